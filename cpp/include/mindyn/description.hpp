@@ -1,0 +1,39 @@
+// Robot descriptions given as a YAML DH / modified-DH table, and generated models.
+//
+// YAML schema (SI units; angles in `angle_unit`):
+//   name, description, source, notes: text
+//   convention: dh | mdh        dh:  Rot(z,theta) Trans(z,d) Trans(x,a) Rot(x,alpha)
+//                               mdh: Rot(x,alpha) Trans(x,d) Rot(z,theta) Trans(z,r)
+//                               (Khalil-Kleinfinger)
+//   angle_unit: rad | deg       applies to alpha, theta and to revolute limits
+//   gravity: [gx, gy, gz]       optional, default [0, 0, -9.81]
+//   synthetic_inertia: bool     the inertial values are invented
+//   joints: list of
+//     name, type: revolute | prismatic
+//     dh: a, alpha, d, theta     mdh: alpha, d, theta, r   (theta / d resp. r is the joint offset)
+//     limits: {lower, upper, velocity, acceleration, effort}
+//     drive: {rated_torque, gear_ratio}
+//     inertial: {mass, com: [x,y,z], inertia: {xx, yy, zz, xy, xz, yz}}   about the COM, link axes
+//           or  {XX, XY, XZ, YY, YZ, ZZ, MX, MY, MZ, M}                     about the link origin
+//     rotor_inertia: Ia           friction: {viscous, coulomb}
+//   tool: {xyz: [..], rpy: [..]}   optional flange frame in the last link frame
+#pragma once
+
+#include <string>
+
+#include "mindyn/model.hpp"
+
+namespace mindyn {
+
+/// Loads a YAML description file. Throws FileError or ModelError (with the file and key named).
+Model loadYaml(const std::string& path);
+
+/// Parses YAML text; `source` names it in error messages.
+Model parseYaml(const std::string& text, const std::string& source = "<string>");
+
+/// A planar arm of n revolute joints with parallel axes and links of length `length` [m], mass
+/// `mass` [kg] (uniform rods). With `vertical` the plane of motion contains gravity; otherwise
+/// the joint axes are parallel to gravity (horizontal plane).
+Model planarArm(int n, bool vertical = true, double length = 0.5, double mass = 2.0);
+
+}  // namespace mindyn

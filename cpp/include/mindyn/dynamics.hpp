@@ -1,0 +1,63 @@
+// Rigid-body dynamics of a serial chain, linear in the classical parameters.
+//
+// Conventions: link frames as in model.hpp; spatial vectors (angular; linear) about the link
+// origin in link coordinates; gravity = model.gravity in the base frame. `params` is any vector
+// in the given ParameterLayout, physically meaningful or not (regrouped base-parameter vectors
+// are fed here too). Every function here allocates nothing and throws nothing; sizes are
+// preconditions (checked by the Python binding and by `checkSizes`).
+#pragma once
+
+#include <Eigen/Core>
+
+#include "mindyn/data.hpp"
+#include "mindyn/model.hpp"
+
+namespace mindyn {
+
+using VecRef = Eigen::Ref<const Eigen::VectorXd>;
+using VecOut = Eigen::Ref<Eigen::VectorXd>;
+using MatOut = Eigen::Ref<Eigen::MatrixXd>;
+
+/// Pose, velocity and acceleration of every link (data.R, p, R0, p0, v, a). With
+/// `with_gravity`, the base acceleration is -gravity so that inertial forces include weight.
+void computeKinematics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                       const VecRef& ddq, bool with_gravity = true) noexcept;
+
+/// Newton-Euler inverse dynamics: tau = W(q, dq, ddq) * params.
+void inverseDynamics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                     const VecRef& ddq, const VecRef& params, ParameterLayout layout,
+                     VecOut tau) noexcept;
+
+/// Gravity torque c(q) (friction and rotor inertia do not contribute).
+void gravityTorque(const Model& model, Data& data, const VecRef& q, const VecRef& params,
+                   ParameterLayout layout, VecOut tau) noexcept;
+
+/// Classical regressor W (n x layout.size(n)) with tau = W * params.
+void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq, const VecRef& ddq,
+               ParameterLayout layout, MatOut W) noexcept;
+
+/// Kinetic and potential energy regressors (rows of length layout.size(n)):
+/// K = wK * params, P = wP * params, total energy H = (wK + wP) * params, Lagrangian (wK - wP).
+/// Friction columns are zero; the rotor column is 0.5 dq_k^2.
+void energyRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                      ParameterLayout layout, VecOut wK, VecOut wP) noexcept;
+
+double kineticEnergy(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                     const VecRef& params, ParameterLayout layout) noexcept;
+double potentialEnergy(const Model& model, Data& data, const VecRef& q, const VecRef& params,
+                       ParameterLayout layout) noexcept;
+
+/// Joint-space inertia matrix A(q) (rotor inertia on the diagonal when in the layout).
+void massMatrix(const Model& model, Data& data, const VecRef& q, const VecRef& params,
+                ParameterLayout layout, MatOut M) noexcept;
+
+/// ddq = A(q)^-1 (tau - b(q, dq) - c(q) - friction). Returns false, leaving ddq unchanged,
+/// when A(q) is not positive definite for these parameters.
+bool forwardDynamics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                     const VecRef& tau, const VecRef& params, ParameterLayout layout,
+                     VecOut ddq) noexcept;
+
+/// Throws std::invalid_argument naming the argument whose size does not fit the model.
+void checkSizes(const Model& model, ParameterLayout layout, long q, long dq, long ddq, long params);
+
+}  // namespace mindyn

@@ -1,0 +1,138 @@
+// The immutable description of a serial manipulator: geometry, joint limits, drive data and the
+// classical inertial parameters. Per-call workspaces live in mindyn::Data (data.hpp).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace mindyn {
+
+/// Raised for every description problem found while building or loading a model.
+class ModelError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Raised when a file named by the user does not exist or cannot be read.
+class FileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class JointType { Revolute, Prismatic };
+
+const char* toString(JointType type);
+
+/// Limits of one joint; a value that the description does not give is NaN.
+struct JointLimits {
+  double lower = std::numeric_limits<double>::quiet_NaN();
+  double upper = std::numeric_limits<double>::quiet_NaN();
+  double velocity = std::numeric_limits<double>::quiet_NaN();
+  double acceleration = std::numeric_limits<double>::quiet_NaN();
+  double effort = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// Drive data used to convert logged relative torques: tau = value * rated_torque * gear_ratio /
+/// 1000.
+struct Drive {
+  double rated_torque = std::numeric_limits<double>::quiet_NaN();  // motor side [N m]
+  double gear_ratio = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// One row of a Denavit-Hartenberg table, kept for display. For `dh`: a, alpha, d, theta.
+/// For `mdh` (Khalil-Kleinfinger): alpha_j, d_j, theta_j, r_j stored as alpha, a (= d_j), theta, d
+/// (= r_j).
+struct DHRow {
+  double a = 0, alpha = 0, d = 0, theta = 0;
+};
+
+/// Joint k moves link k relative to link k-1:
+///   T_{k-1,k}(q) = pre * J(q) * post,
+/// J(q) a rotation by q about `axis` (revolute) or a translation by q along `axis` (prismatic),
+/// `axis` a unit vector in the joint frame through its origin. URDF and modified DH give post = I;
+/// classic DH gives pre = I and puts the fixed part of the row into post.
+struct Joint {
+  std::string name;
+  JointType type = JointType::Revolute;
+  Eigen::Isometry3d pre = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  Eigen::Isometry3d post = Eigen::Isometry3d::Identity();
+  JointLimits limits;
+  Drive drive;
+
+  /// Homogeneous transform T_{k-1,k}(q).
+  Eigen::Isometry3d transform(double q) const;
+};
+
+/// Names of the ten classical inertial parameters of one link, in storage order.
+inline constexpr const char* kInertialNames[10] = {"XX", "XY", "XZ", "YY", "YZ",
+                                                   "ZZ", "MX", "MY", "MZ", "M"};
+
+/// Which optional per-joint parameters follow each link's ten inertial ones.
+/// The classical vector is link by link: [XX1..M1, (Ia1), (Fv1, Fc1), XX2, ...].
+struct ParameterLayout {
+  bool rotor = false;     // Ia_k: tau_k += Ia_k * ddq_k
+  bool friction = false;  // Fv_k, Fc_k: tau_k += Fv_k * dq_k + Fc_k * sign(dq_k)
+
+  int perLink() const { return 10 + (rotor ? 1 : 0) + (friction ? 2 : 0); }
+  int size(int n) const { return n * perLink(); }
+  int rotorIndex(int k) const { return k * perLink() + 10; }
+  int viscousIndex(int k) const { return k * perLink() + 10 + (rotor ? 1 : 0); }
+  int coulombIndex(int k) const { return viscousIndex(k) + 1; }
+  /// The layout whose size for n joints is `size`, or throws ModelError.
+  static ParameterLayout fromSize(int n, long size);
+};
+
+struct Model {
+  std::string name;
+  std::string source;               // file it came from, or "bundled:<name>" / "generated"
+  std::string convention = "urdf";  // urdf | dh | mdh | generated
+  std::vector<Joint> joints;
+  std::vector<std::string> link_names;  // n + 1 names: base, then each moving link
+  std::vector<DHRow> dh;                // empty unless loaded from a DH/MDH table
+  bool synthetic_inertia = false;       // inertial values invented, not measured/published
+  std::string notes;
+
+  Eigen::Vector3d gravity{0.0, 0.0, -9.81};
+  Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();  // last link frame -> tool frame
+
+  Eigen::VectorXd inertial;       // 10 n classical inertial parameters about link origins
+  Eigen::VectorXd rotor_inertia;  // n, joint side
+  Eigen::VectorXd viscous;        // n
+  Eigen::VectorXd coulomb;        // n
+
+  int nq() const { return static_cast<int>(joints.size()); }
+
+  /// Classical parameter names for a layout, e.g. XX1, ..., M1, Ia1, Fv1, Fc1, XX2, ...
+  std::vector<std::string> parameterNames(ParameterLayout layout = {}) const;
+  /// Classical parameter values of this model in a layout.
+  Eigen::VectorXd parameters(ParameterLayout layout = {}) const;
+
+  /// Checks sizes, finiteness, unit axes and rigid transforms; throws ModelError naming the
+  /// problem.
+  void validate() const;
+};
+
+/// Ten classical parameters about the link origin from mass, centre of mass and the inertia
+/// tensor about the COM, all in the same (link) axes.
+Eigen::Matrix<double, 10, 1> inertialFromCom(double mass, const Eigen::Vector3d& com,
+                                             const Eigen::Matrix3d& inertia_com);
+
+/// The same when the inertia is given in a frame rotated by R relative to the link axes
+/// (URDF <inertial><origin rpy>): I_link = R I R^T.
+Eigen::Matrix<double, 10, 1> inertialFromUrdf(double mass, const Eigen::Vector3d& com,
+                                              const Eigen::Matrix3d& R,
+                                              const Eigen::Matrix3d& inertia_com);
+
+/// Inertia tensor about the link origin from a 10-vector.
+Eigen::Matrix3d inertiaTensor(const Eigen::Ref<const Eigen::VectorXd>& p10);
+
+/// Pinocchio's dynamic-parameter order per body: m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz.
+Eigen::VectorXd toPinocchioOrder(const Eigen::Ref<const Eigen::VectorXd>& inertial);
+Eigen::VectorXd fromPinocchioOrder(const Eigen::Ref<const Eigen::VectorXd>& pinocchio);
+
+}  // namespace mindyn

@@ -1,0 +1,37 @@
+// Loading a serial chain from a URDF description (parsed with urdfdom).
+//
+// The chain runs from the URDF root link to a tip link. Links before the first moving joint form
+// the fixed base and their inertia is ignored. Every other link that is not the child of a moving
+// chain joint is rigidly attached to a chain link and merged into it, so the moving mass of the
+// URDF is preserved:
+//  - fixed joints on the chain fold their origin into the next moving joint's `pre`; fixed joints
+//    after the last moving joint (tip given past it, e.g. "tool0") become `Model::tool`;
+//  - fixed children that hang off chain links (sensor frames, hands, flanges) are merged;
+//  - moving joints that leave the chain (e.g. gripper fingers when tip = the hand) are locked at
+//    q = 0 clamped into their limits and merged too; `Model::notes` names them.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <string>
+
+#include "mindyn/model.hpp"
+
+namespace mindyn {
+
+/// Loads the chain root -> `tip` of the URDF file `path`; an empty `tip` picks the only moving
+/// leaf. Throws FileError if the file is missing or unreadable, ModelError for any description
+/// problem.
+Model loadUrdf(const std::string& path, const std::string& tip = "");
+
+/// The same from URDF text; `source` names it in error messages and in `Model::source`.
+Model parseUrdf(const std::string& xml, const std::string& tip = "",
+                const std::string& source = "string");
+
+/// Moves ten classical parameters (XX XY XZ YY YZ ZZ MX MY MZ M, about the child origin in child
+/// axes) to the parent frame, `parent_T_child` mapping child coordinates to parent coordinates:
+///   h' = R h + m p,  I' = R I R^T - [p]x [R h]x - [R h]x [p]x - m [p]x [p]x.
+Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1>& inertial,
+                                               const Eigen::Isometry3d& parent_T_child);
+
+}  // namespace mindyn

@@ -1,0 +1,298 @@
+#include "mindyn/description.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace mindyn {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+struct Ctx {
+  std::string source;
+  std::string where;  // e.g. "joint 2 ('shoulder')"
+  [[noreturn]] void fail(const std::string& msg, const YAML::Node& node = YAML::Node()) const {
+    std::string loc = source;
+    if (node.IsDefined() && node.Mark().line >= 0)
+      loc += ":" + std::to_string(node.Mark().line + 1);
+    throw ModelError(loc + ": " + (where.empty() ? "" : where + ": ") + msg);
+  }
+};
+
+void checkKeys(const Ctx& c, const YAML::Node& node, const std::set<std::string>& allowed,
+               const std::string& what) {
+  if (!node.IsMap()) c.fail(what + " must be a mapping", node);
+  for (const auto& kv : node) {
+    const std::string key = kv.first.as<std::string>();
+    if (!allowed.count(key)) {
+      std::string list;
+      for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+      c.fail("unknown key '" + key + "' in " + what + " (allowed: " + list + ")", kv.first);
+    }
+  }
+}
+
+double number(const Ctx& c, const YAML::Node& node, const std::string& key) {
+  if (!node.IsScalar()) c.fail("'" + key + "' must be a number", node);
+  try {
+    const double v = node.as<double>();
+    if (!std::isfinite(v)) c.fail("'" + key + "' is not finite", node);
+    return v;
+  } catch (const YAML::Exception&) {
+    c.fail("'" + key + "' must be a number, got '" + node.as<std::string>() + "'", node);
+  }
+}
+
+double optional(const Ctx& c, const YAML::Node& map, const std::string& key, double def) {
+  const YAML::Node n = map[key];
+  return n.IsDefined() && !n.IsNull() ? number(c, n, key) : def;
+}
+
+Eigen::Vector3d vec3(const Ctx& c, const YAML::Node& node, const std::string& key) {
+  if (!node.IsSequence() || node.size() != 3)
+    c.fail("'" + key + "' must be a list of 3 numbers", node);
+  return {number(c, node[0], key), number(c, node[1], key), number(c, node[2], key)};
+}
+
+Eigen::Isometry3d rotX(double a) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  return T;
+}
+Eigen::Isometry3d rotZ(double a) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return T;
+}
+Eigen::Isometry3d trans(double x, double y, double z) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() << x, y, z;
+  return T;
+}
+
+// Rotations that are exact multiples of 90 degrees come out of sin/cos with 1e-17 residues;
+// clean them so that exactly degenerate geometry stays exactly degenerate.
+void clean(Eigen::Isometry3d& T) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (std::abs(T.matrix()(i, j)) < 1e-15) T.matrix()(i, j) = 0.0;
+}
+
+Eigen::Matrix<double, 10, 1> readInertial(const Ctx& c, const YAML::Node& node) {
+  if (!node.IsMap()) c.fail("'inertial' must be a mapping", node);
+  if (node["mass"].IsDefined()) {
+    checkKeys(c, node, {"mass", "com", "inertia"}, "inertial");
+    const double m = number(c, node["mass"], "mass");
+    if (m < 0) c.fail("mass is negative", node["mass"]);
+    const Eigen::Vector3d com =
+        node["com"].IsDefined() ? vec3(c, node["com"], "com") : Eigen::Vector3d::Zero();
+    Eigen::Matrix3d I = Eigen::Matrix3d::Zero();
+    if (node["inertia"].IsDefined()) {
+      const YAML::Node in = node["inertia"];
+      checkKeys(c, in, {"xx", "yy", "zz", "xy", "xz", "yz"}, "inertia");
+      I(0, 0) = optional(c, in, "xx", 0);
+      I(1, 1) = optional(c, in, "yy", 0);
+      I(2, 2) = optional(c, in, "zz", 0);
+      I(0, 1) = I(1, 0) = optional(c, in, "xy", 0);
+      I(0, 2) = I(2, 0) = optional(c, in, "xz", 0);
+      I(1, 2) = I(2, 1) = optional(c, in, "yz", 0);
+    }
+    return inertialFromCom(m, com, I);
+  }
+  std::set<std::string> names(std::begin(kInertialNames), std::end(kInertialNames));
+  checkKeys(c, node, names, "inertial (give either mass/com/inertia or XX..M)");
+  Eigen::Matrix<double, 10, 1> p;
+  for (int i = 0; i < 10; ++i) p[i] = optional(c, node, kInertialNames[i], 0.0);
+  return p;
+}
+
+}  // namespace
+
+Model parseYaml(const std::string& text, const std::string& source) {
+  Ctx c{source, ""};
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::ParserException& e) {
+    throw ModelError(source + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+  }
+  if (!root.IsMap()) c.fail("a robot description must be a YAML mapping with a 'joints' list");
+  checkKeys(c, root,
+            {"name", "description", "source", "notes", "convention", "angle_unit", "gravity",
+             "synthetic_inertia", "joints", "tool"},
+            "the description");
+  Model model;
+  model.name = root["name"].IsDefined() ? root["name"].as<std::string>() : std::string("robot");
+  model.source = source;
+  if (root["notes"].IsDefined()) model.notes = root["notes"].as<std::string>();
+  if (root["synthetic_inertia"].IsDefined())
+    model.synthetic_inertia = root["synthetic_inertia"].as<bool>();
+  const std::string conv =
+      root["convention"].IsDefined() ? root["convention"].as<std::string>() : std::string();
+  if (conv != "dh" && conv != "mdh")
+    c.fail("'convention' must be 'dh' or 'mdh'" +
+               (conv.empty() ? std::string(" (missing)") : ", got '" + conv + "'"),
+           root["convention"]);
+  model.convention = conv;
+  const std::string unit =
+      root["angle_unit"].IsDefined() ? root["angle_unit"].as<std::string>() : std::string("rad");
+  if (unit != "rad" && unit != "deg")
+    c.fail("'angle_unit' must be 'rad' or 'deg'", root["angle_unit"]);
+  const double ang = unit == "deg" ? kPi / 180.0 : 1.0;
+  if (root["gravity"].IsDefined()) model.gravity = vec3(c, root["gravity"], "gravity");
+
+  const YAML::Node joints = root["joints"];
+  if (!joints.IsDefined() || !joints.IsSequence() || joints.size() == 0)
+    c.fail("'joints' must be a non-empty list", joints);
+  const int n = static_cast<int>(joints.size());
+  model.inertial = Eigen::VectorXd::Zero(10 * n);
+  model.rotor_inertia = Eigen::VectorXd::Zero(n);
+  model.viscous = Eigen::VectorXd::Zero(n);
+  model.coulomb = Eigen::VectorXd::Zero(n);
+  model.link_names.push_back("base");
+  const std::set<std::string> geo = conv == "dh"
+                                        ? std::set<std::string>{"a", "alpha", "d", "theta"}
+                                        : std::set<std::string>{"alpha", "d", "theta", "r"};
+  for (int k = 0; k < n; ++k) {
+    const YAML::Node jn = joints[k];
+    Joint j;
+    j.name = jn.IsMap() && jn["name"].IsDefined() ? jn["name"].as<std::string>()
+                                                  : "joint" + std::to_string(k + 1);
+    c.where = "joint " + std::to_string(k + 1) + " ('" + j.name + "')";
+    std::set<std::string> allowed = geo;
+    allowed.insert(
+        {"name", "type", "limits", "drive", "inertial", "rotor_inertia", "friction", "link"});
+    checkKeys(c, jn, allowed, "the joint");
+    const std::string type = jn["type"].IsDefined() ? jn["type"].as<std::string>() : "revolute";
+    if (type == "revolute" || type == "continuous")
+      j.type = JointType::Revolute;
+    else if (type == "prismatic")
+      j.type = JointType::Prismatic;
+    else
+      c.fail("joint type '" + type + "' is not supported (revolute or prismatic)", jn["type"]);
+    DHRow row;
+    if (conv == "dh") {
+      row.a = optional(c, jn, "a", 0);
+      row.alpha = optional(c, jn, "alpha", 0) * ang;
+      row.d = optional(c, jn, "d", 0);
+      row.theta = optional(c, jn, "theta", 0) * ang;
+      j.pre = Eigen::Isometry3d::Identity();
+      j.post = rotZ(row.theta) * trans(0, 0, row.d) * trans(row.a, 0, 0) * rotX(row.alpha);
+    } else {
+      // MDH: alpha_j, d_j (along x), theta_j, r_j; stored as alpha, a, theta, d.
+      row.alpha = optional(c, jn, "alpha", 0) * ang;
+      row.a = optional(c, jn, "d", 0);
+      row.theta = optional(c, jn, "theta", 0) * ang;
+      row.d = optional(c, jn, "r", 0);
+      j.pre = rotX(row.alpha) * trans(row.a, 0, 0) * rotZ(row.theta) * trans(0, 0, row.d);
+      j.post = Eigen::Isometry3d::Identity();
+    }
+    clean(j.pre);
+    clean(j.post);
+    j.axis = Eigen::Vector3d::UnitZ();
+    model.dh.push_back(row);
+    if (jn["limits"].IsDefined()) {
+      const YAML::Node l = jn["limits"];
+      checkKeys(c, l, {"lower", "upper", "velocity", "acceleration", "effort"}, "limits");
+      const double s = j.type == JointType::Revolute ? ang : 1.0;
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      j.limits.lower = optional(c, l, "lower", nan) * s;
+      j.limits.upper = optional(c, l, "upper", nan) * s;
+      j.limits.velocity = optional(c, l, "velocity", nan) * s;
+      j.limits.acceleration = optional(c, l, "acceleration", nan) * s;
+      j.limits.effort = optional(c, l, "effort", nan);
+      if (j.limits.lower > j.limits.upper) c.fail("lower limit above upper limit", l);
+    }
+    if (jn["drive"].IsDefined()) {
+      checkKeys(c, jn["drive"], {"rated_torque", "gear_ratio"}, "drive");
+      j.drive.rated_torque = optional(c, jn["drive"], "rated_torque", j.drive.rated_torque);
+      j.drive.gear_ratio = optional(c, jn["drive"], "gear_ratio", j.drive.gear_ratio);
+    }
+    if (jn["inertial"].IsDefined())
+      model.inertial.segment<10>(10 * k) = readInertial(c, jn["inertial"]);
+    model.rotor_inertia[k] = optional(c, jn, "rotor_inertia", 0.0);
+    if (jn["friction"].IsDefined()) {
+      checkKeys(c, jn["friction"], {"viscous", "coulomb"}, "friction");
+      model.viscous[k] = optional(c, jn["friction"], "viscous", 0.0);
+      model.coulomb[k] = optional(c, jn["friction"], "coulomb", 0.0);
+    }
+    model.link_names.push_back(jn["link"].IsDefined() ? jn["link"].as<std::string>()
+                                                      : "link" + std::to_string(k + 1));
+    model.joints.push_back(j);
+  }
+  c.where.clear();
+  if (root["tool"].IsDefined()) {
+    const YAML::Node t = root["tool"];
+    checkKeys(c, t, {"xyz", "rpy"}, "tool");
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    if (t["xyz"].IsDefined()) T.translation() = vec3(c, t["xyz"], "xyz");
+    if (t["rpy"].IsDefined()) {
+      const Eigen::Vector3d rpy = vec3(c, t["rpy"], "rpy") * ang;
+      T.linear() = (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
+                    Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+                    Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+                       .toRotationMatrix();
+    }
+    model.tool = T;
+  }
+  model.validate();
+  return model;
+}
+
+Model loadYaml(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw FileError("robot description '" + path + "' does not exist or cannot be read");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parseYaml(ss.str(), path);
+}
+
+Model planarArm(int n, bool vertical, double length, double mass) {
+  if (n < 1) throw ModelError("a planar arm needs at least one joint, got " + std::to_string(n));
+  if (!(length > 0) || !(mass > 0))
+    throw ModelError("planar arm: length and mass must be positive");
+  Model model;
+  model.name = "planar" + std::to_string(n) + (vertical ? "" : "h");
+  model.source = "generated";
+  model.convention = "mdh";
+  model.notes = std::string("uniform rods of ") + std::to_string(length) + " m, " +
+                std::to_string(mass) + " kg; " +
+                (vertical ? "vertical plane (axes perpendicular to gravity)"
+                          : "horizontal plane (axes parallel to gravity)");
+  model.inertial = Eigen::VectorXd::Zero(10 * n);
+  model.rotor_inertia = Eigen::VectorXd::Zero(n);
+  model.viscous = Eigen::VectorXd::Zero(n);
+  model.coulomb = Eigen::VectorXd::Zero(n);
+  model.link_names.push_back("base");
+  const double radius = 0.02;
+  for (int k = 0; k < n; ++k) {
+    Joint j;
+    j.name = "joint" + std::to_string(k + 1);
+    DHRow row;
+    row.alpha = (k == 0 && vertical) ? kPi / 2 : 0.0;
+    row.a = k == 0 ? 0.0 : length;
+    j.pre = rotX(row.alpha) * trans(row.a, 0, 0);
+    clean(j.pre);
+    j.limits.lower = -kPi;
+    j.limits.upper = kPi;
+    j.limits.velocity = kPi;
+    j.limits.acceleration = 4 * kPi;
+    model.dh.push_back(row);
+    model.joints.push_back(j);
+    model.link_names.push_back("link" + std::to_string(k + 1));
+    Eigen::Matrix3d Ic = Eigen::Matrix3d::Zero();
+    Ic(0, 0) = 0.5 * mass * radius * radius;
+    Ic(1, 1) = Ic(2, 2) = mass * (3 * radius * radius + length * length) / 12.0;
+    model.inertial.segment<10>(10 * k) = inertialFromCom(mass, {length / 2, 0, 0}, Ic);
+  }
+  model.tool = trans(length, 0, 0);
+  model.validate();
+  return model;
+}
+
+}  // namespace mindyn

@@ -1,0 +1,269 @@
+#include "mindyn/dynamics.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace mindyn {
+
+namespace {
+
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d m;
+  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
+  return m;
+}
+
+// I w = L(w) [XX XY XZ YY YZ ZZ] for the symmetric tensor of model.hpp.
+inline Eigen::Matrix<double, 3, 6> inertiaMap(const Eigen::Vector3d& w) {
+  Eigen::Matrix<double, 3, 6> L;
+  L << w.x(), w.y(), w.z(), 0.0, 0.0, 0.0,  //
+      0.0, w.x(), 0.0, w.y(), w.z(), 0.0,   //
+      0.0, 0.0, w.x(), 0.0, w.y(), w.z();
+  return L;
+}
+
+inline double sgn(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }
+
+inline int blockStart(ParameterLayout layout, int k) { return k * layout.perLink(); }
+
+// Link poses relative to the parent and to the base.
+void positionPass(const Model& model, Data& data, const VecRef& q) noexcept {
+  for (int k = 0; k < data.n; ++k) {
+    const Joint& j = model.joints[k];
+    Eigen::Matrix3d Rj;
+    Eigen::Vector3d tj;
+    if (j.type == JointType::Revolute) {
+      Rj = Eigen::AngleAxisd(q[k], j.axis).toRotationMatrix();
+      tj = Rj * j.post.translation();
+    } else {
+      Rj.setIdentity();
+      tj = j.axis * q[k] + j.post.translation();
+    }
+    data.R[k] = j.pre.linear() * Rj * j.post.linear();
+    data.p[k] = j.pre.translation() + j.pre.linear() * tj;
+    if (k == 0) {
+      data.R0[k] = data.R[k];
+      data.p0[k] = data.p[k];
+    } else {
+      data.p0[k] = data.p0[k - 1] + data.R0[k - 1] * data.p[k];
+      data.R0[k] = data.R0[k - 1] * data.R[k];
+    }
+  }
+}
+
+// Spatial velocities and accelerations; needs positionPass.
+void motionPass(const Model& model, Data& data, const VecRef& dq, const VecRef& ddq,
+                bool with_gravity) noexcept {
+  Vector6d vp = Vector6d::Zero();
+  Vector6d ap = Vector6d::Zero();
+  if (with_gravity) ap.tail<3>() = -model.gravity;
+  for (int k = 0; k < data.n; ++k) {
+    const Eigen::Matrix3d& R = data.R[k];
+    const Eigen::Vector3d& p = data.p[k];
+    const Vector6d& S = data.S[k];
+    Vector6d v, a;
+    v.head<3>() = R.transpose() * vp.head<3>();
+    v.tail<3>() = R.transpose() * (vp.tail<3>() + vp.head<3>().cross(p));
+    a.head<3>() = R.transpose() * ap.head<3>();
+    a.tail<3>() = R.transpose() * (ap.tail<3>() + ap.head<3>().cross(p));
+    const Vector6d vj = S * dq[k];
+    v += vj;
+    // a += S ddq + v x vj (spatial motion cross product)
+    a += S * ddq[k];
+    a.head<3>() += v.head<3>().cross(vj.head<3>());
+    a.tail<3>() += v.head<3>().cross(vj.tail<3>()) + v.tail<3>().cross(vj.head<3>());
+    data.v[k] = v;
+    data.a[k] = a;
+    vp = v;
+    ap = a;
+  }
+}
+
+// Joint torques from the kinematic quantities and a parameter vector.
+void forcePass(const Model&, Data& data, const VecRef& dq, const VecRef& ddq, const VecRef& params,
+               ParameterLayout layout, bool joint_terms, VecOut tau) noexcept {
+  const int n = data.n;
+  for (int k = 0; k < n; ++k) {
+    const auto pk = params.segment<10>(blockStart(layout, k));
+    Eigen::Matrix3d I;
+    I << pk[0], pk[1], pk[2], pk[1], pk[3], pk[4], pk[2], pk[4], pk[5];
+    const Eigen::Vector3d h = pk.segment<3>(6);
+    const double m = pk[9];
+    const Eigen::Vector3d w = data.v[k].head<3>();
+    const Eigen::Vector3d vl = data.v[k].tail<3>();
+    const Eigen::Vector3d aw = data.a[k].head<3>();
+    const Eigen::Vector3d b = data.a[k].tail<3>() + w.cross(vl);
+    data.f[k].head<3>() = I * aw + w.cross(I * w) - b.cross(h);
+    data.f[k].tail<3>() = m * b + aw.cross(h) + w.cross(w.cross(h));
+  }
+  for (int k = n - 1; k >= 0; --k) {
+    double t = data.S[k].dot(data.f[k]);
+    if (joint_terms) {
+      if (layout.rotor) t += params[layout.rotorIndex(k)] * ddq[k];
+      if (layout.friction)
+        t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
+    }
+    tau[k] = t;
+    if (k > 0) {
+      const Eigen::Vector3d fr = data.R[k] * data.f[k].tail<3>();
+      data.f[k - 1].head<3>() += data.R[k] * data.f[k].head<3>() + data.p[k].cross(fr);
+      data.f[k - 1].tail<3>() += fr;
+    }
+  }
+}
+
+}  // namespace
+
+void computeKinematics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                       const VecRef& ddq, bool with_gravity) noexcept {
+  positionPass(model, data, q);
+  motionPass(model, data, dq, ddq, with_gravity);
+}
+
+void inverseDynamics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                     const VecRef& ddq, const VecRef& params, ParameterLayout layout,
+                     VecOut tau) noexcept {
+  computeKinematics(model, data, q, dq, ddq, true);
+  forcePass(model, data, dq, ddq, params, layout, true, tau);
+}
+
+void gravityTorque(const Model& model, Data& data, const VecRef& q, const VecRef& params,
+                   ParameterLayout layout, VecOut tau) noexcept {
+  computeKinematics(model, data, q, data.zeros, data.zeros, true);
+  forcePass(model, data, data.zeros, data.zeros, params, layout, false, tau);
+}
+
+void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq, const VecRef& ddq,
+               ParameterLayout layout, MatOut W) noexcept {
+  computeKinematics(model, data, q, dq, ddq, true);
+  const int n = data.n;
+  W.setZero();
+  for (int j = 0; j < n; ++j) {
+    const Eigen::Vector3d w = data.v[j].head<3>();
+    const Eigen::Vector3d vl = data.v[j].tail<3>();
+    const Eigen::Vector3d aw = data.a[j].head<3>();
+    const Eigen::Vector3d b = data.a[j].tail<3>() + w.cross(vl);
+    const Eigen::Matrix3d Sw = skew(w);
+    Matrix6x10& F = data.F;
+    F.setZero();
+    F.block<3, 6>(0, 0) = inertiaMap(aw) + Sw * inertiaMap(w);
+    F.block<3, 3>(0, 6) = -skew(b);
+    F.block<3, 3>(3, 6) = skew(aw) + Sw * Sw;
+    F.block<3, 1>(3, 9) = b;
+    const int c0 = blockStart(layout, j);
+    for (int k = j; k >= 0; --k) {
+      W.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
+      if (k > 0) {
+        // carry the wrench block to link k-1: n' = R n + p x (R f), f' = R f
+        const Eigen::Matrix3d& R = data.R[k];
+        Eigen::Matrix<double, 3, 10> fr = R * F.bottomRows<3>();
+        F.topRows<3>() = R * F.topRows<3>() + skew(data.p[k]) * fr;
+        F.bottomRows<3>() = fr;
+      }
+    }
+    if (layout.rotor) W(j, layout.rotorIndex(j)) = ddq[j];
+    if (layout.friction) {
+      W(j, layout.viscousIndex(j)) = dq[j];
+      W(j, layout.coulombIndex(j)) = sgn(dq[j]);
+    }
+  }
+}
+
+void energyRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                      ParameterLayout layout, VecOut wK, VecOut wP) noexcept {
+  computeKinematics(model, data, q, dq, data.zeros, false);
+  wK.setZero();
+  wP.setZero();
+  const Eigen::Vector3d& g = model.gravity;
+  for (int k = 0; k < data.n; ++k) {
+    const Eigen::Vector3d w = data.v[k].head<3>();
+    const Eigen::Vector3d vl = data.v[k].tail<3>();
+    const int c = blockStart(layout, k);
+    wK[c + 0] = 0.5 * w.x() * w.x();
+    wK[c + 1] = w.x() * w.y();
+    wK[c + 2] = w.x() * w.z();
+    wK[c + 3] = 0.5 * w.y() * w.y();
+    wK[c + 4] = w.y() * w.z();
+    wK[c + 5] = 0.5 * w.z() * w.z();
+    wK.segment<3>(c + 6) = vl.cross(w);
+    wK[c + 9] = 0.5 * vl.squaredNorm();
+    if (layout.rotor) wK[layout.rotorIndex(k)] = 0.5 * dq[k] * dq[k];
+    wP.segment<3>(c + 6) = -(data.R0[k].transpose() * g);
+    wP[c + 9] = -g.dot(data.p0[k]);
+  }
+}
+
+double kineticEnergy(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                     const VecRef& params, ParameterLayout layout) noexcept {
+  computeKinematics(model, data, q, dq, data.zeros, false);
+  double K = 0.0;
+  for (int k = 0; k < data.n; ++k) {
+    const auto pk = params.segment<10>(blockStart(layout, k));
+    Eigen::Matrix3d I;
+    I << pk[0], pk[1], pk[2], pk[1], pk[3], pk[4], pk[2], pk[4], pk[5];
+    const Eigen::Vector3d w = data.v[k].head<3>();
+    const Eigen::Vector3d vl = data.v[k].tail<3>();
+    K += 0.5 * w.dot(I * w) + vl.dot(w.cross(pk.segment<3>(6))) + 0.5 * pk[9] * vl.squaredNorm();
+    if (layout.rotor) K += 0.5 * params[layout.rotorIndex(k)] * dq[k] * dq[k];
+  }
+  return K;
+}
+
+double potentialEnergy(const Model& model, Data& data, const VecRef& q, const VecRef& params,
+                       ParameterLayout layout) noexcept {
+  positionPass(model, data, q);
+  double P = 0.0;
+  for (int k = 0; k < data.n; ++k) {
+    const auto pk = params.segment<10>(blockStart(layout, k));
+    P -= model.gravity.dot(pk[9] * data.p0[k] + data.R0[k] * pk.segment<3>(6));
+  }
+  return P;
+}
+
+void massMatrix(const Model& model, Data& data, const VecRef& q, const VecRef& params,
+                ParameterLayout layout, MatOut M) noexcept {
+  positionPass(model, data, q);
+  data.unit.setZero();
+  for (int j = 0; j < data.n; ++j) {
+    data.unit[j] = 1.0;
+    motionPass(model, data, data.zeros, data.unit, false);
+    forcePass(model, data, data.zeros, data.unit, params, layout, true, M.col(j));
+    data.unit[j] = 0.0;
+  }
+  // The columns are exact; symmetrise the rounding.
+  for (int i = 0; i < data.n; ++i)
+    for (int j = 0; j < i; ++j) M(i, j) = M(j, i) = 0.5 * (M(i, j) + M(j, i));
+}
+
+bool forwardDynamics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
+                     const VecRef& tau, const VecRef& params, ParameterLayout layout,
+                     VecOut ddq) noexcept {
+  massMatrix(model, data, q, params, layout, data.M);
+  data.llt.compute(data.M);
+  if (data.llt.info() != Eigen::Success) return false;
+  motionPass(model, data, dq, data.zeros, true);
+  forcePass(model, data, dq, data.zeros, params, layout, true, data.tmp);
+  data.tmp = tau - data.tmp;
+  data.llt.solveInPlace(data.tmp);
+  ddq = data.tmp;
+  return true;
+}
+
+void checkSizes(const Model& model, ParameterLayout layout, long q, long dq, long ddq,
+                long params) {
+  const long n = model.nq();
+  auto need = [n](const char* what, long got) {
+    if (got >= 0 && got != n)
+      throw std::invalid_argument(std::string(what) + " has " + std::to_string(got) +
+                                  " entries; the model has " + std::to_string(n) + " joints");
+  };
+  need("q", q);
+  need("dq", dq);
+  need("ddq", ddq);
+  if (params >= 0 && params != layout.size(static_cast<int>(n)))
+    throw std::invalid_argument("params has " + std::to_string(params) + " entries; expected " +
+                                std::to_string(layout.size(static_cast<int>(n))) +
+                                " for this parameter layout");
+}
+
+}  // namespace mindyn

@@ -1,0 +1,179 @@
+#include "mindyn/model.hpp"
+
+#include <cmath>
+
+#include "mindyn/data.hpp"
+
+namespace mindyn {
+
+const char* toString(JointType type) {
+  return type == JointType::Revolute ? "revolute" : "prismatic";
+}
+
+Eigen::Isometry3d Joint::transform(double q) const {
+  Eigen::Isometry3d J = Eigen::Isometry3d::Identity();
+  if (type == JointType::Revolute)
+    J.linear() = Eigen::AngleAxisd(q, axis).toRotationMatrix();
+  else
+    J.translation() = axis * q;
+  return pre * J * post;
+}
+
+ParameterLayout ParameterLayout::fromSize(int n, long size) {
+  for (int r = 0; r < 2; ++r)
+    for (int f = 0; f < 2; ++f) {
+      ParameterLayout l{r == 1, f == 1};
+      if (l.size(n) == size) return l;
+    }
+  throw ModelError("a parameter vector of " + std::to_string(size) +
+                   " entries fits no layout for " + std::to_string(n) + " joints (expected " +
+                   std::to_string(10 * n) + ", " + std::to_string(11 * n) + " with Ia, " +
+                   std::to_string(12 * n) + " with Fv, Fc, or " + std::to_string(13 * n) +
+                   " with all)");
+}
+
+std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
+  std::vector<std::string> names;
+  names.reserve(layout.size(nq()));
+  for (int k = 0; k < nq(); ++k) {
+    const std::string idx = std::to_string(k + 1);
+    for (const char* s : kInertialNames) names.push_back(s + idx);
+    if (layout.rotor) names.push_back("Ia" + idx);
+    if (layout.friction) {
+      names.push_back("Fv" + idx);
+      names.push_back("Fc" + idx);
+    }
+  }
+  return names;
+}
+
+Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
+  const int n = nq();
+  Eigen::VectorXd p(layout.size(n));
+  for (int k = 0; k < n; ++k) {
+    p.segment<10>(k * layout.perLink()) = inertial.segment<10>(10 * k);
+    if (layout.rotor) p[layout.rotorIndex(k)] = rotor_inertia[k];
+    if (layout.friction) {
+      p[layout.viscousIndex(k)] = viscous[k];
+      p[layout.coulombIndex(k)] = coulomb[k];
+    }
+  }
+  return p;
+}
+
+namespace {
+bool isRigid(const Eigen::Isometry3d& T) {
+  const Eigen::Matrix3d R = T.linear();
+  return T.matrix().allFinite() &&
+         (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-9 &&
+         R.determinant() > 0.0;
+}
+}  // namespace
+
+void Model::validate() const {
+  const int n = nq();
+  const std::string who = name.empty() ? std::string("model") : "model '" + name + "'";
+  if (n == 0) throw ModelError(who + " has no moving joint");
+  if (inertial.size() != 10 * n)
+    throw ModelError(who + ": " + std::to_string(inertial.size()) + " inertial parameters for " +
+                     std::to_string(n) + " links (expected " + std::to_string(10 * n) + ")");
+  for (const auto* v : {&rotor_inertia, &viscous, &coulomb})
+    if (v->size() != n) throw ModelError(who + ": per-joint parameter vector of wrong size");
+  if (!inertial.allFinite()) throw ModelError(who + ": inertial parameters are not finite");
+  if (!rotor_inertia.allFinite() || !viscous.allFinite() || !coulomb.allFinite())
+    throw ModelError(who + ": rotor inertia or friction is not finite");
+  if (!gravity.allFinite()) throw ModelError(who + ": gravity is not finite");
+  if (link_names.size() != static_cast<size_t>(n + 1))
+    throw ModelError(who + ": expected " + std::to_string(n + 1) + " link names");
+  for (const Joint& j : joints) {
+    if (!j.axis.allFinite() || std::abs(j.axis.norm() - 1.0) > 1e-9)
+      throw ModelError(who + ", joint '" + j.name + "': axis is not a unit vector");
+    if (!isRigid(j.pre) || !isRigid(j.post))
+      throw ModelError(who + ", joint '" + j.name + "': origin is not a rigid transform");
+    if (j.limits.lower > j.limits.upper)
+      throw ModelError(who + ", joint '" + j.name + "': lower limit above upper limit");
+  }
+  if (!isRigid(tool)) throw ModelError(who + ": tool frame is not a rigid transform");
+}
+
+Eigen::Matrix<double, 10, 1> inertialFromCom(double mass, const Eigen::Vector3d& com,
+                                             const Eigen::Matrix3d& inertia_com) {
+  // Parallel axes: I_o = I_c + m (c^T c 1 - c c^T).
+  const Eigen::Matrix3d Io = inertia_com + mass * (com.squaredNorm() * Eigen::Matrix3d::Identity() -
+                                                   com * com.transpose());
+  Eigen::Matrix<double, 10, 1> p;
+  p << Io(0, 0), Io(0, 1), Io(0, 2), Io(1, 1), Io(1, 2), Io(2, 2), mass * com.x(), mass * com.y(),
+      mass * com.z(), mass;
+  return p;
+}
+
+Eigen::Matrix<double, 10, 1> inertialFromUrdf(double mass, const Eigen::Vector3d& com,
+                                              const Eigen::Matrix3d& R,
+                                              const Eigen::Matrix3d& inertia_com) {
+  return inertialFromCom(mass, com, R * inertia_com * R.transpose());
+}
+
+Eigen::Matrix3d inertiaTensor(const Eigen::Ref<const Eigen::VectorXd>& p) {
+  Eigen::Matrix3d I;
+  I << p[0], p[1], p[2], p[1], p[3], p[4], p[2], p[4], p[5];
+  return I;
+}
+
+Eigen::VectorXd toPinocchioOrder(const Eigen::Ref<const Eigen::VectorXd>& in) {
+  if (in.size() % 10 != 0)
+    throw ModelError("inertial parameter vector length " + std::to_string(in.size()) +
+                     " is not a multiple of 10");
+  Eigen::VectorXd out(in.size());
+  for (long k = 0; k < in.size() / 10; ++k) {
+    const auto a = in.segment<10>(10 * k);
+    out.segment<10>(10 * k) << a[9], a[6], a[7], a[8], a[0], a[1], a[3], a[2], a[4], a[5];
+  }
+  return out;
+}
+
+Eigen::VectorXd fromPinocchioOrder(const Eigen::Ref<const Eigen::VectorXd>& in) {
+  if (in.size() % 10 != 0)
+    throw ModelError("dynamic parameter vector length " + std::to_string(in.size()) +
+                     " is not a multiple of 10");
+  Eigen::VectorXd out(in.size());
+  for (long k = 0; k < in.size() / 10; ++k) {
+    const auto b = in.segment<10>(10 * k);
+    // b = m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz
+    out.segment<10>(10 * k) << b[4], b[5], b[7], b[6], b[8], b[9], b[1], b[2], b[3], b[0];
+  }
+  return out;
+}
+
+Data::Data(const Model& model)
+    : n(model.nq()),
+      S(n),
+      R(n),
+      p(n),
+      R0(n),
+      p0(n),
+      v(n),
+      a(n),
+      f(n),
+      K(n),
+      zeros(Eigen::VectorXd::Zero(n)),
+      unit(Eigen::VectorXd::Zero(n)),
+      tmp(Eigen::VectorXd::Zero(n)),
+      M(Eigen::MatrixXd::Zero(n, n)),
+      llt(n) {
+  for (int k = 0; k < n; ++k) {
+    const Joint& j = model.joints[k];
+    const Eigen::Matrix3d Rt = j.post.linear().transpose();
+    const Eigen::Vector3d pt = -(Rt * j.post.translation());
+    Vector6d s;
+    if (j.type == JointType::Revolute) {
+      s.head<3>() = Rt * j.axis;
+      s.tail<3>() = pt.cross(s.head<3>());
+    } else {
+      s.head<3>().setZero();
+      s.tail<3>() = Rt * j.axis;
+    }
+    S[k] = s;
+  }
+}
+
+}  // namespace mindyn

@@ -1,0 +1,349 @@
+#include "mindyn/urdf.hpp"
+
+#include <console_bridge/console.h>
+#include <urdf_parser/urdf_parser.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <vector>
+
+namespace mindyn {
+namespace {
+
+/// Collects console_bridge error messages instead of printing them.
+class CaptureHandler : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char* /*filename*/,
+           int /*line*/) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) messages.push_back(text);
+  }
+  std::vector<std::string> messages;
+};
+
+/// Serialises our use of console_bridge's global handler and level.
+std::mutex& consoleMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+/// Parses with urdfdom, printing nothing; on failure returns nullptr and urdfdom's complaints.
+urdf::ModelInterfaceSharedPtr parseQuietly(const std::string& xml, std::string* reason) {
+  std::lock_guard<std::mutex> lock(consoleMutex());
+  CaptureHandler handler;
+  const console_bridge::LogLevel level = console_bridge::getLogLevel();
+  console_bridge::useOutputHandler(&handler);
+  console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_ERROR);
+  urdf::ModelInterfaceSharedPtr model;
+  try {
+    model = urdf::parseURDF(xml);
+  } catch (const std::exception& e) {
+    handler.messages.push_back(e.what());
+    model.reset();
+  }
+  console_bridge::restorePreviousOutputHandler();
+  console_bridge::setLogLevel(level);
+  if (!model) {
+    std::string text;
+    for (const std::string& m : handler.messages) {
+      if (m.empty()) continue;
+      if (!text.empty()) text += "; ";
+      text += m;
+    }
+    *reason = text.empty() ? std::string("urdfdom rejected it") : text;
+  }
+  return model;
+}
+
+Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  const Eigen::Quaterniond q(pose.rotation.w, pose.rotation.x, pose.rotation.y, pose.rotation.z);
+  if (q.norm() > 0.0) T.linear() = q.normalized().toRotationMatrix();
+  T.translation() << pose.position.x, pose.position.y, pose.position.z;
+  return T;
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return S;
+}
+
+bool isMoving(const urdf::Joint& j) { return j.type != urdf::Joint::FIXED; }
+
+const char* urdfTypeName(int type) {
+  switch (type) {
+    case urdf::Joint::REVOLUTE:
+      return "revolute";
+    case urdf::Joint::CONTINUOUS:
+      return "continuous";
+    case urdf::Joint::PRISMATIC:
+      return "prismatic";
+    case urdf::Joint::FLOATING:
+      return "floating";
+    case urdf::Joint::PLANAR:
+      return "planar";
+    case urdf::Joint::FIXED:
+      return "fixed";
+    default:
+      return "unknown";
+  }
+}
+
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const std::string& n : names) s += (s.empty() ? "'" : ", '") + n + "'";
+  return s;
+}
+
+/// Builds the Model once the URDF text has been parsed.
+class Builder {
+ public:
+  Builder(const urdf::ModelInterface& urdf, std::string source)
+      : urdf_(urdf), source_(std::move(source)) {}
+
+  Model build(const std::string& tip_name) {
+    root_ = urdf_.getRoot();
+    if (!root_) fail("has no root link");
+    const urdf::LinkConstSharedPtr tip = findTip(tip_name);
+
+    // Root -> tip path, as links and as the joints entering them.
+    std::vector<urdf::LinkConstSharedPtr> path;
+    for (urdf::LinkConstSharedPtr l = tip; l; l = l->getParent()) path.push_back(l);
+    std::reverse(path.begin(), path.end());
+    for (const auto& l : path) on_path_.insert(l->name);
+
+    Model model;
+    model.name = urdf_.getName();
+    model.source = source_;
+    model.convention = "urdf";
+    model.link_names.push_back(root_->name);
+
+    Eigen::Isometry3d fixed = Eigen::Isometry3d::Identity();  // since the last moving link
+    std::vector<urdf::LinkConstSharedPtr> bodies;             // child links of moving joints
+    std::vector<double> viscous, coulomb;
+    for (size_t i = 1; i < path.size(); ++i) {
+      const urdf::Joint& uj = *path[i]->parent_joint;
+      const Eigen::Isometry3d origin = toIsometry(uj.parent_to_joint_origin_transform);
+      if (!isMoving(uj)) {
+        fixed = fixed * origin;
+        continue;
+      }
+      Joint j;
+      j.name = uj.name;
+      if (uj.type == urdf::Joint::REVOLUTE || uj.type == urdf::Joint::CONTINUOUS)
+        j.type = JointType::Revolute;
+      else if (uj.type == urdf::Joint::PRISMATIC)
+        j.type = JointType::Prismatic;
+      else
+        fail("joint '" + uj.name + "' has type '" + urdfTypeName(uj.type) +
+             "', which is not supported in a serial chain");
+      if (uj.mimic)
+        fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
+             "', which is not supported in a serial chain (pass a tip before it)");
+      const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
+      if (!axis.allFinite() || axis.norm() < 1e-12)
+        fail("joint '" + uj.name + "' has a zero or invalid axis");
+      j.axis = axis.normalized();
+      j.pre = fixed * origin;
+      fixed.setIdentity();
+      if (uj.limits) {
+        const urdf::JointLimits& lim = *uj.limits;
+        // urdfdom reports absent lower/upper as 0/0 and absent velocity/effort as 0: not given.
+        if (uj.type != urdf::Joint::CONTINUOUS && !(lim.lower == 0.0 && lim.upper == 0.0)) {
+          j.limits.lower = lim.lower;
+          j.limits.upper = lim.upper;
+        }
+        if (lim.velocity > 0.0) j.limits.velocity = lim.velocity;
+        if (lim.effort > 0.0) j.limits.effort = lim.effort;
+      }
+      viscous.push_back(uj.dynamics ? uj.dynamics->damping : 0.0);
+      coulomb.push_back(uj.dynamics ? uj.dynamics->friction : 0.0);
+      model.joints.push_back(j);
+      model.link_names.push_back(path[i]->name);
+      bodies.push_back(path[i]);
+    }
+    if (model.joints.empty())
+      fail("no moving joint between root link '" + root_->name + "' and tip link '" + tip->name +
+           "'");
+    model.tool = fixed;
+
+    const int n = model.nq();
+    model.inertial.setZero(10 * n);
+    for (int k = 0; k < n; ++k) {
+      Eigen::Matrix<double, 10, 1> body = Eigen::Matrix<double, 10, 1>::Zero();
+      accumulate(*bodies[k], Eigen::Isometry3d::Identity(), &body);
+      model.inertial.segment<10>(10 * k) = body;
+    }
+    model.rotor_inertia.setZero(n);
+    model.viscous = Eigen::Map<const Eigen::VectorXd>(viscous.data(), n);
+    model.coulomb = Eigen::Map<const Eigen::VectorXd>(coulomb.data(), n);
+    if (!locked_.empty())
+      model.notes = "joints off the chain locked at q = 0 (clamped to limits) and merged: " +
+                    joinNames(locked_);
+    model.validate();
+    return model;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const { throw ModelError(source_ + ": " + what); }
+
+  /// True if the subtree below `link` contains a moving joint.
+  bool movingBelow(const urdf::Link& link) {
+    const auto it = moving_below_.find(link.name);
+    if (it != moving_below_.end()) return it->second;
+    bool moving = false;
+    for (const auto& c : link.child_links)
+      if (isMoving(*c->parent_joint) || movingBelow(*c)) moving = true;
+    moving_below_[link.name] = moving;
+    return moving;
+  }
+
+  /// Moving links whose subtrees hold only fixed joints.
+  void collectLeaves(const urdf::LinkConstSharedPtr& link, std::vector<std::string>* leaves) {
+    if (link != root_ && isMoving(*link->parent_joint) && !movingBelow(*link)) {
+      leaves->push_back(link->name);
+      return;
+    }
+    for (const auto& c : link->child_links) collectLeaves(c, leaves);
+  }
+
+  urdf::LinkConstSharedPtr findTip(const std::string& tip_name) {
+    if (!tip_name.empty()) {
+      urdf::LinkConstSharedPtr tip = urdf_.getLink(tip_name);
+      if (!tip) {
+        std::vector<std::string> names;
+        for (const auto& kv : urdf_.links_) names.push_back(kv.first);
+        fail("tip link '" + tip_name + "' is not in robot '" + urdf_.getName() +
+             "'; its links are " + joinNames(names));
+      }
+      return tip;
+    }
+    std::vector<std::string> leaves;
+    collectLeaves(root_, &leaves);
+    if (leaves.empty()) fail("robot '" + urdf_.getName() + "' has no moving joint");
+    if (leaves.size() == 1) return urdf_.getLink(leaves.front());
+    std::string msg = "robot '" + urdf_.getName() + "' branches into " +
+                      std::to_string(leaves.size()) + " moving tips: " + joinNames(leaves) +
+                      "; pass tip= one of them";
+    const std::string shared = lastSharedLink(leaves);
+    if (!shared.empty())
+      msg += ", or a link before the branch such as '" + shared +
+             "' (joints after it are then locked at q = 0)";
+    fail(msg);
+  }
+
+  /// Deepest link shared by the paths to all `leaves`, if a moving joint precedes it; else "".
+  std::string lastSharedLink(const std::vector<std::string>& leaves) const {
+    std::vector<std::vector<urdf::LinkConstSharedPtr>> paths;
+    for (const std::string& name : leaves) {
+      std::vector<urdf::LinkConstSharedPtr> p;
+      for (urdf::LinkConstSharedPtr l = urdf_.getLink(name); l; l = l->getParent()) p.push_back(l);
+      std::reverse(p.begin(), p.end());
+      paths.push_back(p);
+    }
+    size_t depth = 0;
+    bool moving = false;
+    std::string shared;
+    while (true) {
+      for (const auto& p : paths)
+        if (depth >= p.size() || p[depth] != paths.front()[depth]) return moving ? shared : "";
+      const auto& l = paths.front()[depth];
+      if (l->parent_joint && isMoving(*l->parent_joint)) moving = true;
+      shared = l->name;
+      ++depth;
+    }
+  }
+
+  /// Motion of an off-chain joint locked at q = 0 clamped into its limits.
+  Eigen::Isometry3d lockedMotion(const urdf::Joint& j) {
+    Eigen::Isometry3d M = Eigen::Isometry3d::Identity();
+    if (!isMoving(j)) return M;
+    locked_.push_back(j.name);
+    double q = 0.0;
+    if (j.limits && j.type != urdf::Joint::CONTINUOUS && j.limits->lower <= j.limits->upper)
+      q = std::min(std::max(0.0, j.limits->lower), j.limits->upper);
+    const Eigen::Vector3d axis(j.axis.x, j.axis.y, j.axis.z);
+    if (q == 0.0 || !(axis.norm() > 1e-12)) return M;
+    if (j.type == urdf::Joint::REVOLUTE)
+      M.linear() = Eigen::AngleAxisd(q, axis.normalized()).toRotationMatrix();
+    else if (j.type == urdf::Joint::PRISMATIC)
+      M.translation() = q * axis.normalized();
+    return M;
+  }
+
+  /// Adds `link` and everything rigidly attached below it (in frame `body_T_link`) to `body`.
+  void accumulate(const urdf::Link& link, const Eigen::Isometry3d& body_T_link,
+                  Eigen::Matrix<double, 10, 1>* body) {
+    if (link.inertial) {
+      const urdf::Inertial& in = *link.inertial;
+      if (!std::isfinite(in.mass) || in.mass < 0.0)
+        fail("link '" + link.name + "' has mass " + std::to_string(in.mass));
+      const Eigen::Isometry3d frame = toIsometry(in.origin);
+      Eigen::Matrix3d Ic;
+      Ic << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+      if (!Ic.allFinite()) fail("link '" + link.name + "' has a non-finite inertia");
+      const Eigen::Matrix<double, 10, 1> p =
+          inertialFromUrdf(in.mass, frame.translation(), frame.linear(), Ic);
+      *body += transformInertial(p, body_T_link);
+    }
+    for (const auto& child : link.child_links) {
+      const urdf::Joint& j = *child->parent_joint;
+      if (isMoving(j) && on_path_.count(child->name)) continue;  // the next chain body
+      const Eigen::Isometry3d T =
+          body_T_link * toIsometry(j.parent_to_joint_origin_transform) * lockedMotion(j);
+      accumulate(*child, T, body);
+    }
+  }
+
+  const urdf::ModelInterface& urdf_;
+  const std::string source_;
+  urdf::LinkConstSharedPtr root_;
+  std::set<std::string> on_path_;
+  std::map<std::string, bool> moving_below_;
+  std::vector<std::string> locked_;
+};
+
+}  // namespace
+
+Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1>& inertial,
+                                               const Eigen::Isometry3d& parent_T_child) {
+  const Eigen::Matrix3d R = parent_T_child.linear();
+  const Eigen::Vector3d p = parent_T_child.translation();
+  const double m = inertial[9];
+  const Eigen::Vector3d Rh = R * inertial.segment<3>(6);
+  const Eigen::Matrix3d P = skew(p);
+  const Eigen::Matrix3d H = skew(Rh);
+  const Eigen::Matrix3d I = R * inertiaTensor(inertial) * R.transpose() - P * H - H * P - m * P * P;
+  const Eigen::Vector3d h = Rh + m * p;
+  Eigen::Matrix<double, 10, 1> out;
+  out << I(0, 0), I(0, 1), I(0, 2), I(1, 1), I(1, 2), I(2, 2), h.x(), h.y(), h.z(), m;
+  return out;
+}
+
+Model parseUrdf(const std::string& xml, const std::string& tip, const std::string& source) {
+  std::string reason;
+  const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(xml, &reason);
+  if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
+  return Builder(*urdf, source).build(tip);
+}
+
+Model loadUrdf(const std::string& path, const std::string& tip) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw FileError("URDF file '" + path + "' does not exist");
+  if (fs::is_directory(path, ec)) throw FileError("URDF file '" + path + "' is a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw FileError("URDF file '" + path + "' cannot be read");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw FileError("URDF file '" + path + "' cannot be read");
+  return parseUrdf(text.str(), tip, path);
+}
+
+}  // namespace mindyn

@@ -1,0 +1,192 @@
+// Dynamics checked against closed forms, energy identities and internal consistency of
+// independent code paths (Newton-Euler vs regressor vs energies vs mass matrix).
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+
+#include "mindyn/dynamics.hpp"
+#include "test_util.hpp"
+
+using namespace mindyn;
+using mindyn::test::random;
+using mindyn::test::relErr;
+
+namespace {
+
+std::vector<std::string> bundled() { return {"puma560", "puma560_3", "zcr07s", "stanford"}; }
+
+Model withExtras(Model m, std::mt19937& rng) {
+  const int n = m.nq();
+  m.rotor_inertia = random(rng, n).cwiseAbs();
+  m.viscous = random(rng, n).cwiseAbs();
+  m.coulomb = random(rng, n).cwiseAbs();
+  return m;
+}
+
+}  // namespace
+
+TEST(Dynamics, TwoLinkPlanarClosedForm) {
+  // Vertical-plane two-link arm of uniform rods: the textbook closed form.
+  const double l = 0.5, m = 2.0, r = 0.02, g = 9.81;
+  Model model = planarArm(2, true, l, m);
+  Data data(model);
+  const double lc = l / 2, I = m * (3 * r * r + l * l) / 12.0;
+  std::mt19937 rng(1);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Eigen::VectorXd q = random(rng, 2, M_PI), dq = random(rng, 2, 2), ddq = random(rng, 2, 3);
+    const double c1 = std::cos(q[0]), c2 = std::cos(q[1]), s2 = std::sin(q[1]);
+    const double c12 = std::cos(q[0] + q[1]);
+    const double m11 = m * lc * lc + I + m * (l * l + lc * lc + 2 * l * lc * c2) + I;
+    const double m12 = m * (lc * lc + l * lc * c2) + I;
+    const double m22 = m * lc * lc + I;
+    const double hh = m * l * lc * s2;
+    Eigen::Vector2d expected;
+    expected[0] = m11 * ddq[0] + m12 * ddq[1] - hh * (2 * dq[0] * dq[1] + dq[1] * dq[1]) +
+                  (m * lc + m * l) * g * c1 + m * lc * g * c12;
+    expected[1] = m12 * ddq[0] + m22 * ddq[1] + hh * dq[0] * dq[0] + m * lc * g * c12;
+    Eigen::VectorXd tau(2);
+    inverseDynamics(model, data, q, dq, ddq, model.parameters(), {}, tau);
+    EXPECT_LT(relErr(tau, expected), 1e-12) << tau.transpose() << " vs " << expected.transpose();
+  }
+}
+
+TEST(Dynamics, RegressorTimesParametersIsInverseDynamics) {
+  std::mt19937 rng(2);
+  for (const auto& name : bundled()) {
+    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+    Data data(model);
+    const int n = model.nq();
+    for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true},
+                                   ParameterLayout{true, false}, ParameterLayout{false, true}}) {
+      const int P = layout.size(n);
+      Eigen::MatrixXd W(n, P);
+      Eigen::VectorXd tau(n);
+      for (int trial = 0; trial < 10; ++trial) {
+        const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2),
+                              ddq = random(rng, n, 5);
+        const Eigen::VectorXd pi = random(rng, P);  // physically meaningless on purpose
+        regressor(model, data, q, dq, ddq, layout, W);
+        inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+        EXPECT_LT(relErr(W * pi, tau), 1e-12) << name;
+      }
+    }
+  }
+}
+
+TEST(Dynamics, EnergyRegressorsAndKineticEnergyFromMassMatrix) {
+  std::mt19937 rng(3);
+  for (const auto& name : bundled()) {
+    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+    Data data(model);
+    const int n = model.nq();
+    const ParameterLayout layout{true, true};
+    const Eigen::VectorXd pi = model.parameters(layout);
+    Eigen::VectorXd wK(layout.size(n)), wP(layout.size(n));
+    Eigen::MatrixXd M(n, n);
+    for (int trial = 0; trial < 10; ++trial) {
+      const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2);
+      energyRegressors(model, data, q, dq, layout, wK, wP);
+      const double K = kineticEnergy(model, data, q, dq, pi, layout);
+      const double P = potentialEnergy(model, data, q, pi, layout);
+      massMatrix(model, data, q, pi, layout, M);
+      EXPECT_NEAR(wK.dot(pi), K, 1e-12 * std::max(1.0, std::abs(K))) << name;
+      EXPECT_NEAR(wP.dot(pi), P, 1e-12 * std::max(1.0, std::abs(P))) << name;
+      EXPECT_NEAR(0.5 * dq.dot(M * dq), K, 1e-11 * std::max(1.0, std::abs(K))) << name;
+    }
+  }
+}
+
+TEST(Dynamics, PotentialEnergyGradientIsGravityTorque) {
+  std::mt19937 rng(4);
+  for (const auto& name : bundled()) {
+    const Model model = loadYaml(test::robotFile(name));
+    Data data(model);
+    const int n = model.nq();
+    const Eigen::VectorXd pi = model.parameters();
+    const Eigen::VectorXd q = random(rng, n, 2);
+    Eigen::VectorXd g(n), fd(n);
+    gravityTorque(model, data, q, pi, {}, g);
+    const double h = 1e-6;
+    for (int k = 0; k < n; ++k) {
+      Eigen::VectorXd qp = q, qm = q;
+      qp[k] += h;
+      qm[k] -= h;
+      fd[k] =
+          (potentialEnergy(model, data, qp, pi, {}) - potentialEnergy(model, data, qm, pi, {})) /
+          (2 * h);
+    }
+    EXPECT_LT(relErr(g, fd), 1e-7) << name << ": " << g.transpose() << " vs " << fd.transpose();
+  }
+}
+
+TEST(Dynamics, PowerBalanceAlongATrajectory) {
+  // dH/dt = dq^T tau for a frictionless robot, by central differences of H along
+  // q(t) = q0 + dq0 t + ddq0 t^2 / 2.
+  std::mt19937 rng(5);
+  for (const auto& name : bundled()) {
+    Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+    Data data(model);
+    const int n = model.nq();
+    const ParameterLayout layout{true, false};
+    const Eigen::VectorXd pi = model.parameters(layout);
+    for (int trial = 0; trial < 5; ++trial) {
+      const Eigen::VectorXd q0 = random(rng, n, 2), dq0 = random(rng, n, 1),
+                            ddq0 = random(rng, n, 2);
+      auto H = [&](double t) {
+        const Eigen::VectorXd q = q0 + dq0 * t + 0.5 * ddq0 * t * t, dq = dq0 + ddq0 * t;
+        return kineticEnergy(model, data, q, dq, pi, layout) +
+               potentialEnergy(model, data, q, pi, layout);
+      };
+      const double h = 1e-5;
+      const double dH = (H(h) - H(-h)) / (2 * h);
+      Eigen::VectorXd tau(n);
+      inverseDynamics(model, data, q0, dq0, ddq0, pi, layout, tau);
+      EXPECT_NEAR(dH, dq0.dot(tau), 1e-6 * std::max(1.0, std::abs(dH))) << name;
+    }
+  }
+}
+
+TEST(Dynamics, MassMatrixSymmetricPositiveDefiniteAndForwardDynamicsInverts) {
+  std::mt19937 rng(6);
+  for (const auto& name : bundled()) {
+    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+    Data data(model);
+    const int n = model.nq();
+    const ParameterLayout layout{true, true};
+    const Eigen::VectorXd pi = model.parameters(layout);
+    Eigen::MatrixXd M(n, n);
+    Eigen::VectorXd tau(n), ddq2(n);
+    for (int trial = 0; trial < 10; ++trial) {
+      const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 5);
+      massMatrix(model, data, q, pi, layout, M);
+      EXPECT_LT((M - M.transpose()).norm(), 1e-14 * M.norm());
+      EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M).eigenvalues().minCoeff(), 0.0)
+          << name;
+      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+      ASSERT_TRUE(forwardDynamics(model, data, q, dq, tau, pi, layout, ddq2));
+      EXPECT_LT(relErr(ddq2, ddq), 1e-9) << name;
+    }
+  }
+}
+
+TEST(Dynamics, ForwardDynamicsReportsSingularInertia) {
+  Model model = planarArm(2);
+  Data data(model);
+  const Eigen::VectorXd pi = Eigen::VectorXd::Zero(20);
+  Eigen::VectorXd q = Eigen::VectorXd::Zero(2), ddq = Eigen::VectorXd::Constant(2, 7.0);
+  EXPECT_FALSE(forwardDynamics(model, data, q, q, q, pi, {}, ddq));
+  EXPECT_EQ(ddq[0], 7.0);
+}
+
+TEST(Dynamics, SizeChecksNameTheArgument) {
+  const Model model = planarArm(3);
+  try {
+    checkSizes(model, {}, 3, 2, 3, 30);
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("dq has 2 entries"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(checkSizes(model, {true, false}, 3, 3, 3, 30), std::invalid_argument);
+  EXPECT_NO_THROW(checkSizes(model, {true, false}, 3, 3, 3, 33));
+}

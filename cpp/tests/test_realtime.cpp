@@ -1,0 +1,92 @@
+// The per-call paths allocate nothing: every heap allocation made through malloc, calloc,
+// realloc or operator new (which goes through malloc in libstdc++) is counted while a guard is
+// active.
+#include <gtest/gtest.h>
+#include <malloc.h>
+
+#include <atomic>
+
+#include "mindyn/dynamics.hpp"
+#include "test_util.hpp"
+
+extern "C" {
+void* __libc_malloc(size_t);
+void* __libc_calloc(size_t, size_t);
+void* __libc_realloc(void*, size_t);
+}
+
+namespace {
+std::atomic<bool> counting{false};
+std::atomic<long> allocations{0};
+}  // namespace
+
+extern "C" void* malloc(size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  return __libc_malloc(size);
+}
+extern "C" void* calloc(size_t n, size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  return __libc_calloc(n, size);
+}
+extern "C" void* realloc(void* p, size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  return __libc_realloc(p, size);
+}
+
+namespace {
+struct Count {
+  Count() {
+    allocations = 0;
+    counting = true;
+  }
+  ~Count() { counting = false; }
+  long value() const { return allocations.load(); }
+};
+}  // namespace
+
+using namespace mindyn;
+
+TEST(Realtime, TheCounterSeesAllocations) {
+  long seen;
+  {
+    Count c;
+    std::vector<double>* v = new std::vector<double>(100);
+    Eigen::VectorXd* e = new Eigen::VectorXd(50);
+    seen = c.value();
+    delete v;
+    delete e;
+  }
+  EXPECT_GE(seen, 3);
+}
+
+TEST(Realtime, DynamicsPathsAllocateNothing) {
+  for (const char* name : {"puma560", "zcr07s", "stanford"}) {
+    const Model model = loadYaml(test::robotFile(name));
+    Data data(model);
+    const int n = model.nq();
+    const ParameterLayout layout{true, true};
+    const Eigen::VectorXd pi = model.parameters(layout);
+    std::mt19937 rng(21);
+    const Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n),
+                          ddq = test::random(rng, n);
+    Eigen::VectorXd tau(n), ddq2(n), wK(layout.size(n)), wP(layout.size(n));
+    Eigen::MatrixXd W(n, layout.size(n)), M(n, n);
+    double e = 0;
+    bool ok = true;
+    Count c;
+    for (int i = 0; i < 3; ++i) {
+      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+      gravityTorque(model, data, q, pi, layout, tau);
+      regressor(model, data, q, dq, ddq, layout, W);
+      energyRegressors(model, data, q, dq, layout, wK, wP);
+      e += kineticEnergy(model, data, q, dq, pi, layout) +
+           potentialEnergy(model, data, q, pi, layout);
+      massMatrix(model, data, q, pi, layout, M);
+      ok = ok && forwardDynamics(model, data, q, dq, tau, pi, layout, ddq2);
+    }
+    const long seen = c.value();
+    EXPECT_EQ(seen, 0) << name;
+    EXPECT_TRUE(ok);
+    EXPECT_TRUE(std::isfinite(e));
+  }
+}

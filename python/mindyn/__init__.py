@@ -1,0 +1,35 @@
+"""mindyn: the minimal dynamic model of a manipulator.
+
+``mindyn.load(name_or_path)`` gives a :class:`Robot` with linear-in-parameters inverse dynamics,
+regressors, energies, mass matrix and forward dynamics (C++ core) and KDL kinematics.
+"""
+
+from ._core import ModelError, RobotFileNotFoundError, inertial_from_com, inertial_from_urdf
+from ._core import from_pinocchio_order as _from_pin
+from ._core import to_pinocchio_order as _to_pin
+from .robot import Robot, bundled_robots, load
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ModelError",
+    "Robot",
+    "RobotFileNotFoundError",
+    "bundled_robots",
+    "from_pinocchio_order",
+    "inertial_from_com",
+    "inertial_from_urdf",
+    "load",
+    "to_pinocchio_order",
+]
+
+
+def to_pinocchio_order(params):
+    """Inertial parameters ``[XX XY XZ YY YZ ZZ MX MY MZ M]`` per link, shape (10 n,), to
+    Pinocchio's dynamic-parameter order ``[m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]``."""
+    return _to_pin(params)
+
+
+def from_pinocchio_order(params):
+    """Inverse of :func:`to_pinocchio_order`."""
+    return _from_pin(params)

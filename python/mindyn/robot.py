@@ -1,0 +1,331 @@
+"""Robot models: loading by name or path, and the linear-in-parameters dynamics.
+
+Every per-sample method takes one sample, arrays of shape ``(n,)``, or a batch of ``m`` samples,
+arrays of shape ``(m, n)``, and returns the matching shape. Parameter vectors follow the classical
+layout ``[XX1 XY1 XZ1 YY1 YZ1 ZZ1 MX1 MY1 MZ1 M1 (Ia1) (Fv1 Fc1) XX2 ...]``: inertial parameters
+about each link-frame origin, optionally followed per joint by rotor inertia and viscous / Coulomb
+friction. A vector's layout is recognised from its length (10n, 11n with ``Ia``, 12n with
+``Fv, Fc``, 13n with all three).
+"""
+
+from __future__ import annotations
+
+import re
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["Robot", "load", "bundled_robots"]
+
+_PLANAR = re.compile(r"^planar(\d+)(h?)$")
+
+
+def bundled_robots() -> list[str]:
+    """Names accepted by :func:`load` besides file paths (``planar<N>`` for any N >= 1)."""
+    names = sorted(p.stem for p in _robot_dir().iterdir() if p.suffix == ".yaml")
+    return names + ["planar<N>", "planar<N>h"]
+
+
+def _robot_dir() -> Path:
+    return Path(str(resources.files("mindyn") / "robots"))
+
+
+def load(robot: str | Path, tip: str | None = None) -> Robot:
+    """Load a robot.
+
+    Parameters
+    ----------
+    robot : str or Path
+        A bundled name (``puma560``, ``puma560_3``, ``zcr07s``, ``stanford``, ``planar<N>`` for a
+        vertical-plane N-link arm, ``planar<N>h`` for a horizontal one), a URDF file (``.urdf``,
+        ``.xml``) or a YAML DH / MDH table (``.yaml``, ``.yml``).
+    tip : str, optional
+        URDF only: the link that ends the serial chain. Needed when the URDF is a tree with more
+        than one moving branch.
+
+    Raises
+    ------
+    FileNotFoundError
+        The file does not exist (``mindyn.RobotFileNotFoundError``).
+    ValueError
+        Malformed description, unsupported joint, unknown name (``mindyn.ModelError``).
+    """
+    if isinstance(robot, Robot):
+        return robot
+    text = str(robot)
+    path = Path(text)
+    suffix = path.suffix.lower()
+    if suffix in (".urdf", ".xml"):
+        if not path.is_file():
+            raise _core.RobotFileNotFoundError(f"URDF file '{text}' does not exist")
+        return Robot(_core.load_urdf(text, tip or ""))
+    if suffix in (".yaml", ".yml"):
+        if tip:
+            raise _core.ModelError("tip= applies to URDF chains only, not to a DH/MDH table")
+        if not path.is_file():
+            raise _core.RobotFileNotFoundError(f"robot description '{text}' does not exist")
+        return Robot(_core.load_yaml(text))
+    if tip:
+        raise _core.ModelError(
+            f"tip= applies to URDF files only, not to the bundled robot '{text}'"
+        )
+    m = _PLANAR.match(text)
+    if m:
+        return Robot(_core.planar_arm(int(m.group(1)), vertical=not m.group(2)))
+    bundled = _robot_dir() / f"{text}.yaml"
+    if "/" not in text and bundled.is_file():
+        return Robot(_core.load_yaml(str(bundled)))
+    if "/" in text or suffix:
+        raise _core.RobotFileNotFoundError(
+            f"'{text}' is neither an existing .urdf/.yaml file nor a bundled robot"
+        )
+    raise _core.ModelError(
+        f"unknown robot '{text}'; bundled robots: {', '.join(bundled_robots())}, "
+        "or give a path to a .urdf or .yaml file"
+    )
+
+
+class Robot:
+    """A serial manipulator with a fixed base.
+
+    Attributes
+    ----------
+    n : int
+        Number of joints.
+    param_names : list of str
+        Names of the classical inertial parameters (``10 n``).
+    params : ndarray, shape (10 n,)
+        Their values (a copy; assign to change the model).
+    """
+
+    def __init__(self, core: _core.Model):
+        self._m = core
+        self._kin: _core.Kinematics | None = None
+
+    # -- description ---------------------------------------------------------------------------
+    @property
+    def n(self) -> int:
+        return self._m.n
+
+    @property
+    def name(self) -> str:
+        return self._m.name
+
+    @property
+    def source(self) -> str:
+        return self._m.source
+
+    @property
+    def convention(self) -> str:
+        """``urdf``, ``dh`` or ``mdh``: how the geometry was given."""
+        return self._m.convention
+
+    @property
+    def notes(self) -> str:
+        return self._m.notes
+
+    @property
+    def synthetic_inertia(self) -> bool:
+        """True when the description says its inertial values are invented, not measured."""
+        return self._m.synthetic_inertia
+
+    @property
+    def joint_names(self) -> list[str]:
+        return self._m.joint_names
+
+    @property
+    def joint_types(self) -> list[str]:
+        return self._m.joint_types
+
+    @property
+    def link_names(self) -> list[str]:
+        """``n + 1`` names: the base, then each moving link."""
+        return self._m.link_names
+
+    @property
+    def axes(self) -> np.ndarray:
+        """Joint axes, shape (n, 3), each in its joint frame."""
+        return self._m.axes
+
+    @property
+    def dh(self) -> np.ndarray:
+        """DH rows ``(a, alpha, d, theta)`` for ``dh``; MDH ``(d_j, alpha_j, r_j, theta_j)`` as
+        ``(a, alpha, d, theta)`` for ``mdh``; empty for URDF. Shape (n, 4) or (0, 4)."""
+        return self._m.dh
+
+    @property
+    def limits(self) -> dict[str, np.ndarray]:
+        """Joint limits as arrays of shape (n,): lower, upper, velocity, acceleration, effort
+        (NaN where the description gives none)."""
+        rows = self._m.limits
+        return {k: np.array([r[k] for r in rows]) for k in rows[0]}
+
+    @property
+    def drives(self) -> dict[str, np.ndarray]:
+        """Motor rated torque and gear ratio per joint, shape (n,) each (NaN when unknown)."""
+        rows = self._m.drives
+        return {k: np.array([r[k] for r in rows]) for k in rows[0]}
+
+    @property
+    def gravity(self) -> np.ndarray:
+        """Gravity in the base frame, shape (3,); default (0, 0, -9.81)."""
+        return self._m.gravity
+
+    @gravity.setter
+    def gravity(self, g) -> None:
+        self._m.gravity = np.asarray(g, dtype=float).reshape(3)
+
+    @property
+    def tool(self) -> np.ndarray:
+        """4x4 transform from the last link frame to the tool frame."""
+        return self._m.tool
+
+    def joint_transform(self, k: int, q: float) -> np.ndarray:
+        """4x4 transform from link ``k-1`` to link ``k`` (0-based ``k``) at joint value ``q``."""
+        self._check_joint(k)
+        return self._m.joint_transform(k, float(q))
+
+    def joint_pre(self, k: int) -> np.ndarray:
+        self._check_joint(k)
+        return self._m.joint_pre(k)
+
+    def joint_post(self, k: int) -> np.ndarray:
+        self._check_joint(k)
+        return self._m.joint_post(k)
+
+    def _check_joint(self, k: int) -> None:
+        if not 0 <= k < self.n:
+            raise IndexError(f"joint index {k} out of range for {self.n} joints")
+
+    # -- parameters ----------------------------------------------------------------------------
+    @property
+    def param_names(self) -> list[str]:
+        return self._m.parameter_names(False, False)
+
+    @property
+    def params(self) -> np.ndarray:
+        return self._m.inertial
+
+    @params.setter
+    def params(self, value) -> None:
+        self._m.inertial = np.asarray(value, dtype=float)
+
+    @property
+    def rotor_inertia(self) -> np.ndarray:
+        return self._m.rotor_inertia
+
+    @rotor_inertia.setter
+    def rotor_inertia(self, v) -> None:
+        self._m.rotor_inertia = np.asarray(v, dtype=float)
+
+    @property
+    def viscous(self) -> np.ndarray:
+        return self._m.viscous
+
+    @viscous.setter
+    def viscous(self, v) -> None:
+        self._m.viscous = np.asarray(v, dtype=float)
+
+    @property
+    def coulomb(self) -> np.ndarray:
+        return self._m.coulomb
+
+    @coulomb.setter
+    def coulomb(self, v) -> None:
+        self._m.coulomb = np.asarray(v, dtype=float)
+
+    def parameter_names(self, rotor: bool = False, friction: bool = False) -> list[str]:
+        """Classical parameter names in the layout with optional ``Ia`` and ``Fv, Fc``."""
+        return self._m.parameter_names(rotor, friction)
+
+    def parameters(self, rotor: bool = False, friction: bool = False) -> np.ndarray:
+        """Classical parameter values of the model in that layout."""
+        return self._m.parameters(rotor, friction)
+
+    # -- dynamics ------------------------------------------------------------------------------
+    def inverse_dynamics(self, q, dq, ddq, params=None) -> np.ndarray:
+        """Joint torques ``tau = W(q, dq, ddq) @ params`` by Newton-Euler.
+
+        ``params`` defaults to the model's inertial parameters; any vector in a classical layout is
+        accepted, physically meaningful or not. Returns shape (n,) or (m, n)."""
+        return self._m.inverse_dynamics(q, dq, ddq, params)
+
+    def regressor(self, q, dq, ddq, rotor: bool = False, friction: bool = False) -> np.ndarray:
+        """Classical regressor ``W``, shape (n, P) or (m, n, P), with ``tau = W @ params``."""
+        return self._m.regressor(q, dq, ddq, rotor, friction)
+
+    def gravity_torque(self, q, params=None) -> np.ndarray:
+        """Gravity torque ``c(q)``, shape (n,) or (m, n)."""
+        return self._m.gravity_torque(q, params)
+
+    def mass_matrix(self, q, params=None) -> np.ndarray:
+        """Joint-space inertia ``A(q)``, shape (n, n) or (m, n, n)."""
+        return self._m.mass_matrix(q, params)
+
+    def forward_dynamics(self, q, dq, tau, params=None) -> np.ndarray:
+        """Joint accelerations ``A(q)^-1 (tau - b - c - friction)``, shape (n,) or (m, n).
+
+        Raises ValueError when ``A(q)`` is not positive definite for ``params``."""
+        return self._m.forward_dynamics(q, dq, tau, params)
+
+    def kinetic_energy(self, q, dq, params=None):
+        """Kinetic energy (rotor inertia included when ``params`` has it): float or shape (m,)."""
+        return self._m.energies(q, dq, params)[0]
+
+    def potential_energy(self, q, params=None):
+        """Potential energy ``-sum g . (M_k p_k + R_k MS_k)``: float or shape (m,)."""
+        q = np.asarray(q, dtype=float)
+        return self._m.energies(q, np.zeros_like(q), params)[1]
+
+    def energy(self, q, dq, params=None):
+        """Total energy ``H = K + P``: float or shape (m,)."""
+        k, p = self._m.energies(q, dq, params)
+        return k + p
+
+    def energy_regressors(self, q, dq, rotor: bool = False, friction: bool = False):
+        """``(w_K, w_P)`` with ``K = w_K @ params`` and ``P = w_P @ params``; shape (P,) or
+        (m, P) each."""
+        return self._m.energy_regressors(q, dq, rotor, friction)
+
+    def energy_regressor(self, q, dq, rotor: bool = False, friction: bool = False) -> np.ndarray:
+        """Total-energy regressor ``w_H = w_K + w_P`` (``H = w_H @ params``)."""
+        wk, wp = self._m.energy_regressors(q, dq, rotor, friction)
+        return wk + wp
+
+    def lagrangian_regressor(self, q, dq, rotor: bool = False, friction: bool = False):
+        """Lagrangian regressor ``w_L = w_K - w_P`` (``L = w_L @ params``)."""
+        wk, wp = self._m.energy_regressors(q, dq, rotor, friction)
+        return wk - wp
+
+    # -- kinematics (Orocos KDL) ---------------------------------------------------------------
+    def _kinematics(self) -> _core.Kinematics:
+        if self._kin is None:
+            self._kin = _core.Kinematics(self._m)
+        return self._kin
+
+    def fk(self, q, link: int = -1) -> np.ndarray:
+        """4x4 pose of link ``link`` (0-based) or of the tool frame (``-1``) in the base frame."""
+        q = _vector(q, self.n, "q")
+        if not -1 <= link < self.n:
+            raise IndexError(f"link index {link} out of range for {self.n} links")
+        return self._kinematics().pose(q, link)
+
+    def jacobian(self, q) -> np.ndarray:
+        """Geometric Jacobian of the tool frame, shape (6, n): rows vx vy vz wx wy wz in the
+        base frame, reference point the tool-frame origin."""
+        return self._kinematics().jacobian(_vector(q, self.n, "q"))
+
+    def __repr__(self) -> str:
+        return f"Robot(name={self.name!r}, n={self.n}, convention={self.convention!r})"
+
+
+def _vector(x, n: int, name: str) -> np.ndarray:
+    a = np.asarray(x, dtype=float)
+    if a.shape != (n,):
+        raise ValueError(f"{name} has shape {a.shape}; expected ({n},)")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return a

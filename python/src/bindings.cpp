@@ -1,0 +1,473 @@
+// Python bindings of the mindyn C++ core. Arrays in, arrays out: every per-sample function takes
+// a single sample of shape (n,) or a batch of shape (m, n) and returns matching shapes.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "mindyn/data.hpp"
+#include "mindyn/description.hpp"
+#include "mindyn/dynamics.hpp"
+#include "mindyn/kinematics.hpp"
+#include "mindyn/model.hpp"
+#include "mindyn/urdf.hpp"
+
+namespace py = pybind11;
+using namespace mindyn;
+
+namespace {
+
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using RowMap =
+    Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
+
+// A model with its own workspace.
+struct PyModel {
+  explicit PyModel(Model m) : model(std::move(m)), data(model) {}
+  Model model;
+  Data data;
+};
+
+// Shape check of a per-sample argument: returns the number of samples (0 = single sample).
+long samples(const Array& a, long n, const char* name) {
+  if (a.ndim() == 1) {
+    if (a.shape(0) != n) {
+      std::ostringstream s;
+      s << name << " has shape (" << a.shape(0) << ",); expected (" << n << ",) or (m, " << n
+        << ")";
+      throw py::value_error(s.str());
+    }
+    return 0;
+  }
+  if (a.ndim() == 2) {
+    if (a.shape(1) != n) {
+      std::ostringstream s;
+      s << name << " has shape (" << a.shape(0) << ", " << a.shape(1) << "); expected (m, " << n
+        << ")";
+      throw py::value_error(s.str());
+    }
+    return a.shape(0);
+  }
+  throw py::value_error(std::string(name) + " must be 1-D (n,) or 2-D (m, n), got " +
+                        std::to_string(a.ndim()) + "-D");
+}
+
+void finite(const Array& a, const char* name) {
+  const double* p = a.data();
+  const long size = static_cast<long>(a.size());
+  for (long i = 0; i < size; ++i)
+    if (!std::isfinite(p[i])) {
+      std::ostringstream s;
+      s << name << " contains " << (std::isnan(p[i]) ? "NaN" : "an infinite value");
+      if (a.ndim() == 2)
+        s << " at sample " << i / a.shape(1) << ", joint " << i % a.shape(1) + 1;
+      else
+        s << " at joint " << i + 1;
+      throw py::value_error(s.str());
+    }
+}
+
+// Checks a group of per-sample arrays; all single or all batches of the same length.
+long batch(const std::vector<std::pair<const Array*, const char*>>& args, long n) {
+  long m = -2;
+  for (const auto& [a, name] : args) {
+    const long s = samples(*a, n, name);
+    finite(*a, name);
+    if (m == -2)
+      m = s;
+    else if (s != m)
+      throw py::value_error(std::string(name) +
+                            ": all inputs must be single samples or batches of equal length");
+  }
+  return m;
+}
+
+Eigen::VectorXd paramVector(const PyModel& self, const py::object& params, ParameterLayout& layout,
+                            bool layout_given) {
+  const int n = self.model.nq();
+  if (params.is_none()) return self.model.parameters(layout);
+  Array a = params.cast<Array>();
+  if (a.ndim() != 1) throw py::value_error("params must be 1-D");
+  const long size = a.shape(0);
+  if (layout_given) {
+    if (size != layout.size(n))
+      throw py::value_error("params has " + std::to_string(size) +
+                            " entries; this layout expects " + std::to_string(layout.size(n)));
+  } else {
+    try {
+      layout = ParameterLayout::fromSize(n, size);
+    } catch (const ModelError& e) {
+      throw py::value_error(e.what());
+    }
+  }
+  finite(a, "params");
+  return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
+}
+
+ParameterLayout layoutOf(const py::object& rotor, const py::object& friction, bool& given) {
+  given = !rotor.is_none() || !friction.is_none();
+  ParameterLayout l;
+  l.rotor = !rotor.is_none() && rotor.cast<bool>();
+  l.friction = !friction.is_none() && friction.cast<bool>();
+  return l;
+}
+
+py::array_t<double> vectorOut(long m, long n) {
+  if (m == 0) return py::array_t<double>({n});
+  return py::array_t<double>({m, n});
+}
+
+template <class F>
+py::array_t<double> perSampleVector(PyModel& self, const Array& a, const Array& b, const Array& c,
+                                    const char* na, const char* nb, const char* nc, F&& f) {
+  const long n = self.model.nq();
+  const long m = batch({{&a, na}, {&b, nb}, {&c, nc}}, n);
+  auto out = vectorOut(m, n);
+  const long rows = m == 0 ? 1 : m;
+  RowMap A(a.data(), rows, n), B(b.data(), rows, n), C(c.data(), rows, n);
+  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> O(
+      out.mutable_data(), rows, n);
+  Eigen::VectorXd qi(n), dqi(n), ddqi(n), ti(n);
+  for (long i = 0; i < rows; ++i) {
+    qi = A.row(i).transpose();
+    dqi = B.row(i).transpose();
+    ddqi = C.row(i).transpose();
+    f(qi, dqi, ddqi, ti);
+    O.row(i) = ti.transpose();
+  }
+  return out;
+}
+
+py::array_t<double> matrix3Out(long m, long r, long c) {
+  if (m == 0) return py::array_t<double>({r, c});
+  return py::array_t<double>({m, r, c});
+}
+
+Eigen::Matrix4d toMatrix(const Eigen::Isometry3d& T) { return T.matrix(); }
+
+Eigen::Isometry3d fromMatrix(const Eigen::Matrix4d& M) {
+  Eigen::Isometry3d T;
+  T.matrix() = M;
+  return T;
+}
+
+py::dict limitsDict(const JointLimits& l) {
+  py::dict d;
+  d["lower"] = l.lower;
+  d["upper"] = l.upper;
+  d["velocity"] = l.velocity;
+  d["acceleration"] = l.acceleration;
+  d["effort"] = l.effort;
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "mindyn C++ core: models, linear-in-parameters dynamics, kinematics";
+
+  py::register_exception<ModelError>(m, "ModelError", PyExc_ValueError);
+  py::register_exception<FileError>(m, "RobotFileNotFoundError", PyExc_FileNotFoundError);
+
+  py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model")
+      .def_property_readonly("n", [](const PyModel& s) { return s.model.nq(); })
+      .def_property_readonly("name", [](const PyModel& s) { return s.model.name; })
+      .def_property_readonly("source", [](const PyModel& s) { return s.model.source; })
+      .def_property_readonly("convention", [](const PyModel& s) { return s.model.convention; })
+      .def_property_readonly("notes", [](const PyModel& s) { return s.model.notes; })
+      .def_property_readonly("synthetic_inertia",
+                             [](const PyModel& s) { return s.model.synthetic_inertia; })
+      .def_property_readonly("link_names", [](const PyModel& s) { return s.model.link_names; })
+      .def_property_readonly("joint_names",
+                             [](const PyModel& s) {
+                               std::vector<std::string> v;
+                               for (const auto& j : s.model.joints) v.push_back(j.name);
+                               return v;
+                             })
+      .def_property_readonly("joint_types",
+                             [](const PyModel& s) {
+                               std::vector<std::string> v;
+                               for (const auto& j : s.model.joints) v.push_back(toString(j.type));
+                               return v;
+                             })
+      .def_property_readonly("axes",
+                             [](const PyModel& s) {
+                               Eigen::MatrixXd a(s.model.nq(), 3);
+                               for (int k = 0; k < s.model.nq(); ++k)
+                                 a.row(k) = s.model.joints[k].axis.transpose();
+                               return a;
+                             })
+      .def(
+          "joint_pre", [](const PyModel& s, int k) { return toMatrix(s.model.joints.at(k).pre); },
+          "4x4 fixed transform from link k-1 to the frame of joint k (0-based k).")
+      .def(
+          "joint_post", [](const PyModel& s, int k) { return toMatrix(s.model.joints.at(k).post); },
+          "4x4 fixed transform from the moved joint frame to link k (0-based k).")
+      .def("joint_transform", [](const PyModel& s, int k,
+                                 double q) { return toMatrix(s.model.joints.at(k).transform(q)); })
+      .def_property_readonly("limits",
+                             [](const PyModel& s) {
+                               py::list l;
+                               for (const auto& j : s.model.joints) l.append(limitsDict(j.limits));
+                               return l;
+                             })
+      .def_property_readonly("drives",
+                             [](const PyModel& s) {
+                               py::list l;
+                               for (const auto& j : s.model.joints) {
+                                 py::dict d;
+                                 d["rated_torque"] = j.drive.rated_torque;
+                                 d["gear_ratio"] = j.drive.gear_ratio;
+                                 l.append(d);
+                               }
+                               return l;
+                             })
+      .def_property_readonly("dh",
+                             [](const PyModel& s) {
+                               Eigen::MatrixXd d(s.model.dh.size(), 4);
+                               for (size_t k = 0; k < s.model.dh.size(); ++k)
+                                 d.row(k) << s.model.dh[k].a, s.model.dh[k].alpha, s.model.dh[k].d,
+                                     s.model.dh[k].theta;
+                               return d;
+                             })
+      .def_property(
+          "gravity", [](const PyModel& s) { return Eigen::Vector3d(s.model.gravity); },
+          [](PyModel& s, const Eigen::Vector3d& g) {
+            if (!g.allFinite()) throw py::value_error("gravity must be finite");
+            s.model.gravity = g;
+          })
+      .def_property(
+          "tool", [](const PyModel& s) { return toMatrix(s.model.tool); },
+          [](PyModel& s, const Eigen::Matrix4d& T) {
+            Model m = s.model;
+            m.tool = fromMatrix(T);
+            m.validate();
+            s.model.tool = m.tool;
+          })
+      .def_property(
+          "inertial", [](const PyModel& s) { return Eigen::VectorXd(s.model.inertial); },
+          [](PyModel& s, const Eigen::VectorXd& v) {
+            if (v.size() != s.model.inertial.size())
+              throw py::value_error("inertial must have " +
+                                    std::to_string(s.model.inertial.size()) + " entries");
+            if (!v.allFinite()) throw py::value_error("inertial contains NaN or infinity");
+            s.model.inertial = v;
+          })
+      .def_property(
+          "rotor_inertia", [](const PyModel& s) { return Eigen::VectorXd(s.model.rotor_inertia); },
+          [](PyModel& s, const Eigen::VectorXd& v) {
+            if (v.size() != s.model.nq() || !v.allFinite())
+              throw py::value_error("rotor_inertia must be n finite values");
+            s.model.rotor_inertia = v;
+          })
+      .def_property(
+          "viscous", [](const PyModel& s) { return Eigen::VectorXd(s.model.viscous); },
+          [](PyModel& s, const Eigen::VectorXd& v) {
+            if (v.size() != s.model.nq() || !v.allFinite())
+              throw py::value_error("viscous must be n finite values");
+            s.model.viscous = v;
+          })
+      .def_property(
+          "coulomb", [](const PyModel& s) { return Eigen::VectorXd(s.model.coulomb); },
+          [](PyModel& s, const Eigen::VectorXd& v) {
+            if (v.size() != s.model.nq() || !v.allFinite())
+              throw py::value_error("coulomb must be n finite values");
+            s.model.coulomb = v;
+          })
+      .def(
+          "parameter_names",
+          [](const PyModel& s, bool rotor, bool friction) {
+            return s.model.parameterNames({rotor, friction});
+          },
+          py::arg("rotor") = false, py::arg("friction") = false)
+      .def(
+          "parameters",
+          [](const PyModel& s, bool rotor, bool friction) {
+            return s.model.parameters({rotor, friction});
+          },
+          py::arg("rotor") = false, py::arg("friction") = false)
+      .def(
+          "inverse_dynamics",
+          [](PyModel& s, const Array& q, const Array& dq, const Array& ddq,
+             const py::object& params) {
+            ParameterLayout layout;
+            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            return perSampleVector(
+                s, q, dq, ddq, "q", "dq", "ddq",
+                [&](const auto& a, const auto& b, const auto& c, Eigen::VectorXd& t) {
+                  inverseDynamics(s.model, s.data, a, b, c, p, layout, t);
+                });
+          },
+          py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("params") = py::none())
+      .def(
+          "gravity_torque",
+          [](PyModel& s, const Array& q, const py::object& params) {
+            ParameterLayout layout;
+            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            return perSampleVector(
+                s, q, q, q, "q", "q", "q",
+                [&](const auto& a, const auto&, const auto&, Eigen::VectorXd& t) {
+                  gravityTorque(s.model, s.data, a, p, layout, t);
+                });
+          },
+          py::arg("q"), py::arg("params") = py::none())
+      .def(
+          "forward_dynamics",
+          [](PyModel& s, const Array& q, const Array& dq, const Array& tau,
+             const py::object& params) {
+            ParameterLayout layout;
+            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            return perSampleVector(
+                s, q, dq, tau, "q", "dq", "tau",
+                [&](const auto& a, const auto& b, const auto& c, Eigen::VectorXd& t) {
+                  if (!forwardDynamics(s.model, s.data, a, b, c, p, layout, t))
+                    throw py::value_error(
+                        "the mass matrix is not positive definite for these parameters");
+                });
+          },
+          py::arg("q"), py::arg("dq"), py::arg("tau"), py::arg("params") = py::none())
+      .def(
+          "regressor",
+          [](PyModel& s, const Array& q, const Array& dq, const Array& ddq, bool rotor,
+             bool friction) {
+            const long n = s.model.nq();
+            const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
+            const ParameterLayout layout{rotor, friction};
+            const long P = layout.size(static_cast<int>(n));
+            auto out = matrix3Out(m, n, P);
+            const long rows = m == 0 ? 1 : m;
+            RowMap A(q.data(), rows, n), B(dq.data(), rows, n), C(ddq.data(), rows, n);
+            Eigen::MatrixXd W(n, P);
+            Eigen::VectorXd a(n), b(n), c(n);
+            double* o = out.mutable_data();
+            for (long i = 0; i < rows; ++i) {
+              a = A.row(i).transpose();
+              b = B.row(i).transpose();
+              c = C.row(i).transpose();
+              regressor(s.model, s.data, a, b, c, layout, W);
+              Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                  o + i * n * P, n, P) = W;
+            }
+            return out;
+          },
+          py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("rotor") = false,
+          py::arg("friction") = false)
+      .def(
+          "energy_regressors",
+          [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction) {
+            const long n = s.model.nq();
+            const long m = batch({{&q, "q"}, {&dq, "dq"}}, n);
+            const ParameterLayout layout{rotor, friction};
+            const long P = layout.size(static_cast<int>(n));
+            auto wk = vectorOut(m, P), wp = vectorOut(m, P);
+            const long rows = m == 0 ? 1 : m;
+            RowMap A(q.data(), rows, n), B(dq.data(), rows, n);
+            Eigen::VectorXd a(n), b(n), k(P), p(P);
+            for (long i = 0; i < rows; ++i) {
+              a = A.row(i).transpose();
+              b = B.row(i).transpose();
+              energyRegressors(s.model, s.data, a, b, layout, k, p);
+              std::copy(k.data(), k.data() + P, wk.mutable_data() + i * P);
+              std::copy(p.data(), p.data() + P, wp.mutable_data() + i * P);
+            }
+            return py::make_tuple(wk, wp);
+          },
+          py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false)
+      .def(
+          "energies",
+          [](PyModel& s, const Array& q, const Array& dq, const py::object& params) {
+            const long n = s.model.nq();
+            const long m = batch({{&q, "q"}, {&dq, "dq"}}, n);
+            ParameterLayout layout;
+            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            const long rows = m == 0 ? 1 : m;
+            py::array_t<double> K(rows), P(rows);
+            RowMap A(q.data(), rows, n), B(dq.data(), rows, n);
+            Eigen::VectorXd a(n), b(n);
+            for (long i = 0; i < rows; ++i) {
+              a = A.row(i).transpose();
+              b = B.row(i).transpose();
+              K.mutable_at(i) = kineticEnergy(s.model, s.data, a, b, p, layout);
+              P.mutable_at(i) = potentialEnergy(s.model, s.data, a, p, layout);
+            }
+            if (m == 0) return py::object(py::make_tuple(K.at(0), P.at(0)));
+            return py::object(py::make_tuple(K, P));
+          },
+          py::arg("q"), py::arg("dq"), py::arg("params") = py::none())
+      .def(
+          "mass_matrix",
+          [](PyModel& s, const Array& q, const py::object& params) {
+            const long n = s.model.nq();
+            const long m = batch({{&q, "q"}}, n);
+            ParameterLayout layout;
+            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            auto out = matrix3Out(m, n, n);
+            const long rows = m == 0 ? 1 : m;
+            RowMap A(q.data(), rows, n);
+            Eigen::MatrixXd M(n, n);
+            Eigen::VectorXd a(n);
+            for (long i = 0; i < rows; ++i) {
+              a = A.row(i).transpose();
+              massMatrix(s.model, s.data, a, p, layout, M);
+              Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                  out.mutable_data() + i * n * n, n, n) = M;
+            }
+            return out;
+          },
+          py::arg("q"), py::arg("params") = py::none());
+
+  py::class_<Kinematics>(m, "Kinematics")
+      .def(py::init([](const PyModel& s) { return std::make_unique<Kinematics>(s.model); }))
+      .def(
+          "pose",
+          [](Kinematics& k, const Eigen::VectorXd& q, int link) {
+            return toMatrix(k.pose(q, link));
+          },
+          py::arg("q"), py::arg("link") = -1)
+      .def("jacobian",
+           [](Kinematics& k, const Eigen::VectorXd& q) { return Eigen::MatrixXd(k.jacobian(q)); });
+
+  m.def("load_yaml",
+        [](const std::string& path) { return std::make_shared<PyModel>(loadYaml(path)); });
+  m.def(
+      "parse_yaml",
+      [](const std::string& text, const std::string& source) {
+        return std::make_shared<PyModel>(parseYaml(text, source));
+      },
+      py::arg("text"), py::arg("source") = "<string>");
+  m.def(
+      "load_urdf",
+      [](const std::string& path, const std::string& tip) {
+        return std::make_shared<PyModel>(loadUrdf(path, tip));
+      },
+      py::arg("path"), py::arg("tip") = "");
+  m.def(
+      "parse_urdf",
+      [](const std::string& xml, const std::string& tip, const std::string& source) {
+        return std::make_shared<PyModel>(parseUrdf(xml, tip, source));
+      },
+      py::arg("xml"), py::arg("tip") = "", py::arg("source") = "<string>");
+  m.def(
+      "planar_arm",
+      [](int n, bool vertical, double length, double mass) {
+        return std::make_shared<PyModel>(planarArm(n, vertical, length, mass));
+      },
+      py::arg("n"), py::arg("vertical") = true, py::arg("length") = 0.5, py::arg("mass") = 2.0);
+  m.def(
+      "inertial_from_com",
+      [](double mass, const Eigen::Vector3d& com, const Eigen::Matrix3d& I) {
+        return Eigen::VectorXd(inertialFromCom(mass, com, I));
+      },
+      py::arg("mass"), py::arg("com"), py::arg("inertia"));
+  m.def(
+      "inertial_from_urdf",
+      [](double mass, const Eigen::Vector3d& com, const Eigen::Matrix3d& R,
+         const Eigen::Matrix3d& I) { return Eigen::VectorXd(inertialFromUrdf(mass, com, R, I)); },
+      py::arg("mass"), py::arg("com"), py::arg("rotation"), py::arg("inertia"));
+  m.def("to_pinocchio_order", [](const Eigen::VectorXd& v) { return toPinocchioOrder(v); });
+  m.def("from_pinocchio_order", [](const Eigen::VectorXd& v) { return fromPinocchioOrder(v); });
+}

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs what mindyn needs on Debian 12 (apt packages, a virtual environment in .venv, the
+# package itself) and does nothing that is already done. Usage: bootstrap.sh [--test]
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+
+apt_packages=(build-essential cmake ninja-build pkg-config python3 python3-venv python3-dev
+  libeigen3-dev liborocos-kdl-dev liburdfdom-dev libyaml-cpp-dev)
+if [[ "${1:-}" == "--test" ]]; then
+  apt_packages+=(libgtest-dev libbenchmark-dev clang-format)
+fi
+
+missing=()
+for p in "${apt_packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "bootstrap: installing Debian packages: ${missing[*]}"
+  sudo=""
+  [[ $(id -u) -eq 0 ]] || sudo="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+if [[ ! -x .venv/bin/python ]]; then
+  echo "bootstrap: creating .venv"
+  python3 -m venv .venv
+fi
+py=.venv/bin/python
+$py -m pip install -q --upgrade pip
+# Build requirements first, so that the package builds without isolation and reuses build/.
+$py -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12" "numpy>=1.23"
+extra=""
+[[ "${1:-}" == "--test" ]] && extra="[test]"
+echo "bootstrap: building and installing mindyn${extra}"
+$py -m pip install -q --no-build-isolation ".${extra}"
