@@ -211,7 +211,7 @@ class Robot:
 
     @params.setter
     def params(self, value) -> None:
-        self._m.inertial = np.asarray(value, dtype=float)
+        self._m.inertial = _vector(value, 10 * self.n, "params", "entry")
 
     @property
     def rotor_inertia(self) -> np.ndarray:
@@ -219,7 +219,7 @@ class Robot:
 
     @rotor_inertia.setter
     def rotor_inertia(self, v) -> None:
-        self._m.rotor_inertia = np.asarray(v, dtype=float)
+        self._m.rotor_inertia = _vector(v, self.n, "rotor_inertia")
 
     @property
     def viscous(self) -> np.ndarray:
@@ -227,7 +227,7 @@ class Robot:
 
     @viscous.setter
     def viscous(self, v) -> None:
-        self._m.viscous = np.asarray(v, dtype=float)
+        self._m.viscous = _vector(v, self.n, "viscous")
 
     @property
     def coulomb(self) -> np.ndarray:
@@ -235,7 +235,7 @@ class Robot:
 
     @coulomb.setter
     def coulomb(self, v) -> None:
-        self._m.coulomb = np.asarray(v, dtype=float)
+        self._m.coulomb = _vector(v, self.n, "coulomb")
 
     def parameter_names(self, rotor: bool = False, friction: bool = False) -> list[str]:
         """Classical parameter names in the layout with optional ``Ia`` and ``Fv, Fc``."""
@@ -322,10 +322,15 @@ class Robot:
         return f"Robot(name={self.name!r}, n={self.n}, convention={self.convention!r})"
 
 
-def _vector(x, n: int, name: str) -> np.ndarray:
+def _vector(x, n: int, name: str, unit: str = "joint") -> np.ndarray:
+    """``x`` as a finite float array of shape (n,), or ValueError naming ``name`` and the
+    offending ``unit`` (1-based, as in the bindings' messages)."""
     a = np.asarray(x, dtype=float)
     if a.shape != (n,):
         raise ValueError(f"{name} has shape {a.shape}; expected ({n},)")
-    if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} contains NaN or infinite values")
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        i = int(bad[0])
+        what = "NaN" if np.isnan(a[i]) else "an infinite value"
+        raise ValueError(f"{name} contains {what} at {unit} {i + 1}")
     return a

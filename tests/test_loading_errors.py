@@ -1,0 +1,375 @@
+"""Bad input gets a precise ValueError / FileNotFoundError (subclass) in Python and a one-line
+message with a non-zero exit status from the CLI."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import mindyn
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import URDFS
+
+GOOD_YAML = """\
+name: two
+convention: dh
+joints:
+  - {name: a, a: 0.4, alpha: 0, d: 0, theta: 0, inertial: {mass: 1.0, com: [-0.2, 0, 0]}}
+  - {name: b, a: 0.3, alpha: 0, d: 0, theta: 0, inertial: {mass: 0.5, com: [-0.15, 0, 0]}}
+"""
+
+
+def write(tmp_path: Path, name: str, text: str) -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def urdf(joints: str, links: str = "") -> str:
+    head = '<?xml version="1.0"?>\n<robot name="t">\n<link name="base"/>\n'
+    return f"{head}{links}\n{joints}\n</robot>\n"
+
+
+def link(name: str, mass: float = 1.0) -> str:
+    return (
+        f'<link name="{name}"><inertial><mass value="{mass}"/>'
+        '<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>'
+    )
+
+
+def joint(name: str, parent: str, child: str, kind: str = "revolute", extra: str = "") -> str:
+    lim = '<limit lower="-1" upper="1" effort="1" velocity="1"/>' if kind != "fixed" else ""
+    return (
+        f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+        f'<axis xyz="0 0 1"/>{lim}{extra}</joint>'
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# files
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["missing.urdf", "missing.yaml", "missing.yml", "missing.xml"])
+def test_missing_file(tmp_path, name):
+    path = tmp_path / name
+    with pytest.raises(FileNotFoundError, match=str(path)) as info:
+        mindyn.load(path)
+    assert isinstance(info.value, mindyn.RobotFileNotFoundError)
+    with pytest.raises(mindyn.RobotFileNotFoundError):
+        mindyn.load(str(path))
+
+
+def test_missing_path_without_suffix(tmp_path):
+    path = tmp_path / "nowhere" / "robot"
+    with pytest.raises(FileNotFoundError, match="robot"):
+        mindyn.load(path)
+
+
+def test_unknown_bundled_name():
+    with pytest.raises(ValueError, match="unknown robot 'puma999'.*puma560") as info:
+        mindyn.load("puma999")
+    assert isinstance(info.value, mindyn.ModelError)
+
+
+def test_bundled_names_load():
+    for name in ["puma560", "puma560_3", "zcr07s", "stanford", "planar1", "planar5h"]:
+        robot = mindyn.load(name)
+        assert robot.n >= 1
+        assert len(robot.params) == 10 * robot.n
+    assert "puma560" in mindyn.bundled_robots()
+    with pytest.raises(ValueError, match="at least one joint"):
+        mindyn.load("planar0")
+
+
+def test_malformed_urdf(tmp_path):
+    path = write(tmp_path, "bad.urdf", '<robot name="x"><link name="a"/><joint name="j"')
+    with pytest.raises(ValueError, match=r"bad\.urdf.*not a valid URDF") as info:
+        mindyn.load(path)
+    assert isinstance(info.value, mindyn.ModelError)
+    # a joint naming a link that does not exist is urdfdom's complaint, passed on
+    path = write(tmp_path, "dangling.urdf", urdf(joint("j1", "base", "nolink")))
+    with pytest.raises(ValueError, match=r"dangling\.urdf.*not a valid URDF"):
+        mindyn.load(path)
+
+
+def test_urdf_floating_joint_unsupported(tmp_path):
+    path = write(tmp_path, "float.urdf", urdf(joint("free", "base", "l1", "floating"), link("l1")))
+    with pytest.raises(ValueError, match=r"float\.urdf.*'free'.*'floating'.*not supported"):
+        mindyn.load(path)
+
+
+def test_urdf_planar_joint_unsupported(tmp_path):
+    path = write(tmp_path, "planar.urdf", urdf(joint("pl", "base", "l1", "planar"), link("l1")))
+    with pytest.raises(ValueError, match="'pl'.*'planar'.*not supported"):
+        mindyn.load(path)
+
+
+def test_urdf_without_moving_joint(tmp_path):
+    path = write(tmp_path, "rigid.urdf", urdf(joint("f", "base", "l1", "fixed"), link("l1")))
+    with pytest.raises(ValueError, match="no moving joint"):
+        mindyn.load(path)
+
+
+def test_tree_urdf_without_tip_names_candidates(tmp_path):
+    with pytest.raises(ValueError) as info:
+        mindyn.load(URDFS["panda"])
+    msg = str(info.value)
+    for candidate in ("panda_leftfinger", "panda_rightfinger", "panda_hand", "tip="):
+        assert candidate in msg
+    # a small tree of our own
+    joints = joint("j1", "base", "l1") + joint("j2", "l1", "l2") + joint("j3", "l1", "l3")
+    path = write(tmp_path, "tree.urdf", urdf(joints, link("l1") + link("l2") + link("l3")))
+    with pytest.raises(ValueError, match="2 moving tips: 'l2', 'l3'.*'l1'"):
+        mindyn.load(path)
+    assert mindyn.load(path, tip="l2").n == 2
+    robot = mindyn.load(path, tip="l1")  # the branch locked and merged
+    assert robot.n == 1
+    assert robot.params[9] == pytest.approx(3.0)
+
+
+def test_unknown_tip(tmp_path):
+    with pytest.raises(ValueError, match="tip link 'hand' is not in robot 'panda'.*panda_link0"):
+        mindyn.load(URDFS["panda"], tip="hand")
+
+
+def test_mimic_joint_in_chain():
+    with pytest.raises(ValueError, match="'panda_finger_joint2' mimics"):
+        mindyn.load(URDFS["panda"], tip="panda_rightfinger")
+
+
+def test_malformed_yaml(tmp_path):
+    path = write(tmp_path, "bad.yaml", "name: x\nconvention: dh\njoints:\n  - {a: 1, alpha: 0\n")
+    with pytest.raises(ValueError, match=r"bad\.yaml:\d+: not valid YAML") as info:
+        mindyn.load(path)
+    assert isinstance(info.value, mindyn.ModelError)
+
+
+def test_yaml_unknown_key_typo(tmp_path):
+    text = GOOD_YAML.replace("a: 0.3, alpha: 0", "a: 0.3, alpah: 0")
+    path = write(tmp_path, "typo.yaml", text)
+    with pytest.raises(
+        ValueError, match=r"typo\.yaml:5: joint 2 \('b'\): unknown key 'alpah'.*alpha"
+    ):
+        mindyn.load(path)
+    path = write(tmp_path, "top.yaml", GOOD_YAML.replace("convention", "conventoin"))
+    with pytest.raises(ValueError, match="unknown key 'conventoin'"):
+        mindyn.load(path)
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        (("convention: dh", "convention: xyz"), "'convention' must be 'dh' or 'mdh'"),
+        (("name: a, a: 0.4", "name: a, type: spherical, a: 0.4"), "joint type 'spherical'"),
+        (("a: 0.3", "a: abc"), "'a' must be a number"),
+        (("mass: 1.0", "mass: -1.0"), "mass is negative"),
+        (("com: [-0.2, 0, 0]", "com: [-0.2, 0]"), "'com' must be a list of 3 numbers"),
+    ],
+)
+def test_yaml_bad_values(tmp_path, change, match):
+    path = write(tmp_path, "r.yaml", GOOD_YAML.replace(*change))
+    with pytest.raises(ValueError, match=match):
+        mindyn.load(path)
+
+
+def test_good_yaml_loads(tmp_path):
+    robot = mindyn.load(write(tmp_path, "r.yaml", GOOD_YAML))
+    assert robot.n == 2
+    assert robot.joint_names == ["a", "b"]
+    assert robot.params[9::10].tolist() == [1.0, 0.5]
+
+
+def test_tip_rejected_for_yaml_and_bundled(tmp_path):
+    path = write(tmp_path, "r.yaml", GOOD_YAML)
+    with pytest.raises(ValueError, match="tip= applies to URDF"):
+        mindyn.load(path, tip="link2")
+    with pytest.raises(ValueError, match="tip= applies to URDF"):
+        mindyn.load("puma560", tip="link6")
+
+
+# --------------------------------------------------------------------------------------------
+# arrays
+# --------------------------------------------------------------------------------------------
+def test_wrong_array_shapes():
+    robot = mindyn.load("puma560")
+    z = np.zeros(6)
+    with pytest.raises(ValueError, match=r"q has shape \(5,\); expected \(6,\)"):
+        robot.inverse_dynamics(np.zeros(5), z, z)
+    with pytest.raises(ValueError, match=r"ddq has shape \(7,\)"):
+        robot.inverse_dynamics(z, z, np.zeros(7))
+    with pytest.raises(ValueError, match=r"q has shape \(2, 3\); expected \(m, 6\)"):
+        robot.mass_matrix(np.zeros((2, 3)))
+    with pytest.raises(ValueError, match="q must be 1-D .* or 2-D .*got 3-D"):
+        robot.regressor(np.zeros((2, 6, 1)), z, z)
+    with pytest.raises(ValueError, match="batches of equal length"):
+        robot.inverse_dynamics(np.zeros((3, 6)), np.zeros((2, 6)), np.zeros((3, 6)))
+    with pytest.raises(ValueError, match="batches of equal length"):
+        robot.inverse_dynamics(np.zeros((3, 6)), z, z)
+    with pytest.raises(ValueError, match=r"dq has shape \(7,\)"):
+        robot.kinetic_energy(z, np.zeros(7))
+    with pytest.raises(ValueError, match=r"tau has shape \(5,\)"):
+        robot.forward_dynamics(z, z, np.zeros(5))
+    with pytest.raises(ValueError, match=r"q has shape \(5,\)"):
+        robot.gravity_torque(np.zeros(5))
+    with pytest.raises(ValueError, match=r"q has shape \(7,\)"):
+        robot.energy_regressors(np.zeros(7), np.zeros(7))
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda r, q, z: r.inverse_dynamics(q, z, z),
+        lambda r, q, z: r.regressor(q, z, z),
+        lambda r, q, z: r.mass_matrix(q),
+        lambda r, q, z: r.gravity_torque(q),
+        lambda r, q, z: r.forward_dynamics(q, z, z),
+        lambda r, q, z: r.kinetic_energy(q, z),
+        lambda r, q, z: r.potential_energy(q),
+        lambda r, q, z: r.energy_regressors(q, z),
+        lambda r, q, z: r.fk(q),
+        lambda r, q, z: r.jacobian(q),
+    ],
+)
+def test_nan_in_q_names_q_and_joint(call):
+    robot = mindyn.load("puma560")
+    q = np.zeros(6)
+    q[2] = np.nan
+    with pytest.raises(ValueError, match="q contains NaN at joint 3"):
+        call(robot, q, np.zeros(6))
+
+
+def test_nan_in_batches_and_other_arguments():
+    robot = mindyn.load("puma560")
+    Q = np.zeros((4, 6))
+    Q[2, 4] = np.nan
+    with pytest.raises(ValueError, match="q contains NaN at sample 2, joint 5"):
+        robot.inverse_dynamics(Q, Q * 0, Q * 0)
+    dq = np.zeros(6)
+    dq[0] = np.inf
+    with pytest.raises(ValueError, match="dq contains an infinite value at joint 1"):
+        robot.inverse_dynamics(np.zeros(6), dq, np.zeros(6))
+    p = robot.params
+    p[3] = np.nan
+    with pytest.raises(ValueError, match="params contains NaN"):
+        robot.inverse_dynamics(np.zeros(6), np.zeros(6), np.zeros(6), p)
+
+
+def test_wrong_params_length():
+    robot = mindyn.load("puma560")
+    z = np.zeros(6)
+    with pytest.raises(ValueError, match="59 entries fits no layout for 6 joints.*60.*66.*72.*78"):
+        robot.inverse_dynamics(z, z, z, np.zeros(59))
+    with pytest.raises(ValueError, match="fits no layout"):
+        robot.mass_matrix(z, np.zeros(10))
+    with pytest.raises(ValueError, match="params must be 1-D"):
+        robot.gravity_torque(z, np.zeros((6, 10)))
+
+
+def test_forward_dynamics_singular():
+    robot = mindyn.load("planar3")
+    z = np.zeros(3)
+    with pytest.raises(ValueError, match="not positive definite"):
+        robot.forward_dynamics(z, z, z, np.zeros(30))
+
+
+def test_gravity_setter_validation():
+    robot = mindyn.load("planar2")
+    with pytest.raises(ValueError, match="gravity must be finite"):
+        robot.gravity = [0.0, np.nan, -9.81]
+    with pytest.raises(ValueError):
+        robot.gravity = [0.0, -9.81]
+
+
+# --------------------------------------------------------------------------------------------
+# command line
+# --------------------------------------------------------------------------------------------
+def run_cli(*args, cwd=None):
+    return subprocess.run(
+        [sys.executable, "-m", "mindyn", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=cwd,
+    )
+
+
+def assert_one_line_error(result):
+    assert result.returncode != 0
+    assert result.stdout == ""
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert lines[0].startswith("mindyn: error: ")
+    assert "Traceback" not in result.stderr
+
+
+def test_cli_info_bundled():
+    r = run_cli("info", "puma560")
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == ""
+    out = r.stdout
+    assert "robot      puma560  (6 joints, dh)" in out
+    rows = [line.split() for line in out.splitlines() if line[:2].strip().isdigit()]
+    assert [row[:3] for row in rows] == [[str(k), f"j{k}", "revolute"] for k in range(1, 7)]
+    # the PUMA's published link masses (Armstrong-Khatib-Burdick): 17.4 + 4.8 + 0.82 + 0.34 + 0.09
+    assert "total moving mass 23.45 kg" in out
+    assert "XX" in out and "Ia" in out and "Fc" in out
+
+
+def test_cli_info_urdf():
+    r = run_cli("info", URDFS["ur5"])
+    assert r.returncode == 0, r.stderr
+    model = pin.buildModelFromUrdf(str(URDFS["ur5"]))
+    mass = sum(model.inertias[k].mass for k in range(1, model.njoints))
+    assert f"total moving mass {mass:.4g} kg" in r.stdout
+    rows = [line.split() for line in r.stdout.splitlines() if line[:2].strip().isdigit()]
+    names = [model.names[k] for k in range(1, model.njoints)]
+    assert [row[1] for row in rows] == names  # long names do not run into the type column
+    assert all(row[2] == "revolute" for row in rows)
+
+
+def test_cli_info_panda_with_tip():
+    r = run_cli("info", URDFS["panda"], "--tip", "panda_hand")
+    assert r.returncode == 0, r.stderr
+    assert "(7 joints, urdf)" in r.stdout
+
+
+def test_cli_console_script():
+    script = Path(sys.executable).with_name("mindyn")
+    if not script.exists():
+        pytest.skip("console script not installed next to the interpreter")
+    r = subprocess.run([str(script), "info", "planar2"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    assert "total moving mass 4 kg" in r.stdout  # two 2 kg rods
+
+
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (("info", "missing.urdf"), "URDF file 'missing.urdf' does not exist"),
+        (("info", "missing.yaml"), "missing.yaml"),
+        (("info", "puma999"), "unknown robot 'puma999'"),
+        (("info", "puma560", "--tip", "link6"), "tip= applies to URDF"),
+        (("info", "GOOD.yaml", "--tip", "b"), "tip= applies to URDF"),
+        (("info", "BAD.yaml"), "not valid YAML"),
+        (("info", "BAD.urdf"), "not a valid URDF"),
+        (("info", URDFS["panda"]), "pass tip="),
+    ],
+)
+def test_cli_errors_are_one_line(tmp_path, args, match):
+    write(tmp_path, "GOOD.yaml", GOOD_YAML)
+    write(tmp_path, "BAD.yaml", "joints: [")
+    write(tmp_path, "BAD.urdf", "<robot")
+    r = run_cli(*args, cwd=tmp_path)
+    assert_one_line_error(r)
+    assert match in r.stderr
+
+
+def test_cli_usage_errors():
+    r = run_cli()
+    assert r.returncode != 0
+    assert "Traceback" not in r.stderr
+    r = run_cli("info", "--help")
+    assert r.returncode == 0
+    assert "ROBOT" in r.stdout
