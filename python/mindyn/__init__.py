@@ -7,11 +7,14 @@ regressors, energies, mass matrix and forward dynamics (C++ core) and KDL kinema
 from ._core import ModelError, RobotFileNotFoundError, inertial_from_com, inertial_from_urdf
 from ._core import from_pinocchio_order as _from_pin
 from ._core import to_pinocchio_order as _to_pin
+from .base import BaseParameters, base_parameters
 from .robot import Robot, bundled_robots, load
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "BaseParameters",
+    "base_parameters",
     "ModelError",
     "Robot",
     "RobotFileNotFoundError",

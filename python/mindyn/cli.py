@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import re
 import sys
 
 import numpy as np
 
-from . import ModelError, RobotFileNotFoundError, bundled_robots, load
+from . import ModelError, RobotFileNotFoundError, base_parameters, bundled_robots, load
 
 ROBOT_HELP = (
     "a bundled robot (" + ", ".join(bundled_robots()) + "), a URDF file or a YAML DH/MDH table"
@@ -38,6 +40,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     drv = robot.drives
     deg = {"revolute": 180.0 / math.pi, "prismatic": 1.0}
     dh = robot.dh
+    w = max([13] + [len(j) for j in robot.joint_names]) + 1  # joint-name column
     if robot.convention in ("dh", "mdh") and len(dh):
         if robot.convention == "dh":
             head = f"{'a [m]':>9} {'alpha[deg]':>10} {'d [m]':>9} {'theta[deg]':>10}"
@@ -46,7 +49,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     else:
         head = f"{'axis (joint frame)':>30}"
     out.append(
-        f"{'#':>2} {'joint':<14}{'type':<10}{head} {'lower':>9} {'upper':>9} {'vel':>9} "
+        f"{'#':>2} {'joint':<{w}}{'type':<10}{head} {'lower':>9} {'upper':>9} {'vel':>9} "
         f"{'effort':>9} {'rated':>7} {'gear':>7}"
     )
     out.append(
@@ -62,7 +65,7 @@ def cmd_info(args: argparse.Namespace) -> int:
             ax = robot.axes[k]
             geo = f"[{ax[0]:8.4f} {ax[1]:8.4f} {ax[2]:8.4f}]".rjust(30)
         out.append(
-            f"{k + 1:>2} {robot.joint_names[k]:<14}{t:<10}{geo} {_fmt(lim['lower'][k] * s, 9)} "
+            f"{k + 1:>2} {robot.joint_names[k]:<{w}}{t:<10}{geo} {_fmt(lim['lower'][k] * s, 9)} "
             f"{_fmt(lim['upper'][k] * s, 9)} {_fmt(lim['velocity'][k] * s, 9)} "
             f"{_fmt(lim['effort'][k], 9)} {_fmt(drv['rated_torque'][k], 7)} "
             f"{_fmt(drv['gear_ratio'][k], 7)}"
@@ -81,6 +84,77 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _latex_name(name: str) -> str:
+    m = re.match(r"^([A-Za-z]+?)(R?)(\d+)$", name)
+    if not m:
+        return rf"\mathrm{{{name}}}"
+    return rf"\mathrm{{{m.group(1)}{m.group(2)}}}_{{{m.group(3)}}}"
+
+
+def _latex_formula(formula: str) -> str:
+    lhs, rhs = formula.split(" = ", 1)
+    out = re.sub(r"([A-Za-z]+R?\d+)", lambda m: _latex_name(m.group(1)), rhs)
+    out = out.replace("*", r"\,")
+    return f"{_latex_name(lhs)} &= {out}"
+
+
+def cmd_base(args: argparse.Namespace) -> int:
+    robot = load(args.robot, tip=args.tip)
+    order = [s.strip() for s in args.order.split(",")] if args.order else None
+    bp = base_parameters(
+        robot,
+        rotor=args.rotor,
+        friction=args.friction,
+        method=args.method,
+        order=order,
+        tolerance=args.tolerance,
+        snap=args.snap,
+    )
+    if args.format == "json":
+        print(json.dumps(bp.to_dict(), indent=2))
+        return 0
+    if args.format == "latex":
+        print(r"\begin{align*}")
+        print(" \\\\\n".join(_latex_formula(f) for f in bp.formulas))
+        print(r"\end{align*}")
+        return 0
+    extras = [x for x, on in (("rotor inertia", args.rotor), ("friction", args.friction)) if on]
+    counts = {k: s["n"] for k, s in bp.sets.items()}
+    m = bp.margin
+    lines = [
+        f"{robot.name}: base parameters by the {bp.method} method"
+        + (f" ({', '.join(extras)})" if extras else ""),
+        f"  sets           Lagrangian {counts['lagrangian']}, total energy {counts['energy']}, "
+        f"equations of motion {counts['eom']}",
+        f"  coincide       Lagrangian = energy: {'yes' if bp.lagrangian_equals_energy else 'no'}; "
+        f"Lagrangian = equations of motion: {'yes' if bp.lagrangian_equals_eom else 'no'}",
+        "  used           the equations-of-motion set, for inverse dynamics, the base regressor "
+        "and both identification models",
+        f"  rank margin    smallest kept pivot {m['smallest_kept']:.3g}, largest dropped "
+        f"{m['largest_dropped']:.3g} (relative tolerance {m['tolerance']:.3g})",
+    ]
+    if m["near_degenerate"]:
+        lines.append(
+            f"  WARNING        near-degenerate geometry: {m['rank_at_looser_tolerance']} base "
+            f"parameters at tolerance {m['looser_tolerance']:.3g}, "
+            f"{m['rank_at_tighter_tolerance']} at {m['tighter_tolerance']:.3g} "
+            "(consider --snap if joint rotations are meant to be right angles)"
+        )
+    for s in bp.snapped:
+        lines.append(f"  snapped        {s}")
+    if bp.no_effect:
+        lines.append(f"  no effect      {' '.join(bp.no_effect)}")
+    what = "non-zero basis functions" if bp.method == "projection" else "stacked regressor rows"
+    lines.append(f"  computed       {bp.basis_rows} {what}, {bp.seconds * 1e3:.2f} ms")
+    lines.append("")
+    width = max(len(n) for n in bp.names) if bp.names else 4
+    for i, f in enumerate(bp.formulas, 1):
+        name, rhs = f.split(" = ", 1)
+        lines.append(f"{i:>3}  {name:<{width}}  = {rhs}")
+    print("\n".join(lines))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mindyn",
@@ -91,6 +165,40 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     p.add_argument("--tip", help="URDF: the link that ends the chain")
     p.set_defaults(func=cmd_info)
+
+    p = sub.add_parser(
+        "base",
+        help="base inertial parameters: counts of the three sets, formulas, rank margin",
+        description="Base inertial parameters by the projection method (exact) or the "
+        "numerical method (sampled regressor + QR).",
+    )
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    p.add_argument("--rotor", action="store_true", help="include rotor inertia Ia per joint")
+    p.add_argument("--friction", action="store_true", help="include Fv, Fc per joint")
+    p.add_argument(
+        "--order",
+        help="column priority: every classical parameter once, comma-separated "
+        "(default: Khalil's order, link by link with YY, MZ, M last)",
+    )
+    p.add_argument("--method", choices=["projection", "numerical"], default="projection")
+    p.add_argument("--format", choices=["table", "json", "latex"], default="table")
+    p.add_argument(
+        "--tolerance",
+        type=float,
+        default=1e-9,
+        help="relative pivot size below which a column is dependent (default 1e-9)",
+    )
+    p.add_argument(
+        "--snap",
+        type=float,
+        nargs="?",
+        const=1e-3,
+        default=None,
+        metavar="RAD",
+        help="round joint rotations within RAD (default 1e-3) of multiples of pi/2",
+    )
+    p.set_defaults(func=cmd_base)
     return parser
 
 

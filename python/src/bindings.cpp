@@ -9,11 +9,13 @@
 #include <memory>
 #include <sstream>
 
+#include "mindyn/base_parameters.hpp"
 #include "mindyn/data.hpp"
 #include "mindyn/description.hpp"
 #include "mindyn/dynamics.hpp"
 #include "mindyn/kinematics.hpp"
 #include "mindyn/model.hpp"
+#include "mindyn/projection.hpp"
 #include "mindyn/urdf.hpp"
 
 namespace py = pybind11;
@@ -148,6 +150,44 @@ py::array_t<double> matrix3Out(long m, long r, long c) {
 }
 
 Eigen::Matrix4d toMatrix(const Eigen::Isometry3d& T) { return T.matrix(); }
+
+// Base parameters with the model they were computed for (possibly a snapped copy).
+struct PyBase {
+  std::shared_ptr<PyModel> model;
+  BaseParameters bp;
+  std::vector<std::string> snapped;
+  Eigen::MatrixXd W;  // work
+  Eigen::VectorXd wK, wP;
+};
+
+py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
+  const RankDecision& d = set.decision;
+  py::dict out;
+  out["n"] = set.size();
+  out["names"] = set.names;
+  out["formulas"] = set.formulas;
+  out["pivots"] = d.pivots;
+  out["Y"] = d.Y;
+  out["pivot_size"] = d.pivot_size;
+  std::vector<std::string> zero, dep;
+  for (int c : d.zero) zero.push_back(names[c]);
+  for (int c : d.dependent) dep.push_back(names[c]);
+  out["no_effect"] = zero;
+  out["regrouped"] = dep;
+  out["residual"] = d.residual;
+  py::dict margin;
+  margin["tolerance"] = d.tolerance;
+  margin["smallest_kept"] = d.smallest_kept;
+  margin["largest_dropped"] = d.largest_dropped;
+  margin["rank_at_looser_tolerance"] = d.rank_looser;
+  margin["rank_at_tighter_tolerance"] = d.rank_tighter;
+  margin["looser_tolerance"] = d.tolerance * 1e4;
+  margin["tighter_tolerance"] = d.tolerance * 1e-3;
+  margin["near_degenerate"] = d.near_degenerate;
+  margin["fit_residual"] = d.fit_residual;
+  out["margin"] = margin;
+  return out;
+}
 
 Eigen::Isometry3d fromMatrix(const Eigen::Matrix4d& M) {
   Eigen::Isometry3d T;
@@ -430,6 +470,145 @@ PYBIND11_MODULE(_core, m) {
           py::arg("q"), py::arg("link") = -1)
       .def("jacobian",
            [](Kinematics& k, const Eigen::VectorXd& q) { return Eigen::MatrixXd(k.jacobian(q)); });
+
+  py::class_<PyBase, std::shared_ptr<PyBase>>(m, "BaseParameters")
+      .def_property_readonly("n", [](const PyBase& b) { return b.bp.eom.size(); })
+      .def_property_readonly("names", [](const PyBase& b) { return b.bp.eom.names; })
+      .def_property_readonly("formulas", [](const PyBase& b) { return b.bp.eom.formulas; })
+      .def_property_readonly("Y", [](const PyBase& b) { return b.bp.eom.decision.Y; })
+      .def_property_readonly("pivots", [](const PyBase& b) { return b.bp.eom.decision.pivots; })
+      .def_property_readonly("classical_names",
+                             [](const PyBase& b) { return b.bp.classical_names; })
+      .def_property_readonly("rotor", [](const PyBase& b) { return b.bp.layout.rotor; })
+      .def_property_readonly("friction", [](const PyBase& b) { return b.bp.layout.friction; })
+      .def_property_readonly(
+          "method",
+          [](const PyBase& b) {
+            return std::string(b.bp.method == BaseMethod::Projection ? "projection" : "numerical");
+          })
+      .def_property_readonly(
+          "lagrangian",
+          [](const PyBase& b) { return setDict(b.bp.lagrangian, b.bp.classical_names); })
+      .def_property_readonly(
+          "energy", [](const PyBase& b) { return setDict(b.bp.energy, b.bp.classical_names); })
+      .def_property_readonly(
+          "eom", [](const PyBase& b) { return setDict(b.bp.eom, b.bp.classical_names); })
+      .def_property_readonly("lagrangian_equals_energy",
+                             [](const PyBase& b) { return b.bp.lagrangian_equals_energy; })
+      .def_property_readonly("lagrangian_equals_eom",
+                             [](const PyBase& b) { return b.bp.lagrangian_equals_eom; })
+      .def_property_readonly("basis_rows", [](const PyBase& b) { return b.bp.basis_rows; })
+      .def_property_readonly("terms_formed", [](const PyBase& b) { return b.bp.terms_formed; })
+      .def_property_readonly("seconds", [](const PyBase& b) { return b.bp.seconds; })
+      .def_property_readonly("snapped", [](const PyBase& b) { return b.snapped; })
+      .def_property_readonly("model", [](const PyBase& b) { return b.model; })
+      .def("values",
+           [](const PyBase& b, const Eigen::VectorXd& pi) {
+             if (!pi.allFinite()) throw py::value_error("params contains NaN or infinite values");
+             return b.bp.values(pi);
+           })
+      .def("embed",
+           [](const PyBase& b, const Eigen::VectorXd& pb) {
+             if (!pb.allFinite())
+               throw py::value_error("base parameter vector contains NaN or infinite values");
+             return b.bp.embed(pb);
+           })
+      .def(
+          "regressor",
+          [](PyBase& b, const Array& q, const Array& dq, const Array& ddq) {
+            PyModel& s = *b.model;
+            const long n = s.model.nq();
+            const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
+            const long nb = b.bp.eom.size();
+            auto out = matrix3Out(m, n, nb);
+            const long rows = m == 0 ? 1 : m;
+            RowMap A(q.data(), rows, n), B(dq.data(), rows, n), C(ddq.data(), rows, n);
+            Eigen::MatrixXd Wb(n, nb);
+            Eigen::VectorXd x(n), y(n), z(n);
+            for (long i = 0; i < rows; ++i) {
+              x = A.row(i).transpose();
+              y = B.row(i).transpose();
+              z = C.row(i).transpose();
+              baseRegressor(s.model, s.data, b.bp, x, y, z, b.W, Wb);
+              Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+                  out.mutable_data() + i * n * nb, n, nb) = Wb;
+            }
+            return out;
+          },
+          py::arg("q"), py::arg("dq"), py::arg("ddq"))
+      .def(
+          "energy_regressor",
+          [](PyBase& b, const Array& q, const Array& dq) {
+            PyModel& s = *b.model;
+            const long n = s.model.nq();
+            const long m = batch({{&q, "q"}, {&dq, "dq"}}, n);
+            const long nb = b.bp.eom.size();
+            auto out = vectorOut(m, nb);
+            const long rows = m == 0 ? 1 : m;
+            RowMap A(q.data(), rows, n), B(dq.data(), rows, n);
+            Eigen::VectorXd x(n), y(n), wb(nb);
+            for (long i = 0; i < rows; ++i) {
+              x = A.row(i).transpose();
+              y = B.row(i).transpose();
+              baseEnergyRegressor(s.model, s.data, b.bp, x, y, b.wK, b.wP, wb);
+              std::copy(wb.data(), wb.data() + nb, out.mutable_data() + i * nb);
+            }
+            return out;
+          },
+          py::arg("q"), py::arg("dq"));
+
+  m.def(
+      "base_parameters",
+      [](const std::shared_ptr<PyModel>& model, bool rotor, bool friction,
+         const std::string& method, const std::vector<int>& order, double tolerance, int samples,
+         unsigned seed, double snap) {
+        auto out = std::make_shared<PyBase>();
+        if (snap > 0) {
+          Model copy = model->model;
+          out->snapped = snapRightAngles(copy, snap);
+          out->model = std::make_shared<PyModel>(std::move(copy));
+        } else {
+          out->model = model;
+        }
+        BaseOptions o;
+        o.layout = {rotor, friction};
+        o.order = order;
+        o.tolerance = tolerance;
+        o.samples = samples;
+        o.seed = seed;
+        if (method == "projection")
+          o.method = BaseMethod::Projection;
+        else if (method == "numerical")
+          o.method = BaseMethod::Numerical;
+        else
+          throw py::value_error("method must be 'projection' or 'numerical', got '" + method + "'");
+        {
+          py::gil_scoped_release release;
+          out->bp = computeBaseParameters(out->model->model, o);
+        }
+        const int n = out->model->model.nq();
+        out->W.resize(n, o.layout.size(n));
+        out->wK.resize(o.layout.size(n));
+        out->wP.resize(o.layout.size(n));
+        return out;
+      },
+      py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
+      py::arg("method") = "projection", py::arg("order") = std::vector<int>(),
+      py::arg("tolerance") = kDefaultRankTolerance, py::arg("samples") = 0, py::arg("seed") = 1u,
+      py::arg("snap") = 0.0);
+  m.def(
+      "influence_coordinates",
+      [](const std::shared_ptr<PyModel>& model, bool rotor) {
+        const InfluenceCoordinates ic = influenceCoordinates(model->model, {rotor, false});
+        std::vector<std::string> basis;
+        for (int r = 0; r < ic.rows(); ++r) basis.push_back(ic.basis(r).toString(model->model));
+        return py::make_tuple(ic.dense(), basis);
+      },
+      py::arg("model"), py::arg("rotor") = false,
+      "Z (rows x 10n or 11n) and the basis function of each row, as text.");
+  m.def("khalil_order", [](int n, bool rotor, bool friction) {
+    return khalilOrder(n, {rotor, friction});
+  });
 
   m.def("load_yaml",
         [](const std::string& path) { return std::make_shared<PyModel>(loadYaml(path)); });

@@ -1,0 +1,108 @@
+// Base inertial parameters: echelon form of the coordinate matrix, the regrouping matrix Y, the
+// Lagrangian / total-energy / equations-of-motion sets, readable formulas, and the base
+// regressors. Two methods: the exact projection method (projection.hpp) and the sampled
+// numerical method (regressor samples, QR), for cross-checking.
+#pragma once
+
+#include <Eigen/Core>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "mindyn/data.hpp"
+#include "mindyn/dynamics.hpp"
+#include "mindyn/model.hpp"
+
+namespace mindyn {
+
+/// Outcome of one rank decision by Gaussian elimination with partial pivoting, columns offered
+/// in a priority order. Sizes of pivots are relative to the column's own largest entry, so the
+/// decision does not depend on the units of the parameters.
+struct RankDecision {
+  double tolerance = 0;
+  std::vector<int> pivots;         // kept columns (classical indices), in the order they were kept
+  std::vector<double> pivot_size;  // relative pivot of each kept column
+  std::vector<int> dependent;      // non-zero columns that are combinations of earlier pivots
+  std::vector<double> residual;    // their relative residuals
+  std::vector<int> zero;           // columns that are identically zero: no effect at all
+  double smallest_kept = std::numeric_limits<double>::infinity();
+  double largest_dropped = 0;
+  int rank_looser = -1;   // rank with tolerance x 100 (-1: not recomputed, equal to rank)
+  int rank_tighter = -1;  // rank with tolerance / 100
+  bool near_degenerate = false;
+  Eigen::MatrixXd Y;        // rank x columns, Y.col(pivots[b]) = e_b
+  double fit_residual = 0;  // max |Z - Z~ Y| relative to max |Z|
+  int rank() const { return static_cast<int>(pivots.size()); }
+};
+
+/// Relative tolerance of the rank decisions (see RankDecision).
+inline constexpr double kDefaultRankTolerance = 1e-9;
+
+/// Gaussian elimination of the columns of Z in `order` (a permutation of all column indices).
+RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order,
+                     double tolerance = kDefaultRankTolerance);
+
+/// The conventional (Khalil) priority order: link by link from the base; in each link
+/// XX XY XZ YZ ZZ MX MY, then YY MZ M, then Ia, Fv, Fc.
+std::vector<int> khalilOrder(int n, ParameterLayout layout);
+
+enum class BaseMethod { Projection, Numerical };
+
+struct BaseOptions {
+  ParameterLayout layout;
+  std::vector<int> order;  // empty: khalilOrder
+  double tolerance = kDefaultRankTolerance;
+  BaseMethod method = BaseMethod::Projection;
+  int samples = 0;    // numerical method: number of random states (0: automatic)
+  unsigned seed = 1;  // numerical method: random seed
+};
+
+/// One base-parameter set with its names and formulas.
+struct BaseSet {
+  RankDecision decision;
+  std::vector<std::string> names;     // e.g. XXR3, ZZ1, Fv2
+  std::vector<std::string> formulas;  // "XXR3 = XX3 - YY3 + ..."
+  int size() const { return decision.rank(); }
+};
+
+struct BaseParameters {
+  ParameterLayout layout;
+  std::vector<std::string> classical_names;
+  BaseMethod method = BaseMethod::Projection;
+  BaseSet lagrangian, energy, eom;  // the three sets; eom is the one used for dynamics
+  bool lagrangian_equals_energy = false;
+  bool lagrangian_equals_eom = false;
+  int basis_rows = 0;    // projection: non-zero basis functions; numerical: stacked rows
+  int terms_formed = 0;  // projection: terms produced by the recursion
+  double seconds = 0;    // wall time of the computation
+
+  /// p_b = Y pi for the equations-of-motion set.
+  Eigen::VectorXd values(const Eigen::Ref<const Eigen::VectorXd>& classical) const;
+  /// A classical vector with p_b at the pivots and zeros elsewhere (Y embed(p_b) = p_b).
+  Eigen::VectorXd embed(const Eigen::Ref<const Eigen::VectorXd>& base) const;
+};
+
+BaseParameters computeBaseParameters(const Model& model, const BaseOptions& options = {});
+
+/// Formula text "NAME = c1*P1 + c2*P2 ...": exact zeros dropped, +-1 written as signs,
+/// coefficients at full (shortest round-trip) precision.
+std::string formatFormula(const std::string& name, const Eigen::Ref<const Eigen::RowVectorXd>& row,
+                          const std::vector<std::string>& classical_names);
+
+/// Base regressor W_b = W(:, pivots) of the equations-of-motion set: tau = W_b p_b.
+/// `W` is an n x layout.size(n) work matrix. Allocates nothing.
+void baseRegressor(const Model& model, Data& data, const BaseParameters& base, const VecRef& q,
+                   const VecRef& dq, const VecRef& ddq, MatOut W, MatOut Wb) noexcept;
+
+/// Base total-energy regressor row w_H,b = (w_K + w_P)(:, pivots) of the equations-of-motion
+/// set (the set used by the energy-difference identification model). Allocates nothing.
+void baseEnergyRegressor(const Model& model, Data& data, const BaseParameters& base,
+                         const VecRef& q, const VecRef& dq, VecOut wK, VecOut wP,
+                         VecOut wb) noexcept;
+
+/// Rounds joint-origin rotations that are within `tolerance` [rad] of multiples of pi/2 (per
+/// roll-pitch-yaw angle) and axis components within `tolerance` of 0 or +-1; returns one line per
+/// change made.
+std::vector<std::string> snapRightAngles(Model& model, double tolerance = 1e-3);
+
+}  // namespace mindyn

@@ -1,0 +1,63 @@
+// The projection kernel: exact coordinates of every influence coefficient of the Lagrangian in
+// the basis of F_L = Y0 x Y1 x ... x Yn (method: docs, sections 2-4).
+//
+// Basis functions are multi-indices (l0; l1 .. ln):
+//   l0 = 0        the constant 1 (potential part);
+//   l0 = J(i, j)  = i(i-1)/2 + j, 1 <= j <= i <= n: 0.5 dq_i^2 when i == j, dq_i dq_j otherwise;
+//   lk in 1..5    1, cos q_k, sin q_k, cos 2q_k, sin 2q_k for a revolute joint k;
+//   lk in 1..3    1, q_k, q_k^2 for a prismatic joint k.
+// The coordinates are computed by a recursion over the joints on the body twists (kinetic part)
+// and on g~^T T_k (potential part): each joint multiplies by a matrix affine in (1, cos, sin) or
+// (1, q), which maps a term to at most five terms. No sampling, no regressor evaluation. Terms
+// whose coefficients vanish are dropped, so only the non-zero rows are ever formed.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "mindyn/model.hpp"
+
+namespace mindyn {
+
+/// One basis function of F_L.
+struct BasisFunction {
+  int l0 = 0;                                      // 0: constant; J(i, j) for the velocity product
+  std::vector<int> l;                              // per joint, 1-based index into its Y_k
+  std::string toString(const Model& model) const;  // e.g. "dq1*dq2*cos(q2)*sin(2q3)"
+};
+
+/// Coordinates of the classical influence coefficients of the Lagrangian, w_L = w~ Z.
+/// Rows: the non-zero basis functions; columns: the classical parameters in `layout` (friction
+/// columns, which are not in the Lagrangian, are zero here).
+struct InfluenceCoordinates {
+  struct Entry {
+    int row, col;
+    double value;
+  };
+  ParameterLayout layout;
+  int n = 0;
+  std::vector<std::uint64_t> keys;  // packed multi-index of each row
+  std::vector<Entry> entries;       // the non-zero coordinates (a row may repeat a column: add)
+  int terms_formed = 0;             // kinetic + potential terms produced by the recursion
+  int rows() const { return static_cast<int>(keys.size()); }
+  int cols() const { return layout.size(n); }
+  /// Z as a dense matrix (rows x cols); large for long chains.
+  Eigen::MatrixXd dense() const;
+  /// Index of the row of the constant function 1, or -1 if that row is zero.
+  int constantRow() const;
+  BasisFunction basis(int row) const;
+  /// The last joint (1-based) a row's basis function involves, through q or dq; 0 for the
+  /// constant. Columns of links before it are zero on that row.
+  int depth(int row) const;
+};
+
+/// Runs the recursion. Throws ModelError for more than 18 joints (the packed index limit).
+InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout = {});
+
+/// Packs (l0; l1..ln) into a key and back.
+std::uint64_t packBasis(int l0, const std::vector<int>& l);
+BasisFunction unpackBasis(std::uint64_t key, int n);
+
+}  // namespace mindyn

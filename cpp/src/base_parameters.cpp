@@ -1,0 +1,412 @@
+#include "mindyn/base_parameters.hpp"
+
+#include <Eigen/LU>
+#include <Eigen/QR>
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <random>
+
+#include "mindyn/projection.hpp"
+
+namespace mindyn {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Rank by elimination only (no Y), for the neighbouring-tolerance report.
+int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tol,
+              const Eigen::VectorXd& colmax, double zero_level, RankDecision* out) {
+  std::vector<Eigen::VectorXd> U;
+  std::vector<int> prow;
+  Eigen::VectorXd x(Z.rows());
+  for (int c : order) {
+    if (colmax[c] <= zero_level) {
+      if (out) out->zero.push_back(c);
+      continue;
+    }
+    x = Z.col(c);
+    for (size_t b = 0; b < U.size(); ++b) {
+      const double f = x[prow[b]] / U[b][prow[b]];
+      if (f != 0.0) x.noalias() -= f * U[b];
+    }
+    Eigen::Index r;
+    const double rel = x.cwiseAbs().maxCoeff(&r) / colmax[c];
+    if (rel > tol) {
+      U.push_back(x);
+      prow.push_back(static_cast<int>(r));
+      if (out) {
+        out->pivots.push_back(c);
+        out->pivot_size.push_back(rel);
+        out->smallest_kept = std::min(out->smallest_kept, rel);
+      }
+    } else if (out) {
+      out->dependent.push_back(c);
+      out->residual.push_back(rel);
+      out->largest_dropped = std::max(out->largest_dropped, rel);
+    }
+  }
+  if (out) {
+    // Y from the square system on the pivot rows: Z~[prow] Y = Z[prow].
+    const int nb = static_cast<int>(prow.size());
+    Eigen::MatrixXd A(nb, nb), B(nb, Z.cols());
+    for (int i = 0; i < nb; ++i) {
+      for (int b = 0; b < nb; ++b) A(i, b) = Z(prow[i], out->pivots[b]);
+      B.row(i) = Z.row(prow[i]);
+    }
+    out->Y = nb ? Eigen::MatrixXd(Eigen::PartialPivLU<Eigen::MatrixXd>(A).solve(B))
+                : Eigen::MatrixXd(0, Z.cols());
+  }
+  return static_cast<int>(prow.size());
+}
+
+std::string shortest(double v) {
+  char buf[64];
+  auto res = std::to_chars(buf, buf + sizeof(buf), v);
+  return std::string(buf, res.ptr);
+}
+
+std::string regroupedName(const std::string& classical) {
+  size_t d = classical.size();
+  while (d > 0 && std::isdigit(static_cast<unsigned char>(classical[d - 1]))) --d;
+  return classical.substr(0, d) + "R" + classical.substr(d);
+}
+
+BaseSet makeSet(RankDecision decision, const std::vector<std::string>& names) {
+  BaseSet set;
+  const int nb = decision.rank();
+  for (int b = 0; b < nb; ++b) {
+    const int p = decision.pivots[b];
+    bool regrouped = false;
+    for (int c = 0; c < decision.Y.cols(); ++c)
+      if (c != p && decision.Y(b, c) != 0.0) regrouped = true;
+    set.names.push_back(regrouped ? regroupedName(names[p]) : names[p]);
+    set.formulas.push_back(formatFormula(set.names.back(), decision.Y.row(b), names));
+  }
+  set.decision = std::move(decision);
+  return set;
+}
+
+// Samples of the regressors at random states, for the numerical method.
+struct Samples {
+  Eigen::MatrixXd W, wL, wH;
+};
+
+Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsigned seed) {
+  const int n = model.nq(), P = layout.size(n);
+  Data data(model);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Samples s;
+  s.W.resize(static_cast<long>(m) * n, P);
+  s.wL.resize(m, P);
+  s.wH.resize(m, P);
+  Eigen::VectorXd q(n), dq(n), ddq(n), wK(P), wP(P);
+  Eigen::MatrixXd W(n, P);
+  for (int i = 0; i < m; ++i) {
+    for (int k = 0; k < n; ++k) {
+      const JointLimits& l = model.joints[k].limits;
+      const bool bounded = std::isfinite(l.lower) && std::isfinite(l.upper);
+      const double lo =
+          bounded ? l.lower : (model.joints[k].type == JointType::Revolute ? -kPi : -1.0);
+      const double hi = bounded ? l.upper : -lo;
+      q[k] = lo + (hi - lo) * 0.5 * (u(rng) + 1.0);
+      dq[k] = 2.0 * u(rng);
+      ddq[k] = 2.0 * u(rng);
+    }
+    regressor(model, data, q, dq, ddq, layout, W);
+    s.W.middleRows(static_cast<long>(i) * n, n) = W;
+    energyRegressors(model, data, q, dq, layout, wK, wP);
+    s.wL.row(i) = (wK - wP).transpose();
+    s.wH.row(i) = (wK + wP).transpose();
+  }
+  return s;
+}
+
+// Z with its rows combined orthogonally within groups of equal depth: a row of depth d is zero
+// on the columns of links before d, so each group reduces to at most as many rows as it has
+// columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged. `sign` scales the
+// rows (0 drops a row); `extra` rows are appended as they are.
+Eigen::MatrixXd reduceRows(const InfluenceCoordinates& ic, const std::vector<double>& sign,
+                           const Eigen::MatrixXd& extra) {
+  const int P = ic.cols(), n = ic.n;
+  std::vector<int> group(ic.rows()), pos(ic.rows());
+  std::vector<int> count(n + 1, 0), first(n + 1, P);
+  for (int r = 0; r < ic.rows(); ++r) {
+    if (sign[r] == 0.0) {
+      group[r] = -1;
+      continue;
+    }
+    group[r] = ic.depth(r);
+    pos[r] = count[group[r]]++;
+  }
+  for (const auto& e : ic.entries)
+    if (group[e.row] >= 0) first[group[e.row]] = std::min(first[group[e.row]], e.col);
+  std::vector<Eigen::MatrixXd> blocks(n + 1);
+  for (int g = 0; g <= n; ++g)
+    if (count[g] > 0 && first[g] < P) blocks[g] = Eigen::MatrixXd::Zero(count[g], P - first[g]);
+  for (const auto& e : ic.entries) {
+    const int g = group[e.row];
+    if (g >= 0) blocks[g](pos[e.row], e.col - first[g]) += sign[e.row] * e.value;
+  }
+  std::vector<Eigen::MatrixXd> reduced;
+  long total = extra.rows();
+  for (int g = 0; g <= n; ++g) {
+    if (blocks[g].size() == 0) continue;
+    if (blocks[g].rows() > blocks[g].cols()) {
+      Eigen::HouseholderQR<Eigen::MatrixXd> qr(blocks[g]);
+      const long m = blocks[g].cols();
+      Eigen::MatrixXd R = qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
+      blocks[g] = std::move(R);
+    }
+    total += blocks[g].rows();
+  }
+  Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(total, P);
+  long row = 0;
+  for (int g = 0; g <= n; ++g) {
+    if (blocks[g].size() == 0) continue;
+    Z.block(row, first[g], blocks[g].rows(), blocks[g].cols()) = blocks[g];
+    row += blocks[g].rows();
+  }
+  if (extra.rows()) Z.bottomRows(extra.rows()) = extra;
+  return Z;
+}
+
+}  // namespace
+
+RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tolerance) {
+  if (static_cast<long>(order.size()) != Z.cols())
+    throw std::invalid_argument("echelon: the order must name every column once");
+  std::vector<char> seen(Z.cols(), 0);
+  for (int c : order) {
+    if (c < 0 || c >= Z.cols() || seen[c])
+      throw std::invalid_argument("echelon: the order must be a permutation");
+    seen[c] = 1;
+  }
+  RankDecision d;
+  d.tolerance = tolerance;
+  Eigen::VectorXd colmax(Z.cols());
+  for (int c = 0; c < Z.cols(); ++c) colmax[c] = Z.col(c).norm();
+  const double zero_level = 1e-13 * (Z.cols() ? colmax.maxCoeff() : 0.0);
+  eliminate(Z, order, tolerance, colmax, zero_level, &d);
+
+  // Clean rounding in Y: coefficients that are 0 or +-1 to working precision are exactly that.
+  for (int b = 0; b < d.Y.rows(); ++b) {
+    const double sb = colmax[d.pivots[b]];
+    for (int c = 0; c < d.Y.cols(); ++c) {
+      double& y = d.Y(b, c);
+      const double rel = colmax[c] > 0 ? sb / colmax[c] : 1.0;
+      if (std::abs(y) * rel < 1e-10 || colmax[c] <= zero_level)
+        y = 0.0;
+      else if (std::abs(std::abs(y) - 1.0) < 1e-10)
+        y = y > 0 ? 1.0 : -1.0;
+    }
+    for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b, d.pivots[b2]) = b == b2 ? 1.0 : 0.0;
+  }
+  if (d.rank() > 0) {
+    Eigen::MatrixXd Zt(Z.rows(), d.rank());
+    for (int b = 0; b < d.rank(); ++b) Zt.col(b) = Z.col(d.pivots[b]);
+    const Eigen::MatrixXd E = Z - Zt * d.Y;
+    for (int c = 0; c < Z.cols(); ++c)
+      if (colmax[c] > zero_level)
+        d.fit_residual = std::max(d.fit_residual, E.col(c).norm() / colmax[c]);
+  }
+  // Near-degenerate geometry: say what the neighbouring tolerances would decide.
+  const double looser = tolerance * 1e4, tighter = tolerance * 1e-3;
+  if (d.smallest_kept < looser * 10 || d.largest_dropped > tighter / 10) {
+    d.rank_looser = eliminate(Z, order, looser, colmax, zero_level, nullptr);
+    d.rank_tighter = eliminate(Z, order, tighter, colmax, zero_level, nullptr);
+  } else {
+    d.rank_looser = d.rank_tighter = d.rank();
+  }
+  d.near_degenerate = d.rank_looser != d.rank() || d.rank_tighter != d.rank();
+  return d;
+}
+
+std::vector<int> khalilOrder(int n, ParameterLayout layout) {
+  std::vector<int> order;
+  for (int k = 0; k < n; ++k) {
+    const int c0 = k * layout.perLink();
+    for (int p : {0, 1, 2, 4, 5, 6, 7, 3, 8, 9}) order.push_back(c0 + p);
+    if (layout.rotor) order.push_back(layout.rotorIndex(k));
+    if (layout.friction) {
+      order.push_back(layout.viscousIndex(k));
+      order.push_back(layout.coulombIndex(k));
+    }
+  }
+  return order;
+}
+
+std::string formatFormula(const std::string& name, const Eigen::Ref<const Eigen::RowVectorXd>& row,
+                          const std::vector<std::string>& classical_names) {
+  std::string s = name + " =";
+  bool first = true;
+  for (int c = 0; c < row.size(); ++c) {
+    const double y = row[c];
+    if (y == 0.0) continue;
+    const bool neg = y < 0;
+    const double a = std::abs(y);
+    s += first ? (neg ? " -" : " ") : (neg ? " - " : " + ");
+    if (a != 1.0) s += shortest(a) + "*";
+    s += classical_names[c];
+    first = false;
+  }
+  if (first) s += " 0";
+  return s;
+}
+
+Eigen::VectorXd BaseParameters::values(const Eigen::Ref<const Eigen::VectorXd>& classical) const {
+  if (classical.size() != eom.decision.Y.cols())
+    throw std::invalid_argument("classical parameter vector has " +
+                                std::to_string(classical.size()) + " entries; expected " +
+                                std::to_string(eom.decision.Y.cols()));
+  return eom.decision.Y * classical;
+}
+
+Eigen::VectorXd BaseParameters::embed(const Eigen::Ref<const Eigen::VectorXd>& base) const {
+  if (base.size() != eom.size())
+    throw std::invalid_argument("base parameter vector has " + std::to_string(base.size()) +
+                                " entries; expected " + std::to_string(eom.size()));
+  Eigen::VectorXd pi = Eigen::VectorXd::Zero(eom.decision.Y.cols());
+  for (int b = 0; b < eom.size(); ++b) pi[eom.decision.pivots[b]] = base[b];
+  return pi;
+}
+
+BaseParameters computeBaseParameters(const Model& model, const BaseOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const int n = model.nq();
+  const ParameterLayout layout = options.layout;
+  const int P = layout.size(n);
+  std::vector<int> order = options.order.empty() ? khalilOrder(n, layout) : options.order;
+  if (static_cast<int>(order.size()) != P)
+    throw ModelError("the parameter order names " + std::to_string(order.size()) +
+                     " parameters; the layout has " + std::to_string(P));
+  if (!(options.tolerance > 0 && options.tolerance < 1e-2))
+    throw ModelError("the rank tolerance must be in (0, 0.01), got " + shortest(options.tolerance));
+
+  BaseParameters bp;
+  bp.layout = layout;
+  bp.method = options.method;
+  bp.classical_names = model.parameterNames(layout);
+  const double tol = options.tolerance;
+
+  Eigen::MatrixXd ZL, ZH, ZE;
+  if (options.method == BaseMethod::Projection) {
+    const InfluenceCoordinates ic = influenceCoordinates(model, layout);
+    bp.basis_rows = ic.rows();
+    bp.terms_formed = ic.terms_formed;
+    std::vector<double> ones(ic.rows(), 1.0), energy(ic.rows(), 1.0), eom(ic.rows(), 1.0);
+    for (int r = 0; r < ic.rows(); ++r) {
+      if ((ic.keys[r] & 1023u) == 0) energy[r] = -1.0;  // potential part changes sign in H
+      if (ic.keys[r] == 0) eom[r] = 0.0;                // constants do not reach the torques
+    }
+    Eigen::MatrixXd friction = Eigen::MatrixXd::Zero(layout.friction ? 2 * n : 0, P);
+    for (int k = 0; k < n && layout.friction; ++k) {
+      friction(2 * k, layout.viscousIndex(k)) = 1.0;
+      friction(2 * k + 1, layout.coulombIndex(k)) = 1.0;
+    }
+    ZL = reduceRows(ic, ones, Eigen::MatrixXd(0, P));
+    ZH = reduceRows(ic, energy, Eigen::MatrixXd(0, P));
+    ZE = reduceRows(ic, eom, friction);
+  } else {
+    const int m = options.samples > 0 ? options.samples : std::max(40, 3 * P / std::max(1, n) + 20);
+    Samples s = sampleRegressors(model, layout, m, options.seed);
+    // The energy sets: differences remove the constant, so keep one absolute sample row.
+    ZL = s.wL;
+    ZH = s.wH;
+    ZE = s.W;
+    bp.basis_rows = static_cast<int>(s.W.rows());
+  }
+  bp.lagrangian = makeSet(echelon(ZL, order, tol), bp.classical_names);
+  bp.energy = makeSet(echelon(ZH, order, tol), bp.classical_names);
+  bp.eom = makeSet(echelon(ZE, order, tol), bp.classical_names);
+  bp.lagrangian_equals_energy = bp.lagrangian.decision.pivots == bp.energy.decision.pivots;
+  bp.lagrangian_equals_eom = bp.lagrangian.decision.pivots == bp.eom.decision.pivots;
+  bp.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return bp;
+}
+
+void baseRegressor(const Model& model, Data& data, const BaseParameters& base, const VecRef& q,
+                   const VecRef& dq, const VecRef& ddq, MatOut W, MatOut Wb) noexcept {
+  regressor(model, data, q, dq, ddq, base.layout, W);
+  const auto& piv = base.eom.decision.pivots;
+  for (size_t b = 0; b < piv.size(); ++b) Wb.col(static_cast<long>(b)) = W.col(piv[b]);
+}
+
+void baseEnergyRegressor(const Model& model, Data& data, const BaseParameters& base,
+                         const VecRef& q, const VecRef& dq, VecOut wK, VecOut wP,
+                         VecOut wb) noexcept {
+  energyRegressors(model, data, q, dq, base.layout, wK, wP);
+  const auto& piv = base.eom.decision.pivots;
+  for (size_t b = 0; b < piv.size(); ++b) wb[static_cast<long>(b)] = wK[piv[b]] + wP[piv[b]];
+}
+
+std::vector<std::string> snapRightAngles(Model& model, double tolerance) {
+  std::vector<std::string> report;
+  auto snapAngle = [tolerance](double a, bool& changed) {
+    const double k = std::round(a / (kPi / 2));
+    const double s = k * (kPi / 2);
+    if (std::abs(a - s) <= tolerance && a != s) {
+      changed = true;
+      return s;
+    }
+    return a;
+  };
+  auto snapRotation = [&](Eigen::Isometry3d& T, const std::string& what) {
+    const Eigen::Matrix3d R = T.linear();
+    // Already exactly a signed permutation: nothing to do.
+    bool exact = true;
+    for (int i = 0; i < 9; ++i) {
+      const double v = std::abs(R.data()[i]);
+      if (v != 0.0 && v != 1.0) exact = false;
+    }
+    if (exact) return;
+    const Eigen::Vector3d ypr = R.eulerAngles(2, 1, 0);
+    bool changed = false;
+    Eigen::Vector3d s;
+    for (int i = 0; i < 3; ++i) s[i] = snapAngle(ypr[i], changed);
+    bool all_right = true;
+    for (int i = 0; i < 3; ++i)
+      if (std::abs(s[i] / (kPi / 2) - std::round(s[i] / (kPi / 2))) > 1e-12) all_right = false;
+    Eigen::Matrix3d Rs = (Eigen::AngleAxisd(s[0], Eigen::Vector3d::UnitZ()) *
+                          Eigen::AngleAxisd(s[1], Eigen::Vector3d::UnitY()) *
+                          Eigen::AngleAxisd(s[2], Eigen::Vector3d::UnitX()))
+                             .toRotationMatrix();
+    if (all_right) {
+      for (int i = 0; i < 9; ++i) Rs.data()[i] = std::round(Rs.data()[i]);
+      changed = changed || Rs != R;
+    }
+    if (!changed) return;
+    T.linear() = Rs;
+    report.push_back(what + ": rotation (yaw, pitch, roll) = (" + shortest(ypr[0]) + ", " +
+                     shortest(ypr[1]) + ", " + shortest(ypr[2]) +
+                     ") rad snapped to multiples of pi/2");
+  };
+  for (Joint& j : model.joints) {
+    snapRotation(j.pre, "joint '" + j.name + "' origin");
+    snapRotation(j.post, "joint '" + j.name + "' link frame");
+    Eigen::Vector3d a = j.axis;
+    bool changed = false;
+    for (int i = 0; i < 3; ++i) {
+      if (a[i] != 0.0 && std::abs(a[i]) <= tolerance) {
+        a[i] = 0.0;
+        changed = true;
+      }
+    }
+    if (changed) {
+      const Eigen::Vector3d old = j.axis;
+      j.axis = a.normalized();
+      for (int i = 0; i < 3; ++i)
+        if (std::abs(std::abs(j.axis[i]) - 1.0) < 1e-15) j.axis[i] = j.axis[i] > 0 ? 1.0 : -1.0;
+      report.push_back("joint '" + j.name + "' axis (" + shortest(old[0]) + ", " +
+                       shortest(old[1]) + ", " + shortest(old[2]) + ") snapped to (" +
+                       shortest(j.axis[0]) + ", " + shortest(j.axis[1]) + ", " +
+                       shortest(j.axis[2]) + ")");
+    }
+  }
+  return report;
+}
+
+}  // namespace mindyn

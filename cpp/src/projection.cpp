@@ -1,0 +1,462 @@
+#include "mindyn/projection.hpp"
+
+#include <Eigen/Geometry>
+#include <array>
+#include <cmath>
+#include <unordered_map>
+
+namespace mindyn {
+
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Row4d = Eigen::Matrix<double, 1, 4>;
+
+constexpr int kL0Bits = 10;
+constexpr int kJointBits = 3;
+constexpr int kMaxJoints = (64 - kL0Bits) / kJointBits;  // 18
+
+inline int pairIndex(int i, int j) {  // 1-based, j <= i
+  return i * (i - 1) / 2 + j;
+}
+inline std::uint64_t withJoint(std::uint64_t key, int joint, int l) {  // joint 0-based, l 1-based
+  return key | (static_cast<std::uint64_t>(l - 1) << (kL0Bits + kJointBits * joint));
+}
+inline std::uint64_t withL0(std::uint64_t key, int l0) {
+  return key | static_cast<std::uint64_t>(l0);
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d m;
+  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
+  return m;
+}
+
+// Twist transformation (angular; linear) of a rigid transform.
+Matrix6d adjoint(const Eigen::Isometry3d& T) {
+  Matrix6d A = Matrix6d::Zero();
+  A.topLeftCorner<3, 3>() = T.linear();
+  A.bottomRightCorner<3, 3>() = T.linear();
+  A.bottomLeftCorner<3, 3>() = skew(T.translation()) * T.linear();
+  return A;
+}
+
+// Rotation taking z to u, exact for the axis-aligned cases.
+Eigen::Matrix3d alignZ(const Eigen::Vector3d& u) {
+  if (u == Eigen::Vector3d::UnitZ()) return Eigen::Matrix3d::Identity();
+  if (u == -Eigen::Vector3d::UnitZ()) return Eigen::Vector3d(1, -1, -1).asDiagonal();
+  if (u == Eigen::Vector3d::UnitX()) {
+    Eigen::Matrix3d C;
+    C << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+    return C;
+  }
+  if (u == Eigen::Vector3d::UnitY()) {
+    Eigen::Matrix3d C;
+    C << 0, 1, 0, 0, 0, 1, 1, 0, 0;
+    return C;
+  }
+  if (u == -Eigen::Vector3d::UnitX()) {
+    Eigen::Matrix3d C;
+    C << 0, 0, -1, -1, 0, 0, 0, 1, 0;
+    return C;
+  }
+  if (u == -Eigen::Vector3d::UnitY()) {
+    Eigen::Matrix3d C;
+    C << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+    return C;
+  }
+  return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), u).toRotationMatrix();
+}
+
+template <class M>
+double maxAbs(const M& m) {
+  return m.cwiseAbs().maxCoeff();
+}
+
+// Zeroes entries below tol; true if something is left.
+template <class M>
+bool prune(M& m, double tol) {
+  bool any = false;
+  for (int i = 0; i < m.size(); ++i) {
+    if (std::abs(m.data()[i]) <= tol)
+      m.data()[i] = 0.0;
+    else
+      any = true;
+  }
+  return any;
+}
+
+// A constant 6x6 map kept as its non-zero entries (geometry is often axis-aligned).
+struct Sparse6 {
+  int count = 0;
+  int row[36], col[36];
+  double val[36];
+  explicit Sparse6(const Matrix6d& m) {
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j)
+        if (m(i, j) != 0.0) {
+          row[count] = i;
+          col[count] = j;
+          val[count] = m(i, j);
+          ++count;
+        }
+  }
+  // C Q C^T
+  void congruence(const Matrix6d& Q, Matrix6d& out) const {
+    Matrix6d T = Matrix6d::Zero();
+    for (int e = 0; e < count; ++e) T.row(row[e]) += val[e] * Q.row(col[e]);
+    out.setZero();
+    for (int e = 0; e < count; ++e) out.col(row[e]) += val[e] * T.col(col[e]);
+  }
+  void apply(const Vector6d& x, Vector6d& out) const {
+    out.setZero();
+    for (int e = 0; e < count; ++e) out[row[e]] += val[e] * x[col[e]];
+  }
+  // 1/2 tr(E Q) for symmetric E (this) and Q
+  double halfTrace(const Matrix6d& Q) const {
+    double s = 0.0;
+    for (int e = 0; e < count; ++e) s += val[e] * Q(col[e], row[e]);
+    return 0.5 * s;
+  }
+};
+
+// R B R^T for R = blockdiag(Rz(-q), Rz(-q)), B symmetric, split over 1, cos q, sin q, cos 2q,
+// sin 2q. Indices 2 and 5 lie on the axis; (0, 1) and (3, 4) rotate as (x, y) -> (c x + s y,
+// -s x + c y).
+void splitRotation(const Matrix6d& B, Matrix6d parts[5]) {
+  for (int l = 0; l < 5; ++l) parts[l].setZero();
+  static constexpr int ax[2] = {2, 5};
+  static constexpr int px[2] = {0, 3};
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) parts[0](ax[a], ax[b]) = B(ax[a], ax[b]);
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) {
+      const int z = ax[a], x = px[b], y = px[b] + 1;
+      // D(z, x') = c B(z,x) + s B(z,y);  D(z, y') = -s B(z,x) + c B(z,y)
+      parts[1](z, x) = parts[1](x, z) = B(z, x);
+      parts[2](z, x) = parts[2](x, z) = B(z, y);
+      parts[1](z, y) = parts[1](y, z) = B(z, y);
+      parts[2](z, y) = parts[2](y, z) = -B(z, x);
+    }
+  for (int a = 0; a < 2; ++a)
+    for (int b = 0; b < 2; ++b) {
+      const int x1 = px[a], y1 = px[a] + 1, x2 = px[b], y2 = px[b] + 1;
+      const double xx = B(x1, x2), xy = B(x1, y2), yx = B(y1, x2), yy = B(y1, y2);
+      parts[0](x1, x2) = 0.5 * (xx + yy);
+      parts[3](x1, x2) = 0.5 * (xx - yy);
+      parts[4](x1, x2) = 0.5 * (xy + yx);
+      parts[0](x1, y2) = 0.5 * (xy - yx);
+      parts[3](x1, y2) = 0.5 * (xy + yx);
+      parts[4](x1, y2) = 0.5 * (yy - xx);
+      parts[0](y1, x2) = 0.5 * (yx - xy);
+      parts[3](y1, x2) = 0.5 * (xy + yx);
+      parts[4](y1, x2) = 0.5 * (yy - xx);
+      parts[0](y1, y2) = 0.5 * (xx + yy);
+      parts[3](y1, y2) = -0.5 * (xx - yy);
+      parts[4](y1, y2) = -0.5 * (xy + yx);
+    }
+}
+
+struct QTerm {
+  std::uint64_t key;
+  Matrix6d Q;
+};
+struct VTerm {
+  int i;              // 1-based joint whose rate multiplies this term
+  std::uint64_t key;  // joint indices only
+  Vector6d x;
+};
+struct RTerm {
+  std::uint64_t key;
+  Row4d r;
+};
+using Entry = InfluenceCoordinates::Entry;
+
+// Relative size below which a coefficient is rounding noise of exactly-zero structure.
+constexpr double kNoise = 1e-13;
+
+}  // namespace
+
+std::uint64_t packBasis(int l0, const std::vector<int>& l) {
+  if (static_cast<int>(l.size()) > kMaxJoints)
+    throw ModelError("basis index: at most " + std::to_string(kMaxJoints) + " joints");
+  std::uint64_t key = static_cast<std::uint64_t>(l0);
+  for (size_t j = 0; j < l.size(); ++j) key = withJoint(key, static_cast<int>(j), l[j]);
+  return key;
+}
+
+BasisFunction unpackBasis(std::uint64_t key, int n) {
+  BasisFunction b;
+  b.l0 = static_cast<int>(key & ((1u << kL0Bits) - 1));
+  b.l.resize(n);
+  for (int j = 0; j < n; ++j)
+    b.l[j] = static_cast<int>((key >> (kL0Bits + kJointBits * j)) & 7u) + 1;
+  return b;
+}
+
+std::string BasisFunction::toString(const Model& model) const {
+  std::string s;
+  auto add = [&s](const std::string& f) { s += (s.empty() ? "" : "*") + f; };
+  if (l0 > 0) {
+    const int i = static_cast<int>(std::floor((1 + std::sqrt(8.0 * l0 - 7)) / 2));
+    const int j = l0 - i * (i - 1) / 2;
+    if (i == j)
+      add("0.5*dq" + std::to_string(i) + "^2");
+    else
+      add("dq" + std::to_string(j) + "*dq" + std::to_string(i));
+  }
+  for (size_t k = 0; k < l.size(); ++k) {
+    const std::string q = "q" + std::to_string(k + 1);
+    if (model.joints[k].type == JointType::Revolute) {
+      static const char* f[] = {"", "cos(%)", "sin(%)", "cos(2%)", "sin(2%)"};
+      if (l[k] > 1) {
+        std::string t = f[l[k] - 1];
+        t.replace(t.find('%'), 1, q);
+        add(t);
+      }
+    } else {
+      if (l[k] == 2) add(q);
+      if (l[k] == 3) add(q + "^2");
+    }
+  }
+  return s.empty() ? "1" : s;
+}
+
+int InfluenceCoordinates::constantRow() const {
+  for (size_t r = 0; r < keys.size(); ++r)
+    if (keys[r] == 0) return static_cast<int>(r);
+  return -1;
+}
+
+BasisFunction InfluenceCoordinates::basis(int row) const { return unpackBasis(keys.at(row), n); }
+
+int InfluenceCoordinates::depth(int row) const {
+  const BasisFunction b = basis(row);
+  int d = 0;
+  if (b.l0 > 0) d = static_cast<int>(std::floor((1 + std::sqrt(8.0 * b.l0 - 7)) / 2));
+  for (int j = 0; j < n; ++j)
+    if (b.l[j] != 1) d = std::max(d, j + 1);
+  return d;
+}
+
+Eigen::MatrixXd InfluenceCoordinates::dense() const {
+  Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(rows(), cols());
+  for (const auto& e : entries) Z(e.row, e.col) += e.value;
+  return Z;
+}
+
+InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout) {
+  model.validate();
+  const int n = model.nq();
+  if (n > kMaxJoints)
+    throw ModelError("the projection method handles at most " + std::to_string(kMaxJoints) +
+                     " joints, the model has " + std::to_string(n));
+  if (n * (n + 1) / 2 >= (1 << kL0Bits)) throw ModelError("too many joints for the basis index");
+
+  // Joint frames aligned so that every joint moves about / along its z axis.
+  std::vector<Eigen::Isometry3d> pre(n), post(n);
+  for (int k = 0; k < n; ++k) {
+    const Joint& j = model.joints[k];
+    Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
+    C.linear() = alignZ(j.axis);
+    pre[k] = j.pre * C;
+    post[k] = C.inverse() * j.post;
+  }
+
+  // Per-link kinetic parameter forms E'_p (10 per link) in the aligned joint frame.
+  auto kineticForms = [&](int k) {
+    std::array<Matrix6d, 10> E;
+    for (auto& e : E) e.setZero();
+    E[0](0, 0) = 1;
+    E[1](0, 1) = E[1](1, 0) = 1;
+    E[2](0, 2) = E[2](2, 0) = 1;
+    E[3](1, 1) = 1;
+    E[4](1, 2) = E[4](2, 1) = 1;
+    E[5](2, 2) = 1;
+    for (int a = 0; a < 3; ++a) {
+      const Eigen::Matrix3d S = skew(Eigen::Vector3d::Unit(a));
+      E[6 + a].topRightCorner<3, 3>() = S;
+      E[6 + a].bottomLeftCorner<3, 3>() = S.transpose();
+    }
+    E[9].bottomRightCorner<3, 3>().setIdentity();
+    const Matrix6d A = adjoint(post[k].inverse());
+    std::vector<Sparse6> forms;
+    for (auto& e : E) {
+      Matrix6d f = A.transpose() * e * A;
+      prune(f, kNoise * maxAbs(f));
+      forms.emplace_back(f);
+    }
+    return forms;
+  };
+
+  // Rotation by -q about z, as (1, cos, sin) coefficients of the 6x6 twist map.
+  Matrix6d R6[3];
+  for (auto& r : R6) r.setZero();
+  {
+    Eigen::Matrix3d P0 = Eigen::Matrix3d::Zero(), P1 = Eigen::Matrix3d::Zero(),
+                    P2 = Eigen::Matrix3d::Zero();
+    P0(2, 2) = 1;
+    P1(0, 0) = P1(1, 1) = 1;
+    P2(0, 1) = 1;
+    P2(1, 0) = -1;
+    const Eigen::Matrix3d* Ps[3] = {&P0, &P1, &P2};
+    for (int a = 0; a < 3; ++a) {
+      R6[a].topLeftCorner<3, 3>() = *Ps[a];
+      R6[a].bottomRightCorner<3, 3>() = *Ps[a];
+    }
+  }
+  // Translation by -q along z on twists: v -> v - q z x w.
+  Matrix6d N6 = Matrix6d::Zero();
+  N6.bottomLeftCorner<3, 3>() = -skew(Eigen::Vector3d::UnitZ());
+  // Homogeneous rotation by +q about z and translation by +q along z, for g~^T T.
+  Eigen::Matrix4d R4[3];
+  for (auto& r : R4) r.setZero();
+  R4[0](2, 2) = R4[0](3, 3) = 1;
+  R4[1](0, 0) = R4[1](1, 1) = 1;
+  R4[2](0, 1) = -1;
+  R4[2](1, 0) = 1;
+  Eigen::Matrix4d N4 = Eigen::Matrix4d::Zero();
+  N4(2, 3) = 1;
+
+  std::vector<QTerm> Q, Qnext;
+  std::vector<VTerm> V, Vnext;
+  std::vector<RTerm> R, Rnext;
+  Row4d g0;
+  g0 << model.gravity.transpose(), 0.0;
+  R.push_back({0, g0});
+
+  std::unordered_map<std::uint64_t, int> rowOf;
+  std::vector<std::uint64_t> keys;
+  std::vector<Entry> entries;
+  auto rowFor = [&](std::uint64_t key) {
+    auto it = rowOf.find(key);
+    if (it != rowOf.end()) return it->second;
+    const int r = static_cast<int>(keys.size());
+    rowOf.emplace(key, r);
+    keys.push_back(key);
+    return r;
+  };
+  InfluenceCoordinates out;
+  out.layout = layout;
+  out.n = n;
+
+  Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
+  for (int k = 0; k < n; ++k) {
+    const bool revolute = model.joints[k].type == JointType::Revolute;
+    Matrix6d Cd = adjoint((prevPost * pre[k]).inverse());
+    const double cscale = std::max(1.0, maxAbs(Cd));
+    prune(Cd, 1e-16 * cscale);
+    const Sparse6 C(Cd);
+    Vector6d S = Vector6d::Zero();
+    if (revolute)
+      S[2] = 1.0;
+    else
+      S[5] = 1.0;
+
+    // Kinetic part: Q_k = Ad Q_{k-1} Ad^T + cross terms + 2 S S^T dq_k^2.
+    Qnext.clear();
+    Qnext.reserve(Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1);
+    for (const QTerm& t : Q) {
+      Matrix6d B;
+      C.congruence(t.Q, B);
+      const double tol = kNoise * maxAbs(t.Q) * cscale * cscale;
+      if (!prune(B, tol)) continue;
+      Matrix6d parts[5];
+      int count;
+      if (revolute) {
+        splitRotation(B, parts);
+        count = 5;
+      } else {
+        const Matrix6d NB = N6 * B;
+        parts[0] = B;
+        parts[1] = NB + NB.transpose();
+        parts[2] = NB * N6.transpose();
+        count = 3;
+      }
+      const double ptol = kNoise * maxAbs(B);
+      for (int l = 0; l < count; ++l)
+        if (prune(parts[l], ptol)) Qnext.push_back({withJoint(t.key, k, l + 1), parts[l]});
+    }
+    Vnext.clear();
+    Vnext.reserve(V.size() * 3 + 1);
+    for (const VTerm& t : V) {
+      Vector6d y;
+      C.apply(t.x, y);
+      if (!prune(y, kNoise * maxAbs(t.x) * cscale)) continue;
+      Vector6d parts[3];
+      int count;
+      if (revolute) {
+        for (int a = 0; a < 3; ++a) parts[a] = R6[a] * y;
+        count = 3;
+      } else {
+        parts[0] = y;
+        parts[1] = N6 * y;
+        count = 2;
+      }
+      const double ptol = kNoise * maxAbs(y);
+      for (int l = 0; l < count; ++l) {
+        if (!prune(parts[l], ptol)) continue;
+        const std::uint64_t key = withJoint(t.key, k, l + 1);
+        Vnext.push_back({t.i, key, parts[l]});
+        Matrix6d X = parts[l] * S.transpose();
+        Qnext.push_back({withL0(key, pairIndex(k + 1, t.i)), X + X.transpose()});
+      }
+    }
+    Vnext.push_back({k + 1, 0, S});
+    Qnext.push_back({withL0(0, pairIndex(k + 1, k + 1)), 2.0 * S * S.transpose()});
+    std::swap(Q, Qnext);
+    std::swap(V, Vnext);
+
+    // Potential part: g~^T T_k.
+    Rnext.clear();
+    Rnext.reserve(R.size() * 3);
+    const Eigen::Matrix4d Pre = (prevPost * pre[k]).matrix(), Post = post[k].matrix();
+    for (const RTerm& t : R) {
+      Row4d y = t.r * Pre;
+      if (!prune(y, kNoise * maxAbs(t.r) * std::max(1.0, maxAbs(Pre)))) continue;
+      Row4d parts[3];
+      int count;
+      if (revolute) {
+        for (int a = 0; a < 3; ++a) parts[a] = y * R4[a];
+        count = 3;
+      } else {
+        parts[0] = y;
+        parts[1] = y * N4;
+        count = 2;
+      }
+      const double ptol = kNoise * maxAbs(y);
+      for (int l = 0; l < count; ++l)
+        if (prune(parts[l], ptol)) Rnext.push_back({withJoint(t.key, k, l + 1), parts[l]});
+    }
+    std::swap(R, Rnext);
+    out.terms_formed += static_cast<int>(Q.size() + R.size());
+
+    // Project link k's parameters.
+    const int c0 = k * layout.perLink();
+    const auto E = kineticForms(k);
+    for (const QTerm& t : Q) {
+      const int row = rowFor(t.key);
+      const double scale = maxAbs(t.Q);
+      for (int p = 0; p < 10; ++p) {
+        const double v = E[p].halfTrace(t.Q);
+        if (std::abs(v) > kNoise * scale) entries.push_back({row, c0 + p, v});
+      }
+    }
+    for (const RTerm& t : R) {
+      const Row4d r = t.r * Post;
+      const double scale = maxAbs(t.r) * std::max(1.0, maxAbs(Post));
+      for (int a = 0; a < 4; ++a)
+        if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowFor(t.key), c0 + 6 + a, r[a]});
+    }
+    if (layout.rotor)
+      entries.push_back({rowFor(withL0(0, pairIndex(k + 1, k + 1))), layout.rotorIndex(k), 1.0});
+    prevPost = post[k];
+  }
+
+  out.keys = std::move(keys);
+  out.entries = std::move(entries);
+  return out;
+}
+
+}  // namespace mindyn

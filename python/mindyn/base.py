@@ -1,0 +1,208 @@
+"""Base inertial parameters by the projection method (exact) or the numerical method (sampled).
+
+The three sets -- of the Lagrangian, of the total energy and of the equations of motion -- are
+all computed. The equations-of-motion set is the one used for inverse dynamics, the base
+regressor and the dynamic identification model; the energy-difference identification model
+uses the same set (a constant in the energy cancels in differences).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from . import _core
+from .robot import Robot, load
+
+__all__ = ["BaseParameters", "base_parameters"]
+
+DEFAULT_TOLERANCE = 1e-9
+
+
+class BaseParameters:
+    """Base parameters of a robot, with the regrouping matrix and the base regressors.
+
+    Attributes
+    ----------
+    n : int
+        Number of base parameters of the equations of motion (friction included when enabled).
+    names : list of str
+        Their names; a regrouped parameter gets ``R`` before its index (``XXR3``).
+    Y : ndarray, shape (n, P)
+        Regrouping matrix: ``p_b = Y @ params`` for a classical vector of length ``P``.
+    formulas : list of str
+        ``XXR3 = XX3 - YY3 + YY4 + ...`` at full precision.
+    sets : dict
+        ``lagrangian``, ``energy`` and ``eom``: each with ``n``, ``names``, ``formulas``, ``Y``,
+        ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
+        and ``margin`` (tolerance, smallest kept / largest dropped relative pivot, the counts at
+        the neighbouring tolerances, ``near_degenerate``).
+    """
+
+    def __init__(self, core: _core.BaseParameters, robot: Robot):
+        self._b = core
+        self.robot = robot
+        self.sets = {"lagrangian": core.lagrangian, "energy": core.energy, "eom": core.eom}
+
+    n = property(lambda self: self._b.n)
+    names = property(lambda self: self._b.names)
+    formulas = property(lambda self: self._b.formulas)
+    Y = property(lambda self: self._b.Y)
+    pivots = property(lambda self: self._b.pivots)
+    classical_names = property(lambda self: self._b.classical_names)
+    rotor = property(lambda self: self._b.rotor)
+    friction = property(lambda self: self._b.friction)
+    method = property(lambda self: self._b.method)
+    seconds = property(lambda self: self._b.seconds)
+    basis_rows = property(lambda self: self._b.basis_rows)
+    terms_formed = property(lambda self: self._b.terms_formed)
+    snapped = property(lambda self: self._b.snapped)
+    lagrangian_equals_energy = property(lambda self: self._b.lagrangian_equals_energy)
+    lagrangian_equals_eom = property(lambda self: self._b.lagrangian_equals_eom)
+
+    @property
+    def margin(self) -> dict:
+        """Rank-decision report of the equations-of-motion set."""
+        return self.sets["eom"]["margin"]
+
+    @property
+    def no_effect(self) -> list[str]:
+        """Classical parameters that do not appear in the equations of motion at all."""
+        return self.sets["eom"]["no_effect"]
+
+    def values(self, params) -> np.ndarray:
+        """``p_b = Y @ params``; ``params`` in the classical layout of this set, shape (P,)."""
+        p = np.asarray(params, dtype=float)
+        if p.shape != (self.Y.shape[1],):
+            raise ValueError(f"params has shape {p.shape}; expected ({self.Y.shape[1]},)")
+        return self._b.values(p)
+
+    def embed(self, base) -> np.ndarray:
+        """A classical vector with ``base`` at the pivot positions and zeros elsewhere, so that
+        ``values(embed(p_b)) == p_b`` and any inverse dynamics linear in the classical
+        parameters gives the same torques for it."""
+        b = np.asarray(base, dtype=float)
+        if b.shape != (self.n,):
+            raise ValueError(f"base parameter vector has shape {b.shape}; expected ({self.n},)")
+        return self._b.embed(b)
+
+    def regressor(self, q, dq, ddq) -> np.ndarray:
+        """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
+        ``tau = W_b @ values(params)``."""
+        return self._b.regressor(q, dq, ddq)
+
+    def energy_regressor(self, q, dq) -> np.ndarray:
+        """Base total-energy regressor ``w_H,b``, shape (n,) or (m, n), over the
+        equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant."""
+        return self._b.energy_regressor(q, dq)
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary (counts, names, formulas, margins)."""
+        out = {
+            "robot": self.robot.name,
+            "method": self.method,
+            "rotor": self.rotor,
+            "friction": self.friction,
+            "n_base": self.n,
+            "names": self.names,
+            "formulas": self.formulas,
+            "margin": _plain(self.margin),
+            "no_effect": self.no_effect,
+            "counts": {k: s["n"] for k, s in self.sets.items()},
+            "lagrangian_equals_energy": self.lagrangian_equals_energy,
+            "lagrangian_equals_eom": self.lagrangian_equals_eom,
+            "used_for": {
+                "inverse_dynamics": "eom",
+                "dynamic_identification": "eom",
+                "energy_identification": "eom",
+            },
+            "sets": {
+                k: {
+                    "n": s["n"],
+                    "names": s["names"],
+                    "formulas": s["formulas"],
+                    "no_effect": s["no_effect"],
+                    "margin": _plain(s["margin"]),
+                }
+                for k, s in self.sets.items()
+            },
+            "basis_rows": self.basis_rows,
+            "seconds": self.seconds,
+            "snapped": self.snapped,
+        }
+        return out
+
+    def __repr__(self) -> str:
+        return f"BaseParameters(robot={self.robot.name!r}, n={self.n}, method={self.method!r})"
+
+
+def _plain(d: dict) -> dict:
+    return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in d.items()}
+
+
+def base_parameters(
+    robot: Robot | str,
+    rotor: bool = False,
+    friction: bool = False,
+    method: str = "projection",
+    order: Sequence[int] | Sequence[str] | None = None,
+    tolerance: float = DEFAULT_TOLERANCE,
+    snap: float | bool | None = None,
+    samples: int = 0,
+    seed: int = 1,
+) -> BaseParameters:
+    """Base inertial parameters of ``robot``.
+
+    Parameters
+    ----------
+    robot : Robot or str
+        A robot or anything :func:`mindyn.load` accepts.
+    rotor, friction : bool
+        Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
+    method : {"projection", "numerical"}
+        Exact projection method, or sampled regressors with QR (for cross-checks).
+    order : sequence of int or str, optional
+        Column priority: every classical parameter once, by index or name (``"XX1"``).
+        Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
+    tolerance : float
+        Relative size below which a pivot counts as zero (default 1e-9). Every decision's
+        margin is reported in ``sets[...]["margin"]``.
+    snap : float or bool, optional
+        Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
+        1e-3) before computing; what was changed is listed in ``snapped``.
+    samples, seed : int
+        Numerical method only: number of random states (0: automatic) and the random seed.
+    """
+    robot = load(robot) if not isinstance(robot, Robot) else robot
+    names = robot.parameter_names(rotor, friction)
+    idx: list[int] = []
+    if order is not None:
+        lookup = {name: i for i, name in enumerate(names)}
+        for item in order:
+            if isinstance(item, str):
+                if item not in lookup:
+                    raise ValueError(f"order: unknown parameter '{item}'")
+                idx.append(lookup[item])
+            else:
+                idx.append(int(item))
+        if sorted(idx) != list(range(len(names))):
+            missing = [names[i] for i in sorted(set(range(len(names))) - set(idx))]
+            raise ValueError(
+                f"order must name each of the {len(names)} parameters exactly once"
+                + (f"; missing: {', '.join(missing[:8])}" if missing else "")
+            )
+    if snap is True:
+        snap = 1e-3
+    core = _core.base_parameters(
+        robot._m,
+        rotor=rotor,
+        friction=friction,
+        method=method,
+        order=idx,
+        tolerance=float(tolerance),
+        samples=int(samples),
+        seed=int(seed),
+        snap=float(snap or 0.0),
+    )
+    return BaseParameters(core, robot)
