@@ -19,7 +19,10 @@ constexpr double kPi = 3.14159265358979323846;
 // Rank by elimination only (no Y), for the neighbouring-tolerance report.
 int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tol,
               const Eigen::VectorXd& colmax, double zero_level, RankDecision* out) {
+  // Rows are kept in their order; every vector remembers where its non-zero part ends, since
+  // the row reduction leaves the rows of the inner links first.
   std::vector<Eigen::VectorXd> U;
+  std::vector<long> uend;
   std::vector<int> prow;
   Eigen::VectorXd x(Z.rows());
   for (int c : order) {
@@ -28,14 +31,20 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
       continue;
     }
     x = Z.col(c);
+    long end = Z.rows();
+    while (end > 0 && x[end - 1] == 0.0) --end;
     for (size_t b = 0; b < U.size(); ++b) {
       const double f = x[prow[b]] / U[b][prow[b]];
-      if (f != 0.0) x.noalias() -= f * U[b];
+      if (f == 0.0) continue;
+      const long e = std::max(end, uend[b]);
+      x.head(e).noalias() -= f * U[b].head(e);
+      end = e;
     }
-    Eigen::Index r;
-    const double rel = x.cwiseAbs().maxCoeff(&r) / colmax[c];
+    Eigen::Index r = 0;
+    const double rel = end > 0 ? x.head(end).cwiseAbs().maxCoeff(&r) / colmax[c] : 0.0;
     if (rel > tol) {
       U.push_back(x);
+      uend.push_back(end);
       prow.push_back(static_cast<int>(r));
       if (out) {
         out->pivots.push_back(c);
@@ -125,35 +134,34 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsi
   return s;
 }
 
-// Z with its rows combined orthogonally within groups of equal depth: a row of depth d is zero
-// on the columns of links before d, so each group reduces to at most as many rows as it has
-// columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged. `sign` scales the
-// rows (0 drops a row); `extra` rows are appended as they are.
-Eigen::MatrixXd reduceRows(const InfluenceCoordinates& ic, const std::vector<double>& sign,
-                           const Eigen::MatrixXd& extra) {
-  const int P = ic.cols(), n = ic.n;
+// Z with its rows combined orthogonally within groups: a row whose basis function involves
+// joints up to d only is zero on the columns of links before d, so a group of rows of equal
+// depth (and of the same kind, potential or kinetic) reduces to at most as many rows as it has
+// columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged.
+struct Reduced {
+  Eigen::MatrixXd Z;
+  int constant_row = -1;  // the row of the constant function, if non-zero
+};
+
+Reduced reduceRows(const InfluenceCoordinates& ic) {
+  const int P = ic.cols(), n = ic.n, G = 2 * (n + 1);
   std::vector<int> group(ic.rows()), pos(ic.rows());
-  std::vector<int> count(n + 1, 0), first(n + 1, P);
+  std::vector<int> count(G, 0), first(G, P);
   for (int r = 0; r < ic.rows(); ++r) {
-    if (sign[r] == 0.0) {
-      group[r] = -1;
-      continue;
-    }
-    group[r] = ic.depth(r);
+    const bool pot = (ic.keys[r] & 1023u) == 0;
+    group[r] = 2 * ic.depth(r) + (pot ? 1 : 0);
     pos[r] = count[group[r]]++;
   }
-  for (const auto& e : ic.entries)
-    if (group[e.row] >= 0) first[group[e.row]] = std::min(first[group[e.row]], e.col);
-  std::vector<Eigen::MatrixXd> blocks(n + 1);
-  for (int g = 0; g <= n; ++g)
+  for (const auto& e : ic.entries) first[group[e.row]] = std::min(first[group[e.row]], e.col);
+  std::vector<Eigen::MatrixXd> blocks(G);
+  for (int g = 0; g < G; ++g)
     if (count[g] > 0 && first[g] < P) blocks[g] = Eigen::MatrixXd::Zero(count[g], P - first[g]);
   for (const auto& e : ic.entries) {
     const int g = group[e.row];
-    if (g >= 0) blocks[g](pos[e.row], e.col - first[g]) += sign[e.row] * e.value;
+    blocks[g](pos[e.row], e.col - first[g]) += e.value;
   }
-  std::vector<Eigen::MatrixXd> reduced;
-  long total = extra.rows();
-  for (int g = 0; g <= n; ++g) {
+  long total = 0;
+  for (int g = 0; g < G; ++g) {
     if (blocks[g].size() == 0) continue;
     if (blocks[g].rows() > blocks[g].cols()) {
       Eigen::HouseholderQR<Eigen::MatrixXd> qr(blocks[g]);
@@ -163,15 +171,16 @@ Eigen::MatrixXd reduceRows(const InfluenceCoordinates& ic, const std::vector<dou
     }
     total += blocks[g].rows();
   }
-  Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(total, P);
+  Reduced out;
+  out.Z = Eigen::MatrixXd::Zero(total, P);
   long row = 0;
-  for (int g = 0; g <= n; ++g) {
+  for (int g = 0; g < G; ++g) {
     if (blocks[g].size() == 0) continue;
-    Z.block(row, first[g], blocks[g].rows(), blocks[g].cols()) = blocks[g];
+    out.Z.block(row, first[g], blocks[g].rows(), blocks[g].cols()) = blocks[g];
+    if (g == 1) out.constant_row = static_cast<int>(row);  // depth 0, potential: the constant
     row += blocks[g].rows();
   }
-  if (extra.rows()) Z.bottomRows(extra.rows()) = extra;
-  return Z;
+  return out;
 }
 
 }  // namespace
@@ -297,19 +306,19 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     const InfluenceCoordinates ic = influenceCoordinates(model, layout);
     bp.basis_rows = ic.rows();
     bp.terms_formed = ic.terms_formed;
-    std::vector<double> ones(ic.rows(), 1.0), energy(ic.rows(), 1.0), eom(ic.rows(), 1.0);
-    for (int r = 0; r < ic.rows(); ++r) {
-      if ((ic.keys[r] & 1023u) == 0) energy[r] = -1.0;  // potential part changes sign in H
-      if (ic.keys[r] == 0) eom[r] = 0.0;                // constants do not reach the torques
-    }
-    Eigen::MatrixXd friction = Eigen::MatrixXd::Zero(layout.friction ? 2 * n : 0, P);
+    const Reduced red = reduceRows(ic);
+    ZL = red.Z;
+    // Equations of motion: the constant does not reach the torques; friction columns do.
+    const long keep = ZL.rows() - (red.constant_row >= 0 ? 1 : 0);
+    const int fr = layout.friction ? 2 * n : 0;
+    ZE = Eigen::MatrixXd::Zero(keep + fr, P);
+    long row = 0;
+    for (long r = 0; r < ZL.rows(); ++r)
+      if (r != red.constant_row) ZE.row(row++) = ZL.row(r);
     for (int k = 0; k < n && layout.friction; ++k) {
-      friction(2 * k, layout.viscousIndex(k)) = 1.0;
-      friction(2 * k + 1, layout.coulombIndex(k)) = 1.0;
+      ZE(keep + 2 * k, layout.viscousIndex(k)) = 1.0;
+      ZE(keep + 2 * k + 1, layout.coulombIndex(k)) = 1.0;
     }
-    ZL = reduceRows(ic, ones, Eigen::MatrixXd(0, P));
-    ZH = reduceRows(ic, energy, Eigen::MatrixXd(0, P));
-    ZE = reduceRows(ic, eom, friction);
   } else {
     const int m = options.samples > 0 ? options.samples : std::max(40, 3 * P / std::max(1, n) + 20);
     Samples s = sampleRegressors(model, layout, m, options.seed);
@@ -320,7 +329,13 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     bp.basis_rows = static_cast<int>(s.W.rows());
   }
   bp.lagrangian = makeSet(echelon(ZL, order, tol), bp.classical_names);
-  bp.energy = makeSet(echelon(ZH, order, tol), bp.classical_names);
+  if (options.method == BaseMethod::Projection) {
+    // The total-energy coordinates are the Lagrangian's with the potential rows negated: a
+    // diagonal +-1 row scaling, which leaves every pivot, residual and Y exactly as they are.
+    bp.energy = bp.lagrangian;
+  } else {
+    bp.energy = makeSet(echelon(ZH, order, tol), bp.classical_names);
+  }
   bp.eom = makeSet(echelon(ZE, order, tol), bp.classical_names);
   bp.lagrangian_equals_energy = bp.lagrangian.decision.pivots == bp.energy.decision.pivots;
   bp.lagrangian_equals_eom = bp.lagrangian.decision.pivots == bp.eom.decision.pivots;

@@ -3,7 +3,6 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
-#include <unordered_map>
 
 namespace mindyn {
 
@@ -74,6 +73,20 @@ double maxAbs(const M& m) {
   return m.cwiseAbs().maxCoeff();
 }
 
+// Zeroes entries below tol; returns the largest remaining |entry| (0: nothing left).
+template <class M>
+double pruneMax(M& m, double tol) {
+  double big = 0.0;
+  for (int i = 0; i < m.size(); ++i) {
+    const double a = std::abs(m.data()[i]);
+    if (a <= tol)
+      m.data()[i] = 0.0;
+    else if (a > big)
+      big = a;
+  }
+  return big;
+}
+
 // Zeroes entries below tol; true if something is left.
 template <class M>
 bool prune(M& m, double tol) {
@@ -85,6 +98,29 @@ bool prune(M& m, double tol) {
       any = true;
   }
   return any;
+}
+
+// Symmetric 6x6 matrices stored as their 21 upper entries.
+using Sym6 = std::array<double, 21>;
+struct SymIndex {
+  int idx[6][6];
+  constexpr SymIndex() : idx() {
+    int k = 0;
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) idx[i][j] = idx[j][i] = k++;
+  }
+};
+constexpr SymIndex kSym;
+
+inline void toFull(const Sym6& s, Matrix6d& m) {
+  for (int i = 0; i < 6; ++i)
+    for (int j = i; j < 6; ++j) m(i, j) = m(j, i) = s[kSym.idx[i][j]];
+}
+inline Sym6 toSym(const Matrix6d& m) {
+  Sym6 s;
+  for (int i = 0; i < 6; ++i)
+    for (int j = i; j < 6; ++j) s[kSym.idx[i][j]] = m(i, j);
+  return s;
 }
 
 // A constant 6x6 map kept as its non-zero entries (geometry is often axis-aligned).
@@ -113,54 +149,120 @@ struct Sparse6 {
     out.setZero();
     for (int e = 0; e < count; ++e) out[row[e]] += val[e] * x[col[e]];
   }
-  // 1/2 tr(E Q) for symmetric E (this) and Q
-  double halfTrace(const Matrix6d& Q) const {
+};
+
+// 1/2 tr(E Q) for a constant symmetric E and a packed symmetric Q.
+struct TraceForm {
+  int count = 0;
+  int idx[21];
+  double w[21];
+  explicit TraceForm(const Matrix6d& E) {
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) {
+        const double v = i == j ? 0.5 * E(i, i) : 0.5 * (E(i, j) + E(j, i));
+        if (v != 0.0) {
+          idx[count] = kSym.idx[i][j];
+          w[count] = v;
+          ++count;
+        }
+      }
+  }
+  double operator()(const Sym6& Q) const {
     double s = 0.0;
-    for (int e = 0; e < count; ++e) s += val[e] * Q(col[e], row[e]);
-    return 0.5 * s;
+    for (int e = 0; e < count; ++e) s += w[e] * Q[idx[e]];
+    return s;
   }
 };
 
 // R B R^T for R = blockdiag(Rz(-q), Rz(-q)), B symmetric, split over 1, cos q, sin q, cos 2q,
 // sin 2q. Indices 2 and 5 lie on the axis; (0, 1) and (3, 4) rotate as (x, y) -> (c x + s y,
 // -s x + c y).
-void splitRotation(const Matrix6d& B, Matrix6d parts[5]) {
-  for (int l = 0; l < 5; ++l) parts[l].setZero();
+void splitRotation(const Matrix6d& B, Sym6 parts[5]) {
+  for (int l = 0; l < 5; ++l) parts[l].fill(0.0);
   static constexpr int ax[2] = {2, 5};
   static constexpr int px[2] = {0, 3};
-  for (int a = 0; a < 2; ++a)
-    for (int b = 0; b < 2; ++b) parts[0](ax[a], ax[b]) = B(ax[a], ax[b]);
+  const auto& I = kSym.idx;
+  parts[0][I[2][2]] = B(2, 2);
+  parts[0][I[2][5]] = B(2, 5);
+  parts[0][I[5][5]] = B(5, 5);
   for (int a = 0; a < 2; ++a)
     for (int b = 0; b < 2; ++b) {
       const int z = ax[a], x = px[b], y = px[b] + 1;
       // D(z, x') = c B(z,x) + s B(z,y);  D(z, y') = -s B(z,x) + c B(z,y)
-      parts[1](z, x) = parts[1](x, z) = B(z, x);
-      parts[2](z, x) = parts[2](x, z) = B(z, y);
-      parts[1](z, y) = parts[1](y, z) = B(z, y);
-      parts[2](z, y) = parts[2](y, z) = -B(z, x);
+      parts[1][I[z][x]] = B(z, x);
+      parts[2][I[z][x]] = B(z, y);
+      parts[1][I[z][y]] = B(z, y);
+      parts[2][I[z][y]] = -B(z, x);
     }
   for (int a = 0; a < 2; ++a)
-    for (int b = 0; b < 2; ++b) {
+    for (int b = a; b < 2; ++b) {
       const int x1 = px[a], y1 = px[a] + 1, x2 = px[b], y2 = px[b] + 1;
       const double xx = B(x1, x2), xy = B(x1, y2), yx = B(y1, x2), yy = B(y1, y2);
-      parts[0](x1, x2) = 0.5 * (xx + yy);
-      parts[3](x1, x2) = 0.5 * (xx - yy);
-      parts[4](x1, x2) = 0.5 * (xy + yx);
-      parts[0](x1, y2) = 0.5 * (xy - yx);
-      parts[3](x1, y2) = 0.5 * (xy + yx);
-      parts[4](x1, y2) = 0.5 * (yy - xx);
-      parts[0](y1, x2) = 0.5 * (yx - xy);
-      parts[3](y1, x2) = 0.5 * (xy + yx);
-      parts[4](y1, x2) = 0.5 * (yy - xx);
-      parts[0](y1, y2) = 0.5 * (xx + yy);
-      parts[3](y1, y2) = -0.5 * (xx - yy);
-      parts[4](y1, y2) = -0.5 * (xy + yx);
+      parts[0][I[x1][x2]] = 0.5 * (xx + yy);
+      parts[3][I[x1][x2]] = 0.5 * (xx - yy);
+      parts[4][I[x1][x2]] = 0.5 * (xy + yx);
+      parts[0][I[x1][y2]] = 0.5 * (xy - yx);
+      parts[3][I[x1][y2]] = 0.5 * (xy + yx);
+      parts[4][I[x1][y2]] = 0.5 * (yy - xx);
+      parts[0][I[y1][y2]] = 0.5 * (xx + yy);
+      parts[3][I[y1][y2]] = -0.5 * (xx - yy);
+      parts[4][I[y1][y2]] = -0.5 * (xy + yx);
+      if (a != b) {  // (y1, x2) lies in the upper triangle too
+        parts[0][I[y1][x2]] = 0.5 * (yx - xy);
+        parts[3][I[y1][x2]] = 0.5 * (xy + yx);
+        parts[4][I[y1][x2]] = 0.5 * (yy - xx);
+      }
     }
 }
 
+// Open-addressing map from basis keys to row numbers (keys are never removed).
+class RowIndex {
+ public:
+  RowIndex() { resize(1024); }
+  int find(std::uint64_t key, std::vector<std::uint64_t>& keys) {
+    if (2 * (count_ + 1) > static_cast<long>(slots_.size())) grow(keys);
+    std::size_t i = hash(key) & mask_;
+    while (true) {
+      const int r = slots_[i];
+      if (r < 0) {
+        slots_[i] = static_cast<int>(keys.size());
+        keys.push_back(key);
+        ++count_;
+        return slots_[i];
+      }
+      if (keys[r] == key) return r;
+      i = (i + 1) & mask_;
+    }
+  }
+
+ private:
+  static std::size_t hash(std::uint64_t k) {
+    k ^= k >> 33;
+    k *= 0xff51afd7ed558ccdULL;
+    k ^= k >> 33;
+    return static_cast<std::size_t>(k);
+  }
+  void resize(std::size_t n) {
+    slots_.assign(n, -1);
+    mask_ = n - 1;
+  }
+  void grow(const std::vector<std::uint64_t>& keys) {
+    resize(slots_.size() * 2);
+    for (std::size_t r = 0; r < keys.size(); ++r) {
+      std::size_t i = hash(keys[r]) & mask_;
+      while (slots_[i] >= 0) i = (i + 1) & mask_;
+      slots_[i] = static_cast<int>(r);
+    }
+  }
+  std::vector<int> slots_;
+  std::size_t mask_ = 0;
+  long count_ = 0;
+};
+
 struct QTerm {
   std::uint64_t key;
-  Matrix6d Q;
+  double scale;  // largest |entry|
+  Sym6 Q;
 };
 struct VTerm {
   int i;              // 1-based joint whose rate multiplies this term
@@ -232,11 +334,13 @@ int InfluenceCoordinates::constantRow() const {
 BasisFunction InfluenceCoordinates::basis(int row) const { return unpackBasis(keys.at(row), n); }
 
 int InfluenceCoordinates::depth(int row) const {
-  const BasisFunction b = basis(row);
+  const std::uint64_t key = keys.at(row);
+  const int l0 = static_cast<int>(key & ((1u << kL0Bits) - 1));
   int d = 0;
-  if (b.l0 > 0) d = static_cast<int>(std::floor((1 + std::sqrt(8.0 * b.l0 - 7)) / 2));
-  for (int j = 0; j < n; ++j)
-    if (b.l[j] != 1) d = std::max(d, j + 1);
+  if (l0 > 0) d = static_cast<int>(std::floor((1 + std::sqrt(8.0 * l0 - 7)) / 2));
+  std::uint64_t joints = key >> kL0Bits;
+  for (int j = 0; joints != 0; ++j, joints >>= kJointBits)
+    if (joints & 7u) d = std::max(d, j + 1);
   return d;
 }
 
@@ -281,7 +385,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     }
     E[9].bottomRightCorner<3, 3>().setIdentity();
     const Matrix6d A = adjoint(post[k].inverse());
-    std::vector<Sparse6> forms;
+    std::vector<TraceForm> forms;
     for (auto& e : E) {
       Matrix6d f = A.transpose() * e * A;
       prune(f, kNoise * maxAbs(f));
@@ -326,17 +430,10 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   g0 << model.gravity.transpose(), 0.0;
   R.push_back({0, g0});
 
-  std::unordered_map<std::uint64_t, int> rowOf;
+  RowIndex rowOf;
   std::vector<std::uint64_t> keys;
   std::vector<Entry> entries;
-  auto rowFor = [&](std::uint64_t key) {
-    auto it = rowOf.find(key);
-    if (it != rowOf.end()) return it->second;
-    const int r = static_cast<int>(keys.size());
-    rowOf.emplace(key, r);
-    keys.push_back(key);
-    return r;
-  };
+  auto rowFor = [&](std::uint64_t key) { return rowOf.find(key, keys); };
   InfluenceCoordinates out;
   out.layout = layout;
   out.n = n;
@@ -358,25 +455,28 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     Qnext.clear();
     Qnext.reserve(Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1);
     for (const QTerm& t : Q) {
-      Matrix6d B;
-      C.congruence(t.Q, B);
-      const double tol = kNoise * maxAbs(t.Q) * cscale * cscale;
-      if (!prune(B, tol)) continue;
-      Matrix6d parts[5];
+      Matrix6d B, Qf;
+      toFull(t.Q, Qf);
+      C.congruence(Qf, B);
+      const double bscale = pruneMax(B, kNoise * t.scale * cscale * cscale);
+      if (bscale == 0.0) continue;
+      Sym6 parts[5];
       int count;
       if (revolute) {
         splitRotation(B, parts);
         count = 5;
       } else {
         const Matrix6d NB = N6 * B;
-        parts[0] = B;
-        parts[1] = NB + NB.transpose();
-        parts[2] = NB * N6.transpose();
+        parts[0] = toSym(B);
+        parts[1] = toSym(NB + NB.transpose());
+        parts[2] = toSym(NB * N6.transpose());
         count = 3;
       }
-      const double ptol = kNoise * maxAbs(B);
-      for (int l = 0; l < count; ++l)
-        if (prune(parts[l], ptol)) Qnext.push_back({withJoint(t.key, k, l + 1), parts[l]});
+      const double ptol = kNoise * bscale;
+      for (int l = 0; l < count; ++l) {
+        const double ps = pruneMax(parts[l], ptol);
+        if (ps > 0.0) Qnext.push_back({withJoint(t.key, k, l + 1), ps, parts[l]});
+      }
     }
     Vnext.clear();
     Vnext.reserve(V.size() * 3 + 1);
@@ -400,11 +500,12 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         const std::uint64_t key = withJoint(t.key, k, l + 1);
         Vnext.push_back({t.i, key, parts[l]});
         Matrix6d X = parts[l] * S.transpose();
-        Qnext.push_back({withL0(key, pairIndex(k + 1, t.i)), X + X.transpose()});
+        X += X.transpose().eval();
+        Qnext.push_back({withL0(key, pairIndex(k + 1, t.i)), maxAbs(X), toSym(X)});
       }
     }
     Vnext.push_back({k + 1, 0, S});
-    Qnext.push_back({withL0(0, pairIndex(k + 1, k + 1)), 2.0 * S * S.transpose()});
+    Qnext.push_back({withL0(0, pairIndex(k + 1, k + 1)), 2.0, toSym(2.0 * S * S.transpose())});
     std::swap(Q, Qnext);
     std::swap(V, Vnext);
 
@@ -437,10 +538,9 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     const auto E = kineticForms(k);
     for (const QTerm& t : Q) {
       const int row = rowFor(t.key);
-      const double scale = maxAbs(t.Q);
       for (int p = 0; p < 10; ++p) {
-        const double v = E[p].halfTrace(t.Q);
-        if (std::abs(v) > kNoise * scale) entries.push_back({row, c0 + p, v});
+        const double v = E[p](t.Q);
+        if (std::abs(v) > kNoise * t.scale) entries.push_back({row, c0 + p, v});
       }
     }
     for (const RTerm& t : R) {
