@@ -202,14 +202,18 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   eliminate(Z, order, tolerance, colmax, zero_level, &d);
 
   // Clean rounding in Y: coefficients that are 0 or +-1 to working precision are exactly that.
+  // The level sits just above the rounding noise of exact geometry (<= 1e-13 relative): 1e-10
+  // dropped genuine small coefficients of near-right-angle URDFs (1.3e-9 MZ5 in so101's ZZR1),
+  // and W_b Y pi then missed the torques by 1e-10 relative; with 1e-12, by about 1e-12.
+  constexpr double kCleanLevel = 1e-12;
   for (int b = 0; b < d.Y.rows(); ++b) {
     const double sb = colmax[d.pivots[b]];
     for (int c = 0; c < d.Y.cols(); ++c) {
       double& y = d.Y(b, c);
       const double rel = colmax[c] > 0 ? sb / colmax[c] : 1.0;
-      if (std::abs(y) * rel < 1e-10 || colmax[c] <= zero_level)
+      if (std::abs(y) * rel < kCleanLevel || colmax[c] <= zero_level)
         y = 0.0;
-      else if (std::abs(std::abs(y) - 1.0) < 1e-10)
+      else if (std::abs(std::abs(y) - 1.0) < kCleanLevel)
         y = y > 0 ? 1.0 : -1.0;
     }
     for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b, d.pivots[b2]) = b == b2 ? 1.0 : 0.0;

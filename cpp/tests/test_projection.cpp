@@ -1,9 +1,12 @@
-// The projection kernel's coordinates, evaluated back at random states, reproduce the
-// Lagrangian regressor computed by the kinematic recursion (dynamics.hpp): w_L = sum_rows
-// Z(row, :) f_row(q, dq). Base parameters reproduce the torques: W_b Y pi = W pi.
+// The projection kernel and the echelon form against independent references: the coordinates Z
+// evaluated on their basis functions reproduce the Lagrangian regressor computed by Newton-Euler
+// (energyRegressors), and the elimination on small hand-made matrices gives the hand-derived
+// pivots, regrouping matrix and formulas.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
+#include <sstream>
 
 #include "mindyn/base_parameters.hpp"
 #include "mindyn/projection.hpp"
@@ -14,6 +17,7 @@ using namespace mindyn;
 
 namespace {
 
+// Value of basis function (l0; l1..ln) at (q, dq), from its definition (docs, section 3).
 double basisValue(const BasisFunction& b, const Model& model, const Eigen::VectorXd& q,
                   const Eigen::VectorXd& dq) {
   double v = 1.0;
@@ -35,87 +39,132 @@ double basisValue(const BasisFunction& b, const Model& model, const Eigen::Vecto
   return v;
 }
 
-// A chain with skewed axes, offsets everywhere, a prismatic joint and non-identity post frames.
-Model skewedArm(std::mt19937& rng) {
-  const std::string dh = R"(
-convention: dh
-angle_unit: deg
-joints:
-  - {a: 0.05, alpha: 73, d: 0.3, theta: 11}
-  - {a: 0.4, alpha: -17, d: 0.02, theta: 40}
-  - {type: prismatic, a: 0.03, alpha: 61, d: 0.1, theta: -25}
-  - {a: 0.0, alpha: 88, d: 0.35, theta: 5}
-  - {a: 0.02, alpha: -95, d: 0.01, theta: 0}
-)";
-  Model m = parseYaml(dh, "skewed");
-  m.inertial = test::random(rng, 10 * m.nq());
-  m.gravity = Eigen::Vector3d(0.3, -1.2, -9.7);
-  return m;
+// A URDF chain with random origins, axes, joint types and inertias.
+std::string randomUrdf(std::mt19937& rng, int n) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::ostringstream s;
+  s.precision(17);
+  s << "<robot name=\"random\"><link name=\"l0\"/>";
+  for (int k = 1; k <= n; ++k) {
+    const double m = 1.0 + 2.0 * std::abs(u(rng));
+    s << "<link name=\"l" << k << "\"><inertial><origin xyz=\"" << 0.2 * u(rng) << ' '
+      << 0.2 * u(rng) << ' ' << 0.2 * u(rng) << "\"/><mass value=\"" << m << "\"/>"
+      << "<inertia ixx=\"0.05\" ixy=\"" << 0.01 * u(rng) << "\" ixz=\"" << 0.01 * u(rng)
+      << "\" iyy=\"0.04\" iyz=\"" << 0.01 * u(rng) << "\" izz=\"0.03\"/></inertial></link>";
+    Eigen::Vector3d axis(u(rng), u(rng), u(rng));
+    axis.normalize();
+    s << "<joint name=\"j" << k << "\" type=\"" << (k % 3 == 2 ? "prismatic" : "revolute")
+      << "\"><parent link=\"l" << k - 1 << "\"/><child link=\"l" << k << "\"/><origin xyz=\""
+      << 0.5 * u(rng) << ' ' << 0.5 * u(rng) << ' ' << 0.5 * u(rng) << "\" rpy=\"" << 3 * u(rng)
+      << ' ' << 3 * u(rng) << ' ' << 3 * u(rng) << "\"/><axis xyz=\"" << axis.x() << ' ' << axis.y()
+      << ' ' << axis.z()
+      << "\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>";
+  }
+  s << "</robot>";
+  return s.str();
+}
+
+void expectCoordinatesReproduceLagrangian(const Model& model, ParameterLayout layout,
+                                          const std::string& what) {
+  const InfluenceCoordinates ic = influenceCoordinates(model, layout);
+  const int n = model.nq(), P = layout.size(n);
+  ASSERT_EQ(ic.cols(), P) << what;
+  Data data(model);
+  Eigen::VectorXd wK(P), wP(P);
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 4; ++trial) {
+    const Eigen::VectorXd q = test::random(rng, n, 2.0), dq = test::random(rng, n, 2.0);
+    std::vector<double> phi(ic.rows());
+    for (int r = 0; r < ic.rows(); ++r) phi[r] = basisValue(ic.basis(r), model, q, dq);
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(P);
+    for (const auto& e : ic.entries) w[e.col] += phi[e.row] * e.value;
+    energyRegressors(model, data, q, dq, layout, wK, wP);
+    const Eigen::VectorXd wL = wK - wP;
+    EXPECT_LE((w - wL).norm(), 1e-12 * std::max(1.0, wL.norm())) << what << " trial " << trial;
+  }
 }
 
 }  // namespace
 
 TEST(Projection, CoordinatesReproduceTheLagrangianRegressor) {
-  std::mt19937 rng(31);
-  std::vector<Model> models = {loadYaml(test::robotFile("puma560")),
-                               loadYaml(test::robotFile("zcr07s")),
-                               loadYaml(test::robotFile("stanford")), skewedArm(rng), planarArm(4)};
-  for (const Model& model : models) {
-    const ParameterLayout layout{true, false};
-    const InfluenceCoordinates ic = influenceCoordinates(model, layout);
-    const Eigen::MatrixXd Z = ic.dense();
-    Data data(model);
-    const int n = model.nq(), P = layout.size(n);
-    Eigen::VectorXd wK(P), wP(P);
-    for (int trial = 0; trial < 5; ++trial) {
-      const Eigen::VectorXd q = test::random(rng, n, 2.5), dq = test::random(rng, n, 1.5);
-      Eigen::VectorXd f(ic.rows());
-      for (int r = 0; r < ic.rows(); ++r) f[r] = basisValue(ic.basis(r), model, q, dq);
-      const Eigen::VectorXd wL = Z.transpose() * f;
-      energyRegressors(model, data, q, dq, layout, wK, wP);
-      const Eigen::VectorXd expect = wK - wP;
-      EXPECT_LT((wL - expect).norm(), 1e-12 * std::max(1.0, expect.norm())) << model.name;
-    }
+  for (const char* name : {"puma560", "zcr07s", "stanford", "puma560_3"}) {
+    const Model model = loadYaml(test::robotFile(name));
+    expectCoordinatesReproduceLagrangian(model, {}, name);
+    expectCoordinatesReproduceLagrangian(model, {true, false}, std::string(name) + " with Ia");
+  }
+  expectCoordinatesReproduceLagrangian(planarArm(4, true), {}, "planar4");
+  expectCoordinatesReproduceLagrangian(planarArm(3, false), {true, false}, "planar3h");
+}
+
+TEST(Projection, CoordinatesOfRandomChains) {
+  std::mt19937 rng(11);
+  for (int n = 2; n <= 5; ++n) {
+    const Model model = parseUrdf(randomUrdf(rng, n), "", "random");
+    ASSERT_EQ(model.nq(), n);
+    expectCoordinatesReproduceLagrangian(model, {true, false},
+                                         "random chain n=" + std::to_string(n));
   }
 }
 
-TEST(Projection, BaseParametersReproduceTheTorquesAndMatchTheNumericalCount) {
-  std::mt19937 rng(32);
-  std::vector<Model> models = {loadYaml(test::robotFile("puma560")),
-                               loadYaml(test::robotFile("zcr07s")), skewedArm(rng)};
-  for (const Model& model : models) {
-    for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true}}) {
-      BaseOptions opt;
-      opt.layout = layout;
-      const BaseParameters bp = computeBaseParameters(model, opt);
-      opt.method = BaseMethod::Numerical;
-      const BaseParameters num = computeBaseParameters(model, opt);
-      EXPECT_EQ(bp.eom.size(), num.eom.size()) << model.name;
-      EXPECT_EQ(bp.lagrangian.size(), num.lagrangian.size()) << model.name;
-      Data data(model);
-      const int n = model.nq(), P = layout.size(n);
-      Eigen::MatrixXd W(n, P), Wb(n, bp.eom.size());
-      for (int trial = 0; trial < 5; ++trial) {
-        const Eigen::VectorXd pi = test::random(rng, P);
-        const Eigen::VectorXd q = test::random(rng, n, 2.5), dq = test::random(rng, n, 1.5),
-                              ddq = test::random(rng, n, 3);
-        baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
-        const Eigen::VectorXd tau = W * pi;
-        EXPECT_LT((Wb * bp.values(pi) - tau).norm(), 1e-10 * std::max(1.0, tau.norm()))
-            << model.name;
-        // The embedded base vector gives the same torques through the classical algorithm.
-        Eigen::VectorXd tau2(n);
-        inverseDynamics(model, data, q, dq, ddq, bp.embed(bp.values(pi)), layout, tau2);
-        EXPECT_LT((tau2 - tau).norm(), 1e-10 * std::max(1.0, tau.norm())) << model.name;
-      }
-    }
-  }
+TEST(Projection, BasisIndexRoundTrip) {
+  // l0 = J(4, 3) = 4 * 3 / 2 + 3 = 9: the product dq3 dq4
+  const std::vector<int> l = {1, 5, 3, 2, 4, 1};
+  const BasisFunction b = unpackBasis(packBasis(9, l), 6);
+  EXPECT_EQ(b.l0, 9);
+  EXPECT_EQ(b.l, l);
+  EXPECT_EQ(b.toString(planarArm(6)), "dq3*dq4*sin(2q2)*sin(q3)*cos(q4)*cos(2q5)");
 }
 
-TEST(Projection, EchelonRejectsBadOrders) {
-  const Eigen::MatrixXd Z = Eigen::MatrixXd::Identity(3, 3);
-  EXPECT_THROW(echelon(Z, {0, 1}), std::invalid_argument);
-  EXPECT_THROW(echelon(Z, {0, 1, 1}), std::invalid_argument);
-  const RankDecision d = echelon(Z, {2, 0, 1});
-  EXPECT_EQ(d.pivots, (std::vector<int>{2, 0, 1}));
+TEST(Echelon, HandMadeDependencies) {
+  // columns: a, 2a, b, a - b, 0, c: pivots a, b, c; 2a = 2 * a; a - b = a - b; column 4 no effect
+  Eigen::MatrixXd Z(4, 6);
+  Z << 1, 2, 0, 1, 0, 3,  //
+      2, 4, 1, 1, 0, 0,   //
+      0, 0, 5, -5, 0, 1,  //
+      1, 2, 1, 0, 0, 2;
+  const RankDecision d = echelon(Z, {0, 1, 2, 3, 4, 5});
+  EXPECT_EQ(d.pivots, (std::vector<int>{0, 2, 5}));
+  EXPECT_EQ(d.dependent, (std::vector<int>{1, 3}));
+  EXPECT_EQ(d.zero, (std::vector<int>{4}));
+  Eigen::MatrixXd Y(3, 6);
+  Y << 1, 2, 0, 1, 0, 0,  //
+      0, 0, 1, -1, 0, 0,  //
+      0, 0, 0, 0, 0, 1;
+  EXPECT_LT((d.Y - Y).cwiseAbs().maxCoeff(), 1e-14);
+  for (int i = 0; i < Y.size(); ++i)  // 0 and +-1 are recognised exactly
+    if (Y.data()[i] == 0.0 || std::abs(Y.data()[i]) == 1.0)
+      EXPECT_EQ(d.Y.data()[i], Y.data()[i]) << "entry " << i;
+  EXPECT_LT(d.largest_dropped, 1e-15);
+  EXPECT_FALSE(d.near_degenerate);
+
+  // another order keeps other columns: a - b, then 2a; a = 0.5 (2a), b = 0.5 (2a) - (a - b)
+  const RankDecision e = echelon(Z, {3, 1, 0, 2, 4, 5});
+  EXPECT_EQ(e.pivots, (std::vector<int>{3, 1, 5}));
+  EXPECT_NEAR(e.Y(1, 0), 0.5, 1e-15);
+  const std::vector<std::string> names = {"A", "B", "C", "D", "E", "F"};
+  EXPECT_EQ(formatFormula("BR", e.Y.row(1), names), "BR = 0.5*A + B + 0.5*C");
+  EXPECT_EQ(formatFormula("DR", e.Y.row(0), names), "DR = -C + D");
+  EXPECT_THROW(echelon(Z, {0, 1, 2}), std::invalid_argument);
+  EXPECT_THROW(echelon(Z, {0, 0, 1, 2, 3, 4}), std::invalid_argument);
+}
+
+TEST(Echelon, NearDegenerateIsFlagged) {
+  // column 2 = column 0 + 1e-11 * e: kept at tolerance 1e-12, dropped at 1e-9
+  Eigen::MatrixXd Z(3, 3);
+  Z << 1, 0, 1, 0, 1, 0, 0, 0, 1e-11;
+  const RankDecision d = echelon(Z, {0, 1, 2});
+  EXPECT_EQ(d.rank(), 2);
+  EXPECT_NEAR(d.largest_dropped, 1e-11, 1e-13);
+  EXPECT_TRUE(d.near_degenerate);
+  EXPECT_EQ(d.rank_tighter, 3);
+  EXPECT_EQ(echelon(Z, {0, 1, 2}, 1e-12).rank(), 3);
+}
+
+TEST(Echelon, KhalilOrder) {
+  const std::vector<int> o = khalilOrder(2, {true, true});
+  // link 1: XX XY XZ YZ ZZ MX MY, YY MZ M, Ia, Fv, Fc; then link 2 (13 columns per link)
+  const std::vector<int> first = {0, 1, 2, 4, 5, 6, 7, 3, 8, 9, 10, 11, 12};
+  ASSERT_EQ(o.size(), 26u);
+  EXPECT_EQ(std::vector<int>(o.begin(), o.begin() + 13), first);
+  for (int i = 0; i < 13; ++i) EXPECT_EQ(o[13 + i], first[i] + 13);
 }

@@ -6,6 +6,7 @@
 
 #include <atomic>
 
+#include "mindyn/base_parameters.hpp"
 #include "mindyn/dynamics.hpp"
 #include "test_util.hpp"
 
@@ -88,5 +89,37 @@ TEST(Realtime, DynamicsPathsAllocateNothing) {
     EXPECT_EQ(seen, 0) << name;
     EXPECT_TRUE(ok);
     EXPECT_TRUE(std::isfinite(e));
+  }
+}
+
+TEST(Realtime, BaseRegressorsAllocateNothing) {
+  for (const char* name : {"puma560", "zcr07s", "stanford"}) {
+    const Model model = loadYaml(test::robotFile(name));
+    const ParameterLayout layout{true, true};
+    BaseOptions options;
+    options.layout = layout;
+    const BaseParameters base = computeBaseParameters(model, options);
+    Data data(model);
+    const int n = model.nq(), P = layout.size(n), nb = base.eom.size();
+    std::mt19937 rng(5);
+    const Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n),
+                          ddq = test::random(rng, n);
+    Eigen::MatrixXd W(n, P), Wb(n, nb);
+    Eigen::VectorXd wK(P), wP(P), wb(nb);
+    long seen;
+    {
+      Count c;
+      for (int i = 0; i < 3; ++i) {
+        baseRegressor(model, data, base, q, dq, ddq, W, Wb);
+        baseEnergyRegressor(model, data, base, q, dq, wK, wP, wb);
+      }
+      seen = c.value();
+    }
+    EXPECT_EQ(seen, 0) << name;
+    // and they are the pivot columns of the classical regressors
+    for (int b = 0; b < nb; ++b) {
+      EXPECT_EQ(Wb.col(b), W.col(base.eom.decision.pivots[b])) << name;
+      EXPECT_EQ(wb[b], wK[base.eom.decision.pivots[b]] + wP[base.eom.decision.pivots[b]]);
+    }
   }
 }
