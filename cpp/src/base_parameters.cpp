@@ -185,7 +185,8 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
 
 }  // namespace
 
-RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tolerance) {
+RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tolerance,
+                     const std::vector<int>& kinds) {
   if (static_cast<long>(order.size()) != Z.cols())
     throw std::invalid_argument("echelon: the order must name every column once");
   std::vector<char> seen(Z.cols(), 0);
@@ -198,8 +199,12 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   d.tolerance = tolerance;
   Eigen::VectorXd colmax(Z.cols());
   for (int c = 0; c < Z.cols(); ++c) colmax[c] = Z.col(c).norm();
-  const double zero_level = 1e-13 * (Z.cols() ? colmax.maxCoeff() : 0.0);
+  const double biggest = Z.cols() ? colmax.maxCoeff() : 0.0;
+  const double zero_level = 1e-13 * biggest;
   eliminate(Z, order, tolerance, colmax, zero_level, &d);
+  d.zero_threshold = 1e-13;
+  for (int c : d.zero)
+    if (biggest > 0) d.largest_zeroed = std::max(d.largest_zeroed, colmax[c] / biggest);
 
   // Clean rounding in Y: coefficients that are 0 or +-1 to working precision are exactly that.
   // The level sits just above the rounding noise of exact geometry (<= 1e-13 relative): 1e-10
@@ -228,9 +233,23 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   }
   // Near-degenerate geometry: say what the neighbouring tolerances would decide.
   const double looser = tolerance * 1e4, tighter = tolerance * 1e-3;
-  if (d.smallest_kept < looser * 10 || d.largest_dropped > tighter / 10) {
+  int weak = 0;
+  if (kinds.size() == static_cast<size_t>(Z.cols())) {
+    std::vector<double> kindmax(*std::max_element(kinds.begin(), kinds.end()) + 1, 0.0);
+    for (int c = 0; c < Z.cols(); ++c) kindmax[kinds[c]] = std::max(kindmax[kinds[c]], colmax[c]);
+    for (int b = 0; b < d.rank(); ++b) {
+      const int c = d.pivots[b];
+      const double s = d.pivot_size[b] * colmax[c] / kindmax[kinds[c]];
+      d.weakest_kept = std::min(d.weakest_kept, s);
+      if (s < looser) ++weak;
+    }
+  }
+  if (d.smallest_kept < looser * 10 || d.largest_dropped > tighter / 10 || weak > 0 ||
+      d.largest_zeroed > 0) {
     d.rank_looser = eliminate(Z, order, looser, colmax, zero_level, nullptr);
-    d.rank_tighter = eliminate(Z, order, tighter, colmax, zero_level, nullptr);
+    d.rank_tighter = eliminate(Z, order, tighter, colmax, 0.0, nullptr);
+    // Weak columns would go at the looser tolerance measured against their kind.
+    d.rank_looser = std::min(d.rank_looser, d.rank() - weak);
   } else {
     d.rank_looser = d.rank_tighter = d.rank();
   }
@@ -332,15 +351,20 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     ZE = s.W;
     bp.basis_rows = static_cast<int>(s.W.rows());
   }
-  bp.lagrangian = makeSet(echelon(ZL, order, tol), bp.classical_names);
+  std::vector<int> kinds(P);
+  for (int c = 0; c < P; ++c) {
+    const int p = c % layout.perLink();
+    kinds[c] = p < 6 ? 0 : (p < 9 ? 1 : (p == 9 ? 2 : 3 + (p - 10)));
+  }
+  bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds), bp.classical_names);
   if (options.method == BaseMethod::Projection) {
     // The total-energy coordinates are the Lagrangian's with the potential rows negated: a
     // diagonal +-1 row scaling, which leaves every pivot, residual and Y exactly as they are.
     bp.energy = bp.lagrangian;
   } else {
-    bp.energy = makeSet(echelon(ZH, order, tol), bp.classical_names);
+    bp.energy = makeSet(echelon(ZH, order, tol, kinds), bp.classical_names);
   }
-  bp.eom = makeSet(echelon(ZE, order, tol), bp.classical_names);
+  bp.eom = makeSet(echelon(ZE, order, tol, kinds), bp.classical_names);
   bp.lagrangian_equals_energy = bp.lagrangian.decision.pivots == bp.energy.decision.pivots;
   bp.lagrangian_equals_eom = bp.lagrangian.decision.pivots == bp.eom.decision.pivots;
   bp.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -399,9 +423,11 @@ std::vector<std::string> snapRightAngles(Model& model, double tolerance) {
     }
     if (!changed) return;
     T.linear() = Rs;
-    report.push_back(what + ": rotation (yaw, pitch, roll) = (" + shortest(ypr[0]) + ", " +
-                     shortest(ypr[1]) + ", " + shortest(ypr[2]) +
-                     ") rad snapped to multiples of pi/2");
+    report.push_back(
+        what + ": rotation (yaw, pitch, roll) = (" + shortest(ypr[0]) + ", " + shortest(ypr[1]) +
+        ", " + shortest(ypr[2]) + ") rad -> (" + shortest(s[0]) + ", " + shortest(s[1]) + ", " +
+        shortest(s[2]) + ")" +
+        (all_right ? ", all multiples of pi/2" : ", angles near multiples of pi/2 rounded"));
   };
   for (Joint& j : model.joints) {
     snapRotation(j.pre, "joint '" + j.name + "' origin");

@@ -131,8 +131,14 @@ def cmd_base(args: argparse.Namespace) -> int:
         "  used           the equations-of-motion set, for inverse dynamics, the base regressor "
         "and both identification models",
         f"  rank margin    smallest kept pivot {m['smallest_kept']:.3g}, largest dropped "
-        f"{m['largest_dropped']:.3g} (relative tolerance {m['tolerance']:.3g})",
+        f"{m['largest_dropped']:.3g} (relative tolerance {m['tolerance']:.3g}); weakest kept "
+        f"column against its kind {m['weakest_kept_for_its_kind']:.3g}",
     ]
+    if m["largest_zeroed"] > 0:
+        lines.append(
+            f"  zero columns   treated as zero below {m['zero_threshold']:.1g} of the largest; "
+            f"the largest such column is {m['largest_zeroed']:.3g}"
+        )
     if m["near_degenerate"]:
         lines.append(
             f"  WARNING        near-degenerate geometry: {m['rank_at_looser_tolerance']} base "

@@ -183,6 +183,9 @@ py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
   margin["rank_at_tighter_tolerance"] = d.rank_tighter;
   margin["looser_tolerance"] = d.tolerance * 1e4;
   margin["tighter_tolerance"] = d.tolerance * 1e-3;
+  margin["weakest_kept_for_its_kind"] = d.weakest_kept;
+  margin["zero_threshold"] = d.zero_threshold;
+  margin["largest_zeroed"] = d.largest_zeroed;
   margin["near_degenerate"] = d.near_degenerate;
   margin["fit_residual"] = d.fit_residual;
   out["margin"] = margin;

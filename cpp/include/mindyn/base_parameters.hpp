@@ -27,8 +27,13 @@ struct RankDecision {
   std::vector<int> zero;           // columns that are identically zero: no effect at all
   double smallest_kept = std::numeric_limits<double>::infinity();
   double largest_dropped = 0;
-  int rank_looser = -1;   // rank with tolerance x 100 (-1: not recomputed, equal to rank)
-  int rank_tighter = -1;  // rank with tolerance / 100
+  int rank_looser = -1;   // rank with tolerance x 1e4
+  int rank_tighter = -1;  // rank with tolerance x 1e-3
+  // Columns are also compared with the largest column of their kind (inertia, first moment,
+  // mass, ...): a kept column that is tiny for its kind (a joint axis tilted by rounding) is weak.
+  double weakest_kept = std::numeric_limits<double>::infinity();  // pivot x norm / kind's largest
+  double zero_threshold = 0;  // column norms up to this (relative to the largest) count as zero
+  double largest_zeroed = 0;  // largest such non-zero column norm, relative; 0 if all exact
   bool near_degenerate = false;
   Eigen::MatrixXd Y;        // rank x columns, Y.col(pivots[b]) = e_b
   double fit_residual = 0;  // max |Z - Z~ Y| relative to max |Z|
@@ -39,8 +44,10 @@ struct RankDecision {
 inline constexpr double kDefaultRankTolerance = 1e-9;
 
 /// Gaussian elimination of the columns of Z in `order` (a permutation of all column indices).
+/// `kinds` optionally groups the columns (same value: same kind of parameter) for the
+/// weak-column report.
 RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order,
-                     double tolerance = kDefaultRankTolerance);
+                     double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {});
 
 /// The conventional (Khalil) priority order: link by link from the base; in each link
 /// XX XY XZ YZ ZZ MX MY, then YY MZ M, then Ia, Fv, Fc.
