@@ -8,6 +8,8 @@
 
 #include "mindyn/base_parameters.hpp"
 #include "mindyn/dynamics.hpp"
+#include "mindyn/ik.hpp"
+#include "mindyn/slotine_li.hpp"
 #include "test_util.hpp"
 
 extern "C" {
@@ -121,5 +123,68 @@ TEST(Realtime, BaseRegressorsAllocateNothing) {
       EXPECT_EQ(Wb.col(b), W.col(base.eom.decision.pivots[b])) << name;
       EXPECT_EQ(wb[b], wK[base.eom.decision.pivots[b]] + wP[base.eom.decision.pivots[b]]);
     }
+  }
+}
+
+TEST(Realtime, SlotineLiPathsAllocateNothing) {
+  for (const char* name : {"puma560", "zcr07s", "stanford"}) {
+    const Model model = loadYaml(test::robotFile(name));
+    Data data(model);
+    const int n = model.nq();
+    const ParameterLayout layout{true, true};
+    BaseOptions options;
+    options.layout = layout;
+    const BaseParameters bp = computeBaseParameters(model, options);
+    SlotineLiData sl(model, layout);
+    const Eigen::VectorXd pi = model.parameters(layout);
+    std::mt19937 rng(22);
+    const Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n),
+                          dqr = test::random(rng, n), ddqr = test::random(rng, n);
+    Eigen::VectorXd tau(n);
+    Eigen::MatrixXd Y(n, layout.size(n)), Yb(n, bp.eom.size()), C(n, n);
+    Count c;
+    for (int i = 0; i < 3; ++i) {
+      slotineLiRegressor(model, data, sl, q, dq, dqr, ddqr, layout, Y);
+      slotineLiBaseRegressor(model, data, sl, bp, q, dq, dqr, ddqr, Yb);
+      slotineLiTorque(model, data, sl, q, dq, dqr, ddqr, pi, layout, tau);
+      coriolisMatrix(model, data, sl, q, dq, pi, layout, C);
+    }
+    const long seen = c.value();
+    EXPECT_EQ(seen, 0) << name;
+    EXPECT_TRUE(Yb.allFinite() && tau.allFinite() && C.allFinite());
+  }
+}
+
+TEST(Realtime, InverseKinematicsAllocatesNothing) {
+  for (const char* name : {"puma560", "zcr07s"}) {
+    const Model model = loadYaml(test::robotFile(name));
+    IkSolver solver(model);
+    ChainKinematics chain(model);
+    const int n = model.nq();
+    std::mt19937 rng(23);
+    Eigen::VectorXd q(n);
+    Matrix6Xd J(6, n);
+    Eigen::Isometry3d T;
+    std::vector<Eigen::Isometry3d> targets;
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int i = 0; i < 5; ++i) {
+      for (int k = 0; k < n; ++k)
+        q[k] = solver.lower()[k] + u(rng) * (solver.upper()[k] - solver.lower()[k]);
+      chain.pose(q, T);
+      targets.push_back(T);
+    }
+    Eigen::Isometry3d far = Eigen::Isometry3d::Identity();
+    far.translation() << 9.0, 0.0, 0.0;
+    targets.push_back(far);  // fails after restarts: exercises every path
+    const Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
+    int converged = 0;
+    Count c;
+    for (const auto& target : targets) {
+      converged += solver.solve(target, q0, q).success();
+      chain.poseAndJacobian(q, T, J);
+    }
+    const long seen = c.value();
+    EXPECT_EQ(seen, 0) << name;
+    EXPECT_EQ(converged, 5) << name;
   }
 }

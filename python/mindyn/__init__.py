@@ -8,6 +8,8 @@ from ._core import ModelError, RobotFileNotFoundError, inertial_from_com, inerti
 from ._core import from_pinocchio_order as _from_pin
 from ._core import to_pinocchio_order as _to_pin
 from .base import BaseParameters, base_parameters
+from .control import coriolis_matrix, slotine_li_regressor
+from .ik import ik
 from .robot import Robot, bundled_robots, load
 
 __version__ = "0.1.0"
@@ -19,10 +21,13 @@ __all__ = [
     "Robot",
     "RobotFileNotFoundError",
     "bundled_robots",
+    "coriolis_matrix",
     "from_pinocchio_order",
     "inertial_from_com",
+    "ik",
     "inertial_from_urdf",
     "load",
+    "slotine_li_regressor",
     "to_pinocchio_order",
 ]
 

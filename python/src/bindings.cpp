@@ -17,22 +17,18 @@
 #include "mindyn/model.hpp"
 #include "mindyn/projection.hpp"
 #include "mindyn/urdf.hpp"
+#include "py_types.hpp"
 
 namespace py = pybind11;
 using namespace mindyn;
+
+void bindControl(py::module_& m);
 
 namespace {
 
 using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using RowMap =
     Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
-
-// A model with its own workspace.
-struct PyModel {
-  explicit PyModel(Model m) : model(std::move(m)), data(model) {}
-  Model model;
-  Data data;
-};
 
 // Shape check of a per-sample argument: returns the number of samples (0 = single sample).
 long samples(const Array& a, long n, const char* name) {
@@ -150,15 +146,6 @@ py::array_t<double> matrix3Out(long m, long r, long c) {
 }
 
 Eigen::Matrix4d toMatrix(const Eigen::Isometry3d& T) { return T.matrix(); }
-
-// Base parameters with the model they were computed for (possibly a snapped copy).
-struct PyBase {
-  std::shared_ptr<PyModel> model;
-  BaseParameters bp;
-  std::vector<std::string> snapped;
-  Eigen::MatrixXd W;  // work
-  Eigen::VectorXd wK, wP;
-};
 
 py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
   const RankDecision& d = set.decision;
@@ -652,4 +639,5 @@ PYBIND11_MODULE(_core, m) {
       py::arg("mass"), py::arg("com"), py::arg("rotation"), py::arg("inertia"));
   m.def("to_pinocchio_order", [](const Eigen::VectorXd& v) { return toPinocchioOrder(v); });
   m.def("from_pinocchio_order", [](const Eigen::VectorXd& v) { return fromPinocchioOrder(v); });
+  bindControl(m);
 }

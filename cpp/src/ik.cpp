@@ -1,0 +1,279 @@
+#include "mindyn/ik.hpp"
+
+#include <time.h>
+
+#include <cmath>
+#include <limits>
+
+namespace mindyn {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kTwoPi = 2 * kPi;
+
+// CPU time of the calling thread [s].
+double threadSeconds() noexcept {
+  timespec ts;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+ChainKinematics::ChainKinematics(const Model& model)
+    : n_(model.nq()), tool_(model.tool), z_(model.nq()), o_(model.nq()) {
+  for (const Joint& j : model.joints) {
+    pre_R_.push_back(j.pre.linear());
+    pre_p_.push_back(j.pre.translation());
+    post_R_.push_back(j.post.linear());
+    post_p_.push_back(j.post.translation());
+    axis_.push_back(j.axis);
+    revolute_.push_back(j.type == JointType::Revolute);
+  }
+}
+
+void ChainKinematics::pose(const Eigen::Ref<const Eigen::VectorXd>& q,
+                           Eigen::Isometry3d& T) noexcept {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int k = 0; k < n_; ++k) {
+    p += R * pre_p_[k];
+    R = R * pre_R_[k];
+    if (revolute_[k])
+      R = R * Eigen::AngleAxisd(q[k], axis_[k]).toRotationMatrix();
+    else
+      p += R * (axis_[k] * q[k]);
+    p += R * post_p_[k];
+    R = R * post_R_[k];
+  }
+  T.linear() = R * tool_.linear();
+  T.translation() = p + R * tool_.translation();
+}
+
+void ChainKinematics::poseAndJacobian(const Eigen::Ref<const Eigen::VectorXd>& q,
+                                      Eigen::Isometry3d& T, Eigen::Ref<Matrix6Xd> J) noexcept {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (int k = 0; k < n_; ++k) {
+    p += R * pre_p_[k];
+    R = R * pre_R_[k];
+    z_[k] = R * axis_[k];
+    o_[k] = p;
+    if (revolute_[k])
+      R = R * Eigen::AngleAxisd(q[k], axis_[k]).toRotationMatrix();
+    else
+      p += z_[k] * q[k];
+    p += R * post_p_[k];
+    R = R * post_R_[k];
+  }
+  T.linear() = R * tool_.linear();
+  T.translation() = p + R * tool_.translation();
+  const Eigen::Vector3d pt = T.translation();
+  for (int k = 0; k < n_; ++k) {
+    if (revolute_[k]) {
+      J.col(k).head<3>() = z_[k].cross(pt - o_[k]);
+      J.col(k).tail<3>() = z_[k];
+    } else {
+      J.col(k).head<3>() = z_[k];
+      J.col(k).tail<3>().setZero();
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+const char* toString(IkStatus status) {
+  switch (status) {
+    case IkStatus::Converged:
+      return "converged";
+    case IkStatus::NotConverged:
+      return "not converged";
+    case IkStatus::Timeout:
+      return "timeout";
+    case IkStatus::InvalidTarget:
+      return "invalid target";
+  }
+  return "unknown";
+}
+
+IkSolver::IkSolver(const Model& model, IkOptions options)
+    : n_(model.nq()),
+      options_(options),
+      kin_(model),
+      lower_(model.nq()),
+      upper_(model.nq()),
+      wraps_(model.nq()),
+      revolute_(model.nq()),
+      rng_(options.seed),
+      x_(model.nq()),
+      xc_(model.nq()),
+      dq_(model.nq()),
+      best_(model.nq()),
+      J_(6, model.nq()),
+      Jc_(6, model.nq()),
+      Jw_(6, model.nq()) {
+  for (int k = 0; k < n_; ++k) {
+    const Joint& j = model.joints[k];
+    const bool rev = j.type == JointType::Revolute;
+    revolute_[k] = rev;
+    double lo = j.limits.lower, hi = j.limits.upper;
+    if (!std::isfinite(lo) || !std::isfinite(hi) || !(hi >= lo)) {
+      lo = rev ? -kPi : -options.unlimited_prismatic_range;
+      hi = rev ? kPi : options.unlimited_prismatic_range;
+    }
+    lower_[k] = lo;
+    upper_[k] = hi;
+    wraps_[k] = rev;
+  }
+}
+
+double IkSolver::poseError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target,
+                           Eigen::Matrix<double, 6, 1>& e) noexcept {
+  e.head<3>() = target.translation() - T.translation();
+  const Eigen::Matrix3d dR = target.linear() * T.linear().transpose();
+  // rotation vector of dR (log map), accurate near 0 and pi
+  const double c = std::max(-1.0, std::min(1.0, 0.5 * (dR.trace() - 1.0)));
+  const Eigen::Vector3d w(dR(2, 1) - dR(1, 2), dR(0, 2) - dR(2, 0), dR(1, 0) - dR(0, 1));
+  const double s = 0.5 * w.norm();
+  const double angle = std::atan2(s, c);
+  if (s > 1e-6) {
+    e.tail<3>() = w * (angle / (2.0 * s));
+  } else if (c > 0.0) {
+    e.tail<3>() = 0.5 * w;  // small angle: sin(angle) ~ angle
+  } else {
+    // angle ~ pi: the axis from the symmetric part, dR ~ 2 a a^T - I
+    const Eigen::Matrix3d B = 0.5 * (dR + dR.transpose()) + Eigen::Matrix3d::Identity();
+    int i;
+    B.diagonal().maxCoeff(&i);
+    Eigen::Vector3d a = B.col(i).normalized();
+    if (a.dot(w) < 0) a = -a;
+    e.tail<3>() = angle * a;
+  }
+  return e.cwiseAbs().maxCoeff();
+}
+
+void IkSolver::bringInside(Eigen::Ref<Eigen::VectorXd> q) const noexcept {
+  for (int k = 0; k < n_; ++k) {
+    double v = q[k];
+    const double lo = lower_[k], hi = upper_[k];
+    if (v >= lo && v <= hi) continue;
+    if (wraps_[k] && std::isfinite(v)) {
+      // the representative of v in [lo, lo + 2 pi)
+      double w = lo + std::fmod(v - lo, kTwoPi);
+      if (w < lo) w += kTwoPi;
+      if (w <= hi) {
+        q[k] = w;
+        continue;
+      }
+      // outside: go to the nearer limit along the circle
+      const double to_hi = w - hi, to_lo = lo + kTwoPi - w;
+      q[k] = to_hi <= to_lo ? hi : lo;
+      continue;
+    }
+    q[k] = v < lo ? lo : (v > hi ? hi : (lo + hi) / 2);
+  }
+}
+
+void IkSolver::randomPoint(Eigen::Ref<Eigen::VectorXd> q) noexcept {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int k = 0; k < n_; ++k) q[k] = lower_[k] + (upper_[k] - lower_[k]) * u(rng_);
+}
+
+IkResult IkSolver::solve(const Eigen::Isometry3d& target,
+                         const Eigen::Ref<const Eigen::VectorXd>& q0,
+                         Eigen::Ref<Eigen::VectorXd> q) noexcept {
+  const double start = options_.max_time > 0 ? threadSeconds() : 0.0;
+  IkResult result;
+  const Eigen::Matrix3d Rt = target.linear();
+  if (!target.matrix().allFinite() ||
+      (Rt.transpose() * Rt - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 ||
+      Rt.determinant() < 0) {
+    result.status = IkStatus::InvalidTarget;
+    q = q0;
+    return result;
+  }
+  rng_.seed(options_.seed);
+  const double tol = options_.tolerance;
+  const double wr = options_.orientation_weight;
+  Eigen::Matrix<double, 6, 1> W;
+  W << 1, 1, 1, wr, wr, wr;
+  Eigen::Isometry3d T, Tc;
+  Eigen::Matrix<double, 6, 1> e, ec;
+  Eigen::Matrix<double, 6, 6> A;
+  double best_err = std::numeric_limits<double>::infinity();
+  best_ = q0;
+
+  for (int attempt = 0; attempt < options_.max_attempts; ++attempt) {
+    result.attempts = attempt + 1;
+    if (attempt == 0) {
+      x_ = q0;
+      for (int k = 0; k < n_; ++k)
+        if (!std::isfinite(x_[k])) x_[k] = 0.5 * (lower_[k] + upper_[k]);
+    } else {
+      randomPoint(x_);
+    }
+    bringInside(x_);
+    kin_.poseAndJacobian(x_, T, J_);
+    double err = poseError(T, target, e);
+    double cost = 0.5 * (W.asDiagonal() * e).squaredNorm();
+    double mu = 0.3;
+    double err_checkpoint = err;
+    for (int it = 0; it < options_.max_iterations; ++it) {
+      if (err < best_err) {
+        best_err = err;
+        best_ = x_;
+      }
+      if (err <= tol) {
+        q = x_;
+        result.status = IkStatus::Converged;
+        result.error = err;
+        return result;
+      }
+      ++result.iterations;
+      if (options_.max_time > 0 && threadSeconds() - start > options_.max_time) {
+        q = best_;
+        result.status = IkStatus::Timeout;
+        result.error = best_err;
+        return result;
+      }
+      // damped least squares step on the weighted error: dq = Jw^T (Jw Jw^T + lambda I)^-1 ew
+      Jw_.noalias() = W.asDiagonal() * J_;
+      A.noalias() = Jw_ * Jw_.transpose();
+      const double lambda = mu * cost + 1e-12;
+      A.diagonal().array() += lambda;
+      llt_.compute(A);
+      const Eigen::Matrix<double, 6, 1> y = llt_.solve(W.asDiagonal() * e);
+      dq_.noalias() = Jw_.transpose() * y;
+      xc_ = x_ + dq_;
+      bringInside(xc_);
+      kin_.poseAndJacobian(xc_, Tc, Jc_);
+      const double errc = poseError(Tc, target, ec);
+      const double costc = 0.5 * (W.asDiagonal() * ec).squaredNorm();
+      if (costc < cost) {
+        x_.swap(xc_);
+        J_.swap(Jc_);
+        e = ec;
+        err = errc;
+        cost = costc;
+        mu = std::max(mu * 0.5, 1e-3);
+      } else {
+        mu *= 10.0;
+        if (mu > 1e8) break;  // no descent left: a local minimum or a limit; restart
+      }
+      // stagnation: restart when five iterations did not halve the error
+      if ((it + 1) % 5 == 0) {
+        if (err > 0.5 * err_checkpoint) break;
+        err_checkpoint = err;
+      }
+    }
+    if (err < best_err) {
+      best_err = err;
+      best_ = x_;
+    }
+  }
+  q = best_;
+  result.status = IkStatus::NotConverged;
+  result.error = best_err;
+  return result;
+}
+
+}  // namespace mindyn

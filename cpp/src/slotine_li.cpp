@@ -1,0 +1,209 @@
+#include "mindyn/slotine_li.hpp"
+
+namespace mindyn {
+
+namespace {
+
+inline Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d m;
+  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
+  return m;
+}
+
+// I w = L(w) [XX XY XZ YY YZ ZZ] for the symmetric tensor of model.hpp.
+inline Eigen::Matrix<double, 3, 6> inertiaMap(const Eigen::Vector3d& w) {
+  Eigen::Matrix<double, 3, 6> L;
+  L << w.x(), w.y(), w.z(), 0.0, 0.0, 0.0,  //
+      0.0, w.x(), 0.0, w.y(), w.z(), 0.0,   //
+      0.0, 0.0, w.x(), 0.0, w.y(), w.z();
+  return L;
+}
+
+inline double sgn(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }
+
+// Spatial motion cross product v x u.
+inline Vector6d crossMotion(const Vector6d& v, const Vector6d& u) {
+  Vector6d r;
+  r.head<3>() = v.head<3>().cross(u.head<3>());
+  r.tail<3>() = v.head<3>().cross(u.tail<3>()) + v.tail<3>().cross(u.head<3>());
+  return r;
+}
+
+// Spatial force cross product v x* f.
+inline Vector6d crossForce(const Vector6d& v, const Vector6d& f) {
+  Vector6d r;
+  r.head<3>() = v.head<3>().cross(f.head<3>()) + v.tail<3>().cross(f.tail<3>());
+  r.tail<3>() = v.head<3>().cross(f.tail<3>());
+  return r;
+}
+
+// The 6x6 matrix of v x* .
+inline Eigen::Matrix<double, 6, 6> crossForceMatrix(const Vector6d& v) {
+  Eigen::Matrix<double, 6, 6> X = Eigen::Matrix<double, 6, 6>::Zero();
+  X.topLeftCorner<3, 3>() = skew(v.head<3>());
+  X.topRightCorner<3, 3>() = skew(v.tail<3>());
+  X.bottomRightCorner<3, 3>() = skew(v.head<3>());
+  return X;
+}
+
+// I u = K(u) [XX XY XZ YY YZ ZZ MX MY MZ M] for the spatial inertia about the link origin:
+// I (w, l) = (I_o w + h x l, M l - h x w).
+inline Matrix6x10 inertiaRegressor(const Vector6d& u) {
+  Matrix6x10 K = Matrix6x10::Zero();
+  K.block<3, 6>(0, 0) = inertiaMap(u.head<3>());
+  K.block<3, 3>(0, 6) = -skew(u.tail<3>());
+  K.block<3, 3>(3, 6) = skew(u.head<3>());
+  K.block<3, 1>(3, 9) = u.tail<3>();
+  return K;
+}
+
+// Spatial inertia of ten classical parameters applied to a motion vector.
+inline Vector6d applyInertia(const Eigen::Ref<const Eigen::VectorXd>& p, int c0,
+                             const Vector6d& u) {
+  const Eigen::Vector3d w = u.head<3>(), l = u.tail<3>();
+  const Eigen::Vector3d h(p[c0 + 6], p[c0 + 7], p[c0 + 8]);
+  Vector6d r;
+  r[0] = p[c0 + 0] * w.x() + p[c0 + 1] * w.y() + p[c0 + 2] * w.z();
+  r[1] = p[c0 + 1] * w.x() + p[c0 + 3] * w.y() + p[c0 + 4] * w.z();
+  r[2] = p[c0 + 2] * w.x() + p[c0 + 4] * w.y() + p[c0 + 5] * w.z();
+  r.head<3>() += h.cross(l);
+  r.tail<3>() = p[c0 + 9] * l - h.cross(w);
+  return r;
+}
+
+// Motion vector of the parent expressed in link k (X_{k,k-1} u).
+inline Vector6d toChild(const Data& data, int k, const Vector6d& u) {
+  const Eigen::Matrix3d& R = data.R[k];
+  Vector6d r;
+  r.head<3>() = R.transpose() * u.head<3>();
+  r.tail<3>() = R.transpose() * (u.tail<3>() + u.head<3>().cross(data.p[k]));
+  return r;
+}
+
+// Reference velocities and accelerations; needs data.R, data.p, data.v (actual velocities).
+void referencePass(const Model& model, const Data& data, SlotineLiData& sl, const VecRef& dqr,
+                   const VecRef& ddqr, bool with_gravity) noexcept {
+  Vector6d vp = Vector6d::Zero(), ap = Vector6d::Zero();
+  if (with_gravity) ap.tail<3>() = -model.gravity;
+  for (int k = 0; k < sl.n; ++k) {
+    const Vector6d& S = data.S[k];
+    const Vector6d sj = S * dqr[k];
+    Vector6d vr = toChild(data, k, vp) + sj;
+    Vector6d ar = toChild(data, k, ap) + S * ddqr[k] + crossMotion(data.v[k], sj);
+    sl.vr[k] = vr;
+    sl.ar[k] = ar;
+    vp = vr;
+    ap = ar;
+  }
+}
+
+}  // namespace
+
+SlotineLiData::SlotineLiData(const Model& model, ParameterLayout l)
+    : n(model.nq()),
+      layout(l),
+      vr(model.nq(), Vector6d::Zero()),
+      ar(model.nq(), Vector6d::Zero()),
+      F(Matrix6x10::Zero()),
+      W(Eigen::MatrixXd::Zero(model.nq(), l.size(model.nq()))),
+      zeros(Eigen::VectorXd::Zero(model.nq())),
+      unit(Eigen::VectorXd::Zero(model.nq())),
+      tau(Eigen::VectorXd::Zero(model.nq())) {}
+
+void slotineLiRegressor(const Model& model, Data& data, SlotineLiData& sl, const VecRef& q,
+                        const VecRef& dq, const VecRef& dqr, const VecRef& ddqr,
+                        ParameterLayout layout, MatOut Y) noexcept {
+  computeKinematics(model, data, q, dq, sl.zeros, false);
+  referencePass(model, data, sl, dqr, ddqr, true);
+  const int n = sl.n;
+  Y.setZero();
+  for (int j = 0; j < n; ++j) {
+    const Vector6d& v = data.v[j];
+    const Vector6d& vr = sl.vr[j];
+    Matrix6x10& F = sl.F;
+    F.noalias() = inertiaRegressor(sl.ar[j] - 0.5 * crossMotion(v, vr));
+    F.noalias() += 0.5 * crossForceMatrix(v) * inertiaRegressor(vr);
+    F.noalias() += 0.5 * crossForceMatrix(vr) * inertiaRegressor(v);
+    const int c0 = j * layout.perLink();
+    for (int k = j; k >= 0; --k) {
+      Y.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
+      if (k > 0) {
+        const Eigen::Matrix3d& R = data.R[k];
+        const Eigen::Matrix<double, 3, 10> fr = R * F.bottomRows<3>();
+        F.topRows<3>() = R * F.topRows<3>() + skew(data.p[k]) * fr;
+        F.bottomRows<3>() = fr;
+      }
+    }
+    if (layout.rotor) Y(j, layout.rotorIndex(j)) = ddqr[j];
+    if (layout.friction) {
+      Y(j, layout.viscousIndex(j)) = dq[j];
+      Y(j, layout.coulombIndex(j)) = sgn(dq[j]);
+    }
+  }
+}
+
+void slotineLiBaseRegressor(const Model& model, Data& data, SlotineLiData& sl,
+                            const BaseParameters& base, const VecRef& q, const VecRef& dq,
+                            const VecRef& dqr, const VecRef& ddqr, MatOut Yb) noexcept {
+  slotineLiRegressor(model, data, sl, q, dq, dqr, ddqr, base.layout, sl.W);
+  const auto& piv = base.eom.decision.pivots;
+  for (size_t b = 0; b < piv.size(); ++b) Yb.col(static_cast<long>(b)) = sl.W.col(piv[b]);
+}
+
+namespace {
+
+// The force pass for a parameter vector; needs computeKinematics and referencePass.
+void torquePass(const Data& data, SlotineLiData& sl, const VecRef& dq, const VecRef& ddqr,
+                const VecRef& params, ParameterLayout layout, bool joint_terms,
+                VecOut tau) noexcept {
+  const int n = sl.n;
+  Vector6d carried = Vector6d::Zero();
+  for (int k = n - 1; k >= 0; --k) {
+    const int c0 = k * layout.perLink();
+    const Vector6d& v = data.v[k];
+    const Vector6d& vr = sl.vr[k];
+    Vector6d f = applyInertia(params, c0, sl.ar[k] - 0.5 * crossMotion(v, vr));
+    f += 0.5 * (crossForce(v, applyInertia(params, c0, vr)) +
+                crossForce(vr, applyInertia(params, c0, v)));
+    f += carried;
+    double t = data.S[k].dot(f);
+    if (joint_terms) {
+      if (layout.rotor) t += params[layout.rotorIndex(k)] * ddqr[k];
+      if (layout.friction)
+        t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
+    }
+    tau[k] = t;
+    if (k > 0) {
+      const Eigen::Matrix3d& R = data.R[k];
+      const Eigen::Vector3d fr = R * f.tail<3>();
+      carried.head<3>() = R * f.head<3>() + data.p[k].cross(fr);
+      carried.tail<3>() = fr;
+    }
+  }
+}
+
+}  // namespace
+
+void slotineLiTorque(const Model& model, Data& data, SlotineLiData& sl, const VecRef& q,
+                     const VecRef& dq, const VecRef& dqr, const VecRef& ddqr, const VecRef& params,
+                     ParameterLayout layout, VecOut tau, bool with_gravity,
+                     bool joint_terms) noexcept {
+  computeKinematics(model, data, q, dq, sl.zeros, false);
+  referencePass(model, data, sl, dqr, ddqr, with_gravity);
+  torquePass(data, sl, dq, ddqr, params, layout, joint_terms, tau);
+}
+
+void coriolisMatrix(const Model& model, Data& data, SlotineLiData& sl, const VecRef& q,
+                    const VecRef& dq, const VecRef& params, ParameterLayout layout,
+                    MatOut C) noexcept {
+  computeKinematics(model, data, q, dq, sl.zeros, false);
+  sl.unit.setZero();
+  for (int j = 0; j < sl.n; ++j) {
+    sl.unit[j] = 1.0;
+    referencePass(model, data, sl, sl.unit, sl.zeros, false);
+    torquePass(data, sl, dq, sl.zeros, params, layout, false, C.col(j));
+    sl.unit[j] = 0.0;
+  }
+}
+
+}  // namespace mindyn

@@ -1,0 +1,253 @@
+"""Command-line subcommands of the control side: ``track`` (closed-loop tracking simulation) and
+``ik`` (position inverse kinematics)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import numpy as np
+
+from . import base_parameters, load
+
+ROBOT_HELP = "a bundled robot name, a URDF file or a YAML DH/MDH table"
+
+#: Seed 001's maximum position errors on the real ZCR07S, joints 1-6 [deg].
+SEED001_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
+
+
+def _row(label: str, values, fmt: str = "{:9.4f}") -> str:
+    return f"{label:<28}" + "".join(fmt.format(v) for v in values)
+
+
+def cmd_track(args: argparse.Namespace) -> int:
+    from . import control
+
+    robot = load(args.robot, tip=args.tip)
+    n = robot.n
+    gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
+    if args.trajectory:
+        reference = control.CsvTrajectory(args.trajectory, n)
+        ref_text = f"trajectory {args.trajectory} ({reference.duration:g} s)"
+        duration = args.duration or reference.duration
+        cycle = args.cycle or duration
+    else:
+        reference = control.SumOfSines(robot, period=args.cycle or 10.0, seed=args.seed)
+        ref_text = f"sum of sines within the limits, {reference.period:g} s cycle"
+        duration = args.duration or 2 * reference.period
+        cycle = reference.period
+    if not (args.param_error >= 0):
+        raise ValueError("--param-error must be >= 0")
+    base = None
+    p_hat = None
+    if args.controller != "pd":
+        base = base_parameters(robot, rotor=True, friction=True)
+        p_true = base.values(robot.parameters(True, True))
+        p_hat = control.perturbed_parameters(p_true, args.param_error, args.seed)
+    controller = control.make_controller(args.controller, robot, gains, p_hat=p_hat, base=base)
+    limit = None if args.torque_limit == "none" else args.torque_limit
+    result = control.simulate(
+        robot,
+        controller,
+        reference,
+        duration,
+        args.period,
+        substeps=args.substeps,
+        integrator=args.integrator,
+        noise=(args.noise[0], args.noise[1]),
+        torque_limit=limit,
+        seed=args.seed,
+    )
+    s = control.summary(result, cycle)
+    lines = [
+        f"{robot.name}: {args.controller}, period {args.period * 1e3:g} ms, {duration:g} s, "
+        f"{ref_text}",
+    ]
+    if args.controller != "pd":
+        lines.append(
+            f"  initial base-parameter estimate: true values x (1 + {args.param_error:g} u), "
+            f"u uniform in [-1, 1] (seed {args.seed}); {base.n} base parameters "
+            "with rotor inertia and friction"
+        )
+    if args.noise[0] > 0 or args.noise[1] > 0:
+        lines.append(
+            f"  sensor noise: sigma_q {args.noise[0]:g} rad, sigma_dq {args.noise[1]:g} rad/s"
+        )
+    if limit is not None:
+        lines.append(f"  torque limits: effort, saturated {100 * s['saturated_fraction']:.2f} %")
+    lines.append("")
+    lines.append(_row("joint", range(1, n + 1), "{:>9d}"))
+    lines.append(_row("max |q - q_d| [deg]", s["max_error_deg"]))
+    if robot.name == "zcr07s" and args.controller == "adaptive-pd" and n == 6:
+        lines.append(_row("  seed 001 (real robot)", SEED001_MAX_ERROR_DEG, "{:9.2f}"))
+    lines.append(_row("final q - q_d [deg]", s["final_error_deg"]))
+    rms = s["rms_error_deg_per_cycle"]
+    lines.append(_row("RMS error, first cycle", rms[0]))
+    if len(rms) > 1:
+        lines.append(_row(f"RMS error, cycle {len(rms)}", rms[-1]))
+    if "torque_prediction_rms_per_cycle" in s:
+        tp = s["torque_prediction_rms_per_cycle"]
+        lines.append(_row("|Y (p_hat - p)| RMS, first [Nm]", tp[0]))
+        if len(tp) > 1:
+            lines.append(_row(f"|Y (p_hat - p)| RMS, cycle {len(tp)}", tp[-1]))
+    if "parameter_error_norm" in s:
+        pe = s["parameter_error_norm"]
+        lines.append(f"parameter error |p_hat - p|: {pe[0]:.4g} at t = 0, {pe[-1]:.4g} at the end")
+    if args.report:
+        header = {
+            "robot": robot.name,
+            "reference": ref_text,
+            "gains": {k: np.asarray(v).tolist() for k, v in gains.items()},
+            "param_error": args.param_error,
+            "seed": args.seed,
+            "noise": list(args.noise),
+            "torque_limit": args.torque_limit,
+            "integrator": f"{args.integrator} ({args.substeps} steps per period)"
+            if args.integrator == "rk4"
+            else "scipy RK45",
+        }
+        if robot.name == "zcr07s" and args.controller == "adaptive-pd":
+            header["seed001_max_error_deg"] = SEED001_MAX_ERROR_DEG
+        control.write_report(result, args.report, cycle, header)
+        lines.append(f"report: {args.report}/ (summary.json, log.csv, plots)")
+    print("\n".join(lines))
+    return 0
+
+
+def cmd_ik(args: argparse.Namespace) -> int:
+    from .ik import ik_solve, pose_from_xyz_rpy
+
+    robot = load(args.robot, tip=args.tip)
+    scale = np.pi / 180.0 if args.deg else 1.0
+    T = pose_from_xyz_rpy(args.xyz, np.asarray(args.rpy, dtype=float) * scale)
+    q0 = None
+    if args.q0 is not None:
+        if len(args.q0) != robot.n:
+            raise ValueError(f"--q0 needs {robot.n} values, got {len(args.q0)}")
+        q0 = np.asarray(args.q0, dtype=float) * scale
+    r = ik_solve(
+        robot,
+        T,
+        q0,
+        tolerance=args.tolerance,
+        max_time=args.timeout,
+        seed=args.seed,
+    )
+    if args.format == "json":
+        print(
+            json.dumps(
+                {
+                    "robot": robot.name,
+                    "success": r.success,
+                    "status": r.status,
+                    "q": r.q.tolist(),
+                    "pose_error": r.error,
+                    "iterations": r.iterations,
+                    "attempts": r.attempts,
+                },
+                indent=2,
+            )
+        )
+    else:
+        print(
+            f"{robot.name}: {r.status} (pose error {r.error:.3g}, {r.iterations} iterations, "
+            f"{r.attempts} attempt{'s' if r.attempts != 1 else ''})"
+        )
+        for k in range(robot.n):
+            unit = "rad" if robot.joint_types[k] == "revolute" else "m"
+            extra = f"  {np.degrees(r.q[k]):10.4f} deg" if unit == "rad" else ""
+            print(f"  {robot.joint_names[k]:<16} {r.q[k]:12.6f} {unit}{extra}")
+    if not r.success:
+        print(
+            f"mindyn: error: no joint solution inside the limits reached the pose "
+            f"({r.status}; best pose error {r.error:.3g})",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def register(sub) -> None:
+    """Adds ``track`` and ``ik`` to the ``mindyn`` subcommands."""
+    p = sub.add_parser(
+        "track",
+        help="closed-loop joint tracking simulation: adaptive PD, computed torque or PD",
+        description="Simulates the robot (true parameters with rotor inertia and friction, RK4) "
+        "under a controller sampled every --period seconds with zero-order hold. Adaptive PD is "
+        "the Slotine-Li controller on the base parameters: tau = Y p_hat - K_D s, "
+        "dp_hat/dt = -Gamma Y^T s, s = de + Lambda e, e = q - q_d. Default gains: seed 001's "
+        "for zcr07s (K_D = diag(400, 350, 130, 22, 9, 2), Lambda = diag(10, 10, 10, 30, 30, 25), "
+        "Gamma = 1), otherwise Lambda = 10, K_D = 40 diag(A(q_mid)).",
+    )
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    p.add_argument(
+        "--controller", choices=["adaptive-pd", "computed-torque", "pd"], default="adaptive-pd"
+    )
+    p.add_argument(
+        "--gains",
+        metavar="FILE",
+        help="YAML with kd, lambda, gamma (adaptive PD) and optionally kp (PD: default "
+        "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
+    )
+    p.add_argument("--period", type=float, default=0.004, help="controller period [s] (0.004)")
+    p.add_argument(
+        "--duration", type=float, help="simulated time [s] (default: two cycles, or the CSV's)"
+    )
+    p.add_argument(
+        "--trajectory",
+        metavar="CSV",
+        help="reference: columns t, q1..qN [, dq1..dqN, ddq1..ddqN] (default: a sum of sines "
+        "within the joint limits)",
+    )
+    p.add_argument(
+        "--cycle",
+        type=float,
+        help="period of the default reference and of the per-cycle figures [s] (10)",
+    )
+    p.add_argument(
+        "--param-error",
+        type=float,
+        default=0.3,
+        help="relative error of the initial base-parameter estimate (0.3: +-30 %%)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the estimate error and noise")
+    p.add_argument(
+        "--noise",
+        type=float,
+        nargs=2,
+        default=[0.0, 0.0],
+        metavar=("SIGMA_Q", "SIGMA_DQ"),
+        help="sensor noise standard deviations [rad, rad/s]",
+    )
+    p.add_argument("--torque-limit", choices=["effort", "none"], default="none")
+    p.add_argument("--substeps", type=int, default=4, help="RK4 steps per period (4)")
+    p.add_argument("--integrator", choices=["rk4", "scipy"], default="rk4")
+    p.add_argument("--report", metavar="DIR", help="write summary.json, log.csv and plots here")
+    p.set_defaults(func=cmd_track)
+
+    p = sub.add_parser(
+        "ik",
+        help="position inverse kinematics of the tool frame, inside the joint limits",
+        description="Damped least squares (Levenberg-Marquardt) with random restarts inside the "
+        "limits. Exit status 1 when no solution is found.",
+    )
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    p.add_argument("--xyz", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
+    p.add_argument(
+        "--rpy",
+        type=float,
+        nargs=3,
+        default=[0.0, 0.0, 0.0],
+        metavar=("R", "P", "Y"),
+        help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention)",
+    )
+    p.add_argument("--q0", type=float, nargs="+", help="start (default: middle of the limits)")
+    p.add_argument("--deg", action="store_true", help="--rpy and --q0 in degrees")
+    p.add_argument("--tolerance", type=float, default=1e-5, help="pose error [m, rad] (1e-5)")
+    p.add_argument("--timeout", type=float, default=0.5, help="CPU-time budget [s] (0.5)")
+    p.add_argument("--seed", type=int, default=42, help="seed of the restart points")
+    p.add_argument("--format", choices=["table", "json"], default="table")
+    p.set_defaults(func=cmd_ik)

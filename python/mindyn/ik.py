@@ -1,0 +1,371 @@
+"""Inverse kinematics through the Jacobian (method.md §8).
+
+- :func:`velocity_ik`: ``dq = J^+ dx`` for a tool twist ``dx``, with damped least squares near
+  singularities and optional null-space motion for redundant arms;
+- :func:`resolved_rate`: online velocity control along a Cartesian path, ``q`` read back every
+  cycle (the seed's scheme), with feedback on the pose error;
+- :func:`ik` / :func:`ik_solve`: position IK by iterating the velocity solution (damped least
+  squares / Levenberg-Marquardt in C++), inside the joint limits, with seeded random restarts.
+
+Twists and Jacobians follow :meth:`mindyn.Robot.jacobian`: ``(vx, vy, vz, wx, wy, wz)`` in the base
+frame, the linear part the velocity of the tool-frame origin. Pose errors are the twist that moves
+a frame onto another in unit time: ``(p_d - p, rotation vector of R_d R^T)``.
+
+``mindyn.ik`` is the function :func:`ik`; import the other names with ``from mindyn.ik import ...``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from . import _core
+from .robot import Robot
+
+__all__ = [
+    "IkResult",
+    "circle_path",
+    "damped_pinv",
+    "ik",
+    "ik_solve",
+    "limits_gradient",
+    "line_path",
+    "pose_error",
+    "pose_from_xyz_rpy",
+    "resolved_rate",
+    "velocity_ik",
+]
+
+TASKS = {"pose": [0, 1, 2, 3, 4, 5], "position": [0, 1, 2], "orientation": [3, 4, 5]}
+
+
+# ---------------------------------------------------------------------------------------------
+# Poses
+# ---------------------------------------------------------------------------------------------
+def _rotation_log(R: np.ndarray) -> np.ndarray:
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_matrix(R).as_rotvec()
+
+
+def pose_error(T: np.ndarray, T_desired: np.ndarray) -> np.ndarray:
+    """Twist ``(p_d - p, log(R_d R^T))``, shape (6,), taking pose ``T`` onto ``T_desired`` (4x4
+    each, base frame)."""
+    T = _pose(T, "T")
+    Td = _pose(T_desired, "T_desired")
+    return np.concatenate([Td[:3, 3] - T[:3, 3], _rotation_log(Td[:3, :3] @ T[:3, :3].T)])
+
+
+def pose_from_xyz_rpy(xyz, rpy) -> np.ndarray:
+    """4x4 pose from a position and roll-pitch-yaw angles (URDF convention, fixed axes:
+    ``R = Rz(yaw) Ry(pitch) Rx(roll)``)."""
+    from scipy.spatial.transform import Rotation
+
+    xyz = np.asarray(xyz, dtype=float)
+    rpy = np.asarray(rpy, dtype=float)
+    if xyz.shape != (3,) or rpy.shape != (3,):
+        raise ValueError("xyz and rpy need three values each")
+    if not (np.all(np.isfinite(xyz)) and np.all(np.isfinite(rpy))):
+        raise ValueError("xyz and rpy must be finite")
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_euler("xyz", rpy).as_matrix()  # extrinsic x, then y, then z
+    T[:3, 3] = xyz
+    return T
+
+
+def _pose(T, name: str) -> np.ndarray:
+    T = np.asarray(T, dtype=float)
+    if T.shape != (4, 4):
+        raise ValueError(f"{name} must be a 4x4 homogeneous transform, got shape {T.shape}")
+    if not np.all(np.isfinite(T)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    R = T[:3, :3]
+    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
+        raise ValueError(f"{name}: the upper-left 3x3 block is not a rotation matrix")
+    if np.any(T[3] != [0.0, 0.0, 0.0, 1.0]):
+        raise ValueError(f"{name}: the last row must be (0, 0, 0, 1)")
+    return T
+
+
+# ---------------------------------------------------------------------------------------------
+# Velocity IK
+# ---------------------------------------------------------------------------------------------
+def damped_pinv(J, damping: float = 0.05, threshold: float = 0.02) -> np.ndarray:
+    """Damped pseudo-inverse ``V diag(s / (s^2 + lambda^2)) U^T`` of ``J`` (m x n).
+
+    ``lambda^2 = damping^2 (1 - (s_min / threshold)^2)`` when the smallest singular value
+    ``s_min`` is below ``threshold`` and 0 otherwise: the exact pseudo-inverse away from
+    singularities, bounded joint speeds near them."""
+    J = np.asarray(J, dtype=float)
+    U, s, Vt = np.linalg.svd(J, full_matrices=False)
+    smin = s[-1] if s.size else 0.0
+    lam2 = 0.0
+    if threshold > 0 and smin < threshold:
+        lam2 = damping**2 * (1.0 - (smin / threshold) ** 2)
+    if lam2 == 0.0:
+        keep = s > s[0] * 1e-12 if s.size else s
+        inv = np.zeros_like(s)
+        inv[keep] = 1.0 / s[keep]
+    else:
+        inv = s / (s**2 + lam2)
+    return (Vt.T * inv) @ U.T
+
+
+def _task_rows(task) -> list[int]:
+    if isinstance(task, str):
+        if task not in TASKS:
+            raise ValueError(f"task must be one of {', '.join(TASKS)} or a list of rows 0..5")
+        return TASKS[task]
+    rows = [int(r) for r in task]
+    if not rows or any(r < 0 or r > 5 for r in rows) or len(set(rows)) != len(rows):
+        raise ValueError("task rows must be distinct integers in 0..5")
+    return rows
+
+
+def limits_gradient(robot: Robot, q) -> np.ndarray:
+    """A null-space motion that moves joints towards the middle of their limits:
+    ``-(q - q_mid) / half_range^2`` (zero for joints without limits)."""
+    lim = robot.limits
+    lo, hi = lim["lower"], lim["upper"]
+    ok = np.isfinite(lo) & np.isfinite(hi) & (hi > lo)
+    z = np.zeros(robot.n)
+    mid = 0.5 * (lo + hi)
+    half = 0.5 * (hi - lo)
+    z[ok] = -(np.asarray(q)[ok] - mid[ok]) / half[ok] ** 2
+    return z
+
+
+def velocity_ik(
+    robot: Robot,
+    q,
+    twist,
+    *,
+    task="pose",
+    damping: float = 0.05,
+    threshold: float = 0.02,
+    nullspace=None,
+) -> np.ndarray:
+    """Joint velocities for a commanded tool twist.
+
+    ``dq = J^+ dx + (I - J^+ J) z`` with ``J`` the rows ``task`` of the tool Jacobian at ``q``
+    and ``J^+`` :func:`damped_pinv` (exact away from singularities).
+
+    Parameters
+    ----------
+    robot : Robot
+    q : array (n,)
+        Current joint positions (the sensor reading in online control).
+    twist : array (len(rows),)
+        Commanded ``(vx, vy, vz, wx, wy, wz)`` restricted to the task rows.
+    task : "pose", "position", "orientation" or a list of rows of the 6-row Jacobian
+    damping, threshold : float
+        Damped least squares near singularities (see :func:`damped_pinv`).
+    nullspace : None, array (n,), callable ``q -> (n,)`` or "limits"
+        Secondary joint motion ``z`` projected on the null space of the task (redundant arms);
+        ``"limits"`` uses :func:`limits_gradient`.
+
+    Returns
+    -------
+    dq : ndarray (n,)
+    """
+    q = np.asarray(q, dtype=float)
+    rows = _task_rows(task)
+    x = np.asarray(twist, dtype=float)
+    if x.shape != (len(rows),):
+        raise ValueError(f"twist has shape {x.shape}; expected ({len(rows)},) for this task")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("twist contains NaN or infinite values")
+    J = robot.jacobian(q)[rows]
+    Jp = damped_pinv(J, damping, threshold)
+    dq = Jp @ x
+    if nullspace is not None:
+        if isinstance(nullspace, str):
+            if nullspace != "limits":
+                raise ValueError("nullspace must be None, an array, a callable or 'limits'")
+            z = limits_gradient(robot, q)
+        elif callable(nullspace):
+            z = np.asarray(nullspace(q), dtype=float)
+        else:
+            z = np.asarray(nullspace, dtype=float)
+        if z.shape != (robot.n,):
+            raise ValueError(f"nullspace motion has shape {z.shape}; expected ({robot.n},)")
+        dq = dq + z - Jp @ (J @ z)
+    return dq
+
+
+# ---------------------------------------------------------------------------------------------
+# Cartesian paths: callables t -> (T_d (4, 4), twist_d (6,))
+# ---------------------------------------------------------------------------------------------
+def circle_path(T0, radius: float, period: float, normal=(0.0, 0.0, 1.0)):
+    """A circle through the position of ``T0`` at constant orientation: centre
+    ``p0 - radius u``, ``p(t) = c + radius (cos(w t) u + sin(w t) v)``, ``(u, v, normal)``
+    right-handed, ``w = 2 pi / period``."""
+    T0 = _pose(T0, "T0")
+    nrm = np.asarray(normal, dtype=float)
+    nrm = nrm / np.linalg.norm(nrm)
+    u = np.cross(nrm, [1.0, 0.0, 0.0])
+    if np.linalg.norm(u) < 1e-6:
+        u = np.cross(nrm, [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(nrm, u)
+    c = T0[:3, 3] - radius * u
+    w = 2 * np.pi / period
+
+    def path(t: float):
+        T = T0.copy()
+        T[:3, 3] = c + radius * (np.cos(w * t) * u + np.sin(w * t) * v)
+        vel = radius * w * (-np.sin(w * t) * u + np.cos(w * t) * v)
+        return T, np.concatenate([vel, np.zeros(3)])
+
+    return path
+
+
+def line_path(T0, T1, duration: float):
+    """A straight line with the orientation turning about a fixed axis, both with the quintic
+    time scaling ``s(t)`` (zero speed and acceleration at both ends)."""
+    T0 = _pose(T0, "T0")
+    T1 = _pose(T1, "T1")
+    dp = T1[:3, 3] - T0[:3, 3]
+    rv = _rotation_log(T1[:3, :3] @ T0[:3, :3].T)
+
+    def path(t: float):
+        from scipy.spatial.transform import Rotation
+
+        x = min(max(t / duration, 0.0), 1.0)
+        s = 10 * x**3 - 15 * x**4 + 6 * x**5
+        ds = (30 * x**2 - 60 * x**3 + 30 * x**4) / duration if 0 < t < duration else 0.0
+        T = np.eye(4)
+        T[:3, 3] = T0[:3, 3] + s * dp
+        T[:3, :3] = Rotation.from_rotvec(s * rv).as_matrix() @ T0[:3, :3]
+        return T, np.concatenate([ds * dp, ds * rv])
+
+    return path
+
+
+@dataclass
+class RateResult:
+    """Resolved-rate run: ``t`` (K,), ``q`` and ``dq`` (K, n), ``error`` (K, 6) pose error of
+    the tool against the path at each cycle (before the update)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    error: np.ndarray
+
+    @property
+    def max_position_error(self) -> float:
+        return float(np.linalg.norm(self.error[:, :3], axis=1).max())
+
+    @property
+    def max_orientation_error(self) -> float:
+        return float(np.linalg.norm(self.error[:, 3:], axis=1).max())
+
+
+def resolved_rate(
+    robot: Robot,
+    q0,
+    path: Callable[[float], tuple],
+    duration: float,
+    dt: float = 0.004,
+    gain: float = 10.0,
+    **velocity_options,
+) -> RateResult:
+    """Online velocity control along ``path``: every cycle read ``q``, command
+    ``dx = twist_d + gain * pose_error(fk(q), T_d)`` (pose task) and integrate
+    ``dq = velocity_ik(q, dx)`` over ``dt`` (the joints are assumed to follow the commanded
+    velocity). ``velocity_options`` go to :func:`velocity_ik` (``nullspace``, ``damping``, ...).
+    """
+    if not (duration > 0 and dt > 0):
+        raise ValueError("duration and dt must be positive")
+    q = np.array(q0, dtype=float)
+    if q.shape != (robot.n,):
+        raise ValueError(f"q0 has shape {q.shape}; expected ({robot.n},)")
+    K = int(round(duration / dt)) + 1
+    t = np.arange(K) * dt
+    Q, DQ, E = np.zeros((K, robot.n)), np.zeros((K, robot.n)), np.zeros((K, 6))
+    for i in range(K):
+        Td, twist = path(t[i])
+        e = pose_error(robot.fk(q), Td)
+        dq = velocity_ik(robot, q, np.asarray(twist) + gain * e, **velocity_options)
+        Q[i], DQ[i], E[i] = q, dq, e
+        q = q + dt * dq
+    return RateResult(t, Q, DQ, E)
+
+
+# ---------------------------------------------------------------------------------------------
+# Position IK
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class IkResult:
+    """Outcome of :func:`ik_solve`.
+
+    status: ``"converged"`` (pose error within tolerance, inside the limits), ``"not converged"``
+    (all attempts used: unreachable or too hard), ``"timeout"`` (budget used up).
+    ``q`` is the solution, or the best point found; ``error`` its max |pose error| component."""
+
+    q: np.ndarray
+    success: bool
+    status: str
+    error: float
+    iterations: int
+    attempts: int
+
+
+def ik_solve(
+    robot: Robot,
+    T_target,
+    q0=None,
+    *,
+    tolerance: float = 1e-5,
+    max_time: float = 0.1,
+    max_attempts: int = 100,
+    max_iterations: int = 100,
+    orientation_weight: float = 0.3,
+    seed: int = 42,
+) -> IkResult:
+    """Joint positions inside the limits that put the tool frame at ``T_target`` (4x4, base
+    frame), by damped least squares with random restarts (C++).
+
+    Parameters
+    ----------
+    q0 : array (n,), optional
+        Start (default: the middle of the limits); values outside the limits are brought inside.
+    tolerance : float
+        Largest accepted |component| of the pose error (m, rad).
+    max_time : float
+        CPU-time budget in seconds (0: none); ``max_attempts`` bounds the restarts.
+    seed : int
+        Seed of the restart points (same seed, same answer).
+    """
+    T = _pose(T_target, "T_target")
+    solver = _core.IkSolver(
+        robot._m,
+        tolerance=tolerance,
+        max_iterations=max_iterations,
+        max_attempts=max_attempts,
+        max_time=max_time,
+        orientation_weight=orientation_weight,
+        seed=seed,
+    )
+    if q0 is None:
+        q0 = 0.5 * (solver.lower + solver.upper)
+    q0 = np.asarray(q0, dtype=float)
+    if q0.shape != (robot.n,):
+        raise ValueError(f"q0 has shape {q0.shape}; expected ({robot.n},)")
+    r = solver.solve(T, q0)
+    return IkResult(
+        q=np.asarray(r["q"]),
+        success=bool(r["success"]),
+        status=r["status"],
+        error=float(r["error"]),
+        iterations=int(r["iterations"]),
+        attempts=int(r["attempts"]),
+    )
+
+
+def ik(robot: Robot, T_target, q0=None, **options) -> tuple[np.ndarray, bool]:
+    """``(q, success)`` of :func:`ik_solve` (same options)."""
+    r = ik_solve(robot, T_target, q0, **options)
+    return r.q, r.success

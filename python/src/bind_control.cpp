@@ -1,0 +1,285 @@
+// Python bindings of the control side: the Slotine-Li regressor and Coriolis matrix, a fixed-step
+// integrator of the forward dynamics with a held torque, and the inverse-kinematics solver.
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "mindyn/dynamics.hpp"
+#include "mindyn/ik.hpp"
+#include "mindyn/slotine_li.hpp"
+#include "py_types.hpp"
+
+namespace py = pybind11;
+using namespace mindyn;
+
+namespace {
+
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// Number of samples of a per-sample argument (0: a single sample of shape (n,)), after checking
+// shape and finiteness; all arguments must agree.
+long sampleCount(const std::vector<std::pair<const Array*, const char*>>& args, long n) {
+  long m = -2;
+  for (const auto& [a, name] : args) {
+    long s;
+    if (a->ndim() == 1 && a->shape(0) == n) {
+      s = 0;
+    } else if (a->ndim() == 2 && a->shape(1) == n) {
+      s = a->shape(0);
+    } else {
+      std::ostringstream msg;
+      msg << name << " has shape (";
+      for (long d = 0; d < a->ndim(); ++d) msg << (d ? ", " : "") << a->shape(d);
+      msg << (a->ndim() == 1 ? ",)" : ")") << "; expected (" << n << ",) or (m, " << n << ")";
+      throw py::value_error(msg.str());
+    }
+    const double* p = a->data();
+    for (long i = 0; i < static_cast<long>(a->size()); ++i)
+      if (!std::isfinite(p[i])) {
+        std::ostringstream msg;
+        msg << name << " contains " << (std::isnan(p[i]) ? "NaN" : "an infinite value");
+        if (a->ndim() == 2)
+          msg << " at sample " << i / n << ", joint " << i % n + 1;
+        else
+          msg << " at joint " << i + 1;
+        throw py::value_error(msg.str());
+      }
+    if (m == -2)
+      m = s;
+    else if (s != m)
+      throw py::value_error(std::string(name) +
+                            ": all inputs must be single samples or batches of equal length");
+  }
+  return m;
+}
+
+py::array_t<double> stackedOut(long m, long r, long c) {
+  if (m == 0) return py::array_t<double>({r, c});
+  return py::array_t<double>({m, r, c});
+}
+
+// Calls f(q, dq, dqr, ddqr, out) per sample, out an r x c matrix stored row-major per sample.
+template <class F>
+py::array_t<double> perSample4(long n, const Array& a, const Array& b, const Array& c,
+                               const Array& d, long rows, long cols, F&& f) {
+  const long m = sampleCount({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, n);
+  auto out = stackedOut(m, rows, cols);
+  const long count = m == 0 ? 1 : m;
+  Eigen::Map<const RowMajor> A(a.data(), count, n), B(b.data(), count, n), C(c.data(), count, n),
+      D(d.data(), count, n);
+  Eigen::VectorXd x(n), y(n), z(n), w(n);
+  Eigen::MatrixXd M(rows, cols);
+  for (long i = 0; i < count; ++i) {
+    x = A.row(i).transpose();
+    y = B.row(i).transpose();
+    z = C.row(i).transpose();
+    w = D.row(i).transpose();
+    f(x, y, z, w, M);
+    Eigen::Map<RowMajor>(out.mutable_data() + i * rows * cols, rows, cols) = M;
+  }
+  return out;
+}
+
+Eigen::VectorXd classicalParams(const PyModel& s, const py::object& params,
+                                ParameterLayout& layout) {
+  const int n = s.model.nq();
+  if (params.is_none()) {
+    layout = {};
+    return s.model.parameters(layout);
+  }
+  Array a = params.cast<Array>();
+  if (a.ndim() != 1) throw py::value_error("params must be 1-D");
+  try {
+    layout = ParameterLayout::fromSize(n, a.shape(0));
+  } catch (const ModelError& e) {
+    throw py::value_error(e.what());
+  }
+  Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(a.data(), a.shape(0));
+  if (!p.allFinite()) throw py::value_error("params contains NaN or an infinite value");
+  return p;
+}
+
+Eigen::VectorXd vectorArg(const Eigen::VectorXd& v, long n, const char* name) {
+  if (v.size() != n)
+    throw py::value_error(std::string(name) + " has " + std::to_string(v.size()) +
+                          " entries; expected " + std::to_string(n));
+  for (long i = 0; i < n; ++i)
+    if (!std::isfinite(v[i]))
+      throw py::value_error(std::string(name) + " contains " +
+                            (std::isnan(v[i]) ? "NaN" : "an infinite value") + " at joint " +
+                            std::to_string(i + 1));
+  return v;
+}
+
+// Python-side IK solver: owns a copy of the model's chain.
+struct PyIk {
+  PyIk(const PyModel& m, const IkOptions& o) : solver(m.model, o), n(m.model.nq()) {}
+  IkSolver solver;
+  int n;
+};
+
+Eigen::Isometry3d poseArg(const Eigen::Matrix4d& M) {
+  Eigen::Isometry3d T;
+  T.matrix() = M;
+  return T;
+}
+
+}  // namespace
+
+void bindControl(py::module_& m) {
+  m.def(
+      "slotine_li_regressor",
+      [](PyBase& b, const Array& q, const Array& dq, const Array& dqr, const Array& ddqr) {
+        PyModel& s = *b.model;
+        const long n = s.model.nq(), nb = b.bp.eom.size();
+        SlotineLiData sl(s.model, b.bp.layout);
+        return perSample4(
+            n, q, dq, dqr, ddqr, n, nb,
+            [&](const auto& x, const auto& y, const auto& z, const auto& w, Eigen::MatrixXd& Y) {
+              slotineLiBaseRegressor(s.model, s.data, sl, b.bp, x, y, z, w, Y);
+            });
+      },
+      py::arg("base"), py::arg("q"), py::arg("dq"), py::arg("dqr"), py::arg("ddqr"),
+      "Base Slotine-Li regressor Y_b (n, nb) or (m, n, nb): Y_b p_b = A ddqr + C dqr + c "
+      "(+ friction).");
+  m.def(
+      "slotine_li_regressor_classical",
+      [](PyModel& s, const Array& q, const Array& dq, const Array& dqr, const Array& ddqr,
+         bool rotor, bool friction) {
+        const long n = s.model.nq();
+        const ParameterLayout layout{rotor, friction};
+        SlotineLiData sl(s.model, layout);
+        return perSample4(
+            n, q, dq, dqr, ddqr, n, layout.size(static_cast<int>(n)),
+            [&](const auto& x, const auto& y, const auto& z, const auto& w, Eigen::MatrixXd& Y) {
+              slotineLiRegressor(s.model, s.data, sl, x, y, z, w, layout, Y);
+            });
+      },
+      py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("dqr"), py::arg("ddqr"),
+      py::arg("rotor") = false, py::arg("friction") = false);
+  m.def(
+      "coriolis_matrix",
+      [](PyModel& s, const Array& q, const Array& dq, const py::object& params) {
+        const long n = s.model.nq();
+        ParameterLayout layout;
+        const Eigen::VectorXd p = classicalParams(s, params, layout);
+        SlotineLiData sl(s.model, layout);
+        return perSample4(
+            n, q, dq, q, q, n, n,
+            [&](const auto& x, const auto& y, const auto&, const auto&, Eigen::MatrixXd& C) {
+              coriolisMatrix(s.model, s.data, sl, x, y, p, layout, C);
+            });
+      },
+      py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("params") = py::none());
+  m.def(
+      "integrate_rk4",
+      [](PyModel& s, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+         const Eigen::VectorXd& tau, double dt, int steps, const py::object& params) {
+        const long n = s.model.nq();
+        if (!(dt > 0) || !std::isfinite(dt)) throw py::value_error("dt must be positive");
+        if (steps < 1) throw py::value_error("steps must be at least 1");
+        ParameterLayout layout;
+        const Eigen::VectorXd p = classicalParams(s, params, layout);
+        Eigen::VectorXd x = vectorArg(q, n, "q"), v = vectorArg(dq, n, "dq");
+        const Eigen::VectorXd t = vectorArg(tau, n, "tau");
+        Eigen::VectorXd k1(n), k2(n), k3(n), k4(n), xs(n), vs(n);
+        const double h = dt / steps;
+        bool ok = true;
+        {
+          py::gil_scoped_release release;
+          for (int i = 0; i < steps && ok; ++i) {
+            ok = ok && forwardDynamics(s.model, s.data, x, v, t, p, layout, k1);
+            xs = x + 0.5 * h * v;
+            vs = v + 0.5 * h * k1;
+            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k2);
+            const Eigen::VectorXd v2 = vs;
+            xs = x + 0.5 * h * v2;
+            vs = v + 0.5 * h * k2;
+            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k3);
+            const Eigen::VectorXd v3 = vs;
+            xs = x + h * v3;
+            vs = v + h * k3;
+            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k4);
+            x += h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + vs);
+            v += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+          }
+        }
+        if (!ok)
+          throw py::value_error(
+              "the mass matrix is not positive definite for these "
+              "parameters");
+        if (!x.allFinite() || !v.allFinite())
+          throw py::value_error("the integration diverged (non-finite state)");
+        return py::make_tuple(x, v);
+      },
+      py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("tau"), py::arg("dt"),
+      py::arg("steps") = 1, py::arg("params") = py::none(),
+      "Integrates A(q) ddq + b + c + friction = tau with tau held constant over dt, by `steps` "
+      "classical Runge-Kutta steps. Returns (q, dq).");
+
+  py::class_<PyIk>(m, "IkSolver")
+      .def(py::init([](const PyModel& s, double tolerance, int max_iterations, int max_attempts,
+                       double max_time, double orientation_weight, unsigned seed) {
+             if (!(tolerance > 0)) throw py::value_error("tolerance must be positive");
+             if (max_iterations < 1) throw py::value_error("max_iterations must be >= 1");
+             if (max_attempts < 1) throw py::value_error("max_attempts must be >= 1");
+             if (!(max_time >= 0)) throw py::value_error("max_time must be >= 0 (0: no limit)");
+             if (!(orientation_weight >= 0))
+               throw py::value_error("orientation_weight must be >= 0");
+             IkOptions o;
+             o.tolerance = tolerance;
+             o.max_iterations = max_iterations;
+             o.max_attempts = max_attempts;
+             o.max_time = max_time;
+             o.orientation_weight = orientation_weight;
+             o.seed = seed;
+             return std::make_unique<PyIk>(s, o);
+           }),
+           py::arg("model"), py::arg("tolerance") = 1e-5, py::arg("max_iterations") = 100,
+           py::arg("max_attempts") = 100, py::arg("max_time") = 0.005,
+           py::arg("orientation_weight") = 0.3, py::arg("seed") = 42u)
+      .def_property_readonly("lower", [](const PyIk& k) { return k.solver.lower(); })
+      .def_property_readonly("upper", [](const PyIk& k) { return k.solver.upper(); })
+      .def(
+          "solve",
+          [](PyIk& k, const Eigen::Matrix4d& target, const Eigen::VectorXd& q0) {
+            const Eigen::VectorXd start = vectorArg(q0, k.n, "q0");
+            Eigen::VectorXd q(k.n);
+            IkResult r;
+            {
+              py::gil_scoped_release release;
+              r = k.solver.solve(poseArg(target), start, q);
+            }
+            py::dict d;
+            d["q"] = q;
+            d["success"] = r.success();
+            d["status"] = std::string(toString(r.status));
+            d["error"] = r.error;
+            d["iterations"] = r.iterations;
+            d["attempts"] = r.attempts;
+            return d;
+          },
+          py::arg("target"), py::arg("q0"))
+      .def(
+          "pose",
+          [](PyIk& k, const Eigen::VectorXd& q) {
+            Eigen::Isometry3d T;
+            k.solver.kinematics().pose(vectorArg(q, k.n, "q"), T);
+            return Eigen::Matrix4d(T.matrix());
+          },
+          py::arg("q"))
+      .def(
+          "jacobian",
+          [](PyIk& k, const Eigen::VectorXd& q) {
+            Eigen::Isometry3d T;
+            Matrix6Xd J(6, k.n);
+            k.solver.kinematics().poseAndJacobian(vectorArg(q, k.n, "q"), T, J);
+            return Eigen::MatrixXd(J);
+          },
+          py::arg("q"));
+}

@@ -1,0 +1,211 @@
+"""Inverse kinematics: seed 004's two-link closed form (8.17), the IK solver's own Jacobian against
+Pinocchio and finite differences, velocity IK on the redundant Panda (commanded twist reproduced,
+null-space motion), damping at a singularity, resolved-rate tracking, and position IK checked with
+Pinocchio's forward kinematics and the joint limits; the ``ik`` command."""
+
+from __future__ import annotations
+
+import json
+
+import mindyn
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import assert_close, load_urdf_pair, pinocchio_model, random_state
+from mindyn import _core
+from mindyn.cli import main
+from mindyn.ik import (
+    circle_path,
+    damped_pinv,
+    ik_solve,
+    limits_gradient,
+    line_path,
+    pose_error,
+    pose_from_xyz_rpy,
+    resolved_rate,
+    velocity_ik,
+)
+
+LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+def test_two_link_closed_form_8_17(rng):
+    """Seed 004, (8.17): dq1 = (c12 dx + s12 dy) / (l1 s2),
+    dq2 = -((l1 c1 + l2 c12) dx + (l1 s1 + l2 s12) dy) / (l1 l2 s2); det J = l1 l2 s2.
+    planar2h moves in the base x-y plane, the arm along +x at q = 0 (l1 = l2 = 0.5 m)."""
+    robot = mindyn.load("planar2h")
+    l1 = l2 = 0.5
+    for _ in range(10):
+        q1 = rng.uniform(-np.pi, np.pi)
+        q2 = rng.choice([-1, 1]) * rng.uniform(0.2, np.pi - 0.2)  # away from sin q2 = 0
+        q = np.array([q1, q2])
+        dx, dy = rng.uniform(-1, 1, 2)
+        c1, s1, s2 = np.cos(q1), np.sin(q1), np.sin(q2)
+        c12, s12 = np.cos(q1 + q2), np.sin(q1 + q2)
+        expected = [
+            (c12 * dx + s12 * dy) / (l1 * s2),
+            -((l1 * c1 + l2 * c12) * dx + (l1 * s1 + l2 * s12) * dy) / (l1 * l2 * s2),
+        ]
+        dq = velocity_ik(robot, q, [dx, dy], task=[0, 1])
+        assert_close(dq, expected, 1e-12, "velocity IK vs seed 004 (8.17)")
+        J = robot.jacobian(q)[:2]
+        assert np.linalg.det(J) == pytest.approx(l1 * l2 * s2, rel=1e-12)
+
+
+@pytest.mark.parametrize("name", ["puma560", "zcr07s", "stanford", "ur5", "panda"])
+def test_ik_solver_kinematics_match_pinocchio_and_finite_differences(name, rng):
+    if name in ("ur5", "panda"):
+        robot, model = load_urdf_pair(name, tip="tool0" if name == "ur5" else "panda_hand")
+        frame = "tool0" if name == "ur5" else "panda_hand"
+    else:
+        robot = mindyn.load(name)
+        model, frame = pinocchio_model(robot), "tool"
+    data = model.createData()
+    fid = model.getFrameId(frame)
+    solver = _core.IkSolver(robot._m)
+    h = 1e-6
+    for _ in range(3):
+        q, _, _ = random_state(robot, rng)
+        pin.framesForwardKinematics(model, data, q)
+        assert_close(solver.pose(q), data.oMf[fid].homogeneous, 1e-12, "IK chain pose vs pin")
+        J = solver.jacobian(q)
+        assert_close(J, pin.computeFrameJacobian(model, data, q, fid, LWA), 1e-12, "IK J vs pin")
+        Jfd = np.zeros_like(J)
+        for k in range(robot.n):
+            e = np.zeros(robot.n)
+            e[k] = h
+            Tp, Tm = solver.pose(q + e), solver.pose(q - e)
+            Jfd[:3, k] = (Tp[:3, 3] - Tm[:3, 3]) / (2 * h)
+            Jfd[3:, k] = pin.log3(Tp[:3, :3] @ Tm[:3, :3].T) / (2 * h)
+        assert_close(J, Jfd, 1e-8, "IK J vs finite differences")
+
+
+def test_velocity_ik_on_the_redundant_panda(rng):
+    robot, _ = load_urdf_pair("panda")
+    done = 0
+    while done < 5:
+        q, _, _ = random_state(robot, rng)
+        J = robot.jacobian(q)
+        if np.linalg.svd(J, compute_uv=False)[-1] < 0.05:
+            continue  # near a singularity the damping applies (tested below)
+        done += 1
+        twist = rng.uniform(-0.5, 0.5, 6)
+        dq = velocity_ik(robot, q, twist)
+        assert_close(J @ dq, twist, 1e-10, "Panda velocity IK reproduces the twist")
+        # the minimum-norm solution: orthogonal to the null space
+        null = np.linalg.svd(J)[2][6:].T
+        assert np.abs(null.T @ dq).max() < 1e-10
+        # null-space motion changes dq, not the twist
+        for z in (rng.uniform(-1, 1, 7), "limits"):
+            dq2 = velocity_ik(robot, q, twist, nullspace=z)
+            assert_close(J @ dq2, twist, 1e-10, "Panda velocity IK with null-space motion")
+            assert np.linalg.norm(dq2 - dq) > 1e-3
+        # self-motion that lowers sum ((q - q_mid) / half_range)^2, the twist staying zero
+        dq3 = velocity_ik(robot, q, np.zeros(6), nullspace="limits")
+        assert limits_gradient(robot, q) @ dq3 > 0
+        assert np.abs(J @ dq3).max() < 1e-10
+
+
+def test_damped_least_squares_near_a_singularity():
+    """UR5 with the wrist nearly straight (q5 ~ 0): the plain pseudo-inverse asks for huge joint
+    speeds; the damped one stays bounded and still follows the achievable directions."""
+    robot, _ = load_urdf_pair("ur5")
+    q = np.array([0.3, -1.2, 1.4, -0.6, 1e-6, 0.5])
+    J = robot.jacobian(q)
+    twist = np.array([0.0, 0.0, 0.0, 0.1, 0.2, 0.0])
+    plain = np.linalg.pinv(J) @ twist
+    dq = velocity_ik(robot, q, twist)
+    assert np.linalg.norm(plain) > 1e3
+    assert np.linalg.norm(dq) < 20
+    assert twist @ (J @ dq) > 0
+    assert_close(damped_pinv(J, threshold=0.0), np.linalg.pinv(J), 1e-6, "undamped == pinv")
+
+
+def test_resolved_rate_tracks_a_circle_and_a_line(rng):
+    robot, model = load_urdf_pair("panda")
+    q0 = np.array([0.1, -0.3, 0.2, -2.0, 0.1, 1.8, 0.6])
+    T0 = robot.fk(q0)
+    res = resolved_rate(
+        robot, q0, circle_path(T0, 0.05, 2.0, normal=(0, 1, 1)), 2.0, nullspace="limits"
+    )
+    assert res.max_position_error < 2e-4 and res.max_orientation_error < 1e-4
+    # independent check of the end point with Pinocchio
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, res.q[-1])
+    fid = model.getFrameId("panda_hand")
+    assert np.linalg.norm(data.oMf[fid].translation - T0[:3, 3]) < 2e-3
+    T1 = T0.copy()
+    T1[:3, 3] += [0.05, -0.1, 0.05]
+    T1[:3, :3] = pin.rpy.rpyToMatrix(0.2, -0.1, 0.3) @ T0[:3, :3]
+    res = resolved_rate(robot, q0, line_path(T0, T1, 1.0), 2.0)
+    assert np.abs(pose_error(robot.fk(res.q[-1]), T1)).max() < 1e-6
+
+
+@pytest.mark.parametrize("name", ["ur5", "panda", "puma560"])
+def test_position_ik_checked_with_pinocchio(name, rng):
+    if name == "puma560":
+        robot = mindyn.load(name)
+        model, frame = pinocchio_model(robot), "tool"
+    else:
+        robot, model = load_urdf_pair(name)
+        frame = "wrist_3_link" if name == "ur5" else "panda_hand"
+    data = model.createData()
+    fid = model.getFrameId(frame)
+    lo, hi = robot.limits["lower"], robot.limits["upper"]
+    for _ in range(10):
+        qt, _, _ = random_state(robot, rng)
+        target = robot.fk(qt)
+        q, ok = mindyn.ik(robot, target)
+        assert ok
+        assert np.all(q >= lo) and np.all(q <= hi)
+        pin.framesForwardKinematics(model, data, q)
+        M = data.oMf[fid]
+        err = np.concatenate(
+            [target[:3, 3] - M.translation, pin.log3(target[:3, :3] @ M.rotation.T)]
+        )
+        assert np.abs(err).max() <= 1e-5
+
+
+def test_position_ik_status_and_errors():
+    robot = mindyn.load("puma560")
+    far = pose_from_xyz_rpy([3.0, 0.0, 0.0], [0, 0, 0])
+    r = ik_solve(robot, far, max_time=0.02)
+    assert not r.success and r.status in ("not converged", "timeout") and r.error > 1.0
+    q, ok = mindyn.ik(robot, far, max_time=0.02)
+    assert not ok and q.shape == (6,)
+    with pytest.raises(ValueError, match="4x4"):
+        mindyn.ik(robot, np.eye(3))
+    bad = np.eye(4)
+    bad[0, 0] = 2.0
+    with pytest.raises(ValueError, match="not a rotation"):
+        mindyn.ik(robot, bad)
+    with pytest.raises(ValueError, match=r"q0 has shape \(5,\)"):
+        mindyn.ik(robot, np.eye(4), q0=np.zeros(5))
+    # same seed, same answer
+    target = robot.fk(np.array([0.3, -0.4, 0.5, 0.2, 0.6, -0.3]))
+    assert np.array_equal(ik_solve(robot, target, seed=7).q, ik_solve(robot, target, seed=7).q)
+
+
+def test_pose_from_xyz_rpy_is_urdf_convention():
+    T = pose_from_xyz_rpy([1, 2, 3], [0.1, -0.2, 0.3])
+    assert_close(T[:3, :3], pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), 1e-14, "rpy vs pin.rpy")
+    assert_close(T[:3, 3], [1, 2, 3], 0.0, "xyz")
+
+
+def test_ik_command(capsys):
+    robot = mindyn.load("puma560")
+    q = np.array([0.3, -0.4, 0.5, 0.2, 0.6, -0.3])
+    T = robot.fk(q)
+    rpy = pin.rpy.matrixToRpy(T[:3, :3])
+    args = ["ik", "puma560", "--xyz", *map(str, T[:3, 3]), "--rpy", *map(str, rpy)]
+    assert main(args + ["--format", "json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["success"] and out["status"] == "converged"
+    assert np.abs(pose_error(robot.fk(out["q"]), T)).max() <= 1e-5
+    assert main(args) == 0
+    assert "converged" in capsys.readouterr().out
+    assert main(["ik", "puma560", "--xyz", "3", "0", "0", "--timeout", "0.02"]) == 1
+    assert "no joint solution" in capsys.readouterr().err
+    assert main(["ik", "puma560", "--xyz", "0.5", "0", "0", "--q0", "1", "2"]) == 2
+    err = capsys.readouterr().err
+    assert err == "mindyn: error: --q0 needs 6 values, got 2\n"
