@@ -739,7 +739,7 @@ def test_rounded_right_angles_are_flagged_and_snapped(tmp_path, rng):
     assert not snapped.margin["near_degenerate"]
     assert snapped.margin["smallest_kept"] > 1e-3
     assert len(snapped.snapped) == 4  # joints 2, 4, 5, 6 carry the rounded right angles
-    assert all("snapped" in s for s in snapped.snapped)
+    assert all("multiples of pi/2" in s and " -> (" in s for s in snapped.snapped)
     assert kept(snapped) == kept(exact)
     # the snapped model is the one the base regressor uses; it reproduces its own torques
     check_against_rnea(
