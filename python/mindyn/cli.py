@@ -199,6 +199,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="round joint rotations within RAD (default 1e-3) of multiples of pi/2",
     )
     p.set_defaults(func=cmd_base)
+    from . import cli_demo, cli_identify
+
+    cli_identify.register(sub)
+    cli_demo.register(sub)
     return parser
 
 
@@ -207,7 +211,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except RobotFileNotFoundError as e:
+    except (RobotFileNotFoundError, FileNotFoundError) as e:
         print(f"mindyn: error: {e}", file=sys.stderr)
         return 2
     except (ModelError, ValueError, IndexError) as e:
