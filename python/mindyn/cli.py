@@ -10,7 +10,16 @@ import sys
 
 import numpy as np
 
-from . import ModelError, RobotFileNotFoundError, base_parameters, bundled_robots, cli_control, load
+from . import (
+    ModelError,
+    RobotFileNotFoundError,
+    base_parameters,
+    bundled_robots,
+    cli_control,
+    cli_demo,
+    cli_identify,
+    load,
+)
 
 ROBOT_HELP = (
     "a bundled robot (" + ", ".join(bundled_robots()) + "), a URDF file or a YAML DH/MDH table"
@@ -206,6 +215,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.set_defaults(func=cmd_base)
     cli_control.register(sub)
+    cli_identify.register(sub)
+    cli_demo.register(sub)
     return parser
 
 
@@ -214,7 +225,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except RobotFileNotFoundError as e:
+    except (RobotFileNotFoundError, FileNotFoundError) as e:
         print(f"mindyn: error: {e}", file=sys.stderr)
         return 2
     except (ModelError, ValueError, IndexError) as e:

@@ -1,0 +1,260 @@
+"""CLI: ``mindyn demo`` -- the whole chain on one robot, every file in one folder.
+
+base parameters -> optimised excitation -> simulated measurement with noise -> identification
+(dynamic and energy models) -> validation on a second trajectory -> generated code.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import base_parameters, bundled_robots, load
+
+
+def _step(no: int, title: str) -> float:
+    print(f"\n[{no}] {title}", flush=True)
+    return time.perf_counter()
+
+
+def _done(t0: float) -> None:
+    print(f"    ({time.perf_counter() - t0:.1f} s)", flush=True)
+
+
+def _joints(values, fmt: str = "{:8.3g}") -> str:
+    return " ".join(fmt.format(v) for v in values)
+
+
+def cmd_demo(args: argparse.Namespace) -> int:
+    from .data import convert_torque, read_csv, write_csv
+    from .excitation import excitation_limits, optimize_excitation, random_trajectory
+    from .identification import identify, true_base_values, validate
+    from .report import SEED001_TABLE6, format_table, plot_torques
+    from .simulate import SensorNoise, noise_from_spec, simulate_tracking
+
+    t_all = time.perf_counter()
+    robot = load(args.robot)
+    out = Path(args.out or f"mindyn-demo-{robot.name}")
+    out.mkdir(parents=True, exist_ok=True)
+    print(f"mindyn demo: {robot.name} ({robot.n} joints), files in {out}/")
+    if robot.synthetic_inertia:
+        print("    (the description's inertial values are synthetic: they play the true robot)")
+
+    # 1. base parameters ------------------------------------------------------------------------
+    t0 = _step(1, "base parameters (projection method, with rotor inertia and friction)")
+    base = base_parameters(robot, rotor=True, friction=True)
+    counts = {k: s["n"] for k, s in base.sets.items()}
+    print(
+        f"    {base.n} base parameters of {len(base.classical_names)} classical "
+        f"(Lagrangian {counts['lagrangian']}, energy {counts['energy']}, equations of motion "
+        f"{counts['eom']}); computed in {base.seconds * 1e3:.1f} ms"
+    )
+    print("    " + " ".join(base.names))
+    (out / "base_parameters.json").write_text(json.dumps(base.to_dict(), indent=2) + "\n")
+    _done(t0)
+
+    # 2. excitation -------------------------------------------------------------------------------
+    full = args.full
+    t0 = _step(2, f"excitation trajectory ({'full' if full else 'quick'} optimisation)")
+    exc = optimize_excitation(
+        robot,
+        base=base,
+        harmonics=args.harmonics,
+        freq=0.1,
+        criterion="cond",
+        starts=6 if full else 2,
+        maxiter=150 if full else 30,
+        seed=args.seed,
+        progress=True,
+    )
+    paths = exc.save(out / "excitation.csv")
+    print(
+        f"    condition number of the stacked base regressor {exc.initial_value:.4g} -> "
+        f"{exc.value:.4g}; {args.harmonics} harmonics, 0.1 Hz, 10 s; wrote {paths['csv'].name}, "
+        f"{paths['json'].name}, {paths['png'].name}"
+    )
+    lim, _ = excitation_limits(robot)
+    val_traj = random_trajectory(robot, seed=args.seed + 1000, limits=lim)
+    t = np.linspace(0, val_traj.period, 1001)
+    (out / "validation_trajectory.json").write_text(
+        json.dumps({"trajectory": val_traj.to_dict()}, indent=2) + "\n"
+    )
+    from .excitation import criterion_value
+
+    print(
+        f"    validation trajectory: random Fourier series within the limits (condition number "
+        f"{criterion_value(base, *val_traj.evaluate(t[::10]), 'cond'):.4g})"
+    )
+    _done(t0)
+
+    # 3. simulated measurement -------------------------------------------------------------------
+    t0 = _step(3, "simulated measurement (true parameters, computed-torque tracking at 250 Hz)")
+    ref_tau = robot.inverse_dynamics(*exc.trajectory.evaluate(t[::5]))
+    sd = noise_from_spec(f"{args.noise:g}%", robot, "torque", ref_tau)
+    noise = SensorNoise(torque=sd, quantization=2 * np.pi / 2**20)
+    kw = dict(rotor=True, friction=True, noise=noise, rate=250.0)
+    log_e = simulate_tracking(robot, exc.trajectory, seed=args.seed + 1, **kw)
+    log_v = simulate_tracking(robot, val_traj, seed=args.seed + 2, **kw)
+    permille = bool(np.isfinite(robot.drives["rated_torque"]).all()) and bool(
+        np.isfinite(robot.drives["gear_ratio"]).all()
+    )
+    files = {}
+    for name, log in (("measurement", log_e), ("validation", log_v)):
+        p = log.save(out / f"{name}.csv", robot.name)
+        if permille:  # log torques the way seed 001's controller does: per mille of rated torque
+            scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
+            write_csv(p, log.t, log.q, log.tau / scale, dq=log.dq)
+        files[name] = p
+    print(
+        f"    torque noise sd per joint ({args.noise:g} % of the effort limit) [N m]: "
+        f"{_joints(sd)}; 20-bit encoder"
+    )
+    print(
+        "    max tracking error per joint [deg]: "
+        + _joints(np.degrees(log_e.info["max_tracking_error"]))
+    )
+    print(
+        f"    wrote {files['measurement'].name}, {files['validation'].name} ({log_e.t.size} "
+        "samples each: t, q, dq, tau"
+        + (", torques in per mille of rated torque as in seed 001" if permille else "")
+        + ") and their .truth.json"
+    )
+    _done(t0)
+
+    # 4. identification ---------------------------------------------------------------------------
+    t0 = _step(4, "identification (weighted least squares, RSD pruning at 30 %)")
+    unit = "permille" if permille else "Nm"
+    data = read_csv(files["measurement"], robot, torque_unit=unit)
+    vdata = read_csv(files["validation"], robot, torque_unit=unit)
+    dv = data.processing["acceleration"]
+    print(
+        f"    read {data.m} samples; accelerations by Butterworth order {dv['order']}, "
+        f"{dv['cutoff_Hz']:g} Hz, zero-phase, + central differences"
+    )
+    truth = true_base_values(base, {"names": log_e.param_names, "values": log_e.params})
+    results = {}
+    for model in ("dynamic", "energy"):
+        res = identify(robot, data, model=model, base=base, integration="zoh", energy_window=10)
+        fit, val = validate(res, data), validate(res, vdata)
+        results[model] = (res, fit, val)
+        kept = len(res.names)
+        err = np.abs(res.full - truth)
+        print(
+            f"    {model:7s} model: {res.rows} equations, {base.n} estimated, {kept} kept "
+            f"({len(res.removed)} removed), scaled condition number {res.cond:.3g}, "
+            f"{res.seconds:.2f} s"
+        )
+        print(f"      RMS error [N m], identification data: {_joints(fit['rms'])}")
+        print(f"      RMS error [N m], validation data:     {_joints(val['rms'])}")
+        big = np.argsort(-np.abs(truth))[:3]
+        print(
+            "      largest base parameters, estimate / true: "
+            + ", ".join(f"{base.names[b]} {res.full[b]:.4g} / {truth[b]:.4g}" for b in big)
+        )
+        (out / f"identification_{model}.txt").write_text(format_table(res, truth) + "\n")
+        doc = res.to_dict()
+        doc["fit"] = {"rms": fit["rms"].tolist()}
+        doc["validation"] = {"rms": val["rms"].tolist(), "relative": val["relative"].tolist()}
+        doc["true_values"] = truth.tolist()
+        doc["max_abs_error"] = float(err.max())
+        (out / f"identification_{model}.json").write_text(json.dumps(doc, indent=2) + "\n")
+        plot_torques(
+            out / f"torque_identification_{model}.png",
+            data.t,
+            data.tau,
+            fit["tau_hat"],
+            f"{robot.name}, {model} model: excitation trajectory",
+        )
+        plot_torques(
+            out / f"torque_validation_{model}.png",
+            vdata.t,
+            vdata.tau,
+            val["tau_hat"],
+            f"{robot.name}, {model} model: validation trajectory",
+        )
+    print(f"    noise sd (reference) [N m]:               {_joints(sd)}")
+    if robot.name == "zcr07s":
+        print(
+            "    seed 001 Table 6 (real robot), excitation:  "
+            + _joints(SEED001_TABLE6["excitation"])
+        )
+        print(
+            "    seed 001 Table 6 (real robot), validation:  "
+            + _joints(SEED001_TABLE6["validation"])
+        )
+    print(
+        "    wrote identification_{dynamic,energy}.{json,txt} and "
+        "torque_{identification,validation}_{dynamic,energy}.png"
+    )
+    _done(t0)
+
+    # 5. generated code ---------------------------------------------------------------------------
+    t0 = _step(5, "generated code")
+    _codegen(args.robot, out)
+    _done(t0)
+    print(f"\ndone in {time.perf_counter() - t_all:.1f} s; everything is in {out}/")
+    return 0
+
+
+def _codegen(robot_arg: str, out: Path) -> None:
+    """Runs ``mindyn codegen`` when this build has it (another part of the package)."""
+    try:
+        from . import codegen  # noqa: F401
+    except ImportError:
+        print("    unavailable: this build of mindyn has no code generator (mindyn.codegen)")
+        return
+    from .cli import build_parser, main
+
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    if "codegen" not in sub.choices:
+        print("    unavailable: this build of mindyn has no 'codegen' command")
+        return
+    for lang, ext in (("c", "c"), ("st", "st")):
+        target = out / f"inverse_dynamics.{ext}"
+        rc = main(
+            ["codegen", robot_arg, "--lang", lang, "--rotor", "--friction", "-o", str(target)]
+        )
+        print(f"    {'wrote ' + target.name if rc == 0 else 'codegen --lang ' + lang + ' failed'}")
+
+
+def register(sub) -> None:
+    """Adds ``demo`` to the ``mindyn`` subcommands."""
+    p = sub.add_parser(
+        "demo",
+        help="the whole chain on a robot: base parameters, excitation, simulated measurement, "
+        "identification, validation, generated code",
+        description="Runs the identification chain end to end on a robot (default zcr07s) and "
+        "puts every file in one folder: base parameters, an optimised excitation trajectory, a "
+        "simulated noisy measurement of the robot tracking it (and of a validation trajectory), "
+        "identification with the dynamic and the energy model, validation, plots, and generated "
+        "code when this build has the code generator.",
+    )
+    p.add_argument(
+        "robot",
+        nargs="?",
+        default="zcr07s",
+        metavar="ROBOT",
+        help="a bundled robot (" + ", ".join(bundled_robots()) + "), URDF or YAML; default zcr07s",
+    )
+    p.add_argument("--out", metavar="DIR", help="output folder (default ./mindyn-demo-ROBOT)")
+    p.add_argument("--full", action="store_true", help="full excitation optimisation (slower)")
+    p.add_argument(
+        "--harmonics",
+        type=int,
+        default=10,
+        help="harmonics of the excitation (default 10; seed 001 uses 5, enough for the dynamic "
+        "model but not for the energy model, whose regressor needs richer motion)",
+    )
+    p.add_argument(
+        "--noise",
+        type=float,
+        default=1.0,
+        help="torque noise sd in %% of each joint's effort limit (default 1)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.set_defaults(func=cmd_demo)

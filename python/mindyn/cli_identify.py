@@ -1,0 +1,433 @@
+"""CLI: ``mindyn excite``, ``mindyn simulate``, ``mindyn identify``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from . import base_parameters, bundled_robots, load
+
+ROBOT_HELP = (
+    "a bundled robot (" + ", ".join(bundled_robots()) + "), a URDF file or a YAML DH/MDH table"
+)
+
+
+def _floats(text: str, n: int, what: str) -> np.ndarray:
+    try:
+        v = np.array([float(x) for x in text.split(",")])
+    except ValueError:
+        raise ValueError(f"{what}: '{text}' is not a comma-separated list of numbers") from None
+    if v.size == 1:
+        v = np.full(n, v[0])
+    if v.size != n:
+        raise ValueError(f"{what}: {v.size} values for {n} joints")
+    return v
+
+
+# ---------------------------------------------------------------------------------------------
+# excite
+# ---------------------------------------------------------------------------------------------
+def cmd_excite(args: argparse.Namespace) -> int:
+    from .excitation import optimize_excitation
+
+    robot = load(args.robot, tip=args.tip)
+    start = None
+    if args.start:
+        start = _floats(args.start, robot.n, "--start")
+        if args.degrees:
+            rev = np.array([t == "revolute" for t in robot.joint_types])
+            start = np.where(rev, np.radians(start), start)
+    res = optimize_excitation(
+        robot,
+        harmonics=args.harmonics,
+        freq=args.freq,
+        criterion=args.criterion,
+        starts=args.starts,
+        seed=args.seed,
+        rotor=args.rotor,
+        friction=args.friction,
+        samples=args.samples,
+        maxiter=args.maxiter,
+        margin=args.margin,
+        start=start,
+        progress=not args.quiet,
+    )
+    paths = res.save(args.output, rate=args.rate)
+    shown = {"cond": "condition number", "logdet": "log det(W^T W / rows)"}.get(
+        res.criterion, "log Hadamard ratio"
+    )
+    print(
+        f"{robot.name}: {res.trajectory.harmonics} harmonics at {res.trajectory.freq:g} Hz "
+        f"(period {res.trajectory.period:g} s), {len(res.base_names)} base parameters"
+    )
+    print(f"  {shown}: {res.value:.6g} (initial guess {res.initial_value:.6g})")
+    print(f"  limits respected on a fine grid (largest relative excess {res.max_violation:.2g})")
+    print(f"  wrote {paths['csv']} ({args.rate:g} Hz), {paths['json']}, {paths['png']}")
+    return 0
+
+
+# ---------------------------------------------------------------------------------------------
+# simulate
+# ---------------------------------------------------------------------------------------------
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from .data import convert_torque, write_csv
+    from .simulate import CONTROLLERS, SensorNoise, load_reference, noise_from_spec, simulate
+
+    robot = load(args.robot, tip=args.tip)
+    ref = load_reference(args.trajectory)
+    if ref.n != robot.n:
+        raise ValueError(
+            f"{args.trajectory} has {ref.n} joints; robot '{robot.name}' has {robot.n}"
+        )
+    rate = 1.0 / args.period if args.period else args.rate
+    ref_tau = None
+    if args.torque_noise and args.torque_noise.strip().endswith("%"):
+        t = np.linspace(0, getattr(ref, "period", getattr(ref, "duration", 1.0)), 200)
+        ref_tau = robot.inverse_dynamics(*ref.evaluate(t))
+    noise = SensorNoise(
+        torque=noise_from_spec(args.torque_noise, robot, "torque", ref_tau),
+        position=noise_from_spec(args.position_noise, robot, "position"),
+        velocity=noise_from_spec(args.velocity_noise, robot, "velocity"),
+        quantization=noise_from_spec(args.quantization, robot, "quantization"),
+    )
+    kwargs = dict(
+        rate=rate,
+        duration=args.duration,
+        rotor=args.rotor,
+        friction=args.friction,
+        noise=noise,
+        seed=args.seed,
+    )
+    if args.mode == "tracking":
+        kwargs["substeps"] = args.substeps
+        kwargs["controller"] = CONTROLLERS[args.controller](robot, args)
+    log = simulate(robot, ref, mode=args.mode, **kwargs)
+    path = log.save(args.output, robot.name)
+    if args.torque_unit == "permille":
+        scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
+        write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq)
+    info = log.info
+    print(
+        f"{robot.name}: {info['mode']} simulation, {log.t.shape[0]} samples at {rate:g} Hz "
+        f"({info['duration_s']:g} s), rotor inertia {'on' if args.rotor else 'off'}, "
+        f"friction {'on' if args.friction else 'off'}"
+    )
+    if info["mode"] == "tracking":
+        err = np.degrees(info["max_tracking_error"])
+        print(
+            f"  controller {info['controller']}; max tracking error per joint [deg]: "
+            + " ".join(f"{e:.3g}" for e in err)
+        )
+    nz = info["noise"]
+    print("  torque noise sd per joint: " + " ".join(f"{v:.3g}" for v in nz["torque"]))
+    if any(nz["quantization"]) or any(nz["position"]) or any(nz["velocity"]):
+        print(
+            f"  encoder step {max(nz['quantization']):.3g}, position noise "
+            f"{max(nz['position']):.3g}, velocity noise {max(nz['velocity']):.3g}"
+        )
+    unit = " (torques in permille of rated torque)" if args.torque_unit == "permille" else ""
+    print(f"  wrote {path}{unit} and {path.with_name(path.stem + '.truth.json')}")
+    return 0
+
+
+# ---------------------------------------------------------------------------------------------
+# identify
+# ---------------------------------------------------------------------------------------------
+def _read(path, robot, args):
+    from .data import read_csv
+
+    return read_csv(
+        path,
+        robot=robot,
+        torque_unit=args.torque_unit,
+        filter=args.filter,
+        cutoff=args.cutoff,
+    )
+
+
+def cmd_identify(args: argparse.Namespace) -> int:
+    from .data import read_truth
+    from .identification import identify, true_base_values, validate
+    from .report import format_table, write_report
+
+    robot = load(args.robot, tip=args.tip)
+    data = _read(args.data, robot, args)
+    vdata = _read(args.validate, robot, args) if args.validate else None
+    base = base_parameters(robot, rotor=args.rotor, friction=args.friction)
+    res = identify(
+        robot,
+        data,
+        model=args.model,
+        base=base,
+        weighted=not args.ols,
+        rsd_threshold=args.rsd_threshold,
+        energy_window=args.energy_window,
+        integration=args.integration,
+        min_velocity=args.min_velocity,
+    )
+    truth_doc = read_truth(args.data)
+    truth = true_base_values(base, truth_doc) if truth_doc else None
+    fit = validate(res, data)
+    val = validate(res, vdata) if vdata is not None else None
+
+    proc = data.processing
+    extras = [x for x, on in (("rotor inertia", args.rotor), ("friction", args.friction)) if on]
+    out = [
+        f"{robot.name}: {res.model} model, {base.n} base parameters"
+        + (f" ({', '.join(extras)})" if extras else "")
+        + f", {data.m} samples at {data.rate:.4g} Hz from {args.data}",
+        f"  velocities: {_describe(proc.get('velocity', {}))}; accelerations: "
+        f"{_describe(proc.get('acceleration', {}))}"
+        + ("" if res.model == "dynamic" else " (not used by the energy model)"),
+        f"  {res.rows} equations, {res.settings.get('weighting')}; condition number of the "
+        f"column-scaled regressor {res.cond:.3g}",
+    ]
+    if res.model == "energy":
+        out.append(
+            f"  energy windows of {res.settings['energy_window']} sample interval(s), "
+            f"{res.settings['integration']} integration"
+        )
+    elif res.settings.get("equations_left_out"):
+        out.append(
+            f"  {res.settings['equations_left_out']} joint equations below "
+            f"{res.settings['min_velocity']:g} rad/s left out (Coulomb sign undetermined)"
+        )
+    if "torque" in proc and proc["torque"]["unit"] != "N m":
+        out.append(
+            "  torques converted from permille: scale "
+            + " ".join(f"{s:.4g}" for s in proc["torque"]["scale_Nm_per_unit"])
+            + " N m per unit"
+        )
+    kept = len(res.names)
+    out.append(
+        f"  {kept} of {base.n} parameters kept"
+        + (
+            f" after removing {len(res.removed)} with RSD > {args.rsd_threshold:g} %"
+            if res.removed
+            else ""
+        )
+        + (
+            " (true values from " + str(Path(args.data).with_suffix("")) + ".truth.json)"
+            if truth is not None
+            else ""
+        )
+    )
+    out.append("")
+    out.append(format_table(res, truth))
+    out.append("")
+    out.append(_rms_lines("identification data", fit))
+    if val is not None:
+        out.append(_rms_lines(f"validation data ({args.validate})", val))
+    print("\n".join(out))
+
+    doc = res.to_dict()
+    doc["data"] = {"file": str(args.data), "samples": data.m, "processing": _plain(proc)}
+    doc["fit"] = {"rms": fit["rms"].tolist(), "relative": _nan_list(fit["relative"])}
+    if val is not None:
+        doc["validation"] = {
+            "file": str(args.validate),
+            "rms": val["rms"].tolist(),
+            "relative": _nan_list(val["relative"]),
+        }
+    if truth is not None:
+        doc["true_values"] = [float(v) for v in truth]
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
+        print(f"wrote {args.json}")
+    if args.report:
+        from .excitation import excitation_limits
+
+        lim, _ = excitation_limits(robot, margin=0.0)
+        paths = write_report(args.report, res, data, vdata, val, fit["tau_hat"], lim)
+        (Path(args.report) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
+        (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
+        print(f"wrote report to {args.report}/: " + ", ".join(p.name for p in paths))
+    return 0
+
+
+def _describe(info: dict) -> str:
+    if not info or info.get("source") == "logged":
+        return "logged"
+    if info.get("filter", "").startswith("butter"):
+        return (
+            f"from {info['source'].split()[-1]}, Butterworth order {info['order']} at "
+            f"{info['cutoff_Hz']:g} Hz zero-phase + central differences"
+        )
+    if info.get("filter") == "savitzky-golay":
+        return (
+            f"from {info['source'].split()[-1]}, Savitzky-Golay order {info['polyorder']} over "
+            f"{info['window_samples']} samples"
+        )
+    return f"from {info['source'].split()[-1]}, central differences (no filter)"
+
+
+def _rms_lines(label: str, v: dict) -> str:
+    rms = " ".join(f"{x:9.4g}" for x in v["rms"])
+    rel = " ".join(f"{100 * x:8.2f}%" if math.isfinite(x) else f"{'-':>9}" for x in v["relative"])
+    return f"RMS torque error on {label}:\n  per joint  {rms}\n  relative   {rel}"
+
+
+def _nan_list(a):
+    return [float(x) if math.isfinite(x) else None for x in a]
+
+
+def _plain(d):
+    if isinstance(d, dict):
+        return {k: _plain(v) for k, v in d.items()}
+    if isinstance(d, (list, tuple)):
+        return [_plain(v) for v in d]
+    if isinstance(d, (np.floating, float)):
+        return float(d) if math.isfinite(d) else None
+    if isinstance(d, np.integer):
+        return int(d)
+    return d
+
+
+# ---------------------------------------------------------------------------------------------
+def register(sub) -> None:
+    """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
+    from .simulate import CONTROLLERS
+
+    p = sub.add_parser(
+        "excite",
+        help="optimised Fourier excitation trajectory for identification",
+        description="Finite Fourier series per joint, zero velocity and acceleration at start and "
+        "end, optimised (SLSQP, several random starts) for a conditioning criterion of the "
+        "stacked base regressor under the robot's position, velocity and acceleration limits. "
+        "Writes the sampled trajectory (CSV), the coefficients (JSON, same name) and a plot (PNG).",
+    )
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    p.add_argument("--harmonics", type=int, default=5, help="harmonics N (default 5)")
+    p.add_argument("--freq", type=float, default=0.1, help="base frequency in Hz (default 0.1)")
+    p.add_argument(
+        "--criterion",
+        choices=["cond", "logdet", "hadamard"],
+        default="cond",
+        help="condition number (default), D-optimality, or the Hadamard-bound ratio of seed 001",
+    )
+    p.add_argument("--starts", type=int, default=3, help="random starting guesses (default 3)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--maxiter", type=int, default=100, help="SLSQP iterations per start")
+    p.add_argument("--samples", type=int, default=100, help="regressor samples per period")
+    p.add_argument(
+        "--margin", type=float, default=0.05, help="fraction the limits are tightened by"
+    )
+    p.add_argument("--rotor", action="store_true", help="base parameters with rotor inertia")
+    p.add_argument("--friction", action="store_true", help="base parameters with friction")
+    p.add_argument("--start", help="prescribed start position q1,...,qn (rad, m)")
+    p.add_argument("--degrees", action="store_true", help="--start of revolute joints in degrees")
+    p.add_argument("--rate", type=float, default=250.0, help="CSV sample rate in Hz (default 250)")
+    p.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    p.add_argument("-o", "--output", required=True, metavar="CSV", help="trajectory CSV to write")
+    p.set_defaults(func=cmd_excite)
+
+    p = sub.add_parser(
+        "simulate",
+        help="simulated joint log along a trajectory (stand-in for a robot)",
+        description="Produces what a joint controller would log (t, q, dq, tau): the robot with "
+        "its true parameters integrated (RK4) under a tracking controller, or torques from "
+        "inverse dynamics along the reference (--mode inverse); optional sensor noise and "
+        "encoder quantisation. Also writes <output>.truth.json with the true parameters. "
+        "Closed-loop adaptive PD, computed torque or PD with the controller at its own period: "
+        "'mindyn track'.",
+    )
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    p.add_argument(
+        "--trajectory",
+        required=True,
+        help="reference: JSON of 'mindyn excite' or a CSV t, q, [dq], [ddq]",
+    )
+    p.add_argument("--mode", choices=["tracking", "inverse"], default="tracking")
+    p.add_argument(
+        "--controller",
+        choices=sorted(CONTROLLERS),
+        default="computed-torque",
+        help="tracking controller (default computed-torque: computed torque + PD)",
+    )
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--rate", type=float, default=250.0, help="control and log rate, Hz (250)")
+    g.add_argument("--period", type=float, help="control and log period in s (1 / rate)")
+    p.add_argument("--duration", type=float, help="seconds (default: one period of the reference)")
+    p.add_argument("--substeps", type=int, default=4, help="RK4 steps per control period (4)")
+    p.add_argument("--rotor", action="store_true", help="true robot with rotor inertia")
+    p.add_argument("--friction", action="store_true", help="true robot with friction")
+    p.add_argument(
+        "--torque-noise",
+        metavar="SD",
+        help="torque noise sd: one value, one per joint (comma-separated), or P%% of each "
+        "joint's effort limit",
+    )
+    p.add_argument("--position-noise", metavar="SD", help="position noise sd (rad, m)")
+    p.add_argument("--velocity-noise", metavar="SD", help="velocity noise sd (rad/s, m/s)")
+    p.add_argument("--quantization", metavar="STEP", help="encoder step (rad, m)")
+    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille"],
+        default="Nm",
+        help="write torques in N m or in permille of rated torque (drive table)",
+    )
+    p.add_argument("-o", "--output", required=True, metavar="CSV", help="log to write")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser(
+        "identify",
+        help="identify base parameters from a joint log (dynamic or energy model)",
+        description="Least-squares identification of the base parameters from a CSV log "
+        "(t, q1..qn, [dq1..dqn], tau1..taun) with statistics (RSD), pruning of parameters "
+        "with large RSD, validation on a second log, JSON output and a plot report.",
+    )
+    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    p.add_argument("data", help="CSV log: t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun")
+    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    p.add_argument("--model", choices=["dynamic", "energy"], default="dynamic")
+    p.add_argument("--rotor", action="store_true", help="identify rotor inertia Ia")
+    p.add_argument("--friction", action="store_true", help="identify Fv, Fc per joint")
+    p.add_argument("--validate", metavar="CSV", help="second log for validation")
+    p.add_argument("--json", metavar="FILE", help="write the results as JSON")
+    p.add_argument("--report", metavar="DIR", help="write plots and tables to DIR")
+    p.add_argument(
+        "--rsd-threshold",
+        type=float,
+        default=30.0,
+        help="remove parameters with RSD above this %% (default 30; 0 keeps all)",
+    )
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille"],
+        default="Nm",
+        help="logged torque unit; permille: value x rated torque x gear ratio / 1000",
+    )
+    p.add_argument(
+        "--filter",
+        choices=["butter", "savgol", "none"],
+        default="butter",
+        help="filter for velocities/accelerations derived from the log",
+    )
+    p.add_argument(
+        "--cutoff", type=float, help="Butterworth cutoff in Hz (default min(10, rate/10))"
+    )
+    p.add_argument("--ols", action="store_true", help="ordinary instead of weighted least squares")
+    p.add_argument(
+        "--energy-window", type=int, default=10, help="sample intervals per energy equation"
+    )
+    p.add_argument(
+        "--integration",
+        choices=["simpson", "trapezoid", "zoh"],
+        default="simpson",
+        help="energy model integration rule (zoh: torque held over each period)",
+    )
+    p.add_argument(
+        "--min-velocity",
+        type=float,
+        default=0.01,
+        help="dynamic model with friction: leave out joint equations slower than this",
+    )
+    p.set_defaults(func=cmd_identify)

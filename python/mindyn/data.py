@@ -1,0 +1,445 @@
+"""Joint data in and out: the CSV format of ``mindyn simulate`` / ``mindyn identify``.
+
+Format: one header line, then one row per sample, comma-separated::
+
+    t, q1..qN, [dq1..dqN], [ddq1..ddqN], tau1..tauN
+
+``t`` in seconds, strictly increasing; positions in rad (m for prismatic joints), velocities and
+accelerations per second; torques in N m (N), or as relative values in per mille of the drive's
+rated torque (``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, seed
+001, with the drive table of the robot description). Velocities and accelerations that are not
+logged are obtained from the positions (velocities) by zero-phase low-pass filtering and central
+differences; the settings are reported in :attr:`JointData.processing`.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy import signal
+
+__all__ = [
+    "DataError",
+    "DataFileNotFoundError",
+    "JointData",
+    "differentiate",
+    "read_csv",
+    "read_truth",
+    "truth_path",
+    "write_csv",
+    "write_trajectory_csv",
+]
+
+
+class DataError(ValueError):
+    """Malformed or unusable joint data (names the file, line and column)."""
+
+
+class DataFileNotFoundError(FileNotFoundError):
+    """A data file that does not exist."""
+
+
+@dataclass
+class JointData:
+    """Samples of a joint-space log.
+
+    Attributes
+    ----------
+    t : ndarray, shape (m,)
+    q, dq, ddq : ndarray, shape (m, n)
+    tau : ndarray, shape (m, n), or None for a trajectory without torques
+    source : str
+        Where the data came from (file name).
+    processing : dict
+        How ``dq`` / ``ddq`` were obtained (``logged`` or the filter and its settings) and the
+        torque unit conversion.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    ddq: np.ndarray
+    tau: np.ndarray | None = None
+    source: str = ""
+    processing: dict = field(default_factory=dict)
+
+    @property
+    def m(self) -> int:
+        return self.t.shape[0]
+
+    @property
+    def n(self) -> int:
+        return self.q.shape[1]
+
+    @property
+    def rate(self) -> float:
+        """Mean sampling rate [Hz]."""
+        return (self.m - 1) / (self.t[-1] - self.t[0]) if self.m > 1 else float("nan")
+
+    def evaluate(self, t):
+        """Reference interface (as :class:`mindyn.excitation.FourierTrajectory`): positions,
+        velocities, accelerations at times ``t`` counted from the first sample, by cubic-spline
+        interpolation, (m, n) each."""
+        from scipy.interpolate import CubicSpline
+
+        if not hasattr(self, "_splines"):
+            self._splines = tuple(
+                CubicSpline(self.t, x, axis=0) for x in (self.q, self.dq, self.ddq)
+            )
+        t = np.atleast_1d(np.asarray(t, dtype=float)) + self.t[0]
+        t = np.clip(t, self.t[0], self.t[-1])
+        return tuple(s(t) for s in self._splines)
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+
+_COLUMN = re.compile(r"^(t|q|dq|ddq|tau)(\d*)$")
+
+
+def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
+    """Maps header names to kinds; raises DataError naming missing and extra columns."""
+    names = [h.strip() for h in header]
+    groups: dict[str, dict[int, int]] = {"q": {}, "dq": {}, "ddq": {}, "tau": {}}
+    t_col = None
+    extra = []
+    seen = set()
+    for i, name in enumerate(names):
+        if name in seen:
+            raise DataError(f"{path}: column '{name}' appears twice in the header")
+        seen.add(name)
+        m = _COLUMN.match(name)
+        if not m or (m.group(1) == "t") != (m.group(2) == ""):
+            extra.append(name)
+            continue
+        if m.group(1) == "t":
+            t_col = i
+        else:
+            groups[m.group(1)][int(m.group(2))] = i
+    if n is None:
+        n = max(groups["q"]) if groups["q"] else 0
+        if n == 0:
+            raise DataError(f"{path}: no position columns q1, q2, ... in the header")
+    want = {"q": True, "dq": False, "ddq": False, "tau": require_torque}
+    missing = [] if t_col is not None else ["t"]
+    for kind, required in want.items():
+        present = groups[kind]
+        for j in present:
+            if not 1 <= j <= n:
+                extra.append(f"{kind}{j}")
+        if present or required:
+            missing += [f"{kind}{j}" for j in range(1, n + 1) if j not in present]
+    if not require_torque and groups["tau"] and len(groups["tau"]) < n:
+        missing += [f"tau{j}" for j in range(1, n + 1) if j not in groups["tau"]]
+    if missing or extra:
+        parts = []
+        if missing:
+            parts.append("missing " + ", ".join(missing))
+        if extra:
+            parts.append("unexpected " + ", ".join(extra))
+        raise DataError(
+            f"{path}: wrong columns for a {n}-joint robot ({'; '.join(parts)}); expected "
+            f"t, q1..q{n}, optionally dq1..dq{n} and ddq1..ddq{n}"
+            + (f", then tau1..tau{n}" if require_torque else ", optionally tau1..tau{n}")
+        )
+    return {"t": t_col, "n": n, **groups}
+
+
+def read_csv(
+    path,
+    robot=None,
+    n: int | None = None,
+    torque_unit: str = "Nm",
+    require_torque: bool = True,
+    filter: str = "butter",
+    cutoff: float | None = None,
+    order: int = 4,
+    window: float | None = None,
+    polyorder: int = 3,
+) -> JointData:
+    """Read a joint log.
+
+    Parameters
+    ----------
+    path : str or Path
+    robot : Robot, optional
+        Gives the number of joints and the drive table (needed for ``permille``).
+    n : int, optional
+        Number of joints when no robot is given (default: from the header).
+    torque_unit : {"Nm", "permille"}
+        ``permille``: torques logged relative to the motor rated torque, converted with
+        ``value * rated_torque * gear_ratio / 1000`` per joint.
+    require_torque : bool
+        False for a trajectory file (``t, q, [dq], [ddq]``).
+    filter, cutoff, order, window, polyorder
+        How missing velocities / accelerations are obtained, see :func:`differentiate`.
+
+    Raises
+    ------
+    DataFileNotFoundError
+        ``path`` does not exist.
+    DataError
+        Wrong or missing columns, a value that is not a number or is NaN (line and column
+        named), time not strictly increasing (line named), fewer than 2 samples.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DataFileNotFoundError(f"data file '{path}' does not exist")
+    if robot is not None:
+        n = robot.n
+    with path.open(newline="") as f:
+        reader = csv.reader(f)
+        try:
+            header = next(reader)
+        except StopIteration:
+            raise DataError(f"{path}: the file is empty") from None
+        while header and header[0].lstrip().startswith("#"):
+            header = next(reader, [])
+        cols = _columns(header, n, require_torque, str(path))
+        n = cols["n"]
+        rows = []
+        first_line = reader.line_num + 1
+        for row in reader:
+            if not row or (len(row) == 1 and not row[0].strip()):
+                continue
+            if len(row) != len(header):
+                raise DataError(
+                    f"{path}, line {reader.line_num}: {len(row)} values for {len(header)} columns"
+                )
+            rows.append((reader.line_num, row))
+    if len(rows) < 2:
+        raise DataError(f"{path}: {len(rows)} data row(s); at least 2 samples are needed")
+    names = [h.strip() for h in header]
+    values = np.empty((len(rows), len(header)))
+    for r, (line, row) in enumerate(rows):
+        for c, v in enumerate(row):
+            try:
+                values[r, c] = float(v)
+            except ValueError:
+                raise DataError(
+                    f"{path}, line {line}, column {names[c]}: '{v.strip()}' is not a number"
+                ) from None
+    bad = ~np.isfinite(values)
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        what = "NaN" if np.isnan(values[r, c]) else "an infinite value"
+        raise DataError(f"{path}, line {rows[r][0]}, column {names[c]}: {what}")
+    t = values[:, cols["t"]]
+    dt = np.diff(t)
+    if (dt <= 0).any():
+        r = int(np.flatnonzero(dt <= 0)[0]) + 1
+        raise DataError(
+            f"{path}, line {rows[r][0]}: time is not increasing (t = {t[r]:.9g} after "
+            f"{t[r - 1]:.9g})"
+        )
+
+    def block(kind):
+        g = cols[kind]
+        if not g:
+            return None
+        return values[:, [g[j] for j in range(1, n + 1)]]
+
+    q = block("q")
+    dq = block("dq")
+    ddq = block("ddq")
+    tau = block("tau")
+    processing: dict = {"samples": len(rows), "first_data_line": first_line}
+    if tau is not None:
+        tau, unit_info = convert_torque(tau, torque_unit, robot)
+        processing["torque"] = unit_info
+    dq, ddq, deriv = fill_derivatives(
+        t, q, dq, ddq, filter=filter, cutoff=cutoff, order=order, window=window, polyorder=polyorder
+    )
+    processing.update(deriv)
+    return JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
+
+
+def convert_torque(tau: np.ndarray, unit: str, robot=None):
+    """Torques in N m from the logged unit; returns ``(tau, info)``."""
+    unit_l = unit.lower().replace(" ", "")
+    if unit_l in ("nm", "n*m", "n.m", "si"):
+        return tau, {"unit": "N m"}
+    if unit_l in ("permille", "‰", "promille"):
+        if robot is None:
+            raise DataError("torque unit 'permille' needs the robot's drive table")
+        drives = robot.drives
+        rated, gear = drives["rated_torque"], drives["gear_ratio"]
+        bad = np.flatnonzero(~(np.isfinite(rated) & np.isfinite(gear)))
+        if bad.size:
+            raise DataError(
+                f"torque unit 'permille': the description of '{robot.name}' gives no rated "
+                f"torque / gear ratio for joint(s) {', '.join(str(k + 1) for k in bad)}"
+            )
+        scale = rated * gear / 1000.0
+        return tau * scale, {
+            "unit": "permille of rated torque",
+            "scale_Nm_per_unit": scale.tolist(),
+            "formula": "value x rated_torque x gear_ratio / 1000",
+        }
+    raise DataError(f"unknown torque unit '{unit}'; use Nm or permille")
+
+
+def differentiate(
+    t: np.ndarray,
+    x: np.ndarray,
+    filter: str = "butter",
+    cutoff: float | None = None,
+    order: int = 4,
+    window: float | None = None,
+    polyorder: int = 3,
+):
+    """Zero-phase low-pass filtered signal and its time derivative.
+
+    Parameters
+    ----------
+    t : ndarray, shape (m,)
+    x : ndarray, shape (m, n)
+    filter : {"butter", "savgol", "none"}
+        ``butter``: Butterworth of ``order`` with ``cutoff`` Hz run forwards and backwards
+        (``scipy.signal.filtfilt``), then central differences (``numpy.gradient``).
+        ``savgol``: Savitzky-Golay of ``polyorder`` over ``window`` seconds, derivative from the
+        local polynomial. ``none``: central differences of the raw signal.
+    cutoff : float, optional
+        Default ``min(10 Hz, rate / 10)``.
+
+    Returns
+    -------
+    (xf, dx, info) : filtered signal (m, n), derivative (m, n), settings dict.
+    """
+    m = t.shape[0]
+    rate = (m - 1) / (t[-1] - t[0])
+    jitter = float(np.max(np.abs(np.diff(t) * rate - 1.0))) if m > 1 else 0.0
+    info: dict = {"rate_Hz": rate, "timing_jitter": jitter}
+    if filter == "butter":
+        fc = cutoff if cutoff is not None else min(10.0, rate / 10.0)
+        if not 0 < fc < rate / 2:
+            raise DataError(
+                f"cutoff {fc:g} Hz must be between 0 and half the rate ({rate / 2:g} Hz)"
+            )
+        b, a = signal.butter(order, fc / (rate / 2))
+        if m <= 3 * max(len(a), len(b)):
+            raise DataError(f"{m} samples are too few for a Butterworth filter of order {order}")
+        # Odd extension over a few filter time constants keeps the ends from ringing.
+        padlen = min(m - 1, max(3 * max(len(a), len(b)), int(3 * rate / fc)))
+        xf = signal.filtfilt(b, a, x, axis=0, padlen=padlen)
+        info.update(
+            {
+                "filter": "butterworth, zero-phase (filtfilt)",
+                "order": order,
+                "cutoff_Hz": fc,
+                "derivative": "central differences",
+            }
+        )
+        return xf, np.gradient(xf, t, axis=0), info
+    if filter == "savgol":
+        win = window if window is not None else 0.1
+        w = int(round(win * rate)) | 1
+        w = max(w, polyorder + 2 + (polyorder + 2) % 2 - 1)
+        if w % 2 == 0:
+            w += 1
+        if m < w:
+            raise DataError(f"{m} samples are fewer than the Savitzky-Golay window ({w})")
+        dt = 1.0 / rate
+        xf = signal.savgol_filter(x, w, polyorder, axis=0)
+        dx = signal.savgol_filter(x, w, polyorder, deriv=1, delta=dt, axis=0)
+        info.update(
+            {
+                "filter": "savitzky-golay",
+                "window_samples": w,
+                "window_s": w / rate,
+                "polyorder": polyorder,
+                "derivative": "of the local polynomial",
+            }
+        )
+        return xf, dx, info
+    if filter == "none":
+        info.update({"filter": "none", "derivative": "central differences"})
+        return x, np.gradient(x, t, axis=0), info
+    raise DataError(f"unknown filter '{filter}'; use butter, savgol or none")
+
+
+def fill_derivatives(t, q, dq=None, ddq=None, **settings):
+    """Velocities and accelerations: logged ones are kept, missing ones derived (velocities from
+    filtered positions, accelerations from filtered velocities). Returns ``(dq, ddq, info)``."""
+    info: dict = {}
+    if dq is None:
+        _, dq, s = differentiate(t, q, **settings)
+        info["velocity"] = {"source": "differentiated positions", **s}
+    else:
+        info["velocity"] = {"source": "logged"}
+    if ddq is None:
+        _, ddq, s = differentiate(t, dq, **settings)
+        info["acceleration"] = {"source": "differentiated velocities", **s}
+    else:
+        info["acceleration"] = {"source": "logged"}
+    return dq, ddq, info
+
+
+def _header(n: int, kinds) -> list[str]:
+    return ["t"] + [f"{k}{j}" for k in kinds for j in range(1, n + 1)]
+
+
+def write_csv(path, t, q, tau, dq=None, ddq=None) -> Path:
+    """Write ``t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun``; shapes (m,) and (m, n)."""
+    arrays = [np.asarray(t, dtype=float)[:, None], np.asarray(q, dtype=float)]
+    kinds = ["q"]
+    for kind, a in (("dq", dq), ("ddq", ddq)):
+        if a is not None:
+            arrays.append(np.asarray(a, dtype=float))
+            kinds.append(kind)
+    if tau is not None:
+        arrays.append(np.asarray(tau, dtype=float))
+        kinds.append("tau")
+    n = arrays[1].shape[1]
+    for a in arrays[1:]:
+        if a.shape != arrays[1].shape:
+            raise ValueError(f"array shapes differ: {a.shape} vs {arrays[1].shape}")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savetxt(
+        path,
+        np.hstack(arrays),
+        delimiter=",",
+        header=",".join(_header(n, kinds)),
+        comments="",
+        fmt="%.12g",
+    )
+    return path
+
+
+def write_trajectory_csv(path, t, q, dq, ddq) -> Path:
+    """Write a reference trajectory ``t, q, dq, ddq`` (no torques)."""
+    return write_csv(path, t, q, None, dq=dq, ddq=ddq)
+
+
+def truth_path(csv_path) -> Path:
+    """``data.csv`` -> ``data.truth.json``: the true parameters of a simulated log."""
+    p = Path(csv_path)
+    return p.with_name(p.stem + ".truth.json")
+
+
+def read_truth(csv_path) -> dict | None:
+    """The truth sidecar of a simulated log, or None when there is none."""
+    p = truth_path(csv_path)
+    if not p.is_file():
+        return None
+    try:
+        d = json.loads(p.read_text())
+    except json.JSONDecodeError as e:
+        raise DataError(f"{p}: not valid JSON ({e})") from None
+    if "names" not in d or "values" not in d:
+        raise DataError(f"{p}: a truth file needs 'names' and 'values'")
+    return d
+
+
+def finite_or_none(x) -> float | None:
+    """JSON helper: a float, or None for NaN / inf."""
+    x = float(x)
+    return x if math.isfinite(x) else None

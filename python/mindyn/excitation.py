@@ -1,0 +1,752 @@
+"""Excitation trajectories for identification: finite Fourier series optimised for conditioning.
+
+Joint ``i`` follows (seed 001, ``method.md`` section 6)::
+
+    q_i(t) = q_i0 + sum_{l=1..N} [ a_il / (w l) sin(w l t) - b_il / (w l) cos(w l t) ],  w = 2 pi f
+
+so that ``dq_i = sum_l a_il cos(w l t) + b_il sin(w l t)`` and
+``ddq_i = sum_l w l (-a_il sin(w l t) + b_il cos(w l t))``. The motion is periodic with period
+``1 / f``. Zero velocity and acceleration at the start and end of each period hold *by
+construction*: ``a_i1 = -sum_{l>=2} a_il`` and ``b_i1 = -sum_{l>=2} l b_il``, so the optimiser only
+sees the free coefficients ``a_i2..a_iN``, ``b_i2..b_iN`` and the offset ``q_i0`` (or, with a
+prescribed start position, only the ``a``, ``b``: ``q_i0`` then follows from ``q_i(0)``).
+
+Positions, velocities and accelerations are linear in these coefficients, so the joint limits are
+linear inequality constraints (imposed on a time grid and checked afterwards on a fine grid). The
+criterion is evaluated on the stacked base regressor ``W_b`` (C++ core) along the trajectory:
+
+``cond``      condition number of ``W_b`` (minimised through its logarithm);
+``logdet``    D-optimality: ``-log det(W_b^T W_b / rows)``;
+``hadamard``  the Hadamard-inequality bound of seed 001: ``det(G) <= prod diag(G)`` with
+              ``G = W_b^T W_b``, minimised as ``log prod diag(G) - log det(G) >= 0`` (zero exactly
+              when the columns of ``W_b`` are orthogonal).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ._threads import single_threaded_blas
+from .base import BaseParameters, base_parameters
+from .robot import Robot, load
+
+__all__ = [
+    "CRITERIA",
+    "ExcitationResult",
+    "FourierTrajectory",
+    "criterion_value",
+    "excitation_limits",
+    "optimize_excitation",
+    "plot_trajectory",
+    "random_trajectory",
+]
+
+CRITERIA = ("cond", "logdet", "hadamard")
+
+# Used where a robot description gives no limit (NaN): revolute, prismatic.
+FALLBACK = {
+    "position": (math.pi, 0.5),  # half range about 0 [rad], [m]
+    "velocity": (1.5, 0.5),  # [rad/s], [m/s]
+    "acceleration": (6.0, 2.0),  # [rad/s^2], [m/s^2]
+}
+
+
+@dataclass
+class FourierTrajectory:
+    """A periodic joint trajectory given by finite Fourier series.
+
+    Attributes
+    ----------
+    a, b : ndarray, shape (n, N)
+        Coefficients per joint and harmonic (velocity amplitudes, rad/s or m/s).
+    q0 : ndarray, shape (n,)
+        Offsets.
+    freq : float
+        Base frequency [Hz]; the period is ``1 / freq``.
+    """
+
+    a: np.ndarray
+    b: np.ndarray
+    q0: np.ndarray
+    freq: float
+
+    def __post_init__(self):
+        self.a = np.atleast_2d(np.asarray(self.a, dtype=float))
+        self.b = np.atleast_2d(np.asarray(self.b, dtype=float))
+        self.q0 = np.asarray(self.q0, dtype=float).reshape(-1)
+        if self.a.shape != self.b.shape or self.a.shape[0] != self.q0.shape[0]:
+            raise ValueError(
+                f"Fourier coefficients a {self.a.shape}, b {self.b.shape} and offsets q0 "
+                f"{self.q0.shape} do not fit together; expected (n, N), (n, N), (n,)"
+            )
+        if not self.freq > 0:
+            raise ValueError(f"base frequency must be positive, got {self.freq}")
+
+    @property
+    def n(self) -> int:
+        return self.a.shape[0]
+
+    @property
+    def harmonics(self) -> int:
+        return self.a.shape[1]
+
+    @property
+    def period(self) -> float:
+        return 1.0 / self.freq
+
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Positions, velocities, accelerations at times ``t`` (shape (m,)): three (m, n) arrays."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        bq, bd, bdd = _basis(t, self.harmonics, self.freq)
+        c = np.hstack([self.a, self.b, self.q0[:, None]])  # (n, 2N+1)
+        return bq @ c.T, bd @ c.T, bdd @ c.T
+
+    def sample(self, rate: float = 250.0, periods: float = 1.0):
+        """``(t, q, dq, ddq)`` sampled at ``rate`` Hz over ``periods`` periods, both ends
+        included; ``t`` shape (m,), the others (m, n)."""
+        m = int(round(periods * self.period * rate)) + 1
+        t = np.arange(m) / rate
+        return (t, *self.evaluate(t))
+
+    def to_dict(self) -> dict:
+        return {
+            "type": "fourier",
+            "freq": self.freq,
+            "period": self.period,
+            "harmonics": self.harmonics,
+            "a": self.a.tolist(),
+            "b": self.b.tolist(),
+            "q0": self.q0.tolist(),
+        }
+
+    @classmethod
+    def from_dict(cls, d: dict) -> FourierTrajectory:
+        try:
+            return cls(np.array(d["a"]), np.array(d["b"]), np.array(d["q0"]), float(d["freq"]))
+        except KeyError as e:
+            raise ValueError(f"Fourier trajectory: missing entry {e}") from None
+
+    @classmethod
+    def load(cls, path) -> FourierTrajectory:
+        """Reads the JSON written by :meth:`ExcitationResult.save` (or :meth:`to_dict`)."""
+        path = Path(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"trajectory file '{path}' does not exist")
+        try:
+            d = json.loads(path.read_text())
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{path}: not valid JSON ({e})") from None
+        return cls.from_dict(d.get("trajectory", d))
+
+
+def _basis(t: np.ndarray, N: int, freq: float):
+    """Matrices mapping full per-joint coefficients ``[a_1..a_N, b_1..b_N, q0]`` to q, dq, ddq at
+    times ``t``: three arrays of shape (m, 2N+1)."""
+    w = 2.0 * math.pi * freq
+    ell = np.arange(1, N + 1)
+    arg = np.outer(t, w * ell)
+    s, c = np.sin(arg), np.cos(arg)
+    m = t.shape[0]
+    one, zero = np.ones((m, 1)), np.zeros((m, 1))
+    bq = np.hstack([s / (w * ell), -c / (w * ell), one])
+    bd = np.hstack([c, s, zero])
+    bdd = np.hstack([-s * (w * ell), c * (w * ell), zero])
+    return bq, bd, bdd
+
+
+def _reduction(N: int, freq: float, start: float | None):
+    """Affine map from free to full per-joint coefficients, ``full = R @ free + r``.
+
+    Free coefficients: ``a_2..a_N, b_2..b_N`` and, without a prescribed start, ``q0``. With
+    ``start`` the offset ``q0`` follows from ``q(0) = q0 - sum_l b_l / (w l) = start``."""
+    nf = 2 * (N - 1) + (0 if start is not None else 1)
+    R = np.zeros((2 * N + 1, nf))
+    r = np.zeros(2 * N + 1)
+    ell = np.arange(2, N + 1)
+    for j in range(N - 1):
+        R[1 + j, j] = 1.0  # a_l
+        R[0, j] = -1.0  # a_1 = -sum a_l
+        R[N + 1 + j, N - 1 + j] = 1.0  # b_l
+        R[N, N - 1 + j] = -float(ell[j])  # b_1 = -sum l b_l
+    if start is None:
+        R[2 * N, nf - 1] = 1.0
+    else:
+        w = 2.0 * math.pi * freq
+        # q0 = start + sum_{l>=1} b_l / (w l), with b_1 expressed through the free b's.
+        for j in range(N - 1):
+            R[2 * N, N - 1 + j] = 1.0 / (w * ell[j]) - ell[j] / w
+        r[2 * N] = start
+    return R, r
+
+
+def excitation_limits(robot: Robot, margin: float = 0.05, overrides: dict | None = None):
+    """Limits used for the excitation: arrays ``lower``, ``upper``, ``velocity``,
+    ``acceleration`` of shape (n,), and a list of notes for every fallback taken.
+
+    The robot's limits are shrunk by ``margin`` (a fraction: positions towards the middle of
+    their range, velocities and accelerations in magnitude). Where the description gives no
+    limit (NaN) a fallback is used (``FALLBACK``) and noted. ``overrides`` may give any of the
+    four arrays (or scalars) to replace the robot's values."""
+    lim = robot.limits
+    n = robot.n
+    overrides = overrides or {}
+    prism = np.array([t == "prismatic" for t in robot.joint_types])
+    out: dict[str, np.ndarray] = {}
+    notes: list[str] = []
+    for key in ("lower", "upper", "velocity", "acceleration"):
+        v = np.array(lim[key], dtype=float)
+        if key in overrides and overrides[key] is not None:
+            v = np.broadcast_to(np.asarray(overrides[key], dtype=float), (n,)).copy()
+        out[key] = v
+    for k in range(n):
+        unit = "m" if prism[k] else "rad"
+        for key in ("velocity", "acceleration"):
+            if not np.isfinite(out[key][k]) or out[key][k] <= 0:
+                fb = FALLBACK[key][1 if prism[k] else 0]
+                out[key][k] = fb
+                suffix = "/s" if key == "velocity" else "/s^2"
+                notes.append(f"joint {k + 1}: no {key} limit given; using {fb:g} {unit}{suffix}")
+        for key, sign in (("lower", -1.0), ("upper", 1.0)):
+            if not np.isfinite(out[key][k]):
+                fb = FALLBACK["position"][1 if prism[k] else 0]
+                out[key][k] = sign * fb
+                notes.append(
+                    f"joint {k + 1}: no {key} position limit given; using {sign * fb:g} {unit}"
+                )
+        if out["lower"][k] >= out["upper"][k]:
+            raise ValueError(
+                f"joint {k + 1}: lower position limit {out['lower'][k]:g} is not below the "
+                f"upper limit {out['upper'][k]:g}"
+            )
+    if not 0 <= margin < 0.5:
+        raise ValueError(f"margin must be in [0, 0.5), got {margin}")
+    mid = 0.5 * (out["lower"] + out["upper"])
+    half = 0.5 * (out["upper"] - out["lower"]) * (1 - margin)
+    out["lower"], out["upper"] = mid - half, mid + half
+    out["velocity"] = out["velocity"] * (1 - margin)
+    out["acceleration"] = out["acceleration"] * (1 - margin)
+    return out, notes
+
+
+def _criterion(G: np.ndarray, rows: int, criterion: str) -> float:
+    """Criterion value from ``G = W^T W`` (the quantity minimised)."""
+    if criterion == "cond":
+        ev = np.linalg.eigvalsh(G)
+        if ev[0] <= ev[-1] * 1e-30 or ev[-1] <= 0:
+            return 70.0  # log of a condition number beyond double precision
+        return 0.5 * math.log(ev[-1] / ev[0])
+    sign, logdet = np.linalg.slogdet(G / rows)
+    if sign <= 0:
+        return 1e3
+    if criterion == "logdet":
+        return -logdet
+    d = np.diag(G) / rows
+    return float(np.sum(np.log(d)) - logdet)
+
+
+def criterion_value(base: BaseParameters, q, dq, ddq, criterion: str = "cond") -> float:
+    """The criterion in its reported form on samples ``q, dq, ddq`` (each (m, n)): the condition
+    number for ``cond``, ``log det(W^T W / rows)`` for ``logdet`` and the log Hadamard ratio
+    ``log prod diag(G) - log det(G)`` for ``hadamard``."""
+    if criterion not in CRITERIA:
+        raise ValueError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
+    W = base.regressor(q, dq, ddq).reshape(-1, base.n)
+    J = _criterion(W.T @ W, W.shape[0], criterion)
+    if criterion == "cond":
+        return math.exp(J)
+    if criterion == "logdet":
+        return -J
+    return J
+
+
+@dataclass
+class ExcitationResult:
+    """An optimised excitation trajectory with what it took to get it.
+
+    ``value`` / ``initial_value`` are in the reported form of :func:`criterion_value` (the
+    latter for ``initial_trajectory``, the starting guess of the best start); ``starts`` lists
+    per random start its initial and final value, iterations, seconds and the optimiser's
+    message."""
+
+    robot: str
+    trajectory: FourierTrajectory
+    criterion: str
+    value: float
+    initial_value: float
+    limits: dict
+    notes: list = field(default_factory=list)
+    starts: list = field(default_factory=list)
+    seconds: float = 0.0
+    base_names: list = field(default_factory=list)
+    rotor: bool = False
+    friction: bool = False
+    seed: int = 0
+    max_violation: float = 0.0
+    initial_trajectory: FourierTrajectory | None = None
+
+    def to_dict(self) -> dict:
+        return {
+            "robot": self.robot,
+            "criterion": self.criterion,
+            "value": self.value,
+            "initial_value": self.initial_value,
+            "rotor": self.rotor,
+            "friction": self.friction,
+            "base_parameters": len(self.base_names),
+            "seed": self.seed,
+            "seconds": self.seconds,
+            "max_limit_violation": self.max_violation,
+            "limits": {k: np.asarray(v).tolist() for k, v in self.limits.items()},
+            "notes": self.notes,
+            "starts": self.starts,
+            "trajectory": self.trajectory.to_dict(),
+        }
+
+    def save(self, csv_path, rate: float = 250.0, periods: float = 1.0) -> dict:
+        """Writes ``<stem>.csv`` (``t, q1..qn, dq1..dqn, ddq1..ddqn`` sampled at ``rate`` Hz),
+        ``<stem>.json`` (coefficients, criterion, limits) and ``<stem>.png`` (plot). Returns the
+        three paths."""
+        from .data import write_trajectory_csv
+
+        csv_path = Path(csv_path)
+        csv_path.parent.mkdir(parents=True, exist_ok=True)
+        t, q, dq, ddq = self.trajectory.sample(rate, periods)
+        write_trajectory_csv(csv_path, t, q, dq, ddq)
+        json_path = csv_path.with_suffix(".json")
+        json_path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
+        png_path = csv_path.with_suffix(".png")
+        plot_trajectory(
+            png_path, t, q, dq, ddq, self.limits, title=f"{self.robot}: excitation trajectory"
+        )
+        return {"csv": csv_path, "json": json_path, "png": png_path}
+
+
+class _Problem:
+    """The optimisation problem in free coefficients, all joints stacked joint by joint."""
+
+    def __init__(self, base, n, N, freq, limits, criterion, samples, grid, start):
+        self.base, self.n, self.N, self.freq = base, n, N, freq
+        self.criterion = criterion
+        self.start = None if start is None else np.asarray(start, dtype=float)
+        T = 1.0 / freq
+        t_obj = np.arange(samples) * (T / samples)
+        t_con = np.arange(grid) * (T / grid)
+        self.bq, self.bd, self.bdd = _basis(t_obj, N, freq)
+        cq, cd, cdd = _basis(t_con, N, freq)
+        self.R, self.r = [], []
+        for k in range(n):
+            R, r = _reduction(N, freq, None if start is None else self.start[k])
+            self.R.append(R)
+            self.r.append(r)
+        self.nf = self.R[0].shape[1]
+        # Linear constraints A x <= ub for all joints, block diagonal.
+        rows, ub = [], []
+        for k in range(n):
+            R, r = self.R[k], self.r[k]
+            for B, lo, hi in (
+                (cq, limits["lower"][k], limits["upper"][k]),
+                (cd, -limits["velocity"][k], limits["velocity"][k]),
+                (cdd, -limits["acceleration"][k], limits["acceleration"][k]),
+            ):
+                if B is cq or np.isfinite(hi):
+                    M = B @ R
+                    off = B @ r
+                    blk = np.zeros((2 * M.shape[0], n * self.nf))
+                    blk[: M.shape[0], k * self.nf : (k + 1) * self.nf] = M
+                    blk[M.shape[0] :, k * self.nf : (k + 1) * self.nf] = -M
+                    rows.append(blk)
+                    ub.append(np.concatenate([hi - off, -(lo - off)]))
+        self.A = np.vstack(rows)
+        self.ub = np.concatenate(ub)
+        self.evals = 0
+        self.best = math.inf
+
+    def full(self, x: np.ndarray) -> np.ndarray:
+        """Full coefficients (n, 2N+1)."""
+        X = x.reshape(self.n, self.nf)
+        return np.stack([self.R[k] @ X[k] + self.r[k] for k in range(self.n)])
+
+    def trajectory(self, x: np.ndarray) -> FourierTrajectory:
+        C = self.full(x)
+        N = self.N
+        return FourierTrajectory(C[:, :N], C[:, N : 2 * N], C[:, 2 * N], self.freq)
+
+    def objective(self, x: np.ndarray) -> float:
+        self.evals += 1
+        C = self.full(x)
+        q, dq, ddq = self.bq @ C.T, self.bd @ C.T, self.bdd @ C.T
+        W = self.base.regressor(q, dq, ddq).reshape(-1, self.base.n)
+        J = _criterion(W.T @ W, W.shape[0], self.criterion)
+        if J < self.best and self.violation(x) <= 1e-9:
+            self.best = J
+        return J
+
+    def violation(self, x: np.ndarray) -> float:
+        return float(np.max(self.A @ x - self.ub, initial=0.0))
+
+
+def _scale_into_limits(traj: FourierTrajectory, limits: dict, grid: int, fixed_q0: bool):
+    """Shrinks the motion until the trajectory respects ``limits`` on a grid; returns a copy.
+
+    The motion is scaled about its start position ``q(0)`` when that is prescribed
+    (``fixed_q0``; ``q(t) - q(0)`` is linear in the coefficients, so the start stays put), and
+    otherwise about its offsets, which are first moved into range."""
+    t = np.arange(grid) * (traj.period / grid)
+    q, dq, ddq = traj.evaluate(t)
+    lo, hi = limits["lower"], limits["upper"]
+    if fixed_q0:
+        anchor = q[0].copy()
+        q0 = traj.q0
+    else:
+        q0 = np.clip(traj.q0, lo, hi)
+        anchor = q0
+        q = q - traj.q0 + q0
+    dev = q - anchor
+    with np.errstate(divide="ignore", invalid="ignore"):
+        up = np.where(dev.max(0) > 0, (hi - anchor) / dev.max(0), np.inf)
+        dn = np.where(dev.min(0) < 0, (lo - anchor) / dev.min(0), np.inf)
+        sv = limits["velocity"] / np.abs(dq).max(0)
+        sa = limits["acceleration"] / np.abs(ddq).max(0)
+    s = np.minimum.reduce([np.ones(traj.n), up, dn, sv, sa])
+    s = np.where(np.isfinite(s), np.maximum(s, 0.0), 1.0)
+    # q0 - q(0) is linear in the coefficients too: it scales with them.
+    q0 = anchor + s * (q0 - anchor) if fixed_q0 else q0
+    return FourierTrajectory(traj.a * s[:, None], traj.b * s[:, None], q0, traj.freq)
+
+
+def random_trajectory(
+    robot: Robot | str,
+    harmonics: int = 5,
+    freq: float = 0.1,
+    seed: int = 0,
+    limits: dict | None = None,
+    start=None,
+    fill: float = 0.8,
+    margin: float = 0.05,
+) -> FourierTrajectory:
+    """A random Fourier trajectory within the limits (zero velocity and acceleration at both ends),
+    scaled to use ``fill`` of the tightest limit per joint. Used as starting guess and as
+    validation trajectory. ``limits``: all four arrays as returned by
+    :func:`excitation_limits`, or some of them as overrides of the robot's (then ``margin``
+    applies)."""
+    robot = load(robot)
+    keys = ("lower", "upper", "velocity", "acceleration")
+    if limits is None or not all(k in limits for k in keys):
+        limits, _ = excitation_limits(robot, margin=margin, overrides=limits)
+    rng = np.random.default_rng(seed)
+    n, N = robot.n, harmonics
+    rows = []
+    for k in range(n):
+        R, r = _reduction(N, freq, None if start is None else float(np.asarray(start)[k]))
+        # Velocity amplitudes falling off with the harmonic number.
+        ell = np.arange(2, N + 1, dtype=float)
+        xk = rng.normal(size=2 * (N - 1)) / np.concatenate([ell, ell])
+        if start is None:
+            mid = 0.5 * (limits["lower"][k] + limits["upper"][k])
+            half = 0.5 * (limits["upper"][k] - limits["lower"][k])
+            xk = np.concatenate([xk, [mid + 0.3 * half * rng.uniform(-1, 1)]])
+        rows.append(R @ xk + r)
+    C = np.stack(rows)
+    traj = FourierTrajectory(C[:, :N], C[:, N : 2 * N], C[:, 2 * N], freq)
+    grid = max(400, 40 * N)
+    shrunk = {
+        "lower": traj.q0 + fill * (limits["lower"] - traj.q0) if start is None else limits["lower"],
+        "upper": traj.q0 + fill * (limits["upper"] - traj.q0) if start is None else limits["upper"],
+        "velocity": fill * limits["velocity"],
+        "acceleration": fill * limits["acceleration"],
+    }
+    shrunk["lower"] = np.minimum(shrunk["lower"], traj.q0)
+    shrunk["upper"] = np.maximum(shrunk["upper"], traj.q0)
+    return _scale_into_limits(traj, shrunk, grid, fixed_q0=start is not None)
+
+
+@single_threaded_blas
+def optimize_excitation(
+    robot: Robot | str,
+    harmonics: int = 5,
+    freq: float = 0.1,
+    criterion: str = "cond",
+    starts: int = 3,
+    seed: int = 0,
+    rotor: bool = False,
+    friction: bool = False,
+    base: BaseParameters | None = None,
+    samples: int = 100,
+    grid: int | None = None,
+    maxiter: int = 100,
+    margin: float = 0.05,
+    limits: dict | None = None,
+    start=None,
+    progress: bool = True,
+    stream=None,
+) -> ExcitationResult:
+    """Optimise a Fourier excitation trajectory for the base regressor of ``robot``.
+
+    Parameters
+    ----------
+    robot : Robot or str
+    harmonics, freq : int, float
+        Number of harmonics ``N`` and base frequency [Hz] (period ``1 / freq``).
+    criterion : {"cond", "logdet", "hadamard"}
+    starts, seed : int
+        Number of random starting guesses and the seed of their generator.
+    rotor, friction : bool
+        Base parameters with rotor inertia / friction (ignored when ``base`` is given).
+    samples : int
+        Regressor samples per period for the criterion.
+    grid : int, optional
+        Time samples per period on which the limits are imposed (default ``max(100, 20 N)``);
+        the result is checked on a grid ten times finer and shrunk if needed.
+    maxiter : int
+        SLSQP iterations per start.
+    margin : float
+        Fraction by which the robot's limits are tightened (see :func:`excitation_limits`).
+    limits : dict, optional
+        Overrides for ``lower``, ``upper``, ``velocity``, ``acceleration`` (arrays (n,) or
+        scalars).
+    start : array (n,), optional
+        Prescribed position at ``t = 0`` (and at the end of each period).
+    progress : bool
+        Print progress to ``stream`` (default stderr).
+    """
+    if criterion not in CRITERIA:
+        raise ValueError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
+    if harmonics < 2:
+        raise ValueError(
+            f"harmonics must be at least 2 (one is spent on zero start/end velocity and "
+            f"acceleration), got {harmonics}"
+        )
+    if not freq > 0:
+        raise ValueError(f"base frequency must be positive, got {freq}")
+    if starts < 1:
+        raise ValueError(f"starts must be at least 1, got {starts}")
+    robot = load(robot)
+    stream = stream or sys.stderr
+    t_begin = time.perf_counter()
+    if base is None:
+        base = base_parameters(robot, rotor=rotor, friction=friction)
+    lim, notes = excitation_limits(robot, margin=margin, overrides=limits)
+    if start is not None:
+        start = np.asarray(start, dtype=float).reshape(-1)
+        if start.shape != (robot.n,):
+            raise ValueError(f"start has shape {start.shape}; expected ({robot.n},)")
+        bad = np.flatnonzero((start < lim["lower"]) | (start > lim["upper"]))
+        if bad.size:
+            k = int(bad[0])
+            raise ValueError(
+                f"start position of joint {k + 1} ({start[k]:g}) is outside its limits "
+                f"[{lim['lower'][k]:g}, {lim['upper'][k]:g}] (after the {margin:g} margin)"
+            )
+    if samples * robot.n < base.n:
+        raise ValueError(
+            f"{samples} samples x {robot.n} joints = {samples * robot.n} regressor rows are "
+            f"fewer than the {base.n} base parameters; raise samples"
+        )
+    grid = grid or max(100, 20 * harmonics)
+    prob = _Problem(base, robot.n, harmonics, freq, lim, criterion, samples, grid, start)
+
+    def say(msg: str, end: str = "\n") -> None:
+        if progress:
+            print(msg, end=end, file=stream, flush=True)
+
+    for note in notes:
+        say(f"excite: {note}")
+    say(
+        f"excite: {robot.name}, {base.n} base parameters, criterion {criterion}, "
+        f"N={harmonics}, f={freq:g} Hz, {prob.n * prob.nf} free coefficients, "
+        f"{starts} start(s), {prob.A.shape[0]} limit constraints"
+    )
+    shown = {"cond": "cond", "logdet": "-logdet", "hadamard": "log hadamard ratio"}[criterion]
+
+    def report(J: float) -> float:
+        return math.exp(J) if criterion == "cond" else J
+
+    best = None
+    runs = []
+    rng = np.random.default_rng(seed)
+    for s in range(starts):
+        t0 = time.perf_counter()
+        guess = random_trajectory(
+            robot,
+            harmonics,
+            freq,
+            seed=int(rng.integers(2**31)),
+            limits=lim,
+            start=start,
+            fill=0.7,
+        )
+        x0 = _free_from(prob, guess)
+        J0 = prob.objective(x0)
+        it = {"k": 0, "last": time.perf_counter()}
+
+        prob.best = J0
+
+        def callback(*_, it=it, s=s):
+            it["k"] += 1
+            now = time.perf_counter()
+            if now - it["last"] > 0.5:
+                it["last"] = now
+                say(
+                    f"\r  start {s + 1}/{starts}: iteration {it['k']:>3}, "
+                    f"best {shown} so far {report(prob.best):.6g}   ",
+                    end="",
+                )
+
+        cons = [
+            {
+                "type": "ineq",
+                "fun": lambda x: prob.ub - prob.A @ x,
+                "jac": lambda x: -prob.A,
+            }
+        ]
+        res = minimize(
+            prob.objective,
+            x0,
+            method="SLSQP",
+            constraints=cons,
+            callback=callback,
+            options={"maxiter": maxiter, "ftol": 1e-7},
+        )
+        x = res.x
+        viol = prob.violation(x)
+        if viol > 1e-6:  # infeasible end point: fall back to the feasible start
+            traj = _scale_into_limits(prob.trajectory(x), lim, grid, start is not None)
+            x = _free_from(prob, traj)
+        J = prob.objective(x)
+        if J > J0:
+            x, J = x0, J0
+        dt = time.perf_counter() - t0
+        runs.append(
+            {
+                "initial": report(J0),
+                "final": report(J),
+                "iterations": int(res.nit),
+                "seconds": dt,
+                "message": str(res.message),
+            }
+        )
+        say(
+            f"\r  start {s + 1}/{starts}: {shown} {report(J0):.6g} -> {report(J):.6g} "
+            f"({res.nit} iterations, {dt:.1f} s)          "
+        )
+        if best is None or J < best[1]:
+            best = (x, J, J0, guess)
+    x, J, J0, guess = best
+    if J >= 60.0:  # no start found a trajectory with a full-rank regressor
+        raise ValueError(
+            f"no excitation found that excites all {base.n} base parameters of {robot.name} "
+            "within the limits; widen the limits or add harmonics"
+        )
+    traj = prob.trajectory(x)
+    # The optimiser saw the limits on a coarse grid only. Shrink against limits tightened by
+    # 1e-3 on a grid 20 times finer: between its points (>= 200 per period of the highest
+    # harmonic) a peak can exceed the sampled maximum by at most 1 - cos(pi / 200) ~ 1.2e-4.
+    fine = 20 * grid
+    t = np.arange(fine + 1) * (traj.period / fine)
+    q, dq, ddq = traj.evaluate(t)
+    rel = _relative_violation(q, dq, ddq, _tighten(lim, 1e-3))
+    if rel > 0:
+        if rel > 1e-3:
+            say(f"excite: limits exceeded by {100 * rel:.3g} % between grid points; motion shrunk")
+        traj = _scale_into_limits(traj, _tighten(lim, 1e-3), fine, start is not None)
+        q, dq, ddq = traj.evaluate(t)
+    tm = np.arange(samples) * (traj.period / samples)
+    value = criterion_value(base, *traj.evaluate(tm), criterion)
+    elapsed = time.perf_counter() - t_begin
+    say(f"excite: best {shown} {value:.6g} (initial guess {report(J0):.6g}), {elapsed:.1f} s")
+    return ExcitationResult(
+        robot=robot.name,
+        trajectory=traj,
+        criterion=criterion,
+        value=value,
+        initial_value=report(J0),
+        limits=lim,
+        notes=notes,
+        starts=runs,
+        seconds=elapsed,
+        base_names=list(base.names),
+        rotor=base.rotor,
+        friction=base.friction,
+        seed=seed,
+        max_violation=_relative_violation(q, dq, ddq, lim),
+        initial_trajectory=guess,
+    )
+
+
+def _tighten(lim: dict, frac: float) -> dict:
+    mid = 0.5 * (lim["lower"] + lim["upper"])
+    half = 0.5 * (lim["upper"] - lim["lower"]) * (1 - frac)
+    return {
+        "lower": mid - half,
+        "upper": mid + half,
+        "velocity": lim["velocity"] * (1 - frac),
+        "acceleration": lim["acceleration"] * (1 - frac),
+    }
+
+
+def _relative_violation(q, dq, ddq, lim) -> float:
+    """Largest limit excess relative to the limit's size (0 when all limits hold)."""
+    span = lim["upper"] - lim["lower"]
+    v = [
+        np.max((q - lim["upper"]) / span, initial=0.0),
+        np.max((lim["lower"] - q) / span, initial=0.0),
+        np.max(np.abs(dq) / lim["velocity"] - 1.0, initial=0.0),
+        np.max(np.abs(ddq) / lim["acceleration"] - 1.0, initial=0.0),
+    ]
+    return float(max(v))
+
+
+def _free_from(prob: _Problem, traj: FourierTrajectory) -> np.ndarray:
+    """Free coefficients of ``traj`` (which must satisfy the boundary conditions)."""
+    N = prob.N
+    x = []
+    for k in range(prob.n):
+        xk = np.concatenate([traj.a[k, 1:], traj.b[k, 1:]])
+        if prob.start is None:
+            xk = np.concatenate([xk, [traj.q0[k]]])
+        x.append(xk)
+    assert len(x[0]) == prob.nf, (len(x[0]), prob.nf, N)
+    return np.concatenate(x)
+
+
+def plot_trajectory(path, t, q, dq, ddq, limits: dict | None = None, title: str = "") -> Path:
+    """PNG of positions, velocities and accelerations per joint (limits dashed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = q.shape[1]
+    fig, axes = plt.subplots(3, 1, figsize=(9, 8), sharex=True)
+    for ax, y, label, keys in (
+        (axes[0], q, "position [rad | m]", ("lower", "upper")),
+        (axes[1], dq, "velocity [/s]", ("velocity",)),
+        (axes[2], ddq, "acceleration [/s^2]", ("acceleration",)),
+    ):
+        for k in range(n):
+            (line,) = ax.plot(t, y[:, k], lw=1.0, label=f"joint {k + 1}")
+            if limits is not None:
+                for key in keys:
+                    v = np.asarray(limits[key])[k]
+                    ax.axhline(v, color=line.get_color(), ls="--", lw=0.6)
+                    if key in ("velocity", "acceleration"):
+                        ax.axhline(-v, color=line.get_color(), ls="--", lw=0.6)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(ncol=min(n, 6), fontsize=7, loc="upper right")
+    axes[-1].set_xlabel("t [s]")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,504 @@
+"""Identification of the base parameters from joint data (``method.md`` section 6, seed 001).
+
+Two models, both over the equations-of-motion base set of :func:`mindyn.base_parameters`:
+
+``dynamic``
+    ``W_b(q_i, dq_i, ddq_i) p_b = tau_i`` for every sample ``i``, stacked (``m n`` rows).
+``energy``
+    The integral form of the energy theorem over consecutive windows ``[t_a, t_b]`` of
+    ``window`` samples: ``(w_H(t_b) - w_H(t_a)) p_b + Fv_k int dq_k^2 dt + Fc_k int |dq_k| dt
+    = int dq^T tau dt``; no accelerations are needed. The dissipated-energy columns of the
+    friction parameters replace their (zero) energy columns; the integrals use the trapezoid or
+    Simpson rule on the samples.
+
+Estimation is ordinary least squares, or weighted least squares with per-joint weights
+``1 / sigma_j`` from the residuals of a first OLS pass (dynamic model). Statistics as in seed 001:
+``sigma^2 = |y - W p|^2 / (r - c)``, ``cov = sigma^2 (W^T W)^-1``,
+``RSD = 100 sqrt(cov_bb) / |p_b|``; parameters whose RSD exceeds a threshold are removed one at a
+time (largest first) and the rest re-estimated. Validation: per-joint RMS and relative torque
+error on another data set.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+from scipy import integrate
+
+from ._threads import single_threaded_blas
+from .base import BaseParameters, base_parameters
+from .data import DataError, JointData
+from .robot import Robot, load
+
+__all__ = [
+    "IdentificationError",
+    "IdentificationResult",
+    "RankDeficientError",
+    "dynamic_system",
+    "energy_system",
+    "identify",
+    "validate",
+]
+
+MODELS = ("dynamic", "energy")
+
+
+class IdentificationError(ValueError):
+    """The data cannot identify the requested parameters."""
+
+
+class RankDeficientError(IdentificationError):
+    """The stacked regressor is rank deficient; ``unidentifiable`` names the base parameters that
+    the data cannot separate from the others."""
+
+    def __init__(self, message: str, unidentifiable: list[str], rank: int):
+        super().__init__(message)
+        self.unidentifiable = unidentifiable
+        self.rank = rank
+
+
+@dataclass
+class IdentificationResult:
+    """Estimated base parameters with their statistics.
+
+    Attributes
+    ----------
+    model : str
+        ``dynamic`` or ``energy``.
+    names, values, std, rsd : list, ndarray (k,), ndarray (k,), ndarray (k,)
+        The parameters kept after pruning, their estimates, standard deviations and relative
+        standard deviations in percent.
+    removed : list of (name, rsd)
+        Parameters removed for an RSD above the threshold, in order of removal (their RSD at
+        that moment).
+    full : ndarray, shape (nb,)
+        All base parameters in the order of ``base.names``, removed ones set to zero: the vector
+        to use with ``base.regressor`` (see :meth:`predict`).
+    sigma : float
+        Residual standard deviation of the (weighted) final fit.
+    joint_sigma : ndarray (n,), optional
+        Dynamic model: per-joint residual standard deviations of the first OLS pass, the weights'
+        inverse (WLS).
+    initial : dict
+        Estimates, std and RSD of all base parameters before pruning.
+    """
+
+    model: str
+    base: BaseParameters
+    names: list
+    values: np.ndarray
+    std: np.ndarray
+    rsd: np.ndarray
+    removed: list
+    full: np.ndarray
+    sigma: float
+    rows: int
+    weighted: bool
+    joint_sigma: np.ndarray | None = None
+    cond: float = float("nan")
+    rsd_threshold: float = 30.0
+    initial: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+    seconds: float = 0.0
+
+    def predict(self, data: JointData) -> np.ndarray:
+        """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n)."""
+        return self.base.regressor(data.q, data.dq, data.ddq) @ self.full
+
+    def to_dict(self) -> dict:
+        return {
+            "model": self.model,
+            "robot": self.base.robot.name,
+            "rotor": self.base.rotor,
+            "friction": self.base.friction,
+            "names": list(self.names),
+            "values": [float(v) for v in self.values],
+            "std": [float(v) for v in self.std],
+            "rsd": [_json_float(v) for v in self.rsd],
+            "removed": [{"name": n, "rsd": _json_float(r)} for n, r in self.removed],
+            "rsd_threshold": self.rsd_threshold,
+            "base_names": list(self.base.names),
+            "base_values": [float(v) for v in self.full],
+            "sigma": self.sigma,
+            "rows": self.rows,
+            "weighted": self.weighted,
+            "joint_sigma": None if self.joint_sigma is None else self.joint_sigma.tolist(),
+            "cond": _json_float(self.cond),
+            "initial": {
+                "names": list(self.base.names),
+                "values": [float(v) for v in self.initial.get("values", [])],
+                "rsd": [_json_float(v) for v in self.initial.get("rsd", [])],
+            },
+            "settings": self.settings,
+            "seconds": self.seconds,
+        }
+
+
+def _json_float(x):
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+# ---------------------------------------------------------------------------------------------
+# Regression systems
+# ---------------------------------------------------------------------------------------------
+def dynamic_system(base: BaseParameters, data: JointData, min_velocity: float = 0.0):
+    """Stacked dynamic model: ``W`` (r, nb), ``y`` (r,) and the joint of each row (r,).
+
+    With ``min_velocity > 0`` and Coulomb friction in the model, the equation of joint ``j`` at a
+    sample where ``|dq_j| < min_velocity`` is left out: there the sign of the velocity, and so
+    the Coulomb term, is not determined by the data (a torque held over a sample period, stiction,
+    velocity noise). ``r = m n`` minus those equations."""
+    _need_torque(data)
+    W = base.regressor(data.q, data.dq, data.ddq)  # (m, n, nb)
+    m, n, nb = W.shape
+    W, y, joint = W.reshape(m * n, nb), data.tau.reshape(m * n), np.tile(np.arange(n), m)
+    if min_velocity > 0 and base.friction:
+        keep = np.abs(data.dq).reshape(m * n) >= min_velocity
+        W, y, joint = W[keep], y[keep], joint[keep]
+    return W, y, joint
+
+
+def _cumulative(f: np.ndarray, t: np.ndarray, rule: str) -> np.ndarray:
+    """Cumulative integral of the samples ``f`` (m, ...) over ``t`` (m,), starting at 0."""
+    if rule == "trapezoid":
+        return integrate.cumulative_trapezoid(f, t, axis=0, initial=0)
+    if rule == "simpson":
+        if hasattr(integrate, "cumulative_simpson"):
+            return integrate.cumulative_simpson(f, x=t, axis=0, initial=0)
+        raise ValueError("Simpson integration needs scipy >= 1.12; use trapezoid")
+    raise ValueError(f"unknown integration rule '{rule}'; use trapezoid or simpson")
+
+
+def energy_system(
+    base: BaseParameters, data: JointData, window: int = 1, integration: str = "simpson"
+):
+    """Energy model over non-overlapping windows of ``window`` sample intervals:
+    ``W`` (r, nb) and ``y`` (r,), ``r = (m - 1) // window``."""
+    _need_torque(data)
+    if window < 1:
+        raise ValueError(f"energy window must be at least 1 sample interval, got {window}")
+    t, dq = data.t, data.dq
+    wH = base.energy_regressor(data.q, dq)  # (m, nb)
+    ends = np.arange(0, data.m, window)
+    if ends.size < 2:
+        raise IdentificationError(
+            f"{data.m} samples give no complete energy window of {window} intervals"
+        )
+    W = np.diff(wH[ends], axis=0)
+    power = np.einsum("ij,ij->i", dq, data.tau)
+    if integration == "zoh":
+        # Torque held over each sample interval: int dq^T tau dt = sum tau_k^T (q_k+1 - q_k).
+        power_int = np.concatenate(
+            [[0.0], np.cumsum(np.einsum("ij,ij->i", np.diff(data.q, axis=0), data.tau[:-1]))]
+        )
+        integration_f = "simpson"
+    else:
+        power_int = None
+        integration_f = integration
+    names = base.names
+    cols = {}
+    for k in range(data.n):
+        for kind, f in (("Fv", dq[:, k] ** 2), ("Fc", np.abs(dq[:, k]))):
+            name = f"{kind}{k + 1}"
+            if name in names:
+                cols[names.index(name)] = f
+    F = np.column_stack([power] + list(cols.values())) if cols else power[:, None]
+    cum = _cumulative(F, t, integration_f)
+    if power_int is not None:
+        cum[:, 0] = power_int
+    dI = np.diff(cum[ends], axis=0)
+    y = dI[:, 0]
+    for j, c in enumerate(cols):
+        W[:, c] = dI[:, j + 1]
+    return W, y
+
+
+def torque_noise(tau: np.ndarray) -> np.ndarray:
+    """Per-joint standard deviation of white noise on sampled torques, shape (n,), estimated
+    from second differences (robust: median absolute deviation); the smooth part of a torque
+    sampled much faster than it changes hardly contributes."""
+    d2 = np.diff(tau, n=2, axis=0)
+    mad = np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0)
+    return 1.4826 * mad / math.sqrt(6.0)
+
+
+def energy_row_noise(data: JointData, window: int) -> np.ndarray:
+    """Per window and joint, ``sum_k (c_k dq_jk)^2`` with trapezoid weights ``c_k``: the
+    variance of the window's power integral per unit torque-noise variance of joint ``j``;
+    shape (rows, n). A row's noise variance is ``A @ sigma^2``."""
+    dt = np.diff(data.t)
+    c = np.zeros(data.m)
+    ends = np.arange(0, data.m, window)
+    rows = []
+    for a, b in zip(ends[:-1], ends[1:]):
+        c = np.zeros(b - a + 1)
+        c[:-1] += 0.5 * dt[a:b]
+        c[1:] += 0.5 * dt[a:b]
+        rows.append(np.sum((c[:, None] * data.dq[a : b + 1]) ** 2, axis=0))
+    return np.array(rows)
+
+
+def _need_torque(data: JointData) -> None:
+    if data.tau is None:
+        raise DataError(f"{data.source or 'data'}: no torque columns tau1..tau{data.n}")
+
+
+# ---------------------------------------------------------------------------------------------
+# Least squares with statistics
+# ---------------------------------------------------------------------------------------------
+class _Reduced:
+    """A least-squares problem ``min |y - W p|`` reduced once by QR of the column-scaled
+    ``[W y]`` to a ``c x c`` triangle, so that any subset of columns is solved (with statistics)
+    from the small triangle: ``W`` (r, c), ``y`` (r,)."""
+
+    def __init__(self, W: np.ndarray, y: np.ndarray):
+        self.r, self.c = W.shape
+        norms = np.linalg.norm(W, axis=0)
+        self.zero = norms <= 1e-300
+        self.norms = np.where(self.zero, 1.0, norms)
+        R = np.linalg.qr(np.column_stack([W / self.norms, y]), mode="r")
+        c = self.c
+        self.R = R[:c, :c]
+        self.z = R[:c, c]
+        self.rho = float(R[c, c] ** 2) if R.shape[0] > c else 0.0
+
+    def rank(self, tol: float):
+        """``(rank, pivot order, condition number)`` of the column-scaled regressor."""
+        _, Rp, piv = sla.qr(self.R, pivoting=True)
+        d = np.abs(np.diag(Rp))
+        rank = int(np.sum(d > tol * d[0])) if d.size and d[0] > 0 else 0
+        cond = float(d[0] / d[-1]) if d.size and d[-1] > 0 else float("inf")
+        return rank, piv, cond
+
+    def solve(self, keep: list[int]):
+        """Estimate of the columns ``keep``: ``(p, std, sigma2)``."""
+        k = len(keep)
+        T = np.linalg.qr(np.column_stack([self.R[:, keep], self.z]), mode="r")
+        rss = self.rho + (float(T[k, k] ** 2) if T.shape[0] > k else 0.0)
+        Rk = T[:k, :k]
+        ps = sla.solve_triangular(Rk, T[:k, k])
+        scale = self.norms[keep]
+        sigma2 = rss / (self.r - k) if self.r > k else float("nan")
+        Rinv = sla.solve_triangular(Rk, np.eye(k))
+        var = sigma2 * np.einsum("ij,ij->i", Rinv, Rinv) / scale**2
+        return ps / scale, np.sqrt(var), sigma2
+
+
+def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float) -> float:
+    """Raises RankDeficientError when the columns of the regressor are dependent; returns the
+    condition number of the column-scaled regressor."""
+    rank, piv, cond = ls.rank(tol)
+    if rank < ls.c:
+        zero = [names[j] for j in np.flatnonzero(ls.zero)]
+        dropped = [names[j] for j in piv[rank:]]
+        dependent = [nm for nm in dropped if nm not in zero]
+        parts = []
+        if zero:
+            parts.append(f"no effect on this data: {', '.join(zero)}")
+        if dependent:
+            parts.append(
+                f"not separable from the others (combinations of the remaining columns): "
+                f"{', '.join(dependent)}"
+            )
+        raise RankDeficientError(
+            f"{what}: the stacked regressor has rank {rank} for {ls.c} base parameters; "
+            f"this trajectory cannot identify {len(dropped)} of them ({'; '.join(parts)}). "
+            "Use a richer excitation trajectory or fewer parameters.",
+            dropped,
+            rank,
+        )
+    return cond
+
+
+def _rsd(p: np.ndarray, std: np.ndarray) -> np.ndarray:
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(p != 0, 100.0 * std / np.abs(p), np.inf)
+
+
+@single_threaded_blas
+def identify(
+    robot: Robot | str,
+    data: JointData,
+    model: str = "dynamic",
+    rotor: bool = False,
+    friction: bool = False,
+    base: BaseParameters | None = None,
+    weighted: bool = True,
+    rsd_threshold: float | None = 30.0,
+    energy_window: int = 10,
+    integration: str = "simpson",
+    min_velocity: float = 0.01,
+    rank_tolerance: float = 1e-9,
+) -> IdentificationResult:
+    """Estimate the base parameters of ``robot`` from ``data``.
+
+    Parameters
+    ----------
+    robot : Robot or str
+    data : JointData
+        ``t, q, dq, ddq, tau`` (``ddq`` is not used by the energy model).
+    model : {"dynamic", "energy"}
+    rotor, friction : bool
+        Include rotor inertia / viscous and Coulomb friction (ignored when ``base`` is given).
+    base : BaseParameters, optional
+        Reuse a computed base-parameter set.
+    weighted : bool
+        Dynamic model: weighted least squares with per-joint weights from a first OLS pass.
+    rsd_threshold : float or None
+        Remove parameters with an RSD above this many percent, largest first, re-estimating after
+        each removal (None or <= 0: keep all).
+    energy_window : int
+        Energy model: sample intervals per window (one equation per window).
+    integration : {"simpson", "trapezoid", "zoh"}
+        Energy model: rule for the power and dissipation integrals (``zoh``: the logged torque
+        is taken as held over each sample period, ``int dq^T tau dt = sum tau_k^T (q_k+1 - q_k)``,
+        exact for a command held by the drive; dissipation by Simpson).
+    min_velocity : float
+        Dynamic model with friction: equations of joints slower than this [rad/s | m/s] are left
+        out (see :func:`dynamic_system`).
+    rank_tolerance : float
+        Relative size of the pivots of the column-scaled regressor below which it counts as rank
+        deficient.
+
+    Raises
+    ------
+    IdentificationError
+        Too few samples for the number of parameters, unknown model.
+    RankDeficientError
+        The data do not excite every base parameter (they are named).
+    """
+    t0 = time.perf_counter()
+    if model not in MODELS:
+        raise ValueError(f"unknown model '{model}'; use dynamic or energy")
+    robot = load(robot)
+    if data.n != robot.n:
+        raise DataError(
+            f"{data.source or 'data'} has {data.n} joints; robot '{robot.name}' has {robot.n}"
+        )
+    if base is None:
+        base = base_parameters(robot, rotor=rotor, friction=friction)
+    names = list(base.names)
+    nb = base.n
+    settings: dict = {"model": model}
+    if model == "dynamic":
+        if data.m * data.n < nb + 1:
+            raise IdentificationError(
+                f"{data.source or 'data'}: {data.m} samples x {data.n} joints = "
+                f"{data.m * data.n} equations for {nb} base parameters; at least "
+                f"{math.ceil((nb + 1) / data.n)} samples are needed (many more for a good fit)"
+            )
+        W, y, joint = dynamic_system(base, data, min_velocity)
+        settings["min_velocity"] = min_velocity if base.friction else 0.0
+        settings["equations_left_out"] = data.m * data.n - W.shape[0]
+    else:
+        rows = (data.m - 1) // energy_window
+        if rows < nb + 1:
+            raise IdentificationError(
+                f"{data.source or 'data'}: {data.m} samples give {rows} energy windows of "
+                f"{energy_window} intervals for {nb} base parameters; at least "
+                f"{(nb + 1) * energy_window + 1} samples are needed (or a shorter window)"
+            )
+        W, y = energy_system(base, data, energy_window, integration)
+        joint = None
+        settings.update({"energy_window": energy_window, "integration": integration})
+    what = f"{model} model on {data.source or 'the data'}"
+    ls = _Reduced(W, y)
+    cond = _check_rank(ls, names, what, rank_tolerance)
+
+    joint_sigma = None
+    if weighted and model == "energy":
+        joint_sigma = torque_noise(data.tau)
+        var = energy_row_noise(data, energy_window) @ joint_sigma**2
+        # Floor: windows near rest would otherwise get unbounded weight, and their error is
+        # then dominated by what the noise model leaves out (velocity noise, model error).
+        var = var + 0.1 * np.median(var)
+        if np.all(var > 0):
+            w = 1.0 / np.sqrt(var)
+            ls = _Reduced(W * w[:, None], y * w)
+            settings["weighting"] = (
+                "per-window 1/sd of the power integral from per-joint torque-noise estimates "
+                "(second differences of the logged torques)"
+            )
+        else:
+            weighted = False
+            settings["weighting"] = "none (torque noise not measurable)"
+    elif weighted:
+        p, _, _ = ls.solve(list(range(nb)))
+        res = y - W @ p
+        n = data.n
+        dof = (W.shape[0] - nb) / W.shape[0]
+        joint_sigma = np.sqrt(
+            np.array([np.mean(res[joint == j] ** 2) for j in range(n)]) / max(dof, 1e-12)
+        )
+        floor = max(joint_sigma.max() * 1e-9, 1e-300)
+        w = 1.0 / np.maximum(joint_sigma, floor)[joint]
+        ls = _Reduced(W * w[:, None], y * w)
+        settings["weighting"] = "per-joint 1/sigma_j from a first OLS pass"
+    else:
+        settings["weighting"] = "none (ordinary least squares)"
+
+    keep = list(range(nb))
+    p, std, s2 = ls.solve(keep)
+    initial = {"values": p.copy(), "std": std.copy(), "rsd": _rsd(p, std)}
+    removed = []
+    thr = rsd_threshold if rsd_threshold is not None and rsd_threshold > 0 else None
+    while thr is not None and len(keep) > 1:
+        rsd = _rsd(p, std)
+        j = int(np.argmax(np.where(np.isnan(rsd), np.inf, rsd)))
+        if not rsd[j] > thr:
+            break
+        removed.append((names[keep[j]], float(rsd[j])))
+        del keep[j]
+        p, std, s2 = ls.solve(keep)
+    full = np.zeros(nb)
+    full[keep] = p
+    settings["rsd_threshold"] = thr
+    return IdentificationResult(
+        model=model,
+        base=base,
+        names=[names[k] for k in keep],
+        values=p,
+        std=std,
+        rsd=_rsd(p, std),
+        removed=removed,
+        full=full,
+        sigma=math.sqrt(s2) if math.isfinite(s2) else float("nan"),
+        rows=ls.r,
+        weighted=weighted,
+        joint_sigma=joint_sigma,
+        cond=cond,
+        rsd_threshold=thr if thr is not None else float("nan"),
+        initial=initial,
+        settings=settings,
+        seconds=time.perf_counter() - t0,
+    )
+
+
+def validate(result: IdentificationResult, data: JointData) -> dict:
+    """Torque prediction on ``data``: per joint ``rms`` [N m | N] of ``tau - tau_hat`` and
+    ``relative`` error ``|tau - tau_hat| / |tau|`` (fractions), plus the predicted torques
+    ``tau_hat`` (m, n)."""
+    _need_torque(data)
+    if data.n != result.base.robot.n:
+        raise DataError(
+            f"{data.source or 'data'} has {data.n} joints; expected {result.base.robot.n}"
+        )
+    pred = result.predict(data)
+    err = data.tau - pred
+    rms = np.sqrt(np.mean(err**2, axis=0))
+    norm = np.linalg.norm(data.tau, axis=0)
+    rel = np.where(norm > 0, np.linalg.norm(err, axis=0) / np.where(norm > 0, norm, 1), np.nan)
+    return {"rms": rms, "relative": rel, "tau_hat": pred, "source": data.source}
+
+
+def true_base_values(base: BaseParameters, truth: dict) -> np.ndarray:
+    """Base-parameter values of a truth sidecar (classical names/values, any layout) in the layout
+    of ``base``; classical parameters absent from the truth count as zero."""
+    lookup = dict(zip(truth["names"], truth["values"]))
+    pi = np.array([float(lookup.get(nm, 0.0)) for nm in base.classical_names])
+    return base.values(pi)

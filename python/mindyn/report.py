@@ -1,0 +1,143 @@
+"""Identification reports: plots (matplotlib, Agg backend, PNG files) and terminal tables."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["format_table", "plot_torques", "write_report"]
+
+# Seed 001, Table 6: RMS torque error [N m] of the identified ZCR07S model, per joint, on the
+# excitation and the validation trajectory (measured on the real robot).
+SEED001_TABLE6 = {
+    "excitation": [4.1301, 4.3332, 2.3701, 2.4848, 1.1972, 0.4701],
+    "validation": [7.6313, 6.1961, 3.4130, 2.7433, 1.1433, 0.4757],
+}
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_torques(path, t, tau, tau_hat, title: str = "", unit: str = "N m") -> Path:
+    """Measured and estimated torque per joint, one panel each (as seed 001, Fig. 6-7).
+    ``t`` (m,), ``tau``, ``tau_hat`` (m, n)."""
+    plt = _pyplot()
+    n = tau.shape[1]
+    cols = 2 if n > 3 else 1
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(6 * cols, 2.1 * rows + 0.8), sharex=True)
+    axes = np.atleast_1d(axes).reshape(-1)
+    for k in range(n):
+        ax = axes[k]
+        rms = float(np.sqrt(np.mean((tau[:, k] - tau_hat[:, k]) ** 2)))
+        ax.plot(t, tau[:, k], lw=0.7, color="0.55", label="measured")
+        ax.plot(t, tau_hat[:, k], lw=1.0, color="C3", label="estimated")
+        ax.set_title(f"joint {k + 1}   RMS error {rms:.3g} {unit}", fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.set_ylabel(f"[{unit}]", fontsize=8)
+    for ax in axes[n:]:
+        ax.set_visible(False)
+    axes[0].legend(fontsize=7, loc="upper right")
+    for ax in axes[max(0, n - cols) : n]:
+        ax.set_xlabel("t [s]")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def format_table(result, truth=None) -> str:
+    """Terminal table of an :class:`~mindyn.identification.IdentificationResult`: name,
+    estimate, standard deviation, RSD and, when ``truth`` (base values, shape (nb,)) is given,
+    the true value and the relative error."""
+    names = list(result.base.names)
+    width = max(8, max(len(n) for n in names))
+    head = f"{'#':>3}  {'parameter':<{width}} {'estimate':>13} {'std':>11} {'RSD %':>8}"
+    if truth is not None:
+        head += f" {'true':>13} {'error %':>9}"
+    lines = [head]
+    kept = {n: i for i, n in enumerate(result.names)}
+    for b, name in enumerate(names):
+        if name not in kept:
+            continue
+        i = kept[name]
+        rsd = result.rsd[i]
+        line = (
+            f"{b + 1:>3}  {name:<{width}} {result.values[i]:>13.6g} {result.std[i]:>11.3g} "
+            f"{rsd:>8.2f}"
+            if math.isfinite(rsd)
+            else f"{b + 1:>3}  {name:<{width}} {result.values[i]:>13.6g} {result.std[i]:>11.3g} "
+            f"{'inf':>8}"
+        )
+        if truth is not None:
+            tv = truth[b]
+            err = 100 * abs(result.values[i] - tv) / abs(tv) if tv != 0 else float("nan")
+            line += f" {tv:>13.6g} {err:>9.3g}"
+        lines.append(line)
+    if result.removed:
+        lines.append("")
+        lines.append(
+            f"removed (RSD > {result.rsd_threshold:g} %), in order: "
+            + ", ".join(
+                f"{n} ({r:.0f} %)" if math.isfinite(r) else f"{n} (inf)" for n, r in result.removed
+            )
+        )
+    return "\n".join(lines)
+
+
+def write_report(
+    directory, result, data, validation_data=None, validation=None, fit=None, trajectory_limits=None
+) -> list[Path]:
+    """Writes the PNG plots of a report folder: measured vs estimated torques on the
+    identification data (and on the validation data), and the joint trajectory of the
+    identification data. Returns the paths written."""
+    from .excitation import plot_trajectory
+
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    out = []
+    tag = f"{result.base.robot.name}, {result.model} model"
+    fit = fit if fit is not None else result.predict(data)
+    out.append(
+        plot_torques(
+            d / "torque_identification.png",
+            data.t,
+            data.tau,
+            fit,
+            f"{tag}: identification data ({Path(data.source).name or 'data'})",
+        )
+    )
+    if validation_data is not None and validation is not None:
+        out.append(
+            plot_torques(
+                d / "torque_validation.png",
+                validation_data.t,
+                validation_data.tau,
+                validation["tau_hat"],
+                f"{tag}: validation data ({Path(validation_data.source).name or 'data'})",
+            )
+        )
+    out.append(
+        plot_trajectory(
+            d / "trajectory.png",
+            data.t,
+            data.q,
+            data.dq,
+            data.ddq,
+            trajectory_limits,
+            title=f"{result.base.robot.name}: excitation trajectory (identification data)",
+        )
+    )
+    return out
