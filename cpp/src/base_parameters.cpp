@@ -224,12 +224,14 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
     for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b, d.pivots[b2]) = b == b2 ? 1.0 : 0.0;
   }
   if (d.rank() > 0) {
+    // Pivot columns are reproduced exactly (identity block of Y); check the regrouped ones.
     Eigen::MatrixXd Zt(Z.rows(), d.rank());
     for (int b = 0; b < d.rank(); ++b) Zt.col(b) = Z.col(d.pivots[b]);
-    const Eigen::MatrixXd E = Z - Zt * d.Y;
-    for (int c = 0; c < Z.cols(); ++c)
-      if (colmax[c] > zero_level)
-        d.fit_residual = std::max(d.fit_residual, E.col(c).norm() / colmax[c]);
+    Eigen::VectorXd e(Z.rows());
+    for (int c : d.dependent) {
+      e.noalias() = Z.col(c) - Zt * d.Y.col(c);
+      d.fit_residual = std::max(d.fit_residual, e.norm() / colmax[c]);
+    }
   }
   // Near-degenerate geometry: say what the neighbouring tolerances would decide.
   const double looser = tolerance * 1e4, tighter = tolerance * 1e-3;
