@@ -589,10 +589,12 @@ def optimize_excitation(
 
         prob.best = J0
 
-        def callback(*_, it=it, s=s):
+        live = bool(getattr(stream, "isatty", lambda: False)())  # redraw on a terminal only
+
+        def callback(*_, it=it, s=s, live=live):
             it["k"] += 1
             now = time.perf_counter()
-            if now - it["last"] > 0.5:
+            if live and now - it["last"] > 0.5:
                 it["last"] = now
                 say(
                     f"\r  start {s + 1}/{starts}: iteration {it['k']:>3}, "
@@ -634,7 +636,8 @@ def optimize_excitation(
             }
         )
         say(
-            f"\r  start {s + 1}/{starts}: {shown} {report(J0):.6g} -> {report(J):.6g} "
+            ("\r" if live else "")
+            + f"  start {s + 1}/{starts}: {shown} {report(J0):.6g} -> {report(J):.6g} "
             f"({res.nit} iterations, {dt:.1f} s)          "
         )
         if best is None or J < best[1]:
