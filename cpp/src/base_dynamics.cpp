@@ -1,0 +1,192 @@
+#include "mindyn/base_dynamics.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mindyn {
+
+using codegen::Function;
+using codegen::GeneratedFunction;
+using codegen::InputKind;
+using codegen::Node;
+using codegen::Op;
+using codegen::Ref;
+
+Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
+  const codegen::Graph& g = f.graph;
+  const int N = g.size();
+  // Slots: constants and inputs first, then the computed values in execution order.
+  std::vector<std::uint32_t> slot(N, 0);
+  std::vector<char> used(N, 0);
+  for (int id = 0; id < N; ++id) used[id] = f.program.uses[id] > 0;
+  for (int id : f.program.order) used[id] = 1;
+  for (int id = 0; id < N; ++id) {
+    const Node& n = g.node(id);
+    if (!used[id] || (n.op != Op::Const && n.op != Op::Input)) continue;
+    slot[id] = static_cast<std::uint32_t>(slots_.size());
+    slots_.push_back(n.op == Op::Const ? n.value : 0.0);
+    if (n.op == Op::Input)
+      loads_.push_back({slot[id], n.kind, static_cast<std::uint32_t>(n.index)});
+  }
+  first_ = static_cast<std::uint32_t>(slots_.size());
+
+  auto kindOf = [&g](int id) {
+    const Node& n = g.node(id);
+    switch (n.op) {
+      case Op::Mul:
+        return Mul;
+      case Op::Add:
+        return n.b.negative() ? Sub : Add;
+      case Op::Sin:
+        return Sin;
+      case Op::Cos:
+        return Cos;
+      default:
+        return Sign;
+    }
+  };
+  // List scheduling: keep taking ready operations of the current kind, so that runs are long.
+  std::vector<int> pending(N, 0);
+  std::vector<std::vector<int>> readers(N);
+  for (int id : f.program.order) {
+    const Node& n = g.node(id);
+    std::vector<int> deps{n.a.id()};
+    if (n.op == Op::Add || n.op == Op::Mul) deps.push_back(n.b.id());
+    std::sort(deps.begin(), deps.end());
+    deps.erase(std::unique(deps.begin(), deps.end()), deps.end());
+    for (int d : deps) {
+      const Op o = g.node(d).op;
+      if (o == Op::Const || o == Op::Input) continue;
+      pending[id]++;
+      readers[d].push_back(id);
+    }
+  }
+  std::vector<std::vector<int>> ready(6);
+  for (int id : f.program.order)
+    if (pending[id] == 0) ready[kindOf(id)].push_back(id);
+  std::vector<int> order;
+  order.reserve(f.program.order.size());
+  int kind = -1;
+  while (order.size() < f.program.order.size()) {
+    if (kind < 0 || ready[kind].empty()) {
+      kind = 0;
+      for (int k = 1; k < 6; ++k)
+        if (ready[k].size() > ready[kind].size()) kind = k;
+      runs_.push_back({static_cast<Kind>(kind), static_cast<std::uint32_t>(order.size()), 0});
+    }
+    std::vector<int> batch;
+    std::swap(batch, ready[kind]);
+    for (int id : batch) {
+      slot[id] = first_ + static_cast<std::uint32_t>(order.size());
+      order.push_back(id);
+    }
+    for (int id : batch)
+      for (int r : readers[id])
+        if (--pending[r] == 0) ready[kindOf(r)].push_back(r);
+  }
+  for (auto& r : runs_) r.end = 0;
+  for (size_t i = 0; i < runs_.size(); ++i)
+    runs_[i].end =
+        i + 1 < runs_.size() ? runs_[i + 1].begin : static_cast<std::uint32_t>(order.size());
+  code_.reserve(order.size());
+  for (int id : order) {
+    const Node& n = g.node(id);
+    const bool binary = n.op == Op::Add || n.op == Op::Mul;
+    code_.push_back({slot[n.a.id()], binary ? slot[n.b.id()] : 0u});
+  }
+  slots_.resize(first_ + order.size(), 0.0);
+  for (Ref r : f.outputs) outputs_.emplace_back(slot[r.id()], r.negative());
+}
+
+void Tape::run(const double* q, const double* dq, const double* ddq, const double* p,
+               double* out) noexcept {
+  double* v = slots_.data();
+  for (const Load& l : loads_) {
+    const double* src = l.kind == InputKind::Q     ? q
+                        : l.kind == InputKind::DQ  ? dq
+                        : l.kind == InputKind::DDQ ? ddq
+                                                   : p;
+    v[l.slot] = src[l.index];
+  }
+  const Operands* c = code_.data();
+  for (const Run& r : runs_) {
+    double* dst = v + first_;
+    switch (r.kind) {
+      case Mul:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = v[c[i].a] * v[c[i].b];
+        break;
+      case Add:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = v[c[i].a] + v[c[i].b];
+        break;
+      case Sub:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = v[c[i].a] - v[c[i].b];
+        break;
+      case Sin:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = std::sin(v[c[i].a]);
+        break;
+      case Cos:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = std::cos(v[c[i].a]);
+        break;
+      case Sign:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) {
+          const double x = v[c[i].a];
+          dst[i] = x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0);
+        }
+        break;
+    }
+  }
+  for (size_t i = 0; i < outputs_.size(); ++i)
+    out[i] = outputs_[i].second ? -v[outputs_[i].first] : v[outputs_[i].first];
+}
+
+BaseDynamics::BaseDynamics(const Model& model, const BaseParameters& base)
+    : n_(model.nq()), np_(base.eom.size()), layout_(base.layout), names_(base.eom.names) {
+  if (base.eom.decision.Y.cols() != base.layout.size(n_))
+    throw ModelError("base parameters computed for another model (" +
+                     std::to_string(base.eom.decision.Y.cols()) + " classical parameters, " +
+                     std::to_string(base.layout.size(n_)) + " expected)");
+  const codegen::ParameterSet ps = codegen::baseParameterSet(model, base);
+  id_ = Tape(codegen::generate(model, ps, Function::InverseDynamics));
+  gravity_ = Tape(codegen::generate(model, ps, Function::Gravity));
+  regressor_ = Tape(codegen::generate(model, ps, Function::Regressor));
+  qb_.resize(n_);
+  dqb_.resize(n_);
+  ddqb_.resize(n_);
+  pb_.resize(np_);
+  out_.resize(static_cast<long>(n_) * np_);
+}
+
+void BaseDynamics::inverseDynamics(const VecRef& q, const VecRef& dq, const VecRef& ddq,
+                                   const VecRef& pb, VecOut tau) noexcept {
+  qb_ = q;
+  dqb_ = dq;
+  ddqb_ = ddq;
+  pb_ = pb;
+  id_.run(qb_.data(), dqb_.data(), ddqb_.data(), pb_.data(), out_.data());
+  tau = out_.head(n_);
+}
+
+void BaseDynamics::gravity(const VecRef& q, const VecRef& pb, VecOut tau) noexcept {
+  qb_ = q;
+  pb_ = pb;
+  gravity_.run(qb_.data(), nullptr, nullptr, pb_.data(), out_.data());
+  tau = out_.head(n_);
+}
+
+void BaseDynamics::regressor(const VecRef& q, const VecRef& dq, const VecRef& ddq,
+                             MatOut Wb) noexcept {
+  qb_ = q;
+  dqb_ = dq;
+  ddqb_ = ddq;
+  regressor_.run(qb_.data(), dqb_.data(), ddqb_.data(), nullptr, out_.data());
+  for (int i = 0; i < n_; ++i)
+    for (int b = 0; b < np_; ++b) Wb(i, b) = out_[static_cast<long>(i) * np_ + b];
+}
+
+const codegen::OpCount& BaseDynamics::count(Function f) const {
+  return f == Function::InverseDynamics ? id_.count()
+         : f == Function::Gravity       ? gravity_.count()
+                                        : regressor_.count();
+}
+
+}  // namespace mindyn
