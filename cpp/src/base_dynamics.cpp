@@ -139,13 +139,21 @@ void Tape::run(const double* q, const double* dq, const double* ddq, const doubl
     out[i] = outputs_[i].second ? -v[outputs_[i].first] : v[outputs_[i].first];
 }
 
-BaseDynamics::BaseDynamics(const Model& model, const BaseParameters& base)
-    : n_(model.nq()), np_(base.eom.size()), layout_(base.layout), names_(base.eom.names) {
-  if (base.eom.decision.Y.cols() != base.layout.size(n_))
+namespace {
+const BaseParameters& checked(const Model& model, const BaseParameters& base) {
+  if (base.eom.decision.Y.cols() != base.layout.size(model.nq()))
     throw ModelError("base parameters computed for another model (" +
                      std::to_string(base.eom.decision.Y.cols()) + " classical parameters, " +
-                     std::to_string(base.layout.size(n_)) + " expected)");
-  const codegen::ParameterSet ps = codegen::baseParameterSet(model, base);
+                     std::to_string(base.layout.size(model.nq())) + " expected)");
+  return base;
+}
+}  // namespace
+
+BaseDynamics::BaseDynamics(const Model& model, const BaseParameters& base)
+    : BaseDynamics(model, codegen::baseParameterSet(model, checked(model, base))) {}
+
+BaseDynamics::BaseDynamics(const Model& model, const codegen::ParameterSet& ps)
+    : n_(model.nq()), np_(ps.size()), layout_(ps.layout), names_(ps.names) {
   id_ = Tape(codegen::generate(model, ps, Function::InverseDynamics));
   gravity_ = Tape(codegen::generate(model, ps, Function::Gravity));
   regressor_ = Tape(codegen::generate(model, ps, Function::Regressor));

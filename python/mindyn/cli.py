@@ -10,7 +10,7 @@ import sys
 
 import numpy as np
 
-from . import ModelError, RobotFileNotFoundError, base_parameters, bundled_robots, load
+from . import ModelError, RobotFileNotFoundError, base_parameters, bundled_robots, cli_codegen, load
 
 ROBOT_HELP = (
     "a bundled robot (" + ", ".join(bundled_robots()) + "), a URDF file or a YAML DH/MDH table"
@@ -199,6 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="round joint rotations within RAD (default 1e-3) of multiples of pi/2",
     )
     p.set_defaults(func=cmd_base)
+    cli_codegen.register(sub)
     return parser
 
 

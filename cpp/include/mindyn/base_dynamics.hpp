@@ -62,6 +62,8 @@ class BaseDynamics {
  public:
   /// Throws ModelError when `base` does not belong to `model`.
   BaseDynamics(const Model& model, const BaseParameters& base);
+  /// The same from a parameter set (codegen::baseParameterSet, or any pi = E p map).
+  BaseDynamics(const Model& model, const codegen::ParameterSet& params);
 
   int nq() const { return n_; }
   /// Number of base parameters (equations-of-motion set, friction and rotor when enabled).

@@ -52,7 +52,8 @@ std::vector<std::string> describe(const GeneratedCode& code) {
     what += ", with ";
     for (size_t i = 0; i < extras.size(); ++i) what += (i ? " and " : "") + extras[i];
   }
-  lines.push_back(what + ".");
+  std::istringstream whatLines(wrap(what + ".", 90, "  "));
+  for (std::string part; std::getline(whatLines, part);) lines.push_back(part);
   lines.push_back("Units SI; gravity and all frames as in the robot description.");
   lines.push_back("");
   lines.push_back("Operation counts (multiplications, additions, sin/cos calls):");
@@ -66,10 +67,13 @@ std::vector<std::string> describe(const GeneratedCode& code) {
     lines.push_back(l);
   }
   lines.push_back("");
-  lines.push_back(code.numeric ? "Parameter values baked in (inverse_dynamics and gravity take no "
-                                 "p); the regressor's columns, in order:"
-                               : "Parameters p, in order, with the values of the robot "
-                                 "description or of the given file:");
+  if (code.numeric) {
+    lines.push_back("Parameter values baked in (inverse_dynamics and gravity take no p);");
+    lines.push_back("the regressor's columns, in order:");
+  } else {
+    lines.push_back("Parameters p, in order, with the values of the robot description or of");
+    lines.push_back("the given file:");
+  }
   for (int b = 0; b < ps.size(); ++b) {
     std::string l = std::to_string(b + 1) + ". " +
                     (ps.formulas.empty() ? ps.names[b] : ps.formulas[b]) + "  [" +
