@@ -387,7 +387,7 @@ def test_structured_text_parses_and_evaluates_like_the_c(name, robots, tmp_path,
 
 def test_structured_text_passes_blark():
     blark = pytest.importorskip("blark")
-    st = generate("planar2", lang="st", what="id,gravity,regressor", friction=True)
+    st = generate("planar2", lang="st", what="id,gravity", friction=True)
     result = blark.parse_source_code(st.text)
     assert result.exception is None, result.exception
     # blark rejects what it should: a C-style assignment
