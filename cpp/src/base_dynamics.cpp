@@ -15,14 +15,26 @@ using codegen::Ref;
 Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
   const codegen::Graph& g = f.graph;
   const int N = g.size();
-  // Slots: constants and inputs first, then the computed values in execution order.
+  const auto& uses = f.program.uses;
+  auto isMul = [&g](Ref r) { return g.node(r.id()).op == Op::Mul; };
+  // Products read by a single sum are fused into it.
+  std::vector<char> fused(N, 0);
+  for (int id : f.program.order) {
+    const Node& n = g.node(id);
+    if (n.op != Op::Add) continue;
+    if (isMul(n.a) && uses[n.a.id()] == 1)
+      fused[n.a.id()] = 1;
+    else if (isMul(n.b) && uses[n.b.id()] == 1)
+      fused[n.b.id()] = 1;
+  }
+  // Slots: constants (with 0 and 1) and inputs first, then the computed values.
   std::vector<std::uint32_t> slot(N, 0);
-  std::vector<char> used(N, 0);
-  for (int id = 0; id < N; ++id) used[id] = f.program.uses[id] > 0;
-  for (int id : f.program.order) used[id] = 1;
+  std::vector<char> needed(N, 0);
+  needed[0] = needed[1] = 1;
+  for (int id = 0; id < N; ++id) needed[id] = needed[id] || uses[id] > 0;
   for (int id = 0; id < N; ++id) {
     const Node& n = g.node(id);
-    if (!used[id] || (n.op != Op::Const && n.op != Op::Input)) continue;
+    if (!needed[id] || (n.op != Op::Const && n.op != Op::Input)) continue;
     slot[id] = static_cast<std::uint32_t>(slots_.size());
     slots_.push_back(n.op == Op::Const ? n.value : 0.0);
     if (n.op == Op::Input)
@@ -30,47 +42,59 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
   }
   first_ = static_cast<std::uint32_t>(slots_.size());
 
+  std::vector<int> nodes;  // one per instruction
+  for (int id : f.program.order)
+    if (!fused[id]) nodes.push_back(id);
   auto kindOf = [&g](int id) {
-    const Node& n = g.node(id);
-    switch (n.op) {
-      case Op::Mul:
-        return Mul;
-      case Op::Add:
-        return n.b.negative() ? Sub : Add;
+    switch (g.node(id).op) {
       case Op::Sin:
         return Sin;
       case Op::Cos:
         return Cos;
-      default:
+      case Op::Sign:
         return Sign;
+      default:
+        return Arith;
     }
   };
-  // List scheduling: keep taking ready operations of the current kind, so that runs are long.
+  // The computed nodes an instruction reads (through a fused product too).
+  auto reads = [&](int id) {
+    std::vector<int> r;
+    const Node& n = g.node(id);
+    std::vector<Ref> ops{n.a};
+    if (n.op == Op::Add || n.op == Op::Mul) ops.push_back(n.b);
+    for (size_t i = 0; i < ops.size(); ++i) {
+      const Ref x = ops[i];
+      if (fused[x.id()]) {
+        ops.push_back(g.node(x.id()).a);
+        ops.push_back(g.node(x.id()).b);
+        continue;
+      }
+      const Op o = g.node(x.id()).op;
+      if (o != Op::Const && o != Op::Input) r.push_back(x.id());
+    }
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    return r;
+  };
+  // List scheduling: keep taking ready instructions of the current kind, so that runs are long.
   std::vector<int> pending(N, 0);
   std::vector<std::vector<int>> readers(N);
-  for (int id : f.program.order) {
-    const Node& n = g.node(id);
-    std::vector<int> deps{n.a.id()};
-    if (n.op == Op::Add || n.op == Op::Mul) deps.push_back(n.b.id());
-    std::sort(deps.begin(), deps.end());
-    deps.erase(std::unique(deps.begin(), deps.end()), deps.end());
-    for (int d : deps) {
-      const Op o = g.node(d).op;
-      if (o == Op::Const || o == Op::Input) continue;
+  for (int id : nodes)
+    for (int d : reads(id)) {
       pending[id]++;
       readers[d].push_back(id);
     }
-  }
-  std::vector<std::vector<int>> ready(6);
-  for (int id : f.program.order)
+  std::vector<std::vector<int>> ready(4);
+  for (int id : nodes)
     if (pending[id] == 0) ready[kindOf(id)].push_back(id);
   std::vector<int> order;
-  order.reserve(f.program.order.size());
+  order.reserve(nodes.size());
   int kind = -1;
-  while (order.size() < f.program.order.size()) {
+  while (order.size() < nodes.size()) {
     if (kind < 0 || ready[kind].empty()) {
       kind = 0;
-      for (int k = 1; k < 6; ++k)
+      for (int k = 1; k < 4; ++k)
         if (ready[k].size() > ready[kind].size()) kind = k;
       runs_.push_back({static_cast<Kind>(kind), static_cast<std::uint32_t>(order.size()), 0});
     }
@@ -84,15 +108,29 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
       for (int r : readers[id])
         if (--pending[r] == 0) ready[kindOf(r)].push_back(r);
   }
-  for (auto& r : runs_) r.end = 0;
   for (size_t i = 0; i < runs_.size(); ++i)
     runs_[i].end =
         i + 1 < runs_.size() ? runs_[i + 1].begin : static_cast<std::uint32_t>(order.size());
   code_.reserve(order.size());
+  const std::uint32_t one = slot[1];
   for (int id : order) {
     const Node& n = g.node(id);
-    const bool binary = n.op == Op::Add || n.op == Op::Mul;
-    code_.push_back({slot[n.a.id()], binary ? slot[n.b.id()] : 0u});
+    Instruction in{slot[n.a.id()], one, slot[0], 1.0, 0.0};
+    if (n.op == Op::Mul) {
+      in.b = slot[n.b.id()];
+    } else if (n.op == Op::Add) {
+      // a + sb * b, one of them possibly a fused product x * y
+      Ref prod = n.a, other = n.b;
+      if (!fused[n.a.id()]) std::swap(prod, other);
+      if (fused[prod.id()]) {
+        const Node& m = g.node(prod.id());
+        in = {slot[m.a.id()], slot[m.b.id()], slot[other.id()], prod.negative() ? -1.0 : 1.0,
+              other.negative() ? -1.0 : 1.0};
+      } else {
+        in = {slot[n.a.id()], one, slot[n.b.id()], 1.0, n.b.negative() ? -1.0 : 1.0};
+      }
+    }
+    code_.push_back(in);
   }
   slots_.resize(first_ + order.size(), 0.0);
   for (Ref r : f.outputs) outputs_.emplace_back(slot[r.id()], r.negative());
@@ -108,18 +146,13 @@ void Tape::run(const double* q, const double* dq, const double* ddq, const doubl
                                                    : p;
     v[l.slot] = src[l.index];
   }
-  const Operands* c = code_.data();
+  const Instruction* c = code_.data();
+  double* dst = v + first_;
   for (const Run& r : runs_) {
-    double* dst = v + first_;
     switch (r.kind) {
-      case Mul:
-        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = v[c[i].a] * v[c[i].b];
-        break;
-      case Add:
-        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = v[c[i].a] + v[c[i].b];
-        break;
-      case Sub:
-        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = v[c[i].a] - v[c[i].b];
+      case Arith:
+        for (std::uint32_t i = r.begin; i < r.end; ++i)
+          dst[i] = c[i].sp * (v[c[i].a] * v[c[i].b]) + c[i].s * v[c[i].c];
         break;
       case Sin:
         for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = std::sin(v[c[i].a]);

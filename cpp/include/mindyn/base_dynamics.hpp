@@ -4,10 +4,11 @@
 // At setup the recursion is written into an expression graph (codegen/newton_euler.hpp) with
 // the model's exact geometric zeros and ones and with p_b at the pivot positions of the
 // classical vector (every non-base entry exactly zero), folded, de-duplicated and pruned; what
-// remains is flattened into a tape of multiplications, additions, sin/cos and sign, grouped in
-// runs of one kind so that the evaluation loop does not branch per operation. The per-call
-// functions allocate nothing and throw nothing; sizes are preconditions (the Python binding
-// checks them). One object per thread: the workspace is inside.
+// remains is flattened into a tape. Every arithmetic step is one uniform instruction
+// x = sp * (a * b) + s * c (a product feeding a single sum is fused into it), so the evaluation
+// loop does not branch per operation; sin, cos and sign run in their own short loops. The
+// per-call functions allocate nothing and throw nothing; sizes are preconditions (the Python
+// binding checks them). One object per thread: the workspace is inside.
 #pragma once
 
 #include <Eigen/Core>
@@ -31,18 +32,21 @@ class Tape {
   void run(const double* q, const double* dq, const double* ddq, const double* p,
            double* out) noexcept;
 
+  /// Operation counts of the generated function (before fusing).
   const codegen::OpCount& count() const { return count_; }
-  int operations() const { return static_cast<int>(code_.size()); }
+  /// Tape instructions (fused) and runs of one kind.
+  int instructions() const { return static_cast<int>(code_.size()); }
   int runs() const { return static_cast<int>(runs_.size()); }
 
  private:
-  enum Kind : std::uint8_t { Mul, Add, Sub, Sin, Cos, Sign };
+  enum Kind : std::uint8_t { Arith, Sin, Cos, Sign };
   struct Run {
     Kind kind;
     std::uint32_t begin, end;  // range in code_; results go to slots first_ + begin ...
   };
-  struct Operands {
-    std::uint32_t a, b;
+  struct Instruction {
+    std::uint32_t a, b, c;  // Arith: sp * (v[a] * v[b]) + s * v[c]; others: f(v[a])
+    double sp, s;
   };
   struct Load {
     std::uint32_t slot;
@@ -52,7 +56,7 @@ class Tape {
   std::vector<double> slots_;
   std::vector<Load> loads_;
   std::vector<Run> runs_;
-  std::vector<Operands> code_;
+  std::vector<Instruction> code_;
   std::vector<std::pair<std::uint32_t, bool>> outputs_;  // slot, negated
   std::uint32_t first_ = 0;                              // slot of the first computed value
   codegen::OpCount count_;
