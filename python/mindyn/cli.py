@@ -15,6 +15,7 @@ from . import (
     RobotFileNotFoundError,
     base_parameters,
     bundled_robots,
+    cli_codegen,
     cli_control,
     cli_demo,
     cli_identify,
@@ -217,6 +218,7 @@ def build_parser() -> argparse.ArgumentParser:
     cli_control.register(sub)
     cli_identify.register(sub)
     cli_demo.register(sub)
+    cli_codegen.register(sub)
     return parser
 
 

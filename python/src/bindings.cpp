@@ -197,6 +197,8 @@ py::dict limitsDict(const JointLimits& l) {
 
 }  // namespace
 
+void bindCodegen(pybind11::module_& m);
+
 PYBIND11_MODULE(_core, m) {
   m.doc() = "mindyn C++ core: models, linear-in-parameters dynamics, kinematics";
 
@@ -640,4 +642,5 @@ PYBIND11_MODULE(_core, m) {
   m.def("to_pinocchio_order", [](const Eigen::VectorXd& v) { return toPinocchioOrder(v); });
   m.def("from_pinocchio_order", [](const Eigen::VectorXd& v) { return fromPinocchioOrder(v); });
   bindControl(m);
+  bindCodegen(m);
 }

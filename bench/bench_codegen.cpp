@@ -1,0 +1,222 @@
+// Inverse dynamics per call, in one process: the generated C (base parameters, compiled here
+// with the system C compiler and loaded with dlopen), the runtime base-parameter tape, our
+// classical Newton-Euler, Pinocchio's rnea (C++, linked from the pin wheel) and KDL's
+// ChainIdSolver_RNE. Prints ns/call, ratios and operation counts.
+//
+// usage: bench_codegen ROBOT_DIR [UR5_URDF] [CC_FLAGS]
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <kdl/chainidsolver_recursive_newton_euler.hpp>
+#include <pinocchio/algorithm/rnea.hpp>
+#include <pinocchio/multibody.hpp>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "mindyn/base_dynamics.hpp"
+#include "mindyn/codegen/emit_c.hpp"
+#include "mindyn/description.hpp"
+#include "mindyn/dynamics.hpp"
+#include "mindyn/kinematics.hpp"
+#include "mindyn/urdf.hpp"
+
+using namespace mindyn;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+using IdFn = void (*)(const double*, const double*, const double*, const double*, double*);
+
+pinocchio::Model toPinocchio(const Model& m) {
+  pinocchio::Model pm;
+  pinocchio::JointIndex parent = 0;
+  for (int k = 0; k < m.nq(); ++k) {
+    const Joint& j = m.joints[k];
+    Eigen::Isometry3d X = j.pre;
+    if (k > 0) X = m.joints[k - 1].post * X;
+    const pinocchio::SE3 placement(X.linear(), X.translation());
+    if (j.type == JointType::Revolute)
+      parent =
+          pm.addJoint(parent, pinocchio::JointModelRevoluteUnaligned(j.axis), placement, j.name);
+    else
+      parent =
+          pm.addJoint(parent, pinocchio::JointModelPrismaticUnaligned(j.axis), placement, j.name);
+    // link parameters about the link origin, in link axes; the link frame sits at `post`
+    const auto p = m.inertial.segment<10>(10 * k);
+    const double mass = p[9];
+    const Eigen::Vector3d c =
+        mass != 0 ? Eigen::Vector3d(p.segment<3>(6) / mass) : Eigen::Vector3d::Zero();
+    const Eigen::Matrix3d Io = inertiaTensor(p);
+    const Eigen::Matrix3d Ic =
+        Io - mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+    const pinocchio::Inertia link(mass, c, Ic);
+    pm.inertias[parent] = link.se3Action(pinocchio::SE3(j.post.linear(), j.post.translation()));
+  }
+  pm.gravity.linear(m.gravity);
+  return pm;
+}
+
+// Best over repetitions of the mean time per call, in ns (the least disturbed by other load on
+// a shared machine).
+template <class F>
+double timeIt(F&& f, int calls) {
+  std::vector<double> reps;
+  for (int r = 0; r < 15; ++r) {
+    const auto t0 = Clock::now();
+    for (int i = 0; i < calls; ++i) f(i);
+    reps.push_back(std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / calls);
+  }
+  std::sort(reps.begin(), reps.end());
+  return reps.front();
+}
+
+volatile double sink = 0;
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: bench_codegen ROBOT_DIR [UR5_URDF] [CC_FLAGS]\n");
+    return 2;
+  }
+  const std::string dir = argv[1];
+  const std::string flags = argc > 3 ? argv[3] : "-O2";
+  std::vector<std::pair<std::string, Model>> robots;
+  robots.emplace_back("puma560", loadYaml(dir + "/puma560.yaml"));
+  robots.emplace_back("zcr07s", loadYaml(dir + "/zcr07s.yaml"));
+  if (argc > 2 && std::string(argv[2]).size()) robots.emplace_back("ur5", loadUrdf(argv[2], ""));
+  const std::string work = "bench_codegen_build";
+  std::system(("mkdir -p " + work).c_str());
+
+  std::printf(
+      "inverse dynamics, ns per call (best of 15 runs of 20000 calls); generated C: cc %s\n",
+      flags.c_str());
+  std::printf("%-8s %9s %9s %9s %9s %9s | %8s %8s | %s\n", "robot", "gen. C", "base tape",
+              "mindyn NE", "Pinocchio", "KDL", "Pin/genC", "KDL/genC",
+              "ops gen. C base (classical): mul add trig");
+  for (auto& [name, model] : robots) {
+    const int n = model.nq();
+    const BaseParameters bp = computeBaseParameters(model);
+    const codegen::ParameterSet ps = codegen::baseParameterSet(model, bp);
+    const auto code =
+        codegen::generateCode(model, ps, {codegen::Function::InverseDynamics}, name + "_bench");
+    const auto classical = codegen::generate(model, codegen::classicalParameterSet(model, {}),
+                                             codegen::Function::InverseDynamics);
+    const codegen::CFiles files = codegen::emitC(code, name + "_bench.h");
+    std::ofstream(work + "/" + name + "_bench.h") << files.header;
+    std::ofstream(work + "/" + name + "_bench.c") << files.source;
+    const std::string so = work + "/lib" + name + "_bench.so";
+    const std::string cmd = "cc -std=c99 " + flags + " -fPIC -shared -o " + so + " " + work + "/" +
+                            name + "_bench.c -lm";
+    if (std::system(cmd.c_str()) != 0) {
+      std::fprintf(stderr, "compiling the generated C failed: %s\n", cmd.c_str());
+      return 1;
+    }
+    void* lib = dlopen(("./" + so).c_str(), RTLD_NOW);
+    if (!lib) {
+      std::fprintf(stderr, "dlopen: %s\n", dlerror());
+      return 1;
+    }
+    const auto gen = reinterpret_cast<IdFn>(dlsym(lib, (name + "_bench_inverse_dynamics").c_str()));
+
+    // states
+    const int S = 256;
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> u(-2.0, 2.0);
+    std::vector<Eigen::VectorXd> Q(S, Eigen::VectorXd(n)), DQ = Q, DDQ = Q;
+    for (int s = 0; s < S; ++s)
+      for (int k = 0; k < n; ++k) {
+        Q[s][k] = 1.5 * u(rng);
+        DQ[s][k] = u(rng);
+        DDQ[s][k] = u(rng);
+      }
+    const Eigen::VectorXd pb = ps.values, pi = model.parameters();
+    Eigen::VectorXd tau(n), ref(n);
+
+    Data data(model);
+    BaseDynamics bd(model, bp);
+    pinocchio::Model pm = toPinocchio(model);
+    pinocchio::Data pd(pm);
+    KDL::Chain chain = toKdlChain(model);
+    KDL::ChainIdSolver_RNE kdl(
+        chain, KDL::Vector(model.gravity.x(), model.gravity.y(), model.gravity.z()));
+    KDL::JntArray kq(n), kdq(n), kddq(n), kt(n);
+    KDL::Wrenches fext(chain.getNrOfSegments(), KDL::Wrench::Zero());
+
+    // agreement first
+    double worst = 0;
+    for (int s = 0; s < 8; ++s) {
+      inverseDynamics(model, data, Q[s], DQ[s], DDQ[s], pi, {}, ref);
+      gen(Q[s].data(), DQ[s].data(), DDQ[s].data(), pb.data(), tau.data());
+      worst = std::max(worst, (tau - ref).norm() / ref.norm());
+      bd.inverseDynamics(Q[s], DQ[s], DDQ[s], pb, tau);
+      worst = std::max(worst, (tau - ref).norm() / ref.norm());
+      worst =
+          std::max(worst, (pinocchio::rnea(pm, pd, Q[s], DQ[s], DDQ[s]) - ref).norm() / ref.norm());
+      for (int k = 0; k < n; ++k) {
+        kq(k) = Q[s][k];
+        kdq(k) = DQ[s][k];
+        kddq(k) = DDQ[s][k];
+      }
+      kdl.CartToJnt(kq, kdq, kddq, fext, kt);
+      worst = std::max(worst, (kt.data - ref).norm() / ref.norm());
+    }
+    if (worst > 1e-8) {
+      std::fprintf(stderr, "%s: implementations disagree (relative %g)\n", name.c_str(), worst);
+      return 1;
+    }
+
+    const int calls = 20000;
+    const double tGen = timeIt(
+        [&](int i) {
+          const int s = i % S;
+          gen(Q[s].data(), DQ[s].data(), DDQ[s].data(), pb.data(), tau.data());
+          sink = sink + tau[0];
+        },
+        calls);
+    const double tTape = timeIt(
+        [&](int i) {
+          const int s = i % S;
+          bd.inverseDynamics(Q[s], DQ[s], DDQ[s], pb, tau);
+          sink = sink + tau[0];
+        },
+        calls);
+    const double tNe = timeIt(
+        [&](int i) {
+          const int s = i % S;
+          inverseDynamics(model, data, Q[s], DQ[s], DDQ[s], pi, {}, tau);
+          sink = sink + tau[0];
+        },
+        calls);
+    const double tPin = timeIt(
+        [&](int i) {
+          const int s = i % S;
+          sink = sink + pinocchio::rnea(pm, pd, Q[s], DQ[s], DDQ[s])[0];
+        },
+        calls);
+    const double tKdl = timeIt(
+        [&](int i) {
+          const int s = i % S;
+          for (int k = 0; k < n; ++k) {
+            kq(k) = Q[s][k];
+            kdq(k) = DQ[s][k];
+            kddq(k) = DDQ[s][k];
+          }
+          kdl.CartToJnt(kq, kdq, kddq, fext, kt);
+          sink = sink + kt(0);
+        },
+        calls);
+    const auto& c = code.functions[0].program.count;
+    const auto& k = classical.program.count;
+    std::printf("%-8s %9.1f %9.1f %9.1f %9.1f %9.1f | %8.2f %8.2f | %ld %ld %ld (%ld %ld %ld)\n",
+                name.c_str(), tGen, tTape, tNe, tPin, tKdl, tPin / tGen, tKdl / tGen, c.mul, c.add,
+                c.trig, k.mul, k.add, k.trig);
+    dlclose(lib);
+  }
+  return 0;
+}

@@ -1,0 +1,33 @@
+// C99 emitter: a header and a source file, depending on nothing but math.h, allocating nothing.
+//
+//   void NAME_inverse_dynamics(const double q[N], const double dq[N], const double ddq[N],
+//                              const double p[NP], double tau[N]);
+//   void NAME_gravity(const double q[N], const double p[NP], double tau[N]);
+//   void NAME_regressor(const double q[N], const double dq[N], const double ddq[N],
+//                       double W[N * NP]);          /* row-major: tau = W p */
+//
+// With baked-in (numeric) parameters the `p` argument is absent. The header lists the
+// parameters in order, with their definitions, in a comment and as NAME_parameter_names.
+#pragma once
+
+#include <string>
+
+#include "mindyn/codegen/newton_euler.hpp"
+
+namespace mindyn::codegen {
+
+struct CFiles {
+  std::string header;
+  std::string source;
+};
+
+/// `header_name` is the file name the source includes (e.g. "puma560_dyn.h").
+CFiles emitC(const GeneratedCode& code, const std::string& header_name);
+
+/// A double as a C / Structured Text literal that reads back to the same value.
+std::string literal(double v, bool structured_text = false);
+
+/// Shared by the emitters: the comment lines describing the generated code.
+std::vector<std::string> describe(const GeneratedCode& code);
+
+}  // namespace mindyn::codegen

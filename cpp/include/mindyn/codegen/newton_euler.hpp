@@ -1,0 +1,83 @@
+// The Newton-Euler recursion of a model written into an expression graph, customised to the
+// model: the constant joint transforms enter with their exact zeros and ones, the parameters
+// with their exact zeros (for base parameters every non-base classical entry is zero), and each
+// link's wrench is formed as a linear form in its parameters whose coefficients are shared
+// kinematic products. What does not reach an output is never scheduled.
+//
+// Frames: every joint is split into stages: the constant transform `pre`, the joint motion
+// about/along the axis through the stage origin, the constant transform `post`; link k's
+// wrench is added in link frame k. Forward: angular velocity and acceleration and the linear
+// acceleration of each stage origin (gravity as an upward base acceleration). Backward: the
+// wrench (moment about the stage origin, force); the torque is the axis component of the moment
+// (revolute) or the force (prismatic) right after the joint motion.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "mindyn/base_parameters.hpp"
+#include "mindyn/codegen/expr.hpp"
+#include "mindyn/model.hpp"
+
+namespace mindyn::codegen {
+
+enum class Function { InverseDynamics, Gravity, Regressor };
+
+/// "inverse_dynamics", "gravity" or "regressor" (the suffix of the generated function names).
+const char* toString(Function f);
+
+/// The parameter vector `p` a generated function takes, and how it maps to the classical
+/// parameters: pi = E p.
+struct ParameterSet {
+  ParameterLayout layout;
+  bool base = true;
+  std::vector<std::string> names;
+  std::vector<std::string> formulas;  // base: "XXR2 = XX2 - YY2 + ..."; classical: empty
+  Eigen::VectorXd values;             // the model's values (p = Y pi for a base set)
+  Eigen::MatrixXd E;                  // layout.size(n) x names.size()
+  int size() const { return static_cast<int>(names.size()); }
+};
+
+/// The equations-of-motion base set of `bp`: pi = embed(p_b).
+ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp);
+/// All classical parameters of a layout (E = identity).
+ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout);
+
+/// One generated function.
+struct GeneratedFunction {
+  Function function = Function::InverseDynamics;
+  int n = 0;             // joints
+  int np = 0;            // parameters
+  bool numeric = false;  // parameter values baked in (inverse dynamics and gravity only)
+  Graph graph;
+  /// tau (n entries) or the regressor, row-major n x np.
+  std::vector<Ref> outputs;
+  Program program;
+};
+
+/// Builds one function. `values` (size np) are baked in when `numeric` (ignored for the
+/// regressor, which does not depend on the parameters). Throws ModelError on a size mismatch.
+GeneratedFunction generate(const Model& model, const ParameterSet& params, Function function,
+                           bool numeric = false, const Eigen::VectorXd& values = {});
+
+/// Everything an emitter needs: the functions of one robot under one name.
+struct GeneratedCode {
+  std::string robot;  // model name, for the header comment
+  std::string name;   // identifier prefix of the generated functions
+  int n = 0;
+  ParameterSet params;
+  Eigen::VectorXd values;  // the parameter values (baked in when numeric)
+  bool numeric = false;
+  std::vector<GeneratedFunction> functions;
+};
+
+/// Generates `functions` under `name` (a C identifier; throws ModelError otherwise).
+GeneratedCode generateCode(const Model& model, const ParameterSet& params,
+                           const std::vector<Function>& functions, const std::string& name,
+                           bool numeric = false, const Eigen::VectorXd& values = {});
+
+/// `name` if it is a valid C and Structured Text identifier, otherwise throws ModelError.
+void checkIdentifier(const std::string& name);
+
+}  // namespace mindyn::codegen

@@ -1,0 +1,233 @@
+#include "mindyn/base_dynamics.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mindyn {
+
+using codegen::Function;
+using codegen::GeneratedFunction;
+using codegen::InputKind;
+using codegen::Node;
+using codegen::Op;
+using codegen::Ref;
+
+Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
+  const codegen::Graph& g = f.graph;
+  const int N = g.size();
+  const auto& uses = f.program.uses;
+  auto isMul = [&g](Ref r) { return g.node(r.id()).op == Op::Mul; };
+  // Products read by a single sum are fused into it.
+  std::vector<char> fused(N, 0);
+  for (int id : f.program.order) {
+    const Node& n = g.node(id);
+    if (n.op != Op::Add) continue;
+    if (isMul(n.a) && uses[n.a.id()] == 1)
+      fused[n.a.id()] = 1;
+    else if (isMul(n.b) && uses[n.b.id()] == 1)
+      fused[n.b.id()] = 1;
+  }
+  // Slots: constants (with 0 and 1) and inputs first, then the computed values.
+  std::vector<std::uint32_t> slot(N, 0);
+  std::vector<char> needed(N, 0);
+  needed[0] = needed[1] = 1;
+  for (int id = 0; id < N; ++id) needed[id] = needed[id] || uses[id] > 0;
+  for (int id = 0; id < N; ++id) {
+    const Node& n = g.node(id);
+    if (!needed[id] || (n.op != Op::Const && n.op != Op::Input)) continue;
+    slot[id] = static_cast<std::uint32_t>(slots_.size());
+    slots_.push_back(n.op == Op::Const ? n.value : 0.0);
+    if (n.op == Op::Input)
+      loads_.push_back({slot[id], n.kind, static_cast<std::uint32_t>(n.index)});
+  }
+  first_ = static_cast<std::uint32_t>(slots_.size());
+
+  std::vector<int> nodes;  // one per instruction
+  for (int id : f.program.order)
+    if (!fused[id]) nodes.push_back(id);
+  auto kindOf = [&g](int id) {
+    switch (g.node(id).op) {
+      case Op::Sin:
+        return Sin;
+      case Op::Cos:
+        return Cos;
+      case Op::Sign:
+        return Sign;
+      default:
+        return Arith;
+    }
+  };
+  // The computed nodes an instruction reads (through a fused product too).
+  auto reads = [&](int id) {
+    std::vector<int> r;
+    const Node& n = g.node(id);
+    std::vector<Ref> ops{n.a};
+    if (n.op == Op::Add || n.op == Op::Mul) ops.push_back(n.b);
+    for (size_t i = 0; i < ops.size(); ++i) {
+      const Ref x = ops[i];
+      if (fused[x.id()]) {
+        ops.push_back(g.node(x.id()).a);
+        ops.push_back(g.node(x.id()).b);
+        continue;
+      }
+      const Op o = g.node(x.id()).op;
+      if (o != Op::Const && o != Op::Input) r.push_back(x.id());
+    }
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    return r;
+  };
+  // List scheduling: keep taking ready instructions of the current kind, so that runs are long.
+  std::vector<int> pending(N, 0);
+  std::vector<std::vector<int>> readers(N);
+  for (int id : nodes)
+    for (int d : reads(id)) {
+      pending[id]++;
+      readers[d].push_back(id);
+    }
+  std::vector<std::vector<int>> ready(4);
+  for (int id : nodes)
+    if (pending[id] == 0) ready[kindOf(id)].push_back(id);
+  std::vector<int> order;
+  order.reserve(nodes.size());
+  int kind = -1;
+  while (order.size() < nodes.size()) {
+    if (kind < 0 || ready[kind].empty()) {
+      kind = 0;
+      for (int k = 1; k < 4; ++k)
+        if (ready[k].size() > ready[kind].size()) kind = k;
+      runs_.push_back({static_cast<Kind>(kind), static_cast<std::uint32_t>(order.size()), 0});
+    }
+    std::vector<int> batch;
+    std::swap(batch, ready[kind]);
+    for (int id : batch) {
+      slot[id] = first_ + static_cast<std::uint32_t>(order.size());
+      order.push_back(id);
+    }
+    for (int id : batch)
+      for (int r : readers[id])
+        if (--pending[r] == 0) ready[kindOf(r)].push_back(r);
+  }
+  for (size_t i = 0; i < runs_.size(); ++i)
+    runs_[i].end =
+        i + 1 < runs_.size() ? runs_[i + 1].begin : static_cast<std::uint32_t>(order.size());
+  code_.reserve(order.size());
+  const std::uint32_t one = slot[1];
+  for (int id : order) {
+    const Node& n = g.node(id);
+    Instruction in{slot[n.a.id()], one, slot[0], 1.0, 0.0};
+    if (n.op == Op::Mul) {
+      in.b = slot[n.b.id()];
+    } else if (n.op == Op::Add) {
+      // a + sb * b, one of them possibly a fused product x * y
+      Ref prod = n.a, other = n.b;
+      if (!fused[n.a.id()]) std::swap(prod, other);
+      if (fused[prod.id()]) {
+        const Node& m = g.node(prod.id());
+        in = {slot[m.a.id()], slot[m.b.id()], slot[other.id()], prod.negative() ? -1.0 : 1.0,
+              other.negative() ? -1.0 : 1.0};
+      } else {
+        in = {slot[n.a.id()], one, slot[n.b.id()], 1.0, n.b.negative() ? -1.0 : 1.0};
+      }
+    }
+    code_.push_back(in);
+  }
+  slots_.resize(first_ + order.size(), 0.0);
+  for (Ref r : f.outputs) outputs_.emplace_back(slot[r.id()], r.negative());
+}
+
+void Tape::run(const double* q, const double* dq, const double* ddq, const double* p,
+               double* out) noexcept {
+  double* v = slots_.data();
+  for (const Load& l : loads_) {
+    const double* src = l.kind == InputKind::Q     ? q
+                        : l.kind == InputKind::DQ  ? dq
+                        : l.kind == InputKind::DDQ ? ddq
+                                                   : p;
+    v[l.slot] = src[l.index];
+  }
+  const Instruction* c = code_.data();
+  double* dst = v + first_;
+  for (const Run& r : runs_) {
+    switch (r.kind) {
+      case Arith:
+        for (std::uint32_t i = r.begin; i < r.end; ++i)
+          dst[i] = c[i].sp * (v[c[i].a] * v[c[i].b]) + c[i].s * v[c[i].c];
+        break;
+      case Sin:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = std::sin(v[c[i].a]);
+        break;
+      case Cos:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = std::cos(v[c[i].a]);
+        break;
+      case Sign:
+        for (std::uint32_t i = r.begin; i < r.end; ++i) {
+          const double x = v[c[i].a];
+          dst[i] = x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0);
+        }
+        break;
+    }
+  }
+  for (size_t i = 0; i < outputs_.size(); ++i)
+    out[i] = outputs_[i].second ? -v[outputs_[i].first] : v[outputs_[i].first];
+}
+
+namespace {
+const BaseParameters& checked(const Model& model, const BaseParameters& base) {
+  if (base.eom.decision.Y.cols() != base.layout.size(model.nq()))
+    throw ModelError("base parameters computed for another model (" +
+                     std::to_string(base.eom.decision.Y.cols()) + " classical parameters, " +
+                     std::to_string(base.layout.size(model.nq())) + " expected)");
+  return base;
+}
+}  // namespace
+
+BaseDynamics::BaseDynamics(const Model& model, const BaseParameters& base)
+    : BaseDynamics(model, codegen::baseParameterSet(model, checked(model, base))) {}
+
+BaseDynamics::BaseDynamics(const Model& model, const codegen::ParameterSet& ps)
+    : n_(model.nq()), np_(ps.size()), layout_(ps.layout), names_(ps.names) {
+  id_ = Tape(codegen::generate(model, ps, Function::InverseDynamics));
+  gravity_ = Tape(codegen::generate(model, ps, Function::Gravity));
+  regressor_ = Tape(codegen::generate(model, ps, Function::Regressor));
+  qb_.resize(n_);
+  dqb_.resize(n_);
+  ddqb_.resize(n_);
+  pb_.resize(np_);
+  out_.resize(static_cast<long>(n_) * np_);
+}
+
+void BaseDynamics::inverseDynamics(const VecRef& q, const VecRef& dq, const VecRef& ddq,
+                                   const VecRef& pb, VecOut tau) noexcept {
+  qb_ = q;
+  dqb_ = dq;
+  ddqb_ = ddq;
+  pb_ = pb;
+  id_.run(qb_.data(), dqb_.data(), ddqb_.data(), pb_.data(), out_.data());
+  tau = out_.head(n_);
+}
+
+void BaseDynamics::gravity(const VecRef& q, const VecRef& pb, VecOut tau) noexcept {
+  qb_ = q;
+  pb_ = pb;
+  gravity_.run(qb_.data(), nullptr, nullptr, pb_.data(), out_.data());
+  tau = out_.head(n_);
+}
+
+void BaseDynamics::regressor(const VecRef& q, const VecRef& dq, const VecRef& ddq,
+                             MatOut Wb) noexcept {
+  qb_ = q;
+  dqb_ = dq;
+  ddqb_ = ddq;
+  regressor_.run(qb_.data(), dqb_.data(), ddqb_.data(), nullptr, out_.data());
+  for (int i = 0; i < n_; ++i)
+    for (int b = 0; b < np_; ++b) Wb(i, b) = out_[static_cast<long>(i) * np_ + b];
+}
+
+const codegen::OpCount& BaseDynamics::count(Function f) const {
+  return f == Function::InverseDynamics ? id_.count()
+         : f == Function::Gravity       ? gravity_.count()
+                                        : regressor_.count();
+}
+
+}  // namespace mindyn

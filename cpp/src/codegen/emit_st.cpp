@@ -1,0 +1,157 @@
+#include "mindyn/codegen/emit_st.hpp"
+
+#include <sstream>
+
+#include "mindyn/codegen/emit_c.hpp"
+
+namespace mindyn::codegen {
+
+namespace {
+
+const char* inputName(InputKind k) {
+  switch (k) {
+    case InputKind::Q:
+      return "q";
+    case InputKind::DQ:
+      return "dq";
+    case InputKind::DDQ:
+      return "ddq";
+    case InputKind::P:
+      return "p";
+  }
+  return "?";
+}
+
+class STWriter {
+ public:
+  explicit STWriter(const GeneratedFunction& f) : f_(f), slot_(f.graph.size(), -1) {}
+
+  std::string operand(Ref r) const {
+    const Node& n = f_.graph.node(r.id());
+    switch (n.op) {
+      case Op::Const:
+        return literal(n.value, true);
+      case Op::Input:
+        return std::string(inputName(n.kind)) + "[" + std::to_string(n.index + 1) + "]";
+      default:
+        return "t" + std::to_string(slot_[r.id()] + 1);
+    }
+  }
+  std::string signedValue(Ref r) const {
+    if (f_.graph.isConstant(r)) return literal(f_.graph.constantValue(r), true);
+    return (r.negative() ? "-" : "") + operand(r);
+  }
+  std::string output(size_t i) const {
+    if (f_.function != Function::Regressor) return "tau[" + std::to_string(i + 1) + "]";
+    const size_t np = static_cast<size_t>(f_.np);
+    return "W[" + std::to_string(i / np + 1) + ", " + std::to_string(i % np + 1) + "]";
+  }
+
+  // Statements, with temporaries reused once their last reader has run.
+  void body(std::ostream& os) {
+    const auto& order = f_.program.order;
+    std::vector<int> last(f_.graph.size(), -1);
+    for (size_t i = 0; i < order.size(); ++i) {
+      const Node& n = f_.graph.node(order[i]);
+      last[n.a.id()] = static_cast<int>(i);
+      if (n.op == Op::Add || n.op == Op::Mul) last[n.b.id()] = static_cast<int>(i);
+    }
+    std::vector<std::vector<size_t>> outputsOf(f_.graph.size());
+    for (size_t i = 0; i < f_.outputs.size(); ++i) outputsOf[f_.outputs[i].id()].push_back(i);
+    std::vector<int> free;
+    for (size_t i = 0; i < order.size(); ++i) {
+      const int id = order[i];
+      const Node& n = f_.graph.node(id);
+      const std::string a = operand(n.a);
+      const std::string b = (n.op == Op::Add || n.op == Op::Mul) ? operand(n.b) : "";
+      // operands whose last reader is this statement free their slots for the result
+      for (Ref r : {n.a, n.b})
+        if (slot_[r.id()] >= 0 && last[r.id()] == static_cast<int>(i)) {
+          free.push_back(slot_[r.id()]);
+          last[r.id()] = -2;
+        }
+      if (free.empty()) {
+        slot_[id] = slots_++;
+      } else {
+        slot_[id] = free.back();
+        free.pop_back();
+      }
+      const std::string t = operand(Ref(id, false));
+      switch (n.op) {
+        case Op::Sin:
+          os << t << " := SIN(" << a << ");\n";
+          break;
+        case Op::Cos:
+          os << t << " := COS(" << a << ");\n";
+          break;
+        case Op::Sign:
+          os << "IF " << a << " > 0.0 THEN\n  " << t << " := 1.0;\nELSIF " << a << " < 0.0 THEN\n  "
+             << t << " := -1.0;\nELSE\n  " << t << " := 0.0;\nEND_IF;\n";
+          break;
+        case Op::Add:
+          os << t << " := " << a << (n.b.negative() ? " - " : " + ") << b << ";\n";
+          break;
+        case Op::Mul:
+          os << t << " := " << a << " * " << b << ";\n";
+          break;
+        default:
+          break;
+      }
+      for (size_t o : outputsOf[id])
+        os << output(o) << " := " << signedValue(f_.outputs[o]) << ";\n";
+      if (last[id] == -1) {  // read by outputs only
+        free.push_back(slot_[id]);
+        last[id] = -2;
+      }
+    }
+    for (size_t o = 0; o < f_.outputs.size(); ++o) {
+      const Op op = f_.graph.node(f_.outputs[o].id()).op;
+      if (op == Op::Const || op == Op::Input)
+        os << output(o) << " := " << signedValue(f_.outputs[o]) << ";\n";
+    }
+  }
+  int slots() const { return slots_; }
+
+ private:
+  const GeneratedFunction& f_;
+  std::vector<int> slot_;
+  int slots_ = 0;
+};
+
+}  // namespace
+
+std::string emitST(const GeneratedCode& code) {
+  checkIdentifier(code.name);
+  const std::string N = std::to_string(code.n), NP = std::to_string(code.params.size());
+  std::ostringstream os;
+  for (const auto& l : describe(code)) os << "(* " << l << " *)\n";
+  os << "(* Arrays are 1-based: q[k] is joint k, p[j] parameter j; regressor W[i, j]. *)\n";
+  for (const auto& f : code.functions) {
+    STWriter w(f);
+    std::ostringstream body;
+    w.body(body);
+    os << "\nFUNCTION_BLOCK " << code.name << "_" << toString(f.function) << "\n";
+    os << "VAR_INPUT\n  q : ARRAY[1.." << N << "] OF LREAL;\n";
+    if (f.function != Function::Gravity)
+      os << "  dq : ARRAY[1.." << N << "] OF LREAL;\n  ddq : ARRAY[1.." << N << "] OF LREAL;\n";
+    if (f.function != Function::Regressor && !f.numeric)
+      os << "  p : ARRAY[1.." << NP << "] OF LREAL;\n";
+    os << "END_VAR\nVAR_OUTPUT\n";
+    if (f.function == Function::Regressor)
+      os << "  W : ARRAY[1.." << N << ", 1.." << NP << "] OF LREAL;\n";
+    else
+      os << "  tau : ARRAY[1.." << N << "] OF LREAL;\n";
+    os << "END_VAR\n";
+    if (w.slots() > 0) {
+      os << "VAR\n";
+      for (int s = 0; s < w.slots(); ++s) os << "  t" << s + 1 << " : LREAL;\n";
+      os << "END_VAR\n";
+    }
+    const OpCount& c = f.program.count;
+    os << "(* " << c.mul << " mul, " << c.add << " add, " << c.trig << " sin/cos *)\n";
+    os << body.str() << "END_FUNCTION_BLOCK\n";
+  }
+  return os.str();
+}
+
+}  // namespace mindyn::codegen

@@ -1,0 +1,282 @@
+// The expression graph's simplifications, the generated Newton-Euler graphs against a closed form
+// and against the classical recursion, the runtime base-parameter tapes, and their allocation
+// freedom (malloc counter of this test program).
+#include <gtest/gtest.h>
+#include <malloc.h>
+
+#include <atomic>
+#include <cmath>
+
+#include "mindyn/base_dynamics.hpp"
+#include "mindyn/codegen/emit_c.hpp"
+#include "mindyn/codegen/emit_st.hpp"
+#include "mindyn/codegen/newton_euler.hpp"
+#include "test_util.hpp"
+
+extern "C" {
+void* __libc_malloc(size_t);
+void* __libc_calloc(size_t, size_t);
+void* __libc_realloc(void*, size_t);
+}
+
+namespace {
+std::atomic<bool> counting{false};
+std::atomic<long> allocations{0};
+}  // namespace
+
+extern "C" void* malloc(size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  return __libc_malloc(size);
+}
+extern "C" void* calloc(size_t n, size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  return __libc_calloc(n, size);
+}
+extern "C" void* realloc(void* p, size_t size) {
+  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
+  return __libc_realloc(p, size);
+}
+
+using namespace mindyn;
+using namespace mindyn::codegen;
+using mindyn::test::random;
+using mindyn::test::relErr;
+
+namespace {
+
+struct Count {
+  Count() {
+    allocations = 0;
+    counting = true;
+  }
+  ~Count() { counting = false; }
+  long value() const { return allocations.load(); }
+};
+
+Model withExtras(Model m, std::mt19937& rng) {
+  const int n = m.nq();
+  m.rotor_inertia = random(rng, n).cwiseAbs();
+  m.viscous = random(rng, n).cwiseAbs();
+  m.coulomb = random(rng, n).cwiseAbs();
+  return m;
+}
+
+Eigen::VectorXd outputs(const GeneratedFunction& f, const Eigen::VectorXd& q,
+                        const Eigen::VectorXd& dq, const Eigen::VectorXd& ddq,
+                        const Eigen::VectorXd& p) {
+  const auto v = f.graph.evaluate({q.data(), dq.data(), ddq.data(), p.data()});
+  Eigen::VectorXd out(f.outputs.size());
+  for (size_t i = 0; i < f.outputs.size(); ++i) out[i] = f.graph.value(v, f.outputs[i]);
+  return out;
+}
+
+}  // namespace
+
+TEST(Expr, FoldingAndSharing) {
+  Graph g;
+  const Ref x = g.input(InputKind::DQ, 0), y = g.input(InputKind::DDQ, 1);
+  EXPECT_EQ(g.mul(x, Graph::one()), x);
+  EXPECT_EQ(g.mul(g.constant(-1.0), x), -x);
+  EXPECT_EQ(g.mul(x, Graph::zero()), Graph::zero());
+  EXPECT_EQ(g.add(x, Graph::zero()), x);
+  EXPECT_EQ(g.sub(x, x), Graph::zero());
+  EXPECT_EQ(g.mul(x, y), g.mul(y, x));
+  EXPECT_EQ(g.mul(-x, y), -g.mul(x, y));
+  EXPECT_EQ(g.sub(x, y), -g.sub(y, x));
+  EXPECT_EQ(g.add(x, y), g.add(y, x));
+  EXPECT_EQ(g.constantValue(g.add(g.constant(2.0), g.constant(-0.5))), 1.5);
+  EXPECT_EQ(g.constantValue(g.mul(g.constant(3.0), g.constant(-2.0))), -6.0);
+  // constants gather: 2 * (3 * x) is one multiplication 6 * x
+  EXPECT_EQ(g.mul(g.constant(2.0), g.mul(g.constant(3.0), x)), g.mul(g.constant(6.0), x));
+  EXPECT_EQ(g.cos(-x), g.cos(x));
+  EXPECT_EQ(g.sin(-x), -g.sin(x));
+  // x*y + y*x - 2*(x*y): built three ways, scheduled once
+  const Ref xy = g.mul(x, y);
+  const Ref e = g.sub(g.add(g.mul(x, y), g.mul(y, x)), g.add(xy, xy));
+  EXPECT_EQ(e, Graph::zero());
+  const Program p = schedule(g, {g.add(g.mul(x, y), g.mul(y, x)), -g.mul(y, x)});
+  EXPECT_EQ(p.count.mul, 1);
+  EXPECT_EQ(p.count.add, 1);
+  EXPECT_EQ(p.count.neg, 1);
+  const double xv = 0.3, yv = -1.7;
+  const double dqv[1] = {xv}, ddqv[2] = {0.0, yv};
+  const auto v = g.evaluate({nullptr, dqv, ddqv, nullptr});
+  EXPECT_DOUBLE_EQ(g.value(v, p.outputs[0]), 2 * xv * yv);
+  EXPECT_DOUBLE_EQ(g.value(v, p.outputs[1]), -xv * yv);
+}
+
+TEST(Codegen, TwoLinkPlanarClosedForm) {
+  // Vertical-plane two-link arm of uniform rods (planarArm): the textbook closed form.
+  const double l = 0.5, m = 2.0, r = 0.02, g = 9.81;
+  const Model model = planarArm(2, true, l, m);
+  const BaseParameters bp = computeBaseParameters(model);
+  const ParameterSet ps = baseParameterSet(model, bp);
+  const auto id = generate(model, ps, Function::InverseDynamics);
+  const auto idn = generate(model, ps, Function::InverseDynamics, true);
+  const auto grav = generate(model, ps, Function::Gravity);
+  const double lc = l / 2, I = m * (3 * r * r + l * l) / 12.0;
+  std::mt19937 rng(1);
+  for (int trial = 0; trial < 10; ++trial) {
+    const Eigen::VectorXd q = random(rng, 2, M_PI), dq = random(rng, 2, 2), ddq = random(rng, 2, 3);
+    const double c1 = std::cos(q[0]), c2 = std::cos(q[1]), s2 = std::sin(q[1]);
+    const double c12 = std::cos(q[0] + q[1]);
+    const double m11 = m * lc * lc + I + m * (l * l + lc * lc + 2 * l * lc * c2) + I;
+    const double m12 = m * (lc * lc + l * lc * c2) + I;
+    const double m22 = m * lc * lc + I;
+    const double hh = m * l * lc * s2;
+    Eigen::Vector2d expected, gexp;
+    gexp << (m * lc + m * l) * g * c1 + m * lc * g * c12, m * lc * g * c12;
+    expected[0] = m11 * ddq[0] + m12 * ddq[1] - hh * (2 * dq[0] * dq[1] + dq[1] * dq[1]) + gexp[0];
+    expected[1] = m12 * ddq[0] + m22 * ddq[1] + hh * dq[0] * dq[0] + gexp[1];
+    EXPECT_LT(relErr(outputs(id, q, dq, ddq, ps.values), expected), 1e-12);
+    EXPECT_LT(relErr(outputs(idn, q, dq, ddq, Eigen::VectorXd()), expected), 1e-12);
+    EXPECT_LT(relErr(outputs(grav, q, dq, ddq, ps.values), gexp), 1e-12);
+  }
+}
+
+TEST(Codegen, BaseAndClassicalGraphsMatchTheClassicalRecursion) {
+  std::mt19937 rng(3);
+  for (const char* name : {"puma560", "zcr07s", "stanford", "puma560_3"}) {
+    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+    Data data(model);
+    const int n = model.nq();
+    for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true}}) {
+      BaseOptions opt;
+      opt.layout = layout;
+      const BaseParameters bp = computeBaseParameters(model, opt);
+      const ParameterSet base = baseParameterSet(model, bp);
+      const ParameterSet classical = classicalParameterSet(model, layout);
+      const auto id = generate(model, base, Function::InverseDynamics);
+      const auto grav = generate(model, base, Function::Gravity);
+      const auto reg = generate(model, base, Function::Regressor);
+      const auto cid = generate(model, classical, Function::InverseDynamics);
+      // the base recursion exploits the zeros: fewer operations than the classical one
+      EXPECT_LT(id.program.count.mul, cid.program.count.mul) << name;
+      EXPECT_LT(id.program.count.add, cid.program.count.add) << name;
+      for (int trial = 0; trial < 3; ++trial) {
+        const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2),
+                              ddq = random(rng, n, 2);
+        const Eigen::VectorXd pi = random(rng, layout.size(n));
+        const Eigen::VectorXd pb = bp.values(pi);
+        Eigen::VectorXd tau(n), tg(n);
+        Eigen::MatrixXd W(n, layout.size(n)), Wb(n, bp.eom.size());
+        inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+        gravityTorque(model, data, q, pi, layout, tg);
+        baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
+        EXPECT_LT(relErr(outputs(id, q, dq, ddq, pb), tau), 1e-12) << name;
+        EXPECT_LT(relErr(outputs(cid, q, dq, ddq, pi), tau), 1e-12) << name;
+        EXPECT_LT(relErr(outputs(grav, q, dq, ddq, pb), tg), 1e-12) << name;
+        const Eigen::VectorXd w = outputs(reg, q, dq, ddq, pb);
+        const Eigen::MatrixXd Wg = Eigen::Map<const Eigen::MatrixXd>(w.data(), bp.eom.size(), n);
+        EXPECT_LT((Wg.transpose() - Wb).norm() / std::max(1.0, Wb.norm()), 1e-12) << name;
+      }
+    }
+  }
+}
+
+TEST(Codegen, NumericValuesAreBakedIn) {
+  const Model model = loadYaml(test::robotFile("puma560"));
+  const BaseParameters bp = computeBaseParameters(model);
+  const ParameterSet ps = baseParameterSet(model, bp);
+  const auto sym = generate(model, ps, Function::InverseDynamics);
+  const auto num = generate(model, ps, Function::InverseDynamics, true);
+  // zeros in the published values remove work
+  EXPECT_LT(num.program.count.mul, sym.program.count.mul);
+  for (int id = 0; id < num.graph.size(); ++id)
+    EXPECT_FALSE(num.graph.node(id).op == Op::Input && num.graph.node(id).kind == InputKind::P &&
+                 num.program.uses[id] > 0);
+  std::mt19937 rng(4);
+  const Eigen::VectorXd q = random(rng, 6), dq = random(rng, 6), ddq = random(rng, 6);
+  EXPECT_LT(
+      relErr(outputs(num, q, dq, ddq, Eigen::VectorXd()), outputs(sym, q, dq, ddq, ps.values)),
+      1e-13);
+  EXPECT_THROW(generate(model, ps, Function::InverseDynamics, true, Eigen::VectorXd::Ones(3)),
+               ModelError);
+}
+
+TEST(Codegen, EmittersNameEverything) {
+  const Model model = loadYaml(test::robotFile("puma560_3"));
+  const BaseParameters bp = computeBaseParameters(model);
+  const GeneratedCode code =
+      generateCode(model, baseParameterSet(model, bp),
+                   {Function::InverseDynamics, Function::Gravity, Function::Regressor}, "puma3");
+  const CFiles c = emitC(code, "puma3.h");
+  EXPECT_NE(c.header.find("void puma3_inverse_dynamics(const double q[3], const double dq[3], "
+                          "const double ddq[3], const double p[15], double tau[3]);"),
+            std::string::npos);
+  EXPECT_NE(c.header.find("void puma3_gravity(const double q[3], const double p[15], "
+                          "double tau[3]);"),
+            std::string::npos);
+  EXPECT_NE(c.header.find("double W[45]"), std::string::npos);
+  for (const auto& name : bp.eom.names)
+    EXPECT_NE(c.source.find("\"" + name + "\""), std::string::npos) << name;
+  const std::string st = emitST(code);
+  EXPECT_NE(st.find("FUNCTION_BLOCK puma3_inverse_dynamics"), std::string::npos);
+  EXPECT_NE(st.find("W : ARRAY[1..3, 1..15] OF LREAL;"), std::string::npos);
+  EXPECT_EQ(st.find("**"), std::string::npos);
+  EXPECT_EQ(st.find("ATAN2"), std::string::npos);
+  size_t longest = 0, start = 0;
+  for (size_t i = 0; i <= st.size(); ++i)
+    if (i == st.size() || st[i] == '\n') {
+      longest = std::max(longest, i - start);
+      start = i + 1;
+    }
+  EXPECT_LE(longest, 100u);
+  EXPECT_THROW(generateCode(model, baseParameterSet(model, bp), {Function::Gravity}, "9lives"),
+               ModelError);
+  EXPECT_THROW(generateCode(model, baseParameterSet(model, bp), {Function::Gravity}, "a__b"),
+               ModelError);
+}
+
+TEST(BaseDynamics, TapesMatchTheClassicalRecursionAndAllocateNothing) {
+  std::mt19937 rng(5);
+  for (const char* name : {"puma560", "zcr07s", "stanford"}) {
+    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+    Data data(model);
+    const int n = model.nq();
+    BaseOptions opt;
+    opt.layout = {true, true};
+    const BaseParameters bp = computeBaseParameters(model, opt);
+    BaseDynamics bd(model, bp);
+    ASSERT_EQ(bd.np(), bp.eom.size());
+    EXPECT_LT(bd.count(Function::InverseDynamics).mul, bd.count(Function::Regressor).mul);
+    const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 2);
+    const Eigen::VectorXd pi = random(rng, opt.layout.size(n));
+    const Eigen::VectorXd pb = bp.values(pi);
+    Eigen::VectorXd tau(n), tg(n), t1(n), t2(n);
+    Eigen::MatrixXd W(n, opt.layout.size(n)), Wb(n, bd.np()), Wt(n, bd.np());
+    inverseDynamics(model, data, q, dq, ddq, pi, opt.layout, tau);
+    gravityTorque(model, data, q, pi, opt.layout, tg);
+    baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
+    long seen;
+    {
+      Count c;
+      for (int i = 0; i < 3; ++i) {
+        bd.inverseDynamics(q, dq, ddq, pb, t1);
+        bd.gravity(q, pb, t2);
+        bd.regressor(q, dq, ddq, Wt);
+      }
+      seen = c.value();
+    }
+    EXPECT_EQ(seen, 0) << name;
+    EXPECT_LT(relErr(t1, tau), 1e-12) << name;
+    EXPECT_LT(relErr(t2, tg), 1e-12) << name;
+    EXPECT_LT((Wt - Wb).norm() / std::max(1.0, Wb.norm()), 1e-12) << name;
+  }
+}
+
+TEST(BaseDynamics, TheCounterSeesAllocations) {
+  long seen;
+  {
+    Count c;
+    auto* v = new std::vector<double>(100);
+    seen = c.value();
+    delete v;
+  }
+  EXPECT_GE(seen, 1);
+}
+
+TEST(BaseDynamics, RejectsBaseParametersOfAnotherModel) {
+  const Model a = loadYaml(test::robotFile("puma560")), b = loadYaml(test::robotFile("puma560_3"));
+  EXPECT_THROW(BaseDynamics(b, computeBaseParameters(a)), ModelError);
+}

@@ -1,0 +1,303 @@
+"""Generated inverse-dynamics code (C99, IEC 61131-3 Structured Text) and the runtime
+base-parameter dynamics.
+
+The generator writes the Newton-Euler recursion of a robot into an expression graph, customised
+to the model: exact zeros and ones of the geometry, the base parameters at their pivot positions
+of the classical vector (every other entry exactly zero), constant folding, removal of
+multiplications by 0 and +-1, common-subexpression elimination and dead-code removal. Three
+functions can be generated: ``inverse_dynamics`` (tau from q, dq, ddq and p), ``gravity``
+(tau from q and p) and ``regressor`` (W_b with tau = W_b p).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from . import _core
+from .base import BaseParameters, base_parameters
+from .robot import Robot, load
+
+__all__ = [
+    "FUNCTIONS",
+    "BaseDynamics",
+    "GeneratedCode",
+    "generate",
+    "read_parameter_file",
+]
+
+FUNCTIONS = ("inverse_dynamics", "gravity", "regressor")
+_ALIASES = {"id": "inverse_dynamics"}
+
+
+class GeneratedCode:
+    """Generated code and its operation counts.
+
+    Attributes
+    ----------
+    lang : {"c", "st"}
+    name : str
+        Prefix of the generated functions (``NAME_inverse_dynamics`` ...).
+    header, source : str
+        C only: the header and source texts.
+    text : str
+        Structured Text only: the FUNCTION_BLOCKs.
+    counts : dict
+        Per function: ``{"mul", "add", "neg", "trig", "sign"}`` operation counts.
+    names : list of str
+        The parameters ``p`` in order.
+    values : ndarray, shape (np,)
+        Their values (the robot's own, or those given; baked in when ``numeric``).
+    """
+
+    def __init__(self, lang: str, name: str, out: dict, numeric: bool, header_name: str):
+        self.lang = lang
+        self.header_name = header_name
+        self.name = name
+        self.numeric = numeric
+        self.header = out.get("header")
+        self.source = out.get("source")
+        self.text = out.get("text")
+        self.counts = {k: dict(v) for k, v in out["counts"].items()}
+        self.names = list(out["names"])
+        self.values = np.asarray(out["values"], dtype=float)
+
+    def write(self, path: str | Path) -> list[Path]:
+        """Writes the code: C to ``path`` (``.c`` added when missing) and the header beside it
+        under ``header_name`` (the name the source includes); ST to ``path``. Returns the paths
+        written."""
+        path = Path(path)
+        if self.lang == "st":
+            path.write_text(self.text)
+            return [path]
+        src = path if path.suffix == ".c" else path.with_suffix(".c")
+        hdr = src.parent / self.header_name
+        hdr.write_text(self.header)
+        src.write_text(self.source)
+        return [hdr, src]
+
+    def __repr__(self) -> str:
+        c = ", ".join(f"{k}: {v['mul']} mul {v['add']} add" for k, v in self.counts.items())
+        return f"GeneratedCode({self.lang!r}, {self.name!r}, {c})"
+
+
+def _functions(what) -> list[str]:
+    if isinstance(what, str):
+        what = [w.strip() for w in what.split(",") if w.strip()]
+    out = []
+    for w in what:
+        w = _ALIASES.get(w, w)
+        if w not in FUNCTIONS:
+            raise ValueError(f"unknown function '{w}' (choose from id, gravity, regressor)")
+        if w not in out:
+            out.append(w)
+    if not out:
+        raise ValueError("no function to generate")
+    return out
+
+
+def _identifier(name: str) -> str:
+    s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
+    s = re.sub(r"_+", "_", s)
+    if not s or not s[0].isalpha():
+        s = "robot_" + s
+    return s[:40].rstrip("_")
+
+
+def generate(
+    robot: Robot | str,
+    lang: str = "c",
+    what: Sequence[str] | str = FUNCTIONS,
+    rotor: bool = False,
+    friction: bool = False,
+    params: str | Path | Sequence[float] | None = None,
+    numeric: bool = False,
+    name: str | None = None,
+    base: bool | BaseParameters = True,
+    header_name: str | None = None,
+) -> GeneratedCode:
+    """Generates inverse-dynamics code for ``robot``.
+
+    Parameters
+    ----------
+    robot : Robot or str
+        Anything :func:`mindyn.load` accepts.
+    lang : {"c", "st"}
+        C99 (header and source) or IEC 61131-3 Structured Text.
+    what : sequence of str or str
+        Functions to generate: ``inverse_dynamics`` (alias ``id``), ``gravity``, ``regressor``;
+        a comma-separated string is accepted.
+    rotor, friction : bool
+        Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
+    params : path or array, optional
+        Parameter values, shape (np,): an array, or a file read by
+        :func:`read_parameter_file`. Default: the robot's own values (``p_b = Y pi``).
+    numeric : bool
+        Bake the values into inverse_dynamics and gravity (they then take no ``p``).
+    name : str, optional
+        Prefix of the generated identifiers (default: from the robot's name).
+    base : bool or BaseParameters
+        Base parameters (default), a given :class:`BaseParameters`, or ``False`` for all
+        classical parameters (the classical recursion, for comparison).
+    header_name : str, optional
+        C: the header file name the source includes (default ``NAME.h``).
+    """
+    robot = load(robot) if not isinstance(robot, Robot) else robot
+    if lang not in ("c", "st"):
+        raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
+    fs = _functions(what)
+    name = name if name is not None else _identifier(robot.name)
+    if isinstance(base, BaseParameters):
+        if base.rotor != rotor or base.friction != friction:
+            rotor, friction = base.rotor, base.friction
+        bp_core = base._b
+        names = base.names
+    elif base:
+        bp = base_parameters(robot, rotor=rotor, friction=friction)
+        bp_core = bp._b
+        names = bp.names
+    else:
+        bp_core = None
+        names = robot.parameter_names(rotor, friction)
+    values = None
+    if params is not None:
+        if isinstance(params, (str, Path)):
+            values = read_parameter_file(params, names)
+        else:
+            values = np.asarray(params, dtype=float)
+            if values.shape != (len(names),):
+                raise ValueError(
+                    f"params has shape {values.shape}; expected ({len(names)},) for {names[:3]}..."
+                )
+    out = _core.generate_code(
+        robot._m,
+        bp_core,
+        rotor=rotor,
+        friction=friction,
+        functions=fs,
+        name=name,
+        numeric=numeric,
+        values=values,
+        lang=lang,
+        header_name=header_name or f"{name}.h",
+    )
+    return GeneratedCode(lang, name, out, numeric, header_name or f"{name}.h")
+
+
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
+    """Parameter values from a file, in the order of ``names``.
+
+    Accepted: JSON, either a mapping ``{"NAME": value}`` or ``{"names": [...], "values": [...]}``
+    or a plain list in order; or text with one ``NAME value`` (or ``NAME = value``) per line,
+    ``#`` comments allowed. Every name must be given exactly once; unknown names are an error.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise _core.RobotFileNotFoundError(f"parameter file '{path}' does not exist")
+    text = path.read_text()
+    names = list(names)
+    mapping: dict[str, float] = {}
+    if path.suffix.lower() == ".json" or text.lstrip().startswith(("{", "[")):
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise ValueError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+        if isinstance(data, list):
+            if len(data) != len(names):
+                raise ValueError(f"{path}: {len(data)} values; expected {len(names)}")
+            mapping = dict(zip(names, data))
+        elif isinstance(data, dict) and "names" in data and "values" in data:
+            if len(data["names"]) != len(data["values"]):
+                raise ValueError(f"{path}: 'names' and 'values' differ in length")
+            mapping = dict(zip(data["names"], data["values"]))
+        elif isinstance(data, dict):
+            mapping = data
+        else:
+            raise ValueError(f"{path}: expected a JSON mapping or list")
+    else:
+        for lineno, line in enumerate(text.splitlines(), 1):
+            line = line.split("#", 1)[0].strip()
+            if not line:
+                continue
+            m = re.fullmatch(r"([A-Za-z_][A-Za-z0-9_]*)\s*(?:=|:|\s)\s*(" + _NUMBER + r")", line)
+            if not m:
+                raise ValueError(f"{path}:{lineno}: expected 'NAME value', got '{line}'")
+            if m.group(1) in mapping:
+                raise ValueError(f"{path}:{lineno}: '{m.group(1)}' given twice")
+            mapping[m.group(1)] = float(m.group(2))
+    unknown = [k for k in mapping if k not in names]
+    if unknown:
+        raise ValueError(
+            f"{path}: unknown parameter(s) {', '.join(unknown[:5])}; expected {', '.join(names)}"
+        )
+    missing = [k for k in names if k not in mapping]
+    if missing:
+        raise ValueError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
+    values = np.empty(len(names))
+    for i, k in enumerate(names):
+        try:
+            values[i] = float(mapping[k])
+        except (TypeError, ValueError):
+            raise ValueError(f"{path}: value of '{k}' is not a number") from None
+        if not math.isfinite(values[i]):
+            raise ValueError(f"{path}: value of '{k}' is not finite")
+    return values
+
+
+class BaseDynamics:
+    """Inverse dynamics, gravity torque and base regressor in the base parameters, by the
+    customised Newton-Euler recursion flattened at construction (C++, allocation-free per call).
+
+    Parameters
+    ----------
+    base : BaseParameters
+        From :func:`mindyn.base_parameters` (its robot, rotor and friction settings are used).
+
+    Attributes
+    ----------
+    n, np : int
+        Joints and base parameters.
+    names : list of str
+    counts : dict
+        Operation counts per function.
+    """
+
+    def __init__(self, base: BaseParameters):
+        self.base = base
+        self._d = _core.BaseDynamics(base._b)
+
+    n = property(lambda self: self._d.n)
+    np = property(lambda self: self._d.np)
+    names = property(lambda self: self._d.names)
+    counts = property(lambda self: self._d.counts)
+
+    def inverse_dynamics(self, q, dq, ddq, p=None) -> np.ndarray:
+        """tau, shape (n,) or (m, n) for batches of q, dq, ddq; ``p`` shape (np,), default the
+        robot's own base-parameter values."""
+        p = self._values(p)
+        return self._d.inverse_dynamics(q, dq, ddq, p)
+
+    def gravity(self, q, p=None) -> np.ndarray:
+        """Gravity torque, shape (n,) or (m, n)."""
+        return self._d.gravity(q, self._values(p))
+
+    def regressor(self, q, dq, ddq) -> np.ndarray:
+        """W_b, shape (n, np) or (m, n, np): ``tau = W_b @ p``."""
+        return self._d.regressor(q, dq, ddq)
+
+    def _values(self, p):
+        if p is None:
+            rob = self.base.robot
+            return self.base.values(rob.parameters(self.base.rotor, self.base.friction))
+        return np.asarray(p, dtype=float)
+
+    def __repr__(self) -> str:
+        return f"BaseDynamics(n={self.n}, np={self.np})"
