@@ -4,9 +4,13 @@
 #include <array>
 #include <cmath>
 
+#include "spatial.hpp"
+
 namespace mindyn {
 
 namespace {
+
+using detail::skew;
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
@@ -24,12 +28,6 @@ inline std::uint64_t withJoint(std::uint64_t key, int joint, int l) {  // joint 
 }
 inline std::uint64_t withL0(std::uint64_t key, int l0) {
   return key | static_cast<std::uint64_t>(l0);
-}
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
-  Eigen::Matrix3d m;
-  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
-  return m;
 }
 
 // Twist transformation (angular; linear) of a rigid transform.
@@ -77,7 +75,7 @@ double maxAbs(const M& m) {
 template <class M>
 double pruneMax(M& m, double tol) {
   double big = 0.0;
-  for (int i = 0; i < m.size(); ++i) {
+  for (int i = 0; i < static_cast<int>(m.size()); ++i) {
     const double a = std::abs(m.data()[i]);
     if (a <= tol)
       m.data()[i] = 0.0;
@@ -91,7 +89,7 @@ double pruneMax(M& m, double tol) {
 template <class M>
 bool prune(M& m, double tol) {
   bool any = false;
-  for (int i = 0; i < m.size(); ++i) {
+  for (int i = 0; i < static_cast<int>(m.size()); ++i) {
     if (std::abs(m.data()[i]) <= tol)
       m.data()[i] = 0.0;
     else

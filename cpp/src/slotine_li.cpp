@@ -1,25 +1,14 @@
 #include "mindyn/slotine_li.hpp"
 
+#include "spatial.hpp"
+
 namespace mindyn {
 
 namespace {
 
-inline Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
-  Eigen::Matrix3d m;
-  m << 0.0, -w.z(), w.y(), w.z(), 0.0, -w.x(), -w.y(), w.x(), 0.0;
-  return m;
-}
-
-// I w = L(w) [XX XY XZ YY YZ ZZ] for the symmetric tensor of model.hpp.
-inline Eigen::Matrix<double, 3, 6> inertiaMap(const Eigen::Vector3d& w) {
-  Eigen::Matrix<double, 3, 6> L;
-  L << w.x(), w.y(), w.z(), 0.0, 0.0, 0.0,  //
-      0.0, w.x(), 0.0, w.y(), w.z(), 0.0,   //
-      0.0, 0.0, w.x(), 0.0, w.y(), w.z();
-  return L;
-}
-
-inline double sgn(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }
+using detail::inertiaMap;
+using detail::sgn;
+using detail::skew;
 
 // Spatial motion cross product v x u.
 inline Vector6d crossMotion(const Vector6d& v, const Vector6d& u) {

@@ -13,6 +13,8 @@
 #include <sstream>
 #include <vector>
 
+#include "spatial.hpp"
+
 namespace mindyn {
 namespace {
 
@@ -66,12 +68,6 @@ Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
   if (q.norm() > 0.0) T.linear() = q.normalized().toRotationMatrix();
   T.translation() << pose.position.x, pose.position.y, pose.position.z;
   return T;
-}
-
-Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d S;
-  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return S;
 }
 
 bool isMoving(const urdf::Joint& j) { return j.type != urdf::Joint::FIXED; }
@@ -317,8 +313,8 @@ Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1
   const Eigen::Vector3d p = parent_T_child.translation();
   const double m = inertial[9];
   const Eigen::Vector3d Rh = R * inertial.segment<3>(6);
-  const Eigen::Matrix3d P = skew(p);
-  const Eigen::Matrix3d H = skew(Rh);
+  const Eigen::Matrix3d P = detail::skew(p);
+  const Eigen::Matrix3d H = detail::skew(Rh);
   const Eigen::Matrix3d I = R * inertiaTensor(inertial) * R.transpose() - P * H - H * P - m * P * P;
   const Eigen::Vector3d h = Rh + m * p;
   Eigen::Matrix<double, 10, 1> out;

@@ -5,9 +5,13 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "../spatial.hpp"
+
 namespace mindyn::codegen {
 
 namespace {
+
+using detail::sgn;
 
 std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
   h ^= v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);
@@ -40,8 +44,6 @@ bool sameNode(const Node& x, const Node& y) {
       return x.a == y.a && x.b == y.b;
   }
 }
-
-inline double sgn(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }
 
 }  // namespace
 
