@@ -373,3 +373,20 @@ def test_cli_usage_errors():
     r = run_cli("info", "--help")
     assert r.returncode == 0
     assert "ROBOT" in r.stdout
+
+
+def test_simulate_with_a_feedback_controller_is_the_closed_loop_simulation():
+    from mindyn.cli import _route
+
+    assert _route(["simulate", "zcr07s", "--controller", "adaptive-pd"])[0] == "track"
+    assert _route(["simulate", "zcr07s", "--controller=pd", "--trajectory", "t.csv"])[0] == "track"
+    assert (
+        _route(["simulate", "zcr07s", "--gains", "g.yaml", "--trajectory", "t.csv"])[0] == "track"
+    )
+    assert (
+        _route(["simulate", "zcr07s", "--controller", "computed-torque", "--period", "0.004"])[0]
+        == "track"
+    )
+    # logging along a trajectory stays the open-loop log of `simulate`
+    assert _route(["simulate", "zcr07s", "--trajectory", "t.json", "-o", "d.csv"])[0] == "simulate"
+    assert _route(["simulate", "--help"])[0] == "simulate"

@@ -222,9 +222,29 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+_TRACK_ONLY = ("--gains", "--cycle", "--param-error", "--report")
+
+
+def _route(argv: list[str]) -> list[str]:
+    """``mindyn simulate`` with ``--controller adaptive-pd|pd``, with the closed-loop options
+    (--gains, ...) or without a --trajectory to log is the closed-loop simulation of
+    ``mindyn track``."""
+    if not argv or argv[0] != "simulate" or "-h" in argv or "--help" in argv:
+        return argv
+    keys = [a.split("=", 1)[0] for a in argv[1:]]
+    closed = any(k in _TRACK_ONLY for k in keys) or "--trajectory" not in keys
+    for i, a in enumerate(argv[1:], 1):
+        value = a.split("=", 1)[1] if a.startswith("--controller=") else None
+        if a == "--controller" and i + 1 < len(argv):
+            value = argv[i + 1]
+        if value in ("adaptive-pd", "pd"):
+            closed = True
+    return ["track", *argv[1:]] if closed else argv
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_route(list(sys.argv[1:] if argv is None else argv)))
     try:
         return args.func(args)
     except (RobotFileNotFoundError, FileNotFoundError) as e:

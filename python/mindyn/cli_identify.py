@@ -334,8 +334,8 @@ def register(sub) -> None:
         "its true parameters integrated (RK4) under a tracking controller, or torques from "
         "inverse dynamics along the reference (--mode inverse); optional sensor noise and "
         "encoder quantisation. Also writes <output>.truth.json with the true parameters. "
-        "Closed-loop adaptive PD, computed torque or PD with the controller at its own period: "
-        "'mindyn track'.",
+        "With --controller adaptive-pd or pd, with --gains, or without --trajectory, this is the "
+        "closed-loop simulation of 'mindyn track' (controller at its own period).",
     )
     p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
     p.add_argument("--tip", help="URDF: the link that ends the chain")
