@@ -1,7 +1,8 @@
 """Base inertial parameters (projection method) against independent references.
 
-- ZCR07S: the split into kept and regrouped parameters of the published Table 1 (seed 001) and
-  Khalil's general grouping relations, derived here from the published MDH table (Table 2).
+- ZCR07S: the split into kept and regrouped parameters of the published Table 1 (the ZCR07S
+  study) and Khalil's general grouping relations, derived here from the published MDH table
+  (Table 2).
 - Published / Pinocchio-measured counts (PUMA 560, planar chains, UR, Panda, double pendulum,
   asr_twodof, a generic skewed-axis 6R).
 - Every fixed-base arm URDF of example-robot-data and randomly generated robots with arbitrary
@@ -133,9 +134,10 @@ def assert_terms(got: dict[str, float], expected: dict[str, float], what: str, t
 
 
 # --------------------------------------------------------------------------------------------
-# ZCR07S (seed 001): Table 1 split and Khalil's grouping relations
+# ZCR07S (the ZCR07S study): Table 1 split and Khalil's grouping relations
 # --------------------------------------------------------------------------------------------
-# Seed 001, Table 2 (published MDH table): r_j [mm], alpha_j [deg], d_j [mm], theta offset [deg].
+# The ZCR07S study, Table 2 (published MDH table): r_j [mm], alpha_j [deg], d_j [mm],
+# theta offset [deg].
 SEED_MDH = [(0, 0, 0, 0), (0, 90, 25, 90), (0, 0, 455, 0), (420, 90, 35, 0), (0, 90, 0, 0)]
 SEED_MDH.append((0, -90, 0, 0))
 SIN = {0: 0.0, 90: 1.0, -90: -1.0}
@@ -264,15 +266,15 @@ def test_zcr07s_formulas_agree_with_khalil():
 def test_zcr07s_named_formulas_from_the_table():
     """The relations quoted in the issue, with coefficients from the published table.
 
-    Where we differ from the seed's printed formulas, and why:
-    - the seed prints XXR3 with r4^2 (M4 + M5 + M6) and MX3, XY3 unregrouped: it leaves out every
+    Where we differ from the study's printed formulas, and why:
+    - the study prints XXR3 with r4^2 (M4 + M5 + M6) and MX3, XY3 unregrouped: it leaves out every
       term in d4 = 35 mm that its own Table 2 implies (XXR3 gets (r4^2 - d4^2), XYR3 gets
       d4 MZ4 + d4 r4 (M4+M5+M6), MXR3 gets d4 (M4+M5+M6), ZZR3 gets (r4^2 + d4^2), ZZR1 d4^2);
-    - the seed prints MY4R = MY4 + MZ5 and MY5R = MY5 - MZ6; with alpha5 = +90 deg and
+    - the study prints MY4R = MY4 + MZ5 and MY5R = MY5 - MZ6; with alpha5 = +90 deg and
       alpha6 = -90 deg, Khalil's MY_{j-1} += -sin(alpha_j) MZ_j gives MYR4 = MY4 - MZ5 and
       MYR5 = MY5 + MZ6. test_zcr07s_seed_print_breaks_the_torque_identity shows that the printed
       signs and the missing d4 terms do not reproduce the torques, while these do;
-    - the seed marks XZ3, XZ4, XZ5 as regrouped; with cos(alpha4) = cos(alpha5) = cos(alpha6)
+    - the study marks XZ3, XZ4, XZ5 as regrouped; with cos(alpha4) = cos(alpha5) = cos(alpha6)
       = 0, XZ_{j-1} += -d_j cos(alpha_j) (...) adds nothing, so they stay alone.
     """
     bp = zcr07s_bp()
@@ -325,7 +327,7 @@ def test_zcr07s_khalil_relations_reproduce_pinocchio(rng):
 
 
 def test_zcr07s_seed_print_breaks_the_torque_identity(rng):
-    """The seed's printed MY4R = MY4 + MZ5, MY5R = MY5 - MZ6 and its d4-free XXR3 / MXR3 do not
+    """The study's printed MY4R = MY4 + MZ5, MY5R = MY5 - MZ6 and its d4-free XXR3 / MXR3 do not
     reproduce the torques of its own MDH table: each breaks tau = W_b p_b."""
     robot = mindyn.load("zcr07s")
     names = robot.parameter_names(True, True)
@@ -348,7 +350,7 @@ def test_zcr07s_seed_print_breaks_the_torque_identity(rng):
         for name, v in change.items():
             Yseed[b, col[name]] = v
         err = np.linalg.norm(W[:, pivots] @ (Yseed @ pi) - W @ pi) / np.linalg.norm(W @ pi)
-        assert err > 1e-4, f"the seed's {kept_name} variant unexpectedly reproduces the torques"
+        assert err > 1e-4, f"the study's {kept_name} variant unexpectedly reproduces the torques"
 
 
 def test_zcr07s_projection_reproduces_pinocchio(rng):

@@ -88,8 +88,8 @@ def test_adaptive_pd_learns_the_model_from_zero():
     assert np.all(rp.max_error_deg(8.0) > 5 * r.max_error_deg(8.0))
 
 
-def test_seed001_setting_tracks_better_than_pd_and_improves():
-    """ZCR07S with seed 001's gains (adaptation gains 1, 4 ms), estimate off by up to +-30 %:
+def test_zcr07s_setting_tracks_better_than_pd_and_improves():
+    """ZCR07S with the study's gains (adaptation gains 1, 4 ms), estimate off by up to +-30 %:
     tracking error and torque prediction error decrease from the first to the last cycle;
     PD and the same controller with the estimate frozen are worse."""
     robot = mindyn.load("zcr07s")

@@ -16,7 +16,7 @@ from mindyn.data import (
 )
 from mindyn.identification import IdentificationError, identify
 
-# Seed 001, Table 4: motor rated torque [N m] and reducer ratio of the ZCR07S joints.
+# The ZCR07S study, Table 4: motor rated torque [N m] and reducer ratio of the ZCR07S joints.
 SEED_RATED = [2.390, 2.390, 1.270, 0.318, 0.318, 0.318]
 SEED_GEAR = [120, 120, 100, 116, 80, 50]
 

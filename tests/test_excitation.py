@@ -20,7 +20,7 @@ from mindyn.excitation import (
 
 
 def seed_formula(a, b, q0, f, t):
-    """Seed 001 / method.md section 6, written out term by term."""
+    """The ZCR07S study / method.md section 6, written out term by term."""
     w = 2 * math.pi * f
     n, N = a.shape
     q = np.tile(q0, (t.size, 1)).astype(float)
@@ -38,7 +38,7 @@ def test_fourier_series_matches_the_seed_formula_and_its_derivatives():
     t = np.linspace(0, 5, 501)
     q, dq, ddq = traj.evaluate(t)
     np.testing.assert_allclose(q, seed_formula(a, b, q0, 0.2, t), rtol=1e-13, atol=1e-13)
-    h = 1e-5  # central differences of the seed formula
+    h = 1e-5  # central differences of the series formula
     fd = (seed_formula(a, b, q0, 0.2, t + h) - seed_formula(a, b, q0, 0.2, t - h)) / (2 * h)
     np.testing.assert_allclose(dq, fd, atol=1e-8)
     fdd = (seed_formula(a, b, q0, 0.2, t + h) - 2 * q + seed_formula(a, b, q0, 0.2, t - h)) / h**2

@@ -2,7 +2,7 @@
 
 References: the true parameters the simulated robot was given (mapped to base parameters by the
 regrouping matrix), Pinocchio's RNEA for the simulated torques, numpy's own least squares and
-matrix rank for the statistics and the rank decision, and the published tables of seed 001.
+matrix rank for the statistics and the rank decision, and the published tables of the ZCR07S study.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from mindyn.identification import (
     true_base_values,
     validate,
 )
-from mindyn.report import SEED001_TABLE6
+from mindyn.report import ZCR07S_STUDY_TABLE6
 from mindyn.simulate import SensorNoise, simulate_inverse, simulate_tracking
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -257,10 +257,11 @@ def test_rank_deficient_trajectory_names_the_parameters():
 
 
 # ---------------------------------------------------------------------------------------------
-# Seed 001 pipeline and a robot the test makes up
+# The ZCR07S study pipeline and a robot the test makes up
 # ---------------------------------------------------------------------------------------------
-def test_seed001_pipeline_on_zcr07s():
-    """Seed 001 on the simulated ZCR07S: optimised Fourier excitation, closed-loop log at 250 Hz
+def test_zcr07s_pipeline_on_zcr07s():
+    """The ZCR07S study's pipeline on the simulated robot: optimised Fourier excitation, closed-loop
+    log at 250 Hz
     with torque noise (1 % of the continuous joint torque) and 20-bit encoders, 52 base
     parameters with rotor inertia and friction, RSD pruning at 30 %, validation on a second
     trajectory."""
@@ -278,15 +279,14 @@ def test_seed001_pipeline_on_zcr07s():
     fit, val = validate(res, data), validate(res, vdata)
     print(
         f"\nzcr07s dynamic model: 52 estimated, {len(res.names)} kept after RSD pruning "
-        f"(seed 001: 29 of 52 on the real robot)"
+        f"(the ZCR07S study: 29 of 52 on the real robot)"
     )
-    print(
-        "joint  noise sd   RMS excitation  RMS validation | seed 001 Table 6 excitation validation"
-    )
+    print("joint  noise sd   RMS excitation  RMS validation | study Table 6: excitation validation")
     for j in range(6):
         print(
             f"{j + 1:>5} {sd[j]:9.3f} {fit['rms'][j]:16.3f} {val['rms'][j]:15.3f} | "
-            f"{SEED001_TABLE6['excitation'][j]:27.4f} {SEED001_TABLE6['validation'][j]:10.4f}"
+            f"{ZCR07S_STUDY_TABLE6['excitation'][j]:27.4f} "
+            f"{ZCR07S_STUDY_TABLE6['validation'][j]:10.4f}"
         )
     assert 0 < len(res.removed) < 52 and (res.rsd <= 30).all()
     assert (val["rms"] <= 1.2 * sd).all()

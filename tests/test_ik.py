@@ -1,7 +1,7 @@
-"""Inverse kinematics: seed 004's two-link closed form (8.17), the IK solver's own Jacobian against
-Pinocchio and finite differences, velocity IK on the redundant Panda (commanded twist reproduced,
-null-space motion), damping at a singularity, resolved-rate tracking, and position IK checked with
-Pinocchio's forward kinematics and the joint limits; the ``ik`` command."""
+"""Inverse kinematics: the textbook's two-link closed form (8.17), the IK solver's own Jacobian
+against Pinocchio and finite differences, velocity IK on the redundant Panda (commanded twist
+reproduced, null-space motion), damping at a singularity, resolved-rate tracking, and position IK
+checked with Pinocchio's forward kinematics and the joint limits; the ``ik`` command."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 def test_two_link_closed_form_8_17(rng):
-    """Seed 004, (8.17): dq1 = (c12 dx + s12 dy) / (l1 s2),
+    """Textbook, (8.17): dq1 = (c12 dx + s12 dy) / (l1 s2),
     dq2 = -((l1 c1 + l2 c12) dx + (l1 s1 + l2 s12) dy) / (l1 l2 s2); det J = l1 l2 s2.
     planar2h moves in the base x-y plane, the arm along +x at q = 0 (l1 = l2 = 0.5 m)."""
     robot = mindyn.load("planar2h")
@@ -47,7 +47,7 @@ def test_two_link_closed_form_8_17(rng):
             -((l1 * c1 + l2 * c12) * dx + (l1 * s1 + l2 * s12) * dy) / (l1 * l2 * s2),
         ]
         dq = velocity_ik(robot, q, [dx, dy], task=[0, 1])
-        assert_close(dq, expected, 1e-12, "velocity IK vs seed 004 (8.17)")
+        assert_close(dq, expected, 1e-12, "velocity IK vs the textbook (8.17)")
         J = robot.jacobian(q)[:2]
         assert np.linalg.det(J) == pytest.approx(l1 * l2 * s2, rel=1e-12)
 

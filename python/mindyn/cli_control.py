@@ -13,8 +13,8 @@ from . import base_parameters, load
 
 ROBOT_HELP = "a bundled robot name, a URDF file or a YAML DH/MDH table"
 
-#: Seed 001's maximum position errors on the real ZCR07S, joints 1-6 [deg].
-SEED001_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
+#: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
+ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
 
 
 def _row(label: str, values, fmt: str = "{:9.4f}") -> str:
@@ -80,7 +80,7 @@ def cmd_track(args: argparse.Namespace) -> int:
     lines.append(_row("joint", range(1, n + 1), "{:>9d}"))
     lines.append(_row("max |q - q_d| [deg]", s["max_error_deg"]))
     if robot.name == "zcr07s" and args.controller == "adaptive-pd" and n == 6:
-        lines.append(_row("  seed 001 (real robot)", SEED001_MAX_ERROR_DEG, "{:9.2f}"))
+        lines.append(_row("  the ZCR07S study (real robot)", ZCR07S_STUDY_MAX_ERROR_DEG, "{:9.2f}"))
     lines.append(_row("final q - q_d [deg]", s["final_error_deg"]))
     rms = s["rms_error_deg_per_cycle"]
     lines.append(_row("RMS error, first cycle", rms[0]))
@@ -108,7 +108,7 @@ def cmd_track(args: argparse.Namespace) -> int:
             else "scipy RK45",
         }
         if robot.name == "zcr07s" and args.controller == "adaptive-pd":
-            header["seed001_max_error_deg"] = SEED001_MAX_ERROR_DEG
+            header["zcr07s_max_error_deg"] = ZCR07S_STUDY_MAX_ERROR_DEG
         control.write_report(result, args.report, cycle, header)
         lines.append(f"report: {args.report}/ (summary.json, log.csv, plots)")
     print("\n".join(lines))
@@ -176,7 +176,8 @@ def register(sub) -> None:
         description="Simulates the robot (true parameters with rotor inertia and friction, RK4) "
         "under a controller sampled every --period seconds with zero-order hold. Adaptive PD is "
         "the Slotine-Li controller on the base parameters: tau = Y p_hat - K_D s, "
-        "dp_hat/dt = -Gamma Y^T s, s = de + Lambda e, e = q - q_d. Default gains: seed 001's "
+        "dp_hat/dt = -Gamma Y^T s, s = de + Lambda e, e = q - q_d. Default gains: "
+        "the ZCR07S study's "
         "for zcr07s (K_D = diag(400, 350, 130, 22, 9, 2), Lambda = diag(10, 10, 10, 30, 30, 25), "
         "Gamma = 1), otherwise Lambda = 10, K_D = 40 diag(A(q_mid)).",
     )

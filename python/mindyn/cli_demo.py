@@ -33,7 +33,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from .data import convert_torque, read_csv, write_csv
     from .excitation import excitation_limits, optimize_excitation, random_trajectory
     from .identification import identify, true_base_values, validate
-    from .report import SEED001_TABLE6, format_table, plot_torques
+    from .report import ZCR07S_STUDY_TABLE6, format_table, plot_torques
     from .simulate import SensorNoise, noise_from_spec, simulate_tracking
 
     t_all = time.perf_counter()
@@ -105,7 +105,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     files = {}
     for name, log in (("measurement", log_e), ("validation", log_v)):
         p = log.save(out / f"{name}.csv", robot.name)
-        if permille:  # log torques the way seed 001's controller does: per mille of rated torque
+        if (
+            permille
+        ):  # log torques the way the ZCR07S study's controller does: per mille of rated torque
             scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
             write_csv(p, log.t, log.q, log.tau / scale, dq=log.dq)
         files[name] = p
@@ -120,7 +122,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(
         f"    wrote {files['measurement'].name}, {files['validation'].name} ({log_e.t.size} "
         "samples each: t, q, dq, tau"
-        + (", torques in per mille of rated torque as in seed 001" if permille else "")
+        + (", torques in per mille of rated torque as in the ZCR07S study" if permille else "")
         + ") and their .truth.json"
     )
     _done(t0)
@@ -179,12 +181,12 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"    noise sd (reference) [N m]:               {_joints(sd)}")
     if robot.name == "zcr07s":
         print(
-            "    seed 001 Table 6 (real robot), excitation:  "
-            + _joints(SEED001_TABLE6["excitation"])
+            "    ZCR07S study Table 6 (real robot), excitation:  "
+            + _joints(ZCR07S_STUDY_TABLE6["excitation"])
         )
         print(
-            "    seed 001 Table 6 (real robot), validation:  "
-            + _joints(SEED001_TABLE6["validation"])
+            "    ZCR07S study Table 6 (real robot), validation:  "
+            + _joints(ZCR07S_STUDY_TABLE6["validation"])
         )
     print(
         "    wrote identification_{dynamic,energy}.{json,txt} and "
@@ -247,7 +249,8 @@ def register(sub) -> None:
         "--harmonics",
         type=int,
         default=10,
-        help="harmonics of the excitation (default 10; seed 001 uses 5, enough for the dynamic "
+        help="harmonics of the excitation (default 10; the ZCR07S study uses 5, enough for the "
+        "dynamic "
         "model but not for the energy model, whose regressor needs richer motion)",
     )
     p.add_argument(

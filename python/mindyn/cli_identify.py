@@ -309,7 +309,8 @@ def register(sub) -> None:
         "--criterion",
         choices=["cond", "logdet", "hadamard"],
         default="cond",
-        help="condition number (default), D-optimality, or the Hadamard-bound ratio of seed 001",
+        help="condition number (default), D-optimality, or the Hadamard-bound ratio of the "
+        "ZCR07S study",
     )
     p.add_argument("--starts", type=int, default=3, help="random starting guesses (default 3)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")

@@ -41,7 +41,7 @@ __all__ = [
     "ComputedTorque",
     "CsvTrajectory",
     "PD",
-    "SEED001_GAINS",
+    "ZCR07S_STUDY_GAINS",
     "SimulationResult",
     "SumOfSines",
     "coriolis_matrix",
@@ -53,8 +53,8 @@ __all__ = [
     "write_report",
 ]
 
-#: Seed 001's gains for the ZCR07S (joints 1-6), adaptation gains 1, period 4 ms.
-SEED001_GAINS = {
+#: The ZCR07S study's gains for the ZCR07S (joints 1-6), adaptation gains 1, period 4 ms.
+ZCR07S_STUDY_GAINS = {
     "kd": [400.0, 350.0, 130.0, 22.0, 9.0, 2.0],
     "lambda": [10.0, 10.0, 10.0, 30.0, 30.0, 25.0],
     "gamma": 1.0,
@@ -314,11 +314,11 @@ class AdaptivePD:
 # Gains
 # ---------------------------------------------------------------------------------------------
 def default_gains(robot: Robot) -> dict:
-    """Seed 001's gains for ``zcr07s``; otherwise ``Lambda = 10``, ``K_D = 40 diag(A(q_mid))``
-    (``A`` with rotor inertia), adaptation gains 1. ``kp`` for PD is ``Lambda K_D``; computed
-    torque uses ``K_P = Lambda^2``, ``K_D = 2 Lambda``."""
+    """The ZCR07S study's gains for ``zcr07s``; otherwise ``Lambda = 10``,
+    ``K_D = 40 diag(A(q_mid))`` (``A`` with rotor inertia), adaptation gains 1. ``kp`` for PD is
+    ``Lambda K_D``; computed torque uses ``K_P = Lambda^2``, ``K_D = 2 Lambda``."""
     if robot.name == "zcr07s" and robot.n == 6:
-        g = {k: (list(v) if isinstance(v, list) else v) for k, v in SEED001_GAINS.items()}
+        g = {k: (list(v) if isinstance(v, list) else v) for k, v in ZCR07S_STUDY_GAINS.items()}
     else:
         lim = robot.limits
         lo = np.where(np.isfinite(lim["lower"]), lim["lower"], 0.0)

@@ -1,6 +1,6 @@
 """Excitation trajectories for identification: finite Fourier series optimised for conditioning.
 
-Joint ``i`` follows (seed 001, ``method.md`` section 6)::
+Joint ``i`` follows (the ZCR07S study, ``method.md`` section 6)::
 
     q_i(t) = q_i0 + sum_{l=1..N} [ a_il / (w l) sin(w l t) - b_il / (w l) cos(w l t) ],  w = 2 pi f
 
@@ -17,7 +17,7 @@ criterion is evaluated on the stacked base regressor ``W_b`` (C++ core) along th
 
 ``cond``      condition number of ``W_b`` (minimised through its logarithm);
 ``logdet``    D-optimality: ``-log det(W_b^T W_b / rows)``;
-``hadamard``  the Hadamard-inequality bound of seed 001: ``det(G) <= prod diag(G)`` with
+``hadamard``  the Hadamard-inequality bound of the ZCR07S study: ``det(G) <= prod diag(G)`` with
               ``G = W_b^T W_b``, minimised as ``log prod diag(G) - log det(G) >= 0`` (zero exactly
               when the columns of ``W_b`` are orthogonal).
 """

@@ -1,4 +1,4 @@
-"""Identification of the base parameters from joint data (``method.md`` section 6, seed 001).
+"""Identification of the base parameters from joint data (the thesis and the ZCR07S study).
 
 Two models, both over the equations-of-motion base set of :func:`mindyn.base_parameters`:
 
@@ -12,7 +12,8 @@ Two models, both over the equations-of-motion base set of :func:`mindyn.base_par
     Simpson rule on the samples.
 
 Estimation is ordinary least squares, or weighted least squares with per-joint weights
-``1 / sigma_j`` from the residuals of a first OLS pass (dynamic model). Statistics as in seed 001:
+``1 / sigma_j`` from the residuals of a first OLS pass (dynamic model). Statistics as in the
+ZCR07S study:
 ``sigma^2 = |y - W p|^2 / (r - c)``, ``cov = sigma^2 (W^T W)^-1``,
 ``RSD = 100 sqrt(cov_bb) / |p_b|``; parameters whose RSD exceeds a threshold are removed one at a
 time (largest first) and the rest re-estimated. Validation: per-joint RMS and relative torque

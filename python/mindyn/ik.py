@@ -3,7 +3,7 @@
 - :func:`velocity_ik`: ``dq = J^+ dx`` for a tool twist ``dx``, with damped least squares near
   singularities and optional null-space motion for redundant arms;
 - :func:`resolved_rate`: online velocity control along a Cartesian path, ``q`` read back every
-  cycle (the seed's scheme), with feedback on the pose error;
+  cycle (the textbook's scheme), with feedback on the pose error;
 - :func:`ik` / :func:`ik_solve`: position IK by iterating the velocity solution (damped least
   squares / Levenberg-Marquardt in C++), inside the joint limits, with seeded random restarts.
 

@@ -9,9 +9,9 @@ import numpy as np
 
 __all__ = ["format_table", "plot_torques", "write_report"]
 
-# Seed 001, Table 6: RMS torque error [N m] of the identified ZCR07S model, per joint, on the
-# excitation and the validation trajectory (measured on the real robot).
-SEED001_TABLE6 = {
+# The ZCR07S study, Table 6: RMS torque error [N m] of the identified ZCR07S model, per joint, on
+# the excitation and the validation trajectory (measured on the real robot).
+ZCR07S_STUDY_TABLE6 = {
     "excitation": [4.1301, 4.3332, 2.3701, 2.4848, 1.1972, 0.4701],
     "validation": [7.6313, 6.1961, 3.4130, 2.7433, 1.1433, 0.4757],
 }
@@ -27,7 +27,7 @@ def _pyplot():
 
 
 def plot_torques(path, t, tau, tau_hat, title: str = "", unit: str = "N m") -> Path:
-    """Measured and estimated torque per joint, one panel each (as seed 001, Fig. 6-7).
+    """Measured and estimated torque per joint, one panel each (as the ZCR07S study, Fig. 6-7).
     ``t`` (m,), ``tau``, ``tau_hat`` (m, n)."""
     plt = _pyplot()
     n = tau.shape[1]

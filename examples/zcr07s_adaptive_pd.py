@@ -1,16 +1,16 @@
-"""Seed 001's adaptive PD experiment on the ZCR07S, in simulation.
+"""The ZCR07S study's adaptive PD experiment on the ZCR07S, in simulation.
 
 K_D = diag(400, 350, 130, 22, 9, 2), Lambda = diag(10, 10, 10, 30, 30, 25), adaptation gains 1,
 controller period 4 ms; 52 base parameters with rotor inertia and friction, the initial estimate
 off by up to +-30 % per parameter (uniform, seeded). The true robot is the bundled zcr07s model
 (synthetic inertial values, rotor inertia and friction), integrated by RK4 at 1 ms with the torque
-held over each period. The seed's desired trajectory is not legible, so the reference is a sum of
+held over each period. The study's desired trajectory is not legible, so the reference is a sum of
 sines within half of each joint's range and speed limit, repeated every 10 s.
 
 Beside the adaptive controller the same run is made with the estimate frozen (Gamma = 0), with
 computed torque using the same wrong estimate, and with plain PD (K_P = Lambda K_D).
 
-    python examples/seed001_adaptive_pd.py [REPORT_DIR] [--cycles N]
+    python examples/zcr07s_adaptive_pd.py [REPORT_DIR] [--cycles N]
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ SEED_FINAL_DEG = [-0.06, 0.02, 0.04, -0.11, -0.11, 0.09]
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("report", nargs="?", default="seed001-report")
+    ap.add_argument("report", nargs="?", default="zcr07s-report")
     ap.add_argument("--cycles", type=int, default=10, help="10 s cycles to simulate (10)")
     ap.add_argument("--error", type=float, default=0.3, help="initial estimate error (0.3)")
     ap.add_argument("--seed", type=int, default=0)
@@ -69,18 +69,18 @@ def main() -> None:
 
     a = summaries["adaptive-pd"]
     lines = [
-        "# Seed 001 adaptive PD on the ZCR07S, simulated",
+        "# The ZCR07S study adaptive PD on the ZCR07S, simulated",
         "",
         f"{base.n} base parameters (rotor inertia, friction); initial estimate = true x (1 + "
         f"{args.error:g} u), u ~ U[-1, 1], seed {args.seed}; reference: sum of sines, {cycle:g} s "
-        f"cycle, {args.cycles} cycles; K_D, Lambda, Gamma = 1, 4 ms as in the seed.",
+        f"cycle, {args.cycles} cycles; K_D, Lambda, Gamma = 1, 4 ms as in the study.",
         "",
         "```",
         f"{'joint':<36}" + " ".join(f"{k:>7d}" for k in range(1, 7)),
-        f"{'seed 001, max |e| (real robot) [deg]':<36}{fmt(SEED_MAX_DEG, 2)}",
+        f"{'the ZCR07S study, max |e| (real robot) [deg]':<36}{fmt(SEED_MAX_DEG, 2)}",
         f"{'adaptive PD, max |e| [deg]':<36}{fmt(a['max_error_deg'])}",
         f"{'adaptive PD, max |e| last cycle':<36}{fmt(a['max_error_last_cycle_deg'])}",
-        f"{'seed 001, final error [deg]':<36}{fmt(SEED_FINAL_DEG, 2)}",
+        f"{'the ZCR07S study, final error [deg]':<36}{fmt(SEED_FINAL_DEG, 2)}",
         f"{'adaptive PD, final error [deg]':<36}{fmt(a['final_error_deg'])}",
     ]
     for name in ("frozen-estimate", "computed-torque", "pd"):
