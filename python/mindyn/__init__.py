@@ -1,7 +1,16 @@
 """mindyn: the minimal dynamic model of a manipulator.
 
-``mindyn.load(name_or_path)`` gives a :class:`Robot` with linear-in-parameters inverse dynamics,
-regressors, energies, mass matrix and forward dynamics (C++ core) and KDL kinematics.
+- :func:`load` gives a :class:`Robot` (URDF, YAML DH/MDH table or bundled name) with inverse
+  dynamics, regressors, energies, mass matrix and forward dynamics, linear in the classical
+  parameters (C++ core), and KDL kinematics;
+- :func:`base_parameters`: base inertial parameters by the projection method (or the numerical
+  method), regrouping matrix, formulas, base regressors;
+- :mod:`mindyn.codegen`: inverse dynamics, gravity and base regressor as C or Structured Text;
+- :mod:`mindyn.excitation`, :mod:`mindyn.data`, :mod:`mindyn.simulate`,
+  :mod:`mindyn.identification`: excitation trajectories, joint logs, simulated measurements,
+  least-squares identification with statistics and validation;
+- :mod:`mindyn.control`, :func:`ik`: Slotine-Li regressor, adaptive PD and other controllers in
+  closed-loop simulation, inverse kinematics.
 """
 
 from ._core import ModelError, RobotFileNotFoundError, inertial_from_com, inertial_from_urdf
