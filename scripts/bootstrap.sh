@@ -8,7 +8,7 @@ cd "$root"
 apt_packages=(build-essential cmake ninja-build pkg-config python3 python3-venv python3-dev
   libeigen3-dev liborocos-kdl-dev liburdfdom-dev libyaml-cpp-dev)
 if [[ "${1:-}" == "--test" ]]; then
-  apt_packages+=(libgtest-dev libbenchmark-dev clang-format)
+  apt_packages+=(libgtest-dev libbenchmark-dev clang-format git valgrind)
 fi
 
 missing=()
