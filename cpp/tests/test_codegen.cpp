@@ -103,6 +103,13 @@ TEST(Expr, FoldingAndSharing) {
   const auto v = g.evaluate({nullptr, dqv, ddqv, nullptr});
   EXPECT_DOUBLE_EQ(g.value(v, p.outputs[0]), 2 * xv * yv);
   EXPECT_DOUBLE_EQ(g.value(v, p.outputs[1]), -xv * yv);
+  // a term cancelled against one of an operand's terms leaves the other term
+  const Ref z = g.input(InputKind::Q, 2);
+  const Ref xz = g.add(x, z);
+  EXPECT_EQ(g.sub(xz, x), z);
+  EXPECT_EQ(g.sub(z, xz), -x);
+  EXPECT_EQ(g.add(-xz, x), -z);
+  EXPECT_EQ(g.add(g.sub(xy, z), z), xy);
 }
 
 TEST(Codegen, TwoLinkPlanarClosedForm) {

@@ -118,6 +118,15 @@ Ref Graph::add(Ref a, Ref b) {
   if (b.id() == 0) return a;
   if (isConstant(a) && isConstant(b)) return constant(constantValue(a) + constantValue(b));
   if (a.abs() == b.abs() && a != b) return zero();
+  // Cancellation one level down: x + (-x + y) = y.
+  for (int side = 0; side < 2; ++side) {
+    const Ref s = side ? a : b, t = side ? b : a;
+    const Node& ns = nodes_[s.id()];
+    if (ns.op != Op::Add) continue;
+    const Ref s1 = ns.a.negatedIf(s.negative()), s2 = ns.b.negatedIf(s.negative());
+    if (s1 == -t) return s2;
+    if (s2 == -t) return s1;
+  }
   if (a.id() > b.id()) std::swap(a, b);
   const bool s = a.negative();
   Node n;

@@ -3,6 +3,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <utility>
 
 namespace mindyn::codegen {
@@ -49,9 +50,14 @@ Eigen::Isometry3d rotAbout(const Eigen::Vector3d& u, double angle) {
   return T;
 }
 
+// Where the part of a joint's constant translations along its axis goes: it commutes with the
+// joint motion (a rotation about, or a translation along, that axis), so it can sit in `pre`
+// or in `post`. Which side is cheaper depends on the zeros and the products shared there.
+enum class AxisShift : std::uint8_t { Keep, ToPre, ToPost };
+
 // The stages of every joint. A DH/MDH angle offset theta is moved out of the constant
 // transforms into the joint angle, so that right-angle twists keep their exact zeros.
-std::vector<JointStages> jointStages(const Model& model) {
+std::vector<JointStages> jointStages(const Model& model, const std::vector<AxisShift>& shift) {
   std::vector<JointStages> out;
   const int n = model.nq();
   const bool dh = model.convention == "dh" && static_cast<int>(model.dh.size()) == n;
@@ -70,6 +76,25 @@ std::vector<JointStages> jointStages(const Model& model) {
       if (mdh) pre = pre * rotAbout(j.axis, -theta);
       s.offset = theta;
     }
+    const AxisShift sh = shift[k];
+    if (sh != AxisShift::Keep) {
+      // pre = T(t_pre) R_pre; post = T(t_post) R_post; u is in the joint frame.
+      const Eigen::Vector3d u = j.axis.normalized();
+      const double along = sh == AxisShift::ToPre
+                               ? u.dot(post.translation())
+                               : u.dot(pre.linear().transpose() * pre.translation());
+      if (cleanValue(along) != 0.0) {
+        Eigen::Isometry3d move = Eigen::Isometry3d::Identity();
+        move.translation() = along * u;
+        if (sh == AxisShift::ToPre) {
+          pre = pre * move;
+          post.translation() -= along * u;
+        } else {
+          pre = pre * move.inverse();
+          post = move * post;
+        }
+      }
+    }
     s.pre = rigid(pre);
     s.post = rigid(post);
     out.push_back(s);
@@ -87,7 +112,8 @@ struct Wrench {
 
 class Builder {
  public:
-  Builder(Graph& g, const Model& model) : g_(g), model_(model), stages_(jointStages(model)) {
+  Builder(Graph& g, const Model& model, std::vector<JointStages> stages)
+      : g_(g), model_(model), stages_(std::move(stages)) {
     zero_ = {Graph::zero(), Graph::zero(), Graph::zero()};
   }
 
@@ -361,8 +387,11 @@ ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout) {
   return s;
 }
 
-GeneratedFunction generate(const Model& model, const ParameterSet& params, Function function,
-                           bool numeric, const Eigen::VectorXd& values) {
+namespace {
+
+GeneratedFunction generateWith(const Model& model, const ParameterSet& params, Function function,
+                               bool numeric, const Eigen::VectorXd& values,
+                               const std::vector<AxisShift>& shift) {
   const int n = model.nq(), np = params.size();
   const int P = params.layout.size(n);
   if (params.E.rows() != P || params.E.cols() != np)
@@ -381,7 +410,7 @@ GeneratedFunction generate(const Model& model, const ParameterSet& params, Funct
   out.np = np;
   out.numeric = numeric && function != Function::Regressor;
   Graph& g = out.graph;
-  Builder b(g, model);
+  Builder b(g, model, jointStages(model, shift));
 
   std::vector<Ref> dq(n, Graph::zero()), ddq(n, Graph::zero());
   if (function != Function::Gravity)
@@ -417,6 +446,28 @@ GeneratedFunction generate(const Model& model, const ParameterSet& params, Funct
   }
   out.program = schedule(g, out.outputs);
   return out;
+}
+
+}  // namespace
+
+GeneratedFunction generate(const Model& model, const ParameterSet& params, Function function,
+                           bool numeric, const Eigen::VectorXd& values) {
+  // Place each joint's along-axis translation where it costs least, one joint at a time.
+  const int n = model.nq();
+  std::vector<AxisShift> shift(n, AxisShift::Keep);
+  GeneratedFunction best = generateWith(model, params, function, numeric, values, shift);
+  auto cost = [](const GeneratedFunction& f) { return f.program.count.mul + f.program.count.add; };
+  for (int k = 0; k < n; ++k)
+    for (AxisShift sh : {AxisShift::ToPre, AxisShift::ToPost}) {
+      std::vector<AxisShift> trial = shift;
+      trial[k] = sh;
+      GeneratedFunction f = generateWith(model, params, function, numeric, values, trial);
+      if (cost(f) < cost(best)) {
+        best = std::move(f);
+        shift = std::move(trial);
+      }
+    }
+  return best;
 }
 
 void checkIdentifier(const std::string& name) {

@@ -2,7 +2,8 @@
 // and the parameters, built with constant folding, removal of multiplications by 0 and +-1 and
 // additions of 0, and common-subexpression elimination by hash-consing. Signs live on the edges
 // (a Ref is a node with a sign), so x*y, (-x)*y and -(x*y) are one node, and a - b and b - a are
-// one node used with opposite signs: negation costs nothing until it reaches an output.
+// one node used with opposite signs: negation costs nothing until it reaches an output. A sum
+// that cancels one of the terms of an operand, x + (-x + y), is that remaining term.
 #pragma once
 
 #include <cstdint>

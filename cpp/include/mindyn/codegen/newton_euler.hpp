@@ -9,7 +9,9 @@
 // wrench is added in link frame k. Forward: angular velocity and acceleration and the linear
 // acceleration of each stage origin (gravity as an upward base acceleration). Backward: the
 // wrench (moment about the stage origin, force); the torque is the axis component of the moment
-// (revolute) or the force (prismatic) right after the joint motion.
+// (revolute) or the force (prismatic) right after the joint motion. The part of a constant
+// translation that lies along a joint's axis commutes with the joint motion and is placed in
+// `pre` or `post`, joint by joint, wherever the generated function has fewer operations.
 #pragma once
 
 #include <Eigen/Core>
