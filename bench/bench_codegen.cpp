@@ -24,6 +24,7 @@
 #include "mindyn/dynamics.hpp"
 #include "mindyn/kinematics.hpp"
 #include "mindyn/urdf.hpp"
+#include "pinocchio_adapter.hpp"
 
 using namespace mindyn;
 using Clock = std::chrono::steady_clock;
@@ -31,35 +32,6 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 using IdFn = void (*)(const double*, const double*, const double*, const double*, double*);
-
-pinocchio::Model toPinocchio(const Model& m) {
-  pinocchio::Model pm;
-  pinocchio::JointIndex parent = 0;
-  for (int k = 0; k < m.nq(); ++k) {
-    const Joint& j = m.joints[k];
-    Eigen::Isometry3d X = j.pre;
-    if (k > 0) X = m.joints[k - 1].post * X;
-    const pinocchio::SE3 placement(X.linear(), X.translation());
-    if (j.type == JointType::Revolute)
-      parent =
-          pm.addJoint(parent, pinocchio::JointModelRevoluteUnaligned(j.axis), placement, j.name);
-    else
-      parent =
-          pm.addJoint(parent, pinocchio::JointModelPrismaticUnaligned(j.axis), placement, j.name);
-    // link parameters about the link origin, in link axes; the link frame sits at `post`
-    const auto p = m.inertial.segment<10>(10 * k);
-    const double mass = p[9];
-    const Eigen::Vector3d c =
-        mass != 0 ? Eigen::Vector3d(p.segment<3>(6) / mass) : Eigen::Vector3d::Zero();
-    const Eigen::Matrix3d Io = inertiaTensor(p);
-    const Eigen::Matrix3d Ic =
-        Io - mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
-    const pinocchio::Inertia link(mass, c, Ic);
-    pm.inertias[parent] = link.se3Action(pinocchio::SE3(j.post.linear(), j.post.translation()));
-  }
-  pm.gravity.linear(m.gravity);
-  return pm;
-}
 
 // Best over repetitions of the mean time per call, in ns (the least disturbed by other load on
 // a shared machine).
@@ -140,7 +112,7 @@ int main(int argc, char** argv) {
 
     Data data(model);
     BaseDynamics bd(model, bp);
-    pinocchio::Model pm = toPinocchio(model);
+    pinocchio::Model pm = bench::toPinocchioModel(model);
     pinocchio::Data pd(pm);
     KDL::Chain chain = toKdlChain(model);
     KDL::ChainIdSolver_RNE kdl(
