@@ -41,6 +41,7 @@ using namespace mindyn;
 using namespace mindyn::codegen;
 using mindyn::test::random;
 using mindyn::test::relErr;
+using mindyn::test::withExtras;
 
 namespace {
 
@@ -52,14 +53,6 @@ struct Count {
   ~Count() { counting = false; }
   long value() const { return allocations.load(); }
 };
-
-Model withExtras(Model m, std::mt19937& rng) {
-  const int n = m.nq();
-  m.rotor_inertia = random(rng, n).cwiseAbs();
-  m.viscous = random(rng, n).cwiseAbs();
-  m.coulomb = random(rng, n).cwiseAbs();
-  return m;
-}
 
 Eigen::VectorXd outputs(const GeneratedFunction& f, const Eigen::VectorXd& q,
                         const Eigen::VectorXd& dq, const Eigen::VectorXd& ddq,

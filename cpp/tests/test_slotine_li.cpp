@@ -8,20 +8,12 @@
 #include "test_util.hpp"
 
 using namespace mindyn;
+using mindyn::test::bundled;
 using mindyn::test::random;
 using mindyn::test::relErr;
+using mindyn::test::withExtras;
 
 namespace {
-
-std::vector<std::string> bundled() { return {"puma560", "puma560_3", "zcr07s", "stanford"}; }
-
-Model withExtras(Model m, std::mt19937& rng) {
-  const int n = m.nq();
-  m.rotor_inertia = random(rng, n).cwiseAbs();
-  m.viscous = random(rng, n).cwiseAbs();
-  m.coulomb = random(rng, n).cwiseAbs();
-  return m;
-}
 
 const ParameterLayout kLayouts[] = {{false, false}, {true, true}, {true, false}, {false, true}};
 

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "mindyn/description.hpp"
 #include "mindyn/model.hpp"
@@ -23,6 +24,18 @@ inline Eigen::VectorXd random(std::mt19937& rng, int n, double scale = 1.0) {
 
 inline double relErr(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return (a - b).norm() / std::max(1.0, b.norm());
+}
+
+/// The bundled YAML robots.
+inline std::vector<std::string> bundled() { return {"puma560", "puma560_3", "zcr07s", "stanford"}; }
+
+/// The model with random positive rotor inertia and friction.
+inline Model withExtras(Model m, std::mt19937& rng) {
+  const int n = m.nq();
+  m.rotor_inertia = random(rng, n).cwiseAbs();
+  m.viscous = random(rng, n).cwiseAbs();
+  m.coulomb = random(rng, n).cwiseAbs();
+  return m;
 }
 
 }  // namespace mindyn::test

@@ -97,23 +97,10 @@ class CWriter {
       case Op::Const:
         return literal(n.value);
       case Op::Input:
-        return inputName(n.kind) + "[" + std::to_string(n.index) + "]";
+        return std::string(inputName(n.kind)) + "[" + std::to_string(n.index) + "]";
       default:
         return name_[r.id()];
     }
-  }
-  static std::string inputName(InputKind k) {
-    switch (k) {
-      case InputKind::Q:
-        return "q";
-      case InputKind::DQ:
-        return "dq";
-      case InputKind::DDQ:
-        return "ddq";
-      case InputKind::P:
-        return "p";
-    }
-    return "?";
   }
   std::string signedValue(Ref r) const {
     if (f_.graph.isConstant(r)) return literal(f_.graph.constantValue(r));
@@ -218,7 +205,7 @@ CFiles emitC(const GeneratedCode& code, const std::string& header_name) {
           k == InputKind::Q ||
           ((k == InputKind::DQ || k == InputKind::DDQ) && f.function != Function::Gravity) ||
           (k == InputKind::P && f.function != Function::Regressor && !f.numeric);
-      if (present && !w.uses(k)) c << "  (void)" << CWriter::inputName(k) << ";\n";
+      if (present && !w.uses(k)) c << "  (void)" << inputName(k) << ";\n";
     }
     w.body(c, f.function == Function::Regressor ? "W" : "tau");
     c << "}\n";

@@ -8,20 +8,6 @@ namespace mindyn::codegen {
 
 namespace {
 
-const char* inputName(InputKind k) {
-  switch (k) {
-    case InputKind::Q:
-      return "q";
-    case InputKind::DQ:
-      return "dq";
-    case InputKind::DDQ:
-      return "ddq";
-    case InputKind::P:
-      return "p";
-  }
-  return "?";
-}
-
 class STWriter {
  public:
   explicit STWriter(const GeneratedFunction& f) : f_(f), slot_(f.graph.size(), -1) {}

@@ -25,6 +25,21 @@ enum class Op : std::uint8_t {
 
 enum class InputKind : std::uint8_t { Q, DQ, DDQ, P };
 
+/// The argument name of an input kind in generated code: q, dq, ddq, p.
+inline const char* inputName(InputKind k) {
+  switch (k) {
+    case InputKind::Q:
+      return "q";
+    case InputKind::DQ:
+      return "dq";
+    case InputKind::DDQ:
+      return "ddq";
+    case InputKind::P:
+      return "p";
+  }
+  return "?";
+}
+
 /// A node index with a sign: the value of the Ref is (negative ? -1 : 1) * value(node).
 class Ref {
  public:
