@@ -2,57 +2,24 @@
 // and against the classical recursion, the runtime base-parameter tapes, and their allocation
 // freedom (malloc counter of this test program).
 #include <gtest/gtest.h>
-#include <malloc.h>
 
-#include <atomic>
 #include <cmath>
 
+#include "malloc_counter.hpp"
 #include "mindyn/base_dynamics.hpp"
 #include "mindyn/codegen/emit_c.hpp"
 #include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
 #include "test_util.hpp"
 
-extern "C" {
-void* __libc_malloc(size_t);
-void* __libc_calloc(size_t, size_t);
-void* __libc_realloc(void*, size_t);
-}
-
-namespace {
-std::atomic<bool> counting{false};
-std::atomic<long> allocations{0};
-}  // namespace
-
-extern "C" void* malloc(size_t size) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
-  return __libc_malloc(size);
-}
-extern "C" void* calloc(size_t n, size_t size) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
-  return __libc_calloc(n, size);
-}
-extern "C" void* realloc(void* p, size_t size) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
-  return __libc_realloc(p, size);
-}
-
 using namespace mindyn;
+using mindyn::test::Count;
 using namespace mindyn::codegen;
 using mindyn::test::random;
 using mindyn::test::relErr;
 using mindyn::test::withExtras;
 
 namespace {
-
-struct Count {
-  Count() {
-    allocations = 0;
-    counting = true;
-  }
-  ~Count() { counting = false; }
-  long value() const { return allocations.load(); }
-};
 
 Eigen::VectorXd outputs(const GeneratedFunction& f, const Eigen::VectorXd& q,
                         const Eigen::VectorXd& dq, const Eigen::VectorXd& ddq,
@@ -114,20 +81,11 @@ TEST(Codegen, TwoLinkPlanarClosedForm) {
   const auto id = generate(model, ps, Function::InverseDynamics);
   const auto idn = generate(model, ps, Function::InverseDynamics, true);
   const auto grav = generate(model, ps, Function::Gravity);
-  const double lc = l / 2, I = m * (3 * r * r + l * l) / 12.0;
   std::mt19937 rng(1);
   for (int trial = 0; trial < 10; ++trial) {
     const Eigen::VectorXd q = random(rng, 2, M_PI), dq = random(rng, 2, 2), ddq = random(rng, 2, 3);
-    const double c1 = std::cos(q[0]), c2 = std::cos(q[1]), s2 = std::sin(q[1]);
-    const double c12 = std::cos(q[0] + q[1]);
-    const double m11 = m * lc * lc + I + m * (l * l + lc * lc + 2 * l * lc * c2) + I;
-    const double m12 = m * (lc * lc + l * lc * c2) + I;
-    const double m22 = m * lc * lc + I;
-    const double hh = m * l * lc * s2;
-    Eigen::Vector2d expected, gexp;
-    gexp << (m * lc + m * l) * g * c1 + m * lc * g * c12, m * lc * g * c12;
-    expected[0] = m11 * ddq[0] + m12 * ddq[1] - hh * (2 * dq[0] * dq[1] + dq[1] * dq[1]) + gexp[0];
-    expected[1] = m12 * ddq[0] + m22 * ddq[1] + hh * dq[0] * dq[0] + gexp[1];
+    Eigen::Vector2d gexp;
+    const Eigen::Vector2d expected = test::twoLinkTorque(q, dq, ddq, l, m, r, g, &gexp);
     EXPECT_LT(relErr(outputs(id, q, dq, ddq, ps.values), expected), 1e-12);
     EXPECT_LT(relErr(outputs(idn, q, dq, ddq, Eigen::VectorXd()), expected), 1e-12);
     EXPECT_LT(relErr(outputs(grav, q, dq, ddq, ps.values), gexp), 1e-12);

@@ -21,20 +21,10 @@ TEST(Dynamics, TwoLinkPlanarClosedForm) {
   const double l = 0.5, m = 2.0, r = 0.02, g = 9.81;
   Model model = planarArm(2, true, l, m);
   Data data(model);
-  const double lc = l / 2, I = m * (3 * r * r + l * l) / 12.0;
   std::mt19937 rng(1);
   for (int trial = 0; trial < 20; ++trial) {
     const Eigen::VectorXd q = random(rng, 2, M_PI), dq = random(rng, 2, 2), ddq = random(rng, 2, 3);
-    const double c1 = std::cos(q[0]), c2 = std::cos(q[1]), s2 = std::sin(q[1]);
-    const double c12 = std::cos(q[0] + q[1]);
-    const double m11 = m * lc * lc + I + m * (l * l + lc * lc + 2 * l * lc * c2) + I;
-    const double m12 = m * (lc * lc + l * lc * c2) + I;
-    const double m22 = m * lc * lc + I;
-    const double hh = m * l * lc * s2;
-    Eigen::Vector2d expected;
-    expected[0] = m11 * ddq[0] + m12 * ddq[1] - hh * (2 * dq[0] * dq[1] + dq[1] * dq[1]) +
-                  (m * lc + m * l) * g * c1 + m * lc * g * c12;
-    expected[1] = m12 * ddq[0] + m22 * ddq[1] + hh * dq[0] * dq[0] + m * lc * g * c12;
+    const Eigen::Vector2d expected = test::twoLinkTorque(q, dq, ddq, l, m, r, g);
     Eigen::VectorXd tau(2);
     inverseDynamics(model, data, q, dq, ddq, model.parameters(), {}, tau);
     EXPECT_LT(relErr(tau, expected), 1e-12) << tau.transpose() << " vs " << expected.transpose();

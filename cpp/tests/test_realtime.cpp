@@ -2,52 +2,16 @@
 // realloc or operator new (which goes through malloc in libstdc++) is counted while a guard is
 // active.
 #include <gtest/gtest.h>
-#include <malloc.h>
 
-#include <atomic>
-
+#include "malloc_counter.hpp"
 #include "mindyn/base_parameters.hpp"
 #include "mindyn/dynamics.hpp"
 #include "mindyn/ik.hpp"
 #include "mindyn/slotine_li.hpp"
 #include "test_util.hpp"
 
-extern "C" {
-void* __libc_malloc(size_t);
-void* __libc_calloc(size_t, size_t);
-void* __libc_realloc(void*, size_t);
-}
-
-namespace {
-std::atomic<bool> counting{false};
-std::atomic<long> allocations{0};
-}  // namespace
-
-extern "C" void* malloc(size_t size) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
-  return __libc_malloc(size);
-}
-extern "C" void* calloc(size_t n, size_t size) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
-  return __libc_calloc(n, size);
-}
-extern "C" void* realloc(void* p, size_t size) {
-  if (counting.load(std::memory_order_relaxed)) allocations.fetch_add(1);
-  return __libc_realloc(p, size);
-}
-
-namespace {
-struct Count {
-  Count() {
-    allocations = 0;
-    counting = true;
-  }
-  ~Count() { counting = false; }
-  long value() const { return allocations.load(); }
-};
-}  // namespace
-
 using namespace mindyn;
+using mindyn::test::Count;
 
 TEST(Realtime, TheCounterSeesAllocations) {
   long seen;
