@@ -219,6 +219,12 @@ def test_runtime_base_dynamics_matches_pinocchio(rng):
         bd.inverse_dynamics(np.zeros(5), np.zeros(6), np.zeros(6))
     with pytest.raises(ValueError, match="NaN"):
         bd.gravity(np.full(6, np.nan))
+    p_bad = bp.values(robot.parameters(True, True))
+    with pytest.raises(ValueError, match=rf"p has shape \({bp.n - 1},\); expected \({bp.n},\)"):
+        bd.gravity(Q[0], p_bad[:-1])
+    p_bad[2] = np.inf
+    with pytest.raises(ValueError, match="p contains an infinite value at entry 3"):
+        bd.inverse_dynamics(Q[0], DQ[0], DDQ[0], p_bad)
 
 
 # --------------------------------------------------------------------------------------------

@@ -6,57 +6,18 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
-#include <sstream>
 
 #include "mindyn/dynamics.hpp"
 #include "mindyn/ik.hpp"
 #include "mindyn/slotine_li.hpp"
+#include "py_args.hpp"
 #include "py_types.hpp"
 
 namespace py = pybind11;
 using namespace mindyn;
+using namespace mindyn::pyargs;
 
 namespace {
-
-using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
-using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-// Number of samples of a per-sample argument (0: a single sample of shape (n,)), after checking
-// shape and finiteness; all arguments must agree.
-long sampleCount(const std::vector<std::pair<const Array*, const char*>>& args, long n) {
-  long m = -2;
-  for (const auto& [a, name] : args) {
-    long s;
-    if (a->ndim() == 1 && a->shape(0) == n) {
-      s = 0;
-    } else if (a->ndim() == 2 && a->shape(1) == n) {
-      s = a->shape(0);
-    } else {
-      std::ostringstream msg;
-      msg << name << " has shape (";
-      for (long d = 0; d < a->ndim(); ++d) msg << (d ? ", " : "") << a->shape(d);
-      msg << (a->ndim() == 1 ? ",)" : ")") << "; expected (" << n << ",) or (m, " << n << ")";
-      throw py::value_error(msg.str());
-    }
-    const double* p = a->data();
-    for (long i = 0; i < static_cast<long>(a->size()); ++i)
-      if (!std::isfinite(p[i])) {
-        std::ostringstream msg;
-        msg << name << " contains " << (std::isnan(p[i]) ? "NaN" : "an infinite value");
-        if (a->ndim() == 2)
-          msg << " at sample " << i / n << ", joint " << i % n + 1;
-        else
-          msg << " at joint " << i + 1;
-        throw py::value_error(msg.str());
-      }
-    if (m == -2)
-      m = s;
-    else if (s != m)
-      throw py::value_error(std::string(name) +
-                            ": all inputs must be single samples or batches of equal length");
-  }
-  return m;
-}
 
 py::array_t<double> stackedOut(long m, long r, long c) {
   if (m == 0) return py::array_t<double>({r, c});
@@ -67,7 +28,7 @@ py::array_t<double> stackedOut(long m, long r, long c) {
 template <class F>
 py::array_t<double> perSample4(long n, const Array& a, const Array& b, const Array& c,
                                const Array& d, long rows, long cols, F&& f) {
-  const long m = sampleCount({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, n);
+  const long m = batch({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, n);
   auto out = stackedOut(m, rows, cols);
   const long count = m == 0 ? 1 : m;
   Eigen::Map<const RowMajor> A(a.data(), count, n), B(b.data(), count, n), C(c.data(), count, n),
@@ -85,49 +46,12 @@ py::array_t<double> perSample4(long n, const Array& a, const Array& b, const Arr
   return out;
 }
 
-Eigen::VectorXd classicalParams(const PyModel& s, const py::object& params,
-                                ParameterLayout& layout) {
-  const int n = s.model.nq();
-  if (params.is_none()) {
-    layout = {};
-    return s.model.parameters(layout);
-  }
-  Array a = params.cast<Array>();
-  if (a.ndim() != 1) throw py::value_error("params must be 1-D");
-  try {
-    layout = ParameterLayout::fromSize(n, a.shape(0));
-  } catch (const ModelError& e) {
-    throw py::value_error(e.what());
-  }
-  Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(a.data(), a.shape(0));
-  if (!p.allFinite()) throw py::value_error("params contains NaN or an infinite value");
-  return p;
-}
-
-Eigen::VectorXd vectorArg(const Eigen::VectorXd& v, long n, const char* name) {
-  if (v.size() != n)
-    throw py::value_error(std::string(name) + " has " + std::to_string(v.size()) +
-                          " entries; expected " + std::to_string(n));
-  for (long i = 0; i < n; ++i)
-    if (!std::isfinite(v[i]))
-      throw py::value_error(std::string(name) + " contains " +
-                            (std::isnan(v[i]) ? "NaN" : "an infinite value") + " at joint " +
-                            std::to_string(i + 1));
-  return v;
-}
-
 // Python-side IK solver: owns a copy of the model's chain.
 struct PyIk {
   PyIk(const PyModel& m, const IkOptions& o) : solver(m.model, o), n(m.model.nq()) {}
   IkSolver solver;
   int n;
 };
-
-Eigen::Isometry3d poseArg(const Eigen::Matrix4d& M) {
-  Eigen::Isometry3d T;
-  T.matrix() = M;
-  return T;
-}
 
 }  // namespace
 
@@ -167,7 +91,7 @@ void bindControl(py::module_& m) {
       [](PyModel& s, const Array& q, const Array& dq, const py::object& params) {
         const long n = s.model.nq();
         ParameterLayout layout;
-        const Eigen::VectorXd p = classicalParams(s, params, layout);
+        const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
         SlotineLiData sl(s.model, layout);
         return perSample4(
             n, q, dq, q, q, n, n,
@@ -184,7 +108,7 @@ void bindControl(py::module_& m) {
         if (!(dt > 0) || !std::isfinite(dt)) throw py::value_error("dt must be positive");
         if (steps < 1) throw py::value_error("steps must be at least 1");
         ParameterLayout layout;
-        const Eigen::VectorXd p = classicalParams(s, params, layout);
+        const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
         Eigen::VectorXd x = vectorArg(q, n, "q"), v = vectorArg(dq, n, "dq");
         const Eigen::VectorXd t = vectorArg(tau, n, "tau");
         Eigen::VectorXd k1(n), k2(n), k3(n), k4(n), xs(n), vs(n);
@@ -253,7 +177,7 @@ void bindControl(py::module_& m) {
             IkResult r;
             {
               py::gil_scoped_release release;
-              r = k.solver.solve(poseArg(target), start, q);
+              r = k.solver.solve(isometry(target), start, q);
             }
             py::dict d;
             d["q"] = q;

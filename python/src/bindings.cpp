@@ -7,7 +7,6 @@
 
 #include <cmath>
 #include <memory>
-#include <sstream>
 
 #include "mindyn/base_parameters.hpp"
 #include "mindyn/data.hpp"
@@ -17,94 +16,16 @@
 #include "mindyn/model.hpp"
 #include "mindyn/projection.hpp"
 #include "mindyn/urdf.hpp"
+#include "py_args.hpp"
 #include "py_types.hpp"
 
 namespace py = pybind11;
 using namespace mindyn;
+using namespace mindyn::pyargs;
 
 void bindControl(py::module_& m);
 
 namespace {
-
-using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
-using RowMap =
-    Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>;
-
-// Shape check of a per-sample argument: returns the number of samples (0 = single sample).
-long samples(const Array& a, long n, const char* name) {
-  if (a.ndim() == 1) {
-    if (a.shape(0) != n) {
-      std::ostringstream s;
-      s << name << " has shape (" << a.shape(0) << ",); expected (" << n << ",) or (m, " << n
-        << ")";
-      throw py::value_error(s.str());
-    }
-    return 0;
-  }
-  if (a.ndim() == 2) {
-    if (a.shape(1) != n) {
-      std::ostringstream s;
-      s << name << " has shape (" << a.shape(0) << ", " << a.shape(1) << "); expected (m, " << n
-        << ")";
-      throw py::value_error(s.str());
-    }
-    return a.shape(0);
-  }
-  throw py::value_error(std::string(name) + " must be 1-D (n,) or 2-D (m, n), got " +
-                        std::to_string(a.ndim()) + "-D");
-}
-
-void finite(const Array& a, const char* name) {
-  const double* p = a.data();
-  const long size = static_cast<long>(a.size());
-  for (long i = 0; i < size; ++i)
-    if (!std::isfinite(p[i])) {
-      std::ostringstream s;
-      s << name << " contains " << (std::isnan(p[i]) ? "NaN" : "an infinite value");
-      if (a.ndim() == 2)
-        s << " at sample " << i / a.shape(1) << ", joint " << i % a.shape(1) + 1;
-      else
-        s << " at joint " << i + 1;
-      throw py::value_error(s.str());
-    }
-}
-
-// Checks a group of per-sample arrays; all single or all batches of the same length.
-long batch(const std::vector<std::pair<const Array*, const char*>>& args, long n) {
-  long m = -2;
-  for (const auto& [a, name] : args) {
-    const long s = samples(*a, n, name);
-    finite(*a, name);
-    if (m == -2)
-      m = s;
-    else if (s != m)
-      throw py::value_error(std::string(name) +
-                            ": all inputs must be single samples or batches of equal length");
-  }
-  return m;
-}
-
-Eigen::VectorXd paramVector(const PyModel& self, const py::object& params, ParameterLayout& layout,
-                            bool layout_given) {
-  const int n = self.model.nq();
-  if (params.is_none()) return self.model.parameters(layout);
-  Array a = params.cast<Array>();
-  if (a.ndim() != 1) throw py::value_error("params must be 1-D");
-  const long size = a.shape(0);
-  if (layout_given) {
-    if (size != layout.size(n))
-      throw py::value_error("params has " + std::to_string(size) +
-                            " entries; this layout expects " + std::to_string(layout.size(n)));
-  } else {
-    try {
-      layout = ParameterLayout::fromSize(n, size);
-    } catch (const ModelError& e) {
-      throw py::value_error(e.what());
-    }
-  }
-  finite(a, "params");
-  return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
-}
 
 ParameterLayout layoutOf(const py::object& rotor, const py::object& friction, bool& given) {
   given = !rotor.is_none() || !friction.is_none();
@@ -127,8 +48,7 @@ py::array_t<double> perSampleVector(PyModel& self, const Array& a, const Array& 
   auto out = vectorOut(m, n);
   const long rows = m == 0 ? 1 : m;
   RowMap A(a.data(), rows, n), B(b.data(), rows, n), C(c.data(), rows, n);
-  Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> O(
-      out.mutable_data(), rows, n);
+  Eigen::Map<RowMajor> O(out.mutable_data(), rows, n);
   Eigen::VectorXd qi(n), dqi(n), ddqi(n), ti(n);
   for (long i = 0; i < rows; ++i) {
     qi = A.row(i).transpose();
@@ -177,12 +97,6 @@ py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
   margin["fit_residual"] = d.fit_residual;
   out["margin"] = margin;
   return out;
-}
-
-Eigen::Isometry3d fromMatrix(const Eigen::Matrix4d& M) {
-  Eigen::Isometry3d T;
-  T.matrix() = M;
-  return T;
 }
 
 py::dict limitsDict(const JointLimits& l) {
@@ -276,7 +190,7 @@ PYBIND11_MODULE(_core, m) {
           "tool", [](const PyModel& s) { return toMatrix(s.model.tool); },
           [](PyModel& s, const Eigen::Matrix4d& T) {
             Model m = s.model;
-            m.tool = fromMatrix(T);
+            m.tool = isometry(T);
             m.validate();
             s.model.tool = m.tool;
           })
@@ -327,7 +241,7 @@ PYBIND11_MODULE(_core, m) {
           [](PyModel& s, const Array& q, const Array& dq, const Array& ddq,
              const py::object& params) {
             ParameterLayout layout;
-            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
             return perSampleVector(
                 s, q, dq, ddq, "q", "dq", "ddq",
                 [&](const auto& a, const auto& b, const auto& c, Eigen::VectorXd& t) {
@@ -339,7 +253,7 @@ PYBIND11_MODULE(_core, m) {
           "gravity_torque",
           [](PyModel& s, const Array& q, const py::object& params) {
             ParameterLayout layout;
-            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
             return perSampleVector(
                 s, q, q, q, "q", "q", "q",
                 [&](const auto& a, const auto&, const auto&, Eigen::VectorXd& t) {
@@ -352,7 +266,7 @@ PYBIND11_MODULE(_core, m) {
           [](PyModel& s, const Array& q, const Array& dq, const Array& tau,
              const py::object& params) {
             ParameterLayout layout;
-            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
             return perSampleVector(
                 s, q, dq, tau, "q", "dq", "tau",
                 [&](const auto& a, const auto& b, const auto& c, Eigen::VectorXd& t) {
@@ -381,8 +295,7 @@ PYBIND11_MODULE(_core, m) {
               b = B.row(i).transpose();
               c = C.row(i).transpose();
               regressor(s.model, s.data, a, b, c, layout, W);
-              Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-                  o + i * n * P, n, P) = W;
+              Eigen::Map<RowMajor>(o + i * n * P, n, P) = W;
             }
             return out;
           },
@@ -415,7 +328,7 @@ PYBIND11_MODULE(_core, m) {
             const long n = s.model.nq();
             const long m = batch({{&q, "q"}, {&dq, "dq"}}, n);
             ParameterLayout layout;
-            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
             const long rows = m == 0 ? 1 : m;
             py::array_t<double> K(rows), P(rows);
             RowMap A(q.data(), rows, n), B(dq.data(), rows, n);
@@ -436,7 +349,7 @@ PYBIND11_MODULE(_core, m) {
             const long n = s.model.nq();
             const long m = batch({{&q, "q"}}, n);
             ParameterLayout layout;
-            const Eigen::VectorXd p = paramVector(s, params, layout, false);
+            const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
             auto out = matrix3Out(m, n, n);
             const long rows = m == 0 ? 1 : m;
             RowMap A(q.data(), rows, n);
@@ -445,8 +358,7 @@ PYBIND11_MODULE(_core, m) {
             for (long i = 0; i < rows; ++i) {
               a = A.row(i).transpose();
               massMatrix(s.model, s.data, a, p, layout, M);
-              Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-                  out.mutable_data() + i * n * n, n, n) = M;
+              Eigen::Map<RowMajor>(out.mutable_data() + i * n * n, n, n) = M;
             }
             return out;
           },
@@ -522,8 +434,7 @@ PYBIND11_MODULE(_core, m) {
               y = B.row(i).transpose();
               z = C.row(i).transpose();
               baseRegressor(s.model, s.data, b.bp, x, y, z, b.W, Wb);
-              Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-                  out.mutable_data() + i * n * nb, n, nb) = Wb;
+              Eigen::Map<RowMajor>(out.mutable_data() + i * n * nb, n, nb) = Wb;
             }
             return out;
           },

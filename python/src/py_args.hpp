@@ -1,0 +1,140 @@
+// Argument checks shared by the binding translation units: per-sample arrays of shape (n,) or
+// (m, n), finiteness with the position of the first bad value, classical parameter vectors and
+// 4x4 poses. Every failure is a ValueError naming the argument.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "mindyn/model.hpp"
+#include "py_types.hpp"
+
+namespace mindyn::pyargs {
+
+namespace py = pybind11;
+
+using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using RowMap = Eigen::Map<const RowMajor>;
+
+inline std::string shapeOf(const Array& a) {
+  std::string s = "(";
+  for (long d = 0; d < a.ndim(); ++d) s += (d ? ", " : "") + std::to_string(a.shape(d));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+
+/// Number of samples of a per-sample argument: 0 for a single sample of shape (n,), m for a
+/// batch of shape (m, n).
+inline long samples(const Array& a, long n, const char* name) {
+  const std::string want = std::to_string(n);
+  if (a.ndim() == 1) {
+    if (a.shape(0) != n)
+      throw py::value_error(std::string(name) + " has shape " + shapeOf(a) + "; expected (" + want +
+                            ",) or (m, " + want + ")");
+    return 0;
+  }
+  if (a.ndim() == 2) {
+    if (a.shape(1) != n)
+      throw py::value_error(std::string(name) + " has shape " + shapeOf(a) + "; expected (m, " +
+                            want + ")");
+    return a.shape(0);
+  }
+  throw py::value_error(std::string(name) + " must be 1-D (n,) or 2-D (m, n), got " +
+                        std::to_string(a.ndim()) + "-D");
+}
+
+/// Rejects NaN and infinite entries; the message gives the sample and the joint (or `entry`).
+inline void requireFinite(const Array& a, const char* name, const char* entry = "joint") {
+  const double* p = a.data();
+  const long size = static_cast<long>(a.size());
+  for (long i = 0; i < size; ++i) {
+    if (std::isfinite(p[i])) continue;
+    std::string s =
+        std::string(name) + " contains " + (std::isnan(p[i]) ? "NaN" : "an infinite value");
+    if (a.ndim() == 2)
+      s += " at sample " + std::to_string(i / a.shape(1)) + ", " + entry + " " +
+           std::to_string(i % a.shape(1) + 1);
+    else
+      s += std::string(" at ") + entry + " " + std::to_string(i + 1);
+    throw py::value_error(s);
+  }
+}
+
+/// Checks a group of per-sample arguments of width n: all single samples or all batches of one
+/// length. Returns the number of samples (0: single).
+inline long batch(const std::vector<std::pair<const Array*, const char*>>& args, long n) {
+  long m = -2;
+  for (const auto& [a, name] : args) {
+    const long s = samples(*a, n, name);
+    requireFinite(*a, name);
+    if (m == -2)
+      m = s;
+    else if (s != m)
+      throw py::value_error(std::string(name) +
+                            ": all inputs must be single samples or batches of equal length");
+  }
+  return m;
+}
+
+/// A vector argument of exactly n finite entries.
+inline Eigen::VectorXd vectorArg(const Eigen::VectorXd& v, long n, const char* name) {
+  if (v.size() != n)
+    throw py::value_error(std::string(name) + " has " + std::to_string(v.size()) +
+                          " entries; expected " + std::to_string(n));
+  for (long i = 0; i < n; ++i)
+    if (!std::isfinite(v[i]))
+      throw py::value_error(std::string(name) + " contains " +
+                            (std::isnan(v[i]) ? "NaN" : "an infinite value") + " at joint " +
+                            std::to_string(i + 1));
+  return v;
+}
+
+/// A 1-D parameter vector of exactly `size` finite entries (p of a base set, for instance).
+inline Eigen::Map<const Eigen::VectorXd> parameterArg(const Array& a, long size, const char* name) {
+  if (a.ndim() != 1 || a.shape(0) != size)
+    throw py::value_error(std::string(name) + " has shape " + shapeOf(a) + "; expected (" +
+                          std::to_string(size) + ",)");
+  requireFinite(a, name, "entry");
+  return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
+}
+
+/// A classical parameter vector for `self`'s model. None: the model's own values in `layout`.
+/// With `layout_given` the size must fit `layout`; otherwise the layout is read off the size
+/// (10, 11, 12 or 13 entries per joint) and returned in `layout`.
+inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object& params,
+                                           ParameterLayout& layout, bool layout_given) {
+  const int n = self.model.nq();
+  if (params.is_none()) return self.model.parameters(layout);
+  Array a = params.cast<Array>();
+  if (a.ndim() != 1) throw py::value_error("params must be 1-D");
+  const long size = a.shape(0);
+  if (layout_given) {
+    if (size != layout.size(n))
+      throw py::value_error("params has " + std::to_string(size) +
+                            " entries; this layout expects " + std::to_string(layout.size(n)));
+  } else {
+    try {
+      layout = ParameterLayout::fromSize(n, size);
+    } catch (const ModelError& e) {
+      throw py::value_error(e.what());
+    }
+  }
+  requireFinite(a, "params", "entry");
+  return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
+}
+
+/// A homogeneous 4x4 matrix as an isometry (its last row is not read).
+inline Eigen::Isometry3d isometry(const Eigen::Matrix4d& M) {
+  Eigen::Isometry3d T;
+  T.matrix() = M;
+  return T;
+}
+
+}  // namespace mindyn::pyargs
