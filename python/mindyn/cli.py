@@ -14,17 +14,13 @@ from . import (
     ModelError,
     RobotFileNotFoundError,
     base_parameters,
-    bundled_robots,
     cli_codegen,
     cli_control,
     cli_demo,
     cli_identify,
     load,
 )
-
-ROBOT_HELP = (
-    "a bundled robot (" + ", ".join(bundled_robots()) + "), a URDF file or a YAML DH/MDH table"
-)
+from .cli_args import add_joint_terms, add_robot
 
 
 def _fmt(x: float, width: int = 10) -> str:
@@ -178,8 +174,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     p = sub.add_parser("info", help="print a robot model: joints, geometry, limits, parameters")
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    add_robot(p)
     p.set_defaults(func=cmd_info)
 
     p = sub.add_parser(
@@ -188,10 +183,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Base inertial parameters by the projection method (exact) or the "
         "numerical method (sampled regressor + QR).",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
-    p.add_argument("--rotor", action="store_true", help="include rotor inertia Ia per joint")
-    p.add_argument("--friction", action="store_true", help="include Fv, Fc per joint")
+    add_robot(p)
+    add_joint_terms(p)
     p.add_argument(
         "--order",
         help="column priority: every classical parameter once, comma-separated "

@@ -6,12 +6,11 @@ import argparse
 from pathlib import Path
 
 from . import ModelError, load
+from .cli_args import add_joint_terms, add_robot
 from .codegen import generate
 
 
 def register(subparsers) -> None:
-    from .cli import ROBOT_HELP
-
     p = subparsers.add_parser(
         "codegen",
         help="generate inverse dynamics, gravity torque and base regressor in C or ST",
@@ -20,8 +19,7 @@ def register(subparsers) -> None:
         "operation counts beside those of the classical-parameter recursion generated the "
         "same way.",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    add_robot(p)
     p.add_argument("--lang", choices=["c", "st"], required=True, help="C99 or Structured Text")
     p.add_argument(
         "--what",
@@ -29,8 +27,7 @@ def register(subparsers) -> None:
         help="functions, comma-separated: id (inverse dynamics), gravity, regressor "
         "(default: all three)",
     )
-    p.add_argument("--rotor", action="store_true", help="include rotor inertia Ia per joint")
-    p.add_argument("--friction", action="store_true", help="include Fv, Fc per joint")
+    add_joint_terms(p)
     p.add_argument(
         "--params",
         metavar="FILE",

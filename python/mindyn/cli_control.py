@@ -10,8 +10,7 @@ import sys
 import numpy as np
 
 from . import base_parameters, load
-
-ROBOT_HELP = "a bundled robot name, a URDF file or a YAML DH/MDH table"
+from .cli_args import add_robot
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
@@ -181,8 +180,7 @@ def register(sub) -> None:
         "for zcr07s (K_D = diag(400, 350, 130, 22, 9, 2), Lambda = diag(10, 10, 10, 30, 30, 25), "
         "Gamma = 1), otherwise Lambda = 10, K_D = 40 diag(A(q_mid)).",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    add_robot(p)
     p.add_argument(
         "--controller", choices=["adaptive-pd", "computed-torque", "pd"], default="adaptive-pd"
     )
@@ -234,8 +232,7 @@ def register(sub) -> None:
         description="Damped least squares (Levenberg-Marquardt) with random restarts inside the "
         "limits. Exit status 1 when no solution is found.",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    add_robot(p)
     p.add_argument("--xyz", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
     p.add_argument(
         "--rpy",

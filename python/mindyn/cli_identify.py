@@ -9,11 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import base_parameters, bundled_robots, load
-
-ROBOT_HELP = (
-    "a bundled robot (" + ", ".join(bundled_robots()) + "), a URDF file or a YAML DH/MDH table"
-)
+from . import base_parameters, load
+from .cli_args import add_joint_terms, add_robot
 
 
 def _floats(text: str, n: int, what: str) -> np.ndarray:
@@ -301,8 +298,7 @@ def register(sub) -> None:
         "stacked base regressor under the robot's position, velocity and acceleration limits. "
         "Writes the sampled trajectory (CSV), the coefficients (JSON, same name) and a plot (PNG).",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    add_robot(p)
     p.add_argument("--harmonics", type=int, default=5, help="harmonics N (default 5)")
     p.add_argument("--freq", type=float, default=0.1, help="base frequency in Hz (default 0.1)")
     p.add_argument(
@@ -338,8 +334,7 @@ def register(sub) -> None:
         "With --controller adaptive-pd or pd, with --gains, or without --trajectory, this is the "
         "closed-loop simulation of 'mindyn track' (controller at its own period).",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    add_robot(p)
     p.add_argument(
         "--trajectory",
         required=True,
@@ -385,12 +380,10 @@ def register(sub) -> None:
         "(t, q1..qn, [dq1..dqn], tau1..taun) with statistics (RSD), pruning of parameters "
         "with large RSD, validation on a second log, JSON output and a plot report.",
     )
-    p.add_argument("robot", metavar="ROBOT", help=ROBOT_HELP)
+    add_robot(p)
     p.add_argument("data", help="CSV log: t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun")
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
     p.add_argument("--model", choices=["dynamic", "energy"], default="dynamic")
-    p.add_argument("--rotor", action="store_true", help="identify rotor inertia Ia")
-    p.add_argument("--friction", action="store_true", help="identify Fv, Fc per joint")
+    add_joint_terms(p, "identify")
     p.add_argument("--validate", metavar="CSV", help="second log for validation")
     p.add_argument("--json", metavar="FILE", help="write the results as JSON")
     p.add_argument("--report", metavar="DIR", help="write plots and tables to DIR")
