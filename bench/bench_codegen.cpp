@@ -1,7 +1,8 @@
 // Inverse dynamics per call, in one process: the generated C (base parameters, compiled here
 // with the system C compiler and loaded with dlopen), the runtime base-parameter tape, our
 // classical Newton-Euler, Pinocchio's rnea (C++, linked from the pin wheel) and KDL's
-// ChainIdSolver_RNE. Prints ns/call, ratios and operation counts.
+// ChainIdSolver_RNE. Prints ns/call, ratios and operation counts. Robots: PUMA 560, ZCR07S, the
+// Staubli RX-90 (published operation counts of other generators exist for it) and UR5.
 //
 // usage: bench_codegen ROBOT_DIR [UR5_URDF] [CC_FLAGS]
 #include <dlfcn.h>
@@ -49,6 +50,25 @@ double timeIt(F&& f, int calls) {
 
 volatile double sink = 0;
 
+// The Staubli RX-90 in Khalil's modified DH table (D3 = RL4 = 0.45 m), the robot of the published
+// OpenSYMORO operation counts; the inertial values are invented (physical, no zeros).
+Model rx90() {
+  const char* table[6] = {"alpha: 0, d: 0, r: 0",    "alpha: -90, d: 0, r: 0",
+                          "alpha: 0, d: 0.45, r: 0", "alpha: 90, d: 0, r: 0.45",
+                          "alpha: -90, d: 0, r: 0",  "alpha: 90, d: 0, r: 0"};
+  std::string yaml = "name: rx90\nconvention: mdh\nangle_unit: deg\njoints:\n";
+  for (int k = 0; k < 6; ++k) {
+    const double m = 6.0 - k, c = 0.01 * (k + 1), i = 0.01 * (6 - k);
+    yaml += "  - {name: j" + std::to_string(k + 1) + ", theta: 0, " + table[k] +
+            ", inertial: {mass: " + std::to_string(m) + ", com: [" + std::to_string(c) + ", " +
+            std::to_string(-0.5 * c) + ", " + std::to_string(0.7 * c) +
+            "], inertia: {xx: " + std::to_string(i) + ", yy: " + std::to_string(1.1 * i) +
+            ", zz: " + std::to_string(0.9 * i) + ", xy: " + std::to_string(0.05 * i) +
+            ", xz: " + std::to_string(-0.04 * i) + ", yz: " + std::to_string(0.03 * i) + "}}}\n";
+  }
+  return parseYaml(yaml, "rx90");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -61,6 +81,7 @@ int main(int argc, char** argv) {
   std::vector<std::pair<std::string, Model>> robots;
   robots.emplace_back("puma560", loadYaml(dir + "/puma560.yaml"));
   robots.emplace_back("zcr07s", loadYaml(dir + "/zcr07s.yaml"));
+  robots.emplace_back("rx90", rx90());
   if (argc > 2 && std::string(argv[2]).size()) robots.emplace_back("ur5", loadUrdf(argv[2], ""));
   const std::string work = "bench_codegen_build";
   std::system(("mkdir -p " + work).c_str());
