@@ -59,6 +59,12 @@ def test_adaptive_pd_feedback_and_update_signs(rng):
     s = lam * e
     Y = mindyn.slotine_li_regressor(base, qd + e, dqd, dqd - lam * e, ddqd)
     assert_close(ctl.p_hat, -0.01 * gamma * (Y.T @ s), 1e-12, "adaptation step -T Gamma Y^T s")
+    normalised = control.AdaptivePD(base, kd, lam, gamma, np.zeros(base.n), nu=0.05)
+    normalised(0.0, qd + e, dqd, (qd, dqd, ddqd), 0.01)
+    step = -0.01 * gamma * (Y.T @ s) / (1 + 0.05 * np.sum(Y**2))
+    assert_close(normalised.p_hat, step, 1e-12, "normalised step -T Gamma Y^T s / (1 + nu |Y|^2)")
+    with pytest.raises(ValueError, match="nu must be"):
+        control.AdaptivePD(base, kd, lam, gamma, np.zeros(base.n), nu=-1.0)
 
 
 # --------------------------------------------------------------------------------------------
@@ -112,6 +118,29 @@ def test_zcr07s_setting_tracks_better_than_pd_and_improves():
     pd = control.make_controller("pd", robot, gains)
     rp = control.simulate(robot, pd, ref, 7.5)
     assert np.all(rp.max_error_deg() > r.max_error_deg())
+
+
+def test_normalised_adaptation_keeps_large_gains_stable_at_4ms():
+    """At the study's 4 ms period the plain law with adaptation gains 5 diverges; normalised by
+    1 + nu |Y|^2 the same gains track within the plain law's accuracy at gains 1 and improve
+    the estimate, cycle by cycle."""
+    robot = mindyn.load("zcr07s")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    p = base.values(robot.parameters(True, True))
+    p0 = control.perturbed_parameters(p, 0.3, seed=0)
+    gains = control.default_gains(robot)
+    ref = control.SumOfSines(robot, period=2.5)
+    plain = control.make_controller("adaptive-pd", robot, dict(gains, gamma=5.0), p0, base)
+    with pytest.raises(ValueError, match="diverged"):
+        control.simulate(robot, plain, ref, 7.5)
+    slow = control.make_controller("adaptive-pd", robot, gains, p0, base)
+    r1 = control.simulate(robot, slow, ref, 7.5)
+    fast = control.make_controller("adaptive-pd", robot, dict(gains, gamma=5.0, nu=0.01), p0, base)
+    r5 = control.simulate(robot, fast, ref, 7.5)
+    assert np.all(r5.max_error_deg(5.0) < 1.5 * r1.max_error_deg(5.0))
+    rms, s = _per_cycle_rms(r5, 2.5)
+    assert rms[-1] < rms[0]
+    assert s["parameter_error_norm"][-1] < s["parameter_error_norm"][0]
 
 
 def test_computed_torque_with_exact_parameters_tracks_closely():
@@ -248,6 +277,12 @@ def test_gains_file(tmp_path):
         control.load_gains(f, robot)
     f.write_text("kd: [1, 2\n")
     with pytest.raises(ValueError, match="not valid YAML"):
+        control.load_gains(f, robot)
+    f.write_text("gamma: 5\nnu: 0.01\n")
+    g = control.load_gains(f, robot)
+    assert control.make_controller("adaptive-pd", robot, g).nu == 0.01
+    f.write_text("nu: [0.1, 0.2]\n")
+    with pytest.raises(ValueError, match="'nu' must be one number >= 0"):
         control.load_gains(f, robot)
 
 

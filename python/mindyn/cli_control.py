@@ -175,10 +175,10 @@ def register(sub) -> None:
         description="Simulates the robot (true parameters with rotor inertia and friction, RK4) "
         "under a controller sampled every --period seconds with zero-order hold. Adaptive PD is "
         "the Slotine-Li controller on the base parameters: tau = Y p_hat - K_D s, "
-        "dp_hat/dt = -Gamma Y^T s, s = de + Lambda e, e = q - q_d. Default gains: "
+        "dp_hat/dt = -Gamma Y^T s / (1 + nu |Y|^2), s = de + Lambda e, e = q - q_d. Default gains: "
         "the ZCR07S study's "
         "for zcr07s (K_D = diag(400, 350, 130, 22, 9, 2), Lambda = diag(10, 10, 10, 30, 30, 25), "
-        "Gamma = 1), otherwise Lambda = 10, K_D = 40 diag(A(q_mid)).",
+        "Gamma = 1), otherwise Lambda = 10, K_D = 40 diag(A(q_mid)); nu = 0 (the plain law).",
     )
     add_robot(p)
     p.add_argument(
@@ -187,7 +187,7 @@ def register(sub) -> None:
     p.add_argument(
         "--gains",
         metavar="FILE",
-        help="YAML with kd, lambda, gamma (adaptive PD) and optionally kp (PD: default "
+        help="YAML with kd, lambda, gamma, nu (adaptive PD) and optionally kp (PD: default "
         "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
     )
     p.add_argument("--period", type=float, default=0.004, help="controller period [s] (0.004)")

@@ -8,10 +8,13 @@ Controllers (all sampled at their own period, torque held in between):
       e = q - q_d                 s = dq - dq_r = de + Lambda e
       dq_r = dq_d - Lambda e      ddq_r = ddq_d - Lambda de
       tau = Y(q, dq, dq_r, ddq_r) p_hat - K_D s
-      dp_hat/dt = -Gamma Y^T s     (explicit Euler over one period)
+      dp_hat/dt = -Gamma Y^T s / (1 + nu |Y|^2)     (explicit Euler over one period)
 
   with ``Y p = A(q) ddq_r + C(q, dq) dq_r + c(q) (+ Fv dq + Fc sign dq)`` the Slotine-Li regressor
-  (:func:`slotine_li_regressor`); ``K_P = Lambda K_D``.
+  (:func:`slotine_li_regressor`); ``K_P = Lambda K_D``. ``nu = 0`` is the Slotine-Li law; ``nu > 0``
+  normalises the step by the squared Frobenius norm of ``Y`` (normalised gradient), which bounds
+  the change of the estimate per period by ``T Gamma |s| / (nu |Y|)`` and keeps large adaptation
+  gains usable at a slow controller rate (plain Euler steps diverge there).
 - :class:`ComputedTorque`: ``tau = W_b(q, dq, ddq_d - K_D de - K_P e) p_hat`` with fixed
   parameters.
 - :class:`PD`: ``tau = -K_P e - K_D de``.
@@ -270,11 +273,15 @@ class AdaptivePD:
         Initial estimate.
     adapt : bool
         False freezes the estimate (the controller is then a PD plus model feedforward).
+    nu : float
+        Normalisation of the adaptation step (>= 0; 0: the plain Slotine-Li law).
     """
 
     name = "adaptive-pd"
 
-    def __init__(self, base: BaseParameters, kd, lam, gamma, p0, adapt: bool = True):
+    def __init__(
+        self, base: BaseParameters, kd, lam, gamma, p0, adapt: bool = True, nu: float = 0.0
+    ):
         n = base.robot.n
         self.base = base
         self.kd = _diag(kd, n, "kd")
@@ -284,6 +291,9 @@ class AdaptivePD:
         if self.p0.shape != (base.n,):
             raise ValueError(f"p0 has shape {self.p0.shape}; expected ({base.n},)")
         self.adapt = adapt
+        self.nu = float(nu)
+        if not (math.isfinite(self.nu) and self.nu >= 0):
+            raise ValueError(f"nu must be a finite number >= 0, got {nu}")
         self.reset()
 
     def reset(self) -> None:
@@ -306,7 +316,10 @@ class AdaptivePD:
         self.model_torque = Y @ self.p_hat
         tau = self.model_torque - self.kd * s
         if self.adapt:
-            self.p_hat = self.p_hat - dt * self.gamma * (Y.T @ s)
+            step = dt * self.gamma * (Y.T @ s)
+            if self.nu:
+                step /= 1.0 + self.nu * float(np.sum(Y * Y))
+            self.p_hat = self.p_hat - step
         return tau
 
 
@@ -330,8 +343,8 @@ def default_gains(robot: Robot) -> dict:
 
 
 def load_gains(path: str | Path, robot: Robot) -> dict:
-    """Gains from a YAML file with keys ``kd``, ``lambda``, ``gamma``, ``kp`` (scalars or lists;
-    missing keys take :func:`default_gains`)."""
+    """Gains from a YAML file with keys ``kd``, ``lambda``, ``gamma``, ``nu`` (adaptation-step
+    normalisation, a scalar), ``kp`` (scalars or lists; missing keys take :func:`default_gains`)."""
     import yaml
 
     path = Path(path)
@@ -346,11 +359,12 @@ def load_gains(path: str | Path, robot: Robot) -> dict:
     if data is None:
         data = {}
     if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a mapping with keys kd, lambda, gamma, kp")
-    unknown = set(data) - {"kd", "lambda", "gamma", "kp"}
+        raise ValueError(f"{path}: expected a mapping with keys kd, lambda, gamma, nu, kp")
+    unknown = set(data) - {"kd", "lambda", "gamma", "nu", "kp"}
     if unknown:
         raise ValueError(
-            f"{path}: unknown key(s) {', '.join(sorted(unknown))}; expected kd, lambda, gamma, kp"
+            f"{path}: unknown key(s) {', '.join(sorted(unknown))}; "
+            "expected kd, lambda, gamma, nu, kp"
         )
     gains = default_gains(robot)
     for key, value in data.items():
@@ -358,6 +372,8 @@ def load_gains(path: str | Path, robot: Robot) -> dict:
             arr = np.asarray(value, dtype=float)
         except (TypeError, ValueError):
             raise ValueError(f"{path}: '{key}' must be a number or a list of numbers") from None
+        if key == "nu" and (arr.ndim != 0 or not arr >= 0):
+            raise ValueError(f"{path}: 'nu' must be one number >= 0")
         gains[key] = arr.tolist()
     return gains
 
@@ -717,4 +733,4 @@ def make_controller(
     if kind == "computed-torque":
         kp = gains.get("kp", lam**2)
         return ComputedTorque(base, p_hat, kp, 2 * lam if "kp" not in gains else kd)
-    return AdaptivePD(base, kd, lam, gains.get("gamma", 1.0), p_hat)
+    return AdaptivePD(base, kd, lam, gains.get("gamma", 1.0), p_hat, nu=gains.get("nu", 0.0))
