@@ -31,7 +31,9 @@ fi
 py=.venv/bin/python
 $py -m pip install -q --upgrade pip
 # Build requirements first, so that the package builds without isolation and reuses build/.
-$py -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12" "numpy>=1.23"
+# setuptools and wheel: dependencies published only as source (a tree-sitter grammar among the
+# test extras) are built in this environment too.
+$py -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12" "numpy>=1.23" setuptools wheel
 extra=""
 [[ "${1:-}" == "--test" ]] && extra="[test]"
 echo "bootstrap: building and installing mindyn${extra}"
