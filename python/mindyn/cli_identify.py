@@ -136,7 +136,17 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------------------------
 def _read(path, robot, args):
     from .data import read_csv
+    from .rosbag import is_rosbag, read_rosbag
 
+    if is_rosbag(path):
+        return read_rosbag(
+            path,
+            robot,
+            topic=args.topic,
+            torque_unit=args.torque_unit,
+            filter=args.filter,
+            cutoff=args.cutoff,
+        )
     return read_csv(
         path,
         robot=robot,
@@ -377,14 +387,20 @@ def register(sub) -> None:
         "identify",
         help="identify base parameters from a joint log (dynamic or energy model)",
         description="Least-squares identification of the base parameters from a CSV log "
-        "(t, q1..qn, [dq1..dqn], tau1..taun) with statistics (RSD), pruning of parameters "
-        "with large RSD, validation on a second log, JSON output and a plot report.",
+        "(t, q1..qn, [dq1..dqn], tau1..taun) or a ROS bag (sensor_msgs/JointState: position, "
+        "[velocity], effort, joints matched by name) with statistics (RSD), pruning of "
+        "parameters with large RSD, validation on a second log, JSON output and a plot report.",
     )
     add_robot(p)
-    p.add_argument("data", help="CSV log: t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun")
+    p.add_argument(
+        "data",
+        help="CSV log (t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun) or ROS bag (a ROS 2 bag "
+        "folder, .mcap, .db3, or a ROS 1 .bag)",
+    )
+    p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
     p.add_argument("--model", choices=["dynamic", "energy"], default="dynamic")
     add_joint_terms(p, "identify")
-    p.add_argument("--validate", metavar="CSV", help="second log for validation")
+    p.add_argument("--validate", metavar="LOG", help="second log (CSV or bag) for validation")
     p.add_argument("--json", metavar="FILE", help="write the results as JSON")
     p.add_argument("--report", metavar="DIR", help="write plots and tables to DIR")
     p.add_argument(

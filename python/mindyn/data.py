@@ -232,9 +232,8 @@ def read_csv(
         what = "NaN" if np.isnan(values[r, c]) else "an infinite value"
         raise DataError(f"{path}, line {rows[r][0]}, column {names[c]}: {what}")
     t = values[:, cols["t"]]
-    dt = np.diff(t)
-    if (dt <= 0).any():
-        r = int(np.flatnonzero(dt <= 0)[0]) + 1
+    r = first_not_increasing(t)
+    if r is not None:
         raise DataError(
             f"{path}, line {rows[r][0]}: time is not increasing (t = {t[r]:.9g} after "
             f"{t[r - 1]:.9g})"
@@ -259,6 +258,12 @@ def read_csv(
     )
     processing.update(deriv)
     return JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
+
+
+def first_not_increasing(t: np.ndarray) -> int | None:
+    """Index of the first time that does not exceed the one before it, or None."""
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    return int(bad[0]) + 1 if bad.size else None
 
 
 def convert_torque(tau: np.ndarray, unit: str, robot=None):
