@@ -324,3 +324,7 @@ def test_track_command_errors(tmp_path, capsys):
     f.write_text("kd: [1, 2, 3]\n")
     assert main(["track", "planar2", "--gains", str(f), "--duration", "0.1"]) == 2
     assert "gain 'kd' must be a scalar or 2 values" in capsys.readouterr().err
+    for opt, value in (("--duration", "0"), ("--cycle", "-1"), ("--duration", "nan")):
+        assert main(["track", "planar2", opt, value]) == 2
+        err = capsys.readouterr().err
+        assert f"{opt} must be a positive number of seconds" in err and err.count("\n") == 1

@@ -390,3 +390,11 @@ def test_simulate_with_a_feedback_controller_is_the_closed_loop_simulation():
     # logging along a trajectory stays the open-loop log of `simulate`
     assert _route(["simulate", "zcr07s", "--trajectory", "t.json", "-o", "d.csv"])[0] == "simulate"
     assert _route(["simulate", "--help"])[0] == "simulate"
+    # an output log without a trajectory is an incomplete open-loop call: simulate says so
+    assert _route(["simulate", "zcr07s", "-o", "d.csv"])[0] == "simulate"
+    r = subprocess.run(
+        [sys.executable, "-m", "mindyn.cli", "simulate", "planar2", "-o", "d.csv"],
+        capture_output=True,
+        text=True,
+    )
+    assert r.returncode == 2 and "the following arguments are required: --trajectory" in r.stderr

@@ -213,6 +213,10 @@ def test_bag_errors_are_precise(planar, tmp_path, capsys):
     with pytest.raises(DataFileNotFoundError):
         read_rosbag(tmp_path / "absent.mcap", robot)
 
+    rc = cli.main(["identify", "planar3", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert rc == 2 and "is a folder but not a ROS 2 bag (it has no metadata.yaml)" in err
+
     rc = cli.main(["identify", "planar3", str(two)])
     err = capsys.readouterr().err
     assert rc == 2 and err.startswith("mindyn: error: ") and err.count("\n") == 1

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
 import numpy as np
@@ -26,6 +27,10 @@ def cmd_track(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     n = robot.n
     gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
+    for name in ("duration", "cycle"):
+        value = getattr(args, name)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise ValueError(f"--{name} must be a positive number of seconds, got {value:g}")
     if args.trajectory:
         reference = control.CsvTrajectory(args.trajectory, n)
         ref_text = f"trajectory {args.trajectory} ({reference.duration:g} s)"

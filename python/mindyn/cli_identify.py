@@ -135,9 +135,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 # identify
 # ---------------------------------------------------------------------------------------------
 def _read(path, robot, args):
-    from .data import read_csv
+    from .data import DataError, read_csv
     from .rosbag import is_rosbag, read_rosbag
 
+    if Path(path).is_dir() and not is_rosbag(path):
+        raise DataError(f"'{path}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
     if is_rosbag(path):
         return read_rosbag(
             path,
