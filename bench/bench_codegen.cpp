@@ -5,6 +5,9 @@
 // Staubli RX-90 (published operation counts of other generators exist for it) and UR5.
 //
 // usage: bench_codegen ROBOT_DIR [UR5_URDF] [CC_FLAGS]
+// With MINDYN_BENCH_CALLGRIND=N in the environment (under valgrind --tool=callgrind
+// --instr-atstart=no) it times nothing and makes N calls per robot and implementation instead,
+// each bracketed by callgrind client requests and dumped as "robot/implementation".
 #include <dlfcn.h>
 
 #include <algorithm>
@@ -12,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <kdl/chainidsolver_recursive_newton_euler.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/multibody.hpp>
@@ -26,6 +30,15 @@
 #include "mindyn/kinematics.hpp"
 #include "mindyn/urdf.hpp"
 #include "pinocchio_adapter.hpp"
+
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#else  // no valgrind headers: the callgrind mode runs without client requests
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_STOP_INSTRUMENTATION
+#define CALLGRIND_ZERO_STATS
+#define CALLGRIND_DUMP_STATS_AT(label) ((void)(label))
+#endif
 
 using namespace mindyn;
 using Clock = std::chrono::steady_clock;
@@ -78,6 +91,8 @@ int main(int argc, char** argv) {
   }
   const std::string dir = argv[1];
   const std::string flags = argc > 3 ? argv[3] : "-O2";
+  const char* cg = std::getenv("MINDYN_BENCH_CALLGRIND");
+  const long callgrind = cg ? std::atol(cg) : 0;
   std::vector<std::pair<std::string, Model>> robots;
   robots.emplace_back("puma560", loadYaml(dir + "/puma560.yaml"));
   robots.emplace_back("zcr07s", loadYaml(dir + "/zcr07s.yaml"));
@@ -86,12 +101,14 @@ int main(int argc, char** argv) {
   const std::string work = "bench_codegen_build";
   std::system(("mkdir -p " + work).c_str());
 
-  std::printf(
-      "inverse dynamics, ns per call (best of 15 runs of 20000 calls); generated C: cc %s\n",
-      flags.c_str());
-  std::printf("%-8s %9s %9s %9s %9s %9s | %8s %8s | %s\n", "robot", "gen. C", "base tape",
-              "mindyn NE", "Pinocchio", "KDL", "Pin/genC", "KDL/genC",
-              "ops gen. C base (classical): mul add trig");
+  if (callgrind == 0) {
+    std::printf(
+        "inverse dynamics, ns per call (best of 15 runs of 20000 calls); generated C: cc %s\n",
+        flags.c_str());
+    std::printf("%-8s %9s %9s %9s %9s %9s | %8s %8s | %s\n", "robot", "gen. C", "base tape",
+                "mindyn NE", "Pinocchio", "KDL", "Pin/genC", "KDL/genC",
+                "ops gen. C base (classical): mul add trig");
+  }
   for (auto& [name, model] : robots) {
     const int n = model.nq();
     const BaseParameters bp = computeBaseParameters(model);
@@ -164,46 +181,60 @@ int main(int argc, char** argv) {
       return 1;
     }
 
-    const int calls = 20000;
-    const double tGen = timeIt(
-        [&](int i) {
-          const int s = i % S;
-          gen(Q[s].data(), DQ[s].data(), DDQ[s].data(), pb.data(), tau.data());
-          sink = sink + tau[0];
-        },
-        calls);
-    const double tTape = timeIt(
-        [&](int i) {
-          const int s = i % S;
-          bd.inverseDynamics(Q[s], DQ[s], DDQ[s], pb, tau);
-          sink = sink + tau[0];
-        },
-        calls);
-    const double tNe = timeIt(
-        [&](int i) {
-          const int s = i % S;
-          inverseDynamics(model, data, Q[s], DQ[s], DDQ[s], pi, {}, tau);
-          sink = sink + tau[0];
-        },
-        calls);
-    const double tPin = timeIt(
-        [&](int i) {
-          const int s = i % S;
-          sink = sink + pinocchio::rnea(pm, pd, Q[s], DQ[s], DDQ[s])[0];
-        },
-        calls);
-    const double tKdl = timeIt(
-        [&](int i) {
-          const int s = i % S;
-          for (int k = 0; k < n; ++k) {
-            kq(k) = Q[s][k];
-            kdq(k) = DQ[s][k];
-            kddq(k) = DDQ[s][k];
-          }
-          kdl.CartToJnt(kq, kdq, kddq, fext, kt);
-          sink = sink + kt(0);
-        },
-        calls);
+    // The five implementations, each a loop body over the fixed states.
+    const std::vector<std::pair<const char*, std::function<void(int)>>> impls = {
+        {"generated_c",
+         [&](int i) {
+           const int s = i % S;
+           gen(Q[s].data(), DQ[s].data(), DDQ[s].data(), pb.data(), tau.data());
+           sink = sink + tau[0];
+         }},
+        {"base_tape",
+         [&](int i) {
+           const int s = i % S;
+           bd.inverseDynamics(Q[s], DQ[s], DDQ[s], pb, tau);
+           sink = sink + tau[0];
+         }},
+        {"mindyn_ne",
+         [&](int i) {
+           const int s = i % S;
+           inverseDynamics(model, data, Q[s], DQ[s], DDQ[s], pi, {}, tau);
+           sink = sink + tau[0];
+         }},
+        {"pinocchio",
+         [&](int i) {
+           const int s = i % S;
+           sink = sink + pinocchio::rnea(pm, pd, Q[s], DQ[s], DDQ[s])[0];
+         }},
+        {"kdl",
+         [&](int i) {
+           const int s = i % S;
+           for (int k = 0; k < n; ++k) {
+             kq(k) = Q[s][k];
+             kdq(k) = DQ[s][k];
+             kddq(k) = DDQ[s][k];
+           }
+           kdl.CartToJnt(kq, kdq, kddq, fext, kt);
+           sink = sink + kt(0);
+         }},
+    };
+    if (callgrind > 0) {
+      // One dump per implementation, "robot/implementation", for scripts/bench_codegen.
+      for (const auto& [impl, body] : impls) {
+        for (int i = 0; i < 2 * S; ++i) body(i);  // first-call effects stay out of the count
+        const std::string label = name + "/" + impl;
+        CALLGRIND_START_INSTRUMENTATION;
+        CALLGRIND_ZERO_STATS;
+        for (long i = 0; i < callgrind; ++i) body(static_cast<int>(i));
+        CALLGRIND_DUMP_STATS_AT(label.c_str());
+        CALLGRIND_STOP_INSTRUMENTATION;
+      }
+      dlclose(lib);
+      continue;
+    }
+    std::vector<double> t;
+    for (const auto& impl : impls) t.push_back(timeIt(impl.second, 20000));
+    const double tGen = t[0], tTape = t[1], tNe = t[2], tPin = t[3], tKdl = t[4];
     const auto& c = code.functions[0].program.count;
     const auto& k = classical.program.count;
     std::printf("%-8s %9.1f %9.1f %9.1f %9.1f %9.1f | %8.2f %8.2f | %ld %ld %ld (%ld %ld %ld)\n",
