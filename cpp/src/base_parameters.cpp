@@ -138,38 +138,78 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsi
 // joints up to d only is zero on the columns of links before d, so a group of rows of equal
 // depth (and of the same kind, potential or kinetic) reduces to at most as many rows as it has
 // columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged.
+//
+// The groups reduced are those with more basis functions than columns. Their rows without
+// entries are left out, and their rows with entries in a single column are first combined into
+// one row per column (the 2-norm of the entries there). Both are orthogonal combinations, so
+// R^T R = Z_g^T Z_g is unchanged and so is R itself up to the signs of its rows when the
+// group's columns are independent; the dense factorization sees a few rows instead of hundreds.
 struct Reduced {
   Eigen::MatrixXd Z;
   int constant_row = -1;  // the row of the constant function, if non-zero
 };
 
 Reduced reduceRows(const InfluenceCoordinates& ic) {
-  const int P = ic.cols(), n = ic.n, G = 2 * (n + 1);
-  std::vector<int> group(ic.rows()), pos(ic.rows());
-  std::vector<int> count(G, 0), first(G, P);
-  for (int r = 0; r < ic.rows(); ++r) {
+  const int P = ic.cols(), n = ic.n, G = 2 * (n + 1), rows = ic.rows();
+  constexpr int kNone = -1, kSeveral = -2;
+  std::vector<int> group(rows), col(rows, kNone), pos(rows, kNone);
+  std::vector<int> count(G, 0), first(G, P), filled(G, 0);
+  for (int r = 0; r < rows; ++r) {
     const bool pot = (ic.keys[r] & 1023u) == 0;
     group[r] = 2 * ic.depth(r) + (pot ? 1 : 0);
-    pos[r] = count[group[r]]++;
+    ++count[group[r]];
   }
-  for (const auto& e : ic.entries) first[group[e.row]] = std::min(first[group[e.row]], e.col);
+  for (const auto& e : ic.entries) {
+    int& c = col[e.row];
+    c = (c == kNone || c == e.col) ? e.col : kSeveral;
+    first[group[e.row]] = std::min(first[group[e.row]], e.col);
+  }
+  auto reduced = [&](int g) { return count[g] > P - first[g]; };
+  // Block rows: one per row kept as it is, one per column of the combined single-entry rows.
+  std::vector<int> slot(static_cast<size_t>(G) * P, kNone);
+  std::vector<char> combined(rows, 0);
+  for (int r = 0; r < rows; ++r) {
+    const int g = group[r];
+    if (col[r] == kNone) continue;
+    if (col[r] >= 0 && reduced(g)) {
+      combined[r] = 1;
+      int& s = slot[static_cast<size_t>(g) * P + col[r]];
+      if (s == kNone) s = filled[g]++;
+      pos[r] = s;
+    } else {
+      pos[r] = filled[g]++;
+    }
+  }
   std::vector<Eigen::MatrixXd> blocks(G);
   for (int g = 0; g < G; ++g)
-    if (count[g] > 0 && first[g] < P) blocks[g] = Eigen::MatrixXd::Zero(count[g], P - first[g]);
+    if (filled[g] > 0) blocks[g] = Eigen::MatrixXd::Zero(filled[g], P - first[g]);
+  std::vector<double> single(rows, 0.0);
   for (const auto& e : ic.entries) {
-    const int g = group[e.row];
-    blocks[g](pos[e.row], e.col - first[g]) += e.value;
+    if (combined[e.row])
+      single[e.row] += e.value;
+    else
+      blocks[group[e.row]](pos[e.row], e.col - first[group[e.row]]) += e.value;
   }
+  for (int r = 0; r < rows; ++r)
+    if (combined[r]) {
+      double& b = blocks[group[r]](pos[r], col[r] - first[group[r]]);
+      b += single[r] * single[r];
+    }
   long total = 0;
   for (int g = 0; g < G; ++g) {
-    if (blocks[g].size() == 0) continue;
-    if (blocks[g].rows() > blocks[g].cols()) {
-      Eigen::HouseholderQR<Eigen::MatrixXd> qr(blocks[g]);
-      const long m = blocks[g].cols();
+    Eigen::MatrixXd& B = blocks[g];
+    if (B.size() == 0) continue;
+    if (reduced(g)) {
+      for (int c = first[g]; c < P; ++c) {
+        const int s = slot[static_cast<size_t>(g) * P + c];
+        if (s != kNone) B(s, c - first[g]) = std::sqrt(B(s, c - first[g]));
+      }
+      Eigen::HouseholderQR<Eigen::MatrixXd> qr(B);
+      const long m = std::min(B.rows(), B.cols());
       Eigen::MatrixXd R = qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
-      blocks[g] = std::move(R);
+      B = std::move(R);
     }
-    total += blocks[g].rows();
+    total += B.rows();
   }
   Reduced out;
   out.Z = Eigen::MatrixXd::Zero(total, P);

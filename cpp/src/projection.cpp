@@ -335,11 +335,12 @@ int InfluenceCoordinates::depth(int row) const {
   const std::uint64_t key = keys.at(row);
   const int l0 = static_cast<int>(key & ((1u << kL0Bits) - 1));
   int d = 0;
-  if (l0 > 0) d = static_cast<int>(std::floor((1 + std::sqrt(8.0 * l0 - 7)) / 2));
-  std::uint64_t joints = key >> kL0Bits;
-  for (int j = 0; joints != 0; ++j, joints >>= kJointBits)
-    if (joints & 7u) d = std::max(d, j + 1);
-  return d;
+  if (l0 > 0) {  // the larger joint i of J(i, j) = i(i-1)/2 + j, 1 <= j <= i
+    while (d * (d + 1) / 2 < l0) ++d;
+  }
+  int last = 0;  // the last joint with a non-constant factor
+  for (std::uint64_t joints = key >> kL0Bits; joints != 0; joints >>= kJointBits) ++last;
+  return std::max(d, last);
 }
 
 Eigen::MatrixXd InfluenceCoordinates::dense() const {
