@@ -1,6 +1,5 @@
 #include "mindyn/base_parameters.hpp"
 
-#include <Eigen/LU>
 #include <Eigen/QR>
 #include <algorithm>
 #include <charconv>
@@ -16,37 +15,53 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Rank by elimination only (no Y), for the neighbouring-tolerance report.
+// Gaussian elimination of the columns of Z in `order` with partial pivoting; returns the rank.
+// With `out`, also the decision and Y. Each column is reduced against the pivots before it:
+//   z_c = sum_b f(b, c) u_b + x_c,
+// x_c being zero on the pivot rows of those pivots; a column with a large enough residual x_c
+// becomes pivot u_b = x_c (f(b, c) = 1). The coefficients f are the LU factors of the square
+// system on the pivot rows, Z~[prow] Y = Z[prow]: with F~ = F(:, pivots) (unit upper
+// triangular), Y = F~^-1 F, which needs no separate factorization.
 int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tol,
-              const Eigen::VectorXd& colmax, double zero_level, RankDecision* out) {
+              const Eigen::VectorXd& colmax, const std::vector<long>& colend, double zero_level,
+              RankDecision* out) {
   // Rows are kept in their order; every vector remembers where its non-zero part ends, since
   // the row reduction leaves the rows of the inner links first.
-  std::vector<Eigen::VectorXd> U;
+  const long m = Z.rows();
+  const int P = static_cast<int>(Z.cols());
+  Eigen::MatrixXd U(m, std::min<long>(m, P));
   std::vector<long> uend;
   std::vector<int> prow;
-  Eigen::VectorXd x(Z.rows());
+  Eigen::MatrixXd F;
+  if (out) F = Eigen::MatrixXd::Zero(U.cols(), P);
+  Eigen::VectorXd x(m);
   for (int c : order) {
     if (colmax[c] <= zero_level) {
       if (out) out->zero.push_back(c);
       continue;
     }
-    x = Z.col(c);
-    long end = Z.rows();
-    while (end > 0 && x[end - 1] == 0.0) --end;
-    for (size_t b = 0; b < U.size(); ++b) {
-      const double f = x[prow[b]] / U[b][prow[b]];
+    long end = colend[c];
+    x.head(end) = Z.col(c).head(end);
+    const int nb = static_cast<int>(prow.size());
+    for (int b = 0; b < nb; ++b) {
+      const double f = (prow[b] < end ? x[prow[b]] : 0.0) / U(prow[b], b);
       if (f == 0.0) continue;
-      const long e = std::max(end, uend[b]);
-      x.head(e).noalias() -= f * U[b].head(e);
-      end = e;
+      if (out) F(b, c) = f;
+      const long e = uend[b];
+      if (e > end) {
+        x.segment(end, e - end).setZero();
+        end = e;
+      }
+      x.head(e).noalias() -= f * U.col(b).head(e);
     }
     Eigen::Index r = 0;
     const double rel = end > 0 ? x.head(end).cwiseAbs().maxCoeff(&r) / colmax[c] : 0.0;
     if (rel > tol) {
-      U.push_back(x);
+      U.col(nb).head(end) = x.head(end);
       uend.push_back(end);
       prow.push_back(static_cast<int>(r));
       if (out) {
+        F(nb, c) = 1.0;
         out->pivots.push_back(c);
         out->pivot_size.push_back(rel);
         out->smallest_kept = std::min(out->smallest_kept, rel);
@@ -57,18 +72,22 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
       out->largest_dropped = std::max(out->largest_dropped, rel);
     }
   }
+  const int nb = static_cast<int>(prow.size());
   if (out) {
-    // Y from the square system on the pivot rows: Z~[prow] Y = Z[prow].
-    const int nb = static_cast<int>(prow.size());
-    Eigen::MatrixXd A(nb, nb), B(nb, Z.cols());
-    for (int i = 0; i < nb; ++i) {
-      for (int b = 0; b < nb; ++b) A(i, b) = Z(prow[i], out->pivots[b]);
-      B.row(i) = Z.row(prow[i]);
+    // Y = F~^-1 F by back substitution, column by column; pivot columns give e_b.
+    out->Y.resize(nb, P);
+    for (int c = 0; c < P; ++c) {
+      auto y = out->Y.col(c);
+      y = F.col(c).head(nb);
+      for (int b = nb - 1; b > 0; --b) {
+        const double yb = y[b];
+        if (yb == 0.0) continue;
+        const int pb = out->pivots[b];
+        for (int b2 = 0; b2 < b; ++b2) y[b2] -= F(b2, pb) * yb;
+      }
     }
-    out->Y = nb ? Eigen::MatrixXd(Eigen::PartialPivLU<Eigen::MatrixXd>(A).solve(B))
-                : Eigen::MatrixXd(0, Z.cols());
   }
-  return static_cast<int>(prow.size());
+  return nb;
 }
 
 std::string shortest(double v) {
@@ -238,10 +257,16 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   RankDecision d;
   d.tolerance = tolerance;
   Eigen::VectorXd colmax(Z.cols());
-  for (int c = 0; c < Z.cols(); ++c) colmax[c] = Z.col(c).norm();
+  std::vector<long> colend(Z.cols());  // one past the last non-zero entry
+  for (int c = 0; c < Z.cols(); ++c) {
+    colmax[c] = Z.col(c).norm();
+    long end = Z.rows();
+    while (end > 0 && Z(end - 1, c) == 0.0) --end;
+    colend[c] = end;
+  }
   const double biggest = Z.cols() ? colmax.maxCoeff() : 0.0;
   const double zero_level = 1e-13 * biggest;
-  eliminate(Z, order, tolerance, colmax, zero_level, &d);
+  eliminate(Z, order, tolerance, colmax, colend, zero_level, &d);
   d.zero_threshold = 1e-13;
   for (int c : d.zero)
     if (biggest > 0) d.largest_zeroed = std::max(d.largest_zeroed, colmax[c] / biggest);
@@ -265,11 +290,11 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   }
   if (d.rank() > 0) {
     // Pivot columns are reproduced exactly (identity block of Y); check the regrouped ones.
-    Eigen::MatrixXd Zt(Z.rows(), d.rank());
-    for (int b = 0; b < d.rank(); ++b) Zt.col(b) = Z.col(d.pivots[b]);
     Eigen::VectorXd e(Z.rows());
     for (int c : d.dependent) {
-      e.noalias() = Z.col(c) - Zt * d.Y.col(c);
+      e = Z.col(c);
+      for (int b = 0; b < d.rank(); ++b)
+        if (d.Y(b, c) != 0.0) e.noalias() -= d.Y(b, c) * Z.col(d.pivots[b]);
       d.fit_residual = std::max(d.fit_residual, e.norm() / colmax[c]);
     }
   }
@@ -288,8 +313,8 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   }
   if (d.smallest_kept < looser * 10 || d.largest_dropped > tighter / 10 || weak > 0 ||
       d.largest_zeroed > 0) {
-    d.rank_looser = eliminate(Z, order, looser, colmax, zero_level, nullptr);
-    d.rank_tighter = eliminate(Z, order, tighter, colmax, 0.0, nullptr);
+    d.rank_looser = eliminate(Z, order, looser, colmax, colend, zero_level, nullptr);
+    d.rank_tighter = eliminate(Z, order, tighter, colmax, colend, 0.0, nullptr);
     // Weak columns would go at the looser tolerance measured against their kind.
     d.rank_looser = std::min(d.rank_looser, d.rank() - weak);
   } else {
