@@ -136,12 +136,17 @@ struct Sparse6 {
           ++count;
         }
   }
-  // C Q C^T
-  void congruence(const Matrix6d& Q, Matrix6d& out) const {
-    Matrix6d T = Matrix6d::Zero();
-    for (int e = 0; e < count; ++e) T.row(row[e]) += val[e] * Q.row(col[e]);
-    out.setZero();
-    for (int e = 0; e < count; ++e) out.col(row[e]) += val[e] * T.col(col[e]);
+  // C Q C^T for a packed symmetric Q; only the upper triangle of the product is formed.
+  void congruence(const Sym6& Q, Sym6& out) const {
+    double Qf[6][6];
+    for (int i = 0; i < 6; ++i)
+      for (int j = i; j < 6; ++j) Qf[i][j] = Qf[j][i] = Q[kSym.idx[i][j]];
+    double T[6][6] = {};  // C Q
+    for (int e = 0; e < count; ++e)
+      for (int j = 0; j < 6; ++j) T[row[e]][j] += val[e] * Qf[col[e]][j];
+    out.fill(0.0);
+    for (int e = 0; e < count; ++e)
+      for (int i = 0; i <= row[e]; ++i) out[kSym.idx[i][row[e]]] += val[e] * T[i][col[e]];
   }
   void apply(const Vector6d& x, Vector6d& out) const {
     out.setZero();
@@ -149,116 +154,99 @@ struct Sparse6 {
   }
 };
 
-// 1/2 tr(E Q) for a constant symmetric E and a packed symmetric Q.
-struct TraceForm {
-  int count = 0;
-  int idx[21];
-  double w[21];
-  explicit TraceForm(const Matrix6d& E) {
+// The ten forms 1/2 tr(E_p Q), p = 0..9, for constant symmetric E_p and a packed symmetric Q,
+// kept by entry of Q so that the zero entries of Q (most of them) cost nothing.
+class TraceForms {
+ public:
+  explicit TraceForms(const std::array<Matrix6d, 10>& E) {
+    int count = 0;
     for (int i = 0; i < 6; ++i)
       for (int j = i; j < 6; ++j) {
-        const double v = i == j ? 0.5 * E(i, i) : 0.5 * (E(i, j) + E(j, i));
-        if (v != 0.0) {
-          idx[count] = kSym.idx[i][j];
-          w[count] = v;
-          ++count;
+        const int q = kSym.idx[i][j];
+        start_[q] = count;
+        for (int p = 0; p < 10; ++p) {
+          const double v = i == j ? 0.5 * E[p](i, i) : 0.5 * (E[p](i, j) + E[p](j, i));
+          if (v != 0.0) {
+            param_[count] = p;
+            w_[count] = v;
+            ++count;
+          }
         }
       }
+    start_[21] = count;
   }
-  double operator()(const Sym6& Q) const {
-    double s = 0.0;
-    for (int e = 0; e < count; ++e) s += w[e] * Q[idx[e]];
-    return s;
+  // Each value sums its terms in the order of the entries of Q.
+  void operator()(const Sym6& Q, double v[10]) const {
+    for (int p = 0; p < 10; ++p) v[p] = 0.0;
+    for (int q = 0; q < 21; ++q) {
+      if (Q[q] == 0.0) continue;
+      for (int e = start_[q]; e < start_[q + 1]; ++e) v[param_[e]] += w_[e] * Q[q];
+    }
   }
+
+ private:
+  int start_[22];
+  int param_[210];
+  double w_[210];
 };
 
 // R B R^T for R = blockdiag(Rz(-q), Rz(-q)), B symmetric, split over 1, cos q, sin q, cos 2q,
 // sin 2q. Indices 2 and 5 lie on the axis; (0, 1) and (3, 4) rotate as (x, y) -> (c x + s y,
-// -s x + c y).
-void splitRotation(const Matrix6d& B, Sym6 parts[5]) {
-  for (int l = 0; l < 5; ++l) parts[l].fill(0.0);
+// -s x + c y). Entries up to `tol` are set to zero; big[l] receives the largest |entry| of part l.
+void splitRotation(const Sym6& Bp, double tol, Sym6 parts[5], double big[5]) {
+  for (int l = 0; l < 5; ++l) {
+    parts[l].fill(0.0);
+    big[l] = 0.0;
+  }
+  const auto& I = kSym.idx;
+  auto B = [&](int i, int j) { return Bp[I[i][j]]; };
+  auto put = [&](int l, int i, int j, double v) {
+    const double a = std::abs(v);
+    if (a <= tol) return;
+    parts[l][I[i][j]] = v;
+    big[l] = std::max(big[l], a);
+  };
   static constexpr int ax[2] = {2, 5};
   static constexpr int px[2] = {0, 3};
-  const auto& I = kSym.idx;
-  parts[0][I[2][2]] = B(2, 2);
-  parts[0][I[2][5]] = B(2, 5);
-  parts[0][I[5][5]] = B(5, 5);
+  put(0, 2, 2, B(2, 2));
+  put(0, 2, 5, B(2, 5));
+  put(0, 5, 5, B(5, 5));
   for (int a = 0; a < 2; ++a)
     for (int b = 0; b < 2; ++b) {
       const int z = ax[a], x = px[b], y = px[b] + 1;
       // D(z, x') = c B(z,x) + s B(z,y);  D(z, y') = -s B(z,x) + c B(z,y)
-      parts[1][I[z][x]] = B(z, x);
-      parts[2][I[z][x]] = B(z, y);
-      parts[1][I[z][y]] = B(z, y);
-      parts[2][I[z][y]] = -B(z, x);
+      put(1, z, x, B(z, x));
+      put(2, z, x, B(z, y));
+      put(1, z, y, B(z, y));
+      put(2, z, y, -B(z, x));
     }
   for (int a = 0; a < 2; ++a)
     for (int b = a; b < 2; ++b) {
       const int x1 = px[a], y1 = px[a] + 1, x2 = px[b], y2 = px[b] + 1;
       const double xx = B(x1, x2), xy = B(x1, y2), yx = B(y1, x2), yy = B(y1, y2);
-      parts[0][I[x1][x2]] = 0.5 * (xx + yy);
-      parts[3][I[x1][x2]] = 0.5 * (xx - yy);
-      parts[4][I[x1][x2]] = 0.5 * (xy + yx);
-      parts[0][I[x1][y2]] = 0.5 * (xy - yx);
-      parts[3][I[x1][y2]] = 0.5 * (xy + yx);
-      parts[4][I[x1][y2]] = 0.5 * (yy - xx);
-      parts[0][I[y1][y2]] = 0.5 * (xx + yy);
-      parts[3][I[y1][y2]] = -0.5 * (xx - yy);
-      parts[4][I[y1][y2]] = -0.5 * (xy + yx);
+      put(0, x1, x2, 0.5 * (xx + yy));
+      put(3, x1, x2, 0.5 * (xx - yy));
+      put(4, x1, x2, 0.5 * (xy + yx));
+      put(0, x1, y2, 0.5 * (xy - yx));
+      put(3, x1, y2, 0.5 * (xy + yx));
+      put(4, x1, y2, 0.5 * (yy - xx));
+      put(0, y1, y2, 0.5 * (xx + yy));
+      put(3, y1, y2, -0.5 * (xx - yy));
+      put(4, y1, y2, -0.5 * (xy + yx));
       if (a != b) {  // (y1, x2) lies in the upper triangle too
-        parts[0][I[y1][x2]] = 0.5 * (yx - xy);
-        parts[3][I[y1][x2]] = 0.5 * (xy + yx);
-        parts[4][I[y1][x2]] = 0.5 * (yy - xx);
+        put(0, y1, x2, 0.5 * (yx - xy));
+        put(3, y1, x2, 0.5 * (xy + yx));
+        put(4, y1, x2, 0.5 * (yy - xx));
       }
     }
 }
 
-// Open-addressing map from basis keys to row numbers (keys are never removed).
-class RowIndex {
- public:
-  RowIndex() { resize(1024); }
-  int find(std::uint64_t key, std::vector<std::uint64_t>& keys) {
-    if (2 * (count_ + 1) > static_cast<long>(slots_.size())) grow(keys);
-    std::size_t i = hash(key) & mask_;
-    while (true) {
-      const int r = slots_[i];
-      if (r < 0) {
-        slots_[i] = static_cast<int>(keys.size());
-        keys.push_back(key);
-        ++count_;
-        return slots_[i];
-      }
-      if (keys[r] == key) return r;
-      i = (i + 1) & mask_;
-    }
-  }
-
- private:
-  static std::size_t hash(std::uint64_t k) {
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdULL;
-    k ^= k >> 33;
-    return static_cast<std::size_t>(k);
-  }
-  void resize(std::size_t n) {
-    slots_.assign(n, -1);
-    mask_ = n - 1;
-  }
-  void grow(const std::vector<std::uint64_t>& keys) {
-    resize(slots_.size() * 2);
-    for (std::size_t r = 0; r < keys.size(); ++r) {
-      std::size_t i = hash(keys[r]) & mask_;
-      while (slots_[i] >= 0) i = (i + 1) & mask_;
-      slots_[i] = static_cast<int>(r);
-    }
-  }
-  std::vector<int> slots_;
-  std::size_t mask_ = 0;
-  long count_ = 0;
-};
-
+// Terms of the recursion. `row` is the row of Z of the term's basis function, -1 while it has
+// none: a term carried through a joint by its constant factor keeps its key, hence its row;
+// the other terms have keys that no earlier term had.
 struct QTerm {
   std::uint64_t key;
+  int row;
   double scale;  // largest |entry|
   Sym6 Q;
 };
@@ -269,6 +257,7 @@ struct VTerm {
 };
 struct RTerm {
   std::uint64_t key;
+  int row;
   Row4d r;
 };
 using Entry = InfluenceCoordinates::Entry;
@@ -384,13 +373,11 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     }
     E[9].bottomRightCorner<3, 3>().setIdentity();
     const Matrix6d A = adjoint(post[k].inverse());
-    std::vector<TraceForm> forms;
     for (auto& e : E) {
-      Matrix6d f = A.transpose() * e * A;
-      prune(f, kNoise * maxAbs(f));
-      forms.emplace_back(f);
+      e = A.transpose() * e * A;
+      prune(e, kNoise * maxAbs(e));
     }
-    return forms;
+    return TraceForms(E);
   };
 
   // Rotation by -q about z, as (1, cos, sin) coefficients of the 6x6 twist map.
@@ -427,12 +414,17 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   std::vector<RTerm> R, Rnext;
   Row4d g0;
   g0 << model.gravity.transpose(), 0.0;
-  R.push_back({0, g0});
+  R.push_back({0, -1, g0});
 
-  RowIndex rowOf;
   std::vector<std::uint64_t> keys;
   std::vector<Entry> entries;
-  auto rowFor = [&](std::uint64_t key) { return rowOf.find(key, keys); };
+  auto rowOf = [&keys](auto& term) {
+    if (term.row < 0) {
+      term.row = static_cast<int>(keys.size());
+      keys.push_back(term.key);
+    }
+    return term.row;
+  };
   InfluenceCoordinates out;
   out.layout = layout;
   out.n = n;
@@ -444,38 +436,38 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     const double cscale = std::max(1.0, maxAbs(Cd));
     prune(Cd, 1e-16 * cscale);
     const Sparse6 C(Cd);
-    Vector6d S = Vector6d::Zero();
-    if (revolute)
-      S[2] = 1.0;
-    else
-      S[5] = 1.0;
+    const int s = revolute ? 2 : 5;  // the joint's twist is S = e_s
+    const Vector6d S = Vector6d::Unit(s);
 
     // Kinetic part: Q_k = Ad Q_{k-1} Ad^T + cross terms + 2 S S^T dq_k^2.
     Qnext.clear();
     Qnext.reserve(Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1);
     for (const QTerm& t : Q) {
-      Matrix6d B, Qf;
-      toFull(t.Q, Qf);
-      C.congruence(Qf, B);
+      Sym6 B;
+      C.congruence(t.Q, B);
       const double bscale = pruneMax(B, kNoise * t.scale * cscale * cscale);
       if (bscale == 0.0) continue;
+      const double ptol = kNoise * bscale;
       Sym6 parts[5];
+      double ps[5];
       int count;
       if (revolute) {
-        splitRotation(B, parts);
+        splitRotation(B, ptol, parts, ps);
         count = 5;
       } else {
-        const Matrix6d NB = N6 * B;
-        parts[0] = toSym(B);
+        Matrix6d Bf;
+        toFull(B, Bf);
+        const Matrix6d NB = N6 * Bf;
+        parts[0] = B;
         parts[1] = toSym(NB + NB.transpose());
         parts[2] = toSym(NB * N6.transpose());
         count = 3;
+        for (int l = 0; l < count; ++l) ps[l] = pruneMax(parts[l], ptol);
       }
-      const double ptol = kNoise * bscale;
-      for (int l = 0; l < count; ++l) {
-        const double ps = pruneMax(parts[l], ptol);
-        if (ps > 0.0) Qnext.push_back({withJoint(t.key, k, l + 1), ps, parts[l]});
-      }
+      // The constant factor (l = 0) keeps the key and the row.
+      for (int l = 0; l < count; ++l)
+        if (ps[l] > 0.0)
+          Qnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1, ps[l], parts[l]});
     }
     Vnext.clear();
     Vnext.reserve(V.size() * 3 + 1);
@@ -498,13 +490,20 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         if (!prune(parts[l], ptol)) continue;
         const std::uint64_t key = withJoint(t.key, k, l + 1);
         Vnext.push_back({t.i, key, parts[l]});
-        Matrix6d X = parts[l] * S.transpose();
-        X += X.transpose().eval();
-        Qnext.push_back({withL0(key, pairIndex(k + 1, t.i)), maxAbs(X), toSym(X)});
+        // x S^T + S x^T
+        QTerm cross{withL0(key, pairIndex(k + 1, t.i)), -1, 0.0, {}};
+        for (int i = 0; i < 6; ++i) {
+          const double v = i == s ? 2.0 * parts[l][i] : parts[l][i];
+          cross.Q[kSym.idx[i][s]] = v;
+          cross.scale = std::max(cross.scale, std::abs(v));
+        }
+        Qnext.push_back(cross);
       }
     }
     Vnext.push_back({k + 1, 0, S});
-    Qnext.push_back({withL0(0, pairIndex(k + 1, k + 1)), 2.0, toSym(2.0 * S * S.transpose())});
+    QTerm diagonal{withL0(0, pairIndex(k + 1, k + 1)), -1, 2.0, {}};  // 2 S S^T
+    diagonal.Q[kSym.idx[s][s]] = 2.0;
+    Qnext.push_back(diagonal);
     std::swap(Q, Qnext);
     std::swap(V, Vnext);
 
@@ -527,7 +526,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       }
       const double ptol = kNoise * maxAbs(y);
       for (int l = 0; l < count; ++l)
-        if (prune(parts[l], ptol)) Rnext.push_back({withJoint(t.key, k, l + 1), parts[l]});
+        if (prune(parts[l], ptol))
+          Rnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1, parts[l]});
     }
     std::swap(R, Rnext);
     out.terms_formed += static_cast<int>(Q.size() + R.size());
@@ -535,21 +535,21 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     // Project link k's parameters.
     const int c0 = k * layout.perLink();
     const auto E = kineticForms(k);
-    for (const QTerm& t : Q) {
-      const int row = rowFor(t.key);
-      for (int p = 0; p < 10; ++p) {
-        const double v = E[p](t.Q);
-        if (std::abs(v) > kNoise * t.scale) entries.push_back({row, c0 + p, v});
-      }
+    for (QTerm& t : Q) {
+      const int row = rowOf(t);
+      double v[10];
+      E(t.Q, v);
+      for (int p = 0; p < 10; ++p)
+        if (std::abs(v[p]) > kNoise * t.scale) entries.push_back({row, c0 + p, v[p]});
     }
-    for (const RTerm& t : R) {
+    for (RTerm& t : R) {
       const Row4d r = t.r * Post;
       const double scale = maxAbs(t.r) * std::max(1.0, maxAbs(Post));
       for (int a = 0; a < 4; ++a)
-        if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowFor(t.key), c0 + 6 + a, r[a]});
+        if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowOf(t), c0 + 6 + a, r[a]});
     }
-    if (layout.rotor)
-      entries.push_back({rowFor(withL0(0, pairIndex(k + 1, k + 1))), layout.rotorIndex(k), 1.0});
+    if (layout.rotor)  // on 0.5 dq_k^2: the last kinetic term, which always has its row now
+      entries.push_back({Q.back().row, layout.rotorIndex(k), 1.0});
     prevPost = post[k];
   }
 
