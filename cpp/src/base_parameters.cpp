@@ -105,13 +105,15 @@ std::string regroupedName(const std::string& classical) {
 BaseSet makeSet(RankDecision decision, const std::vector<std::string>& names) {
   BaseSet set;
   const int nb = decision.rank();
+  set.names.reserve(nb);
+  set.formulas.reserve(nb);
+  const Eigen::MatrixXd Yt = decision.Y.transpose();  // the rows of Y, contiguous
   for (int b = 0; b < nb; ++b) {
     const int p = decision.pivots[b];
-    bool regrouped = false;
-    for (int c = 0; c < decision.Y.cols(); ++c)
-      if (c != p && decision.Y(b, c) != 0.0) regrouped = true;
-    set.names.push_back(regrouped ? regroupedName(names[p]) : names[p]);
-    set.formulas.push_back(formatFormula(set.names.back(), decision.Y.row(b), names));
+    const auto y = Yt.col(b);
+    const long others = (y.array() != 0.0).count() - (y[p] != 0.0 ? 1 : 0);
+    set.names.push_back(others > 0 ? regroupedName(names[p]) : names[p]);
+    set.formulas.push_back(formatFormula(set.names.back(), y.transpose(), names));
   }
   set.decision = std::move(decision);
   return set;
@@ -340,15 +342,22 @@ std::vector<int> khalilOrder(int n, ParameterLayout layout) {
 
 std::string formatFormula(const std::string& name, const Eigen::Ref<const Eigen::RowVectorXd>& row,
                           const std::vector<std::string>& classical_names) {
-  std::string s = name + " =";
+  std::string s;
+  s.reserve(name.size() + 64);
+  s += name;
+  s += " =";
   bool first = true;
+  char buf[32];
   for (int c = 0; c < row.size(); ++c) {
     const double y = row[c];
     if (y == 0.0) continue;
     const bool neg = y < 0;
     const double a = std::abs(y);
     s += first ? (neg ? " -" : " ") : (neg ? " - " : " + ");
-    if (a != 1.0) s += shortest(a) + "*";
+    if (a != 1.0) {
+      s.append(buf, std::to_chars(buf, buf + sizeof(buf), a).ptr);
+      s += '*';
+    }
     s += classical_names[c];
     first = false;
   }

@@ -322,13 +322,25 @@ BasisFunction InfluenceCoordinates::basis(int row) const { return unpackBasis(ke
 
 int InfluenceCoordinates::depth(int row) const {
   const std::uint64_t key = keys.at(row);
-  const int l0 = static_cast<int>(key & ((1u << kL0Bits) - 1));
-  int d = 0;
-  if (l0 > 0) {  // the larger joint i of J(i, j) = i(i-1)/2 + j, 1 <= j <= i
-    while (d * (d + 1) / 2 < l0) ++d;
-  }
-  int last = 0;  // the last joint with a non-constant factor
-  for (std::uint64_t joints = key >> kL0Bits; joints != 0; joints >>= kJointBits) ++last;
+  // l0 = J(i, j) = i(i-1)/2 + j, 1 <= j <= i, involves joint i at most
+  static const std::array<std::uint8_t, 1u << kL0Bits> pairDepth = [] {
+    std::array<std::uint8_t, 1u << kL0Bits> d{};
+    int i = 0;
+    for (int l0 = 1; l0 < static_cast<int>(d.size()); ++l0) {
+      if (i * (i + 1) / 2 < l0) ++i;
+      d[l0] = static_cast<std::uint8_t>(i);
+    }
+    return d;
+  }();
+  const int d = pairDepth[key & ((1u << kL0Bits) - 1)];
+  // the last joint with a non-constant factor
+  const std::uint64_t joints = key >> kL0Bits;
+#if defined(__GNUC__) || defined(__clang__)
+  const int last = joints != 0 ? (63 - __builtin_clzll(joints)) / kJointBits + 1 : 0;
+#else
+  int last = 0;
+  for (std::uint64_t j = joints; j != 0; j >>= kJointBits) ++last;
+#endif
   return std::max(d, last);
 }
 
