@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <cstring>
 
 #include "spatial.hpp"
 
@@ -102,10 +103,15 @@ bool prune(M& m, double tol) {
 using Sym6 = std::array<double, 21>;
 struct SymIndex {
   int idx[6][6];
-  constexpr SymIndex() : idx() {
+  int first[21], second[21];  // (i, j), i <= j, of each packed entry
+  constexpr SymIndex() : idx(), first(), second() {
     int k = 0;
     for (int i = 0; i < 6; ++i)
-      for (int j = i; j < 6; ++j) idx[i][j] = idx[j][i] = k++;
+      for (int j = i; j < 6; ++j) {
+        first[k] = i;
+        second[k] = j;
+        idx[i][j] = idx[j][i] = k++;
+      }
   }
 };
 constexpr SymIndex kSym;
@@ -121,11 +127,21 @@ inline Sym6 toSym(const Matrix6d& m) {
   return s;
 }
 
-// A constant 6x6 map kept as its non-zero entries (geometry is often axis-aligned).
+// The entries of a packed symmetric matrix that may be non-zero, ascending.
+struct Pattern {
+  int count = 0;
+  int idx[21];
+};
+
+// A constant 6x6 map kept as its non-zero entries (geometry is often axis-aligned), by rows
+// and by columns.
 struct Sparse6 {
   int count = 0;
   int row[36], col[36];
   double val[36];
+  int colStart[7];  // column j: rows colRow[colStart[j] .. colStart[j + 1] - 1], ascending
+  int colRow[36];
+  double colVal[36];
   explicit Sparse6(const Matrix6d& m) {
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j)
@@ -135,15 +151,32 @@ struct Sparse6 {
           val[count] = m(i, j);
           ++count;
         }
+    int c = 0;
+    for (int j = 0; j < 6; ++j) {
+      colStart[j] = c;
+      for (int i = 0; i < 6; ++i)
+        if (m(i, j) != 0.0) {
+          colRow[c] = i;
+          colVal[c] = m(i, j);
+          ++c;
+        }
+    }
+    colStart[6] = c;
   }
-  // C Q C^T for a packed symmetric Q; only the upper triangle of the product is formed.
-  void congruence(const Sym6& Q, Sym6& out) const {
-    double Qf[6][6];
-    for (int i = 0; i < 6; ++i)
-      for (int j = i; j < 6; ++j) Qf[i][j] = Qf[j][i] = Q[kSym.idx[i][j]];
-    double T[6][6] = {};  // C Q
-    for (int e = 0; e < count; ++e)
-      for (int j = 0; j < 6; ++j) T[row[e]][j] += val[e] * Qf[col[e]][j];
+  // C Q C^T for a packed symmetric Q whose non-zero entries lie in `where`; only the upper
+  // triangle of the product is formed.
+  void congruence(const Sym6& Q, const Pattern& where, Sym6& out) const {
+    // T = C Q, entry by entry of Q; every T(r, j) sums C(r, a) Q(a, j) by ascending a.
+    double T[6][6] = {};
+    for (int w = 0; w < where.count; ++w) {
+      const int q = where.idx[w];
+      const double v = Q[q];
+      if (v == 0.0) continue;
+      const int a = kSym.first[q], b = kSym.second[q];
+      for (int e = colStart[a]; e < colStart[a + 1]; ++e) T[colRow[e]][b] += colVal[e] * v;
+      if (a != b)
+        for (int e = colStart[b]; e < colStart[b + 1]; ++e) T[colRow[e]][a] += colVal[e] * v;
+    }
     out.fill(0.0);
     for (int e = 0; e < count; ++e)
       for (int i = 0; i <= row[e]; ++i) out[kSym.idx[i][row[e]]] += val[e] * T[i][col[e]];
@@ -175,10 +208,12 @@ class TraceForms {
       }
     start_[21] = count;
   }
-  // Each value sums its terms in the order of the entries of Q.
-  void operator()(const Sym6& Q, double v[10]) const {
+  // Each value sums its terms in the order of the entries of Q; entries of Q outside `where`
+  // (ascending) are zero.
+  void operator()(const Sym6& Q, const Pattern& where, double v[10]) const {
     for (int p = 0; p < 10; ++p) v[p] = 0.0;
-    for (int q = 0; q < 21; ++q) {
+    for (int i = 0; i < where.count; ++i) {
+      const int q = where.idx[i];
       if (Q[q] == 0.0) continue;
       for (int e = start_[q]; e < start_[q + 1]; ++e) v[param_[e]] += w_[e] * Q[q];
     }
@@ -194,10 +229,8 @@ class TraceForms {
 // sin 2q. Indices 2 and 5 lie on the axis; (0, 1) and (3, 4) rotate as (x, y) -> (c x + s y,
 // -s x + c y). Entries up to `tol` are set to zero; big[l] receives the largest |entry| of part l.
 void splitRotation(const Sym6& Bp, double tol, Sym6 parts[5], double big[5]) {
-  for (int l = 0; l < 5; ++l) {
-    parts[l].fill(0.0);
-    big[l] = 0.0;
-  }
+  std::memset(parts, 0, 5 * sizeof(Sym6));
+  for (int l = 0; l < 5; ++l) big[l] = 0.0;
   const auto& I = kSym.idx;
   auto B = [&](int i, int j) { return Bp[I[i][j]]; };
   auto put = [&](int l, int i, int j, double v) {
@@ -241,13 +274,44 @@ void splitRotation(const Sym6& Bp, double tol, Sym6 parts[5], double big[5]) {
     }
 }
 
+// What a kinetic term may hold: one of the five parts of a rotation split, x S^T + S x^T or
+// S S^T for the joint's S = e_2 (revolute) or e_5 (prismatic), or anything.
+enum TermKind : std::uint8_t { kCross2 = 5, kCross5, kDiag2, kDiag5, kAny, kKinds };
+
+const std::array<Pattern, kKinds>& patterns() {
+  static const std::array<Pattern, kKinds> table = [] {
+    std::array<bool[21], kKinds> nonzero{};
+    Sym6 generic;  // distinct positive entries: no sum or difference of two of them cancels
+    for (int q = 0; q < 21; ++q) generic[q] = std::sqrt(q + 2.0);
+    Sym6 parts[5];
+    double big[5];
+    splitRotation(generic, 0.0, parts, big);
+    for (int l = 0; l < 5; ++l)
+      for (int q = 0; q < 21; ++q) nonzero[l][q] = parts[l][q] != 0.0;
+    for (int i = 0; i < 6; ++i) {
+      nonzero[kCross2][kSym.idx[i][2]] = true;
+      nonzero[kCross5][kSym.idx[i][5]] = true;
+    }
+    nonzero[kDiag2][kSym.idx[2][2]] = true;
+    nonzero[kDiag5][kSym.idx[5][5]] = true;
+    for (bool& b : nonzero[kAny]) b = true;
+    std::array<Pattern, kKinds> t;
+    for (int k = 0; k < kKinds; ++k)
+      for (int q = 0; q < 21; ++q)
+        if (nonzero[k][q]) t[k].idx[t[k].count++] = q;
+    return t;
+  }();
+  return table;
+}
+
 // Terms of the recursion. `row` is the row of Z of the term's basis function, -1 while it has
 // none: a term carried through a joint by its constant factor keeps its key, hence its row;
 // the other terms have keys that no earlier term had.
 struct QTerm {
   std::uint64_t key;
   int row;
-  double scale;  // largest |entry|
+  std::uint8_t kind;  // TermKind or the part of a rotation split (0..4)
+  double scale;       // largest |entry|
   Sym6 Q;
 };
 struct VTerm {
@@ -442,6 +506,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   out.n = n;
 
   Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
+  const auto& kinds = patterns();
   for (int k = 0; k < n; ++k) {
     const bool revolute = model.joints[k].type == JointType::Revolute;
     Matrix6d Cd = adjoint((prevPost * pre[k]).inverse());
@@ -456,7 +521,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     Qnext.reserve(Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1);
     for (const QTerm& t : Q) {
       Sym6 B;
-      C.congruence(t.Q, B);
+      C.congruence(t.Q, kinds[t.kind], B);
       const double bscale = pruneMax(B, kNoise * t.scale * cscale * cscale);
       if (bscale == 0.0) continue;
       const double ptol = kNoise * bscale;
@@ -479,7 +544,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       // The constant factor (l = 0) keeps the key and the row.
       for (int l = 0; l < count; ++l)
         if (ps[l] > 0.0)
-          Qnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1, ps[l], parts[l]});
+          Qnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1,
+                           static_cast<std::uint8_t>(revolute ? l : kAny), ps[l], parts[l]});
     }
     Vnext.clear();
     Vnext.reserve(V.size() * 3 + 1);
@@ -503,7 +569,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         const std::uint64_t key = withJoint(t.key, k, l + 1);
         Vnext.push_back({t.i, key, parts[l]});
         // x S^T + S x^T
-        QTerm cross{withL0(key, pairIndex(k + 1, t.i)), -1, 0.0, {}};
+        QTerm cross{withL0(key, pairIndex(k + 1, t.i)), -1, revolute ? kCross2 : kCross5, 0.0, {}};
         for (int i = 0; i < 6; ++i) {
           const double v = i == s ? 2.0 * parts[l][i] : parts[l][i];
           cross.Q[kSym.idx[i][s]] = v;
@@ -513,7 +579,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       }
     }
     Vnext.push_back({k + 1, 0, S});
-    QTerm diagonal{withL0(0, pairIndex(k + 1, k + 1)), -1, 2.0, {}};  // 2 S S^T
+    QTerm diagonal{withL0(0, pairIndex(k + 1, k + 1)), -1, revolute ? kDiag2 : kDiag5, 2.0, {}};
     diagonal.Q[kSym.idx[s][s]] = 2.0;
     Qnext.push_back(diagonal);
     std::swap(Q, Qnext);
@@ -550,7 +616,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     for (QTerm& t : Q) {
       const int row = rowOf(t);
       double v[10];
-      E(t.Q, v);
+      E(t.Q, kinds[t.kind], v);
       for (int p = 0; p < 10; ++p)
         if (std::abs(v[p]) > kNoise * t.scale) entries.push_back({row, c0 + p, v[p]});
     }
