@@ -225,9 +225,9 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
         const int s = slot[static_cast<size_t>(g) * P + c];
         if (s != kNone) B(s, c - first[g]) = std::sqrt(B(s, c - first[g]));
       }
-      Eigen::HouseholderQR<Eigen::MatrixXd> qr(B);
+      Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(B);  // in place
       const long m = std::min(B.rows(), B.cols());
-      Eigen::MatrixXd R = qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
+      Eigen::MatrixXd R = B.topRows(m).triangularView<Eigen::Upper>();
       B = std::move(R);
     }
     total += B.rows();

@@ -516,9 +516,31 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     const int s = revolute ? 2 : 5;  // the joint's twist is S = e_s
     const Vector6d S = Vector6d::Unit(s);
 
+    // Every new kinetic term is projected on link k's parameters at once and kept for the
+    // next joint (after the last joint, not kept).
+    const bool last = k + 1 == n;
+    const int c0 = k * layout.perLink();
+    const auto E = kineticForms(k);
+    const std::size_t most = Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1;
+    const std::size_t rmost = R.size() * (revolute ? 3 : 2);
+    if (entries.size() + 10 * most + 4 * rmost > entries.capacity())
+      entries.reserve(std::max(entries.size() + 10 * most + 4 * rmost, 2 * entries.capacity()));
+    if (keys.size() + most + rmost > keys.capacity())
+      keys.reserve(std::max(keys.size() + most + rmost, 2 * keys.capacity()));
+    int formed = 0;
+    auto add = [&](QTerm& t) {
+      ++formed;
+      const int row = rowOf(t);
+      double v[10];
+      E(t.Q, kinds[t.kind], v);
+      for (int p = 0; p < 10; ++p)
+        if (std::abs(v[p]) > kNoise * t.scale) entries.push_back({row, c0 + p, v[p]});
+      if (!last) Qnext.push_back(t);
+    };
+
     // Kinetic part: Q_k = Ad Q_{k-1} Ad^T + cross terms + 2 S S^T dq_k^2.
     Qnext.clear();
-    Qnext.reserve(Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1);
+    if (!last) Qnext.reserve(most);
     for (const QTerm& t : Q) {
       Sym6 B;
       C.congruence(t.Q, kinds[t.kind], B);
@@ -543,9 +565,11 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       }
       // The constant factor (l = 0) keeps the key and the row.
       for (int l = 0; l < count; ++l)
-        if (ps[l] > 0.0)
-          Qnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1,
-                           static_cast<std::uint8_t>(revolute ? l : kAny), ps[l], parts[l]});
+        if (ps[l] > 0.0) {
+          QTerm part{withJoint(t.key, k, l + 1), l == 0 ? t.row : -1,
+                     static_cast<std::uint8_t>(revolute ? l : kAny), ps[l], parts[l]};
+          add(part);
+        }
     }
     Vnext.clear();
     Vnext.reserve(V.size() * 3 + 1);
@@ -575,13 +599,13 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
           cross.Q[kSym.idx[i][s]] = v;
           cross.scale = std::max(cross.scale, std::abs(v));
         }
-        Qnext.push_back(cross);
+        add(cross);
       }
     }
     Vnext.push_back({k + 1, 0, S});
     QTerm diagonal{withL0(0, pairIndex(k + 1, k + 1)), -1, revolute ? kDiag2 : kDiag5, 2.0, {}};
     diagonal.Q[kSym.idx[s][s]] = 2.0;
-    Qnext.push_back(diagonal);
+    add(diagonal);
     std::swap(Q, Qnext);
     std::swap(V, Vnext);
 
@@ -608,26 +632,17 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
           Rnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1, parts[l]});
     }
     std::swap(R, Rnext);
-    out.terms_formed += static_cast<int>(Q.size() + R.size());
+    out.terms_formed += formed + static_cast<int>(R.size());
 
-    // Project link k's parameters.
-    const int c0 = k * layout.perLink();
-    const auto E = kineticForms(k);
-    for (QTerm& t : Q) {
-      const int row = rowOf(t);
-      double v[10];
-      E(t.Q, kinds[t.kind], v);
-      for (int p = 0; p < 10; ++p)
-        if (std::abs(v[p]) > kNoise * t.scale) entries.push_back({row, c0 + p, v[p]});
-    }
+    // Project link k's potential parameters.
     for (RTerm& t : R) {
       const Row4d r = t.r * Post;
       const double scale = maxAbs(t.r) * std::max(1.0, maxAbs(Post));
       for (int a = 0; a < 4; ++a)
         if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowOf(t), c0 + 6 + a, r[a]});
     }
-    if (layout.rotor)  // on 0.5 dq_k^2: the last kinetic term, which always has its row now
-      entries.push_back({Q.back().row, layout.rotorIndex(k), 1.0});
+    if (layout.rotor)  // on 0.5 dq_k^2
+      entries.push_back({diagonal.row, layout.rotorIndex(k), 1.0});
     prevPost = post[k];
   }
 
