@@ -187,42 +187,39 @@ struct Sparse6 {
   }
 };
 
-// The ten forms 1/2 tr(E_p Q), p = 0..9, for constant symmetric E_p and a packed symmetric Q,
-// kept by entry of Q so that the zero entries of Q (most of them) cost nothing.
+// The ten forms 1/2 tr(E_p Q), p = 0..9, for constant symmetric E_p and a packed symmetric Q.
+// For each kind of term, only the entries it may hold and the forms see are visited, each with
+// all ten weights (zeros included: no data-dependent branches).
 class TraceForms {
  public:
-  explicit TraceForms(const std::array<Matrix6d, 10>& E) {
-    int count = 0;
+  TraceForms(const std::array<Matrix6d, 10>& E, const Pattern* kinds, int count) {
+    bool seen[21] = {};
     for (int i = 0; i < 6; ++i)
       for (int j = i; j < 6; ++j) {
         const int q = kSym.idx[i][j];
-        start_[q] = count;
         for (int p = 0; p < 10; ++p) {
-          const double v = i == j ? 0.5 * E[p](i, i) : 0.5 * (E[p](i, j) + E[p](j, i));
-          if (v != 0.0) {
-            param_[count] = p;
-            w_[count] = v;
-            ++count;
-          }
+          w_[q][p] = i == j ? 0.5 * E[p](i, i) : 0.5 * (E[p](i, j) + E[p](j, i));
+          if (w_[q][p] != 0.0) seen[q] = true;
         }
       }
-    start_[21] = count;
+    visible_.resize(count);
+    for (int k = 0; k < count; ++k)
+      for (int i = 0; i < kinds[k].count; ++i)
+        if (seen[kinds[k].idx[i]]) visible_[k].idx[visible_[k].count++] = kinds[k].idx[i];
   }
-  // Each value sums its terms in the order of the entries of Q; entries of Q outside `where`
-  // (ascending) are zero.
-  void operator()(const Sym6& Q, const Pattern& where, double v[10]) const {
+  // Each value sums its terms in the order of the entries of Q; Q is of kind `kind`.
+  void operator()(const Sym6& Q, int kind, double v[10]) const {
     for (int p = 0; p < 10; ++p) v[p] = 0.0;
+    const Pattern& where = visible_[kind];
     for (int i = 0; i < where.count; ++i) {
       const int q = where.idx[i];
-      if (Q[q] == 0.0) continue;
-      for (int e = start_[q]; e < start_[q + 1]; ++e) v[param_[e]] += w_[e] * Q[q];
+      for (int p = 0; p < 10; ++p) v[p] += w_[q][p] * Q[q];
     }
   }
 
  private:
-  int start_[22];
-  int param_[210];
-  double w_[210];
+  double w_[21][10];
+  std::vector<Pattern> visible_;
 };
 
 // R B R^T for R = blockdiag(Rz(-q), Rz(-q)), B symmetric, split over 1, cos q, sin q, cos 2q,
@@ -433,6 +430,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   }
 
   // Per-link kinetic parameter forms E'_p (10 per link) in the aligned joint frame.
+  const auto& kinds = patterns();
   auto kineticForms = [&](int k) {
     std::array<Matrix6d, 10> E;
     for (auto& e : E) e.setZero();
@@ -453,7 +451,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       e = A.transpose() * e * A;
       prune(e, kNoise * maxAbs(e));
     }
-    return TraceForms(E);
+    return TraceForms(E, kinds.data(), kKinds);
   };
 
   // Rotation by -q about z, as (1, cos, sin) coefficients of the 6x6 twist map.
@@ -506,7 +504,6 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   out.n = n;
 
   Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
-  const auto& kinds = patterns();
   for (int k = 0; k < n; ++k) {
     const bool revolute = model.joints[k].type == JointType::Revolute;
     Matrix6d Cd = adjoint((prevPost * pre[k]).inverse());
@@ -532,7 +529,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       ++formed;
       const int row = rowOf(t);
       double v[10];
-      E(t.Q, kinds[t.kind], v);
+      E(t.Q, t.kind, v);
       for (int p = 0; p < 10; ++p)
         if (std::abs(v[p]) > kNoise * t.scale) entries.push_back({row, c0 + p, v[p]});
       if (!last) Qnext.push_back(t);
