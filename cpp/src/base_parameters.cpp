@@ -278,18 +278,21 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   // dropped genuine small coefficients of near-right-angle URDFs (1.3e-9 MZ5 in so101's ZZR1),
   // and W_b Y pi then missed the torques by 1e-10 relative; with 1e-12, by about 1e-12.
   constexpr double kCleanLevel = 1e-12;
-  for (int b = 0; b < d.Y.rows(); ++b) {
-    const double sb = colmax[d.pivots[b]];
-    for (int c = 0; c < d.Y.cols(); ++c) {
+  for (int c = 0; c < d.Y.cols(); ++c)
+    for (int b = 0; b < d.Y.rows(); ++b) {
       double& y = d.Y(b, c);
-      const double rel = colmax[c] > 0 ? sb / colmax[c] : 1.0;
+      if (y == 0.0) {  // most of Y
+        y = 0.0;
+        continue;
+      }
+      const double rel = colmax[c] > 0 ? colmax[d.pivots[b]] / colmax[c] : 1.0;
       if (std::abs(y) * rel < kCleanLevel || colmax[c] <= zero_level)
         y = 0.0;
       else if (std::abs(std::abs(y) - 1.0) < kCleanLevel)
         y = y > 0 ? 1.0 : -1.0;
     }
-    for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b, d.pivots[b2]) = b == b2 ? 1.0 : 0.0;
-  }
+  for (int b = 0; b < d.Y.rows(); ++b)
+    for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b2, d.pivots[b]) = b == b2 ? 1.0 : 0.0;
   if (d.rank() > 0) {
     // Pivot columns are reproduced exactly (identity block of Y); check the regrouped ones.
     Eigen::VectorXd e(Z.rows());
