@@ -19,9 +19,11 @@ constexpr double kPi = 3.14159265358979323846;
 // With `out`, also the decision and Y. Each column is reduced against the pivots before it:
 //   z_c = sum_b f(b, c) u_b + x_c,
 // x_c being zero on the pivot rows of those pivots; a column with a large enough residual x_c
-// becomes pivot u_b = x_c (f(b, c) = 1). The coefficients f are the LU factors of the square
-// system on the pivot rows, Z~[prow] Y = Z[prow]: with F~ = F(:, pivots) (unit upper
-// triangular), Y = F~^-1 F, which needs no separate factorization.
+// becomes pivot u_b = x_c (f(b, c) = 1). Y solves the square system on the pivot rows,
+// Z~[prow] Y = Z[prow]: the residual of a dependent column is reduced further against the
+// pivots found after it, so that it vanishes on every pivot row (the residual of a column
+// dependent only within the tolerance is not zero there); then with F~ = F(:, pivots) (unit
+// upper triangular), Y = F~^-1 F, which needs no separate factorization.
 int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tol,
               const Eigen::VectorXd& colmax, const std::vector<long>& colend, double zero_level,
               RankDecision* out) {
@@ -34,16 +36,9 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
   std::vector<int> prow;
   Eigen::MatrixXd F;
   if (out) F = Eigen::MatrixXd::Zero(U.cols(), P);
-  Eigen::VectorXd x(m);
-  for (int c : order) {
-    if (colmax[c] <= zero_level) {
-      if (out) out->zero.push_back(c);
-      continue;
-    }
-    long end = colend[c];
-    x.head(end) = Z.col(c).head(end);
-    const int nb = static_cast<int>(prow.size());
-    for (int b = 0; b < nb; ++b) {
+  // Reduces x (non-zero up to `end`), the residual of column c, against pivots from .. to - 1.
+  auto reduce = [&](Eigen::Ref<Eigen::VectorXd> x, long& end, int c, int from, int to) {
+    for (int b = from; b < to; ++b) {
       const double f = (prow[b] < end ? x[prow[b]] : 0.0) / U(prow[b], b);
       if (f == 0.0) continue;
       if (out) F(b, c) = f;
@@ -54,6 +49,24 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
       }
       x.head(e).noalias() -= f * U.col(b).head(e);
     }
+  };
+  struct Dependent {
+    int c, pivots;  // the column and the number of pivots before it
+    long end;
+  };
+  std::vector<Dependent> dependent;
+  Eigen::MatrixXd residuals;  // of the dependent columns
+  if (out) residuals.resize(m, P);
+  Eigen::VectorXd x(m);
+  for (int c : order) {
+    if (colmax[c] <= zero_level) {
+      if (out) out->zero.push_back(c);
+      continue;
+    }
+    long end = colend[c];
+    x.head(end) = Z.col(c).head(end);
+    const int nb = static_cast<int>(prow.size());
+    reduce(x, end, c, 0, nb);
     Eigen::Index r = 0;
     const double rel = end > 0 ? x.head(end).cwiseAbs().maxCoeff(&r) / colmax[c] : 0.0;
     if (rel > tol) {
@@ -70,10 +83,16 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
       out->dependent.push_back(c);
       out->residual.push_back(rel);
       out->largest_dropped = std::max(out->largest_dropped, rel);
+      residuals.col(static_cast<long>(dependent.size())).head(end) = x.head(end);
+      dependent.push_back({c, nb, end});
     }
   }
   const int nb = static_cast<int>(prow.size());
   if (out) {
+    for (std::size_t i = 0; i < dependent.size(); ++i) {
+      Dependent& d = dependent[i];
+      reduce(residuals.col(static_cast<long>(i)), d.end, d.c, d.pivots, nb);
+    }
     // Y = F~^-1 F by back substitution, column by column; pivot columns give e_b.
     out->Y.resize(nb, P);
     for (int c = 0; c < P; ++c) {
