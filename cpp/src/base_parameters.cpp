@@ -179,11 +179,11 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsi
 // depth (and of the same kind, potential or kinetic) reduces to at most as many rows as it has
 // columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged.
 //
-// The groups reduced are those with more basis functions than columns. Their rows without
-// entries are left out, and their rows with entries in a single column are first combined into
-// one row per column (the 2-norm of the entries there). Both are orthogonal combinations, so
-// R^T R = Z_g^T Z_g is unchanged and so is R itself up to the signs of its rows when the
-// group's columns are independent; the dense factorization sees a few rows instead of hundreds.
+// The groups reduced are those with more basis functions than columns; their rows without
+// entries are left out of the factorization, which changes nothing in it but its cost.
+// (Combining rows further, e.g. the rows with one entry in the same column, would keep
+// R^T R = Z_g^T Z_g but not the rows of R where a group's columns are dependent, and with them
+// some relative pivot sizes of the margin report.)
 struct Reduced {
   Eigen::MatrixXd Z;
   int constant_row = -1;  // the row of the constant function, if non-zero
@@ -191,8 +191,7 @@ struct Reduced {
 
 Reduced reduceRows(const InfluenceCoordinates& ic) {
   const int P = ic.cols(), n = ic.n, G = 2 * (n + 1), rows = ic.rows();
-  constexpr int kNone = -1, kSeveral = -2;
-  std::vector<int> group(rows), col(rows, kNone), pos(rows, kNone);
+  std::vector<int> group(rows), pos(rows, -1);
   std::vector<int> count(G, 0), first(G, P), filled(G, 0);
   for (int r = 0; r < rows; ++r) {
     const bool pot = (ic.keys[r] & 1023u) == 0;
@@ -200,50 +199,24 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
     ++count[group[r]];
   }
   for (const auto& e : ic.entries) {
-    int& c = col[e.row];
-    c = (c == kNone || c == e.col) ? e.col : kSeveral;
-    first[group[e.row]] = std::min(first[group[e.row]], e.col);
+    const int g = group[e.row];
+    first[g] = std::min(first[g], e.col);
+    pos[e.row] = 0;
   }
-  auto reduced = [&](int g) { return count[g] > P - first[g]; };
-  // Block rows: one per row kept as it is, one per column of the combined single-entry rows.
-  std::vector<int> slot(static_cast<size_t>(G) * P, kNone);
-  std::vector<char> combined(rows, 0);
-  for (int r = 0; r < rows; ++r) {
-    const int g = group[r];
-    if (col[r] == kNone) continue;
-    if (col[r] >= 0 && reduced(g)) {
-      combined[r] = 1;
-      int& s = slot[static_cast<size_t>(g) * P + col[r]];
-      if (s == kNone) s = filled[g]++;
-      pos[r] = s;
-    } else {
-      pos[r] = filled[g]++;
-    }
-  }
+  for (int r = 0; r < rows; ++r)  // the rows with entries, in their order
+    if (pos[r] == 0) pos[r] = filled[group[r]]++;
   std::vector<Eigen::MatrixXd> blocks(G);
   for (int g = 0; g < G; ++g)
     if (filled[g] > 0) blocks[g] = Eigen::MatrixXd::Zero(filled[g], P - first[g]);
-  std::vector<double> single(rows, 0.0);
   for (const auto& e : ic.entries) {
-    if (combined[e.row])
-      single[e.row] += e.value;
-    else
-      blocks[group[e.row]](pos[e.row], e.col - first[group[e.row]]) += e.value;
+    const int g = group[e.row];
+    blocks[g](pos[e.row], e.col - first[g]) += e.value;
   }
-  for (int r = 0; r < rows; ++r)
-    if (combined[r]) {
-      double& b = blocks[group[r]](pos[r], col[r] - first[group[r]]);
-      b += single[r] * single[r];
-    }
   long total = 0;
   for (int g = 0; g < G; ++g) {
     Eigen::MatrixXd& B = blocks[g];
     if (B.size() == 0) continue;
-    if (reduced(g)) {
-      for (int c = first[g]; c < P; ++c) {
-        const int s = slot[static_cast<size_t>(g) * P + c];
-        if (s != kNone) B(s, c - first[g]) = std::sqrt(B(s, c - first[g]));
-      }
+    if (count[g] > B.cols()) {
       Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(B);  // in place
       const long m = std::min(B.rows(), B.cols());
       Eigen::MatrixXd R = B.topRows(m).triangularView<Eigen::Upper>();
