@@ -1,6 +1,5 @@
 #include "mindyn/base_parameters.hpp"
 
-#include <Eigen/LU>
 #include <Eigen/QR>
 #include <algorithm>
 #include <charconv>
@@ -16,37 +15,66 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// Rank by elimination only (no Y), for the neighbouring-tolerance report.
+// Gaussian elimination of the columns of Z in `order` with partial pivoting; returns the rank.
+// With `out`, also the decision and Y. Each column is reduced against the pivots before it:
+//   z_c = sum_b f(b, c) u_b + x_c,
+// x_c being zero on the pivot rows of those pivots; a column with a large enough residual x_c
+// becomes pivot u_b = x_c (f(b, c) = 1). Y solves the square system on the pivot rows,
+// Z~[prow] Y = Z[prow]: the residual of a dependent column is reduced further against the
+// pivots found after it, so that it vanishes on every pivot row (the residual of a column
+// dependent only within the tolerance is not zero there); then with F~ = F(:, pivots) (unit
+// upper triangular), Y = F~^-1 F, which needs no separate factorization.
 int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tol,
-              const Eigen::VectorXd& colmax, double zero_level, RankDecision* out) {
+              const Eigen::VectorXd& colmax, const std::vector<long>& colend, double zero_level,
+              RankDecision* out) {
   // Rows are kept in their order; every vector remembers where its non-zero part ends, since
   // the row reduction leaves the rows of the inner links first.
-  std::vector<Eigen::VectorXd> U;
+  const long m = Z.rows();
+  const int P = static_cast<int>(Z.cols());
+  Eigen::MatrixXd U(m, std::min<long>(m, P));
   std::vector<long> uend;
   std::vector<int> prow;
-  Eigen::VectorXd x(Z.rows());
+  Eigen::MatrixXd F;
+  if (out) F = Eigen::MatrixXd::Zero(U.cols(), P);
+  // Reduces x (non-zero up to `end`), the residual of column c, against pivots from .. to - 1.
+  auto reduce = [&](Eigen::Ref<Eigen::VectorXd> x, long& end, int c, int from, int to) {
+    for (int b = from; b < to; ++b) {
+      const double f = (prow[b] < end ? x[prow[b]] : 0.0) / U(prow[b], b);
+      if (f == 0.0) continue;
+      if (out) F(b, c) = f;
+      const long e = uend[b];
+      if (e > end) {
+        x.segment(end, e - end).setZero();
+        end = e;
+      }
+      x.head(e).noalias() -= f * U.col(b).head(e);
+    }
+  };
+  struct Dependent {
+    int c, pivots;  // the column and the number of pivots before it
+    long end;
+  };
+  std::vector<Dependent> dependent;
+  Eigen::MatrixXd residuals;  // of the dependent columns
+  if (out) residuals.resize(m, P);
+  Eigen::VectorXd x(m);
   for (int c : order) {
     if (colmax[c] <= zero_level) {
       if (out) out->zero.push_back(c);
       continue;
     }
-    x = Z.col(c);
-    long end = Z.rows();
-    while (end > 0 && x[end - 1] == 0.0) --end;
-    for (size_t b = 0; b < U.size(); ++b) {
-      const double f = x[prow[b]] / U[b][prow[b]];
-      if (f == 0.0) continue;
-      const long e = std::max(end, uend[b]);
-      x.head(e).noalias() -= f * U[b].head(e);
-      end = e;
-    }
+    long end = colend[c];
+    x.head(end) = Z.col(c).head(end);
+    const int nb = static_cast<int>(prow.size());
+    reduce(x, end, c, 0, nb);
     Eigen::Index r = 0;
     const double rel = end > 0 ? x.head(end).cwiseAbs().maxCoeff(&r) / colmax[c] : 0.0;
     if (rel > tol) {
-      U.push_back(x);
+      U.col(nb).head(end) = x.head(end);
       uend.push_back(end);
       prow.push_back(static_cast<int>(r));
       if (out) {
+        F(nb, c) = 1.0;
         out->pivots.push_back(c);
         out->pivot_size.push_back(rel);
         out->smallest_kept = std::min(out->smallest_kept, rel);
@@ -55,20 +83,30 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
       out->dependent.push_back(c);
       out->residual.push_back(rel);
       out->largest_dropped = std::max(out->largest_dropped, rel);
+      residuals.col(static_cast<long>(dependent.size())).head(end) = x.head(end);
+      dependent.push_back({c, nb, end});
     }
   }
+  const int nb = static_cast<int>(prow.size());
   if (out) {
-    // Y from the square system on the pivot rows: Z~[prow] Y = Z[prow].
-    const int nb = static_cast<int>(prow.size());
-    Eigen::MatrixXd A(nb, nb), B(nb, Z.cols());
-    for (int i = 0; i < nb; ++i) {
-      for (int b = 0; b < nb; ++b) A(i, b) = Z(prow[i], out->pivots[b]);
-      B.row(i) = Z.row(prow[i]);
+    for (std::size_t i = 0; i < dependent.size(); ++i) {
+      Dependent& d = dependent[i];
+      reduce(residuals.col(static_cast<long>(i)), d.end, d.c, d.pivots, nb);
     }
-    out->Y = nb ? Eigen::MatrixXd(Eigen::PartialPivLU<Eigen::MatrixXd>(A).solve(B))
-                : Eigen::MatrixXd(0, Z.cols());
+    // Y = F~^-1 F by back substitution, column by column; pivot columns give e_b.
+    out->Y.resize(nb, P);
+    for (int c = 0; c < P; ++c) {
+      auto y = out->Y.col(c);
+      y = F.col(c).head(nb);
+      for (int b = nb - 1; b > 0; --b) {
+        const double yb = y[b];
+        if (yb == 0.0) continue;
+        const int pb = out->pivots[b];
+        for (int b2 = 0; b2 < b; ++b2) y[b2] -= F(b2, pb) * yb;
+      }
+    }
   }
-  return static_cast<int>(prow.size());
+  return nb;
 }
 
 std::string shortest(double v) {
@@ -86,13 +124,15 @@ std::string regroupedName(const std::string& classical) {
 BaseSet makeSet(RankDecision decision, const std::vector<std::string>& names) {
   BaseSet set;
   const int nb = decision.rank();
+  set.names.reserve(nb);
+  set.formulas.reserve(nb);
+  const Eigen::MatrixXd Yt = decision.Y.transpose();  // the rows of Y, contiguous
   for (int b = 0; b < nb; ++b) {
     const int p = decision.pivots[b];
-    bool regrouped = false;
-    for (int c = 0; c < decision.Y.cols(); ++c)
-      if (c != p && decision.Y(b, c) != 0.0) regrouped = true;
-    set.names.push_back(regrouped ? regroupedName(names[p]) : names[p]);
-    set.formulas.push_back(formatFormula(set.names.back(), decision.Y.row(b), names));
+    const auto y = Yt.col(b);
+    const long others = (y.array() != 0.0).count() - (y[p] != 0.0 ? 1 : 0);
+    set.names.push_back(others > 0 ? regroupedName(names[p]) : names[p]);
+    set.formulas.push_back(formatFormula(set.names.back(), y.transpose(), names));
   }
   set.decision = std::move(decision);
   return set;
@@ -138,38 +178,51 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsi
 // joints up to d only is zero on the columns of links before d, so a group of rows of equal
 // depth (and of the same kind, potential or kinetic) reduces to at most as many rows as it has
 // columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged.
+//
+// The groups reduced are those with more basis functions than columns; their rows without
+// entries are left out of the factorization, which changes nothing in it but its cost.
+// (Combining rows further, e.g. the rows with one entry in the same column, would keep
+// R^T R = Z_g^T Z_g but not the rows of R where a group's columns are dependent, and with them
+// some relative pivot sizes of the margin report.)
 struct Reduced {
   Eigen::MatrixXd Z;
   int constant_row = -1;  // the row of the constant function, if non-zero
 };
 
 Reduced reduceRows(const InfluenceCoordinates& ic) {
-  const int P = ic.cols(), n = ic.n, G = 2 * (n + 1);
-  std::vector<int> group(ic.rows()), pos(ic.rows());
-  std::vector<int> count(G, 0), first(G, P);
-  for (int r = 0; r < ic.rows(); ++r) {
+  const int P = ic.cols(), n = ic.n, G = 2 * (n + 1), rows = ic.rows();
+  std::vector<int> group(rows), pos(rows, -1);
+  std::vector<int> count(G, 0), first(G, P), filled(G, 0);
+  for (int r = 0; r < rows; ++r) {
     const bool pot = (ic.keys[r] & 1023u) == 0;
     group[r] = 2 * ic.depth(r) + (pot ? 1 : 0);
-    pos[r] = count[group[r]]++;
+    ++count[group[r]];
   }
-  for (const auto& e : ic.entries) first[group[e.row]] = std::min(first[group[e.row]], e.col);
+  for (const auto& e : ic.entries) {
+    const int g = group[e.row];
+    first[g] = std::min(first[g], e.col);
+    pos[e.row] = 0;
+  }
+  for (int r = 0; r < rows; ++r)  // the rows with entries, in their order
+    if (pos[r] == 0) pos[r] = filled[group[r]]++;
   std::vector<Eigen::MatrixXd> blocks(G);
   for (int g = 0; g < G; ++g)
-    if (count[g] > 0 && first[g] < P) blocks[g] = Eigen::MatrixXd::Zero(count[g], P - first[g]);
+    if (filled[g] > 0) blocks[g] = Eigen::MatrixXd::Zero(filled[g], P - first[g]);
   for (const auto& e : ic.entries) {
     const int g = group[e.row];
     blocks[g](pos[e.row], e.col - first[g]) += e.value;
   }
   long total = 0;
   for (int g = 0; g < G; ++g) {
-    if (blocks[g].size() == 0) continue;
-    if (blocks[g].rows() > blocks[g].cols()) {
-      Eigen::HouseholderQR<Eigen::MatrixXd> qr(blocks[g]);
-      const long m = blocks[g].cols();
-      Eigen::MatrixXd R = qr.matrixQR().topRows(m).triangularView<Eigen::Upper>();
-      blocks[g] = std::move(R);
+    Eigen::MatrixXd& B = blocks[g];
+    if (B.size() == 0) continue;
+    if (count[g] > B.cols()) {
+      Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(B);  // in place
+      const long m = std::min(B.rows(), B.cols());
+      Eigen::MatrixXd R = B.topRows(m).triangularView<Eigen::Upper>();
+      B = std::move(R);
     }
-    total += blocks[g].rows();
+    total += B.rows();
   }
   Reduced out;
   out.Z = Eigen::MatrixXd::Zero(total, P);
@@ -198,10 +251,16 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   RankDecision d;
   d.tolerance = tolerance;
   Eigen::VectorXd colmax(Z.cols());
-  for (int c = 0; c < Z.cols(); ++c) colmax[c] = Z.col(c).norm();
+  std::vector<long> colend(Z.cols());  // one past the last non-zero entry
+  for (int c = 0; c < Z.cols(); ++c) {
+    colmax[c] = Z.col(c).norm();
+    long end = Z.rows();
+    while (end > 0 && Z(end - 1, c) == 0.0) --end;
+    colend[c] = end;
+  }
   const double biggest = Z.cols() ? colmax.maxCoeff() : 0.0;
   const double zero_level = 1e-13 * biggest;
-  eliminate(Z, order, tolerance, colmax, zero_level, &d);
+  eliminate(Z, order, tolerance, colmax, colend, zero_level, &d);
   d.zero_threshold = 1e-13;
   for (int c : d.zero)
     if (biggest > 0) d.largest_zeroed = std::max(d.largest_zeroed, colmax[c] / biggest);
@@ -211,25 +270,28 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   // dropped genuine small coefficients of near-right-angle URDFs (1.3e-9 MZ5 in so101's ZZR1),
   // and W_b Y pi then missed the torques by 1e-10 relative; with 1e-12, by about 1e-12.
   constexpr double kCleanLevel = 1e-12;
-  for (int b = 0; b < d.Y.rows(); ++b) {
-    const double sb = colmax[d.pivots[b]];
-    for (int c = 0; c < d.Y.cols(); ++c) {
+  for (int c = 0; c < d.Y.cols(); ++c)
+    for (int b = 0; b < d.Y.rows(); ++b) {
       double& y = d.Y(b, c);
-      const double rel = colmax[c] > 0 ? sb / colmax[c] : 1.0;
+      if (y == 0.0) {  // most of Y
+        y = 0.0;
+        continue;
+      }
+      const double rel = colmax[c] > 0 ? colmax[d.pivots[b]] / colmax[c] : 1.0;
       if (std::abs(y) * rel < kCleanLevel || colmax[c] <= zero_level)
         y = 0.0;
       else if (std::abs(std::abs(y) - 1.0) < kCleanLevel)
         y = y > 0 ? 1.0 : -1.0;
     }
-    for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b, d.pivots[b2]) = b == b2 ? 1.0 : 0.0;
-  }
+  for (int b = 0; b < d.Y.rows(); ++b)
+    for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b2, d.pivots[b]) = b == b2 ? 1.0 : 0.0;
   if (d.rank() > 0) {
     // Pivot columns are reproduced exactly (identity block of Y); check the regrouped ones.
-    Eigen::MatrixXd Zt(Z.rows(), d.rank());
-    for (int b = 0; b < d.rank(); ++b) Zt.col(b) = Z.col(d.pivots[b]);
     Eigen::VectorXd e(Z.rows());
     for (int c : d.dependent) {
-      e.noalias() = Z.col(c) - Zt * d.Y.col(c);
+      e = Z.col(c);
+      for (int b = 0; b < d.rank(); ++b)
+        if (d.Y(b, c) != 0.0) e.noalias() -= d.Y(b, c) * Z.col(d.pivots[b]);
       d.fit_residual = std::max(d.fit_residual, e.norm() / colmax[c]);
     }
   }
@@ -248,8 +310,8 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   }
   if (d.smallest_kept < looser * 10 || d.largest_dropped > tighter / 10 || weak > 0 ||
       d.largest_zeroed > 0) {
-    d.rank_looser = eliminate(Z, order, looser, colmax, zero_level, nullptr);
-    d.rank_tighter = eliminate(Z, order, tighter, colmax, 0.0, nullptr);
+    d.rank_looser = eliminate(Z, order, looser, colmax, colend, zero_level, nullptr);
+    d.rank_tighter = eliminate(Z, order, tighter, colmax, colend, 0.0, nullptr);
     // Weak columns would go at the looser tolerance measured against their kind.
     d.rank_looser = std::min(d.rank_looser, d.rank() - weak);
   } else {
@@ -275,15 +337,22 @@ std::vector<int> khalilOrder(int n, ParameterLayout layout) {
 
 std::string formatFormula(const std::string& name, const Eigen::Ref<const Eigen::RowVectorXd>& row,
                           const std::vector<std::string>& classical_names) {
-  std::string s = name + " =";
+  std::string s;
+  s.reserve(name.size() + 64);
+  s += name;
+  s += " =";
   bool first = true;
+  char buf[32];
   for (int c = 0; c < row.size(); ++c) {
     const double y = row[c];
     if (y == 0.0) continue;
     const bool neg = y < 0;
     const double a = std::abs(y);
     s += first ? (neg ? " -" : " ") : (neg ? " - " : " + ");
-    if (a != 1.0) s += shortest(a) + "*";
+    if (a != 1.0) {
+      s.append(buf, std::to_chars(buf, buf + sizeof(buf), a).ptr);
+      s += '*';
+    }
     s += classical_names[c];
     first = false;
   }

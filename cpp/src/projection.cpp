@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <cstring>
 
 #include "spatial.hpp"
 
@@ -102,10 +103,15 @@ bool prune(M& m, double tol) {
 using Sym6 = std::array<double, 21>;
 struct SymIndex {
   int idx[6][6];
-  constexpr SymIndex() : idx() {
+  int first[21], second[21];  // (i, j), i <= j, of each packed entry
+  constexpr SymIndex() : idx(), first(), second() {
     int k = 0;
     for (int i = 0; i < 6; ++i)
-      for (int j = i; j < 6; ++j) idx[i][j] = idx[j][i] = k++;
+      for (int j = i; j < 6; ++j) {
+        first[k] = i;
+        second[k] = j;
+        idx[i][j] = idx[j][i] = k++;
+      }
   }
 };
 constexpr SymIndex kSym;
@@ -121,11 +127,21 @@ inline Sym6 toSym(const Matrix6d& m) {
   return s;
 }
 
-// A constant 6x6 map kept as its non-zero entries (geometry is often axis-aligned).
+// The entries of a packed symmetric matrix that may be non-zero, ascending.
+struct Pattern {
+  int count = 0;
+  int idx[21];
+};
+
+// A constant 6x6 map kept as its non-zero entries (geometry is often axis-aligned), by rows
+// and by columns.
 struct Sparse6 {
   int count = 0;
   int row[36], col[36];
   double val[36];
+  int colStart[7];  // column j: rows colRow[colStart[j] .. colStart[j + 1] - 1], ascending
+  int colRow[36];
+  double colVal[36];
   explicit Sparse6(const Matrix6d& m) {
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j)
@@ -135,13 +151,35 @@ struct Sparse6 {
           val[count] = m(i, j);
           ++count;
         }
+    int c = 0;
+    for (int j = 0; j < 6; ++j) {
+      colStart[j] = c;
+      for (int i = 0; i < 6; ++i)
+        if (m(i, j) != 0.0) {
+          colRow[c] = i;
+          colVal[c] = m(i, j);
+          ++c;
+        }
+    }
+    colStart[6] = c;
   }
-  // C Q C^T
-  void congruence(const Matrix6d& Q, Matrix6d& out) const {
-    Matrix6d T = Matrix6d::Zero();
-    for (int e = 0; e < count; ++e) T.row(row[e]) += val[e] * Q.row(col[e]);
-    out.setZero();
-    for (int e = 0; e < count; ++e) out.col(row[e]) += val[e] * T.col(col[e]);
+  // C Q C^T for a packed symmetric Q whose non-zero entries lie in `where`; only the upper
+  // triangle of the product is formed.
+  void congruence(const Sym6& Q, const Pattern& where, Sym6& out) const {
+    // T = C Q, entry by entry of Q; every T(r, j) sums C(r, a) Q(a, j) by ascending a.
+    double T[6][6] = {};
+    for (int w = 0; w < where.count; ++w) {
+      const int q = where.idx[w];
+      const double v = Q[q];
+      if (v == 0.0) continue;
+      const int a = kSym.first[q], b = kSym.second[q];
+      for (int e = colStart[a]; e < colStart[a + 1]; ++e) T[colRow[e]][b] += colVal[e] * v;
+      if (a != b)
+        for (int e = colStart[b]; e < colStart[b + 1]; ++e) T[colRow[e]][a] += colVal[e] * v;
+    }
+    out.fill(0.0);
+    for (int e = 0; e < count; ++e)
+      for (int i = 0; i <= row[e]; ++i) out[kSym.idx[i][row[e]]] += val[e] * T[i][col[e]];
   }
   void apply(const Vector6d& x, Vector6d& out) const {
     out.setZero();
@@ -149,117 +187,128 @@ struct Sparse6 {
   }
 };
 
-// 1/2 tr(E Q) for a constant symmetric E and a packed symmetric Q.
-struct TraceForm {
-  int count = 0;
-  int idx[21];
-  double w[21];
-  explicit TraceForm(const Matrix6d& E) {
+// The ten forms 1/2 tr(E_p Q), p = 0..9, for constant symmetric E_p and a packed symmetric Q.
+// For each kind of term, only the entries it may hold and the forms see are visited, each with
+// all ten weights (zeros included: no data-dependent branches).
+class TraceForms {
+ public:
+  TraceForms(const std::array<Matrix6d, 10>& E, const Pattern* kinds, int count) {
+    bool seen[21] = {};
     for (int i = 0; i < 6; ++i)
       for (int j = i; j < 6; ++j) {
-        const double v = i == j ? 0.5 * E(i, i) : 0.5 * (E(i, j) + E(j, i));
-        if (v != 0.0) {
-          idx[count] = kSym.idx[i][j];
-          w[count] = v;
-          ++count;
+        const int q = kSym.idx[i][j];
+        for (int p = 0; p < 10; ++p) {
+          w_[q][p] = i == j ? 0.5 * E[p](i, i) : 0.5 * (E[p](i, j) + E[p](j, i));
+          if (w_[q][p] != 0.0) seen[q] = true;
         }
       }
+    visible_.resize(count);
+    for (int k = 0; k < count; ++k)
+      for (int i = 0; i < kinds[k].count; ++i)
+        if (seen[kinds[k].idx[i]]) visible_[k].idx[visible_[k].count++] = kinds[k].idx[i];
   }
-  double operator()(const Sym6& Q) const {
-    double s = 0.0;
-    for (int e = 0; e < count; ++e) s += w[e] * Q[idx[e]];
-    return s;
+  // Each value sums its terms in the order of the entries of Q; Q is of kind `kind`.
+  void operator()(const Sym6& Q, int kind, double v[10]) const {
+    for (int p = 0; p < 10; ++p) v[p] = 0.0;
+    const Pattern& where = visible_[kind];
+    for (int i = 0; i < where.count; ++i) {
+      const int q = where.idx[i];
+      for (int p = 0; p < 10; ++p) v[p] += w_[q][p] * Q[q];
+    }
   }
+
+ private:
+  double w_[21][10];
+  std::vector<Pattern> visible_;
 };
 
 // R B R^T for R = blockdiag(Rz(-q), Rz(-q)), B symmetric, split over 1, cos q, sin q, cos 2q,
 // sin 2q. Indices 2 and 5 lie on the axis; (0, 1) and (3, 4) rotate as (x, y) -> (c x + s y,
-// -s x + c y).
-void splitRotation(const Matrix6d& B, Sym6 parts[5]) {
-  for (int l = 0; l < 5; ++l) parts[l].fill(0.0);
+// -s x + c y). Entries up to `tol` are set to zero; big[l] receives the largest |entry| of part l.
+void splitRotation(const Sym6& Bp, double tol, Sym6 parts[5], double big[5]) {
+  std::memset(parts, 0, 5 * sizeof(Sym6));
+  for (int l = 0; l < 5; ++l) big[l] = 0.0;
+  const auto& I = kSym.idx;
+  auto B = [&](int i, int j) { return Bp[I[i][j]]; };
+  auto put = [&](int l, int i, int j, double v) {
+    const double a = std::abs(v);
+    if (a <= tol) return;
+    parts[l][I[i][j]] = v;
+    big[l] = std::max(big[l], a);
+  };
   static constexpr int ax[2] = {2, 5};
   static constexpr int px[2] = {0, 3};
-  const auto& I = kSym.idx;
-  parts[0][I[2][2]] = B(2, 2);
-  parts[0][I[2][5]] = B(2, 5);
-  parts[0][I[5][5]] = B(5, 5);
+  put(0, 2, 2, B(2, 2));
+  put(0, 2, 5, B(2, 5));
+  put(0, 5, 5, B(5, 5));
   for (int a = 0; a < 2; ++a)
     for (int b = 0; b < 2; ++b) {
       const int z = ax[a], x = px[b], y = px[b] + 1;
       // D(z, x') = c B(z,x) + s B(z,y);  D(z, y') = -s B(z,x) + c B(z,y)
-      parts[1][I[z][x]] = B(z, x);
-      parts[2][I[z][x]] = B(z, y);
-      parts[1][I[z][y]] = B(z, y);
-      parts[2][I[z][y]] = -B(z, x);
+      put(1, z, x, B(z, x));
+      put(2, z, x, B(z, y));
+      put(1, z, y, B(z, y));
+      put(2, z, y, -B(z, x));
     }
   for (int a = 0; a < 2; ++a)
     for (int b = a; b < 2; ++b) {
       const int x1 = px[a], y1 = px[a] + 1, x2 = px[b], y2 = px[b] + 1;
       const double xx = B(x1, x2), xy = B(x1, y2), yx = B(y1, x2), yy = B(y1, y2);
-      parts[0][I[x1][x2]] = 0.5 * (xx + yy);
-      parts[3][I[x1][x2]] = 0.5 * (xx - yy);
-      parts[4][I[x1][x2]] = 0.5 * (xy + yx);
-      parts[0][I[x1][y2]] = 0.5 * (xy - yx);
-      parts[3][I[x1][y2]] = 0.5 * (xy + yx);
-      parts[4][I[x1][y2]] = 0.5 * (yy - xx);
-      parts[0][I[y1][y2]] = 0.5 * (xx + yy);
-      parts[3][I[y1][y2]] = -0.5 * (xx - yy);
-      parts[4][I[y1][y2]] = -0.5 * (xy + yx);
+      put(0, x1, x2, 0.5 * (xx + yy));
+      put(3, x1, x2, 0.5 * (xx - yy));
+      put(4, x1, x2, 0.5 * (xy + yx));
+      put(0, x1, y2, 0.5 * (xy - yx));
+      put(3, x1, y2, 0.5 * (xy + yx));
+      put(4, x1, y2, 0.5 * (yy - xx));
+      put(0, y1, y2, 0.5 * (xx + yy));
+      put(3, y1, y2, -0.5 * (xx - yy));
+      put(4, y1, y2, -0.5 * (xy + yx));
       if (a != b) {  // (y1, x2) lies in the upper triangle too
-        parts[0][I[y1][x2]] = 0.5 * (yx - xy);
-        parts[3][I[y1][x2]] = 0.5 * (xy + yx);
-        parts[4][I[y1][x2]] = 0.5 * (yy - xx);
+        put(0, y1, x2, 0.5 * (yx - xy));
+        put(3, y1, x2, 0.5 * (xy + yx));
+        put(4, y1, x2, 0.5 * (yy - xx));
       }
     }
 }
 
-// Open-addressing map from basis keys to row numbers (keys are never removed).
-class RowIndex {
- public:
-  RowIndex() { resize(1024); }
-  int find(std::uint64_t key, std::vector<std::uint64_t>& keys) {
-    if (2 * (count_ + 1) > static_cast<long>(slots_.size())) grow(keys);
-    std::size_t i = hash(key) & mask_;
-    while (true) {
-      const int r = slots_[i];
-      if (r < 0) {
-        slots_[i] = static_cast<int>(keys.size());
-        keys.push_back(key);
-        ++count_;
-        return slots_[i];
-      }
-      if (keys[r] == key) return r;
-      i = (i + 1) & mask_;
-    }
-  }
+// What a kinetic term may hold: one of the five parts of a rotation split, x S^T + S x^T or
+// S S^T for the joint's S = e_2 (revolute) or e_5 (prismatic), or anything.
+enum TermKind : std::uint8_t { kCross2 = 5, kCross5, kDiag2, kDiag5, kAny, kKinds };
 
- private:
-  static std::size_t hash(std::uint64_t k) {
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdULL;
-    k ^= k >> 33;
-    return static_cast<std::size_t>(k);
-  }
-  void resize(std::size_t n) {
-    slots_.assign(n, -1);
-    mask_ = n - 1;
-  }
-  void grow(const std::vector<std::uint64_t>& keys) {
-    resize(slots_.size() * 2);
-    for (std::size_t r = 0; r < keys.size(); ++r) {
-      std::size_t i = hash(keys[r]) & mask_;
-      while (slots_[i] >= 0) i = (i + 1) & mask_;
-      slots_[i] = static_cast<int>(r);
+const std::array<Pattern, kKinds>& patterns() {
+  static const std::array<Pattern, kKinds> table = [] {
+    std::array<bool[21], kKinds> nonzero{};
+    Sym6 generic;  // distinct positive entries: no sum or difference of two of them cancels
+    for (int q = 0; q < 21; ++q) generic[q] = std::sqrt(q + 2.0);
+    Sym6 parts[5];
+    double big[5];
+    splitRotation(generic, 0.0, parts, big);
+    for (int l = 0; l < 5; ++l)
+      for (int q = 0; q < 21; ++q) nonzero[l][q] = parts[l][q] != 0.0;
+    for (int i = 0; i < 6; ++i) {
+      nonzero[kCross2][kSym.idx[i][2]] = true;
+      nonzero[kCross5][kSym.idx[i][5]] = true;
     }
-  }
-  std::vector<int> slots_;
-  std::size_t mask_ = 0;
-  long count_ = 0;
-};
+    nonzero[kDiag2][kSym.idx[2][2]] = true;
+    nonzero[kDiag5][kSym.idx[5][5]] = true;
+    for (bool& b : nonzero[kAny]) b = true;
+    std::array<Pattern, kKinds> t;
+    for (int k = 0; k < kKinds; ++k)
+      for (int q = 0; q < 21; ++q)
+        if (nonzero[k][q]) t[k].idx[t[k].count++] = q;
+    return t;
+  }();
+  return table;
+}
 
+// Terms of the recursion. `row` is the row of Z of the term's basis function, -1 while it has
+// none: a term carried through a joint by its constant factor keeps its key, hence its row;
+// the other terms have keys that no earlier term had.
 struct QTerm {
   std::uint64_t key;
-  double scale;  // largest |entry|
+  int row;
+  std::uint8_t kind;  // TermKind or the part of a rotation split (0..4)
+  double scale;       // largest |entry|
   Sym6 Q;
 };
 struct VTerm {
@@ -269,6 +318,7 @@ struct VTerm {
 };
 struct RTerm {
   std::uint64_t key;
+  int row;
   Row4d r;
 };
 using Entry = InfluenceCoordinates::Entry;
@@ -333,13 +383,26 @@ BasisFunction InfluenceCoordinates::basis(int row) const { return unpackBasis(ke
 
 int InfluenceCoordinates::depth(int row) const {
   const std::uint64_t key = keys.at(row);
-  const int l0 = static_cast<int>(key & ((1u << kL0Bits) - 1));
-  int d = 0;
-  if (l0 > 0) d = static_cast<int>(std::floor((1 + std::sqrt(8.0 * l0 - 7)) / 2));
-  std::uint64_t joints = key >> kL0Bits;
-  for (int j = 0; joints != 0; ++j, joints >>= kJointBits)
-    if (joints & 7u) d = std::max(d, j + 1);
-  return d;
+  // l0 = J(i, j) = i(i-1)/2 + j, 1 <= j <= i, involves joint i at most
+  static const std::array<std::uint8_t, 1u << kL0Bits> pairDepth = [] {
+    std::array<std::uint8_t, 1u << kL0Bits> d{};
+    int i = 0;
+    for (int l0 = 1; l0 < static_cast<int>(d.size()); ++l0) {
+      if (i * (i + 1) / 2 < l0) ++i;
+      d[l0] = static_cast<std::uint8_t>(i);
+    }
+    return d;
+  }();
+  const int d = pairDepth[key & ((1u << kL0Bits) - 1)];
+  // the last joint with a non-constant factor
+  const std::uint64_t joints = key >> kL0Bits;
+#if defined(__GNUC__) || defined(__clang__)
+  const int last = joints != 0 ? (63 - __builtin_clzll(joints)) / kJointBits + 1 : 0;
+#else
+  int last = 0;
+  for (std::uint64_t j = joints; j != 0; j >>= kJointBits) ++last;
+#endif
+  return std::max(d, last);
 }
 
 Eigen::MatrixXd InfluenceCoordinates::dense() const {
@@ -367,6 +430,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   }
 
   // Per-link kinetic parameter forms E'_p (10 per link) in the aligned joint frame.
+  const auto& kinds = patterns();
   auto kineticForms = [&](int k) {
     std::array<Matrix6d, 10> E;
     for (auto& e : E) e.setZero();
@@ -383,13 +447,11 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     }
     E[9].bottomRightCorner<3, 3>().setIdentity();
     const Matrix6d A = adjoint(post[k].inverse());
-    std::vector<TraceForm> forms;
     for (auto& e : E) {
-      Matrix6d f = A.transpose() * e * A;
-      prune(f, kNoise * maxAbs(f));
-      forms.emplace_back(f);
+      e = A.transpose() * e * A;
+      prune(e, kNoise * maxAbs(e));
     }
-    return forms;
+    return TraceForms(E, kinds.data(), kKinds);
   };
 
   // Rotation by -q about z, as (1, cos, sin) coefficients of the 6x6 twist map.
@@ -426,12 +488,17 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   std::vector<RTerm> R, Rnext;
   Row4d g0;
   g0 << model.gravity.transpose(), 0.0;
-  R.push_back({0, g0});
+  R.push_back({0, -1, g0});
 
-  RowIndex rowOf;
   std::vector<std::uint64_t> keys;
   std::vector<Entry> entries;
-  auto rowFor = [&](std::uint64_t key) { return rowOf.find(key, keys); };
+  auto rowOf = [&keys](auto& term) {
+    if (term.row < 0) {
+      term.row = static_cast<int>(keys.size());
+      keys.push_back(term.key);
+    }
+    return term.row;
+  };
   InfluenceCoordinates out;
   out.layout = layout;
   out.n = n;
@@ -443,38 +510,63 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     const double cscale = std::max(1.0, maxAbs(Cd));
     prune(Cd, 1e-16 * cscale);
     const Sparse6 C(Cd);
-    Vector6d S = Vector6d::Zero();
-    if (revolute)
-      S[2] = 1.0;
-    else
-      S[5] = 1.0;
+    const int s = revolute ? 2 : 5;  // the joint's twist is S = e_s
+    const Vector6d S = Vector6d::Unit(s);
+
+    // Every new kinetic term is projected on link k's parameters at once and kept for the
+    // next joint (after the last joint, not kept).
+    const bool last = k + 1 == n;
+    const int c0 = k * layout.perLink();
+    const auto E = kineticForms(k);
+    const std::size_t most = Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1;
+    const std::size_t rmost = R.size() * (revolute ? 3 : 2);
+    if (entries.size() + 10 * most + 4 * rmost > entries.capacity())
+      entries.reserve(std::max(entries.size() + 10 * most + 4 * rmost, 2 * entries.capacity()));
+    if (keys.size() + most + rmost > keys.capacity())
+      keys.reserve(std::max(keys.size() + most + rmost, 2 * keys.capacity()));
+    int formed = 0;
+    auto add = [&](QTerm& t) {
+      ++formed;
+      const int row = rowOf(t);
+      double v[10];
+      E(t.Q, t.kind, v);
+      for (int p = 0; p < 10; ++p)
+        if (std::abs(v[p]) > kNoise * t.scale) entries.push_back({row, c0 + p, v[p]});
+      if (!last) Qnext.push_back(t);
+    };
 
     // Kinetic part: Q_k = Ad Q_{k-1} Ad^T + cross terms + 2 S S^T dq_k^2.
     Qnext.clear();
-    Qnext.reserve(Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1);
+    if (!last) Qnext.reserve(most);
     for (const QTerm& t : Q) {
-      Matrix6d B, Qf;
-      toFull(t.Q, Qf);
-      C.congruence(Qf, B);
+      Sym6 B;
+      C.congruence(t.Q, kinds[t.kind], B);
       const double bscale = pruneMax(B, kNoise * t.scale * cscale * cscale);
       if (bscale == 0.0) continue;
+      const double ptol = kNoise * bscale;
       Sym6 parts[5];
+      double ps[5];
       int count;
       if (revolute) {
-        splitRotation(B, parts);
+        splitRotation(B, ptol, parts, ps);
         count = 5;
       } else {
-        const Matrix6d NB = N6 * B;
-        parts[0] = toSym(B);
+        Matrix6d Bf;
+        toFull(B, Bf);
+        const Matrix6d NB = N6 * Bf;
+        parts[0] = B;
         parts[1] = toSym(NB + NB.transpose());
         parts[2] = toSym(NB * N6.transpose());
         count = 3;
+        for (int l = 0; l < count; ++l) ps[l] = pruneMax(parts[l], ptol);
       }
-      const double ptol = kNoise * bscale;
-      for (int l = 0; l < count; ++l) {
-        const double ps = pruneMax(parts[l], ptol);
-        if (ps > 0.0) Qnext.push_back({withJoint(t.key, k, l + 1), ps, parts[l]});
-      }
+      // The constant factor (l = 0) keeps the key and the row.
+      for (int l = 0; l < count; ++l)
+        if (ps[l] > 0.0) {
+          QTerm part{withJoint(t.key, k, l + 1), l == 0 ? t.row : -1,
+                     static_cast<std::uint8_t>(revolute ? l : kAny), ps[l], parts[l]};
+          add(part);
+        }
     }
     Vnext.clear();
     Vnext.reserve(V.size() * 3 + 1);
@@ -497,13 +589,20 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         if (!prune(parts[l], ptol)) continue;
         const std::uint64_t key = withJoint(t.key, k, l + 1);
         Vnext.push_back({t.i, key, parts[l]});
-        Matrix6d X = parts[l] * S.transpose();
-        X += X.transpose().eval();
-        Qnext.push_back({withL0(key, pairIndex(k + 1, t.i)), maxAbs(X), toSym(X)});
+        // x S^T + S x^T
+        QTerm cross{withL0(key, pairIndex(k + 1, t.i)), -1, revolute ? kCross2 : kCross5, 0.0, {}};
+        for (int i = 0; i < 6; ++i) {
+          const double v = i == s ? 2.0 * parts[l][i] : parts[l][i];
+          cross.Q[kSym.idx[i][s]] = v;
+          cross.scale = std::max(cross.scale, std::abs(v));
+        }
+        add(cross);
       }
     }
     Vnext.push_back({k + 1, 0, S});
-    Qnext.push_back({withL0(0, pairIndex(k + 1, k + 1)), 2.0, toSym(2.0 * S * S.transpose())});
+    QTerm diagonal{withL0(0, pairIndex(k + 1, k + 1)), -1, revolute ? kDiag2 : kDiag5, 2.0, {}};
+    diagonal.Q[kSym.idx[s][s]] = 2.0;
+    add(diagonal);
     std::swap(Q, Qnext);
     std::swap(V, Vnext);
 
@@ -526,29 +625,21 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       }
       const double ptol = kNoise * maxAbs(y);
       for (int l = 0; l < count; ++l)
-        if (prune(parts[l], ptol)) Rnext.push_back({withJoint(t.key, k, l + 1), parts[l]});
+        if (prune(parts[l], ptol))
+          Rnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1, parts[l]});
     }
     std::swap(R, Rnext);
-    out.terms_formed += static_cast<int>(Q.size() + R.size());
+    out.terms_formed += formed + static_cast<int>(R.size());
 
-    // Project link k's parameters.
-    const int c0 = k * layout.perLink();
-    const auto E = kineticForms(k);
-    for (const QTerm& t : Q) {
-      const int row = rowFor(t.key);
-      for (int p = 0; p < 10; ++p) {
-        const double v = E[p](t.Q);
-        if (std::abs(v) > kNoise * t.scale) entries.push_back({row, c0 + p, v});
-      }
-    }
-    for (const RTerm& t : R) {
+    // Project link k's potential parameters.
+    for (RTerm& t : R) {
       const Row4d r = t.r * Post;
       const double scale = maxAbs(t.r) * std::max(1.0, maxAbs(Post));
       for (int a = 0; a < 4; ++a)
-        if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowFor(t.key), c0 + 6 + a, r[a]});
+        if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowOf(t), c0 + 6 + a, r[a]});
     }
-    if (layout.rotor)
-      entries.push_back({rowFor(withL0(0, pairIndex(k + 1, k + 1))), layout.rotorIndex(k), 1.0});
+    if (layout.rotor)  // on 0.5 dq_k^2
+      entries.push_back({diagonal.row, layout.rotorIndex(k), 1.0});
     prevPost = post[k];
   }
 

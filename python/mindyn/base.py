@@ -9,6 +9,7 @@ uses the same set (a constant in the energy cancels in differences).
 from __future__ import annotations
 
 from collections.abc import Sequence
+from functools import cached_property
 
 import numpy as np
 
@@ -43,7 +44,12 @@ class BaseParameters:
     def __init__(self, core: _core.BaseParameters, robot: Robot):
         self._b = core
         self.robot = robot
-        self.sets = {"lagrangian": core.lagrangian, "energy": core.energy, "eom": core.eom}
+
+    @cached_property
+    def sets(self) -> dict:
+        """The three sets as dictionaries (see the class attributes), built on first use."""
+        core = self._b
+        return {"lagrangian": core.lagrangian, "energy": core.energy, "eom": core.eom}
 
     n = property(lambda self: self._b.n)
     names = property(lambda self: self._b.names)
@@ -175,9 +181,9 @@ def base_parameters(
         Numerical method only: number of random states (0: automatic) and the random seed.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
-    names = robot.parameter_names(rotor, friction)
     idx: list[int] = []
     if order is not None:
+        names = robot.parameter_names(rotor, friction)
         lookup = {name: i for i, name in enumerate(names)}
         for item in order:
             if isinstance(item, str):
