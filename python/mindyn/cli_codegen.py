@@ -58,27 +58,16 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     if args.lang == "c" and out.suffix in (".c", ".h"):
         out = out.with_suffix("")
     header = out.name + ".h"
-    code = generate(
-        robot,
+    same = dict(
         lang=args.lang,
         what=args.what,
         rotor=args.rotor,
         friction=args.friction,
-        params=args.params,
-        numeric=args.numeric,
-        name=args.name,
-        header_name=header,
-    )
-    classical = generate(
-        robot,
-        lang=args.lang,
-        what=args.what,
-        rotor=args.rotor,
-        friction=args.friction,
-        name=code.name,
-        base=False,
         numeric=args.numeric,
     )
+    code = generate(robot, params=args.params, name=args.name, header_name=header, **same)
+    # the classical-parameter recursion generated the same way, for its operation counts
+    classical = generate(robot, name=code.name, base=False, **same)
     written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
     extras = [x for x, on in (("rotor inertia", args.rotor), ("friction", args.friction)) if on]
     print(

@@ -120,8 +120,7 @@ void bindCodegen(py::module_& m) {
             const long n = s.bd->nq(), np = s.bd->np();
             const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const long rows = m == 0 ? 1 : m;
-            py::array_t<double> out =
-                m == 0 ? py::array_t<double>({n}) : py::array_t<double>({m, n});
+            auto out = vectorOut(m, n);
             const auto p = parameterArg(pb, np, "p");
             for (long i = 0; i < rows; ++i) {
               Eigen::Map<Eigen::VectorXd> t(out.mutable_data() + i * n, n);
@@ -138,8 +137,7 @@ void bindCodegen(py::module_& m) {
             const long n = s.bd->nq(), np = s.bd->np();
             const long m = batch({{&q, "q"}}, n);
             const long rows = m == 0 ? 1 : m;
-            py::array_t<double> out =
-                m == 0 ? py::array_t<double>({n}) : py::array_t<double>({m, n});
+            auto out = vectorOut(m, n);
             const auto p = parameterArg(pb, np, "p");
             for (long i = 0; i < rows; ++i) {
               Eigen::Map<Eigen::VectorXd> t(out.mutable_data() + i * n, n);
@@ -154,8 +152,7 @@ void bindCodegen(py::module_& m) {
             const long n = s.bd->nq(), np = s.bd->np();
             const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const long rows = m == 0 ? 1 : m;
-            py::array_t<double> out =
-                m == 0 ? py::array_t<double>({n, np}) : py::array_t<double>({m, n, np});
+            auto out = matrixOut(m, n, np);
             Eigen::MatrixXd Wb(n, np);
             for (long i = 0; i < rows; ++i) {
               s.bd->regressor(Eigen::Map<const Eigen::VectorXd>(q.data() + i * n, n),

@@ -19,17 +19,12 @@ using namespace mindyn::pyargs;
 
 namespace {
 
-py::array_t<double> stackedOut(long m, long r, long c) {
-  if (m == 0) return py::array_t<double>({r, c});
-  return py::array_t<double>({m, r, c});
-}
-
 // Calls f(q, dq, dqr, ddqr, out) per sample, out an r x c matrix stored row-major per sample.
 template <class F>
 py::array_t<double> perSample4(long n, const Array& a, const Array& b, const Array& c,
                                const Array& d, long rows, long cols, F&& f) {
   const long m = batch({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, n);
-  auto out = stackedOut(m, rows, cols);
+  auto out = matrixOut(m, rows, cols);
   const long count = m == 0 ? 1 : m;
   Eigen::Map<const RowMajor> A(a.data(), count, n), B(b.data(), count, n), C(c.data(), count, n),
       D(d.data(), count, n);

@@ -35,11 +35,6 @@ ParameterLayout layoutOf(const py::object& rotor, const py::object& friction, bo
   return l;
 }
 
-py::array_t<double> vectorOut(long m, long n) {
-  if (m == 0) return py::array_t<double>({n});
-  return py::array_t<double>({m, n});
-}
-
 template <class F>
 py::array_t<double> perSampleVector(PyModel& self, const Array& a, const Array& b, const Array& c,
                                     const char* na, const char* nb, const char* nc, F&& f) {
@@ -58,11 +53,6 @@ py::array_t<double> perSampleVector(PyModel& self, const Array& a, const Array& 
     O.row(i) = ti.transpose();
   }
   return out;
-}
-
-py::array_t<double> matrix3Out(long m, long r, long c) {
-  if (m == 0) return py::array_t<double>({r, c});
-  return py::array_t<double>({m, r, c});
 }
 
 Eigen::Matrix4d toMatrix(const Eigen::Isometry3d& T) { return T.matrix(); }
@@ -284,7 +274,7 @@ PYBIND11_MODULE(_core, m) {
             const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const ParameterLayout layout{rotor, friction};
             const long P = layout.size(static_cast<int>(n));
-            auto out = matrix3Out(m, n, P);
+            auto out = matrixOut(m, n, P);
             const long rows = m == 0 ? 1 : m;
             RowMap A(q.data(), rows, n), B(dq.data(), rows, n), C(ddq.data(), rows, n);
             Eigen::MatrixXd W(n, P);
@@ -350,7 +340,7 @@ PYBIND11_MODULE(_core, m) {
             const long m = batch({{&q, "q"}}, n);
             ParameterLayout layout;
             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-            auto out = matrix3Out(m, n, n);
+            auto out = matrixOut(m, n, n);
             const long rows = m == 0 ? 1 : m;
             RowMap A(q.data(), rows, n);
             Eigen::MatrixXd M(n, n);
@@ -424,7 +414,7 @@ PYBIND11_MODULE(_core, m) {
             const long n = s.model.nq();
             const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const long nb = b.bp.eom.size();
-            auto out = matrix3Out(m, n, nb);
+            auto out = matrixOut(m, n, nb);
             const long rows = m == 0 ? 1 : m;
             RowMap A(q.data(), rows, n), B(dq.data(), rows, n), C(ddq.data(), rows, n);
             Eigen::MatrixXd Wb(n, nb);

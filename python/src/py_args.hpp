@@ -130,6 +130,18 @@ inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object
   return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
 }
 
+/// Output of a per-sample function: (n,) for a single sample (m = 0), (m, n) for a batch.
+inline py::array_t<double> vectorOut(long m, long n) {
+  if (m == 0) return py::array_t<double>({n});
+  return py::array_t<double>({m, n});
+}
+
+/// Output of a per-sample matrix function: (r, c) for a single sample (m = 0), (m, r, c).
+inline py::array_t<double> matrixOut(long m, long r, long c) {
+  if (m == 0) return py::array_t<double>({r, c});
+  return py::array_t<double>({m, r, c});
+}
+
 /// A homogeneous 4x4 matrix as an isometry (its last row is not read).
 inline Eigen::Isometry3d isometry(const Eigen::Matrix4d& M) {
   Eigen::Isometry3d T;
