@@ -2,10 +2,13 @@
 
 #include <Eigen/QR>
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <random>
+#include <type_traits>
 
 #include "mindyn/projection.hpp"
 
@@ -179,11 +182,10 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsi
 // depth (and of the same kind, potential or kinetic) reduces to at most as many rows as it has
 // columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged.
 //
-// The groups reduced are those with more basis functions than columns; their rows without
-// entries are left out of the factorization, which changes nothing in it but its cost.
-// (Combining rows further, e.g. the rows with one entry in the same column, would keep
-// R^T R = Z_g^T Z_g but not the rows of R where a group's columns are dependent, and with them
-// some relative pivot sizes of the margin report.)
+// Within a group, the rows with the same non-zero columns are combined first (a Householder QR
+// of just those columns; one column: the 2-norm), which is cheap since most rows have one or a
+// few entries; the rows that result are combined by a QR of the group's columns when there are
+// more of them than columns. Rows without entries are left out.
 struct Reduced {
   Eigen::MatrixXd Z;
   int constant_row = -1;  // the row of the constant function, if non-zero
@@ -191,38 +193,138 @@ struct Reduced {
 
 Reduced reduceRows(const InfluenceCoordinates& ic) {
   const int P = ic.cols(), n = ic.n, G = 2 * (n + 1), rows = ic.rows();
-  std::vector<int> group(rows), pos(rows, -1);
-  std::vector<int> count(G, 0), first(G, P), filled(G, 0);
+  // The entries by row, by ascending column within a row (as the recursion produced them).
+  std::vector<int> start(rows + 1, 0);
+  for (const auto& e : ic.entries) ++start[e.row + 1];
+  for (int r = 0; r < rows; ++r) start[r + 1] += start[r];
+  const int nnz = start[rows];
+  std::vector<int> col(nnz);
+  std::vector<double> val(nnz);
+  bool sorted = true;
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (const auto& e : ic.entries) {
+      const int k = fill[e.row]++;
+      if (k > start[e.row] && col[k - 1] >= e.col) sorted = false;
+      col[k] = e.col;
+      val[k] = e.value;
+    }
+  }
+  if (!sorted) {  // sort each row by column and sum repeated columns
+    int kept = 0;
+    for (int r = 0; r < rows; ++r) {
+      const int b = start[r], e = start[r + 1];
+      for (int k = b + 1; k < e; ++k)
+        for (int j = k; j > b && col[j - 1] > col[j]; --j) {
+          std::swap(col[j - 1], col[j]);
+          std::swap(val[j - 1], val[j]);
+        }
+      start[r] = kept;
+      for (int k = b; k < e; ++k) {
+        if (kept > start[r] && col[kept - 1] == col[k]) {
+          val[kept - 1] += val[k];
+        } else {
+          col[kept] = col[k];
+          val[kept++] = val[k];
+        }
+      }
+    }
+    start[rows] = kept;
+  }
+
+  std::vector<std::vector<int>> members(G);
+  std::vector<int> first(G, P);
   for (int r = 0; r < rows; ++r) {
+    if (start[r + 1] == start[r]) continue;
     const bool pot = (ic.keys[r] & 1023u) == 0;
-    group[r] = 2 * ic.depth(r) + (pot ? 1 : 0);
-    ++count[group[r]];
+    const int g = 2 * ic.depth(r) + (pot ? 1 : 0);
+    members[g].push_back(r);
+    first[g] = std::min(first[g], col[start[r]]);
   }
-  for (const auto& e : ic.entries) {
-    const int g = group[e.row];
-    first[g] = std::min(first[g], e.col);
-    pos[e.row] = 0;
-  }
-  for (int r = 0; r < rows; ++r)  // the rows with entries, in their order
-    if (pos[r] == 0) pos[r] = filled[group[r]]++;
+  // Rows of equal pattern (exact: a bit mask of the columns) are collected in buckets; a group
+  // has few patterns, so they are searched linearly, starting from the last one found.
+  if (P > 256) throw ModelError("the projection method handles at most 256 parameters");
+  std::vector<std::vector<int>> buckets;
+  int nbuckets = 0;
+  auto collect = [&](const std::vector<int>& rs, int offset, auto mask) {
+    using Mask = decltype(mask);
+    std::vector<Mask> masks;
+    std::size_t hit = 0;
+    for (int r : rs) {
+      Mask m{};
+      for (int e = start[r]; e < start[r + 1]; ++e) {
+        const int c = col[e] - offset;
+        if constexpr (std::is_same_v<Mask, std::uint64_t>)
+          m |= std::uint64_t{1} << c;
+        else
+          m[c >> 6] |= std::uint64_t{1} << (c & 63);
+      }
+      if (hit >= masks.size() || masks[hit] != m) {
+        hit = static_cast<std::size_t>(std::find(masks.begin(), masks.end(), m) - masks.begin());
+        if (hit == masks.size()) {
+          masks.push_back(m);
+          if (buckets.size() < masks.size()) buckets.emplace_back();
+          buckets[hit].clear();
+        }
+      }
+      buckets[hit].push_back(r);
+    }
+    nbuckets = static_cast<int>(masks.size());
+  };
+
   std::vector<Eigen::MatrixXd> blocks(G);
-  for (int g = 0; g < G; ++g)
-    if (filled[g] > 0) blocks[g] = Eigen::MatrixXd::Zero(filled[g], P - first[g]);
-  for (const auto& e : ic.entries) {
-    const int g = group[e.row];
-    blocks[g](pos[e.row], e.col - first[g]) += e.value;
-  }
+  Eigen::MatrixXd M;
   long total = 0;
   for (int g = 0; g < G; ++g) {
-    Eigen::MatrixXd& B = blocks[g];
-    if (B.size() == 0) continue;
-    if (count[g] > B.cols()) {
-      Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(B);  // in place
-      const long m = std::min(B.rows(), B.cols());
-      Eigen::MatrixXd R = B.topRows(m).triangularView<Eigen::Upper>();
-      B = std::move(R);
+    const std::vector<int>& rs = members[g];
+    if (rs.empty()) continue;
+    const int width = P - first[g];
+    if (width <= 64)
+      collect(rs, first[g], std::uint64_t{0});
+    else
+      collect(rs, 0, std::array<std::uint64_t, 4>{});
+    // Rows of equal pattern, combined: a bucket of k rows with s entries gives min(k, s) rows.
+    long bound = 0;
+    for (int i = 0; i < nbuckets; ++i) {
+      const int r = buckets[i][0];
+      bound += std::min<long>(static_cast<long>(buckets[i].size()), start[r + 1] - start[r]);
     }
-    total += B.rows();
+    Eigen::MatrixXd B = Eigen::MatrixXd::Zero(bound, width);
+    long used = 0;
+    for (int i = 0; i < nbuckets; ++i) {
+      const std::vector<int>& bucket = buckets[i];
+      const int s0 = start[bucket[0]], s = start[bucket[0] + 1] - s0;
+      const long k = static_cast<long>(bucket.size());
+      if (k == 1) {
+        for (int e = 0; e < s; ++e) B(used, col[s0 + e] - first[g]) = val[s0 + e];
+        ++used;
+      } else if (s == 1) {
+        double big = 0.0;
+        for (int r : bucket) big = std::max(big, std::abs(val[start[r]]));
+        double sum = 0.0;
+        for (int r : bucket) {
+          const double v = val[start[r]] / big;
+          sum += v * v;
+        }
+        B(used++, col[s0] - first[g]) = big * std::sqrt(sum);
+      } else {
+        M.resize(k, s);
+        for (long t = 0; t < k; ++t)
+          for (int e = 0; e < s; ++e) M(t, e) = val[start[bucket[t]] + e];
+        Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(M);  // in place
+        const long m = std::min<long>(k, s);
+        for (long t = 0; t < m; ++t, ++used)
+          for (int e = static_cast<int>(t); e < s; ++e) B(used, col[s0 + e] - first[g]) = M(t, e);
+      }
+    }
+    if (used > width) {
+      Eigen::Ref<Eigen::MatrixXd> top = B.topRows(used);
+      Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(top);  // in place
+      blocks[g] = B.topRows(width).triangularView<Eigen::Upper>();
+    } else {
+      blocks[g] = B.topRows(used);
+    }
+    total += blocks[g].rows();
   }
   Reduced out;
   out.Z = Eigen::MatrixXd::Zero(total, P);

@@ -188,38 +188,71 @@ struct Sparse6 {
 };
 
 // The ten forms 1/2 tr(E_p Q), p = 0..9, for constant symmetric E_p and a packed symmetric Q.
-// For each kind of term, only the entries it may hold and the forms see are visited, each with
-// all ten weights (zeros included: no data-dependent branches).
+// For each kind of term, only the entries of Q it may hold and the forms see are visited, in
+// ascending order: each value sums its terms in the order of the entries of Q. Where few of the
+// weights of those entries are non-zero (axis-aligned link frames), only those are visited;
+// otherwise every entry with all ten weights, zeros included (no data-dependent branches).
 class TraceForms {
  public:
   TraceForms(const std::array<Matrix6d, 10>& E, const Pattern* kinds, int count) {
-    bool seen[21] = {};
     for (int i = 0; i < 6; ++i)
       for (int j = i; j < 6; ++j) {
         const int q = kSym.idx[i][j];
-        for (int p = 0; p < 10; ++p) {
+        for (int p = 0; p < 10; ++p)
           w_[q][p] = i == j ? 0.5 * E[p](i, i) : 0.5 * (E[p](i, j) + E[p](j, i));
-          if (w_[q][p] != 0.0) seen[q] = true;
-        }
       }
-    visible_.resize(count);
-    for (int k = 0; k < count; ++k)
-      for (int i = 0; i < kinds[k].count; ++i)
-        if (seen[kinds[k].idx[i]]) visible_[k].idx[visible_[k].count++] = kinds[k].idx[i];
-  }
-  // Each value sums its terms in the order of the entries of Q; Q is of kind `kind`.
-  void operator()(const Sym6& Q, int kind, double v[10]) const {
-    for (int p = 0; p < 10; ++p) v[p] = 0.0;
-    const Pattern& where = visible_[kind];
-    for (int i = 0; i < where.count; ++i) {
-      const int q = where.idx[i];
-      for (int p = 0; p < 10; ++p) v[p] += w_[q][p] * Q[q];
+    kinds_.resize(count);
+    for (int k = 0; k < count; ++k) {
+      Kind& kind = kinds_[k];
+      kind.first = static_cast<int>(sparse_.size());
+      for (int i = 0; i < kinds[k].count; ++i) {
+        const int q = kinds[k].idx[i];
+        bool seen = false;
+        for (int p = 0; p < 10; ++p)
+          if (w_[q][p] != 0.0) {
+            sparse_.push_back(
+                {static_cast<std::uint8_t>(q), static_cast<std::uint8_t>(p), w_[q][p]});
+            kind.touched |= 1u << p;
+            seen = true;
+          }
+        if (seen) kind.dense.idx[kind.dense.count++] = q;
+      }
+      kind.last = static_cast<int>(sparse_.size());
+      kind.use_sparse = kind.last - kind.first <= 2 * kind.dense.count;
     }
+  }
+  // v[p] for the forms a term of kind `kind` can reach: the bits of the result (the other
+  // values are zero).
+  unsigned operator()(const Sym6& Q, int kind, double v[10]) const {
+    const Kind& k = kinds_[kind];
+    if (k.use_sparse) {
+      for (int p = 0; p < 10; ++p) v[p] = 0.0;
+      for (int e = k.first; e < k.last; ++e) v[sparse_[e].p] += sparse_[e].w * Q[sparse_[e].q];
+    } else {
+      double acc[10] = {};
+      for (int i = 0; i < k.dense.count; ++i) {
+        const int q = k.dense.idx[i];
+        for (int p = 0; p < 10; ++p) acc[p] += w_[q][p] * Q[q];
+      }
+      for (int p = 0; p < 10; ++p) v[p] = acc[p];
+    }
+    return k.touched;
   }
 
  private:
+  struct Weight {
+    std::uint8_t q, p;
+    double w;
+  };
+  struct Kind {
+    Pattern dense;            // the entries with a non-zero weight
+    int first = 0, last = 0;  // their non-zero weights: sparse_[first .. last - 1]
+    unsigned touched = 0;
+    bool use_sparse = false;
+  };
   double w_[21][10];
-  std::vector<Pattern> visible_;
+  std::vector<Weight> sparse_;
+  std::vector<Kind> kinds_;
 };
 
 // R B R^T for R = blockdiag(Rz(-q), Rz(-q)), B symmetric, split over 1, cos q, sin q, cos 2q,
@@ -280,7 +313,7 @@ const std::array<Pattern, kKinds>& patterns() {
     std::array<bool[21], kKinds> nonzero{};
     Sym6 generic;  // distinct positive entries: no sum or difference of two of them cancels
     for (int q = 0; q < 21; ++q) generic[q] = std::sqrt(q + 2.0);
-    Sym6 parts[5];
+    Sym6 parts[5] = {};
     double big[5];
     splitRotation(generic, 0.0, parts, big);
     for (int l = 0; l < 5; ++l)
@@ -529,9 +562,10 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       ++formed;
       const int row = rowOf(t);
       double v[10];
-      E(t.Q, t.kind, v);
+      const unsigned touched = E(t.Q, t.kind, v);
       for (int p = 0; p < 10; ++p)
-        if (std::abs(v[p]) > kNoise * t.scale) entries.push_back({row, c0 + p, v[p]});
+        if ((touched >> p & 1u) && std::abs(v[p]) > kNoise * t.scale)
+          entries.push_back({row, c0 + p, v[p]});
       if (!last) Qnext.push_back(t);
     };
 
