@@ -128,14 +128,11 @@ BaseSet makeSet(RankDecision decision, const std::vector<std::string>& names) {
   BaseSet set;
   const int nb = decision.rank();
   set.names.reserve(nb);
-  set.formulas.reserve(nb);
-  const Eigen::MatrixXd Yt = decision.Y.transpose();  // the rows of Y, contiguous
   for (int b = 0; b < nb; ++b) {
     const int p = decision.pivots[b];
-    const auto y = Yt.col(b);
+    const auto y = decision.Y.row(b);
     const long others = (y.array() != 0.0).count() - (y[p] != 0.0 ? 1 : 0);
     set.names.push_back(others > 0 ? regroupedName(names[p]) : names[p]);
-    set.formulas.push_back(formatFormula(set.names.back(), y.transpose(), names));
   }
   set.decision = std::move(decision);
   return set;
@@ -460,6 +457,19 @@ std::string formatFormula(const std::string& name, const Eigen::Ref<const Eigen:
   }
   if (first) s += " 0";
   return s;
+}
+
+std::vector<std::string> BaseSet::formulas(const std::vector<std::string>& classical_names) const {
+  if (static_cast<long>(classical_names.size()) != decision.Y.cols())
+    throw std::invalid_argument("formulas: " + std::to_string(classical_names.size()) +
+                                " classical names for " + std::to_string(decision.Y.cols()) +
+                                " columns of Y");
+  std::vector<std::string> out;
+  out.reserve(names.size());
+  const Eigen::MatrixXd Yt = decision.Y.transpose();  // the rows of Y, contiguous
+  for (int b = 0; b < size(); ++b)
+    out.push_back(formatFormula(names[b], Yt.col(b).transpose(), classical_names));
+  return out;
 }
 
 Eigen::VectorXd BaseParameters::values(const Eigen::Ref<const Eigen::VectorXd>& classical) const {

@@ -480,10 +480,15 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     }
     E[9].bottomRightCorner<3, 3>().setIdentity();
     const Matrix6d A = adjoint(post[k].inverse());
-    for (auto& e : E) {
-      e = A.transpose() * e * A;
-      prune(e, kNoise * maxAbs(e));
-    }
+    if (A != Matrix6d::Identity())  // the link frame is not the joint frame
+      for (auto& e : E) {
+        Matrix6d f = Matrix6d::Zero();  // A^T e A over the few non-zero entries of e
+        for (int i = 0; i < 6; ++i)
+          for (int j = 0; j < 6; ++j)
+            if (e(i, j) != 0.0) f.noalias() += e(i, j) * A.row(i).transpose() * A.row(j);
+        e = f;
+        prune(e, kNoise * maxAbs(e));
+      }
     return TraceForms(E, kinds.data(), kKinds);
   };
 

@@ -53,7 +53,13 @@ class BaseParameters:
 
     n = property(lambda self: self._b.n)
     names = property(lambda self: self._b.names)
-    formulas = property(lambda self: self._b.formulas)
+
+    @cached_property
+    def formulas(self) -> list[str]:
+        """The regrouping formulas of the equations-of-motion set, one per base parameter
+        (written on first use)."""
+        return self._b.formulas
+
     Y = property(lambda self: self._b.Y)
     pivots = property(lambda self: self._b.pivots)
     classical_names = property(lambda self: self._b.classical_names)

@@ -62,7 +62,7 @@ py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
   py::dict out;
   out["n"] = set.size();
   out["names"] = set.names;
-  out["formulas"] = set.formulas;
+  out["formulas"] = set.formulas(names);
   out["pivots"] = d.pivots;
   out["Y"] = d.Y;
   out["pivot_size"] = d.pivot_size;
@@ -368,7 +368,8 @@ PYBIND11_MODULE(_core, m) {
   py::class_<PyBase, std::shared_ptr<PyBase>>(m, "BaseParameters")
       .def_property_readonly("n", [](const PyBase& b) { return b.bp.eom.size(); })
       .def_property_readonly("names", [](const PyBase& b) { return b.bp.eom.names; })
-      .def_property_readonly("formulas", [](const PyBase& b) { return b.bp.eom.formulas; })
+      .def_property_readonly(
+          "formulas", [](const PyBase& b) { return b.bp.eom.formulas(b.bp.classical_names); })
       .def_property_readonly("Y", [](const PyBase& b) { return b.bp.eom.decision.Y; })
       .def_property_readonly("pivots", [](const PyBase& b) { return b.bp.eom.decision.pivots; })
       .def_property_readonly("classical_names",

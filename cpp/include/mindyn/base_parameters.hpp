@@ -64,12 +64,14 @@ struct BaseOptions {
   unsigned seed = 1;  // numerical method: random seed
 };
 
-/// One base-parameter set with its names and formulas.
+/// One base-parameter set with its names.
 struct BaseSet {
   RankDecision decision;
-  std::vector<std::string> names;     // e.g. XXR3, ZZ1, Fv2
-  std::vector<std::string> formulas;  // "XXR3 = XX3 - YY3 + ..."
+  std::vector<std::string> names;  // e.g. XXR3, ZZ1, Fv2
   int size() const { return decision.rank(); }
+  /// The regrouping formulas, one per base parameter ("XXR3 = XX3 - YY3 + ...", see
+  /// formatFormula), written on request from the rows of Y.
+  std::vector<std::string> formulas(const std::vector<std::string>& classical_names) const;
 };
 
 struct BaseParameters {

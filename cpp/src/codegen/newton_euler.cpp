@@ -368,7 +368,7 @@ ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
   s.layout = bp.layout;
   s.base = true;
   s.names = bp.eom.names;
-  s.formulas = bp.eom.formulas;
+  s.formulas = bp.eom.formulas(bp.classical_names);
   const int P = bp.layout.size(model.nq()), nb = bp.eom.size();
   s.E = Eigen::MatrixXd::Zero(P, nb);
   for (int b = 0; b < nb; ++b) s.E(bp.eom.decision.pivots[b], b) = 1.0;
