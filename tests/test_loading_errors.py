@@ -398,3 +398,19 @@ def test_simulate_with_a_feedback_controller_is_the_closed_loop_simulation():
         text=True,
     )
     assert r.returncode == 2 and "the following arguments are required: --trajectory" in r.stderr
+
+
+def test_closed_stdout_ends_quietly():
+    """A reader that goes away (`mindyn base ROBOT | head -1`) ends the command without a
+    traceback: the pipe is closed before the command writes anything."""
+    p = subprocess.Popen(
+        [sys.executable, "-m", "mindyn", "base", "puma560"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    p.stdout.close()
+    err = p.stderr.read()
+    p.wait(timeout=60)
+    assert "Traceback" not in err and "BrokenPipeError" not in err, err
+    assert p.returncode == 141

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import re
 import sys
 
@@ -250,6 +251,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("mindyn: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # The reader of stdout went away (e.g. `mindyn base ROBOT | head`): stop quietly, and
+        # keep the interpreter from reporting the same error again when it flushes stdout.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
 
 
 if __name__ == "__main__":
