@@ -879,6 +879,19 @@ def test_cli_table():
     assert len(rows) == 40
 
 
+@pytest.mark.parametrize("name", ["puma560", "zcr07s", "planar6"])
+def test_basis_rows_are_the_nonzero_rows_of_z(name):
+    """`basis_rows` (printed as "non-zero basis functions") counts the rows of Z with a non-zero
+    coordinate, and Z has no others."""
+    robot = mindyn.load(name)
+    Z, basis = mindyn._core.influence_coordinates(robot._m, rotor=True)
+    nonzero = int(np.count_nonzero(np.abs(Z).max(axis=1)))
+    assert nonzero == len(basis) == Z.shape[0]
+    assert mindyn.base_parameters(robot, rotor=True).basis_rows == nonzero
+    r = run_cli("base", name, "--rotor")
+    assert f"computed       {nonzero} non-zero basis functions" in r.stdout
+
+
 def test_cli_snap_reports(tmp_path, rng):
     path = tmp_path / "rounded.urdf"
     path.write_text(mdh_urdf("1.5708", rng))

@@ -563,14 +563,21 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     if (keys.size() + most + rmost > keys.capacity())
       keys.reserve(std::max(keys.size() + most + rmost, 2 * keys.capacity()));
     int formed = 0;
+    // A term gets its row of Z with its first coordinate (its constant-factor part carries the
+    // key on, hence the row once it has one).
     auto add = [&](QTerm& t) {
       ++formed;
-      const int row = rowOf(t);
       double v[10];
       const unsigned touched = E(t.Q, t.kind, v);
+      const double tol = kNoise * t.scale;
+      unsigned keep = 0;
       for (int p = 0; p < 10; ++p)
-        if ((touched >> p & 1u) && std::abs(v[p]) > kNoise * t.scale)
-          entries.push_back({row, c0 + p, v[p]});
+        if ((touched >> p & 1u) && std::abs(v[p]) > tol) keep |= 1u << p;
+      if (keep != 0) {
+        const int row = rowOf(t);
+        for (int p = 0; p < 10; ++p)
+          if (keep >> p & 1u) entries.push_back({row, c0 + p, v[p]});
+      }
       if (!last) Qnext.push_back(t);
     };
 
@@ -641,6 +648,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     Vnext.push_back({k + 1, 0, S});
     QTerm diagonal{withL0(0, pairIndex(k + 1, k + 1)), -1, revolute ? kDiag2 : kDiag5, 2.0, {}};
     diagonal.Q[kSym.idx[s][s]] = 2.0;
+    if (layout.rotor) rowOf(diagonal);  // Ia_k's coordinate is on this row
     add(diagonal);
     std::swap(Q, Qnext);
     std::swap(V, Vnext);

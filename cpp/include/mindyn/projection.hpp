@@ -29,8 +29,9 @@ struct BasisFunction {
 };
 
 /// Coordinates of the classical influence coefficients of the Lagrangian, w_L = w~ Z.
-/// Rows: the non-zero basis functions; columns: the classical parameters in `layout` (friction
-/// columns, which are not in the Lagrangian, are zero here).
+/// Rows: the non-zero basis functions (a row is made with a term's first non-zero coordinate);
+/// columns: the classical parameters in `layout` (friction columns, which are not in the
+/// Lagrangian, are zero here).
 struct InfluenceCoordinates {
   struct Entry {
     int row, col;
