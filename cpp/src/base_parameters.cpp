@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <stdexcept>
 #include <type_traits>
 
 #include "mindyn/projection.hpp"
@@ -190,7 +191,7 @@ struct Reduced {
 
 Reduced reduceRows(const InfluenceCoordinates& ic) {
   const int P = ic.cols(), n = ic.n, G = 2 * (n + 1), rows = ic.rows();
-  // The entries by row, by ascending column within a row (as the recursion produced them).
+  // The entries by row, by ascending column within a row.
   std::vector<int> start(rows + 1, 0);
   for (const auto& e : ic.entries) ++start[e.row + 1];
   for (int r = 0; r < rows; ++r) start[r + 1] += start[r];
@@ -207,27 +208,8 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
       val[k] = e.value;
     }
   }
-  if (!sorted) {  // sort each row by column and sum repeated columns
-    int kept = 0;
-    for (int r = 0; r < rows; ++r) {
-      const int b = start[r], e = start[r + 1];
-      for (int k = b + 1; k < e; ++k)
-        for (int j = k; j > b && col[j - 1] > col[j]; --j) {
-          std::swap(col[j - 1], col[j]);
-          std::swap(val[j - 1], val[j]);
-        }
-      start[r] = kept;
-      for (int k = b; k < e; ++k) {
-        if (kept > start[r] && col[kept - 1] == col[k]) {
-          val[kept - 1] += val[k];
-        } else {
-          col[kept] = col[k];
-          val[kept++] = val[k];
-        }
-      }
-    }
-    start[rows] = kept;
-  }
+  // The recursion projects a term link after link, ten forms in order: it cannot do otherwise.
+  if (!sorted) throw std::logic_error("projection: the coordinates of a row are out of order");
 
   std::vector<std::vector<int>> members(G);
   std::vector<int> first(G, P);
@@ -300,7 +282,7 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
         for (int r : bucket) big = std::max(big, std::abs(val[start[r]]));
         double sum = 0.0;
         for (int r : bucket) {
-          const double v = val[start[r]] / big;
+          const double v = val[start[r]] / big;  // entries are non-zero
           sum += v * v;
         }
         B(used++, col[s0] - first[g]) = big * std::sqrt(sum);

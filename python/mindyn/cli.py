@@ -241,7 +241,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(_route(list(sys.argv[1:] if argv is None else argv)))
     try:
-        return args.func(args)
+        status = args.func(args)
+        sys.stdout.flush()  # a closed pipe shows here, not at exit
+        return status
     except (RobotFileNotFoundError, FileNotFoundError) as e:
         print(f"mindyn: error: {e}", file=sys.stderr)
         return 2

@@ -40,7 +40,7 @@ struct InfluenceCoordinates {
   ParameterLayout layout;
   int n = 0;
   std::vector<std::uint64_t> keys;  // packed multi-index of each row
-  std::vector<Entry> entries;       // the non-zero coordinates (a row may repeat a column: add)
+  std::vector<Entry> entries;       // the non-zero coordinates; a row's by ascending column
   int terms_formed = 0;             // kinetic + potential terms produced by the recursion
   int rows() const { return static_cast<int>(keys.size()); }
   int cols() const { return layout.size(n); }
