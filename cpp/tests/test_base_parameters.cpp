@@ -2,6 +2,9 @@
 // with the embedded base vector) and agree in number with the numerical method.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <sstream>
+
 #include "mindyn/base_parameters.hpp"
 #include "mindyn/projection.hpp"
 #include "mindyn/urdf.hpp"
@@ -70,4 +73,43 @@ TEST(BaseParameters, EchelonRejectsBadOrders) {
   EXPECT_THROW(echelon(Z, {0, 1, 1}), std::invalid_argument);
   const RankDecision d = echelon(Z, {2, 0, 1});
   EXPECT_EQ(d.pivots, (std::vector<int>{2, 0, 1}));
+}
+
+// The formulas, written on request, evaluate to p_b = Y pi: their text carries the coefficients at
+// full precision and the right names and signs.
+TEST(BaseParameters, FormulasEvaluateToTheBaseValues) {
+  std::mt19937 rng(7);
+  BaseOptions opt;
+  opt.layout = {true, true};
+  const BaseParameters bp = computeBaseParameters(loadYaml(test::robotFile("puma560")), opt);
+  const std::vector<std::string> text = bp.eom.formulas(bp.classical_names);
+  ASSERT_EQ(static_cast<int>(text.size()), bp.eom.size());
+  const Eigen::VectorXd pi = test::random(rng, static_cast<int>(bp.classical_names.size()));
+  const Eigen::VectorXd pb = bp.values(pi);
+  for (int b = 0; b < bp.eom.size(); ++b) {
+    std::istringstream in(text[b]);
+    std::string name, eq, token;
+    in >> name >> eq;
+    EXPECT_EQ(name, bp.eom.names[b]);
+    double sum = 0.0, sign = 1.0;
+    while (in >> token) {
+      if (token == "+" || token == "-") {
+        sign = token == "-" ? -1.0 : 1.0;
+        continue;
+      }
+      if (token[0] == '-') {  // a leading minus is written on the first term
+        sign = -1.0;
+        token = token.substr(1);
+      }
+      const auto star = token.find('*');
+      const double c = star == std::string::npos ? 1.0 : std::stod(token.substr(0, star));
+      const std::string p = star == std::string::npos ? token : token.substr(star + 1);
+      const auto it = std::find(bp.classical_names.begin(), bp.classical_names.end(), p);
+      ASSERT_NE(it, bp.classical_names.end()) << text[b];
+      sum += sign * c * pi[it - bp.classical_names.begin()];
+      sign = 1.0;
+    }
+    EXPECT_NEAR(sum, pb[b], 1e-12 * std::max(1.0, std::abs(pb[b]))) << text[b];
+  }
+  EXPECT_THROW(bp.eom.formulas({"XX1"}), std::invalid_argument);
 }
