@@ -181,9 +181,9 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsi
 // columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged.
 //
 // Within a group, the rows with the same non-zero columns are combined first (a Householder QR
-// of just those columns; one column: the 2-norm), which is cheap since most rows have one or a
-// few entries; the rows that result are combined by a QR of the group's columns when there are
-// more of them than columns. Rows without entries are left out.
+// of just those columns), which is cheap since most rows have one or a few entries; the rows that
+// result are combined by a QR of the group's columns when there are more of them than columns. Rows
+// without entries are left out.
 struct Reduced {
   Eigen::MatrixXd Z;
   int constant_row = -1;  // the row of the constant function, if non-zero
@@ -277,15 +277,6 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
       if (k == 1) {
         for (int e = 0; e < s; ++e) B(used, col[s0 + e] - first[g]) = val[s0 + e];
         ++used;
-      } else if (s == 1) {
-        double big = 0.0;
-        for (int r : bucket) big = std::max(big, std::abs(val[start[r]]));
-        double sum = 0.0;
-        for (int r : bucket) {
-          const double v = val[start[r]] / big;  // entries are non-zero
-          sum += v * v;
-        }
-        B(used++, col[s0] - first[g]) = big * std::sqrt(sum);
       } else {
         M.resize(k, s);
         for (long t = 0; t < k; ++t)

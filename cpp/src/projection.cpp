@@ -313,7 +313,7 @@ const std::array<Pattern, kKinds>& patterns() {
     std::array<bool[21], kKinds> nonzero{};
     Sym6 generic;  // distinct positive entries: no sum or difference of two of them cancels
     for (int q = 0; q < 21; ++q) generic[q] = std::sqrt(q + 2.0);
-    Sym6 parts[5] = {};
+    Sym6 parts[5];
     double big[5];
     splitRotation(generic, 0.0, parts, big);
     for (int l = 0; l < 5; ++l)
