@@ -11,6 +11,7 @@ tree, compared with the C output.
 from __future__ import annotations
 
 import ctypes
+import re
 import shutil
 import subprocess
 
@@ -206,6 +207,14 @@ def test_numeric_code_bakes_the_values_in(robots, tmp_path, rng):
         q, dq, ddq = random_state(robot, rng)
         assert_close(c.id(q, dq, ddq), pin.rnea(model, data, q, dq, ddq), 1e-10, "numeric C id")
         assert_close(c.gravity(q), pin.computeGeneralizedGravity(model, data, q), 1e-10, "num g")
+
+
+def test_sines_and_cosines_come_first(robots):
+    # They depend on q alone; the C computes them all before the recursion that waits on them.
+    src = generate(robots["puma560"][0], what="id").source
+    body = src[src.index("_inverse_dynamics(") :].splitlines()[1:]
+    trig = [i for i, line in enumerate(body) if re.search(r"= (sin|cos)\(", line)]
+    assert trig == list(range(len(trig))) and len(trig) == 10, body[:12]
 
 
 def test_base_recursion_needs_fewer_operations_than_classical(robots):
