@@ -47,18 +47,20 @@ namespace {
 
 using IdFn = void (*)(const double*, const double*, const double*, const double*, double*);
 
-// Best over repetitions of the mean time per call, in ns (the least disturbed by other load on
-// a shared machine).
-template <class F>
-double timeIt(F&& f, int calls) {
-  std::vector<double> reps;
-  for (int r = 0; r < 15; ++r) {
-    const auto t0 = Clock::now();
-    for (int i = 0; i < calls; ++i) f(i);
-    reps.push_back(std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / calls);
-  }
-  std::sort(reps.begin(), reps.end());
-  return reps.front();
+// Mean time per call in ns, the best over repetitions (the least disturbed by other load on a
+// shared machine). The implementations take turns within each repetition, so that a slow phase
+// of the machine weighs on all of them alike rather than on whichever ran during it.
+std::vector<double> timeInTurns(const std::vector<std::function<void(int)>>& impls, int calls,
+                                int repetitions) {
+  std::vector<double> best(impls.size(), 1e300);
+  for (int r = 0; r < repetitions; ++r)
+    for (size_t k = 0; k < impls.size(); ++k) {
+      const auto t0 = Clock::now();
+      for (int i = 0; i < calls; ++i) impls[k](i);
+      const double ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / calls;
+      best[k] = std::min(best[k], ns);
+    }
+  return best;
 }
 
 volatile double sink = 0;
@@ -103,7 +105,8 @@ int main(int argc, char** argv) {
 
   if (callgrind == 0) {
     std::printf(
-        "inverse dynamics, ns per call (best of 15 runs of 20000 calls); generated C: cc %s\n",
+        "inverse dynamics, ns per call (best of 150 turns of 2000 calls each); generated C: cc "
+        "%s\n",
         flags.c_str());
     std::printf("%-8s %9s %9s %9s %9s %9s | %8s %8s | %s\n", "robot", "gen. C", "base tape",
                 "mindyn NE", "Pinocchio", "KDL", "Pin/genC", "KDL/genC",
@@ -232,8 +235,9 @@ int main(int argc, char** argv) {
       dlclose(lib);
       continue;
     }
-    std::vector<double> t;
-    for (const auto& impl : impls) t.push_back(timeIt(impl.second, 20000));
+    std::vector<std::function<void(int)>> bodies;
+    for (const auto& impl : impls) bodies.push_back(impl.second);
+    const std::vector<double> t = timeInTurns(bodies, 2000, 150);
     const double tGen = t[0], tTape = t[1], tNe = t[2], tPin = t[3], tKdl = t[4];
     const auto& c = code.functions[0].program.count;
     const auto& k = classical.program.count;
