@@ -87,7 +87,8 @@ def rx90_yaml(rng: np.random.Generator) -> str:
 
 @pytest.fixture(scope="module")
 def robots(tmp_path_factory):
-    """name -> (robot, pin.Model, rotor, friction, published number of base parameters)."""
+    """name -> (robot, pin.Model, rotor, friction, number of base parameters: published, or
+    the sampled method's where none is)."""
     out = {}
     for name, rotor, friction, nb in (("puma560", False, False, 36), ("zcr07s", True, True, 52)):
         robot = mindyn.load(name)
@@ -102,6 +103,10 @@ def robots(tmp_path_factory):
     robot = mindyn.load(path)
     nb = mindyn.base_parameters(robot, method="numerical").n  # no published count: sampled method
     out["rx90"] = (robot, pinocchio_model(robot), False, False, nb)
+    # a prismatic joint (the Stanford arm's third), with rotor inertia and friction
+    robot = mindyn.load("stanford")
+    nb = mindyn.base_parameters(robot, rotor=True, friction=True, method="numerical").n
+    out["stanford"] = (robot, pinocchio_model(robot), True, True, nb)
     return out
 
 
@@ -161,7 +166,7 @@ class CFunctions:
         return W.reshape(self.n, self.np)
 
 
-@pytest.mark.parametrize("name", ["puma560", "zcr07s", "ur5", "skewed6r", "rx90"])
+@pytest.mark.parametrize("name", ["puma560", "zcr07s", "ur5", "skewed6r", "rx90", "stanford"])
 def test_generated_c_matches_pinocchio(name, robots, tmp_path, rng):
     robot, model, rotor, friction, nb = robots[name]
     bp = mindyn.base_parameters(robot, rotor=rotor, friction=friction)
@@ -406,7 +411,7 @@ class STInterpreter:
         raise AssertionError(f"expression {t} not supported by the test interpreter")
 
 
-@pytest.mark.parametrize("name", ["puma560", "zcr07s", "ur5", "skewed6r"])
+@pytest.mark.parametrize("name", ["puma560", "zcr07s", "ur5", "skewed6r", "stanford"])
 def test_structured_text_parses_and_evaluates_like_the_c(name, robots, tmp_path, rng):
     robot, _, rotor, friction, _ = robots[name]
     bp = mindyn.base_parameters(robot, rotor=rotor, friction=friction)
