@@ -7,7 +7,8 @@
 //                       double W[N * NP]);          /* row-major: tau = W p */
 //
 // With baked-in (numeric) parameters the `p` argument is absent. The header lists the
-// parameters in order, with their definitions, in a comment and as NAME_parameter_names.
+// parameters in order, with their definitions, in a comment and as NAME_parameter_names. Each
+// function computes all its sines and cosines first, then the recursion in graph order.
 #pragma once
 
 #include <string>
