@@ -50,13 +50,14 @@ using IdFn = void (*)(const double*, const double*, const double*, const double*
 // Mean time per call in ns, the best over repetitions (the least disturbed by other load on a
 // shared machine). The implementations take turns within each repetition, so that a slow phase
 // of the machine weighs on all of them alike rather than on whichever ran during it.
-std::vector<double> timeInTurns(const std::vector<std::function<void(int)>>& impls, int calls,
-                                int repetitions) {
+using Impl = std::pair<const char*, std::function<void(int)>>;  // name, loop body
+
+std::vector<double> timeInTurns(const std::vector<Impl>& impls, int calls, int repetitions) {
   std::vector<double> best(impls.size(), 1e300);
   for (int r = 0; r < repetitions; ++r)
     for (size_t k = 0; k < impls.size(); ++k) {
       const auto t0 = Clock::now();
-      for (int i = 0; i < calls; ++i) impls[k](i);
+      for (int i = 0; i < calls; ++i) impls[k].second(i);
       const double ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / calls;
       best[k] = std::min(best[k], ns);
     }
@@ -185,7 +186,7 @@ int main(int argc, char** argv) {
     }
 
     // The five implementations, each a loop body over the fixed states.
-    const std::vector<std::pair<const char*, std::function<void(int)>>> impls = {
+    const std::vector<Impl> impls = {
         {"generated_c",
          [&](int i) {
            const int s = i % S;
@@ -235,9 +236,7 @@ int main(int argc, char** argv) {
       dlclose(lib);
       continue;
     }
-    std::vector<std::function<void(int)>> bodies;
-    for (const auto& impl : impls) bodies.push_back(impl.second);
-    const std::vector<double> t = timeInTurns(bodies, 2000, 150);
+    const std::vector<double> t = timeInTurns(impls, 2000, 150);
     const double tGen = t[0], tTape = t[1], tNe = t[2], tPin = t[3], tKdl = t[4];
     const auto& c = code.functions[0].program.count;
     const auto& k = classical.program.count;
