@@ -166,12 +166,16 @@ class CFunctions:
         return W.reshape(self.n, self.np)
 
 
-@pytest.mark.parametrize("name", ["puma560", "zcr07s", "ur5", "skewed6r", "rx90", "stanford"])
-def test_generated_c_matches_pinocchio(name, robots, tmp_path, rng):
+@pytest.mark.parametrize(
+    "name, minimise",
+    [(r, "operations") for r in ("puma560", "zcr07s", "ur5", "skewed6r", "rx90", "stanford")]
+    + [(r, "additions") for r in ("puma560", "zcr07s", "rx90")],
+)
+def test_generated_c_matches_pinocchio(name, minimise, robots, tmp_path, rng):
     robot, model, rotor, friction, nb = robots[name]
     bp = mindyn.base_parameters(robot, rotor=rotor, friction=friction)
     assert bp.n == nb  # published counts (numerical method with Pinocchio), reference/robots.md
-    code = generate(robot, lang="c", base=bp, name=f"{name}_dyn")
+    code = generate(robot, lang="c", base=bp, name=f"{name}_dyn", minimise=minimise)
     assert code.names == bp.names
     c = CFunctions(compile_c(code, tmp_path, name), code, robot.n)
     data = model.createData()
@@ -231,6 +235,22 @@ def test_base_recursion_needs_fewer_operations_than_classical(robots):
         assert b["mul"] < k["mul"] and b["add"] < k["add"], (name, b, k)
         # one sin and one cos at most per revolute joint
         assert b["trig"] <= 2 * robot.n
+
+
+def test_operation_count_target_for_a_puma_class_arm(robots):
+    # The Staubli RX-90 (PUMA-class 6R, Khalil's MDH table), no friction: at most 250
+    # multiplications and 220 additions when the formulation is chosen for the fewest additions;
+    # the values of this code are checked against Pinocchio in test_generated_c_matches_pinocchio.
+    robot = robots["rx90"][0]
+    c = generate(robot, what="id", minimise="additions").counts["inverse_dynamics"]
+    assert c["mul"] <= 250 and c["add"] <= 220, c
+    d = generate(robot, what="id").counts["inverse_dynamics"]
+    assert d["mul"] + d["add"] <= c["mul"] + c["add"] and d["add"] >= c["add"], (c, d)
+
+
+def test_unknown_objective_is_refused(robots):
+    with pytest.raises(ValueError, match="minimise must be"):
+        generate(robots["rx90"][0], what="id", minimise="time")
 
 
 def test_fewer_operations_than_published_customised_recursions(robots):
@@ -485,6 +505,12 @@ def test_cli_codegen(tmp_path, capsys):
     numbers = [int(x) for x in row.split()[1:]]
     b, k = base.counts["inverse_dynamics"], classical.counts["inverse_dynamics"]
     assert numbers == [b["mul"], b["add"], b["trig"], k["mul"], k["add"], k["trig"]]
+    argv = ["codegen", "puma560", "--lang", "c", "--what", "id", "--minimise", "additions"]
+    assert main(argv + ["-o", str(out)]) == 0
+    row = next(ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("inverse_dyn"))
+    a = generate("puma560", what="id", minimise="additions").counts["inverse_dynamics"]
+    assert [int(x) for x in row.split()[1:3]] == [a["mul"], a["add"]]
+    assert "chosen for the fewest additions:" in (tmp_path / "puma.h").read_text()
 
     bp = mindyn.base_parameters("puma560")
     values = np.arange(1, bp.n + 1) * 0.01

@@ -10,6 +10,7 @@
 #include "mindyn/codegen/emit_c.hpp"
 #include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
+#include "mindyn/urdf.hpp"
 #include "test_util.hpp"
 
 using namespace mindyn;
@@ -129,6 +130,77 @@ TEST(Codegen, BaseAndClassicalGraphsMatchTheClassicalRecursion) {
         EXPECT_LT((Wg.transpose() - Wb).norm() / std::max(1.0, Wb.norm()), 1e-12) << name;
       }
     }
+  }
+}
+
+// Every way of forming the link wrenches that the choice in generate() may take, forced on every
+// link at once: own frame, or the joint frame before the motion with the inertia turned entry by
+// entry, keeping its trace or split, each with the moment of the first moment taken before or
+// after the motion. Standard DH (link frames off the joint axes), modified DH, a prismatic joint
+// and joint axes that are not coordinate axes.
+TEST(Codegen, EveryLinkFormMatchesTheClassicalRecursion) {
+  std::mt19937 rng(11);
+  const std::string skewed = R"(<robot name="skew"><link name="b"/>
+    <link name="l1"><inertial><origin xyz="0.1 -0.05 0.2" rpy="0.3 0.2 0.1"/><mass value="2"/>
+      <inertia ixx="0.05" ixy="0.01" ixz="-0.004" iyy="0.04" iyz="0.003" izz="0.03"/></inertial></link>
+    <link name="l2"><inertial><origin xyz="-0.2 0.1 0.05" rpy="0 0.4 0"/><mass value="1.5"/>
+      <inertia ixx="0.02" ixy="0.002" ixz="0.001" iyy="0.03" iyz="-0.002" izz="0.025"/></inertial></link>
+    <link name="l3"><inertial><origin xyz="0.05 0.05 0.1" rpy="0 0 0"/><mass value="1"/>
+      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.012" iyz="0" izz="0.008"/></inertial></link>
+    <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.3" rpy="0.2 -0.1 0.3"/>
+      <axis xyz="0.267 0.535 0.802"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.3 0.1 0" rpy="1.0 0 0.5"/>
+      <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+    <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0.2 0 0.1" rpy="0 0 0"/>
+      <axis xyz="-1 0 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  </robot>)";
+  std::vector<std::pair<std::string, Model>> models;
+  for (const char* name : {"puma560", "zcr07s", "stanford"})
+    models.emplace_back(name, withExtras(loadYaml(test::robotFile(name)), rng));
+  models.emplace_back("skewed", withExtras(parseUrdf(skewed), rng));
+  for (const auto& [name, model] : models) {
+    Data data(model);
+    const int n = model.nq();
+    const ParameterLayout layout{true, true};
+    BaseOptions opt;
+    opt.layout = layout;
+    const BaseParameters bp = computeBaseParameters(model, opt);
+    const ParameterSet base = baseParameterSet(model, bp);
+    for (int form = 0; form < 8; ++form) {
+      if (form == 4) continue;  // the same as 0
+      const auto id = detail::generateWithLinkForm(model, base, Function::InverseDynamics, form);
+      const auto reg = detail::generateWithLinkForm(model, base, Function::Regressor, form);
+      for (int trial = 0; trial < 2; ++trial) {
+        const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2),
+                              ddq = random(rng, n, 2);
+        const Eigen::VectorXd pi = random(rng, layout.size(n));
+        const Eigen::VectorXd pb = bp.values(pi);
+        Eigen::VectorXd tau(n);
+        Eigen::MatrixXd W(n, layout.size(n)), Wb(n, bp.eom.size());
+        inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+        baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
+        EXPECT_LT(relErr(outputs(id, q, dq, ddq, pb), tau), 1e-12) << name << " form " << form;
+        const Eigen::VectorXd w = outputs(reg, q, dq, ddq, pb);
+        const Eigen::MatrixXd Wg = Eigen::Map<const Eigen::MatrixXd>(w.data(), bp.eom.size(), n);
+        EXPECT_LT((Wg.transpose() - Wb).norm() / std::max(1.0, Wb.norm()), 1e-12)
+            << name << " form " << form;
+      }
+    }
+  }
+}
+
+// The objective: additions first gives no more additions than the default, which gives no more
+// operations in all; both stay exact (checked above and in the Python tests against Pinocchio).
+TEST(Codegen, ObjectiveOrdersTheCounts) {
+  for (const char* name : {"puma560", "zcr07s"}) {
+    const Model model = loadYaml(test::robotFile(name));
+    const ParameterSet base = baseParameterSet(model, computeBaseParameters(model));
+    const OpCount ops = generate(model, base, Function::InverseDynamics).program.count;
+    const OpCount adds =
+        generate(model, base, Function::InverseDynamics, false, {}, Objective::Additions)
+            .program.count;
+    EXPECT_LE(adds.add, ops.add) << name;
+    EXPECT_LE(ops.mul + ops.add, adds.mul + adds.add) << name;
   }
 }
 

@@ -39,6 +39,13 @@ def register(subparsers) -> None:
         action="store_true",
         help="bake the parameter values in (inverse dynamics and gravity then take no p)",
     )
+    p.add_argument(
+        "--minimise",
+        choices=["operations", "additions"],
+        default="operations",
+        help="what the choice among exact formulations minimises: multiplications plus "
+        "additions (default; ties to fewer additions) or additions first",
+    )
     p.add_argument("--name", help="prefix of the generated identifiers (default: robot name)")
     p.add_argument(
         "-o",
@@ -64,6 +71,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         rotor=args.rotor,
         friction=args.friction,
         numeric=args.numeric,
+        minimise=args.minimise,
     )
     code = generate(robot, params=args.params, name=args.name, header_name=header, **same)
     # the classical-parameter recursion generated the same way, for its operation counts

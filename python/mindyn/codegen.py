@@ -120,6 +120,7 @@ def generate(
     name: str | None = None,
     base: bool | BaseParameters = True,
     header_name: str | None = None,
+    minimise: str = "operations",
 ) -> GeneratedCode:
     """Generates inverse-dynamics code for ``robot``.
 
@@ -146,6 +147,11 @@ def generate(
         classical parameters (the classical recursion, for comparison).
     header_name : str, optional
         C: the header file name the source includes (default ``NAME.h``).
+    minimise : {"operations", "additions"}
+        What the choice among exact formulations of the recursion minimises (where the
+        along-axis translations go, and whether a link's wrench is formed in its own frame or
+        in the joint frame before the joint motion): multiplications plus additions, ties to
+        fewer additions (default), or additions first, ties to fewer multiplications.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
     if lang not in ("c", "st"):
@@ -185,6 +191,7 @@ def generate(
         values=values,
         lang=lang,
         header_name=header_name or f"{name}.h",
+        minimise=minimise,
     )
     return GeneratedCode(lang, name, out, numeric, header_name or f"{name}.h")
 

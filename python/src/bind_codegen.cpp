@@ -51,7 +51,7 @@ void bindCodegen(py::module_& m) {
       [](const std::shared_ptr<PyModel>& model_core, const std::shared_ptr<PyBase>& base_core,
          bool rotor, bool friction, const std::vector<std::string>& functions,
          const std::string& name, bool numeric, const std::optional<Eigen::VectorXd>& values,
-         const std::string& lang, const std::string& header_name) {
+         const std::string& lang, const std::string& header_name, const std::string& minimise) {
         // Base parameters carry the model they were computed for (possibly a snapped copy).
         const Model& model = base_core ? base_core->model->model : model_core->model;
         const ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
@@ -63,10 +63,16 @@ void bindCodegen(py::module_& m) {
                                 " parameter values; expected " + std::to_string(ps.size()));
         if (values && !values->allFinite())
           throw py::value_error("parameter values contain NaN or infinity");
+        if (minimise != "operations" && minimise != "additions")
+          throw py::value_error("minimise must be 'operations' or 'additions', got '" + minimise +
+                                "'");
+        const Objective objective =
+            minimise == "additions" ? Objective::Additions : Objective::Operations;
         GeneratedCode code;
         {
           py::gil_scoped_release release;
-          code = generateCode(model, ps, fs, name, numeric, values ? *values : Eigen::VectorXd());
+          code = generateCode(model, ps, fs, name, numeric, values ? *values : Eigen::VectorXd(),
+                              objective);
         }
         py::dict out;
         if (lang == "c") {
@@ -89,7 +95,7 @@ void bindCodegen(py::module_& m) {
       py::arg("functions") = std::vector<std::string>{"inverse_dynamics"},
       py::arg("name") = "robot", py::arg("numeric") = false,
       py::arg("values") = std::optional<Eigen::VectorXd>(), py::arg("lang") = "c",
-      py::arg("header_name") = "robot.h",
+      py::arg("header_name") = "robot.h", py::arg("minimise") = "operations",
       "Generated code and operation counts. base=None: the classical parameters.");
 
   py::class_<PyBaseDynamics, std::shared_ptr<PyBaseDynamics>>(m, "BaseDynamics")

@@ -56,7 +56,9 @@ std::vector<std::string> describe(const GeneratedCode& code) {
   for (std::string part; std::getline(whatLines, part);) lines.push_back(part);
   lines.push_back("Units SI; gravity and all frames as in the robot description.");
   lines.push_back("");
-  lines.push_back("Operation counts (multiplications, additions, sin/cos calls):");
+  lines.push_back("Operation counts (multiplications, additions, sin/cos calls), the formulation");
+  lines.push_back(std::string("chosen for the fewest ") +
+                  (code.objective == Objective::Additions ? "additions" : "operations") + ":");
   for (const auto& f : code.functions) {
     const OpCount& c = f.program.count;
     std::string l = "  " + std::string(toString(f.function)) + ": " + std::to_string(c.mul) +

@@ -11,7 +11,17 @@ namespace mindyn::codegen {
 namespace {
 
 using V3 = std::array<Ref, 3>;
-using M3 = std::array<V3, 3>;  // rows
+using M3 = std::array<V3, 3>;     // rows
+using P10 = std::array<Ref, 10>;  // XX XY XZ YY YZ ZZ MX MY MZ M
+using Sym3 = std::array<std::array<int, 3>, 3>;
+
+// The inertial parameters of a body as the wrench recursion uses them: the inertia tensor as a
+// sum of parameters times constant symmetric tensors, the first moment and the mass.
+struct Body {
+  std::vector<std::pair<Ref, Sym3>> inertia;
+  V3 ms;
+  Ref mass;
+};
 
 // Constants of the geometry within this of 0 or +-1 are taken as exactly that: rotations by
 // multiples of 90 degrees leave 1e-17 residues.
@@ -54,6 +64,27 @@ Eigen::Isometry3d rotAbout(const Eigen::Vector3d& u, double angle) {
 // joint motion (a rotation about, or a translation along, that axis), so it can sit in `pre`
 // or in `post`. Which side is cheaper depends on the zeros and the products shared there.
 enum class AxisShift : std::uint8_t { Keep, ToPre, ToPost };
+
+// How a link's wrench is formed.
+struct LinkForm {
+  // 0: in the link frame. 1, 2, 3: in the joint frame before the joint motion (revolute
+  // joints), with the inertia tensor carried through the joint rotation entry by entry (1),
+  // keeping its trace (2), or split into a part the rotation leaves alone and a part turned by
+  // twice the angle (3); see Builder::rotateParams.
+  int frame = 0;
+  // With frame > 0: the moment of the first moment, MS x a, taken in the axes after the joint
+  // motion and turned with the rest of the wrench, instead of from the turned first moment.
+  bool momentAfter = false;
+  friend bool operator==(LinkForm a, LinkForm b) {
+    return a.frame == b.frame && a.momentAfter == b.momentAfter;
+  }
+};
+
+// The choices a generated recursion is built with, per joint.
+struct Plan {
+  std::vector<AxisShift> shift;
+  std::vector<LinkForm> link;
+};
 
 // The stages of every joint. A DH/MDH angle offset theta is moved out of the constant
 // transforms into the joint angle, so that right-angle twists keep their exact zeros.
@@ -104,10 +135,22 @@ std::vector<JointStages> jointStages(const Model& model, const std::vector<AxisS
 
 struct Motion {
   V3 w, dw, a;  // angular velocity, angular acceleration, linear acceleration of the origin
+  // Set for a link seen in its joint frame before the joint motion, the joint turning about
+  // coordinate axis `axis`: the parent's angular velocity and acceleration in the same axes,
+  // of which w and dw are these plus the joint terms.
+  int axis = -1;
+  V3 wp{}, dwp{};
 };
 
-struct Wrench {
-  V3 n, f;  // moment about the origin, force
+// A wrench component not yet written as a node: the sum of `rest` and of the products of the
+// kinematic coefficients and parameters in `terms` (coefficient, parameter).
+struct Component {
+  std::vector<std::pair<Ref, Ref>> terms;
+  Ref rest;
+};
+
+struct Pending {
+  std::array<Component, 3> n, f;  // moment about the origin, force
 };
 
 class Builder {
@@ -122,7 +165,11 @@ class Builder {
     const int n = model_.nq();
     q_.assign(n, Graph::zero());
     jointR_.assign(n, M3{});
+    jointC_.assign(n, Graph::one());
+    jointS_.assign(n, Graph::zero());
     link_.assign(n, Motion{});
+    linkPre_.assign(n, Motion{});
+    afterA_.assign(n, V3{});
     dq_ = dq;
     ddq_ = ddq;
     Motion m{zero_, zero_, zero_};
@@ -136,9 +183,17 @@ class Builder {
       if (s.type == JointType::Revolute) {
         const Ref angle = g_.add(qk, g_.constant(s.offset));
         const Ref c = g_.cos(angle), sn = g_.sin(angle);
+        jointC_[k] = c;
+        jointS_[k] = sn;
         jointR_[k] = rodrigues(s.u, c, sn);
-        const V3 wr = mulT(jointR_[k], m.w);
         const V3 wj = scale(u, dq[k]);
+        // the link's motion in the joint frame before the joint motion (same origin)
+        linkPre_[k] = {addv(m.w, wj), addv(addv(m.dw, scale(u, ddq[k])), cross(m.w, wj)), m.a};
+        for (int i = 0; i < 3; ++i)
+          if (std::abs(s.u[i]) == 1.0) linkPre_[k].axis = i;
+        linkPre_[k].wp = m.w;
+        linkPre_[k].dwp = m.dw;
+        const V3 wr = mulT(jointR_[k], m.w);
         m.w = addv(wr, wj);
         m.dw = addv(addv(mulT(jointR_[k], m.dw), scale(u, ddq[k])), cross(wr, wj));
         m.a = mulT(jointR_[k], m.a);
@@ -150,31 +205,53 @@ class Builder {
         a = addv(a, scale(cross(m.w, scale(u, dq[k])), g_.constant(2.0)));
         m.a = addv(a, scale(u, ddq[k]));
       }
+      afterA_[k] = m.a;
       m = rigidForward(s.post, m);
       link_[k] = m;
     }
   }
 
   // Backward pass for a classical parameter vector (layout of the model's ParameterSet).
-  std::vector<Ref> torques(const std::vector<Ref>& pi, ParameterLayout layout, bool joint_terms) {
+  // `forms[k]` (see LinkForm): link k's wrench is formed in its own frame, or in the joint frame
+  // before the joint motion from its parameters carried into that frame. The wrench is carried as
+  // pending linear forms in the parameters for as long as only sums and signed permutations act on
+  // it, so that equal kinematic coefficients of different links share one product.
+  std::vector<Ref> torques(const std::vector<Ref>& pi, ParameterLayout layout, bool joint_terms,
+                           const std::vector<LinkForm>& forms) {
     const int n = model_.nq();
     std::vector<Ref> tau(n, Graph::zero());
-    Wrench w{zero_, zero_};
+    Pending w;
     for (int k = n - 1; k >= 0; --k) {
       const JointStages& s = stages_[k];
-      const Wrench own = linkWrench(link_[k], pi, k * layout.perLink());
-      w.n = addv(w.n, own.n);
-      w.f = addv(w.f, own.f);
+      P10 own;
+      for (int i = 0; i < 10; ++i) own[i] = pi[k * layout.perLink() + i];
+      const LinkForm form = forms[k];
+      const bool pre = form.frame != 0 && s.type == JointType::Revolute;
+      if (!pre) append(w, linkWrench(link_[k], body(own)));
       w = rigidBackward(s.post, w);
       const V3 u = constVec(s.u);
       Ref t;
       if (s.type == JointType::Revolute) {
-        t = dot(u, w.n);
-        w.n = mul(jointR_[k], w.n);
-        w.f = mul(jointR_[k], w.f);
+        const M3& R = jointR_[k];
+        w.n = rotate(R, w.n);
+        w.f = rotate(R, w.f);
+        if (pre) {
+          const P10 after = transformParams(s.post, own);
+          const Body turned = rotateParams(s.u, jointC_[k], jointS_[k], after, form.frame);
+          append(w, linkWrench(linkPre_[k], turned, !form.momentAfter));
+          if (form.momentAfter) {
+            std::array<Component, 3> m;
+            const V3 v = cross({after[6], after[7], after[8]}, afterA_[k]);
+            for (int i = 0; i < 3; ++i) m[i].rest = v[i];
+            m = rotate(R, m);
+            for (int i = 0; i < 3; ++i) w.n[i].rest = g_.add(w.n[i].rest, m[i].rest);
+          }
+        }
+        t = along(u, w.n);  // the axis is the same before and after the joint motion
       } else {
-        t = dot(u, w.f);
-        w.n = addv(w.n, cross(scale(u, q_[k]), w.f));
+        t = along(u, w.f);
+        const V3 extra = cross(scale(u, q_[k]), values(w.f));
+        for (int i = 0; i < 3; ++i) w.n[i].rest = g_.add(value(w.n[i]), extra[i]);
       }
       if (joint_terms) {
         if (layout.rotor) t = g_.add(t, g_.mul(pi[layout.rotorIndex(k)], ddq_[k]));
@@ -235,17 +312,30 @@ class Builder {
                          g_.mul(g_.constant(cleanValue(K(i, j))), s));
     return R;
   }
+  // dw_k + w_i w_j (plus) or dw_k - w_i w_j. In the frame before a joint turning about
+  // coordinate axis a, with (b, d, a) right-handed, the joint terms cancel in two of these:
+  // dw_b - w_d w_a = dwp_b - wp_d wp_a and dw_d + w_b w_a = dwp_d + wp_b wp_a, the same sums
+  // as the parent's.
+  Ref dwPlusWW(const Motion& m, int k, int i, int j, bool plus) {
+    if (m.axis >= 0) {
+      const int a = m.axis, b = (a + 1) % 3, d = (a + 2) % 3;
+      const bool ia = i == a || j == a, ib = i == b || j == b, id = i == d || j == d;
+      if (k == b && ia && id && !plus) return g_.sub(m.dwp[b], g_.mul(m.wp[d], m.wp[a]));
+      if (k == d && ia && ib && plus) return g_.add(m.dwp[d], g_.mul(m.wp[b], m.wp[a]));
+    }
+    const Ref ww = g_.mul(m.w[i], m.w[j]);
+    return plus ? g_.add(m.dw[k], ww) : g_.sub(m.dw[k], ww);
+  }
   // Entry (i, j) of U = [dw]x + [w]x^2: w_i w_j + [dw]x(i, j), diagonal -(w_j^2 + w_k^2).
   Ref uEntry(const Motion& m, int i, int j) {
     if (i == j) {
       const int a = (i + 1) % 3, b = (i + 2) % 3;
       return -g_.add(g_.mul(m.w[a], m.w[a]), g_.mul(m.w[b], m.w[b]));
     }
-    const Ref ww = g_.mul(m.w[i], m.w[j]);
     // [dw]x(i, j) = -eps_ijk dw_k
     const int k = 3 - i - j;
     const bool plus = (j == (i + 2) % 3);  // (0,2), (1,0), (2,1): +dw_k
-    return plus ? g_.add(ww, m.dw[k]) : g_.sub(ww, m.dw[k]);
+    return plus ? dwPlusWW(m, k, i, j, true) : -dwPlusWW(m, k, i, j, false);
   }
   V3 uTimes(const Motion& m, const V3& d) {
     V3 y;
@@ -257,6 +347,107 @@ class Builder {
     }
     return y;
   }
+  // Entry (i, j) of the inertia tensor in a parameter vector XX XY XZ YY YZ ZZ MX MY MZ M.
+  static int tensorIndex(int i, int j) {
+    static const int idx[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+    return idx[i][j];
+  }
+
+  // Parameters of a body about the origin of frame B, from those about the origin of frame A,
+  // with x_B = R x_A + t: first moment R h + m t, inertia
+  // R I R^T + 2 (t . R h) 1 - (R h) t^T - t (R h)^T + m (|t|^2 1 - t t^T).
+  P10 transformParams(const Rigid& T, const P10& p) {
+    if (T.identity()) return p;
+    const M3 R = constMat(T.R);
+    M3 I;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) I[i][j] = p[tensorIndex(i, j)];
+    M3 RI;
+    for (int i = 0; i < 3; ++i) RI[i] = mulT(I, R[i]);  // row i of R I (I symmetric)
+    const V3 h = mul(R, {p[6], p[7], p[8]});
+    const V3 t = constVec(T.t);
+    const Ref m = p[9];
+    P10 out;
+    const Ref th = dot(t, h), tt = g_.constant(T.t.squaredNorm());
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) {
+        Ref e = dot(RI[i], R[j]);
+        if (i == j) e = g_.add(e, g_.add(g_.mul(g_.constant(2.0), th), g_.mul(m, tt)));
+        e = g_.sub(e, g_.add(g_.mul(h[i], t[j]), g_.mul(t[i], h[j])));
+        e = g_.sub(e, g_.mul(m, g_.mul(t[i], t[j])));
+        out[tensorIndex(i, j)] = e;
+      }
+    for (int i = 0; i < 3; ++i) out[6 + i] = g_.add(h[i], g_.mul(m, t[i]));
+    out[9] = m;
+    return out;
+  }
+
+  // The body carried through the joint rotation J (x_before = J x_after): J I J^T and J h.
+  // About a coordinate axis a only the plane of the other two axes b, d turns. `form` says how
+  // the plane block of the tensor is written:
+  //   1  entry by entry, I'_bb = cc I_bb + ss I_dd - 2 cs I_bd, I'_dd likewise;
+  //   2  I'_dd = I_bb + I_dd - I'_bb (trace kept; cheaper when both are needed);
+  //   3  as m (e_bb + e_dd) + h (e_bb - e_dd) + I'_bd (e_bd + e_db), m = (I_bb + I_dd) / 2
+  //      unchanged by the rotation and (h, I'_bd) the pair ((I_bb - I_dd) / 2, I_bd) turned
+  //      by 2q: the moment of m is m (dw_b - w_d w_a, dw_d + w_b w_a, 0), sums that equal the
+  //      parent's in this frame.
+  Body rotateParams(const Eigen::Vector3d& axis, Ref c, Ref s, const P10& p, int form) {
+    int a = -1;
+    for (int i = 0; i < 3; ++i)
+      if (std::abs(axis[i]) == 1.0) a = i;
+    if (a < 0) {  // general axis
+      const M3 J = rodrigues(axis, c, s);
+      M3 I;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) I[i][j] = p[tensorIndex(i, j)];
+      M3 JI;
+      for (int i = 0; i < 3; ++i) JI[i] = mulT(I, J[i]);
+      P10 out = p;
+      for (int i = 0; i < 3; ++i)
+        for (int j = i; j < 3; ++j) out[tensorIndex(i, j)] = dot(JI[i], J[j]);
+      const V3 h = mul(J, {p[6], p[7], p[8]});
+      for (int i = 0; i < 3; ++i) out[6 + i] = h[i];
+      return body(out);
+    }
+    // (b, d, a) right-handed; about -e_a the angle changes sign.
+    const int b = (a + 1) % 3, d = (a + 2) % 3;
+    if (axis[a] < 0) s = -s;
+    const Ref bb = p[tensorIndex(b, b)], dd = p[tensorIndex(d, d)], bd = p[tensorIndex(b, d)];
+    const Ref ba = p[tensorIndex(b, a)], da = p[tensorIndex(d, a)];
+    const Ref cc = g_.mul(c, c), ss = g_.mul(s, s), cs = g_.mul(c, s);
+    const Ref cos2 = g_.sub(cc, ss), sin2 = g_.mul(g_.constant(2.0), cs);
+    Body out;
+    auto put = [&out](Ref par, std::initializer_list<std::array<int, 3>> entries) {
+      Sym3 T{};
+      for (const auto& e : entries) T[e[0]][e[1]] = T[e[1]][e[0]] = e[2];
+      out.inertia.emplace_back(par, T);
+    };
+    if (form == 3) {
+      const Ref half = g_.constant(0.5);
+      const Ref m = g_.mul(half, g_.add(bb, dd)), dh = g_.mul(half, g_.sub(bb, dd));
+      put(m, {{b, b, 1}, {d, d, 1}});
+      put(g_.sub(g_.mul(cos2, dh), g_.mul(sin2, bd)), {{b, b, 1}, {d, d, -1}});
+      put(g_.add(g_.mul(sin2, dh), g_.mul(cos2, bd)), {{b, d, 1}});
+    } else {
+      const Ref bd2 = g_.mul(sin2, bd);
+      const Ref nbb = g_.sub(g_.add(g_.mul(cc, bb), g_.mul(ss, dd)), bd2);
+      put(nbb, {{b, b, 1}});
+      put(form == 2 ? g_.sub(g_.add(bb, dd), nbb)
+                    : g_.add(g_.add(g_.mul(ss, bb), g_.mul(cc, dd)), bd2),
+          {{d, d, 1}});
+      put(g_.add(g_.mul(cs, g_.sub(bb, dd)), g_.mul(cos2, bd)), {{b, d, 1}});
+    }
+    put(p[tensorIndex(a, a)], {{a, a, 1}});
+    put(g_.sub(g_.mul(c, ba), g_.mul(s, da)), {{b, a, 1}});
+    put(g_.add(g_.mul(s, ba), g_.mul(c, da)), {{d, a, 1}});
+    const Ref hb = p[6 + b], hd = p[6 + d];
+    out.ms[b] = g_.sub(g_.mul(c, hb), g_.mul(s, hd));
+    out.ms[d] = g_.add(g_.mul(s, hb), g_.mul(c, hd));
+    out.ms[a] = p[6 + a];
+    out.mass = p[9];
+    return out;
+  }
+
   Motion rigidForward(const Rigid& T, const Motion& m) {
     if (T.identity()) return m;
     const M3 R = constMat(T.R);
@@ -268,14 +459,80 @@ class Builder {
     o.a = mulT(R, a);
     return o;
   }
-  Wrench rigidBackward(const Rigid& T, const Wrench& w) {
+  Pending rigidBackward(const Rigid& T, Pending w) {
     if (T.identity()) return w;
     const M3 R = constMat(T.R);
-    Wrench o;
-    o.f = mul(R, w.f);
-    o.n = mul(R, w.n);
-    if (!T.t.isZero(0.0)) o.n = addv(o.n, cross(constVec(T.t), o.f));
+    Pending o;
+    o.f = rotate(R, w.f);
+    o.n = rotate(R, w.n);
+    if (!T.t.isZero(0.0)) {
+      const V3 m = cross(constVec(T.t), values(o.f));
+      for (int i = 0; i < 3; ++i) o.n[i].rest = g_.add(o.n[i].rest, m[i]);
+    }
     return o;
+  }
+
+  // The node of a pending component (written once, then kept as that node).
+  Ref value(Component& c) {
+    if (!c.terms.empty()) {
+      c.rest = g_.add(c.rest, linearForm(c.terms));
+      c.terms.clear();
+    }
+    return c.rest;
+  }
+  V3 values(std::array<Component, 3>& v) { return {value(v[0]), value(v[1]), value(v[2])}; }
+
+  // u . v, writing only the components u needs.
+  Ref along(const V3& u, std::array<Component, 3>& v) {
+    Ref t = Graph::zero();
+    for (int i = 0; i < 3; ++i)
+      if (u[i] != Graph::zero()) t = g_.add(t, g_.mul(u[i], value(v[i])));
+    return t;
+  }
+
+  static Component negated(Component c) {
+    for (auto& t : c.terms) t.first = -t.first;
+    c.rest = -c.rest;
+    return c;
+  }
+
+  // R x; a row of R that is a signed unit vector carries that component as it is.
+  std::array<Component, 3> rotate(const M3& R, std::array<Component, 3>& x) {
+    int carried[3];
+    std::array<bool, 3> needed{};
+    for (int i = 0; i < 3; ++i) {
+      carried[i] = -1;
+      int nonzero = 0, j0 = -1;
+      for (int j = 0; j < 3; ++j)
+        if (R[i][j] != Graph::zero()) {
+          ++nonzero;
+          j0 = j;
+        }
+      if (nonzero == 1 && R[i][j0].abs() == Graph::one()) carried[i] = j0;
+      if (carried[i] < 0)
+        for (int j = 0; j < 3; ++j)
+          if (R[i][j] != Graph::zero()) needed[j] = true;
+    }
+    for (int j = 0; j < 3; ++j)
+      if (needed[j]) value(x[j]);
+    std::array<Component, 3> y;
+    for (int i = 0; i < 3; ++i) {
+      if (carried[i] >= 0) {
+        y[i] = R[i][carried[i]].negative() ? negated(x[carried[i]]) : x[carried[i]];
+      } else {
+        y[i].rest = dot(R[i], {x[0].rest, x[1].rest, x[2].rest});
+      }
+    }
+    return y;
+  }
+
+  void append(Pending& w, Pending own) {
+    for (int i = 0; i < 3; ++i) {
+      w.n[i].terms.insert(w.n[i].terms.end(), own.n[i].terms.begin(), own.n[i].terms.end());
+      w.f[i].terms.insert(w.f[i].terms.end(), own.f[i].terms.begin(), own.f[i].terms.end());
+      w.n[i].rest = g_.add(w.n[i].rest, own.n[i].rest);
+      w.f[i].rest = g_.add(w.f[i].rest, own.f[i].rest);
+    }
   }
 
   // sum_k coef_k * param_k with equal coefficients (up to sign) gathered first.
@@ -298,46 +555,101 @@ class Builder {
     return s;
   }
 
-  // Wrench of one link about its origin, in its frame, linear in its ten parameters.
-  Wrench linkWrench(const Motion& m, const std::vector<Ref>& pi, int c0) {
+  // A kinematic coefficient of the wrench: an integer combination of the angular
+  // acceleration components dw_k and the products w_i w_j.
+  struct Lin {
+    std::array<int, 3> dw{};
+    std::array<std::array<int, 3>, 3> ww{};  // upper triangle used
+    void addProduct(int i, int j, int c) { ww[std::min(i, j)][std::max(i, j)] += c; }
+  };
+
+  // coefficient of a parameter whose tensor is T in the moment n = I dw + w x (I w):
+  // T dw + w x (T w)
+  std::array<Lin, 3> inertiaCoefficients(const Sym3& T) {
+    std::array<Lin, 3> out;
+    for (int i = 0; i < 3; ++i) {
+      for (int k = 0; k < 3; ++k) out[i].dw[k] = T[i][k];
+      const int j1 = (i + 1) % 3, j2 = (i + 2) % 3;
+      for (int l = 0; l < 3; ++l) {
+        // (w x T w)_i = w_j1 (T w)_j2 - w_j2 (T w)_j1
+        if (T[j2][l]) out[i].addProduct(j1, l, T[j2][l]);
+        if (T[j1][l]) out[i].addProduct(j2, l, -T[j1][l]);
+      }
+    }
+    return out;
+  }
+
+  Ref scaled(Ref x, int c) {
+    if (c == 1) return x;
+    if (c == -1) return -x;
+    return g_.mul(g_.constant(c), x);
+  }
+
+  // The node of a coefficient: dw_k +- w_i w_j through dwPlusWW (shared sums), anything else
+  // term by term.
+  Ref materialise(const Motion& m, const Lin& c) {
+    std::vector<std::pair<int, int>> dws;  // (k, coefficient)
+    std::vector<std::array<int, 3>> wws;   // (i, j, coefficient)
+    for (int k = 0; k < 3; ++k)
+      if (c.dw[k]) dws.push_back({k, c.dw[k]});
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j)
+        if (c.ww[i][j]) wws.push_back({i, j, c.ww[i][j]});
+    if (dws.size() == 1 && wws.size() == 1 && std::abs(dws[0].second) == 1 &&
+        std::abs(wws[0][2]) == 1) {
+      const bool negate = dws[0].second < 0;
+      const bool plus = (wws[0][2] > 0) != negate;
+      return dwPlusWW(m, dws[0].first, wws[0][0], wws[0][1], plus).negatedIf(negate);
+    }
+    Ref r = Graph::zero();
+    for (const auto& [k, cf] : dws) r = g_.add(r, scaled(m.dw[k], cf));
+    for (const auto& t : wws) r = g_.add(r, scaled(g_.mul(m.w[t[0]], m.w[t[1]]), t[2]));
+    return r;
+  }
+
+  // Wrench of one body about the frame origin, in the frame, linear in its parameters.
+  Pending linkWrench(const Motion& m, const Body& body, bool moment_of_ms = true) {
     std::array<std::vector<std::pair<Ref, Ref>>, 3> tn, tf;
-    // Inertia: n += L(dw) I6 + w x (L(w) I6), L(v) I6 = I v.
-    static const int rowOf[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
-    for (int p = 0; p < 6; ++p) {
-      const Ref par = pi[c0 + p];
+    // Inertia: n += I dw + w x (I w), I = sum of parameter * basis tensor.
+    for (const auto& [par, T] : body.inertia) {
       if (par == Graph::zero()) continue;
-      // column p of L(v): the tensor entry (r, c) contributes v_c to row r and v_r to row c.
-      auto column = [&](const V3& v) {
-        V3 col = zero_;
-        const int r = rowOf[p][0], c = rowOf[p][1];
-        col[r] = v[c];
-        if (r != c) col[c] = v[r];
-        return col;
-      };
-      const V3 coef = addv(column(m.dw), cross(m.w, column(m.w)));
-      for (int i = 0; i < 3; ++i) tn[i].emplace_back(coef[i], par);
+      const auto coef = inertiaCoefficients(T);
+      for (int i = 0; i < 3; ++i) tn[i].emplace_back(materialise(m, coef[i]), par);
     }
     // First moments: n += MS x a, f += U MS.
     for (int j = 0; j < 3; ++j) {
-      const Ref par = pi[c0 + 6 + j];
+      const Ref par = body.ms[j];
       if (par == Graph::zero()) continue;
       V3 e = zero_;
       e[j] = Graph::one();
       const V3 cn = cross(e, m.a);
       for (int i = 0; i < 3; ++i) {
-        tn[i].emplace_back(cn[i], par);
+        if (moment_of_ms) tn[i].emplace_back(cn[i], par);
         tf[i].emplace_back(uEntry(m, i, j), par);
       }
     }
-    const Ref mass = pi[c0 + 9];
-    if (mass != Graph::zero())
-      for (int i = 0; i < 3; ++i) tf[i].emplace_back(m.a[i], mass);
-    Wrench w;
+    if (body.mass != Graph::zero())
+      for (int i = 0; i < 3; ++i) tf[i].emplace_back(m.a[i], body.mass);
+    Pending w;
     for (int i = 0; i < 3; ++i) {
-      w.n[i] = linearForm(tn[i]);
-      w.f[i] = linearForm(tf[i]);
+      w.n[i].terms = std::move(tn[i]);
+      w.f[i].terms = std::move(tf[i]);
     }
     return w;
+  }
+
+  // The ten classical parameters as a body: each inertia entry with its unit tensor.
+  static Body body(const P10& p) {
+    Body b;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) {
+        Sym3 T{};
+        T[i][j] = T[j][i] = 1;
+        b.inertia.emplace_back(p[tensorIndex(i, j)], T);
+      }
+    b.ms = {p[6], p[7], p[8]};
+    b.mass = p[9];
+    return b;
   }
 
   Graph& g_;
@@ -346,7 +658,9 @@ class Builder {
   V3 zero_;
   std::vector<Ref> q_, dq_, ddq_;
   std::vector<M3> jointR_;
-  std::vector<Motion> link_;
+  std::vector<Ref> jointC_, jointS_;
+  std::vector<Motion> link_, linkPre_;
+  std::vector<V3> afterA_;  // acceleration of the joint origin in the axes after the motion
 };
 
 }  // namespace
@@ -390,8 +704,7 @@ ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout) {
 namespace {
 
 GeneratedFunction generateWith(const Model& model, const ParameterSet& params, Function function,
-                               bool numeric, const Eigen::VectorXd& values,
-                               const std::vector<AxisShift>& shift) {
+                               bool numeric, const Eigen::VectorXd& values, const Plan& plan) {
   const int n = model.nq(), np = params.size();
   const int P = params.layout.size(n);
   if (params.E.rows() != P || params.E.cols() != np)
@@ -410,7 +723,7 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
   out.np = np;
   out.numeric = numeric && function != Function::Regressor;
   Graph& g = out.graph;
-  Builder b(g, model, jointStages(model, shift));
+  Builder b(g, model, jointStages(model, plan.shift));
 
   std::vector<Ref> dq(n, Graph::zero()), ddq(n, Graph::zero());
   if (function != Function::Gravity)
@@ -429,7 +742,7 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
     out.outputs.assign(static_cast<size_t>(n) * np, Graph::zero());
     for (int col = 0; col < np; ++col) {
       const auto pi = classical([&](int c) { return g.constant(params.E(c, col)); });
-      const auto tau = b.torques(pi, params.layout, true);
+      const auto tau = b.torques(pi, params.layout, true, plan.link);
       for (int i = 0; i < n; ++i) out.outputs[static_cast<size_t>(i) * np + col] = tau[i];
     }
   } else {
@@ -442,7 +755,7 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
         if (params.E(c, j) != 0.0) s = g.add(s, g.mul(g.constant(params.E(c, j)), p[j]));
       return s;
     });
-    out.outputs = b.torques(pi, params.layout, function == Function::InverseDynamics);
+    out.outputs = b.torques(pi, params.layout, function == Function::InverseDynamics, plan.link);
   }
   out.program = schedule(g, out.outputs);
   return out;
@@ -451,23 +764,59 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
 }  // namespace
 
 GeneratedFunction generate(const Model& model, const ParameterSet& params, Function function,
-                           bool numeric, const Eigen::VectorXd& values) {
-  // Place each joint's along-axis translation where it costs least, one joint at a time.
+                           bool numeric, const Eigen::VectorXd& values, Objective objective) {
+  // Choose, joint by joint, where the along-axis translation goes and in which frame the link's
+  // wrench is formed, keeping a change when it lowers the operation count; repeat while a
+  // pass improves.
   const int n = model.nq();
-  std::vector<AxisShift> shift(n, AxisShift::Keep);
-  GeneratedFunction best = generateWith(model, params, function, numeric, values, shift);
-  auto cost = [](const GeneratedFunction& f) { return f.program.count.mul + f.program.count.add; };
-  for (int k = 0; k < n; ++k)
-    for (AxisShift sh : {AxisShift::ToPre, AxisShift::ToPost}) {
-      std::vector<AxisShift> trial = shift;
-      trial[k] = sh;
-      GeneratedFunction f = generateWith(model, params, function, numeric, values, trial);
-      if (cost(f) < cost(best)) {
-        best = std::move(f);
-        shift = std::move(trial);
+  Plan plan{std::vector<AxisShift>(n, AxisShift::Keep), std::vector<LinkForm>(n)};
+  GeneratedFunction best = generateWith(model, params, function, numeric, values, plan);
+  auto better = [objective](const OpCount& a, const OpCount& b) {
+    if (objective == Objective::Additions)
+      return a.add < b.add || (a.add == b.add && a.mul < b.mul);
+    const long ta = a.mul + a.add, tb = b.mul + b.add;
+    return ta < tb || (ta == tb && a.add < b.add);
+  };
+  auto attempt = [&](const Plan& trial) {
+    GeneratedFunction f = generateWith(model, params, function, numeric, values, trial);
+    if (!better(f.program.count, best.program.count)) return false;
+    best = std::move(f);
+    plan = trial;
+    return true;
+  };
+  std::vector<LinkForm> forms{{0, false}};
+  for (int frame = 1; frame <= 3; ++frame)
+    for (bool after : {false, true}) forms.push_back({frame, after});
+  for (int pass = 0; pass < 3; ++pass) {
+    bool improved = false;
+    for (int k = n - 1; k >= 0; --k) {
+      for (AxisShift sh : {AxisShift::Keep, AxisShift::ToPre, AxisShift::ToPost}) {
+        if (sh == plan.shift[k]) continue;
+        Plan trial = plan;
+        trial.shift[k] = sh;
+        improved |= attempt(trial);
       }
+      if (model.joints[k].type == JointType::Revolute)
+        for (const LinkForm& form : forms) {
+          if (form == plan.link[k]) continue;
+          Plan trial = plan;
+          trial.link[k] = form;
+          improved |= attempt(trial);
+        }
     }
+    if (!improved) break;
+  }
   return best;
+}
+
+const char* toString(Objective o) { return o == Objective::Additions ? "additions" : "operations"; }
+
+GeneratedFunction detail::generateWithLinkForm(const Model& model, const ParameterSet& params,
+                                               Function function, int form) {
+  const int n = model.nq();
+  Plan plan{std::vector<AxisShift>(n, AxisShift::Keep),
+            std::vector<LinkForm>(n, LinkForm{form % 4, form >= 4})};
+  return generateWith(model, params, function, false, {}, plan);
 }
 
 void checkIdentifier(const std::string& name) {
@@ -484,7 +833,7 @@ void checkIdentifier(const std::string& name) {
 
 GeneratedCode generateCode(const Model& model, const ParameterSet& params,
                            const std::vector<Function>& functions, const std::string& name,
-                           bool numeric, const Eigen::VectorXd& values) {
+                           bool numeric, const Eigen::VectorXd& values, Objective objective) {
   checkIdentifier(name);
   if (functions.empty()) throw ModelError("codegen: no function to generate");
   GeneratedCode code;
@@ -494,8 +843,9 @@ GeneratedCode generateCode(const Model& model, const ParameterSet& params,
   code.params = params;
   code.values = values.size() ? values : params.values;
   code.numeric = numeric;
+  code.objective = objective;
   for (Function f : functions)
-    code.functions.push_back(generate(model, params, f, numeric, values));
+    code.functions.push_back(generate(model, params, f, numeric, values, objective));
   return code;
 }
 

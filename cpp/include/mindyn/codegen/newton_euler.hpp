@@ -12,6 +12,15 @@
 // (revolute) or the force (prismatic) right after the joint motion. The part of a constant
 // translation that lies along a joint's axis commutes with the joint motion and is placed in
 // `pre` or `post`, joint by joint, wherever the generated function has fewer operations.
+//
+// A link's wrench may instead be formed in the joint frame before the joint motion (revolute
+// joints), with the link's parameters turned by the joint angle: the link's angular velocity
+// there is the parent's plus the joint rate along a fixed axis, so that no rotation of the
+// velocities into the link frame or of the wrench out of it is needed, two of the kinematic sums
+// are the parent's, and a link after a joint whose parent turns about one fixed axis (the second
+// link of most arms) sees sparse velocities. The wrench is carried as linear forms in the
+// parameters through sums and signed permutations, so that equal kinematic coefficients of
+// different links share one product. Which frame each link uses is chosen by operation count.
 #pragma once
 
 #include <Eigen/Core>
@@ -58,10 +67,30 @@ struct GeneratedFunction {
   Program program;
 };
 
+/// What the choice among the exact formulations minimises: multiplications plus additions
+/// (ties: fewer additions), or additions first (ties: fewer multiplications).
+enum class Objective { Operations, Additions };
+
+/// "operations" or "additions".
+const char* toString(Objective o);
+
 /// Builds one function. `values` (size np) are baked in when `numeric` (ignored for the
 /// regressor, which does not depend on the parameters). Throws ModelError on a size mismatch.
+/// Joint by joint, the recursion chooses where the along-axis translation goes and in which
+/// frame the link's wrench is formed (its own, or the joint frame before the joint motion with
+/// the parameters turned by the joint angle), keeping what lowers the count by `objective`.
 GeneratedFunction generate(const Model& model, const ParameterSet& params, Function function,
-                           bool numeric = false, const Eigen::VectorXd& values = {});
+                           bool numeric = false, const Eigen::VectorXd& values = {},
+                           Objective objective = Objective::Operations);
+
+namespace detail {
+/// The recursion with one fixed choice for every link (for tests): `form` 0 forms each wrench
+/// in the link frame; 1, 2, 3 in the joint frame before the motion (revolute joints), with the
+/// inertia turned entry by entry, keeping its trace, or split; +4: the moment of the first
+/// moment taken after the motion.
+GeneratedFunction generateWithLinkForm(const Model& model, const ParameterSet& params,
+                                       Function function, int form);
+}  // namespace detail
 
 /// Everything an emitter needs: the functions of one robot under one name.
 struct GeneratedCode {
@@ -71,13 +100,15 @@ struct GeneratedCode {
   ParameterSet params;
   Eigen::VectorXd values;  // the parameter values (baked in when numeric)
   bool numeric = false;
+  Objective objective = Objective::Operations;
   std::vector<GeneratedFunction> functions;
 };
 
 /// Generates `functions` under `name` (a C identifier; throws ModelError otherwise).
 GeneratedCode generateCode(const Model& model, const ParameterSet& params,
                            const std::vector<Function>& functions, const std::string& name,
-                           bool numeric = false, const Eigen::VectorXd& values = {});
+                           bool numeric = false, const Eigen::VectorXd& values = {},
+                           Objective objective = Objective::Operations);
 
 /// `name` if it is a valid C and Structured Text identifier, otherwise throws ModelError.
 void checkIdentifier(const std::string& name);
