@@ -353,25 +353,36 @@ class Builder {
     return idx[i][j];
   }
 
+  // The body's tensor and first moment in axes turned by R (x_new = R x_old): R I R^T, R h; the
+  // mass as it is.
+  P10 turned(const M3& R, const P10& p) {
+    M3 I;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) I[i][j] = p[tensorIndex(i, j)];
+    M3 RI;
+    for (int i = 0; i < 3; ++i) RI[i] = mulT(I, R[i]);  // row i of R I (I symmetric)
+    P10 out = p;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) out[tensorIndex(i, j)] = dot(RI[i], R[j]);
+    const V3 h = mul(R, {p[6], p[7], p[8]});
+    for (int i = 0; i < 3; ++i) out[6 + i] = h[i];
+    return out;
+  }
+
   // Parameters of a body about the origin of frame B, from those about the origin of frame A,
   // with x_B = R x_A + t: first moment R h + m t, inertia
   // R I R^T + 2 (t . R h) 1 - (R h) t^T - t (R h)^T + m (|t|^2 1 - t t^T).
   P10 transformParams(const Rigid& T, const P10& p) {
     if (T.identity()) return p;
     const M3 R = constMat(T.R);
-    M3 I;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) I[i][j] = p[tensorIndex(i, j)];
-    M3 RI;
-    for (int i = 0; i < 3; ++i) RI[i] = mulT(I, R[i]);  // row i of R I (I symmetric)
-    const V3 h = mul(R, {p[6], p[7], p[8]});
+    P10 out = turned(R, p);
+    const V3 h = {out[6], out[7], out[8]};
     const V3 t = constVec(T.t);
     const Ref m = p[9];
-    P10 out;
     const Ref th = dot(t, h), tt = g_.constant(T.t.squaredNorm());
     for (int i = 0; i < 3; ++i)
       for (int j = i; j < 3; ++j) {
-        Ref e = dot(RI[i], R[j]);
+        Ref e = out[tensorIndex(i, j)];
         if (i == j) e = g_.add(e, g_.add(g_.mul(g_.constant(2.0), th), g_.mul(m, tt)));
         e = g_.sub(e, g_.add(g_.mul(h[i], t[j]), g_.mul(t[i], h[j])));
         e = g_.sub(e, g_.mul(m, g_.mul(t[i], t[j])));
@@ -396,18 +407,7 @@ class Builder {
     for (int i = 0; i < 3; ++i)
       if (std::abs(axis[i]) == 1.0) a = i;
     if (a < 0) {  // general axis
-      const M3 J = rodrigues(axis, c, s);
-      M3 I;
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) I[i][j] = p[tensorIndex(i, j)];
-      M3 JI;
-      for (int i = 0; i < 3; ++i) JI[i] = mulT(I, J[i]);
-      P10 out = p;
-      for (int i = 0; i < 3; ++i)
-        for (int j = i; j < 3; ++j) out[tensorIndex(i, j)] = dot(JI[i], J[j]);
-      const V3 h = mul(J, {p[6], p[7], p[8]});
-      for (int i = 0; i < 3; ++i) out[6 + i] = h[i];
-      return body(out);
+      return body(turned(rodrigues(axis, c, s), p));
     }
     // (b, d, a) right-handed; about -e_a the angle changes sign.
     const int b = (a + 1) % 3, d = (a + 2) % 3;
@@ -609,12 +609,12 @@ class Builder {
 
   // Wrench of one body about the frame origin, in the frame, linear in its parameters.
   Pending linkWrench(const Motion& m, const Body& body, bool moment_of_ms = true) {
-    std::array<std::vector<std::pair<Ref, Ref>>, 3> tn, tf;
+    Pending w;
     // Inertia: n += I dw + w x (I w), I = sum of parameter * basis tensor.
     for (const auto& [par, T] : body.inertia) {
       if (par == Graph::zero()) continue;
       const auto coef = inertiaCoefficients(T);
-      for (int i = 0; i < 3; ++i) tn[i].emplace_back(materialise(m, coef[i]), par);
+      for (int i = 0; i < 3; ++i) w.n[i].terms.emplace_back(materialise(m, coef[i]), par);
     }
     // First moments: n += MS x a, f += U MS.
     for (int j = 0; j < 3; ++j) {
@@ -624,17 +624,12 @@ class Builder {
       e[j] = Graph::one();
       const V3 cn = cross(e, m.a);
       for (int i = 0; i < 3; ++i) {
-        if (moment_of_ms) tn[i].emplace_back(cn[i], par);
-        tf[i].emplace_back(uEntry(m, i, j), par);
+        if (moment_of_ms) w.n[i].terms.emplace_back(cn[i], par);
+        w.f[i].terms.emplace_back(uEntry(m, i, j), par);
       }
     }
     if (body.mass != Graph::zero())
-      for (int i = 0; i < 3; ++i) tf[i].emplace_back(m.a[i], body.mass);
-    Pending w;
-    for (int i = 0; i < 3; ++i) {
-      w.n[i].terms = std::move(tn[i]);
-      w.f[i].terms = std::move(tf[i]);
-    }
+      for (int i = 0; i < 3; ++i) w.f[i].terms.emplace_back(m.a[i], body.mass);
     return w;
   }
 
