@@ -1,5 +1,6 @@
 // Inverse dynamics per call, in one process: the generated C (base parameters, compiled here
-// with the system C compiler and loaded with dlopen), the runtime base-parameter tape, our
+// with the system C compiler and loaded with dlopen; sines and cosines inline, and again from
+// math.h), the runtime base-parameter tape, our
 // classical Newton-Euler, Pinocchio's rnea (C++, linked from the pin wheel) and KDL's
 // ChainIdSolver_RNE. Prints ns/call, ratios and operation counts. Robots: PUMA 560, ZCR07S, the
 // Staubli RX-90 (published operation counts of other generators exist for it) and UR5.
@@ -109,8 +110,8 @@ int main(int argc, char** argv) {
         "inverse dynamics, ns per call (best of 150 turns of 2000 calls each); generated C: cc "
         "%s\n",
         flags.c_str());
-    std::printf("%-8s %9s %9s %9s %9s %9s | %8s %8s | %s\n", "robot", "gen. C", "base tape",
-                "mindyn NE", "Pinocchio", "KDL", "Pin/genC", "KDL/genC",
+    std::printf("%-8s %9s %9s %9s %9s %9s %9s | %8s %8s | %s\n", "robot", "gen. C", "C libm",
+                "base tape", "mindyn NE", "Pinocchio", "KDL", "Pin/genC", "KDL/genC",
                 "ops gen. C base (classical): mul add trig");
   }
   for (auto& [name, model] : robots) {
@@ -121,22 +122,33 @@ int main(int argc, char** argv) {
         codegen::generateCode(model, ps, {codegen::Function::InverseDynamics}, name + "_bench");
     const auto classical = codegen::generate(model, codegen::classicalParameterSet(model, {}),
                                              codegen::Function::InverseDynamics);
-    const codegen::CFiles files = codegen::emitC(code, name + "_bench.h");
-    std::ofstream(work + "/" + name + "_bench.h") << files.header;
-    std::ofstream(work + "/" + name + "_bench.c") << files.source;
-    const std::string so = work + "/lib" + name + "_bench.so";
-    const std::string cmd = "cc -std=c99 " + flags + " -fPIC -shared -o " + so + " " + work + "/" +
-                            name + "_bench.c -lm";
-    if (std::system(cmd.c_str()) != 0) {
-      std::fprintf(stderr, "compiling the generated C failed: %s\n", cmd.c_str());
-      return 1;
-    }
-    void* lib = dlopen(("./" + so).c_str(), RTLD_NOW);
-    if (!lib) {
-      std::fprintf(stderr, "dlopen: %s\n", dlerror());
-      return 1;
-    }
-    const auto gen = reinterpret_cast<IdFn>(dlsym(lib, (name + "_bench_inverse_dynamics").c_str()));
+    // The generated C twice: sines and cosines inline (the default) and from math.h.
+    std::vector<void*> libs;
+    const auto build = [&](const std::string& file, codegen::CTrig trig) -> IdFn {
+      const codegen::CFiles files = codegen::emitC(code, file + ".h", trig);
+      std::ofstream(work + "/" + file + ".h") << files.header;
+      std::ofstream(work + "/" + file + ".c") << files.source;
+      const std::string so = work + "/lib" + file + ".so";
+      const std::string cmd =
+          "cc -std=c99 " + flags + " -fPIC -shared -o " + so + " " + work + "/" + file + ".c -lm";
+      if (std::system(cmd.c_str()) != 0) {
+        std::fprintf(stderr, "compiling the generated C failed: %s\n", cmd.c_str());
+        return nullptr;
+      }
+      void* lib = dlopen(("./" + so).c_str(), RTLD_NOW | RTLD_LOCAL);
+      if (!lib) {
+        std::fprintf(stderr, "dlopen: %s\n", dlerror());
+        return nullptr;
+      }
+      libs.push_back(lib);
+      return reinterpret_cast<IdFn>(dlsym(lib, (name + "_bench_inverse_dynamics").c_str()));
+    };
+    const IdFn gen = build(name + "_bench", codegen::CTrig::Inline);
+    const IdFn genLibm = build(name + "_bench_libm", codegen::CTrig::Libm);
+    if (!gen || !genLibm) return 1;
+    const auto closeLibs = [&] {
+      for (void* lib : libs) dlclose(lib);
+    };
 
     // states
     const int S = 256;
@@ -168,6 +180,8 @@ int main(int argc, char** argv) {
       inverseDynamics(model, data, Q[s], DQ[s], DDQ[s], pi, {}, ref);
       gen(Q[s].data(), DQ[s].data(), DDQ[s].data(), pb.data(), tau.data());
       worst = std::max(worst, (tau - ref).norm() / ref.norm());
+      genLibm(Q[s].data(), DQ[s].data(), DDQ[s].data(), pb.data(), tau.data());
+      worst = std::max(worst, (tau - ref).norm() / ref.norm());
       bd.inverseDynamics(Q[s], DQ[s], DDQ[s], pb, tau);
       worst = std::max(worst, (tau - ref).norm() / ref.norm());
       worst =
@@ -185,12 +199,18 @@ int main(int argc, char** argv) {
       return 1;
     }
 
-    // The five implementations, each a loop body over the fixed states.
+    // The six implementations, each a loop body over the fixed states.
     const std::vector<Impl> impls = {
         {"generated_c",
          [&](int i) {
            const int s = i % S;
            gen(Q[s].data(), DQ[s].data(), DDQ[s].data(), pb.data(), tau.data());
+           sink = sink + tau[0];
+         }},
+        {"generated_c_libm",
+         [&](int i) {
+           const int s = i % S;
+           genLibm(Q[s].data(), DQ[s].data(), DDQ[s].data(), pb.data(), tau.data());
            sink = sink + tau[0];
          }},
         {"base_tape",
@@ -233,17 +253,18 @@ int main(int argc, char** argv) {
         CALLGRIND_DUMP_STATS_AT(label.c_str());
         CALLGRIND_STOP_INSTRUMENTATION;
       }
-      dlclose(lib);
+      closeLibs();
       continue;
     }
     const std::vector<double> t = timeInTurns(impls, 2000, 150);
-    const double tGen = t[0], tTape = t[1], tNe = t[2], tPin = t[3], tKdl = t[4];
+    const double tGen = t[0], tLibm = t[1], tTape = t[2], tNe = t[3], tPin = t[4], tKdl = t[5];
     const auto& c = code.functions[0].program.count;
     const auto& k = classical.program.count;
-    std::printf("%-8s %9.1f %9.1f %9.1f %9.1f %9.1f | %8.2f %8.2f | %ld %ld %ld (%ld %ld %ld)\n",
-                name.c_str(), tGen, tTape, tNe, tPin, tKdl, tPin / tGen, tKdl / tGen, c.mul, c.add,
-                c.trig, k.mul, k.add, k.trig);
-    dlclose(lib);
+    std::printf(
+        "%-8s %9.1f %9.1f %9.1f %9.1f %9.1f %9.1f | %8.2f %8.2f | %ld %ld %ld (%ld %ld %ld)\n",
+        name.c_str(), tGen, tLibm, tTape, tNe, tPin, tKdl, tPin / tGen, tKdl / tGen, c.mul, c.add,
+        c.trig, k.mul, k.add, k.trig);
+    closeLibs();
   }
   return 0;
 }

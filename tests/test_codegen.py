@@ -169,13 +169,18 @@ class CFunctions:
 @pytest.mark.parametrize(
     "name, minimise",
     [(r, "operations") for r in ("puma560", "zcr07s", "ur5", "skewed6r", "rx90", "stanford")]
-    + [(r, "additions") for r in ("puma560", "zcr07s", "rx90")],
+    + [(r, "additions") for r in ("puma560", "zcr07s", "rx90")]
+    + [(r, "libm") for r in ("ur5", "stanford")],
 )
 def test_generated_c_matches_pinocchio(name, minimise, robots, tmp_path, rng):
+    # minimise="libm": the default objective, sines and cosines from math.h
     robot, model, rotor, friction, nb = robots[name]
     bp = mindyn.base_parameters(robot, rotor=rotor, friction=friction)
     assert bp.n == nb  # published counts (numerical method with Pinocchio), reference/robots.md
-    code = generate(robot, lang="c", base=bp, name=f"{name}_dyn", minimise=minimise)
+    trig = "libm" if minimise == "libm" else None
+    minimise = "operations" if minimise == "libm" else minimise
+    code = generate(robot, lang="c", base=bp, name=f"{name}_dyn", minimise=minimise, trig=trig)
+    assert ("_sincos(" in code.source) == (trig is None)
     assert code.names == bp.names
     c = CFunctions(compile_c(code, tmp_path, name), code, robot.n)
     data = model.createData()
@@ -219,11 +224,69 @@ def test_numeric_code_bakes_the_values_in(robots, tmp_path, rng):
 
 
 def test_sines_and_cosines_come_first(robots):
-    # They depend on q alone; the C computes them all before the recursion that waits on them.
-    src = generate(robots["puma560"][0], what="id").source
+    # They depend on q alone; the C computes them all before the recursion that waits on them:
+    # inline, one routine call per angle for its sine and cosine; from math.h, one call each.
+    robot = robots["puma560"][0]
+    src = generate(robot, what="id").source
+    body = src[src.index("_inverse_dynamics(") :].splitlines()[1:]
+    calls = [i for i, line in enumerate(body) if "_sincos(" in line]
+    assert calls == [1, 3, 5, 7, 9], body[:12]
+    assert not re.search(r"\b(sin|cos)\(", "\n".join(body)), "math.h called outside the routine"
+    src = generate(robot, what="id", trig="libm").source
+    assert "_sincos" not in src
     body = src[src.index("_inverse_dynamics(") :].splitlines()[1:]
     trig = [i for i, line in enumerate(body) if re.search(r"= (sin|cos)\(", line)]
     assert trig == list(range(len(trig))) and len(trig) == 10, body[:12]
+
+
+def test_inline_sine_cosine_matches_the_c_library(tmp_path, rng):
+    # The routine of the generated source against glibc's sin and cos, both called from C.
+    code = generate("planar2", what="gravity", name="arm")
+    code.write(tmp_path / "arm.c")
+    (tmp_path / "check.c").write_text(
+        '#include "arm.c"\n'
+        "void check(const double* x, long n, double* out) {\n"
+        "  for (long i = 0; i < n; ++i) {\n"
+        "    arm_sincos(x[i], &out[4 * i], &out[4 * i + 1]);\n"
+        "    out[4 * i + 2] = sin(x[i]);\n"
+        "    out[4 * i + 3] = cos(x[i]);\n"
+        "  }\n"
+        "}\n"
+    )
+    so = tmp_path / "libcheck.so"
+    cmd = [GCC, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", "-shared", "-fPIC"]
+    res = subprocess.run(cmd + ["-o", str(so), str(tmp_path / "check.c"), "-lm"], text=True)
+    assert res.returncode == 0
+    check = ctypes.CDLL(str(so)).check
+    check.argtypes = [_DBL, ctypes.c_long, _DBL]
+
+    def run(x):
+        x = np.ascontiguousarray(x, dtype=float)
+        out = np.zeros((len(x), 4))
+        check(ptr(x), len(x), ptr(out))
+        return out
+
+    half_pi = np.pi / 2
+    k = rng.integers(-600000, 600000, 20000)
+    x = np.concatenate(
+        [
+            rng.uniform(-np.pi, np.pi, 200000),
+            rng.uniform(-50, 50, 100000),
+            rng.uniform(-1e6, 1e6, 100000),
+            k * half_pi + rng.uniform(-1e-9, 1e-9, k.size),  # near the quadrant boundaries
+            (k + 0.5) * half_pi,  # where the nearest k changes
+            [0.0, -0.0, 1e-300, -1e-300, 5e-324, 1e6, -1e6, np.nextafter(1e6, 0)],
+        ]
+    )
+    out = run(x)
+    err = np.abs(out[:, :2] - out[:, 2:])
+    assert err.max() <= 2.3e-16, (err.max(), x[np.argmax(err.max(axis=1))])
+    small = np.abs(x) < 1e-3  # relative accuracy of sin near 0
+    rel = np.abs(out[small, 0] - out[small, 2]) / np.maximum(np.abs(out[small, 2]), 1e-320)
+    assert rel.max() <= 2.3e-16
+    # beyond |x| = 1e6, and NaN and infinities: exactly the C library
+    big = run([np.nextafter(1e6, 2e6), -3e7, 1e300, np.inf, -np.inf, np.nan])
+    np.testing.assert_array_equal(big[:, :2], big[:, 2:])
 
 
 def test_base_recursion_needs_fewer_operations_than_classical(robots):
@@ -251,6 +314,10 @@ def test_operation_count_target_for_a_puma_class_arm(robots):
 def test_unknown_objective_is_refused(robots):
     with pytest.raises(ValueError, match="minimise must be"):
         generate(robots["rx90"][0], what="id", minimise="time")
+    with pytest.raises(ValueError, match="trig must be 'inline' or 'libm'"):
+        generate(robots["rx90"][0], what="id", trig="table")
+    with pytest.raises(ValueError, match="trig applies to C only"):
+        generate(robots["rx90"][0], what="id", lang="st", trig="libm")
 
 
 def test_fewer_operations_than_published_customised_recursions(robots):
@@ -511,6 +578,10 @@ def test_cli_codegen(tmp_path, capsys):
     a = generate("puma560", what="id", minimise="additions").counts["inverse_dynamics"]
     assert [int(x) for x in row.split()[1:3]] == [a["mul"], a["add"]]
     assert "chosen for the fewest additions:" in (tmp_path / "puma.h").read_text()
+    assert "_sincos(" in (tmp_path / "puma.c").read_text()
+    assert main(["codegen", "puma560", "--lang", "c", "--trig", "libm", "-o", str(out)]) == 0
+    assert "_sincos" not in (tmp_path / "puma.c").read_text()
+    capsys.readouterr()
 
     bp = mindyn.base_parameters("puma560")
     values = np.arange(1, bp.n + 1) * 0.01
@@ -534,10 +605,11 @@ def test_cli_codegen(tmp_path, capsys):
         (["--name", "9x"], "is not an identifier"),
         (["--params", "/nonexistent/p.txt"], "does not exist"),
         (["-o", "/nonexistent/dir/x.c"], "output folder"),
+        (["--lang", "st", "--trig", "libm"], "trig applies to C only"),
     ],
 )
 def test_cli_codegen_errors(args, message, tmp_path, capsys):
-    argv = ["codegen", "puma560_3", "--lang", "c"] + args
+    argv = ["codegen", "puma560_3"] + ([] if "--lang" in args else ["--lang", "c"]) + args
     if "-o" not in args:
         argv += ["-o", str(tmp_path / "x")]
     assert main(argv) == 2

@@ -46,6 +46,13 @@ def register(subparsers) -> None:
         help="what the choice among exact formulations minimises: multiplications plus "
         "additions (default; ties to fewer additions) or additions first",
     )
+    p.add_argument(
+        "--trig",
+        choices=["inline", "libm"],
+        help="C: sines and cosines from a branch-free routine in the generated source (default; "
+        "within 2.2e-16 of math.h, math.h beyond |q| > 1e6) or from math.h's sin and cos; "
+        "Structured Text always uses SIN and COS",
+    )
     p.add_argument("--name", help="prefix of the generated identifiers (default: robot name)")
     p.add_argument(
         "-o",
@@ -73,7 +80,9 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         numeric=args.numeric,
         minimise=args.minimise,
     )
-    code = generate(robot, params=args.params, name=args.name, header_name=header, **same)
+    code = generate(
+        robot, params=args.params, name=args.name, header_name=header, trig=args.trig, **same
+    )
     # the classical-parameter recursion generated the same way, for its operation counts
     classical = generate(robot, name=code.name, base=False, **same)
     written = code.write(out.with_suffix(".c") if args.lang == "c" else out)

@@ -121,6 +121,7 @@ def generate(
     base: bool | BaseParameters = True,
     header_name: str | None = None,
     minimise: str = "operations",
+    trig: str | None = None,
 ) -> GeneratedCode:
     """Generates inverse-dynamics code for ``robot``.
 
@@ -152,10 +153,20 @@ def generate(
         along-axis translations go, and whether a link's wrench is formed in its own frame or
         in the joint frame before the joint motion): multiplications plus additions, ties to
         fewer additions (default), or additions first, ties to fewer multiplications.
+    trig : {"inline", "libm"}, optional
+        C only: how sines and cosines are evaluated. ``"inline"`` (default): a routine in the
+        generated source, one per angle for the pair, without branches or calls for
+        ``|x| <= 1e6`` and within 2.2e-16 of the C library (which it calls beyond, and for NaN
+        and infinities); ``"libm"``: ``sin`` and ``cos`` of ``math.h``. Structured Text always
+        uses ``SIN`` and ``COS``.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
     if lang not in ("c", "st"):
         raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
+    if trig is not None and lang != "c":
+        raise ValueError("trig applies to C only; Structured Text uses SIN and COS")
+    if trig not in (None, "inline", "libm"):
+        raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
     fs = _functions(what)
     name = name if name is not None else _identifier(robot.name)
     if isinstance(base, BaseParameters):
@@ -192,6 +203,7 @@ def generate(
         lang=lang,
         header_name=header_name or f"{name}.h",
         minimise=minimise,
+        inline_trig=trig != "libm",
     )
     return GeneratedCode(lang, name, out, numeric, header_name or f"{name}.h")
 

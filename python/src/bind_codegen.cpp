@@ -51,7 +51,8 @@ void bindCodegen(py::module_& m) {
       [](const std::shared_ptr<PyModel>& model_core, const std::shared_ptr<PyBase>& base_core,
          bool rotor, bool friction, const std::vector<std::string>& functions,
          const std::string& name, bool numeric, const std::optional<Eigen::VectorXd>& values,
-         const std::string& lang, const std::string& header_name, const std::string& minimise) {
+         const std::string& lang, const std::string& header_name, const std::string& minimise,
+         bool inlineTrig) {
         // Base parameters carry the model they were computed for (possibly a snapped copy).
         const Model& model = base_core ? base_core->model->model : model_core->model;
         const ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
@@ -76,7 +77,7 @@ void bindCodegen(py::module_& m) {
         }
         py::dict out;
         if (lang == "c") {
-          const CFiles files = emitC(code, header_name);
+          const CFiles files = emitC(code, header_name, inlineTrig ? CTrig::Inline : CTrig::Libm);
           out["header"] = files.header;
           out["source"] = files.source;
         } else if (lang == "st") {
@@ -96,6 +97,7 @@ void bindCodegen(py::module_& m) {
       py::arg("name") = "robot", py::arg("numeric") = false,
       py::arg("values") = std::optional<Eigen::VectorXd>(), py::arg("lang") = "c",
       py::arg("header_name") = "robot.h", py::arg("minimise") = "operations",
+      py::arg("inline_trig") = true,
       "Generated code and operation counts. base=None: the classical parameters.");
 
   py::class_<PyBaseDynamics, std::shared_ptr<PyBaseDynamics>>(m, "BaseDynamics")

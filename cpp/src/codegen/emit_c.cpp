@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <sstream>
+#include <unordered_map>
 
 namespace mindyn::codegen {
 
@@ -56,7 +58,8 @@ std::vector<std::string> describe(const GeneratedCode& code) {
   for (std::string part; std::getline(whatLines, part);) lines.push_back(part);
   lines.push_back("Units SI; gravity and all frames as in the robot description.");
   lines.push_back("");
-  lines.push_back("Operation counts (multiplications, additions, sin/cos calls), the formulation");
+  lines.push_back(
+      "Operation counts (multiplications, additions, sines and cosines), the formulation");
   lines.push_back(std::string("chosen for the fewest ") +
                   (code.objective == Objective::Additions ? "additions" : "operations") + ":");
   for (const auto& f : code.functions) {
@@ -89,9 +92,57 @@ std::vector<std::string> describe(const GeneratedCode& code) {
 
 namespace {
 
+// The sine-cosine routine of the generated source. x = k pi/2 + r with k the nearest integer
+// (through a truncating conversion of a positive number, so that no floating-point rounding trick
+// can be undone by a compiler's reassociation) and |r| <= pi/4 + tiny; pi/2 in two parts, the
+// first with 32 significant bits so that k times it is exact for |k| < 2^21. On r, with z = r^2:
+//   sin r = r + r z S(z),   cos r = (1 - z/2) + z^2 C(z),
+// S and C of degree 5, interpolating (sin r - r)/(r z) and (cos r - 1 + z/2)/z^2 at the six
+// Chebyshev nodes of z in [0, (pi/4)^2] (60-digit arithmetic; their own error is below 1e-17),
+// evaluated in Estrin's scheme for a short dependency chain. The quadrant k mod 4 selects
+// (cos, sin) of k pi/2 from a table and the angle-sum formulas combine them, without a branch.
+constexpr double kTwoOverPi = 0x1.45f306dc9c883p-1;
+constexpr double kHalfPiHead = 0x1.921fb54400000p+0;   // 32 significant bits
+constexpr double kHalfPiTail = 0x1.0b4611a626331p-34;  // pi/2 - kHalfPiHead
+constexpr double kSin[6] = {-0x1.5555555555555p-3, 0x1.1111111110bb2p-7,   -0x1.a01a019e83aaep-13,
+                            0x1.71de37968a100p-19, -0x1.ae600b02b6262p-26, 0x1.5e0b19f8b1451p-33};
+constexpr double kCos[6] = {0x1.5555555555555p-5,   -0x1.6c16c16c16967p-10, 0x1.a01a019f4eb01p-16,
+                            -0x1.27e4fa17da09ep-22, 0x1.1eeb68e93b64cp-29,  -0x1.907da367a37cbp-37};
+
+std::string sincosRoutine(const std::string& name) {
+  // a + z b, as "a + z * b" or "a - z * |b|"
+  const auto pair = [](double a, double b) {
+    return literal(a) + (b < 0 ? " - z * " : " + z * ") + literal(std::abs(b));
+  };
+  std::ostringstream os;
+  os << "/* *s = sin(x), *c = cos(x): for |x| <= 1e6 without a branch or a call (x = k pi/2 + r,\n"
+        " * |r| <= pi/4, polynomials in r, the quadrant from a table), within 2.2e-16 of the C\n"
+        " * library; beyond, and for NaN and infinities, the C library's. Reassociating compiler\n"
+        " * options (-ffast-math) merge the two parts of pi/2: the error is then about 1e-16 |x|. "
+        "*/\n";
+  os << "static const double " << name << "_quadrant[4][2] = {{1.0, 0.0}, {0.0, 1.0}, "
+     << "{-1.0, 0.0}, {0.0, -1.0}};\n\n";
+  os << "static inline void " << name << "_sincos(const double x, double* s, double* c) {\n";
+  os << "  if (!(fabs(x) <= 1.0e6)) {\n    *s = sin(x);\n    *c = cos(x);\n    return;\n  }\n";
+  os << "  const long k = (long)(x * " << literal(kTwoOverPi) << " + 2097152.5) - 2097152L;\n";
+  os << "  const double kd = (double)k;\n";
+  os << "  const double r = (x - kd * " << literal(kHalfPiHead) << ") - kd * "
+     << literal(kHalfPiTail) << ";\n";
+  os << "  const double z = r * r;\n  const double z2 = z * z;\n  const double z4 = z2 * z2;\n";
+  for (const auto& [v, coef] : {std::pair{'s', kSin}, std::pair{'c', kCos}})
+    for (int i = 0; i < 6; i += 2)
+      os << "  const double " << v << i << i + 1 << " = " << pair(coef[i], coef[i + 1]) << ";\n";
+  os << "  const double sr = r + r * z * (s01 + z2 * s23 + z4 * s45);\n";
+  os << "  const double cr = (1.0 - 0.5 * z) + z2 * (c01 + z2 * c23 + z4 * c45);\n";
+  os << "  const double* const t = " << name << "_quadrant[(unsigned long)k & 3u];\n";
+  os << "  *s = sr * t[0] + cr * t[1];\n  *c = cr * t[0] - sr * t[1];\n}\n";
+  return os.str();
+}
+
 class CWriter {
  public:
-  CWriter(const GeneratedFunction& f) : f_(f), name_(f.graph.size()) {}
+  CWriter(const GeneratedFunction& f, const std::string& prefix, CTrig trig)
+      : f_(f), prefix_(prefix), trig_(trig), name_(f.graph.size()) {}
 
   std::string operand(Ref r) const {
     const Node& n = f_.graph.node(r.id());
@@ -131,9 +182,27 @@ class CWriter {
     for (int pass = 1; pass >= 0; --pass)
       for (int id : f_.program.order)
         if (early[id] == pass) order.push_back(id);
+    // Inline trig: one routine call per argument gives its sine and cosine together.
+    std::unordered_map<std::uint32_t, std::pair<int, int>> trigOf;  // argument -> (sin, cos)
+    for (int id : order) {
+      const Node& n = g.node(id);
+      if (n.op != Op::Sin && n.op != Op::Cos) continue;
+      auto& sc = trigOf.try_emplace(n.a.bits(), -1, -1).first->second;
+      (n.op == Op::Sin ? sc.first : sc.second) = id;
+    }
     int t = 0;
     for (int id : order) {
       const Node& n = f_.graph.node(id);
+      if (trig_ == CTrig::Inline && (n.op == Op::Sin || n.op == Op::Cos)) {
+        if (!name_[id].empty()) continue;  // named with its partner
+        const auto [s, c] = trigOf.at(n.a.bits());
+        const std::string sn = "t" + std::to_string(t++), cn = "t" + std::to_string(t++);
+        if (s >= 0) name_[s] = sn;
+        if (c >= 0) name_[c] = cn;
+        os << "  double " << sn << ", " << cn << ";\n";
+        os << "  " << prefix_ << "_sincos(" << operand(n.a) << ", &" << sn << ", &" << cn << ");\n";
+        continue;
+      }
       name_[id] = "t" + std::to_string(t++);
       os << "  const double " << name_[id] << " = ";
       switch (n.op) {
@@ -161,6 +230,12 @@ class CWriter {
       os << "  " << out << "[" << i << "] = " << signedValue(f_.outputs[i]) << ";\n";
   }
 
+  bool usesTrig() const {
+    for (int id : f_.program.order)
+      if (f_.graph.node(id).op == Op::Sin || f_.graph.node(id).op == Op::Cos) return true;
+    return false;
+  }
+
   bool uses(InputKind k) const {
     for (int id = 0; id < f_.graph.size(); ++id) {
       const Node& n = f_.graph.node(id);
@@ -171,6 +246,8 @@ class CWriter {
 
  private:
   const GeneratedFunction& f_;
+  std::string prefix_;
+  CTrig trig_;
   std::vector<std::string> name_;
 };
 
@@ -192,7 +269,7 @@ std::string upper(std::string s) {
 
 }  // namespace
 
-CFiles emitC(const GeneratedCode& code, const std::string& header_name) {
+CFiles emitC(const GeneratedCode& code, const std::string& header_name, CTrig trig) {
   checkIdentifier(code.name);
   const std::string NAME = upper(code.name);
   const int np = code.params.size();
@@ -220,8 +297,11 @@ CFiles emitC(const GeneratedCode& code, const std::string& header_name) {
   c << "const double " << code.name << "_parameter_values[" << np << "] = {";
   for (int b = 0; b < np; ++b) c << "\n    " << literal(code.values[b]) << ",";
   c << "\n};\n";
+  bool trigUsed = false;
+  for (const auto& f : code.functions) trigUsed |= CWriter(f, code.name, trig).usesTrig();
+  if (trig == CTrig::Inline && trigUsed) c << "\n" << sincosRoutine(code.name);
   for (const auto& f : code.functions) {
-    CWriter w(f);
+    CWriter w(f, code.name, trig);
     c << "\n" << signature(code, f) << " {\n";
     for (InputKind k : {InputKind::Q, InputKind::DQ, InputKind::DDQ, InputKind::P}) {
       const bool present =

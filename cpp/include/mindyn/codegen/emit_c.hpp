@@ -9,6 +9,10 @@
 // With baked-in (numeric) parameters the `p` argument is absent. The header lists the
 // parameters in order, with their definitions, in a comment and as NAME_parameter_names. Each
 // function computes all its sines and cosines first, then the recursion in graph order.
+//
+// Sines and cosines: by default (CTrig::Inline) each angle's pair comes from a static routine in
+// the source, without branches or calls for |x| <= 1e6 (the C library's sin and cos beyond, and
+// for NaN and infinities), within 2.2e-16 of the C library; CTrig::Libm calls sin and cos.
 #pragma once
 
 #include <string>
@@ -22,8 +26,14 @@ struct CFiles {
   std::string source;
 };
 
+/// How the generated C evaluates sines and cosines.
+enum class CTrig {
+  Inline,  ///< a branch-free sine-cosine routine in the generated source
+  Libm,    ///< sin and cos of math.h
+};
+
 /// `header_name` is the file name the source includes (e.g. "puma560_dyn.h").
-CFiles emitC(const GeneratedCode& code, const std::string& header_name);
+CFiles emitC(const GeneratedCode& code, const std::string& header_name, CTrig trig = CTrig::Inline);
 
 /// A double as a C / Structured Text literal that reads back to the same value.
 std::string literal(double v, bool structured_text = false);
