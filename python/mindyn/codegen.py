@@ -154,11 +154,11 @@ def generate(
         in the joint frame before the joint motion): multiplications plus additions, ties to
         fewer additions (default), or additions first, ties to fewer multiplications.
     trig : {"inline", "libm"}, optional
-        C only: how sines and cosines are evaluated. ``"inline"`` (default): a routine in the
-        generated source, one per angle for the pair, without branches or calls for
-        ``|x| <= 1e6`` and within 2.2e-16 of the C library (which it calls beyond, and for NaN
-        and infinities); ``"libm"``: ``sin`` and ``cos`` of ``math.h``. Structured Text always
-        uses ``SIN`` and ``COS``.
+        C only: how sines and cosines are evaluated. ``"inline"`` (default): one call per
+        angle of a routine in the generated source gives both, without branches or library
+        calls for ``|x| <= 1e6`` and within 2.2e-16 of the C library (which it calls beyond, and
+        for NaN and infinities); ``"libm"``: ``sin`` and ``cos`` of ``math.h``. Structured Text
+        always uses ``SIN`` and ``COS``.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
     if lang not in ("c", "st"):
