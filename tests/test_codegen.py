@@ -125,15 +125,19 @@ def joint_terms(robot, dq, ddq, rotor: bool, friction: bool) -> np.ndarray:
 _DBL = ctypes.POINTER(ctypes.c_double)
 
 
-def compile_c(code, folder, name: str):
-    """Writes, compiles warning-free under -Werror and loads the generated C."""
-    header, source = code.write(folder / f"{name}.c")
-    so = folder / f"lib{name}.so"
-    cmd = [GCC, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O1", "-shared"]
+def compile_shared(source, so, optimise: str = "-O1"):
+    """Compiles C99 warning-free under -Werror into a shared object and loads it."""
+    cmd = [GCC, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", optimise, "-shared"]
     cmd += ["-fPIC", "-o", str(so), str(source), "-lm"]
     res = subprocess.run(cmd, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     return ctypes.CDLL(str(so))
+
+
+def compile_c(code, folder, name: str):
+    """Writes, compiles and loads the generated C."""
+    header, source = code.write(folder / f"{name}.c")
+    return compile_shared(source, folder / f"lib{name}.so")
 
 
 def ptr(a: np.ndarray):
@@ -167,18 +171,15 @@ class CFunctions:
 
 
 @pytest.mark.parametrize(
-    "name, minimise",
-    [(r, "operations") for r in ("puma560", "zcr07s", "ur5", "skewed6r", "rx90", "stanford")]
-    + [(r, "additions") for r in ("puma560", "zcr07s", "rx90")]
-    + [(r, "libm") for r in ("ur5", "stanford")],
+    "name, minimise, trig",
+    [(r, "operations", None) for r in ("puma560", "zcr07s", "ur5", "skewed6r", "rx90", "stanford")]
+    + [(r, "additions", None) for r in ("puma560", "zcr07s", "rx90")]
+    + [(r, "operations", "libm") for r in ("ur5", "stanford")],
 )
-def test_generated_c_matches_pinocchio(name, minimise, robots, tmp_path, rng):
-    # minimise="libm": the default objective, sines and cosines from math.h
+def test_generated_c_matches_pinocchio(name, minimise, trig, robots, tmp_path, rng):
     robot, model, rotor, friction, nb = robots[name]
     bp = mindyn.base_parameters(robot, rotor=rotor, friction=friction)
     assert bp.n == nb  # published counts (numerical method with Pinocchio), reference/robots.md
-    trig = "libm" if minimise == "libm" else None
-    minimise = "operations" if minimise == "libm" else minimise
     code = generate(robot, lang="c", base=bp, name=f"{name}_dyn", minimise=minimise, trig=trig)
     assert ("_sincos(" in code.source) == (trig is None)
     assert code.names == bp.names
@@ -253,11 +254,7 @@ def test_inline_sine_cosine_matches_the_c_library(tmp_path, rng):
         "  }\n"
         "}\n"
     )
-    so = tmp_path / "libcheck.so"
-    cmd = [GCC, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-O2", "-shared", "-fPIC"]
-    res = subprocess.run(cmd + ["-o", str(so), str(tmp_path / "check.c"), "-lm"], text=True)
-    assert res.returncode == 0
-    check = ctypes.CDLL(str(so)).check
+    check = compile_shared(tmp_path / "check.c", tmp_path / "libcheck.so", "-O2").check
     check.argtypes = [_DBL, ctypes.c_long, _DBL]
 
     def run(x):
