@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
+
+#include "mindyn/sincos.hpp"
 
 namespace mindyn {
 
@@ -17,6 +20,10 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
   const int N = g.size();
   const auto& uses = f.program.uses;
   auto isMul = [&g](Ref r) { return g.node(r.id()).op == Op::Mul; };
+  auto computed = [&g](int id) {
+    const Op o = g.node(id).op;
+    return o != Op::Const && o != Op::Input;
+  };
   // Products read by a single sum are fused into it.
   std::vector<char> fused(N, 0);
   for (int id : f.program.order) {
@@ -27,14 +34,28 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
     else if (isMul(n.b) && uses[n.b.id()] == 1)
       fused[n.b.id()] = 1;
   }
-  // Slots: constants (with 0 and 1) and inputs first, then the computed values.
+  // The sine and the cosine of one angle come from one instruction, the sine's when both are
+  // used: owner[id] is the instruction node that computes id.
+  std::vector<int> owner(N), partner(N, -1);
+  for (int id = 0; id < N; ++id) owner[id] = id;
+  {
+    std::unordered_map<std::uint32_t, int> sinOf;
+    for (int id : f.program.order)
+      if (g.node(id).op == Op::Sin) sinOf[g.node(id).a.bits()] = id;
+    for (int id : f.program.order)
+      if (g.node(id).op == Op::Cos) {
+        const auto it = sinOf.find(g.node(id).a.bits());
+        if (it == sinOf.end()) continue;
+        owner[id] = it->second;
+        partner[it->second] = id;
+      }
+  }
+  // Slots: constants (with 0) and inputs first, then the computed values, then the cosines
+  // computed with their sines, then one slot for an unused result.
   std::vector<std::uint32_t> slot(N, 0);
-  std::vector<char> needed(N, 0);
-  needed[0] = needed[1] = 1;
-  for (int id = 0; id < N; ++id) needed[id] = needed[id] || uses[id] > 0;
   for (int id = 0; id < N; ++id) {
     const Node& n = g.node(id);
-    if (!needed[id] || (n.op != Op::Const && n.op != Op::Input)) continue;
+    if ((id != 0 && uses[id] == 0) || computed(id)) continue;
     slot[id] = static_cast<std::uint32_t>(slots_.size());
     slots_.push_back(n.op == Op::Const ? n.value : 0.0);
     if (n.op == Op::Input)
@@ -42,22 +63,28 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
   }
   first_ = static_cast<std::uint32_t>(slots_.size());
 
-  std::vector<int> nodes;  // one per instruction
-  for (int id : f.program.order)
-    if (!fused[id]) nodes.push_back(id);
-  auto kindOf = [&g](int id) {
-    switch (g.node(id).op) {
+  auto kindOf = [&](int id) {
+    const Node& n = g.node(id);
+    switch (n.op) {
       case Op::Sin:
-        return Sin;
       case Op::Cos:
-        return Cos;
+        return SinCos;
       case Op::Sign:
         return Sign;
+      case Op::Mul:
+        return Mul;
       default:
-        return Arith;
+        break;
     }
+    // a + b with a positive; at most one of them a fused product x * y (positive factors)
+    if (fused[n.a.id()]) return n.b.negative() ? MulSub : MulAdd;
+    if (fused[n.b.id()]) return n.b.negative() ? SubMul : MulAdd;
+    return n.b.negative() ? Sub : Add;
   };
-  // The computed nodes an instruction reads (through a fused product too).
+  std::vector<int> nodes;  // one per instruction
+  for (int id : f.program.order)
+    if (!fused[id] && owner[id] == id) nodes.push_back(id);
+  // The instructions an instruction reads (through a fused product too).
   auto reads = [&](int id) {
     std::vector<int> r;
     const Node& n = g.node(id);
@@ -70,8 +97,7 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
         ops.push_back(g.node(x.id()).b);
         continue;
       }
-      const Op o = g.node(x.id()).op;
-      if (o != Op::Const && o != Op::Input) r.push_back(x.id());
+      if (computed(x.id())) r.push_back(owner[x.id()]);
     }
     std::sort(r.begin(), r.end());
     r.erase(std::unique(r.begin(), r.end()), r.end());
@@ -85,17 +111,37 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
       pending[id]++;
       readers[d].push_back(id);
     }
-  std::vector<std::vector<int>> ready(4);
+  std::vector<std::vector<int>> ready(kKinds);
   for (int id : nodes)
     if (pending[id] == 0) ready[kindOf(id)].push_back(id);
+  // How many instructions a run of kind k would take from here (what it makes ready included).
+  auto runLength = [&](int k) {
+    std::vector<int> left = pending, todo = ready[k];
+    size_t len = 0;
+    while (!todo.empty()) {
+      const int id = todo.back();
+      todo.pop_back();
+      ++len;
+      for (int r : readers[id])
+        if (--left[r] == 0 && kindOf(r) == k) todo.push_back(r);
+    }
+    return len;
+  };
   std::vector<int> order;
   order.reserve(nodes.size());
   int kind = -1;
   while (order.size() < nodes.size()) {
     if (kind < 0 || ready[kind].empty()) {
-      kind = 0;
-      for (int k = 1; k < 4; ++k)
-        if (ready[k].size() > ready[kind].size()) kind = k;
+      // the kind whose run, taken to the end, is the longest
+      size_t longest = 0;
+      for (int k = 0; k < kKinds; ++k) {
+        if (ready[k].empty()) continue;
+        const size_t len = runLength(k);
+        if (len > longest) {
+          longest = len;
+          kind = k;
+        }
+      }
       runs_.push_back({static_cast<Kind>(kind), static_cast<std::uint32_t>(order.size()), 0});
     }
     std::vector<int> batch;
@@ -111,28 +157,39 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
   for (size_t i = 0; i < runs_.size(); ++i)
     runs_[i].end =
         i + 1 < runs_.size() ? runs_[i + 1].begin : static_cast<std::uint32_t>(order.size());
+  std::uint32_t next = first_ + static_cast<std::uint32_t>(order.size());
+  for (int id : order)
+    if (partner[id] >= 0) slot[partner[id]] = next++;
+  const std::uint32_t unused = next++;
+  slots_.resize(next, 0.0);
   code_.reserve(order.size());
-  const std::uint32_t one = slot[1];
   for (int id : order) {
     const Node& n = g.node(id);
-    Instruction in{slot[n.a.id()], one, slot[0], 1.0, 0.0};
-    if (n.op == Op::Mul) {
-      in.b = slot[n.b.id()];
-    } else if (n.op == Op::Add) {
-      // a + sb * b, one of them possibly a fused product x * y
-      Ref prod = n.a, other = n.b;
-      if (!fused[n.a.id()]) std::swap(prod, other);
-      if (fused[prod.id()]) {
+    Instruction in{slot[n.a.id()], slot[n.b.id()], 0};
+    switch (kindOf(id)) {
+      case SinCos: {
+        const bool isSin = n.op == Op::Sin;
+        const std::uint32_t other = partner[id] >= 0 ? slot[partner[id]] : unused;
+        in.b = isSin ? slot[id] : other;
+        in.c = isSin ? other : slot[id];
+        break;
+      }
+      case Mul:
+      case Sign:
+        break;
+      case Add:
+      case Sub:
+        in = {slot[n.a.id()], 0, slot[n.b.id()]};
+        break;
+      default: {  // a fused product and a sum
+        const Ref prod = fused[n.a.id()] ? n.a : n.b, other = fused[n.a.id()] ? n.b : n.a;
         const Node& m = g.node(prod.id());
-        in = {slot[m.a.id()], slot[m.b.id()], slot[other.id()], prod.negative() ? -1.0 : 1.0,
-              other.negative() ? -1.0 : 1.0};
-      } else {
-        in = {slot[n.a.id()], one, slot[n.b.id()], 1.0, n.b.negative() ? -1.0 : 1.0};
+        in = {slot[m.a.id()], slot[m.b.id()], slot[other.id()]};
+        break;
       }
     }
     code_.push_back(in);
   }
-  slots_.resize(first_ + order.size(), 0.0);
   for (Ref r : f.outputs) outputs_.emplace_back(slot[r.id()], r.negative());
 }
 
@@ -149,19 +206,31 @@ void Tape::run(const double* q, const double* dq, const double* ddq, const doubl
   const Instruction* c = code_.data();
   double* dst = v + first_;
   for (const Run& r : runs_) {
+    const std::uint32_t b = r.begin, e = r.end;
     switch (r.kind) {
-      case Arith:
-        for (std::uint32_t i = r.begin; i < r.end; ++i)
-          dst[i] = c[i].sp * (v[c[i].a] * v[c[i].b]) + c[i].s * v[c[i].c];
+      case Mul:
+        for (std::uint32_t i = b; i < e; ++i) dst[i] = v[c[i].a] * v[c[i].b];
         break;
-      case Sin:
-        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = std::sin(v[c[i].a]);
+      case Add:
+        for (std::uint32_t i = b; i < e; ++i) dst[i] = v[c[i].a] + v[c[i].c];
         break;
-      case Cos:
-        for (std::uint32_t i = r.begin; i < r.end; ++i) dst[i] = std::cos(v[c[i].a]);
+      case Sub:
+        for (std::uint32_t i = b; i < e; ++i) dst[i] = v[c[i].a] - v[c[i].c];
+        break;
+      case MulAdd:
+        for (std::uint32_t i = b; i < e; ++i) dst[i] = v[c[i].a] * v[c[i].b] + v[c[i].c];
+        break;
+      case MulSub:
+        for (std::uint32_t i = b; i < e; ++i) dst[i] = v[c[i].a] * v[c[i].b] - v[c[i].c];
+        break;
+      case SubMul:
+        for (std::uint32_t i = b; i < e; ++i) dst[i] = v[c[i].c] - v[c[i].a] * v[c[i].b];
+        break;
+      case SinCos:
+        for (std::uint32_t i = b; i < e; ++i) sinCos(v[c[i].a], v[c[i].b], v[c[i].c]);
         break;
       case Sign:
-        for (std::uint32_t i = r.begin; i < r.end; ++i) {
+        for (std::uint32_t i = b; i < e; ++i) {
           const double x = v[c[i].a];
           dst[i] = x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0);
         }

@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 
 #include "malloc_counter.hpp"
 #include "mindyn/base_dynamics.hpp"
 #include "mindyn/codegen/emit_c.hpp"
 #include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
+#include "mindyn/sincos.hpp"
 #include "mindyn/urdf.hpp"
 #include "test_util.hpp"
 
@@ -293,6 +296,77 @@ TEST(BaseDynamics, TapesMatchTheClassicalRecursionAndAllocateNothing) {
     EXPECT_LT(relErr(t2, tg), 1e-12) << name;
     EXPECT_LT((Wt - Wb).norm() / std::max(1.0, Wb.norm()), 1e-12) << name;
   }
+}
+
+TEST(SinCos, WithinOneRoundingOfTheCLibrary) {
+  std::mt19937 rng(11);
+  std::vector<double> xs{0.0,    -0.0, 4.9e-324, -4.9e-324, 2.2e-308,
+                         1e-300, 1e-8, -1e-3,    1.0e6,     -1.0e6};
+  for (double range : {M_PI, 50.0, 1.0e6}) {
+    std::uniform_real_distribution<double> u(-range, range);
+    for (int i = 0; i < 100000; ++i) xs.push_back(u(rng));
+  }
+  std::uniform_real_distribution<double> tiny(-1e-9, 1e-9);
+  for (int k = -2000; k <= 2000; ++k) {
+    xs.push_back(k * M_PI_2 + tiny(rng));          // quadrant boundaries
+    xs.push_back((k + 0.5) * M_PI_2 + tiny(rng));  // where the chosen quadrant changes
+  }
+  for (double x : xs) {
+    double s, c;
+    sinCos(x, s, c);
+    const double bound = std::abs(x) < 1e-3 ? 2.3e-16 * std::abs(std::sin(x)) : 2.3e-16;
+    ASSERT_LE(std::abs(s - std::sin(x)), bound) << std::hexfloat << x;
+    ASSERT_LE(std::abs(c - std::cos(x)), 2.3e-16) << std::hexfloat << x;
+  }
+  // beyond 1e6 rad, NaN and infinities: the C library's values, bit for bit
+  const double inf = std::numeric_limits<double>::infinity();
+  for (double x : {std::nextafter(1.0e6, 2.0e6), -1.0e7, 1e300, inf, -inf,
+                   std::numeric_limits<double>::quiet_NaN()}) {
+    double s, c;
+    sinCos(x, s, c);
+    const double rs = std::sin(x), rc = std::cos(x);
+    EXPECT_EQ(std::memcmp(&s, &rs, sizeof s), 0) << x;
+    EXPECT_EQ(std::memcmp(&c, &rc, sizeof c), 0) << x;
+  }
+}
+
+// Every kind of tape instruction: lone sines and cosines and pairs, products, sums and
+// differences, products fused into a sum from either side, signs; against direct formulas.
+TEST(BaseDynamics, TapeEvaluatesEveryInstructionKind) {
+  GeneratedFunction f;
+  Graph& g = f.graph;
+  auto in = [&g](InputKind k, int i) { return Sym{&g, g.input(k, i)}; };
+  const Sym q0 = in(InputKind::Q, 0), q1 = in(InputKind::Q, 1), q2 = in(InputKind::Q, 2);
+  const Sym d0 = in(InputKind::DQ, 0), d1 = in(InputKind::DQ, 1), d2 = in(InputKind::DQ, 2);
+  const Sym a0 = in(InputKind::DDQ, 0), a1 = in(InputKind::DDQ, 1), a2 = in(InputKind::DDQ, 2);
+  const Sym p0 = in(InputKind::P, 0);
+  const Sym s2{&g, g.sin(q2.r)}, c2{&g, g.cos(q2.r)};
+  const std::vector<Sym> outs{
+      {&g, g.sin(q0.r)}, {&g, g.cos(q1.r)},  s2 * c2 + p0,      d0 * d1,      d0 + d1,
+      d0 - d1,           d0 * a1 + a0,       d1 * a0 - a1,      a2 - d2 * a0, -(d2 * d1),
+      2.5 * p0,          {&g, g.sign(d0.r)}, {&g, g.sign(d2.r)}};
+  for (const Sym& o : outs) f.outputs.push_back(o.r);
+  f.program = schedule(g, f.outputs);
+  Tape tape(f);
+  const double q[3] = {0.7, -2.9, 123.4}, dq[3] = {-1.3, 0.4, 0.0}, ddq[3] = {2.2, -0.6, 1.9};
+  const double p[1] = {-0.35};
+  const std::vector<double> expected{std::sin(q[0]),
+                                     std::cos(q[1]),
+                                     std::sin(q[2]) * std::cos(q[2]) + p[0],
+                                     dq[0] * dq[1],
+                                     dq[0] + dq[1],
+                                     dq[0] - dq[1],
+                                     dq[0] * ddq[1] + ddq[0],
+                                     dq[1] * ddq[0] - ddq[1],
+                                     ddq[2] - dq[2] * ddq[0],
+                                     -(dq[2] * dq[1]),
+                                     2.5 * p[0],
+                                     -1.0,
+                                     0.0};
+  std::vector<double> out(expected.size());
+  tape.run(q, dq, ddq, p, out.data());
+  for (size_t i = 0; i < out.size(); ++i) EXPECT_NEAR(out[i], expected[i], 1e-15) << i;
+  EXPECT_EQ(tape.count().trig, 4);
 }
 
 TEST(BaseDynamics, TheCounterSeesAllocations) {

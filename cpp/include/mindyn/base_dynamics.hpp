@@ -4,11 +4,13 @@
 // At setup the recursion is written into an expression graph (codegen/newton_euler.hpp) with
 // the model's exact geometric zeros and ones and with p_b at the pivot positions of the
 // classical vector (every non-base entry exactly zero), folded, de-duplicated and pruned; what
-// remains is flattened into a tape. Every arithmetic step is one uniform instruction
-// x = sp * (a * b) + s * c (a product feeding a single sum is fused into it), so the evaluation
-// loop does not branch per operation; sin, cos and sign run in their own short loops. The
-// per-call functions allocate nothing and throw nothing; sizes are preconditions (the Python
-// binding checks them). One object per thread: the workspace is inside.
+// remains is flattened into a tape of instructions of a few kinds: a * b, a + b, a - b, and a
+// product feeding a single sum fused into it (a * b + c, a * b - c, c - a * b); the sine and
+// cosine of one angle together (mindyn/sincos.hpp); sign. Instructions are ordered into runs of
+// one kind, each evaluated by its own loop, so that the evaluation branches per run, not per
+// operation. The per-call functions allocate nothing and throw nothing; sizes are
+// preconditions (the Python binding checks them). One object per thread: the workspace is
+// inside.
 #pragma once
 
 #include <Eigen/Core>
@@ -34,19 +36,21 @@ class Tape {
 
   /// Operation counts of the generated function (before fusing).
   const codegen::OpCount& count() const { return count_; }
-  /// Tape instructions (fused) and runs of one kind.
+  /// Tape instructions (fused; one per sine-cosine pair) and runs of one kind.
   int instructions() const { return static_cast<int>(code_.size()); }
   int runs() const { return static_cast<int>(runs_.size()); }
 
  private:
-  enum Kind : std::uint8_t { Arith, Sin, Cos, Sign };
+  // Mul: a * b; Add, Sub: a + c, a - c; MulAdd, MulSub: a * b + c, a * b - c; SubMul:
+  // c - a * b; SinCos: sin a to slot b, cos a to slot c; Sign: sign(a).
+  enum Kind : std::uint8_t { Mul, Add, Sub, MulAdd, MulSub, SubMul, SinCos, Sign };
+  static constexpr int kKinds = 8;
   struct Run {
     Kind kind;
     std::uint32_t begin, end;  // range in code_; results go to slots first_ + begin ...
   };
   struct Instruction {
-    std::uint32_t a, b, c;  // Arith: sp * (v[a] * v[b]) + s * v[c]; others: f(v[a])
-    double sp, s;
+    std::uint32_t a, b, c;  // slots
   };
   struct Load {
     std::uint32_t slot;

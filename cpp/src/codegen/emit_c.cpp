@@ -6,6 +6,8 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "mindyn/sincos.hpp"
+
 namespace mindyn::codegen {
 
 std::string literal(double v, bool structured_text) {
@@ -92,24 +94,10 @@ std::vector<std::string> describe(const GeneratedCode& code) {
 
 namespace {
 
-// The sine-cosine routine of the generated source. x = k pi/2 + r with k the nearest integer
-// (through a truncating conversion of a positive number, so that no floating-point rounding trick
-// can be undone by a compiler's reassociation) and |r| <= pi/4 + tiny; pi/2 in two parts, the
-// first with 32 significant bits so that k times it is exact for |k| < 2^21. On r, with z = r^2:
-//   sin r = r + r z S(z),   cos r = (1 - z/2) + z^2 C(z),
-// S and C of degree 5, interpolating (sin r - r)/(r z) and (cos r - 1 + z/2)/z^2 at the six
-// Chebyshev nodes of z in [0, (pi/4)^2] (60-digit arithmetic; their own error is below 1e-17),
-// evaluated in Estrin's scheme for a short dependency chain. The quadrant k mod 4 selects
-// (cos, sin) of k pi/2 from a table and the angle-sum formulas combine them, without a branch.
-constexpr double kTwoOverPi = 0x1.45f306dc9c883p-1;
-constexpr double kHalfPiHead = 0x1.921fb54400000p+0;   // 32 significant bits
-constexpr double kHalfPiTail = 0x1.0b4611a626331p-34;  // pi/2 - kHalfPiHead
-constexpr double kSin[6] = {-0x1.5555555555555p-3, 0x1.1111111110bb2p-7,   -0x1.a01a019e83aaep-13,
-                            0x1.71de37968a100p-19, -0x1.ae600b02b6262p-26, 0x1.5e0b19f8b1451p-33};
-constexpr double kCos[6] = {0x1.5555555555555p-5,   -0x1.6c16c16c16967p-10, 0x1.a01a019f4eb01p-16,
-                            -0x1.27e4fa17da09ep-22, 0x1.1eeb68e93b64cp-29,  -0x1.907da367a37cbp-37};
-
+// The sine-cosine routine of the generated source: mindyn::sinCos (mindyn/sincos.hpp, where the
+// method is described) written out in C with the same constants.
 std::string sincosRoutine(const std::string& name) {
+  using namespace sincos_constants;
   // a + z b, as "a + z * b" or "a - z * |b|"
   const auto pair = [](double a, double b) {
     return literal(a) + (b < 0 ? " - z * " : " + z * ") + literal(std::abs(b));
@@ -120,11 +108,15 @@ std::string sincosRoutine(const std::string& name) {
         " * library; beyond, and for NaN and infinities, the C library's. Reassociating compiler\n"
         " * options (-ffast-math) merge the two parts of pi/2: the error is then about 1e-16 |x|. "
         "*/\n";
-  os << "static const double " << name << "_quadrant[4][2] = {{1.0, 0.0}, {0.0, 1.0}, "
-     << "{-1.0, 0.0}, {0.0, -1.0}};\n\n";
+  os << "static const double " << name << "_quadrant[4][2] = {";
+  for (int k = 0; k < 4; ++k)
+    os << (k ? ", {" : "{") << literal(kQuadrant[k][0]) << ", " << literal(kQuadrant[k][1]) << "}";
+  os << "};\n\n";
   os << "static inline void " << name << "_sincos(const double x, double* s, double* c) {\n";
-  os << "  if (!(fabs(x) <= 1.0e6)) {\n    *s = sin(x);\n    *c = cos(x);\n    return;\n  }\n";
-  os << "  const long k = (long)(x * " << literal(kTwoOverPi) << " + 2097152.5) - 2097152L;\n";
+  os << "  if (!(fabs(x) <= " << literal(kLimit) << ")) {\n"
+     << "    *s = sin(x);\n    *c = cos(x);\n    return;\n  }\n";
+  os << "  const long k = (long)(x * " << literal(kTwoOverPi) << " + "
+     << literal(static_cast<double>(kOffset) + 0.5) << ") - " << kOffset << "L;\n";
   os << "  const double kd = (double)k;\n";
   os << "  const double r = (x - kd * " << literal(kHalfPiHead) << ") - kd * "
      << literal(kHalfPiTail) << ";\n";
