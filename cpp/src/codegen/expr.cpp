@@ -118,6 +118,7 @@ Ref Graph::add(Ref a, Ref b) {
   if (b.id() == 0) return a;
   if (isConstant(a) && isConstant(b)) return constant(constantValue(a) + constantValue(b));
   if (a.abs() == b.abs() && a != b) return zero();
+  if (a == b) return mul(constant(2.0), a);  // x + x = 2 x, which gathers with other constants
   // Cancellation one level down: x + (-x + y) = y.
   for (int side = 0; side < 2; ++side) {
     const Ref s = side ? a : b, t = side ? b : a;

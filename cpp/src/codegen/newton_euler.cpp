@@ -415,7 +415,12 @@ class Builder {
     const Ref bb = p[tensorIndex(b, b)], dd = p[tensorIndex(d, d)], bd = p[tensorIndex(b, d)];
     const Ref ba = p[tensorIndex(b, a)], da = p[tensorIndex(d, a)];
     const Ref cc = g_.mul(c, c), ss = g_.mul(s, s), cs = g_.mul(c, s);
-    const Ref cos2 = g_.sub(cc, ss), sin2 = g_.mul(g_.constant(2.0), cs);
+    Ref cos2 = g_.sub(cc, ss), sin2 = g_.mul(g_.constant(2.0), cs);
+    if (form == 3) {  // no need for c^2, s^2, c s: with 2 s, sin 2q = c (2 s), cos 2q = 1 - s (2 s)
+      const Ref s2 = g_.mul(g_.constant(2.0), s);
+      sin2 = g_.mul(c, s2);
+      cos2 = g_.sub(Graph::one(), g_.mul(s, s2));
+    }
     Body out;
     auto put = [&out](Ref par, std::initializer_list<std::array<int, 3>> entries) {
       Sym3 T{};
