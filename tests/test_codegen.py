@@ -22,6 +22,7 @@ import pytest
 import tree_sitter
 import tree_sitter_iec61131_3_st
 from conftest import (
+    URDFS,
     assert_close,
     load_urdf_pair,
     pinocchio_model,
@@ -306,6 +307,25 @@ def test_operation_count_target_for_a_puma_class_arm(robots):
     assert c["mul"] <= 250 and c["add"] <= 220, c
     d = generate(robot, what="id").counts["inverse_dynamics"]
     assert d["mul"] + d["add"] <= c["mul"] + c["add"] and d["add"] >= c["add"], (c, d)
+
+
+def test_truncated_right_angles_are_taken_as_exact_and_reported(robots, tmp_path, capsys):
+    # The UR5 URDF turns two joint frames by the pitch 1.57079632679 (pi/2 to 11 decimals): in
+    # each rotation two entries are cos(1.57079632679) = 4.9e-12, taken as 0 (the values still
+    # match Pinocchio's on the unrounded model to 1e-10, test_generated_c_matches_pinocchio).
+    ur5 = robots["ur5"][0]
+    code = generate(ur5, what="id,gravity")
+    snap = code.geometry_snap
+    assert snap["count"] == 4 and snap["tolerance"] == 1e-9, snap
+    assert snap["largest"] == pytest.approx(abs(np.cos(1.57079632679)), rel=1e-6)
+    assert "Geometry: 4 constants within 1e-09 of 0 or +-1 taken as exact" in code.header
+    assert BaseDynamics(mindyn.base_parameters(ur5)).geometry_snap == snap
+    exact = generate(robots["puma560"][0], what="id")  # DH in degrees: round-off residues only
+    assert exact.geometry_snap["count"] == 0 and "Geometry:" not in exact.header
+    assert main(["codegen", str(URDFS["ur5"]), "--lang", "st", "-o", str(tmp_path / "u.st")]) == 0
+    out = capsys.readouterr().out
+    assert "geometry: 4 constants within 1e-09 of 0 or +-1 taken as exact" in out
+    assert "(largest change 4.9e-12)" in out
 
 
 def test_unknown_objective_is_refused(robots):

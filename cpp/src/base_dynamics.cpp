@@ -256,9 +256,14 @@ BaseDynamics::BaseDynamics(const Model& model, const BaseParameters& base)
 
 BaseDynamics::BaseDynamics(const Model& model, const codegen::ParameterSet& ps)
     : n_(model.nq()), np_(ps.size()), layout_(ps.layout), names_(ps.names) {
-  id_ = Tape(codegen::generate(model, ps, Function::InverseDynamics));
-  gravity_ = Tape(codegen::generate(model, ps, Function::Gravity));
-  regressor_ = Tape(codegen::generate(model, ps, Function::Regressor));
+  for (Function f : {Function::InverseDynamics, Function::Gravity, Function::Regressor}) {
+    const GeneratedFunction g = codegen::generate(model, ps, f);
+    (f == Function::InverseDynamics ? id_
+     : f == Function::Gravity       ? gravity_
+                                    : regressor_) = Tape(g);
+    snap_.count = std::max(snap_.count, g.snap.count);
+    snap_.largest = std::max(snap_.largest, g.snap.largest);
+  }
   qb_.resize(n_);
   dqb_.resize(n_);
   ddqb_.resize(n_);

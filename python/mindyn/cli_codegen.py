@@ -17,7 +17,8 @@ def register(subparsers) -> None:
         description="Generate the Newton-Euler recursion customised to the robot, in its base "
         "parameters, as C99 (header + source) or IEC 61131-3 Structured Text, and print its "
         "operation counts beside those of the classical-parameter recursion generated the "
-        "same way.",
+        "same way. Constants of the geometry within 1e-9 of 0 or +-1 are taken as exact; how "
+        "many (beyond round-off) is printed and stated in the generated header.",
     )
     add_robot(p)
     p.add_argument("--lang", choices=["c", "st"], required=True, help="C99 or Structured Text")
@@ -94,6 +95,12 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         + f"; {len(classical.names)} classical"
     )
     print("wrote " + ", ".join(str(w) for w in written))
+    snap = code.geometry_snap
+    if snap["count"]:
+        print(
+            f"geometry: {snap['count']} constants within {snap['tolerance']:g} of 0 or +-1 "
+            f"taken as exact (largest change {snap['largest']:.2g})"
+        )
     print()
     print(f"{'function':<18}{'base parameters':>22}    {'classical parameters':>22}")
     print(f"{'':<18}{'mul':>8}{'add':>7}{'trig':>7}    {'mul':>8}{'add':>7}{'trig':>7}")

@@ -53,6 +53,11 @@ class GeneratedCode:
         The parameters ``p`` in order.
     values : ndarray, shape (np,)
         Their values (the robot's own, or those given; baked in when ``numeric``).
+    geometry_snap : dict
+        Constants of the geometry (joint transforms and axes, gravity) within ``tolerance``
+        (1e-9) of 0 or +-1 are taken as exact; ``count``: how many changed by more than
+        round-off (e.g. cos 1.57079632679 = 4.9e-12 from a URDF's truncated pi/2), ``largest``:
+        the largest change. Also stated in the generated header comment.
     """
 
     def __init__(self, lang: str, name: str, out: dict, numeric: bool, header_name: str):
@@ -66,6 +71,7 @@ class GeneratedCode:
         self.counts = {k: dict(v) for k, v in out["counts"].items()}
         self.names = list(out["names"])
         self.values = np.asarray(out["values"], dtype=float)
+        self.geometry_snap = dict(out["geometry_snap"])
 
     def write(self, path: str | Path) -> list[Path]:
         """Writes the code: C to ``path`` (``.c`` added when missing) and the header beside it
@@ -287,6 +293,8 @@ class BaseDynamics:
     names : list of str
     counts : dict
         Operation counts per function.
+    geometry_snap : dict
+        Geometric constants taken as exactly 0 or +-1, as in :class:`GeneratedCode`.
     """
 
     def __init__(self, base: BaseParameters):
@@ -297,6 +305,7 @@ class BaseDynamics:
     np = property(lambda self: self._d.np)
     names = property(lambda self: self._d.names)
     counts = property(lambda self: self._d.counts)
+    geometry_snap = property(lambda self: self._d.geometry_snap)
 
     def inverse_dynamics(self, q, dq, ddq, p=None) -> np.ndarray:
         """tau, shape (n,) or (m, n) for batches of q, dq, ddq; ``p`` shape (np,), default the

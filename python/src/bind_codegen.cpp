@@ -29,6 +29,14 @@ Function functionOf(const std::string& what) {
                         "' (inverse_dynamics or id, gravity, regressor)");
 }
 
+py::dict snapDict(const GeometrySnap& g) {
+  py::dict d;
+  d["count"] = g.count;
+  d["largest"] = g.largest;
+  d["tolerance"] = kGeometrySnap;
+  return d;
+}
+
 py::dict counts(const OpCount& c) {
   py::dict d;
   d["mul"] = c.mul;
@@ -90,6 +98,7 @@ void bindCodegen(py::module_& m) {
         out["counts"] = c;
         out["names"] = ps.names;
         out["values"] = code.values;
+        out["geometry_snap"] = snapDict(geometrySnap(code));
         return out;
       },
       py::arg("model"), py::arg("base"), py::arg("rotor") = false, py::arg("friction") = false,
@@ -113,6 +122,10 @@ void bindCodegen(py::module_& m) {
       .def_property_readonly("n", [](const PyBaseDynamics& s) { return s.bd->nq(); })
       .def_property_readonly("np", [](const PyBaseDynamics& s) { return s.bd->np(); })
       .def_property_readonly("names", [](const PyBaseDynamics& s) { return s.bd->names(); })
+      .def_property_readonly(
+          "geometry_snap", [](const PyBaseDynamics& s) { return snapDict(s.bd->geometrySnap()); },
+          "Constants of the geometry within `tolerance` of 0 or +-1 taken as exact: how many "
+          "beyond round-off (`count`) and the largest change (`largest`).")
       .def_property_readonly(
           "counts",
           [](const PyBaseDynamics& s) {

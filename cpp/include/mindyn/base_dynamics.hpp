@@ -89,12 +89,15 @@ class BaseDynamics {
 
   /// Operation counts of the three tapes.
   const codegen::OpCount& count(codegen::Function f) const;
+  /// Geometric constants taken as exactly 0 or +-1 (codegen::kGeometrySnap), over the tapes.
+  const codegen::GeometrySnap& geometrySnap() const { return snap_; }
 
  private:
   int n_ = 0, np_ = 0;
   ParameterLayout layout_;
   std::vector<std::string> names_;
   Tape id_, gravity_, regressor_;
+  codegen::GeometrySnap snap_;
   Eigen::VectorXd qb_, dqb_, ddqb_, pb_, out_;
 };
 

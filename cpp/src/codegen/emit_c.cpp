@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <unordered_map>
 
@@ -59,6 +60,15 @@ std::vector<std::string> describe(const GeneratedCode& code) {
   std::istringstream whatLines(wrap(what + ".", 90, "  "));
   for (std::string part; std::getline(whatLines, part);) lines.push_back(part);
   lines.push_back("Units SI; gravity and all frames as in the robot description.");
+  const GeometrySnap snap = geometrySnap(code);
+  if (snap.count > 0) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "Geometry: %d constants within %.2g of 0 or +-1 taken as exact (largest "
+                  "change %.2g).",
+                  snap.count, kGeometrySnap, snap.largest);
+    lines.push_back(buf);
+  }
   lines.push_back("");
   lines.push_back(
       "Operation counts (multiplications, additions, sines and cosines), the formulation");

@@ -1,5 +1,6 @@
 #include "mindyn/codegen/newton_euler.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
@@ -23,15 +24,25 @@ struct Body {
   Ref mass;
 };
 
-// Constants of the geometry within this of 0 or +-1 are taken as exactly that: rotations by
-// multiples of 90 degrees leave 1e-17 residues.
-constexpr double kSnap = 1e-14;
-
+// Constants of the geometry within kGeometrySnap of 0 or +-1 are taken as exactly that: rotations
+// by multiples of 90 degrees leave 1e-17 residues, and angles written with a truncated pi/2
+// (1.57079632679 in many URDF files) 5e-12 ones.
 double cleanValue(double x) {
-  if (std::abs(x) < kSnap) return 0.0;
-  if (std::abs(x - 1.0) < kSnap) return 1.0;
-  if (std::abs(x + 1.0) < kSnap) return -1.0;
+  if (std::abs(x) < kGeometrySnap) return 0.0;
+  if (std::abs(x - 1.0) < kGeometrySnap) return 1.0;
+  if (std::abs(x + 1.0) < kGeometrySnap) return -1.0;
   return x;
+}
+
+// Records what cleanValue changed beyond round-off (when a report is asked for).
+void noteSnaps(const double* x, int size, GeometrySnap* report) {
+  if (!report) return;
+  for (int i = 0; i < size; ++i) {
+    const double change = std::abs(cleanValue(x[i]) - x[i]);
+    if (change <= GeometrySnap::kRoundOff) continue;
+    ++report->count;
+    report->largest = std::max(report->largest, change);
+  }
 }
 
 struct Rigid {
@@ -40,10 +51,14 @@ struct Rigid {
   bool identity() const { return R.isIdentity(0.0) && t.isZero(0.0); }
 };
 
-Rigid rigid(const Eigen::Isometry3d& T) {
+Rigid rigid(const Eigen::Isometry3d& T, GeometrySnap* report) {
   Rigid r;
   r.R = T.linear().unaryExpr(&cleanValue);
   r.t = T.translation().unaryExpr(&cleanValue);
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d t = T.translation();
+  noteSnaps(R.data(), 9, report);
+  noteSnaps(t.data(), 3, report);
   return r;
 }
 
@@ -88,7 +103,8 @@ struct Plan {
 
 // The stages of every joint. A DH/MDH angle offset theta is moved out of the constant
 // transforms into the joint angle, so that right-angle twists keep their exact zeros.
-std::vector<JointStages> jointStages(const Model& model, const std::vector<AxisShift>& shift) {
+std::vector<JointStages> jointStages(const Model& model, const std::vector<AxisShift>& shift,
+                                     GeometrySnap* report = nullptr) {
   std::vector<JointStages> out;
   const int n = model.nq();
   const bool dh = model.convention == "dh" && static_cast<int>(model.dh.size()) == n;
@@ -98,6 +114,7 @@ std::vector<JointStages> jointStages(const Model& model, const std::vector<AxisS
     JointStages s;
     s.type = j.type;
     s.u = j.axis.unaryExpr(&cleanValue);
+    noteSnaps(j.axis.data(), 3, report);
     Eigen::Isometry3d pre = j.pre, post = j.post;
     const double theta = (dh || mdh) ? model.dh[k].theta : 0.0;
     if (j.type == JointType::Revolute && theta != 0.0) {
@@ -126,8 +143,8 @@ std::vector<JointStages> jointStages(const Model& model, const std::vector<AxisS
         }
       }
     }
-    s.pre = rigid(pre);
-    s.post = rigid(post);
+    s.pre = rigid(pre, report);
+    s.post = rigid(post, report);
     out.push_back(s);
   }
   return out;
@@ -806,6 +823,9 @@ GeneratedFunction generate(const Model& model, const ParameterSet& params, Funct
     }
     if (!improved) break;
   }
+  jointStages(model, plan.shift, &best.snap);
+  const Eigen::Vector3d gravity = model.gravity;
+  noteSnaps(gravity.data(), 3, &best.snap);
   return best;
 }
 
@@ -817,6 +837,14 @@ GeneratedFunction detail::generateWithLinkForm(const Model& model, const Paramet
   Plan plan{std::vector<AxisShift>(n, AxisShift::Keep),
             std::vector<LinkForm>(n, LinkForm{form % 4, form >= 4})};
   return generateWith(model, params, function, false, {}, plan);
+}
+
+GeometrySnap geometrySnap(const GeneratedCode& code) {
+  GeometrySnap out;
+  for (const auto& f : code.functions)
+    if (f.snap.count > out.count) out.count = f.snap.count;
+  for (const auto& f : code.functions) out.largest = std::max(out.largest, f.snap.largest);
+  return out;
 }
 
 void checkIdentifier(const std::string& name) {

@@ -55,6 +55,19 @@ ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp);
 /// All classical parameters of a layout (E = identity).
 ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout);
 
+/// Constants of the geometry (joint transforms and axes, gravity) within this of 0 or +-1 are
+/// taken as exactly 0 or +-1 in the generated recursion, so that their products vanish or are
+/// free: beyond round-off this affects descriptions written with a truncated pi/2, such as the
+/// rpy 1.57079632679 of many URDF files (cos = 4.9e-12). GeometrySnap reports what changed.
+inline constexpr double kGeometrySnap = 1e-9;
+
+/// The constants kGeometrySnap changed by more than round-off (kRoundOff), and the largest change.
+struct GeometrySnap {
+  static constexpr double kRoundOff = 1e-14;
+  int count = 0;
+  double largest = 0.0;
+};
+
 /// One generated function.
 struct GeneratedFunction {
   Function function = Function::InverseDynamics;
@@ -65,6 +78,7 @@ struct GeneratedFunction {
   /// tau (n entries) or the regressor, row-major n x np.
   std::vector<Ref> outputs;
   Program program;
+  GeometrySnap snap;  // of the chosen formulation
 };
 
 /// What the choice among the exact formulations minimises: multiplications plus additions
@@ -109,6 +123,9 @@ GeneratedCode generateCode(const Model& model, const ParameterSet& params,
                            const std::vector<Function>& functions, const std::string& name,
                            bool numeric = false, const Eigen::VectorXd& values = {},
                            Objective objective = Objective::Operations);
+
+/// What the geometry snap changed, over all functions of `code`.
+GeometrySnap geometrySnap(const GeneratedCode& code);
 
 /// `name` if it is a valid C and Structured Text identifier, otherwise throws ModelError.
 void checkIdentifier(const std::string& name);
