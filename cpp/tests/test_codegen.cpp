@@ -196,6 +196,50 @@ TEST(Codegen, EveryLinkFormMatchesTheClassicalRecursion) {
   }
 }
 
+// Geometric constants within kGeometrySnap of 0 or +-1 are taken as exact and reported; what is
+// derived from them (the rotation about a general axis) keeps products below that tolerance:
+// an axis 3e-5 off z has u_x u_y = 9e-10, which still turns the link.
+TEST(Codegen, GeometrySnapIsReportedAndLeavesDerivedConstantsAlone) {
+  std::mt19937 rng(13);
+  const auto arm = [](const std::string& rpy, const std::string& axis) {
+    return R"(<robot name="snap"><link name="b"/>
+    <link name="l1"><inertial><origin xyz="0.1 -0.05 0.2" rpy="0 0 0"/><mass value="2"/>
+      <inertia ixx="0.05" ixy="0.01" ixz="-0.004" iyy="0.04" iyz="0.003" izz="0.03"/></inertial></link>
+    <link name="l2"><inertial><origin xyz="-0.2 0.1 0.05" rpy="0 0 0"/><mass value="1.5"/>
+      <inertia ixx="0.02" ixy="0.002" ixz="0.001" iyy="0.03" iyz="-0.002" izz="0.025"/></inertial></link>
+    <joint name="j1" type="revolute"><parent link="b"/><child link="l1"/><origin xyz="0 0 0.3" rpy="0.4 0 0"/>
+      <axis xyz=")" +
+           axis + R"("/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+    <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="0.3 0 0" rpy=")" +
+           rpy +
+           R"("/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+    </robot>)";
+  };
+  for (const bool truncated : {false, true}) {
+    const Model model = parseUrdf(arm(truncated ? "0 1.57079632679 0" : "0 0.7 0",
+                                      truncated ? "0 0 1" : "0.00003 0.00003 1"));
+    Data data(model);
+    const int n = model.nq();
+    const ParameterLayout layout{false, false};
+    const BaseParameters bp = computeBaseParameters(model, {});
+    const auto id = generate(model, baseParameterSet(model, bp), Function::InverseDynamics);
+    // two rotation entries, and residues of the translation moved along the axis, if it is
+    if (truncated)
+      EXPECT_GE(id.snap.count, 2);
+    else
+      EXPECT_EQ(id.snap.count, 0);
+    EXPECT_NEAR(id.snap.largest, truncated ? std::abs(std::cos(1.57079632679)) : 0.0, 1e-16);
+    for (int trial = 0; trial < 3; ++trial) {
+      const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 2);
+      const Eigen::VectorXd pi = random(rng, layout.size(n));
+      Eigen::VectorXd tau(n);
+      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+      // the 4.9e-12 taken as 0 moves the result by about that much; nothing else does
+      EXPECT_LT(relErr(outputs(id, q, dq, ddq, bp.values(pi)), tau), truncated ? 1e-10 : 1e-13);
+    }
+  }
+}
+
 // The objective: additions first gives no more additions than the default, which gives no more
 // operations in all; both stay exact (checked above and in the Python tests against Pinocchio).
 TEST(Codegen, ObjectiveOrdersTheCounts) {

@@ -24,25 +24,45 @@ struct Body {
   Ref mass;
 };
 
-// Constants of the geometry within kGeometrySnap of 0 or +-1 are taken as exactly that: rotations
-// by multiples of 90 degrees leave 1e-17 residues, and angles written with a truncated pi/2
-// (1.57079632679 in many URDF files) 5e-12 ones.
-double cleanValue(double x) {
-  if (std::abs(x) < kGeometrySnap) return 0.0;
-  if (std::abs(x - 1.0) < kGeometrySnap) return 1.0;
-  if (std::abs(x + 1.0) < kGeometrySnap) return -1.0;
+// Within round-off of 0 or +-1: exactly that (rotations by multiples of 90 degrees leave 1e-17
+// residues).
+double roundOffClean(double x) {
+  constexpr double tol = GeometrySnap::kRoundOff;
+  if (std::abs(x) < tol) return 0.0;
+  if (std::abs(x - 1.0) < tol) return 1.0;
+  if (std::abs(x + 1.0) < tol) return -1.0;
   return x;
 }
 
-// Records what cleanValue changed beyond round-off (when a report is asked for).
-void noteSnaps(const double* x, int size, GeometrySnap* report) {
-  if (!report) return;
-  for (int i = 0; i < size; ++i) {
-    const double change = std::abs(cleanValue(x[i]) - x[i]);
-    if (change <= GeometrySnap::kRoundOff) continue;
-    ++report->count;
-    report->largest = std::max(report->largest, change);
-  }
+// The constants of the geometry as the recursion uses them: entries within kGeometrySnap of 0 are
+// 0 (a truncated pi/2, 1.57079632679 in many URDF files, leaves 4.9e-12); an entry of a rotation
+// or of an axis within kGeometrySnap of +-1 is +-1 only when the rest of its row and column
+// became 0, so that a small tilt is kept whole (`unit`: rotations and axes; translations and
+// gravity get no +-1 beyond round-off); everything else loses only round-off. What changed beyond
+// round-off goes into `report`.
+template <int Rows, int Cols>
+Eigen::Matrix<double, Rows, Cols> cleanGeometry(const Eigen::Matrix<double, Rows, Cols>& x,
+                                                bool unit, GeometrySnap* report) {
+  Eigen::Matrix<double, Rows, Cols> z =
+      x.unaryExpr([](double v) { return std::abs(v) < kGeometrySnap ? 0.0 : roundOffClean(v); });
+  if (unit)
+    for (int i = 0; i < Rows; ++i)
+      for (int j = 0; j < Cols; ++j) {
+        if (std::abs(std::abs(z(i, j)) - 1.0) >= kGeometrySnap) continue;
+        bool alone = true;
+        for (int k = 0; k < Rows; ++k) alone = alone && (k == i || z(k, j) == 0.0);
+        for (int k = 0; k < Cols; ++k) alone = alone && (k == j || z(i, k) == 0.0);
+        if (alone) z(i, j) = z(i, j) > 0 ? 1.0 : -1.0;
+      }
+  if (report)
+    for (int i = 0; i < Rows; ++i)
+      for (int j = 0; j < Cols; ++j) {
+        const double change = std::abs(z(i, j) - x(i, j));
+        if (change <= GeometrySnap::kRoundOff) continue;
+        ++report->count;
+        report->largest = std::max(report->largest, change);
+      }
+  return z;
 }
 
 struct Rigid {
@@ -53,12 +73,8 @@ struct Rigid {
 
 Rigid rigid(const Eigen::Isometry3d& T, GeometrySnap* report) {
   Rigid r;
-  r.R = T.linear().unaryExpr(&cleanValue);
-  r.t = T.translation().unaryExpr(&cleanValue);
-  const Eigen::Matrix3d R = T.linear();
-  const Eigen::Vector3d t = T.translation();
-  noteSnaps(R.data(), 9, report);
-  noteSnaps(t.data(), 3, report);
+  r.R = cleanGeometry<3, 3>(T.linear(), true, report);
+  r.t = cleanGeometry<3, 1>(T.translation(), false, report);
   return r;
 }
 
@@ -113,8 +129,7 @@ std::vector<JointStages> jointStages(const Model& model, const std::vector<AxisS
     const Joint& j = model.joints[k];
     JointStages s;
     s.type = j.type;
-    s.u = j.axis.unaryExpr(&cleanValue);
-    noteSnaps(j.axis.data(), 3, report);
+    s.u = cleanGeometry<3, 1>(j.axis, true, report);
     Eigen::Isometry3d pre = j.pre, post = j.post;
     const double theta = (dh || mdh) ? model.dh[k].theta : 0.0;
     if (j.type == JointType::Revolute && theta != 0.0) {
@@ -131,7 +146,7 @@ std::vector<JointStages> jointStages(const Model& model, const std::vector<AxisS
       const double along = sh == AxisShift::ToPre
                                ? u.dot(post.translation())
                                : u.dot(pre.linear().transpose() * pre.translation());
-      if (cleanValue(along) != 0.0) {
+      if (std::abs(along) >= kGeometrySnap) {
         Eigen::Isometry3d move = Eigen::Isometry3d::Identity();
         move.translation() = along * u;
         if (sh == AxisShift::ToPre) {
@@ -175,6 +190,7 @@ class Builder {
   Builder(Graph& g, const Model& model, std::vector<JointStages> stages)
       : g_(g), model_(model), stages_(std::move(stages)) {
     zero_ = {Graph::zero(), Graph::zero(), Graph::zero()};
+    gravity_ = cleanGeometry<3, 1>(model.gravity, false, nullptr);
   }
 
   // Forward pass: fills the joint trigonometry and the motion of every link frame.
@@ -191,7 +207,7 @@ class Builder {
     ddq_ = ddq;
     Motion m{zero_, zero_, zero_};
     if (gravity)
-      for (int i = 0; i < 3; ++i) m.a[i] = g_.constant(cleanValue(-model_.gravity[i]));
+      for (int i = 0; i < 3; ++i) m.a[i] = g_.constant(-gravity_[i]);
     for (int k = 0; k < n; ++k) {
       const JointStages& s = stages_[k];
       m = rigidForward(s.pre, m);
@@ -320,13 +336,14 @@ class Builder {
     Eigen::Matrix3d K;
     K << 0, -u.z(), u.y(), u.z(), 0, -u.x(), -u.y(), u.x(), 0;
     const Eigen::Matrix3d K2 = K * K;
-    const Eigen::Matrix3d A0 = (Eigen::Matrix3d::Identity() + K2).unaryExpr(&cleanValue);
-    const Eigen::Matrix3d A1 = (-K2).unaryExpr(&cleanValue);
+    // derived from the (already cleaned) axis: only round-off is removed here
+    const Eigen::Matrix3d A0 = (Eigen::Matrix3d::Identity() + K2).unaryExpr(&roundOffClean);
+    const Eigen::Matrix3d A1 = (-K2).unaryExpr(&roundOffClean);
     M3 R;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         R[i][j] = g_.add(g_.add(g_.constant(A0(i, j)), g_.mul(g_.constant(A1(i, j)), c)),
-                         g_.mul(g_.constant(cleanValue(K(i, j))), s));
+                         g_.mul(g_.constant(K(i, j)), s));
     return R;
   }
   // dw_k + w_i w_j (plus) or dw_k - w_i w_j. In the frame before a joint turning about
@@ -672,6 +689,7 @@ class Builder {
   Graph& g_;
   const Model& model_;
   std::vector<JointStages> stages_;
+  Eigen::Vector3d gravity_;
   V3 zero_;
   std::vector<Ref> q_, dq_, ddq_;
   std::vector<M3> jointR_;
@@ -824,8 +842,7 @@ GeneratedFunction generate(const Model& model, const ParameterSet& params, Funct
     if (!improved) break;
   }
   jointStages(model, plan.shift, &best.snap);
-  const Eigen::Vector3d gravity = model.gravity;
-  noteSnaps(gravity.data(), 3, &best.snap);
+  cleanGeometry<3, 1>(model.gravity, false, &best.snap);
   return best;
 }
 

@@ -55,10 +55,12 @@ ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp);
 /// All classical parameters of a layout (E = identity).
 ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout);
 
-/// Constants of the geometry (joint transforms and axes, gravity) within this of 0 or +-1 are
-/// taken as exactly 0 or +-1 in the generated recursion, so that their products vanish or are
+/// Constants of the geometry (joint transforms and axes, gravity) within this of 0 are taken as
+/// exactly 0 in the generated recursion, and an entry of a rotation or an axis within this of
+/// +-1 as +-1 when the rest of its row and column is 0, so that their products vanish or are
 /// free: beyond round-off this affects descriptions written with a truncated pi/2, such as the
-/// rpy 1.57079632679 of many URDF files (cos = 4.9e-12). GeometrySnap reports what changed.
+/// rpy 1.57079632679 of many URDF files (cos = 4.9e-12). A small tilt (an axis 3e-5 off a
+/// coordinate axis) is kept whole. GeometrySnap reports what changed.
 inline constexpr double kGeometrySnap = 1e-9;
 
 /// The constants kGeometrySnap changed by more than round-off (kRoundOff), and the largest change.
