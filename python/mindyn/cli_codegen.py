@@ -17,8 +17,9 @@ def register(subparsers) -> None:
         description="Generate the Newton-Euler recursion customised to the robot, in its base "
         "parameters, as C99 (header + source) or IEC 61131-3 Structured Text, and print its "
         "operation counts beside those of the classical-parameter recursion generated the "
-        "same way. Constants of the geometry within 1e-9 of 0 or +-1 are taken as exact; how "
-        "many (beyond round-off) is printed and stated in the generated header.",
+        "same way. Constants of the geometry within 1e-9 of 0 (or of +-1, for rotation "
+        "entries alone in their row and column) are taken as exact; how many (beyond "
+        "round-off) is printed and stated in the generated header.",
     )
     add_robot(p)
     p.add_argument("--lang", choices=["c", "st"], required=True, help="C99 or Structured Text")

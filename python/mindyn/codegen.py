@@ -55,9 +55,10 @@ class GeneratedCode:
         Their values (the robot's own, or those given; baked in when ``numeric``).
     geometry_snap : dict
         Constants of the geometry (joint transforms and axes, gravity) within ``tolerance``
-        (1e-9) of 0 or +-1 are taken as exact; ``count``: how many changed by more than
-        round-off (e.g. cos 1.57079632679 = 4.9e-12 from a URDF's truncated pi/2), ``largest``:
-        the largest change. Also stated in the generated header comment.
+        (1e-9) of 0 are taken as 0, and rotation or axis entries then alone in their row and
+        column as +-1; ``count``: how many changed by more than round-off (e.g. cos
+        1.57079632679 = 4.9e-12 from a URDF's truncated pi/2), ``largest``: the largest change.
+        Also stated in the generated header comment.
     """
 
     def __init__(self, lang: str, name: str, out: dict, numeric: bool, header_name: str):
