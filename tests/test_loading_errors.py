@@ -354,7 +354,7 @@ def test_cli_console_script():
         (("info", "GOOD.yaml", "--tip", "b"), "tip= applies to URDF"),
         (("info", "BAD.yaml"), "not valid YAML"),
         (("info", "BAD.urdf"), "not a valid URDF"),
-        (("info", URDFS["panda"]), "pass tip="),
+        (("info", URDFS["panda"]), "--tip on the command line"),
     ],
 )
 def test_cli_errors_are_one_line(tmp_path, args, match):

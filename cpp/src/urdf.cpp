@@ -224,9 +224,10 @@ class Builder {
     collectLeaves(root_, &leaves);
     if (leaves.empty()) fail("robot '" + urdf_.getName() + "' has no moving joint");
     if (leaves.size() == 1) return urdf_.getLink(leaves.front());
-    std::string msg = "robot '" + urdf_.getName() + "' branches into " +
-                      std::to_string(leaves.size()) + " moving tips: " + joinNames(leaves) +
-                      "; pass tip= one of them";
+    std::string msg =
+        "robot '" + urdf_.getName() + "' branches into " + std::to_string(leaves.size()) +
+        " moving tips: " + joinNames(leaves) +
+        "; choose the tip link (tip= in Python and C++, --tip on the command line): one of them";
     const std::string shared = lastSharedLink(leaves);
     if (!shared.empty())
       msg += ", or a link before the branch such as '" + shared +
