@@ -261,8 +261,7 @@ BaseDynamics::BaseDynamics(const Model& model, const codegen::ParameterSet& ps)
     (f == Function::InverseDynamics ? id_
      : f == Function::Gravity       ? gravity_
                                     : regressor_) = Tape(g);
-    snap_.count = std::max(snap_.count, g.snap.count);
-    snap_.largest = std::max(snap_.largest, g.snap.largest);
+    snap_.include(g.snap);
   }
   qb_.resize(n_);
   dqb_.resize(n_);

@@ -448,13 +448,6 @@ class Builder {
     if (axis[a] < 0) s = -s;
     const Ref bb = p[tensorIndex(b, b)], dd = p[tensorIndex(d, d)], bd = p[tensorIndex(b, d)];
     const Ref ba = p[tensorIndex(b, a)], da = p[tensorIndex(d, a)];
-    const Ref cc = g_.mul(c, c), ss = g_.mul(s, s), cs = g_.mul(c, s);
-    Ref cos2 = g_.sub(cc, ss), sin2 = g_.mul(g_.constant(2.0), cs);
-    if (form == 3) {  // no need for c^2, s^2, c s: with 2 s, sin 2q = c (2 s), cos 2q = 1 - s (2 s)
-      const Ref s2 = g_.mul(g_.constant(2.0), s);
-      sin2 = g_.mul(c, s2);
-      cos2 = g_.sub(Graph::one(), g_.mul(s, s2));
-    }
     Body out;
     auto put = [&out](Ref par, std::initializer_list<std::array<int, 3>> entries) {
       Sym3 T{};
@@ -462,12 +455,17 @@ class Builder {
       out.inertia.emplace_back(par, T);
     };
     if (form == 3) {
+      // only the double angle: with 2 s, sin 2q = c (2 s), cos 2q = 1 - s (2 s)
+      const Ref s2 = g_.mul(g_.constant(2.0), s);
+      const Ref cos2 = g_.sub(Graph::one(), g_.mul(s, s2)), sin2 = g_.mul(c, s2);
       const Ref half = g_.constant(0.5);
       const Ref m = g_.mul(half, g_.add(bb, dd)), dh = g_.mul(half, g_.sub(bb, dd));
       put(m, {{b, b, 1}, {d, d, 1}});
       put(g_.sub(g_.mul(cos2, dh), g_.mul(sin2, bd)), {{b, b, 1}, {d, d, -1}});
       put(g_.add(g_.mul(sin2, dh), g_.mul(cos2, bd)), {{b, d, 1}});
     } else {
+      const Ref cc = g_.mul(c, c), ss = g_.mul(s, s), cs = g_.mul(c, s);
+      const Ref cos2 = g_.sub(cc, ss), sin2 = g_.mul(g_.constant(2.0), cs);
       const Ref bd2 = g_.mul(sin2, bd);
       const Ref nbb = g_.sub(g_.add(g_.mul(cc, bb), g_.mul(ss, dd)), bd2);
       put(nbb, {{b, b, 1}});
@@ -858,9 +856,7 @@ GeneratedFunction detail::generateWithLinkForm(const Model& model, const Paramet
 
 GeometrySnap geometrySnap(const GeneratedCode& code) {
   GeometrySnap out;
-  for (const auto& f : code.functions)
-    if (f.snap.count > out.count) out.count = f.snap.count;
-  for (const auto& f : code.functions) out.largest = std::max(out.largest, f.snap.largest);
+  for (const auto& f : code.functions) out.include(f.snap);
   return out;
 }
 

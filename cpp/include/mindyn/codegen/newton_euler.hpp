@@ -68,6 +68,11 @@ struct GeometrySnap {
   static constexpr double kRoundOff = 1e-14;
   int count = 0;
   double largest = 0.0;
+  /// Over several functions of one model: the most constants changed, the largest change.
+  void include(const GeometrySnap& other) {
+    count = count > other.count ? count : other.count;
+    largest = largest > other.largest ? largest : other.largest;
+  }
 };
 
 /// One generated function.
