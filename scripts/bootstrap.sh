@@ -15,8 +15,12 @@ missing=()
 for p in "${apt_packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+if ((${#missing[@]})) || [[ ! -x .venv/bin/mindyn ]]; then
+  echo "bootstrap: first run: installing what mindyn needs (Debian packages, .venv, the C++" \
+    "build); this takes several minutes"
+fi
 if ((${#missing[@]})); then
-  echo "bootstrap: installing Debian packages: ${missing[*]}"
+  echo "bootstrap: installing Debian packages with apt-get: ${missing[*]}"
   sudo=""
   [[ $(id -u) -eq 0 ]] || sudo="sudo"
   export DEBIAN_FRONTEND=noninteractive
@@ -29,6 +33,7 @@ if [[ ! -x .venv/bin/python ]]; then
   python3 -m venv .venv
 fi
 py=.venv/bin/python
+echo "bootstrap: updating pip and the build requirements in .venv"
 $py -m pip install -q --upgrade pip
 # Build requirements first, so that the package builds without isolation and reuses build/.
 # setuptools and wheel: dependencies published only as source (a tree-sitter grammar among the
@@ -36,5 +41,7 @@ $py -m pip install -q --upgrade pip
 $py -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.12" "numpy>=1.23" setuptools wheel
 extra=""
 [[ "${1:-}" == "--test" ]] && extra="[test]"
-echo "bootstrap: building and installing mindyn${extra}"
+echo "bootstrap: building and installing mindyn${extra} into .venv (the C++ core is compiled;" \
+  "minutes the first time, seconds later)"
 $py -m pip install -q --no-build-isolation ".${extra}"
+echo "bootstrap: mindyn is installed: .venv/bin/mindyn"
