@@ -138,7 +138,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     vdata = read_csv(files["validation"], robot)
     dv = data.processing["acceleration"]
     print(
-        f"    read {data.m} samples; accelerations by Butterworth order {dv['order']}, "
+        f"    read {data.m} samples, torques in {data.processing['torque']['unit']} (as the "
+        f"header says); accelerations by Butterworth order {dv['order']}, "
         f"{dv['cutoff_Hz']:g} Hz, zero-phase, + central differences"
     )
     truth = true_base_values(base, {"names": log_e.param_names, "values": log_e.params})
