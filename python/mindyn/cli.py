@@ -221,12 +221,13 @@ _TRACK_ONLY = ("--gains", "--cycle", "--param-error", "--report")
 
 def _route(argv: list[str]) -> list[str]:
     """``mindyn simulate`` with ``--controller adaptive-pd|pd``, with the closed-loop options
-    (--gains, ...), or without a --trajectory is the closed-loop simulation of ``mindyn track``
-    (which writes its log with -o as well)."""
+    (--gains, ...), or with neither a --trajectory nor an output log (-o) is the closed-loop
+    simulation of ``mindyn track`` (whose -o writes the closed-loop log)."""
     if not argv or argv[0] != "simulate" or "-h" in argv or "--help" in argv:
         return argv
     keys = [a.split("=", 1)[0] for a in argv[1:]]
-    closed = any(k in _TRACK_ONLY for k in keys) or "--trajectory" not in keys
+    logs = any(k == "--output" or k.startswith("-o") for k in keys)
+    closed = any(k in _TRACK_ONLY for k in keys) or ("--trajectory" not in keys and not logs)
     for i, a in enumerate(argv[1:], 1):
         value = a.split("=", 1)[1] if a.startswith("--controller=") else None
         if a == "--controller" and i + 1 < len(argv):
