@@ -91,8 +91,10 @@ def test_every_block_is_run_or_listed_with_a_reason():
 
 
 def commands(block: Block) -> list[str]:
-    """The lines of a sh block that are commands (comments and blank lines are not)."""
-    return [ln for ln in block.text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    """The commands of a sh block: its lines, a line ending in a backslash joined with the next
+    as the shell does; comments and blank lines are not commands."""
+    text = re.sub(r"\\\n", " ", block.text)
+    return [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
 
 
 @pytest.fixture(scope="module")
