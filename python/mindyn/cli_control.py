@@ -261,7 +261,8 @@ def register(sub) -> None:
         "--output",
         metavar="CSV",
         help="write the log as 'mindyn identify' reads it: t, q1..qN, dq1..dqN (true motion), "
-        "tau1..tauN (applied torque, N m) at the controller samples, and CSV.truth.json",
+        "tau1..tauN (applied torque, N m) at the controller samples; the true parameters in "
+        "<name>.truth.json beside it",
     )
     p.set_defaults(func=cmd_track)
 
