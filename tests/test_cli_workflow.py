@@ -40,7 +40,7 @@ def cli(*argv) -> str:
 
 @pytest.mark.skipif(GCC is None, reason="gcc is needed to compile the generated C")
 def test_codegen_takes_identify_json_with_pruned_parameters_as_zero(tmp_path):
-    robot_name = "puma560_3"
+    robot_name = "zcr07s"
     traj, data, ident = tmp_path / "traj.csv", tmp_path / "data.csv", tmp_path / "id.json"
     flags = ["--rotor", "--friction"]
     cli("excite", robot_name, *flags, "--starts", 1, "--maxiter", 20, "--quiet", "-o", traj)
@@ -57,6 +57,17 @@ def test_codegen_takes_identify_json_with_pruned_parameters_as_zero(tmp_path):
     )
     cli("identify", robot_name, data, *flags, "--json", ident)
     doc = json.loads(ident.read_text())
+    # the same log in per mille of rated torque, the header saying so: identify reads the unit
+    # from the header and finds the same parameters (the CSV holds 12 significant digits)
+    permille, ident2 = tmp_path / "permille.csv", tmp_path / "id2.json"
+    cli("simulate", robot_name, "--trajectory", traj.with_suffix(".json"), *flags,
+        "--torque-noise", "2%", "--torque-unit", "permille", "-o", permille)  # fmt: skip
+    assert "tau1[permille]" in permille.read_text().splitlines()[0]
+    out = cli("identify", robot_name, permille, *flags, "--json", ident2)
+    assert "torques converted from permille" in out
+    doc2 = json.loads(ident2.read_text())
+    assert doc2["names"] == doc["names"]
+    assert np.allclose(doc2["values"], doc["values"], rtol=1e-7, atol=1e-9)
     pruned = [r["name"] for r in doc["removed"]]
     assert pruned, "the test needs an identification that pruned parameters"
 
@@ -91,8 +102,8 @@ def test_codegen_takes_identify_json_with_pruned_parameters_as_zero(tmp_path):
     for _ in range(20):
         q, dq, ddq = rng.uniform(-2, 2, (3, n))
         tau, g = np.zeros(n), np.zeros(n)
-        lib.puma560_3_inverse_dynamics(ptr(q), ptr(dq), ptr(ddq), ptr(tau))
-        lib.puma560_3_gravity(ptr(q), ptr(g))
+        lib.zcr07s_inverse_dynamics(ptr(q), ptr(dq), ptr(ddq), ptr(tau))
+        lib.zcr07s_gravity(ptr(q), ptr(g))
         ref = robot.inverse_dynamics(q, dq, ddq, pi)
         ref_g = robot.gravity_torque(q, pi[np.arange(pi.size) % 13 < 10])
         # two exact recursions in double precision: round-off ~1e-13 of the torque scale
