@@ -480,14 +480,20 @@ def simulate(
         Used to report the true base parameters and the true model torque next to the estimates
         (default: the controller's).
     """
-    if not (duration > 0 and period > 0):
-        raise ValueError("duration and period must be positive")
+    if not (math.isfinite(duration) and duration > 0 and math.isfinite(period) and period > 0):
+        raise ValueError(
+            f"duration and period must be positive numbers of seconds, got {duration:g} and "
+            f"{period:g}"
+        )
     if duration < period:
         raise ValueError(f"duration {duration} s is shorter than one period {period} s")
     if integrator not in ("rk4", "scipy"):
         raise ValueError(f"integrator must be 'rk4' or 'scipy', got '{integrator}'")
     if substeps < 1:
         raise ValueError("substeps must be at least 1")
+    from .simulate import check_steps
+
+    check_steps(duration, 1.0 / period, substeps if integrator == "rk4" else 1)
     n = robot.n
     p_true = robot.parameters(True, True) if true_params is None else np.asarray(true_params)
     limit = None
@@ -517,25 +523,30 @@ def simulate(
     controller.reset()
     q, dq, _ = reference(0.0)
     q, dq = np.array(q, dtype=float), np.array(dq, dtype=float)
-    for i in range(K):
-        ref = reference(t[i])
-        qm = q + (rng.normal(0.0, sq, n) if sq > 0 else 0.0)
-        dqm = dq + (rng.normal(0.0, sdq, n) if sdq > 0 else 0.0)
-        tau = np.asarray(controller(t[i], qm, dqm, ref, period), dtype=float)
-        if not np.all(np.isfinite(tau)):
-            raise ValueError(f"the controller returned a non-finite torque at t = {t[i]:.4f} s")
-        if limit is not None:
-            SAT[i] = np.abs(tau) > limit
-            tau = np.clip(tau, -limit, limit)
-        Q[i], DQ[i] = q, dq
-        QD[i], DQD[i], DDQD[i] = ref
-        TAU[i] = tau
-        TAUM[i] = getattr(controller, "model_torque", np.full(n, np.nan))
-        if adaptive:
-            PH[i] = controller.p_hat
-            if pb_true is not None:
-                TAUT[i] = controller.Y @ pb_true
-        q, dq = _advance(robot, q, dq, tau, period, substeps, integrator, p_true)
+    # A diverging loop shows as a non-finite torque, reported as such (not as warnings).
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for i in range(K):
+            ref = reference(t[i])
+            qm = q + (rng.normal(0.0, sq, n) if sq > 0 else 0.0)
+            dqm = dq + (rng.normal(0.0, sdq, n) if sdq > 0 else 0.0)
+            tau = np.asarray(controller(t[i], qm, dqm, ref, period), dtype=float)
+            if not np.all(np.isfinite(tau)):
+                raise ValueError(
+                    f"the controller returned a non-finite torque at t = {t[i]:.4f} s: the "
+                    "closed loop diverged (gains, controller period or reference speed)"
+                )
+            if limit is not None:
+                SAT[i] = np.abs(tau) > limit
+                tau = np.clip(tau, -limit, limit)
+            Q[i], DQ[i] = q, dq
+            QD[i], DQD[i], DDQD[i] = ref
+            TAU[i] = tau
+            TAUM[i] = getattr(controller, "model_torque", np.full(n, np.nan))
+            if adaptive:
+                PH[i] = controller.p_hat
+                if pb_true is not None:
+                    TAUT[i] = controller.Y @ pb_true
+            q, dq = _advance(robot, q, dq, tau, period, substeps, integrator, p_true)
     return SimulationResult(
         controller=getattr(controller, "name", type(controller).__name__),
         period=period,

@@ -214,6 +214,36 @@ def expand_params(n: int, params) -> np.ndarray:
     return out.reshape(-1)
 
 
+#: Most samples (control periods) one simulation may have: the logs are held in memory, about
+#: 60 bytes per sample and joint (tracking) before they are written.
+MAX_SAMPLES = 1_000_000
+#: Most integration steps (samples x substeps) one simulation may take: about a minute of RK4
+#: on a 6-joint robot.
+MAX_STEPS = 4_000_000
+
+
+def check_steps(duration: float, rate: float, substeps: int = 1) -> int:
+    """Number of samples of a simulation of ``duration`` s at ``rate`` Hz with ``substeps``
+    integration steps each; raises ValueError unless all are finite and positive and within
+    :data:`MAX_SAMPLES` and :data:`MAX_STEPS` (the message gives the counts and the limits)."""
+    duration, rate = float(duration), float(rate)
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be a positive number of seconds, got {duration:g}")
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"rate must be a positive number of Hz, got {rate:g}")
+    if not substeps >= 1:
+        raise ValueError(f"substeps must be at least 1, got {substeps}")
+    samples = duration * rate
+    if samples > MAX_SAMPLES or samples * substeps > MAX_STEPS:
+        raise ValueError(
+            f"{duration:g} s at {rate:g} Hz are {samples:.4g} samples"
+            + (f" x {substeps} substeps = {samples * substeps:.4g} steps" if substeps > 1 else "")
+            + f"; at most {MAX_SAMPLES:,} samples and {MAX_STEPS:,} integration steps are "
+            "simulated (shorten the duration or lower the rate)"
+        )
+    return int(round(samples)) + 1
+
+
 def _span(reference, duration):
     if duration is not None:
         return float(duration)
@@ -274,9 +304,7 @@ def simulate_tracking(
     arr = noise.arrays(n)
     rng = np.random.default_rng(seed)
     T = _span(reference, duration)
-    if not rate > 0 or substeps < 1:
-        raise ValueError("rate must be positive and substeps at least 1")
-    m = int(round(T * rate)) + 1
+    m = check_steps(T, rate, substeps)
     t = np.arange(m) / rate
     q_ref, dq_ref, ddq_ref = reference.evaluate(t)
     h = 1.0 / (rate * substeps)
@@ -368,7 +396,7 @@ def simulate_inverse(
     arr = noise.arrays(n)
     rng = np.random.default_rng(seed)
     T = _span(reference, duration)
-    m = int(round(T * rate)) + 1
+    m = check_steps(T, rate)
     t = np.arange(m) / rate
     t0 = time.perf_counter()
     q, dq, ddq = reference.evaluate(t)
