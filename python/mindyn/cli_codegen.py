@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from . import ModelError, base_parameters, load
-from .cli_args import add_joint_terms, add_robot
+from .cli_args import add_joint_terms, add_robot, output_file
 from .codegen import generate
 
 
@@ -67,6 +67,7 @@ def register(subparsers) -> None:
         "--output",
         required=True,
         metavar="FILE",
+        type=output_file,
         help="C: FILE.c and FILE.h; ST: FILE",
     )
     p.set_defaults(func=cmd_codegen)

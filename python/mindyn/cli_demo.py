@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from . import base_parameters, bundled_robots, load
+from .cli_args import number, output_dir, robot_arg, seed
 
 
 def _step(no: int, title: str) -> float:
@@ -261,25 +262,35 @@ def register(sub) -> None:
     p.add_argument(
         "robot",
         nargs="?",
+        type=robot_arg,
         default="zcr07s",
         metavar="ROBOT",
         help="a bundled robot (" + ", ".join(bundled_robots()) + "), URDF or YAML; default zcr07s",
     )
-    p.add_argument("--out", metavar="DIR", help="output folder (default ./mindyn-demo-ROBOT)")
-    p.add_argument("--full", action="store_true", help="full excitation optimisation (slower)")
     p.add_argument(
+        "--out",
+        metavar="DIR",
+        type=output_dir,
+        help="output folder (default ./mindyn-demo-ROBOT)",
+    )
+    p.add_argument("--full", action="store_true", help="full excitation optimisation (slower)")
+    number(
+        p,
         "--harmonics",
-        type=int,
+        low=2,
+        high=30,
+        integer=True,
         default=10,
-        help="harmonics of the excitation (default 10; the ZCR07S study uses 5, enough for the "
-        "dynamic "
+        help="harmonics of the excitation (the ZCR07S study uses 5, enough for the dynamic "
         "model but not for the energy model, whose regressor needs richer motion)",
     )
-    p.add_argument(
+    number(
+        p,
         "--noise",
-        type=float,
+        low=0,
+        high=100,
         default=1.0,
-        help="torque noise sd in %% of each joint's effort limit (default 1)",
+        help="torque noise sd in % of each joint's effort limit",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    seed(p, "--seed")
     p.set_defaults(func=cmd_demo)
