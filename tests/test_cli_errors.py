@@ -145,6 +145,23 @@ def test_simulate_step_count_is_bounded(files):
     assert_one_line_error(rc, err, "1e+08 samples", "at most 1,000,000 samples")
 
 
+@pytest.mark.parametrize(
+    "option, value, needle",
+    [
+        ("--quantization", "1e308", "--quantization: expected finite values in [0, 1]"),
+        ("--torque-noise", "abc%", "--torque-noise: expected a percentage in [0, 100]"),
+        ("--torque-noise", "1e308", "--torque-noise: expected finite values in [0, 1e+06]"),
+        ("--velocity-noise", "nan", "--velocity-noise: expected finite values in [0, 100]"),
+    ],
+)
+def test_simulate_noise_levels_are_bounded(option, value, needle, files, tmp_path):
+    out = tmp_path / "s.csv"
+    argv = ["simulate", "planar2", "--trajectory", str(files / "traj.json"), "-o", str(out)]
+    rc, _, err = run([*argv, option, value])
+    assert_one_line_error(rc, err, needle)
+    assert not out.exists()
+
+
 def test_excite_rate_must_sample_the_highest_harmonic(tmp_path):
     out = str(tmp_path / "e.csv")
     # 5 harmonics of 10 Hz: the highest is 50 Hz, sampled only above 100 Hz

@@ -286,7 +286,7 @@ def main(argv: list[str] | None = None) -> int:
         _error(f"{where}{e.strerror or e}")
         return 1
     except MemoryError:
-        _error("out of memory; use a shorter log, a lower rate or fewer samples")
+        _error("out of memory: the input asks for more memory than this machine has")
         return 1
     except Exception as e:  # last resort: a defect in mindyn, not in the input
         _error(

@@ -486,11 +486,15 @@ def register(sub) -> None:
         "--torque-noise",
         metavar="SD",
         help="torque noise sd: one value, one per joint (comma-separated), or P%% of each "
-        "joint's effort limit",
+        "joint's effort limit; in [0, 1e6] N m or [0, 100] %%",
     )
-    p.add_argument("--position-noise", metavar="SD", help="position noise sd (rad, m)")
-    p.add_argument("--velocity-noise", metavar="SD", help="velocity noise sd (rad/s, m/s)")
-    p.add_argument("--quantization", metavar="STEP", help="encoder step (rad, m)")
+    p.add_argument(
+        "--position-noise", metavar="SD", help="position noise sd (rad, m), each in [0, 1]"
+    )
+    p.add_argument(
+        "--velocity-noise", metavar="SD", help="velocity noise sd (rad/s, m/s), each in [0, 100]"
+    )
+    p.add_argument("--quantization", metavar="STEP", help="encoder step (rad, m), each in [0, 1]")
     seed(p, "--seed", help="noise seed")
     p.add_argument(
         "--torque-unit",

@@ -394,7 +394,7 @@ def _enough(
         return
     src = data.source or "data"
     if model == "dynamic":
-        got = f"{data.m} samples x {data.n} joints give {rows} equations"
+        got = f"{data.m} samples x {data.n} joints = {rows} equations"
         if settings.get("equations_left_out"):
             got += f" ({settings['equations_left_out']} left out as slower than min_velocity)"
         more = f"at least {math.ceil(need * data.m / max(rows, 1))} samples"
