@@ -446,3 +446,25 @@ def test_last_resort_is_one_line_naming_the_exception(monkeypatch):
     assert rc == 70 and err.count("\n") == 1
     assert err.startswith("mindyn: error: unexpected TypeError: first line; second line")
     assert "a defect in mindyn; please report it" in err
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["base", "planar2", "--tolerance", "1e-6", "--snap", "0.05"],
+        ["excite", "planar2", "--quiet", "--starts", "1", "--maxiter", "3", "-o", "OUT/e.csv"],
+        ["simulate", "planar2", "--trajectory", "TRAJ", "--duration", "0.2", "-o", "OUT/s.csv"],
+        ["track", "planar2", "--cycle", "0.4", "--duration", "0.1", "-o", "OUT/t.csv"],
+        ["identify", "planar2", "LOG", "--json", "OUT/i.json", "--energy-window", "1"],
+        # the tool pose at q = (0.3, 0.5) rad: (0.826, 0, 0.506) m, pitch -0.8 rad
+        ["ik", "planar2", "--xyz", "0.826022", "0", "0.506438", "--rpy", "1.570796", "-0.8", "0"]
+        + ["--tolerance", "1e-3", "--seed", "4294967295"],
+        ["codegen", "planar2", "--lang", "st", "-o", "OUT/g.st"],
+    ],
+)
+def test_valid_values_at_their_bounds_run(argv, files, tmp_path):
+    """The property test's valid values are accepted: each command runs with them."""
+    named = {"TRAJ": str(files / "traj.json"), "LOG": str(files / "log.csv")}
+    argv = [named.get(a, a).replace("OUT", str(tmp_path)) for a in argv]
+    rc, _, err = run(argv)
+    assert rc == 0, err
