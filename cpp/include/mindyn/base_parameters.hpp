@@ -12,6 +12,7 @@
 #include "mindyn/data.hpp"
 #include "mindyn/dynamics.hpp"
 #include "mindyn/model.hpp"
+#include "mindyn/projection.hpp"
 
 namespace mindyn {
 
@@ -62,6 +63,7 @@ struct BaseOptions {
   BaseMethod method = BaseMethod::Projection;
   int samples = 0;    // numerical method: number of random states (0: automatic)
   unsigned seed = 1;  // numerical method: random seed
+  double projection_budget = kProjectionBudget;  // bytes, projection method
 };
 
 /// One base-parameter set with its names.
