@@ -222,7 +222,7 @@ _TRACK_ONLY = ("--gains", "--cycle", "--param-error", "--report")
 def _route(argv: list[str]) -> list[str]:
     """``mindyn simulate`` with ``--controller adaptive-pd|pd``, with the closed-loop options
     (--gains, ...), or with neither a --trajectory nor an output log (-o) is the closed-loop
-    simulation of ``mindyn track``."""
+    simulation of ``mindyn track`` (whose -o writes the closed-loop log)."""
     if not argv or argv[0] != "simulate" or "-h" in argv or "--help" in argv:
         return argv
     keys = [a.split("=", 1)[0] for a in argv[1:]]

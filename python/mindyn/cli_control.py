@@ -98,6 +98,8 @@ def cmd_track(args: argparse.Namespace) -> int:
     if "parameter_error_norm" in s:
         pe = s["parameter_error_norm"]
         lines.append(f"parameter error |p_hat - p|: {pe[0]:.4g} at t = 0, {pe[-1]:.4g} at the end")
+    if args.output:
+        lines.append(_write_log(result, robot, args.output))
     if args.report:
         header = {
             "robot": robot.name,
@@ -117,6 +119,31 @@ def cmd_track(args: argparse.Namespace) -> int:
         lines.append(f"report: {args.report}/ (summary.json, log.csv, plots)")
     print("\n".join(lines))
     return 0
+
+
+def _write_log(result, robot, output: str) -> str:
+    """The closed-loop log as the CSV of ``mindyn identify`` (``t, q, dq, tau`` at the controller
+    samples) and its ``.truth.json`` (the simulated robot's classical parameters)."""
+    from pathlib import Path
+
+    from .data import truth_path, write_csv
+
+    out = Path(output)
+    if not out.parent.is_dir():
+        raise ValueError(f"-o {output}: the folder '{out.parent}' does not exist")
+    path = write_csv(out, result.t, result.q, result.tau, dq=result.dq)
+    truth = {
+        "robot": robot.name,
+        "names": robot.parameter_names(True, True),
+        "values": [float(v) for v in robot.parameters(True, True)],
+        "simulation": {
+            "mode": "closed loop",
+            "controller": result.controller,
+            "period_s": result.period,
+        },
+    }
+    truth_path(path).write_text(json.dumps(truth, indent=2) + "\n")
+    return f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"
 
 
 def cmd_ik(args: argparse.Namespace) -> int:
@@ -229,6 +256,14 @@ def register(sub) -> None:
     p.add_argument("--substeps", type=int, default=4, help="RK4 steps per period (4)")
     p.add_argument("--integrator", choices=["rk4", "scipy"], default="rk4")
     p.add_argument("--report", metavar="DIR", help="write summary.json, log.csv and plots here")
+    p.add_argument(
+        "-o",
+        "--output",
+        metavar="CSV",
+        help="write the log as 'mindyn identify' reads it: t, q1..qN, dq1..dqN (true motion), "
+        "tau1..tauN (applied torque, N m) at the controller samples; the true parameters in "
+        "<name>.truth.json beside it",
+    )
     p.set_defaults(func=cmd_track)
 
     p = sub.add_parser(

@@ -7,6 +7,8 @@ base parameters -> optimised excitation -> simulated measurement with noise -> i
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import time
 from pathlib import Path
@@ -105,11 +107,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     files = {}
     for name, log in (("measurement", log_e), ("validation", log_v)):
         p = log.save(out / f"{name}.csv", robot.name)
-        if (
-            permille
-        ):  # log torques the way the ZCR07S study's controller does: per mille of rated torque
+        if permille:  # torques as the ZCR07S study's controller logs them: per mille of rated
             scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
-            write_csv(p, log.t, log.q, log.tau / scale, dq=log.dq)
+            write_csv(p, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
         files[name] = p
     print(
         f"    torque noise sd per joint ({args.noise:g} % of the effort limit) [N m]: "
@@ -122,19 +122,24 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(
         f"    wrote {files['measurement'].name}, {files['validation'].name} ({log_e.t.size} "
         "samples each: t, q, dq, tau"
-        + (", torques in per mille of rated torque as in the ZCR07S study" if permille else "")
+        + (
+            ", torques in per mille of rated torque as in the ZCR07S study (header "
+            "tau1[permille]...)"
+            if permille
+            else ""
+        )
         + ") and their .truth.json"
     )
     _done(t0)
 
     # 4. identification ---------------------------------------------------------------------------
     t0 = _step(4, "identification (weighted least squares, RSD pruning at 30 %)")
-    unit = "permille" if permille else "Nm"
-    data = read_csv(files["measurement"], robot, torque_unit=unit)
-    vdata = read_csv(files["validation"], robot, torque_unit=unit)
+    data = read_csv(files["measurement"], robot)  # the torque unit from the header
+    vdata = read_csv(files["validation"], robot)
     dv = data.processing["acceleration"]
     print(
-        f"    read {data.m} samples; accelerations by Butterworth order {dv['order']}, "
+        f"    read {data.m} samples, torques in {data.processing['torque']['unit']} (as the "
+        f"header says); accelerations by Butterworth order {dv['order']}, "
         f"{dv['cutoff_Hz']:g} Hz, zero-phase, + central differences"
     )
     truth = true_base_values(base, {"names": log_e.param_names, "values": log_e.params})
@@ -216,12 +221,29 @@ def _codegen(robot_arg: str, out: Path) -> None:
     if "codegen" not in sub.choices:
         print("    unavailable: this build of mindyn has no 'codegen' command")
         return
+    tables = {}
     for lang, ext in (("c", "c"), ("st", "st")):
         target = out / f"inverse_dynamics.{ext}"
-        rc = main(
-            ["codegen", robot_arg, "--lang", lang, "--rotor", "--friction", "-o", str(target)]
-        )
-        print(f"    {'wrote ' + target.name if rc == 0 else 'codegen --lang ' + lang + ' failed'}")
+        text = io.StringIO()
+        with contextlib.redirect_stdout(text):
+            rc = main(
+                ["codegen", robot_arg, "--lang", lang, "--rotor", "--friction", "-o", str(target)]
+            )
+        if rc != 0:
+            print(f"    codegen --lang {lang} failed")
+            continue
+        lines = text.getvalue().splitlines()
+        # the operation table follows the first empty line; C and ST share the recursion
+        cut = lines.index("") if "" in lines else len(lines)
+        tables[lang] = lines[cut + 1 :]
+        print(f"    wrote {target.name}")
+    if "c" in tables and tables.get("st", tables["c"]) == tables["c"]:
+        print("    operation counts (C and Structured Text alike):")
+        print("\n".join("      " + line for line in tables["c"]))
+    else:
+        for lang, table in tables.items():
+            print(f"    operation counts ({'C' if lang == 'c' else 'Structured Text'}):")
+            print("\n".join("      " + line for line in table))
 
 
 def register(sub) -> None:

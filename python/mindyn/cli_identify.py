@@ -106,7 +106,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     path = log.save(args.output, robot.name)
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
-        write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq)
+        write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
     info = log.info
     print(
         f"{robot.name}: {info['mode']} simulation, {log.t.shape[0]} samples at {rate:g} Hz "
@@ -145,7 +145,7 @@ def _read(path, robot, args):
             path,
             robot,
             topic=args.topic,
-            torque_unit=args.torque_unit,
+            torque_unit=args.torque_unit or "Nm",
             filter=args.filter,
             cutoff=args.cutoff,
         )
@@ -255,7 +255,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         paths = write_report(args.report, res, data, vdata, val, fit["tau_hat"], lim)
         (Path(args.report) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
         (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
-        print(f"wrote report to {args.report}/: " + ", ".join(p.name for p in paths))
+        print(f"wrote report to {Path(args.report)}/: " + ", ".join(p.name for p in paths))
     return 0
 
 
@@ -357,7 +357,8 @@ def register(sub) -> None:
         "--controller",
         choices=sorted(CONTROLLERS),
         default="computed-torque",
-        help="tracking controller (default computed-torque: computed torque + PD)",
+        help="tracking controller (default computed-torque: computed torque + PD); "
+        "adaptive-pd and pd run the closed-loop simulation of 'mindyn track', -o included",
     )
     g = p.add_mutually_exclusive_group()
     g.add_argument("--rate", type=float, default=250.0, help="control and log rate, Hz (250)")
@@ -380,7 +381,8 @@ def register(sub) -> None:
         "--torque-unit",
         choices=["Nm", "permille"],
         default="Nm",
-        help="write torques in N m or in permille of rated torque (drive table)",
+        help="write torques in N m or in permille of rated torque (drive table; the header "
+        "then says tau1[permille]...)",
     )
     p.add_argument("-o", "--output", required=True, metavar="CSV", help="log to write")
     p.set_defaults(func=cmd_simulate)
@@ -414,8 +416,8 @@ def register(sub) -> None:
     p.add_argument(
         "--torque-unit",
         choices=["Nm", "permille"],
-        default="Nm",
-        help="logged torque unit; permille: value x rated torque x gear ratio / 1000",
+        help="logged torque unit; permille: value x rated torque x gear ratio / 1000 "
+        "(default: the unit the CSV header gives, as in tau1[permille], else Nm)",
     )
     p.add_argument(
         "--filter",
