@@ -169,7 +169,11 @@ def base_parameters(
     rotor, friction : bool
         Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
     method : {"projection", "numerical"}
-        Exact projection method, or sampled regressors with QR (for cross-checks).
+        Exact projection method, or sampled regressors with QR (for cross-checks). The
+        projection method's basis grows geometrically along runs of parallel or general joint
+        axes: its memory is estimated before computing (an upper bound) and a chain over the
+        8 GiB budget, or of more than 18 joints, is refused with a ModelError that gives the
+        estimate; the numerical method handles such chains.
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
@@ -180,7 +184,10 @@ def base_parameters(
         Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
         1e-3) before computing; what was changed is listed in ``snapped``.
     samples, seed : int
-        Numerical method only: number of random states (0: automatic) and the random seed.
+        Numerical method only: number of random states for the regressor (0: automatic,
+        ``max(40, 3 P / n + 20)`` for ``P`` parameters and ``n`` joints; fewer than ``P / n`` are
+        refused) and the random seed. The energies take at least ``P + max(20, P / 2)`` states,
+        so that no set is capped by the number of samples.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
