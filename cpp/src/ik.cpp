@@ -246,8 +246,15 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
         best_ = x_;
       }
       if (err <= tol) {
-        // Converged: Newton steps (damping at rounding level) while each halves the error.
-        for (int r = 0; r < kIkRefineSteps; ++r) {
+        // Converged: Newton steps (damping at rounding level) from here, the best point kept.
+        // Near a singularity the first steps may overshoot before they converge, so a step is
+        // taken even when it does not improve, up to kIkRefineSteps or a thousandfold growth.
+        // Below `noise` (a few hundred roundings of the target's size) nothing is to gain.
+        const double noise =
+            256 * std::numeric_limits<double>::epsilon() * (1.0 + target.translation().norm());
+        double best = err;
+        best_ = x_;
+        for (int r = 0; r < kIkRefineSteps && err > noise; ++r) {
           ++result.iterations;
           std::fill(fixed_.begin(), fixed_.end(), 0);
           // A joint the step takes past a limit is held there and the step taken again
@@ -257,7 +264,7 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
             for (int k = 0; k < n_; ++k)
               if (fixed_[k]) Jw_.col(k).setZero();
             A.noalias() = Jw_ * Jw_.transpose();
-            A.diagonal().array() += 1e-12 * (1.0 + A.diagonal().maxCoeff() * 1e-4);
+            A.diagonal().array() += 1e-12 * (1.0 + A.diagonal().maxCoeff());
             llt_.compute(A);
             const Eigen::Matrix<double, 6, 1> y = llt_.solve(W.asDiagonal() * e);
             dq_.noalias() = Jw_.transpose() * y;
@@ -274,15 +281,21 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
           }
           kin_.poseAndJacobian(xc_, Tc, Jc_);
           const double errc = logError(Tc, target);
-          if (!(errc <= 0.5 * err)) break;
+          if (!(errc <= 1e3 * best)) break;
           poseError(Tc, target, e);
           x_.swap(xc_);
           J_.swap(Jc_);
           err = errc;
+          if (err < best) {
+            best = err;
+            best_ = x_;
+          } else if (r > 0 && err >= 0.5 * best && best <= 1e3 * noise) {
+            break;  // at rounding level: no further gain
+          }
         }
-        q = x_;
+        q = best_;
         result.status = IkStatus::Converged;
-        result.error = err;
+        result.error = best;
         return result;
       }
       ++result.iterations;

@@ -317,8 +317,9 @@ def ik_solve(
 ) -> IkResult:
     """Joint positions inside the limits that put the tool frame at ``T_target`` (4x4, base
     frame), by damped least squares with random restarts (C++). Once the pose error is within
-    ``tolerance``, Newton steps continue while each halves it (at most four): a converged answer
-    is as precise as the arithmetic allows (about 1e-15) unless a joint limit stops it.
+    ``tolerance``, Newton steps continue (at most ten, the best point kept) until it is at
+    rounding level: a converged answer is as precise as the arithmetic allows (about 1e-15)
+    unless a joint limit stops it.
 
     Parameters
     ----------

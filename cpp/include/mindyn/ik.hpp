@@ -6,9 +6,10 @@
 // the base frame, e = (p_target - p, rotation vector of R_target R^T). Convergence test: the norm
 // of the SE(3) logarithm of T_target^-1 T (metres and radians, the measure of Pinocchio's
 // log6(oMdes.actInv(oMq))) within the tolerance, the joints inside their limits. A converged
-// point is then refined by Newton steps while each one at least halves that norm (at most
-// kIkRefineSteps), joints that a step would take past a limit held there: the answer is as
-// precise as the arithmetic allows (about 1e-15 m or rad) unless a limit prevents it.
+// point is then refined by Newton steps (joints a step would take past a limit held there), at
+// most kIkRefineSteps, until the norm is at rounding level; the best point is returned. The
+// answer is as precise as the arithmetic allows (about 1e-15 m or rad) unless a limit prevents
+// it.
 //
 // After construction nothing allocates or throws: solve() and forward() are real-time safe.
 #pragma once
@@ -47,7 +48,7 @@ class ChainKinematics {
 };
 
 /// Most Newton steps taken after convergence to refine the answer.
-inline constexpr int kIkRefineSteps = 4;
+inline constexpr int kIkRefineSteps = 10;
 
 enum class IkStatus {
   Converged,      // pose error within tolerance, joints inside the limits
