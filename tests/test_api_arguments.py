@@ -158,6 +158,17 @@ BAD_MISC = {
     "velocity_ik nullspace": (lambda: velocity_ik(ROBOT, Z, Z, nullspace=[1.0]), "nullspace"),
     "damped_pinv J": (lambda: damped_pinv(np.zeros(6)), "J"),
     "damped_pinv damping": (lambda: damped_pinv(np.eye(3), damping=np.nan), "damping"),
+    "inertial_from_com mass": (
+        lambda: mindyn.inertial_from_com(None, [0, 0, 0], np.eye(3)),
+        "mass",
+    ),
+    "inertial_from_com inertia": (lambda: mindyn.inertial_from_com(1.0, [0, 0, 0], Z), "inertia"),
+    "inertial_from_urdf com": (
+        lambda: mindyn.inertial_from_urdf(1.0, [0, 0], np.eye(3), np.eye(3)),
+        "com",
+    ),
+    "to_pinocchio_order": (lambda: mindyn.to_pinocchio_order("x"), "params"),
+    "from_pinocchio_order": (lambda: mindyn.from_pinocchio_order(np.zeros((2, 10))), "params"),
 }
 
 
