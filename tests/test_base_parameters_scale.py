@@ -75,6 +75,14 @@ def test_numerical_method_on_a_100_joint_chain():
         mindyn.base_parameters("planar100")
 
 
+def test_numerical_method_refuses_a_chain_over_its_budget():
+    """planar400: 4000 parameters and 20000 stacked rows, about 2.4 GiB, over the 2 GiB."""
+    with pytest.raises(
+        mindyn.ModelError, match=r"about 2.4 GiB for this 400-joint chain.*budget of 2 GiB"
+    ):
+        mindyn.base_parameters("planar400", method="numerical")
+
+
 def test_too_few_samples_refused():
     with pytest.raises(mindyn.ModelError, match="samples = 2 states give 12 regressor rows"):
         mindyn.base_parameters("puma560", method="numerical", samples=2)

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <random>
 #include <stdexcept>
 #include <type_traits>
@@ -517,6 +518,20 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
                        std::to_string(static_cast<long>(m) * n) + " regressor rows for " +
                        std::to_string(P) + " parameters; give at least " +
                        std::to_string((P + n - 1) / n) + " (0: automatic)");
+    // Peak memory: the samples (regressor and two energy matrices), and for the regressor's
+    // elimination its triangular factor and residuals (rows x P each) and F (P x P).
+    const double rows = static_cast<double>(m) * n;
+    const double bytes = 8.0 * P * (3.0 * rows + 2.0 * me + 2.0 * P);
+    if (bytes > options.numerical_budget) {
+      char buf[320];
+      std::snprintf(buf, sizeof buf,
+                    "the numerical method would need about %.2g GiB for this %d-joint chain (%d "
+                    "parameters, %.0f stacked regressor rows), over its budget of %.2g GiB; its "
+                    "memory grows with the square and its time with the cube of the number of "
+                    "joints",
+                    bytes / 1073741824.0, n, P, rows, options.numerical_budget / 1073741824.0);
+      throw ModelError(buf);
+    }
     Samples s = sampleRegressors(model, layout, m, me, options.seed);
     // The energy sets: differences remove the constant, so keep one absolute sample row.
     ZL = s.wL;
