@@ -173,7 +173,8 @@ def base_parameters(
         projection method's basis grows geometrically along runs of parallel or general joint
         axes: its memory is estimated before computing (an upper bound) and a chain over the
         8 GiB budget, or of more than 18 joints, is refused with a ModelError that gives the
-        estimate; the numerical method handles such chains.
+        estimate; the numerical method handles such chains, up to its own budget of 2 GiB
+        (about 340 joints).
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
