@@ -35,7 +35,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from .base import BaseParameters, base_parameters
 from .robot import Robot
 
@@ -85,6 +85,7 @@ def slotine_li_regressor(base: BaseParameters, q, dq, dqr, ddqr) -> np.ndarray:
     -------
     ndarray, shape (n, base.n) or (m, n, base.n)
     """
+    q, dq, dqr, ddqr = _args.batch(base.robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
     return _core.slotine_li_regressor(base._b, q, dq, dqr, ddqr)
 
 
@@ -92,6 +93,8 @@ def slotine_li_regressor_classical(
     robot: Robot, q, dq, dqr, ddqr, rotor: bool = False, friction: bool = False
 ) -> np.ndarray:
     """Slotine-Li regressor in the classical layout, shape (n, P) or (m, n, P)."""
+    q, dq, dqr, ddqr = _args.batch(robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     return _core.slotine_li_regressor_classical(robot._m, q, dq, dqr, ddqr, rotor, friction)
 
 
@@ -99,7 +102,8 @@ def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
     """Coriolis matrix ``C(q, dq)`` of the Christoffel symbols, shape (n, n) or (m, n, n):
     ``C dq`` is the velocity-product torque and ``dA/dt - 2 C`` is skew-symmetric. ``params``: any
     classical layout (default the model's inertial parameters)."""
-    return _core.coriolis_matrix(robot._m, q, dq, params)
+    q, dq = _args.batch(robot.n, q=q, dq=dq)
+    return _core.coriolis_matrix(robot._m, q, dq, _args.params(params, "params", robot.n))
 
 
 # ---------------------------------------------------------------------------------------------
