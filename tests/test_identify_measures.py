@@ -193,9 +193,14 @@ def test_junction_between_logs_does_not_leak_into_derivatives(tmp_path, capsys):
     # The command line fits both files the same way and reports each log
     out = tmp_path / "res.json"
     args = ["identify", "zcr07s", *map(str, files), "--rsd-threshold", "0", "--json", str(out)]
-    assert cli.main(args + ["--validate", str(files[1]), str(files[0])]) == 0
+    report = tmp_path / "report"
+    argv = args + ["--validate", str(files[1]), str(files[0]), "--report", str(report)]
+    assert cli.main(argv) == 0
     text = capsys.readouterr().out
     assert "2 logs fitted together" in text and "overall relative error" in text
+    for name in ("torque_identification", "torque_validation", "trajectory"):
+        assert (report / f"{name}.png").is_file() and (report / f"{name}_2.png").is_file()
+    assert json.loads((report / "identification.json").read_text()) == json.loads(out.read_text())
     doc = json.loads(out.read_text())
     np.testing.assert_allclose(doc["base_values"], sep.full, rtol=1e-9, atol=1e-12)
     v = validate(sep, data)
@@ -269,8 +274,11 @@ def test_currents_times_gains_are_the_torques(drive_arm, tmp_path, capsys):
     ref = tmp_path / "tau.csv"
     write_csv(ref, log.t, log.q, log.tau, dq=log.dq)
     docs = []
+    tau_as_current = tmp_path / "tau_current.csv"
+    write_csv(tau_as_current, log.t, log.q, cur, dq=log.dq)  # tau columns holding currents
     for extra_args in (
         [str(p)],
+        [str(tau_as_current), "--torque-unit", "current"],
         [str(ref), "--torque-unit", "Nm"],
         [str(q), "--currents", str(c)],
         [str(p), "--drive-gain", ",".join(f"{k:.17g}" for k in K)],
