@@ -323,6 +323,7 @@ def test_current_errors_are_one_line(drive_arm, tmp_path, capsys):
         (["zcr07s", str(zcr), "--torque-unit", "current"], "gives no torque constant"),
         ([arm, str(q), "--currents", str(c), "--drive-gain", "1,2"], "--drive-gain: 2 values"),
         ([arm, str(q), "--validate-currents", str(c)], "expected --validate"),
+        (["zcr07s", str(zcr), "--drive-gain", "2"], "not motor currents"),
     ]
     for argv, msg in cases:
         assert cli.main(["identify", *argv]) == 2
@@ -342,3 +343,28 @@ def test_several_logs_refuse_a_wrong_joint_count(two_logs):
         identify(robot, [d, short], base=base)
     with pytest.raises(ValueError, match="non-empty sequence"):
         identify(robot, [], base=base)
+
+
+def test_bag_efforts_in_amperes(tmp_path, capsys):
+    """A ROS bag whose effort field holds motor currents: --torque-unit current with the gains
+    gives the estimate of the same log in N m."""
+    pytest.importorskip("rosbags")
+    from test_rosbag import messages, robot_log, write_bag
+
+    robot = mindyn.load("planar3")
+    t, q, dq, tau = robot_log(robot)
+    K = np.array([50.0, 40.0, 30.0])
+    bag = write_bag(tmp_path / "run", messages(robot, (t, q, dq, tau / K)), storage="mcap")
+    ref = write_bag(tmp_path / "ref", messages(robot, (t, q, dq, tau)), storage="mcap")
+    out = {}
+    for name, argv in (
+        ("amps", [str(bag), "--torque-unit", "current", "--drive-gain", "50,40,30"]),
+        ("ref", [str(ref)]),
+    ):
+        js = tmp_path / f"{name}.json"
+        assert cli.main(["identify", "planar3", *argv, "--json", str(js)]) == 0
+        out[name] = json.loads(js.read_text())
+    capsys.readouterr()
+    a, b = np.array(out["amps"]["base_values"]), np.array(out["ref"]["base_values"])
+    np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12 * np.abs(b).max())  # round-off
+    assert out["amps"]["data"]["processing"]["torque"]["scale_Nm_per_unit"] == [50, 40, 30]

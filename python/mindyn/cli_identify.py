@@ -187,6 +187,11 @@ def _read(path, robot, args, currents=None):
         )
     if currents:
         data = attach_currents(data, currents, robot, gain)
+    if gain is not None and not data.processing["torque"]["unit"].startswith("motor current"):
+        raise ValueError(
+            f"--drive-gain: {path} holds torques in {data.processing['torque']['unit']}, not "
+            "motor currents; expected --torque-unit current, columns i1..in or --currents"
+        )
     return data
 
 
