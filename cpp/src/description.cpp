@@ -209,9 +209,11 @@ Model parseYaml(const std::string& text, const std::string& source) {
       if (j.limits.lower > j.limits.upper) c.fail("lower limit above upper limit", l);
     }
     if (jn["drive"].IsDefined()) {
-      checkKeys(c, jn["drive"], {"rated_torque", "gear_ratio"}, "drive");
+      checkKeys(c, jn["drive"], {"rated_torque", "gear_ratio", "torque_constant"}, "drive");
       j.drive.rated_torque = optional(c, jn["drive"], "rated_torque", j.drive.rated_torque);
       j.drive.gear_ratio = optional(c, jn["drive"], "gear_ratio", j.drive.gear_ratio);
+      j.drive.torque_constant =
+          optional(c, jn["drive"], "torque_constant", j.drive.torque_constant);
     }
     if (jn["inertial"].IsDefined())
       model.inertial.segment<10>(10 * k) = readInertial(c, jn["inertial"]);

@@ -151,34 +151,54 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------------------------
 # identify
 # ---------------------------------------------------------------------------------------------
-def _read(path, robot, args):
-    from .identification.data import DataError, read_csv
+def _read(path, robot, args, currents=None):
+    from dataclasses import replace
+
+    from .identification.currents import attach_currents
+    from .identification.data import DataError, convert_torque, read_csv
     from .identification.rosbag import is_rosbag, read_rosbag
 
+    gain = _floats(args.drive_gain, robot.n, "--drive-gain") if args.drive_gain else None
     if Path(path).is_dir() and not is_rosbag(path):
         raise DataError(f"'{path}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
+    unit = None if currents else args.torque_unit
     if is_rosbag(path):
-        return read_rosbag(
+        current = unit == "current"
+        data = read_rosbag(
             path,
             robot,
             topic=args.topic,
-            torque_unit=args.torque_unit or "Nm",
+            torque_unit="Nm" if current or not unit else unit,
             filter=args.filter,
             cutoff=args.cutoff,
         )
-    return read_csv(
-        path,
-        robot=robot,
-        torque_unit=args.torque_unit,
-        filter=args.filter,
-        cutoff=args.cutoff,
-    )
+        if current:  # effort in A: the gains (given or of the drive table) turn it into N m
+            tau, info = convert_torque(data.tau, "current", robot, gain)
+            data = replace(data, tau=tau, processing={**data.processing, "torque": info})
+    else:
+        data = read_csv(
+            path,
+            robot=robot,
+            torque_unit=unit,
+            require_torque=not currents,
+            filter=args.filter,
+            cutoff=args.cutoff,
+            drive_gain=gain,
+        )
+    if currents:
+        data = attach_currents(data, currents, robot, gain)
+    if gain is not None and not data.processing["torque"]["unit"].startswith("motor current"):
+        raise ValueError(
+            f"--drive-gain: {path} holds torques in {data.processing['torque']['unit']}, not "
+            "motor currents; expected --torque-unit current, columns i1..in or --currents"
+        )
+    return data
 
 
-def _read_filtered(path, robot, args):
+def _read_filtered(path, robot, args, currents=None):
     """:func:`_read`, with a filter that cannot be designed at ``--cutoff`` named as such."""
     try:
-        return _read(path, robot, args)
+        return _read(path, robot, args, currents)
     except np.linalg.LinAlgError as e:
         if args.filter != "butter":
             raise
@@ -191,19 +211,37 @@ def _read_filtered(path, robot, args):
         ) from None
 
 
+def _paired(logs, currents, flag, logs_flag):
+    """One currents file per log (or none)."""
+    if not currents:
+        return [None] * len(logs)
+    if len(currents) != len(logs):
+        raise ValueError(
+            f"{flag}: {len(currents)} currents file(s) for {len(logs)} log(s) of {logs_flag}; "
+            "expected one per log, in the same order"
+        )
+    return currents
+
+
 def cmd_identify(args: argparse.Namespace) -> int:
     from .identification import identify, true_base_values, validate
     from .identification.data import read_truth
     from .identification.report import format_table, write_report
 
+    if args.validate_currents and not args.validate:
+        raise ValueError("--validate-currents: expected --validate with the logs they belong to")
     robot = load(args.robot, tip=args.tip)
-    data = _read_filtered(args.data, robot, args)
-    vdata = _read_filtered(args.validate, robot, args) if args.validate else None
+    files = list(args.data)
+    vfiles = list(args.validate or [])
+    cur = _paired(files, args.currents, "--currents", "the identification data")
+    vcur = _paired(vfiles, args.validate_currents, "--validate-currents", "--validate")
+    logs = [_read_filtered(f, robot, args, c) for f, c in zip(files, cur)]
+    vlogs = [_read_filtered(f, robot, args, c) for f, c in zip(vfiles, vcur)]
     base = base_parameters(robot, rotor=args.rotor, friction=args.friction)
     try:
         res = identify(
             robot,
-            data,
+            logs,
             model=args.model,
             base=base,
             weighted=not args.ols,
@@ -214,25 +252,36 @@ def cmd_identify(args: argparse.Namespace) -> int:
         )
     except np.linalg.LinAlgError as e:
         raise ValueError(
-            f"{args.model} model on {args.data}: the least-squares problem of the base regressor "
-            f"of this data is singular ({e}); the data do not determine the {base.n} base "
-            "parameters: use a longer or richer log, or fewer parameters"
+            f"{args.model} model on {' + '.join(files)}: the least-squares problem of the base "
+            f"regressor of this data is singular ({e}); the data do not determine the {base.n} "
+            "base parameters: use a longer or richer log, or fewer parameters"
         ) from None
-    truth_doc = read_truth(args.data)
+    truth_docs = [read_truth(f) for f in files]
+    truth_doc = truth_docs[0] if all(d == truth_docs[0] for d in truth_docs) else None
 
     truth = true_base_values(base, truth_doc) if truth_doc else None
-    fit = validate(res, data)
-    val = validate(res, vdata) if vdata is not None else None
+    fit = validate(res, logs)
+    val = validate(res, vlogs) if vlogs else None
 
+    data = logs[0]
     proc = data.processing
     extras = [x for x, on in (("rotor inertia", args.rotor), ("friction", args.friction)) if on]
-    out = [
+    head = (
         f"{robot.name}: {res.model} model, {base.n} base parameters"
         + (f" ({', '.join(extras)})" if extras else "")
-        + f", {data.m} samples at {data.rate:.4g} Hz from {args.data}",
+        + ", "
+    )
+    if len(logs) == 1:
+        out = [head + f"{data.m} samples at {data.rate:.4g} Hz from {files[0]}"]
+    else:
+        out = [head + f"{sum(d.m for d in logs)} samples from {len(logs)} logs fitted together:"]
+        for f, d, info in zip(files, logs, res.settings["logs"]):
+            out.append(f"    {f}: {d.m} samples at {d.rate:.4g} Hz, {info['equations']} equations")
+    out += [
         f"  velocities: {_describe(proc.get('velocity', {}))}; accelerations: "
         f"{_describe(proc.get('acceleration', {}))}"
-        + ("" if res.model == "dynamic" else " (not used by the energy model)"),
+        + ("" if res.model == "dynamic" else " (not used by the energy model)")
+        + (" (each log on its own)" if len(logs) > 1 else ""),
         f"  {res.rows} equations, {res.settings.get('weighting')}; condition number of the "
         f"column-scaled regressor {res.cond:.3g}",
     ]
@@ -247,10 +296,18 @@ def cmd_identify(args: argparse.Namespace) -> int:
             f"{res.settings['min_velocity']:g} rad/s left out (Coulomb sign undetermined)"
         )
     if "torque" in proc and proc["torque"]["unit"] != "N m":
+        what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
         out.append(
-            "  torques converted from permille: scale "
+            f"  torques converted from {what}: "
+            + ("gain " if what != "permille" else "scale ")
             + " ".join(f"{s:.4g}" for s in proc["torque"]["scale_Nm_per_unit"])
-            + " N m per unit"
+            + " N m per "
+            + ("A" if what != "permille" else "unit")
+            + (
+                f" ({proc['torque']['formula'].split('(')[-1].rstrip(')')})"
+                if what != "permille"
+                else ""
+            )
         )
     kept = len(res.names)
     out.append(
@@ -261,7 +318,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
             else ""
         )
         + (
-            " (true values from " + str(Path(args.data).with_suffix("")) + ".truth.json)"
+            " (true values from " + str(Path(files[0]).with_suffix("")) + ".truth.json)"
             if truth is not None
             else ""
         )
@@ -273,18 +330,23 @@ def cmd_identify(args: argparse.Namespace) -> int:
     out.append("")
     out.append(_rms_lines("identification data", fit))
     if val is not None:
-        out.append(_rms_lines(f"validation data ({args.validate})", val))
+        out.append(_rms_lines(f"validation data ({', '.join(vfiles)})", val))
     print("\n".join(out))
 
     doc = res.to_dict()
-    doc["data"] = {"file": str(args.data), "samples": data.m, "processing": _plain(proc)}
-    doc["fit"] = {"rms": fit["rms"].tolist(), "relative": _nan_list(fit["relative"])}
+    doc["data"] = {
+        "file": files[0] if len(files) == 1 else None,
+        "files": files,
+        "samples": sum(d.m for d in logs),
+        "processing": _plain(proc),
+        "logs": [
+            {"file": f, "samples": d.m, "processing": _plain(d.processing)}
+            for f, d in zip(files, logs)
+        ],
+    }
+    doc["fit"] = _measures_doc(fit, files)
     if val is not None:
-        doc["validation"] = {
-            "file": str(args.validate),
-            "rms": val["rms"].tolist(),
-            "relative": _nan_list(val["relative"]),
-        }
+        doc["validation"] = {"file": ", ".join(vfiles), **_measures_doc(val, vfiles)}
     if truth is not None:
         doc["true_values"] = [float(v) for v in truth]
     if args.json:
@@ -295,11 +357,30 @@ def cmd_identify(args: argparse.Namespace) -> int:
         from .identification.excitation import excitation_limits
 
         lim, _ = excitation_limits(robot, margin=0.0)
-        paths = write_report(args.report, res, data, vdata, val, fit["tau_hat"], lim)
+        paths = write_report(args.report, res, logs, vlogs, val, fit, lim)
         (Path(args.report) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
         (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
         print(f"wrote report to {Path(args.report)}/: " + ", ".join(p.name for p in paths))
     return 0
+
+
+def _measures_doc(v: dict, files: list) -> dict:
+    """The error measures of :func:`~mindyn.identification.validate` for the JSON: fractions
+    (relative, NRMS) and N m (RMS), over all logs stacked and per log."""
+
+    def one(m):
+        return {
+            "overall_relative": _nan_list([m["overall_relative"]])[0],
+            "rms": m["rms"].tolist(),
+            "relative": _nan_list(m["relative"]),
+            "nrms": _nan_list(m["nrms"]),
+            "nrms_missing_limit": m["nrms_missing"],
+        }
+
+    out = one(v)
+    out["samples"] = v["samples"]
+    out["logs"] = [{"file": f, "samples": m["samples"], **one(m)} for f, m in zip(files, v["logs"])]
+    return out
 
 
 def _describe(info: dict) -> str:
@@ -318,10 +399,36 @@ def _describe(info: dict) -> str:
     return f"from {info['source'].split()[-1]}, central differences (no filter)"
 
 
+def _pct(x) -> str:
+    return f"{100 * x:8.2f}%" if math.isfinite(x) else f"{'-':>9}"
+
+
 def _rms_lines(label: str, v: dict) -> str:
-    rms = " ".join(f"{x:9.4g}" for x in v["rms"])
-    rel = " ".join(f"{100 * x:8.2f}%" if math.isfinite(x) else f"{'-':>9}" for x in v["relative"])
-    return f"RMS torque error on {label}:\n  per joint  {rms}\n  relative   {rel}"
+    """The error measures of :func:`~mindyn.identification.validate` as terminal lines."""
+    n = len(v["rms"])
+    lines = [
+        f"RMS torque error on {label}:",
+        "  joint     " + " ".join(f"{k + 1:>9}" for k in range(n)),
+        "  per joint " + " ".join(f"{x:9.4g}" for x in v["rms"]) + "  [N m | N]",
+        "  relative  " + " ".join(_pct(x) for x in v["relative"]),
+        "  NRMS      "
+        + " ".join(_pct(x) for x in v["nrms"])
+        + "  (RMS / effort limit"
+        + (
+            f"; no effort limit for joint(s) {', '.join(map(str, v['nrms_missing']))})"
+            if v["nrms_missing"]
+            else ")"
+        ),
+        f"  overall relative error |tau - tau_hat| / |tau|, all joints stacked: "
+        f"{_pct(v['overall_relative']).strip()}",
+    ]
+    if len(v["logs"]) > 1:
+        for m in v["logs"]:
+            lines.append(
+                f"  {m['source']}: overall {_pct(m['overall_relative']).strip()}, RMS "
+                + " ".join(f"{x:.4g}" for x in m["rms"])
+            )
+    return "\n".join(lines)
 
 
 def _nan_list(a):
@@ -516,21 +623,28 @@ def register(sub) -> None:
     p = sub.add_parser(
         "identify",
         help="identify base parameters from a joint log (dynamic or energy model)",
-        description="Least-squares identification of the base parameters from a CSV log "
-        "(t, q1..qn, [dq1..dqn], tau1..taun) or a ROS bag (sensor_msgs/JointState: position, "
-        "[velocity], effort, joints matched by name) with statistics (RSD), pruning of "
-        "parameters with large RSD, validation on a second log, JSON output and a plot report.",
+        description="Least-squares identification of the base parameters from CSV logs "
+        "(t, q1..qn, [dq1..dqn], tau1..taun) or ROS bags (sensor_msgs/JointState: position, "
+        "[velocity], effort, joints matched by name), one or several fitted together, with "
+        "statistics (RSD), pruning of parameters with large RSD, error measures (overall "
+        "relative error, per-joint RMS, relative error and NRMS of the effort limit, scaled "
+        "condition number) on the fit and on validation logs, JSON output and a plot report.",
     )
     add_robot(p)
     p.add_argument(
         "data",
-        help="CSV log (t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun) or ROS bag (a ROS 2 bag "
-        "folder, .mcap, .db3, or a ROS 1 .bag)",
+        nargs="+",
+        metavar="LOG",
+        help="CSV log (t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun or currents i1..in) or "
+        "ROS bag (a ROS 2 bag folder, .mcap, .db3, or a ROS 1 .bag); several logs are fitted "
+        "together (derivatives taken on each log alone, regression systems stacked)",
     )
     p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
     p.add_argument("--model", choices=["dynamic", "energy"], default="dynamic")
     add_joint_terms(p, "identify")
-    p.add_argument("--validate", metavar="LOG", help="second log (CSV or bag) for validation")
+    p.add_argument(
+        "--validate", nargs="+", metavar="LOG", help="log(s) (CSV or bag) for validation"
+    )
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
     p.add_argument("--report", metavar="DIR", type=output_dir, help="write plots and tables to DIR")
     number(
@@ -542,9 +656,32 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--torque-unit",
-        choices=["Nm", "permille"],
-        help="logged torque unit; permille: value x rated torque x gear ratio / 1000 "
-        "(default: the unit the CSV header gives, as in tau1[permille], else Nm)",
+        choices=["Nm", "permille", "current"],
+        help="logged torque unit; permille: value x rated torque x gear ratio / 1000; current: "
+        "motor current [A] x drive gain (--drive-gain, else torque_constant x gear_ratio of the "
+        "drive table) (default: the unit the CSV header gives, as in tau1[permille], or current "
+        "for columns i1..in, else Nm)",
+    )
+    p.add_argument(
+        "--drive-gain",
+        metavar="K1,...,Kn",
+        help="joint-side drive gains [N m/A] that turn motor currents into joint torques (one "
+        "value for all joints or one per joint); default: the robot's drive table",
+    )
+    p.add_argument(
+        "--currents",
+        nargs="+",
+        metavar="CSV",
+        help="motor currents from separate files (t, i1..in, other columns ignored), one per "
+        "LOG in the same order, joined on the time stamps (each sample of the log needs a "
+        "current sample within 1/1000 of its sample period); torques = currents x drive gains, "
+        "torque columns of the log are ignored",
+    )
+    p.add_argument(
+        "--validate-currents",
+        nargs="+",
+        metavar="CSV",
+        help="as --currents, one per --validate log",
     )
     p.add_argument(
         "--filter",

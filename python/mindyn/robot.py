@@ -165,7 +165,9 @@ class Robot:
 
     @property
     def drives(self) -> dict[str, np.ndarray]:
-        """Motor rated torque and gear ratio per joint, shape (n,) each (NaN when unknown)."""
+        """Motor rated torque [N m], gear ratio and motor torque constant [N m/A] per joint
+        (``rated_torque``, ``gear_ratio``, ``torque_constant``), shape (n,) each (NaN when
+        unknown; URDF gives none)."""
         rows = self._m.drives
         return {k: np.array([r[k] for r in rows]) for k in rows[0]}
 

@@ -152,6 +152,7 @@ PYBIND11_MODULE(_core, m) {
                                  py::dict d;
                                  d["rated_torque"] = j.drive.rated_torque;
                                  d["gear_ratio"] = j.drive.gear_ratio;
+                                 d["torque_constant"] = j.drive.torque_constant;
                                  l.append(d);
                                }
                                return l;

@@ -12,7 +12,7 @@
 //     name, type: revolute | prismatic
 //     dh: a, alpha, d, theta     mdh: alpha, d, theta, r   (theta / d resp. r is the joint offset)
 //     limits: {lower, upper, velocity, acceleration, effort}
-//     drive: {rated_torque, gear_ratio}
+//     drive: {rated_torque, gear_ratio, torque_constant}   motor side; torque_constant in N m/A
 //     inertial: {mass, com: [x,y,z], inertia: {xx, yy, zz, xy, xz, yz}}   about the COM, link axes
 //           or  {XX, XY, XZ, YY, YZ, ZZ, MX, MY, MZ, M}                     about the link origin
 //     rotor_inertia: Ia           friction: {viscous, coulomb}

@@ -36,11 +36,12 @@ struct JointLimits {
   double effort = std::numeric_limits<double>::quiet_NaN();
 };
 
-/// Drive data used to convert logged relative torques: tau = value * rated_torque * gear_ratio /
-/// 1000.
+/// Drive data used to convert logged relative torques, tau = value * rated_torque * gear_ratio /
+/// 1000, and logged motor currents, tau = current * torque_constant * gear_ratio.
 struct Drive {
   double rated_torque = std::numeric_limits<double>::quiet_NaN();  // motor side [N m]
   double gear_ratio = std::numeric_limits<double>::quiet_NaN();
+  double torque_constant = std::numeric_limits<double>::quiet_NaN();  // motor side [N m / A]
 };
 
 /// One row of a Denavit-Hartenberg table, kept for display. For `dh`: a, alpha, d, theta.

@@ -6,7 +6,8 @@
 - :mod:`~mindyn.identification.excitation`: optimised Fourier excitation trajectories;
 - :mod:`~mindyn.identification.models`: the regression systems (dynamic and energy models);
 - :mod:`~mindyn.identification.estimation`: least squares with statistics and pruning;
-- :mod:`~mindyn.identification.validation`: torque prediction on other data;
+- :mod:`~mindyn.identification.validation`: torque prediction and error measures;
+- :mod:`~mindyn.identification.currents`: torques from motor currents logged apart;
 - :mod:`~mindyn.identification.report`: tables and plots.
 
 The names below are the ones a workflow needs; the modules hold the rest.
@@ -16,7 +17,7 @@ from .data import DataError, JointData, read_csv, write_csv
 from .errors import IdentificationError, RankDeficientError
 from .estimation import IdentificationResult, identify
 from .models import MODELS, dynamic_system, energy_system
-from .validation import true_base_values, validate
+from .validation import error_measures, true_base_values, validate
 
 __all__ = [
     "MODELS",
@@ -27,6 +28,7 @@ __all__ = [
     "RankDeficientError",
     "dynamic_system",
     "energy_system",
+    "error_measures",
     "identify",
     "read_csv",
     "true_base_values",

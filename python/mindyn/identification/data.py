@@ -9,7 +9,10 @@ accelerations per second; torques in N m (N), or as relative values in per mille
 rated torque (``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, seed
 001, with the drive table of the robot description). The torque columns may say their unit in
 the header, ``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with
-``torque_unit``); the reader then needs no ``torque_unit``. Velocities and accelerations that
+``torque_unit``); the reader then needs no ``torque_unit``. Motor currents in A may stand in
+for the torques, as columns ``i1..iN`` (or ``torque_unit="current"``): ``tau = i * K`` with
+the joint-side drive gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K``
+given as ``drive_gain``. Velocities and accelerations that
 are not logged are obtained from the positions (velocities) by zero-phase low-pass filtering and
 central differences; the settings are reported in :attr:`JointData.processing`.
 """
@@ -113,6 +116,15 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
     returned as ``torque_unit`` (None when the header names none)."""
     names = [h.strip() for h in header]
+    currents = [i for i, h in enumerate(names) if re.fullmatch(r"i\d+", h)]
+    if currents:
+        if any(re.fullmatch(r"tau\d+(\s*\[.*\])?", h) for h in names):
+            raise DataError(
+                f"{path}: both torque columns (tau1..) and current columns (i1..) in the "
+                "header; give one of them"
+            )
+        for i in currents:  # currents stand in for the torques, unit 'current'
+            names[i] = f"tau{names[i][1:]}[current]"
     units = {}
     for i, name in enumerate(names):
         u = _UNIT.match(name)
@@ -183,6 +195,7 @@ def read_csv(
     order: int = 4,
     window: float | None = None,
     polyorder: int = 3,
+    drive_gain=None,
 ) -> JointData:
     """Read a joint log.
 
@@ -197,11 +210,14 @@ def read_csv(
         ``permille``: torques logged relative to the motor rated torque, converted with
         ``value * rated_torque * gear_ratio / 1000`` per joint. Default: the unit the header
         gives (``tau1[permille]``), else N m; a unit given here that differs from the header's
-        is an error.
+        is an error. ``current``: motor currents in A (columns ``i1..iN`` say so themselves),
+        converted with the drive gains, see :func:`convert_torque`.
     require_torque : bool
         False for a trajectory file (``t, q, [dq], [ddq]``).
     filter, cutoff, order, window, polyorder
         How missing velocities / accelerations are obtained, see :func:`differentiate`.
+    drive_gain : array (n,), optional
+        Currents: joint-side gain per joint [N m/A], instead of the drive table's.
 
     Raises
     ------
@@ -274,9 +290,10 @@ def read_csv(
     processing: dict = {"samples": len(rows), "first_data_line": first_line}
     header_unit = cols["torque_unit"]
     if tau is not None and header_unit is not None:
-        if _unit_key(header_unit) not in ("Nm", "permille"):
+        if _unit_key(header_unit) not in ("Nm", "permille", "current"):
             raise DataError(
-                f"{path}: unknown torque unit '{header_unit}' in the header; use Nm or permille"
+                f"{path}: unknown torque unit '{header_unit}' in the header; use Nm, permille "
+                "or current"
             )
         if torque_unit is not None and _unit_key(torque_unit) != _unit_key(header_unit):
             raise DataError(
@@ -285,7 +302,7 @@ def read_csv(
             )
         torque_unit = header_unit
     if tau is not None:
-        tau, unit_info = convert_torque(tau, torque_unit or "Nm", robot)
+        tau, unit_info = convert_torque(tau, torque_unit or "Nm", robot, drive_gain)
         processing["torque"] = unit_info
     dq, ddq, deriv = fill_derivatives(
         t, q, dq, ddq, filter=filter, cutoff=cutoff, order=order, window=window, polyorder=polyorder
@@ -306,14 +323,57 @@ def _unit_key(unit: str) -> str:
         return "Nm"
     if u in ("permille", "‰", "promille"):
         return "permille"
+    if u in ("current", "a", "amp", "ampere"):
+        return "current"
     return u
 
 
-def convert_torque(tau: np.ndarray, unit: str, robot=None):
-    """Torques in N m from the logged unit; returns ``(tau, info)``."""
+def drive_gains(robot=None, drive_gain=None) -> tuple[np.ndarray, str]:
+    """Joint-side drive gains ``K`` [N m/A per joint] that turn motor currents into joint
+    torques, and where they come from: ``drive_gain`` (n,) when given, else the robot's drive
+    table, ``torque_constant * gear_ratio``. Raises DataError when a gain is missing, not
+    finite or zero."""
+    if drive_gain is not None:
+        K = np.asarray(drive_gain, dtype=float).reshape(-1)
+        if robot is not None and K.size != robot.n:
+            raise DataError(f"drive gains: {K.size} values for {robot.n} joints")
+        bad = np.flatnonzero(~np.isfinite(K) | (K == 0))
+        if bad.size:
+            raise DataError(
+                f"drive gains: joint(s) {', '.join(str(k + 1) for k in bad)} have a gain that "
+                "is zero or not a finite number"
+            )
+        return K, "given drive gains"
+    if robot is None:
+        raise DataError("torque unit 'current' needs drive gains or the robot's drive table")
+    drives = robot.drives
+    K = drives.get("torque_constant", np.full(robot.n, np.nan)) * drives["gear_ratio"]
+    bad = np.flatnonzero(~np.isfinite(K) | (K == 0))
+    if bad.size:
+        raise DataError(
+            f"torque unit 'current': the description of '{robot.name}' gives no torque constant "
+            f"/ gear ratio for joint(s) {', '.join(str(k + 1) for k in bad)}; add "
+            "drive: {torque_constant, gear_ratio} to its YAML or give the joint-side gains "
+            "(--drive-gain K1,...,Kn in N m/A)"
+        )
+    return K, "drive table: torque_constant x gear_ratio"
+
+
+def convert_torque(tau: np.ndarray, unit: str, robot=None, drive_gain=None):
+    """Torques in N m from the logged unit (``Nm``, ``permille``, or ``current``: motor currents
+    in A times the gains of :func:`drive_gains`); returns ``(tau, info)``."""
     unit_l = _unit_key(unit)
     if unit_l == "Nm":
         return tau, {"unit": "N m"}
+    if unit_l == "current":
+        K, source = drive_gains(robot, drive_gain)
+        if K.size != tau.shape[1]:
+            raise DataError(f"drive gains: {K.size} values for {tau.shape[1]} joints")
+        return tau * K, {
+            "unit": "motor current [A]",
+            "scale_Nm_per_unit": K.tolist(),
+            "formula": f"current x gain ({source})",
+        }
     if unit_l == "permille":
         if robot is None:
             raise DataError("torque unit 'permille' needs the robot's drive table")
@@ -331,7 +391,7 @@ def convert_torque(tau: np.ndarray, unit: str, robot=None):
             "scale_Nm_per_unit": scale.tolist(),
             "formula": "value x rated_torque x gear_ratio / 1000",
         }
-    raise DataError(f"unknown torque unit '{unit}'; use Nm or permille")
+    raise DataError(f"unknown torque unit '{unit}'; use Nm, permille or current")
 
 
 def differentiate(

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -67,6 +68,9 @@ class IdentificationResult:
     joint_sigma : ndarray (n,), optional
         Dynamic model: per-joint residual standard deviations of the first OLS pass, the weights'
         inverse (WLS).
+    cond : float
+        Condition number of the stacked regressor (unweighted, equations left out by
+        ``min_velocity`` excluded) with its columns scaled to unit norm.
     initial : dict
         Estimates, std and RSD of all base parameters before pruning.
     """
@@ -117,6 +121,7 @@ class IdentificationResult:
             "weighted": self.weighted,
             "joint_sigma": None if self.joint_sigma is None else self.joint_sigma.tolist(),
             "cond": _json_float(self.cond),
+            "condition_number_scaled": _json_float(self.cond),
             "initial": {
                 "names": list(self.base.names),
                 "values": [float(v) for v in self.initial.get("values", [])],
@@ -165,11 +170,14 @@ class _Reduced:
         self.rho = float(R[c, c] ** 2)
 
     def rank(self, tol: float):
-        """``(rank, pivot order, condition number)`` of the column-scaled regressor."""
+        """``(rank, pivot order, condition number)`` of the column-scaled regressor (columns
+        of unit norm); the condition number is the ratio of the extreme singular values, those
+        of the triangle ``R``."""
         _, Rp, piv = sla.qr(self.R, pivoting=True)
         d = np.abs(np.diag(Rp))
         rank = int(np.sum(d > tol * d[0])) if d.size and d[0] > 0 else 0
-        cond = float(d[0] / d[-1]) if d.size and d[-1] > 0 else float("inf")
+        sv = np.linalg.svd(self.R, compute_uv=False)
+        cond = float(sv[0] / sv[-1]) if sv.size and sv[-1] > 0 else float("inf")
         return rank, piv, cond
 
     def solve(self, keep: list[int]):
@@ -249,29 +257,42 @@ def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float) -> float:
 
 
 def _enough(
-    model: str, rows: int, nb: int, data: JointData, settings: dict, window: int = 1
+    model: str, rows: int, nb: int, logs: list[JointData], settings: dict, window: int = 1
 ) -> None:
     """Refuses too few equations for ``nb`` parameters (:data:`MIN_EQUATIONS_PER_PARAMETER`,
-    :data:`MIN_NOISE_DOF`); records the rule in ``settings``."""
+    :data:`MIN_NOISE_DOF`) over all ``logs``; records the rule in ``settings``."""
     k = MIN_EQUATIONS_PER_PARAMETER[model]
     need = max(k * nb, nb + MIN_NOISE_DOF)
     settings["min_equations"] = need
     if rows >= need:
         return
-    src = data.source or "data"
+    src = _sources(logs)
+    m, n = sum(d.m for d in logs), logs[0].n
     if model == "dynamic":
-        got = f"{data.m} samples x {data.n} joints = {rows} equations"
+        got = f"{m} samples x {n} joints = {rows} equations"
         if settings.get("equations_left_out"):
             got += f" ({settings['equations_left_out']} left out as slower than min_velocity)"
-        more = f"at least {math.ceil(need * data.m / max(rows, 1))} samples"
+        more = f"at least {math.ceil(need * m / max(rows, 1))} samples"
     else:
-        got = f"{data.m} samples give {rows} energy windows of {window} intervals"
+        got = f"{m} samples give {rows} energy windows of {window} intervals"
         more = f"at least {need * window + 1} samples, or a shorter window"
     raise IdentificationError(
         f"{src}: {got} for {nb} base parameters; at least {need} are needed ({k} per "
         f"parameter and {MIN_NOISE_DOF} degrees of freedom for the noise estimate): fewer give "
         f"estimates whose RSD does not show their error. Use a longer log ({more})"
     )
+
+
+def _sources(logs: list[JointData]) -> str:
+    return " + ".join(d.source or "data" for d in logs)
+
+
+def _logs(data) -> list[JointData]:
+    """One log or a sequence of logs as a non-empty list of :class:`JointData`."""
+    logs = [data] if isinstance(data, JointData) else list(data)
+    if not logs or not all(isinstance(d, JointData) for d in logs):
+        raise ValueError("data must be a JointData or a non-empty sequence of JointData")
+    return logs
 
 
 def _rsd(p: np.ndarray, std: np.ndarray) -> np.ndarray:
@@ -282,7 +303,7 @@ def _rsd(p: np.ndarray, std: np.ndarray) -> np.ndarray:
 @single_threaded_blas
 def identify(
     robot: Robot | str,
-    data: JointData,
+    data: JointData | Sequence[JointData],
     model: str = "dynamic",
     rotor: bool = False,
     friction: bool = False,
@@ -299,8 +320,13 @@ def identify(
     Parameters
     ----------
     robot : Robot or str
-    data : JointData
-        ``t, q, dq, ddq, tau`` (``ddq`` is not used by the energy model).
+    data : JointData or sequence of JointData
+        ``t, q, dq, ddq, tau`` (``ddq`` is not used by the energy model). Several logs are
+        fitted together: each log's regression system is formed from its own samples (its
+        derivatives were obtained on it alone, never across the junction between logs; energy
+        windows do not span two logs) and the systems are stacked; the per-joint noise weights
+        are estimated over all of them. ``settings["logs"]`` gives each log's samples and
+        equations.
     model : {"dynamic", "energy"}
     rotor, friction : bool
         Include rotor inertia / viscous and Coulomb friction (ignored when ``base`` is given).
@@ -348,28 +374,45 @@ def identify(
     if rsd_threshold is not None and not math.isfinite(rsd_threshold):
         raise ValueError(f"rsd_threshold must be a finite number or None, got {rsd_threshold}")
     robot = load(robot)
-    if data.n != robot.n:
-        raise DataError(
-            f"{data.source or 'data'} has {data.n} joints; robot '{robot.name}' has {robot.n}"
-        )
+    logs = _logs(data)
+    for d in logs:
+        if d.n != robot.n:
+            raise DataError(
+                f"{d.source or 'data'} has {d.n} joints; robot '{robot.name}' has {robot.n}"
+            )
     if base is None:
         base = base_parameters(robot, rotor=rotor, friction=friction)
     names = list(base.names)
     nb = base.n
     settings: dict = {"model": model}
+    equations = sum(d.m for d in logs) * robot.n
     if model == "dynamic":
-        _enough(model, data.m * data.n, nb, data, settings)  # before any work
-        S, joint_rows = dynamic_triangles(base, data, min_velocity)
+        _enough(model, equations, nb, logs, settings)  # before any work
+        S = np.zeros((robot.n, nb + 1, nb + 1))
+        joint_rows = np.zeros(robot.n, dtype=int)
+        log_rows = []
+        for d in logs:  # each log's system on its own samples; per joint, merged by QR
+            Sd, rd = dynamic_triangles(base, d, min_velocity)
+            S = np.stack([_triangle(np.vstack([a, b])) for a, b in zip(S, Sd)])
+            joint_rows += rd
+            log_rows.append(int(rd.sum()))
         rows = int(joint_rows.sum())
         settings["min_velocity"] = min_velocity if base.friction else 0.0
-        settings["equations_left_out"] = data.m * data.n - rows
-        _enough(model, rows, nb, data, settings)
+        settings["equations_left_out"] = equations - rows
+        _enough(model, rows, nb, logs, settings)
     else:
-        rows = (data.m - 1) // energy_window
-        _enough(model, rows, nb, data, settings, energy_window)
-        W, y = energy_system(base, data, energy_window, integration)
+        log_rows = [max(0, (d.m - 1) // energy_window) for d in logs]
+        rows = sum(log_rows)
+        _enough(model, rows, nb, logs, settings, energy_window)
+        used = [d for d, r in zip(logs, log_rows) if r > 0]  # logs with a whole window
+        parts = [energy_system(base, d, energy_window, integration) for d in used]
+        W = np.vstack([w for w, _ in parts])
+        y = np.concatenate([v for _, v in parts])
         settings.update({"energy_window": energy_window, "integration": integration})
-    what = f"{model} model on {data.source or 'the data'}"
+    settings["logs"] = [
+        {"source": d.source, "samples": d.m, "equations": r} for d, r in zip(logs, log_rows)
+    ]
+    what = f"{model} model on {_sources(logs)}"
     if model == "dynamic":
         ls = _Reduced.from_triangle(_triangle(np.vstack(list(S))), rows)
     else:
@@ -378,8 +421,8 @@ def identify(
 
     joint_sigma = None
     if weighted and model == "energy":
-        joint_sigma = torque_noise(data.tau)
-        var = energy_row_noise(data, energy_window) @ joint_sigma**2
+        joint_sigma = torque_noise([d.tau for d in logs])
+        var = np.vstack([energy_row_noise(d, energy_window) for d in used]) @ joint_sigma**2
         # Floor: windows near rest would otherwise get unbounded weight, and their error is
         # then dominated by what the noise model leaves out (velocity noise, model error).
         var = var + 0.1 * np.median(var)

@@ -97,11 +97,13 @@ def energy_system(
     return W, y
 
 
-def torque_noise(tau: np.ndarray) -> np.ndarray:
+def torque_noise(tau) -> np.ndarray:
     """Per-joint standard deviation of white noise on sampled torques, shape (n,), estimated
     from second differences (robust: median absolute deviation); the smooth part of a torque
-    sampled much faster than it changes hardly contributes."""
-    d2 = np.diff(tau, n=2, axis=0)
+    sampled much faster than it changes hardly contributes. ``tau`` (m, n), or a list of such
+    logs: their second differences are pooled, none taken across the junction of two logs."""
+    logs = tau if isinstance(tau, (list, tuple)) else [tau]
+    d2 = np.vstack([np.diff(np.asarray(x), n=2, axis=0) for x in logs])
     mad = np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0)
     return 1.4826 * mad / math.sqrt(6.0)
 

@@ -97,47 +97,76 @@ def format_table(result, truth=None) -> str:
     return "\n".join(lines)
 
 
+def _tau_hats(pred, logs, result) -> list:
+    """Predicted torques per log from what the caller has: None, an array (one log), a list of
+    arrays, or a :func:`~mindyn.identification.validate` result."""
+    if pred is None:
+        return [result.predict(d) for d in logs]
+    if isinstance(pred, dict):
+        pred = pred["tau_hat"]
+    return [pred] if isinstance(pred, np.ndarray) else list(pred)
+
+
+def _name(data) -> str:
+    return Path(data.source).name if data.source else "data"
+
+
 def write_report(
     directory, result, data, validation_data=None, validation=None, fit=None, trajectory_limits=None
 ) -> list[Path]:
     """Writes the PNG plots of a report folder: measured vs estimated torques on the
     identification data (and on the validation data), and the joint trajectory of the
-    identification data. Returns the paths written."""
+    identification data. ``data`` and ``validation_data`` are one log or a list of logs; with
+    several, each gets its own plots (``torque_identification_2.png``, ...). ``fit`` and
+    ``validation`` are the results of :func:`~mindyn.identification.validate` (or the predicted
+    torques); a plot's title gives the log's overall relative error when they are. Returns the
+    paths written."""
     from .excitation import plot_trajectory
 
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
     out = []
     tag = f"{result.base.robot.name}, {result.model} model"
-    fit = fit if fit is not None else result.predict(data)
-    out.append(
-        plot_torques(
-            d / "torque_identification.png",
-            data.t,
-            data.tau,
-            fit,
-            f"{tag}: identification data ({Path(data.source).name or 'data'})",
-        )
-    )
+
+    def series(kind, logs, measures, pred):
+        hats = _tau_hats(pred, logs, result)
+        per = measures["logs"] if isinstance(measures, dict) and "logs" in measures else None
+        for k, (log, hat) in enumerate(zip(logs, hats)):
+            suffix = "" if k == 0 else f"_{k + 1}"
+            err = ""
+            if per is not None and np.isfinite(per[k]["overall_relative"]):
+                err = f", relative error {100 * per[k]['overall_relative']:.2f} %"
+            out.append(
+                plot_torques(
+                    d / f"torque_{kind}{suffix}.png",
+                    log.t,
+                    log.tau,
+                    hat,
+                    f"{tag}: {kind} data ({_name(log)}){err}",
+                )
+            )
+
+    logs = [data] if not isinstance(data, (list, tuple)) else list(data)
+    series("identification", logs, fit, fit)
     if validation_data is not None and validation is not None:
+        vlogs = (
+            [validation_data]
+            if not isinstance(validation_data, (list, tuple))
+            else list(validation_data)
+        )
+        if vlogs:
+            series("validation", vlogs, validation, validation)
+    for k, log in enumerate(logs):
         out.append(
-            plot_torques(
-                d / "torque_validation.png",
-                validation_data.t,
-                validation_data.tau,
-                validation["tau_hat"],
-                f"{tag}: validation data ({Path(validation_data.source).name or 'data'})",
+            plot_trajectory(
+                d / f"trajectory{'' if k == 0 else f'_{k + 1}'}.png",
+                log.t,
+                log.q,
+                log.dq,
+                log.ddq,
+                trajectory_limits,
+                title=f"{result.base.robot.name}: excitation trajectory (identification data"
+                + (f", {_name(log)})" if len(logs) > 1 else ")"),
             )
         )
-    out.append(
-        plot_trajectory(
-            d / "trajectory.png",
-            data.t,
-            data.q,
-            data.dq,
-            data.ddq,
-            trajectory_limits,
-            title=f"{result.base.robot.name}: excitation trajectory (identification data)",
-        )
-    )
     return out
