@@ -105,6 +105,13 @@ class BaseParameters:
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.energy_regressor(q, dq)
 
+    def momentum_regressors(self, q, dq):
+        """Base momentum regressors ``(W_p,b, W_l,b)``, shape (n_joints, n) or (m, n_joints, n)
+        each, over the equations-of-motion set: ``p = A(q) dq = W_p,b @ p_b`` and
+        ``-dL/dq = W_l,b @ p_b`` (see ``Robot.momentum_regressors``)."""
+        q, dq = _args.batch(self.robot.n, q=q, dq=dq)
+        return self._b.momentum_regressors(q, dq)
+
     def to_dict(self) -> dict:
         """A JSON-ready summary (counts, names, formulas, margins)."""
         out = {
