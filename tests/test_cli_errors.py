@@ -22,15 +22,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mindyn import cli
-from mindyn.data import JointData
-from mindyn.excitation import random_trajectory
-from mindyn.identification import (
-    MIN_EQUATIONS_PER_PARAMETER,
-    MIN_NOISE_DOF,
-    IdentificationError,
-    dynamic_system,
-    identify,
-)
+from mindyn.identification import IdentificationError, dynamic_system, identify
+from mindyn.identification.data import JointData
+from mindyn.identification.estimation import MIN_EQUATIONS_PER_PARAMETER, MIN_NOISE_DOF
+from mindyn.identification.excitation import random_trajectory
 from mindyn.simulate import MAX_STEPS, SensorNoise, simulate_inverse
 
 
@@ -246,7 +241,7 @@ def test_chunked_reduction_equals_the_stacked_least_squares(zcr_log, monkeypatch
     """The dynamic model reduced chunk by chunk (chunks of 7 samples here, so that every
     chunk boundary and a ragged last chunk occur) gives numpy's least squares on the stacked
     regressor, weighted and not."""
-    import mindyn.identification as ident
+    import mindyn.identification.estimation as ident
 
     robot, base, log = zcr_log
     data = _head(log, 400)

@@ -23,7 +23,7 @@ import mindyn
 import numpy as np
 import pytest
 from mindyn.cli import main
-from mindyn.data import DataError, read_csv, write_csv
+from mindyn.identification.data import DataError, read_csv, write_csv
 from scipy.integrate import solve_ivp
 
 GCC = shutil.which("gcc")

@@ -17,8 +17,6 @@ import pinocchio as pin
 import pytest
 from conftest import pinocchio_model
 from mindyn import cli
-from mindyn.data import JointData, fill_derivatives, read_csv
-from mindyn.excitation import FourierTrajectory, optimize_excitation, random_trajectory
 from mindyn.identification import (
     RankDeficientError,
     dynamic_system,
@@ -27,7 +25,13 @@ from mindyn.identification import (
     true_base_values,
     validate,
 )
-from mindyn.report import ZCR07S_STUDY_TABLE6
+from mindyn.identification.data import JointData, fill_derivatives, read_csv
+from mindyn.identification.excitation import (
+    FourierTrajectory,
+    optimize_excitation,
+    random_trajectory,
+)
+from mindyn.identification.report import ZCR07S_STUDY_TABLE6
 from mindyn.simulate import SensorNoise, simulate_inverse, simulate_tracking
 
 sys.path.insert(0, str(Path(__file__).parent))

@@ -6,9 +6,9 @@
 - :func:`base_parameters`: base inertial parameters by the projection method (or the numerical
   method), regrouping matrix, formulas, base regressors;
 - :mod:`mindyn.codegen`: inverse dynamics, gravity and base regressor as C or Structured Text;
-- :mod:`mindyn.excitation`, :mod:`mindyn.data`, :mod:`mindyn.simulate`,
-  :mod:`mindyn.identification`: excitation trajectories, joint logs, simulated measurements,
-  least-squares identification with statistics and validation;
+- :mod:`mindyn.identification` (excitation trajectories, joint logs, least-squares
+  identification with statistics, validation and reports) and :mod:`mindyn.simulate` (simulated
+  measurements);
 - :mod:`mindyn.control`, :func:`ik`: Slotine-Li regressor, adaptive PD and other controllers in
   closed-loop simulation, inverse kinematics.
 """

@@ -138,7 +138,7 @@ def _write_log(result, robot, output: str) -> str:
     samples) and its ``.truth.json`` (the simulated robot's classical parameters)."""
     from pathlib import Path
 
-    from .data import truth_path, write_csv
+    from .identification.data import truth_path, write_csv
 
     out = Path(output)
     if not out.parent.is_dir():

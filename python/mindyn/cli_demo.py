@@ -33,10 +33,10 @@ def _joints(values, fmt: str = "{:8.3g}") -> str:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from .data import convert_torque, read_csv, write_csv
-    from .excitation import excitation_limits, optimize_excitation, random_trajectory
     from .identification import identify, true_base_values, validate
-    from .report import ZCR07S_STUDY_TABLE6, format_table, plot_torques
+    from .identification.data import convert_torque, read_csv, write_csv
+    from .identification.excitation import excitation_limits, optimize_excitation, random_trajectory
+    from .identification.report import ZCR07S_STUDY_TABLE6, format_table, plot_torques
     from .simulate import SensorNoise, noise_from_spec, simulate_tracking
 
     t_all = time.perf_counter()
@@ -86,7 +86,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     (out / "validation_trajectory.json").write_text(
         json.dumps({"trajectory": val_traj.to_dict()}, indent=2) + "\n"
     )
-    from .excitation import criterion_value
+    from .identification.excitation import criterion_value
 
     print(
         f"    validation trajectory: random Fourier series within the limits (condition number "

@@ -31,7 +31,7 @@ def _floats(text: str, n: int, what: str) -> np.ndarray:
 # excite
 # ---------------------------------------------------------------------------------------------
 def cmd_excite(args: argparse.Namespace) -> int:
-    from .excitation import check_sampling, optimize_excitation
+    from .identification.excitation import check_sampling, optimize_excitation
 
     if Path(args.output).suffix.lower() in (".json", ".png"):
         raise ValueError(
@@ -88,7 +88,7 @@ def cmd_excite(args: argparse.Namespace) -> int:
 # simulate
 # ---------------------------------------------------------------------------------------------
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .data import convert_torque, write_csv
+    from .identification.data import convert_torque, write_csv
     from .simulate import CONTROLLERS, SensorNoise, load_reference, noise_from_spec, simulate
 
     robot = load(args.robot, tip=args.tip)
@@ -152,8 +152,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 # identify
 # ---------------------------------------------------------------------------------------------
 def _read(path, robot, args):
-    from .data import DataError, read_csv
-    from .rosbag import is_rosbag, read_rosbag
+    from .identification.data import DataError, read_csv
+    from .identification.rosbag import is_rosbag, read_rosbag
 
     if Path(path).is_dir() and not is_rosbag(path):
         raise DataError(f"'{path}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
@@ -192,9 +192,9 @@ def _read_filtered(path, robot, args):
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
-    from .data import read_truth
     from .identification import identify, true_base_values, validate
-    from .report import format_table, write_report
+    from .identification.data import read_truth
+    from .identification.report import format_table, write_report
 
     robot = load(args.robot, tip=args.tip)
     data = _read_filtered(args.data, robot, args)
@@ -292,7 +292,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
     if args.report:
-        from .excitation import excitation_limits
+        from .identification.excitation import excitation_limits
 
         lim, _ = excitation_limits(robot, margin=0.0)
         paths = write_report(args.report, res, data, vdata, val, fit["tau_hat"], lim)
@@ -343,7 +343,7 @@ def _plain(d):
 # ---------------------------------------------------------------------------------------------
 def register(sub) -> None:
     """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
-    from .excitation import MAX_TRAJECTORY_ROWS
+    from .identification.excitation import MAX_TRAJECTORY_ROWS
     from .simulate import CONTROLLERS, MAX_SAMPLES, MAX_STEPS
 
     p = sub.add_parser(

@@ -26,7 +26,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .data import truth_path, write_csv
+from .identification.data import truth_path, write_csv
 from .robot import Robot, load
 
 __all__ = [
@@ -172,8 +172,8 @@ def load_reference(path):
     """A reference trajectory from the JSON of ``mindyn excite`` (exact Fourier series) or from a
     CSV ``t, q, [dq], [ddq]`` (interpolated by cubic splines; missing derivatives obtained from
     the positions)."""
-    from .data import read_csv
-    from .excitation import FourierTrajectory
+    from .identification.data import read_csv
+    from .identification.excitation import FourierTrajectory
 
     p = Path(path)
     if p.suffix.lower() == ".json":
@@ -274,7 +274,8 @@ def simulate_tracking(
     robot : Robot or str
     reference
         Anything with ``evaluate(t) -> (q, dq, ddq)`` (each (m, n)) — a
-        :class:`~mindyn.excitation.FourierTrajectory` or :class:`~mindyn.data.JointData`.
+        :class:`~mindyn.identification.excitation.FourierTrajectory` or
+        :class:`~mindyn.identification.data.JointData`.
     controller : Controller, optional
         Default :class:`ComputedTorquePD` with the true parameters.
     rate : float

@@ -85,8 +85,9 @@ class JointData:
         return (self.m - 1) / (self.t[-1] - self.t[0]) if self.m > 1 else float("nan")
 
     def evaluate(self, t):
-        """Reference interface (as :class:`mindyn.excitation.FourierTrajectory`): positions,
-        velocities, accelerations at times ``t`` counted from the first sample, by cubic-spline
+        """Reference interface (as
+        :class:`~mindyn.identification.excitation.FourierTrajectory`): positions, velocities,
+        accelerations at times ``t`` counted from the first sample, by cubic-spline
         interpolation, (m, n) each."""
         from scipy.interpolate import CubicSpline
 

@@ -34,9 +34,9 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize
 
-from ._threads import single_threaded_blas
-from .base import BaseParameters, base_parameters
-from .robot import Robot, load
+from .._threads import single_threaded_blas
+from ..base import BaseParameters, base_parameters
+from ..robot import Robot, load
 
 __all__ = [
     "CRITERIA",
