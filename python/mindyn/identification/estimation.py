@@ -27,6 +27,8 @@ from .models import (
     MODELS,
     energy_row_noise,
     energy_system,
+    integral_system,
+    integral_windows,
     require_torque,
     torque_noise,
 )
@@ -35,9 +37,10 @@ from .models import (
 #: :func:`identify` accepts. Dynamic model: 10 equations per parameter; fewer, and a log too
 #: short to move every joint through its range gives estimates (after pruning) far from the
 #: truth with small RSDs. Energy model: 4 windows per parameter (one window integrates the
-#: power of all joints over ``window`` samples). Both: at least 30 degrees of freedom, so that
-#: the noise variance behind the RSDs is known within about 25 %.
-MIN_EQUATIONS_PER_PARAMETER = {"dynamic": 10, "energy": 4}
+#: power of all joints over ``window`` samples). Integral model: 4 equations per parameter (one
+#: per joint and window, each integrating ``window`` samples). All: at least 30 degrees of
+#: freedom, so that the noise variance behind the RSDs is known within about 25 %.
+MIN_EQUATIONS_PER_PARAMETER = {"dynamic": 10, "energy": 4, "integral": 4}
 MIN_NOISE_DOF = 30
 
 #: Samples whose regressor is evaluated at once by the dynamic model (memory: samples x joints x
@@ -52,7 +55,7 @@ class IdentificationResult:
     Attributes
     ----------
     model : str
-        ``dynamic`` or ``energy``.
+        ``dynamic``, ``energy`` or ``integral``.
     names, values, std, rsd : list, ndarray (k,), ndarray (k,), ndarray (k,)
         The parameters kept after pruning, their estimates, standard deviations and relative
         standard deviations in percent.
@@ -65,8 +68,8 @@ class IdentificationResult:
     sigma : float
         Residual standard deviation of the (weighted) final fit.
     joint_sigma : ndarray (n,), optional
-        Dynamic model: per-joint residual standard deviations of the first OLS pass, the weights'
-        inverse (WLS).
+        Dynamic and integral models: per-joint residual standard deviations of the first OLS
+        pass, the weights' inverse (WLS).
     initial : dict
         Estimates, std and RSD of all base parameters before pruning.
     """
@@ -264,6 +267,12 @@ def _enough(
         if settings.get("equations_left_out"):
             got += f" ({settings['equations_left_out']} left out as slower than min_velocity)"
         more = f"at least {math.ceil(need * data.m / max(rows, 1))} samples"
+    elif model == "integral":
+        got = (
+            f"{data.m} samples give {rows} integral equations ({data.n} per window of {window} "
+            "intervals)"
+        )
+        more = f"at least {math.ceil(need / data.n) * window + 1} samples, or a shorter window"
     else:
         got = f"{data.m} samples give {rows} energy windows of {window} intervals"
         more = f"at least {need * window + 1} samples, or a shorter window"
@@ -291,6 +300,7 @@ def identify(
     rsd_threshold: float | None = 30.0,
     energy_window: int = 10,
     integration: str = "simpson",
+    integral_window: int = 10,
     min_velocity: float = 0.01,
     rank_tolerance: float = 1e-9,
 ) -> IdentificationResult:
@@ -301,22 +311,27 @@ def identify(
     robot : Robot or str
     data : JointData
         ``t, q, dq, ddq, tau`` (``ddq`` is not used by the energy model).
-    model : {"dynamic", "energy"}
+    model : {"dynamic", "energy", "integral"}
     rotor, friction : bool
         Include rotor inertia / viscous and Coulomb friction (ignored when ``base`` is given).
     base : BaseParameters, optional
         Reuse a computed base-parameter set.
     weighted : bool
-        Dynamic model: weighted least squares with per-joint weights from a first OLS pass.
+        Dynamic and integral models: weighted least squares with per-joint weights from a first
+        OLS pass; energy model: per-window weights from torque-noise estimates.
     rsd_threshold : float or None
         Remove parameters with an RSD above this many percent, largest first, re-estimating after
         each removal (None or <= 0: keep all).
     energy_window : int
         Energy model: sample intervals per window (one equation per window).
     integration : {"simpson", "trapezoid", "zoh"}
-        Energy model: rule for the power and dissipation integrals (``zoh``: the logged torque
-        is taken as held over each sample period, ``int dq^T tau dt = sum tau_k^T (q_k+1 - q_k)``,
-        exact for a command held by the drive; dissipation by Simpson).
+        Energy and integral models: rule for the integrals over a window (``zoh``: the logged
+        torque is taken as held over each sample period, ``int dq^T tau dt = sum tau_k^T (q_k+1 -
+        q_k)`` (energy), ``int tau dt = sum tau_k (t_k+1 - t_k)`` (integral), exact for a command
+        held by the drive; the other integrals by Simpson).
+    integral_window : int
+        Integral model: sample intervals per window (one equation per joint and window; see
+        :func:`~mindyn.identification.models.integral_system`).
     min_velocity : float
         Dynamic model with friction: equations of joints slower than this [rad/s | m/s] are left
         out (see :func:`dynamic_system`).
@@ -338,10 +353,14 @@ def identify(
     """
     t0 = time.perf_counter()
     if model not in MODELS:
-        raise ValueError(f"unknown model '{model}'; use dynamic or energy")
+        raise ValueError(f"unknown model '{model}'; use dynamic, energy or integral")
     if not (isinstance(energy_window, (int, np.integer)) and energy_window >= 1):
         raise ValueError(
             f"energy window must be an integer >= 1 sample interval, got {energy_window}"
+        )
+    if not (isinstance(integral_window, (int, np.integer)) and integral_window >= 1):
+        raise ValueError(
+            f"integral window must be an integer >= 1 sample interval, got {integral_window}"
         )
     if not (math.isfinite(min_velocity) and min_velocity >= 0):
         raise ValueError(f"min_velocity must be a finite number >= 0, got {min_velocity}")
@@ -364,13 +383,20 @@ def identify(
         settings["min_velocity"] = min_velocity if base.friction else 0.0
         settings["equations_left_out"] = data.m * data.n - rows
         _enough(model, rows, nb, data, settings)
+    elif model == "integral":
+        rows = integral_windows(data.t, integral_window)[0].size * data.n
+        _enough(model, rows, nb, data, settings, integral_window)
+        Wi, yi = integral_system(base, data, integral_window, integration)
+        S = np.array([_triangle(np.column_stack([Wi[:, j], yi[:, j]])) for j in range(data.n)])
+        joint_rows = np.full(data.n, Wi.shape[0])
+        settings.update({"integral_window": integral_window, "integration": integration})
     else:
         rows = (data.m - 1) // energy_window
         _enough(model, rows, nb, data, settings, energy_window)
         W, y = energy_system(base, data, energy_window, integration)
         settings.update({"energy_window": energy_window, "integration": integration})
     what = f"{model} model on {data.source or 'the data'}"
-    if model == "dynamic":
+    if model in ("dynamic", "integral"):
         ls = _Reduced.from_triangle(_triangle(np.vstack(list(S))), rows)
     else:
         ls = _Reduced(W, y)

@@ -9,6 +9,10 @@
     = int dq^T tau dt``; no accelerations are needed. The dissipated-energy columns of the
     friction parameters replace their (zero) energy columns; the integrals use the trapezoid or
     Simpson rule on the samples.
+``integral``
+    Each joint's equation of motion in momentum form, ``tau = d/dt p - dL/dq + friction``
+    (``p = A(q) dq``, ``L = K - P``), integrated over windows ``[t_a, t_b]`` of ``window``
+    sample intervals (:func:`integral_system`): ``n`` equations per window, no accelerations.
 """
 
 from __future__ import annotations
@@ -22,7 +26,14 @@ from ..base import BaseParameters
 from .data import DataError, JointData
 from .errors import IdentificationError
 
-MODELS = ("dynamic", "energy")
+MODELS = ("dynamic", "energy", "integral")
+
+#: A sample interval longer than this many times the median one is a gap in the log: no
+#: integral-model window spans it.
+GAP_FACTOR = 2.0
+
+#: Samples whose momentum regressors are evaluated at once by the integral model.
+CHUNK_SAMPLES = 8192
 
 
 # ---------------------------------------------------------------------------------------------
@@ -94,6 +105,93 @@ def energy_system(
     y = dI[:, 0]
     for j, c in enumerate(cols):
         W[:, c] = dI[:, j + 1]
+    return W, y
+
+
+def integral_windows(t: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sample indices ``(a, b)`` of the integral model's windows, ``b = a + window``.
+
+    The log is split into continuous segments at gaps (a sample interval longer than
+    :data:`GAP_FACTOR` times the median one); each segment is covered by consecutive
+    non-overlapping windows from its first sample (a window's last sample is the next one's
+    first), the incomplete rest of a segment left out. No window spans a gap."""
+    if window < 1:
+        raise ValueError(f"integral window must be at least 1 sample interval, got {window}")
+    dt = np.diff(t)
+    if dt.size == 0:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    gaps = np.flatnonzero(dt > GAP_FACTOR * np.median(dt))
+    first = np.concatenate([[0], gaps + 1])
+    last = np.concatenate([gaps, [t.size - 1]])
+    starts = [np.arange(f, e - window + 1, window) for f, e in zip(first, last)]
+    a = np.concatenate(starts).astype(int)
+    return a, a + window
+
+
+def _quadrature(t: np.ndarray, rule: str) -> np.ndarray:
+    """Weights ``c`` with ``int f dt ~ c @ f(t)`` over the samples ``t`` of one window."""
+    k = t.size
+    if rule == "trapezoid":
+        c = np.zeros(k)
+        d = np.diff(t)
+        c[:-1] += 0.5 * d
+        c[1:] += 0.5 * d
+        return c
+    if rule == "simpson":
+        return integrate.simpson(np.eye(k), x=t, axis=0)
+    raise ValueError(f"unknown integration rule '{rule}'; use trapezoid, simpson or zoh")
+
+
+def integral_system(
+    base: BaseParameters, data: JointData, window: int = 10, integration: str = "simpson"
+):
+    """Integral model: ``W`` (w, n, nb), ``y`` (w, n) for ``w`` windows (:func:`integral_windows`).
+
+    Joint ``j``, window ``[t_a, t_b]``:
+    ``(W_p,j(t_b) - W_p,j(t_a) + int W_l,j dt) p_b + Fv_j (q_j(t_b) - q_j(t_a))
+    + Fc_j int sign(dq_j) dt = int tau_j dt``, with the base momentum regressors
+    ``p = W_p p_b``, ``-dL/dq = W_l p_b`` (:meth:`BaseParameters.momentum_regressors`). The
+    momentum is taken at the window's ends only; ``W_l``, the Coulomb term and the torque are
+    integrated over the window's samples by Simpson's rule (``simpson``, exact for cubics; any
+    number of intervals) or the trapezoid rule; ``zoh`` takes the logged torque as held over each
+    sample interval (``int tau dt = sum tau_k (t_k+1 - t_k)``, exact for a command held by the
+    drive) and integrates the rest by Simpson. The viscous term integrates exactly to the
+    position difference, not through the (noisier) velocities.
+
+    Windows do not overlap; consecutive ones share their boundary sample, so noise at that sample
+    enters both (with the momentum's sign opposite): a mild correlation between neighbouring
+    windows that the statistics ignore, as the energy model's do."""
+    require_torque(data)
+    a, b = integral_windows(data.t, window)
+    if a.size == 0:
+        raise IdentificationError(
+            f"{data.m} samples give no complete integral window of {window} intervals"
+        )
+    rule = "simpson" if integration == "zoh" else integration
+    n, nb = data.n, base.n
+    names = list(base.names)
+    fv = {k: names.index(f"Fv{k + 1}") for k in range(n) if f"Fv{k + 1}" in names}
+    fc = {k: names.index(f"Fc{k + 1}") for k in range(n) if f"Fc{k + 1}" in names}
+    W = np.empty((a.size, n, nb))
+    y = np.empty((a.size, n))
+    per = max(1, CHUNK_SAMPLES // (window + 1))
+    for c0 in range(0, a.size, per):
+        wa, wb = a[c0 : c0 + per], b[c0 : c0 + per]
+        idx = wa[:, None] + np.arange(window + 1)  # (k, window + 1) samples of each window
+        Wp, Wl = base.momentum_regressors(data.q[idx.ravel()], data.dq[idx.ravel()])
+        Wp = Wp.reshape(idx.shape + (n, nb))
+        Wl = Wl.reshape(idx.shape + (n, nb))
+        C = np.array([_quadrature(data.t[i], rule) for i in idx])  # (k, window + 1)
+        W[c0 : c0 + per] = Wp[:, -1] - Wp[:, 0] + np.einsum("ws,wsjp->wjp", C, Wl)
+        tau = data.tau[idx]  # (k, window + 1, n)
+        if integration == "zoh":
+            y[c0 : c0 + per] = np.einsum("ws,wsj->wj", np.diff(data.t[idx], axis=1), tau[:, :-1])
+        else:
+            y[c0 : c0 + per] = np.einsum("ws,wsj->wj", C, tau)
+        for k, col in fv.items():
+            W[c0 : c0 + per, k, col] = data.q[wb, k] - data.q[wa, k]
+        for k, col in fc.items():
+            W[c0 : c0 + per, k, col] = np.einsum("ws,ws->w", C, np.sign(data.dq[idx, k]))
     return W, y
 
 
