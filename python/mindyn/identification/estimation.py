@@ -300,7 +300,7 @@ def identify(
     rsd_threshold: float | None = 30.0,
     energy_window: int = 10,
     integration: str = "simpson",
-    integral_window: int = 10,
+    integral_window: int = 40,
     min_velocity: float = 0.01,
     rank_tolerance: float = 1e-9,
 ) -> IdentificationResult:

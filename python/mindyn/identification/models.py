@@ -6,9 +6,10 @@
 ``energy``
     The integral form of the energy theorem over consecutive windows ``[t_a, t_b]`` of
     ``window`` samples: ``(w_H(t_b) - w_H(t_a)) p_b + Fv_k int dq_k^2 dt + Fc_k int |dq_k| dt
-    = int dq^T tau dt``; no accelerations are needed. The dissipated-energy columns of the
-    friction parameters replace their (zero) energy columns; the integrals use the trapezoid or
-    Simpson rule on the samples.
+    + Off_k (q_k(t_b) - q_k(t_a)) = int dq^T tau dt``; no accelerations are needed. The
+    dissipated-energy columns of the friction parameters (and the work of the torque offsets)
+    replace their (zero) energy columns; the integrals use the trapezoid or Simpson rule on the
+    samples.
 ``integral``
     Each joint's equation of motion in momentum form, ``tau = d/dt p - dL/dq + friction``
     (``p = A(q) dq``, ``L = K - P``), integrated over windows ``[t_a, t_b]`` of ``window``
@@ -105,6 +106,10 @@ def energy_system(
     y = dI[:, 0]
     for j, c in enumerate(cols):
         W[:, c] = dI[:, j + 1]
+    for k in range(data.n):
+        # an offset's work: Off_k int dq_k dt = Off_k (q_k(t_b) - q_k(t_a)), exactly
+        if f"Off{k + 1}" in names:
+            W[:, names.index(f"Off{k + 1}")] = np.diff(data.q[ends, k])
     return W, y
 
 
@@ -143,13 +148,13 @@ def _quadrature(t: np.ndarray, rule: str) -> np.ndarray:
 
 
 def integral_system(
-    base: BaseParameters, data: JointData, window: int = 10, integration: str = "simpson"
+    base: BaseParameters, data: JointData, window: int = 40, integration: str = "simpson"
 ):
     """Integral model: ``W`` (w, n, nb), ``y`` (w, n) for ``w`` windows (:func:`integral_windows`).
 
     Joint ``j``, window ``[t_a, t_b]``:
     ``(W_p,j(t_b) - W_p,j(t_a) + int W_l,j dt) p_b + Fv_j (q_j(t_b) - q_j(t_a))
-    + Fc_j int sign(dq_j) dt = int tau_j dt``, with the base momentum regressors
+    + Fc_j int sign(dq_j) dt + Off_j (t_b - t_a) = int tau_j dt``, with the base momentum regressors
     ``p = W_p p_b``, ``-dL/dq = W_l p_b`` (:meth:`BaseParameters.momentum_regressors`). The
     momentum is taken at the window's ends only; ``W_l``, the Coulomb term and the torque are
     integrated over the window's samples by Simpson's rule (``simpson``, exact for cubics; any
@@ -172,6 +177,7 @@ def integral_system(
     names = list(base.names)
     fv = {k: names.index(f"Fv{k + 1}") for k in range(n) if f"Fv{k + 1}" in names}
     fc = {k: names.index(f"Fc{k + 1}") for k in range(n) if f"Fc{k + 1}" in names}
+    off = {k: names.index(f"Off{k + 1}") for k in range(n) if f"Off{k + 1}" in names}
     W = np.empty((a.size, n, nb))
     y = np.empty((a.size, n))
     per = max(1, CHUNK_SAMPLES // (window + 1))
@@ -192,6 +198,8 @@ def integral_system(
             W[c0 : c0 + per, k, col] = data.q[wb, k] - data.q[wa, k]
         for k, col in fc.items():
             W[c0 : c0 + per, k, col] = np.einsum("ws,ws->w", C, np.sign(data.dq[idx, k]))
+        for k, col in off.items():
+            W[c0 : c0 + per, k, col] = data.t[wb] - data.t[wa]
     return W, y
 
 
