@@ -11,6 +11,8 @@ injected noise levels.
 from __future__ import annotations
 
 import functools
+import json
+import re
 
 import mindyn
 import numpy as np
@@ -176,3 +178,43 @@ def test_noisy_logs_predict_to_the_noise_level_and_the_errors_match_the_statisti
         )
         assert (worst <= 1.2).all(), f"{model}: {worst}"
         assert inside >= 0.95 * total, f"{model}: {inside}/{total} within 3 std"
+
+
+# ---------------------------------------------------------------------------------------------
+# Command line
+# ---------------------------------------------------------------------------------------------
+def test_cli_identify_integral_model_with_offsets(tmp_path, capsys):
+    """`mindyn identify --model integral --offset` on a log with offsets and its truth file;
+    `mindyn base --offset` lists the offsets."""
+    from mindyn import cli
+    from mindyn.identification.data import write_csv
+
+    robot, base, offsets, sd = _setup()
+    files = {}
+    for name, seeds, vel in (("data", [21, 22, 23], 0.002), ("val", [101], 0.0)):
+        data, truth = make_log(seeds, sd, vel)
+        files[name] = write_csv(tmp_path / f"{name}.csv", data.t, data.q, data.tau, dq=data.dq)
+    log = _segment(21, 0.0, 0.0)[1]
+    names = list(log.param_names) + [f"Off{k + 1}" for k in range(robot.n)]
+    values = [float(v) for v in log.params] + [float(v) for v in offsets]
+    (tmp_path / "data.truth.json").write_text(json.dumps({"names": names, "values": values}))
+    args = ["identify", ROBOT, str(files["data"]), "--rotor", "--friction", "--offset"]
+    args += ["--model", "integral", "--validate", str(files["val"])]
+    args += ["--json", str(tmp_path / "id.json"), "--rsd-threshold", "0"]
+    assert cli.main(args) == 0
+    out = capsys.readouterr().out
+    assert "integral model, 58 base parameters (rotor inertia, friction, torque offsets)" in out
+    assert "integral windows of 40 sample interval(s), simpson integration" in out
+    doc = json.loads((tmp_path / "id.json").read_text())
+    assert doc["model"] == "integral" and doc["offset"] is True
+    assert doc["base_names"][-6:] == [f"Off{k}" for k in range(1, 7)]
+    # the offsets come back within 3 std of the truth file's values
+    est = np.array(doc["base_values"][-6:])
+    std = np.array(doc["std"][-6:])
+    assert np.all(np.abs(est - offsets) < 3 * std), (est, offsets, std)
+    assert np.all(np.array(doc["validation"]["rms"]) < 1.2 * sd)
+
+    assert cli.main(["base", ROBOT, "--friction", "--offset"]) == 0
+    out = capsys.readouterr().out
+    assert "Off1..Off6 after the equations-of-motion set" in out
+    assert re.search(r"\n +54  Off6 += Off6\n", out)

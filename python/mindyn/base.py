@@ -176,6 +176,7 @@ class BaseParameters:
                 "inverse_dynamics": "eom",
                 "dynamic_identification": "eom",
                 "energy_identification": "eom",
+                "integral_identification": "eom",
             },
             "sets": {
                 k: {

@@ -107,6 +107,7 @@ class IdentificationResult:
             "robot": self.base.robot.name,
             "rotor": self.base.rotor,
             "friction": self.base.friction,
+            "offset": self.base.offset,
             "names": list(self.names),
             "values": [float(v) for v in self.values],
             "std": [float(v) for v in self.std],
