@@ -214,7 +214,57 @@ def test_cli_identify_integral_model_with_offsets(tmp_path, capsys):
     assert np.all(np.abs(est - offsets) < 3 * std), (est, offsets, std)
     assert np.all(np.array(doc["validation"]["rms"]) < 1.2 * sd)
 
+    # codegen takes the identified offsets (the JSON says offset: true, so --offset is needed)
+    cg = ["codegen", ROBOT, "--lang", "c", "--rotor", "--friction", "--params"]
+    cg += [str(tmp_path / "id.json"), "-o", str(tmp_path / "gen.c")]
+    assert cli.main(cg + ["--offset"]) == 0
+    assert "torque offsets" in capsys.readouterr().out
+    header = (tmp_path / "gen.h").read_text()
+    value = float(re.search(r"Off6 = Off6 \[(.*)\]", header).group(1))
+    assert value == pytest.approx(est[-1], rel=1e-12)
+    assert cli.main(cg) == 2
+    assert "(and --offset)" in capsys.readouterr().err
+
     assert cli.main(["base", ROBOT, "--friction", "--offset"]) == 0
     out = capsys.readouterr().out
     assert "Off1..Off6 after the equations-of-motion set" in out
     assert re.search(r"\n +54  Off6 += Off6\n", out)
+
+
+# ---------------------------------------------------------------------------------------------
+# Offsets in the generated code and the runtime base dynamics
+# ---------------------------------------------------------------------------------------------
+def test_generated_code_and_runtime_dynamics_add_the_offsets(tmp_path):
+    """Generated C and BaseDynamics with offsets against Pinocchio's RNEA plus rotor inertia,
+    friction and the offsets; the gravity torque has no offsets; the regressor's offset columns
+    are unit columns."""
+    import pinocchio as pin
+    from conftest import assert_close, pinocchio_model
+    from mindyn.codegen import BaseDynamics, generate
+    from test_codegen import CFunctions, compile_c
+
+    robot, base, offsets, _ = _setup()
+    n = robot.n
+    code = generate(robot, lang="c", base=base, name="zcr_off")
+    assert code.names == base.names and code.names[-n:] == [f"Off{k + 1}" for k in range(n)]
+    assert "torque offset per joint" in code.header
+    c = CFunctions(compile_c(code, tmp_path, "zcr_off"), code, n)
+    bd = BaseDynamics(base)
+    assert bd.names == base.names
+    model = pinocchio_model(robot)
+    data = model.createData()
+    pi = robot.parameters(rotor=True, friction=True)
+    p = base.values(np.concatenate([pi, offsets]))
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        q, dq, ddq = rng.uniform(-2, 2, (3, n))
+        ref = pin.rnea(model, data, q, dq, ddq) + robot.rotor_inertia * ddq
+        ref += robot.viscous * dq + robot.coulomb * np.sign(dq) + offsets
+        g = pin.computeGeneralizedGravity(model, data, q)
+        for what, f in (("C", c), ("BaseDynamics", bd)):
+            tau = f.id(q, dq, ddq, p) if what == "C" else f.inverse_dynamics(q, dq, ddq, p)
+            assert_close(tau, ref, 1e-10, f"{what} with offsets vs Pinocchio")
+            assert_close(f.gravity(q, p), g, 1e-10, f"{what} gravity (no offsets) vs Pinocchio")
+            W = f.regressor(q, dq, ddq)
+            np.testing.assert_array_equal(W[:, -n:], np.eye(n))
+            assert_close(W, base.regressor(q, dq, ddq), 1e-10, f"{what} regressor with offsets")
