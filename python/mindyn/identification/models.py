@@ -163,9 +163,22 @@ def integral_system(
     drive) and integrates the rest by Simpson. The viscous term integrates exactly to the
     position difference, not through the (noisier) velocities.
 
-    Windows do not overlap; consecutive ones share their boundary sample, so noise at that sample
-    enters both (with the momentum's sign opposite): a mild correlation between neighbouring
-    windows that the statistics ignore, as the energy model's do."""
+    Windows do not overlap (overlapping ones would repeat the same torque samples in several
+    equations, correlating their errors without adding information); consecutive ones share
+    their boundary sample, so noise at that sample enters both (with the momentum's sign
+    opposite): a mild correlation between neighbouring windows that the statistics ignore, as
+    the energy model's do.
+
+    Window length: the momentum at the two ends carries the velocity noise once per window
+    (``A(q) delta dq``), while the torque integral's noise grows only as the square root of the
+    window's length and its signal linearly; short windows therefore let velocity noise, an
+    error in the regressor that least squares does not model, bias the estimate. The default of
+    :func:`~mindyn.identification.identify` is 40 intervals (0.16 s at 250 Hz): on simulated
+    6-joint log (ZCR07S, 20 s) with 0.005 rad/s velocity noise, 10 intervals left 14 % of the
+    estimates outside three standard deviations and a validation error 16 % above that of the
+    true parameters; 40 intervals, none outside and 2.5 % above.
+    Longer windows give fewer equations (``n`` per window); a motion faster than the window
+    is still integrated exactly up to the quadrature error."""
     require_torque(data)
     a, b = integral_windows(data.t, window)
     if a.size == 0:
