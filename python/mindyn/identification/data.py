@@ -371,6 +371,14 @@ def differentiate(
             raise DataError(
                 f"cutoff {fc:g} Hz must be between 0 and half the rate ({rate / 2:g} Hz)"
             )
+        span = float(t[-1] - t[0])
+        if fc * span < 1.0:
+            # Below one cycle over the log, a low-pass leaves little more than the mean.
+            raise DataError(
+                f"cutoff {fc:g} Hz is below one cycle over the log's {span:g} s "
+                f"({1.0 / span:.3g} Hz); expected a cutoff between {1.0 / span:.3g} Hz and half "
+                f"the rate ({rate / 2:g} Hz)"
+            )
         b, a = signal.butter(order, fc / (rate / 2))
         if m <= 3 * max(len(a), len(b)):
             raise DataError(f"{m} samples are too few for a Butterworth filter of order {order}")
