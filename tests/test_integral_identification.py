@@ -268,3 +268,17 @@ def test_generated_code_and_runtime_dynamics_add_the_offsets(tmp_path):
             W = f.regressor(q, dq, ddq)
             np.testing.assert_array_equal(W[:, -n:], np.eye(n))
             assert_close(W, base.regressor(q, dq, ddq), 1e-10, f"{what} regressor with offsets")
+
+
+def test_chunks_give_the_same_estimate(monkeypatch):
+    """The integral model is reduced chunk by chunk; chunks of 2 windows give what one chunk
+    gives, to rounding (1e-9 relative: the QR merges are orthogonal)."""
+    import mindyn.identification.models as models
+
+    robot, base, _, sd = _setup()
+    data, _ = make_log([4], sd, 0.002)
+    one = identify(robot, data, model="integral", base=base, rsd_threshold=None)
+    monkeypatch.setattr(models, "CHUNK_SAMPLES", 2 * 41)
+    many = identify(robot, data, model="integral", base=base, rsd_threshold=None)
+    np.testing.assert_allclose(many.full, one.full, rtol=1e-9, atol=1e-9 * np.abs(one.full).max())
+    np.testing.assert_allclose(many.std, one.std, rtol=1e-9)

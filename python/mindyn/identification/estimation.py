@@ -27,7 +27,7 @@ from .models import (
     MODELS,
     energy_row_noise,
     energy_system,
-    integral_system,
+    integral_chunks,
     integral_windows,
     require_torque,
     torque_noise,
@@ -341,8 +341,10 @@ def identify(
         deficient.
 
     The dynamic model is reduced chunk by chunk (:func:`dynamic_triangles`): memory does not
-    grow with the length of the log. More than half of the parameters removed by pruning is
-    reported in ``settings["warnings"]``.
+    grow with the length of the log; nor does the integral model's (reduced per joint from
+    :func:`~mindyn.identification.models.integral_chunks`, then weighted like the dynamic
+    model's). More than half of the parameters removed by pruning is reported in
+    ``settings["warnings"]``.
 
     Raises
     ------
@@ -387,9 +389,11 @@ def identify(
     elif model == "integral":
         rows = integral_windows(data.t, integral_window)[0].size * data.n
         _enough(model, rows, nb, data, settings, integral_window)
-        Wi, yi = integral_system(base, data, integral_window, integration)
-        S = np.array([_triangle(np.column_stack([Wi[:, j], yi[:, j]])) for j in range(data.n)])
-        joint_rows = np.full(data.n, Wi.shape[0])
+        S = np.zeros((data.n, nb + 1, nb + 1))
+        for Wi, yi in integral_chunks(base, data, integral_window, integration):
+            for j in range(data.n):
+                S[j] = _triangle(np.vstack([S[j], np.column_stack([Wi[:, j], yi[:, j]])]))
+        joint_rows = np.full(data.n, rows // data.n)
         settings.update({"integral_window": integral_window, "integration": integration})
     else:
         rows = (data.m - 1) // energy_window

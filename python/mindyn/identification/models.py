@@ -150,7 +150,17 @@ def _quadrature(t: np.ndarray, rule: str) -> np.ndarray:
 def integral_system(
     base: BaseParameters, data: JointData, window: int = 40, integration: str = "simpson"
 ):
-    """Integral model: ``W`` (w, n, nb), ``y`` (w, n) for ``w`` windows (:func:`integral_windows`).
+    """Integral model: ``W`` (w, n, nb), ``y`` (w, n) for ``w`` windows (:func:`integral_windows`)
+    (see :func:`integral_chunks`)."""
+    parts = list(integral_chunks(base, data, window, integration))
+    return np.concatenate([W for W, _ in parts]), np.concatenate([y for _, y in parts])
+
+
+def integral_chunks(
+    base: BaseParameters, data: JointData, window: int = 40, integration: str = "simpson"
+):
+    """The integral model's equations, :data:`CHUNK_SAMPLES` samples' worth of windows at a time:
+    yields ``(W, y)``, shapes (k, n, nb) and (k, n), for consecutive runs of ``k`` windows.
 
     Joint ``j``, window ``[t_a, t_b]``:
     ``(W_p,j(t_b) - W_p,j(t_a) + int W_l,j dt) p_b + Fv_j (q_j(t_b) - q_j(t_a))
@@ -191,8 +201,6 @@ def integral_system(
     fv = {k: names.index(f"Fv{k + 1}") for k in range(n) if f"Fv{k + 1}" in names}
     fc = {k: names.index(f"Fc{k + 1}") for k in range(n) if f"Fc{k + 1}" in names}
     off = {k: names.index(f"Off{k + 1}") for k in range(n) if f"Off{k + 1}" in names}
-    W = np.empty((a.size, n, nb))
-    y = np.empty((a.size, n))
     per = max(1, CHUNK_SAMPLES // (window + 1))
     for c0 in range(0, a.size, per):
         wa, wb = a[c0 : c0 + per], b[c0 : c0 + per]
@@ -201,19 +209,19 @@ def integral_system(
         Wp = Wp.reshape(idx.shape + (n, nb))
         Wl = Wl.reshape(idx.shape + (n, nb))
         C = np.array([_quadrature(data.t[i], rule) for i in idx])  # (k, window + 1)
-        W[c0 : c0 + per] = Wp[:, -1] - Wp[:, 0] + np.einsum("ws,wsjp->wjp", C, Wl)
+        W = Wp[:, -1] - Wp[:, 0] + np.einsum("ws,wsjp->wjp", C, Wl)
         tau = data.tau[idx]  # (k, window + 1, n)
         if integration == "zoh":
-            y[c0 : c0 + per] = np.einsum("ws,wsj->wj", np.diff(data.t[idx], axis=1), tau[:, :-1])
+            y = np.einsum("ws,wsj->wj", np.diff(data.t[idx], axis=1), tau[:, :-1])
         else:
-            y[c0 : c0 + per] = np.einsum("ws,wsj->wj", C, tau)
+            y = np.einsum("ws,wsj->wj", C, tau)
         for k, col in fv.items():
-            W[c0 : c0 + per, k, col] = data.q[wb, k] - data.q[wa, k]
+            W[:, k, col] = data.q[wb, k] - data.q[wa, k]
         for k, col in fc.items():
-            W[c0 : c0 + per, k, col] = np.einsum("ws,ws->w", C, np.sign(data.dq[idx, k]))
+            W[:, k, col] = np.einsum("ws,ws->w", C, np.sign(data.dq[idx, k]))
         for k, col in off.items():
-            W[c0 : c0 + per, k, col] = data.t[wb] - data.t[wa]
-    return W, y
+            W[:, k, col] = data.t[wb] - data.t[wa]
+        yield W, y
 
 
 def torque_noise(tau: np.ndarray) -> np.ndarray:
