@@ -14,20 +14,26 @@ import pinocchio as pin
 import pytest
 from conftest import BUNDLED, URDFS, assert_close, load_urdf_pair, pinocchio_model, random_state
 
-ALL = BUNDLED + ["ur5", "panda"]
+ALL = BUNDLED + ["ur5", "panda", "skewed6r"]
 TOL = 1e-10
 
 
-def _pair(name):
+def _pair(name, tmp_path_factory=None):
     if name in URDFS:
         return load_urdf_pair(name)
+    if name == "skewed6r":  # random joint origins, rotations and axes (test_codegen.py)
+        from test_codegen import skewed_urdf
+
+        path = tmp_path_factory.mktemp("skewed") / "skewed6r.urdf"
+        path.write_text(skewed_urdf(np.random.default_rng(7)))
+        return mindyn.load(path), pin.buildModelFromUrdf(str(path))
     robot = mindyn.load(name)
     return robot, pinocchio_model(robot)
 
 
 @pytest.mark.parametrize("name", ALL)
-def test_momentum_regressors_match_pinocchio(name, rng):
-    robot, model = _pair(name)
+def test_momentum_regressors_match_pinocchio(name, rng, tmp_path_factory):
+    robot, model = _pair(name, tmp_path_factory)
     data = model.createData()
     p = robot.params
     for _ in range(4):
@@ -41,11 +47,11 @@ def test_momentum_regressors_match_pinocchio(name, rng):
         assert_close(Wl @ p, g - C.T @ dq, TOL, "-dL/dq vs pin g - C^T dq")
 
 
-@pytest.mark.parametrize("name", ["puma560", "stanford", "zcr07s", "panda"])
-def test_lagrangian_gradient_matches_finite_differences(name, rng):
+@pytest.mark.parametrize("name", ["puma560", "stanford", "zcr07s", "panda", "skewed6r"])
+def test_lagrangian_gradient_matches_finite_differences(name, rng, tmp_path_factory):
     # Central differences, step 1e-6: truncation ~1e-12 x third derivatives, rounding
     # ~1e-16 |K| / 1e-6 ~ 1e-10 |K|; 1e-7 relative leaves a margin of about 1000.
-    robot, _ = _pair(name)
+    robot, _ = _pair(name, tmp_path_factory)
     p = robot.parameters(rotor=True)
     p[10::11] = rng.uniform(0.1, 1.0, robot.n)  # rotor inertia: must not contribute to dK/dq
     h = 1e-6
