@@ -21,6 +21,7 @@ from mindyn.identification import (
     energy_system,
     error_measures,
     identify,
+    integral_system,
     read_csv,
     true_base_values,
     validate,
@@ -160,6 +161,28 @@ def test_energy_model_stacks_the_windows_of_each_log(two_logs):
     p, *_ = np.linalg.lstsq(W, y, rcond=None)
     np.testing.assert_allclose(res.values, p, rtol=1e-7, atol=1e-9 * np.abs(p).max())
     assert res.rows == W.shape[0] == (d1.m - 1) // 5 + (d2.m - 1) // 5
+
+
+def test_integral_model_stacks_the_windows_of_each_log(two_logs):
+    """Per log, its own windows (none across the junction); the joint-wise stacked system of
+    both logs solved by numpy gives the estimate."""
+    robot, base, logs = two_logs
+    d1, d2 = logs[0][1], logs[1][1]
+    res = identify(
+        robot,
+        [d1, d2],
+        model="integral",
+        base=base,
+        weighted=False,
+        rsd_threshold=None,
+        integral_window=8,
+    )
+    systems = [integral_system(base, d, 8) for d in (d1, d2)]
+    W = np.vstack([s[0].reshape(-1, base.n) for s in systems])
+    y = np.concatenate([s[1].reshape(-1) for s in systems])
+    p, *_ = np.linalg.lstsq(W, y, rcond=None)
+    np.testing.assert_allclose(res.values, p, rtol=1e-7, atol=1e-9 * np.abs(p).max())
+    assert res.rows == W.shape[0] == robot.n * ((d1.m - 1) // 8 + (d2.m - 1) // 8)
 
 
 def test_junction_between_logs_does_not_leak_into_derivatives(tmp_path, capsys):

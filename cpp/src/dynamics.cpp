@@ -9,6 +9,7 @@ namespace mindyn {
 
 namespace {
 
+using detail::carryToParent;
 using detail::inertiaMap;
 using detail::sgn;
 using detail::skew;
@@ -142,13 +143,7 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
     const int c0 = blockStart(layout, j);
     for (int k = j; k >= 0; --k) {
       W.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
-      if (k > 0) {
-        // carry the wrench block to link k-1: n' = R n + p x (R f), f' = R f
-        const Eigen::Matrix3d& R = data.R[k];
-        Eigen::Matrix<double, 3, 10> fr = R * F.bottomRows<3>();
-        F.topRows<3>() = R * F.topRows<3>() + skew(data.p[k]) * fr;
-        F.bottomRows<3>() = fr;
-      }
+      if (k > 0) carryToParent(data.R[k], data.p[k], F);  // the wrench block to link k-1
     }
     if (layout.rotor) W(j, layout.rotorIndex(j)) = ddq[j];
     if (layout.friction) {

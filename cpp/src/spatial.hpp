@@ -21,6 +21,25 @@ inline Eigen::Matrix<double, 3, 6> inertiaMap(const Eigen::Vector3d& w) {
   return L;
 }
 
+/// Motion cross product a x b of two spatial vectors (angular; linear).
+inline Eigen::Matrix<double, 6, 1> crossMotion(const Eigen::Matrix<double, 6, 1>& a,
+                                               const Eigen::Matrix<double, 6, 1>& b) {
+  Eigen::Matrix<double, 6, 1> c;
+  c.head<3>() = a.head<3>().cross(b.head<3>());
+  c.tail<3>() = a.head<3>().cross(b.tail<3>()) + a.tail<3>().cross(b.head<3>());
+  return c;
+}
+
+/// Re-expresses a block of force-like spatial vectors (wrenches or momenta; columns of F, in the
+/// frame of link k about its origin) in link k-1 about its origin, given the rotation R and the
+/// origin p of link k in link k-1: n' = R n + p x (R f), f' = R f.
+inline void carryToParent(const Eigen::Matrix3d& R, const Eigen::Vector3d& p,
+                          Eigen::Matrix<double, 6, 10>& F) {
+  const Eigen::Matrix<double, 3, 10> fr = R * F.bottomRows<3>();
+  F.topRows<3>() = R * F.topRows<3>() + skew(p) * fr;
+  F.bottomRows<3>() = fr;
+}
+
 /// sign(x) with sign(0) = 0 (Coulomb friction at rest).
 inline double sgn(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0); }
 

@@ -346,6 +346,44 @@ TEST(BaseDynamics, TapesMatchTheClassicalRecursionAndAllocateNothing) {
   }
 }
 
+TEST(BaseDynamics, TorqueOffsetsAddToTheInverseDynamicsOnly) {
+  std::mt19937 rng(6);
+  const Model model = withExtras(loadYaml(test::robotFile("zcr07s")), rng);
+  Data data(model);
+  const int n = model.nq();
+  BaseOptions opt;
+  opt.layout = {true, true};
+  const BaseParameters bp = computeBaseParameters(model, opt);
+  const ParameterSet ps = withOffsets(model, baseParameterSet(model, bp));
+  EXPECT_THROW(withOffsets(model, ps), ModelError);
+  const int nb = bp.eom.size();
+  ASSERT_EQ(ps.size(), nb + n);
+  EXPECT_EQ(ps.names.back(), "Off" + std::to_string(n));
+  BaseDynamics bd(model, ps);
+  const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 2);
+  const Eigen::VectorXd pi = random(rng, opt.layout.size(n)), off = random(rng, n);
+  Eigen::VectorXd p(nb + n);
+  p << bp.values(pi), off;
+  Eigen::VectorXd tau(n), tg(n), t1(n), t2(n);
+  Eigen::MatrixXd W(n, opt.layout.size(n)), Wb(n, nb), Wt(n, nb + n);
+  inverseDynamics(model, data, q, dq, ddq, pi, opt.layout, tau);
+  gravityTorque(model, data, q, pi, opt.layout, tg);
+  baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
+  long seen;
+  {
+    Count c;
+    bd.inverseDynamics(q, dq, ddq, p, t1);
+    bd.gravity(q, p, t2);
+    bd.regressor(q, dq, ddq, Wt);
+    seen = c.value();
+  }
+  EXPECT_EQ(seen, 0);
+  EXPECT_LT(relErr(t1, tau + off), 1e-12);
+  EXPECT_LT(relErr(t2, tg), 1e-12);
+  EXPECT_LT((Wt.leftCols(nb) - Wb).norm() / std::max(1.0, Wb.norm()), 1e-12);
+  EXPECT_EQ(Wt.rightCols(n), Eigen::MatrixXd::Identity(n, n));
+}
+
 TEST(SinCos, WithinOneRoundingOfTheCLibrary) {
   std::mt19937 rng(11);
   std::vector<double> xs{0.0,    -0.0, 4.9e-324, -4.9e-324, 2.2e-308,

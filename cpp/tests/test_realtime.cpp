@@ -7,6 +7,7 @@
 #include "mindyn/base_parameters.hpp"
 #include "mindyn/dynamics.hpp"
 #include "mindyn/ik.hpp"
+#include "mindyn/momentum.hpp"
 #include "mindyn/slotine_li.hpp"
 #include "test_util.hpp"
 
@@ -37,7 +38,7 @@ TEST(Realtime, DynamicsPathsAllocateNothing) {
     const Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n),
                           ddq = test::random(rng, n);
     Eigen::VectorXd tau(n), ddq2(n), wK(layout.size(n)), wP(layout.size(n));
-    Eigen::MatrixXd W(n, layout.size(n)), M(n, n);
+    Eigen::MatrixXd W(n, layout.size(n)), M(n, n), Wp(n, layout.size(n));
     double e = 0;
     bool ok = true;
     Count c;
@@ -46,6 +47,7 @@ TEST(Realtime, DynamicsPathsAllocateNothing) {
       gravityTorque(model, data, q, pi, layout, tau);
       regressor(model, data, q, dq, ddq, layout, W);
       energyRegressors(model, data, q, dq, layout, wK, wP);
+      momentumRegressors(model, data, q, dq, layout, Wp, W);
       e += kineticEnergy(model, data, q, dq, pi, layout) +
            potentialEnergy(model, data, q, pi, layout);
       massMatrix(model, data, q, pi, layout, M);
@@ -70,12 +72,13 @@ TEST(Realtime, BaseRegressorsAllocateNothing) {
     std::mt19937 rng(5);
     const Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n),
                           ddq = test::random(rng, n);
-    Eigen::MatrixXd W(n, P), Wb(n, nb);
+    Eigen::MatrixXd W(n, P), Wb(n, nb), Wp(n, P), Wl(n, P), Wpb(n, nb), Wlb(n, nb);
     Eigen::VectorXd wK(P), wP(P), wb(nb);
     long seen;
     {
       Count c;
       for (int i = 0; i < 3; ++i) {
+        baseMomentumRegressors(model, data, base, q, dq, Wp, Wl, Wpb, Wlb);
         baseRegressor(model, data, base, q, dq, ddq, W, Wb);
         baseEnergyRegressor(model, data, base, q, dq, wK, wP, wb);
       }

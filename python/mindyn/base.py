@@ -27,7 +27,8 @@ class BaseParameters:
     Attributes
     ----------
     n : int
-        Number of base parameters of the equations of motion (friction included when enabled).
+        Number of base parameters of the equations of motion (friction and offsets included
+        when enabled).
     names : list of str
         Their names; a regrouped parameter gets ``R`` before its index (``XXR3``).
     Y : ndarray, shape (n, P)
@@ -39,11 +40,18 @@ class BaseParameters:
         ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
         and ``margin`` (tolerance, smallest kept / largest dropped relative pivot, the counts at
         the neighbouring tolerances, ``near_degenerate``).
+    offset : bool
+        A constant torque offset per joint, ``tau_j = ... + Off_j``: the parameters ``Off1 ..
+        OffN`` follow all others, in the base set as in the classical vector, each its own base
+        parameter (its regressor column is 1 in its joint's equation, 0 elsewhere). The
+        three sets in ``sets`` describe the rigid-body, rotor and friction part only.
     """
 
-    def __init__(self, core: _core.BaseParameters, robot: Robot):
+    def __init__(self, core: _core.BaseParameters, robot: Robot, offset: bool = False):
         self._b = core
         self.robot = robot
+        self.offset = bool(offset)
+        self._off = [f"Off{k + 1}" for k in range(robot.n)] if self.offset else []
 
     @cached_property
     def sets(self) -> dict:
@@ -51,18 +59,29 @@ class BaseParameters:
         core = self._b
         return {"lagrangian": core.lagrangian, "energy": core.energy, "eom": core.eom}
 
-    n = property(lambda self: self._b.n)
-    names = property(lambda self: self._b.names)
+    n = property(lambda self: self._b.n + len(self._off))
+    names = property(lambda self: list(self._b.names) + self._off)
 
     @cached_property
     def formulas(self) -> list[str]:
         """The regrouping formulas of the equations-of-motion set, one per base parameter
         (written on first use)."""
-        return self._b.formulas
+        return list(self._b.formulas) + [f"{o} = {o}" for o in self._off]
 
-    Y = property(lambda self: self._b.Y)
-    pivots = property(lambda self: self._b.pivots)
-    classical_names = property(lambda self: self._b.classical_names)
+    @property
+    def Y(self) -> np.ndarray:
+        Y = self._b.Y
+        if not self.offset:
+            return Y
+        k = len(self._off)
+        return np.block([[Y, np.zeros((Y.shape[0], k))], [np.zeros((k, Y.shape[1])), np.eye(k)]])
+
+    @property
+    def pivots(self) -> list[int]:
+        P = len(self._b.classical_names)
+        return list(self._b.pivots) + list(range(P, P + len(self._off)))
+
+    classical_names = property(lambda self: list(self._b.classical_names) + self._off)
     rotor = property(lambda self: self._b.rotor)
     friction = property(lambda self: self._b.friction)
     method = property(lambda self: self._b.method)
@@ -84,26 +103,58 @@ class BaseParameters:
         return self.sets["eom"]["no_effect"]
 
     def values(self, params) -> np.ndarray:
-        """``p_b = Y @ params``; ``params`` in the classical layout of this set, shape (P,)."""
-        return self._b.values(_args.array(params, "params", (self.Y.shape[1],)))
+        """``p_b = Y @ params``; ``params`` in the classical layout of this set, shape (P,).
+        With offsets, a vector without them (shape (P - n_joints,)) is accepted too: its
+        offsets are zero."""
+        P = len(self._b.classical_names)
+        if not self.offset:
+            return self._b.values(_args.array(params, "params", (P,)))
+        p = params
+        if isinstance(p, (list, tuple, np.ndarray)) and np.shape(p) == (P,):
+            p = np.concatenate([_args.array(p, "params", (P,)), np.zeros(len(self._off))])
+        p = _args.array(p, "params", (P + len(self._off),))
+        return np.concatenate([self._b.values(p[:P]), p[P:]])
 
     def embed(self, base) -> np.ndarray:
         """A classical vector with ``base`` at the pivot positions and zeros elsewhere, so that
         ``values(embed(p_b)) == p_b`` and any inverse dynamics linear in the classical
         parameters gives the same torques for it."""
-        return self._b.embed(_args.array(base, "base", (self.n,)))
+        base = _args.array(base, "base", (self.n,))
+        k = len(self._off)
+        if not k:
+            return self._b.embed(base)
+        return np.concatenate([self._b.embed(base[:-k]), base[-k:]])
+
+    def _with_offset(self, W: np.ndarray, value: float) -> np.ndarray:
+        """``W`` (..., n_joints, nb) with the offset columns appended: ``value`` times the
+        identity per sample (the regressor) or zero (energies, momenta)."""
+        if not self.offset:
+            return W
+        eye = np.broadcast_to(value * np.eye(self.robot.n), W.shape[:-1] + (self.robot.n,))
+        return np.concatenate([W, eye], axis=-1)
 
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
-        ``tau = W_b @ values(params)``."""
+        ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row."""
         q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
-        return self._b.regressor(q, dq, ddq)
+        return self._with_offset(self._b.regressor(q, dq, ddq), 1.0)
 
     def energy_regressor(self, q, dq) -> np.ndarray:
         """Base total-energy regressor ``w_H,b``, shape (n,) or (m, n), over the
-        equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant."""
+        equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant (offset columns zero)."""
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
-        return self._b.energy_regressor(q, dq)
+        w = self._b.energy_regressor(q, dq)
+        if not self.offset:
+            return w
+        return np.concatenate([w, np.zeros(w.shape[:-1] + (len(self._off),))], axis=-1)
+
+    def momentum_regressors(self, q, dq):
+        """Base momentum regressors ``(W_p,b, W_l,b)``, shape (n_joints, n) or (m, n_joints, n)
+        each, over the equations-of-motion set: ``p = A(q) dq = W_p,b @ p_b`` and
+        ``-dL/dq = W_l,b @ p_b`` (see ``Robot.momentum_regressors``)."""
+        q, dq = _args.batch(self.robot.n, q=q, dq=dq)
+        wp, wl = self._b.momentum_regressors(q, dq)
+        return self._with_offset(wp, 0.0), self._with_offset(wl, 0.0)
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (counts, names, formulas, margins)."""
@@ -112,6 +163,7 @@ class BaseParameters:
             "method": self.method,
             "rotor": self.rotor,
             "friction": self.friction,
+            "offset": self.offset,
             "n_base": self.n,
             "names": self.names,
             "formulas": self.formulas,
@@ -124,6 +176,7 @@ class BaseParameters:
                 "inverse_dynamics": "eom",
                 "dynamic_identification": "eom",
                 "energy_identification": "eom",
+                "integral_identification": "eom",
             },
             "sets": {
                 k: {
@@ -142,7 +195,8 @@ class BaseParameters:
         return out
 
     def __repr__(self) -> str:
-        return f"BaseParameters(robot={self.robot.name!r}, n={self.n}, method={self.method!r})"
+        off = ", offset=True" if self.offset else ""
+        return f"BaseParameters(robot={self.robot.name!r}, n={self.n}, method={self.method!r}{off})"
 
 
 def _plain(d: dict) -> dict:
@@ -159,6 +213,7 @@ def base_parameters(
     snap: float | bool | None = None,
     samples: int = 0,
     seed: int = 1,
+    offset: bool = False,
 ) -> BaseParameters:
     """Base inertial parameters of ``robot``.
 
@@ -189,9 +244,13 @@ def base_parameters(
         ``max(40, 3 P / n + 20)`` for ``P`` parameters and ``n`` joints; fewer than ``P / n`` are
         refused) and the random seed. The energies take at least ``P + max(20, P / 2)`` states,
         so that no set is capped by the number of samples.
+    offset : bool
+        Add a constant torque offset per joint, ``Off1 .. OffN``, after all other parameters
+        (see :class:`BaseParameters`); ``order`` does not name them.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    offset = _args.flag(offset, "offset")
     if method not in ("projection", "numerical"):
         raise _core.ModelError(f"method is {method!r}; expected 'projection' or 'numerical'")
     tolerance = _args.number(tolerance, "tolerance", positive=True)
@@ -233,4 +292,4 @@ def base_parameters(
         seed=int(seed),
         snap=float(snap or 0.0),
     )
-    return BaseParameters(core, robot)
+    return BaseParameters(core, robot, offset)

@@ -21,7 +21,7 @@ from . import (
     cli_identify,
     load,
 )
-from .cli_args import Parser, UsageError, add_joint_terms, add_robot, number
+from .cli_args import Parser, UsageError, add_joint_terms, add_offset, add_robot, number
 
 
 def _fmt(x: float, width: int = 10) -> str:
@@ -112,6 +112,7 @@ def cmd_base(args: argparse.Namespace) -> int:
         robot,
         rotor=args.rotor,
         friction=args.friction,
+        offset=args.offset,
         method=args.method,
         order=order,
         tolerance=args.tolerance,
@@ -125,7 +126,15 @@ def cmd_base(args: argparse.Namespace) -> int:
         print(" \\\\\n".join(_latex_formula(f) for f in bp.formulas))
         print(r"\end{align*}")
         return 0
-    extras = [x for x, on in (("rotor inertia", args.rotor), ("friction", args.friction)) if on]
+    extras = [
+        x
+        for x, on in (
+            ("rotor inertia", args.rotor),
+            ("friction", args.friction),
+            ("torque offsets", args.offset),
+        )
+        if on
+    ]
     counts = {k: s["n"] for k, s in bp.sets.items()}
     m = bp.margin
     lines = [
@@ -136,7 +145,7 @@ def cmd_base(args: argparse.Namespace) -> int:
         f"  coincide       Lagrangian = energy: {'yes' if bp.lagrangian_equals_energy else 'no'}; "
         f"Lagrangian = equations of motion: {'yes' if bp.lagrangian_equals_eom else 'no'}",
         "  used           the equations-of-motion set, for inverse dynamics, the base regressor "
-        "and both identification models",
+        "and the identification models",
         f"  rank margin    smallest kept pivot {m['smallest_kept']:.3g}, largest dropped "
         f"{m['largest_dropped']:.3g} (relative tolerance {m['tolerance']:.3g}); weakest kept "
         f"column against its kind {m['weakest_kept_for_its_kind']:.3g}",
@@ -152,6 +161,11 @@ def cmd_base(args: argparse.Namespace) -> int:
             f"parameters at tolerance {m['looser_tolerance']:.3g}, "
             f"{m['rank_at_tighter_tolerance']} at {m['tighter_tolerance']:.3g} "
             "(consider --snap if joint rotations are meant to be right angles)"
+        )
+    if bp.offset:
+        lines.append(
+            f"  offsets        Off1..Off{robot.n} after the equations-of-motion set, one base "
+            f"parameter each ({bp.n} in all)"
         )
     for s in bp.snapped:
         lines.append(f"  snapped        {s}")
@@ -186,6 +200,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     add_robot(p)
     add_joint_terms(p)
+    add_offset(p)
     p.add_argument(
         "--order",
         help="column priority: every classical parameter once, comma-separated "

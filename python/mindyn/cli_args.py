@@ -213,3 +213,12 @@ def add_joint_terms(p: argparse.ArgumentParser, verb: str = "include") -> None:
     """``--rotor`` and ``--friction``; ``verb`` says what they do in this command."""
     p.add_argument("--rotor", action="store_true", help=f"{verb} rotor inertia Ia per joint")
     p.add_argument("--friction", action="store_true", help=f"{verb} Fv, Fc per joint")
+
+
+def add_offset(p: argparse.ArgumentParser, verb: str = "include") -> None:
+    """``--offset``: a constant torque offset per joint (Off1 .. OffN)."""
+    p.add_argument(
+        "--offset",
+        action="store_true",
+        help=f"{verb} a constant torque offset per joint, Off1..OffN (tau_j = ... + Off_j)",
+    )

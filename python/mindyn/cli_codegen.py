@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from . import ModelError, base_parameters, load
-from .cli_args import add_joint_terms, add_robot, output_file
+from .cli_args import add_joint_terms, add_offset, add_robot, output_file
 from .codegen import generate
 
 
@@ -34,6 +34,7 @@ def register(subparsers) -> None:
         "(default: all three)",
     )
     add_joint_terms(p)
+    add_offset(p)
     p.add_argument(
         "--params",
         metavar="FILE",
@@ -88,8 +89,9 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         friction=args.friction,
         numeric=args.numeric,
         minimise=args.minimise,
+        offset=args.offset,
     )
-    base = base_parameters(robot, rotor=args.rotor, friction=args.friction)
+    base = base_parameters(robot, rotor=args.rotor, friction=args.friction, offset=args.offset)
     params, pruned, threshold = (
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )
@@ -105,7 +107,15 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     # the classical-parameter recursion generated the same way, for its operation counts
     classical = generate(robot, name=code.name, base=False, **same)
     written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
-    extras = [x for x, on in (("rotor inertia", args.rotor), ("friction", args.friction)) if on]
+    extras = [
+        x
+        for x, on in (
+            ("rotor inertia", args.rotor),
+            ("friction", args.friction),
+            ("torque offsets", args.offset),
+        )
+        if on
+    ]
     print(
         f"{robot.name}: {len(code.names)} base parameters"
         + (f" ({', '.join(extras)})" if extras else "")
@@ -155,13 +165,14 @@ def _identified_params(path: str, robot, base, args):
         raise ModelError(
             f"{path}: parameters identified for robot '{doc['robot']}', not '{robot.name}'"
         )
-    flags = {"rotor": args.rotor, "friction": args.friction}
+    flags = {"rotor": args.rotor, "friction": args.friction, "offset": args.offset}
     differ = [k for k, on in flags.items() if k in doc and bool(doc[k]) != on]
     if differ:
         said = " ".join(f"--{k}" for k in flags if doc.get(k))
         raise ModelError(
-            f"{path}: identified {'with ' + said if said else 'without --rotor and --friction'}; "
-            "give codegen the same --rotor and --friction as identify"
+            f"{path}: identified "
+            f"{'with ' + said if said else 'without --rotor, --friction and --offset'}; "
+            "give codegen the same --rotor and --friction (and --offset) as identify"
         )
     names, values = doc["names"], doc["values"]
     try:

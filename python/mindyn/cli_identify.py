@@ -10,7 +10,15 @@ from pathlib import Path
 import numpy as np
 
 from . import base_parameters, load
-from .cli_args import add_joint_terms, add_robot, number, output_dir, output_file, seed
+from .cli_args import (
+    add_joint_terms,
+    add_offset,
+    add_robot,
+    number,
+    output_dir,
+    output_file,
+    seed,
+)
 
 
 def _floats(text: str, n: int, what: str) -> np.ndarray:
@@ -237,7 +245,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     vcur = _paired(vfiles, args.validate_currents, "--validate-currents", "--validate")
     logs = [_read_filtered(f, robot, args, c) for f, c in zip(files, cur)]
     vlogs = [_read_filtered(f, robot, args, c) for f, c in zip(vfiles, vcur)]
-    base = base_parameters(robot, rotor=args.rotor, friction=args.friction)
+    base = base_parameters(robot, rotor=args.rotor, friction=args.friction, offset=args.offset)
     try:
         res = identify(
             robot,
@@ -248,6 +256,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
             rsd_threshold=args.rsd_threshold,
             energy_window=args.energy_window,
             integration=args.integration,
+            integral_window=args.integral_window,
             min_velocity=args.min_velocity,
         )
     except np.linalg.LinAlgError as e:
@@ -265,7 +274,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     data = logs[0]
     proc = data.processing
-    extras = [x for x, on in (("rotor inertia", args.rotor), ("friction", args.friction)) if on]
+    extras = [
+        x
+        for x, on in (
+            ("rotor inertia", args.rotor),
+            ("friction", args.friction),
+            ("torque offsets", args.offset),
+        )
+        if on
+    ]
     head = (
         f"{robot.name}: {res.model} model, {base.n} base parameters"
         + (f" ({', '.join(extras)})" if extras else "")
@@ -280,7 +297,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     out += [
         f"  velocities: {_describe(proc.get('velocity', {}))}; accelerations: "
         f"{_describe(proc.get('acceleration', {}))}"
-        + ("" if res.model == "dynamic" else " (not used by the energy model)")
+        + ("" if res.model == "dynamic" else f" (not used by the {res.model} model)")
         + (" (each log on its own)" if len(logs) > 1 else ""),
         f"  {res.rows} equations, {res.settings.get('weighting')}; condition number of the "
         f"column-scaled regressor {res.cond:.3g}",
@@ -288,6 +305,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if res.model == "energy":
         out.append(
             f"  energy windows of {res.settings['energy_window']} sample interval(s), "
+            f"{res.settings['integration']} integration"
+        )
+    elif res.model == "integral":
+        out.append(
+            f"  integral windows of {res.settings['integral_window']} sample interval(s), "
             f"{res.settings['integration']} integration"
         )
     elif res.settings.get("equations_left_out"):
@@ -622,7 +644,7 @@ def register(sub) -> None:
 
     p = sub.add_parser(
         "identify",
-        help="identify base parameters from a joint log (dynamic or energy model)",
+        help="identify base parameters from joint logs (dynamic, integral or energy model)",
         description="Least-squares identification of the base parameters from CSV logs "
         "(t, q1..qn, [dq1..dqn], tau1..taun) or ROS bags (sensor_msgs/JointState: position, "
         "[velocity], effort, joints matched by name), one or several fitted together, with "
@@ -640,8 +662,16 @@ def register(sub) -> None:
         "together (derivatives taken on each log alone, regression systems stacked)",
     )
     p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
-    p.add_argument("--model", choices=["dynamic", "energy"], default="dynamic")
+    p.add_argument(
+        "--model",
+        choices=["dynamic", "integral", "energy"],
+        default="dynamic",
+        help="dynamic: tau = W(q, dq, ddq) p per sample (needs accelerations); integral: each "
+        "joint's equation of motion integrated over windows (momentum difference, no "
+        "accelerations); energy: the energy theorem over windows (one equation per window)",
+    )
     add_joint_terms(p, "identify")
+    add_offset(p, "identify")
     p.add_argument(
         "--validate", nargs="+", metavar="LOG", help="log(s) (CSV or bag) for validation"
     )
@@ -710,7 +740,16 @@ def register(sub) -> None:
         "--integration",
         choices=["simpson", "trapezoid", "zoh"],
         default="simpson",
-        help="energy model integration rule (zoh: torque held over each period)",
+        help="energy and integral model integration rule (zoh: torque held over each period)",
+    )
+    number(
+        p,
+        "--integral-window",
+        low=1,
+        high=1000000,
+        integer=True,
+        default=40,
+        help="sample intervals per integral-model window (one equation per joint and window)",
     )
     number(
         p,

@@ -129,6 +129,7 @@ def generate(
     header_name: str | None = None,
     minimise: str = "operations",
     trig: str | None = None,
+    offset: bool = False,
 ) -> GeneratedCode:
     """Generates inverse-dynamics code for ``robot``.
 
@@ -166,10 +167,15 @@ def generate(
         calls for ``|x| <= 1e6`` and within 2.2e-16 of the C library (which it calls beyond, and
         for NaN and infinities); ``"libm"``: ``sin`` and ``cos`` of ``math.h``. Structured Text
         always uses ``SIN`` and ``COS``.
+    offset : bool
+        A constant torque offset per joint, ``Off1 .. OffN``, after the other parameters: added
+        to the inverse dynamics, a unit column of the regressor, not part of the gravity torque
+        (taken from ``base`` when a :class:`BaseParameters` is given).
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     numeric = _args.flag(numeric, "numeric")
+    offset = _args.flag(offset, "offset")
     if not isinstance(base, BaseParameters):
         base = _args.flag(base, "base")
     if lang not in ("c", "st"):
@@ -183,6 +189,7 @@ def generate(
     if isinstance(base, BaseParameters):
         if base.rotor != rotor or base.friction != friction:
             rotor, friction = base.rotor, base.friction
+        offset = base.offset
         bp_core = base._b
         names = base.names
     elif base:
@@ -197,10 +204,11 @@ def generate(
                 "classical parameters"
             ) from None
         bp_core = bp._b
-        names = bp.names
+        names = bp.names + [f"Off{k + 1}" for k in range(robot.n) if offset]
     else:
         bp_core = None
         names = robot.parameter_names(rotor, friction)
+        names += [f"Off{k + 1}" for k in range(robot.n) if offset]
     values = None
     if params is not None:
         if isinstance(params, (str, Path)):
@@ -220,6 +228,7 @@ def generate(
         header_name=header_name or f"{name}.h",
         minimise=minimise,
         inline_trig=trig != "libm",
+        offset=offset,
     )
     return GeneratedCode(lang, name, out, numeric, header_name or f"{name}.h")
 
@@ -294,7 +303,8 @@ class BaseDynamics:
     Parameters
     ----------
     base : BaseParameters
-        From :func:`mindyn.base_parameters` (its robot, rotor and friction settings are used).
+        From :func:`mindyn.base_parameters` (its robot, rotor, friction and offset settings are
+        used; offsets are added to the inverse dynamics, not to the gravity torque).
 
     Attributes
     ----------
@@ -309,7 +319,7 @@ class BaseDynamics:
 
     def __init__(self, base: BaseParameters):
         self.base = base
-        self._d = _core.BaseDynamics(base._b)
+        self._d = _core.BaseDynamics(base._b, offset=base.offset)
 
     n = property(lambda self: self._d.n)
     np = property(lambda self: self._d.np)

@@ -306,6 +306,15 @@ class Robot:
         wk, wp = self._energy_regressors(q, dq, rotor, friction)
         return wk - wp
 
+    def momentum_regressors(self, q, dq, rotor: bool = False, friction: bool = False):
+        """``(W_p, W_l)``, shape (n, P) or (m, n, P) each, of the momentum form of the equations
+        of motion ``tau = d/dt p - dL/dq + friction``: generalized momentum
+        ``p = A(q) dq = W_p @ params`` and ``-dL/dq = W_l @ params`` (minus the gradient of the
+        Lagrangian ``K - P``: the gravity torque minus ``dK/dq``). Neither needs an acceleration;
+        their friction columns are zero, the rotor column of ``W_p`` is ``dq``."""
+        q, dq = _args.batch(self.n, q=q, dq=dq)
+        return self._m.momentum_regressors(q, dq, *self._layout(rotor, friction))
+
     def _energies(self, q, dq, params):
         q, dq = _args.batch(self.n, q=q, dq=dq)
         return self._m.energies(q, dq, self._params(params))

@@ -60,11 +60,12 @@ void bindCodegen(py::module_& m) {
          bool rotor, bool friction, const std::vector<std::string>& functions,
          const std::string& name, bool numeric, const std::optional<Eigen::VectorXd>& values,
          const std::string& lang, const std::string& header_name, const std::string& minimise,
-         bool inlineTrig) {
+         bool inlineTrig, bool offset) {
         // Base parameters carry the model they were computed for (possibly a snapped copy).
         const Model& model = base_core ? base_core->model->model : model_core->model;
-        const ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
-                                          : classicalParameterSet(model, {rotor, friction});
+        ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
+                                    : classicalParameterSet(model, {rotor, friction});
+        if (offset) ps = withOffsets(model, std::move(ps));
         std::vector<Function> fs;
         for (const auto& f : functions) fs.push_back(functionOf(f));
         if (values && values->size() != ps.size())
@@ -106,19 +107,21 @@ void bindCodegen(py::module_& m) {
       py::arg("name") = "robot", py::arg("numeric") = false,
       py::arg("values") = std::optional<Eigen::VectorXd>(), py::arg("lang") = "c",
       py::arg("header_name") = "robot.h", py::arg("minimise") = "operations",
-      py::arg("inline_trig") = true,
-      "Generated code and operation counts. base=None: the classical parameters.");
+      py::arg("inline_trig") = true, py::arg("offset") = false,
+      "Generated code and operation counts. base=None: the classical parameters; offset: a "
+      "torque offset per joint after them.");
 
   py::class_<PyBaseDynamics, std::shared_ptr<PyBaseDynamics>>(m, "BaseDynamics")
-      .def(py::init([](const PyBase& base_core) {
+      .def(py::init([](const PyBase& base_core, bool offset) {
              const Model& model = base_core.model->model;
-             const ParameterSet ps = baseParameterSet(model, base_core.bp);
+             ParameterSet ps = baseParameterSet(model, base_core.bp);
+             if (offset) ps = withOffsets(model, std::move(ps));
              auto out = std::make_shared<PyBaseDynamics>();
              py::gil_scoped_release release;
              out->bd = std::make_unique<BaseDynamics>(model, ps);
              return out;
            }),
-           py::arg("base"))
+           py::arg("base"), py::arg("offset") = false)
       .def_property_readonly("n", [](const PyBaseDynamics& s) { return s.bd->nq(); })
       .def_property_readonly("np", [](const PyBaseDynamics& s) { return s.bd->np(); })
       .def_property_readonly("names", [](const PyBaseDynamics& s) { return s.bd->names(); })

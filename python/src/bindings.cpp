@@ -14,6 +14,7 @@
 #include "mindyn/dynamics.hpp"
 #include "mindyn/kinematics.hpp"
 #include "mindyn/model.hpp"
+#include "mindyn/momentum.hpp"
 #include "mindyn/projection.hpp"
 #include "mindyn/urdf.hpp"
 #include "py_args.hpp"
@@ -297,6 +298,23 @@ PYBIND11_MODULE(_core, m) {
           },
           py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false)
       .def(
+          "momentum_regressors",
+          [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction) {
+            const long n = s.model.nq();
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
+            const ParameterLayout layout{rotor, friction};
+            const long P = layout.size(static_cast<int>(n));
+            auto wp = batch.output({n, P}), wl = batch.output({n, P});
+            Eigen::MatrixXd Wp(n, P), Wl(n, P);
+            batch.forEach([&](long i, const auto& x) {
+              momentumRegressors(s.model, s.data, x[0], x[1], layout, Wp, Wl);
+              Eigen::Map<RowMajor>(wp.mutable_data() + i * n * P, n, P) = Wp;
+              Eigen::Map<RowMajor>(wl.mutable_data() + i * n * P, n, P) = Wl;
+            });
+            return py::make_tuple(wp, wl);
+          },
+          py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false)
+      .def(
           "energies",
           [](PyModel& s, const Array& q, const Array& dq, const py::object& params) {
             const long n = s.model.nq();
@@ -413,6 +431,23 @@ PYBIND11_MODULE(_core, m) {
               std::copy(wb.data(), wb.data() + nb, out.mutable_data() + i * nb);
             });
             return out;
+          },
+          py::arg("q"), py::arg("dq"))
+      .def(
+          "momentum_regressors",
+          [](PyBase& b, const Array& q, const Array& dq) {
+            PyModel& s = *b.model;
+            const long n = s.model.nq();
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
+            const long nb = b.bp.eom.size(), P = b.W.cols();
+            auto wp = batch.output({n, nb}), wl = batch.output({n, nb});
+            Eigen::MatrixXd Wl(n, P), Wpb(n, nb), Wlb(n, nb);
+            batch.forEach([&](long i, const auto& x) {
+              baseMomentumRegressors(s.model, s.data, b.bp, x[0], x[1], b.W, Wl, Wpb, Wlb);
+              Eigen::Map<RowMajor>(wp.mutable_data() + i * n * nb, n, nb) = Wpb;
+              Eigen::Map<RowMajor>(wl.mutable_data() + i * n * nb, n, nb) = Wlb;
+            });
+            return py::make_tuple(wp, wl);
           },
           py::arg("q"), py::arg("dq"));
 

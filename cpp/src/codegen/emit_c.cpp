@@ -53,6 +53,7 @@ std::vector<std::string> describe(const GeneratedCode& code) {
   std::vector<std::string> extras;
   if (ps.layout.rotor) extras.push_back("rotor inertia");
   if (ps.layout.friction) extras.push_back("viscous and Coulomb friction");
+  if (ps.offsets) extras.push_back("a torque offset per joint (not in the gravity torque)");
   if (!extras.empty()) {
     what += ", with ";
     for (size_t i = 0; i < extras.size(); ++i) what += (i ? " and " : "") + extras[i];

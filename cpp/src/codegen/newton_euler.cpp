@@ -734,6 +734,22 @@ ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout) {
   return s;
 }
 
+ParameterSet withOffsets(const Model& model, ParameterSet s) {
+  if (s.offsets) throw ModelError("codegen: the parameter set has torque offsets already");
+  const int n = model.nq(), np = s.size();
+  for (int k = 0; k < n; ++k) {
+    const std::string name = "Off" + std::to_string(k + 1);
+    s.names.push_back(name);
+    if (s.base) s.formulas.push_back(name + " = " + name);
+  }
+  s.E.conservativeResize(Eigen::NoChange, np + n);
+  s.E.rightCols(n).setZero();
+  s.values.conservativeResize(np + n);
+  s.values.tail(n).setZero();
+  s.offsets = n;
+  return s;
+}
+
 namespace {
 
 GeneratedFunction generateWith(const Model& model, const ParameterSet& params, Function function,
@@ -749,6 +765,10 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
     throw ModelError("codegen: " + std::to_string(vals.size()) + " parameter values for " +
                      std::to_string(np) + " parameters");
   if (numeric && !vals.allFinite()) throw ModelError("codegen: parameter values are not finite");
+  if (params.offsets != 0 && params.offsets != n)
+    throw ModelError("codegen: " + std::to_string(params.offsets) + " torque offsets for " +
+                     std::to_string(n) + " joints");
+  const int off0 = np - params.offsets;  // the first offset in p
 
   GeneratedFunction out;
   out.function = function;
@@ -773,11 +793,13 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
   };
   if (function == Function::Regressor) {
     out.outputs.assign(static_cast<size_t>(n) * np, Graph::zero());
-    for (int col = 0; col < np; ++col) {
+    for (int col = 0; col < off0; ++col) {
       const auto pi = classical([&](int c) { return g.constant(params.E(c, col)); });
       const auto tau = b.torques(pi, params.layout, true, plan.link);
       for (int i = 0; i < n; ++i) out.outputs[static_cast<size_t>(i) * np + col] = tau[i];
     }
+    for (int k = 0; k < params.offsets; ++k)
+      out.outputs[static_cast<size_t>(k) * np + off0 + k] = g.constant(1.0);
   } else {
     std::vector<Ref> p(np);
     for (int j = 0; j < np; ++j)
@@ -789,6 +811,8 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
       return s;
     });
     out.outputs = b.torques(pi, params.layout, function == Function::InverseDynamics, plan.link);
+    if (function == Function::InverseDynamics)
+      for (int k = 0; k < params.offsets; ++k) out.outputs[k] = g.add(out.outputs[k], p[off0 + k]);
   }
   out.program = schedule(g, out.outputs);
   return out;

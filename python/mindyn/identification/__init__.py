@@ -4,7 +4,8 @@
   units, derivatives by zero-phase filtering;
 - :mod:`~mindyn.identification.rosbag`: ``sensor_msgs/JointState`` from ROS bags;
 - :mod:`~mindyn.identification.excitation`: optimised Fourier excitation trajectories;
-- :mod:`~mindyn.identification.models`: the regression systems (dynamic and energy models);
+- :mod:`~mindyn.identification.models`: the regression systems (dynamic, energy and integral
+  models);
 - :mod:`~mindyn.identification.estimation`: least squares with statistics and pruning;
 - :mod:`~mindyn.identification.validation`: torque prediction and error measures;
 - :mod:`~mindyn.identification.currents`: torques from motor currents logged apart;
@@ -16,7 +17,7 @@ The names below are the ones a workflow needs; the modules hold the rest.
 from .data import DataError, JointData, read_csv, write_csv
 from .errors import IdentificationError, RankDeficientError
 from .estimation import IdentificationResult, identify
-from .models import MODELS, dynamic_system, energy_system
+from .models import MODELS, dynamic_system, energy_system, integral_system
 from .validation import error_measures, true_base_values, validate
 
 __all__ = [
@@ -30,6 +31,7 @@ __all__ = [
     "energy_system",
     "error_measures",
     "identify",
+    "integral_system",
     "read_csv",
     "true_base_values",
     "validate",

@@ -28,6 +28,8 @@ from .models import (
     MODELS,
     energy_row_noise,
     energy_system,
+    integral_chunks,
+    integral_windows,
     require_torque,
     torque_noise,
 )
@@ -36,9 +38,10 @@ from .models import (
 #: :func:`identify` accepts. Dynamic model: 10 equations per parameter; fewer, and a log too
 #: short to move every joint through its range gives estimates (after pruning) far from the
 #: truth with small RSDs. Energy model: 4 windows per parameter (one window integrates the
-#: power of all joints over ``window`` samples). Both: at least 30 degrees of freedom, so that
-#: the noise variance behind the RSDs is known within about 25 %.
-MIN_EQUATIONS_PER_PARAMETER = {"dynamic": 10, "energy": 4}
+#: power of all joints over ``window`` samples). Integral model: 4 equations per parameter (one
+#: per joint and window, each integrating ``window`` samples). All: at least 30 degrees of
+#: freedom, so that the noise variance behind the RSDs is known within about 25 %.
+MIN_EQUATIONS_PER_PARAMETER = {"dynamic": 10, "energy": 4, "integral": 4}
 MIN_NOISE_DOF = 30
 
 #: Samples whose regressor is evaluated at once by the dynamic model (memory: samples x joints x
@@ -53,7 +56,7 @@ class IdentificationResult:
     Attributes
     ----------
     model : str
-        ``dynamic`` or ``energy``.
+        ``dynamic``, ``energy`` or ``integral``.
     names, values, std, rsd : list, ndarray (k,), ndarray (k,), ndarray (k,)
         The parameters kept after pruning, their estimates, standard deviations and relative
         standard deviations in percent.
@@ -66,8 +69,8 @@ class IdentificationResult:
     sigma : float
         Residual standard deviation of the (weighted) final fit.
     joint_sigma : ndarray (n,), optional
-        Dynamic model: per-joint residual standard deviations of the first OLS pass, the weights'
-        inverse (WLS).
+        Dynamic and integral models: per-joint residual standard deviations of the first OLS
+        pass, the weights' inverse (WLS).
     cond : float
         Condition number of the stacked regressor (unweighted, equations left out by
         ``min_velocity`` excluded) with its columns scaled to unit norm.
@@ -108,6 +111,7 @@ class IdentificationResult:
             "robot": self.base.robot.name,
             "rotor": self.base.rotor,
             "friction": self.base.friction,
+            "offset": self.base.offset,
             "names": list(self.names),
             "values": [float(v) for v in self.values],
             "std": [float(v) for v in self.std],
@@ -273,6 +277,9 @@ def _enough(
         if settings.get("equations_left_out"):
             got += f" ({settings['equations_left_out']} left out as slower than min_velocity)"
         more = f"at least {math.ceil(need * m / max(rows, 1))} samples"
+    elif model == "integral":
+        got = f"{m} samples give {rows} integral equations ({n} per window of {window} intervals)"
+        more = f"at least {math.ceil(need / n) * window + 1} samples, or a shorter window"
     else:
         got = f"{m} samples give {rows} energy windows of {window} intervals"
         more = f"at least {need * window + 1} samples, or a shorter window"
@@ -312,6 +319,7 @@ def identify(
     rsd_threshold: float | None = 30.0,
     energy_window: int = 10,
     integration: str = "simpson",
+    integral_window: int = 40,
     min_velocity: float = 0.01,
     rank_tolerance: float = 1e-9,
 ) -> IdentificationResult:
@@ -321,28 +329,33 @@ def identify(
     ----------
     robot : Robot or str
     data : JointData or sequence of JointData
-        ``t, q, dq, ddq, tau`` (``ddq`` is not used by the energy model). Several logs are
+        ``t, q, dq, ddq, tau`` (``ddq`` is used by the dynamic model only). Several logs are
         fitted together: each log's regression system is formed from its own samples (its
         derivatives were obtained on it alone, never across the junction between logs; energy
-        windows do not span two logs) and the systems are stacked; the per-joint noise weights
-        are estimated over all of them. ``settings["logs"]`` gives each log's samples and
-        equations.
-    model : {"dynamic", "energy"}
+        and integral windows do not span two logs) and the systems are stacked; the per-joint
+        noise weights are estimated over all of them. ``settings["logs"]`` gives each log's
+        samples and equations.
+    model : {"dynamic", "energy", "integral"}
     rotor, friction : bool
         Include rotor inertia / viscous and Coulomb friction (ignored when ``base`` is given).
     base : BaseParameters, optional
         Reuse a computed base-parameter set.
     weighted : bool
-        Dynamic model: weighted least squares with per-joint weights from a first OLS pass.
+        Dynamic and integral models: weighted least squares with per-joint weights from a first
+        OLS pass; energy model: per-window weights from torque-noise estimates.
     rsd_threshold : float or None
         Remove parameters with an RSD above this many percent, largest first, re-estimating after
         each removal (None or <= 0: keep all).
     energy_window : int
         Energy model: sample intervals per window (one equation per window).
     integration : {"simpson", "trapezoid", "zoh"}
-        Energy model: rule for the power and dissipation integrals (``zoh``: the logged torque
-        is taken as held over each sample period, ``int dq^T tau dt = sum tau_k^T (q_k+1 - q_k)``,
-        exact for a command held by the drive; dissipation by Simpson).
+        Energy and integral models: rule for the integrals over a window (``zoh``: the logged
+        torque is taken as held over each sample period, ``int dq^T tau dt = sum tau_k^T (q_k+1 -
+        q_k)`` (energy), ``int tau dt = sum tau_k (t_k+1 - t_k)`` (integral), exact for a command
+        held by the drive; the other integrals by Simpson).
+    integral_window : int
+        Integral model: sample intervals per window (one equation per joint and window; see
+        :func:`~mindyn.identification.models.integral_system`).
     min_velocity : float
         Dynamic model with friction: equations of joints slower than this [rad/s | m/s] are left
         out (see :func:`dynamic_system`).
@@ -351,8 +364,10 @@ def identify(
         deficient.
 
     The dynamic model is reduced chunk by chunk (:func:`dynamic_triangles`): memory does not
-    grow with the length of the log. More than half of the parameters removed by pruning is
-    reported in ``settings["warnings"]``.
+    grow with the length of the log; nor does the integral model's (reduced per joint from
+    :func:`~mindyn.identification.models.integral_chunks`, then weighted like the dynamic
+    model's). More than half of the parameters removed by pruning is reported in
+    ``settings["warnings"]``.
 
     Raises
     ------
@@ -364,10 +379,14 @@ def identify(
     """
     t0 = time.perf_counter()
     if model not in MODELS:
-        raise ValueError(f"unknown model '{model}'; use dynamic or energy")
+        raise ValueError(f"unknown model '{model}'; use dynamic, energy or integral")
     if not (isinstance(energy_window, (int, np.integer)) and energy_window >= 1):
         raise ValueError(
             f"energy window must be an integer >= 1 sample interval, got {energy_window}"
+        )
+    if not (isinstance(integral_window, (int, np.integer)) and integral_window >= 1):
+        raise ValueError(
+            f"integral window must be an integer >= 1 sample interval, got {integral_window}"
         )
     if not (math.isfinite(min_velocity) and min_velocity >= 0):
         raise ValueError(f"min_velocity must be a finite number >= 0, got {min_velocity}")
@@ -400,6 +419,17 @@ def identify(
         settings["min_velocity"] = min_velocity if base.friction else 0.0
         settings["equations_left_out"] = equations - rows
         _enough(model, rows, nb, logs, settings)
+    elif model == "integral":
+        log_rows = [integral_windows(d.t, integral_window)[0].size * d.n for d in logs]
+        rows = sum(log_rows)
+        _enough(model, rows, nb, logs, settings, integral_window)
+        S = np.zeros((robot.n, nb + 1, nb + 1))
+        for d in logs:  # windows within each log; per joint, merged by QR
+            for Wi, yi in integral_chunks(base, d, integral_window, integration):
+                for j in range(robot.n):
+                    S[j] = _triangle(np.vstack([S[j], np.column_stack([Wi[:, j], yi[:, j]])]))
+        joint_rows = np.full(robot.n, rows // robot.n)
+        settings.update({"integral_window": integral_window, "integration": integration})
     else:
         log_rows = [max(0, (d.m - 1) // energy_window) for d in logs]
         rows = sum(log_rows)
@@ -413,7 +443,7 @@ def identify(
         {"source": d.source, "samples": d.m, "equations": r} for d, r in zip(logs, log_rows)
     ]
     what = f"{model} model on {_sources(logs)}"
-    if model == "dynamic":
+    if model in ("dynamic", "integral"):
         ls = _Reduced.from_triangle(_triangle(np.vstack(list(S))), rows)
     else:
         ls = _Reduced(W, y)

@@ -6,9 +6,14 @@
 ``energy``
     The integral form of the energy theorem over consecutive windows ``[t_a, t_b]`` of
     ``window`` samples: ``(w_H(t_b) - w_H(t_a)) p_b + Fv_k int dq_k^2 dt + Fc_k int |dq_k| dt
-    = int dq^T tau dt``; no accelerations are needed. The dissipated-energy columns of the
-    friction parameters replace their (zero) energy columns; the integrals use the trapezoid or
-    Simpson rule on the samples.
+    + Off_k (q_k(t_b) - q_k(t_a)) = int dq^T tau dt``; no accelerations are needed. The
+    dissipated-energy columns of the friction parameters (and the work of the torque offsets)
+    replace their (zero) energy columns; the integrals use the trapezoid or Simpson rule on the
+    samples.
+``integral``
+    Each joint's equation of motion in momentum form, ``tau = d/dt p - dL/dq + friction``
+    (``p = A(q) dq``, ``L = K - P``), integrated over windows ``[t_a, t_b]`` of ``window``
+    sample intervals (:func:`integral_system`): ``n`` equations per window, no accelerations.
 """
 
 from __future__ import annotations
@@ -22,7 +27,14 @@ from ..base import BaseParameters
 from .data import DataError, JointData
 from .errors import IdentificationError
 
-MODELS = ("dynamic", "energy")
+MODELS = ("dynamic", "energy", "integral")
+
+#: A sample interval longer than this many times the median one is a gap in the log: no
+#: integral-model window spans it.
+GAP_FACTOR = 2.0
+
+#: Samples whose momentum regressors are evaluated at once by the integral model.
+CHUNK_SAMPLES = 8192
 
 
 # ---------------------------------------------------------------------------------------------
@@ -94,7 +106,122 @@ def energy_system(
     y = dI[:, 0]
     for j, c in enumerate(cols):
         W[:, c] = dI[:, j + 1]
+    for k in range(data.n):
+        # an offset's work: Off_k int dq_k dt = Off_k (q_k(t_b) - q_k(t_a)), exactly
+        if f"Off{k + 1}" in names:
+            W[:, names.index(f"Off{k + 1}")] = np.diff(data.q[ends, k])
     return W, y
+
+
+def integral_windows(t: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sample indices ``(a, b)`` of the integral model's windows, ``b = a + window``.
+
+    The log is split into continuous segments at gaps (a sample interval longer than
+    :data:`GAP_FACTOR` times the median one); each segment is covered by consecutive
+    non-overlapping windows from its first sample (a window's last sample is the next one's
+    first), the incomplete rest of a segment left out. No window spans a gap."""
+    if window < 1:
+        raise ValueError(f"integral window must be at least 1 sample interval, got {window}")
+    dt = np.diff(t)
+    if dt.size == 0:
+        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
+    gaps = np.flatnonzero(dt > GAP_FACTOR * np.median(dt))
+    first = np.concatenate([[0], gaps + 1])
+    last = np.concatenate([gaps, [t.size - 1]])
+    starts = [np.arange(f, e - window + 1, window) for f, e in zip(first, last)]
+    a = np.concatenate(starts).astype(int)
+    return a, a + window
+
+
+def _quadrature(t: np.ndarray, rule: str) -> np.ndarray:
+    """Weights ``c`` with ``int f dt ~ c @ f(t)`` over the samples ``t`` of one window."""
+    k = t.size
+    if rule == "trapezoid":
+        c = np.zeros(k)
+        d = np.diff(t)
+        c[:-1] += 0.5 * d
+        c[1:] += 0.5 * d
+        return c
+    if rule == "simpson":
+        return integrate.simpson(np.eye(k), x=t, axis=0)
+    raise ValueError(f"unknown integration rule '{rule}'; use trapezoid, simpson or zoh")
+
+
+def integral_system(
+    base: BaseParameters, data: JointData, window: int = 40, integration: str = "simpson"
+):
+    """Integral model: ``W`` (w, n, nb), ``y`` (w, n) for ``w`` windows (:func:`integral_windows`)
+    (see :func:`integral_chunks`)."""
+    parts = list(integral_chunks(base, data, window, integration))
+    return np.concatenate([W for W, _ in parts]), np.concatenate([y for _, y in parts])
+
+
+def integral_chunks(
+    base: BaseParameters, data: JointData, window: int = 40, integration: str = "simpson"
+):
+    """The integral model's equations, :data:`CHUNK_SAMPLES` samples' worth of windows at a time:
+    yields ``(W, y)``, shapes (k, n, nb) and (k, n), for consecutive runs of ``k`` windows.
+
+    Joint ``j``, window ``[t_a, t_b]``:
+    ``(W_p,j(t_b) - W_p,j(t_a) + int W_l,j dt) p_b + Fv_j (q_j(t_b) - q_j(t_a))
+    + Fc_j int sign(dq_j) dt + Off_j (t_b - t_a) = int tau_j dt``, with the base momentum regressors
+    ``p = W_p p_b``, ``-dL/dq = W_l p_b`` (:meth:`BaseParameters.momentum_regressors`). The
+    momentum is taken at the window's ends only; ``W_l``, the Coulomb term and the torque are
+    integrated over the window's samples by Simpson's rule (``simpson``, exact for cubics; any
+    number of intervals) or the trapezoid rule; ``zoh`` takes the logged torque as held over each
+    sample interval (``int tau dt = sum tau_k (t_k+1 - t_k)``, exact for a command held by the
+    drive) and integrates the rest by Simpson. The viscous term integrates exactly to the
+    position difference, not through the (noisier) velocities.
+
+    Windows do not overlap (overlapping ones would repeat the same torque samples in several
+    equations, correlating their errors without adding information); consecutive ones share
+    their boundary sample, so noise at that sample enters both (with the momentum's sign
+    opposite): a mild correlation between neighbouring windows that the statistics ignore, as
+    the energy model's do.
+
+    Window length: the momentum at the two ends carries the velocity noise once per window
+    (``A(q) delta dq``), while the torque integral's noise grows only as the square root of the
+    window's length and its signal linearly; short windows therefore let velocity noise, an
+    error in the regressor that least squares does not model, bias the estimate. The default of
+    :func:`~mindyn.identification.identify` is 40 intervals (0.16 s at 250 Hz): on simulated
+    6-joint log (ZCR07S, 20 s) with 0.005 rad/s velocity noise, 10 intervals left 14 % of the
+    estimates outside three standard deviations and a validation error 16 % above that of the
+    true parameters; 40 intervals, none outside and 2.5 % above.
+    Longer windows give fewer equations (``n`` per window); a motion faster than the window
+    is still integrated exactly up to the quadrature error."""
+    require_torque(data)
+    a, b = integral_windows(data.t, window)
+    if a.size == 0:
+        raise IdentificationError(
+            f"{data.m} samples give no complete integral window of {window} intervals"
+        )
+    rule = "simpson" if integration == "zoh" else integration
+    n, nb = data.n, base.n
+    names = list(base.names)
+    fv = {k: names.index(f"Fv{k + 1}") for k in range(n) if f"Fv{k + 1}" in names}
+    fc = {k: names.index(f"Fc{k + 1}") for k in range(n) if f"Fc{k + 1}" in names}
+    off = {k: names.index(f"Off{k + 1}") for k in range(n) if f"Off{k + 1}" in names}
+    per = max(1, CHUNK_SAMPLES // (window + 1))
+    for c0 in range(0, a.size, per):
+        wa, wb = a[c0 : c0 + per], b[c0 : c0 + per]
+        idx = wa[:, None] + np.arange(window + 1)  # (k, window + 1) samples of each window
+        Wp, Wl = base.momentum_regressors(data.q[idx.ravel()], data.dq[idx.ravel()])
+        Wp = Wp.reshape(idx.shape + (n, nb))
+        Wl = Wl.reshape(idx.shape + (n, nb))
+        C = np.array([_quadrature(data.t[i], rule) for i in idx])  # (k, window + 1)
+        W = Wp[:, -1] - Wp[:, 0] + np.einsum("ws,wsjp->wjp", C, Wl)
+        tau = data.tau[idx]  # (k, window + 1, n)
+        if integration == "zoh":
+            y = np.einsum("ws,wsj->wj", np.diff(data.t[idx], axis=1), tau[:, :-1])
+        else:
+            y = np.einsum("ws,wsj->wj", C, tau)
+        for k, col in fv.items():
+            W[:, k, col] = data.q[wb, k] - data.q[wa, k]
+        for k, col in fc.items():
+            W[:, k, col] = np.einsum("ws,ws->w", C, np.sign(data.dq[idx, k]))
+        for k, col in off.items():
+            W[:, k, col] = data.t[wb] - data.t[wa]
+        yield W, y
 
 
 def torque_noise(tau) -> np.ndarray:

@@ -47,6 +47,10 @@ struct ParameterSet {
   std::vector<std::string> formulas;  // base: "XXR2 = XX2 - YY2 + ..."; classical: empty
   Eigen::VectorXd values;             // the model's values (p = Y pi for a base set)
   Eigen::MatrixXd E;                  // layout.size(n) x names.size()
+  /// 0, or n: the last n entries of p are constant torque offsets Off1..OffN, tau_k += Off_k in
+  /// the inverse dynamics and the regressor (column 1 in joint k's row), not in the gravity
+  /// torque; their columns of E are zero (no classical parameter).
+  int offsets = 0;
   int size() const { return static_cast<int>(names.size()); }
 };
 
@@ -54,6 +58,9 @@ struct ParameterSet {
 ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp);
 /// All classical parameters of a layout (E = identity).
 ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout);
+/// The set with a torque offset per joint appended (names Off1..OffN, values 0, formulas
+/// "Offk = Offk" for a base set). Throws ModelError when it has offsets already.
+ParameterSet withOffsets(const Model& model, ParameterSet set);
 
 /// Constants of the geometry (joint transforms and axes, gravity) within this of 0 are taken as
 /// exactly 0 in the generated recursion, and an entry of a rotation or an axis within this of
