@@ -61,6 +61,11 @@ class JointData:
     processing : dict
         How ``dq`` / ``ddq`` were obtained (``logged`` or the filter and its settings) and the
         torque unit conversion.
+    regressor_filter : optional
+        Set by :func:`~mindyn.identification.preprocess.preprocess`: the low-pass, edge drop and
+        decimation that turned the logged torques into ``tau``, to be applied alike to the
+        regressor columns (parallel filtering); its ``regressor(base)`` gives them, shape
+        (m, n, nb).
     """
 
     t: np.ndarray
@@ -70,6 +75,7 @@ class JointData:
     tau: np.ndarray | None = None
     source: str = ""
     processing: dict = field(default_factory=dict)
+    regressor_filter: object = None
 
     @property
     def m(self) -> int:
@@ -371,15 +377,17 @@ def differentiate(
             raise DataError(
                 f"cutoff {fc:g} Hz must be between 0 and half the rate ({rate / 2:g} Hz)"
             )
-        b, a = signal.butter(order, fc / (rate / 2))
-        if m <= 3 * max(len(a), len(b)):
+        # Second-order sections: the (b, a) form loses the filter at low normalised cut-offs.
+        sos = signal.butter(order, fc / (rate / 2), output="sos")
+        taps = 3 * (2 * len(sos) + 1)
+        if m <= taps:
             raise DataError(f"{m} samples are too few for a Butterworth filter of order {order}")
         # Odd extension over a few filter time constants keeps the ends from ringing.
-        padlen = min(m - 1, max(3 * max(len(a), len(b)), int(3 * rate / fc)))
-        xf = signal.filtfilt(b, a, x, axis=0, padlen=padlen)
+        padlen = min(m - 1, max(taps, int(3 * rate / fc)))
+        xf = signal.sosfiltfilt(sos, x, axis=0, padlen=padlen)
         info.update(
             {
-                "filter": "butterworth, zero-phase (filtfilt)",
+                "filter": "butterworth, zero-phase (sosfiltfilt, second-order sections)",
                 "order": order,
                 "cutoff_Hz": fc,
                 "derivative": "central differences",
