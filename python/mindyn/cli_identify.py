@@ -151,9 +151,25 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------------------------
 # identify
 # ---------------------------------------------------------------------------------------------
-def _read(path, robot, args):
+def _read(path, robot, args, cutoff=None, periodic=False):
+    """The log at ``path``; with ``--filter lowpass`` through the data path of
+    :func:`~mindyn.identification.preprocess.preprocess` (``cutoff`` overrides ``--cutoff``;
+    ``--periods`` / ``--period`` only when ``periodic``)."""
     from .identification.data import DataError, read_csv
     from .identification.rosbag import is_rosbag, read_rosbag
+
+    if args.filter == "lowpass":
+        from .identification.preprocess import preprocess
+
+        raw = _read(path, robot, argparse.Namespace(**{**vars(args), "filter": "none"}))
+        return preprocess(
+            raw,
+            cutoff=cutoff if cutoff is not None else args.cutoff,
+            periods=args.periods if periodic else None,
+            period=args.period if periodic else None,
+            edge=args.edge,
+            decimate=not args.no_decimate,
+        )
 
     if Path(path).is_dir() and not is_rosbag(path):
         raise DataError(f"'{path}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
@@ -175,10 +191,10 @@ def _read(path, robot, args):
     )
 
 
-def _read_filtered(path, robot, args):
+def _read_filtered(path, robot, args, **kw):
     """:func:`_read`, with a filter that cannot be designed at ``--cutoff`` named as such."""
     try:
-        return _read(path, robot, args)
+        return _read(path, robot, args, **kw)
     except np.linalg.LinAlgError as e:
         if args.filter != "butter":
             raise
@@ -197,8 +213,24 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from .identification.report import format_table, write_report
 
     robot = load(args.robot, tip=args.tip)
-    data = _read_filtered(args.data, robot, args)
-    vdata = _read_filtered(args.validate, robot, args) if args.validate else None
+    if args.filter != "lowpass":
+        for flag, value in (
+            ("--periods", args.periods),
+            ("--period", args.period),
+            ("--edge", args.edge),
+            ("--no-decimate", args.no_decimate or None),
+        ):
+            if value is not None:
+                raise ValueError(f"{flag} needs --filter lowpass (got --filter {args.filter})")
+    data = _read_filtered(args.data, robot, args, periodic=True)
+    pre = data.processing.get("preprocess")
+    vdata = (
+        _read_filtered(
+            args.validate, robot, args, cutoff=pre["filter"]["cutoff_Hz"] if pre else None
+        )
+        if args.validate
+        else None
+    )
     base = base_parameters(robot, rotor=args.rotor, friction=args.friction)
     try:
         res = identify(
@@ -230,9 +262,16 @@ def cmd_identify(args: argparse.Namespace) -> int:
         f"{robot.name}: {res.model} model, {base.n} base parameters"
         + (f" ({', '.join(extras)})" if extras else "")
         + f", {data.m} samples at {data.rate:.4g} Hz from {args.data}",
-        f"  velocities: {_describe(proc.get('velocity', {}))}; accelerations: "
-        f"{_describe(proc.get('acceleration', {}))}"
-        + ("" if res.model == "dynamic" else " (not used by the energy model)"),
+    ]
+    if pre:
+        out += _describe_preprocess(pre, res.model)
+    else:
+        out.append(
+            f"  velocities: {_describe(proc.get('velocity', {}))}; accelerations: "
+            f"{_describe(proc.get('acceleration', {}))}"
+            + ("" if res.model == "dynamic" else " (not used by the energy model)")
+        )
+    out += [
         f"  {res.rows} equations, {res.settings.get('weighting')}; condition number of the "
         f"column-scaled regressor {res.cond:.3g}",
     ]
@@ -245,6 +284,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
         out.append(
             f"  {res.settings['equations_left_out']} joint equations below "
             f"{res.settings['min_velocity']:g} rad/s left out (Coulomb sign undetermined)"
+        )
+    elif base.friction:
+        out.append(
+            f"  no joint equation below {res.settings['min_velocity']:g} rad/s left out"
+            if res.settings["min_velocity"] > 0
+            else "  all joint equations kept (--min-velocity 0)"
         )
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         out.append(
@@ -300,6 +345,46 @@ def cmd_identify(args: argparse.Namespace) -> int:
         (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
         print(f"wrote report to {Path(args.report)}/: " + ", ".join(p.name for p in paths))
     return 0
+
+
+def _describe_preprocess(pre: dict, model: str) -> list[str]:
+    """The lines of ``mindyn identify`` that say what the data path did."""
+    tm, flt = pre["timing"], pre["filter"]
+    lines = [
+        f"  time stamps: median interval {1e3 * tm['median_dt_s']:.4g} ms "
+        f"({1e3 * tm['min_dt_s']:.4g} to {1e3 * tm['max_dt_s']:.4g} ms, jitter "
+        f"{100 * tm['jitter']:.3g} % of the median, {tm['gaps']} gap(s) over 1.5 intervals); "
+        + pre["time_base"],
+    ]
+    avg = pre.get("averaging")
+    if avg:
+        spread = avg.get("torque_spread_rms")
+        lines.append(
+            f"  {avg['periods']} period(s) of {avg['period_s']:.6g} s averaged "
+            f"({avg['samples_per_period']} samples per period"
+            + (
+                "; torque spread about the mean per joint " + " ".join(f"{v:.3g}" for v in spread)
+                if spread
+                else ""
+            )
+            + ")"
+        )
+    lines.append(
+        f"  low-pass: Butterworth order {flt['order']}, zero-phase, cut-off {flt['cutoff_Hz']:.4g} "
+        f"Hz ({pre['cutoff_source']}; excited band {pre['excited_band_Hz']:.4g} Hz), applied to "
+        f"{flt['applied_to']}"
+        + (" and the regressor columns (parallel filtering)" if pre["parallel_filtering"] else "")
+    )
+    lines.append(
+        f"  velocities: {pre['velocity']}; accelerations: {pre['acceleration']}"
+        + ("" if model == "dynamic" else " (not used by the energy model)")
+    )
+    lines.append(
+        f"  {pre['edge_samples_dropped']} samples of filter edges dropped ({pre['edge_s']:.4g} s "
+        f"at each end); decimated by {pre['decimation']} to {pre['rate_Hz']:.4g} Hz, "
+        f"{pre['samples']} samples"
+    )
+    return lines
 
 
 def _describe(info: dict) -> str:
@@ -548,16 +633,52 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--filter",
-        choices=["butter", "savgol", "none"],
-        default="butter",
-        help="filter for velocities/accelerations derived from the log",
+        choices=["lowpass", "butter", "savgol", "none"],
+        default="lowpass",
+        help="lowpass (default): the identification data path: uniform resampling of jittered "
+        "time stamps, one zero-phase Butterworth low-pass of positions, logged velocities, "
+        "torques and regressor columns, derivatives of the filtered signals, filter edges "
+        "dropped, decimation; butter, savgol, none: only derive missing velocities and "
+        "accelerations (torques unfiltered)",
     )
     number(
         p,
         "--cutoff",
         low=0,
         low_open=True,
-        help="Butterworth cutoff [Hz], below half the log's rate (default min(10, rate/10))",
+        help="cut-off [Hz], below half the log's rate; lowpass: default 10 x the excited band of "
+        "the identification log's positions (at most rate / 10), the validation log filtered at "
+        "the same cut-off; butter: default min(10, rate / 10)",
+    )
+    g = p.add_mutually_exclusive_group()
+    number(
+        g,
+        "--periods",
+        low=1,
+        high=100000,
+        integer=True,
+        help="lowpass: the identification log holds this many periods of a periodic excitation; "
+        "they are averaged sample by sample",
+    )
+    number(
+        g,
+        "--period",
+        low=0,
+        low_open=True,
+        help="lowpass: period [s] of a periodic excitation; the whole periods the "
+        "identification log holds are averaged",
+    )
+    number(
+        p,
+        "--edge",
+        low=0,
+        help="lowpass: seconds dropped at each end after filtering (default 1 / cut-off; none "
+        "for an averaged period)",
+    )
+    p.add_argument(
+        "--no-decimate",
+        action="store_true",
+        help="lowpass: keep every sample (default: decimate to at least 10 x the cut-off)",
     )
     p.add_argument("--ols", action="store_true", help="ordinary instead of weighted least squares")
     number(
