@@ -46,6 +46,7 @@ __all__ = [
     "CUTOFF_FACTOR",
     "DECIMATION_MARGIN",
     "ParallelFilter",
+    "concatenate",
     "excited_band",
     "preprocess",
     "timing",
@@ -345,4 +346,55 @@ def preprocess(
         out.regressor_filter = ParallelFilter(qf, dqf, ddqf, lowpass, keep)
     out.processing["velocity"] = {"source": info["velocity"]}
     out.processing["acceleration"] = {"source": info["acceleration"]}
+    return out
+
+
+class _Joined:
+    """Regressor rows of several logs stacked, each filtered like its own torques."""
+
+    def __init__(self, logs):
+        self.logs = logs
+
+    def regressor(self, base) -> np.ndarray:
+        parts = []
+        for d in self.logs:
+            if d.regressor_filter is not None:
+                parts.append(d.regressor_filter.regressor(base))
+            else:
+                parts.append(base.regressor(d.q, d.dq, d.ddq))
+        return np.concatenate(parts, axis=0)
+
+
+def concatenate(logs) -> JointData:
+    """Several logs (preprocessed or not) of one robot as one identification data set: samples
+    stacked, the time of each log shifted to follow the one before (the samples are equations;
+    no derivative is taken across the joins), regressor filters kept per log. The processing
+    of each log is listed under ``processing["logs"]``; ``processing["preprocess"]`` is the first
+    log's, with ``"logs"`` listing every log's."""
+    logs = list(logs)
+    if not logs:
+        raise DataError("no logs to concatenate")
+    n = logs[0].n
+    for d in logs[1:]:
+        if d.n != n:
+            raise DataError(f"{d.source or 'data'} has {d.n} joints; {logs[0].source} has {n}")
+    if any(d.tau is None for d in logs):
+        raise DataError("every log to concatenate needs torques")
+    ts, end = [], None
+    for d in logs:
+        step = float(np.median(np.diff(d.t))) if d.m > 1 else 1.0
+        t = d.t - d.t[0] + (0.0 if end is None else end + step)
+        ts.append(t)
+        end = float(t[-1])
+    out = JointData(
+        np.concatenate(ts),
+        *(np.concatenate([getattr(d, k) for d in logs]) for k in ("q", "dq", "ddq", "tau")),
+        source=" + ".join(d.source or "data" for d in logs),
+        processing={"logs": [d.processing for d in logs]},
+    )
+    pres = [d.processing.get("preprocess") for d in logs]
+    if pres[0] is not None:
+        out.processing["preprocess"] = {**pres[0], "logs": pres}
+    if any(d.regressor_filter is not None for d in logs):
+        out.regressor_filter = _Joined(logs)
     return out
