@@ -196,10 +196,10 @@ def _read_filtered(path, robot, args, **kw):
     try:
         return _read(path, robot, args, **kw)
     except np.linalg.LinAlgError as e:
-        if args.filter != "butter":
+        if args.filter not in ("butter", "lowpass"):
             raise
         raise ValueError(
-            f"--cutoff {args.cutoff:g} Hz: the zero-phase Butterworth filter for the derivatives "
+            f"--cutoff {args.cutoff:g} Hz: the zero-phase Butterworth filter "
             f"of {path} is singular at this cutoff ({e}); expected a cutoff of at least 1e-4 of "
             "half the log's sample rate"
             if args.cutoff is not None
@@ -672,7 +672,7 @@ def register(sub) -> None:
         p,
         "--edge",
         low=0,
-        help="lowpass: seconds dropped at each end after filtering (default 1 / cut-off; none "
+        help="lowpass: seconds dropped at each end after filtering (default 2 / cut-off; none "
         "for an averaged period)",
     )
     p.add_argument(

@@ -23,8 +23,8 @@ Steps, each recorded in ``JointData.processing["preprocess"]``:
    evaluated on the filtered motion at the full rate, then filtered, edge-dropped and
    decimated like the torques, see :class:`ParallelFilter`), so that ``tau_f = W_f p`` holds
    exactly for the model, the Coulomb sign columns included.
-4. **Filter edges dropped**: ``edge`` seconds at each end (default one period of the cut-off,
-   ``1 / cutoff``), where the zero-phase filter starts up.
+4. **Filter edges dropped**: ``edge`` seconds at each end (default :data:`EDGE_PERIODS`
+   periods of the cut-off), where the zero-phase filter starts up.
 5. **Decimation** to the useful band: every ``k``-th sample, ``k`` the largest whole number
    keeping the rate at least ``DECIMATION_MARGIN`` times the cut-off.
 
@@ -60,6 +60,8 @@ DECIMATION_MARGIN = 10.0
 BAND_ENERGY = 0.999
 #: Relative jitter of the sample intervals above which the log is resampled.
 JITTER_TOLERANCE = 1e-3
+#: Filter edges dropped at each end, in periods of the cut-off.
+EDGE_PERIODS = 2.0
 #: Bytes of full-rate regressor columns filtered at once by :class:`ParallelFilter`.
 PARALLEL_BUDGET = 256 * 2**20
 #: Samples whose regressor is evaluated at once.
@@ -169,8 +171,8 @@ def preprocess(
         Average a periodic log: the log holds ``periods`` whole periods, or the period is
         ``period`` seconds (as many whole periods as the log holds are used). At most one.
     edge : float, optional
-        Seconds dropped at each end after filtering (default ``1 / cutoff``; none for an
-        averaged period).
+        Seconds dropped at each end after filtering (default ``EDGE_PERIODS / cutoff``; none
+        for an averaged period).
     decimate : bool
         Keep every k-th sample (rate at least :data:`DECIMATION_MARGIN` x cutoff).
     parallel : bool
@@ -316,8 +318,9 @@ def preprocess(
 
     # 4: edges
     if edge is None:
-        edge = 0.0 if periodic else 1.0 / fc
-    drop = int(math.ceil(edge * rate - 1e-9)) if edge > 0 else 0
+        edge = 0.0 if periodic else EDGE_PERIODS / fc
+    span = edge * rate
+    drop = m if not span < m else (int(math.ceil(span - 1e-9)) if edge > 0 else 0)
     if m - 2 * drop < 8:
         raise DataError(
             f"{src}: dropping {edge:g} s at each end (filter edges) leaves {max(m - 2 * drop, 0)} "
@@ -327,7 +330,7 @@ def preprocess(
     info["edge_samples_dropped"] = 2 * drop
 
     # 5: decimation
-    k = max(1, int(math.floor(rate / (DECIMATION_MARGIN * fc)))) if decimate else 1
+    k = max(1, int(math.floor(rate / (DECIMATION_MARGIN * fc) + 1e-9))) if decimate else 1
     keep = slice(drop, m - drop, k)
     info["decimation"] = k
     info["rate_Hz"] = rate / k
