@@ -322,7 +322,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
     print("\n".join(out))
 
     doc = res.to_dict()
-    doc["data"] = {"file": str(args.data), "samples": data.m, "processing": _plain(proc)}
+    doc["data"] = {
+        "file": str(args.data),
+        "samples": int(proc.get("samples", data.m)),  # as logged
+        "samples_used": data.m,  # after resampling, edges and decimation
+        "processing": _plain(proc),
+    }
     doc["fit"] = {"rms": fit["rms"].tolist(), "relative": _nan_list(fit["relative"])}
     if val is not None:
         doc["validation"] = {
