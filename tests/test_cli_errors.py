@@ -187,7 +187,7 @@ def test_cutoff_below_one_cycle_over_the_log_is_named(files):
     design, with the range that is accepted."""
     for cutoff, shown in (("1e-300", "1e-300"), ("1e-3", "0.001")):
         rc, _, err = run(["identify", "planar2", str(files / "log.csv"), "--cutoff", cutoff])
-        assert_one_line_error(rc, err, f"cutoff {shown} Hz", "below one cycle over the log")
+        assert_one_line_error(rc, err, f"cutoff {shown} Hz", "below one cycle over", "log.csv")
 
 
 # ---------------------------------------------------------------------------------------------

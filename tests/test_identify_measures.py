@@ -216,6 +216,7 @@ def test_junction_between_logs_does_not_leak_into_derivatives(tmp_path, capsys):
     # The command line fits both files the same way and reports each log
     out = tmp_path / "res.json"
     args = ["identify", "zcr07s", *map(str, files), "--rsd-threshold", "0", "--json", str(out)]
+    args += ["--filter", "butter"]  # the reader's derivative filter, as read_csv above
     report = tmp_path / "report"
     argv = args + ["--validate", str(files[1]), str(files[0]), "--report", str(report)]
     assert cli.main(argv) == 0

@@ -159,12 +159,41 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 # ---------------------------------------------------------------------------------------------
 # identify
 # ---------------------------------------------------------------------------------------------
-def _read(path, robot, args, currents=None):
+def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
+    """The log at ``path`` (torques from the ``currents`` file when given) as a list of logs;
+    with ``--filter lowpass`` cut at its breaks (:func:`~mindyn.identification.preprocess.
+    split_at_gaps`) and each segment through the data path of :func:`~mindyn.identification.
+    preprocess.preprocess` (``cutoff`` overrides ``--cutoff``; ``--periods`` / ``--period``
+    only when ``periodic``); otherwise one log."""
     from dataclasses import replace
 
     from .identification.currents import attach_currents
     from .identification.data import DataError, convert_torque, read_csv
     from .identification.rosbag import is_rosbag, read_rosbag
+
+    if args.filter == "lowpass":
+        from .identification.preprocess import preprocess, split_at_gaps
+
+        unfiltered = argparse.Namespace(**{**vars(args), "filter": "none"})
+        (raw,) = _read(path, robot, unfiltered, currents)
+        segments = split_at_gaps(raw)
+        if len(segments) > 1 and (args.periods or args.period):
+            raise ValueError(
+                f"--periods/--period: {path} has {len(segments) - 1} break(s) in its time "
+                "stamps; a periodic log to be averaged must be one continuous recording"
+            )
+        return [
+            preprocess(
+                seg,
+                cutoff=cutoff if cutoff is not None else args.cutoff,
+                periods=args.periods if periodic else None,
+                period=args.period if periodic else None,
+                edge=args.edge,
+                # The window models integrate over the logged samples: no decimation there.
+                decimate=not args.no_decimate and args.model == "dynamic",
+            )
+            for seg in segments
+        ]
 
     gain = _floats(args.drive_gain, robot.n, "--drive-gain") if args.drive_gain else None
     if Path(path).is_dir() and not is_rosbag(path):
@@ -200,18 +229,18 @@ def _read(path, robot, args, currents=None):
             f"--drive-gain: {path} holds torques in {data.processing['torque']['unit']}, not "
             "motor currents; expected --torque-unit current, columns i1..in or --currents"
         )
-    return data
+    return [data]
 
 
-def _read_filtered(path, robot, args, currents=None):
+def _read_filtered(path, robot, args, currents=None, **kw):
     """:func:`_read`, with a filter that cannot be designed at ``--cutoff`` named as such."""
     try:
-        return _read(path, robot, args, currents)
+        return _read(path, robot, args, currents, **kw)
     except np.linalg.LinAlgError as e:
-        if args.filter != "butter":
+        if args.filter not in ("butter", "lowpass"):
             raise
         raise ValueError(
-            f"--cutoff {args.cutoff:g} Hz: the zero-phase Butterworth filter for the derivatives "
+            f"--cutoff {args.cutoff:g} Hz: the zero-phase Butterworth filter "
             f"of {path} is singular at this cutoff ({e}); expected a cutoff of at least 1e-4 of "
             "half the log's sample rate"
             if args.cutoff is not None
@@ -239,12 +268,29 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.validate_currents and not args.validate:
         raise ValueError("--validate-currents: expected --validate with the logs they belong to")
     robot = load(args.robot, tip=args.tip)
+    if args.filter != "lowpass":
+        for flag, value in (
+            ("--periods", args.periods),
+            ("--period", args.period),
+            ("--edge", args.edge),
+            ("--no-decimate", args.no_decimate or None),
+        ):
+            if value is not None:
+                raise ValueError(f"{flag} needs --filter lowpass (got --filter {args.filter})")
     files = list(args.data)
     vfiles = list(args.validate or [])
     cur = _paired(files, args.currents, "--currents", "the identification data")
     vcur = _paired(vfiles, args.validate_currents, "--validate-currents", "--validate")
-    logs = [_read_filtered(f, robot, args, c) for f, c in zip(files, cur)]
-    vlogs = [_read_filtered(f, robot, args, c) for f, c in zip(vfiles, vcur)]
+    # A file cut at breaks in its time stamps gives several logs (segments), fitted together.
+    parts = [_read_filtered(f, robot, args, c, periodic=True) for f, c in zip(files, cur)]
+    logs = [d for ds in parts for d in ds]
+    labels = [d.source if len(ds) > 1 else f for f, ds in zip(files, parts) for d in ds]
+    pres = [d.processing.get("preprocess") for d in logs]
+    # Validation logs are filtered at the fit's cut-off (the highest of the fit logs').
+    vcut = max(p["filter"]["cutoff_Hz"] for p in pres) if all(pres) else None
+    vparts = [_read_filtered(f, robot, args, c, cutoff=vcut) for f, c in zip(vfiles, vcur)]
+    vlogs = [d for ds in vparts for d in ds]
+    vlabels = [d.source if len(ds) > 1 else f for f, ds in zip(vfiles, vparts) for d in ds]
     base = base_parameters(robot, rotor=args.rotor, friction=args.friction, offset=args.offset)
     try:
         res = identify(
@@ -292,13 +338,22 @@ def cmd_identify(args: argparse.Namespace) -> int:
         out = [head + f"{data.m} samples at {data.rate:.4g} Hz from {files[0]}"]
     else:
         out = [head + f"{sum(d.m for d in logs)} samples from {len(logs)} logs fitted together:"]
-        for f, d, info in zip(files, logs, res.settings["logs"]):
+        for f, d, info in zip(labels, logs, res.settings["logs"]):
             out.append(f"    {f}: {d.m} samples at {d.rate:.4g} Hz, {info['equations']} equations")
+    if all(pres):
+        for f, p in zip(labels, pres):
+            if len(logs) > 1:
+                out.append(f"  {f} (on its own):")
+            indent = "  " if len(logs) > 1 else ""
+            out += [indent + line for line in _describe_preprocess(p, res.model)]
+    else:
+        out.append(
+            f"  velocities: {_describe(proc.get('velocity', {}))}; accelerations: "
+            f"{_describe(proc.get('acceleration', {}))}"
+            + ("" if res.model == "dynamic" else f" (not used by the {res.model} model)")
+            + (" (each log on its own)" if len(logs) > 1 else "")
+        )
     out += [
-        f"  velocities: {_describe(proc.get('velocity', {}))}; accelerations: "
-        f"{_describe(proc.get('acceleration', {}))}"
-        + ("" if res.model == "dynamic" else f" (not used by the {res.model} model)")
-        + (" (each log on its own)" if len(logs) > 1 else ""),
         f"  {res.rows} equations, {res.settings.get('weighting')}; condition number of the "
         f"column-scaled regressor {res.cond:.3g}",
     ]
@@ -316,6 +371,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
         out.append(
             f"  {res.settings['equations_left_out']} joint equations below "
             f"{res.settings['min_velocity']:g} rad/s left out (Coulomb sign undetermined)"
+        )
+    elif base.friction:
+        out.append(
+            f"  no joint equation below {res.settings['min_velocity']:g} rad/s left out"
+            if res.settings["min_velocity"] > 0
+            else "  all joint equations kept (--min-velocity 0)"
         )
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
@@ -359,16 +420,22 @@ def cmd_identify(args: argparse.Namespace) -> int:
     doc["data"] = {
         "file": files[0] if len(files) == 1 else None,
         "files": files,
-        "samples": sum(d.m for d in logs),
+        "samples": sum(int(d.processing.get("samples", d.m)) for d in logs),  # as logged
+        "samples_used": sum(d.m for d in logs),  # after resampling, edges and decimation
         "processing": _plain(proc),
         "logs": [
-            {"file": f, "samples": d.m, "processing": _plain(d.processing)}
-            for f, d in zip(files, logs)
+            {
+                "file": f,
+                "samples": int(d.processing.get("samples", d.m)),
+                "samples_used": d.m,
+                "processing": _plain(d.processing),
+            }
+            for f, d in zip(labels, logs)
         ],
     }
-    doc["fit"] = _measures_doc(fit, files)
+    doc["fit"] = _measures_doc(fit, labels)
     if val is not None:
-        doc["validation"] = {"file": ", ".join(vfiles), **_measures_doc(val, vfiles)}
+        doc["validation"] = {"file": ", ".join(vfiles), **_measures_doc(val, vlabels)}
     if truth is not None:
         doc["true_values"] = [float(v) for v in truth]
     if args.json:
@@ -403,6 +470,46 @@ def _measures_doc(v: dict, files: list) -> dict:
     out["samples"] = v["samples"]
     out["logs"] = [{"file": f, "samples": m["samples"], **one(m)} for f, m in zip(files, v["logs"])]
     return out
+
+
+def _describe_preprocess(pre: dict, model: str) -> list[str]:
+    """The lines of ``mindyn identify`` that say what the data path did."""
+    tm, flt = pre["timing"], pre["filter"]
+    lines = [
+        f"  time stamps: median interval {1e3 * tm['median_dt_s']:.4g} ms "
+        f"({1e3 * tm['min_dt_s']:.4g} to {1e3 * tm['max_dt_s']:.4g} ms, jitter "
+        f"{100 * tm['jitter']:.3g} % of the median, {tm['gaps']} gap(s) over 1.5 intervals); "
+        + pre["time_base"],
+    ]
+    avg = pre.get("averaging")
+    if avg:
+        spread = avg.get("torque_spread_rms")
+        lines.append(
+            f"  {avg['periods']} period(s) of {avg['period_s']:.6g} s averaged "
+            f"({avg['samples_per_period']} samples per period"
+            + (
+                "; torque spread about the mean per joint " + " ".join(f"{v:.3g}" for v in spread)
+                if spread
+                else ""
+            )
+            + ")"
+        )
+    lines.append(
+        f"  low-pass: Butterworth order {flt['order']}, zero-phase, cut-off {flt['cutoff_Hz']:.4g} "
+        f"Hz ({pre['cutoff_source']}; excited band {pre['excited_band_Hz']:.4g} Hz), applied to "
+        f"{flt['applied_to']}"
+        + (" and the regressor columns (parallel filtering)" if pre["parallel_filtering"] else "")
+    )
+    lines.append(
+        f"  velocities: {pre['velocity']}; accelerations: {pre['acceleration']}"
+        + ("" if model == "dynamic" else f" (not used by the {model} model)")
+    )
+    lines.append(
+        f"  {pre['edge_samples_dropped']} samples of filter edges dropped ({pre['edge_s']:.4g} s "
+        f"at each end); decimated by {pre['decimation']} to {pre['rate_Hz']:.4g} Hz, "
+        f"{pre['samples']} samples"
+    )
+    return lines
 
 
 def _describe(info: dict) -> str:
@@ -715,16 +822,53 @@ def register(sub) -> None:
     )
     p.add_argument(
         "--filter",
-        choices=["butter", "savgol", "none"],
-        default="butter",
-        help="filter for velocities/accelerations derived from the log",
+        choices=["lowpass", "butter", "savgol", "none"],
+        default="lowpass",
+        help="lowpass (default): the identification data path: uniform resampling of jittered "
+        "time stamps, one zero-phase Butterworth low-pass of positions, logged velocities, "
+        "torques and regressor columns, derivatives of the filtered signals, filter edges "
+        "dropped, decimation; butter, savgol, none: only derive missing velocities and "
+        "accelerations (torques unfiltered)",
     )
     number(
         p,
         "--cutoff",
         low=0,
         low_open=True,
-        help="Butterworth cutoff [Hz], below half the log's rate (default min(10, rate/10))",
+        help="cut-off [Hz], below half the log's rate; lowpass: default 10 x the excited band of "
+        "the identification log's positions (at most rate / 10), the validation log filtered at "
+        "the same cut-off; butter: default min(10, rate / 10)",
+    )
+    g = p.add_mutually_exclusive_group()
+    number(
+        g,
+        "--periods",
+        low=1,
+        high=100000,
+        integer=True,
+        help="lowpass: the identification log holds this many periods of a periodic excitation; "
+        "they are averaged sample by sample",
+    )
+    number(
+        g,
+        "--period",
+        low=0,
+        low_open=True,
+        help="lowpass: period [s] of a periodic excitation; the whole periods the "
+        "identification log holds are averaged",
+    )
+    number(
+        p,
+        "--edge",
+        low=0,
+        help="lowpass: seconds dropped at each end after filtering (default 2 / cut-off; none "
+        "for an averaged period)",
+    )
+    p.add_argument(
+        "--no-decimate",
+        action="store_true",
+        help="lowpass: keep every sample (default for the dynamic model: decimate to at least "
+        "10 x the cut-off; the integral and energy models keep every sample)",
     )
     p.add_argument("--ols", action="store_true", help="ordinary instead of weighted least squares")
     number(

@@ -64,6 +64,11 @@ class JointData:
     processing : dict
         How ``dq`` / ``ddq`` were obtained (``logged`` or the filter and its settings) and the
         torque unit conversion.
+    regressor_filter : optional
+        Set by :func:`~mindyn.identification.preprocess.preprocess`: the low-pass, edge drop and
+        decimation that turned the logged torques into ``tau``, to be applied alike to the
+        regressor columns (parallel filtering); its ``regressor(base)`` gives them, shape
+        (m, n, nb).
     """
 
     t: np.ndarray
@@ -73,6 +78,7 @@ class JointData:
     tau: np.ndarray | None = None
     source: str = ""
     processing: dict = field(default_factory=dict)
+    regressor_filter: object = None
 
     @property
     def m(self) -> int:
@@ -394,6 +400,22 @@ def convert_torque(tau: np.ndarray, unit: str, robot=None, drive_gain=None):
     raise DataError(f"unknown torque unit '{unit}'; use Nm, permille or current")
 
 
+def check_cutoff(fc: float, rate: float, span: float, source: str = "the log") -> None:
+    """Refuses a low-pass cut-off ``fc`` [Hz] outside (1 / span, rate / 2): at or above half the
+    sample ``rate`` there is no filter to design, and below one cycle over the log's ``span`` [s]
+    a low-pass leaves little more than the mean."""
+    if not 0 < fc < rate / 2:
+        raise DataError(
+            f"cutoff {fc:g} Hz must be between 0 and half the rate of {source} ({rate / 2:g} Hz)"
+        )
+    if fc * span < 1.0:
+        raise DataError(
+            f"cutoff {fc:g} Hz is below one cycle over {source}'s {span:g} s "
+            f"({1.0 / span:.3g} Hz); expected a cutoff between {1.0 / span:.3g} Hz and half "
+            f"the rate ({rate / 2:g} Hz)"
+        )
+
+
 def differentiate(
     t: np.ndarray,
     x: np.ndarray,
@@ -427,27 +449,18 @@ def differentiate(
     info: dict = {"rate_Hz": rate, "timing_jitter": jitter}
     if filter == "butter":
         fc = cutoff if cutoff is not None else min(10.0, rate / 10.0)
-        if not 0 < fc < rate / 2:
-            raise DataError(
-                f"cutoff {fc:g} Hz must be between 0 and half the rate ({rate / 2:g} Hz)"
-            )
-        span = float(t[-1] - t[0])
-        if fc * span < 1.0:
-            # Below one cycle over the log, a low-pass leaves little more than the mean.
-            raise DataError(
-                f"cutoff {fc:g} Hz is below one cycle over the log's {span:g} s "
-                f"({1.0 / span:.3g} Hz); expected a cutoff between {1.0 / span:.3g} Hz and half "
-                f"the rate ({rate / 2:g} Hz)"
-            )
-        b, a = signal.butter(order, fc / (rate / 2))
-        if m <= 3 * max(len(a), len(b)):
+        check_cutoff(fc, rate, float(t[-1] - t[0]))
+        # Second-order sections: the (b, a) form loses the filter at low normalised cut-offs.
+        sos = signal.butter(order, fc / (rate / 2), output="sos")
+        taps = 3 * (2 * len(sos) + 1)
+        if m <= taps:
             raise DataError(f"{m} samples are too few for a Butterworth filter of order {order}")
         # Odd extension over a few filter time constants keeps the ends from ringing.
-        padlen = min(m - 1, max(3 * max(len(a), len(b)), int(3 * rate / fc)))
-        xf = signal.filtfilt(b, a, x, axis=0, padlen=padlen)
+        padlen = min(m - 1, max(taps, int(3 * rate / fc)))
+        xf = signal.sosfiltfilt(sos, x, axis=0, padlen=padlen)
         info.update(
             {
-                "filter": "butterworth, zero-phase (filtfilt)",
+                "filter": "butterworth, zero-phase (sosfiltfilt, second-order sections)",
                 "order": order,
                 "cutoff_Hz": fc,
                 "derivative": "central differences",

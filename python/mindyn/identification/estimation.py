@@ -98,11 +98,12 @@ class IdentificationResult:
 
     def predict(self, data: JointData) -> np.ndarray:
         """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n); the regressor is
-        evaluated :data:`CHUNK_SAMPLES` samples at a time."""
+        evaluated :data:`CHUNK_SAMPLES` samples at a time; on preprocessed data whose torques
+        were low-pass filtered, the regressor columns are filtered alike (parallel filtering)."""
         out = np.empty((data.m, data.n))
         for a in range(0, data.m, CHUNK_SAMPLES):
             b = min(data.m, a + CHUNK_SAMPLES)
-            out[a:b] = self.base.regressor(data.q[a:b], data.dq[a:b], data.ddq[a:b]) @ self.full
+            out[a:b] = regressor_rows(self.base, data, a, b) @ self.full
         return out
 
     def to_dict(self) -> dict:
@@ -224,7 +225,7 @@ def dynamic_triangles(
     skip = min_velocity > 0 and base.friction
     for a in range(0, data.m, CHUNK_SAMPLES):
         b = min(data.m, a + CHUNK_SAMPLES)
-        W = base.regressor(data.q[a:b], data.dq[a:b], data.ddq[a:b])  # (k, n, nb)
+        W = regressor_rows(base, data, a, b)  # (k, n, nb)
         for j in range(n):
             A = np.column_stack([W[:, j, :], data.tau[a:b, j]])
             if skip:
@@ -232,6 +233,15 @@ def dynamic_triangles(
             rows[j] += A.shape[0]
             S[j] = _triangle(np.vstack([S[j], A]))
     return S, rows
+
+
+def regressor_rows(base: BaseParameters, data: JointData, a: int, b: int) -> np.ndarray:
+    """The base regressor of samples ``a:b`` of ``data``, (b - a, n, nb): evaluated on the
+    samples, or, when ``data`` carries a ``regressor_filter`` (preprocessed data), the
+    regressor columns filtered like its torques."""
+    if data.regressor_filter is not None:
+        return data.regressor_filter.regressor(base)[a:b]
+    return base.regressor(data.q[a:b], data.dq[a:b], data.ddq[a:b])
 
 
 def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float) -> float:
@@ -405,6 +415,9 @@ def identify(
     nb = base.n
     settings: dict = {"model": model}
     equations = sum(d.m for d in logs) * robot.n
+    pre = [d.processing["preprocess"] for d in logs if "preprocess" in d.processing]
+    if pre:
+        settings["preprocessing"] = pre[0] if len(logs) == 1 else pre
     if model == "dynamic":
         _enough(model, equations, nb, logs, settings)  # before any work
         S = np.zeros((robot.n, nb + 1, nb + 1))

@@ -46,7 +46,10 @@ def dynamic_system(base: BaseParameters, data: JointData, min_velocity: float = 
     the Coulomb term, is not determined by the data (a torque held over a sample period, stiction,
     velocity noise). ``r = m n`` minus those equations."""
     require_torque(data)
-    W = base.regressor(data.q, data.dq, data.ddq)  # (m, n, nb)
+    if data.regressor_filter is not None:  # preprocessed: columns filtered like the torques
+        W = data.regressor_filter.regressor(base)
+    else:
+        W = base.regressor(data.q, data.dq, data.ddq)  # (m, n, nb)
     m, n, nb = W.shape
     W, y, joint = W.reshape(m * n, nb), data.tau.reshape(m * n), np.tile(np.arange(n), m)
     if min_velocity > 0 and base.friction:

@@ -1,0 +1,143 @@
+"""Identification on real robot logs with default settings, beside reference figures.
+
+``DIR`` is laid out as::
+
+    DIR/panda/panda_gaz2019.yaml, panda_gaz2019_traj1_fit_period1.csv,
+              panda_gaz2019_traj1_val_repeat.csv
+    DIR/kuka_lwr4/kuka_lwr4.urdf, lwr4_meas1_trajA_run1.csv, lwr4_meas2_trajA_run2.csv,
+                  lwr4_meas3_trajB.csv
+    DIR/ur10e/ur10e.urdf, ur10e_fit_30sec_12harm.csv, ur10e_val_ptp_10_points.csv
+
+(torques in N m; the UR10e's are motor currents times the drive gains). Each case is one fixed
+``mindyn identify`` command line, printed, run with default settings (``--friction``, plus
+``--rotor`` on the UR10e; ``--offset`` when asked and the CLI has it). The error is the overall
+relative error ``|tau - tau_hat| / |tau|`` over all joints stacked, on the identification log
+(fit) and on the validation log, against the torques as the data path leaves them (low-pass
+filtered, edges dropped, decimated); it is recovered from the per-joint RMS and relative errors
+of the JSON output. A case whose command the CLI refuses (e.g. several identification logs) is
+reported as such.
+
+Run: ``.venv/bin/python bench/bench_real_identification.py DIR [--offset]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+#: (name, robot, identification logs, validation log, extra flags, reference fit, reference
+#: validation, target fit, target validation); errors in percent, None: not given.
+CASES = [
+    (
+        "Panda, fit period 1, validate repeat",
+        "panda/panda_gaz2019.yaml",
+        ["panda/panda_gaz2019_traj1_fit_period1.csv"],
+        "panda/panda_gaz2019_traj1_val_repeat.csv",
+        [],
+        1.02,
+        1.31,
+        1.3,
+        1.5,
+    ),
+    (
+        "KUKA LWR4+, fit meas3, validate meas1",
+        "kuka_lwr4/kuka_lwr4.urdf",
+        ["kuka_lwr4/lwr4_meas3_trajB.csv"],
+        "kuka_lwr4/lwr4_meas1_trajA_run1.csv",
+        [],
+        None,
+        5.77,
+        None,
+        5.8,
+    ),
+    (
+        "KUKA LWR4+, fit meas2+meas3, validate meas1",
+        "kuka_lwr4/kuka_lwr4.urdf",
+        ["kuka_lwr4/lwr4_meas2_trajA_run2.csv", "kuka_lwr4/lwr4_meas3_trajB.csv"],
+        "kuka_lwr4/lwr4_meas1_trajA_run1.csv",
+        [],
+        None,
+        2.49,
+        None,
+        2.6,
+    ),
+    (
+        "UR10e, fit 12-harmonic excitation, validate point-to-point",
+        "ur10e/ur10e.urdf",
+        ["ur10e/ur10e_fit_30sec_12harm.csv"],
+        "ur10e/ur10e_val_ptp_10_points.csv",
+        ["--rotor"],
+        4.67,
+        5.12,
+        4.8,
+        5.2,
+    ),
+]
+
+
+def overall(block: dict) -> float:
+    """``|e| / |tau|`` over all joints from per-joint ``rms`` (``|e_j| / sqrt(m)``) and
+    ``relative`` (``|e_j| / |tau_j|``)."""
+    rms = [r for r in block["rms"]]
+    rel = block["relative"]
+    err2 = sum(r * r for r in rms)
+    tau2 = sum((r / q) ** 2 for r, q in zip(rms, rel) if q)
+    return math.sqrt(err2 / tau2) if tau2 > 0 else float("nan")
+
+
+def fmt(x) -> str:
+    return "-" if x is None or not math.isfinite(x) else f"{x:.2f} %"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("dir", type=Path, help="folder with panda/, kuka_lwr4/, ur10e/")
+    ap.add_argument("--offset", action="store_true", help="add --offset (torque offsets)")
+    args = ap.parse_args()
+    mindyn = [sys.executable, "-m", "mindyn"]
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for k, (name, robot, fits, val, extra, ref_f, ref_v, tgt_f, tgt_v) in enumerate(CASES):
+            out = Path(tmp) / f"case{k}.json"
+            cmd = (
+                ["mindyn", "identify", str(args.dir / robot)]
+                + [str(args.dir / f) for f in fits]
+                + ["--friction"]
+                + extra
+                + (["--offset"] if args.offset else [])
+                + ["--validate", str(args.dir / val), "--json", str(out)]
+            )
+            print("$ " + " ".join(cmd), flush=True)
+            run = subprocess.run(mindyn + cmd[1:], capture_output=True, text=True)
+            if run.returncode != 0:
+                msg = (run.stderr.strip().splitlines() or ["failed"])[-1]
+                print(f"  refused: {msg}")
+                rows.append((name, None, None, ref_f, ref_v, tgt_f, tgt_v, "refused"))
+                continue
+            doc = json.loads(out.read_text())
+            pre = doc.get("settings", {}).get("preprocessing", {})
+            if pre:
+                print(
+                    f"  cut-off {pre['filter']['cutoff_Hz']:.3g} Hz, jitter "
+                    f"{100 * pre['timing']['jitter']:.3g} %, {pre['edge_samples_dropped']} edge "
+                    f"samples dropped, decimation {pre['decimation']}, {pre['samples']} samples"
+                )
+            f, v = 100 * overall(doc["fit"]), 100 * overall(doc["validation"])
+            ok = all(x is None or y <= x for x, y in ((tgt_f, f), (tgt_v, v)))
+            rows.append((name, f, v, ref_f, ref_v, tgt_f, tgt_v, "met" if ok else "MISSED"))
+    print()
+    head = ("case", "fit", "validation", "ref. fit", "ref. val.", "target fit", "target val.", "")
+    width = max(len(r[0]) for r in rows)
+    print(f"{head[0]:<{width}}  " + "  ".join(f"{h:>11}" for h in head[1:]))
+    for r in rows:
+        print(f"{r[0]:<{width}}  " + "  ".join(f"{fmt(x):>11}" for x in r[1:7]) + f"  {r[7]:>11}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

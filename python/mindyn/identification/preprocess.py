@@ -1,0 +1,454 @@
+"""The data path of inverse-dynamics identification: from a logged ``t, q, [dq], tau`` to the
+samples the least squares are fitted on.
+
+Steps, each recorded in ``JointData.processing["preprocess"]``:
+
+1. **Time base.** The sample intervals are measured (median, extremes, jitter = largest
+   deviation from the median relative to it, gaps over 1.5 median intervals). A log whose
+   intervals vary is resampled onto a uniform grid at the median interval (positions by cubic
+   spline, logged velocities and torques linearly), so that the filter and the derivatives work
+   on a true time base.
+2. **Period averaging** (when asked, ``periods`` or ``period``): a periodic excitation recorded
+   over several periods is cut into whole periods (the grid is then chosen with a whole number
+   of samples per period) and averaged sample by sample; the spread of the periods about their
+   mean is reported. The averaged period is filtered as a periodic signal (no edges).
+3. **One zero-phase low-pass**: Butterworth of ``order`` in second-order sections run forwards
+   and backwards (``scipy.signal.sosfiltfilt``). The cut-off is chosen from the data unless
+   given: ``CUTOFF_FACTOR`` times the excited band, the frequency below which 99.9 % of the
+   spectral energy of the positions lies (linear trend removed, Hann window), at most
+   ``rate / 10``. Velocities are the filtered logged velocities, or the derivative of the
+   filtered positions when none are logged; accelerations the derivative of the filtered
+   velocities (central differences on the uniform grid). The measured torques go through the
+   same filter, and so do the columns of the regressor (parallel filtering: the regressor is
+   evaluated on the filtered motion at the full rate, then filtered, edge-dropped and
+   decimated like the torques, see :class:`ParallelFilter`), so that ``tau_f = W_f p`` holds
+   exactly for the model, the Coulomb sign columns included.
+4. **Filter edges dropped**: ``edge`` seconds at each end (default :data:`EDGE_PERIODS`
+   periods of the cut-off), where the zero-phase filter starts up.
+5. **Decimation** to the useful band: every ``k``-th sample, ``k`` the largest whole number
+   keeping the rate at least ``DECIMATION_MARGIN`` times the cut-off.
+
+The sign of the Coulomb friction is then that of the filtered velocity; equations of joints
+slower than ``min_velocity`` are left out by :func:`~mindyn.identification.identify`.
+
+A break in the log (a sample interval longer than :data:`SEGMENT_GAP` median intervals) would
+be bridged by the resampling and the filter, joining motion that did not happen: such a log is
+refused by :func:`preprocess`; :func:`split_at_gaps` cuts it into segments that go through the
+data path on their own and are then fitted together (as several logs are).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import signal
+from scipy.interpolate import CubicSpline
+
+from .data import DataError, JointData, check_cutoff
+
+__all__ = [
+    "CUTOFF_FACTOR",
+    "DECIMATION_MARGIN",
+    "ParallelFilter",
+    "concatenate",
+    "excited_band",
+    "preprocess",
+    "timing",
+]
+
+#: Cut-off of the low-pass as a multiple of the excited band of the positions.
+CUTOFF_FACTOR = 10.0
+#: Least ratio of the decimated sample rate to the cut-off.
+DECIMATION_MARGIN = 10.0
+#: Fraction of the position spectrum's energy that defines the excited band.
+BAND_ENERGY = 0.999
+#: Relative jitter of the sample intervals above which the log is resampled.
+JITTER_TOLERANCE = 1e-3
+#: Filter edges dropped at each end, in periods of the cut-off.
+EDGE_PERIODS = 2.0
+#: Bytes of full-rate regressor columns filtered at once by :class:`ParallelFilter`.
+PARALLEL_BUDGET = 256 * 2**20
+#: Samples whose regressor is evaluated at once.
+_CHUNK = 8192
+
+#: A sample interval longer than this many median intervals is a break in the log, not jitter
+#: (the jittered logs we know reach 9 median intervals at most; a break of 20 intervals at the
+#: decimated rate of 10 x the cut-off is two periods of the cut-off, over which the motion is
+#: not known).
+SEGMENT_GAP = 20.0
+
+
+class ParallelFilter:
+    """The regressor columns filtered like the torques: ``regressor(base)`` evaluates
+    ``base.regressor`` on the filtered full-rate motion, applies the same zero-phase low-pass,
+    then the same edge drop and decimation, giving (m, n, nb) rows that match the preprocessed
+    torques. Columns are filtered in blocks of at most :data:`PARALLEL_BUDGET` bytes; the result
+    is kept per base-parameter set."""
+
+    def __init__(self, q, dq, ddq, lowpass, keep: slice):
+        self.q, self.dq, self.ddq = q, dq, ddq
+        self.lowpass, self.keep = lowpass, keep
+        self._cache: dict = {}
+
+    def regressor(self, base) -> np.ndarray:
+        key = id(base)
+        hit = self._cache.get(key)
+        if hit is not None and hit[0] is base:
+            return hit[1]
+        m, n = self.q.shape
+        nb = base.n
+        idx = np.arange(m)[self.keep]
+        out = np.empty((idx.size, n, nb))
+        block = max(1, min(nb, PARALLEL_BUDGET // (8 * m * n)))
+        for c0 in range(0, nb, block):
+            c1 = min(nb, c0 + block)
+            W = np.empty((m, n, c1 - c0))
+            for a in range(0, m, _CHUNK):
+                b = min(m, a + _CHUNK)
+                W[a:b] = base.regressor(self.q[a:b], self.dq[a:b], self.ddq[a:b])[:, :, c0:c1]
+            out[:, :, c0:c1] = self.lowpass(W)[idx]
+        self._cache[key] = (base, out)
+        return out
+
+
+def timing(t: np.ndarray) -> dict:
+    """Statistics of the sample intervals of ``t`` (m,): median, min, max [s], ``jitter`` (largest
+    deviation from the median relative to it), ``rms_jitter`` and the number of ``gaps`` longer
+    than 1.5 median intervals."""
+    dt = np.diff(t)
+    med = float(np.median(dt))
+    dev = np.abs(dt - med) / med
+    return {
+        "median_dt_s": med,
+        "min_dt_s": float(dt.min()),
+        "max_dt_s": float(dt.max()),
+        "rate_Hz": 1.0 / med,
+        "jitter": float(dev.max()),
+        "rms_jitter": float(np.sqrt(np.mean(dev**2))),
+        "gaps": int(np.sum(dt > 1.5 * med)),
+    }
+
+
+def excited_band(q: np.ndarray, dt: float, energy: float = BAND_ENERGY) -> float:
+    """Frequency [Hz] below which ``energy`` of the spectral energy of the positions ``q`` (m, n)
+    on a uniform grid of step ``dt`` lies, all joints together; the straight line between the
+    first and last sample is removed first (a motion that does not return to its start would
+    otherwise show as a broad-band ramp) and a Hann window applied."""
+    m = q.shape[0]
+    ramp = np.linspace(0.0, 1.0, m)[:, None] * (q[-1] - q[0])
+    x = (q - q[0] - ramp) * np.hanning(m)[:, None]
+    power = np.sum(np.abs(np.fft.rfft(x, axis=0)) ** 2, axis=1)
+    freq = np.fft.rfftfreq(m, dt)
+    total = power.sum()
+    if not total > 0:
+        return float("nan")
+    k = int(np.searchsorted(np.cumsum(power) / total, energy))
+    return float(freq[min(max(k, 1), freq.size - 1)])
+
+
+def _resample(t, tu, q, dq, tau):
+    """Positions by cubic spline, velocities and torques linearly, onto ``tu``."""
+    qu = CubicSpline(t, q, axis=0)(tu)
+
+    def lin(x):
+        return None if x is None else np.column_stack([np.interp(tu, t, c) for c in x.T])
+
+    return qu, lin(dq), lin(tau)
+
+
+def split_at_gaps(data: JointData, gap: float = SEGMENT_GAP) -> list[JointData]:
+    """``data`` cut at every sample interval longer than ``gap`` median intervals: a list of
+    :class:`JointData` segments (one when there is no break), each with ``processing["segment"]``
+    giving its index, count and time span, and its source naming the span."""
+    dt = np.diff(data.t)
+    if dt.size == 0:
+        return [data]
+    cuts = np.flatnonzero(dt > gap * np.median(dt)) + 1
+    if cuts.size == 0:
+        return [data]
+    bounds = np.concatenate([[0], cuts, [data.m]])
+    out = []
+    for k, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):
+        span = (float(data.t[a]), float(data.t[b - 1]))
+        out.append(
+            JointData(
+                data.t[a:b],
+                data.q[a:b],
+                None if data.dq is None else data.dq[a:b],
+                None if data.ddq is None else data.ddq[a:b],
+                None if data.tau is None else data.tau[a:b],
+                f"{data.source or 'data'} [{span[0]:g} s to {span[1]:g} s]",
+                {
+                    **data.processing,
+                    "segment": {"index": k, "of": len(bounds) - 1, "t_s": list(span)},
+                },
+            )
+        )
+    return out
+
+
+def preprocess(
+    data: JointData,
+    cutoff: float | None = None,
+    order: int = 4,
+    periods: int | None = None,
+    period: float | None = None,
+    edge: float | None = None,
+    decimate: bool = True,
+    parallel: bool = True,
+    gap: float = SEGMENT_GAP,
+) -> JointData:
+    """The data path of the module docstring applied to ``data`` (its ``q``, its ``dq`` when
+    logged, its ``tau``); returns new :class:`JointData` with ``processing["preprocess"]``
+    recording every choice.
+
+    Parameters
+    ----------
+    cutoff : float, optional
+        Low-pass cut-off [Hz]; default from the data (:func:`excited_band` x
+        :data:`CUTOFF_FACTOR`, at most a tenth of the rate).
+    order : int
+        Butterworth order (the zero-phase filter has twice this order).
+    periods, period : int or float, optional
+        Average a periodic log: the log holds ``periods`` whole periods, or the period is
+        ``period`` seconds (as many whole periods as the log holds are used). At most one.
+    edge : float, optional
+        Seconds dropped at each end after filtering (default ``EDGE_PERIODS / cutoff``; none
+        for an averaged period).
+    decimate : bool
+        Keep every k-th sample (rate at least :data:`DECIMATION_MARGIN` x cutoff).
+    gap : float
+        A sample interval longer than ``gap`` median intervals is a break, refused
+        (:func:`split_at_gaps`); ``numpy.inf`` bridges every break.
+    parallel : bool
+        Filter the regressor columns like the torques (:class:`ParallelFilter`, attached as
+        ``regressor_filter``; used by the dynamic model and by predictions on this data).
+
+    Raises
+    ------
+    DataError
+        Bad settings (named), too short a log for the filter, the periods or the edges.
+    """
+    src = data.source or "data"
+    if not (isinstance(order, (int, np.integer)) and 1 <= order <= 10):
+        raise DataError(f"filter order must be an integer from 1 to 10, got {order}")
+    if periods is not None and period is not None:
+        raise DataError("give the number of periods or the period, not both")
+    if cutoff is not None and not (math.isfinite(cutoff) and cutoff > 0):
+        raise DataError(f"cutoff must be a positive number of Hz, got {cutoff}")
+    if edge is not None and not (math.isfinite(edge) and edge >= 0):
+        raise DataError(f"edge must be a number of seconds >= 0, got {edge}")
+    if data.m < 8:
+        raise DataError(f"{src}: {data.m} samples are too few to filter")
+    logged_dq = data.processing.get("velocity", {}).get("source", "logged") == "logged"
+    info: dict = {"timing": timing(data.t)}
+    t = data.t - data.t[0]
+    dt = info["timing"]["median_dt_s"]
+    longest = info["timing"]["max_dt_s"]
+    if longest > gap * dt:
+        k = int(np.argmax(np.diff(data.t)))
+        raise DataError(
+            f"{src}: a break of {longest:.4g} s ({longest / dt:.3g} median intervals) after "
+            f"t = {data.t[k]:.6g} s; the resampling and the filter would bridge it: "
+            "preprocess each segment on its own (split_at_gaps)"
+        )
+
+    # 1-2: time base, period averaging
+    cycle = None
+    if periods is not None or period is not None:
+        duration = t[-1] + dt  # the last sample's interval belongs to the log
+        if periods is not None:
+            if not (isinstance(periods, (int, np.integer)) and periods >= 1):
+                raise DataError(f"periods must be a whole number >= 1, got {periods}")
+            T, count = duration / periods, int(periods)
+        else:
+            if not (math.isfinite(period) and period > 0):
+                raise DataError(f"period must be a positive number of seconds, got {period}")
+            T, count = float(period), int(math.floor(duration / period * (1 + 1e-9)))
+            if count < 1:
+                raise DataError(
+                    f"{src}: the log lasts {duration:.6g} s, shorter than the period {T:g} s"
+                )
+        per = max(8, int(round(T / dt)))
+        dt = T / per
+        cycle = {"period_s": T, "periods": count, "samples_per_period": per}
+        tu = np.arange(count * per) * dt
+        tu = tu[tu <= t[-1]]
+        if tu.size < count * per:  # the last period ends a fraction of a sample after the log
+            tu = np.append(tu, np.full(count * per - tu.size, t[-1]))
+    else:
+        tu = t[0] + np.arange(int(math.floor(t[-1] / dt + 1e-9)) + 1) * dt
+    uniform = info["timing"]["jitter"] <= JITTER_TOLERANCE and cycle is None
+    if uniform:
+        q, dq, tau = data.q, data.dq if logged_dq else None, data.tau
+        tu = t
+    else:
+        q, dq, tau = _resample(t, tu, data.q, data.dq if logged_dq else None, data.tau)
+    info["time_base"] = (
+        "uniform as logged"
+        if uniform
+        else f"resampled to a uniform grid of {dt:.6g} s (positions by cubic spline, "
+        + ("velocities and " if dq is not None else "")
+        + "torques linearly)"
+    )
+    rate = 1.0 / dt
+
+    if cycle is not None:
+
+        def fold(x):
+            return (
+                None if x is None else x.reshape(cycle["periods"], cycle["samples_per_period"], -1)
+            )
+
+        Q, DQ, TAU = fold(q), fold(dq), fold(tau)
+        if cycle["periods"] > 1 and TAU is not None:
+            spread = np.sqrt(np.mean((TAU - TAU.mean(axis=0)) ** 2, axis=(0, 1)))
+            cycle["torque_spread_rms"] = spread.tolist()
+        if cycle["periods"] > 1:
+            qs = np.sqrt(np.mean((Q - Q.mean(axis=0)) ** 2, axis=(0, 1)))
+            cycle["position_spread_rms"] = qs.tolist()
+        q = Q.mean(axis=0)
+        dq = None if DQ is None else DQ.mean(axis=0)
+        tau = None if TAU is None else TAU.mean(axis=0)
+        tu = tu[: cycle["samples_per_period"]]
+        info["averaging"] = cycle
+
+    # 3: one low-pass
+    band = excited_band(q, dt)
+    info["excited_band_Hz"] = band
+    if cutoff is None:
+        if not math.isfinite(band):
+            raise DataError(f"{src}: the positions do not move; no cut-off can be chosen")
+        fc = min(CUTOFF_FACTOR * band, rate / 10.0)
+        info["cutoff_source"] = (
+            f"{CUTOFF_FACTOR:g} x the excited band ({100 * BAND_ENERGY:g} % of the position "
+            "spectrum's energy)" + (", limited to rate / 10" if fc < CUTOFF_FACTOR * band else "")
+        )
+    else:
+        fc = float(cutoff)
+        info["cutoff_source"] = "given"
+        check_cutoff(fc, rate, float(t[-1] - t[0]), src)
+    sos = signal.butter(order, fc, fs=rate, output="sos")
+    periodic = cycle is not None
+    m = q.shape[0]
+
+    def lowpass(x):
+        if periodic:  # one period, filtered as the periodic signal it is
+            reps = 1 + 2 * int(math.ceil(3 * rate / fc / m))
+            y = signal.sosfiltfilt(sos, np.concatenate([x] * reps, axis=0), axis=0)
+            k = reps // 2
+            return y[k * m : (k + 1) * m]
+        padlen = min(m - 1, max(3 * (2 * len(sos) + 1), int(3 * rate / fc)))
+        return signal.sosfiltfilt(sos, x, axis=0, padlen=padlen)
+
+    def derivative(x):
+        if periodic:
+            return (np.roll(x, -1, axis=0) - np.roll(x, 1, axis=0)) / (2 * dt)
+        return np.gradient(x, dt, axis=0)
+
+    if m <= 3 * (2 * len(sos) + 1):
+        raise DataError(f"{src}: {m} samples are too few for a Butterworth filter of order {order}")
+    qf = lowpass(q)
+    dqf = lowpass(dq) if dq is not None else derivative(qf)
+    ddqf = derivative(dqf)
+    tauf = lowpass(tau) if tau is not None else None
+    info["filter"] = {
+        "type": "butterworth, second-order sections, zero-phase (sosfiltfilt)"
+        + (", periodic" if periodic else ""),
+        "order": order,
+        "cutoff_Hz": fc,
+        "applied_to": "positions, "
+        + ("logged velocities, " if dq is not None else "")
+        + ("torques" if tau is not None else ""),
+    }
+    info["velocity"] = (
+        "filtered logged velocities" if dq is not None else "derivative of the filtered positions"
+    )
+    info["acceleration"] = "derivative of the filtered velocities (central differences)"
+
+    # 4: edges
+    if edge is None:
+        edge = 0.0 if periodic else EDGE_PERIODS / fc
+    span = edge * rate
+    drop = m if not span < m else (int(math.ceil(span - 1e-9)) if edge > 0 else 0)
+    if m - 2 * drop < 8:
+        raise DataError(
+            f"{src}: dropping {edge:g} s at each end (filter edges) leaves {max(m - 2 * drop, 0)} "
+            "samples; give a longer log, a smaller edge or a higher cutoff"
+        )
+    info["edge_s"] = drop * dt
+    info["edge_samples_dropped"] = 2 * drop
+
+    # 5: decimation
+    k = max(1, int(math.floor(rate / (DECIMATION_MARGIN * fc) + 1e-9))) if decimate else 1
+    keep = slice(drop, m - drop, k)
+    info["decimation"] = k
+    info["rate_Hz"] = rate / k
+    info["parallel_filtering"] = bool(parallel and tauf is not None)
+    out = JointData(
+        tu[keep] + data.t[0],
+        qf[keep],
+        dqf[keep],
+        ddqf[keep],
+        None if tauf is None else tauf[keep],
+        source=data.source,
+        processing={**data.processing, "preprocess": info},
+    )
+    info["samples"] = out.m
+    if info["parallel_filtering"]:
+        out.regressor_filter = ParallelFilter(qf, dqf, ddqf, lowpass, keep)
+    out.processing["velocity"] = {"source": info["velocity"]}
+    out.processing["acceleration"] = {"source": info["acceleration"]}
+    return out
+
+
+class _Joined:
+    """Regressor rows of several logs stacked, each filtered like its own torques."""
+
+    def __init__(self, logs):
+        self.logs = logs
+
+    def regressor(self, base) -> np.ndarray:
+        parts = []
+        for d in self.logs:
+            if d.regressor_filter is not None:
+                parts.append(d.regressor_filter.regressor(base))
+            else:
+                parts.append(base.regressor(d.q, d.dq, d.ddq))
+        return np.concatenate(parts, axis=0)
+
+
+def concatenate(logs) -> JointData:
+    """Several logs (preprocessed or not) of one robot as one identification data set: samples
+    stacked, the time of each log shifted to follow the one before (the samples are equations;
+    no derivative is taken across the joins), regressor filters kept per log. The processing
+    of each log is listed under ``processing["logs"]``; ``processing["preprocess"]`` is the first
+    log's, with ``"logs"`` listing every log's."""
+    logs = list(logs)
+    if not logs:
+        raise DataError("no logs to concatenate")
+    n = logs[0].n
+    for d in logs[1:]:
+        if d.n != n:
+            raise DataError(f"{d.source or 'data'} has {d.n} joints; {logs[0].source} has {n}")
+    if any(d.tau is None for d in logs):
+        raise DataError("every log to concatenate needs torques")
+    ts, end = [], None
+    for d in logs:
+        step = float(np.median(np.diff(d.t))) if d.m > 1 else 1.0
+        t = d.t - d.t[0] + (0.0 if end is None else end + step)
+        ts.append(t)
+        end = float(t[-1])
+    out = JointData(
+        np.concatenate(ts),
+        *(np.concatenate([getattr(d, k) for d in logs]) for k in ("q", "dq", "ddq", "tau")),
+        source=" + ".join(d.source or "data" for d in logs),
+        processing={"logs": [d.processing for d in logs]},
+    )
+    pres = [d.processing.get("preprocess") for d in logs]
+    if pres[0] is not None:
+        out.processing["preprocess"] = {**pres[0], "logs": pres}
+    if any(d.regressor_filter is not None for d in logs):
+        out.regressor_filter = _Joined(logs)
+    return out

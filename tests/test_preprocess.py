@@ -1,0 +1,338 @@
+"""The identification data path (mindyn.identification.preprocess) on logs generated here with
+known answers: analytic Fourier motions sampled at jittered times, noisy velocities and
+torques, several periods."""
+
+from __future__ import annotations
+
+import json
+
+import mindyn
+import numpy as np
+import pytest
+from mindyn import cli
+from mindyn.identification import (
+    JointData,
+    dynamic_system,
+    identify,
+    true_base_values,
+    validate,
+    write_csv,
+)
+from mindyn.identification.data import DataError, fill_derivatives
+from mindyn.identification.excitation import FourierTrajectory, random_trajectory
+from mindyn.identification.preprocess import (
+    concatenate,
+    excited_band,
+    preprocess,
+    split_at_gaps,
+    timing,
+)
+
+RATE = 500.0
+
+
+def jittered_times(duration, rate=RATE, seed=0, gaps=(), jitter=0.3):
+    """Sample times: intervals 1/rate x U(1 - jitter, 1 + jitter), plus ``gaps`` (index, factor):
+    interval ``index`` made ``factor`` median intervals long."""
+    rng = np.random.default_rng(seed)
+    m = int(duration * rate)
+    dt = np.full(m - 1, 1.0 / rate) * rng.uniform(1 - jitter, 1 + jitter, m - 1)
+    for k, f in gaps:
+        dt[k] = f / rate
+    return np.concatenate([[0.0], np.cumsum(dt)])
+
+
+def sine_log(t, freqs, amps, vel_noise=0.0, tau_noise=0.0, seed=1):
+    """One joint per frequency: q = a sin(2 pi f t); torque = q (any signal in the band)."""
+    rng = np.random.default_rng(seed)
+    w = 2 * np.pi * np.asarray(freqs)
+    a = np.asarray(amps)
+    q = a * np.sin(np.outer(t, w))
+    dq = a * w * np.cos(np.outer(t, w)) + vel_noise * rng.standard_normal(q.shape)
+    tau = q + tau_noise * rng.standard_normal(q.shape)
+    return JointData(t, q, dq, np.zeros_like(q), tau, source="sine")
+
+
+def test_timing_reports_the_jitter_and_gaps_of_known_stamps():
+    # 1 ms intervals with two gaps of exactly 5 ms and 3 ms: jitter 4 (400 % of the median)
+    t = jittered_times(2.0, rate=1000.0, jitter=0.0, gaps=((100, 5.0), (700, 3.0)))
+    info = timing(t)
+    assert info["median_dt_s"] == pytest.approx(1e-3, rel=1e-9)
+    assert info["jitter"] == pytest.approx(4.0, rel=1e-6)
+    assert info["max_dt_s"] == pytest.approx(5e-3, rel=1e-9)
+    assert info["gaps"] == 2
+
+
+def test_derivatives_on_jittered_stamps_match_the_analytic_motion():
+    """A 3-harmonic Fourier motion sampled with +-30 % jitter and gaps, logged velocity with
+    noise 0.05 rad/s: the filtered velocity and the acceleration follow the analytic ones."""
+    traj = FourierTrajectory(
+        a=[[0.5, -0.3, 0.2], [0.2, 0.4, -0.1]],
+        b=[[0.1, 0.2, -0.2], [-0.3, 0.1, 0.25]],
+        q0=[0.1, -0.2],
+        freq=0.25,
+    )
+    t = jittered_times(16.0, gaps=((1000, 6.0), (3000, 4.0)))
+    q, dq, ddq = traj.evaluate(t)
+    rng = np.random.default_rng(2)
+    dq_meas = dq + 0.05 * rng.standard_normal(dq.shape)
+    d = preprocess(JointData(t, q, dq_meas, np.zeros_like(q), q.copy(), source="fourier"))
+    p = d.processing["preprocess"]
+    assert "resampled" in p["time_base"]
+    # the excited band is the third harmonic (0.75 Hz), within a few bins of the 16 s log
+    assert 0.75 <= p["excited_band_Hz"] <= 0.75 + 4 / 16
+    assert p["filter"]["cutoff_Hz"] == pytest.approx(10 * p["excited_band_Hz"])
+    q_ref, dq_ref, ddq_ref = traj.evaluate(d.t)
+    scale = np.abs(dq_ref).max(axis=0)
+    # Noise left in the pass band: sd 0.05 x sqrt(2 fc / rate) ~ 0.012 rad/s; ends dropped, so
+    # no edge transient: 5 % of the peak velocity is a margin of about 2.5 on the noise.
+    assert np.max(np.abs(d.dq - dq_ref) / scale) < 0.05
+    np.testing.assert_allclose(d.q, q_ref, atol=1e-4)  # spline of noise-free positions
+    # acceleration from the filtered velocity: white noise of sd s band-limited to fc has
+    # sd s sqrt(2 fc / rate) and its derivative that times 2 pi fc / sqrt(3); 1.5 x that bound
+    fc = p["filter"]["cutoff_Hz"]
+    rate = 1 / p["timing"]["median_dt_s"]
+    bound = 0.05 * np.sqrt(2 * fc / rate) * 2 * np.pi * fc / np.sqrt(3)
+    assert np.sqrt(np.mean((d.ddq - ddq_ref) ** 2)) < 1.5 * bound
+    # without any filtering the acceleration of the noisy velocity is far off (the test can fail)
+    raw = np.gradient(dq_meas, t, axis=0)
+    assert np.max(np.abs(raw - ddq)) > 10 * np.max(np.abs(d.ddq - ddq_ref))
+
+
+def test_cutoff_from_known_harmonics_and_given_cutoff():
+    t = np.arange(0, 20.0, 1 / RATE)
+    d = preprocess(sine_log(t, [0.2, 0.5], [1.0, 0.3]))
+    p = d.processing["preprocess"]
+    assert 0.5 <= p["excited_band_Hz"] <= 0.5 + 3 / 20  # highest frequency, a few bins of 20 s
+    assert p["time_base"] == "uniform as logged"
+    d2 = preprocess(sine_log(t, [0.2, 0.5], [1.0, 0.3]), cutoff=3.0)
+    assert d2.processing["preprocess"]["filter"]["cutoff_Hz"] == 3.0
+    assert d2.processing["preprocess"]["cutoff_source"] == "given"
+    # excited_band alone: one 2 Hz sine over whole periods
+    tt = np.arange(0, 5.0, 1e-3)
+    assert excited_band(np.sin(2 * np.pi * 2.0 * tt)[:, None], 1e-3) == pytest.approx(2.0, abs=0.6)
+
+
+def test_edges_dropped_and_decimation():
+    t = np.arange(0, 10.0, 1 / RATE)
+    d = preprocess(sine_log(t, [0.3], [1.0]), cutoff=5.0, edge=0.2, decimate=False)
+    p = d.processing["preprocess"]
+    assert p["edge_samples_dropped"] == 2 * 100  # 0.2 s at 500 Hz at each end
+    assert d.t[0] == pytest.approx(0.2) and d.t[-1] == pytest.approx(t[-1] - 0.2)
+    assert d.m == t.size - 200
+    dd = preprocess(sine_log(t, [0.3], [1.0]), cutoff=5.0)
+    pd = dd.processing["preprocess"]
+    assert pd["edge_s"] == pytest.approx(2 / 5.0)  # default edge: two periods of the cut-off
+    assert pd["decimation"] == 10  # 500 Hz down to 10 x 5 Hz
+    assert np.allclose(np.diff(dd.t), 10 / RATE)
+
+
+def test_filter_removes_torque_noise_and_keeps_the_signal():
+    """Torque = a 0.4 Hz sine plus white noise 0.2: after the low-pass the error to the
+    noise-free sine is close to the in-band noise sd 0.2 sqrt(2 fc / rate)."""
+    t = np.arange(0, 20.0, 1 / RATE)
+    d = preprocess(sine_log(t, [0.4], [1.0], tau_noise=0.2, seed=5), decimate=False)
+    fc = d.processing["preprocess"]["filter"]["cutoff_Hz"]
+    err = np.sqrt(np.mean((d.tau[:, 0] - np.sin(2 * np.pi * 0.4 * d.t)) ** 2))
+    expect = 0.2 * np.sqrt(2 * fc / RATE)
+    assert 0.5 * expect < err < 2.0 * expect
+
+
+def test_period_averaging_of_a_periodic_log():
+    """Four periods of 2.5 s with torque noise sd 0.1: four periods are averaged, the spread
+    about the mean is the noise sd x sqrt(3/4), and the averaged, filtered period is the
+    noise-free torque within the noise of the mean."""
+    T, sd = 2.5, 0.1
+    # uniform stamps: interpolating jittered ones would average the noise and shrink the spread
+    t = np.arange(int(4 * T * RATE)) / RATE
+    log = sine_log(t, [1 / T, 2 / T], [1.0, 0.5], tau_noise=sd, seed=4)
+    for kw in ({"periods": 4}, {"period": T}):
+        d = preprocess(log, **kw, decimate=False)
+        avg = d.processing["preprocess"]["averaging"]
+        assert avg["periods"] == 4 and avg["period_s"] == pytest.approx(T, rel=1e-3)
+        assert d.processing["preprocess"]["edge_samples_dropped"] == 0  # periodic: no edges
+        spread = np.array(avg["torque_spread_rms"])
+        np.testing.assert_allclose(spread, sd * np.sqrt(3 / 4), rtol=0.1)  # 1250 x 4 samples
+        q_true = np.column_stack([np.sin(2 * np.pi / T * d.t), 0.5 * np.sin(4 * np.pi / T * d.t)])
+        err = np.sqrt(np.mean((d.tau - q_true) ** 2))
+        assert err < sd / 2 * 0.5  # mean of 4: sd / 2, then the low-pass takes most of it
+    with pytest.raises(DataError, match="shorter than the period"):
+        preprocess(log, period=20.0)
+    with pytest.raises(DataError, match="not both"):
+        preprocess(log, periods=2, period=T)
+
+
+def _friction_log(robot, t, seed=0, vel_noise=0.0, tau_noise=0.0):
+    """Inverse dynamics along a random Fourier motion at times ``t`` plus viscous and Coulomb
+    friction computed here, with noise; returns the log and the true base values."""
+    traj = random_trajectory(robot, harmonics=5, freq=0.1, seed=seed)
+    q, dq, ddq = traj.evaluate(t)
+    p = robot.parameters(True, True).reshape(robot.n, 13).copy()
+    p[:, 10] = 0.0
+    fv, fc = 0.5 + 0.1 * np.arange(robot.n), 1.0 + 0.2 * np.arange(robot.n)
+    p[:, 11], p[:, 12] = 0.0, 0.0
+    tau = robot.inverse_dynamics(q, dq, ddq, p.reshape(-1)) + fv * dq + fc * np.sign(dq)
+    p[:, 11], p[:, 12] = fv, fc
+    rng = np.random.default_rng(seed + 100)
+    dqm = dq + vel_noise * rng.standard_normal(dq.shape)
+    taum = tau + tau_noise * rng.standard_normal(tau.shape)
+    log = JointData(t, q, dqm, np.zeros_like(q), taum, source=f"sim{seed}")
+    names = robot.parameter_names(True, True)
+    return log, {"names": names, "values": p.reshape(-1)}, tau, traj
+
+
+def test_parallel_filtering_is_exact_on_noise_free_data_with_coulomb_friction():
+    """Filtering the torques but not the regressor breaks tau_f = W p at every Coulomb sign
+    change; filtering both alike keeps it exact: the true parameters come back to rounding."""
+    robot = mindyn.load("zcr07s")
+    base = mindyn.base_parameters(robot, friction=True)
+    log, truth, _, _ = _friction_log(robot, np.arange(0, 10.0, 1 / 250.0))
+    true = true_base_values(base, truth)
+    kw = dict(base=base, rsd_threshold=None, min_velocity=0, weighted=False)
+    # 5 periods of the cut-off dropped at each end: the start-up of the filter on the Coulomb
+    # steps decays to 3e-5 N m there (measured: 0.15 N m after 1 period, 1e-3 after 3)
+    d = preprocess(log, cutoff=5.0, edge=1.0)
+    res = identify(robot, d, **kw)
+    big = np.abs(true) > 1e-3 * np.abs(true).max()
+    err = np.max(np.abs(res.full - true)[big] / np.abs(true)[big])
+    # what is left is the 3e-5 N m of edge and the central differences (1e-5 relative at the
+    # fifth harmonic), magnified by the weakest excited parameters; 1e-3 is 4 x the measured
+    assert err < 1e-3
+    plain = preprocess(log, cutoff=5.0, edge=1.0, parallel=False)
+    res2 = identify(robot, plain, **kw)
+    err2 = np.max(np.abs(res2.full - true)[big] / np.abs(true)[big])
+    assert err2 > 10 * err
+
+
+def test_data_path_recovers_the_parameters_from_noisy_jittered_logs(tmp_path):
+    """zcr07s with viscous and Coulomb friction, 40 s at 500 Hz with +-30 % jitter, velocity
+    noise 0.05 rad/s, torque noise 2 % of the peak torque: the identified model predicts the
+    noise-free torques of another trajectory within 1 %, and better than the path without the
+    low-pass on velocities and torques."""
+    robot = mindyn.load("zcr07s")
+    base = mindyn.base_parameters(robot, friction=True)
+    t = jittered_times(40.0, seed=7)
+    log, truth, tau, _ = _friction_log(robot, t, seed=1, vel_noise=0.05)
+    sd = 0.02 * np.abs(tau).max(axis=0)
+    log.tau = tau + sd * np.random.default_rng(9).standard_normal(tau.shape)
+    d = preprocess(log)
+    res = identify(robot, d, base=base)
+    true = true_base_values(base, truth)
+    # validation: an exact, noise-free log of another motion, uniform stamps
+    tv = np.arange(0, 10.0, 1 / 250.0)
+    vlog, _, vtau, vtraj = _friction_log(robot, tv, seed=2)
+    q, dq, ddq = vtraj.evaluate(tv)
+    exact = JointData(tv, q, dq, ddq, vtau, source="exact")
+    v = validate(res, exact)
+    rel = np.linalg.norm(vtau - v["tau_hat"]) / np.linalg.norm(vtau)
+    assert rel < 0.01  # measured 0.26 %
+    # the old path: logged noisy velocities as they are, accelerations from them by the
+    # derivative filter, raw torques on the jittered stamps (measured 2.6 %)
+    dq2, ddq2, _ = fill_derivatives(log.t, log.q, log.dq, None)
+    old = identify(robot, JointData(log.t, log.q, dq2, ddq2, log.tau), base=base)
+    rel_old = np.linalg.norm(vtau - validate(old, exact)["tau_hat"]) / np.linalg.norm(vtau)
+    assert rel_old > 3 * rel
+    # the true parameters predict the same torques: the estimate is close in what matters
+    Wt = base.regressor(q, dq, ddq) @ true
+    assert np.linalg.norm(vtau - Wt) / np.linalg.norm(vtau) < 1e-9
+    # CLI on the same log: the settings say what the data path did, the validation agrees
+    write_csv(tmp_path / "log.csv", log.t, log.q, log.tau, dq=log.dq)
+    write_csv(tmp_path / "val.csv", tv, q, vtau, dq=dq)
+    out = tmp_path / "r.json"
+    rc = cli.main(
+        [
+            "identify",
+            "zcr07s",
+            str(tmp_path / "log.csv"),
+            "--friction",
+            "--validate",
+            str(tmp_path / "val.csv"),
+            "--json",
+            str(out),
+        ]
+    )
+    assert rc == 0
+    doc = json.loads(out.read_text())
+    pre = doc["settings"]["preprocessing"]
+    assert pre["filter"]["cutoff_Hz"] == pytest.approx(
+        d.processing["preprocess"]["filter"]["cutoff_Hz"]
+    )
+    assert pre["timing"]["jitter"] == pytest.approx(timing(t)["jitter"])
+    assert pre["parallel_filtering"] is True
+    assert max(doc["validation"]["relative"]) < 0.05
+
+
+def test_concatenate_keeps_each_logs_regressor_filter():
+    robot = mindyn.load("zcr07s")
+    base = mindyn.base_parameters(robot, friction=True)
+    a, truth, _, _ = _friction_log(robot, np.arange(0, 8.0, 1 / 250.0), seed=3)
+    b, _, _, _ = _friction_log(robot, np.arange(0, 8.0, 1 / 250.0), seed=4)
+    parts = [preprocess(x, cutoff=4.0, edge=1.25) for x in (a, b)]
+    d = concatenate(parts)
+    assert np.all(np.diff(d.t) > 0) and d.m == parts[0].m + parts[1].m
+    true = true_base_values(base, truth)
+    # the stacked system holds for the true parameters as each log's does (edges: 5 periods
+    # of the cut-off, 3e-5 N m left, see above): 1e-5 of the torques
+    W, y, _ = dynamic_system(base, d)
+    assert np.linalg.norm(W @ true - y) / np.linalg.norm(y) < 1e-5
+    res = identify(robot, d, base=base, rsd_threshold=None, min_velocity=0, weighted=False)
+    big = np.abs(true) > 1e-2 * np.abs(true).max()
+    assert np.max(np.abs(res.full - true)[big] / np.abs(true)[big]) < 1e-3
+
+
+def test_bad_settings_are_named():
+    t = np.arange(0, 4.0, 1 / RATE)
+    log = sine_log(t, [0.5], [1.0])
+    with pytest.raises(DataError, match="cutoff 300 Hz must be between 0 and half the rate"):
+        preprocess(log, cutoff=300.0)
+    with pytest.raises(DataError, match="dropping 3 s at each end"):
+        preprocess(log, cutoff=5.0, edge=3.0)
+    with pytest.raises(DataError, match="do not move"):
+        preprocess(JointData(t, np.zeros((t.size, 1)), np.zeros((t.size, 1)), None, None))
+
+
+def test_cli_prints_the_data_path_and_refuses_periods_without_it(tmp_path, capsys):
+    t = jittered_times(30.0, rate=250.0, seed=2)
+    robot = mindyn.load("zcr07s")
+    log, _, _, _ = _friction_log(robot, t, seed=5)
+    write_csv(tmp_path / "log.csv", log.t, log.q, log.tau, dq=log.dq)
+    rc = cli.main(["identify", "zcr07s", str(tmp_path / "log.csv"), "--friction", "--cutoff", "3"])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "cut-off 3 Hz (given" in out and "jitter" in out and "parallel filtering" in out
+    assert "edges dropped" in out
+    rc = cli.main(
+        ["identify", "zcr07s", str(tmp_path / "log.csv"), "--filter", "butter", "--periods", "2"]
+    )
+    err = capsys.readouterr().err
+    assert rc != 0 and "--periods needs --filter lowpass" in err and len(err.splitlines()) == 1
+
+
+def test_a_break_in_the_log_is_refused_whole_and_fitted_as_segments():
+    """Two motions logged in one file with a 2 s break between them (the second resumes
+    elsewhere): preprocess refuses to bridge the break; split_at_gaps gives the two motions,
+    which go through the data path on their own and identify the parameters as if they had
+    been logged apart. Bridged (the break taken as jitter), the estimate is far off."""
+    robot = mindyn.load("zcr07s")
+    base = mindyn.base_parameters(robot, friction=True)
+    a, truth, _, _ = _friction_log(robot, np.arange(0, 8.0, 1 / 250.0), seed=3)
+    b, _, _, _ = _friction_log(robot, 10.0 + np.arange(0, 8.0, 1 / 250.0), seed=4)
+    whole = JointData(
+        np.concatenate([a.t, b.t]),
+        *(np.vstack([getattr(a, k), getattr(b, k)]) for k in ("q", "dq", "ddq", "tau")),
+        source="one file",
+    )
+    with pytest.raises(DataError, match=r"one file: a break of 2\.004 s .* after t = 7\.996 s"):
+        preprocess(whole, cutoff=4.0)
+    segments = split_at_gaps(whole)
+    assert [s.m for s in segments] == [a.m, b.m]
+    assert segments[1].processing["segment"] == {"index": 1, "of": 2, "t_s": [10.0, b.t[-1]]}
+    assert split_at_gaps(a) == [a]
+    kw = dict(base=base, rsd_threshold=None, min_velocity=0, weighted=False)
+    true = true_base_values(base, truth)
+    big = np.abs(true) > 1e-2 * np.abs(true).max()
+    parts = [preprocess(s, cutoff=4.0, edge=1.25) for s in segments]
+    res = identify(robot, parts, **kw)
+    assert np.max(np.abs(res.full - true)[big] / np.abs(true)[big]) < 1e-3
+    bridged = identify(robot, preprocess(whole, cutoff=4.0, edge=1.25, gap=np.inf), **kw)
+    assert np.max(np.abs(bridged.full - true)[big] / np.abs(true)[big]) > 0.05
