@@ -15,6 +15,7 @@ differences; the settings are reported in :attr:`JointData.processing`.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import re
@@ -101,7 +102,14 @@ class JointData:
         return float(self.t[-1] - self.t[0])
 
 
-_COLUMN = re.compile(r"^(t|q|dq|ddq|tau)(\d*)$")
+_COLUMN = re.compile(r"(t|q|dq|ddq|tau)([1-9][0-9]*)?")
+
+# A cell holds a decimal number in ASCII: optional sign, digits with an optional point, optional
+# exponent, ASCII blanks around it. Python's float() also takes digit-group underscores
+# ("1_000"), non-ASCII digits and blanks, and "nan"/"inf"/"infinity" spelled out; none of these
+# belongs in a log, so they are refused (the last two with their own message).
+_NUMBER = re.compile(r"[ \t]*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?[ \t]*")
+_NONFINITE = re.compile(r"[ \t]*[+-]?(?:nan|inf|infinity)[ \t]*", re.IGNORECASE)
 
 
 def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
@@ -115,8 +123,8 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         if name in seen:
             raise DataError(f"{path}: column '{name}' appears twice in the header")
         seen.add(name)
-        m = _COLUMN.match(name)
-        if not m or (m.group(1) == "t") != (m.group(2) == ""):
+        m = _COLUMN.fullmatch(name)
+        if not m or (m.group(1) == "t") != (m.group(2) is None):
             extra.append(name)
             continue
         if m.group(1) == "t":
@@ -126,7 +134,13 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     if n is None:
         n = max(groups["q"]) if groups["q"] else 0
         if n == 0:
-            raise DataError(f"{path}: no position columns q1, q2, ... in the header")
+            other = f" (it has {', '.join(repr(e) for e in extra)})" if extra else ""
+            raise DataError(f"{path}: no position columns q1, q2, ... in the header{other}")
+        if n > len(names):
+            raise DataError(
+                f"{path}: column 'q{n}' implies {n} joints, but the header has only "
+                f"{len(names)} columns"
+            )
     want = {"q": True, "dq": False, "ddq": False, "tau": require_torque}
     missing = [] if t_col is not None else ["t"]
     for kind, required in want.items():
@@ -194,8 +208,9 @@ def read_csv(
         raise DataFileNotFoundError(f"data file '{path}' does not exist")
     if robot is not None:
         n = robot.n
-    with path.open(newline="") as f:
-        reader = csv.reader(f)
+    text = _decode(path)
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
         try:
             header = next(reader)
         except StopIteration:
@@ -214,23 +229,32 @@ def read_csv(
                     f"{path}, line {reader.line_num}: {len(row)} values for {len(header)} columns"
                 )
             rows.append((reader.line_num, row))
+    except csv.Error as e:
+        raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
     if len(rows) < 2:
         raise DataError(f"{path}: {len(rows)} data row(s); at least 2 samples are needed")
     names = [h.strip() for h in header]
     values = np.empty((len(rows), len(header)))
     for r, (line, row) in enumerate(rows):
         for c, v in enumerate(row):
-            try:
+            if _NUMBER.fullmatch(v):
                 values[r, c] = float(v)
-            except ValueError:
-                raise DataError(
-                    f"{path}, line {line}, column {names[c]}: '{v.strip()}' is not a number"
-                ) from None
+                continue
+            where = f"{path}, line {line}, column {names[c]}"
+            if _NONFINITE.fullmatch(v):
+                what = "NaN" if v.strip().lstrip("+-").lower() == "nan" else "an infinite value"
+                raise DataError(f"{where}: {what}")
+            raise DataError(
+                f"{where}: {v.strip()!r} is not a number (expected a decimal number such as "
+                "-1.25 or 3e-4)"
+            )
     bad = ~np.isfinite(values)
     if bad.any():
         r, c = np.argwhere(bad)[0]
-        what = "NaN" if np.isnan(values[r, c]) else "an infinite value"
-        raise DataError(f"{path}, line {rows[r][0]}, column {names[c]}: {what}")
+        raise DataError(
+            f"{path}, line {rows[r][0]}, column {names[c]}: {rows[r][1][c].strip()!r} is too large "
+            "for a double"
+        )
     t = values[:, cols["t"]]
     r = first_not_increasing(t)
     if r is not None:
@@ -250,19 +274,52 @@ def read_csv(
     ddq = block("ddq")
     tau = block("tau")
     processing: dict = {"samples": len(rows), "first_data_line": first_line}
-    if tau is not None:
-        tau, unit_info = convert_torque(tau, torque_unit, robot)
-        processing["torque"] = unit_info
-    dq, ddq, deriv = fill_derivatives(
-        t, q, dq, ddq, filter=filter, cutoff=cutoff, order=order, window=window, polyorder=polyorder
-    )
+    try:
+        # overflow is checked below and reported once, not as numpy warnings
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            if tau is not None:
+                tau, unit_info = convert_torque(tau, torque_unit, robot)
+                processing["torque"] = unit_info
+            dq, ddq, deriv = fill_derivatives(
+                t,
+                q,
+                dq,
+                ddq,
+                filter=filter,
+                cutoff=cutoff,
+                order=order,
+                window=window,
+                polyorder=polyorder,
+            )
+    except DataError as e:
+        raise DataError(f"{path}: {e}") from None
     processing.update(deriv)
+    for what, a in (("velocities", dq), ("accelerations", ddq), ("torques", tau)):
+        if a is not None and not np.isfinite(a).all():
+            raise DataError(
+                f"{path}: the {what} overflow (the largest logged magnitude is "
+                f"{np.max(np.abs(values)):.3g}); the log's values are too large to process"
+            )
     return JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
+
+
+def _decode(path: Path) -> str:
+    """The file's text as UTF-8 (a leading byte-order mark is skipped), or DataError naming the
+    line and byte offset of the first byte that is not UTF-8."""
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        raise DataError(
+            f"{path}, line {line}: not UTF-8 text (byte 0x{data[e.start]:02x} at offset {e.start})"
+        ) from None
 
 
 def first_not_increasing(t: np.ndarray) -> int | None:
     """Index of the first time that does not exceed the one before it, or None."""
-    bad = np.flatnonzero(np.diff(t) <= 0)
+    with np.errstate(over="ignore", invalid="ignore"):  # t[k] - t[k-1] may overflow to inf > 0
+        bad = np.flatnonzero(np.diff(t) <= 0)
     return int(bad[0]) + 1 if bad.size else None
 
 
