@@ -47,17 +47,16 @@ const char* kindName(const YAML::Node& node) {
 /// Tags a description may carry: none, or YAML's core-schema ones. Anything else (language
 /// specific objects such as !!python/object, binary data, application tags) is refused.
 bool plainTag(const std::string& tag) {
-  static const std::set<std::string> core = {
-      "",
-      "?",
-      "!",
-      "tag:yaml.org,2002:str",
-      "tag:yaml.org,2002:int",
-      "tag:yaml.org,2002:float",
-      "tag:yaml.org,2002:bool",
-      "tag:yaml.org,2002:null",
-      "tag:yaml.org,2002:seq",
-      "tag:yaml.org,2002:map"};
+  static const std::set<std::string> core = {"",
+                                             "?",
+                                             "!",
+                                             "tag:yaml.org,2002:str",
+                                             "tag:yaml.org,2002:int",
+                                             "tag:yaml.org,2002:float",
+                                             "tag:yaml.org,2002:bool",
+                                             "tag:yaml.org,2002:null",
+                                             "tag:yaml.org,2002:seq",
+                                             "tag:yaml.org,2002:map"};
   return core.count(tag) > 0;
 }
 
@@ -66,9 +65,10 @@ bool plainTag(const std::string& tag) {
 /// nodes visited, so that aliases cannot make the walk exponential.
 void checkTree(const Ctx& c, const YAML::Node& node, long* budget, int depth) {
   if (--*budget < 0)
-    c.fail("the document expands (through aliases) to more nodes than its text holds; a robot "
-           "description does not need that",
-           node);
+    c.fail(
+        "the document expands (through aliases) to more nodes than its text holds; a robot "
+        "description does not need that",
+        node);
   if (depth > 64) c.fail("the document is nested more than 64 levels deep", node);
   if (!plainTag(node.Tag()))
     c.fail("YAML tag '" + node.Tag() + "' is not supported (plain values, lists and mappings only)",
@@ -377,8 +377,8 @@ Model loadYaml(const std::string& path) {
 Model planarArm(int n, bool vertical, double length, double mass) {
   if (n < 1) throw ModelError("a planar arm needs at least one joint, got " + std::to_string(n));
   if (n > kMaxModelJoints)
-    throw ModelError("a planar arm has at most " + std::to_string(kMaxModelJoints) + " joints, got " +
-                     std::to_string(n));
+    throw ModelError("a planar arm has at most " + std::to_string(kMaxModelJoints) +
+                     " joints, got " + std::to_string(n));
   if (!(length > 0) || !(mass > 0))
     throw ModelError("planar arm: length and mass must be positive");
   Model model;

@@ -87,8 +87,9 @@ bool isRigid(const Eigen::Isometry3d& T) {
 
 void Model::validate() const {
   const int n = nq();
-  const std::string who = (source.empty() || source == "generated" ? std::string() : source + ": ") +
-                          (name.empty() ? std::string("model") : "model '" + name + "'");
+  const std::string who =
+      (source.empty() || source == "generated" ? std::string() : source + ": ") +
+      (name.empty() ? std::string("model") : "model '" + name + "'");
   if (n == 0) throw ModelError(who + " has no moving joint");
   if (n > kMaxModelJoints)
     throw ModelError(who + " has " + std::to_string(n) + " joints; at most " +
@@ -112,8 +113,8 @@ void Model::validate() const {
     const auto p = inertial.segment<10>(10 * k);
     for (int i = 0; i < 10; ++i) {
       const double bound = i == 9 ? L : i >= 6 ? L * L : L * L * L;
-      checkBound(who + ", link '" + link + "'", std::string("inertial parameter ") +
-                 kInertialNames[i], p[i], bound);
+      checkBound(who + ", link '" + link + "'",
+                 std::string("inertial parameter ") + kInertialNames[i], p[i], bound);
     }
     const std::string joint = who + ", joint '" + joints[k].name + "'";
     checkBound(joint, "rotor inertia", rotor_inertia[k], V);
@@ -126,13 +127,11 @@ void Model::validate() const {
       checkBound(joint, "origin translation", j.pre.translation()[i], L);
       checkBound(joint, "origin translation", j.post.translation()[i], L);
     }
-    const std::pair<const char*, double> limits[] = {{"lower limit", j.limits.lower},
-                                                     {"upper limit", j.limits.upper},
-                                                     {"velocity limit", j.limits.velocity},
-                                                     {"acceleration limit", j.limits.acceleration},
-                                                     {"effort limit", j.limits.effort},
-                                                     {"drive rated torque", j.drive.rated_torque},
-                                                     {"drive gear ratio", j.drive.gear_ratio}};
+    const std::pair<const char*, double> limits[] = {
+        {"lower limit", j.limits.lower},         {"upper limit", j.limits.upper},
+        {"velocity limit", j.limits.velocity},   {"acceleration limit", j.limits.acceleration},
+        {"effort limit", j.limits.effort},       {"drive rated torque", j.drive.rated_torque},
+        {"drive gear ratio", j.drive.gear_ratio}};
     for (const auto& [what, value] : limits) {
       if (std::isnan(value)) continue;  // not given
       if (!std::isfinite(value)) throw ModelError(joint + ": " + what + " is not finite");

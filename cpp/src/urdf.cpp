@@ -148,8 +148,7 @@ class Builder {
              "', which is not supported in a serial chain (pass a tip before it)");
       const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
       for (int i = 0; i < 3; ++i) checkValue("joint '" + uj.name + "'", "axis", axis[i]);
-      if (axis.norm() < 1e-12)
-        fail("joint '" + uj.name + "' has a zero or invalid axis");
+      if (axis.norm() < 1e-12) fail("joint '" + uj.name + "' has a zero or invalid axis");
       j.axis = axis.normalized();
       j.pre = fixed * origin;
       fixed.setIdentity();
@@ -239,8 +238,8 @@ class Builder {
     }
     for (const auto& [link, joints] : entering)
       if (joints.size() > 1)
-        fail("link '" + link + "' is the child of " + std::to_string(joints.size()) +
-             " joints (" + joinNames(joints) +
+        fail("link '" + link + "' is the child of " + std::to_string(joints.size()) + " joints (" +
+             joinNames(joints) +
              "); in a URDF every link but the root has exactly one parent joint");
     // Every link must be reached from the root; one that is not sits in a loop of joints.
     // The depth bound keeps the recursive walks below (merging, leaf search) shallow.
@@ -382,8 +381,8 @@ class Builder {
       if (in.mass < 0.0) fail(who + " has mass " + std::to_string(in.mass));
       for (double v : {in.origin.position.x, in.origin.position.y, in.origin.position.z})
         checkValue(who, "inertial origin xyz", v);
-      for (double v : {in.origin.rotation.x, in.origin.rotation.y, in.origin.rotation.z,
-                       in.origin.rotation.w})
+      for (double v :
+           {in.origin.rotation.x, in.origin.rotation.y, in.origin.rotation.z, in.origin.rotation.w})
         if (!std::isfinite(v)) fail(who + ": inertial origin rpy is not finite");
       const Eigen::Isometry3d frame = toIsometry(in.origin);
       Eigen::Matrix3d Ic;
