@@ -414,3 +414,124 @@ def test_closed_stdout_ends_quietly():
     p.wait(timeout=60)
     assert "Traceback" not in err and "BrokenPipeError" not in err, err
     assert p.returncode == 141
+
+
+# --------------------------------------------------------------------------------------------
+# descriptions that are not trees, wrongly typed YAML, extreme values
+# --------------------------------------------------------------------------------------------
+def test_urdf_loops_and_self_parented_joints_are_named(tmp_path):
+    links = link("a") + link("b") + link("c") + link("d")
+    # a -> b -> c -> a next to the root chain base -> d: urdfdom accepts it, the chain walk used
+    # to crash (SIGSEGV) or grow without bound with a tip
+    loop = joint("j0", "base", "d") + joint("j1", "a", "b") + joint("j2", "b", "c")
+    path = write(tmp_path, "loop.urdf", urdf(loop + joint("j3", "c", "a"), links))
+    for tip in (None, "c", "d"):
+        with pytest.raises(
+            mindyn.ModelError,
+            match=r"loop\.urdf: joints 'j1', 'j2', 'j3' form a loop through links 'b', 'c', 'a'",
+        ):
+            mindyn.load(path, tip=tip)
+    # base -> a -> b -> a: a joint leads back to its parent's parent
+    back = joint("j0", "base", "a") + joint("j1", "a", "b") + joint("j2", "b", "a")
+    path = write(tmp_path, "back.urdf", urdf(back, link("a") + link("b")))
+    for tip in (None, "b"):
+        with pytest.raises(mindyn.ModelError, match=r"back\.urdf: link 'a' is the child of 2"):
+            mindyn.load(path, tip=tip)
+    # b -> b used to drop b silently and load a one-joint robot
+    path = write(
+        tmp_path,
+        "self.urdf",
+        urdf(joint("j0", "base", "a") + joint("j1", "b", "b"), link("a") + link("b")),
+    )
+    with pytest.raises(
+        mindyn.ModelError, match=r"self\.urdf: joint 'j1' has link 'b' as both its parent"
+    ):
+        mindyn.load(path)
+    r = run_cli("info", path)
+    assert_one_line_error(r)
+    assert "self.urdf" in r.stderr
+
+
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        (("name: two", "name: [1, 2]"), r"r\.yaml:1: 'name' must be text, got a list"),
+        (("convention: dh", "convention: {x: 1}"), r"r\.yaml:2: 'convention' must be text"),
+        (("name: a,", "name: [a],"), r"r\.yaml:4: joint 1: 'name' must be text, got a list"),
+        (("a: 0.4", "a: [0.4]"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got a list"),
+        (("com: [-0.2, 0, 0]", "com: {x: 1}"), r"r\.yaml:4: .*'com' must be a list of 3 numbers"),
+        (("name: two", "name: !!python/object:os.system two"), r"r\.yaml:1: YAML tag '.*python"),
+        (("name: two", "name: !!binary AAAA"), r"r\.yaml:1: YAML tag '.*binary"),
+        (("name: two", "name: two\nname: three"), r"r\.yaml:2: key 'name' appears twice"),
+        (("a: 0.4,", "a: 0.4, a: 0.5,"), r"r\.yaml:4: key 'a' appears twice"),
+        (("name: two", "name: two\nsynthetic_inertia: [1]"), r"r\.yaml:2: 'synthetic_inertia'"),
+        (("name: two", "name: two\n[1, 2]: 3"), r"r\.yaml:2: a key must be plain text"),
+    ],
+)
+def test_yaml_type_errors_name_file_line_and_key(tmp_path, change, match):
+    path = write(tmp_path, "r.yaml", GOOD_YAML.replace(*change))
+    with pytest.raises(mindyn.ModelError, match=match):
+        mindyn.load(path)
+
+
+def test_yaml_several_documents_refused(tmp_path):
+    path = write(tmp_path, "r.yaml", GOOD_YAML + "---\n" + GOOD_YAML)
+    with pytest.raises(mindyn.ModelError, match=r"r\.yaml:7: holds 2 YAML documents"):
+        mindyn.load(path)
+
+
+@pytest.mark.parametrize(
+    "change, key",
+    [
+        (("a: 0.4", "a: 1e308"), "a"),
+        (("mass: 1.0", "mass: 1e300"), "mass"),
+        (("mass: 1.0", "mass: 1.0, inertia: {xx: 1e305}"), "xx"),
+        (("name: a,", "name: a, limits: {lower: -1e308, upper: 1},"), "lower"),
+        (("name: two", "name: two\ngravity: [0, 0, -1e200]"), "gravity"),
+    ],
+)
+def test_yaml_extreme_values_refused_with_the_bound(tmp_path, change, key):
+    path = write(tmp_path, "r.yaml", GOOD_YAML.replace(*change))
+    with pytest.raises(
+        mindyn.ModelError, match=rf"r\.yaml:\d+: .*'{key}' = .* exceeds the bound 1e\+16"
+    ):
+        mindyn.load(path)
+
+
+def test_values_at_the_bound_give_finite_dynamics(tmp_path):
+    """The bound is set so that the largest accepted values keep every result finite: a mass of
+    1e16 kg on a 1e16 m link under 1e16 m/s^2 gravity at a moderate joint state."""
+    text = GOOD_YAML.replace("a: 0.4", "a: 1e16").replace("mass: 1.0", "mass: 1e16")
+    text = text.replace("name: two", "name: two\ngravity: [0, -1e16, 0]")
+    robot = mindyn.load(write(tmp_path, "r.yaml", text))
+    q = np.array([0.3, -0.2])
+    tau = robot.inverse_dynamics(q, q, q)
+    assert np.isfinite(tau).all()
+    # gravity torque of joint 2 alone: its mass 0.5 at com -0.15 m of a 0.3 m link, known in
+    # closed form, unaffected by the huge values upstream (relative 1e-9: rounding of the sums)
+    g = robot.gravity_torque(q)
+    assert np.isfinite(g).all()
+    expect2 = -0.5 * 1e16 * (0.3 - 0.15) * np.cos(q[0] + q[1]) * -1
+    assert g[1] == pytest.approx(expect2, rel=1e-9)
+
+
+def test_urdf_extreme_values_refused_with_the_bound(tmp_path):
+    path = write(tmp_path, "m.urdf", urdf(joint("j0", "base", "a"), link("a", mass=1e300)))
+    with pytest.raises(mindyn.ModelError, match=r"m\.urdf: link 'a': mass 1e\+300 exceeds"):
+        mindyn.load(path)
+    far = joint("j0", "base", "a", extra='<origin xyz="0 1e308 0"/>')
+    path = write(tmp_path, "o.urdf", urdf(far, link("a")))
+    with pytest.raises(mindyn.ModelError, match=r"o\.urdf: joint 'j0': origin xyz 1e\+308"):
+        mindyn.load(path)
+
+
+def test_planar_arm_size_is_bounded():
+    assert mindyn.load("planar1000").n == 1000  # the bound itself, as the core's
+    for name in ("planar1001", "planar100000", "planar9999999999999999999999999"):
+        with pytest.raises(mindyn.ModelError, match="a planar arm has at most 1000 joints"):
+            mindyn.load(name)
+    r = run_cli("info", "planar9999999999999999999999999")
+    assert_one_line_error(r)
+    assert "at most 1000 joints" in r.stderr
+    with pytest.raises(mindyn.ModelError, match="unknown robot"):
+        mindyn.load("planar\u0661")  # a non-ASCII digit is no number of joints

@@ -109,6 +109,7 @@ _COLUMN = re.compile(r"(t|q|dq|ddq|tau)([1-9][0-9]*)?")
 # ("1_000"), non-ASCII digits and blanks, and "nan"/"inf"/"infinity" spelled out; none of these
 # belongs in a log, so they are refused (the last two with their own message).
 _NUMBER = re.compile(r"[ \t]*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?[ \t]*")
+_BLANKS = " \t"
 _NONFINITE = re.compile(r"[ \t]*[+-]?(?:nan|inf|infinity)[ \t]*", re.IGNORECASE)
 
 
@@ -245,7 +246,7 @@ def read_csv(
                 what = "NaN" if v.strip().lstrip("+-").lower() == "nan" else "an infinite value"
                 raise DataError(f"{where}: {what}")
             raise DataError(
-                f"{where}: {v.strip()!r} is not a number (expected a decimal number such as "
+                f"{where}: {v.strip(_BLANKS)!r} is not a number (expected a decimal number such as "
                 "-1.25 or 3e-4)"
             )
     bad = ~np.isfinite(values)
