@@ -209,6 +209,7 @@ Model build(const Ctx& start, const YAML::Node& root);
 
 Model parseYaml(const std::string& yaml, const std::string& source) {
   Ctx c{source, ""};
+  requireUtf8(yaml, source);
   std::vector<YAML::Node> docs;
   try {
     docs = YAML::LoadAll(yaml);

@@ -1,5 +1,6 @@
 #include "mindyn/model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -146,6 +147,40 @@ void Model::validate() const {
   }
   if (!isRigid(tool)) throw ModelError(who + ": tool frame is not a rigid transform");
   for (int i = 0; i < 3; ++i) checkBound(who, "tool translation", tool.translation()[i], L);
+}
+
+void requireUtf8(const std::string& text, const std::string& source) {
+  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
+  const size_t n = text.size();
+  size_t i = 0;
+  while (i < n) {
+    const unsigned char c = s[i];
+    size_t len = 0;
+    unsigned lo = 0x80, hi = 0xBF;  // allowed range of the second byte
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if (c >= 0xC2 && c <= 0xDF) {
+      len = 2;
+    } else if (c >= 0xE0 && c <= 0xEF) {
+      len = 3;
+      if (c == 0xE0) lo = 0xA0;  // no overlong forms
+      if (c == 0xED) hi = 0x9F;  // no surrogates
+    } else if (c >= 0xF0 && c <= 0xF4) {
+      len = 4;
+      if (c == 0xF0) lo = 0x90;
+      if (c == 0xF4) hi = 0x8F;  // nothing above U+10FFFF
+    }
+    bool ok = len > 0 && i + len <= n && s[i + 1] >= lo && s[i + 1] <= hi;
+    for (size_t k = 2; ok && k < len; ++k) ok = s[i + k] >= 0x80 && s[i + k] <= 0xBF;
+    if (!ok) {  // report the sequence's first byte, as Python's decoder does
+      char buf[64];
+      std::snprintf(buf, sizeof buf, " (byte 0x%02x at offset %zu)", c, i);
+      const long line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(i), '\n');
+      throw ModelError(source + ":" + std::to_string(line) + ": not UTF-8 text" + buf);
+    }
+    i += len;
+  }
 }
 
 Eigen::Matrix<double, 10, 1> inertialFromCom(double mass, const Eigen::Vector3d& com,

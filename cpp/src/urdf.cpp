@@ -427,6 +427,7 @@ Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1
 }
 
 Model parseUrdf(const std::string& xml, const std::string& tip, const std::string& source) {
+  requireUtf8(xml, source);
   std::string reason;
   const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(xml, &reason);
   if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);

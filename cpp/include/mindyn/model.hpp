@@ -147,6 +147,10 @@ Eigen::Matrix<double, 10, 1> inertialFromUrdf(double mass, const Eigen::Vector3d
 /// Inertia tensor about the link origin from a 10-vector.
 Eigen::Matrix3d inertiaTensor(const Eigen::Ref<const Eigen::VectorXd>& p10);
 
+/// Throws ModelError "<source>:<line>: not UTF-8 text (byte 0x.. at offset N)" unless `text` is
+/// valid UTF-8 (the encoding of URDF and YAML files, and what names must be to reach Python).
+void requireUtf8(const std::string& text, const std::string& source);
+
 /// Pinocchio's dynamic-parameter order per body: m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz.
 Eigen::VectorXd toPinocchioOrder(const Eigen::Ref<const Eigen::VectorXd>& inertial);
 Eigen::VectorXd fromPinocchioOrder(const Eigen::Ref<const Eigen::VectorXd>& pinocchio);
