@@ -3,6 +3,7 @@ message with a non-zero exit status from the CLI."""
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -12,6 +13,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from conftest import URDFS
+from mindyn.data import DataError, read_csv
 
 GOOD_YAML = """\
 name: two
@@ -525,6 +527,20 @@ def test_urdf_extreme_values_refused_with_the_bound(tmp_path):
         mindyn.load(path)
 
 
+def test_text_that_is_not_utf8_is_located(tmp_path):
+    text = GOOD_YAML.replace("name: b", "name: b\xff").encode("latin-1")
+    (tmp_path / "r.yaml").write_bytes(text)
+    offset = text.index(b"\xff")
+    with pytest.raises(
+        mindyn.ModelError, match=rf"r\.yaml:5: not UTF-8 text \(byte 0xff at offset {offset}\)"
+    ):
+        mindyn.load(tmp_path / "r.yaml")
+    text = urdf(joint("j\xe91", "base", "a"), link("a")).encode("latin-1")  # a Latin-1 name
+    (tmp_path / "r.urdf").write_bytes(text)
+    with pytest.raises(mindyn.ModelError, match=r"r\.urdf:\d+: not UTF-8 text \(byte 0xe9"):
+        mindyn.load(tmp_path / "r.urdf")
+
+
 def test_planar_arm_size_is_bounded():
     assert mindyn.load("planar1000").n == 1000  # the bound itself, as the core's
     for name in ("planar1001", "planar100000", "planar9999999999999999999999999"):
@@ -535,3 +551,100 @@ def test_planar_arm_size_is_bounded():
     assert "at most 1000 joints" in r.stderr
     with pytest.raises(mindyn.ModelError, match="unknown robot"):
         mindyn.load("planar\u0661")  # a non-ASCII digit is no number of joints
+
+
+# --------------------------------------------------------------------------------------------
+# property: every mutation of a valid file loads or fails with our error naming the file
+# --------------------------------------------------------------------------------------------
+GOOD_URDF = urdf(
+    joint("j1", "base", "l1", extra='<origin xyz="0 0 0.1"/>')
+    + joint("j2", "l1", "l2", "prismatic", extra='<origin xyz="0.4 0 0" rpy="1.5 0 0"/>')
+    + joint("f", "l2", "tool", "fixed"),
+    link("l1") + link("l2", 0.5) + '<link name="tool"/>',
+)
+GOOD_CSV = "t,q1,q2,tau1,tau2\n" + "".join(
+    f"{0.004 * k:.3f},{0.1 * k:.2f},{-0.05 * k:.3f},{k % 3},{1 - k % 2}\n" for k in range(40)
+)
+EXTREMES = [
+    "1e308", "-1e308", "1e400", "nan", ".nan", "inf", "-.inf", "1e16", "2e16", "0", "-0", "1_000",
+    "0x10", "\uff11", "", " ", "[1, 2]", "{a: 1}", "!!python/object:os.system x", "~", "true",
+    "'text'", "\xff", "\udcff", "\x00", "a", "&x 1", "*x", "-1", "1e-320",
+]  # fmt: skip
+
+
+def _mutate(text: str, data) -> str:
+    """Drops, duplicates, retypes or breaks pieces of `text` as `data` (hypothesis) chooses."""
+    from hypothesis import strategies as st
+
+    for _ in range(data.draw(st.integers(1, 3))):
+        lines = text.split("\n")
+        k = data.draw(st.integers(0, len(lines) - 1))
+        op = data.draw(st.sampled_from(["drop", "dup", "value", "key", "cut", "swap", "byte"]))
+        if op == "drop":
+            del lines[k]
+        elif op == "dup":
+            lines.insert(k, lines[k])
+        elif op == "swap":
+            j = data.draw(st.integers(0, len(lines) - 1))
+            lines[k], lines[j] = lines[j], lines[k]
+        elif op in ("value", "key"):
+            # replace one token (a number, a quoted attribute, a word) by an extreme or a wrong type
+            tokens = re.findall(r'"[^"]*"|[A-Za-z_]+|[-+0-9.eE]+', lines[k])
+            if tokens:
+                old = data.draw(st.sampled_from(tokens))
+                new = data.draw(st.sampled_from(EXTREMES + ["name", "a", "base", "l1", "j1"]))
+                if old.startswith('"'):
+                    new = f'"{new}"'
+                lines[k] = lines[k].replace(old, new, 1)
+        elif op == "cut":
+            i = data.draw(st.integers(0, len(lines[k])))
+            lines[k] = lines[k][:i]
+        else:
+            i = data.draw(st.integers(0, len(lines[k])))
+            ins = data.draw(st.sampled_from(["\udcff", "\x00", "<", '"', ","]))
+            lines[k] = lines[k][:i] + ins + lines[k][i:]
+        text = "\n".join(lines)
+    return text
+
+
+def _outcome_is_ours(path: Path, load) -> None:
+    try:
+        result = load(path)
+    except (mindyn.ModelError, mindyn.RobotFileNotFoundError, DataError) as e:
+        assert path.name in str(e) and "\n" not in str(e), str(e)
+        return
+    if isinstance(result, mindyn.Robot):
+        q = np.full(result.n, 0.3)
+        assert np.isfinite(result.inverse_dynamics(q, q, q)).all()
+    else:
+        assert all(np.isfinite(a).all() for a in (result.q, result.dq, result.ddq))
+
+
+@pytest.mark.parametrize(
+    "name, good, load",
+    [
+        ("m.urdf", GOOD_URDF, mindyn.load),
+        ("m.yaml", GOOD_YAML, mindyn.load),
+        ("m.csv", GOOD_CSV, lambda p: read_csv(p, filter="none")),
+    ],
+)
+def test_mutated_files_load_or_fail_with_our_error(tmp_path, name, good, load):
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    path = tmp_path / name
+    _outcome_is_ours(write(tmp_path, name, good), load)  # the unmutated file loads
+
+    @settings(
+        max_examples=150,
+        deadline=2000,
+        derandomize=True,
+        database=None,
+        suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+    )
+    @given(st.data())
+    def check(data):
+        path.write_bytes(_mutate(good, data).encode("utf-8", "surrogateescape"))
+        _outcome_is_ours(path, load)
+
+    check()

@@ -204,10 +204,21 @@ Eigen::Matrix<double, 10, 1> readInertial(const Ctx& c, const YAML::Node& node) 
 namespace {
 
 Model build(const Ctx& start, const YAML::Node& root);
+Model parseDocument(const std::string& yaml, const std::string& source);
 
 }  // namespace
 
 Model parseYaml(const std::string& yaml, const std::string& source) {
+  try {
+    return parseDocument(yaml, source);
+  } catch (const ModelError& e) {
+    throw ModelError(escapeControl(e.what()));  // names from the file may hold line breaks
+  }
+}
+
+namespace {
+
+Model parseDocument(const std::string& yaml, const std::string& source) {
   Ctx c{source, ""};
   requireUtf8(yaml, source);
   std::vector<YAML::Node> docs;
@@ -233,8 +244,6 @@ Model parseYaml(const std::string& yaml, const std::string& source) {
                      ": " + e.msg);
   }
 }
-
-namespace {
 
 Model build(const Ctx& start, const YAML::Node& root) {
   Ctx c = start;

@@ -427,11 +427,15 @@ Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1
 }
 
 Model parseUrdf(const std::string& xml, const std::string& tip, const std::string& source) {
-  requireUtf8(xml, source);
-  std::string reason;
-  const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(xml, &reason);
-  if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
-  return Builder(*urdf, source).build(tip);
+  try {
+    requireUtf8(xml, source);
+    std::string reason;
+    const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(xml, &reason);
+    if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
+    return Builder(*urdf, source).build(tip);
+  } catch (const ModelError& e) {
+    throw ModelError(escapeControl(e.what()));  // names from the file may hold line breaks
+  }
 }
 
 Model loadUrdf(const std::string& path, const std::string& tip) {

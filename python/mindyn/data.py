@@ -207,6 +207,21 @@ def read_csv(
     path = Path(path)
     if not path.is_file():
         raise DataFileNotFoundError(f"data file '{path}' does not exist")
+    try:
+        return _read_csv(
+            path, robot, n, torque_unit, require_torque, filter, cutoff, order, window, polyorder
+        )
+    except DataError as e:
+        # column names from the file may hold line breaks; the message stays one line
+        raise DataError(_CONTROL.sub(lambda m: repr(m.group())[1:-1], str(e))) from None
+
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+
+def _read_csv(
+    path: Path, robot, n, torque_unit, require_torque, filter, cutoff, order, window, polyorder
+) -> JointData:
     if robot is not None:
         n = robot.n
     text = _decode(path)
