@@ -212,6 +212,14 @@ def test_header_indices_are_checked_before_use(tmp_path):
             read_csv(p, require_torque=False)
 
 
+def test_column_names_with_line_breaks_stay_on_one_line(tmp_path):
+    p = tmp_path / "n.csv"
+    p.write_text('t,q1,"x\ny"\n0,0,0\n1,1,1\n')
+    with pytest.raises(DataError, match=r"n\.csv: .*unexpected x\\ny") as info:
+        read_csv(p, require_torque=False)
+    assert "\n" not in str(info.value)
+
+
 def test_values_whose_derivatives_overflow_are_refused(tmp_path):
     rows = [["0", "1e308", "0"], ["0.004", "-1e308", "0"], ["0.008", "1e308", "0"]]
     p = _write(tmp_path / "o.csv", ["t", "q1", "tau1"], rows)

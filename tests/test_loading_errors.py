@@ -541,6 +541,17 @@ def test_text_that_is_not_utf8_is_located(tmp_path):
         mindyn.load(tmp_path / "r.urdf")
 
 
+def test_names_with_line_breaks_stay_on_one_line(tmp_path):
+    path = write(tmp_path, "n.urdf", urdf(joint("j0", "base", "a\nb"), link("a")))
+    with pytest.raises(mindyn.ModelError, match=r"n\.urdf: .*a\\nb") as info:
+        mindyn.load(path)
+    assert "\n" not in str(info.value)
+    path = write(tmp_path, "n.yaml", GOOD_YAML.replace("a: 0.4", 'type: "x\\ny", a: 0.4'))
+    with pytest.raises(mindyn.ModelError, match=r"n\.yaml:4: .*joint type 'x\\ny'") as info:
+        mindyn.load(path)
+    assert "\n" not in str(info.value)
+
+
 def test_planar_arm_size_is_bounded():
     assert mindyn.load("planar1000").n == 1000  # the bound itself, as the core's
     for name in ("planar1001", "planar100000", "planar9999999999999999999999999"):
