@@ -1,5 +1,7 @@
 #include "mindyn/description.hpp"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
@@ -203,6 +205,35 @@ Eigen::Matrix<double, 10, 1> readInertial(const Ctx& c, const YAML::Node& node) 
 
 namespace {
 
+/// Records where documents start and nothing else.
+class DocumentStarts : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark& mark) override { starts.push_back(mark); }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+  std::vector<YAML::Mark> starts;
+};
+
+/// The start of a second document in `yaml`, or a null mark. Parses at most two documents:
+/// YAML::LoadAll of this yaml-cpp can loop forever, allocating, on a stray ',' or ']'.
+YAML::Mark secondDocument(const std::string& yaml) {
+  std::istringstream in(yaml);
+  YAML::Parser parser(in);
+  DocumentStarts starts;
+  for (int k = 0; k < 2 && parser.HandleNextDocument(starts); ++k) {
+  }
+  return starts.starts.size() > 1 ? starts.starts[1] : YAML::Mark::null_mark();
+}
+
 Model build(const Ctx& start, const YAML::Node& root);
 Model parseDocument(const std::string& yaml, const std::string& source);
 
@@ -221,19 +252,19 @@ namespace {
 Model parseDocument(const std::string& yaml, const std::string& source) {
   Ctx c{source, ""};
   requireUtf8(yaml, source);
-  std::vector<YAML::Node> docs;
+  YAML::Node root;
+  YAML::Mark second;  // where a second document starts, if there is one
   try {
-    docs = YAML::LoadAll(yaml);
+    root = YAML::Load(yaml);
+    second = secondDocument(yaml);
   } catch (const YAML::Exception& e) {
     throw ModelError(source + (e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1)) +
                      ": not valid YAML: " + e.msg);
   }
-  if (docs.size() > 1)
-    c.fail("holds " + std::to_string(docs.size()) +
-               " YAML documents; a robot description is one document",
-           docs[1]);
-  const YAML::Node root = docs.empty() ? YAML::Node() : docs.front();
   if (!root.IsMap()) c.fail("a robot description must be a YAML mapping with a 'joints' list");
+  if (!second.is_null())
+    throw ModelError(source + ":" + std::to_string(second.line + 1) +
+                     ": a second YAML document starts here; a robot description is one document");
   long budget = 4 * static_cast<long>(yaml.size()) + 16;
   checkTree(c, root, &budget, 0);
   try {

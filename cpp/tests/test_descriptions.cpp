@@ -283,7 +283,9 @@ TEST(Yaml, TypeErrorsNameFileLineAndKey) {
       {"name: r\nconvention: dh\njoints:\n  - {a: 1, a: 2}\n", "y.yaml:4: key 'a' appears twice"},
       {"name: r\nconvention: dh\nsynthetic_inertia: maybe\njoints:\n  - {a: 1}\n",
        "y.yaml:3: 'synthetic_inertia' must be true or false"},
-      {base + "---\n" + base, "y.yaml:6: holds 2 YAML documents"},
+      {base + "---\n" + base, "y.yaml:5: a second YAML document starts here"},
+      // yaml-cpp's LoadAll loops forever, allocating, on this (a stray flow end)
+      {", 0.1]}}\n", "y.yaml"},
   };
   for (const Case& c : cases) {
     const std::string e = errorOf<ModelError>([&] { parseYaml(c.yaml, "y.yaml"); });

@@ -4,10 +4,12 @@ Format: one header line, then one row per sample, comma-separated::
 
     t, q1..qN, [dq1..dqN], [ddq1..ddqN], tau1..tauN
 
-``t`` in seconds, strictly increasing; positions in rad (m for prismatic joints), velocities and
-accelerations per second; torques in N m (N), or as relative values in per mille of the drive's
-rated torque (``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, seed
-001, with the drive table of the robot description). Velocities and accelerations that are not
+Cells are decimal numbers in ASCII (``-1.25``, ``3e-4``, blanks around them allowed); the file
+is UTF-8 text (a leading byte-order mark is skipped). ``t`` in seconds, strictly increasing;
+positions in rad (m for prismatic joints), velocities and accelerations per second; torques in
+N m (N), or as relative values in per mille of the drive's rated torque
+(``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, seed 001, with
+the drive table of the robot description). Velocities and accelerations that are not
 logged are obtained from the positions (velocities) by zero-phase low-pass filtering and central
 differences; the settings are reported in :attr:`JointData.processing`.
 """
@@ -201,8 +203,10 @@ def read_csv(
     DataFileNotFoundError
         ``path`` does not exist.
     DataError
-        Wrong or missing columns, a value that is not a number or is NaN (line and column
-        named), time not strictly increasing (line named), fewer than 2 samples.
+        Wrong or missing columns, a cell that is not a decimal number in ASCII (``1_000``,
+        ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
+        named), a file that is not UTF-8 text (line and byte offset named), time not strictly
+        increasing (line named), fewer than 2 samples, derivatives that overflow.
     """
     path = Path(path)
     if not path.is_file():
