@@ -556,6 +556,16 @@ def test_names_with_line_breaks_stay_on_one_line(tmp_path):
     assert "\n" not in str(info.value)
 
 
+def test_yaml_parser_messages_reach_python_as_one_line(tmp_path):
+    # NUL bytes make yaml-cpp quote a byte that is not UTF-8 in its message; the conversion to
+    # Python used to fail with UnicodeDecodeError
+    text = b"n" + b"\0" * 8 + b"ame: three\njoints:\n  - {alpha:, d: 0.1}\n  - {alpha: 0, d: }\n"
+    (tmp_path / "z.yaml").write_bytes(text)
+    with pytest.raises(mindyn.ModelError, match=r"z\.yaml:\d+: not valid YAML") as info:
+        mindyn.load(tmp_path / "z.yaml")
+    assert "\n" not in str(info.value)
+
+
 def test_planar_arm_size_is_bounded():
     assert mindyn.load("planar1000").n == 1000  # the bound itself, as the core's
     for name in ("planar1001", "planar100000", "planar9999999999999999999999999"):

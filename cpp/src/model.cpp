@@ -149,24 +149,55 @@ void Model::validate() const {
   for (int i = 0; i < 3; ++i) checkBound(who, "tool translation", tool.translation()[i], L);
 }
 
+namespace {
+/// Length of the valid UTF-8 sequence starting at s[i], or 0 if none starts there.
+size_t utf8Length(const unsigned char* s, size_t i, size_t n) {
+  const unsigned char c = s[i];
+  if (c < 0x80) return 1;
+  size_t len = 0;
+  unsigned lo = 0x80, hi = 0xBF;  // allowed range of the second byte
+  if (c >= 0xC2 && c <= 0xDF) {
+    len = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    len = 3;
+    if (c == 0xE0) lo = 0xA0;  // no overlong forms
+    if (c == 0xED) hi = 0x9F;  // no surrogates
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    len = 4;
+    if (c == 0xF0) lo = 0x90;
+    if (c == 0xF4) hi = 0x8F;  // nothing above U+10FFFF
+  }
+  if (len == 0 || i + len > n || s[i + 1] < lo || s[i + 1] > hi) return 0;
+  for (size_t k = 2; k < len; ++k)
+    if (s[i + k] < 0x80 || s[i + k] > 0xBF) return 0;
+  return len;
+}
+}  // namespace
+
 std::string escapeControl(const std::string& text) {
+  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
+  const size_t n = text.size();
   std::string out;
-  out.reserve(text.size());
-  for (const char ch : text) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c == '\n')
+  out.reserve(n);
+  for (size_t i = 0; i < n;) {
+    const unsigned char c = s[i];
+    const size_t len = utf8Length(s, i, n);
+    if (c == '\n') {
       out += "\\n";
-    else if (c == '\t')
+    } else if (c == '\t') {
       out += "\\t";
-    else if (c == '\r')
+    } else if (c == '\r') {
       out += "\\r";
-    else if (c < 0x20 || c == 0x7f) {
+    } else if (c < 0x20 || c == 0x7f || len == 0) {
       char buf[8];
       std::snprintf(buf, sizeof buf, "\\x%02x", c);
       out += buf;
     } else {
-      out += ch;
+      out.append(text, i, len);
+      i += len;
+      continue;
     }
+    ++i;
   }
   return out;
 }
@@ -174,30 +205,11 @@ std::string escapeControl(const std::string& text) {
 void requireUtf8(const std::string& text, const std::string& source) {
   const auto* s = reinterpret_cast<const unsigned char*>(text.data());
   const size_t n = text.size();
-  size_t i = 0;
-  while (i < n) {
-    const unsigned char c = s[i];
-    size_t len = 0;
-    unsigned lo = 0x80, hi = 0xBF;  // allowed range of the second byte
-    if (c < 0x80) {
-      ++i;
-      continue;
-    } else if (c >= 0xC2 && c <= 0xDF) {
-      len = 2;
-    } else if (c >= 0xE0 && c <= 0xEF) {
-      len = 3;
-      if (c == 0xE0) lo = 0xA0;  // no overlong forms
-      if (c == 0xED) hi = 0x9F;  // no surrogates
-    } else if (c >= 0xF0 && c <= 0xF4) {
-      len = 4;
-      if (c == 0xF0) lo = 0x90;
-      if (c == 0xF4) hi = 0x8F;  // nothing above U+10FFFF
-    }
-    bool ok = len > 0 && i + len <= n && s[i + 1] >= lo && s[i + 1] <= hi;
-    for (size_t k = 2; ok && k < len; ++k) ok = s[i + k] >= 0x80 && s[i + k] <= 0xBF;
-    if (!ok) {  // report the sequence's first byte, as Python's decoder does
+  for (size_t i = 0; i < n;) {
+    const size_t len = utf8Length(s, i, n);
+    if (len == 0) {  // report the sequence's first byte, as Python's decoder does
       char buf[64];
-      std::snprintf(buf, sizeof buf, " (byte 0x%02x at offset %zu)", c, i);
+      std::snprintf(buf, sizeof buf, " (byte 0x%02x at offset %zu)", s[i], i);
       const long line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(i), '\n');
       throw ModelError(source + ":" + std::to_string(line) + ": not UTF-8 text" + buf);
     }

@@ -329,3 +329,18 @@ TEST(Model, ValidateBoundsMagnitudesAndJointCount) {
   EXPECT_TRUE(contains(errorOf<ModelError>([&] { m.validate(); }),
                        "link 'link2': inertial parameter M 1e+300 exceeds the bound 1e+18"));
 }
+
+TEST(Yaml, MessagesStayOneLineOfUtf8) {
+  // NUL bytes make yaml-cpp quote a stray byte in its message; names may hold line breaks
+  const std::string nul = "n" + std::string(8, '\0') +
+                          "ame: three\nconvention: mdh\nsynthetic_inertia: true\nnotes: modified "
+                          "DH\njoints:\n  - {alpha:, d: 0.1, theta: 0, r: 0, inertial: {mass: 1, "
+                          "com: [0.2, 0, 0]}}\n  - {alpha: 0, d: }\n";
+  const std::string e = errorOf<ModelError>([&] { parseYaml(nul, "n.yaml"); });
+  EXPECT_TRUE(contains(e, "n.yaml")) << e;
+  EXPECT_FALSE(contains(e, "\n")) << e;
+  EXPECT_NO_THROW(requireUtf8(e, "message"));
+  EXPECT_EQ(escapeControl("a\nb\x01\xff\xc3\xa9"), "a\\nb\\x01\\xff\xc3\xa9");
+  const std::string u = errorOf<ModelError>([] { parseYaml("name: r\xff\n", "u.yaml"); });
+  EXPECT_TRUE(contains(u, "u.yaml:1: not UTF-8 text (byte 0xff at offset 7)")) << u;
+}

@@ -151,8 +151,8 @@ Eigen::Matrix3d inertiaTensor(const Eigen::Ref<const Eigen::VectorXd>& p10);
 /// valid UTF-8 (the encoding of URDF and YAML files, and what names must be to reach Python).
 void requireUtf8(const std::string& text, const std::string& source);
 
-/// `text` with control characters written as escapes (\n, \t, \r, \xNN), so that a message
-/// quoting names from a file stays on one line.
+/// `text` with control characters and bytes that are not UTF-8 written as escapes (\n, \t, \r,
+/// \xNN), so that a message quoting a file stays on one line and reaches Python intact.
 std::string escapeControl(const std::string& text);
 
 /// Pinocchio's dynamic-parameter order per body: m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz.
