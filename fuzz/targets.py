@@ -18,7 +18,7 @@ import numpy as np
 
 with atheris.instrument_imports(include=["mindyn"]):
     import mindyn
-    from mindyn.data import DataError, read_csv
+    from mindyn.identification.data import DataError, read_csv
 
 _DIR = tempfile.mkdtemp(prefix="mindyn-fuzz-")
 _ALLOWED = (mindyn.ModelError, mindyn.RobotFileNotFoundError, DataError)

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from mindyn import cli, load
-from mindyn.data import (
+from mindyn.identification import IdentificationError, identify
+from mindyn.identification.data import (
     DataError,
     DataFileNotFoundError,
     differentiate,
@@ -14,7 +15,6 @@ from mindyn.data import (
     truth_path,
     write_csv,
 )
-from mindyn.identification import IdentificationError, identify
 
 # The ZCR07S study, Table 4: motor rated torque [N m] and reducer ratio of the ZCR07S joints.
 SEED_RATED = [2.390, 2.390, 1.270, 0.318, 0.318, 0.318]

@@ -9,8 +9,8 @@ import mindyn
 import numpy as np
 import pytest
 from mindyn import cli
-from mindyn.data import read_csv
-from mindyn.excitation import (
+from mindyn.identification.data import read_csv
+from mindyn.identification.excitation import (
     FourierTrajectory,
     criterion_value,
     excitation_limits,

@@ -17,8 +17,6 @@ import pinocchio as pin
 import pytest
 from conftest import pinocchio_model
 from mindyn import cli
-from mindyn.data import JointData, fill_derivatives, read_csv
-from mindyn.excitation import FourierTrajectory, optimize_excitation, random_trajectory
 from mindyn.identification import (
     RankDeficientError,
     dynamic_system,
@@ -27,7 +25,13 @@ from mindyn.identification import (
     true_base_values,
     validate,
 )
-from mindyn.report import ZCR07S_STUDY_TABLE6
+from mindyn.identification.data import JointData, fill_derivatives, read_csv
+from mindyn.identification.excitation import (
+    FourierTrajectory,
+    optimize_excitation,
+    random_trajectory,
+)
+from mindyn.identification.report import ZCR07S_STUDY_TABLE6
 from mindyn.simulate import SensorNoise, simulate_inverse, simulate_tracking
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -299,12 +303,21 @@ def test_zcr07s_pipeline_on_zcr07s():
     )
 
 
-@pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.parametrize("seed", [1, 2, 3, 4])
 def test_both_models_predict_validation_torques_to_the_noise_level(tmp_path, seed):
     """A random 3-joint arm (MDH, rotor inertia, friction) written by the test: closed-loop logs
     with torque noise of 1 % of the median joint effort on every joint and 20-bit encoders.
     Both models (unpruned) predict the validation torques with an RMS error within 1.2 times
-    the injected noise on each joint."""
+    the injected noise on each joint.
+
+    The fit log holds three periods of the excitation. The energy model sees one equation per
+    window, so over one period (250 windows for about 22 parameters) the spread of its estimate
+    alone lifts the validation error by up to 22 % on some arms, and how much depends on where
+    the excitation optimiser stops (which moves with the scipy release). Over three periods the
+    worst of eight arms, with the optimiser stopped after 10, 30 or 80 iterations, is 1.07 for
+    either model (the dynamic model's excess is mostly the filtered acceleration): the bound
+    1.2 leaves 0.13 of margin, and a biased estimate (a wrong regressor column, a lost friction
+    term) exceeds it by far."""
     robot = mindyn.load(str(random_arm_yaml(tmp_path / "arm.yaml", 3, seed)))
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     exc = optimize_excitation(robot, base=base, starts=1, maxiter=30, seed=seed, progress=False)
@@ -312,7 +325,12 @@ def test_both_models_predict_validation_torques_to_the_noise_level(tmp_path, see
     kw = dict(
         rotor=True, friction=True, noise=SensorNoise(torque=sd, quantization=2 * np.pi / 2**20)
     )
-    data = as_data(simulate_tracking(robot, exc.trajectory, seed=1, **kw))
+    periods = 3
+    data = as_data(
+        simulate_tracking(
+            robot, exc.trajectory, seed=1, duration=periods * exc.trajectory.period, **kw
+        )
+    )
     vdata = as_data(
         simulate_tracking(robot, random_trajectory(robot, seed=100 + seed), seed=2, **kw)
     )

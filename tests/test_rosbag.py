@@ -10,8 +10,8 @@ import mindyn
 import numpy as np
 import pytest
 from mindyn import cli
-from mindyn.data import DataError, DataFileNotFoundError, read_csv, write_csv
-from mindyn.rosbag import is_rosbag, read_rosbag
+from mindyn.identification.data import DataError, DataFileNotFoundError, read_csv, write_csv
+from mindyn.identification.rosbag import is_rosbag, read_rosbag
 
 rosbags = pytest.importorskip("rosbags")
 from rosbags.rosbag1 import Writer as Writer1  # noqa: E402

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <random>
 #include <stdexcept>
 #include <type_traits>
@@ -73,7 +74,9 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
     reduce(x, end, c, 0, nb);
     Eigen::Index r = 0;
     const double rel = end > 0 ? x.head(end).cwiseAbs().maxCoeff(&r) / colmax[c] : 0.0;
-    if (rel > tol) {
+    // A matrix of m rows has at most min(m, P) pivots; a residual left once they are all taken
+    // is rounding noise, so the column is dependent.
+    if (rel > tol && nb < U.cols()) {
       U.col(nb).head(end) = x.head(end);
       uend.push_back(end);
       prow.push_back(static_cast<int>(r));
@@ -144,18 +147,20 @@ struct Samples {
   Eigen::MatrixXd W, wL, wH;
 };
 
-Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsigned seed) {
+// `m` states give the regressor rows (n each); the energy rows (one per state) come from the
+// first `me` states and further ones when me > m.
+Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, int me, unsigned seed) {
   const int n = model.nq(), P = layout.size(n);
   Data data(model);
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   Samples s;
   s.W.resize(static_cast<long>(m) * n, P);
-  s.wL.resize(m, P);
-  s.wH.resize(m, P);
+  s.wL.resize(me, P);
+  s.wH.resize(me, P);
   Eigen::VectorXd q(n), dq(n), ddq(n), wK(P), wP(P);
   Eigen::MatrixXd W(n, P);
-  for (int i = 0; i < m; ++i) {
+  for (int i = 0; i < std::max(m, me); ++i) {
     for (int k = 0; k < n; ++k) {
       const JointLimits& l = model.joints[k].limits;
       const bool bounded = std::isfinite(l.lower) && std::isfinite(l.upper);
@@ -166,11 +171,15 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, unsi
       dq[k] = 2.0 * u(rng);
       ddq[k] = 2.0 * u(rng);
     }
-    regressor(model, data, q, dq, ddq, layout, W);
-    s.W.middleRows(static_cast<long>(i) * n, n) = W;
-    energyRegressors(model, data, q, dq, layout, wK, wP);
-    s.wL.row(i) = (wK - wP).transpose();
-    s.wH.row(i) = (wK + wP).transpose();
+    if (i < m) {
+      regressor(model, data, q, dq, ddq, layout, W);
+      s.W.middleRows(static_cast<long>(i) * n, n) = W;
+    }
+    if (i < me) {
+      energyRegressors(model, data, q, dq, layout, wK, wP);
+      s.wL.row(i) = (wK - wP).transpose();
+      s.wH.row(i) = (wK + wP).transpose();
+    }
   }
   return s;
 }
@@ -482,7 +491,7 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
 
   Eigen::MatrixXd ZL, ZH, ZE;
   if (options.method == BaseMethod::Projection) {
-    const InfluenceCoordinates ic = influenceCoordinates(model, layout);
+    const InfluenceCoordinates ic = influenceCoordinates(model, layout, options.projection_budget);
     bp.basis_rows = ic.rows();
     bp.terms_formed = ic.terms_formed;
     const Reduced red = reduceRows(ic);
@@ -499,8 +508,31 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
       ZE(keep + 2 * k + 1, layout.coulombIndex(k)) = 1.0;
     }
   } else {
+    // The sampled matrices need at least as many rows as the rank they are to show (at most P
+    // each), with a margin so that random states keep the smallest singular values clear of
+    // the tolerance: the regressor stacks n rows per state, the energies one.
     const int m = options.samples > 0 ? options.samples : std::max(40, 3 * P / std::max(1, n) + 20);
-    Samples s = sampleRegressors(model, layout, m, options.seed);
+    const int me = std::max(m, P + std::max(20, P / 2));
+    if (static_cast<long>(m) * n < P)
+      throw ModelError("samples = " + std::to_string(m) + " states give " +
+                       std::to_string(static_cast<long>(m) * n) + " regressor rows for " +
+                       std::to_string(P) + " parameters; give at least " +
+                       std::to_string((P + n - 1) / n) + " (0: automatic)");
+    // Peak memory: the samples (regressor and two energy matrices), and for the regressor's
+    // elimination its triangular factor and residuals (rows x P each) and F (P x P).
+    const double rows = static_cast<double>(m) * n;
+    const double bytes = 8.0 * P * (3.0 * rows + 2.0 * me + 2.0 * P);
+    if (bytes > options.numerical_budget) {
+      char buf[320];
+      std::snprintf(buf, sizeof buf,
+                    "the numerical method would need about %.2g GiB for this %d-joint chain (%d "
+                    "parameters, %.0f stacked regressor rows), over its budget of %.2g GiB; its "
+                    "memory grows with the square and its time with the cube of the number of "
+                    "joints",
+                    bytes / 1073741824.0, n, P, rows, options.numerical_budget / 1073741824.0);
+      throw ModelError(buf);
+    }
+    Samples s = sampleRegressors(model, layout, m, me, options.seed);
     // The energy sets: differences remove the constant, so keep one absolute sample row.
     ZL = s.wL;
     ZH = s.wH;

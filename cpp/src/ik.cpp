@@ -108,6 +108,8 @@ IkSolver::IkSolver(const Model& model, IkOptions options)
       xc_(model.nq()),
       dq_(model.nq()),
       best_(model.nq()),
+      xt_(model.nq()),
+      fixed_(model.nq()),
       J_(6, model.nq()),
       Jc_(6, model.nq()),
       Jw_(6, model.nq()) {
@@ -126,19 +128,17 @@ IkSolver::IkSolver(const Model& model, IkOptions options)
   }
 }
 
-double IkSolver::poseError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target,
-                           Eigen::Matrix<double, 6, 1>& e) noexcept {
-  e.head<3>() = target.translation() - T.translation();
-  const Eigen::Matrix3d dR = target.linear() * T.linear().transpose();
-  // rotation vector of dR (log map), accurate near 0 and pi
+namespace {
+// Rotation vector of dR (log map), accurate near 0 and pi; returns the angle.
+double rotationLog(const Eigen::Matrix3d& dR, Eigen::Ref<Eigen::Vector3d> out) noexcept {
   const double c = std::max(-1.0, std::min(1.0, 0.5 * (dR.trace() - 1.0)));
   const Eigen::Vector3d w(dR(2, 1) - dR(1, 2), dR(0, 2) - dR(2, 0), dR(1, 0) - dR(0, 1));
   const double s = 0.5 * w.norm();
   const double angle = std::atan2(s, c);
   if (s > 1e-6) {
-    e.tail<3>() = w * (angle / (2.0 * s));
+    out = w * (angle / (2.0 * s));
   } else if (c > 0.0) {
-    e.tail<3>() = 0.5 * w;  // small angle: sin(angle) ~ angle
+    out = 0.5 * w;  // small angle: sin(angle) ~ angle
   } else {
     // angle ~ pi: the axis from the symmetric part, dR ~ 2 a a^T - I
     const Eigen::Matrix3d B = 0.5 * (dR + dR.transpose()) + Eigen::Matrix3d::Identity();
@@ -146,9 +146,31 @@ double IkSolver::poseError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& 
     B.diagonal().maxCoeff(&i);
     Eigen::Vector3d a = B.col(i).normalized();
     if (a.dot(w) < 0) a = -a;
-    e.tail<3>() = angle * a;
+    out = angle * a;
   }
+  return angle;
+}
+}  // namespace
+
+double IkSolver::poseError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target,
+                           Eigen::Matrix<double, 6, 1>& e) noexcept {
+  e.head<3>() = target.translation() - T.translation();
+  rotationLog(target.linear() * T.linear().transpose(), e.tail<3>());
   return e.cwiseAbs().maxCoeff();
+}
+
+double IkSolver::logError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target) noexcept {
+  // M = target^-1 T; log6(M) = (V(w)^-1 p, w) with w = log3(R) of angle t and
+  // V^-1 = I - W / 2 + k W^2, k = (1 - t sin t / (2 (1 - cos t))) / t^2 (1/12 + t^2/720 near 0).
+  const Eigen::Matrix3d R = target.linear().transpose() * T.linear();
+  const Eigen::Vector3d p = target.linear().transpose() * (T.translation() - target.translation());
+  Eigen::Vector3d w;
+  const double t = rotationLog(R, w);
+  const double k = t < 1e-4 ? 1.0 / 12 + t * t / 720
+                            : (1.0 - t * std::sin(t) / (2.0 * (1.0 - std::cos(t)))) / (t * t);
+  const Eigen::Vector3d wp = w.cross(p);
+  const Eigen::Vector3d v = p - 0.5 * wp + k * w.cross(wp);
+  return std::sqrt(v.squaredNorm() + w.squaredNorm());
 }
 
 void IkSolver::bringInside(Eigen::Ref<Eigen::VectorXd> q) const noexcept {
@@ -213,7 +235,8 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
     }
     bringInside(x_);
     kin_.poseAndJacobian(x_, T, J_);
-    double err = poseError(T, target, e);
+    poseError(T, target, e);
+    double err = logError(T, target);
     double cost = 0.5 * (W.asDiagonal() * e).squaredNorm();
     double mu = 0.3;
     double err_checkpoint = err;
@@ -223,9 +246,56 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
         best_ = x_;
       }
       if (err <= tol) {
-        q = x_;
+        // Converged: Newton steps (damping at rounding level) from here, the best point kept.
+        // Near a singularity the first steps may overshoot before they converge, so a step is
+        // taken even when it does not improve, up to kIkRefineSteps or a thousandfold growth.
+        // Below `noise` (a few hundred roundings of the target's size) nothing is to gain.
+        const double noise =
+            256 * std::numeric_limits<double>::epsilon() * (1.0 + target.translation().norm());
+        double best = err;
+        best_ = x_;
+        for (int r = 0; r < kIkRefineSteps && err > noise; ++r) {
+          ++result.iterations;
+          std::fill(fixed_.begin(), fixed_.end(), 0);
+          // A joint the step takes past a limit is held there and the step taken again
+          // without it (at most one pass per joint).
+          for (int pass = 0; pass <= n_; ++pass) {
+            Jw_.noalias() = W.asDiagonal() * J_;
+            for (int k = 0; k < n_; ++k)
+              if (fixed_[k]) Jw_.col(k).setZero();
+            A.noalias() = Jw_ * Jw_.transpose();
+            A.diagonal().array() += 1e-12 * (1.0 + A.diagonal().maxCoeff());
+            llt_.compute(A);
+            const Eigen::Matrix<double, 6, 1> y = llt_.solve(W.asDiagonal() * e);
+            dq_.noalias() = Jw_.transpose() * y;
+            xc_ = x_ + dq_;
+            xt_ = xc_;
+            bringInside(xc_);
+            bool held = false;
+            for (int k = 0; k < n_; ++k)
+              if (std::abs(std::remainder(xc_[k] - xt_[k], kTwoPi)) > 1e-12 && !fixed_[k]) {
+                fixed_[k] = 1;
+                held = true;
+              }
+            if (!held) break;
+          }
+          kin_.poseAndJacobian(xc_, Tc, Jc_);
+          const double errc = logError(Tc, target);
+          if (!(errc <= 1e3 * best)) break;
+          poseError(Tc, target, e);
+          x_.swap(xc_);
+          J_.swap(Jc_);
+          err = errc;
+          if (err < best) {
+            best = err;
+            best_ = x_;
+          } else if (r > 0 && err >= 0.5 * best && best <= 1e3 * noise) {
+            break;  // at rounding level: no further gain
+          }
+        }
+        q = best_;
         result.status = IkStatus::Converged;
-        result.error = err;
+        result.error = best;
         return result;
       }
       ++result.iterations;
@@ -246,7 +316,8 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
       xc_ = x_ + dq_;
       bringInside(xc_);
       kin_.poseAndJacobian(xc_, Tc, Jc_);
-      const double errc = poseError(Tc, target, ec);
+      poseError(Tc, target, ec);
+      const double errc = logError(Tc, target);
       const double costc = 0.5 * (W.asDiagonal() * ec).squaredNorm();
       if (costc < cost) {
         x_.swap(xc_);

@@ -2,8 +2,12 @@
 
 #include <Eigen/Geometry>
 #include <array>
+#include <bitset>
 #include <cmath>
 #include <cstring>
+#include <iomanip>
+#include <map>
+#include <sstream>
 
 #include "spatial.hpp"
 
@@ -359,6 +363,114 @@ using Entry = InfluenceCoordinates::Entry;
 // Relative size below which a coefficient is rounding noise of exactly-zero structure.
 constexpr double kNoise = 1e-13;
 
+// Joint frames aligned so that every joint moves about / along its z axis.
+void alignedFrames(const Model& model, std::vector<Eigen::Isometry3d>& pre,
+                   std::vector<Eigen::Isometry3d>& post) {
+  const int n = model.nq();
+  pre.resize(n);
+  post.resize(n);
+  for (int k = 0; k < n; ++k) {
+    const Joint& j = model.joints[k];
+    Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
+    C.linear() = alignZ(j.axis);
+    pre[k] = j.pre * C;
+    post[k] = C.inverse() * j.post;
+  }
+}
+
+// Per-link kinetic parameter forms E'_p (10 per link) in the aligned joint frame, `post` the
+// transform from it to the link frame.
+std::array<Matrix6d, 10> linkForms(const Eigen::Isometry3d& post) {
+  std::array<Matrix6d, 10> E;
+  for (auto& e : E) e.setZero();
+  E[0](0, 0) = 1;
+  E[1](0, 1) = E[1](1, 0) = 1;
+  E[2](0, 2) = E[2](2, 0) = 1;
+  E[3](1, 1) = 1;
+  E[4](1, 2) = E[4](2, 1) = 1;
+  E[5](2, 2) = 1;
+  for (int a = 0; a < 3; ++a) {
+    const Eigen::Matrix3d S = skew(Eigen::Vector3d::Unit(a));
+    E[6 + a].topRightCorner<3, 3>() = S;
+    E[6 + a].bottomLeftCorner<3, 3>() = S.transpose();
+  }
+  E[9].bottomRightCorner<3, 3>().setIdentity();
+  const Matrix6d A = adjoint(post.inverse());
+  if (A != Matrix6d::Identity())  // the link frame is not the joint frame
+    for (auto& e : E) {
+      Matrix6d f = Matrix6d::Zero();  // A^T e A over the few non-zero entries of e
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j)
+          if (e(i, j) != 0.0) f.noalias() += e(i, j) * A.row(i).transpose() * A.row(j);
+      e = f;
+      prune(e, kNoise * maxAbs(e));
+    }
+  return E;
+}
+
+// The twist map of the fixed transform before a joint, rounding noise of exact zeros removed.
+Matrix6d jointMap(const Eigen::Isometry3d& T) {
+  Matrix6d Cd = adjoint(T.inverse());
+  prune(Cd, 1e-16 * std::max(1.0, maxAbs(Cd)));
+  return Cd;
+}
+
+// --- Cost of the recursion, on sparsity patterns ---------------------------------------------
+// A term is represented by the set of its entries that may be non-zero (bit masks); terms of
+// equal pattern and kind behave alike, so only their number is carried.
+using Mask = std::uint32_t;
+
+Sym6 genericOn(Mask mask) {  // distinct positive values on the mask: no sum or difference cancels
+  Sym6 g{};
+  for (int q = 0; q < 21; ++q)
+    if (mask >> q & 1u) g[q] = std::sqrt(q + 2.0);
+  return g;
+}
+Mask maskOf(const Sym6& s) {
+  Mask m = 0;
+  for (int q = 0; q < 21; ++q)
+    if (s[q] != 0.0) m |= 1u << q;
+  return m;
+}
+// Pattern of C Q C^T.
+Mask congruencePattern(const bool C[6][6], Mask q) {
+  bool T[6][6] = {};  // C Q
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b)
+      if (q >> kSym.idx[a][b] & 1u)
+        for (int r = 0; r < 6; ++r)
+          if (C[r][a]) T[r][b] = true;
+  Mask out = 0;
+  for (int i = 0; i < 6; ++i)
+    for (int j = i; j < 6; ++j)
+      for (int b = 0; b < 6 && !(out >> kSym.idx[i][j] & 1u); ++b)
+        if (T[i][b] && C[j][b]) out |= 1u << kSym.idx[i][j];
+  return out;
+}
+template <int N>
+unsigned applyPattern(const Eigen::Matrix<double, N, N>& M, unsigned x, bool transpose) {
+  unsigned out = 0;
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j < N; ++j)
+      if ((transpose ? M(j, i) : M(i, j)) != 0.0 && (x >> j & 1u)) out |= 1u << i;
+  return out;
+}
+
+std::string overBudget(int n, const ProjectionCost& c, double budget) {
+  auto gib = [](double b) {
+    std::ostringstream o;
+    o << std::setprecision(b < 10 * 1073741824.0 ? 2 : 3) << b / 1073741824.0 << " GiB";
+    return o.str();
+  };
+  std::ostringstream o;
+  o << std::setprecision(2) << "the projection method would form up to " << c.rows
+    << " basis rows and " << c.terms << " terms for this " << n << "-joint chain, up to "
+    << gib(c.bytes) << " of memory (estimated before computing), over its budget of " << gib(budget)
+    << " (the basis grows geometrically along runs of parallel or general joint axes); "
+       "the numerical method (--method numerical, method='numerical') handles long chains";
+  return o.str();
+}
+
 }  // namespace
 
 std::uint64_t packBasis(int l0, const std::vector<int>& l) {
@@ -444,53 +556,180 @@ Eigen::MatrixXd InfluenceCoordinates::dense() const {
   return Z;
 }
 
-InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout) {
+ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
+  model.validate();
+  const int n = model.nq();
+  std::vector<Eigen::Isometry3d> pre, post;
+  alignedFrames(model, pre, post);
+  const auto& kinds = patterns();
+  Matrix6d R6[3], N6 = Matrix6d::Zero();
+  for (auto& r : R6) r.setZero();
+  R6[0](2, 2) = R6[0](5, 5) = 1;
+  for (int i : {0, 1, 3, 4}) R6[1](i, i) = 1;
+  R6[2](0, 1) = R6[2](3, 4) = 1;
+  R6[2](1, 0) = R6[2](4, 3) = -1;
+  N6.bottomLeftCorner<3, 3>() = -skew(Eigen::Vector3d::UnitZ());
+  Eigen::Matrix4d R4[3], N4 = Eigen::Matrix4d::Zero();
+  for (auto& r : R4) r.setZero();
+  R4[0](2, 2) = R4[0](3, 3) = 1;
+  R4[1](0, 0) = R4[1](1, 1) = 1;
+  R4[2](0, 1) = -1;
+  R4[2](1, 0) = 1;
+  N4(2, 3) = 1;
+
+  ProjectionCost cost;
+  std::map<std::pair<int, Mask>, double> Q, Qnext;  // (kind, pattern) -> number of terms
+  std::map<unsigned, double> V, Vnext, R, Rnext;    // pattern -> number of terms
+  {
+    unsigned g = 0;
+    for (int a = 0; a < 3; ++a)
+      if (model.gravity[a] != 0.0) g |= 1u << a;
+    if (g) R[g] = 1;
+  }
+  double held = 0, stages = 0;  // kinetic terms held; the most held by two stages at once
+  Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
+  for (int k = 0; k < n; ++k) {
+    const bool revolute = model.joints[k].type == JointType::Revolute;
+    const Matrix6d Cd = jointMap(prevPost * pre[k]);
+    bool C[6][6];
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 6; ++j) C[i][j] = Cd(i, j) != 0.0;
+    const int s = revolute ? 2 : 5;
+    const bool last = k + 1 == n;
+    // forms[q]: the parameters of link k an entry q of a term reaches
+    unsigned forms[21] = {};
+    {
+      const auto E = linkForms(post[k]);
+      for (int i = 0; i < 6; ++i)
+        for (int j = i; j < 6; ++j)
+          for (int p = 0; p < 10; ++p)
+            if (E[p](i, j) != 0.0 || E[p](j, i) != 0.0) forms[kSym.idx[i][j]] |= 1u << p;
+    }
+    double formed = 0, vterms = 0;
+    for (const auto& e : V) vterms += e.second;
+    // the recursion reserves the next stage at its bound
+    stages = std::max(stages, held + (last ? 0.0 : held * (revolute ? 5 : 3) + vterms * 3 + 1));
+    Qnext.clear();
+    auto add = [&](int kind, Mask m, double count, bool newRow) {
+      formed += count;
+      unsigned reach = 0;
+      for (int q = 0; q < 21; ++q)
+        if (m >> q & 1u) reach |= forms[q];
+      cost.entries += static_cast<double>(std::bitset<10>(reach).count()) * count;
+      if (newRow) cost.rows += count;
+      if (!last) Qnext[{kind, m}] += count;
+    };
+    for (const auto& [km, count] : Q) {
+      Mask where = 0;
+      for (int i = 0; i < kinds[km.first].count; ++i) where |= 1u << kinds[km.first].idx[i];
+      const Mask b = congruencePattern(C, km.second & where);
+      if (b == 0) continue;
+      if (revolute) {
+        Sym6 parts[5];
+        double big[5];
+        splitRotation(genericOn(b), 0.0, parts, big);
+        for (int l = 0; l < 5; ++l)
+          if (big[l] > 0.0) add(l, maskOf(parts[l]), count, l != 0);
+      } else {
+        Matrix6d Bf;
+        toFull(genericOn(b), Bf);  // positive entries: the sums below do not cancel
+        const Matrix6d Na = N6.cwiseAbs();
+        const Matrix6d NB = Na * Bf;
+        const Matrix6d parts[3] = {Bf, NB + NB.transpose(), NB * Na.transpose()};
+        for (int l = 0; l < 3; ++l) {
+          const Mask m = maskOf(toSym(parts[l]));
+          if (m != 0) add(kAny, m, count, l != 0);
+        }
+      }
+    }
+    Vnext.clear();
+    for (const auto& [x, count] : V) {
+      const unsigned y = applyPattern<6>(Cd, x, false);
+      if (y == 0) continue;
+      unsigned parts[3];
+      int np;
+      if (revolute) {
+        for (int a = 0; a < 3; ++a) parts[a] = applyPattern<6>(R6[a], y, false);
+        np = 3;
+      } else {
+        parts[0] = y;
+        parts[1] = applyPattern<6>(N6, y, false);
+        np = 2;
+      }
+      for (int l = 0; l < np; ++l) {
+        if (parts[l] == 0) continue;
+        Vnext[parts[l]] += count;
+        Mask cross = 0;
+        for (int i = 0; i < 6; ++i)
+          if (parts[l] >> i & 1u) cross |= 1u << kSym.idx[i][s];
+        add(revolute ? kCross2 : kCross5, cross, count, true);
+      }
+    }
+    Vnext[1u << s] += 1;
+    add(revolute ? kDiag2 : kDiag5, 1u << kSym.idx[s][s], 1, true);
+    std::swap(Q, Qnext);
+    std::swap(V, Vnext);
+    held = 0;
+    for (const auto& e : Q) held += e.second;
+
+    Rnext.clear();
+    const Eigen::Matrix4d Pre = (prevPost * pre[k]).matrix();
+    for (const auto& [r, count] : R) {
+      const unsigned y = applyPattern<4>(Pre, r, true);
+      if (y == 0) continue;
+      unsigned parts[3];
+      int np;
+      if (revolute) {
+        for (int a = 0; a < 3; ++a) parts[a] = applyPattern<4>(R4[a], y, true);
+        np = 3;
+      } else {
+        parts[0] = y;
+        parts[1] = applyPattern<4>(N4, y, true);
+        np = 2;
+      }
+      for (int l = 0; l < np; ++l)
+        if (parts[l] != 0) {
+          Rnext[parts[l]] += count;
+          if (l != 0) cost.rows += count;
+        }
+    }
+    std::swap(R, Rnext);
+    double rterms = 0;
+    for (const auto& e : R) rterms += e.second;
+    cost.terms += formed + rterms;
+    cost.entries += 4 * rterms;
+    cost.largest_stage = std::max(cost.largest_stage, formed);
+    prevPost = post[k];
+  }
+  if (!R.empty() || layout.rotor) cost.rows += 1;  // the constant
+  // Peak memory: two stages of kinetic terms, the entries and keys (vectors grown by doubling,
+  // so up to twice their size), then the row reduction's sorted copy of the entries.
+  cost.bytes = stages * sizeof(QTerm) + 2.0 * sizeof(InfluenceCoordinates::Entry) * cost.entries +
+               2.0 * sizeof(std::uint64_t) * cost.rows + 12.0 * cost.entries;
+  return cost;
+}
+
+InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout,
+                                          double budget) {
   model.validate();
   const int n = model.nq();
   if (n > kMaxJoints)
     throw ModelError("the projection method handles at most " + std::to_string(kMaxJoints) +
-                     " joints, the model has " + std::to_string(n));
+                     " joints, the model has " + std::to_string(n) +
+                     "; the numerical method (--method numerical, method='numerical') handles "
+                     "long chains");
   if (n * (n + 1) / 2 >= (1 << kL0Bits)) throw ModelError("too many joints for the basis index");
 
-  // Joint frames aligned so that every joint moves about / along its z axis.
-  std::vector<Eigen::Isometry3d> pre(n), post(n);
-  for (int k = 0; k < n; ++k) {
-    const Joint& j = model.joints[k];
-    Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
-    C.linear() = alignZ(j.axis);
-    pre[k] = j.pre * C;
-    post[k] = C.inverse() * j.post;
+  {
+    const ProjectionCost cost = projectionCost(model, layout);
+    if (cost.bytes > budget) throw ModelError(overBudget(n, cost, budget));
   }
+  std::vector<Eigen::Isometry3d> pre, post;
+  alignedFrames(model, pre, post);
 
   // Per-link kinetic parameter forms E'_p (10 per link) in the aligned joint frame.
   const auto& kinds = patterns();
-  auto kineticForms = [&](int k) {
-    std::array<Matrix6d, 10> E;
-    for (auto& e : E) e.setZero();
-    E[0](0, 0) = 1;
-    E[1](0, 1) = E[1](1, 0) = 1;
-    E[2](0, 2) = E[2](2, 0) = 1;
-    E[3](1, 1) = 1;
-    E[4](1, 2) = E[4](2, 1) = 1;
-    E[5](2, 2) = 1;
-    for (int a = 0; a < 3; ++a) {
-      const Eigen::Matrix3d S = skew(Eigen::Vector3d::Unit(a));
-      E[6 + a].topRightCorner<3, 3>() = S;
-      E[6 + a].bottomLeftCorner<3, 3>() = S.transpose();
-    }
-    E[9].bottomRightCorner<3, 3>().setIdentity();
-    const Matrix6d A = adjoint(post[k].inverse());
-    if (A != Matrix6d::Identity())  // the link frame is not the joint frame
-      for (auto& e : E) {
-        Matrix6d f = Matrix6d::Zero();  // A^T e A over the few non-zero entries of e
-        for (int i = 0; i < 6; ++i)
-          for (int j = 0; j < 6; ++j)
-            if (e(i, j) != 0.0) f.noalias() += e(i, j) * A.row(i).transpose() * A.row(j);
-        e = f;
-        prune(e, kNoise * maxAbs(e));
-      }
-    return TraceForms(E, kinds.data(), kKinds);
-  };
+  auto kineticForms = [&](int k) { return TraceForms(linkForms(post[k]), kinds.data(), kKinds); };
 
   // Rotation by -q about z, as (1, cos, sin) coefficients of the 6x6 twist map.
   Matrix6d R6[3];
@@ -544,9 +783,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
   for (int k = 0; k < n; ++k) {
     const bool revolute = model.joints[k].type == JointType::Revolute;
-    Matrix6d Cd = adjoint((prevPost * pre[k]).inverse());
+    const Matrix6d Cd = jointMap(prevPost * pre[k]);
     const double cscale = std::max(1.0, maxAbs(Cd));
-    prune(Cd, 1e-16 * cscale);
     const Sparse6 C(Cd);
     const int s = revolute ? 2 : 5;  // the joint's twist is S = e_s
     const Vector6d S = Vector6d::Unit(s);

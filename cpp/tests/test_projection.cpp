@@ -106,6 +106,46 @@ TEST(Projection, CoordinatesOfRandomChains) {
   }
 }
 
+// The cost counted before the recursion bounds what the recursion then forms.
+TEST(Projection, CostEstimateBoundsTheRecursion) {
+  auto check = [](const Model& model, ParameterLayout layout, const std::string& what) {
+    const ProjectionCost c = projectionCost(model, layout);
+    const InfluenceCoordinates ic = influenceCoordinates(model, layout);
+    EXPECT_GE(c.terms, ic.terms_formed) << what;
+    EXPECT_GE(c.rows, ic.rows()) << what;
+    EXPECT_GE(c.entries, static_cast<double>(ic.entries.size())) << what;
+    EXPECT_GT(c.bytes, 0.0) << what;
+  };
+  for (const char* name : {"puma560", "stanford", "zcr07s"}) {
+    const Model model = loadYaml(test::robotFile(name));
+    check(model, {}, name);
+    check(model, {true, false}, std::string(name) + " with Ia");
+  }
+  check(planarArm(7, true), {}, "planar7");
+  std::mt19937 rng(5);
+  for (int n = 2; n <= 6; ++n)
+    check(parseUrdf(randomUrdf(rng, n), "", "random"), {true, false},
+          "random chain n=" + std::to_string(n));
+  check(planarArm(5, false), {true, false}, "planar5h");
+}
+
+TEST(Projection, OverBudgetIsRefusedBeforeComputing) {
+  const Model model = planarArm(6, true);
+  const ProjectionCost c = projectionCost(model);
+  try {
+    influenceCoordinates(model, {}, c.bytes / 2);
+    FAIL() << "not refused";
+  } catch (const ModelError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("6-joint chain"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("--method numerical"), std::string::npos) << msg;
+  }
+  EXPECT_NO_THROW(influenceCoordinates(model, {}, c.bytes));
+  BaseOptions o;
+  o.projection_budget = c.bytes / 2;
+  EXPECT_THROW(computeBaseParameters(model, o), ModelError);
+}
+
 TEST(Projection, BasisIndexRoundTrip) {
   // l0 = J(4, 3) = 4 * 3 / 2 + 3 = 9: the product dq3 dq4
   const std::vector<int> l = {1, 5, 3, 2, 4, 1};

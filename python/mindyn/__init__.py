@@ -6,15 +6,18 @@
 - :func:`base_parameters`: base inertial parameters by the projection method (or the numerical
   method), regrouping matrix, formulas, base regressors;
 - :mod:`mindyn.codegen`: inverse dynamics, gravity and base regressor as C or Structured Text;
-- :mod:`mindyn.excitation`, :mod:`mindyn.data`, :mod:`mindyn.simulate`,
-  :mod:`mindyn.identification`: excitation trajectories, joint logs, simulated measurements,
-  least-squares identification with statistics and validation;
+- :mod:`mindyn.identification` (excitation trajectories, joint logs, least-squares
+  identification with statistics, validation and reports) and :mod:`mindyn.simulate` (simulated
+  measurements);
 - :mod:`mindyn.control`, :func:`ik`: Slotine-Li regressor, adaptive PD and other controllers in
   closed-loop simulation, inverse kinematics.
 """
 
-from ._core import ModelError, RobotFileNotFoundError, inertial_from_com, inertial_from_urdf
+from . import _args
+from ._core import ModelError, RobotFileNotFoundError
 from ._core import from_pinocchio_order as _from_pin
+from ._core import inertial_from_com as _from_com
+from ._core import inertial_from_urdf as _from_urdf
 from ._core import to_pinocchio_order as _to_pin
 from .base import BaseParameters, base_parameters
 from .control import coriolis_matrix, slotine_li_regressor
@@ -44,9 +47,32 @@ __all__ = [
 def to_pinocchio_order(params):
     """Inertial parameters ``[XX XY XZ YY YZ ZZ MX MY MZ M]`` per link, shape (10 n,), to
     Pinocchio's dynamic-parameter order ``[m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]``."""
-    return _to_pin(params)
+    return _to_pin(_args.array(params, "params", (None,)))
 
 
 def from_pinocchio_order(params):
     """Inverse of :func:`to_pinocchio_order`."""
-    return _from_pin(params)
+    return _from_pin(_args.array(params, "params", (None,)))
+
+
+def inertial_from_com(mass, com, inertia):
+    """The ten inertial parameters about the link origin ``[XX XY XZ YY YZ ZZ MX MY MZ M]`` of a
+    body of ``mass`` with centre of mass ``com`` (3,) and inertia tensor ``inertia`` (3, 3) about
+    the centre of mass, all in link axes."""
+    return _from_com(
+        _args.number(mass, "mass"),
+        _args.array(com, "com", (3,)),
+        _args.array(inertia, "inertia", (3, 3)),
+    )
+
+
+def inertial_from_urdf(mass, com, rotation, inertia):
+    """As :func:`inertial_from_com` for a URDF ``<inertial>``: ``inertia`` (3, 3) about the
+    centre of mass in the axes of its origin, which is rotated by ``rotation`` (3, 3) from the
+    link axes."""
+    return _from_urdf(
+        _args.number(mass, "mass"),
+        _args.array(com, "com", (3,)),
+        _args.array(rotation, "rotation", (3, 3)),
+        _args.array(inertia, "inertia", (3, 3)),
+    )

@@ -13,7 +13,7 @@ from functools import cached_property
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from .robot import Robot, load
 
 __all__ = ["BaseParameters", "base_parameters"]
@@ -85,28 +85,24 @@ class BaseParameters:
 
     def values(self, params) -> np.ndarray:
         """``p_b = Y @ params``; ``params`` in the classical layout of this set, shape (P,)."""
-        p = np.asarray(params, dtype=float)
-        if p.shape != (self.Y.shape[1],):
-            raise ValueError(f"params has shape {p.shape}; expected ({self.Y.shape[1]},)")
-        return self._b.values(p)
+        return self._b.values(_args.array(params, "params", (self.Y.shape[1],)))
 
     def embed(self, base) -> np.ndarray:
         """A classical vector with ``base`` at the pivot positions and zeros elsewhere, so that
         ``values(embed(p_b)) == p_b`` and any inverse dynamics linear in the classical
         parameters gives the same torques for it."""
-        b = np.asarray(base, dtype=float)
-        if b.shape != (self.n,):
-            raise ValueError(f"base parameter vector has shape {b.shape}; expected ({self.n},)")
-        return self._b.embed(b)
+        return self._b.embed(_args.array(base, "base", (self.n,)))
 
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
         ``tau = W_b @ values(params)``."""
+        q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
         return self._b.regressor(q, dq, ddq)
 
     def energy_regressor(self, q, dq) -> np.ndarray:
         """Base total-energy regressor ``w_H,b``, shape (n,) or (m, n), over the
         equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant."""
+        q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.energy_regressor(q, dq)
 
     def to_dict(self) -> dict:
@@ -173,7 +169,12 @@ def base_parameters(
     rotor, friction : bool
         Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
     method : {"projection", "numerical"}
-        Exact projection method, or sampled regressors with QR (for cross-checks).
+        Exact projection method, or sampled regressors with QR (for cross-checks). The
+        projection method's basis grows geometrically along runs of parallel or general joint
+        axes: its memory is estimated before computing (an upper bound) and a chain over the
+        8 GiB budget, or of more than 18 joints, is refused with a ModelError that gives the
+        estimate; the numerical method handles such chains, up to its own budget of 2 GiB
+        (about 340 joints).
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
@@ -184,23 +185,38 @@ def base_parameters(
         Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
         1e-3) before computing; what was changed is listed in ``snapped``.
     samples, seed : int
-        Numerical method only: number of random states (0: automatic) and the random seed.
+        Numerical method only: number of random states for the regressor (0: automatic,
+        ``max(40, 3 P / n + 20)`` for ``P`` parameters and ``n`` joints; fewer than ``P / n`` are
+        refused) and the random seed. The energies take at least ``P + max(20, P / 2)`` states,
+        so that no set is capped by the number of samples.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    if method not in ("projection", "numerical"):
+        raise _core.ModelError(f"method is {method!r}; expected 'projection' or 'numerical'")
+    tolerance = _args.number(tolerance, "tolerance", positive=True)
+    samples = _args.integer(samples, "samples", minimum=0)
+    seed = _args.integer(seed, "seed", minimum=0)
+    if snap is not None and not isinstance(snap, bool):
+        snap = _args.number(snap, "snap", minimum=0.0)
     idx: list[int] = []
     if order is not None:
         names = robot.parameter_names(rotor, friction)
         lookup = {name: i for i, name in enumerate(names)}
+        if isinstance(order, (str, bytes)) or not hasattr(order, "__iter__"):
+            raise _core.ModelError(
+                f"order is {order!r}; expected a sequence of parameter indices or names"
+            )
         for item in order:
             if isinstance(item, str):
                 if item not in lookup:
-                    raise ValueError(f"order: unknown parameter '{item}'")
+                    raise _core.ModelError(f"order: unknown parameter '{item}'")
                 idx.append(lookup[item])
             else:
-                idx.append(int(item))
+                idx.append(_args.integer(item, "order entry"))
         if sorted(idx) != list(range(len(names))):
             missing = [names[i] for i in sorted(set(range(len(names))) - set(idx))]
-            raise ValueError(
+            raise _core.ModelError(
                 f"order must name each of the {len(names)} parameters exactly once"
                 + (f"; missing: {', '.join(missing[:8])}" if missing else "")
             )

@@ -21,7 +21,7 @@ from . import (
     cli_identify,
     load,
 )
-from .cli_args import add_joint_terms, add_robot
+from .cli_args import Parser, UsageError, add_joint_terms, add_robot, number
 
 
 def _fmt(x: float, width: int = 10) -> str:
@@ -169,7 +169,7 @@ def cmd_base(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="mindyn",
         description="Minimal dynamic models of manipulators.",
     )
@@ -193,20 +193,26 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--method", choices=["projection", "numerical"], default="projection")
     p.add_argument("--format", choices=["table", "json", "latex"], default="table")
-    p.add_argument(
+    number(
+        p,
         "--tolerance",
-        type=float,
+        low=0,
+        high=0.01,
+        low_open=True,
+        high_open=True,
         default=1e-9,
-        help="relative pivot size below which a column is dependent (default 1e-9)",
+        help="relative pivot size below which a column is dependent",
     )
-    p.add_argument(
+    number(
+        p,
         "--snap",
-        type=float,
+        low=0,
+        high=0.1,
         nargs="?",
         const=1e-3,
         default=None,
         metavar="RAD",
-        help="round joint rotations within RAD (default 1e-3) of multiples of pi/2",
+        help="round joint rotations within RAD (1e-3 when given alone) of multiples of pi/2",
     )
     p.set_defaults(func=cmd_base)
     cli_control.register(sub)
@@ -222,7 +228,7 @@ _TRACK_ONLY = ("--gains", "--cycle", "--param-error", "--report")
 def _route(argv: list[str]) -> list[str]:
     """``mindyn simulate`` with ``--controller adaptive-pd|pd``, with the closed-loop options
     (--gains, ...), or with neither a --trajectory nor an output log (-o) is the closed-loop
-    simulation of ``mindyn track``."""
+    simulation of ``mindyn track`` (whose -o writes the closed-loop log)."""
     if not argv or argv[0] != "simulate" or "-h" in argv or "--help" in argv:
         return argv
     keys = [a.split("=", 1)[0] for a in argv[1:]]
@@ -237,18 +243,34 @@ def _route(argv: list[str]) -> list[str]:
     return ["track", *argv[1:]] if closed else argv
 
 
+def _one_line(text: object) -> str:
+    return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())
+
+
+def _error(text: object) -> None:
+    print(f"mindyn: error: {_one_line(text)}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(_route(list(sys.argv[1:] if argv is None else argv)))
+    """Runs the command line; returns the exit status. Every failure ends in one line on stderr,
+    ``mindyn: error: ...``, and a non-zero status."""
+    try:
+        parser = build_parser()
+        args = parser.parse_args(_route(list(sys.argv[1:] if argv is None else argv)))
+    except UsageError as e:
+        _error(e)
+        return 2
+    except SystemExit as e:  # --help
+        return e.code if isinstance(e.code, int) else 0
     try:
         status = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return status
     except (RobotFileNotFoundError, FileNotFoundError) as e:
-        print(f"mindyn: error: {e}", file=sys.stderr)
+        _error(e)
         return 2
     except (ModelError, ValueError, IndexError) as e:
-        print(f"mindyn: error: {e}", file=sys.stderr)
+        _error(e)
         return 2
     except KeyboardInterrupt:
         print("mindyn: interrupted", file=sys.stderr)
@@ -259,6 +281,19 @@ def main(argv: list[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 141
+    except OSError as e:  # writing an output: permissions, a full disk, a folder in the way
+        where = f"'{e.filename}': " if e.filename else ""
+        _error(f"{where}{e.strerror or e}")
+        return 1
+    except MemoryError:
+        _error("out of memory: the input asks for more memory than this machine has")
+        return 1
+    except Exception as e:  # last resort: a defect in mindyn, not in the input
+        _error(
+            f"unexpected {type(e).__name__}: {e} (a defect in mindyn; please report it with "
+            "the command line)"
+        )
+        return 70
 
 
 if __name__ == "__main__":

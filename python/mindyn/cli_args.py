@@ -1,10 +1,183 @@
-"""Arguments shared by the subcommands of the ``mindyn`` command line."""
+"""Arguments shared by the subcommands of the ``mindyn`` command line, and the validated types of
+every numeric and output-path option: each says what it accepts, in its error message and in
+its ``--help`` line alike."""
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import re
+from pathlib import Path
 
 from . import bundled_robots
+
+#: Largest seed accepted (the random generators take 32-bit seeds).
+MAX_SEED = 2**32 - 1
+
+
+class UsageError(Exception):
+    """A command-line argument was rejected; the message names it and what was expected."""
+
+
+class Parser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line, ``mindyn: error: ...``, raised as
+    :class:`UsageError` for :func:`mindyn.cli.main` to print (instead of usage text and an
+    exit)."""
+
+    def error(self, message: str):  # noqa: D102 - argparse API
+        sub = self.prog.split(" ", 1)[1] if " " in self.prog else ""
+        where = f" (see 'mindyn {sub} --help')" if sub else " (see 'mindyn --help')"
+        raise UsageError(f"{message}{where}")
+
+
+def _fmt(x: float) -> str:
+    if isinstance(x, int) or (isinstance(x, float) and x.is_integer() and abs(x) < 1e6):
+        return str(int(x))
+    return f"{x:g}"
+
+
+class Number:
+    """An argparse ``type``: a finite float (or an int) within bounds, with the range stated in
+    the error message and, through :func:`number`, in the help."""
+
+    def __init__(
+        self,
+        low: float | None = None,
+        high: float | None = None,
+        *,
+        low_open: bool = False,
+        high_open: bool = False,
+        integer: bool = False,
+        unit: str = "",
+    ):
+        self.low, self.high = low, high
+        self.low_open, self.high_open = low_open, high_open
+        self.integer = integer
+        self.unit = unit
+        self.__name__ = "integer" if integer else "number"  # argparse names the type by this
+
+    def describe(self) -> str:
+        kind = "an integer" if self.integer else "a finite number"
+        lo, hi = self.low, self.high
+        if lo is not None and hi is not None:
+            left = "(" if self.low_open else "["
+            right = ")" if self.high_open else "]"
+            rng = f" in {left}{_fmt(lo)}, {_fmt(hi)}{right}"
+        elif lo is not None:
+            rng = f" {'>' if self.low_open else '>='} {_fmt(lo)}"
+        elif hi is not None:
+            rng = f" {'<' if self.high_open else '<='} {_fmt(hi)}"
+        else:
+            rng = ""
+        return kind + rng + (f" {self.unit}" if self.unit else "")
+
+    def range_text(self) -> str:
+        lo, hi = self.low, self.high
+        if lo is not None and hi is not None:
+            left = "(" if self.low_open else "["
+            right = ")" if self.high_open else "]"
+            return f"{left}{_fmt(lo)}, {_fmt(hi)}{right}"
+        if lo is not None:
+            return f"{'>' if self.low_open else '>='} {_fmt(lo)}"
+        if hi is not None:
+            return f"{'<' if self.high_open else '<='} {_fmt(hi)}"
+        return "finite"
+
+    def __call__(self, text: str):
+        bad = argparse.ArgumentTypeError(f"expected {self.describe()}, got '{text}'")
+        s = text.strip()
+        try:
+            if self.integer:
+                if len(s) > 30:  # int() of a huge digit string is slow, and no bound allows it
+                    raise bad
+                value = int(s)
+            else:
+                value = float(s)
+        except ValueError:
+            raise bad from None
+        if not self.integer and not math.isfinite(value):
+            raise bad
+        lo, hi = self.low, self.high
+        if lo is not None and (value < lo or (self.low_open and value == lo)):
+            raise bad
+        if hi is not None and (value > hi or (self.high_open and value == hi)):
+            raise bad
+        return value
+
+
+def number(
+    p,
+    *flags: str,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    integer: bool = False,
+    unit: str = "",
+    help: str = "",
+    **kwargs,
+):
+    """``p.add_argument(*flags, type=Number(...), help=...)`` with the accepted range appended
+    to the help text."""
+    kind = Number(low, high, low_open=low_open, high_open=high_open, integer=integer, unit=unit)
+    text = f"{help}; " if help else ""
+    text += f"{'integer' if integer else 'number'} {kind.range_text()}"
+    if "default" in kwargs and kwargs["default"] is not None and "nargs" not in kwargs:
+        text += f"; default {_fmt(kwargs['default'])}"
+    return p.add_argument(*flags, type=kind, help=text.replace("%", "%%"), **kwargs)
+
+
+def seed(p, *flags: str, default: int = 0, help: str = "random seed") -> None:
+    number(p, *flags, low=0, high=MAX_SEED, integer=True, default=default, help=help)
+
+
+def _nearest_existing(path: Path) -> Path:
+    path = path.absolute()
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
+def _check_parent(path: Path, text: str) -> None:
+    anc = _nearest_existing(path.parent)
+    if not anc.is_dir():
+        raise argparse.ArgumentTypeError(f"'{text}': '{anc}' is a file, not a folder")
+    if not os.access(anc, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"'{text}': the folder '{anc}' is not writable")
+
+
+def output_file(text: str) -> str:
+    """An argparse ``type``: a file to write (its folder is created when missing)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file name to write, got an empty string")
+    path = Path(text)
+    if path.is_dir() or text.endswith(("/", os.sep)):
+        raise argparse.ArgumentTypeError(f"'{text}' is a folder; expected a file name to write")
+    if path.exists() and not os.access(path, os.W_OK):
+        raise argparse.ArgumentTypeError(f"'{text}' exists and is not writable")
+    _check_parent(path, text)
+    return text
+
+
+output_file.__name__ = "file name"
+
+
+def output_dir(text: str) -> str:
+    """An argparse ``type``: a folder to write into (created when missing)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder to write into, got an empty string")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"'{text}' is a file; expected a folder to write into")
+    if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"the folder '{text}' is not writable")
+    if not path.exists():
+        _check_parent(path, text)
+    return text
+
+
+output_dir.__name__ = "folder"
 
 
 def robot_help() -> str:
@@ -13,9 +186,26 @@ def robot_help() -> str:
     )
 
 
+def robot_arg(text: str) -> str:
+    """An argparse ``type`` for ROBOT: the name, file or ``planar<N>`` is checked by the loader;
+    here only what cannot reach it (an empty name, a ``planar<N>`` whose N is no integer the
+    model builder takes)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a robot name or file, got an empty string")
+    m = re.fullmatch(r"planar(\d+)h?", text)
+    if m and (len(m.group(1)) > 9 or int(m.group(1)) > 2**31 - 1):
+        raise argparse.ArgumentTypeError(
+            f"'{text}': planar<N> takes a joint count N, not {m.group(1)}"
+        )
+    return text
+
+
+robot_arg.__name__ = "robot"
+
+
 def add_robot(p: argparse.ArgumentParser) -> None:
     """The positional ROBOT and ``--tip`` (the last link of a URDF chain)."""
-    p.add_argument("robot", metavar="ROBOT", help=robot_help())
+    p.add_argument("robot", metavar="ROBOT", type=robot_arg, help=robot_help())
     p.add_argument("--tip", help="URDF: the link that ends the chain")
 
 

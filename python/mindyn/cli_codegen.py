@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import json
+import math
 from pathlib import Path
 
-from . import ModelError, load
-from .cli_args import add_joint_terms, add_robot
+import numpy as np
+
+from . import ModelError, base_parameters, load
+from .cli_args import add_joint_terms, add_robot, output_file
 from .codegen import generate
 
 
@@ -33,7 +37,9 @@ def register(subparsers) -> None:
     p.add_argument(
         "--params",
         metavar="FILE",
-        help="base-parameter values (JSON mapping or 'NAME value' lines); default: the "
+        help="base-parameter values: the JSON that 'mindyn identify --json' writes (the "
+        "parameters it pruned for a high relative standard deviation are taken as zero, and "
+        "the output says how many), a JSON mapping, or 'NAME value' lines; default: the "
         "robot's own values",
     )
     p.add_argument(
@@ -61,6 +67,7 @@ def register(subparsers) -> None:
         "--output",
         required=True,
         metavar="FILE",
+        type=output_file,
         help="C: FILE.c and FILE.h; ST: FILE",
     )
     p.set_defaults(func=cmd_codegen)
@@ -82,8 +89,18 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         numeric=args.numeric,
         minimise=args.minimise,
     )
+    base = base_parameters(robot, rotor=args.rotor, friction=args.friction)
+    params, pruned, threshold = (
+        _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
+    )
     code = generate(
-        robot, params=args.params, name=args.name, header_name=header, trig=args.trig, **same
+        robot,
+        params=params if params is not None else args.params,
+        name=args.name,
+        header_name=header,
+        trig=args.trig,
+        base=base,
+        **same,
     )
     # the classical-parameter recursion generated the same way, for its operation counts
     classical = generate(robot, name=code.name, base=False, **same)
@@ -95,6 +112,12 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         + (", values baked in" if args.numeric else "")
         + f"; {len(classical.names)} classical"
     )
+    if params is not None:
+        print(
+            f"parameters: {len(code.names) - len(pruned)} identified values from {args.params}; "
+            f"{len(pruned)} pruned in identification (relative standard deviation above "
+            f"{threshold}) taken as zero" + (f": {', '.join(pruned)}" if pruned else "")
+        )
     print("wrote " + ", ".join(str(w) for w in written))
     snap = code.geometry_snap
     if snap["count"]:
@@ -112,3 +135,62 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             f"{k['mul']:>8}{k['add']:>7}{k['trig']:>7}"
         )
     return 0
+
+
+def _identified_params(path: str, robot, base, args):
+    """The values of a ``mindyn identify --json`` file in the order of ``base.names``, with the
+    parameters it pruned (``removed``) as zero, and the pruned names; ``(None, [], "")`` for any
+    other parameter file (read by :func:`mindyn.codegen.read_parameter_file`); and the pruning
+    threshold as text."""
+    p = Path(path)
+    if not p.is_file():
+        return None, [], ""
+    try:
+        doc = json.loads(p.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        return None, [], ""
+    if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
+        return None, [], ""
+    if doc.get("robot") not in (None, robot.name):
+        raise ModelError(
+            f"{path}: parameters identified for robot '{doc['robot']}', not '{robot.name}'"
+        )
+    flags = {"rotor": args.rotor, "friction": args.friction}
+    differ = [k for k, on in flags.items() if k in doc and bool(doc[k]) != on]
+    if differ:
+        said = " ".join(f"--{k}" for k in flags if doc.get(k))
+        raise ModelError(
+            f"{path}: identified {'with ' + said if said else 'without --rotor and --friction'}; "
+            "give codegen the same --rotor and --friction as identify"
+        )
+    names, values = doc["names"], doc["values"]
+    try:
+        pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]
+    except (KeyError, TypeError):
+        raise ModelError(f"{path}: 'removed' must list the pruned parameters by name") from None
+    if not (isinstance(names, list) and isinstance(values, list) and len(names) == len(values)):
+        raise ModelError(f"{path}: 'names' and 'values' must be lists of the same length")
+    known = set(base.names)
+    unknown = [k for k in names + pruned if k not in known]
+    if unknown:
+        raise ModelError(
+            f"{path}: unknown parameter(s) {', '.join(unknown[:5])}; expected "
+            f"{', '.join(base.names)}"
+        )
+    given = dict(zip(names, values))
+    both = [k for k in pruned if k in given]
+    if both:
+        raise ModelError(f"{path}: {', '.join(both[:5])} both identified and pruned")
+    missing = [k for k in base.names if k not in given and k not in pruned]
+    if missing:
+        raise ModelError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
+    out = np.zeros(len(base.names))
+    for i, k in enumerate(base.names):
+        if k in given:
+            v = given[k]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise ModelError(f"{path}: value of '{k}' is not a finite number")
+            out[i] = v
+    threshold = doc.get("rsd_threshold")
+    said = f"{threshold:g} %" if isinstance(threshold, (int, float)) else "the threshold"
+    return out, [k for k in base.names if k in pruned], said

@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 
 import numpy as np
 
 from . import base_parameters, load
-from .cli_args import add_robot
+from .cli_args import add_robot, number, output_dir, output_file, seed
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
@@ -27,10 +26,12 @@ def cmd_track(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     n = robot.n
     gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
-    for name in ("duration", "cycle"):
-        value = getattr(args, name)
-        if value is not None and not (math.isfinite(value) and value > 0):
-            raise ValueError(f"--{name} must be a positive number of seconds, got {value:g}")
+    if args.cycle is not None and args.cycle < 20 * args.period:
+        raise ValueError(
+            f"--cycle {args.cycle:g} s: expected at least 20 controller periods "
+            f"(--period {args.period:g} s), so that the reference's third harmonic is sampled "
+            "about 7 times per oscillation"
+        )
     if args.trajectory:
         reference = control.CsvTrajectory(args.trajectory, n)
         ref_text = f"trajectory {args.trajectory} ({reference.duration:g} s)"
@@ -41,8 +42,19 @@ def cmd_track(args: argparse.Namespace) -> int:
         ref_text = f"sum of sines within the limits, {reference.period:g} s cycle"
         duration = args.duration or 2 * reference.period
         cycle = reference.period
-    if not (args.param_error >= 0):
-        raise ValueError("--param-error must be >= 0")
+    from .simulate import check_steps
+
+    try:  # before any set-up work
+        check_steps(duration, 1.0 / args.period, args.substeps if args.integrator == "rk4" else 1)
+    except ValueError as e:
+        raise ValueError(
+            f"--duration {duration:g} with --period {args.period:g}: {e}"
+            + (" (the duration is two cycles unless given)" if args.duration is None else "")
+        ) from None
+    if duration < args.period:
+        raise ValueError(
+            f"--duration {duration:g} s is shorter than one controller --period {args.period:g} s"
+        )
     base = None
     p_hat = None
     if args.controller != "pd":
@@ -98,6 +110,8 @@ def cmd_track(args: argparse.Namespace) -> int:
     if "parameter_error_norm" in s:
         pe = s["parameter_error_norm"]
         lines.append(f"parameter error |p_hat - p|: {pe[0]:.4g} at t = 0, {pe[-1]:.4g} at the end")
+    if args.output:
+        lines.append(_write_log(result, robot, args.output))
     if args.report:
         header = {
             "robot": robot.name,
@@ -117,6 +131,31 @@ def cmd_track(args: argparse.Namespace) -> int:
         lines.append(f"report: {args.report}/ (summary.json, log.csv, plots)")
     print("\n".join(lines))
     return 0
+
+
+def _write_log(result, robot, output: str) -> str:
+    """The closed-loop log as the CSV of ``mindyn identify`` (``t, q, dq, tau`` at the controller
+    samples) and its ``.truth.json`` (the simulated robot's classical parameters)."""
+    from pathlib import Path
+
+    from .identification.data import truth_path, write_csv
+
+    out = Path(output)
+    if not out.parent.is_dir():
+        raise ValueError(f"-o {output}: the folder '{out.parent}' does not exist")
+    path = write_csv(out, result.t, result.q, result.tau, dq=result.dq)
+    truth = {
+        "robot": robot.name,
+        "names": robot.parameter_names(True, True),
+        "values": [float(v) for v in robot.parameters(True, True)],
+        "simulation": {
+            "mode": "closed loop",
+            "controller": result.controller,
+            "period_s": result.period,
+        },
+    }
+    truth_path(path).write_text(json.dumps(truth, indent=2) + "\n")
+    return f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"
 
 
 def cmd_ik(args: argparse.Namespace) -> int:
@@ -195,9 +234,24 @@ def register(sub) -> None:
         help="YAML with kd, lambda, gamma, nu (adaptive PD) and optionally kp (PD: default "
         "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
     )
-    p.add_argument("--period", type=float, default=0.004, help="controller period [s] (0.004)")
-    p.add_argument(
-        "--duration", type=float, help="simulated time [s] (default: two cycles, or the CSV's)"
+    from .simulate import MAX_STEPS
+
+    number(
+        p,
+        "--period",
+        low=0,
+        high=10,
+        low_open=True,
+        default=0.004,
+        help=f"controller period [s]; duration / period x substeps at most {MAX_STEPS:,}",
+    )
+    number(
+        p,
+        "--duration",
+        low=0,
+        high=1e6,
+        low_open=True,
+        help="simulated time [s] (default: two cycles, or the CSV's)",
     )
     p.add_argument(
         "--trajectory",
@@ -205,30 +259,52 @@ def register(sub) -> None:
         help="reference: columns t, q1..qN [, dq1..dqN, ddq1..ddqN] (default: a sum of sines "
         "within the joint limits)",
     )
-    p.add_argument(
+    number(
+        p,
         "--cycle",
-        type=float,
-        help="period of the default reference and of the per-cycle figures [s] (10)",
+        low=0,
+        high=1e6,
+        low_open=True,
+        help="period of the default reference and of the per-cycle figures [s], at least 20 "
+        "controller periods (default 10)",
     )
-    p.add_argument(
+    number(
+        p,
         "--param-error",
-        type=float,
+        low=0,
+        high=10,
         default=0.3,
-        help="relative error of the initial base-parameter estimate (0.3: +-30 %%)",
+        help="relative error of the initial base-parameter estimate (0.3: +-30 %)",
     )
-    p.add_argument("--seed", type=int, default=0, help="seed of the estimate error and noise")
-    p.add_argument(
+    seed(p, "--seed", help="seed of the estimate error and noise")
+    number(
+        p,
         "--noise",
-        type=float,
+        low=0,
+        high=10,
         nargs=2,
         default=[0.0, 0.0],
         metavar=("SIGMA_Q", "SIGMA_DQ"),
-        help="sensor noise standard deviations [rad, rad/s]",
+        help="sensor noise standard deviations [rad, rad/s] (default 0 0)",
     )
     p.add_argument("--torque-limit", choices=["effort", "none"], default="none")
-    p.add_argument("--substeps", type=int, default=4, help="RK4 steps per period (4)")
+    number(p, "--substeps", low=1, high=1000, integer=True, default=4, help="RK4 steps per period")
     p.add_argument("--integrator", choices=["rk4", "scipy"], default="rk4")
-    p.add_argument("--report", metavar="DIR", help="write summary.json, log.csv and plots here")
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        type=output_dir,
+        help="write summary.json, log.csv and plots here",
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        metavar="CSV",
+        type=output_file,
+        help="write the log as 'mindyn identify' reads it: t, q1..qN, dq1..dqN (true motion), "
+        "tau1..tauN (applied torque, N m) at the controller samples; the true parameters in "
+        "<name>.truth.json beside it",
+    )
     p.set_defaults(func=cmd_track)
 
     p = sub.add_parser(
@@ -238,19 +314,27 @@ def register(sub) -> None:
         "limits. Exit status 1 when no solution is found.",
     )
     add_robot(p)
-    p.add_argument("--xyz", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"))
-    p.add_argument(
+    number(p, "--xyz", nargs=3, required=True, metavar=("X", "Y", "Z"), help="tool position [m]")
+    number(
+        p,
         "--rpy",
-        type=float,
         nargs=3,
         default=[0.0, 0.0, 0.0],
         metavar=("R", "P", "Y"),
         help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention)",
     )
-    p.add_argument("--q0", type=float, nargs="+", help="start (default: middle of the limits)")
+    number(p, "--q0", nargs="+", help="start (default: middle of the limits)")
     p.add_argument("--deg", action="store_true", help="--rpy and --q0 in degrees")
-    p.add_argument("--tolerance", type=float, default=1e-5, help="pose error [m, rad] (1e-5)")
-    p.add_argument("--timeout", type=float, default=0.5, help="CPU-time budget [s] (0.5)")
-    p.add_argument("--seed", type=int, default=42, help="seed of the restart points")
+    number(
+        p,
+        "--tolerance",
+        low=0,
+        high=1,
+        low_open=True,
+        default=1e-5,
+        help="pose error [m, rad]",
+    )
+    number(p, "--timeout", low=0, high=3600, low_open=True, default=0.5, help="CPU-time budget [s]")
+    seed(p, "--seed", default=42, help="seed of the restart points")
     p.add_argument("--format", choices=["table", "json"], default="table")
     p.set_defaults(func=cmd_ik)

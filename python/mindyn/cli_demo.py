@@ -7,6 +7,8 @@ base parameters -> optimised excitation -> simulated measurement with noise -> i
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import time
 from pathlib import Path
@@ -14,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from . import base_parameters, bundled_robots, load
+from .cli_args import number, output_dir, robot_arg, seed
 
 
 def _step(no: int, title: str) -> float:
@@ -30,10 +33,10 @@ def _joints(values, fmt: str = "{:8.3g}") -> str:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from .data import convert_torque, read_csv, write_csv
-    from .excitation import excitation_limits, optimize_excitation, random_trajectory
     from .identification import identify, true_base_values, validate
-    from .report import ZCR07S_STUDY_TABLE6, format_table, plot_torques
+    from .identification.data import convert_torque, read_csv, write_csv
+    from .identification.excitation import excitation_limits, optimize_excitation, random_trajectory
+    from .identification.report import ZCR07S_STUDY_TABLE6, format_table, plot_torques
     from .simulate import SensorNoise, noise_from_spec, simulate_tracking
 
     t_all = time.perf_counter()
@@ -83,7 +86,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     (out / "validation_trajectory.json").write_text(
         json.dumps({"trajectory": val_traj.to_dict()}, indent=2) + "\n"
     )
-    from .excitation import criterion_value
+    from .identification.excitation import criterion_value
 
     print(
         f"    validation trajectory: random Fourier series within the limits (condition number "
@@ -105,11 +108,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
     files = {}
     for name, log in (("measurement", log_e), ("validation", log_v)):
         p = log.save(out / f"{name}.csv", robot.name)
-        if (
-            permille
-        ):  # log torques the way the ZCR07S study's controller does: per mille of rated torque
+        if permille:  # torques as the ZCR07S study's controller logs them: per mille of rated
             scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
-            write_csv(p, log.t, log.q, log.tau / scale, dq=log.dq)
+            write_csv(p, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
         files[name] = p
     print(
         f"    torque noise sd per joint ({args.noise:g} % of the effort limit) [N m]: "
@@ -122,19 +123,24 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(
         f"    wrote {files['measurement'].name}, {files['validation'].name} ({log_e.t.size} "
         "samples each: t, q, dq, tau"
-        + (", torques in per mille of rated torque as in the ZCR07S study" if permille else "")
+        + (
+            ", torques in per mille of rated torque as in the ZCR07S study (header "
+            "tau1[permille]...)"
+            if permille
+            else ""
+        )
         + ") and their .truth.json"
     )
     _done(t0)
 
     # 4. identification ---------------------------------------------------------------------------
     t0 = _step(4, "identification (weighted least squares, RSD pruning at 30 %)")
-    unit = "permille" if permille else "Nm"
-    data = read_csv(files["measurement"], robot, torque_unit=unit)
-    vdata = read_csv(files["validation"], robot, torque_unit=unit)
+    data = read_csv(files["measurement"], robot)  # the torque unit from the header
+    vdata = read_csv(files["validation"], robot)
     dv = data.processing["acceleration"]
     print(
-        f"    read {data.m} samples; accelerations by Butterworth order {dv['order']}, "
+        f"    read {data.m} samples, torques in {data.processing['torque']['unit']} (as the "
+        f"header says); accelerations by Butterworth order {dv['order']}, "
         f"{dv['cutoff_Hz']:g} Hz, zero-phase, + central differences"
     )
     truth = true_base_values(base, {"names": log_e.param_names, "values": log_e.params})
@@ -216,12 +222,29 @@ def _codegen(robot_arg: str, out: Path) -> None:
     if "codegen" not in sub.choices:
         print("    unavailable: this build of mindyn has no 'codegen' command")
         return
+    tables = {}
     for lang, ext in (("c", "c"), ("st", "st")):
         target = out / f"inverse_dynamics.{ext}"
-        rc = main(
-            ["codegen", robot_arg, "--lang", lang, "--rotor", "--friction", "-o", str(target)]
-        )
-        print(f"    {'wrote ' + target.name if rc == 0 else 'codegen --lang ' + lang + ' failed'}")
+        text = io.StringIO()
+        with contextlib.redirect_stdout(text):
+            rc = main(
+                ["codegen", robot_arg, "--lang", lang, "--rotor", "--friction", "-o", str(target)]
+            )
+        if rc != 0:
+            print(f"    codegen --lang {lang} failed")
+            continue
+        lines = text.getvalue().splitlines()
+        # the operation table follows the first empty line; C and ST share the recursion
+        cut = lines.index("") if "" in lines else len(lines)
+        tables[lang] = lines[cut + 1 :]
+        print(f"    wrote {target.name}")
+    if "c" in tables and tables.get("st", tables["c"]) == tables["c"]:
+        print("    operation counts (C and Structured Text alike):")
+        print("\n".join("      " + line for line in tables["c"]))
+    else:
+        for lang, table in tables.items():
+            print(f"    operation counts ({'C' if lang == 'c' else 'Structured Text'}):")
+            print("\n".join("      " + line for line in table))
 
 
 def register(sub) -> None:
@@ -239,25 +262,35 @@ def register(sub) -> None:
     p.add_argument(
         "robot",
         nargs="?",
+        type=robot_arg,
         default="zcr07s",
         metavar="ROBOT",
         help="a bundled robot (" + ", ".join(bundled_robots()) + "), URDF or YAML; default zcr07s",
     )
-    p.add_argument("--out", metavar="DIR", help="output folder (default ./mindyn-demo-ROBOT)")
-    p.add_argument("--full", action="store_true", help="full excitation optimisation (slower)")
     p.add_argument(
+        "--out",
+        metavar="DIR",
+        type=output_dir,
+        help="output folder (default ./mindyn-demo-ROBOT)",
+    )
+    p.add_argument("--full", action="store_true", help="full excitation optimisation (slower)")
+    number(
+        p,
         "--harmonics",
-        type=int,
+        low=2,
+        high=30,
+        integer=True,
         default=10,
-        help="harmonics of the excitation (default 10; the ZCR07S study uses 5, enough for the "
-        "dynamic "
+        help="harmonics of the excitation (the ZCR07S study uses 5, enough for the dynamic "
         "model but not for the energy model, whose regressor needs richer motion)",
     )
-    p.add_argument(
+    number(
+        p,
         "--noise",
-        type=float,
+        low=0,
+        high=100,
         default=1.0,
-        help="torque noise sd in %% of each joint's effort limit (default 1)",
+        help="torque noise sd in % of each joint's effort limit",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    seed(p, "--seed")
     p.set_defaults(func=cmd_demo)

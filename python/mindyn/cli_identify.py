@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from . import base_parameters, load
-from .cli_args import add_joint_terms, add_robot
+from .cli_args import add_joint_terms, add_robot, number, output_dir, output_file, seed
 
 
 def _floats(text: str, n: int, what: str) -> np.ndarray:
@@ -18,6 +18,8 @@ def _floats(text: str, n: int, what: str) -> np.ndarray:
         v = np.array([float(x) for x in text.split(",")])
     except ValueError:
         raise ValueError(f"{what}: '{text}' is not a comma-separated list of numbers") from None
+    if not np.all(np.isfinite(v)):
+        raise ValueError(f"{what}: '{text}' has a value that is not a finite number")
     if v.size == 1:
         v = np.full(n, v[0])
     if v.size != n:
@@ -29,8 +31,23 @@ def _floats(text: str, n: int, what: str) -> np.ndarray:
 # excite
 # ---------------------------------------------------------------------------------------------
 def cmd_excite(args: argparse.Namespace) -> int:
-    from .excitation import optimize_excitation
+    from .identification.excitation import check_sampling, optimize_excitation
 
+    if Path(args.output).suffix.lower() in (".json", ".png"):
+        raise ValueError(
+            f"-o {args.output}: the trajectory CSV needs another suffix than "
+            f"{Path(args.output).suffix} (the coefficients and the plot are written beside it as "
+            ".json and .png)"
+        )
+    try:  # before the optimisation, not after it
+        check_sampling(args.harmonics, args.freq, args.rate)
+    except ValueError as e:
+        raise ValueError(f"--rate {args.rate:g}: {e}") from None
+    if not args.samples > 2 * args.harmonics:
+        raise ValueError(
+            f"--samples {args.samples}: expected more than 2 x --harmonics = "
+            f"{2 * args.harmonics}, so that the highest harmonic is sampled"
+        )
     robot = load(args.robot, tip=args.tip)
     start = None
     if args.start:
@@ -71,7 +88,7 @@ def cmd_excite(args: argparse.Namespace) -> int:
 # simulate
 # ---------------------------------------------------------------------------------------------
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .data import convert_torque, write_csv
+    from .identification.data import convert_torque, write_csv
     from .simulate import CONTROLLERS, SensorNoise, load_reference, noise_from_spec, simulate
 
     robot = load(args.robot, tip=args.tip)
@@ -106,7 +123,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     path = log.save(args.output, robot.name)
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
-        write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq)
+        write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
     info = log.info
     print(
         f"{robot.name}: {info['mode']} simulation, {log.t.shape[0]} samples at {rate:g} Hz "
@@ -135,8 +152,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 # identify
 # ---------------------------------------------------------------------------------------------
 def _read(path, robot, args):
-    from .data import DataError, read_csv
-    from .rosbag import is_rosbag, read_rosbag
+    from .identification.data import DataError, read_csv
+    from .identification.rosbag import is_rosbag, read_rosbag
 
     if Path(path).is_dir() and not is_rosbag(path):
         raise DataError(f"'{path}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
@@ -145,7 +162,7 @@ def _read(path, robot, args):
             path,
             robot,
             topic=args.topic,
-            torque_unit=args.torque_unit,
+            torque_unit=args.torque_unit or "Nm",
             filter=args.filter,
             cutoff=args.cutoff,
         )
@@ -158,27 +175,51 @@ def _read(path, robot, args):
     )
 
 
+def _read_filtered(path, robot, args):
+    """:func:`_read`, with a filter that cannot be designed at ``--cutoff`` named as such."""
+    try:
+        return _read(path, robot, args)
+    except np.linalg.LinAlgError as e:
+        if args.filter != "butter":
+            raise
+        raise ValueError(
+            f"--cutoff {args.cutoff:g} Hz: the zero-phase Butterworth filter for the derivatives "
+            f"of {path} is singular at this cutoff ({e}); expected a cutoff of at least 1e-4 of "
+            "half the log's sample rate"
+            if args.cutoff is not None
+            else f"{path}: the Butterworth filter for the derivatives is singular ({e})"
+        ) from None
+
+
 def cmd_identify(args: argparse.Namespace) -> int:
-    from .data import read_truth
     from .identification import identify, true_base_values, validate
-    from .report import format_table, write_report
+    from .identification.data import read_truth
+    from .identification.report import format_table, write_report
 
     robot = load(args.robot, tip=args.tip)
-    data = _read(args.data, robot, args)
-    vdata = _read(args.validate, robot, args) if args.validate else None
+    data = _read_filtered(args.data, robot, args)
+    vdata = _read_filtered(args.validate, robot, args) if args.validate else None
     base = base_parameters(robot, rotor=args.rotor, friction=args.friction)
-    res = identify(
-        robot,
-        data,
-        model=args.model,
-        base=base,
-        weighted=not args.ols,
-        rsd_threshold=args.rsd_threshold,
-        energy_window=args.energy_window,
-        integration=args.integration,
-        min_velocity=args.min_velocity,
-    )
+    try:
+        res = identify(
+            robot,
+            data,
+            model=args.model,
+            base=base,
+            weighted=not args.ols,
+            rsd_threshold=args.rsd_threshold,
+            energy_window=args.energy_window,
+            integration=args.integration,
+            min_velocity=args.min_velocity,
+        )
+    except np.linalg.LinAlgError as e:
+        raise ValueError(
+            f"{args.model} model on {args.data}: the least-squares problem of the base regressor "
+            f"of this data is singular ({e}); the data do not determine the {base.n} base "
+            "parameters: use a longer or richer log, or fewer parameters"
+        ) from None
     truth_doc = read_truth(args.data)
+
     truth = true_base_values(base, truth_doc) if truth_doc else None
     fit = validate(res, data)
     val = validate(res, vdata) if vdata is not None else None
@@ -225,6 +266,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
             else ""
         )
     )
+    for w in res.settings.get("warnings", []):
+        out.append(f"  WARNING: {w}")
     out.append("")
     out.append(format_table(res, truth))
     out.append("")
@@ -249,13 +292,13 @@ def cmd_identify(args: argparse.Namespace) -> int:
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
     if args.report:
-        from .excitation import excitation_limits
+        from .identification.excitation import excitation_limits
 
         lim, _ = excitation_limits(robot, margin=0.0)
         paths = write_report(args.report, res, data, vdata, val, fit["tau_hat"], lim)
         (Path(args.report) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
         (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
-        print(f"wrote report to {args.report}/: " + ", ".join(p.name for p in paths))
+        print(f"wrote report to {Path(args.report)}/: " + ", ".join(p.name for p in paths))
     return 0
 
 
@@ -300,7 +343,8 @@ def _plain(d):
 # ---------------------------------------------------------------------------------------------
 def register(sub) -> None:
     """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
-    from .simulate import CONTROLLERS
+    from .identification.excitation import MAX_TRAJECTORY_ROWS
+    from .simulate import CONTROLLERS, MAX_SAMPLES, MAX_STEPS
 
     p = sub.add_parser(
         "excite",
@@ -311,8 +355,17 @@ def register(sub) -> None:
         "Writes the sampled trajectory (CSV), the coefficients (JSON, same name) and a plot (PNG).",
     )
     add_robot(p)
-    p.add_argument("--harmonics", type=int, default=5, help="harmonics N (default 5)")
-    p.add_argument("--freq", type=float, default=0.1, help="base frequency in Hz (default 0.1)")
+    number(
+        p,
+        "--harmonics",
+        low=2,
+        high=30,
+        integer=True,
+        default=5,
+        help="harmonics N (the limits are imposed on max(100, 20 N) points per period, each "
+        "a constraint of the optimisation)",
+    )
+    number(p, "--freq", low=0, high=1000, low_open=True, default=0.1, help="base frequency [Hz]")
     p.add_argument(
         "--criterion",
         choices=["cond", "logdet", "hadamard"],
@@ -320,20 +373,58 @@ def register(sub) -> None:
         help="condition number (default), D-optimality, or the Hadamard-bound ratio of the "
         "ZCR07S study",
     )
-    p.add_argument("--starts", type=int, default=3, help="random starting guesses (default 3)")
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    p.add_argument("--maxiter", type=int, default=100, help="SLSQP iterations per start")
-    p.add_argument("--samples", type=int, default=100, help="regressor samples per period")
-    p.add_argument(
-        "--margin", type=float, default=0.05, help="fraction the limits are tightened by"
+    number(p, "--starts", low=1, high=100, integer=True, default=3, help="random starting guesses")
+    seed(p, "--seed")
+    number(
+        p,
+        "--maxiter",
+        low=1,
+        high=10000,
+        integer=True,
+        default=100,
+        help="SLSQP iterations per start (the work is about --starts x --maxiter iterations)",
+    )
+    number(
+        p,
+        "--samples",
+        low=1,
+        high=10000,
+        integer=True,
+        default=100,
+        help="regressor samples per period (more than 2 N: the highest harmonic is sampled)",
+    )
+    number(
+        p,
+        "--margin",
+        low=0,
+        high=0.5,
+        high_open=True,
+        default=0.05,
+        help="fraction the limits are tightened by",
     )
     p.add_argument("--rotor", action="store_true", help="base parameters with rotor inertia")
     p.add_argument("--friction", action="store_true", help="base parameters with friction")
     p.add_argument("--start", help="prescribed start position q1,...,qn (rad, m)")
     p.add_argument("--degrees", action="store_true", help="--start of revolute joints in degrees")
-    p.add_argument("--rate", type=float, default=250.0, help="CSV sample rate in Hz (default 250)")
+    number(
+        p,
+        "--rate",
+        low=0,
+        high=1e6,
+        low_open=True,
+        default=250.0,
+        help="CSV sample rate [Hz], above 2 N freq (the highest harmonic is sampled) and at most "
+        f"{MAX_TRAJECTORY_ROWS:,} rows per period",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
-    p.add_argument("-o", "--output", required=True, metavar="CSV", help="trajectory CSV to write")
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="CSV",
+        type=output_file,
+        help="trajectory CSV to write (and its .json and .png beside it)",
+    )
     p.set_defaults(func=cmd_excite)
 
     p = sub.add_parser(
@@ -357,32 +448,69 @@ def register(sub) -> None:
         "--controller",
         choices=sorted(CONTROLLERS),
         default="computed-torque",
-        help="tracking controller (default computed-torque: computed torque + PD)",
+        help="tracking controller (default computed-torque: computed torque + PD); "
+        "adaptive-pd and pd run the closed-loop simulation of 'mindyn track', -o included",
     )
     g = p.add_mutually_exclusive_group()
-    g.add_argument("--rate", type=float, default=250.0, help="control and log rate, Hz (250)")
-    g.add_argument("--period", type=float, help="control and log period in s (1 / rate)")
-    p.add_argument("--duration", type=float, help="seconds (default: one period of the reference)")
-    p.add_argument("--substeps", type=int, default=4, help="RK4 steps per control period (4)")
+    number(
+        g, "--rate", low=0, high=1e6, low_open=True, default=250.0, help="control and log rate [Hz]"
+    )
+    number(
+        g,
+        "--period",
+        low=1e-6,
+        high=1e3,
+        help="control and log period [s] (1 / rate)",
+    )
+    number(
+        p,
+        "--duration",
+        low=0,
+        high=1e6,
+        low_open=True,
+        help=f"seconds (default: one period of the reference); at most {MAX_SAMPLES:,} samples "
+        f"(duration x rate) and {MAX_STEPS:,} integration steps (x substeps)",
+    )
+    number(
+        p,
+        "--substeps",
+        low=1,
+        high=1000,
+        integer=True,
+        default=4,
+        help="RK4 steps per control period",
+    )
     p.add_argument("--rotor", action="store_true", help="true robot with rotor inertia")
     p.add_argument("--friction", action="store_true", help="true robot with friction")
     p.add_argument(
         "--torque-noise",
         metavar="SD",
         help="torque noise sd: one value, one per joint (comma-separated), or P%% of each "
-        "joint's effort limit",
+        "joint's effort limit; in [0, 1e6] N m or [0, 100] %%",
     )
-    p.add_argument("--position-noise", metavar="SD", help="position noise sd (rad, m)")
-    p.add_argument("--velocity-noise", metavar="SD", help="velocity noise sd (rad/s, m/s)")
-    p.add_argument("--quantization", metavar="STEP", help="encoder step (rad, m)")
-    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.add_argument(
+        "--position-noise", metavar="SD", help="position noise sd (rad, m), each in [0, 1]"
+    )
+    p.add_argument(
+        "--velocity-noise", metavar="SD", help="velocity noise sd (rad/s, m/s), each in [0, 100]"
+    )
+    p.add_argument("--quantization", metavar="STEP", help="encoder step (rad, m), each in [0, 1]")
+    seed(p, "--seed", help="noise seed")
     p.add_argument(
         "--torque-unit",
         choices=["Nm", "permille"],
         default="Nm",
-        help="write torques in N m or in permille of rated torque (drive table)",
+        help="write torques in N m or in permille of rated torque (drive table; the header "
+        "then says tau1[permille]...)",
     )
-    p.add_argument("-o", "--output", required=True, metavar="CSV", help="log to write")
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="CSV",
+        type=output_file,
+        help="log to write (and its .truth.json beside it)",
+    )
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser(
@@ -403,19 +531,20 @@ def register(sub) -> None:
     p.add_argument("--model", choices=["dynamic", "energy"], default="dynamic")
     add_joint_terms(p, "identify")
     p.add_argument("--validate", metavar="LOG", help="second log (CSV or bag) for validation")
-    p.add_argument("--json", metavar="FILE", help="write the results as JSON")
-    p.add_argument("--report", metavar="DIR", help="write plots and tables to DIR")
-    p.add_argument(
+    p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
+    p.add_argument("--report", metavar="DIR", type=output_dir, help="write plots and tables to DIR")
+    number(
+        p,
         "--rsd-threshold",
-        type=float,
+        low=0,
         default=30.0,
-        help="remove parameters with RSD above this %% (default 30; 0 keeps all)",
+        help="remove parameters with RSD above this % (0 keeps all)",
     )
     p.add_argument(
         "--torque-unit",
         choices=["Nm", "permille"],
-        default="Nm",
-        help="logged torque unit; permille: value x rated torque x gear ratio / 1000",
+        help="logged torque unit; permille: value x rated torque x gear ratio / 1000 "
+        "(default: the unit the CSV header gives, as in tau1[permille], else Nm)",
     )
     p.add_argument(
         "--filter",
@@ -423,12 +552,22 @@ def register(sub) -> None:
         default="butter",
         help="filter for velocities/accelerations derived from the log",
     )
-    p.add_argument(
-        "--cutoff", type=float, help="Butterworth cutoff in Hz (default min(10, rate/10))"
+    number(
+        p,
+        "--cutoff",
+        low=0,
+        low_open=True,
+        help="Butterworth cutoff [Hz], below half the log's rate (default min(10, rate/10))",
     )
     p.add_argument("--ols", action="store_true", help="ordinary instead of weighted least squares")
-    p.add_argument(
-        "--energy-window", type=int, default=10, help="sample intervals per energy equation"
+    number(
+        p,
+        "--energy-window",
+        low=1,
+        high=1000000,
+        integer=True,
+        default=10,
+        help="sample intervals per energy equation",
     )
     p.add_argument(
         "--integration",
@@ -436,10 +575,11 @@ def register(sub) -> None:
         default="simpson",
         help="energy model integration rule (zoh: torque held over each period)",
     )
-    p.add_argument(
+    number(
+        p,
         "--min-velocity",
-        type=float,
+        low=0,
         default=0.01,
-        help="dynamic model with friction: leave out joint equations slower than this",
+        help="dynamic model with friction: leave out joint equations slower than this [rad/s, m/s]",
     )
     p.set_defaults(func=cmd_identify)

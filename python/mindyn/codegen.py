@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from .base import BaseParameters, base_parameters
 from .robot import Robot, load
 
@@ -168,6 +168,10 @@ def generate(
         always uses ``SIN`` and ``COS``.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    numeric = _args.flag(numeric, "numeric")
+    if not isinstance(base, BaseParameters):
+        base = _args.flag(base, "base")
     if lang not in ("c", "st"):
         raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
     if trig is not None and lang != "c":
@@ -182,7 +186,16 @@ def generate(
         bp_core = base._b
         names = base.names
     elif base:
-        bp = base_parameters(robot, rotor=rotor, friction=friction)
+        try:
+            bp = base_parameters(robot, rotor=rotor, friction=friction)
+        except _core.ModelError as e:
+            if "projection method" not in str(e):
+                raise
+            raise _core.ModelError(
+                f"code generation needs the base parameters, and {e}; in Python pass "
+                "base=mindyn.base_parameters(robot, method='numerical'), or base=False for the "
+                "classical parameters"
+            ) from None
         bp_core = bp._b
         names = bp.names
     else:
@@ -193,11 +206,7 @@ def generate(
         if isinstance(params, (str, Path)):
             values = read_parameter_file(params, names)
         else:
-            values = np.asarray(params, dtype=float)
-            if values.shape != (len(names),):
-                raise ValueError(
-                    f"params has shape {values.shape}; expected ({len(names)},) for {names[:3]}..."
-                )
+            values = _args.array(params, "params", (len(names),))
     out = _core.generate_code(
         robot._m,
         bp_core,
@@ -311,22 +320,23 @@ class BaseDynamics:
     def inverse_dynamics(self, q, dq, ddq, p=None) -> np.ndarray:
         """tau, shape (n,) or (m, n) for batches of q, dq, ddq; ``p`` shape (np,), default the
         robot's own base-parameter values."""
-        p = self._values(p)
-        return self._d.inverse_dynamics(q, dq, ddq, p)
+        q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
+        return self._d.inverse_dynamics(q, dq, ddq, self._values(p))
 
     def gravity(self, q, p=None) -> np.ndarray:
         """Gravity torque, shape (n,) or (m, n)."""
-        return self._d.gravity(q, self._values(p))
+        return self._d.gravity(_args.samples(q, "q", self.n), self._values(p))
 
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """W_b, shape (n, np) or (m, n, np): ``tau = W_b @ p``."""
+        q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._d.regressor(q, dq, ddq)
 
     def _values(self, p):
         if p is None:
             rob = self.base.robot
             return self.base.values(rob.parameters(self.base.rotor, self.base.friction))
-        return np.asarray(p, dtype=float)
+        return _args.array(p, "p", (self.np,))
 
     def __repr__(self) -> str:
         return f"BaseDynamics(n={self.n}, np={self.np})"

@@ -35,7 +35,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from .base import BaseParameters, base_parameters
 from .robot import Robot
 
@@ -85,6 +85,7 @@ def slotine_li_regressor(base: BaseParameters, q, dq, dqr, ddqr) -> np.ndarray:
     -------
     ndarray, shape (n, base.n) or (m, n, base.n)
     """
+    q, dq, dqr, ddqr = _args.batch(base.robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
     return _core.slotine_li_regressor(base._b, q, dq, dqr, ddqr)
 
 
@@ -92,6 +93,8 @@ def slotine_li_regressor_classical(
     robot: Robot, q, dq, dqr, ddqr, rotor: bool = False, friction: bool = False
 ) -> np.ndarray:
     """Slotine-Li regressor in the classical layout, shape (n, P) or (m, n, P)."""
+    q, dq, dqr, ddqr = _args.batch(robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     return _core.slotine_li_regressor_classical(robot._m, q, dq, dqr, ddqr, rotor, friction)
 
 
@@ -99,7 +102,8 @@ def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
     """Coriolis matrix ``C(q, dq)`` of the Christoffel symbols, shape (n, n) or (m, n, n):
     ``C dq`` is the velocity-product torque and ``dA/dt - 2 C`` is skew-symmetric. ``params``: any
     classical layout (default the model's inertial parameters)."""
-    return _core.coriolis_matrix(robot._m, q, dq, params)
+    q, dq = _args.batch(robot.n, q=q, dq=dq)
+    return _core.coriolis_matrix(robot._m, q, dq, _args.params(params, "params", robot.n))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -480,14 +484,20 @@ def simulate(
         Used to report the true base parameters and the true model torque next to the estimates
         (default: the controller's).
     """
-    if not (duration > 0 and period > 0):
-        raise ValueError("duration and period must be positive")
+    if not (math.isfinite(duration) and duration > 0 and math.isfinite(period) and period > 0):
+        raise ValueError(
+            f"duration and period must be positive numbers of seconds, got {duration:g} and "
+            f"{period:g}"
+        )
     if duration < period:
         raise ValueError(f"duration {duration} s is shorter than one period {period} s")
     if integrator not in ("rk4", "scipy"):
         raise ValueError(f"integrator must be 'rk4' or 'scipy', got '{integrator}'")
     if substeps < 1:
         raise ValueError("substeps must be at least 1")
+    from .simulate import check_steps
+
+    check_steps(duration, 1.0 / period, substeps if integrator == "rk4" else 1)
     n = robot.n
     p_true = robot.parameters(True, True) if true_params is None else np.asarray(true_params)
     limit = None
@@ -517,25 +527,30 @@ def simulate(
     controller.reset()
     q, dq, _ = reference(0.0)
     q, dq = np.array(q, dtype=float), np.array(dq, dtype=float)
-    for i in range(K):
-        ref = reference(t[i])
-        qm = q + (rng.normal(0.0, sq, n) if sq > 0 else 0.0)
-        dqm = dq + (rng.normal(0.0, sdq, n) if sdq > 0 else 0.0)
-        tau = np.asarray(controller(t[i], qm, dqm, ref, period), dtype=float)
-        if not np.all(np.isfinite(tau)):
-            raise ValueError(f"the controller returned a non-finite torque at t = {t[i]:.4f} s")
-        if limit is not None:
-            SAT[i] = np.abs(tau) > limit
-            tau = np.clip(tau, -limit, limit)
-        Q[i], DQ[i] = q, dq
-        QD[i], DQD[i], DDQD[i] = ref
-        TAU[i] = tau
-        TAUM[i] = getattr(controller, "model_torque", np.full(n, np.nan))
-        if adaptive:
-            PH[i] = controller.p_hat
-            if pb_true is not None:
-                TAUT[i] = controller.Y @ pb_true
-        q, dq = _advance(robot, q, dq, tau, period, substeps, integrator, p_true)
+    # A diverging loop shows as a non-finite torque, reported as such (not as warnings).
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for i in range(K):
+            ref = reference(t[i])
+            qm = q + (rng.normal(0.0, sq, n) if sq > 0 else 0.0)
+            dqm = dq + (rng.normal(0.0, sdq, n) if sdq > 0 else 0.0)
+            tau = np.asarray(controller(t[i], qm, dqm, ref, period), dtype=float)
+            if not np.all(np.isfinite(tau)):
+                raise ValueError(
+                    f"the controller returned a non-finite torque at t = {t[i]:.4f} s: the "
+                    "closed loop diverged (gains, controller period or reference speed)"
+                )
+            if limit is not None:
+                SAT[i] = np.abs(tau) > limit
+                tau = np.clip(tau, -limit, limit)
+            Q[i], DQ[i] = q, dq
+            QD[i], DQD[i], DDQD[i] = ref
+            TAU[i] = tau
+            TAUM[i] = getattr(controller, "model_torque", np.full(n, np.nan))
+            if adaptive:
+                PH[i] = controller.p_hat
+                if pb_true is not None:
+                    TAUT[i] = controller.Y @ pb_true
+            q, dq = _advance(robot, q, dq, tau, period, substeps, integrator, p_true)
     return SimulationResult(
         controller=getattr(controller, "name", type(controller).__name__),
         period=period,

@@ -21,7 +21,7 @@ from typing import Callable
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from .robot import Robot
 
 __all__ = [
@@ -63,12 +63,8 @@ def pose_from_xyz_rpy(xyz, rpy) -> np.ndarray:
     ``R = Rz(yaw) Ry(pitch) Rx(roll)``)."""
     from scipy.spatial.transform import Rotation
 
-    xyz = np.asarray(xyz, dtype=float)
-    rpy = np.asarray(rpy, dtype=float)
-    if xyz.shape != (3,) or rpy.shape != (3,):
-        raise ValueError("xyz and rpy need three values each")
-    if not (np.all(np.isfinite(xyz)) and np.all(np.isfinite(rpy))):
-        raise ValueError("xyz and rpy must be finite")
+    xyz = _args.array(xyz, "xyz", (3,))
+    rpy = _args.array(rpy, "rpy", (3,))
     T = np.eye(4)
     T[:3, :3] = Rotation.from_euler("xyz", rpy).as_matrix()  # extrinsic x, then y, then z
     T[:3, 3] = xyz
@@ -76,16 +72,12 @@ def pose_from_xyz_rpy(xyz, rpy) -> np.ndarray:
 
 
 def _pose(T, name: str) -> np.ndarray:
-    T = np.asarray(T, dtype=float)
-    if T.shape != (4, 4):
-        raise ValueError(f"{name} must be a 4x4 homogeneous transform, got shape {T.shape}")
-    if not np.all(np.isfinite(T)):
-        raise ValueError(f"{name} contains NaN or infinite values")
+    T = _args.array(T, name, (4, 4))
     R = T[:3, :3]
     if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
-        raise ValueError(f"{name}: the upper-left 3x3 block is not a rotation matrix")
+        raise _core.ModelError(f"{name}: the upper-left 3x3 block is not a rotation matrix")
     if np.any(T[3] != [0.0, 0.0, 0.0, 1.0]):
-        raise ValueError(f"{name}: the last row must be (0, 0, 0, 1)")
+        raise _core.ModelError(f"{name}: the last row must be (0, 0, 0, 1)")
     return T
 
 
@@ -98,7 +90,9 @@ def damped_pinv(J, damping: float = 0.05, threshold: float = 0.02) -> np.ndarray
     ``lambda^2 = damping^2 (1 - (s_min / threshold)^2)`` when the smallest singular value
     ``s_min`` is below ``threshold`` and 0 otherwise: the exact pseudo-inverse away from
     singularities, bounded joint speeds near them."""
-    J = np.asarray(J, dtype=float)
+    J = _args.array(J, "J", (None, None))
+    damping = _args.number(damping, "damping", minimum=0.0)
+    threshold = _args.number(threshold, "threshold", minimum=0.0)
     U, s, Vt = np.linalg.svd(J, full_matrices=False)
     smin = s[-1] if s.size else 0.0
     lam2 = 0.0
@@ -130,10 +124,11 @@ def limits_gradient(robot: Robot, q) -> np.ndarray:
     lim = robot.limits
     lo, hi = lim["lower"], lim["upper"]
     ok = np.isfinite(lo) & np.isfinite(hi) & (hi > lo)
+    q = _args.array(q, "q", (robot.n,), unit="joint")
     z = np.zeros(robot.n)
     mid = 0.5 * (lo + hi)
     half = 0.5 * (hi - lo)
-    z[ok] = -(np.asarray(q)[ok] - mid[ok]) / half[ok] ** 2
+    z[ok] = -(q[ok] - mid[ok]) / half[ok] ** 2
     return z
 
 
@@ -170,13 +165,9 @@ def velocity_ik(
     -------
     dq : ndarray (n,)
     """
-    q = np.asarray(q, dtype=float)
+    q = _args.array(q, "q", (robot.n,), unit="joint")
     rows = _task_rows(task)
-    x = np.asarray(twist, dtype=float)
-    if x.shape != (len(rows),):
-        raise ValueError(f"twist has shape {x.shape}; expected ({len(rows)},) for this task")
-    if not np.all(np.isfinite(x)):
-        raise ValueError("twist contains NaN or infinite values")
+    x = _args.array(twist, "twist", (len(rows),))
     J = robot.jacobian(q)[rows]
     Jp = damped_pinv(J, damping, threshold)
     dq = Jp @ x
@@ -188,9 +179,8 @@ def velocity_ik(
         elif callable(nullspace):
             z = np.asarray(nullspace(q), dtype=float)
         else:
-            z = np.asarray(nullspace, dtype=float)
-        if z.shape != (robot.n,):
-            raise ValueError(f"nullspace motion has shape {z.shape}; expected ({robot.n},)")
+            z = nullspace
+        z = _args.array(z, "nullspace", (robot.n,), unit="joint")
         dq = dq + z - Jp @ (J @ z)
     return dq
 
@@ -279,9 +269,7 @@ def resolved_rate(
     """
     if not (duration > 0 and dt > 0):
         raise ValueError("duration and dt must be positive")
-    q = np.array(q0, dtype=float)
-    if q.shape != (robot.n,):
-        raise ValueError(f"q0 has shape {q.shape}; expected ({robot.n},)")
+    q = _args.array(q0, "q0", (robot.n,), unit="joint").copy()
     K = int(round(duration / dt)) + 1
     t = np.arange(K) * dt
     Q, DQ, E = np.zeros((K, robot.n)), np.zeros((K, robot.n)), np.zeros((K, 6))
@@ -303,7 +291,9 @@ class IkResult:
 
     status: ``"converged"`` (pose error within tolerance, inside the limits), ``"not converged"``
     (all attempts used: unreachable or too hard), ``"timeout"`` (budget used up).
-    ``q`` is the solution, or the best point found; ``error`` its max |pose error| component."""
+    ``q`` is the solution, or the best point found; ``error`` its pose error
+    ``|log6(T_target^-1 T(q))|`` (metres and radians, as Pinocchio's
+    ``pin.log6(oMdes.actInv(oMq)).vector`` norm)."""
 
     q: np.ndarray
     success: bool
@@ -326,34 +316,36 @@ def ik_solve(
     seed: int = 42,
 ) -> IkResult:
     """Joint positions inside the limits that put the tool frame at ``T_target`` (4x4, base
-    frame), by damped least squares with random restarts (C++).
+    frame), by damped least squares with random restarts (C++). Once the pose error is within
+    ``tolerance``, Newton steps continue (at most ten, the best point kept) until it is at
+    rounding level: a converged answer is as precise as the arithmetic allows (about 1e-15)
+    unless a joint limit stops it.
 
     Parameters
     ----------
     q0 : array (n,), optional
         Start (default: the middle of the limits); values outside the limits are brought inside.
     tolerance : float
-        Largest accepted |component| of the pose error (m, rad).
+        Largest accepted pose error ``|log6(T_target^-1 T(q))|`` (m, rad).
     max_time : float
         CPU-time budget in seconds (0: none); ``max_attempts`` bounds the restarts.
     seed : int
         Seed of the restart points (same seed, same answer).
     """
     T = _pose(T_target, "T_target")
+    if q0 is not None:
+        q0 = _args.array(q0, "q0", (robot.n,), unit="joint")
     solver = _core.IkSolver(
         robot._m,
-        tolerance=tolerance,
-        max_iterations=max_iterations,
-        max_attempts=max_attempts,
-        max_time=max_time,
-        orientation_weight=orientation_weight,
-        seed=seed,
+        tolerance=_args.number(tolerance, "tolerance", positive=True),
+        max_iterations=_args.integer(max_iterations, "max_iterations", minimum=1),
+        max_attempts=_args.integer(max_attempts, "max_attempts", minimum=1),
+        max_time=_args.number(max_time, "max_time", minimum=0.0),
+        orientation_weight=_args.number(orientation_weight, "orientation_weight", minimum=0.0),
+        seed=_args.integer(seed, "seed", minimum=0),
     )
     if q0 is None:
         q0 = 0.5 * (solver.lower + solver.upper)
-    q0 = np.asarray(q0, dtype=float)
-    if q0.shape != (robot.n,):
-        raise ValueError(f"q0 has shape {q0.shape}; expected ({robot.n},)")
     r = solver.solve(T, q0)
     return IkResult(
         q=np.asarray(r["q"]),

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 
 __all__ = ["Robot", "load", "bundled_robots"]
 
@@ -184,7 +184,7 @@ class Robot:
 
     @gravity.setter
     def gravity(self, g) -> None:
-        self._m.gravity = np.asarray(g, dtype=float).reshape(3)
+        self._m.gravity = _args.array(g, "gravity", (3,))
 
     @property
     def tool(self) -> np.ndarray:
@@ -194,7 +194,7 @@ class Robot:
     def joint_transform(self, k: int, q: float) -> np.ndarray:
         """4x4 transform from link ``k-1`` to link ``k`` (0-based ``k``) at joint value ``q``."""
         self._check_joint(k)
-        return self._m.joint_transform(k, float(q))
+        return self._m.joint_transform(k, _args.number(q, "q"))
 
     def joint_pre(self, k: int) -> np.ndarray:
         self._check_joint(k)
@@ -205,6 +205,7 @@ class Robot:
         return self._m.joint_post(k)
 
     def _check_joint(self, k: int) -> None:
+        _args.integer(k, "k")
         if not 0 <= k < self.n:
             raise IndexError(f"joint index {k} out of range for {self.n} joints")
 
@@ -247,11 +248,11 @@ class Robot:
 
     def parameter_names(self, rotor: bool = False, friction: bool = False) -> list[str]:
         """Classical parameter names in the layout with optional ``Ia`` and ``Fv, Fc``."""
-        return self._m.parameter_names(rotor, friction)
+        return self._m.parameter_names(_args.flag(rotor, "rotor"), _args.flag(friction, "friction"))
 
     def parameters(self, rotor: bool = False, friction: bool = False) -> np.ndarray:
         """Classical parameter values of the model in that layout."""
-        return self._m.parameters(rotor, friction)
+        return self._m.parameters(_args.flag(rotor, "rotor"), _args.flag(friction, "friction"))
 
     # -- dynamics ------------------------------------------------------------------------------
     def inverse_dynamics(self, q, dq, ddq, params=None) -> np.ndarray:
@@ -259,54 +260,72 @@ class Robot:
 
         ``params`` defaults to the model's inertial parameters; any vector in a classical layout is
         accepted, physically meaningful or not. Returns shape (n,) or (m, n)."""
-        return self._m.inverse_dynamics(q, dq, ddq, params)
+        q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
+        return self._m.inverse_dynamics(q, dq, ddq, self._params(params))
 
     def regressor(self, q, dq, ddq, rotor: bool = False, friction: bool = False) -> np.ndarray:
         """Classical regressor ``W``, shape (n, P) or (m, n, P), with ``tau = W @ params``."""
-        return self._m.regressor(q, dq, ddq, rotor, friction)
+        q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
+        return self._m.regressor(q, dq, ddq, *self._layout(rotor, friction))
 
     def gravity_torque(self, q, params=None) -> np.ndarray:
         """Gravity torque ``c(q)``, shape (n,) or (m, n)."""
-        return self._m.gravity_torque(q, params)
+        return self._m.gravity_torque(_args.samples(q, "q", self.n), self._params(params))
 
     def mass_matrix(self, q, params=None) -> np.ndarray:
         """Joint-space inertia ``A(q)``, shape (n, n) or (m, n, n)."""
-        return self._m.mass_matrix(q, params)
+        return self._m.mass_matrix(_args.samples(q, "q", self.n), self._params(params))
 
     def forward_dynamics(self, q, dq, tau, params=None) -> np.ndarray:
         """Joint accelerations ``A(q)^-1 (tau - b - c - friction)``, shape (n,) or (m, n).
 
         Raises ValueError when ``A(q)`` is not positive definite for ``params``."""
-        return self._m.forward_dynamics(q, dq, tau, params)
+        q, dq, tau = _args.batch(self.n, q=q, dq=dq, tau=tau)
+        return self._m.forward_dynamics(q, dq, tau, self._params(params))
 
     def kinetic_energy(self, q, dq, params=None):
         """Kinetic energy (rotor inertia included when ``params`` has it): float or shape (m,)."""
-        return self._m.energies(q, dq, params)[0]
+        return self._energies(q, dq, params)[0]
 
     def potential_energy(self, q, params=None):
         """Potential energy ``-sum g . (M_k p_k + R_k MS_k)``: float or shape (m,)."""
-        q = np.asarray(q, dtype=float)
-        return self._m.energies(q, np.zeros_like(q), params)[1]
+        q = _args.samples(q, "q", self.n)
+        return self._m.energies(q, np.zeros_like(q), self._params(params))[1]
 
     def energy(self, q, dq, params=None):
         """Total energy ``H = K + P``: float or shape (m,)."""
-        k, p = self._m.energies(q, dq, params)
+        k, p = self._energies(q, dq, params)
         return k + p
 
     def energy_regressors(self, q, dq, rotor: bool = False, friction: bool = False):
         """``(w_K, w_P)`` with ``K = w_K @ params`` and ``P = w_P @ params``; shape (P,) or
         (m, P) each."""
-        return self._m.energy_regressors(q, dq, rotor, friction)
+        return self._energy_regressors(q, dq, rotor, friction)
 
     def energy_regressor(self, q, dq, rotor: bool = False, friction: bool = False) -> np.ndarray:
         """Total-energy regressor ``w_H = w_K + w_P`` (``H = w_H @ params``)."""
-        wk, wp = self._m.energy_regressors(q, dq, rotor, friction)
+        wk, wp = self._energy_regressors(q, dq, rotor, friction)
         return wk + wp
 
     def lagrangian_regressor(self, q, dq, rotor: bool = False, friction: bool = False):
         """Lagrangian regressor ``w_L = w_K - w_P`` (``L = w_L @ params``)."""
-        wk, wp = self._m.energy_regressors(q, dq, rotor, friction)
+        wk, wp = self._energy_regressors(q, dq, rotor, friction)
         return wk - wp
+
+    def _energies(self, q, dq, params):
+        q, dq = _args.batch(self.n, q=q, dq=dq)
+        return self._m.energies(q, dq, self._params(params))
+
+    def _energy_regressors(self, q, dq, rotor, friction):
+        q, dq = _args.batch(self.n, q=q, dq=dq)
+        return self._m.energy_regressors(q, dq, *self._layout(rotor, friction))
+
+    def _params(self, params, name: str = "params"):
+        return _args.params(params, name, self.n)
+
+    @staticmethod
+    def _layout(rotor, friction) -> tuple[bool, bool]:
+        return _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
 
     # -- kinematics (Orocos KDL) ---------------------------------------------------------------
     def _kinematics(self) -> _core.Kinematics:
@@ -317,6 +336,7 @@ class Robot:
     def fk(self, q, link: int = -1) -> np.ndarray:
         """4x4 pose of link ``link`` (0-based) or of the tool frame (``-1``) in the base frame."""
         q = _vector(q, self.n, "q")
+        _args.integer(link, "link")
         if not -1 <= link < self.n:
             raise IndexError(f"link index {link} out of range for {self.n} links")
         return self._kinematics().pose(q, link)
@@ -331,14 +351,6 @@ class Robot:
 
 
 def _vector(x, n: int, name: str, unit: str = "joint") -> np.ndarray:
-    """``x`` as a finite float array of shape (n,), or ValueError naming ``name`` and the
-    offending ``unit`` (1-based, as in the bindings' messages)."""
-    a = np.asarray(x, dtype=float)
-    if a.shape != (n,):
-        raise ValueError(f"{name} has shape {a.shape}; expected ({n},)")
-    bad = np.flatnonzero(~np.isfinite(a))
-    if bad.size:
-        i = int(bad[0])
-        what = "NaN" if np.isnan(a[i]) else "an infinite value"
-        raise ValueError(f"{name} contains {what} at {unit} {i + 1}")
-    return a
+    """``x`` as a finite float array of shape (n,), or ModelError naming ``name``, the expected
+    shape and what was given (the offending ``unit``, 1-based, for a non-finite value)."""
+    return _args.array(x, name, (n,), unit=unit)

@@ -26,7 +26,7 @@ from typing import Protocol
 
 import numpy as np
 
-from .data import truth_path, write_csv
+from .identification.data import truth_path, write_csv
 from .robot import Robot, load
 
 __all__ = [
@@ -172,8 +172,8 @@ def load_reference(path):
     """A reference trajectory from the JSON of ``mindyn excite`` (exact Fourier series) or from a
     CSV ``t, q, [dq], [ddq]`` (interpolated by cubic splines; missing derivatives obtained from
     the positions)."""
-    from .data import read_csv
-    from .excitation import FourierTrajectory
+    from .identification.data import read_csv
+    from .identification.excitation import FourierTrajectory
 
     p = Path(path)
     if p.suffix.lower() == ".json":
@@ -214,6 +214,36 @@ def expand_params(n: int, params) -> np.ndarray:
     return out.reshape(-1)
 
 
+#: Most samples (control periods) one simulation may have: the logs are held in memory, about
+#: 60 bytes per sample and joint (tracking) before they are written.
+MAX_SAMPLES = 1_000_000
+#: Most integration steps (samples x substeps) one simulation may take: about two minutes of
+#: RK4 with the controller on a 6-joint robot (3 s per 100,000 steps measured).
+MAX_STEPS = 4_000_000
+
+
+def check_steps(duration: float, rate: float, substeps: int = 1) -> int:
+    """Number of samples of a simulation of ``duration`` s at ``rate`` Hz with ``substeps``
+    integration steps each; raises ValueError unless all are finite and positive and within
+    :data:`MAX_SAMPLES` and :data:`MAX_STEPS` (the message gives the counts and the limits)."""
+    duration, rate = float(duration), float(rate)
+    if not (math.isfinite(duration) and duration > 0):
+        raise ValueError(f"duration must be a positive number of seconds, got {duration:g}")
+    if not (math.isfinite(rate) and rate > 0):
+        raise ValueError(f"rate must be a positive number of Hz, got {rate:g}")
+    if not substeps >= 1:
+        raise ValueError(f"substeps must be at least 1, got {substeps}")
+    samples = duration * rate
+    if samples > MAX_SAMPLES or samples * substeps > MAX_STEPS:
+        raise ValueError(
+            f"{duration:g} s at {rate:g} Hz are {samples:.4g} samples"
+            + (f" x {substeps} substeps = {samples * substeps:.4g} steps" if substeps > 1 else "")
+            + f"; at most {MAX_SAMPLES:,} samples and {MAX_STEPS:,} integration steps are "
+            "simulated (shorten the duration or lower the rate)"
+        )
+    return int(round(samples)) + 1
+
+
 def _span(reference, duration):
     if duration is not None:
         return float(duration)
@@ -244,7 +274,8 @@ def simulate_tracking(
     robot : Robot or str
     reference
         Anything with ``evaluate(t) -> (q, dq, ddq)`` (each (m, n)) — a
-        :class:`~mindyn.excitation.FourierTrajectory` or :class:`~mindyn.data.JointData`.
+        :class:`~mindyn.identification.excitation.FourierTrajectory` or
+        :class:`~mindyn.identification.data.JointData`.
     controller : Controller, optional
         Default :class:`ComputedTorquePD` with the true parameters.
     rate : float
@@ -274,9 +305,7 @@ def simulate_tracking(
     arr = noise.arrays(n)
     rng = np.random.default_rng(seed)
     T = _span(reference, duration)
-    if not rate > 0 or substeps < 1:
-        raise ValueError("rate must be positive and substeps at least 1")
-    m = int(round(T * rate)) + 1
+    m = check_steps(T, rate, substeps)
     t = np.arange(m) / rate
     q_ref, dq_ref, ddq_ref = reference.evaluate(t)
     h = 1.0 / (rate * substeps)
@@ -368,7 +397,7 @@ def simulate_inverse(
     arr = noise.arrays(n)
     rng = np.random.default_rng(seed)
     T = _span(reference, duration)
-    m = int(round(T * rate)) + 1
+    m = check_steps(T, rate)
     t = np.arange(m) / rate
     t0 = time.perf_counter()
     q, dq, ddq = reference.evaluate(t)
@@ -409,33 +438,47 @@ def simulate(robot, reference, mode: str = "tracking", **kwargs) -> SimulationLo
     raise ValueError(f"unknown simulation mode '{mode}'; use tracking or inverse")
 
 
+#: Largest noise levels :func:`noise_from_spec` accepts, per kind (SI units; torque noise in
+#: percent at most 100 %): beyond them the "measurement" carries no information about the
+#: motion or the torque.
+NOISE_LIMITS = {"torque": 1e6, "position": 1.0, "velocity": 100.0, "quantization": 1.0}
+
+
 def noise_from_spec(spec: str | None, robot: Robot, what: str, reference_torque=None) -> np.ndarray:
     """Parses a noise level: ``"0.5"`` (all joints), ``"0.5,0.5,0.2"`` (per joint) or ``"1%"``
     (torque only: percent of each joint's effort limit, or of the peak reference torque where
-    the description gives no effort limit)."""
+    the description gives no effort limit). Values must be finite, non-negative and at most
+    :data:`NOISE_LIMITS` (percentages at most 100)."""
     n = robot.n
+    opt = "--quantization" if what == "quantization" else f"--{what}-noise"
     if spec is None or spec == "":
         return np.zeros(n)
     s = spec.strip()
     if s.endswith("%"):
         if what != "torque":
-            raise ValueError(f"--{what}-noise: a percentage applies to torque noise only")
-        frac = float(s[:-1]) / 100.0
+            raise ValueError(f"{opt}: a percentage applies to torque noise only")
+        try:
+            pct = float(s[:-1])
+        except ValueError:
+            pct = math.nan
+        if not (math.isfinite(pct) and 0 <= pct <= 100):
+            raise ValueError(f"{opt}: expected a percentage in [0, 100], got '{spec}'")
         eff = np.array(robot.limits["effort"], dtype=float)
         if reference_torque is not None:
             peak = np.abs(np.asarray(reference_torque)).max(0)
             eff = np.where(np.isfinite(eff) & (eff > 0), eff, peak)
         if not np.isfinite(eff).all():
             raise ValueError("torque noise in %: the robot has no effort limits")
-        return frac * eff
+        return pct / 100.0 * eff
     try:
         vals = [float(v) for v in s.split(",")]
     except ValueError:
-        raise ValueError(f"--{what}-noise: '{spec}' is not a number or list of numbers") from None
+        raise ValueError(f"{opt}: '{spec}' is not a number or list of numbers") from None
     if len(vals) == 1:
         vals = vals * n
     if len(vals) != n:
-        raise ValueError(f"--{what}-noise: {len(vals)} values for {n} joints")
-    if any(v < 0 or not math.isfinite(v) for v in vals):
-        raise ValueError(f"--{what}-noise: values must be finite and non-negative")
+        raise ValueError(f"{opt}: {len(vals)} values for {n} joints")
+    top = NOISE_LIMITS[what]
+    if any(not (math.isfinite(v) and 0 <= v <= top) for v in vals):
+        raise ValueError(f"{opt}: expected finite values in [0, {top:g}], got '{spec}'")
     return np.array(vals)

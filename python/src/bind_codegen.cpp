@@ -139,16 +139,13 @@ void bindCodegen(py::module_& m) {
           [](PyBaseDynamics& s, const Array& q, const Array& dq, const Array& ddq,
              const Array& pb) {
             const long n = s.bd->nq(), np = s.bd->np();
-            const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
-            const long rows = m == 0 ? 1 : m;
-            auto out = vectorOut(m, n);
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
+            auto out = batch.output({n});
             const auto p = parameterArg(pb, np, "p");
-            for (long i = 0; i < rows; ++i) {
+            batch.forEach([&](long i, const auto& x) {
               Eigen::Map<Eigen::VectorXd> t(out.mutable_data() + i * n, n);
-              s.bd->inverseDynamics(Eigen::Map<const Eigen::VectorXd>(q.data() + i * n, n),
-                                    Eigen::Map<const Eigen::VectorXd>(dq.data() + i * n, n),
-                                    Eigen::Map<const Eigen::VectorXd>(ddq.data() + i * n, n), p, t);
-            }
+              s.bd->inverseDynamics(x[0], x[1], x[2], p, t);
+            });
             return out;
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("p"))
@@ -156,14 +153,13 @@ void bindCodegen(py::module_& m) {
           "gravity",
           [](PyBaseDynamics& s, const Array& q, const Array& pb) {
             const long n = s.bd->nq(), np = s.bd->np();
-            const long m = batch({{&q, "q"}}, n);
-            const long rows = m == 0 ? 1 : m;
-            auto out = vectorOut(m, n);
+            SampleBatch batch({{&q, "q"}}, n);
+            auto out = batch.output({n});
             const auto p = parameterArg(pb, np, "p");
-            for (long i = 0; i < rows; ++i) {
+            batch.forEach([&](long i, const auto& x) {
               Eigen::Map<Eigen::VectorXd> t(out.mutable_data() + i * n, n);
-              s.bd->gravity(Eigen::Map<const Eigen::VectorXd>(q.data() + i * n, n), p, t);
-            }
+              s.bd->gravity(x[0], p, t);
+            });
             return out;
           },
           py::arg("q"), py::arg("p"))
@@ -171,16 +167,13 @@ void bindCodegen(py::module_& m) {
           "regressor",
           [](PyBaseDynamics& s, const Array& q, const Array& dq, const Array& ddq) {
             const long n = s.bd->nq(), np = s.bd->np();
-            const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
-            const long rows = m == 0 ? 1 : m;
-            auto out = matrixOut(m, n, np);
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
+            auto out = batch.output({n, np});
             Eigen::MatrixXd Wb(n, np);
-            for (long i = 0; i < rows; ++i) {
-              s.bd->regressor(Eigen::Map<const Eigen::VectorXd>(q.data() + i * n, n),
-                              Eigen::Map<const Eigen::VectorXd>(dq.data() + i * n, n),
-                              Eigen::Map<const Eigen::VectorXd>(ddq.data() + i * n, n), Wb);
+            batch.forEach([&](long i, const auto& x) {
+              s.bd->regressor(x[0], x[1], x[2], Wb);
               Eigen::Map<RowMajor>(out.mutable_data() + i * n * np, n, np) = Wb;
-            }
+            });
             return out;
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"));

@@ -23,21 +23,13 @@ namespace {
 template <class F>
 py::array_t<double> perSample4(long n, const Array& a, const Array& b, const Array& c,
                                const Array& d, long rows, long cols, F&& f) {
-  const long m = batch({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, n);
-  auto out = matrixOut(m, rows, cols);
-  const long count = m == 0 ? 1 : m;
-  Eigen::Map<const RowMajor> A(a.data(), count, n), B(b.data(), count, n), C(c.data(), count, n),
-      D(d.data(), count, n);
-  Eigen::VectorXd x(n), y(n), z(n), w(n);
+  SampleBatch batch({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, n);
+  auto out = batch.output({rows, cols});
   Eigen::MatrixXd M(rows, cols);
-  for (long i = 0; i < count; ++i) {
-    x = A.row(i).transpose();
-    y = B.row(i).transpose();
-    z = C.row(i).transpose();
-    w = D.row(i).transpose();
-    f(x, y, z, w, M);
+  batch.forEach([&](long i, const auto& x) {
+    f(x[0], x[1], x[2], x[3], M);
     Eigen::Map<RowMajor>(out.mutable_data() + i * rows * cols, rows, cols) = M;
-  }
+  });
   return out;
 }
 

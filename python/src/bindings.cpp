@@ -39,19 +39,13 @@ template <class F>
 py::array_t<double> perSampleVector(PyModel& self, const Array& a, const Array& b, const Array& c,
                                     const char* na, const char* nb, const char* nc, F&& f) {
   const long n = self.model.nq();
-  const long m = batch({{&a, na}, {&b, nb}, {&c, nc}}, n);
-  auto out = vectorOut(m, n);
-  const long rows = m == 0 ? 1 : m;
-  RowMap A(a.data(), rows, n), B(b.data(), rows, n), C(c.data(), rows, n);
-  Eigen::Map<RowMajor> O(out.mutable_data(), rows, n);
-  Eigen::VectorXd qi(n), dqi(n), ddqi(n), ti(n);
-  for (long i = 0; i < rows; ++i) {
-    qi = A.row(i).transpose();
-    dqi = B.row(i).transpose();
-    ddqi = C.row(i).transpose();
-    f(qi, dqi, ddqi, ti);
-    O.row(i) = ti.transpose();
-  }
+  SampleBatch s({{&a, na}, {&b, nb}, {&c, nc}}, n);
+  auto out = s.output({n});
+  Eigen::VectorXd ti(n);
+  s.forEach([&](long i, const auto& x) {
+    f(x[0], x[1], x[2], ti);
+    Eigen::Map<Eigen::VectorXd>(out.mutable_data() + i * n, n) = ti;
+  });
   return out;
 }
 
@@ -271,22 +265,15 @@ PYBIND11_MODULE(_core, m) {
           [](PyModel& s, const Array& q, const Array& dq, const Array& ddq, bool rotor,
              bool friction) {
             const long n = s.model.nq();
-            const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const ParameterLayout layout{rotor, friction};
             const long P = layout.size(static_cast<int>(n));
-            auto out = matrixOut(m, n, P);
-            const long rows = m == 0 ? 1 : m;
-            RowMap A(q.data(), rows, n), B(dq.data(), rows, n), C(ddq.data(), rows, n);
+            auto out = batch.output({n, P});
             Eigen::MatrixXd W(n, P);
-            Eigen::VectorXd a(n), b(n), c(n);
-            double* o = out.mutable_data();
-            for (long i = 0; i < rows; ++i) {
-              a = A.row(i).transpose();
-              b = B.row(i).transpose();
-              c = C.row(i).transpose();
-              regressor(s.model, s.data, a, b, c, layout, W);
-              Eigen::Map<RowMajor>(o + i * n * P, n, P) = W;
-            }
+            batch.forEach([&](long i, const auto& x) {
+              regressor(s.model, s.data, x[0], x[1], x[2], layout, W);
+              Eigen::Map<RowMajor>(out.mutable_data() + i * n * P, n, P) = W;
+            });
             return out;
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("rotor") = false,
@@ -295,20 +282,16 @@ PYBIND11_MODULE(_core, m) {
           "energy_regressors",
           [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction) {
             const long n = s.model.nq();
-            const long m = batch({{&q, "q"}, {&dq, "dq"}}, n);
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             const ParameterLayout layout{rotor, friction};
             const long P = layout.size(static_cast<int>(n));
-            auto wk = vectorOut(m, P), wp = vectorOut(m, P);
-            const long rows = m == 0 ? 1 : m;
-            RowMap A(q.data(), rows, n), B(dq.data(), rows, n);
-            Eigen::VectorXd a(n), b(n), k(P), p(P);
-            for (long i = 0; i < rows; ++i) {
-              a = A.row(i).transpose();
-              b = B.row(i).transpose();
-              energyRegressors(s.model, s.data, a, b, layout, k, p);
+            auto wk = batch.output({P}), wp = batch.output({P});
+            Eigen::VectorXd k(P), p(P);
+            batch.forEach([&](long i, const auto& x) {
+              energyRegressors(s.model, s.data, x[0], x[1], layout, k, p);
               std::copy(k.data(), k.data() + P, wk.mutable_data() + i * P);
               std::copy(p.data(), p.data() + P, wp.mutable_data() + i * P);
-            }
+            });
             return py::make_tuple(wk, wp);
           },
           py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false)
@@ -316,20 +299,15 @@ PYBIND11_MODULE(_core, m) {
           "energies",
           [](PyModel& s, const Array& q, const Array& dq, const py::object& params) {
             const long n = s.model.nq();
-            const long m = batch({{&q, "q"}, {&dq, "dq"}}, n);
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             ParameterLayout layout;
             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-            const long rows = m == 0 ? 1 : m;
-            py::array_t<double> K(rows), P(rows);
-            RowMap A(q.data(), rows, n), B(dq.data(), rows, n);
-            Eigen::VectorXd a(n), b(n);
-            for (long i = 0; i < rows; ++i) {
-              a = A.row(i).transpose();
-              b = B.row(i).transpose();
-              K.mutable_at(i) = kineticEnergy(s.model, s.data, a, b, p, layout);
-              P.mutable_at(i) = potentialEnergy(s.model, s.data, a, p, layout);
-            }
-            if (m == 0) return py::object(py::make_tuple(K.at(0), P.at(0)));
+            py::array_t<double> K(batch.count()), P(batch.count());
+            batch.forEach([&](long i, const auto& x) {
+              K.mutable_at(i) = kineticEnergy(s.model, s.data, x[0], x[1], p, layout);
+              P.mutable_at(i) = potentialEnergy(s.model, s.data, x[0], p, layout);
+            });
+            if (batch.single()) return py::object(py::make_tuple(K.at(0), P.at(0)));
             return py::object(py::make_tuple(K, P));
           },
           py::arg("q"), py::arg("dq"), py::arg("params") = py::none())
@@ -337,19 +315,15 @@ PYBIND11_MODULE(_core, m) {
           "mass_matrix",
           [](PyModel& s, const Array& q, const py::object& params) {
             const long n = s.model.nq();
-            const long m = batch({{&q, "q"}}, n);
+            SampleBatch batch({{&q, "q"}}, n);
             ParameterLayout layout;
             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-            auto out = matrixOut(m, n, n);
-            const long rows = m == 0 ? 1 : m;
-            RowMap A(q.data(), rows, n);
+            auto out = batch.output({n, n});
             Eigen::MatrixXd M(n, n);
-            Eigen::VectorXd a(n);
-            for (long i = 0; i < rows; ++i) {
-              a = A.row(i).transpose();
-              massMatrix(s.model, s.data, a, p, layout, M);
+            batch.forEach([&](long i, const auto& x) {
+              massMatrix(s.model, s.data, x[0], p, layout, M);
               Eigen::Map<RowMajor>(out.mutable_data() + i * n * n, n, n) = M;
-            }
+            });
             return out;
           },
           py::arg("q"), py::arg("params") = py::none());
@@ -413,20 +387,14 @@ PYBIND11_MODULE(_core, m) {
           [](PyBase& b, const Array& q, const Array& dq, const Array& ddq) {
             PyModel& s = *b.model;
             const long n = s.model.nq();
-            const long m = batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const long nb = b.bp.eom.size();
-            auto out = matrixOut(m, n, nb);
-            const long rows = m == 0 ? 1 : m;
-            RowMap A(q.data(), rows, n), B(dq.data(), rows, n), C(ddq.data(), rows, n);
+            auto out = batch.output({n, nb});
             Eigen::MatrixXd Wb(n, nb);
-            Eigen::VectorXd x(n), y(n), z(n);
-            for (long i = 0; i < rows; ++i) {
-              x = A.row(i).transpose();
-              y = B.row(i).transpose();
-              z = C.row(i).transpose();
-              baseRegressor(s.model, s.data, b.bp, x, y, z, b.W, Wb);
+            batch.forEach([&](long i, const auto& x) {
+              baseRegressor(s.model, s.data, b.bp, x[0], x[1], x[2], b.W, Wb);
               Eigen::Map<RowMajor>(out.mutable_data() + i * n * nb, n, nb) = Wb;
-            }
+            });
             return out;
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"))
@@ -435,18 +403,14 @@ PYBIND11_MODULE(_core, m) {
           [](PyBase& b, const Array& q, const Array& dq) {
             PyModel& s = *b.model;
             const long n = s.model.nq();
-            const long m = batch({{&q, "q"}, {&dq, "dq"}}, n);
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             const long nb = b.bp.eom.size();
-            auto out = vectorOut(m, nb);
-            const long rows = m == 0 ? 1 : m;
-            RowMap A(q.data(), rows, n), B(dq.data(), rows, n);
-            Eigen::VectorXd x(n), y(n), wb(nb);
-            for (long i = 0; i < rows; ++i) {
-              x = A.row(i).transpose();
-              y = B.row(i).transpose();
-              baseEnergyRegressor(s.model, s.data, b.bp, x, y, b.wK, b.wP, wb);
+            auto out = batch.output({nb});
+            Eigen::VectorXd wb(nb);
+            batch.forEach([&](long i, const auto& x) {
+              baseEnergyRegressor(s.model, s.data, b.bp, x[0], x[1], b.wK, b.wP, wb);
               std::copy(wb.data(), wb.data() + nb, out.mutable_data() + i * nb);
-            }
+            });
             return out;
           },
           py::arg("q"), py::arg("dq"));
@@ -500,6 +464,22 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("model"), py::arg("rotor") = false,
       "Z (rows x 10n or 11n) and the basis function of each row, as text.");
+  m.def(
+      "projection_cost",
+      [](const std::shared_ptr<PyModel>& model, bool rotor) {
+        const ProjectionCost c = projectionCost(model->model, {rotor, false});
+        py::dict d;
+        d["terms"] = c.terms;
+        d["rows"] = c.rows;
+        d["entries"] = c.entries;
+        d["largest_stage"] = c.largest_stage;
+        d["bytes"] = c.bytes;
+        d["budget"] = kProjectionBudget;
+        return d;
+      },
+      py::arg("model"), py::arg("rotor") = false,
+      "Upper bounds of what the projection method forms (terms, rows, entries) and its memory "
+      "estimate in bytes, counted on sparsity patterns before computing; `budget`: the limit.");
   m.def("khalil_order", [](int n, bool rotor, bool friction) {
     return khalilOrder(n, {rotor, friction});
   });

@@ -30,15 +30,15 @@ inline std::string shapeOf(const Array& a) {
   return s + (a.ndim() == 1 ? ",)" : ")");
 }
 
-/// Number of samples of a per-sample argument: 0 for a single sample of shape (n,), m for a
-/// batch of shape (m, n).
+/// Number of samples of a per-sample argument: -1 for a single sample of shape (n,), m >= 0 for
+/// a batch of shape (m, n) (an empty batch, m = 0, included).
 inline long samples(const Array& a, long n, const char* name) {
   const std::string want = std::to_string(n);
   if (a.ndim() == 1) {
     if (a.shape(0) != n)
       throw py::value_error(std::string(name) + " has shape " + shapeOf(a) + "; expected (" + want +
                             ",) or (m, " + want + ")");
-    return 0;
+    return -1;
   }
   if (a.ndim() == 2) {
     if (a.shape(1) != n)
@@ -67,21 +67,51 @@ inline void requireFinite(const Array& a, const char* name, const char* entry = 
   }
 }
 
-/// Checks a group of per-sample arguments of width n: all single samples or all batches of one
-/// length. Returns the number of samples (0: single).
-inline long batch(const std::vector<std::pair<const Array*, const char*>>& args, long n) {
-  long m = -2;
-  for (const auto& [a, name] : args) {
-    const long s = samples(*a, n, name);
-    requireFinite(*a, name);
-    if (m == -2)
-      m = s;
-    else if (s != m)
-      throw py::value_error(std::string(name) +
-                            ": all inputs must be single samples or batches of equal length");
+/// A group of per-sample arguments of width n, checked together: all single samples of shape
+/// (n,) or all batches of one length m >= 0, shape (m, n), every entry finite. The one loop of
+/// every per-sample binding: outputs get a leading axis of length m for a batch (none for a
+/// single sample), and forEach visits the m samples (none for an empty batch).
+class SampleBatch {
+ public:
+  SampleBatch(std::initializer_list<std::pair<const Array*, const char*>> args, long n) : n_(n) {
+    long m = -2;
+    for (const auto& [a, name] : args) {
+      const long s = samples(*a, n, name);
+      requireFinite(*a, name);
+      if (m == -2)
+        m = s;
+      else if (s != m)
+        throw py::value_error(std::string(name) +
+                              ": all inputs must be single samples or batches of equal length");
+      args_.push_back(a);
+    }
+    m_ = m;
+    x_.assign(args_.size(), Eigen::VectorXd(n));
   }
-  return m;
-}
+  bool single() const { return m_ < 0; }
+  /// Number of samples visited: 1 for a single sample, m for a batch.
+  long count() const { return single() ? 1 : m_; }
+  /// An output array of per-sample shape `shape`, with the leading batch axis if any.
+  py::array_t<double> output(std::vector<py::ssize_t> shape) const {
+    if (!single()) shape.insert(shape.begin(), m_);
+    return py::array_t<double>(shape);
+  }
+  /// Calls f(i, x) for each sample i, x[j] the sample of the j-th argument (reused vectors).
+  template <class F>
+  void forEach(F&& f) {
+    const long c = count();
+    for (long i = 0; i < c; ++i) {
+      for (size_t j = 0; j < args_.size(); ++j)
+        x_[j] = Eigen::Map<const Eigen::VectorXd>(args_[j]->data() + i * n_, n_);
+      f(i, static_cast<const std::vector<Eigen::VectorXd>&>(x_));
+    }
+  }
+
+ private:
+  long n_, m_ = -1;
+  std::vector<const Array*> args_;
+  std::vector<Eigen::VectorXd> x_;
+};
 
 /// A vector argument of exactly n finite entries.
 inline Eigen::VectorXd vectorArg(const Eigen::VectorXd& v, long n, const char* name) {
@@ -128,18 +158,6 @@ inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object
   }
   requireFinite(a, "params", "entry");
   return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
-}
-
-/// Output of a per-sample function: (n,) for a single sample (m = 0), (m, n) for a batch.
-inline py::array_t<double> vectorOut(long m, long n) {
-  if (m == 0) return py::array_t<double>({n});
-  return py::array_t<double>({m, n});
-}
-
-/// Output of a per-sample matrix function: (r, c) for a single sample (m = 0), (m, r, c).
-inline py::array_t<double> matrixOut(long m, long r, long c) {
-  if (m == 0) return py::array_t<double>({r, c});
-  return py::array_t<double>({m, r, c});
 }
 
 /// A homogeneous 4x4 matrix as an isometry (its last row is not read).

@@ -12,6 +12,7 @@
 #include "mindyn/data.hpp"
 #include "mindyn/dynamics.hpp"
 #include "mindyn/model.hpp"
+#include "mindyn/projection.hpp"
 
 namespace mindyn {
 
@@ -62,6 +63,9 @@ struct BaseOptions {
   BaseMethod method = BaseMethod::Projection;
   int samples = 0;    // numerical method: number of random states (0: automatic)
   unsigned seed = 1;  // numerical method: random seed
+  double projection_budget = kProjectionBudget;  // bytes, projection method
+  // bytes, numerical method: 2 GiB, a chain of about 340 joints (200 joints: 0.7 GiB, 14 s)
+  double numerical_budget = 2.0 * 1024 * 1024 * 1024;
 };
 
 /// One base-parameter set with its names.

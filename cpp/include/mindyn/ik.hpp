@@ -2,9 +2,14 @@
 // inside the joint limits, with seeded random restarts; and the forward kinematics and geometric
 // Jacobian it runs on (the model's own chain, no KDL).
 //
-// Pose error (the convergence test): the twist that moves the current tool frame onto the target
-// in the base frame, e = (p_target - p, rotation vector of R_target R^T); converged when every
-// component satisfies |e_i| <= tolerance (metres and radians).
+// Steps: damped least squares on the twist that moves the current tool frame onto the target in
+// the base frame, e = (p_target - p, rotation vector of R_target R^T). Convergence test: the norm
+// of the SE(3) logarithm of T_target^-1 T (metres and radians, the measure of Pinocchio's
+// log6(oMdes.actInv(oMq))) within the tolerance, the joints inside their limits. A converged
+// point is then refined by Newton steps (joints a step would take past a limit held there), at
+// most kIkRefineSteps, until the norm is at rounding level; the best point is returned. The
+// answer is as precise as the arithmetic allows (about 1e-15 m or rad) unless a limit prevents
+// it.
 //
 // After construction nothing allocates or throws: solve() and forward() are real-time safe.
 #pragma once
@@ -42,6 +47,9 @@ class ChainKinematics {
   std::vector<Eigen::Vector3d> z_, o_;  // joint axes and origins in the base frame
 };
 
+/// Most Newton steps taken after convergence to refine the answer.
+inline constexpr int kIkRefineSteps = 10;
+
 enum class IkStatus {
   Converged,      // pose error within tolerance, joints inside the limits
   NotConverged,   // every attempt used up its iterations (target unreachable or too hard)
@@ -52,7 +60,7 @@ enum class IkStatus {
 const char* toString(IkStatus status);
 
 struct IkOptions {
-  double tolerance = 1e-5;   // max |component| of the pose error [m, rad]
+  double tolerance = 1e-5;   // of the norm of the pose error's SE(3) logarithm [m, rad]
   int max_iterations = 100;  // per attempt
   int max_attempts = 100;    // the first from q0, the others from random points inside limits
   // CPU seconds of the calling thread for one solve (0: no limit). In a real-time thread this is
@@ -66,7 +74,7 @@ struct IkOptions {
 
 struct IkResult {
   IkStatus status = IkStatus::NotConverged;
-  double error = 0;    // max |component| of the final pose error
+  double error = 0;    // norm of the SE(3) logarithm of T_target^-1 T at the answer
   int iterations = 0;  // over all attempts
   int attempts = 0;
   bool success() const { return status == IkStatus::Converged; }
@@ -92,6 +100,8 @@ class IkSolver {
   /// Pose error twist of `T` relative to `target` (see the header comment) and its max |e_i|.
   static double poseError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target,
                           Eigen::Matrix<double, 6, 1>& e) noexcept;
+  /// Norm of the SE(3) logarithm of target^-1 T: sqrt(|v|^2 + |w|^2) with (v, w) = log6.
+  static double logError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target) noexcept;
 
   ChainKinematics& kinematics() { return kin_; }
 
@@ -107,7 +117,8 @@ class IkSolver {
   std::vector<bool> revolute_;
   std::mt19937 rng_;
   // work
-  Eigen::VectorXd x_, xc_, dq_, best_;
+  Eigen::VectorXd x_, xc_, dq_, best_, xt_;
+  std::vector<char> fixed_;  // refinement: joints held at a limit
   Matrix6Xd J_, Jc_, Jw_;
   Eigen::LLT<Eigen::Matrix<double, 6, 6>> llt_;
 };

@@ -9,8 +9,10 @@ is UTF-8 text (a leading byte-order mark is skipped). ``t`` in seconds, strictly
 positions in rad (m for prismatic joints), velocities and accelerations per second; torques in
 N m (N), or as relative values in per mille of the drive's rated torque
 (``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, seed 001, with
-the drive table of the robot description). Velocities and accelerations that are not
-logged are obtained from the positions (velocities) by zero-phase low-pass filtering and central
+the drive table of the robot description). The torque columns may say their unit in the header,
+``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with ``torque_unit``); the
+reader then needs no ``torque_unit``. Velocities and accelerations that are not logged are
+obtained from the positions (velocities) by zero-phase low-pass filtering and central
 differences; the settings are reported in :attr:`JointData.processing`.
 """
 
@@ -86,8 +88,9 @@ class JointData:
         return (self.m - 1) / (self.t[-1] - self.t[0]) if self.m > 1 else float("nan")
 
     def evaluate(self, t):
-        """Reference interface (as :class:`mindyn.excitation.FourierTrajectory`): positions,
-        velocities, accelerations at times ``t`` counted from the first sample, by cubic-spline
+        """Reference interface (as
+        :class:`~mindyn.identification.excitation.FourierTrajectory`): positions, velocities,
+        accelerations at times ``t`` counted from the first sample, by cubic-spline
         interpolation, (m, n) each."""
         from scipy.interpolate import CubicSpline
 
@@ -105,6 +108,7 @@ class JointData:
 
 
 _COLUMN = re.compile(r"(t|q|dq|ddq|tau)([1-9][0-9]*)?")
+_UNIT = re.compile(r"(tau[1-9][0-9]*)\s*\[([^\]]*)\]")
 
 # A cell holds a decimal number in ASCII: optional sign, digits with an optional point, optional
 # exponent, ASCII blanks around it. Python's float() also takes digit-group underscores
@@ -116,8 +120,23 @@ _NONFINITE = re.compile(r"[ \t]*[+-]?(?:nan|inf|infinity)[ \t]*", re.IGNORECASE)
 
 
 def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
-    """Maps header names to kinds; raises DataError naming missing and extra columns."""
+    """Maps header names to kinds; raises DataError naming missing and extra columns. A torque
+    column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
+    returned as ``torque_unit`` (None when the header names none)."""
     names = [h.strip() for h in header]
+    units = {}
+    for i, name in enumerate(names):
+        u = _UNIT.fullmatch(name)
+        if u:
+            names[i], units[u.group(1)] = u.group(1), u.group(2).strip()
+    if units:
+        taus = [h for h in names if re.fullmatch(r"tau[1-9][0-9]*", h)]
+        if set(units) != set(taus) or len(set(units.values())) != 1:
+            raise DataError(
+                f"{path}: the torque columns say different units ("
+                + ", ".join(f"{h}[{units[h]}]" if h in units else h for h in taus)
+                + "); give one unit on every torque column or on none"
+            )
     groups: dict[str, dict[int, int]] = {"q": {}, "dq": {}, "ddq": {}, "tau": {}}
     t_col = None
     extra = []
@@ -166,14 +185,15 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
             f"t, q1..q{n}, optionally dq1..dq{n} and ddq1..ddq{n}"
             + (f", then tau1..tau{n}" if require_torque else ", optionally tau1..tau{n}")
         )
-    return {"t": t_col, "n": n, **groups}
+    unit = next(iter(units.values())) if units else None
+    return {"t": t_col, "n": n, "torque_unit": unit, **groups}
 
 
 def read_csv(
     path,
     robot=None,
     n: int | None = None,
-    torque_unit: str = "Nm",
+    torque_unit: str | None = None,
     require_torque: bool = True,
     filter: str = "butter",
     cutoff: float | None = None,
@@ -190,9 +210,11 @@ def read_csv(
         Gives the number of joints and the drive table (needed for ``permille``).
     n : int, optional
         Number of joints when no robot is given (default: from the header).
-    torque_unit : {"Nm", "permille"}
+    torque_unit : {"Nm", "permille"}, optional
         ``permille``: torques logged relative to the motor rated torque, converted with
-        ``value * rated_torque * gear_ratio / 1000`` per joint.
+        ``value * rated_torque * gear_ratio / 1000`` per joint. Default: the unit the header
+        gives (``tau1[permille]``), else N m; a unit given here that differs from the header's
+        is an error.
     require_torque : bool
         False for a trajectory file (``t, q, [dq], [ddq]``).
     filter, cutoff, order, window, polyorder
@@ -294,11 +316,23 @@ def _read_csv(
     ddq = block("ddq")
     tau = block("tau")
     processing: dict = {"samples": len(rows), "first_data_line": first_line}
+    header_unit = cols["torque_unit"]
+    if tau is not None and header_unit is not None:
+        if _unit_key(header_unit) not in ("Nm", "permille"):
+            raise DataError(
+                f"{path}: unknown torque unit '{header_unit}' in the header; use Nm or permille"
+            )
+        if torque_unit is not None and _unit_key(torque_unit) != _unit_key(header_unit):
+            raise DataError(
+                f"{path}: the header gives the torques in '{header_unit}', but the torque unit "
+                f"'{torque_unit}' was asked for"
+            )
+        torque_unit = header_unit
     try:
         # overflow is checked below and reported once, not as numpy warnings
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             if tau is not None:
-                tau, unit_info = convert_torque(tau, torque_unit, robot)
+                tau, unit_info = convert_torque(tau, torque_unit or "Nm", robot)
                 processing["torque"] = unit_info
             dq, ddq, deriv = fill_derivatives(
                 t,
@@ -343,12 +377,21 @@ def first_not_increasing(t: np.ndarray) -> int | None:
     return int(bad[0]) + 1 if bad.size else None
 
 
+def _unit_key(unit: str) -> str:
+    u = unit.lower().replace(" ", "")
+    if u in ("nm", "n*m", "n.m", "si"):
+        return "Nm"
+    if u in ("permille", "‰", "promille"):
+        return "permille"
+    return u
+
+
 def convert_torque(tau: np.ndarray, unit: str, robot=None):
     """Torques in N m from the logged unit; returns ``(tau, info)``."""
-    unit_l = unit.lower().replace(" ", "")
-    if unit_l in ("nm", "n*m", "n.m", "si"):
+    unit_l = _unit_key(unit)
+    if unit_l == "Nm":
         return tau, {"unit": "N m"}
-    if unit_l in ("permille", "‰", "promille"):
+    if unit_l == "permille":
         if robot is None:
             raise DataError("torque unit 'permille' needs the robot's drive table")
         drives = robot.drives
@@ -468,8 +511,9 @@ def _header(n: int, kinds) -> list[str]:
     return ["t"] + [f"{k}{j}" for k in kinds for j in range(1, n + 1)]
 
 
-def write_csv(path, t, q, tau, dq=None, ddq=None) -> Path:
-    """Write ``t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun``; shapes (m,) and (m, n)."""
+def write_csv(path, t, q, tau, dq=None, ddq=None, torque_unit: str | None = None) -> Path:
+    """Write ``t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun``; shapes (m,) and (m, n). With
+    ``torque_unit`` (e.g. ``"permille"``) the torque columns say it: ``tau1[permille]``."""
     arrays = [np.asarray(t, dtype=float)[:, None], np.asarray(q, dtype=float)]
     kinds = ["q"]
     for kind, a in (("dq", dq), ("ddq", ddq)):
@@ -483,13 +527,16 @@ def write_csv(path, t, q, tau, dq=None, ddq=None) -> Path:
     for a in arrays[1:]:
         if a.shape != arrays[1].shape:
             raise ValueError(f"array shapes differ: {a.shape} vs {arrays[1].shape}")
+    header = _header(n, kinds)
+    if torque_unit is not None and tau is not None:
+        header = [f"{h}[{torque_unit}]" if h.startswith("tau") else h for h in header]
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     np.savetxt(
         path,
         np.hstack(arrays),
         delimiter=",",
-        header=",".join(_header(n, kinds)),
+        header=",".join(header),
         comments="",
         fmt="%.12g",
     )

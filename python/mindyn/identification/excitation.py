@@ -34,12 +34,14 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize
 
-from ._threads import single_threaded_blas
-from .base import BaseParameters, base_parameters
-from .robot import Robot, load
+from .._threads import single_threaded_blas
+from ..base import BaseParameters, base_parameters
+from ..robot import Robot, load
 
 __all__ = [
     "CRITERIA",
+    "MAX_TRAJECTORY_ROWS",
+    "check_sampling",
     "ExcitationResult",
     "FourierTrajectory",
     "criterion_value",
@@ -51,12 +53,39 @@ __all__ = [
 
 CRITERIA = ("cond", "logdet", "hadamard")
 
+#: Most rows a sampled trajectory may have (:meth:`FourierTrajectory.sample`): one period at
+#: 1 kHz of a 0.001 Hz trajectory; about 160 bytes per row and joint in CSV text.
+MAX_TRAJECTORY_ROWS = 1_000_000
+
 # Used where a robot description gives no limit (NaN): revolute, prismatic.
 FALLBACK = {
     "position": (math.pi, 0.5),  # half range about 0 [rad], [m]
     "velocity": (1.5, 0.5),  # [rad/s], [m/s]
     "acceleration": (6.0, 2.0),  # [rad/s^2], [m/s^2]
 }
+
+
+def check_sampling(harmonics: int, freq: float, rate: float, periods: float = 1.0) -> int:
+    """Raises ValueError unless ``rate`` [Hz] samples ``periods`` periods of a trajectory of
+    ``harmonics`` harmonics of ``freq`` [Hz]: a rate above ``2 N freq`` (each period of the
+    highest harmonic sampled more than twice) and at most :data:`MAX_TRAJECTORY_ROWS` samples.
+    Returns the number of samples."""
+    rate, periods, period = float(rate), float(periods), 1.0 / float(freq)
+    top = harmonics * freq
+    if not (math.isfinite(rate) and rate > 2 * top):
+        raise ValueError(
+            f"sample rate {rate:g} Hz does not sample the highest harmonic ({harmonics} x "
+            f"{freq:g} Hz = {top:g} Hz); expected a rate above {2 * top:g} Hz"
+        )
+    if not (math.isfinite(periods) and periods > 0):
+        raise ValueError(f"periods must be a positive number, got {periods:g}")
+    rows = periods * period * rate + 1
+    if rows > MAX_TRAJECTORY_ROWS:
+        raise ValueError(
+            f"{periods:g} period(s) of {period:g} s at {rate:g} Hz are {rows:.4g} rows; "
+            f"at most {MAX_TRAJECTORY_ROWS:,} are written (lower the rate)"
+        )
+    return int(round(periods * period * rate)) + 1
 
 
 @dataclass
@@ -111,7 +140,12 @@ class FourierTrajectory:
 
     def sample(self, rate: float = 250.0, periods: float = 1.0):
         """``(t, q, dq, ddq)`` sampled at ``rate`` Hz over ``periods`` periods, both ends
-        included; ``t`` shape (m,), the others (m, n)."""
+        included; ``t`` shape (m,), the others (m, n).
+
+        The rate must be above twice the highest harmonic's frequency (``2 N freq``: each of its
+        periods is then sampled more than twice), and the samples at most
+        :data:`MAX_TRAJECTORY_ROWS`."""
+        check_sampling(self.harmonics, self.freq, rate, periods)
         m = int(round(periods * self.period * rate)) + 1
         t = np.arange(m) / rate
         return (t, *self.evaluate(t))
@@ -528,6 +562,11 @@ def optimize_excitation(
         raise ValueError(f"base frequency must be positive, got {freq}")
     if starts < 1:
         raise ValueError(f"starts must be at least 1, got {starts}")
+    if not samples > 2 * harmonics:
+        raise ValueError(
+            f"{samples} regressor samples per period do not sample the highest of {harmonics} "
+            f"harmonics; expected more than {2 * harmonics}"
+        )
     robot = load(robot)
     stream = stream or sys.stderr
     t_begin = time.perf_counter()

@@ -1,23 +1,12 @@
-"""Identification of the base parameters from joint data (the thesis and the ZCR07S study).
-
-Two models, both over the equations-of-motion base set of :func:`mindyn.base_parameters`:
-
-``dynamic``
-    ``W_b(q_i, dq_i, ddq_i) p_b = tau_i`` for every sample ``i``, stacked (``m n`` rows).
-``energy``
-    The integral form of the energy theorem over consecutive windows ``[t_a, t_b]`` of
-    ``window`` samples: ``(w_H(t_b) - w_H(t_a)) p_b + Fv_k int dq_k^2 dt + Fc_k int |dq_k| dt
-    = int dq^T tau dt``; no accelerations are needed. The dissipated-energy columns of the
-    friction parameters replace their (zero) energy columns; the integrals use the trapezoid or
-    Simpson rule on the samples.
+"""Least-squares estimation of the base parameters from a regression system of
+:mod:`mindyn.identification.models`.
 
 Estimation is ordinary least squares, or weighted least squares with per-joint weights
 ``1 / sigma_j`` from the residuals of a first OLS pass (dynamic model). Statistics as in the
 ZCR07S study:
 ``sigma^2 = |y - W p|^2 / (r - c)``, ``cov = sigma^2 (W^T W)^-1``,
 ``RSD = 100 sqrt(cov_bb) / |p_b|``; parameters whose RSD exceeds a threshold are removed one at a
-time (largest first) and the rest re-estimated. Validation: per-joint RMS and relative torque
-error on another data set.
+time (largest first) and the rest re-estimated.
 """
 
 from __future__ import annotations
@@ -28,38 +17,32 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
-from scipy import integrate
 
-from ._threads import single_threaded_blas
-from .base import BaseParameters, base_parameters
+from .._threads import single_threaded_blas
+from ..base import BaseParameters, base_parameters
+from ..robot import Robot, load
 from .data import DataError, JointData
-from .robot import Robot, load
+from .errors import IdentificationError, RankDeficientError
+from .models import (
+    MODELS,
+    energy_row_noise,
+    energy_system,
+    require_torque,
+    torque_noise,
+)
 
-__all__ = [
-    "IdentificationError",
-    "IdentificationResult",
-    "RankDeficientError",
-    "dynamic_system",
-    "energy_system",
-    "identify",
-    "validate",
-]
+#: Least equations per base parameter (and degrees of freedom of the noise estimate) that
+#: :func:`identify` accepts. Dynamic model: 10 equations per parameter; fewer, and a log too
+#: short to move every joint through its range gives estimates (after pruning) far from the
+#: truth with small RSDs. Energy model: 4 windows per parameter (one window integrates the
+#: power of all joints over ``window`` samples). Both: at least 30 degrees of freedom, so that
+#: the noise variance behind the RSDs is known within about 25 %.
+MIN_EQUATIONS_PER_PARAMETER = {"dynamic": 10, "energy": 4}
+MIN_NOISE_DOF = 30
 
-MODELS = ("dynamic", "energy")
-
-
-class IdentificationError(ValueError):
-    """The data cannot identify the requested parameters."""
-
-
-class RankDeficientError(IdentificationError):
-    """The stacked regressor is rank deficient; ``unidentifiable`` names the base parameters that
-    the data cannot separate from the others."""
-
-    def __init__(self, message: str, unidentifiable: list[str], rank: int):
-        super().__init__(message)
-        self.unidentifiable = unidentifiable
-        self.rank = rank
+#: Samples whose regressor is evaluated at once by the dynamic model (memory: samples x joints x
+#: base parameters x 8 bytes, 15 MB for 6 joints and 40 parameters).
+CHUNK_SAMPLES = 8192
 
 
 @dataclass
@@ -107,8 +90,13 @@ class IdentificationResult:
     seconds: float = 0.0
 
     def predict(self, data: JointData) -> np.ndarray:
-        """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n)."""
-        return self.base.regressor(data.q, data.dq, data.ddq) @ self.full
+        """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n); the regressor is
+        evaluated :data:`CHUNK_SAMPLES` samples at a time."""
+        out = np.empty((data.m, data.n))
+        for a in range(0, data.m, CHUNK_SAMPLES):
+            b = min(data.m, a + CHUNK_SAMPLES)
+            out[a:b] = self.base.regressor(data.q[a:b], data.dq[a:b], data.ddq[a:b]) @ self.full
+        return out
 
     def to_dict(self) -> dict:
         return {
@@ -145,111 +133,6 @@ def _json_float(x):
 
 
 # ---------------------------------------------------------------------------------------------
-# Regression systems
-# ---------------------------------------------------------------------------------------------
-def dynamic_system(base: BaseParameters, data: JointData, min_velocity: float = 0.0):
-    """Stacked dynamic model: ``W`` (r, nb), ``y`` (r,) and the joint of each row (r,).
-
-    With ``min_velocity > 0`` and Coulomb friction in the model, the equation of joint ``j`` at a
-    sample where ``|dq_j| < min_velocity`` is left out: there the sign of the velocity, and so
-    the Coulomb term, is not determined by the data (a torque held over a sample period, stiction,
-    velocity noise). ``r = m n`` minus those equations."""
-    _need_torque(data)
-    W = base.regressor(data.q, data.dq, data.ddq)  # (m, n, nb)
-    m, n, nb = W.shape
-    W, y, joint = W.reshape(m * n, nb), data.tau.reshape(m * n), np.tile(np.arange(n), m)
-    if min_velocity > 0 and base.friction:
-        keep = np.abs(data.dq).reshape(m * n) >= min_velocity
-        W, y, joint = W[keep], y[keep], joint[keep]
-    return W, y, joint
-
-
-def _cumulative(f: np.ndarray, t: np.ndarray, rule: str) -> np.ndarray:
-    """Cumulative integral of the samples ``f`` (m, ...) over ``t`` (m,), starting at 0."""
-    if rule == "trapezoid":
-        return integrate.cumulative_trapezoid(f, t, axis=0, initial=0)
-    if rule == "simpson":
-        if hasattr(integrate, "cumulative_simpson"):
-            return integrate.cumulative_simpson(f, x=t, axis=0, initial=0)
-        raise ValueError("Simpson integration needs scipy >= 1.12; use trapezoid")
-    raise ValueError(f"unknown integration rule '{rule}'; use trapezoid or simpson")
-
-
-def energy_system(
-    base: BaseParameters, data: JointData, window: int = 1, integration: str = "simpson"
-):
-    """Energy model over non-overlapping windows of ``window`` sample intervals:
-    ``W`` (r, nb) and ``y`` (r,), ``r = (m - 1) // window``."""
-    _need_torque(data)
-    if window < 1:
-        raise ValueError(f"energy window must be at least 1 sample interval, got {window}")
-    t, dq = data.t, data.dq
-    wH = base.energy_regressor(data.q, dq)  # (m, nb)
-    ends = np.arange(0, data.m, window)
-    if ends.size < 2:
-        raise IdentificationError(
-            f"{data.m} samples give no complete energy window of {window} intervals"
-        )
-    W = np.diff(wH[ends], axis=0)
-    power = np.einsum("ij,ij->i", dq, data.tau)
-    if integration == "zoh":
-        # Torque held over each sample interval: int dq^T tau dt = sum tau_k^T (q_k+1 - q_k).
-        power_int = np.concatenate(
-            [[0.0], np.cumsum(np.einsum("ij,ij->i", np.diff(data.q, axis=0), data.tau[:-1]))]
-        )
-        integration_f = "simpson"
-    else:
-        power_int = None
-        integration_f = integration
-    names = base.names
-    cols = {}
-    for k in range(data.n):
-        for kind, f in (("Fv", dq[:, k] ** 2), ("Fc", np.abs(dq[:, k]))):
-            name = f"{kind}{k + 1}"
-            if name in names:
-                cols[names.index(name)] = f
-    F = np.column_stack([power] + list(cols.values())) if cols else power[:, None]
-    cum = _cumulative(F, t, integration_f)
-    if power_int is not None:
-        cum[:, 0] = power_int
-    dI = np.diff(cum[ends], axis=0)
-    y = dI[:, 0]
-    for j, c in enumerate(cols):
-        W[:, c] = dI[:, j + 1]
-    return W, y
-
-
-def torque_noise(tau: np.ndarray) -> np.ndarray:
-    """Per-joint standard deviation of white noise on sampled torques, shape (n,), estimated
-    from second differences (robust: median absolute deviation); the smooth part of a torque
-    sampled much faster than it changes hardly contributes."""
-    d2 = np.diff(tau, n=2, axis=0)
-    mad = np.median(np.abs(d2 - np.median(d2, axis=0)), axis=0)
-    return 1.4826 * mad / math.sqrt(6.0)
-
-
-def energy_row_noise(data: JointData, window: int) -> np.ndarray:
-    """Per window and joint, ``sum_k (c_k dq_jk)^2`` with trapezoid weights ``c_k``: the
-    variance of the window's power integral per unit torque-noise variance of joint ``j``;
-    shape (rows, n). A row's noise variance is ``A @ sigma^2``."""
-    dt = np.diff(data.t)
-    c = np.zeros(data.m)
-    ends = np.arange(0, data.m, window)
-    rows = []
-    for a, b in zip(ends[:-1], ends[1:]):
-        c = np.zeros(b - a + 1)
-        c[:-1] += 0.5 * dt[a:b]
-        c[1:] += 0.5 * dt[a:b]
-        rows.append(np.sum((c[:, None] * data.dq[a : b + 1]) ** 2, axis=0))
-    return np.array(rows)
-
-
-def _need_torque(data: JointData) -> None:
-    if data.tau is None:
-        raise DataError(f"{data.source or 'data'}: no torque columns tau1..tau{data.n}")
-
-
-# ---------------------------------------------------------------------------------------------
 # Least squares with statistics
 # ---------------------------------------------------------------------------------------------
 class _Reduced:
@@ -258,15 +141,28 @@ class _Reduced:
     from the small triangle: ``W`` (r, c), ``y`` (r,)."""
 
     def __init__(self, W: np.ndarray, y: np.ndarray):
-        self.r, self.c = W.shape
-        norms = np.linalg.norm(W, axis=0)
+        self._set(_triangle(np.column_stack([W, y])), W.shape[0])
+
+    @classmethod
+    def from_triangle(cls, S: np.ndarray, rows: int) -> _Reduced:
+        """From the triangular factor ``S`` ((c+1) x (c+1)) of the unscaled ``[W y]`` of
+        ``rows`` rows: ``S^T S = [W y]^T [W y]``."""
+        self = cls.__new__(cls)
+        self._set(S, rows)
+        return self
+
+    def _set(self, S: np.ndarray, rows: int) -> None:
+        # Column scaling commutes with QR: the factor of [W / norms, y] is S with its first c
+        # columns divided by the norms, which are the norms of the columns of S.
+        self.r, c = rows, S.shape[1] - 1
+        self.c = c
+        norms = np.linalg.norm(S[:, :c], axis=0)
         self.zero = norms <= 1e-300
         self.norms = np.where(self.zero, 1.0, norms)
-        R = np.linalg.qr(np.column_stack([W / self.norms, y]), mode="r")
-        c = self.c
+        R = S / np.append(self.norms, 1.0)
         self.R = R[:c, :c]
         self.z = R[:c, c]
-        self.rho = float(R[c, c] ** 2) if R.shape[0] > c else 0.0
+        self.rho = float(R[c, c] ** 2)
 
     def rank(self, tol: float):
         """``(rank, pivot order, condition number)`` of the column-scaled regressor."""
@@ -288,6 +184,42 @@ class _Reduced:
         Rinv = sla.solve_triangular(Rk, np.eye(k))
         var = sigma2 * np.einsum("ij,ij->i", Rinv, Rinv) / scale**2
         return ps / scale, np.sqrt(var), sigma2
+
+
+def _triangle(A: np.ndarray) -> np.ndarray:
+    """The upper triangular R of ``A = Q R``, padded with zero rows to square ``(k, k)``."""
+    k = A.shape[1]
+    R = np.linalg.qr(A, mode="r")
+    if R.shape[0] < k:
+        R = np.vstack([R, np.zeros((k - R.shape[0], k))])
+    return R
+
+
+def dynamic_triangles(
+    base: BaseParameters, data: JointData, min_velocity: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
+    """The dynamic model of :func:`dynamic_system` reduced per joint without forming it: for
+    each joint ``j``, the triangle ``S_j`` ((nb+1) x (nb+1)) with ``S_j^T S_j = [W_j y_j]^T
+    [W_j y_j]`` over that joint's equations, and the equation count of each joint. The
+    regressor is evaluated :data:`CHUNK_SAMPLES` samples at a time and each chunk merged by a
+    QR factorisation (not by normal equations, which would square the condition number), so
+    the memory does not grow with the length of the log. Returns ``(S, rows)``, shapes
+    (n, nb+1, nb+1) and (n,)."""
+    require_torque(data)
+    n, nb = data.n, base.n
+    S = np.zeros((n, nb + 1, nb + 1))
+    rows = np.zeros(n, dtype=int)
+    skip = min_velocity > 0 and base.friction
+    for a in range(0, data.m, CHUNK_SAMPLES):
+        b = min(data.m, a + CHUNK_SAMPLES)
+        W = base.regressor(data.q[a:b], data.dq[a:b], data.ddq[a:b])  # (k, n, nb)
+        for j in range(n):
+            A = np.column_stack([W[:, j, :], data.tau[a:b, j]])
+            if skip:
+                A = A[np.abs(data.dq[a:b, j]) >= min_velocity]
+            rows[j] += A.shape[0]
+            S[j] = _triangle(np.vstack([S[j], A]))
+    return S, rows
 
 
 def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float) -> float:
@@ -314,6 +246,32 @@ def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float) -> float:
             rank,
         )
     return cond
+
+
+def _enough(
+    model: str, rows: int, nb: int, data: JointData, settings: dict, window: int = 1
+) -> None:
+    """Refuses too few equations for ``nb`` parameters (:data:`MIN_EQUATIONS_PER_PARAMETER`,
+    :data:`MIN_NOISE_DOF`); records the rule in ``settings``."""
+    k = MIN_EQUATIONS_PER_PARAMETER[model]
+    need = max(k * nb, nb + MIN_NOISE_DOF)
+    settings["min_equations"] = need
+    if rows >= need:
+        return
+    src = data.source or "data"
+    if model == "dynamic":
+        got = f"{data.m} samples x {data.n} joints = {rows} equations"
+        if settings.get("equations_left_out"):
+            got += f" ({settings['equations_left_out']} left out as slower than min_velocity)"
+        more = f"at least {math.ceil(need * data.m / max(rows, 1))} samples"
+    else:
+        got = f"{data.m} samples give {rows} energy windows of {window} intervals"
+        more = f"at least {need * window + 1} samples, or a shorter window"
+    raise IdentificationError(
+        f"{src}: {got} for {nb} base parameters; at least {need} are needed ({k} per "
+        f"parameter and {MIN_NOISE_DOF} degrees of freedom for the noise estimate): fewer give "
+        f"estimates whose RSD does not show their error. Use a longer log ({more})"
+    )
 
 
 def _rsd(p: np.ndarray, std: np.ndarray) -> np.ndarray:
@@ -366,16 +324,29 @@ def identify(
         Relative size of the pivots of the column-scaled regressor below which it counts as rank
         deficient.
 
+    The dynamic model is reduced chunk by chunk (:func:`dynamic_triangles`): memory does not
+    grow with the length of the log. More than half of the parameters removed by pruning is
+    reported in ``settings["warnings"]``.
+
     Raises
     ------
     IdentificationError
-        Too few samples for the number of parameters, unknown model.
+        Fewer equations than :data:`MIN_EQUATIONS_PER_PARAMETER` per base parameter or than
+        :data:`MIN_NOISE_DOF` beyond them, unknown model.
     RankDeficientError
         The data do not excite every base parameter (they are named).
     """
     t0 = time.perf_counter()
     if model not in MODELS:
         raise ValueError(f"unknown model '{model}'; use dynamic or energy")
+    if not (isinstance(energy_window, (int, np.integer)) and energy_window >= 1):
+        raise ValueError(
+            f"energy window must be an integer >= 1 sample interval, got {energy_window}"
+        )
+    if not (math.isfinite(min_velocity) and min_velocity >= 0):
+        raise ValueError(f"min_velocity must be a finite number >= 0, got {min_velocity}")
+    if rsd_threshold is not None and not math.isfinite(rsd_threshold):
+        raise ValueError(f"rsd_threshold must be a finite number or None, got {rsd_threshold}")
     robot = load(robot)
     if data.n != robot.n:
         raise DataError(
@@ -387,28 +358,22 @@ def identify(
     nb = base.n
     settings: dict = {"model": model}
     if model == "dynamic":
-        if data.m * data.n < nb + 1:
-            raise IdentificationError(
-                f"{data.source or 'data'}: {data.m} samples x {data.n} joints = "
-                f"{data.m * data.n} equations for {nb} base parameters; at least "
-                f"{math.ceil((nb + 1) / data.n)} samples are needed (many more for a good fit)"
-            )
-        W, y, joint = dynamic_system(base, data, min_velocity)
+        _enough(model, data.m * data.n, nb, data, settings)  # before any work
+        S, joint_rows = dynamic_triangles(base, data, min_velocity)
+        rows = int(joint_rows.sum())
         settings["min_velocity"] = min_velocity if base.friction else 0.0
-        settings["equations_left_out"] = data.m * data.n - W.shape[0]
+        settings["equations_left_out"] = data.m * data.n - rows
+        _enough(model, rows, nb, data, settings)
     else:
         rows = (data.m - 1) // energy_window
-        if rows < nb + 1:
-            raise IdentificationError(
-                f"{data.source or 'data'}: {data.m} samples give {rows} energy windows of "
-                f"{energy_window} intervals for {nb} base parameters; at least "
-                f"{(nb + 1) * energy_window + 1} samples are needed (or a shorter window)"
-            )
+        _enough(model, rows, nb, data, settings, energy_window)
         W, y = energy_system(base, data, energy_window, integration)
-        joint = None
         settings.update({"energy_window": energy_window, "integration": integration})
     what = f"{model} model on {data.source or 'the data'}"
-    ls = _Reduced(W, y)
+    if model == "dynamic":
+        ls = _Reduced.from_triangle(_triangle(np.vstack(list(S))), rows)
+    else:
+        ls = _Reduced(W, y)
     cond = _check_rank(ls, names, what, rank_tolerance)
 
     joint_sigma = None
@@ -430,15 +395,14 @@ def identify(
             settings["weighting"] = "none (torque noise not measurable)"
     elif weighted:
         p, _, _ = ls.solve(list(range(nb)))
-        res = y - W @ p
-        n = data.n
-        dof = (W.shape[0] - nb) / W.shape[0]
-        joint_sigma = np.sqrt(
-            np.array([np.mean(res[joint == j] ** 2) for j in range(n)]) / max(dof, 1e-12)
-        )
+        # |y_j - W_j p|^2 = |S_j [p; -1]|^2: each joint's residual from its triangle
+        rss = np.array([float(np.sum((Sj @ np.append(p, -1.0)) ** 2)) for Sj in S])
+        dof = (rows - nb) / rows
+        mean = rss / np.maximum(joint_rows, 1)
+        joint_sigma = np.sqrt(np.where(joint_rows > 0, mean, 0.0) / max(dof, 1e-12))
         floor = max(joint_sigma.max() * 1e-9, 1e-300)
-        w = 1.0 / np.maximum(joint_sigma, floor)[joint]
-        ls = _Reduced(W * w[:, None], y * w)
+        w = 1.0 / np.maximum(joint_sigma, floor)
+        ls = _Reduced.from_triangle(_triangle(np.vstack([wj * Sj for wj, Sj in zip(w, S)])), rows)
         settings["weighting"] = "per-joint 1/sigma_j from a first OLS pass"
     else:
         settings["weighting"] = "none (ordinary least squares)"
@@ -459,6 +423,15 @@ def identify(
     full = np.zeros(nb)
     full[keep] = p
     settings["rsd_threshold"] = thr
+    if 2 * len(removed) > nb:
+        # The removed parameters are set to zero; what they contribute to the torques is taken
+        # up by the kept ones, whose RSDs hold only if the removed ones are in fact negligible.
+        settings["warnings"] = [
+            f"{len(removed)} of {nb} base parameters removed for RSD > {thr:g} %: the data "
+            "excite most parameters too little to tell them apart; the kept estimates take up "
+            "what the removed ones contribute, and their RSDs assume those are zero. Use a "
+            "longer or richer excitation"
+        ]
     return IdentificationResult(
         model=model,
         base=base,
@@ -478,28 +451,3 @@ def identify(
         settings=settings,
         seconds=time.perf_counter() - t0,
     )
-
-
-def validate(result: IdentificationResult, data: JointData) -> dict:
-    """Torque prediction on ``data``: per joint ``rms`` [N m | N] of ``tau - tau_hat`` and
-    ``relative`` error ``|tau - tau_hat| / |tau|`` (fractions), plus the predicted torques
-    ``tau_hat`` (m, n)."""
-    _need_torque(data)
-    if data.n != result.base.robot.n:
-        raise DataError(
-            f"{data.source or 'data'} has {data.n} joints; expected {result.base.robot.n}"
-        )
-    pred = result.predict(data)
-    err = data.tau - pred
-    rms = np.sqrt(np.mean(err**2, axis=0))
-    norm = np.linalg.norm(data.tau, axis=0)
-    rel = np.where(norm > 0, np.linalg.norm(err, axis=0) / np.where(norm > 0, norm, 1), np.nan)
-    return {"rms": rms, "relative": rel, "tau_hat": pred, "source": data.source}
-
-
-def true_base_values(base: BaseParameters, truth: dict) -> np.ndarray:
-    """Base-parameter values of a truth sidecar (classical names/values, any layout) in the layout
-    of ``base``; classical parameters absent from the truth count as zero."""
-    lookup = dict(zip(truth["names"], truth["values"]))
-    pi = np.array([float(lookup.get(nm, 0.0)) for nm in base.classical_names])
-    return base.values(pi)

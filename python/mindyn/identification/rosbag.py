@@ -6,7 +6,7 @@ Each message contributes one sample: the time stamp of its header (the recording
 header is not stamped), the positions, and the velocities and efforts when the message carries
 them. Joints are matched by name to the robot's joints, in the robot's order; other joints in the
 messages (a gripper, say) are ignored. Missing velocities and accelerations are derived as for a
-CSV log (:func:`mindyn.data.differentiate`).
+CSV log (:func:`mindyn.identification.data.differentiate`).
 """
 
 from __future__ import annotations
@@ -70,12 +70,13 @@ def read_rosbag(
     topic : str, optional
         The ``sensor_msgs/JointState`` topic; needed only when the bag has several.
     torque_unit : {"Nm", "permille"}
-        Unit of the ``effort`` fields, as in :func:`mindyn.data.read_csv`.
+        Unit of the ``effort`` fields, as in :func:`mindyn.identification.data.read_csv`.
     require_torque : bool
         False accepts messages without efforts (a trajectory); ``tau`` is then None.
     **derivative_settings
         ``filter``, ``cutoff``, ``order``, ``window``, ``polyorder`` of
-        :func:`mindyn.data.differentiate`, for velocities / accelerations not in the messages.
+        :func:`mindyn.identification.data.differentiate`, for velocities / accelerations not in
+        the messages.
 
     Returns
     -------
