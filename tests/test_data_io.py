@@ -156,6 +156,82 @@ def test_nan_and_non_numbers_are_located(tmp_path):
         read_csv(p)
 
 
+@pytest.mark.parametrize(
+    "cell, match",
+    [
+        ("1_000", r"'1_000' is not a number"),  # float() takes digit-group underscores
+        ("\uff11", r"'\uff11' is not a number"),  # and full-width digits
+        ("\u0661.5", r".* is not a number"),  # and Arabic-Indic ones
+        ("0x10", r"'0x10' is not a number"),
+        ("1.5\u00a0", r"'1.5\\xa0' is not a number"),  # a non-breaking space is no ASCII blank
+        ("1e5e5", r"'1e5e5' is not a number"),
+        (" nan", r"NaN"),
+        ("-Infinity", r"an infinite value"),
+        ("INF", r"an infinite value"),
+        ("1e400", r"'1e400' is too large for a double"),
+    ],
+)
+def test_cells_must_be_ascii_decimal_numbers(tmp_path, cell, match):
+    rows = [["0", "0", "0"], ["0.004", cell, "0"], ["0.008", "0", "0"]]
+    p = _write(tmp_path / "c.csv", ["t", "q1", "tau1"], rows)
+    with pytest.raises(DataError, match=rf"c\.csv, line 3, column q1: {match}"):
+        read_csv(p, filter="none")
+
+
+def test_accepted_number_spellings_read_exactly(tmp_path):
+    # blanks around a number, signs, a bare point, exponents: values known from the text
+    cells = [" 1.5", "+2", "-.25", "3.", "1E-3 ", "\t7e+2"]
+    rows = [[str(0.004 * k), c, "0"] for k, c in enumerate(cells)]
+    d = read_csv(_write(tmp_path / "ok.csv", ["t", "q1", "tau1"], rows), filter="none")
+    assert d.q[:, 0].tolist() == [1.5, 2.0, -0.25, 3.0, 1e-3, 700.0]
+
+
+def test_non_utf8_and_nul_bytes_are_one_line_errors(tmp_path):
+    p = tmp_path / "b.csv"
+    p.write_bytes(b"t,q1,tau1\n0,0,0\n0.004,\xff1,0\n0.008,0,0\n")
+    with pytest.raises(
+        DataError, match=r"b\.csv, line 3: not UTF-8 text \(byte 0xff at offset 22\)"
+    ):
+        read_csv(p)
+    p.write_bytes(b"t,q1,tau1\n0,0,0\n0.004,\x001,0\n0.008,0,0\n")
+    with pytest.raises(DataError, match=r"b\.csv, line 3, column q1: .* is not a number"):
+        read_csv(p)
+    # a byte-order mark (as spreadsheet programs write) is not part of the first column's name
+    p.write_bytes(b"\xef\xbb\xbft,q1,tau1\n0,0,0\n0.004,1,0\n0.008,2,0\n")
+    assert read_csv(p, filter="none").q[:, 0].tolist() == [0.0, 1.0, 2.0]
+
+
+def test_header_indices_are_checked_before_use(tmp_path):
+    # a huge joint index used to make a list of that many missing columns
+    p = _write(tmp_path / "h.csv", ["t", "q99999999999999999999"], [["0", "1"], ["1", "2"]])
+    with pytest.raises(DataError, match=r"h\.csv: column 'q99999999999999999999' implies"):
+        read_csv(p, require_torque=False)
+    for name in ("q01", "q\u0661"):  # leading zeros and non-ASCII digits are no indices
+        p = _write(tmp_path / "z.csv", ["t", name], [["0", "1"], ["1", "2"]])
+        with pytest.raises(DataError, match=r"z\.csv: no position columns .* \(it has"):
+            read_csv(p, require_torque=False)
+
+
+def test_column_names_with_line_breaks_stay_on_one_line(tmp_path):
+    p = tmp_path / "n.csv"
+    p.write_text('t,q1,"x\ny"\n0,0,0\n1,1,1\n')
+    with pytest.raises(DataError, match=r"n\.csv: .*unexpected x\\ny") as info:
+        read_csv(p, require_torque=False)
+    assert "\n" not in str(info.value)
+
+
+def test_values_whose_derivatives_overflow_are_refused(tmp_path):
+    rows = [["0", "1e308", "0"], ["0.004", "-1e308", "0"], ["0.008", "1e308", "0"]]
+    p = _write(tmp_path / "o.csv", ["t", "q1", "tau1"], rows)
+    with pytest.raises(DataError, match=r"o\.csv: the velocities overflow"):
+        read_csv(p, filter="none")
+    # errors of the derivative settings name the file too
+    rows = [[str(0.004 * k), "0", "0"] for k in range(5)]
+    p = _write(tmp_path / "f.csv", ["t", "q1", "tau1"], rows)
+    with pytest.raises(DataError, match=r"f\.csv: cutoff 10 Hz is below one cycle"):
+        read_csv(p)
+
+
 def test_empty_and_missing_files(tmp_path):
     (tmp_path / "e.csv").write_text("")
     with pytest.raises(DataError, match="empty"):

@@ -1,8 +1,11 @@
 #include "mindyn/description.hpp"
 
+#include <yaml-cpp/eventhandler.h>
+#include <yaml-cpp/parser.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -12,6 +15,12 @@ namespace mindyn {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+
+std::string formatNumber(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
 
 struct Ctx {
   std::string source;
@@ -24,11 +33,68 @@ struct Ctx {
   }
 };
 
+const char* kindName(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Sequence:
+      return "a list";
+    case YAML::NodeType::Map:
+      return "a mapping";
+    case YAML::NodeType::Null:
+      return "empty";
+    default:
+      return "a scalar";
+  }
+}
+
+/// Tags a description may carry: none, or YAML's core-schema ones. Anything else (language
+/// specific objects such as !!python/object, binary data, application tags) is refused.
+bool plainTag(const std::string& tag) {
+  static const std::set<std::string> core = {"",
+                                             "?",
+                                             "!",
+                                             "tag:yaml.org,2002:str",
+                                             "tag:yaml.org,2002:int",
+                                             "tag:yaml.org,2002:float",
+                                             "tag:yaml.org,2002:bool",
+                                             "tag:yaml.org,2002:null",
+                                             "tag:yaml.org,2002:seq",
+                                             "tag:yaml.org,2002:map"};
+  return core.count(tag) > 0;
+}
+
+/// Checks the whole document once: only core tags, keys that are plain scalars, no key twice in
+/// one mapping (yaml-cpp keeps duplicates and answers lookups with the first). `budget` bounds the
+/// nodes visited, so that aliases cannot make the walk exponential.
+void checkTree(const Ctx& c, const YAML::Node& node, long* budget, int depth) {
+  if (--*budget < 0)
+    c.fail(
+        "the document expands (through aliases) to more nodes than its text holds; a robot "
+        "description does not need that",
+        node);
+  if (depth > 64) c.fail("the document is nested more than 64 levels deep", node);
+  if (!plainTag(node.Tag()))
+    c.fail("YAML tag '" + node.Tag() + "' is not supported (plain values, lists and mappings only)",
+           node);
+  if (node.IsSequence()) {
+    for (const YAML::Node& item : node) checkTree(c, item, budget, depth + 1);
+  } else if (node.IsMap()) {
+    std::set<std::string> seen;
+    for (const auto& kv : node) {
+      if (!kv.first.IsScalar())
+        c.fail(std::string("a key must be plain text, got ") + kindName(kv.first), kv.first);
+      checkTree(c, kv.first, budget, depth + 1);
+      const std::string key = kv.first.Scalar();
+      if (!seen.insert(key).second) c.fail("key '" + key + "' appears twice", kv.first);
+      checkTree(c, kv.second, budget, depth + 1);
+    }
+  }
+}
+
 void checkKeys(const Ctx& c, const YAML::Node& node, const std::set<std::string>& allowed,
                const std::string& what) {
-  if (!node.IsMap()) c.fail(what + " must be a mapping", node);
+  if (!node.IsMap()) c.fail(what + " must be a mapping, got " + kindName(node), node);
   for (const auto& kv : node) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = kv.first.Scalar();
     if (!allowed.count(key)) {
       std::string list;
       for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
@@ -38,14 +104,38 @@ void checkKeys(const Ctx& c, const YAML::Node& node, const std::set<std::string>
 }
 
 double number(const Ctx& c, const YAML::Node& node, const std::string& key) {
-  if (!node.IsScalar()) c.fail("'" + key + "' must be a number", node);
+  if (!node.IsScalar()) c.fail("'" + key + "' must be a number, got " + kindName(node), node);
+  double v = 0.0;
   try {
-    const double v = node.as<double>();
-    if (!std::isfinite(v)) c.fail("'" + key + "' is not finite", node);
-    return v;
+    v = node.as<double>();
   } catch (const YAML::Exception&) {
-    c.fail("'" + key + "' must be a number, got '" + node.as<std::string>() + "'", node);
+    c.fail("'" + key + "' must be a number, got '" + node.Scalar() + "'", node);
   }
+  if (!std::isfinite(v)) c.fail("'" + key + "' is not finite", node);
+  if (std::abs(v) > kMaxDescriptionValue)
+    c.fail("'" + key + "' = " + node.Scalar() + " exceeds the bound " +
+               formatNumber(kMaxDescriptionValue) + " on the magnitude of a description value",
+           node);
+  return v;
+}
+
+/// The text of a scalar entry (numbers given as text are taken as written).
+std::string text(const Ctx& c, const YAML::Node& node, const std::string& key) {
+  if (!node.IsScalar()) c.fail("'" + key + "' must be text, got " + kindName(node), node);
+  return node.Scalar();
+}
+
+std::string text(const Ctx& c, const YAML::Node& map, const std::string& key,
+                 const std::string& def) {
+  const YAML::Node n = map[key];
+  return n.IsDefined() && !n.IsNull() ? text(c, n, key) : def;
+}
+
+bool boolean(const Ctx& c, const YAML::Node& node, const std::string& key) {
+  bool b = false;
+  if (!node.IsScalar() || !YAML::convert<bool>::decode(node, b))
+    c.fail("'" + key + "' must be true or false", node);
+  return b;
 }
 
 double optional(const Ctx& c, const YAML::Node& map, const std::string& key, double def) {
@@ -113,34 +203,101 @@ Eigen::Matrix<double, 10, 1> readInertial(const Ctx& c, const YAML::Node& node) 
 
 }  // namespace
 
-Model parseYaml(const std::string& text, const std::string& source) {
-  Ctx c{source, ""};
-  YAML::Node root;
+namespace {
+
+/// Records where documents start and nothing else.
+class DocumentStarts : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark& mark) override { starts.push_back(mark); }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+  std::vector<YAML::Mark> starts;
+};
+
+/// The start of a second document in `yaml`, or a null mark. Parses at most two documents:
+/// YAML::LoadAll of this yaml-cpp can loop forever, allocating, on a stray ',' or ']'.
+YAML::Mark secondDocument(const std::string& yaml) {
+  std::istringstream in(yaml);
+  YAML::Parser parser(in);
+  DocumentStarts starts;
+  for (int k = 0; k < 2 && parser.HandleNextDocument(starts); ++k) {
+  }
+  return starts.starts.size() > 1 ? starts.starts[1] : YAML::Mark::null_mark();
+}
+
+Model build(const Ctx& start, const YAML::Node& root);
+Model parseDocument(const std::string& yaml, const std::string& source);
+
+}  // namespace
+
+Model parseYaml(const std::string& yaml, const std::string& source) {
   try {
-    root = YAML::Load(text);
-  } catch (const YAML::ParserException& e) {
-    throw ModelError(source + ":" + std::to_string(e.mark.line + 1) + ": not valid YAML: " + e.msg);
+    return parseDocument(yaml, source);
+  } catch (const ModelError& e) {
+    throw ModelError(escapeControl(e.what()));  // names from the file may hold line breaks
+  }
+}
+
+namespace {
+
+Model parseDocument(const std::string& yaml, const std::string& source) {
+  Ctx c{source, ""};
+  requireUtf8(yaml, source);
+  YAML::Node root;
+  YAML::Mark second;  // where a second document starts, if there is one
+  try {
+    root = YAML::Load(yaml);
+    second = secondDocument(yaml);
+  } catch (const YAML::Exception& e) {
+    throw ModelError(source + (e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1)) +
+                     ": not valid YAML: " + e.msg);
   }
   if (!root.IsMap()) c.fail("a robot description must be a YAML mapping with a 'joints' list");
+  if (!second.is_null())
+    throw ModelError(source + ":" + std::to_string(second.line + 1) +
+                     ": a second YAML document starts here; a robot description is one document");
+  long budget = 4 * static_cast<long>(yaml.size()) + 16;
+  checkTree(c, root, &budget, 0);
+  try {
+    return build(c, root);
+  } catch (const YAML::Exception& e) {
+    // Every entry is type-checked before conversion; this is the backstop for anything missed.
+    throw ModelError(source + (e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1)) +
+                     ": " + e.msg);
+  }
+}
+
+Model build(const Ctx& start, const YAML::Node& root) {
+  Ctx c = start;
+  const std::string source = c.source;
   checkKeys(c, root,
             {"name", "description", "source", "notes", "convention", "angle_unit", "gravity",
              "synthetic_inertia", "joints", "tool"},
             "the description");
   Model model;
-  model.name = root["name"].IsDefined() ? root["name"].as<std::string>() : std::string("robot");
+  model.name = text(c, root, "name", "robot");
   model.source = source;
-  if (root["notes"].IsDefined()) model.notes = root["notes"].as<std::string>();
+  model.notes = text(c, root, "notes", "");
+  text(c, root, "description", "");
+  text(c, root, "source", "");
   if (root["synthetic_inertia"].IsDefined())
-    model.synthetic_inertia = root["synthetic_inertia"].as<bool>();
-  const std::string conv =
-      root["convention"].IsDefined() ? root["convention"].as<std::string>() : std::string();
+    model.synthetic_inertia = boolean(c, root["synthetic_inertia"], "synthetic_inertia");
+  const std::string conv = text(c, root, "convention", "");
   if (conv != "dh" && conv != "mdh")
     c.fail("'convention' must be 'dh' or 'mdh'" +
                (conv.empty() ? std::string(" (missing)") : ", got '" + conv + "'"),
            root["convention"]);
   model.convention = conv;
-  const std::string unit =
-      root["angle_unit"].IsDefined() ? root["angle_unit"].as<std::string>() : std::string("rad");
+  const std::string unit = text(c, root, "angle_unit", "rad");
   if (unit != "rad" && unit != "deg")
     c.fail("'angle_unit' must be 'rad' or 'deg'", root["angle_unit"]);
   const double ang = unit == "deg" ? kPi / 180.0 : 1.0;
@@ -149,6 +306,10 @@ Model parseYaml(const std::string& text, const std::string& source) {
   const YAML::Node joints = root["joints"];
   if (!joints.IsDefined() || !joints.IsSequence() || joints.size() == 0)
     c.fail("'joints' must be a non-empty list", joints);
+  if (joints.size() > static_cast<size_t>(kMaxModelJoints))
+    c.fail("'joints' lists " + std::to_string(joints.size()) + " joints; at most " +
+               std::to_string(kMaxModelJoints) + " are supported",
+           joints);
   const int n = static_cast<int>(joints.size());
   model.inertial = Eigen::VectorXd::Zero(10 * n);
   model.rotor_inertia = Eigen::VectorXd::Zero(n);
@@ -161,14 +322,15 @@ Model parseYaml(const std::string& text, const std::string& source) {
   for (int k = 0; k < n; ++k) {
     const YAML::Node jn = joints[k];
     Joint j;
-    j.name = jn.IsMap() && jn["name"].IsDefined() ? jn["name"].as<std::string>()
-                                                  : "joint" + std::to_string(k + 1);
+    c.where = "joint " + std::to_string(k + 1);
+    if (!jn.IsMap()) c.fail("a joint must be a mapping, got " + std::string(kindName(jn)), jn);
+    j.name = text(c, jn, "name", "joint" + std::to_string(k + 1));
     c.where = "joint " + std::to_string(k + 1) + " ('" + j.name + "')";
     std::set<std::string> allowed = geo;
     allowed.insert(
         {"name", "type", "limits", "drive", "inertial", "rotor_inertia", "friction", "link"});
     checkKeys(c, jn, allowed, "the joint");
-    const std::string type = jn["type"].IsDefined() ? jn["type"].as<std::string>() : "revolute";
+    const std::string type = text(c, jn, "type", "revolute");
     if (type == "revolute" || type == "continuous")
       j.type = JointType::Revolute;
     else if (type == "prismatic")
@@ -223,8 +385,7 @@ Model parseYaml(const std::string& text, const std::string& source) {
       model.viscous[k] = optional(c, jn["friction"], "viscous", 0.0);
       model.coulomb[k] = optional(c, jn["friction"], "coulomb", 0.0);
     }
-    model.link_names.push_back(jn["link"].IsDefined() ? jn["link"].as<std::string>()
-                                                      : "link" + std::to_string(k + 1));
+    model.link_names.push_back(text(c, jn, "link", "link" + std::to_string(k + 1)));
     model.joints.push_back(j);
   }
   c.where.clear();
@@ -246,6 +407,8 @@ Model parseYaml(const std::string& text, const std::string& source) {
   return model;
 }
 
+}  // namespace
+
 Model loadYaml(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw FileError("robot description '" + path + "' does not exist or cannot be read");
@@ -256,6 +419,9 @@ Model loadYaml(const std::string& path) {
 
 Model planarArm(int n, bool vertical, double length, double mass) {
   if (n < 1) throw ModelError("a planar arm needs at least one joint, got " + std::to_string(n));
+  if (n > kMaxModelJoints)
+    throw ModelError("a planar arm has at most " + std::to_string(kMaxModelJoints) +
+                     " joints, got " + std::to_string(n));
   if (!(length > 0) || !(mass > 0))
     throw ModelError("planar arm: length and mass must be positive");
   Model model;

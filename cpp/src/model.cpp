@@ -1,6 +1,9 @@
 #include "mindyn/model.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <utility>
 
 #include "mindyn/data.hpp"
 
@@ -62,6 +65,19 @@ Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
 }
 
 namespace {
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+/// Throws unless |value| <= bound; `what` names the value.
+void checkBound(const std::string& who, const std::string& what, double value, double bound) {
+  if (std::abs(value) > bound)
+    throw ModelError(who + ": " + what + " " + number(value) + " exceeds the bound " +
+                     number(bound) + " on its magnitude");
+}
+
 bool isRigid(const Eigen::Isometry3d& T) {
   const Eigen::Matrix3d R = T.linear();
   return T.matrix().allFinite() &&
@@ -72,8 +88,13 @@ bool isRigid(const Eigen::Isometry3d& T) {
 
 void Model::validate() const {
   const int n = nq();
-  const std::string who = name.empty() ? std::string("model") : "model '" + name + "'";
+  const std::string who =
+      (source.empty() || source == "generated" ? std::string() : source + ": ") +
+      (name.empty() ? std::string("model") : "model '" + name + "'");
   if (n == 0) throw ModelError(who + " has no moving joint");
+  if (n > kMaxModelJoints)
+    throw ModelError(who + " has " + std::to_string(n) + " joints; at most " +
+                     std::to_string(kMaxModelJoints) + " are supported");
   if (inertial.size() != 10 * n)
     throw ModelError(who + ": " + std::to_string(inertial.size()) + " inertial parameters for " +
                      std::to_string(n) + " links (expected " + std::to_string(10 * n) + ")");
@@ -85,7 +106,38 @@ void Model::validate() const {
   if (!gravity.allFinite()) throw ModelError(who + ": gravity is not finite");
   if (link_names.size() != static_cast<size_t>(n + 1))
     throw ModelError(who + ": expected " + std::to_string(n + 1) + " link names");
+  const double V = kMaxDescriptionValue;
+  const double L = 100 * V;  // a length or mass folded from up to 100 inputs
+  for (int i = 0; i < 3; ++i) checkBound(who, "gravity component", gravity[i], V);
+  for (int k = 0; k < n; ++k) {
+    const std::string link = link_names[k + 1];
+    const auto p = inertial.segment<10>(10 * k);
+    for (int i = 0; i < 10; ++i) {
+      const double bound = i == 9 ? L : i >= 6 ? L * L : L * L * L;
+      checkBound(who + ", link '" + link + "'",
+                 std::string("inertial parameter ") + kInertialNames[i], p[i], bound);
+    }
+    const std::string joint = who + ", joint '" + joints[k].name + "'";
+    checkBound(joint, "rotor inertia", rotor_inertia[k], V);
+    checkBound(joint, "viscous friction", viscous[k], V);
+    checkBound(joint, "Coulomb friction", coulomb[k], V);
+  }
   for (const Joint& j : joints) {
+    const std::string joint = who + ", joint '" + j.name + "'";
+    for (int i = 0; i < 3; ++i) {
+      checkBound(joint, "origin translation", j.pre.translation()[i], L);
+      checkBound(joint, "origin translation", j.post.translation()[i], L);
+    }
+    const std::pair<const char*, double> limits[] = {
+        {"lower limit", j.limits.lower},         {"upper limit", j.limits.upper},
+        {"velocity limit", j.limits.velocity},   {"acceleration limit", j.limits.acceleration},
+        {"effort limit", j.limits.effort},       {"drive rated torque", j.drive.rated_torque},
+        {"drive gear ratio", j.drive.gear_ratio}};
+    for (const auto& [what, value] : limits) {
+      if (std::isnan(value)) continue;  // not given
+      if (!std::isfinite(value)) throw ModelError(joint + ": " + what + " is not finite");
+      checkBound(joint, what, value, V);
+    }
     if (!j.axis.allFinite() || std::abs(j.axis.norm() - 1.0) > 1e-9)
       throw ModelError(who + ", joint '" + j.name + "': axis is not a unit vector");
     if (!isRigid(j.pre) || !isRigid(j.post))
@@ -94,6 +146,75 @@ void Model::validate() const {
       throw ModelError(who + ", joint '" + j.name + "': lower limit above upper limit");
   }
   if (!isRigid(tool)) throw ModelError(who + ": tool frame is not a rigid transform");
+  for (int i = 0; i < 3; ++i) checkBound(who, "tool translation", tool.translation()[i], L);
+}
+
+namespace {
+/// Length of the valid UTF-8 sequence starting at s[i], or 0 if none starts there.
+size_t utf8Length(const unsigned char* s, size_t i, size_t n) {
+  const unsigned char c = s[i];
+  if (c < 0x80) return 1;
+  size_t len = 0;
+  unsigned lo = 0x80, hi = 0xBF;  // allowed range of the second byte
+  if (c >= 0xC2 && c <= 0xDF) {
+    len = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    len = 3;
+    if (c == 0xE0) lo = 0xA0;  // no overlong forms
+    if (c == 0xED) hi = 0x9F;  // no surrogates
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    len = 4;
+    if (c == 0xF0) lo = 0x90;
+    if (c == 0xF4) hi = 0x8F;  // nothing above U+10FFFF
+  }
+  if (len == 0 || i + len > n || s[i + 1] < lo || s[i + 1] > hi) return 0;
+  for (size_t k = 2; k < len; ++k)
+    if (s[i + k] < 0x80 || s[i + k] > 0xBF) return 0;
+  return len;
+}
+}  // namespace
+
+std::string escapeControl(const std::string& text) {
+  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
+  const size_t n = text.size();
+  std::string out;
+  out.reserve(n);
+  for (size_t i = 0; i < n;) {
+    const unsigned char c = s[i];
+    const size_t len = utf8Length(s, i, n);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c < 0x20 || c == 0x7f || len == 0) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else {
+      out.append(text, i, len);
+      i += len;
+      continue;
+    }
+    ++i;
+  }
+  return out;
+}
+
+void requireUtf8(const std::string& text, const std::string& source) {
+  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
+  const size_t n = text.size();
+  for (size_t i = 0; i < n;) {
+    const size_t len = utf8Length(s, i, n);
+    if (len == 0) {  // report the sequence's first byte, as Python's decoder does
+      char buf[64];
+      std::snprintf(buf, sizeof buf, " (byte 0x%02x at offset %zu)", s[i], i);
+      const long line = 1 + std::count(text.begin(), text.begin() + static_cast<long>(i), '\n');
+      throw ModelError(source + ":" + std::to_string(line) + ": not UTF-8 text" + buf);
+    }
+    i += len;
+  }
 }
 
 Eigen::Matrix<double, 10, 1> inertialFromCom(double mass, const Eigen::Vector3d& com,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -70,6 +71,10 @@ Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
   return T;
 }
 
+/// Deepest link (in joints below the root) accepted: a chain has at most kMaxModelJoints moving
+/// joints, and fixed joints between them are a few each.
+constexpr int kMaxTreeDepth = 4 * kMaxModelJoints;
+
 bool isMoving(const urdf::Joint& j) { return j.type != urdf::Joint::FIXED; }
 
 const char* urdfTypeName(int type) {
@@ -106,12 +111,11 @@ class Builder {
   Model build(const std::string& tip_name) {
     root_ = urdf_.getRoot();
     if (!root_) fail("has no root link");
+    checkTree();
     const urdf::LinkConstSharedPtr tip = findTip(tip_name);
 
     // Root -> tip path, as links and as the joints entering them.
-    std::vector<urdf::LinkConstSharedPtr> path;
-    for (urdf::LinkConstSharedPtr l = tip; l; l = l->getParent()) path.push_back(l);
-    std::reverse(path.begin(), path.end());
+    const std::vector<urdf::LinkConstSharedPtr> path = pathTo(tip);
     for (const auto& l : path) on_path_.insert(l->name);
 
     Model model;
@@ -125,7 +129,7 @@ class Builder {
     std::vector<double> viscous, coulomb;
     for (size_t i = 1; i < path.size(); ++i) {
       const urdf::Joint& uj = *path[i]->parent_joint;
-      const Eigen::Isometry3d origin = toIsometry(uj.parent_to_joint_origin_transform);
+      const Eigen::Isometry3d origin = jointOrigin(uj);
       if (!isMoving(uj)) {
         fixed = fixed * origin;
         continue;
@@ -143,13 +147,18 @@ class Builder {
         fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
              "', which is not supported in a serial chain (pass a tip before it)");
       const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
-      if (!axis.allFinite() || axis.norm() < 1e-12)
-        fail("joint '" + uj.name + "' has a zero or invalid axis");
+      for (int i = 0; i < 3; ++i) checkValue("joint '" + uj.name + "'", "axis", axis[i]);
+      if (axis.norm() < 1e-12) fail("joint '" + uj.name + "' has a zero or invalid axis");
       j.axis = axis.normalized();
       j.pre = fixed * origin;
       fixed.setIdentity();
       if (uj.limits) {
         const urdf::JointLimits& lim = *uj.limits;
+        const std::string who = "joint '" + uj.name + "'";
+        checkValue(who, "lower limit", lim.lower);
+        checkValue(who, "upper limit", lim.upper);
+        checkValue(who, "velocity limit", lim.velocity);
+        checkValue(who, "effort limit", lim.effort);
         // urdfdom reports absent lower/upper as 0/0 and absent velocity/effort as 0: not given.
         if (uj.type != urdf::Joint::CONTINUOUS && !(lim.lower == 0.0 && lim.upper == 0.0)) {
           j.limits.lower = lim.lower;
@@ -157,6 +166,10 @@ class Builder {
         }
         if (lim.velocity > 0.0) j.limits.velocity = lim.velocity;
         if (lim.effort > 0.0) j.limits.effort = lim.effort;
+      }
+      if (uj.dynamics) {
+        checkValue("joint '" + uj.name + "'", "damping", uj.dynamics->damping);
+        checkValue("joint '" + uj.name + "'", "friction", uj.dynamics->friction);
       }
       viscous.push_back(uj.dynamics ? uj.dynamics->damping : 0.0);
       coulomb.push_back(uj.dynamics ? uj.dynamics->friction : 0.0);
@@ -188,6 +201,89 @@ class Builder {
 
  private:
   [[noreturn]] void fail(const std::string& what) const { throw ModelError(source_ + ": " + what); }
+
+  /// Throws unless `value` is finite and within kMaxDescriptionValue; `who` and `what` name it.
+  void checkValue(const std::string& who, const std::string& what, double value) const {
+    if (!std::isfinite(value)) fail(who + ": " + what + " is not finite");
+    if (std::abs(value) > kMaxDescriptionValue) {
+      char buf[80];
+      std::snprintf(buf, sizeof buf, " %.6g exceeds the bound %.6g on its magnitude", value,
+                    kMaxDescriptionValue);
+      fail(who + ": " + what + buf);
+    }
+  }
+
+  Eigen::Isometry3d jointOrigin(const urdf::Joint& j) const {
+    const urdf::Pose& o = j.parent_to_joint_origin_transform;
+    const std::string who = "joint '" + j.name + "'";
+    for (double v : {o.position.x, o.position.y, o.position.z}) checkValue(who, "origin xyz", v);
+    for (double v : {o.rotation.x, o.rotation.y, o.rotation.z, o.rotation.w})
+      if (!std::isfinite(v)) fail(who + ": origin rpy is not finite");
+    return toIsometry(o);
+  }
+
+  /// Refuses what urdfdom lets through but is no tree: a joint whose parent is its child, a link
+  /// entered by two joints, links that hang in a loop instead of below the root. After this,
+  /// walking parents from any link ends at the root and walking children ends at leaves.
+  void checkTree() const {
+    std::map<std::string, std::vector<std::string>> entering;  // child link -> joints
+    std::map<std::string, std::string> parent_of;              // child link -> parent link
+    for (const auto& [name, j] : urdf_.joints_) {
+      if (!j) continue;
+      if (j->parent_link_name == j->child_link_name)
+        fail("joint '" + name + "' has link '" + j->child_link_name +
+             "' as both its parent and its child");
+      entering[j->child_link_name].push_back(name);
+      parent_of[j->child_link_name] = j->parent_link_name;
+    }
+    for (const auto& [link, joints] : entering)
+      if (joints.size() > 1)
+        fail("link '" + link + "' is the child of " + std::to_string(joints.size()) + " joints (" +
+             joinNames(joints) +
+             "); in a URDF every link but the root has exactly one parent joint");
+    // Every link must be reached from the root; one that is not sits in a loop of joints.
+    // The depth bound keeps the recursive walks below (merging, leaf search) shallow.
+    std::set<std::string> reached{root_->name};
+    std::vector<std::pair<urdf::LinkConstSharedPtr, int>> stack{{root_, 0}};
+    while (!stack.empty()) {
+      const auto [l, depth] = stack.back();
+      stack.pop_back();
+      if (depth > kMaxTreeDepth)
+        fail("link '" + l->name + "' lies more than " + std::to_string(kMaxTreeDepth) +
+             " joints below the root; deeper trees are not supported");
+      for (const auto& c : l->child_links)
+        if (c && reached.insert(c->name).second) stack.push_back({c, depth + 1});
+    }
+    for (const auto& [name, link] : urdf_.links_) {
+      if (reached.count(name)) continue;
+      // Each link has one parent, so walking up from here must come back to a link seen before.
+      std::vector<std::string> walk{name};
+      std::set<std::string> seen{name};
+      for (auto it = parent_of.find(name); it != parent_of.end(); it = parent_of.find(it->second)) {
+        if (!seen.insert(it->second).second) {
+          const auto start = std::find(walk.begin(), walk.end(), it->second);
+          std::vector<std::string> loop(walk.rbegin(), std::make_reverse_iterator(start)), joints;
+          for (const std::string& l : loop) joints.push_back(entering[l].front());
+          fail("joints " + joinNames(joints) + " form a loop through links " + joinNames(loop) +
+               "; a URDF must be a tree");
+        }
+        walk.push_back(it->second);
+      }
+      fail("link '" + name + "' is not connected to the root link '" + root_->name + "'");
+    }
+  }
+
+  /// The links from the root to `tip`, both included.
+  std::vector<urdf::LinkConstSharedPtr> pathTo(const urdf::LinkConstSharedPtr& tip) const {
+    std::vector<urdf::LinkConstSharedPtr> path;
+    for (urdf::LinkConstSharedPtr l = tip; l; l = l->getParent()) {
+      if (path.size() > urdf_.links_.size())  // unreachable after checkTree(); kept as a guard
+        fail("the parents of link '" + tip->name + "' do not lead to the root");
+      path.push_back(l);
+    }
+    std::reverse(path.begin(), path.end());
+    return path;
+  }
 
   /// True if the subtree below `link` contains a moving joint.
   bool movingBelow(const urdf::Link& link) {
@@ -238,12 +334,7 @@ class Builder {
   /// Deepest link shared by the paths to all `leaves`, if a moving joint precedes it; else "".
   std::string lastSharedLink(const std::vector<std::string>& leaves) const {
     std::vector<std::vector<urdf::LinkConstSharedPtr>> paths;
-    for (const std::string& name : leaves) {
-      std::vector<urdf::LinkConstSharedPtr> p;
-      for (urdf::LinkConstSharedPtr l = urdf_.getLink(name); l; l = l->getParent()) p.push_back(l);
-      std::reverse(p.begin(), p.end());
-      paths.push_back(p);
-    }
+    for (const std::string& name : leaves) paths.push_back(pathTo(urdf_.getLink(name)));
     size_t depth = 0;
     bool moving = false;
     std::string shared;
@@ -263,9 +354,15 @@ class Builder {
     if (!isMoving(j)) return M;
     locked_.push_back(j.name);
     double q = 0.0;
-    if (j.limits && j.type != urdf::Joint::CONTINUOUS && j.limits->lower <= j.limits->upper)
-      q = std::min(std::max(0.0, j.limits->lower), j.limits->upper);
+    const std::string who = "joint '" + j.name + "'";
+    if (j.limits && j.type != urdf::Joint::CONTINUOUS) {
+      checkValue(who, "lower limit", j.limits->lower);
+      checkValue(who, "upper limit", j.limits->upper);
+      if (j.limits->lower <= j.limits->upper)
+        q = std::min(std::max(0.0, j.limits->lower), j.limits->upper);
+    }
     const Eigen::Vector3d axis(j.axis.x, j.axis.y, j.axis.z);
+    for (int i = 0; i < 3; ++i) checkValue(who, "axis", axis[i]);
     if (q == 0.0 || !(axis.norm() > 1e-12)) return M;
     if (j.type == urdf::Joint::REVOLUTE)
       M.linear() = Eigen::AngleAxisd(q, axis.normalized()).toRotationMatrix();
@@ -279,12 +376,19 @@ class Builder {
                   Eigen::Matrix<double, 10, 1>* body) {
     if (link.inertial) {
       const urdf::Inertial& in = *link.inertial;
-      if (!std::isfinite(in.mass) || in.mass < 0.0)
-        fail("link '" + link.name + "' has mass " + std::to_string(in.mass));
+      const std::string who = "link '" + link.name + "'";
+      checkValue(who, "mass", in.mass);
+      if (in.mass < 0.0) fail(who + " has mass " + std::to_string(in.mass));
+      for (double v : {in.origin.position.x, in.origin.position.y, in.origin.position.z})
+        checkValue(who, "inertial origin xyz", v);
+      for (double v :
+           {in.origin.rotation.x, in.origin.rotation.y, in.origin.rotation.z, in.origin.rotation.w})
+        if (!std::isfinite(v)) fail(who + ": inertial origin rpy is not finite");
       const Eigen::Isometry3d frame = toIsometry(in.origin);
       Eigen::Matrix3d Ic;
       Ic << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
-      if (!Ic.allFinite()) fail("link '" + link.name + "' has a non-finite inertia");
+      if (!Ic.allFinite()) fail(who + " has a non-finite inertia");
+      for (int i = 0; i < 9; ++i) checkValue(who, "inertia", Ic(i));
       const Eigen::Matrix<double, 10, 1> p =
           inertialFromUrdf(in.mass, frame.translation(), frame.linear(), Ic);
       *body += transformInertial(p, body_T_link);
@@ -292,8 +396,7 @@ class Builder {
     for (const auto& child : link.child_links) {
       const urdf::Joint& j = *child->parent_joint;
       if (isMoving(j) && on_path_.count(child->name)) continue;  // the next chain body
-      const Eigen::Isometry3d T =
-          body_T_link * toIsometry(j.parent_to_joint_origin_transform) * lockedMotion(j);
+      const Eigen::Isometry3d T = body_T_link * jointOrigin(j) * lockedMotion(j);
       accumulate(*child, T, body);
     }
   }
@@ -324,10 +427,15 @@ Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1
 }
 
 Model parseUrdf(const std::string& xml, const std::string& tip, const std::string& source) {
-  std::string reason;
-  const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(xml, &reason);
-  if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
-  return Builder(*urdf, source).build(tip);
+  try {
+    requireUtf8(xml, source);
+    std::string reason;
+    const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(xml, &reason);
+    if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
+    return Builder(*urdf, source).build(tip);
+  } catch (const ModelError& e) {
+    throw ModelError(escapeControl(e.what()));  // names from the file may hold line breaks
+  }
 }
 
 Model loadUrdf(const std::string& path, const std::string& tip) {

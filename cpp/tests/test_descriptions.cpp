@@ -199,3 +199,148 @@ TEST(Urdf, ErrorsNameTheProblem) {
   const std::string e = errorOf<ModelError>([&] { parseUrdf(floating, "", "f.urdf"); });
   EXPECT_TRUE(contains(e, "floating")) << e;
 }
+
+namespace {
+std::string revolute(const std::string& name, const std::string& parent, const std::string& child,
+                     const std::string& extra = "") {
+  return "<joint name=\"" + name + "\" type=\"revolute\"><parent link=\"" + parent +
+         "\"/><child link=\"" + child + "\"/><axis xyz=\"0 0 1\"/>" + extra +
+         "<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>";
+}
+std::string robot(const std::string& links, const std::string& joints) {
+  std::string s = "<robot name=\"r\"><link name=\"base\"/>";
+  for (char l : links) s += std::string("<link name=\"") + l + "\"/>";
+  return s + joints + "</robot>";
+}
+}  // namespace
+
+TEST(Urdf, LoopsAndSelfParentedJointsAreNamed) {
+  // a -> b -> c -> a beside the root: urdfdom accepts it (one link without a parent), the chain
+  // walk would never end.
+  const std::string loop = robot("abcd", revolute("j0", "base", "d") + revolute("j1", "a", "b") +
+                                             revolute("j2", "b", "c") + revolute("j3", "c", "a"));
+  for (const char* tip : {"", "c", "d"}) {
+    const std::string e = errorOf<ModelError>([&] { parseUrdf(loop, tip, "loop.urdf"); });
+    EXPECT_TRUE(contains(e,
+                         "loop.urdf: joints 'j1', 'j2', 'j3' form a loop through links 'b', "
+                         "'c', 'a'"))
+        << e;
+  }
+  // base -> a -> b -> a: link a has two parent joints (here urdfdom's tree has a cycle of
+  // children).
+  const std::string two = robot(
+      "ab", revolute("j0", "base", "a") + revolute("j1", "a", "b") + revolute("j2", "b", "a"));
+  for (const char* tip : {"", "b"}) {
+    const std::string e = errorOf<ModelError>([&] { parseUrdf(two, tip, "two.urdf"); });
+    EXPECT_TRUE(contains(e, "two.urdf: link 'a' is the child of 2 joints ('j0', 'j2')")) << e;
+  }
+  // a joint that is its own parent's parent: b -> b
+  const std::string self = robot("ab", revolute("j0", "base", "a") + revolute("j1", "b", "b"));
+  const std::string e = errorOf<ModelError>([&] { parseUrdf(self, "", "self.urdf"); });
+  EXPECT_TRUE(contains(e, "self.urdf: joint 'j1' has link 'b' as both its parent and its child"))
+      << e;
+  // the same chain without the bad joint loads
+  EXPECT_EQ(parseUrdf(robot("a", revolute("j0", "base", "a")), "", "ok.urdf").nq(), 1);
+}
+
+TEST(Urdf, ExtremeValuesAreRefusedWithTheBound) {
+  const std::string mass =
+      "<inertial><mass value=\"M\"/><inertia ixx=\"1\" iyy=\"1\" izz=\"1\" "
+      "ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>";
+  auto withMass = [&](const std::string& m) {
+    std::string link = mass;
+    link.replace(link.find('M'), 1, m);
+    return "<robot name=\"r\"><link name=\"base\"/><link name=\"a\">" + link + "</link>" +
+           revolute("j0", "base", "a") + "</robot>";
+  };
+  // at the bound: accepted, and the gravity torque stays finite
+  const Model ok = parseUrdf(withMass("1e16"), "", "m.urdf");
+  EXPECT_EQ(ok.inertial[9], 1e16);
+  const std::string e = errorOf<ModelError>([&] { parseUrdf(withMass("1e300"), "", "m.urdf"); });
+  EXPECT_TRUE(contains(e, "m.urdf: link 'a': mass 1e+300 exceeds the bound 1e+16")) << e;
+  const std::string far = robot("a", revolute("j0", "base", "a", "<origin xyz=\"1e308 0 0\"/>"));
+  const std::string o = errorOf<ModelError>([&] { parseUrdf(far, "", "o.urdf"); });
+  EXPECT_TRUE(contains(o, "o.urdf: joint 'j0': origin xyz 1e+308 exceeds the bound 1e+16")) << o;
+}
+
+TEST(Yaml, TypeErrorsNameFileLineAndKey) {
+  const std::string base = "name: r\nconvention: dh\njoints:\n  - {a: 1}\n";
+  struct Case {
+    std::string yaml, expect;
+  };
+  const Case cases[] = {
+      {"name: [1, 2]\nconvention: dh\njoints:\n  - {a: 1}\n", "y.yaml:1: 'name' must be text"},
+      {"name: r\nconvention: {x: 1}\njoints:\n  - {a: 1}\n", "y.yaml:2: 'convention' must be text"},
+      {"name: r\nconvention: dh\njoints: {a: 1}\n", "y.yaml:3: 'joints' must be a non-empty list"},
+      {"name: r\nconvention: dh\njoints:\n  - {a: [1]}\n",
+       "y.yaml:4: joint 1 ('joint1'): 'a' must be a number, got a list"},
+      {"name: r\nconvention: dh\njoints:\n  - {type: {x: 1}}\n",
+       "y.yaml:4: joint 1 ('joint1'): 'type' must be text, got a mapping"},
+      {"name: !!python/object:os.system r\nconvention: dh\njoints:\n  - {a: 1}\n",
+       "y.yaml:1: YAML tag 'tag:yaml.org,2002:python/object:os.system' is not supported"},
+      {"name: r\nconvention: dh\nname: s\njoints:\n  - {a: 1}\n",
+       "y.yaml:3: key 'name' appears twice"},
+      {"name: r\nconvention: dh\njoints:\n  - {a: 1, a: 2}\n", "y.yaml:4: key 'a' appears twice"},
+      {"name: r\nconvention: dh\nsynthetic_inertia: maybe\njoints:\n  - {a: 1}\n",
+       "y.yaml:3: 'synthetic_inertia' must be true or false"},
+      {base + "---\n" + base, "y.yaml:5: a second YAML document starts here"},
+      // yaml-cpp's LoadAll loops forever, allocating, on this (a stray flow end)
+      {", 0.1]}}\n", "y.yaml"},
+  };
+  for (const Case& c : cases) {
+    const std::string e = errorOf<ModelError>([&] { parseYaml(c.yaml, "y.yaml"); });
+    EXPECT_TRUE(contains(e, c.expect)) << e << "\nexpected: " << c.expect;
+  }
+  EXPECT_EQ(parseYaml(base, "y.yaml").nq(), 1);
+}
+
+TEST(Yaml, ExtremeValuesAreRefusedWithTheBound) {
+  // 1e16 is the bound: accepted; 2e16 is refused with the value, the bound, file and line
+  EXPECT_EQ(parseYaml("convention: dh\njoints:\n  - {a: 1e16}\n", "y.yaml").nq(), 1);
+  for (const char* entry : {"a: 2e16", "d: -1e308", "inertial: {mass: 1e300}",
+                            "inertial: {mass: 1, inertia: {xx: 1e200}}",
+                            "limits: {lower: -1e300, upper: 1}", "rotor_inertia: 1e17"}) {
+    const std::string e = errorOf<ModelError>([&] {
+      parseYaml(std::string("convention: dh\njoints:\n  - {") + entry + "}\n", "y.yaml");
+    });
+    EXPECT_TRUE(contains(e, "y.yaml:3: joint 1 ('joint1'): '")) << e;
+    EXPECT_TRUE(contains(e, "exceeds the bound 1e+16")) << e;
+  }
+  const std::string g = errorOf<ModelError>([] {
+    parseYaml("convention: dh\ngravity: [0, 0, -1e200]\njoints:\n  - {a: 1}\n", "y.yaml");
+  });
+  EXPECT_TRUE(contains(g, "y.yaml:2: 'gravity' = -1e200 exceeds the bound")) << g;
+}
+
+TEST(Model, ValidateBoundsMagnitudesAndJointCount) {
+  const std::string e = errorOf<ModelError>([] { planarArm(kMaxModelJoints + 1); });
+  EXPECT_TRUE(contains(e, "at most 1000 joints, got 1001")) << e;
+  EXPECT_EQ(planarArm(kMaxModelJoints).nq(), kMaxModelJoints);
+  Model m = planarArm(2);
+  m.gravity.z() = -1e200;
+  EXPECT_TRUE(contains(errorOf<ModelError>([&] { m.validate(); }),
+                       "gravity component -1e+200 exceeds the bound 1e+16"));
+  m = planarArm(2);
+  m.joints[1].limits.velocity = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(contains(errorOf<ModelError>([&] { m.validate(); }),
+                       "joint 'joint2': velocity limit is not finite"));
+  m = planarArm(2);
+  m.inertial[10 + 9] = 1e300;
+  EXPECT_TRUE(contains(errorOf<ModelError>([&] { m.validate(); }),
+                       "link 'link2': inertial parameter M 1e+300 exceeds the bound 1e+18"));
+}
+
+TEST(Yaml, MessagesStayOneLineOfUtf8) {
+  // NUL bytes make yaml-cpp quote a stray byte in its message; names may hold line breaks
+  const std::string nul = "n" + std::string(8, '\0') +
+                          "ame: three\nconvention: mdh\nsynthetic_inertia: true\nnotes: modified "
+                          "DH\njoints:\n  - {alpha:, d: 0.1, theta: 0, r: 0, inertial: {mass: 1, "
+                          "com: [0.2, 0, 0]}}\n  - {alpha: 0, d: }\n";
+  const std::string e = errorOf<ModelError>([&] { parseYaml(nul, "n.yaml"); });
+  EXPECT_TRUE(contains(e, "n.yaml")) << e;
+  EXPECT_FALSE(contains(e, "\n")) << e;
+  EXPECT_NO_THROW(requireUtf8(e, "message"));
+  EXPECT_EQ(escapeControl("a\nb\x01\xff\xc3\xa9"), "a\\nb\\x01\\xff\xc3\xa9");
+  const std::string u = errorOf<ModelError>([] { parseYaml("name: r\xff\n", "u.yaml"); });
+  EXPECT_TRUE(contains(u, "u.yaml:1: not UTF-8 text (byte 0xff at offset 7)")) << u;
+}

@@ -20,11 +20,14 @@ from . import _args, _core
 
 __all__ = ["Robot", "load", "bundled_robots"]
 
-_PLANAR = re.compile(r"^planar(\d+)(h?)$")
+_PLANAR = re.compile(r"planar([0-9]+)(h?)")
+# Most joints of a model, as the core's kMaxModelJoints (a test keeps the two equal); checked here
+# too so that a number too large for a C++ int gets the same message.
+_MAX_JOINTS = 1000
 
 
 def bundled_robots() -> list[str]:
-    """Names accepted by :func:`load` besides file paths (``planar<N>`` for any N >= 1)."""
+    """Names accepted by :func:`load` besides file paths (``planar<N>`` for 1 <= N <= 1000)."""
     names = sorted(p.stem for p in _robot_dir().iterdir() if p.suffix == ".yaml")
     return names + ["planar<N>", "planar<N>h"]
 
@@ -40,8 +43,8 @@ def load(robot: str | Path, tip: str | None = None) -> Robot:
     ----------
     robot : str or Path
         A bundled name (``puma560``, ``puma560_3``, ``zcr07s``, ``stanford``, ``planar<N>`` for a
-        vertical-plane N-link arm, ``planar<N>h`` for a horizontal one), a URDF file (``.urdf``,
-        ``.xml``) or a YAML DH / MDH table (``.yaml``, ``.yml``).
+        vertical-plane N-link arm, ``planar<N>h`` for a horizontal one, 1 <= N <= 1000), a URDF
+        file (``.urdf``, ``.xml``) or a YAML DH / MDH table (``.yaml``, ``.yml``).
     tip : str, optional
         URDF only: the link that ends the serial chain. Needed when the URDF is a tree with more
         than one moving branch.
@@ -72,9 +75,14 @@ def load(robot: str | Path, tip: str | None = None) -> Robot:
         raise _core.ModelError(
             f"tip= applies to URDF files only, not to the bundled robot '{text}'"
         )
-    m = _PLANAR.match(text)
+    m = _PLANAR.fullmatch(text)
     if m:
-        return Robot(_core.planar_arm(int(m.group(1)), vertical=not m.group(2)))
+        n = int(m.group(1))
+        if n > _MAX_JOINTS:
+            raise _core.ModelError(
+                f"a planar arm has at most {_MAX_JOINTS} joints, got {m.group(1)} ('{text}')"
+            )
+        return Robot(_core.planar_arm(n, vertical=not m.group(2)))
     bundled = _robot_dir() / f"{text}.yaml"
     if "/" not in text and bundled.is_file():
         return Robot(_core.load_yaml(str(bundled)))

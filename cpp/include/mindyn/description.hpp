@@ -17,6 +17,10 @@
 //           or  {XX, XY, XZ, YY, YZ, ZZ, MX, MY, MZ, M}                     about the link origin
 //     rotor_inertia: Ia           friction: {viscous, coulomb}
 //   tool: {xyz: [..], rpy: [..]}   optional flange frame in the last link frame
+//
+// The file is one UTF-8 YAML document with plain values, lists and mappings (no key twice in a
+// mapping, no tags beyond YAML's core ones such as !!str); every number is finite with magnitude
+// at most kMaxDescriptionValue; at most kMaxModelJoints joints.
 #pragma once
 
 #include <string>

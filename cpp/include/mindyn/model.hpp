@@ -23,6 +23,18 @@ class FileError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Largest magnitude accepted for any number of a robot description, in its SI unit (m, kg,
+/// kg m^2, m/s^2, rad, N m, ...). Published URDFs write +-1e16 for "no position limit", so that is
+/// the largest value still meaningful; a larger one is a mistake. The bound keeps results finite:
+/// the dynamics multiply at most four description quantities in one term (mass x length^2 x
+/// gravity, inertia x speed^2), below 1e64 for inputs within the bound, far from the double
+/// overflow at 1.8e308, which leaves over 200 orders of magnitude for the joint state.
+inline constexpr double kMaxDescriptionValue = 1e16;
+
+/// Most joints a model may have. Per-call workspaces grow with n^2 (mass matrix) and a regressor
+/// with 10 n^2 (80 MB at 1000 joints); no serial manipulator comes near it.
+inline constexpr int kMaxModelJoints = 1000;
+
 enum class JointType { Revolute, Prismatic };
 
 const char* toString(JointType type);
@@ -113,8 +125,12 @@ struct Model {
   /// Classical parameter values of this model in a layout.
   Eigen::VectorXd parameters(ParameterLayout layout = {}) const;
 
-  /// Checks sizes, finiteness, unit axes and rigid transforms; throws ModelError naming the
-  /// problem.
+  /// Checks sizes, finiteness, magnitudes, unit axes and rigid transforms; throws ModelError
+  /// naming the problem. Loaders check each input against kMaxDescriptionValue; a model built
+  /// from them folds up to 100 inputs into one value (fixed joints into one origin, rigidly
+  /// attached links into one body), so here lengths and masses may reach 100x that bound, first
+  /// moments its square and second moments its cube; limits, gravity, rotor inertia and friction
+  /// are taken as given and keep the bound itself.
   void validate() const;
 };
 
@@ -131,6 +147,14 @@ Eigen::Matrix<double, 10, 1> inertialFromUrdf(double mass, const Eigen::Vector3d
 
 /// Inertia tensor about the link origin from a 10-vector.
 Eigen::Matrix3d inertiaTensor(const Eigen::Ref<const Eigen::VectorXd>& p10);
+
+/// Throws ModelError "<source>:<line>: not UTF-8 text (byte 0x.. at offset N)" unless `text` is
+/// valid UTF-8 (the encoding of URDF and YAML files, and what names must be to reach Python).
+void requireUtf8(const std::string& text, const std::string& source);
+
+/// `text` with control characters and bytes that are not UTF-8 written as escapes (\n, \t, \r,
+/// \xNN), so that a message quoting a file stays on one line and reaches Python intact.
+std::string escapeControl(const std::string& text);
 
 /// Pinocchio's dynamic-parameter order per body: m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz.
 Eigen::VectorXd toPinocchioOrder(const Eigen::Ref<const Eigen::VectorXd>& inertial);

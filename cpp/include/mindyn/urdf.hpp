@@ -9,6 +9,10 @@
 //  - fixed children that hang off chain links (sensor frames, hands, flanges) are merged;
 //  - moving joints that leave the chain (e.g. gripper fingers when tip = the hand) are locked at
 //    q = 0 clamped into their limits and merged too; `Model::notes` names them.
+//
+// The file must be UTF-8 and its links a tree: a joint whose parent is its child, a link entered
+// by two joints or a loop of joints is refused by name, as is any number used for the model that
+// is not finite or exceeds kMaxDescriptionValue in magnitude.
 #pragma once
 
 #include <Eigen/Core>

@@ -4,22 +4,25 @@ Format: one header line, then one row per sample, comma-separated::
 
     t, q1..qN, [dq1..dqN], [ddq1..ddqN], tau1..tauN
 
-``t`` in seconds, strictly increasing; positions in rad (m for prismatic joints), velocities and
-accelerations per second; torques in N m (N), or as relative values in per mille of the drive's
-rated torque (``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, seed
-001, with the drive table of the robot description). The torque columns may say their unit in
-the header, ``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with
-``torque_unit``); the reader then needs no ``torque_unit``. Motor currents in A may stand in
-for the torques, as columns ``i1..iN`` (or ``torque_unit="current"``): ``tau = i * K`` with
-the joint-side drive gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K``
-given as ``drive_gain``. Velocities and accelerations that
-are not logged are obtained from the positions (velocities) by zero-phase low-pass filtering and
-central differences; the settings are reported in :attr:`JointData.processing`.
+Cells are decimal numbers in ASCII (``-1.25``, ``3e-4``, blanks around them allowed); the file
+is UTF-8 text (a leading byte-order mark is skipped). ``t`` in seconds, strictly increasing;
+positions in rad (m for prismatic joints), velocities and accelerations per second; torques in
+N m (N), or as relative values in per mille of the drive's rated torque
+(``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, seed 001, with
+the drive table of the robot description). The torque columns may say their unit in the header,
+``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with ``torque_unit``); the
+reader then needs no ``torque_unit``. Motor currents in A may stand in for the torques, as
+columns ``i1..iN`` (or ``torque_unit="current"``): ``tau = i * K`` with the joint-side drive
+gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K`` given as
+``drive_gain``. Velocities and accelerations that are not logged are obtained from the
+positions (velocities) by zero-phase low-pass filtering and central differences; the settings
+are reported in :attr:`JointData.processing`.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import json
 import math
 import re
@@ -113,8 +116,16 @@ class JointData:
         return float(self.t[-1] - self.t[0])
 
 
-_COLUMN = re.compile(r"^(t|q|dq|ddq|tau)(\d*)$")
-_UNIT = re.compile(r"^(tau\d+)\s*\[([^\]]*)\]$")
+_COLUMN = re.compile(r"(t|q|dq|ddq|tau)([1-9][0-9]*)?")
+_UNIT = re.compile(r"(tau[1-9][0-9]*)\s*\[([^\]]*)\]")
+
+# A cell holds a decimal number in ASCII: optional sign, digits with an optional point, optional
+# exponent, ASCII blanks around it. Python's float() also takes digit-group underscores
+# ("1_000"), non-ASCII digits and blanks, and "nan"/"inf"/"infinity" spelled out; none of these
+# belongs in a log, so they are refused (the last two with their own message).
+_NUMBER = re.compile(r"[ \t]*[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?[ \t]*")
+_BLANKS = " \t"
+_NONFINITE = re.compile(r"[ \t]*[+-]?(?:nan|inf|infinity)[ \t]*", re.IGNORECASE)
 
 
 def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
@@ -133,11 +144,11 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
             names[i] = f"tau{names[i][1:]}[current]"
     units = {}
     for i, name in enumerate(names):
-        u = _UNIT.match(name)
+        u = _UNIT.fullmatch(name)
         if u:
             names[i], units[u.group(1)] = u.group(1), u.group(2).strip()
     if units:
-        taus = [h for h in names if re.fullmatch(r"tau\d+", h)]
+        taus = [h for h in names if re.fullmatch(r"tau[1-9][0-9]*", h)]
         if set(units) != set(taus) or len(set(units.values())) != 1:
             raise DataError(
                 f"{path}: the torque columns say different units ("
@@ -152,8 +163,8 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         if name in seen:
             raise DataError(f"{path}: column '{name}' appears twice in the header")
         seen.add(name)
-        m = _COLUMN.match(name)
-        if not m or (m.group(1) == "t") != (m.group(2) == ""):
+        m = _COLUMN.fullmatch(name)
+        if not m or (m.group(1) == "t") != (m.group(2) is None):
             extra.append(name)
             continue
         if m.group(1) == "t":
@@ -163,7 +174,13 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     if n is None:
         n = max(groups["q"]) if groups["q"] else 0
         if n == 0:
-            raise DataError(f"{path}: no position columns q1, q2, ... in the header")
+            other = f" (it has {', '.join(repr(e) for e in extra)})" if extra else ""
+            raise DataError(f"{path}: no position columns q1, q2, ... in the header{other}")
+        if n > len(names):
+            raise DataError(
+                f"{path}: column 'q{n}' implies {n} joints, but the header has only "
+                f"{len(names)} columns"
+            )
     want = {"q": True, "dq": False, "ddq": False, "tau": require_torque}
     missing = [] if t_col is not None else ["t"]
     for kind, required in want.items():
@@ -230,16 +247,54 @@ def read_csv(
     DataFileNotFoundError
         ``path`` does not exist.
     DataError
-        Wrong or missing columns, a value that is not a number or is NaN (line and column
-        named), time not strictly increasing (line named), fewer than 2 samples.
+        Wrong or missing columns, a cell that is not a decimal number in ASCII (``1_000``,
+        ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
+        named), a file that is not UTF-8 text (line and byte offset named), time not strictly
+        increasing (line named), fewer than 2 samples, derivatives that overflow.
     """
     path = Path(path)
     if not path.is_file():
         raise DataFileNotFoundError(f"data file '{path}' does not exist")
+    try:
+        return _read_csv(
+            path,
+            robot,
+            n,
+            torque_unit,
+            require_torque,
+            filter,
+            cutoff,
+            order,
+            window,
+            polyorder,
+            drive_gain,
+        )
+    except DataError as e:
+        # column names from the file may hold line breaks; the message stays one line
+        raise DataError(_CONTROL.sub(lambda m: repr(m.group())[1:-1], str(e))) from None
+
+
+_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+
+
+def _read_csv(
+    path: Path,
+    robot,
+    n,
+    torque_unit,
+    require_torque,
+    filter,
+    cutoff,
+    order,
+    window,
+    polyorder,
+    drive_gain,
+) -> JointData:
     if robot is not None:
         n = robot.n
-    with path.open(newline="") as f:
-        reader = csv.reader(f)
+    text = _decode(path)
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
         try:
             header = next(reader)
         except StopIteration:
@@ -258,23 +313,32 @@ def read_csv(
                     f"{path}, line {reader.line_num}: {len(row)} values for {len(header)} columns"
                 )
             rows.append((reader.line_num, row))
+    except csv.Error as e:
+        raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
     if len(rows) < 2:
         raise DataError(f"{path}: {len(rows)} data row(s); at least 2 samples are needed")
     names = [h.strip() for h in header]
     values = np.empty((len(rows), len(header)))
     for r, (line, row) in enumerate(rows):
         for c, v in enumerate(row):
-            try:
+            if _NUMBER.fullmatch(v):
                 values[r, c] = float(v)
-            except ValueError:
-                raise DataError(
-                    f"{path}, line {line}, column {names[c]}: '{v.strip()}' is not a number"
-                ) from None
+                continue
+            where = f"{path}, line {line}, column {names[c]}"
+            if _NONFINITE.fullmatch(v):
+                what = "NaN" if v.strip().lstrip("+-").lower() == "nan" else "an infinite value"
+                raise DataError(f"{where}: {what}")
+            raise DataError(
+                f"{where}: {v.strip(_BLANKS)!r} is not a number (expected a decimal number such as "
+                "-1.25 or 3e-4)"
+            )
     bad = ~np.isfinite(values)
     if bad.any():
         r, c = np.argwhere(bad)[0]
-        what = "NaN" if np.isnan(values[r, c]) else "an infinite value"
-        raise DataError(f"{path}, line {rows[r][0]}, column {names[c]}: {what}")
+        raise DataError(
+            f"{path}, line {rows[r][0]}, column {names[c]}: {rows[r][1][c].strip()!r} is too large "
+            "for a double"
+        )
     t = values[:, cols["t"]]
     r = first_not_increasing(t)
     if r is not None:
@@ -307,19 +371,52 @@ def read_csv(
                 f"'{torque_unit}' was asked for"
             )
         torque_unit = header_unit
-    if tau is not None:
-        tau, unit_info = convert_torque(tau, torque_unit or "Nm", robot, drive_gain)
-        processing["torque"] = unit_info
-    dq, ddq, deriv = fill_derivatives(
-        t, q, dq, ddq, filter=filter, cutoff=cutoff, order=order, window=window, polyorder=polyorder
-    )
+    try:
+        # overflow is checked below and reported once, not as numpy warnings
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            if tau is not None:
+                tau, unit_info = convert_torque(tau, torque_unit or "Nm", robot, drive_gain)
+                processing["torque"] = unit_info
+            dq, ddq, deriv = fill_derivatives(
+                t,
+                q,
+                dq,
+                ddq,
+                filter=filter,
+                cutoff=cutoff,
+                order=order,
+                window=window,
+                polyorder=polyorder,
+            )
+    except DataError as e:
+        raise DataError(f"{path}: {e}") from None
     processing.update(deriv)
+    for what, a in (("velocities", dq), ("accelerations", ddq), ("torques", tau)):
+        if a is not None and not np.isfinite(a).all():
+            raise DataError(
+                f"{path}: the {what} overflow (the largest logged magnitude is "
+                f"{np.max(np.abs(values)):.3g}); the log's values are too large to process"
+            )
     return JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
+
+
+def _decode(path: Path) -> str:
+    """The file's text as UTF-8 (a leading byte-order mark is skipped), or DataError naming the
+    line and byte offset of the first byte that is not UTF-8."""
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        line = data.count(b"\n", 0, e.start) + 1
+        raise DataError(
+            f"{path}, line {line}: not UTF-8 text (byte 0x{data[e.start]:02x} at offset {e.start})"
+        ) from None
 
 
 def first_not_increasing(t: np.ndarray) -> int | None:
     """Index of the first time that does not exceed the one before it, or None."""
-    bad = np.flatnonzero(np.diff(t) <= 0)
+    with np.errstate(over="ignore", invalid="ignore"):  # t[k] - t[k-1] may overflow to inf > 0
+        bad = np.flatnonzero(np.diff(t) <= 0)
     return int(bad[0]) + 1 if bad.size else None
 
 
