@@ -1,7 +1,7 @@
 """CLI: ``mindyn demo`` -- the whole chain on one robot, every file in one folder.
 
 base parameters -> optimised excitation -> simulated measurement with noise -> identification
-(dynamic and energy models) -> validation on a second trajectory -> generated code.
+(dynamic, integral and energy models) -> validation on a second trajectory -> generated code.
 """
 
 from __future__ import annotations
@@ -145,19 +145,24 @@ def cmd_demo(args: argparse.Namespace) -> int:
     )
     truth = true_base_values(base, {"names": log_e.param_names, "values": log_e.params})
     results = {}
-    for model in ("dynamic", "energy"):
+    for model in ("dynamic", "integral", "energy"):
         res = identify(robot, data, model=model, base=base, integration="zoh", energy_window=10)
         fit, val = validate(res, data), validate(res, vdata)
         results[model] = (res, fit, val)
         kept = len(res.names)
         err = np.abs(res.full - truth)
         print(
-            f"    {model:7s} model: {res.rows} equations, {base.n} estimated, {kept} kept "
+            f"    {model:8s} model: {res.rows} equations, {base.n} estimated, {kept} kept "
             f"({len(res.removed)} removed), scaled condition number {res.cond:.3g}, "
             f"{res.seconds:.2f} s"
         )
         print(f"      RMS error [N m], identification data: {_joints(fit['rms'])}")
         print(f"      RMS error [N m], validation data:     {_joints(val['rms'])}")
+        print(
+            "      overall relative error |tau - tau_hat| / |tau|: identification "
+            f"{100 * fit['overall_relative']:.2f} %, "
+            f"validation {100 * val['overall_relative']:.2f} %"
+        )
         big = np.argsort(-np.abs(truth))[:3]
         print(
             "      largest base parameters, estimate / true: "
@@ -165,8 +170,12 @@ def cmd_demo(args: argparse.Namespace) -> int:
         )
         (out / f"identification_{model}.txt").write_text(format_table(res, truth) + "\n")
         doc = res.to_dict()
-        doc["fit"] = {"rms": fit["rms"].tolist()}
-        doc["validation"] = {"rms": val["rms"].tolist(), "relative": val["relative"].tolist()}
+        doc["fit"] = {"overall_relative": fit["overall_relative"], "rms": fit["rms"].tolist()}
+        doc["validation"] = {
+            "overall_relative": val["overall_relative"],
+            "rms": val["rms"].tolist(),
+            "relative": val["relative"].tolist(),
+        }
         doc["true_values"] = truth.tolist()
         doc["max_abs_error"] = float(err.max())
         (out / f"identification_{model}.json").write_text(json.dumps(doc, indent=2) + "\n")
@@ -195,8 +204,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
             + _joints(ZCR07S_STUDY_TABLE6["validation"])
         )
     print(
-        "    wrote identification_{dynamic,energy}.{json,txt} and "
-        "torque_{identification,validation}_{dynamic,energy}.png"
+        "    wrote identification_{dynamic,integral,energy}.{json,txt} and "
+        "torque_{identification,validation}_{dynamic,integral,energy}.png"
     )
     _done(t0)
 
@@ -256,8 +265,8 @@ def register(sub) -> None:
         description="Runs the identification chain end to end on a robot (default zcr07s) and "
         "puts every file in one folder: base parameters, an optimised excitation trajectory, a "
         "simulated noisy measurement of the robot tracking it (and of a validation trajectory), "
-        "identification with the dynamic and the energy model, validation, plots, and generated "
-        "code when this build has the code generator.",
+        "identification with the dynamic, integral and energy models, validation, plots, and "
+        "generated code when this build has the code generator.",
     )
     p.add_argument(
         "robot",
