@@ -21,7 +21,15 @@ from . import (
     cli_identify,
     load,
 )
-from .cli_args import Parser, UsageError, add_joint_terms, add_offset, add_robot, number
+from .cli_args import (
+    Parser,
+    UsageError,
+    add_joint_terms,
+    add_offset,
+    add_robot,
+    joint_terms,
+    number,
+)
 
 
 def _fmt(x: float, width: int = 10) -> str:
@@ -126,15 +134,7 @@ def cmd_base(args: argparse.Namespace) -> int:
         print(" \\\\\n".join(_latex_formula(f) for f in bp.formulas))
         print(r"\end{align*}")
         return 0
-    extras = [
-        x
-        for x, on in (
-            ("rotor inertia", args.rotor),
-            ("friction", args.friction),
-            ("torque offsets", args.offset),
-        )
-        if on
-    ]
+    extras = joint_terms(args)
     counts = {k: s["n"] for k, s in bp.sets.items()}
     m = bp.margin
     lines = [

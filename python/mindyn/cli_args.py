@@ -222,3 +222,14 @@ def add_offset(p: argparse.ArgumentParser, verb: str = "include") -> None:
         action="store_true",
         help=f"{verb} a constant torque offset per joint, Off1..OffN (tau_j = ... + Off_j)",
     )
+
+
+def joint_terms(args) -> list[str]:
+    """The joint terms a command line asked for (``--rotor``, ``--friction``, ``--offset``), in
+    words, for the first line of a command's output."""
+    named = (
+        ("rotor inertia", "rotor"),
+        ("friction", "friction"),
+        ("torque offsets", "offset"),
+    )
+    return [words for words, flag in named if getattr(args, flag, False)]

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from . import ModelError, base_parameters, load
-from .cli_args import add_joint_terms, add_offset, add_robot, output_file
+from .cli_args import add_joint_terms, add_offset, add_robot, joint_terms, output_file
 from .codegen import generate
 
 
@@ -107,15 +107,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     # the classical-parameter recursion generated the same way, for its operation counts
     classical = generate(robot, name=code.name, base=False, **same)
     written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
-    extras = [
-        x
-        for x, on in (
-            ("rotor inertia", args.rotor),
-            ("friction", args.friction),
-            ("torque offsets", args.offset),
-        )
-        if on
-    ]
+    extras = joint_terms(args)
     print(
         f"{robot.name}: {len(code.names)} base parameters"
         + (f" ({', '.join(extras)})" if extras else "")

@@ -14,6 +14,7 @@ from .cli_args import (
     add_joint_terms,
     add_offset,
     add_robot,
+    joint_terms,
     number,
     output_dir,
     output_file,
@@ -320,15 +321,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     data = logs[0]
     proc = data.processing
-    extras = [
-        x
-        for x, on in (
-            ("rotor inertia", args.rotor),
-            ("friction", args.friction),
-            ("torque offsets", args.offset),
-        )
-        if on
-    ]
+    extras = joint_terms(args)
     head = (
         f"{robot.name}: {res.model} model, {base.n} base parameters"
         + (f" ({', '.join(extras)})" if extras else "")

@@ -256,19 +256,10 @@ def read_csv(
     if not path.is_file():
         raise DataFileNotFoundError(f"data file '{path}' does not exist")
     try:
-        return _read_csv(
-            path,
-            robot,
-            n,
-            torque_unit,
-            require_torque,
-            filter,
-            cutoff,
-            order,
-            window,
-            polyorder,
-            drive_gain,
+        derivatives = dict(
+            filter=filter, cutoff=cutoff, order=order, window=window, polyorder=polyorder
         )
+        return _read_csv(path, robot, n, torque_unit, require_torque, drive_gain, derivatives)
     except DataError as e:
         # column names from the file may hold line breaks; the message stays one line
         raise DataError(_CONTROL.sub(lambda m: repr(m.group())[1:-1], str(e))) from None
@@ -278,17 +269,7 @@ _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
 
 
 def _read_csv(
-    path: Path,
-    robot,
-    n,
-    torque_unit,
-    require_torque,
-    filter,
-    cutoff,
-    order,
-    window,
-    polyorder,
-    drive_gain,
+    path: Path, robot, n, torque_unit, require_torque, drive_gain, derivatives: dict
 ) -> JointData:
     if robot is not None:
         n = robot.n
@@ -377,17 +358,7 @@ def _read_csv(
             if tau is not None:
                 tau, unit_info = convert_torque(tau, torque_unit or "Nm", robot, drive_gain)
                 processing["torque"] = unit_info
-            dq, ddq, deriv = fill_derivatives(
-                t,
-                q,
-                dq,
-                ddq,
-                filter=filter,
-                cutoff=cutoff,
-                order=order,
-                window=window,
-                polyorder=polyorder,
-            )
+            dq, ddq, deriv = fill_derivatives(t, q, dq, ddq, **derivatives)
     except DataError as e:
         raise DataError(f"{path}: {e}") from None
     processing.update(deriv)
