@@ -672,8 +672,7 @@ def test_three_sets_planar_horizontal(n):
     assert not bp.lagrangian_equals_eom
     lag = dict(zip(bp.sets["lagrangian"]["names"], bp.sets["lagrangian"]["formulas"]))
     assert lag["MZR1"] == "MZR1 = " + " + ".join(f"MZ{k}" for k in range(1, n + 1))
-    robot.gravity = [0.0, 0.0, 0.0]
-    bp0 = mindyn.base_parameters(robot)
+    bp0 = mindyn.base_parameters(robot.with_gravity([0.0, 0.0, 0.0]))
     assert bp0.lagrangian_equals_eom and bp0.lagrangian_equals_energy
     assert bp0.sets["lagrangian"]["n"] == bp0.n == 3 * n - 2
 
@@ -922,3 +921,24 @@ def test_cli_errors_are_one_line(args, match):
     lines = r.stderr.splitlines()
     assert len(lines) == 1, r.stderr
     assert lines[0].startswith("mindyn: error: ") and match in lines[0]
+
+
+def test_gravity_is_fixed_per_robot(rng):
+    """A base set keeps the gravity of the robot it was made from: one made with g = 0 gives
+    the g = 0 torques after a robot with g = -9.81 is made from the same one, each checked
+    against the inverse dynamics of its own robot (the same arithmetic regrouped: 1e-9)."""
+    flat = mindyn.load("planar2", gravity=[0.0, 0.0, 0.0])
+    bp_flat = mindyn.base_parameters(flat)
+    heavy = flat.with_gravity([0.0, 0.0, -9.81])
+    bp_heavy = mindyn.base_parameters(heavy)
+    np.testing.assert_array_equal(flat.gravity, [0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(heavy.gravity, [0.0, 0.0, -9.81])
+    with pytest.raises(AttributeError, match="with_gravity"):
+        flat.gravity = [0.0, 0.0, -9.81]
+    q, dq, ddq = (rng.uniform(-1.0, 1.0, (5, 2)) for _ in range(3))
+    for robot, bp in ((flat, bp_flat), (heavy, bp_heavy)):
+        p = robot.parameters(bp.rotor, bp.friction)
+        tau = bp.regressor(q, dq, ddq) @ bp.values(p)
+        np.testing.assert_allclose(tau, robot.inverse_dynamics(q, dq, ddq), rtol=0, atol=1e-9)
+    # the two answers differ by the gravity torque, which is not small on a vertical arm
+    assert np.max(np.abs(heavy.gravity_torque(q))) > 1.0

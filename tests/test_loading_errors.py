@@ -276,12 +276,16 @@ def test_forward_dynamics_singular():
         robot.forward_dynamics(z, z, z, np.zeros(30))
 
 
-def test_gravity_setter_validation():
+def test_gravity_validation():
     robot = mindyn.load("planar2")
     with pytest.raises(ValueError, match="gravity contains NaN at entry 2"):
-        robot.gravity = [0.0, np.nan, -9.81]
+        robot.with_gravity([0.0, np.nan, -9.81])
     with pytest.raises(ValueError):
-        robot.gravity = [0.0, -9.81]
+        robot.with_gravity([0.0, -9.81])
+    with pytest.raises(ValueError, match="gravity contains NaN at entry 2"):
+        mindyn.load("planar2", gravity=[0.0, np.nan, -9.81])
+    with pytest.raises(AttributeError, match="with_gravity"):
+        robot.gravity = [0.0, 0.0, -9.81]
 
 
 # --------------------------------------------------------------------------------------------

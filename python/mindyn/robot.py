@@ -36,7 +36,7 @@ def _robot_dir() -> Path:
     return Path(str(resources.files("mindyn") / "robots"))
 
 
-def load(robot: str | Path, tip: str | None = None) -> Robot:
+def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
     """Load a robot.
 
     Parameters
@@ -48,6 +48,10 @@ def load(robot: str | Path, tip: str | None = None) -> Robot:
     tip : str, optional
         URDF only: the link that ends the serial chain. Needed when the URDF is a tree with more
         than one moving branch.
+    gravity : array_like, shape (3,), optional
+        Gravity in the base frame [m/s^2], instead of the description's (default
+        ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
+        gives a new robot with another.
 
     Raises
     ------
@@ -56,6 +60,11 @@ def load(robot: str | Path, tip: str | None = None) -> Robot:
     ValueError
         Malformed description, unsupported joint, unknown name (``mindyn.ModelError``).
     """
+    out = _load(robot, tip)
+    return out if gravity is None else out.with_gravity(gravity)
+
+
+def _load(robot: str | Path, tip: str | None) -> Robot:
     if isinstance(robot, Robot):
         return robot
     text = str(robot)
@@ -107,6 +116,17 @@ class Robot:
         Names of the classical inertial parameters (``10 n``).
     params : ndarray, shape (10 n,)
         Their values (a copy; assign to change the model).
+    gravity : ndarray, shape (3,)
+        Fixed once loaded (``mindyn.load(..., gravity=g)``, :meth:`with_gravity`): base
+        parameter sets and the code generated from them depend on it.
+
+    Notes
+    -----
+    The parameter values (``params``, ``rotor_inertia``, ``viscous``, ``coulomb``) can be
+    assigned: what is derived from a robot depends on its geometry and gravity only (base
+    parameter sets, base dynamics, inverse kinematics) or takes the values when it is made
+    (generated code with baked-in values, simulators, controllers' default estimates), so
+    an assignment never changes an object made before it.
     """
 
     def __init__(self, core: _core.Model):
@@ -186,7 +206,16 @@ class Robot:
 
     @gravity.setter
     def gravity(self, g) -> None:
-        self._m.gravity = _args.array(g, "gravity", (3,))
+        raise AttributeError(
+            "a robot's gravity is fixed: use robot.with_gravity(g) for a new robot, or "
+            "mindyn.load(..., gravity=g)"
+        )
+
+    def with_gravity(self, g) -> Robot:
+        """A new robot, the same as this one but for gravity ``g`` (shape (3,), base frame,
+        m/s^2), with its own model: this robot, and base parameter sets, generated code or
+        solvers made from it, are unchanged."""
+        return Robot(self._m.with_gravity(_args.array(g, "gravity", (3,))))
 
     @property
     def tool(self) -> np.ndarray:

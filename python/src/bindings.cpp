@@ -166,12 +166,19 @@ PYBIND11_MODULE(_core, m) {
                                      s.model.dh[k].theta;
                                return d;
                              })
-      .def_property(
-          "gravity", [](const PyModel& s) { return Eigen::Vector3d(s.model.gravity); },
-          [](PyModel& s, const Eigen::Vector3d& g) {
+      .def_property_readonly("gravity",
+                             [](const PyModel& s) { return Eigen::Vector3d(s.model.gravity); })
+      .def(
+          "with_gravity",
+          [](const PyModel& s, const Eigen::Vector3d& g) {
             if (!g.allFinite()) throw py::value_error("gravity must be finite");
-            s.model.gravity = g;
-          })
+            Model copy = s.model;
+            copy.gravity = g;
+            return std::make_shared<PyModel>(std::move(copy));
+          },
+          py::arg("gravity"),
+          "A new model, the same but for its gravity vector (base frame, m/s^2); this one is "
+          "unchanged.")
       .def_property(
           "tool", [](const PyModel& s) { return toMatrix(s.model.tool); },
           [](PyModel& s, const Eigen::Matrix4d& T) {
