@@ -308,7 +308,8 @@ class ExcitationResult:
     ``value`` / ``initial_value`` are in the reported form of :func:`criterion_value` (the
     latter for ``initial_trajectory``, the starting guess of the best start); ``starts`` lists
     per random start its initial and final value, iterations, seconds and the optimiser's
-    message."""
+    message, in the same form. That form is smaller-is-better for ``cond`` and ``hadamard``
+    and larger-is-better for ``logdet`` (``log det(W^T W / rows)``, maximised)."""
 
     robot: str
     trajectory: FourierTrajectory
@@ -603,10 +604,13 @@ def optimize_excitation(
         f"N={harmonics}, f={freq:g} Hz, {prob.n * prob.nf} free coefficients, "
         f"{starts} start(s), {prob.A.shape[0]} limit constraints"
     )
-    shown = {"cond": "cond", "logdet": "-logdet", "hadamard": "log hadamard ratio"}[criterion]
+    shown = {"cond": "cond", "logdet": "logdet", "hadamard": "log hadamard ratio"}[criterion]
 
     def report(J: float) -> float:
-        return math.exp(J) if criterion == "cond" else J
+        """The objective ``J`` (minimised) in the reported form of :func:`criterion_value`."""
+        if criterion == "cond":
+            return math.exp(J)
+        return -J if criterion == "logdet" else J
 
     best = None
     runs = []
