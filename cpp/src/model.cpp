@@ -275,7 +275,6 @@ Data::Data(const Model& model)
       v(n),
       a(n),
       f(n),
-      K(n),
       zeros(Eigen::VectorXd::Zero(n)),
       unit(Eigen::VectorXd::Zero(n)),
       tmp(Eigen::VectorXd::Zero(n)),

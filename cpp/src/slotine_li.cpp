@@ -96,8 +96,7 @@ SlotineLiData::SlotineLiData(const Model& model, ParameterLayout l)
       F(Matrix6x10::Zero()),
       W(Eigen::MatrixXd::Zero(model.nq(), l.size(model.nq()))),
       zeros(Eigen::VectorXd::Zero(model.nq())),
-      unit(Eigen::VectorXd::Zero(model.nq())),
-      tau(Eigen::VectorXd::Zero(model.nq())) {}
+      unit(Eigen::VectorXd::Zero(model.nq())) {}
 
 void slotineLiRegressor(const Model& model, Data& data, SlotineLiData& sl, const VecRef& q,
                         const VecRef& dq, const VecRef& dqr, const VecRef& ddqr,

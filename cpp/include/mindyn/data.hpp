@@ -28,8 +28,7 @@ struct Data {
   // Spatial velocity, spatial acceleration (gravity included as a base acceleration) and the
   // force transmitted by joint k, all in link-k coordinates, about the link origin.
   std::vector<Vector6d> v, a, f;
-  // Regressor work: the 6x10 blocks being carried towards the base.
-  std::vector<Matrix6x10> K;
+  // Regressor work: one 6x10 block.
   Matrix6x10 F;
 
   Eigen::VectorXd zeros, unit, tmp;  // n

@@ -34,8 +34,8 @@ struct SlotineLiData {
   ParameterLayout layout;
   std::vector<Vector6d> vr, ar;  // reference velocity and acceleration of each link
   Matrix6x10 F;
-  Eigen::MatrixXd W;                 // n x layout.size(n): classical regressor for the base one
-  Eigen::VectorXd zeros, unit, tau;  // n
+  Eigen::MatrixXd W;            // n x layout.size(n): classical regressor for the base one
+  Eigen::VectorXd zeros, unit;  // n
 };
 
 /// Classical Slotine-Li regressor Y (n x layout.size(n)); `layout` must be the workspace's.
