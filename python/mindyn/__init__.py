@@ -13,6 +13,8 @@
   closed-loop simulation, inverse kinematics.
 """
 
+from importlib import metadata as _metadata
+
 from . import _args
 from ._core import ModelError, RobotFileNotFoundError
 from ._core import from_pinocchio_order as _from_pin
@@ -24,7 +26,10 @@ from .control import coriolis_matrix, slotine_li_regressor
 from .ik import ik
 from .robot import Robot, bundled_robots, load
 
-__version__ = "0.1.0"
+try:  # the version is written once, in pyproject.toml
+    __version__ = _metadata.version("mindyn")
+except _metadata.PackageNotFoundError:  # pragma: no cover - imported from a source tree
+    __version__ = "unknown"
 
 __all__ = [
     "BaseParameters",
