@@ -353,6 +353,18 @@ def test_current_errors_are_one_line(drive_arm, tmp_path, capsys):
         assert cli.main(["identify", *argv]) == 2
         err = capsys.readouterr().err.strip()
         assert err.startswith("mindyn: error:") and "\n" not in err and msg in err, err
+    # the currents file follows the same cell and text rules as the log itself
+    from mindyn.identification.currents import read_currents
+
+    (tmp_path / "u.csv").write_text("t,i1,i2,i3\n0,1_000,0,0\n0.01,0,0,0\n")
+    with pytest.raises(DataError, match=r"u\.csv, line 2, column i1: '1_000' is not a number"):
+        read_currents(tmp_path / "u.csv", 3)
+    (tmp_path / "x.csv").write_bytes(b"t,i1,i2,i3\n0,0,0,0\n0.01,0,\xff,0\n")
+    with pytest.raises(DataError, match=r"x\.csv, line 3: not UTF-8 text \(byte 0xff"):
+        read_currents(tmp_path / "x.csv", 3)
+    (tmp_path / "h.csv").write_text("t,i1,i2,i3\n0,1e400,0,0\n0.01,0,0,0\n")
+    with pytest.raises(DataError, match=r"column i1: '1e400' is too large for a double"):
+        read_currents(tmp_path / "h.csv", 3)
     with pytest.raises(DataError, match="both torque columns"):
         p = tmp_path / "both.csv"
         p.write_text("t,q1,q2,q3,tau1,tau2,tau3,i1,i2,i3\n" + "0,0,0,0,0,0,0,0,0,0\n" * 3)

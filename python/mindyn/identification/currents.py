@@ -12,13 +12,22 @@ or gains given per joint).
 from __future__ import annotations
 
 import csv
+import io
 import re
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from .data import DataError, DataFileNotFoundError, JointData, drive_gains, first_not_increasing
+from .data import (
+    DataError,
+    DataFileNotFoundError,
+    JointData,
+    decode_text,
+    drive_gains,
+    first_not_increasing,
+    parse_cell,
+)
 
 __all__ = ["attach_currents", "read_currents"]
 
@@ -31,8 +40,8 @@ def read_currents(path, n: int) -> tuple[np.ndarray, np.ndarray]:
     path = Path(path)
     if not path.is_file():
         raise DataFileNotFoundError(f"currents file '{path}' does not exist")
-    with path.open(newline="") as f:
-        reader = csv.reader(f)
+    reader = csv.reader(io.StringIO(decode_text(path), newline=""))
+    try:
         header = next(reader, None)
         while header is not None and header and header[0].lstrip().startswith("#"):
             header = next(reader, None)
@@ -57,21 +66,13 @@ def read_currents(path, n: int) -> tuple[np.ndarray, np.ndarray]:
                 raise DataError(
                     f"{path}, line {reader.line_num}: {len(row)} values for {len(names)} columns"
                 )
-            vals = []
-            for c in cols:
-                try:
-                    v = float(row[c])
-                except ValueError:
-                    v = None
-                if v is None or not np.isfinite(v):
-                    raise DataError(
-                        f"{path}, line {reader.line_num}, column {names[c]}: "
-                        f"'{row[c].strip()}' is not a finite number"
-                    )
-                vals.append(v)
+            where = f"{path}, line {reader.line_num}, column "
+            vals = [parse_cell(row[c], where + names[c]) for c in cols]
             t.append(vals[0])
             cur.append(vals[1:])
             lines.append(reader.line_num)
+    except csv.Error as e:
+        raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
     if len(t) < 2:
         raise DataError(f"{path}: {len(t)} data row(s); at least 2 samples are needed")
     t = np.array(t)

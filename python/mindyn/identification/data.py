@@ -273,7 +273,7 @@ def _read_csv(
 ) -> JointData:
     if robot is not None:
         n = robot.n
-    text = _decode(path)
+    text = decode_text(path)
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         try:
@@ -302,24 +302,7 @@ def _read_csv(
     values = np.empty((len(rows), len(header)))
     for r, (line, row) in enumerate(rows):
         for c, v in enumerate(row):
-            if _NUMBER.fullmatch(v):
-                values[r, c] = float(v)
-                continue
-            where = f"{path}, line {line}, column {names[c]}"
-            if _NONFINITE.fullmatch(v):
-                what = "NaN" if v.strip().lstrip("+-").lower() == "nan" else "an infinite value"
-                raise DataError(f"{where}: {what}")
-            raise DataError(
-                f"{where}: {v.strip(_BLANKS)!r} is not a number (expected a decimal number such as "
-                "-1.25 or 3e-4)"
-            )
-    bad = ~np.isfinite(values)
-    if bad.any():
-        r, c = np.argwhere(bad)[0]
-        raise DataError(
-            f"{path}, line {rows[r][0]}, column {names[c]}: {rows[r][1][c].strip()!r} is too large "
-            "for a double"
-        )
+            values[r, c] = parse_cell(v, f"{path}, line {line}, column {names[c]}")
     t = values[:, cols["t"]]
     r = first_not_increasing(t)
     if r is not None:
@@ -371,7 +354,25 @@ def _read_csv(
     return JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
 
 
-def _decode(path: Path) -> str:
+def parse_cell(text: str, where: str) -> float:
+    """A CSV cell as a finite double: a decimal number in ASCII (``-1.25``, ``3e-4``, blanks
+    around it allowed); anything else (``1_000``, ``0x10``, non-ASCII digits, NaN, infinities, a
+    value too large for a double) raises DataError prefixed with ``where`` (file, line, column)."""
+    if _NUMBER.fullmatch(text):
+        value = float(text)
+        if math.isfinite(value):
+            return value
+        raise DataError(f"{where}: {text.strip()!r} is too large for a double")
+    if _NONFINITE.fullmatch(text):
+        what = "NaN" if text.strip().lstrip("+-").lower() == "nan" else "an infinite value"
+        raise DataError(f"{where}: {what}")
+    raise DataError(
+        f"{where}: {text.strip(_BLANKS)!r} is not a number (expected a decimal number such as "
+        "-1.25 or 3e-4)"
+    )
+
+
+def decode_text(path: Path) -> str:
     """The file's text as UTF-8 (a leading byte-order mark is skipped), or DataError naming the
     line and byte offset of the first byte that is not UTF-8."""
     data = path.read_bytes()
