@@ -209,15 +209,8 @@ def test_noise_and_torque_limits():
     gains = control.default_gains(robot)
     ref = SumOfSines(robot, period=1.0, fraction=1.0)
     ctl = control.make_controller("pd", robot, dict(gains, kd=[4000] * 6))
-    r = _run(
-        robot,
-        ctl,
-        ref,
-        0.5,
-        torque_limit="effort",
-        noise=SensorNoise(position=1e-4, velocity=1e-3),
-        seed=3,
-    )
+    noisy = {"torque_limit": "effort", "noise": SensorNoise(position=1e-4, velocity=1e-3)}
+    r = _run(robot, ctl, ref, 0.5, seed=3, **noisy)
     effort = robot.limits["effort"]
     assert np.all(np.abs(r.tau_true) <= effort + 1e-12)
     assert r.saturated.any()
@@ -225,15 +218,7 @@ def test_noise_and_torque_limits():
         np.abs(r.tau_true[r.saturated]), np.broadcast_to(effort, r.tau.shape)[r.saturated]
     )
     # same seed, same run; the noise changes the torques
-    r2 = _run(
-        robot,
-        ctl,
-        ref,
-        0.5,
-        torque_limit="effort",
-        noise=SensorNoise(position=1e-4, velocity=1e-3),
-        seed=3,
-    )
+    r2 = _run(robot, ctl, ref, 0.5, seed=3, **noisy)
     assert np.array_equal(r.tau_true, r2.tau_true)
     r3 = _run(robot, ctl, ref, 0.5, torque_limit="effort")
     assert not np.allclose(r.tau_true, r3.tau_true)

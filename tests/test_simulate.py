@@ -4,8 +4,6 @@ one controller protocol, and ``mindyn simulate`` and ``mindyn track`` as two use
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import mindyn
@@ -17,14 +15,7 @@ from mindyn.identification.data import read_csv, write_csv, write_trajectory_csv
 from mindyn.identification.excitation import FourierTrajectory, random_trajectory
 from mindyn.simulate import CsvTrajectory, SumOfSines, load_reference, simulate
 from scipy.integrate import solve_ivp
-
-
-def cli(*argv) -> str:
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        rc = main([str(a) for a in argv])
-    assert rc == 0, f"mindyn {' '.join(map(str, argv))}: exit {rc}\n{out.getvalue()}"
-    return out.getvalue()
+from test_cli_workflow import cli
 
 
 def save_like_excite(traj, csv_path):
