@@ -254,7 +254,7 @@ def add_closed_loop_args(p, default: str) -> None:
         low=0,
         high=10,
         help="relative error of the initial base-parameter estimate of adaptive PD and computed "
-        "torque (default 0.3: +-30 %%); simulate's computed torque without --gains and "
+        "torque (default 0.3: +-30 %); simulate's computed torque without --gains and "
         "--param-error has the true parameters",
     )
     number(p, "--substeps", low=1, high=1000, integer=True, default=4, help="RK4 steps per period")
