@@ -76,7 +76,7 @@ TEST(Integrator, FourthOrderConvergence) {
     ASSERT_GT(err, 1e-13);  // well above round-off, so that the ratio measures the order
     if (previous > 0) {
       // halving h divides the error of a fourth-order method by 2^4 = 16 asymptotically (the
-      // ratios here are 19.4, 17.6, 16.8: the higher-order terms fade); a third- or fifth-order
+      // ratio is 19.4 at the coarsest step here: higher-order terms); a third- or fifth-order
       // method would give 8 or 32
       EXPECT_GT(previous / err, 13.0) << steps;
       EXPECT_LT(previous / err, 21.0) << steps;
