@@ -30,7 +30,7 @@ import numpy as np  # noqa: E402
 from mindyn.identification import dynamic_system, identify, validate  # noqa: E402
 from mindyn.identification.data import read_csv  # noqa: E402
 from mindyn.identification.excitation import optimize_excitation, random_trajectory  # noqa: E402
-from mindyn.simulate import SensorNoise, simulate_tracking  # noqa: E402
+from mindyn.simulate import SensorNoise, simulate  # noqa: E402
 
 
 def median_time(f, repeat=5):
@@ -47,7 +47,7 @@ def bench_identification(tmp: Path) -> None:
     robot = mindyn.load("zcr07s")
     traj = random_trajectory(robot, seed=1)
     noise = SensorNoise(torque=0.01 * robot.limits["effort"], quantization=2 * np.pi / 2**20)
-    log = simulate_tracking(robot, traj, rotor=True, friction=True, noise=noise, seed=1)
+    log = simulate(robot, traj, rotor=True, friction=True, noise=noise, seed=1)
     csv = log.save(tmp / "zcr07s.csv", robot.name)
     print(f"identification: zcr07s, {log.t.size} samples (10 s at 250 Hz), 52 base parameters")
 

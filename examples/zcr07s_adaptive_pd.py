@@ -21,7 +21,7 @@ from pathlib import Path
 
 import mindyn
 import numpy as np
-from mindyn import control
+from mindyn import control, simulate
 
 SEED_MAX_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
 SEED_FINAL_DEG = [-0.06, 0.02, 0.04, -0.11, -0.11, 0.09]
@@ -43,7 +43,7 @@ def main() -> None:
     p0 = control.perturbed_parameters(p_true, args.error, args.seed)
     gains = control.default_gains(robot)
     cycle = 10.0
-    ref = control.SumOfSines(robot, period=cycle, seed=args.seed)
+    ref = simulate.SumOfSines(robot, period=cycle, seed=args.seed)
     duration = cycle * args.cycles
 
     runs = {
@@ -56,9 +56,19 @@ def main() -> None:
     }
     summaries = {}
     for name, ctl in runs.items():
-        result = control.simulate(robot, ctl, ref, duration, 0.004, substeps=4)
+        result = simulate.simulate(
+            robot,
+            ref,
+            ctl,
+            rate=250.0,
+            duration=duration,
+            substeps=4,
+            rotor=True,
+            friction=True,
+            endpoint=False,
+        )
         header = {"run": name, "param_error": args.error, "seed": args.seed}
-        summaries[name] = control.write_report(result, out / name, cycle, header)
+        summaries[name] = simulate.write_report(result, out / name, cycle, header)
         summaries[name]["max_error_last_cycle_deg"] = result.max_error_deg(
             duration - cycle
         ).tolist()

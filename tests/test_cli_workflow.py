@@ -135,10 +135,10 @@ def test_codegen_params_errors_name_the_file(tmp_path, capsys):
 def test_simulate_closed_loop_writes_a_log_that_follows_the_dynamics(tmp_path):
     log = tmp_path / "pd.csv"
     out = cli("simulate", "planar2", "--controller", "pd", "--duration", 0.4, "-o", log)
-    assert f"log: {log}" in out
+    assert f"wrote {log}" in out
     robot = mindyn.load("planar2")
     d = read_csv(log, robot, filter="none")
-    assert d.m == 100 and np.allclose(np.diff(d.t), 0.004, rtol=0, atol=1e-12)
+    assert d.m == 101 and np.allclose(np.diff(d.t), 0.004, rtol=0, atol=1e-12)
     truth = json.loads(log.with_name("pd.truth.json").read_text())
     p = np.array(truth["values"])
     assert truth["names"] == robot.parameter_names(True, True)

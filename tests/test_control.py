@@ -1,6 +1,6 @@
 """Controllers and the closed-loop simulator: the adaptive PD sign convention (feedforward against
 Pinocchio's rnea, feedback and update terms by their formulas), tracking that improves while the
-estimate adapts, against plain PD, the simulator against energy conservation and scipy's
+estimate adapts, against plain PD, the closed loop against energy conservation and scipy's
 integrator, reference trajectories, gains files and the ``track`` command."""
 
 from __future__ import annotations
@@ -14,11 +14,24 @@ import pytest
 from conftest import assert_close, pinocchio_model
 from mindyn import control
 from mindyn.cli import main
+from mindyn.simulate import CsvTrajectory, SensorNoise, SumOfSines, simulate, summary
+
+
+def _at(ref, t):
+    """The reference at one time: three (n,) arrays."""
+    return tuple(x[0] for x in ref.evaluate(t))
 
 
 def _state_on(ref, t):
-    qd, dqd, ddqd = ref(t)
+    qd, dqd, ddqd = _at(ref, t)
     return qd.copy(), dqd.copy(), (qd, dqd, ddqd)
+
+
+def _run(robot, ctl, ref, duration, **kw):
+    """The tracking run of ``mindyn track``: the robot with rotor inertia and friction, the
+    controller's periods over [0, duration)."""
+    kw = {"rotor": True, "friction": True, **kw}
+    return simulate(robot, ref, ctl, duration=duration, endpoint=False, **kw)
 
 
 # --------------------------------------------------------------------------------------------
@@ -30,12 +43,12 @@ def test_adaptive_pd_on_the_reference_with_true_parameters_is_inverse_dynamics()
     base = mindyn.base_parameters(robot, friction=True)
     p = base.values(robot.parameters(friction=True))
     ctl = control.AdaptivePD(base, kd=50.0, lam=5.0, gamma=1.0, p0=p)
-    ref = control.SumOfSines(robot, period=3.0)
+    ref = SumOfSines(robot, period=3.0)
     model = pinocchio_model(robot)
     data = model.createData()
     for t in (0.3, 1.1, 2.4):
         q, dq, r = _state_on(ref, t)
-        tau = ctl(t, q, dq, r, 0.004)
+        tau = ctl(t, q, dq, *r)
         expected = pin.rnea(model, data, *r) + robot.viscous * dq + robot.coulomb * np.sign(dq)
         assert_close(tau, expected, 1e-10, "adaptive PD feedforward vs pin rnea")
         assert np.allclose(ctl.p_hat, p)  # s = 0: no adaptation
@@ -49,18 +62,18 @@ def test_adaptive_pd_feedback_and_update_signs(rng):
     kd = rng.uniform(1, 5, 6)
     lam = rng.uniform(2, 8, 6)
     gamma = rng.uniform(0.5, 2.0, base.n)
-    ctl = control.AdaptivePD(base, kd, lam, gamma, np.zeros(base.n))
+    ctl = control.AdaptivePD(base, kd, lam, gamma, np.zeros(base.n), period=0.01)
     qd, dqd, ddqd = rng.uniform(-1, 1, (3, 6))
     e = np.zeros(6)
     e[2] = 1e-3  # joint 3 ahead of the reference
-    tau = ctl(0.0, qd + e, dqd, (qd, dqd, ddqd), 0.01)
+    tau = ctl(0.0, qd + e, dqd, qd, dqd, ddqd)
     assert tau[2] == pytest.approx(-kd[2] * lam[2] * 1e-3, rel=1e-12)
     assert np.all(tau[[0, 1, 3, 4, 5]] == 0)
     s = lam * e
     Y = mindyn.slotine_li_regressor(base, qd + e, dqd, dqd - lam * e, ddqd)
     assert_close(ctl.p_hat, -0.01 * gamma * (Y.T @ s), 1e-12, "adaptation step -T Gamma Y^T s")
-    normalised = control.AdaptivePD(base, kd, lam, gamma, np.zeros(base.n), nu=0.05)
-    normalised(0.0, qd + e, dqd, (qd, dqd, ddqd), 0.01)
+    normalised = control.AdaptivePD(base, kd, lam, gamma, np.zeros(base.n), nu=0.05, period=0.01)
+    normalised(0.0, qd + e, dqd, qd, dqd, ddqd)
     step = -0.01 * gamma * (Y.T @ s) / (1 + 0.05 * np.sum(Y**2))
     assert_close(normalised.p_hat, step, 1e-12, "normalised step -T Gamma Y^T s / (1 + nu |Y|^2)")
     with pytest.raises(ValueError, match="nu must be"):
@@ -71,7 +84,7 @@ def test_adaptive_pd_feedback_and_update_signs(rng):
 # Closed loop
 # --------------------------------------------------------------------------------------------
 def _per_cycle_rms(result, cycle):
-    s = control.summary(result, cycle)
+    s = summary(result, cycle)
     return np.array([np.sqrt(np.mean(np.square(r))) for r in s["rms_error_deg_per_cycle"]]), s
 
 
@@ -81,16 +94,16 @@ def test_adaptive_pd_learns_the_model_from_zero():
     robot = mindyn.load("planar2")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     gains = control.default_gains(robot)
-    ref = control.SumOfSines(robot, period=2.0)
+    ref = SumOfSines(robot, period=2.0)
     ada = control.make_controller("adaptive-pd", robot, gains, np.zeros(base.n), base)
-    r = control.simulate(robot, ada, ref, 10.0)
+    r = _run(robot, ada, ref, 10.0)
     rms, s = _per_cycle_rms(r, 2.0)
     assert np.all(np.diff(rms) < 0), rms
     assert rms[-1] < 0.2 * rms[0]
     tp = [np.sqrt(np.mean(np.square(x))) for x in s["torque_prediction_rms_per_cycle"]]
     assert tp[-1] < 0.2 * tp[0]
     pd = control.make_controller("pd", robot, gains)
-    rp = control.simulate(robot, pd, ref, 10.0)
+    rp = _run(robot, pd, ref, 10.0)
     assert np.all(rp.max_error_deg(8.0) > 5 * r.max_error_deg(8.0))
 
 
@@ -104,19 +117,19 @@ def test_zcr07s_setting_tracks_better_than_pd_and_improves():
     p0 = control.perturbed_parameters(p, 0.3, seed=0)
     gains = control.default_gains(robot)
     assert gains["kd"] == [400, 350, 130, 22, 9, 2] and gains["gamma"] == 1
-    ref = control.SumOfSines(robot, period=2.5)
+    ref = SumOfSines(robot, period=2.5)
     ada = control.make_controller("adaptive-pd", robot, gains, p0, base)
-    r = control.simulate(robot, ada, ref, 7.5)
+    r = _run(robot, ada, ref, 7.5)
     rms, s = _per_cycle_rms(r, 2.5)
     assert rms[-1] < rms[0]
     tp = [np.sqrt(np.mean(np.square(x))) for x in s["torque_prediction_rms_per_cycle"]]
     assert np.all(np.diff(tp) < 0), tp
     assert s["parameter_error_norm"][-1] < s["parameter_error_norm"][0]
     frozen = control.make_controller("adaptive-pd", robot, dict(gains, gamma=0.0), p0, base)
-    rf = control.simulate(robot, frozen, ref, 7.5)
+    rf = _run(robot, frozen, ref, 7.5)
     assert _per_cycle_rms(rf, 2.5)[0][-1] > rms[-1]
     pd = control.make_controller("pd", robot, gains)
-    rp = control.simulate(robot, pd, ref, 7.5)
+    rp = _run(robot, pd, ref, 7.5)
     assert np.all(rp.max_error_deg() > r.max_error_deg())
 
 
@@ -129,14 +142,14 @@ def test_normalised_adaptation_keeps_large_gains_stable_at_4ms():
     p = base.values(robot.parameters(True, True))
     p0 = control.perturbed_parameters(p, 0.3, seed=0)
     gains = control.default_gains(robot)
-    ref = control.SumOfSines(robot, period=2.5)
+    ref = SumOfSines(robot, period=2.5)
     plain = control.make_controller("adaptive-pd", robot, dict(gains, gamma=5.0), p0, base)
     with pytest.raises(ValueError, match="diverged"):
-        control.simulate(robot, plain, ref, 7.5)
+        _run(robot, plain, ref, 7.5)
     slow = control.make_controller("adaptive-pd", robot, gains, p0, base)
-    r1 = control.simulate(robot, slow, ref, 7.5)
+    r1 = _run(robot, slow, ref, 7.5)
     fast = control.make_controller("adaptive-pd", robot, dict(gains, gamma=5.0, nu=0.01), p0, base)
-    r5 = control.simulate(robot, fast, ref, 7.5)
+    r5 = _run(robot, fast, ref, 7.5)
     assert np.all(r5.max_error_deg(5.0) < 1.5 * r1.max_error_deg(5.0))
     rms, s = _per_cycle_rms(r5, 2.5)
     assert rms[-1] < rms[0]
@@ -147,8 +160,8 @@ def test_computed_torque_with_exact_parameters_tracks_closely():
     robot = mindyn.load("puma560_3")
     gains = {"kd": [0, 0, 0], "lambda": [20.0] * 3}
     ct = control.make_controller("computed-torque", robot, gains)
-    ref = control.SumOfSines(robot, period=2.0)
-    r = control.simulate(robot, ct, ref, 2.0, substeps=8)
+    ref = SumOfSines(robot, period=2.0)
+    r = _run(robot, ct, ref, 2.0, substeps=8)
     # only the zero-order hold of the 4 ms period separates it from exact tracking
     assert r.max_error_deg().max() < 0.02
 
@@ -163,61 +176,64 @@ def test_free_motion_conserves_energy():
     class Zero:
         name = "zero"
 
-        def reset(self):
-            pass
-
-        def __call__(self, t, q, dq, ref, dt):
+        def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
             return np.zeros(6)
 
-    def start(t):
-        return np.array([0.2, -0.5, 0.3, 0.1, 0.4, -0.2]), np.array([1, -1, 0.5, 2, -1, 1.0]), 0
+    class Start:  # the start state at every time: the robot starts there
+        n, duration = 6, 1.0
 
-    r = control.simulate(robot, Zero(), start, 1.0, 0.004, true_params=robot.params, substeps=4)
-    H = robot.energy(r.q, r.dq)
+        def evaluate(self, t):
+            m = np.size(t)
+            q0, dq0 = [0.2, -0.5, 0.3, 0.1, 0.4, -0.2], [1, -1, 0.5, 2, -1, 1.0]
+            return np.tile(q0, (m, 1)), np.tile(dq0, (m, 1)), np.zeros((m, 6))
+
+    r = simulate(robot, Start(), Zero(), params=robot.params, substeps=4)
+    H = robot.energy(r.q_true, r.dq_true)
     assert np.abs(H - H[0]).max() < 1e-6 * max(1.0, abs(H[0]))
-    assert np.abs(r.q[-1] - r.q[0]).max() > 0.1  # it did move
+    assert np.abs(r.q_true[-1] - r.q_true[0]).max() > 0.1  # it did move
 
 
 def test_rk4_and_scipy_integrators_agree():
     robot = mindyn.load("planar2")
     gains = control.default_gains(robot)
-    ref = control.SumOfSines(robot, period=1.0)
+    ref = SumOfSines(robot, period=1.0)
     runs = []
     for integrator in ("rk4", "scipy"):
         ctl = control.make_controller("pd", robot, gains)
-        runs.append(control.simulate(robot, ctl, ref, 0.4, integrator=integrator, substeps=8))
-    assert np.abs(runs[0].q - runs[1].q).max() < 1e-7
+        runs.append(_run(robot, ctl, ref, 0.4, integrator=integrator, substeps=8))
+    assert np.abs(runs[0].q_true - runs[1].q_true).max() < 1e-7
 
 
 def test_noise_and_torque_limits():
     robot = mindyn.load("zcr07s")
     gains = control.default_gains(robot)
-    ref = control.SumOfSines(robot, period=1.0, fraction=1.0)
+    ref = SumOfSines(robot, period=1.0, fraction=1.0)
     ctl = control.make_controller("pd", robot, dict(gains, kd=[4000] * 6))
-    r = control.simulate(robot, ctl, ref, 0.5, torque_limit="effort", noise=(1e-4, 1e-3), seed=3)
+    noisy = {"torque_limit": "effort", "noise": SensorNoise(position=1e-4, velocity=1e-3)}
+    r = _run(robot, ctl, ref, 0.5, seed=3, **noisy)
     effort = robot.limits["effort"]
-    assert np.all(np.abs(r.tau) <= effort + 1e-12)
+    assert np.all(np.abs(r.tau_true) <= effort + 1e-12)
     assert r.saturated.any()
     assert np.allclose(
-        np.abs(r.tau[r.saturated]), np.broadcast_to(effort, r.tau.shape)[r.saturated]
+        np.abs(r.tau_true[r.saturated]), np.broadcast_to(effort, r.tau.shape)[r.saturated]
     )
     # same seed, same run; the noise changes the torques
-    r2 = control.simulate(robot, ctl, ref, 0.5, torque_limit="effort", noise=(1e-4, 1e-3), seed=3)
-    assert np.array_equal(r.tau, r2.tau)
-    r3 = control.simulate(robot, ctl, ref, 0.5, torque_limit="effort")
-    assert not np.allclose(r.tau, r3.tau)
+    r2 = _run(robot, ctl, ref, 0.5, seed=3, **noisy)
+    assert np.array_equal(r.tau_true, r2.tau_true)
+    r3 = _run(robot, ctl, ref, 0.5, torque_limit="effort")
+    assert not np.allclose(r.tau_true, r3.tau_true)
 
 
 def test_simulate_input_errors():
     robot = mindyn.load("planar2")
     ctl = control.PD(2, 1.0, 1.0)
-    ref = control.SumOfSines(robot)
+    ref = SumOfSines(robot)
     with pytest.raises(ValueError, match="shorter than one period"):
-        control.simulate(robot, ctl, ref, 0.001)
+        _run(robot, ctl, ref, 0.001)
     with pytest.raises(ValueError, match="integrator"):
-        control.simulate(robot, ctl, ref, 0.1, integrator="euler")
+        _run(robot, ctl, ref, 0.1, integrator="euler")
     with pytest.raises(ValueError, match="torque_limit"):
-        control.simulate(robot, ctl, ref, 0.1, torque_limit="max")
+        _run(robot, ctl, ref, 0.1, torque_limit="max")
     with pytest.raises(ValueError, match="gain 'kd'"):
         control.PD(2, 1.0, [1.0, -1.0])
 
@@ -227,18 +243,18 @@ def test_simulate_input_errors():
 # --------------------------------------------------------------------------------------------
 def test_sum_of_sines_respects_limits_and_differentiates(rng):
     robot = mindyn.load("zcr07s")
-    ref = control.SumOfSines(robot, period=4.0, fraction=0.9)
+    ref = SumOfSines(robot, period=4.0, fraction=0.9)
     lim = robot.limits
     ts = np.linspace(0, 4, 2001)
-    Q = np.array([ref(t)[0] for t in ts])
-    DQ = np.array([ref(t)[1] for t in ts])
+    Q, DQ, _ = ref.evaluate(ts)
     assert np.all(Q >= lim["lower"]) and np.all(Q <= lim["upper"])
     assert np.all(np.abs(DQ) <= lim["velocity"])
     h = 1e-6
     for t in rng.uniform(0, 4, 5):
-        q, dq, ddq = ref(t)
-        assert_close((ref(t + h)[0] - ref(t - h)[0]) / (2 * h), dq, 1e-7, "reference dq by FD")
-        assert_close((ref(t + h)[1] - ref(t - h)[1]) / (2 * h), ddq, 1e-7, "reference ddq by FD")
+        q, dq, ddq = _at(ref, t)
+        plus, minus = _at(ref, t + h), _at(ref, t - h)
+        assert_close((plus[0] - minus[0]) / (2 * h), dq, 1e-7, "reference dq by FD")
+        assert_close((plus[1] - minus[1]) / (2 * h), ddq, 1e-7, "reference ddq by FD")
 
 
 def test_csv_trajectory(tmp_path):
@@ -246,24 +262,24 @@ def test_csv_trajectory(tmp_path):
     q = np.column_stack([np.sin(2 * t), 0.5 * np.cos(t)])
     path = tmp_path / "traj.csv"
     np.savetxt(path, np.column_stack([t, q]), delimiter=",", header="t,q1,q2", comments="")
-    ref = control.CsvTrajectory(path, 2)
+    ref = CsvTrajectory(path, 2)
     for s in (0.3047, 1.1731):
-        qd, dqd, ddqd = ref(s)
+        qd, dqd, ddqd = _at(ref, s)
         assert_close(qd, [np.sin(2 * s), 0.5 * np.cos(s)], 1e-7, "CSV spline q")
         assert_close(dqd, [2 * np.cos(2 * s), -0.5 * np.sin(s)], 1e-4, "CSV spline dq")
         assert_close(ddqd, [-4 * np.sin(2 * s), -0.5 * np.cos(s)], 1e-2, "CSV spline ddq")
-    qd, dqd, _ = ref(5.0)  # after the end: hold
+    qd, dqd, _ = _at(ref, 5.0)  # after the end: hold
     assert_close(qd, q[-1], 0.0, "CSV hold")
     assert not dqd.any()
     bad = tmp_path / "bad.csv"
     bad.write_text("0,1,2\n1,2,3\n2,3\n3,4,5\n")
     with pytest.raises(ValueError, match="different numbers of columns"):
-        control.CsvTrajectory(bad, 2)
+        CsvTrajectory(bad, 2)
     bad.write_text("0,1\n1,2\n2,3\n3,4\n")
     with pytest.raises(ValueError, match="2 columns; expected t and q1..q2"):
-        control.CsvTrajectory(bad, 2)
+        CsvTrajectory(bad, 2)
     with pytest.raises(FileNotFoundError, match="does not exist"):
-        control.CsvTrajectory(tmp_path / "none.csv", 2)
+        CsvTrajectory(tmp_path / "none.csv", 2)
 
 
 def test_gains_file(tmp_path):

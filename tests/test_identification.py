@@ -32,7 +32,7 @@ from mindyn.identification.excitation import (
     random_trajectory,
 )
 from mindyn.identification.report import ZCR07S_STUDY_TABLE6
-from mindyn.simulate import SensorNoise, simulate_inverse, simulate_tracking
+from mindyn.simulate import SensorNoise, simulate, simulate_inverse
 
 sys.path.insert(0, str(Path(__file__).parent))
 from random_arm import random_arm_yaml  # noqa: E402
@@ -65,7 +65,7 @@ def test_inverse_mode_torques_match_pinocchio():
 def test_tracking_log_satisfies_the_equations_of_motion_with_rotor_and_friction():
     robot = mindyn.load("zcr07s")
     traj = random_trajectory(robot, seed=2)
-    log = simulate_tracking(robot, traj, rotor=True, friction=True, duration=2.0)
+    log = simulate(robot, traj, rotor=True, friction=True, duration=2.0)
     model = pinocchio_model(robot)
     data = model.createData()
     ia, fv, fc = robot.rotor_inertia, robot.viscous, robot.coulomb
@@ -165,7 +165,7 @@ def test_energy_equation_with_friction_on_a_held_torque_log():
     other side (the opposite sign) it does not close."""
     robot = mindyn.load("zcr07s")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    log = simulate_tracking(robot, random_trajectory(robot, seed=6), rotor=True, friction=True)
+    log = simulate(robot, random_trajectory(robot, seed=6), rotor=True, friction=True)
     truth = truth_of(base, log)
     W, y = energy_system(base, as_data(log), window=1, integration="zoh")
     rel = np.linalg.norm(W @ truth - y) / np.linalg.norm(y)
@@ -276,8 +276,8 @@ def test_zcr07s_pipeline_on_zcr07s():
     sd = 0.01 * robot.limits["effort"]
     noise = SensorNoise(torque=sd, quantization=2 * np.pi / 2**20)
     kw = dict(rotor=True, friction=True, noise=noise)
-    data = as_data(simulate_tracking(robot, exc.trajectory, seed=1, **kw), "excitation")
-    vdata = as_data(simulate_tracking(robot, random_trajectory(robot, seed=11), seed=2, **kw))
+    data = as_data(simulate(robot, exc.trajectory, seed=1, **kw), "excitation")
+    vdata = as_data(simulate(robot, random_trajectory(robot, seed=11), seed=2, **kw))
     res = identify(robot, data, base=base)
     assert res.initial["values"].shape == (52,)
     fit, val = validate(res, data), validate(res, vdata)
@@ -327,13 +327,9 @@ def test_both_models_predict_validation_torques_to_the_noise_level(tmp_path, see
     )
     periods = 3
     data = as_data(
-        simulate_tracking(
-            robot, exc.trajectory, seed=1, duration=periods * exc.trajectory.period, **kw
-        )
+        simulate(robot, exc.trajectory, seed=1, duration=periods * exc.trajectory.period, **kw)
     )
-    vdata = as_data(
-        simulate_tracking(robot, random_trajectory(robot, seed=100 + seed), seed=2, **kw)
-    )
+    vdata = as_data(simulate(robot, random_trajectory(robot, seed=100 + seed), seed=2, **kw))
     ratios = {}
     for model in ("dynamic", "energy"):
         res = identify(robot, data, model=model, base=base, rsd_threshold=None)

@@ -381,31 +381,6 @@ def test_cli_usage_errors():
     assert "ROBOT" in r.stdout
 
 
-def test_simulate_with_a_feedback_controller_is_the_closed_loop_simulation():
-    from mindyn.cli import _route
-
-    assert _route(["simulate", "zcr07s", "--controller", "adaptive-pd"])[0] == "track"
-    assert _route(["simulate", "zcr07s", "--controller=pd", "--trajectory", "t.csv"])[0] == "track"
-    assert (
-        _route(["simulate", "zcr07s", "--gains", "g.yaml", "--trajectory", "t.csv"])[0] == "track"
-    )
-    assert (
-        _route(["simulate", "zcr07s", "--controller", "computed-torque", "--period", "0.004"])[0]
-        == "track"
-    )
-    # logging along a trajectory stays the open-loop log of `simulate`
-    assert _route(["simulate", "zcr07s", "--trajectory", "t.json", "-o", "d.csv"])[0] == "simulate"
-    assert _route(["simulate", "--help"])[0] == "simulate"
-    # an output log without a trajectory is an incomplete open-loop call: simulate says so
-    assert _route(["simulate", "zcr07s", "-o", "d.csv"])[0] == "simulate"
-    r = subprocess.run(
-        [sys.executable, "-m", "mindyn.cli", "simulate", "planar2", "-o", "d.csv"],
-        capture_output=True,
-        text=True,
-    )
-    assert r.returncode == 2 and "the following arguments are required: --trajectory" in r.stderr
-
-
 def test_closed_stdout_ends_quietly():
     """A reader that goes away (`mindyn base ROBOT | head -1`) ends the command without a
     traceback: the pipe is closed before the command writes anything."""

@@ -7,6 +7,7 @@
 #include "mindyn/base_parameters.hpp"
 #include "mindyn/dynamics.hpp"
 #include "mindyn/ik.hpp"
+#include "mindyn/integrator.hpp"
 #include "mindyn/momentum.hpp"
 #include "mindyn/slotine_li.hpp"
 #include "test_util.hpp"
@@ -157,4 +158,22 @@ TEST(Realtime, InverseKinematicsAllocatesNothing) {
     EXPECT_EQ(seen, 0) << name;
     EXPECT_EQ(converged, 10) << name;
   }
+}
+
+TEST(Realtime, IntegratorStepsAllocateNothing) {
+  const Model model = loadYaml(test::robotFile("zcr07s"));
+  const ParameterLayout layout{true, true};
+  Integrator integ(model, model.parameters(layout), layout, 0.01);
+  Data data(model);
+  Eigen::VectorXd q = Eigen::VectorXd::Constant(6, 0.1), dq = Eigen::VectorXd::Constant(6, 0.2),
+                  tau = Eigen::VectorXd::Constant(6, 1.0), ddq(6);
+  long seen;
+  {
+    Count c;
+    integ.step(data, q, dq, tau, 0.004, 4);
+    integ.acceleration(data, q, dq, tau, ddq);
+    seen = c.value();
+  }
+  EXPECT_EQ(seen, 0);
+  EXPECT_TRUE(q.allFinite() && dq.allFinite());
 }

@@ -7,8 +7,8 @@
   method), regrouping matrix, formulas, base regressors;
 - :mod:`mindyn.codegen`: inverse dynamics, gravity and base regressor as C or Structured Text;
 - :mod:`mindyn.identification` (excitation trajectories, joint logs, least-squares
-  identification with statistics, validation and reports) and :mod:`mindyn.simulate` (simulated
-  measurements);
+  identification with statistics, validation and reports) and :mod:`mindyn.simulate` (the one
+  closed-loop simulation: simulated measurements and tracking experiments);
 - :mod:`mindyn.control`, :func:`ik`: Slotine-Li regressor, adaptive PD and other controllers in
   closed-loop simulation, inverse kinematics.
 """

@@ -237,27 +237,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-_TRACK_ONLY = ("--gains", "--cycle", "--param-error", "--report")
-
-
-def _route(argv: list[str]) -> list[str]:
-    """``mindyn simulate`` with ``--controller adaptive-pd|pd``, with the closed-loop options
-    (--gains, ...), or with neither a --trajectory nor an output log (-o) is the closed-loop
-    simulation of ``mindyn track`` (whose -o writes the closed-loop log)."""
-    if not argv or argv[0] != "simulate" or "-h" in argv or "--help" in argv:
-        return argv
-    keys = [a.split("=", 1)[0] for a in argv[1:]]
-    logs = any(k == "--output" or k.startswith("-o") for k in keys)
-    closed = any(k in _TRACK_ONLY for k in keys) or ("--trajectory" not in keys and not logs)
-    for i, a in enumerate(argv[1:], 1):
-        value = a.split("=", 1)[1] if a.startswith("--controller=") else None
-        if a == "--controller" and i + 1 < len(argv):
-            value = argv[i + 1]
-        if value in ("adaptive-pd", "pd"):
-            closed = True
-    return ["track", *argv[1:]] if closed else argv
-
-
 def _one_line(text: object) -> str:
     return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())
 
@@ -271,7 +250,7 @@ def main(argv: list[str] | None = None) -> int:
     ``mindyn: error: ...``, and a non-zero status."""
     try:
         parser = build_parser()
-        args = parser.parse_args(_route(list(sys.argv[1:] if argv is None else argv)))
+        args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
     except UsageError as e:
         _error(e)
         return 2

@@ -11,6 +11,7 @@ import numpy as np
 
 from . import base_parameters, load
 from .cli_args import add_robot, number, output_dir, output_file, seed
+from .identification.data import truth_path
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
@@ -20,62 +21,88 @@ def _row(label: str, values, fmt: str = "{:9.4f}") -> str:
     return f"{label:<28}" + "".join(fmt.format(v) for v in values)
 
 
-def cmd_track(args: argparse.Namespace) -> int:
+def reference_and_controller(args: argparse.Namespace, robot, default_duration):
+    """The reference, its text, the simulated time, the per-cycle span and the controller of
+    ``mindyn track`` and ``mindyn simulate`` (``--trajectory``, ``--cycle``, ``--controller``,
+    ``--gains``, ``--param-error``, ``--seed``); ``default_duration(reference)`` gives the
+    simulated time when ``--duration`` is not given. Returns also the base parameters of the
+    estimate (None for PD)."""
     from . import control
+    from .simulate import SumOfSines, load_reference
 
-    robot = load(args.robot, tip=args.tip)
     n = robot.n
-    gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
-    if args.cycle is not None and args.cycle < 20 * args.period:
+    period = args.period
+    if args.cycle is not None and args.cycle < 20 * period:
         raise ValueError(
             f"--cycle {args.cycle:g} s: expected at least 20 controller periods "
-            f"(--period {args.period:g} s), so that the reference's third harmonic is sampled "
+            f"(--period {period:g} s), so that the reference's third harmonic is sampled "
             "about 7 times per oscillation"
         )
     if args.trajectory:
-        reference = control.CsvTrajectory(args.trajectory, n)
+        reference = load_reference(args.trajectory, n)
         ref_text = f"trajectory {args.trajectory} ({reference.duration:g} s)"
         duration = args.duration or reference.duration
         cycle = args.cycle or duration
     else:
-        reference = control.SumOfSines(robot, period=args.cycle or 10.0, seed=args.seed)
+        reference = SumOfSines(robot, period=args.cycle or 10.0, seed=args.seed)
         ref_text = f"sum of sines within the limits, {reference.period:g} s cycle"
-        duration = args.duration or 2 * reference.period
+        duration = args.duration or default_duration(reference)
         cycle = reference.period
     from .simulate import check_steps
 
     try:  # before any set-up work
-        check_steps(duration, 1.0 / args.period, args.substeps if args.integrator == "rk4" else 1)
+        check_steps(duration, 1.0 / period, args.substeps if args.integrator == "rk4" else 1)
     except ValueError as e:
         raise ValueError(
-            f"--duration {duration:g} with --period {args.period:g}: {e}"
+            f"--duration {duration:g} with --period {period:g}: {e}"
             + (" (the duration is two cycles unless given)" if args.duration is None else "")
         ) from None
-    if duration < args.period:
+    if duration < period:
         raise ValueError(
-            f"--duration {duration:g} s is shorter than one controller --period {args.period:g} s"
+            f"--duration {duration:g} s is shorter than one controller --period {period:g} s"
         )
-    base = None
-    p_hat = None
+    if args.controller == "computed-torque" and args.gains is None and args.param_error is None:
+        return reference, ref_text, duration, cycle, None, None  # the simulator's default
+    gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
+    base = p_hat = None
     if args.controller != "pd":
         base = base_parameters(robot, rotor=True, friction=True)
         p_true = base.values(robot.parameters(True, True))
-        p_hat = control.perturbed_parameters(p_true, args.param_error, args.seed)
-    controller = control.make_controller(args.controller, robot, gains, p_hat=p_hat, base=base)
+        error = 0.3 if args.param_error is None else args.param_error
+        p_hat = control.perturbed_parameters(p_true, error, args.seed)
+    controller = control.make_controller(args.controller, robot, gains, p_hat, base, period)
+    controller.gains = gains
+    return reference, ref_text, duration, cycle, controller, base
+
+
+def cmd_track(args: argparse.Namespace) -> int:
+    from .simulate import SensorNoise, simulate, summary, write_report
+
+    robot = load(args.robot, tip=args.tip)
+    n = robot.n
+    if args.param_error is None:
+        args.param_error = 0.3
+    reference, ref_text, duration, cycle, controller, base = reference_and_controller(
+        args, robot, lambda ref: 2 * ref.period
+    )
+    gains = controller.gains
     limit = None if args.torque_limit == "none" else args.torque_limit
-    result = control.simulate(
+    result = simulate(
         robot,
-        controller,
         reference,
-        duration,
-        args.period,
+        controller,
+        rate=1.0 / args.period,
+        duration=duration,
         substeps=args.substeps,
         integrator=args.integrator,
-        noise=(args.noise[0], args.noise[1]),
+        rotor=True,
+        friction=True,
+        noise=SensorNoise(position=args.noise[0], velocity=args.noise[1]),
         torque_limit=limit,
         seed=args.seed,
+        endpoint=False,
     )
-    s = control.summary(result, cycle)
+    s = summary(result, cycle)
     lines = [
         f"{robot.name}: {args.controller}, period {args.period * 1e3:g} ms, {duration:g} s, "
         f"{ref_text}",
@@ -111,7 +138,10 @@ def cmd_track(args: argparse.Namespace) -> int:
         pe = s["parameter_error_norm"]
         lines.append(f"parameter error |p_hat - p|: {pe[0]:.4g} at t = 0, {pe[-1]:.4g} at the end")
     if args.output:
-        lines.append(_write_log(result, robot, args.output))
+        path = result.save(args.output, robot.name)
+        lines.append(
+            f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"
+        )
     if args.report:
         header = {
             "robot": robot.name,
@@ -127,35 +157,10 @@ def cmd_track(args: argparse.Namespace) -> int:
         }
         if robot.name == "zcr07s" and args.controller == "adaptive-pd":
             header["zcr07s_max_error_deg"] = ZCR07S_STUDY_MAX_ERROR_DEG
-        control.write_report(result, args.report, cycle, header)
+        write_report(result, args.report, cycle, header)
         lines.append(f"report: {args.report}/ (summary.json, log.csv, plots)")
     print("\n".join(lines))
     return 0
-
-
-def _write_log(result, robot, output: str) -> str:
-    """The closed-loop log as the CSV of ``mindyn identify`` (``t, q, dq, tau`` at the controller
-    samples) and its ``.truth.json`` (the simulated robot's classical parameters)."""
-    from pathlib import Path
-
-    from .identification.data import truth_path, write_csv
-
-    out = Path(output)
-    if not out.parent.is_dir():
-        raise ValueError(f"-o {output}: the folder '{out.parent}' does not exist")
-    path = write_csv(out, result.t, result.q, result.tau, dq=result.dq)
-    truth = {
-        "robot": robot.name,
-        "names": robot.parameter_names(True, True),
-        "values": [float(v) for v in robot.parameters(True, True)],
-        "simulation": {
-            "mode": "closed loop",
-            "controller": result.controller,
-            "period_s": result.period,
-        },
-    }
-    truth_path(path).write_text(json.dumps(truth, indent=2) + "\n")
-    return f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"
 
 
 def cmd_ik(args: argparse.Namespace) -> int:
@@ -211,6 +216,58 @@ def cmd_ik(args: argparse.Namespace) -> int:
     return 0
 
 
+def add_closed_loop_args(p, default: str) -> None:
+    """The reference, controller and integration options shared by ``track`` and ``simulate``
+    (``default``: the default controller)."""
+    from .control import CONTROLLERS
+
+    p.add_argument(
+        "--controller",
+        choices=CONTROLLERS,
+        default=default,
+        help=f"tracking controller (default {default})",
+    )
+    p.add_argument(
+        "--gains",
+        metavar="FILE",
+        help="YAML with kd, lambda, gamma, nu (adaptive PD) and optionally kp (PD: default "
+        "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
+    )
+    p.add_argument(
+        "--trajectory",
+        metavar="FILE",
+        help="reference: the JSON of 'mindyn excite' (its Fourier series) or a CSV with columns "
+        "t, q1..qN [, dq1..dqN, ddq1..ddqN] (default: a sum of sines within the joint limits)",
+    )
+    number(
+        p,
+        "--cycle",
+        low=0,
+        high=1e6,
+        low_open=True,
+        help="period of the default reference and of the per-cycle figures [s], at least 20 "
+        "controller periods (default 10)",
+    )
+    number(
+        p,
+        "--param-error",
+        low=0,
+        high=10,
+        help="relative error of the initial base-parameter estimate of adaptive PD and computed "
+        "torque (default 0.3: +-30 %); simulate's computed torque without --gains and "
+        "--param-error has the true parameters",
+    )
+    number(p, "--substeps", low=1, high=1000, integer=True, default=4, help="RK4 steps per period")
+    p.add_argument("--integrator", choices=["rk4", "scipy"], default="rk4")
+    p.add_argument("--torque-limit", choices=["effort", "none"], default="none")
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        type=output_dir,
+        help="write the tracking report here: summary.json, log.csv and plots",
+    )
+
+
 def register(sub) -> None:
     """Adds ``track`` and ``ik`` to the ``mindyn`` subcommands."""
     p = sub.add_parser(
@@ -225,15 +282,7 @@ def register(sub) -> None:
         "Gamma = 1), otherwise Lambda = 10, K_D = 40 diag(A(q_mid)); nu = 0 (the plain law).",
     )
     add_robot(p)
-    p.add_argument(
-        "--controller", choices=["adaptive-pd", "computed-torque", "pd"], default="adaptive-pd"
-    )
-    p.add_argument(
-        "--gains",
-        metavar="FILE",
-        help="YAML with kd, lambda, gamma, nu (adaptive PD) and optionally kp (PD: default "
-        "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
-    )
+    add_closed_loop_args(p, "adaptive-pd")
     from .simulate import MAX_STEPS
 
     number(
@@ -253,29 +302,6 @@ def register(sub) -> None:
         low_open=True,
         help="simulated time [s] (default: two cycles, or the CSV's)",
     )
-    p.add_argument(
-        "--trajectory",
-        metavar="CSV",
-        help="reference: columns t, q1..qN [, dq1..dqN, ddq1..ddqN] (default: a sum of sines "
-        "within the joint limits)",
-    )
-    number(
-        p,
-        "--cycle",
-        low=0,
-        high=1e6,
-        low_open=True,
-        help="period of the default reference and of the per-cycle figures [s], at least 20 "
-        "controller periods (default 10)",
-    )
-    number(
-        p,
-        "--param-error",
-        low=0,
-        high=10,
-        default=0.3,
-        help="relative error of the initial base-parameter estimate (0.3: +-30 %)",
-    )
     seed(p, "--seed", help="seed of the estimate error and noise")
     number(
         p,
@@ -287,23 +313,14 @@ def register(sub) -> None:
         metavar=("SIGMA_Q", "SIGMA_DQ"),
         help="sensor noise standard deviations [rad, rad/s] (default 0 0)",
     )
-    p.add_argument("--torque-limit", choices=["effort", "none"], default="none")
-    number(p, "--substeps", low=1, high=1000, integer=True, default=4, help="RK4 steps per period")
-    p.add_argument("--integrator", choices=["rk4", "scipy"], default="rk4")
-    p.add_argument(
-        "--report",
-        metavar="DIR",
-        type=output_dir,
-        help="write summary.json, log.csv and plots here",
-    )
     p.add_argument(
         "-o",
         "--output",
         metavar="CSV",
         type=output_file,
-        help="write the log as 'mindyn identify' reads it: t, q1..qN, dq1..dqN (true motion), "
-        "tau1..tauN (applied torque, N m) at the controller samples; the true parameters in "
-        "<name>.truth.json beside it",
+        help="write the log as 'mindyn identify' reads it: t, q1..qN, dq1..dqN, tau1..tauN "
+        "(the measured motion and the applied torque, N m) at the controller samples; the true "
+        "parameters in <name>.truth.json beside it",
     )
     p.set_defaults(func=cmd_track)
 

@@ -37,7 +37,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from .identification.data import convert_torque, read_csv, write_csv
     from .identification.excitation import excitation_limits, optimize_excitation, random_trajectory
     from .identification.report import ZCR07S_STUDY_TABLE6, format_table, plot_torques
-    from .simulate import SensorNoise, noise_from_spec, simulate_tracking
+    from .simulate import SensorNoise, noise_from_spec, simulate
 
     t_all = time.perf_counter()
     robot = load(args.robot)
@@ -100,8 +100,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     sd = noise_from_spec(f"{args.noise:g}%", robot, "torque", ref_tau)
     noise = SensorNoise(torque=sd, quantization=2 * np.pi / 2**20)
     kw = dict(rotor=True, friction=True, noise=noise, rate=250.0)
-    log_e = simulate_tracking(robot, exc.trajectory, seed=args.seed + 1, **kw)
-    log_v = simulate_tracking(robot, val_traj, seed=args.seed + 2, **kw)
+    log_e = simulate(robot, exc.trajectory, seed=args.seed + 1, **kw)
+    log_v = simulate(robot, val_traj, seed=args.seed + 2, **kw)
     permille = bool(np.isfinite(robot.drives["rated_torque"]).all()) and bool(
         np.isfinite(robot.drives["gear_ratio"]).all()
     )

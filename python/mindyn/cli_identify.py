@@ -97,19 +97,19 @@ def cmd_excite(args: argparse.Namespace) -> int:
 # simulate
 # ---------------------------------------------------------------------------------------------
 def cmd_simulate(args: argparse.Namespace) -> int:
+    from .cli_control import reference_and_controller
     from .identification.data import convert_torque, write_csv
-    from .simulate import CONTROLLERS, SensorNoise, load_reference, noise_from_spec, simulate
+    from .simulate import SensorNoise, noise_from_spec, simulate, simulate_inverse, write_report
 
     robot = load(args.robot, tip=args.tip)
-    ref = load_reference(args.trajectory)
-    if ref.n != robot.n:
-        raise ValueError(
-            f"{args.trajectory} has {ref.n} joints; robot '{robot.name}' has {robot.n}"
-        )
     rate = 1.0 / args.period if args.period else args.rate
+    args.period = 1.0 / rate
+    ref, ref_text, duration, cycle, controller, _ = reference_and_controller(
+        args, robot, lambda r: r.duration
+    )
     ref_tau = None
     if args.torque_noise and args.torque_noise.strip().endswith("%"):
-        t = np.linspace(0, getattr(ref, "period", getattr(ref, "duration", 1.0)), 200)
+        t = np.linspace(0, ref.duration, 200)
         ref_tau = robot.inverse_dynamics(*ref.evaluate(t))
     noise = SensorNoise(
         torque=noise_from_spec(args.torque_noise, robot, "torque", ref_tau),
@@ -119,16 +119,25 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     )
     kwargs = dict(
         rate=rate,
-        duration=args.duration,
+        duration=duration,
         rotor=args.rotor,
         friction=args.friction,
         noise=noise,
         seed=args.seed,
     )
     if args.mode == "tracking":
-        kwargs["substeps"] = args.substeps
-        kwargs["controller"] = CONTROLLERS[args.controller](robot, args)
-    log = simulate(robot, ref, mode=args.mode, **kwargs)
+        limit = None if args.torque_limit == "none" else args.torque_limit
+        log = simulate(
+            robot,
+            ref,
+            controller,
+            substeps=args.substeps,
+            integrator=args.integrator,
+            torque_limit=limit,
+            **kwargs,
+        )
+    else:
+        log = simulate_inverse(robot, ref, **kwargs)
     path = log.save(args.output, robot.name)
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
@@ -154,6 +163,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         )
     unit = " (torques in permille of rated torque)" if args.torque_unit == "permille" else ""
     print(f"  wrote {path}{unit} and {path.with_name(path.stem + '.truth.json')}")
+    if args.report:
+        header = {"robot": robot.name, "reference": ref_text, "seed": args.seed}
+        write_report(log, args.report, cycle, header)
+        print(f"  report: {args.report}/ (summary.json, log.csv, plots)")
     return 0
 
 
@@ -572,8 +585,9 @@ def _plain(d):
 # ---------------------------------------------------------------------------------------------
 def register(sub) -> None:
     """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
+    from .cli_control import add_closed_loop_args
     from .identification.excitation import MAX_TRAJECTORY_ROWS
-    from .simulate import CONTROLLERS, MAX_SAMPLES, MAX_STEPS
+    from .simulate import MAX_SAMPLES, MAX_STEPS
 
     p = sub.add_parser(
         "excite",
@@ -663,23 +677,13 @@ def register(sub) -> None:
         "its true parameters integrated (RK4) under a tracking controller, or torques from "
         "inverse dynamics along the reference (--mode inverse); optional sensor noise and "
         "encoder quantisation. Also writes <output>.truth.json with the true parameters. "
-        "With --controller adaptive-pd or pd, with --gains, or without --trajectory, this is the "
-        "closed-loop simulation of 'mindyn track' (controller at its own period).",
+        "The controller and the reference are those of 'mindyn track' (default: computed torque "
+        "with the true parameters and Coulomb friction on the reference velocity, K_P = 400, "
+        "K_D = 40; a sum of sines within the limits when no --trajectory is given).",
     )
     add_robot(p)
-    p.add_argument(
-        "--trajectory",
-        required=True,
-        help="reference: JSON of 'mindyn excite' or a CSV t, q, [dq], [ddq]",
-    )
     p.add_argument("--mode", choices=["tracking", "inverse"], default="tracking")
-    p.add_argument(
-        "--controller",
-        choices=sorted(CONTROLLERS),
-        default="computed-torque",
-        help="tracking controller (default computed-torque: computed torque + PD); "
-        "adaptive-pd and pd run the closed-loop simulation of 'mindyn track', -o included",
-    )
+    add_closed_loop_args(p, "computed-torque")
     g = p.add_mutually_exclusive_group()
     number(
         g, "--rate", low=0, high=1e6, low_open=True, default=250.0, help="control and log rate [Hz]"
@@ -699,15 +703,6 @@ def register(sub) -> None:
         low_open=True,
         help=f"seconds (default: one period of the reference); at most {MAX_SAMPLES:,} samples "
         f"(duration x rate) and {MAX_STEPS:,} integration steps (x substeps)",
-    )
-    number(
-        p,
-        "--substeps",
-        low=1,
-        high=1000,
-        integer=True,
-        default=4,
-        help="RK4 steps per control period",
     )
     p.add_argument("--rotor", action="store_true", help="true robot with rotor inertia")
     p.add_argument("--friction", action="store_true", help="true robot with friction")

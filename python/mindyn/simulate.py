@@ -1,22 +1,30 @@
-"""Simulation as the stand-in for a robot: what a joint controller would log along a reference.
+"""The simulation stack: a simulated robot under a discrete-time joint controller along a
+reference trajectory, standing in for a real robot (identification logs) and for a control
+experiment (tracking reports).
 
-Two modes:
+- One reference protocol, :class:`Reference`: ``n`` joints, a ``duration`` and
+  ``evaluate(t) -> (q_d, dq_d, ddq_d)`` for times ``t`` of shape (m,), each (m, n). The Fourier
+  series of ``mindyn excite`` (:class:`~mindyn.identification.excitation.FourierTrajectory`, its
+  JSON read by :func:`load_reference`), a CSV (:class:`CsvTrajectory`), a sum of sines within the
+  limits (:class:`SumOfSines`) and a joint log (:class:`~mindyn.identification.data.JointData`)
+  satisfy it.
+- One controller protocol, :class:`Controller`: ``u = step(t, q, dq, q_d, dq_d, ddq_d)`` once
+  per period on the measured state, the torque held until the next call; the controllers of
+  :mod:`mindyn.control` and a compiled step with internal state alike.
+- One integrator, the C++ ``mindyn::Integrator``: classical Runge-Kutta (RK4) of the forward
+  dynamics of the true robot with the torque held over each controller period, ``substeps``
+  steps per period (or scipy's adaptive RK45, ``integrator="scipy"``).
+- One result, :class:`SimulationResult`: what was logged (measured, noisy), what was true, the
+  reference and the controller's model terms; :meth:`SimulationResult.save` writes the log of
+  ``mindyn identify``, :func:`write_report` the tracking report of ``mindyn track``.
 
-``tracking`` (default)
-    The robot (forward dynamics of the C++ core, true parameters, optionally with rotor inertia
-    and friction) is integrated with fixed-step RK4 under a discrete-time controller that runs at
-    the log rate (zero-order hold on the torque). The controller reads the *measured* joint state
-    (quantised, noisy) and its torque is logged with torque-sensor noise added. The default
-    controller is computed torque with PD on the reference (:class:`ComputedTorquePD`); any
-    object with the :class:`Controller` call signature can be passed to
-    :func:`simulate_tracking`.
-``inverse``
-    The reference itself is taken as the motion and the torques come from inverse dynamics
-    along it (no controller, no integration); noise is added the same way.
+:func:`simulate` runs the closed loop; :func:`simulate_inverse` is the open-loop alternative
+(the motion is the reference, the torques by inverse dynamics, no controller).
 """
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import time
@@ -26,19 +34,22 @@ from typing import Protocol
 
 import numpy as np
 
+from . import _core
 from .identification.data import truth_path, write_csv
 from .robot import Robot, load
 
 __all__ = [
-    "CONTROLLERS",
-    "ComputedTorquePD",
     "Controller",
+    "CsvTrajectory",
+    "Reference",
     "SensorNoise",
-    "SimulationLog",
+    "SimulationResult",
+    "SumOfSines",
     "load_reference",
     "simulate",
     "simulate_inverse",
-    "simulate_tracking",
+    "summary",
+    "write_report",
 ]
 
 
@@ -47,56 +58,145 @@ class Controller(Protocol):
 
     ``q, dq`` are the measured joint state, ``q_d, dq_d, ddq_d`` the reference at time ``t``;
     all shape (n,). Returns the joint torque, shape (n,), held until the next call. A controller
-    may keep and update internal state (e.g. parameter estimates) on each call."""
+    may keep and update internal state (e.g. parameter estimates) on each call; a compiled step
+    ``u = step(t, q, dq, q_d, dq_d, ddq_d)`` wrapped as a Python callable satisfies the protocol.
+
+    Optional members, used when present: ``reset()`` (called once before a run: back to the
+    initial state), ``period`` (the period the controller was made for, in s: a run at another
+    period is refused), and, read after each call for the report, ``model_torque`` (the model
+    part of the torque, shape (n,)), ``p_hat`` (the current parameter estimate) and ``Y`` (the
+    regressor with ``model_torque = Y p_hat``), ``base`` (the
+    :class:`~mindyn.base.BaseParameters` that ``p_hat`` is in)."""
 
     def __call__(self, t: float, q, dq, q_d, dq_d, ddq_d) -> np.ndarray: ...
 
 
-class ComputedTorquePD:
-    """Computed torque with PD on the reference:
-    ``tau = ID(q, dq, ddq_d + Kp (q_d - q) + Kd (dq_d - dq); params)``.
+class Reference(Protocol):
+    """A reference trajectory: ``n`` joints, a natural ``duration`` [s] (the default simulated
+    time) and ``evaluate(t)``: positions, velocities and accelerations at times ``t`` (shape
+    (m,), from 0), three (m, n) arrays."""
 
-    ``params`` (any classical layout, default: the robot's with rotor inertia and friction) is the
-    controller's model. Its Coulomb friction is compensated as a feedforward from the *reference*
-    velocity, ``Fc sign(dq_d)`` (``Fc tanh(dq_d / coulomb_smoothing)`` when smoothing is set):
-    switching on the measured velocity would chatter about zero speed. ``kp``, ``kd`` default to
-    ``omega^2`` and ``2 omega`` per joint (critical damping at ``omega`` rad/s)."""
+    n: int
+    duration: float
 
-    name = "computed-torque"
-
-    def __init__(
-        self,
-        robot: Robot,
-        params=None,
-        omega: float = 20.0,
-        kp=None,
-        kd=None,
-        coulomb_smoothing: float = 0.0,
-    ):
-        self.robot = robot
-        full = expand_params(robot.n, robot.parameters(True, True) if params is None else params)
-        self.params, self.fc = split_coulomb(robot.n, full)
-        self.eps = float(coulomb_smoothing)
-        n = robot.n
-        self.kp = np.broadcast_to(np.asarray(omega**2 if kp is None else kp, float), (n,))
-        self.kd = np.broadcast_to(np.asarray(2 * omega if kd is None else kd, float), (n,))
-
-    def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
-        v = ddq_d + self.kp * (q_d - q) + self.kd * (dq_d - dq)
-        return self.robot.inverse_dynamics(q, dq, v, self.params) + coulomb(self.fc, dq_d, self.eps)
+    def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
 
-def split_coulomb(n: int, full: np.ndarray):
-    """``(params with Fc = 0, Fc)`` from a 13 n vector."""
-    p = full.reshape(n, 13).copy()
-    fc = p[:, 12].copy()
-    p[:, 12] = 0.0
-    return p.reshape(-1), fc
+# ---------------------------------------------------------------------------------------------
+# References
+# ---------------------------------------------------------------------------------------------
+class SumOfSines:
+    """A smooth periodic reference inside the joint limits:
+    ``q_d,i(t) = c_i + a_i (sin(w t + phi_i) + 0.5 sin(2 w t + 2 phi_i) + 0.25 sin(3 w t))``
+    with ``w = 2 pi / period``, ``c`` the middle of the limits and the amplitude ``a_i`` the
+    largest that keeps ``q_d`` within ``fraction`` of the half range and ``|dq_d|`` within
+    ``fraction`` of the velocity limit (joints without limits: half range pi/2, 1 rad/s).
+    ``duration`` is one period."""
+
+    def __init__(self, robot: Robot, period: float = 10.0, fraction: float = 0.5, seed: int = 0):
+        if not period > 0:
+            raise ValueError(f"period must be positive, got {period}")
+        if not 0 < fraction <= 1:
+            raise ValueError(f"fraction must be in (0, 1], got {fraction}")
+        lim = robot.limits
+        lo = np.where(np.isfinite(lim["lower"]), lim["lower"], -np.pi / 2)
+        hi = np.where(np.isfinite(lim["upper"]), lim["upper"], np.pi / 2)
+        vmax = np.where(np.isfinite(lim["velocity"]), lim["velocity"], 1.0)
+        self.n = robot.n
+        self.period = self.duration = float(period)
+        self.w = 2 * np.pi / self.period
+        self.center = 0.5 * (lo + hi)
+        self.phase = np.random.default_rng(seed).uniform(0, 2 * np.pi, robot.n)
+        # bounds of the unit shape: |sum| <= 1.75, |d/dt| <= w (1 + 1 + 0.75)
+        amp_q = fraction * 0.5 * (hi - lo) / 1.75
+        amp_v = fraction * vmax / (2.75 * self.w)
+        self.amplitude = np.minimum(amp_q, amp_v)
+
+    def evaluate(self, t):
+        w, p, a = self.w, self.phase, self.amplitude
+        th = w * np.atleast_1d(np.asarray(t, dtype=float))[:, None]
+        s = np.sin(th + p) + 0.5 * np.sin(2 * th + 2 * p) + 0.25 * np.sin(3 * th)
+        ds = w * (np.cos(th + p) + np.cos(2 * th + 2 * p) + 0.75 * np.cos(3 * th))
+        dds = -(w**2) * (np.sin(th + p) + 2 * np.sin(2 * th + 2 * p) + 2.25 * np.sin(3 * th))
+        return self.center + a * s, a * ds, a * dds
 
 
-def coulomb(fc: np.ndarray, dq: np.ndarray, eps: float) -> np.ndarray:
-    """Coulomb friction torque ``Fc tanh(dq / eps)`` (``Fc sign(dq)`` for ``eps = 0``)."""
-    return fc * (np.tanh(dq / eps) if eps > 0 else np.sign(dq))
+class CsvTrajectory:
+    """A reference from a CSV file with columns ``t, q1..qN`` and optionally ``dq1..dqN`` and
+    ``ddq1..ddqN`` (a header line is allowed; ``mindyn excite`` writes such a file). Positions
+    are interpolated by cubic splines; missing velocities and accelerations are the spline's
+    derivatives. Times count from the first sample; after the last sample the reference holds
+    the last position at rest."""
+
+    def __init__(self, path: str | Path, n: int):
+        from scipy.interpolate import CubicSpline
+
+        path = Path(path)
+        if not path.is_file():
+            from . import RobotFileNotFoundError
+
+            raise RobotFileNotFoundError(f"trajectory file '{path}' does not exist")
+        rows: list[list[float]] = []
+        with path.open(newline="") as f:
+            for lineno, row in enumerate(csv.reader(f), 1):
+                if not row or all(not c.strip() for c in row):
+                    continue
+                try:
+                    rows.append([float(c) for c in row])
+                except ValueError:
+                    if rows or lineno > 1:
+                        raise ValueError(
+                            f"{path}:{lineno}: non-numeric value in a data line"
+                        ) from None
+                    continue  # header
+        if len({len(r) for r in rows}) > 1:
+            raise ValueError(f"{path}: rows have different numbers of columns")
+        if len(rows) < 4:
+            raise ValueError(f"{path}: need at least 4 samples, found {len(rows)}")
+        data = np.array(rows, dtype=float)
+        cols = data.shape[1]
+        if cols not in (1 + n, 1 + 2 * n, 1 + 3 * n):
+            raise ValueError(
+                f"{path}: {cols} columns; expected t and q1..q{n} ({1 + n}), plus dq "
+                f"({1 + 2 * n}) and ddq ({1 + 3 * n})"
+            )
+        if not np.all(np.isfinite(data)):
+            raise ValueError(f"{path}: contains NaN or infinite values")
+        t = data[:, 0]
+        if np.any(np.diff(t) <= 0):
+            raise ValueError(f"{path}: time column must be strictly increasing")
+        self.n = n
+        self.t0, self.t1 = float(t[0]), float(t[-1])
+        self.duration = self.t1 - self.t0
+        self._q = CubicSpline(t, data[:, 1 : 1 + n])
+        self._dq = CubicSpline(t, data[:, 1 + n : 1 + 2 * n]) if cols >= 1 + 2 * n else None
+        self._ddq = CubicSpline(t, data[:, 1 + 2 * n :]) if cols == 1 + 3 * n else None
+        self._qend = data[-1, 1 : 1 + n]
+
+    def evaluate(self, t):
+        t = self.t0 + np.atleast_1d(np.asarray(t, dtype=float))
+        inside = np.minimum(t, self.t1)
+        q = self._q(inside)
+        dq = self._dq(inside) if self._dq is not None else self._q(inside, 1)
+        ddq = self._ddq(inside) if self._ddq is not None else self._q(inside, 2)
+        after = t >= self.t1
+        q[after], dq[after], ddq[after] = self._qend, 0.0, 0.0
+        return q, dq, ddq
+
+
+def load_reference(path, n: int):
+    """A reference from the JSON of ``mindyn excite`` (its exact Fourier series) or from a CSV
+    (:class:`CsvTrajectory`, e.g. the CSV ``mindyn excite`` writes) for a robot of ``n`` joints;
+    raises ValueError when the file gives another number of joints."""
+    from .identification.excitation import FourierTrajectory
+
+    p = Path(path)
+    if p.suffix.lower() == ".json":
+        ref = FourierTrajectory.load(p)
+        if ref.n != n:
+            raise ValueError(f"{path} has {ref.n} joints; the robot has {n}")
+        return ref
+    return CsvTrajectory(p, n)
 
 
 @dataclass
@@ -131,54 +231,6 @@ class SensorNoise:
         step = arr["quantization"]
         qm = np.where(step > 0, np.round(q / np.where(step > 0, step, 1.0)) * step, q)
         return qm + arr["position"] * rng.standard_normal(q.shape)
-
-
-@dataclass
-class SimulationLog:
-    """What was logged and what was true.
-
-    ``t`` (m,); ``q, dq, tau``: logged (measured) values, (m, n) each; ``q_true, dq_true,
-    ddq_true, tau_true``: the true motion and applied torque at the log instants; ``q_ref``:
-    the reference; ``info``: settings and figures (mode, rate, noise, tracking error)."""
-
-    t: np.ndarray
-    q: np.ndarray
-    dq: np.ndarray
-    tau: np.ndarray
-    q_true: np.ndarray
-    dq_true: np.ndarray
-    ddq_true: np.ndarray
-    tau_true: np.ndarray
-    q_ref: np.ndarray
-    info: dict = field(default_factory=dict)
-    params: np.ndarray | None = None
-    param_names: list = field(default_factory=list)
-
-    def save(self, path, robot_name: str = "") -> Path:
-        """Writes ``t, q, dq, tau`` (the logged values) to ``path`` and the true parameters and
-        settings to the sidecar ``<stem>.truth.json``."""
-        path = write_csv(path, self.t, self.q, self.tau, dq=self.dq)
-        truth = {
-            "robot": robot_name,
-            "names": self.param_names,
-            "values": [float(v) for v in self.params],
-            "simulation": self.info,
-        }
-        truth_path(path).write_text(json.dumps(truth, indent=2) + "\n")
-        return path
-
-
-def load_reference(path):
-    """A reference trajectory from the JSON of ``mindyn excite`` (exact Fourier series) or from a
-    CSV ``t, q, [dq], [ddq]`` (interpolated by cubic splines; missing derivatives obtained from
-    the positions)."""
-    from .identification.data import read_csv
-    from .identification.excitation import FourierTrajectory
-
-    p = Path(path)
-    if p.suffix.lower() == ".json":
-        return FourierTrajectory.load(p)
-    return read_csv(p, require_torque=False, filter="none")
 
 
 def _true_params(robot: Robot, rotor: bool, friction: bool, params=None):
@@ -247,111 +299,272 @@ def check_steps(duration: float, rate: float, substeps: int = 1) -> int:
 def _span(reference, duration):
     if duration is not None:
         return float(duration)
-    for attr in ("period", "duration"):
-        if hasattr(reference, attr):
-            return float(getattr(reference, attr))
-    raise ValueError("duration is needed for a reference without a period or duration")
+    if getattr(reference, "duration", None) is None:
+        raise ValueError("duration is needed for a reference without a duration")
+    return float(reference.duration)
 
 
-def simulate_tracking(
+# ---------------------------------------------------------------------------------------------
+# Result
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class SimulationResult:
+    """A simulation at the controller samples (``m`` samples, ``n`` joints).
+
+    ``t`` (m,); ``q, dq, tau``: the logged (measured) values, (m, n) each (with sensor noise;
+    the controller saw ``q`` and ``dq``); ``q_true, dq_true, ddq_true, tau_true``: the true
+    motion and the applied torque (after limits); ``qd, dqd, ddqd``: the reference;
+    ``tau_model``: the model part of the controller's torque (NaN when it has none);
+    ``tau_true_model``: the same with the true parameters (adaptive controllers);
+    ``p_hat`` (m, nb): the controller's estimate after each call, ``p_true`` (nb,) the true
+    values, in the base parameters ``base_names``; ``saturated`` (m, n): torque limited;
+    ``params``, ``param_names``: the simulated robot's classical parameters (13 per joint);
+    ``info``: settings and figures."""
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    tau: np.ndarray
+    q_true: np.ndarray
+    dq_true: np.ndarray
+    ddq_true: np.ndarray
+    tau_true: np.ndarray
+    qd: np.ndarray
+    dqd: np.ndarray
+    ddqd: np.ndarray
+    info: dict = field(default_factory=dict)
+    params: np.ndarray | None = None
+    param_names: list = field(default_factory=list)
+    tau_model: np.ndarray | None = None
+    tau_true_model: np.ndarray | None = None
+    p_hat: np.ndarray | None = None
+    p_true: np.ndarray | None = None
+    base_names: list = field(default_factory=list)
+    saturated: np.ndarray | None = None
+
+    @property
+    def controller(self) -> str:
+        return self.info.get("controller", "")
+
+    @property
+    def period(self) -> float:
+        return 1.0 / self.info["rate_Hz"]
+
+    @property
+    def error(self) -> np.ndarray:
+        """True position error ``q_true - q_d``, shape (m, n), rad."""
+        return self.q_true - self.qd
+
+    def max_error_deg(self, t_from: float = 0.0) -> np.ndarray:
+        """Largest ``|q - q_d|`` per joint in degrees, from ``t_from`` on."""
+        sel = self.t >= t_from
+        return np.degrees(np.abs(self.error[sel]).max(axis=0))
+
+    def rms_error_deg(self, t0: float, t1: float) -> np.ndarray:
+        """RMS position error per joint in degrees over ``t0 <= t < t1``."""
+        sel = (self.t >= t0) & (self.t < t1)
+        if not np.any(sel):
+            raise ValueError(f"no samples in [{t0}, {t1})")
+        return np.degrees(np.sqrt(np.mean(self.error[sel] ** 2, axis=0)))
+
+    def final_error_deg(self) -> np.ndarray:
+        """``q - q_d`` at the last sample, degrees."""
+        return np.degrees(self.error[-1])
+
+    def save(self, path, robot_name: str = "") -> Path:
+        """Writes ``t, q, dq, tau`` (the logged values, torques in N m) to ``path`` as
+        ``mindyn identify`` reads it and the true parameters and settings to the sidecar
+        ``<stem>.truth.json``."""
+        path = write_csv(path, self.t, self.q, self.tau, dq=self.dq)
+        truth = {
+            "robot": robot_name,
+            "names": self.param_names,
+            "values": [float(v) for v in self.params],
+            "simulation": self.info,
+        }
+        truth_path(path).write_text(json.dumps(truth, indent=2) + "\n")
+        return path
+
+
+# ---------------------------------------------------------------------------------------------
+# Closed loop
+# ---------------------------------------------------------------------------------------------
+def _torque_limit(robot: Robot, torque_limit):
+    if torque_limit is None:
+        return None
+    n = robot.n
+    if isinstance(torque_limit, str):
+        if torque_limit != "effort":
+            raise ValueError(f"torque_limit must be None, 'effort' or {n} values")
+        limit = np.asarray(robot.limits["effort"], dtype=float)
+        if not np.all(np.isfinite(limit)):
+            raise ValueError(f"robot '{robot.name}' does not give effort limits for all joints")
+        return limit
+    limit = np.asarray(torque_limit, dtype=float)
+    if limit.ndim == 0:
+        limit = np.full(n, float(limit))
+    if limit.shape != (n,) or not np.all(np.isfinite(limit)) or np.any(limit < 0):
+        raise ValueError(f"torque_limit must be None, 'effort' or {n} finite values >= 0")
+    return limit
+
+
+def simulate(
     robot: Robot | str,
-    reference,
+    reference: Reference,
     controller: Controller | None = None,
+    *,
     rate: float = 250.0,
     duration: float | None = None,
     substeps: int = 4,
+    integrator: str = "rk4",
     rotor: bool = False,
     friction: bool = False,
     params=None,
     noise: SensorNoise | None = None,
+    torque_limit=None,
     seed: int = 0,
     coulomb_smoothing: float = 0.0,
-) -> SimulationLog:
+    endpoint: bool = True,
+    base=None,
+) -> SimulationResult:
     """Closed-loop simulation: the robot tracks ``reference`` under ``controller``.
+
+    Every ``1 / rate`` seconds the controller reads the measured state (quantised, noisy) and the
+    reference and returns a torque; the torque (limited by ``torque_limit``) is held while the
+    true robot moves for one period. The logged torque carries torque-sensor noise. The robot
+    starts on the reference at t = 0.
 
     Parameters
     ----------
     robot : Robot or str
-    reference
-        Anything with ``evaluate(t) -> (q, dq, ddq)`` (each (m, n)) — a
-        :class:`~mindyn.identification.excitation.FourierTrajectory` or
-        :class:`~mindyn.identification.data.JointData`.
+    reference : Reference
+        E.g. :class:`SumOfSines`, :class:`CsvTrajectory`, a
+        :class:`~mindyn.identification.excitation.FourierTrajectory` (:func:`load_reference`).
     controller : Controller, optional
-        Default :class:`ComputedTorquePD` with the true parameters.
+        Default: computed torque with PD on the reference and the true parameters
+        (:func:`mindyn.control.default_controller`).
     rate : float
-        Control and log rate [Hz] (default 250 Hz, a 4 ms period).
+        Controller and log rate [Hz] (default 250 Hz, a 4 ms period).
     duration : float, optional
-        Default: the reference's period (or duration).
+        Simulated time [s]; default the reference's period (or duration).
     substeps : int
         RK4 steps per control period.
+    integrator : {"rk4", "scipy"}
+        Fixed-step RK4 (C++ ``mindyn::Integrator``) or scipy's adaptive RK45 per period
+        (rtol 1e-8).
     rotor, friction : bool
         Give the simulated robot its rotor inertia / friction (from the description).
     params : array, optional
         True classical parameters (any layout, e.g. 13 n with Ia, Fv, Fc per joint); overrides
-        the above.
+        ``rotor`` and ``friction``.
     noise : SensorNoise, optional
+    torque_limit : None, "effort" or array (n,)
+        Saturation of the applied torque (``"effort"``: the model's effort limits).
     seed : int
         Seed of the noise generator.
     coulomb_smoothing : float
         If positive, the simulated Coulomb friction is ``Fc tanh(dq / coulomb_smoothing)``
         [rad/s | m/s] instead of ``Fc sign(dq)`` (plant and default controller).
+    endpoint : bool
+        Samples at ``0, T, ..., duration`` (True: ``duration * rate + 1`` samples, a log of the
+        whole span) or up to one period before ``duration`` (False: ``duration * rate``
+        controller periods, as the tracking report counts them).
+    base : BaseParameters, optional
+        The base parameters in which the true values ``p_true`` and the true model torque are
+        reported beside the controller's estimates (default: the controller's ``base``).
     """
+    from .control import default_controller
+
     robot = load(robot)
     n = robot.n
+    if integrator not in ("rk4", "scipy"):
+        raise ValueError(f"integrator must be 'rk4' or 'scipy', got '{integrator}'")
+    if not (isinstance(substeps, (int, np.integer)) and substeps >= 1):
+        raise ValueError(f"substeps must be an integer >= 1, got {substeps}")
     names, p_true = _true_params(robot, rotor, friction, params)
+    eps = float(coulomb_smoothing)
+    plant = _core.Integrator(robot._m, p_true, eps)
     if controller is None:
-        controller = ComputedTorquePD(robot, p_true, coulomb_smoothing=coulomb_smoothing)
+        controller = default_controller(robot, p_true, coulomb_smoothing=eps)
+    T = _span(reference, duration)
+    m = check_steps(T, rate, substeps if integrator == "rk4" else 1)
+    period = 1.0 / rate
+    if not endpoint:
+        m -= 1
+    if m < 1:
+        raise ValueError(f"duration {T:g} s is shorter than one period {period:g} s")
+    own = getattr(controller, "period", None)
+    if own is not None and not math.isclose(own, period, rel_tol=1e-9):
+        raise ValueError(
+            f"the controller was made for a period of {own:g} s; the simulation runs at "
+            f"{period:g} s"
+        )
+    limit = _torque_limit(robot, torque_limit)
     noise = noise or SensorNoise()
     arr = noise.arrays(n)
     rng = np.random.default_rng(seed)
-    T = _span(reference, duration)
-    m = check_steps(T, rate, substeps)
-    t = np.arange(m) / rate
-    q_ref, dq_ref, ddq_ref = reference.evaluate(t)
-    h = 1.0 / (rate * substeps)
-    fd = robot._m.forward_dynamics
-    p_plant, fc = split_coulomb(n, p_true)
-    eps = float(coulomb_smoothing)
+    t = np.arange(m) * period
+    qd, dqd, ddqd = (np.asarray(x, dtype=float) for x in reference.evaluate(t))
+    if qd.shape != (m, n) or dqd.shape != (m, n) or ddqd.shape != (m, n):
+        raise ValueError(f"the reference gives shape {qd.shape}; expected ({m}, {n}) joints")
+    base = base if base is not None else getattr(controller, "base", None)
+    pb_true = None
+    if base is not None and len(base.classical_names) == 13 * n:
+        pb_true = base.values(p_true)
 
-    def f(q, dq, tau):
-        return fd(q, dq, tau - coulomb(fc, dq, eps), p_plant)
-
-    q, dq = q_ref[0].copy(), dq_ref[0].copy()
-    out = {k: np.empty((m, n)) for k in ("q", "dq", "ddq", "tau", "qm", "dqm", "taum")}
+    out = {k: np.empty((m, n)) for k in ("q", "dq", "ddq", "tau", "qm", "dqm", "taum", "taud")}
+    out["taud"].fill(np.nan)
+    taut = np.full((m, n), np.nan)
+    sat = np.zeros((m, n), dtype=bool)
+    ph = None
+    if hasattr(controller, "reset"):
+        controller.reset()
+    q, dq = qd[0].copy(), dqd[0].copy()
     t0 = time.perf_counter()
-    for i in range(m):
-        qm = noise.measure_q(q, rng, arr)
-        dqm = dq + arr["velocity"] * rng.standard_normal(n)
-        tau = np.asarray(controller(t[i], qm, dqm, q_ref[i], dq_ref[i], ddq_ref[i]), float)
-        if tau.shape != (n,) or not np.isfinite(tau).all():
-            raise ValueError(
-                f"controller returned {tau!r} at t = {t[i]:g}; expected {n} finite torques"
-            )
-        ddq = f(q, dq, tau)
-        out["q"][i], out["dq"][i], out["ddq"][i], out["tau"][i] = q, dq, ddq, tau
-        out["qm"][i], out["dqm"][i] = qm, dqm
-        out["taum"][i] = tau + arr["torque"] * rng.standard_normal(n)
-        if i == m - 1:
-            break
-        for _ in range(substeps):  # RK4 with the torque held
-            k1v = ddq
-            k1q = dq
-            q2, dq2 = q + 0.5 * h * k1q, dq + 0.5 * h * k1v
-            k2v = f(q2, dq2, tau)
-            q3, dq3 = q + 0.5 * h * dq2, dq + 0.5 * h * k2v
-            k3v = f(q3, dq3, tau)
-            q4, dq4 = q + h * dq3, dq + h * k3v
-            k4v = f(q4, dq4, tau)
-            q = q + h / 6.0 * (k1q + 2 * dq2 + 2 * dq3 + dq4)
-            dq = dq + h / 6.0 * (k1v + 2 * k2v + 2 * k3v + k4v)
-            ddq = f(q, dq, tau)
-    err = out["q"] - q_ref
+    # A diverging loop shows as a non-finite torque, reported as such (not as warnings).
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        for i in range(m):
+            qm = noise.measure_q(q, rng, arr)
+            dqm = dq + arr["velocity"] * rng.standard_normal(n)
+            tau = np.asarray(controller(t[i], qm, dqm, qd[i], dqd[i], ddqd[i]), dtype=float)
+            if tau.shape != (n,):
+                raise ValueError(
+                    f"the controller returned shape {tau.shape} at t = {t[i]:g} s; expected "
+                    f"{n} torques"
+                )
+            if not np.all(np.isfinite(tau)):
+                raise ValueError(
+                    f"the controller returned a non-finite torque at t = {t[i]:.4f} s: the "
+                    "closed loop diverged (gains, controller period or reference speed)"
+                )
+            if limit is not None:
+                sat[i] = np.abs(tau) > limit
+                tau = np.clip(tau, -limit, limit)
+            out["q"][i], out["dq"][i], out["tau"][i] = q, dq, tau
+            out["ddq"][i] = plant.acceleration(q, dq, tau)
+            out["qm"][i], out["dqm"][i] = qm, dqm
+            out["taum"][i] = tau + arr["torque"] * rng.standard_normal(n)
+            model_torque = getattr(controller, "model_torque", None)
+            if model_torque is not None:
+                out["taud"][i] = model_torque
+            p_hat = getattr(controller, "p_hat", None)
+            if p_hat is not None:
+                if ph is None:
+                    ph = np.zeros((m, len(p_hat)))
+                ph[i] = p_hat
+                if pb_true is not None and getattr(controller, "Y", None) is not None:
+                    taut[i] = controller.Y @ pb_true
+            if i < m - 1 or not endpoint:
+                q, dq = _advance(plant, q, dq, tau, period, substeps, integrator)
+    err = out["q"] - qd
     info = {
         "mode": "tracking",
         "controller": getattr(controller, "name", type(controller).__name__),
         "rate_Hz": rate,
         "substeps": substeps,
-        "integrator": "RK4, torque held over each control period",
+        "integrator": f"RK4 ({substeps} steps per period), torque held over each period"
+        if integrator == "rk4"
+        else "scipy RK45, torque held over each period",
         "duration_s": T,
         "rotor": rotor,
         "friction": friction,
@@ -361,7 +574,8 @@ def simulate_tracking(
         "max_tracking_error": np.abs(err).max(0).tolist(),
         "seconds": time.perf_counter() - t0,
     }
-    return SimulationLog(
+    adaptive = ph is not None and pb_true is not None
+    return SimulationResult(
         t,
         out["qm"],
         out["dqm"],
@@ -370,11 +584,36 @@ def simulate_tracking(
         out["dq"],
         out["ddq"],
         out["tau"],
-        q_ref,
+        qd,
+        dqd,
+        ddqd,
         info,
         p_true,
         names,
+        tau_model=out["taud"],
+        tau_true_model=taut if adaptive else None,
+        p_hat=ph,
+        p_true=pb_true,
+        base_names=list(base.names) if base is not None else [],
+        saturated=sat,
     )
+
+
+def _advance(plant, q, dq, tau, period, substeps, integrator):
+    if integrator == "rk4":
+        return plant.step(q, dq, tau, period, substeps)
+    from scipy.integrate import solve_ivp
+
+    n = q.shape[0]
+
+    def f(_t, x):
+        return np.concatenate([x[n:], plant.acceleration(x[:n], x[n:], tau)])
+
+    sol = solve_ivp(f, (0.0, period), np.concatenate([q, dq]), rtol=1e-8, atol=1e-10)
+    if not sol.success:
+        raise ValueError(f"the integrator failed: {sol.message}")
+    x = sol.y[:, -1]
+    return x[:n], x[n:]
 
 
 def simulate_inverse(
@@ -387,9 +626,9 @@ def simulate_inverse(
     params=None,
     noise: SensorNoise | None = None,
     seed: int = 0,
-) -> SimulationLog:
+) -> SimulationResult:
     """Open-loop: the motion is the reference, torques by inverse dynamics along it (true
-    parameters), then measurement noise. Arguments as :func:`simulate_tracking`."""
+    parameters), then measurement noise. Arguments as :func:`simulate`."""
     robot = load(robot)
     n = robot.n
     names, p_true = _true_params(robot, rotor, friction, params)
@@ -416,26 +655,7 @@ def simulate_inverse(
         "max_tracking_error": [0.0] * n,
         "seconds": time.perf_counter() - t0,
     }
-    return SimulationLog(t, qm, dqm, taum, q, dq, ddq, tau, q, info, p_true, names)
-
-
-# Tracking controllers selectable by name (``mindyn simulate --controller NAME``): a factory
-# ``(robot, cli_args) -> Controller or None`` (None: the default computed-torque controller with
-# the simulated robot's true parameters).
-CONTROLLERS = {
-    "computed-torque": lambda robot, args=None: None,
-}
-
-
-def simulate(robot, reference, mode: str = "tracking", **kwargs) -> SimulationLog:
-    """:func:`simulate_tracking` (``mode="tracking"``) or :func:`simulate_inverse`."""
-    if mode == "tracking":
-        return simulate_tracking(robot, reference, **kwargs)
-    if mode == "inverse":
-        kwargs.pop("controller", None)
-        kwargs.pop("substeps", None)
-        return simulate_inverse(robot, reference, **kwargs)
-    raise ValueError(f"unknown simulation mode '{mode}'; use tracking or inverse")
+    return SimulationResult(t, qm, dqm, taum, q, dq, ddq, tau, q, dq, ddq, info, p_true, names)
 
 
 #: Largest noise levels :func:`noise_from_spec` accepts, per kind (SI units; torque noise in
@@ -482,3 +702,140 @@ def noise_from_spec(spec: str | None, robot: Robot, what: str, reference_torque=
     if any(not (math.isfinite(v) and 0 <= v <= top) for v in vals):
         raise ValueError(f"{opt}: expected finite values in [0, {top:g}], got '{spec}'")
     return np.array(vals)
+
+
+# ---------------------------------------------------------------------------------------------
+# Report
+# ---------------------------------------------------------------------------------------------
+def summary(result: SimulationResult, cycle: float | None = None) -> dict:
+    """Figures of a run: max / final / RMS-per-cycle position errors (deg), and for adaptive runs
+    the torque prediction error ``Y (p_hat - p)`` and the parameter error per cycle."""
+    T = result.t[-1] + result.period
+    cycle = cycle if cycle else T
+    edges = np.arange(0.0, T + 1e-9, cycle)
+    if edges[-1] < T - 1e-9:
+        edges = np.append(edges, T)
+    out = {
+        "controller": result.controller,
+        "period_s": result.period,
+        "duration_s": float(T),
+        "max_error_deg": result.max_error_deg().tolist(),
+        "final_error_deg": result.final_error_deg().tolist(),
+        "cycle_s": cycle,
+        "rms_error_deg_per_cycle": [
+            result.rms_error_deg(a, b).tolist() for a, b in zip(edges[:-1], edges[1:])
+        ],
+        "max_error_deg_per_cycle": [
+            np.degrees(np.abs(result.error[(result.t >= a) & (result.t < b)]).max(axis=0)).tolist()
+            for a, b in zip(edges[:-1], edges[1:])
+        ],
+        "saturated_fraction": float(result.saturated.mean()) if result.saturated is not None else 0,
+    }
+    if result.tau_true_model is not None:
+        d = result.tau_model - result.tau_true_model
+        out["torque_prediction_rms_per_cycle"] = [
+            np.sqrt(np.mean(d[(result.t >= a) & (result.t < b)] ** 2, axis=0)).tolist()
+            for a, b in zip(edges[:-1], edges[1:])
+        ]
+    if result.p_hat is not None and result.p_true is not None:
+        err = result.p_hat - result.p_true
+        scale = np.maximum(np.abs(result.p_true), 1e-9)
+        idx = [min(int(round(b / result.period)), len(result.t) - 1) for b in edges]
+        out["parameter_error_norm"] = [float(np.linalg.norm(err[i])) for i in idx]
+        out["parameter_error_at_s"] = [float(result.t[i]) for i in idx]
+        out["final_parameter_relative_error"] = dict(
+            zip(result.base_names, (err[-1] / scale).tolist())
+        )
+    return out
+
+
+def write_report(
+    result: SimulationResult,
+    folder: str | Path,
+    cycle: float | None = None,
+    header: dict | None = None,
+) -> dict:
+    """Writes ``summary.json``, ``log.csv`` and plots (``tracking_error.png``, ``torque.png``,
+    and for adaptive runs ``parameters.png``, ``torque_prediction.png``) into ``folder``.
+    Returns the summary."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    s = dict(header or {})
+    s.update(summary(result, cycle))
+    (folder / "summary.json").write_text(json.dumps(s, indent=2) + "\n")
+
+    n = result.q.shape[1]
+    cols = ["t"] + [f"{p}{k + 1}" for p in ("q", "qd", "tau") for k in range(n)]
+    data = np.column_stack([result.t, result.q_true, result.qd, result.tau_true])
+    np.savetxt(folder / "log.csv", data, delimiter=",", header=",".join(cols), comments="")
+
+    def per_joint(draw, title: str, name: str, legend: bool = False) -> None:
+        rows = math.ceil(n / 2)
+        fig, axes = plt.subplots(rows, 2, figsize=(11, 2.4 * rows), sharex=True, squeeze=False)
+        for k in range(n):
+            ax = axes[k // 2][k % 2]
+            draw(ax, k)
+            ax.grid(alpha=0.3)
+        if legend:
+            axes[0][0].legend(fontsize=7)
+        for ax in axes[-1]:
+            ax.set_xlabel("t [s]")
+        fig.suptitle(f"{result.controller}: {title}")
+        fig.tight_layout()
+        fig.savefig(folder / name, dpi=110)
+        plt.close(fig)
+
+    def error(ax, k):
+        ax.plot(result.t, np.degrees(result.error[:, k]), lw=0.8)
+        ax.set_ylabel(f"e{k + 1} [deg]")
+
+    def torque(ax, k):
+        ax.plot(result.t, result.tau_true[:, k], lw=0.8, label="applied")
+        if result.tau_model is not None and np.all(np.isfinite(result.tau_model[:, k])):
+            ax.plot(result.t, result.tau_model[:, k], lw=0.8, label="model (estimate)")
+        if result.tau_true_model is not None:
+            ax.plot(result.t, result.tau_true_model[:, k], lw=0.8, ls="--", label="model (true)")
+        ax.set_ylabel(f"tau{k + 1} [N m]")
+
+    per_joint(error, "position error q - q_d", "tracking_error.png")
+    per_joint(torque, "joint torques", "torque.png", legend=True)
+
+    if result.p_hat is not None and result.p_true is not None:
+        fig, ax = plt.subplots(3, 1, figsize=(10, 10))
+        scale = np.maximum(np.abs(result.p_true), 1e-2 * np.abs(result.p_true).max())
+        ax[0].plot(result.t, (result.p_hat - result.p_true) / scale, lw=0.6)
+        ax[0].set_ylabel("(p_hat - p) / max(|p|, 1% max|p|)")
+        ax[0].set_title("base-parameter estimates: error, one line per parameter")
+        ax[0].grid(alpha=0.3)
+        d = result.tau_model - result.tau_true_model
+        for k in range(n):
+            ax[1].plot(result.t, d[:, k], lw=0.6, label=f"joint {k + 1}")
+        ax[1].set_ylabel("Y (p_hat - p) [N m]")
+        ax[1].set_title("torque prediction error of the adapted model")
+        ax[1].legend(fontsize=7, ncol=3)
+        ax[1].grid(alpha=0.3)
+        ax[1].set_xlabel("t [s]")
+        k = np.arange(1, len(s["rms_error_deg_per_cycle"]) + 1)
+        rms_e = [np.sqrt(np.mean(np.square(x))) for x in s["rms_error_deg_per_cycle"]]
+        rms_t = [np.sqrt(np.mean(np.square(x))) for x in s["torque_prediction_rms_per_cycle"]]
+        ax[2].plot(k, rms_e, "o-", label="tracking error [deg]")
+        ax[2].set_ylabel("RMS tracking error [deg]")
+        ax[2].set_xlabel(f"cycle ({s['cycle_s']:g} s each)")
+        tw = ax[2].twinx()
+        tw.plot(k, rms_t, "s--", color="C3", label="torque prediction error [N m]")
+        tw.set_ylabel("RMS |Y (p_hat - p)| [N m]")
+        ax[2].set_title("per cycle, all joints")
+        ax[2].grid(alpha=0.3)
+        h1, l1 = ax[2].get_legend_handles_labels()
+        h2, l2 = tw.get_legend_handles_labels()
+        ax[2].legend(h1 + h2, l1 + l2, fontsize=8)
+        ax[2].set_xticks(k)
+        fig.tight_layout()
+        fig.savefig(folder / "parameters.png", dpi=110)
+        plt.close(fig)
+    return s

@@ -1,5 +1,6 @@
-// Python bindings of the control side: the Slotine-Li regressor and Coriolis matrix, a fixed-step
-// integrator of the forward dynamics with a held torque, and the inverse-kinematics solver.
+// Python bindings of the control side: the Slotine-Li regressor and Coriolis matrix, the
+// integrator of the closed-loop simulations (RK4 with the torque held), and the inverse-kinematics
+// solver.
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -9,6 +10,7 @@
 
 #include "mindyn/dynamics.hpp"
 #include "mindyn/ik.hpp"
+#include "mindyn/integrator.hpp"
 #include "mindyn/slotine_li.hpp"
 #include "py_args.hpp"
 #include "py_types.hpp"
@@ -32,6 +34,16 @@ py::array_t<double> perSample4(long n, const Array& a, const Array& b, const Arr
   });
   return out;
 }
+
+// Python-side integrator: owns a copy of the model and its workspace.
+struct PyIntegrator {
+  PyIntegrator(const PyModel& m, const Eigen::VectorXd& p, ParameterLayout layout, double eps)
+      : model(m.model), data(model), integrator(model, p, layout, eps), n(model.nq()) {}
+  Model model;
+  Data data;
+  Integrator integrator;
+  int n;
+};
 
 // Python-side IK solver: owns a copy of the model's chain.
 struct PyIk {
@@ -87,51 +99,52 @@ void bindControl(py::module_& m) {
             });
       },
       py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("params") = py::none());
-  m.def(
-      "integrate_rk4",
-      [](PyModel& s, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
-         const Eigen::VectorXd& tau, double dt, int steps, const py::object& params) {
-        const long n = s.model.nq();
-        if (!(dt > 0) || !std::isfinite(dt)) throw py::value_error("dt must be positive");
-        if (steps < 1) throw py::value_error("steps must be at least 1");
-        ParameterLayout layout;
-        const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-        Eigen::VectorXd x = vectorArg(q, n, "q"), v = vectorArg(dq, n, "dq");
-        const Eigen::VectorXd t = vectorArg(tau, n, "tau");
-        Eigen::VectorXd k1(n), k2(n), k3(n), k4(n), xs(n), vs(n);
-        const double h = dt / steps;
-        bool ok = true;
-        {
-          py::gil_scoped_release release;
-          for (int i = 0; i < steps && ok; ++i) {
-            ok = ok && forwardDynamics(s.model, s.data, x, v, t, p, layout, k1);
-            xs = x + 0.5 * h * v;
-            vs = v + 0.5 * h * k1;
-            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k2);
-            const Eigen::VectorXd v2 = vs;
-            xs = x + 0.5 * h * v2;
-            vs = v + 0.5 * h * k2;
-            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k3);
-            const Eigen::VectorXd v3 = vs;
-            xs = x + h * v3;
-            vs = v + h * k3;
-            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k4);
-            x += h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + vs);
-            v += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-          }
-        }
-        if (!ok)
-          throw py::value_error(
-              "the mass matrix is not positive definite for these "
-              "parameters");
-        if (!x.allFinite() || !v.allFinite())
-          throw py::value_error("the integration diverged (non-finite state)");
-        return py::make_tuple(x, v);
-      },
-      py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("tau"), py::arg("dt"),
-      py::arg("steps") = 1, py::arg("params") = py::none(),
-      "Integrates A(q) ddq + b + c + friction = tau with tau held constant over dt, by `steps` "
-      "classical Runge-Kutta steps. Returns (q, dq).");
+  py::class_<PyIntegrator>(m, "Integrator")
+      .def(py::init([](const PyModel& s, const py::object& params, double coulomb_smoothing) {
+             ParameterLayout layout;
+             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
+             if (!(coulomb_smoothing >= 0) || !std::isfinite(coulomb_smoothing))
+               throw py::value_error("coulomb_smoothing must be a finite number >= 0");
+             return std::make_unique<PyIntegrator>(s, p, layout, coulomb_smoothing);
+           }),
+           py::arg("model"), py::arg("params") = py::none(), py::arg("coulomb_smoothing") = 0.0,
+           "RK4 of the forward dynamics with the torque held (mindyn::Integrator) for the "
+           "classical parameters `params` in any layout (default the model's).")
+      .def(
+          "step",
+          [](PyIntegrator& g, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+             const Eigen::VectorXd& tau, double dt, int substeps) {
+            if (!(dt > 0) || !std::isfinite(dt))
+              throw py::value_error("dt must be a positive number of seconds");
+            if (substeps < 1) throw py::value_error("substeps must be at least 1");
+            Eigen::VectorXd x = vectorArg(q, g.n, "q"), v = vectorArg(dq, g.n, "dq");
+            const Eigen::VectorXd t = vectorArg(tau, g.n, "tau");
+            bool ok;
+            {
+              py::gil_scoped_release release;
+              ok = g.integrator.step(g.data, x, v, t, dt, substeps);
+            }
+            if (!ok)
+              throw py::value_error(
+                  "the integration diverged (non-finite state, or a mass matrix that is not "
+                  "positive definite for these parameters)");
+            return py::make_tuple(x, v);
+          },
+          py::arg("q"), py::arg("dq"), py::arg("tau"), py::arg("dt"), py::arg("substeps") = 1,
+          "Advances (q, dq) by dt seconds in `substeps` RK4 steps with tau held; returns them.")
+      .def(
+          "acceleration",
+          [](PyIntegrator& g, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+             const Eigen::VectorXd& tau) {
+            Eigen::VectorXd ddq(g.n);
+            if (!g.integrator.acceleration(g.data, vectorArg(q, g.n, "q"), vectorArg(dq, g.n, "dq"),
+                                           vectorArg(tau, g.n, "tau"), ddq))
+              throw py::value_error(
+                  "the mass matrix is not positive definite for these parameters");
+            return ddq;
+          },
+          py::arg("q"), py::arg("dq"), py::arg("tau"),
+          "Forward dynamics of the simulated robot (Coulomb friction as in step).");
 
   py::class_<PyIk>(m, "IkSolver")
       .def(py::init([](const PyModel& s, double tolerance, int max_iterations, int max_attempts,

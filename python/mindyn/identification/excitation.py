@@ -131,6 +131,12 @@ class FourierTrajectory:
     def period(self) -> float:
         return 1.0 / self.freq
 
+    @property
+    def duration(self) -> float:
+        """One period [s]: the span of a simulation along the trajectory unless told otherwise
+        (the reference protocol of :mod:`mindyn.simulate`)."""
+        return self.period
+
     def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Positions, velocities, accelerations at times ``t`` (shape (m,)): three (m, n) arrays."""
         t = np.atleast_1d(np.asarray(t, dtype=float))

@@ -1,0 +1,238 @@
+"""The one simulation stack: its integrator against the earlier step-by-step RK4 and scipy, every
+kind of reference through the one reference protocol, a controller with internal state through the
+one controller protocol, and ``mindyn simulate`` and ``mindyn track`` as two uses of it."""
+
+from __future__ import annotations
+
+import json
+
+import mindyn
+import numpy as np
+import pytest
+from mindyn import _core, control
+from mindyn.cli import main
+from mindyn.identification.data import read_csv, write_csv, write_trajectory_csv
+from mindyn.identification.excitation import FourierTrajectory, random_trajectory
+from mindyn.simulate import CsvTrajectory, SumOfSines, load_reference, simulate
+from scipy.integrate import solve_ivp
+from test_cli_workflow import cli
+
+
+def save_like_excite(traj, csv_path):
+    """The CSV (sampled at 250 Hz) and the JSON (coefficients) of ``mindyn excite``."""
+    write_trajectory_csv(csv_path, *traj.sample(250.0))
+    csv_path.with_suffix(".json").write_text(json.dumps(traj.to_dict()))
+
+
+# --------------------------------------------------------------------------------------------
+# Integrator
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("eps", [0.0, 0.05])
+def test_integrator_is_the_rk4_of_the_forward_dynamics_with_coulomb_as_a_torque(eps, rng):
+    """The RK4 written out here on Robot.forward_dynamics (Coulomb friction taken out of the
+    parameters and applied as Fc sign(dq) or Fc tanh(dq / eps), the simulator's earlier
+    Python loop) and the C++ integrator take the same steps: equal to round-off."""
+    robot = mindyn.load("zcr07s")
+    n = robot.n
+    p = robot.parameters(True, True)
+    fc = p.reshape(n, 13)[:, 12].copy()
+    p0 = p.reshape(n, 13).copy()
+    p0[:, 12] = 0.0
+    p0 = p0.reshape(-1)
+
+    def f(q, dq, tau):
+        s = np.tanh(dq / eps) if eps > 0 else np.sign(dq)
+        return robot.forward_dynamics(q, dq, tau - fc * s, p0)
+
+    plant = _core.Integrator(robot._m, p, eps)
+    q, dq, tau = rng.uniform(-1, 1, (3, n))
+    tau *= 20
+    h, steps = 0.001, 4
+    x, v = q.copy(), dq.copy()
+    for _ in range(steps):
+        k1 = f(x, v, tau)
+        v2 = v + 0.5 * h * k1
+        k2 = f(x + 0.5 * h * v, v2, tau)
+        v3 = v + 0.5 * h * k2
+        k3 = f(x + 0.5 * h * v2, v3, tau)
+        v4 = v + h * k3
+        k4 = f(x + h * v3, v4, tau)
+        x, v = x + h / 6 * (v + 2 * v2 + 2 * v3 + v4), v + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    qn, dqn = plant.step(q, dq, tau, h * steps, steps)
+    # the same arithmetic in another order: round-off, ~1e-15 of the state
+    assert np.allclose(qn, x, rtol=0, atol=1e-12)
+    assert np.allclose(dqn, v, rtol=0, atol=1e-10)
+    assert np.allclose(plant.acceleration(q, dq, tau), f(q, dq, tau), rtol=1e-12, atol=1e-9)
+
+
+def test_integrator_against_scipy_and_errors():
+    robot = mindyn.load("planar2")
+    p = robot.parameters(True, True)
+    plant = _core.Integrator(robot._m, p)
+    q, dq, tau = np.array([0.3, -0.4]), np.array([0.5, 1.0]), np.array([2.0, -1.0])
+
+    def f(_, x):
+        return np.concatenate([x[2:], robot.forward_dynamics(x[:2], x[2:], tau, p)])
+
+    sol = solve_ivp(f, (0, 0.1), np.concatenate([q, dq]), rtol=1e-12, atol=1e-13)
+    qn, dqn = plant.step(q, dq, tau, 0.1, 100)
+    # RK4 at h = 1 ms: ~1e-12 of the state; scipy at rtol 1e-12: 1e-9 covers both
+    assert np.allclose(qn, sol.y[:2, -1], rtol=0, atol=1e-9)
+    assert np.allclose(dqn, sol.y[2:, -1], rtol=0, atol=1e-9)
+    with pytest.raises(ValueError, match="dt must be"):
+        plant.step(q, dq, tau, 0.0, 1)
+    with pytest.raises(ValueError, match="substeps must be"):
+        plant.step(q, dq, tau, 0.1, 0)
+    with pytest.raises(ValueError, match="coulomb_smoothing"):
+        _core.Integrator(robot._m, p, -1.0)
+    with pytest.raises(ValueError, match="tau"):
+        plant.step(q, dq, np.zeros(3), 0.1, 1)
+
+
+# --------------------------------------------------------------------------------------------
+# References
+# --------------------------------------------------------------------------------------------
+def test_every_reference_kind_drives_the_same_simulator(tmp_path):
+    """A Fourier series, its JSON and CSV as ``mindyn excite`` writes them, a sum of sines and a
+    CSV of positions only: the robot under computed torque with the true parameters follows each
+    to within the zero-order hold of the 4 ms period."""
+    robot = mindyn.load("planar2")
+    traj = random_trajectory(robot, seed=2)
+    save_like_excite(traj, tmp_path / "traj.csv")
+    t = np.arange(0, traj.period, 0.01)
+    q_only = tmp_path / "q.csv"
+    write_csv(q_only, t, traj.evaluate(t)[0], None)
+    refs = {
+        "fourier": traj,
+        "excite json": load_reference(tmp_path / "traj.json", 2),
+        "excite csv": load_reference(tmp_path / "traj.csv", 2),
+        "positions csv": CsvTrajectory(q_only, 2),
+        "sum of sines": SumOfSines(robot, period=2.0),
+    }
+    assert isinstance(refs["excite json"], FourierTrajectory)
+    for name, ref in refs.items():
+        r = simulate(robot, ref, duration=1.0)
+        assert r.t.shape == (251,) and r.qd.shape == (251, 2), name
+        assert np.allclose(r.qd, ref.evaluate(r.t)[0], rtol=0, atol=1e-12), name
+        # tracking error of computed torque at K_P = 400: far below the reference's motion
+        motion = np.ptp(r.qd, axis=0).max()
+        assert np.abs(r.error).max() < 1e-2 * motion, name
+    with pytest.raises(ValueError, match="2 joints; the robot has 3"):
+        load_reference(tmp_path / "traj.json", 3)
+
+
+# --------------------------------------------------------------------------------------------
+# Controller protocol
+# --------------------------------------------------------------------------------------------
+class IntegralStep:
+    """What a compiled step looks like from Python: ``u = step(t, q, dq, q_d, dq_d, ddq_d)``
+    with internal state (here a PID's error integral), no other members."""
+
+    def __init__(self, kp, kd, ki, period):
+        self.kp, self.kd, self.ki, self.h = kp, kd, ki, period
+        self.integral = 0.0
+        self.calls = []
+
+    def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
+        e = q_d - q
+        self.integral = self.integral + self.h * e
+        self.calls.append((t, q.copy(), dq.copy()))
+        return self.kp * e + self.kd * (dq_d - dq) + self.ki * self.integral
+
+
+def test_a_stateful_step_is_a_controller():
+    robot = mindyn.load("planar2")
+    ref = SumOfSines(robot, period=1.0)
+    step = IntegralStep(400.0, 40.0, 1000.0, 0.004)
+    r = simulate(robot, ref, step, duration=0.4)
+    assert len(step.calls) == r.t.size == 101
+    # called on the logged (here noise-free) state at each sample, its torque applied and logged
+    for i, (t, q, dq) in enumerate(step.calls):
+        assert t == r.t[i] and np.array_equal(q, r.q[i]) and np.array_equal(dq, r.dq[i])
+    e = r.qd - r.q_true
+    integral = 0.004 * np.cumsum(e, axis=0)
+    expected = 400 * e + 40 * (r.dqd - r.dq_true) + 1000 * integral
+    assert np.allclose(r.tau_true, expected, rtol=1e-12, atol=1e-12)
+    assert np.isnan(r.tau_model).all() and r.p_hat is None
+
+
+def test_controller_period_and_output_are_checked():
+    robot = mindyn.load("planar2")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    ref = SumOfSines(robot, period=1.0)
+    gains = control.default_gains(robot)
+    ada = control.make_controller("adaptive-pd", robot, gains, base=base, period=0.002)
+    with pytest.raises(ValueError, match="made for a period of 0.002 s; the simulation runs at"):
+        simulate(robot, ref, ada, duration=0.1)
+    r = simulate(robot, ref, ada, rate=500.0, duration=0.1)
+    assert r.p_hat.shape == (51, base.n)
+    with pytest.raises(ValueError, match="returned shape \\(3,\\)"):
+        simulate(robot, ref, lambda *a: np.zeros(3), duration=0.1)
+
+
+def test_default_controller_is_computed_torque_on_the_true_model():
+    """Computed torque with the true parameters and Coulomb friction on the reference velocity:
+    on the reference (e = 0) its torque is the inverse dynamics with Fc sign(dq_d)."""
+    robot = mindyn.load("zcr07s")
+    p = robot.parameters(True, True)
+    ctl = control.default_controller(robot, p)
+    traj = random_trajectory(robot, seed=1)
+    q, dq, ddq = (x[0] for x in traj.evaluate(0.37))
+    tau = ctl(0.37, q, dq, q, dq, ddq)
+    assert np.allclose(tau, robot.inverse_dynamics(q, dq, ddq, p), rtol=1e-9, atol=1e-9)
+    assert np.all(robot.coulomb > 0) and np.all(dq != 0)
+    dq_m = -dq  # a measured velocity of the other sign: the Coulomb term keeps the reference's
+    v = ddq - 40 * (dq_m - dq)
+    p0 = p.reshape(6, 13).copy()
+    p0[:, 12] = 0
+    expected = robot.inverse_dynamics(q, dq_m, v, p0.reshape(-1)) + robot.coulomb * np.sign(dq)
+    assert np.allclose(ctl(0.37, q, dq_m, q, dq, ddq), expected, rtol=1e-9, atol=1e-9)
+
+
+# --------------------------------------------------------------------------------------------
+# simulate and track on the command line
+# --------------------------------------------------------------------------------------------
+def test_simulate_and_track_run_the_same_closed_loop(tmp_path):
+    """``track`` (the robot with rotor inertia and friction) and ``simulate --rotor --friction``
+    with the same controller give the same log over the controller periods they share."""
+    a, b = tmp_path / "track.csv", tmp_path / "sim.csv"
+    out = cli("track", "planar2", "--controller", "pd", "--duration", 0.4, "-o", a)
+    assert f"log: {a} (100 samples" in out
+    out = cli("simulate", "planar2", "--controller", "pd", "--rotor", "--friction",
+              "--duration", 0.4, "-o", b)  # fmt: skip
+    assert f"wrote {b}" in out
+    robot = mindyn.load("planar2")
+    da, db = read_csv(a, robot, filter="none"), read_csv(b, robot, filter="none")
+    assert (da.m, db.m) == (100, 101)
+    assert np.array_equal(da.q, db.q[:100]) and np.array_equal(da.tau, db.tau[:100])
+    truth = json.loads(b.with_name("sim.truth.json").read_text())
+    assert truth["values"] == robot.parameters(True, True).tolist()
+
+
+def test_simulate_with_feedback_controllers_and_rotor(tmp_path):
+    """``simulate --controller adaptive-pd|pd`` is simulate's own closed loop (no hand-over to
+    track): its log, the rotor inertia of --rotor in the truth, the controller named."""
+    robot = mindyn.load("planar2")
+    for kind in ("adaptive-pd", "pd"):
+        log = tmp_path / f"{kind}.csv"
+        out = cli("simulate", "planar2", "--controller", kind, "--rotor", "--duration", 0.2,
+                  "-o", log)  # fmt: skip
+        assert f"controller {kind}" in out and f"wrote {log}" in out
+        truth = json.loads(log.with_name(f"{kind}.truth.json").read_text())
+        p = np.array(truth["values"]).reshape(2, 13)
+        assert np.array_equal(p[:, 10], robot.rotor_inertia) and not p[:, 11:].any()
+        assert read_csv(log, robot, filter="none").m == 51
+
+
+def test_track_reads_the_excite_json(tmp_path, capsys):
+    robot = mindyn.load("planar2")
+    traj = random_trajectory(robot, seed=3)
+    save_like_excite(traj, tmp_path / "traj.csv")
+    out = cli("track", "planar2", "--controller", "computed-torque", "--trajectory",
+              tmp_path / "traj.json", "--duration", 1.0, "--report", tmp_path / "rep")  # fmt: skip
+    assert f"trajectory {tmp_path / 'traj.json'} ({traj.period:g} s)" in out
+    log = np.loadtxt(tmp_path / "rep" / "log.csv", delimiter=",", skiprows=1)
+    qd = traj.evaluate(log[:, 0])[0]
+    assert np.allclose(log[:, 3:5], qd, rtol=0, atol=1e-12)  # the reference logged is the JSON's
+    assert main(["track", "planar2", "--trajectory", str(tmp_path / "none.json")]) == 2
+    assert "none.json" in capsys.readouterr().err
