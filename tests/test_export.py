@@ -6,10 +6,11 @@ with the parameters a robot was loaded with must have the dynamics of the source
 on both files), and one written with random physically consistent parameters must have mindyn's
 inverse dynamics with those parameters. Thresholds: the Pinocchio comparisons run at 1e-9
 relative (the target); double round-off in both recursions gives about 1e-14 here, so the margin
-is five orders. Parameters read back must be exactly the ones written, except for the inertia
-about the link origin, which goes through the centre of mass (I_c = I_o - m [c]^T [c] on
-writing, back on reading) and so carries a few ulp of the largest term, m |c|^2 + |I_o|:
-checked at 1e-15 of that scale (a few ulp is 4e-16 to 9e-16).
+is five orders. Parameters read back must be the ones written: the mass exactly, the first
+moments m (h / m) to two ulp, and the inertia about the link origin, which goes through the
+centre of mass (I_c = I_o - [h]^T [h] / m on writing, back on reading), to 1e-15 of the link's
+largest term |I_o| + |h|^2 / m (90 random links of the tree, Panda and UR5 gave at most 2.1e-16,
+one ulp; margin about five).
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
-from conftest import assert_close
+from conftest import URDFS, assert_close
 from mindyn import cli
 from mindyn.export import classical_terms, read_joint_terms, write_urdf, write_yaml
 from random_arm import random_arm_yaml
@@ -295,6 +296,51 @@ def test_ur5_example(tmp_path):
     back = mindyn.load(out)
     assert_inertial_roundtrip(robot, back.params, p)
     assert not back.viscous.any() and not back.coulomb.any()
+
+
+def test_panda_hand_with_fingers(tmp_path):
+    """example-robot-data's Panda to the hand: link8, the hand, its TCP frame and both fingers
+    (off-chain prismatic joints, locked at 0) merged into link 7."""
+    src = URDFS["panda"]
+    robot = mindyn.load(src, tip="panda_hand")
+    locked = {"panda_finger_joint1": 0.0, "panda_finger_joint2": 0.0}
+    rng = np.random.default_rng(12)
+    q, dq, ddq = states(robot, rng)
+    own = tmp_path / "own.urdf"
+    write_urdf(robot, robot.params, own)
+    want = pin_rnea(pin_chain(src, robot, locked), q, dq, ddq)
+    got = pin_rnea(pin_chain(own, robot, locked), q, dq, ddq)
+    assert_close(got, want, TOL_DYN, "export: panda own params, Pinocchio source vs written")
+    classical = consistent_params(robot, rng)
+    out = tmp_path / "panda_id.urdf"
+    res = write_urdf(robot, classical, out)
+    assert "panda_leftfinger, panda_rightfinger" in res.notes[-1]
+    p = inertial_vector(robot, classical)
+    got = pin_rnea(pin_chain(out, robot, locked), q, dq, ddq)
+    assert_close(got, robot.inverse_dynamics(q, dq, ddq, p), TOL_DYN, "export: panda vs Pinocchio")
+    assert_inertial_roundtrip(robot, mindyn.load(out, tip="panda_hand").params, p)
+
+
+def test_namespaces_and_compact_elements(tmp_path):
+    """A default namespace and prefixed elements are written as they were declared and named."""
+    src = tmp_path / "ns.urdf"
+    src.write_text(
+        '<robot name="ns" xmlns="http://example.org/urdf" xmlns:xacro="http://www.ros.org/'
+        'wiki/xacro">\n  <link name="a"/>\n  <joint name="j" type="revolute"><parent link="a"/>'
+        '<child link="b"/><axis xyz="0 1 0"/><limit lower="-1" upper="1" effort="1" '
+        'velocity="1"/></joint>\n  <link name="b"><xacro:property name="x" value="1"/></link>\n'
+        "</robot>\n"
+    )
+    robot = mindyn.load(src)
+    classical = consistent_params(robot, np.random.default_rng(13))
+    out = tmp_path / "out.urdf"
+    write_urdf(robot, classical, out)
+    text = out.read_text()
+    assert text.startswith('<robot name="ns" xmlns="http://example.org/urdf" xmlns:xacro=')
+    assert '<xacro:property name="x" value="1"/>' in text
+    back = mindyn.load(out)
+    assert_inertial_roundtrip(robot, back.params, inertial_vector(robot, classical))
+    assert back.viscous[0] == classical["Fv1"] and back.coulomb[0] == classical["Fc1"]
 
 
 def test_zero_mass_link(tree, tmp_path):

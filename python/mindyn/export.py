@@ -13,6 +13,7 @@ from __future__ import annotations
 import io
 import math
 import numbers
+import re
 import xml.etree.ElementTree as ET
 import xml.parsers.expat
 from collections.abc import Mapping
@@ -228,10 +229,6 @@ def write_urdf(
     return written
 
 
-def _local(tag) -> str:
-    return tag.rsplit("}", 1)[-1] if isinstance(tag, str) else ""
-
-
 class _UrdfDocument:
     """A URDF file parsed with its comments, to be edited and written back."""
 
@@ -252,23 +249,48 @@ class _UrdfDocument:
         except ET.ParseError as e:
             line, col = e.position
             raise ModelError(f"{path}:{line}:{col + 1}: not valid XML: {e}") from None
-        if _local(self.root.tag) != "robot":
-            raise ModelError(f"{path}: the root element is <{_local(self.root.tag)}>, not <robot>")
         self.prolog = self._prolog(raw)
-        self.namespaces = {}
-        for _, (prefix, uri) in ET.iterparse(io.BytesIO(raw), events=("start-ns",)):
-            self.namespaces.setdefault(prefix, uri)
-        self.ns = self.root.tag[: -len("robot")]  # "{uri}" or ""
-        self.links = {
-            e.get("name"): e for e in self.root if _local(e.tag) == "link" and e.get("name")
-        }
-        self.joints = [e for e in self.root if _local(e.tag) == "joint"]
+        self._names_as_written(raw)
+        if self.root.tag != "robot":
+            raise ModelError(f"{path}: the root element is <{self.root.tag}>, not <robot>")
+        self.links = {e.get("name"): e for e in self.root if e.tag == "link" and e.get("name")}
+        self.joints = [e for e in self.root if e.tag == "joint"]
         self.entering = {}  # child link -> joint element
         self.children = {}  # parent link -> joint elements
         for j in self.joints:
             child, parent = self._end(j, "child"), self._end(j, "parent")
             self.entering[child] = j
             self.children.setdefault(parent, []).append(j)
+
+    def _names_as_written(self, raw: bytes) -> None:
+        """Turns ElementTree's ``{uri}name`` back into ``prefix:name`` (``name`` for the default
+        namespace, as urdfdom reads it) and declares the namespaces on the root again, so that
+        the file is written with the names and declarations it had."""
+        declared = {}
+        for _, (prefix, uri) in ET.iterparse(io.BytesIO(raw), events=("start-ns",)):
+            declared.setdefault(prefix, uri)
+        if not declared:
+            return
+        prefix_of = {}
+        for prefix, uri in declared.items():
+            prefix_of.setdefault(uri, prefix)
+
+        def plain(name: str) -> str:
+            if not name.startswith("{"):
+                return name
+            uri, local = name[1:].split("}", 1)
+            prefix = prefix_of.get(uri, "")
+            return f"{prefix}:{local}" if prefix else local
+
+        for e in self.root.iter():
+            if isinstance(e.tag, str):
+                e.tag = plain(e.tag)
+            if any(k.startswith("{") for k in e.attrib):
+                attrib = {plain(k): v for k, v in e.attrib.items()}
+                e.attrib.clear()
+                e.attrib.update(attrib)
+        for prefix, uri in declared.items():
+            self.root.set(f"xmlns:{prefix}" if prefix else "xmlns", uri)
 
     @staticmethod
     def _prolog(raw: bytes) -> str:
@@ -288,7 +310,7 @@ class _UrdfDocument:
         return raw[: start[0]].decode("utf-8") if start else ""
 
     def _end(self, joint, which: str) -> str:
-        e = joint.find(self.ns + which)
+        e = joint.find(which)
         return e.get("link", "") if e is not None else ""
 
     def set_chain(self, robot: Robot, terms: JointTerms) -> list[str]:
@@ -335,7 +357,7 @@ class _UrdfDocument:
     def _element(self, parent, tag: str, indent: str, attrib=None):
         """A new last child of `parent` (whose own line starts with `indent`), indented one
         level deeper than `parent`, or like its other children."""
-        e = ET.Element(self.ns + tag, attrib or {})
+        e = ET.Element(tag, attrib or {})
         kids = list(parent)
         if not kids:
             parent.text = "\n" + indent + "  "
@@ -380,13 +402,13 @@ class _UrdfDocument:
                     f"link '{name}': the inertia about its centre of mass (principal moments "
                     f"{', '.join(f'{v:.4g}' for v in ev)}) is not that of a physical body"
                 )
-        old = [e for e in link if _local(e.tag) == "inertial"]
+        old = [e for e in link if e.tag == "inertial"]
         if old:
             where = list(link).index(old[0])
             tail = old[0].tail
             for e in old:
                 link.remove(e)
-            new = ET.Element(self.ns + "inertial")
+            new = ET.Element("inertial")
             new.tail = tail
             link.insert(where, new)
         else:
@@ -411,7 +433,7 @@ class _UrdfDocument:
         """Replaces `link`'s <inertial> by a comment; False if it had none."""
         found = False
         for i, e in enumerate(list(link)):
-            if _local(e.tag) != "inertial":
+            if e.tag != "inertial":
                 continue
             c = ET.Comment(f" inertial merged into link '{body}' by mindyn export ")
             c.tail = e.tail
@@ -421,7 +443,7 @@ class _UrdfDocument:
         return found
 
     def _set_dynamics(self, joint, viscous: float, coulomb: float) -> None:
-        dyn = joint.find(self.ns + "dynamics")
+        dyn = joint.find("dynamics")
         if dyn is None:
             if viscous == 0 and coulomb == 0:
                 return
@@ -430,12 +452,14 @@ class _UrdfDocument:
         dyn.set("friction", _num(coulomb))
 
     def text(self) -> str:
-        for prefix, uri in self.namespaces.items():
-            if prefix:
-                ET.register_namespace(prefix, uri)
-        default = self.namespaces.get("")
-        body = ET.tostring(self.root, encoding="unicode", default_namespace=default)
-        return self.prolog + body + "\n"
+        body = ET.tostring(self.root, encoding="unicode")
+        # ElementTree closes empty elements with " />"; URDFs mostly write "/>". Outside comments
+        # and processing instructions, whose text is written as it is, every ">" of the output
+        # ends a tag (ElementTree escapes it in text and attribute values).
+        parts = re.split(r"(<!--.*?-->|<\?.*?\?>)", body, flags=re.DOTALL)
+        for i in range(0, len(parts), 2):
+            parts[i] = parts[i].replace(" />", "/>")
+        return self.prolog + "".join(parts) + "\n"
 
 
 def _child_ws(parent, indent: str) -> str:
