@@ -373,6 +373,8 @@ def test_vector_input_and_offsets(tree, tmp_path):
     res = write_urdf(robot, classical, b, sidecar=tmp_path / "side.yaml")
     assert a.read_text() == b.read_text()
     assert read_joint_terms(res.sidecar)["Off3"] == 2.0
+    with pytest.raises(mindyn.ModelError, match="is the description file itself"):
+        write_urdf(robot, classical, b, sidecar=b)
     assert yaml.safe_load(res.sidecar.read_text())["joints"][2]["units"]["Off"] == "N"
 
 
@@ -512,6 +514,7 @@ def _params_of(name) -> dict:
         ("puma560", "puma560", "o.urdf", "--urdf needs a robot from a URDF: 'puma560' is a DH"),
         (str(UR5), str(UR5), "o.yaml", "--yaml needs a YAML DH/MDH table: "),
         ("planar3", "planar3", "o.yaml", "was not read from a description file"),
+        ("stanford", {"robot": "puma560"}, "o.yaml", "identified for robot 'puma560', not 'st"),
     ],
 )
 def test_cli_export_errors(tmp_path, robot, content, output, message):
@@ -520,6 +523,8 @@ def test_cli_export_errors(tmp_path, robot, content, output, message):
         ident.write_text(content)
     elif isinstance(content, str):
         ident.write_text(json.dumps({"classical": _params_of(content)}))
+    elif "robot" in content:  # puma560's parameter names with its name, for stanford
+        ident.write_text(json.dumps({**content, "classical": _params_of("puma560")}))
     else:
         ident.write_text(json.dumps(content))
     flag = "--yaml" if output.endswith(".yaml") else "--urdf"

@@ -37,8 +37,9 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_export)
 
 
-def read_classical(path: str) -> dict:
-    """The 'classical' map of an identification JSON, or a one-line error naming the file."""
+def read_classical(path: str) -> tuple[dict, str | None]:
+    """The 'classical' map of an identification JSON and the robot it names (None if none),
+    or a one-line error naming the file."""
     file = Path(path)
     if not file.is_file():
         raise FileNotFoundError(f"identification file '{path}' does not exist")
@@ -56,7 +57,8 @@ def read_classical(path: str) -> dict:
             f"{path} has no 'classical' map of classical parameter values (it is written by "
             "'mindyn identify --consistent --json')"
         )
-    return classical
+    robot = doc.get("robot")
+    return classical, robot if isinstance(robot, str) else None
 
 
 def _no_constant(name: str) -> float:
@@ -64,8 +66,12 @@ def _no_constant(name: str) -> float:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    classical = read_classical(args.params)
+    classical, identified_for = read_classical(args.params)
     robot = load(args.robot, tip=args.tip)
+    if identified_for not in (None, robot.name):
+        raise ModelError(
+            f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"
+        )
     urdf = args.urdf is not None
     if urdf != (robot.convention == "urdf"):
         want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"

@@ -218,12 +218,11 @@ def write_urdf(
     doc = _UrdfDocument(src)
     notes = doc.set_chain(robot, terms)
     out = Path(path)
+    side = _sidecar_path(sidecar, out) if terms.joint_terms() or sidecar is not None else None
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(doc.text(), encoding="utf-8")
     written = Export(out, notes=notes)
-    joint = terms.joint_terms()
-    if joint or sidecar is not None:
-        side = Path(sidecar) if sidecar is not None else out.with_name(out.stem + ".joints.yaml")
+    if side is not None:
         _write_sidecar(side, robot, terms, out, urdf=True)
         written.sidecar = side
     return written
@@ -472,6 +471,13 @@ def _child_ws(parent, indent: str) -> str:
 
 
 # -- sidecar ----------------------------------------------------------------------------------
+def _sidecar_path(sidecar, out: Path) -> Path:
+    side = Path(sidecar) if sidecar is not None else out.with_name(out.stem + ".joints.yaml")
+    if side.absolute() == out.absolute():
+        raise ModelError(f"the sidecar file '{side}' is the description file itself")
+    return side
+
+
 def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Path, urdf: bool):
     present = terms.joint_terms()
     meaning = {}
@@ -580,11 +586,11 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
                 "coulomb": float(terms.coulomb[k]),
             }
     out = Path(path)
+    side = _sidecar_path(sidecar, out) if terms.offset is not None or sidecar is not None else None
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(yaml.safe_dump(doc, sort_keys=False, width=100), encoding="utf-8")
     written = Export(out)
-    if terms.offset is not None or sidecar is not None:
-        side = Path(sidecar) if sidecar is not None else out.with_name(out.stem + ".joints.yaml")
+    if side is not None:
         _write_sidecar(side, robot, terms, out, urdf=False)
         written.sidecar = side
         if terms.offset is not None:
