@@ -356,11 +356,25 @@ def test_zero_mass_link(tree, tmp_path):
     assert any("'l3': M3 = 0" in n and "zero inertial" in n for n in res.notes), res.notes
     back = mindyn.load(out, tip="tool")
     assert_inertial_roundtrip(robot, back.params, inertial_vector(robot, classical))
+    assert not back.viscous.any() and not back.coulomb.any()  # j1, j3 had damping / friction
     rng = np.random.default_rng(6)
     q, dq, ddq = states(robot, rng)
     got = pin_rnea(pin_chain(out, robot, TREE_LOCKED), q, dq, ddq)
     want = robot.inverse_dynamics(q, dq, ddq, inertial_vector(robot, classical))
     assert_close(got, want, TOL_DYN, "export: massless links vs Pinocchio")
+
+
+def test_inertia_that_is_not_physical_is_written_and_noted(tree, tmp_path):
+    """Least-squares values may break the triangle inequality: written as they are (the
+    dynamics stay those of the parameters), with a note."""
+    robot = mindyn.load(tree, tip="tool")
+    classical = consistent_params(robot, np.random.default_rng(14), rotor=False, friction=False)
+    classical["XX2"] += 1.0  # principal moment about x far above the other two
+    res = write_urdf(robot, classical, tmp_path / "x.urdf")
+    assert any(n.startswith("link 'l2': the inertia about its centre") for n in res.notes)
+    assert len(res.notes) == 4  # that one and the three links' merged inertials
+    back = mindyn.load(tmp_path / "x.urdf", tip="tool")
+    assert_inertial_roundtrip(robot, back.params, inertial_vector(robot, classical))
 
 
 def test_vector_input_and_offsets(tree, tmp_path):

@@ -529,6 +529,20 @@ def read_joint_terms(path) -> dict[str, float]:
     return out
 
 
+class _TableDumper(yaml.SafeDumper):
+    """Writes lists of numbers and short mappings of numbers on one line, as the bundled tables
+    do (``gravity: [0, 0, -9.81]``, ``limits: {lower: -170, upper: 170}``)."""
+
+    def represent_sequence(self, tag, sequence, flow_style=None):
+        flat = all(isinstance(v, (int, float, str)) for v in sequence)
+        return super().represent_sequence(tag, sequence, flow_style=flat or flow_style)
+
+    def represent_mapping(self, tag, mapping, flow_style=None):
+        items = mapping.values() if isinstance(mapping, dict) else []
+        flat = len(mapping) <= 6 and all(isinstance(v, (int, float)) for v in items)
+        return super().represent_mapping(tag, mapping, flow_style=flat or flow_style)
+
+
 def _read_yaml(path: Path, what: str):
     """The document of the YAML file `path`, or an error naming it as `what`."""
     if not path.is_file():
@@ -585,10 +599,18 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
                 "viscous": float(terms.viscous[k]),
                 "coulomb": float(terms.coulomb[k]),
             }
+    parts = ["inertial parameters"]
+    parts += [
+        t for t, v in (("rotor inertia", terms.rotor), ("friction", terms.viscous)) if v is not None
+    ]
+    what = ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]
+    note = f"The {what} of this table are identified values written by mindyn export."
+    old_notes = doc.get("notes")
+    doc["notes"] = f"{old_notes.rstrip()} {note}" if isinstance(old_notes, str) else note
     out = Path(path)
     side = _sidecar_path(sidecar, out) if terms.offset is not None or sidecar is not None else None
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(yaml.safe_dump(doc, sort_keys=False, width=100), encoding="utf-8")
+    out.write_text(yaml.dump(doc, Dumper=_TableDumper, sort_keys=False, width=100), "utf-8")
     written = Export(out)
     if side is not None:
         _write_sidecar(side, robot, terms, out, urdf=False)
