@@ -569,3 +569,18 @@ def _text(element) -> str:
     import xml.etree.ElementTree as ET
 
     return " ".join(ET.tostring(element, encoding="unicode").split()).replace(" />", "/>")
+
+
+def test_read_joint_terms_errors(tmp_path):
+    with pytest.raises(mindyn.RobotFileNotFoundError, match="joint-terms file '.*none.yaml'"):
+        read_joint_terms(tmp_path / "none.yaml")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("joints: [1, 2]\n")
+    with pytest.raises(mindyn.ModelError, match="expected a 'joints' list of mappings"):
+        read_joint_terms(bad)
+    bad.write_text("joints:\n- {name: j1, Ia: x}\n")
+    with pytest.raises(mindyn.ModelError, match="joint 1: 'Ia' is 'x'; expected a number"):
+        read_joint_terms(bad)
+    bad.write_text("joints: [\n")
+    with pytest.raises(mindyn.ModelError, match="bad.yaml: not a YAML file"):
+        read_joint_terms(bad)
