@@ -197,10 +197,11 @@ def write_urdf(
     is the identified one. Links before the first moving joint and off the chain are kept as
     they were, as is everything else in the file (comments included). A link of zero mass and
     zero first moment gets mass 0 and its rotational inertia at the link origin (a zero
-    inertial if it has none); the notes say so. ``Fv`` and ``Fc`` go into the joint's ``<dynamics damping= friction=>``; when the
-    parameters have no friction, the chain joints' damping and friction are set to 0, so that
-    the file describes the identified model. ``Ia``, ``Fv``, ``Fc`` and ``Off`` are also written
-    to the sidecar YAML, with their meaning and unit (:func:`read_joint_terms` reads it back).
+    inertial if it has none); the notes say so. ``Fv`` and ``Fc`` go into the joint's
+    ``<dynamics damping= friction=>``; when the parameters have no friction, the chain joints'
+    damping and friction are set to 0, so that the file describes the identified model. ``Ia``,
+    ``Fv``, ``Fc`` and ``Off`` are also written to the sidecar YAML, with their meaning and unit
+    (:func:`read_joint_terms` reads it back).
 
     Raises
     ------
