@@ -18,6 +18,7 @@ from . import (
     cli_codegen,
     cli_control,
     cli_demo,
+    cli_export,
     cli_identify,
     load,
 )
@@ -234,6 +235,7 @@ def build_parser() -> argparse.ArgumentParser:
     cli_identify.register(sub)
     cli_demo.register(sub)
     cli_codegen.register(sub)
+    cli_export.register(sub)
     return parser
 
 

@@ -1,0 +1,92 @@
+"""``mindyn export``: identified classical parameters written back as a robot description."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from . import ModelError, load
+from .cli_args import add_robot, output_file
+from .export import classical_terms, write_urdf, write_yaml
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "export",
+        help="write identified classical parameters into the robot's URDF or YAML table",
+        description="Write the classical parameters of an identification JSON (its 'classical' "
+        "map, from 'mindyn identify --consistent --json') into a copy of the robot's "
+        "description: a URDF (inertials, joint damping and friction; rotor inertia, friction "
+        "and torque offsets also in a sidecar YAML) or a YAML DH/MDH table.",
+    )
+    add_robot(p)
+    p.add_argument("params", metavar="ID.json", help="identification JSON with a 'classical' map")
+    out = p.add_mutually_exclusive_group(required=True)
+    out.add_argument("--urdf", metavar="FILE", type=output_file, help="URDF to write")
+    out.add_argument("--yaml", metavar="FILE", type=output_file, help="YAML DH/MDH table to write")
+    p.add_argument(
+        "--sidecar",
+        metavar="FILE",
+        type=output_file,
+        help="YAML for the joint terms (rotor inertia, friction, offsets); default: "
+        "<FILE stem>.joints.yaml beside FILE, written when there are joint terms (URDF) or "
+        "torque offsets (YAML table)",
+    )
+    p.set_defaults(func=cmd_export)
+
+
+def read_classical(path: str) -> tuple[dict, str | None]:
+    """The 'classical' map of an identification JSON and the robot it names (None if none),
+    or a one-line error naming the file."""
+    file = Path(path)
+    if not file.is_file():
+        raise FileNotFoundError(f"identification file '{path}' does not exist")
+    try:
+        doc = json.loads(file.read_text(encoding="utf-8"), parse_constant=_no_constant)
+    except UnicodeDecodeError as e:
+        raise ModelError(f"{path}: not UTF-8 text (byte at offset {e.start})") from None
+    except json.JSONDecodeError as e:
+        raise ModelError(f"{path}:{e.lineno}:{e.colno}: not valid JSON: {e.msg}") from None
+    except ValueError as e:
+        raise ModelError(f"{path}: {e}") from None
+    classical = doc.get("classical") if isinstance(doc, dict) else None
+    if not isinstance(classical, dict) or not classical:
+        raise ModelError(
+            f"{path} has no 'classical' map of classical parameter values (it is written by "
+            "'mindyn identify --consistent --json')"
+        )
+    robot = doc.get("robot")
+    return classical, robot if isinstance(robot, str) else None
+
+
+def _no_constant(name: str) -> float:
+    raise ValueError(f"holds {name}; expected finite numbers")
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    classical, identified_for = read_classical(args.params)
+    robot = load(args.robot, tip=args.tip)
+    if identified_for not in (None, robot.name):
+        raise ModelError(
+            f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"
+        )
+    urdf = args.urdf is not None
+    if urdf != (robot.convention == "urdf"):
+        want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
+        kind = "a URDF" if robot.convention == "urdf" else f"a {robot.convention.upper()} table"
+        raise ModelError(f"{want}: '{args.robot}' is {kind}; use {'--yaml' if urdf else '--urdf'}")
+    terms = classical_terms(robot, classical, f"{args.params}: 'classical'")
+    if urdf:
+        res = write_urdf(robot, classical, args.urdf, sidecar=args.sidecar)
+    else:
+        res = write_yaml(robot, classical, args.yaml, sidecar=args.sidecar)
+    total = math.fsum(terms.inertial[9::10])
+    line = f"wrote {res.path} ({robot.name}, {robot.n} links, moving mass {total:.6g} kg)"
+    if res.sidecar is not None:
+        line += f" and {res.sidecar}"
+    print(line)
+    for note in res.notes:
+        print(f"  note: {note}")
+    return 0

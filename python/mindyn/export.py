@@ -1,0 +1,621 @@
+"""Writing identified classical parameters back into a robot description.
+
+:func:`write_urdf` rewrites the URDF a robot was loaded from with new inertials and joint
+friction (and a sidecar YAML for what URDF has no place for: rotor inertia, torque offsets);
+:func:`write_yaml` rewrites a YAML DH/MDH table. Both take the classical parameters as a mapping
+from their names (``XX1 .. M1``, optionally ``Ia1``, ``Fv1 Fc1`` and ``Off1`` per joint, all
+joints alike) to values, or as a vector in a classical layout, and write numbers with ``repr``
+precision, so that ``mindyn.load`` of the result gives back the same parameters.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import numbers
+import re
+import xml.etree.ElementTree as ET
+import xml.parsers.expat
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from . import _args
+from ._core import ModelError, RobotFileNotFoundError
+from .robot import Robot
+
+__all__ = [
+    "Export",
+    "JointTerms",
+    "classical_terms",
+    "read_joint_terms",
+    "write_urdf",
+    "write_yaml",
+]
+
+#: What each joint term of a sidecar file is, and its unit for a revolute / prismatic joint.
+_TERMS = {
+    "Ia": (
+        "rotor (armature) inertia reflected to the joint side: tau += Ia * ddq",
+        "kg m^2",
+        "kg",
+    ),
+    "Fv": ("viscous friction: tau += Fv * dq", "N m s/rad", "N s/m"),
+    "Fc": ("Coulomb friction: tau += Fc * sign(dq)", "N m", "N"),
+    "Off": ("constant torque offset: tau += Off", "N m", "N"),
+}
+
+
+@dataclass
+class JointTerms:
+    """Validated classical parameters: ``inertial`` (10 n) and, per joint, the optional terms
+    (``None`` when absent)."""
+
+    inertial: np.ndarray
+    rotor: np.ndarray | None = None
+    viscous: np.ndarray | None = None
+    coulomb: np.ndarray | None = None
+    offset: np.ndarray | None = None
+
+    def joint_terms(self) -> dict[str, np.ndarray]:
+        """The per-joint terms present, by their name prefix (``Ia``, ``Fv``, ``Fc``, ``Off``)."""
+        out = {"Ia": self.rotor, "Fv": self.viscous, "Fc": self.coulomb, "Off": self.offset}
+        return {k: v for k, v in out.items() if v is not None}
+
+
+@dataclass
+class Export:
+    """What an export wrote: the description, the sidecar YAML (``None`` if none) and notes on
+    values that needed a choice (zero masses, inertias that are not physical, ...)."""
+
+    path: Path
+    sidecar: Path | None = None
+    notes: list[str] = field(default_factory=list)
+
+
+# -- the classical parameters -----------------------------------------------------------------
+def classical_terms(robot: Robot, classical, what: str = "classical parameters") -> JointTerms:
+    """Checks ``classical`` against ``robot`` and splits it.
+
+    ``classical`` is a mapping ``{name: value}`` holding exactly the names of one classical
+    layout of the robot (``robot.parameter_names(rotor, friction)``), optionally with ``Off1 ..
+    OffN``, or a vector in a classical layout (length 10 n, 11 n, 12 n or 13 n). ``what`` names
+    the input in error messages."""
+    n = robot.n
+    if isinstance(classical, Mapping):
+        return _from_mapping(robot, classical, what)
+    p = _args.params(classical, what, n)
+    per = p.size // n
+    rotor = per in (11, 13)
+    friction = per in (12, 13)
+    rows = p.reshape(n, per)
+    out = JointTerms(inertial=rows[:, :10].reshape(-1).copy())
+    if rotor:
+        out.rotor = rows[:, 10].copy()
+    if friction:
+        out.viscous = rows[:, per - 2].copy()
+        out.coulomb = rows[:, per - 1].copy()
+    return out
+
+
+def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
+    n = robot.n
+    keys = list(classical)
+    bad = [k for k in keys if not isinstance(k, str)]
+    if bad:
+        raise ModelError(f"{what}: the names must be text, got {bad[0]!r}")
+    has = {p: any(k.startswith(p) and k[len(p) :].isdigit() for k in keys) for p in _TERMS}
+    rotor, friction = has["Ia"], has["Fv"] or has["Fc"]
+    expected = robot.parameter_names(rotor, friction)
+    if has["Off"]:
+        expected += [f"Off{k + 1}" for k in range(n)]
+    missing = [k for k in expected if k not in classical]
+    unknown = [k for k in keys if k not in set(expected)]
+    if missing or unknown:
+        parts = []
+        if unknown:
+            parts.append(f"unknown {_few(unknown)}")
+        if missing:
+            parts.append(f"missing {_few(missing)}")
+        extras = [t for t, on in (("Ia", rotor), ("Fv, Fc", friction), ("Off", has["Off"])) if on]
+        layout = "XX..M" + "".join(f", {t}" for t in extras)
+        raise ModelError(
+            f"{what}: {'; '.join(parts)} (robot '{robot.name}' has {n} joints: expected "
+            f"{layout} for joints 1..{n}, {len(expected)} names)"
+        )
+    values = {}
+    for k in expected:
+        v = classical[k]
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+            raise ModelError(f"{what}: '{k}' is {v!r}; expected a number")
+        if not math.isfinite(float(v)):
+            raise ModelError(f"{what}: '{k}' is {float(v)}; expected a finite number")
+        values[k] = float(v)
+
+    def column(prefix: str) -> np.ndarray:
+        return np.array([values[f"{prefix}{k + 1}"] for k in range(n)])
+
+    out = JointTerms(inertial=np.array([values[k] for k in robot.param_names]))
+    if rotor:
+        out.rotor = column("Ia")
+    if friction:
+        out.viscous, out.coulomb = column("Fv"), column("Fc")
+    if has["Off"]:
+        out.offset = column("Off")
+    return out
+
+
+def _few(names: list[str], most: int = 6) -> str:
+    shown = ", ".join(f"'{k}'" for k in names[:most])
+    return shown + (f" and {len(names) - most} more" if len(names) > most else "")
+
+
+def _num(x: float) -> str:
+    """The shortest text that reads back as exactly ``x`` (``repr``), for XML attributes."""
+    return repr(float(x))
+
+
+# -- URDF -------------------------------------------------------------------------------------
+def write_urdf(
+    robot: Robot,
+    classical,
+    path,
+    *,
+    source=None,
+    sidecar=None,
+) -> Export:
+    """Writes the URDF ``robot`` was loaded from with ``classical`` as its dynamics.
+
+    Parameters
+    ----------
+    robot : Robot
+        Loaded from a URDF (with the ``tip`` the parameters were identified for).
+    classical : mapping or array_like
+        Classical parameters, see :func:`classical_terms`: about each link-frame origin, in link
+        axes; a link frame is the URDF frame of the link that the moving joint moves.
+    path : str or Path
+        The URDF to write (its folder is created when missing).
+    source : str or Path, optional
+        The URDF to start from; default ``robot.source``.
+    sidecar : str or Path, optional
+        The YAML for the joint terms (default ``<path stem>.joints.yaml`` beside ``path``, written
+        only when ``classical`` has joint terms).
+
+    Returns
+    -------
+    Export
+        The files written and notes.
+
+    Each moving link of the chain gets one ``<inertial>``: mass ``M``, centre of mass ``(MX,
+    MY, MZ) / M`` and the inertia about it, in link axes (``rpy="0 0 0"``); comments inside a
+    replaced ``<inertial>`` go with it. The links merged into a moving link when the robot was
+    loaded (children on fixed joints, and off-chain moving joints locked at ``q = 0`` clamped
+    into their limits) lose their ``<inertial>``, which a comment replaces, so that the total
+    is the identified one. Links before the first moving joint and off the chain are kept as
+    they were, as is everything else in the file (comments included). A link of zero mass and
+    zero first moment gets mass 0 and its rotational inertia at the link origin (a zero
+    inertial if it has none); the notes say so. ``Fv`` and ``Fc`` go into the joint's
+    ``<dynamics damping= friction=>``; when the parameters have no friction, the chain joints'
+    damping and friction are set to 0, so that the file describes the identified model. ``Ia``,
+    ``Fv``, ``Fc`` and ``Off`` are also written to the sidecar YAML, with their meaning and unit
+    (:func:`read_joint_terms` reads it back).
+
+    Raises
+    ------
+    ModelError
+        ``classical`` does not fit the robot, a mass is negative (or zero with a first moment),
+        the robot is not from a URDF, or ``source`` does not hold the robot's chain.
+    """
+    if robot.convention != "urdf":
+        raise ModelError(
+            f"robot '{robot.name}' is a {robot.convention} table, not a URDF"
+            + (": export it with write_yaml" if robot.convention in ("dh", "mdh") else "")
+        )
+    terms = classical_terms(robot, classical)
+    src = Path(robot.source if source is None else source)
+    doc = _UrdfDocument(src)
+    notes = doc.set_chain(robot, terms)
+    out = Path(path)
+    side = _sidecar_path(sidecar, out) if terms.joint_terms() or sidecar is not None else None
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(doc.text(), encoding="utf-8")
+    written = Export(out, notes=notes)
+    if side is not None:
+        _write_sidecar(side, robot, terms, out, urdf=True)
+        written.sidecar = side
+    return written
+
+
+class _UrdfDocument:
+    """A URDF file parsed with its comments, to be edited and written back."""
+
+    def __init__(self, path: Path):
+        if not path.is_file():
+            raise RobotFileNotFoundError(f"URDF file '{path}' does not exist")
+        self.path = path
+        raw = path.read_bytes()
+        try:
+            raw.decode("utf-8")
+        except UnicodeDecodeError as e:
+            raise ModelError(f"{path}: not UTF-8 text (byte at offset {e.start})") from None
+        builder = ET.TreeBuilder(insert_comments=True, insert_pis=True)
+        parser = ET.XMLParser(target=builder)
+        try:
+            parser.feed(raw)
+            self.root = parser.close()
+        except ET.ParseError as e:
+            line, col = e.position
+            raise ModelError(f"{path}:{line}:{col + 1}: not valid XML: {e}") from None
+        self.prolog = self._prolog(raw)
+        self._names_as_written(raw)
+        if self.root.tag != "robot":
+            raise ModelError(f"{path}: the root element is <{self.root.tag}>, not <robot>")
+        self.links = {e.get("name"): e for e in self.root if e.tag == "link" and e.get("name")}
+        self.joints = [e for e in self.root if e.tag == "joint"]
+        self.entering = {}  # child link -> joint element
+        self.children = {}  # parent link -> joint elements
+        for j in self.joints:
+            child, parent = self._end(j, "child"), self._end(j, "parent")
+            self.entering[child] = j
+            self.children.setdefault(parent, []).append(j)
+
+    def _names_as_written(self, raw: bytes) -> None:
+        """Turns ElementTree's ``{uri}name`` back into ``prefix:name`` (``name`` for the default
+        namespace, as urdfdom reads it) and declares the namespaces on the root again, so that
+        the file is written with the names and declarations it had."""
+        declared = {}
+        for _, (prefix, uri) in ET.iterparse(io.BytesIO(raw), events=("start-ns",)):
+            declared.setdefault(prefix, uri)
+        if not declared:
+            return
+        prefix_of = {}
+        for prefix, uri in declared.items():
+            prefix_of.setdefault(uri, prefix)
+
+        def plain(name: str) -> str:
+            if not name.startswith("{"):
+                return name
+            uri, local = name[1:].split("}", 1)
+            prefix = prefix_of.get(uri, "")
+            return f"{prefix}:{local}" if prefix else local
+
+        for e in self.root.iter():
+            if isinstance(e.tag, str):
+                e.tag = plain(e.tag)
+            if any(k.startswith("{") for k in e.attrib):
+                attrib = {plain(k): v for k, v in e.attrib.items()}
+                e.attrib.clear()
+                e.attrib.update(attrib)
+        for prefix, uri in declared.items():
+            self.root.set(f"xmlns:{prefix}" if prefix else "xmlns", uri)
+
+    @staticmethod
+    def _prolog(raw: bytes) -> str:
+        """The text before the root element (XML declaration, comments), kept verbatim."""
+        start = []
+        p = xml.parsers.expat.ParserCreate()
+
+        def first(name, attrs):
+            start.append(p.CurrentByteIndex)
+            raise StopIteration
+
+        p.StartElementHandler = first
+        try:
+            p.Parse(raw, True)
+        except StopIteration:
+            pass
+        return raw[: start[0]].decode("utf-8") if start else ""
+
+    def _end(self, joint, which: str) -> str:
+        e = joint.find(which)
+        return e.get("link", "") if e is not None else ""
+
+    def set_chain(self, robot: Robot, terms: JointTerms) -> list[str]:
+        bodies = robot.link_names[1:]
+        for k, name in enumerate(bodies):
+            j = self.entering.get(name)
+            if name not in self.links or j is None or j.get("name") != robot.joint_names[k]:
+                raise ModelError(
+                    f"{self.path}: has no joint '{robot.joint_names[k]}' moving link '{name}': "
+                    f"it is not the URDF robot '{robot.name}' was loaded from"
+                )
+        notes = []
+        body_set = set(bodies)
+        for k, name in enumerate(bodies):
+            merged = [
+                m
+                for m in self._merged_below(name, body_set)
+                if self._drop_inertial(self.links[m], name)
+            ]
+            p = terms.inertial[10 * k : 10 * k + 10]
+            notes += self._set_inertial(self.links[name], p, k + 1, name)
+            if merged:
+                notes.append(
+                    f"link '{name}' holds the identified inertia of the links merged into it, "
+                    f"whose <inertial> was removed: {', '.join(merged)}"
+                )
+        for k, name in enumerate(bodies):
+            fv = 0.0 if terms.viscous is None else terms.viscous[k]
+            fc = 0.0 if terms.coulomb is None else terms.coulomb[k]
+            self._set_dynamics(self.entering[name], fv, fc)
+        return notes
+
+    def _merged_below(self, body: str, bodies: set) -> list[str]:
+        """The links merged into `body` by the loader: all below it, up to the next body."""
+        out, stack = [], [body]
+        while stack:  # depth first, in the file's order
+            link = stack.pop()
+            if link != body:
+                out.append(link)
+            kids = [self._end(j, "child") for j in self.children.get(link, [])]
+            stack += [c for c in reversed(kids) if c not in bodies]
+        return [m for m in out if m in self.links]
+
+    def _element(self, parent, tag: str, indent: str, attrib=None):
+        """A new last child of `parent` (whose own line starts with `indent`), indented one
+        level deeper than `parent`, or like its other children."""
+        e = ET.Element(tag, attrib or {})
+        kids = list(parent)
+        if not kids:
+            parent.text = "\n" + indent + "  "
+            e.tail = "\n" + indent
+        else:
+            e.tail = kids[-1].tail
+            kids[-1].tail = _child_ws(parent, indent)
+        parent.append(e)
+        return e
+
+    def _set_inertial(self, link, p: np.ndarray, index: int, name: str) -> list[str]:
+        notes = []
+        m = float(p[9])
+        h = np.array(p[6:9], dtype=float)
+        Io = np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]], dtype=float)
+        if m < 0:
+            raise ModelError(
+                f"M{index} = {m!r} (link '{name}') is negative; a URDF mass must be >= 0 "
+                "(export physically consistent parameters)"
+            )
+        if m == 0:
+            if np.any(h != 0):
+                raise ModelError(
+                    f"M{index} = 0 (link '{name}') with a first moment (MX{index}, MY{index}, "
+                    f"MZ{index}) = ({h[0]!r}, {h[1]!r}, {h[2]!r}): no URDF inertial has that"
+                )
+            com, Ic = np.zeros(3), Io
+            notes.append(
+                f"link '{name}': M{index} = 0, no centre of mass; "
+                + (
+                    "zero inertial written"
+                    if not np.any(Io)
+                    else "its rotational inertia is written at the link origin"
+                )
+            )
+        else:
+            com = h / m
+            Ic = Io - (np.dot(h, h) * np.eye(3) - np.outer(h, h)) / m
+            ev = np.linalg.eigvalsh(Ic)
+            if ev[0] < 0 or 2 * ev.max() > ev.sum() * (1 + 1e-12):
+                notes.append(
+                    f"link '{name}': the inertia about its centre of mass (principal moments "
+                    f"{', '.join(f'{v:.4g}' for v in ev)}) is not that of a physical body"
+                )
+        old = [e for e in link if e.tag == "inertial"]
+        if old:
+            where = list(link).index(old[0])
+            tail = old[0].tail
+            for e in old:
+                link.remove(e)
+            new = ET.Element("inertial")
+            new.tail = tail
+            link.insert(where, new)
+        else:
+            new = self._element(link, "inertial", self._indent(link))
+        level = _child_ws(link, self._indent(link)).rsplit("\n", 1)[1]
+        xyz = " ".join(_num(v) for v in com)
+        self._element(new, "origin", level, {"xyz": xyz, "rpy": "0 0 0"})
+        self._element(new, "mass", level, {"value": _num(m)})
+        names = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+        values = (Ic[0, 0], Ic[0, 1], Ic[0, 2], Ic[1, 1], Ic[1, 2], Ic[2, 2])
+        self._element(new, "inertia", level, {k: _num(v) for k, v in zip(names, values)})
+        return notes
+
+    def _indent(self, element) -> str:
+        """The indentation of the line of `element`, a child of the root."""
+        kids = list(self.root)
+        i = kids.index(element)
+        ws = (self.root.text if i == 0 else kids[i - 1].tail) or ""
+        return ws.rsplit("\n", 1)[1] if "\n" in ws and not ws.strip() else ""
+
+    def _drop_inertial(self, link, body: str) -> bool:
+        """Replaces `link`'s <inertial> by a comment; False if it had none."""
+        found = False
+        for i, e in enumerate(list(link)):
+            if e.tag != "inertial":
+                continue
+            c = ET.Comment(f" inertial merged into link '{body}' by mindyn export ")
+            c.tail = e.tail
+            link.remove(e)
+            link.insert(i, c)
+            found = True
+        return found
+
+    def _set_dynamics(self, joint, viscous: float, coulomb: float) -> None:
+        dyn = joint.find("dynamics")
+        if dyn is None:
+            if viscous == 0 and coulomb == 0:
+                return
+            dyn = self._element(joint, "dynamics", self._indent(joint))
+        dyn.set("damping", _num(viscous))
+        dyn.set("friction", _num(coulomb))
+
+    def text(self) -> str:
+        body = ET.tostring(self.root, encoding="unicode")
+        # ElementTree closes empty elements with " />"; URDFs mostly write "/>". Outside comments
+        # and processing instructions, whose text is written as it is, every ">" of the output
+        # ends a tag (ElementTree escapes it in text and attribute values).
+        parts = re.split(r"(<!--.*?-->|<\?.*?\?>)", body, flags=re.DOTALL)
+        for i in range(0, len(parts), 2):
+            parts[i] = parts[i].replace(" />", "/>")
+        return self.prolog + "".join(parts) + "\n"
+
+
+def _child_ws(parent, indent: str) -> str:
+    """The whitespace before `parent`'s children: as its first child has it, or one level (two
+    spaces) deeper than `indent`."""
+    text = parent.text or ""
+    if len(parent) and "\n" in text and not text.strip():
+        return "\n" + text.rsplit("\n", 1)[1]
+    return "\n" + indent + "  "
+
+
+# -- sidecar ----------------------------------------------------------------------------------
+def _sidecar_path(sidecar, out: Path) -> Path:
+    side = Path(sidecar) if sidecar is not None else out.with_name(out.stem + ".joints.yaml")
+    if side.absolute() == out.absolute():
+        raise ModelError(f"the sidecar file '{side}' is the description file itself")
+    return side
+
+
+def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Path, urdf: bool):
+    present = terms.joint_terms()
+    meaning = {}
+    for key in present:
+        text, rev, pri = _TERMS[key]
+        if urdf and key == "Fv":
+            text += "; also the URDF joint's <dynamics damping>"
+        if urdf and key == "Fc":
+            text += "; also the URDF joint's <dynamics friction>"
+        meaning[key] = f"{text} [{rev} for a revolute joint, {pri} for a prismatic one]"
+    joints = []
+    for k in range(robot.n):
+        kind = robot.joint_types[k]
+        unit = 1 if kind == "revolute" else 2
+        row = {"name": robot.joint_names[k], "index": k + 1, "type": kind}
+        row.update({key: float(v[k]) for key, v in present.items()})
+        row["units"] = {key: _TERMS[key][unit] for key in present}
+        joints.append(row)
+    doc = {
+        "robot": robot.name,
+        "description": description.name,
+        "terms": meaning,
+        "joints": joints,
+    }
+    head = (
+        f"# Joint terms identified for robot '{robot.name}', written by mindyn export beside "
+        f"{description.name}.\n# Per joint: the term's value in the unit given under 'units'.\n"
+    )
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(head + yaml.safe_dump(doc, sort_keys=False, width=100), encoding="utf-8")
+
+
+def read_joint_terms(path) -> dict[str, float]:
+    """The joint terms of a sidecar YAML written by :func:`write_urdf` or :func:`write_yaml`, as
+    ``{"Ia1": ..., "Fv1": ..., "Fc1": ..., "Off1": ..., ...}`` (the terms it holds)."""
+    p = Path(path)
+    doc = _read_yaml(p, "joint-terms file")
+    rows = doc.get("joints") if isinstance(doc, dict) else None
+    if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
+        raise ModelError(f"{p}: expected a 'joints' list of mappings (a mindyn joint-terms file)")
+    out = {}
+    for i, row in enumerate(rows, 1):
+        for key in _TERMS:
+            if key in row:
+                v = row[key]
+                if isinstance(v, bool) or not isinstance(v, (int, float)):
+                    raise ModelError(f"{p}: joint {i}: '{key}' is {v!r}; expected a number")
+                out[f"{key}{i}"] = float(v)
+    return out
+
+
+class _TableDumper(yaml.SafeDumper):
+    """Writes lists of numbers and short mappings of numbers on one line, as the bundled tables
+    do (``gravity: [0, 0, -9.81]``, ``limits: {lower: -170, upper: 170}``)."""
+
+    def represent_sequence(self, tag, sequence, flow_style=None):
+        flat = all(isinstance(v, (int, float, str)) for v in sequence)
+        return super().represent_sequence(tag, sequence, flow_style=flat or flow_style)
+
+    def represent_mapping(self, tag, mapping, flow_style=None):
+        items = mapping.values() if isinstance(mapping, dict) else []
+        flat = len(mapping) <= 6 and all(isinstance(v, (int, float)) for v in items)
+        return super().represent_mapping(tag, mapping, flow_style=flat or flow_style)
+
+
+def _read_yaml(path: Path, what: str):
+    """The document of the YAML file `path`, or an error naming it as `what`."""
+    if not path.is_file():
+        raise RobotFileNotFoundError(f"{what} '{path}' does not exist")
+    try:
+        return yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError) as e:
+        raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
+
+
+# -- YAML DH / MDH tables -----------------------------------------------------------------------
+def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> Export:
+    """Writes the YAML DH/MDH table ``robot`` was loaded from with ``classical`` as its dynamics.
+
+    Each joint's ``inertial`` becomes ``{XX, XY, XZ, YY, YZ, ZZ, MX, MY, MZ, M}`` (about the
+    link origin, link axes: the loader's own form), its ``rotor_inertia`` ``Ia`` and its
+    ``friction`` ``{viscous: Fv, coulomb: Fc}``; a term that ``classical`` does not have is
+    removed (zero), so that ``mindyn.load(path).parameters(True, True)`` is ``classical`` with
+    zeros for the absent terms. The rest of the table is kept, in its order; the YAML comments
+    of the source are not. Torque offsets ``Off`` have no place in a table: when present they
+    go to a sidecar YAML (default ``<path stem>.joints.yaml``), as in :func:`write_urdf`.
+    """
+    if robot.convention not in ("dh", "mdh"):
+        raise ModelError(
+            f"robot '{robot.name}' is not from a YAML DH/MDH table ({robot.convention}): "
+            + ("export it with write_urdf" if robot.convention == "urdf" else "nothing to rewrite")
+        )
+    terms = classical_terms(robot, classical)
+    if source is None and not Path(robot.source).is_file():
+        raise ModelError(
+            f"robot '{robot.name}' was not read from a description file (source "
+            f"'{robot.source}'): there is no table to rewrite"
+        )
+    src = Path(robot.source if source is None else source)
+    doc = _read_yaml(src, "robot description")
+    joints = doc.get("joints") if isinstance(doc, dict) else None
+    if not isinstance(joints, list) or len(joints) != robot.n:
+        raise ModelError(
+            f"{src}: expected a 'joints' list of {robot.n} joints: it is not the table robot "
+            f"'{robot.name}' was loaded from"
+        )
+    names = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
+    for k, jn in enumerate(joints):
+        if not isinstance(jn, dict):
+            raise ModelError(f"{src}: joint {k + 1} is not a mapping")
+        p = terms.inertial[10 * k : 10 * k + 10]
+        jn["inertial"] = {key: float(v) for key, v in zip(names, p)}
+        jn.pop("rotor_inertia", None)
+        if terms.rotor is not None:
+            jn["rotor_inertia"] = float(terms.rotor[k])
+        jn.pop("friction", None)
+        if terms.viscous is not None:
+            jn["friction"] = {
+                "viscous": float(terms.viscous[k]),
+                "coulomb": float(terms.coulomb[k]),
+            }
+    parts = ["inertial parameters"]
+    parts += [
+        t for t, v in (("rotor inertia", terms.rotor), ("friction", terms.viscous)) if v is not None
+    ]
+    what = ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]
+    note = f"The {what} of this table are identified values written by mindyn export."
+    old_notes = doc.get("notes")
+    doc["notes"] = f"{old_notes.rstrip()} {note}" if isinstance(old_notes, str) else note
+    out = Path(path)
+    side = _sidecar_path(sidecar, out) if terms.offset is not None or sidecar is not None else None
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(yaml.dump(doc, Dumper=_TableDumper, sort_keys=False, width=100), "utf-8")
+    written = Export(out)
+    if side is not None:
+        _write_sidecar(side, robot, terms, out, urdf=False)
+        written.sidecar = side
+        if terms.offset is not None:
+            written.notes.append(f"torque offsets have no place in a DH/MDH table: see {side}")
+    return written
