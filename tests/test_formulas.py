@@ -220,6 +220,63 @@ def test_symbolic_urdf_at_random_origins(tmp_path, rng):
     assert f["ZZR2"] == "ZZR2 = ZZ2 + Ia2 + x3^2*(M3 + M4 + M5 + M6)"
 
 
+SKEWED = """name: skewed3
+convention: mdh
+angle_unit: deg
+joints:
+  - {type: revolute, alpha: 0, d: 0, r: 0}
+  - {type: revolute, alpha: 90, d: 0.1, r: 0}
+  - {type: revolute, alpha: %r, d: %r, r: %r}
+"""
+
+
+def test_symbolic_general_twist(tmp_path, rng):
+    """A twist of 30 degrees brings C_alpha3, S_alpha3. Khalil's relations for link 3 carried
+    into frame 2 through Rx(alpha3) and the translation (d3, -r3 S, r3 C) give, e.g.,
+    MYR2 = MY2 - S MZ3 - r3 S M3, XZR2 = XZ2 - d3 C MZ3 - d3 r3 C M3; every formula is checked
+    against robots built at random lengths and twists."""
+    path = tmp_path / "skewed.yaml"
+    path.write_text(SKEWED % (30.0, 0.4, 0.2))
+    bp = mindyn.base_parameters(path)
+    sym = bp.symbolic()
+    assert list(sym.symbols) == ["d2", "d3", "r3", "C_alpha3", "S_alpha3"]
+    f = dict(zip(bp.names, sym.text))
+    assert f["MYR2"] == "MYR2 = MY2 - S_alpha3*MZ3 - r3*S_alpha3*M3"
+    assert f["XZR2"] == "XZR2 = XZ2 - d3*C_alpha3*MZ3 - d3*r3*C_alpha3*M3"
+    assert f["MXR2"] == "MXR2 = MX2 + d3*M3"
+    assert r"\cos^{2}\alpha_{3}" in bp.latex(symbolic=True)
+    for _ in range(3):
+        alpha = rng.uniform(-3, 3)
+        d3, r3 = rng.uniform(0.1, 1.5, 2)
+        path.write_text(SKEWED % (float(np.degrees(alpha)), float(d3), float(r3)))
+        values = {
+            "d2": 0.1,
+            "d3": d3,
+            "r3": r3,
+            "C_alpha3": np.cos(alpha),
+            "S_alpha3": np.sin(alpha),
+        }
+        other = mindyn.base_parameters(path)
+        assert other.names == bp.names
+        got = formula_rows(sym.text, other.classical_names, values)
+        assert_close(got, other.Y, 1e-10, "symbolic formulas vs Y at random lengths")
+        assert np.max(np.abs(got - other.Y)) <= 1e-10
+
+
+def test_symbolic_twist_stays_numeric_beyond_the_monomial_budget(tmp_path, monkeypatch):
+    """Past MAX_MONOMIALS the twist's cosine and sine are numbers: MYR2 = MY2 - sin(30 deg) MZ3
+    - r3 sin(30 deg) M3, with sin(30 deg) = 1/2 exactly as a fraction."""
+    path = tmp_path / "skewed.yaml"
+    path.write_text(SKEWED % (30.0, 0.4, 0.2))
+    monkeypatch.setattr(F, "MAX_MONOMIALS", 20)
+    bp = mindyn.base_parameters(path)
+    sym = bp.symbolic()
+    assert list(sym.symbols) == ["d2", "d3", "r3"]
+    f = dict(zip(bp.names, sym.text))
+    assert f["MYR2"] == "MYR2 = MY2 - 1/2*MZ3 - 1/2*r3*M3"
+    assert sym.largest_difference <= 1e-12
+
+
 def test_symbolic_with_offsets_and_json():
     bp = mindyn.base_parameters("planar2", offset=True)
     out = bp.to_dict(symbolic=True)
@@ -354,7 +411,7 @@ def test_symbolic_refuses_a_changing_base_set(monkeypatch):
     """A robot whose base set differs at the sampled lengths (simulated: the geometry builder
     returns the arm turned horizontal, whose mass never changes height) is refused."""
     bp = mindyn.base_parameters("planar2")
-    monkeypatch.setattr(F._Geometry, "build", lambda self, values: mindyn.load("planar2h"))
+    monkeypatch.setattr(F._Geometry, "build", lambda self, *a: mindyn.load("planar2h"))
     with pytest.raises(mindyn.ModelError, match="changes when its lengths vary"):
         bp.symbolic()
 
@@ -384,7 +441,7 @@ def test_cli_symbolic_table_json_latex(run_cli):
     assert r.returncode == 0, r.stderr
     assert "MYR3  = MY3 - MZ4 - r4*(M4 + M5 + M6)" in r.stdout
     assert "ZZR2  = ZZ2 + Ia2 + d3^2*(M3 + M4 + M5 + M6)" in r.stdout
-    assert "symbols        d2 = 0.025, d3 = 0.455, d4 = 0.035, r4 = 0.42 (m)" in r.stdout
+    assert "symbols        d2 = 0.025, d3 = 0.455, d4 = 0.035, r4 = 0.42 (lengths in m)" in r.stdout
     r = run_cli("base", "zcr07s", "--rotor", "--friction", "--symbolic", "--format", "json")
     out = json.loads(r.stdout)
     assert len(out["formulas_symbolic"]) == out["n_base"] == 52

@@ -160,7 +160,7 @@ def cmd_base(args: argparse.Namespace) -> int:
     if args.symbolic:
         sym = bp.symbolic()
         values = ", ".join(f"{k} = {v:g}" for k, v in sym.symbols.items()) or "none"
-        lines.append(f"  symbols        {values} (m)")
+        lines.append(f"  symbols        {values} (lengths in m)")
         lines.append(
             f"  checked        against the numeric formulas at {sym.checked} geometries, "
             f"largest difference {sym.largest_difference:.2g}"

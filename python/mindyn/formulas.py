@@ -14,13 +14,16 @@ Symbolic formulas (:func:`symbolic_formulas`)
     The coefficients of ``Y`` as polynomials in the robot's lengths: for a DH table ``a_j, d_j``,
     for an MDH table ``d_j, r_j`` (the column names of the table), for a URDF ``x_j, y_j, z_j``, the
     translation of joint ``j``'s origin in the frame of the link before it (fixed joints merged).
-    Angles keep their values: for twists of 0 and +-90 degrees their sines and cosines are exact
-    0 and +-1, so the coefficients are polynomials with small integer coefficients; for other
-    angles the sines and cosines stay numbers inside the coefficients. A length that is zero in the
-    description is a structural zero (a symbol would change which parameters are base: with
-    ``r_2 = 0`` joint 2's frame sits on the common normal and ``MZ2`` groups differently), and the
-    offset of a prismatic joint's variable is no symbol either (shifting a joint variable changes no
-    relation between the parameters).
+    Twists of 0 and +-90 degrees keep their exact sines and cosines 0 and +-1, so the coefficients
+    are polynomials in the lengths with small integer coefficients; any other twist ``alpha_j`` of
+    a DH/MDH table brings two more symbols, ``C_alphaj`` and ``S_alphaj`` (its cosine and sine;
+    ``C^2`` or ``1 - S^2``, whichever is shorter), unless lengths and twists together would need
+    more than ``MAX_MONOMIALS`` monomials: then those sines and cosines stay numbers in the
+    coefficients. URDF rotations and the fixed ``theta`` of prismatic joints stay numbers. A length
+    that is zero in the description is a structural zero, not a symbol (a non-zero value there
+    describes another robot, whose base set can differ: zero offsets are what let parameters
+    regroup across parallel or intersecting axes), and the offset of a prismatic joint's variable
+    is no symbol either (shifting a joint variable changes no relation between the parameters).
 
     Degree bound. Moving link ``j``'s parameters to the frame of link ``j - 1`` (the
     parallel-axis theorem, which is what each regrouping relation does) keeps the mass, adds the
@@ -31,17 +34,21 @@ Symbolic formulas (:func:`symbolic_formulas`)
     at most linear, that of an inertia, rotor inertia or friction constant; with every length scaled
     by ``s`` a coefficient scales by ``s**(w_b - w_p)`` with weights 2 for inertias, 1 for first
     moments, 0 for masses (the Lagrangian keeps its form when lengths and first moments scale by
-    ``s`` and inertias by ``s**2``). So each coefficient is a polynomial of degree at most 2.
+    ``s`` and inertias by ``s**2``). So each coefficient is a polynomial of degree at most 2 in
+    the lengths. The rotation across joint ``j`` and the translation are linear in
+    ``cos alpha_j, sin alpha_j`` and each joint is crossed once, so the degree in those two is at
+    most 2 per joint: with ``sin^2 = 1 - cos^2``, the five functions ``1, C, S, C^2, C S``.
 
     Recovery. The numeric ``Y`` is computed for robots with the same angles and random lengths
     (uniform in +-[0.4, 1.6] m: generic, so the base set must be the one of the description, which
-    is checked) at more points than there are monomials of degree <= 2, the monomial
-    coefficients are solved for by least squares, rounded to fractions with denominators up to
-    1000 when within ``1e-12`` (otherwise to the shortest decimal within ``1e-13``), and every
-    formula, as printed, is checked against the numeric ``Y`` at the description's lengths and at
-    three further random geometries. The bound above assumes that the kept parameters take what is
-    carried from link to link; a column order or a geometry for which a coefficient is not such a
-    polynomial fails that check and is refused with a ModelError rather than printed wrong.
+    is checked), and random general angles for the symbolic twists, at more points than there
+    are monomials, the monomial coefficients are solved for by least squares, rounded to fractions
+    with denominators up to 1000 when within ``1e-12`` (otherwise to the shortest decimal within
+    ``1e-13``), and every formula, as printed, is checked against the numeric ``Y`` at the
+    description's geometry and at three further random geometries. The bound above assumes that
+    the kept parameters take what is carried from link to link; a column order or a geometry for
+    which a coefficient is not such a polynomial fails that check and is refused with a
+    ModelError rather than printed wrong.
 
 ZCR07S: our formulas against the study's Table 1
     With ``rotor=True, friction=True`` the 52 symbolic formulas give the study's relations in its
@@ -65,6 +72,7 @@ ZCR07S: our formulas against the study's Table 1
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -201,8 +209,10 @@ def _monomials(poly: Poly, symbols: Sequence[str], latex: bool) -> list[tuple[bo
         vars_ = []
         for s, k in zip(symbols, e):
             if k:
-                sym = _latex_symbol(s) if latex else s
-                vars_.append(sym if k == 1 else (f"{sym}^{{{k}}}" if latex else f"{sym}^{k}"))
+                if latex:
+                    vars_.append(_latex_symbol(s, k))
+                else:
+                    vars_.append(s if k == 1 else f"{s}^{k}")
         a = abs(c)
         num = _num_latex(a) if latex else _num_text(a)
         sep = r"\," if latex else "*"
@@ -253,10 +263,15 @@ def _latex_name(name: str) -> str:
     return rf"\mathrm{{{head}}}_{{{tail}}}" if head and tail else rf"\mathrm{{{name}}}"
 
 
-def _latex_symbol(s: str) -> str:
+def _latex_symbol(s: str, power: int = 1) -> str:
+    """``d3`` -> ``d_{3}``, ``C_alpha3`` -> ``cos alpha_{3}`` in LaTeX, with ``power``."""
     head = s.rstrip("0123456789")
     tail = s[len(head) :]
-    return f"{head}_{{{tail}}}" if tail else s
+    up = "" if power == 1 else f"^{{{power}}}"
+    trig = {"C_alpha": r"\cos", "S_alpha": r"\sin"}.get(head)
+    if trig:
+        return rf"{trig}{up}\alpha_{{{tail}}}"
+    return (f"{head}_{{{tail}}}" if tail else s) + up
 
 
 def _num_latex(c: Number) -> str:
@@ -336,6 +351,12 @@ class _Geometry:
                         self.symbols.append(f"{letter}{k + 1}")
                         self.where.append((k, slot))
             self.values = np.array([self.rows[k, s] for k, s in self.where])
+            # twists other than multiples of 90 degrees: their cosine and sine become symbols
+            self.twists = [
+                k
+                for k in range(robot.n)
+                if min(abs(math.cos(self.rows[k, 1])), abs(math.sin(self.rows[k, 1]))) > 1e-9
+            ]
         elif self.convention == "urdf":
             self.pre = [np.array(robot.joint_pre(k)) for k in range(robot.n)]
             self.axes = np.array(robot.axes, dtype=float)
@@ -345,19 +366,24 @@ class _Geometry:
                         self.symbols.append(f"{letter}{k + 1}")
                         self.where.append((k, i))
             self.values = np.array([self.pre[k][i, 3] for k, i in self.where])
+            self.twists = []
         else:
             raise _core.ModelError(
                 f"symbolic formulas: robot '{robot.name}' has convention "
                 f"'{self.convention}'; expected dh, mdh or urdf"
             )
 
-    def build(self, values: np.ndarray) -> Robot:
+    def build(self, values: np.ndarray, twists: Sequence[float] = ()) -> Robot:
+        """The robot with the symbol lengths ``values`` and, when given, the angles ``twists``
+        (rad) for the joints in ``self.twists``."""
         robot = self.robot
         if self.convention == "urdf":
             return self._build_urdf(values)
         rows = self.rows.copy()
         for (k, s), v in zip(self.where, values):
             rows[k, s] = v
+        for k, a in zip(self.twists, twists):
+            rows[k, 1] = a
         keys = ("a", "alpha", "d", "theta") if self.convention == "dh" else ("d", "alpha", "r")
         lines = [
             "name: geometry",
@@ -435,6 +461,9 @@ MAX_DENOMINATOR = 1000
 #: ... and taken when within this of the fitted value (relative to max(1, |value|)); fitted
 #: coefficients below it are zero. The fit, over lengths of order 1, is accurate to about 1e-14.
 FRACTION_TOLERANCE = 1e-12
+#: More monomials than this (lengths times the cos/sin of general twists) and the twists' sines
+#: and cosines stay numbers.
+MAX_MONOMIALS = 600
 #: A symbolic formula must reproduce the numeric ``Y`` within this (relative to max(1, |Y|)).
 CHECK_TOLERANCE = 1e-10
 
@@ -519,8 +548,24 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     order = pivots + [c for c in range(P) if c not in set(pivots)]
     opts = bp.options
 
-    def numeric(values: np.ndarray) -> np.ndarray:
-        r = geo.build(values)
+    ns = len(geo.symbols)
+    twists = list(geo.twists)
+    trig_exps = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1)]  # in (cos, sin), sin^2 = 1 - cos^2
+    if len(_exponents(ns)) * len(trig_exps) ** len(twists) > MAX_MONOMIALS:
+        twists = []  # too many general twists: their sines and cosines stay numbers
+    nt = len(twists)
+    geo.twists = twists
+    symbols = list(geo.symbols)
+    for k in twists:
+        symbols += [f"C_alpha{k + 1}", f"S_alpha{k + 1}"]
+    exps = []
+    for e in _exponents(ns):
+        for t in itertools.product(trig_exps, repeat=nt):
+            exps.append(e + tuple(x for pair in t for x in pair))
+    alpha0 = np.array([geo.rows[k, 1] for k in twists]) if nt else np.zeros(0)
+
+    def numeric(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
+        r = geo.build(values, angles)
         core = _core.base_parameters(
             r._m,
             rotor=bp.rotor,
@@ -541,16 +586,23 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
             )
         return np.array(core.Y)
 
-    ns = len(geo.symbols)
-    exps = _exponents(ns)
+    def point(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
+        """Symbol values: the lengths, then cos and sin of each symbolic twist."""
+        trig = [f(a) for a in angles for f in (math.cos, math.sin)]
+        return np.concatenate([values, trig])
+
     rng = np.random.default_rng(seed)
 
-    def draw(k: int) -> np.ndarray:
-        return rng.choice([-1.0, 1.0], size=(k, ns)) * rng.uniform(0.4, 1.6, size=(k, ns))
+    def draw(k: int) -> list[tuple[np.ndarray, np.ndarray]]:
+        lengths = rng.choice([-1.0, 1.0], size=(k, ns)) * rng.uniform(0.4, 1.6, size=(k, ns))
+        # general angles: at least 0.15 rad away from every multiple of 90 degrees
+        angles = rng.uniform(0.15, math.pi / 2 - 0.15, size=(k, nt))
+        angles += rng.integers(0, 4, size=(k, nt)) * math.pi / 2
+        return list(zip(lengths, angles))
 
-    fit_points = draw(len(exps) + 8)
-    samples = np.array([numeric(x).ravel() for x in fit_points])
-    A = _design(fit_points, exps)
+    fit = draw(len(exps) + 8)
+    samples = np.array([numeric(x, a).ravel() for x, a in fit])
+    A = _design(np.array([point(x, a) for x, a in fit]), exps)
     C, *_ = np.linalg.lstsq(A, samples, rcond=None)  # (monomials, base * classical)
 
     polys: dict[tuple[int, int], Poly] = {}
@@ -561,12 +613,14 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
             v = _rationalise(float(C[m, flat]))
             if v is not None:
                 poly.append((e, v))
+        for j in range(nt):
+            poly = _shorter_trig(poly, ns + 2 * j)
         if poly:
             polys[(b, c)] = tuple(poly)
 
     result = SymbolicFormulas(
         formulas=[],
-        symbols=dict(zip(geo.symbols, (float(v) for v in geo.values))),
+        symbols=dict(zip(symbols, (float(v) for v in point(geo.values, alpha0)))),
         polys=polys,
         names=names,
         classical_names=classical,
@@ -574,14 +628,15 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
         largest_difference=0.0,
     )
     worst = 0.0
-    checks = [(geo.values, Y0)] + [(x, numeric(x)) for x in draw(3)]
+    checks = [(point(geo.values, alpha0), Y0)]
+    checks += [(point(x, a), numeric(x, a)) for x, a in draw(3)]
     for x, Yn in checks:
         diff = float(np.max(np.abs(result.evaluate(x) - Yn))) if Yn.size else 0.0
         limit = CHECK_TOLERANCE * max(1.0, float(np.max(np.abs(Yn))) if Yn.size else 1.0)
         if not diff <= limit:
             raise _core.ModelError(
                 f"symbolic formulas: the regrouping coefficients of '{robot.name}' are not "
-                f"polynomials of degree <= 2 in its lengths {', '.join(geo.symbols) or '(none)'} "
+                f"polynomials of degree <= 2 in its lengths {', '.join(symbols) or '(none)'} "
                 f"(a fitted formula misses the numeric one by {diff:.3g} at a check geometry)"
                 + (
                     "; the geometry is near-degenerate: consider snap"
@@ -592,9 +647,23 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
         worst = max(worst, diff)
     result.checked = len(checks)
     result.largest_difference = worst
-    result.formulas = _gather(names, classical, polys, tuple(geo.symbols))
+    result.formulas = _gather(names, classical, polys, tuple(symbols))
     result.formulas += [unit_formula(o) for o in bp.names[len(names) :]]
     return result
+
+
+def _shorter_trig(poly: list, i: int) -> list:
+    """``poly`` with ``cos^2`` (exponent slot ``i``) written as ``1 - sin^2`` (slot ``i + 1``)
+    when that takes fewer monomials."""
+    alt: dict[tuple[int, ...], Number] = {}
+    for e, v in poly:
+        if e[i] == 2:
+            for e2, sign in (((*e[:i], 0, *e[i + 1 :]), 1), ((*e[:i], 0, 2, *e[i + 2 :]), -1)):
+                alt[e2] = alt.get(e2, 0) + sign * v
+        else:
+            alt[e] = alt.get(e, 0) + v
+    alt_list = [(e, v) for e, v in alt.items() if v != 0]
+    return alt_list if len(alt_list) < len(poly) else poly
 
 
 def _gather(names, classical, polys, symbols) -> list[Formula]:
