@@ -565,9 +565,10 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     alpha0 = np.array([geo.rows[k, 1] for k in twists]) if nt else np.zeros(0)
 
     def numeric(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
-        r = geo.build(values, angles)
-        core = _core.base_parameters(
-            r._m,
+        from .base import base_parameters  # base imports this module
+
+        other = base_parameters(
+            geo.build(values, angles),
             rotor=bp.rotor,
             friction=bp.friction,
             method=bp.method,
@@ -577,14 +578,14 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
             seed=int(opts.get("seed", 1)),
             snap=float(opts.get("snap", 0.0)),
         )
-        if list(core.names) != names or list(core.pivots) != pivots:
+        if other.names != names or other.pivots != pivots:
             raise _core.ModelError(
                 f"symbolic formulas: the base set of '{robot.name}' changes when its lengths "
                 f"vary ({len(names)} base parameters with the description's lengths, "
-                f"{len(core.names)} with others): the description's lengths are special, and "
+                f"{len(other.names)} with others): the description's lengths are special, and "
                 "its formulas have no form valid for general lengths"
             )
-        return np.array(core.Y)
+        return np.array(other.Y)
 
     def point(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
         """Symbol values: the lengths, then cos and sin of each symbolic twist."""
