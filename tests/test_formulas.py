@@ -407,6 +407,28 @@ def test_symbolic_refuses_a_rational_coefficient():
         bp.symbolic()
 
 
+def test_symbolic_budgets(monkeypatch):
+    """Too many length monomials or too long an estimated run: refused, with the numbers."""
+    bp = mindyn.base_parameters("zcr07s")
+    monkeypatch.setattr(F, "MAX_MONOMIALS", 14)  # 4 lengths: 15 monomials of degree <= 2
+    with pytest.raises(mindyn.ModelError, match="4 non-zero lengths, 15 monomials"):
+        bp.symbolic()
+    monkeypatch.setattr(F, "MAX_MONOMIALS", 600)
+    monkeypatch.setattr(F, "MAX_SECONDS", 0.0)
+    with pytest.raises(mindyn.ModelError, match=r"would take about .* the limit is 0 s"):
+        mindyn.base_parameters("zcr07s").symbolic()
+
+
+def test_symbolic_without_lengths(tmp_path):
+    """Three intersecting axes (all lengths zero): no symbols, the formulas are numbers."""
+    path = tmp_path / "wrist.yaml"
+    path.write_text(SKEWED.replace("%r, d: %r, r: %r", "90, d: 0, r: 0").replace("0.1", "0"))
+    bp = mindyn.base_parameters(path)
+    sym = bp.symbolic()
+    assert sym.symbols == {}
+    assert sym.text == bp.formulas
+
+
 def test_symbolic_refuses_a_changing_base_set(monkeypatch):
     """A robot whose base set differs at the sampled lengths (simulated: the geometry builder
     returns the arm turned horizontal, whose mass never changes height) is refused."""

@@ -48,7 +48,9 @@ Symbolic formulas (:func:`symbolic_formulas`)
     description's geometry and at three further random geometries. The bound above assumes that
     the kept parameters take what is carried from link to link; a column order or a geometry for
     which a coefficient is not such a polynomial fails that check and is refused with a
-    ModelError rather than printed wrong.
+    ModelError rather than printed wrong. So is a description with more than ``MAX_MONOMIALS``
+    monomials in its lengths alone, or one whose computation, estimated from the first varied
+    geometry, would take longer than ``MAX_SECONDS``.
 
 ZCR07S: our formulas against the study's Table 1
     With ``rotor=True, friction=True`` the 52 symbolic formulas give the study's relations in its
@@ -74,6 +76,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
@@ -464,6 +467,8 @@ FRACTION_TOLERANCE = 1e-12
 #: More monomials than this (lengths times the cos/sin of general twists) and the twists' sines
 #: and cosines stay numbers.
 MAX_MONOMIALS = 600
+#: Estimated time (from the first varied geometry) beyond which symbolic formulas are refused.
+MAX_SECONDS = 120.0
 #: A symbolic formula must reproduce the numeric ``Y`` within this (relative to max(1, |Y|)).
 CHECK_TOLERANCE = 1e-10
 
@@ -551,6 +556,12 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     ns = len(geo.symbols)
     twists = list(geo.twists)
     trig_exps = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1)]  # in (cos, sin), sin^2 = 1 - cos^2
+    if len(_exponents(ns)) > MAX_MONOMIALS:
+        raise _core.ModelError(
+            f"symbolic formulas: '{robot.name}' has {ns} non-zero lengths, "
+            f"{len(_exponents(ns))} monomials of degree <= 2 to recover; at most "
+            f"{MAX_MONOMIALS} are supported (about 33 lengths)"
+        )
     if len(_exponents(ns)) * len(trig_exps) ** len(twists) > MAX_MONOMIALS:
         twists = []  # too many general twists: their sines and cosines stay numbers
     nt = len(twists)
@@ -602,7 +613,16 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
         return list(zip(lengths, angles))
 
     fit = draw(len(exps) + 8)
-    samples = np.array([numeric(x, a).ravel() for x, a in fit])
+    start = time.perf_counter()
+    samples = [numeric(*fit[0]).ravel()]
+    need = (len(fit) + 3) * (time.perf_counter() - start)
+    if need > MAX_SECONDS:
+        raise _core.ModelError(
+            f"symbolic formulas: '{robot.name}' would take about {need:.0f} s "
+            f"({len(fit) + 3} base-parameter computations of {need / (len(fit) + 3):.2g} s); "
+            f"the limit is {MAX_SECONDS:.0f} s"
+        )
+    samples = np.array(samples + [numeric(x, a).ravel() for x, a in fit[1:]])
     A = _design(np.array([point(x, a) for x, a in fit]), exps)
     C, *_ = np.linalg.lstsq(A, samples, rcond=None)  # (monomials, base * classical)
 
