@@ -493,9 +493,15 @@ class SymbolicFormulas:
     formulas : list of Formula
         One per base parameter (``str(f)`` writes it, ``f.latex()`` as LaTeX).
     symbols : dict
-        Symbol name -> its value in the description (m).
-    coefficients : dict
-        ``(base name, classical name) -> {monomial text: coefficient}`` of every non-zero entry.
+        Symbol name -> its value in the description (lengths in m; ``C_alphaj``, ``S_alphaj``
+        the cosine and sine of a twist).
+    polys : dict
+        ``(base index, classical index) -> ((exponents, coefficient), ...)`` for every non-zero
+        entry of ``Y``: a polynomial, exponents in the order of ``symbols``, coefficients
+        fractions (or rounded floats where an angle stays a number).
+    names, classical_names : list of str
+        The base parameters (offsets excluded) and the classical parameters: the rows and
+        columns of :meth:`evaluate`.
     checked : int
         Number of geometries every formula was checked at (the description's and random ones).
     largest_difference : float
