@@ -14,6 +14,7 @@ from functools import cached_property
 import numpy as np
 
 from . import _args, _core
+from . import formulas as _formulas
 from .robot import Robot, load
 
 __all__ = ["BaseParameters", "base_parameters"]
@@ -34,9 +35,14 @@ class BaseParameters:
     Y : ndarray, shape (n, P)
         Regrouping matrix: ``p_b = Y @ params`` for a classical vector of length ``P``.
     formulas : list of str
-        ``XXR3 = XX3 - YY3 + YY4 + ...`` at full precision.
+        ``XXR2 = XX2 - YY2 + 0.18645124*(M2 + M3 + M4 + M5 + M6)``: coefficients without their
+        round-off, equal ones gathered (see :mod:`mindyn.formulas`).
+    formulas_full : list of str
+        The same at full precision, one term per classical parameter
+        (``... + 0.18645124000000002*M2 + ...``).
     sets : dict
-        ``lagrangian``, ``energy`` and ``eom``: each with ``n``, ``names``, ``formulas``, ``Y``,
+        ``lagrangian``, ``energy`` and ``eom``: each with ``n``, ``names``, ``formulas`` (readable),
+        ``formulas_full``, ``Y``,
         ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
         and ``margin`` (tolerance, smallest kept / largest dropped relative pivot, the counts at
         the neighbouring tolerances, ``near_degenerate``).
@@ -47,26 +53,69 @@ class BaseParameters:
         three sets in ``sets`` describe the rigid-body, rotor and friction part only.
     """
 
-    def __init__(self, core: _core.BaseParameters, robot: Robot, offset: bool = False):
+    def __init__(
+        self,
+        core: _core.BaseParameters,
+        robot: Robot,
+        offset: bool = False,
+        options: dict | None = None,
+    ):
         self._b = core
         self.robot = robot
         self.offset = bool(offset)
+        # the settings it was computed with (tolerance, snap, samples, seed), for symbolic()
+        self.options = dict(options or {})
         self._off = [f"Off{k + 1}" for k in range(robot.n)] if self.offset else []
 
     @cached_property
     def sets(self) -> dict:
         """The three sets as dictionaries (see the class attributes), built on first use."""
         core = self._b
-        return {"lagrangian": core.lagrangian, "energy": core.energy, "eom": core.eom}
+        out = {"lagrangian": core.lagrangian, "energy": core.energy, "eom": core.eom}
+        names = list(core.classical_names)
+        for s in out.values():
+            s["formulas_full"] = s["formulas"]
+            s["formulas"] = [str(f) for f in _formulas.numeric_formulas(s["Y"], s["names"], names)]
+        return out
 
     n = property(lambda self: self._b.n + len(self._off))
     names = property(lambda self: list(self._b.names) + self._off)
 
     @cached_property
     def formulas(self) -> list[str]:
-        """The regrouping formulas of the equations-of-motion set, one per base parameter
-        (written on first use)."""
+        """The regrouping formulas of the equations-of-motion set, one per base parameter,
+        readable: round-off removed and equal coefficients gathered (written on first use)."""
+        return [str(f) for f in self.formula_terms()]
+
+    @cached_property
+    def formulas_full(self) -> list[str]:
+        """The regrouping formulas at full precision, one term per classical parameter."""
         return list(self._b.formulas) + [f"{o} = {o}" for o in self._off]
+
+    def formula_terms(self) -> list[_formulas.Formula]:
+        """The readable formulas as :class:`mindyn.formulas.Formula` objects (``str()`` gives
+        the text, ``.latex()`` a LaTeX row)."""
+        core = self._b
+        out = _formulas.numeric_formulas(core.Y, core.names, core.classical_names)
+        return out + [_formulas.unit_formula(o) for o in self._off]
+
+    @cached_property
+    def _symbolic(self) -> _formulas.SymbolicFormulas:
+        return _formulas.symbolic_formulas(self)
+
+    def symbolic(self) -> _formulas.SymbolicFormulas:
+        """The regrouping formulas in the symbols of the robot's description (lengths ``d_j,
+        r_j`` of an MDH table, ``a_j, d_j`` of a DH table, joint origins ``x_j, y_j, z_j`` of a
+        URDF), recovered exactly and checked against the numeric ``Y`` at several geometries;
+        see :func:`mindyn.formulas.symbolic_formulas`. Offsets, when enabled, are
+        ``Off_j = Off_j``. Computed on first use."""
+        return self._symbolic
+
+    def latex(self, symbolic: bool = False) -> str:
+        """The formulas (numeric, or symbolic) as a LaTeX ``align*`` environment."""
+        if symbolic:
+            return _formulas.latex(self.symbolic().formulas)
+        return _formulas.latex(self.formula_terms())
 
     @property
     def Y(self) -> np.ndarray:
@@ -156,8 +205,9 @@ class BaseParameters:
         wp, wl = self._b.momentum_regressors(q, dq)
         return self._with_offset(wp, 0.0), self._with_offset(wl, 0.0)
 
-    def to_dict(self) -> dict:
-        """A JSON-ready summary (counts, names, formulas, margins)."""
+    def to_dict(self, symbolic: bool = False) -> dict:
+        """A JSON-ready summary (counts, names, formulas, margins); with ``symbolic``, also
+        ``formulas_symbolic``, ``symbols`` and ``symbolic_check`` (see :meth:`symbolic`)."""
         out = {
             "robot": self.robot.name,
             "method": self.method,
@@ -167,6 +217,7 @@ class BaseParameters:
             "n_base": self.n,
             "names": self.names,
             "formulas": self.formulas,
+            "formulas_full": self.formulas_full,
             "margin": _plain(self.margin),
             "no_effect": self.no_effect,
             "counts": {k: s["n"] for k, s in self.sets.items()},
@@ -192,6 +243,8 @@ class BaseParameters:
             "seconds": self.seconds,
             "snapped": self.snapped,
         }
+        if symbolic:
+            out.update(self.symbolic().to_dict())
         return out
 
     def __repr__(self) -> str:
@@ -292,4 +345,6 @@ def base_parameters(
         seed=int(seed),
         snap=float(snap or 0.0),
     )
-    return BaseParameters(core, robot, offset)
+    options = {"tolerance": float(tolerance), "snap": float(snap or 0.0)}
+    options.update(samples=int(samples), seed=int(seed))
+    return BaseParameters(core, robot, offset, options)

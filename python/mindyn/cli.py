@@ -6,7 +6,6 @@ import argparse
 import json
 import math
 import os
-import re
 import sys
 
 import numpy as np
@@ -100,20 +99,6 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
-def _latex_name(name: str) -> str:
-    m = re.match(r"^([A-Za-z]+?)(R?)(\d+)$", name)
-    if not m:
-        return rf"\mathrm{{{name}}}"
-    return rf"\mathrm{{{m.group(1)}{m.group(2)}}}_{{{m.group(3)}}}"
-
-
-def _latex_formula(formula: str) -> str:
-    lhs, rhs = formula.split(" = ", 1)
-    out = re.sub(r"([A-Za-z]+R?\d+)", lambda m: _latex_name(m.group(1)), rhs)
-    out = out.replace("*", r"\,")
-    return f"{_latex_name(lhs)} &= {out}"
-
-
 def cmd_base(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     order = [s.strip() for s in args.order.split(",")] if args.order else None
@@ -128,12 +113,10 @@ def cmd_base(args: argparse.Namespace) -> int:
         snap=args.snap,
     )
     if args.format == "json":
-        print(json.dumps(bp.to_dict(), indent=2))
+        print(json.dumps(bp.to_dict(symbolic=args.symbolic), indent=2))
         return 0
     if args.format == "latex":
-        print(r"\begin{align*}")
-        print(" \\\\\n".join(_latex_formula(f) for f in bp.formulas))
-        print(r"\end{align*}")
+        print(bp.latex(symbolic=args.symbolic))
         return 0
     extras = joint_terms(args)
     counts = {k: s["n"] for k, s in bp.sets.items()}
@@ -174,9 +157,19 @@ def cmd_base(args: argparse.Namespace) -> int:
         lines.append(f"  no effect      {' '.join(bp.no_effect)}")
     what = "non-zero basis functions" if bp.method == "projection" else "stacked regressor rows"
     lines.append(f"  computed       {bp.basis_rows} {what}, {bp.seconds * 1e3:.2f} ms")
+    formulas = bp.formulas
+    if args.symbolic:
+        sym = bp.symbolic()
+        values = ", ".join(f"{k} = {v:g}" for k, v in sym.symbols.items()) or "none"
+        lines.append(f"  symbols        {values} (lengths in m)")
+        lines.append(
+            f"  checked        against the numeric formulas at {sym.checked} geometries, "
+            f"largest difference {sym.largest_difference:.2g}"
+        )
+        formulas = sym.text
     lines.append("")
     width = max(len(n) for n in bp.names) if bp.names else 4
-    for i, f in enumerate(bp.formulas, 1):
+    for i, f in enumerate(formulas, 1):
         name, rhs = f.split(" = ", 1)
         lines.append(f"{i:>3}  {name:<{width}}  = {rhs}")
     print("\n".join(lines))
@@ -209,6 +202,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--method", choices=["projection", "numerical"], default="projection")
     p.add_argument("--format", choices=["table", "json", "latex"], default="table")
+    p.add_argument(
+        "--symbolic",
+        action="store_true",
+        help="formulas in the description's lengths (DH a_j, d_j; MDH d_j, r_j; URDF joint "
+        "origins x_j, y_j, z_j) instead of numbers",
+    )
     number(
         p,
         "--tolerance",

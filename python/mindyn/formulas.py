@@ -1,0 +1,718 @@
+"""Regrouping formulas written for reading, with numbers or with the description's own symbols.
+
+Numeric formulas (:func:`numeric_formulas`)
+    A row of the regrouping matrix ``Y`` is a double-precision vector: ``0.4318**2`` comes out as
+    ``0.18645124000000002`` and five equal coefficients as five slightly different doubles. Each
+    coefficient is printed as the shortest decimal within a tolerance of it, ``1e-13`` of its own
+    size plus ``1e-15`` of the largest coefficient of its formula (the round-off of the
+    projection is a few units in the last place of the numbers it combines, and the description's
+    lengths, given with a few decimals, make coefficients with at most twice as many). Exact zeros
+    are left out and ``+-1`` is written as a plain sign. Terms whose coefficients agree within that
+    tolerance are gathered: ``0.18645124*(M2 + M3 + M4 + M5 + M6)``.
+
+Symbolic formulas (:func:`symbolic_formulas`)
+    The coefficients of ``Y`` as polynomials in the robot's lengths: for a DH table ``a_j, d_j``,
+    for an MDH table ``d_j, r_j`` (the column names of the table), for a URDF ``x_j, y_j, z_j``, the
+    translation of joint ``j``'s origin in the frame of the link before it (fixed joints merged).
+    Twists of 0 and +-90 degrees keep their exact sines and cosines 0 and +-1, so the coefficients
+    are polynomials in the lengths with small integer coefficients; any other twist ``alpha_j`` of
+    a DH/MDH table brings two more symbols, ``C_alphaj`` and ``S_alphaj`` (its cosine and sine;
+    ``C^2`` or ``1 - S^2``, whichever is shorter), unless lengths and twists together would need
+    more than ``MAX_MONOMIALS`` monomials: then those sines and cosines stay numbers in the
+    coefficients. URDF rotations and the fixed ``theta`` of prismatic joints stay numbers. A length
+    that is zero in the description is a structural zero, not a symbol (a non-zero value there
+    describes another robot, whose base set can differ: zero offsets are what let parameters
+    regroup across parallel or intersecting axes), and the offset of a prismatic joint's variable
+    is no symbol either (shifting a joint variable changes no relation between the parameters).
+
+    Degree bound. Moving link ``j``'s parameters to the frame of link ``j - 1`` (the
+    parallel-axis theorem, which is what each regrouping relation does) keeps the mass, adds the
+    mass times the translation to the first moment, and adds to the inertia the translation times
+    the first moment and the translation squared times the mass. The translation is linear in the
+    lengths and the rotation free of them. Carried from the last link inwards, the coefficient of a
+    mass in a base parameter is therefore at most quadratic in the lengths, that of a first moment
+    at most linear, that of an inertia, rotor inertia or friction constant; with every length scaled
+    by ``s`` a coefficient scales by ``s**(w_b - w_p)`` with weights 2 for inertias, 1 for first
+    moments, 0 for masses (the Lagrangian keeps its form when lengths and first moments scale by
+    ``s`` and inertias by ``s**2``). So each coefficient is a polynomial of degree at most 2 in
+    the lengths. The rotation across joint ``j`` and the translation are linear in
+    ``cos alpha_j, sin alpha_j`` and each joint is crossed once, so the degree in those two is at
+    most 2 per joint: with ``sin^2 = 1 - cos^2``, the five functions ``1, C, S, C^2, C S``.
+
+    Recovery. The numeric ``Y`` is computed for robots with the same angles and random lengths
+    (uniform in +-[0.4, 1.6] m: generic, so the base set must be the one of the description, which
+    is checked), and random general angles for the symbolic twists, at more points than there
+    are monomials, the monomial coefficients are solved for by least squares, rounded to fractions
+    with denominators up to 1000 when within ``1e-12`` (otherwise to the shortest decimal within
+    ``1e-13``), and every formula, as printed, is checked against the numeric ``Y`` at the
+    description's geometry and at three further random geometries. The bound above assumes that
+    the kept parameters take what is carried from link to link; a column order or a geometry for
+    which a coefficient is not such a polynomial fails that check and is refused with a
+    ModelError rather than printed wrong. So is a description with more than ``MAX_MONOMIALS``
+    monomials in its lengths alone, or one whose computation, estimated from the first varied
+    geometry, would take longer than ``MAX_SECONDS``.
+
+ZCR07S: our formulas against the study's Table 1
+    With ``rotor=True, friction=True`` the 52 symbolic formulas give the study's relations in its
+    own symbols, for example ``MYR3 = MY3 - MZ4 - r4*(M4 + M5 + M6)``,
+    ``ZZR2 = ZZ2 + Ia2 + d3^2*(M3 + M4 + M5 + M6)``, ``MXR2 = MX2 + d3*(M3 + M4 + M5 + M6)``,
+    ``XXR2 = XX2 - YY2 - d3^2*(M3 + M4 + M5 + M6)``. The study's print differs in these places,
+    where its own MDH table (Table 2) decides for our version:
+
+    - the elbow offset ``d4 = 35 mm`` is missing from the study's relations. It belongs in
+      ``XXR3 = XX3 - YY3 + YY4 + 2*r4*MZ4 + (r4^2 - d4^2)*(M4 + M5 + M6)``,
+      ``ZZR3 = ZZ3 + YY4 + 2*r4*MZ4 + (r4^2 + d4^2)*(M4 + M5 + M6)``, and it regroups two
+      parameters that the study keeps alone: ``MXR3 = MX3 + d4*(M4 + M5 + M6)`` and
+      ``XYR3 = XY3 + d4*MZ4 + d4*r4*(M4 + M5 + M6)``; ``ZZR1`` gets ``d4^2*(M4 + M5 + M6)`` too;
+    - the wrist first moments have the opposite signs: ``alpha5 = +90`` and ``alpha6 = -90``
+      degrees give ``MYR4 = MY4 - MZ5`` and ``MYR5 = MY5 + MZ6``;
+    - ``ZZ3`` enters ``ZZR3`` with ``+1`` (the study's print reads ``- Izz3``);
+    - ``XZ3``, ``XZ4``, ``XZ5`` are not regrouped (the study marks them with ``r``): the relation
+      that would feed them is proportional to ``cos(alpha_j)``, zero for ``alpha_4..6 = +-90``;
+    - ``XZR2 = XZ2 - d3*MZ3``: with ``r3 = 0`` no mass term remains.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Union
+
+import numpy as np
+
+from . import _core
+from .robot import Robot
+
+__all__ = [
+    "Formula",
+    "SymbolicFormulas",
+    "latex",
+    "numeric_formulas",
+    "round_coefficient",
+    "shortest_decimal",
+    "symbolic_formulas",
+    "unit_formula",
+]
+
+#: Numeric formulas: tolerance of a coefficient, relative to itself ...
+RELATIVE = 1e-13
+#: ... plus this much of the largest coefficient of its formula.
+ABSOLUTE = 1e-15
+
+Number = Union[Fraction, float]
+# A polynomial: ((exponents, coefficient), ...), exponents one per symbol; the numeric formulas
+# use no symbols, so their coefficients are constant polynomials ((), value).
+Poly = tuple[tuple[tuple[int, ...], Number], ...]
+
+
+# -- numbers ------------------------------------------------------------------------------------
+def shortest_decimal(x: float, tol: float) -> str:
+    """The shortest decimal (1 to 17 significant digits) within ``tol`` of ``x``, as text."""
+    x = float(x)
+    if x == 0.0 or not math.isfinite(x):
+        return "0" if x == 0.0 else repr(x)
+    for digits in range(1, 18):
+        s = f"{x:.{digits}g}"
+        if abs(float(s) - x) <= tol:
+            return _tidy(s)
+    return _tidy(repr(x))
+
+
+def _tidy(s: str) -> str:
+    """``1.2e-05`` -> ``1.2e-5``, ``3e+06`` -> ``3e6``."""
+    if "e" not in s:
+        return s
+    mant, exp = s.split("e")
+    return f"{mant}e{int(exp)}"
+
+
+def round_coefficient(x: float, scale: float = 0.0) -> float:
+    """``x`` without its round-off: the shortest decimal within ``RELATIVE * |x| + ABSOLUTE *
+    scale`` (``scale``: the largest coefficient of the formula), e.g. ``0.18645124000000002`` ->
+    ``0.18645124``, ``1.0000000000000002`` -> ``1``."""
+    return float(shortest_decimal(x, RELATIVE * abs(x) + ABSOLUTE * abs(scale)))
+
+
+# -- formulas -------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Term:
+    """``coef * (params[0] + params[1] + ...)``: classical parameters sharing one coefficient."""
+
+    coef: Poly
+    params: tuple[str, ...]
+
+
+@dataclass(frozen=True)
+class Formula:
+    """One base parameter: ``name = sum of terms``; ``symbols`` names the polynomial variables."""
+
+    name: str
+    terms: tuple[Term, ...]
+    symbols: tuple[str, ...] = ()
+
+    def __str__(self) -> str:
+        return self.text()
+
+    def text(self) -> str:
+        """``XXR2 = XX2 - YY2 + 0.18645124*(M2 + M3)``; powers as ``d3^2``."""
+        return self.name + " = " + _join([_term_text(t, self.symbols) for t in self.terms])
+
+    def latex(self) -> str:
+        """One ``align`` row: ``\\mathrm{XXR}_{2} &= ...``."""
+        parts = [_term_latex(t, self.symbols) for t in self.terms]
+        return f"{_latex_name(self.name)} &= {_join(parts)}"
+
+
+def _join(parts: list[tuple[bool, str]]) -> str:
+    """Signed parts as a sum: ``a - b + c``; an empty sum is ``0``."""
+    if not parts:
+        return "0"
+    out = ""
+    for i, (neg, body) in enumerate(parts):
+        if i == 0:
+            out = ("-" if neg else "") + body
+        else:
+            out += (" - " if neg else " + ") + body
+    return out
+
+
+def _is_unit(poly: Poly) -> bool:
+    return len(poly) == 1 and not any(poly[0][0]) and abs(poly[0][1]) == 1
+
+
+def _negative(poly: Poly) -> bool:
+    """Written with a minus in front: every coefficient negative."""
+    return all(c < 0 for _, c in poly)
+
+
+def _num_text(c: Number) -> str:
+    """A fraction as ``n/d`` (``n`` when whole); a float, already rounded, as its shortest
+    round-tripping text (``0.18645124``, ``2`` for 2.0)."""
+    if isinstance(c, Fraction):
+        return str(c.numerator) if c.denominator == 1 else f"{c.numerator}/{c.denominator}"
+    c = float(c)
+    if c.is_integer() and abs(c) < 1e15:
+        return str(int(c))
+    return _tidy(repr(c))
+
+
+def _monomials(poly: Poly, symbols: Sequence[str], latex: bool) -> list[tuple[bool, str]]:
+    """Positive monomials first, then by degree (highest first), then by symbol order."""
+
+    def key(item):
+        e, c = item
+        return (c < 0, -sum(e), [-x for x in e])
+
+    out = []
+    for e, c in sorted(poly, key=key):
+        vars_ = []
+        for s, k in zip(symbols, e):
+            if k:
+                if latex:
+                    vars_.append(_latex_symbol(s, k))
+                else:
+                    vars_.append(s if k == 1 else f"{s}^{k}")
+        a = abs(c)
+        num = _num_latex(a) if latex else _num_text(a)
+        sep = r"\," if latex else "*"
+        if vars_:
+            body = (" " if latex else "*").join(vars_)
+            body = body if a == 1 else f"{num}{sep}{body}"
+        else:
+            body = num
+        out.append((c < 0, body))
+    return out
+
+
+def _poly_body(poly: Poly, symbols, latex: bool) -> tuple[bool, str, bool]:
+    """(written negative, text without that sign, needs parentheses as a factor)."""
+    neg = _negative(poly)
+    if neg:
+        poly = tuple((e, -c) for e, c in poly)
+    mons = _monomials(poly, symbols, latex)
+    return neg, _join(mons), len(mons) > 1
+
+
+def _term_text(t: Term, symbols) -> tuple[bool, str]:
+    return _term(t, symbols, latex=False)
+
+
+def _term_latex(t: Term, symbols) -> tuple[bool, str]:
+    return _term(t, symbols, latex=True)
+
+
+def _term(t: Term, symbols, latex: bool) -> tuple[bool, str]:
+    name = _latex_name if latex else str
+    params = [name(p) for p in t.params]
+    lp, rp = (r"\left(", r"\right)") if latex else ("(", ")")
+    if _is_unit(t.coef):
+        return t.coef[0][1] < 0, " + ".join(params)
+    neg, body, compound = _poly_body(t.coef, symbols, latex)
+    if compound:
+        body = f"{lp}{body}{rp}"
+    group = params[0] if len(params) == 1 else f"{lp}{' + '.join(params)}{rp}"
+    times = r"\," if latex else "*"
+    return neg, f"{body}{times}{group}"
+
+
+def _latex_name(name: str) -> str:
+    """``XXR3`` -> ``\\mathrm{XXR}_{3}``."""
+    head = name.rstrip("0123456789")
+    tail = name[len(head) :]
+    return rf"\mathrm{{{head}}}_{{{tail}}}" if head and tail else rf"\mathrm{{{name}}}"
+
+
+def _latex_symbol(s: str, power: int = 1) -> str:
+    """``d3`` -> ``d_{3}``, ``C_alpha3`` -> ``cos alpha_{3}`` in LaTeX, with ``power``."""
+    head = s.rstrip("0123456789")
+    tail = s[len(head) :]
+    up = "" if power == 1 else f"^{{{power}}}"
+    trig = {"C_alpha": r"\cos", "S_alpha": r"\sin"}.get(head)
+    if trig:
+        return rf"{trig}{up}\alpha_{{{tail}}}"
+    return (f"{head}_{{{tail}}}" if tail else s) + up
+
+
+def _num_latex(c: Number) -> str:
+    if isinstance(c, Fraction):
+        if c.denominator == 1:
+            return str(c.numerator)
+        return rf"\tfrac{{{c.numerator}}}{{{c.denominator}}}"
+    s = _num_text(c)
+    if "e" in s:
+        mant, exp = s.split("e")
+        return rf"{mant}\cdot 10^{{{int(exp)}}}"
+    return s
+
+
+def unit_formula(name: str) -> Formula:
+    """``name = name`` (a parameter that is its own base parameter, e.g. a torque offset)."""
+    return Formula(name=name, terms=(Term(coef=(((), 1.0),), params=(name,)),))
+
+
+def latex(formulas: Sequence[Formula]) -> str:
+    """The formulas as one LaTeX ``align*`` environment."""
+    body = " \\\\\n".join(f.latex() for f in formulas)
+    return "\\begin{align*}\n" + body + "\n\\end{align*}"
+
+
+# -- numeric formulas --------------------------------------------------------------------------
+def numeric_formulas(
+    Y: np.ndarray, names: Sequence[str], classical_names: Sequence[str]
+) -> list[Formula]:
+    """Readable formulas of the rows of ``Y``: coefficients rounded (:func:`round_coefficient`),
+    terms whose coefficients agree within that rounding gathered, ``+-1`` kept as signs."""
+    Y = np.asarray(Y, dtype=float)
+    out = []
+    for b, name in enumerate(names):
+        row = Y[b]
+        scale = float(np.max(np.abs(row))) if row.size else 0.0
+        groups: list[tuple[float, float, list[str]]] = []  # (raw value, rounded, params)
+        for c in np.flatnonzero(row):
+            y = float(row[c])
+            tol = RELATIVE * abs(y) + ABSOLUTE * scale
+            if abs(y) <= ABSOLUTE * scale:
+                continue  # round-off of an exact zero
+            r = round_coefficient(y, scale)
+            if abs(abs(r) - 1.0) == 0.0:
+                groups.append((y, r, [classical_names[c]]))
+                continue
+            for g in groups:
+                if abs(g[1]) != 1.0 and abs(g[0] - y) <= 2 * tol:
+                    g[2].append(classical_names[c])
+                    break
+            else:
+                groups.append((y, r, [classical_names[c]]))
+        terms = tuple(Term(coef=(((), r),), params=tuple(ps)) for _, r, ps in groups)
+        out.append(Formula(name=name, terms=terms))
+    return out
+
+
+# -- symbolic formulas -------------------------------------------------------------------------
+class _Geometry:
+    """The lengths of a robot's description that become symbols, and robots with other values."""
+
+    def __init__(self, robot: Robot):
+        self.robot = robot
+        self.convention = robot.convention
+        self.symbols: list[str] = []
+        self.where: list[tuple[int, int]] = []
+        types = robot.joint_types
+        if self.convention in ("dh", "mdh"):
+            self.rows = np.array(robot.dh, dtype=float)
+            # (a, alpha, d, theta) slots 0 and 2; MDH stores (d_j, alpha_j, r_j, theta_j) there
+            letters = ("a", "d") if self.convention == "dh" else ("d", "r")
+            for k in range(robot.n):
+                for slot, letter in zip((0, 2), letters):
+                    if slot == 2 and types[k] == "prismatic":
+                        continue  # the offset of the joint variable
+                    if self.rows[k, slot] != 0.0:
+                        self.symbols.append(f"{letter}{k + 1}")
+                        self.where.append((k, slot))
+            self.values = np.array([self.rows[k, s] for k, s in self.where])
+            # twists other than multiples of 90 degrees: their cosine and sine become symbols
+            self.twists = [
+                k
+                for k in range(robot.n)
+                if min(abs(math.cos(self.rows[k, 1])), abs(math.sin(self.rows[k, 1]))) > 1e-9
+            ]
+        elif self.convention == "urdf":
+            self.pre = [np.array(robot.joint_pre(k)) for k in range(robot.n)]
+            self.axes = np.array(robot.axes, dtype=float)
+            for k in range(robot.n):
+                for i, letter in enumerate("xyz"):
+                    if self.pre[k][i, 3] != 0.0:
+                        self.symbols.append(f"{letter}{k + 1}")
+                        self.where.append((k, i))
+            self.values = np.array([self.pre[k][i, 3] for k, i in self.where])
+            self.twists = []
+        else:
+            raise _core.ModelError(
+                f"symbolic formulas: robot '{robot.name}' has convention "
+                f"'{self.convention}'; expected dh, mdh or urdf"
+            )
+
+    def build(self, values: np.ndarray, twists: Sequence[float] = ()) -> Robot:
+        """The robot with the symbol lengths ``values`` and, when given, the angles ``twists``
+        (rad) for the joints in ``self.twists``."""
+        robot = self.robot
+        if self.convention == "urdf":
+            return self._build_urdf(values)
+        rows = self.rows.copy()
+        for (k, s), v in zip(self.where, values):
+            rows[k, s] = v
+        for k, a in zip(self.twists, twists):
+            rows[k, 1] = a
+        keys = ("a", "alpha", "d", "theta") if self.convention == "dh" else ("d", "alpha", "r")
+        lines = [
+            "name: geometry",
+            f"convention: {self.convention}",
+            "angle_unit: rad",
+            "gravity: [" + ", ".join(repr(float(g)) for g in robot.gravity) + "]",
+            "joints:",
+        ]
+        for k in range(robot.n):
+            vals = list(rows[k]) if self.convention == "dh" else list(rows[k, :3])
+            geo = ", ".join(f"{key}: {float(v)!r}" for key, v in zip(keys, vals))
+            theta = "" if self.convention == "dh" else f", theta: {float(rows[k, 3])!r}"
+            lines.append(f"  - {{type: {robot.joint_types[k]}, {geo}{theta}}}")
+        return Robot(_core.parse_yaml("\n".join(lines) + "\n", "<symbolic geometry>"))
+
+    def _build_urdf(self, values: np.ndarray) -> Robot:
+        robot = self.robot
+        xml = ['<robot name="geometry">', '<link name="L0"/>']
+        pre = [p.copy() for p in self.pre]
+        for (k, i), v in zip(self.where, values):
+            pre[k][i, 3] = v
+        for k in range(robot.n):
+            xyz = " ".join(repr(float(v)) for v in pre[k][:3, 3])
+            rpy = " ".join(repr(float(v)) for v in _rpy(pre[k][:3, :3]))
+            axis = " ".join(repr(float(v)) for v in self.axes[k])
+            kind = "continuous" if robot.joint_types[k] == "revolute" else "prismatic"
+            limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
+            xml.append(
+                f'<joint name="J{k + 1}" type="{kind}"><parent link="L{k}"/>'
+                f'<child link="L{k + 1}"/><origin xyz="{xyz}" rpy="{rpy}"/>'
+                f'<axis xyz="{axis}"/>{limit if kind == "prismatic" else ""}</joint>'
+                f'<link name="L{k + 1}"/>'
+            )
+        xml.append("</robot>")
+        core = _core.parse_urdf("\n".join(xml), "", "<symbolic geometry>")
+        return Robot(core).with_gravity(robot.gravity)
+
+
+def _rpy(R: np.ndarray) -> tuple[float, float, float]:
+    """URDF roll, pitch, yaw of ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    if math.hypot(R[0, 0], R[1, 0]) < 1e-12:  # pitch = +-90 degrees: roll and yaw share an axis
+        return 0.0, pitch, math.atan2(-R[0, 1], R[1, 1])
+    return math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])
+
+
+def _exponents(n: int, degree: int = 2) -> list[tuple[int, ...]]:
+    """All monomials of total degree <= ``degree`` (at most 2) in ``n`` symbols."""
+    out = [tuple([0] * n)]
+    for i in range(n):
+        e = [0] * n
+        e[i] = 1
+        out.append(tuple(e))
+    if degree >= 2:
+        for i in range(n):
+            for j in range(i, n):
+                e = [0] * n
+                e[i] += 1
+                e[j] += 1
+                out.append(tuple(e))
+    return out
+
+
+def _design(points: np.ndarray, exps: list[tuple[int, ...]]) -> np.ndarray:
+    E = np.array(exps, dtype=float)  # (monomials, symbols)
+    return (
+        np.prod(points[:, None, :] ** E[None, :, :], axis=2)
+        if len(exps[0])
+        else np.ones((len(points), 1))
+    )
+
+
+#: Fractions with denominators up to this are tried for the fitted monomial coefficients ...
+MAX_DENOMINATOR = 1000
+#: ... and taken when within this of the fitted value (relative to max(1, |value|)); fitted
+#: coefficients below it are zero. The fit, over lengths of order 1, is accurate to about 1e-14.
+FRACTION_TOLERANCE = 1e-12
+#: More monomials than this (lengths times the cos/sin of general twists) and the twists' sines
+#: and cosines stay numbers.
+MAX_MONOMIALS = 600
+#: Estimated time (from the first varied geometry) beyond which symbolic formulas are refused.
+MAX_SECONDS = 120.0
+#: A symbolic formula must reproduce the numeric ``Y`` within this (relative to max(1, |Y|)).
+CHECK_TOLERANCE = 1e-10
+
+
+def _rationalise(c: float) -> Number | None:
+    """A fitted monomial coefficient as a fraction, a rounded float, or None for zero."""
+    tol = FRACTION_TOLERANCE * max(1.0, abs(c))
+    if abs(c) <= tol:
+        return None
+    f = Fraction(c).limit_denominator(MAX_DENOMINATOR)
+    if abs(float(f) - c) <= tol:
+        return f
+    return float(shortest_decimal(c, 0.1 * tol))
+
+
+@dataclass
+class SymbolicFormulas:
+    """Regrouping formulas of the equations-of-motion set in the description's symbols.
+
+    Attributes
+    ----------
+    formulas : list of Formula
+        One per base parameter (``str(f)`` writes it, ``f.latex()`` as LaTeX).
+    symbols : dict
+        Symbol name -> its value in the description (lengths in m; ``C_alphaj``, ``S_alphaj``
+        the cosine and sine of a twist).
+    polys : dict
+        ``(base index, classical index) -> ((exponents, coefficient), ...)`` for every non-zero
+        entry of ``Y``: a polynomial, exponents in the order of ``symbols``, coefficients
+        fractions (or rounded floats where an angle stays a number).
+    names, classical_names : list of str
+        The base parameters (offsets excluded) and the classical parameters: the rows and
+        columns of :meth:`evaluate`.
+    checked : int
+        Number of geometries every formula was checked at (the description's and random ones).
+    largest_difference : float
+        Largest difference between a formula evaluated there and the numeric ``Y``.
+    """
+
+    formulas: list[Formula]
+    symbols: dict
+    polys: dict
+    names: list[str]
+    classical_names: list[str]
+    checked: int
+    largest_difference: float
+
+    @property
+    def text(self) -> list[str]:
+        return [f.text() for f in self.formulas]
+
+    def evaluate(self, values) -> np.ndarray:
+        """``Y`` (base x classical) of the formulas at symbol values ``values`` (in the order of
+        ``symbols``)."""
+        x = np.asarray(values, dtype=float)
+        Y = np.zeros((len(self.names), len(self.classical_names)))
+        for (b, c), poly in self.polys.items():
+            Y[b, c] = sum(float(v) * np.prod(x ** np.array(e, dtype=float)) for e, v in poly)
+        return Y
+
+    def to_dict(self) -> dict:
+        return {
+            "formulas_symbolic": self.text,
+            "symbols": {k: float(v) for k, v in self.symbols.items()},
+            "symbolic_check": {
+                "geometries": self.checked,
+                "largest_difference": self.largest_difference,
+                "tolerance": CHECK_TOLERANCE,
+            },
+        }
+
+    def latex(self) -> str:
+        return latex(self.formulas)
+
+
+def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
+    """The regrouping formulas of ``bp`` (a :class:`mindyn.BaseParameters`) in the symbols of its
+    robot's description (see the module documentation for the symbols, the degree bound and the
+    checks). Raises ModelError when the base set changes with the lengths or a coefficient is
+    not a polynomial of degree <= 2 in them."""
+    robot = bp.robot
+    geo = _Geometry(robot)
+    names = list(bp._b.names)
+    classical = list(bp._b.classical_names)
+    pivots = list(bp._b.pivots)
+    Y0 = np.array(bp._b.Y)
+    P = len(classical)
+    order = pivots + [c for c in range(P) if c not in set(pivots)]
+    opts = bp.options
+
+    ns = len(geo.symbols)
+    twists = list(geo.twists)
+    trig_exps = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1)]  # in (cos, sin), sin^2 = 1 - cos^2
+    if len(_exponents(ns)) > MAX_MONOMIALS:
+        raise _core.ModelError(
+            f"symbolic formulas: '{robot.name}' has {ns} non-zero lengths, "
+            f"{len(_exponents(ns))} monomials of degree <= 2 to recover; at most "
+            f"{MAX_MONOMIALS} are supported (about 33 lengths)"
+        )
+    if len(_exponents(ns)) * len(trig_exps) ** len(twists) > MAX_MONOMIALS:
+        twists = []  # too many general twists: their sines and cosines stay numbers
+    nt = len(twists)
+    geo.twists = twists
+    symbols = list(geo.symbols)
+    for k in twists:
+        symbols += [f"C_alpha{k + 1}", f"S_alpha{k + 1}"]
+    exps = []
+    for e in _exponents(ns):
+        for t in itertools.product(trig_exps, repeat=nt):
+            exps.append(e + tuple(x for pair in t for x in pair))
+    alpha0 = np.array([geo.rows[k, 1] for k in twists]) if nt else np.zeros(0)
+
+    def numeric(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
+        from .base import base_parameters  # base imports this module
+
+        other = base_parameters(
+            geo.build(values, angles),
+            rotor=bp.rotor,
+            friction=bp.friction,
+            method=bp.method,
+            order=order,
+            tolerance=float(opts.get("tolerance", 1e-9)),
+            samples=int(opts.get("samples", 0)),
+            seed=int(opts.get("seed", 1)),
+            snap=float(opts.get("snap", 0.0)),
+        )
+        if other.names != names or other.pivots != pivots:
+            raise _core.ModelError(
+                f"symbolic formulas: the base set of '{robot.name}' changes when its lengths "
+                f"vary ({len(names)} base parameters with the description's lengths, "
+                f"{len(other.names)} with others): the description's lengths are special, and "
+                "its formulas have no form valid for general lengths"
+            )
+        return np.array(other.Y)
+
+    def point(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
+        """Symbol values: the lengths, then cos and sin of each symbolic twist."""
+        trig = [f(a) for a in angles for f in (math.cos, math.sin)]
+        return np.concatenate([values, trig])
+
+    rng = np.random.default_rng(seed)
+
+    def draw(k: int) -> list[tuple[np.ndarray, np.ndarray]]:
+        lengths = rng.choice([-1.0, 1.0], size=(k, ns)) * rng.uniform(0.4, 1.6, size=(k, ns))
+        # general angles: at least 0.15 rad away from every multiple of 90 degrees
+        angles = rng.uniform(0.15, math.pi / 2 - 0.15, size=(k, nt))
+        angles += rng.integers(0, 4, size=(k, nt)) * math.pi / 2
+        return list(zip(lengths, angles))
+
+    fit = draw(len(exps) + 8)
+    start = time.perf_counter()
+    samples = [numeric(*fit[0]).ravel()]
+    need = (len(fit) + 3) * (time.perf_counter() - start)
+    if need > MAX_SECONDS:
+        raise _core.ModelError(
+            f"symbolic formulas: '{robot.name}' would take about {need:.0f} s "
+            f"({len(fit) + 3} base-parameter computations of {need / (len(fit) + 3):.2g} s); "
+            f"the limit is {MAX_SECONDS:.0f} s"
+        )
+    samples = np.array(samples + [numeric(x, a).ravel() for x, a in fit[1:]])
+    A = _design(np.array([point(x, a) for x, a in fit]), exps)
+    C, *_ = np.linalg.lstsq(A, samples, rcond=None)  # (monomials, base * classical)
+
+    polys: dict[tuple[int, int], Poly] = {}
+    for flat in np.flatnonzero(np.max(np.abs(C), axis=0) > FRACTION_TOLERANCE):
+        b, c = divmod(int(flat), P)
+        poly = []
+        for m, e in enumerate(exps):
+            v = _rationalise(float(C[m, flat]))
+            if v is not None:
+                poly.append((e, v))
+        for j in range(nt):
+            poly = _shorter_trig(poly, ns + 2 * j)
+        if poly:
+            polys[(b, c)] = tuple(poly)
+
+    result = SymbolicFormulas(
+        formulas=[],
+        symbols=dict(zip(symbols, (float(v) for v in point(geo.values, alpha0)))),
+        polys=polys,
+        names=names,
+        classical_names=classical,
+        checked=0,
+        largest_difference=0.0,
+    )
+    worst = 0.0
+    checks = [(point(geo.values, alpha0), Y0)]
+    checks += [(point(x, a), numeric(x, a)) for x, a in draw(3)]
+    for x, Yn in checks:
+        diff = float(np.max(np.abs(result.evaluate(x) - Yn))) if Yn.size else 0.0
+        limit = CHECK_TOLERANCE * max(1.0, float(np.max(np.abs(Yn))) if Yn.size else 1.0)
+        if not diff <= limit:
+            raise _core.ModelError(
+                f"symbolic formulas: the regrouping coefficients of '{robot.name}' are not "
+                f"polynomials of degree <= 2 in its lengths {', '.join(symbols) or '(none)'} "
+                f"(a fitted formula misses the numeric one by {diff:.3g} at a check geometry)"
+                + (
+                    "; the geometry is near-degenerate: consider snap"
+                    if bp.margin.get("near_degenerate")
+                    else ""
+                )
+            )
+        worst = max(worst, diff)
+    result.checked = len(checks)
+    result.largest_difference = worst
+    result.formulas = _gather(names, classical, polys, tuple(symbols))
+    result.formulas += [unit_formula(o) for o in bp.names[len(names) :]]
+    return result
+
+
+def _shorter_trig(poly: list, i: int) -> list:
+    """``poly`` with ``cos^2`` (exponent slot ``i``) written as ``1 - sin^2`` (slot ``i + 1``)
+    when that takes fewer monomials."""
+    alt: dict[tuple[int, ...], Number] = {}
+    for e, v in poly:
+        if e[i] == 2:
+            for e2, sign in (((*e[:i], 0, *e[i + 1 :]), 1), ((*e[:i], 0, 2, *e[i + 2 :]), -1)):
+                alt[e2] = alt.get(e2, 0) + sign * v
+        else:
+            alt[e] = alt.get(e, 0) + v
+    alt_list = [(e, v) for e, v in alt.items() if v != 0]
+    return alt_list if len(alt_list) < len(poly) else poly
+
+
+def _gather(names, classical, polys, symbols) -> list[Formula]:
+    out = []
+    for b, name in enumerate(names):
+        groups: list[tuple[Poly, list[str]]] = []
+        entries = sorted((c, poly) for (bb, c), poly in polys.items() if bb == b)
+        for c, poly in entries:
+            key = _canonical(poly)
+            if _is_unit(poly):
+                groups.append((poly, [classical[c]]))
+                continue
+            for g in groups:
+                if not _is_unit(g[0]) and _canonical(g[0]) == key:
+                    g[1].append(classical[c])
+                    break
+            else:
+                groups.append((poly, [classical[c]]))
+        terms = tuple(Term(coef=p, params=tuple(ps)) for p, ps in groups)
+        out.append(Formula(name=name, terms=terms, symbols=symbols))
+    return out
+
+
+def _canonical(poly: Poly) -> tuple:
+    return tuple(sorted((e, float(v)) for e, v in poly))
