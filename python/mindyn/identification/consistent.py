@@ -70,9 +70,10 @@ EIG_TOL = 1e-9
 TIE_BREAK_SLACK = 1.0
 NULL_SPACE_WEIGHT = 1e-6
 
-#: A description link whose pseudo-inertia ``J0`` is not positive definite enters the log-det
-#: prior as its projection onto the positive semidefinite matrices plus this fraction of the mean
-#: link mass (kg) times the identity.
+#: A description link whose pseudo-inertia ``J0`` has an eigenvalue below this fraction of the
+#: mean link mass ``eps`` (kg; singular, nearly singular or indefinite) enters the log-det prior as
+#: its projection onto the positive semidefinite matrices plus ``eps`` times the identity (noted
+#: in the result).
 PRIOR_REGULARISATION = 1e-3
 
 INERTIAL = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
@@ -414,9 +415,9 @@ def _prior_matrices(base, layout, pi0, notes) -> list[np.ndarray]:
             J0 = (V * np.maximum(lam, 0.0)) @ V.T + eps * np.eye(4)
             if notes is not None:
                 notes.append(
-                    f"prior: the description's pseudo-inertia of {name} is not positive definite "
-                    f"(smallest eigenvalue {lam[0]:.3g} kg); regularised to its PSD part + "
-                    f"{eps:.3g} kg x identity"
+                    f"prior: the description's pseudo-inertia of {name} has its smallest "
+                    f"eigenvalue {lam[0]:.3g} kg, below {eps:.3g} kg (singular or nearly so); "
+                    f"regularised to its PSD part + {eps:.3g} kg x identity"
                 )
         out.append(J0)
     return out
