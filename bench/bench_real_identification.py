@@ -20,7 +20,20 @@ filtered, edges dropped, decimated); it is recovered from the per-joint RMS and 
 (``fit.overall_relative`` and ``validation.overall_relative`` of the JSON output). A case whose
 command the CLI refuses is reported as such.
 
-Run: ``.venv/bin/python bench/bench_real_identification.py DIR [--no-offset]``.
+With ``--consistent`` each command also gets ``--consistent`` (and ``--prior-weight W`` when
+given), and a second table gives, per case: the smallest pseudo-inertia eigenvalue of the
+consistent estimate over all links, the validation error of the consistent estimate against the
+unconstrained one (target: at most 1.1 times), the total mass, the solver's time and the whole
+command's wall time (target for the Panda: 10 s), the smallest mass-matrix eigenvalue over the
+data, and a forward simulation of the consistent model (RK4, computed torque with the same
+model, the log's own rate) along the first identification log: ``stable`` when it stays finite
+(else ``DIVERGED``) and its largest tracking error [rad] is at most 0.05 rad or twice that of
+the same simulation of the description's model (in parentheses; the torque held over a sample
+period of the log and the Coulomb feedforward on the reference velocity leave errors of this
+size with any model), ``WORSE`` when finite but beyond that.
+
+Run: ``.venv/bin/python bench/bench_real_identification.py DIR [--no-offset] [--consistent
+[--prior-weight W]]``.
 """
 
 from __future__ import annotations
@@ -31,6 +44,7 @@ import math
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 
 #: Joint-side drive gains of the UR10e [N m/A], as its data's README gives them.
@@ -102,7 +116,10 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dir", type=Path, help="folder with panda/, kuka_lwr4/, ur10e/")
     ap.add_argument("--no-offset", action="store_true", help="leave out --offset (torque offsets)")
+    ap.add_argument("--consistent", action="store_true", help="also the consistent estimate")
+    ap.add_argument("--prior-weight", type=float, default=0.0, help="with --consistent")
     args = ap.parse_args()
+    cons_rows = []
     mindyn = [sys.executable, "-m", "mindyn"]
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -115,9 +132,13 @@ def main() -> int:
                 + [x.format(dir=args.dir) for x in extra]
                 + ([] if args.no_offset else ["--offset"])
                 + ["--validate", str(args.dir / val), "--json", str(out)]
+                + (["--consistent"] if args.consistent else [])
+                + (["--prior-weight", str(args.prior_weight)] if args.prior_weight else [])
             )
             print("$ " + " ".join(cmd), flush=True)
+            t0 = time.perf_counter()
             run = subprocess.run(mindyn + cmd[1:], capture_output=True, text=True)
+            wall = time.perf_counter() - t0
             if run.returncode != 0:
                 msg = (run.stderr.strip().splitlines() or ["failed"])[-1]
                 print(f"  refused: {msg}")
@@ -135,13 +156,82 @@ def main() -> int:
             v = 100 * doc["validation"]["overall_relative"]
             ok = all(x is None or y <= x for x, y in ((tgt_f, f), (tgt_v, v)))
             rows.append((name, f, v, ref_f, ref_v, tgt_f, tgt_v, "met" if ok else "MISSED"))
+            if args.consistent:
+                cons_rows.append(
+                    consistent_row(name, doc, wall, args.dir / robot, args.dir / fits[0])
+                )
     print()
     head = ("case", "fit", "validation", "ref. fit", "ref. val.", "target fit", "target val.", "")
     width = max(len(r[0]) for r in rows)
     print(f"{head[0]:<{width}}  " + "  ".join(f"{h:>11}" for h in head[1:]))
     for r in rows:
         print(f"{r[0]:<{width}}  " + "  ".join(f"{fmt(x):>11}" for x in r[1:7]) + f"  {r[7]:>11}")
+    if cons_rows:
+        print()
+        head = (
+            "case",
+            "min eig",
+            "val. uncon.",
+            "val. cons.",
+            "ratio",
+            "mass",
+            "solve",
+            "wall",
+            "min eig A",
+            "simulation",
+        )
+        print(f"{head[0]:<{width}}  " + "  ".join(f"{h:>11}" for h in head[1:]))
+        for r in cons_rows:
+            print(f"{r[0]:<{width}}  " + "  ".join(f"{x:>11}" for x in r[1:]))
+        print(
+            "(min eig: smallest pseudo-inertia eigenvalue of the consistent estimate [kg]; ratio: "
+            "consistent / unconstrained validation error, target <= 1.1; mass [kg]; solve: the "
+            "consistent solve [s]; wall: the whole command [s]; min eig A: smallest mass-matrix "
+            "eigenvalue over the identification data)"
+        )
     return 0
+
+
+def consistent_row(name, doc, wall, robot_path, log_path):
+    """The consistent estimate's figures of one case, and a forward simulation along the log."""
+    import mindyn
+    import numpy as np
+    from mindyn.identification import read_csv
+    from mindyn.simulate import simulate_tracking
+
+    ce = doc["consistent_estimate"]
+    eig = min(doc["pseudo_inertia_min_eig"].values())
+    vu = 100 * doc["validation"]["overall_relative"]
+    vc = 100 * ce["validation"]["overall_relative"]
+    robot = mindyn.load(str(robot_path))
+    names = robot.parameter_names(doc["rotor"], doc["friction"])
+    params = np.array([doc["classical"][nm] for nm in names])
+    data = read_csv(log_path, robot=robot, filter="butter")
+    span = data.t[-1] - data.t[0]
+    try:
+        log = simulate_tracking(robot, data, rate=data.rate, duration=span, params=params)
+        ref = simulate_tracking(robot, data, rate=data.rate, duration=span, friction=True)
+        err = float(np.max(log.info["max_tracking_error"]))
+        err0 = float(np.max(ref.info["max_tracking_error"]))
+        if not np.all(np.isfinite(log.q)):
+            verdict = "DIVERGED"
+        else:
+            verdict = "stable" if err <= max(0.05, 2 * err0) else "WORSE"
+        sim = f"{verdict} {err:.2g} ({err0:.2g})"
+    except ValueError as e:
+        sim = f"failed: {e}"[:40]
+    return (
+        name,
+        f"{eig:.2g}",
+        fmt(vu),
+        fmt(vc),
+        f"{vc / vu:.3f}",
+        f"{doc['total_mass']:.2f}",
+        f"{ce['seconds']:.2f}",
+        f"{wall:.2f}",
+        f"{ce['mass_matrix_min_eig']:.3g}",
+        sim,
+    )
 
 
 if __name__ == "__main__":

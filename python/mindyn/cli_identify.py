@@ -1,4 +1,4 @@
-"""CLI: ``mindyn excite``, ``mindyn simulate``, ``mindyn identify``."""
+"""CLI: ``mindyn excite``, ``mindyn simulate``, ``mindyn identify``, ``mindyn identify-payload``."""
 
 from __future__ import annotations
 
@@ -274,14 +274,8 @@ def _paired(logs, currents, flag, logs_flag):
     return currents
 
 
-def cmd_identify(args: argparse.Namespace) -> int:
-    from .identification import identify, true_base_values, validate
-    from .identification.data import read_truth
-    from .identification.report import format_table, write_report
-
-    if args.validate_currents and not args.validate:
-        raise ValueError("--validate-currents: expected --validate with the logs they belong to")
-    robot = load(args.robot, tip=args.tip)
+def _check_lowpass_options(args: argparse.Namespace) -> None:
+    """Refuses the options of ``--filter lowpass`` with another filter."""
     if args.filter != "lowpass":
         for flag, value in (
             ("--periods", args.periods),
@@ -291,6 +285,17 @@ def cmd_identify(args: argparse.Namespace) -> int:
         ):
             if value is not None:
                 raise ValueError(f"{flag} needs --filter lowpass (got --filter {args.filter})")
+
+
+def cmd_identify(args: argparse.Namespace) -> int:
+    from .identification import identify, true_base_values, validate
+    from .identification.data import read_truth
+    from .identification.report import format_table, write_report
+
+    if args.validate_currents and not args.validate:
+        raise ValueError("--validate-currents: expected --validate with the logs they belong to")
+    robot = load(args.robot, tip=args.tip)
+    _check_lowpass_options(args)
     files = list(args.data)
     vfiles = list(args.validate or [])
     cur = _paired(files, args.currents, "--currents", "the identification data")
@@ -325,6 +330,13 @@ def cmd_identify(args: argparse.Namespace) -> int:
             f"regressor of this data is singular ({e}); the data do not determine the {base.n} "
             "base parameters: use a longer or richer log, or fewer parameters"
         ) from None
+    cons = None
+    if args.consistent:
+        from .identification.consistent import consistent_estimate
+
+        cons = consistent_estimate(res, args.prior_weight)
+    elif args.prior_weight:
+        raise ValueError("--prior-weight: expected --consistent as well")
     truth_docs = [read_truth(f) for f in files]
     truth_doc = truth_docs[0] if all(d == truth_docs[0] for d in truth_docs) else None
 
@@ -420,9 +432,23 @@ def cmd_identify(args: argparse.Namespace) -> int:
     out.append(_rms_lines("identification data", fit))
     if val is not None:
         out.append(_rms_lines(f"validation data ({', '.join(vfiles)})", val))
+    cfit = cval = None
+    if cons is not None:
+        cfit = validate(cons, logs)
+        cval = validate(cons, vlogs) if vlogs else None
+        out.append("")
+        out += _consistent_lines(cons, fit, val, cfit, cval, logs)
     print("\n".join(out))
 
     doc = res.to_dict()
+    doc["consistent"] = cons is not None
+    if cons is not None:
+        doc.update(_plain(cons.to_dict()))
+        ce = doc["consistent_estimate"]
+        ce["fit"] = _measures_doc(cfit, labels)
+        if cval is not None:
+            ce["validation"] = {"file": ", ".join(vfiles), **_measures_doc(cval, vlabels)}
+        ce["mass_matrix_min_eig"] = cons.mass_matrix_min_eig(logs)
     doc["data"] = {
         "file": files[0] if len(files) == 1 else None,
         "files": files,
@@ -457,6 +483,108 @@ def cmd_identify(args: argparse.Namespace) -> int:
         (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
         print(f"wrote report to {Path(args.report)}/: " + ", ".join(p.name for p in paths))
     return 0
+
+
+def cmd_identify_payload(args: argparse.Namespace) -> int:
+    from .identification.consistent import identify_payload, read_arm
+
+    robot = load(args.robot, tip=args.tip)
+    read_arm(robot, args.identification)  # its errors before reading the logs
+    args.model = "dynamic"
+    _check_lowpass_options(args)
+    files = list(args.data)
+    cur = _paired(files, args.currents, "--currents", "the payload data")
+    logs = [d for f, c in zip(files, cur) for d in _read_filtered(f, robot, args, c, periodic=True)]
+    res = identify_payload(
+        robot,
+        args.identification,
+        logs,
+        consistent=not args.no_consistent,
+        min_velocity=args.min_velocity,
+    )
+    d = res.derived()
+    out = [
+        f"{robot.name}: payload on the last link ({robot.link_names[-1]}) from "
+        f"{', '.join(files)}: {res.rows} equations, regressor rank {res.rank} of 10, condition "
+        f"number {res.cond:.3g}; arm torques from the {res.arm_values} of {args.identification}",
+        "  parameters about the last link frame's origin, in its frame (least squares):",
+    ]
+    for nm, v, sd in zip(res.names, res.values, res.std):
+        out.append(f"    {nm:<6} {v:12.5g} +- {sd:.3g}")
+    out.append(
+        f"  mass {d['mass']:.5g} +- {d['mass_std']:.3g} kg; centre of mass "
+        + " ".join(f"{c:.4g}" for c in d["com"])
+        + " +- "
+        + " ".join(f"{c:.2g}" for c in d["com_std"])
+        + " m"
+    )
+    out.append(
+        "  inertia about the centre of mass XX XY XZ YY YZ ZZ: "
+        + " ".join(f"{c:.4g}" for c in d["inertia_com"])
+        + " +- "
+        + " ".join(f"{c:.2g}" for c in d["inertia_com_std"])
+        + " kg m^2"
+    )
+    out.append(
+        f"  smallest pseudo-inertia eigenvalue {res.min_eig:.4g} kg"
+        + ("" if res.min_eig >= 0 else " (physically inconsistent)")
+    )
+    if res.consistent is not None:
+        c = res.derived(True)
+        out.append(
+            f"  consistent ({res.solver}, {res.status}): mass {c['mass']:.5g} kg, centre of "
+            "mass "
+            + " ".join(f"{x:.4g}" for x in c["com"])
+            + " m, inertia about it "
+            + " ".join(f"{x:.4g}" for x in c["inertia_com"])
+            + f" kg m^2, smallest pseudo-inertia eigenvalue {res.consistent_min_eig:.3g} kg"
+        )
+    print("\n".join(out))
+    if args.json:
+        doc = _plain({"robot": robot.name, "files": files, **res.to_dict()})
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
+        print(f"wrote {args.json}")
+    return 0
+
+
+def _consistent_lines(cons, fit, val, cfit, cval, logs) -> list[str]:
+    """The lines of ``mindyn identify --consistent``: pseudo-inertias, errors side by side."""
+    un = cons.violating_links(True)
+    lines = [
+        f"Physically consistent estimate ({cons.solver}, {cons.status}, {cons.seconds:.3g} s"
+        + (f", prior weight {cons.prior_weight:g}" if cons.prior_weight else ", no prior")
+        + f"): total mass {cons.total_mass:.4g} kg; fit {cons.fit_increase:.4g} noise variances "
+        "worse than the unconstrained fit with all base parameters",
+        "  smallest pseudo-inertia eigenvalue per link [kg] (unconstrained: its realisation "
+        "nearest the description):",
+        f"  {'link':<24} {'unconstrained':>14} {'consistent':>14}",
+    ]
+    for nm, a, b in zip(cons.link_names, cons.unconstrained_min_eig, cons.min_eig):
+        lines.append(f"  {nm:<24} {a:14.4g} {b:14.4g}" + ("  violated" if nm in un else ""))
+    lines.append(
+        "  unconstrained estimate violates physical consistency at: " + ", ".join(un)
+        if un
+        else "  unconstrained estimate: a consistent realisation nearest the description"
+    )
+    lines.append(f"  {'overall relative error':<24} {'unconstrained':>14} {'consistent':>14}")
+    lines.append(
+        f"  {'identification data':<24} {_pct(fit['overall_relative']):>14} "
+        f"{_pct(cfit['overall_relative']):>14}"
+    )
+    if cval is not None:
+        lines.append(
+            f"  {'validation data':<24} {_pct(val['overall_relative']):>14} "
+            f"{_pct(cval['overall_relative']):>14}"
+        )
+    low = cons.mass_matrix_min_eig(logs)
+    lines.append(
+        f"  mass matrix of the consistent model: smallest eigenvalue over the data {low:.4g} "
+        + ("(positive definite at every sample)" if low > 0 else "(NOT positive definite)")
+    )
+    for note in cons.notes:
+        lines.append(f"  note: {note}")
+    return lines
 
 
 def _measures_doc(v: dict, files: list) -> dict:
@@ -580,6 +708,85 @@ def _plain(d):
     if isinstance(d, np.integer):
         return int(d)
     return d
+
+
+def _add_data_options(p) -> None:
+    """The options of ``identify`` that say how a log is read and preprocessed (shared with
+    ``identify-payload``)."""
+    p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille", "current"],
+        help="logged torque unit; permille: value x rated torque x gear ratio / 1000; current: "
+        "motor current [A] x drive gain (--drive-gain, else torque_constant x gear_ratio of the "
+        "drive table) (default: the unit the CSV header gives, as in tau1[permille], or current "
+        "for columns i1..in, else Nm)",
+    )
+    p.add_argument(
+        "--drive-gain",
+        metavar="K1,...,Kn",
+        help="joint-side drive gains [N m/A] that turn motor currents into joint torques (one "
+        "value for all joints or one per joint); default: the robot's drive table",
+    )
+    p.add_argument(
+        "--currents",
+        nargs="+",
+        metavar="CSV",
+        help="motor currents from separate files (t, i1..in, other columns ignored), one per "
+        "LOG in the same order, joined on the time stamps (each sample of the log needs a "
+        "current sample within 1/1000 of its sample period); torques = currents x drive gains, "
+        "torque columns of the log are ignored",
+    )
+    p.add_argument(
+        "--filter",
+        choices=["lowpass", "butter", "savgol", "none"],
+        default="lowpass",
+        help="lowpass (default): the identification data path: uniform resampling of jittered "
+        "time stamps, one zero-phase Butterworth low-pass of positions, logged velocities, "
+        "torques and regressor columns, derivatives of the filtered signals, filter edges "
+        "dropped, decimation; butter, savgol, none: only derive missing velocities and "
+        "accelerations (torques unfiltered)",
+    )
+    number(
+        p,
+        "--cutoff",
+        low=0,
+        low_open=True,
+        help="cut-off [Hz], below half the log's rate; lowpass: default 10 x the excited band of "
+        "the identification log's positions (at most rate / 10), the validation log filtered at "
+        "the same cut-off; butter: default min(10, rate / 10)",
+    )
+    g = p.add_mutually_exclusive_group()
+    number(
+        g,
+        "--periods",
+        low=1,
+        high=100000,
+        integer=True,
+        help="lowpass: the identification log holds this many periods of a periodic excitation; "
+        "they are averaged sample by sample",
+    )
+    number(
+        g,
+        "--period",
+        low=0,
+        low_open=True,
+        help="lowpass: period [s] of a periodic excitation; the whole periods the "
+        "identification log holds are averaged",
+    )
+    number(
+        p,
+        "--edge",
+        low=0,
+        help="lowpass: seconds dropped at each end after filtering (default 2 / cut-off; none "
+        "for an averaged period)",
+    )
+    p.add_argument(
+        "--no-decimate",
+        action="store_true",
+        help="lowpass: keep every sample (default for the dynamic model: decimate to at least "
+        "10 x the cut-off; the integral and energy models keep every sample)",
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -756,7 +963,6 @@ def register(sub) -> None:
         "ROS bag (a ROS 2 bag folder, .mcap, .db3, or a ROS 1 .bag); several logs are fitted "
         "together (derivatives taken on each log alone, regression systems stacked)",
     )
-    p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
     p.add_argument(
         "--model",
         choices=["dynamic", "integral", "energy"],
@@ -779,86 +985,31 @@ def register(sub) -> None:
         default=30.0,
         help="remove parameters with RSD above this % (0 keeps all)",
     )
-    p.add_argument(
-        "--torque-unit",
-        choices=["Nm", "permille", "current"],
-        help="logged torque unit; permille: value x rated torque x gear ratio / 1000; current: "
-        "motor current [A] x drive gain (--drive-gain, else torque_constant x gear_ratio of the "
-        "drive table) (default: the unit the CSV header gives, as in tau1[permille], or current "
-        "for columns i1..in, else Nm)",
-    )
-    p.add_argument(
-        "--drive-gain",
-        metavar="K1,...,Kn",
-        help="joint-side drive gains [N m/A] that turn motor currents into joint torques (one "
-        "value for all joints or one per joint); default: the robot's drive table",
-    )
-    p.add_argument(
-        "--currents",
-        nargs="+",
-        metavar="CSV",
-        help="motor currents from separate files (t, i1..in, other columns ignored), one per "
-        "LOG in the same order, joined on the time stamps (each sample of the log needs a "
-        "current sample within 1/1000 of its sample period); torques = currents x drive gains, "
-        "torque columns of the log are ignored",
-    )
+    _add_data_options(p)
     p.add_argument(
         "--validate-currents",
         nargs="+",
         metavar="CSV",
         help="as --currents, one per --validate log",
     )
-    p.add_argument(
-        "--filter",
-        choices=["lowpass", "butter", "savgol", "none"],
-        default="lowpass",
-        help="lowpass (default): the identification data path: uniform resampling of jittered "
-        "time stamps, one zero-phase Butterworth low-pass of positions, logged velocities, "
-        "torques and regressor columns, derivatives of the filtered signals, filter edges "
-        "dropped, decimation; butter, savgol, none: only derive missing velocities and "
-        "accelerations (torques unfiltered)",
-    )
-    number(
-        p,
-        "--cutoff",
-        low=0,
-        low_open=True,
-        help="cut-off [Hz], below half the log's rate; lowpass: default 10 x the excited band of "
-        "the identification log's positions (at most rate / 10), the validation log filtered at "
-        "the same cut-off; butter: default min(10, rate / 10)",
-    )
-    g = p.add_mutually_exclusive_group()
-    number(
-        g,
-        "--periods",
-        low=1,
-        high=100000,
-        integer=True,
-        help="lowpass: the identification log holds this many periods of a periodic excitation; "
-        "they are averaged sample by sample",
-    )
-    number(
-        g,
-        "--period",
-        low=0,
-        low_open=True,
-        help="lowpass: period [s] of a periodic excitation; the whole periods the "
-        "identification log holds are averaged",
-    )
-    number(
-        p,
-        "--edge",
-        low=0,
-        help="lowpass: seconds dropped at each end after filtering (default 2 / cut-off; none "
-        "for an averaged period)",
-    )
-    p.add_argument(
-        "--no-decimate",
-        action="store_true",
-        help="lowpass: keep every sample (default for the dynamic model: decimate to at least "
-        "10 x the cut-off; the integral and energy models keep every sample)",
-    )
     p.add_argument("--ols", action="store_true", help="ordinary instead of weighted least squares")
+    p.add_argument(
+        "--consistent",
+        action="store_true",
+        help="also estimate physically consistent classical parameters (every link's "
+        "pseudo-inertia positive semidefinite, rotor inertia and friction >= 0) minimising the "
+        "same weighted residual (convex, cvxpy with Clarabel); JSON: classical, "
+        "pseudo_inertia_min_eig, total_mass, consistent_estimate",
+    )
+    number(
+        p,
+        "--prior-weight",
+        low=0,
+        default=0.0,
+        help="with --consistent: add W x the log-det divergence of each link's pseudo-inertia "
+        "from the description's; the fit term is in units of the noise variance, so W = 1 makes "
+        "a divergence of 1 cost as much as one standard deviation of the fit; 0: no prior",
+    )
     number(
         p,
         "--energy-window",
@@ -891,3 +1042,31 @@ def register(sub) -> None:
         help="dynamic model with friction: leave out joint equations slower than this [rad/s, m/s]",
     )
     p.set_defaults(func=cmd_identify)
+
+    p = sub.add_parser(
+        "identify-payload",
+        help="identify a payload fixed to the last link, with an identified arm",
+        description="The 10 inertial parameters (XX XY XZ YY YZ ZZ MX MY MZ M about the last "
+        "link frame's origin, in its frame) of a payload rigidly fixed to the last link, from "
+        "logs with the payload: tau - tau_arm = W_last phi, with tau_arm from the identified arm "
+        "(the JSON of 'mindyn identify': its classical map when present, else its base values; "
+        "friction, rotor inertia and offsets as identified). Least squares with standard "
+        "deviations, and the estimate with a positive semidefinite pseudo-inertia (cvxpy, "
+        "Clarabel). Refused, naming them, when the data do not determine all 10 parameters.",
+    )
+    add_robot(p)
+    p.add_argument("identification", metavar="ID.json", help="JSON of 'mindyn identify'")
+    p.add_argument("data", nargs="+", metavar="LOG", help="log(s) with the payload, as identify's")
+    _add_data_options(p)
+    number(
+        p,
+        "--min-velocity",
+        low=0,
+        default=0.01,
+        help="arm with friction: leave out joint equations slower than this [rad/s, m/s]",
+    )
+    p.add_argument(
+        "--no-consistent", action="store_true", help="least squares only (no convex solve)"
+    )
+    p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
+    p.set_defaults(func=cmd_identify_payload)

@@ -8,12 +8,15 @@
   models);
 - :mod:`~mindyn.identification.estimation`: least squares with statistics and pruning;
 - :mod:`~mindyn.identification.validation`: torque prediction and error measures;
+- :mod:`~mindyn.identification.consistent`: physically consistent classical parameters and
+  payload identification (convex, cvxpy);
 - :mod:`~mindyn.identification.currents`: torques from motor currents logged apart;
 - :mod:`~mindyn.identification.report`: tables and plots.
 
 The names below are the ones a workflow needs; the modules hold the rest.
 """
 
+from .consistent import ConsistentResult, identify_consistent, identify_payload
 from .data import DataError, JointData, read_csv, write_csv
 from .errors import IdentificationError, RankDeficientError
 from .estimation import IdentificationResult, identify
@@ -22,6 +25,7 @@ from .validation import error_measures, true_base_values, validate
 
 __all__ = [
     "MODELS",
+    "ConsistentResult",
     "DataError",
     "IdentificationError",
     "IdentificationResult",
@@ -31,6 +35,8 @@ __all__ = [
     "energy_system",
     "error_measures",
     "identify",
+    "identify_consistent",
+    "identify_payload",
     "integral_system",
     "read_csv",
     "true_base_values",

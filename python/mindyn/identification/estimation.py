@@ -95,6 +95,9 @@ class IdentificationResult:
     initial: dict = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
     seconds: float = 0.0
+    #: The final (weighted) least-squares problem reduced to its triangle, for estimates under
+    #: constraints on the same residual (:mod:`~mindyn.identification.consistent`).
+    reduced: _Reduced | None = field(default=None, repr=False, compare=False)
 
     def predict(self, data: JointData) -> np.ndarray:
         """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n); the regressor is
@@ -536,4 +539,5 @@ def identify(
         initial=initial,
         settings=settings,
         seconds=time.perf_counter() - t0,
+        reduced=ls,
     )

@@ -1,0 +1,793 @@
+"""Physically consistent estimation of the classical parameters, and payload identification.
+
+Consistent estimate (:func:`identify_consistent`, :func:`consistent_estimate`): the classical
+parameters ``pi`` (per link ``XX XY XZ YY YZ ZZ MX MY MZ M`` about the link-frame origin, then
+``Ia``, ``Fv``, ``Fc`` per joint and ``Off`` per joint as the base set has them) minimising the
+residual of the unconstrained estimate's own least-squares problem -- same model, same equations,
+same row weights -- through the base parameters ``p_b = Y pi``, subject to
+
+- every link's pseudo-inertia ``J = [[tr(I)/2 1 - I, h], [h^T, m]]`` positive semidefinite (mass
+  ``m >= 0``, inertia about the centre of mass positive semidefinite and the triangle
+  inequalities of its principal moments);
+- ``Ia >= 0``, ``Fv >= 0``, ``Fc >= 0`` (offsets are free).
+
+The residual is taken from the ``c x c`` triangle the estimation reduced the (weighted) system to,
+``|A p_b - b|^2 = |R p_b - z|^2 + rho``, so the convex problem is small whatever the length of
+the log. It is solved with cvxpy (Clarabel; SCS if Clarabel fails, reported). The fit term is
+measured in units of the residual variance ``s^2`` of the unconstrained fit with all base
+parameters, ``|R p_b - z|^2 / s^2``: it grows by about 1 per standard deviation that the base
+parameters move along any one direction of the estimate's uncertainty.
+
+Payload (:func:`identify_payload`): the 10 inertial parameters of a body fixed to the last link,
+from ``tau - tau_arm(q, dq, ddq) = W_last(q, dq, ddq) phi`` with the identified arm's torques
+``tau_arm`` and the last link's 10 classical regressor columns ``W_last``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import time
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg as sla
+
+from .._core import ModelError
+from ..base import BaseParameters, base_parameters
+from ..robot import Robot, load
+from .data import JointData
+from .errors import IdentificationError
+from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
+from .models import require_torque
+
+__all__ = [
+    "ConsistentResult",
+    "PayloadResult",
+    "consistent_estimate",
+    "identify_consistent",
+    "identify_payload",
+    "inertial_from_pseudo",
+    "pseudo_inertia",
+]
+
+#: Smallest eigenvalue of a link's pseudo-inertia accepted as positive semidefinite, in kg (its
+#: entries in kg, kg m and kg m^2, lengths in metres).
+EIG_TOL = 1e-9
+
+#: Without a prior, the classical parameters the data do not determine (the null space of the
+#: regrouping ``Y``) are chosen nearest the description (Euclidean norm, masses in units of the
+#: description's mean link mass). When the unconstrained optimum has no consistent realisation,
+#: the constrained optimum may only be approached as some masses grow without bound (a larger
+#: mass lets the link carry larger first moments; the fit gains ever less): so the estimate is the
+#: one nearest the description among those whose fit term is within this many noise variances of
+#: the optimum (statistically indistinguishable from it: a tenth of a standard deviation along
+#: any one direction would cost 0.01). A first solve finds the optimum, carrying the same
+#: distance with weight :data:`NULL_SPACE_WEIGHT` to keep it bounded; a second one the estimate.
+TIE_BREAK_SLACK = 1.0
+NULL_SPACE_WEIGHT = 1e-6
+
+#: A description link whose pseudo-inertia ``J0`` has an eigenvalue below this fraction of the
+#: mean link mass ``eps`` (kg; singular, nearly singular or indefinite) enters the log-det prior as
+#: its projection onto the positive semidefinite matrices plus ``eps`` times the identity (noted
+#: in the result).
+PRIOR_REGULARISATION = 1e-3
+
+INERTIAL = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
+_NAME = re.compile(r"([A-Za-z]+?)([0-9]+)")
+
+
+# ---------------------------------------------------------------------------------------------
+# Pseudo-inertia
+# ---------------------------------------------------------------------------------------------
+def pseudo_inertia(p) -> np.ndarray:
+    """The 4x4 pseudo-inertia ``[[tr(I)/2 1 - I, h], [h^T, m]]`` of the 10 inertial parameters
+    ``XX XY XZ YY YZ ZZ MX MY MZ M`` (about the link-frame origin, in its frame)."""
+    xx, xy, xz, yy, yz, zz, mx, my, mz, m = np.asarray(p, dtype=float)
+    inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    J = np.empty((4, 4))
+    J[:3, :3] = 0.5 * np.trace(inertia) * np.eye(3) - inertia
+    J[:3, 3] = J[3, :3] = (mx, my, mz)
+    J[3, 3] = m
+    return J
+
+
+def inertial_from_pseudo(J) -> np.ndarray:
+    """The 10 inertial parameters of a pseudo-inertia (inverse of :func:`pseudo_inertia`):
+    ``I = tr(S) 1 - S`` for its upper-left block ``S``."""
+    J = 0.5 * (np.asarray(J, dtype=float) + np.asarray(J, dtype=float).T)
+    inertia = np.trace(J[:3, :3]) * np.eye(3) - J[:3, :3]
+    return np.array(
+        [
+            inertia[0, 0],
+            inertia[0, 1],
+            inertia[0, 2],
+            inertia[1, 1],
+            inertia[1, 2],
+            inertia[2, 2],
+            J[0, 3],
+            J[1, 3],
+            J[2, 3],
+            J[3, 3],
+        ]
+    )
+
+
+def _pseudo_map() -> np.ndarray:
+    """``G`` (10, 16) with ``inertial_from_pseudo(J) = G @ J.ravel()`` for symmetric ``J``
+    (symmetric pairs of entries weighted half each)."""
+    G = np.zeros((10, 16))
+    for k in range(16):
+        E = np.zeros(16)
+        E[k] = 1.0
+        G[:, k] = inertial_from_pseudo(E.reshape(4, 4))
+    return G
+
+
+def body_quantities(p) -> dict:
+    """Mass, centre of mass and inertia about it (``XX XY XZ YY YZ ZZ``) of 10 inertial
+    parameters about a frame's origin: ``I_O = I_C + m (|c|^2 1 - c c^T)``."""
+    p = np.asarray(p, dtype=float)
+    m = p[9]
+    c = p[6:9] / m if m != 0 else np.full(3, np.nan)
+    S = pseudo_inertia(p)[:3, :3]
+    inertia_o = np.trace(S) * np.eye(3) - S
+    ic = inertia_o - m * (c @ c * np.eye(3) - np.outer(c, c))
+    return {"mass": m, "com": c, "inertia_com": ic[np.triu_indices(3)]}
+
+
+def min_eigenvalues(pi: np.ndarray, layout: _Layout) -> np.ndarray:
+    """Smallest eigenvalue of each link's pseudo-inertia, shape (n,) [kg]."""
+    return np.array([np.linalg.eigvalsh(pseudo_inertia(pi[ix]))[0] for ix in layout.links])
+
+
+class _Layout:
+    """Indices of a base set's classical vector: the 10 inertial parameters of each link, and
+    the rotor, friction and offset parameters."""
+
+    def __init__(self, base: BaseParameters):
+        names = base.classical_names
+        self.names = names
+        n = base.robot.n
+        where = {nm: i for i, nm in enumerate(names)}
+        self.links = [np.array([where[f"{k}{j + 1}"] for k in INERTIAL]) for j in range(n)]
+        inertial = set(np.concatenate(self.links).tolist())
+        self.extra = np.array([i for i in range(len(names)) if i not in inertial], dtype=int)
+        kinds = [_NAME.fullmatch(names[i]).group(1) for i in self.extra]
+        self.nonneg = np.array([k in ("Ia", "Fv", "Fc") for k in kinds], dtype=bool)
+        self.robot_params = len(names) - (n if base.offset else 0)
+
+
+# ---------------------------------------------------------------------------------------------
+# Consistent estimate
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class ConsistentResult:
+    """A physically consistent estimate beside the unconstrained one it was computed from.
+
+    Attributes
+    ----------
+    base : BaseParameters
+    classical : ndarray, shape (P,)
+        The classical parameters, names ``classical_names`` (``base.classical_names``).
+    full : ndarray, shape (nb,)
+        Their base parameters ``Y @ classical`` (use with ``base.regressor``, :meth:`predict`).
+    unconstrained : IdentificationResult
+    min_eig, unconstrained_min_eig : ndarray (n,)
+        Smallest eigenvalue of each link's pseudo-inertia [kg] of this estimate, and of a
+        classical realisation of the unconstrained estimate: a consistent one when it has one
+        (found without a prior, the estimate then being that realisation), else the one nearest
+        to the description (``pi0 + Y^+ (p_b - Y pi0)``, least change in the Euclidean norm).
+    solver, status : str
+        ``CLARABEL`` or ``SCS`` (``none`` when the unconstrained optimum is itself consistent and
+        is returned as it is), and the solver's status.
+    fit_increase : float
+        ``(|R p_b - z|^2 - |R p_b_ls - z|^2) / s^2``: how much worse the consistent estimate fits
+        than the unconstrained one with all base parameters, in units of the noise variance.
+    """
+
+    model: str
+    base: BaseParameters
+    classical: np.ndarray
+    full: np.ndarray
+    unconstrained: IdentificationResult
+    min_eig: np.ndarray
+    unconstrained_min_eig: np.ndarray
+    prior_weight: float
+    solver: str
+    status: str
+    fit_increase: float
+    prior_divergence: float | None = None
+    notes: list = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def classical_names(self) -> list[str]:
+        return list(self.base.classical_names)
+
+    @property
+    def link_names(self) -> list[str]:
+        return list(self.base.robot.link_names[1:])
+
+    @property
+    def robot_params(self) -> np.ndarray:
+        """The classical vector without offsets, in the layout ``Robot`` methods take."""
+        return self.classical[: _Layout(self.base).robot_params]
+
+    @property
+    def total_mass(self) -> float:
+        return float(sum(self.classical[ix[9]] for ix in _Layout(self.base).links))
+
+    def violating_links(self, unconstrained: bool = True) -> list[str]:
+        eig = self.unconstrained_min_eig if unconstrained else self.min_eig
+        return [nm for nm, e in zip(self.link_names, eig) if e < -EIG_TOL]
+
+    def predict(self, data: JointData) -> np.ndarray:
+        """Joint torques of the consistent estimate on ``data``, shape (m, n)."""
+        out = np.empty((data.m, data.n))
+        step = 8192
+        for a in range(0, data.m, step):
+            b = min(data.m, a + step)
+            out[a:b] = regressor_rows(self.base, data, a, b) @ self.full
+        return out
+
+    def mass_matrix_min_eig(self, data) -> float:
+        """Smallest eigenvalue of the joint-space inertia ``A(q)`` of the identified classical
+        parameters over every sample of ``data`` (one log or several)."""
+        robot = self.base.robot
+        low = math.inf
+        for d in _logs(data):
+            for a in range(0, d.m, 8192):
+                A = robot.mass_matrix(d.q[a : a + 8192], self.robot_params)
+                low = min(low, float(np.linalg.eigvalsh(A)[:, 0].min()))
+        return low
+
+    def to_dict(self) -> dict:
+        """The JSON fields of a consistent estimate (``classical`` and ``pseudo_inertia_min_eig``
+        as name -> value maps)."""
+        return {
+            "consistent": True,
+            "classical": {nm: float(v) for nm, v in zip(self.classical_names, self.classical)},
+            "pseudo_inertia_min_eig": {
+                nm: float(v) for nm, v in zip(self.link_names, self.min_eig)
+            },
+            "total_mass": self.total_mass,
+            "consistent_estimate": {
+                "solver": self.solver,
+                "status": self.status,
+                "seconds": self.seconds,
+                "prior_weight": self.prior_weight,
+                "prior_divergence": self.prior_divergence,
+                "fit_increase_noise_variances": self.fit_increase,
+                "eig_tolerance": EIG_TOL,
+                "base_names": list(self.base.names),
+                "base_values": [float(v) for v in self.full],
+                "unconstrained_pseudo_inertia_min_eig": {
+                    nm: float(v) for nm, v in zip(self.link_names, self.unconstrained_min_eig)
+                },
+                "unconstrained_violating_links": self.violating_links(True),
+                "notes": list(self.notes),
+            },
+        }
+
+
+def description_vector(base: BaseParameters) -> np.ndarray:
+    """The description's classical parameters in the layout of ``base`` (offsets zero)."""
+    robot = base.robot
+    p = robot.parameters(base.rotor, base.friction)
+    return np.concatenate([p, np.zeros(robot.n if base.offset else 0)])
+
+
+def nearest_realisation(base: BaseParameters, values) -> np.ndarray:
+    """The classical vector with base parameters ``values`` nearest to the description
+    (Euclidean norm): ``pi0 + Y^+ (values - Y pi0)``."""
+    pi0 = description_vector(base)
+    Y = base.Y
+    return pi0 + np.linalg.lstsq(Y, np.asarray(values, float) - Y @ pi0, rcond=None)[0]
+
+
+def identify_consistent(robot, data, prior_weight: float = 0.0, **kwargs) -> ConsistentResult:
+    """:func:`~mindyn.identification.identify` (same arguments in ``kwargs``), then
+    :func:`consistent_estimate` on its least-squares problem."""
+    return consistent_estimate(identify(robot, data, **kwargs), prior_weight)
+
+
+def _weight(prior_weight) -> float:
+    try:
+        w = float(prior_weight)
+    except (TypeError, ValueError):
+        raise ModelError(f"prior_weight is {prior_weight!r}; expected a number >= 0") from None
+    if not (math.isfinite(w) and w >= 0):
+        raise ModelError(f"prior_weight is {prior_weight!r}; expected a finite number >= 0")
+    return w
+
+
+def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) -> ConsistentResult:
+    """The physically consistent classical parameters for the least-squares problem of ``res``
+    (see the module documentation).
+
+    ``prior_weight`` ``W >= 0`` adds ``W * sum_links d(J, J0)``, the log-det (Bregman) divergence
+    ``d(J, J0) = -log det(J0^-1 J) + tr(J0^-1 J) - 4`` of each link's pseudo-inertia from the
+    description's, to the fit term (which is in units of the noise variance, see the module): at
+    ``W = 1`` a divergence of 1 costs as much as moving the base parameters one standard deviation
+    along one direction. ``W = 0`` (default): no prior; the classical parameters the data leave
+    undetermined are then taken nearest the description. Without a prior, when the unconstrained
+    optimum (all base parameters, no pruning) has a consistent classical realisation, that is the
+    answer (its base parameters equal the least-squares estimate): its realisation nearest the
+    description when that is consistent (no solver runs), else the consistent one nearest the
+    description (one convex solve with ``Y pi = p_b`` imposed). Otherwise the optimum is on the
+    boundary of the consistent set; see :data:`TIE_BREAK_SLACK` for how it is taken.
+    After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance are projected
+    onto the positive semidefinite matrices (negative eigenvalues set to zero) and ``Ia, Fv, Fc``
+    clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``."""
+    t0 = time.perf_counter()
+    W = _weight(prior_weight)
+    base = res.base
+    ls = res.reduced
+    if ls is None:
+        raise IdentificationError("the identification result carries no least-squares problem")
+    layout = _Layout(base)
+    nb = base.n
+    Y = base.Y
+    M = (ls.R * ls.norms) @ Y  # residual |M pi - z|^2 + rho
+    z = ls.z
+    beta_ls, _, _ = ls.solve(list(range(nb)))
+    s2 = ls.rho / (ls.r - nb) if ls.r > nb else 0.0
+    floor = 1e-10 * (float(z @ z) + ls.rho)  # noise-free data: |z| / s at most 1e5
+    s2 = max(s2, floor, 1e-300)
+    fit_ls = float(np.sum((ls.R @ (beta_ls * ls.norms) - z) ** 2))
+    notes: list[str] = []
+
+    def fit_increase(pi):
+        return (float(np.sum((M @ pi - z) ** 2)) - fit_ls) / s2
+
+    pi0 = description_vector(base)
+    pi_n = nearest_realisation(base, beta_ls)
+    ok_n = np.all(min_eigenvalues(pi_n, layout) >= 0) and np.all(
+        pi_n[layout.extra[layout.nonneg]] >= 0
+    )
+    pi_un = nearest_realisation(base, res.full)
+    if W == 0 and ok_n:
+        pi, solver, status = pi_n, "none", "optimal"
+        notes.append("the unconstrained optimum is consistent: returned as it is")
+    else:
+        pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls)
+    realised = W == 0 and (ok_n or any(n.startswith("the unconstrained optimum") for n in notes))
+    # Enforce the constraints exactly (solver tolerance): PSD projection, clipping.
+    for ix in layout.links:
+        J = pseudo_inertia(pi[ix])
+        lam, V = np.linalg.eigh(J)
+        if lam[0] < 0:
+            pi[ix] = inertial_from_pseudo((V * np.maximum(lam, 0.0)) @ V.T)
+    nonneg = layout.extra[layout.nonneg]
+    pi[nonneg] = np.maximum(pi[nonneg], 0.0)
+    eig = min_eigenvalues(pi, layout)
+    if eig.min() < -EIG_TOL:  # pragma: no cover - guarded by the projection above
+        raise IdentificationError(
+            f"consistent estimate: smallest pseudo-inertia eigenvalue {eig.min():.3g} kg"
+        )
+    prior = None
+    if W > 0:
+        prior = float(
+            sum(
+                _divergence(pseudo_inertia(pi[ix]), J0)
+                for ix, J0 in zip(layout.links, _prior_matrices(base, layout, pi0, None))
+            )
+        )
+    return ConsistentResult(
+        model=res.model,
+        base=base,
+        classical=pi,
+        full=Y @ pi,
+        unconstrained=res,
+        min_eig=eig,
+        unconstrained_min_eig=min_eigenvalues(
+            pi if realised and np.array_equal(res.full, beta_ls) else pi_un, layout
+        ),
+        prior_weight=W,
+        solver=solver,
+        status=status,
+        fit_increase=fit_increase(pi),
+        prior_divergence=prior,
+        notes=notes,
+        seconds=time.perf_counter() - t0,
+    )
+
+
+def _mean_mass(base: BaseParameters, layout: _Layout, pi0: np.ndarray) -> float:
+    masses = np.array([pi0[ix[9]] for ix in layout.links])
+    pos = masses[masses > 0]
+    return float(pos.mean()) if pos.size else 1.0
+
+
+def _prior_matrices(base, layout, pi0, notes) -> list[np.ndarray]:
+    """The description's pseudo-inertias, each made positive definite when it is not (see
+    :data:`PRIOR_REGULARISATION`)."""
+    eps = PRIOR_REGULARISATION * _mean_mass(base, layout, pi0)
+    out = []
+    for name, ix in zip(base.robot.link_names[1:], layout.links):
+        J0 = pseudo_inertia(pi0[ix])
+        lam, V = np.linalg.eigh(J0)
+        if lam[0] < eps:
+            J0 = (V * np.maximum(lam, 0.0)) @ V.T + eps * np.eye(4)
+            if notes is not None:
+                notes.append(
+                    f"prior: the description's pseudo-inertia of {name} has its smallest "
+                    f"eigenvalue {lam[0]:.3g} kg, below {eps:.3g} kg (singular or nearly so); "
+                    f"regularised to its PSD part + {eps:.3g} kg x identity"
+                )
+        out.append(J0)
+    return out
+
+
+def _divergence(J, J0) -> float:
+    A = np.linalg.solve(J0, J)
+    sign, logdet = np.linalg.slogdet(A)
+    return float(-logdet + np.trace(A) - 4) if sign > 0 else math.inf
+
+
+def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None):
+    import cvxpy as cp
+
+    n = base.robot.n
+    P = len(layout.names)
+    mbar = _mean_mass(base, layout, pi0)
+    G10 = _pseudo_map()
+    # pi = G u, u = [vec(J'_1) .. vec(J'_n), extras]; J = mbar J' (the variables of order 1).
+    k = layout.extra.size
+    G = np.zeros((P, 16 * n + k))
+    for j, ix in enumerate(layout.links):
+        G[ix, 16 * j : 16 * (j + 1)] = mbar * G10
+    G[layout.extra, 16 * n + np.arange(k)] = 1.0
+    Js = [cp.Variable((4, 4), PSD=True) for _ in range(n)]
+    parts = [cp.vec(J, order="C") for J in Js]
+    e = cp.Variable(k) if k else None
+    if e is not None:
+        parts.append(e)
+    u = cp.hstack(parts)
+    pi = G @ u
+    scale = 1.0 / math.sqrt(s2)
+    # The residual as its own variable: the objective's quadratic form is then the identity
+    # rather than the (squared, ill-conditioned) normal matrix.
+    r = cp.Variable(z.size)
+    fit = cp.sum_squares(r)
+    objective = fit
+    N = np.zeros((P, 0))
+    cons = [r == (M @ G) @ u * scale - z * scale]
+    if e is not None and layout.nonneg.any():
+        cons.append(e[np.flatnonzero(layout.nonneg)] >= 0)
+    if W > 0:
+        J0s = _prior_matrices(base, layout, pi0, notes)
+        for J, J0 in zip(Js, J0s):
+            inv = np.linalg.inv(J0 / mbar)
+            inv = 0.5 * (inv + inv.T)
+            objective = objective + W * (-cp.log_det(J) + cp.trace(inv @ J))
+    else:
+        s = np.ones(P)
+        for ix in layout.links:
+            s[ix] = mbar
+        N = sla.null_space(base.Y * s)
+        if N.size:
+            w = cp.Variable(N.shape[1])
+            cons.append(w == N.T @ ((pi - pi0) / s))
+            tie = cp.sum_squares(w)
+            objective = objective + NULL_SPACE_WEIGHT * tie
+    if W == 0 and beta is not None:
+        # Does the unconstrained optimum have a consistent realisation? Then it is the answer,
+        # the undetermined parameters nearest the description.
+        A = base.Y @ G
+        rn = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
+        feas = cons[1:] + [(A / rn[:, None]) @ u == beta / rn]
+        prob = cp.Problem(cp.Minimize(tie if N.size else 0), feas)
+        solver, status = _run(prob, notes, "realisation ", accept_infeasible=True)
+        if status in ("optimal", "optimal_inaccurate"):
+            pi_f = np.asarray(G @ u.value, float)
+            pi_f += np.linalg.lstsq(base.Y, beta - base.Y @ pi_f, rcond=None)[0]
+            notes.append("the unconstrained optimum has a consistent realisation: returned")
+            return pi_f, solver, status
+    solver, status = _run(cp.Problem(cp.Minimize(objective), cons), notes, "")
+    if W == 0 and N.size:
+        # second solve: the undetermined parameters nearest the description among the optima
+        best = float(fit.value)
+        prob = cp.Problem(
+            cp.Minimize(tie), cons + [cp.norm(r) <= math.sqrt(best + TIE_BREAK_SLACK)]
+        )
+        solver2, status2 = _run(prob, notes, "tie-break ")
+        solver = solver if solver2 == solver else f"{solver}+{solver2}"
+        status = status if status2 == status else f"{status}+{status2}"
+    return np.asarray(G @ u.value, float), solver, status
+
+
+def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple[str, str]:
+    """Solves ``prob`` with Clarabel, else SCS (noted); raises IdentificationError when neither
+    gives a solution (with ``accept_infeasible``, Clarabel's verdict of infeasibility is
+    returned as the status)."""
+    import cvxpy as cp
+
+    tried = []
+    for solver in ("CLARABEL", "SCS"):
+        # an inaccurate solution is reported in the status (optimal_inaccurate), not warned
+        options = (
+            {"eps": 1e-9, "max_iters": 20000}
+            if solver == "SCS"
+            else {"chordal_decomposition_enable": False}
+        )
+        try:
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
+                prob.solve(solver=solver, **options)
+        except (cp.error.SolverError, ValueError, ArithmeticError) as ex:
+            tried.append(f"{solver}: {str(ex).splitlines()[0] if str(ex) else type(ex).__name__}")
+            continue
+        if accept_infeasible and solver == "CLARABEL" and prob.status == "infeasible":
+            return solver, prob.status
+        if prob.status in ("optimal", "optimal_inaccurate") and all(
+            v.value is not None for v in prob.variables()
+        ):
+            if tried:
+                notes.append(f"{what}fallback to SCS after " + "; ".join(tried))
+            return solver, prob.status
+        tried.append(f"{solver}: status {prob.status}")
+    raise IdentificationError(
+        f"consistent estimate: no solver succeeded in the {what}solve (" + "; ".join(tried) + ")"
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# Payload
+# ---------------------------------------------------------------------------------------------
+@dataclass
+class PayloadResult:
+    """Inertial parameters of a payload fixed to the last link, about the last link frame's
+    origin and in its frame (``XX XY XZ YY YZ ZZ MX MY MZ M``).
+
+    ``values``, ``std``: the unconstrained least-squares estimate and its standard deviations
+    (``s^2 (A^T A)^-1``, ``s^2`` the residual variance); ``covariance`` (10, 10). ``consistent``:
+    the estimate with the payload's pseudo-inertia positive semidefinite (or None). ``derived`` /
+    ``consistent_derived``: mass, centre of mass, inertia about the centre of mass, with standard
+    deviations by first-order propagation for the unconstrained one."""
+
+    names: list
+    values: np.ndarray
+    std: np.ndarray
+    covariance: np.ndarray
+    sigma: float
+    rows: int
+    rank: int
+    cond: float
+    consistent: np.ndarray | None
+    min_eig: float
+    consistent_min_eig: float | None
+    arm_values: str
+    solver: str | None = None
+    status: str | None = None
+    seconds: float = 0.0
+
+    def derived(self, consistent: bool = False) -> dict:
+        p = self.consistent if consistent else self.values
+        out = body_quantities(p)
+        if consistent:
+            return out
+        # first-order propagation: central differences of the derived quantities
+        f0 = _flat(out)
+        Jac = np.zeros((f0.size, 10))
+        for k in range(10):
+            h = 1e-6 * max(1.0, abs(p[k]))
+            dp = np.zeros(10)
+            dp[k] = h
+            Jac[:, k] = (_flat(body_quantities(p + dp)) - _flat(body_quantities(p - dp))) / (2 * h)
+        sd = np.sqrt(np.maximum(np.einsum("ij,jk,ik->i", Jac, self.covariance, Jac), 0.0))
+        out["mass_std"], out["com_std"], out["inertia_com_std"] = sd[0], sd[1:4], sd[4:]
+        return out
+
+    def to_dict(self) -> dict:
+        def plain(d):
+            return {
+                k: (v.tolist() if isinstance(v, np.ndarray) else float(v)) for k, v in d.items()
+            }
+
+        return {
+            "frame": "last link frame, parameters about its origin",
+            "names": list(self.names),
+            "values": self.values.tolist(),
+            "std": self.std.tolist(),
+            "sigma": self.sigma,
+            "rows": self.rows,
+            "rank": self.rank,
+            "condition_number_scaled": self.cond,
+            "pseudo_inertia_min_eig": self.min_eig,
+            "unconstrained": plain(self.derived()),
+            "consistent": None
+            if self.consistent is None
+            else {
+                "values": self.consistent.tolist(),
+                "pseudo_inertia_min_eig": self.consistent_min_eig,
+                "solver": self.solver,
+                "status": self.status,
+                **plain(self.derived(True)),
+            },
+            "arm_values": self.arm_values,
+            "seconds": self.seconds,
+        }
+
+
+def _flat(d: dict) -> np.ndarray:
+    return np.concatenate([[d["mass"]], d["com"], d["inertia_com"]])
+
+
+class _LastLink:
+    """The last link's 10 classical regressor columns, in the interface of a base set that the
+    preprocessing's parallel filter takes (``n``, ``regressor``)."""
+
+    def __init__(self, robot: Robot):
+        self.robot = robot
+        self.n = 10
+        self.cols = np.arange(10 * (robot.n - 1), 10 * robot.n)
+
+    def regressor(self, q, dq, ddq):
+        return self.robot.regressor(q, dq, ddq)[..., self.cols]
+
+
+def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.ndarray, str]:
+    """The base set and base values of an identified arm: the JSON of ``mindyn identify``
+    (a dict or a path). Uses ``classical`` when present (the consistent estimate), else
+    ``base_values``."""
+    if isinstance(arm, (str, Path)):
+        where = str(arm)
+        try:
+            arm = json.loads(Path(arm).read_text())
+        except FileNotFoundError:
+            raise FileNotFoundError(f"identification JSON '{arm}' does not exist") from None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as ex:
+            raise ModelError(f"{where}: not a JSON file of mindyn identify ({ex})") from None
+    need = ("robot", "base_names", "base_values", "rotor", "friction", "offset")
+    if not isinstance(arm, dict) or any(k not in arm for k in need):
+        raise ModelError(
+            f"{where}: expected the JSON of mindyn identify (fields {', '.join(need)})"
+        )
+    if arm["robot"] != robot.name:
+        raise ModelError(f"{where}: identified for robot '{arm['robot']}', not '{robot.name}'")
+    base = base_parameters(
+        robot, rotor=bool(arm["rotor"]), friction=bool(arm["friction"]), offset=bool(arm["offset"])
+    )
+    if list(arm["base_names"]) != list(base.names):
+        raise ModelError(
+            f"{where}: its base parameters ({len(arm['base_names'])}) are not those of robot "
+            f"'{robot.name}' ({base.n}); identified with another description?"
+        )
+    classical = arm.get("classical")
+    try:
+        if isinstance(classical, dict):
+            missing = [nm for nm in base.classical_names if nm not in classical]
+            if missing:
+                raise ModelError(f"{where}: 'classical' lacks {', '.join(missing[:5])}")
+            pi = np.array([float(classical[nm]) for nm in base.classical_names])
+            values, used = base.values(pi), "classical (consistent estimate)"
+        else:
+            values, used = np.array([float(v) for v in arm["base_values"]]), "base values"
+    except (TypeError, ValueError) as ex:
+        raise ModelError(f"{where}: a parameter value is not a number ({ex})") from None
+    if values.shape != (base.n,) or not np.all(np.isfinite(values)):
+        raise ModelError(f"{where}: expected {base.n} finite base values")
+    return base, values, used
+
+
+def identify_payload(
+    robot: Robot | str,
+    arm,
+    data: JointData | list[JointData],
+    consistent: bool = True,
+    min_velocity: float = 0.01,
+    rank_tolerance: float = 1e-9,
+) -> PayloadResult:
+    """Inertial parameters of a payload rigidly fixed to the last link, from logs ``data`` with
+    the payload and the identified ``arm`` (JSON of ``mindyn identify`` as a dict or path: its
+    base values, or its ``classical`` map when present; friction, rotor inertia and offsets as
+    identified). Ordinary least squares on ``tau - tau_arm = W_last phi`` (all joints' equations;
+    with arm friction, equations of joints slower than ``min_velocity`` left out as in
+    :func:`~mindyn.identification.identify`), and with ``consistent`` the estimate under a
+    positive semidefinite payload pseudo-inertia (cvxpy, Clarabel).
+
+    Raises IdentificationError when the data (or the geometry: a last joint whose axis symmetry
+    hides some parameters) do not determine all 10 parameters: the rank and the undetermined
+    parameters and combinations are named."""
+    t0 = time.perf_counter()
+    robot = load(robot)
+    base, beta, used = read_arm(robot, arm)
+    logs = _logs(data)
+    last = _LastLink(robot)
+    names = [f"{k}{robot.n}" for k in INERTIAL]
+    rows_A, rows_y = [], []
+    for d in logs:
+        require_torque(d)
+        if d.n != robot.n:
+            raise ModelError(
+                f"{d.source or 'data'} has {d.n} joints; robot '{robot.name}' has {robot.n}"
+            )
+        if d.regressor_filter is not None:
+            Wl = d.regressor_filter.regressor(last)
+        else:
+            Wl = last.regressor(d.q, d.dq, d.ddq)
+        tau_arm = np.concatenate(
+            [regressor_rows(base, d, a, min(d.m, a + 8192)) @ beta for a in range(0, d.m, 8192)]
+        )
+        r = (d.tau - tau_arm).reshape(-1)
+        A = Wl.reshape(-1, 10)
+        if min_velocity > 0 and base.friction:
+            keep = np.abs(d.dq).reshape(-1) >= min_velocity
+            A, r = A[keep], r[keep]
+        rows_A.append(A)
+        rows_y.append(r)
+    A, y = np.vstack(rows_A), np.concatenate(rows_y)
+    if A.shape[0] < 10 + 30:
+        raise IdentificationError(
+            f"{len(y)} equations for the 10 payload parameters; at least 40 are needed"
+        )
+    ls = _Reduced(A, y)
+    rank, piv, cond = ls.rank(rank_tolerance)
+    if rank < 10:
+        N = sla.null_space(ls.R, rcond=rank_tolerance)  # scaled coordinates
+        combos = []
+        for v in N.T[: 10 - rank]:
+            v = v / ls.norms
+            v = v / v[np.argmax(np.abs(v))]
+            combos.append(
+                " ".join(f"{c:+.3g} {nm}" for c, nm in zip(v, names) if abs(c) > 1e-6).lstrip("+")
+            )
+        dropped = ", ".join(names[j] for j in piv[rank:])
+        raise IdentificationError(
+            f"payload: the last link's regressor has rank {rank} of 10 on this data; "
+            f"{dropped} cannot be separated from the others (undetermined combinations: "
+            + "; ".join(combos)
+            + "); the joint axes' symmetry or the motion leaves them unobservable"
+        )
+    p, std, s2 = ls.solve(list(range(10)))
+    Rinv = sla.solve_triangular(ls.R, np.eye(10))
+    cov = s2 * (Rinv @ Rinv.T) / np.outer(ls.norms, ls.norms)
+    min_eig = float(np.linalg.eigvalsh(pseudo_inertia(p))[0])
+    phi_c, solver, status, cmin = None, None, None, None
+    if consistent:
+        if min_eig >= 0:
+            phi_c, solver, status = p.copy(), "none", "optimal"
+        else:
+            phi_c, solver, status = _solve_payload(ls, p)
+        lam, V = np.linalg.eigh(pseudo_inertia(phi_c))
+        if lam[0] < 0:
+            phi_c = inertial_from_pseudo((V * np.maximum(lam, 0)) @ V.T)
+        cmin = float(np.linalg.eigvalsh(pseudo_inertia(phi_c))[0])
+    return PayloadResult(
+        names=names,
+        values=p,
+        std=std,
+        covariance=cov,
+        sigma=math.sqrt(s2),
+        rows=ls.r,
+        rank=rank,
+        cond=cond,
+        consistent=phi_c,
+        min_eig=min_eig,
+        consistent_min_eig=cmin,
+        arm_values=used,
+        solver=solver,
+        status=status,
+        seconds=time.perf_counter() - t0,
+    )
+
+
+def _solve_payload(ls: _Reduced, p: np.ndarray):
+    import cvxpy as cp
+
+    ms = max(abs(p[9]), 1e-3)
+    G = ms * _pseudo_map()
+    J = cp.Variable((4, 4), PSD=True)
+    Rs = ls.R * ls.norms
+    scale = 1.0 / max(float(np.linalg.norm(ls.z)), 1e-300)
+    r = cp.Variable(ls.z.size)
+    cons = [r == (Rs @ G) @ cp.vec(J, order="C") * scale - ls.z * scale]
+    prob = cp.Problem(cp.Minimize(cp.sum_squares(r)), cons)
+    notes: list[str] = []
+    solver, status = _run(prob, notes, "payload ")
+    return G @ np.asarray(J.value).reshape(-1), solver, status

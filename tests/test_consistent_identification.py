@@ -1,0 +1,399 @@
+"""Physically consistent identification and payload identification.
+
+References: data simulated by inverse dynamics with known parameters (noise-free or with seeded
+noise), the regrouping of those known parameters, and an independent solve of the same small
+problems by scipy.optimize over a Cholesky factorisation of each pseudo-inertia (``J = L L^T``,
+positive semidefinite by construction, no cone solver involved).
+"""
+
+from __future__ import annotations
+
+import json
+
+import mindyn
+import numpy as np
+import pytest
+from mindyn import cli
+from mindyn.identification import identify
+from mindyn.identification.consistent import (
+    EIG_TOL,
+    consistent_estimate,
+    identify_consistent,
+    identify_payload,
+    inertial_from_pseudo,
+    pseudo_inertia,
+)
+from mindyn.identification.data import JointData
+from mindyn.identification.excitation import random_trajectory
+from mindyn.simulate import SensorNoise, simulate_inverse, simulate_tracking
+from scipy.optimize import least_squares, minimize
+
+ROBOT = "zcr07s"  # a description whose every link is physically consistent
+SMALL = "planar2"  # for the independent solves by scipy (20 unknowns)
+
+
+def make_log(robot, params, seed=1, noise=0.0, rate=50.0, traj_seed=1):
+    """Inverse-dynamics log along a random trajectory; torques with white noise of ``noise``
+    times each joint's RMS torque; accelerations as simulated (no differentiation error)."""
+    traj = random_trajectory(robot, seed=traj_seed)
+    clean = simulate_inverse(robot, traj, rate=rate, params=params)
+    sd = noise * np.sqrt(np.mean(clean.tau**2, axis=0))
+    log = simulate_inverse(
+        robot, traj, rate=rate, params=params, noise=SensorNoise(torque=sd), seed=seed
+    )
+    return JointData(log.t, log.q, log.dq, log.ddq_true, log.tau, f"sim{seed}")
+
+
+def scaled_links(robot, factors):
+    """The description with each link's 10 inertial parameters scaled (a positive factor keeps
+    a pseudo-inertia positive semidefinite)."""
+    p = robot.params.reshape(robot.n, 10) * np.asarray(factors)[:, None]
+    return p.reshape(-1)
+
+
+def test_pseudo_inertia_round_trip_and_meaning():
+    # a point mass m at c: J = m [c; 1][c; 1]^T, rank 1
+    m, c = 2.0, np.array([0.1, -0.2, 0.3])
+    inertia = m * (c @ c * np.eye(3) - np.outer(c, c))
+    p = np.concatenate([inertia[np.triu_indices(3)], m * c, [m]])
+    v = np.append(c, 1.0)
+    np.testing.assert_allclose(pseudo_inertia(p), m * np.outer(v, v), atol=1e-15)
+    np.testing.assert_allclose(inertial_from_pseudo(pseudo_inertia(p)), p, atol=1e-15)
+
+
+def test_consistent_optimum_equals_unconstrained_when_it_is_consistent():
+    """(a) noise-free data of a physical robot: the constrained optimum is the unconstrained
+    one; its base parameters equal the least-squares estimate and the truth's."""
+    robot = mindyn.load(ROBOT)
+    truth = scaled_links(robot, [1.1, 0.9, 1.2, 0.8, 1.05, 0.95])  # differs from the description
+    data = make_log(robot, truth)
+    res = identify(robot, data, rsd_threshold=None)
+    cons = consistent_estimate(res, 0.0)
+    beta_true = res.base.values(truth)
+    scale = np.linalg.norm(beta_true)
+    # tolerance: noise-free data, the least-squares solve is exact to ~1e-12 relative
+    assert np.linalg.norm(cons.full - res.full) / scale < 1e-9
+    assert np.linalg.norm(cons.full - beta_true) / scale < 1e-8
+    assert np.all(cons.min_eig >= -EIG_TOL)
+    assert cons.violating_links() == []
+
+
+def _residual_problem(res):
+    ls = res.reduced
+    M = (ls.R * ls.norms) @ res.base.Y
+    nb = res.base.n
+    s2 = ls.rho / (ls.r - nb)
+    return M, ls.z, s2
+
+
+def _cholesky_pi(x, n, P, links, extra, nonneg):
+    """Classical vector from per-link lower-triangular factors (10 entries each) and the other
+    parameters (squared where they must be >= 0)."""
+    pi = np.zeros(P)
+    tril = np.tril_indices(4)
+    for j, ix in enumerate(links):
+        L = np.zeros((4, 4))
+        L[tril] = x[10 * j : 10 * j + 10]
+        pi[ix] = inertial_from_pseudo(L @ L.T)
+    e = x[10 * n :]
+    pi[extra] = np.where(nonneg, e**2, e)
+    return pi
+
+
+def _cholesky_start(pi0, n, links, extra, nonneg):
+    x = []
+    for ix in links:
+        J = pseudo_inertia(pi0[ix]) + 1e-6 * np.eye(4)
+        x.extend(np.linalg.cholesky(J)[np.tril_indices(4)])
+    e = pi0[extra]
+    x.extend(np.where(nonneg, np.sqrt(np.abs(e)), e))
+    return np.array(x)
+
+
+def test_prior_optimum_matches_independent_scipy_solve():
+    """(b) data of an inconsistent parameter vector (a two-link arm, link 2 with a negative
+    moment of inertia about its joint axis), prior weight 1: the cone solver's minimiser of
+    fit + W * log-det divergence equals scipy's over Cholesky factors (the objective is strictly
+    convex in the pseudo-inertias: one minimiser)."""
+    robot = mindyn.load(SMALL)
+    bad = robot.params.reshape(robot.n, 10).copy()
+    bad[1, 5] = -bad[1, 5]  # negative ZZ2
+    data = make_log(robot, bad.reshape(-1), noise=0.01)
+    res = identify(robot, data, rsd_threshold=None)
+    W = 1.0
+    cons = consistent_estimate(res, W)
+    assert cons.violating_links() != []  # the unconstrained estimate is inconsistent
+    assert np.all(cons.min_eig >= -EIG_TOL)  # (c)
+
+    from mindyn.identification.consistent import _Layout, _prior_matrices, description_vector
+
+    layout = _Layout(res.base)
+    n, P = robot.n, len(layout.names)
+    M, z, s2 = _residual_problem(res)
+    pi0 = description_vector(res.base)
+    J0inv = [np.linalg.inv(J0) for J0 in _prior_matrices(res.base, layout, pi0, None)]
+
+    def objective(x):
+        pi = _cholesky_pi(x, n, P, layout.links, layout.extra, layout.nonneg)
+        f = np.sum((M @ pi - z) ** 2) / s2
+        for ix, Ji in zip(layout.links, J0inv):
+            A = Ji @ pseudo_inertia(pi[ix])
+            sign, logdet = np.linalg.slogdet(A)
+            if sign <= 0:
+                return 1e30
+            f += W * (-logdet + np.trace(A) - 4)
+        return f
+
+    x0 = _cholesky_start(pi0, n, layout.links, layout.extra, layout.nonneg)
+    opt = minimize(objective, x0, method="BFGS", options={"maxiter": 20000, "gtol": 1e-8})
+    pi_ref = _cholesky_pi(opt.x, n, P, layout.links, layout.extra, layout.nonneg)
+    ours = objective(_cholesky_start(cons.classical, n, layout.links, layout.extra, layout.nonneg))
+    # both reach the same objective value (to 1e-5 of it: BFGS's and the cone solver's
+    # tolerances) and the same minimiser in the base parameters
+    assert abs(ours - opt.fun) <= 1e-5 * abs(opt.fun)
+    Lw = (res.reduced.R * res.reduced.norms) / np.sqrt(s2)  # whitened: units of one std
+    assert np.linalg.norm(Lw @ (cons.full - res.base.Y @ pi_ref)) < 0.05
+
+
+def test_boundary_optimum_without_prior_matches_bounded_least_squares():
+    """(b, c) prior weight 0, data of a robot with a negative viscous friction on joint 2: the
+    optimum sits on the boundary Fv2 = 0. Independent route: scipy's bounded linear least
+    squares of the same weighted problem in the base parameters with Fv, Fc >= 0 (the inertial
+    part of the optimum is inside the consistent set, so only the bounds are active)."""
+    from scipy.optimize import lsq_linear
+
+    robot = mindyn.load(ROBOT)
+    p = robot.parameters(False, True).reshape(robot.n, 12)
+    p[:, 10] = [0.5, -0.4, 0.3, 0.2, 0.1, 0.1]  # Fv, one negative
+    p[:, 11] = [0.8, 0.6, 0.5, 0.3, 0.2, 0.2]  # Fc
+    data = make_log(robot, p.reshape(-1), noise=0.01)
+    res = identify(robot, data, friction=True, rsd_threshold=None, min_velocity=0.0)
+    cons = consistent_estimate(res, 0.0)
+    assert np.all(cons.min_eig >= -EIG_TOL)
+    names = res.base.names
+    lo = np.array([0.0 if nm[:2] in ("Fv", "Fc") else -np.inf for nm in names])
+    ls = res.reduced
+    ref = lsq_linear(ls.R, ls.z, bounds=(lo / ls.norms, np.inf), tol=1e-14, method="bvls")
+    beta_ref = ref.x / ls.norms
+    assert beta_ref[names.index("Fv2")] == 0.0  # the bound is active
+    assert cons.full[names.index("Fv2")] >= 0.0
+    # The same minimiser up to the tie-break: the estimate's fit is within TIE_BREAK_SLACK noise
+    # variances of the optimum's; for this strongly convex quadratic that bounds its whitened
+    # distance from the minimiser by sqrt(TIE_BREAK_SLACK) (1 % margin for solver tolerance).
+    from mindyn.identification.consistent import TIE_BREAK_SLACK
+
+    M, z, s2 = _residual_problem(res)
+    Lw = (ls.R * ls.norms) / np.sqrt(s2)
+    f_ref = float(np.sum((Lw @ beta_ref - z / np.sqrt(s2)) ** 2))
+    f_ours = float(np.sum((Lw @ cons.full - z / np.sqrt(s2)) ** 2))
+    assert f_ours <= f_ref + TIE_BREAK_SLACK * 1.01
+    assert np.linalg.norm(Lw @ (cons.full - beta_ref)) <= np.sqrt(TIE_BREAK_SLACK) * 1.01
+    assert cons.fit_increase > 1.0  # the constraint is active: the optimum is on the boundary
+
+
+def test_prior_weight_pulls_toward_description_monotonically():
+    """(e) the summed log-det divergence from the description falls as W grows, and the fit
+    worsens."""
+    robot = mindyn.load(ROBOT)
+    truth = scaled_links(robot, [1.3, 0.7, 1.4, 0.6, 1.2, 0.8])
+    data = make_log(robot, truth, noise=0.01)
+    res = identify(robot, data, rsd_threshold=None)
+    div, fit = [], []
+    for W in (0.01, 1.0, 100.0):
+        c = consistent_estimate(res, W)
+        div.append(c.prior_divergence)
+        fit.append(c.fit_increase)
+    assert div[0] > div[1] > div[2]
+    assert fit[0] < fit[1] < fit[2]
+
+
+def test_identify_consistent_api_and_mass_matrix():
+    robot = mindyn.load(ROBOT)
+    data = make_log(robot, robot.params, noise=0.01)
+    c = identify_consistent(robot, data, friction=False, rsd_threshold=None)
+    doc = c.to_dict()
+    assert doc["consistent"] is True
+    assert list(doc["classical"]) == robot.parameter_names()
+    assert list(doc["pseudo_inertia_min_eig"]) == robot.link_names[1:]
+    assert doc["total_mass"] == pytest.approx(sum(robot.params.reshape(6, 10)[:, 9]), rel=0.2)
+    assert c.mass_matrix_min_eig(data) > 0
+    with pytest.raises(ValueError, match="prior_weight"):
+        consistent_estimate(c.unconstrained, -1)
+
+
+def test_consistent_model_simulates_stably_along_the_trajectory():
+    """4: the identified consistent model, driven by computed torque with the same model along
+    the fit trajectory, stays on it (a mass matrix not positive definite would stop the
+    integration with an error)."""
+    robot = mindyn.load(ROBOT)
+    data = make_log(robot, robot.params, noise=0.01)
+    c = identify_consistent(robot, data, rsd_threshold=None)
+    log = simulate_tracking(
+        robot, data, rate=data.rate, duration=data.t[-1] - data.t[0], params=c.robot_params
+    )
+    assert np.all(np.isfinite(log.q))
+    # computed torque with its own model: what remains is the torque held over each 20 ms
+    # control period (a few mrad); an unstable model would diverge from the ~1 rad motion
+    assert np.max(log.info["max_tracking_error"]) < 0.01
+
+
+# ---------------------------------------------------------------------------------------------
+# Payload
+# ---------------------------------------------------------------------------------------------
+def _payload():
+    m, c = 1.5, np.array([0.02, -0.01, 0.05])
+    ic = np.array([[0.004, 0.0003, -0.0002], [0.0003, 0.005, 0.0001], [-0.0002, 0.0001, 0.003]])
+    io = ic + m * (c @ c * np.eye(3) - np.outer(c, c))
+    return np.concatenate([io[np.triu_indices(3)], m * c, [m]]), m, c, ic
+
+
+def _arm_doc(robot):
+    base = mindyn.base_parameters(robot)
+    return {
+        "robot": robot.name,
+        "base_names": base.names,
+        "base_values": base.values(robot.params).tolist(),
+        "rotor": False,
+        "friction": False,
+        "offset": False,
+    }
+
+
+def _with_payload(robot, phi):
+    p = robot.params.copy()
+    p[-10:] += phi
+    return p
+
+
+def test_payload_recovered_exactly_from_noise_free_data():
+    """(d) noise-free: the 10 parameters within 1e-6 relative (the arm's torques are exact)."""
+    robot = mindyn.load(ROBOT)
+    phi, m, c, ic = _payload()
+    data = make_log(robot, _with_payload(robot, phi))
+    res = identify_payload(robot, _arm_doc(robot), data)
+    assert res.rank == 10
+    assert np.linalg.norm(res.values - phi) / np.linalg.norm(phi) <= 1e-6
+    d = res.derived()
+    assert abs(d["mass"] - m) / m <= 1e-6
+    np.testing.assert_allclose(d["com"], c, atol=1e-6)
+    np.testing.assert_allclose(d["inertia_com"], ic[np.triu_indices(3)], atol=1e-6)
+    assert np.linalg.norm(res.consistent - phi) / np.linalg.norm(phi) <= 1e-6
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_payload_mass_within_two_percent_at_one_percent_noise(seed):
+    """(d) 1 % torque noise (of each joint's RMS torque), 20 s at 100 Hz: the payload's
+    standard deviation of mass is about 0.3 %, so 2 % is more than 5 sigma."""
+    robot = mindyn.load(ROBOT)
+    phi, m, _, _ = _payload()
+    data = make_log(robot, _with_payload(robot, phi), seed=seed, noise=0.01, rate=100.0)
+    res = identify_payload(robot, _arm_doc(robot), data)
+    assert abs(res.derived()["mass"] - m) / m <= 0.02
+    assert abs(res.derived(True)["mass"] - m) / m <= 0.02
+    # the reported sigma explains the error (within 5 sigma)
+    assert abs(res.values[9] - m) <= 5 * res.std[9]
+
+
+def test_payload_boundary_optimum_matches_scipy():
+    """(b) a payload whose parameters break the triangle inequality: the consistent estimate is
+    on the boundary (smallest eigenvalue 0) and equals scipy's least squares over a Cholesky
+    factor of its pseudo-inertia."""
+    robot = mindyn.load(ROBOT)
+    phi, _, _, _ = _payload()
+    phi = phi.copy()
+    phi[0] += 3 * (phi[3] + phi[5])  # XX > YY + ZZ
+    data = make_log(robot, _with_payload(robot, phi), noise=0.01)
+    res = identify_payload(robot, _arm_doc(robot), data)
+    assert res.min_eig < 0
+    assert res.consistent_min_eig >= -EIG_TOL
+    assert res.consistent_min_eig <= 1e-6  # on the boundary
+    from mindyn.identification.estimation import _Reduced
+
+    base = mindyn.base_parameters(robot)
+    Wl = robot.regressor(data.q, data.dq, data.ddq)[..., -10:].reshape(-1, 10)
+    y = (data.tau - base.regressor(data.q, data.dq, data.ddq) @ base.values(robot.params)).ravel()
+    ls = _Reduced(Wl, y)
+    tril = np.tril_indices(4)
+
+    Rs = ls.R * ls.norms  # |Wl phi - y|^2 = |Rs phi - z|^2 + rho: the same problem, small
+
+    def resid(x):
+        L = np.zeros((4, 4))
+        L[tril] = x
+        return Rs @ inertial_from_pseudo(L @ L.T) - ls.z
+
+    x0 = np.linalg.cholesky(pseudo_inertia(_payload()[0]))[tril]
+    ref = least_squares(resid, x0, xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=5000)
+    L = np.zeros((4, 4))
+    L[tril] = ref.x
+    phi_ref = inertial_from_pseudo(L @ L.T)
+    assert ls.r == Wl.shape[0]
+    # same residual to 1e-6 relative and same parameters within 1e-3 relative (the boundary
+    # optimum is unique: the regressor has full rank)
+    f_ours = np.sum((Wl @ res.consistent - y) ** 2)
+    assert f_ours <= (np.sum(ref.fun**2) + ls.rho) * (1 + 1e-6)
+    assert np.linalg.norm(res.consistent - phi_ref) / np.linalg.norm(phi_ref) < 1e-3
+
+
+def test_payload_refused_when_geometry_hides_parameters():
+    """A planar arm's last link: only some of its 10 parameters act on the joints."""
+    robot = mindyn.load("planar3")
+    data = make_log(robot, robot.params)
+    with pytest.raises(mindyn.identification.IdentificationError, match="rank [0-9] of 10"):
+        identify_payload(robot, _arm_doc(robot), data)
+
+
+# ---------------------------------------------------------------------------------------------
+# CLI
+# ---------------------------------------------------------------------------------------------
+def _write_log(path, data):
+    from mindyn.identification.data import write_csv
+
+    write_csv(path, data.t, data.q, data.tau, dq=data.dq)
+
+
+def test_cli_consistent_and_payload(tmp_path, capsys):
+    robot = mindyn.load(ROBOT)
+    fit = tmp_path / "fit.csv"
+    _write_log(fit, make_log(robot, robot.params, noise=0.005, rate=100.0))
+    out = tmp_path / "id.json"
+    assert cli.main(["identify", ROBOT, str(fit), "--consistent", "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["consistent"] is True
+    assert set(doc["classical"]) == set(robot.parameter_names())
+    assert min(doc["pseudo_inertia_min_eig"].values()) >= -EIG_TOL
+    assert doc["consistent_estimate"]["mass_matrix_min_eig"] > 0
+    text = capsys.readouterr().out
+    assert "Physically consistent estimate" in text
+    phi, m, _, _ = _payload()
+    pay = tmp_path / "payload.csv"
+    _write_log(pay, make_log(robot, _with_payload(robot, phi), noise=0.005, rate=100.0))
+    pj = tmp_path / "payload.json"
+    assert cli.main(["identify-payload", ROBOT, str(out), str(pay), "--json", str(pj)]) == 0
+    pdoc = json.loads(pj.read_text())
+    # filtered derivatives and the arm's own estimation error: 5 % on the mass
+    assert abs(pdoc["unconstrained"]["mass"] - m) / m < 0.05
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["identify", ROBOT, "{fit}", "--consistent", "--prior-weight", "-1"], "--prior-weight"),
+        (["identify", ROBOT, "{fit}", "--prior-weight", "1"], "--prior-weight"),
+        (["identify-payload", "puma560", "{json}", "{fit}"], "not 'puma560'"),
+        (["identify-payload", ROBOT, "{missing}", "{fit}"], "does not exist"),
+        (["identify-payload", ROBOT, "{fit}", "{fit}"], "not a JSON file"),
+    ],
+)
+def test_cli_bad_input_one_line(tmp_path, capsys, argv, message):
+    """(f) one-line errors naming the argument or file."""
+    robot = mindyn.load(ROBOT)
+    fit = tmp_path / "fit.csv"
+    _write_log(fit, make_log(robot, robot.params, rate=20.0))
+    js = tmp_path / "id.json"
+    js.write_text(json.dumps(_arm_doc(robot)))
+    args = [a.format(fit=fit, json=js, missing=tmp_path / "none.json") for a in argv]
+    assert cli.main(args) != 0
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1, err
+    assert message in err
