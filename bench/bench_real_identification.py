@@ -197,7 +197,7 @@ def consistent_row(name, doc, wall, robot_path, log_path):
     import mindyn
     import numpy as np
     from mindyn.identification import read_csv
-    from mindyn.simulate import simulate_tracking
+    from mindyn.simulate import simulate
 
     ce = doc["consistent_estimate"]
     eig = min(doc["pseudo_inertia_min_eig"].values())
@@ -209,8 +209,8 @@ def consistent_row(name, doc, wall, robot_path, log_path):
     data = read_csv(log_path, robot=robot, filter="butter")
     span = data.t[-1] - data.t[0]
     try:
-        log = simulate_tracking(robot, data, rate=data.rate, duration=span, params=params)
-        ref = simulate_tracking(robot, data, rate=data.rate, duration=span, friction=True)
+        log = simulate(robot, data, rate=data.rate, duration=span, params=params)
+        ref = simulate(robot, data, rate=data.rate, duration=span, friction=True)
         err = float(np.max(log.info["max_tracking_error"]))
         err0 = float(np.max(ref.info["max_tracking_error"]))
         if not np.all(np.isfinite(log.q)):

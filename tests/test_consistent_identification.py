@@ -25,7 +25,7 @@ from mindyn.identification.consistent import (
 )
 from mindyn.identification.data import JointData
 from mindyn.identification.excitation import random_trajectory
-from mindyn.simulate import SensorNoise, simulate_inverse, simulate_tracking
+from mindyn.simulate import SensorNoise, simulate, simulate_inverse
 from scipy.optimize import least_squares, minimize
 
 ROBOT = "zcr07s"  # a description whose every link is physically consistent
@@ -228,7 +228,7 @@ def test_consistent_model_simulates_stably_along_the_trajectory():
     robot = mindyn.load(ROBOT)
     data = make_log(robot, robot.params, noise=0.01)
     c = identify_consistent(robot, data, rsd_threshold=None)
-    log = simulate_tracking(
+    log = simulate(
         robot, data, rate=data.rate, duration=data.t[-1] - data.t[0], params=c.robot_params
     )
     assert np.all(np.isfinite(log.q))

@@ -584,3 +584,45 @@ def test_read_joint_terms_errors(tmp_path):
     bad.write_text("joints: [\n")
     with pytest.raises(mindyn.ModelError, match="bad.yaml: not a YAML file"):
         read_joint_terms(bad)
+
+
+def test_identify_consistent_writes_the_urdf_that_pinocchio_reproduces(tmp_path):
+    """``identify --consistent --urdf``: the written URDF, loaded by Pinocchio, gives ``rnea``
+    equal to mindyn's prediction of the consistent estimate, W_b(q, dq, ddq) (Y pi), with
+    the identified base values from the JSON (the log is noisy, so these are not the truth)."""
+    from mindyn.identification.data import write_csv
+    from mindyn.identification.excitation import random_trajectory
+    from mindyn.simulate import SensorNoise, simulate_inverse
+
+    robot = mindyn.load(UR5)
+    traj = random_trajectory(robot, seed=3)
+    log = simulate_inverse(robot, traj, rate=50.0, noise=SensorNoise(torque=0.05), seed=2)
+    fit = tmp_path / "fit.csv"
+    write_csv(fit, log.t, log.q, log.tau, dq=log.dq)
+    ident, out = tmp_path / "id.json", tmp_path / "ur5_id.urdf"
+    argv = ["identify", UR5, fit, "--consistent", "--json", ident, "--urdf", out]
+    rc, stdout, err = run(argv)
+    assert rc == 0, err
+    assert f"wrote {out}" in stdout
+    doc = json.loads(ident.read_text())
+    bp = mindyn.base_parameters(robot)
+    assert doc["base_names"] == bp.names
+    beta = bp.values(inertial_vector(robot, doc["classical"]))
+    rng = np.random.default_rng(5)
+    q, dq, ddq = states(robot, rng)
+    predicted = np.einsum("mij,j->mi", bp.regressor(q, dq, ddq), beta)
+    got = pin_rnea(pin_chain(out, robot, {}), q, dq, ddq)
+    assert_close(got, predicted, TOL_DYN, "identify --consistent --urdf vs Pinocchio")
+    # and the consistent estimate is the JSON's: its base values reproduce Y pi
+    cons = doc["consistent_estimate"]
+    if "base_values" in cons:
+        np.testing.assert_allclose(cons["base_values"], beta, rtol=1e-9, atol=1e-12)
+
+
+def test_identify_urdf_needs_consistent_and_a_urdf_robot(tmp_path):
+    fit = tmp_path / "fit.csv"
+    fit.write_text("t,q1,q2,tau1,tau2\n")
+    rc, _, err = run(["identify", "planar2", fit, "--consistent", "--urdf", tmp_path / "x.urdf"])
+    assert rc == 2 and "--urdf needs a robot from a URDF" in err, err
+    rc, _, err = run(["identify", UR5, fit, "--urdf", tmp_path / "x.urdf"])
+    assert rc == 2 and "expected --consistent" in err, err

@@ -23,17 +23,7 @@ def register(subparsers) -> None:
     )
     add_robot(p)
     p.add_argument("params", metavar="ID.json", help="identification JSON with a 'classical' map")
-    out = p.add_mutually_exclusive_group(required=True)
-    out.add_argument("--urdf", metavar="FILE", type=output_file, help="URDF to write")
-    out.add_argument("--yaml", metavar="FILE", type=output_file, help="YAML DH/MDH table to write")
-    p.add_argument(
-        "--sidecar",
-        metavar="FILE",
-        type=output_file,
-        help="YAML for the joint terms (rotor inertia, friction, offsets); default: "
-        "<FILE stem>.joints.yaml beside FILE, written when there are joint terms (URDF) or "
-        "torque offsets (YAML table)",
-    )
+    add_description_outputs(p, "export")
     p.set_defaults(func=cmd_export)
 
 
@@ -72,16 +62,53 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise ModelError(
             f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"
         )
-    urdf = args.urdf is not None
+    write_description(
+        robot,
+        classical,
+        f"{args.params}: 'classical'",
+        args.robot,
+        args.urdf,
+        args.yaml,
+        args.sidecar,
+    )
+    return 0
+
+
+def add_description_outputs(p, what: str) -> None:
+    """``--urdf FILE``, ``--yaml FILE`` (one of them) and ``--sidecar FILE`` on parser ``p``."""
+    out = p.add_mutually_exclusive_group(required=what == "export")
+    suffix = "" if what == "export" else " with the consistent estimate (needs --consistent)"
+    out.add_argument("--urdf", metavar="FILE", type=output_file, help="URDF to write" + suffix)
+    out.add_argument(
+        "--yaml", metavar="FILE", type=output_file, help="YAML DH/MDH table to write" + suffix
+    )
+    p.add_argument(
+        "--sidecar",
+        metavar="FILE",
+        type=output_file,
+        help="YAML for the joint terms (rotor inertia, friction, offsets); default: "
+        "<FILE stem>.joints.yaml beside FILE, written when there are joint terms (URDF) or "
+        "torque offsets (YAML table)",
+    )
+
+
+def check_description_kind(robot, source: str, urdf: bool) -> None:
+    """Refuse ``--urdf`` for a robot from a YAML table and ``--yaml`` for one from a URDF."""
     if urdf != (robot.convention == "urdf"):
         want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
         kind = "a URDF" if robot.convention == "urdf" else f"a {robot.convention.upper()} table"
-        raise ModelError(f"{want}: '{args.robot}' is {kind}; use {'--yaml' if urdf else '--urdf'}")
-    terms = classical_terms(robot, classical, f"{args.params}: 'classical'")
-    if urdf:
-        res = write_urdf(robot, classical, args.urdf, sidecar=args.sidecar)
+        raise ModelError(f"{want}: '{source}' is {kind}; use {'--yaml' if urdf else '--urdf'}")
+
+
+def write_description(robot, classical, what: str, source: str, urdf, yaml, sidecar) -> None:
+    """Write ``classical`` into a copy of the robot's description (``urdf`` or ``yaml`` path) and
+    say what was written; ``what`` names the values in errors, ``source`` the robot argument."""
+    check_description_kind(robot, source, urdf is not None)
+    terms = classical_terms(robot, classical, what)
+    if urdf is not None:
+        res = write_urdf(robot, classical, urdf, sidecar=sidecar)
     else:
-        res = write_yaml(robot, classical, args.yaml, sidecar=args.sidecar)
+        res = write_yaml(robot, classical, yaml, sidecar=sidecar)
     total = math.fsum(terms.inertial[9::10])
     line = f"wrote {res.path} ({robot.name}, {robot.n} links, moving mass {total:.6g} kg)"
     if res.sidecar is not None:
@@ -89,4 +116,3 @@ def cmd_export(args: argparse.Namespace) -> int:
     print(line)
     for note in res.notes:
         print(f"  note: {note}")
-    return 0

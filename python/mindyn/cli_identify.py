@@ -20,6 +20,7 @@ from .cli_args import (
     output_file,
     seed,
 )
+from .cli_export import add_description_outputs, check_description_kind, write_description
 
 
 def _floats(text: str, n: int, what: str) -> np.ndarray:
@@ -295,6 +296,14 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.validate_currents and not args.validate:
         raise ValueError("--validate-currents: expected --validate with the logs they belong to")
     robot = load(args.robot, tip=args.tip)
+    if (args.urdf or args.yaml or args.sidecar) and not args.consistent:
+        raise ValueError(
+            f"--{'urdf' if args.urdf else 'yaml' if args.yaml else 'sidecar'}: expected "
+            "--consistent as well (only a physically consistent estimate can be written as a robot "
+            "description)"
+        )
+    if args.urdf or args.yaml:
+        check_description_kind(robot, args.robot, args.urdf is not None)
     _check_lowpass_options(args)
     files = list(args.data)
     vfiles = list(args.validate or [])
@@ -474,6 +483,16 @@ def cmd_identify(args: argparse.Namespace) -> int:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
+    if args.urdf or args.yaml:
+        write_description(
+            robot,
+            doc["classical"],
+            "the consistent estimate",
+            args.robot,
+            args.urdf,
+            args.yaml,
+            args.sidecar,
+        )
     if args.report:
         from .identification.excitation import excitation_limits
 
@@ -1010,6 +1029,7 @@ def register(sub) -> None:
         "from the description's; the fit term is in units of the noise variance, so W = 1 makes "
         "a divergence of 1 cost as much as one standard deviation of the fit; 0: no prior",
     )
+    add_description_outputs(p, "identify")
     number(
         p,
         "--energy-window",
