@@ -24,10 +24,14 @@ from .base import BaseParameters, base_parameters
 from .robot import Robot, load
 
 __all__ = [
+    "CONTROLLERS",
     "FUNCTIONS",
     "BaseDynamics",
+    "CompiledController",
     "GeneratedCode",
+    "GeneratedController",
     "generate",
+    "generate_controller",
     "read_parameter_file",
 ]
 
@@ -108,6 +112,15 @@ def _functions(what) -> list[str]:
     return out
 
 
+def _check_lang(lang: str, trig: str | None) -> None:
+    if lang not in ("c", "st"):
+        raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
+    if trig is not None and lang != "c":
+        raise ValueError("trig applies to C only; Structured Text uses SIN and COS")
+    if trig not in (None, "inline", "libm"):
+        raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
+
+
 def _identifier(name: str) -> str:
     s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
     s = re.sub(r"_+", "_", s)
@@ -178,12 +191,7 @@ def generate(
     offset = _args.flag(offset, "offset")
     if not isinstance(base, BaseParameters):
         base = _args.flag(base, "base")
-    if lang not in ("c", "st"):
-        raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
-    if trig is not None and lang != "c":
-        raise ValueError("trig applies to C only; Structured Text uses SIN and COS")
-    if trig not in (None, "inline", "libm"):
-        raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
+    _check_lang(lang, trig)
     fs = _functions(what)
     name = name if name is not None else _identifier(robot.name)
     if isinstance(base, BaseParameters):
@@ -350,3 +358,242 @@ class BaseDynamics:
 
     def __repr__(self) -> str:
         return f"BaseDynamics(n={self.n}, np={self.np})"
+
+
+# ---------------------------------------------------------------------------------------------
+# Generated controllers
+# ---------------------------------------------------------------------------------------------
+CONTROLLERS = ("adaptive-pd", "computed-torque", "gravity-compensation")
+
+
+class GeneratedController(GeneratedCode):
+    """A generated controller step (see :func:`generate_controller`).
+
+    Attributes (beyond :class:`GeneratedCode`)
+    ------------------------------------------
+    kind : str
+        ``adaptive-pd``, ``computed-torque`` or ``gravity-compensation``.
+    function : str
+        The C / ST name of the step: ``NAME_adaptive_pd`` (C: ``NAME_adaptive_pd_t``,
+        ``NAME_adaptive_pd_init``, ``NAME_adaptive_pd_step``; ST: the FUNCTION_BLOCK).
+    counts : dict
+        ``{"slotine_li" | "inverse_dynamics" | "gravity": counts of the dynamics part,
+        "step": counts of the whole step (with ``div``)}``.
+    variants : dict
+        Adaptive PD: the counts of each way of forming ``Y p`` and ``Y^T s`` (``form``: the one
+        used, the fewest multiplications plus additions).
+    settings : dict
+        The settings the step starts with (``kd``, ``lambda``, ``gamma``, ``kp``, ``p_min``,
+        ``p_max``, ``tau_max``, ``nu``, ``period``; arrays).
+    """
+
+    def __init__(self, kind, lang, name, out, header_name, settings):
+        super().__init__(lang, name, out, False, header_name)
+        self.kind = kind
+        self.function = f"{name}_{kind.replace('-', '_')}"
+        self.variants = {k: dict(v) for k, v in out["variants"].items()}
+        self.form = out["form"]
+        self.settings = settings
+
+    def __repr__(self) -> str:
+        s = self.counts["step"]
+        return f"GeneratedController({self.kind!r}, {self.lang!r}, {s['mul']} mul {s['add']} add)"
+
+
+def _setting(value, size: int, name: str, default: float) -> np.ndarray:
+    if value is None:
+        return np.full(size, default)
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        a = np.full(size, float(a))
+    if a.shape != (size,):
+        raise ValueError(f"setting '{name}' must be a scalar or {size} values, got shape {a.shape}")
+    return a
+
+
+def generate_controller(
+    robot: Robot | str,
+    kind: str = "adaptive-pd",
+    lang: str = "c",
+    base: BaseParameters | None = None,
+    gains: dict | None = None,
+    params: str | Path | Sequence[float] | None = None,
+    period: float = 0.004,
+    p_min=None,
+    p_max=None,
+    tau_max=None,
+    name: str | None = None,
+    header_name: str | None = None,
+    trig: str | None = None,
+) -> GeneratedController:
+    """Generates one controller step as C99 or Structured Text.
+
+    ``adaptive-pd`` is :class:`mindyn.control.AdaptivePD` (same sign convention, same
+    adaptation step, ``nu`` normalisation when ``gains["nu"] > 0``) with the products ``Y p``
+    and ``Y^T s`` of the Slotine-Li regressor generated from its recursion customised to the
+    robot, then a torque limit and a box on the estimate; ``computed-torque`` is
+    :class:`mindyn.control.ComputedTorque`, ``gravity-compensation`` is PD plus the gravity
+    torque ``g(q) p``.
+
+    Parameters
+    ----------
+    robot : Robot or str
+    kind : {"adaptive-pd", "computed-torque", "gravity-compensation"}
+    lang : {"c", "st"}
+    base : BaseParameters, optional
+        The parameter set (default: base parameters with rotor inertia and friction); its
+        offset setting adds a torque offset per joint.
+    gains : dict, optional
+        ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
+        gives them (the default). ``kp`` defaults to ``lambda**2`` for computed torque (with
+        ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and ``lambda kd`` for
+        gravity compensation.
+    params : path or array, optional
+        The initial estimate ``p0`` (a file as :func:`read_parameter_file` reads it, e.g. the JSON
+        of ``mindyn identify --json``); default the robot's own values.
+    period : float
+        Controller period [s] (adaptive PD: the adaptation step).
+    p_min, p_max : scalar or array (np,), optional
+        Box on the estimate (default unbounded).
+    tau_max : None, "effort", scalar or array (n,)
+        Torque limit (default none; ``"effort"``: the model's effort limits).
+    """
+    from . import control
+
+    robot = load(robot) if not isinstance(robot, Robot) else robot
+    if kind not in CONTROLLERS:
+        raise ValueError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
+    _check_lang(lang, trig)
+    if base is None:
+        base = base_parameters(robot, rotor=True, friction=True)
+    n, names = robot.n, list(base.names)
+    g = dict(control.default_gains(robot)) if gains is None else dict(gains)
+    lam = _setting(g.get("lambda"), n, "lambda", 10.0)
+    s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
+    if kind == "computed-torque":
+        s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam**2
+        s["kd"] = _setting(g["kd"], n, "kd", 0.0) if "kp" in g else 2 * lam
+    else:
+        s["kd"] = _setting(g.get("kd"), n, "kd", 0.0)
+        s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam * s["kd"]
+    s["gamma"] = _setting(g.get("gamma"), len(names), "gamma", 1.0)
+    if params is None:
+        s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
+        if base.offset:
+            s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
+    elif isinstance(params, (str, Path)):
+        s["p0"] = read_parameter_file(params, names)
+    else:
+        s["p0"] = _args.array(params, "params", (len(names),))
+    s["p_min"] = _setting(p_min, len(names), "p_min", -math.inf)
+    s["p_max"] = _setting(p_max, len(names), "p_max", math.inf)
+    if isinstance(tau_max, str):
+        if tau_max != "effort":
+            raise ValueError(f"tau_max must be None, 'effort' or {n} values, got '{tau_max}'")
+        tau_max = robot.limits["effort"]
+    s["tau_max"] = _setting(tau_max, n, "tau_max", math.inf)
+    name = name if name is not None else _identifier(robot.name)
+    fn = f"{name}_{kind.replace('-', '_')}"
+    header_name = header_name or f"{fn}.h"
+    out = _core.generate_controller(
+        base._b,
+        base.offset,
+        kind,
+        name,
+        s,
+        lang=lang,
+        header_name=header_name,
+        inline_trig=trig != "libm",
+    )
+    return GeneratedController(kind, lang, name, out, header_name, s)
+
+
+class CompiledController:
+    """A generated C controller step compiled with the system C compiler (``$CC``, else ``cc``
+    or ``gcc``) into a temporary folder and called through ctypes, usable as the controller of
+    :func:`mindyn.control.simulate`: ``controller(t, q, dq, (q_d, dq_d, ddq_d), period) ->
+    tau``, ``reset()``.
+
+    Parameters
+    ----------
+    code : GeneratedController
+        C code from :func:`generate_controller`.
+    base : BaseParameters, optional
+        Reported to :func:`~mindyn.control.simulate` (the true base parameters in its result).
+
+    Attributes
+    ----------
+    p_hat : ndarray
+        The current estimate (a copy).
+    """
+
+    def __init__(self, code: GeneratedController, base: BaseParameters | None = None):
+        import ctypes
+        import os
+        import shutil
+        import subprocess
+        import tempfile
+
+        if not isinstance(code, GeneratedController) or code.lang != "c":
+            raise ValueError("CompiledController needs the C code of generate_controller")
+        cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+        if not cc:
+            raise _core.ModelError("no C compiler found (set CC, or install cc or gcc)")
+        self.code = code
+        self.base = base
+        self.name = code.kind
+        self._dir = tempfile.TemporaryDirectory(prefix="mindyn-ctl-")
+        folder = Path(self._dir.name)
+        src, so = code.write(folder / f"{code.function}.c")[1], folder / f"{code.function}.so"
+        cmd = [cc, "-std=c99", "-O2", "-shared", "-fPIC", "-o", str(so), str(src), "-lm"]
+        res = subprocess.run(cmd, capture_output=True, text=True)
+        if res.returncode != 0:
+            raise _core.ModelError(f"compiling the generated controller failed: {res.stderr}")
+        self._lib = ctypes.CDLL(str(so))
+        n, np_ = len(code.settings["kd"]), len(code.names)
+        dbl = ctypes.c_double
+        fields = [("p", dbl * np_), ("p0", dbl * np_), ("kd", dbl * n)]
+        if code.kind == "adaptive-pd":
+            fields += [("lambda_", dbl * n), ("gamma", dbl * np_)]
+            fields += [("p_min", dbl * np_), ("p_max", dbl * np_)]
+        else:
+            fields += [("kp", dbl * n)]
+        fields += [("tau_max", dbl * n)]
+        if code.kind == "adaptive-pd" and code.settings["nu"] > 0:
+            fields += [("nu", dbl)]
+        if code.kind == "adaptive-pd":
+            fields += [("period", dbl)]
+        self._State = type("State", (ctypes.Structure,), {"_fields_": fields})
+        self._state = self._State()
+        self._init = getattr(self._lib, f"{code.function}_init")
+        self._step = getattr(self._lib, f"{code.function}_step")
+        ptr = ctypes.POINTER(dbl)
+        self._step.argtypes = [ctypes.POINTER(self._State)] + [ptr] * 6
+        self._step.restype = None
+        self._ptr = ptr
+        self._n = n
+        self.reset()
+
+    def reset(self) -> None:
+        import ctypes
+
+        self._init(ctypes.byref(self._state))
+
+    @property
+    def p_hat(self) -> np.ndarray:
+        return np.array(self._state.p[:], dtype=float)
+
+    def __call__(self, t, q, dq, ref, dt):
+        import ctypes
+
+        if hasattr(self._state, "period"):
+            self._state.period = float(dt)
+        qd, dqd, ddqd = ref
+        args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, qd, dqd, ddqd)]
+        for a in args:
+            if a.shape != (self._n,):
+                raise ValueError(f"controller inputs must have shape ({self._n},), got {a.shape}")
+        tau = np.zeros(self._n)
+        ptrs = [a.ctypes.data_as(self._ptr) for a in args + [tau]]
+        self._step(ctypes.byref(self._state), *ptrs)
+        return tau
