@@ -175,8 +175,8 @@ std::vector<std::string> header(const ControllerCode& c) {
           normalised(c)
               ? "  p <- p - period gamma Y^T s / (1 + nu |Y|^2), then clamped to [p_min, p_max]."
               : "  p <- p - period gamma Y^T s, then clamped to [p_min, p_max].");
-      out.push_back("Y p and Y^T s from the Slotine-Li recursion customised to the robot (" +
-                    std::string(toString(c.form)) + "; all forms counted below).");
+      out.push_back("Y p and Y^T s from the Slotine-Li recursion customised to the robot:");
+      out.push_back("  " + std::string(toString(c.form)) + " (all forms counted below).");
       break;
     case Controller::ComputedTorque:
       out.push_back("Computed torque in the " + std::to_string(np) +
@@ -324,6 +324,7 @@ CFiles emitControllerC(const ControllerCode& c, const std::string& header_name, 
     src << "  double le[" << N << "], dqr[" << N << "], ddqr[" << N << "], s[" << N << "];\n";
   if (c.kind == Controller::ComputedTorque) src << "  double ddq[" << N << "];\n";
   if (normalised(c)) src << "  double den;\n";
+  if (c.kind == Controller::GravityCompensation) src << "  (void)ddq_d;\n";
   src << s.os.str() << "}\n";
   return {h.str(), src.str()};
 }
@@ -337,7 +338,7 @@ std::string emitControllerST(const ControllerCode& c) {
   const std::string vecN = " : ARRAY[1.." + N + "] OF LREAL;\n";
   const std::string vecP = " : ARRAY[1.." + NP + "] OF LREAL;\n";
   std::ostringstream os;
-  for (const auto& l : header(c)) os << "(* " << l << " *)\n";
+  for (const auto& l : header(c)) os << (l.empty() ? "(* *)" : "(* " + l + " *)") << "\n";
   os << "(* Arrays are 1-based: q[k] is joint k, p[j] parameter j. The settings are set on the\n"
         "   first call and when reset is TRUE, which also sets the estimate p back to p0. *)\n";
   Writer s{true, {}, ""};
