@@ -1128,6 +1128,13 @@ const char* toString(SlotineLiForm f) {
   return "?";
 }
 
+GeneratedFunction detail::generateSlotineLiForm(const Model& model, const ParameterSet& params,
+                                                bool normalised, SlotineLiForm form) {
+  const bool pass = form == SlotineLiForm::PassColumns || form == SlotineLiForm::PassAdjoint;
+  const bool adj = form == SlotineLiForm::ColumnsAdjoint || form == SlotineLiForm::PassAdjoint;
+  return slotineLiWith(model, params, normalised, pass, adj);
+}
+
 GeneratedFunction generateSlotineLi(const Model& model, const ParameterSet& params, bool normalised,
                                     std::vector<SlotineLiVariant>* variants) {
   const int n = model.nq();
@@ -1140,9 +1147,7 @@ GeneratedFunction generateSlotineLi(const Model& model, const ParameterSet& para
   bool have = false;
   for (SlotineLiForm form : {SlotineLiForm::Columns, SlotineLiForm::PassColumns,
                              SlotineLiForm::ColumnsAdjoint, SlotineLiForm::PassAdjoint}) {
-    const bool pass = form == SlotineLiForm::PassColumns || form == SlotineLiForm::PassAdjoint;
-    const bool adj = form == SlotineLiForm::ColumnsAdjoint || form == SlotineLiForm::PassAdjoint;
-    GeneratedFunction f = slotineLiWith(model, params, normalised, pass, adj);
+    GeneratedFunction f = detail::generateSlotineLiForm(model, params, normalised, form);
     if (variants) variants->push_back({form, f.program.count});
     const OpCount& c = f.program.count;
     const OpCount& d = best.program.count;

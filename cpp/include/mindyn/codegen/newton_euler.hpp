@@ -146,6 +146,12 @@ struct SlotineLiVariant {
 GeneratedFunction generateSlotineLi(const Model& model, const ParameterSet& params, bool normalised,
                                     std::vector<SlotineLiVariant>* variants = nullptr);
 
+namespace detail {
+/// The Slotine-Li products in one given form (for tests).
+GeneratedFunction generateSlotineLiForm(const Model& model, const ParameterSet& params,
+                                        bool normalised, SlotineLiForm form);
+}  // namespace detail
+
 /// Everything an emitter needs: the functions of one robot under one name.
 struct GeneratedCode {
   std::string robot;  // model name, for the header comment
