@@ -146,14 +146,14 @@ TEST(Codegen, BaseAndClassicalGraphsMatchTheClassicalRecursion) {
 // (a unit column per joint).
 TEST(Codegen, SlotineLiProductsMatchTheRuntimeRegressor) {
   std::mt19937 rng(5);
+  BaseOptions withJointTerms;
+  withJointTerms.layout = {true, true};
   for (const char* name : {"zcr07s", "stanford", "puma560_3"}) {
     const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+    const BaseParameters bp = computeBaseParameters(model, withJointTerms);
     Data data(model);
-    const int n = model.nq();
-    BaseOptions opt;
-    opt.layout = {true, true};
-    const BaseParameters bp = computeBaseParameters(model, opt);
     SlotineLiData sl(model, bp.layout);
+    const int n = model.nq();
     for (bool offsets : {false, true}) {
       ParameterSet ps = baseParameterSet(model, bp);
       if (offsets) ps = withOffsets(model, ps);
