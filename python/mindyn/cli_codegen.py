@@ -1,4 +1,5 @@
-"""``mindyn codegen``: generated inverse-dynamics code in C99 or Structured Text."""
+"""``mindyn codegen``: generated inverse-dynamics code and controller steps in C99 or Structured
+Text, optionally packed as a PLCopen XML project."""
 
 from __future__ import annotations
 
@@ -23,7 +24,9 @@ def register(subparsers) -> None:
         "operation counts beside those of the classical-parameter recursion generated the "
         "same way. Constants of the geometry within 1e-9 of 0 (or of +-1, for rotation "
         "entries alone in their row and column) are taken as exact; how many (beyond "
-        "round-off) is printed and stated in the generated header.",
+        "round-off) is printed and stated in the generated header. With --what adaptive-pd, "
+        "computed-torque or gravity-compensation: one controller step instead (C: a state "
+        "struct, init and step; ST: one FUNCTION_BLOCK) and its operation counts.",
     )
     add_robot(p)
     p.add_argument("--lang", choices=["c", "st"], required=True, help="C99 or Structured Text")

@@ -7,6 +7,14 @@ of the classical vector (every other entry exactly zero), constant folding, remo
 multiplications by 0 and +-1, common-subexpression elimination and dead-code removal. Three
 functions can be generated: ``inverse_dynamics`` (tau from q, dq, ddq and p), ``gravity``
 (tau from q and p) and ``regressor`` (W_b with tau = W_b p).
+
+Controller steps (:func:`generate_controller`): the Slotine-Li adaptive PD of
+:class:`mindyn.control.AdaptivePD` with ``Y p`` and ``Y^T s`` generated from the Slotine-Li
+recursion customised the same way (the regressor's columns, or the adjoint pass of ``s^T Y p``,
+whichever needs fewer operations), computed torque and PD with gravity compensation, as a C99 state
+struct with init and step functions or one Structured Text FUNCTION_BLOCK holding the estimate;
+:class:`CompiledController` runs the C step in :func:`mindyn.control.simulate`, and
+:func:`plcopen_project` packs Structured Text function blocks into a PLCopen XML project.
 """
 
 from __future__ import annotations
