@@ -10,6 +10,7 @@ schema (tests/data/plcopen).
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -45,6 +46,14 @@ def test_generated_steps_compile_warning_free(kind, robot_name, nu, offset, tmp_
     code = codegen.generate_controller(robot, kind, base=base, gains=gains, tau_max=50.0)
     strict_compile(code, tmp_path)
     assert code.counts["step"]["mul"] > 0 and "Per step" in code.header
+    # math.h only, and no allocation
+    includes = re.findall(r"#include [<\"](.+?)[>\"]", code.source + code.header)
+    assert includes == [code.header_name, "math.h"]
+    assert not re.search(r"\b(malloc|calloc|realloc|free)\(", code.source)
+    # Structured Text: SIN and COS are the only functions called
+    st = codegen.generate_controller(robot, kind, lang="st", base=base, gains=gains, tau_max=50.0)
+    statements = re.sub(r"\(\*.*?\*\)", "", st.text, flags=re.DOTALL)
+    assert set(re.findall(r"\b([A-Za-z_]\w*)\(", statements)) <= {"SIN", "COS"}
 
 
 def one_step_reference(base, gains, p, q, dq, ref, dt, offset: bool):
