@@ -559,7 +559,8 @@ class CompiledController:
         cmd = [cc, "-std=c99", "-O2", "-shared", "-fPIC", "-o", str(so), str(src), "-lm"]
         res = subprocess.run(cmd, capture_output=True, text=True)
         if res.returncode != 0:
-            raise _core.ModelError(f"compiling the generated controller failed: {res.stderr}")
+            first = (res.stderr.strip().splitlines() or ["no message"])[0]
+            raise _core.ModelError(f"compiling the generated controller with {cc} failed: {first}")
         self._lib = ctypes.CDLL(str(so))
         n, np_ = len(code.settings["kd"]), len(code.names)
         dbl = ctypes.c_double
