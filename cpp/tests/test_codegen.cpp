@@ -13,6 +13,7 @@
 #include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
 #include "mindyn/sincos.hpp"
+#include "mindyn/slotine_li.hpp"
 #include "mindyn/urdf.hpp"
 #include "test_util.hpp"
 
@@ -135,6 +136,48 @@ TEST(Codegen, BaseAndClassicalGraphsMatchTheClassicalRecursion) {
         const Eigen::VectorXd w = outputs(reg, q, dq, ddq, pb);
         const Eigen::MatrixXd Wg = Eigen::Map<const Eigen::MatrixXd>(w.data(), bp.eom.size(), n);
         EXPECT_LT((Wg.transpose() - Wb).norm() / std::max(1.0, Wb.norm()), 1e-12) << name;
+      }
+    }
+  }
+}
+
+// The Slotine-Li products of the controller step, in each of their forms, against the runtime
+// Slotine-Li base regressor Y_b: Y_b p, Y_b^T s and |Y_b|^2, with and without torque offsets
+// (a unit column per joint).
+TEST(Codegen, SlotineLiProductsMatchTheRuntimeRegressor) {
+  std::mt19937 rng(5);
+  BaseOptions withJointTerms;
+  withJointTerms.layout = {true, true};
+  for (const char* name : {"zcr07s", "stanford", "puma560_3"}) {
+    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+    const BaseParameters bp = computeBaseParameters(model, withJointTerms);
+    Data data(model);
+    SlotineLiData sl(model, bp.layout);
+    const int n = model.nq();
+    for (bool offsets : {false, true}) {
+      ParameterSet ps = baseParameterSet(model, bp);
+      if (offsets) ps = withOffsets(model, ps);
+      const int np = ps.size(), nb = bp.eom.size();
+      const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), dqr = random(rng, n, 2),
+                            ddqr = random(rng, n, 2), s = random(rng, n), p = random(rng, np);
+      Eigen::MatrixXd Yb(n, nb), Y = Eigen::MatrixXd::Zero(n, np);
+      slotineLiBaseRegressor(model, data, sl, bp, q, dq, dqr, ddqr, Yb);
+      Y.leftCols(nb) = Yb;
+      if (offsets) Y.rightCols(n).setIdentity();
+      for (SlotineLiForm form : {SlotineLiForm::Columns, SlotineLiForm::PassColumns,
+                                 SlotineLiForm::ColumnsAdjoint, SlotineLiForm::PassAdjoint}) {
+        const GeneratedFunction f = detail::generateSlotineLiForm(model, ps, true, form);
+        InputValues in{q.data(), dq.data(), nullptr, p.data()};
+        in.dqr = dqr.data();
+        in.ddqr = ddqr.data();
+        in.s = s.data();
+        const auto v = f.graph.evaluate(in);
+        Eigen::VectorXd out(f.outputs.size());
+        for (size_t i = 0; i < f.outputs.size(); ++i) out[i] = f.graph.value(v, f.outputs[i]);
+        ASSERT_EQ(out.size(), n + np + 1);
+        EXPECT_LT(relErr(out.head(n), Y * p), 1e-12) << name << " " << toString(form);
+        EXPECT_LT(relErr(out.segment(n, np), Y.transpose() * s), 1e-12) << name;
+        EXPECT_LT(std::abs(out[n + np] - Y.squaredNorm()) / Y.squaredNorm(), 1e-12) << name;
       }
     }
   }

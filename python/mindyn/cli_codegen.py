@@ -1,4 +1,5 @@
-"""``mindyn codegen``: generated inverse-dynamics code in C99 or Structured Text."""
+"""``mindyn codegen``: generated inverse-dynamics code and controller steps in C99 or Structured
+Text, optionally packed as a PLCopen XML project."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import numpy as np
 
 from . import ModelError, base_parameters, load
 from .cli_args import add_joint_terms, add_offset, add_robot, joint_terms, output_file
-from .codegen import generate
+from .codegen import CONTROLLERS, generate, generate_controller, plcopen_project
 
 
 def register(subparsers) -> None:
@@ -23,7 +24,9 @@ def register(subparsers) -> None:
         "operation counts beside those of the classical-parameter recursion generated the "
         "same way. Constants of the geometry within 1e-9 of 0 (or of +-1, for rotation "
         "entries alone in their row and column) are taken as exact; how many (beyond "
-        "round-off) is printed and stated in the generated header.",
+        "round-off) is printed and stated in the generated header. With --what adaptive-pd, "
+        "computed-torque or gravity-compensation: one controller step instead (C: a state "
+        "struct, init and step; ST: one FUNCTION_BLOCK) and its operation counts.",
     )
     add_robot(p)
     p.add_argument("--lang", choices=["c", "st"], required=True, help="C99 or Structured Text")
@@ -31,7 +34,9 @@ def register(subparsers) -> None:
         "--what",
         default="id,gravity,regressor",
         help="functions, comma-separated: id (inverse dynamics), gravity, regressor "
-        "(default: all three)",
+        "(default: all three); or one controller step: adaptive-pd (Slotine-Li, as "
+        "mindyn.control.AdaptivePD, with its regressor products generated from the recursion "
+        "customised to the robot), computed-torque, gravity-compensation",
     )
     add_joint_terms(p)
     add_offset(p)
@@ -61,6 +66,36 @@ def register(subparsers) -> None:
         help="C: sines and cosines from a branch-free routine in the generated source (default; "
         "within 2.2e-16 of math.h, math.h beyond |q| > 1e6) or from math.h's sin and cos; "
         "Structured Text always uses SIN and COS",
+    )
+    c = p.add_argument_group(
+        "controller steps (--what adaptive-pd, computed-torque, gravity-compensation)"
+    )
+    c.add_argument(
+        "--gains",
+        metavar="FILE",
+        help="YAML with kd, lambda, gamma, nu, kp (as 'mindyn control' reads it; default: "
+        "the defaults of 'mindyn control'); --params gives the initial estimate",
+    )
+    c.add_argument(
+        "--period", type=float, default=0.004, help="controller period in s (default 0.004)"
+    )
+    c.add_argument(
+        "--torque-limit",
+        metavar="effort|NM",
+        help="saturate the torque at the robot's effort limits or at +-NM on every joint",
+    )
+    c.add_argument(
+        "--box",
+        type=float,
+        metavar="F",
+        help="keep each estimate within F |p0| of its initial value p0 (default: unbounded)",
+    )
+    p.add_argument(
+        "--plcopen",
+        metavar="XML",
+        type=output_file,
+        help="also write a PLCopen XML (TC6 v2.01) project with the Structured Text function "
+        "blocks (the controller, inverse dynamics, gravity and regressor) for CODESYS",
     )
     p.add_argument("--name", help="prefix of the generated identifiers (default: robot name)")
     p.add_argument(
@@ -95,6 +130,13 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     params, pruned, threshold = (
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )
+    if args.what.strip() in CONTROLLERS:
+        return _controller(args, robot, base, out, params if params is not None else args.params)
+    for opt in ("gains", "torque_limit", "box"):
+        if getattr(args, opt) is not None:
+            raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
+    if any(w.strip() in CONTROLLERS for w in args.what.split(",")):
+        raise ModelError("--what: a controller step is generated alone, not with other functions")
     code = generate(
         robot,
         params=params if params is not None else args.params,
@@ -120,6 +162,14 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             f"{len(pruned)} pruned in identification (relative standard deviation above "
             f"{threshold}) taken as zero" + (f": {', '.join(pruned)}" if pruned else "")
         )
+    if args.plcopen:
+        st = (
+            code
+            if args.lang == "st"
+            else generate(robot, base=base, name=code.name, **dict(same, lang="st"))
+        )
+        Path(args.plcopen).write_bytes(plcopen_project([st.text], code.name))
+        written.append(Path(args.plcopen))
     print("wrote " + ", ".join(str(w) for w in written))
     snap = code.geometry_snap
     if snap["count"]:
@@ -136,6 +186,67 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             f"{f:<18}{c['mul']:>8}{c['add']:>7}{c['trig']:>7}    "
             f"{k['mul']:>8}{k['add']:>7}{k['trig']:>7}"
         )
+    return 0
+
+
+def _controller(args, robot, base, out: Path, params) -> int:
+    """``--what adaptive-pd | computed-torque | gravity-compensation``."""
+    from . import control
+
+    kind = args.what.strip()
+    if args.numeric:
+        raise ModelError("--numeric does not apply to controller steps (p is their state)")
+    gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
+    if not (math.isfinite(args.period) and args.period > 0):
+        raise ModelError(f"--period must be a positive number of seconds, got {args.period:g}")
+    limit = args.torque_limit
+    if limit is not None and limit != "effort":
+        try:
+            limit = float(limit)
+        except ValueError:
+            raise ModelError(
+                f"--torque-limit: expected 'effort' or a number, got '{limit}'"
+            ) from None
+        if not (math.isfinite(limit) and limit > 0):
+            raise ModelError(f"--torque-limit must be positive, got {limit:g}")
+    same = dict(base=base, gains=gains, params=params, period=args.period, name=args.name)
+    same.update(tau_max=limit)
+    if args.box is not None:
+        if kind != "adaptive-pd":
+            raise ModelError("--box (a box on the estimate) applies to --what adaptive-pd only")
+        if not (math.isfinite(args.box) and args.box >= 0):
+            raise ModelError(f"--box must be a number >= 0, got {args.box:g}")
+        p0 = generate_controller(robot, kind, lang="st", **same).settings["p0"]
+        same.update(p_min=p0 - args.box * np.abs(p0), p_max=p0 + args.box * np.abs(p0))
+    code = generate_controller(
+        robot, kind, lang=args.lang, header_name=out.name + ".h", trig=args.trig, **same
+    )
+    written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
+    if args.plcopen:
+        st = code if args.lang == "st" else generate_controller(robot, kind, lang="st", **same)
+        dyn = generate(robot, lang="st", base=base, name=st.name, offset=base.offset)
+        Path(args.plcopen).write_bytes(plcopen_project([st.text, dyn.text], st.name))
+        written.append(Path(args.plcopen))
+    extras = joint_terms(args)
+    print(
+        f"{robot.name}: {kind} step in {len(code.names)} base parameters"
+        + (f" ({', '.join(extras)})" if extras else "")
+        + f", period {args.period:g} s"
+    )
+    print("wrote " + ", ".join(str(w) for w in written))
+    print()
+    print(f"{'':<34}{'mul':>8}{'add':>7}{'trig':>7}{'sign':>7}{'div':>7}")
+    for f, c in code.counts.items():
+        label = "whole step" if f == "step" else f
+        print(
+            f"{label:<34}{c['mul']:>8}{c['add']:>7}{c['trig']:>7}{c['sign']:>7}{c.get('div', 0):>7}"
+        )
+    if code.variants:
+        print()
+        print("forms of Y p and Y^T s (* used: the fewest multiplications plus additions):")
+        for form, c in code.variants.items():
+            mark = "*" if form == code.form else " "
+            print(f" {mark} {form:<52}{c['mul']:>6} mul{c['add']:>6} add")
     return 0
 
 

@@ -7,6 +7,14 @@ of the classical vector (every other entry exactly zero), constant folding, remo
 multiplications by 0 and +-1, common-subexpression elimination and dead-code removal. Three
 functions can be generated: ``inverse_dynamics`` (tau from q, dq, ddq and p), ``gravity``
 (tau from q and p) and ``regressor`` (W_b with tau = W_b p).
+
+Controller steps (:func:`generate_controller`): the Slotine-Li adaptive PD of
+:class:`mindyn.control.AdaptivePD` with ``Y p`` and ``Y^T s`` generated from the Slotine-Li
+recursion customised the same way (the regressor's columns, or the adjoint pass of ``s^T Y p``,
+whichever needs fewer operations), computed torque and PD with gravity compensation, as a C99 state
+struct with init and step functions or one Structured Text FUNCTION_BLOCK holding the estimate;
+:class:`CompiledController` runs the C step in :func:`mindyn.control.simulate`, and
+:func:`plcopen_project` packs Structured Text function blocks into a PLCopen XML project.
 """
 
 from __future__ import annotations
@@ -24,10 +32,15 @@ from .base import BaseParameters, base_parameters
 from .robot import Robot, load
 
 __all__ = [
+    "CONTROLLERS",
     "FUNCTIONS",
     "BaseDynamics",
+    "CompiledController",
     "GeneratedCode",
+    "GeneratedController",
     "generate",
+    "generate_controller",
+    "plcopen_project",
     "read_parameter_file",
 ]
 
@@ -108,6 +121,15 @@ def _functions(what) -> list[str]:
     return out
 
 
+def _check_lang(lang: str, trig: str | None) -> None:
+    if lang not in ("c", "st"):
+        raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
+    if trig is not None and lang != "c":
+        raise ValueError("trig applies to C only; Structured Text uses SIN and COS")
+    if trig not in (None, "inline", "libm"):
+        raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
+
+
 def _identifier(name: str) -> str:
     s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
     s = re.sub(r"_+", "_", s)
@@ -178,12 +200,7 @@ def generate(
     offset = _args.flag(offset, "offset")
     if not isinstance(base, BaseParameters):
         base = _args.flag(base, "base")
-    if lang not in ("c", "st"):
-        raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
-    if trig is not None and lang != "c":
-        raise ValueError("trig applies to C only; Structured Text uses SIN and COS")
-    if trig not in (None, "inline", "libm"):
-        raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
+    _check_lang(lang, trig)
     fs = _functions(what)
     name = name if name is not None else _identifier(robot.name)
     if isinstance(base, BaseParameters):
@@ -350,3 +367,347 @@ class BaseDynamics:
 
     def __repr__(self) -> str:
         return f"BaseDynamics(n={self.n}, np={self.np})"
+
+
+# ---------------------------------------------------------------------------------------------
+# Generated controllers
+# ---------------------------------------------------------------------------------------------
+CONTROLLERS = ("adaptive-pd", "computed-torque", "gravity-compensation")
+
+
+class GeneratedController(GeneratedCode):
+    """A generated controller step (see :func:`generate_controller`).
+
+    Attributes (beyond :class:`GeneratedCode`)
+    ------------------------------------------
+    kind : str
+        ``adaptive-pd``, ``computed-torque`` or ``gravity-compensation``.
+    function : str
+        The C / ST name of the step: ``NAME_adaptive_pd`` (C: ``NAME_adaptive_pd_t``,
+        ``NAME_adaptive_pd_init``, ``NAME_adaptive_pd_step``; ST: the FUNCTION_BLOCK).
+    counts : dict
+        ``{"slotine_li" | "inverse_dynamics" | "gravity": counts of the dynamics part,
+        "step": counts of the whole step (with ``div``)}``.
+    variants : dict
+        Adaptive PD: the counts of each way of forming ``Y p`` and ``Y^T s`` (``form``: the one
+        used, the fewest multiplications plus additions).
+    settings : dict
+        The settings the step starts with (``kd``, ``lambda``, ``gamma``, ``kp``, ``p_min``,
+        ``p_max``, ``tau_max``, ``nu``, ``period``; arrays).
+    """
+
+    def __init__(self, kind, lang, name, out, header_name, settings):
+        super().__init__(lang, name, out, False, header_name)
+        self.kind = kind
+        self.function = f"{name}_{kind.replace('-', '_')}"
+        self.variants = {k: dict(v) for k, v in out["variants"].items()}
+        self.form = out["form"]
+        self.settings = settings
+
+    def __repr__(self) -> str:
+        s = self.counts["step"]
+        return f"GeneratedController({self.kind!r}, {self.lang!r}, {s['mul']} mul {s['add']} add)"
+
+
+def _setting(value, size: int, name: str, default: float) -> np.ndarray:
+    if value is None:
+        return np.full(size, default)
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        a = np.full(size, float(a))
+    if a.shape != (size,):
+        raise ValueError(f"setting '{name}' must be a scalar or {size} values, got shape {a.shape}")
+    return a
+
+
+def generate_controller(
+    robot: Robot | str,
+    kind: str = "adaptive-pd",
+    lang: str = "c",
+    base: BaseParameters | None = None,
+    gains: dict | None = None,
+    params: str | Path | Sequence[float] | None = None,
+    period: float = 0.004,
+    p_min=None,
+    p_max=None,
+    tau_max=None,
+    name: str | None = None,
+    header_name: str | None = None,
+    trig: str | None = None,
+) -> GeneratedController:
+    """Generates one controller step as C99 or Structured Text.
+
+    ``adaptive-pd`` is :class:`mindyn.control.AdaptivePD` (same sign convention, same
+    adaptation step, ``nu`` normalisation when ``gains["nu"] > 0``) with the products ``Y p``
+    and ``Y^T s`` of the Slotine-Li regressor generated from its recursion customised to the
+    robot, then a torque limit and a box on the estimate; ``computed-torque`` is
+    :class:`mindyn.control.ComputedTorque`, ``gravity-compensation`` is PD plus the gravity
+    torque ``g(q) p``.
+
+    Parameters
+    ----------
+    robot : Robot or str
+    kind : {"adaptive-pd", "computed-torque", "gravity-compensation"}
+    lang : {"c", "st"}
+    base : BaseParameters, optional
+        The parameter set (default: base parameters with rotor inertia and friction); its
+        offset setting adds a torque offset per joint.
+    gains : dict, optional
+        ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
+        gives them (the default). ``kp`` defaults to ``lambda**2`` for computed torque (with
+        ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and ``lambda kd`` for
+        gravity compensation.
+    params : path or array, optional
+        The initial estimate ``p0`` (a file as :func:`read_parameter_file` reads it, e.g. the JSON
+        of ``mindyn identify --json``); default the robot's own values.
+    period : float
+        Controller period [s] (adaptive PD: the adaptation step).
+    p_min, p_max : scalar or array (np,), optional
+        Box on the estimate (default unbounded).
+    tau_max : None, "effort", scalar or array (n,)
+        Torque limit (default none; ``"effort"``: the model's effort limits).
+    """
+    from . import control
+
+    robot = load(robot) if not isinstance(robot, Robot) else robot
+    if kind not in CONTROLLERS:
+        raise ValueError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
+    _check_lang(lang, trig)
+    if base is None:
+        base = base_parameters(robot, rotor=True, friction=True)
+    n, names = robot.n, list(base.names)
+    g = dict(control.default_gains(robot)) if gains is None else dict(gains)
+    lam = _setting(g.get("lambda"), n, "lambda", 10.0)
+    s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
+    if kind == "computed-torque":
+        s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam**2
+        s["kd"] = _setting(g["kd"], n, "kd", 0.0) if "kp" in g else 2 * lam
+    else:
+        s["kd"] = _setting(g.get("kd"), n, "kd", 0.0)
+        s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam * s["kd"]
+    s["gamma"] = _setting(g.get("gamma"), len(names), "gamma", 1.0)
+    if params is None:
+        s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
+        if base.offset:
+            s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
+    elif isinstance(params, (str, Path)):
+        s["p0"] = read_parameter_file(params, names)
+    else:
+        s["p0"] = _args.array(params, "params", (len(names),))
+    s["p_min"] = _setting(p_min, len(names), "p_min", -math.inf)
+    s["p_max"] = _setting(p_max, len(names), "p_max", math.inf)
+    if isinstance(tau_max, str):
+        if tau_max != "effort":
+            raise ValueError(f"tau_max must be None, 'effort' or {n} values, got '{tau_max}'")
+        tau_max = robot.limits["effort"]
+        if not np.all(np.isfinite(tau_max)):
+            raise ValueError(f"robot '{robot.name}' does not give effort limits for all joints")
+    s["tau_max"] = _setting(tau_max, n, "tau_max", math.inf)
+    name = name if name is not None else _identifier(robot.name)
+    fn = f"{name}_{kind.replace('-', '_')}"
+    header_name = header_name or f"{fn}.h"
+    out = _core.generate_controller(
+        base._b,
+        base.offset,
+        kind,
+        name,
+        s,
+        lang=lang,
+        header_name=header_name,
+        inline_trig=trig != "libm",
+    )
+    return GeneratedController(kind, lang, name, out, header_name, s)
+
+
+class CompiledController:
+    """A generated C controller step compiled with the system C compiler (``$CC``, else ``cc``
+    or ``gcc``) into a temporary folder and called through ctypes, usable as the controller of
+    :func:`mindyn.control.simulate`: ``controller(t, q, dq, (q_d, dq_d, ddq_d), period) ->
+    tau``, ``reset()``.
+
+    Parameters
+    ----------
+    code : GeneratedController
+        C code from :func:`generate_controller`.
+    base : BaseParameters, optional
+        Reported to :func:`~mindyn.control.simulate` (the true base parameters in its result).
+
+    Attributes
+    ----------
+    p_hat : ndarray
+        The current estimate (a copy).
+    """
+
+    def __init__(self, code: GeneratedController, base: BaseParameters | None = None):
+        import ctypes
+        import os
+        import shutil
+        import subprocess
+        import tempfile
+
+        if not isinstance(code, GeneratedController) or code.lang != "c":
+            raise ValueError("CompiledController needs the C code of generate_controller")
+        cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+        if not cc:
+            raise _core.ModelError("no C compiler found (set CC, or install cc or gcc)")
+        self.code = code
+        self.base = base
+        self.name = code.kind
+        self._dir = tempfile.TemporaryDirectory(prefix="mindyn-ctl-")
+        folder = Path(self._dir.name)
+        src, so = code.write(folder / f"{code.function}.c")[1], folder / f"{code.function}.so"
+        cmd = [cc, "-std=c99", "-O2", "-shared", "-fPIC", "-o", str(so), str(src), "-lm"]
+        res = subprocess.run(cmd, capture_output=True, text=True)
+        if res.returncode != 0:
+            first = (res.stderr.strip().splitlines() or ["no message"])[0]
+            raise _core.ModelError(f"compiling the generated controller with {cc} failed: {first}")
+        self._lib = ctypes.CDLL(str(so))
+        n, np_ = len(code.settings["kd"]), len(code.names)
+        dbl = ctypes.c_double
+        fields = [("p", dbl * np_), ("p0", dbl * np_), ("kd", dbl * n)]
+        if code.kind == "adaptive-pd":
+            fields += [("lambda_", dbl * n), ("gamma", dbl * np_)]
+            fields += [("p_min", dbl * np_), ("p_max", dbl * np_)]
+        else:
+            fields += [("kp", dbl * n)]
+        fields += [("tau_max", dbl * n)]
+        if code.kind == "adaptive-pd" and code.settings["nu"] > 0:
+            fields += [("nu", dbl)]
+        if code.kind == "adaptive-pd":
+            fields += [("period", dbl)]
+        self._State = type("State", (ctypes.Structure,), {"_fields_": fields})
+        self._state = self._State()
+        self._init = getattr(self._lib, f"{code.function}_init")
+        self._step = getattr(self._lib, f"{code.function}_step")
+        ptr = ctypes.POINTER(dbl)
+        self._step.argtypes = [ctypes.POINTER(self._State)] + [ptr] * 6
+        self._step.restype = None
+        self._ptr = ptr
+        self._n = n
+        self.reset()
+
+    def reset(self) -> None:
+        import ctypes
+
+        self._init(ctypes.byref(self._state))
+
+    @property
+    def p_hat(self) -> np.ndarray:
+        return np.array(self._state.p[:], dtype=float)
+
+    def __call__(self, t, q, dq, ref, dt):
+        import ctypes
+
+        if hasattr(self._state, "period"):
+            self._state.period = float(dt)
+        qd, dqd, ddqd = ref
+        args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, qd, dqd, ddqd)]
+        for a in args:
+            if a.shape != (self._n,):
+                raise ValueError(f"controller inputs must have shape ({self._n},), got {a.shape}")
+        tau = np.zeros(self._n)
+        ptrs = [a.ctypes.data_as(self._ptr) for a in args + [tau]]
+        self._step(ctypes.byref(self._state), *ptrs)
+        return tau
+
+
+# ---------------------------------------------------------------------------------------------
+# PLCopen XML (IEC 61131-10 / TC6 XML v2.01)
+# ---------------------------------------------------------------------------------------------
+PLCOPEN_NS = "http://www.plcopen.org/xml/tc6_0201"
+_XHTML_NS = "http://www.w3.org/1999/xhtml"
+_SECTIONS = {"VAR_INPUT": "inputVars", "VAR_OUTPUT": "outputVars", "VAR": "localVars"}
+_DECL = re.compile(
+    r"\s*(\w+)\s*:\s*(?:ARRAY\[([0-9., ]+)\]\s+OF\s+)?(LREAL|BOOL)\s*;\s*", re.IGNORECASE
+)
+
+
+def _function_blocks(text: str) -> list[dict]:
+    """The FUNCTION_BLOCKs of generated Structured Text: name, variable sections, body, and the
+    comment lines before the first block."""
+    blocks = []
+    for m in re.finditer(r"FUNCTION_BLOCK (\w+)\n(.*?)END_FUNCTION_BLOCK", text, re.DOTALL):
+        name, inner = m.group(1), m.group(2)
+        sections: list[tuple[str, list[tuple[str, list[tuple[int, int]], str]]]] = []
+        lines = inner.split("\n")
+        i = 0
+        while i < len(lines) and lines[i].strip() in _SECTIONS:
+            kind, decls = _SECTIONS[lines[i].strip()], []
+            i += 1
+            while lines[i].strip() != "END_VAR":
+                d = _DECL.fullmatch(lines[i])
+                if not d:
+                    raise ValueError(f"FUNCTION_BLOCK {name}: unexpected declaration '{lines[i]}'")
+                dims = []
+                if d.group(2):
+                    for r in d.group(2).split(","):
+                        lo, hi = r.split("..")
+                        dims.append((int(lo), int(hi)))
+                decls.append((d.group(1), dims, d.group(3).upper()))
+                i += 1
+            sections.append((kind, decls))
+            i += 1
+        blocks.append({"name": name, "sections": sections, "body": "\n".join(lines[i:])})
+    return blocks
+
+
+def plcopen_project(texts: Sequence[str], project: str, comment: str = "") -> bytes:
+    """A PLCopen XML (TC6 XML v2.01) project with the FUNCTION_BLOCKs of the given generated
+    Structured Text texts as POUs (interface variables typed, bodies in ``<ST><xhtml:p>``), ready
+    for import into CODESYS and other IEC 61131-3 tools. Returns UTF-8 XML bytes."""
+    import datetime
+    import xml.etree.ElementTree as ET
+
+    ET.register_namespace("", PLCOPEN_NS)
+    ET.register_namespace("xhtml", _XHTML_NS)
+
+    def el(parent, tag, **attrs):
+        return ET.SubElement(parent, f"{{{PLCOPEN_NS}}}{tag}", attrs)
+
+    now = datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0).isoformat()
+    root = ET.Element(f"{{{PLCOPEN_NS}}}project")
+    from . import __version__
+
+    el(
+        root,
+        "fileHeader",
+        companyName="mindyn",
+        productName="mindyn",
+        productVersion=str(__version__),
+        creationDateTime=now,
+        contentDescription="generated robot dynamics and controllers",
+    )
+    header = el(root, "contentHeader", name=project, modificationDateTime=now)
+    if comment:
+        el(header, "Comment").text = comment
+    coord = el(header, "coordinateInfo")
+    for lang in ("fbd", "ld", "sfc"):
+        el(el(coord, lang), "scaling", x="1", y="1")
+    types = el(root, "types")
+    el(types, "dataTypes")
+    pous = el(types, "pous")
+    for text in texts:
+        head = text.split("FUNCTION_BLOCK ", 1)[0]
+        notes = "\n".join(re.findall(r"\(\*(.*?)\*\)", head, re.DOTALL)).strip()
+        for fb in _function_blocks(text):
+            pou = el(pous, "pou", name=fb["name"], pouType="functionBlock")
+            interface = el(pou, "interface")
+            for kind, decls in fb["sections"]:
+                section = el(interface, kind)
+                for var, dims, base in decls:
+                    typ = el(el(section, "variable", name=var), "type")
+                    if dims:
+                        arr = el(typ, "array")
+                        for lo, hi in dims:
+                            el(arr, "dimension", lower=str(lo), upper=str(hi))
+                        el(el(arr, "baseType"), base)
+                    else:
+                        el(typ, base)
+            st = el(el(pou, "body"), "ST")
+            ET.SubElement(st, f"{{{_XHTML_NS}}}p").text = fb["body"]
+            if notes:
+                doc = el(pou, "documentation")
+                ET.SubElement(doc, f"{{{_XHTML_NS}}}p").text = notes
+    el(el(root, "instances"), "configurations")
+    ET.indent(root)
+    return ET.tostring(root, encoding="utf-8", xml_declaration=True)

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "mindyn/base_dynamics.hpp"
+#include "mindyn/codegen/controller.hpp"
 #include "mindyn/codegen/emit_c.hpp"
 #include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
@@ -53,7 +54,10 @@ struct PyBaseDynamics {
 
 }  // namespace
 
+void bindController(py::module_& m);
+
 void bindCodegen(py::module_& m) {
+  bindController(m);
   m.def(
       "generate_code",
       [](const std::shared_ptr<PyModel>& model_core, const std::shared_ptr<PyBase>& base_core,
@@ -180,4 +184,77 @@ void bindCodegen(py::module_& m) {
             return out;
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"));
+}
+
+namespace {
+
+Eigen::VectorXd settingVector(const py::dict& d, const char* key) {
+  if (!d.contains(key) || d[key].is_none()) return {};
+  return d[key].cast<Eigen::VectorXd>();
+}
+
+}  // namespace
+
+void bindController(py::module_& m) {
+  m.def(
+      "generate_controller",
+      [](const std::shared_ptr<PyBase>& base_core, bool offset, const std::string& kind,
+         const std::string& name, const py::dict& settings, const std::string& lang,
+         const std::string& header_name, bool inlineTrig) {
+        const Model& model = base_core->model->model;
+        ParameterSet ps = baseParameterSet(model, base_core->bp);
+        if (offset) ps = withOffsets(model, std::move(ps));
+        Controller k = kind == "adaptive-pd"       ? Controller::AdaptivePD
+                       : kind == "computed-torque" ? Controller::ComputedTorque
+                       : kind == "gravity-compensation"
+                           ? Controller::GravityCompensation
+                           : throw py::value_error("unknown controller '" + kind +
+                                                   "' (adaptive-pd, computed-torque, "
+                                                   "gravity-compensation)");
+        ControllerSettings s;
+        s.kd = settingVector(settings, "kd");
+        s.kp = settingVector(settings, "kp");
+        s.lambda = settingVector(settings, "lambda");
+        s.gamma = settingVector(settings, "gamma");
+        s.p0 = settingVector(settings, "p0");
+        s.p_min = settingVector(settings, "p_min");
+        s.p_max = settingVector(settings, "p_max");
+        s.tau_max = settingVector(settings, "tau_max");
+        if (settings.contains("nu")) s.nu = settings["nu"].cast<double>();
+        if (settings.contains("period")) s.period = settings["period"].cast<double>();
+        ControllerCode c;
+        {
+          py::gil_scoped_release release;
+          c = generateController(model, ps, k, s, name);
+        }
+        py::dict out;
+        if (lang == "c") {
+          const CFiles files =
+              emitControllerC(c, header_name, inlineTrig ? CTrig::Inline : CTrig::Libm);
+          out["header"] = files.header;
+          out["source"] = files.source;
+        } else if (lang == "st") {
+          out["text"] = emitControllerST(c);
+        } else {
+          throw py::value_error("lang must be 'c' or 'st', got '" + lang + "'");
+        }
+        py::dict cnt;
+        cnt[toString(c.code.functions.front().function)] = counts(c.core);
+        py::dict step = counts(c.step);
+        step["div"] = c.divisions;
+        cnt["step"] = step;
+        out["counts"] = cnt;
+        py::dict var;
+        for (const auto& v : c.variants) var[toString(v.form)] = counts(v.count);
+        out["variants"] = var;
+        out["form"] = c.kind == Controller::AdaptivePD ? toString(c.form) : "";
+        out["names"] = ps.names;
+        out["values"] = c.settings.p0;
+        out["geometry_snap"] = snapDict(geometrySnap(c.code));
+        return out;
+      },
+      py::arg("base"), py::arg("offset"), py::arg("kind"), py::arg("name"), py::arg("settings"),
+      py::arg("lang") = "c", py::arg("header_name") = "controller.h", py::arg("inline_trig") = true,
+      "A generated controller step (adaptive-pd, computed-torque, gravity-compensation) and its "
+      "operation counts.");
 }

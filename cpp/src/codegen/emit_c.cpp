@@ -272,6 +272,15 @@ std::string upper(std::string s) {
 
 }  // namespace
 
+void detail::writeCBody(std::ostream& os, const GeneratedFunction& f, const std::string& prefix,
+                        CTrig trig, const std::string& out) {
+  CWriter(f, prefix, trig).body(os, out);
+}
+
+bool detail::usesTrig(const GeneratedFunction& f) { return CWriter(f, "", CTrig::Libm).usesTrig(); }
+
+std::string detail::sincosSource(const std::string& prefix) { return sincosRoutine(prefix); }
+
 CFiles emitC(const GeneratedCode& code, const std::string& header_name, CTrig trig) {
   checkIdentifier(code.name);
   const std::string NAME = upper(code.name);

@@ -1,6 +1,7 @@
 #include "mindyn/codegen/emit_st.hpp"
 
 #include <sstream>
+#include <utility>
 
 #include "mindyn/codegen/emit_c.hpp"
 
@@ -10,7 +11,8 @@ namespace {
 
 class STWriter {
  public:
-  explicit STWriter(const GeneratedFunction& f) : f_(f), slot_(f.graph.size(), -1) {}
+  explicit STWriter(const GeneratedFunction& f, std::string out = "")
+      : f_(f), slot_(f.graph.size(), -1), out_(std::move(out)) {}
 
   std::string operand(Ref r) const {
     const Node& n = f_.graph.node(r.id());
@@ -28,6 +30,7 @@ class STWriter {
     return (r.negative() ? "-" : "") + operand(r);
   }
   std::string output(size_t i) const {
+    if (!out_.empty()) return out_ + "[" + std::to_string(i + 1) + "]";
     if (f_.function != Function::Regressor) return "tau[" + std::to_string(i + 1) + "]";
     const size_t np = static_cast<size_t>(f_.np);
     return "W[" + std::to_string(i / np + 1) + ", " + std::to_string(i % np + 1) + "]";
@@ -102,9 +105,16 @@ class STWriter {
   const GeneratedFunction& f_;
   std::vector<int> slot_;
   int slots_ = 0;
+  std::string out_;
 };
 
 }  // namespace
+
+int detail::writeSTBody(std::ostream& os, const GeneratedFunction& f, const std::string& out) {
+  STWriter w(f, out);
+  w.body(os);
+  return w.slots();
+}
 
 std::string emitST(const GeneratedCode& code) {
   checkIdentifier(code.name);

@@ -179,10 +179,13 @@ std::vector<double> Graph::evaluate(const InputValues& in) const {
         v[i] = n.value;
         break;
       case Op::Input: {
-        const double* src = n.kind == InputKind::Q     ? in.q
-                            : n.kind == InputKind::DQ  ? in.dq
-                            : n.kind == InputKind::DDQ ? in.ddq
-                                                       : in.p;
+        const double* src = n.kind == InputKind::Q      ? in.q
+                            : n.kind == InputKind::DQ   ? in.dq
+                            : n.kind == InputKind::DDQ  ? in.ddq
+                            : n.kind == InputKind::DQR  ? in.dqr
+                            : n.kind == InputKind::DDQR ? in.ddqr
+                            : n.kind == InputKind::S    ? in.s
+                                                        : in.p;
         if (!src) throw std::invalid_argument("codegen: evaluate() is missing an input array");
         v[i] = src[n.index];
         break;

@@ -23,9 +23,11 @@ enum class Op : std::uint8_t {
   Mul,   // a * b; both positive, a.id <= b.id
 };
 
-enum class InputKind : std::uint8_t { Q, DQ, DDQ, P };
+// DQR, DDQR, S: the reference velocity and acceleration and the sliding variable of the
+// Slotine-Li controller step (local arrays of the generated step function).
+enum class InputKind : std::uint8_t { Q, DQ, DDQ, P, DQR, DDQR, S };
 
-/// The argument name of an input kind in generated code: q, dq, ddq, p.
+/// The argument name of an input kind in generated code: q, dq, ddq, p, dqr, ddqr, s.
 inline const char* inputName(InputKind k) {
   switch (k) {
     case InputKind::Q:
@@ -36,6 +38,12 @@ inline const char* inputName(InputKind k) {
       return "ddq";
     case InputKind::P:
       return "p";
+    case InputKind::DQR:
+      return "dqr";
+    case InputKind::DDQR:
+      return "ddqr";
+    case InputKind::S:
+      return "s";
   }
   return "?";
 }
@@ -89,6 +97,9 @@ struct InputValues {
   const double* dq = nullptr;
   const double* ddq = nullptr;
   const double* p = nullptr;
+  const double* dqr = nullptr;
+  const double* ddqr = nullptr;
+  const double* s = nullptr;
 };
 
 class Graph {

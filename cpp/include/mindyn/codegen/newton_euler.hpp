@@ -33,9 +33,15 @@
 
 namespace mindyn::codegen {
 
-enum class Function { InverseDynamics, Gravity, Regressor };
+enum class Function {
+  InverseDynamics,
+  Gravity,
+  Regressor,
+  SlotineLi,  ///< the products of the Slotine-Li regressor a controller step needs
+};
 
-/// "inverse_dynamics", "gravity" or "regressor" (the suffix of the generated function names).
+/// "inverse_dynamics", "gravity", "regressor" or "slotine_li" (the suffix of the generated
+/// function names).
 const char* toString(Function f);
 
 /// The parameter vector `p` a generated function takes, and how it maps to the classical
@@ -118,6 +124,32 @@ namespace detail {
 /// moment taken after the motion.
 GeneratedFunction generateWithLinkForm(const Model& model, const ParameterSet& params,
                                        Function function, int form);
+}  // namespace detail
+
+/// How the Slotine-Li products are formed: from the columns of the regressor Y, or Y p by one
+/// force pass with the parameters as inputs, and Y^T s by the reverse (adjoint) pass of s^T Y p.
+enum class SlotineLiForm { Columns, PassColumns, ColumnsAdjoint, PassAdjoint };
+const char* toString(SlotineLiForm f);
+
+struct SlotineLiVariant {
+  SlotineLiForm form;
+  OpCount count;
+};
+
+/// The Slotine-Li products of an adaptive controller step, customised to the model: inputs q,
+/// dq, the reference velocity dqr and acceleration ddqr, the sliding variable s and the estimate
+/// p; outputs Y p (n entries), Y^T s (np entries) and, when `normalised`, |Y|^2 (the squared
+/// Frobenius norm), with Y = Y(q, dq, dqr, ddqr) the Slotine-Li regressor of mindyn/slotine_li.hpp
+/// in the parameters `params` (offsets: a unit column per joint). Of the forms of SlotineLiForm
+/// the one with the fewest multiplications plus additions is kept; `variants` receives the count
+/// of each.
+GeneratedFunction generateSlotineLi(const Model& model, const ParameterSet& params, bool normalised,
+                                    std::vector<SlotineLiVariant>* variants = nullptr);
+
+namespace detail {
+/// The Slotine-Li products in one given form (for tests).
+GeneratedFunction generateSlotineLiForm(const Model& model, const ParameterSet& params,
+                                        bool normalised, SlotineLiForm form);
 }  // namespace detail
 
 /// Everything an emitter needs: the functions of one robot under one name.
