@@ -2,7 +2,7 @@
 
 The C step (compiled with gcc -std=c99 -Wall -Wextra -Werror -pedantic) is compared step by
 step with mindyn.control.AdaptivePD / ComputedTorque and in the closed loop of
-mindyn.control.simulate (the ZCR07S study's experiment, shortened); the Structured Text step is
+mindyn.simulate.simulate (the ZCR07S study's experiment, shortened); the Structured Text step is
 run by the tree-sitter evaluator of test_codegen over a few hundred cycles, its estimate carried
 from call to call, against the C step; the PLCopen XML is validated against the TC6 XML v2.01
 schema (tests/data/plcopen).
@@ -19,7 +19,7 @@ import mindyn
 import numpy as np
 import pytest
 from conftest import assert_close, random_state
-from mindyn import codegen, control
+from mindyn import codegen, control, simulate
 from mindyn.cli import main
 from test_codegen import STInterpreter, st_tree
 
@@ -62,7 +62,7 @@ def one_step_reference(base, gains, p, q, dq, ref, dt, offset: bool):
     n = base.robot.n
     nb = len(p) - (n if offset else 0)
     ctl = control.AdaptivePD(
-        base, gains["kd"], gains["lambda"], np.ones(nb), p[:nb], nu=gains["nu"]
+        base, gains["kd"], gains["lambda"], np.ones(nb), p[:nb], nu=gains["nu"], period=dt
     )
     _, s, dqr, ddqr = ctl.terms(q, dq, ref)
     Y = control.slotine_li_regressor(base, q, dq, dqr, ddqr)
@@ -102,7 +102,7 @@ def test_adaptive_step_matches_the_library(robot_name, nu, offset, rng):
         q, dq, _ = random_state(robot, rng)
         ref = random_state(robot, rng)
         p = ctl.p_hat
-        tau = ctl(0.0, q, dq, ref, 0.002)
+        tau = ctl(0.0, q, dq, *ref)
         tau_ref, p_ref = one_step_reference(base0, gains, p, q, dq, ref, 0.002, offset)
         assert_close(tau, tau_ref, 1e-11, "generated adaptive step: tau")
         assert_close(ctl.p_hat, p_ref, 1e-11, "generated adaptive step: estimate")
@@ -124,7 +124,7 @@ def test_torque_limit_and_box_are_applied(rng):
     ctl = codegen.CompiledController(code, base)
     q, dq, _ = random_state(robot, rng)
     ref = random_state(robot, rng)
-    tau = ctl(0.0, q, dq, ref, 0.004)
+    tau = ctl(0.0, q, dq, *ref)
     g = dict(gains, gamma=np.full(nb, 50.0))
     tau_ref, p_ref = one_step_reference(base, g, p0, q, dq, ref, 0.004, False)
     assert np.any(np.abs(tau_ref) > 5.0) and np.any(p_ref < lo) and np.any(p_ref > hi)
@@ -133,24 +133,25 @@ def test_torque_limit_and_box_are_applied(rng):
 
 
 def in_the_loop(robot_name, kind, duration, substeps, error, seed, period):
-    """control.simulate with the library's controller and with the generated C step (same
+    """simulate.simulate with the library's controller and with the generated C step (same
     gains, same initial estimate = the true base parameters off by +-`error`)."""
     robot = mindyn.load(robot_name)
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     p0 = control.perturbed_parameters(base.values(robot.parameters(True, True)), error, seed)
     gains = control.default_gains(robot)
-    ref = control.SumOfSines(robot, period=period, seed=seed)
+    ref = simulate.SumOfSines(robot, period=period, seed=seed)
     library = control.make_controller(kind, robot, gains, p0, base)
     code = codegen.generate_controller(robot, kind, base=base, gains=gains, params=p0)
     generated = codegen.CompiledController(code, base)
-    a = control.simulate(robot, library, ref, duration, 0.004, substeps=substeps)
-    b = control.simulate(robot, generated, ref, duration, 0.004, substeps=substeps)
+    run = dict(rate=250.0, duration=duration, substeps=substeps, rotor=True, friction=True)
+    a = simulate.simulate(robot, ref, library, **run)
+    b = simulate.simulate(robot, ref, generated, **run)
     return a, b, library, generated
 
 
 def test_zcr07s_study_in_the_loop_matches_the_library():
     """The ZCR07S study's experiment (examples/zcr07s_adaptive_pd.py) for 1.2 s (300 periods of
-    4 ms): the generated C step in control.simulate against AdaptivePD; the trajectories agree
+    4 ms): the generated C step in simulate.simulate against AdaptivePD; the trajectories agree
     to 1e-9 rad (the target; both evaluate the same formulas, in another order)."""
     a, b, library, generated = in_the_loop("zcr07s", "adaptive-pd", 1.2, 4, 0.3, 0, 10.0)
     assert np.abs(a.q - b.q).max() <= 1e-9
@@ -216,15 +217,15 @@ def test_structured_text_step_matches_the_c_step(kind, cycles, tmp_path):
     c = codegen.CompiledController(codegen.generate_controller(robot, kind, trig="libm", **same))
     tree = st_tree(st.text)
     block = STBlock(tree, st.function)
-    reference = control.SumOfSines(robot, period=2.0, seed=3)
+    reference = simulate.SumOfSines(robot, period=2.0, seed=3)
     rng = np.random.default_rng(7)
     saturated = clamped = 0
     for i in range(cycles):
-        qd, dqd, ddqd = reference(0.004 * i)
+        qd, dqd, ddqd = (x[0] for x in reference.evaluate([0.004 * i]))
         q = qd + rng.normal(0, 0.05, 2)
         dq = dqd + rng.normal(0, 0.3, 2)
         out = block({"q": q, "dq": dq, "q_d": qd, "dq_d": dqd, "ddq_d": ddqd})
-        tau = c(0.0, q, dq, (qd, dqd, ddqd), 0.004)
+        tau = c(0.0, q, dq, qd, dqd, ddqd)
         assert_close(out["tau"], tau, 1e-9, "ST step vs C: tau")
         assert_close(out["p"], c.p_hat, 1e-9, "ST step vs C: estimate")
         saturated += np.sum(np.abs(tau) == [8.0, 4.0])
@@ -235,7 +236,7 @@ def test_structured_text_step_matches_the_c_step(kind, cycles, tmp_path):
     # reset: the estimate back to p0 before the step
     out = block({"q": q, "dq": dq, "q_d": qd, "dq_d": dqd, "ddq_d": ddqd, "reset": True})
     c.reset()
-    tau = c(0.0, q, dq, (qd, dqd, ddqd), 0.004)
+    tau = c(0.0, q, dq, qd, dqd, ddqd)
     assert_close(out["tau"], tau, 1e-9, "ST step vs C: tau")
     assert_close(out["p"], c.p_hat, 1e-9, "ST step vs C: estimate")
 

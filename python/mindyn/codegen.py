@@ -13,7 +13,7 @@ Controller steps (:func:`generate_controller`): the Slotine-Li adaptive PD of
 recursion customised the same way (the regressor's columns, or the adjoint pass of ``s^T Y p``,
 whichever needs fewer operations), computed torque and PD with gravity compensation, as a C99 state
 struct with init and step functions or one Structured Text FUNCTION_BLOCK holding the estimate;
-:class:`CompiledController` runs the C step in :func:`mindyn.control.simulate`, and
+:class:`CompiledController` runs the C step in :func:`mindyn.simulate.simulate`, and
 :func:`plcopen_project` packs Structured Text function blocks into a PLCopen XML project.
 """
 
@@ -521,16 +521,17 @@ def generate_controller(
 
 class CompiledController:
     """A generated C controller step compiled with the system C compiler (``$CC``, else ``cc``
-    or ``gcc``) into a temporary folder and called through ctypes, usable as the controller of
-    :func:`mindyn.control.simulate`: ``controller(t, q, dq, (q_d, dq_d, ddq_d), period) ->
-    tau``, ``reset()``.
+    or ``gcc``) into a temporary folder and called through ctypes: a controller of
+    :func:`mindyn.simulate.simulate` (:class:`mindyn.simulate.Controller`), ``tau =
+    controller(t, q, dq, q_d, dq_d, ddq_d)``, with ``reset()`` and, for the adaptive step,
+    ``period`` (the period it was generated for; a simulation at another period is refused).
 
     Parameters
     ----------
     code : GeneratedController
         C code from :func:`generate_controller`.
     base : BaseParameters, optional
-        Reported to :func:`~mindyn.control.simulate` (the true base parameters in its result).
+        Reported to :func:`~mindyn.simulate.simulate` (the true base parameters in its result).
 
     Attributes
     ----------
@@ -595,13 +596,17 @@ class CompiledController:
     def p_hat(self) -> np.ndarray:
         return np.array(self._state.p[:], dtype=float)
 
-    def __call__(self, t, q, dq, ref, dt):
+    def __getattr__(self, name):
+        # ``period`` exists for the adaptive step only (the others do not depend on it)
+        if name == "period" and self.__dict__.get("code") is not None:
+            if self.code.kind == "adaptive-pd":
+                return float(self.code.settings["period"])
+        raise AttributeError(name)
+
+    def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
         import ctypes
 
-        if hasattr(self._state, "period"):
-            self._state.period = float(dt)
-        qd, dqd, ddqd = ref
-        args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, qd, dqd, ddqd)]
+        args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, q_d, dq_d, ddq_d)]
         for a in args:
             if a.shape != (self._n,):
                 raise ValueError(f"controller inputs must have shape ({self._n},), got {a.shape}")
