@@ -73,8 +73,9 @@ def register(subparsers) -> None:
     c.add_argument(
         "--gains",
         metavar="FILE",
-        help="YAML with kd, lambda, gamma, nu, kp (as 'mindyn control' reads it; default: "
-        "the defaults of 'mindyn control'); --params gives the initial estimate",
+        help="YAML with kd, lambda, gamma, nu, kp (as 'mindyn track --gains' reads it; default: "
+        "the ZCR07S study's gains, as 'mindyn track' uses them); --params gives the initial "
+        "estimate",
     )
     c.add_argument(
         "--period", type=float, default=0.004, help="controller period in s (default 0.004)"
