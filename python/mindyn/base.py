@@ -251,8 +251,10 @@ def base_parameters(
     robot = load(robot) if not isinstance(robot, Robot) else robot
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     offset = _args.flag(offset, "offset")
-    if method not in ("projection", "numerical"):
-        raise _core.ModelError(f"method is {method!r}; expected 'projection' or 'numerical'")
+    if method not in ("projection", "recursive", "numerical"):
+        raise _core.ModelError(
+            f"method is {method!r}; expected 'projection', 'recursive' or 'numerical'"
+        )
     tolerance = _args.number(tolerance, "tolerance", positive=True)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)
