@@ -103,8 +103,15 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
     }
     // Y = F~^-1 F by back substitution, column by column; pivot columns give e_b.
     out->Y.resize(nb, P);
+    std::vector<int> pivot_of(P, -1);
+    for (int b = 0; b < nb; ++b) pivot_of[out->pivots[b]] = b;
     for (int c = 0; c < P; ++c) {
       auto y = out->Y.col(c);
+      if (pivot_of[c] >= 0) {
+        y.setZero();
+        y[pivot_of[c]] = 1.0;
+        continue;
+      }
       y = F.col(c).head(nb);
       for (int b = nb - 1; b > 0; --b) {
         const double yb = y[b];
@@ -476,8 +483,9 @@ namespace {
 
 // The recursion decides ranks of its own, on spans of at most ten dimensions: their margins join
 // those of the echelon form, and when one is close, the counts at the neighbouring tolerances
-// come from the recursion run again at those tolerances (its rows are independent by
-// construction, so their number is the rank; the Lagrangian's count moves with it).
+// (and with them the near-degenerate flag) come from the recursion run again at those tolerances
+// (its rows are independent by construction, so their number is the rank; the Lagrangian's count
+// moves with it).
 void foldRecursiveMargins(const Model& model, ParameterLayout layout, double tol,
                           const IdentifiableSpace& space, BaseParameters& bp) {
   const double looser = tol * 1e4, tighter = tol * 1e-3;
@@ -495,9 +503,7 @@ void foldRecursiveMargins(const Model& model, ParameterLayout layout, double tol
     if (!close) continue;
     d.rank_looser = std::min(d.rank_looser, d.rank() + dl);
     d.rank_tighter = std::max(d.rank_tighter, d.rank() + dt);
-    // A decision within a thousand times the rounding of exact geometry is flagged even when
-    // the neighbouring tolerances agree (a joint axis tilted by 1e-13 rad).
-    d.near_degenerate = true;
+    d.near_degenerate = d.rank_looser != d.rank() || d.rank_tighter != d.rank();
   }
 }
 
@@ -545,16 +551,18 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     // no friction columns), the total energy's is the same space.
     space = recursiveIdentifiable(model, layout, tol);
     ZE = space.rows;
+    ZE.rowwise().normalize();
     ZL.resize(ZE.rows() + 1, P);
-    long row = 0;
+    // The constant first: it involves no joint, like the rows of the inner links, and leaves
+    // the columns' last non-zero rows where they are.
+    ZL.row(0) = space.constant;
+    long row = 1;
     for (long r = 0; r < ZE.rows(); ++r) {
       Eigen::RowVectorXd z = ZE.row(r);
       for (int k = 0; k < n && layout.friction; ++k)
         z[layout.viscousIndex(k)] = z[layout.coulombIndex(k)] = 0.0;
       if (!z.isZero(0.0)) ZL.row(row++) = z;
     }
-    // The constant first: it involves no joint, like the rows of the inner links.
-    ZL.row(row++) = space.constant;
     ZL.conservativeResize(row, P);
     bp.basis_rows = static_cast<int>(ZE.rows());
   } else {
