@@ -133,7 +133,7 @@ def timing_table(all_cases, repeats: int) -> None:
         print(
             f"{label:<17}{counts:>17}{str(same)[:1] if same != '-' else '-':>6}{pms}"
             f"{rec['ms']:>9.3f}{rec['wall_ms']:>9.3f}{num['ms']:>9.2f}"
-            f"{num['ms'] / rec['ms']:>9.0f}{pr}",
+            f"{num['ms'] / rec['ms']:>9.1f}{pr}",
             flush=True,
         )
     print(
