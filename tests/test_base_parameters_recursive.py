@@ -144,3 +144,36 @@ def test_cli_explicit_projection_refusal_names_the_recursive_method():
 def test_bad_method_is_refused():
     with pytest.raises(mindyn.ModelError, match="'projection', 'recursive' or 'numerical'"):
         mindyn.base_parameters("puma560", method="recursiv")
+
+
+PRISMATIC_FIRST = """name: pp_r
+convention: dh
+joints:
+  - {type: prismatic, a: 0.1, alpha: 0, d: 0.2, theta: 0}
+  - {type: prismatic, a: 0.1, alpha: 0.5, d: 0.2, theta: 0}
+  - {a: 0.1, alpha: 1.0, d: 0.2, theta: 0}
+"""
+
+
+@pytest.mark.parametrize(
+    "gravity, ia1_alone",
+    [((0.0, 0.0, -9.81), True), ((9.81, 0.0, 0.0), False), ((0.0, 0.0, 0.0), False)],
+)
+def test_prismatic_rotor_inertia_and_gravity(gravity, ia1_alone, tmp_path):
+    """A prismatic first joint along z: its rotor term Ia1 q''_1 is the unit mass M1 moving
+    along z unless gravity acts along the joint (then M1 also carries a gravity force); without
+    gravity nothing of link 1 is seen but its mass."""
+    path = tmp_path / "pp_r.yaml"
+    path.write_text(PRISMATIC_FIRST)
+    robot = mindyn.load(path).with_gravity(gravity)
+    rec = assert_same(robot, f"prismatic, g = {gravity}", rotor=True, friction=True)
+    num = mindyn.base_parameters(robot, method="numerical", rotor=True, friction=True)
+    assert counts(rec) == counts(num)
+    assert ("Ia1" in rec.names) == ia1_alone
+
+
+def test_zero_gravity():
+    for name in ("puma560", "stanford"):
+        robot = mindyn.load(name).with_gravity([0.0, 0.0, 0.0])
+        rec = assert_same(robot, f"{name} without gravity", rotor=True)
+        assert counts(rec) == counts(mindyn.base_parameters(robot, method="numerical", rotor=True))

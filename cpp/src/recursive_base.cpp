@@ -138,6 +138,7 @@ Vec6 motionSubspace(const Joint& j) {
 
 IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layout,
                                         double tolerance) {
+  model.validate();
   const int n = model.nq(), P = layout.size(n), per = layout.perLink();
   IdentifiableSpace out;
   out.link_rank.resize(n);

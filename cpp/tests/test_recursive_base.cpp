@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
+#include <cmath>
 #include <random>
 
 #include "mindyn/base_parameters.hpp"
@@ -141,4 +142,10 @@ TEST(RecursiveBase, RowsAreIndependentAndCountedPerLink) {
   EXPECT_EQ(sum, s.rows.rows());
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(s.rows);
   EXPECT_EQ(svd.rank(), s.rows.rows());
+}
+
+TEST(RecursiveBase, RefusesAnInvalidModel) {
+  Model m = loadYaml(test::robotFile("puma560"));
+  m.joints[2].axis = Eigen::Vector3d(std::nan(""), 0.0, 1.0);
+  EXPECT_THROW(compute(m, {}, BaseMethod::Recursive), ModelError);
 }
