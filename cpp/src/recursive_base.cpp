@@ -164,7 +164,10 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     T0[k] = transformParameters(X);
 
     // Rotor inertia: tau_k += Ia q''_k equals the torques of the inertia u u^T (or, prismatic, a
-    // unit mass) on link k when joint k's motion does not couple to the motion of link k-1.
+    // unit mass on link k less one on link k-1) when joint k's motion does not couple to the
+    // motion of link k-1 (nor, prismatic, to gravity). Otherwise its column is taken as
+    // independent of all others: a sufficient condition only, which the tests check against the
+    // projection method and the sampled regressor (bundled and random arms, mixed joints).
     if (layout.rotor) {
       const Eigen::Vector3d u = joint.pre.linear() * joint.axis;  // in link k-1
       bool decoupled = true;
