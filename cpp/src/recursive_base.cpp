@@ -14,6 +14,8 @@ using Vec6 = Eigen::Matrix<double, 6, 1>;
 using Vec10 = Eigen::Matrix<double, 10, 1>;
 using Row10 = Eigen::Matrix<double, 1, 10>;
 using Mat10 = Eigen::Matrix<double, 10, 10>;
+// Up to ten rows of ten, on the stack.
+using Rows10 = Eigen::Matrix<double, Eigen::Dynamic, 10, Eigen::RowMajor, 10, 10>;
 using detail::skew;
 
 // The ten parameters as inertia tensor about the frame origin, first moment and mass.
@@ -154,8 +156,8 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   }
   Span<10> Cp(tolerance, margin);
   std::vector<Mat10> T0(n);
-  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 10>> M(n);      // basis of N_k
-  std::vector<Eigen::Matrix<double, Eigen::Dynamic, 10>> rotor(n);  // x0 of a regrouped rotor
+  std::vector<Rows10> M(n);      // basis of N_k
+  std::vector<Rows10> rotor(n);  // x0 of a regrouped rotor
   for (int k = 0; k < n; ++k) {
     const Joint& joint = model.joints[k];
     const Eigen::Isometry3d X = joint.pre * joint.post;  // link k in link k-1 at q_k = 0
@@ -243,7 +245,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   out.rows.setZero(rows, P);
   int r0 = 0;
   for (int j = 0; j < n; ++j) {
-    Eigen::Matrix<double, Eigen::Dynamic, 10> cur = M[j];
+    Rows10 cur = M[j];
     const int nj = static_cast<int>(cur.rows());
     for (int k = j; k < n; ++k) {
       if (k > j) cur = cur * T0[k];
