@@ -1,15 +1,16 @@
-"""Base parameters: the projection method against the numerical method, in the same run.
+"""Base parameters: the projection, recursive and numerical methods, in the same run.
 
     .venv/bin/python bench/bench_base_parameters.py [--quick] [--repeats N] [--callgrind]
 
-For each robot both methods run alternately; the table gives the median over the repeats of the
-computation time the library reports (``bp.seconds``) and of the wall time of the Python call,
-the ratio projection / numerical (wall), the number of base parameters found by each, the
-non-zero basis functions of the projection (rows of Z) with the terms its recursion formed, and
-the stacked regressor rows of the numerical method. ``--quick`` leaves out the 12-link chain
-(several seconds per call). ``--callgrind`` adds instruction counts of one call of each
-method (valgrind's callgrind, counting only inside ``mindyn::computeBaseParameters``), which do
-not depend on the load of the machine.
+For each robot the methods run alternately; the table gives the median over the repeats of the
+computation time the library reports (``bp.seconds``) per method, the wall time of the Python
+call of the recursive method, the ratios numerical / recursive and projection / recursive (of
+the library times), the number of base parameters found by each method and whether the
+recursive method's base set and ``Y`` equal the projection's (``same``). The projection method
+refuses the 20-joint chains (more than 18 joints): ``-`` in its columns. ``--quick`` leaves out
+the 12-link chain (several seconds per projection call). ``--callgrind`` adds instruction
+counts of one call of each method (valgrind's callgrind, counting only inside
+``mindyn::computeBaseParameters``), which do not depend on the load of the machine.
 """
 
 from __future__ import annotations
@@ -27,17 +28,17 @@ import mindyn
 import numpy as np
 
 
-def skewed_6r(directory: Path) -> mindyn.Robot:
-    """A 6R arm in standard DH with no parallel or perpendicular consecutive axes, mounted tilted
-    against gravity (robots.md: 38 base parameters)."""
-    rng = np.random.default_rng(6)
+def skewed_chain(directory: Path, n: int, seed: int) -> mindyn.Robot:
+    """An n-joint arm in standard DH with no parallel or perpendicular consecutive axes, mounted
+    tilted against gravity (n = 6, seed 6: the skewed 6R of robots.md, 38 base parameters)."""
+    rng = np.random.default_rng(seed)
     lines = [
-        "name: skewed6r",
+        f"name: skewed{n}r",
         "convention: dh",
         "gravity: [1.5, -2.0, -9.5]",
         "joints:",
     ]
-    for k in range(6):
+    for k in range(n):
         alpha = float(rng.choice([-1, 1]) * rng.uniform(0.3, 1.2))
         a, d = (float(x) for x in rng.uniform(0.05, 0.4, 2))
         m = float(rng.uniform(1.0, 5.0))
@@ -48,7 +49,7 @@ def skewed_6r(directory: Path) -> mindyn.Robot:
             f"inertial: {{mass: {m!r}, com: [{c}], "
             f"inertia: {{xx: {ixx!r}, yy: {iyy!r}, zz: {izz!r}}}}}}}"
         )
-    path = directory / "skewed6r.yaml"
+    path = directory / f"skewed{n}r.yaml"
     path.write_text("\n".join(lines) + "\n")
     return mindyn.load(path)
 
@@ -63,12 +64,13 @@ def panda() -> mindyn.Robot | None:
     return mindyn.load(hits[0], tip="panda_hand") if hits else None
 
 
-def measure(robot: mindyn.Robot, options: dict, repeats: int) -> dict:
-    runs: dict[str, dict[str, list]] = {
-        m: {"seconds": [], "wall": [], "bp": []} for m in ("projection", "numerical")
-    }
+METHODS = ("projection", "recursive", "numerical")
+
+
+def measure(robot: mindyn.Robot, options: dict, methods, repeats: int) -> dict:
+    runs: dict[str, dict[str, list]] = {m: {"seconds": [], "wall": [], "bp": []} for m in methods}
     for _ in range(repeats):
-        for method in ("projection", "numerical"):
+        for method in methods:
             t0 = time.perf_counter()
             bp = mindyn.base_parameters(robot, method=method, **options)
             wall = time.perf_counter() - t0
@@ -90,16 +92,20 @@ def cases(directory: Path, quick: bool) -> list[tuple[str, mindyn.Robot | None, 
         ("puma560", mindyn.load("puma560"), {}),
         ("zcr07s Ia+Fv+Fc", mindyn.load("zcr07s"), {"rotor": True, "friction": True}),
         ("panda", panda(), {}),
-        ("skewed 6R", skewed_6r(directory), {}),
+        ("skewed 6R", skewed_chain(directory, 6, 6), {}),
     ]
     sizes = [6, 8, 10] if quick else [6, 8, 10, 12]
-    return out + [(f"planar{n}", mindyn.load(f"planar{n}"), {}) for n in sizes]
+    out += [(f"planar{n}", mindyn.load(f"planar{n}"), {}) for n in sizes]
+    return out + [
+        ("planar20", mindyn.load("planar20"), {}),
+        ("skewed 20R", skewed_chain(directory, 20, 20), {}),
+    ]
 
 
 def timing_table(all_cases, repeats: int) -> None:
     head = (
-        f"{'robot':<17}{'n_b proj/num':>13}{'basis rows':>12}{'terms':>10}{'num rows':>10}"
-        f"{'proj ms':>10}{'(wall)':>10}{'num ms':>10}{'(wall)':>10}{'proj/num':>10}"
+        f"{'robot':<17}{'n_b proj/rec/num':>17}{'same':>6}{'proj ms':>10}{'rec ms':>9}"
+        f"{'(wall)':>9}{'num ms':>9}{'num/rec':>9}{'proj/rec':>10}"
     )
     print(head)
     print("-" * len(head))
@@ -107,21 +113,35 @@ def timing_table(all_cases, repeats: int) -> None:
         if robot is None:
             print(f"{label:<17}  skipped: example-robot-data is not installed")
             continue
-        # one untimed call, then fewer repeats for the slow chains
-        first = mindyn.base_parameters(robot, **options).seconds
-        r = measure(robot, options, repeats if first < 0.5 else max(1, min(repeats, 3)))
-        p, q = r["projection"], r["numerical"]
+        methods = METHODS if robot.n <= 18 else ("recursive", "numerical")
+        # one untimed call of each, then fewer repeats for the slow chains
+        first = max(mindyn.base_parameters(robot, method=m, **options).seconds for m in methods)
+        r = measure(robot, options, methods, repeats if first < 0.5 else max(1, min(repeats, 3)))
+        rec, num, proj = r["recursive"], r["numerical"], r.get("projection")
+        if proj:
+            same = proj["bp"].names == rec["bp"].names and np.allclose(
+                proj["bp"].Y, rec["bp"].Y, rtol=0, atol=1e-10
+            )
+            pn, pms, pr = (
+                f"{proj['bp'].n}",
+                f"{proj['ms']:>10.3f}",
+                f"{proj['ms'] / rec['ms']:>10.0f}",
+            )
+        else:
+            same, pn, pms, pr = "-", "-", f"{'-':>10}", f"{'-':>10}"
+        counts = f"{pn}/{rec['bp'].n}/{num['bp'].n}"
         print(
-            f"{label:<17}{p['bp'].n:>7}/{q['bp'].n:<5}{p['bp'].basis_rows:>12}"
-            f"{p['bp'].terms_formed:>10}{q['bp'].basis_rows:>10}"
-            f"{p['ms']:>10.2f}{p['wall_ms']:>10.2f}{q['ms']:>10.2f}{q['wall_ms']:>10.2f}"
-            f"{p['wall_ms'] / q['wall_ms']:>10.2f}",
+            f"{label:<17}{counts:>17}{str(same)[:1] if same != '-' else '-':>6}{pms}"
+            f"{rec['ms']:>9.3f}{rec['wall_ms']:>9.3f}{num['ms']:>9.2f}"
+            f"{num['ms'] / rec['ms']:>9.1f}{pr}",
             flush=True,
         )
     print(
         "\nms: median time reported by the library (bp.seconds); (wall): median of the Python "
-        "call; proj/num: ratio of the wall times. Targets: a 6-DOF arm <= 1 ms, planar10 "
-        "<= 100 ms (projection)."
+        "call of the recursive method; num/rec, proj/rec: ratios of the library times; same: "
+        "the recursive base set and Y (to 1e-10) equal the projection's (T). Targets: recursive "
+        "faster than numerical on every arm (goal 5x), a 6-DOF arm <= 0.1 ms, planar20 and the "
+        "skewed 20R <= 5 ms (recursive); a 6-DOF arm <= 1 ms, planar10 <= 100 ms (projection)."
     )
 
 
@@ -152,13 +172,19 @@ def callgrind_table(all_cases, quick: bool) -> None:
     if shutil.which("valgrind") is None:
         print("callgrind: valgrind is not installed")
         return
-    print(f"\n{'robot':<17}{'proj instr':>15}{'num instr':>15}{'proj/num':>10}   (callgrind)")
+    print(
+        f"\n{'robot':<17}" + "".join(f"{m[:4] + ' instr':>15}" for m in METHODS) + "   (callgrind)"
+    )
     for label, robot, _ in all_cases:
         if robot is None or label == "planar12":  # planar12: minutes under valgrind
             continue
-        p = instructions(label, "projection", quick)
-        q = instructions(label, "numerical", quick)
-        print(f"{label:<17}{p:>15,}{q:>15,}{p / q:>10.2f}", flush=True)
+        methods = METHODS if robot.n <= 18 else METHODS[1:]
+        counts = {m: instructions(label, m, quick) for m in methods}
+        print(
+            f"{label:<17}"
+            + "".join(f"{counts[m]:>15,}" if m in counts else f"{'-':>15}" for m in METHODS),
+            flush=True,
+        )
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -149,7 +149,12 @@ def test_codegen_refuses_with_the_alternatives():
 
 
 @pytest.mark.parametrize(
-    "args", [("base", "planar17"), ("codegen", "planar18", "--lang", "c", "-o", "robot.c")]
+    "args",
+    [
+        # without --method, `mindyn base` computes such a chain by the recursive method
+        ("base", "planar17", "--method", "projection"),
+        ("codegen", "planar18", "--lang", "c", "-o", "robot.c"),
+    ],
 )
 def test_cli_refuses_in_one_line(args, tmp_path):
     r = subprocess.run(

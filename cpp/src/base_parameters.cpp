@@ -13,6 +13,7 @@
 #include <type_traits>
 
 #include "mindyn/projection.hpp"
+#include "mindyn/recursive_base.hpp"
 
 namespace mindyn {
 
@@ -102,8 +103,15 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
     }
     // Y = F~^-1 F by back substitution, column by column; pivot columns give e_b.
     out->Y.resize(nb, P);
+    std::vector<int> pivot_of(P, -1);
+    for (int b = 0; b < nb; ++b) pivot_of[out->pivots[b]] = b;
     for (int c = 0; c < P; ++c) {
       auto y = out->Y.col(c);
+      if (pivot_of[c] >= 0) {
+        y.setZero();
+        y[pivot_of[c]] = 1.0;
+        continue;
+      }
       y = F.col(c).head(nb);
       for (int b = nb - 1; b > 0; --b) {
         const double yb = y[b];
@@ -471,6 +479,36 @@ Eigen::VectorXd BaseParameters::embed(const Eigen::Ref<const Eigen::VectorXd>& b
   return pi;
 }
 
+namespace {
+
+// The recursion decides ranks of its own, on spans of at most ten dimensions: their margins join
+// those of the echelon form, and when one is close, the counts at the neighbouring tolerances
+// (and with them the near-degenerate flag) come from the recursion run again at those tolerances
+// (its rows are independent by construction, so their number is the rank; the Lagrangian's count
+// moves with it).
+void foldRecursiveMargins(const Model& model, ParameterLayout layout, double tol,
+                          const IdentifiableSpace& space, BaseParameters& bp) {
+  const double looser = tol * 1e4, tighter = tol * 1e-3;
+  const bool close = space.smallest_kept < looser * 10 || space.largest_dropped > tighter / 10;
+  int dl = 0, dt = 0;
+  if (close) {
+    const long rows = space.rows.rows();
+    dl = static_cast<int>(recursiveIdentifiable(model, layout, looser).rows.rows() - rows);
+    dt = static_cast<int>(recursiveIdentifiable(model, layout, tighter).rows.rows() - rows);
+  }
+  for (BaseSet* set : {&bp.lagrangian, &bp.energy, &bp.eom}) {
+    RankDecision& d = set->decision;
+    d.smallest_kept = std::min(d.smallest_kept, space.smallest_kept);
+    d.largest_dropped = std::max(d.largest_dropped, space.largest_dropped);
+    if (!close) continue;
+    d.rank_looser = std::min(d.rank_looser, d.rank() + dl);
+    d.rank_tighter = std::max(d.rank_tighter, d.rank() + dt);
+    d.near_degenerate = d.rank_looser != d.rank() || d.rank_tighter != d.rank();
+  }
+}
+
+}  // namespace
+
 BaseParameters computeBaseParameters(const Model& model, const BaseOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const int n = model.nq();
@@ -490,6 +528,7 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
   const double tol = options.tolerance;
 
   Eigen::MatrixXd ZL, ZH, ZE;
+  IdentifiableSpace space;  // recursive method
   if (options.method == BaseMethod::Projection) {
     const InfluenceCoordinates ic = influenceCoordinates(model, layout, options.projection_budget);
     bp.basis_rows = ic.rows();
@@ -507,6 +546,25 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
       ZE(keep + 2 * k, layout.viscousIndex(k)) = 1.0;
       ZE(keep + 2 * k + 1, layout.coulombIndex(k)) = 1.0;
     }
+  } else if (options.method == BaseMethod::Recursive) {
+    // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has
+    // no friction columns), the total energy's is the same space.
+    space = recursiveIdentifiable(model, layout, tol);
+    ZE = space.rows;
+    ZE.rowwise().normalize();
+    ZL.resize(ZE.rows() + 1, P);
+    // The constant first: it involves no joint, like the rows of the inner links, and leaves
+    // the columns' last non-zero rows where they are.
+    ZL.row(0) = space.constant;
+    long row = 1;
+    for (long r = 0; r < ZE.rows(); ++r) {
+      Eigen::RowVectorXd z = ZE.row(r);
+      for (int k = 0; k < n && layout.friction; ++k)
+        z[layout.viscousIndex(k)] = z[layout.coulombIndex(k)] = 0.0;
+      if (!z.isZero(0.0)) ZL.row(row++) = z;
+    }
+    ZL.conservativeResize(row, P);
+    bp.basis_rows = static_cast<int>(ZE.rows());
   } else {
     // The sampled matrices need at least as many rows as the rank they are to show (at most P
     // each), with a margin so that random states keep the smallest singular values clear of
@@ -545,14 +603,16 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     kinds[c] = p < 6 ? 0 : (p < 9 ? 1 : (p == 9 ? 2 : 3 + (p - 10)));
   }
   bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds), bp.classical_names);
-  if (options.method == BaseMethod::Projection) {
+  if (options.method != BaseMethod::Numerical) {
     // The total-energy coordinates are the Lagrangian's with the potential rows negated: a
-    // diagonal +-1 row scaling, which leaves every pivot, residual and Y exactly as they are.
+    // diagonal +-1 row scaling, which leaves every pivot, residual and Y exactly as they are
+    // (recursive: the same row space, as the constant's sign does not change it).
     bp.energy = bp.lagrangian;
   } else {
     bp.energy = makeSet(echelon(ZH, order, tol, kinds), bp.classical_names);
   }
   bp.eom = makeSet(echelon(ZE, order, tol, kinds), bp.classical_names);
+  if (options.method == BaseMethod::Recursive) foldRecursiveMargins(model, layout, tol, space, bp);
   bp.lagrangian_equals_energy = bp.lagrangian.decision.pivots == bp.energy.decision.pivots;
   bp.lagrangian_equals_eom = bp.lagrangian.decision.pivots == bp.eom.decision.pivots;
   bp.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -467,7 +467,8 @@ std::string overBudget(int n, const ProjectionCost& c, double budget) {
     << " basis rows and " << c.terms << " terms for this " << n << "-joint chain, up to "
     << gib(c.bytes) << " of memory (estimated before computing), over its budget of " << gib(budget)
     << " (the basis grows geometrically along runs of parallel or general joint axes); "
-       "the numerical method (--method numerical, method='numerical') handles long chains";
+       "the recursive method (--method recursive, method='recursive') gives the same base set "
+       "for long chains, the numerical method (--method numerical) a sampled one";
   return o.str();
 }
 
@@ -716,8 +717,9 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   if (n > kMaxJoints)
     throw ModelError("the projection method handles at most " + std::to_string(kMaxJoints) +
                      " joints, the model has " + std::to_string(n) +
-                     "; the numerical method (--method numerical, method='numerical') handles "
-                     "long chains");
+                     "; the recursive method (--method recursive, method='recursive') gives "
+                     "the same base set for long chains, the numerical method (--method "
+                     "numerical) a sampled one");
   if (n * (n + 1) / 2 >= (1 << kL0Bits)) throw ModelError("too many joints for the basis index");
 
   {

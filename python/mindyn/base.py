@@ -1,4 +1,5 @@
-"""Base inertial parameters by the projection method (exact) or the numerical method (sampled).
+"""Base inertial parameters by the projection or the recursive method (exact) or the numerical
+method (sampled).
 
 The three sets -- of the Lagrangian, of the total energy and of the equations of motion -- are
 all computed. The equations-of-motion set is the one used for inverse dynamics, the base
@@ -276,13 +277,15 @@ def base_parameters(
         A robot or anything :func:`mindyn.load` accepts.
     rotor, friction : bool
         Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
-    method : {"projection", "numerical"}
-        Exact projection method, or sampled regressors with QR (for cross-checks). The
-        projection method's basis grows geometrically along runs of parallel or general joint
-        axes: its memory is estimated before computing (an upper bound) and a chain over the
-        8 GiB budget, or of more than 18 joints, is refused with a ModelError that gives the
-        estimate; the numerical method handles such chains, up to its own budget of 2 GiB
-        (about 340 joints).
+    method : {"projection", "recursive", "numerical"}
+        Exact projection method; exact recursive method (the identifiable space link by link,
+        cost linear in the number of joints, then the same echelon form: the same base set and
+        ``Y``); or sampled regressors with QR (for cross-checks). The projection method's basis
+        grows geometrically along runs of parallel or general joint axes: its memory is
+        estimated before computing (an upper bound) and a chain over the 8 GiB budget, or of
+        more than 18 joints, is refused with a ModelError that gives the estimate; the
+        recursive method handles such chains, and so does the numerical one, up to its own
+        budget of 2 GiB (about 340 joints).
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
@@ -304,8 +307,10 @@ def base_parameters(
     robot = load(robot) if not isinstance(robot, Robot) else robot
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     offset = _args.flag(offset, "offset")
-    if method not in ("projection", "numerical"):
-        raise _core.ModelError(f"method is {method!r}; expected 'projection' or 'numerical'")
+    if method not in ("projection", "recursive", "numerical"):
+        raise _core.ModelError(
+            f"method is {method!r}; expected 'projection', 'recursive' or 'numerical'"
+        )
     tolerance = _args.number(tolerance, "tolerance", positive=True)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)

@@ -13,6 +13,7 @@ import numpy as np
 from . import (
     ModelError,
     RobotFileNotFoundError,
+    _core,
     base_parameters,
     cli_codegen,
     cli_control,
@@ -99,21 +100,48 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+# The projection method's limit on the number of joints (its packed basis index).
+_PROJECTION_MAX_JOINTS = 18
+
+
+def _base_method(robot, rotor: bool, method: str | None) -> tuple[str, str]:
+    """The method ``mindyn base`` runs and why: the one given, else the projection method, or
+    the recursive method (exact, the same base set) when the projection method's cost estimate
+    would refuse the chain."""
+    if method is not None:
+        return method, "--method " + method
+    if robot.n > _PROJECTION_MAX_JOINTS:
+        return "recursive", (
+            f"the projection method handles at most {_PROJECTION_MAX_JOINTS} joints, the robot "
+            f"has {robot.n}; the recursive method is exact and gives the same base set"
+        )
+    cost = _core.projection_cost(robot._m, rotor=rotor)
+    if cost["bytes"] > cost["budget"]:
+        gib = 1024.0**3
+        return "recursive", (
+            f"the projection method would need up to {cost['bytes'] / gib:.2g} GiB (estimated "
+            f"before computing), over its budget of {cost['budget'] / gib:.2g} GiB; the "
+            "recursive method is exact and gives the same base set"
+        )
+    return "projection", "the default (exact, the thesis's method)"
+
+
 def cmd_base(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     order = [s.strip() for s in args.order.split(",")] if args.order else None
+    method, why = _base_method(robot, args.rotor, args.method)
     bp = base_parameters(
         robot,
         rotor=args.rotor,
         friction=args.friction,
         offset=args.offset,
-        method=args.method,
+        method=method,
         order=order,
         tolerance=args.tolerance,
         snap=args.snap,
     )
     if args.format == "json":
-        print(json.dumps(bp.to_dict(symbolic=args.symbolic), indent=2))
+        print(json.dumps({**bp.to_dict(symbolic=args.symbolic), "method_reason": why}, indent=2))
         return 0
     if args.format == "latex":
         print(bp.latex(symbolic=args.symbolic))
@@ -124,6 +152,7 @@ def cmd_base(args: argparse.Namespace) -> int:
     lines = [
         f"{robot.name}: base parameters by the {bp.method} method"
         + (f" ({', '.join(extras)})" if extras else ""),
+        f"  method         {bp.method}: {why}",
         f"  sets           Lagrangian {counts['lagrangian']}, total energy {counts['energy']}, "
         f"equations of motion {counts['eom']}",
         f"  coincide       Lagrangian = energy: {'yes' if bp.lagrangian_equals_energy else 'no'}; "
@@ -155,7 +184,10 @@ def cmd_base(args: argparse.Namespace) -> int:
         lines.append(f"  snapped        {s}")
     if bp.no_effect:
         lines.append(f"  no effect      {' '.join(bp.no_effect)}")
-    what = "non-zero basis functions" if bp.method == "projection" else "stacked regressor rows"
+    what = {
+        "projection": "non-zero basis functions",
+        "recursive": "rows spanning the identifiable space",
+    }.get(bp.method, "stacked regressor rows")
     lines.append(f"  computed       {bp.basis_rows} {what}, {bp.seconds * 1e3:.2f} ms")
     formulas = bp.formulas
     if args.symbolic:
@@ -189,8 +221,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser(
         "base",
         help="base inertial parameters: counts of the three sets, formulas, rank margin",
-        description="Base inertial parameters by the projection method (exact) or the "
-        "numerical method (sampled regressor + QR).",
+        description="Base inertial parameters by the projection method (exact; the default), "
+        "the recursive method (exact, the same base set, cost linear in the number of joints) "
+        "or the numerical method (sampled regressor + QR). Without --method, a chain whose "
+        "projection cost estimate is over its budget (or of more than 18 joints) is computed "
+        "by the recursive method, and the output says so.",
     )
     add_robot(p)
     add_joint_terms(p)
@@ -200,7 +235,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="column priority: every classical parameter once, comma-separated "
         "(default: Khalil's order, link by link with YY, MZ, M last)",
     )
-    p.add_argument("--method", choices=["projection", "numerical"], default="projection")
+    p.add_argument(
+        "--method",
+        choices=["projection", "recursive", "numerical"],
+        default=None,
+        help="default: projection, or recursive when the projection's cost estimate refuses",
+    )
     p.add_argument("--format", choices=["table", "json", "latex"], default="table")
     p.add_argument(
         "--symbolic",

@@ -376,11 +376,17 @@ PYBIND11_MODULE(_core, m) {
                              [](const PyBase& b) { return b.bp.classical_names; })
       .def_property_readonly("rotor", [](const PyBase& b) { return b.bp.layout.rotor; })
       .def_property_readonly("friction", [](const PyBase& b) { return b.bp.layout.friction; })
-      .def_property_readonly(
-          "method",
-          [](const PyBase& b) {
-            return std::string(b.bp.method == BaseMethod::Projection ? "projection" : "numerical");
-          })
+      .def_property_readonly("method",
+                             [](const PyBase& b) {
+                               switch (b.bp.method) {
+                                 case BaseMethod::Projection:
+                                   return std::string("projection");
+                                 case BaseMethod::Recursive:
+                                   return std::string("recursive");
+                                 default:
+                                   return std::string("numerical");
+                               }
+                             })
       .def_property_readonly(
           "lagrangian",
           [](const PyBase& b) { return setDict(b.bp.lagrangian, b.bp.classical_names); })
@@ -481,8 +487,11 @@ PYBIND11_MODULE(_core, m) {
           o.method = BaseMethod::Projection;
         else if (method == "numerical")
           o.method = BaseMethod::Numerical;
+        else if (method == "recursive")
+          o.method = BaseMethod::Recursive;
         else
-          throw py::value_error("method must be 'projection' or 'numerical', got '" + method + "'");
+          throw py::value_error("method must be 'projection', 'recursive' or 'numerical', got '" +
+                                method + "'");
         {
           py::gil_scoped_release release;
           out->bp = computeBaseParameters(out->model->model, o);

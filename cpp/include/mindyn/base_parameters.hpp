@@ -1,7 +1,9 @@
 // Base inertial parameters: echelon form of the coordinate matrix, the regrouping matrix Y, the
 // Lagrangian / total-energy / equations-of-motion sets, readable formulas, and the base
-// regressors. Two methods: the exact projection method (projection.hpp) and the sampled
-// numerical method (regressor samples, QR), for cross-checking.
+// regressors. Three methods: the exact projection method (projection.hpp), the exact recursive
+// method (recursive_base.hpp: the identifiable space link by link, cost linear in the number of
+// links, then the same echelon form) and the sampled numerical method (regressor samples, QR),
+// for cross-checking.
 #pragma once
 
 #include <Eigen/Core>
@@ -54,7 +56,7 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order,
 /// XX XY XZ YZ ZZ MX MY, then YY MZ M, then Ia, Fv, Fc.
 std::vector<int> khalilOrder(int n, ParameterLayout layout);
 
-enum class BaseMethod { Projection, Numerical };
+enum class BaseMethod { Projection, Numerical, Recursive };
 
 struct BaseOptions {
   ParameterLayout layout;

@@ -1,0 +1,288 @@
+#include "mindyn/recursive_base.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+#include "spatial.hpp"
+
+namespace mindyn {
+
+namespace {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Vec10 = Eigen::Matrix<double, 10, 1>;
+using Row10 = Eigen::Matrix<double, 1, 10>;
+using Mat10 = Eigen::Matrix<double, 10, 10>;
+// Up to ten rows of ten, on the stack.
+using Rows10 = Eigen::Matrix<double, Eigen::Dynamic, 10, Eigen::RowMajor, 10, 10>;
+using detail::skew;
+
+// The ten parameters as inertia tensor about the frame origin, first moment and mass.
+struct Parts {
+  Eigen::Matrix3d I;
+  Eigen::Vector3d h;
+  double m;
+};
+
+Parts parts(const Vec10& p) {
+  Parts s;
+  s.I << p[0], p[1], p[2], p[1], p[3], p[4], p[2], p[4], p[5];
+  s.h = p.segment<3>(6);
+  s.m = p[9];
+  return s;
+}
+
+Vec10 pack(const Parts& s) {
+  Vec10 p;
+  p << s.I(0, 0), s.I(0, 1), s.I(0, 2), s.I(1, 1), s.I(1, 2), s.I(2, 2), s.h, s.m;
+  return p;
+}
+
+// The matrix of a linear map of the ten parameters, column by column.
+template <class F>
+Mat10 matrixOf(F f) {
+  Mat10 M;
+  for (int c = 0; c < 10; ++c) M.col(c) = f(parts(Vec10::Unit(c)));
+  return M;
+}
+
+// Parameters of a body given in frame B expressed in frame A, B at rotation R and origin p in A:
+// I_A = R I R^T + [p]x^T [R h]x + [R h]x^T [p]x + m [p]x^T [p]x, h_A = R h + m p.
+Mat10 transformParameters(const Eigen::Isometry3d& T) {
+  const Eigen::Matrix3d R = T.linear(), P = skew(T.translation());
+  return matrixOf([&](const Parts& s) {
+    const Eigen::Matrix3d H = skew(R * s.h);
+    return pack(
+        {R * s.I * R.transpose() + P.transpose() * H + H.transpose() * P + s.m * P.transpose() * P,
+         R * s.h + s.m * T.translation(), s.m});
+  });
+}
+
+// Rate of change of the parameters of a body moving with the twist (w, v) (v: velocity of the
+// point at the origin), seen from a frame momentarily coinciding with its own.
+Mat10 parameterRate(const Vec6& S) {
+  const Eigen::Matrix3d W = skew(S.head<3>()), V = skew(S.tail<3>());
+  return matrixOf([&](const Parts& s) {
+    const Eigen::Matrix3d H = skew(s.h);
+    return pack({W * s.I - s.I * W + V.transpose() * H + H.transpose() * V,
+                 S.head<3>().cross(s.h) + s.m * S.tail<3>(), 0.0});
+  });
+}
+
+// The row c with c pi = a^T I(pi) b, I the spatial inertia about the origin:
+// a^T I b = a_w^T I b_w + h . (b_v x a_w) + h . (a_v x b_w) + m a_v . b_v.
+Row10 outputRow(const Vec6& a, const Vec6& b) {
+  const Eigen::Vector3d aw = a.head<3>(), av = a.tail<3>(), bw = b.head<3>(), bv = b.tail<3>();
+  Row10 c;
+  c << aw.x() * bw.x(), aw.x() * bw.y() + aw.y() * bw.x(), aw.x() * bw.z() + aw.z() * bw.x(),
+      aw.y() * bw.y(), aw.y() * bw.z() + aw.z() * bw.y(), aw.z() * bw.z(),
+      (bv.cross(aw) + av.cross(bw)).transpose(), av.dot(bv);
+  return c;
+}
+
+// Motion vectors of frame A expressed in frame B, B at (R, p) in A.
+Vec6 motionToChild(const Eigen::Isometry3d& T, const Vec6& v) {
+  const Eigen::Matrix3d Rt = T.linear().transpose();
+  Vec6 out;
+  out.head<3>() = Rt * v.head<3>();
+  out.tail<3>() = Rt * (v.tail<3>() + v.head<3>().cross(T.translation()));
+  return out;
+}
+
+// An orthonormal basis grown one vector at a time: a vector joins when what is left of it after
+// removing its components along the basis (twice, for accuracy) exceeds tolerance x scale, the
+// scale being the size of what produced it.
+struct Margin {
+  double kept = 1.0, dropped = 0.0;
+};
+
+template <int D>
+struct Span {
+  Eigen::Matrix<double, D, D> Q;
+  int dim = 0;
+  double tol;
+  Margin* margin;
+  Span(double tolerance, Margin& m) : tol(tolerance), margin(&m) {}
+  bool add(const Eigen::Matrix<double, D, 1>& v, double scale) {
+    if (dim == D) return false;
+    Eigen::Matrix<double, D, 1> r = v;
+    for (int pass = 0; pass < 2; ++pass)
+      for (int i = 0; i < dim; ++i) r -= Q.col(i).dot(r) * Q.col(i);
+    const double nr = r.norm(), rel = scale > 0 ? nr / scale : 0.0;
+    if (!(rel > tol)) {
+      margin->dropped = std::max(margin->dropped, rel);
+      return false;
+    }
+    margin->kept = std::min(margin->kept, rel);
+    Q.col(dim++) = r / nr;
+    return true;
+  }
+  auto basis() const { return Q.leftCols(dim); }
+};
+
+// Motion subspace of joint k in link k's frame: rotation about the axis through the joint
+// frame's origin, or translation along it.
+Vec6 motionSubspace(const Joint& j) {
+  const Eigen::Matrix3d Rt = j.post.linear().transpose();
+  const Eigen::Vector3d u = Rt * j.axis;
+  Vec6 S;
+  if (j.type == JointType::Revolute) {
+    const Eigen::Vector3d c = -(Rt * j.post.translation());  // a point of the axis
+    S << u, c.cross(u);
+  } else {
+    S << Eigen::Vector3d::Zero(), u;
+  }
+  return S;
+}
+
+}  // namespace
+
+IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layout,
+                                        double tolerance) {
+  model.validate();
+  const int n = model.nq(), P = layout.size(n), per = layout.perLink();
+  IdentifiableSpace out;
+  out.link_rank.resize(n);
+  Margin margin;
+
+  // Motion span of the link before (the fixed base: gravity as its acceleration) and the rows
+  // spanning what is identifiable of that link's inertia.
+  Span<6> Vp(tolerance, margin);
+  if (model.gravity.norm() > 0) {
+    Vec6 g;
+    g << Eigen::Vector3d::Zero(), -model.gravity;
+    Vp.add(g, g.norm());
+  }
+  Span<10> Cp(tolerance, margin);
+  std::vector<Mat10> T0(n);
+  std::vector<Rows10> M(n);      // basis of N_k
+  std::vector<Rows10> rotor(n);  // x0 of a regrouped rotor
+  for (int k = 0; k < n; ++k) {
+    const Joint& joint = model.joints[k];
+    const Eigen::Isometry3d X = joint.pre * joint.post;  // link k in link k-1 at q_k = 0
+    const Vec6 S = motionSubspace(joint);
+    const double sn = S.norm();
+    T0[k] = transformParameters(X);
+
+    // Rotor inertia: tau_k += Ia q''_k equals the torques of the inertia u u^T (or, prismatic, a
+    // unit mass on link k less one on link k-1) when joint k's motion does not couple to the
+    // motion of link k-1 (nor, prismatic, to gravity). Otherwise its column is taken as
+    // independent of all others: a sufficient condition only, which the tests check against the
+    // projection method and the sampled regressor (bundled and random arms, mixed joints).
+    if (layout.rotor) {
+      const Eigen::Vector3d u = joint.pre.linear() * joint.axis;  // in link k-1
+      bool decoupled = true;
+      for (int i = 0; i < Vp.dim; ++i) {
+        const Vec6 v = Vp.Q.col(i);
+        if (joint.type == JointType::Revolute)
+          decoupled = decoupled && std::abs(u.dot(v.head<3>())) <= tolerance;
+        else
+          decoupled = decoupled && v.head<3>().norm() <= tolerance &&
+                      std::abs(u.dot(v.tail<3>())) <= tolerance;
+      }
+      if (decoupled) {
+        rotor[k].setZero(k > 0 && joint.type == JointType::Prismatic ? 2 : 1, 10);
+        if (joint.type == JointType::Revolute) {
+          const Eigen::Vector3d w = S.head<3>();
+          Parts s{w * w.transpose(), Eigen::Vector3d::Zero(), 0.0};
+          rotor[k].row(0) = pack(s).transpose();
+        } else {
+          rotor[k](0, 9) = 1.0;              // unit mass on link k
+          if (k > 0) rotor[k](1, 9) = -1.0;  // less a unit mass on link k-1
+        }
+      }
+    }
+
+    // V_k: the motions of link k-1 seen from link k, closed under joint k's motion, and S_k.
+    Span<6> V(tolerance, margin);
+    V.add(S, sn);
+    for (int i = 0; i < Vp.dim; ++i) {
+      const Vec6 v = motionToChild(X, Vp.Q.col(i));
+      V.add(v, v.norm());
+    }
+    for (int i = 0; i < V.dim; ++i) V.add(detail::crossMotion(S, V.Q.col(i)), sn);
+
+    // O_k: what link k-1 identifies of link k's inertia, at every q_k (closed under the rate).
+    const Mat10 A = parameterRate(S);
+    const double an = A.norm();
+    Span<10> O(tolerance, margin);
+    for (int i = 0; i < Cp.dim; ++i) {
+      const Row10 r = Cp.Q.col(i).transpose() * T0[k];
+      O.add(r.transpose(), r.norm());
+    }
+    for (int i = 0; i < O.dim; ++i) O.add((O.Q.col(i).transpose() * A).transpose(), an);
+
+    // N_k: s^T I v for v in V_k, and the rates of O_k.
+    Span<10> N(tolerance, margin);
+    for (int i = 0; i < V.dim; ++i) N.add(outputRow(S, V.Q.col(i)).transpose(), sn);
+    for (int i = 0; i < O.dim; ++i) N.add((O.Q.col(i).transpose() * A).transpose(), an);
+    M[k] = N.basis().transpose();
+    out.link_rank[k] = N.dim;
+
+    // C_k: N_k and what link k-1 identifies of link k's inertia at q_k = 0.
+    Span<10> C(tolerance, margin);
+    for (int i = 0; i < Cp.dim; ++i) {
+      const Row10 r = Cp.Q.col(i).transpose() * T0[k];
+      C.add(r.transpose(), r.norm());
+    }
+    for (int i = 0; i < N.dim; ++i) C.add(N.Q.col(i), 1.0);
+    Vp = V;
+    Cp = C;
+  }
+
+  out.smallest_kept = margin.kept;
+  out.largest_dropped = margin.dropped;
+
+  // The rows: per link j, its N_j basis on link j and carried outwards, n T_{j,k}; then the rotor
+  // inertia (its own row, or the value of the rows on its regrouping vector) and friction.
+  int rows = 0;
+  for (int k = 0; k < n; ++k) {
+    rows += out.link_rank[k];
+    if (layout.rotor && rotor[k].rows() == 0) ++rows;
+    if (layout.friction) rows += 2;
+  }
+  out.rows.setZero(rows, P);
+  int r0 = 0;
+  for (int j = 0; j < n; ++j) {
+    Rows10 cur = M[j];
+    const int nj = static_cast<int>(cur.rows());
+    for (int k = j; k < n; ++k) {
+      if (k > j) cur = cur * T0[k];
+      out.rows.block(r0, k * per, nj, 10) = cur;
+    }
+    r0 += nj;
+    if (layout.rotor && rotor[j].rows() == 0) out.rows(r0++, layout.rotorIndex(j)) = 1.0;
+    if (layout.friction) {
+      out.rows(r0++, layout.viscousIndex(j)) = 1.0;
+      out.rows(r0++, layout.coulombIndex(j)) = 1.0;
+    }
+  }
+  for (int k = 0; k < n && layout.rotor; ++k) {
+    if (rotor[k].rows() == 0) continue;
+    out.rotor_regrouped.push_back(k);
+    auto col = out.rows.col(layout.rotorIndex(k));
+    col = out.rows.middleCols(k * per, 10) * rotor[k].row(0).transpose();
+    if (rotor[k].rows() > 1)
+      col += out.rows.middleCols((k - 1) * per, 10) * rotor[k].row(1).transpose();
+  }
+
+  // The constant of the Lagrangian: the potential energy's mean over the revolute joints (the
+  // pose is affine in each joint's cos and sin, one joint per factor, so the mean of the product
+  // is the product of the means; a rotation's mean is u u^T) and its value at q = 0 for the
+  // prismatic ones.
+  out.constant.setZero(P);
+  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  for (int k = 0; k < n; ++k) {
+    const Joint& joint = model.joints[k];
+    Eigen::Matrix4d J = Eigen::Matrix4d::Identity();
+    if (joint.type == JointType::Revolute)
+      J.topLeftCorner<3, 3>() = joint.axis * joint.axis.transpose();
+    T = T * joint.pre.matrix() * J * joint.post.matrix();
+    out.constant.segment<3>(k * per + 6) = model.gravity.transpose() * T.topLeftCorner<3, 3>();
+    out.constant[k * per + 9] = model.gravity.dot(T.block<3, 1>(0, 3));
+  }
+  return out;
+}
+
+}  // namespace mindyn
