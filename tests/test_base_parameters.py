@@ -942,3 +942,13 @@ def test_gravity_is_fixed_per_robot(rng):
         np.testing.assert_allclose(tau, robot.inverse_dynamics(q, dq, ddq), rtol=0, atol=1e-9)
     # the two answers differ by the gravity torque, which is not small on a vertical arm
     assert np.max(np.abs(heavy.gravity_torque(q))) > 1.0
+
+
+@pytest.mark.parametrize("g", [[np.nan, 0, 0], [0, np.inf, 0], [0, 0, -1e17], [1e300, 0, 0]])
+def test_gravity_outside_the_number_bound_is_refused(g):
+    """A gravity vector is held to the same bound as every number of a description (1e16), so
+    that every result stays finite: refused by name, whether given to load or to with_gravity."""
+    with pytest.raises(ValueError, match="gravity"):
+        mindyn.load("planar2").with_gravity(g)
+    with pytest.raises(ValueError, match="gravity"):
+        mindyn.load("planar2", gravity=g)

@@ -71,10 +71,12 @@ std::string number(double v) {
   return buf;
 }
 
-/// Throws unless |value| <= bound; `what` names the value.
-void checkBound(const std::string& who, const std::string& what, double value, double bound) {
+/// Throws unless |value| <= bound; `what` names the value and `where()` the place. `where` is
+/// only called on an error, so that checking a valid model builds no message.
+template <class Where>
+void checkBound(const Where& where, const char* what, double value, double bound) {
   if (std::abs(value) > bound)
-    throw ModelError(who + ": " + what + " " + number(value) + " exceeds the bound " +
+    throw ModelError(where() + ": " + what + " " + number(value) + " exceeds the bound " +
                      number(bound) + " on its magnitude");
 }
 
@@ -88,42 +90,44 @@ bool isRigid(const Eigen::Isometry3d& T) {
 
 void Model::validate() const {
   const int n = nq();
-  const std::string who =
-      (source.empty() || source == "generated" ? std::string() : source + ": ") +
-      (name.empty() ? std::string("model") : "model '" + name + "'");
-  if (n == 0) throw ModelError(who + " has no moving joint");
+  const auto who = [this] {
+    return (source.empty() || source == "generated" ? std::string() : source + ": ") +
+           (name.empty() ? std::string("model") : "model '" + name + "'");
+  };
+  if (n == 0) throw ModelError(who() + " has no moving joint");
   if (n > kMaxModelJoints)
-    throw ModelError(who + " has " + std::to_string(n) + " joints; at most " +
+    throw ModelError(who() + " has " + std::to_string(n) + " joints; at most " +
                      std::to_string(kMaxModelJoints) + " are supported");
   if (inertial.size() != 10 * n)
-    throw ModelError(who + ": " + std::to_string(inertial.size()) + " inertial parameters for " +
+    throw ModelError(who() + ": " + std::to_string(inertial.size()) + " inertial parameters for " +
                      std::to_string(n) + " links (expected " + std::to_string(10 * n) + ")");
   for (const auto* v : {&rotor_inertia, &viscous, &coulomb})
-    if (v->size() != n) throw ModelError(who + ": per-joint parameter vector of wrong size");
-  if (!inertial.allFinite()) throw ModelError(who + ": inertial parameters are not finite");
+    if (v->size() != n) throw ModelError(who() + ": per-joint parameter vector of wrong size");
+  if (!inertial.allFinite()) throw ModelError(who() + ": inertial parameters are not finite");
   if (!rotor_inertia.allFinite() || !viscous.allFinite() || !coulomb.allFinite())
-    throw ModelError(who + ": rotor inertia or friction is not finite");
-  if (!gravity.allFinite()) throw ModelError(who + ": gravity is not finite");
+    throw ModelError(who() + ": rotor inertia or friction is not finite");
+  if (!gravity.allFinite()) throw ModelError(who() + ": gravity is not finite");
   if (link_names.size() != static_cast<size_t>(n + 1))
-    throw ModelError(who + ": expected " + std::to_string(n + 1) + " link names");
+    throw ModelError(who() + ": expected " + std::to_string(n + 1) + " link names");
   const double V = kMaxDescriptionValue;
   const double L = 100 * V;  // a length or mass folded from up to 100 inputs
   for (int i = 0; i < 3; ++i) checkBound(who, "gravity component", gravity[i], V);
   for (int k = 0; k < n; ++k) {
-    const std::string link = link_names[k + 1];
+    const auto link = [&] { return who() + ", link '" + link_names[k + 1] + "'"; };
     const auto p = inertial.segment<10>(10 * k);
     for (int i = 0; i < 10; ++i) {
       const double bound = i == 9 ? L : i >= 6 ? L * L : L * L * L;
-      checkBound(who + ", link '" + link + "'",
-                 std::string("inertial parameter ") + kInertialNames[i], p[i], bound);
+      if (std::abs(p[i]) > bound)  // the name is built only for the error
+        checkBound(link, (std::string("inertial parameter ") + kInertialNames[i]).c_str(), p[i],
+                   bound);
     }
-    const std::string joint = who + ", joint '" + joints[k].name + "'";
+    const auto joint = [&] { return who() + ", joint '" + joints[k].name + "'"; };
     checkBound(joint, "rotor inertia", rotor_inertia[k], V);
     checkBound(joint, "viscous friction", viscous[k], V);
     checkBound(joint, "Coulomb friction", coulomb[k], V);
   }
   for (const Joint& j : joints) {
-    const std::string joint = who + ", joint '" + j.name + "'";
+    const auto joint = [&] { return who() + ", joint '" + j.name + "'"; };
     for (int i = 0; i < 3; ++i) {
       checkBound(joint, "origin translation", j.pre.translation()[i], L);
       checkBound(joint, "origin translation", j.post.translation()[i], L);
@@ -135,17 +139,17 @@ void Model::validate() const {
         {"drive gear ratio", j.drive.gear_ratio}};
     for (const auto& [what, value] : limits) {
       if (std::isnan(value)) continue;  // not given
-      if (!std::isfinite(value)) throw ModelError(joint + ": " + what + " is not finite");
+      if (!std::isfinite(value)) throw ModelError(joint() + ": " + what + " is not finite");
       checkBound(joint, what, value, V);
     }
     if (!j.axis.allFinite() || std::abs(j.axis.norm() - 1.0) > 1e-9)
-      throw ModelError(who + ", joint '" + j.name + "': axis is not a unit vector");
+      throw ModelError(joint() + ": axis is not a unit vector");
     if (!isRigid(j.pre) || !isRigid(j.post))
-      throw ModelError(who + ", joint '" + j.name + "': origin is not a rigid transform");
+      throw ModelError(joint() + ": origin is not a rigid transform");
     if (j.limits.lower > j.limits.upper)
-      throw ModelError(who + ", joint '" + j.name + "': lower limit above upper limit");
+      throw ModelError(joint() + ": lower limit above upper limit");
   }
-  if (!isRigid(tool)) throw ModelError(who + ": tool frame is not a rigid transform");
+  if (!isRigid(tool)) throw ModelError(who() + ": tool frame is not a rigid transform");
   for (int i = 0; i < 3; ++i) checkBound(who, "tool translation", tool.translation()[i], L);
 }
 

@@ -174,6 +174,7 @@ PYBIND11_MODULE(_core, m) {
             if (!g.allFinite()) throw py::value_error("gravity must be finite");
             Model copy = s.model;
             copy.gravity = g;
+            copy.validate();  // the bound on every number holds for gravity too
             return std::make_shared<PyModel>(std::move(copy));
           },
           py::arg("gravity"),
