@@ -27,10 +27,10 @@ from pathlib import Path  # noqa: E402
 
 import mindyn  # noqa: E402
 import numpy as np  # noqa: E402
+from mindyn.control import SensorNoise, simulate  # noqa: E402
 from mindyn.identification import dynamic_system, identify, validate  # noqa: E402
 from mindyn.identification.data import read_csv  # noqa: E402
 from mindyn.identification.excitation import optimize_excitation, random_trajectory  # noqa: E402
-from mindyn.simulate import SensorNoise, simulate  # noqa: E402
 
 
 def median_time(f, repeat=5):

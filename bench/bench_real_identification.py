@@ -196,8 +196,8 @@ def consistent_row(name, doc, wall, robot_path, log_path):
     """The consistent estimate's figures of one case, and a forward simulation along the log."""
     import mindyn
     import numpy as np
+    from mindyn.control import simulate
     from mindyn.identification import read_csv
-    from mindyn.simulate import simulate
 
     ce = doc["consistent_estimate"]
     eig = min(doc["pseudo_inertia_min_eig"].values())

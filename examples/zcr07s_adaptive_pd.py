@@ -25,7 +25,7 @@ from pathlib import Path
 
 import mindyn
 import numpy as np
-from mindyn import control, simulate
+from mindyn import control
 
 SEED_MAX_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
 SEED_FINAL_DEG = [-0.06, 0.02, 0.04, -0.11, -0.11, 0.09]
@@ -50,7 +50,7 @@ def main() -> None:
     p0 = control.perturbed_parameters(p_true, args.error, args.seed)
     gains = control.default_gains(robot)
     cycle = 10.0
-    ref = simulate.SumOfSines(robot, period=cycle, seed=args.seed)
+    ref = control.SumOfSines(robot, period=cycle, seed=args.seed)
     duration = cycle * args.cycles
 
     runs = {
@@ -70,7 +70,7 @@ def main() -> None:
         print(f"generated adaptive PD step: {step['mul']} mul, {step['add']} add per step")
     summaries = {}
     for name, ctl in runs.items():
-        result = simulate.simulate(
+        result = control.simulate(
             robot,
             ref,
             ctl,
@@ -82,7 +82,7 @@ def main() -> None:
             endpoint=False,
         )
         header = {"run": name, "param_error": args.error, "seed": args.seed}
-        summaries[name] = simulate.write_report(result, out / name, cycle, header)
+        summaries[name] = control.write_report(result, out / name, cycle, header)
         summaries[name]["max_error_last_cycle_deg"] = result.max_error_deg(
             duration - cycle
         ).tolist()

@@ -22,11 +22,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mindyn import cli
+from mindyn.control.simulation import MAX_STEPS, SensorNoise, simulate_inverse
 from mindyn.identification import IdentificationError, dynamic_system, identify
 from mindyn.identification.data import JointData
 from mindyn.identification.estimation import MIN_EQUATIONS_PER_PARAMETER, MIN_NOISE_DOF
 from mindyn.identification.excitation import random_trajectory
-from mindyn.simulate import MAX_STEPS, SensorNoise, simulate_inverse
 
 
 def run(argv: list[str]) -> tuple[int, str, str]:

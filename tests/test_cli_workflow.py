@@ -184,7 +184,7 @@ def test_torque_unit_in_the_header(tmp_path):
 
 
 def test_demo_prints_the_operation_counts_once(tmp_path, capsys):
-    from mindyn.cli_demo import _codegen
+    from mindyn.cli.demo import _codegen
 
     _codegen("planar2", tmp_path)
     out = capsys.readouterr().out

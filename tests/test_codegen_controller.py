@@ -2,7 +2,7 @@
 
 The C step (compiled with gcc -std=c99 -Wall -Wextra -Werror -pedantic) is compared step by
 step with mindyn.control.AdaptivePD / ComputedTorque and in the closed loop of
-mindyn.simulate.simulate (the ZCR07S study's experiment, shortened); the Structured Text step is
+mindyn.control.simulate (the ZCR07S study's experiment, shortened); the Structured Text step is
 run by the tree-sitter evaluator of test_codegen over a few hundred cycles, its estimate carried
 from call to call, against the C step; the PLCopen XML is validated against the TC6 XML v2.01
 schema (tests/data/plcopen).
@@ -19,7 +19,7 @@ import mindyn
 import numpy as np
 import pytest
 from conftest import assert_close, random_state
-from mindyn import codegen, control, simulate
+from mindyn import codegen, control
 from mindyn.cli import main
 from test_codegen import STInterpreter, st_tree
 
@@ -133,25 +133,25 @@ def test_torque_limit_and_box_are_applied(rng):
 
 
 def in_the_loop(robot_name, kind, duration, substeps, error, seed, period):
-    """simulate.simulate with the library's controller and with the generated C step (same
+    """control.simulate with the library's controller and with the generated C step (same
     gains, same initial estimate = the true base parameters off by +-`error`)."""
     robot = mindyn.load(robot_name)
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     p0 = control.perturbed_parameters(base.values(robot.parameters(True, True)), error, seed)
     gains = control.default_gains(robot)
-    ref = simulate.SumOfSines(robot, period=period, seed=seed)
+    ref = control.SumOfSines(robot, period=period, seed=seed)
     library = control.make_controller(kind, robot, gains, p0, base)
     code = codegen.generate_controller(robot, kind, base=base, gains=gains, params=p0)
     generated = codegen.CompiledController(code, base)
     run = dict(rate=250.0, duration=duration, substeps=substeps, rotor=True, friction=True)
-    a = simulate.simulate(robot, ref, library, **run)
-    b = simulate.simulate(robot, ref, generated, **run)
+    a = control.simulate(robot, ref, library, **run)
+    b = control.simulate(robot, ref, generated, **run)
     return a, b, library, generated
 
 
 def test_zcr07s_study_in_the_loop_matches_the_library():
     """The ZCR07S study's experiment (examples/zcr07s_adaptive_pd.py) for 1.2 s (300 periods of
-    4 ms): the generated C step in simulate.simulate against AdaptivePD; the trajectories agree
+    4 ms): the generated C step in control.simulate against AdaptivePD; the trajectories agree
     to 1e-9 rad (the target; both evaluate the same formulas, in another order)."""
     a, b, library, generated = in_the_loop("zcr07s", "adaptive-pd", 1.2, 4, 0.3, 0, 10.0)
     assert np.abs(a.q - b.q).max() <= 1e-9
@@ -217,7 +217,7 @@ def test_structured_text_step_matches_the_c_step(kind, cycles, tmp_path):
     c = codegen.CompiledController(codegen.generate_controller(robot, kind, trig="libm", **same))
     tree = st_tree(st.text)
     block = STBlock(tree, st.function)
-    reference = simulate.SumOfSines(robot, period=2.0, seed=3)
+    reference = control.SumOfSines(robot, period=2.0, seed=3)
     rng = np.random.default_rng(7)
     saturated = clamped = 0
     for i in range(cycles):

@@ -14,6 +14,7 @@ import mindyn
 import numpy as np
 import pytest
 from mindyn import cli
+from mindyn.control import SensorNoise, simulate, simulate_inverse
 from mindyn.identification import identify
 from mindyn.identification.consistent import (
     EIG_TOL,
@@ -25,7 +26,6 @@ from mindyn.identification.consistent import (
 )
 from mindyn.identification.data import JointData
 from mindyn.identification.excitation import random_trajectory
-from mindyn.simulate import SensorNoise, simulate, simulate_inverse
 from scipy.optimize import least_squares, minimize
 
 ROBOT = "zcr07s"  # a description whose every link is physically consistent

@@ -14,7 +14,7 @@ import pytest
 from conftest import assert_close, pinocchio_model
 from mindyn import control
 from mindyn.cli import main
-from mindyn.simulate import CsvTrajectory, SensorNoise, SumOfSines, simulate, summary
+from mindyn.control import CsvTrajectory, SensorNoise, SumOfSines, simulate, summary
 
 
 def _at(ref, t):

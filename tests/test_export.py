@@ -590,9 +590,9 @@ def test_identify_consistent_writes_the_urdf_that_pinocchio_reproduces(tmp_path)
     """``identify --consistent --urdf``: the written URDF, loaded by Pinocchio, gives ``rnea``
     equal to mindyn's prediction of the consistent estimate, W_b(q, dq, ddq) (Y pi), with
     the identified base values from the JSON (the log is noisy, so these are not the truth)."""
+    from mindyn.control import SensorNoise, simulate_inverse
     from mindyn.identification.data import write_csv
     from mindyn.identification.excitation import random_trajectory
-    from mindyn.simulate import SensorNoise, simulate_inverse
 
     robot = mindyn.load(UR5)
     traj = random_trajectory(robot, seed=3)

@@ -17,6 +17,7 @@ import pinocchio as pin
 import pytest
 from conftest import pinocchio_model
 from mindyn import cli
+from mindyn.control import SensorNoise, simulate, simulate_inverse
 from mindyn.identification import (
     RankDeficientError,
     dynamic_system,
@@ -32,7 +33,6 @@ from mindyn.identification.excitation import (
     random_trajectory,
 )
 from mindyn.identification.report import ZCR07S_STUDY_TABLE6
-from mindyn.simulate import SensorNoise, simulate, simulate_inverse
 
 sys.path.insert(0, str(Path(__file__).parent))
 from random_arm import random_arm_yaml  # noqa: E402

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import yaml
 from mindyn import cli
+from mindyn.control import SensorNoise, simulate_inverse
 from mindyn.identification import (
     DataError,
     JointData,
@@ -29,7 +30,6 @@ from mindyn.identification import (
 )
 from mindyn.identification.currents import attach_currents
 from mindyn.identification.excitation import random_trajectory
-from mindyn.simulate import SensorNoise, simulate_inverse
 
 sys.path.insert(0, str(Path(__file__).parent))
 from random_arm import random_arm_yaml  # noqa: E402

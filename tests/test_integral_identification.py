@@ -17,6 +17,7 @@ import re
 import mindyn
 import numpy as np
 import pytest
+from mindyn.control import SensorNoise, simulate_inverse
 from mindyn.identification import (
     IdentificationError,
     energy_system,
@@ -28,7 +29,6 @@ from mindyn.identification import (
 from mindyn.identification.data import JointData, fill_derivatives
 from mindyn.identification.excitation import random_trajectory
 from mindyn.identification.models import integral_windows
-from mindyn.simulate import SensorNoise, simulate_inverse
 
 ROBOT = "zcr07s"
 PERIOD = 10.0  # s, one period of random_trajectory (0.1 Hz fundamental)

@@ -71,6 +71,8 @@ def not_run_reason(b: Block) -> str | None:
         return "benchmarks: minutes of timing runs, tried by hand"
     if b.lang == "cpp":
         return "a C++ fragment; the complete program is examples/consumer (ctest consumer.*)"
+    if b.lang == "iecst":
+        return "Structured Text for a PLC program; parsed by test_structured_text_blocks_parse"
     return None
 
 
@@ -84,11 +86,26 @@ def test_every_block_is_run_or_listed_with_a_reason():
         if not_run_reason(b) is None:
             assert b.lang in ("sh", "python"), f"README.md:{b.line}: ```{b.lang} block not run"
     skipped = [b for b in BLOCKS if not_run_reason(b) is not None]
-    # the top commands, the C++ fragment, the benchmarks: nothing else is left out
-    assert [b.section or "top" for b in skipped] == ["top", "C++", "Benchmarks"], [
-        (b.id, b.section) for b in skipped
-    ]
-    assert sum(b.lang == "sh" for b in RUN) == 3 and sum(b.lang == "python" for b in RUN) == 1
+    # nothing else is left out: the top commands, the CODESYS program, the C++ fragment and
+    # the benchmarks
+    assert [b.section or "top" for b in skipped] == [
+        "top",
+        "Generated code",
+        "C++",
+        "Benchmarks",
+    ], [(b.id, b.section) for b in skipped]
+    assert sum(b.lang == "sh" for b in RUN) == 5 and sum(b.lang == "python" for b in RUN) == 1
+
+
+def test_structured_text_blocks_parse():
+    """The PLC program the README shows (calling the generated function block) is Structured
+    Text by the independent IEC 61131-3 grammar."""
+    from test_codegen import st_tree
+
+    blocks = [b for b in BLOCKS if b.lang == "iecst"]
+    assert blocks
+    for b in blocks:
+        st_tree(b.text)
 
 
 def commands(block: Block) -> list[str]:
@@ -186,7 +203,9 @@ def test_readme_examples_made_what_they_say(workdir, env):
     assert head[-6:] == [f"tau{j}[permille]" for j in range(1, 7)]
     removed = json.loads((workdir / "out/id.json").read_text())["removed"]
     said = [o for c, o in OUTPUT.items() if "--params out/id.json" in c]
-    assert len(said) == 1 and f"; {len(removed)} pruned in identification" in said[0], said
+    # the code of the identified model and the two controller steps starting from it
+    assert len(said) == 3, said
+    assert all(f"; {len(removed)} pruned in identification" in o for o in said), said
 
 
 # ---------------------------------------------------------------------------------------------

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from mindyn import _core, control
 from mindyn.cli import main
+from mindyn.control import CsvTrajectory, SumOfSines, load_reference, simulate
 from mindyn.identification.data import read_csv, write_csv, write_trajectory_csv
 from mindyn.identification.excitation import FourierTrajectory, random_trajectory
-from mindyn.simulate import CsvTrajectory, SumOfSines, load_reference, simulate
 from scipy.integrate import solve_ivp
 from test_cli_workflow import cli
 

@@ -6,11 +6,12 @@
 - :func:`base_parameters`: base inertial parameters by the projection method (or the numerical
   method), regrouping matrix, formulas, base regressors;
 - :mod:`mindyn.codegen`: inverse dynamics, gravity and base regressor as C or Structured Text;
-- :mod:`mindyn.identification` (excitation trajectories, joint logs, least-squares
-  identification with statistics, validation and reports) and :mod:`mindyn.simulate` (the one
-  closed-loop simulation: simulated measurements and tracking experiments);
-- :mod:`mindyn.control`, :func:`ik`: Slotine-Li regressor, adaptive PD and other controllers in
-  closed-loop simulation, inverse kinematics.
+- :mod:`mindyn.identification`: excitation trajectories, joint logs, least-squares and
+  physically consistent identification with statistics, validation and reports;
+- :mod:`mindyn.control`: Slotine-Li regressor, adaptive PD and other controllers, and the one
+  closed-loop simulation (simulated measurements and tracking experiments);
+- :func:`ik`: inverse kinematics; :mod:`mindyn.export`: identified parameters written back
+  into a robot description; :mod:`mindyn.cli`: the ``mindyn`` command.
 """
 
 from importlib import metadata as _metadata

@@ -13,7 +13,7 @@ Controller steps (:func:`generate_controller`): the Slotine-Li adaptive PD of
 recursion customised the same way (the regressor's columns, or the adjoint pass of ``s^T Y p``,
 whichever needs fewer operations), computed torque and PD with gravity compensation, as a C99 state
 struct with init and step functions or one Structured Text FUNCTION_BLOCK holding the estimate;
-:class:`CompiledController` runs the C step in :func:`mindyn.simulate.simulate`, and
+:class:`CompiledController` runs the C step in :func:`mindyn.control.simulate`, and
 :func:`plcopen_project` packs Structured Text function blocks into a PLCopen XML project.
 """
 
@@ -522,7 +522,7 @@ def generate_controller(
 class CompiledController:
     """A generated C controller step compiled with the system C compiler (``$CC``, else ``cc``
     or ``gcc``) into a temporary folder and called through ctypes: a controller of
-    :func:`mindyn.simulate.simulate` (:class:`mindyn.simulate.Controller`), ``tau =
+    :func:`mindyn.control.simulate` (:class:`mindyn.control.Controller`), ``tau =
     controller(t, q, dq, q_d, dq_d, ddq_d)``, with ``reset()`` and, for the adaptive step,
     ``period`` (the period it was generated for; a simulation at another period is refused).
 
@@ -531,7 +531,7 @@ class CompiledController:
     code : GeneratedController
         C code from :func:`generate_controller`.
     base : BaseParameters, optional
-        Reported to :func:`~mindyn.simulate.simulate` (the true base parameters in its result).
+        Reported to :func:`~mindyn.control.simulate` (the true base parameters in its result).
 
     Attributes
     ----------

@@ -134,7 +134,7 @@ class FourierTrajectory:
     @property
     def duration(self) -> float:
         """One period [s]: the span of a simulation along the trajectory unless told otherwise
-        (the reference protocol of :mod:`mindyn.simulate`)."""
+        (the reference protocol of :mod:`mindyn.control.simulation`)."""
         return self.period
 
     def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

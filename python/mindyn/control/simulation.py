@@ -34,9 +34,9 @@ from typing import Protocol
 
 import numpy as np
 
-from . import _core
-from .identification.data import truth_path, write_csv
-from .robot import Robot, load
+from .. import _core
+from ..identification.data import truth_path, write_csv
+from ..robot import Robot, load
 
 __all__ = [
     "Controller",
@@ -133,7 +133,7 @@ class CsvTrajectory:
 
         path = Path(path)
         if not path.is_file():
-            from . import RobotFileNotFoundError
+            from .._core import RobotFileNotFoundError
 
             raise RobotFileNotFoundError(f"trajectory file '{path}' does not exist")
         rows: list[list[float]] = []
@@ -188,7 +188,7 @@ def load_reference(path, n: int):
     """A reference from the JSON of ``mindyn excite`` (its exact Fourier series) or from a CSV
     (:class:`CsvTrajectory`, e.g. the CSV ``mindyn excite`` writes) for a robot of ``n`` joints;
     raises ValueError when the file gives another number of joints."""
-    from .identification.excitation import FourierTrajectory
+    from ..identification.excitation import FourierTrajectory
 
     p = Path(path)
     if p.suffix.lower() == ".json":
@@ -473,7 +473,7 @@ def simulate(
         The base parameters in which the true values ``p_true`` and the true model torque are
         reported beside the controller's estimates (default: the controller's ``base``).
     """
-    from .control import default_controller
+    from .controllers import default_controller
 
     robot = load(robot)
     n = robot.n

@@ -10,7 +10,7 @@ import os
 import re
 from pathlib import Path
 
-from . import bundled_robots
+from ..robot import bundled_robots
 
 #: Largest seed accepted (the random generators take 32-bit seeds).
 MAX_SEED = 2**32 - 1

@@ -10,9 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from . import ModelError, base_parameters, load
-from .cli_args import add_joint_terms, add_offset, add_robot, joint_terms, output_file
-from .codegen import CONTROLLERS, generate, generate_controller, plcopen_project
+from .._core import ModelError
+from ..base import base_parameters
+from ..codegen import CONTROLLERS, generate, generate_controller, plcopen_project
+from ..robot import load
+from .args import add_joint_terms, add_offset, add_robot, joint_terms, output_file
 
 
 def register(subparsers) -> None:
@@ -132,7 +134,9 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )
     if args.what.strip() in CONTROLLERS:
-        return _controller(args, robot, base, out, params if params is not None else args.params)
+        note = _params_note(base.n, args.params, pruned, threshold) if params is not None else None
+        given = params if params is not None else args.params
+        return _controller(args, robot, base, out, given, note)
     for opt in ("gains", "torque_limit", "box"):
         if getattr(args, opt) is not None:
             raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
@@ -158,11 +162,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         + f"; {len(classical.names)} classical"
     )
     if params is not None:
-        print(
-            f"parameters: {len(code.names) - len(pruned)} identified values from {args.params}; "
-            f"{len(pruned)} pruned in identification (relative standard deviation above "
-            f"{threshold}) taken as zero" + (f": {', '.join(pruned)}" if pruned else "")
-        )
+        print(_params_note(len(code.names), args.params, pruned, threshold))
     if args.plcopen:
         st = (
             code
@@ -179,20 +179,39 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             f"taken as exact (largest change {snap['largest']:.2g})"
         )
     print()
-    print(f"{'function':<18}{'base parameters':>22}    {'classical parameters':>22}")
-    print(f"{'':<18}{'mul':>8}{'add':>7}{'trig':>7}    {'mul':>8}{'add':>7}{'trig':>7}")
-    for f, c in code.counts.items():
-        k = classical.counts[f]
-        print(
-            f"{f:<18}{c['mul']:>8}{c['add']:>7}{c['trig']:>7}    "
-            f"{k['mul']:>8}{k['add']:>7}{k['trig']:>7}"
-        )
+    print("\n".join(operation_table(code, classical)))
     return 0
 
 
-def _controller(args, robot, base, out: Path, params) -> int:
-    """``--what adaptive-pd | computed-torque | gravity-compensation``."""
-    from . import control
+def operation_table(code, classical) -> list[str]:
+    """The lines of the operation counts of each function of ``code`` (base parameters) beside
+    those of ``classical`` (the classical-parameter recursion generated the same way)."""
+    lines = [
+        f"{'function':<18}{'base parameters':>22}    {'classical parameters':>22}",
+        f"{'':<18}{'mul':>8}{'add':>7}{'trig':>7}    {'mul':>8}{'add':>7}{'trig':>7}",
+    ]
+    for f, c in code.counts.items():
+        k = classical.counts[f]
+        lines.append(
+            f"{f:<18}{c['mul']:>8}{c['add']:>7}{c['trig']:>7}    "
+            f"{k['mul']:>8}{k['add']:>7}{k['trig']:>7}"
+        )
+    return lines
+
+
+def _params_note(n: int, path: str, pruned: list[str], threshold: str) -> str:
+    """The line saying which identified values the generated code takes."""
+    return (
+        f"parameters: {n - len(pruned)} identified values from {path}; "
+        f"{len(pruned)} pruned in identification (relative standard deviation above "
+        f"{threshold}) taken as zero" + (f": {', '.join(pruned)}" if pruned else "")
+    )
+
+
+def _controller(args, robot, base, out: Path, params, note: str | None = None) -> int:
+    """``--what adaptive-pd | computed-torque | gravity-compensation``; ``note`` says where the
+    initial estimate comes from."""
+    from .. import control
 
     kind = args.what.strip()
     if args.numeric:
@@ -234,6 +253,8 @@ def _controller(args, robot, base, out: Path, params) -> int:
         + (f" ({', '.join(extras)})" if extras else "")
         + f", period {args.period:g} s"
     )
+    if note:
+        print(note)
     print("wrote " + ", ".join(str(w) for w in written))
     print()
     print(f"{'':<34}{'mul':>8}{'add':>7}{'trig':>7}{'sign':>7}{'div':>7}")

@@ -7,16 +7,15 @@ base parameters -> optimised excitation -> simulated measurement with noise -> i
 from __future__ import annotations
 
 import argparse
-import contextlib
-import io
 import json
 import time
 from pathlib import Path
 
 import numpy as np
 
-from . import base_parameters, bundled_robots, load
-from .cli_args import number, output_dir, robot_arg, seed
+from ..base import base_parameters
+from ..robot import bundled_robots, load
+from .args import number, output_dir, robot_arg, seed
 
 
 def _step(no: int, title: str) -> float:
@@ -33,11 +32,15 @@ def _joints(values, fmt: str = "{:8.3g}") -> str:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from .identification import identify, true_base_values, validate
-    from .identification.data import convert_torque, read_csv, write_csv
-    from .identification.excitation import excitation_limits, optimize_excitation, random_trajectory
-    from .identification.report import ZCR07S_STUDY_TABLE6, format_table, plot_torques
-    from .simulate import SensorNoise, noise_from_spec, simulate
+    from ..control.simulation import SensorNoise, noise_from_spec, simulate
+    from ..identification import identify, true_base_values, validate
+    from ..identification.data import convert_torque, read_csv, write_csv
+    from ..identification.excitation import (
+        excitation_limits,
+        optimize_excitation,
+        random_trajectory,
+    )
+    from ..identification.report import ZCR07S_STUDY_TABLE6, format_table, plot_torques
 
     t_all = time.perf_counter()
     robot = load(args.robot)
@@ -86,7 +89,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     (out / "validation_trajectory.json").write_text(
         json.dumps({"trajectory": val_traj.to_dict()}, indent=2) + "\n"
     )
-    from .identification.excitation import criterion_value
+    from ..identification.excitation import criterion_value
 
     print(
         f"    validation trajectory: random Fourier series within the limits (condition number "
@@ -218,34 +221,25 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _codegen(robot_arg: str, out: Path) -> None:
-    """Runs ``mindyn codegen`` when this build has it (another part of the package)."""
+    """Generates the inverse dynamics, gravity and base regressor in C and Structured Text, as
+    ``mindyn codegen ROBOT --rotor --friction`` does, when this build has the code generator."""
     try:
-        from . import codegen  # noqa: F401
+        from ..codegen import generate
     except ImportError:
         print("    unavailable: this build of mindyn has no code generator (mindyn.codegen)")
         return
-    from .cli import build_parser, main
+    from .codegen import operation_table
 
-    parser = build_parser()
-    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    if "codegen" not in sub.choices:
-        print("    unavailable: this build of mindyn has no 'codegen' command")
-        return
+    robot = load(robot_arg)
+    base = base_parameters(robot, rotor=True, friction=True)
     tables = {}
     for lang, ext in (("c", "c"), ("st", "st")):
         target = out / f"inverse_dynamics.{ext}"
-        text = io.StringIO()
-        with contextlib.redirect_stdout(text):
-            rc = main(
-                ["codegen", robot_arg, "--lang", lang, "--rotor", "--friction", "-o", str(target)]
-            )
-        if rc != 0:
-            print(f"    codegen --lang {lang} failed")
-            continue
-        lines = text.getvalue().splitlines()
-        # the operation table follows the first empty line; C and ST share the recursion
-        cut = lines.index("") if "" in lines else len(lines)
-        tables[lang] = lines[cut + 1 :]
+        same = dict(lang=lang, rotor=True, friction=True)
+        code = generate(robot, base=base, header_name="inverse_dynamics.h", **same)
+        classical = generate(robot, base=False, name=code.name, **same)
+        code.write(target)
+        tables[lang] = operation_table(code, classical)
         print(f"    wrote {target.name}")
     if "c" in tables and tables.get("st", tables["c"]) == tables["c"]:
         print("    operation counts (C and Structured Text alike):")

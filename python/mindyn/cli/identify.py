@@ -9,8 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import base_parameters, load
-from .cli_args import (
+from ..base import base_parameters
+from ..robot import load
+from .args import (
     add_joint_terms,
     add_offset,
     add_robot,
@@ -20,7 +21,7 @@ from .cli_args import (
     output_file,
     seed,
 )
-from .cli_export import add_description_outputs, check_description_kind, write_description
+from .export import add_description_outputs, check_description_kind, write_description
 
 
 def _floats(text: str, n: int, what: str) -> np.ndarray:
@@ -41,7 +42,7 @@ def _floats(text: str, n: int, what: str) -> np.ndarray:
 # excite
 # ---------------------------------------------------------------------------------------------
 def cmd_excite(args: argparse.Namespace) -> int:
-    from .identification.excitation import check_sampling, optimize_excitation
+    from ..identification.excitation import check_sampling, optimize_excitation
 
     if Path(args.output).suffix.lower() in (".json", ".png"):
         raise ValueError(
@@ -98,9 +99,15 @@ def cmd_excite(args: argparse.Namespace) -> int:
 # simulate
 # ---------------------------------------------------------------------------------------------
 def cmd_simulate(args: argparse.Namespace) -> int:
-    from .cli_control import reference_and_controller
-    from .identification.data import convert_torque, write_csv
-    from .simulate import SensorNoise, noise_from_spec, simulate, simulate_inverse, write_report
+    from ..control.simulation import (
+        SensorNoise,
+        noise_from_spec,
+        simulate,
+        simulate_inverse,
+        write_report,
+    )
+    from ..identification.data import convert_torque, write_csv
+    from .control import reference_and_controller
 
     robot = load(args.robot, tip=args.tip)
     rate = 1.0 / args.period if args.period else args.rate
@@ -182,12 +189,12 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
     only when ``periodic``); otherwise one log."""
     from dataclasses import replace
 
-    from .identification.currents import attach_currents
-    from .identification.data import DataError, convert_torque, read_csv
-    from .identification.rosbag import is_rosbag, read_rosbag
+    from ..identification.currents import attach_currents
+    from ..identification.data import DataError, convert_torque, read_csv
+    from ..identification.rosbag import is_rosbag, read_rosbag
 
     if args.filter == "lowpass":
-        from .identification.preprocess import preprocess, split_at_gaps
+        from ..identification.preprocess import preprocess, split_at_gaps
 
         unfiltered = argparse.Namespace(**{**vars(args), "filter": "none"})
         (raw,) = _read(path, robot, unfiltered, currents)
@@ -289,9 +296,9 @@ def _check_lowpass_options(args: argparse.Namespace) -> None:
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
-    from .identification import identify, true_base_values, validate
-    from .identification.data import read_truth
-    from .identification.report import format_table, write_report
+    from ..identification import identify, true_base_values, validate
+    from ..identification.data import read_truth
+    from ..identification.report import format_table, write_report
 
     if args.validate_currents and not args.validate:
         raise ValueError("--validate-currents: expected --validate with the logs they belong to")
@@ -341,7 +348,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         ) from None
     cons = None
     if args.consistent:
-        from .identification.consistent import consistent_estimate
+        from ..identification.consistent import consistent_estimate
 
         cons = consistent_estimate(res, args.prior_weight)
     elif args.prior_weight:
@@ -494,7 +501,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
             args.sidecar,
         )
     if args.report:
-        from .identification.excitation import excitation_limits
+        from ..identification.excitation import excitation_limits
 
         lim, _ = excitation_limits(robot, margin=0.0)
         paths = write_report(args.report, res, logs, vlogs, val, fit, lim)
@@ -505,7 +512,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
 
 def cmd_identify_payload(args: argparse.Namespace) -> int:
-    from .identification.consistent import identify_payload, read_arm
+    from ..identification.consistent import identify_payload, read_arm
 
     robot = load(args.robot, tip=args.tip)
     read_arm(robot, args.identification)  # its errors before reading the logs
@@ -811,9 +818,9 @@ def _add_data_options(p) -> None:
 # ---------------------------------------------------------------------------------------------
 def register(sub) -> None:
     """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
-    from .cli_control import add_closed_loop_args
-    from .identification.excitation import MAX_TRAJECTORY_ROWS
-    from .simulate import MAX_SAMPLES, MAX_STEPS
+    from ..control.simulation import MAX_SAMPLES, MAX_STEPS
+    from ..identification.excitation import MAX_TRAJECTORY_ROWS
+    from .control import add_closed_loop_args
 
     p = sub.add_parser(
         "excite",

@@ -9,9 +9,10 @@ import sys
 
 import numpy as np
 
-from . import base_parameters, load
-from .cli_args import add_robot, number, output_dir, output_file, seed
-from .identification.data import truth_path
+from ..base import base_parameters
+from ..identification.data import truth_path
+from ..robot import load
+from .args import add_robot, number, output_dir, output_file, seed
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
@@ -27,8 +28,8 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     ``--gains``, ``--param-error``, ``--seed``); ``default_duration(reference)`` gives the
     simulated time when ``--duration`` is not given. Returns also the base parameters of the
     estimate (None for PD)."""
-    from . import control
-    from .simulate import SumOfSines, load_reference
+    from .. import control
+    from ..control.simulation import SumOfSines, load_reference
 
     n = robot.n
     period = args.period
@@ -48,7 +49,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         ref_text = f"sum of sines within the limits, {reference.period:g} s cycle"
         duration = args.duration or default_duration(reference)
         cycle = reference.period
-    from .simulate import check_steps
+    from ..control.simulation import check_steps
 
     try:  # before any set-up work
         check_steps(duration, 1.0 / period, args.substeps if args.integrator == "rk4" else 1)
@@ -76,7 +77,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
 
 
 def cmd_track(args: argparse.Namespace) -> int:
-    from .simulate import SensorNoise, simulate, summary, write_report
+    from ..control.simulation import SensorNoise, simulate, summary, write_report
 
     robot = load(args.robot, tip=args.tip)
     n = robot.n
@@ -164,7 +165,7 @@ def cmd_track(args: argparse.Namespace) -> int:
 
 
 def cmd_ik(args: argparse.Namespace) -> int:
-    from .ik import ik_solve, pose_from_xyz_rpy
+    from ..ik import ik_solve, pose_from_xyz_rpy
 
     robot = load(args.robot, tip=args.tip)
     scale = np.pi / 180.0 if args.deg else 1.0
@@ -219,7 +220,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
 def add_closed_loop_args(p, default: str) -> None:
     """The reference, controller and integration options shared by ``track`` and ``simulate``
     (``default``: the default controller)."""
-    from .control import CONTROLLERS
+    from ..control.controllers import CONTROLLERS
 
     p.add_argument(
         "--controller",
@@ -283,7 +284,7 @@ def register(sub) -> None:
     )
     add_robot(p)
     add_closed_loop_args(p, "adaptive-pd")
-    from .simulate import MAX_STEPS
+    from ..control.simulation import MAX_STEPS
 
     number(
         p,

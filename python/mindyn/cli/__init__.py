@@ -10,19 +10,12 @@ import sys
 
 import numpy as np
 
-from . import (
-    ModelError,
-    RobotFileNotFoundError,
-    _core,
-    base_parameters,
-    cli_codegen,
-    cli_control,
-    cli_demo,
-    cli_export,
-    cli_identify,
-    load,
-)
-from .cli_args import (
+from .. import _core
+from .._core import ModelError, RobotFileNotFoundError
+from ..base import base_parameters
+from ..robot import load
+from . import codegen, control, demo, export, identify
+from .args import (
     Parser,
     UsageError,
     add_joint_terms,
@@ -270,11 +263,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="round joint rotations within RAD (1e-3 when given alone) of multiples of pi/2",
     )
     p.set_defaults(func=cmd_base)
-    cli_control.register(sub)
-    cli_identify.register(sub)
-    cli_demo.register(sub)
-    cli_codegen.register(sub)
-    cli_export.register(sub)
+    control.register(sub)
+    identify.register(sub)
+    demo.register(sub)
+    codegen.register(sub)
+    export.register(sub)
     return parser
 
 

@@ -1,8 +1,8 @@
 """Joint-space tracking controllers and their regressors.
 
-Each controller satisfies :class:`mindyn.simulate.Controller`: ``tau = ctl(t, q, dq, q_d, dq_d,
+Each controller satisfies :class:`mindyn.control.Controller`: ``tau = ctl(t, q, dq, q_d, dq_d,
 ddq_d)`` once per period on the measured state, the torque held until the next call;
-:func:`mindyn.simulate.simulate` runs them in closed loop.
+:func:`mindyn.control.simulate` runs them in closed loop.
 
 - :class:`AdaptivePD`: the Slotine-Li adaptive controller on the base parameters (method.md §7).
   Sign convention (the one used everywhere here)::
@@ -30,9 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _args, _core
-from .base import BaseParameters, base_parameters
-from .robot import Robot
+from .. import _args, _core
+from ..base import BaseParameters, base_parameters
+from ..robot import Robot
 
 __all__ = [
     "AdaptivePD",
@@ -281,7 +281,7 @@ def load_gains(path: str | Path, robot: Robot) -> dict:
 
     path = Path(path)
     if not path.is_file():
-        from . import RobotFileNotFoundError
+        from .._core import RobotFileNotFoundError
 
         raise RobotFileNotFoundError(f"gains file '{path}' does not exist")
     try:

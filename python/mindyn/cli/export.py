@@ -7,9 +7,10 @@ import json
 import math
 from pathlib import Path
 
-from . import ModelError, load
-from .cli_args import add_robot, output_file
-from .export import classical_terms, write_urdf, write_yaml
+from .._core import ModelError
+from ..export import classical_terms, write_urdf, write_yaml
+from ..robot import load
+from .args import add_robot, output_file
 
 
 def register(subparsers) -> None:

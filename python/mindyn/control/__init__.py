@@ -1,0 +1,61 @@
+"""Control: joint-space controllers (:mod:`mindyn.control.controllers`) and the closed-loop
+simulation that runs them (:mod:`mindyn.control.simulation`).
+
+The names most used are here: the controllers :class:`AdaptivePD`, :class:`ComputedTorque` and
+:class:`PD` with their gains and registry, the Slotine-Li regressor, and :func:`simulate` with
+its protocols (:class:`Controller`, :class:`Reference`), references and result.
+"""
+
+from .controllers import (
+    CONTROLLERS,
+    PD,
+    AdaptivePD,
+    ComputedTorque,
+    coriolis_matrix,
+    default_controller,
+    default_gains,
+    load_gains,
+    make_controller,
+    perturbed_parameters,
+    slotine_li_regressor,
+    slotine_li_regressor_classical,
+)
+from .simulation import (
+    Controller,
+    CsvTrajectory,
+    Reference,
+    SensorNoise,
+    SimulationResult,
+    SumOfSines,
+    load_reference,
+    simulate,
+    simulate_inverse,
+    summary,
+    write_report,
+)
+
+__all__ = [
+    "CONTROLLERS",
+    "PD",
+    "AdaptivePD",
+    "ComputedTorque",
+    "Controller",
+    "CsvTrajectory",
+    "Reference",
+    "SensorNoise",
+    "SimulationResult",
+    "SumOfSines",
+    "coriolis_matrix",
+    "default_controller",
+    "default_gains",
+    "load_gains",
+    "load_reference",
+    "make_controller",
+    "perturbed_parameters",
+    "simulate",
+    "simulate_inverse",
+    "slotine_li_regressor",
+    "slotine_li_regressor_classical",
+    "summary",
+    "write_report",
+]
