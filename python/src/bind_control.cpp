@@ -19,21 +19,22 @@ using namespace mindyn::pyargs;
 
 namespace {
 
-// Calls f(q, dq, dqr, ddqr, out) per sample, out an r x c matrix stored row-major per sample.
+// Calls f(q, dq, dqr, ddqr, data, out) per sample with a workspace of this call, out an
+// r x c matrix stored row-major per sample.
 template <class F>
-py::array_t<double> perSample4(long n, const Array& a, const Array& b, const Array& c,
+py::array_t<double> perSample4(const PyModel& s, const Array& a, const Array& b, const Array& c,
                                const Array& d, long rows, long cols, F&& f) {
-  SampleBatch batch({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, n);
-  auto out = batch.output({rows, cols});
+  SampleBatch batch({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, s.model.nq());
+  Data data(s.model);
   Eigen::MatrixXd M(rows, cols);
-  batch.forEach([&](long i, const auto& x) {
-    f(x[0], x[1], x[2], x[3], M);
-    Eigen::Map<RowMajor>(out.mutable_data() + i * rows * cols, rows, cols) = M;
-  });
-  return out;
+  return perSample<1>(batch, {{{rows, cols}}}, [&](const auto& x, auto out) {
+    f(x[0], x[1], x[2], x[3], data, M);
+    rowMajor(out[0], rows, cols) = M;
+  })[0];
 }
 
-// Python-side IK solver: owns a copy of the model's chain.
+// Python-side IK solver: owns a copy of the model's chain. solve() works on a copy of the solver
+// (its workspace and random generator), so calls from several threads share nothing.
 struct PyIk {
   PyIk(const PyModel& m, const IkOptions& o) : solver(m.model, o), n(m.model.nq()) {}
   IkSolver solver;
@@ -49,11 +50,11 @@ void bindControl(py::module_& m) {
         PyModel& s = *b.model;
         const long n = s.model.nq(), nb = b.bp.eom.size();
         SlotineLiData sl(s.model, b.bp.layout);
-        return perSample4(
-            n, q, dq, dqr, ddqr, n, nb,
-            [&](const auto& x, const auto& y, const auto& z, const auto& w, Eigen::MatrixXd& Y) {
-              slotineLiBaseRegressor(s.model, s.data, sl, b.bp, x, y, z, w, Y);
-            });
+        return perSample4(s, q, dq, dqr, ddqr, n, nb,
+                          [&](const auto& x, const auto& y, const auto& z, const auto& w,
+                              Data& data, Eigen::MatrixXd& Y) {
+                            slotineLiBaseRegressor(s.model, data, sl, b.bp, x, y, z, w, Y);
+                          });
       },
       py::arg("base"), py::arg("q"), py::arg("dq"), py::arg("dqr"), py::arg("ddqr"),
       "Base Slotine-Li regressor Y_b (n, nb) or (m, n, nb): Y_b p_b = A ddqr + C dqr + c "
@@ -65,11 +66,11 @@ void bindControl(py::module_& m) {
         const long n = s.model.nq();
         const ParameterLayout layout{rotor, friction};
         SlotineLiData sl(s.model, layout);
-        return perSample4(
-            n, q, dq, dqr, ddqr, n, layout.size(static_cast<int>(n)),
-            [&](const auto& x, const auto& y, const auto& z, const auto& w, Eigen::MatrixXd& Y) {
-              slotineLiRegressor(s.model, s.data, sl, x, y, z, w, layout, Y);
-            });
+        return perSample4(s, q, dq, dqr, ddqr, n, layout.size(static_cast<int>(n)),
+                          [&](const auto& x, const auto& y, const auto& z, const auto& w,
+                              Data& data, Eigen::MatrixXd& Y) {
+                            slotineLiRegressor(s.model, data, sl, x, y, z, w, layout, Y);
+                          });
       },
       py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("dqr"), py::arg("ddqr"),
       py::arg("rotor") = false, py::arg("friction") = false);
@@ -81,10 +82,9 @@ void bindControl(py::module_& m) {
         const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
         SlotineLiData sl(s.model, layout);
         return perSample4(
-            n, q, dq, q, q, n, n,
-            [&](const auto& x, const auto& y, const auto&, const auto&, Eigen::MatrixXd& C) {
-              coriolisMatrix(s.model, s.data, sl, x, y, p, layout, C);
-            });
+            s, q, dq, q, q, n, n,
+            [&](const auto& x, const auto& y, const auto&, const auto&, Data& data,
+                Eigen::MatrixXd& C) { coriolisMatrix(s.model, data, sl, x, y, p, layout, C); });
       },
       py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("params") = py::none());
   m.def(
@@ -101,21 +101,22 @@ void bindControl(py::module_& m) {
         Eigen::VectorXd k1(n), k2(n), k3(n), k4(n), xs(n), vs(n);
         const double h = dt / steps;
         bool ok = true;
+        Data data(s.model);
         {
           py::gil_scoped_release release;
           for (int i = 0; i < steps && ok; ++i) {
-            ok = ok && forwardDynamics(s.model, s.data, x, v, t, p, layout, k1);
+            ok = ok && forwardDynamics(s.model, data, x, v, t, p, layout, k1);
             xs = x + 0.5 * h * v;
             vs = v + 0.5 * h * k1;
-            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k2);
+            ok = ok && forwardDynamics(s.model, data, xs, vs, t, p, layout, k2);
             const Eigen::VectorXd v2 = vs;
             xs = x + 0.5 * h * v2;
             vs = v + 0.5 * h * k2;
-            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k3);
+            ok = ok && forwardDynamics(s.model, data, xs, vs, t, p, layout, k3);
             const Eigen::VectorXd v3 = vs;
             xs = x + h * v3;
             vs = v + h * k3;
-            ok = ok && forwardDynamics(s.model, s.data, xs, vs, t, p, layout, k4);
+            ok = ok && forwardDynamics(s.model, data, xs, vs, t, p, layout, k4);
             x += h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + vs);
             v += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
           }
@@ -161,10 +162,11 @@ void bindControl(py::module_& m) {
           [](PyIk& k, const Eigen::Matrix4d& target, const Eigen::VectorXd& q0) {
             const Eigen::VectorXd start = vectorArg(q0, k.n, "q0");
             Eigen::VectorXd q(k.n);
+            IkSolver solver = k.solver;
             IkResult r;
             {
               py::gil_scoped_release release;
-              r = k.solver.solve(isometry(target), start, q);
+              r = solver.solve(isometry(target), start, q);
             }
             py::dict d;
             d["q"] = q;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -68,9 +69,9 @@ inline void requireFinite(const Array& a, const char* name, const char* entry = 
 }
 
 /// A group of per-sample arguments of width n, checked together: all single samples of shape
-/// (n,) or all batches of one length m >= 0, shape (m, n), every entry finite. The one loop of
-/// every per-sample binding: outputs get a leading axis of length m for a batch (none for a
-/// single sample), and forEach visits the m samples (none for an empty batch).
+/// (n,) or all batches of one length m >= 0, shape (m, n), every entry finite. Outputs get a
+/// leading axis of length m for a batch (none for a single sample), and forEach visits the m
+/// samples (none for an empty batch); perSample below is the loop the bindings use.
 class SampleBatch {
  public:
   SampleBatch(std::initializer_list<std::pair<const Array*, const char*>> args, long n) : n_(n) {
@@ -112,6 +113,45 @@ class SampleBatch {
   std::vector<const Array*> args_;
   std::vector<Eigen::VectorXd> x_;
 };
+
+/// The one per-sample loop of the bindings: K output arrays of per-sample shapes `shapes` (with
+/// the batch's leading axis), and f(x, out) called for each sample with the GIL released, x[j]
+/// the sample of the j-th argument and out[k] the start of that sample's block of output k
+/// (row-major). f must not touch Python objects; the workspaces it uses must belong to the
+/// calling binding (Data, SlotineLiData, ... made in the call), so that threads share none.
+template <size_t K, class F>
+std::array<py::array_t<double>, K> perSample(SampleBatch& batch,
+                                             std::array<std::vector<py::ssize_t>, K> shapes,
+                                             F&& f) {
+  std::array<py::array_t<double>, K> outs;
+  std::array<double*, K> start;
+  std::array<long, K> size;
+  for (size_t k = 0; k < K; ++k) {
+    size[k] = 1;
+    for (py::ssize_t d : shapes[k]) size[k] *= static_cast<long>(d);
+    outs[k] = batch.output(shapes[k]);
+    start[k] = outs[k].mutable_data();
+  }
+  {
+    py::gil_scoped_release release;
+    batch.forEach([&](long i, const auto& x) {
+      std::array<double*, K> out;
+      for (size_t k = 0; k < K; ++k) out[k] = start[k] + i * size[k];
+      f(x, out);
+    });
+  }
+  return outs;
+}
+
+/// The r x c row-major block at `p` (one sample of a matrix output of perSample).
+inline Eigen::Map<RowMajor> rowMajor(double* p, long r, long c) {
+  return Eigen::Map<RowMajor>(p, r, c);
+}
+
+/// The n entries at `p` (one sample of a vector output of perSample).
+inline Eigen::Map<Eigen::VectorXd> vectorAt(double* p, long n) {
+  return Eigen::Map<Eigen::VectorXd>(p, n);
+}
 
 /// A vector argument of exactly n finite entries.
 inline Eigen::VectorXd vectorArg(const Eigen::VectorXd& v, long n, const char* name) {
