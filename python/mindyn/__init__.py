@@ -16,7 +16,7 @@
 from importlib import metadata as _metadata
 
 from . import _args
-from ._core import ModelError, RobotFileNotFoundError
+from ._core import Error, ModelError, RobotFileNotFoundError
 from ._core import from_pinocchio_order as _from_pin
 from ._core import inertial_from_com as _from_com
 from ._core import inertial_from_urdf as _from_urdf
@@ -33,6 +33,7 @@ except _metadata.PackageNotFoundError:  # pragma: no cover - imported from a sou
 
 __all__ = [
     "BaseParameters",
+    "Error",
     "base_parameters",
     "ModelError",
     "Robot",

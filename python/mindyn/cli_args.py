@@ -11,12 +11,13 @@ import re
 from pathlib import Path
 
 from . import bundled_robots
+from ._core import Error
 
 #: Largest seed accepted (the random generators take 32-bit seeds).
 MAX_SEED = 2**32 - 1
 
 
-class UsageError(Exception):
+class UsageError(Error):
     """A command-line argument was rejected; the message names it and what was expected."""
 
 

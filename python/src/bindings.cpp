@@ -87,8 +87,16 @@ void bindCodegen(pybind11::module_& m);
 PYBIND11_MODULE(_core, m) {
   m.doc() = "mindyn C++ core: models, linear-in-parameters dynamics, kinematics";
 
-  py::register_exception<ModelError>(m, "ModelError", PyExc_ValueError);
-  py::register_exception<FileError>(m, "RobotFileNotFoundError", PyExc_FileNotFoundError);
+  // mindyn.Error: the base of every error mindyn raises for its input (the Python ones derive
+  // from it too); each keeps the standard base it had, ValueError or FileNotFoundError.
+  auto error = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
+      "mindyn._core.Error", "Base class of the errors mindyn raises.", nullptr, nullptr));
+  if (!error) throw py::error_already_set();
+  m.attr("Error") = error;
+  py::register_exception<ModelError>(m, "ModelError",
+                                     py::make_tuple(error, py::handle(PyExc_ValueError)));
+  py::register_exception<FileError>(m, "RobotFileNotFoundError",
+                                    py::make_tuple(error, py::handle(PyExc_FileNotFoundError)));
 
   py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model")
       .def_property_readonly("n", [](const PyModel& s) { return s.model.nq(); })
@@ -157,7 +165,7 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "with_gravity",
           [](const PyModel& s, const Eigen::Vector3d& g) {
-            if (!g.allFinite()) throw py::value_error("gravity must be finite");
+            if (!g.allFinite()) throw ModelError("gravity must be finite");
             Model copy = s.model;
             copy.gravity = g;
             return std::make_shared<PyModel>(std::move(copy));
@@ -170,30 +178,30 @@ PYBIND11_MODULE(_core, m) {
           "inertial", [](const PyModel& s) { return Eigen::VectorXd(s.model.inertial); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.inertial.size())
-              throw py::value_error("inertial must have " +
-                                    std::to_string(s.model.inertial.size()) + " entries");
-            if (!v.allFinite()) throw py::value_error("inertial contains NaN or infinity");
+              throw ModelError("inertial must have " + std::to_string(s.model.inertial.size()) +
+                               " entries");
+            if (!v.allFinite()) throw ModelError("inertial contains NaN or infinity");
             s.model.inertial = v;
           })
       .def_property(
           "rotor_inertia", [](const PyModel& s) { return Eigen::VectorXd(s.model.rotor_inertia); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.nq() || !v.allFinite())
-              throw py::value_error("rotor_inertia must be n finite values");
+              throw ModelError("rotor_inertia must be n finite values");
             s.model.rotor_inertia = v;
           })
       .def_property(
           "viscous", [](const PyModel& s) { return Eigen::VectorXd(s.model.viscous); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.nq() || !v.allFinite())
-              throw py::value_error("viscous must be n finite values");
+              throw ModelError("viscous must be n finite values");
             s.model.viscous = v;
           })
       .def_property(
           "coulomb", [](const PyModel& s) { return Eigen::VectorXd(s.model.coulomb); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.nq() || !v.allFinite())
-              throw py::value_error("coulomb must be n finite values");
+              throw ModelError("coulomb must be n finite values");
             s.model.coulomb = v;
           })
       .def(
@@ -246,8 +254,7 @@ PYBIND11_MODULE(_core, m) {
             Data data(s.model);
             return perSample<1>(batch, {{{n}}}, [&](const auto& x, auto out) {
               if (!forwardDynamics(s.model, data, x[0], x[1], x[2], p, layout, vectorAt(out[0], n)))
-                throw py::value_error(
-                    "the mass matrix is not positive definite for these parameters");
+                throw ModelError("the mass matrix is not positive definite for these parameters");
             })[0];
           },
           py::arg("q"), py::arg("dq"), py::arg("tau"), py::arg("params") = py::none())
@@ -377,13 +384,13 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("model", [](const PyBase& b) { return b.model; })
       .def("values",
            [](const PyBase& b, const Eigen::VectorXd& pi) {
-             if (!pi.allFinite()) throw py::value_error("params contains NaN or infinite values");
+             if (!pi.allFinite()) throw ModelError("params contains NaN or infinite values");
              return b.bp.values(pi);
            })
       .def("embed",
            [](const PyBase& b, const Eigen::VectorXd& pb) {
              if (!pb.allFinite())
-               throw py::value_error("base parameter vector contains NaN or infinite values");
+               throw ModelError("base parameter vector contains NaN or infinite values");
              return b.bp.embed(pb);
            })
       .def(
@@ -458,7 +465,7 @@ PYBIND11_MODULE(_core, m) {
         else if (method == "numerical")
           o.method = BaseMethod::Numerical;
         else
-          throw py::value_error("method must be 'projection' or 'numerical', got '" + method + "'");
+          throw ModelError("method must be 'projection' or 'numerical', got '" + method + "'");
         {
           py::gil_scoped_release release;
           out->bp = computeBaseParameters(out->model->model, o);
