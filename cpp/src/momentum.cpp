@@ -1,13 +1,8 @@
 #include "mindyn/momentum.hpp"
 
-#include "spatial.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
-
-using detail::carryToParent;
-using detail::crossMotion;
-using detail::inertiaMap;
-using detail::skew;
 
 void momentumRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                         ParameterLayout layout, MatOut Wp, MatOut Wl) noexcept {

@@ -16,6 +16,7 @@
 #include "mindyn/model.hpp"
 #include "mindyn/momentum.hpp"
 #include "mindyn/projection.hpp"
+#include "mindyn/spatial.hpp"
 #include "mindyn/urdf.hpp"
 #include "py_args.hpp"
 #include "py_types.hpp"
@@ -543,6 +544,16 @@ PYBIND11_MODULE(_core, m) {
       [](double mass, const Eigen::Vector3d& com, const Eigen::Matrix3d& R,
          const Eigen::Matrix3d& I) { return Eigen::VectorXd(inertialFromUrdf(mass, com, R, I)); },
       py::arg("mass"), py::arg("com"), py::arg("rotation"), py::arg("inertia"));
+  m.def(
+      "pose_error",
+      [](const Eigen::Matrix4d& T, const Eigen::Matrix4d& target) {
+        Vector6d e;
+        poseError(isometry(T), isometry(target), e);
+        return Eigen::VectorXd(e);
+      },
+      py::arg("T"), py::arg("target"),
+      "The twist (p_target - p, rotation vector of R_target R^T) taking T onto target (the pose "
+      "error of the inverse kinematics).");
   m.def("to_pinocchio_order", [](const Eigen::VectorXd& v) { return toPinocchioOrder(v); });
   m.def("from_pinocchio_order", [](const Eigen::VectorXd& v) { return fromPinocchioOrder(v); });
   bindControl(m);
