@@ -4,7 +4,8 @@
 // origin in link coordinates; gravity = model.gravity in the base frame. `params` is any vector
 // in the given ParameterLayout, physically meaningful or not (regrouped base-parameter vectors
 // are fed here too). Every function here allocates nothing and throws nothing; sizes are
-// preconditions (checked by the Python binding and by `checkSizes`).
+// preconditions, which a caller checks once at setup with `checkSizes` (the Python binding checks
+// its arguments itself, with messages in the terms of its own arguments).
 #pragma once
 
 #include <Eigen/Core>

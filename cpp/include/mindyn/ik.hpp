@@ -10,7 +10,8 @@
 // returned. The answer is as precise as the arithmetic allows (about 1e-15 m or rad) unless a limit
 // prevents it.
 //
-// After construction nothing allocates or throws: solve() and forward() are real-time safe.
+// After construction nothing allocates or throws: IkSolver::solve() and ChainKinematics::pose()
+// and poseAndJacobian() are real-time safe. An object holds its workspace: one per thread.
 #pragma once
 
 #include <Eigen/Cholesky>
