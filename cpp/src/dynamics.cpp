@@ -51,8 +51,10 @@ void motionPass(const Model& model, Data& data, const VecRef& dq, const VecRef& 
     Vector6d a = motionToChild(data.R[k], data.p[k], ap);
     const Vector6d vj = S * dq[k];
     v += vj;
+    // a += S ddq + v x vj (motion cross product, written out: no temporary)
     a += S * ddq[k];
-    a += crossMotion(v, vj);
+    a.head<3>() += v.head<3>().cross(vj.head<3>());
+    a.tail<3>() += v.head<3>().cross(vj.tail<3>()) + v.tail<3>().cross(vj.head<3>());
     data.v[k] = v;
     data.a[k] = a;
     vp = v;

@@ -77,7 +77,10 @@ template <int Cols>
 inline void carryToParent(const Eigen::Matrix3d& R, const Eigen::Vector3d& p,
                           Eigen::Matrix<double, 6, Cols>& F) noexcept {
   const Eigen::Matrix<double, 3, Cols> fr = R * F.template bottomRows<3>();
-  F.template topRows<3>() = R * F.template topRows<3>() + skew(p) * fr;
+  if constexpr (Cols == 1)
+    F.template topRows<3>() = R * F.template topRows<3>() + p.cross(fr);
+  else
+    F.template topRows<3>() = R * F.template topRows<3>() + skew(p) * fr;
   F.template bottomRows<3>() = fr;
 }
 
