@@ -88,9 +88,7 @@ void forcePass(const Model&, Data& data, const VecRef& dq, const VecRef& ddq, co
     }
     tau[k] = t;
     if (k > 0) {
-      Vector6d carried = data.f[k];
-      carryToParent(data.R[k], data.p[k], carried);
-      data.f[k - 1] += carried;
+      carryToParent<true>(data.R[k], data.p[k], data.f[k], data.f[k - 1]);
     }
   }
 }
@@ -136,7 +134,7 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
     const int c0 = blockStart(layout, j);
     for (int k = j; k >= 0; --k) {
       W.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
-      if (k > 0) carryToParent(data.R[k], data.p[k], F);  // the wrench block to link k-1
+      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);  // the wrench block to link k-1
     }
     if (layout.rotor) W(j, layout.rotorIndex(j)) = ddq[j];
     if (layout.friction) {

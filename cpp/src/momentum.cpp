@@ -25,7 +25,7 @@ void momentumRegressors(const Model& model, Data& data, const VecRef& q, const V
     for (int k = j; k >= 0; --k) {
       Wp.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
       Wl.block<1, 10>(k, c0).noalias() -= crossMotion(data.v[k], data.S[k]).transpose() * F;
-      if (k > 0) carryToParent(data.R[k], data.p[k], F);
+      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);
     }
     if (layout.rotor) Wp(j, layout.rotorIndex(j)) = dq[j];
   }

@@ -78,7 +78,7 @@ void slotineLiRegressor(const Model& model, Data& data, SlotineLiData& sl, const
     const int c0 = j * layout.perLink();
     for (int k = j; k >= 0; --k) {
       Y.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
-      if (k > 0) carryToParent(data.R[k], data.p[k], F);  // the wrench block to link k-1
+      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);  // the wrench block to link k-1
     }
     if (layout.rotor) Y(j, layout.rotorIndex(j)) = ddqr[j];
     if (layout.friction) {
@@ -119,10 +119,7 @@ void torquePass(const Data& data, SlotineLiData& sl, const VecRef& dq, const Vec
         t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
     }
     tau[k] = t;
-    if (k > 0) {
-      carried = f;
-      carryToParent(data.R[k], data.p[k], carried);
-    }
+    if (k > 0) carryToParent(data.R[k], data.p[k], f, carried);
   }
 }
 

@@ -72,16 +72,29 @@ inline Vector6d motionToChild(const Eigen::Matrix3d& R, const Eigen::Vector3d& p
 /// The one wrench carry of the backward recursions: re-expresses force-like spatial vectors
 /// (wrenches or momenta, the columns of F: 6 x 1 or a 6 x 10 regressor block, in the frame of
 /// link k about its origin) in link k-1 about its origin, given the rotation R and the origin p
-/// of link k in link k-1: n' = R n + p x (R f), f' = R f.
-template <int Cols>
+/// of link k in link k-1: n' = R n + p x (R f), f' = R f. The result is written to `out`, or
+/// added to it with Add; `out` may be F itself (carried in place; not with Add).
+template <bool Add = false, int Cols>
 inline void carryToParent(const Eigen::Matrix3d& R, const Eigen::Vector3d& p,
-                          Eigen::Matrix<double, 6, Cols>& F) noexcept {
+                          const Eigen::Matrix<double, 6, Cols>& F,
+                          Eigen::Matrix<double, 6, Cols>& out) noexcept {
   const Eigen::Matrix<double, 3, Cols> fr = R * F.template bottomRows<3>();
-  if constexpr (Cols == 1)
-    F.template topRows<3>() = R * F.template topRows<3>() + p.cross(fr);
+  auto top = out.template topRows<3>();
+  if constexpr (Cols == 1) {
+    if constexpr (Add)
+      top += R * F.template topRows<3>() + p.cross(fr);
+    else
+      top = R * F.template topRows<3>() + p.cross(fr);
+  } else {
+    if constexpr (Add)
+      top += R * F.template topRows<3>() + skew(p) * fr;
+    else
+      top = R * F.template topRows<3>() + skew(p) * fr;
+  }
+  if constexpr (Add)
+    out.template bottomRows<3>() += fr;
   else
-    F.template topRows<3>() = R * F.template topRows<3>() + skew(p) * fr;
-  F.template bottomRows<3>() = fr;
+    out.template bottomRows<3>() = fr;
 }
 
 /// sign(x) with sign(0) = 0 (Coulomb friction at rest).
