@@ -209,3 +209,24 @@ def test_ik_command(capsys):
     assert main(["ik", "puma560", "--xyz", "0.5", "0", "0", "--q0", "1", "2"]) == 2
     err = capsys.readouterr().err
     assert err == "mindyn: error: --q0 needs 6 values, got 2\n"
+
+
+def test_pose_error_is_position_difference_and_scipy_rotation_vector():
+    """pose_error (the C++ map of the IK solver) against SciPy's rotation vector of R_d R^T,
+    including angles within 1e-9 of pi where the axis comes from the symmetric part."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(5)
+    for angle in [1e-9, 0.3, 2.0, np.pi - 1e-3, np.pi - 1e-9]:
+        axis = rng.normal(size=3)
+        axis /= np.linalg.norm(axis)
+        T, Td = np.eye(4), np.eye(4)
+        T[:3, :3] = Rotation.from_rotvec(rng.normal(size=3)).as_matrix()
+        T[:3, 3] = rng.normal(size=3)
+        Td[:3, :3] = Rotation.from_rotvec(angle * axis).as_matrix() @ T[:3, :3]
+        Td[:3, 3] = rng.normal(size=3)
+        e = pose_error(T, Td)
+        assert np.array_equal(e[:3], Td[:3, 3] - T[:3, 3])
+        # rounding of the rotation matrices (1e-16) shows as 1e-8 in the axis within 1e-9 of pi
+        tol = 1e-7 if np.pi - angle < 1e-6 else 1e-12
+        assert np.abs(e[3:] - angle * axis).max() <= tol, angle

@@ -14,12 +14,11 @@
 
 #include "mindyn/projection.hpp"
 #include "mindyn/recursive_base.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Gaussian elimination of the columns of Z in `order` with partial pivoting; returns the rank.
 // With `out`, also the decision and Y. Each column is reduced against the pivots before it:

@@ -10,11 +10,11 @@
 #include <set>
 #include <sstream>
 
+#include "mindyn/spatial.hpp"
+
 namespace mindyn {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 std::string formatNumber(double v) {
   char buf[32];

@@ -3,21 +3,17 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "spatial.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
 
 namespace {
 
-using detail::carryToParent;
-using detail::inertiaMap;
-using detail::sgn;
-using detail::skew;
-
 inline int blockStart(ParameterLayout layout, int k) { return k * layout.perLink(); }
 
-// Link poses relative to the parent and to the base.
-void positionPass(const Model& model, Data& data, const VecRef& q) noexcept {
+}  // namespace
+
+void forwardKinematics(const Model& model, Data& data, const VecRef& q) noexcept {
   for (int k = 0; k < data.n; ++k) {
     const Joint& j = model.joints[k];
     Eigen::Matrix3d Rj;
@@ -41,24 +37,21 @@ void positionPass(const Model& model, Data& data, const VecRef& q) noexcept {
   }
 }
 
-// Spatial velocities and accelerations; needs positionPass.
+namespace {
+
+// Spatial velocities and accelerations; needs forwardKinematics.
 void motionPass(const Model& model, Data& data, const VecRef& dq, const VecRef& ddq,
                 bool with_gravity) noexcept {
   Vector6d vp = Vector6d::Zero();
   Vector6d ap = Vector6d::Zero();
   if (with_gravity) ap.tail<3>() = -model.gravity;
   for (int k = 0; k < data.n; ++k) {
-    const Eigen::Matrix3d& R = data.R[k];
-    const Eigen::Vector3d& p = data.p[k];
     const Vector6d& S = data.S[k];
-    Vector6d v, a;
-    v.head<3>() = R.transpose() * vp.head<3>();
-    v.tail<3>() = R.transpose() * (vp.tail<3>() + vp.head<3>().cross(p));
-    a.head<3>() = R.transpose() * ap.head<3>();
-    a.tail<3>() = R.transpose() * (ap.tail<3>() + ap.head<3>().cross(p));
+    Vector6d v = motionToChild(data.R[k], data.p[k], vp);
+    Vector6d a = motionToChild(data.R[k], data.p[k], ap);
     const Vector6d vj = S * dq[k];
     v += vj;
-    // a += S ddq + v x vj (spatial motion cross product)
+    // a += S ddq + v x vj (motion cross product, written out: no temporary)
     a += S * ddq[k];
     a.head<3>() += v.head<3>().cross(vj.head<3>());
     a.tail<3>() += v.head<3>().cross(vj.tail<3>()) + v.tail<3>().cross(vj.head<3>());
@@ -95,9 +88,7 @@ void forcePass(const Model&, Data& data, const VecRef& dq, const VecRef& ddq, co
     }
     tau[k] = t;
     if (k > 0) {
-      const Eigen::Vector3d fr = data.R[k] * data.f[k].tail<3>();
-      data.f[k - 1].head<3>() += data.R[k] * data.f[k].head<3>() + data.p[k].cross(fr);
-      data.f[k - 1].tail<3>() += fr;
+      carryToParent<true>(data.R[k], data.p[k], data.f[k], data.f[k - 1]);
     }
   }
 }
@@ -106,7 +97,7 @@ void forcePass(const Model&, Data& data, const VecRef& dq, const VecRef& ddq, co
 
 void computeKinematics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                        const VecRef& ddq, bool with_gravity) noexcept {
-  positionPass(model, data, q);
+  forwardKinematics(model, data, q);
   motionPass(model, data, dq, ddq, with_gravity);
 }
 
@@ -143,7 +134,7 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
     const int c0 = blockStart(layout, j);
     for (int k = j; k >= 0; --k) {
       W.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
-      if (k > 0) carryToParent(data.R[k], data.p[k], F);  // the wrench block to link k-1
+      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);  // the wrench block to link k-1
     }
     if (layout.rotor) W(j, layout.rotorIndex(j)) = ddq[j];
     if (layout.friction) {
@@ -195,7 +186,7 @@ double kineticEnergy(const Model& model, Data& data, const VecRef& q, const VecR
 
 double potentialEnergy(const Model& model, Data& data, const VecRef& q, const VecRef& params,
                        ParameterLayout layout) noexcept {
-  positionPass(model, data, q);
+  forwardKinematics(model, data, q);
   double P = 0.0;
   for (int k = 0; k < data.n; ++k) {
     const auto pk = params.segment<10>(blockStart(layout, k));
@@ -206,7 +197,7 @@ double potentialEnergy(const Model& model, Data& data, const VecRef& q, const Ve
 
 void massMatrix(const Model& model, Data& data, const VecRef& q, const VecRef& params,
                 ParameterLayout layout, MatOut M) noexcept {
-  positionPass(model, data, q);
+  forwardKinematics(model, data, q);
   data.unit.setZero();
   for (int j = 0; j < data.n; ++j) {
     data.unit[j] = 1.0;

@@ -5,11 +5,12 @@
 #include <cmath>
 #include <limits>
 
+#include "mindyn/dynamics.hpp"
+#include "mindyn/spatial.hpp"
+
 namespace mindyn {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kTwoPi = 2 * kPi;
 
 // CPU time of the calling thread [s].
 double threadSeconds() noexcept {
@@ -20,63 +21,26 @@ double threadSeconds() noexcept {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-ChainKinematics::ChainKinematics(const Model& model)
-    : n_(model.nq()), tool_(model.tool), z_(model.nq()), o_(model.nq()) {
-  for (const Joint& j : model.joints) {
-    pre_R_.push_back(j.pre.linear());
-    pre_p_.push_back(j.pre.translation());
-    post_R_.push_back(j.post.linear());
-    post_p_.push_back(j.post.translation());
-    axis_.push_back(j.axis);
-    revolute_.push_back(j.type == JointType::Revolute);
-  }
-}
+ChainKinematics::ChainKinematics(const Model& model) : model_(model), data_(model_) {}
 
 void ChainKinematics::pose(const Eigen::Ref<const Eigen::VectorXd>& q,
                            Eigen::Isometry3d& T) noexcept {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (int k = 0; k < n_; ++k) {
-    p += R * pre_p_[k];
-    R = R * pre_R_[k];
-    if (revolute_[k])
-      R = R * Eigen::AngleAxisd(q[k], axis_[k]).toRotationMatrix();
-    else
-      p += R * (axis_[k] * q[k]);
-    p += R * post_p_[k];
-    R = R * post_R_[k];
-  }
-  T.linear() = R * tool_.linear();
-  T.translation() = p + R * tool_.translation();
+  forwardKinematics(model_, data_, q);
+  const int last = model_.nq() - 1;
+  T.linear() = data_.R0[last] * model_.tool.linear();
+  T.translation() = data_.p0[last] + data_.R0[last] * model_.tool.translation();
 }
 
 void ChainKinematics::poseAndJacobian(const Eigen::Ref<const Eigen::VectorXd>& q,
                                       Eigen::Isometry3d& T, Eigen::Ref<Matrix6Xd> J) noexcept {
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d p = Eigen::Vector3d::Zero();
-  for (int k = 0; k < n_; ++k) {
-    p += R * pre_p_[k];
-    R = R * pre_R_[k];
-    z_[k] = R * axis_[k];
-    o_[k] = p;
-    if (revolute_[k])
-      R = R * Eigen::AngleAxisd(q[k], axis_[k]).toRotationMatrix();
-    else
-      p += z_[k] * q[k];
-    p += R * post_p_[k];
-    R = R * post_R_[k];
-  }
-  T.linear() = R * tool_.linear();
-  T.translation() = p + R * tool_.translation();
+  pose(q, T);
+  // Column k: the joint's unit twist S_k (link k, about its origin) in the base frame, its
+  // linear part moved to the tool origin.
   const Eigen::Vector3d pt = T.translation();
-  for (int k = 0; k < n_; ++k) {
-    if (revolute_[k]) {
-      J.col(k).head<3>() = z_[k].cross(pt - o_[k]);
-      J.col(k).tail<3>() = z_[k];
-    } else {
-      J.col(k).head<3>() = z_[k];
-      J.col(k).tail<3>().setZero();
-    }
+  for (int k = 0; k < model_.nq(); ++k) {
+    const Eigen::Vector3d w = data_.R0[k] * data_.S[k].head<3>();
+    J.col(k).head<3>() = data_.R0[k] * data_.S[k].tail<3>() + w.cross(pt - data_.p0[k]);
+    J.col(k).tail<3>() = w;
   }
 }
 
@@ -126,51 +90,6 @@ IkSolver::IkSolver(const Model& model, IkOptions options)
     upper_[k] = hi;
     wraps_[k] = rev;
   }
-}
-
-namespace {
-// Rotation vector of dR (log map), accurate near 0 and pi; returns the angle.
-double rotationLog(const Eigen::Matrix3d& dR, Eigen::Ref<Eigen::Vector3d> out) noexcept {
-  const double c = std::max(-1.0, std::min(1.0, 0.5 * (dR.trace() - 1.0)));
-  const Eigen::Vector3d w(dR(2, 1) - dR(1, 2), dR(0, 2) - dR(2, 0), dR(1, 0) - dR(0, 1));
-  const double s = 0.5 * w.norm();
-  const double angle = std::atan2(s, c);
-  if (s > 1e-6) {
-    out = w * (angle / (2.0 * s));
-  } else if (c > 0.0) {
-    out = 0.5 * w;  // small angle: sin(angle) ~ angle
-  } else {
-    // angle ~ pi: the axis from the symmetric part, dR ~ 2 a a^T - I
-    const Eigen::Matrix3d B = 0.5 * (dR + dR.transpose()) + Eigen::Matrix3d::Identity();
-    int i;
-    B.diagonal().maxCoeff(&i);
-    Eigen::Vector3d a = B.col(i).normalized();
-    if (a.dot(w) < 0) a = -a;
-    out = angle * a;
-  }
-  return angle;
-}
-}  // namespace
-
-double IkSolver::poseError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target,
-                           Eigen::Matrix<double, 6, 1>& e) noexcept {
-  e.head<3>() = target.translation() - T.translation();
-  rotationLog(target.linear() * T.linear().transpose(), e.tail<3>());
-  return e.cwiseAbs().maxCoeff();
-}
-
-double IkSolver::logError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target) noexcept {
-  // M = target^-1 T; log6(M) = (V(w)^-1 p, w) with w = log3(R) of angle t and
-  // V^-1 = I - W / 2 + k W^2, k = (1 - t sin t / (2 (1 - cos t))) / t^2 (1/12 + t^2/720 near 0).
-  const Eigen::Matrix3d R = target.linear().transpose() * T.linear();
-  const Eigen::Vector3d p = target.linear().transpose() * (T.translation() - target.translation());
-  Eigen::Vector3d w;
-  const double t = rotationLog(R, w);
-  const double k = t < 1e-4 ? 1.0 / 12 + t * t / 720
-                            : (1.0 - t * std::sin(t) / (2.0 * (1.0 - std::cos(t)))) / (t * t);
-  const Eigen::Vector3d wp = w.cross(p);
-  const Eigen::Vector3d v = p - 0.5 * wp + k * w.cross(wp);
-  return std::sqrt(v.squaredNorm() + w.squaredNorm());
 }
 
 void IkSolver::bringInside(Eigen::Ref<Eigen::VectorXd> q) const noexcept {

@@ -1,13 +1,8 @@
 #include "mindyn/momentum.hpp"
 
-#include "spatial.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
-
-using detail::carryToParent;
-using detail::crossMotion;
-using detail::inertiaMap;
-using detail::skew;
 
 void momentumRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                         ParameterLayout layout, MatOut Wp, MatOut Wl) noexcept {
@@ -30,7 +25,7 @@ void momentumRegressors(const Model& model, Data& data, const VecRef& q, const V
     for (int k = j; k >= 0; --k) {
       Wp.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
       Wl.block<1, 10>(k, c0).noalias() -= crossMotion(data.v[k], data.S[k]).transpose() * F;
-      if (k > 0) carryToParent(data.R[k], data.p[k], F);
+      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);
     }
     if (layout.rotor) Wp(j, layout.rotorIndex(j)) = dq[j];
   }

@@ -9,13 +9,11 @@
 #include <map>
 #include <sstream>
 
-#include "spatial.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
 
 namespace {
-
-using detail::skew;
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "spatial.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
 
@@ -16,7 +16,6 @@ using Row10 = Eigen::Matrix<double, 1, 10>;
 using Mat10 = Eigen::Matrix<double, 10, 10>;
 // Up to ten rows of ten, on the stack.
 using Rows10 = Eigen::Matrix<double, Eigen::Dynamic, 10, Eigen::RowMajor, 10, 10>;
-using detail::skew;
 
 // The ten parameters as inertia tensor about the frame origin, first moment and mass.
 struct Parts {
@@ -201,7 +200,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
       const Vec6 v = motionToChild(X, Vp.Q.col(i));
       V.add(v, v.norm());
     }
-    for (int i = 0; i < V.dim; ++i) V.add(detail::crossMotion(S, V.Q.col(i)), sn);
+    for (int i = 0; i < V.dim; ++i) V.add(crossMotion(S, V.Q.col(i)), sn);
 
     // O_k: what link k-1 identifies of link k's inertia, at every q_k (closed under the rate).
     const Mat10 A = parameterRate(S);

@@ -1,39 +1,10 @@
 #include "mindyn/slotine_li.hpp"
 
-#include "spatial.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
 
 namespace {
-
-using detail::inertiaMap;
-using detail::sgn;
-using detail::skew;
-
-// Spatial motion cross product v x u.
-inline Vector6d crossMotion(const Vector6d& v, const Vector6d& u) {
-  Vector6d r;
-  r.head<3>() = v.head<3>().cross(u.head<3>());
-  r.tail<3>() = v.head<3>().cross(u.tail<3>()) + v.tail<3>().cross(u.head<3>());
-  return r;
-}
-
-// Spatial force cross product v x* f.
-inline Vector6d crossForce(const Vector6d& v, const Vector6d& f) {
-  Vector6d r;
-  r.head<3>() = v.head<3>().cross(f.head<3>()) + v.tail<3>().cross(f.tail<3>());
-  r.tail<3>() = v.head<3>().cross(f.tail<3>());
-  return r;
-}
-
-// The 6x6 matrix of v x* .
-inline Eigen::Matrix<double, 6, 6> crossForceMatrix(const Vector6d& v) {
-  Eigen::Matrix<double, 6, 6> X = Eigen::Matrix<double, 6, 6>::Zero();
-  X.topLeftCorner<3, 3>() = skew(v.head<3>());
-  X.topRightCorner<3, 3>() = skew(v.tail<3>());
-  X.bottomRightCorner<3, 3>() = skew(v.head<3>());
-  return X;
-}
 
 // I u = K(u) [XX XY XZ YY YZ ZZ MX MY MZ M] for the spatial inertia about the link origin:
 // I (w, l) = (I_o w + h x l, M l - h x w).
@@ -60,15 +31,6 @@ inline Vector6d applyInertia(const Eigen::Ref<const Eigen::VectorXd>& p, int c0,
   return r;
 }
 
-// Motion vector of the parent expressed in link k (X_{k,k-1} u).
-inline Vector6d toChild(const Data& data, int k, const Vector6d& u) {
-  const Eigen::Matrix3d& R = data.R[k];
-  Vector6d r;
-  r.head<3>() = R.transpose() * u.head<3>();
-  r.tail<3>() = R.transpose() * (u.tail<3>() + u.head<3>().cross(data.p[k]));
-  return r;
-}
-
 // Reference velocities and accelerations; needs data.R, data.p, data.v (actual velocities).
 void referencePass(const Model& model, const Data& data, SlotineLiData& sl, const VecRef& dqr,
                    const VecRef& ddqr, bool with_gravity) noexcept {
@@ -77,8 +39,9 @@ void referencePass(const Model& model, const Data& data, SlotineLiData& sl, cons
   for (int k = 0; k < sl.n; ++k) {
     const Vector6d& S = data.S[k];
     const Vector6d sj = S * dqr[k];
-    Vector6d vr = toChild(data, k, vp) + sj;
-    Vector6d ar = toChild(data, k, ap) + S * ddqr[k] + crossMotion(data.v[k], sj);
+    Vector6d vr = motionToChild(data.R[k], data.p[k], vp) + sj;
+    Vector6d ar =
+        motionToChild(data.R[k], data.p[k], ap) + S * ddqr[k] + crossMotion(data.v[k], sj);
     sl.vr[k] = vr;
     sl.ar[k] = ar;
     vp = vr;
@@ -115,12 +78,7 @@ void slotineLiRegressor(const Model& model, Data& data, SlotineLiData& sl, const
     const int c0 = j * layout.perLink();
     for (int k = j; k >= 0; --k) {
       Y.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
-      if (k > 0) {
-        const Eigen::Matrix3d& R = data.R[k];
-        const Eigen::Matrix<double, 3, 10> fr = R * F.bottomRows<3>();
-        F.topRows<3>() = R * F.topRows<3>() + skew(data.p[k]) * fr;
-        F.bottomRows<3>() = fr;
-      }
+      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);  // the wrench block to link k-1
     }
     if (layout.rotor) Y(j, layout.rotorIndex(j)) = ddqr[j];
     if (layout.friction) {
@@ -161,12 +119,7 @@ void torquePass(const Data& data, SlotineLiData& sl, const VecRef& dq, const Vec
         t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
     }
     tau[k] = t;
-    if (k > 0) {
-      const Eigen::Matrix3d& R = data.R[k];
-      const Eigen::Vector3d fr = R * f.tail<3>();
-      carried.head<3>() = R * f.head<3>() + data.p[k].cross(fr);
-      carried.tail<3>() = fr;
-    }
+    if (k > 0) carryToParent(data.R[k], data.p[k], f, carried);
   }
 }
 

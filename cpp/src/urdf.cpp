@@ -14,7 +14,7 @@
 #include <sstream>
 #include <vector>
 
-#include "spatial.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
 namespace {
@@ -417,8 +417,8 @@ Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1
   const Eigen::Vector3d p = parent_T_child.translation();
   const double m = inertial[9];
   const Eigen::Vector3d Rh = R * inertial.segment<3>(6);
-  const Eigen::Matrix3d P = detail::skew(p);
-  const Eigen::Matrix3d H = detail::skew(Rh);
+  const Eigen::Matrix3d P = skew(p);
+  const Eigen::Matrix3d H = skew(Rh);
   const Eigen::Matrix3d I = R * inertiaTensor(inertial) * R.transpose() - P * H - H * P - m * P * P;
   const Eigen::Vector3d h = Rh + m * p;
   Eigen::Matrix<double, 10, 1> out;

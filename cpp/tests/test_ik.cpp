@@ -7,6 +7,7 @@
 
 #include "mindyn/ik.hpp"
 #include "mindyn/kinematics.hpp"
+#include "mindyn/spatial.hpp"
 #include "mindyn/urdf.hpp"
 #include "test_util.hpp"
 
@@ -89,7 +90,7 @@ TEST(Ik, PoseErrorIsKdlsTwistDiffAndFirstOrder) {
     Eigen::Isometry3d A, B;
     chain.pose(random(rng, 6, 3), A);
     chain.pose(random(rng, 6, 3), B);
-    const double m = IkSolver::poseError(A, B, e);
+    const double m = poseError(A, B, e);
     const KDL::Twist t = KDL::diff(toKdl(A), toKdl(B));
     for (int i = 0; i < 6; ++i) EXPECT_NEAR(e[i], t[i], 1e-9);
     EXPECT_DOUBLE_EQ(m, e.cwiseAbs().maxCoeff());
@@ -99,7 +100,7 @@ TEST(Ik, PoseErrorIsKdlsTwistDiffAndFirstOrder) {
     const Eigen::Vector3d axis = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
     Eigen::Isometry3d A = Eigen::Isometry3d::Identity(), B = Eigen::Isometry3d::Identity();
     B.linear() = Eigen::AngleAxisd(angle, axis).toRotationMatrix();
-    IkSolver::poseError(A, B, e);
+    poseError(A, B, e);
     EXPECT_LT((e.tail<3>() - angle * axis).norm(), 1e-6) << angle;
   }
 }

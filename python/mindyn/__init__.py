@@ -14,26 +14,21 @@
   into a robot description; :mod:`mindyn.cli`: the ``mindyn`` command.
 """
 
-from importlib import metadata as _metadata
-
 from . import _args
-from ._core import ModelError, RobotFileNotFoundError
+from ._core import Error, ModelError, RobotFileNotFoundError
 from ._core import from_pinocchio_order as _from_pin
 from ._core import inertial_from_com as _from_com
 from ._core import inertial_from_urdf as _from_urdf
 from ._core import to_pinocchio_order as _to_pin
+from ._version import __version__ as __version__
 from .base import BaseParameters, base_parameters
 from .control import coriolis_matrix, slotine_li_regressor
 from .ik import ik
 from .robot import Robot, bundled_robots, load
 
-try:  # the version is written once, in pyproject.toml
-    __version__ = _metadata.version("mindyn")
-except _metadata.PackageNotFoundError:  # pragma: no cover - imported from a source tree
-    __version__ = "unknown"
-
 __all__ = [
     "BaseParameters",
+    "Error",
     "base_parameters",
     "ModelError",
     "Robot",

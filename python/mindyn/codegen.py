@@ -671,7 +671,7 @@ def plcopen_project(texts: Sequence[str], project: str, comment: str = "") -> by
 
     now = datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0).isoformat()
     root = ET.Element(f"{{{PLCOPEN_NS}}}project")
-    from . import __version__
+    from ._version import __version__
 
     el(
         root,

@@ -44,18 +44,10 @@ TASKS = {"pose": [0, 1, 2, 3, 4, 5], "position": [0, 1, 2], "orientation": [3, 4
 # ---------------------------------------------------------------------------------------------
 # Poses
 # ---------------------------------------------------------------------------------------------
-def _rotation_log(R: np.ndarray) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_matrix(R).as_rotvec()
-
-
 def pose_error(T: np.ndarray, T_desired: np.ndarray) -> np.ndarray:
     """Twist ``(p_d - p, log(R_d R^T))``, shape (6,), taking pose ``T`` onto ``T_desired`` (4x4
     each, base frame)."""
-    T = _pose(T, "T")
-    Td = _pose(T_desired, "T_desired")
-    return np.concatenate([Td[:3, 3] - T[:3, 3], _rotation_log(Td[:3, :3] @ T[:3, :3].T)])
+    return _core.pose_error(_pose(T, "T"), _pose(T_desired, "T_desired"))
 
 
 def pose_from_xyz_rpy(xyz, rpy) -> np.ndarray:
@@ -218,7 +210,7 @@ def line_path(T0, T1, duration: float):
     T0 = _pose(T0, "T0")
     T1 = _pose(T1, "T1")
     dp = T1[:3, 3] - T0[:3, 3]
-    rv = _rotation_log(T1[:3, :3] @ T0[:3, :3].T)
+    rv = _core.pose_error(T0, T1)[3:]
 
     def path(t: float):
         from scipy.spatial.transform import Rotation

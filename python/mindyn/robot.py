@@ -127,6 +127,9 @@ class Robot:
     parameter sets, base dynamics, inverse kinematics) or takes the values when it is made
     (generated code with baked-in values, simulators, controllers' default estimates), so
     an assignment never changes an object made before it.
+
+    Several threads may use one robot at once: every computation makes its own workspace and
+    runs with the GIL released, so batches on different threads run in parallel.
     """
 
     def __init__(self, core: _core.Model):

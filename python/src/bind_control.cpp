@@ -21,31 +21,32 @@ using namespace mindyn::pyargs;
 
 namespace {
 
-// Calls f(q, dq, dqr, ddqr, out) per sample, out an r x c matrix stored row-major per sample.
+// Calls f(q, dq, dqr, ddqr, data, out) per sample with a workspace of this call, out an
+// r x c matrix stored row-major per sample.
 template <class F>
-py::array_t<double> perSample4(long n, const Array& a, const Array& b, const Array& c,
+py::array_t<double> perSample4(const PyModel& s, const Array& a, const Array& b, const Array& c,
                                const Array& d, long rows, long cols, F&& f) {
-  SampleBatch batch({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, n);
-  auto out = batch.output({rows, cols});
+  SampleBatch batch({{&a, "q"}, {&b, "dq"}, {&c, "dqr"}, {&d, "ddqr"}}, s.model.nq());
+  Data data(s.model);
   Eigen::MatrixXd M(rows, cols);
-  batch.forEach([&](long i, const auto& x) {
-    f(x[0], x[1], x[2], x[3], M);
-    Eigen::Map<RowMajor>(out.mutable_data() + i * rows * cols, rows, cols) = M;
-  });
-  return out;
+  return perSample<1>(batch, {{{rows, cols}}}, [&](const auto& x, auto out) {
+    f(x[0], x[1], x[2], x[3], data, M);
+    rowMajor(out[0], rows, cols) = M;
+  })[0];
 }
 
-// Python-side integrator: owns a copy of the model and its workspace.
+// Python-side integrator: owns a copy of the model; each call makes its own workspace, so calls
+// from several threads share nothing.
 struct PyIntegrator {
   PyIntegrator(const PyModel& m, const Eigen::VectorXd& p, ParameterLayout layout, double eps)
-      : model(m.model), data(model), integrator(model, p, layout, eps), n(model.nq()) {}
+      : model(m.model), integrator(model, p, layout, eps), n(model.nq()) {}
   Model model;
-  Data data;
   Integrator integrator;
   int n;
 };
 
-// Python-side IK solver: owns a copy of the model's chain.
+// Python-side IK solver: owns a copy of the model's chain. solve() works on a copy of the solver
+// (its workspace and random generator), so calls from several threads share nothing.
 struct PyIk {
   PyIk(const PyModel& m, const IkOptions& o) : solver(m.model, o), n(m.model.nq()) {}
   IkSolver solver;
@@ -61,11 +62,11 @@ void bindControl(py::module_& m) {
         PyModel& s = *b.model;
         const long n = s.model.nq(), nb = b.bp.eom.size();
         SlotineLiData sl(s.model, b.bp.layout);
-        return perSample4(
-            n, q, dq, dqr, ddqr, n, nb,
-            [&](const auto& x, const auto& y, const auto& z, const auto& w, Eigen::MatrixXd& Y) {
-              slotineLiBaseRegressor(s.model, s.data, sl, b.bp, x, y, z, w, Y);
-            });
+        return perSample4(s, q, dq, dqr, ddqr, n, nb,
+                          [&](const auto& x, const auto& y, const auto& z, const auto& w,
+                              Data& data, Eigen::MatrixXd& Y) {
+                            slotineLiBaseRegressor(s.model, data, sl, b.bp, x, y, z, w, Y);
+                          });
       },
       py::arg("base"), py::arg("q"), py::arg("dq"), py::arg("dqr"), py::arg("ddqr"),
       "Base Slotine-Li regressor Y_b (n, nb) or (m, n, nb): Y_b p_b = A ddqr + C dqr + c "
@@ -77,11 +78,11 @@ void bindControl(py::module_& m) {
         const long n = s.model.nq();
         const ParameterLayout layout{rotor, friction};
         SlotineLiData sl(s.model, layout);
-        return perSample4(
-            n, q, dq, dqr, ddqr, n, layout.size(static_cast<int>(n)),
-            [&](const auto& x, const auto& y, const auto& z, const auto& w, Eigen::MatrixXd& Y) {
-              slotineLiRegressor(s.model, s.data, sl, x, y, z, w, layout, Y);
-            });
+        return perSample4(s, q, dq, dqr, ddqr, n, layout.size(static_cast<int>(n)),
+                          [&](const auto& x, const auto& y, const auto& z, const auto& w,
+                              Data& data, Eigen::MatrixXd& Y) {
+                            slotineLiRegressor(s.model, data, sl, x, y, z, w, layout, Y);
+                          });
       },
       py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("dqr"), py::arg("ddqr"),
       py::arg("rotor") = false, py::arg("friction") = false);
@@ -93,10 +94,9 @@ void bindControl(py::module_& m) {
         const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
         SlotineLiData sl(s.model, layout);
         return perSample4(
-            n, q, dq, q, q, n, n,
-            [&](const auto& x, const auto& y, const auto&, const auto&, Eigen::MatrixXd& C) {
-              coriolisMatrix(s.model, s.data, sl, x, y, p, layout, C);
-            });
+            s, q, dq, q, q, n, n,
+            [&](const auto& x, const auto& y, const auto&, const auto&, Data& data,
+                Eigen::MatrixXd& C) { coriolisMatrix(s.model, data, sl, x, y, p, layout, C); });
       },
       py::arg("model"), py::arg("q"), py::arg("dq"), py::arg("params") = py::none());
   py::class_<PyIntegrator>(m, "Integrator")
@@ -104,7 +104,7 @@ void bindControl(py::module_& m) {
              ParameterLayout layout;
              const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
              if (!(coulomb_smoothing >= 0) || !std::isfinite(coulomb_smoothing))
-               throw py::value_error("coulomb_smoothing must be a finite number >= 0");
+               throw ModelError("coulomb_smoothing must be a finite number >= 0");
              return std::make_unique<PyIntegrator>(s, p, layout, coulomb_smoothing);
            }),
            py::arg("model"), py::arg("params") = py::none(), py::arg("coulomb_smoothing") = 0.0,
@@ -115,14 +115,15 @@ void bindControl(py::module_& m) {
           [](PyIntegrator& g, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
              const Eigen::VectorXd& tau, double dt, int substeps) {
             if (!(dt > 0) || !std::isfinite(dt))
-              throw py::value_error("dt must be a positive number of seconds");
-            if (substeps < 1) throw py::value_error("substeps must be at least 1");
+              throw ModelError("dt must be a positive number of seconds");
+            if (substeps < 1) throw ModelError("substeps must be at least 1");
             Eigen::VectorXd x = vectorArg(q, g.n, "q"), v = vectorArg(dq, g.n, "dq");
             const Eigen::VectorXd t = vectorArg(tau, g.n, "tau");
             bool ok;
             {
               py::gil_scoped_release release;
-              ok = g.integrator.step(g.data, x, v, t, dt, substeps);
+              Data data(g.model);
+              ok = g.integrator.step(data, x, v, t, dt, substeps);
             }
             if (!ok)
               throw py::value_error(
@@ -137,7 +138,8 @@ void bindControl(py::module_& m) {
           [](PyIntegrator& g, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
              const Eigen::VectorXd& tau) {
             Eigen::VectorXd ddq(g.n);
-            if (!g.integrator.acceleration(g.data, vectorArg(q, g.n, "q"), vectorArg(dq, g.n, "dq"),
+            Data data(g.model);
+            if (!g.integrator.acceleration(data, vectorArg(q, g.n, "q"), vectorArg(dq, g.n, "dq"),
                                            vectorArg(tau, g.n, "tau"), ddq))
               throw py::value_error(
                   "the mass matrix is not positive definite for these parameters");
@@ -174,10 +176,11 @@ void bindControl(py::module_& m) {
           [](PyIk& k, const Eigen::Matrix4d& target, const Eigen::VectorXd& q0) {
             const Eigen::VectorXd start = vectorArg(q0, k.n, "q0");
             Eigen::VectorXd q(k.n);
+            IkSolver solver = k.solver;
             IkResult r;
             {
               py::gil_scoped_release release;
-              r = k.solver.solve(isometry(target), start, q);
+              r = solver.solve(isometry(target), start, q);
             }
             py::dict d;
             d["q"] = q;

@@ -16,6 +16,7 @@
 #include "mindyn/model.hpp"
 #include "mindyn/momentum.hpp"
 #include "mindyn/projection.hpp"
+#include "mindyn/spatial.hpp"
 #include "mindyn/urdf.hpp"
 #include "py_args.hpp"
 #include "py_types.hpp"
@@ -34,20 +35,6 @@ ParameterLayout layoutOf(const py::object& rotor, const py::object& friction, bo
   l.rotor = !rotor.is_none() && rotor.cast<bool>();
   l.friction = !friction.is_none() && friction.cast<bool>();
   return l;
-}
-
-template <class F>
-py::array_t<double> perSampleVector(PyModel& self, const Array& a, const Array& b, const Array& c,
-                                    const char* na, const char* nb, const char* nc, F&& f) {
-  const long n = self.model.nq();
-  SampleBatch s({{&a, na}, {&b, nb}, {&c, nc}}, n);
-  auto out = s.output({n});
-  Eigen::VectorXd ti(n);
-  s.forEach([&](long i, const auto& x) {
-    f(x[0], x[1], x[2], ti);
-    Eigen::Map<Eigen::VectorXd>(out.mutable_data() + i * n, n) = ti;
-  });
-  return out;
 }
 
 Eigen::Matrix4d toMatrix(const Eigen::Isometry3d& T) { return T.matrix(); }
@@ -101,8 +88,16 @@ void bindCodegen(pybind11::module_& m);
 PYBIND11_MODULE(_core, m) {
   m.doc() = "mindyn C++ core: models, linear-in-parameters dynamics, kinematics";
 
-  py::register_exception<ModelError>(m, "ModelError", PyExc_ValueError);
-  py::register_exception<FileError>(m, "RobotFileNotFoundError", PyExc_FileNotFoundError);
+  // mindyn.Error: the base of every error mindyn raises for its input (the Python ones derive
+  // from it too); each keeps the standard base it had, ValueError or FileNotFoundError.
+  auto error = py::reinterpret_steal<py::object>(PyErr_NewExceptionWithDoc(
+      "mindyn._core.Error", "Base class of the errors mindyn raises.", nullptr, nullptr));
+  if (!error) throw py::error_already_set();
+  m.attr("Error") = error;
+  py::register_exception<ModelError>(m, "ModelError",
+                                     py::make_tuple(error, py::handle(PyExc_ValueError)));
+  py::register_exception<FileError>(m, "RobotFileNotFoundError",
+                                    py::make_tuple(error, py::handle(PyExc_FileNotFoundError)));
 
   py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model")
       .def_property_readonly("n", [](const PyModel& s) { return s.model.nq(); })
@@ -171,7 +166,7 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "with_gravity",
           [](const PyModel& s, const Eigen::Vector3d& g) {
-            if (!g.allFinite()) throw py::value_error("gravity must be finite");
+            if (!g.allFinite()) throw ModelError("gravity must be finite");
             Model copy = s.model;
             copy.gravity = g;
             copy.validate();  // the bound on every number holds for gravity too
@@ -180,42 +175,35 @@ PYBIND11_MODULE(_core, m) {
           py::arg("gravity"),
           "A new model, the same but for its gravity vector (base frame, m/s^2); this one is "
           "unchanged.")
-      .def_property(
-          "tool", [](const PyModel& s) { return toMatrix(s.model.tool); },
-          [](PyModel& s, const Eigen::Matrix4d& T) {
-            Model m = s.model;
-            m.tool = isometry(T);
-            m.validate();
-            s.model.tool = m.tool;
-          })
+      .def_property_readonly("tool", [](const PyModel& s) { return toMatrix(s.model.tool); })
       .def_property(
           "inertial", [](const PyModel& s) { return Eigen::VectorXd(s.model.inertial); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.inertial.size())
-              throw py::value_error("inertial must have " +
-                                    std::to_string(s.model.inertial.size()) + " entries");
-            if (!v.allFinite()) throw py::value_error("inertial contains NaN or infinity");
+              throw ModelError("inertial must have " + std::to_string(s.model.inertial.size()) +
+                               " entries");
+            if (!v.allFinite()) throw ModelError("inertial contains NaN or infinity");
             s.model.inertial = v;
           })
       .def_property(
           "rotor_inertia", [](const PyModel& s) { return Eigen::VectorXd(s.model.rotor_inertia); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.nq() || !v.allFinite())
-              throw py::value_error("rotor_inertia must be n finite values");
+              throw ModelError("rotor_inertia must be n finite values");
             s.model.rotor_inertia = v;
           })
       .def_property(
           "viscous", [](const PyModel& s) { return Eigen::VectorXd(s.model.viscous); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.nq() || !v.allFinite())
-              throw py::value_error("viscous must be n finite values");
+              throw ModelError("viscous must be n finite values");
             s.model.viscous = v;
           })
       .def_property(
           "coulomb", [](const PyModel& s) { return Eigen::VectorXd(s.model.coulomb); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.nq() || !v.allFinite())
-              throw py::value_error("coulomb must be n finite values");
+              throw ModelError("coulomb must be n finite values");
             s.model.coulomb = v;
           })
       .def(
@@ -236,11 +224,12 @@ PYBIND11_MODULE(_core, m) {
              const py::object& params) {
             ParameterLayout layout;
             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-            return perSampleVector(
-                s, q, dq, ddq, "q", "dq", "ddq",
-                [&](const auto& a, const auto& b, const auto& c, Eigen::VectorXd& t) {
-                  inverseDynamics(s.model, s.data, a, b, c, p, layout, t);
-                });
+            const long n = s.model.nq();
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
+            Data data(s.model);
+            return perSample<1>(batch, {{{n}}}, [&](const auto& x, auto out) {
+              inverseDynamics(s.model, data, x[0], x[1], x[2], p, layout, vectorAt(out[0], n));
+            })[0];
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("params") = py::none())
       .def(
@@ -248,11 +237,12 @@ PYBIND11_MODULE(_core, m) {
           [](PyModel& s, const Array& q, const py::object& params) {
             ParameterLayout layout;
             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-            return perSampleVector(
-                s, q, q, q, "q", "q", "q",
-                [&](const auto& a, const auto&, const auto&, Eigen::VectorXd& t) {
-                  gravityTorque(s.model, s.data, a, p, layout, t);
-                });
+            const long n = s.model.nq();
+            SampleBatch batch({{&q, "q"}}, n);
+            Data data(s.model);
+            return perSample<1>(batch, {{{n}}}, [&](const auto& x, auto out) {
+              gravityTorque(s.model, data, x[0], p, layout, vectorAt(out[0], n));
+            })[0];
           },
           py::arg("q"), py::arg("params") = py::none())
       .def(
@@ -261,13 +251,13 @@ PYBIND11_MODULE(_core, m) {
              const py::object& params) {
             ParameterLayout layout;
             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-            return perSampleVector(
-                s, q, dq, tau, "q", "dq", "tau",
-                [&](const auto& a, const auto& b, const auto& c, Eigen::VectorXd& t) {
-                  if (!forwardDynamics(s.model, s.data, a, b, c, p, layout, t))
-                    throw py::value_error(
-                        "the mass matrix is not positive definite for these parameters");
-                });
+            const long n = s.model.nq();
+            SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&tau, "tau"}}, n);
+            Data data(s.model);
+            return perSample<1>(batch, {{{n}}}, [&](const auto& x, auto out) {
+              if (!forwardDynamics(s.model, data, x[0], x[1], x[2], p, layout, vectorAt(out[0], n)))
+                throw ModelError("the mass matrix is not positive definite for these parameters");
+            })[0];
           },
           py::arg("q"), py::arg("dq"), py::arg("tau"), py::arg("params") = py::none())
       .def(
@@ -278,13 +268,12 @@ PYBIND11_MODULE(_core, m) {
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const ParameterLayout layout{rotor, friction};
             const long P = layout.size(static_cast<int>(n));
-            auto out = batch.output({n, P});
+            Data data(s.model);
             Eigen::MatrixXd W(n, P);
-            batch.forEach([&](long i, const auto& x) {
-              regressor(s.model, s.data, x[0], x[1], x[2], layout, W);
-              Eigen::Map<RowMajor>(out.mutable_data() + i * n * P, n, P) = W;
-            });
-            return out;
+            return perSample<1>(batch, {{{n, P}}}, [&](const auto& x, auto out) {
+              regressor(s.model, data, x[0], x[1], x[2], layout, W);
+              rowMajor(out[0], n, P) = W;
+            })[0];
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("rotor") = false,
           py::arg("friction") = false)
@@ -295,12 +284,10 @@ PYBIND11_MODULE(_core, m) {
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             const ParameterLayout layout{rotor, friction};
             const long P = layout.size(static_cast<int>(n));
-            auto wk = batch.output({P}), wp = batch.output({P});
-            Eigen::VectorXd k(P), p(P);
-            batch.forEach([&](long i, const auto& x) {
-              energyRegressors(s.model, s.data, x[0], x[1], layout, k, p);
-              std::copy(k.data(), k.data() + P, wk.mutable_data() + i * P);
-              std::copy(p.data(), p.data() + P, wp.mutable_data() + i * P);
+            Data data(s.model);
+            auto [wk, wp] = perSample<2>(batch, {{{P}, {P}}}, [&](const auto& x, auto out) {
+              energyRegressors(s.model, data, x[0], x[1], layout, vectorAt(out[0], P),
+                               vectorAt(out[1], P));
             });
             return py::make_tuple(wk, wp);
           },
@@ -312,12 +299,12 @@ PYBIND11_MODULE(_core, m) {
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             const ParameterLayout layout{rotor, friction};
             const long P = layout.size(static_cast<int>(n));
-            auto wp = batch.output({n, P}), wl = batch.output({n, P});
+            Data data(s.model);
             Eigen::MatrixXd Wp(n, P), Wl(n, P);
-            batch.forEach([&](long i, const auto& x) {
-              momentumRegressors(s.model, s.data, x[0], x[1], layout, Wp, Wl);
-              Eigen::Map<RowMajor>(wp.mutable_data() + i * n * P, n, P) = Wp;
-              Eigen::Map<RowMajor>(wl.mutable_data() + i * n * P, n, P) = Wl;
+            auto [wp, wl] = perSample<2>(batch, {{{n, P}, {n, P}}}, [&](const auto& x, auto out) {
+              momentumRegressors(s.model, data, x[0], x[1], layout, Wp, Wl);
+              rowMajor(out[0], n, P) = Wp;
+              rowMajor(out[1], n, P) = Wl;
             });
             return py::make_tuple(wp, wl);
           },
@@ -329,12 +316,12 @@ PYBIND11_MODULE(_core, m) {
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             ParameterLayout layout;
             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-            py::array_t<double> K(batch.count()), P(batch.count());
-            batch.forEach([&](long i, const auto& x) {
-              K.mutable_at(i) = kineticEnergy(s.model, s.data, x[0], x[1], p, layout);
-              P.mutable_at(i) = potentialEnergy(s.model, s.data, x[0], p, layout);
+            Data data(s.model);
+            auto [K, P] = perSample<2>(batch, {{{}, {}}}, [&](const auto& x, auto out) {
+              *out[0] = kineticEnergy(s.model, data, x[0], x[1], p, layout);
+              *out[1] = potentialEnergy(s.model, data, x[0], p, layout);
             });
-            if (batch.single()) return py::object(py::make_tuple(K.at(0), P.at(0)));
+            if (batch.single()) return py::object(py::make_tuple(*K.data(), *P.data()));
             return py::object(py::make_tuple(K, P));
           },
           py::arg("q"), py::arg("dq"), py::arg("params") = py::none())
@@ -345,13 +332,12 @@ PYBIND11_MODULE(_core, m) {
             SampleBatch batch({{&q, "q"}}, n);
             ParameterLayout layout;
             const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-            auto out = batch.output({n, n});
+            Data data(s.model);
             Eigen::MatrixXd M(n, n);
-            batch.forEach([&](long i, const auto& x) {
-              massMatrix(s.model, s.data, x[0], p, layout, M);
-              Eigen::Map<RowMajor>(out.mutable_data() + i * n * n, n, n) = M;
-            });
-            return out;
+            return perSample<1>(batch, {{{n, n}}}, [&](const auto& x, auto out) {
+              massMatrix(s.model, data, x[0], p, layout, M);
+              rowMajor(out[0], n, n) = M;
+            })[0];
           },
           py::arg("q"), py::arg("params") = py::none());
 
@@ -406,13 +392,13 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("model", [](const PyBase& b) { return b.model; })
       .def("values",
            [](const PyBase& b, const Eigen::VectorXd& pi) {
-             if (!pi.allFinite()) throw py::value_error("params contains NaN or infinite values");
+             if (!pi.allFinite()) throw ModelError("params contains NaN or infinite values");
              return b.bp.values(pi);
            })
       .def("embed",
            [](const PyBase& b, const Eigen::VectorXd& pb) {
              if (!pb.allFinite())
-               throw py::value_error("base parameter vector contains NaN or infinite values");
+               throw ModelError("base parameter vector contains NaN or infinite values");
              return b.bp.embed(pb);
            })
       .def(
@@ -422,13 +408,12 @@ PYBIND11_MODULE(_core, m) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const long nb = b.bp.eom.size();
-            auto out = batch.output({n, nb});
-            Eigen::MatrixXd Wb(n, nb);
-            batch.forEach([&](long i, const auto& x) {
-              baseRegressor(s.model, s.data, b.bp, x[0], x[1], x[2], b.W, Wb);
-              Eigen::Map<RowMajor>(out.mutable_data() + i * n * nb, n, nb) = Wb;
-            });
-            return out;
+            Data data(s.model);
+            Eigen::MatrixXd W(n, b.bp.layout.size(static_cast<int>(n))), Wb(n, nb);
+            return perSample<1>(batch, {{{n, nb}}}, [&](const auto& x, auto out) {
+              baseRegressor(s.model, data, b.bp, x[0], x[1], x[2], W, Wb);
+              rowMajor(out[0], n, nb) = Wb;
+            })[0];
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"))
       .def(
@@ -438,13 +423,12 @@ PYBIND11_MODULE(_core, m) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             const long nb = b.bp.eom.size();
-            auto out = batch.output({nb});
-            Eigen::VectorXd wb(nb);
-            batch.forEach([&](long i, const auto& x) {
-              baseEnergyRegressor(s.model, s.data, b.bp, x[0], x[1], b.wK, b.wP, wb);
-              std::copy(wb.data(), wb.data() + nb, out.mutable_data() + i * nb);
-            });
-            return out;
+            const long P = b.bp.layout.size(static_cast<int>(n));
+            Data data(s.model);
+            Eigen::VectorXd wK(P), wP(P);
+            return perSample<1>(batch, {{{nb}}}, [&](const auto& x, auto out) {
+              baseEnergyRegressor(s.model, data, b.bp, x[0], x[1], wK, wP, vectorAt(out[0], nb));
+            })[0];
           },
           py::arg("q"), py::arg("dq"))
       .def(
@@ -453,13 +437,13 @@ PYBIND11_MODULE(_core, m) {
             PyModel& s = *b.model;
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
-            const long nb = b.bp.eom.size(), P = b.W.cols();
-            auto wp = batch.output({n, nb}), wl = batch.output({n, nb});
-            Eigen::MatrixXd Wl(n, P), Wpb(n, nb), Wlb(n, nb);
-            batch.forEach([&](long i, const auto& x) {
-              baseMomentumRegressors(s.model, s.data, b.bp, x[0], x[1], b.W, Wl, Wpb, Wlb);
-              Eigen::Map<RowMajor>(wp.mutable_data() + i * n * nb, n, nb) = Wpb;
-              Eigen::Map<RowMajor>(wl.mutable_data() + i * n * nb, n, nb) = Wlb;
+            const long nb = b.bp.eom.size(), P = b.bp.layout.size(static_cast<int>(n));
+            Data data(s.model);
+            Eigen::MatrixXd W(n, P), Wl(n, P), Wpb(n, nb), Wlb(n, nb);
+            auto [wp, wl] = perSample<2>(batch, {{{n, nb}, {n, nb}}}, [&](const auto& x, auto out) {
+              baseMomentumRegressors(s.model, data, b.bp, x[0], x[1], W, Wl, Wpb, Wlb);
+              rowMajor(out[0], n, nb) = Wpb;
+              rowMajor(out[1], n, nb) = Wlb;
             });
             return py::make_tuple(wp, wl);
           },
@@ -491,16 +475,12 @@ PYBIND11_MODULE(_core, m) {
         else if (method == "recursive")
           o.method = BaseMethod::Recursive;
         else
-          throw py::value_error("method must be 'projection', 'recursive' or 'numerical', got '" +
-                                method + "'");
+          throw ModelError("method must be 'projection', 'recursive' or 'numerical', got '" +
+                           method + "'");
         {
           py::gil_scoped_release release;
           out->bp = computeBaseParameters(out->model->model, o);
         }
-        const int n = out->model->model.nq();
-        out->W.resize(n, o.layout.size(n));
-        out->wK.resize(o.layout.size(n));
-        out->wP.resize(o.layout.size(n));
         return out;
       },
       py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
@@ -574,6 +554,16 @@ PYBIND11_MODULE(_core, m) {
       [](double mass, const Eigen::Vector3d& com, const Eigen::Matrix3d& R,
          const Eigen::Matrix3d& I) { return Eigen::VectorXd(inertialFromUrdf(mass, com, R, I)); },
       py::arg("mass"), py::arg("com"), py::arg("rotation"), py::arg("inertia"));
+  m.def(
+      "pose_error",
+      [](const Eigen::Matrix4d& T, const Eigen::Matrix4d& target) {
+        Vector6d e;
+        poseError(isometry(T), isometry(target), e);
+        return Eigen::VectorXd(e);
+      },
+      py::arg("T"), py::arg("target"),
+      "The twist (p_target - p, rotation vector of R_target R^T) taking T onto target (the pose "
+      "error of the inverse kinematics).");
   m.def("to_pinocchio_order", [](const Eigen::VectorXd& v) { return toPinocchioOrder(v); });
   m.def("from_pinocchio_order", [](const Eigen::VectorXd& v) { return fromPinocchioOrder(v); });
   bindControl(m);

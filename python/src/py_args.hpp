@@ -1,6 +1,6 @@
 // Argument checks shared by the binding translation units: per-sample arrays of shape (n,) or
 // (m, n), finiteness with the position of the first bad value, classical parameter vectors and
-// 4x4 poses. Every failure is a ValueError naming the argument.
+// 4x4 poses. Every failure is a ModelError (a ValueError in Python) naming the argument.
 #pragma once
 
 #include <pybind11/numpy.h>
@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -36,18 +37,18 @@ inline long samples(const Array& a, long n, const char* name) {
   const std::string want = std::to_string(n);
   if (a.ndim() == 1) {
     if (a.shape(0) != n)
-      throw py::value_error(std::string(name) + " has shape " + shapeOf(a) + "; expected (" + want +
-                            ",) or (m, " + want + ")");
+      throw ModelError(std::string(name) + " has shape " + shapeOf(a) + "; expected (" + want +
+                       ",) or (m, " + want + ")");
     return -1;
   }
   if (a.ndim() == 2) {
     if (a.shape(1) != n)
-      throw py::value_error(std::string(name) + " has shape " + shapeOf(a) + "; expected (m, " +
-                            want + ")");
+      throw ModelError(std::string(name) + " has shape " + shapeOf(a) + "; expected (m, " + want +
+                       ")");
     return a.shape(0);
   }
-  throw py::value_error(std::string(name) + " must be 1-D (n,) or 2-D (m, n), got " +
-                        std::to_string(a.ndim()) + "-D");
+  throw ModelError(std::string(name) + " must be 1-D (n,) or 2-D (m, n), got " +
+                   std::to_string(a.ndim()) + "-D");
 }
 
 /// Rejects NaN and infinite entries; the message gives the sample and the joint (or `entry`).
@@ -63,14 +64,14 @@ inline void requireFinite(const Array& a, const char* name, const char* entry = 
            std::to_string(i % a.shape(1) + 1);
     else
       s += std::string(" at ") + entry + " " + std::to_string(i + 1);
-    throw py::value_error(s);
+    throw ModelError(s);
   }
 }
 
 /// A group of per-sample arguments of width n, checked together: all single samples of shape
-/// (n,) or all batches of one length m >= 0, shape (m, n), every entry finite. The one loop of
-/// every per-sample binding: outputs get a leading axis of length m for a batch (none for a
-/// single sample), and forEach visits the m samples (none for an empty batch).
+/// (n,) or all batches of one length m >= 0, shape (m, n), every entry finite. Outputs get a
+/// leading axis of length m for a batch (none for a single sample), and forEach visits the m
+/// samples (none for an empty batch); perSample below is the loop the bindings use.
 class SampleBatch {
  public:
   SampleBatch(std::initializer_list<std::pair<const Array*, const char*>> args, long n) : n_(n) {
@@ -81,8 +82,8 @@ class SampleBatch {
       if (m == -2)
         m = s;
       else if (s != m)
-        throw py::value_error(std::string(name) +
-                              ": all inputs must be single samples or batches of equal length");
+        throw ModelError(std::string(name) +
+                         ": all inputs must be single samples or batches of equal length");
       args_.push_back(a);
     }
     m_ = m;
@@ -113,24 +114,63 @@ class SampleBatch {
   std::vector<Eigen::VectorXd> x_;
 };
 
+/// The one per-sample loop of the bindings: K output arrays of per-sample shapes `shapes` (with
+/// the batch's leading axis), and f(x, out) called for each sample with the GIL released, x[j]
+/// the sample of the j-th argument and out[k] the start of that sample's block of output k
+/// (row-major). f must not touch Python objects; the workspaces it uses must belong to the
+/// calling binding (Data, SlotineLiData, ... made in the call), so that threads share none.
+template <size_t K, class F>
+std::array<py::array_t<double>, K> perSample(SampleBatch& batch,
+                                             std::array<std::vector<py::ssize_t>, K> shapes,
+                                             F&& f) {
+  std::array<py::array_t<double>, K> outs;
+  std::array<double*, K> start;
+  std::array<long, K> size;
+  for (size_t k = 0; k < K; ++k) {
+    size[k] = 1;
+    for (py::ssize_t d : shapes[k]) size[k] *= static_cast<long>(d);
+    outs[k] = batch.output(shapes[k]);
+    start[k] = outs[k].mutable_data();
+  }
+  {
+    py::gil_scoped_release release;
+    batch.forEach([&](long i, const auto& x) {
+      std::array<double*, K> out;
+      for (size_t k = 0; k < K; ++k) out[k] = start[k] + i * size[k];
+      f(x, out);
+    });
+  }
+  return outs;
+}
+
+/// The r x c row-major block at `p` (one sample of a matrix output of perSample).
+inline Eigen::Map<RowMajor> rowMajor(double* p, long r, long c) {
+  return Eigen::Map<RowMajor>(p, r, c);
+}
+
+/// The n entries at `p` (one sample of a vector output of perSample).
+inline Eigen::Map<Eigen::VectorXd> vectorAt(double* p, long n) {
+  return Eigen::Map<Eigen::VectorXd>(p, n);
+}
+
 /// A vector argument of exactly n finite entries.
 inline Eigen::VectorXd vectorArg(const Eigen::VectorXd& v, long n, const char* name) {
   if (v.size() != n)
-    throw py::value_error(std::string(name) + " has " + std::to_string(v.size()) +
-                          " entries; expected " + std::to_string(n));
+    throw ModelError(std::string(name) + " has " + std::to_string(v.size()) +
+                     " entries; expected " + std::to_string(n));
   for (long i = 0; i < n; ++i)
     if (!std::isfinite(v[i]))
-      throw py::value_error(std::string(name) + " contains " +
-                            (std::isnan(v[i]) ? "NaN" : "an infinite value") + " at joint " +
-                            std::to_string(i + 1));
+      throw ModelError(std::string(name) + " contains " +
+                       (std::isnan(v[i]) ? "NaN" : "an infinite value") + " at joint " +
+                       std::to_string(i + 1));
   return v;
 }
 
 /// A 1-D parameter vector of exactly `size` finite entries (p of a base set, for instance).
 inline Eigen::Map<const Eigen::VectorXd> parameterArg(const Array& a, long size, const char* name) {
   if (a.ndim() != 1 || a.shape(0) != size)
-    throw py::value_error(std::string(name) + " has shape " + shapeOf(a) + "; expected (" +
-                          std::to_string(size) + ",)");
+    throw ModelError(std::string(name) + " has shape " + shapeOf(a) + "; expected (" +
+                     std::to_string(size) + ",)");
   requireFinite(a, name, "entry");
   return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
 }
@@ -143,18 +183,14 @@ inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object
   const int n = self.model.nq();
   if (params.is_none()) return self.model.parameters(layout);
   Array a = params.cast<Array>();
-  if (a.ndim() != 1) throw py::value_error("params must be 1-D");
+  if (a.ndim() != 1) throw ModelError("params must be 1-D");
   const long size = a.shape(0);
   if (layout_given) {
     if (size != layout.size(n))
-      throw py::value_error("params has " + std::to_string(size) +
-                            " entries; this layout expects " + std::to_string(layout.size(n)));
+      throw ModelError("params has " + std::to_string(size) + " entries; this layout expects " +
+                       std::to_string(layout.size(n)));
   } else {
-    try {
-      layout = ParameterLayout::fromSize(n, size);
-    } catch (const ModelError& e) {
-      throw py::value_error(e.what());
-    }
+    layout = ParameterLayout::fromSize(n, size);
   }
   requireFinite(a, "params", "entry");
   return Eigen::Map<const Eigen::VectorXd>(a.data(), size);

@@ -13,11 +13,13 @@
 
 namespace mindyn {
 
-// A model with its own workspace.
+// A model. It holds no workspace: every binding call makes its own Data (and whatever other
+// workspace it needs), so that calls from several threads, which run with the GIL released, never
+// share one. The geometry and gravity are never changed after construction (the parameter
+// setters change only the inertial, rotor and friction values, read with the GIL held).
 struct PyModel {
-  explicit PyModel(Model m) : model(std::move(m)), data(model) {}
+  explicit PyModel(Model m) : model(std::move(m)) {}
   Model model;
-  Data data;
 };
 
 // Base parameters with the model they were computed for (possibly a snapped copy).
@@ -25,8 +27,6 @@ struct PyBase {
   std::shared_ptr<PyModel> model;
   BaseParameters bp;
   std::vector<std::string> snapped;
-  Eigen::MatrixXd W;  // work
-  Eigen::VectorXd wK, wP;
 };
 
 }  // namespace mindyn

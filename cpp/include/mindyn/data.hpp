@@ -1,5 +1,6 @@
-// Per-call workspace for the dynamics algorithms. Built once from a Model; after that the
-// algorithms write into it and allocate nothing.
+// Per-call workspace of the dynamics algorithms, the Slotine-Li functions and the IK chain. Built
+// once from a Model; after that the algorithms write into it and allocate nothing. One thread
+// at a time: every thread that computes uses a Data of its own.
 #pragma once
 
 #include <Eigen/Cholesky>

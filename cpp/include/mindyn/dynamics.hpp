@@ -4,7 +4,8 @@
 // origin in link coordinates; gravity = model.gravity in the base frame. `params` is any vector
 // in the given ParameterLayout, physically meaningful or not (regrouped base-parameter vectors
 // are fed here too). Every function here allocates nothing and throws nothing; sizes are
-// preconditions (checked by the Python binding and by `checkSizes`).
+// preconditions, which a caller checks once at setup with `checkSizes` (the Python binding checks
+// its arguments itself, with messages in the terms of its own arguments).
 #pragma once
 
 #include <Eigen/Core>
@@ -18,7 +19,12 @@ using VecRef = Eigen::Ref<const Eigen::VectorXd>;
 using VecOut = Eigen::Ref<Eigen::VectorXd>;
 using MatOut = Eigen::Ref<Eigen::MatrixXd>;
 
-/// Pose, velocity and acceleration of every link (data.R, p, R0, p0, v, a). With
+/// The kinematic pass of every algorithm here, of the Slotine-Li functions and of the inverse
+/// kinematics: the pose of every link relative to its parent (data.R, p) and to the base
+/// (data.R0, p0).
+void forwardKinematics(const Model& model, Data& data, const VecRef& q) noexcept;
+
+/// forwardKinematics, then the velocity and acceleration of every link (data.v, a). With
 /// `with_gravity`, the base acceleration is -gravity so that inertial forces include weight.
 void computeKinematics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                        const VecRef& ddq, bool with_gravity = true) noexcept;

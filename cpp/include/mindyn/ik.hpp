@@ -1,17 +1,17 @@
 // Position inverse kinematics by damped least squares (Levenberg-Marquardt) on the tool pose,
-// inside the joint limits, with seeded random restarts; and the forward kinematics and geometric
-// Jacobian it runs on (the model's own chain, no KDL).
+// inside the joint limits, with seeded random restarts; and the tool pose and geometric Jacobian
+// it runs on, from the kinematic pass of the dynamics (forwardKinematics, dynamics.hpp; no KDL).
 //
 // Steps: damped least squares on the twist that moves the current tool frame onto the target in
-// the base frame, e = (p_target - p, rotation vector of R_target R^T). Convergence test: the norm
-// of the SE(3) logarithm of T_target^-1 T (metres and radians, the measure of Pinocchio's
-// log6(oMdes.actInv(oMq))) within the tolerance, the joints inside their limits. A converged
-// point is then refined by Newton steps (joints a step would take past a limit held there), at
-// most kIkRefineSteps, until the norm is at rounding level; the best point is returned. The
-// answer is as precise as the arithmetic allows (about 1e-15 m or rad) unless a limit prevents
-// it.
+// the base frame, e = poseError(T, target) (spatial.hpp). Convergence test: logError(T, target),
+// the norm of the SE(3) logarithm of T_target^-1 T, within the tolerance, the joints inside their
+// limits. A converged point is then refined by Newton steps (joints a step would take past a limit
+// held there), at most kIkRefineSteps, until the norm is at rounding level; the best point is
+// returned. The answer is as precise as the arithmetic allows (about 1e-15 m or rad) unless a limit
+// prevents it.
 //
-// After construction nothing allocates or throws: solve() and forward() are real-time safe.
+// After construction nothing allocates or throws: IkSolver::solve() and ChainKinematics::pose()
+// and poseAndJacobian() are real-time safe. An object holds its workspace: one per thread.
 #pragma once
 
 #include <Eigen/Cholesky>
@@ -20,6 +20,7 @@
 #include <random>
 #include <vector>
 
+#include "mindyn/data.hpp"
 #include "mindyn/model.hpp"
 
 namespace mindyn {
@@ -31,7 +32,7 @@ using Matrix6Xd = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 class ChainKinematics {
  public:
   explicit ChainKinematics(const Model& model);
-  int nq() const { return n_; }
+  int nq() const { return model_.nq(); }
   /// Tool pose at q.
   void pose(const Eigen::Ref<const Eigen::VectorXd>& q, Eigen::Isometry3d& T) noexcept;
   /// Tool pose and Jacobian at q.
@@ -39,12 +40,8 @@ class ChainKinematics {
                        Eigen::Ref<Matrix6Xd> J) noexcept;
 
  private:
-  int n_;
-  std::vector<Eigen::Matrix3d> pre_R_, post_R_;
-  std::vector<Eigen::Vector3d> pre_p_, post_p_, axis_;
-  std::vector<bool> revolute_;
-  Eigen::Isometry3d tool_;
-  std::vector<Eigen::Vector3d> z_, o_;  // joint axes and origins in the base frame
+  Model model_;
+  Data data_;
 };
 
 /// Most Newton steps taken after convergence to refine the answer.
@@ -96,12 +93,6 @@ class IkSolver {
   /// limits are brought inside). On failure q holds the best point found.
   IkResult solve(const Eigen::Isometry3d& target, const Eigen::Ref<const Eigen::VectorXd>& q0,
                  Eigen::Ref<Eigen::VectorXd> q) noexcept;
-
-  /// Pose error twist of `T` relative to `target` (see the header comment) and its max |e_i|.
-  static double poseError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target,
-                          Eigen::Matrix<double, 6, 1>& e) noexcept;
-  /// Norm of the SE(3) logarithm of target^-1 T: sqrt(|v|^2 + |w|^2) with (v, w) = log6.
-  static double logError(const Eigen::Isometry3d& T, const Eigen::Isometry3d& target) noexcept;
 
   ChainKinematics& kinematics() { return kin_; }
 

@@ -10,13 +10,14 @@ import os
 import re
 from pathlib import Path
 
+from .._core import Error
 from ..robot import bundled_robots
 
 #: Largest seed accepted (the random generators take 32-bit seeds).
 MAX_SEED = 2**32 - 1
 
 
-class UsageError(Exception):
+class UsageError(Error):
     """A command-line argument was rejected; the message names it and what was expected."""
 
 

@@ -32,6 +32,8 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
+from .._core import Error
+
 __all__ = [
     "DataError",
     "DataFileNotFoundError",
@@ -45,11 +47,11 @@ __all__ = [
 ]
 
 
-class DataError(ValueError):
+class DataError(Error, ValueError):
     """Malformed or unusable joint data (names the file, line and column)."""
 
 
-class DataFileNotFoundError(FileNotFoundError):
+class DataFileNotFoundError(Error, FileNotFoundError):
     """A data file that does not exist."""
 
 

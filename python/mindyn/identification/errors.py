@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+from .._core import Error
 
-class IdentificationError(ValueError):
+
+class IdentificationError(Error, ValueError):
     """The data cannot identify the requested parameters."""
 
 

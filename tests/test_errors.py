@@ -1,0 +1,93 @@
+"""One base class, mindyn.Error, for every error mindyn raises for its input, each error keeping
+the standard base it had (ValueError, FileNotFoundError), so that both kinds of handler work."""
+
+from __future__ import annotations
+
+import ast
+import builtins
+import importlib
+from pathlib import Path
+
+import mindyn
+import numpy as np
+import pytest
+from mindyn.identification.data import DataError, DataFileNotFoundError, read_csv
+from mindyn.identification.errors import IdentificationError, RankDeficientError
+
+PACKAGE = Path(mindyn.__file__).parent
+
+
+def error_classes():
+    """(module, class name) of every exception class defined in the package's sources: a
+    class whose bases name an ...Error or Exception."""
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        module = ".".join(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+        module = module.removesuffix(".__init__")
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ClassDef):
+                names = [ast.unparse(b) for b in node.bases]
+                if any(n.endswith(("Error", "Exception")) for n in names):
+                    found.append((module, node.name))
+    return found
+
+
+def test_the_source_scan_finds_the_known_classes():
+    found = {name for _, name in error_classes()}
+    assert {"IdentificationError", "DataError", "UsageError", "RankDeficientError"} <= found
+
+
+@pytest.mark.parametrize(("module", "name"), error_classes())
+def test_every_error_class_of_the_package_derives_from_mindyn_error(module, name):
+    cls = getattr(importlib.import_module(module), name)
+    assert issubclass(cls, mindyn.Error), f"{module}.{name}: {cls.__mro__}"
+
+
+@pytest.mark.parametrize(
+    ("cls", "standard"),
+    [
+        (mindyn.ModelError, ValueError),
+        (mindyn.RobotFileNotFoundError, FileNotFoundError),
+        (IdentificationError, ValueError),
+        (RankDeficientError, ValueError),
+        (DataError, ValueError),
+        (DataFileNotFoundError, FileNotFoundError),
+    ],
+)
+def test_errors_keep_their_standard_base(cls, standard):
+    assert issubclass(cls, mindyn.Error)
+    assert issubclass(cls, standard)
+
+
+def test_mindyn_error_is_not_a_builtin_exception_class():
+    assert issubclass(mindyn.Error, Exception)
+    assert not issubclass(mindyn.Error, ValueError)
+    assert mindyn.Error not in vars(builtins).values()
+
+
+def raises_both(standard, call):
+    """The call raises an error that both an `except mindyn.Error` and an `except standard`
+    handler catch."""
+    with pytest.raises(mindyn.Error) as info:
+        call()
+    assert isinstance(info.value, standard), type(info.value).__mro__
+    return info.value
+
+
+def test_raised_errors_are_caught_by_either_handler(tmp_path):
+    robot = mindyn.load("puma560")
+    e = raises_both(FileNotFoundError, lambda: mindyn.load(str(tmp_path / "missing.urdf")))
+    assert isinstance(e, mindyn.RobotFileNotFoundError)
+    e = raises_both(ValueError, lambda: mindyn.load("no_such_robot"))
+    assert isinstance(e, mindyn.ModelError)
+    # raised by the C++ binding's argument checks
+    e = raises_both(
+        ValueError, lambda: robot._m.inverse_dynamics(np.zeros(5), np.zeros(6), np.zeros(6), None)
+    )
+    assert isinstance(e, mindyn.ModelError) and "q has shape (5,)" in str(e)
+    e = raises_both(FileNotFoundError, lambda: read_csv(tmp_path / "missing.csv"))
+    assert isinstance(e, DataFileNotFoundError)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,q1\n0,notanumber\n", encoding="utf-8")
+    e = raises_both(ValueError, lambda: read_csv(bad))
+    assert isinstance(e, DataError)
