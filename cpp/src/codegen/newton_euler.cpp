@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <utility>
 
+#include "internal.hpp"
+
 namespace mindyn::codegen {
 
 namespace {
@@ -1005,8 +1007,8 @@ GeneratedFunction generate(const Model& model, const ParameterSet& params, Funct
 
 const char* toString(Objective o) { return o == Objective::Additions ? "additions" : "operations"; }
 
-GeneratedFunction detail::generateWithLinkForm(const Model& model, const ParameterSet& params,
-                                               Function function, int form) {
+GeneratedFunction internal::generateWithLinkForm(const Model& model, const ParameterSet& params,
+                                                 Function function, int form) {
   const int n = model.nq();
   Plan plan{std::vector<AxisShift>(n, AxisShift::Keep),
             std::vector<LinkForm>(n, LinkForm{form % 4, form >= 4})};
@@ -1128,8 +1130,8 @@ const char* toString(SlotineLiForm f) {
   return "?";
 }
 
-GeneratedFunction detail::generateSlotineLiForm(const Model& model, const ParameterSet& params,
-                                                bool normalised, SlotineLiForm form) {
+GeneratedFunction internal::generateSlotineLiForm(const Model& model, const ParameterSet& params,
+                                                  bool normalised, SlotineLiForm form) {
   const bool pass = form == SlotineLiForm::PassColumns || form == SlotineLiForm::PassAdjoint;
   const bool adj = form == SlotineLiForm::ColumnsAdjoint || form == SlotineLiForm::PassAdjoint;
   return slotineLiWith(model, params, normalised, pass, adj);
@@ -1147,7 +1149,7 @@ GeneratedFunction generateSlotineLi(const Model& model, const ParameterSet& para
   bool have = false;
   for (SlotineLiForm form : {SlotineLiForm::Columns, SlotineLiForm::PassColumns,
                              SlotineLiForm::ColumnsAdjoint, SlotineLiForm::PassAdjoint}) {
-    GeneratedFunction f = detail::generateSlotineLiForm(model, params, normalised, form);
+    GeneratedFunction f = internal::generateSlotineLiForm(model, params, normalised, form);
     if (variants) variants->push_back({form, f.program.count});
     const OpCount& c = f.program.count;
     const OpCount& d = best.program.count;
