@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 
+#include "codegen/internal.hpp"
 #include "malloc_counter.hpp"
 #include "mindyn/base_dynamics.hpp"
 #include "mindyn/codegen/emit_c.hpp"
@@ -166,7 +167,7 @@ TEST(Codegen, SlotineLiProductsMatchTheRuntimeRegressor) {
       if (offsets) Y.rightCols(n).setIdentity();
       for (SlotineLiForm form : {SlotineLiForm::Columns, SlotineLiForm::PassColumns,
                                  SlotineLiForm::ColumnsAdjoint, SlotineLiForm::PassAdjoint}) {
-        const GeneratedFunction f = detail::generateSlotineLiForm(model, ps, true, form);
+        const GeneratedFunction f = internal::generateSlotineLiForm(model, ps, true, form);
         InputValues in{q.data(), dq.data(), nullptr, p.data()};
         in.dqr = dqr.data();
         in.ddqr = ddqr.data();
@@ -218,8 +219,8 @@ TEST(Codegen, EveryLinkFormMatchesTheClassicalRecursion) {
     const ParameterSet base = baseParameterSet(model, bp);
     for (int form = 0; form < 8; ++form) {
       if (form == 4) continue;  // the same as 0
-      const auto id = detail::generateWithLinkForm(model, base, Function::InverseDynamics, form);
-      const auto reg = detail::generateWithLinkForm(model, base, Function::Regressor, form);
+      const auto id = internal::generateWithLinkForm(model, base, Function::InverseDynamics, form);
+      const auto reg = internal::generateWithLinkForm(model, base, Function::Regressor, form);
       for (int trial = 0; trial < 2; ++trial) {
         const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2),
                               ddq = random(rng, n, 2);

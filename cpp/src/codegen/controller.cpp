@@ -4,6 +4,7 @@
 #include <functional>
 #include <sstream>
 
+#include "internal.hpp"
 #include "mindyn/codegen/emit_st.hpp"
 
 namespace mindyn::codegen {
@@ -135,9 +136,9 @@ void stepBody(Writer& w, const ControllerCode& c, const std::string& prefix, CTr
             std::to_string(c.core.add) + " add, " + std::to_string(c.core.trig) + " sin/cos");
   std::ostringstream body;
   if (w.st)
-    detail::writeSTBody(body, f, "y");
+    internal::writeSTBody(body, f, "y");
   else
-    detail::writeCBody(body, f, prefix, trig, "y");
+    internal::writeCBody(body, f, prefix, trig, "y");
   w.os << body.str();
   for (int k = 0; k < n; ++k) {
     std::string tau = w.at("y", k);
@@ -302,8 +303,8 @@ CFiles emitControllerC(const ControllerCode& c, const std::string& header_name, 
 
   src << "/* " << header_name << ": see the header. */\n#include \"" << header_name
       << "\"\n\n#include <math.h>\n";
-  if (trig == CTrig::Inline && detail::usesTrig(f))
-    src << "\n" << detail::sincosSource(c.code.name + "_" + kind);
+  if (trig == CTrig::Inline && internal::usesTrig(f))
+    src << "\n" << internal::sincosSource(c.code.name + "_" + kind);
   Writer w{false, {}, "  "};
   src << "\nvoid " << fn << "_init(" << T << "* c) {\n";
   for (const Field& fd : fields(c))
@@ -358,7 +359,7 @@ std::string emitControllerST(const ControllerCode& c) {
   if (c.kind == Controller::ComputedTorque) os << "  ddq" << vecN;
   os << "  y : ARRAY[1.." << f.outputs.size() << "] OF LREAL;\n";
   std::ostringstream probe;
-  const int slots = detail::writeSTBody(probe, f, "y");
+  const int slots = internal::writeSTBody(probe, f, "y");
   for (int t = 0; t < slots; ++t) os << "  t" << t + 1 << " : LREAL;\n";
   os << "END_VAR\n";
   Writer init{true, {}, "  "};

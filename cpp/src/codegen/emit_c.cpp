@@ -7,6 +7,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "internal.hpp"
 #include "mindyn/sincos.hpp"
 
 namespace mindyn::codegen {
@@ -272,14 +273,16 @@ std::string upper(std::string s) {
 
 }  // namespace
 
-void detail::writeCBody(std::ostream& os, const GeneratedFunction& f, const std::string& prefix,
-                        CTrig trig, const std::string& out) {
+void internal::writeCBody(std::ostream& os, const GeneratedFunction& f, const std::string& prefix,
+                          CTrig trig, const std::string& out) {
   CWriter(f, prefix, trig).body(os, out);
 }
 
-bool detail::usesTrig(const GeneratedFunction& f) { return CWriter(f, "", CTrig::Libm).usesTrig(); }
+bool internal::usesTrig(const GeneratedFunction& f) {
+  return CWriter(f, "", CTrig::Libm).usesTrig();
+}
 
-std::string detail::sincosSource(const std::string& prefix) { return sincosRoutine(prefix); }
+std::string internal::sincosSource(const std::string& prefix) { return sincosRoutine(prefix); }
 
 CFiles emitC(const GeneratedCode& code, const std::string& header_name, CTrig trig) {
   checkIdentifier(code.name);

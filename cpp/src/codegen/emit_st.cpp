@@ -3,6 +3,7 @@
 #include <sstream>
 #include <utility>
 
+#include "internal.hpp"
 #include "mindyn/codegen/emit_c.hpp"
 
 namespace mindyn::codegen {
@@ -110,7 +111,7 @@ class STWriter {
 
 }  // namespace
 
-int detail::writeSTBody(std::ostream& os, const GeneratedFunction& f, const std::string& out) {
+int internal::writeSTBody(std::ostream& os, const GeneratedFunction& f, const std::string& out) {
   STWriter w(f, out);
   w.body(os);
   return w.slots();

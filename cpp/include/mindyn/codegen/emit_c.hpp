@@ -15,7 +15,6 @@
 // for NaN and infinities), within 2.2e-16 of the C library; CTrig::Libm calls sin and cos.
 #pragma once
 
-#include <ostream>
 #include <string>
 
 #include "mindyn/codegen/newton_euler.hpp"
@@ -41,16 +40,5 @@ std::string literal(double v, bool structured_text = false);
 
 /// Shared by the emitters: the comment lines describing the generated code.
 std::vector<std::string> describe(const GeneratedCode& code);
-
-namespace detail {
-/// The statements of one function, its outputs assigned to out[0], out[1], ... (for emitters of
-/// code around a generated function).
-void writeCBody(std::ostream& os, const GeneratedFunction& f, const std::string& prefix, CTrig trig,
-                const std::string& out);
-/// Whether the function calls sine or cosine.
-bool usesTrig(const GeneratedFunction& f);
-/// The static sine-cosine routine PREFIX_sincos of CTrig::Inline.
-std::string sincosSource(const std::string& prefix);
-}  // namespace detail
 
 }  // namespace mindyn::codegen

@@ -9,7 +9,6 @@
 // SIN and COS are called, products are written out (no **), one operation per line.
 #pragma once
 
-#include <ostream>
 #include <string>
 
 #include "mindyn/codegen/newton_euler.hpp"
@@ -17,11 +16,5 @@
 namespace mindyn::codegen {
 
 std::string emitST(const GeneratedCode& code);
-
-namespace detail {
-/// The statements of one function with its outputs assigned to out[1], out[2], ...; returns
-/// the number of LREAL temporaries t1 .. tK they use.
-int writeSTBody(std::ostream& os, const GeneratedFunction& f, const std::string& out);
-}  // namespace detail
 
 }  // namespace mindyn::codegen

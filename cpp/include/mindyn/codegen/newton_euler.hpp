@@ -117,15 +117,6 @@ GeneratedFunction generate(const Model& model, const ParameterSet& params, Funct
                            bool numeric = false, const Eigen::VectorXd& values = {},
                            Objective objective = Objective::Operations);
 
-namespace detail {
-/// The recursion with one fixed choice for every link (for tests): `form` 0 forms each wrench
-/// in the link frame; 1, 2, 3 in the joint frame before the motion (revolute joints), with the
-/// inertia turned entry by entry, keeping its trace, or split; +4: the moment of the first
-/// moment taken after the motion.
-GeneratedFunction generateWithLinkForm(const Model& model, const ParameterSet& params,
-                                       Function function, int form);
-}  // namespace detail
-
 /// How the Slotine-Li products are formed: from the columns of the regressor Y, or Y p by one
 /// force pass with the parameters as inputs, and Y^T s by the reverse (adjoint) pass of s^T Y p.
 enum class SlotineLiForm { Columns, PassColumns, ColumnsAdjoint, PassAdjoint };
@@ -145,12 +136,6 @@ struct SlotineLiVariant {
 /// of each.
 GeneratedFunction generateSlotineLi(const Model& model, const ParameterSet& params, bool normalised,
                                     std::vector<SlotineLiVariant>* variants = nullptr);
-
-namespace detail {
-/// The Slotine-Li products in one given form (for tests).
-GeneratedFunction generateSlotineLiForm(const Model& model, const ParameterSet& params,
-                                        bool normalised, SlotineLiForm form);
-}  // namespace detail
 
 /// Everything an emitter needs: the functions of one robot under one name.
 struct GeneratedCode {

@@ -1,0 +1,569 @@
+// The symbolic Newton-Euler recursion on the stages of every joint (stages.hpp), written into
+// an expression graph. Forward: angular velocity and acceleration and the linear acceleration of
+// each stage origin (gravity as an upward base acceleration), in the axes of that stage.
+// Backward: the wrench (moment about the stage origin, force), carried as pending linear forms in
+// the parameters while only sums and signed permutations act on it; the torque is the axis
+// component of the moment (revolute) or of the force (prismatic) right after the joint motion.
+// A link's wrench is formed in its own frame or in the joint frame before the joint motion
+// (LinkForm), with its parameters turned by the joint angle.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <initializer_list>
+#include <utility>
+#include <vector>
+
+#include "mindyn/codegen/expr.hpp"
+#include "mindyn/model.hpp"
+#include "stages.hpp"
+
+namespace mindyn::codegen::internal {
+
+using V3 = std::array<Ref, 3>;
+using M3 = std::array<V3, 3>;     // rows
+using P10 = std::array<Ref, 10>;  // XX XY XZ YY YZ ZZ MX MY MZ M
+using Sym3 = std::array<std::array<int, 3>, 3>;
+
+// The inertial parameters of a body as the wrench recursion uses them: the inertia tensor as a
+// sum of parameters times constant symmetric tensors, the first moment and the mass.
+struct Body {
+  std::vector<std::pair<Ref, Sym3>> inertia;
+  V3 ms;
+  Ref mass;
+};
+
+struct Motion {
+  V3 w, dw, a;  // angular velocity, angular acceleration, linear acceleration of the origin
+  // Set for a link seen in its joint frame before the joint motion, the joint turning about
+  // coordinate axis `axis`: the parent's angular velocity and acceleration in the same axes,
+  // of which w and dw are these plus the joint terms.
+  int axis = -1;
+  V3 wp{}, dwp{};
+};
+
+// A wrench component not yet written as a node: the sum of `rest` and of the products of the
+// kinematic coefficients and parameters in `terms` (coefficient, parameter).
+struct Component {
+  std::vector<std::pair<Ref, Ref>> terms;
+  Ref rest;
+};
+
+struct Pending {
+  std::array<Component, 3> n, f;  // moment about the origin, force
+};
+
+class Builder {
+ public:
+  Builder(Graph& g, const Model& model, std::vector<JointStages> stages)
+      : g_(g), model_(model), stages_(std::move(stages)) {
+    zero_ = {Graph::zero(), Graph::zero(), Graph::zero()};
+    gravity_ = cleanGeometry<3, 1>(model.gravity, false, nullptr);
+  }
+
+  // Forward pass: fills the joint trigonometry and the motion of every link frame.
+  void forward(const std::vector<Ref>& dq, const std::vector<Ref>& ddq, bool gravity) {
+    const int n = model_.nq();
+    q_.assign(n, Graph::zero());
+    jointR_.assign(n, M3{});
+    jointC_.assign(n, Graph::one());
+    jointS_.assign(n, Graph::zero());
+    link_.assign(n, Motion{});
+    linkPre_.assign(n, Motion{});
+    afterA_.assign(n, V3{});
+    dq_ = dq;
+    ddq_ = ddq;
+    Motion m{zero_, zero_, zero_};
+    if (gravity)
+      for (int i = 0; i < 3; ++i) m.a[i] = g_.constant(-gravity_[i]);
+    for (int k = 0; k < n; ++k) {
+      const JointStages& s = stages_[k];
+      m = rigidForward(s.pre, m);
+      const Ref qk = g_.input(InputKind::Q, k);
+      const V3 u = constVec(s.u);
+      if (s.type == JointType::Revolute) {
+        const Ref angle = g_.add(qk, g_.constant(s.offset));
+        const Ref c = g_.cos(angle), sn = g_.sin(angle);
+        jointC_[k] = c;
+        jointS_[k] = sn;
+        jointR_[k] = rodrigues(s.u, c, sn);
+        const V3 wj = scale(u, dq[k]);
+        // the link's motion in the joint frame before the joint motion (same origin)
+        linkPre_[k] = {addv(m.w, wj), addv(addv(m.dw, scale(u, ddq[k])), cross(m.w, wj)), m.a};
+        for (int i = 0; i < 3; ++i)
+          if (std::abs(s.u[i]) == 1.0) linkPre_[k].axis = i;
+        linkPre_[k].wp = m.w;
+        linkPre_[k].dwp = m.dw;
+        const V3 wr = mulT(jointR_[k], m.w);
+        m.w = addv(wr, wj);
+        m.dw = addv(addv(mulT(jointR_[k], m.dw), scale(u, ddq[k])), cross(wr, wj));
+        m.a = mulT(jointR_[k], m.a);
+      } else {
+        q_[k] = qk;
+        const V3 d = scale(u, qk);
+        // a' = a + U d + 2 w x (u dq) + u ddq
+        V3 a = addv(m.a, uTimes(m, d));
+        a = addv(a, scale(cross(m.w, scale(u, dq[k])), g_.constant(2.0)));
+        m.a = addv(a, scale(u, ddq[k]));
+      }
+      afterA_[k] = m.a;
+      m = rigidForward(s.post, m);
+      link_[k] = m;
+    }
+  }
+
+  // Backward pass for a classical parameter vector (layout of the model's ParameterSet).
+  // `forms[k]` (see LinkForm): link k's wrench is formed in its own frame, or in the joint frame
+  // before the joint motion from its parameters carried into that frame. The wrench is carried as
+  // pending linear forms in the parameters for as long as only sums and signed permutations act on
+  // it, so that equal kinematic coefficients of different links share one product.
+  std::vector<Ref> torques(const std::vector<Ref>& pi, ParameterLayout layout, bool joint_terms,
+                           const std::vector<LinkForm>& forms) {
+    const int n = model_.nq();
+    std::vector<Ref> tau(n, Graph::zero());
+    Pending w;
+    for (int k = n - 1; k >= 0; --k) {
+      const JointStages& s = stages_[k];
+      P10 own;
+      for (int i = 0; i < 10; ++i) own[i] = pi[k * layout.perLink() + i];
+      const LinkForm form = forms[k];
+      const bool pre = form.frame != 0 && s.type == JointType::Revolute;
+      if (!pre) append(w, linkWrench(link_[k], body(own)));
+      w = rigidBackward(s.post, w);
+      const V3 u = constVec(s.u);
+      Ref t;
+      if (s.type == JointType::Revolute) {
+        const M3& R = jointR_[k];
+        w.n = rotate(R, w.n);
+        w.f = rotate(R, w.f);
+        if (pre) {
+          const P10 after = transformParams(s.post, own);
+          const Body turned = rotateParams(s.u, jointC_[k], jointS_[k], after, form.frame);
+          append(w, linkWrench(linkPre_[k], turned, !form.momentAfter));
+          if (form.momentAfter) {
+            std::array<Component, 3> m;
+            const V3 v = cross({after[6], after[7], after[8]}, afterA_[k]);
+            for (int i = 0; i < 3; ++i) m[i].rest = v[i];
+            m = rotate(R, m);
+            for (int i = 0; i < 3; ++i) w.n[i].rest = g_.add(w.n[i].rest, m[i].rest);
+          }
+        }
+        t = along(u, w.n);  // the axis is the same before and after the joint motion
+      } else {
+        t = along(u, w.f);
+        const V3 extra = cross(scale(u, q_[k]), values(w.f));
+        for (int i = 0; i < 3; ++i) w.n[i].rest = g_.add(value(w.n[i]), extra[i]);
+      }
+      if (joint_terms) {
+        if (layout.rotor) t = g_.add(t, g_.mul(pi[layout.rotorIndex(k)], ddq_[k]));
+        if (layout.friction) {
+          t = g_.add(t, g_.mul(pi[layout.viscousIndex(k)], dq_[k]));
+          t = g_.add(t, g_.mul(pi[layout.coulombIndex(k)], g_.sign(dq_[k])));
+        }
+      }
+      tau[k] = t;
+      if (k > 0) w = rigidBackward(s.pre, w);
+    }
+    return tau;
+  }
+
+ protected:
+  Graph& graph() { return g_; }
+  V3 constVec(const Eigen::Vector3d& v) {
+    return {g_.constant(v[0]), g_.constant(v[1]), g_.constant(v[2])};
+  }
+  M3 constMat(const Eigen::Matrix3d& R) {
+    M3 m;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[i][j] = g_.constant(R(i, j));
+    return m;
+  }
+  V3 addv(const V3& a, const V3& b) {
+    return {g_.add(a[0], b[0]), g_.add(a[1], b[1]), g_.add(a[2], b[2])};
+  }
+  V3 scale(const V3& a, Ref s) { return {g_.mul(a[0], s), g_.mul(a[1], s), g_.mul(a[2], s)}; }
+  Ref dot(const V3& a, const V3& b) {
+    return g_.add(g_.add(g_.mul(a[0], b[0]), g_.mul(a[1], b[1])), g_.mul(a[2], b[2]));
+  }
+  V3 cross(const V3& a, const V3& b) {
+    return {g_.sub(g_.mul(a[1], b[2]), g_.mul(a[2], b[1])),
+            g_.sub(g_.mul(a[2], b[0]), g_.mul(a[0], b[2])),
+            g_.sub(g_.mul(a[0], b[1]), g_.mul(a[1], b[0]))};
+  }
+  V3 mul(const M3& R, const V3& x) {
+    V3 y;
+    for (int i = 0; i < 3; ++i) y[i] = dot(R[i], x);
+    return y;
+  }
+  V3 mulT(const M3& R, const V3& x) {
+    V3 y;
+    for (int i = 0; i < 3; ++i) y[i] = dot({R[0][i], R[1][i], R[2][i]}, x);
+    return y;
+  }
+  // Rot(u, q) = (I + K^2) - cos q K^2 + sin q K, K = [u]x.
+  M3 rodrigues(const Eigen::Vector3d& u, Ref c, Ref s) {
+    Eigen::Matrix3d K;
+    K << 0, -u.z(), u.y(), u.z(), 0, -u.x(), -u.y(), u.x(), 0;
+    const Eigen::Matrix3d K2 = K * K;
+    // derived from the (already cleaned) axis: only round-off is removed here
+    const Eigen::Matrix3d A0 = (Eigen::Matrix3d::Identity() + K2).unaryExpr(&roundOffClean);
+    const Eigen::Matrix3d A1 = (-K2).unaryExpr(&roundOffClean);
+    M3 R;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        R[i][j] = g_.add(g_.add(g_.constant(A0(i, j)), g_.mul(g_.constant(A1(i, j)), c)),
+                         g_.mul(g_.constant(K(i, j)), s));
+    return R;
+  }
+  // dw_k + w_i w_j (plus) or dw_k - w_i w_j. In the frame before a joint turning about
+  // coordinate axis a, with (b, d, a) right-handed, the joint terms cancel in two of these:
+  // dw_b - w_d w_a = dwp_b - wp_d wp_a and dw_d + w_b w_a = dwp_d + wp_b wp_a, the same sums
+  // as the parent's.
+  Ref dwPlusWW(const Motion& m, int k, int i, int j, bool plus) {
+    if (m.axis >= 0) {
+      const int a = m.axis, b = (a + 1) % 3, d = (a + 2) % 3;
+      const bool ia = i == a || j == a, ib = i == b || j == b, id = i == d || j == d;
+      if (k == b && ia && id && !plus) return g_.sub(m.dwp[b], g_.mul(m.wp[d], m.wp[a]));
+      if (k == d && ia && ib && plus) return g_.add(m.dwp[d], g_.mul(m.wp[b], m.wp[a]));
+    }
+    const Ref ww = g_.mul(m.w[i], m.w[j]);
+    return plus ? g_.add(m.dw[k], ww) : g_.sub(m.dw[k], ww);
+  }
+  // Entry (i, j) of U = [dw]x + [w]x^2: w_i w_j + [dw]x(i, j), diagonal -(w_j^2 + w_k^2).
+  Ref uEntry(const Motion& m, int i, int j) {
+    if (i == j) {
+      const int a = (i + 1) % 3, b = (i + 2) % 3;
+      return -g_.add(g_.mul(m.w[a], m.w[a]), g_.mul(m.w[b], m.w[b]));
+    }
+    // [dw]x(i, j) = -eps_ijk dw_k
+    const int k = 3 - i - j;
+    const bool plus = (j == (i + 2) % 3);  // (0,2), (1,0), (2,1): +dw_k
+    return plus ? dwPlusWW(m, k, i, j, true) : -dwPlusWW(m, k, i, j, false);
+  }
+  V3 uTimes(const Motion& m, const V3& d) {
+    V3 y;
+    for (int i = 0; i < 3; ++i) {
+      Ref s = Graph::zero();
+      for (int j = 0; j < 3; ++j)
+        if (d[j] != Graph::zero()) s = g_.add(s, g_.mul(uEntry(m, i, j), d[j]));
+      y[i] = s;
+    }
+    return y;
+  }
+  // Entry (i, j) of the inertia tensor in a parameter vector XX XY XZ YY YZ ZZ MX MY MZ M.
+  static int tensorIndex(int i, int j) {
+    static const int idx[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
+    return idx[i][j];
+  }
+
+  // The body's tensor and first moment in axes turned by R (x_new = R x_old): R I R^T, R h; the
+  // mass as it is.
+  P10 turned(const M3& R, const P10& p) {
+    M3 I;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) I[i][j] = p[tensorIndex(i, j)];
+    M3 RI;
+    for (int i = 0; i < 3; ++i) RI[i] = mulT(I, R[i]);  // row i of R I (I symmetric)
+    P10 out = p;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) out[tensorIndex(i, j)] = dot(RI[i], R[j]);
+    const V3 h = mul(R, {p[6], p[7], p[8]});
+    for (int i = 0; i < 3; ++i) out[6 + i] = h[i];
+    return out;
+  }
+
+  // Parameters of a body about the origin of frame B, from those about the origin of frame A,
+  // with x_B = R x_A + t: first moment R h + m t, inertia
+  // R I R^T + 2 (t . R h) 1 - (R h) t^T - t (R h)^T + m (|t|^2 1 - t t^T).
+  P10 transformParams(const Rigid& T, const P10& p) {
+    if (T.identity()) return p;
+    const M3 R = constMat(T.R);
+    P10 out = turned(R, p);
+    const V3 h = {out[6], out[7], out[8]};
+    const V3 t = constVec(T.t);
+    const Ref m = p[9];
+    const Ref th = dot(t, h), tt = g_.constant(T.t.squaredNorm());
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) {
+        Ref e = out[tensorIndex(i, j)];
+        if (i == j) e = g_.add(e, g_.add(g_.mul(g_.constant(2.0), th), g_.mul(m, tt)));
+        e = g_.sub(e, g_.add(g_.mul(h[i], t[j]), g_.mul(t[i], h[j])));
+        e = g_.sub(e, g_.mul(m, g_.mul(t[i], t[j])));
+        out[tensorIndex(i, j)] = e;
+      }
+    for (int i = 0; i < 3; ++i) out[6 + i] = g_.add(h[i], g_.mul(m, t[i]));
+    out[9] = m;
+    return out;
+  }
+
+  // The body carried through the joint rotation J (x_before = J x_after): J I J^T and J h.
+  // About a coordinate axis a only the plane of the other two axes b, d turns. `form` says how
+  // the plane block of the tensor is written:
+  //   1  entry by entry, I'_bb = cc I_bb + ss I_dd - 2 cs I_bd, I'_dd likewise;
+  //   2  I'_dd = I_bb + I_dd - I'_bb (trace kept; cheaper when both are needed);
+  //   3  as m (e_bb + e_dd) + h (e_bb - e_dd) + I'_bd (e_bd + e_db), m = (I_bb + I_dd) / 2
+  //      unchanged by the rotation and (h, I'_bd) the pair ((I_bb - I_dd) / 2, I_bd) turned
+  //      by 2q: the moment of m is m (dw_b - w_d w_a, dw_d + w_b w_a, 0), sums that equal the
+  //      parent's in this frame.
+  Body rotateParams(const Eigen::Vector3d& axis, Ref c, Ref s, const P10& p, int form) {
+    int a = -1;
+    for (int i = 0; i < 3; ++i)
+      if (std::abs(axis[i]) == 1.0) a = i;
+    if (a < 0) {  // general axis
+      return body(turned(rodrigues(axis, c, s), p));
+    }
+    // (b, d, a) right-handed; about -e_a the angle changes sign.
+    const int b = (a + 1) % 3, d = (a + 2) % 3;
+    if (axis[a] < 0) s = -s;
+    const Ref bb = p[tensorIndex(b, b)], dd = p[tensorIndex(d, d)], bd = p[tensorIndex(b, d)];
+    const Ref ba = p[tensorIndex(b, a)], da = p[tensorIndex(d, a)];
+    Body out;
+    auto put = [&out](Ref par, std::initializer_list<std::array<int, 3>> entries) {
+      Sym3 T{};
+      for (const auto& e : entries) T[e[0]][e[1]] = T[e[1]][e[0]] = e[2];
+      out.inertia.emplace_back(par, T);
+    };
+    if (form == 3) {
+      // only the double angle: with 2 s, sin 2q = c (2 s), cos 2q = 1 - s (2 s)
+      const Ref s2 = g_.mul(g_.constant(2.0), s);
+      const Ref cos2 = g_.sub(Graph::one(), g_.mul(s, s2)), sin2 = g_.mul(c, s2);
+      const Ref half = g_.constant(0.5);
+      const Ref m = g_.mul(half, g_.add(bb, dd)), dh = g_.mul(half, g_.sub(bb, dd));
+      put(m, {{b, b, 1}, {d, d, 1}});
+      put(g_.sub(g_.mul(cos2, dh), g_.mul(sin2, bd)), {{b, b, 1}, {d, d, -1}});
+      put(g_.add(g_.mul(sin2, dh), g_.mul(cos2, bd)), {{b, d, 1}});
+    } else {
+      const Ref cc = g_.mul(c, c), ss = g_.mul(s, s), cs = g_.mul(c, s);
+      const Ref cos2 = g_.sub(cc, ss), sin2 = g_.mul(g_.constant(2.0), cs);
+      const Ref bd2 = g_.mul(sin2, bd);
+      const Ref nbb = g_.sub(g_.add(g_.mul(cc, bb), g_.mul(ss, dd)), bd2);
+      put(nbb, {{b, b, 1}});
+      put(form == 2 ? g_.sub(g_.add(bb, dd), nbb)
+                    : g_.add(g_.add(g_.mul(ss, bb), g_.mul(cc, dd)), bd2),
+          {{d, d, 1}});
+      put(g_.add(g_.mul(cs, g_.sub(bb, dd)), g_.mul(cos2, bd)), {{b, d, 1}});
+    }
+    put(p[tensorIndex(a, a)], {{a, a, 1}});
+    put(g_.sub(g_.mul(c, ba), g_.mul(s, da)), {{b, a, 1}});
+    put(g_.add(g_.mul(s, ba), g_.mul(c, da)), {{d, a, 1}});
+    const Ref hb = p[6 + b], hd = p[6 + d];
+    out.ms[b] = g_.sub(g_.mul(c, hb), g_.mul(s, hd));
+    out.ms[d] = g_.add(g_.mul(s, hb), g_.mul(c, hd));
+    out.ms[a] = p[6 + a];
+    out.mass = p[9];
+    return out;
+  }
+
+  Motion rigidForward(const Rigid& T, const Motion& m) {
+    if (T.identity()) return m;
+    const M3 R = constMat(T.R);
+    Motion o;
+    V3 a = m.a;
+    if (!T.t.isZero(0.0)) a = addv(a, uTimes(m, constVec(T.t)));
+    o.w = mulT(R, m.w);
+    o.dw = mulT(R, m.dw);
+    o.a = mulT(R, a);
+    return o;
+  }
+  Pending rigidBackward(const Rigid& T, Pending w) {
+    if (T.identity()) return w;
+    const M3 R = constMat(T.R);
+    Pending o;
+    o.f = rotate(R, w.f);
+    o.n = rotate(R, w.n);
+    if (!T.t.isZero(0.0)) {
+      const V3 m = cross(constVec(T.t), values(o.f));
+      for (int i = 0; i < 3; ++i) o.n[i].rest = g_.add(o.n[i].rest, m[i]);
+    }
+    return o;
+  }
+
+  // The node of a pending component (written once, then kept as that node).
+  Ref value(Component& c) {
+    if (!c.terms.empty()) {
+      c.rest = g_.add(c.rest, linearForm(c.terms));
+      c.terms.clear();
+    }
+    return c.rest;
+  }
+  V3 values(std::array<Component, 3>& v) { return {value(v[0]), value(v[1]), value(v[2])}; }
+
+  // u . v, writing only the components u needs.
+  Ref along(const V3& u, std::array<Component, 3>& v) {
+    Ref t = Graph::zero();
+    for (int i = 0; i < 3; ++i)
+      if (u[i] != Graph::zero()) t = g_.add(t, g_.mul(u[i], value(v[i])));
+    return t;
+  }
+
+  static Component negated(Component c) {
+    for (auto& t : c.terms) t.first = -t.first;
+    c.rest = -c.rest;
+    return c;
+  }
+
+  // R x; a row of R that is a signed unit vector carries that component as it is.
+  std::array<Component, 3> rotate(const M3& R, std::array<Component, 3>& x) {
+    int carried[3];
+    std::array<bool, 3> needed{};
+    for (int i = 0; i < 3; ++i) {
+      carried[i] = -1;
+      int nonzero = 0, j0 = -1;
+      for (int j = 0; j < 3; ++j)
+        if (R[i][j] != Graph::zero()) {
+          ++nonzero;
+          j0 = j;
+        }
+      if (nonzero == 1 && R[i][j0].abs() == Graph::one()) carried[i] = j0;
+      if (carried[i] < 0)
+        for (int j = 0; j < 3; ++j)
+          if (R[i][j] != Graph::zero()) needed[j] = true;
+    }
+    for (int j = 0; j < 3; ++j)
+      if (needed[j]) value(x[j]);
+    std::array<Component, 3> y;
+    for (int i = 0; i < 3; ++i) {
+      if (carried[i] >= 0) {
+        y[i] = R[i][carried[i]].negative() ? negated(x[carried[i]]) : x[carried[i]];
+      } else {
+        y[i].rest = dot(R[i], {x[0].rest, x[1].rest, x[2].rest});
+      }
+    }
+    return y;
+  }
+
+  void append(Pending& w, Pending own) {
+    for (int i = 0; i < 3; ++i) {
+      w.n[i].terms.insert(w.n[i].terms.end(), own.n[i].terms.begin(), own.n[i].terms.end());
+      w.f[i].terms.insert(w.f[i].terms.end(), own.f[i].terms.begin(), own.f[i].terms.end());
+      w.n[i].rest = g_.add(w.n[i].rest, own.n[i].rest);
+      w.f[i].rest = g_.add(w.f[i].rest, own.f[i].rest);
+    }
+  }
+
+  // sum_k coef_k * param_k with equal coefficients (up to sign) gathered first.
+  Ref linearForm(const std::vector<std::pair<Ref, Ref>>& terms) {
+    std::vector<std::pair<Ref, Ref>> groups;
+    for (const auto& [c, p] : terms) {
+      if (c == Graph::zero() || p == Graph::zero()) continue;
+      const Ref ca = c.abs(), ps = p.negatedIf(c.negative());
+      bool found = false;
+      for (auto& gr : groups)
+        if (gr.first == ca) {
+          gr.second = g_.add(gr.second, ps);
+          found = true;
+          break;
+        }
+      if (!found) groups.emplace_back(ca, ps);
+    }
+    Ref s = Graph::zero();
+    for (const auto& [c, p] : groups) s = g_.add(s, g_.mul(c, p));
+    return s;
+  }
+
+  // A kinematic coefficient of the wrench: an integer combination of the angular
+  // acceleration components dw_k and the products w_i w_j.
+  struct Lin {
+    std::array<int, 3> dw{};
+    std::array<std::array<int, 3>, 3> ww{};  // upper triangle used
+    void addProduct(int i, int j, int c) { ww[std::min(i, j)][std::max(i, j)] += c; }
+  };
+
+  // coefficient of a parameter whose tensor is T in the moment n = I dw + w x (I w):
+  // T dw + w x (T w)
+  std::array<Lin, 3> inertiaCoefficients(const Sym3& T) {
+    std::array<Lin, 3> out;
+    for (int i = 0; i < 3; ++i) {
+      for (int k = 0; k < 3; ++k) out[i].dw[k] = T[i][k];
+      const int j1 = (i + 1) % 3, j2 = (i + 2) % 3;
+      for (int l = 0; l < 3; ++l) {
+        // (w x T w)_i = w_j1 (T w)_j2 - w_j2 (T w)_j1
+        if (T[j2][l]) out[i].addProduct(j1, l, T[j2][l]);
+        if (T[j1][l]) out[i].addProduct(j2, l, -T[j1][l]);
+      }
+    }
+    return out;
+  }
+
+  Ref scaled(Ref x, int c) {
+    if (c == 1) return x;
+    if (c == -1) return -x;
+    return g_.mul(g_.constant(c), x);
+  }
+
+  // The node of a coefficient: dw_k +- w_i w_j through dwPlusWW (shared sums), anything else
+  // term by term.
+  Ref materialise(const Motion& m, const Lin& c) {
+    std::vector<std::pair<int, int>> dws;  // (k, coefficient)
+    std::vector<std::array<int, 3>> wws;   // (i, j, coefficient)
+    for (int k = 0; k < 3; ++k)
+      if (c.dw[k]) dws.push_back({k, c.dw[k]});
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j)
+        if (c.ww[i][j]) wws.push_back({i, j, c.ww[i][j]});
+    if (dws.size() == 1 && wws.size() == 1 && std::abs(dws[0].second) == 1 &&
+        std::abs(wws[0][2]) == 1) {
+      const bool negate = dws[0].second < 0;
+      const bool plus = (wws[0][2] > 0) != negate;
+      return dwPlusWW(m, dws[0].first, wws[0][0], wws[0][1], plus).negatedIf(negate);
+    }
+    Ref r = Graph::zero();
+    for (const auto& [k, cf] : dws) r = g_.add(r, scaled(m.dw[k], cf));
+    for (const auto& t : wws) r = g_.add(r, scaled(g_.mul(m.w[t[0]], m.w[t[1]]), t[2]));
+    return r;
+  }
+
+  // Wrench of one body about the frame origin, in the frame, linear in its parameters.
+  Pending linkWrench(const Motion& m, const Body& body, bool moment_of_ms = true) {
+    Pending w;
+    // Inertia: n += I dw + w x (I w), I = sum of parameter * basis tensor.
+    for (const auto& [par, T] : body.inertia) {
+      if (par == Graph::zero()) continue;
+      const auto coef = inertiaCoefficients(T);
+      for (int i = 0; i < 3; ++i) w.n[i].terms.emplace_back(materialise(m, coef[i]), par);
+    }
+    // First moments: n += MS x a, f += U MS.
+    for (int j = 0; j < 3; ++j) {
+      const Ref par = body.ms[j];
+      if (par == Graph::zero()) continue;
+      V3 e = zero_;
+      e[j] = Graph::one();
+      const V3 cn = cross(e, m.a);
+      for (int i = 0; i < 3; ++i) {
+        if (moment_of_ms) w.n[i].terms.emplace_back(cn[i], par);
+        w.f[i].terms.emplace_back(uEntry(m, i, j), par);
+      }
+    }
+    if (body.mass != Graph::zero())
+      for (int i = 0; i < 3; ++i) w.f[i].terms.emplace_back(m.a[i], body.mass);
+    return w;
+  }
+
+  // The ten classical parameters as a body: each inertia entry with its unit tensor.
+  static Body body(const P10& p) {
+    Body b;
+    for (int i = 0; i < 3; ++i)
+      for (int j = i; j < 3; ++j) {
+        Sym3 T{};
+        T[i][j] = T[j][i] = 1;
+        b.inertia.emplace_back(p[tensorIndex(i, j)], T);
+      }
+    b.ms = {p[6], p[7], p[8]};
+    b.mass = p[9];
+    return b;
+  }
+
+  Graph& g_;
+  const Model& model_;
+  std::vector<JointStages> stages_;
+  Eigen::Vector3d gravity_;
+  V3 zero_;
+  std::vector<Ref> q_, dq_, ddq_;
+  std::vector<M3> jointR_;
+  std::vector<Ref> jointC_, jointS_;
+  std::vector<Motion> link_, linkPre_;
+  std::vector<V3> afterA_;  // acceleration of the joint origin in the axes after the motion
+};
+
+}  // namespace mindyn::codegen::internal
