@@ -9,7 +9,13 @@ import numpy as np
 import pytest
 from mindyn import codegen
 from mindyn.control import coriolis_matrix, slotine_li_regressor, slotine_li_regressor_classical
-from mindyn.ik import damped_pinv, ik_solve, pose_error, pose_from_xyz_rpy, velocity_ik
+from mindyn.inverse_kinematics import (
+    damped_pinv,
+    ik_solve,
+    pose_error,
+    pose_from_xyz_rpy,
+    velocity_ik,
+)
 
 ROBOT = mindyn.load("puma560")
 BASE = mindyn.base_parameters(ROBOT)

@@ -48,7 +48,7 @@ def test_bundled_robots(name, extras):
 
 def test_zcr07s_with_rotor_friction_and_offsets():
     rec = assert_same(mindyn.load("zcr07s"), "zcr07s", rotor=True, friction=True, offset=True)
-    # Khalil's published count for the ZCR07S with Ia, Fv, Fc (seed 001): 52, and the offsets.
+    # the ZCR07S study's published count with Ia, Fv, Fc: 52, and the offsets
     assert rec.n == 52 + 6
 
 

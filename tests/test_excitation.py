@@ -20,7 +20,7 @@ from mindyn.identification.excitation import (
 
 
 def seed_formula(a, b, q0, f, t):
-    """The ZCR07S study / method.md section 6, written out term by term."""
+    """The Fourier series of the ZCR07S study, written out term by term."""
     w = 2 * math.pi * f
     n, N = a.shape
     q = np.tile(q0, (t.size, 1)).astype(float)

@@ -14,7 +14,7 @@ import pytest
 from conftest import assert_close, load_urdf_pair, pinocchio_model, random_state
 from mindyn import _core
 from mindyn.cli import main
-from mindyn.ik import (
+from mindyn.inverse_kinematics import (
     circle_path,
     damped_pinv,
     ik_solve,

@@ -12,7 +12,7 @@ import pinocchio as pin
 import pytest
 import yaml
 from conftest import load_urdf_pair, pinocchio_model
-from mindyn.ik import ik_solve
+from mindyn.inverse_kinematics import ik_solve
 
 POSES = 120
 

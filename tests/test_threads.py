@@ -16,7 +16,7 @@ import time
 
 import mindyn
 import numpy as np
-from mindyn.ik import ik_solve
+from mindyn.inverse_kinematics import ik_solve
 
 THREADS = 4
 ROUNDS = 25

@@ -23,7 +23,7 @@ from ._core import to_pinocchio_order as _to_pin
 from ._version import __version__ as __version__
 from .base import BaseParameters, base_parameters
 from .control import coriolis_matrix, slotine_li_regressor
-from .ik import ik
+from .inverse_kinematics import ik
 from .robot import Robot, bundled_robots, load
 
 __all__ = [

@@ -68,6 +68,25 @@ class BaseParameters:
         self.options = dict(options or {})
         self._off = [f"Off{k + 1}" for k in range(robot.n)] if self.offset else []
 
+    def for_robot(
+        self, robot: Robot, order: Sequence[int] | Sequence[str] | None = None, offset=None
+    ) -> BaseParameters:
+        """The base parameters of ``robot`` (e.g. the same description at other lengths) by the
+        same method, joint terms and settings as these; ``order`` (as :func:`base_parameters`
+        takes it) replaces the column priority order, ``offset`` the offsets, when given."""
+        return base_parameters(
+            robot,
+            rotor=self.rotor,
+            friction=self.friction,
+            method=self.method,
+            order=order,
+            tolerance=float(self.options.get("tolerance", 1e-9)),
+            samples=int(self.options.get("samples", 0)),
+            seed=int(self.options.get("seed", 1)),
+            snap=float(self.options.get("snap", 0.0)),
+            offset=self.offset if offset is None else offset,
+        )
+
     @cached_property
     def sets(self) -> dict:
         """The three sets as dictionaries (see the class attributes), built on first use."""

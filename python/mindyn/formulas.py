@@ -557,7 +557,6 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     Y0 = np.array(bp._b.Y)
     P = len(classical)
     order = pivots + [c for c in range(P) if c not in set(pivots)]
-    opts = bp.options
 
     ns = len(geo.symbols)
     twists = list(geo.twists)
@@ -582,19 +581,7 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     alpha0 = np.array([geo.rows[k, 1] for k in twists]) if nt else np.zeros(0)
 
     def numeric(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
-        from .base import base_parameters  # base imports this module
-
-        other = base_parameters(
-            geo.build(values, angles),
-            rotor=bp.rotor,
-            friction=bp.friction,
-            method=bp.method,
-            order=order,
-            tolerance=float(opts.get("tolerance", 1e-9)),
-            samples=int(opts.get("samples", 0)),
-            seed=int(opts.get("seed", 1)),
-            snap=float(opts.get("snap", 0.0)),
-        )
+        other = bp.for_robot(geo.build(values, angles), order=order, offset=False)
         if other.names != names or other.pivots != pivots:
             raise _core.ModelError(
                 f"symbolic formulas: the base set of '{robot.name}' changes when its lengths "

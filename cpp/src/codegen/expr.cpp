@@ -5,13 +5,11 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "../spatial.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn::codegen {
 
 namespace {
-
-using detail::sgn;
 
 std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
   h ^= v + 0x9e3779b97f4a7c15ULL + (h << 6) + (h >> 2);

@@ -165,7 +165,7 @@ def cmd_track(args: argparse.Namespace) -> int:
 
 
 def cmd_ik(args: argparse.Namespace) -> int:
-    from ..ik import ik_solve, pose_from_xyz_rpy
+    from ..inverse_kinematics import ik_solve, pose_from_xyz_rpy
 
     robot = load(args.robot, tip=args.tip)
     scale = np.pi / 180.0 if args.deg else 1.0

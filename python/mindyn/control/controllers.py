@@ -4,7 +4,7 @@ Each controller satisfies :class:`mindyn.control.Controller`: ``tau = ctl(t, q, 
 ddq_d)`` once per period on the measured state, the torque held until the next call;
 :func:`mindyn.control.simulate` runs them in closed loop.
 
-- :class:`AdaptivePD`: the Slotine-Li adaptive controller on the base parameters (method.md §7).
+- :class:`AdaptivePD`: the Slotine-Li adaptive controller on the base parameters.
   Sign convention (the one used everywhere here)::
 
       e = q - q_d                 s = dq - dq_r = de + Lambda e

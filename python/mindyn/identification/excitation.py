@@ -1,6 +1,6 @@
 """Excitation trajectories for identification: finite Fourier series optimised for conditioning.
 
-Joint ``i`` follows (the ZCR07S study, ``method.md`` section 6)::
+Joint ``i`` follows a finite Fourier series (as in the ZCR07S study)::
 
     q_i(t) = q_i0 + sum_{l=1..N} [ a_il / (w l) sin(w l t) - b_il / (w l) cos(w l t) ],  w = 2 pi f
 

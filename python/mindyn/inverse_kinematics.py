@@ -1,4 +1,4 @@
-"""Inverse kinematics through the Jacobian (method.md §8).
+"""Inverse kinematics through the Jacobian.
 
 - :func:`velocity_ik`: ``dq = J^+ dx`` for a tool twist ``dx``, with damped least squares near
   singularities and optional null-space motion for redundant arms;
@@ -11,7 +11,8 @@ Twists and Jacobians follow :meth:`mindyn.Robot.jacobian`: ``(vx, vy, vz, wx, wy
 frame, the linear part the velocity of the tool-frame origin. Pose errors are the twist that moves
 a frame onto another in unit time: ``(p_d - p, rotation vector of R_d R^T)``.
 
-``mindyn.ik`` is the function :func:`ik`; import the other names with ``from mindyn.ik import ...``.
+``mindyn.ik`` is the function :func:`ik`; the other names are imported from this module,
+``mindyn.inverse_kinematics``.
 """
 
 from __future__ import annotations
