@@ -6,17 +6,17 @@ Format: one header line, then one row per sample, comma-separated::
 
 Cells are decimal numbers in ASCII (``-1.25``, ``3e-4``, blanks around them allowed); the file
 is UTF-8 text (a leading byte-order mark is skipped). ``t`` in seconds, strictly increasing;
-positions in rad (m for prismatic joints), velocities and accelerations per second; torques in
-N m (N), or as relative values in per mille of the drive's rated torque, as the ZCR07S
-controller logs them (``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio /
-1000``, with the drive table of the robot description). The torque columns may say their unit
-in the header, ``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with
-``torque_unit``); the reader then needs no ``torque_unit``. Motor currents in A may stand in for the torques, as
+positions in rad (m for prismatic joints), velocities and accelerations per second; torques in N
+m (N), or as relative values in per mille of the drive's rated torque, as the ZCR07S controller
+logs them (``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, with
+the drive table of the robot description). The torque columns may say their unit in the header,
+``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with ``torque_unit``); the
+reader then needs no ``torque_unit``. Motor currents in A may stand in for the torques, as
 columns ``i1..iN`` (or ``torque_unit="current"``): ``tau = i * K`` with the joint-side drive
-gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K`` given as
-``drive_gain``. Velocities and accelerations that are not logged are obtained from the
-positions (velocities) by zero-phase low-pass filtering and central differences; the settings
-are reported in :attr:`JointData.processing`.
+gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K`` given as ``drive_gain``.
+Velocities and accelerations that are not logged are obtained from the positions (velocities) by
+zero-phase low-pass filtering and central differences; the settings are reported in
+:attr:`JointData.processing`.
 """
 
 from __future__ import annotations
