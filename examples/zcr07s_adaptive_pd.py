@@ -82,7 +82,7 @@ def main() -> None:
             endpoint=False,
         )
         header = {"run": name, "param_error": args.error, "seed": args.seed}
-        summaries[name] = control.write_report(result, out / name, cycle, header)
+        summaries[name] = control.write_tracking_report(result, out / name, cycle, header)
         summaries[name]["max_error_last_cycle_deg"] = result.max_error_deg(
             duration - cycle
         ).tolist()

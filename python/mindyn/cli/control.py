@@ -77,7 +77,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
 
 
 def cmd_track(args: argparse.Namespace) -> int:
-    from ..control.simulation import SensorNoise, simulate, summary, write_report
+    from ..control.simulation import SensorNoise, simulate, summary, write_tracking_report
 
     robot = load(args.robot, tip=args.tip)
     n = robot.n
@@ -158,7 +158,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         }
         if robot.name == "zcr07s" and args.controller == "adaptive-pd":
             header["zcr07s_max_error_deg"] = ZCR07S_STUDY_MAX_ERROR_DEG
-        write_report(result, args.report, cycle, header)
+        write_tracking_report(result, args.report, cycle, header)
         lines.append(f"report: {args.report}/ (summary.json, log.csv, plots)")
     print("\n".join(lines))
     return 0

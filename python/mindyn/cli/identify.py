@@ -104,7 +104,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         noise_from_spec,
         simulate,
         simulate_inverse,
-        write_report,
+        write_tracking_report,
     )
     from ..identification.data import convert_torque, write_csv
     from .control import reference_and_controller
@@ -173,7 +173,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     print(f"  wrote {path}{unit} and {path.with_name(path.stem + '.truth.json')}")
     if args.report:
         header = {"robot": robot.name, "reference": ref_text, "seed": args.seed}
-        write_report(log, args.report, cycle, header)
+        write_tracking_report(log, args.report, cycle, header)
         print(f"  report: {args.report}/ (summary.json, log.csv, plots)")
     return 0
 

@@ -31,7 +31,7 @@ from .simulation import (
     simulate,
     simulate_inverse,
     summary,
-    write_report,
+    write_tracking_report,
 )
 
 __all__ = [
@@ -57,5 +57,5 @@ __all__ = [
     "slotine_li_regressor",
     "slotine_li_regressor_classical",
     "summary",
-    "write_report",
+    "write_tracking_report",
 ]

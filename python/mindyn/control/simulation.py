@@ -16,7 +16,7 @@ experiment (tracking reports).
   steps per period (or scipy's adaptive RK45, ``integrator="scipy"``).
 - One result, :class:`SimulationResult`: what was logged (measured, noisy), what was true, the
   reference and the controller's model terms; :meth:`SimulationResult.save` writes the log of
-  ``mindyn identify``, :func:`write_report` the tracking report of ``mindyn track``.
+  ``mindyn identify``, :func:`write_tracking_report` the tracking report of ``mindyn track``.
 
 :func:`simulate` runs the closed loop; :func:`simulate_inverse` is the open-loop alternative
 (the motion is the reference, the torques by inverse dynamics, no controller).
@@ -49,7 +49,7 @@ __all__ = [
     "simulate",
     "simulate_inverse",
     "summary",
-    "write_report",
+    "write_tracking_report",
 ]
 
 
@@ -749,7 +749,7 @@ def summary(result: SimulationResult, cycle: float | None = None) -> dict:
     return out
 
 
-def write_report(
+def write_tracking_report(
     result: SimulationResult,
     folder: str | Path,
     cycle: float | None = None,
