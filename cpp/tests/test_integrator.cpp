@@ -148,7 +148,9 @@ TEST(Integrator, FreeTwoLinkArmConvergesAndConservesEnergy) {
   for (int steps : {10, 20, 40, 80, 160}) {
     const Eigen::VectorXd x = run(steps);
     const double err = (x - fine).norm();
-    if (previous > 0) EXPECT_LT(err, previous) << steps;
+    if (previous > 0) {
+      EXPECT_LT(err, previous) << steps;
+    }
     previous = err;
   }
   const Eigen::VectorXd x40 = run(40), x160 = run(160);

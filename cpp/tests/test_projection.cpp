@@ -172,8 +172,9 @@ TEST(Echelon, HandMadeDependencies) {
       0, 0, 0, 0, 0, 1;
   EXPECT_LT((d.Y - Y).cwiseAbs().maxCoeff(), 1e-14);
   for (int i = 0; i < Y.size(); ++i)  // 0 and +-1 are recognised exactly
-    if (Y.data()[i] == 0.0 || std::abs(Y.data()[i]) == 1.0)
+    if (Y.data()[i] == 0.0 || std::abs(Y.data()[i]) == 1.0) {
       EXPECT_EQ(d.Y.data()[i], Y.data()[i]) << "entry " << i;
+    }
   EXPECT_LT(d.largest_dropped, 1e-15);
   EXPECT_FALSE(d.near_degenerate);
 
