@@ -319,8 +319,9 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
     answer (its base parameters equal the least-squares estimate): its realisation nearest the
     description when that is consistent (no solver runs), else the consistent one nearest the
     description (one convex solve with ``Y pi = p_b`` imposed). Otherwise the optimum is on the
-    boundary of the consistent set; see :data:`TIE_BREAK_SLACK` for how it is taken.
-    After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance are projected
+    boundary of the consistent set; see :data:`TIE_BREAK_SLACK` for how it is taken. With a
+    prior, the conic solver's answer is refined by a smooth descent of the same objective
+    (:func:`_refine_with_prior`; noted with the gain). After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance are projected
     onto the positive semidefinite matrices (negative eigenvalues set to zero) and ``Ia, Fv, Fc``
     clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``."""
     t0 = time.perf_counter()
@@ -355,6 +356,14 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
         notes.append("the unconstrained optimum is consistent: returned as it is")
     else:
         pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls)
+        if W > 0:
+            J0s = _prior_matrices(base, layout, pi0, None)
+            pi, gain = _refine_with_prior(M, z, s2, pi, layout, J0s, W)
+            if gain > 0:
+                notes.append(
+                    f"the cone solver's answer refined by a smooth descent of the same objective "
+                    f"(L-BFGS-B over Cholesky factors of the pseudo-inertias): lower by {gain:.3g}"
+                )
     realised = W == 0 and (ok_n or any(n.startswith("the unconstrained optimum") for n in notes))
     # Enforce the constraints exactly (solver tolerance): PSD projection, clipping.
     for ix in layout.links:
@@ -395,6 +404,79 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
         notes=notes,
         seconds=time.perf_counter() - t0,
     )
+
+
+def _refine_with_prior(M, z, s2, pi, layout: _Layout, J0s, W: float) -> tuple[np.ndarray, float]:
+    """With a prior the objective ``|M pi - z|^2 / s2 + W sum d(J, J0)`` is smooth and strictly
+    convex inside the cone, and its minimiser is interior (the log-det term): a conic solver
+    stops at a relative duality gap of about 1e-5 when the fit term is large, which leaves the
+    parameters the prior decides visibly off (or on the boundary). This descends from its
+    answer over ``J = L L^T`` per link (``L`` lower triangular, so every iterate is consistent)
+    and the non-negative joint terms as bounds, with the exact gradient; returns the better of
+    the two and how much lower the objective is (0: the solver's answer kept)."""
+    from scipy.optimize import minimize
+
+    G10 = _pseudo_map()
+    tril = np.tril_indices(4)
+    J0inv = [0.5 * (A + A.T) for A in (np.linalg.inv(J0) for J0 in J0s)]
+    links, extra = layout.links, layout.extra
+    nl = len(links)
+
+    def unpack(x):
+        p = np.array(pi, dtype=float)
+        Js = []
+        for j, ix in enumerate(links):
+            L = np.zeros((4, 4))
+            L[tril] = x[10 * j : 10 * j + 10]
+            J = L @ L.T
+            p[ix] = G10 @ J.ravel()
+            Js.append((L, J))
+        p[extra] = x[10 * nl :]
+        return p, Js
+
+    def fun(x):
+        p, Js = unpack(x)
+        r = M @ p - z
+        f = float(r @ r) / s2
+        gp = 2.0 * (M.T @ r) / s2
+        grad = np.zeros_like(x)
+        for j, (ix, (L, J)) in enumerate(zip(links, Js)):
+            sign, logdet = np.linalg.slogdet(J)
+            if sign <= 0:
+                return math.inf, grad
+            Jinv = np.linalg.inv(J)
+            f += W * (-logdet + float(np.sum(J0inv[j] * J)))
+            D = (G10.T @ gp[ix]).reshape(4, 4) + W * (J0inv[j] - Jinv)
+            grad[10 * j : 10 * j + 10] = ((D + D.T) @ L)[tril]
+        grad[10 * nl :] = gp[extra]
+        return f, grad
+
+    x0 = []
+    for ix in links:
+        J = pseudo_inertia(pi[ix])
+        lam, V = np.linalg.eigh(J)
+        floor = 1e-9 * max(1.0, float(lam[-1]))  # a factor of a singular answer: just inside
+        root = V * np.sqrt(np.maximum(lam, floor))
+        R = np.linalg.qr(root.T, mode="r")
+        x0.extend((R.T * np.where(np.diag(R) < 0, -1.0, 1.0))[tril])
+    x0 = np.concatenate([x0, np.asarray(pi, float)[extra]])
+    f0 = fun(x0)[0]
+    nonneg = set(extra[layout.nonneg].tolist())
+    bounds = [(None, None)] * (10 * nl) + [
+        (0.0, None) if i in nonneg else (None, None) for i in extra
+    ]
+    x0[10 * nl :] = [max(v, 0.0) if i in nonneg else v for v, i in zip(x0[10 * nl :], extra)]
+    out = minimize(
+        fun,
+        x0,
+        jac=True,
+        method="L-BFGS-B",
+        bounds=bounds,
+        options={"maxiter": 5000, "ftol": 1e-15, "gtol": 1e-10},
+    )
+    if not (math.isfinite(out.fun) and out.fun < f0):
+        return pi, 0.0
+    return unpack(out.x)[0], float(f0 - out.fun)
 
 
 def _mean_mass(base: BaseParameters, layout: _Layout, pi0: np.ndarray) -> float:
