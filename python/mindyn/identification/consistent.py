@@ -309,21 +309,22 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
     """The physically consistent classical parameters for the least-squares problem of ``res``
     (see the module documentation).
 
-    ``prior_weight`` ``W >= 0`` adds ``W * sum_links d(J, J0)``, the log-det (Bregman) divergence
-    ``d(J, J0) = -log det(J0^-1 J) + tr(J0^-1 J) - 4`` of each link's pseudo-inertia from the
-    description's, to the fit term (which is in units of the noise variance, see the module): at
-    ``W = 1`` a divergence of 1 costs as much as moving the base parameters one standard deviation
-    along one direction. ``W = 0`` (default): no prior; the classical parameters the data leave
-    undetermined are then taken nearest the description. Without a prior, when the unconstrained
-    optimum (all base parameters, no pruning) has a consistent classical realisation, that is the
-    answer (its base parameters equal the least-squares estimate): its realisation nearest the
-    description when that is consistent (no solver runs), else the consistent one nearest the
-    description (one convex solve with ``Y pi = p_b`` imposed). Otherwise the optimum is on the
-    boundary of the consistent set; see :data:`TIE_BREAK_SLACK` for how it is taken. With a
-    prior, the conic solver's answer is refined by a smooth descent of the same objective
-    (:func:`_refine_with_prior`; noted with the gain). After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance are projected
-    onto the positive semidefinite matrices (negative eigenvalues set to zero) and ``Ia, Fv, Fc``
-    clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``."""
+    ``prior_weight`` ``W >= 0`` adds ``W * sum_links d(J, J0)``, the log-det (Bregman)
+    divergence ``d(J, J0) = -log det(J0^-1 J) + tr(J0^-1 J) - 4`` of each link's pseudo-inertia
+    from the description's, to the fit term (which is in units of the noise variance, see the
+    module): at ``W = 1`` a divergence of 1 costs as much as moving the base parameters one
+    standard deviation along one direction. ``W = 0`` (default): no prior; the classical
+    parameters the data leave undetermined are then taken nearest the description. Without a
+    prior, when the unconstrained optimum (all base parameters, no pruning) has a consistent
+    classical realisation, that is the answer (its base parameters equal the least-squares
+    estimate): its realisation nearest the description when that is consistent (no solver
+    runs), else the consistent one nearest the description (one convex solve with ``Y pi =
+    p_b`` imposed). Otherwise the optimum is on the boundary of the consistent set; see
+    :data:`TIE_BREAK_SLACK` for how it is taken. With a prior, the conic solver's answer is
+    refined by a smooth descent of the same objective (:func:`_refine_with_prior`; noted with
+    the gain). After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance
+    are projected onto the positive semidefinite matrices (negative eigenvalues set to zero)
+    and ``Ia, Fv, Fc`` clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``."""
     t0 = time.perf_counter()
     W = _weight(prior_weight)
     base = res.base
