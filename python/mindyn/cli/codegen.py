@@ -20,7 +20,8 @@ from .args import add_joint_terms, add_offset, add_robot, joint_terms, output_fi
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "codegen",
-        help="generate inverse dynamics, gravity torque and base regressor in C or ST",
+        help="generate inverse dynamics, gravity torque, base regressor or a controller step "
+        "(adaptive PD, computed torque, gravity compensation) in C or ST",
         description="Generate the Newton-Euler recursion customised to the robot, in its base "
         "parameters, as C99 (header + source) or IEC 61131-3 Structured Text, and print its "
         "operation counts beside those of the classical-parameter recursion generated the "
