@@ -345,3 +345,38 @@ def test_track_command_errors(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.startswith(f"mindyn: error: argument {opt}: expected a finite number in (0,")
         assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b"kd: 5\n\xff\xfe\n", r"line 2: not UTF-8 text \(byte 0xff at offset 6\)"),
+        (b"- 1\n- 2\n", "expected a mapping"),
+    ],
+)
+def test_gains_file_not_utf8_or_not_a_mapping(tmp_path, content, message):
+    """A gains file that is not UTF-8 text, or not a mapping: one error naming the file."""
+    f = tmp_path / "gains.yaml"
+    f.write_bytes(content)
+    with pytest.raises(ValueError, match=message) as err:
+        control.load_gains(f, mindyn.load("planar2"))
+    assert str(f) in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b'{"freq": 0.1,\xff}', r"line 1: not UTF-8 text \(byte 0xff at offset 13\)"),
+        (b"[1, 2, 3]", "expected a JSON object"),
+    ],
+)
+def test_trajectory_json_not_utf8_or_not_an_object(tmp_path, content, message):
+    """An excitation JSON that is not UTF-8 text, or not an object: one error naming the file
+    (it used to be a codec error without the file, or an AttributeError)."""
+    from mindyn.identification.excitation import FourierTrajectory
+
+    f = tmp_path / "traj.json"
+    f.write_bytes(content)
+    with pytest.raises(ValueError, match=message) as err:
+        FourierTrajectory.load(f)
+    assert str(f) in str(err.value)

@@ -284,8 +284,10 @@ def load_gains(path: str | Path, robot: Robot) -> dict:
         from .._core import RobotFileNotFoundError
 
         raise RobotFileNotFoundError(f"gains file '{path}' does not exist")
+    from ..identification.data import decode_text
+
     try:
-        data = yaml.safe_load(path.read_text())
+        data = yaml.safe_load(decode_text(path))
     except yaml.YAMLError as e:
         raise ValueError(f"{path}: not valid YAML ({e})") from None
     if data is None:

@@ -180,10 +180,14 @@ class FourierTrajectory:
         path = Path(path)
         if not path.is_file():
             raise FileNotFoundError(f"trajectory file '{path}' does not exist")
+        from .data import decode_text
+
         try:
-            d = json.loads(path.read_text())
+            d = json.loads(decode_text(path))
         except json.JSONDecodeError as e:
             raise ValueError(f"{path}: not valid JSON ({e})") from None
+        if not isinstance(d, dict):
+            raise ValueError(f"{path}: expected a JSON object (the excitation's coefficients)")
         return cls.from_dict(d.get("trajectory", d))
 
 
