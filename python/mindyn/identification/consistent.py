@@ -460,13 +460,13 @@ def _refine_with_prior(M, z, s2, pi, layout: _Layout, J0s, W: float) -> tuple[np
         root = V * np.sqrt(np.maximum(lam, floor))
         R = np.linalg.qr(root.T, mode="r")
         x0.extend((R.T * np.where(np.diag(R) < 0, -1.0, 1.0))[tril])
-    x0 = np.concatenate([x0, np.asarray(pi, float)[extra]])
-    f0 = fun(x0)[0]
     nonneg = set(extra[layout.nonneg].tolist())
+    start = [max(v, 0.0) if i in nonneg else v for v, i in zip(np.asarray(pi, float)[extra], extra)]
+    x0 = np.concatenate([x0, start])
+    f0 = fun(x0)[0]
     bounds = [(None, None)] * (10 * nl) + [
         (0.0, None) if i in nonneg else (None, None) for i in extra
     ]
-    x0[10 * nl :] = [max(v, 0.0) if i in nonneg else v for v, i in zip(x0[10 * nl :], extra)]
     out = minimize(
         fun,
         x0,
