@@ -626,3 +626,5 @@ def test_identify_urdf_needs_consistent_and_a_urdf_robot(tmp_path):
     assert rc == 2 and "--urdf needs a robot from a URDF" in err, err
     rc, _, err = run(["identify", UR5, fit, "--urdf", tmp_path / "x.urdf"])
     assert rc == 2 and "expected --consistent" in err, err
+    rc, _, err = run(["identify", UR5, fit, "--consistent", "--sidecar", tmp_path / "x.yaml"])
+    assert rc == 2 and "--sidecar: expected --urdf or --yaml" in err, err

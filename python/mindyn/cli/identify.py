@@ -309,6 +309,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
             "--consistent as well (only a physically consistent estimate can be written as a robot "
             "description)"
         )
+    if args.sidecar and not (args.urdf or args.yaml):
+        raise ValueError("--sidecar: expected --urdf or --yaml (the description it goes with)")
     if args.urdf or args.yaml:
         check_description_kind(robot, args.robot, args.urdf is not None)
     _check_lowpass_options(args)
