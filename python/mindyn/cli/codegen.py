@@ -4,7 +4,6 @@ Text, optionally packed as a PLCopen XML project."""
 from __future__ import annotations
 
 import argparse
-import json
 import math
 from pathlib import Path
 
@@ -278,12 +277,11 @@ def _identified_params(path: str, robot, base, args):
     parameters it pruned (``removed``) as zero, and the pruned names; ``(None, [], "")`` for any
     other parameter file (read by :func:`mindyn.codegen.read_parameter_file`); and the pruning
     threshold as text."""
-    p = Path(path)
-    if not p.is_file():
-        return None, [], ""
+    from ..identification.data import DataError, read_json
+
     try:
-        doc = json.loads(p.read_text())
-    except (json.JSONDecodeError, UnicodeDecodeError):
+        doc = read_json(path)
+    except (DataError, FileNotFoundError):
         return None, [], ""
     if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
         return None, [], ""

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 import math
-from pathlib import Path
 
 from .._core import ModelError
 from ..export import classical_terms, write_urdf, write_yaml
+from ..identification.data import read_json
 from ..robot import load
 from .args import add_robot, output_file
 
@@ -31,17 +30,7 @@ def register(subparsers) -> None:
 def read_classical(path: str) -> tuple[dict, str | None]:
     """The 'classical' map of an identification JSON and the robot it names (None if none),
     or a one-line error naming the file."""
-    file = Path(path)
-    if not file.is_file():
-        raise FileNotFoundError(f"identification file '{path}' does not exist")
-    try:
-        doc = json.loads(file.read_text(encoding="utf-8"), parse_constant=_no_constant)
-    except UnicodeDecodeError as e:
-        raise ModelError(f"{path}: not UTF-8 text (byte at offset {e.start})") from None
-    except json.JSONDecodeError as e:
-        raise ModelError(f"{path}:{e.lineno}:{e.colno}: not valid JSON: {e.msg}") from None
-    except ValueError as e:
-        raise ModelError(f"{path}: {e}") from None
+    doc = read_json(path, "identification file")
     classical = doc.get("classical") if isinstance(doc, dict) else None
     if not isinstance(classical, dict) or not classical:
         raise ModelError(
@@ -50,10 +39,6 @@ def read_classical(path: str) -> tuple[dict, str | None]:
         )
     robot = doc.get("robot")
     return classical, robot if isinstance(robot, str) else None
-
-
-def _no_constant(name: str) -> float:
-    raise ValueError(f"holds {name}; expected finite numbers")
 
 
 def cmd_export(args: argparse.Namespace) -> int:

@@ -25,7 +25,6 @@ from ``tau - tau_arm(q, dq, ddq) = W_last(q, dq, ddq) phi`` with the identified 
 
 from __future__ import annotations
 
-import json
 import math
 import re
 import time
@@ -39,7 +38,7 @@ import scipy.linalg as sla
 from .._core import ModelError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
-from .data import JointData
+from .data import DataError, JointData, read_json
 from .errors import IdentificationError
 from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
 from .models import require_torque
@@ -721,10 +720,8 @@ def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.
     if isinstance(arm, (str, Path)):
         where = str(arm)
         try:
-            arm = json.loads(Path(arm).read_text())
-        except FileNotFoundError:
-            raise FileNotFoundError(f"identification JSON '{arm}' does not exist") from None
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as ex:
+            arm = read_json(arm, "identification JSON")
+        except DataError as ex:
             raise ModelError(f"{where}: not a JSON file of mindyn identify ({ex})") from None
     need = ("robot", "base_names", "base_values", "rotor", "friction", "offset")
     if not isinstance(arm, dict) or any(k not in arm for k in need):

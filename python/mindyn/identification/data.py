@@ -387,6 +387,26 @@ def decode_text(path: Path) -> str:
         ) from None
 
 
+def read_json(path, what: str = "JSON file"):
+    """The document of a JSON file, read as :func:`decode_text` reads text: DataFileNotFoundError
+    when ``path`` (the ``what``) does not exist, DataError naming the file, line and column when
+    it is not JSON, or when it holds NaN or Infinity (not JSON numbers)."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataFileNotFoundError(f"{what} '{path}' does not exist")
+    text = decode_text(path)
+    try:
+        return json.loads(text, parse_constant=_no_constant)
+    except json.JSONDecodeError as e:
+        raise DataError(f"{path}:{e.lineno}:{e.colno}: not valid JSON: {e.msg}") from None
+    except ValueError as e:
+        raise DataError(f"{path}: {e}") from None
+
+
+def _no_constant(name: str) -> float:
+    raise ValueError(f"holds {name}; expected finite numbers")
+
+
 def first_not_increasing(t: np.ndarray) -> int | None:
     """Index of the first time that does not exceed the one before it, or None."""
     with np.errstate(over="ignore", invalid="ignore"):  # t[k] - t[k-1] may overflow to inf > 0
@@ -634,10 +654,9 @@ def read_truth(csv_path) -> dict | None:
     p = truth_path(csv_path)
     if not p.is_file():
         return None
-    try:
-        d = json.loads(p.read_text())
-    except json.JSONDecodeError as e:
-        raise DataError(f"{p}: not valid JSON ({e})") from None
+    d = read_json(p, "truth file")
+    if not isinstance(d, dict):
+        raise DataError(f"{p}: a truth file is a JSON object")
     if "names" not in d or "values" not in d:
         raise DataError(f"{p}: a truth file needs 'names' and 'values'")
     return d

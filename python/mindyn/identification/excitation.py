@@ -177,15 +177,10 @@ class FourierTrajectory:
     @classmethod
     def load(cls, path) -> FourierTrajectory:
         """Reads the JSON written by :meth:`ExcitationResult.save` (or :meth:`to_dict`)."""
-        path = Path(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"trajectory file '{path}' does not exist")
-        from .data import decode_text
+        from .data import read_json
 
-        try:
-            d = json.loads(decode_text(path))
-        except json.JSONDecodeError as e:
-            raise ValueError(f"{path}: not valid JSON ({e})") from None
+        path = Path(path)
+        d = read_json(path, "trajectory file")
         if not isinstance(d, dict):
             raise ValueError(f"{path}: expected a JSON object (the excitation's coefficients)")
         return cls.from_dict(d.get("trajectory", d))
