@@ -10,7 +10,6 @@ import sys
 import numpy as np
 
 from ..base import base_parameters
-from ..identification.data import truth_path
 from ..robot import load
 from .args import add_robot, number, output_dir, output_file, seed
 
@@ -139,6 +138,8 @@ def cmd_track(args: argparse.Namespace) -> int:
         pe = s["parameter_error_norm"]
         lines.append(f"parameter error |p_hat - p|: {pe[0]:.4g} at t = 0, {pe[-1]:.4g} at the end")
     if args.output:
+        from ..identification.data import truth_path
+
         path = result.save(args.output, robot.name)
         lines.append(
             f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"

@@ -7,7 +7,6 @@ import math
 
 from .._core import ModelError
 from ..export import classical_terms, write_urdf, write_yaml
-from ..identification.data import read_json
 from ..robot import load
 from .args import add_robot, output_file
 
@@ -30,6 +29,8 @@ def register(subparsers) -> None:
 def read_classical(path: str) -> tuple[dict, str | None]:
     """The 'classical' map of an identification JSON and the robot it names (None if none),
     or a one-line error naming the file."""
+    from ..identification.data import read_json  # here: not needed by the other commands
+
     doc = read_json(path, "identification file")
     classical = doc.get("classical") if isinstance(doc, dict) else None
     if not isinstance(classical, dict) or not classical:

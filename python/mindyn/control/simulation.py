@@ -35,7 +35,6 @@ from typing import Protocol
 import numpy as np
 
 from .. import _core
-from ..identification.data import truth_path, write_csv
 from ..robot import Robot, load
 
 __all__ = [
@@ -375,6 +374,9 @@ class SimulationResult:
         """Writes ``t, q, dq, tau`` (the logged values, torques in N m) to ``path`` as
         ``mindyn identify`` reads it and the true parameters and settings to the sidecar
         ``<stem>.truth.json``."""
+        # imported here: the identification package (and scipy.signal) is not needed to simulate
+        from ..identification.data import truth_path, write_csv
+
         path = write_csv(path, self.t, self.q, self.tau, dq=self.dq)
         truth = {
             "robot": robot_name,
