@@ -62,3 +62,19 @@ def test_layer_contract_holds(tmp_path):
     root = Path(__file__).resolve().parents[1]
     config = str(root / "pyproject.toml")
     assert lint_imports(config_filename=config, no_cache=True, no_logo=True) == 0
+
+
+def test_import_mindyn_leaves_identification_and_solvers_out():
+    """``import mindyn`` (every use of the library, every command) loads the model, base
+    parameters, controllers and IK, not the identification package with scipy.signal or the
+    convex solvers, which take a second or more to import."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, mindyn; "
+        "print(sorted(m for m in ('mindyn.identification', 'scipy.signal', 'cvxpy') "
+        "if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]", out.stdout
