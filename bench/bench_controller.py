@@ -67,8 +67,8 @@ def inputs(robot, steps: int) -> np.ndarray:
     ref = control.SumOfSines(robot, period=10.0, seed=0)
     rng = np.random.default_rng(0)
     out = np.empty((steps, 5, robot.n))
-    for i in range(steps):
-        qd, dqd, ddqd = ref(0.004 * i)
+    Qd, dQd, ddQd = ref.evaluate(0.004 * np.arange(steps))
+    for i, (qd, dqd, ddqd) in enumerate(zip(Qd, dQd, ddQd)):
         out[i] = [
             qd + rng.normal(0, 1e-3, robot.n),
             dqd + rng.normal(0, 1e-2, robot.n),
@@ -116,7 +116,7 @@ def bench(robot, kind, cc, cflags, steps, repeats, folder: Path):
         m = min(steps, 500)
         t0 = time.perf_counter()
         for i in range(m):
-            ctl(0.0, x[i, 0], x[i, 1], (x[i, 2], x[i, 3], x[i, 4]), 0.004)
+            ctl(0.0, x[i, 0], x[i, 1], x[i, 2], x[i, 3], x[i, 4])
         lib_us = (time.perf_counter() - t0) / m * 1e6
     return code, ns, lib_us
 
