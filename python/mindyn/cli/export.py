@@ -31,7 +31,7 @@ def read_classical(path: str) -> tuple[dict, str | None]:
     or a one-line error naming the file."""
     from ..identification.data import read_json  # here: not needed by the other commands
 
-    doc = read_json(path, "identification file")
+    doc = read_json(path, "identification file", finite=True)
     classical = doc.get("classical") if isinstance(doc, dict) else None
     if not isinstance(classical, dict) or not classical:
         raise ModelError(

@@ -387,16 +387,17 @@ def decode_text(path: Path) -> str:
         ) from None
 
 
-def read_json(path, what: str = "JSON file"):
+def read_json(path, what: str = "JSON file", finite: bool = False):
     """The document of a JSON file, read as :func:`decode_text` reads text: DataFileNotFoundError
     when ``path`` (the ``what``) does not exist, DataError naming the file, line and column when
-    it is not JSON, or when it holds NaN or Infinity (not JSON numbers)."""
+    it is not JSON, or, with ``finite``, when it holds NaN or Infinity (which Python's json
+    writes for undefined figures, e.g. in the JSON of ``mindyn identify``)."""
     path = Path(path)
     if not path.is_file():
         raise DataFileNotFoundError(f"{what} '{path}' does not exist")
     text = decode_text(path)
     try:
-        return json.loads(text, parse_constant=_no_constant)
+        return json.loads(text, parse_constant=_no_constant if finite else None)
     except json.JSONDecodeError as e:
         raise DataError(f"{path}:{e.lineno}:{e.colno}: not valid JSON: {e.msg}") from None
     except ValueError as e:
