@@ -22,6 +22,17 @@ Eigen::Isometry3d Joint::transform(double q) const {
   return pre * J * post;
 }
 
+bool Model::isSerial() const {
+  for (int k = 0; k < nq(); ++k)
+    if (parent(k) != k - 1) return false;
+  return true;
+}
+
+bool Model::supports(int j, int k) const {
+  while (k > j) k = parent(k);
+  return k == j;
+}
+
 ParameterLayout ParameterLayout::fromSize(int n, long size) {
   for (int r = 0; r < 2; ++r)
     for (int f = 0; f < 2; ++f) {
@@ -109,6 +120,16 @@ void Model::validate() const {
   if (!gravity.allFinite()) throw ModelError(who() + ": gravity is not finite");
   if (link_names.size() != static_cast<size_t>(n + 1))
     throw ModelError(who() + ": expected " + std::to_string(n + 1) + " link names");
+  if (!parents.empty()) {
+    if (parents.size() != static_cast<size_t>(n))
+      throw ModelError(who() + ": " + std::to_string(parents.size()) + " parent indices for " +
+                       std::to_string(n) + " joints");
+    for (int k = 0; k < n; ++k)
+      if (parents[k] < -1 || parents[k] >= k)
+        throw ModelError(who() + ", joint '" + joints[k].name + "': parent index " +
+                         std::to_string(parents[k]) + " is not in [-1, " + std::to_string(k - 1) +
+                         "] (a parent joint comes before its children; -1 is the base)");
+  }
   const double V = kMaxDescriptionValue;
   const double L = 100 * V;  // a length or mass folded from up to 100 inputs
   for (int i = 0; i < 3; ++i) checkBound(who, "gravity component", gravity[i], V);

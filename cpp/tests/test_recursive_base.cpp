@@ -16,47 +16,6 @@ using namespace mindyn;
 
 namespace {
 
-Eigen::Vector3d randomUnit(std::mt19937& rng) { return test::random(rng, 3).normalized(); }
-
-// A chain with joint origins, axes and link frames drawn at random; with `special`, each joint
-// axis is, at random, parallel or perpendicular to the one before or general, and each origin
-// rotation a multiple of pi/2 or general, so that the regrouping rules of every kind occur.
-Model randomChain(std::mt19937& rng, int n, bool prismatic, bool special) {
-  Model m;
-  m.name = "random" + std::to_string(n);
-  m.convention = "generated";
-  std::uniform_int_distribution<int> pick(0, 3);
-  m.link_names.push_back("base");
-  for (int k = 0; k < n; ++k) {
-    Joint j;
-    j.name = "j" + std::to_string(k + 1);
-    j.type = prismatic && pick(rng) == 0 ? JointType::Prismatic : JointType::Revolute;
-    if (special && pick(rng) != 0) {
-      const double a = 1.5707963267948966 * pick(rng);
-      j.pre.linear() =
-          Eigen::AngleAxisd(a, Eigen::Vector3d::Unit(pick(rng) % 3)).toRotationMatrix();
-      j.axis = Eigen::Vector3d::Unit(pick(rng) % 3);
-    } else {
-      j.pre.linear() =
-          Eigen::AngleAxisd(1.3 * test::random(rng, 1)[0], randomUnit(rng)).toRotationMatrix();
-      j.axis = randomUnit(rng);
-    }
-    j.pre.translation() = test::random(rng, 3, 0.4);
-    if (pick(rng) == 0) {
-      j.post.linear() = Eigen::AngleAxisd(0.7, randomUnit(rng)).toRotationMatrix();
-      j.post.translation() = test::random(rng, 3, 0.1);
-    }
-    m.joints.push_back(j);
-    m.link_names.push_back("l" + std::to_string(k + 1));
-  }
-  m.inertial = test::random(rng, 10 * n);
-  m.rotor_inertia = test::random(rng, n).cwiseAbs();
-  m.viscous = test::random(rng, n).cwiseAbs();
-  m.coulomb = test::random(rng, n).cwiseAbs();
-  m.gravity = special ? Eigen::Vector3d(0, 0, -9.81) : Eigen::Vector3d(test::random(rng, 3, 9.81));
-  return m;
-}
-
 BaseParameters compute(const Model& model, ParameterLayout layout, BaseMethod method) {
   BaseOptions opt;
   opt.layout = layout;
@@ -121,7 +80,7 @@ TEST(RecursiveBase, SameSetAndYAsProjectionOnRandomChains) {
   std::mt19937 rng(11);
   for (int trial = 0; trial < 12; ++trial) {
     const bool special = trial % 3 != 0;
-    const Model m = randomChain(rng, special ? 6 : 4, trial % 2 == 0, special);
+    const Model m = test::randomChain(rng, special ? 6 : 4, trial % 2 == 0, special);
     expectSame(m, {false, false});
     expectSame(m, {true, true});
   }
@@ -130,8 +89,8 @@ TEST(RecursiveBase, SameSetAndYAsProjectionOnRandomChains) {
 TEST(RecursiveBase, LongChainsMatchTheSampledRegressor) {
   std::mt19937 rng(5);
   expectTorquesAndNumericalCount(planarArm(20, true), {true, true}, rng);
-  expectTorquesAndNumericalCount(randomChain(rng, 20, true, false), {true, true}, rng);
-  expectTorquesAndNumericalCount(randomChain(rng, 20, true, true), {false, false}, rng);
+  expectTorquesAndNumericalCount(test::randomChain(rng, 20, true, false), {true, true}, rng);
+  expectTorquesAndNumericalCount(test::randomChain(rng, 20, true, true), {false, false}, rng);
 }
 
 TEST(RecursiveBase, RowsAreIndependentAndCountedPerLink) {

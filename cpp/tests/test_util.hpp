@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
 #include <string>
@@ -56,6 +57,51 @@ inline Model withExtras(Model m, std::mt19937& rng) {
   m.rotor_inertia = random(rng, n).cwiseAbs();
   m.viscous = random(rng, n).cwiseAbs();
   m.coulomb = random(rng, n).cwiseAbs();
+  return m;
+}
+
+inline Eigen::Vector3d randomUnit(std::mt19937& rng) { return random(rng, 3).normalized(); }
+
+/// A chain (or, with `tree`, a tree) with joint origins, axes and link frames drawn at random; with
+/// `special`, each joint axis is, at random, parallel or perpendicular to its parent's or general,
+/// and each origin rotation a multiple of pi/2 or general, so that the regrouping rules of every
+/// kind occur. With `tree`, each joint's parent is drawn among the base and the joints before it.
+/// The inertial values are random numbers (not physically consistent).
+inline Model randomChain(std::mt19937& rng, int n, bool prismatic, bool special,
+                         bool tree = false) {
+  Model m;
+  m.name = (tree ? "randomtree" : "random") + std::to_string(n);
+  m.convention = "generated";
+  std::uniform_int_distribution<int> pick(0, 3);
+  m.link_names.push_back("base");
+  for (int k = 0; k < n; ++k) {
+    Joint j;
+    j.name = "j" + std::to_string(k + 1);
+    j.type = prismatic && pick(rng) == 0 ? JointType::Prismatic : JointType::Revolute;
+    if (special && pick(rng) != 0) {
+      const double a = 1.5707963267948966 * pick(rng);
+      j.pre.linear() =
+          Eigen::AngleAxisd(a, Eigen::Vector3d::Unit(pick(rng) % 3)).toRotationMatrix();
+      j.axis = Eigen::Vector3d::Unit(pick(rng) % 3);
+    } else {
+      j.pre.linear() =
+          Eigen::AngleAxisd(1.3 * random(rng, 1)[0], randomUnit(rng)).toRotationMatrix();
+      j.axis = randomUnit(rng);
+    }
+    j.pre.translation() = random(rng, 3, 0.4);
+    if (pick(rng) == 0) {
+      j.post.linear() = Eigen::AngleAxisd(0.7, randomUnit(rng)).toRotationMatrix();
+      j.post.translation() = random(rng, 3, 0.1);
+    }
+    m.joints.push_back(j);
+    m.link_names.push_back("l" + std::to_string(k + 1));
+    if (tree) m.parents.push_back(std::uniform_int_distribution<int>(-1, k - 1)(rng));
+  }
+  m.inertial = random(rng, 10 * n);
+  m.rotor_inertia = random(rng, n).cwiseAbs();
+  m.viscous = random(rng, n).cwiseAbs();
+  m.coulomb = random(rng, n).cwiseAbs();
+  m.gravity = special ? Eigen::Vector3d(0, 0, -9.81) : Eigen::Vector3d(random(rng, 3, 9.81));
   return m;
 }
 

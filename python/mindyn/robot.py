@@ -172,6 +172,18 @@ class Robot:
         return self._m.joint_types
 
     @property
+    def parents(self) -> list[int]:
+        """Parent joint of each joint (0-based), -1 for the base: joint k moves link k+1 relative
+        to the link of joint ``parents[k]``. A serial chain has ``parents == [-1, 0, 1, ...]``;
+        a tree has parents before children (``parents[k] < k``)."""
+        return self._m.parents
+
+    @property
+    def is_serial(self) -> bool:
+        """True when every joint's parent is the joint before it (a serial chain)."""
+        return all(p == k - 1 for k, p in enumerate(self._m.parents))
+
+    @property
     def link_names(self) -> list[str]:
         """``n + 1`` names: the base, then each moving link."""
         return self._m.link_names

@@ -108,6 +108,13 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("synthetic_inertia",
                              [](const PyModel& s) { return s.model.synthetic_inertia; })
       .def_property_readonly("link_names", [](const PyModel& s) { return s.model.link_names; })
+      .def_property_readonly("parents",
+                             [](const PyModel& s) {
+                               std::vector<int> v;
+                               for (int k = 0; k < s.model.nq(); ++k)
+                                 v.push_back(s.model.parent(k));
+                               return v;
+                             })
       .def_property_readonly("joint_names",
                              [](const PyModel& s) {
                                std::vector<std::string> v;

@@ -1,5 +1,10 @@
-// The immutable description of a serial manipulator: geometry, joint limits, drive data and the
-// classical inertial parameters. Per-call workspaces live in mindyn::Data (data.hpp).
+// The immutable description of a fixed-base manipulator, a serial chain or a tree: geometry, joint
+// limits, drive data and the classical inertial parameters. Per-call workspaces live in
+// mindyn::Data (data.hpp).
+//
+// Topology: joint k (0-based) moves link k+1 relative to the link carried by joint parent(k), or
+// relative to the base (link 0) when parent(k) == -1. Joints are numbered so that a parent comes
+// before its children (parent(k) < k). A serial chain has parent(k) = k - 1.
 #pragma once
 
 #include <Eigen/Core>
@@ -63,8 +68,8 @@ struct DHRow {
   double a = 0, alpha = 0, d = 0, theta = 0;
 };
 
-/// Joint k moves link k relative to link k-1:
-///   T_{k-1,k}(q) = pre * J(q) * post,
+/// Joint k moves link k relative to its parent link (link k-1 in a chain):
+///   T_{parent,k}(q) = pre * J(q) * post,
 /// J(q) a rotation by q about `axis` (revolute) or a translation by q along `axis` (prismatic),
 /// `axis` a unit vector in the joint frame through its origin. URDF and modified DH give post = I;
 /// classic DH gives pre = I and puts the fixed part of the row into post.
@@ -77,7 +82,7 @@ struct Joint {
   JointLimits limits;
   Drive drive;
 
-  /// Homogeneous transform T_{k-1,k}(q).
+  /// Homogeneous transform T_{parent,k}(q).
   Eigen::Isometry3d transform(double q) const;
 };
 
@@ -106,12 +111,15 @@ struct Model {
   std::string convention = "urdf";  // urdf | dh | mdh | generated
   std::vector<Joint> joints;
   std::vector<std::string> link_names;  // n + 1 names: base, then each moving link
-  std::vector<DHRow> dh;                // empty unless loaded from a DH/MDH table
-  bool synthetic_inertia = false;       // inertial values invented, not measured/published
+  /// Parent joint of each joint, -1 for the base; empty for a serial chain (parent(k) = k - 1).
+  /// When given: n entries with -1 <= parents[k] < k.
+  std::vector<int> parents;
+  std::vector<DHRow> dh;           // empty unless loaded from a DH/MDH table
+  bool synthetic_inertia = false;  // inertial values invented, not measured/published
   std::string notes;
 
   Eigen::Vector3d gravity{0.0, 0.0, -9.81};
-  Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();  // last link frame -> tool frame
+  Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();  // last link (n) frame -> tool frame
 
   Eigen::VectorXd inertial;       // 10 n classical inertial parameters about link origins
   Eigen::VectorXd rotor_inertia;  // n, joint side
@@ -119,6 +127,12 @@ struct Model {
   Eigen::VectorXd coulomb;        // n
 
   int nq() const { return static_cast<int>(joints.size()); }
+  /// Index of the joint that carries joint k's parent link, -1 for the base.
+  int parent(int k) const { return parents.empty() ? k - 1 : parents[static_cast<size_t>(k)]; }
+  /// True when every joint's parent is the joint before it (a serial chain).
+  bool isSerial() const;
+  /// True when joint j supports joint k: j == k or j is an ancestor of k.
+  bool supports(int j, int k) const;
 
   /// Classical parameter names for a layout, e.g. XX1, ..., M1, Ia1, Fv1, Fc1, XX2, ...
   std::vector<std::string> parameterNames(ParameterLayout layout = {}) const;
