@@ -145,32 +145,38 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   out.link_rank.resize(n);
   Margin margin;
 
-  // Motion span of the link before (the fixed base: gravity as its acceleration) and the rows
-  // spanning what is identifiable of that link's inertia.
-  Span<6> Vp(tolerance, margin);
+  // Motion span of the fixed base (gravity as its acceleration) and of each link, and the rows
+  // spanning what is identifiable of each link's inertia (nothing of the base's).
+  Span<6> Vbase(tolerance, margin);
   if (model.gravity.norm() > 0) {
     Vec6 g;
     g << Eigen::Vector3d::Zero(), -model.gravity;
-    Vp.add(g, g.norm());
+    Vbase.add(g, g.norm());
   }
-  Span<10> Cp(tolerance, margin);
+  const Span<10> Cbase(tolerance, margin);
+  std::vector<Span<6>> Vs(n, Span<6>(tolerance, margin));
+  std::vector<Span<10>> Cs(n, Span<10>(tolerance, margin));
   std::vector<Mat10> T0(n);
   std::vector<Rows10> M(n);      // basis of N_k
   std::vector<Rows10> rotor(n);  // x0 of a regrouped rotor
   for (int k = 0; k < n; ++k) {
     const Joint& joint = model.joints[k];
-    const Eigen::Isometry3d X = joint.pre * joint.post;  // link k in link k-1 at q_k = 0
+    const int p = model.parent(k);
+    const Span<6>& Vp = p < 0 ? Vbase : Vs[p];
+    const Span<10>& Cp = p < 0 ? Cbase : Cs[p];
+    const Eigen::Isometry3d X = joint.pre * joint.post;  // link k in its parent link at q_k = 0
     const Vec6 S = motionSubspace(joint);
     const double sn = S.norm();
     T0[k] = transformParameters(X);
 
     // Rotor inertia: tau_k += Ia q''_k equals the torques of the inertia u u^T (or, prismatic, a
-    // unit mass on link k less one on link k-1) when joint k's motion does not couple to the
-    // motion of link k-1 (nor, prismatic, to gravity). Otherwise its column is taken as
-    // independent of all others: a sufficient condition only, which the tests check against the
-    // projection method and the sampled regressor (bundled and random arms, mixed joints).
+    // unit mass on link k less one on its parent link) when joint k's motion does not couple to
+    // the motion of the parent link (nor, prismatic, to gravity). Otherwise its column is taken
+    // as independent of all others: a sufficient condition only, which the tests check against
+    // the projection method and the sampled regressor (bundled and random arms and trees, mixed
+    // joints).
     if (layout.rotor) {
-      const Eigen::Vector3d u = joint.pre.linear() * joint.axis;  // in link k-1
+      const Eigen::Vector3d u = joint.pre.linear() * joint.axis;  // in the parent link
       bool decoupled = true;
       for (int i = 0; i < Vp.dim; ++i) {
         const Vec6 v = Vp.Q.col(i);
@@ -181,20 +187,21 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
                       std::abs(u.dot(v.tail<3>())) <= tolerance;
       }
       if (decoupled) {
-        rotor[k].setZero(k > 0 && joint.type == JointType::Prismatic ? 2 : 1, 10);
+        rotor[k].setZero(p >= 0 && joint.type == JointType::Prismatic ? 2 : 1, 10);
         if (joint.type == JointType::Revolute) {
           const Eigen::Vector3d w = S.head<3>();
           Parts s{w * w.transpose(), Eigen::Vector3d::Zero(), 0.0};
           rotor[k].row(0) = pack(s).transpose();
         } else {
-          rotor[k](0, 9) = 1.0;              // unit mass on link k
-          if (k > 0) rotor[k](1, 9) = -1.0;  // less a unit mass on link k-1
+          rotor[k](0, 9) = 1.0;               // unit mass on link k
+          if (p >= 0) rotor[k](1, 9) = -1.0;  // less a unit mass on the parent link
         }
       }
     }
 
-    // V_k: the motions of link k-1 seen from link k, closed under joint k's motion, and S_k.
-    Span<6> V(tolerance, margin);
+    // V_k: the motions of the parent link seen from link k, closed under joint k's motion, and
+    // S_k.
+    Span<6>& V = Vs[k];
     V.add(S, sn);
     for (int i = 0; i < Vp.dim; ++i) {
       const Vec6 v = motionToChild(X, Vp.Q.col(i));
@@ -202,7 +209,8 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     }
     for (int i = 0; i < V.dim; ++i) V.add(crossMotion(S, V.Q.col(i)), sn);
 
-    // O_k: what link k-1 identifies of link k's inertia, at every q_k (closed under the rate).
+    // O_k: what the parent link identifies of link k's inertia, at every q_k (closed under the
+    // rate).
     const Mat10 A = parameterRate(S);
     const double an = A.norm();
     Span<10> O(tolerance, margin);
@@ -219,22 +227,21 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     M[k] = N.basis().transpose();
     out.link_rank[k] = N.dim;
 
-    // C_k: N_k and what link k-1 identifies of link k's inertia at q_k = 0.
-    Span<10> C(tolerance, margin);
+    // C_k: N_k and what the parent link identifies of link k's inertia at q_k = 0.
+    Span<10>& C = Cs[k];
     for (int i = 0; i < Cp.dim; ++i) {
       const Row10 r = Cp.Q.col(i).transpose() * T0[k];
       C.add(r.transpose(), r.norm());
     }
     for (int i = 0; i < N.dim; ++i) C.add(N.Q.col(i), 1.0);
-    Vp = V;
-    Cp = C;
   }
 
   out.smallest_kept = margin.kept;
   out.largest_dropped = margin.dropped;
 
-  // The rows: per link j, its N_j basis on link j and carried outwards, n T_{j,k}; then the rotor
-  // inertia (its own row, or the value of the rows on its regrouping vector) and friction.
+  // The rows: per link j, its N_j basis on link j and carried outwards over its subtree,
+  // n T_{j,k} = (n T_{j,parent(k)}) T0_k; then the rotor inertia (its own row, or the value of the
+  // rows on its regrouping vector) and friction.
   int rows = 0;
   for (int k = 0; k < n; ++k) {
     rows += out.link_rank[k];
@@ -242,13 +249,20 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     if (layout.friction) rows += 2;
   }
   out.rows.setZero(rows, P);
+  std::vector<char> below(n);      // link k in the subtree of link j
+  std::vector<Rows10> carried(n);  // n T_{j,k}
   int r0 = 0;
   for (int j = 0; j < n; ++j) {
-    Rows10 cur = M[j];
-    const int nj = static_cast<int>(cur.rows());
-    for (int k = j; k < n; ++k) {
-      if (k > j) cur = cur * T0[k];
-      out.rows.block(r0, k * per, nj, 10) = cur;
+    const int nj = out.link_rank[j];
+    carried[j] = M[j];
+    out.rows.block(r0, j * per, nj, 10) = M[j];
+    below[j] = 1;
+    for (int k = j + 1; k < n; ++k) {
+      const int p = model.parent(k);
+      below[k] = p >= j && below[p];
+      if (!below[k]) continue;
+      carried[k] = carried[p] * T0[k];
+      out.rows.block(r0, k * per, nj, 10) = carried[k];
     }
     r0 += nj;
     if (layout.rotor && rotor[j].rows() == 0) out.rows(r0++, layout.rotorIndex(j)) = 1.0;
@@ -263,7 +277,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     auto col = out.rows.col(layout.rotorIndex(k));
     col = out.rows.middleCols(k * per, 10) * rotor[k].row(0).transpose();
     if (rotor[k].rows() > 1)
-      col += out.rows.middleCols((k - 1) * per, 10) * rotor[k].row(1).transpose();
+      col += out.rows.middleCols(model.parent(k) * per, 10) * rotor[k].row(1).transpose();
   }
 
   // The constant of the Lagrangian: the potential energy's mean over the revolute joints (the
@@ -271,15 +285,17 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   // is the product of the means; a rotation's mean is u u^T) and its value at q = 0 for the
   // prismatic ones.
   out.constant.setZero(P);
-  Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+  std::vector<Eigen::Matrix4d> T(n);
   for (int k = 0; k < n; ++k) {
     const Joint& joint = model.joints[k];
+    const int p = model.parent(k);
     Eigen::Matrix4d J = Eigen::Matrix4d::Identity();
     if (joint.type == JointType::Revolute)
       J.topLeftCorner<3, 3>() = joint.axis * joint.axis.transpose();
-    T = T * joint.pre.matrix() * J * joint.post.matrix();
-    out.constant.segment<3>(k * per + 6) = model.gravity.transpose() * T.topLeftCorner<3, 3>();
-    out.constant[k * per + 9] = model.gravity.dot(T.block<3, 1>(0, 3));
+    T[k] = (p >= 0 ? T[p] : Eigen::Matrix4d::Identity()) * joint.pre.matrix() * J *
+           joint.post.matrix();
+    out.constant.segment<3>(k * per + 6) = model.gravity.transpose() * T[k].topLeftCorner<3, 3>();
+    out.constant[k * per + 9] = model.gravity.dot(T[k].block<3, 1>(0, 3));
   }
   return out;
 }

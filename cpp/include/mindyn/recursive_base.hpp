@@ -1,22 +1,25 @@
 // The identifiable subspace of the classical parameters by a recursion over the links (the
 // recursive parameter nullspace algorithm of Wensing, Niemeyer and Slotine, IJRR 2018), exact and
-// of cost linear in the number of links. Its rows feed the same echelon form as the projection
-// method's coordinates (base_parameters.hpp), so both give the same base set and the same Y.
+// of cost linear in the number of links, on serial chains and on trees. Its rows feed the same
+// echelon form as the projection method's coordinates (base_parameters.hpp), so both give the
+// same base set and the same Y.
 //
-// Per link k, in its own frame:
+// Per link k, in its own frame (p = parent(k): the link that joint k moves link k against, the
+// fixed base when p = -1):
 //   V_k  the span of the spatial motions link k can have (velocities, and gravity taken as an
-//        acceleration of the fixed base), carried over joint k and closed under its motion;
+//        acceleration of the fixed base), carried over joint k from V_p and closed under joint
+//        k's motion;
 //   N_k  the functionals of link k's inertia that joint k's torque or the motion of joint k
-//        relative to the inner links reveal: s_k^T I v for v in V_k, and the rate under joint
-//        k's motion of what the inner links identify;
-//   C_k  everything identifiable about link k's inertia: N_k and what the inner links identify
-//        of it at q_k = 0.
+//        relative to link p reveal: s_k^T I v for v in V_k, and the rate under joint k's motion
+//        of what link p identifies;
+//   C_k  everything identifiable about link k's inertia: N_k and what link p identifies of it
+//        at q_k = 0.
 // The nullspace of the regressor is spanned by each link's null(C_k) and by the inertia in
-// null(N_k) moved rigidly over joint k to link k-1. Its orthogonal complement, the identifiable
-// space, is then spanned by the rows n T_{j,k} on links k >= j for every row n of a basis of
-// N_j: n applied to the inertia of the links j..n carried into frame j at q = 0 (T_{j,k}: the
-// parameters of link k expressed in frame j). Rotor inertia and friction are added as columns
-// of their own (see recursiveIdentifiable).
+// null(N_k) moved rigidly over joint k to link p. Its orthogonal complement, the identifiable
+// space, is then spanned by the rows n T_{j,k} on the links k of the subtree of link j (j and
+// its descendants) for every row n of a basis of N_j: n applied to the inertia of that subtree
+// carried into frame j at q = 0 (T_{j,k}: the parameters of link k expressed in frame j). Rotor
+// inertia and friction are added as columns of their own (see recursiveIdentifiable).
 #pragma once
 
 #include <Eigen/Core>
@@ -28,7 +31,7 @@ namespace mindyn {
 
 struct IdentifiableSpace {
   /// Rows spanning the identifiable space of the equations of motion (layout columns), link by
-  /// link from the base: the rows of link j are zero on the columns of links before j.
+  /// link from the base: the rows of link j are zero outside the columns of its subtree.
   Eigen::MatrixXd rows;
   /// The constant part of the Lagrangian as a functional of the parameters (the potential energy
   /// averaged over the revolute joints, at q = 0 for the prismatic ones); with the rows without
