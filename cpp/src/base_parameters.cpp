@@ -44,7 +44,9 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
   // Reduces x (non-zero up to `end`), the residual of column c, against pivots from .. to - 1.
   auto reduce = [&](Eigen::Ref<Eigen::VectorXd> x, long& end, int c, int from, int to) {
     for (int b = from; b < to; ++b) {
-      const double f = (prow[b] < end ? x[prow[b]] : 0.0) / U(prow[b], b);
+      const double xb = prow[b] < end ? x[prow[b]] : 0.0;
+      if (xb == 0.0) continue;  // (most entries, on structured coordinates: skip the division)
+      const double f = xb / U(prow[b], b);
       if (f == 0.0) continue;
       if (out) F(b, c) = f;
       const long e = uend[b];

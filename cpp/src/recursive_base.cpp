@@ -91,14 +91,15 @@ Vec6 motionToChild(const Eigen::Isometry3d& T, const Vec6& v) {
 
 // An orthonormal basis grown one vector at a time: a vector joins when what is left of it after
 // removing its components along the basis (twice, for accuracy) exceeds tolerance x scale, the
-// scale being the size of what produced it.
+// scale being the size of what produced it. The columns not yet in the basis are zero, so that
+// each removal is one fixed-size product (classical Gram-Schmidt, done twice).
 struct Margin {
   double kept = 1.0, dropped = 0.0;
 };
 
 template <int D>
 struct Span {
-  Eigen::Matrix<double, D, D> Q;
+  Eigen::Matrix<double, D, D> Q = Eigen::Matrix<double, D, D>::Zero();
   int dim = 0;
   double tol;
   Margin* margin;
@@ -106,8 +107,11 @@ struct Span {
   bool add(const Eigen::Matrix<double, D, 1>& v, double scale) {
     if (dim == D) return false;
     Eigen::Matrix<double, D, 1> r = v;
-    for (int pass = 0; pass < 2; ++pass)
-      for (int i = 0; i < dim; ++i) r -= Q.col(i).dot(r) * Q.col(i);
+    if (dim > 0)
+      for (int pass = 0; pass < 2; ++pass) {
+        const Eigen::Matrix<double, D, 1> c = Q.transpose().lazyProduct(r);
+        r.noalias() -= Q.lazyProduct(c);
+      }
     const double nr = r.norm(), rel = scale > 0 ? nr / scale : 0.0;
     if (!(rel > tol)) {
       margin->dropped = std::max(margin->dropped, rel);
@@ -210,29 +214,31 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     for (int i = 0; i < V.dim; ++i) V.add(crossMotion(S, V.Q.col(i)), sn);
 
     // O_k: what the parent link identifies of link k's inertia, at every q_k (closed under the
-    // rate).
-    const Mat10 A = parameterRate(S);
-    const double an = A.norm();
+    // rate), and its rates.
+    const Mat10 At = parameterRate(S).transpose();
+    const double an = At.norm();
     Span<10> O(tolerance, margin);
     for (int i = 0; i < Cp.dim; ++i) {
-      const Row10 r = Cp.Q.col(i).transpose() * T0[k];
-      O.add(r.transpose(), r.norm());
+      const Vec10 r = T0[k].transpose().lazyProduct(Cp.Q.col(i));
+      O.add(r, r.norm());
     }
-    for (int i = 0; i < O.dim; ++i) O.add((O.Q.col(i).transpose() * A).transpose(), an);
+    // C_k starts from the same rows: what the parent link identifies of link k at q_k = 0.
+    Span<10>& C = Cs[k];
+    C = O;
+    Rows10 rates(10, 10);
+    for (int i = 0; i < O.dim; ++i) {
+      rates.row(i) = At.lazyProduct(O.Q.col(i)).transpose();
+      O.add(rates.row(i).transpose(), an);
+    }
 
     // N_k: s^T I v for v in V_k, and the rates of O_k.
     Span<10> N(tolerance, margin);
     for (int i = 0; i < V.dim; ++i) N.add(outputRow(S, V.Q.col(i)).transpose(), sn);
-    for (int i = 0; i < O.dim; ++i) N.add((O.Q.col(i).transpose() * A).transpose(), an);
+    for (int i = 0; i < O.dim; ++i) N.add(rates.row(i).transpose(), an);
     M[k] = N.basis().transpose();
     out.link_rank[k] = N.dim;
 
-    // C_k: N_k and what the parent link identifies of link k's inertia at q_k = 0.
-    Span<10>& C = Cs[k];
-    for (int i = 0; i < Cp.dim; ++i) {
-      const Row10 r = Cp.Q.col(i).transpose() * T0[k];
-      C.add(r.transpose(), r.norm());
-    }
+    // C_k: and N_k.
     for (int i = 0; i < N.dim; ++i) C.add(N.Q.col(i), 1.0);
   }
 
@@ -261,7 +267,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
       const int p = model.parent(k);
       below[k] = p >= j && below[p];
       if (!below[k]) continue;
-      carried[k] = carried[p] * T0[k];
+      carried[k].noalias() = carried[p].lazyProduct(T0[k]);
       out.rows.block(r0, k * per, nj, 10) = carried[k];
     }
     r0 += nj;
