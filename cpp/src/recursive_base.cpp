@@ -173,22 +173,29 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     const double sn = S.norm();
     T0[k] = transformParameters(X);
 
-    // Rotor inertia: tau_k += Ia q''_k equals the torques of the inertia u u^T (or, prismatic, a
-    // unit mass on link k less one on its parent link) when joint k's motion does not couple to
-    // the motion of the parent link (nor, prismatic, to gravity). Otherwise its column is taken
-    // as independent of all others: a sufficient condition only, which the tests check against
-    // the projection method and the sampled regressor (bundled and random arms and trees, mixed
-    // joints).
+    // Rotor inertia: tau_k += Ia q''_k equals the torques of the inertia u u^T on link k when the
+    // parent link does not rotate about axes with a component along u. Prismatic: those of a unit
+    // mass on link k less one on the parent link, when the parent link moves in planes normal to
+    // u (gravity included): its rotations about axes along u, its translations normal to u. A
+    // unit point mass at a point of link k and one at the same point of the parent link at
+    // q_k = 0 then differ in kinetic energy by q'_k^2 / 2 and not in potential energy; when the
+    // parent link does not rotate, the one on the parent link may sit at its origin. Otherwise
+    // the rotor's column is taken as independent of all others: a sufficient condition only,
+    // which the tests check against the projection method and the sampled regressor (bundled and
+    // random arms and trees, mixed joints).
     if (layout.rotor) {
       const Eigen::Vector3d u = joint.pre.linear() * joint.axis;  // in the parent link
-      bool decoupled = true;
+      bool decoupled = true, still = true;
       for (int i = 0; i < Vp.dim; ++i) {
         const Vec6 v = Vp.Q.col(i);
-        if (joint.type == JointType::Revolute)
-          decoupled = decoupled && std::abs(u.dot(v.head<3>())) <= tolerance;
-        else
-          decoupled = decoupled && v.head<3>().norm() <= tolerance &&
+        const Eigen::Vector3d w = v.head<3>();
+        if (joint.type == JointType::Revolute) {
+          decoupled = decoupled && std::abs(u.dot(w)) <= tolerance;
+        } else {
+          still = still && w.norm() <= tolerance;
+          decoupled = decoupled && (w - u.dot(w) * u).norm() <= tolerance &&
                       std::abs(u.dot(v.tail<3>())) <= tolerance;
+        }
       }
       if (decoupled) {
         rotor[k].setZero(p >= 0 && joint.type == JointType::Prismatic ? 2 : 1, 10);
@@ -197,8 +204,11 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
           Parts s{w * w.transpose(), Eigen::Vector3d::Zero(), 0.0};
           rotor[k].row(0) = pack(s).transpose();
         } else {
-          rotor[k](0, 9) = 1.0;               // unit mass on link k
-          if (p >= 0) rotor[k](1, 9) = -1.0;  // less a unit mass on the parent link
+          rotor[k](0, 9) = 1.0;  // unit mass at the origin of link k
+          if (p >= 0 && still)
+            rotor[k](1, 9) = -1.0;  // less one at the origin of the parent link
+          else if (p >= 0)          // less one where link k's origin is at q_k = 0
+            rotor[k].row(1) = -T0[k].col(9).transpose();
         }
       }
     }
