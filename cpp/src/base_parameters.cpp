@@ -140,11 +140,15 @@ std::string regroupedName(const std::string& classical) {
 BaseSet makeSet(RankDecision decision, const std::vector<std::string>& names) {
   BaseSet set;
   const int nb = decision.rank();
+  // Non-zero entries of each row of Y, counted column by column (Y is stored by columns).
+  std::vector<long> nonzero(nb, 0);
+  const Eigen::MatrixXd& Y = decision.Y;
+  for (long c = 0; c < Y.cols(); ++c)
+    for (int b = 0; b < nb; ++b) nonzero[b] += Y(b, c) != 0.0;
   set.names.reserve(nb);
   for (int b = 0; b < nb; ++b) {
     const int p = decision.pivots[b];
-    const auto y = decision.Y.row(b);
-    const long others = (y.array() != 0.0).count() - (y[p] != 0.0 ? 1 : 0);
+    const long others = nonzero[b] - (Y(b, p) != 0.0 ? 1 : 0);
     set.names.push_back(others > 0 ? regroupedName(names[p]) : names[p]);
   }
   set.decision = std::move(decision);
@@ -400,8 +404,15 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   }
   if (d.smallest_kept < looser * 10 || d.largest_dropped > tighter / 10 || weak > 0 ||
       d.largest_zeroed > 0) {
-    d.rank_looser = eliminate(Z, order, looser, colmax, colend, zero_level, nullptr);
-    d.rank_tighter = eliminate(Z, order, tighter, colmax, colend, 0.0, nullptr);
+    // Each decision depends only on those before it: with every kept pivot above the looser
+    // tolerance, or every dropped residual below the tighter one and no column zeroed that is
+    // not exactly zero, the elimination would decide every column as it did.
+    d.rank_looser = d.smallest_kept > looser
+                        ? d.rank()
+                        : eliminate(Z, order, looser, colmax, colend, zero_level, nullptr);
+    d.rank_tighter = d.largest_dropped <= tighter && d.largest_zeroed == 0
+                         ? d.rank()
+                         : eliminate(Z, order, tighter, colmax, colend, 0.0, nullptr);
     // Weak columns would go at the looser tolerance measured against their kind.
     d.rank_looser = std::min(d.rank_looser, d.rank() - weak);
   } else {
@@ -488,12 +499,11 @@ namespace {
 // (its rows are independent by construction, so their number is the rank; the Lagrangian's count
 // moves with it).
 void foldRecursiveMargins(const Model& model, ParameterLayout layout, double tol,
-                          const IdentifiableSpace& space, BaseParameters& bp) {
+                          const IdentifiableSpace& space, long rows, BaseParameters& bp) {
   const double looser = tol * 1e4, tighter = tol * 1e-3;
   const bool close = space.smallest_kept < looser * 10 || space.largest_dropped > tighter / 10;
   int dl = 0, dt = 0;
   if (close) {
-    const long rows = space.rows.rows();
     dl = static_cast<int>(recursiveIdentifiable(model, layout, looser).rows.rows() - rows);
     dt = static_cast<int>(recursiveIdentifiable(model, layout, tighter).rows.rows() - rows);
   }
@@ -551,20 +561,31 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has
     // no friction columns), the total energy's is the same space.
     space = recursiveIdentifiable(model, layout, tol);
-    ZE = space.rows;
+    ZE = std::move(space.rows);
     ZE.rowwise().normalize();
-    ZL.resize(ZE.rows() + 1, P);
     // The constant first: it involves no joint, like the rows of the inner links, and leaves
-    // the columns' last non-zero rows where they are.
+    // the columns' last non-zero rows where they are. Then the rows with an entry off the
+    // friction columns, without their friction entries.
+    std::vector<char> friction(P, 0);
+    for (int k = 0; k < n && layout.friction; ++k)
+      friction[layout.viscousIndex(k)] = friction[layout.coulombIndex(k)] = 1;
+    std::vector<char> keep(ZE.rows(), 0);
+    for (int c = 0; c < P; ++c)
+      if (!friction[c])
+        for (long r = 0; r < ZE.rows(); ++r) keep[r] = keep[r] || ZE(r, c) != 0.0;
+    std::vector<long> kept;
+    for (long r = 0; r < ZE.rows(); ++r)
+      if (keep[r]) kept.push_back(r);
+    ZL.resize(static_cast<long>(kept.size()) + 1, P);
     ZL.row(0) = space.constant;
-    long row = 1;
-    for (long r = 0; r < ZE.rows(); ++r) {
-      Eigen::RowVectorXd z = ZE.row(r);
-      for (int k = 0; k < n && layout.friction; ++k)
-        z[layout.viscousIndex(k)] = z[layout.coulombIndex(k)] = 0.0;
-      if (!z.isZero(0.0)) ZL.row(row++) = z;
+    for (int c = 0; c < P; ++c) {
+      auto z = ZL.col(c).tail(static_cast<long>(kept.size()));
+      if (friction[c]) {
+        z.setZero();
+        continue;
+      }
+      for (std::size_t i = 0; i < kept.size(); ++i) z[static_cast<long>(i)] = ZE(kept[i], c);
     }
-    ZL.conservativeResize(row, P);
     bp.basis_rows = static_cast<int>(ZE.rows());
   } else {
     // The sampled matrices need at least as many rows as the rank they are to show (at most P
@@ -613,7 +634,8 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     bp.energy = makeSet(echelon(ZH, order, tol, kinds), bp.classical_names);
   }
   bp.eom = makeSet(echelon(ZE, order, tol, kinds), bp.classical_names);
-  if (options.method == BaseMethod::Recursive) foldRecursiveMargins(model, layout, tol, space, bp);
+  if (options.method == BaseMethod::Recursive)
+    foldRecursiveMargins(model, layout, tol, space, ZE.rows(), bp);
   bp.lagrangian_equals_energy = bp.lagrangian.decision.pivots == bp.energy.decision.pivots;
   bp.lagrangian_equals_eom = bp.lagrangian.decision.pivots == bp.eom.decision.pivots;
   bp.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
