@@ -91,8 +91,8 @@ Vec6 motionToChild(const Eigen::Isometry3d& T, const Vec6& v) {
 
 // An orthonormal basis grown one vector at a time: a vector joins when what is left of it after
 // removing its components along the basis (twice, for accuracy) exceeds tolerance x scale, the
-// scale being the size of what produced it. The columns not yet in the basis are zero, so that
-// each removal is one fixed-size product (classical Gram-Schmidt, done twice).
+// scale being the size of what produced it. The components are taken all at once (classical
+// Gram-Schmidt, done twice), so that they do not wait on one another.
 struct Margin {
   double kept = 1.0, dropped = 0.0;
 };
@@ -109,8 +109,9 @@ struct Span {
     Eigen::Matrix<double, D, 1> r = v;
     if (dim > 0)
       for (int pass = 0; pass < 2; ++pass) {
-        const Eigen::Matrix<double, D, 1> c = Q.transpose().lazyProduct(r);
-        r.noalias() -= Q.lazyProduct(c);
+        double c[D];
+        for (int i = 0; i < dim; ++i) c[i] = Q.col(i).dot(r);
+        for (int i = 0; i < dim; ++i) r -= c[i] * Q.col(i);
       }
     const double nr = r.norm(), rel = scale > 0 ? nr / scale : 0.0;
     if (!(rel > tol)) {
