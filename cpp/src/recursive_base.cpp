@@ -109,7 +109,7 @@ struct Span {
     Eigen::Matrix<double, D, 1> r = v;
     if (dim > 0)
       for (int pass = 0; pass < 2; ++pass) {
-        double c[D];
+        double c[D] = {};
         for (int i = 0; i < dim; ++i) c[i] = Q.col(i).dot(r);
         for (int i = 0; i < dim; ++i) r -= c[i] * Q.col(i);
       }
