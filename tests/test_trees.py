@@ -145,6 +145,41 @@ def test_inertial_parameters_equal_pinocchio(pair):
         assert_close(ours, model.inertias[k + 1].toDynamicParameters(), TOL, "tree inertias")
 
 
+def test_joint_transforms_equal_pinocchio(pair):
+    """Geometry as loaded: each joint's transform from its parent's link frame at random q
+    equals Pinocchio's liMi (fixed joints folded into the origins, axes normalised)."""
+    robot, model, _ = pair
+    data = model.createData()
+    for q, _, _ in states(robot, 10, 3):
+        pin.forwardKinematics(model, data, pin_q(model, q))
+        for k in range(robot.n):
+            got = robot.joint_transform(k, q[k])
+            assert_close(got, data.liMi[k + 1].homogeneous, TOL, "tree joint transforms")
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_many_random_trees_load_as_pinocchio(seed, tmp_path):
+    """A bounded sweep (40 trees, a few ms each): order, parents, body inertias and joint
+    transforms equal Pinocchio's, trees and chains (branches=False) alike."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 13))
+    branches = n >= 2 and seed % 4 != 0
+    path = random_tree_urdf(tmp_path / "t.urdf", n, 100 + seed, branches=branches)
+    robot = mindyn.load(path)
+    model = pin.buildModelFromUrdf(str(path))
+    assert robot.joint_names == list(model.names[1:])
+    assert robot.parents == [int(p) - 1 for p in model.parents[1:]]
+    assert robot.is_serial == all(p == k for k, p in enumerate(model.parents[1:]))
+    data = model.createData()
+    q = random_state(robot, rng)[0]
+    pin.forwardKinematics(model, data, pin_q(model, q))
+    for k in range(robot.n):
+        ours = np.asarray(mindyn.to_pinocchio_order(robot.params[10 * k : 10 * k + 10]))
+        assert_close(ours, model.inertias[k + 1].toDynamicParameters(), TOL, "tree inertias")
+        got = robot.joint_transform(k, q[k])
+        assert_close(got, data.liMi[k + 1].homogeneous, TOL, "tree joint transforms")
+
+
 def test_inverse_dynamics_regressor_and_mass_matrix_equal_pinocchio(pair):
     robot, model, _ = pair
     data = model.createData()
