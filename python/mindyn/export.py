@@ -194,8 +194,9 @@ def write_urdf(
     0"``); comments inside a replaced ``<inertial>`` go with it. The links merged into a moving
     link when the robot was loaded (children on fixed joints, and moving joints locked at
     ``q = 0`` clamped into their limits: off a chain, or mimic joints) lose their
-    ``<inertial>``, which a comment replaces, so that the total is the identified one. Links before the first moving joint and off the model are kept as
-    they were, as is everything else in the file (comments included). A link of zero mass and
+    ``<inertial>``, which a comment replaces, so that the total is the identified one. Links
+    before the first moving joint and off the model are kept as they were, as is everything
+    else in the file (comments included). A link of zero mass and
     zero first moment gets mass 0 and its rotational inertia at the link origin (a zero
     inertial if it has none); the notes say so. ``Fv`` and ``Fc`` go into the joint's
     ``<dynamics damping= friction=>``; when the parameters have no friction, the model joints'
