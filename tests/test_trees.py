@@ -159,8 +159,9 @@ def test_joint_transforms_equal_pinocchio(pair):
 
 @pytest.mark.parametrize("seed", range(40))
 def test_many_random_trees_load_as_pinocchio(seed, tmp_path):
-    """A bounded sweep (40 trees, a few ms each): order, parents, body inertias and joint
-    transforms equal Pinocchio's, trees and chains (branches=False) alike."""
+    """A bounded sweep (40 URDFs, a few ms each): order, parents, body inertias and joint
+    transforms equal Pinocchio's. branches=False lets some draws be chains (3 of the 40 here,
+    1 to 12 joints), loaded with empty parents as before."""
     rng = np.random.default_rng(seed)
     n = int(rng.integers(1, 13))
     branches = n >= 2 and seed % 4 != 0
@@ -230,38 +231,28 @@ def test_numerical_base_parameters_reproduce_rnea(pair):
         assert_close(bp.regressor(q, dq, ddq) @ pb, ref, BASE_TOL, "tree W_b (Y pi) vs rnea")
 
 
-# The exact methods are made tree-aware on their own branches; until a method is, its checks
-# below are expected to fail (strict: once they pass, this table must be switched on). A method
-# that does not support trees must refuse one with a one-line ModelError naming "tree"; one that
-# does must give the numerical method's count and reproduce rnea.
+# The exact methods on trees. One that does not support trees yet (False) must refuse a tree
+# with one line naming the method, the robot and "tree"; one that does (True) must give the
+# numerical method's count and reproduce rnea. Switch a method on here when it supports trees
+# (and mindyn.base._TREE_METHODS lets it through): the test then checks its numbers.
 TREE_SUPPORT = {"projection": False, "recursive": False}
 
 
-def _unsupported(method: str):
-    reason = f"the {method} method on trees is not merged yet"
-    return pytest.mark.xfail(not TREE_SUPPORT[method], reason=reason, strict=True)
-
-
-EXACT = [
-    pytest.param(case, method, marks=[] if budget else _unsupported(method))
-    for case in CASES
-    for method in ("projection", "recursive")
-    # Baxter (17 joints) is over the projection method's cost budget as a chain: refused
-    for budget in [case == "baxter" and method == "projection"]
-]
-
-
-@pytest.mark.parametrize("case,method", EXACT)
-def test_exact_methods_on_trees(case, method, tmp_path_factory):
-    robot, model, _ = _pair(case, tmp_path_factory)
+@pytest.mark.parametrize("method", ["projection", "recursive"])
+def test_exact_methods_on_trees(pair, method):
+    robot, model, _ = pair
+    if not TREE_SUPPORT[method]:
+        with pytest.raises(mindyn.ModelError) as info:
+            mindyn.base_parameters(robot, method=method)
+        msg = str(info.value)
+        assert "\n" not in msg and method in msg, msg
+        assert f"robot '{robot.name}' is a tree" in msg and "numerical" in msg, msg
+        return
     try:
         bp = mindyn.base_parameters(robot, method=method)
     except mindyn.ModelError as e:
-        msg = str(e)
-        assert "\n" not in msg, msg
-        if method == "projection" and "budget" in msg:
-            return  # its cost estimate refused the robot before computing: precise
-        assert "tree" in msg and robot.name in msg, msg
+        # Baxter's 17 joints may exceed the projection method's cost budget: refused, precisely
+        assert method == "projection" and "budget" in str(e) and "\n" not in str(e), str(e)
         return
     data = model.createData()
     numerical = mindyn.base_parameters(robot, method="numerical")
@@ -320,16 +311,21 @@ def test_cli_info_shows_the_tree(capsys):
     assert "(7 joints, urdf)" in chain and "parent link" not in chain
 
 
-@pytest.mark.parametrize(
-    "method", ["numerical", pytest.param(None, marks=_unsupported("projection"))]
-)
+@pytest.mark.parametrize("method", ["numerical", "projection", "recursive", None])
 def test_cli_base_on_a_tree(capsys, tmp_path, method):
-    """``mindyn base`` on a tree, by the numerical method and by the default (projection)."""
+    """``mindyn base`` on a tree by each method and by the default (projection): the numerical
+    method's count, or, for a method without tree support yet, one line naming the way out."""
     path = random_tree_urdf(tmp_path / "t.urdf", 6, 7)
     robot = mindyn.load(path)
     extra = ["--method", method] if method else []
-    out = _cli(capsys, "base", path, *extra)
     numerical = mindyn.base_parameters(robot, method="numerical")
+    if method != "numerical" and not TREE_SUPPORT[method or "projection"]:
+        assert cli.main([str(a) for a in ["base", path, *extra]]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("mindyn: error: ") and err.count("\n") == 1, err
+        assert "is a tree" in err and "--method numerical" in err, err
+        return
+    out = _cli(capsys, "base", path, *extra)
     assert f"equations of motion {numerical.n}" in out
 
 
