@@ -337,8 +337,9 @@ def base_parameters(
         leaves = robot.n - len(set(robot.parents) - {-1})
         raise _core.ModelError(
             f"the {method} method does not support trees yet; robot '{robot.name}' is a tree "
-            f"({robot.n} joints, {leaves} branches): use method='numerical' (--method "
-            "numerical), or load one chain of it with tip="
+            f"({robot.n} joints, {leaves} branches): use the numerical method "
+            "(method='numerical', mindyn base --method numerical), or load one chain of it "
+            "with tip="
         )
     tolerance = _args.number(tolerance, "tolerance", positive=True)
     samples = _args.integer(samples, "samples", minimum=0)
