@@ -12,6 +12,8 @@ independent joints, gets the same joints locked at the same values (buildReduced
 
 from __future__ import annotations
 
+import json
+
 import mindyn
 import numpy as np
 import pinocchio as pin
@@ -327,6 +329,10 @@ def test_cli_base_on_a_tree(capsys, tmp_path, method):
         return
     out = _cli(capsys, "base", path, *extra)
     assert f"equations of motion {numerical.n}" in out
+    parents = ", ".join("-" if p < 0 else str(p + 1) for p in robot.parents)
+    assert f"(- the base): {parents}\n" in out
+    doc = json.loads(_cli(capsys, "base", path, *extra, "--format", "json"))
+    assert doc["parents"] == robot.parents and len(doc["names"]) == numerical.n
 
 
 def test_chain_only_operations_refuse_a_tree():

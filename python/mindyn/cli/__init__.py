@@ -146,8 +146,10 @@ def cmd_base(args: argparse.Namespace) -> int:
         tolerance=args.tolerance,
         snap=args.snap,
     )
+    tree = {} if robot.is_serial else {"parents": robot.parents}  # 0-based, -1 the base
     if args.format == "json":
-        print(json.dumps({**bp.to_dict(symbolic=args.symbolic), "method_reason": why}, indent=2))
+        doc = {**bp.to_dict(symbolic=args.symbolic), "method_reason": why, **tree}
+        print(json.dumps(doc, indent=2))
         return 0
     if args.format == "latex":
         print(bp.latex(symbolic=args.symbolic))
@@ -169,6 +171,14 @@ def cmd_base(args: argparse.Namespace) -> int:
         f"{m['largest_dropped']:.3g} (relative tolerance {m['tolerance']:.3g}); weakest kept "
         f"column against its kind {m['weakest_kept_for_its_kind']:.3g}",
     ]
+    if tree:
+        # joint numbers as in the parameter names (XX3 belongs to joint 3's link)
+        parents = ", ".join("-" if p < 0 else str(p + 1) for p in robot.parents)
+        lines.insert(
+            2,
+            f"  tree           {robot.n} joints, {_branches(robot)} branches; parent joint of "
+            f"joints 1..{robot.n} (- the base): {parents}",
+        )
     if m["largest_zeroed"] > 0:
         lines.append(
             f"  zero columns   treated as zero below {m['zero_threshold']:.1g} of the largest; "
