@@ -10,6 +10,7 @@
 #include "codegen/internal.hpp"
 #include "malloc_counter.hpp"
 #include "mindyn/base_dynamics.hpp"
+#include "mindyn/codegen/controller.hpp"
 #include "mindyn/codegen/emit_c.hpp"
 #include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
@@ -766,4 +767,28 @@ TEST(CodegenTree, TapesMatchTheChainsOfItsPathsAndAllocateNothing) {
     EXPECT_LT((Wt.leftCols(np) - W).norm() / std::max(1.0, W.norm()), 1e-10) << model.name;
     EXPECT_EQ(Wt.rightCols(n), Eigen::MatrixXd::Identity(n, n)) << model.name;
   }
+}
+
+// The header of a tree's code lists its joints in the order of q with the joint each is mounted on;
+// a chain's does not.
+TEST(CodegenTree, HeaderListsTheJointsOfATree) {
+  std::mt19937 rng(29);
+  Model tree = test::randomChain(rng, 4, false, true, true);
+  tree.parents = {-1, 0, -1, 0};
+  const ParameterSet ps = classicalParameterSet(tree, {});
+  const GeneratedCode code = generateCode(tree, ps, {Function::Gravity}, "tree");
+  const std::string header = emitC(code, "tree.h").header, st = emitST(code);
+  const std::string list = "1. j1 (base), 2. j2 (j1), 3. j3 (base), 4. j4 (j1).";
+  EXPECT_NE(header.find(list), std::string::npos) << header;
+  EXPECT_NE(st.find(list), std::string::npos);
+  ControllerSettings s;
+  s.kd = s.kp = Eigen::VectorXd::Ones(4);
+  const ControllerCode c = generateController(tree, ps, Controller::GravityCompensation, s, "t");
+  EXPECT_NE(emitControllerC(c, "t.h").header.find(list), std::string::npos);
+  Model chain = tree;
+  chain.parents.clear();
+  const std::string serial =
+      emitC(generateCode(chain, ps, {Function::Gravity}, "chain"), "chain.h").header;
+  EXPECT_EQ(serial.find("A tree"), std::string::npos);
+  EXPECT_EQ(serial.find("(base)"), std::string::npos);
 }
