@@ -792,3 +792,44 @@ TEST(CodegenTree, HeaderListsTheJointsOfATree) {
   EXPECT_EQ(serial.find("A tree"), std::string::npos);
   EXPECT_EQ(serial.find("(base)"), std::string::npos);
 }
+
+// Base parameters of trees (the numerical method, on the runtime regressor of trees): the
+// generated inverse dynamics, gravity and base regressor, run by the tapes, against the runtime
+// recursion on the tree, W pi = W_b p_b and the tree's regressor from its paths. Random trees with
+// consistent and with arbitrary inertia, with and without rotor and friction. Tolerance 1e-10 as
+// above; the base values p_b = Y pi add round-off of the echelon form (~1e-13 here).
+TEST(CodegenTree, BaseParameterCodeMatchesTheRuntimeRecursion) {
+  std::mt19937 rng(31);
+  std::vector<Model> models{test::randomTree(rng, 5, true), test::randomTree(rng, 8, false),
+                            test::randomChain(rng, 6, true, true, true),
+                            test::randomChain(rng, 10, false, false, true)};
+  for (const Model& model : models) {
+    const int n = model.nq();
+    Data data(model);
+    for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true}}) {
+      BaseOptions opt;
+      opt.layout = layout;
+      opt.method = BaseMethod::Numerical;
+      const BaseParameters bp = computeBaseParameters(model, opt);
+      const int P = layout.size(n), nb = bp.eom.size();
+      BaseDynamics bd(model, bp);
+      const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 2);
+      const Eigen::VectorXd pi = random(rng, P), pb = bp.values(pi);
+      Eigen::VectorXd tau(n), tg(n), t1(n), t2(n);
+      Eigen::MatrixXd W(n, P), Wb(n, nb), Wt(n, nb);
+      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+      gravityTorque(model, data, q, pi, layout, tg);
+      regressor(model, data, q, dq, ddq, layout, W);
+      const std::string what = model.name + (layout.rotor ? " rotor+friction" : "");
+      // the runtime recursion on the tree and the chains of its paths agree
+      ASSERT_LT((W - treeRegressor(model, layout, q, dq, ddq)).norm() / W.norm(), 1e-12) << what;
+      EXPECT_EQ(runTapes(bd, q, dq, ddq, pb, t1, t2, Wt), 0) << what;
+      EXPECT_LT(relErr(t1, tau), 1e-10) << what;
+      EXPECT_LT(relErr(t1, W * pi), 1e-10) << what;
+      EXPECT_LT(relErr(t2, tg), 1e-10) << what;
+      EXPECT_LT(relErr(Wt * pb, W * pi), 1e-10) << what;
+      baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
+      EXPECT_LT((Wt - Wb).norm() / std::max(1.0, Wb.norm()), 1e-10) << what;
+    }
+  }
+}
