@@ -1,7 +1,7 @@
 """The recursive method: the same base set and the same Y as the projection method wherever the
 projection runs (bundled robots, the example-robot-data arms, random arms with rotor inertia and
 friction), the sampled numerical method's counts and Pinocchio's torques on 20-joint chains the
-projection refuses, and the command line's choice of method."""
+projection refuses and on trees, and the command line's choice of method."""
 
 from __future__ import annotations
 
@@ -9,9 +9,11 @@ import json
 
 import mindyn
 import numpy as np
+import pinocchio as pin
 import pytest
 from conftest import ROBOTS_DIR, pinocchio_model
 from random_arm import random_arm_yaml
+from random_tree import random_tree_urdf
 from test_base_parameters import ARMS, NEAR_EXACT, check_against_rnea, run_cli
 from test_base_parameters_scale import counts, general_chain
 
@@ -177,3 +179,20 @@ def test_zero_gravity():
         robot = mindyn.load(name).with_gravity([0.0, 0.0, 0.0])
         rec = assert_same(robot, f"{name} without gravity", rotor=True)
         assert counts(rec) == counts(mindyn.base_parameters(robot, method="numerical", rotor=True))
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_random_trees_with_rotor_and_friction(seed, tmp_path):
+    """Trees (tests/random_tree.py: random parents, axes and joint kinds): the numerical
+    method's count, and Pinocchio's rnea of a random pi (armature, friction added) equals
+    W_b (Y pi) (1e-9 relative: the method's own accuracy requirement)."""
+    path = random_tree_urdf(tmp_path / "tree.urdf", 7 + 3 * seed, 40 + seed, fixed=0)
+    robot = mindyn.load(path)
+    assert not robot.is_serial
+    model = pin.buildModelFromUrdf(str(path))
+    rng = np.random.default_rng(seed)
+    for extras in ({}, {"rotor": True, "friction": True}):
+        rec = mindyn.base_parameters(robot, method="recursive", **extras)
+        num = mindyn.base_parameters(robot, method="numerical", **extras)
+        assert rec.n == num.n, (seed, extras)
+        check_against_rnea(rec, robot, model, rng, f"tree {seed} {extras}", tol=1e-9)

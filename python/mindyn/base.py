@@ -23,7 +23,7 @@ __all__ = ["BaseParameters", "base_parameters"]
 DEFAULT_TOLERANCE = 1e-9
 # Methods that handle trees (Robot.parents); the others refuse a tree rather than treat it as
 # the chain of its joint order.
-_TREE_METHODS = {"numerical"}
+_TREE_METHODS = {"numerical", "recursive"}
 
 
 class BaseParameters:
@@ -307,7 +307,8 @@ def base_parameters(
         estimated before computing (an upper bound) and a chain over the 8 GiB budget, or of
         more than 18 joints, is refused with a ModelError that gives the estimate; the
         recursive method handles such chains, and so does the numerical one, up to its own
-        budget of 2 GiB (about 340 joints).
+        budget of 2 GiB (about 340 joints). On a tree (``Robot.parents``), the recursive and
+        numerical methods apply.
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
