@@ -358,6 +358,22 @@ struct RTerm {
 };
 using Entry = InfluenceCoordinates::Entry;
 
+// The terms after a joint, from which its children start. A term of a stage that several
+// children start from may hold, instead of a row, a shared slot -2 - s: the row its basis
+// function gets in whichever branch first gives it a coordinate.
+struct Stage {
+  std::vector<QTerm> Q;
+  std::vector<VTerm> V;
+  std::vector<RTerm> R;
+};
+
+// Number of child joints of the base (entry 0) and of each joint k (entry k + 1).
+std::vector<int> childCounts(const Model& model) {
+  std::vector<int> c(static_cast<std::size_t>(model.nq()) + 1, 0);
+  for (int k = 0; k < model.nq(); ++k) ++c[static_cast<std::size_t>(model.parent(k) + 1)];
+  return c;
+}
+
 // Relative size below which a coefficient is rounding noise of exactly-zero structure.
 constexpr double kNoise = 1e-13;
 
@@ -454,7 +470,7 @@ unsigned applyPattern(const Eigen::Matrix<double, N, N>& M, unsigned x, bool tra
   return out;
 }
 
-std::string overBudget(int n, const ProjectionCost& c, double budget) {
+std::string overBudget(const Model& model, const ProjectionCost& c, double budget) {
   auto gib = [](double b) {
     std::ostringstream o;
     o << std::setprecision(b < 10 * 1073741824.0 ? 2 : 3) << b / 1073741824.0 << " GiB";
@@ -462,8 +478,9 @@ std::string overBudget(int n, const ProjectionCost& c, double budget) {
   };
   std::ostringstream o;
   o << std::setprecision(2) << "the projection method would form up to " << c.rows
-    << " basis rows and " << c.terms << " terms for this " << n << "-joint chain, up to "
-    << gib(c.bytes) << " of memory (estimated before computing), over its budget of " << gib(budget)
+    << " basis rows and " << c.terms << " terms for this " << model.nq()
+    << (model.isSerial() ? "-joint chain" : "-joint tree") << ", up to " << gib(c.bytes)
+    << " of memory (estimated before computing), over its budget of " << gib(budget)
     << " (the basis grows geometrically along runs of parallel or general joint axes); "
        "the recursive method (--method recursive, method='recursive') gives the same base set "
        "for long chains, the numerical method (--method numerical) a sampled one";
@@ -577,24 +594,42 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
   N4(2, 3) = 1;
 
   ProjectionCost cost;
-  std::map<std::pair<int, Mask>, double> Q, Qnext;  // (kind, pattern) -> number of terms
-  std::map<unsigned, double> V, Vnext, R, Rnext;    // pattern -> number of terms
+  // The stages as the recursion keeps them (stage[0]: the base's, stage[k + 1]: joint k's).
+  struct PatternStage {
+    std::map<std::pair<int, Mask>, double> Q;  // (kind, pattern) -> number of terms
+    std::map<unsigned, double> V, R;           // pattern -> number of terms
+    double held = 0;                           // kinetic terms
+    double reserved = 0;                       // kinetic terms the recursion reserved for it
+  };
+  const std::vector<int> children = childCounts(model);
+  std::vector<int> pending = children;
+  std::vector<PatternStage> stage(n + 1);
   {
     unsigned g = 0;
     for (int a = 0; a < 3; ++a)
       if (model.gravity[a] != 0.0) g |= 1u << a;
-    if (g) R[g] = 1;
+    if (g) stage[0].R[g] = 1;
   }
-  double held = 0, stages = 0;  // kinetic terms held; the most held by two stages at once
-  Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
+  bool potential = false;  // some potential term is left after a joint
+  // The most kinetic terms held at once: the stage being formed (reserved at its bound), the
+  // one it starts from, and the others waiting for children (at what was reserved for them;
+  // `waiting` sums the reservations of all the stages waiting, the one started from included).
+  double stages = 0, waiting = 0;
   for (int k = 0; k < n; ++k) {
     const bool revolute = model.joints[k].type == JointType::Revolute;
+    const int parent = model.parent(k);
+    PatternStage& in = stage[static_cast<std::size_t>(parent + 1)];
+    PatternStage& out = stage[static_cast<std::size_t>(k + 1)];
+    auto &Q = in.Q, &Qnext = out.Q;
+    auto &V = in.V, &Vnext = out.V, &R = in.R, &Rnext = out.R;
+    const double held = in.held;
+    const Eigen::Isometry3d prevPost = parent < 0 ? Eigen::Isometry3d::Identity() : post[parent];
     const Matrix6d Cd = jointMap(prevPost * pre[k]);
     bool C[6][6];
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) C[i][j] = Cd(i, j) != 0.0;
     const int s = revolute ? 2 : 5;
-    const bool last = k + 1 == n;
+    const bool last = children[static_cast<std::size_t>(k + 1)] == 0;
     // forms[q]: the parameters of link k an entry q of a term reaches
     unsigned forms[21] = {};
     {
@@ -607,8 +642,8 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
     double formed = 0, vterms = 0;
     for (const auto& e : V) vterms += e.second;
     // the recursion reserves the next stage at its bound
-    stages = std::max(stages, held + (last ? 0.0 : held * (revolute ? 5 : 3) + vterms * 3 + 1));
-    Qnext.clear();
+    out.reserved = last ? 0.0 : held * (revolute ? 5 : 3) + vterms * 3 + 1;
+    stages = std::max(stages, waiting - in.reserved + held + out.reserved);
     auto add = [&](int kind, Mask m, double count, bool newRow) {
       formed += count;
       unsigned reach = 0;
@@ -666,12 +701,8 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
     }
     Vnext[1u << s] += 1;
     add(revolute ? kDiag2 : kDiag5, 1u << kSym.idx[s][s], 1, true);
-    std::swap(Q, Qnext);
-    std::swap(V, Vnext);
-    held = 0;
-    for (const auto& e : Q) held += e.second;
+    for (const auto& e : Qnext) out.held += e.second;
 
-    Rnext.clear();
     const Eigen::Matrix4d Pre = (prevPost * pre[k]).matrix();
     for (const auto& [r, count] : R) {
       const unsigned y = applyPattern<4>(Pre, r, true);
@@ -692,15 +723,22 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
           if (l != 0) cost.rows += count;
         }
     }
-    std::swap(R, Rnext);
     double rterms = 0;
-    for (const auto& e : R) rterms += e.second;
+    for (const auto& e : Rnext) rterms += e.second;
+    potential = potential || !Rnext.empty();
     cost.terms += formed + rterms;
     cost.entries += 4 * rterms;
     cost.largest_stage = std::max(cost.largest_stage, formed);
-    prevPost = post[k];
+    if (--pending[static_cast<std::size_t>(parent + 1)] == 0) {
+      waiting -= in.reserved;
+      in = PatternStage();
+    }
+    if (last)
+      out = PatternStage();
+    else
+      waiting += out.reserved;
   }
-  if (!R.empty() || layout.rotor) cost.rows += 1;  // the constant
+  if (potential || layout.rotor) cost.rows += 1;  // the constant
   // Peak memory: two stages of kinetic terms, the entries and keys (vectors grown by doubling,
   // so up to twice their size), then the row reduction's sorted copy of the entries.
   cost.bytes = stages * sizeof(QTerm) + 2.0 * sizeof(InfluenceCoordinates::Entry) * cost.entries +
@@ -722,7 +760,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
 
   {
     const ProjectionCost cost = projectionCost(model, layout);
-    if (cost.bytes > budget) throw ModelError(overBudget(n, cost, budget));
+    if (cost.bytes > budget) throw ModelError(overBudget(model, cost, budget));
   }
   std::vector<Eigen::Isometry3d> pre, post;
   alignedFrames(model, pre, post);
@@ -760,29 +798,65 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   Eigen::Matrix4d N4 = Eigen::Matrix4d::Zero();
   N4(2, 3) = 1;
 
+  // The stage after each joint, kept until its last child joint has started from it (a serial
+  // chain keeps one at a time); stage[0] is the base's, stage[k + 1] joint k's. The stage a
+  // joint starts from and the one it forms are moved into Q, V, R and Qnext, Vnext, Rnext for
+  // the joint; the vectors of a finished stage are reused for the next one formed.
+  const std::vector<int> children = childCounts(model);
+  std::vector<int> pending = children;  // children yet to start from each stage
+  std::vector<Stage> stage(n + 1);
   std::vector<QTerm> Q, Qnext;
   std::vector<VTerm> V, Vnext;
   std::vector<RTerm> R, Rnext;
   Row4d g0;
   g0 << model.gravity.transpose(), 0.0;
-  R.push_back({0, -1, g0});
+  stage[0].R.push_back({0, -1, g0});
 
   std::vector<std::uint64_t> keys;
   std::vector<Entry> entries;
-  auto rowOf = [&keys](auto& term) {
+  std::vector<int> slotRow;  // row of each shared slot (-1: none yet), see Stage
+  auto rowOf = [&keys, &slotRow](auto& term) {
     if (term.row < 0) {
-      term.row = static_cast<int>(keys.size());
-      keys.push_back(term.key);
+      if (term.row == -1) {
+        term.row = static_cast<int>(keys.size());
+        keys.push_back(term.key);
+      } else {
+        int& row = slotRow[static_cast<std::size_t>(-2 - term.row)];
+        if (row < 0) {
+          row = static_cast<int>(keys.size());
+          keys.push_back(term.key);
+        }
+        term.row = row;
+      }
     }
     return term.row;
   };
+  // A stage that several children start from gives each of its terms without a row a slot:
+  // their constant-factor parts in every branch are the same basis function, hence one row.
+  auto share = [&slotRow](Stage& st) {
+    auto give = [&slotRow](auto& terms) {
+      for (auto& t : terms)
+        if (t.row == -1) {
+          t.row = -2 - static_cast<int>(slotRow.size());
+          slotRow.push_back(-1);
+        }
+    };
+    give(st.Q);
+    give(st.R);
+  };
+  if (children[0] > 1) share(stage[0]);
   InfluenceCoordinates out;
   out.layout = layout;
   out.n = n;
 
-  Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
   for (int k = 0; k < n; ++k) {
     const bool revolute = model.joints[k].type == JointType::Revolute;
+    const int parent = model.parent(k);
+    Stage& in = stage[static_cast<std::size_t>(parent + 1)];
+    Q.swap(in.Q);  // Q, V and R are empty here
+    V.swap(in.V);
+    R.swap(in.R);
+    const Eigen::Isometry3d prevPost = parent < 0 ? Eigen::Isometry3d::Identity() : post[parent];
     const Matrix6d Cd = jointMap(prevPost * pre[k]);
     const double cscale = std::max(1.0, maxAbs(Cd));
     const Sparse6 C(Cd);
@@ -790,8 +864,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     const Vector6d S = Vector6d::Unit(s);
 
     // Every new kinetic term is projected on link k's parameters at once and kept for the
-    // next joint (after the last joint, not kept).
-    const bool last = k + 1 == n;
+    // joint's children (for a leaf, not kept).
+    const bool last = children[static_cast<std::size_t>(k + 1)] == 0;
     const int c0 = k * layout.perLink();
     const auto E = kineticForms(k);
     const std::size_t most = Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1;
@@ -819,7 +893,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       if (!last) Qnext.push_back(t);
     };
 
-    // Kinetic part: Q_k = Ad Q_{k-1} Ad^T + cross terms + 2 S S^T dq_k^2.
+    // Kinetic part: Q_k = Ad Q_parent(k) Ad^T + cross terms + 2 S S^T dq_k^2.
     Qnext.clear();
     if (!last) Qnext.reserve(most);
     for (const QTerm& t : Q) {
@@ -888,8 +962,6 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     diagonal.Q[kSym.idx[s][s]] = 2.0;
     if (layout.rotor) rowOf(diagonal);  // Ia_k's coordinate is on this row
     add(diagonal);
-    std::swap(Q, Qnext);
-    std::swap(V, Vnext);
 
     // Potential part: g~^T T_k.
     Rnext.clear();
@@ -913,11 +985,10 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         if (prune(parts[l], ptol))
           Rnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1, parts[l]});
     }
-    std::swap(R, Rnext);
-    out.terms_formed += formed + static_cast<int>(R.size());
+    out.terms_formed += formed + static_cast<int>(Rnext.size());
 
     // Project link k's potential parameters.
-    for (RTerm& t : R) {
+    for (RTerm& t : Rnext) {
       const Row4d r = t.r * Post;
       const double scale = maxAbs(t.r) * std::max(1.0, maxAbs(Post));
       for (int a = 0; a < 4; ++a)
@@ -925,7 +996,30 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     }
     if (layout.rotor)  // on 0.5 dq_k^2
       entries.push_back({diagonal.row, layout.rotorIndex(k), 1.0});
-    prevPost = post[k];
+    if (!last) {
+      Stage& next = stage[static_cast<std::size_t>(k + 1)];
+      next.Q.swap(Qnext);  // Qnext, Vnext and Rnext are left empty
+      next.V.swap(Vnext);
+      next.R.swap(Rnext);
+      if (children[static_cast<std::size_t>(k + 1)] > 1) share(next);
+    }
+    // The parent's stage is done once its last child has started from it; otherwise it goes
+    // back for the next child.
+    if (--pending[static_cast<std::size_t>(parent + 1)] == 0) {
+      if (!last) {  // its vectors serve for the next stage formed
+        Qnext.swap(Q);
+        Vnext.swap(V);
+        Rnext.swap(R);
+      } else {  // a leaf's stage is not kept: its vectors serve instead
+        std::vector<QTerm>().swap(Q);
+        std::vector<VTerm>().swap(V);
+        std::vector<RTerm>().swap(R);
+      }
+    } else {
+      in.Q.swap(Q);
+      in.V.swap(V);
+      in.R.swap(R);
+    }
   }
 
   out.keys = std::move(keys);

@@ -10,6 +10,10 @@
 // and on g~^T T_k (potential part): each joint multiplies by a matrix affine in (1, cos, sin) or
 // (1, q), which maps a term to at most five terms. No sampling, no regressor evaluation. Terms
 // whose coefficients vanish are dropped, so only the non-zero rows are ever formed.
+// On a tree, each joint starts from the stage of its parent joint (siblings branch from the
+// same stage): a link's energies involve only the joints of its root path, so J(i, j) occurs
+// only for i and j on one root path, and lk = 1 for every joint off the path. A basis function
+// that does not involve a branch is one row, whichever branches give it coordinates.
 #pragma once
 
 #include <Eigen/Core>
@@ -50,14 +54,18 @@ struct InfluenceCoordinates {
   int constantRow() const;
   BasisFunction basis(int row) const;
   /// The last joint (1-based) a row's basis function involves, through q or dq; 0 for the
-  /// constant. Columns of links before it are zero on that row.
+  /// constant. The joints it involves lie on that joint's root path; the row's coordinates lie
+  /// on the links that joint carries (its link and those of its descendants, numbered after
+  /// it), so columns of links before it are zero on that row.
   int depth(int row) const;
 };
 
 /// What the recursion of influenceCoordinates will form, counted beforehand on the sparsity
-/// patterns of the terms (no values): every count is an upper bound, reached for generic
-/// geometry; exact zeros of special geometry (axis-aligned frames) are seen, cancellations of
-/// values are not. The basis grows geometrically along runs of parallel or general joint axes.
+/// patterns of the terms (no values), stage by stage as the recursion keeps them (on a tree,
+/// the stages waiting for further children count in the memory): every count is an upper bound,
+/// reached for generic geometry; exact zeros of special geometry (axis-aligned frames) are seen,
+/// cancellations of values are not. The basis grows geometrically along runs of parallel or
+/// general joint axes.
 struct ProjectionCost {
   double terms = 0;          // kinetic and potential terms formed (terms_formed)
   double rows = 0;           // non-zero basis functions (rows of Z)
