@@ -27,12 +27,13 @@ void forwardKinematics(const Model& model, Data& data, const VecRef& q) noexcept
     }
     data.R[k] = j.pre.linear() * Rj * j.post.linear();
     data.p[k] = j.pre.translation() + j.pre.linear() * tj;
-    if (k == 0) {
+    const int pk = model.parent(k);
+    if (pk < 0) {
       data.R0[k] = data.R[k];
       data.p0[k] = data.p[k];
     } else {
-      data.p0[k] = data.p0[k - 1] + data.R0[k - 1] * data.p[k];
-      data.R0[k] = data.R0[k - 1] * data.R[k];
+      data.p0[k] = data.p0[pk] + data.R0[pk] * data.p[k];
+      data.R0[k] = data.R0[pk] * data.R[k];
     }
   }
 }
@@ -42,13 +43,20 @@ namespace {
 // Spatial velocities and accelerations; needs forwardKinematics.
 void motionPass(const Model& model, Data& data, const VecRef& dq, const VecRef& ddq,
                 bool with_gravity) noexcept {
-  Vector6d vp = Vector6d::Zero();
-  Vector6d ap = Vector6d::Zero();
-  if (with_gravity) ap.tail<3>() = -model.gravity;
+  // The base: at rest, accelerating upwards by -g to account for gravity.
+  Vector6d a_base = Vector6d::Zero();
+  if (with_gravity) a_base.tail<3>() = -model.gravity;
   for (int k = 0; k < data.n; ++k) {
     const Vector6d& S = data.S[k];
-    Vector6d v = motionToChild(data.R[k], data.p[k], vp);
-    Vector6d a = motionToChild(data.R[k], data.p[k], ap);
+    const int pk = model.parent(k);
+    Vector6d v, a;
+    if (pk < 0) {
+      v.setZero();
+      a = motionToChild(data.R[k], data.p[k], a_base);
+    } else {
+      v = motionToChild(data.R[k], data.p[k], data.v[pk]);
+      a = motionToChild(data.R[k], data.p[k], data.a[pk]);
+    }
     const Vector6d vj = S * dq[k];
     v += vj;
     // a += S ddq + v x vj (motion cross product, written out: no temporary)
@@ -57,14 +65,13 @@ void motionPass(const Model& model, Data& data, const VecRef& dq, const VecRef& 
     a.tail<3>() += v.head<3>().cross(vj.tail<3>()) + v.tail<3>().cross(vj.head<3>());
     data.v[k] = v;
     data.a[k] = a;
-    vp = v;
-    ap = a;
   }
 }
 
 // Joint torques from the kinematic quantities and a parameter vector.
-void forcePass(const Model&, Data& data, const VecRef& dq, const VecRef& ddq, const VecRef& params,
-               ParameterLayout layout, bool joint_terms, VecOut tau) noexcept {
+void forcePass(const Model& model, Data& data, const VecRef& dq, const VecRef& ddq,
+               const VecRef& params, ParameterLayout layout, bool joint_terms,
+               VecOut tau) noexcept {
   const int n = data.n;
   for (int k = 0; k < n; ++k) {
     const auto pk = params.segment<10>(blockStart(layout, k));
@@ -87,9 +94,9 @@ void forcePass(const Model&, Data& data, const VecRef& dq, const VecRef& ddq, co
         t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
     }
     tau[k] = t;
-    if (k > 0) {
-      carryToParent<true>(data.R[k], data.p[k], data.f[k], data.f[k - 1]);
-    }
+    // f[k] is complete: every child of link k has a larger index and was carried into it.
+    const int pk = model.parent(k);
+    if (pk >= 0) carryToParent<true>(data.R[k], data.p[k], data.f[k], data.f[pk]);
   }
 }
 
@@ -132,9 +139,10 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
     F.block<3, 3>(3, 6) = skew(aw) + Sw * Sw;
     F.block<3, 1>(3, 9) = b;
     const int c0 = blockStart(layout, j);
-    for (int k = j; k >= 0; --k) {
+    // Link j's wrench block reaches the joints that support it: j and its ancestors.
+    for (int k = j; k >= 0; k = model.parent(k)) {
       W.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
-      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);  // the wrench block to link k-1
+      if (model.parent(k) >= 0) carryToParent(data.R[k], data.p[k], F, F);  // to the parent link
     }
     if (layout.rotor) W(j, layout.rotorIndex(j)) = ddq[j];
     if (layout.friction) {

@@ -36,8 +36,10 @@ void ChainKinematics::poseAndJacobian(const Eigen::Ref<const Eigen::VectorXd>& q
   pose(q, T);
   // Column k: the joint's unit twist S_k (link k, about its origin) in the base frame, its
   // linear part moved to the tool origin.
+  // Joints that do not support the last link (other branches of a tree) have zero columns.
   const Eigen::Vector3d pt = T.translation();
-  for (int k = 0; k < model_.nq(); ++k) {
+  if (!model_.parents.empty()) J.setZero();
+  for (int k = model_.nq() - 1; k >= 0; k = model_.parent(k)) {
     const Eigen::Vector3d w = data_.R0[k] * data_.S[k].head<3>();
     J.col(k).head<3>() = data_.R0[k] * data_.S[k].tail<3>() + w.cross(pt - data_.p0[k]);
     J.col(k).tail<3>() = w;

@@ -52,6 +52,10 @@ KDL::Frame toKdl(const Eigen::Isometry3d& T) {
 
 KDL::Chain toKdlChain(const Model& model, bool with_inertia) {
   model.validate();
+  if (!model.isSerial())
+    throw ModelError("model '" + model.name +
+                     "' is a tree; a KDL chain needs a serial chain (load the URDF with a tip "
+                     "link to take one chain of it)");
   KDL::Chain chain;
   for (int k = 0; k < model.nq(); ++k) {
     const Joint& j = model.joints[k];

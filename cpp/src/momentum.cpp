@@ -22,10 +22,10 @@ void momentumRegressors(const Model& model, Data& data, const VecRef& q, const V
     F.block<3, 3>(3, 6) = skew(w);        // w x (m c)
     F.block<3, 1>(3, 9) = vo;             // m vo
     const int c0 = j * layout.perLink();
-    for (int k = j; k >= 0; --k) {
+    for (int k = j; k >= 0; k = model.parent(k)) {  // j and the joints that support it
       Wp.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
       Wl.block<1, 10>(k, c0).noalias() -= crossMotion(data.v[k], data.S[k]).transpose() * F;
-      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);
+      if (model.parent(k) >= 0) carryToParent(data.R[k], data.p[k], F, F);
     }
     if (layout.rotor) Wp(j, layout.rotorIndex(j)) = dq[j];
   }

@@ -34,18 +34,16 @@ inline Vector6d applyInertia(const Eigen::Ref<const Eigen::VectorXd>& p, int c0,
 // Reference velocities and accelerations; needs data.R, data.p, data.v (actual velocities).
 void referencePass(const Model& model, const Data& data, SlotineLiData& sl, const VecRef& dqr,
                    const VecRef& ddqr, bool with_gravity) noexcept {
-  Vector6d vp = Vector6d::Zero(), ap = Vector6d::Zero();
-  if (with_gravity) ap.tail<3>() = -model.gravity;
+  Vector6d a_base = Vector6d::Zero();
+  if (with_gravity) a_base.tail<3>() = -model.gravity;
   for (int k = 0; k < sl.n; ++k) {
     const Vector6d& S = data.S[k];
     const Vector6d sj = S * dqr[k];
-    Vector6d vr = motionToChild(data.R[k], data.p[k], vp) + sj;
-    Vector6d ar =
-        motionToChild(data.R[k], data.p[k], ap) + S * ddqr[k] + crossMotion(data.v[k], sj);
-    sl.vr[k] = vr;
-    sl.ar[k] = ar;
-    vp = vr;
-    ap = ar;
+    const int pk = model.parent(k);
+    const Vector6d& vp = pk < 0 ? Vector6d::Zero().eval() : sl.vr[pk];
+    const Vector6d& ap = pk < 0 ? a_base : sl.ar[pk];
+    sl.vr[k] = motionToChild(data.R[k], data.p[k], vp) + sj;
+    sl.ar[k] = motionToChild(data.R[k], data.p[k], ap) + S * ddqr[k] + crossMotion(data.v[k], sj);
   }
 }
 
@@ -76,9 +74,9 @@ void slotineLiRegressor(const Model& model, Data& data, SlotineLiData& sl, const
     F.noalias() += 0.5 * crossForceMatrix(v) * inertiaRegressor(vr);
     F.noalias() += 0.5 * crossForceMatrix(vr) * inertiaRegressor(v);
     const int c0 = j * layout.perLink();
-    for (int k = j; k >= 0; --k) {
+    for (int k = j; k >= 0; k = model.parent(k)) {  // j and the joints that support it
       Y.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
-      if (k > 0) carryToParent(data.R[k], data.p[k], F, F);  // the wrench block to link k-1
+      if (model.parent(k) >= 0) carryToParent(data.R[k], data.p[k], F, F);  // to the parent link
     }
     if (layout.rotor) Y(j, layout.rotorIndex(j)) = ddqr[j];
     if (layout.friction) {
@@ -99,11 +97,12 @@ void slotineLiBaseRegressor(const Model& model, Data& data, SlotineLiData& sl,
 namespace {
 
 // The force pass for a parameter vector; needs computeKinematics and referencePass.
-void torquePass(const Data& data, SlotineLiData& sl, const VecRef& dq, const VecRef& ddqr,
-                const VecRef& params, ParameterLayout layout, bool joint_terms,
+// data.f collects the wrenches the children of each link carry into it.
+void torquePass(const Model& model, Data& data, SlotineLiData& sl, const VecRef& dq,
+                const VecRef& ddqr, const VecRef& params, ParameterLayout layout, bool joint_terms,
                 VecOut tau) noexcept {
   const int n = sl.n;
-  Vector6d carried = Vector6d::Zero();
+  for (int k = 0; k < n; ++k) data.f[k].setZero();
   for (int k = n - 1; k >= 0; --k) {
     const int c0 = k * layout.perLink();
     const Vector6d& v = data.v[k];
@@ -111,7 +110,7 @@ void torquePass(const Data& data, SlotineLiData& sl, const VecRef& dq, const Vec
     Vector6d f = applyInertia(params, c0, sl.ar[k] - 0.5 * crossMotion(v, vr));
     f += 0.5 * (crossForce(v, applyInertia(params, c0, vr)) +
                 crossForce(vr, applyInertia(params, c0, v)));
-    f += carried;
+    f += data.f[k];
     double t = data.S[k].dot(f);
     if (joint_terms) {
       if (layout.rotor) t += params[layout.rotorIndex(k)] * ddqr[k];
@@ -119,7 +118,8 @@ void torquePass(const Data& data, SlotineLiData& sl, const VecRef& dq, const Vec
         t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
     }
     tau[k] = t;
-    if (k > 0) carryToParent(data.R[k], data.p[k], f, carried);
+    const int pk = model.parent(k);
+    if (pk >= 0) carryToParent<true>(data.R[k], data.p[k], f, data.f[pk]);
   }
 }
 
@@ -131,7 +131,7 @@ void slotineLiTorque(const Model& model, Data& data, SlotineLiData& sl, const Ve
                      bool joint_terms) noexcept {
   computeKinematics(model, data, q, dq, sl.zeros, false);
   referencePass(model, data, sl, dqr, ddqr, with_gravity);
-  torquePass(data, sl, dq, ddqr, params, layout, joint_terms, tau);
+  torquePass(model, data, sl, dq, ddqr, params, layout, joint_terms, tau);
 }
 
 void coriolisMatrix(const Model& model, Data& data, SlotineLiData& sl, const VecRef& q,
@@ -142,7 +142,7 @@ void coriolisMatrix(const Model& model, Data& data, SlotineLiData& sl, const Vec
   for (int j = 0; j < sl.n; ++j) {
     sl.unit[j] = 1.0;
     referencePass(model, data, sl, sl.unit, sl.zeros, false);
-    torquePass(data, sl, dq, sl.zeros, params, layout, false, C.col(j));
+    torquePass(model, data, sl, dq, sl.zeros, params, layout, false, C.col(j));
     sl.unit[j] = 0.0;
   }
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 
 #include "mindyn/dynamics.hpp"
@@ -33,8 +34,8 @@ TEST(Dynamics, TwoLinkPlanarClosedForm) {
 
 TEST(Dynamics, RegressorTimesParametersIsInverseDynamics) {
   std::mt19937 rng(2);
-  for (const auto& name : bundled()) {
-    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    const Model model = withExtras(loaded, rng);
     Data data(model);
     const int n = model.nq();
     for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true},
@@ -56,8 +57,8 @@ TEST(Dynamics, RegressorTimesParametersIsInverseDynamics) {
 
 TEST(Dynamics, EnergyRegressorsAndKineticEnergyFromMassMatrix) {
   std::mt19937 rng(3);
-  for (const auto& name : bundled()) {
-    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    const Model model = withExtras(loaded, rng);
     Data data(model);
     const int n = model.nq();
     const ParameterLayout layout{true, true};
@@ -79,8 +80,8 @@ TEST(Dynamics, EnergyRegressorsAndKineticEnergyFromMassMatrix) {
 
 TEST(Dynamics, PotentialEnergyGradientIsGravityTorque) {
   std::mt19937 rng(4);
-  for (const auto& name : bundled()) {
-    const Model model = loadYaml(test::robotFile(name));
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    const Model model = loaded;
     Data data(model);
     const int n = model.nq();
     const Eigen::VectorXd pi = model.parameters();
@@ -104,8 +105,8 @@ TEST(Dynamics, PowerBalanceAlongATrajectory) {
   // dH/dt = dq^T tau for a frictionless robot, by central differences of H along
   // q(t) = q0 + dq0 t + ddq0 t^2 / 2.
   std::mt19937 rng(5);
-  for (const auto& name : bundled()) {
-    Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    Model model = withExtras(loaded, rng);
     Data data(model);
     const int n = model.nq();
     const ParameterLayout layout{true, false};
@@ -129,8 +130,8 @@ TEST(Dynamics, PowerBalanceAlongATrajectory) {
 
 TEST(Dynamics, MassMatrixSymmetricPositiveDefiniteAndForwardDynamicsInverts) {
   std::mt19937 rng(6);
-  for (const auto& name : bundled()) {
-    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    const Model model = withExtras(loaded, rng);
     Data data(model);
     const int n = model.nq();
     const ParameterLayout layout{true, true};
@@ -169,4 +170,59 @@ TEST(Dynamics, SizeChecksNameTheArgument) {
   }
   EXPECT_THROW(checkSizes(model, {true, false}, 3, 3, 3, 30), std::invalid_argument);
   EXPECT_NO_THROW(checkSizes(model, {true, false}, 3, 3, 3, 33));
+}
+
+TEST(Dynamics, TreeWithMasslessSideBranchesActsAsItsRootPath) {
+  // Independent of the tree code: the serial chain of one root path, computed by the chain
+  // algorithms, must give the torques of that path's joints when every other link of the tree
+  // is massless (and the side joints' torques are then zero).
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 6; ++trial) {
+    Model tree = test::randomTree(rng, 8, trial % 2 == 0);
+    const int n = tree.nq();
+    std::vector<int> path;  // root path of the last joint, base first
+    for (int k = n - 1; k >= 0; k = tree.parent(k)) path.insert(path.begin(), k);
+    Model chain = tree;
+    chain.parents.clear();
+    chain.joints.clear();
+    chain.link_names.assign(1, tree.link_names[0]);
+    const int m = static_cast<int>(path.size());
+    chain.inertial.resize(10 * m);
+    chain.rotor_inertia.resize(m);
+    chain.viscous.resize(m);
+    chain.coulomb.resize(m);
+    for (int i = 0; i < m; ++i) {
+      const int k = path[static_cast<size_t>(i)];
+      chain.joints.push_back(tree.joints[static_cast<size_t>(k)]);
+      chain.link_names.push_back(tree.link_names[static_cast<size_t>(k) + 1]);
+      chain.inertial.segment<10>(10 * i) = tree.inertial.segment<10>(10 * k);
+      chain.rotor_inertia[i] = tree.rotor_inertia[k];
+      chain.viscous[i] = tree.viscous[k];
+      chain.coulomb[i] = tree.coulomb[k];
+    }
+    chain.validate();
+    for (int k = 0; k < n; ++k)
+      if (std::find(path.begin(), path.end(), k) == path.end())
+        tree.inertial.segment<10>(10 * k).setZero();
+    Data dt(tree), dc(chain);
+    const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 5);
+    Eigen::VectorXd qc(m), dqc(m), ddqc(m);
+    for (int i = 0; i < m; ++i) {
+      const int k = path[static_cast<size_t>(i)];
+      qc[i] = q[k];
+      dqc[i] = dq[k];
+      ddqc[i] = ddq[k];
+    }
+    Eigen::VectorXd tau(n), tauc(m);
+    inverseDynamics(tree, dt, q, dq, ddq, tree.parameters(), {}, tau);
+    inverseDynamics(chain, dc, qc, dqc, ddqc, chain.parameters(), {}, tauc);
+    Eigen::VectorXd on_path(m);
+    for (int i = 0; i < m; ++i) on_path[i] = tau[path[static_cast<size_t>(i)]];
+    EXPECT_LT(relErr(on_path, tauc), 1e-12) << "trial " << trial;
+    for (int k = 0; k < n; ++k) {
+      if (std::find(path.begin(), path.end(), k) == path.end()) {
+        EXPECT_LT(std::abs(tau[k]), 1e-12 * tauc.norm()) << "side joint " << k;
+      }
+    }
+  }
 }

@@ -170,3 +170,34 @@ TEST(Ik, StartOutsideTheLimitsIsBroughtInside) {
   EXPECT_TRUE(r.success());
   EXPECT_TRUE(insideModelLimits(model, q));
 }
+
+TEST(Ik, ChainKinematicsOfATreeFollowsTheLastLinksRootPath) {
+  // Central differences of the tool pose: the Jacobian's columns, zero for joints of other
+  // branches.
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 4; ++trial) {
+    const Model tree = test::randomTree(rng, 8, trial % 2 == 0);
+    ChainKinematics kin(tree);
+    const int n = tree.nq();
+    const Eigen::VectorXd q = test::random(rng, n, 2);
+    Eigen::Isometry3d T, Tp, Tm;
+    Matrix6Xd J(6, n);
+    kin.poseAndJacobian(q, T, J);
+    const double h = 1e-6;
+    for (int k = 0; k < n; ++k) {
+      Eigen::VectorXd qp = q, qm = q;
+      qp[k] += h;
+      qm[k] -= h;
+      kin.pose(qp, Tp);
+      kin.pose(qm, Tm);
+      const Eigen::AngleAxisd turn(Tp.linear() * Tm.linear().transpose());
+      Vector6d fd;
+      fd.head<3>() = (Tp.translation() - Tm.translation()) / (2 * h);
+      fd.tail<3>() = turn.angle() * turn.axis() / (2 * h);
+      EXPECT_LT((J.col(k) - fd).norm(), 1e-7 * std::max(1.0, fd.norm())) << "joint " << k;
+      if (!tree.supports(k, n - 1)) {
+        EXPECT_EQ(J.col(k).norm(), 0.0) << "joint " << k;
+      }
+    }
+  }
+}

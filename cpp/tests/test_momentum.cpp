@@ -20,8 +20,8 @@ namespace {
 std::vector<std::pair<std::string, Model>> robots() {
   std::mt19937 rng(11);
   std::vector<std::pair<std::string, Model>> out;
-  for (const auto& name : test::bundled())
-    out.emplace_back(name, test::withExtras(loadYaml(test::robotFile(name)), rng));
+  for (const auto& [name, model] : test::chainsAndTrees())
+    out.emplace_back(name, test::withExtras(model, rng));
   const std::string dir = MINDYN_ROBOT_DATA_DIR;
   if (dir.empty()) {
     ADD_FAILURE() << "MINDYN_ROBOT_DATA_DIR is not set";

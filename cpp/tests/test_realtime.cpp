@@ -29,8 +29,7 @@ TEST(Realtime, TheCounterSeesAllocations) {
 }
 
 TEST(Realtime, DynamicsPathsAllocateNothing) {
-  for (const char* name : {"puma560", "zcr07s", "stanford"}) {
-    const Model model = loadYaml(test::robotFile(name));
+  for (const auto& [name, model] : test::chainsAndTrees()) {
     Data data(model);
     const int n = model.nq();
     const ParameterLayout layout{true, true};
@@ -95,8 +94,7 @@ TEST(Realtime, BaseRegressorsAllocateNothing) {
 }
 
 TEST(Realtime, SlotineLiPathsAllocateNothing) {
-  for (const char* name : {"puma560", "zcr07s", "stanford"}) {
-    const Model model = loadYaml(test::robotFile(name));
+  for (const auto& [name, model] : test::chainsAndTrees()) {
     Data data(model);
     const int n = model.nq();
     const ParameterLayout layout{true, true};

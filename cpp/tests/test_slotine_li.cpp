@@ -41,8 +41,8 @@ std::vector<Eigen::MatrixXd> massMatrixDerivatives(const Model& model, Data& dat
 
 TEST(SlotineLi, EqualsTheRegressorWhenReferenceIsActualMotion) {
   std::mt19937 rng(11);
-  for (const auto& name : bundled()) {
-    const Model model = loadYaml(test::robotFile(name));
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    const Model model = loaded;
     Data data(model);
     const int n = model.nq();
     for (ParameterLayout layout : kLayouts) {
@@ -62,8 +62,8 @@ TEST(SlotineLi, EqualsTheRegressorWhenReferenceIsActualMotion) {
 
 TEST(SlotineLi, RegressorIsMassMatrixCoriolisAndGravity) {
   std::mt19937 rng(12);
-  for (const auto& name : bundled()) {
-    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    const Model model = withExtras(loaded, rng);
     Data data(model);
     const int n = model.nq();
     for (ParameterLayout layout : kLayouts) {
@@ -103,8 +103,8 @@ TEST(SlotineLi, RegressorIsMassMatrixCoriolisAndGravity) {
 
 TEST(SlotineLi, MassMatrixDerivativeMinusTwoCoriolisIsSkewSymmetric) {
   std::mt19937 rng(13);
-  for (const auto& name : bundled()) {
-    const Model model = withExtras(loadYaml(test::robotFile(name)), rng);
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    const Model model = withExtras(loaded, rng);
     Data data(model);
     const int n = model.nq();
     const ParameterLayout layout{true, false};
@@ -128,8 +128,8 @@ TEST(SlotineLi, MassMatrixDerivativeMinusTwoCoriolisIsSkewSymmetric) {
 
 TEST(SlotineLi, CoriolisMatrixIsTheChristoffelOne) {
   std::mt19937 rng(14);
-  for (const auto& name : bundled()) {
-    const Model model = loadYaml(test::robotFile(name));
+  for (const auto& [name, loaded] : test::chainsAndTrees()) {
+    const Model model = loaded;
     Data data(model);
     const int n = model.nq();
     SlotineLiData sl(model);

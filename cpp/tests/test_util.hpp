@@ -4,8 +4,10 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdlib>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mindyn/description.hpp"
@@ -103,6 +105,38 @@ inline Model randomChain(std::mt19937& rng, int n, bool prismatic, bool special,
   m.coulomb = random(rng, n).cwiseAbs();
   m.gravity = special ? Eigen::Vector3d(0, 0, -9.81) : Eigen::Vector3d(random(rng, 3, 9.81));
   return m;
+}
+
+/// A random tree (see randomChain) with physically consistent inertia (each link a box of random
+/// size, mass and pose), random positive rotor inertia and friction, and gravity along -z.
+inline Model randomTree(std::mt19937& rng, int n, bool special) {
+  Model m = randomChain(rng, n, true, special, true);
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d size = random(rng, 3).cwiseAbs() * 0.3 + Eigen::Vector3d::Constant(0.05);
+    const double mass = 1.0 + std::abs(random(rng, 1)[0]);
+    const Eigen::Vector3d s2 = size.cwiseProduct(size);
+    const Eigen::Vector3d moments =
+        mass / 12 * Eigen::Vector3d(s2.y() + s2.z(), s2.x() + s2.z(), s2.x() + s2.y());
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(random(rng, 1, 3.0)[0], randomUnit(rng)).toRotationMatrix();
+    m.inertial.segment<10>(10 * k) =
+        inertialFromCom(mass, random(rng, 3, 0.2), R * moments.asDiagonal() * R.transpose());
+  }
+  m.gravity = Eigen::Vector3d(0, 0, -9.81);
+  return m;
+}
+
+/// The bundled robots and three random trees: the models of the runtime dynamics tests.
+inline std::vector<std::pair<std::string, Model>> chainsAndTrees() {
+  std::vector<std::pair<std::string, Model>> out;
+  for (const auto& name : bundled()) out.emplace_back(name, loadYaml(robotFile(name)));
+  std::mt19937 rng(20261124);
+  out.emplace_back("tree5 special", randomTree(rng, 5, true));
+  out.emplace_back("tree7", randomTree(rng, 7, false));
+  out.emplace_back("tree9 special", randomTree(rng, 9, true));
+  for (int k = 5; k < 8; ++k)  // every draw branches
+    if (out[static_cast<size_t>(k) - 1].second.isSerial()) std::abort();
+  return out;
 }
 
 }  // namespace mindyn::test

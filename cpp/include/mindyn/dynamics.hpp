@@ -1,4 +1,4 @@
-// Rigid-body dynamics of a serial chain, linear in the classical parameters.
+// Rigid-body dynamics of a fixed-base serial chain or tree, linear in the classical parameters.
 //
 // Conventions: link frames as in model.hpp; spatial vectors (angular; linear) about the link
 // origin in link coordinates; gravity = model.gravity in the base frame. `params` is any vector
@@ -38,7 +38,8 @@ void inverseDynamics(const Model& model, Data& data, const VecRef& q, const VecR
 void gravityTorque(const Model& model, Data& data, const VecRef& q, const VecRef& params,
                    ParameterLayout layout, VecOut tau) noexcept;
 
-/// Classical regressor W (n x layout.size(n)) with tau = W * params.
+/// Classical regressor W (n x layout.size(n)) with tau = W * params. On a tree, the block of link
+/// k is zero on the rows of joints that do not support it.
 void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq, const VecRef& ddq,
                ParameterLayout layout, MatOut W) noexcept;
 

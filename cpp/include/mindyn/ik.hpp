@@ -28,7 +28,8 @@ namespace mindyn {
 using Matrix6Xd = Eigen::Matrix<double, 6, Eigen::Dynamic>;
 
 /// Tool pose and geometric Jacobian of a model's chain (rows vx vy vz wx wy wz in the base frame,
-/// reference point the tool origin: the KDL convention of kinematics.hpp).
+/// reference point the tool origin: the KDL convention of kinematics.hpp). The tool is fixed to
+/// the last link (n); on a tree, the columns of joints off its root path are zero.
 class ChainKinematics {
  public:
   explicit ChainKinematics(const Model& model);
