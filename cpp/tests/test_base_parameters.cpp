@@ -88,10 +88,12 @@ void expectTreeSetsReproduce(const Model& model, const BaseParameters& bp, std::
     const Eigen::VectorXd q = test::random(rng, n, 2.5), dq = test::random(rng, n, 1.5),
                           ddq = test::random(rng, n, 3);
     const Eigen::MatrixXd W = test::pathRegressor(model, q, dq, ddq, layout);
-    Eigen::MatrixXd Wb(n, bp.eom.size());
-    for (int b = 0; b < bp.eom.size(); ++b) Wb.col(b) = W.col(bp.eom.decision.pivots[b]);
     const Eigen::VectorXd tau = W * pi;
-    // rounding of sums of a few hundred terms of size ~10: far below 1e-10 relative
+    // The library's base regressor on the tree against the reference torques; rounding of sums
+    // of a few hundred terms of size ~10: far below 1e-10 relative.
+    Data data(model);
+    Eigen::MatrixXd Wl(n, P), Wb(n, bp.eom.size());
+    baseRegressor(model, data, bp, q, dq, ddq, Wl, Wb);
     EXPECT_LT((Wb * bp.values(pi) - tau).norm(), 1e-10 * std::max(1.0, tau.norm())) << what;
     for (bool total : {false, true}) {
       const BaseSet& set = total ? bp.energy : bp.lagrangian;
@@ -123,6 +125,11 @@ TEST(BaseParameters, RandomTreesReproduceTheTorquesAndEnergies) {
         EXPECT_EQ(bp.eom.size(), test::sampledRank(model, layout, 3 * P / n + 20, rng)) << what;
         EXPECT_EQ(bp.lagrangian.size(), test::sampledRank(model, layout, P + 20, rng, true))
             << what;
+        opt.method = BaseMethod::Numerical;
+        const BaseParameters num = computeBaseParameters(model, opt);
+        EXPECT_EQ(bp.eom.size(), num.eom.size()) << what;
+        EXPECT_EQ(bp.lagrangian.size(), num.lagrangian.size()) << what;
+        EXPECT_EQ(bp.energy.size(), num.energy.size()) << what;
         expectTreeSetsReproduce(model, bp, rng, what);
       }
 }
@@ -184,6 +191,10 @@ TEST(BaseParameters, TwoCopiesOfAnArmOnTheBase) {
       // The Lagrangian's constant is shared: independent check of its count.
       EXPECT_EQ(two.lagrangian.size(), test::sampledRank(tree, layout, 2 * P + 20, rng, true))
           << what;
+      opt.method = BaseMethod::Numerical;
+      const BaseParameters num = computeBaseParameters(tree, opt);
+      EXPECT_EQ(two.eom.size(), num.eom.size()) << what;
+      EXPECT_EQ(two.lagrangian.size(), num.lagrangian.size()) << what;
       expectTreeSetsReproduce(tree, two, rng, what);
     }
   }
