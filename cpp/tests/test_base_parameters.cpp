@@ -112,26 +112,23 @@ void expectTreeSetsReproduce(const Model& model, const BaseParameters& bp, std::
 // counts are the ranks of the sampled reference regressors.
 TEST(BaseParameters, RandomTreesReproduceTheTorquesAndEnergies) {
   std::mt19937 rng(41);
-  for (int n = 3; n <= 8; ++n)
-    for (bool special : {false, true})
-      for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true}}) {
-        const Model model = test::randomChain(rng, n, true, special, true);
-        const std::string what = "tree n=" + std::to_string(n) + (special ? " special" : "") +
-                                 (layout.rotor ? " Ia+Fv+Fc" : "");
-        BaseOptions opt;
-        opt.layout = layout;
-        const BaseParameters bp = computeBaseParameters(model, opt);
-        const int P = layout.size(n);
-        EXPECT_EQ(bp.eom.size(), test::sampledRank(model, layout, 3 * P / n + 20, rng)) << what;
-        EXPECT_EQ(bp.lagrangian.size(), test::sampledRank(model, layout, P + 20, rng, true))
-            << what;
-        opt.method = BaseMethod::Numerical;
-        const BaseParameters num = computeBaseParameters(model, opt);
-        EXPECT_EQ(bp.eom.size(), num.eom.size()) << what;
-        EXPECT_EQ(bp.lagrangian.size(), num.lagrangian.size()) << what;
-        EXPECT_EQ(bp.energy.size(), num.energy.size()) << what;
-        expectTreeSetsReproduce(model, bp, rng, what);
-      }
+  for (const Model& model : test::testTrees(rng))
+    for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true}}) {
+      const int n = model.nq();
+      const std::string what = model.name + (layout.rotor ? " Ia+Fv+Fc" : "");
+      BaseOptions opt;
+      opt.layout = layout;
+      const BaseParameters bp = computeBaseParameters(model, opt);
+      const int P = layout.size(n);
+      EXPECT_EQ(bp.eom.size(), test::sampledRank(model, layout, 3 * P / n + 20, rng)) << what;
+      EXPECT_EQ(bp.lagrangian.size(), test::sampledRank(model, layout, P + 20, rng, true)) << what;
+      opt.method = BaseMethod::Numerical;
+      const BaseParameters num = computeBaseParameters(model, opt);
+      EXPECT_EQ(bp.eom.size(), num.eom.size()) << what;
+      EXPECT_EQ(bp.lagrangian.size(), num.lagrangian.size()) << what;
+      EXPECT_EQ(bp.energy.size(), num.energy.size()) << what;
+      expectTreeSetsReproduce(model, bp, rng, what);
+    }
 }
 
 // Two copies of an arm mounted on the base: each branch regroups within itself exactly as the

@@ -120,50 +120,49 @@ TEST(Projection, CoordinatesOfRandomChains) {
 // reproduces the Lagrangian regressor of the serial chains of the root paths.
 TEST(Projection, CoordinatesOfRandomTrees) {
   std::mt19937 rng(23);
-  for (int n = 3; n <= 8; ++n)
-    for (bool special : {false, true}) {
-      const Model model = test::randomChain(rng, n, true, special, true);
-      const ParameterLayout layout{n % 2 == 0, false};
-      const std::string what = "tree n=" + std::to_string(n) + (special ? " special" : "");
-      const InfluenceCoordinates ic = influenceCoordinates(model, layout);
-      std::vector<std::uint64_t> keys = ic.keys;
-      std::sort(keys.begin(), keys.end());
-      EXPECT_EQ(std::adjacent_find(keys.begin(), keys.end()), keys.end()) << what;
-      // Counted, the first offence shown: a wrong recursion offends on thousands of rows.
-      int off_path = 0, wrong_depth = 0, off_subtree = 0;
-      std::string first;
-      std::vector<int> deepest(ic.rows(), -1);
-      for (int r = 0; r < ic.rows(); ++r) {
-        const BasisFunction b = ic.basis(r);
-        std::vector<int> joints;
-        if (b.l0 > 0) {
-          const int i = static_cast<int>(std::floor((1 + std::sqrt(8.0 * b.l0 - 7)) / 2));
-          joints = {i - 1, b.l0 - i * (i - 1) / 2 - 1};
-        }
-        for (int k = 0; k < n; ++k)
-          if (b.l[k] > 1) joints.push_back(k);
-        const int d = joints.empty() ? -1 : *std::max_element(joints.begin(), joints.end());
-        bool bad = false;
-        for (int j : joints) bad = bad || !model.supports(j, d);
-        off_path += bad;
-        wrong_depth += ic.depth(r) != d + 1;
-        if ((bad || ic.depth(r) != d + 1) && first.empty()) first = b.toString(model);
-        deepest[r] = d;
+  for (const Model& model : test::testTrees(rng)) {
+    const int n = model.nq();
+    const ParameterLayout layout{n % 2 == 0, false};
+    const std::string& what = model.name;
+    const InfluenceCoordinates ic = influenceCoordinates(model, layout);
+    std::vector<std::uint64_t> keys = ic.keys;
+    std::sort(keys.begin(), keys.end());
+    EXPECT_EQ(std::adjacent_find(keys.begin(), keys.end()), keys.end()) << what;
+    // Counted, the first offence shown: a wrong recursion offends on thousands of rows.
+    int off_path = 0, wrong_depth = 0, off_subtree = 0;
+    std::string first;
+    std::vector<int> deepest(ic.rows(), -1);
+    for (int r = 0; r < ic.rows(); ++r) {
+      const BasisFunction b = ic.basis(r);
+      std::vector<int> joints;
+      if (b.l0 > 0) {
+        const int i = static_cast<int>(std::floor((1 + std::sqrt(8.0 * b.l0 - 7)) / 2));
+        joints = {i - 1, b.l0 - i * (i - 1) / 2 - 1};
       }
-      for (const auto& e : ic.entries) {
-        const int link = e.col / layout.perLink(), d = deepest[e.row];
-        if (d >= 0 && !model.supports(d, link)) {
-          ++off_subtree;
-          if (first.empty())
-            first = ic.basis(e.row).toString(model) + " column " + std::to_string(e.col);
-        }
-      }
-      EXPECT_EQ(off_path + wrong_depth + off_subtree, 0)
-          << what << ": " << off_path << " rows off one root path, " << wrong_depth
-          << " with a wrong depth, " << off_subtree
-          << " coordinates off the deepest joint's subtree; first: " << first;
-      expectCoordinatesReproduceLagrangian(model, layout, what);
+      for (int k = 0; k < n; ++k)
+        if (b.l[k] > 1) joints.push_back(k);
+      const int d = joints.empty() ? -1 : *std::max_element(joints.begin(), joints.end());
+      bool bad = false;
+      for (int j : joints) bad = bad || !model.supports(j, d);
+      off_path += bad;
+      wrong_depth += ic.depth(r) != d + 1;
+      if ((bad || ic.depth(r) != d + 1) && first.empty()) first = b.toString(model);
+      deepest[r] = d;
     }
+    for (const auto& e : ic.entries) {
+      const int link = e.col / layout.perLink(), d = deepest[e.row];
+      if (d >= 0 && !model.supports(d, link)) {
+        ++off_subtree;
+        if (first.empty())
+          first = ic.basis(e.row).toString(model) + " column " + std::to_string(e.col);
+      }
+    }
+    EXPECT_EQ(off_path + wrong_depth + off_subtree, 0)
+        << what << ": " << off_path << " rows off one root path, " << wrong_depth
+        << " with a wrong depth, " << off_subtree
+        << " coordinates off the deepest joint's subtree; first: " << first;
+    expectCoordinatesReproduceLagrangian(model, layout, what);
+  }
 }
 
 // The cost counted before the recursion bounds what the recursion then forms.
@@ -187,10 +186,7 @@ TEST(Projection, CostEstimateBoundsTheRecursion) {
     check(parseUrdf(randomUrdf(rng, n), "", "random"), {true, false},
           "random chain n=" + std::to_string(n));
   check(planarArm(5, false), {true, false}, "planar5h");
-  for (int n = 3; n <= 8; ++n)
-    for (bool special : {false, true})
-      check(test::randomChain(rng, n, true, special, true), {special, false},
-            "random tree n=" + std::to_string(n));
+  for (const Model& tree : test::testTrees(rng)) check(tree, {true, false}, tree.name);
 }
 
 TEST(Projection, OverBudgetIsRefusedBeforeComputing) {

@@ -49,6 +49,32 @@ inline PathChain pathChain(const Model& tree, int k) {
   return p;
 }
 
+/// Trees for the tests: random ones of 3 to 8 joints (random parents: mostly shallow), and deeper
+/// shapes with random geometry (a trunk forking into two arms, three branches from one joint,
+/// forks at several depths), each with generic and with special geometry (see randomChain).
+/// The name says which.
+inline std::vector<Model> testTrees(std::mt19937& rng) {
+  std::vector<Model> out;
+  auto name = [](Model& m, bool special) {
+    m.name = (special ? "special tree, parents" : "tree, parents");
+    for (int k = 0; k < m.nq(); ++k) m.name += " " + std::to_string(m.parent(k));
+  };
+  for (int n = 3; n <= 8; ++n)
+    for (bool special : {false, true}) {
+      out.push_back(randomChain(rng, n, true, special, true));
+      name(out.back(), special);
+    }
+  const std::vector<std::vector<int>> shapes = {
+      {-1, 0, 1, 2, 1, 4, 5}, {-1, 0, 0, 0, 1, 2, 3}, {-1, 0, 1, 2, 3, 2, 1}};
+  for (const auto& parents : shapes)
+    for (bool special : {false, true}) {
+      out.push_back(randomChain(rng, static_cast<int>(parents.size()), true, special));
+      out.back().parents = parents;
+      name(out.back(), special);
+    }
+  return out;
+}
+
 /// The tree's Lagrangian regressor w_K - w_P, or with `total` the total-energy one w_K + w_P.
 inline Eigen::VectorXd pathEnergyRegressor(const Model& tree, const Eigen::VectorXd& q,
                                            const Eigen::VectorXd& dq, ParameterLayout layout,
