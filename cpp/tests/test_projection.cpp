@@ -215,6 +215,31 @@ TEST(Projection, OverBudgetIsRefusedBeforeComputing) {
   }
 }
 
+// A tree may have more joints than a serial chain, not longer root paths (the packed index).
+TEST(Projection, LongRootPathsOfATreeAreRefused) {
+  std::mt19937 rng(9);
+  Model tree = test::randomChain(rng, 18, false, true);
+  tree.parents = {-1};
+  for (int k = 1; k < 17; ++k) tree.parents.push_back(k - 1);  // a 17-joint path
+  tree.parents.push_back(0);
+  try {
+    influenceCoordinates(tree);
+    FAIL() << "not refused";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("root paths of up to 16 joints on a tree, the longest of "
+                                         "this 18-joint tree has 17"),
+              std::string::npos)
+        << e.what();
+  }
+  tree.parents[16] = 0;  // 16 at most: accepted, then refused for its size (17 general axes)
+  try {
+    influenceCoordinates(tree);
+    FAIL() << "not refused";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("over its budget"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Projection, BasisIndexRoundTrip) {
   // l0 = J(4, 3) = 4 * 3 / 2 + 3 = 9: the product dq3 dq4
   const std::vector<int> l = {1, 5, 3, 2, 4, 1};

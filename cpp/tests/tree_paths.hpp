@@ -72,6 +72,12 @@ inline std::vector<Model> testTrees(std::mt19937& rng) {
       out.back().parents = parents;
       name(out.back(), special);
     }
+  // Baxter's shape, 19 joints (more than a serial chain's projection handles): a head joint and
+  // two 7-joint arms on the base, two finger joints on each wrist; special geometry (generic
+  // 7-joint arms take a tenth of a second each).
+  out.push_back(randomChain(rng, 19, true, true));
+  out.back().parents = {-1, -1, 1, 2, 3, 4, 5, 6, 7, 7, -1, 10, 11, 12, 13, 14, 15, 16, 16};
+  name(out.back(), true);
   return out;
 }
 

@@ -46,6 +46,11 @@ struct InfluenceCoordinates {
   std::vector<std::uint64_t> keys;  // packed multi-index of each row
   std::vector<Entry> entries;       // the non-zero coordinates; a row's by ascending column
   int terms_formed = 0;             // kinetic + potential terms produced by the recursion
+  /// A tree's: the parent of each joint (empty for a serial chain) and where its keys keep the
+  /// deepest joint they involve; its keys give each joint's factor at the joint's position on
+  /// its root path (for a serial chain, at the joint's index, as packBasis).
+  std::vector<int> parents;
+  int end_shift = 0;
   int rows() const { return static_cast<int>(keys.size()); }
   int cols() const { return layout.size(n); }
   /// Z as a dense matrix (rows x cols); large for long chains.
@@ -81,12 +86,13 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout = {});
 /// ten times; a generic 12-joint chain (estimate 31 GB) is refused.
 inline constexpr double kProjectionBudget = 8.0 * 1024 * 1024 * 1024;
 
-/// Runs the recursion. Throws ModelError for more than 18 joints (the packed index limit) and,
-/// before forming anything, when projectionCost(model, layout).bytes exceeds `budget`.
+/// Runs the recursion. Throws ModelError for more than 18 joints on a serial chain (the packed
+/// index limit; on a tree, for more than 44 joints or root paths of more than 16) and, before
+/// forming anything, when projectionCost(model, layout).bytes exceeds `budget`.
 InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout = {},
                                           double budget = kProjectionBudget);
 
-/// Packs (l0; l1..ln) into a key and back.
+/// Packs (l0; l1..ln) into a key and back, as a serial chain's keys are packed.
 std::uint64_t packBasis(int l0, const std::vector<int>& l);
 BasisFunction unpackBasis(std::uint64_t key, int n);
 
