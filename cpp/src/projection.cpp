@@ -371,6 +371,19 @@ const std::array<Pattern, kKinds>& patterns() {
   return table;
 }
 
+// The parts of y through a joint: times 1, cos q, sin q for a revolute joint (part(a), a < 3),
+// times 1, q for a prismatic one (y, part(3)). Returns their number.
+template <class V, class Part>
+int jointParts(bool revolute, const V& y, V parts[3], Part part) {
+  if (revolute) {
+    for (int a = 0; a < 3; ++a) parts[a] = part(a);
+    return 3;
+  }
+  parts[0] = y;
+  parts[1] = part(3);
+  return 2;
+}
+
 // Terms of the recursion. `row` is the row of Z of the term's basis function, -1 while it has
 // none: a term carried through a joint by its constant factor keeps its key, hence its row;
 // the other terms have keys that no earlier term had.
@@ -1016,15 +1029,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         C.apply(t.x, y);
         if (!prune(y, kNoise * maxAbs(t.x) * cscale)) continue;
         Vector6d parts[3];
-        int count;
-        if (revolute) {
-          for (int a = 0; a < 3; ++a) parts[a] = R6[a] * y;
-          count = 3;
-        } else {
-          parts[0] = y;
-          parts[1] = N6 * y;
-          count = 2;
-        }
+        const int count = jointParts(revolute, y, parts,
+                                     [&](int a) -> Vector6d { return a < 3 ? R6[a] * y : N6 * y; });
         const double ptol = kNoise * maxAbs(y);
         for (int l = 0; l < count; ++l) {
           if (!prune(parts[l], ptol)) continue;
@@ -1058,15 +1064,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         Row4d y = t.r * Pre;
         if (!prune(y, kNoise * maxAbs(t.r) * std::max(1.0, maxAbs(Pre)))) continue;
         Row4d parts[3];
-        int count;
-        if (revolute) {
-          for (int a = 0; a < 3; ++a) parts[a] = y * R4[a];
-          count = 3;
-        } else {
-          parts[0] = y;
-          parts[1] = y * N4;
-          count = 2;
-        }
+        const int count = jointParts(revolute, y, parts,
+                                     [&](int a) -> Row4d { return a < 3 ? y * R4[a] : y * N4; });
         const double ptol = kNoise * maxAbs(y);
         for (int l = 0; l < count; ++l)
           if (prune(parts[l], ptol))
