@@ -599,6 +599,14 @@ def test_cli_codegen(tmp_path, capsys):
     assert main(["codegen", "puma560", "--lang", "c", "--trig", "libm", "-o", str(out)]) == 0
     assert "_sincos" not in (tmp_path / "puma.c").read_text()
     capsys.readouterr()
+    # --method: a chain of 20 joints, beyond the projection method, by the recursive method
+    # (the same set as the numerical method's)
+    argv = ["codegen", "planar20", "--lang", "c", "--what", "id", "-o", str(out)]
+    assert main(argv) != 0 and "--method recursive" in capsys.readouterr().err
+    assert main(argv + ["--method", "recursive"]) == 0
+    names = mindyn.base_parameters("planar20", method="numerical").names
+    assert capsys.readouterr().out.startswith(f"planar20: {len(names)} base parameters;")
+    assert all(f'"{name}"' in (tmp_path / "puma.c").read_text() for name in names)
 
     bp = mindyn.base_parameters("puma560")
     values = np.arange(1, bp.n + 1) * 0.01

@@ -88,9 +88,14 @@ def test_adaptive_step_matches_the_library(robot_name, nu, offset, rng):
     """One step from random states: tau and the next estimate as AdaptivePD gives them (and, with
     offsets, the Slotine-Li regressor with unit offset columns); 1e-11 relative: round-off of
     sums of ~1000 products of order-one terms."""
-    robot = mindyn.load(robot_name)
-    base0 = mindyn.base_parameters(robot, rotor=True, friction=True)
-    base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=offset)
+    check_adaptive_steps(mindyn.load(robot_name), nu, offset, rng)
+
+
+def check_adaptive_steps(robot, nu, offset, rng, method="projection", what="") -> None:
+    """Three steps of the generated adaptive PD with random gains and estimate from random states
+    against one_step_reference, to 1e-11 relative."""
+    base0 = mindyn.base_parameters(robot, rotor=True, friction=True, method=method)
+    base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=offset, method=method)
     n = robot.n
     np_ = len(base.names)
     gamma = rng.uniform(0.5, 2.0, np_)
@@ -104,8 +109,8 @@ def test_adaptive_step_matches_the_library(robot_name, nu, offset, rng):
         p = ctl.p_hat
         tau = ctl(0.0, q, dq, *ref)
         tau_ref, p_ref = one_step_reference(base0, gains, p, q, dq, ref, 0.002, offset)
-        assert_close(tau, tau_ref, 1e-11, "generated adaptive step: tau")
-        assert_close(ctl.p_hat, p_ref, 1e-11, "generated adaptive step: estimate")
+        assert_close(tau, tau_ref, 1e-11, f"generated adaptive step{what}: tau")
+        assert_close(ctl.p_hat, p_ref, 1e-11, f"generated adaptive step{what}: estimate")
 
 
 def test_torque_limit_and_box_are_applied(rng):

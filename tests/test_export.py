@@ -29,6 +29,7 @@ from conftest import URDFS, assert_close
 from mindyn import cli
 from mindyn.export import classical_terms, read_joint_terms, write_urdf, write_yaml
 from random_arm import random_arm_yaml
+from random_tree import com_inertia
 
 REPO = Path(__file__).resolve().parents[1]
 UR5 = REPO / "examples/urdf/ur5.urdf"
@@ -159,12 +160,8 @@ def consistent_params(robot: mindyn.Robot, rng, rotor=True, friction=True) -> di
     p = []
     for _ in range(robot.n):
         m = rng.uniform(0.5, 5.0)
-        while True:
-            mom = rng.uniform(0.2, 1.0, 3) * m * 0.3**2 / 12
-            if 2 * mom.max() < mom.sum():
-                break
-        Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
-        p.append(mindyn.inertial_from_com(m, rng.uniform(-0.3, 0.3, 3), Q @ np.diag(mom) @ Q.T))
+        inertia = com_inertia(rng, m, 0.3)
+        p.append(mindyn.inertial_from_com(m, rng.uniform(-0.3, 0.3, 3), inertia))
     values = dict(zip(robot.param_names, np.concatenate(p)))
     for k in range(1, robot.n + 1):
         if rotor:

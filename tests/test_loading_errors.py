@@ -114,17 +114,17 @@ def test_urdf_without_moving_joint(tmp_path):
         mindyn.load(path)
 
 
-def test_tree_urdf_without_tip_names_candidates(tmp_path):
-    with pytest.raises(ValueError) as info:
-        mindyn.load(URDFS["panda"])
-    msg = str(info.value)
-    for candidate in ("panda_leftfinger", "panda_rightfinger", "panda_hand", "tip="):
-        assert candidate in msg
-    # a small tree of our own
+def test_tree_urdf_without_tip_loads_whole(tmp_path):
+    # Panda: the arm and one finger; the mirrored finger mimics it and is locked and merged
+    robot = mindyn.load(URDFS["panda"])
+    assert robot.n == 8 and robot.is_serial
+    assert robot.joint_names[-1] == "panda_finger_joint1"
+    assert "'panda_finger_joint2'" in robot.notes
+    # a small tree of our own loads whole; tip= still selects a chain
     joints = joint("j1", "base", "l1") + joint("j2", "l1", "l2") + joint("j3", "l1", "l3")
     path = write(tmp_path, "tree.urdf", urdf(joints, link("l1") + link("l2") + link("l3")))
-    with pytest.raises(ValueError, match="2 moving tips: 'l2', 'l3'.*'l1'"):
-        mindyn.load(path)
+    tree = mindyn.load(path)
+    assert tree.n == 3 and tree.parents == [-1, 0, 0] and not tree.is_serial
     assert mindyn.load(path, tip="l2").n == 2
     robot = mindyn.load(path, tip="l1")  # the branch locked and merged
     assert robot.n == 1
@@ -360,7 +360,7 @@ def test_cli_console_script():
         (("info", "GOOD.yaml", "--tip", "b"), "tip= applies to URDF"),
         (("info", "BAD.yaml"), "not valid YAML"),
         (("info", "BAD.urdf"), "not a valid URDF"),
-        (("info", URDFS["panda"]), "--tip on the command line"),
+        (("info", URDFS["panda"], "--tip", "panda_rightfinger"), "--tip on the command line"),
     ],
 )
 def test_cli_errors_are_one_line(tmp_path, args, match):

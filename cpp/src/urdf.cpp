@@ -77,6 +77,10 @@ constexpr int kMaxTreeDepth = 4 * kMaxModelJoints;
 
 bool isMoving(const urdf::Joint& j) { return j.type != urdf::Joint::FIXED; }
 
+/// A moving joint the model can hold: not a mimic joint (whose coupling to another joint the
+/// model has no place for).
+bool isModelled(const urdf::Joint& j) { return isMoving(j) && !j.mimic; }
+
 const char* urdfTypeName(int type) {
   switch (type) {
     case urdf::Joint::REVOLUTE:
@@ -112,21 +116,30 @@ class Builder {
     root_ = urdf_.getRoot();
     if (!root_) fail("has no root link");
     checkTree();
-    const urdf::LinkConstSharedPtr tip = findTip(tip_name);
+    if (!tip_name.empty()) return buildChain(findTip(tip_name));
+    std::vector<std::string> leaves;
+    collectLeaves(root_, &leaves);
+    if (leaves.empty()) {
+      std::vector<std::string> mimic;
+      for (const auto& [name, j] : urdf_.joints_)
+        if (j && isMoving(*j)) mimic.push_back(name);
+      if (mimic.empty()) fail("robot '" + urdf_.getName() + "' has no moving joint");
+      fail("robot '" + urdf_.getName() + "' has no moving joint but mimic joints (" +
+           joinNames(mimic) + "), which are not supported");
+    }
+    if (leaves.size() == 1) return buildChain(urdf_.getLink(leaves.front()));
+    return buildTree();
+  }
 
+ private:
+  /// The chain root -> `tip`; moving joints off it are locked and merged.
+  Model buildChain(const urdf::LinkConstSharedPtr& tip) {
     // Root -> tip path, as links and as the joints entering them.
     const std::vector<urdf::LinkConstSharedPtr> path = pathTo(tip);
     for (const auto& l : path) on_path_.insert(l->name);
 
-    Model model;
-    model.name = urdf_.getName();
-    model.source = source_;
-    model.convention = "urdf";
-    model.link_names.push_back(root_->name);
-
+    Model model = emptyModel();
     Eigen::Isometry3d fixed = Eigen::Isometry3d::Identity();  // since the last moving link
-    std::vector<urdf::LinkConstSharedPtr> bodies;             // child links of moving joints
-    std::vector<double> viscous, coulomb;
     for (size_t i = 1; i < path.size(); ++i) {
       const urdf::Joint& uj = *path[i]->parent_joint;
       const Eigen::Isometry3d origin = jointOrigin(uj);
@@ -134,72 +147,131 @@ class Builder {
         fixed = fixed * origin;
         continue;
       }
-      Joint j;
-      j.name = uj.name;
-      if (uj.type == urdf::Joint::REVOLUTE || uj.type == urdf::Joint::CONTINUOUS)
-        j.type = JointType::Revolute;
-      else if (uj.type == urdf::Joint::PRISMATIC)
-        j.type = JointType::Prismatic;
-      else
-        fail("joint '" + uj.name + "' has type '" + urdfTypeName(uj.type) +
-             "', which is not supported in a serial chain");
-      if (uj.mimic)
-        fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
-             "', which is not supported in a serial chain (pass a tip before it)");
-      const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
-      for (int i = 0; i < 3; ++i) checkValue("joint '" + uj.name + "'", "axis", axis[i]);
-      if (axis.norm() < 1e-12) fail("joint '" + uj.name + "' has a zero or invalid axis");
-      j.axis = axis.normalized();
-      j.pre = fixed * origin;
+      addJoint(uj, fixed * origin, *path[i], &model);
       fixed.setIdentity();
-      if (uj.limits) {
-        const urdf::JointLimits& lim = *uj.limits;
-        const std::string who = "joint '" + uj.name + "'";
-        checkValue(who, "lower limit", lim.lower);
-        checkValue(who, "upper limit", lim.upper);
-        checkValue(who, "velocity limit", lim.velocity);
-        checkValue(who, "effort limit", lim.effort);
-        // urdfdom reports absent lower/upper as 0/0 and absent velocity/effort as 0: not given.
-        if (uj.type != urdf::Joint::CONTINUOUS && !(lim.lower == 0.0 && lim.upper == 0.0)) {
-          j.limits.lower = lim.lower;
-          j.limits.upper = lim.upper;
-        }
-        if (lim.velocity > 0.0) j.limits.velocity = lim.velocity;
-        if (lim.effort > 0.0) j.limits.effort = lim.effort;
-      }
-      if (uj.dynamics) {
-        checkValue("joint '" + uj.name + "'", "damping", uj.dynamics->damping);
-        checkValue("joint '" + uj.name + "'", "friction", uj.dynamics->friction);
-      }
-      viscous.push_back(uj.dynamics ? uj.dynamics->damping : 0.0);
-      coulomb.push_back(uj.dynamics ? uj.dynamics->friction : 0.0);
-      model.joints.push_back(j);
-      model.link_names.push_back(path[i]->name);
-      bodies.push_back(path[i]);
     }
     if (model.joints.empty())
       fail("no moving joint between root link '" + root_->name + "' and tip link '" + tip->name +
            "'");
     model.tool = fixed;
+    return finish(&model, "joints off the chain locked at q = 0 (clamped to limits) and merged: ");
+  }
 
-    const int n = model.nq();
-    model.inertial.setZero(10 * n);
-    for (int k = 0; k < n; ++k) {
-      Eigen::Matrix<double, 10, 1> body = Eigen::Matrix<double, 10, 1>::Zero();
-      accumulate(*bodies[k], Eigen::Isometry3d::Identity(), &body);
-      model.inertial.segment<10>(10 * k) = body;
+  /// The whole tree: every moving joint, depth-first from the root, children in the order of
+  /// their joint names (urdfdom's order, which Pinocchio's URDF parser follows too). Mimic joints
+  /// with no other moving joint below are locked and merged.
+  Model buildTree() {
+    Model model = emptyModel();
+    addSubtree(*root_, -1, Eigen::Isometry3d::Identity(), &model);
+    return finish(&model, "mimic joints locked at q = 0 (clamped to limits) and merged: ");
+  }
+
+  /// Adds the moving joints below `link` to `model`; `parent` is the index of the joint moving
+  /// `link` (-1 for the base) and `fixed` the fixed joints' transform from its frame to `link`.
+  void addSubtree(const urdf::Link& link, int parent, const Eigen::Isometry3d& fixed,
+                  Model* model) {
+    std::vector<urdf::LinkConstSharedPtr> children(link.child_links.begin(),
+                                                   link.child_links.end());
+    std::sort(children.begin(), children.end(), [](const auto& a, const auto& b) {
+      return a->parent_joint->name < b->parent_joint->name;
+    });
+    for (const auto& child : children) {
+      const urdf::Joint& uj = *child->parent_joint;
+      if (!isMoving(uj)) {
+        if (movingBelow(*child)) addSubtree(*child, parent, fixed * jointOrigin(uj), model);
+        continue;  // else merged into the body above (or part of the base)
+      }
+      if (uj.mimic) {
+        if (movingBelow(*child))
+          fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
+               "', which is not supported, and moving joints hang below it; load a chain that "
+               "avoids it with a tip link (tip= in Python and C++, --tip on the command line)");
+        continue;  // locked at q = 0 and merged into the body above by accumulate()
+      }
+      on_path_.insert(child->name);
+      addJoint(uj, fixed * jointOrigin(uj), *child, model);
+      model->parents.push_back(parent);
+      addSubtree(*child, model->nq() - 1, Eigen::Isometry3d::Identity(), model);
     }
-    model.rotor_inertia.setZero(n);
-    model.viscous = Eigen::Map<const Eigen::VectorXd>(viscous.data(), n);
-    model.coulomb = Eigen::Map<const Eigen::VectorXd>(coulomb.data(), n);
-    if (!locked_.empty())
-      model.notes = "joints off the chain locked at q = 0 (clamped to limits) and merged: " +
-                    joinNames(locked_);
-    model.validate();
+  }
+
+  Model emptyModel() const {
+    Model model;
+    model.name = urdf_.getName();
+    model.source = source_;
+    model.convention = "urdf";
+    model.link_names.push_back(root_->name);
     return model;
   }
 
- private:
+  /// Appends the moving joint `uj` (origin `pre` from its parent body's frame) and its child
+  /// link `body` to `model`.
+  void addJoint(const urdf::Joint& uj, const Eigen::Isometry3d& pre, const urdf::Link& body,
+                Model* model) {
+    Joint j;
+    j.name = uj.name;
+    if (uj.type == urdf::Joint::REVOLUTE || uj.type == urdf::Joint::CONTINUOUS)
+      j.type = JointType::Revolute;
+    else if (uj.type == urdf::Joint::PRISMATIC)
+      j.type = JointType::Prismatic;
+    else
+      fail("joint '" + uj.name + "' has type '" + urdfTypeName(uj.type) +
+           "', which is not supported (revolute, continuous, prismatic and fixed joints are)");
+    if (uj.mimic)
+      fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
+           "', which is not supported; load a chain that ends before it with a tip link (tip= "
+           "in Python and C++, --tip on the command line), e.g. its parent link '" +
+           uj.parent_link_name + "', which locks it at q = 0");
+    const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
+    for (int i = 0; i < 3; ++i) checkValue("joint '" + uj.name + "'", "axis", axis[i]);
+    if (axis.norm() < 1e-12) fail("joint '" + uj.name + "' has a zero or invalid axis");
+    j.axis = axis.normalized();
+    j.pre = pre;
+    if (uj.limits) {
+      const urdf::JointLimits& lim = *uj.limits;
+      const std::string who = "joint '" + uj.name + "'";
+      checkValue(who, "lower limit", lim.lower);
+      checkValue(who, "upper limit", lim.upper);
+      checkValue(who, "velocity limit", lim.velocity);
+      checkValue(who, "effort limit", lim.effort);
+      // urdfdom reports absent lower/upper as 0/0 and absent velocity/effort as 0: not given.
+      if (uj.type != urdf::Joint::CONTINUOUS && !(lim.lower == 0.0 && lim.upper == 0.0)) {
+        j.limits.lower = lim.lower;
+        j.limits.upper = lim.upper;
+      }
+      if (lim.velocity > 0.0) j.limits.velocity = lim.velocity;
+      if (lim.effort > 0.0) j.limits.effort = lim.effort;
+    }
+    if (uj.dynamics) {
+      checkValue("joint '" + uj.name + "'", "damping", uj.dynamics->damping);
+      checkValue("joint '" + uj.name + "'", "friction", uj.dynamics->friction);
+    }
+    viscous_.push_back(uj.dynamics ? uj.dynamics->damping : 0.0);
+    coulomb_.push_back(uj.dynamics ? uj.dynamics->friction : 0.0);
+    model->joints.push_back(j);
+    model->link_names.push_back(body.name);
+    bodies_.push_back(&body);
+  }
+
+  /// Inertial and friction values of the joints added; `parents` emptied for a chain; `locked`
+  /// introduces the joints locked and merged in the notes.
+  Model finish(Model* model, const std::string& locked) {
+    const int n = model->nq();
+    model->inertial.setZero(10 * n);
+    for (int k = 0; k < n; ++k) {
+      Eigen::Matrix<double, 10, 1> body = Eigen::Matrix<double, 10, 1>::Zero();
+      accumulate(*bodies_[k], Eigen::Isometry3d::Identity(), &body);
+      model->inertial.segment<10>(10 * k) = body;
+    }
+    model->rotor_inertia.setZero(n);
+    model->viscous = Eigen::Map<const Eigen::VectorXd>(viscous_.data(), n);
+    model->coulomb = Eigen::Map<const Eigen::VectorXd>(coulomb_.data(), n);
+    if (!locked_.empty()) model->notes = locked + joinNames(locked_);
+    if (model->isSerial()) model->parents.clear();
+    model->validate();
+    return std::move(*model);
+  }
+
   [[noreturn]] void fail(const std::string& what) const { throw ModelError(source_ + ": " + what); }
 
   /// Throws unless `value` is finite and within kMaxDescriptionValue; `who` and `what` name it.
@@ -285,67 +357,36 @@ class Builder {
     return path;
   }
 
-  /// True if the subtree below `link` contains a moving joint.
+  /// True if the subtree below `link` contains a moving joint that is not a mimic joint.
   bool movingBelow(const urdf::Link& link) {
     const auto it = moving_below_.find(link.name);
     if (it != moving_below_.end()) return it->second;
     bool moving = false;
     for (const auto& c : link.child_links)
-      if (isMoving(*c->parent_joint) || movingBelow(*c)) moving = true;
+      if (isModelled(*c->parent_joint) || movingBelow(*c)) moving = true;
     moving_below_[link.name] = moving;
     return moving;
   }
 
-  /// Moving links whose subtrees hold only fixed joints.
+  /// Links of moving (not mimic) joints whose subtrees hold only fixed or mimic joints.
   void collectLeaves(const urdf::LinkConstSharedPtr& link, std::vector<std::string>* leaves) {
-    if (link != root_ && isMoving(*link->parent_joint) && !movingBelow(*link)) {
+    if (link != root_ && isModelled(*link->parent_joint) && !movingBelow(*link)) {
       leaves->push_back(link->name);
       return;
     }
     for (const auto& c : link->child_links) collectLeaves(c, leaves);
   }
 
-  urdf::LinkConstSharedPtr findTip(const std::string& tip_name) {
-    if (!tip_name.empty()) {
-      urdf::LinkConstSharedPtr tip = urdf_.getLink(tip_name);
-      if (!tip) {
-        std::vector<std::string> names;
-        for (const auto& kv : urdf_.links_) names.push_back(kv.first);
-        fail("tip link '" + tip_name + "' is not in robot '" + urdf_.getName() +
-             "'; its links are " + joinNames(names));
-      }
-      return tip;
+  /// The link named `tip_name`, or a ModelError listing the links.
+  urdf::LinkConstSharedPtr findTip(const std::string& tip_name) const {
+    urdf::LinkConstSharedPtr tip = urdf_.getLink(tip_name);
+    if (!tip) {
+      std::vector<std::string> names;
+      for (const auto& kv : urdf_.links_) names.push_back(kv.first);
+      fail("tip link '" + tip_name + "' is not in robot '" + urdf_.getName() + "'; its links are " +
+           joinNames(names));
     }
-    std::vector<std::string> leaves;
-    collectLeaves(root_, &leaves);
-    if (leaves.empty()) fail("robot '" + urdf_.getName() + "' has no moving joint");
-    if (leaves.size() == 1) return urdf_.getLink(leaves.front());
-    std::string msg =
-        "robot '" + urdf_.getName() + "' branches into " + std::to_string(leaves.size()) +
-        " moving tips: " + joinNames(leaves) +
-        "; choose the tip link (tip= in Python and C++, --tip on the command line): one of them";
-    const std::string shared = lastSharedLink(leaves);
-    if (!shared.empty())
-      msg += ", or a link before the branch such as '" + shared +
-             "' (joints after it are then locked at q = 0)";
-    fail(msg);
-  }
-
-  /// Deepest link shared by the paths to all `leaves`, if a moving joint precedes it; else "".
-  std::string lastSharedLink(const std::vector<std::string>& leaves) const {
-    std::vector<std::vector<urdf::LinkConstSharedPtr>> paths;
-    for (const std::string& name : leaves) paths.push_back(pathTo(urdf_.getLink(name)));
-    size_t depth = 0;
-    bool moving = false;
-    std::string shared;
-    while (true) {
-      for (const auto& p : paths)
-        if (depth >= p.size() || p[depth] != paths.front()[depth]) return moving ? shared : "";
-      const auto& l = paths.front()[depth];
-      if (l->parent_joint && isMoving(*l->parent_joint)) moving = true;
-      shared = l->name;
-      ++depth;
-    }
+    return tip;
   }
 
   /// Motion of an off-chain joint locked at q = 0 clamped into its limits.
@@ -404,9 +445,11 @@ class Builder {
   const urdf::ModelInterface& urdf_;
   const std::string source_;
   urdf::LinkConstSharedPtr root_;
-  std::set<std::string> on_path_;
+  std::set<std::string> on_path_;  // links of the model's moving joints (chain: the whole path)
   std::map<std::string, bool> moving_below_;
   std::vector<std::string> locked_;
+  std::vector<const urdf::Link*> bodies_;  // child links of the model's joints
+  std::vector<double> viscous_, coulomb_;
 };
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include "codegen/internal.hpp"
 #include "malloc_counter.hpp"
 #include "mindyn/base_dynamics.hpp"
+#include "mindyn/codegen/controller.hpp"
 #include "mindyn/codegen/emit_c.hpp"
 #include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
@@ -34,6 +35,41 @@ Eigen::VectorXd outputs(const GeneratedFunction& f, const Eigen::VectorXd& q,
   Eigen::VectorXd out(f.outputs.size());
   for (size_t i = 0; i < f.outputs.size(); ++i) out[i] = f.graph.value(v, f.outputs[i]);
   return out;
+}
+
+// The Slotine-Li products of the controller step in each of their forms against a regressor Y of
+// the parameter set (n x np): Y p, Y^T s and |Y|^2.
+void expectSlotineLiProducts(const Model& model, const ParameterSet& ps, const Eigen::MatrixXd& Y,
+                             const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+                             const Eigen::VectorXd& dqr, const Eigen::VectorXd& ddqr,
+                             const Eigen::VectorXd& s, const Eigen::VectorXd& p, double tol) {
+  const long n = model.nq(), np = ps.size();
+  for (SlotineLiForm form : {SlotineLiForm::Columns, SlotineLiForm::PassColumns,
+                             SlotineLiForm::ColumnsAdjoint, SlotineLiForm::PassAdjoint}) {
+    const GeneratedFunction f = internal::generateSlotineLiForm(model, ps, true, form);
+    InputValues in{q.data(), dq.data(), nullptr, p.data()};
+    in.dqr = dqr.data();
+    in.ddqr = ddqr.data();
+    in.s = s.data();
+    const auto v = f.graph.evaluate(in);
+    Eigen::VectorXd out(f.outputs.size());
+    for (size_t i = 0; i < f.outputs.size(); ++i) out[i] = f.graph.value(v, f.outputs[i]);
+    ASSERT_EQ(out.size(), n + np + 1);
+    EXPECT_LT(relErr(out.head(n), Y * p), tol) << model.name << " " << toString(form);
+    EXPECT_LT(relErr(out.segment(n, np), Y.transpose() * s), tol) << model.name;
+    EXPECT_LT(std::abs(out[n + np] - Y.squaredNorm()) / Y.squaredNorm(), tol) << model.name;
+  }
+}
+
+// The three tapes of `bd` run once each; returns the number of allocations they made.
+long runTapes(BaseDynamics& bd, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+              const Eigen::VectorXd& ddq, const Eigen::VectorXd& p, Eigen::VectorXd& tau,
+              Eigen::VectorXd& gravity, Eigen::MatrixXd& W) {
+  Count c;
+  bd.inverseDynamics(q, dq, ddq, p, tau);
+  bd.gravity(q, p, gravity);
+  bd.regressor(q, dq, ddq, W);
+  return c.value();
 }
 
 }  // namespace
@@ -165,21 +201,7 @@ TEST(Codegen, SlotineLiProductsMatchTheRuntimeRegressor) {
       slotineLiBaseRegressor(model, data, sl, bp, q, dq, dqr, ddqr, Yb);
       Y.leftCols(nb) = Yb;
       if (offsets) Y.rightCols(n).setIdentity();
-      for (SlotineLiForm form : {SlotineLiForm::Columns, SlotineLiForm::PassColumns,
-                                 SlotineLiForm::ColumnsAdjoint, SlotineLiForm::PassAdjoint}) {
-        const GeneratedFunction f = internal::generateSlotineLiForm(model, ps, true, form);
-        InputValues in{q.data(), dq.data(), nullptr, p.data()};
-        in.dqr = dqr.data();
-        in.ddqr = ddqr.data();
-        in.s = s.data();
-        const auto v = f.graph.evaluate(in);
-        Eigen::VectorXd out(f.outputs.size());
-        for (size_t i = 0; i < f.outputs.size(); ++i) out[i] = f.graph.value(v, f.outputs[i]);
-        ASSERT_EQ(out.size(), n + np + 1);
-        EXPECT_LT(relErr(out.head(n), Y * p), 1e-12) << name << " " << toString(form);
-        EXPECT_LT(relErr(out.segment(n, np), Y.transpose() * s), 1e-12) << name;
-        EXPECT_LT(std::abs(out[n + np] - Y.squaredNorm()) / Y.squaredNorm(), 1e-12) << name;
-      }
+      expectSlotineLiProducts(model, ps, Y, q, dq, dqr, ddqr, s, p, 1e-12);
     }
   }
 }
@@ -413,15 +435,7 @@ TEST(BaseDynamics, TorqueOffsetsAddToTheInverseDynamicsOnly) {
   inverseDynamics(model, data, q, dq, ddq, pi, opt.layout, tau);
   gravityTorque(model, data, q, pi, opt.layout, tg);
   baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
-  long seen;
-  {
-    Count c;
-    bd.inverseDynamics(q, dq, ddq, p, t1);
-    bd.gravity(q, p, t2);
-    bd.regressor(q, dq, ddq, Wt);
-    seen = c.value();
-  }
-  EXPECT_EQ(seen, 0);
+  EXPECT_EQ(runTapes(bd, q, dq, ddq, p, t1, t2, Wt), 0);
   EXPECT_LT(relErr(t1, tau + off), 1e-12);
   EXPECT_LT(relErr(t2, tg), 1e-12);
   EXPECT_LT((Wt.leftCols(nb) - Wb).norm() / std::max(1.0, Wb.norm()), 1e-12);
@@ -513,4 +527,311 @@ TEST(BaseDynamics, TheCounterSeesAllocations) {
 TEST(BaseDynamics, RejectsBaseParametersOfAnotherModel) {
   const Model a = loadYaml(test::robotFile("puma560")), b = loadYaml(test::robotFile("puma560_3"));
   EXPECT_THROW(BaseDynamics(b, computeBaseParameters(a)), ModelError);
+}
+
+namespace {
+
+// The classical regressor of a tree from the serial chains of its paths, by the runtime recursion
+// on chains alone: the parameters of link L (and its joint terms) act on the joints from the base
+// to L exactly as on the last link of the chain of those joints, and on no other joint. `chain`
+// returns the regressor of such a chain (path: the tree's joint indices, base first).
+template <class ChainRegressor>
+Eigen::MatrixXd byPaths(const Model& tree, ParameterLayout layout, ChainRegressor chain) {
+  const int n = tree.nq(), per = layout.perLink();
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, layout.size(n));
+  for (int last = 0; last < n; ++last) {
+    std::vector<int> path;
+    for (int k = last; k >= 0; k = tree.parent(k)) path.insert(path.begin(), k);
+    const int m = static_cast<int>(path.size());
+    Model c;
+    c.name = "path";
+    c.convention = tree.convention;
+    c.gravity = tree.gravity;
+    c.link_names.push_back("base");
+    for (int k : path) {
+      c.joints.push_back(tree.joints[k]);
+      c.link_names.push_back(tree.link_names[k + 1]);
+    }
+    c.inertial = Eigen::VectorXd::Zero(10 * m);
+    c.rotor_inertia = c.viscous = c.coulomb = Eigen::VectorXd::Zero(m);
+    const Eigen::MatrixXd Wc = chain(c, path);
+    for (int i = 0; i < m; ++i)
+      W.block(path[i], last * per, 1, per) = Wc.block(i, (m - 1) * per, 1, per);
+  }
+  return W;
+}
+
+Eigen::VectorXd along(const std::vector<int>& path, const Eigen::VectorXd& x) {
+  Eigen::VectorXd y(path.size());
+  for (size_t i = 0; i < path.size(); ++i) y[static_cast<long>(i)] = x[path[i]];
+  return y;
+}
+
+Eigen::MatrixXd treeRegressor(const Model& tree, ParameterLayout layout, const Eigen::VectorXd& q,
+                              const Eigen::VectorXd& dq, const Eigen::VectorXd& ddq) {
+  return byPaths(tree, layout, [&](const Model& c, const std::vector<int>& path) {
+    Data data(c);
+    Eigen::MatrixXd Wc(c.nq(), layout.size(c.nq()));
+    regressor(c, data, along(path, q), along(path, dq), along(path, ddq), layout, Wc);
+    return Wc;
+  });
+}
+
+// The random trees of the tree tests: sizes up to 10, generic or special geometry, revolute or
+// mixed joints; every third one a chain, so that a chain and a tree of the same draw both occur.
+std::vector<Model> randomTrees(std::mt19937& rng) {
+  std::vector<Model> out;
+  int i = 0;
+  for (int n : {2, 3, 4, 6, 8, 10})
+    for (bool special : {false, true}) {
+      const bool prismatic = (i % 2) == 1;
+      out.push_back(test::randomChain(rng, n, prismatic, special, /*tree=*/i % 3 != 2));
+      ++i;
+    }
+  return out;
+}
+
+}  // namespace
+
+// The generated inverse dynamics, gravity torque and regressor of random trees (classical
+// parameters, with and without the joint terms; the cheapest formulation the search finds, and
+// every link form forced on all links) against the trees' regressor built from the runtime
+// recursion on the chains of their paths. Tolerance 1e-10: the sums of up to 10 links' terms of
+// magnitude ~10 in double precision are exact to ~1e-14; the geometry's snapping of multiples of
+// pi/2 moves values by ~1e-16.
+TEST(CodegenTree, GeneratedRecursionMatchesTheChainsOfItsPaths) {
+  std::mt19937 rng(21);
+  for (const Model& model : randomTrees(rng)) {
+    const int n = model.nq();
+    for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true}}) {
+      const ParameterSet ps = classicalParameterSet(model, layout);
+      const int P = layout.size(n);
+      const auto id = generate(model, ps, Function::InverseDynamics);
+      const auto grav = generate(model, ps, Function::Gravity);
+      const auto reg = generate(model, ps, Function::Regressor);
+      std::vector<GeneratedFunction> forms;
+      for (int form : {1, 2, 3, 5, 6, 7})
+        forms.push_back(internal::generateWithLinkForm(model, ps, Function::InverseDynamics, form));
+      const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 2);
+      const Eigen::VectorXd pi = random(rng, P), zero = Eigen::VectorXd::Zero(n);
+      const Eigen::MatrixXd W = treeRegressor(model, layout, q, dq, ddq);
+      const Eigen::MatrixXd Wg = treeRegressor(model, layout, q, zero, zero);
+      const std::string what = model.name + (layout.rotor ? " rotor+friction" : "");
+      EXPECT_LT(relErr(outputs(id, q, dq, ddq, pi), W * pi), 1e-10) << what;
+      EXPECT_LT(relErr(outputs(grav, q, dq, ddq, pi), Wg * pi), 1e-10) << what;
+      const Eigen::VectorXd w = outputs(reg, q, dq, ddq, pi);
+      const Eigen::MatrixXd Wr = Eigen::Map<const Eigen::MatrixXd>(w.data(), P, n).transpose();
+      EXPECT_LT((Wr - W).norm() / std::max(1.0, W.norm()), 1e-10) << what;
+      for (const auto& f : forms)
+        EXPECT_LT(relErr(outputs(f, q, dq, ddq, pi), W * pi), 1e-10) << what;
+    }
+  }
+}
+
+// A tree whose every link hangs from the base (a star) has no coupling at all: each joint's torque
+// is that of a one-joint arm. A tree of two copies of one chain on a common first joint, the two
+// branches moved alike, carries on that first joint twice the branch load of the chain. Closed
+// checks that need no recursion on trees.
+TEST(CodegenTree, StarAndTwinBranchesAgreeWithChains) {
+  std::mt19937 rng(23);
+  const Model arm = test::randomChain(rng, 4, true, false);
+  const ParameterLayout layout{true, true};
+  // star: the four joints of `arm`, each on the base
+  Model star = arm;
+  star.name = "star";
+  star.parents = {-1, -1, -1, -1};
+  // twins: joint 0, then joints 1..3 twice, both copies on joint 0
+  Model twins = arm;
+  twins.name = "twins";
+  twins.parents = {-1, 0, 1, 2, 0, 4, 5};
+  for (int k = 1; k < 4; ++k) {
+    twins.joints.push_back(arm.joints[k]);
+    twins.link_names.push_back(arm.link_names[k + 1] + "b");
+  }
+  auto twice = [](const Eigen::VectorXd& x, long tail) {
+    Eigen::VectorXd y(x.size() + tail);
+    y << x, x.tail(tail);
+    return y;
+  };
+  twins.inertial = twice(arm.inertial, 30);
+  twins.rotor_inertia = twice(arm.rotor_inertia, 3);
+  twins.viscous = twice(arm.viscous, 3);
+  twins.coulomb = twice(arm.coulomb, 3);
+  const Eigen::VectorXd pa = arm.parameters(layout);
+  const int per = layout.perLink();
+  const Eigen::VectorXd pt = twice(pa, 3 * per);
+  ASSERT_EQ(pt, twins.parameters(layout));
+  const auto idStar =
+      generate(star, classicalParameterSet(star, layout), Function::InverseDynamics);
+  const auto idTwins =
+      generate(twins, classicalParameterSet(twins, layout), Function::InverseDynamics);
+  Data data(arm);
+  for (int trial = 0; trial < 3; ++trial) {
+    const Eigen::VectorXd q = random(rng, 4, 3), dq = random(rng, 4, 2), ddq = random(rng, 4, 2);
+    Eigen::VectorXd expected(4);
+    for (int k = 0; k < 4; ++k) {
+      Model one;
+      one.name = "one";
+      one.convention = arm.convention;
+      one.gravity = arm.gravity;
+      one.joints = {arm.joints[k]};
+      one.link_names = {"base", "l"};
+      one.inertial = arm.inertial.segment(10 * k, 10);
+      one.rotor_inertia = arm.rotor_inertia.segment(k, 1);
+      one.viscous = arm.viscous.segment(k, 1);
+      one.coulomb = arm.coulomb.segment(k, 1);
+      Data d1(one);
+      Eigen::VectorXd t(1);
+      inverseDynamics(one, d1, q.segment(k, 1), dq.segment(k, 1), ddq.segment(k, 1),
+                      pa.segment(k * per, per), layout, t);
+      expected[k] = t[0];
+    }
+    EXPECT_LT(relErr(outputs(idStar, q, dq, ddq, pa), expected), 1e-10);
+    // the chain with its links 2..4 of double mass, inertia, rotor and friction: the same
+    // torque on joint 1 as the twins; on joints 2..4, the twins' branches each carry half
+    Eigen::VectorXd pd = pa;
+    pd.tail(3 * per) *= 2.0;
+    Eigen::VectorXd tauArm(4), tauDouble(4);
+    inverseDynamics(arm, data, q, dq, ddq, pa, layout, tauArm);
+    inverseDynamics(arm, data, q, dq, ddq, pd, layout, tauDouble);
+    Eigen::VectorXd qt(7), dqt(7), ddqt(7);
+    qt << q, q.tail(3);
+    dqt << dq, dq.tail(3);
+    ddqt << ddq, ddq.tail(3);
+    Eigen::VectorXd expectedTwins(7);
+    expectedTwins << tauDouble[0], tauArm.tail(3), tauArm.tail(3);
+    EXPECT_LT(relErr(outputs(idTwins, qt, dqt, ddqt, pt), expectedTwins), 1e-10);
+  }
+}
+
+// The Slotine-Li products of the controller step on random trees, in each form, with and without
+// torque offsets, against the classical Slotine-Li regressor built from the chains of the paths.
+TEST(CodegenTree, SlotineLiProductsMatchTheChainsOfItsPaths) {
+  std::mt19937 rng(25);
+  const ParameterLayout layout{true, true};
+  for (const Model& model : randomTrees(rng)) {
+    const int n = model.nq();
+    if (n > 6) continue;  // the column forms grow with n times the parameter count
+    const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), dqr = random(rng, n, 2),
+                          ddqr = random(rng, n, 2), s = random(rng, n);
+    const Eigen::MatrixXd Yc =
+        byPaths(model, layout, [&](const Model& c, const std::vector<int>& path) {
+          Data data(c);
+          SlotineLiData sl(c, layout);
+          Eigen::MatrixXd Y(c.nq(), layout.size(c.nq()));
+          slotineLiRegressor(c, data, sl, along(path, q), along(path, dq), along(path, dqr),
+                             along(path, ddqr), layout, Y);
+          return Y;
+        });
+    for (bool offsets : {false, true}) {
+      ParameterSet ps = classicalParameterSet(model, layout);
+      if (offsets) ps = withOffsets(model, ps);
+      const int np = ps.size(), P = layout.size(n);
+      const Eigen::VectorXd p = random(rng, np);
+      Eigen::MatrixXd Y = Eigen::MatrixXd::Zero(n, np);
+      Y.leftCols(P) = Yc;
+      if (offsets) Y.rightCols(n).setIdentity();
+      expectSlotineLiProducts(model, ps, Y, q, dq, dqr, ddqr, s, p, 1e-10);
+    }
+  }
+}
+
+// The runtime tapes on a tree (a parameter set of random combinations pi = E p, with torque
+// offsets): inverse dynamics, gravity and regressor against the tree's regressor from its paths,
+// and nothing allocated.
+TEST(CodegenTree, TapesMatchTheChainsOfItsPathsAndAllocateNothing) {
+  std::mt19937 rng(27);
+  const ParameterLayout layout{true, true};
+  for (const Model& model : randomTrees(rng)) {
+    const int n = model.nq(), P = layout.size(n);
+    if (n > 6) continue;
+    ParameterSet ps = classicalParameterSet(model, layout);
+    const int np = P / 2;
+    ps.E = Eigen::MatrixXd::Zero(P, np);
+    for (int c = 0; c < P; ++c) ps.E(c, c % np) = 1.0 + c % 3;
+    ps.names.resize(static_cast<size_t>(np));
+    ps.values = random(rng, np);
+    ps = withOffsets(model, ps);
+    BaseDynamics bd(model, ps);
+    const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 2);
+    const Eigen::VectorXd p = random(rng, np + n);
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+    const Eigen::MatrixXd E = ps.E.leftCols(np);
+    const Eigen::MatrixXd W = treeRegressor(model, layout, q, dq, ddq) * E;
+    const Eigen::MatrixXd Wg = treeRegressor(model, layout, q, zero, zero) * E;
+    Eigen::VectorXd t1(n), t2(n);
+    Eigen::MatrixXd Wt(n, np + n);
+    EXPECT_EQ(runTapes(bd, q, dq, ddq, p, t1, t2, Wt), 0) << model.name;
+    EXPECT_LT(relErr(t1, W * p.head(np) + p.tail(n)), 1e-10) << model.name;
+    EXPECT_LT(relErr(t2, Wg * p.head(np)), 1e-10) << model.name;
+    EXPECT_LT((Wt.leftCols(np) - W).norm() / std::max(1.0, W.norm()), 1e-10) << model.name;
+    EXPECT_EQ(Wt.rightCols(n), Eigen::MatrixXd::Identity(n, n)) << model.name;
+  }
+}
+
+// The header of a tree's code lists its joints in the order of q with the joint each is mounted on;
+// a chain's does not.
+TEST(CodegenTree, HeaderListsTheJointsOfATree) {
+  std::mt19937 rng(29);
+  Model tree = test::randomChain(rng, 4, false, true, true);
+  tree.parents = {-1, 0, -1, 0};
+  const ParameterSet ps = classicalParameterSet(tree, {});
+  const GeneratedCode code = generateCode(tree, ps, {Function::Gravity}, "tree");
+  const std::string header = emitC(code, "tree.h").header, st = emitST(code);
+  const std::string list =
+      " *   1. j1 (on the base)\n *   2. j2 (on j1)\n *   3. j3 (on the base)\n *   4. j4 (on "
+      "j1)\n";
+  EXPECT_NE(header.find(list), std::string::npos) << header;
+  EXPECT_NE(st.find("(*   2. j2 (on j1) *)\n(*   3. j3 (on the base) *)"), std::string::npos) << st;
+  ControllerSettings s;
+  s.kd = s.kp = Eigen::VectorXd::Ones(4);
+  const ControllerCode c = generateController(tree, ps, Controller::GravityCompensation, s, "t");
+  EXPECT_NE(emitControllerC(c, "t.h").header.find(list), std::string::npos);
+  Model chain = tree;
+  chain.parents.clear();
+  const std::string serial =
+      emitC(generateCode(chain, ps, {Function::Gravity}, "chain"), "chain.h").header;
+  EXPECT_EQ(serial.find("A tree"), std::string::npos);
+  EXPECT_EQ(serial.find("(on "), std::string::npos);
+}
+
+// Base parameters of trees (the numerical method, on the runtime regressor of trees): the
+// generated inverse dynamics, gravity and base regressor, run by the tapes, against the runtime
+// recursion on the tree, W pi = W_b p_b and the tree's regressor from its paths. Random trees with
+// consistent and with arbitrary inertia, with and without rotor and friction. Tolerance 1e-10 as
+// above; the base values p_b = Y pi add round-off of the echelon form (~1e-13 here).
+TEST(CodegenTree, BaseParameterCodeMatchesTheRuntimeRecursion) {
+  std::mt19937 rng(31);
+  std::vector<Model> models{test::randomTree(rng, 5, true), test::randomTree(rng, 8, false),
+                            test::randomChain(rng, 6, true, true, true),
+                            test::randomChain(rng, 10, false, false, true)};
+  for (const Model& model : models) {
+    const int n = model.nq();
+    Data data(model);
+    for (ParameterLayout layout : {ParameterLayout{false, false}, ParameterLayout{true, true}}) {
+      BaseOptions opt;
+      opt.layout = layout;
+      opt.method = BaseMethod::Numerical;
+      const BaseParameters bp = computeBaseParameters(model, opt);
+      const int P = layout.size(n), nb = bp.eom.size();
+      BaseDynamics bd(model, bp);
+      const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 2);
+      const Eigen::VectorXd pi = random(rng, P), pb = bp.values(pi);
+      Eigen::VectorXd tau(n), tg(n), t1(n), t2(n);
+      Eigen::MatrixXd W(n, P), Wb(n, nb), Wt(n, nb);
+      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+      gravityTorque(model, data, q, pi, layout, tg);
+      regressor(model, data, q, dq, ddq, layout, W);
+      const std::string what = model.name + (layout.rotor ? " rotor+friction" : "");
+      // the runtime recursion on the tree and the chains of its paths agree
+      ASSERT_LT((W - treeRegressor(model, layout, q, dq, ddq)).norm() / W.norm(), 1e-12) << what;
+      EXPECT_EQ(runTapes(bd, q, dq, ddq, pb, t1, t2, Wt), 0) << what;
+      EXPECT_LT(relErr(t1, tau), 1e-10) << what;
+      EXPECT_LT(relErr(t1, W * pi), 1e-10) << what;
+      EXPECT_LT(relErr(t2, tg), 1e-10) << what;
+      EXPECT_LT(relErr(Wt * pb, W * pi), 1e-10) << what;
+      baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
+      EXPECT_LT((Wt - Wb).norm() / std::max(1.0, Wb.norm()), 1e-10) << what;
+    }
+  }
 }

@@ -179,15 +179,124 @@ const char* kTreeUrdf = R"(<robot name="tree">
 </robot>)";
 }
 
-TEST(Urdf, TreeNeedsATipAndTipSelectsTheChain) {
-  const std::string e = errorOf<ModelError>([] { parseUrdf(kTreeUrdf, "", "tree.urdf"); });
-  EXPECT_TRUE(contains(e, "tip")) << e;
-  EXPECT_TRUE(contains(e, "b") && contains(e, "c")) << e;
+TEST(Urdf, TreeLoadsWholeAndTipSelectsTheChain) {
+  const Model t = parseUrdf(kTreeUrdf, "", "tree.urdf");
+  ASSERT_EQ(t.nq(), 3);
+  EXPECT_EQ(t.parents, (std::vector<int>{-1, 0, 0}));
+  EXPECT_EQ(t.link_names, (std::vector<std::string>{"base", "a", "b", "c"}));
+  EXPECT_EQ(t.joints[2].type, JointType::Prismatic);
+  EXPECT_TRUE(t.joints[2].pre.translation().isApprox(Eigen::Vector3d(0, 1, 0)));
+  EXPECT_TRUE(t.tool.isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_TRUE(t.notes.empty()) << t.notes;
   const Model m = parseUrdf(kTreeUrdf, "c", "tree.urdf");
   ASSERT_EQ(m.nq(), 2);
+  EXPECT_TRUE(m.parents.empty());  // a chain: the serial representation
   EXPECT_EQ(m.joints[1].type, JointType::Prismatic);
+  EXPECT_EQ(m.inertial[9], 2.0);  // a + the locked branch b
   EXPECT_TRUE(
       contains(errorOf<ModelError>([] { parseUrdf(kTreeUrdf, "nope", "tree.urdf"); }), "nope"));
+}
+
+namespace {
+std::string massAt(double m, const std::string& xyz) {
+  return "<inertial><origin xyz=\"" + xyz + "\"/><mass value=\"" + std::to_string(m) +
+         "\"/><inertia ixx=\"0\" iyy=\"0\" izz=\"0\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial>";
+}
+std::string joint(const std::string& name, const std::string& type, const std::string& parent,
+                  const std::string& child, const std::string& xyz = "0 0 0") {
+  return "<joint name=\"" + name + "\" type=\"" + type + "\"><origin xyz=\"" + xyz +
+         "\"/><parent link=\"" + parent + "\"/><child link=\"" + child +
+         "\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" " +
+         "velocity=\"1\"/></joint>";
+}
+}  // namespace
+
+// Joints depth-first, siblings by joint name (not document order); fixed joints fold into the
+// origin of the next moving joint and their subtrees without moving joints into the body above;
+// links before the first moving joint are the base.
+TEST(Urdf, TreeOrderParentsAndFixedJoints) {
+  const std::string xml =
+      "<robot name=\"t\"><link name=\"world\"/><link name=\"torso\">" + massAt(5, "0 0 0") +
+      "</link><link name=\"a\">" + massAt(1, "0 0 0") + "</link><link name=\"sensor\">" +
+      massAt(2, "0 0 0.5") + "</link><link name=\"mount\">" + massAt(3, "0 0 0") +
+      "</link><link name=\"b\">" + massAt(1, "0 0 0") + "</link><link name=\"c\">" +
+      massAt(1, "0 0 0") + "</link><link name=\"d\">" + massAt(1, "0 0 0") + "</link>" +
+      // written out of order: the order comes from the names
+      joint("z_right", "revolute", "torso", "d", "0 -1 0") +
+      joint("y_mount", "fixed", "a", "mount", "1 0 0") +
+      joint("x_sensor", "fixed", "a", "sensor", "0 2 0") +
+      joint("m_left", "revolute", "torso", "a", "0 1 0") +
+      joint("b_wrist", "prismatic", "mount", "c", "0 0 1") +
+      joint("c_elbow", "continuous", "a", "b", "0 0 3") +
+      joint("a_torso", "fixed", "world", "torso", "0 0 1") + "</robot>";
+  const Model m = parseUrdf(xml, "", "t.urdf");
+  ASSERT_EQ(m.nq(), 4);
+  std::vector<std::string> names;
+  for (const Joint& j : m.joints) names.push_back(j.name);
+  // under a: c_elbow (moving) before y_mount (fixed, with b_wrist below); then z_right
+  EXPECT_EQ(names, (std::vector<std::string>{"m_left", "c_elbow", "b_wrist", "z_right"}));
+  EXPECT_EQ(m.parents, (std::vector<int>{-1, 0, 0, -1}));
+  EXPECT_EQ(m.link_names, (std::vector<std::string>{"world", "a", "b", "c", "d"}));
+  EXPECT_TRUE(m.joints[0].pre.translation().isApprox(Eigen::Vector3d(0, 1, 1)));   // torso folded
+  EXPECT_TRUE(m.joints[2].pre.translation().isApprox(Eigen::Vector3d(1, 0, 1)));   // mount folded
+  EXPECT_TRUE(m.joints[3].pre.translation().isApprox(Eigen::Vector3d(0, -1, 1)));  // the base
+  EXPECT_EQ(m.joints[2].type, JointType::Prismatic);
+  // body a = a (1 kg at 0) + sensor (2 kg at (0, 2, 0.5)) + mount (3 kg at (1, 0, 0))
+  const Eigen::Matrix<double, 10, 1> a = m.inertial.segment<10>(0);
+  EXPECT_DOUBLE_EQ(a[9], 6.0);
+  EXPECT_TRUE(a.segment<3>(6).isApprox(Eigen::Vector3d(3, 4, 1))) << a.transpose();
+  EXPECT_NEAR(a[0], 2 * (4 + 0.25), 1e-12);  // XX = sum m (y^2 + z^2)
+  EXPECT_NEAR(a[4], -2 * 2 * 0.5, 1e-12);    // YZ = -sum m y z
+  for (int k = 1; k < 4; ++k) EXPECT_DOUBLE_EQ(m.inertial[10 * k + 9], 1.0);
+  EXPECT_TRUE(m.tool.isApprox(Eigen::Isometry3d::Identity()));
+  // the chain to c through the same fixed joints: b is locked and merged into a
+  const Model c = parseUrdf(xml, "c", "t.urdf");
+  ASSERT_EQ(c.nq(), 2);
+  EXPECT_TRUE(c.parents.empty());
+  EXPECT_DOUBLE_EQ(c.inertial[9], 7.0);
+  EXPECT_TRUE(c.joints[1].pre.translation().isApprox(Eigen::Vector3d(1, 0, 1)));
+}
+
+// A mimic joint has no place in a model: locked and merged when it ends a branch (a gripper's
+// mirrored finger), refused when moving joints hang below it or a chain's tip lies past it.
+TEST(Urdf, MimicJointsAreLockedOrRefusedAndUnsupportedTypesNamed) {
+  const std::string mimic =
+      "<joint name=\"j3\" type=\"prismatic\"><parent link=\"a\"/><child "
+      "link=\"c\"/><axis xyz=\"0 0 1\"/><mimic joint=\"j2\"/><limit "
+      "lower=\"0.5\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>";
+  const std::string links =
+      "<robot name=\"t\"><link name=\"base\"/><link name=\"a\"/>"
+      "<link name=\"b\"/><link name=\"c\">" +
+      massAt(2, "0 0 0") + "</link>";
+  const std::string two = joint("j1", "revolute", "base", "a") + joint("j2", "revolute", "a", "b");
+  // a chain and a mimic leaf: j3 locked at its lower limit 0.5, c's mass merged into a
+  const Model m = parseUrdf(links + two + mimic + "</robot>", "", "m.urdf");
+  ASSERT_EQ(m.nq(), 2);
+  EXPECT_TRUE(m.parents.empty());
+  EXPECT_EQ(m.inertial[9], 2.0);
+  EXPECT_TRUE(m.inertial.segment<3>(6).isApprox(Eigen::Vector3d(0, 0, 1.0)));  // 2 kg at z 0.5
+  EXPECT_TRUE(contains(m.notes, "locked") && contains(m.notes, "'j3'")) << m.notes;
+  // a tree (another branch d off the base) with the same mimic leaf
+  const Model t = parseUrdf(links + "<link name=\"d\"/>" + two + mimic +
+                                joint("j4", "revolute", "base", "d") + "</robot>",
+                            "", "m.urdf");
+  ASSERT_EQ(t.nq(), 3);
+  EXPECT_EQ(t.parents, (std::vector<int>{-1, 0, -1}));
+  EXPECT_EQ(t.inertial[9], 2.0);
+  EXPECT_TRUE(contains(t.notes, "mimic joints locked") && contains(t.notes, "'j3'")) << t.notes;
+  // moving joints below the mimic joint: refused, with or without a tip through it
+  const std::string below =
+      links + "<link name=\"e\"/>" + two + mimic + joint("j5", "revolute", "c", "e") + "</robot>";
+  for (const char* tip : {"", "e"}) {
+    const std::string e = errorOf<ModelError>([&] { parseUrdf(below, tip, "m.urdf"); });
+    EXPECT_TRUE(contains(e, "m.urdf: joint 'j3' mimics joint 'j2', which is not supported")) << e;
+    EXPECT_TRUE(contains(e, "tip")) << e;
+  }
+  const std::string planar =
+      links + two + "<joint name=\"j3\" type=\"planar\"><parent link=\"a\"/><child link=\"c\"/>" +
+      "</joint></robot>";
+  const std::string p = errorOf<ModelError>([&] { parseUrdf(planar, "", "p.urdf"); });
+  EXPECT_TRUE(contains(p, "p.urdf: joint 'j3' has type 'planar', which is not supported")) << p;
 }
 
 TEST(Urdf, ErrorsNameTheProblem) {

@@ -21,6 +21,9 @@ from .robot import Robot, load
 __all__ = ["BaseParameters", "base_parameters"]
 
 DEFAULT_TOLERANCE = 1e-9
+# Methods that handle trees (Robot.parents); the others refuse a tree rather than treat it as
+# the chain of its joint order.
+_TREE_METHODS = {"numerical"}
 
 
 class BaseParameters:
@@ -329,6 +332,14 @@ def base_parameters(
     if method not in ("projection", "recursive", "numerical"):
         raise _core.ModelError(
             f"method is {method!r}; expected 'projection', 'recursive' or 'numerical'"
+        )
+    if not robot.is_serial and method not in _TREE_METHODS:
+        leaves = robot.n - len(set(robot.parents) - {-1})
+        raise _core.ModelError(
+            f"the {method} method does not support trees yet; robot '{robot.name}' is a tree "
+            f"({robot.n} joints, {leaves} branches): use the numerical method "
+            "(method='numerical', mindyn base --method numerical), or load one chain of it "
+            "with tip="
         )
     tolerance = _args.number(tolerance, "tolerance", positive=True)
     samples = _args.integer(samples, "samples", minimum=0)

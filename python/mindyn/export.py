@@ -189,16 +189,17 @@ def write_urdf(
     Export
         The files written and notes.
 
-    Each moving link of the chain gets one ``<inertial>``: mass ``M``, centre of mass ``(MX,
-    MY, MZ) / M`` and the inertia about it, in link axes (``rpy="0 0 0"``); comments inside a
-    replaced ``<inertial>`` go with it. The links merged into a moving link when the robot was
-    loaded (children on fixed joints, and off-chain moving joints locked at ``q = 0`` clamped
-    into their limits) lose their ``<inertial>``, which a comment replaces, so that the total
-    is the identified one. Links before the first moving joint and off the chain are kept as
-    they were, as is everything else in the file (comments included). A link of zero mass and
+    Each moving link of the model (a chain or a tree) gets one ``<inertial>``: mass ``M``,
+    centre of mass ``(MX, MY, MZ) / M`` and the inertia about it, in link axes (``rpy="0 0
+    0"``); comments inside a replaced ``<inertial>`` go with it. The links merged into a moving
+    link when the robot was loaded (children on fixed joints, and moving joints locked at
+    ``q = 0`` clamped into their limits: off a chain, or mimic joints) lose their
+    ``<inertial>``, which a comment replaces, so that the total is the identified one. Links
+    before the first moving joint and off the model are kept as they were, as is everything
+    else in the file (comments included). A link of zero mass and
     zero first moment gets mass 0 and its rotational inertia at the link origin (a zero
     inertial if it has none); the notes say so. ``Fv`` and ``Fc`` go into the joint's
-    ``<dynamics damping= friction=>``; when the parameters have no friction, the chain joints'
+    ``<dynamics damping= friction=>``; when the parameters have no friction, the model joints'
     damping and friction are set to 0, so that the file describes the identified model. ``Ia``,
     ``Fv``, ``Fc`` and ``Off`` are also written to the sidecar YAML, with their meaning and unit
     (:func:`read_joint_terms` reads it back).
@@ -207,7 +208,7 @@ def write_urdf(
     ------
     ModelError
         ``classical`` does not fit the robot, a mass is negative (or zero with a first moment),
-        the robot is not from a URDF, or ``source`` does not hold the robot's chain.
+        the robot is not from a URDF, or ``source`` does not hold the robot's joints.
     """
     if robot.convention != "urdf":
         raise ModelError(

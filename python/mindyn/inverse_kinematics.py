@@ -158,6 +158,7 @@ def velocity_ik(
     -------
     dq : ndarray (n,)
     """
+    robot._require_serial("inverse kinematics (velocity_ik)")
     q = _args.array(q, "q", (robot.n,), unit="joint")
     rows = _task_rows(task)
     x = _args.array(twist, "twist", (len(rows),))
@@ -260,6 +261,7 @@ def resolved_rate(
     ``dq = velocity_ik(q, dx)`` over ``dt`` (the joints are assumed to follow the commanded
     velocity). ``velocity_options`` go to :func:`velocity_ik` (``nullspace``, ``damping``, ...).
     """
+    robot._require_serial("inverse kinematics (resolved_rate)")
     if not (duration > 0 and dt > 0):
         raise ValueError("duration and dt must be positive")
     q = _args.array(q0, "q0", (robot.n,), unit="joint").copy()
@@ -325,6 +327,7 @@ def ik_solve(
     seed : int
         Seed of the restart points (same seed, same answer).
     """
+    robot._require_serial("inverse kinematics (ik_solve)")
     T = _pose(T_target, "T_target")
     if q0 is not None:
         q0 = _args.array(q0, "q0", (robot.n,), unit="joint")

@@ -46,8 +46,11 @@ def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
         vertical-plane N-link arm, ``planar<N>h`` for a horizontal one, 1 <= N <= 1000), a URDF
         file (``.urdf``, ``.xml``) or a YAML DH / MDH table (``.yaml``, ``.yml``).
     tip : str, optional
-        URDF only: the link that ends the serial chain. Needed when the URDF is a tree with more
-        than one moving branch.
+        URDF only: the link that ends the serial chain root -> tip; moving joints off it are
+        locked at ``q = 0`` (clamped into their limits) and merged. Without it the whole URDF is
+        loaded: a tree when it branches (:attr:`Robot.parents`), its joints numbered depth-first
+        from the root, the children of a link in the order of their joint names (Pinocchio's
+        order). Mimic joints that end a branch are then locked and merged (see ``notes``).
     gravity : array_like, shape (3,), optional
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
@@ -106,7 +109,7 @@ def _load(robot: str | Path, tip: str | None) -> Robot:
 
 
 class Robot:
-    """A serial manipulator with a fixed base.
+    """A fixed-base manipulator: a serial chain, or a tree (:attr:`parents`, :attr:`is_serial`).
 
     Attributes
     ----------
@@ -234,11 +237,22 @@ class Robot:
 
     @property
     def tool(self) -> np.ndarray:
-        """4x4 transform from the last link frame to the tool frame."""
+        """4x4 transform from the last link frame to the tool frame (the identity for a tree)."""
         return self._m.tool
 
+    def _require_serial(self, what: str) -> None:
+        """Raises ModelError unless the robot is a serial chain; ``what`` names the operation."""
+        if not self.is_serial:
+            leaves = self.n - len(set(self.parents) - {-1})
+            raise _core.ModelError(
+                f"{what} needs a serial chain; robot '{self.name}' is a tree ({self.n} joints, "
+                f"{leaves} branches): load the chain to the link concerned with "
+                "mindyn.load(..., tip=link) (--tip on the command line)"
+            )
+
     def joint_transform(self, k: int, q: float) -> np.ndarray:
-        """4x4 transform from link ``k-1`` to link ``k`` (0-based ``k``) at joint value ``q``."""
+        """4x4 transform from the link of joint ``parents[k]`` (the base when -1; ``k-1`` in a
+        chain) to link ``k`` (0-based ``k``) at joint value ``q``."""
         self._check_joint(k)
         return self._m.joint_transform(k, _args.number(q, "q"))
 
@@ -389,17 +403,48 @@ class Robot:
         return self._kin
 
     def fk(self, q, link: int = -1) -> np.ndarray:
-        """4x4 pose of link ``link`` (0-based) or of the tool frame (``-1``) in the base frame."""
+        """4x4 pose in the base frame of link ``link`` (0-based: the link moved by joint
+        ``link``) or of the tool frame (``-1``; for a tree the last link's frame)."""
         q = _vector(q, self.n, "q")
         _args.integer(link, "link")
         if not -1 <= link < self.n:
             raise IndexError(f"link index {link} out of range for {self.n} links")
+        if not self.is_serial:
+            links = self._tree_frames(q)[0]
+            return links[link] if link >= 0 else links[-1] @ self.tool
         return self._kinematics().pose(q, link)
 
     def jacobian(self, q) -> np.ndarray:
         """Geometric Jacobian of the tool frame, shape (6, n): rows vx vy vz wx wy wz in the
-        base frame, reference point the tool-frame origin."""
-        return self._kinematics().jacobian(_vector(q, self.n, "q"))
+        base frame, reference point the tool-frame origin. For a tree, of the last link's frame,
+        with zero columns for the joints not on its path from the base."""
+        q = _vector(q, self.n, "q")
+        if self.is_serial:
+            return self._kinematics().jacobian(q)
+        links, axes, points = self._tree_frames(q)
+        tip = (links[-1] @ self.tool)[:3, 3]
+        J = np.zeros((6, self.n))
+        k = self.n - 1
+        while k >= 0:
+            if self.joint_types[k] == "revolute":
+                J[:3, k] = np.cross(axes[k], tip - points[k])
+                J[3:, k] = axes[k]
+            else:
+                J[:3, k] = axes[k]
+            k = self.parents[k]
+        return J
+
+    def _tree_frames(self, q):
+        """Poses of links 1..n in the base frame (4x4 each), and each joint's axis and a point
+        on it in the base frame, composed along the parents (the KDL chain holds chains only)."""
+        links, axes, points = [], [], []
+        for k, p in enumerate(self.parents):
+            parent = np.eye(4) if p < 0 else links[p]
+            frame = parent @ self.joint_pre(k)  # the joint frame, before the joint's motion
+            axes.append(frame[:3, :3] @ self.axes[k])
+            points.append(frame[:3, 3])
+            links.append(parent @ self.joint_transform(k, q[k]))
+        return links, axes, points
 
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, convention={self.convention!r})"

@@ -1,14 +1,24 @@
-// Loading a serial chain from a URDF description (parsed with urdfdom).
+// Loading a fixed-base model from a URDF description (parsed with urdfdom): the whole tree, or the
+// serial chain from the root link to a tip link.
 //
-// The chain runs from the URDF root link to a tip link. Links before the first moving joint form
-// the fixed base and their inertia is ignored. Every other link that is not the child of a moving
-// chain joint is rigidly attached to a chain link and merged into it, so the moving mass of the
-// URDF is preserved:
-//  - fixed joints on the chain fold their origin into the next moving joint's `pre`; fixed joints
-//    after the last moving joint (tip given past it, e.g. "tool0") become `Model::tool`;
-//  - fixed children that hang off chain links (sensor frames, hands, flanges) are merged;
-//  - moving joints that leave the chain (e.g. gripper fingers when tip = the hand) are locked at
-//    q = 0 clamped into their limits and merged too; `Model::notes` names them.
+// Links before the first moving joint form the fixed base and their inertia is ignored. Every
+// other link that is not the child of a moving joint of the model is rigidly attached to a link of
+// the model and merged into it, so the moving mass of the URDF is preserved:
+//  - fixed joints between moving ones fold their origin into the next moving joint's `pre`;
+//    in a chain, fixed joints after the last moving joint (tip given past it, e.g. "tool0")
+//    become `Model::tool`;
+//  - fixed children that hang off the model's links (sensor frames, hands, flanges) are merged;
+//  - in a chain, moving joints that leave it (e.g. gripper fingers when tip = the hand) are locked
+//    at q = 0 clamped into their limits and merged too; `Model::notes` names them.
+//
+// Without a tip the whole URDF is loaded: a chain if it has one moving leaf, else a tree with
+// `Model::parents` set, its joints numbered depth-first from the root, the children of a link in
+// the order of their joint names (urdfdom's order, which Pinocchio's URDF parser follows too, so
+// that joint k is Pinocchio's joint k + 1). A tree's tool frame is the identity (on the last
+// link). Floating and planar joints are refused by name. A mimic joint has no place in the model
+// (its coupling to another joint): it is refused on a chain given by a tip, and without a tip it
+// is locked at q = 0 clamped into its limits and merged like a joint off the chain (grippers'
+// mirrored fingers), unless moving joints hang below it (refused).
 //
 // The file must be UTF-8 and its links a tree: a joint whose parent is its child, a link entered
 // by two joints or a loop of joints is refused by name, as is any number used for the model that
@@ -23,9 +33,9 @@
 
 namespace mindyn {
 
-/// Loads the chain root -> `tip` of the URDF file `path`; an empty `tip` picks the only moving
-/// leaf. Throws FileError if the file is missing or unreadable, ModelError for any description
-/// problem.
+/// Loads the chain root -> `tip` of the URDF file `path`; an empty `tip` loads the whole URDF
+/// (a chain or a tree, see above). Throws FileError if the file is missing or unreadable,
+/// ModelError for any description problem.
 Model loadUrdf(const std::string& path, const std::string& tip = "");
 
 /// The same from URDF text; `source` names it in error messages and in `Model::source`.

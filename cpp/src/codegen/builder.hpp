@@ -1,8 +1,9 @@
 // The symbolic Newton-Euler recursion on the stages of every joint (stages.hpp), written into
-// an expression graph. Forward: angular velocity and acceleration and the linear acceleration of
-// each stage origin (gravity as an upward base acceleration), in the axes of that stage.
-// Backward: the wrench (moment about the stage origin, force), carried as pending linear forms in
-// the parameters while only sums and signed permutations act on it; the torque is the axis
+// an expression graph, on a chain or a tree (Model::parent). Forward, from the parent's link:
+// angular velocity and acceleration and the linear acceleration of each stage origin (gravity as
+// an upward base acceleration), in the axes of that stage. Backward: the wrench (moment about the
+// stage origin, force), carried as pending linear forms in the parameters while only sums and
+// signed permutations act on it, each link's added to its parent's; the torque is the axis
 // component of the moment (revolute) or of the force (prismatic) right after the joint motion.
 // A link's wrench is formed in its own frame or in the joint frame before the joint motion
 // (LinkForm), with its parameters turned by the joint angle.
@@ -74,12 +75,13 @@ class Builder {
     afterA_.assign(n, V3{});
     dq_ = dq;
     ddq_ = ddq;
-    Motion m{zero_, zero_, zero_};
+    Motion base{zero_, zero_, zero_};
     if (gravity)
-      for (int i = 0; i < 3; ++i) m.a[i] = g_.constant(-gravity_[i]);
+      for (int i = 0; i < 3; ++i) base.a[i] = g_.constant(-gravity_[i]);
     for (int k = 0; k < n; ++k) {
       const JointStages& s = stages_[k];
-      m = rigidForward(s.pre, m);
+      const int parent = model_.parent(k);
+      Motion m = rigidForward(s.pre, parent < 0 ? base : link_[parent]);
       const Ref qk = g_.input(InputKind::Q, k);
       const V3 u = constVec(s.u);
       if (s.type == JointType::Revolute) {
@@ -117,14 +119,17 @@ class Builder {
   // `forms[k]` (see LinkForm): link k's wrench is formed in its own frame, or in the joint frame
   // before the joint motion from its parameters carried into that frame. The wrench is carried as
   // pending linear forms in the parameters for as long as only sums and signed permutations act on
-  // it, so that equal kinematic coefficients of different links share one product.
+  // it, so that equal kinematic coefficients of different links share one product. Each link's
+  // total wrench (its own and its descendants') is carried into its parent's link frame and added
+  // to the parent's; children come after their parent, so all of them are in when it is reached.
   std::vector<Ref> torques(const std::vector<Ref>& pi, ParameterLayout layout, bool joint_terms,
                            const std::vector<LinkForm>& forms) {
     const int n = model_.nq();
     std::vector<Ref> tau(n, Graph::zero());
-    Pending w;
+    std::vector<Pending> children(n);  // the children's wrenches in each link's frame
     for (int k = n - 1; k >= 0; --k) {
       const JointStages& s = stages_[k];
+      Pending w = std::move(children[k]);
       P10 own;
       for (int i = 0; i < 10; ++i) own[i] = pi[k * layout.perLink() + i];
       const LinkForm form = forms[k];
@@ -163,7 +168,9 @@ class Builder {
         }
       }
       tau[k] = t;
-      if (k > 0) w = rigidBackward(s.pre, w);
+      const int parent = model_.parent(k);
+      if (parent < 0) continue;
+      append(children[parent], rigidBackward(s.pre, std::move(w)));
     }
     return tau;
   }

@@ -242,9 +242,8 @@ ControllerCode generateController(const Model& model, const ParameterSet& params
   c.kind = kind;
   c.settings = s;
   GeneratedCode& code = c.code;
-  code.robot = model.name;
+  describeModel(code, model);
   code.name = name;
-  code.n = n;
   code.params = params;
   code.values = s.p0;
   if (kind == Controller::AdaptivePD)

@@ -62,6 +62,17 @@ std::vector<std::string> describe(const GeneratedCode& code) {
   std::istringstream whatLines(wrap(what + ".", 90, "  "));
   for (std::string part; std::getline(whatLines, part);) lines.push_back(part);
   lines.push_back("Units SI; gravity and all frames as in the robot description.");
+  if (!code.parents.empty()) {
+    lines.push_back(
+        "A tree: the joints in the order of q, dq, ddq and tau, each with the one it is");
+    lines.push_back("mounted on:");
+    for (size_t k = 0; k < code.joints.size(); ++k) {
+      const int p = code.parents[k];
+      lines.push_back("  " + std::to_string(k + 1) + ". " + code.joints[k] + " (on " +
+                      (p < 0 ? std::string("the base") : code.joints[static_cast<size_t>(p)]) +
+                      ")");
+    }
+  }
   const GeometrySnap snap = geometrySnap(code);
   if (snap.count > 0) {
     char buf[160];

@@ -163,6 +163,16 @@ GeneratedFunction internal::generateWithLinkForm(const Model& model, const Param
   return generateWith(model, params, function, false, {}, plan);
 }
 
+void describeModel(GeneratedCode& code, const Model& model) {
+  code.robot = model.name;
+  code.n = model.nq();
+  code.joints.clear();
+  code.parents.clear();
+  if (model.isSerial()) return;
+  for (const Joint& j : model.joints) code.joints.push_back(j.name);
+  for (int k = 0; k < model.nq(); ++k) code.parents.push_back(model.parent(k));
+}
+
 GeometrySnap geometrySnap(const GeneratedCode& code) {
   GeometrySnap out;
   for (const auto& f : code.functions) out.include(f.snap);
@@ -187,9 +197,8 @@ GeneratedCode generateCode(const Model& model, const ParameterSet& params,
   checkIdentifier(name);
   if (functions.empty()) throw ModelError("codegen: no function to generate");
   GeneratedCode code;
-  code.robot = model.name;
+  describeModel(code, model);
   code.name = name;
-  code.n = model.nq();
   code.params = params;
   code.values = values.size() ? values : params.values;
   code.numeric = numeric;

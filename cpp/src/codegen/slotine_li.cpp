@@ -47,13 +47,14 @@ class SlotineLiBuilder : public Builder {
     ar_.assign(n, SV{});
     R_.assign(n, M3{});
     d_.assign(n, V3{});
-    SV v{zero_, zero_}, vr{zero_, zero_}, ar{zero_, zero_};
-    for (int i = 0; i < 3; ++i) ar.l[i] = g.constant(-gravity_[i]);
+    SV base{zero_, zero_}, baseA{zero_, zero_};
+    for (int i = 0; i < 3; ++i) baseA.l[i] = g.constant(-gravity_[i]);
     for (int k = 0; k < n; ++k) {
       const JointStages& s = stages_[k];
-      v = toChild(s.pre, v);
-      vr = toChild(s.pre, vr);
-      ar = toChild(s.pre, ar);
+      const int parent = model_.parent(k);
+      SV v = toChild(s.pre, parent < 0 ? base : v_[parent]);
+      SV vr = toChild(s.pre, parent < 0 ? base : vr_[parent]);
+      SV ar = toChild(s.pre, parent < 0 ? baseA : ar_[parent]);
       const V3 u = constVec(s.u);
       if (s.type == JointType::Revolute) {
         const Ref angle = g.add(g.input(InputKind::Q, k), g.constant(s.offset));
@@ -81,14 +82,18 @@ class SlotineLiBuilder : public Builder {
     }
   }
 
-  // tau = Y(q, dq, dqr, ddqr) pi for classical parameters pi (layout `layout`).
+  // tau = Y(q, dq, dqr, ddqr) pi for classical parameters pi (layout `layout`). Each link's
+  // total wrench (its own and its descendants') is carried into its parent's frame and added to
+  // the parent's.
   std::vector<Ref> torques(const std::vector<Ref>& pi, ParameterLayout layout) {
     Graph& g = graph();
     const int n = model_.nq();
     std::vector<Ref> tau(n, Graph::zero());
-    SV f{zero_, zero_};  // carried wrench: w = moment about the origin, l = force
+    // the children's wrenches in each link's frame: w = moment about the origin, l = force
+    std::vector<SV> children(n, SV{zero_, zero_});
     for (int k = n - 1; k >= 0; --k) {
       const JointStages& s = stages_[k];
+      SV f = children[k];
       P10 p;
       for (int i = 0; i < 10; ++i) p[i] = pi[k * layout.perLink() + i];
       const SV& v = v_[k];
@@ -107,12 +112,13 @@ class SlotineLiBuilder : public Builder {
         t = g.add(t, g.mul(pi[layout.coulombIndex(k)], g.sign(dq_[k])));
       }
       tau[k] = t;
-      if (k == 0) break;
+      const int parent = model_.parent(k);
+      if (parent < 0) continue;
       if (s.type == JointType::Revolute)
         f = {mul(R_[k], f.w), mul(R_[k], f.l)};
       else
         f.w = addv(f.w, cross(d_[k], f.l));
-      f = toParent(s.pre, f);
+      children[parent] = addsv(children[parent], toParent(s.pre, f));
     }
     return tau;
   }

@@ -36,7 +36,9 @@ def cmd_info(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     n = robot.n
     out = []
-    out.append(f"robot      {robot.name}  ({n} joints, {robot.convention})")
+    tree = not robot.is_serial
+    shape = f", a tree of {_branches(robot)} branches" if tree else ""
+    out.append(f"robot      {robot.name}  ({n} joints, {robot.convention}{shape})")
     out.append(f"source     {robot.source}")
     g = robot.gravity
     out.append(f"gravity    [{g[0]:g}, {g[1]:g}, {g[2]:g}] m/s^2")
@@ -50,6 +52,10 @@ def cmd_info(args: argparse.Namespace) -> int:
     deg = {"revolute": 180.0 / math.pi, "prismatic": 1.0}
     dh = robot.dh
     w = max([13] + [len(j) for j in robot.joint_names]) + 1  # joint-name column
+    # a tree: the link each joint hangs from (the base link, or the link of its parent joint)
+    hang = [robot.link_names[p + 1] for p in robot.parents] if tree else []
+    wp = max([12] + [len(h) for h in hang]) + 1 if tree else 0
+    parent_head = f"{'parent link':<{wp}}" if tree else ""
     if robot.convention in ("dh", "mdh") and len(dh):
         if robot.convention == "dh":
             head = f"{'a [m]':>9} {'alpha[deg]':>10} {'d [m]':>9} {'theta[deg]':>10}"
@@ -58,8 +64,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     else:
         head = f"{'axis (joint frame)':>30}"
     out.append(
-        f"{'#':>2} {'joint':<{w}}{'type':<10}{head} {'lower':>9} {'upper':>9} {'vel':>9} "
-        f"{'effort':>9} {'rated':>7} {'gear':>7}"
+        f"{'#':>2} {'joint':<{w}}{parent_head}{'type':<10}{head} {'lower':>9} {'upper':>9} "
+        f"{'vel':>9} {'effort':>9} {'rated':>7} {'gear':>7}"
     )
     out.append(
         "   (limits in deg, deg/s for revolute joints; m, m/s for prismatic; effort N m or N)"
@@ -74,23 +80,30 @@ def cmd_info(args: argparse.Namespace) -> int:
             ax = robot.axes[k]
             geo = f"[{ax[0]:8.4f} {ax[1]:8.4f} {ax[2]:8.4f}]".rjust(30)
         out.append(
-            f"{k + 1:>2} {robot.joint_names[k]:<{w}}{t:<10}{geo} {_fmt(lim['lower'][k] * s, 9)} "
-            f"{_fmt(lim['upper'][k] * s, 9)} {_fmt(lim['velocity'][k] * s, 9)} "
+            f"{k + 1:>2} {robot.joint_names[k]:<{w}}{hang[k] if tree else '':<{wp}}{t:<10}{geo} "
+            f"{_fmt(lim['lower'][k] * s, 9)} {_fmt(lim['upper'][k] * s, 9)} "
+            f"{_fmt(lim['velocity'][k] * s, 9)} "
             f"{_fmt(lim['effort'][k], 9)} {_fmt(drv['rated_torque'][k], 7)} "
             f"{_fmt(drv['gear_ratio'][k], 7)}"
         )
     out.append("")
     out.append("classical parameters about each link-frame origin (SI)")
     names = ["XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "Ia", "Fv", "Fc"]
-    out.append(f"{'link':<10}" + "".join(f"{c:>11}" for c in names))
+    wl = max([10] + [len(x) + 1 for x in robot.link_names[1:]])  # link-name column
+    out.append(f"{'link':<{wl}}" + "".join(f"{c:>11}" for c in names))
     p = robot.params.reshape(n, 10)
     extra = np.column_stack([robot.rotor_inertia, robot.viscous, robot.coulomb])
     for k in range(n):
         row = list(p[k]) + list(extra[k])
-        out.append(f"{robot.link_names[k + 1]:<10}" + "".join(f"{v:11.4g}" for v in row))
+        out.append(f"{robot.link_names[k + 1]:<{wl}}" + "".join(f"{v:11.4g}" for v in row))
     out.append(f"total moving mass {p[:, 9].sum():.4g} kg")
     print("\n".join(out))
     return 0
+
+
+def _branches(robot) -> int:
+    """Number of leaves of a tree: joints that no other joint hangs from."""
+    return robot.n - len(set(robot.parents) - {-1})
 
 
 # The projection method's limit on the number of joints (its packed basis index).
@@ -133,8 +146,10 @@ def cmd_base(args: argparse.Namespace) -> int:
         tolerance=args.tolerance,
         snap=args.snap,
     )
+    tree = {} if robot.is_serial else {"parents": robot.parents}  # 0-based, -1 the base
     if args.format == "json":
-        print(json.dumps({**bp.to_dict(symbolic=args.symbolic), "method_reason": why}, indent=2))
+        doc = {**bp.to_dict(symbolic=args.symbolic), "method_reason": why, **tree}
+        print(json.dumps(doc, indent=2))
         return 0
     if args.format == "latex":
         print(bp.latex(symbolic=args.symbolic))
@@ -156,6 +171,14 @@ def cmd_base(args: argparse.Namespace) -> int:
         f"{m['largest_dropped']:.3g} (relative tolerance {m['tolerance']:.3g}); weakest kept "
         f"column against its kind {m['weakest_kept_for_its_kind']:.3g}",
     ]
+    if tree:
+        # joint numbers as in the parameter names (XX3 belongs to joint 3's link)
+        parents = ", ".join("-" if p < 0 else str(p + 1) for p in robot.parents)
+        lines.insert(
+            2,
+            f"  tree           {robot.n} joints, {_branches(robot)} branches; parent joint of "
+            f"joints 1..{robot.n} (- the base): {parents}",
+        )
     if m["largest_zeroed"] > 0:
         lines.append(
             f"  zero columns   treated as zero below {m['zero_threshold']:.1g} of the largest; "

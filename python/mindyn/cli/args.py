@@ -207,7 +207,11 @@ robot_arg.__name__ = "robot"
 def add_robot(p: argparse.ArgumentParser) -> None:
     """The positional ROBOT and ``--tip`` (the last link of a URDF chain)."""
     p.add_argument("robot", metavar="ROBOT", type=robot_arg, help=robot_help())
-    p.add_argument("--tip", help="URDF: the link that ends the chain")
+    p.add_argument(
+        "--tip",
+        help="URDF: the link that ends the chain root -> TIP (default: the whole URDF, a tree "
+        "if it branches)",
+    )
 
 
 def add_joint_terms(p: argparse.ArgumentParser, verb: str = "include") -> None:

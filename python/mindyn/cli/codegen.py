@@ -50,6 +50,13 @@ def register(subparsers) -> None:
         "the output says how many), a JSON mapping, or 'NAME value' lines; default: the "
         "robot's own values",
     )
+    method_help = (
+        "how the base parameters are found, as 'mindyn base --method': the exact projection "
+        "method (default), the exact recursive method, or the numerical method (sampled "
+        "regressor + QR)"
+    )
+    methods = ["projection", "recursive", "numerical"]
+    p.add_argument("--method", choices=methods, default="projection", help=method_help)
     p.add_argument(
         "--numeric",
         action="store_true",
@@ -129,7 +136,9 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         minimise=args.minimise,
         offset=args.offset,
     )
-    base = base_parameters(robot, rotor=args.rotor, friction=args.friction, offset=args.offset)
+    base = base_parameters(
+        robot, rotor=args.rotor, friction=args.friction, offset=args.offset, method=args.method
+    )
     params, pruned, threshold = (
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )

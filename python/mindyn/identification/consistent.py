@@ -776,6 +776,7 @@ def identify_payload(
     parameters and combinations are named."""
     t0 = time.perf_counter()
     robot = load(robot)
+    robot._require_serial("payload identification (a payload on the last link)")
     base, beta, used = read_arm(robot, arm)
     logs = _logs(data)
     last = _LastLink(robot)

@@ -142,6 +142,10 @@ struct GeneratedCode {
   std::string robot;  // model name, for the header comment
   std::string name;   // identifier prefix of the generated functions
   int n = 0;
+  // A tree (empty for a serial chain): the joint names in the order of q, and each joint's
+  // parent (Model::parents), for the header comment.
+  std::vector<std::string> joints;
+  std::vector<int> parents;
   ParameterSet params;
   Eigen::VectorXd values;  // the parameter values (baked in when numeric)
   bool numeric = false;
@@ -154,6 +158,9 @@ GeneratedCode generateCode(const Model& model, const ParameterSet& params,
                            const std::vector<Function>& functions, const std::string& name,
                            bool numeric = false, const Eigen::VectorXd& values = {},
                            Objective objective = Objective::Operations);
+
+/// Sets the robot's name and joint count of `code`, and for a tree its joints and parents.
+void describeModel(GeneratedCode& code, const Model& model);
 
 /// What the geometry snap changed, over all functions of `code`.
 GeometrySnap geometrySnap(const GeneratedCode& code);
