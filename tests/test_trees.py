@@ -237,7 +237,7 @@ def test_numerical_base_parameters_reproduce_rnea(pair):
 # with one line naming the method, the robot and "tree"; one that does (True) must give the
 # numerical method's count and reproduce rnea. Switch a method on here when it supports trees
 # (and mindyn.base._TREE_METHODS lets it through): the test then checks its numbers.
-TREE_SUPPORT = {"projection": False, "recursive": False}
+TREE_SUPPORT = {"projection": True, "recursive": False}
 
 
 @pytest.mark.parametrize("method", ["projection", "recursive"])

@@ -23,7 +23,7 @@ __all__ = ["BaseParameters", "base_parameters"]
 DEFAULT_TOLERANCE = 1e-9
 # Methods that handle trees (Robot.parents); the others refuse a tree rather than treat it as
 # the chain of its joint order.
-_TREE_METHODS = {"numerical"}
+_TREE_METHODS = {"numerical", "projection"}
 
 
 class BaseParameters:
