@@ -865,6 +865,20 @@ def run_cli(*args):
     )
 
 
+def test_cli_base_of_a_tree_beyond_a_chains_joint_limit(tmp_path):
+    """A 20-joint tree with short root paths: mindyn base runs the projection method (its limits
+    on a tree are 16 joints on a root path and 44 in all, not a chain's 18), with the numerical
+    method's count."""
+    path = random_tree_urdf(tmp_path / "tree20.urdf", 20, 1)
+    robot = mindyn.load(path)
+    assert robot.n == 20 and not robot.is_serial
+    r = run_cli("base", path, "--format", "json")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert out["method"] == "projection", out["method_reason"]
+    assert out["n_base"] == mindyn.base_parameters(robot, method="numerical").n
+
+
 def test_cli_json():
     r = run_cli("base", "zcr07s", "--rotor", "--friction", "--format", "json")
     assert r.returncode == 0, r.stderr
