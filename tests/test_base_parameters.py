@@ -26,6 +26,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from conftest import ROBOTS_DIR, assert_close, body_inertia, pinocchio_model, random_state
+from mindyn.formulas import symbolic_formulas
+from random_tree import random_tree_urdf
 
 INERTIAL = ["XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M"]
 KEPT7 = ["XX", "XY", "XZ", "YZ", "ZZ", "MX", "MY"]
@@ -641,6 +643,35 @@ def test_random_robot(seed, n, structured, tmp_path):
         check_against_rnea(bp, robot, model, rng, "random robot W_b Y pi vs rnea")
 
 
+# Trees (tests/random_tree.py: arbitrary axes, revolute, continuous and prismatic joints):
+# (moving joints, seed); every draw branches.
+TREE_CASES = [(4, 1), (5, 3), (6, 7), (10, 3)]
+
+
+@pytest.mark.parametrize("n, seed", TREE_CASES)
+def test_random_tree(n, seed, tmp_path, rng):
+    """The projection method on a tree: the numerical method's count in each set, W_b (Y pi) =
+    W pi (the runtime regressor, checked against Pinocchio on trees in test_trees.py), and
+    symbolic formulas of the tree's own geometry (each joint on its parent's link) that give
+    the numeric Y at the description's lengths."""
+    robot = mindyn.load(random_tree_urdf(tmp_path / "tree.urdf", n, seed))
+    assert not robot.is_serial
+    for rotor, friction in [(False, False), (True, True)]:
+        bp = mindyn.base_parameters(robot, rotor=rotor, friction=friction)
+        num = mindyn.base_parameters(robot, rotor=rotor, friction=friction, method="numerical")
+        for s in ("lagrangian", "energy", "eom"):
+            assert bp.sets[s]["n"] == num.sets[s]["n"], s
+        pi = rng.uniform(-1.0, 1.0, len(bp.classical_names))
+        for q, dq, ddq in zip(*random_state(robot, rng, 3)):
+            tau = robot.regressor(q, dq, ddq, rotor=rotor, friction=friction) @ pi
+            assert_close(bp.regressor(q, dq, ddq) @ bp.values(pi), tau, 1e-9, "tree W_b Y pi")
+    if n > 6:
+        return  # symbolic formulas of 10 joints' lengths: half a minute of fits
+    sym = symbolic_formulas(bp)
+    # the formulas are checked against Y to 1e-10 (CHECK_TOLERANCE) before they are given
+    assert_close(sym.evaluate(list(sym.symbols.values())), bp.Y, 1e-9, "tree symbolic Y")
+
+
 # --------------------------------------------------------------------------------------------
 # The three sets
 # --------------------------------------------------------------------------------------------
@@ -832,6 +863,20 @@ def run_cli(*args):
         text=True,
         timeout=120,
     )
+
+
+def test_cli_base_of_a_tree_beyond_a_chains_joint_limit(tmp_path):
+    """A 20-joint tree with short root paths: mindyn base runs the projection method (its limits
+    on a tree are 16 joints on a root path and 44 in all, not a chain's 18), with the numerical
+    method's count."""
+    path = random_tree_urdf(tmp_path / "tree20.urdf", 20, 1)
+    robot = mindyn.load(path)
+    assert robot.n == 20 and not robot.is_serial
+    r = run_cli("base", path, "--format", "json")
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    assert out["method"] == "projection", out["method_reason"]
+    assert out["n_base"] == mindyn.base_parameters(robot, method="numerical").n
 
 
 def test_cli_json():

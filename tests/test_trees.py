@@ -233,29 +233,11 @@ def test_numerical_base_parameters_reproduce_rnea(pair):
         assert_close(bp.regressor(q, dq, ddq) @ pb, ref, BASE_TOL, "tree W_b (Y pi) vs rnea")
 
 
-# The exact methods on trees. One that does not support trees yet (False) must refuse a tree
-# with one line naming the method, the robot and "tree"; one that does (True) must give the
-# numerical method's count and reproduce rnea. Switch a method on here when it supports trees
-# (and mindyn.base._TREE_METHODS lets it through): the test then checks its numbers.
-TREE_SUPPORT = {"projection": False, "recursive": True}
-
-
 @pytest.mark.parametrize("method", ["projection", "recursive"])
 def test_exact_methods_on_trees(pair, method):
+    """The exact methods give the numerical method's count and reproduce rnea."""
     robot, model, _ = pair
-    if not TREE_SUPPORT[method]:
-        with pytest.raises(mindyn.ModelError) as info:
-            mindyn.base_parameters(robot, method=method)
-        msg = str(info.value)
-        assert "\n" not in msg and method in msg, msg
-        assert f"robot '{robot.name}' is a tree" in msg and "numerical" in msg, msg
-        return
-    try:
-        bp = mindyn.base_parameters(robot, method=method)
-    except mindyn.ModelError as e:
-        # Baxter's 17 joints may exceed the projection method's cost budget: refused, precisely
-        assert method == "projection" and "budget" in str(e) and "\n" not in str(e), str(e)
-        return
+    bp = mindyn.base_parameters(robot, method=method)
     data = model.createData()
     numerical = mindyn.base_parameters(robot, method="numerical")
     assert bp.n == numerical.n
@@ -316,17 +298,11 @@ def test_cli_info_shows_the_tree(capsys):
 @pytest.mark.parametrize("method", ["numerical", "projection", "recursive", None])
 def test_cli_base_on_a_tree(capsys, tmp_path, method):
     """``mindyn base`` on a tree by each method and by the default (projection): the numerical
-    method's count, or, for a method without tree support yet, one line naming the way out."""
+    method's count, the parent joints in the text and in the JSON."""
     path = random_tree_urdf(tmp_path / "t.urdf", 6, 7)
     robot = mindyn.load(path)
     extra = ["--method", method] if method else []
     numerical = mindyn.base_parameters(robot, method="numerical")
-    if method != "numerical" and not TREE_SUPPORT[method or "projection"]:
-        assert cli.main([str(a) for a in ["base", path, *extra]]) == 2
-        err = capsys.readouterr().err
-        assert err.startswith("mindyn: error: ") and err.count("\n") == 1, err
-        assert "is a tree" in err and "--method numerical" in err, err
-        return
     out = _cli(capsys, "base", path, *extra)
     assert f"equations of motion {numerical.n}" in out
     parents = ", ".join("-" if p < 0 else str(p + 1) for p in robot.parents)

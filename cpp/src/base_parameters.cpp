@@ -198,7 +198,8 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, int 
 }
 
 // Z with its rows combined orthogonally within groups: a row whose basis function involves
-// joints up to d only is zero on the columns of links before d, so a group of rows of equal
+// joints up to d only is zero on the columns of links before d (on a tree, its coordinates lie
+// on the links joint d carries, all numbered after d), so a group of rows of equal
 // depth (and of the same kind, potential or kinetic) reduces to at most as many rows as it has
 // columns. Column dependencies, column 2-norms and Y = Z~+ Z are unchanged.
 //
@@ -230,7 +231,8 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
       val[k] = e.value;
     }
   }
-  // The recursion projects a term link after link, ten forms in order: it cannot do otherwise.
+  // The recursion projects a term link after link, ten forms in order, joints in index order
+  // (on a tree too, for a row that several branches reach): it cannot do otherwise.
   if (!sorted) throw std::logic_error("projection: the coordinates of a row are out of order");
 
   std::vector<std::vector<int>> members(G);

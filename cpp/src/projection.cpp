@@ -8,6 +8,7 @@
 #include <iomanip>
 #include <map>
 #include <sstream>
+#include <type_traits>
 
 #include "mindyn/spatial.hpp"
 
@@ -22,12 +23,46 @@ using Row4d = Eigen::Matrix<double, 1, 4>;
 constexpr int kL0Bits = 10;
 constexpr int kJointBits = 3;
 constexpr int kMaxJoints = (64 - kL0Bits) / kJointBits;  // 18
+constexpr int kMaxTreeJoints = 44;                       // n(n + 1)/2 pairs in kL0Bits
 
 inline int pairIndex(int i, int j) {  // 1-based, j <= i
   return i * (i - 1) / 2 + j;
 }
 inline std::uint64_t withJoint(std::uint64_t key, int joint, int l) {  // joint 0-based, l 1-based
   return key | (static_cast<std::uint64_t>(l - 1) << (kL0Bits + kJointBits * joint));
+}
+// A tree's keys give each joint's factor at its position on its root path (its number of
+// ancestors) and keep above the factors the deepest joint they involve, plus one (0: none),
+// which names the path: two basis functions of different paths differ there. A serial chain's
+// keys keep no deepest joint (a joint's position is its index).
+struct KeyLayout {
+  std::vector<int> shift;  // bit position of each joint's factor
+  int end_shift = 64;      // where a tree's key keeps its deepest joint
+  std::uint64_t end_mask = 0;
+  int longest = 0;   // joints on the longest root path
+  bool fits = true;  // the keys fit in 64 bits
+};
+KeyLayout keyLayout(const Model& model) {
+  const int n = model.nq();
+  KeyLayout kl;
+  kl.shift.resize(static_cast<std::size_t>(n));
+  std::vector<int> pos(static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) {
+    const int p = model.parent(k);
+    pos[static_cast<std::size_t>(k)] = p < 0 ? 0 : pos[static_cast<std::size_t>(p)] + 1;
+    kl.shift[static_cast<std::size_t>(k)] = kL0Bits + kJointBits * pos[static_cast<std::size_t>(k)];
+    kl.longest = std::max(kl.longest, pos[static_cast<std::size_t>(k)] + 1);
+  }
+  if (model.isSerial()) {
+    kl.fits = n <= kMaxJoints;
+    return kl;
+  }
+  int bits = 0;
+  while ((n + 1) >> bits) ++bits;  // 0 .. n
+  kl.end_shift = kL0Bits + kJointBits * kl.longest;
+  kl.fits = kl.end_shift + bits <= 64;
+  if (kl.fits) kl.end_mask = ((std::uint64_t{1} << bits) - 1) << kl.end_shift;
+  return kl;
 }
 inline std::uint64_t withL0(std::uint64_t key, int l0) {
   return key | static_cast<std::uint64_t>(l0);
@@ -336,6 +371,19 @@ const std::array<Pattern, kKinds>& patterns() {
   return table;
 }
 
+// The parts of y through a joint: times 1, cos q, sin q for a revolute joint (part(a), a < 3),
+// times 1, q for a prismatic one (y, part(3)). Returns their number.
+template <class V, class Part>
+int jointParts(bool revolute, const V& y, V parts[3], Part part) {
+  if (revolute) {
+    for (int a = 0; a < 3; ++a) parts[a] = part(a);
+    return 3;
+  }
+  parts[0] = y;
+  parts[1] = part(3);
+  return 2;
+}
+
 // Terms of the recursion. `row` is the row of Z of the term's basis function, -1 while it has
 // none: a term carried through a joint by its constant factor keeps its key, hence its row;
 // the other terms have keys that no earlier term had.
@@ -357,6 +405,22 @@ struct RTerm {
   Row4d r;
 };
 using Entry = InfluenceCoordinates::Entry;
+
+// The terms after a joint, from which its children start. A term of a stage that several
+// children start from may hold, instead of a row, a shared slot -2 - s: the row its basis
+// function gets in whichever branch first gives it a coordinate.
+struct Stage {
+  std::vector<QTerm> Q;
+  std::vector<VTerm> V;
+  std::vector<RTerm> R;
+};
+
+// Number of child joints of the base (entry 0) and of each joint k (entry k + 1).
+std::vector<int> childCounts(const Model& model) {
+  std::vector<int> c(static_cast<std::size_t>(model.nq()) + 1, 0);
+  for (int k = 0; k < model.nq(); ++k) ++c[static_cast<std::size_t>(model.parent(k) + 1)];
+  return c;
+}
 
 // Relative size below which a coefficient is rounding noise of exactly-zero structure.
 constexpr double kNoise = 1e-13;
@@ -454,7 +518,7 @@ unsigned applyPattern(const Eigen::Matrix<double, N, N>& M, unsigned x, bool tra
   return out;
 }
 
-std::string overBudget(int n, const ProjectionCost& c, double budget) {
+std::string overBudget(const Model& model, const ProjectionCost& c, double budget) {
   auto gib = [](double b) {
     std::ostringstream o;
     o << std::setprecision(b < 10 * 1073741824.0 ? 2 : 3) << b / 1073741824.0 << " GiB";
@@ -462,8 +526,9 @@ std::string overBudget(int n, const ProjectionCost& c, double budget) {
   };
   std::ostringstream o;
   o << std::setprecision(2) << "the projection method would form up to " << c.rows
-    << " basis rows and " << c.terms << " terms for this " << n << "-joint chain, up to "
-    << gib(c.bytes) << " of memory (estimated before computing), over its budget of " << gib(budget)
+    << " basis rows and " << c.terms << " terms for this " << model.nq()
+    << (model.isSerial() ? "-joint chain" : "-joint tree") << ", up to " << gib(c.bytes)
+    << " of memory (estimated before computing), over its budget of " << gib(budget)
     << " (the basis grows geometrically along runs of parallel or general joint axes); "
        "the recursive method (--method recursive, method='recursive') gives the same base set "
        "for long chains, the numerical method (--method numerical) a sampled one";
@@ -523,10 +588,26 @@ int InfluenceCoordinates::constantRow() const {
   return -1;
 }
 
-BasisFunction InfluenceCoordinates::basis(int row) const { return unpackBasis(keys.at(row), n); }
+BasisFunction InfluenceCoordinates::basis(int row) const {
+  const std::uint64_t key = keys.at(row);
+  if (parents.empty()) return unpackBasis(key, n);
+  // A tree: the factors of the root path of the deepest joint, by position on the path.
+  BasisFunction b;
+  b.l0 = static_cast<int>(key & ((1u << kL0Bits) - 1));
+  b.l.assign(static_cast<std::size_t>(n), 1);
+  std::vector<int> path;
+  for (int j = static_cast<int>(key >> end_shift) - 1; j >= 0; j = parents[static_cast<size_t>(j)])
+    path.push_back(j);
+  const int len = static_cast<int>(path.size());
+  for (int i = 0; i < len; ++i)
+    b.l[static_cast<std::size_t>(path[static_cast<std::size_t>(len - 1 - i)])] =
+        static_cast<int>((key >> (kL0Bits + kJointBits * i)) & 7u) + 1;
+  return b;
+}
 
 int InfluenceCoordinates::depth(int row) const {
   const std::uint64_t key = keys.at(row);
+  if (!parents.empty()) return static_cast<int>(key >> end_shift);  // a tree keeps it
   // l0 = J(i, j) = i(i-1)/2 + j, 1 <= j <= i, involves joint i at most
   static const std::array<std::uint8_t, 1u << kL0Bits> pairDepth = [] {
     std::array<std::uint8_t, 1u << kL0Bits> d{};
@@ -577,24 +658,42 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
   N4(2, 3) = 1;
 
   ProjectionCost cost;
-  std::map<std::pair<int, Mask>, double> Q, Qnext;  // (kind, pattern) -> number of terms
-  std::map<unsigned, double> V, Vnext, R, Rnext;    // pattern -> number of terms
+  // The stages as the recursion keeps them (stage[0]: the base's, stage[k + 1]: joint k's).
+  struct PatternStage {
+    std::map<std::pair<int, Mask>, double> Q;  // (kind, pattern) -> number of terms
+    std::map<unsigned, double> V, R;           // pattern -> number of terms
+    double held = 0;                           // kinetic terms
+    double reserved = 0;                       // kinetic terms the recursion reserved for it
+  };
+  const std::vector<int> children = childCounts(model);
+  std::vector<int> pending = children;
+  std::vector<PatternStage> stage(n + 1);
   {
     unsigned g = 0;
     for (int a = 0; a < 3; ++a)
       if (model.gravity[a] != 0.0) g |= 1u << a;
-    if (g) R[g] = 1;
+    if (g) stage[0].R[g] = 1;
   }
-  double held = 0, stages = 0;  // kinetic terms held; the most held by two stages at once
-  Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
+  bool potential = false;  // some potential term is left after a joint
+  // The most kinetic terms held at once: the stage being formed (reserved at its bound), the
+  // one it starts from, and the others waiting for children (at what was reserved for them;
+  // `waiting` sums the reservations of all the stages waiting, the one started from included).
+  double stages = 0, waiting = 0;
   for (int k = 0; k < n; ++k) {
     const bool revolute = model.joints[k].type == JointType::Revolute;
+    const int parent = model.parent(k);
+    PatternStage& in = stage[static_cast<std::size_t>(parent + 1)];
+    PatternStage& out = stage[static_cast<std::size_t>(k + 1)];
+    auto &Q = in.Q, &Qnext = out.Q;
+    auto &V = in.V, &Vnext = out.V, &R = in.R, &Rnext = out.R;
+    const double held = in.held;
+    const Eigen::Isometry3d prevPost = parent < 0 ? Eigen::Isometry3d::Identity() : post[parent];
     const Matrix6d Cd = jointMap(prevPost * pre[k]);
     bool C[6][6];
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) C[i][j] = Cd(i, j) != 0.0;
     const int s = revolute ? 2 : 5;
-    const bool last = k + 1 == n;
+    const bool last = children[static_cast<std::size_t>(k + 1)] == 0;
     // forms[q]: the parameters of link k an entry q of a term reaches
     unsigned forms[21] = {};
     {
@@ -607,8 +706,8 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
     double formed = 0, vterms = 0;
     for (const auto& e : V) vterms += e.second;
     // the recursion reserves the next stage at its bound
-    stages = std::max(stages, held + (last ? 0.0 : held * (revolute ? 5 : 3) + vterms * 3 + 1));
-    Qnext.clear();
+    out.reserved = last ? 0.0 : held * (revolute ? 5 : 3) + vterms * 3 + 1;
+    stages = std::max(stages, waiting - in.reserved + held + out.reserved);
     auto add = [&](int kind, Mask m, double count, bool newRow) {
       formed += count;
       unsigned reach = 0;
@@ -666,12 +765,8 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
     }
     Vnext[1u << s] += 1;
     add(revolute ? kDiag2 : kDiag5, 1u << kSym.idx[s][s], 1, true);
-    std::swap(Q, Qnext);
-    std::swap(V, Vnext);
-    held = 0;
-    for (const auto& e : Q) held += e.second;
+    for (const auto& e : Qnext) out.held += e.second;
 
-    Rnext.clear();
     const Eigen::Matrix4d Pre = (prevPost * pre[k]).matrix();
     for (const auto& [r, count] : R) {
       const unsigned y = applyPattern<4>(Pre, r, true);
@@ -692,15 +787,22 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
           if (l != 0) cost.rows += count;
         }
     }
-    std::swap(R, Rnext);
     double rterms = 0;
-    for (const auto& e : R) rterms += e.second;
+    for (const auto& e : Rnext) rterms += e.second;
+    potential = potential || !Rnext.empty();
     cost.terms += formed + rterms;
     cost.entries += 4 * rterms;
     cost.largest_stage = std::max(cost.largest_stage, formed);
-    prevPost = post[k];
+    if (--pending[static_cast<std::size_t>(parent + 1)] == 0) {
+      waiting -= in.reserved;
+      in = PatternStage();
+    }
+    if (last)
+      out = PatternStage();
+    else
+      waiting += out.reserved;
   }
-  if (!R.empty() || layout.rotor) cost.rows += 1;  // the constant
+  if (potential || layout.rotor) cost.rows += 1;  // the constant
   // Peak memory: two stages of kinetic terms, the entries and keys (vectors grown by doubling,
   // so up to twice their size), then the row reduction's sorted copy of the entries.
   cost.bytes = stages * sizeof(QTerm) + 2.0 * sizeof(InfluenceCoordinates::Entry) * cost.entries +
@@ -712,17 +814,30 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
                                           double budget) {
   model.validate();
   const int n = model.nq();
-  if (n > kMaxJoints)
+  const KeyLayout kl = keyLayout(model);
+  const bool tree = kl.end_mask != 0;
+  if (model.isSerial() && !kl.fits)
     throw ModelError("the projection method handles at most " + std::to_string(kMaxJoints) +
                      " joints, the model has " + std::to_string(n) +
                      "; the recursive method (--method recursive, method='recursive') gives "
                      "the same base set for long chains, the numerical method (--method "
                      "numerical) a sampled one");
-  if (n * (n + 1) / 2 >= (1 << kL0Bits)) throw ModelError("too many joints for the basis index");
+  if (n * (n + 1) / 2 >= (1 << kL0Bits))
+    throw ModelError("the projection method handles at most " + std::to_string(kMaxTreeJoints) +
+                     " joints on a tree, the model has " + std::to_string(n) +
+                     "; the recursive method (--method recursive, method='recursive') gives "
+                     "the same base set");
+  if (!kl.fits)
+    throw ModelError("the projection method handles root paths of up to " +
+                     std::to_string((64 - kL0Bits - 6) / kJointBits) +
+                     " joints on a tree, the longest of this " + std::to_string(n) +
+                     "-joint tree has " + std::to_string(kl.longest) +
+                     "; the recursive method (--method recursive, method='recursive') gives "
+                     "the same base set");
 
   {
     const ProjectionCost cost = projectionCost(model, layout);
-    if (cost.bytes > budget) throw ModelError(overBudget(n, cost, budget));
+    if (cost.bytes > budget) throw ModelError(overBudget(model, cost, budget));
   }
   std::vector<Eigen::Isometry3d> pre, post;
   alignedFrames(model, pre, post);
@@ -760,173 +875,243 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   Eigen::Matrix4d N4 = Eigen::Matrix4d::Zero();
   N4(2, 3) = 1;
 
+  // The stage after each joint, kept until its last child joint has started from it (a serial
+  // chain keeps one at a time); stage[0] is the base's, stage[k + 1] joint k's. The stage a
+  // joint starts from and the one it forms are moved into Q, V, R and Qnext, Vnext, Rnext for
+  // the joint; the vectors of a finished stage are reused for the next one formed.
+  const std::vector<int> children = childCounts(model);
+  std::vector<int> pending = children;  // children yet to start from each stage
+  std::vector<Stage> stage(n + 1);
   std::vector<QTerm> Q, Qnext;
   std::vector<VTerm> V, Vnext;
   std::vector<RTerm> R, Rnext;
   Row4d g0;
   g0 << model.gravity.transpose(), 0.0;
-  R.push_back({0, -1, g0});
+  stage[0].R.push_back({0, -1, g0});
 
   std::vector<std::uint64_t> keys;
   std::vector<Entry> entries;
-  auto rowOf = [&keys](auto& term) {
+  std::vector<int> slotRow;  // row of each shared slot (-1: none yet), see Stage
+  auto rowOf = [&keys, &slotRow](auto& term) {
     if (term.row < 0) {
-      term.row = static_cast<int>(keys.size());
-      keys.push_back(term.key);
+      if (term.row == -1) {
+        term.row = static_cast<int>(keys.size());
+        keys.push_back(term.key);
+      } else {
+        int& row = slotRow[static_cast<std::size_t>(-2 - term.row)];
+        if (row < 0) {
+          row = static_cast<int>(keys.size());
+          keys.push_back(term.key);
+        }
+        term.row = row;
+      }
     }
     return term.row;
   };
+  // A stage that several children start from gives each of its terms without a row a slot:
+  // their constant-factor parts in every branch are the same basis function, hence one row.
+  auto share = [&slotRow](Stage& st) {
+    auto give = [&slotRow](auto& terms) {
+      for (auto& t : terms)
+        if (t.row == -1) {
+          t.row = -2 - static_cast<int>(slotRow.size());
+          slotRow.push_back(-1);
+        }
+    };
+    give(st.Q);
+    give(st.R);
+  };
+  if (children[0] > 1) share(stage[0]);
   InfluenceCoordinates out;
   out.layout = layout;
   out.n = n;
-
-  Eigen::Isometry3d prevPost = Eigen::Isometry3d::Identity();
-  for (int k = 0; k < n; ++k) {
-    const bool revolute = model.joints[k].type == JointType::Revolute;
-    const Matrix6d Cd = jointMap(prevPost * pre[k]);
-    const double cscale = std::max(1.0, maxAbs(Cd));
-    const Sparse6 C(Cd);
-    const int s = revolute ? 2 : 5;  // the joint's twist is S = e_s
-    const Vector6d S = Vector6d::Unit(s);
-
-    // Every new kinetic term is projected on link k's parameters at once and kept for the
-    // next joint (after the last joint, not kept).
-    const bool last = k + 1 == n;
-    const int c0 = k * layout.perLink();
-    const auto E = kineticForms(k);
-    const std::size_t most = Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1;
-    const std::size_t rmost = R.size() * (revolute ? 3 : 2);
-    if (entries.size() + 10 * most + 4 * rmost > entries.capacity())
-      entries.reserve(std::max(entries.size() + 10 * most + 4 * rmost, 2 * entries.capacity()));
-    if (keys.size() + most + rmost > keys.capacity())
-      keys.reserve(std::max(keys.size() + most + rmost, 2 * keys.capacity()));
-    int formed = 0;
-    // A term gets its row of Z with its first coordinate (its constant-factor part carries the
-    // key on, hence the row once it has one).
-    auto add = [&](QTerm& t) {
-      ++formed;
-      double v[10];
-      const unsigned touched = E(t.Q, t.kind, v);
-      const double tol = kNoise * t.scale;
-      unsigned keep = 0;
-      for (int p = 0; p < 10; ++p)
-        if ((touched >> p & 1u) && std::abs(v[p]) > tol) keep |= 1u << p;
-      if (keep != 0) {
-        const int row = rowOf(t);
-        for (int p = 0; p < 10; ++p)
-          if (keep >> p & 1u) entries.push_back({row, c0 + p, v[p]});
-      }
-      if (!last) Qnext.push_back(t);
-    };
-
-    // Kinetic part: Q_k = Ad Q_{k-1} Ad^T + cross terms + 2 S S^T dq_k^2.
-    Qnext.clear();
-    if (!last) Qnext.reserve(most);
-    for (const QTerm& t : Q) {
-      Sym6 B;
-      C.congruence(t.Q, kinds[t.kind], B);
-      const double bscale = pruneMax(B, kNoise * t.scale * cscale * cscale);
-      if (bscale == 0.0) continue;
-      const double ptol = kNoise * bscale;
-      Sym6 parts[5];
-      double ps[5];
-      int count;
-      if (revolute) {
-        splitRotation(B, ptol, parts, ps);
-        count = 5;
-      } else {
-        Matrix6d Bf;
-        toFull(B, Bf);
-        const Matrix6d NB = N6 * Bf;
-        parts[0] = B;
-        parts[1] = toSym(NB + NB.transpose());
-        parts[2] = toSym(NB * N6.transpose());
-        count = 3;
-        for (int l = 0; l < count; ++l) ps[l] = pruneMax(parts[l], ptol);
-      }
-      // The constant factor (l = 0) keeps the key and the row.
-      for (int l = 0; l < count; ++l)
-        if (ps[l] > 0.0) {
-          QTerm part{withJoint(t.key, k, l + 1), l == 0 ? t.row : -1,
-                     static_cast<std::uint8_t>(revolute ? l : kAny), ps[l], parts[l]};
-          add(part);
-        }
-    }
-    Vnext.clear();
-    Vnext.reserve(V.size() * 3 + 1);
-    for (const VTerm& t : V) {
-      Vector6d y;
-      C.apply(t.x, y);
-      if (!prune(y, kNoise * maxAbs(t.x) * cscale)) continue;
-      Vector6d parts[3];
-      int count;
-      if (revolute) {
-        for (int a = 0; a < 3; ++a) parts[a] = R6[a] * y;
-        count = 3;
-      } else {
-        parts[0] = y;
-        parts[1] = N6 * y;
-        count = 2;
-      }
-      const double ptol = kNoise * maxAbs(y);
-      for (int l = 0; l < count; ++l) {
-        if (!prune(parts[l], ptol)) continue;
-        const std::uint64_t key = withJoint(t.key, k, l + 1);
-        Vnext.push_back({t.i, key, parts[l]});
-        // x S^T + S x^T
-        QTerm cross{withL0(key, pairIndex(k + 1, t.i)), -1, revolute ? kCross2 : kCross5, 0.0, {}};
-        for (int i = 0; i < 6; ++i) {
-          const double v = i == s ? 2.0 * parts[l][i] : parts[l][i];
-          cross.Q[kSym.idx[i][s]] = v;
-          cross.scale = std::max(cross.scale, std::abs(v));
-        }
-        add(cross);
-      }
-    }
-    Vnext.push_back({k + 1, 0, S});
-    QTerm diagonal{withL0(0, pairIndex(k + 1, k + 1)), -1, revolute ? kDiag2 : kDiag5, 2.0, {}};
-    diagonal.Q[kSym.idx[s][s]] = 2.0;
-    if (layout.rotor) rowOf(diagonal);  // Ia_k's coordinate is on this row
-    add(diagonal);
-    std::swap(Q, Qnext);
-    std::swap(V, Vnext);
-
-    // Potential part: g~^T T_k.
-    Rnext.clear();
-    Rnext.reserve(R.size() * 3);
-    const Eigen::Matrix4d Pre = (prevPost * pre[k]).matrix(), Post = post[k].matrix();
-    for (const RTerm& t : R) {
-      Row4d y = t.r * Pre;
-      if (!prune(y, kNoise * maxAbs(t.r) * std::max(1.0, maxAbs(Pre)))) continue;
-      Row4d parts[3];
-      int count;
-      if (revolute) {
-        for (int a = 0; a < 3; ++a) parts[a] = y * R4[a];
-        count = 3;
-      } else {
-        parts[0] = y;
-        parts[1] = y * N4;
-        count = 2;
-      }
-      const double ptol = kNoise * maxAbs(y);
-      for (int l = 0; l < count; ++l)
-        if (prune(parts[l], ptol))
-          Rnext.push_back({withJoint(t.key, k, l + 1), l == 0 ? t.row : -1, parts[l]});
-    }
-    std::swap(R, Rnext);
-    out.terms_formed += formed + static_cast<int>(R.size());
-
-    // Project link k's potential parameters.
-    for (RTerm& t : R) {
-      const Row4d r = t.r * Post;
-      const double scale = maxAbs(t.r) * std::max(1.0, maxAbs(Post));
-      for (int a = 0; a < 4; ++a)
-        if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowOf(t), c0 + 6 + a, r[a]});
-    }
-    if (layout.rotor)  // on 0.5 dq_k^2
-      entries.push_back({diagonal.row, layout.rotorIndex(k), 1.0});
-    prevPost = post[k];
+  if (!model.isSerial()) {
+    out.parents.resize(static_cast<std::size_t>(n));
+    for (int k = 0; k < n; ++k) out.parents[static_cast<std::size_t>(k)] = model.parent(k);
+    out.end_shift = kl.end_shift;
   }
+
+  // The joints, in index order; compiled apart for serial chains, whose keys need no path.
+  auto run = [&](auto treeKeys) {
+    constexpr bool kTree = decltype(treeKeys)::value;
+    for (int k = 0; k < n; ++k) {
+      const bool revolute = model.joints[k].type == JointType::Revolute;
+      const int parent = model.parent(k);
+      Stage& in = stage[static_cast<std::size_t>(parent + 1)];
+      Q.swap(in.Q);  // Q, V and R are empty here
+      V.swap(in.V);
+      R.swap(in.R);
+      const Eigen::Isometry3d prevPost = parent < 0 ? Eigen::Isometry3d::Identity() : post[parent];
+      const Matrix6d Cd = jointMap(prevPost * pre[k]);
+      const double cscale = std::max(1.0, maxAbs(Cd));
+      const Sparse6 C(Cd);
+      const int s = revolute ? 2 : 5;  // the joint's twist is S = e_s
+      const Vector6d S = Vector6d::Unit(s);
+      // The key of part l (0: the constant factor, the same key) of a term through this joint,
+      // and the key of a function of this joint's rate.
+      const int shift = kl.shift[static_cast<std::size_t>(k)];
+      const std::uint64_t others = ~kl.end_mask,
+                          end = kl.end_mask & (static_cast<std::uint64_t>(k + 1) << kl.end_shift);
+      auto through = [=](std::uint64_t key, int l) {
+        if constexpr (!kTree)
+          return key | (static_cast<std::uint64_t>(l) << shift);
+        else
+          return l == 0 ? key : (key & others) | end | (static_cast<std::uint64_t>(l) << shift);
+      };
+
+      // Every new kinetic term is projected on link k's parameters at once and kept for the
+      // joint's children (for a leaf, not kept).
+      const bool last = children[static_cast<std::size_t>(k + 1)] == 0;
+      const int c0 = k * layout.perLink();
+      const auto E = kineticForms(k);
+      const std::size_t most = Q.size() * (revolute ? 5 : 3) + V.size() * 3 + 1;
+      const std::size_t rmost = R.size() * (revolute ? 3 : 2);
+      if (entries.size() + 10 * most + 4 * rmost > entries.capacity())
+        entries.reserve(std::max(entries.size() + 10 * most + 4 * rmost, 2 * entries.capacity()));
+      if (keys.size() + most + rmost > keys.capacity())
+        keys.reserve(std::max(keys.size() + most + rmost, 2 * keys.capacity()));
+      int formed = 0;
+      // A term gets its row of Z with its first coordinate (its constant-factor part carries the
+      // key on, hence the row once it has one).
+      auto add = [&](QTerm& t) {
+        ++formed;
+        double v[10];
+        const unsigned touched = E(t.Q, t.kind, v);
+        const double tol = kNoise * t.scale;
+        unsigned keep = 0;
+        for (int p = 0; p < 10; ++p)
+          if ((touched >> p & 1u) && std::abs(v[p]) > tol) keep |= 1u << p;
+        if (keep != 0) {
+          const int row = rowOf(t);
+          for (int p = 0; p < 10; ++p)
+            if (keep >> p & 1u) entries.push_back({row, c0 + p, v[p]});
+        }
+        if (!last) Qnext.push_back(t);
+      };
+
+      // Kinetic part: Q_k = Ad Q_parent(k) Ad^T + cross terms + 2 S S^T dq_k^2.
+      Qnext.clear();
+      if (!last) Qnext.reserve(most);
+      for (const QTerm& t : Q) {
+        Sym6 B;
+        C.congruence(t.Q, kinds[t.kind], B);
+        const double bscale = pruneMax(B, kNoise * t.scale * cscale * cscale);
+        if (bscale == 0.0) continue;
+        const double ptol = kNoise * bscale;
+        Sym6 parts[5];
+        double ps[5];
+        int count;
+        if (revolute) {
+          splitRotation(B, ptol, parts, ps);
+          count = 5;
+        } else {
+          Matrix6d Bf;
+          toFull(B, Bf);
+          const Matrix6d NB = N6 * Bf;
+          parts[0] = B;
+          parts[1] = toSym(NB + NB.transpose());
+          parts[2] = toSym(NB * N6.transpose());
+          count = 3;
+          for (int l = 0; l < count; ++l) ps[l] = pruneMax(parts[l], ptol);
+        }
+        // The constant factor (l = 0) keeps the key and the row.
+        for (int l = 0; l < count; ++l)
+          if (ps[l] > 0.0) {
+            QTerm part{through(t.key, l), l == 0 ? t.row : -1,
+                       static_cast<std::uint8_t>(revolute ? l : kAny), ps[l], parts[l]};
+            add(part);
+          }
+      }
+      Vnext.clear();
+      Vnext.reserve(V.size() * 3 + 1);
+      for (const VTerm& t : V) {
+        Vector6d y;
+        C.apply(t.x, y);
+        if (!prune(y, kNoise * maxAbs(t.x) * cscale)) continue;
+        Vector6d parts[3];
+        const int count = jointParts(revolute, y, parts,
+                                     [&](int a) -> Vector6d { return a < 3 ? R6[a] * y : N6 * y; });
+        const double ptol = kNoise * maxAbs(y);
+        for (int l = 0; l < count; ++l) {
+          if (!prune(parts[l], ptol)) continue;
+          const std::uint64_t key = through(t.key, l);
+          Vnext.push_back({t.i, key, parts[l]});
+          // x S^T + S x^T
+          QTerm cross{withL0(kTree ? (key & others) | end : key, pairIndex(k + 1, t.i)),
+                      -1,
+                      revolute ? kCross2 : kCross5,
+                      0.0,
+                      {}};
+          for (int i = 0; i < 6; ++i) {
+            const double v = i == s ? 2.0 * parts[l][i] : parts[l][i];
+            cross.Q[kSym.idx[i][s]] = v;
+            cross.scale = std::max(cross.scale, std::abs(v));
+          }
+          add(cross);
+        }
+      }
+      Vnext.push_back({k + 1, 0, S});
+      QTerm diagonal{withL0(end, pairIndex(k + 1, k + 1)), -1, revolute ? kDiag2 : kDiag5, 2.0, {}};
+      diagonal.Q[kSym.idx[s][s]] = 2.0;
+      if (layout.rotor) rowOf(diagonal);  // Ia_k's coordinate is on this row
+      add(diagonal);
+
+      // Potential part: g~^T T_k.
+      Rnext.clear();
+      Rnext.reserve(R.size() * 3);
+      const Eigen::Matrix4d Pre = (prevPost * pre[k]).matrix(), Post = post[k].matrix();
+      for (const RTerm& t : R) {
+        Row4d y = t.r * Pre;
+        if (!prune(y, kNoise * maxAbs(t.r) * std::max(1.0, maxAbs(Pre)))) continue;
+        Row4d parts[3];
+        const int count = jointParts(revolute, y, parts,
+                                     [&](int a) -> Row4d { return a < 3 ? y * R4[a] : y * N4; });
+        const double ptol = kNoise * maxAbs(y);
+        for (int l = 0; l < count; ++l)
+          if (prune(parts[l], ptol))
+            Rnext.push_back({through(t.key, l), l == 0 ? t.row : -1, parts[l]});
+      }
+      out.terms_formed += formed + static_cast<int>(Rnext.size());
+
+      // Project link k's potential parameters.
+      for (RTerm& t : Rnext) {
+        const Row4d r = t.r * Post;
+        const double scale = maxAbs(t.r) * std::max(1.0, maxAbs(Post));
+        for (int a = 0; a < 4; ++a)
+          if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowOf(t), c0 + 6 + a, r[a]});
+      }
+      if (layout.rotor)  // on 0.5 dq_k^2
+        entries.push_back({diagonal.row, layout.rotorIndex(k), 1.0});
+      if (!last) {
+        Stage& next = stage[static_cast<std::size_t>(k + 1)];
+        next.Q.swap(Qnext);  // Qnext, Vnext and Rnext are left empty
+        next.V.swap(Vnext);
+        next.R.swap(Rnext);
+        if (children[static_cast<std::size_t>(k + 1)] > 1) share(next);
+      }
+      // The parent's stage is done once its last child has started from it; otherwise it goes
+      // back for the next child.
+      if (--pending[static_cast<std::size_t>(parent + 1)] == 0) {
+        if (!last) {  // its vectors serve for the next stage formed
+          Qnext.swap(Q);
+          Vnext.swap(V);
+          Rnext.swap(R);
+        } else {  // a leaf's stage is not kept: its vectors serve instead
+          std::vector<QTerm>().swap(Q);
+          std::vector<VTerm>().swap(V);
+          std::vector<RTerm>().swap(R);
+        }
+      } else {
+        in.Q.swap(Q);
+        in.V.swap(V);
+        in.R.swap(R);
+      }
+    }
+  };
+  if (tree)
+    run(std::true_type{});
+  else
+    run(std::false_type{});
 
   out.keys = std::move(keys);
   out.entries = std::move(entries);

@@ -4,6 +4,7 @@
 // pivots, regrouping matrix and formulas.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <sstream>
@@ -12,6 +13,7 @@
 #include "mindyn/projection.hpp"
 #include "mindyn/urdf.hpp"
 #include "test_util.hpp"
+#include "tree_paths.hpp"
 
 using namespace mindyn;
 
@@ -78,8 +80,14 @@ void expectCoordinatesReproduceLagrangian(const Model& model, ParameterLayout la
     for (int r = 0; r < ic.rows(); ++r) phi[r] = basisValue(ic.basis(r), model, q, dq);
     Eigen::VectorXd w = Eigen::VectorXd::Zero(P);
     for (const auto& e : ic.entries) w[e.col] += phi[e.row] * e.value;
-    energyRegressors(model, data, q, dq, layout, wK, wP);
-    const Eigen::VectorXd wL = wK - wP;
+    // A tree's reference: the serial chains of its root paths.
+    Eigen::VectorXd wL;
+    if (model.isSerial()) {
+      energyRegressors(model, data, q, dq, layout, wK, wP);
+      wL = wK - wP;
+    } else {
+      wL = test::pathEnergyRegressor(model, q, dq, layout);
+    }
     EXPECT_LE((w - wL).norm(), 1e-12 * std::max(1.0, wL.norm())) << what << " trial " << trial;
   }
 }
@@ -106,6 +114,57 @@ TEST(Projection, CoordinatesOfRandomChains) {
   }
 }
 
+// On a tree, each row's basis function involves the joints of one root path only (the joints
+// of q and dq all support the deepest one, whose 1-based index is depth()), no two rows have the
+// same basis function, the row's coordinates lie on the links that deepest joint carries, and Z
+// reproduces the Lagrangian regressor of the serial chains of the root paths.
+TEST(Projection, CoordinatesOfRandomTrees) {
+  std::mt19937 rng(23);
+  for (const Model& model : test::testTrees(rng)) {
+    const int n = model.nq();
+    const ParameterLayout layout{n % 2 == 0, false};
+    const std::string& what = model.name;
+    const InfluenceCoordinates ic = influenceCoordinates(model, layout);
+    std::vector<std::uint64_t> keys = ic.keys;
+    std::sort(keys.begin(), keys.end());
+    EXPECT_EQ(std::adjacent_find(keys.begin(), keys.end()), keys.end()) << what;
+    // Counted, the first offence shown: a wrong recursion offends on thousands of rows.
+    int off_path = 0, wrong_depth = 0, off_subtree = 0;
+    std::string first;
+    std::vector<int> deepest(ic.rows(), -1);
+    for (int r = 0; r < ic.rows(); ++r) {
+      const BasisFunction b = ic.basis(r);
+      std::vector<int> joints;
+      if (b.l0 > 0) {
+        const int i = static_cast<int>(std::floor((1 + std::sqrt(8.0 * b.l0 - 7)) / 2));
+        joints = {i - 1, b.l0 - i * (i - 1) / 2 - 1};
+      }
+      for (int k = 0; k < n; ++k)
+        if (b.l[k] > 1) joints.push_back(k);
+      const int d = joints.empty() ? -1 : *std::max_element(joints.begin(), joints.end());
+      bool bad = false;
+      for (int j : joints) bad = bad || !model.supports(j, d);
+      off_path += bad;
+      wrong_depth += ic.depth(r) != d + 1;
+      if ((bad || ic.depth(r) != d + 1) && first.empty()) first = b.toString(model);
+      deepest[r] = d;
+    }
+    for (const auto& e : ic.entries) {
+      const int link = e.col / layout.perLink(), d = deepest[e.row];
+      if (d >= 0 && !model.supports(d, link)) {
+        ++off_subtree;
+        if (first.empty())
+          first = ic.basis(e.row).toString(model) + " column " + std::to_string(e.col);
+      }
+    }
+    EXPECT_EQ(off_path + wrong_depth + off_subtree, 0)
+        << what << ": " << off_path << " rows off one root path, " << wrong_depth
+        << " with a wrong depth, " << off_subtree
+        << " coordinates off the deepest joint's subtree; first: " << first;
+    expectCoordinatesReproduceLagrangian(model, layout, what);
+  }
+}
+
 // The cost counted before the recursion bounds what the recursion then forms.
 TEST(Projection, CostEstimateBoundsTheRecursion) {
   auto check = [](const Model& model, ParameterLayout layout, const std::string& what) {
@@ -127,6 +186,7 @@ TEST(Projection, CostEstimateBoundsTheRecursion) {
     check(parseUrdf(randomUrdf(rng, n), "", "random"), {true, false},
           "random chain n=" + std::to_string(n));
   check(planarArm(5, false), {true, false}, "planar5h");
+  for (const Model& tree : test::testTrees(rng)) check(tree, {true, false}, tree.name);
 }
 
 TEST(Projection, OverBudgetIsRefusedBeforeComputing) {
@@ -144,6 +204,40 @@ TEST(Projection, OverBudgetIsRefusedBeforeComputing) {
   BaseOptions o;
   o.projection_budget = c.bytes / 2;
   EXPECT_THROW(computeBaseParameters(model, o), ModelError);
+  std::mt19937 rng(3);
+  const Model tree = test::randomChain(rng, 5, false, false, true);
+  ASSERT_FALSE(tree.isSerial());
+  try {
+    influenceCoordinates(tree, {}, projectionCost(tree).bytes / 2);
+    FAIL() << "not refused";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("5-joint tree"), std::string::npos) << e.what();
+  }
+}
+
+// A tree may have more joints than a serial chain, not longer root paths (the packed index).
+TEST(Projection, LongRootPathsOfATreeAreRefused) {
+  std::mt19937 rng(9);
+  Model tree = test::randomChain(rng, 18, false, true);
+  tree.parents = {-1};
+  for (int k = 1; k < 17; ++k) tree.parents.push_back(k - 1);  // a 17-joint path
+  tree.parents.push_back(0);
+  try {
+    influenceCoordinates(tree);
+    FAIL() << "not refused";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("root paths of up to 16 joints on a tree, the longest of "
+                                         "this 18-joint tree has 17"),
+              std::string::npos)
+        << e.what();
+  }
+  tree.parents[16] = 0;  // 16 at most: accepted, then refused for its size (17 general axes)
+  try {
+    influenceCoordinates(tree);
+    FAIL() << "not refused";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("over its budget"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Projection, BasisIndexRoundTrip) {

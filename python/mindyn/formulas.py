@@ -415,7 +415,7 @@ class _Geometry:
             kind = "continuous" if robot.joint_types[k] == "revolute" else "prismatic"
             limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
             xml.append(
-                f'<joint name="J{k + 1}" type="{kind}"><parent link="L{k}"/>'
+                f'<joint name="J{k + 1}" type="{kind}"><parent link="L{robot.parents[k] + 1}"/>'
                 f'<child link="L{k + 1}"/><origin xyz="{xyz}" rpy="{rpy}"/>'
                 f'<axis xyz="{axis}"/>{limit if kind == "prismatic" else ""}</joint>'
                 f'<link name="L{k + 1}"/>'

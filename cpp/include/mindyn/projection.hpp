@@ -10,6 +10,10 @@
 // and on g~^T T_k (potential part): each joint multiplies by a matrix affine in (1, cos, sin) or
 // (1, q), which maps a term to at most five terms. No sampling, no regressor evaluation. Terms
 // whose coefficients vanish are dropped, so only the non-zero rows are ever formed.
+// On a tree, each joint starts from the stage of its parent joint (siblings branch from the
+// same stage): a link's energies involve only the joints of its root path, so J(i, j) occurs
+// only for i and j on one root path, and lk = 1 for every joint off the path. A basis function
+// that does not involve a branch is one row, whichever branches give it coordinates.
 #pragma once
 
 #include <Eigen/Core>
@@ -42,6 +46,11 @@ struct InfluenceCoordinates {
   std::vector<std::uint64_t> keys;  // packed multi-index of each row
   std::vector<Entry> entries;       // the non-zero coordinates; a row's by ascending column
   int terms_formed = 0;             // kinetic + potential terms produced by the recursion
+  /// A tree's: the parent of each joint (empty for a serial chain) and where its keys keep the
+  /// deepest joint they involve; its keys give each joint's factor at the joint's position on
+  /// its root path (for a serial chain, at the joint's index, as packBasis).
+  std::vector<int> parents;
+  int end_shift = 0;
   int rows() const { return static_cast<int>(keys.size()); }
   int cols() const { return layout.size(n); }
   /// Z as a dense matrix (rows x cols); large for long chains.
@@ -50,14 +59,18 @@ struct InfluenceCoordinates {
   int constantRow() const;
   BasisFunction basis(int row) const;
   /// The last joint (1-based) a row's basis function involves, through q or dq; 0 for the
-  /// constant. Columns of links before it are zero on that row.
+  /// constant. The joints it involves lie on that joint's root path; the row's coordinates lie
+  /// on the links that joint carries (its link and those of its descendants, numbered after
+  /// it), so columns of links before it are zero on that row.
   int depth(int row) const;
 };
 
 /// What the recursion of influenceCoordinates will form, counted beforehand on the sparsity
-/// patterns of the terms (no values): every count is an upper bound, reached for generic
-/// geometry; exact zeros of special geometry (axis-aligned frames) are seen, cancellations of
-/// values are not. The basis grows geometrically along runs of parallel or general joint axes.
+/// patterns of the terms (no values), stage by stage as the recursion keeps them (on a tree,
+/// the stages waiting for further children count in the memory): every count is an upper bound,
+/// reached for generic geometry; exact zeros of special geometry (axis-aligned frames) are seen,
+/// cancellations of values are not. The basis grows geometrically along runs of parallel or
+/// general joint axes.
 struct ProjectionCost {
   double terms = 0;          // kinetic and potential terms formed (terms_formed)
   double rows = 0;           // non-zero basis functions (rows of Z)
@@ -73,12 +86,13 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout = {});
 /// ten times; a generic 12-joint chain (estimate 31 GB) is refused.
 inline constexpr double kProjectionBudget = 8.0 * 1024 * 1024 * 1024;
 
-/// Runs the recursion. Throws ModelError for more than 18 joints (the packed index limit) and,
-/// before forming anything, when projectionCost(model, layout).bytes exceeds `budget`.
+/// Runs the recursion. Throws ModelError for more than 18 joints on a serial chain (the packed
+/// index limit; on a tree, for more than 44 joints or root paths of more than 16) and, before
+/// forming anything, when projectionCost(model, layout).bytes exceeds `budget`.
 InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout = {},
                                           double budget = kProjectionBudget);
 
-/// Packs (l0; l1..ln) into a key and back.
+/// Packs (l0; l1..ln) into a key and back, as a serial chain's keys are packed.
 std::uint64_t packBasis(int l0, const std::vector<int>& l);
 BasisFunction unpackBasis(std::uint64_t key, int n);
 

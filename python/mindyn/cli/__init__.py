@@ -106,8 +106,29 @@ def _branches(robot) -> int:
     return robot.n - len(set(robot.parents) - {-1})
 
 
-# The projection method's limit on the number of joints (its packed basis index).
+# The projection method's limits (its packed basis index): joints of a chain; on a tree, joints
+# on a root path and joints in all.
 _PROJECTION_MAX_JOINTS = 18
+_PROJECTION_MAX_PATH, _PROJECTION_MAX_TREE = 16, 44
+
+
+def _projection_limit(robot) -> str | None:
+    """Why the projection method cannot take the robot, or None."""
+    if robot.is_serial:
+        if robot.n > _PROJECTION_MAX_JOINTS:
+            return f"handles at most {_PROJECTION_MAX_JOINTS} joints, the robot has {robot.n}"
+        return None
+    depth: list[int] = []
+    for p in robot.parents:
+        depth.append(1 if p < 0 else depth[p] + 1)
+    if robot.n > _PROJECTION_MAX_TREE:
+        return f"handles at most {_PROJECTION_MAX_TREE} joints on a tree, the robot has {robot.n}"
+    if max(depth) > _PROJECTION_MAX_PATH:
+        return (
+            f"handles root paths of up to {_PROJECTION_MAX_PATH} joints on a tree, the robot's "
+            f"longest has {max(depth)}"
+        )
+    return None
 
 
 def _base_method(robot, rotor: bool, method: str | None) -> tuple[str, str]:
@@ -116,10 +137,11 @@ def _base_method(robot, rotor: bool, method: str | None) -> tuple[str, str]:
     would refuse the chain."""
     if method is not None:
         return method, "--method " + method
-    if robot.n > _PROJECTION_MAX_JOINTS:
+    limit = _projection_limit(robot)
+    if limit:
         return "recursive", (
-            f"the projection method handles at most {_PROJECTION_MAX_JOINTS} joints, the robot "
-            f"has {robot.n}; the recursive method is exact and gives the same base set"
+            f"the projection method {limit}; the recursive method is exact and gives the same "
+            "base set"
         )
     cost = _core.projection_cost(robot._m, rotor=rotor)
     if cost["bytes"] > cost["budget"]:
