@@ -247,6 +247,17 @@ def test_exact_methods_on_trees(pair, method):
         assert_close(bp.regressor(q, dq, ddq) @ pb, ref, BASE_TOL, f"tree {method} vs rnea")
 
 
+@pytest.mark.parametrize("extras", [False, True])
+def test_recursive_gives_the_projection_set_and_y_on_trees(pair, extras):
+    """The recursive method's base set, names and Y are the projection method's, with and
+    without rotor inertia and friction (Y to 1e-10: both computed to rounding)."""
+    robot = pair[0]
+    proj = mindyn.base_parameters(robot, rotor=extras, friction=extras, method="projection")
+    rec = mindyn.base_parameters(robot, rotor=extras, friction=extras, method="recursive")
+    assert rec.names == proj.names
+    assert np.abs(rec.Y - proj.Y).max() <= 1e-10 * max(1.0, np.abs(proj.Y).max())
+
+
 def test_tip_still_selects_a_chain():
     robot = mindyn.load(BAXTER, tip="left_gripper")
     assert robot.is_serial and robot.n == 7 and robot.parents == list(range(-1, 6))

@@ -96,6 +96,16 @@ TEST(RecursiveBase, SameSetAndYAsProjectionOnRandomChains) {
   }
 }
 
+TEST(RecursiveBase, SameSetAndYAsProjectionOnRandomTrees) {
+  std::mt19937 rng(23);
+  for (int trial = 0; trial < 12; ++trial) {
+    const bool special = trial % 3 != 0;
+    const Model m = test::randomChain(rng, 4 + trial % 5, trial % 2 == 0, special, true);
+    expectSame(m, {false, false});
+    expectSame(m, {true, true});
+  }
+}
+
 TEST(RecursiveBase, LongChainsMatchTheSampledRegressor) {
   std::mt19937 rng(5);
   expectTorquesAndNumericalCount(planarArm(20, true), {true, true}, rng);
