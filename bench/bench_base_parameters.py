@@ -7,8 +7,9 @@ computation time the library reports (``bp.seconds``) per method, the wall time 
 call of the recursive method, the ratios numerical / recursive and projection / recursive (of
 the library times), the number of base parameters found by each method and whether the
 recursive method's base set and ``Y`` equal the projection's (``same``). The projection method
-refuses the 20-joint chains (more than 18 joints): ``-`` in its columns. ``--quick`` leaves out
-the 12-link chain (several seconds per projection call). ``--callgrind`` adds instruction
+refuses the 20-joint chains (more than 18 joints): ``-`` in its columns. The last case is a
+tree (Baxter, both arms and the head). ``--quick`` leaves out the 12-link chain (several
+seconds per projection call). ``--callgrind`` adds instruction
 counts of one call of each method (valgrind's callgrind, counting only inside
 ``mindyn::computeBaseParameters``), which do not depend on the load of the machine.
 """
@@ -54,14 +55,14 @@ def skewed_chain(directory: Path, n: int, seed: int) -> mindyn.Robot:
     return mindyn.load(path)
 
 
-def panda() -> mindyn.Robot | None:
+def example_robot(path: str, tip: str | None = None) -> mindyn.Robot | None:
+    """A URDF of example-robot-data (installed with the test requirements), or None."""
     hits = sorted(
         Path(sys.prefix).glob(
-            "lib/python*/site-packages/cmeel.prefix/share/example-robot-data/robots/"
-            "panda_description/urdf/panda.urdf"
+            f"lib/python*/site-packages/cmeel.prefix/share/example-robot-data/robots/{path}"
         )
     )
-    return mindyn.load(hits[0], tip="panda_hand") if hits else None
+    return mindyn.load(hits[0], tip=tip) if hits else None
 
 
 METHODS = ("projection", "recursive", "numerical")
@@ -91,7 +92,7 @@ def cases(directory: Path, quick: bool) -> list[tuple[str, mindyn.Robot | None, 
     out = [
         ("puma560", mindyn.load("puma560"), {}),
         ("zcr07s Ia+Fv+Fc", mindyn.load("zcr07s"), {"rotor": True, "friction": True}),
-        ("panda", panda(), {}),
+        ("panda", example_robot("panda_description/urdf/panda.urdf", "panda_hand"), {}),
         ("skewed 6R", skewed_chain(directory, 6, 6), {}),
     ]
     sizes = [6, 8, 10] if quick else [6, 8, 10, 12]
@@ -99,6 +100,8 @@ def cases(directory: Path, quick: bool) -> list[tuple[str, mindyn.Robot | None, 
     return out + [
         ("planar20", mindyn.load("planar20"), {}),
         ("skewed 20R", skewed_chain(directory, 20, 20), {}),
+        # a tree: head and two 7-joint arms with a gripper finger each, 17 joints
+        ("baxter (tree)", example_robot("baxter_description/urdf/baxter.urdf"), {}),
     ]
 
 

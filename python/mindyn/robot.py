@@ -410,8 +410,8 @@ class Robot:
         if not -1 <= link < self.n:
             raise IndexError(f"link index {link} out of range for {self.n} links")
         if not self.is_serial:
-            links = self._tree_frames(q)[0]
-            return links[link] if link >= 0 else links[-1] @ self.tool
+            pose = _core.link_poses(self._m, q)[link]
+            return pose @ self.tool if link < 0 else pose
         return self._kinematics().pose(q, link)
 
     def jacobian(self, q) -> np.ndarray:
@@ -421,30 +421,7 @@ class Robot:
         q = _vector(q, self.n, "q")
         if self.is_serial:
             return self._kinematics().jacobian(q)
-        links, axes, points = self._tree_frames(q)
-        tip = (links[-1] @ self.tool)[:3, 3]
-        J = np.zeros((6, self.n))
-        k = self.n - 1
-        while k >= 0:
-            if self.joint_types[k] == "revolute":
-                J[:3, k] = np.cross(axes[k], tip - points[k])
-                J[3:, k] = axes[k]
-            else:
-                J[:3, k] = axes[k]
-            k = self.parents[k]
-        return J
-
-    def _tree_frames(self, q):
-        """Poses of links 1..n in the base frame (4x4 each), and each joint's axis and a point
-        on it in the base frame, composed along the parents (the KDL chain holds chains only)."""
-        links, axes, points = [], [], []
-        for k, p in enumerate(self.parents):
-            parent = np.eye(4) if p < 0 else links[p]
-            frame = parent @ self.joint_pre(k)  # the joint frame, before the joint's motion
-            axes.append(frame[:3, :3] @ self.axes[k])
-            points.append(frame[:3, 3])
-            links.append(parent @ self.joint_transform(k, q[k]))
-        return links, axes, points
+        return _core.tool_jacobian(self._m, q)
 
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, convention={self.convention!r})"

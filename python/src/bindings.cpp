@@ -12,6 +12,7 @@
 #include "mindyn/data.hpp"
 #include "mindyn/description.hpp"
 #include "mindyn/dynamics.hpp"
+#include "mindyn/ik.hpp"
 #include "mindyn/kinematics.hpp"
 #include "mindyn/model.hpp"
 #include "mindyn/momentum.hpp"
@@ -347,6 +348,41 @@ PYBIND11_MODULE(_core, m) {
             })[0];
           },
           py::arg("q"), py::arg("params") = py::none());
+
+  // Kinematics of any model, chain or tree, from the kinematic pass of the dynamics (the KDL
+  // class below holds chains only).
+  const auto requireSize = [](const Eigen::VectorXd& q, int n, const char* name) {
+    if (q.size() != n)
+      throw ModelError(std::string(name) + " has " + std::to_string(q.size()) +
+                       " entries; the model has " + std::to_string(n) + " joints");
+  };
+  m.def(
+      "link_poses",
+      [requireSize](const PyModel& s, const Eigen::VectorXd& q) {
+        requireSize(q, s.model.nq(), "q");
+        Data data(s.model);
+        forwardKinematics(s.model, data, q);
+        std::vector<Eigen::Matrix4d> poses(static_cast<size_t>(s.model.nq()));
+        for (int k = 0; k < s.model.nq(); ++k) {
+          Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+          T.linear() = data.R0[k];
+          T.translation() = data.p0[k];
+          poses[static_cast<size_t>(k)] = T.matrix();
+        }
+        return poses;
+      },
+      py::arg("model"), py::arg("q"));
+  m.def(
+      "tool_jacobian",
+      [requireSize](const PyModel& s, const Eigen::VectorXd& q) {
+        requireSize(q, s.model.nq(), "q");
+        ChainKinematics kin(s.model);
+        Eigen::Isometry3d T;
+        Matrix6Xd J(6, s.model.nq());
+        kin.poseAndJacobian(q, T, J);
+        return Eigen::MatrixXd(J);
+      },
+      py::arg("model"), py::arg("q"));
 
   py::class_<Kinematics>(m, "Kinematics")
       .def(py::init([](const PyModel& s) { return std::make_unique<Kinematics>(s.model); }))
