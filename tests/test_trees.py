@@ -353,8 +353,8 @@ def test_identification_on_a_tree_recovers_the_base_parameters(tmp_path, model):
     chains in test_identification)."""
     from mindyn.control import simulate_inverse
     from mindyn.identification import identify, true_base_values
-    from mindyn.identification.excitation import random_trajectory
     from mindyn.identification.data import JointData
+    from mindyn.identification.excitation import random_trajectory
 
     robot = mindyn.load(random_tree_urdf(tmp_path / "t.urdf", 5, 11))
     assert not robot.is_serial
