@@ -19,7 +19,7 @@ import mindyn
 import numpy as np
 import pytest
 import yaml
-from conftest import assert_close
+from conftest import ROBOTS_DIR, assert_close
 from mindyn import cli
 from mindyn import formulas as F
 
@@ -495,3 +495,20 @@ def test_cli_symbolic_refusal_is_one_line(run_cli):
     )
     assert r.returncode == 2
     assert r.stderr.startswith("mindyn: error: symbolic formulas:") and r.stderr.count("\n") == 1
+
+
+def test_symbolic_names_rounded_right_angles_and_works_once_snapped():
+    """Baxter's arm writes its right angles rounded (1.57079632679): the fit misses, and the
+    refusal says to snap; snapped, the symbolic formulas pass their checks against Y."""
+    path = ROBOTS_DIR / "baxter_description/urdf/baxter.urdf"
+    robot = mindyn.load(path, tip="left_gripper")
+    with pytest.raises(mindyn.ModelError, match=r"not polynomials.*rounded.*snap") as info:
+        mindyn.base_parameters(robot).symbolic()
+    assert "\n" not in str(info.value)
+    sym = mindyn.base_parameters(robot, snap=True).symbolic()
+    assert sym.checked == 4 and len(sym.formulas) == mindyn.base_parameters(robot).n
+    # planar2's refusal (test above) has nothing to snap, and says nothing of it
+    order = ["M2"] + [p for p in mindyn.load("planar2").parameter_names() if p != "M2"]
+    with pytest.raises(mindyn.ModelError) as plain:
+        mindyn.base_parameters("planar2", order=order).symbolic()
+    assert "snap" not in str(plain.value)

@@ -657,6 +657,13 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
                     if bp.margin.get("near_degenerate")
                     else ""
                 )
+                + (
+                    "; its joint origins hold rotations within 1e-3 of right angles but not at "
+                    "them (rounded angles such as 1.5708 for pi/2): snap them (snap=True, "
+                    "mindyn base --snap)"
+                    if _rounded_right_angles(robot)
+                    else ""
+                )
             )
         worst = max(worst, diff)
     result.checked = len(checks)
@@ -664,6 +671,17 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     result.formulas = _gather(names, classical, polys, tuple(symbols))
     result.formulas += [unit_formula(o) for o in bp.names[len(names) :]]
     return result
+
+
+def _rounded_right_angles(robot) -> bool:
+    """True when a joint origin's rotation is within 1e-3 (entry by entry) of a rotation by
+    right angles without being one: right angles written rounded, which snapping makes exact."""
+    for k in range(robot.n):
+        a = np.abs(np.asarray(robot.joint_pre(k))[:3, :3])
+        near = (a < 1e-3) | (np.abs(a - 1.0) < 1e-3)
+        if near.all() and not ((a == 0.0) | (a == 1.0)).all():
+            return True
+    return False
 
 
 def _shorter_trig(poly: list, i: int) -> list:
