@@ -578,6 +578,21 @@ def test_parameter_files(tmp_path):
         read_parameter_file(tmp_path / "none.txt", names)
 
 
+def test_cli_codegen_chooses_the_method_as_base_does(tmp_path, capsys):
+    """A chain beyond the projection method (20 joints) is generated from the recursive
+    method's base set, which the output says; --method projection keeps the refusal."""
+    out = str(tmp_path / "p20")
+    assert main(["codegen", "planar20", "--lang", "c", "--what", "id", "-o", out]) == 0
+    text = capsys.readouterr().out
+    assert "base parameters by the recursive method: the projection method handles at most" in text
+    rec = mindyn.base_parameters("planar20", method="recursive")
+    assert f"planar20: {rec.n} base parameters;" in text
+    argv = ["codegen", "planar20", "--lang", "c", "--method", "projection", "-o", out]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mindyn: error: ") and "18 joints" in err and err.count("\n") == 1
+
+
 def test_cli_codegen(tmp_path, capsys):
     out = tmp_path / "puma"
     assert main(["codegen", "puma560", "--lang", "c", "-o", str(out)]) == 0
@@ -600,9 +615,8 @@ def test_cli_codegen(tmp_path, capsys):
     assert "_sincos" not in (tmp_path / "puma.c").read_text()
     capsys.readouterr()
     # --method: a chain of 20 joints, beyond the projection method, by the recursive method
-    # (the same set as the numerical method's)
+    # (the same set as the numerical method's; the default, see the test above)
     argv = ["codegen", "planar20", "--lang", "c", "--what", "id", "-o", str(out)]
-    assert main(argv) != 0 and "--method recursive" in capsys.readouterr().err
     assert main(argv + ["--method", "recursive"]) == 0
     names = mindyn.base_parameters("planar20", method="numerical").names
     assert capsys.readouterr().out.startswith(f"planar20: {len(names)} base parameters;")

@@ -10,7 +10,6 @@ import sys
 
 import numpy as np
 
-from .. import _core
 from .._core import ModelError, RobotFileNotFoundError
 from ..base import base_parameters
 from ..robot import load
@@ -24,6 +23,7 @@ from .args import (
     joint_terms,
     number,
 )
+from .method import base_method, branches
 
 
 def _fmt(x: float, width: int = 10) -> str:
@@ -37,7 +37,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     n = robot.n
     out = []
     tree = not robot.is_serial
-    shape = f", a tree of {_branches(robot)} branches" if tree else ""
+    shape = f", a tree of {branches(robot)} branches" if tree else ""
     out.append(f"robot      {robot.name}  ({n} joints, {robot.convention}{shape})")
     out.append(f"source     {robot.source}")
     g = robot.gravity
@@ -101,63 +101,10 @@ def cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
-def _branches(robot) -> int:
-    """Number of leaves of a tree: joints that no other joint hangs from."""
-    return robot.n - len(set(robot.parents) - {-1})
-
-
-# The projection method's limits (its packed basis index): joints of a chain; on a tree, joints
-# on a root path and joints in all.
-_PROJECTION_MAX_JOINTS = 18
-_PROJECTION_MAX_PATH, _PROJECTION_MAX_TREE = 16, 44
-
-
-def _projection_limit(robot) -> str | None:
-    """Why the projection method cannot take the robot, or None."""
-    if robot.is_serial:
-        if robot.n > _PROJECTION_MAX_JOINTS:
-            return f"handles at most {_PROJECTION_MAX_JOINTS} joints, the robot has {robot.n}"
-        return None
-    depth: list[int] = []
-    for p in robot.parents:
-        depth.append(1 if p < 0 else depth[p] + 1)
-    if robot.n > _PROJECTION_MAX_TREE:
-        return f"handles at most {_PROJECTION_MAX_TREE} joints on a tree, the robot has {robot.n}"
-    if max(depth) > _PROJECTION_MAX_PATH:
-        return (
-            f"handles root paths of up to {_PROJECTION_MAX_PATH} joints on a tree, the robot's "
-            f"longest has {max(depth)}"
-        )
-    return None
-
-
-def _base_method(robot, rotor: bool, method: str | None) -> tuple[str, str]:
-    """The method ``mindyn base`` runs and why: the one given, else the projection method, or
-    the recursive method (exact, the same base set) when the projection method's cost estimate
-    would refuse the chain."""
-    if method is not None:
-        return method, "--method " + method
-    limit = _projection_limit(robot)
-    if limit:
-        return "recursive", (
-            f"the projection method {limit}; the recursive method is exact and gives the same "
-            "base set"
-        )
-    cost = _core.projection_cost(robot._m, rotor=rotor)
-    if cost["bytes"] > cost["budget"]:
-        gib = 1024.0**3
-        return "recursive", (
-            f"the projection method would need up to {cost['bytes'] / gib:.2g} GiB (estimated "
-            f"before computing), over its budget of {cost['budget'] / gib:.2g} GiB; the "
-            "recursive method is exact and gives the same base set"
-        )
-    return "projection", "the default (exact, the thesis's method)"
-
-
 def cmd_base(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     order = [s.strip() for s in args.order.split(",")] if args.order else None
-    method, why = _base_method(robot, args.rotor, args.method)
+    method, why = base_method(robot, args.rotor, args.method)
     bp = base_parameters(
         robot,
         rotor=args.rotor,
@@ -198,7 +145,7 @@ def cmd_base(args: argparse.Namespace) -> int:
         parents = ", ".join("-" if p < 0 else str(p + 1) for p in robot.parents)
         lines.insert(
             2,
-            f"  tree           {robot.n} joints, {_branches(robot)} branches; parent joint of "
+            f"  tree           {robot.n} joints, {branches(robot)} branches; parent joint of "
             f"joints 1..{robot.n} (- the base): {parents}",
         )
     if m["largest_zeroed"] > 0:

@@ -14,6 +14,7 @@ from ..base import base_parameters
 from ..codegen import CONTROLLERS, generate, generate_controller, plcopen_project
 from ..robot import load
 from .args import add_joint_terms, add_offset, add_robot, joint_terms, output_file
+from .method import base_method
 
 
 def register(subparsers) -> None:
@@ -52,11 +53,12 @@ def register(subparsers) -> None:
     )
     method_help = (
         "how the base parameters are found, as 'mindyn base --method': the exact projection "
-        "method (default), the exact recursive method, or the numerical method (sampled "
-        "regressor + QR)"
+        "method, the exact recursive method, or the numerical method (sampled regressor + QR); "
+        "default: the projection method, or the recursive one (the same base set) where the "
+        "projection method's limits or cost estimate refuse the robot, as mindyn base chooses"
     )
     methods = ["projection", "recursive", "numerical"]
-    p.add_argument("--method", choices=methods, default="projection", help=method_help)
+    p.add_argument("--method", choices=methods, help=method_help)
     p.add_argument(
         "--numeric",
         action="store_true",
@@ -136,8 +138,11 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         minimise=args.minimise,
         offset=args.offset,
     )
+    method, why = base_method(robot, args.rotor, args.method)
+    if method != "projection" and args.method is None:
+        print(f"base parameters by the {method} method: {why}")
     base = base_parameters(
-        robot, rotor=args.rotor, friction=args.friction, offset=args.offset, method=args.method
+        robot, rotor=args.rotor, friction=args.friction, offset=args.offset, method=method
     )
     params, pruned, threshold = (
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
