@@ -151,9 +151,10 @@ def test_codegen_refuses_with_the_alternatives():
 @pytest.mark.parametrize(
     "args",
     [
-        # without --method, `mindyn base` computes such a chain by the recursive method
+        # without --method, `mindyn base` and `mindyn codegen` compute such a chain by the
+        # recursive method
         ("base", "planar17", "--method", "projection"),
-        ("codegen", "planar18", "--lang", "c", "-o", "robot.c"),
+        ("codegen", "planar18", "--lang", "c", "--method", "projection", "-o", "robot.c"),
     ],
 )
 def test_cli_refuses_in_one_line(args, tmp_path):
