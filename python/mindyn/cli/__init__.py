@@ -224,7 +224,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--method",
         choices=["projection", "recursive", "numerical"],
         default=None,
-        help="default: projection, or recursive when the projection's cost estimate refuses",
+        help="default: projection, or recursive (the same base set) where the projection "
+        "method's limits (18 joints on a chain; 44 on a tree, 16 on a root path) or its cost "
+        "estimate refuse the robot",
     )
     p.add_argument("--format", choices=["table", "json", "latex"], default="table")
     p.add_argument(
