@@ -208,9 +208,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="base inertial parameters: counts of the three sets, formulas, rank margin",
         description="Base inertial parameters by the projection method (exact; the default), "
         "the recursive method (exact, the same base set, cost linear in the number of joints) "
-        "or the numerical method (sampled regressor + QR). Without --method, a chain whose "
-        "projection cost estimate is over its budget (or of more than 18 joints) is computed "
-        "by the recursive method, and the output says so.",
+        "or the numerical method (sampled regressor + QR), on chains and trees. Without "
+        "--method, a robot whose projection cost estimate is over its budget (or beyond the "
+        "projection method's limits: more than 18 joints on a chain, 44 on a tree or 16 on one "
+        "of its root paths) is computed by the recursive method, and the output says so.",
     )
     add_robot(p)
     add_joint_terms(p)
