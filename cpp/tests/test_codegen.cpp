@@ -18,6 +18,7 @@
 #include "mindyn/slotine_li.hpp"
 #include "mindyn/urdf.hpp"
 #include "test_util.hpp"
+#include "tree_paths.hpp"
 
 using namespace mindyn;
 using mindyn::test::Count;
@@ -532,49 +533,10 @@ TEST(BaseDynamics, RejectsBaseParametersOfAnotherModel) {
 namespace {
 
 // The classical regressor of a tree from the serial chains of its paths, by the runtime recursion
-// on chains alone: the parameters of link L (and its joint terms) act on the joints from the base
-// to L exactly as on the last link of the chain of those joints, and on no other joint. `chain`
-// returns the regressor of such a chain (path: the tree's joint indices, base first).
-template <class ChainRegressor>
-Eigen::MatrixXd byPaths(const Model& tree, ParameterLayout layout, ChainRegressor chain) {
-  const int n = tree.nq(), per = layout.perLink();
-  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, layout.size(n));
-  for (int last = 0; last < n; ++last) {
-    std::vector<int> path;
-    for (int k = last; k >= 0; k = tree.parent(k)) path.insert(path.begin(), k);
-    const int m = static_cast<int>(path.size());
-    Model c;
-    c.name = "path";
-    c.convention = tree.convention;
-    c.gravity = tree.gravity;
-    c.link_names.push_back("base");
-    for (int k : path) {
-      c.joints.push_back(tree.joints[k]);
-      c.link_names.push_back(tree.link_names[k + 1]);
-    }
-    c.inertial = Eigen::VectorXd::Zero(10 * m);
-    c.rotor_inertia = c.viscous = c.coulomb = Eigen::VectorXd::Zero(m);
-    const Eigen::MatrixXd Wc = chain(c, path);
-    for (int i = 0; i < m; ++i)
-      W.block(path[i], last * per, 1, per) = Wc.block(i, (m - 1) * per, 1, per);
-  }
-  return W;
-}
-
-Eigen::VectorXd along(const std::vector<int>& path, const Eigen::VectorXd& x) {
-  Eigen::VectorXd y(path.size());
-  for (size_t i = 0; i < path.size(); ++i) y[static_cast<long>(i)] = x[path[i]];
-  return y;
-}
-
+// on chains alone (tree_paths.hpp).
 Eigen::MatrixXd treeRegressor(const Model& tree, ParameterLayout layout, const Eigen::VectorXd& q,
                               const Eigen::VectorXd& dq, const Eigen::VectorXd& ddq) {
-  return byPaths(tree, layout, [&](const Model& c, const std::vector<int>& path) {
-    Data data(c);
-    Eigen::MatrixXd Wc(c.nq(), layout.size(c.nq()));
-    regressor(c, data, along(path, q), along(path, dq), along(path, ddq), layout, Wc);
-    return Wc;
-  });
+  return test::pathRegressor(tree, q, dq, ddq, layout);
 }
 
 // The random trees of the tree tests: sizes up to 10, generic or special geometry, revolute or
@@ -715,12 +677,12 @@ TEST(CodegenTree, SlotineLiProductsMatchTheChainsOfItsPaths) {
     const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), dqr = random(rng, n, 2),
                           ddqr = random(rng, n, 2), s = random(rng, n);
     const Eigen::MatrixXd Yc =
-        byPaths(model, layout, [&](const Model& c, const std::vector<int>& path) {
+        test::assembleByPaths(model, layout, [&](const Model& c, const std::vector<int>& path) {
           Data data(c);
           SlotineLiData sl(c, layout);
           Eigen::MatrixXd Y(c.nq(), layout.size(c.nq()));
-          slotineLiRegressor(c, data, sl, along(path, q), along(path, dq), along(path, dqr),
-                             along(path, ddqr), layout, Y);
+          slotineLiRegressor(c, data, sl, test::along(path, q), test::along(path, dq),
+                             test::along(path, dqr), test::along(path, ddqr), layout, Y);
           return Y;
         });
     for (bool offsets : {false, true}) {

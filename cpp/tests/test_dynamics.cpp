@@ -8,6 +8,7 @@
 
 #include "mindyn/dynamics.hpp"
 #include "test_util.hpp"
+#include "tree_paths.hpp"
 
 using namespace mindyn;
 using mindyn::test::bundled;
@@ -180,45 +181,20 @@ TEST(Dynamics, TreeWithMasslessSideBranchesActsAsItsRootPath) {
   for (int trial = 0; trial < 6; ++trial) {
     Model tree = test::randomTree(rng, 8, trial % 2 == 0);
     const int n = tree.nq();
-    std::vector<int> path;  // root path of the last joint, base first
-    for (int k = n - 1; k >= 0; k = tree.parent(k)) path.insert(path.begin(), k);
-    Model chain = tree;
-    chain.parents.clear();
-    chain.joints.clear();
-    chain.link_names.assign(1, tree.link_names[0]);
-    const int m = static_cast<int>(path.size());
-    chain.inertial.resize(10 * m);
-    chain.rotor_inertia.resize(m);
-    chain.viscous.resize(m);
-    chain.coulomb.resize(m);
-    for (int i = 0; i < m; ++i) {
-      const int k = path[static_cast<size_t>(i)];
-      chain.joints.push_back(tree.joints[static_cast<size_t>(k)]);
-      chain.link_names.push_back(tree.link_names[static_cast<size_t>(k) + 1]);
-      chain.inertial.segment<10>(10 * i) = tree.inertial.segment<10>(10 * k);
-      chain.rotor_inertia[i] = tree.rotor_inertia[k];
-      chain.viscous[i] = tree.viscous[k];
-      chain.coulomb[i] = tree.coulomb[k];
-    }
-    chain.validate();
+    const test::PathChain pc = test::pathChain(tree, n - 1);  // the last joint's root path
+    const std::vector<int>& path = pc.joints;
+    const Model& chain = pc.model;
+    const int m = chain.nq();
     for (int k = 0; k < n; ++k)
       if (std::find(path.begin(), path.end(), k) == path.end())
         tree.inertial.segment<10>(10 * k).setZero();
     Data dt(tree), dc(chain);
     const Eigen::VectorXd q = random(rng, n, 3), dq = random(rng, n, 2), ddq = random(rng, n, 5);
-    Eigen::VectorXd qc(m), dqc(m), ddqc(m);
-    for (int i = 0; i < m; ++i) {
-      const int k = path[static_cast<size_t>(i)];
-      qc[i] = q[k];
-      dqc[i] = dq[k];
-      ddqc[i] = ddq[k];
-    }
     Eigen::VectorXd tau(n), tauc(m);
     inverseDynamics(tree, dt, q, dq, ddq, tree.parameters(), {}, tau);
-    inverseDynamics(chain, dc, qc, dqc, ddqc, chain.parameters(), {}, tauc);
-    Eigen::VectorXd on_path(m);
-    for (int i = 0; i < m; ++i) on_path[i] = tau[path[static_cast<size_t>(i)]];
-    EXPECT_LT(relErr(on_path, tauc), 1e-12) << "trial " << trial;
+    inverseDynamics(chain, dc, test::along(path, q), test::along(path, dq), test::along(path, ddq),
+                    chain.parameters(), {}, tauc);
+    EXPECT_LT(relErr(test::along(path, tau), tauc), 1e-12) << "trial " << trial;
     for (int k = 0; k < n; ++k) {
       if (std::find(path.begin(), path.end(), k) == path.end()) {
         EXPECT_LT(std::abs(tau[k]), 1e-12 * tauc.norm()) << "side joint " << k;

@@ -49,6 +49,31 @@ inline PathChain pathChain(const Model& tree, int k) {
   return p;
 }
 
+/// The entries of x (one per tree joint) on a path's joints.
+inline Eigen::VectorXd along(const std::vector<int>& joints, const Eigen::VectorXd& x) {
+  Eigen::VectorXd y(static_cast<long>(joints.size()));
+  for (size_t i = 0; i < joints.size(); ++i) y[static_cast<long>(i)] = x[joints[i]];
+  return y;
+}
+
+/// A tree's n x P regressor-like matrix assembled from the serial chains of its paths: the
+/// parameters of link k (and its joint terms) act on the joints of its root path exactly as on
+/// the last link of that path's chain, and on no other joint. `chain(model, joints)` returns the
+/// chain's matrix (len x layout.size(len)) for the path's chain and the tree's joint indices.
+template <class ChainMatrix>
+Eigen::MatrixXd assembleByPaths(const Model& tree, ParameterLayout layout, ChainMatrix chain) {
+  const int n = tree.nq(), L = layout.perLink();
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, layout.size(n));
+  for (int k = 0; k < n; ++k) {
+    const PathChain p = pathChain(tree, k);
+    const int len = p.model.nq();
+    const Eigen::MatrixXd Wp = chain(p.model, p.joints);
+    for (int i = 0; i < len; ++i)
+      W.block(p.joints[static_cast<size_t>(i)], k * L, 1, L) = Wp.block(i, (len - 1) * L, 1, L);
+  }
+  return W;
+}
+
 /// Trees for the tests: random ones of 3 to 8 joints (random parents: mostly shallow), and deeper
 /// shapes with random geometry (a trunk forking into two arms, three branches from one joint,
 /// forks at several depths), each with generic and with special geometry (see randomChain).
@@ -90,13 +115,9 @@ inline Eigen::VectorXd pathEnergyRegressor(const Model& tree, const Eigen::Vecto
   for (int k = 0; k < n; ++k) {
     const PathChain p = pathChain(tree, k);
     const int len = p.model.nq();
-    Eigen::VectorXd qp(len), dqp(len), wK(layout.size(len)), wP(layout.size(len));
-    for (int i = 0; i < len; ++i) {
-      qp[i] = q[p.joints[static_cast<size_t>(i)]];
-      dqp[i] = dq[p.joints[static_cast<size_t>(i)]];
-    }
+    Eigen::VectorXd wK(layout.size(len)), wP(layout.size(len));
     Data data(p.model);
-    energyRegressors(p.model, data, qp, dqp, layout, wK, wP);
+    energyRegressors(p.model, data, along(p.joints, q), along(p.joints, dq), layout, wK, wP);
     if (total) wP = -wP;
     w.segment(k * L, L) = (wK - wP).segment((len - 1) * L, L);
   }
@@ -107,25 +128,12 @@ inline Eigen::VectorXd pathEnergyRegressor(const Model& tree, const Eigen::Vecto
 inline Eigen::MatrixXd pathRegressor(const Model& tree, const Eigen::VectorXd& q,
                                      const Eigen::VectorXd& dq, const Eigen::VectorXd& ddq,
                                      ParameterLayout layout) {
-  const int n = tree.nq(), L = layout.perLink();
-  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(n, layout.size(n));
-  for (int k = 0; k < n; ++k) {
-    const PathChain p = pathChain(tree, k);
-    const int len = p.model.nq();
-    Eigen::VectorXd qp(len), dqp(len), ddqp(len);
-    for (int i = 0; i < len; ++i) {
-      const int j = p.joints[static_cast<size_t>(i)];
-      qp[i] = q[j];
-      dqp[i] = dq[j];
-      ddqp[i] = ddq[j];
-    }
-    Data data(p.model);
-    Eigen::MatrixXd Wp(len, layout.size(len));
-    regressor(p.model, data, qp, dqp, ddqp, layout, Wp);
-    for (int i = 0; i < len; ++i)
-      W.block(p.joints[static_cast<size_t>(i)], k * L, 1, L) = Wp.block(i, (len - 1) * L, 1, L);
-  }
-  return W;
+  return assembleByPaths(tree, layout, [&](const Model& chain, const std::vector<int>& joints) {
+    Data data(chain);
+    Eigen::MatrixXd Wp(chain.nq(), layout.size(chain.nq()));
+    regressor(chain, data, along(joints, q), along(joints, dq), along(joints, ddq), layout, Wp);
+    return Wp;
+  });
 }
 
 /// The rank of the tree's regressor sampled at `states` random states, or with `energy` of its
