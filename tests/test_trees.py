@@ -106,6 +106,8 @@ def test_joint_order_names_and_parents_equal_pinocchio(pair):
     assert robot.joint_names == list(model.names[1:])
     assert robot.parents == [int(p) - 1 for p in model.parents[1:]]
     assert not robot.is_serial
+    # branches: Pinocchio's joints with no child joint (its subtree holds only itself)
+    assert robot.branches == sum(len(model.subtrees[j]) == 1 for j in range(1, model.njoints))
     prismatic = [model.joints[k + 1].shortname().startswith("JointModelP") for k in range(robot.n)]
     assert robot.joint_types == ["prismatic" if p else "revolute" for p in prismatic]
     np.testing.assert_array_equal(robot.tool, np.eye(4))

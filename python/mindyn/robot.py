@@ -187,6 +187,11 @@ class Robot:
         return all(p == k - 1 for k, p in enumerate(self._m.parents))
 
     @property
+    def branches(self) -> int:
+        """Number of branches: joints that no other joint hangs from (1 for a serial chain)."""
+        return self.n - len(set(self.parents) - {-1})
+
+    @property
     def link_names(self) -> list[str]:
         """``n + 1`` names: the base, then each moving link."""
         return self._m.link_names
@@ -243,10 +248,9 @@ class Robot:
     def _require_serial(self, what: str) -> None:
         """Raises ModelError unless the robot is a serial chain; ``what`` names the operation."""
         if not self.is_serial:
-            leaves = self.n - len(set(self.parents) - {-1})
             raise _core.ModelError(
                 f"{what} needs a serial chain; robot '{self.name}' is a tree ({self.n} joints, "
-                f"{leaves} branches): load the chain to the link concerned with "
+                f"{self.branches} branches): load the chain to the link concerned with "
                 "mindyn.load(..., tip=link) (--tip on the command line)"
             )
 

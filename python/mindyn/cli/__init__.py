@@ -23,7 +23,7 @@ from .args import (
     joint_terms,
     number,
 )
-from .method import base_method, branches
+from .method import base_method
 
 
 def _fmt(x: float, width: int = 10) -> str:
@@ -37,7 +37,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     n = robot.n
     out = []
     tree = not robot.is_serial
-    shape = f", a tree of {branches(robot)} branches" if tree else ""
+    shape = f", a tree of {robot.branches} branches" if tree else ""
     out.append(f"robot      {robot.name}  ({n} joints, {robot.convention}{shape})")
     out.append(f"source     {robot.source}")
     g = robot.gravity
@@ -145,7 +145,7 @@ def cmd_base(args: argparse.Namespace) -> int:
         parents = ", ".join("-" if p < 0 else str(p + 1) for p in robot.parents)
         lines.insert(
             2,
-            f"  tree           {robot.n} joints, {branches(robot)} branches; parent joint of "
+            f"  tree           {robot.n} joints, {robot.branches} branches; parent joint of "
             f"joints 1..{robot.n} (- the base): {parents}",
         )
     if m["largest_zeroed"] > 0:

@@ -5,12 +5,6 @@ from __future__ import annotations
 
 from .. import _core
 
-
-def branches(robot) -> int:
-    """Number of leaves of a tree: joints that no other joint hangs from."""
-    return robot.n - len(set(robot.parents) - {-1})
-
-
 # The projection method's limits (its packed basis index): joints of a chain; on a tree, joints
 # on a root path and joints in all.
 _PROJECTION_MAX_JOINTS = 18
