@@ -439,6 +439,26 @@ TEST(Model, ValidateBoundsMagnitudesAndJointCount) {
                        "link 'link2': inertial parameter M 1e+300 exceeds the bound 1e+18"));
 }
 
+TEST(Model, ValidateParentIndices) {
+  Model m = planarArm(3);
+  m.parents = {-1, 0, 0};  // a tree: joints 2 and 3 on link 1
+  EXPECT_NO_THROW(m.validate());
+  EXPECT_FALSE(m.isSerial());
+  EXPECT_TRUE(m.supports(0, 2) && !m.supports(1, 2) && m.supports(2, 2));
+  m.parents = {-1, 0};
+  EXPECT_TRUE(
+      contains(errorOf<ModelError>([&] { m.validate(); }), "2 parent indices for 3 joints"));
+  m.parents = {-1, 2, 0};  // a parent after its child
+  EXPECT_TRUE(contains(errorOf<ModelError>([&] { m.validate(); }),
+                       "joint 'joint2': parent index 2 is not in [-1, 0]"));
+  m.parents = {-2, 0, 1};
+  EXPECT_TRUE(contains(errorOf<ModelError>([&] { m.validate(); }),
+                       "joint 'joint1': parent index -2 is not in [-1, -1]"));
+  m.parents = {-1, 0, 1};  // written out, a chain is still a chain
+  EXPECT_NO_THROW(m.validate());
+  EXPECT_TRUE(m.isSerial());
+}
+
 TEST(Yaml, MessagesStayOneLineOfUtf8) {
   // NUL bytes make yaml-cpp quote a stray byte in its message; names may hold line breaks
   const std::string nul = "n" + std::string(8, '\0') +
