@@ -486,6 +486,12 @@ def generate_controller(
         s["kd"] = _setting(g.get("kd"), n, "kd", 0.0)
         s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam * s["kd"]
     s["gamma"] = _setting(g.get("gamma"), len(names), "gamma", 1.0)
+    check = "pd" if kind == "gravity-compensation" else kind
+    control.check_sampled_gains(check, s["kp"], s["kd"], lam, period)
+    if not (np.all(np.isfinite(s["gamma"])) and np.all(s["gamma"] >= 0)) or not (
+        math.isfinite(s["nu"]) and s["nu"] >= 0
+    ):
+        raise ValueError("gains 'gamma' and 'nu' must be finite and non-negative")
     if params is None:
         s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
         if base.offset:

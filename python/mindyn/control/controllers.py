@@ -45,6 +45,7 @@ __all__ = [
     "Gains",
     "check_gains",
     "check_period",
+    "check_sampled_gains",
     "controller_check",
     "default_gains",
     "load_gains",
@@ -121,22 +122,53 @@ def _diag(x, n: int, name: str) -> np.ndarray:
     return a
 
 
-#: Shortest controller period [s] accepted: a microsecond (joint controllers run at 1-32 kHz).
-MIN_PERIOD = 1e-6
+#: Shortest and longest controller period [s] accepted: a microsecond (joint controllers run
+#: at 1-32 kHz) and 1000 s (the longest of ``mindyn simulate --period``).
+MIN_PERIOD, MAX_PERIOD = 1e-6, 1e3
 
 
 def check_period(period, what: str = "period") -> float:
-    """``period`` as a float; raises ValueError unless it is a finite number of seconds of at
-    least :data:`MIN_PERIOD`."""
+    """``period`` as a float; raises ValueError unless it is a number of seconds in
+    [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
+    if isinstance(period, (bool, np.bool_)):
+        raise ValueError(f"{what} must be a number of seconds, got {period!r}")
     try:
         T = float(period)
     except (TypeError, ValueError):
         raise ValueError(f"{what} must be a number of seconds, got {period!r}") from None
-    if not (math.isfinite(T) and T >= MIN_PERIOD):
+    if not (MIN_PERIOD <= T <= MAX_PERIOD):
         raise ValueError(
-            f"{what} must be a finite number of seconds of at least {MIN_PERIOD:g}, got {T:g}"
+            f"{what} must be a number of seconds in [{MIN_PERIOD:g}, {MAX_PERIOD:g}], got {T:g}"
         )
     return T
+
+
+def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
+    """Raises ValueError unless the gains of ``kind`` (``pd``, ``computed-torque``,
+    ``adaptive-pd``; diagonals) meet the conditions of a sampled loop at ``period`` that hold
+    whatever the robot (one joint of any inertia ``m``: ``K_P T < 2 K_D`` for PD; with an exact
+    model ``K_D T < 2`` and ``K_P T < 2 K_D`` for computed torque; ``Lambda T < 2`` for adaptive
+    PD, :func:`check_lambda`). The robot's part, ``T M^-1 K_D,eff < 2``, is :func:`check_gains`."""
+    T = check_period(period)
+    kp, kd, lam = (np.asarray(x, dtype=float) for x in (kp, kd, lam))
+    for name, x in (("kp", kp), ("kd", kd), ("lambda", lam)):
+        if not np.all(np.isfinite(x)) or np.any(x < 0):
+            raise ValueError(f"gain '{name}' must be finite and non-negative, got {x.tolist()}")
+    if kind == "adaptive-pd":
+        check_lambda(lam, T)
+        return
+    rules = [("K_P T < 2 K_D", kp * T, 2 * kd)]
+    if kind == "computed-torque":
+        rules.append(("K_D T < 2", kd * T, np.full_like(kd, 2.0)))
+    for rule, left, right in rules:
+        bad = np.flatnonzero(~(left < right))
+        if bad.size:
+            k = int(bad[0])
+            raise ValueError(
+                f"{kind} gains on joint {k + 1} (kp {kp[k]:g}, kd {kd[k]:g}) with the controller "
+                f"period {T:g} s: a sampled loop needs {rule} (here {left[k]:.4g} against "
+                f"{right[k]:.4g})"
+            )
 
 
 def check_lambda(lam, period: float, what: str = "lambda") -> None:
@@ -538,6 +570,21 @@ def _reject_duplicate_keys(path: Path):
     return Loader
 
 
+def _yaml_number(v):
+    """A YAML value as a float: numbers, and strings that are numbers (YAML 1.1 reads ``1e3``
+    as a string); None for anything else (booleans, words, lists, mappings)."""
+    if isinstance(v, bool):
+        return None  # true/false, yes/no, on/off
+    if isinstance(v, (int, float)):
+        return float(v)
+    if isinstance(v, str):
+        try:
+            return float(v)
+        except ValueError:
+            return None
+    return None
+
+
 def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=None) -> Gains:
     """Gains from a YAML file with keys ``kd``, ``lambda``, ``gamma``, ``nu`` (adaptation-step
     normalisation, a scalar), ``kp`` (numbers or lists of numbers; a key given twice, a boolean
@@ -570,21 +617,22 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
     given = []
     for key, value in data.items():
         items = value if isinstance(value, list) else [value]
-        bad = [v for v in items if isinstance(v, bool) or not isinstance(v, (int, float))]
+        numbers = [_yaml_number(v) for v in items]
+        bad = [v for v, x in zip(items, numbers) if x is None]
         if bad or not items:
-            raise ValueError(
-                f"{path}: '{key}' must be a number or a list of numbers, got {bad[0]!r}"
-                if bad
-                else f"{path}: '{key}' is an empty list"
-            )
-        arr = np.asarray(value, dtype=float)
+            what = f"{bad[0]!r}" if bad else "an empty list"
+            if bad and isinstance(bad[0], bool):
+                what = f"the boolean {str(bad[0]).lower()} (YAML reads true/false/yes/no/on/off so)"
+            raise ValueError(f"{path}: '{key}' must be a number or a list of numbers, got {what}")
+        arr = np.asarray(numbers if isinstance(value, list) else numbers[0], dtype=float)
         if key == "nu" and (arr.ndim != 0 or not arr >= 0):
             raise ValueError(f"{path}: 'nu' must be one number >= 0")
         gains[key] = arr.tolist()
         given.append(key)
     if given:
+        rest = gains.note.removeprefix("gains: ")
         gains.note = f"gains: {', '.join(given)} from {path}" + (
-            f"; the rest by default ({gains.note})" if len(given) < 3 and gains.note else ""
+            f"; the rest by default: {rest}" if len(given) < 3 and rest else ""
         )
     return gains
 
@@ -622,6 +670,7 @@ def make_controller(
     n = robot.n
     period = check_period(period)
     kp, kd, lam = _gain_arrays(kind, gains, n)
+    check_sampled_gains(kind, kp, kd, lam, period)
     if kind == "pd":
         return PD(n, kp, kd)
     base = base if base is not None else base_parameters(robot, rotor=True, friction=True)

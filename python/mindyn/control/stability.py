@@ -88,7 +88,7 @@ def _margin(kp, kd, minv, T) -> float:
     if _radius(_MARGIN_CAP * kp, _MARGIN_CAP * kd, minv, T) <= _UNSTABLE:
         return _MARGIN_CAP
     lo, hi = 0.0, math.log(_MARGIN_CAP)
-    for _ in range(30):
+    for _ in range(20):  # log g to 7e-6: the margin to 1e-5 relative
         mid = 0.5 * (lo + hi)
         g = math.exp(mid)
         if _radius(g * kp, g * kd, minv, T) <= _UNSTABLE:
