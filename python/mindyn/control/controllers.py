@@ -151,7 +151,7 @@ def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
     PD, :func:`check_lambda`). The robot's part, ``T M^-1 K_D,eff < 2``, is :func:`check_gains`."""
     T = check_period(period)
     kp, kd, lam = (np.asarray(x, dtype=float) for x in (kp, kd, lam))
-    for name, x in (("kp", kp), ("kd", kd), ("lambda", lam)):
+    for name, x in (("kd", kd), ("lambda", lam), ("kp", kp)):
         if not np.all(np.isfinite(x)) or np.any(x < 0):
             raise ValueError(f"gain '{name}' must be finite and non-negative, got {x.tolist()}")
     if kind == "adaptive-pd":

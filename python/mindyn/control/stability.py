@@ -60,18 +60,23 @@ class UnstableLoopError(Error, ValueError):
 
 def loop_matrix(kp, kd, minv, period: float) -> np.ndarray:
     """``Phi`` of one period of ``M dde = u``, ``u = -kp e - kd de`` held (module docstring);
-    ``kp``, ``kd``: (n, n) or (n,) (diagonal) effective gains, ``minv``: ``M^-1`` (n, n)."""
-    minv = np.atleast_2d(np.asarray(minv, dtype=float))
-    n = minv.shape[0]
-    kp, kd = (np.diag(k) if np.ndim(k) == 1 else np.atleast_2d(k) for k in (kp, kd))
+    ``kp``, ``kd``: (n, n) or (n,) (diagonal) effective gains, ``minv``: ``M^-1`` (n, n); or
+    stacks of them, (k, n, n), giving (k, 2n, 2n)."""
+    minv = np.asarray(minv, dtype=float)
+    minv = minv if minv.ndim >= 2 else np.atleast_2d(minv)
+    n = minv.shape[-1]
+    kp, kd = (np.diag(k) if np.ndim(k) == 1 else np.asarray(k, dtype=float) for k in (kp, kd))
     T = float(period)
     bp, bd = minv @ kp, minv @ kd
-    eye = np.eye(n)
-    return np.block([[eye - 0.5 * T * T * bp, T * eye - 0.5 * T * T * bd], [-T * bp, eye - T * bd]])
+    eye = np.broadcast_to(np.eye(n), bp.shape)
+    top = np.concatenate([eye - 0.5 * T * T * bp, T * eye - 0.5 * T * T * bd], axis=-1)
+    bottom = np.concatenate([-T * bp, eye - T * bd], axis=-1)
+    return np.concatenate([top, bottom], axis=-2)
 
 
-def _radius(kp, kd, minv, T) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(loop_matrix(kp, kd, minv, T)))))
+def _radius(kp, kd, minv, T) -> np.ndarray:
+    """Spectral radius of each loop of a stack."""
+    return np.max(np.abs(np.linalg.eigvals(loop_matrix(kp, kd, minv, T))), axis=-1)
 
 
 #: Spectral radius above which a loop counts as unstable: 1 plus round-off (a loop with no
@@ -79,23 +84,20 @@ def _radius(kp, kd, minv, T) -> float:
 _UNSTABLE = 1.0 + 1e-9
 
 
-def _margin(kp, kd, minv, T) -> float:
-    """Largest factor g (up to ``_MARGIN_CAP``) with the loop of ``g kp, g kd`` stable; 0 when
-    the loop is unstable already (bisection on log g; the stable set of g is an interval from 0
-    for the loops here)."""
-    if _radius(kp, kd, minv, T) > _UNSTABLE:
-        return 0.0
-    if _radius(_MARGIN_CAP * kp, _MARGIN_CAP * kd, minv, T) <= _UNSTABLE:
-        return _MARGIN_CAP
-    lo, hi = 0.0, math.log(_MARGIN_CAP)
+def _margin(kp, kd, minv, T) -> np.ndarray:
+    """For each loop of a stack, the largest factor g (up to ``_MARGIN_CAP``) with the loop of
+    ``g kp, g kd`` stable; 0 where the loop is unstable already (bisection on log g, all loops
+    at once; the stable set of g is an interval from 0 for the loops here)."""
+    stable = _radius(kp, kd, minv, T) <= _UNSTABLE
+    capped = _radius(_MARGIN_CAP * kp, _MARGIN_CAP * kd, minv, T) <= _UNSTABLE
+    lo = np.zeros(stable.shape)
+    hi = np.full(stable.shape, math.log(_MARGIN_CAP))
     for _ in range(20):  # log g to 7e-6: the margin to 1e-5 relative
         mid = 0.5 * (lo + hi)
-        g = math.exp(mid)
-        if _radius(g * kp, g * kd, minv, T) <= _UNSTABLE:
-            lo = mid
-        else:
-            hi = mid
-    return math.exp(lo)
+        g = np.exp(mid)[:, None, None]
+        ok = _radius(g * kp, g * kd, minv, T) <= _UNSTABLE
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    return np.where(~stable, 0.0, np.where(capped, _MARGIN_CAP, np.exp(lo)))
 
 
 def workspace_samples(robot: Robot, count: int = SAMPLES, seed: int = 0) -> np.ndarray:
@@ -111,8 +113,9 @@ def workspace_samples(robot: Robot, count: int = SAMPLES, seed: int = 0) -> np.n
 
 
 def effective_gains(kind: str, kp, kd, lam, m_hat):
-    """``(K_P,eff, K_D,eff)`` (n, n) of a controller (module docstring); ``kp``, ``kd``, ``lam``
-    diagonals (n,) as the controller holds them, ``m_hat`` the controller's mass matrix."""
+    """``(K_P,eff, K_D,eff)`` (..., n, n) of a controller (module docstring); ``kp``, ``kd``,
+    ``lam`` diagonals (n,) as the controller holds them, ``m_hat`` the controller's mass matrix
+    (n, n) or a stack of them."""
     if kind == "pd":
         return np.diag(kp), np.diag(kd)
     if kind == "computed-torque":
@@ -180,16 +183,16 @@ def check_loop(
     T = float(period)
     worst = (math.inf, 0.0, 0.0, None)  # margin, radius, ratio, q
     rho_max, ratio_max = 0.0, 0.0
-    for minv_stack, m_stack in zip(plant_inverses, models):
-        for i, q in enumerate(qs):
-            kpe, kde = effective_gains(kind, kp, kd, lam, m_stack[i])
-            minv = minv_stack[i]
-            rho = _radius(kpe, kde, minv, T)
-            ratio = float(np.max(np.abs(np.linalg.eigvals(T * minv @ kde))))
-            margin = _margin(kpe, kde, minv, T)
-            rho_max, ratio_max = max(rho_max, rho), max(ratio_max, ratio)
-            if margin < worst[0]:
-                worst = (margin, rho, ratio, q)
+    for minv, m_hat in zip(plant_inverses, models):
+        kpe, kde = effective_gains(kind, kp, kd, lam, m_hat)
+        kpe, kde = np.broadcast_to(kpe, minv.shape), np.broadcast_to(kde, minv.shape)
+        rho = _radius(kpe, kde, minv, T)
+        ratio = np.max(np.abs(np.linalg.eigvals(T * minv @ kde)), axis=-1)
+        margin = _margin(kpe, kde, minv, T)
+        rho_max, ratio_max = max(rho_max, float(rho.max())), max(ratio_max, float(ratio.max()))
+        i = int(np.argmin(margin))
+        if margin[i] < worst[0]:
+            worst = (float(margin[i]), float(rho[i]), float(ratio[i]), qs[i])
     return LoopCheck(
         kind,
         T,
