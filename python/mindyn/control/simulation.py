@@ -66,7 +66,10 @@ class Controller(Protocol):
     period is refused), and, read after each call for the report, ``model_torque`` (the model
     part of the torque, shape (n,)), ``p_hat`` (the current parameter estimate) and ``Y`` (the
     regressor with ``model_torque = Y p_hat``), ``base`` (the
-    :class:`~mindyn.base.BaseParameters` that ``p_hat`` is in)."""
+    :class:`~mindyn.base.BaseParameters` that ``p_hat`` is in). The controllers of
+    :func:`~mindyn.control.make_controller` made with the true parameters have ``true_model``
+    True and take the simulated robot's (``use_parameters``); their sampled loop is checked
+    before the run (:func:`~mindyn.control.controllers.controller_check`)."""
 
     def __call__(self, t: float, q, dq, q_d, dq_d, ddq_d) -> np.ndarray: ...
 
