@@ -454,7 +454,9 @@ def generate_controller(
         offset setting adds a torque offset per joint.
     gains : dict, optional
         ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
-        gives them (the default). ``kp`` defaults to ``lambda**2`` for computed torque (with
+        gives them (the default: for ``period``, the robot with its rotor inertia). Gains that
+        no sampled loop at ``period`` tolerates are refused
+        (:func:`mindyn.control.check_sampled_gains`). ``kp`` defaults to ``lambda**2`` for computed torque (with
         ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and ``lambda kd`` for
         gravity compensation.
     params : path or array, optional
@@ -476,7 +478,7 @@ def generate_controller(
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
     n, names = robot.n, list(base.names)
-    g = dict(control.default_gains(robot)) if gains is None else dict(gains)
+    g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)
     s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
     if kind == "computed-torque":
