@@ -456,9 +456,9 @@ def generate_controller(
         ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
         gives them (the default: for ``period``, the robot with its rotor inertia). Gains that
         no sampled loop at ``period`` tolerates are refused
-        (:func:`mindyn.control.check_sampled_gains`). ``kp`` defaults to ``lambda**2`` for computed torque (with
-        ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and ``lambda kd`` for
-        gravity compensation.
+        (:func:`mindyn.control.check_sampled_gains`). ``kp`` defaults to ``lambda**2`` for
+        computed torque (with ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and
+        ``lambda kd`` for gravity compensation.
     params : path or array, optional
         The initial estimate ``p0`` (a file as :func:`read_parameter_file` reads it, e.g. the JSON
         of ``mindyn identify --json``); default the robot's own values.
