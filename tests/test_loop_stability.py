@@ -326,3 +326,31 @@ def test_gains_file_numbers_as_yaml_strings(tmp_path):
     g = control.load_gains(path, mindyn.load("planar3"))
     assert g["kd"] == 10.0 and g["lambda"] == [2.0, 3.0, 4.0]
     assert "kd, lambda from" in g.note
+
+
+def test_compiled_step_with_unstable_gains_is_refused_before_the_run():
+    """The generated C step (compiled) with K_D forty times the default: the simulation refuses
+    it with the figures, as it refuses the library's controller with the same gains; with the
+    default gains both run and agree."""
+    from mindyn import codegen
+    from mindyn.control.controllers import base_values, plant_parameters
+
+    robot = mindyn.load("planar2")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    p0 = base_values(base, plant_parameters(robot, False, False))  # simulate's robot
+    ref = SumOfSines(robot, period=2.0)
+    fine = control.default_gains(robot, rotor=False)
+    bad = dict(fine, kd=[40.0 * k for k in fine["kd"]])
+    for gains, stable in ((fine, True), (bad, False)):
+        code = codegen.generate_controller(robot, "adaptive-pd", base=base, gains=gains, params=p0)
+        compiled = codegen.CompiledController(code, base)
+        library = control.make_controller("adaptive-pd", robot, gains, p0, base)
+        if stable:
+            a = simulate(robot, ref, compiled, duration=0.5)
+            b = simulate(robot, ref, library, duration=0.5)
+            assert np.allclose(a.q_true, b.q_true, atol=1e-9)
+            assert "stable" in a.info["stability"]
+            continue
+        for ctl in (compiled, library):
+            with pytest.raises(control.UnstableLoopError, match="UNSTABLE"):
+                simulate(robot, ref, ctl, duration=0.5)

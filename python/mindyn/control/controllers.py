@@ -430,25 +430,33 @@ def check_gains(
 
 
 def controller_check(robot: Robot, controller, params, period: float):
-    """The linearised check of a controller of this module (``None`` for other controllers:
-    those without ``name`` in :data:`CONTROLLERS` and the gains as attributes) against the
-    simulated robot of classical parameters ``params`` (13 per joint) at ``period`` [s]: the
-    controller's own model (``base`` and ``p0`` / ``p_hat``) at the sampled configurations."""
+    """The linearised check of a controller of this module or of a compiled generated step
+    (:class:`mindyn.codegen.CompiledController` given its ``base``; ``None`` for other
+    controllers) against the simulated robot of classical parameters ``params`` (13 per joint)
+    at ``period`` [s]: the controller's own model (``base`` and ``p0`` / ``p_hat``) at the
+    sampled configurations."""
     from .stability import check_loop, workspace_samples
 
-    kind = getattr(controller, "name", None)
-    if kind not in CONTROLLERS or not hasattr(controller, "kd"):
-        return None
     n = robot.n
-    lam = getattr(controller, "lam", np.zeros(n))
-    kp = getattr(controller, "kp", lam * controller.kd)
+    kind = getattr(controller, "name", None)
+    settings = getattr(getattr(controller, "code", None), "settings", None)
+    if isinstance(settings, dict) and {"kd", "kp", "lambda", "p0"} <= settings.keys():
+        kind = "pd" if kind == "gravity-compensation" else kind
+        kd, kp, lam, p_hat = (settings[k] for k in ("kd", "kp", "lambda", "p0"))
+    elif kind in CONTROLLERS and hasattr(controller, "kd"):
+        kd, lam = controller.kd, getattr(controller, "lam", np.zeros(n))
+        kp = getattr(controller, "kp", lam * controller.kd)
+        p_hat = getattr(controller, "p0", None)
+        p_hat = getattr(controller, "p_hat", None) if p_hat is None else p_hat
+    else:
+        return None
+    base = getattr(controller, "base", None)
+    if kind not in CONTROLLERS or (kind != "pd" and (base is None or p_hat is None)):
+        return None
     qs = workspace_samples(robot)
     m = robot.mass_matrix(qs, params)
     models = [m]
     if kind != "pd":
-        base = controller.base
-        p_hat = getattr(controller, "p0", None)
-        p_hat = controller.p_hat if p_hat is None else p_hat
         k = len(qs)
         eye = np.broadcast_to(np.eye(n), (k, n, n)).reshape(k * n, n)
         qq = np.repeat(qs, n, axis=0)
@@ -456,7 +464,7 @@ def controller_check(robot: Robot, controller, params, period: float):
         grav = base.regressor(qs, np.zeros_like(qs), np.zeros_like(qs)) @ p_hat
         models = [cols.reshape(k, n, n).transpose(0, 2, 1) - grav[:, :, None]]
     cases = ["the controller's model", f"{len(qs)} configurations"]
-    return check_loop(kind, kp, controller.kd, lam, period, [np.linalg.inv(m)], models, qs, cases)
+    return check_loop(kind, kp, kd, lam, period, [np.linalg.inv(m)], models, qs, cases)
 
 
 #: Bandwidth of the derived default gains where the period allows it [rad/s]: ``Lambda``
