@@ -85,7 +85,7 @@ def test_one_joint_check_is_the_jury_closed_form(tmp_path, T):
         assert pd.stable == jury_stable(m, lam * kd, kd, T)
         assert math.isclose(pd.ratio, kd * T / m, rel_tol=1e-9)
         if pd.stable:
-            assert math.isclose(pd.gain_margin, 2 * m / (kd * T), rel_tol=1e-4)
+            assert math.isclose(pd.gain_margin, 2 * m / (kd * T), rel_tol=1e-3)
         ada = control.check_gains(robot, gains, "adaptive-pd", period=T, rotor=False, qs=qs)
         assert ada.stable == jury_stable(m, kd * lam, kd + m * lam, T)
         seen |= {pd.stable, ada.stable}
