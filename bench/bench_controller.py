@@ -112,7 +112,9 @@ def bench(robot, kind, cc, cflags, steps, repeats, folder: Path):
     ns = float(res.stdout.split()[0])
     lib_us = float("nan")
     if kind == "adaptive-pd":
-        ctl = control.make_controller(kind, robot, control.default_gains(robot), None, base)
+        ctl = control.make_controller(
+            kind, robot, control.default_gains(robot, rotor=True), None, base
+        )
         m = min(steps, 500)
         t0 = time.perf_counter()
         for i in range(m):

@@ -48,7 +48,7 @@ def main() -> None:
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     p_true = base.values(robot.parameters(True, True))
     p0 = control.perturbed_parameters(p_true, args.error, args.seed)
-    gains = control.default_gains(robot)
+    gains = control.default_gains(robot, rotor=True)  # the study's (the robot has its rotors)
     cycle = 10.0
     ref = control.SumOfSines(robot, period=cycle, seed=args.seed)
     duration = cycle * args.cycles

@@ -115,7 +115,7 @@ def test_zcr07s_setting_tracks_better_than_pd_and_improves():
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     p = base.values(robot.parameters(True, True))
     p0 = control.perturbed_parameters(p, 0.3, seed=0)
-    gains = control.default_gains(robot)
+    gains = control.default_gains(robot, rotor=True)
     assert gains["kd"] == [400, 350, 130, 22, 9, 2] and gains["gamma"] == 1
     ref = SumOfSines(robot, period=2.5)
     ada = control.make_controller("adaptive-pd", robot, gains, p0, base)
@@ -141,7 +141,7 @@ def test_normalised_adaptation_keeps_large_gains_stable_at_4ms():
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     p = base.values(robot.parameters(True, True))
     p0 = control.perturbed_parameters(p, 0.3, seed=0)
-    gains = control.default_gains(robot)
+    gains = control.default_gains(robot, rotor=True)
     ref = SumOfSines(robot, period=2.5)
     plain = control.make_controller("adaptive-pd", robot, dict(gains, gamma=5.0), p0, base)
     with pytest.raises(ValueError, match="diverged"):

@@ -454,9 +454,11 @@ def generate_controller(
         offset setting adds a torque offset per joint.
     gains : dict, optional
         ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
-        gives them (the default). ``kp`` defaults to ``lambda**2`` for computed torque (with
-        ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and ``lambda kd`` for
-        gravity compensation.
+        gives them (the default: for ``period``, the robot with its rotor inertia). Gains that
+        no sampled loop at ``period`` tolerates are refused
+        (:func:`mindyn.control.check_sampled_gains`). ``kp`` defaults to ``lambda**2`` for
+        computed torque (with ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and
+        ``lambda kd`` for gravity compensation.
     params : path or array, optional
         The initial estimate ``p0`` (a file as :func:`read_parameter_file` reads it, e.g. the JSON
         of ``mindyn identify --json``); default the robot's own values.
@@ -476,7 +478,7 @@ def generate_controller(
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
     n, names = robot.n, list(base.names)
-    g = dict(control.default_gains(robot)) if gains is None else dict(gains)
+    g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)
     s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
     if kind == "computed-torque":
@@ -486,6 +488,12 @@ def generate_controller(
         s["kd"] = _setting(g.get("kd"), n, "kd", 0.0)
         s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam * s["kd"]
     s["gamma"] = _setting(g.get("gamma"), len(names), "gamma", 1.0)
+    check = "pd" if kind == "gravity-compensation" else kind
+    control.check_sampled_gains(check, s["kp"], s["kd"], lam, period)
+    if not (np.all(np.isfinite(s["gamma"])) and np.all(s["gamma"] >= 0)) or not (
+        math.isfinite(s["nu"]) and s["nu"] >= 0
+    ):
+        raise ValueError("gains 'gamma' and 'nu' must be finite and non-negative")
     if params is None:
         s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
         if base.offset:

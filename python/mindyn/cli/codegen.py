@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -230,9 +231,12 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
     kind = args.what.strip()
     if args.numeric:
         raise ModelError("--numeric does not apply to controller steps (p is their state)")
-    gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
     if not (math.isfinite(args.period) and args.period > 0):
         raise ModelError(f"--period must be a positive number of seconds, got {args.period:g}")
+    if args.gains:
+        gains = control.load_gains(args.gains, robot, period=args.period, rotor=True)
+    else:
+        gains = control.default_gains(robot, period=args.period, rotor=True)
     limit = args.torque_limit
     if limit is not None and limit != "effort":
         try:
@@ -269,6 +273,9 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
     )
     if note:
         print(note)
+    if gains.note:
+        print(gains.note)
+    _warn_unstable(robot, gains, kind, args.period)
     print("wrote " + ", ".join(str(w) for w in written))
     print()
     print(f"{'':<34}{'mul':>8}{'add':>7}{'trig':>7}{'sign':>7}{'div':>7}")
@@ -284,6 +291,21 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
             mark = "*" if form == code.form else " "
             print(f" {mark} {form:<52}{c['mul']:>6} mul{c['add']:>6} add")
     return 0
+
+
+def _warn_unstable(robot, gains, kind: str, period: float) -> None:
+    """Warns on stderr when the sampled loop of the gains baked in is unstable at ``period``
+    (the robot with its rotor inertia; :func:`mindyn.control.check_gains`)."""
+    from .. import control
+
+    check = control.check_gains(
+        robot, gains, "pd" if kind == "gravity-compensation" else kind, period=period, rotor=True
+    )
+    if not check.stable:
+        print(
+            f"mindyn: warning: the gains baked in are not stable: the {check.text()}",
+            file=sys.stderr,
+        )
 
 
 def _identified_params(path: str, robot, base, args):

@@ -63,11 +63,18 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         )
     if args.controller == "computed-torque" and args.gains is None and args.param_error is None:
         return reference, ref_text, duration, cycle, None, None  # the simulator's default
-    gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
+    # the simulated robot: track's has rotor inertia and friction, simulate's as its flags say
+    rotor, friction = getattr(args, "rotor", True), getattr(args, "friction", True)
+    if args.gains:
+        gains = control.load_gains(args.gains, robot, period=period, rotor=rotor)
+    else:
+        gains = control.default_gains(robot, period=period, rotor=rotor)
     base = p_hat = None
     if args.controller != "pd":
+        from ..control.controllers import base_values, plant_parameters
+
         base = base_parameters(robot, rotor=True, friction=True)
-        p_true = base.values(robot.parameters(True, True))
+        p_true = base_values(base, plant_parameters(robot, rotor, friction))
         error = 0.3 if args.param_error is None else args.param_error
         p_hat = control.perturbed_parameters(p_true, error, args.seed)
     controller = control.make_controller(args.controller, robot, gains, p_hat, base, period)
@@ -119,6 +126,10 @@ def cmd_track(args: argparse.Namespace) -> int:
         )
     if limit is not None:
         lines.append(f"  torque limits: effort, saturated {100 * s['saturated_fraction']:.2f} %")
+    if getattr(gains, "note", ""):
+        lines.append(f"  {gains.note}")
+    if "stability" in result.info:
+        lines.append(f"  {result.info['stability']}")
     lines.append("")
     lines.append(_row("joint", range(1, n + 1), "{:>9d}"))
     lines.append(_row("max |q - q_d| [deg]", s["max_error_deg"]))
@@ -281,7 +292,12 @@ def register(sub) -> None:
         "dp_hat/dt = -Gamma Y^T s / (1 + nu |Y|^2), s = de + Lambda e, e = q - q_d. Default gains: "
         "the ZCR07S study's "
         "for zcr07s (K_D = diag(400, 350, 130, 22, 9, 2), Lambda = diag(10, 10, 10, 30, 30, 25), "
-        "Gamma = 1), otherwise Lambda = 10, K_D = 40 diag(A(q_mid)); nu = 0 (the plain law).",
+        "Gamma = 1) when their sampled loops are stable at --period, otherwise derived from the "
+        "mass matrix sampled over the workspace and the period: Lambda = 10 and K_D = 40 x the "
+        "smallest effective inertia of each joint, lowered until the sampled loops keep a gain "
+        "margin of 3, Gamma = 1 normalised by nu = 3 Gamma T / (2 min K_D); the output states "
+        "the choice. A loop that the linearised check finds unstable is refused, one that "
+        "diverges is stopped, each with the figures that explain it (exit status 2).",
     )
     add_robot(p)
     add_closed_loop_args(p, "adaptive-pd")

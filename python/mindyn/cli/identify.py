@@ -162,6 +162,12 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             f"  controller {info['controller']}; max tracking error per joint [deg]: "
             + " ".join(f"{e:.3g}" for e in err)
         )
+        for note in (
+            getattr(getattr(controller, "gains", None), "note", ""),
+            info.get("stability"),
+        ):
+            if note:
+                print(f"  {note}")
     nz = info["noise"]
     print("  torque noise sd per joint: " + " ".join(f"{v:.3g}" for v in nz["torque"]))
     if any(nz["quantization"]) or any(nz["position"]) or any(nz["velocity"]):

@@ -3,7 +3,8 @@ simulation that runs them (:mod:`mindyn.control.simulation`).
 
 The names most used are here: the controllers :class:`AdaptivePD`, :class:`ComputedTorque` and
 :class:`PD` with their gains and registry, the Slotine-Li regressor, and :func:`simulate` with
-its protocols (:class:`Controller`, :class:`Reference`), references and result.
+its protocols (:class:`Controller`, :class:`Reference`), references and result; the check of
+the sampled loop's stability (:mod:`mindyn.control.stability`, :func:`check_gains`).
 """
 
 from .controllers import (
@@ -11,6 +12,9 @@ from .controllers import (
     PD,
     AdaptivePD,
     ComputedTorque,
+    Gains,
+    check_gains,
+    check_sampled_gains,
     coriolis_matrix,
     default_controller,
     default_gains,
@@ -26,6 +30,7 @@ from .simulation import (
     Reference,
     SensorNoise,
     SimulationResult,
+    SimulationTimeoutError,
     SumOfSines,
     load_reference,
     simulate,
@@ -33,6 +38,7 @@ from .simulation import (
     summary,
     write_tracking_report,
 )
+from .stability import LoopCheck, UnstableLoopError
 
 __all__ = [
     "CONTROLLERS",
@@ -40,11 +46,17 @@ __all__ = [
     "AdaptivePD",
     "ComputedTorque",
     "Controller",
+    "Gains",
+    "LoopCheck",
     "CsvTrajectory",
     "Reference",
     "SensorNoise",
     "SimulationResult",
+    "SimulationTimeoutError",
     "SumOfSines",
+    "UnstableLoopError",
+    "check_gains",
+    "check_sampled_gains",
     "coriolis_matrix",
     "default_controller",
     "default_gains",

@@ -42,6 +42,11 @@ __all__ = [
     "ZCR07S_STUDY_GAINS",
     "coriolis_matrix",
     "default_controller",
+    "Gains",
+    "check_gains",
+    "check_period",
+    "check_sampled_gains",
+    "controller_check",
     "default_gains",
     "load_gains",
     "make_controller",
@@ -103,6 +108,10 @@ def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
 # Controllers
 # ---------------------------------------------------------------------------------------------
 def _diag(x, n: int, name: str) -> np.ndarray:
+    if isinstance(x, (bool, np.bool_)) or (
+        isinstance(x, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in x)
+    ):
+        raise ValueError(f"gain '{name}' must be numbers, got a boolean ({x!r})")
     a = np.asarray(x, dtype=float)
     if a.ndim == 0:
         a = np.full(n, float(a))
@@ -111,6 +120,71 @@ def _diag(x, n: int, name: str) -> np.ndarray:
     if not np.all(np.isfinite(a)) or np.any(a < 0):
         raise ValueError(f"gain '{name}' must be finite and non-negative")
     return a
+
+
+#: Shortest and longest controller period [s] accepted: a microsecond (joint controllers run
+#: at 1-32 kHz) and 1000 s (the longest of ``mindyn simulate --period``).
+MIN_PERIOD, MAX_PERIOD = 1e-6, 1e3
+
+
+def check_period(period, what: str = "period") -> float:
+    """``period`` as a float; raises ValueError unless it is a number of seconds in
+    [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
+    if isinstance(period, (bool, np.bool_)):
+        raise ValueError(f"{what} must be a number of seconds, got {period!r}")
+    try:
+        T = float(period)
+    except (TypeError, ValueError):
+        raise ValueError(f"{what} must be a number of seconds, got {period!r}") from None
+    if not (MIN_PERIOD <= T <= MAX_PERIOD):
+        raise ValueError(
+            f"{what} must be a number of seconds in [{MIN_PERIOD:g}, {MAX_PERIOD:g}], got {T:g}"
+        )
+    return T
+
+
+def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
+    """Raises ValueError unless the gains of ``kind`` (``pd``, ``computed-torque``,
+    ``adaptive-pd``; diagonals) meet the conditions of a sampled loop at ``period`` that hold
+    whatever the robot (one joint of any inertia ``m``: ``K_P T < 2 K_D`` for PD; with an exact
+    model ``K_D T < 2`` and ``K_P T < 2 K_D`` for computed torque; ``Lambda T < 2`` for adaptive
+    PD, :func:`check_lambda`). The robot's part, ``T M^-1 K_D,eff < 2``, is :func:`check_gains`."""
+    T = check_period(period)
+    kp, kd, lam = (np.asarray(x, dtype=float) for x in (kp, kd, lam))
+    for name, x in (("kd", kd), ("lambda", lam), ("kp", kp)):
+        if not np.all(np.isfinite(x)) or np.any(x < 0):
+            raise ValueError(f"gain '{name}' must be finite and non-negative, got {x.tolist()}")
+    if kind == "adaptive-pd":
+        check_lambda(lam, T)
+        return
+    rules = [("K_P T < 2 K_D", kp * T, 2 * kd)]
+    if kind == "computed-torque":
+        rules.append(("K_D T < 2", kd * T, np.full_like(kd, 2.0)))
+    for rule, left, right in rules:
+        bad = np.flatnonzero(~(left < right))
+        if bad.size:
+            k = int(bad[0])
+            raise ValueError(
+                f"{kind} gains on joint {k + 1} (kp {kp[k]:g}, kd {kd[k]:g}) with the controller "
+                f"period {T:g} s: a sampled loop needs {rule} (here {left[k]:.4g} against "
+                f"{right[k]:.4g})"
+            )
+
+
+def check_lambda(lam, period: float, what: str = "lambda") -> None:
+    """Raises ValueError unless ``Lambda T < 2`` on every joint: the adaptive PD's feedforward
+    ``M ddq_r`` with ``ddq_r = ddq_d - Lambda de`` is a velocity feedback of gain ``M Lambda``,
+    and a sampled loop needs ``T M^-1 K_D,eff`` below 2 (one joint: ``(K_D / m + Lambda) T < 2``),
+    whatever the robot."""
+    lam = np.asarray(lam, dtype=float)
+    bad = np.flatnonzero(~(lam * period < 2.0))
+    if bad.size:
+        k = int(bad[0])
+        raise ValueError(
+            f"{what} {lam[k]:g} on joint {k + 1} with the controller period {period:g} s: a "
+            f"sampled loop needs Lambda T < 2 (here {lam[k] * period:.3g}), so Lambda < "
+            f"{2.0 / period:.4g} at this period"
+        )
 
 
 class PD:
@@ -155,6 +229,7 @@ class ComputedTorque:
         self.kd = _diag(kd, n, "kd")
         if coulomb not in ("measured", "reference"):
             raise ValueError(f"coulomb must be 'measured' or 'reference', got '{coulomb}'")
+        self._coulomb = coulomb
         self.eps = float(coulomb_smoothing)
         if not (math.isfinite(self.eps) and self.eps >= 0):
             raise ValueError(f"coulomb_smoothing must be a finite number >= 0, got {self.eps}")
@@ -166,6 +241,10 @@ class ComputedTorque:
                 if name.startswith("Fc") and name[2:].isdigit():
                     self._fc[int(name[2:]) - 1] = self._p[i]
                     self._p[i] = 0.0
+
+    def use_parameters(self, p_hat) -> None:
+        """Takes ``p_hat`` (base parameters) as the fixed model."""
+        self.__init__(self.base, p_hat, self.kp, self.kd, self._coulomb, self.eps)
 
     def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
         v = ddq_d - self.kd * (dq - dq_d) - self.kp * (q - q_d)
@@ -223,13 +302,20 @@ class AdaptivePD:
         self.nu = float(nu)
         if not (math.isfinite(self.nu) and self.nu >= 0):
             raise ValueError(f"nu must be a finite number >= 0, got {nu}")
-        self.period = float(period)
-        if not (math.isfinite(self.period) and self.period > 0):
-            raise ValueError(f"period must be a positive number of seconds, got {period}")
+        self.period = check_period(period)
+        check_lambda(self.lam, self.period)
         self.reset()
 
     def reset(self) -> None:
         self.p_hat = self.p0.copy()
+
+    def use_parameters(self, p0) -> None:
+        """Takes ``p0`` (base parameters) as the initial estimate, and resets."""
+        p0 = np.asarray(p0, dtype=float)
+        if p0.shape != self.p0.shape:
+            raise ValueError(f"p0 has shape {p0.shape}; expected {self.p0.shape}")
+        self.p0 = p0.copy()
+        self.reset()
 
     def terms(self, q, dq, ref):
         """``(e, s, dq_r, ddq_r)`` of the sign convention."""
@@ -258,25 +344,260 @@ class AdaptivePD:
 # ---------------------------------------------------------------------------------------------
 # Gains
 # ---------------------------------------------------------------------------------------------
-def default_gains(robot: Robot) -> dict:
-    """The ZCR07S study's gains for ``zcr07s``; otherwise ``Lambda = 10``,
-    ``K_D = 40 diag(A(q_mid))`` (``A`` with rotor inertia), adaptation gains 1. ``kp`` for PD is
-    ``Lambda K_D``; computed torque uses ``K_P = Lambda^2``, ``K_D = 2 Lambda``."""
-    if robot.name == "zcr07s" and robot.n == 6:
-        g = {k: (list(v) if isinstance(v, list) else v) for k, v in ZCR07S_STUDY_GAINS.items()}
+class Gains(dict):
+    """Gains as :func:`default_gains` and :func:`load_gains` give them (``kd``, ``lambda``,
+    ``gamma`` and optionally ``nu``, ``kp``), with ``note``: how they were chosen and the check
+    of their sampled loops at the period (text, empty when nothing is to be said)."""
+
+    note: str = ""
+
+
+def plant_parameters(robot: Robot, rotor: bool, friction: bool = True) -> np.ndarray:
+    """The description's parameters in the 13-per-joint layout, rotor inertia and friction
+    zero unless asked for (the simulated robot of :func:`mindyn.control.simulate`)."""
+    p = robot.parameters(True, True).reshape(robot.n, 13).copy()
+    if not rotor:
+        p[:, 10] = 0.0
+    if not friction:
+        p[:, 11:] = 0.0
+    return p.reshape(-1)
+
+
+def base_values(base: BaseParameters, params) -> np.ndarray:
+    """The base-parameter values of classical parameters ``params`` in the full layout (13 per
+    joint: with rotor inertia and friction), whatever the layout of ``base``."""
+    n = base.robot.n
+    full = np.asarray(params, dtype=float).reshape(n, 13)
+    cols = list(range(10)) + [10] * base.rotor + [11, 12] * base.friction
+    values = base.values(full[:, cols].reshape(-1))
+    if base.offset:
+        values = np.concatenate([values, np.zeros(n)])[: len(base.names)]
+    return values
+
+
+def _rotor_cases(rotor) -> list[bool]:
+    if rotor is None:
+        return [True, False]
+    return [_args.flag(rotor, "rotor")]
+
+
+def _gain_arrays(kind: str, gains: dict, n: int):
+    """``(kp, kd, lam)`` diagonals as :func:`make_controller` uses them for ``kind``."""
+    kd = _diag(gains["kd"], n, "kd")
+    lam = _diag(gains["lambda"], n, "lambda")
+    if kind == "pd":
+        return _diag(gains.get("kp", lam * kd), n, "kp"), kd, lam
+    if kind == "computed-torque":
+        if "kp" in gains:
+            return _diag(gains["kp"], n, "kp"), kd, lam
+        return lam**2, 2 * lam, lam
+    return lam * kd, kd, lam
+
+
+def check_gains(
+    robot: Robot,
+    gains: dict,
+    kind: str = "adaptive-pd",
+    *,
+    period: float = 0.004,
+    rotor: bool | None = None,
+    qs=None,
+):
+    """The linearised check of the sampled loop (:mod:`mindyn.control.stability`) of the
+    controller ``kind`` that :func:`make_controller` makes from ``gains``, at ``period`` [s].
+
+    The robot's mass matrix is sampled over the workspace
+    (:func:`~mindyn.control.stability.workspace_samples`, or ``qs``); the simulated robot has
+    rotor inertia (``rotor=True``), has none (``False``) or either (``None``: both checked), and
+    the controller's model is the simulated robot's own (the true parameters, the default of
+    :func:`make_controller` in :func:`~mindyn.control.simulate`). Returns a
+    :class:`~mindyn.control.stability.LoopCheck`."""
+    from .stability import check_loop, workspace_samples
+
+    if kind not in CONTROLLERS:
+        raise ValueError(f"unknown controller '{kind}'; use {', '.join(CONTROLLERS)}")
+    T = check_period(period)
+    kp, kd, lam = _gain_arrays(kind, gains, robot.n)
+    qs = workspace_samples(robot) if qs is None else np.atleast_2d(np.asarray(qs, dtype=float))
+    plants, models, cases = [], [], []
+    for r in _rotor_cases(rotor):
+        m = robot.mass_matrix(qs, plant_parameters(robot, r))
+        plants.append(np.linalg.inv(m))
+        models.append(m)
+        cases.append(f"robot {'with' if r else 'without'} rotor inertia")
+    cases.append(f"{len(qs)} configurations, the controller's model the robot's own")
+    return check_loop(kind, kp, kd, lam, T, plants, models, qs, cases)
+
+
+def controller_check(robot: Robot, controller, params, period: float):
+    """The linearised check of a controller of this module or of a compiled generated step
+    (:class:`mindyn.codegen.CompiledController` given its ``base``; ``None`` for other
+    controllers) against the simulated robot of classical parameters ``params`` (13 per joint)
+    at ``period`` [s]: the controller's own model (``base`` and ``p0`` / ``p_hat``) at the
+    sampled configurations."""
+    from .stability import check_loop, workspace_samples
+
+    n = robot.n
+    kind = getattr(controller, "name", None)
+    settings = getattr(getattr(controller, "code", None), "settings", None)
+    if isinstance(settings, dict) and {"kd", "kp", "lambda", "p0"} <= settings.keys():
+        kind = "pd" if kind == "gravity-compensation" else kind
+        kd, kp, lam, p_hat = (settings[k] for k in ("kd", "kp", "lambda", "p0"))
+    elif kind in CONTROLLERS and hasattr(controller, "kd"):
+        kd, lam = controller.kd, getattr(controller, "lam", np.zeros(n))
+        kp = getattr(controller, "kp", lam * controller.kd)
+        p_hat = getattr(controller, "p0", None)
+        p_hat = getattr(controller, "p_hat", None) if p_hat is None else p_hat
     else:
-        lim = robot.limits
-        lo = np.where(np.isfinite(lim["lower"]), lim["lower"], 0.0)
-        hi = np.where(np.isfinite(lim["upper"]), lim["upper"], 0.0)
-        A = robot.mass_matrix(0.5 * (lo + hi), robot.parameters(rotor=True))
-        g = {"kd": list(40.0 * np.maximum(np.diag(A), 1e-3)), "lambda": [10.0] * robot.n}
-        g["gamma"] = 1.0
+        return None
+    base = getattr(controller, "base", None)
+    if kind not in CONTROLLERS or (kind != "pd" and (base is None or p_hat is None)):
+        return None
+    qs = workspace_samples(robot)
+    m = robot.mass_matrix(qs, params)
+    models = [m]
+    if kind != "pd":
+        k = len(qs)
+        eye = np.broadcast_to(np.eye(n), (k, n, n)).reshape(k * n, n)
+        qq = np.repeat(qs, n, axis=0)
+        cols = base.regressor(qq, np.zeros_like(qq), eye) @ p_hat
+        grav = base.regressor(qs, np.zeros_like(qs), np.zeros_like(qs)) @ p_hat
+        models = [cols.reshape(k, n, n).transpose(0, 2, 1) - grav[:, :, None]]
+    cases = ["the controller's model", f"{len(qs)} configurations"]
+    return check_loop(kind, kp, kd, lam, period, [np.linalg.inv(m)], models, qs, cases)
+
+
+#: Bandwidth of the derived default gains where the period allows it [rad/s]: ``Lambda``
+#: (position error) and ``K_D`` per unit of effective inertia.
+DEFAULT_LAMBDA, DEFAULT_KD_PER_INERTIA = 10.0, 40.0
+
+
+def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = None) -> Gains:
+    """Default gains, stable at the controller ``period`` [s] for the simulated robot with
+    rotor inertia (``rotor=True``), without (``False``) or either (``None``).
+
+    ``zcr07s``: the ZCR07S study's gains when their sampled loops are stable at ``period``
+    (otherwise the note says so and the derived gains follow). Derived gains, from the mass
+    matrix sampled over the workspace (:func:`~mindyn.control.stability.workspace_samples`):
+    ``K_D,i = 40 m_i`` with ``m_i = 1 / max_q (M^-1(q))_ii`` the smallest effective inertia of
+    joint ``i`` (the other joints free; ``M`` with and without rotor inertia as ``rotor`` says)
+    and ``Lambda = 10``, lowered where the period requires (``K_D,i`` to ``2 m_i / (3 T)``,
+    ``Lambda`` to ``1 / (3 T)``, then all gains by one factor) until the sampled loops of PD,
+    computed torque and adaptive PD with the true model (:func:`check_gains`) keep a gain
+    margin of
+    :data:`~mindyn.control.stability.GAIN_MARGIN`; adaptation gains 1 with the step normalised
+    by ``nu = 3 Gamma T / (2 min K_D)`` (one joint: the adaptation ``d = Y p_hat`` is an
+    integral of ``s`` of gain ``T Gamma |Y|^2`` per period, stable for ``T Gamma |Y|^2 < 2 K_D``,
+    which the normalised step ``T Gamma |Y|^2 / (1 + nu |Y|^2) < T Gamma / nu`` keeps a third
+    of). ``kp`` for PD is
+    ``Lambda K_D``; computed torque uses ``K_P = Lambda^2``, ``K_D = 2 Lambda``. The result's
+    ``note`` states the choice and the margin."""
+    from .stability import GAIN_MARGIN, workspace_samples
+
+    T = check_period(period)
+    qs = workspace_samples(robot)
+
+    def checks(g):
+        return [check_gains(robot, g, k, period=T, rotor=rotor, qs=qs) for k in CONTROLLERS]
+
+    def margin_text(cs):
+        return ", ".join(f"{c.kind} {c.gain_margin:.3g}" for c in cs)
+
+    where = {None: "with or without rotor inertia", True: "with rotor inertia"}.get(
+        rotor, "without rotor inertia"
+    )
+    prefix = ""
+    if robot.name == "zcr07s" and robot.n == 6:
+        g = Gains(
+            {k: (list(v) if isinstance(v, list) else v) for k, v in ZCR07S_STUDY_GAINS.items()}
+        )
+        lam_ok = np.all(np.asarray(g["lambda"]) * T < 2.0)
+        cs = checks(g) if lam_ok else []
+        if lam_ok and all(c.stable for c in cs):
+            g.note = (
+                f"gains: the ZCR07S study's (K_D {g['kd']}, Lambda {g['lambda']}), stable at "
+                f"{T:g} s for the robot {where} (gain margins {margin_text(cs)})"
+            )
+            return g
+        why = next((c.text() for c in cs if not c.stable), f"Lambda T >= 2 at {T:g} s")
+        prefix = f"the ZCR07S study's gains are NOT stable at this period ({why}); instead "
+    inv = [
+        np.linalg.inv(robot.mass_matrix(qs, plant_parameters(robot, r)))
+        for r in _rotor_cases(rotor)
+    ]
+    m_eff = 1.0 / np.max([np.diagonal(m, axis1=1, axis2=2).max(0) for m in inv], axis=0)
+    lam = np.full(robot.n, min(DEFAULT_LAMBDA, 1.0 / (GAIN_MARGIN * T)))
+    kd = np.minimum(DEFAULT_KD_PER_INERTIA, 2.0 / (GAIN_MARGIN * T)) * m_eff
+    scale = 1.0
+    for _ in range(40):
+        g = Gains(kd=(scale * kd).tolist(), **{"lambda": (scale * lam).tolist()}, gamma=1.0)
+        g["nu"] = GAIN_MARGIN * g["gamma"] * T / (2.0 * min(g["kd"]))
+        cs = checks(g)
+        worst = min(c.gain_margin for c in cs)
+        if worst >= GAIN_MARGIN:
+            break
+        scale *= max(0.1, min(0.9, worst / GAIN_MARGIN))
+    else:
+        raise ValueError(
+            f"no default gains keep a gain margin of {GAIN_MARGIN:g} at a period of {T:g} s "
+            f"for '{robot.name}' (margins {margin_text(cs)}): give gains"
+        )
+    lowered = scale < 1.0 or np.any(lam < DEFAULT_LAMBDA)
+    g.note = (
+        prefix
+        + f"gains: K_D = {DEFAULT_KD_PER_INERTIA:g} x the smallest effective inertia of each "
+        f"joint, Lambda = {DEFAULT_LAMBDA:g}"
+        + (f", lowered for the period {T:g} s" if lowered else "")
+        + f" (mass matrix sampled at {len(qs)} configurations, robot {where}); adaptation "
+        f"gains 1 normalised by nu = {g['nu']:.3g} (= {GAIN_MARGIN:g} Gamma T / (2 min K_D), "
+        "so that an adaptation step adds at most a third of the damping the period allows); "
+        f"gain margins of the sampled loops at {T:g} s: {margin_text(cs)}"
+    )
     return g
 
 
-def load_gains(path: str | Path, robot: Robot) -> dict:
+def _reject_duplicate_keys(path: Path):
+    """A YAML safe loader that refuses a mapping with a key twice (PyYAML keeps the last)."""
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    def mapping(loader, node, deep=False):
+        seen = set()
+        for key_node, _ in node.value:
+            key = loader.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise ValueError(
+                    f"{path}:{key_node.start_mark.line + 1}: key '{key}' appears twice"
+                )
+            seen.add(key)
+        return loader.construct_mapping(node, deep=deep)
+
+    Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, mapping)
+    return Loader
+
+
+def _yaml_number(v):
+    """A YAML value as a float: numbers, and strings that are numbers (YAML 1.1 reads ``1e3``
+    as a string); None for anything else (booleans, words, lists, mappings)."""
+    if isinstance(v, bool):
+        return None  # true/false, yes/no, on/off
+    if isinstance(v, (int, float)):
+        return float(v)
+    if isinstance(v, str):
+        try:
+            return float(v)
+        except ValueError:
+            return None
+    return None
+
+
+def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=None) -> Gains:
     """Gains from a YAML file with keys ``kd``, ``lambda``, ``gamma``, ``nu`` (adaptation-step
-    normalisation, a scalar), ``kp`` (scalars or lists; missing keys take :func:`default_gains`)."""
+    normalisation, a scalar), ``kp`` (numbers or lists of numbers; a key given twice, a boolean
+    or a string is refused; missing keys take :func:`default_gains` at ``period`` for
+    ``rotor``)."""
     import yaml
 
     path = Path(path)
@@ -287,28 +608,40 @@ def load_gains(path: str | Path, robot: Robot) -> dict:
     from ..identification.data import decode_text
 
     try:
-        data = yaml.safe_load(decode_text(path))
+        data = yaml.load(decode_text(path), Loader=_reject_duplicate_keys(path))
     except yaml.YAMLError as e:
         raise ValueError(f"{path}: not valid YAML ({e})") from None
     if data is None:
         data = {}
     if not isinstance(data, dict):
         raise ValueError(f"{path}: expected a mapping with keys kd, lambda, gamma, nu, kp")
-    unknown = set(data) - {"kd", "lambda", "gamma", "nu", "kp"}
+    unknown = {str(k) for k in data} - {"kd", "lambda", "gamma", "nu", "kp"}
     if unknown:
         raise ValueError(
             f"{path}: unknown key(s) {', '.join(sorted(unknown))}; "
             "expected kd, lambda, gamma, nu, kp"
         )
-    gains = default_gains(robot)
+    gains = default_gains(robot, period=period, rotor=rotor)
+    given = []
     for key, value in data.items():
-        try:
-            arr = np.asarray(value, dtype=float)
-        except (TypeError, ValueError):
-            raise ValueError(f"{path}: '{key}' must be a number or a list of numbers") from None
+        items = value if isinstance(value, list) else [value]
+        numbers = [_yaml_number(v) for v in items]
+        bad = [v for v, x in zip(items, numbers) if x is None]
+        if bad or not items:
+            what = f"{bad[0]!r}" if bad else "an empty list"
+            if bad and isinstance(bad[0], bool):
+                what = f"the boolean {str(bad[0]).lower()} (YAML reads true/false/yes/no/on/off so)"
+            raise ValueError(f"{path}: '{key}' must be a number or a list of numbers, got {what}")
+        arr = np.asarray(numbers if isinstance(value, list) else numbers[0], dtype=float)
         if key == "nu" and (arr.ndim != 0 or not arr >= 0):
             raise ValueError(f"{path}: 'nu' must be one number >= 0")
         gains[key] = arr.tolist()
+        given.append(key)
+    if given:
+        rest = gains.note.removeprefix("gains: ")
+        gains.note = f"gains: {', '.join(given)} from {path}" + (
+            f"; the rest by default: {rest}" if len(given) < 3 and rest else ""
+        )
     return gains
 
 
@@ -330,26 +663,36 @@ def make_controller(
     p_hat=None,
     base: BaseParameters | None = None,
     period: float = 0.004,
+    *,
+    rotor: bool = True,
+    friction: bool = True,
 ):
     """A controller by name (:data:`CONTROLLERS`) with ``gains`` as from :func:`default_gains` /
     :func:`load_gains`, for the controller ``period`` [s]. ``base`` defaults to the base
-    parameters with rotor inertia and friction; ``p_hat`` (base parameters) to the true ones."""
+    parameters with rotor inertia and friction; ``p_hat`` (base parameters) to the true ones:
+    those of the description (its rotor inertia and friction unless ``rotor`` / ``friction`` is
+    False), and in :func:`mindyn.control.simulate` those of the simulated robot (its ``rotor``,
+    ``friction`` and ``params``: the controller's ``true_model`` is then True)."""
     if kind not in CONTROLLERS:
         raise ValueError(f"unknown controller '{kind}'; use {', '.join(CONTROLLERS)}")
     n = robot.n
-    kd = _diag(gains["kd"], n, "kd")
-    lam = _diag(gains["lambda"], n, "lambda")
+    period = check_period(period)
+    kp, kd, lam = _gain_arrays(kind, gains, n)
+    check_sampled_gains(kind, kp, kd, lam, period)
     if kind == "pd":
-        kp = gains.get("kp", lam * kd)
         return PD(n, kp, kd)
     base = base if base is not None else base_parameters(robot, rotor=True, friction=True)
-    p_hat = base.values(robot.parameters(base.rotor, base.friction)) if p_hat is None else p_hat
+    true = p_hat is None
+    if true:
+        p_hat = base_values(base, plant_parameters(robot, rotor, friction))
     if kind == "computed-torque":
-        kp = gains.get("kp", lam**2)
-        return ComputedTorque(base, p_hat, kp, 2 * lam if "kp" not in gains else kd)
-    return AdaptivePD(
-        base, kd, lam, gains.get("gamma", 1.0), p_hat, nu=gains.get("nu", 0.0), period=period
-    )
+        ctl = ComputedTorque(base, p_hat, kp, kd)
+    else:
+        ctl = AdaptivePD(
+            base, kd, lam, gains.get("gamma", 1.0), p_hat, nu=gains.get("nu", 0.0), period=period
+        )
+    ctl.true_model = true
+    return ctl
 
 
 def default_controller(robot: Robot, params, omega: float = 20.0, coulomb_smoothing: float = 0.0):

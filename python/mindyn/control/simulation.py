@@ -43,6 +43,7 @@ __all__ = [
     "Reference",
     "SensorNoise",
     "SimulationResult",
+    "SimulationTimeoutError",
     "SumOfSines",
     "load_reference",
     "simulate",
@@ -65,7 +66,10 @@ class Controller(Protocol):
     period is refused), and, read after each call for the report, ``model_torque`` (the model
     part of the torque, shape (n,)), ``p_hat`` (the current parameter estimate) and ``Y`` (the
     regressor with ``model_torque = Y p_hat``), ``base`` (the
-    :class:`~mindyn.base.BaseParameters` that ``p_hat`` is in)."""
+    :class:`~mindyn.base.BaseParameters` that ``p_hat`` is in). The controllers of
+    :func:`~mindyn.control.make_controller` made with the true parameters have ``true_model``
+    True and take the simulated robot's (``use_parameters``); their sampled loop is checked
+    before the run (:func:`~mindyn.control.controllers.controller_check`)."""
 
     def __call__(self, t: float, q, dq, q_d, dq_d, ddq_d) -> np.ndarray: ...
 
@@ -428,6 +432,7 @@ def simulate(
     coulomb_smoothing: float = 0.0,
     endpoint: bool = True,
     base=None,
+    max_seconds: float | None = None,
 ) -> SimulationResult:
     """Closed-loop simulation: the robot tracks ``reference`` under ``controller``.
 
@@ -474,6 +479,21 @@ def simulate(
     base : BaseParameters, optional
         The base parameters in which the true values ``p_true`` and the true model torque are
         reported beside the controller's estimates (default: the controller's ``base``).
+    max_seconds : float, optional
+        Wall-time bound of the run (default :data:`MAX_SECONDS`); scipy's RK45 is also bounded
+        to :data:`SCIPY_MAX_EVALUATIONS` evaluations per period.
+
+    Raises
+    ------
+    UnstableLoopError
+        Before the run, when the linearised sampled loop of a controller of
+        :mod:`mindyn.control.controllers` is unstable for the simulated robot
+        (:func:`~mindyn.control.controllers.controller_check`; not with a ``torque_limit``,
+        which bounds such a loop); during the run, when the
+        tracking error grows past a full turn (revolute; a prismatic joint's range) and four
+        times the reference's excursion, or the state or torque becomes non-finite.
+    SimulationTimeoutError
+        When the run exceeds ``max_seconds``.
     """
     from .controllers import default_controller
 
@@ -501,7 +521,22 @@ def simulate(
             f"the controller was made for a period of {own:g} s; the simulation runs at "
             f"{period:g} s"
         )
+    cycle = getattr(reference, "period", None)
+    if isinstance(cycle, (int, float)) and not period * MIN_SAMPLES_PER_CYCLE <= cycle:
+        raise ValueError(
+            f"the controller period {period:g} s is not far below the reference's period "
+            f"{cycle:g} s: at least {MIN_SAMPLES_PER_CYCLE} periods per cycle are needed"
+        )
+    from .controllers import base_values, controller_check
+
     limit = _torque_limit(robot, torque_limit)
+
+    if getattr(controller, "true_model", False):  # the true parameters: the simulated robot's
+        controller.use_parameters(base_values(controller.base, p_true))
+    check = controller_check(robot, controller, p_true, period)
+    if check is not None and not check.stable and limit is None:
+        raise check.error("the controller")  # (a torque limit bounds an unstable linear loop)
+    budget = _Budget(max_seconds)
     noise = noise or SensorNoise()
     arr = noise.arrays(n)
     rng = np.random.default_rng(seed)
@@ -509,6 +544,7 @@ def simulate(
     qd, dqd, ddqd = (np.asarray(x, dtype=float) for x in reference.evaluate(t))
     if qd.shape != (m, n) or dqd.shape != (m, n) or ddqd.shape != (m, n):
         raise ValueError(f"the reference gives shape {qd.shape}; expected ({m}, {n}) joints")
+    bound = _divergence_bound(robot, qd)
     base = base if base is not None else getattr(controller, "base", None)
     pb_true = None
     if base is not None and len(base.classical_names) == 13 * n:
@@ -535,9 +571,8 @@ def simulate(
                     f"{n} torques"
                 )
             if not np.all(np.isfinite(tau)):
-                raise ValueError(
-                    f"the controller returned a non-finite torque at t = {t[i]:.4f} s: the "
-                    "closed loop diverged (gains, controller period or reference speed)"
+                raise _diverged(
+                    f"the controller returned a non-finite torque at t = {t[i]:.4f} s", check
                 )
             if limit is not None:
                 sat[i] = np.abs(tau) > limit
@@ -557,7 +592,25 @@ def simulate(
                 if pb_true is not None and getattr(controller, "Y", None) is not None:
                     taut[i] = controller.Y @ pb_true
             if i < m - 1 or not endpoint:
-                q, dq = _advance(plant, q, dq, tau, period, substeps, integrator)
+                budget.t = t[i]
+                try:
+                    q, dq = _advance(plant, q, dq, tau, period, substeps, integrator, budget)
+                except ValueError as e:  # the plant's own error, whatever its class
+                    if "the integration diverged" not in str(e):
+                        raise
+                    raise _diverged(
+                        f"the state became non-finite after t = {t[i]:.4f} s", check
+                    ) from None
+                if i + 1 < m:
+                    over = np.flatnonzero(~(np.abs(q - qd[i + 1]) <= bound))
+                    if over.size:
+                        k = int(over[0])
+                        raise _diverged(
+                            f"the tracking error of joint {k + 1} reached "
+                            f"{_amount(robot, k, q[k] - qd[i + 1, k])} at t = {t[i + 1]:.4f} s, "
+                            f"beyond {_amount(robot, k, bound[k])}",
+                            check,
+                        )
     err = out["q"] - qd
     info = {
         "mode": "tracking",
@@ -576,6 +629,8 @@ def simulate(
         "max_tracking_error": np.abs(err).max(0).tolist(),
         "seconds": time.perf_counter() - t0,
     }
+    if check is not None:
+        info["stability"] = check.text()
     adaptive = ph is not None and pb_true is not None
     return SimulationResult(
         t,
@@ -601,21 +656,103 @@ def simulate(
     )
 
 
-def _advance(plant, q, dq, tau, period, substeps, integrator):
+#: Fewest controller periods per cycle of a periodic reference (its third harmonic sampled
+#: about 7 times per oscillation).
+MIN_SAMPLES_PER_CYCLE = 20
+#: Most right-hand-side evaluations scipy's RK45 may take within one controller period (a
+#: smooth motion needs a few dozen; more means a stiff or diverging loop).
+SCIPY_MAX_EVALUATIONS = 20_000
+#: Default wall-time bound of one simulation [s].
+MAX_SECONDS = 600.0
+
+
+class SimulationTimeoutError(_core.Error, TimeoutError):
+    """A simulation ran past its wall-time bound (``max_seconds`` of :func:`simulate`)."""
+
+
+class _Budget:
+    """The wall-time bound of one simulation (checked every period and, with scipy, every
+    evaluation)."""
+
+    def __init__(self, max_seconds):
+        limit = MAX_SECONDS if max_seconds is None else float(max_seconds)
+        if not (math.isfinite(limit) and limit > 0):
+            raise ValueError(f"max_seconds must be a positive number, got {max_seconds}")
+        self.limit = limit
+        self.deadline = time.perf_counter() + limit
+        self.t = 0.0  # simulated time of the period being integrated
+
+    def check(self, where: str) -> None:
+        if time.perf_counter() > self.deadline:
+            raise SimulationTimeoutError(
+                f"the simulation exceeded its wall-time bound of {self.limit:g} s ({where}); "
+                "shorten the duration or raise max_seconds"
+            )
+
+
+class _TooManySteps(Exception):
+    pass
+
+
+def _advance(plant, q, dq, tau, period, substeps, integrator, budget=None):
+    if budget is not None:
+        budget.check("integration")
     if integrator == "rk4":
         return plant.step(q, dq, tau, period, substeps)
     from scipy.integrate import solve_ivp
 
     n = q.shape[0]
+    calls = [0]
 
     def f(_t, x):
+        calls[0] += 1
+        if calls[0] > SCIPY_MAX_EVALUATIONS:
+            raise _TooManySteps
+        if budget is not None and calls[0] % 256 == 0:
+            budget.check("scipy RK45")
         return np.concatenate([x[n:], plant.acceleration(x[:n], x[n:], tau)])
 
-    sol = solve_ivp(f, (0.0, period), np.concatenate([q, dq]), rtol=1e-8, atol=1e-10)
+    try:
+        sol = solve_ivp(
+            f, (0.0, period), np.concatenate([q, dq]), rtol=1e-8, atol=1e-10, t_eval=[period]
+        )
+    except _TooManySteps:
+        raise ValueError(
+            f"scipy RK45 needed more than {SCIPY_MAX_EVALUATIONS:,} evaluations within one "
+            f"controller period of {period:g} s at t = {budget.t if budget else 0:.4f} s: the "
+            "motion is stiff or the closed loop unstable (the rk4 integrator takes fixed steps)"
+        ) from None
     if not sol.success:
         raise ValueError(f"the integrator failed: {sol.message}")
     x = sol.y[:, -1]
+    if not np.all(np.isfinite(x)):
+        raise ValueError("the integration diverged (non-finite state)")
     return x[:n], x[n:]
+
+
+def _divergence_bound(robot: Robot, qd) -> np.ndarray:
+    """The tracking error past which a loop counts as diverged, per joint: a full turn for a
+    revolute joint, else the joint's range or 1 m, and at least four times the reference's
+    own excursion."""
+    lim = robot.limits
+    span = np.where(np.isfinite(lim["upper"] - lim["lower"]), lim["upper"] - lim["lower"], 1.0)
+    rev = np.array([t != "prismatic" for t in robot.joint_types])
+    return np.maximum(np.where(rev, 2 * np.pi, span), 4.0 * np.ptp(qd, axis=0))
+
+
+def _amount(robot: Robot, k: int, value: float) -> str:
+    if robot.joint_types[k] == "prismatic":
+        return f"{value:.4g} m"
+    return f"{math.degrees(value):.4g} deg"
+
+
+def _diverged(what: str, check):
+    from .stability import UnstableLoopError
+
+    why = f" ({check.text()})" if check is not None else ""
+    return UnstableLoopError(
+        f"the closed loop diverged: {what}{why}; lower the gains or the controller period"
+    )
 
 
 def simulate_inverse(

@@ -1,0 +1,356 @@
+"""Stability of the sampled closed loop: the linearised check against the closed form of one
+joint (the Jury conditions of the sampled PD loop) and against simulated runs; default gains
+that keep every loop of the closed-loop table stable at the controller period; unstable loops
+refused or stopped with the figures that explain them (library, ``track``, ``simulate``); the
+warning of ``codegen`` on unstable gains; absurd settings and gains files refused."""
+
+from __future__ import annotations
+
+import math
+
+import mindyn
+import numpy as np
+import pytest
+from conftest import URDFS
+from mindyn import control
+from mindyn.cli import main
+from mindyn.codegen import generate_controller
+from mindyn.control import SumOfSines, simulate
+from mindyn.control import simulation as simulation_module
+
+EXAMPLE_UR5 = "examples/urdf/ur5.urdf"
+
+
+def one_joint_urdf(path, izz: float) -> str:
+    """A single revolute joint about the vertical axis (no gravity torque), its link's mass at
+    the axis: the inertia about the joint is ``izz`` exactly."""
+    path.write_text(
+        f"""<robot name="one">
+  <link name="base"/>
+  <link name="arm"><inertial><origin xyz="0 0 0"/><mass value="2.0"/>
+    <inertia ixx="0.1" iyy="0.1" izz="{izz!r}" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="arm"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="100" velocity="5"/></joint>
+</robot>
+"""
+    )
+    return str(path)
+
+
+def jury_stable(m: float, kp: float, kd: float, T: float) -> bool:
+    """One joint ``m dde = u``, ``u = -kp e - kd de`` held over ``T``: characteristic polynomial
+    ``z^2 - (2 - a - b/2) z + (1 - a + b/2)`` with ``a = kd T / m``, ``b = kp T^2 / m``; by the
+    Jury conditions stable iff ``b > 0``, ``a < 2`` and ``b < 2 a``."""
+    a, b = kd * T / m, kp * T * T / m
+    return b > 0 and a < 2 and b < 2 * a
+
+
+# --------------------------------------------------------------------------------------------
+# The check against independent references
+# --------------------------------------------------------------------------------------------
+def test_loop_matrix_is_one_period_of_the_double_integrator(rng):
+    """Phi against scipy's matrix exponential of the held-input double integrator."""
+    from mindyn.control.stability import loop_matrix
+    from scipy.linalg import expm
+
+    n, T = 3, 0.004
+    a = rng.standard_normal((n, n))
+    M = a @ a.T + n * np.eye(n)
+    kp, kd = rng.uniform(1, 50, n), rng.uniform(1, 20, n)
+    minv = np.linalg.inv(M)
+    # x = (e, de, u), u constant: d/dt (e, de) = (de, M^-1 u)
+    A = np.zeros((3 * n, 3 * n))
+    A[:n, n : 2 * n] = np.eye(n)
+    A[n : 2 * n, 2 * n :] = minv
+    step = expm(A * T)[: 2 * n]
+    feedback = np.vstack([np.eye(2 * n), np.hstack([-np.diag(kp), -np.diag(kd)])])
+    assert np.allclose(loop_matrix(kp, kd, minv, T), step @ feedback, atol=1e-14)
+
+
+@pytest.mark.parametrize("T", [0.001, 0.004, 0.02])
+def test_one_joint_check_is_the_jury_closed_form(tmp_path, T):
+    """On a one-joint robot of inertia m, the check's verdict is the closed form's for PD and
+    adaptive PD (K_P,eff = K_D Lambda, K_D,eff = K_D + m Lambda) over gains on both sides of the
+    limits, its gain/period ratio is K_D T / m, and PD's gain margin is 2 m / (K_D T)."""
+    m = 0.37
+    robot = mindyn.load(one_joint_urdf(tmp_path / "one.urdf", m))
+    rng = np.random.default_rng(7)
+    seen, qs = set(), [[0.0]]  # one joint about the vertical: M does not depend on q
+    for _ in range(40):
+        kd = m / T * rng.uniform(0.05, 3.0)  # a = K_D T / m in (0.05, 3)
+        lam = rng.uniform(0.05, 3.0) / T
+        lam = lam if rng.uniform() < 0.5 else min(lam, 1.9 / T)
+        gains = {"kd": kd, "lambda": lam}
+        pd = control.check_gains(robot, gains, "pd", period=T, rotor=False, qs=qs)
+        assert pd.stable == jury_stable(m, lam * kd, kd, T)
+        assert math.isclose(pd.ratio, kd * T / m, rel_tol=1e-9)
+        if pd.stable:
+            assert math.isclose(pd.gain_margin, 2 * m / (kd * T), rel_tol=1e-3)
+        ada = control.check_gains(robot, gains, "adaptive-pd", period=T, rotor=False, qs=qs)
+        assert ada.stable == jury_stable(m, kd * lam, kd + m * lam, T)
+        seen |= {pd.stable, ada.stable}
+    assert seen == {True, False}
+
+
+def test_verdict_agrees_with_a_simulated_run(tmp_path):
+    """PD on the one-joint robot just below and just above K_D T / m = 2: the simulation (RK4 of
+    the true dynamics, a controller the check does not know) stays bounded below and diverges
+    above, as the check says."""
+    m, T = 0.37, 0.004
+    robot = mindyn.load(one_joint_urdf(tmp_path / "one.urdf", m))
+    ref = SumOfSines(robot, period=2.0)
+    for a, stable in ((1.8, True), (2.2, False)):
+        kd = a * m / T
+        gains = {"kd": kd, "lambda": 1.0}
+        assert control.check_gains(robot, gains, "pd", period=T, rotor=False).stable == stable
+        pd = control.make_controller("pd", robot, gains)
+
+        def opaque(*args, pd=pd):
+            return pd(*args)
+
+        if stable:
+            r = simulate(robot, ref, opaque, duration=2.0)
+            assert np.degrees(np.abs(r.error).max()) < 5.0
+        else:
+            with pytest.raises(control.UnstableLoopError, match="diverged"):
+                simulate(robot, ref, opaque, duration=2.0)
+
+
+# --------------------------------------------------------------------------------------------
+# Default gains: the closed-loop table
+# --------------------------------------------------------------------------------------------
+_GAINS: dict = {}
+
+
+def _default(name):
+    if name not in _GAINS:
+        robot = mindyn.load(name)
+        _GAINS[name] = (robot, control.default_gains(robot))
+    return _GAINS[name]
+
+
+@pytest.mark.parametrize("rotor", [True, False])
+@pytest.mark.parametrize("period", [2.0, 10.0])
+@pytest.mark.parametrize("kind", control.CONTROLLERS)
+@pytest.mark.parametrize("name", ["puma560", "zcr07s", "planar3"])
+def test_closed_loop_table_runs_with_default_settings(name, kind, period, rotor):
+    """``simulate(robot, SumOfSines(robot, period), make_controller(kind, robot,
+    default_gains(robot)), rotor=rotor)``: no divergence (the first second; the full spans are
+    bench/bench_closed_loop.py's), and the controllers with the true model track within a
+    degree."""
+    robot, gains = _default(name)
+    assert gains.note
+    ctl = control.make_controller(kind, robot, gains)
+    r = simulate(robot, SumOfSines(robot, period=period), ctl, duration=1.0, rotor=rotor)
+    err = np.degrees(np.abs(r.error).max())
+    assert np.isfinite(err) and err < (1.0 if kind != "pd" else 180.0)
+    assert "stable" in r.info["stability"] and "UNSTABLE" not in r.info["stability"]
+
+
+@pytest.mark.parametrize("kind", ["adaptive-pd", "pd"])
+@pytest.mark.parametrize(
+    "robot",
+    [
+        [EXAMPLE_UR5],
+        [str(URDFS["ur5"])],
+        [str(URDFS["panda"]), "--tip", "panda_link8"],
+        ["planar3"],
+    ],
+    ids=["example-ur5", "erd-ur5", "panda", "planar3"],
+)
+def test_track_urdf_arms_with_default_settings(robot, kind, capsys):
+    """``mindyn track`` on the URDF arms, with the default estimate error and without: runs,
+    states the gains and their margins, and tracks within a few degrees (PD, without a model
+    and sagging under gravity: within a quarter turn)."""
+    for error in ("0.3", "0"):
+        args = ["track", *robot, "--controller", kind, "--duration", "1", "--param-error", error]
+        assert main(args) == 0
+        out = capsys.readouterr().out
+        assert "gain margins of the sampled loops" in out and "stable (spectral radius" in out
+        row = next(line for line in out.splitlines() if line.startswith("max |q - q_d|"))
+        errors = [float(v) for v in row.split()[5:]]
+        assert max(errors) < (10.0 if kind == "adaptive-pd" else 90.0), row
+
+
+def test_zcr07s_study_gains_kept_where_stable_and_said_where_not():
+    """The study's gains at 4 ms on the robot with its rotor inertia (stable: kept); at 30 ms the
+    check finds them unstable, the note says so, and a run with them diverges (simulated)."""
+    robot = mindyn.load("zcr07s")
+    study = control.controllers.ZCR07S_STUDY_GAINS
+    kept = control.default_gains(robot, period=0.004, rotor=True)
+    assert kept["kd"] == study["kd"] and kept["lambda"] == study["lambda"]
+    assert "the ZCR07S study's" in kept.note and "NOT" not in kept.note
+    other = control.default_gains(robot, period=0.03, rotor=True)
+    assert "the ZCR07S study's gains are NOT stable at this period" in other.note
+    assert other["kd"] != study["kd"]
+    ref = SumOfSines(robot, period=10.0)
+    pd = control.make_controller("pd", robot, study, period=0.03)
+    with pytest.raises(control.UnstableLoopError, match="diverged"):
+        simulate(robot, ref, lambda *a: pd(*a), rate=1 / 0.03, duration=3.0, rotor=True)
+    ok = control.make_controller("pd", robot, other, period=0.03)
+    simulate(robot, ref, lambda *a: ok(*a), rate=1 / 0.03, duration=3.0, rotor=True)
+
+
+# --------------------------------------------------------------------------------------------
+# Unstable loops: errors, no logs
+# --------------------------------------------------------------------------------------------
+def test_unstable_gain_period_is_a_clear_error():
+    """Gains ten times the sampling limit on planar3: refused before the run, with the ratio
+    max |eig(T M^-1 K_D)| that the check computes, here against numpy on the robot's mass
+    matrix at the middle of the limits (a lower bound of the worst over the workspace)."""
+    robot = mindyn.load("planar3")
+    T = 0.004
+    lim = robot.limits
+    M = robot.mass_matrix(0.5 * (lim["lower"] + lim["upper"]))
+    kd = 10 * 2.0 / (T * np.max(np.diag(np.linalg.inv(M))))
+    gains = {"kd": kd, "lambda": 5.0}
+    ctl = control.make_controller("pd", robot, gains)
+    with pytest.raises(control.UnstableLoopError) as info:
+        simulate(robot, SumOfSines(robot, period=10.0), ctl, duration=1.0)
+    msg = str(info.value)
+    assert "UNSTABLE" in msg and "a sampled loop needs it below 2" in msg
+    ratio = float(msg.split("T M^-1 K_D,eff ")[1].split(",")[0])
+    at_mid = np.max(np.abs(np.linalg.eigvals(T * np.linalg.inv(M) * kd)))
+    assert ratio >= at_mid * (1 - 1e-3) and ratio > 2
+
+
+def test_simulate_command_exits_non_zero_and_writes_no_log(tmp_path, capsys):
+    """An unstable loop: exit 2, one line, no log; the UR5 example's default PD: a bounded run
+    (it once wrote errors of 1460 deg with exit 0)."""
+    gains = tmp_path / "g.yaml"
+    gains.write_text("kd: 4000\n")
+    out = tmp_path / "x.csv"
+    args = ["simulate", "planar3", "--controller", "pd", "--gains", str(gains), "-o", str(out)]
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "UNSTABLE" in err and len(err.strip().splitlines()) == 1
+    assert not out.exists() and not out.with_name("x.truth.json").exists()
+    args = ["simulate", EXAMPLE_UR5, "--controller", "pd", "--duration", "2", "-o", str(out)]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    row = next(line for line in text.splitlines() if "max tracking error" in line)
+    assert max(float(v) for v in row.split(":")[1].split()) < 90.0
+    assert "gain margins" in text
+
+
+def test_track_command_refuses_an_unstable_period(tmp_path, capsys):
+    """At a 40 ms period: Lambda = 60 (Lambda T = 2.4) and K_D of the 4 ms defaults are refused
+    with the figures; the defaults derived for 40 ms run, lowered and saying so."""
+    path = tmp_path / "g.yaml"
+    path.write_text("lambda: 60\n")
+    args = ["track", "planar3", "--period", "0.04", "--duration", "4"]
+    assert main([*args, "--gains", str(path)]) == 2
+    assert "a sampled loop needs Lambda T < 2 (here 2.4)" in capsys.readouterr().err
+    fast = control.default_gains(mindyn.load("planar3"), period=0.004, rotor=True)
+    path.write_text(f"kd: {fast['kd']}\nlambda: 5\n")
+    assert main([*args, "--gains", str(path), "--controller", "pd"]) == 2
+    assert "UNSTABLE" in capsys.readouterr().err
+    assert main(args) == 0
+    assert "lowered for the period 0.04 s" in capsys.readouterr().out
+
+
+def test_scipy_integrator_is_bounded(monkeypatch):
+    """scipy's RK45 stops with a precise error when one period needs too many evaluations, and
+    every run stops at its wall-time bound."""
+    robot = mindyn.load("planar3")
+    ref = SumOfSines(robot, period=2.0)
+    monkeypatch.setattr(simulation_module, "SCIPY_MAX_EVALUATIONS", 3)
+    with pytest.raises(ValueError, match="more than 3 evaluations within one controller period"):
+        simulate(robot, ref, integrator="scipy", duration=0.1)
+    monkeypatch.undo()
+    with pytest.raises(control.SimulationTimeoutError, match="wall-time bound of 1e-09 s"):
+        simulate(robot, ref, integrator="scipy", duration=0.1, max_seconds=1e-9)
+    with pytest.raises(ValueError, match="max_seconds"):
+        simulate(robot, ref, duration=0.1, max_seconds=-1)
+
+
+# --------------------------------------------------------------------------------------------
+# codegen, absurd settings, gains files
+# --------------------------------------------------------------------------------------------
+def test_codegen_warns_when_the_gains_are_not_stable(tmp_path, capsys):
+    gains = tmp_path / "g.yaml"
+    gains.write_text("kd: 4000\n")
+    base = ["codegen", "planar3", "--lang", "c", "--what", "adaptive-pd"]
+    assert main([*base, "-o", str(tmp_path / "a"), "--gains", str(gains)]) == 0
+    err = capsys.readouterr().err
+    assert "warning: the gains baked in are not stable" in err and "UNSTABLE" in err
+    assert main([*base, "-o", str(tmp_path / "b")]) == 0
+    captured = capsys.readouterr()
+    assert "warning" not in captured.err and "gain margins" in captured.out
+
+
+@pytest.mark.parametrize(
+    "settings, message",
+    [
+        ({"lambda": 1e200}, "a sampled loop needs Lambda T < 2"),
+        ({"period": 1e308}, "period must be a number of seconds in"),
+        ({"period": 0.5}, "a sampled loop needs Lambda T < 2"),
+        ({"kp": 1e9}, "a sampled loop needs K_P T < 2 K_D"),
+    ],
+)
+def test_absurd_settings_are_refused_by_library_and_codegen(settings, message):
+    """The library's controllers and the generated code refuse the same settings (they once
+    gave NaN / -inf torques in the library and -1e300 in C)."""
+    robot = mindyn.load("planar3")
+    gains = dict(control.default_gains(robot, rotor=True))
+    period = settings.get("period", 0.004)
+    gains.update({k: v for k, v in settings.items() if k != "period"})
+    kind = "computed-torque" if "kp" in settings else "adaptive-pd"
+    with pytest.raises(ValueError, match=message):
+        control.make_controller(kind, robot, gains, period=period)
+    with pytest.raises(ValueError, match=message):
+        generate_controller(robot, kind, gains=gains, period=period)
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("kd: 10\nlambda: 5\nkd: 20\n", r"g.yaml:3: key 'kd' appears twice"),
+        ("kd: true\n", "'kd' must be a number or a list of numbers, got the boolean true"),
+        ("kd: [1, 2, yes]\n", "got the boolean true"),
+        ("gamma: abc\n", "'gamma' must be a number or a list of numbers, got 'abc'"),
+        ("lambda: []\n", "'lambda' must be a number or a list of numbers, got an empty list"),
+    ],
+)
+def test_gains_file_refuses_duplicates_and_booleans(tmp_path, content, message):
+    path = tmp_path / "g.yaml"
+    path.write_text(content)
+    with pytest.raises(ValueError, match=message):
+        control.load_gains(path, mindyn.load("planar3"))
+
+
+def test_gains_file_numbers_as_yaml_strings(tmp_path):
+    """YAML 1.1 reads 1e3 as a string: still the number."""
+    path = tmp_path / "g.yaml"
+    path.write_text("kd: 1e1\nlambda: [2, 3, 4]\n")
+    g = control.load_gains(path, mindyn.load("planar3"))
+    assert g["kd"] == 10.0 and g["lambda"] == [2.0, 3.0, 4.0]
+    assert "kd, lambda from" in g.note
+
+
+def test_compiled_step_with_unstable_gains_is_refused_before_the_run():
+    """The generated C step (compiled) with K_D forty times the default: the simulation refuses
+    it with the figures, as it refuses the library's controller with the same gains; with the
+    default gains both run and agree."""
+    from mindyn import codegen
+    from mindyn.control.controllers import base_values, plant_parameters
+
+    robot = mindyn.load("planar2")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    p0 = base_values(base, plant_parameters(robot, False, False))  # simulate's robot
+    ref = SumOfSines(robot, period=2.0)
+    fine = control.default_gains(robot, rotor=False)
+    bad = dict(fine, kd=[40.0 * k for k in fine["kd"]])
+    for gains, stable in ((fine, True), (bad, False)):
+        code = codegen.generate_controller(robot, "adaptive-pd", base=base, gains=gains, params=p0)
+        compiled = codegen.CompiledController(code, base)
+        library = control.make_controller("adaptive-pd", robot, gains, p0, base)
+        if stable:
+            a = simulate(robot, ref, compiled, duration=0.5)
+            b = simulate(robot, ref, library, duration=0.5)
+            assert np.allclose(a.q_true, b.q_true, atol=1e-9)
+            assert "stable" in a.info["stability"]
+            continue
+        for ctl in (compiled, library):
+            with pytest.raises(control.UnstableLoopError, match="UNSTABLE"):
+                simulate(robot, ref, ctl, duration=0.5)
