@@ -146,7 +146,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         )
     else:
         log = simulate_inverse(robot, ref, **kwargs)
-    path = log.save(args.output, robot.name)
+    path = log.save(args.output, robot.name, robot.joint_names)
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
         write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
@@ -318,6 +318,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
     vfiles = list(args.validate or [])
     cur = _paired(files, args.currents, "--currents", "the identification data")
     vcur = _paired(vfiles, args.validate_currents, "--validate-currents", "--validate")
+    # a log simulated for another robot (its truth sidecar says so) is refused before any work
+    truth_docs = [read_truth(f, robot) for f in files]
+    for f in vfiles:
+        read_truth(f, robot)
     # A file cut at breaks in its time stamps gives several logs (segments), fitted together.
     parts = [_read_filtered(f, robot, args, c, periodic=True) for f, c in zip(files, cur)]
     logs = [d for ds in parts for d in ds]
@@ -355,7 +359,6 @@ def cmd_identify(args: argparse.Namespace) -> int:
         cons = consistent_estimate(res, args.prior_weight)
     elif args.prior_weight:
         raise ValueError("--prior-weight: expected --consistent as well")
-    truth_docs = [read_truth(f) for f in files]
     truth_doc = truth_docs[0] if all(d == truth_docs[0] for d in truth_docs) else None
 
     truth = true_base_values(base, truth_doc) if truth_doc else None
@@ -459,6 +462,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     print("\n".join(out))
 
     doc = res.to_dict()
+    doc["tip"] = args.tip  # the chain identified (None: the whole description)
     doc["consistent"] = cons is not None
     if cons is not None:
         doc.update(_plain(cons.to_dict()))
@@ -514,13 +518,22 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
 
 def cmd_identify_payload(args: argparse.Namespace) -> int:
-    from ..identification.consistent import identify_payload, read_arm
+    from ..identification.consistent import arm_tip, identify_payload, read_arm
+    from ..identification.data import read_truth
 
-    robot = load(args.robot, tip=args.tip)
+    tip = arm_tip(args.identification)
+    if args.tip is not None and tip is not None and args.tip != tip:
+        raise ValueError(
+            f"--tip {args.tip}: {args.identification} was identified on the chain ending at "
+            f"--tip {tip}; the payload sits on that chain's last link"
+        )
+    robot = load(args.robot, tip=args.tip or tip)
     read_arm(robot, args.identification)  # its errors before reading the logs
     args.model = "dynamic"
     _check_lowpass_options(args)
     files = list(args.data)
+    for f in files:
+        read_truth(f, robot)
     cur = _paired(files, args.currents, "--currents", "the payload data")
     logs = [d for f, c in zip(files, cur) for d in _read_filtered(f, robot, args, c, periodic=True)]
     res = identify_payload(
@@ -532,7 +545,9 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
     )
     d = res.derived()
     out = [
-        f"{robot.name}: payload on the last link ({robot.link_names[-1]}) from "
+        f"{robot.name}: payload on the last link ({robot.link_names[-1]}"
+        + (f", chain to --tip {tip} as identified" if tip and not args.tip else "")
+        + ") from "
         f"{', '.join(files)}: {res.rows} equations, regressor rank {res.rank} of 10, condition "
         f"number {res.cond:.3g}; arm torques from the {res.arm_values} of {args.identification}",
         "  parameters about the last link frame's origin, in its frame (least squares):",
@@ -1079,7 +1094,8 @@ def register(sub) -> None:
         "link frame's origin, in its frame) of a payload rigidly fixed to the last link, from "
         "logs with the payload: tau - tau_arm = W_last phi, with tau_arm from the identified arm "
         "(the JSON of 'mindyn identify': its classical map when present, else its base values; "
-        "friction, rotor inertia and offsets as identified). Least squares with standard "
+        "friction, rotor inertia and offsets as identified; the chain to the --tip it was "
+        "identified with, unless --tip is given). Least squares with standard "
         "deviations, and the estimate with a positive semidefinite pseudo-inertia (cvxpy, "
         "Clarabel). Refused, naming them, when the data do not determine all 10 parameters.",
     )

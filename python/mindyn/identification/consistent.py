@@ -39,6 +39,7 @@ from .._core import ModelError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
+from .document import read_identification
 from .errors import IdentificationError
 from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
 from .models import require_torque
@@ -715,8 +716,8 @@ class _LastLink:
 
 def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.ndarray, str]:
     """The base set and base values of an identified arm: the JSON of ``mindyn identify``
-    (a dict or a path). Uses ``classical`` when present (the consistent estimate), else
-    ``base_values``."""
+    (a dict or a path), checked by :func:`~mindyn.identification.document.read_identification`.
+    Uses ``classical`` when present (the consistent estimate), else ``base_values``."""
     if isinstance(arm, (str, Path)):
         where = str(arm)
         try:
@@ -724,35 +725,48 @@ def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.
         except DataError as ex:
             raise ModelError(f"{where}: not a JSON file of mindyn identify ({ex})") from None
     need = ("robot", "base_names", "base_values", "rotor", "friction", "offset")
-    if not isinstance(arm, dict) or any(k not in arm for k in need):
-        raise ModelError(
-            f"{where}: expected the JSON of mindyn identify (fields {', '.join(need)})"
-        )
+    arm = read_identification(arm, need=need, what=where)
     if arm["robot"] != robot.name:
         raise ModelError(f"{where}: identified for robot '{arm['robot']}', not '{robot.name}'")
     base = base_parameters(
-        robot, rotor=bool(arm["rotor"]), friction=bool(arm["friction"]), offset=bool(arm["offset"])
+        robot, rotor=arm["rotor"], friction=arm["friction"], offset=arm["offset"]
     )
-    if list(arm["base_names"]) != list(base.names):
+    if arm["base_names"] != list(base.names):
+        tip = arm.get("tip")
         raise ModelError(
             f"{where}: its base parameters ({len(arm['base_names'])}) are not those of robot "
-            f"'{robot.name}' ({base.n}); identified with another description?"
+            f"'{robot.name}' ({base.n}, {robot.n} joints); "
+            + (
+                f"it was identified on the chain ending at --tip {tip}: load the robot with "
+                "that tip"
+                if tip
+                else "identified with another description or another --tip?"
+            )
         )
     classical = arm.get("classical")
-    try:
-        if isinstance(classical, dict):
-            missing = [nm for nm in base.classical_names if nm not in classical]
-            if missing:
-                raise ModelError(f"{where}: 'classical' lacks {', '.join(missing[:5])}")
-            pi = np.array([float(classical[nm]) for nm in base.classical_names])
-            values, used = base.values(pi), "classical (consistent estimate)"
-        else:
-            values, used = np.array([float(v) for v in arm["base_values"]]), "base values"
-    except (TypeError, ValueError) as ex:
-        raise ModelError(f"{where}: a parameter value is not a number ({ex})") from None
+    if classical is not None:
+        missing = [nm for nm in base.classical_names if nm not in classical]
+        if missing:
+            raise ModelError(f"{where}: 'classical' lacks {', '.join(missing[:5])}")
+        pi = np.array([classical[nm] for nm in base.classical_names])
+        values, used = base.values(pi), "classical (consistent estimate)"
+    else:
+        values, used = np.array(arm["base_values"]), "base values"
     if values.shape != (base.n,) or not np.all(np.isfinite(values)):
         raise ModelError(f"{where}: expected {base.n} finite base values")
     return base, values, used
+
+
+def arm_tip(arm) -> str | None:
+    """The ``tip`` an identification JSON (a path or a dict) was identified with, or None;
+    what :func:`identify_payload` loads a robot named by a string with."""
+    if isinstance(arm, (str, Path)):
+        try:
+            arm = read_json(arm, "identification JSON")
+        except DataError:
+            return None  # read_arm names the problem
+    tip = arm.get("tip") if isinstance(arm, dict) else None
+    return tip if isinstance(tip, str) else None
 
 
 def identify_payload(
@@ -766,7 +780,8 @@ def identify_payload(
     """Inertial parameters of a payload rigidly fixed to the last link, from logs ``data`` with
     the payload and the identified ``arm`` (JSON of ``mindyn identify`` as a dict or path: its
     base values, or its ``classical`` map when present; friction, rotor inertia and offsets as
-    identified). Ordinary least squares on ``tau - tau_arm = W_last phi`` (all joints' equations;
+    identified; a ``robot`` given by name is loaded with the JSON's ``tip``). Ordinary least
+    squares on ``tau - tau_arm = W_last phi`` (all joints' equations;
     with arm friction, equations of joints slower than ``min_velocity`` left out as in
     :func:`~mindyn.identification.identify`), and with ``consistent`` the estimate under a
     positive semidefinite payload pseudo-inertia (cvxpy, Clarabel).
@@ -775,7 +790,7 @@ def identify_payload(
     hides some parameters) do not determine all 10 parameters: the rank and the undetermined
     parameters and combinations are named."""
     t0 = time.perf_counter()
-    robot = load(robot)
+    robot = load(robot, tip=arm_tip(arm) if isinstance(robot, (str, Path)) else None)
     robot._require_serial("payload identification (a payload on the last link)")
     base, beta, used = read_arm(robot, arm)
     logs = _logs(data)
