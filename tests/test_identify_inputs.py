@@ -9,11 +9,16 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import tracemalloc
 from pathlib import Path
 
 import mindyn
+import numpy as np
 import pytest
 from mindyn import cli
+from mindyn.identification import preprocess as preprocess_module
+from mindyn.identification.data import DataError, JointData
+from mindyn.identification.preprocess import preprocess
 
 REPO = Path(__file__).resolve().parents[1]
 UR5 = str(REPO / "examples/urdf/ur5.urdf")
@@ -36,6 +41,12 @@ def one_line_error(rc: int, err: str, *needles: str) -> str:
     return lines[0]
 
 
+def run_ok(argv) -> bool:
+    rc, _, err = run(argv)
+    assert rc == 0, err
+    return True
+
+
 def simulate(path: Path, robot: str, *extra) -> Path:
     rc, out, err = run(
         ["simulate", robot, "--mode", "inverse", "--duration", "6", "-o", path, *extra]
@@ -50,6 +61,8 @@ def logs(tmp_path_factory):
     return {
         "ur5": simulate(d / "ur5.csv", UR5),
         "zcr07s": simulate(d / "zcr07s.csv", "zcr07s"),
+        "zcr07s_period": run_ok(["simulate", "zcr07s", "--mode", "inverse", "-o", d / "p.csv"])
+        and d / "p.csv",
         "dir": d,
     }
 
@@ -101,3 +114,65 @@ def test_identify_json_records_the_tip_and_payload_uses_it(tmp_path):
     js.write_text(json.dumps(doc))
     rc, _, err = run(["identify-payload", UR5, js, log])
     one_line_error(rc, err, "--tip")
+
+
+# -- periods that the log does not hold --------------------------------------------------------
+def periodic_log(periods: float, T: float = 2.0, rate: float = 250.0, noise: float = 0.0):
+    """Two joints moving with period ``T`` (harmonics 1 and 3, and 2), ``periods`` periods long;
+    position noise ``noise`` (rad sd)."""
+    t = np.arange(int(round(periods * T * rate))) / rate
+    w = 2 * np.pi / T
+    q = np.column_stack(
+        [0.8 * np.sin(w * t) + 0.2 * np.cos(3 * w * t), 0.5 * np.sin(2 * w * t + 0.3)]
+    )
+    q += noise * np.random.default_rng(3).standard_normal(q.shape)
+    return JointData(t, q, None, None, q.copy(), source="periodic")
+
+
+@pytest.mark.parametrize("held, asked", [(1, 2), (1, 3), (2, 4), (3, 2)])
+def test_a_period_count_the_log_does_not_hold_is_refused(held, asked):
+    with pytest.raises(DataError, match=f"is not {asked} period"):
+        preprocess(periodic_log(held), periods=asked)
+
+
+@pytest.mark.parametrize("held", [1, 2, 4])
+def test_the_periods_a_noisy_log_holds_are_averaged(held):
+    # position noise of 5 mrad against a motion of about 0.5 rad RMS
+    d = preprocess(periodic_log(held, noise=0.005), periods=held)
+    avg = d.processing["preprocess"]["averaging"]
+    assert avg["periods"] == held and avg["period_s"] == pytest.approx(2.0, rel=1e-3)
+    # several periods: their spread against the motion; one: its end-to-start jump in largest
+    # steps between samples (at most 1 in units of three steps)
+    limit = preprocess_module.PERIODICITY_TOLERANCE if held > 1 else 1.0
+    assert avg["periodicity_residual"] < limit / 2
+
+
+def test_one_period_that_does_not_close_is_refused():
+    log = periodic_log(0.7)  # 0.7 of a period: the end does not run back into the start
+    with pytest.raises(DataError, match="jumps back to its start"):
+        preprocess(log, periods=1)
+
+
+def test_cli_refuses_two_periods_of_a_one_period_log(logs):
+    # the simulated log is one period of its reference (the default duration)
+    rc, _, err = run(["identify", "zcr07s", logs["zcr07s_period"], "--periods", "2"])
+    one_line_error(rc, err, "is not 2 period(s)", "--periods")
+    rc, out, err = run(["identify", "zcr07s", logs["zcr07s_period"], "--periods", "1"])
+    assert rc == 0, err
+
+
+@pytest.mark.parametrize("rows, period", [(600, 1e-6), (3750, 1e-6), (600, 1e-3)])
+def test_a_period_of_a_few_samples_is_refused_before_allocating(rows, period):
+    t = np.arange(rows) / 250.0
+    q = np.column_stack([np.sin(t), np.cos(2 * t)])
+    log = JointData(t, q, None, None, q.copy(), source="short")
+    tracemalloc.start()
+    try:
+        with pytest.raises(DataError, match="sample intervals"):
+            preprocess(log, period=period)
+        with pytest.raises(DataError, match="sample intervals"):
+            preprocess(log, periods=rows)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 20 * 2**20  # the refusal comes before the grid of periods is made
