@@ -16,6 +16,8 @@ import mindyn
 import numpy as np
 import pytest
 from mindyn import cli
+from mindyn.export import classical_terms
+from mindyn.identification import consistent as consistent_module
 from mindyn.identification import preprocess as preprocess_module
 from mindyn.identification.data import DataError, JointData
 from mindyn.identification.preprocess import preprocess
@@ -176,3 +178,105 @@ def test_a_period_of_a_few_samples_is_refused_before_allocating(rows, period):
     finally:
         tracemalloc.stop()
     assert peak < 20 * 2**20  # the refusal comes before the grid of periods is made
+
+
+# -- the identification JSON, read back ------------------------------------------------------
+@pytest.fixture(scope="module")
+def arm_json(logs):
+    js = Path(logs["dir"]) / "arm.json"
+    rc, _, err = run(["identify", UR5, logs["ur5"], "--json", js])
+    assert rc == 0, err
+    return json.loads(js.read_text())
+
+
+@pytest.mark.parametrize(
+    "field, value, needle",
+    [
+        ("base_names", 7, "'base_names' is 7; expected a list of names"),
+        ("base_values", ["1.0"] * 36, "'base_values' item 1 is '1.0'; expected a number"),
+        ("base_values", [1.0], "1 'base_values' for 36 'base_names'"),
+        ("rotor", "no", "'rotor' is 'no'; expected true or false"),
+        ("friction", 0, "'friction' is 0; expected true or false"),
+        ("robot", ["ur5_example"], "'robot' is a list; expected text"),
+        ("tip", 3, "'tip' is 3; expected text"),
+        ("classical", 10**400, "integer of 401 digits is too large for a double"),
+        ("classical", True, "'classical' 'XX1' is true; expected a number"),
+    ],
+    ids=["names", "text", "count", "rotor", "friction", "robot", "tip", "huge", "bool"],
+)
+def test_identification_json_fields_are_checked_when_read(
+    arm_json, logs, tmp_path, field, value, needle
+):
+    doc = dict(arm_json)
+    if field == "classical":  # a complete map, XX1 of the given value
+        robot = mindyn.load(UR5)
+        doc[field] = dict(zip(robot.param_names, robot.params.tolist()), XX1=value)
+    else:
+        doc[field] = value
+    js = tmp_path / "id.json"
+    js.write_text(json.dumps(doc))
+    rc, _, err = run(["identify-payload", UR5, js, logs["ur5"], "--no-consistent"])
+    one_line_error(rc, err, "id.json", needle)
+    if field == "classical":  # export reads the same document
+        rc, _, err = run(["export", UR5, js, "--urdf", tmp_path / "x.urdf"])
+        one_line_error(rc, err, "id.json", needle)
+
+
+def test_export_refuses_deeply_nested_json_in_one_line(tmp_path):
+    js = tmp_path / "deep.json"
+    js.write_text("[" * 100_000 + "]" * 100_000)
+    rc, _, err = run(["export", UR5, js, "--urdf", tmp_path / "x.urdf"])
+    one_line_error(rc, err, "deep.json", "nested deeper")
+
+
+def test_export_refuses_a_huge_integer_in_the_python_api():
+    robot = mindyn.load(UR5)
+    classical = dict(zip(robot.param_names, robot.params.tolist()))
+    classical["M1"] = 10**400
+    with pytest.raises(mindyn.ModelError, match="401 digits, too large for a double"):
+        classical_terms(robot, classical)
+
+
+# -- the consistent estimate's solver ----------------------------------------------------------
+def test_prior_weight_range_is_checked(logs):
+    rc, _, err = run(["identify", UR5, logs["ur5"], "--consistent", "--prior-weight", "1e200"])
+    one_line_error(rc, err, "--prior-weight", "1e+06")
+    with pytest.raises(mindyn.ModelError, match="from 0 to 1e"):
+        consistent_module._weight(1e200)
+
+
+class _Panic(BaseException):
+    """As pyo3's PanicException, which Clarabel raises: not an Exception."""
+
+
+def test_a_solver_panic_and_its_warnings_end_in_one_error_line(logs, monkeypatch):
+    import cvxpy
+
+    def panic(self, *a, **k):
+        np.log(np.zeros(1))  # a numpy RuntimeWarning before the failure
+        raise _Panic("Eigval error: Eigen(1)")
+
+    monkeypatch.setattr(cvxpy.Problem, "solve", panic)
+    rc, _, err = run(["identify", UR5, logs["ur5"], "--consistent", "--prior-weight", "1"])
+    line = one_line_error(rc, err, "consistent estimate", "not solved", "Clarabel failed")
+    assert "RuntimeWarning" not in err and "np.float64" not in line
+
+
+def test_numpy_warnings_are_held_back_until_the_command_succeeds(capsys):
+    from mindyn.cli.quiet import warnings_after_success
+
+    def command(args):
+        with np.errstate(divide="warn"):
+            np.log(np.zeros(2))
+            np.log(np.zeros(3))  # the same warning: printed once
+        if args == "fail":
+            raise mindyn.ModelError("the one line")
+        return 0
+
+    wrapped = warnings_after_success(command)
+    with pytest.raises(mindyn.ModelError):
+        wrapped("fail")
+    assert capsys.readouterr().err == ""
+    assert wrapped("ok") == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mindyn: warning: divide by zero")

@@ -22,6 +22,7 @@ from .args import (
     seed,
 )
 from .export import add_description_outputs, check_description_kind, write_description
+from .quiet import warnings_after_success
 
 
 def _floats(text: str, n: int, what: str) -> np.ndarray:
@@ -295,6 +296,7 @@ def _check_lowpass_options(args: argparse.Namespace) -> None:
                 raise ValueError(f"{flag} needs --filter lowpass (got --filter {args.filter})")
 
 
+@warnings_after_success
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..identification import identify, true_base_values, validate
     from ..identification.data import read_truth
@@ -517,11 +519,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
     return 0
 
 
+@warnings_after_success
 def cmd_identify_payload(args: argparse.Namespace) -> int:
     from ..identification.consistent import arm_tip, identify_payload, read_arm
     from ..identification.data import read_truth
 
-    tip = arm_tip(args.identification)
+    tip = arm_tip(args.identification, args.robot)
     if args.tip is not None and tip is not None and args.tip != tip:
         raise ValueError(
             f"--tip {args.tip}: {args.identification} was identified on the chain ending at "
@@ -836,6 +839,7 @@ def _add_data_options(p) -> None:
 def register(sub) -> None:
     """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
     from ..control.simulation import MAX_SAMPLES, MAX_STEPS
+    from ..identification.consistent import MAX_PRIOR_WEIGHT
     from ..identification.excitation import MAX_TRAJECTORY_ROWS
     from .control import add_closed_loop_args
 
@@ -1048,6 +1052,7 @@ def register(sub) -> None:
         p,
         "--prior-weight",
         low=0,
+        high=MAX_PRIOR_WEIGHT,
         default=0.0,
         help="with --consistent: add W x the log-det divergence of each link's pseudo-inertia "
         "from the description's; the fit term is in units of the noise variance, so W = 1 makes "

@@ -76,6 +76,11 @@ NULL_SPACE_WEIGHT = 1e-6
 #: in the result).
 PRIOR_REGULARISATION = 1e-3
 
+#: Largest prior weight accepted: the prior then counts a million times the fit, which leaves
+#: the description's values; beyond it the conic solvers fail or return inaccurate answers
+#: (Clarabel panics at 1e200, SCS returned a mass of 2e5 kg at 1e9).
+MAX_PRIOR_WEIGHT = 1e6
+
 INERTIAL = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
 _NAME = re.compile(r"([A-Za-z]+?)([0-9]+)")
 
@@ -298,10 +303,16 @@ def identify_consistent(robot, data, prior_weight: float = 0.0, **kwargs) -> Con
 def _weight(prior_weight) -> float:
     try:
         w = float(prior_weight)
-    except (TypeError, ValueError):
-        raise ModelError(f"prior_weight is {prior_weight!r}; expected a number >= 0") from None
-    if not (math.isfinite(w) and w >= 0):
-        raise ModelError(f"prior_weight is {prior_weight!r}; expected a finite number >= 0")
+    except (TypeError, ValueError, OverflowError):
+        raise ModelError(
+            f"prior_weight is {prior_weight!r}; expected a number from 0 to {MAX_PRIOR_WEIGHT:g}"
+        ) from None
+    if not (0 <= w <= MAX_PRIOR_WEIGHT):
+        raise ModelError(
+            f"prior_weight is {w:g}; expected a number from 0 to {MAX_PRIOR_WEIGHT:g} (at "
+            f"{MAX_PRIOR_WEIGHT:g} the prior already outweighs the fit by that factor, and the "
+            "convex solvers lose accuracy beyond it)"
+        )
     return w
 
 
@@ -588,7 +599,6 @@ def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple
     """Solves ``prob`` with Clarabel, else SCS (noted); raises IdentificationError when neither
     gives a solution (with ``accept_infeasible``, Clarabel's verdict of infeasibility is
     returned as the status)."""
-    import cvxpy as cp
 
     tried = []
     for solver in ("CLARABEL", "SCS"):
@@ -599,11 +609,15 @@ def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple
             else {"chordal_decomposition_enable": False}
         )
         try:
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
                 warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
+                warnings.filterwarnings("ignore", category=RuntimeWarning)
                 prob.solve(solver=solver, **options)
-        except (cp.error.SolverError, ValueError, ArithmeticError) as ex:
-            tried.append(f"{solver}: {str(ex).splitlines()[0] if str(ex) else type(ex).__name__}")
+        except (KeyboardInterrupt, SystemExit, MemoryError):
+            raise
+        except BaseException as ex:  # noqa: BLE001 - Clarabel's PanicException is a BaseException
+            text = str(ex).splitlines()[0] if str(ex).strip() else type(ex).__name__
+            tried.append(f"{solver.capitalize()} failed ({text})")
             continue
         if accept_infeasible and solver == "CLARABEL" and prob.status == "infeasible":
             return solver, prob.status
@@ -613,9 +627,11 @@ def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple
             if tried:
                 notes.append(f"{what}fallback to SCS after " + "; ".join(tried))
             return solver, prob.status
-        tried.append(f"{solver}: status {prob.status}")
+        tried.append(f"{solver.capitalize()} ended with status '{prob.status}'")
     raise IdentificationError(
-        f"consistent estimate: no solver succeeded in the {what}solve (" + "; ".join(tried) + ")"
+        f"consistent estimate: the convex {what}problem (least squares under positive "
+        "semidefinite pseudo-inertias) was not solved: " + "; ".join(tried) + "; the data may "
+        "be badly scaled (a longer or richer log, or a smaller --prior-weight, may help)"
     )
 
 
@@ -757,9 +773,13 @@ def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.
     return base, values, used
 
 
-def arm_tip(arm) -> str | None:
-    """The ``tip`` an identification JSON (a path or a dict) was identified with, or None;
-    what :func:`identify_payload` loads a robot named by a string with."""
+def arm_tip(arm, robot) -> str | None:
+    """The ``tip`` an identification JSON (a path or a dict) was identified with, when the
+    ``robot`` argument is a URDF file (a tip applies to nothing else; :func:`read_arm` then
+    refuses the robot by name), else None: what :func:`identify_payload` loads a robot named by
+    a string with."""
+    if Path(str(robot)).suffix.lower() not in (".urdf", ".xml"):
+        return None
     if isinstance(arm, (str, Path)):
         try:
             arm = read_json(arm, "identification JSON")
@@ -790,7 +810,7 @@ def identify_payload(
     hides some parameters) do not determine all 10 parameters: the rank and the undetermined
     parameters and combinations are named."""
     t0 = time.perf_counter()
-    robot = load(robot, tip=arm_tip(arm) if isinstance(robot, (str, Path)) else None)
+    robot = load(robot, tip=arm_tip(arm, robot) if isinstance(robot, (str, Path)) else None)
     robot._require_serial("payload identification (a payload on the last link)")
     base, beta, used = read_arm(robot, arm)
     logs = _logs(data)

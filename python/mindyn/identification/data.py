@@ -26,6 +26,7 @@ import io
 import json
 import math
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -403,6 +404,11 @@ def read_json(path, what: str = "JSON file", finite: bool = False):
         raise DataError(f"{path}:{e.lineno}:{e.colno}: not valid JSON: {e.msg}") from None
     except ValueError as e:
         raise DataError(f"{path}: {e}") from None
+    except RecursionError:
+        raise DataError(
+            f"{path}: not a {what}: its arrays or objects are nested deeper than the JSON "
+            f"reader follows (about {sys.getrecursionlimit()} levels)"
+        ) from None
 
 
 def _no_constant(name: str) -> float:

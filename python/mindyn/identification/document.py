@@ -20,11 +20,14 @@ __all__ = ["FLAGS", "read_identification"]
 FLAGS = ("rotor", "friction", "offset", "consistent")
 
 
-def read_identification(source, *, need=(), what: str = "identification JSON") -> dict:
+def read_identification(
+    source, *, need=(), what: str = "identification JSON", finite: bool = False
+) -> dict:
     """The checked document of ``mindyn identify --json``: ``source`` a path or an already read
     mapping. ``need`` names the fields that must be present (``robot``, ``base_names``,
     ``base_values``, ``classical``, one of :data:`FLAGS`...); the others are checked when
-    present. Returns the document with ``base_values`` as floats and ``classical`` (when
+    present; with ``finite`` a file holding NaN or Infinity anywhere is refused. Returns the
+    document with ``base_values`` as floats and ``classical`` (when
     present) as a name -> float mapping.
 
     Raises
@@ -33,16 +36,22 @@ def read_identification(source, *, need=(), what: str = "identification JSON") -
         Not a JSON object, a needed field missing, or a field of the wrong type or range."""
     if isinstance(source, (str, Path)):
         where = str(source)
-        doc = read_json(source, what)
+        doc = read_json(source, what, finite=finite)
     else:
         where, doc = what, source
+    obj = doc if isinstance(doc, dict) else {}
+    missing = [k for k in need if obj.get(k) is None]
+    if "classical" in missing:
+        raise DataError(
+            f"{where} has no 'classical' map of classical parameter values (it is written by "
+            "'mindyn identify --consistent --json')"
+        )
     if not isinstance(doc, dict):
         raise DataError(f"{where}: expected a JSON object (the JSON of mindyn identify)")
-    missing = [k for k in need if k not in doc or (k == "classical" and doc[k] is None)]
     if missing:
         raise DataError(
             f"{where}: lacks {', '.join(repr(k) for k in missing)} (the JSON of mindyn "
-            "identify" + (" --consistent" if "classical" in missing else "") + " has them)"
+            "identify has them)"
         )
     out = dict(doc)
     for key in ("robot", "tip"):
