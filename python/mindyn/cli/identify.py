@@ -197,7 +197,7 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
     if args.filter == "lowpass":
         from ..identification.preprocess import preprocess, split_at_gaps
 
-        unfiltered = argparse.Namespace(**{**vars(args), "filter": "none"})
+        unfiltered = argparse.Namespace(**{**vars(args), "filter": "none", "_raw": True})
         (raw,) = _read(path, robot, unfiltered, currents)
         segments = split_at_gaps(raw)
         if len(segments) > 1 and (args.periods or args.period):
@@ -247,6 +247,10 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
         )
     if currents:
         data = attach_currents(data, currents, robot, gain)
+    if not getattr(args, "_raw", False):  # the raw read of the lowpass path: resampled later
+        from ..identification.preprocess import require_even_stamps
+
+        require_even_stamps(data, args.filter)
     if gain is not None and not data.processing["torque"]["unit"].startswith("motor current"):
         raise ValueError(
             f"--drive-gain: {path} holds torques in {data.processing['torque']['unit']}, not "
@@ -791,7 +795,8 @@ def _add_data_options(p) -> None:
         "time stamps, one zero-phase Butterworth low-pass of positions, logged velocities, "
         "torques and regressor columns, derivatives of the filtered signals, filter edges "
         "dropped, decimation; butter, savgol, none: only derive missing velocities and "
-        "accelerations (torques unfiltered)",
+        "accelerations (torques unfiltered; butter and savgol refuse unevenly spaced time "
+        "stamps, none differences them as they are)",
     )
     number(
         p,

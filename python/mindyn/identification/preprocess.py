@@ -58,6 +58,7 @@ __all__ = [
     "concatenate",
     "excited_band",
     "preprocess",
+    "require_even_stamps",
     "timing",
 ]
 
@@ -204,6 +205,36 @@ def _check_periodic(Q: np.ndarray, cycle: dict, src: str, duration: float) -> No
             f"{cycle['period_s']:.6g} s: joint {j + 1}'s {what} {detail}; give the number of "
             "periods the log holds (--periods) or the excitation's period (--period)"
         )
+
+
+def require_even_stamps(data: JointData, filter: str) -> None:
+    """Refuses ``data`` whose velocities or accelerations were derived by ``filter``
+    (``butter`` or ``savgol``: filters designed for evenly spaced samples) when its time stamps
+    are not: a jitter over :data:`JITTER_TOLERANCE` of the median interval or intervals over
+    1.5 of it (gaps). The data path of :func:`preprocess` resamples such a log onto a uniform
+    grid first; these filters do not. ``none`` (central differences on the time stamps, which
+    ``numpy.gradient`` takes as they are) is not refused."""
+    if filter not in ("butter", "savgol"):
+        return
+    derived = [
+        what
+        for what in ("velocity", "acceleration")
+        if data.processing.get(what, {}).get("source", "logged") != "logged"
+    ]
+    if not derived or data.m < 3:
+        return
+    tm = timing(data.t)
+    if tm["jitter"] <= JITTER_TOLERANCE and tm["gaps"] == 0:
+        return
+    raise DataError(
+        f"{data.source or 'data'}: --filter {filter} derives the "
+        + " and ".join("velocities" if w == "velocity" else "accelerations" for w in derived)
+        + " as if the samples were evenly spaced, but its time stamps are not (intervals "
+        f"{1e3 * tm['min_dt_s']:.4g} to {1e3 * tm['max_dt_s']:.4g} ms about a median of "
+        f"{1e3 * tm['median_dt_s']:.4g} ms, jitter {100 * tm['jitter']:.3g} %, {tm['gaps']} "
+        "gap(s)); use --filter lowpass (the default), which resamples onto a uniform grid and "
+        "cuts the log at its breaks"
+    )
 
 
 def split_at_gaps(data: JointData, gap: float = SEGMENT_GAP) -> list[JointData]:
