@@ -19,6 +19,7 @@ from mindyn import cli
 from mindyn.base import base_parameters
 from mindyn.export import classical_terms
 from mindyn.identification import consistent as consistent_module
+from mindyn.identification import excitation as excitation_module
 from mindyn.identification import preprocess as preprocess_module
 from mindyn.identification.data import DataError, JointData, write_csv
 from mindyn.identification.excitation import random_trajectory
@@ -320,3 +321,35 @@ def test_filters_on_jittered_stamps_refuse_or_recover_the_truth(jittered, filter
     # the default path and by differences on the stamps, --filter none; butter and savgol had
     # 0.26 and 0.55)
     assert np.linalg.norm(est - truth) / np.linalg.norm(truth) < 0.01
+
+
+# -- progress of the long steps ---------------------------------------------------------------
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_consistent_estimate_reports_its_solves_on_a_terminal(logs, monkeypatch):
+    argv = ["identify", UR5, logs["ur5"], "--consistent", "--prior-weight", "1"]
+    rc, _, err = run(argv)  # not a terminal (a pipe, a log): the result only
+    assert rc == 0 and "identify: consistent estimate" not in err, err
+    out, term = io.StringIO(), _Terminal()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(term):
+        assert cli.main([str(a) for a in argv]) == 0
+    lines = [x for x in term.getvalue().splitlines() if x.startswith("identify: ")]
+    starts = [x for x in lines if x.endswith("...")]
+    ends = [x for x in lines if ": done in " in x]
+    assert starts and len(starts) == len(ends), lines
+    assert any("Clarabel" in x for x in starts) and any("L-BFGS-B" in x for x in starts)
+    assert "Physically consistent estimate" in out.getvalue()
+
+
+def test_excite_reports_progress_within_a_start_to_a_log(monkeypatch):
+    monkeypatch.setattr(excitation_module, "PROGRESS_SECONDS", 0.0)  # every iteration
+    stream = io.StringIO()  # not a terminal
+    excitation_module.optimize_excitation(
+        "planar2", harmonics=3, starts=1, maxiter=4, stream=stream, seed=1
+    )
+    within = [x for x in stream.getvalue().splitlines() if ": iteration " in x]
+    assert len(within) >= 2 and all(x.startswith("  start 1/1: iteration") for x in within)
+    assert "\r" not in stream.getvalue()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -362,7 +363,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.consistent:
         from ..identification.consistent import consistent_estimate
 
-        cons = consistent_estimate(res, args.prior_weight)
+        cons = consistent_estimate(res, args.prior_weight, progress=_progress())
     elif args.prior_weight:
         raise ValueError("--prior-weight: expected --consistent as well")
     truth_doc = truth_docs[0] if all(d == truth_docs[0] for d in truth_docs) else None
@@ -596,6 +597,14 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
     return 0
+
+
+def _progress():
+    """Progress lines on stderr when it is a terminal (``identify --consistent`` solves for
+    seconds); None otherwise, so that a log or a pipe gets the result and errors only."""
+    if not sys.stderr.isatty():
+        return None
+    return lambda line: print(f"identify: {line}", file=sys.stderr, flush=True)
 
 
 def _consistent_lines(cons, fit, val, cfit, cval, logs) -> list[str]:
@@ -1050,8 +1059,9 @@ def register(sub) -> None:
         action="store_true",
         help="also estimate physically consistent classical parameters (every link's "
         "pseudo-inertia positive semidefinite, rotor inertia and friction >= 0) minimising the "
-        "same weighted residual (convex, cvxpy with Clarabel); JSON: classical, "
-        "pseudo_inertia_min_eig, total_mass, consistent_estimate",
+        "same weighted residual (convex, cvxpy with Clarabel; each solve reported on stderr "
+        "when it is a terminal); JSON: classical, pseudo_inertia_min_eig, total_mass, "
+        "consistent_estimate",
     )
     number(
         p,

@@ -25,6 +25,7 @@ from ``tau - tau_arm(q, dq, ddq) = W_last(q, dq, ddq) phi`` with the identified 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 import time
@@ -316,7 +317,9 @@ def _weight(prior_weight) -> float:
     return w
 
 
-def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) -> ConsistentResult:
+def consistent_estimate(
+    res: IdentificationResult, prior_weight: float = 0.0, *, progress=None
+) -> ConsistentResult:
     """The physically consistent classical parameters for the least-squares problem of ``res``
     (see the module documentation).
 
@@ -335,7 +338,10 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
     refined by a smooth descent of the same objective (:func:`_refine_with_prior`; noted with
     the gain). After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance
     are projected onto the positive semidefinite matrices (negative eigenvalues set to zero)
-    and ``Ia, Fv, Fc`` clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``."""
+    and ``Ia, Fv, Fc`` clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
+
+    ``progress``, a callable taking a line of text, is told each solve and refinement as it
+    starts and ends (they can take seconds each)."""
     t0 = time.perf_counter()
     W = _weight(prior_weight)
     base = res.base
@@ -367,10 +373,11 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
         pi, solver, status = pi_n, "none", "optimal"
         notes.append("the unconstrained optimum is consistent: returned as it is")
     else:
-        pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls)
+        pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls, progress)
         if W > 0:
             J0s = _prior_matrices(base, layout, pi0, None)
-            pi, gain = _refine_with_prior(M, z, s2, pi, layout, J0s, W)
+            with _stage(progress, "refinement of the solver's answer (L-BFGS-B)"):
+                pi, gain = _refine_with_prior(M, z, s2, pi, layout, J0s, W)
             if gain > 0:
                 notes.append(
                     f"the cone solver's answer refined by a smooth descent of the same objective "
@@ -416,6 +423,26 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
         notes=notes,
         seconds=time.perf_counter() - t0,
     )
+
+
+@contextlib.contextmanager
+def _stage(progress, what: str):
+    """Tells ``progress`` (a callable taking a line, or None) that ``what`` starts, and when it
+    ends with its duration (or that it failed)."""
+    if progress is None:
+        yield
+        return
+    progress(f"consistent estimate: {what} ...")
+    t0 = time.perf_counter()
+    ok = False
+    try:
+        yield
+        ok = True
+    finally:
+        progress(
+            f"consistent estimate: {what}: {'done' if ok else 'failed'} in "
+            f"{time.perf_counter() - t0:.1f} s"
+        )
 
 
 def _refine_with_prior(M, z, s2, pi, layout: _Layout, J0s, W: float) -> tuple[np.ndarray, float]:
@@ -523,7 +550,7 @@ def _divergence(J, J0) -> float:
     return float(-logdet + np.trace(A) - 4) if sign > 0 else math.inf
 
 
-def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None):
+def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None, progress=None):
     import cvxpy as cp
 
     n = base.robot.n
@@ -576,26 +603,28 @@ def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None):
         rn = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
         feas = cons[1:] + [(A / rn[:, None]) @ u == beta / rn]
         prob = cp.Problem(cp.Minimize(tie if N.size else 0), feas)
-        solver, status = _run(prob, notes, "realisation ", accept_infeasible=True)
+        solver, status = _run(prob, notes, "realisation ", True, progress)
         if status in ("optimal", "optimal_inaccurate"):
             pi_f = np.asarray(G @ u.value, float)
             pi_f += np.linalg.lstsq(base.Y, beta - base.Y @ pi_f, rcond=None)[0]
             notes.append("the unconstrained optimum has a consistent realisation: returned")
             return pi_f, solver, status
-    solver, status = _run(cp.Problem(cp.Minimize(objective), cons), notes, "")
+    solver, status = _run(cp.Problem(cp.Minimize(objective), cons), notes, "", False, progress)
     if W == 0 and N.size:
         # second solve: the undetermined parameters nearest the description among the optima
         best = float(fit.value)
         prob = cp.Problem(
             cp.Minimize(tie), cons + [cp.norm(r) <= math.sqrt(best + TIE_BREAK_SLACK)]
         )
-        solver2, status2 = _run(prob, notes, "tie-break ")
+        solver2, status2 = _run(prob, notes, "tie-break ", False, progress)
         solver = solver if solver2 == solver else f"{solver}+{solver2}"
         status = status if status2 == status else f"{status}+{status2}"
     return np.asarray(G @ u.value, float), solver, status
 
 
-def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple[str, str]:
+def _run(
+    prob, notes: list, what: str, accept_infeasible: bool = False, progress=None
+) -> tuple[str, str]:
     """Solves ``prob`` with Clarabel, else SCS (noted); raises IdentificationError when neither
     gives a solution (with ``accept_infeasible``, Clarabel's verdict of infeasibility is
     returned as the status)."""
@@ -612,7 +641,11 @@ def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple
             with warnings.catch_warnings(), np.errstate(all="ignore"):
                 warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
                 warnings.filterwarnings("ignore", category=RuntimeWarning)
-                prob.solve(solver=solver, **options)
+                size = sum(v.size for v in prob.variables())
+                with _stage(
+                    progress, f"{what or 'main '}solve, {solver.capitalize()}, {size} variables"
+                ):
+                    prob.solve(solver=solver, **options)
         except (KeyboardInterrupt, SystemExit, MemoryError):
             raise
         except BaseException as ex:  # noqa: BLE001 - Clarabel's PanicException is a BaseException
