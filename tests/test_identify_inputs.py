@@ -152,6 +152,19 @@ def test_the_periods_a_noisy_log_holds_are_averaged(held):
     assert avg["periodicity_residual"] < limit / 2
 
 
+def test_a_joint_held_still_with_noise_does_not_refuse_the_periods():
+    log = periodic_log(4)
+    rng = np.random.default_rng(8)
+    still = 1e-4 * rng.standard_normal(log.m)  # encoder noise on a joint that does not move
+    log = JointData(
+        log.t, np.column_stack([log.q, still]), None, None, np.column_stack([log.tau, still])
+    )
+    avg = preprocess(log, periods=4).processing["preprocess"]["averaging"]
+    assert avg["periods"] == 4
+    with pytest.raises(DataError, match="is not 3 period"):
+        preprocess(log, periods=3)
+
+
 def test_one_period_that_does_not_close_is_refused():
     log = periodic_log(0.7)  # 0.7 of a period: the end does not run back into the start
     with pytest.raises(DataError, match="jumps back to its start"):

@@ -16,7 +16,7 @@ def warnings_after_success(command):
     @functools.wraps(command)
     def run(args):
         with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
+            warnings.simplefilter("always", RuntimeWarning)
             status = command(args)
         seen = set()
         for w in caught:

@@ -172,19 +172,24 @@ def _resample(t, tu, q, dq, tau):
 
 def _check_periodic(Q: np.ndarray, cycle: dict, src: str, duration: float) -> None:
     """Refuses periods (``Q`` of shape (periods, samples, n)) that do not repeat: several
-    periods whose positions differ by more than :data:`PERIODICITY_TOLERANCE` of the motion, or
+    periods whose positions differ (beyond the sensor noise, estimated from second differences)
+    by more than :data:`PERIODICITY_TOLERANCE` of the motion, or
     one period whose end does not run back into its start (a jump from the last sample to the
     first over 3 times the largest step between neighbouring samples). Records the residual in
     ``cycle["periodicity_residual"]``."""
     count, per, _ = Q.shape
     flat = Q.reshape(count * per, -1)
     motion = np.sqrt(np.mean((flat - flat.mean(axis=0)) ** 2, axis=0))
-    moving = motion > 1e-12 * max(1.0, float(np.max(np.abs(flat))))
+    # sensor noise from second differences (a smooth motion adds little to them): a joint held
+    # still shows only noise, which differs between periods without saying anything of them
+    noise = np.sqrt(np.mean(np.diff(flat, 2, axis=0) ** 2, axis=0) / 6.0)
+    moving = motion > 10.0 * noise + 1e-12 * max(1.0, float(np.max(np.abs(flat))))
     if not moving.any():
         return
     if count > 1:
         spread = np.sqrt(np.mean((Q - Q.mean(axis=0)) ** 2, axis=(0, 1)))
-        rel = np.where(moving, spread / np.where(moving, motion, 1.0), 0.0)
+        excess = np.sqrt(np.maximum(spread**2 - noise**2, 0.0))  # beyond the noise
+        rel = np.where(moving, excess / np.where(moving, motion, 1.0), 0.0)
         what = "positions differ between periods by"
     else:
         step = np.max(np.abs(np.diff(Q[0], axis=0)), axis=0)
