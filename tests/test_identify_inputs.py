@@ -1,8 +1,8 @@
 """What ``mindyn identify`` and the commands reading its JSON accept: logs of the robot named
 (not of another one with as many joints), the chain ``--tip`` chose, the periods a periodic log
-holds, well-typed identification JSON, solver failures and time bases the filters can take.
-Each answer is checked against data the test generates (a simulated robot with known
-parameters) or against the input's own structure."""
+holds, well-typed identification JSON, solver failures, time bases the filters can take and
+progress of the long steps. Each answer is checked against data the test generates (a simulated
+robot with known parameters) or against the input's own structure."""
 
 from __future__ import annotations
 
