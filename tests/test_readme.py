@@ -206,6 +206,15 @@ def test_readme_examples_made_what_they_say(workdir, env):
     # the code of the identified model and the two controller steps starting from it
     assert len(said) == 3, said
     assert all(f"; {len(removed)} pruned in identification" in o for o in said), said
+    # the UR5 example follows an optimised excitation: no warning that most base parameters
+    # were removed, and the five largest (by the simulation's true values) within 2 % of them
+    ur5 = [o for c, o in OUTPUT.items() if c.startswith("mindyn identify examples/urdf/ur5")]
+    assert len(ur5) == 1 and "WARNING" not in ur5[0], ur5
+    doc = json.loads((workdir / "out/ur5_id.json").read_text())
+    est, true = np.array(doc["base_values"]), np.array(doc["true_values"])
+    big = np.argsort(-np.abs(true))[:5]
+    assert np.all(np.abs(est[big] - true[big]) <= 0.02 * np.abs(true[big])), (est, true)
+    assert len(doc["removed"]) < len(true) / 2
 
 
 # ---------------------------------------------------------------------------------------------

@@ -131,9 +131,16 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
         v = classical[k]
         if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
             raise ModelError(f"{what}: '{k}' is {v!r}; expected a number")
-        if not math.isfinite(float(v)):
-            raise ModelError(f"{what}: '{k}' is {float(v)}; expected a finite number")
-        values[k] = float(v)
+        try:
+            x = float(v)
+        except OverflowError:  # an integer beyond a double
+            raise ModelError(
+                f"{what}: '{k}' is an integer of {len(str(abs(int(v))))} digits, too large "
+                "for a double"
+            ) from None
+        if not math.isfinite(x):
+            raise ModelError(f"{what}: '{k}' is {x}; expected a finite number")
+        values[k] = x
 
     def column(prefix: str) -> np.ndarray:
         return np.array([values[f"{prefix}{k + 1}"] for k in range(n)])
@@ -383,7 +390,8 @@ class _UrdfDocument:
             if np.any(h != 0):
                 raise ModelError(
                     f"M{index} = 0 (link '{name}') with a first moment (MX{index}, MY{index}, "
-                    f"MZ{index}) = ({h[0]!r}, {h[1]!r}, {h[2]!r}): no URDF inertial has that"
+                    f"MZ{index}) = ({', '.join(repr(float(x)) for x in h)}): no URDF inertial "
+                    "has that"
                 )
             com, Ic = np.zeros(3), Io
             notes.append(

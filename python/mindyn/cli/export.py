@@ -9,6 +9,7 @@ from .._core import ModelError
 from ..export import classical_terms, write_urdf, write_yaml
 from ..robot import load
 from .args import add_robot, output_file
+from .quiet import warnings_after_success
 
 
 def register(subparsers) -> None:
@@ -29,19 +30,14 @@ def register(subparsers) -> None:
 def read_classical(path: str) -> tuple[dict, str | None]:
     """The 'classical' map of an identification JSON and the robot it names (None if none),
     or a one-line error naming the file."""
-    from ..identification.data import read_json  # here: not needed by the other commands
+    # here: not needed by the other commands
+    from ..identification.document import read_identification
 
-    doc = read_json(path, "identification file", finite=True)
-    classical = doc.get("classical") if isinstance(doc, dict) else None
-    if not isinstance(classical, dict) or not classical:
-        raise ModelError(
-            f"{path} has no 'classical' map of classical parameter values (it is written by "
-            "'mindyn identify --consistent --json')"
-        )
-    robot = doc.get("robot")
-    return classical, robot if isinstance(robot, str) else None
+    doc = read_identification(path, need=("classical",), what="identification file", finite=True)
+    return doc["classical"], doc.get("robot")
 
 
+@warnings_after_success
 def cmd_export(args: argparse.Namespace) -> int:
     classical, identified_for = read_classical(args.params)
     robot = load(args.robot, tip=args.tip)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -22,6 +23,7 @@ from .args import (
     seed,
 )
 from .export import add_description_outputs, check_description_kind, write_description
+from .quiet import warnings_after_success
 
 
 def _floats(text: str, n: int, what: str) -> np.ndarray:
@@ -146,7 +148,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         )
     else:
         log = simulate_inverse(robot, ref, **kwargs)
-    path = log.save(args.output, robot.name)
+    path = log.save(args.output, robot.name, robot.joint_names)
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
         write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
@@ -202,7 +204,7 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
     if args.filter == "lowpass":
         from ..identification.preprocess import preprocess, split_at_gaps
 
-        unfiltered = argparse.Namespace(**{**vars(args), "filter": "none"})
+        unfiltered = argparse.Namespace(**{**vars(args), "filter": "none", "_raw": True})
         (raw,) = _read(path, robot, unfiltered, currents)
         segments = split_at_gaps(raw)
         if len(segments) > 1 and (args.periods or args.period):
@@ -252,6 +254,10 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
         )
     if currents:
         data = attach_currents(data, currents, robot, gain)
+    if not getattr(args, "_raw", False):  # the raw read of the lowpass path: resampled later
+        from ..identification.preprocess import require_even_stamps
+
+        require_even_stamps(data, args.filter)
     if gain is not None and not data.processing["torque"]["unit"].startswith("motor current"):
         raise ValueError(
             f"--drive-gain: {path} holds torques in {data.processing['torque']['unit']}, not "
@@ -301,6 +307,7 @@ def _check_lowpass_options(args: argparse.Namespace) -> None:
                 raise ValueError(f"{flag} needs --filter lowpass (got --filter {args.filter})")
 
 
+@warnings_after_success
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..identification import identify, true_base_values, validate
     from ..identification.data import read_truth
@@ -324,6 +331,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
     vfiles = list(args.validate or [])
     cur = _paired(files, args.currents, "--currents", "the identification data")
     vcur = _paired(vfiles, args.validate_currents, "--validate-currents", "--validate")
+    # a log simulated for another robot (its truth sidecar says so) is refused before any work
+    truth_docs = [read_truth(f, robot) for f in files]
+    for f in vfiles:
+        read_truth(f, robot)
     # A file cut at breaks in its time stamps gives several logs (segments), fitted together.
     parts = [_read_filtered(f, robot, args, c, periodic=True) for f, c in zip(files, cur)]
     logs = [d for ds in parts for d in ds]
@@ -358,10 +369,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.consistent:
         from ..identification.consistent import consistent_estimate
 
-        cons = consistent_estimate(res, args.prior_weight)
+        cons = consistent_estimate(res, args.prior_weight, progress=_progress())
     elif args.prior_weight:
         raise ValueError("--prior-weight: expected --consistent as well")
-    truth_docs = [read_truth(f) for f in files]
     truth_doc = truth_docs[0] if all(d == truth_docs[0] for d in truth_docs) else None
 
     truth = true_base_values(base, truth_doc) if truth_doc else None
@@ -465,6 +475,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     print("\n".join(out))
 
     doc = res.to_dict()
+    doc["tip"] = args.tip  # the chain identified (None: the whole description)
     doc["consistent"] = cons is not None
     if cons is not None:
         doc.update(_plain(cons.to_dict()))
@@ -519,14 +530,24 @@ def cmd_identify(args: argparse.Namespace) -> int:
     return 0
 
 
+@warnings_after_success
 def cmd_identify_payload(args: argparse.Namespace) -> int:
-    from ..identification.consistent import identify_payload, read_arm
+    from ..identification.consistent import arm_tip, identify_payload, read_arm
+    from ..identification.data import read_truth
 
-    robot = load(args.robot, tip=args.tip)
+    tip = arm_tip(args.identification, args.robot)
+    if args.tip is not None and tip is not None and args.tip != tip:
+        raise ValueError(
+            f"--tip {args.tip}: {args.identification} was identified on the chain ending at "
+            f"--tip {tip}; the payload sits on that chain's last link"
+        )
+    robot = load(args.robot, tip=args.tip or tip)
     read_arm(robot, args.identification)  # its errors before reading the logs
     args.model = "dynamic"
     _check_lowpass_options(args)
     files = list(args.data)
+    for f in files:
+        read_truth(f, robot)
     cur = _paired(files, args.currents, "--currents", "the payload data")
     logs = [d for f, c in zip(files, cur) for d in _read_filtered(f, robot, args, c, periodic=True)]
     res = identify_payload(
@@ -538,7 +559,9 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
     )
     d = res.derived()
     out = [
-        f"{robot.name}: payload on the last link ({robot.link_names[-1]}) from "
+        f"{robot.name}: payload on the last link ({robot.link_names[-1]}"
+        + (f", chain to --tip {tip} as identified" if tip and not args.tip else "")
+        + ") from "
         f"{', '.join(files)}: {res.rows} equations, regressor rank {res.rank} of 10, condition "
         f"number {res.cond:.3g}; arm torques from the {res.arm_values} of {args.identification}",
         "  parameters about the last link frame's origin, in its frame (least squares):",
@@ -580,6 +603,14 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
     return 0
+
+
+def _progress():
+    """Progress lines on stderr when it is a terminal (``identify --consistent`` solves for
+    seconds); None otherwise, so that a log or a pipe gets the result and errors only."""
+    if not sys.stderr.isatty():
+        return None
+    return lambda line: print(f"identify: {line}", file=sys.stderr, flush=True)
 
 
 def _consistent_lines(cons, fit, val, cfit, cval, logs) -> list[str]:
@@ -779,7 +810,8 @@ def _add_data_options(p) -> None:
         "time stamps, one zero-phase Butterworth low-pass of positions, logged velocities, "
         "torques and regressor columns, derivatives of the filtered signals, filter edges "
         "dropped, decimation; butter, savgol, none: only derive missing velocities and "
-        "accelerations (torques unfiltered)",
+        "accelerations (torques unfiltered; butter and savgol refuse unevenly spaced time "
+        "stamps, none differences them as they are)",
     )
     number(
         p,
@@ -827,6 +859,7 @@ def _add_data_options(p) -> None:
 def register(sub) -> None:
     """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
     from ..control.simulation import MAX_SAMPLES, MAX_STEPS
+    from ..identification.consistent import MAX_PRIOR_WEIGHT
     from ..identification.excitation import MAX_TRAJECTORY_ROWS
     from .control import add_closed_loop_args
 
@@ -1032,13 +1065,15 @@ def register(sub) -> None:
         action="store_true",
         help="also estimate physically consistent classical parameters (every link's "
         "pseudo-inertia positive semidefinite, rotor inertia and friction >= 0) minimising the "
-        "same weighted residual (convex, cvxpy with Clarabel); JSON: classical, "
-        "pseudo_inertia_min_eig, total_mass, consistent_estimate",
+        "same weighted residual (convex, cvxpy with Clarabel; each solve reported on stderr "
+        "when it is a terminal); JSON: classical, pseudo_inertia_min_eig, total_mass, "
+        "consistent_estimate",
     )
     number(
         p,
         "--prior-weight",
         low=0,
+        high=MAX_PRIOR_WEIGHT,
         default=0.0,
         help="with --consistent: add W x the log-det divergence of each link's pseudo-inertia "
         "from the description's; the fit term is in units of the noise variance, so W = 1 makes "
@@ -1085,7 +1120,8 @@ def register(sub) -> None:
         "link frame's origin, in its frame) of a payload rigidly fixed to the last link, from "
         "logs with the payload: tau - tau_arm = W_last phi, with tau_arm from the identified arm "
         "(the JSON of 'mindyn identify': its classical map when present, else its base values; "
-        "friction, rotor inertia and offsets as identified). Least squares with standard "
+        "friction, rotor inertia and offsets as identified; the chain to the --tip it was "
+        "identified with, unless --tip is given). Least squares with standard "
         "deviations, and the estimate with a positive semidefinite pseudo-inertia (cvxpy, "
         "Clarabel). Refused, naming them, when the data do not determine all 10 parameters.",
     )

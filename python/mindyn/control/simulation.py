@@ -374,16 +374,18 @@ class SimulationResult:
         """``q - q_d`` at the last sample, degrees."""
         return np.degrees(self.error[-1])
 
-    def save(self, path, robot_name: str = "") -> Path:
+    def save(self, path, robot_name: str = "", joint_names=None) -> Path:
         """Writes ``t, q, dq, tau`` (the logged values, torques in N m) to ``path`` as
         ``mindyn identify`` reads it and the true parameters and settings to the sidecar
-        ``<stem>.truth.json``."""
+        ``<stem>.truth.json``, with the robot's name and ``joint_names`` (when given), by which
+        ``mindyn identify`` refuses the log for another robot."""
         # imported here: the identification package (and scipy.signal) is not needed to simulate
         from ..identification.data import truth_path, write_csv
 
         path = write_csv(path, self.t, self.q, self.tau, dq=self.dq)
         truth = {
             "robot": robot_name,
+            **({} if joint_names is None else {"joints": list(joint_names)}),
             "names": self.param_names,
             "values": [float(v) for v in self.params],
             "simulation": self.info,

@@ -25,6 +25,7 @@ from ``tau - tau_arm(q, dq, ddq) = W_last(q, dq, ddq) phi`` with the identified 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import re
 import time
@@ -39,6 +40,7 @@ from .._core import ModelError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
+from .document import read_identification
 from .errors import IdentificationError
 from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
 from .models import require_torque
@@ -74,6 +76,11 @@ NULL_SPACE_WEIGHT = 1e-6
 #: its projection onto the positive semidefinite matrices plus ``eps`` times the identity (noted
 #: in the result).
 PRIOR_REGULARISATION = 1e-3
+
+#: Largest prior weight accepted: the prior then counts a million times the fit, which leaves
+#: the description's values; beyond it the conic solvers fail or return inaccurate answers
+#: (Clarabel panics at 1e200, SCS returned a mass of 2e5 kg at 1e9).
+MAX_PRIOR_WEIGHT = 1e6
 
 INERTIAL = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
 _NAME = re.compile(r"([A-Za-z]+?)([0-9]+)")
@@ -297,14 +304,22 @@ def identify_consistent(robot, data, prior_weight: float = 0.0, **kwargs) -> Con
 def _weight(prior_weight) -> float:
     try:
         w = float(prior_weight)
-    except (TypeError, ValueError):
-        raise ModelError(f"prior_weight is {prior_weight!r}; expected a number >= 0") from None
-    if not (math.isfinite(w) and w >= 0):
-        raise ModelError(f"prior_weight is {prior_weight!r}; expected a finite number >= 0")
+    except (TypeError, ValueError, OverflowError):
+        raise ModelError(
+            f"prior_weight is {prior_weight!r}; expected a number from 0 to {MAX_PRIOR_WEIGHT:g}"
+        ) from None
+    if not (0 <= w <= MAX_PRIOR_WEIGHT):
+        raise ModelError(
+            f"prior_weight is {w:g}; expected a number from 0 to {MAX_PRIOR_WEIGHT:g} (at "
+            f"{MAX_PRIOR_WEIGHT:g} the prior already outweighs the fit by that factor, and the "
+            "convex solvers lose accuracy beyond it)"
+        )
     return w
 
 
-def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) -> ConsistentResult:
+def consistent_estimate(
+    res: IdentificationResult, prior_weight: float = 0.0, *, progress=None
+) -> ConsistentResult:
     """The physically consistent classical parameters for the least-squares problem of ``res``
     (see the module documentation).
 
@@ -323,7 +338,10 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
     refined by a smooth descent of the same objective (:func:`_refine_with_prior`; noted with
     the gain). After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance
     are projected onto the positive semidefinite matrices (negative eigenvalues set to zero)
-    and ``Ia, Fv, Fc`` clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``."""
+    and ``Ia, Fv, Fc`` clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
+
+    ``progress``, a callable taking a line of text, is told each solve and refinement as it
+    starts and ends (they can take seconds each)."""
     t0 = time.perf_counter()
     W = _weight(prior_weight)
     base = res.base
@@ -355,10 +373,11 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
         pi, solver, status = pi_n, "none", "optimal"
         notes.append("the unconstrained optimum is consistent: returned as it is")
     else:
-        pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls)
+        pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls, progress)
         if W > 0:
             J0s = _prior_matrices(base, layout, pi0, None)
-            pi, gain = _refine_with_prior(M, z, s2, pi, layout, J0s, W)
+            with _stage(progress, "refinement of the solver's answer (L-BFGS-B)"):
+                pi, gain = _refine_with_prior(M, z, s2, pi, layout, J0s, W)
             if gain > 0:
                 notes.append(
                     f"the cone solver's answer refined by a smooth descent of the same objective "
@@ -404,6 +423,26 @@ def consistent_estimate(res: IdentificationResult, prior_weight: float = 0.0) ->
         notes=notes,
         seconds=time.perf_counter() - t0,
     )
+
+
+@contextlib.contextmanager
+def _stage(progress, what: str):
+    """Tells ``progress`` (a callable taking a line, or None) that ``what`` starts, and when it
+    ends with its duration (or that it failed)."""
+    if progress is None:
+        yield
+        return
+    progress(f"consistent estimate: {what} ...")
+    t0 = time.perf_counter()
+    ok = False
+    try:
+        yield
+        ok = True
+    finally:
+        progress(
+            f"consistent estimate: {what}: {'done' if ok else 'failed'} in "
+            f"{time.perf_counter() - t0:.1f} s"
+        )
 
 
 def _refine_with_prior(M, z, s2, pi, layout: _Layout, J0s, W: float) -> tuple[np.ndarray, float]:
@@ -511,7 +550,7 @@ def _divergence(J, J0) -> float:
     return float(-logdet + np.trace(A) - 4) if sign > 0 else math.inf
 
 
-def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None):
+def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None, progress=None):
     import cvxpy as cp
 
     n = base.robot.n
@@ -564,30 +603,31 @@ def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None):
         rn = np.maximum(np.linalg.norm(A, axis=1), 1e-300)
         feas = cons[1:] + [(A / rn[:, None]) @ u == beta / rn]
         prob = cp.Problem(cp.Minimize(tie if N.size else 0), feas)
-        solver, status = _run(prob, notes, "realisation ", accept_infeasible=True)
+        solver, status = _run(prob, notes, "realisation ", True, progress)
         if status in ("optimal", "optimal_inaccurate"):
             pi_f = np.asarray(G @ u.value, float)
             pi_f += np.linalg.lstsq(base.Y, beta - base.Y @ pi_f, rcond=None)[0]
             notes.append("the unconstrained optimum has a consistent realisation: returned")
             return pi_f, solver, status
-    solver, status = _run(cp.Problem(cp.Minimize(objective), cons), notes, "")
+    solver, status = _run(cp.Problem(cp.Minimize(objective), cons), notes, "", False, progress)
     if W == 0 and N.size:
         # second solve: the undetermined parameters nearest the description among the optima
         best = float(fit.value)
         prob = cp.Problem(
             cp.Minimize(tie), cons + [cp.norm(r) <= math.sqrt(best + TIE_BREAK_SLACK)]
         )
-        solver2, status2 = _run(prob, notes, "tie-break ")
+        solver2, status2 = _run(prob, notes, "tie-break ", False, progress)
         solver = solver if solver2 == solver else f"{solver}+{solver2}"
         status = status if status2 == status else f"{status}+{status2}"
     return np.asarray(G @ u.value, float), solver, status
 
 
-def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple[str, str]:
+def _run(
+    prob, notes: list, what: str, accept_infeasible: bool = False, progress=None
+) -> tuple[str, str]:
     """Solves ``prob`` with Clarabel, else SCS (noted); raises IdentificationError when neither
     gives a solution (with ``accept_infeasible``, Clarabel's verdict of infeasibility is
     returned as the status)."""
-    import cvxpy as cp
 
     tried = []
     for solver in ("CLARABEL", "SCS"):
@@ -598,11 +638,19 @@ def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple
             else {"chordal_decomposition_enable": False}
         )
         try:
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), np.errstate(all="ignore"):
                 warnings.filterwarnings("ignore", "Solution may be inaccurate", UserWarning)
-                prob.solve(solver=solver, **options)
-        except (cp.error.SolverError, ValueError, ArithmeticError) as ex:
-            tried.append(f"{solver}: {str(ex).splitlines()[0] if str(ex) else type(ex).__name__}")
+                warnings.filterwarnings("ignore", category=RuntimeWarning)
+                size = sum(v.size for v in prob.variables())
+                with _stage(
+                    progress, f"{what or 'main '}solve, {solver.capitalize()}, {size} variables"
+                ):
+                    prob.solve(solver=solver, **options)
+        except (KeyboardInterrupt, SystemExit, MemoryError):
+            raise
+        except BaseException as ex:  # noqa: BLE001 - Clarabel's PanicException is a BaseException
+            text = str(ex).splitlines()[0] if str(ex).strip() else type(ex).__name__
+            tried.append(f"{solver.capitalize()} failed ({text})")
             continue
         if accept_infeasible and solver == "CLARABEL" and prob.status == "infeasible":
             return solver, prob.status
@@ -612,9 +660,11 @@ def _run(prob, notes: list, what: str, accept_infeasible: bool = False) -> tuple
             if tried:
                 notes.append(f"{what}fallback to SCS after " + "; ".join(tried))
             return solver, prob.status
-        tried.append(f"{solver}: status {prob.status}")
+        tried.append(f"{solver.capitalize()} ended with status '{prob.status}'")
     raise IdentificationError(
-        f"consistent estimate: no solver succeeded in the {what}solve (" + "; ".join(tried) + ")"
+        f"consistent estimate: the convex {what}problem (least squares under positive "
+        "semidefinite pseudo-inertias) was not solved: " + "; ".join(tried) + "; the data may "
+        "be badly scaled (a longer or richer log, or a smaller --prior-weight, may help)"
     )
 
 
@@ -715,8 +765,8 @@ class _LastLink:
 
 def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.ndarray, str]:
     """The base set and base values of an identified arm: the JSON of ``mindyn identify``
-    (a dict or a path). Uses ``classical`` when present (the consistent estimate), else
-    ``base_values``."""
+    (a dict or a path), checked by :func:`~mindyn.identification.document.read_identification`.
+    Uses ``classical`` when present (the consistent estimate), else ``base_values``."""
     if isinstance(arm, (str, Path)):
         where = str(arm)
         try:
@@ -724,35 +774,52 @@ def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.
         except DataError as ex:
             raise ModelError(f"{where}: not a JSON file of mindyn identify ({ex})") from None
     need = ("robot", "base_names", "base_values", "rotor", "friction", "offset")
-    if not isinstance(arm, dict) or any(k not in arm for k in need):
-        raise ModelError(
-            f"{where}: expected the JSON of mindyn identify (fields {', '.join(need)})"
-        )
+    arm = read_identification(arm, need=need, what=where)
     if arm["robot"] != robot.name:
         raise ModelError(f"{where}: identified for robot '{arm['robot']}', not '{robot.name}'")
     base = base_parameters(
-        robot, rotor=bool(arm["rotor"]), friction=bool(arm["friction"]), offset=bool(arm["offset"])
+        robot, rotor=arm["rotor"], friction=arm["friction"], offset=arm["offset"]
     )
-    if list(arm["base_names"]) != list(base.names):
+    if arm["base_names"] != list(base.names):
+        tip = arm.get("tip")
         raise ModelError(
             f"{where}: its base parameters ({len(arm['base_names'])}) are not those of robot "
-            f"'{robot.name}' ({base.n}); identified with another description?"
+            f"'{robot.name}' ({base.n}, {robot.n} joints); "
+            + (
+                f"it was identified on the chain ending at --tip {tip}: load the robot with "
+                "that tip"
+                if tip
+                else "identified with another description or another --tip?"
+            )
         )
     classical = arm.get("classical")
-    try:
-        if isinstance(classical, dict):
-            missing = [nm for nm in base.classical_names if nm not in classical]
-            if missing:
-                raise ModelError(f"{where}: 'classical' lacks {', '.join(missing[:5])}")
-            pi = np.array([float(classical[nm]) for nm in base.classical_names])
-            values, used = base.values(pi), "classical (consistent estimate)"
-        else:
-            values, used = np.array([float(v) for v in arm["base_values"]]), "base values"
-    except (TypeError, ValueError) as ex:
-        raise ModelError(f"{where}: a parameter value is not a number ({ex})") from None
+    if classical is not None:
+        missing = [nm for nm in base.classical_names if nm not in classical]
+        if missing:
+            raise ModelError(f"{where}: 'classical' lacks {', '.join(missing[:5])}")
+        pi = np.array([classical[nm] for nm in base.classical_names])
+        values, used = base.values(pi), "classical (consistent estimate)"
+    else:
+        values, used = np.array(arm["base_values"]), "base values"
     if values.shape != (base.n,) or not np.all(np.isfinite(values)):
         raise ModelError(f"{where}: expected {base.n} finite base values")
     return base, values, used
+
+
+def arm_tip(arm, robot) -> str | None:
+    """The ``tip`` an identification JSON (a path or a dict) was identified with, when the
+    ``robot`` argument is a URDF file (a tip applies to nothing else; :func:`read_arm` then
+    refuses the robot by name), else None: what :func:`identify_payload` loads a robot named by
+    a string with."""
+    if Path(str(robot)).suffix.lower() not in (".urdf", ".xml"):
+        return None
+    if isinstance(arm, (str, Path)):
+        try:
+            arm = read_json(arm, "identification JSON")
+        except DataError:
+            return None  # read_arm names the problem
+    tip = arm.get("tip") if isinstance(arm, dict) else None
+    return tip if isinstance(tip, str) else None
 
 
 def identify_payload(
@@ -766,7 +833,8 @@ def identify_payload(
     """Inertial parameters of a payload rigidly fixed to the last link, from logs ``data`` with
     the payload and the identified ``arm`` (JSON of ``mindyn identify`` as a dict or path: its
     base values, or its ``classical`` map when present; friction, rotor inertia and offsets as
-    identified). Ordinary least squares on ``tau - tau_arm = W_last phi`` (all joints' equations;
+    identified; a ``robot`` given by name is loaded with the JSON's ``tip``). Ordinary least
+    squares on ``tau - tau_arm = W_last phi`` (all joints' equations;
     with arm friction, equations of joints slower than ``min_velocity`` left out as in
     :func:`~mindyn.identification.identify`), and with ``consistent`` the estimate under a
     positive semidefinite payload pseudo-inertia (cvxpy, Clarabel).
@@ -775,7 +843,7 @@ def identify_payload(
     hides some parameters) do not determine all 10 parameters: the rank and the undetermined
     parameters and combinations are named."""
     t0 = time.perf_counter()
-    robot = load(robot)
+    robot = load(robot, tip=arm_tip(arm, robot) if isinstance(robot, (str, Path)) else None)
     robot._require_serial("payload identification (a payload on the last link)")
     base, beta, used = read_arm(robot, arm)
     logs = _logs(data)

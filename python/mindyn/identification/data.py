@@ -26,6 +26,7 @@ import io
 import json
 import math
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,6 +41,7 @@ __all__ = [
     "JointData",
     "differentiate",
     "read_csv",
+    "check_log_robot",
     "read_truth",
     "truth_path",
     "write_csv",
@@ -402,6 +404,11 @@ def read_json(path, what: str = "JSON file", finite: bool = False):
         raise DataError(f"{path}:{e.lineno}:{e.colno}: not valid JSON: {e.msg}") from None
     except ValueError as e:
         raise DataError(f"{path}: {e}") from None
+    except RecursionError:
+        raise DataError(
+            f"{path}: not a {what}: its arrays or objects are nested deeper than the JSON "
+            f"reader follows (about {sys.getrecursionlimit()} levels)"
+        ) from None
 
 
 def _no_constant(name: str) -> float:
@@ -650,8 +657,11 @@ def truth_path(csv_path) -> Path:
     return p.with_name(p.stem + ".truth.json")
 
 
-def read_truth(csv_path) -> dict | None:
-    """The truth sidecar of a simulated log, or None when there is none."""
+def read_truth(csv_path, robot=None) -> dict | None:
+    """The truth sidecar of a simulated log, or None when there is none. With ``robot``, a
+    sidecar that names another robot (``robot``) or other joints (``joints``, in order) than
+    ``robot``'s is refused: the log was simulated for another robot, whatever its joint
+    count."""
     p = truth_path(csv_path)
     if not p.is_file():
         return None
@@ -660,7 +670,36 @@ def read_truth(csv_path) -> dict | None:
         raise DataError(f"{p}: a truth file is a JSON object")
     if "names" not in d or "values" not in d:
         raise DataError(f"{p}: a truth file needs 'names' and 'values'")
+    if robot is not None:
+        check_log_robot(d, robot, f"{csv_path} (simulated, as {p} says)")
     return d
+
+
+def check_log_robot(doc: dict, robot, where: str) -> None:
+    """Refuses a document (a truth sidecar, an identification JSON) whose ``robot`` name or
+    ``joints`` names differ from ``robot``'s; either field may be absent (or an empty name)."""
+    name = doc.get("robot")
+    if name not in (None, "") and name != robot.name:
+        raise DataError(
+            f"{where}: belongs to robot {_shown(name)}, not '{robot.name}' (a log of another "
+            "robot, even with as many joints, identifies nothing of this one)"
+        )
+    joints = doc.get("joints")
+    if joints is not None and joints != list(robot.joint_names):
+        raise DataError(
+            f"{where}: its joints {_shown(joints)} are not those of robot '{robot.name}' "
+            f"({', '.join(robot.joint_names)})"
+        )
+
+
+def _shown(value) -> str:
+    """A JSON value in a message: text quoted, lists joined, anything else as JSON."""
+    if isinstance(value, str):
+        return repr(value)
+    if isinstance(value, list) and all(isinstance(v, str) for v in value):
+        return "(" + ", ".join(value) + ")"
+    text = json.dumps(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def finite_or_none(x) -> float | None:

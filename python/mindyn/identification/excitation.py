@@ -53,6 +53,10 @@ __all__ = [
 
 CRITERIA = ("cond", "logdet", "hadamard")
 
+#: Seconds between progress lines within a start when the progress stream is not a terminal
+#: (on a terminal the line is redrawn twice a second).
+PROGRESS_SECONDS = 10.0
+
 #: Most rows a sampled trajectory may have (:meth:`FourierTrajectory.sample`): one period at
 #: 1 kHz of a 0.001 Hz trajectory; about 160 bytes per row and joint in CSV text.
 MAX_TRAJECTORY_ROWS = 1_000_000
@@ -555,7 +559,8 @@ def optimize_excitation(
     start : array (n,), optional
         Prescribed position at ``t = 0`` (and at the end of each period).
     progress : bool
-        Print progress to ``stream`` (default stderr).
+        Print progress to ``stream`` (default stderr): a line per start, redrawn during it on a
+        terminal, else a line every :data:`PROGRESS_SECONDS` within a start.
     """
     if criterion not in CRITERIA:
         raise ValueError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
@@ -639,16 +644,19 @@ def optimize_excitation(
 
         live = bool(getattr(stream, "isatty", lambda: False)())  # redraw on a terminal only
 
-        def callback(*_, it=it, s=s, live=live):
+        def callback(*_, it=it, s=s, live=live, t0=t0):
             it["k"] += 1
             now = time.perf_counter()
-            if live and now - it["last"] > 0.5:
+            if now - it["last"] > (0.5 if live else PROGRESS_SECONDS):
                 it["last"] = now
-                say(
-                    f"\r  start {s + 1}/{starts}: iteration {it['k']:>3}, "
-                    f"best {shown} so far {report(prob.best):.6g}   ",
-                    end="",
+                text = (
+                    f"  start {s + 1}/{starts}: iteration {it['k']:>3}, "
+                    f"best {shown} so far {report(prob.best):.6g}"
                 )
+                if live:  # redrawn in place
+                    say(f"\r{text}   ", end="")
+                else:  # a log or a pipe: a line now and then
+                    say(f"{text} ({now - t0:.0f} s)")
 
         cons = [
             {

@@ -11,7 +11,11 @@ Steps, each recorded in ``JointData.processing["preprocess"]``:
 2. **Period averaging** (when asked, ``periods`` or ``period``): a periodic excitation recorded
    over several periods is cut into whole periods (the grid is then chosen with a whole number
    of samples per period) and averaged sample by sample; the spread of the periods about their
-   mean is reported. The averaged period is filtered as a periodic signal (no edges).
+   mean is reported. Periods that do not repeat (positions differing between periods by more
+   than :data:`PERIODICITY_TOLERANCE` of the motion, or one period whose end does not run back
+   into its start) and periods of fewer than :data:`MIN_PERIOD_SAMPLES` samples (refused
+   before any array is made) are refused. The averaged period is filtered as a periodic signal
+   (no edges).
 3. **One zero-phase low-pass**: Butterworth of ``order`` in second-order sections run forwards
    and backwards (``scipy.signal.sosfiltfilt``). The cut-off is chosen from the data unless
    given: ``CUTOFF_FACTOR`` times the excited band, the frequency below which 99.9 % of the
@@ -54,6 +58,7 @@ __all__ = [
     "concatenate",
     "excited_band",
     "preprocess",
+    "require_even_stamps",
     "timing",
 ]
 
@@ -71,6 +76,14 @@ EDGE_PERIODS = 2.0
 PARALLEL_BUDGET = 256 * 2**20
 #: Samples whose regressor is evaluated at once.
 _CHUNK = 8192
+
+#: Fewest samples a period to be averaged may hold (the period averaging's grid).
+MIN_PERIOD_SAMPLES = 8
+#: Periodicity residual refused in period averaging: the RMS difference of the positions of
+#: the periods from their mean, relative to the RMS motion of the joint about its mean. Sensor
+#: noise and encoder steps give a small fraction of the motion; a wrong period count or period
+#: gives a difference of the order of the motion itself.
+PERIODICITY_TOLERANCE = 0.05
 
 #: A sample interval longer than this many median intervals is a break in the log, not jitter
 #: (the jittered logs we know reach 9 median intervals at most; a break of 20 intervals at the
@@ -155,6 +168,78 @@ def _resample(t, tu, q, dq, tau):
         return None if x is None else np.column_stack([np.interp(tu, t, c) for c in x.T])
 
     return qu, lin(dq), lin(tau)
+
+
+def _check_periodic(Q: np.ndarray, cycle: dict, src: str, duration: float) -> None:
+    """Refuses periods (``Q`` of shape (periods, samples, n)) that do not repeat: several
+    periods whose positions differ (beyond the sensor noise, estimated from second differences)
+    by more than :data:`PERIODICITY_TOLERANCE` of the motion, or
+    one period whose end does not run back into its start (a jump from the last sample to the
+    first over 3 times the largest step between neighbouring samples). Records the residual in
+    ``cycle["periodicity_residual"]``."""
+    count, per, _ = Q.shape
+    flat = Q.reshape(count * per, -1)
+    motion = np.sqrt(np.mean((flat - flat.mean(axis=0)) ** 2, axis=0))
+    # sensor noise from second differences (a smooth motion adds little to them): a joint held
+    # still shows only noise, which differs between periods without saying anything of them
+    noise = np.sqrt(np.mean(np.diff(flat, 2, axis=0) ** 2, axis=0) / 6.0)
+    moving = motion > 10.0 * noise + 1e-12 * max(1.0, float(np.max(np.abs(flat))))
+    if not moving.any():
+        return
+    if count > 1:
+        spread = np.sqrt(np.mean((Q - Q.mean(axis=0)) ** 2, axis=(0, 1)))
+        excess = np.sqrt(np.maximum(spread**2 - noise**2, 0.0))  # beyond the noise
+        rel = np.where(moving, excess / np.where(moving, motion, 1.0), 0.0)
+        what = "positions differ between periods by"
+    else:
+        step = np.max(np.abs(np.diff(Q[0], axis=0)), axis=0)
+        jump = np.abs(Q[0, -1] - Q[0, 0])
+        rel = np.where(moving, jump / np.maximum(3 * step, 1e-300), 0.0)
+        what = "end jumps back to its start by"
+    j = int(np.argmax(rel))
+    cycle["periodicity_residual"] = float(rel[j])
+    limit = PERIODICITY_TOLERANCE if count > 1 else 1.0
+    if rel[j] > limit:
+        detail = (
+            f"{100 * rel[j]:.3g} % of its motion (at most {100 * limit:g} %)"
+            if count > 1
+            else f"{rel[j] * 3:.3g} times its largest step between samples (at most 3)"
+        )
+        raise DataError(
+            f"{src}: the log ({duration:.6g} s) is not {count} period(s) of "
+            f"{cycle['period_s']:.6g} s: joint {j + 1}'s {what} {detail}; give the number of "
+            "periods the log holds (--periods) or the excitation's period (--period)"
+        )
+
+
+def require_even_stamps(data: JointData, filter: str) -> None:
+    """Refuses ``data`` whose velocities or accelerations were derived by ``filter``
+    (``butter`` or ``savgol``: filters designed for evenly spaced samples) when its time stamps
+    are not: a jitter over :data:`JITTER_TOLERANCE` of the median interval or intervals over
+    1.5 of it (gaps). The data path of :func:`preprocess` resamples such a log onto a uniform
+    grid first; these filters do not. ``none`` (central differences on the time stamps, which
+    ``numpy.gradient`` takes as they are) is not refused."""
+    if filter not in ("butter", "savgol"):
+        return
+    derived = [
+        what
+        for what in ("velocity", "acceleration")
+        if data.processing.get(what, {}).get("source", "logged") != "logged"
+    ]
+    if not derived or data.m < 3:
+        return
+    tm = timing(data.t)
+    if tm["jitter"] <= JITTER_TOLERANCE and tm["gaps"] == 0:
+        return
+    raise DataError(
+        f"{data.source or 'data'}: --filter {filter} derives the "
+        + " and ".join("velocities" if w == "velocity" else "accelerations" for w in derived)
+        + " as if the samples were evenly spaced, but its time stamps are not (intervals "
+        f"{1e3 * tm['min_dt_s']:.4g} to {1e3 * tm['max_dt_s']:.4g} ms about a median of "
+        f"{1e3 * tm['median_dt_s']:.4g} ms, jitter {100 * tm['jitter']:.3g} %, {tm['gaps']} "
+        "gap(s)); use --filter lowpass (the default), which resamples onto a uniform grid and "
+        "cuts the log at its breaks"
+    )
 
 
 def split_at_gaps(data: JointData, gap: float = SEGMENT_GAP) -> list[JointData]:
@@ -270,7 +355,20 @@ def preprocess(
                 raise DataError(
                     f"{src}: the log lasts {duration:.6g} s, shorter than the period {T:g} s"
                 )
-        per = max(8, int(round(T / dt)))
+        # before any array of count x per samples is made: a period of a few sample intervals
+        # (a typo such as 1e-6 s) would ask for millions of them
+        if not T / dt >= MIN_PERIOD_SAMPLES:
+            given = (
+                f"{periods} periods in its {duration:.6g} s make a period of {T:.3g} s,"
+                if periods is not None
+                else f"the period {T:.3g} s is"
+            )
+            raise DataError(
+                f"{src}: {given} {T / dt:.3g} sample intervals ({dt:.6g} s); a period to "
+                f"average needs at least {MIN_PERIOD_SAMPLES} (is the period in seconds, the "
+                "count whole periods of the excitation?)"
+            )
+        per = int(round(T / dt))
         dt = T / per
         cycle = {"period_s": T, "periods": count, "samples_per_period": per}
         tu = np.arange(count * per) * dt
@@ -308,6 +406,7 @@ def preprocess(
         if cycle["periods"] > 1:
             qs = np.sqrt(np.mean((Q - Q.mean(axis=0)) ** 2, axis=(0, 1)))
             cycle["position_spread_rms"] = qs.tolist()
+        _check_periodic(Q, cycle, src, duration)
         q = Q.mean(axis=0)
         dq = None if DQ is None else DQ.mean(axis=0)
         tau = None if TAU is None else TAU.mean(axis=0)

@@ -1,0 +1,119 @@
+"""The JSON document of ``mindyn identify --json`` read back: one check of the fields that
+``identify-payload``, ``export`` and ``codegen --params`` take from it.
+
+A field is checked for its JSON type (``rotor: "no"`` is not a boolean, ``base_names: 7`` not a
+list), numbers for being finite and within a double (a 400-digit integer is not), and the lists
+for matching lengths; each failure is one :class:`~mindyn.identification.data.DataError` naming
+the file and the field.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from .data import DataError, read_json
+
+__all__ = ["FLAGS", "read_identification"]
+
+#: The boolean fields: JSON ``true`` / ``false`` only.
+FLAGS = ("rotor", "friction", "offset", "consistent")
+
+
+def read_identification(
+    source, *, need=(), what: str = "identification JSON", finite: bool = False
+) -> dict:
+    """The checked document of ``mindyn identify --json``: ``source`` a path or an already read
+    mapping. ``need`` names the fields that must be present (``robot``, ``base_names``,
+    ``base_values``, ``classical``, one of :data:`FLAGS`...); the others are checked when
+    present; with ``finite`` a file holding NaN or Infinity anywhere is refused. Returns the
+    document with ``base_values`` as floats and ``classical`` (when
+    present) as a name -> float mapping.
+
+    Raises
+    ------
+    DataError
+        Not a JSON object, a needed field missing, or a field of the wrong type or range."""
+    if isinstance(source, (str, Path)):
+        where = str(source)
+        doc = read_json(source, what, finite=finite)
+    else:
+        where, doc = what, source
+    obj = doc if isinstance(doc, dict) else {}
+    missing = [k for k in need if obj.get(k) is None]
+    if "classical" in missing:
+        raise DataError(
+            f"{where} has no 'classical' map of classical parameter values (it is written by "
+            "'mindyn identify --consistent --json')"
+        )
+    if not isinstance(doc, dict):
+        raise DataError(f"{where}: expected a JSON object (the JSON of mindyn identify)")
+    if missing:
+        raise DataError(
+            f"{where}: lacks {', '.join(repr(k) for k in missing)} (the JSON of mindyn "
+            "identify has them)"
+        )
+    out = dict(doc)
+    for key in ("robot", "tip"):
+        v = doc.get(key)
+        if v is not None and not isinstance(v, str):
+            raise DataError(f"{where}: '{key}' is {_kind(v)}; expected text")
+    for key in FLAGS:
+        if key in doc and not isinstance(doc[key], bool):
+            raise DataError(f"{where}: '{key}' is {_kind(doc[key])}; expected true or false")
+    if "base_names" in doc:
+        names = doc["base_names"]
+        if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
+            raise DataError(f"{where}: 'base_names' is {_kind(names)}; expected a list of names")
+    if "base_values" in doc:
+        values = doc["base_values"]
+        if not isinstance(values, list):
+            raise DataError(
+                f"{where}: 'base_values' is {_kind(values)}; expected a list of numbers"
+            )
+        out["base_values"] = [
+            _number(v, f"{where}: 'base_values' item {i + 1}") for i, v in enumerate(values)
+        ]
+        names = doc.get("base_names")
+        if isinstance(names, list) and len(names) != len(values):
+            raise DataError(f"{where}: {len(values)} 'base_values' for {len(names)} 'base_names'")
+    classical = doc.get("classical")
+    if classical is not None:
+        if not isinstance(classical, dict) or not classical:
+            raise DataError(
+                f"{where}: 'classical' is {_kind(classical)}; expected a map of classical "
+                "parameter names to numbers"
+            )
+        out["classical"] = {
+            k: _number(v, f"{where}: 'classical' {k!r}") for k, v in classical.items()
+        }
+    return out
+
+
+def _number(v, where: str) -> float:
+    """A JSON number as a finite double, or DataError."""
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise DataError(f"{where} is {_kind(v)}; expected a number")
+    try:
+        x = float(v)
+    except OverflowError:
+        raise DataError(
+            f"{where}: an integer of {len(str(abs(v)))} digits is too large for a double"
+        ) from None
+    if not math.isfinite(x):
+        raise DataError(f"{where} is not a finite number")
+    return x
+
+
+def _kind(v) -> str:
+    """What a JSON value is, for a message (its text when short)."""
+    if v is None:
+        return "null"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return repr(v) if len(v) <= 40 else "a text"
+    if isinstance(v, (int, float)):
+        text = repr(v)
+        return text if len(text) <= 24 else f"a number of {len(text)} digits"
+    return "a list" if isinstance(v, list) else "an object"

@@ -1,0 +1,368 @@
+"""What ``mindyn identify`` and the commands reading its JSON accept: logs of the robot named
+(not of another one with as many joints), the chain ``--tip`` chose, the periods a periodic log
+holds, well-typed identification JSON, solver failures, time bases the filters can take and
+progress of the long steps. Each answer is checked against data the test generates (a simulated
+robot with known parameters) or against the input's own structure."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import tracemalloc
+from pathlib import Path
+
+import mindyn
+import numpy as np
+import pytest
+from mindyn import cli
+from mindyn.base import base_parameters
+from mindyn.export import classical_terms
+from mindyn.identification import consistent as consistent_module
+from mindyn.identification import excitation as excitation_module
+from mindyn.identification import preprocess as preprocess_module
+from mindyn.identification.data import DataError, JointData, write_csv
+from mindyn.identification.excitation import random_trajectory
+from mindyn.identification.preprocess import preprocess
+
+REPO = Path(__file__).resolve().parents[1]
+UR5 = str(REPO / "examples/urdf/ur5.urdf")
+
+
+def run(argv: list[str]) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = cli.main([str(a) for a in argv])
+    return rc, out.getvalue(), err.getvalue()
+
+
+def one_line_error(rc: int, err: str, *needles: str) -> str:
+    assert rc != 0, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mindyn: error: "), err
+    assert "a defect in mindyn" not in lines[0], err
+    for s in needles:
+        assert s in lines[0], (s, err)
+    return lines[0]
+
+
+def run_ok(argv) -> bool:
+    rc, _, err = run(argv)
+    assert rc == 0, err
+    return True
+
+
+def simulate(path: Path, robot: str, *extra) -> Path:
+    rc, out, err = run(
+        ["simulate", robot, "--mode", "inverse", "--duration", "6", "-o", path, *extra]
+    )
+    assert rc == 0, err
+    return path
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("inputs")
+    return {
+        "ur5": simulate(d / "ur5.csv", UR5),
+        "zcr07s": simulate(d / "zcr07s.csv", "zcr07s"),
+        "zcr07s_period": run_ok(["simulate", "zcr07s", "--mode", "inverse", "-o", d / "p.csv"])
+        and d / "p.csv",
+        "dir": d,
+    }
+
+
+# -- a log of another robot -----------------------------------------------------------------
+def test_log_of_another_robot_with_as_many_joints_is_refused(logs):
+    assert mindyn.load(UR5).n == mindyn.load("zcr07s").n  # the case: the columns fit
+    rc, _, err = run(["identify", "zcr07s", logs["ur5"]])
+    one_line_error(rc, err, "ur5.csv", "'ur5_example'", "not 'zcr07s'")
+    rc, _, err = run(["identify", "zcr07s", logs["zcr07s"], "--validate", logs["ur5"]])
+    one_line_error(rc, err, "ur5.csv", "'ur5_example'", "not 'zcr07s'")
+    # the robot's own log: the true column comes from its sidecar
+    rc, out, err = run(["identify", "zcr07s", logs["zcr07s"]])
+    assert rc == 0, err
+    assert "true values from" in out
+
+
+def test_log_whose_sidecar_names_other_joints_is_refused(logs, tmp_path):
+    log = tmp_path / "renamed.csv"
+    log.write_text(Path(logs["zcr07s"]).read_text())
+    truth = json.loads(Path(logs["zcr07s"]).with_suffix(".truth.json").read_text())
+    robot = mindyn.load("zcr07s")
+    assert truth["joints"] == robot.joint_names  # what simulate writes
+    truth["robot"] = ""  # no name: the joints alone decide
+    truth["joints"] = [f"other_{j}" for j in robot.joint_names]
+    (tmp_path / "renamed.truth.json").write_text(json.dumps(truth))
+    rc, _, err = run(["identify", "zcr07s", log])
+    one_line_error(rc, err, "renamed.csv", "other_", "not those of robot 'zcr07s'")
+
+
+# -- the chain --tip chose -----------------------------------------------------------------
+def test_identify_json_records_the_tip_and_payload_uses_it(tmp_path):
+    log = simulate(tmp_path / "five.csv", UR5, "--tip", "wrist_2_link")
+    js = tmp_path / "five.json"
+    rc, _, err = run(["identify", UR5, "--tip", "wrist_2_link", log, "--json", js])
+    assert rc == 0, err
+    assert json.loads(js.read_text())["tip"] == "wrist_2_link"
+    # the payload log is the arm's own (no payload): the payload found is nothing
+    pj = tmp_path / "payload.json"
+    rc, out, err = run(["identify-payload", UR5, js, log, "--no-consistent", "--json", pj])
+    assert rc == 0, err
+    assert "--tip wrist_2_link" in out
+    assert abs(json.loads(pj.read_text())["unconstrained"]["mass"]) < 1e-3
+    rc, _, err = run(["identify-payload", UR5, "--tip", "wrist_3_link", js, log])
+    one_line_error(rc, err, "--tip wrist_3_link", "--tip wrist_2_link")
+    # without the tip in the JSON (an older file), the message says which option it may be
+    doc = json.loads(js.read_text())
+    del doc["tip"]
+    js.write_text(json.dumps(doc))
+    rc, _, err = run(["identify-payload", UR5, js, log])
+    one_line_error(rc, err, "--tip")
+
+
+# -- periods that the log does not hold --------------------------------------------------------
+def periodic_log(periods: float, T: float = 2.0, rate: float = 250.0, noise: float = 0.0):
+    """Two joints moving with period ``T`` (harmonics 1 and 3, and 2), ``periods`` periods long;
+    position noise ``noise`` (rad sd)."""
+    t = np.arange(int(round(periods * T * rate))) / rate
+    w = 2 * np.pi / T
+    q = np.column_stack(
+        [0.8 * np.sin(w * t) + 0.2 * np.cos(3 * w * t), 0.5 * np.sin(2 * w * t + 0.3)]
+    )
+    q += noise * np.random.default_rng(3).standard_normal(q.shape)
+    return JointData(t, q, None, None, q.copy(), source="periodic")
+
+
+@pytest.mark.parametrize("held, asked", [(1, 2), (1, 3), (2, 4), (3, 2)])
+def test_a_period_count_the_log_does_not_hold_is_refused(held, asked):
+    with pytest.raises(DataError, match=f"is not {asked} period"):
+        preprocess(periodic_log(held), periods=asked)
+
+
+@pytest.mark.parametrize("held", [1, 2, 4])
+def test_the_periods_a_noisy_log_holds_are_averaged(held):
+    # position noise of 5 mrad against a motion of about 0.5 rad RMS
+    d = preprocess(periodic_log(held, noise=0.005), periods=held)
+    avg = d.processing["preprocess"]["averaging"]
+    assert avg["periods"] == held and avg["period_s"] == pytest.approx(2.0, rel=1e-3)
+    # several periods: their spread against the motion; one: its end-to-start jump in largest
+    # steps between samples (at most 1 in units of three steps)
+    limit = preprocess_module.PERIODICITY_TOLERANCE if held > 1 else 1.0
+    assert avg["periodicity_residual"] < limit / 2
+
+
+def test_a_joint_held_still_with_noise_does_not_refuse_the_periods():
+    log = periodic_log(4)
+    rng = np.random.default_rng(8)
+    still = 1e-4 * rng.standard_normal(log.m)  # encoder noise on a joint that does not move
+    log = JointData(
+        log.t, np.column_stack([log.q, still]), None, None, np.column_stack([log.tau, still])
+    )
+    avg = preprocess(log, periods=4).processing["preprocess"]["averaging"]
+    assert avg["periods"] == 4
+    with pytest.raises(DataError, match="is not 3 period"):
+        preprocess(log, periods=3)
+
+
+def test_one_period_that_does_not_close_is_refused():
+    log = periodic_log(0.7)  # 0.7 of a period: the end does not run back into the start
+    with pytest.raises(DataError, match="jumps back to its start"):
+        preprocess(log, periods=1)
+
+
+def test_cli_refuses_two_periods_of_a_one_period_log(logs):
+    # the simulated log is one period of its reference (the default duration)
+    rc, _, err = run(["identify", "zcr07s", logs["zcr07s_period"], "--periods", "2"])
+    one_line_error(rc, err, "is not 2 period(s)", "--periods")
+    rc, out, err = run(["identify", "zcr07s", logs["zcr07s_period"], "--periods", "1"])
+    assert rc == 0, err
+
+
+@pytest.mark.parametrize("rows, period", [(600, 1e-6), (3750, 1e-6), (600, 1e-3)])
+def test_a_period_of_a_few_samples_is_refused_before_allocating(rows, period):
+    t = np.arange(rows) / 250.0
+    q = np.column_stack([np.sin(t), np.cos(2 * t)])
+    log = JointData(t, q, None, None, q.copy(), source="short")
+    tracemalloc.start()
+    try:
+        with pytest.raises(DataError, match="sample intervals"):
+            preprocess(log, period=period)
+        with pytest.raises(DataError, match="sample intervals"):
+            preprocess(log, periods=rows)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 20 * 2**20  # the refusal comes before the grid of periods is made
+
+
+# -- the identification JSON, read back ------------------------------------------------------
+@pytest.fixture(scope="module")
+def arm_json(logs):
+    js = Path(logs["dir"]) / "arm.json"
+    rc, _, err = run(["identify", UR5, logs["ur5"], "--json", js])
+    assert rc == 0, err
+    return json.loads(js.read_text())
+
+
+@pytest.mark.parametrize(
+    "field, value, needle",
+    [
+        ("base_names", 7, "'base_names' is 7; expected a list of names"),
+        ("base_values", ["1.0"] * 36, "'base_values' item 1 is '1.0'; expected a number"),
+        ("base_values", [1.0], "1 'base_values' for 36 'base_names'"),
+        ("rotor", "no", "'rotor' is 'no'; expected true or false"),
+        ("friction", 0, "'friction' is 0; expected true or false"),
+        ("robot", ["ur5_example"], "'robot' is a list; expected text"),
+        ("tip", 3, "'tip' is 3; expected text"),
+        ("classical", 10**400, "integer of 401 digits is too large for a double"),
+        ("classical", True, "'classical' 'XX1' is true; expected a number"),
+    ],
+    ids=["names", "text", "count", "rotor", "friction", "robot", "tip", "huge", "bool"],
+)
+def test_identification_json_fields_are_checked_when_read(
+    arm_json, logs, tmp_path, field, value, needle
+):
+    doc = dict(arm_json)
+    if field == "classical":  # a complete map, XX1 of the given value
+        robot = mindyn.load(UR5)
+        doc[field] = dict(zip(robot.param_names, robot.params.tolist()), XX1=value)
+    else:
+        doc[field] = value
+    js = tmp_path / "id.json"
+    js.write_text(json.dumps(doc))
+    rc, _, err = run(["identify-payload", UR5, js, logs["ur5"], "--no-consistent"])
+    one_line_error(rc, err, "id.json", needle)
+    if field == "classical":  # export reads the same document
+        rc, _, err = run(["export", UR5, js, "--urdf", tmp_path / "x.urdf"])
+        one_line_error(rc, err, "id.json", needle)
+
+
+def test_export_refuses_deeply_nested_json_in_one_line(tmp_path):
+    js = tmp_path / "deep.json"
+    js.write_text("[" * 100_000 + "]" * 100_000)
+    rc, _, err = run(["export", UR5, js, "--urdf", tmp_path / "x.urdf"])
+    one_line_error(rc, err, "deep.json", "nested deeper")
+
+
+def test_export_refuses_a_huge_integer_in_the_python_api():
+    robot = mindyn.load(UR5)
+    classical = dict(zip(robot.param_names, robot.params.tolist()))
+    classical["M1"] = 10**400
+    with pytest.raises(mindyn.ModelError, match="401 digits, too large for a double"):
+        classical_terms(robot, classical)
+
+
+# -- the consistent estimate's solver ----------------------------------------------------------
+def test_prior_weight_range_is_checked(logs):
+    rc, _, err = run(["identify", UR5, logs["ur5"], "--consistent", "--prior-weight", "1e200"])
+    one_line_error(rc, err, "--prior-weight", "1e+06")
+    with pytest.raises(mindyn.ModelError, match="from 0 to 1e"):
+        consistent_module._weight(1e200)
+
+
+class _Panic(BaseException):
+    """As pyo3's PanicException, which Clarabel raises: not an Exception."""
+
+
+def test_a_solver_panic_and_its_warnings_end_in_one_error_line(logs, monkeypatch):
+    import cvxpy
+
+    def panic(self, *a, **k):
+        np.log(np.zeros(1))  # a numpy RuntimeWarning before the failure
+        raise _Panic("Eigval error: Eigen(1)")
+
+    monkeypatch.setattr(cvxpy.Problem, "solve", panic)
+    rc, _, err = run(["identify", UR5, logs["ur5"], "--consistent", "--prior-weight", "1"])
+    line = one_line_error(rc, err, "consistent estimate", "not solved", "Clarabel failed")
+    assert "RuntimeWarning" not in err and "np.float64" not in line
+
+
+def test_numpy_warnings_are_held_back_until_the_command_succeeds(capsys):
+    from mindyn.cli.quiet import warnings_after_success
+
+    def command(args):
+        with np.errstate(divide="warn"):
+            np.log(np.zeros(2))
+            np.log(np.zeros(3))  # the same warning: printed once
+        if args == "fail":
+            raise mindyn.ModelError("the one line")
+        return 0
+
+    wrapped = warnings_after_success(command)
+    with pytest.raises(mindyn.ModelError):
+        wrapped("fail")
+    assert capsys.readouterr().err == ""
+    assert wrapped("ok") == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mindyn: warning: divide by zero")
+
+
+# -- filters on stamps that are not evenly spaced ---------------------------------------------
+@pytest.fixture(scope="module")
+def jittered(tmp_path_factory):
+    """zcr07s along a random Fourier trajectory (10 s), sampled at 250 Hz with intervals
+    jittered by +-30 % and two gaps of 3 intervals; positions and exact inverse-dynamics
+    torques (no velocities: the filters must derive them). Returns the CSV and the true base
+    values."""
+    robot = mindyn.load("zcr07s")
+    traj = random_trajectory(robot, seed=2)
+    rng = np.random.default_rng(5)
+    dt = rng.uniform(0.7, 1.3, 2499) / 250.0
+    dt[[700, 1600]] = 3 / 250.0
+    t = np.concatenate([[0.0], np.cumsum(dt)])
+    t = t[t <= traj.duration]
+    q, dq, ddq = traj.evaluate(t)
+    tau = robot.inverse_dynamics(q, dq, ddq)
+    path = tmp_path_factory.mktemp("jitter") / "jittered.csv"
+    write_csv(path, t, q, tau)
+    return path, base_parameters(robot).values(robot.params)
+
+
+@pytest.mark.parametrize("filter", ["butter", "savgol", "none", "lowpass"])
+def test_filters_on_jittered_stamps_refuse_or_recover_the_truth(jittered, filter, tmp_path):
+    path, truth = jittered
+    js = tmp_path / "id.json"
+    argv = ["identify", "zcr07s", path, "--filter", filter, "--rsd-threshold", "0", "--json", js]
+    rc, _, err = run(argv)
+    if rc != 0:  # refused: naming the uneven stamps and the filter that handles them
+        assert filter != "lowpass"
+        one_line_error(rc, err, "--filter " + filter, "jitter", "--filter lowpass")
+        return
+    est = np.array(json.loads(js.read_text())["base_values"])
+    # noise-free data: what is left is the data path's own error (1e-5 relative on this log by
+    # the default path and by differences on the stamps, --filter none; butter and savgol had
+    # 0.26 and 0.55)
+    assert np.linalg.norm(est - truth) / np.linalg.norm(truth) < 0.01
+
+
+# -- progress of the long steps ---------------------------------------------------------------
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_consistent_estimate_reports_its_solves_on_a_terminal(logs, monkeypatch):
+    argv = ["identify", UR5, logs["ur5"], "--consistent", "--prior-weight", "1"]
+    rc, _, err = run(argv)  # not a terminal (a pipe, a log): the result only
+    assert rc == 0 and "identify: consistent estimate" not in err, err
+    out, term = io.StringIO(), _Terminal()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(term):
+        assert cli.main([str(a) for a in argv]) == 0
+    lines = [x for x in term.getvalue().splitlines() if x.startswith("identify: ")]
+    starts = [x for x in lines if x.endswith("...")]
+    ends = [x for x in lines if ": done in " in x]
+    assert starts and len(starts) == len(ends), lines
+    assert any("Clarabel" in x for x in starts) and any("L-BFGS-B" in x for x in starts)
+    assert "Physically consistent estimate" in out.getvalue()
+
+
+def test_excite_reports_progress_within_a_start_to_a_log(monkeypatch):
+    monkeypatch.setattr(excitation_module, "PROGRESS_SECONDS", 0.0)  # every iteration
+    stream = io.StringIO()  # not a terminal
+    excitation_module.optimize_excitation(
+        "planar2", harmonics=3, starts=1, maxiter=4, stream=stream, seed=1
+    )
+    within = [x for x in stream.getvalue().splitlines() if ": iteration " in x]
+    assert len(within) >= 2 and all(x.startswith("  start 1/1: iteration") for x in within)
+    assert "\r" not in stream.getvalue()
