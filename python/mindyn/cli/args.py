@@ -129,6 +129,25 @@ def number(
     return p.add_argument(*flags, type=kind, help=text.replace("%", "%%"), **kwargs)
 
 
+def check_radians(values, option: str, flag: str, ranges=None) -> None:
+    """Refuses angles in radians that are degrees given without ``flag``: a value outside
+    [-2 pi, 2 pi], or outside ``ranges[k]`` (the largest magnitude joint k reaches within its
+    limits) where that is wider. ``ranges[k] = None`` skips value k (a prismatic joint)."""
+    for k, v in enumerate(values):
+        reach = 2 * math.pi
+        if ranges is not None:
+            if ranges[k] is None:
+                continue
+            reach = max(reach, ranges[k])
+        if abs(v) > reach:
+            where = f" (value {k + 1})" if len(values) > 1 else ""
+            within = "[-2pi, 2pi]" if reach == 2 * math.pi else f"[-{reach:.4g}, {reach:.4g}]"
+            raise ValueError(
+                f"{option} {_fmt(v)}{where}: outside {within}, so not an angle in radians; "
+                f"give {flag} if the angles are in degrees"
+            )
+
+
 def seed(p, *flags: str, default: int = 0, help: str = "random seed") -> None:
     number(p, *flags, low=0, high=MAX_SEED, integer=True, default=default, help=help)
 
