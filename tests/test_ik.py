@@ -211,7 +211,26 @@ def test_ik_command(capsys):
     assert err == "mindyn: error: --q0 needs 6 values, got 2\n"
 
 
-def test_ik_command_refuses_degrees_given_as_radians(capsys, monkeypatch):
+def write_wide_urdf(tmp_path):
+    """A revolute joint limited to +-4 pi, then a prismatic joint."""
+    link = '<link name="{0}"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" '
+    link += 'iyy="0.1" iyz="0" izz="0.1"/></inertial></link>'
+    joint = '<joint name="{0}" type="{1}"><parent link="{2}"/><child link="{3}"/>'
+    joint += '<axis xyz="0 0 1"/><limit lower="{4}" upper="{5}" effort="1" velocity="1"/></joint>'
+    text = (
+        '<robot name="wide"><link name="base"/>'
+        + link.format("a")
+        + link.format("b")
+        + joint.format("j1", "revolute", "base", "a", -4 * np.pi, 4 * np.pi)
+        + joint.format("j2", "prismatic", "a", "b", -1, 1)
+        + "</robot>"
+    )
+    path = tmp_path / "wide.urdf"
+    path.write_text(text)
+    return path
+
+
+def test_ik_command_refuses_degrees_given_as_radians(tmp_path, capsys, monkeypatch):
     # `--rpy 0 90 0` without --deg used to converge to a pose rotated by 90 rad
     base = ["ik", "puma560", "--xyz", "0.5", "0.1", "0.4"]
     for extra in (["--rpy", "0", "90", "0"], ["--rpy", "0", "-6.3", "0"], ["--q0", "0", "90"]):
@@ -237,12 +256,19 @@ def test_ik_command_refuses_degrees_given_as_radians(capsys, monkeypatch):
     assert main(["ik", "stanford", "--xyz", "0.3", "0.2", "0.4", "--q0", *q0, "--deg"]) in (0, 1)
     capsys.readouterr()
     assert np.allclose(seen["q0"], np.radians([10, 20, 0, 40, 50, 60]) + [0, 0, 0.3, 0, 0, 0])
-    # a joint whose limits reach past 2 pi takes a start up to its limit in radians
+    # a revolute joint whose limits reach past 2 pi takes a start up to its limit in radians
     from mindyn.cli.args import check_radians
 
-    check_radians([7.0, 100.0], "--q0", "--deg", [4 * np.pi, None])
+    wide = mindyn.load(write_wide_urdf(tmp_path))
+    check_radians([7.0, 100.0], "--q0", "--deg", wide)  # 100 m on the prismatic joint
     with pytest.raises(ValueError, match=r"--q0 13 \(value 1\): outside \[-12.57, 12.57\]"):
-        check_radians([13.0, 0.0], "--q0", "--deg", [4 * np.pi, None])
+        check_radians([13.0, 0.0], "--q0", "--deg", wide)
+    # excite's --start: the same check, naming its own option
+    assert (
+        main(["excite", "puma560", "--start", "90,0,0,0,0,0", "-o", str(tmp_path / "e.csv")]) == 2
+    )
+    err = capsys.readouterr().err
+    assert "--start 90 (value 1)" in err and "give --degrees" in err, err
 
 
 def test_pose_error_is_position_difference_and_scipy_rotation_vector():

@@ -179,11 +179,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
             raise ValueError(f"--q0 needs {robot.n} values, got {len(args.q0)}")
         revolute = np.array([t == "revolute" for t in robot.joint_types])
         if not args.deg:
-            lim = robot.limits
-            reach = np.fmax(np.abs(lim["lower"]), np.abs(lim["upper"]))  # NaN: no limit
-            check_radians(
-                args.q0, "--q0", "--deg", [r if rev else None for r, rev in zip(reach, revolute)]
-            )
+            check_radians(args.q0, "--q0", "--deg", robot)
         q0 = np.where(revolute, np.asarray(args.q0, dtype=float) * scale, args.q0)
     r = ik_solve(
         robot,
