@@ -447,6 +447,12 @@ def test_urdf_loops_and_self_parented_joints_are_named(tmp_path):
         (("a: 0.4,", "a: 0.4, a: 0.5,"), r"r\.yaml:4: key 'a' appears twice"),
         (("name: two", "name: two\nsynthetic_inertia: [1]"), r"r\.yaml:2: 'synthetic_inertia'"),
         (("name: two", "name: two\n[1, 2]: 3"), r"r\.yaml:2: a key must be plain text"),
+        # numbers that cannot be read, or keys left without a value (were taken as 0)
+        (("a: 0.4", "a: 3.7.0"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '3.7.0'"),
+        (("a: 0.4", "a: '3,7'"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '3,7'"),
+        (("a: 0.4", "a: 1e400"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '1e400'"),
+        (("a: 0.4", "a: ~"), r"r\.yaml:4: joint 1 \('a'\): 'a' has no value; give a number"),
+        (("mass: 1.0", "mass: 1.0, inertia: {xx: }"), r"r\.yaml:4: .*'xx' has no value"),
     ],
 )
 def test_yaml_type_errors_name_file_line_and_key(tmp_path, change, match):
