@@ -212,6 +212,21 @@ def test_header_indices_are_checked_before_use(tmp_path):
             read_csv(p, require_torque=False)
 
 
+@pytest.mark.parametrize("first", ["0,0,0,0,0", "0.0, 0.1 ,-2e-3,1.5,nan", "# log\n0,1,2,3,4"])
+def test_a_log_without_header_says_the_header_is_missing(tmp_path, first, capsys):
+    # data from the first line on: repeated values used to be reported as a column twice
+    p = tmp_path / "raw.csv"
+    p.write_text(first + "\n0.004,1,2,3,4\n")
+    with pytest.raises(DataError) as e:
+        read_csv(p, n=2)
+    msg = str(e.value)
+    assert "raw.csv" in msg and "not column names: the header is missing" in msg, msg
+    assert "t, q1..q2," in msg and "tau1..tau2" in msg and "twice" not in msg, msg
+    assert cli.main(["identify", "planar2", str(p)]) == 2
+    err = capsys.readouterr().err
+    assert "the header is missing" in err and err.count("\n") == 1, err
+
+
 def test_column_names_with_line_breaks_stay_on_one_line(tmp_path):
     p = tmp_path / "n.csv"
     p.write_text('t,q1,"x\ny"\n0,0,0\n1,1,1\n')

@@ -211,6 +211,66 @@ def test_ik_command(capsys):
     assert err == "mindyn: error: --q0 needs 6 values, got 2\n"
 
 
+def write_wide_urdf(tmp_path):
+    """A revolute joint limited to +-4 pi, then a prismatic joint."""
+    link = '<link name="{0}"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" '
+    link += 'iyy="0.1" iyz="0" izz="0.1"/></inertial></link>'
+    joint = '<joint name="{0}" type="{1}"><parent link="{2}"/><child link="{3}"/>'
+    joint += '<axis xyz="0 0 1"/><limit lower="{4}" upper="{5}" effort="1" velocity="1"/></joint>'
+    text = (
+        '<robot name="wide"><link name="base"/>'
+        + link.format("a")
+        + link.format("b")
+        + joint.format("j1", "revolute", "base", "a", -4 * np.pi, 4 * np.pi)
+        + joint.format("j2", "prismatic", "a", "b", -1, 1)
+        + "</robot>"
+    )
+    path = tmp_path / "wide.urdf"
+    path.write_text(text)
+    return path
+
+
+def test_ik_command_refuses_degrees_given_as_radians(tmp_path, capsys, monkeypatch):
+    # `--rpy 0 90 0` without --deg used to converge to a pose rotated by 90 rad
+    base = ["ik", "puma560", "--xyz", "0.5", "0.1", "0.4"]
+    for extra in (["--rpy", "0", "90", "0"], ["--rpy", "0", "-6.3", "0"], ["--q0", "0", "90"]):
+        args = base + extra + (["0"] * 4 if extra[0] == "--q0" else [])
+        assert main(args) == 2, extra
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and f"mindyn: error: {extra[0]} " in err, err
+        assert "not an angle in radians" in err and "--deg" in err, err
+    # the same pose in degrees: the pose reached is the one of rpy = (0, pi/2, 0) in radians
+    assert main(base + ["--rpy", "0", "90", "0", "--deg", "--format", "json"]) == 0
+    q = json.loads(capsys.readouterr().out)["q"]
+    target = pin.SE3(pin.rpy.rpyToMatrix(0.0, np.pi / 2, 0.0), np.array([0.5, 0.1, 0.4]))
+    assert np.abs(pose_error(mindyn.load("puma560").fk(q), target.homogeneous)).max() <= 1e-5
+    # --deg converts the revolute joints of --q0 only; a prismatic joint's start stays in m
+    seen = {}
+
+    def spy(robot, T, q0, **kw):
+        seen["q0"] = q0
+        return ik_solve(robot, T, q0, **kw)
+
+    monkeypatch.setattr(mindyn.inverse_kinematics, "ik_solve", spy)
+    q0 = ["10", "20", "0.3", "40", "50", "60"]  # stanford: joint 3 is prismatic
+    assert main(["ik", "stanford", "--xyz", "0.3", "0.2", "0.4", "--q0", *q0, "--deg"]) in (0, 1)
+    capsys.readouterr()
+    assert np.allclose(seen["q0"], np.radians([10, 20, 0, 40, 50, 60]) + [0, 0, 0.3, 0, 0, 0])
+    # a revolute joint whose limits reach past 2 pi takes a start up to its limit in radians
+    from mindyn.cli.args import check_radians
+
+    wide = mindyn.load(write_wide_urdf(tmp_path))
+    check_radians([7.0, 100.0], "--q0", "--deg", wide)  # 100 m on the prismatic joint
+    with pytest.raises(ValueError, match=r"--q0 13 \(value 1\): outside \[-12.57, 12.57\]"):
+        check_radians([13.0, 0.0], "--q0", "--deg", wide)
+    # excite's --start: the same check, naming its own option
+    assert (
+        main(["excite", "puma560", "--start", "90,0,0,0,0,0", "-o", str(tmp_path / "e.csv")]) == 2
+    )
+    err = capsys.readouterr().err
+    assert "--start 90 (value 1)" in err and "give --degrees" in err, err
+
+
 def test_pose_error_is_position_difference_and_scipy_rotation_vector():
     """pose_error (the C++ map of the IK solver) against SciPy's rotation vector of R_d R^T,
     including angles within 1e-9 of pi where the axis comes from the symmetric part."""

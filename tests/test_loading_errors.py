@@ -447,6 +447,12 @@ def test_urdf_loops_and_self_parented_joints_are_named(tmp_path):
         (("a: 0.4,", "a: 0.4, a: 0.5,"), r"r\.yaml:4: key 'a' appears twice"),
         (("name: two", "name: two\nsynthetic_inertia: [1]"), r"r\.yaml:2: 'synthetic_inertia'"),
         (("name: two", "name: two\n[1, 2]: 3"), r"r\.yaml:2: a key must be plain text"),
+        # numbers that cannot be read, or keys left without a value (were taken as 0)
+        (("a: 0.4", "a: 3.7.0"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '3.7.0'"),
+        (("a: 0.4", "a: '3,7'"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '3,7'"),
+        (("a: 0.4", "a: 1e400"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '1e400'"),
+        (("a: 0.4", "a: ~"), r"r\.yaml:4: joint 1 \('a'\): 'a' has no value; give a number"),
+        (("mass: 1.0", "mass: 1.0, inertia: {xx: }"), r"r\.yaml:4: .*'xx' has no value"),
     ],
 )
 def test_yaml_type_errors_name_file_line_and_key(tmp_path, change, match):
@@ -502,11 +508,18 @@ def test_values_at_the_bound_give_finite_dynamics(tmp_path):
 
 def test_urdf_extreme_values_refused_with_the_bound(tmp_path):
     path = write(tmp_path, "m.urdf", urdf(joint("j0", "base", "a"), link("a", mass=1e300)))
-    with pytest.raises(mindyn.ModelError, match=r"m\.urdf: link 'a': mass 1e\+300 exceeds"):
+    bound = "exceeds the bound 1e[+]16 on the magnitude"
+    with pytest.raises(
+        mindyn.ModelError,
+        match=rf"m\.urdf:4: link 'a': <inertial><mass value=\"1e[+]300\">: {bound}",
+    ):
         mindyn.load(path)
     far = joint("j0", "base", "a", extra='<origin xyz="0 1e308 0"/>')
     path = write(tmp_path, "o.urdf", urdf(far, link("a")))
-    with pytest.raises(mindyn.ModelError, match=r"o\.urdf: joint 'j0': origin xyz 1e\+308"):
+    with pytest.raises(
+        mindyn.ModelError,
+        match=rf"o\.urdf:5: joint 'j0': <origin xyz=\"0 1e308 0\">: \"1e308\" {bound}",
+    ):
         mindyn.load(path)
 
 

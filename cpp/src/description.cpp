@@ -138,9 +138,14 @@ bool boolean(const Ctx& c, const YAML::Node& node, const std::string& key) {
   return b;
 }
 
+/// The number at `key` of `map`, `def` if the key is absent. A key written without a value
+/// (`xx:` or `xx: ~`) is refused: it is a number left out, not a request for the default.
 double optional(const Ctx& c, const YAML::Node& map, const std::string& key, double def) {
   const YAML::Node n = map[key];
-  return n.IsDefined() && !n.IsNull() ? number(c, n, key) : def;
+  if (!n.IsDefined()) return def;
+  if (n.IsNull())
+    c.fail("'" + key + "' has no value; give a number, or leave the key out for its default", n);
+  return number(c, n, key);
 }
 
 Eigen::Vector3d vec3(const Ctx& c, const YAML::Node& node, const std::string& key) {

@@ -1,9 +1,11 @@
 #include "mindyn/urdf.hpp"
 
 #include <console_bridge/console.h>
+#include <tinyxml.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +14,7 @@
 #include <mutex>
 #include <set>
 #include <sstream>
+#include <system_error>
 #include <vector>
 
 #include "mindyn/spatial.hpp"
@@ -61,6 +64,367 @@ urdf::ModelInterfaceSharedPtr parseQuietly(const std::string& xml, std::string* 
     *reason = text.empty() ? std::string("urdfdom rejected it") : text;
   }
   return model;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The numbers of a URDF, checked on the XML before urdfdom reads it. urdfdom 3 logs a number it
+// cannot read inside a link's <inertial> ("3.7.0", "3,7", "nan", "1e400", " 1.0 "), and a
+// missing <mass>, <inertia> or inertia attribute, and then keeps the link with what it had read
+// so far: mass and inertia 0. It takes a misspelt attribute (<inertia ixxx=...>, <origin xyx=...>,
+// <axis xzy=...>, <limit lowr=...>) as absent, i.e. as its default, and reads only the first of
+// two <inertial>, <mass> or <origin> elements. So every number the model takes from a <link> or
+// a <joint> is read here first, from the same XML parser (TinyXML, urdfdom 3's), and each
+// problem is refused in one line naming the file, line, link or joint, attribute and value.
+// ---------------------------------------------------------------------------------------------
+
+/// `c` in lower case (ASCII letters only).
+char lowerAscii(char c) { return c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c; }
+
+/// XML's white space (production S of XML 1.0).
+bool isXmlSpace(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r'; }
+
+bool isDigit(char c) { return c >= '0' && c <= '9'; }
+
+/// Reads `text` (no surrounding white space) as a decimal number: XML Schema's xs:double
+/// without INF and NaN (an optional sign, digits with an optional point, an optional exponent),
+/// as urdfdom's reader takes it. A value too small for a double rounds to 0. Returns why it is
+/// not one ("" when *out is set).
+std::string readDecimal(const std::string& text, double* out) {
+  const size_t n = text.size();
+  size_t i = (n > 0 && (text[0] == '+' || text[0] == '-')) ? 1 : 0;
+  const size_t mantissa = i;
+  size_t digits = 0;
+  while (i < n && isDigit(text[i])) ++i, ++digits;
+  const size_t point = i;  // where the point is, or would be
+  if (i < n && text[i] == '.') {
+    ++i;
+    while (i < n && isDigit(text[i])) ++i, ++digits;
+  }
+  const size_t mantissa_end = i;
+  long exponent = 0;
+  bool ok = digits > 0;
+  if (ok && i < n && (text[i] == 'e' || text[i] == 'E')) {
+    ++i;
+    const bool negative = i < n && text[i] == '-';
+    if (i < n && (text[i] == '+' || text[i] == '-')) ++i;
+    size_t exponent_digits = 0;
+    for (; i < n && isDigit(text[i]); ++i, ++exponent_digits)
+      exponent = std::min(exponent * 10 + (text[i] - '0'), 1000000L);
+    ok = exponent_digits > 0;
+    if (negative) exponent = -exponent;
+  }
+  if (!ok || i != n) {
+    std::string word;
+    for (size_t k = mantissa; k < n; ++k) word += lowerAscii(text[k]);
+    if (word == "nan" || word == "inf" || word == "infinity") return "not a finite number";
+    return "not a number";
+  }
+  const char* first = text.data() + (text[0] == '+' ? 1 : 0);
+  double value = 0.0;
+  const auto [end, error] = std::from_chars(first, text.data() + n, value);
+  if (error == std::errc::result_out_of_range) {
+    // Out of range: too large if its first significant digit stands at a positive power of ten.
+    for (size_t k = mantissa; k < mantissa_end; ++k) {
+      if (text[k] == '.' || text[k] == '0') continue;
+      const long power =
+          k < point ? static_cast<long>(point - k) - 1 : -static_cast<long>(k - point);
+      if (power + exponent > 0) return "too large for a double";
+      break;
+    }
+    value = text[0] == '-' ? -0.0 : 0.0;
+  } else if (error != std::errc() || end != text.data() + n) {
+    return "not a number";
+  }
+  *out = value;
+  return "";
+}
+
+/// The number of edits (insertions, deletions, substitutions, swaps of neighbours) from `a` to
+/// `b`, case ignored.
+size_t editDistance(const std::string& a, const std::string& b) {
+  const auto lower = lowerAscii;
+  std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
+  for (size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (size_t i = 1; i <= a.size(); ++i)
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t cost = lower(a[i - 1]) == lower(b[j - 1]) ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && lower(a[i - 1]) == lower(b[j - 2]) &&
+          lower(a[i - 2]) == lower(b[j - 1]))
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[a.size()][b.size()];
+}
+
+/// The name of `known` that `name` (not one of them) looks like a misspelling of: one edit from
+/// a name of up to 5 letters, two from a longer one; "" if none.
+std::string misspelt(const std::string& name, const std::vector<std::string>& known) {
+  for (const std::string& k : known) {
+    const size_t allowed = k.size() <= 5 ? 1 : 2;
+    if (std::max(name.size(), k.size()) - std::min(name.size(), k.size()) > allowed) continue;
+    if (editDistance(name, k) <= allowed) return k;
+  }
+  return "";
+}
+
+std::string listNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (size_t i = 0; i < names.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+  return s;
+}
+
+/// An attribute the model may read: `size` numbers (1 or 3), or text (0).
+struct AttributeSpec {
+  std::string name;
+  int size;
+  bool required;
+};
+
+/// An element whose attributes the model may read. `strict`: any other attribute is refused;
+/// otherwise only one that looks like a misspelling of these (extensions such as <limit
+/// current=...> stay allowed).
+struct ElementSpec {
+  std::vector<AttributeSpec> attributes;
+  bool strict;
+};
+
+const ElementSpec& originSpec() {
+  static const ElementSpec spec{{{"xyz", 3, false}, {"rpy", 3, false}}, true};
+  return spec;
+}
+
+/// The child elements of <joint> urdfdom reads (each at most once) and what they hold.
+const std::map<std::string, ElementSpec>& jointSpecs() {
+  static const std::map<std::string, ElementSpec> specs{
+      {"origin", originSpec()},
+      {"parent", {{{"link", 0, false}}, false}},
+      {"child", {{{"link", 0, false}}, false}},
+      {"axis", {{{"xyz", 3, true}}, true}},
+      {"limit",
+       {{{"lower", 1, false}, {"upper", 1, false}, {"effort", 1, true}, {"velocity", 1, true}},
+        false}},
+      {"dynamics", {{{"damping", 1, false}, {"friction", 1, false}}, false}},
+      {"mimic", {{{"joint", 0, true}, {"multiplier", 1, false}, {"offset", 1, false}}, false}},
+      {"safety_controller",
+       {{{"soft_lower_limit", 1, false},
+         {"soft_upper_limit", 1, false},
+         {"k_position", 1, false},
+         {"k_velocity", 1, true}},
+        false}},
+      {"calibration", {{{"rising", 1, false}, {"falling", 1, false}}, false}},
+  };
+  return specs;
+}
+
+/// Checks the links and joints of a URDF document; see above.
+class NumberCheck {
+ public:
+  explicit NumberCheck(std::string source) : source_(std::move(source)) {}
+
+  /// Checks the <link> and <joint> elements of `robot` (as urdfdom reads them: the children of
+  /// the first <robot>). Numbers written with white space around them or between them other
+  /// than single spaces are rewritten in the document; returns true if any was.
+  bool run(TiXmlElement* robot) {
+    for (TiXmlElement* e = robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
+      if (e->ValueStr() == "link") checkLink(e);
+      if (e->ValueStr() == "joint") checkJoint(e);
+    }
+    return rewritten_;
+  }
+
+ private:
+  [[noreturn]] void fail(const TiXmlElement* at, const std::string& what) const {
+    throw ModelError(source_ + ":" + std::to_string(at->Row()) + ": " + owner_ + ": " + what);
+  }
+
+  static std::string quote(const std::string& value) {
+    constexpr size_t kShown = 40;
+    if (value.size() <= kShown) return "\"" + value + "\"";
+    return "\"" + value.substr(0, kShown) + "...\"";
+  }
+
+  /// `<inertial><mass value="3.7.0">`: the element and one of its attributes, as written.
+  std::string show(const TiXmlElement* e, const std::string& attribute,
+                   const std::string& value) const {
+    return "<" + prefix_ + e->ValueStr() + " " + attribute + "=" + quote(value) + ">";
+  }
+
+  void checkLink(TiXmlElement* link) {
+    const char* name = link->Attribute("name");
+    owner_ = name ? std::string("link '") + name + "'" : "a link without a name";
+    prefix_.clear();
+    checkChildren(link, {"inertial", "visual", "collision"}, {"inertial"});
+    TiXmlElement* inertial = link->FirstChildElement("inertial");
+    if (!inertial) return;  // allowed: a massless link, said in Model::notes
+    if (const TiXmlAttribute* a = inertial->FirstAttribute())
+      fail(inertial,
+           "<inertial> has an attribute " + std::string(a->Name()) + "=" + quote(a->ValueStr()) +
+               ", which URDF does not define; its values go in the child elements "
+               "<origin xyz=\"...\" rpy=\"...\"/>, <mass value=\"...\"/> and <inertia "
+               "ixx=\"...\" ixy=\"...\" ixz=\"...\" iyy=\"...\" iyz=\"...\" izz=\"...\"/>");
+    const std::vector<std::string> parts{"origin", "mass", "inertia"};
+    for (const TiXmlElement* c = inertial->FirstChildElement(); c; c = c->NextSiblingElement())
+      if (std::find(parts.begin(), parts.end(), c->ValueStr()) == parts.end())
+        fail(c, "<inertial> holds an element <" + c->ValueStr() +
+                    ">, which URDF does not define "
+                    "there (it holds <origin>, <mass> and <inertia>)");
+    checkChildren(inertial, parts, parts);
+    prefix_ = "inertial><";
+    if (TiXmlElement* o = inertial->FirstChildElement("origin")) checkElement(o, originSpec());
+    TiXmlElement* mass = inertial->FirstChildElement("mass");
+    if (!mass) fail(inertial, "<inertial> has no <mass value=\"...\"/>");
+    checkElement(mass, {{{"value", 1, true}}, true});
+    double m = 0.0;
+    readDecimal(mass->Attribute("value"), &m);
+    if (m < 0.0)
+      fail(mass, show(mass, "value", mass->Attribute("value")) + ": a mass cannot be negative");
+    TiXmlElement* inertia = inertial->FirstChildElement("inertia");
+    if (!inertia)
+      fail(inertial,
+           "<inertial> has no <inertia ixx=\"...\" ixy=\"...\" ixz=\"...\" iyy=\"...\" "
+           "iyz=\"...\" izz=\"...\"/>");
+    ElementSpec spec{{}, true};
+    for (const char* a : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"})
+      spec.attributes.push_back({a, 1, true});
+    checkElement(inertia, spec);
+  }
+
+  void checkJoint(TiXmlElement* joint) {
+    const char* name = joint->Attribute("name");
+    owner_ = name ? std::string("joint '") + name + "'" : "a joint without a name";
+    prefix_.clear();
+    std::vector<std::string> known;
+    for (const auto& kv : jointSpecs()) known.push_back(kv.first);
+    checkChildren(joint, known, known);
+    const char* type = joint->Attribute("type");
+    const bool has_axis =
+        !type || (std::string(type) != "fixed" && std::string(type) != "floating");
+    for (const auto& [element, spec] : jointSpecs()) {
+      TiXmlElement* e = joint->FirstChildElement(element);
+      if (!e || (element == "axis" && !has_axis)) continue;  // urdfdom ignores such an axis
+      checkElement(e, spec);
+      if (element == "dynamics" && !e->Attribute("damping") && !e->Attribute("friction"))
+        fail(e, "<dynamics> has neither damping nor friction");
+      if (element == "limit")
+        for (const char* a : {"effort", "velocity"}) {
+          double v = 0.0;
+          readDecimal(e->Attribute(a), &v);
+          if (v < 0.0)
+            fail(e, show(e, a, e->Attribute(a)) + ": a limit on the magnitude cannot be negative");
+        }
+    }
+  }
+
+  /// Refuses a child element of `parent` whose name looks like a misspelling of one of `known`,
+  /// and a second one of `unique` (urdfdom reads the first only).
+  void checkChildren(const TiXmlElement* parent, const std::vector<std::string>& known,
+                     const std::vector<std::string>& unique) const {
+    std::set<std::string> seen;
+    for (const TiXmlElement* c = parent->FirstChildElement(); c; c = c->NextSiblingElement()) {
+      const std::string& tag = c->ValueStr();
+      if (std::find(known.begin(), known.end(), tag) == known.end()) {
+        const std::string like = misspelt(tag, known);
+        if (!like.empty())
+          fail(c, "<" + parent->ValueStr() + "> holds an element <" + tag +
+                      ">, which URDF does not define; is it <" + like + ">?");
+      } else if (std::find(unique.begin(), unique.end(), tag) != unique.end() &&
+                 !seen.insert(tag).second) {
+        fail(c, "<" + parent->ValueStr() + "> holds a second <" + tag +
+                    ">; URDF parsers read only the first");
+      }
+    }
+  }
+
+  /// Checks the attributes of `e` against `spec`, rewriting numbers to the form urdfdom reads.
+  void checkElement(TiXmlElement* e, const ElementSpec& spec) {
+    std::vector<std::string> names;
+    for (const AttributeSpec& a : spec.attributes) names.push_back(a.name);
+    for (const TiXmlAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
+      const std::string name = a->Name();
+      if (std::find(names.begin(), names.end(), name) != names.end()) continue;
+      const std::string like = misspelt(name, names);
+      if (!spec.strict && like.empty()) continue;
+      fail(e, "<" + prefix_ + e->ValueStr() + "> has an attribute " + name + "=" +
+                  quote(a->ValueStr()) + ", which URDF does not define there" +
+                  (like.empty() ? "" : "; is it " + like + "?") + " (it takes " + listNames(names) +
+                  ")");
+    }
+    for (const AttributeSpec& spec_a : spec.attributes) {
+      const char* raw = e->Attribute(spec_a.name.c_str());
+      if (!raw) {
+        if (spec_a.required)
+          fail(e, "<" + prefix_ + e->ValueStr() + "> has no attribute " + spec_a.name +
+                      " (it needs " + listNames(requiredNames(spec)) + ")");
+        continue;
+      }
+      if (spec_a.size == 0) continue;
+      const std::string value = raw;
+      std::vector<std::string> pieces;
+      std::string piece;
+      for (char c : value + ' ') {
+        if (!isXmlSpace(c)) {
+          piece += c;
+        } else if (!piece.empty()) {
+          pieces.push_back(piece);
+          piece.clear();
+        }
+      }
+      const std::string shown = show(e, spec_a.name, value);
+      if (static_cast<int>(pieces.size()) != spec_a.size)
+        fail(e, shown + ": " +
+                    (spec_a.size == 1 ? std::string("expected one number") : "expected 3 numbers") +
+                    ", got " +
+                    (pieces.empty() ? std::string("none") : std::to_string(pieces.size())));
+      std::string canonical;
+      for (const std::string& p : pieces) {
+        double v = 0.0;
+        const std::string why = readDecimal(p, &v);
+        const std::string which = spec_a.size == 1 ? "" : quote(p) + " ";
+        if (why == "too large for a double" || (why.empty() && std::abs(v) > kMaxDescriptionValue))
+          fail(e, shown + ": " + which + "exceeds the bound " + formatBound() +
+                      " on the magnitude of a description value");
+        if (!why.empty()) fail(e, shown + ": " + (spec_a.size == 1 ? why : which + "is " + why));
+        canonical += (canonical.empty() ? "" : " ") + p;
+      }
+      if (canonical != value) {
+        e->SetAttribute(spec_a.name.c_str(), canonical.c_str());
+        rewritten_ = true;
+      }
+    }
+  }
+
+  static std::vector<std::string> requiredNames(const ElementSpec& spec) {
+    std::vector<std::string> names;
+    for (const AttributeSpec& a : spec.attributes)
+      if (a.required) names.push_back(a.name);
+    return names;
+  }
+
+  static std::string formatBound() {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", kMaxDescriptionValue);
+    return buf;
+  }
+
+  const std::string source_;
+  std::string owner_;   // "link 'l1'" or "joint 'j1'"
+  std::string prefix_;  // "inertial><" inside <inertial>
+  bool rewritten_ = false;
+};
+
+/// The URDF text urdfdom is to read: `xml` once its links and joints passed NumberCheck, with
+/// numbers written with extra white space rewritten. Text TinyXML cannot parse is returned as
+/// it is, for urdfdom to report.
+std::string checkNumbers(const std::string& xml, const std::string& source) {
+  TiXmlDocument doc;
+  doc.Parse(xml.c_str());
+  TiXmlElement* robot = doc.Error() ? nullptr : doc.FirstChildElement("robot");
+  if (!robot || !NumberCheck(source).run(robot)) return xml;
+  TiXmlPrinter printer;
+  doc.Accept(&printer);
+  return printer.Str();
 }
 
 Eigen::Isometry3d toIsometry(const urdf::Pose& pose) {
@@ -223,17 +587,11 @@ class Builder {
            "in Python and C++, --tip on the command line), e.g. its parent link '" +
            uj.parent_link_name + "', which locks it at q = 0");
     const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
-    for (int i = 0; i < 3; ++i) checkValue("joint '" + uj.name + "'", "axis", axis[i]);
     if (axis.norm() < 1e-12) fail("joint '" + uj.name + "' has a zero or invalid axis");
     j.axis = axis.normalized();
     j.pre = pre;
     if (uj.limits) {
       const urdf::JointLimits& lim = *uj.limits;
-      const std::string who = "joint '" + uj.name + "'";
-      checkValue(who, "lower limit", lim.lower);
-      checkValue(who, "upper limit", lim.upper);
-      checkValue(who, "velocity limit", lim.velocity);
-      checkValue(who, "effort limit", lim.effort);
       // urdfdom reports absent lower/upper as 0/0 and absent velocity/effort as 0: not given.
       if (uj.type != urdf::Joint::CONTINUOUS && !(lim.lower == 0.0 && lim.upper == 0.0)) {
         j.limits.lower = lim.lower;
@@ -241,10 +599,6 @@ class Builder {
       }
       if (lim.velocity > 0.0) j.limits.velocity = lim.velocity;
       if (lim.effort > 0.0) j.limits.effort = lim.effort;
-    }
-    if (uj.dynamics) {
-      checkValue("joint '" + uj.name + "'", "damping", uj.dynamics->damping);
-      checkValue("joint '" + uj.name + "'", "friction", uj.dynamics->friction);
     }
     viscous_.push_back(uj.dynamics ? uj.dynamics->damping : 0.0);
     coulomb_.push_back(uj.dynamics ? uj.dynamics->friction : 0.0);
@@ -266,7 +620,11 @@ class Builder {
     model->rotor_inertia.setZero(n);
     model->viscous = Eigen::Map<const Eigen::VectorXd>(viscous_.data(), n);
     model->coulomb = Eigen::Map<const Eigen::VectorXd>(coulomb_.data(), n);
-    if (!locked_.empty()) model->notes = locked + joinNames(locked_);
+    std::vector<std::string> notes;
+    if (!locked_.empty()) notes.push_back(locked + joinNames(locked_));
+    if (!massless_.empty())
+      notes.push_back("links without <inertial>, taken as massless: " + joinNames(massless_));
+    for (const std::string& note : notes) model->notes += (model->notes.empty() ? "" : "; ") + note;
     if (model->isSerial()) model->parents.clear();
     model->validate();
     return std::move(*model);
@@ -274,24 +632,8 @@ class Builder {
 
   [[noreturn]] void fail(const std::string& what) const { throw ModelError(source_ + ": " + what); }
 
-  /// Throws unless `value` is finite and within kMaxDescriptionValue; `who` and `what` name it.
-  void checkValue(const std::string& who, const std::string& what, double value) const {
-    if (!std::isfinite(value)) fail(who + ": " + what + " is not finite");
-    if (std::abs(value) > kMaxDescriptionValue) {
-      char buf[80];
-      std::snprintf(buf, sizeof buf, " %.6g exceeds the bound %.6g on its magnitude", value,
-                    kMaxDescriptionValue);
-      fail(who + ": " + what + buf);
-    }
-  }
-
-  Eigen::Isometry3d jointOrigin(const urdf::Joint& j) const {
-    const urdf::Pose& o = j.parent_to_joint_origin_transform;
-    const std::string who = "joint '" + j.name + "'";
-    for (double v : {o.position.x, o.position.y, o.position.z}) checkValue(who, "origin xyz", v);
-    for (double v : {o.rotation.x, o.rotation.y, o.rotation.z, o.rotation.w})
-      if (!std::isfinite(v)) fail(who + ": origin rpy is not finite");
-    return toIsometry(o);
+  static Eigen::Isometry3d jointOrigin(const urdf::Joint& j) {
+    return toIsometry(j.parent_to_joint_origin_transform);
   }
 
   /// Refuses what urdfdom lets through but is no tree: a joint whose parent is its child, a link
@@ -395,15 +737,9 @@ class Builder {
     if (!isMoving(j)) return M;
     locked_.push_back(j.name);
     double q = 0.0;
-    const std::string who = "joint '" + j.name + "'";
-    if (j.limits && j.type != urdf::Joint::CONTINUOUS) {
-      checkValue(who, "lower limit", j.limits->lower);
-      checkValue(who, "upper limit", j.limits->upper);
-      if (j.limits->lower <= j.limits->upper)
-        q = std::min(std::max(0.0, j.limits->lower), j.limits->upper);
-    }
+    if (j.limits && j.type != urdf::Joint::CONTINUOUS && j.limits->lower <= j.limits->upper)
+      q = std::min(std::max(0.0, j.limits->lower), j.limits->upper);
     const Eigen::Vector3d axis(j.axis.x, j.axis.y, j.axis.z);
-    for (int i = 0; i < 3; ++i) checkValue(who, "axis", axis[i]);
     if (q == 0.0 || !(axis.norm() > 1e-12)) return M;
     if (j.type == urdf::Joint::REVOLUTE)
       M.linear() = Eigen::AngleAxisd(q, axis.normalized()).toRotationMatrix();
@@ -415,21 +751,13 @@ class Builder {
   /// Adds `link` and everything rigidly attached below it (in frame `body_T_link`) to `body`.
   void accumulate(const urdf::Link& link, const Eigen::Isometry3d& body_T_link,
                   Eigen::Matrix<double, 10, 1>* body) {
-    if (link.inertial) {
+    if (!link.inertial) {
+      massless_.push_back(link.name);
+    } else {  // its numbers were checked by NumberCheck
       const urdf::Inertial& in = *link.inertial;
-      const std::string who = "link '" + link.name + "'";
-      checkValue(who, "mass", in.mass);
-      if (in.mass < 0.0) fail(who + " has mass " + std::to_string(in.mass));
-      for (double v : {in.origin.position.x, in.origin.position.y, in.origin.position.z})
-        checkValue(who, "inertial origin xyz", v);
-      for (double v :
-           {in.origin.rotation.x, in.origin.rotation.y, in.origin.rotation.z, in.origin.rotation.w})
-        if (!std::isfinite(v)) fail(who + ": inertial origin rpy is not finite");
       const Eigen::Isometry3d frame = toIsometry(in.origin);
       Eigen::Matrix3d Ic;
       Ic << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
-      if (!Ic.allFinite()) fail(who + " has a non-finite inertia");
-      for (int i = 0; i < 9; ++i) checkValue(who, "inertia", Ic(i));
       const Eigen::Matrix<double, 10, 1> p =
           inertialFromUrdf(in.mass, frame.translation(), frame.linear(), Ic);
       *body += transformInertial(p, body_T_link);
@@ -448,6 +776,7 @@ class Builder {
   std::set<std::string> on_path_;  // links of the model's moving joints (chain: the whole path)
   std::map<std::string, bool> moving_below_;
   std::vector<std::string> locked_;
+  std::vector<std::string> massless_;      // links merged into the model that have no <inertial>
   std::vector<const urdf::Link*> bodies_;  // child links of the model's joints
   std::vector<double> viscous_, coulomb_;
 };
@@ -473,7 +802,7 @@ Model parseUrdf(const std::string& xml, const std::string& tip, const std::strin
   try {
     requireUtf8(xml, source);
     std::string reason;
-    const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(xml, &reason);
+    const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(checkNumbers(xml, source), &reason);
     if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
     return Builder(*urdf, source).build(tip);
   } catch (const ModelError& e) {

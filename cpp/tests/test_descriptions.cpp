@@ -366,10 +366,57 @@ TEST(Urdf, ExtremeValuesAreRefusedWithTheBound) {
   const Model ok = parseUrdf(withMass("1e16"), "", "m.urdf");
   EXPECT_EQ(ok.inertial[9], 1e16);
   const std::string e = errorOf<ModelError>([&] { parseUrdf(withMass("1e300"), "", "m.urdf"); });
-  EXPECT_TRUE(contains(e, "m.urdf: link 'a': mass 1e+300 exceeds the bound 1e+16")) << e;
+  EXPECT_TRUE(contains(e,
+                       "m.urdf:1: link 'a': <inertial><mass value=\"1e300\">: exceeds the "
+                       "bound 1e+16"))
+      << e;
   const std::string far = robot("a", revolute("j0", "base", "a", "<origin xyz=\"1e308 0 0\"/>"));
   const std::string o = errorOf<ModelError>([&] { parseUrdf(far, "", "o.urdf"); });
-  EXPECT_TRUE(contains(o, "o.urdf: joint 'j0': origin xyz 1e+308 exceeds the bound 1e+16")) << o;
+  EXPECT_TRUE(contains(o,
+                       "o.urdf:1: joint 'j0': <origin xyz=\"1e308 0 0\">: \"1e308\" exceeds "
+                       "the bound 1e+16"))
+      << o;
+}
+
+TEST(Urdf, NumbersThatCannotBeReadAreRefusedWhereTheyAre) {
+  // urdfdom logs these and keeps the link with mass and inertia 0, or takes a misspelt
+  // attribute as absent
+  auto withInertial = [](const std::string& inertial) {
+    return "<robot name=\"r\">\n<link name=\"base\"/>\n<link name=\"a\">" + inertial + "</link>\n" +
+           revolute("j0", "base", "a") + "</robot>";
+  };
+  const std::string inertia =
+      "<inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/>";
+  struct Case {
+    std::string inertial, expect;
+  };
+  const Case cases[] = {
+      {"<inertial><mass value=\"3.7.0\"/>" + inertia + "</inertial>",
+       "t.urdf:3: link 'a': <inertial><mass value=\"3.7.0\">: not a number"},
+      {"<inertial><mass value=\"1\"/><inertia ixx=\"nan\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" "
+       "iyz=\"0\"/></inertial>",
+       "t.urdf:3: link 'a': <inertial><inertia ixx=\"nan\">: not a finite number"},
+      {"<inertial><mass value=\"1\"/><inertia ixxx=\"1\" iyy=\"1\" izz=\"1\" ixy=\"0\" ixz=\"0\" "
+       "iyz=\"0\"/></inertial>",
+       "t.urdf:3: link 'a': <inertial><inertia> has an attribute ixxx=\"1\", which URDF does not "
+       "define there; is it ixx?"},
+      {"<inertial ixx=\"1\"><mass value=\"1\"/>" + inertia + "</inertial>",
+       "t.urdf:3: link 'a': <inertial> has an attribute ixx=\"1\""},
+  };
+  for (const Case& c : cases) {
+    const std::string e =
+        errorOf<ModelError>([&] { parseUrdf(withInertial(c.inertial), "", "t.urdf"); });
+    EXPECT_TRUE(contains(e, c.expect)) << e;
+  }
+  // white space around a number is read (XML Schema's xs:double), not taken as 0
+  const Model spaced =
+      parseUrdf(withInertial("<inertial><mass value=\" 2.5 \"/>" + inertia + "</inertial>"));
+  EXPECT_EQ(spaced.inertial[9], 2.5);
+  // a link without <inertial> is massless, and the notes say so
+  const Model massless = parseUrdf(withInertial(""));
+  EXPECT_TRUE(massless.inertial.isZero(0.0));
+  EXPECT_TRUE(contains(massless.notes, "links without <inertial>, taken as massless: 'a'"))
+      << massless.notes;
 }
 
 TEST(Yaml, TypeErrorsNameFileLineAndKey) {
@@ -419,6 +466,23 @@ TEST(Yaml, ExtremeValuesAreRefusedWithTheBound) {
     parseYaml("convention: dh\ngravity: [0, 0, -1e200]\njoints:\n  - {a: 1}\n", "y.yaml");
   });
   EXPECT_TRUE(contains(g, "y.yaml:2: 'gravity' = -1e200 exceeds the bound")) << g;
+}
+
+TEST(Yaml, NumbersThatCannotBeReadOrAreLeftEmptyAreRefused) {
+  for (const char* entry : {"a: 3.7.0", "a: '3,7'", "a: nan", "a: 1e400", "a: 0x10"}) {
+    const std::string e = errorOf<ModelError>([&] {
+      parseYaml(std::string("convention: dh\njoints:\n  - {") + entry + "}\n", "y.yaml");
+    });
+    EXPECT_TRUE(contains(e, "y.yaml:3: joint 1 ('joint1'): 'a' must be a number, got '")) << e;
+  }
+  // a key written without a value is a number left out, not its default
+  for (const char* entry : {"a: ", "a: ~", "inertial: {mass: 1, inertia: {xx: }}"}) {
+    const std::string e = errorOf<ModelError>([&] {
+      parseYaml(std::string("convention: dh\njoints:\n  - {") + entry + "}\n", "y.yaml");
+    });
+    EXPECT_TRUE(contains(e, "y.yaml:3: joint 1 ('joint1'): '")) << e;
+    EXPECT_TRUE(contains(e, "' has no value; give a number, or leave the key out")) << e;
+  }
 }
 
 TEST(Model, ValidateBoundsMagnitudesAndJointCount) {

@@ -61,7 +61,10 @@ def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
     FileNotFoundError
         The file does not exist (``mindyn.RobotFileNotFoundError``).
     ValueError
-        Malformed description, unsupported joint, unknown name (``mindyn.ModelError``).
+        Malformed description, unsupported joint, unknown name (``mindyn.ModelError``); a
+        number that cannot be read, or a missing or misspelt URDF attribute (file, line, link or
+        joint and attribute named). A URDF link without ``<inertial>`` is massless and named in
+        ``notes``.
     """
     out = _load(robot, tip)
     return out if gravity is None else out.with_gravity(gravity)
@@ -159,6 +162,9 @@ class Robot:
 
     @property
     def notes(self) -> str:
+        """Notes on the model: the YAML description's ``notes`` (a planar arm's geometry), or
+        for a URDF the joints locked and merged and the links without ``<inertial>`` taken as
+        massless."""
         return self._m.notes
 
     @property

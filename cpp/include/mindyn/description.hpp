@@ -20,7 +20,8 @@
 //
 // The file is one UTF-8 YAML document with plain values, lists and mappings (no key twice in a
 // mapping, no tags beyond YAML's core ones such as !!str); every number is finite with magnitude
-// at most kMaxDescriptionValue; at most kMaxModelJoints joints.
+// at most kMaxDescriptionValue (a key given without a value, `xx:`, is refused: leave the key out
+// for its default); at most kMaxModelJoints joints.
 #pragma once
 
 #include <string>

@@ -21,8 +21,18 @@
 // mirrored fingers), unless moving joints hang below it (refused).
 //
 // The file must be UTF-8 and its links a tree: a joint whose parent is its child, a link entered
-// by two joints or a loop of joints is refused by name, as is any number used for the model that
-// is not finite or exceeds kMaxDescriptionValue in magnitude.
+// by two joints or a loop of joints is refused by name. Every number of a link's <inertial> and of
+// a joint's <origin>, <axis>, <limit>, <dynamics>, <mimic>, <safety_controller> and <calibration>
+// is read from the XML before urdfdom reads it (which logs a number it cannot read and keeps the
+// link with mass and inertia 0, or takes a misspelt attribute as absent): a number that cannot
+// be read ("3.7.0", "3,7", "abc", ""), is not finite, exceeds kMaxDescriptionValue in magnitude,
+// a negative mass or limit, a missing <mass>, <inertia> or attribute, an attribute or element
+// that URDF does not define there (in <inertial>, <origin>, <mass>, <inertia>, <axis>) or that
+// looks like a misspelling of one it does (ixxx, lowr, <inertal>), and a second <inertial>,
+// <origin>, <axis>, <limit>... are refused in one line naming the file, line, link or joint,
+// element, attribute and value. White space around and between numbers is allowed (XML Schema's
+// xs:double collapses it) and read, not taken as 0. A link without <inertial> is massless; the
+// notes name those merged into the model.
 #pragma once
 
 #include <Eigen/Core>

@@ -129,6 +129,28 @@ def number(
     return p.add_argument(*flags, type=kind, help=text.replace("%", "%%"), **kwargs)
 
 
+def check_radians(values, option: str, flag: str, robot=None) -> None:
+    """Refuses angles in radians that are degrees given without ``flag``: a value outside
+    [-2 pi, 2 pi]. With ``robot``, ``values`` are joint positions: those of prismatic joints are
+    not checked, and a revolute joint whose limits reach past 2 pi takes values up to them."""
+    reach = [2 * math.pi] * len(values)
+    if robot is not None:
+        lim = robot.limits
+        for k, kind in enumerate(robot.joint_types):
+            ends = (lim["lower"][k], lim["upper"][k])
+            wider = max((abs(x) for x in ends if not math.isnan(x)), default=0.0)
+            reach[k] = math.inf if kind != "revolute" else max(reach[k], wider)
+    for k, v in enumerate(values):
+        if abs(v) > reach[k]:
+            where = f" (value {k + 1})" if len(values) > 1 else ""
+            r = reach[k]
+            within = "[-2pi, 2pi]" if r == 2 * math.pi else f"[-{r:.4g}, {r:.4g}] (its limits)"
+            raise ValueError(
+                f"{option} {_fmt(v)}{where}: outside {within}, so not an angle in radians; "
+                f"give {flag} if the angles are in degrees"
+            )
+
+
 def seed(p, *flags: str, default: int = 0, help: str = "random seed") -> None:
     number(p, *flags, low=0, high=MAX_SEED, integer=True, default=default, help=help)
 

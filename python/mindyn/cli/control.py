@@ -11,7 +11,7 @@ import numpy as np
 
 from ..base import base_parameters
 from ..robot import load
-from .args import add_robot, number, output_dir, output_file, seed
+from .args import add_robot, check_radians, number, output_dir, output_file, seed
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
@@ -181,12 +181,17 @@ def cmd_ik(args: argparse.Namespace) -> int:
 
     robot = load(args.robot, tip=args.tip)
     scale = np.pi / 180.0 if args.deg else 1.0
+    if not args.deg:
+        check_radians(args.rpy, "--rpy", "--deg")
     T = pose_from_xyz_rpy(args.xyz, np.asarray(args.rpy, dtype=float) * scale)
     q0 = None
     if args.q0 is not None:
         if len(args.q0) != robot.n:
             raise ValueError(f"--q0 needs {robot.n} values, got {len(args.q0)}")
-        q0 = np.asarray(args.q0, dtype=float) * scale
+        revolute = np.array([t == "revolute" for t in robot.joint_types])
+        if not args.deg:
+            check_radians(args.q0, "--q0", "--deg", robot)
+        q0 = np.where(revolute, np.asarray(args.q0, dtype=float) * scale, args.q0)
     r = ik_solve(
         robot,
         T,
@@ -359,7 +364,12 @@ def register(sub) -> None:
         help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention)",
     )
     number(p, "--q0", nargs="+", help="start (default: middle of the limits)")
-    p.add_argument("--deg", action="store_true", help="--rpy and --q0 in degrees")
+    p.add_argument(
+        "--deg",
+        action="store_true",
+        help="--rpy and --q0 (of revolute joints) in degrees; without it they are in radians, "
+        "and values outside [-2pi, 2pi] are refused",
+    )
     number(
         p,
         "--tolerance",

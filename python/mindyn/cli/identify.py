@@ -16,6 +16,7 @@ from .args import (
     add_joint_terms,
     add_offset,
     add_robot,
+    check_radians,
     joint_terms,
     number,
     output_dir,
@@ -68,6 +69,8 @@ def cmd_excite(args: argparse.Namespace) -> int:
         if args.degrees:
             rev = np.array([t == "revolute" for t in robot.joint_types])
             start = np.where(rev, np.radians(start), start)
+        else:
+            check_radians(start, "--start", "--degrees", robot)
     res = optimize_excitation(
         robot,
         harmonics=args.harmonics,

@@ -132,11 +132,25 @@ _BLANKS = " \t"
 _NONFINITE = re.compile(r"[ \t]*[+-]?(?:nan|inf|infinity)[ \t]*", re.IGNORECASE)
 
 
+def _expected_columns(n, require_torque: bool) -> str:
+    """The columns a log of ``n`` joints has, in words."""
+    return f"t, q1..q{n}, optionally dq1..dq{n} and ddq1..ddq{n}" + (
+        f", then tau1..tau{n}" if require_torque else f", optionally tau1..tau{n}"
+    )
+
+
 def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
     """Maps header names to kinds; raises DataError naming missing and extra columns. A torque
     column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
     returned as ``torque_unit`` (None when the header names none)."""
     names = [h.strip() for h in header]
+    if any(names) and all(_NUMBER.fullmatch(h) or _NONFINITE.fullmatch(h) for h in names if h):
+        shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+        raise DataError(
+            f"{path}: the first line (after any # comments) holds numbers ({shown}), not column "
+            "names: the header is missing; a log starts with a header line naming its columns: "
+            + _expected_columns("N" if n is None else n, require_torque)
+        )
     currents = [i for i, h in enumerate(names) if re.fullmatch(r"i\d+", h)]
     if currents:
         if any(re.fullmatch(r"tau\d+(\s*\[.*\])?", h) for h in names):
@@ -204,8 +218,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
             parts.append("unexpected " + ", ".join(extra))
         raise DataError(
             f"{path}: wrong columns for a {n}-joint robot ({'; '.join(parts)}); expected "
-            f"t, q1..q{n}, optionally dq1..dq{n} and ddq1..ddq{n}"
-            + (f", then tau1..tau{n}" if require_torque else ", optionally tau1..tau{n}")
+            + _expected_columns(n, require_torque)
         )
     unit = next(iter(units.values())) if units else None
     return {"t": t_col, "n": n, "torque_unit": unit, **groups}
