@@ -9,7 +9,7 @@ uses the same set (a constant in the energy cancels in differences).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from functools import cached_property
 
 import numpy as np
@@ -89,13 +89,30 @@ class BaseParameters:
 
     @cached_property
     def sets(self) -> dict:
-        """The three sets as dictionaries (see the class attributes), built on first use."""
+        """The three sets as mappings (see the class attributes), built on first use; each
+        set's ``Y`` and formulas on first access (large for long chains and trees)."""
         core = self._b
-        out = {"lagrangian": core.lagrangian, "energy": core.energy, "eom": core.eom}
-        names = list(core.classical_names)
-        for s in out.values():
-            s["formulas_full"] = s["formulas"]
-            s["formulas"] = [str(f) for f in _formulas.numeric_formulas(s["Y"], s["names"], names)]
+        out = {}
+        for kind in ("lagrangian", "energy", "eom"):
+            d = getattr(core, kind)
+            out[kind] = _Set(
+                d,
+                Y=lambda k=kind: core.set_matrix(k),
+                formulas_full=lambda k=kind: list(core.set_formulas(k)),
+                formulas=lambda k=kind, n=d["names"]: [str(f) for f in self._readable(k, n)],
+            )
+        return out
+
+    def _readable(self, kind: str, names: Sequence[str]) -> list[_formulas.Formula]:
+        """The readable formulas of a set, from its rows of ``Y`` a block at a time (``Y`` is
+        stored sparse: a dense copy of a 1000-joint tree's would take about 1 GB)."""
+        core, classical = self._b, list(self._b.classical_names)
+        out: list[_formulas.Formula] = []
+        for first in range(0, len(names), _ROWS_AT_ONCE):
+            rows, cols = core.set_rows(kind, first, _ROWS_AT_ONCE)  # only columns with entries
+            out += _formulas.numeric_formulas(
+                rows, names[first : first + _ROWS_AT_ONCE], [classical[c] for c in cols]
+            )
         return out
 
     n = property(lambda self: self._b.n + len(self._off))
@@ -115,8 +132,7 @@ class BaseParameters:
     def formula_terms(self) -> list[_formulas.Formula]:
         """The readable formulas as :class:`mindyn.formulas.Formula` objects (``str()`` gives
         the text, ``.latex()`` a LaTeX row)."""
-        core = self._b
-        out = _formulas.numeric_formulas(core.Y, core.names, core.classical_names)
+        out = self._readable("eom", list(self._b.names))
         return out + [_formulas.unit_formula(o) for o in self._off]
 
     @cached_property
@@ -270,6 +286,32 @@ class BaseParameters:
     def __repr__(self) -> str:
         off = ", offset=True" if self.offset else ""
         return f"BaseParameters(robot={self.robot.name!r}, n={self.n}, method={self.method!r}{off})"
+
+
+_ROWS_AT_ONCE = 64
+
+
+class _Set(Mapping):
+    """One set's dictionary (``n``, ``names``, ``margin``, ...) whose entries given as functions
+    (``Y``, the formulas) are computed on first access."""
+
+    def __init__(self, data: dict, **later):
+        self._data = dict(data)
+        self._later = later
+
+    def __getitem__(self, key):
+        if key not in self._data and key in self._later:
+            self._data[key] = self._later.pop(key)()
+        return self._data[key]
+
+    def __iter__(self):
+        return iter([*self._data, *self._later])
+
+    def __len__(self) -> int:
+        return len(self._data) + len(self._later)
+
+    def __repr__(self) -> str:
+        return f"{{{', '.join(repr(k) for k in self)}}}"
 
 
 def _plain(d: dict) -> dict:
