@@ -312,7 +312,8 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
   }
   // Rows of equal pattern (exact: a bit mask of the columns) are collected in buckets; a group
   // has few patterns, so they are searched linearly, starting from the last one found.
-  if (P > 256) throw ModelError("the projection method handles at most 256 parameters");
+  if (P > kProjectionMaxParameters)  // refused before computing (projectionRefusal)
+    throw std::logic_error("projection: more parameters than the row reduction's masks hold");
   std::vector<std::vector<int>> buckets;
   int nbuckets = 0;
   auto collect = [&](const std::vector<int>& rs, int offset, auto mask) {

@@ -18,9 +18,20 @@ from . import _args, _core
 from . import formulas as _formulas
 from .robot import Robot, load
 
-__all__ = ["BaseParameters", "base_parameters"]
+__all__ = ["BaseParameters", "base_parameters", "choose_method"]
 
 DEFAULT_TOLERANCE = 1e-9
+
+
+def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) -> tuple[str, str]:
+    """The method :func:`base_parameters` runs when none is given, and why: the projection
+    method, or the recursive method (exact, the same base set) when any limit of the projection
+    method -- joints, parameters, its memory estimate, all checked by the C++ core before
+    computing -- refuses the robot with these joint terms."""
+    refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
+    if refused:
+        return "recursive", f"{refused}; the recursive method is exact and gives the same base set"
+    return "projection", "the default (exact, the thesis's method)"
 
 
 class BaseParameters:
@@ -46,7 +57,11 @@ class BaseParameters:
         ``formulas_full``, ``Y``,
         ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
         and ``margin`` (tolerance, smallest kept / largest dropped relative pivot, the counts at
-        the neighbouring tolerances, ``near_degenerate``).
+        the neighbouring tolerances, ``near_degenerate``). Each set is a read-only mapping whose
+        ``Y`` and formulas are computed on first access.
+    method_reason : str
+        Why this method ran: ``method='recursive'`` when it was given, else the reason of
+        :func:`choose_method` (``"the projection method handles at most 256 parameters, ..."``).
     offset : bool
         A constant torque offset per joint, ``tau_j = ... + Off_j``: the parameters ``Off1 ..
         OffN`` follow all others, in the base set as in the classical vector, each its own base
@@ -67,6 +82,7 @@ class BaseParameters:
         # the settings it was computed with (tolerance, snap, samples, seed), for symbolic()
         self.options = dict(options or {})
         self._off = [f"Off{k + 1}" for k in range(robot.n)] if self.offset else []
+        self.method_reason = ""  # set by base_parameters
 
     def for_robot(
         self, robot: Robot, order: Sequence[int] | Sequence[str] | None = None, offset=None
@@ -322,7 +338,7 @@ def base_parameters(
     robot: Robot | str,
     rotor: bool = False,
     friction: bool = False,
-    method: str = "projection",
+    method: str | None = None,
     order: Sequence[int] | Sequence[str] | None = None,
     tolerance: float = DEFAULT_TOLERANCE,
     snap: float | bool | None = None,
@@ -338,16 +354,20 @@ def base_parameters(
         A robot or anything :func:`mindyn.load` accepts.
     rotor, friction : bool
         Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
-    method : {"projection", "recursive", "numerical"}
-        Exact projection method; exact recursive method (the identifiable space link by link,
-        cost linear in the number of joints, then the same echelon form: the same base set and
-        ``Y``); or sampled regressors with QR (for cross-checks). The projection method's basis
-        grows geometrically along runs of parallel or general joint axes: its memory is
-        estimated before computing (an upper bound) and a chain over the 8 GiB budget, or of
-        more than 18 joints, is refused with a ModelError that gives the estimate; the
-        recursive method handles such chains, and so does the numerical one, up to its own
-        budget of 2 GiB (about 340 joints). All three handle trees (``Robot.parents``); on a
-        tree the projection method takes at most 16 joints on one root path and 44 in all.
+    method : {"projection", "recursive", "numerical"}, optional
+        Exact projection method; exact recursive method (the identifiable space link by
+        link, cost linear in the number of joints, then the same echelon form: the same base
+        set and ``Y``); or sampled regressors with QR (for cross-checks). The projection
+        method's basis grows geometrically along runs of parallel or general joint axes: its
+        memory is estimated before computing (an upper bound) and a chain over the 8 GiB
+        budget, or of more than 18 joints, is refused with a ModelError that gives the
+        estimate; the recursive method handles such chains, and so does the numerical one, up
+        to its own budget of 2 GiB (about 340 joints). All three handle trees
+        (``Robot.parents``); on a tree the projection method takes at most 16 joints on one
+        root path and 44 in all, and at most 256 parameters in all. Default (``None``): the
+        projection method, or the recursive one where a limit of the projection method refuses
+        the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
+        ``method_reason``).
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
@@ -369,6 +389,10 @@ def base_parameters(
     robot = load(robot) if not isinstance(robot, Robot) else robot
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     offset = _args.flag(offset, "offset")
+    if method is None:
+        method, reason = choose_method(robot, rotor=rotor, friction=friction)
+    else:
+        reason = f"method={method!r}"
     if method not in ("projection", "recursive", "numerical"):
         raise _core.ModelError(
             f"method is {method!r}; expected 'projection', 'recursive' or 'numerical'"
@@ -414,4 +438,6 @@ def base_parameters(
     )
     options = {"tolerance": float(tolerance), "snap": float(snap or 0.0)}
     options.update(samples=int(samples), seed=int(seed))
-    return BaseParameters(core, robot, offset, options)
+    out = BaseParameters(core, robot, offset, options)
+    out.method_reason = reason
+    return out

@@ -601,6 +601,16 @@ PYBIND11_MODULE(_core, m) {
       py::arg("model"), py::arg("rotor") = false,
       "Upper bounds of what the projection method forms (terms, rows, entries) and its memory "
       "estimate in bytes, counted on sparsity patterns before computing; `budget`: the limit.");
+  m.def(
+      "projection_refusal",
+      [](const std::shared_ptr<PyModel>& model, bool rotor, bool friction) -> py::object {
+        const std::string why = projectionRefusal(model->model, {rotor, friction});
+        if (why.empty()) return py::none();
+        return py::str(why);
+      },
+      py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
+      "Why the projection method cannot take the model with these joint terms (its joint, "
+      "parameter and memory limits, checked before computing), or None when it can.");
   m.def("khalil_order", [](int n, bool rotor, bool friction) {
     return khalilOrder(n, {rotor, friction});
   });
