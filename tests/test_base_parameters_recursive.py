@@ -100,7 +100,8 @@ def test_20_joint_chains_against_the_sampled_regressor_and_pinocchio(make, tmp_p
     assert counts(rec) == counts(num)
     assert rec.margin["near_degenerate"] is False
     with pytest.raises(mindyn.ModelError, match="at most 18 joints.*--method recursive"):
-        mindyn.base_parameters(robot)
+        mindyn.base_parameters(robot, method="projection")
+    assert mindyn.base_parameters(robot).method == "recursive"  # the default's choice
     # 1e-9: the lever arms out to the 20th link make Y's entries up to about 1e2.
     check_against_rnea(rec, robot, pinocchio_model(robot), rng, f"{make} recursive", tol=1e-9)
 

@@ -72,7 +72,7 @@ def test_numerical_method_on_a_100_joint_chain():
     bp = mindyn.base_parameters("planar100", method="numerical")
     assert counts(bp) == [300, 300, 300]
     with pytest.raises(mindyn.ModelError, match="at most 18 joints.*numerical"):
-        mindyn.base_parameters("planar100")
+        mindyn.base_parameters("planar100", method="projection")
 
 
 def test_numerical_method_refuses_a_chain_over_its_budget():
@@ -129,7 +129,7 @@ def test_projection_refuses_long_general_chains(n, tmp_path):
     cost = _core.projection_cost(robot._m)
     assert cost["bytes"] > cost["budget"]
     with pytest.raises(mindyn.ModelError) as e:
-        mindyn.base_parameters(robot)
+        mindyn.base_parameters(robot, method="projection")
     msg = str(e.value)
     assert f"{n}-joint chain" in msg and "GiB" in msg and "budget of 8 GiB" in msg
     assert "--method numerical" in msg
@@ -137,14 +137,12 @@ def test_projection_refuses_long_general_chains(n, tmp_path):
     assert counts(mindyn.base_parameters(robot, method="numerical"))[2] > 0
 
 
-def test_codegen_refuses_with_the_alternatives():
-    with pytest.raises(
-        mindyn.ModelError,
-        match="code generation needs the base parameters.*method='numerical'.*base=False",
-    ):
-        codegen.generate("planar18")
+def test_codegen_chooses_the_recursive_method_where_the_projection_method_refuses():
+    # planar18: over the projection method's memory estimate
+    assert "budget" in _core.projection_refusal(mindyn.load("planar18")._m)
+    code = codegen.generate("planar18", what="gravity")
     bp = mindyn.base_parameters("planar18", method="numerical")
-    assert bp.n == 54
+    assert bp.n == 54 == len(code.names)
     assert "void" in codegen.generate("planar18", base=bp, what="gravity").source
 
 

@@ -1,6 +1,7 @@
 #include "mindyn/base_parameters.hpp"
 
 #include <Eigen/QR>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -20,6 +21,57 @@ namespace mindyn {
 
 namespace {
 
+// Vectors appended one after another, each kept as a dense segment from its first to its last
+// non-zero entry or as its non-zero entries, whichever takes less memory: the pivots and residuals
+// of the elimination are short segments on the projection's coordinates, dense on sampled
+// regressors and scattered over the rows of a link's ancestors on the recursive method's rows.
+class VectorPool {
+ public:
+  // Appends x(0 .. end - 1).
+  void push(const Eigen::VectorXd& x, long end) {
+    long first = 0, nnz = 0;
+    while (first < end && x[first] == 0.0) ++first;
+    for (long r = first; r < end; ++r) nnz += x[r] != 0.0;
+    Item it{static_cast<long>(values_.size()), static_cast<long>(index_.size()), first, end, 0};
+    if (8 * (end - first) <= 12 * nnz) {
+      values_.insert(values_.end(), x.data() + first, x.data() + end);
+    } else {
+      it.sparse = nnz;
+      for (long r = first; r < end; ++r)
+        if (x[r] != 0.0) {
+          index_.push_back(static_cast<int>(r));
+          values_.push_back(x[r]);
+        }
+    }
+    items_.push_back(it);
+  }
+  // x -= f * vector i (x long enough).
+  void subtract(int i, double f, Eigen::Ref<Eigen::VectorXd> x) const {
+    const Item& it = items_[i];
+    if (!it.sparse) {
+      x.segment(it.first, it.end - it.first).noalias() -=
+          f * Eigen::Map<const Eigen::VectorXd>(values_.data() + it.at, it.end - it.first);
+      return;
+    }
+    for (long k = 0; k < it.sparse; ++k) x[index_[it.ix + k]] -= f * values_[it.at + k];
+  }
+  // x(0 .. end - 1) = vector i, x(end ..) untouched.
+  void load(int i, Eigen::Ref<Eigen::VectorXd> x) const {
+    const Item& it = items_[i];
+    x.head(it.end).setZero();
+    subtract(i, -1.0, x);
+  }
+  long end(int i) const { return items_[i].end; }
+
+ private:
+  struct Item {
+    long at, ix, first, end, sparse;  // sparse: number of entries kept, 0 for a dense segment
+  };
+  std::vector<Item> items_;
+  std::vector<double> values_;
+  std::vector<int> index_;
+};
+
 // Gaussian elimination of the columns of Z in `order` with partial pivoting; returns the rank.
 // With `out`, also the decision and Y. Each column is reduced against the pivots before it:
 //   z_c = sum_b f(b, c) u_b + x_c,
@@ -28,42 +80,47 @@ namespace {
 // Z~[prow] Y = Z[prow]: the residual of a dependent column is reduced further against the
 // pivots found after it, so that it vanishes on every pivot row (the residual of a column
 // dependent only within the tolerance is not zero there); then with F~ = F(:, pivots) (unit
-// upper triangular), Y = F~^-1 F, which needs no separate factorization.
-int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tol,
+// upper triangular), Y = F~^-1 F, which needs no separate factorization. Z, the pivots u_b, F
+// and Y are kept sparse: on the recursive method's rows of a long tree they are mostly zero.
+int eliminate(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& order, double tol,
               const Eigen::VectorXd& colmax, const std::vector<long>& colend, double zero_level,
               RankDecision* out) {
   // Rows are kept in their order; every vector remembers where its non-zero part ends, since
   // the row reduction leaves the rows of the inner links first.
   const long m = Z.rows();
   const int P = static_cast<int>(Z.cols());
-  Eigen::MatrixXd U(m, std::min<long>(m, P));
+  const long most = std::min<long>(m, P);  // pivots at most
+  VectorPool U;                            // the pivots u_b
+  std::vector<double> upivot;              // u_b on its pivot row
   std::vector<long> uend;
   std::vector<int> prow;
-  Eigen::MatrixXd F;
-  if (out) F = Eigen::MatrixXd::Zero(U.cols(), P);
+  struct Factor {
+    int b;
+    double f;
+  };
+  std::vector<std::vector<Factor>> F;  // F(b, c) by column, b ascending
+  if (out) F.resize(P);
   // Reduces x (non-zero up to `end`), the residual of column c, against pivots from .. to - 1.
-  auto reduce = [&](Eigen::Ref<Eigen::VectorXd> x, long& end, int c, int from, int to) {
+  auto reduce = [&](Eigen::VectorXd& x, long& end, int c, int from, int to) {
     for (int b = from; b < to; ++b) {
       const double xb = prow[b] < end ? x[prow[b]] : 0.0;
       if (xb == 0.0) continue;  // (most entries, on structured coordinates: skip the division)
-      const double f = xb / U(prow[b], b);
+      const double f = xb / upivot[b];
       if (f == 0.0) continue;
-      if (out) F(b, c) = f;
+      if (out) F[c].push_back({b, f});
       const long e = uend[b];
       if (e > end) {
         x.segment(end, e - end).setZero();
         end = e;
       }
-      x.head(e).noalias() -= f * U.col(b).head(e);
+      U.subtract(b, f, x);
     }
   };
   struct Dependent {
     int c, pivots;  // the column and the number of pivots before it
-    long end;
   };
   std::vector<Dependent> dependent;
-  Eigen::MatrixXd residuals;  // of the dependent columns
-  if (out) residuals.resize(m, P);
+  VectorPool residuals;  // of the dependent columns
   Eigen::VectorXd x(m);
   for (int c : order) {
     if (colmax[c] <= zero_level) {
@@ -71,19 +128,21 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
       continue;
     }
     long end = colend[c];
-    x.head(end) = Z.col(c).head(end);
+    x.head(end).setZero();
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it) x[it.index()] = it.value();
     const int nb = static_cast<int>(prow.size());
     reduce(x, end, c, 0, nb);
     Eigen::Index r = 0;
     const double rel = end > 0 ? x.head(end).cwiseAbs().maxCoeff(&r) / colmax[c] : 0.0;
     // A matrix of m rows has at most min(m, P) pivots; a residual left once they are all taken
     // is rounding noise, so the column is dependent.
-    if (rel > tol && nb < U.cols()) {
-      U.col(nb).head(end) = x.head(end);
+    if (rel > tol && nb < most) {
+      U.push(x, end);
+      upivot.push_back(x[r]);
       uend.push_back(end);
       prow.push_back(static_cast<int>(r));
       if (out) {
-        F(nb, c) = 1.0;
+        F[c].push_back({nb, 1.0});
         out->pivots.push_back(c);
         out->pivot_size.push_back(rel);
         out->smallest_kept = std::min(out->smallest_kept, rel);
@@ -92,35 +151,42 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
       out->dependent.push_back(c);
       out->residual.push_back(rel);
       out->largest_dropped = std::max(out->largest_dropped, rel);
-      residuals.col(static_cast<long>(dependent.size())).head(end) = x.head(end);
-      dependent.push_back({c, nb, end});
+      residuals.push(x, end);
+      dependent.push_back({c, nb});
     }
   }
   const int nb = static_cast<int>(prow.size());
   if (out) {
     for (std::size_t i = 0; i < dependent.size(); ++i) {
-      Dependent& d = dependent[i];
-      reduce(residuals.col(static_cast<long>(i)), d.end, d.c, d.pivots, nb);
+      const Dependent& d = dependent[i];
+      long end = residuals.end(static_cast<int>(i));
+      residuals.load(static_cast<int>(i), x);
+      reduce(x, end, d.c, d.pivots, nb);
     }
     // Y = F~^-1 F by back substitution, column by column; pivot columns give e_b.
-    out->Y.resize(nb, P);
     std::vector<int> pivot_of(P, -1);
     for (int b = 0; b < nb; ++b) pivot_of[out->pivots[b]] = b;
+    std::vector<Eigen::Triplet<double>> entries;
+    Eigen::VectorXd y(nb);
     for (int c = 0; c < P; ++c) {
-      auto y = out->Y.col(c);
       if (pivot_of[c] >= 0) {
-        y.setZero();
-        y[pivot_of[c]] = 1.0;
+        entries.emplace_back(pivot_of[c], c, 1.0);
         continue;
       }
-      y = F.col(c).head(nb);
-      for (int b = nb - 1; b > 0; --b) {
+      if (F[c].empty()) continue;
+      y.setZero();
+      for (const Factor& e : F[c]) y[e.b] = e.f;
+      for (int b = F[c].back().b; b > 0; --b) {
         const double yb = y[b];
         if (yb == 0.0) continue;
-        const int pb = out->pivots[b];
-        for (int b2 = 0; b2 < b; ++b2) y[b2] -= F(b2, pb) * yb;
+        for (const Factor& e : F[out->pivots[b]])
+          if (e.b < b) y[e.b] -= e.f * yb;
       }
+      for (int b = 0; b < nb; ++b)
+        if (y[b] != 0.0) entries.emplace_back(b, c, y[b]);
     }
+    out->Y.resize(nb, P);
+    out->Y.setFromTriplets(entries.begin(), entries.end());
   }
   return nb;
 }
@@ -142,13 +208,13 @@ BaseSet makeSet(RankDecision decision, const std::vector<std::string>& names) {
   const int nb = decision.rank();
   // Non-zero entries of each row of Y, counted column by column (Y is stored by columns).
   std::vector<long> nonzero(nb, 0);
-  const Eigen::MatrixXd& Y = decision.Y;
+  const Eigen::SparseMatrix<double>& Y = decision.Y;
   for (long c = 0; c < Y.cols(); ++c)
-    for (int b = 0; b < nb; ++b) nonzero[b] += Y(b, c) != 0.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Y, c); it; ++it) ++nonzero[it.row()];
   set.names.reserve(nb);
   for (int b = 0; b < nb; ++b) {
     const int p = decision.pivots[b];
-    const long others = nonzero[b] - (Y(b, p) != 0.0 ? 1 : 0);
+    const long others = nonzero[b] - (Y.coeff(b, p) != 0.0 ? 1 : 0);
     set.names.push_back(others > 0 ? regroupedName(names[p]) : names[p]);
   }
   set.decision = std::move(decision);
@@ -246,7 +312,8 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
   }
   // Rows of equal pattern (exact: a bit mask of the columns) are collected in buckets; a group
   // has few patterns, so they are searched linearly, starting from the last one found.
-  if (P > 256) throw ModelError("the projection method handles at most 256 parameters");
+  if (P > kProjectionMaxParameters)  // refused before computing (projectionRefusal)
+    throw std::logic_error("projection: more parameters than the row reduction's masks hold");
   std::vector<std::vector<int>> buckets;
   int nbuckets = 0;
   auto collect = [&](const std::vector<int>& rs, int offset, auto mask) {
@@ -336,6 +403,11 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
 
 RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tolerance,
                      const std::vector<int>& kinds) {
+  return echelon(Eigen::SparseMatrix<double>(Z.sparseView(0.0, 0.0)), order, tolerance, kinds);
+}
+
+RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& order,
+                     double tolerance, const std::vector<int>& kinds) {
   if (static_cast<long>(order.size()) != Z.cols())
     throw std::invalid_argument("echelon: the order must name every column once");
   std::vector<char> seen(Z.cols(), 0);
@@ -347,11 +419,21 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   RankDecision d;
   d.tolerance = tolerance;
   Eigen::VectorXd colmax(Z.cols());
-  std::vector<long> colend(Z.cols());  // one past the last non-zero entry
+  std::vector<long> colend(Z.cols());                   // one past the last non-zero entry
+  Eigen::VectorXd e = Eigen::VectorXd::Zero(Z.rows());  // a column at full length
+  auto load = [&](int c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it) e[it.index()] = it.value();
+  };
+  auto clear = [&](int c) {
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it) e[it.index()] = 0.0;
+  };
   for (int c = 0; c < Z.cols(); ++c) {
-    colmax[c] = Z.col(c).norm();
-    long end = Z.rows();
-    while (end > 0 && Z(end - 1, c) == 0.0) --end;
+    load(c);
+    colmax[c] = e.norm();
+    clear(c);
+    long end = 0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it)
+      if (it.value() != 0.0) end = it.index() + 1;
     colend[c] = end;
   }
   const double biggest = Z.cols() ? colmax.maxCoeff() : 0.0;
@@ -367,28 +449,25 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   // and W_b Y pi then missed the torques by 1e-10 relative; with 1e-12, by about 1e-12.
   constexpr double kCleanLevel = 1e-12;
   for (int c = 0; c < d.Y.cols(); ++c)
-    for (int b = 0; b < d.Y.rows(); ++b) {
-      double& y = d.Y(b, c);
-      if (y == 0.0) {  // most of Y
-        y = 0.0;
-        continue;
-      }
-      const double rel = colmax[c] > 0 ? colmax[d.pivots[b]] / colmax[c] : 1.0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(d.Y, c); it; ++it) {
+      double& y = it.valueRef();
+      const double rel = colmax[c] > 0 ? colmax[d.pivots[it.row()]] / colmax[c] : 1.0;
       if (std::abs(y) * rel < kCleanLevel || colmax[c] <= zero_level)
         y = 0.0;
       else if (std::abs(std::abs(y) - 1.0) < kCleanLevel)
         y = y > 0 ? 1.0 : -1.0;
     }
-  for (int b = 0; b < d.Y.rows(); ++b)
-    for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b2, d.pivots[b]) = b == b2 ? 1.0 : 0.0;
+  for (int b = 0; b < d.rank(); ++b) d.Y.coeffRef(b, d.pivots[b]) = 1.0;
+  d.Y.prune([](Eigen::Index, Eigen::Index, double y) { return y != 0.0; });
   if (d.rank() > 0) {
     // Pivot columns are reproduced exactly (identity block of Y); check the regrouped ones.
-    Eigen::VectorXd e(Z.rows());
     for (int c : d.dependent) {
-      e = Z.col(c);
-      for (int b = 0; b < d.rank(); ++b)
-        if (d.Y(b, c) != 0.0) e.noalias() -= d.Y(b, c) * Z.col(d.pivots[b]);
+      load(c);
+      for (Eigen::SparseMatrix<double>::InnerIterator y(d.Y, c); y; ++y)
+        for (Eigen::SparseMatrix<double>::InnerIterator it(Z, d.pivots[y.row()]); it; ++it)
+          e[it.index()] -= y.value() * it.value();
       d.fit_residual = std::max(d.fit_residual, e.norm() / colmax[c]);
+      e.setZero();
     }
   }
   // Near-degenerate geometry: say what the neighbouring tolerances would decide.
@@ -470,9 +549,15 @@ std::vector<std::string> BaseSet::formulas(const std::vector<std::string>& class
                                 " columns of Y");
   std::vector<std::string> out;
   out.reserve(names.size());
-  const Eigen::MatrixXd Yt = decision.Y.transpose();  // the rows of Y, contiguous
-  for (int b = 0; b < size(); ++b)
-    out.push_back(formatFormula(names[b], Yt.col(b).transpose(), classical_names));
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> rows = decision.Y;  // the rows, contiguous
+  Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(rows.cols());
+  for (int b = 0; b < size(); ++b) {
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(rows, b); it; ++it)
+      row[it.col()] = it.value();
+    out.push_back(formatFormula(names[b], row, classical_names));
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(rows, b); it; ++it)
+      row[it.col()] = 0.0;
+  }
   return out;
 }
 
@@ -540,54 +625,65 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
   bp.classical_names = model.parameterNames(layout);
   const double tol = options.tolerance;
 
-  Eigen::MatrixXd ZL, ZH, ZE;
+  Eigen::SparseMatrix<double> ZL, ZH, ZE;
   IdentifiableSpace space;  // recursive method
+  auto sparse = [](const Eigen::MatrixXd& Z) {
+    return Eigen::SparseMatrix<double>(Z.sparseView(0.0, 0.0));
+  };
   if (options.method == BaseMethod::Projection) {
     const InfluenceCoordinates ic = influenceCoordinates(model, layout, options.projection_budget);
     bp.basis_rows = ic.rows();
     bp.terms_formed = ic.terms_formed;
     const Reduced red = reduceRows(ic);
-    ZL = red.Z;
+    ZL = sparse(red.Z);
     // Equations of motion: the constant does not reach the torques; friction columns do.
-    const long keep = ZL.rows() - (red.constant_row >= 0 ? 1 : 0);
+    const long keep = red.Z.rows() - (red.constant_row >= 0 ? 1 : 0);
     const int fr = layout.friction ? 2 * n : 0;
-    ZE = Eigen::MatrixXd::Zero(keep + fr, P);
+    Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(keep + fr, P);
     long row = 0;
-    for (long r = 0; r < ZL.rows(); ++r)
-      if (r != red.constant_row) ZE.row(row++) = ZL.row(r);
+    for (long r = 0; r < red.Z.rows(); ++r)
+      if (r != red.constant_row) Z.row(row++) = red.Z.row(r);
     for (int k = 0; k < n && layout.friction; ++k) {
-      ZE(keep + 2 * k, layout.viscousIndex(k)) = 1.0;
-      ZE(keep + 2 * k + 1, layout.coulombIndex(k)) = 1.0;
+      Z(keep + 2 * k, layout.viscousIndex(k)) = 1.0;
+      Z(keep + 2 * k + 1, layout.coulombIndex(k)) = 1.0;
     }
+    ZE = sparse(Z);
   } else if (options.method == BaseMethod::Recursive) {
     // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has
     // no friction columns), the total energy's is the same space.
     space = recursiveIdentifiable(model, layout, tol);
     ZE = std::move(space.rows);
-    ZE.rowwise().normalize();
+    // Each row normalised (its norm summed in column order).
+    Eigen::VectorXd norm2 = Eigen::VectorXd::Zero(ZE.rows());
+    for (int c = 0; c < P; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(ZE, c); it; ++it)
+        norm2[it.row()] += it.value() * it.value();
+    for (int c = 0; c < P; ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(ZE, c); it; ++it)
+        it.valueRef() /= std::sqrt(norm2[it.row()]);
     // The constant first: it involves no joint, like the rows of the inner links, and leaves
     // the columns' last non-zero rows where they are. Then the rows with an entry off the
     // friction columns, without their friction entries.
     std::vector<char> friction(P, 0);
     for (int k = 0; k < n && layout.friction; ++k)
       friction[layout.viscousIndex(k)] = friction[layout.coulombIndex(k)] = 1;
-    std::vector<char> keep(ZE.rows(), 0);
+    std::vector<long> kept(ZE.rows(), -1);  // a row's row in ZL
     for (int c = 0; c < P; ++c)
       if (!friction[c])
-        for (long r = 0; r < ZE.rows(); ++r) keep[r] = keep[r] || ZE(r, c) != 0.0;
-    std::vector<long> kept;
-    for (long r = 0; r < ZE.rows(); ++r)
-      if (keep[r]) kept.push_back(r);
-    ZL.resize(static_cast<long>(kept.size()) + 1, P);
-    ZL.row(0) = space.constant;
+        for (Eigen::SparseMatrix<double>::InnerIterator it(ZE, c); it; ++it)
+          if (it.value() != 0.0) kept[it.row()] = 0;
+    long rowsL = 1;
+    for (long& r : kept)
+      if (r == 0) r = rowsL++;
+    std::vector<Eigen::Triplet<double>> entries;
     for (int c = 0; c < P; ++c) {
-      auto z = ZL.col(c).tail(static_cast<long>(kept.size()));
-      if (friction[c]) {
-        z.setZero();
-        continue;
-      }
-      for (std::size_t i = 0; i < kept.size(); ++i) z[static_cast<long>(i)] = ZE(kept[i], c);
+      if (friction[c]) continue;
+      if (space.constant[c] != 0.0) entries.emplace_back(0, c, space.constant[c]);
+      for (Eigen::SparseMatrix<double>::InnerIterator it(ZE, c); it; ++it)
+        if (it.value() != 0.0) entries.emplace_back(kept[it.row()], c, it.value());
     }
+    ZL.resize(rowsL, P);
+    ZL.setFromTriplets(entries.begin(), entries.end());
     bp.basis_rows = static_cast<int>(ZE.rows());
   } else {
     // The sampled matrices need at least as many rows as the rank they are to show (at most P
@@ -601,9 +697,10 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
                        std::to_string(P) + " parameters; give at least " +
                        std::to_string((P + n - 1) / n) + " (0: automatic)");
     // Peak memory: the samples (regressor and two energy matrices), and for the regressor's
-    // elimination its triangular factor and residuals (rows x P each) and F (P x P).
+    // elimination its triangular factor and residuals (rows x P each), F and Y (P x P, stored
+    // sparse: up to half as much again as dense).
     const double rows = static_cast<double>(m) * n;
-    const double bytes = 8.0 * P * (3.0 * rows + 2.0 * me + 2.0 * P);
+    const double bytes = 8.0 * P * (3.0 * rows + 2.0 * me + 2.5 * P);
     if (bytes > options.numerical_budget) {
       char buf[320];
       std::snprintf(buf, sizeof buf,
@@ -616,9 +713,9 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     }
     Samples s = sampleRegressors(model, layout, m, me, options.seed);
     // The energy sets: differences remove the constant, so keep one absolute sample row.
-    ZL = s.wL;
-    ZH = s.wH;
-    ZE = s.W;
+    ZL = sparse(s.wL);
+    ZH = sparse(s.wH);
+    ZE = sparse(s.W);
     bp.basis_rows = static_cast<int>(s.W.rows());
   }
   std::vector<int> kinds(P);

@@ -525,13 +525,11 @@ std::string overBudget(const Model& model, const ProjectionCost& c, double budge
     return o.str();
   };
   std::ostringstream o;
-  o << std::setprecision(2) << "the projection method would form up to " << c.rows
-    << " basis rows and " << c.terms << " terms for this " << model.nq()
-    << (model.isSerial() ? "-joint chain" : "-joint tree") << ", up to " << gib(c.bytes)
-    << " of memory (estimated before computing), over its budget of " << gib(budget)
-    << " (the basis grows geometrically along runs of parallel or general joint axes); "
-       "the recursive method (--method recursive, method='recursive') gives the same base set "
-       "for long chains, the numerical method (--method numerical) a sampled one";
+  o << std::setprecision(2) << "the projection method would need up to " << gib(c.bytes)
+    << " (estimated before computing: up to " << c.rows << " basis rows and " << c.terms
+    << " terms for this " << model.nq() << (model.isSerial() ? "-joint chain" : "-joint tree")
+    << "), over its budget of " << gib(budget)
+    << " (the basis grows geometrically along runs of parallel or general joint axes)";
   return o.str();
 }
 
@@ -810,34 +808,44 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
   return cost;
 }
 
+std::string projectionRefusal(const Model& model, ParameterLayout layout, double budget) {
+  model.validate();
+  const int n = model.nq(), P = layout.size(n);
+  const KeyLayout kl = keyLayout(model);
+  const std::string has = ", the model has ";
+  if (model.isSerial() && !kl.fits)
+    return "the projection method handles at most " + std::to_string(kMaxJoints) + " joints" + has +
+           std::to_string(n);
+  if (!model.isSerial() && n * (n + 1) / 2 >= (1 << kL0Bits))
+    return "the projection method handles at most " + std::to_string(kMaxTreeJoints) +
+           " joints on a tree" + has + std::to_string(n);
+  if (!kl.fits)
+    return "the projection method handles root paths of up to " +
+           std::to_string((64 - kL0Bits - 6) / kJointBits) +
+           " joints on a tree, the longest of "
+           "this " +
+           std::to_string(n) + "-joint tree has " + std::to_string(kl.longest);
+  if (P > kProjectionMaxParameters)
+    return "the projection method handles at most " + std::to_string(kProjectionMaxParameters) +
+           " parameters" + has + std::to_string(P) + " (" + std::to_string(n) + " joints, " +
+           std::to_string(layout.perLink()) + " per joint)";
+  const ProjectionCost cost = projectionCost(model, layout);
+  if (cost.bytes > budget) return overBudget(model, cost, budget);
+  return {};
+}
+
 InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout,
                                           double budget) {
   model.validate();
   const int n = model.nq();
   const KeyLayout kl = keyLayout(model);
   const bool tree = kl.end_mask != 0;
-  if (model.isSerial() && !kl.fits)
-    throw ModelError("the projection method handles at most " + std::to_string(kMaxJoints) +
-                     " joints, the model has " + std::to_string(n) +
-                     "; the recursive method (--method recursive, method='recursive') gives "
-                     "the same base set for long chains, the numerical method (--method "
-                     "numerical) a sampled one");
-  if (n * (n + 1) / 2 >= (1 << kL0Bits))
-    throw ModelError("the projection method handles at most " + std::to_string(kMaxTreeJoints) +
-                     " joints on a tree, the model has " + std::to_string(n) +
-                     "; the recursive method (--method recursive, method='recursive') gives "
-                     "the same base set");
-  if (!kl.fits)
-    throw ModelError("the projection method handles root paths of up to " +
-                     std::to_string((64 - kL0Bits - 6) / kJointBits) +
-                     " joints on a tree, the longest of this " + std::to_string(n) +
-                     "-joint tree has " + std::to_string(kl.longest) +
-                     "; the recursive method (--method recursive, method='recursive') gives "
-                     "the same base set");
-
   {
-    const ProjectionCost cost = projectionCost(model, layout);
-    if (cost.bytes > budget) throw ModelError(overBudget(model, cost, budget));
+    const std::string refused = projectionRefusal(model, layout, budget);
+    if (!refused.empty())
+      throw ModelError(refused +
+                       "; the recursive method (--method recursive, method='recursive') gives the "
+                       "same base set, the numerical method (--method numerical) a sampled one");
   }
   std::vector<Eigen::Isometry3d> pre, post;
   alignedFrames(model, pre, post);

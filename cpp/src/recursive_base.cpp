@@ -1,6 +1,7 @@
 #include "mindyn/recursive_base.hpp"
 
 #include <Eigen/Geometry>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 
@@ -265,37 +266,46 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     if (layout.rotor && rotor[k].rows() == 0) ++rows;
     if (layout.friction) rows += 2;
   }
-  out.rows.setZero(rows, P);
+  // The rows are sparse: those of link j are zero outside the columns of its subtree, whose
+  // total size grows as n log n on a random tree (as n^2 only on a long chain).
+  std::vector<Eigen::Triplet<double>> entries;
   std::vector<char> below(n);      // link k in the subtree of link j
   std::vector<Rows10> carried(n);  // n T_{j,k}
+  auto put = [&](int r, int col, const Eigen::Ref<const Eigen::VectorXd>& v) {
+    for (int i = 0; i < v.size(); ++i)
+      if (v[i] != 0.0) entries.emplace_back(r + i, col, v[i]);
+  };
   int r0 = 0;
   for (int j = 0; j < n; ++j) {
     const int nj = out.link_rank[j];
-    carried[j] = M[j];
-    out.rows.block(r0, j * per, nj, 10) = M[j];
-    below[j] = 1;
-    for (int k = j + 1; k < n; ++k) {
+    for (int k = j; k < n; ++k) {
       const int p = model.parent(k);
-      below[k] = p >= j && below[p];
+      below[k] = k == j || (p >= j && below[p]);
       if (!below[k]) continue;
-      carried[k].noalias() = carried[p].lazyProduct(T0[k]);
-      out.rows.block(r0, k * per, nj, 10) = carried[k];
+      if (k == j)
+        carried[k] = M[j];
+      else
+        carried[k].noalias() = carried[p].lazyProduct(T0[k]);
+      for (int c = 0; c < 10; ++c) put(r0, k * per + c, carried[k].col(c));
+      // A regrouped rotor's column: the value of the rows on its regrouping vector (on link k,
+      // and on its parent link when that is in the subtree too).
+      if (layout.rotor && rotor[k].rows() > 0) {
+        Eigen::VectorXd v = carried[k] * rotor[k].row(0).transpose();
+        if (rotor[k].rows() > 1 && k != j) v += carried[p] * rotor[k].row(1).transpose();
+        put(r0, layout.rotorIndex(k), v);
+      }
     }
     r0 += nj;
-    if (layout.rotor && rotor[j].rows() == 0) out.rows(r0++, layout.rotorIndex(j)) = 1.0;
+    if (layout.rotor && rotor[j].rows() == 0) entries.emplace_back(r0++, layout.rotorIndex(j), 1.0);
     if (layout.friction) {
-      out.rows(r0++, layout.viscousIndex(j)) = 1.0;
-      out.rows(r0++, layout.coulombIndex(j)) = 1.0;
+      entries.emplace_back(r0++, layout.viscousIndex(j), 1.0);
+      entries.emplace_back(r0++, layout.coulombIndex(j), 1.0);
     }
   }
-  for (int k = 0; k < n && layout.rotor; ++k) {
-    if (rotor[k].rows() == 0) continue;
-    out.rotor_regrouped.push_back(k);
-    auto col = out.rows.col(layout.rotorIndex(k));
-    col = out.rows.middleCols(k * per, 10) * rotor[k].row(0).transpose();
-    if (rotor[k].rows() > 1)
-      col += out.rows.middleCols(model.parent(k) * per, 10) * rotor[k].row(1).transpose();
-  }
+  for (int k = 0; k < n && layout.rotor; ++k)
+    if (rotor[k].rows() > 0) out.rotor_regrouped.push_back(k);
+  out.rows.resize(rows, P);
+  out.rows.setFromTriplets(entries.begin(), entries.end());
 
   // The constant of the Lagrangian: the potential energy's mean over the revolute joints (the
   // pose is affine in each joint's cos and sin, one joint per factor, so the mean of the product

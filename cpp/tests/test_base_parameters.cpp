@@ -173,8 +173,8 @@ TEST(BaseParameters, TwoCopiesOfAnArmOnTheBase) {
         while (d > 0 && std::isdigit(static_cast<unsigned char>(name[d - 1]))) --d;
         return name.substr(0, d) + std::to_string(std::stoi(name.substr(d)) + m);
       };
-      const Eigen::MatrixXd& Y1 = one.eom.decision.Y;
-      const Eigen::MatrixXd& Y2 = two.eom.decision.Y;
+      const Eigen::MatrixXd Y1(one.eom.decision.Y);
+      const Eigen::MatrixXd Y2(two.eom.decision.Y);
       for (int b = 0; b < nb; ++b) {
         EXPECT_EQ(two.eom.names[b], one.eom.names[b]) << what;
         EXPECT_EQ(two.eom.names[nb + b], relabel(one.eom.names[b])) << what;

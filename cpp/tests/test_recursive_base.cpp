@@ -36,9 +36,17 @@ void expectSame(const Model& model, ParameterLayout layout) {
   EXPECT_EQ(rec.lagrangian_equals_eom, proj.lagrangian_equals_eom) << what;
   ASSERT_EQ(rec.eom.decision.Y.rows(), proj.eom.decision.Y.rows()) << what;
   // Y is determined by the nullspace and the pivots; both are computed to rounding.
-  EXPECT_LT((rec.eom.decision.Y - proj.eom.decision.Y).cwiseAbs().maxCoeff(), 1e-10) << what;
+  EXPECT_LT((Eigen::MatrixXd(rec.eom.decision.Y) - Eigen::MatrixXd(proj.eom.decision.Y))
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-10)
+      << what;
   ASSERT_EQ(rec.lagrangian.decision.Y.rows(), proj.lagrangian.decision.Y.rows()) << what;
-  EXPECT_LT((rec.lagrangian.decision.Y - proj.lagrangian.decision.Y).cwiseAbs().maxCoeff(), 1e-10)
+  EXPECT_LT(
+      (Eigen::MatrixXd(rec.lagrangian.decision.Y) - Eigen::MatrixXd(proj.lagrangian.decision.Y))
+          .cwiseAbs()
+          .maxCoeff(),
+      1e-10)
       << what;
   EXPECT_FALSE(rec.eom.decision.near_degenerate) << what;
 }
@@ -65,7 +73,7 @@ void expectTorquesAndNumericalCount(const Model& model, ParameterLayout layout, 
   // W = W_b Y column by column: every classical column is the base columns' combination Y
   // says. 1e-9 relative: sums of a few hundred terms at rounding 1e-16, Y's entries (lever
   // arms out to the 20th link) up to about 1e3.
-  const Eigen::MatrixXd err = Wbs * rec.eom.decision.Y - Ws;
+  const Eigen::MatrixXd err = Wbs * Eigen::MatrixXd(rec.eom.decision.Y) - Ws;
   EXPECT_LT(err.norm(), 1e-9 * Ws.norm()) << what;
   // And so the torques of random parameters: W pi = W_b (Y pi).
   for (int t = 0; t < 2; ++t) {
@@ -183,13 +191,13 @@ TEST(RecursiveBase, TwoArmsOnOneBaseAreTheSerialArmTwice) {
       names.push_back(name.substr(0, d) + std::to_string(std::stoi(name.substr(d)) + n));
     }
     EXPECT_EQ(rec.eom.names, names);
-    const Eigen::MatrixXd& Y1 = one.eom.decision.Y;
+    const Eigen::MatrixXd Y1(one.eom.decision.Y);
     Eigen::MatrixXd Y = Eigen::MatrixXd::Zero(2 * Y1.rows(), 2 * Y1.cols());
     Y.topLeftCorner(Y1.rows(), Y1.cols()) = Y1;
     Y.bottomRightCorner(Y1.rows(), Y1.cols()) = Y1;
     ASSERT_EQ(rec.eom.decision.Y.rows(), Y.rows());
     // Both exact to rounding (entries up to about 1 here).
-    EXPECT_LT((rec.eom.decision.Y - Y).cwiseAbs().maxCoeff(), 1e-10);
+    EXPECT_LT((Eigen::MatrixXd(rec.eom.decision.Y) - Y).cwiseAbs().maxCoeff(), 1e-10);
   }
 }
 
@@ -199,7 +207,7 @@ TEST(RecursiveBase, RowsAreIndependentAndCountedPerLink) {
   int sum = 0;
   for (int r : s.link_rank) sum += r;
   EXPECT_EQ(sum, s.rows.rows());
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(s.rows);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(s.rows));
   EXPECT_EQ(svd.rank(), s.rows.rows());
 }
 

@@ -9,7 +9,7 @@ uses the same set (a constant in the energy cancels in differences).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from functools import cached_property
 
 import numpy as np
@@ -18,9 +18,20 @@ from . import _args, _core
 from . import formulas as _formulas
 from .robot import Robot, load
 
-__all__ = ["BaseParameters", "base_parameters"]
+__all__ = ["BaseParameters", "base_parameters", "choose_method"]
 
 DEFAULT_TOLERANCE = 1e-9
+
+
+def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) -> tuple[str, str]:
+    """The method :func:`base_parameters` runs when none is given, and why: the projection
+    method, or the recursive method (exact, the same base set) when any limit of the projection
+    method -- joints, parameters, its memory estimate, all checked by the C++ core before
+    computing -- refuses the robot with these joint terms."""
+    refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
+    if refused:
+        return "recursive", f"{refused}; the recursive method is exact and gives the same base set"
+    return "projection", "the default (exact, the thesis's method)"
 
 
 class BaseParameters:
@@ -46,7 +57,11 @@ class BaseParameters:
         ``formulas_full``, ``Y``,
         ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
         and ``margin`` (tolerance, smallest kept / largest dropped relative pivot, the counts at
-        the neighbouring tolerances, ``near_degenerate``).
+        the neighbouring tolerances, ``near_degenerate``). Each set is a read-only mapping whose
+        ``Y`` and formulas are computed on first access.
+    method_reason : str
+        Why this method ran: ``method='recursive'`` when it was given, else the reason of
+        :func:`choose_method` (``"the projection method handles at most 256 parameters, ..."``).
     offset : bool
         A constant torque offset per joint, ``tau_j = ... + Off_j``: the parameters ``Off1 ..
         OffN`` follow all others, in the base set as in the classical vector, each its own base
@@ -67,6 +82,7 @@ class BaseParameters:
         # the settings it was computed with (tolerance, snap, samples, seed), for symbolic()
         self.options = dict(options or {})
         self._off = [f"Off{k + 1}" for k in range(robot.n)] if self.offset else []
+        self.method_reason = ""  # set by base_parameters
 
     def for_robot(
         self, robot: Robot, order: Sequence[int] | Sequence[str] | None = None, offset=None
@@ -89,13 +105,30 @@ class BaseParameters:
 
     @cached_property
     def sets(self) -> dict:
-        """The three sets as dictionaries (see the class attributes), built on first use."""
+        """The three sets as mappings (see the class attributes), built on first use; each
+        set's ``Y`` and formulas on first access (large for long chains and trees)."""
         core = self._b
-        out = {"lagrangian": core.lagrangian, "energy": core.energy, "eom": core.eom}
-        names = list(core.classical_names)
-        for s in out.values():
-            s["formulas_full"] = s["formulas"]
-            s["formulas"] = [str(f) for f in _formulas.numeric_formulas(s["Y"], s["names"], names)]
+        out = {}
+        for kind in ("lagrangian", "energy", "eom"):
+            d = getattr(core, kind)
+            out[kind] = _Set(
+                d,
+                Y=lambda k=kind: core.set_matrix(k),
+                formulas_full=lambda k=kind: list(core.set_formulas(k)),
+                formulas=lambda k=kind, n=d["names"]: [str(f) for f in self._readable(k, n)],
+            )
+        return out
+
+    def _readable(self, kind: str, names: Sequence[str]) -> list[_formulas.Formula]:
+        """The readable formulas of a set, from its rows of ``Y`` a block at a time (``Y`` is
+        stored sparse: a dense copy of a 1000-joint tree's would take about 1 GB)."""
+        core, classical = self._b, list(self._b.classical_names)
+        out: list[_formulas.Formula] = []
+        for first in range(0, len(names), _ROWS_AT_ONCE):
+            rows, cols = core.set_rows(kind, first, _ROWS_AT_ONCE)  # only columns with entries
+            out += _formulas.numeric_formulas(
+                rows, names[first : first + _ROWS_AT_ONCE], [classical[c] for c in cols]
+            )
         return out
 
     n = property(lambda self: self._b.n + len(self._off))
@@ -115,8 +148,7 @@ class BaseParameters:
     def formula_terms(self) -> list[_formulas.Formula]:
         """The readable formulas as :class:`mindyn.formulas.Formula` objects (``str()`` gives
         the text, ``.latex()`` a LaTeX row)."""
-        core = self._b
-        out = _formulas.numeric_formulas(core.Y, core.names, core.classical_names)
+        out = self._readable("eom", list(self._b.names))
         return out + [_formulas.unit_formula(o) for o in self._off]
 
     @cached_property
@@ -272,6 +304,32 @@ class BaseParameters:
         return f"BaseParameters(robot={self.robot.name!r}, n={self.n}, method={self.method!r}{off})"
 
 
+_ROWS_AT_ONCE = 64
+
+
+class _Set(Mapping):
+    """One set's dictionary (``n``, ``names``, ``margin``, ...) whose entries given as functions
+    (``Y``, the formulas) are computed on first access."""
+
+    def __init__(self, data: dict, **later):
+        self._data = dict(data)
+        self._later = later
+
+    def __getitem__(self, key):
+        if key not in self._data and key in self._later:
+            self._data[key] = self._later.pop(key)()
+        return self._data[key]
+
+    def __iter__(self):
+        return iter([*self._data, *self._later])
+
+    def __len__(self) -> int:
+        return len(self._data) + len(self._later)
+
+    def __repr__(self) -> str:
+        return f"{{{', '.join(repr(k) for k in self)}}}"
+
+
 def _plain(d: dict) -> dict:
     return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in d.items()}
 
@@ -280,7 +338,7 @@ def base_parameters(
     robot: Robot | str,
     rotor: bool = False,
     friction: bool = False,
-    method: str = "projection",
+    method: str | None = None,
     order: Sequence[int] | Sequence[str] | None = None,
     tolerance: float = DEFAULT_TOLERANCE,
     snap: float | bool | None = None,
@@ -296,16 +354,20 @@ def base_parameters(
         A robot or anything :func:`mindyn.load` accepts.
     rotor, friction : bool
         Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
-    method : {"projection", "recursive", "numerical"}
-        Exact projection method; exact recursive method (the identifiable space link by link,
-        cost linear in the number of joints, then the same echelon form: the same base set and
-        ``Y``); or sampled regressors with QR (for cross-checks). The projection method's basis
-        grows geometrically along runs of parallel or general joint axes: its memory is
-        estimated before computing (an upper bound) and a chain over the 8 GiB budget, or of
-        more than 18 joints, is refused with a ModelError that gives the estimate; the
-        recursive method handles such chains, and so does the numerical one, up to its own
-        budget of 2 GiB (about 340 joints). All three handle trees (``Robot.parents``); on a
-        tree the projection method takes at most 16 joints on one root path and 44 in all.
+    method : {"projection", "recursive", "numerical"}, optional
+        Exact projection method; exact recursive method (the identifiable space link by
+        link, cost linear in the number of joints, then the same echelon form: the same base
+        set and ``Y``); or sampled regressors with QR (for cross-checks). The projection
+        method's basis grows geometrically along runs of parallel or general joint axes: its
+        memory is estimated before computing (an upper bound) and a chain over the 8 GiB
+        budget, or of more than 18 joints, is refused with a ModelError that gives the
+        estimate; the recursive method handles such chains, and so does the numerical one, up
+        to its own budget of 2 GiB (about 340 joints). All three handle trees
+        (``Robot.parents``); on a tree the projection method takes at most 16 joints on one
+        root path and 44 in all, and at most 256 parameters in all. Default (``None``): the
+        projection method, or the recursive one where a limit of the projection method refuses
+        the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
+        ``method_reason``).
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
@@ -327,6 +389,10 @@ def base_parameters(
     robot = load(robot) if not isinstance(robot, Robot) else robot
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     offset = _args.flag(offset, "offset")
+    if method is None:
+        method, reason = choose_method(robot, rotor=rotor, friction=friction)
+    else:
+        reason = f"method={method!r}"
     if method not in ("projection", "recursive", "numerical"):
         raise _core.ModelError(
             f"method is {method!r}; expected 'projection', 'recursive' or 'numerical'"
@@ -372,4 +438,6 @@ def base_parameters(
     )
     options = {"tolerance": float(tolerance), "snap": float(snap or 0.0)}
     options.update(samples=int(samples), seed=int(seed))
-    return BaseParameters(core, robot, offset, options)
+    out = BaseParameters(core, robot, offset, options)
+    out.method_reason = reason
+    return out

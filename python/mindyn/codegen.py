@@ -174,8 +174,10 @@ def generate(
     name : str, optional
         Prefix of the generated identifiers (default: from the robot's name).
     base : bool or BaseParameters
-        Base parameters (default), a given :class:`BaseParameters`, or ``False`` for all
-        classical parameters (the classical recursion, for comparison).
+        Base parameters (default: by the method :func:`mindyn.base_parameters` chooses), a
+        given :class:`BaseParameters`, or ``False`` for all classical parameters (the classical
+        recursion, for comparison). The header lists the base parameters with their formulas as
+        ``BaseParameters.formulas`` writes them.
     header_name : str, optional
         C: the header file name the source includes (default ``NAME.h``).
     minimise : {"operations", "additions"}
@@ -209,21 +211,15 @@ def generate(
         offset = base.offset
         bp_core = base._b
         names = base.names
+        formulas = base.formulas[: bp_core.n]
     elif base:
-        try:
-            bp = base_parameters(robot, rotor=rotor, friction=friction)
-        except _core.ModelError as e:
-            if "projection method" not in str(e):
-                raise
-            raise _core.ModelError(
-                f"code generation needs the base parameters, and {e}; in Python pass "
-                "base=mindyn.base_parameters(robot, method='numerical'), or base=False for the "
-                "classical parameters"
-            ) from None
+        # the projection method, or the recursive one where the projection method refuses
+        bp = base_parameters(robot, rotor=rotor, friction=friction)
         bp_core = bp._b
         names = bp.names + [f"Off{k + 1}" for k in range(robot.n) if offset]
+        formulas = bp.formulas
     else:
-        bp_core = None
+        bp_core = formulas = None
         names = robot.parameter_names(rotor, friction)
         names += [f"Off{k + 1}" for k in range(robot.n) if offset]
     values = None
@@ -246,6 +242,7 @@ def generate(
         minimise=minimise,
         inline_trig=trig != "libm",
         offset=offset,
+        formulas=formulas,  # as mindyn base prints them (BaseParameters.formulas)
     )
     return GeneratedCode(lang, name, out, numeric, header_name or f"{name}.h")
 

@@ -74,6 +74,7 @@ ZCR07S: our formulas against the study's Table 1
 
 from __future__ import annotations
 
+import bisect
 import itertools
 import math
 import time
@@ -312,6 +313,10 @@ def numeric_formulas(
         row = Y[b]
         scale = float(np.max(np.abs(row))) if row.size else 0.0
         groups: list[tuple[float, float, list[str]]] = []  # (raw value, rounded, params)
+        # the raw values of the groups that gather (not +-1), sorted, and their group indices:
+        # a term joins the first group within twice its tolerance
+        raws: list[float] = []
+        where: list[int] = []
         for c in np.flatnonzero(row):
             y = float(row[c])
             tol = RELATIVE * abs(y) + ABSOLUTE * scale
@@ -321,11 +326,13 @@ def numeric_formulas(
             if abs(abs(r) - 1.0) == 0.0:
                 groups.append((y, r, [classical_names[c]]))
                 continue
-            for g in groups:
-                if abs(g[1]) != 1.0 and abs(g[0] - y) <= 2 * tol:
-                    g[2].append(classical_names[c])
-                    break
+            lo, hi = bisect.bisect_left(raws, y - 2 * tol), bisect.bisect_right(raws, y + 2 * tol)
+            if lo < hi:
+                groups[min(where[lo:hi])][2].append(classical_names[c])
             else:
+                i = bisect.bisect_left(raws, y)
+                raws.insert(i, y)
+                where.insert(i, len(groups))
                 groups.append((y, r, [classical_names[c]]))
         terms = tuple(Term(coef=(((), r),), params=tuple(ps)) for _, r, ps in groups)
         out.append(Formula(name=name, terms=terms))

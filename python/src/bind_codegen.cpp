@@ -64,11 +64,16 @@ void bindCodegen(py::module_& m) {
          bool rotor, bool friction, const std::vector<std::string>& functions,
          const std::string& name, bool numeric, const std::optional<Eigen::VectorXd>& values,
          const std::string& lang, const std::string& header_name, const std::string& minimise,
-         bool inlineTrig, bool offset) {
+         bool inlineTrig, bool offset, const std::optional<std::vector<std::string>>& formulas) {
         // Base parameters carry the model they were computed for (possibly a snapped copy).
         const Model& model = base_core ? base_core->model->model : model_core->model;
         ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
                                     : classicalParameterSet(model, {rotor, friction});
+        if (formulas) {
+          if (!base_core || static_cast<long>(formulas->size()) != ps.size())
+            throw py::value_error("formulas: one per base parameter, with base parameters");
+          ps.formulas = *formulas;
+        }
         if (offset) ps = withOffsets(model, std::move(ps));
         std::vector<Function> fs;
         for (const auto& f : functions) fs.push_back(functionOf(f));
@@ -112,8 +117,10 @@ void bindCodegen(py::module_& m) {
       py::arg("values") = std::optional<Eigen::VectorXd>(), py::arg("lang") = "c",
       py::arg("header_name") = "robot.h", py::arg("minimise") = "operations",
       py::arg("inline_trig") = true, py::arg("offset") = false,
+      py::arg("formulas") = std::optional<std::vector<std::string>>(),
       "Generated code and operation counts. base=None: the classical parameters; offset: a "
-      "torque offset per joint after them.");
+      "torque offset per joint after them; formulas: the text of each base parameter's "
+      "formula in the header comment (default: full precision).");
 
   py::class_<PyBaseDynamics, std::shared_ptr<PyBaseDynamics>>(m, "BaseDynamics")
       .def(py::init([](const PyBase& base_core, bool offset) {

@@ -5,6 +5,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -45,9 +46,9 @@ py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
   py::dict out;
   out["n"] = set.size();
   out["names"] = set.names;
-  out["formulas"] = set.formulas(names);
+  // Y and the formulas, large on long chains and trees, come from set_matrix, set_rows and
+  // set_formulas, on request.
   out["pivots"] = d.pivots;
-  out["Y"] = d.Y;
   out["pivot_size"] = d.pivot_size;
   std::vector<std::string> zero, dep;
   for (int c : d.zero) zero.push_back(names[c]);
@@ -70,6 +71,13 @@ py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
   margin["fit_residual"] = d.fit_residual;
   out["margin"] = margin;
   return out;
+}
+
+const BaseSet& setOf(const BaseParameters& bp, const std::string& name) {
+  if (name == "lagrangian") return bp.lagrangian;
+  if (name == "energy") return bp.energy;
+  if (name == "eom") return bp.eom;
+  throw ModelError("set must be 'lagrangian', 'energy' or 'eom', got '" + name + "'");
 }
 
 py::dict limitsDict(const JointLimits& l) {
@@ -400,7 +408,44 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("names", [](const PyBase& b) { return b.bp.eom.names; })
       .def_property_readonly(
           "formulas", [](const PyBase& b) { return b.bp.eom.formulas(b.bp.classical_names); })
-      .def_property_readonly("Y", [](const PyBase& b) { return b.bp.eom.decision.Y; })
+      .def_property_readonly("Y",
+                             [](const PyBase& b) { return Eigen::MatrixXd(b.bp.eom.decision.Y); })
+      .def(
+          "set_matrix",
+          [](const PyBase& b, const std::string& set) {
+            return Eigen::MatrixXd(setOf(b.bp, set).decision.Y);
+          },
+          py::arg("set"), "Y of a set ('lagrangian', 'energy', 'eom'), dense.")
+      .def(
+          "set_rows",
+          [](const PyBase& b, const std::string& set, long first, long count) {
+            const Eigen::SparseMatrix<double>& Y = setOf(b.bp, set).decision.Y;
+            first = std::clamp<long>(first, 0, Y.rows());
+            count = std::clamp<long>(count, 0, Y.rows() - first);
+            std::vector<int> cols;  // the columns with an entry in these rows
+            for (int c = 0; c < Y.cols(); ++c)
+              for (Eigen::SparseMatrix<double>::InnerIterator it(Y, c); it; ++it)
+                if (it.row() >= first && it.row() < first + count) {
+                  cols.push_back(c);
+                  break;
+                }
+            using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+            RowMajor out = RowMajor::Zero(count, static_cast<long>(cols.size()));
+            for (std::size_t i = 0; i < cols.size(); ++i)
+              for (Eigen::SparseMatrix<double>::InnerIterator it(Y, cols[i]); it; ++it)
+                if (it.row() >= first && it.row() < first + count)
+                  out(it.row() - first, static_cast<long>(i)) = it.value();
+            return py::make_tuple(out, cols);
+          },
+          py::arg("set"), py::arg("first"), py::arg("count"),
+          "Rows first .. first + count - 1 of a set's Y on the columns where they have entries: "
+          "(dense rows, those columns).")
+      .def(
+          "set_formulas",
+          [](const PyBase& b, const std::string& set) {
+            return setOf(b.bp, set).formulas(b.bp.classical_names);
+          },
+          py::arg("set"), "A set's formulas at full precision.")
       .def_property_readonly("pivots", [](const PyBase& b) { return b.bp.eom.decision.pivots; })
       .def_property_readonly("classical_names",
                              [](const PyBase& b) { return b.bp.classical_names; })
@@ -556,6 +601,16 @@ PYBIND11_MODULE(_core, m) {
       py::arg("model"), py::arg("rotor") = false,
       "Upper bounds of what the projection method forms (terms, rows, entries) and its memory "
       "estimate in bytes, counted on sparsity patterns before computing; `budget`: the limit.");
+  m.def(
+      "projection_refusal",
+      [](const std::shared_ptr<PyModel>& model, bool rotor, bool friction) -> py::object {
+        const std::string why = projectionRefusal(model->model, {rotor, friction});
+        if (why.empty()) return py::none();
+        return py::str(why);
+      },
+      py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
+      "Why the projection method cannot take the model with these joint terms (its joint, "
+      "parameter and memory limits, checked before computing), or None when it can.");
   m.def("khalil_order", [](int n, bool rotor, bool friction) {
     return khalilOrder(n, {rotor, friction});
   });

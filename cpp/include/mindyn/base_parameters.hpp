@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <limits>
 #include <string>
 #include <vector>
@@ -38,8 +39,8 @@ struct RankDecision {
   double zero_threshold = 0;  // column norms up to this (relative to the largest) count as zero
   double largest_zeroed = 0;  // largest such non-zero column norm, relative; 0 if all exact
   bool near_degenerate = false;
-  Eigen::MatrixXd Y;        // rank x columns, Y.col(pivots[b]) = e_b
-  double fit_residual = 0;  // max |Z - Z~ Y| relative to max |Z|
+  Eigen::SparseMatrix<double> Y;  // rank x columns, Y.col(pivots[b]) = e_b; mostly zero
+  double fit_residual = 0;        // max |Z - Z~ Y| relative to max |Z|
   int rank() const { return static_cast<int>(pivots.size()); }
 };
 
@@ -50,6 +51,9 @@ inline constexpr double kDefaultRankTolerance = 1e-9;
 /// `kinds` optionally groups the columns (same value: same kind of parameter) for the
 /// weak-column report.
 RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order,
+                     double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {});
+/// The same on a sparse Z (only its non-zero entries are stored and visited).
+RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& order,
                      double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {});
 
 /// The conventional (Khalil) priority order: link by link from the base; in each link

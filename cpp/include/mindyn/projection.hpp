@@ -86,9 +86,22 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout = {});
 /// ten times; a generic 12-joint chain (estimate 31 GB) is refused.
 inline constexpr double kProjectionBudget = 8.0 * 1024 * 1024 * 1024;
 
-/// Runs the recursion. Throws ModelError for more than 18 joints on a serial chain (the packed
-/// index limit; on a tree, for more than 44 joints or root paths of more than 16) and, before
-/// forming anything, when projectionCost(model, layout).bytes exceeds `budget`.
+/// Most parameters (columns, friction included) the projection method's row reduction takes:
+/// it groups rows by bit masks of their columns.
+inline constexpr int kProjectionMaxParameters = 256;
+
+/// Why the projection method cannot take `model` in `layout` with `budget` bytes, or an empty
+/// string when it can: every limit it has, in one place, checked before computing in the order
+/// the method meets them: joints (18 on a serial chain, the packed index; 44 on a tree and 16 on
+/// one root path), parameters (kProjectionMaxParameters) and memory (projectionCost's estimate
+/// against `budget`). The text starts with "the projection method" and names the limit and the
+/// model's value ("the projection method handles at most 256 parameters, the model has 320 (32
+/// joints, 10 per joint)").
+std::string projectionRefusal(const Model& model, ParameterLayout layout = {},
+                              double budget = kProjectionBudget);
+
+/// Runs the recursion. Throws ModelError, before forming anything, when projectionRefusal
+/// refuses the model.
 InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout = {},
                                           double budget = kProjectionBudget);
 

@@ -23,6 +23,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/SparseCore>
 #include <vector>
 
 #include "mindyn/model.hpp"
@@ -31,8 +32,9 @@ namespace mindyn {
 
 struct IdentifiableSpace {
   /// Rows spanning the identifiable space of the equations of motion (layout columns), link by
-  /// link from the base: the rows of link j are zero outside the columns of its subtree.
-  Eigen::MatrixXd rows;
+  /// link from the base: the rows of link j are zero outside the columns of its subtree (sparse:
+  /// only the non-zero entries are stored).
+  Eigen::SparseMatrix<double> rows;
   /// The constant part of the Lagrangian as a functional of the parameters (the potential energy
   /// averaged over the revolute joints, at q = 0 for the prismatic ones); with the rows without
   /// friction it spans the identifiable space of the Lagrangian and of the total energy.

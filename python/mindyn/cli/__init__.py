@@ -104,7 +104,7 @@ def cmd_info(args: argparse.Namespace) -> int:
 def cmd_base(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     order = [s.strip() for s in args.order.split(",")] if args.order else None
-    method, why = base_method(robot, args.rotor, args.method)
+    method, why = base_method(robot, args.rotor, args.method, args.friction)
     bp = base_parameters(
         robot,
         rotor=args.rotor,
@@ -211,7 +211,8 @@ def build_parser() -> argparse.ArgumentParser:
         "or the numerical method (sampled regressor + QR), on chains and trees. Without "
         "--method, a robot whose projection cost estimate is over its budget (or beyond the "
         "projection method's limits: more than 18 joints on a chain, 44 on a tree or 16 on one "
-        "of its root paths) is computed by the recursive method, and the output says so.",
+        "of its root paths, more than 256 parameters) is computed by the recursive method, and "
+        "the output says so.",
     )
     add_robot(p)
     add_joint_terms(p)

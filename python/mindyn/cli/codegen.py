@@ -139,7 +139,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         minimise=args.minimise,
         offset=args.offset,
     )
-    method, why = base_method(robot, args.rotor, args.method)
+    method, why = base_method(robot, args.rotor, args.method, args.friction)
     if method != "projection" and args.method is None:
         print(f"base parameters by the {method} method: {why}")
     base = base_parameters(
