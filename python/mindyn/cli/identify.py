@@ -463,9 +463,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
     out.append("")
     out.append(format_table(res, truth))
     out.append("")
-    out.append(_rms_lines("identification data", fit))
+    # with --consistent, two estimates: each table says whose it is
+    whose = "" if cons is None else " (unconstrained estimate)"
+    out.append(_rms_lines(f"identification data{whose}", fit))
     if val is not None:
-        out.append(_rms_lines(f"validation data ({', '.join(vfiles)})", val))
+        out.append(_rms_lines(f"validation data ({', '.join(vfiles)}){whose}", val))
     cfit = cval = None
     if cons is not None:
         cfit = validate(cons, logs)
@@ -642,6 +644,13 @@ def _consistent_lines(cons, fit, val, cfit, cval, logs) -> list[str]:
             f"  {'validation data':<24} {_pct(val['overall_relative']):>14} "
             f"{_pct(cval['overall_relative']):>14}"
         )
+    for what, un_m, co_m in (("identification", fit, cfit), ("validation", val, cval)):
+        for kind in ("raw", "moving"):
+            if co_m is not None and co_m.get(kind) is not None:
+                lines.append(
+                    f"  {what + ', ' + kind:<24} {_pct(un_m[kind]['overall_relative']):>14} "
+                    f"{_pct(co_m[kind]['overall_relative']):>14}"
+                )
     low = cons.mass_matrix_min_eig(logs)
     lines.append(
         f"  mass matrix of the consistent model: smallest eigenvalue over the data {low:.4g} "
@@ -656,14 +665,33 @@ def _measures_doc(v: dict, files: list) -> dict:
     """The error measures of :func:`~mindyn.identification.validate` for the JSON: fractions
     (relative, NRMS) and N m (RMS), over all logs stacked and per log."""
 
-    def one(m):
+    def base(m):
         return {
             "overall_relative": _nan_list([m["overall_relative"]])[0],
-            "rms": m["rms"].tolist(),
+            "rms": _nan_list(m["rms"]),
             "relative": _nan_list(m["relative"]),
             "nrms": _nan_list(m["nrms"]),
             "nrms_missing_limit": m["nrms_missing"],
         }
+
+    def one(m):
+        out = base(m)
+        raw, mov = m.get("raw"), m.get("moving")
+        out["raw"] = None if raw is None else {**base(raw), "samples": raw["samples"]}
+        if raw is not None:
+            out["raw"]["against"] = raw["against"]
+        out["moving"] = (
+            None
+            if mov is None
+            else {
+                **base(mov),
+                "samples": mov["samples"],
+                "threshold": _nan_list(mov["threshold"]),
+                "rule": mov["rule"],
+                "fraction": _nan_list(mov["fraction"]),
+            }
+        )
+        return out
 
     out = one(v)
     out["samples"] = v["samples"]
@@ -750,6 +778,7 @@ def _rms_lines(label: str, v: dict) -> str:
         f"  overall relative error |tau - tau_hat| / |tau|, all joints stacked: "
         f"{_pct(v['overall_relative']).strip()}",
     ]
+    lines += _three_measures(v)
     if len(v["logs"]) > 1:
         for m in v["logs"]:
             lines.append(
@@ -757,6 +786,32 @@ def _rms_lines(label: str, v: dict) -> str:
                 + " ".join(f"{x:.4g}" for x in m["rms"])
             )
     return "\n".join(lines)
+
+
+def _three_measures(v: dict) -> list[str]:
+    """The three measures of :func:`~mindyn.identification.validate`, named, side by side:
+    overall relative error and per-joint RMS against the torques the fit saw, against the
+    torques as logged, and on the moving samples only."""
+    raw, mov = v.get("raw"), v.get("moving")
+    rows = [("filtered (the torques the fit saw)", v)]
+    if raw is None:
+        return ["  (the torques as logged are not known for this data: no raw or moving measure)"]
+    rows += [("raw (the torques as logged)", raw), ("moving (raw, moving samples)", mov)]
+    lines = [
+        f"  {'measure':<34} {'overall':>9}  {'samples':>8}  RMS per joint [N m | N]",
+    ]
+    for name, m in rows:
+        lines.append(
+            f"  {name:<34} {_pct(m['overall_relative'])}  {m['samples']:>8}  "
+            + " ".join(f"{x:.4g}" for x in m["rms"])
+        )
+    lines.append(
+        f"  raw: {raw['against']}; moving: {mov['rule']}; threshold per joint "
+        + " ".join(f"{x:.3g}" for x in mov["threshold"])
+        + " [rad/s | m/s], samples counted "
+        + " ".join(f"{100 * x:.0f}%" for x in mov["fraction"])
+    )
+    return lines
 
 
 def _nan_list(a):
