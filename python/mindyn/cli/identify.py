@@ -247,7 +247,7 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
             path,
             robot=robot,
             torque_unit=unit,
-            require_torque=not currents,
+            require_torque=not currents and not getattr(args, "_torque_optional", False),
             filter=args.filter,
             cutoff=args.cutoff,
             drive_gain=gain,
@@ -486,6 +486,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
         if cval is not None:
             ce["validation"] = {"file": ", ".join(vfiles), **_measures_doc(cval, vlabels)}
         ce["mass_matrix_min_eig"] = cons.mass_matrix_min_eig(logs)
+    # how a log is read for this model: what 'mindyn predict' does with another log
+    doc["reading"] = {
+        "filter": args.filter,
+        "cutoff_Hz": vcut if args.filter == "lowpass" else args.cutoff,
+        "edge_s": args.edge,
+        "torque_unit": args.torque_unit,
+        "drive_gain": args.drive_gain,
+        "topic": args.topic,
+    }
     doc["data"] = {
         "file": files[0] if len(files) == 1 else None,
         "files": files,
@@ -604,6 +613,74 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
+    return 0
+
+
+@warnings_after_success
+def cmd_predict(args: argparse.Namespace) -> int:
+    from ..identification.data import read_json
+    from ..identification.prediction import identified_model, predict
+
+    doc = read_json(args.identification)
+    if not isinstance(doc, dict):
+        raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
+    robot = load(args.robot, tip=args.tip if args.tip is not None else doc.get("tip"))
+    estimate = "consistent" if args.consistent else "unconstrained"
+    identified_model(doc, robot, estimate=estimate)  # its errors before reading the log
+    recorded = doc.get("reading")
+    if recorded is None and args.filter is None:
+        raise ValueError(
+            f"{args.identification}: does not record how identify read its logs; give --filter "
+            "(and --cutoff) as identify had them"
+        )
+    reading = dict(recorded or {})
+    if args.filter is not None and args.filter != reading.get("filter"):
+        reading["cutoff_Hz"] = None  # the recorded cut-off belongs to the recorded filter
+    stated = []
+    for key, flag in (("filter", "filter"), ("cutoff_Hz", "cutoff")):
+        given = getattr(args, flag)
+        if given is not None:
+            stated.append(f"--{flag} {given:g}" if key == "cutoff_Hz" else f"--{flag} {given}")
+            reading[key] = given
+    ns = argparse.Namespace(
+        filter=reading.get("filter", "lowpass"),
+        cutoff=reading.get("cutoff_Hz"),
+        edge=reading.get("edge_s"),
+        torque_unit=args.torque_unit or reading.get("torque_unit"),
+        drive_gain=args.drive_gain or reading.get("drive_gain"),
+        topic=args.topic or reading.get("topic"),
+        periods=None,
+        period=None,
+        no_decimate=True,
+        model="dynamic",
+        _torque_optional=True,
+    )
+    logs = _read_filtered(args.log, robot, ns)
+    pred = predict(doc, logs, robot=robot, estimate=estimate)
+    path = pred.write_csv(args.output)
+    how = (
+        f"low-pass at {ns.cutoff:.4g} Hz (zero-phase Butterworth order 4), the model on the "
+        "filtered motion at the logged time stamps between the filter edges"
+        if ns.filter == "lowpass"
+        else f"--filter {ns.filter}"
+        + (f" at {ns.cutoff:g} Hz" if ns.cutoff is not None else "")
+        + ", the model on the samples as read"
+    )
+    print(
+        f"{robot.name}: {estimate} estimate of {args.identification} ({len(pred.values)} base "
+        f"parameters) on {args.log}: {pred.t.size} samples"
+        + (f" from {len(logs)} segments (cut at breaks)" if len(logs) > 1 else "")
+    )
+    print(
+        f"  log read as for the identification ({'as recorded in the JSON' if recorded else ''}"
+        + ("; " if recorded and stated else "")
+        + (("given: " + ", ".join(stated)) if stated else "")
+        + f"): {how}"
+    )
+    cols = "t, q, dq, ddq (the motion evaluated), tau_hat" + (
+        ", tau (as logged, N m)" if pred.tau is not None else ""
+    )
+    print(f"  wrote {path} ({cols})")
     return 0
 
 
@@ -1196,3 +1273,41 @@ def register(sub) -> None:
     )
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
     p.set_defaults(func=cmd_identify_payload)
+
+    p = sub.add_parser(
+        "predict",
+        help="torques an identified model predicts on a log (CSV), to score it any way",
+        description="The joint torques W_b(q, dq, ddq) p_b of the base-parameter values of "
+        "'mindyn identify --json' on LOG, read as identify read its logs (the filter and "
+        "cut-off recorded in the JSON: with the low-pass, the model is evaluated on the "
+        "filtered motion at each logged time stamp between the filter edges; a log with breaks "
+        "is cut into segments). Writes t, q, dq, ddq (the motion evaluated, 17 digits), tau_hat "
+        "and, when the log has them, the torques as logged (N m). 'mindyn codegen --params "
+        "ID.json' gives code computing the same torques.",
+    )
+    add_robot(p)
+    p.add_argument("identification", metavar="ID.json", help="JSON of 'mindyn identify'")
+    p.add_argument("log", metavar="LOG", help="CSV log or ROS bag (torques optional)")
+    p.add_argument(
+        "-o", "--output", required=True, metavar="CSV", type=output_file, help="CSV to write"
+    )
+    p.add_argument(
+        "--consistent",
+        action="store_true",
+        help="the consistent estimate of the JSON (identify --consistent) instead of the "
+        "unconstrained one",
+    )
+    p.add_argument(
+        "--filter",
+        choices=["lowpass", "butter", "savgol", "none"],
+        help="read the log otherwise than the JSON records (as identify's --filter)",
+    )
+    number(p, "--cutoff", low=0, low_open=True, help="cut-off [Hz] instead of the recorded one")
+    p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille", "current"],
+        help="logged torque unit, as identify's (default: as recorded)",
+    )
+    p.add_argument("--drive-gain", metavar="K1,...,Kn", help="as identify's (default: as recorded)")
+    p.set_defaults(func=cmd_predict)
