@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -390,12 +391,30 @@ def cmd_identify(args: argparse.Namespace) -> int:
         out = [head + f"{data.m} samples at {data.rate:.4g} Hz from {files[0]}"]
     else:
         out = [head + f"{sum(d.m for d in logs)} samples from {len(logs)} logs fitted together:"]
-        for f, d, info in zip(labels, logs, res.settings["logs"]):
-            out.append(f"    {f}: {d.m} samples at {d.rate:.4g} Hz, {info['equations']} equations")
+        k = 0
+        for f, ds in zip(files, parts):  # a file cut at breaks: one line for its segments
+            infos = res.settings["logs"][k : k + len(ds)]
+            k += len(ds)
+            eq = sum(i["equations"] for i in infos)
+            if len(ds) == 1:
+                out.append(f"    {f}: {ds[0].m} samples at {ds[0].rate:.4g} Hz, {eq} equations")
+            else:
+                out.append(f"    {f}: {_segments_line(ds)}, {sum(d.m for d in ds)} samples, {eq} "
+                           "equations")  # fmt: skip
     if all(pres):
-        for f, p in zip(labels, pres):
+        k = 0
+        for f, ds in zip(files, parts):
+            p = pres[k]
+            k += len(ds)
             if len(logs) > 1:
-                out.append(f"  {f} (on its own):")
+                out.append(
+                    f"  {f} (on its own):"
+                    if len(ds) == 1
+                    else f"  {f} (each segment on its own; the first shown, every one in the "
+                    "JSON's data.logs"
+                    + _cutoff_range([d.processing["preprocess"] for d in ds])
+                    + "):"
+                )
             indent = "  " if len(logs) > 1 else ""
             out += [indent + line for line in _describe_preprocess(p, res.model)]
     else:
@@ -511,6 +530,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
             for f, d in zip(labels, logs)
         ],
     }
+    doc["data"]["segments"] = [
+        {"file": f, **_segments(ds)} for f, ds in zip(files + vfiles, parts + vparts) if len(ds) > 1
+    ]
     doc["fit"] = _measures_doc(fit, labels)
     if val is not None:
         doc["validation"] = {"file": ", ".join(vfiles), **_measures_doc(val, vlabels)}
@@ -776,6 +798,32 @@ def _measures_doc(v: dict, files: list) -> dict:
     return out
 
 
+def _segments(ds) -> dict:
+    """A log cut at its breaks: segment count, shortest and longest [s], each one's span."""
+    spans = [d.processing["segment"]["t_s"] for d in ds]
+    length = [b - a for a, b in spans]
+    return {
+        "count": len(ds),
+        "shortest_s": min(length),
+        "longest_s": max(length),
+        "spans_s": spans,
+    }
+
+
+def _segments_line(ds) -> str:
+    """One line for a log cut at its breaks (the segments themselves are in the JSON)."""
+    s = _segments(ds)
+    return (
+        f"cut at {s['count'] - 1} break(s) in its time stamps into {s['count']} segments "
+        f"(shortest {s['shortest_s']:.4g} s, longest {s['longest_s']:.4g} s)"
+    )
+
+
+def _cutoff_range(pres) -> str:
+    cut = [p["filter"]["cutoff_Hz"] for p in pres]
+    return "" if max(cut) == min(cut) else f"; cut-offs {min(cut):.4g} to {max(cut):.4g} Hz"
+
+
 def _describe_preprocess(pre: dict, model: str) -> list[str]:
     """The lines of ``mindyn identify`` that say what the data path did."""
     tm, flt = pre["timing"], pre["filter"]
@@ -857,11 +905,22 @@ def _rms_lines(label: str, v: dict) -> str:
     ]
     lines += _three_measures(v)
     if len(v["logs"]) > 1:
+        groups: dict = {}  # the segments of a file cut at its breaks: one line
         for m in v["logs"]:
-            lines.append(
-                f"  {m['source']}: overall {_pct(m['overall_relative']).strip()}, RMS "
-                + " ".join(f"{x:.4g}" for x in m["rms"])
-            )
+            seg = re.fullmatch(r"(.*) \[\S+ s to \S+ s\]", m["source"] or "")
+            groups.setdefault(seg.group(1) if seg else m["source"], []).append(m)
+        for name, ms in groups.items():
+            if len(ms) == 1:
+                lines.append(
+                    f"  {ms[0]['source']}: overall {_pct(ms[0]['overall_relative']).strip()}, RMS "
+                    + " ".join(f"{x:.4g}" for x in ms[0]["rms"])
+                )
+            else:
+                e = [m["overall_relative"] for m in ms]
+                lines.append(
+                    f"  {name}, {len(ms)} segments: overall {_pct(min(e)).strip()} to "
+                    f"{_pct(max(e)).strip()} (each in the JSON)"
+                )
     return "\n".join(lines)
 
 
