@@ -499,7 +499,8 @@ def preprocess(
         out.regressor_filter = ParallelFilter(qf, dqf, ddqf, lowpass, keep)
     out.processing["velocity"] = {"source": info["velocity"]}
     out.processing["acceleration"] = {"source": info["acceleration"]}
-    out.logged = _logged_samples(data, tu, qf, dqf, ddqf, drop, cycle, fc, rate, logged_dq)
+    with_dq = logged_dq and data.dq is not None
+    out.logged = _logged_samples(data, tu, qf, dqf, ddqf, drop, cycle, fc, rate, with_dq)
     info["logged_samples"] = out.logged.m
     return out
 
