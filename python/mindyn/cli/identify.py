@@ -1,4 +1,5 @@
-"""CLI: ``mindyn excite``, ``mindyn simulate``, ``mindyn identify``, ``mindyn identify-payload``."""
+"""CLI: ``mindyn excite``, ``mindyn simulate``, ``mindyn identify``, ``mindyn identify-payload``,
+``mindyn predict``."""
 
 from __future__ import annotations
 
@@ -536,6 +537,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     doc["fit"] = _measures_doc(fit, labels)
     if val is not None:
         doc["validation"] = {"file": ", ".join(vfiles), **_measures_doc(val, vlabels)}
+    for key in ("fit", "validation"):  # whose figures (the consistent one's: consistent_estimate)
+        if key in doc:
+            doc[key]["estimate"] = "unconstrained"
     if truth is not None:
         doc["true_values"] = [float(v) for v in truth]
     if args.json:
@@ -1048,7 +1052,8 @@ def _add_data_options(p) -> None:
 
 # ---------------------------------------------------------------------------------------------
 def register(sub) -> None:
-    """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
+    """Adds ``excite``, ``simulate``, ``identify``, ``identify-payload`` and ``predict`` to the
+    ``mindyn`` subcommands."""
     from ..control.simulation import MAX_SAMPLES, MAX_STEPS
     from ..identification.consistent import MAX_PRIOR_WEIGHT
     from ..identification.excitation import MAX_TRAJECTORY_ROWS
@@ -1210,7 +1215,9 @@ def register(sub) -> None:
         "[velocity], effort, joints matched by name), one or several fitted together, with "
         "statistics (RSD), pruning of parameters with large RSD, error measures (overall "
         "relative error, per-joint RMS, relative error and NRMS of the effort limit, scaled "
-        "condition number) on the fit and on validation logs, JSON output and a plot report.",
+        "condition number) on the fit and on validation logs, against the filtered torques, "
+        "against the torques as logged and on moving samples only, JSON output and a plot "
+        "report.",
     )
     add_robot(p)
     p.add_argument(
