@@ -26,7 +26,7 @@ from mindyn.identification import (
     validate,
     write_csv,
 )
-from mindyn.identification.preprocess import preprocess
+from mindyn.identification.preprocess import preprocess, split_at_gaps
 
 CC = shutil.which("cc") or shutil.which("gcc")
 RATE = 500.0
@@ -212,14 +212,58 @@ def test_rank_deficiency_names_the_offset_when_a_joint_never_reverses():
     identify(robot, JointData(t, q, dq, ddq, tau, "both ways"), base=base)
 
 
+def test_a_joint_that_never_moves_names_the_friction():
+    robot = mindyn.load("zcr07s")
+    t = np.arange(0, 20, 1 / 250)
+    rng = np.random.default_rng(0)
+    w, a = rng.uniform(0.3, 1.5, (robot.n, 3)), rng.uniform(0.2, 0.6, (robot.n, 3))
+    q = np.column_stack([(a[j] * np.sin(w[j] * t[:, None])).sum(1) for j in range(robot.n)])
+    dq = np.column_stack([(a[j] * w[j] * np.cos(w[j] * t[:, None])).sum(1) for j in range(6)])
+    ddq = np.column_stack(
+        [(-a[j] * w[j] ** 2 * np.sin(w[j] * t[:, None])).sum(1) for j in range(6)]
+    )
+    q[:, 5], dq[:, 5], ddq[:, 5] = 0.3, 0.0, 0.0  # joint 6 held still
+    base = mindyn.base_parameters(robot, friction=True)
+    tau = base.regressor(q, dq, ddq) @ np.ones(base.n)
+    with pytest.raises(RankDeficientError) as e:
+        identify(robot, JointData(t, q, dq, ddq, tau, "still"), base=base)
+    msg = str(e.value)
+    assert "no effect on this data: Fv6, Fc6" in msg
+    assert "Joint(s) 6 never move" in msg and "leave out --friction" in msg
+    assert "--offset" not in msg and "never reverse" not in msg
+
+
+def gappy_times(duration: float = 60.0, rate: float = 250.0, breaks: int = 20):
+    """Time stamps with ``breaks`` breaks of 0.2 s spread evenly."""
+    t = np.arange(0, duration, 1 / rate)
+    keep = np.ones(t.size, bool)
+    for k in range(breaks):
+        a = int((k + 1) * t.size / (breaks + 1))
+        keep[a : a + int(0.2 * rate)] = False
+    return t[keep]
+
+
+def test_a_rank_deficiency_on_a_log_with_breaks_counts_its_segments():
+    robot = mindyn.load("planar2")
+    t = gappy_times()
+    q, dq, ddq = sines(t)
+    q[:, 1] = 0.3 * t + 0.2 * np.sin(1.3 * t)  # joint 2 turns one way only
+    dq[:, 1] = 0.3 + 0.26 * np.cos(1.3 * t)
+    base = mindyn.base_parameters(robot, friction=True, offset=True)
+    log = JointData(t, q, dq, ddq, base.regressor(q, dq, ddq) @ np.ones(base.n), "oneway.csv")
+    segments = [preprocess(s) for s in split_at_gaps(log)]
+    assert len(segments) == 21
+    with pytest.raises(RankDeficientError) as e:
+        identify(robot, segments, base=base)
+    msg = str(e.value)
+    assert msg.startswith("dynamic model on oneway.csv (21 segments): ")
+    assert "s to" not in msg and len(msg) < 600
+    assert "leave out --offset" in msg
+
+
 def test_a_log_with_twenty_breaks_is_summarised_in_one_line(tmp_path):
     robot = mindyn.load("planar2")
-    t = np.arange(0, 60, 1 / 250)
-    keep = np.ones(t.size, bool)
-    for k in range(20):
-        a = int((k + 1) * t.size / 21)
-        keep[a : a + 50] = False  # a break of 0.2 s
-    t = t[keep]
+    t = gappy_times()
     q, dq, ddq = sines(t)
     tau = robot.inverse_dynamics(q, dq, ddq)
     tau += 0.01 * np.random.default_rng(2).standard_normal(q.shape)

@@ -652,7 +652,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
         raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
     robot = load(args.robot, tip=args.tip if args.tip is not None else doc.get("tip"))
     estimate = "consistent" if args.consistent else "unconstrained"
-    identified_model(doc, robot, estimate=estimate)  # its errors before reading the log
+    identified_model(args.identification, robot, estimate=estimate)  # errors before reading
     recorded = doc.get("reading")
     if recorded is None and args.filter is None:
         raise ValueError(
@@ -682,7 +682,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
         _torque_optional=True,
     )
     logs = _read_filtered(args.log, robot, ns)
-    pred = predict(doc, logs, robot=robot, estimate=estimate)
+    pred = predict(args.identification, logs, robot=robot, estimate=estimate)
     path = pred.write_csv(args.output)
     how = (
         f"low-pass at {ns.cutoff:.4g} Hz (zero-phase Butterworth order 4), the model on the "
