@@ -17,8 +17,10 @@ about +0.85 N m; ``--no-offset`` leaves them out for comparison). The error is t
 relative error ``|tau - tau_hat| / |tau|`` over all joints stacked, on the identification log
 (fit) and on the validation log, against the torques as the data path leaves them (low-pass
 filtered, edges dropped, decimated); it is recovered from the per-joint RMS and relative errors
-(``fit.overall_relative`` and ``validation.overall_relative`` of the JSON output). A case whose
-command the CLI refuses is reported as such.
+(``fit.overall_relative`` and ``validation.overall_relative`` of the JSON output). Each case
+also prints the error against the torques as logged (``raw``) and on the moving samples only
+(``moving``, with the share of each joint's samples counted). A case whose command the CLI
+refuses is reported as such.
 
 With ``--consistent`` each command also gets ``--consistent`` (and ``--prior-weight W`` when
 given), and a second table gives, per case: the smallest pseudo-inertia eigenvalue of the
@@ -154,6 +156,20 @@ def main() -> int:
                 )
             f = 100 * doc["fit"]["overall_relative"]
             v = 100 * doc["validation"]["overall_relative"]
+            for what in ("fit", "validation"):
+                m = doc[what]
+                print(
+                    f"  {what}: filtered {fmt(100 * m['overall_relative'])}, raw "
+                    + (fmt(100 * m["raw"]["overall_relative"]) if m.get("raw") else "-")
+                    + ", moving "
+                    + (
+                        f"{fmt(100 * m['moving']['overall_relative'])} (counted "
+                        + " ".join(f"{100 * x:.0f}%" for x in m["moving"]["fraction"])
+                        + ")"
+                        if m.get("moving")
+                        else "-"
+                    )
+                )
             ok = all(x is None or y <= x for x, y in ((tgt_f, f), (tgt_v, v)))
             rows.append((name, f, v, ref_f, ref_v, tgt_f, tgt_v, "met" if ok else "MISSED"))
             if args.consistent:

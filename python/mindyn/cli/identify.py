@@ -1,10 +1,12 @@
-"""CLI: ``mindyn excite``, ``mindyn simulate``, ``mindyn identify``, ``mindyn identify-payload``."""
+"""CLI: ``mindyn excite``, ``mindyn simulate``, ``mindyn identify``, ``mindyn identify-payload``,
+``mindyn predict``."""
 
 from __future__ import annotations
 
 import argparse
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -250,7 +252,7 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
             path,
             robot=robot,
             torque_unit=unit,
-            require_torque=not currents,
+            require_torque=not currents and not getattr(args, "_torque_optional", False),
             filter=args.filter,
             cutoff=args.cutoff,
             drive_gain=gain,
@@ -393,12 +395,30 @@ def cmd_identify(args: argparse.Namespace) -> int:
         out = [head + f"{data.m} samples at {data.rate:.4g} Hz from {files[0]}"]
     else:
         out = [head + f"{sum(d.m for d in logs)} samples from {len(logs)} logs fitted together:"]
-        for f, d, info in zip(labels, logs, res.settings["logs"]):
-            out.append(f"    {f}: {d.m} samples at {d.rate:.4g} Hz, {info['equations']} equations")
+        k = 0
+        for f, ds in zip(files, parts):  # a file cut at breaks: one line for its segments
+            infos = res.settings["logs"][k : k + len(ds)]
+            k += len(ds)
+            eq = sum(i["equations"] for i in infos)
+            if len(ds) == 1:
+                out.append(f"    {f}: {ds[0].m} samples at {ds[0].rate:.4g} Hz, {eq} equations")
+            else:
+                out.append(f"    {f}: {_segments_line(ds)}, {sum(d.m for d in ds)} samples, {eq} "
+                           "equations")  # fmt: skip
     if all(pres):
-        for f, p in zip(labels, pres):
+        k = 0
+        for f, ds in zip(files, parts):
+            p = pres[k]
+            k += len(ds)
             if len(logs) > 1:
-                out.append(f"  {f} (on its own):")
+                out.append(
+                    f"  {f} (on its own):"
+                    if len(ds) == 1
+                    else f"  {f} (each segment on its own; the first shown, every one in the "
+                    "JSON's data.logs"
+                    + _cutoff_range([d.processing["preprocess"] for d in ds])
+                    + "):"
+                )
             indent = "  " if len(logs) > 1 else ""
             out += [indent + line for line in _describe_preprocess(p, res.model)]
     else:
@@ -466,9 +486,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
     out.append("")
     out.append(format_table(res, truth))
     out.append("")
-    out.append(_rms_lines("identification data", fit))
+    # with --consistent, two estimates: each table says whose it is
+    whose = "" if cons is None else " (unconstrained estimate)"
+    out.append(_rms_lines(f"identification data{whose}", fit))
     if val is not None:
-        out.append(_rms_lines(f"validation data ({', '.join(vfiles)})", val))
+        out.append(_rms_lines(f"validation data ({', '.join(vfiles)}){whose}", val))
     cfit = cval = None
     if cons is not None:
         cfit = validate(cons, logs)
@@ -487,6 +509,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
         if cval is not None:
             ce["validation"] = {"file": ", ".join(vfiles), **_measures_doc(cval, vlabels)}
         ce["mass_matrix_min_eig"] = cons.mass_matrix_min_eig(logs)
+    # how a log is read for this model: what 'mindyn predict' does with another log
+    doc["reading"] = {
+        "filter": args.filter,
+        "cutoff_Hz": vcut if args.filter == "lowpass" else args.cutoff,
+        "edge_s": args.edge,
+        "torque_unit": args.torque_unit,
+        "drive_gain": args.drive_gain,
+        "topic": args.topic,
+    }
     doc["data"] = {
         "file": files[0] if len(files) == 1 else None,
         "files": files,
@@ -503,9 +534,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
             for f, d in zip(labels, logs)
         ],
     }
+    doc["data"]["segments"] = [
+        {"file": f, **_segments(ds)} for f, ds in zip(files + vfiles, parts + vparts) if len(ds) > 1
+    ]
     doc["fit"] = _measures_doc(fit, labels)
     if val is not None:
         doc["validation"] = {"file": ", ".join(vfiles), **_measures_doc(val, vlabels)}
+    for key in ("fit", "validation"):  # whose figures (the consistent one's: consistent_estimate)
+        if key in doc:
+            doc[key]["estimate"] = "unconstrained"
     if truth is not None:
         doc["true_values"] = [float(v) for v in truth]
     if args.json:
@@ -608,6 +645,74 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
     return 0
 
 
+@warnings_after_success
+def cmd_predict(args: argparse.Namespace) -> int:
+    from ..identification.data import read_json
+    from ..identification.prediction import identified_model, predict
+
+    doc = read_json(args.identification)
+    if not isinstance(doc, dict):
+        raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
+    robot = load(args.robot, tip=args.tip if args.tip is not None else doc.get("tip"))
+    estimate = "consistent" if args.consistent else "unconstrained"
+    identified_model(args.identification, robot, estimate=estimate)  # errors before reading
+    recorded = doc.get("reading")
+    if recorded is None and args.filter is None:
+        raise ValueError(
+            f"{args.identification}: does not record how identify read its logs; give --filter "
+            "(and --cutoff) as identify had them"
+        )
+    reading = dict(recorded or {})
+    if args.filter is not None and args.filter != reading.get("filter"):
+        reading["cutoff_Hz"] = None  # the recorded cut-off belongs to the recorded filter
+    stated = []
+    for key, flag in (("filter", "filter"), ("cutoff_Hz", "cutoff")):
+        given = getattr(args, flag)
+        if given is not None:
+            stated.append(f"--{flag} {given:g}" if key == "cutoff_Hz" else f"--{flag} {given}")
+            reading[key] = given
+    ns = argparse.Namespace(
+        filter=reading.get("filter", "lowpass"),
+        cutoff=reading.get("cutoff_Hz"),
+        edge=reading.get("edge_s"),
+        torque_unit=args.torque_unit or reading.get("torque_unit"),
+        drive_gain=args.drive_gain or reading.get("drive_gain"),
+        topic=args.topic or reading.get("topic"),
+        periods=None,
+        period=None,
+        no_decimate=True,
+        model="dynamic",
+        _torque_optional=True,
+    )
+    logs = _read_filtered(args.log, robot, ns)
+    pred = predict(args.identification, logs, robot=robot, estimate=estimate)
+    path = pred.write_csv(args.output)
+    how = (
+        f"low-pass at {ns.cutoff:.4g} Hz (zero-phase Butterworth order 4), the model on the "
+        "filtered motion at the logged time stamps between the filter edges"
+        if ns.filter == "lowpass"
+        else f"--filter {ns.filter}"
+        + (f" at {ns.cutoff:g} Hz" if ns.cutoff is not None else "")
+        + ", the model on the samples as read"
+    )
+    print(
+        f"{robot.name}: {estimate} estimate of {args.identification} ({len(pred.values)} base "
+        f"parameters) on {args.log}: {pred.t.size} samples"
+        + (f" from {len(logs)} segments (cut at breaks)" if len(logs) > 1 else "")
+    )
+    print(
+        f"  log read as for the identification ({'as recorded in the JSON' if recorded else ''}"
+        + ("; " if recorded and stated else "")
+        + (("given: " + ", ".join(stated)) if stated else "")
+        + f"): {how}"
+    )
+    cols = "t, q, dq, ddq (the motion evaluated), tau_hat" + (
+        ", tau (as logged, N m)" if pred.tau is not None else ""
+    )
+    print(f"  wrote {path} ({cols})")
+    return 0
+
+
 def _progress():
     """Progress lines on stderr when it is a terminal (``identify --consistent`` solves for
     seconds); None otherwise, so that a log or a pipe gets the result and errors only."""
@@ -645,6 +750,13 @@ def _consistent_lines(cons, fit, val, cfit, cval, logs) -> list[str]:
             f"  {'validation data':<24} {_pct(val['overall_relative']):>14} "
             f"{_pct(cval['overall_relative']):>14}"
         )
+    for what, un_m, co_m in (("identification", fit, cfit), ("validation", val, cval)):
+        for kind in ("raw", "moving"):
+            if co_m is not None and co_m.get(kind) is not None:
+                lines.append(
+                    f"  {what + ', ' + kind:<24} {_pct(un_m[kind]['overall_relative']):>14} "
+                    f"{_pct(co_m[kind]['overall_relative']):>14}"
+                )
     low = cons.mass_matrix_min_eig(logs)
     lines.append(
         f"  mass matrix of the consistent model: smallest eigenvalue over the data {low:.4g} "
@@ -659,19 +771,64 @@ def _measures_doc(v: dict, files: list) -> dict:
     """The error measures of :func:`~mindyn.identification.validate` for the JSON: fractions
     (relative, NRMS) and N m (RMS), over all logs stacked and per log."""
 
-    def one(m):
+    def base(m):
         return {
             "overall_relative": _nan_list([m["overall_relative"]])[0],
-            "rms": m["rms"].tolist(),
+            "rms": _nan_list(m["rms"]),
             "relative": _nan_list(m["relative"]),
             "nrms": _nan_list(m["nrms"]),
             "nrms_missing_limit": m["nrms_missing"],
         }
 
+    def one(m):
+        out = base(m)
+        raw, mov = m.get("raw"), m.get("moving")
+        out["raw"] = None if raw is None else {**base(raw), "samples": raw["samples"]}
+        if raw is not None:
+            out["raw"]["against"] = raw["against"]
+        out["moving"] = (
+            None
+            if mov is None
+            else {
+                **base(mov),
+                "samples": mov["samples"],
+                "threshold": _nan_list(mov["threshold"]),
+                "rule": mov["rule"],
+                "fraction": _nan_list(mov["fraction"]),
+            }
+        )
+        return out
+
     out = one(v)
     out["samples"] = v["samples"]
     out["logs"] = [{"file": f, "samples": m["samples"], **one(m)} for f, m in zip(files, v["logs"])]
     return out
+
+
+def _segments(ds) -> dict:
+    """A log cut at its breaks: segment count, shortest and longest [s], each one's span."""
+    spans = [d.processing["segment"]["t_s"] for d in ds]
+    length = [b - a for a, b in spans]
+    return {
+        "count": len(ds),
+        "shortest_s": min(length),
+        "longest_s": max(length),
+        "spans_s": spans,
+    }
+
+
+def _segments_line(ds) -> str:
+    """One line for a log cut at its breaks (the segments themselves are in the JSON)."""
+    s = _segments(ds)
+    return (
+        f"cut at {s['count'] - 1} break(s) in its time stamps into {s['count']} segments "
+        f"(shortest {s['shortest_s']:.4g} s, longest {s['longest_s']:.4g} s)"
+    )
+
+
+def _cutoff_range(pres) -> str:
+    cut = [p["filter"]["cutoff_Hz"] for p in pres]
+    return "" if max(cut) == min(cut) else f"; cut-offs {min(cut):.4g} to {max(cut):.4g} Hz"
 
 
 def _describe_preprocess(pre: dict, model: str) -> list[str]:
@@ -753,13 +910,51 @@ def _rms_lines(label: str, v: dict) -> str:
         f"  overall relative error |tau - tau_hat| / |tau|, all joints stacked: "
         f"{_pct(v['overall_relative']).strip()}",
     ]
+    lines += _three_measures(v)
     if len(v["logs"]) > 1:
+        groups: dict = {}  # the segments of a file cut at its breaks: one line
         for m in v["logs"]:
-            lines.append(
-                f"  {m['source']}: overall {_pct(m['overall_relative']).strip()}, RMS "
-                + " ".join(f"{x:.4g}" for x in m["rms"])
-            )
+            seg = re.fullmatch(r"(.*) \[\S+ s to \S+ s\]", m["source"] or "")
+            groups.setdefault(seg.group(1) if seg else m["source"], []).append(m)
+        for name, ms in groups.items():
+            if len(ms) == 1:
+                lines.append(
+                    f"  {ms[0]['source']}: overall {_pct(ms[0]['overall_relative']).strip()}, RMS "
+                    + " ".join(f"{x:.4g}" for x in ms[0]["rms"])
+                )
+            else:
+                e = [m["overall_relative"] for m in ms]
+                lines.append(
+                    f"  {name}, {len(ms)} segments: overall {_pct(min(e)).strip()} to "
+                    f"{_pct(max(e)).strip()} (each in the JSON)"
+                )
     return "\n".join(lines)
+
+
+def _three_measures(v: dict) -> list[str]:
+    """The three measures of :func:`~mindyn.identification.validate`, named, side by side:
+    overall relative error and per-joint RMS against the torques the fit saw, against the
+    torques as logged, and on the moving samples only."""
+    raw, mov = v.get("raw"), v.get("moving")
+    rows = [("filtered (the torques the fit saw)", v)]
+    if raw is None:
+        return ["  (the torques as logged are not known for this data: no raw or moving measure)"]
+    rows += [("raw (the torques as logged)", raw), ("moving (raw, moving samples)", mov)]
+    lines = [
+        f"  {'measure':<34} {'overall':>9}  {'samples':>8}  RMS per joint [N m | N]",
+    ]
+    for name, m in rows:
+        lines.append(
+            f"  {name:<34} {_pct(m['overall_relative'])}  {m['samples']:>8}  "
+            + " ".join(f"{x:.4g}" for x in m["rms"])
+        )
+    lines.append(
+        f"  raw: {raw['against']}; moving: {mov['rule']}; threshold per joint "
+        + " ".join(f"{x:.3g}" for x in mov["threshold"])
+        + " [rad/s | m/s], samples counted "
+        + " ".join(f"{100 * x:.0f}%" for x in mov["fraction"])
+    )
+    return lines
 
 
 def _nan_list(a):
@@ -860,7 +1055,8 @@ def _add_data_options(p) -> None:
 
 # ---------------------------------------------------------------------------------------------
 def register(sub) -> None:
-    """Adds ``excite``, ``simulate`` and ``identify`` to the ``mindyn`` subcommands."""
+    """Adds ``excite``, ``simulate``, ``identify``, ``identify-payload`` and ``predict`` to the
+    ``mindyn`` subcommands."""
     from ..control.simulation import MAX_SAMPLES, MAX_STEPS
     from ..identification.consistent import MAX_PRIOR_WEIGHT
     from ..identification.excitation import MAX_TRAJECTORY_ROWS
@@ -1022,7 +1218,9 @@ def register(sub) -> None:
         "[velocity], effort, joints matched by name), one or several fitted together, with "
         "statistics (RSD), pruning of parameters with large RSD, error measures (overall "
         "relative error, per-joint RMS, relative error and NRMS of the effort limit, scaled "
-        "condition number) on the fit and on validation logs, JSON output and a plot report.",
+        "condition number) on the fit and on validation logs, against the filtered torques, "
+        "against the torques as logged and on moving samples only, JSON output and a plot "
+        "report.",
     )
     add_robot(p)
     p.add_argument(
@@ -1144,3 +1342,41 @@ def register(sub) -> None:
     )
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
     p.set_defaults(func=cmd_identify_payload)
+
+    p = sub.add_parser(
+        "predict",
+        help="torques an identified model predicts on a log (CSV), to score it any way",
+        description="The joint torques W_b(q, dq, ddq) p_b of the base-parameter values of "
+        "'mindyn identify --json' on LOG, read as identify read its logs (the filter and "
+        "cut-off recorded in the JSON: with the low-pass, the model is evaluated on the "
+        "filtered motion at each logged time stamp between the filter edges; a log with breaks "
+        "is cut into segments). Writes t, q, dq, ddq (the motion evaluated, 17 digits), tau_hat "
+        "and, when the log has them, the torques as logged (N m). 'mindyn codegen --params "
+        "ID.json' gives code computing the same torques.",
+    )
+    add_robot(p)
+    p.add_argument("identification", metavar="ID.json", help="JSON of 'mindyn identify'")
+    p.add_argument("log", metavar="LOG", help="CSV log or ROS bag (torques optional)")
+    p.add_argument(
+        "-o", "--output", required=True, metavar="CSV", type=output_file, help="CSV to write"
+    )
+    p.add_argument(
+        "--consistent",
+        action="store_true",
+        help="the consistent estimate of the JSON (identify --consistent) instead of the "
+        "unconstrained one",
+    )
+    p.add_argument(
+        "--filter",
+        choices=["lowpass", "butter", "savgol", "none"],
+        help="read the log otherwise than the JSON records (as identify's --filter)",
+    )
+    number(p, "--cutoff", low=0, low_open=True, help="cut-off [Hz] instead of the recorded one")
+    p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille", "current"],
+        help="logged torque unit, as identify's (default: as recorded)",
+    )
+    p.add_argument("--drive-gain", metavar="K1,...,Kn", help="as identify's (default: as recorded)")
+    p.set_defaults(func=cmd_predict)

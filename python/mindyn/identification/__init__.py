@@ -7,7 +7,9 @@
 - :mod:`~mindyn.identification.models`: the regression systems (dynamic, energy and integral
   models);
 - :mod:`~mindyn.identification.estimation`: least squares with statistics and pruning;
-- :mod:`~mindyn.identification.validation`: torque prediction and error measures;
+- :mod:`~mindyn.identification.validation`: torque prediction and error measures (against the
+  filtered torques, the torques as logged, and on moving samples);
+- :mod:`~mindyn.identification.prediction`: an identification's torques on any log;
 - :mod:`~mindyn.identification.consistent`: physically consistent classical parameters and
   payload identification (convex, cvxpy);
 - :mod:`~mindyn.identification.currents`: torques from motor currents logged apart;

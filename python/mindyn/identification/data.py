@@ -76,6 +76,12 @@ class JointData:
         decimation that turned the logged torques into ``tau``, to be applied alike to the
         regressor columns (parallel filtering); its ``regressor(base)`` gives them, shape
         (m, n, nb).
+    logged : JointData, optional
+        Set by :func:`~mindyn.identification.preprocess.preprocess`: the samples as logged (time
+        stamps and torques as read, between the dropped filter edges) with the filtered motion
+        at those stamps, on which the model's torques are compared with the logged ones
+        (:func:`~mindyn.identification.validate`, ``raw`` and ``moving``), and its
+        ``processing["velocity_noise"]`` (see :func:`~mindyn.identification.preprocess.preprocess`).
     """
 
     t: np.ndarray
@@ -86,6 +92,7 @@ class JointData:
     source: str = ""
     processing: dict = field(default_factory=dict)
     regressor_filter: object = None
+    logged: JointData | None = None
 
     @property
     def m(self) -> int:

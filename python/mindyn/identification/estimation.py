@@ -12,6 +12,7 @@ time (largest first) and the rest re-estimated.
 from __future__ import annotations
 
 import math
+import re
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -247,30 +248,79 @@ def regressor_rows(base: BaseParameters, data: JointData, a: int, b: int) -> np.
     return base.regressor(data.q[a:b], data.dq[a:b], data.ddq[a:b])
 
 
-def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float) -> float:
-    """Raises RankDeficientError when the columns of the regressor are dependent; returns the
-    condition number of the column-scaled regressor."""
+def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float, logs=(), speed=0.0):
+    """Raises RankDeficientError when the columns of the regressor are dependent, naming the
+    parameters in the dependence and, from the motion of ``logs`` (joint speeds at or above
+    ``speed``), the option that would lift it (:func:`_rank_remedies`); returns the condition
+    number of the column-scaled regressor."""
     rank, piv, cond = ls.rank(tol)
     if rank < ls.c:
         zero = [names[j] for j in np.flatnonzero(ls.zero)]
         dropped = [names[j] for j in piv[rank:]]
-        dependent = [nm for nm in dropped if nm not in zero]
+        # the parameters in the dependence: those with weight in the null space of the
+        # column-scaled regressor (its last right singular vectors)
+        _, _, vt = np.linalg.svd(ls.R)
+        null = np.abs(vt[rank:]).max(axis=0)
+        concerned = [names[j] for j in np.flatnonzero(null > 0.05) if names[j] not in zero]
         parts = []
         if zero:
             parts.append(f"no effect on this data: {', '.join(zero)}")
-        if dependent:
-            parts.append(
-                f"not separable from the others (combinations of the remaining columns): "
-                f"{', '.join(dependent)}"
-            )
+        if concerned:
+            parts.append(f"dependent on each other in this data: {', '.join(concerned)}")
+        remedies = _rank_remedies(zero + concerned, logs, speed)
         raise RankDeficientError(
             f"{what}: the stacked regressor has rank {rank} for {ls.c} base parameters; "
             f"this trajectory cannot identify {len(dropped)} of them ({'; '.join(parts)}). "
-            "Use a richer excitation trajectory or fewer parameters.",
+            + (
+                " ".join(remedies)
+                if remedies
+                else "Use a richer excitation trajectory or fewer parameters."
+            ),
             dropped,
             rank,
         )
     return cond
+
+
+def _rank_remedies(concerned: list[str], logs, speed: float) -> list[str]:
+    """What would lift a rank deficiency in ``concerned`` (base-parameter names), from the motion
+    of ``logs``: a joint that never moves (no speed at or above ``speed``) leaves its friction
+    (``--friction``) and rotor inertia (``--rotor``) without effect; a joint that never reverses
+    makes its Coulomb friction a constant, inseparable from its torque offset (``--offset``)."""
+    logs = list(logs)
+    if not logs:
+        return []
+    dq = np.vstack([d.dq for d in logs])
+    floor = max(speed, 1e-12 * float(np.max(np.abs(dq), initial=0.0)))
+    up = np.any(dq >= floor, axis=0) if dq.size else np.zeros(dq.shape[1], bool)
+    down = np.any(dq <= -floor, axis=0) if dq.size else np.zeros(dq.shape[1], bool)
+    kinds: dict[int, set] = {}
+    for nm in concerned:
+        hit = re.fullmatch(r"(Fv|Fc|Off|Ia)(\d+)", nm)
+        if hit:
+            kinds.setdefault(int(hit.group(2)), set()).add(hit.group(1))
+    still = [j for j in sorted(kinds) if not (up[j - 1] or down[j - 1])]
+    one_way = [j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and {"Fc", "Off"} & kinds[j]]
+    out = []
+    speed_txt = f" (speed {speed:g} rad/s | m/s or more)" if speed > 0 else ""
+    if still:
+        opts = sorted(
+            {"--friction" for j in still if {"Fv", "Fc"} & kinds[j]}
+            | {"--rotor" for j in still if "Ia" in kinds[j]}
+            | {"--offset" for j in still if "Off" in kinds[j] and "Fc" not in kinds[j]}
+        )
+        out.append(
+            f"Joint(s) {', '.join(map(str, still))} never move{speed_txt} in this data: "
+            + (f"leave out {' and '.join(opts)}, or " if opts else "")
+            + "move them."
+        )
+    if one_way:
+        out.append(
+            f"Joint(s) {', '.join(map(str, one_way))} never reverse direction in this data: "
+            "their Coulomb friction is a constant torque there, inseparable from a torque offset: "
+            "leave out --offset (or --friction), or reverse them."
+        )
+    return out
 
 
 def _enough(
@@ -304,7 +354,16 @@ def _enough(
 
 
 def _sources(logs: list[JointData]) -> str:
-    return " + ".join(d.source or "data" for d in logs)
+    """The logs by name, the segments of a log cut at its breaks counted, not listed."""
+    out: list[list] = []
+    for d in logs:
+        seg = d.processing.get("segment")
+        name = (d.source or "data").rsplit(" [", 1)[0] if seg else d.source or "data"
+        if seg and out and out[-1][0] == name and out[-1][1]:
+            out[-1][1] += 1
+        else:
+            out.append([name, 1 if seg else 0])
+    return " + ".join(n if k == 0 else f"{n} ({k} segments)" for n, k in out)
 
 
 def _logs(data) -> list[JointData]:
@@ -463,7 +522,8 @@ def identify(
         ls = _Reduced.from_triangle(_triangle(np.vstack(list(S))), rows)
     else:
         ls = _Reduced(W, y)
-    cond = _check_rank(ls, names, what, rank_tolerance)
+    speed = min_velocity if base.friction and model == "dynamic" else 0.0
+    cond = _check_rank(ls, names, what, rank_tolerance, logs, speed)
 
     joint_sigma = None
     if weighted and model == "energy":

@@ -499,7 +499,58 @@ def preprocess(
         out.regressor_filter = ParallelFilter(qf, dqf, ddqf, lowpass, keep)
     out.processing["velocity"] = {"source": info["velocity"]}
     out.processing["acceleration"] = {"source": info["acceleration"]}
+    with_dq = logged_dq and data.dq is not None
+    out.logged = _logged_samples(data, tu, qf, dqf, ddqf, drop, cycle, fc, rate, with_dq)
+    info["logged_samples"] = out.logged.m
     return out
+
+
+def _logged_samples(data, tu, qf, dqf, ddqf, drop, cycle, fc, rate, logged_dq) -> JointData:
+    """The samples of ``data`` as logged (time stamps, torques) whose stamps lie between the
+    dropped filter edges (an averaged period: every sample of the whole periods, at its phase),
+    with the filtered motion at those stamps: the filtered grid itself when the log was not
+    resampled, else its cubic spline (periodic for an averaged period). Its
+    ``processing["velocity_noise"]`` gives the white-noise level of the logged velocities (of
+    the central differences of the logged positions when none are logged), per joint, from
+    second differences (:func:`~mindyn.identification.models.torque_noise`), and
+    ``filtered``: that level through the low-pass, ``sqrt(2 cutoff / rate)`` times it (white
+    noise keeps the fraction of its variance below the cut-off)."""
+    from .models import torque_noise
+
+    t = data.t - data.t[0]
+    dq_raw = data.dq if logged_dq else np.gradient(data.q, data.t, axis=0)
+    raw_sd = torque_noise(dq_raw)
+    noise = {
+        "logged": raw_sd.tolist(),
+        "filtered": (raw_sd * math.sqrt(min(1.0, 2.0 * fc / rate))).tolist(),
+        "source": "logged velocities" if logged_dq else "central differences of the positions",
+    }
+    if cycle is not None:
+        T = cycle["period_s"]
+        sel = np.flatnonzero(t < cycle["periods"] * T * (1 - 1e-12))
+        phase = np.mod(t[sel], T)
+        grid = np.append(tu, T)
+
+        def at(x):
+            return CubicSpline(grid, np.vstack([x, x[:1]]), axis=0, bc_type="periodic")(phase)
+
+        states = [at(x) for x in (qf, dqf, ddqf)]
+    else:
+        m = tu.shape[0]
+        lo, hi = tu[drop], tu[m - drop - 1]
+        tol = 1e-9 * max(abs(hi), 1.0)
+        sel = np.flatnonzero((t >= lo - tol) & (t <= hi + tol))
+        if sel.size == m - 2 * drop and np.array_equal(t[sel], tu[drop : m - drop]):
+            states = [x[drop : m - drop] for x in (qf, dqf, ddqf)]
+        else:
+            states = [CubicSpline(tu, x, axis=0)(t[sel]) for x in (qf, dqf, ddqf)]
+    return JointData(
+        data.t[sel],
+        *states,
+        None if data.tau is None else data.tau[sel],
+        source=data.source,
+        processing={"velocity_noise": noise},
+    )
 
 
 class _Joined:

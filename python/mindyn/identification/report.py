@@ -119,8 +119,8 @@ def write_report(
     identification data. ``data`` and ``validation_data`` are one log or a list of logs; with
     several, each gets its own plots (``torque_identification_2.png``, ...). ``fit`` and
     ``validation`` are the results of :func:`~mindyn.identification.validate` (or the predicted
-    torques); a plot's title gives the log's overall relative error when they are. Returns the
-    paths written."""
+    torques); a plot's title gives the log's overall relative errors when they are (filtered,
+    raw and moving, see :func:`~mindyn.identification.validate`). Returns the paths written."""
     from .excitation import plot_trajectory
 
     d = Path(directory)
@@ -135,7 +135,11 @@ def write_report(
             suffix = "" if k == 0 else f"_{k + 1}"
             err = ""
             if per is not None and np.isfinite(per[k]["overall_relative"]):
-                err = f", relative error {100 * per[k]['overall_relative']:.2f} %"
+                err = f", relative error {100 * per[k]['overall_relative']:.2f} % filtered"
+                for name in ("raw", "moving"):
+                    m = per[k].get(name)
+                    if m is not None and np.isfinite(m["overall_relative"]):
+                        err += f", {100 * m['overall_relative']:.2f} % {name}"
             out.append(
                 plot_torques(
                     d / f"torque_{kind}{suffix}.png",
