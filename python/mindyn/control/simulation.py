@@ -692,8 +692,9 @@ class _Budget:
             )
 
 
-class _TooManySteps(Exception):
-    pass
+class _TooManySteps(_core.Error):
+    """scipy's RK45 reached :data:`SCIPY_MAX_EVALUATIONS` within one period (raised inside the
+    right-hand side, caught by ``_advance`` and reported there as a diverging loop)."""
 
 
 def _advance(plant, q, dq, tau, period, substeps, integrator, budget=None):
