@@ -93,9 +93,15 @@ log="$build/bootstrap.log"
 echo "bootstrap: building and installing mindyn${extra} into .venv in $build (the C++ core is" \
   "compiled: minutes the first time, seconds later; the whole output goes to $log)"
 # pip is verbose so that the build's output reaches the log; the console gets the build tool's
-# progress lines ([k/N] with Ninja, [ p%] with Make).
+# progress lines ([k/N] with Ninja, [ p%] with Make) as they come (a shell loop: awk may wait for
+# a full input buffer).
 progress() {
-  awk '/^[ \t]*\[ *[0-9]+(\/[0-9]+|%)\] / { sub(/^[ \t]+/, ""); print "bootstrap:   " $0; fflush() }'
+  local line pattern='^[[:space:]]*(\[ *[0-9]+(/[0-9]+|%)\] .*)'
+  while IFS= read -r line; do
+    if [[ $line =~ $pattern ]]; then
+      echo "bootstrap:   ${BASH_REMATCH[1]}"
+    fi
+  done
 }
 if ! PYTHONUNBUFFERED=1 $py -m pip install -v "${options[@]}" "${pins[@]}" ".${extra}" 2>&1 |
   tee "$log" | progress; then
