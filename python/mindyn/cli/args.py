@@ -16,6 +16,48 @@ from ..robot import bundled_robots
 #: Largest seed accepted (the random generators take 32-bit seeds).
 MAX_SEED = 2**32 - 1
 
+#: The commands, in the order ``mindyn --help`` lists them: the module of :mod:`mindyn.cli` that
+#: defines each (its ``register(subparsers)`` declares the options of all its commands) and the
+#: command's summary.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "info": ("model", "print a robot model: joints, geometry, limits, parameters"),
+    "base": ("model", "base inertial parameters: counts of the three sets, formulas, rank margin"),
+    "track": (
+        "control",
+        "closed-loop joint tracking simulation: adaptive PD, computed torque or PD",
+    ),
+    "ik": ("control", "position inverse kinematics of the tool frame, inside the joint limits"),
+    "excite": ("identify", "optimised Fourier excitation trajectory for identification"),
+    "simulate": ("identify", "simulated joint log along a trajectory (stand-in for a robot)"),
+    "identify": (
+        "identify",
+        "identify base parameters from joint logs (dynamic, integral or energy model)",
+    ),
+    "identify-payload": (
+        "identify",
+        "identify a payload fixed to the last link, with an identified arm",
+    ),
+    "demo": (
+        "demo",
+        "the whole chain on a robot: base parameters, excitation, simulated measurement, "
+        "identification, validation, generated code",
+    ),
+    "codegen": (
+        "codegen",
+        "generate inverse dynamics, gravity torque, base regressor or a controller step "
+        "(adaptive PD, computed torque, gravity compensation) in C or ST",
+    ),
+    "export": (
+        "export",
+        "write identified classical parameters into the robot's URDF or YAML table",
+    ),
+}
+
+
+def add_command(subparsers, name: str, **kwargs) -> argparse.ArgumentParser:
+    """The parser of command ``name``, with its summary from :data:`COMMANDS`."""
+    return subparsers.add_parser(name, help=COMMANDS[name][1], **kwargs)
+
 
 class UsageError(Error):
     """A command-line argument was rejected; the message names it and what was expected."""

@@ -13,15 +13,14 @@ from .._core import ModelError
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, generate, generate_controller, plcopen_project
 from ..robot import load
-from .args import add_joint_terms, add_offset, add_robot, joint_terms, output_file
+from .args import add_command, add_joint_terms, add_offset, add_robot, joint_terms, output_file
 from .method import base_method
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser(
+    p = add_command(
+        subparsers,
         "codegen",
-        help="generate inverse dynamics, gravity torque, base regressor or a controller step "
-        "(adaptive PD, computed torque, gravity compensation) in C or ST",
         description="Generate the Newton-Euler recursion customised to the robot, in its base "
         "parameters, as C99 (header + source) or IEC 61131-3 Structured Text, and print its "
         "operation counts beside those of the classical-parameter recursion generated the "

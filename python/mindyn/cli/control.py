@@ -11,7 +11,7 @@ import numpy as np
 
 from ..base import base_parameters
 from ..robot import load
-from .args import add_robot, number, output_dir, output_file, seed
+from .args import add_command, add_robot, number, output_dir, output_file, seed
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
@@ -272,9 +272,9 @@ def add_closed_loop_args(p, default: str) -> None:
 
 def register(sub) -> None:
     """Adds ``track`` and ``ik`` to the ``mindyn`` subcommands."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "track",
-        help="closed-loop joint tracking simulation: adaptive PD, computed torque or PD",
         description="Simulates the robot (true parameters with rotor inertia and friction, RK4) "
         "under a controller sampled every --period seconds with zero-order hold. Adaptive PD is "
         "the Slotine-Li controller on the base parameters: tau = Y p_hat - K_D s, "
@@ -326,9 +326,9 @@ def register(sub) -> None:
     )
     p.set_defaults(func=cmd_track)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "ik",
-        help="position inverse kinematics of the tool frame, inside the joint limits",
         description="Damped least squares (Levenberg-Marquardt) with random restarts inside the "
         "limits. Exit status 1 when no solution is found.",
     )

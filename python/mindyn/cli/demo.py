@@ -15,7 +15,7 @@ import numpy as np
 
 from ..base import base_parameters
 from ..robot import bundled_robots, load
-from .args import number, output_dir, robot_arg, seed
+from .args import add_command, number, output_dir, robot_arg, seed
 
 
 def _step(no: int, title: str) -> float:
@@ -252,10 +252,9 @@ def _codegen(robot_arg: str, out: Path) -> None:
 
 def register(sub) -> None:
     """Adds ``demo`` to the ``mindyn`` subcommands."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "demo",
-        help="the whole chain on a robot: base parameters, excitation, simulated measurement, "
-        "identification, validation, generated code",
         description="Runs the identification chain end to end on a robot (default zcr07s) and "
         "puts every file in one folder: base parameters, an optimised excitation trajectory, a "
         "simulated noisy measurement of the robot tracking it (and of a validation trajectory), "

@@ -12,6 +12,7 @@ import numpy as np
 from ..base import base_parameters
 from ..robot import load
 from .args import (
+    add_command,
     add_joint_terms,
     add_offset,
     add_robot,
@@ -824,9 +825,9 @@ def register(sub) -> None:
     from ..identification.excitation import MAX_TRAJECTORY_ROWS
     from .control import add_closed_loop_args
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "excite",
-        help="optimised Fourier excitation trajectory for identification",
         description="Finite Fourier series per joint, zero velocity and acceleration at start and "
         "end, optimised (SLSQP, several random starts) for a conditioning criterion of the "
         "stacked base regressor under the robot's position, velocity and acceleration limits. "
@@ -905,9 +906,9 @@ def register(sub) -> None:
     )
     p.set_defaults(func=cmd_excite)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "simulate",
-        help="simulated joint log along a trajectory (stand-in for a robot)",
         description="Produces what a joint controller would log (t, q, dq, tau): the robot with "
         "its true parameters integrated (RK4) under a tracking controller, or torques from "
         "inverse dynamics along the reference (--mode inverse); optional sensor noise and "
@@ -972,9 +973,9 @@ def register(sub) -> None:
     )
     p.set_defaults(func=cmd_simulate)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "identify",
-        help="identify base parameters from joint logs (dynamic, integral or energy model)",
         description="Least-squares identification of the base parameters from CSV logs "
         "(t, q1..qn, [dq1..dqn], tau1..taun) or ROS bags (sensor_msgs/JointState: position, "
         "[velocity], effort, joints matched by name), one or several fitted together, with "
@@ -1072,9 +1073,9 @@ def register(sub) -> None:
     )
     p.set_defaults(func=cmd_identify)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "identify-payload",
-        help="identify a payload fixed to the last link, with an identified arm",
         description="The 10 inertial parameters (XX XY XZ YY YZ ZZ MX MY MZ M about the last "
         "link frame's origin, in its frame) of a payload rigidly fixed to the last link, from "
         "logs with the payload: tau - tau_arm = W_last phi, with tau_arm from the identified arm "
