@@ -5,7 +5,10 @@
   scipy.stats, matplotlib, cvxpy): a command's module is imported when that command runs.
   Checked in a fresh interpreter through ``sys.modules`` (deterministic; the start-up time
   itself is measured by bench/bench_startup.py, not asserted);
-- ``mindyn --version`` prints the version pyproject.toml declares.
+- ``mindyn --version`` prints the version pyproject.toml declares;
+- outputs, one rule for every output option of every command, applied before anything is
+  written: two outputs naming the same file (also a file an option implies, such as codegen's
+  NAME.c and NAME.h) are refused, and missing folders are created.
 """
 
 from __future__ import annotations
@@ -82,3 +85,46 @@ def test_every_command_is_declared_and_listed():
     assert full == listing(cli.build_parser(""))
     assert [name for name, _ in full] == list(cli.COMMANDS)
     assert all(summary for _, summary in full)
+
+
+def test_codegen_refuses_plcopen_onto_its_c_files_before_writing(tmp_path):
+    src = tmp_path / "arm.c"
+    src.write_text("keep\n")
+    for plcopen in ("arm.c", "arm.h", "./sub/../arm.c"):
+        rc, out, err = run(
+            ["codegen", "planar2", "--lang", "c", "-o", src, "--plcopen", tmp_path / plcopen]
+        )
+        assert rc == 2, (plcopen, out, err)
+        assert err.startswith("mindyn: error: --plcopen") and "its own file" in err, err
+        assert len(err.splitlines()) == 1, err
+        assert src.read_text() == "keep\n"  # nothing written
+        assert not (tmp_path / "arm.h").exists()
+    st = tmp_path / "arm.st"
+    rc, out, err = run(["codegen", "planar2", "--lang", "st", "-o", st, "--plcopen", st])
+    assert rc == 2 and "its own file" in err, err
+    assert not st.exists()
+
+
+def test_codegen_creates_missing_folders_of_every_output(tmp_path):
+    c = tmp_path / "a" / "b" / "arm"
+    xml = tmp_path / "c" / "d" / "arm.xml"
+    rc, out, err = run(["codegen", "planar2", "--lang", "c", "-o", c, "--plcopen", xml])
+    assert rc == 0, err
+    assert '#include "arm.h"' in (c.parent / "arm.c").read_text()  # the source includes its header
+    assert (c.parent / "arm.h").is_file()
+    assert xml.read_text().lstrip().startswith("<?xml")
+
+
+def test_same_output_twice_is_refused_in_every_command(tmp_path):
+    """Commands with several output options: the same file for two of them is refused before
+    the command reads or writes anything (the log named here does not even exist)."""
+    same = tmp_path / "new" / "out.json"
+    cases = [
+        ["identify", "planar2", tmp_path / "none.csv", "--json", same, "--urdf", same],
+        ["export", "planar2", tmp_path / "none.json", "--yaml", same, "--sidecar", same],
+    ]
+    for argv in cases:
+        rc, out, err = run(argv)
+        assert rc == 2, (argv, err)
+        assert "its own file" in err and len(err.splitlines()) == 1, err
+        assert not (tmp_path / "new").exists()  # nothing created

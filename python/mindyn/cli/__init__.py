@@ -10,7 +10,7 @@ import os
 import sys
 
 from .._core import ModelError, RobotFileNotFoundError
-from .args import COMMANDS, Parser, UsageError
+from .args import COMMANDS, Parser, UsageError, prepare_outputs
 
 
 class _Version(argparse.Action):
@@ -75,9 +75,13 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as e:  # --help
         return e.code if isinstance(e.code, int) else 0
     try:
+        prepare_outputs(args)
         status = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         return status
+    except UsageError as e:
+        _error(e)
+        return 2
     except (RobotFileNotFoundError, FileNotFoundError) as e:
         _error(e)
         return 2

@@ -190,8 +190,20 @@ def _check_parent(path: Path, text: str) -> None:
         raise argparse.ArgumentTypeError(f"'{text}': the folder '{anc}' is not writable")
 
 
+class OutputPath(str):
+    """An output option's value (a ``str``), marked as a file or a folder to write, so that
+    :func:`prepare_outputs` finds every output of a command line."""
+
+    folder = False
+
+
+class OutputFolder(OutputPath):
+    folder = True
+
+
 def output_file(text: str) -> str:
-    """An argparse ``type``: a file to write (its folder is created when missing)."""
+    """An argparse ``type``: a file to write (its folder is created when missing, by
+    :func:`prepare_outputs`)."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a file name to write, got an empty string")
     path = Path(text)
@@ -200,7 +212,7 @@ def output_file(text: str) -> str:
     if path.exists() and not os.access(path, os.W_OK):
         raise argparse.ArgumentTypeError(f"'{text}' exists and is not writable")
     _check_parent(path, text)
-    return text
+    return OutputPath(text)
 
 
 output_file.__name__ = "file name"
@@ -217,10 +229,43 @@ def output_dir(text: str) -> str:
         raise argparse.ArgumentTypeError(f"the folder '{text}' is not writable")
     if not path.exists():
         _check_parent(path, text)
-    return text
+    return OutputFolder(text)
 
 
 output_dir.__name__ = "folder"
+
+
+def declared_outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
+    """The outputs a command line names: ``(option, path, is_folder)`` for every value of an
+    option typed :func:`output_file` or :func:`output_dir`."""
+    found = []
+    for dest, value in vars(args).items():
+        for v in value if isinstance(value, list) else [value]:
+            if isinstance(v, OutputPath):
+                found.append(("--" + dest.replace("_", "-"), Path(v), v.folder))
+    return found
+
+
+def prepare_outputs(args: argparse.Namespace) -> None:
+    """The one rule for the outputs of every command, applied before the command writes
+    anything: no two outputs may be the same file (compared as resolved paths), and the missing
+    folders of each are created. The outputs are :func:`declared_outputs`, or those that the
+    command's ``outputs(args)`` (a parser default) lists when it writes files the options only
+    imply (``codegen -o NAME``: NAME.c and NAME.h)."""
+    outputs = args.outputs(args) if callable(getattr(args, "outputs", None)) else None
+    outputs = declared_outputs(args) if outputs is None else outputs
+    seen: dict[Path, tuple[str, Path]] = {}
+    for option, path, _ in outputs:
+        key = path.resolve()
+        if key in seen:
+            other, first = seen[key]
+            raise UsageError(
+                f"{option} '{path}' is also the file {other} writes ('{first}'): give each "
+                "output its own file"
+            )
+        seen[key] = (option, path)
+    for _, path, folder in outputs:
+        (path if folder else path.parent).mkdir(parents=True, exist_ok=True)
 
 
 def robot_help() -> str:

@@ -117,16 +117,35 @@ def register(subparsers) -> None:
         type=output_file,
         help="C: FILE.c and FILE.h; ST: FILE",
     )
-    p.set_defaults(func=cmd_codegen)
+    p.set_defaults(func=cmd_codegen, outputs=_outputs)
+
+
+def _output_base(args: argparse.Namespace) -> Path:
+    """``-o``'s path without the ``.c``/``.h`` a C output may be given with."""
+    out = Path(args.output)
+    return out.with_suffix("") if args.lang == "c" and out.suffix in (".c", ".h") else out
+
+
+def _outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
+    """The files codegen writes (C: NAME.c and NAME.h; ST: the file; the PLCopen XML), for the
+    command line's one rule on outputs."""
+    out = _output_base(args)
+    files = (
+        [
+            ("--output", out.with_suffix(".c"), False),
+            ("--output", out.parent / (out.name + ".h"), False),
+        ]
+        if args.lang == "c"
+        else [("--output", out, False)]
+    )
+    if args.plcopen:
+        files.append(("--plcopen", Path(args.plcopen), False))
+    return files
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
-    out = Path(args.output)
-    if not out.parent.is_dir():
-        raise ModelError(f"output folder '{out.parent}' does not exist")
-    if args.lang == "c" and out.suffix in (".c", ".h"):
-        out = out.with_suffix("")
+    out = _output_base(args)
     header = out.name + ".h"
     same = dict(
         lang=args.lang,
