@@ -8,13 +8,19 @@
 - ``mindyn --version`` prints the version pyproject.toml declares;
 - outputs, one rule for every output option of every command, applied before anything is
   written: two outputs naming the same file (also a file an option implies, such as codegen's
-  NAME.c and NAME.h) are refused, and missing folders are created.
+  NAME.c and NAME.h) are refused, and missing folders are created;
+- one spelling per meaning (``--deg``, ``--controller-period`` / ``--excitation-period``,
+  ``--torque-noise`` / ``--position-noise`` / ``--velocity-noise``, ``--rank-tolerance`` /
+  ``--pose-tolerance``), the former spellings kept for one release with a note; joint vectors
+  with spaces or commas; every option with a help line; no reference left unexplained.
 """
 
 from __future__ import annotations
 
+import argparse
 import contextlib
 import io
+import json
 import re
 import subprocess
 import sys
@@ -128,3 +134,137 @@ def test_same_output_twice_is_refused_in_every_command(tmp_path):
         assert rc == 2, (argv, err)
         assert "its own file" in err and len(err.splitlines()) == 1, err
         assert not (tmp_path / "new").exists()  # nothing created
+
+
+def subparsers() -> dict[str, argparse.ArgumentParser]:
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return dict(sub.choices)
+
+
+def test_every_option_has_a_help_line():
+    missing = [
+        f"{name} {a.option_strings[-1] if a.option_strings else a.dest}"
+        for name, p in subparsers().items()
+        for a in p._actions
+        if not (isinstance(a.help, str) and a.help.strip())
+    ]
+    assert not missing, missing
+
+
+# (command line with a former spelling, the same with the new one)
+RENAMED = [
+    (["base", "planar2", "--tolerance", "1e-8"], ["base", "planar2", "--rank-tolerance", "1e-8"]),
+    (
+        ["ik", "planar2", "--xyz", "1", "0", "0", "--tolerance", "1e-4"],
+        ["ik", "planar2", "--xyz", "1", "0", "0", "--pose-tolerance", "1e-4"],
+    ),
+    (
+        ["track", "planar2", "--period", "0.002"],
+        ["track", "planar2", "--controller-period", "0.002"],
+    ),
+    (
+        ["track", "planar2", "--noise", "0.1", "0.2"],
+        ["track", "planar2", "--position-noise", "0.1", "--velocity-noise", "0.2"],
+    ),
+    (
+        ["simulate", "planar2", "-o", "s.csv", "--period", "0.01"],
+        ["simulate", "planar2", "-o", "s.csv", "--controller-period", "0.01"],
+    ),
+    (
+        ["codegen", "planar2", "--lang", "c", "-o", "x", "--period", "0.01"],
+        ["codegen", "planar2", "--lang", "c", "-o", "x", "--controller-period", "0.01"],
+    ),
+    (
+        ["identify", "planar2", "log.csv", "--period", "2"],
+        ["identify", "planar2", "log.csv", "--excitation-period", "2"],
+    ),
+    (
+        ["excite", "planar2", "-o", "e.csv", "--degrees", "--start", "10,20"],
+        ["excite", "planar2", "-o", "e.csv", "--deg", "--start", "10", "20"],
+    ),
+    (["demo", "--noise", "2"], ["demo", "--torque-noise", "2"]),
+]
+
+
+def _parsed(argv):
+    args = vars(cli.build_parser(argv[0]).parse_args(argv))
+    notes = args.pop("_notes", [])
+    return {k: v for k, v in args.items() if not callable(v)}, notes
+
+
+def test_former_spellings_do_what_the_new_ones_do_with_a_note():
+    for old, new in RENAMED:
+        was, notes = _parsed(old)
+        now, none = _parsed(new)
+        assert was == now, (old, new)
+        assert not none
+        assert len(notes) == 1 and "deprecated" in notes[0], notes
+        assert notes[0].startswith(old[old.index(next(a for a in old if a not in new))])
+    # the note is printed, on stderr, when the command succeeds
+    rc, out, err = run(["base", "planar2", "--tolerance", "1e-8"])
+    assert rc == 0 and out == run(["base", "planar2", "--rank-tolerance", "1e-8"])[1]
+    assert err == (
+        "mindyn: note: --tolerance is deprecated and will be removed in the next release; use "
+        "--rank-tolerance\n"
+    )
+
+
+def test_former_spellings_are_not_in_the_help():
+    for name, p in subparsers().items():
+        text = p.format_help()
+        for old in ("--degrees", "--period ", "--noise ", "--tolerance "):
+            assert old not in text, (name, old)
+
+
+def test_joint_vectors_take_spaces_commas_or_both():
+    def parse(*words):
+        return cli.build_parser("ik").parse_args(["ik", "planar3", "--xyz", "1", "0", "0", *words])
+
+    for words in (["0.1", "-0.2", "3"], ["0.1,-0.2,3"], ["0.1,-0.2", "3"], ["0.1", "-0.2,3"]):
+        assert parse("--q0", *words).q0 == [0.1, -0.2, 3.0], words
+    for argv, option in (
+        (["excite", "planar2", "-o", "e.csv", "--start", "1", "2"], "start"),
+        (["identify", "planar2", "log.csv", "--drive-gain", "1", "2"], "drive_gain"),
+        (["identify", "planar2", "log.csv", "--drive-gain", "1,2"], "drive_gain"),
+    ):
+        assert getattr(cli.build_parser(argv[0]).parse_args(argv), option) == [1.0, 2.0]
+    assert parse("--q0", "-1e-3", "-2,-3").q0 == [-1e-3, -2.0, -3.0]
+    for bad in (["1,,2"], ["1,"], ["x"], ["nan"], ["1", "inf"]):
+        rc, _, err = run(["ik", "planar2", "--xyz", "1", "0", "0", "--q0", *bad])
+        assert rc == 2 and err.startswith("mindyn: error: argument --q0:"), (bad, err)
+        assert len(err.splitlines()) == 1
+    rc, _, err = run(["ik", "planar2", "--xyz", "1", "0", "0", "--q0", "1", "2", "3"])
+    assert rc == 2 and "--q0 needs 2 values" in err, err
+
+
+def test_json_to_stdout_or_to_a_file_alike(tmp_path):
+    # the tool pose at q = (0.3, 0.5) rad: (0.826, 0, 0.506) m, pitch -0.8 rad
+    pose = ["--xyz", "0.826022", "0", "0.506438", "--rpy", "1.570796", "-0.8", "0"]
+    for argv in (["base", "planar2"], ["ik", "planar2", *pose, "--pose-tolerance", "1e-3"]):
+        rc, out, err = run([*argv, "--format", "json"])
+        assert rc == 0, err
+        path = tmp_path / "new" / f"{argv[0]}.json"
+        rc, table, err = run([*argv, "--json", path])
+        assert rc == 0, err
+        printed, written = json.loads(out), json.loads(path.read_text())
+        if argv[0] == "ik":  # restarts within a CPU-time budget: the same answer, not the path
+            assert printed["success"] and written["success"]
+            for doc in (printed, written):
+                del doc["q"], doc["pose_error"], doc["iterations"], doc["attempts"]
+        printed.pop("seconds", None), written.pop("seconds", None)  # the timing of base
+        assert printed == written
+        assert not table.lstrip().startswith("{")  # the table is still printed
+
+
+def test_messages_say_what_they_cite():
+    """No "the thesis's method"; "the ZCR07S study" is said to be a published study of the
+    ZCR07S arm wherever a help text or description names it."""
+    rc, out, err = run(["base", "puma560"])
+    assert rc == 0, err
+    assert "thesis" not in out and "Gaussian elimination" in out
+    for name, p in subparsers().items():
+        text = " ".join(p.format_help().split())
+        assert "thesis" not in text, name
+        if "ZCR07S study" in text:
+            assert "published identification and adaptive PD control study" in text, name

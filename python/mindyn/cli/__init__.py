@@ -10,7 +10,7 @@ import os
 import sys
 
 from .._core import ModelError, RobotFileNotFoundError
-from .args import COMMANDS, Parser, UsageError, prepare_outputs
+from .args import COMMANDS, Parser, UsageError, prepare_outputs, print_deprecation_notes
 
 
 class _Version(argparse.Action):
@@ -78,6 +78,8 @@ def main(argv: list[str] | None = None) -> int:
         prepare_outputs(args)
         status = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
+        if status == 0:  # an error stays one line
+            print_deprecation_notes(args)
         return status
     except UsageError as e:
         _error(e)

@@ -13,7 +13,15 @@ from .._core import ModelError
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, generate, generate_controller, plcopen_project
 from ..robot import load
-from .args import add_command, add_joint_terms, add_offset, add_robot, joint_terms, output_file
+from .args import (
+    add_command,
+    add_joint_terms,
+    add_offset,
+    add_robot,
+    controller_period,
+    joint_terms,
+    output_file,
+)
 from .method import base_method
 
 
@@ -84,12 +92,10 @@ def register(subparsers) -> None:
         "--gains",
         metavar="FILE",
         help="YAML with kd, lambda, gamma, nu, kp (as 'mindyn track --gains' reads it; default: "
-        "the ZCR07S study's gains, as 'mindyn track' uses them); --params gives the initial "
+        "the robot's default gains, as 'mindyn track' uses them); --params gives the initial "
         "estimate",
     )
-    c.add_argument(
-        "--period", type=float, default=0.004, help="controller period in s (default 0.004)"
-    )
+    controller_period(c, default=0.004, help="controller period [s]")
     c.add_argument(
         "--torque-limit",
         metavar="effort|NM",
@@ -250,7 +256,9 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
         raise ModelError("--numeric does not apply to controller steps (p is their state)")
     gains = control.load_gains(args.gains, robot) if args.gains else control.default_gains(robot)
     if not (math.isfinite(args.period) and args.period > 0):
-        raise ModelError(f"--period must be a positive number of seconds, got {args.period:g}")
+        raise ModelError(
+            f"--controller-period must be a positive number of seconds, got {args.period:g}"
+        )
     limit = args.torque_limit
     if limit is not None and limit != "effort":
         try:

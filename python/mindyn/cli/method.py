@@ -50,4 +50,7 @@ def base_method(robot, rotor: bool, method: str | None) -> tuple[str, str]:
             f"before computing), over its budget of {cost['budget'] / gib:.2g} GiB; the "
             "recursive method is exact and gives the same base set"
         )
-    return "projection", "the default (exact, the thesis's method)"
+    return "projection", (
+        "the default (exact: Gaussian elimination on the exact coordinates of the Lagrangian's "
+        "coefficients in a finite basis of functions of the joints, no sampling)"
+    )

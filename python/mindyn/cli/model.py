@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -15,8 +16,10 @@ from .args import (
     add_joint_terms,
     add_offset,
     add_robot,
+    deprecated,
     joint_terms,
     number,
+    output_file,
 )
 from .method import base_method
 
@@ -111,10 +114,14 @@ def cmd_base(args: argparse.Namespace) -> int:
         snap=args.snap,
     )
     tree = {} if robot.is_serial else {"parents": robot.parents}  # 0-based, -1 the base
-    if args.format == "json":
+    if args.format == "json" or args.json:
         doc = {**bp.to_dict(symbolic=args.symbolic), "method_reason": why, **tree}
-        print(json.dumps(doc, indent=2))
-        return 0
+        text = json.dumps(doc, indent=2)
+        if args.json:
+            Path(args.json).write_text(text + "\n")
+        if args.format == "json":
+            print(text)
+            return 0
     if args.format == "latex":
         print(bp.latex(symbolic=args.symbolic))
         return 0
@@ -220,23 +227,37 @@ def register(sub) -> None:
         "method's limits (18 joints on a chain; 44 on a tree, 16 on a root path) or its cost "
         "estimate refuse the robot",
     )
-    p.add_argument("--format", choices=["table", "json", "latex"], default="table")
+    p.add_argument(
+        "--format",
+        choices=["table", "json", "latex"],
+        default="table",
+        help="what is printed: the summary and formulas (table, the default), the JSON document, "
+        "or the formulas as LaTeX",
+    )
+    p.add_argument(
+        "--json",
+        metavar="FILE",
+        type=output_file,
+        help="also write the JSON document (as --format json prints it) to FILE",
+    )
     p.add_argument(
         "--symbolic",
         action="store_true",
         help="formulas in the description's lengths (DH a_j, d_j; MDH d_j, r_j; URDF joint "
         "origins x_j, y_j, z_j) instead of numbers",
     )
-    number(
+    rank_tolerance = number(
         p,
-        "--tolerance",
+        "--rank-tolerance",
+        dest="tolerance",
         low=0,
         high=0.01,
         low_open=True,
         high_open=True,
         default=1e-9,
-        help="relative pivot size below which a column is dependent",
+        help="relative pivot size below which a column is dependent (the rank decision)",
     )
+    deprecated(p, "--tolerance", rank_tolerance)
     number(
         p,
         "--snap",
