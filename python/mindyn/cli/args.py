@@ -239,7 +239,7 @@ def joint_values(values, n: int, what: str, *, broadcast: bool = False) -> list[
         return values * n
     if len(values) != n:
         one = " (or one for all)" if broadcast else ""
-        raise UsageError(f"{what} needs {n} values{one}, one per joint, got {len(values)}")
+        raise UsageError(f"{what} needs {n} values{one}, got {len(values)}")
     return values
 
 
