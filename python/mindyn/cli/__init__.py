@@ -6,11 +6,281 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import json
+import math
 import os
 import sys
+from pathlib import Path
+
+import numpy as np
 
 from .._core import ModelError, RobotFileNotFoundError
-from .args import COMMANDS, Parser, UsageError, prepare_outputs, print_deprecation_notes
+from ..base import base_parameters
+from ..robot import load
+from .args import (
+    COMMANDS,
+    Parser,
+    UsageError,
+    add_command,
+    add_joint_terms,
+    add_offset,
+    add_robot,
+    deprecated,
+    joint_terms,
+    number,
+    output_file,
+    prepare_outputs,
+    print_deprecation_notes,
+)
+from .method import base_method
+
+
+def _fmt(x: float, width: int = 10) -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "-".rjust(width)
+    return f"{x:{width}.4g}"
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    robot = load(args.robot, tip=args.tip)
+    n = robot.n
+    out = []
+    tree = not robot.is_serial
+    shape = f", a tree of {robot.branches} branches" if tree else ""
+    out.append(f"robot      {robot.name}  ({n} joints, {robot.convention}{shape})")
+    out.append(f"source     {robot.source}")
+    g = robot.gravity
+    out.append(f"gravity    [{g[0]:g}, {g[1]:g}, {g[2]:g}] m/s^2")
+    if robot.synthetic_inertia:
+        out.append("inertia    SYNTHETIC: the inertial values are invented, not measured")
+    if robot.notes:
+        out.append(f"notes      {robot.notes.strip()}")
+    out.append("")
+    lim = robot.limits
+    drv = robot.drives
+    deg = {"revolute": 180.0 / math.pi, "prismatic": 1.0}
+    dh = robot.dh
+    w = max([13] + [len(j) for j in robot.joint_names]) + 1  # joint-name column
+    # a tree: the link each joint hangs from (the base link, or the link of its parent joint)
+    hang = [robot.link_names[p + 1] for p in robot.parents] if tree else []
+    wp = max([12] + [len(h) for h in hang]) + 1 if tree else 0
+    parent_head = f"{'parent link':<{wp}}" if tree else ""
+    if robot.convention in ("dh", "mdh") and len(dh):
+        if robot.convention == "dh":
+            head = f"{'a [m]':>9} {'alpha[deg]':>10} {'d [m]':>9} {'theta[deg]':>10}"
+        else:
+            head = f"{'d [m]':>9} {'alpha[deg]':>10} {'r [m]':>9} {'theta[deg]':>10}"
+    else:
+        head = f"{'axis (joint frame)':>30}"
+    out.append(
+        f"{'#':>2} {'joint':<{w}}{parent_head}{'type':<10}{head} {'lower':>9} {'upper':>9} "
+        f"{'vel':>9} {'effort':>9} {'rated':>7} {'gear':>7}"
+    )
+    out.append(
+        "   (limits in deg, deg/s for revolute joints; m, m/s for prismatic; effort N m or N)"
+    )
+    for k in range(n):
+        t = robot.joint_types[k]
+        s = deg[t]
+        if robot.convention in ("dh", "mdh") and len(dh):
+            a, alpha, d, theta = dh[k]
+            geo = f"{a:9.4f} {math.degrees(alpha):10.3f} {d:9.4f} {math.degrees(theta):10.3f}"
+        else:
+            ax = robot.axes[k]
+            geo = f"[{ax[0]:8.4f} {ax[1]:8.4f} {ax[2]:8.4f}]".rjust(30)
+        out.append(
+            f"{k + 1:>2} {robot.joint_names[k]:<{w}}{hang[k] if tree else '':<{wp}}{t:<10}{geo} "
+            f"{_fmt(lim['lower'][k] * s, 9)} {_fmt(lim['upper'][k] * s, 9)} "
+            f"{_fmt(lim['velocity'][k] * s, 9)} "
+            f"{_fmt(lim['effort'][k], 9)} {_fmt(drv['rated_torque'][k], 7)} "
+            f"{_fmt(drv['gear_ratio'][k], 7)}"
+        )
+    out.append("")
+    out.append("classical parameters about each link-frame origin (SI)")
+    names = ["XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "Ia", "Fv", "Fc"]
+    wl = max([10] + [len(x) + 1 for x in robot.link_names[1:]])  # link-name column
+    out.append(f"{'link':<{wl}}" + "".join(f"{c:>11}" for c in names))
+    p = robot.params.reshape(n, 10)
+    extra = np.column_stack([robot.rotor_inertia, robot.viscous, robot.coulomb])
+    for k in range(n):
+        row = list(p[k]) + list(extra[k])
+        out.append(f"{robot.link_names[k + 1]:<{wl}}" + "".join(f"{v:11.4g}" for v in row))
+    out.append(f"total moving mass {p[:, 9].sum():.4g} kg")
+    print("\n".join(out))
+    return 0
+
+
+def cmd_base(args: argparse.Namespace) -> int:
+    robot = load(args.robot, tip=args.tip)
+    order = [s.strip() for s in args.order.split(",")] if args.order else None
+    method, why = base_method(robot, args.rotor, args.method)
+    bp = base_parameters(
+        robot,
+        rotor=args.rotor,
+        friction=args.friction,
+        offset=args.offset,
+        method=method,
+        order=order,
+        tolerance=args.tolerance,
+        snap=args.snap,
+    )
+    tree = {} if robot.is_serial else {"parents": robot.parents}  # 0-based, -1 the base
+    if args.format == "json" or args.json:
+        doc = {**bp.to_dict(symbolic=args.symbolic), "method_reason": why, **tree}
+        text = json.dumps(doc, indent=2)
+        if args.json:
+            Path(args.json).write_text(text + "\n")
+        if args.format == "json":
+            print(text)
+            return 0
+    if args.format == "latex":
+        print(bp.latex(symbolic=args.symbolic))
+        return 0
+    extras = joint_terms(args)
+    counts = {k: s["n"] for k, s in bp.sets.items()}
+    m = bp.margin
+    lines = [
+        f"{robot.name}: base parameters by the {bp.method} method"
+        + (f" ({', '.join(extras)})" if extras else ""),
+        f"  method         {bp.method}: {why}",
+        f"  sets           Lagrangian {counts['lagrangian']}, total energy {counts['energy']}, "
+        f"equations of motion {counts['eom']}",
+        f"  coincide       Lagrangian = energy: {'yes' if bp.lagrangian_equals_energy else 'no'}; "
+        f"Lagrangian = equations of motion: {'yes' if bp.lagrangian_equals_eom else 'no'}",
+        "  used           the equations-of-motion set, for inverse dynamics, the base regressor "
+        "and the identification models",
+        f"  rank margin    smallest kept pivot {m['smallest_kept']:.3g}, largest dropped "
+        f"{m['largest_dropped']:.3g} (relative tolerance {m['tolerance']:.3g}); weakest kept "
+        f"column against its kind {m['weakest_kept_for_its_kind']:.3g}",
+    ]
+    if tree:
+        # joint numbers as in the parameter names (XX3 belongs to joint 3's link)
+        parents = ", ".join("-" if p < 0 else str(p + 1) for p in robot.parents)
+        lines.insert(
+            2,
+            f"  tree           {robot.n} joints, {robot.branches} branches; parent joint of "
+            f"joints 1..{robot.n} (- the base): {parents}",
+        )
+    if m["largest_zeroed"] > 0:
+        lines.append(
+            f"  zero columns   treated as zero below {m['zero_threshold']:.1g} of the largest; "
+            f"the largest such column is {m['largest_zeroed']:.3g}"
+        )
+    if m["near_degenerate"]:
+        lines.append(
+            f"  WARNING        near-degenerate geometry: {m['rank_at_looser_tolerance']} base "
+            f"parameters at tolerance {m['looser_tolerance']:.3g}, "
+            f"{m['rank_at_tighter_tolerance']} at {m['tighter_tolerance']:.3g} "
+            "(consider --snap if joint rotations are meant to be right angles)"
+        )
+    if bp.offset:
+        lines.append(
+            f"  offsets        Off1..Off{robot.n} after the equations-of-motion set, one base "
+            f"parameter each ({bp.n} in all)"
+        )
+    for s in bp.snapped:
+        lines.append(f"  snapped        {s}")
+    if bp.no_effect:
+        lines.append(f"  no effect      {' '.join(bp.no_effect)}")
+    what = {
+        "projection": "non-zero basis functions",
+        "recursive": "rows spanning the identifiable space",
+    }.get(bp.method, "stacked regressor rows")
+    lines.append(f"  computed       {bp.basis_rows} {what}, {bp.seconds * 1e3:.2f} ms")
+    formulas = bp.formulas
+    if args.symbolic:
+        sym = bp.symbolic()
+        values = ", ".join(f"{k} = {v:g}" for k, v in sym.symbols.items()) or "none"
+        lines.append(f"  symbols        {values} (lengths in m)")
+        lines.append(
+            f"  checked        against the numeric formulas at {sym.checked} geometries, "
+            f"largest difference {sym.largest_difference:.2g}"
+        )
+        formulas = sym.text
+    lines.append("")
+    width = max(len(n) for n in bp.names) if bp.names else 4
+    for i, f in enumerate(formulas, 1):
+        name, rhs = f.split(" = ", 1)
+        lines.append(f"{i:>3}  {name:<{width}}  = {rhs}")
+    print("\n".join(lines))
+    return 0
+
+
+def register(sub) -> None:
+    """Adds ``info`` and ``base`` to the ``mindyn`` subcommands."""
+    p = add_command(sub, "info")
+    add_robot(p)
+    p.set_defaults(func=cmd_info)
+
+    p = add_command(
+        sub,
+        "base",
+        description="Base inertial parameters by the projection method (exact; the default), "
+        "the recursive method (exact, the same base set, cost linear in the number of joints) "
+        "or the numerical method (sampled regressor + QR), on chains and trees. Without "
+        "--method, a robot whose projection cost estimate is over its budget (or beyond the "
+        "projection method's limits: more than 18 joints on a chain, 44 on a tree or 16 on one "
+        "of its root paths) is computed by the recursive method, and the output says so.",
+    )
+    add_robot(p)
+    add_joint_terms(p)
+    add_offset(p)
+    p.add_argument(
+        "--order",
+        help="column priority: every classical parameter once, comma-separated "
+        "(default: Khalil's order, link by link with YY, MZ, M last)",
+    )
+    p.add_argument(
+        "--method",
+        choices=["projection", "recursive", "numerical"],
+        default=None,
+        help="default: projection, or recursive (the same base set) where the projection "
+        "method's limits (18 joints on a chain; 44 on a tree, 16 on a root path) or its cost "
+        "estimate refuse the robot",
+    )
+    p.add_argument(
+        "--format",
+        choices=["table", "json", "latex"],
+        default="table",
+        help="what is printed: the summary and formulas (table, the default), the JSON document, "
+        "or the formulas as LaTeX",
+    )
+    p.add_argument(
+        "--json",
+        metavar="FILE",
+        type=output_file,
+        help="also write the JSON document (as --format json prints it) to FILE",
+    )
+    p.add_argument(
+        "--symbolic",
+        action="store_true",
+        help="formulas in the description's lengths (DH a_j, d_j; MDH d_j, r_j; URDF joint "
+        "origins x_j, y_j, z_j) instead of numbers",
+    )
+    rank_tolerance = number(
+        p,
+        "--rank-tolerance",
+        dest="tolerance",
+        low=0,
+        high=0.01,
+        low_open=True,
+        high_open=True,
+        default=1e-9,
+        help="relative pivot size below which a column is dependent (the rank decision)",
+    )
+    deprecated(p, "--tolerance", rank_tolerance)
+    number(
+        p,
+        "--snap",
+        low=0,
+        high=0.1,
+        nargs="?",
+        const=1e-3,
+        default=None,
+        metavar="RAD",
+        help="round joint rotations within RAD (1e-3 when given alone) of multiples of pi/2",
+    )
+    p.set_defaults(func=cmd_base)
 
 
 class _Version(argparse.Action):
@@ -45,7 +315,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         if command is not None and module != wanted:
             sub.add_parser(name, help=summary)
         elif module not in registered:
-            importlib.import_module(f"{__name__}.{module}").register(sub)
+            # "": this module (info, base); else a module of this package
+            home = (
+                importlib.import_module(f"{__name__}.{module}") if module else sys.modules[__name__]
+            )
+            home.register(sub)
             registered.add(module)
     return parser
 
