@@ -291,6 +291,7 @@ def register(sub) -> None:
         p,
         "--torque-noise",
         dest="noise",
+        metavar="PERCENT",
         low=0,
         high=100,
         default=1.0,
