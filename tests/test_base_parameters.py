@@ -956,7 +956,7 @@ def test_cli_snap_reports(tmp_path, rng):
         (("base", "puma999"), "unknown robot 'puma999'"),
         (("base", "missing.urdf"), "does not exist"),
         (("base", "puma560", "--order", "XX1,XX1"), "exactly once"),
-        (("base", "puma560", "--tolerance", "0.5"), "tolerance"),
+        (("base", "puma560", "--rank-tolerance", "0.5"), "--rank-tolerance"),
     ],
 )
 def test_cli_errors_are_one_line(args, match):

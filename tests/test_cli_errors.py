@@ -68,7 +68,7 @@ def files(tmp_path_factory):
     [
         (["track", "planar2", "--duration", "inf"], ["argument --duration", "finite number"]),
         (["track", "planar2", "--cycle", "1e308"], ["argument --cycle", "(0, 1e+06]"]),
-        (["track", "planar2", "--period", "nan"], ["argument --period"]),
+        (["track", "planar2", "--controller-period", "nan"], ["argument --controller-period"]),
         (["simulate", "planar2", "--trajectory", "x", "--rate", "inf", "-o", "a.csv"], ["--rate"]),
         (["excite", "planar2", "--freq", "inf", "-o", "a.csv"], ["argument --freq"]),
         (["excite", "planar2", "--rate", "0", "-o", "a.csv"], ["argument --rate", "(0, "]),
@@ -81,7 +81,7 @@ def files(tmp_path_factory):
         (["identify", "planar2", "x.csv", "--energy-window", "0"], ["--energy-window", "[1, "]),
         (["identify", "planar2", "x.csv", "--integral-window", "0"], ["--integral-window", "[1, "]),
         (["identify", "planar2", "x.csv", "--rsd-threshold", "-5"], ["--rsd-threshold", ">= 0"]),
-        (["base", "planar2", "--tolerance", "0"], ["argument --tolerance"]),
+        (["base", "planar2", "--rank-tolerance", "0"], ["argument --rank-tolerance"]),
         (["info", "planar9999999999999999999999999"], ["planar<N> takes a joint count N"]),
         (["info", ""], ["ROBOT", "empty string"]),
         (["track", "planar2", "--substeps", "0"], ["argument --substeps", "integer"]),
@@ -128,10 +128,14 @@ def test_output_paths_that_cannot_be_written(cmd, where, files, tmp_path, monkey
 
 
 def test_step_count_is_bounded_before_any_work():
-    rc, _, err = run(["track", "planar2", "--period", "1e-7", "--duration", "1"])
-    line = assert_one_line_error(rc, err, "--duration 1 with --period 1e-07", "4e+07 steps")
+    rc, _, err = run(["track", "planar2", "--controller-period", "1e-7", "--duration", "1"])
+    line = assert_one_line_error(
+        rc, err, "--duration 1 with --controller-period 1e-07", "4e+07 steps"
+    )
     assert f"{MAX_STEPS:,} integration steps" in line
-    rc, _, err = run(["track", "planar2", "--period", "1e-6"])  # default duration: 2 cycles
+    rc, _, err = run(
+        ["track", "planar2", "--controller-period", "1e-6"]
+    )  # default duration: 2 cycles
     assert_one_line_error(rc, err, "the duration is two cycles unless given")
 
 
@@ -310,7 +314,7 @@ SPECS = {
     "info": (["info"], []),
     "base": (
         ["base", "planar2"],
-        [("--tolerance", ["1e-9", "1e-3"]), ("--snap", ["1e-3", "0.05"])],
+        [("--rank-tolerance", ["1e-9", "1e-3"]), ("--snap", ["1e-3", "0.05"])],
     ),
     "excite": (
         ["excite", "planar2", "--quiet", "--starts", "1"],
@@ -335,7 +339,7 @@ SPECS = {
             ("--torque-noise", ["0.1", "1%", "0.1,0.2"]),
             ("--quantization", ["1e-4"]),
             ("--mode", ["tracking", "inverse"]),
-            ("--period", ["0.004", "0.01"]),
+            ("--controller-period", ["0.004", "0.01"]),
             ("--torque-unit", ["Nm", "permille"]),
         ],
     ),
@@ -343,11 +347,12 @@ SPECS = {
         ["track", "planar2", "--cycle", "0.2"],
         [
             ("--duration", ["0.02", "0.1"]),
-            ("--period", ["0.004", "0.01"]),
+            ("--controller-period", ["0.004", "0.01"]),
             ("--cycle", ["0.1", "0.5"]),
             ("--param-error", ["0", "0.5"]),
             ("--seed", ["1"]),
-            ("--noise", ["0", "1e-3"], 2),
+            ("--position-noise", ["0", "1e-3"]),
+            ("--velocity-noise", ["0", "1e-3"]),
             ("--substeps", ["1", "4"]),
             ("--controller", ["pd", "computed-torque", "adaptive-pd"]),
             ("--integrator", ["rk4", "scipy"]),
@@ -375,7 +380,7 @@ SPECS = {
             ("--xyz", ["0.5", "0", "0.3"], 3),
             ("--rpy", ["0", "1.5"], 3),
             ("--q0", ["0.1", "0.2"], 2),
-            ("--tolerance", ["1e-5", "1e-3"]),
+            ("--pose-tolerance", ["1e-5", "1e-3"]),
             ("--timeout", ["0.01"]),
             ("--seed", ["0", "7"]),
         ],
@@ -452,14 +457,14 @@ def test_last_resort_is_one_line_naming_the_exception(monkeypatch):
 @pytest.mark.parametrize(
     "argv",
     [
-        ["base", "planar2", "--tolerance", "1e-6", "--snap", "0.05"],
+        ["base", "planar2", "--rank-tolerance", "1e-6", "--snap", "0.05"],
         ["excite", "planar2", "--quiet", "--starts", "1", "--maxiter", "3", "-o", "OUT/e.csv"],
         ["simulate", "planar2", "--trajectory", "TRAJ", "--duration", "0.2", "-o", "OUT/s.csv"],
         ["track", "planar2", "--cycle", "0.4", "--duration", "0.1", "-o", "OUT/t.csv"],
         ["identify", "planar2", "LOG", "--json", "OUT/i.json", "--energy-window", "1"],
         # the tool pose at q = (0.3, 0.5) rad: (0.826, 0, 0.506) m, pitch -0.8 rad
         ["ik", "planar2", "--xyz", "0.826022", "0", "0.506438", "--rpy", "1.570796", "-0.8", "0"]
-        + ["--tolerance", "1e-3", "--seed", "4294967295"],
+        + ["--pose-tolerance", "1e-3", "--seed", "4294967295"],
         ["codegen", "planar2", "--lang", "st", "-o", "OUT/g.st"],
     ],
 )

@@ -643,7 +643,7 @@ def test_cli_codegen(tmp_path, capsys):
         (["--what", "torque"], "unknown function 'torque'"),
         (["--name", "9x"], "is not an identifier"),
         (["--params", "/nonexistent/p.txt"], "does not exist"),
-        (["-o", "/nonexistent/dir/x.c"], "output folder"),
+        (["-o", "/dev/null/x.c"], "is a file, not a folder"),
         (["--lang", "st", "--trig", "libm"], "trig applies to C only"),
     ],
 )

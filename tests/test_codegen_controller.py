@@ -304,7 +304,7 @@ def test_cli_controller(tmp_path, capsys):
         (["--what", "adaptive-pd,id"], "generated alone"),
         (["--what", "computed-torque", "--box", "0.1"], "adaptive-pd only"),
         (["--what", "adaptive-pd", "--box", "-1"], "--box must be"),
-        (["--what", "adaptive-pd", "--period", "0"], "--period must be"),
+        (["--what", "adaptive-pd", "--controller-period", "0"], "--controller-period"),
         (["--what", "adaptive-pd", "--torque-limit", "x"], "--torque-limit"),
         (["--what", "adaptive-pd", "--torque-limit", "effort"], "effort limits"),
         (["--what", "adaptive-pd", "--numeric"], "--numeric"),

@@ -345,7 +345,7 @@ def test_current_errors_are_one_line(drive_arm, tmp_path, capsys):
         ([arm, str(q), "--currents", str(bad_header)], "missing column(s) i3"),
         ([arm, str(q), "--currents", str(c), str(c)], "2 currents file(s) for 1 log(s)"),
         (["zcr07s", str(zcr), "--torque-unit", "current"], "gives no torque constant"),
-        ([arm, str(q), "--currents", str(c), "--drive-gain", "1,2"], "--drive-gain: 2 values"),
+        ([arm, str(q), "--currents", str(c), "--drive-gain", "1,2"], "--drive-gain needs 3 values"),
         ([arm, str(q), "--validate-currents", str(c)], "expected --validate"),
         (["zcr07s", str(zcr), "--drive-gain", "2"], "not motor currents"),
     ]

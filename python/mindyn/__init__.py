@@ -20,7 +20,6 @@ from ._core import from_pinocchio_order as _from_pin
 from ._core import inertial_from_com as _from_com
 from ._core import inertial_from_urdf as _from_urdf
 from ._core import to_pinocchio_order as _to_pin
-from ._version import __version__ as __version__
 from .base import BaseParameters, base_parameters
 from .control import coriolis_matrix, slotine_li_regressor
 from .inverse_kinematics import ik
@@ -43,6 +42,16 @@ __all__ = [
     "slotine_li_regressor",
     "to_pinocchio_order",
 ]
+
+
+def __getattr__(name: str):
+    # The version is read from the installed package's metadata when asked for (importing
+    # importlib.metadata costs every command's start).
+    if name == "__version__":
+        from ._version import __version__
+
+        return __version__
+    raise AttributeError(f"module 'mindyn' has no attribute '{name}'")
 
 
 def to_pinocchio_order(params):

@@ -31,7 +31,10 @@ def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) 
     refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
     if refused:
         return "recursive", f"{refused}; the recursive method is exact and gives the same base set"
-    return "projection", "the default (exact, the thesis's method)"
+    return "projection", (
+        "the default (exact: Gaussian elimination on the exact coordinates of the Lagrangian's "
+        "coefficients in a finite basis of functions of the joints, no sampling)"
+    )
 
 
 class BaseParameters:

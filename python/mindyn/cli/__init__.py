@@ -1,27 +1,36 @@
-"""The ``mindyn`` command line."""
+"""The ``mindyn`` command line. A command's module is imported, and its options declared, only
+when that command runs or shows its help: ``mindyn --help`` and the light commands start without
+the libraries that only identification, plots or convex fits need."""
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import math
 import os
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from .._core import ModelError, RobotFileNotFoundError
 from ..base import base_parameters
 from ..robot import load
-from . import codegen, control, demo, export, identify
 from .args import (
+    COMMANDS,
     Parser,
     UsageError,
+    add_command,
     add_joint_terms,
     add_offset,
     add_robot,
+    deprecated,
     joint_terms,
     number,
+    output_file,
+    prepare_outputs,
+    print_deprecation_notes,
 )
 from .method import base_method
 
@@ -116,10 +125,14 @@ def cmd_base(args: argparse.Namespace) -> int:
         snap=args.snap,
     )
     tree = {} if robot.is_serial else {"parents": robot.parents}  # 0-based, -1 the base
-    if args.format == "json":
+    if args.format == "json" or args.json:
         doc = {**bp.to_dict(symbolic=args.symbolic), "method_reason": why, **tree}
-        print(json.dumps(doc, indent=2))
-        return 0
+        text = json.dumps(doc, indent=2)
+        if args.json:
+            Path(args.json).write_text(text + "\n")
+        if args.format == "json":
+            print(text)
+            return 0
     if args.format == "latex":
         print(bp.latex(symbolic=args.symbolic))
         return 0
@@ -193,19 +206,15 @@ def cmd_base(args: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    parser = Parser(
-        prog="mindyn",
-        description="Minimal dynamic models of manipulators.",
-    )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    p = sub.add_parser("info", help="print a robot model: joints, geometry, limits, parameters")
+def register(sub) -> None:
+    """Adds ``info`` and ``base`` to the ``mindyn`` subcommands."""
+    p = add_command(sub, "info")
     add_robot(p)
     p.set_defaults(func=cmd_info)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "base",
-        help="base inertial parameters: counts of the three sets, formulas, rank margin",
         description="Base inertial parameters by the projection method (exact; the default), "
         "the recursive method (exact, the same base set, cost linear in the number of joints) "
         "or the numerical method (sampled regressor + QR), on chains and trees. Without "
@@ -230,23 +239,37 @@ def build_parser() -> argparse.ArgumentParser:
         "method's limits (18 joints on a chain; 44 on a tree, 16 on a root path) or its cost "
         "estimate refuse the robot",
     )
-    p.add_argument("--format", choices=["table", "json", "latex"], default="table")
+    p.add_argument(
+        "--format",
+        choices=["table", "json", "latex"],
+        default="table",
+        help="what is printed: the summary and formulas (table, the default), the JSON document, "
+        "or the formulas as LaTeX",
+    )
+    p.add_argument(
+        "--json",
+        metavar="FILE",
+        type=output_file,
+        help="also write the JSON document (as --format json prints it) to FILE",
+    )
     p.add_argument(
         "--symbolic",
         action="store_true",
         help="formulas in the description's lengths (DH a_j, d_j; MDH d_j, r_j; URDF joint "
         "origins x_j, y_j, z_j) instead of numbers",
     )
-    number(
+    rank_tolerance = number(
         p,
-        "--tolerance",
+        "--rank-tolerance",
+        dest="tolerance",
         low=0,
         high=0.01,
         low_open=True,
         high_open=True,
         default=1e-9,
-        help="relative pivot size below which a column is dependent",
+        help="relative pivot size below which a column is dependent (the rank decision)",
     )
+    deprecated(p, "--tolerance", rank_tolerance)
     number(
         p,
         "--snap",
@@ -259,12 +282,52 @@ def build_parser() -> argparse.ArgumentParser:
         help="round joint rotations within RAD (1e-3 when given alone) of multiples of pi/2",
     )
     p.set_defaults(func=cmd_base)
-    control.register(sub)
-    identify.register(sub)
-    demo.register(sub)
-    codegen.register(sub)
-    export.register(sub)
+
+
+class _Version(argparse.Action):
+    """``--version``: the package version (read when asked, from the installed package's
+    metadata, which pyproject.toml writes)."""
+
+    def __init__(self, option_strings, dest=argparse.SUPPRESS, **kwargs):
+        kwargs.setdefault("help", "print mindyn's version and exit")
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from .._version import __version__
+
+        print(f"mindyn {__version__}")
+        parser.exit()
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``mindyn`` parser. ``command``: declare that command's options only (with those of
+    the commands defined in the same module) and give the others their name and summary alone,
+    so that their modules are not imported; an unknown name declares none. Default: every
+    command."""
+    parser = Parser(
+        prog="mindyn",
+        description="Minimal dynamic models of manipulators.",
+    )
+    parser.add_argument("--version", action=_Version)
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    wanted = COMMANDS[command][0] if command in COMMANDS else None
+    registered = set()
+    for name, (module, summary) in COMMANDS.items():
+        if command is not None and module != wanted:
+            sub.add_parser(name, help=summary)
+        elif module not in registered:
+            # "": this module (info, base); else a module of this package
+            home = (
+                importlib.import_module(f"{__name__}.{module}") if module else sys.modules[__name__]
+            )
+            home.register(sub)
+            registered.add(module)
     return parser
+
+
+def _command(argv: list[str]) -> str:
+    """The command named on a command line: its first word that is not an option ("" if none)."""
+    return next((a for a in argv if not a.startswith("-")), "")
 
 
 def _one_line(text: object) -> str:
@@ -279,17 +342,23 @@ def main(argv: list[str] | None = None) -> int:
     """Runs the command line; returns the exit status. Every failure ends in one line on stderr,
     ``mindyn: error: ...``, and a non-zero status."""
     try:
-        parser = build_parser()
-        args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
+        argv = list(sys.argv[1:] if argv is None else argv)
+        args = build_parser(_command(argv)).parse_args(argv)
     except UsageError as e:
         _error(e)
         return 2
     except SystemExit as e:  # --help
         return e.code if isinstance(e.code, int) else 0
     try:
+        prepare_outputs(args)
         status = args.func(args)
         sys.stdout.flush()  # a closed pipe shows here, not at exit
+        if status == 0:  # an error stays one line
+            print_deprecation_notes(args)
         return status
+    except UsageError as e:
+        _error(e)
+        return 2
     except (RobotFileNotFoundError, FileNotFoundError) as e:
         _error(e)
         return 2

@@ -1,6 +1,26 @@
 """Arguments shared by the subcommands of the ``mindyn`` command line, and the validated types of
 every numeric and output-path option: each says what it accepts, in its error message and in
-its ``--help`` line alike."""
+its ``--help`` line alike.
+
+The conventions of every command (README.md's "Command line" section states them too):
+
+- angles are in radians (lengths in metres); ``--deg`` takes the angles of an option, and the
+  revolute joints' values of a joint vector, in degrees;
+- a joint vector (one value per joint, or one value for every joint where a command says so)
+  is given as separate words, comma-separated, or both: ``--q0 0 0.5 1`` = ``--q0 0,0.5,1``
+  (:func:`joint_vector`);
+- one name per meaning: ``--controller-period`` (the sample period of a controller),
+  ``--excitation-period`` (the period of a periodic excitation in a log), ``--torque-noise``,
+  ``--position-noise``, ``--velocity-noise`` (noise standard deviations),
+  ``--rank-tolerance`` (the pivot size of a rank decision) and ``--pose-tolerance`` (a pose
+  error);
+- JSON: ``--format json`` prints the JSON document on standard output instead of the table,
+  ``--json FILE`` writes it to FILE;
+- outputs: every file or folder a command writes follows one rule (:func:`prepare_outputs`);
+- every option has a help line;
+- a former spelling is kept for one release as a hidden alias (:func:`deprecated`): it does
+  what the new one does, and a note on standard error names the new spelling.
+"""
 
 from __future__ import annotations
 
@@ -8,6 +28,7 @@ import argparse
 import math
 import os
 import re
+import sys
 from pathlib import Path
 
 from .._core import Error
@@ -15,6 +36,54 @@ from ..robot import bundled_robots
 
 #: Largest seed accepted (the random generators take 32-bit seeds).
 MAX_SEED = 2**32 - 1
+
+#: What "the ZCR07S study" is, for the help texts that cite it.
+ZCR07S_STUDY = (
+    "the ZCR07S study (a published identification and adaptive PD control study of the ZCR07S "
+    "six-axis industrial arm)"
+)
+
+#: The commands, in the order ``mindyn --help`` lists them: the module of :mod:`mindyn.cli` that
+#: defines each (its ``register(subparsers)`` declares the options of all its commands; "" for
+#: :mod:`mindyn.cli` itself) and the command's summary.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "info": ("", "print a robot model: joints, geometry, limits, parameters"),
+    "base": ("", "base inertial parameters: counts of the three sets, formulas, rank margin"),
+    "track": (
+        "control",
+        "closed-loop joint tracking simulation: adaptive PD, computed torque or PD",
+    ),
+    "ik": ("control", "position inverse kinematics of the tool frame, inside the joint limits"),
+    "excite": ("identify", "optimised Fourier excitation trajectory for identification"),
+    "simulate": ("identify", "simulated joint log along a trajectory (stand-in for a robot)"),
+    "identify": (
+        "identify",
+        "identify base parameters from joint logs (dynamic, integral or energy model)",
+    ),
+    "identify-payload": (
+        "identify",
+        "identify a payload fixed to the last link, with an identified arm",
+    ),
+    "demo": (
+        "demo",
+        "the whole chain on a robot: base parameters, excitation, simulated measurement, "
+        "identification, validation, generated code",
+    ),
+    "codegen": (
+        "codegen",
+        "generate inverse dynamics, gravity torque, base regressor or a controller step "
+        "(adaptive PD, computed torque, gravity compensation) in C or ST",
+    ),
+    "export": (
+        "export",
+        "write identified classical parameters into the robot's URDF or YAML table",
+    ),
+}
+
+
+def add_command(subparsers, name: str, **kwargs) -> argparse.ArgumentParser:
+    """The parser of command ``name``, with its summary from :data:`COMMANDS`."""
+    return subparsers.add_parser(name, help=COMMANDS[name][1], **kwargs)
 
 
 class UsageError(Error):
@@ -24,7 +93,12 @@ class UsageError(Error):
 class Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line, ``mindyn: error: ...``, raised as
     :class:`UsageError` for :func:`mindyn.cli.main` to print (instead of usage text and an
-    exit)."""
+    exit). A word that starts with a minus and a digit is a value, not an option: negative
+    numbers in any notation (``-1e-3``) and joint vectors (``-0.2,3``)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(r"^-\.?\d[\d.eE+,-]*$")
 
     def error(self, message: str):  # noqa: D102 - argparse API
         sub = self.prog.split(" ", 1)[1] if " " in self.prog else ""
@@ -151,6 +225,135 @@ def check_radians(values, option: str, flag: str, robot=None) -> None:
             )
 
 
+class _JointVector(argparse.Action):
+    """Values given as separate words, comma-separated, or both, each a finite number."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        words = [w for v in values for w in v.split(",")]
+        if any(not w.strip() for w in words):
+            raise argparse.ArgumentError(
+                self, f"expected numbers separated by spaces or commas, got '{' '.join(values)}'"
+            )
+        try:
+            setattr(namespace, self.dest, [Number()(w) for w in words])
+        except argparse.ArgumentTypeError as e:
+            raise argparse.ArgumentError(self, str(e)) from None
+
+
+def joint_vector(p, *flags: str, help: str, **kwargs):
+    """A joint vector option: values as separate words, comma-separated, or both (a list of
+    floats; :func:`joint_values` checks its length against the robot)."""
+    kwargs.setdefault("metavar", "V")
+    return p.add_argument(
+        *flags,
+        nargs="+",
+        action=_JointVector,
+        help=f"{help} (one value per joint, separated by spaces or commas)".replace("%", "%%"),
+        **kwargs,
+    )
+
+
+def joint_values(values, n: int, what: str, *, broadcast: bool = False) -> list[float]:
+    """The values of a :func:`joint_vector` option for ``n`` joints (one value for all of them
+    when ``broadcast``), or a one-line error naming the option."""
+    values = list(values)
+    if broadcast and len(values) == 1:
+        return values * n
+    if len(values) != n:
+        one = " (or one for all)" if broadcast else ""
+        raise UsageError(f"{what} needs {n} values{one}, got {len(values)}")
+    return values
+
+
+class _Item(argparse.Action):
+    """Stores its value as item ``index`` of the list ``dest`` (options that each set one part
+    of a setting, such as ``--position-noise`` and ``--velocity-noise``)."""
+
+    def __init__(self, option_strings, dest, *, index: int, **kwargs):
+        super().__init__(option_strings, dest, **kwargs)
+        self.index = index
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        items = list(getattr(namespace, self.dest))
+        items[self.index] = values
+        setattr(namespace, self.dest, items)
+
+
+def item(p, *flags: str, dest: str, index: int, default: list, **kwargs):
+    """A :func:`number` option that sets item ``index`` of the list option ``dest``, whose
+    value is ``default`` unless given."""
+    action = number(
+        p, *flags, dest=dest, action=_Item, index=index, default=default[index], **kwargs
+    )
+    action.default = list(default)
+    return action
+
+
+class _Deprecated(argparse.Action):
+    """A former spelling of an option, hidden from the help: does what the option it stands for
+    does, and leaves a note for :func:`deprecation_notes`."""
+
+    def __init__(self, option_strings, dest, *, target=None, new="", **kwargs):
+        kwargs.setdefault("help", argparse.SUPPRESS)
+        super().__init__(option_strings, dest, default=argparse.SUPPRESS, **kwargs)
+        self.target, self.new = target, new
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        notes = getattr(namespace, "_notes", None) or []
+        notes.append(
+            f"{option_string} is deprecated and will be removed in the next release; use {self.new}"
+        )
+        namespace._notes = notes
+        if self.target is not None:
+            self.target(parser, namespace, values, self.new)
+        else:
+            setattr(namespace, self.dest, values)
+
+
+def deprecated(p, old: str, target: argparse.Action | None = None, *, new: str = "", **kwargs):
+    """Keeps ``old``, a former spelling, for one release: as ``target`` (the action of the new
+    option, whose dest, arity and type it shares), or, when one old option stands for several
+    new ones, as a plain store of ``kwargs`` (dest, nargs, type) under the words ``new``."""
+    if target is not None:
+        new = new or max(target.option_strings, key=len)
+        kwargs = dict(
+            dest=target.dest,
+            nargs=target.nargs,
+            type=target.type,
+            choices=target.choices,
+            const=target.const,
+            metavar=target.metavar,
+        )
+    return p.add_argument(old, action=_Deprecated, target=target, new=new, **kwargs)
+
+
+def controller_period(p, *, help: str, low: float = 0, high: float = 10, **kwargs):
+    """``--controller-period`` (the sample period of a controller, in seconds; ``args.period``),
+    with its former spelling ``--period``."""
+    period = number(
+        p,
+        "--controller-period",
+        dest="period",
+        low=low,
+        high=high,
+        low_open=low == 0,
+        help=help,
+        **kwargs,
+    )
+    deprecated(p, "--period", period)
+    return period
+
+
+def deprecation_notes(args: argparse.Namespace) -> list[str]:
+    """The notes the former spellings on a command line left."""
+    return list(getattr(args, "_notes", None) or [])
+
+
+def print_deprecation_notes(args: argparse.Namespace) -> None:
+    for note in deprecation_notes(args):
+        print(f"mindyn: note: {note}", file=sys.stderr)
+
+
 def seed(p, *flags: str, default: int = 0, help: str = "random seed") -> None:
     number(p, *flags, low=0, high=MAX_SEED, integer=True, default=default, help=help)
 
@@ -170,8 +373,20 @@ def _check_parent(path: Path, text: str) -> None:
         raise argparse.ArgumentTypeError(f"'{text}': the folder '{anc}' is not writable")
 
 
+class OutputPath(str):
+    """An output option's value (a ``str``), marked as a file or a folder to write, so that
+    :func:`prepare_outputs` finds every output of a command line."""
+
+    folder = False
+
+
+class OutputFolder(OutputPath):
+    folder = True
+
+
 def output_file(text: str) -> str:
-    """An argparse ``type``: a file to write (its folder is created when missing)."""
+    """An argparse ``type``: a file to write (its folder is created when missing, by
+    :func:`prepare_outputs`)."""
     if not text.strip():
         raise argparse.ArgumentTypeError("expected a file name to write, got an empty string")
     path = Path(text)
@@ -180,7 +395,7 @@ def output_file(text: str) -> str:
     if path.exists() and not os.access(path, os.W_OK):
         raise argparse.ArgumentTypeError(f"'{text}' exists and is not writable")
     _check_parent(path, text)
-    return text
+    return OutputPath(text)
 
 
 output_file.__name__ = "file name"
@@ -197,10 +412,43 @@ def output_dir(text: str) -> str:
         raise argparse.ArgumentTypeError(f"the folder '{text}' is not writable")
     if not path.exists():
         _check_parent(path, text)
-    return text
+    return OutputFolder(text)
 
 
 output_dir.__name__ = "folder"
+
+
+def declared_outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
+    """The outputs a command line names: ``(option, path, is_folder)`` for every value of an
+    option typed :func:`output_file` or :func:`output_dir`."""
+    found = []
+    for dest, value in vars(args).items():
+        for v in value if isinstance(value, list) else [value]:
+            if isinstance(v, OutputPath):
+                found.append(("--" + dest.replace("_", "-"), Path(v), v.folder))
+    return found
+
+
+def prepare_outputs(args: argparse.Namespace) -> None:
+    """The one rule for the outputs of every command, applied before the command writes
+    anything: no two outputs may be the same file (compared as resolved paths), and the missing
+    folders of each are created. The outputs are :func:`declared_outputs`, or those that the
+    command's ``outputs(args)`` (a parser default) lists when it writes files the options only
+    imply (``codegen -o NAME``: NAME.c and NAME.h)."""
+    outputs = args.outputs(args) if callable(getattr(args, "outputs", None)) else None
+    outputs = declared_outputs(args) if outputs is None else outputs
+    seen: dict[Path, tuple[str, Path]] = {}
+    for option, path, _ in outputs:
+        key = path.resolve()
+        if key in seen:
+            other, first = seen[key]
+            raise UsageError(
+                f"{option} '{path}' is also the file {other} writes ('{first}'): give each "
+                "output its own file"
+            )
+        seen[key] = (option, path)
+    for _, path, folder in outputs:
+        (path if folder else path.parent).mkdir(parents=True, exist_ok=True)
 
 
 def robot_help() -> str:

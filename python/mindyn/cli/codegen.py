@@ -14,15 +14,22 @@ from .._core import ModelError
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, generate, generate_controller, plcopen_project
 from ..robot import load
-from .args import add_joint_terms, add_offset, add_robot, joint_terms, output_file
+from .args import (
+    add_command,
+    add_joint_terms,
+    add_offset,
+    add_robot,
+    controller_period,
+    joint_terms,
+    output_file,
+)
 from .method import base_method
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser(
+    p = add_command(
+        subparsers,
         "codegen",
-        help="generate inverse dynamics, gravity torque, base regressor or a controller step "
-        "(adaptive PD, computed torque, gravity compensation) in C or ST",
         description="Generate the Newton-Euler recursion customised to the robot, in its base "
         "parameters, as C99 (header + source) or IEC 61131-3 Structured Text, and print its "
         "operation counts beside those of the classical-parameter recursion generated the "
@@ -86,12 +93,10 @@ def register(subparsers) -> None:
         "--gains",
         metavar="FILE",
         help="YAML with kd, lambda, gamma, nu, kp (as 'mindyn track --gains' reads it; default: "
-        "the ZCR07S study's gains, as 'mindyn track' uses them); --params gives the initial "
+        "the robot's default gains, as 'mindyn track' uses them); --params gives the initial "
         "estimate",
     )
-    c.add_argument(
-        "--period", type=float, default=0.004, help="controller period in s (default 0.004)"
-    )
+    controller_period(c, default=0.004, help="controller period [s]")
     c.add_argument(
         "--torque-limit",
         metavar="effort|NM",
@@ -119,16 +124,35 @@ def register(subparsers) -> None:
         type=output_file,
         help="C: FILE.c and FILE.h; ST: FILE",
     )
-    p.set_defaults(func=cmd_codegen)
+    p.set_defaults(func=cmd_codegen, outputs=_outputs)
+
+
+def _output_base(args: argparse.Namespace) -> Path:
+    """``-o``'s path without the ``.c``/``.h`` a C output may be given with."""
+    out = Path(args.output)
+    return out.with_suffix("") if args.lang == "c" and out.suffix in (".c", ".h") else out
+
+
+def _outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
+    """The files codegen writes (C: NAME.c and NAME.h; ST: the file; the PLCopen XML), for the
+    command line's one rule on outputs."""
+    out = _output_base(args)
+    files = (
+        [
+            ("--output", out.with_suffix(".c"), False),
+            ("--output", out.parent / (out.name + ".h"), False),
+        ]
+        if args.lang == "c"
+        else [("--output", out, False)]
+    )
+    if args.plcopen:
+        files.append(("--plcopen", Path(args.plcopen), False))
+    return files
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
-    out = Path(args.output)
-    if not out.parent.is_dir():
-        raise ModelError(f"output folder '{out.parent}' does not exist")
-    if args.lang == "c" and out.suffix in (".c", ".h"):
-        out = out.with_suffix("")
+    out = _output_base(args)
     header = out.name + ".h"
     same = dict(
         lang=args.lang,
@@ -232,7 +256,9 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
     if args.numeric:
         raise ModelError("--numeric does not apply to controller steps (p is their state)")
     if not (math.isfinite(args.period) and args.period > 0):
-        raise ModelError(f"--period must be a positive number of seconds, got {args.period:g}")
+        raise ModelError(
+            f"--controller-period must be a positive number of seconds, got {args.period:g}"
+        )
     if args.gains:
         gains = control.load_gains(args.gains, robot, period=args.period, rotor=True)
     else:

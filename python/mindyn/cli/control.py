@@ -6,12 +6,28 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from ..base import base_parameters
 from ..robot import load
-from .args import add_robot, check_radians, number, output_dir, output_file, seed
+from .args import (
+    ZCR07S_STUDY,
+    Number,
+    add_command,
+    add_robot,
+    check_radians,
+    controller_period,
+    deprecated,
+    item,
+    joint_values,
+    joint_vector,
+    number,
+    output_dir,
+    output_file,
+    seed,
+)
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
@@ -35,8 +51,8 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     if args.cycle is not None and args.cycle < 20 * period:
         raise ValueError(
             f"--cycle {args.cycle:g} s: expected at least 20 controller periods "
-            f"(--period {period:g} s), so that the reference's third harmonic is sampled "
-            "about 7 times per oscillation"
+            f"(--controller-period {period:g} s), so that the reference's third harmonic is "
+            "sampled about 7 times per oscillation"
         )
     if args.trajectory:
         reference = load_reference(args.trajectory, n)
@@ -54,12 +70,12 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         check_steps(duration, 1.0 / period, args.substeps if args.integrator == "rk4" else 1)
     except ValueError as e:
         raise ValueError(
-            f"--duration {duration:g} with --period {period:g}: {e}"
+            f"--duration {duration:g} with --controller-period {period:g}: {e}"
             + (" (the duration is two cycles unless given)" if args.duration is None else "")
         ) from None
     if duration < period:
         raise ValueError(
-            f"--duration {duration:g} s is shorter than one controller --period {period:g} s"
+            f"--duration {duration:g} s is shorter than one --controller-period {period:g} s"
         )
     if args.controller == "computed-torque" and args.gains is None and args.param_error is None:
         return reference, ref_text, duration, cycle, None, None  # the simulator's default
@@ -186,12 +202,11 @@ def cmd_ik(args: argparse.Namespace) -> int:
     T = pose_from_xyz_rpy(args.xyz, np.asarray(args.rpy, dtype=float) * scale)
     q0 = None
     if args.q0 is not None:
-        if len(args.q0) != robot.n:
-            raise ValueError(f"--q0 needs {robot.n} values, got {len(args.q0)}")
         revolute = np.array([t == "revolute" for t in robot.joint_types])
+        q0 = np.asarray(joint_values(args.q0, robot.n, "--q0"), dtype=float)
         if not args.deg:
-            check_radians(args.q0, "--q0", "--deg", robot)
-        q0 = np.where(revolute, np.asarray(args.q0, dtype=float) * scale, args.q0)
+            check_radians(q0, "--q0", "--deg", robot)
+        q0 = np.where(revolute, q0 * scale, q0)
     r = ik_solve(
         robot,
         T,
@@ -200,21 +215,19 @@ def cmd_ik(args: argparse.Namespace) -> int:
         max_time=args.timeout,
         seed=args.seed,
     )
+    doc = {
+        "robot": robot.name,
+        "success": r.success,
+        "status": r.status,
+        "q": r.q.tolist(),
+        "pose_error": r.error,
+        "iterations": r.iterations,
+        "attempts": r.attempts,
+    }
+    if args.json:
+        Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
     if args.format == "json":
-        print(
-            json.dumps(
-                {
-                    "robot": robot.name,
-                    "success": r.success,
-                    "status": r.status,
-                    "q": r.q.tolist(),
-                    "pose_error": r.error,
-                    "iterations": r.iterations,
-                    "attempts": r.attempts,
-                },
-                indent=2,
-            )
-        )
+        print(json.dumps(doc, indent=2))
     else:
         print(
             f"{robot.name}: {r.status} (pose error {r.error:.3g}, {r.iterations} iterations, "
@@ -276,8 +289,20 @@ def add_closed_loop_args(p, default: str) -> None:
         "--param-error has the true parameters",
     )
     number(p, "--substeps", low=1, high=1000, integer=True, default=4, help="RK4 steps per period")
-    p.add_argument("--integrator", choices=["rk4", "scipy"], default="rk4")
-    p.add_argument("--torque-limit", choices=["effort", "none"], default="none")
+    p.add_argument(
+        "--integrator",
+        choices=["rk4", "scipy"],
+        default="rk4",
+        help="rk4: fixed-step Runge-Kutta, --substeps steps per controller period (default); "
+        "scipy: scipy's adaptive RK45 between controller samples",
+    )
+    p.add_argument(
+        "--torque-limit",
+        choices=["effort", "none"],
+        default="none",
+        help="effort: saturate each joint's torque at the robot's effort limit; none: no limit "
+        "(default)",
+    )
     p.add_argument(
         "--report",
         metavar="DIR",
@@ -288,14 +313,14 @@ def add_closed_loop_args(p, default: str) -> None:
 
 def register(sub) -> None:
     """Adds ``track`` and ``ik`` to the ``mindyn`` subcommands."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "track",
-        help="closed-loop joint tracking simulation: adaptive PD, computed torque or PD",
         description="Simulates the robot (true parameters with rotor inertia and friction, RK4) "
-        "under a controller sampled every --period seconds with zero-order hold. Adaptive PD is "
-        "the Slotine-Li controller on the base parameters: tau = Y p_hat - K_D s, "
+        "under a controller sampled every --controller-period seconds with zero-order hold. "
+        "Adaptive PD is the Slotine-Li controller on the base parameters: tau = Y p_hat - K_D s, "
         "dp_hat/dt = -Gamma Y^T s / (1 + nu |Y|^2), s = de + Lambda e, e = q - q_d. Default gains: "
-        "the ZCR07S study's "
+        f"those of {ZCR07S_STUDY} "
         "for zcr07s (K_D = diag(400, 350, 130, 22, 9, 2), Lambda = diag(10, 10, 10, 30, 30, 25), "
         "Gamma = 1) when their sampled loops are stable at --period, otherwise derived from the "
         "mass matrix sampled over the workspace and the period: Lambda = 10 and K_D = 40 x the "
@@ -308,12 +333,8 @@ def register(sub) -> None:
     add_closed_loop_args(p, "adaptive-pd")
     from ..control.simulation import MAX_STEPS
 
-    number(
+    controller_period(
         p,
-        "--period",
-        low=0,
-        high=10,
-        low_open=True,
         default=0.004,
         help=f"controller period [s]; duration / period x substeps at most {MAX_STEPS:,}",
     )
@@ -326,15 +347,28 @@ def register(sub) -> None:
         help="simulated time [s] (default: two cycles, or the CSV's)",
     )
     seed(p, "--seed", help="seed of the estimate error and noise")
-    number(
+    for index, (flag, unit) in enumerate(
+        [("--position-noise", "rad, m"), ("--velocity-noise", "rad/s, m/s")]
+    ):
+        kind = flag[2:].split("-")[0]
+        item(
+            p,
+            flag,
+            dest="noise",
+            index=index,
+            low=0,
+            high=10,
+            default=[0.0, 0.0],
+            metavar="SD",
+            help=f"{kind} sensor noise standard deviation [{unit}]",
+        )
+    deprecated(
         p,
         "--noise",
-        low=0,
-        high=10,
+        new="--position-noise SD --velocity-noise SD",
+        dest="noise",
         nargs=2,
-        default=[0.0, 0.0],
-        metavar=("SIGMA_Q", "SIGMA_DQ"),
-        help="sensor noise standard deviations [rad, rad/s] (default 0 0)",
+        type=Number(0, 10),
     )
     p.add_argument(
         "-o",
@@ -347,9 +381,9 @@ def register(sub) -> None:
     )
     p.set_defaults(func=cmd_track)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "ik",
-        help="position inverse kinematics of the tool frame, inside the joint limits",
         description="Damped least squares (Levenberg-Marquardt) with random restarts inside the "
         "limits. Exit status 1 when no solution is found.",
     )
@@ -363,23 +397,36 @@ def register(sub) -> None:
         metavar=("R", "P", "Y"),
         help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention)",
     )
-    number(p, "--q0", nargs="+", help="start (default: middle of the limits)")
+    joint_vector(p, "--q0", help="start [rad, m] (default: the middle of the limits)")
     p.add_argument(
         "--deg",
         action="store_true",
-        help="--rpy and --q0 (of revolute joints) in degrees; without it they are in radians, "
+        help="--rpy and the revolute joints of --q0 in degrees; without it they are in radians, "
         "and values outside [-2pi, 2pi] are refused",
     )
-    number(
+    tolerance = number(
         p,
-        "--tolerance",
+        "--pose-tolerance",
+        dest="tolerance",
         low=0,
         high=1,
         low_open=True,
         default=1e-5,
-        help="pose error [m, rad]",
+        help="largest pose error |log6(T_target^-1 T)| of a solution [m, rad]",
     )
+    deprecated(p, "--tolerance", tolerance)
     number(p, "--timeout", low=0, high=3600, low_open=True, default=0.5, help="CPU-time budget [s]")
     seed(p, "--seed", default=42, help="seed of the restart points")
-    p.add_argument("--format", choices=["table", "json"], default="table")
+    p.add_argument(
+        "--format",
+        choices=["table", "json"],
+        default="table",
+        help="what is printed: the joint values (table, the default) or the JSON document",
+    )
+    p.add_argument(
+        "--json",
+        metavar="FILE",
+        type=output_file,
+        help="also write the JSON document (as --format json prints it) to FILE",
+    )
     p.set_defaults(func=cmd_ik)

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..base import base_parameters
 from ..robot import bundled_robots, load
-from .args import number, output_dir, robot_arg, seed
+from .args import ZCR07S_STUDY, add_command, deprecated, number, output_dir, robot_arg, seed
 
 
 def _step(no: int, title: str) -> float:
@@ -198,12 +198,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
         )
     print(f"    noise sd (reference) [N m]:               {_joints(sd)}")
     if robot.name == "zcr07s":
+        print(f"    RMS torque errors on the real robot in {ZCR07S_STUDY}, Table 6:")
         print(
-            "    ZCR07S study Table 6 (real robot), excitation:  "
+            "    ZCR07S study, excitation [N m]:           "
             + _joints(ZCR07S_STUDY_TABLE6["excitation"])
         )
         print(
-            "    ZCR07S study Table 6 (real robot), validation:  "
+            "    ZCR07S study, validation [N m]:           "
             + _joints(ZCR07S_STUDY_TABLE6["validation"])
         )
     print(
@@ -252,10 +253,9 @@ def _codegen(robot_arg: str, out: Path) -> None:
 
 def register(sub) -> None:
     """Adds ``demo`` to the ``mindyn`` subcommands."""
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "demo",
-        help="the whole chain on a robot: base parameters, excitation, simulated measurement, "
-        "identification, validation, generated code",
         description="Runs the identification chain end to end on a robot (default zcr07s) and "
         "puts every file in one folder: base parameters, an optimised excitation trajectory, a "
         "simulated noisy measurement of the robot tracking it (and of a validation trajectory), "
@@ -284,16 +284,19 @@ def register(sub) -> None:
         high=30,
         integer=True,
         default=10,
-        help="harmonics of the excitation (the ZCR07S study uses 5, enough for the dynamic "
+        help=f"harmonics of the excitation ({ZCR07S_STUDY} uses 5, enough for the dynamic "
         "model but not for the energy model, whose regressor needs richer motion)",
     )
-    number(
+    noise = number(
         p,
-        "--noise",
+        "--torque-noise",
+        dest="noise",
+        metavar="PERCENT",
         low=0,
         high=100,
         default=1.0,
         help="torque noise sd in % of each joint's effort limit",
     )
+    deprecated(p, "--noise", noise)
     seed(p, "--seed")
     p.set_defaults(func=cmd_demo)

@@ -8,14 +8,14 @@ import math
 from .._core import ModelError
 from ..export import classical_terms, write_urdf, write_yaml
 from ..robot import load
-from .args import add_robot, output_file
+from .args import add_command, add_robot, output_file
 from .quiet import warnings_after_success
 
 
 def register(subparsers) -> None:
-    p = subparsers.add_parser(
+    p = add_command(
+        subparsers,
         "export",
-        help="write identified classical parameters into the robot's URDF or YAML table",
         description="Write the classical parameters of an identification JSON (its 'classical' "
         "map, from 'mindyn identify --consistent --json') into a copy of the robot's "
         "description: a URDF (inertials, joint damping and friction; rotor inertia, friction "

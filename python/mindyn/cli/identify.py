@@ -15,11 +15,17 @@ import numpy as np
 from ..base import base_parameters
 from ..robot import load
 from .args import (
+    ZCR07S_STUDY,
+    add_command,
     add_joint_terms,
     add_offset,
     add_robot,
     check_radians,
+    controller_period,
+    deprecated,
     joint_terms,
+    joint_values,
+    joint_vector,
     number,
     output_dir,
     output_file,
@@ -27,20 +33,6 @@ from .args import (
 )
 from .export import add_description_outputs, check_description_kind, write_description
 from .quiet import warnings_after_success
-
-
-def _floats(text: str, n: int, what: str) -> np.ndarray:
-    try:
-        v = np.array([float(x) for x in text.split(",")])
-    except ValueError:
-        raise ValueError(f"{what}: '{text}' is not a comma-separated list of numbers") from None
-    if not np.all(np.isfinite(v)):
-        raise ValueError(f"{what}: '{text}' has a value that is not a finite number")
-    if v.size == 1:
-        v = np.full(n, v[0])
-    if v.size != n:
-        raise ValueError(f"{what}: {v.size} values for {n} joints")
-    return v
 
 
 # ---------------------------------------------------------------------------------------------
@@ -67,12 +59,12 @@ def cmd_excite(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     start = None
     if args.start:
-        start = _floats(args.start, robot.n, "--start")
+        start = np.array(joint_values(args.start, robot.n, "--start", broadcast=True))
         if args.degrees:
             rev = np.array([t == "revolute" for t in robot.joint_types])
             start = np.where(rev, np.radians(start), start)
         else:
-            check_radians(start, "--start", "--degrees", robot)
+            check_radians(start, "--start", "--deg", robot)
     res = optimize_excitation(
         robot,
         harmonics=args.harmonics,
@@ -198,8 +190,8 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
     """The log at ``path`` (torques from the ``currents`` file when given) as a list of logs;
     with ``--filter lowpass`` cut at its breaks (:func:`~mindyn.identification.preprocess.
     split_at_gaps`) and each segment through the data path of :func:`~mindyn.identification.
-    preprocess.preprocess` (``cutoff`` overrides ``--cutoff``; ``--periods`` / ``--period``
-    only when ``periodic``); otherwise one log."""
+    preprocess.preprocess` (``cutoff`` overrides ``--cutoff``; ``--periods`` /
+    ``--excitation-period`` only when ``periodic``); otherwise one log."""
     from dataclasses import replace
 
     from ..identification.currents import attach_currents
@@ -214,8 +206,8 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
         segments = split_at_gaps(raw)
         if len(segments) > 1 and (args.periods or args.period):
             raise ValueError(
-                f"--periods/--period: {path} has {len(segments) - 1} break(s) in its time "
-                "stamps; a periodic log to be averaged must be one continuous recording"
+                f"--periods/--excitation-period: {path} has {len(segments) - 1} break(s) in its "
+                "time stamps; a periodic log to be averaged must be one continuous recording"
             )
         return [
             preprocess(
@@ -230,7 +222,11 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
             for seg in segments
         ]
 
-    gain = _floats(args.drive_gain, robot.n, "--drive-gain") if args.drive_gain else None
+    gain = (
+        np.array(joint_values(args.drive_gain, robot.n, "--drive-gain", broadcast=True))
+        if args.drive_gain
+        else None
+    )
     if Path(path).is_dir() and not is_rosbag(path):
         raise DataError(f"'{path}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
     unit = None if currents else args.torque_unit
@@ -304,7 +300,7 @@ def _check_lowpass_options(args: argparse.Namespace) -> None:
     if args.filter != "lowpass":
         for flag, value in (
             ("--periods", args.periods),
-            ("--period", args.period),
+            ("--excitation-period", args.period),
             ("--edge", args.edge),
             ("--no-decimate", args.no_decimate or None),
         ):
@@ -985,11 +981,12 @@ def _add_data_options(p) -> None:
         "drive table) (default: the unit the CSV header gives, as in tau1[permille], or current "
         "for columns i1..in, else Nm)",
     )
-    p.add_argument(
+    joint_vector(
+        p,
         "--drive-gain",
-        metavar="K1,...,Kn",
-        help="joint-side drive gains [N m/A] that turn motor currents into joint torques (one "
-        "value for all joints or one per joint); default: the robot's drive table",
+        metavar="K",
+        help="joint-side drive gains [N m/A] that turn motor currents into joint torques (or "
+        "one value for all joints; default: the robot's drive table)",
     )
     p.add_argument(
         "--currents",
@@ -1030,14 +1027,16 @@ def _add_data_options(p) -> None:
         help="lowpass: the identification log holds this many periods of a periodic excitation; "
         "they are averaged sample by sample",
     )
-    number(
+    period = number(
         g,
-        "--period",
+        "--excitation-period",
+        dest="period",
         low=0,
         low_open=True,
         help="lowpass: period [s] of a periodic excitation; the whole periods the "
         "identification log holds are averaged",
     )
+    deprecated(g, "--period", period)
     number(
         p,
         "--edge",
@@ -1062,9 +1061,9 @@ def register(sub) -> None:
     from ..identification.excitation import MAX_TRAJECTORY_ROWS
     from .control import add_closed_loop_args
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "excite",
-        help="optimised Fourier excitation trajectory for identification",
         description="Finite Fourier series per joint, zero velocity and acceleration at start and "
         "end, optimised (SLSQP, several random starts) for a conditioning criterion of the "
         "stacked base regressor under the robot's position, velocity and acceleration limits. "
@@ -1086,8 +1085,8 @@ def register(sub) -> None:
         "--criterion",
         choices=["cond", "logdet", "hadamard"],
         default="cond",
-        help="condition number (default), D-optimality, or the Hadamard-bound ratio of the "
-        "ZCR07S study",
+        help="condition number (default), D-optimality, or the Hadamard-bound ratio of "
+        + ZCR07S_STUDY,
     )
     number(p, "--starts", low=1, high=100, integer=True, default=3, help="random starting guesses")
     seed(p, "--seed")
@@ -1120,8 +1119,16 @@ def register(sub) -> None:
     )
     p.add_argument("--rotor", action="store_true", help="base parameters with rotor inertia")
     p.add_argument("--friction", action="store_true", help="base parameters with friction")
-    p.add_argument("--start", help="prescribed start position q1,...,qn (rad, m)")
-    p.add_argument("--degrees", action="store_true", help="--start of revolute joints in degrees")
+    joint_vector(
+        p, "--start", help="prescribed start position [rad, m] (or one value for all joints)"
+    )
+    deg = p.add_argument(
+        "--deg",
+        dest="degrees",
+        action="store_true",
+        help="the revolute joints of --start in degrees",
+    )
+    deprecated(p, "--degrees", deg)
     number(
         p,
         "--rate",
@@ -1143,9 +1150,9 @@ def register(sub) -> None:
     )
     p.set_defaults(func=cmd_excite)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "simulate",
-        help="simulated joint log along a trajectory (stand-in for a robot)",
         description="Produces what a joint controller would log (t, q, dq, tau): the robot with "
         "its true parameters integrated (RK4) under a tracking controller, or torques from "
         "inverse dynamics along the reference (--mode inverse); optional sensor noise and "
@@ -1155,19 +1162,19 @@ def register(sub) -> None:
         "K_D = 40; a sum of sines within the limits when no --trajectory is given).",
     )
     add_robot(p)
-    p.add_argument("--mode", choices=["tracking", "inverse"], default="tracking")
+    p.add_argument(
+        "--mode",
+        choices=["tracking", "inverse"],
+        default="tracking",
+        help="tracking: the robot integrated under the controller (default); inverse: torques "
+        "from inverse dynamics along the reference, no controller",
+    )
     add_closed_loop_args(p, "computed-torque")
     g = p.add_mutually_exclusive_group()
     number(
         g, "--rate", low=0, high=1e6, low_open=True, default=250.0, help="control and log rate [Hz]"
     )
-    number(
-        g,
-        "--period",
-        low=1e-6,
-        high=1e3,
-        help="control and log period [s] (1 / rate)",
-    )
+    controller_period(g, low=1e-6, high=1e3, help="control and log period [s] (1 / rate)")
     number(
         p,
         "--duration",
@@ -1210,9 +1217,9 @@ def register(sub) -> None:
     )
     p.set_defaults(func=cmd_simulate)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "identify",
-        help="identify base parameters from joint logs (dynamic, integral or energy model)",
         description="Least-squares identification of the base parameters from CSV logs "
         "(t, q1..qn, [dq1..dqn], tau1..taun) or ROS bags (sensor_msgs/JointState: position, "
         "[velocity], effort, joints matched by name), one or several fitted together, with "
@@ -1314,9 +1321,9 @@ def register(sub) -> None:
     )
     p.set_defaults(func=cmd_identify)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "identify-payload",
-        help="identify a payload fixed to the last link, with an identified arm",
         description="The 10 inertial parameters (XX XY XZ YY YZ ZZ MX MY MZ M about the last "
         "link frame's origin, in its frame) of a payload rigidly fixed to the last link, from "
         "logs with the payload: tau - tau_arm = W_last phi, with tau_arm from the identified arm "
