@@ -20,7 +20,7 @@ done
 ((test)) || pins=()
 
 apt_packages=(build-essential cmake ninja-build pkg-config python3 python3-venv python3-dev
-  libeigen3-dev liborocos-kdl-dev liburdfdom-dev libyaml-cpp-dev)
+  libeigen3-dev liborocos-kdl-dev liburdfdom-dev libyaml-cpp-dev libtinyxml-dev)
 if ((test)); then
   apt_packages+=(libgtest-dev libbenchmark-dev clang-format git valgrind)
 fi
