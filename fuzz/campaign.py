@@ -515,24 +515,17 @@ def check_estimate(doc: dict, out: str, robot_name: str = IDENT_ROBOT) -> tuple[
 # ---------------------------------------------------------------------------------------------
 # ident: consistent identification, export, payload; mutated JSON
 # ---------------------------------------------------------------------------------------------
-def mutate_json(doc, rng: random.Random, depth: int = 0):
-    """One random mutation somewhere in a JSON document."""
-    if isinstance(doc, dict) and doc and rng.random() < 0.8:
-        key = rng.choice(list(doc))
-        doc = dict(doc)
+def mutate_json(doc, rng: random.Random, path: tuple = ()):
+    """One random mutation somewhere in a JSON document: (new document, path of the changed
+    value, old value, new value)."""
+    if isinstance(doc, (dict, list)) and doc and rng.random() < 0.8:
+        key = rng.choice(list(doc)) if isinstance(doc, dict) else rng.randrange(len(doc))
+        doc = dict(doc) if isinstance(doc, dict) else list(doc)
         if rng.random() < 0.1:
-            del doc[key]
-        else:
-            doc[key] = mutate_json(doc[key], rng, depth + 1)
-        return doc
-    if isinstance(doc, list) and doc and rng.random() < 0.8:
-        doc = list(doc)
-        i = rng.randrange(len(doc))
-        if rng.random() < 0.1:
-            del doc[i]
-        else:
-            doc[i] = mutate_json(doc[i], rng, depth + 1)
-        return doc
+            old = doc.pop(key)
+            return doc, (*path, key), old, "<deleted>"
+        doc[key], where, old, new = mutate_json(doc[key], rng, (*path, key))
+        return doc, where, old, new
     choices = [
         lambda: 7,
         lambda: "7",
@@ -553,7 +546,23 @@ def mutate_json(doc, rng: random.Random, depth: int = 0):
         lambda: 0,
         lambda: -1,
     ]
-    return rng.choice(choices)()
+    new = rng.choice(choices)()
+    return new, path, doc, new
+
+
+def _json_type(v) -> str:
+    if isinstance(v, bool):
+        return "boolean"
+    if isinstance(v, (int, float)):
+        return "number"
+    return {str: "string", list: "array", dict: "object", type(None): "null"}.get(type(v), "?")
+
+
+#: Top-level keys each command reads from the identification JSON.
+READ_KEYS = {
+    "export": {"robot", "classical", "rotor", "friction", "offset"},
+    "payload": {"robot", "base_names", "base_values", "rotor", "friction", "offset"},
+}
 
 
 def _dump(doc) -> str:
@@ -571,7 +580,14 @@ def case_ident(ctx, index: int, rng: random.Random) -> Case:
     id_doc = json.loads(Path(logs["id"]).read_text())
     mutated = rng.random() < 0.8
     jfile = out.with_suffix(".json")
-    jfile.write_text(_dump(mutate_json(id_doc, rng)) if mutated else json.dumps(id_doc))
+    typo = None
+    if mutated:
+        doc, where, old, new = mutate_json(id_doc, rng)
+        jfile.write_text(_dump(doc))
+        if where and where[0] in READ_KEYS.get(kind, ()) and _json_type(old) != _json_type(new):
+            typo = f"{'/'.join(map(str, where))}: {_json_type(new)} where {_json_type(old)} was"
+    else:
+        jfile.write_text(json.dumps(id_doc))
     oracle = None
     if kind == "identify":
         opts = []
@@ -611,6 +627,8 @@ def case_ident(ctx, index: int, rng: random.Random) -> Case:
     def fn():
         code, so, se = run_cli(argv)
         cls, detail = cli_class(code, so, se)
+        if cls == "ok" and typo:
+            return "wrong", f"a value of the wrong type accepted: {typo}"[:400]
         if cls != "ok" or oracle is None:
             return cls, detail
         if oracle == "estimate":
