@@ -540,7 +540,7 @@ def mutate_json(doc, rng: random.Random, path: tuple = ()):
         lambda: 10**400,
         lambda: "nan",
         lambda: [[[[doc]]]],
-        lambda: json.loads("[" * 5000 + "]" * 5000),
+        lambda: DEEP,
         lambda: {"a": doc},
         lambda: str(doc),
         lambda: 0,
@@ -565,11 +565,11 @@ READ_KEYS = {
 }
 
 
+DEEP = "<5000 nested arrays>"  # written as text by _dump: Python's json recurses
+
+
 def _dump(doc) -> str:
-    try:
-        return json.dumps(doc, indent=None)
-    except (RecursionError, ValueError):
-        return json.dumps(str(doc))
+    return json.dumps(doc).replace(json.dumps(DEEP), "[" * 5000 + "]" * 5000)
 
 
 def case_ident(ctx, index: int, rng: random.Random) -> Case:
@@ -1118,8 +1118,13 @@ def main(argv=None) -> int:
         for target in targets:
             if time.time() - t0 > opts.budget:
                 break
-            case = make_case(ctx, target, index, opts.seed)
-            kind, detail, secs, rss = run_child(case.fn, opts.timeout, opts.rss)
+            try:
+                case = make_case(ctx, target, index, opts.seed)
+            except Exception:  # noqa: BLE001 - a defect of this tool: counted, the run goes on
+                case = Case(target, index, "drawing the case failed", None)
+                kind, detail, secs, rss = "tool", traceback.format_exc()[-600:], 0.0, 0.0
+            else:
+                kind, detail, secs, rss = run_child(case.fn, opts.timeout, opts.rss)
             counts[target][kind] += 1
             secs_by[target] += secs
             if kind == "error":
