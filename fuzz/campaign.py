@@ -1064,6 +1064,16 @@ def write_finding(out: Path, case: Case, kind: str, detail: str, seed: int, opts
     return d
 
 
+def cause(target: str, kind: str, detail: str) -> str:
+    """A grouping key for findings: the target, the class and the detail without its numbers,
+    paths and array contents."""
+    d = re.sub(r"\[[^\]]*\]", "[..]", str(detail))
+    d = re.sub(r"(/[\w.+-]+)+", "<path>", d)
+    d = re.sub(r"[-+]?(\d+\.?\d*|\.\d+)(e[-+]?\d+)?", "#", d)
+    d = d.strip().splitlines()[-1] if kind == "trace" and d.strip() else d
+    return f"{target} {kind}: {d[:110]}"
+
+
 def summary_table(counts: dict) -> str:
     cols = CLASSES
     rows = [["target", *cols, "total"]]
@@ -1135,7 +1145,14 @@ def main(argv=None) -> int:
             if kind in FINDINGS or kind == "tool":
                 d = write_finding(out, case, kind, detail, opts.seed, opts)
                 if kind in FINDINGS:
-                    findings.append({"dir": str(d), "class": kind, "detail": detail})
+                    findings.append(
+                        {
+                            "dir": str(d),
+                            "class": kind,
+                            "detail": detail,
+                            "cause": cause(target, kind, detail),
+                        }
+                    )
     log.close()
     elapsed = time.time() - t0
     table = summary_table(counts)
@@ -1153,7 +1170,12 @@ def main(argv=None) -> int:
     for t in targets:
         for msg, k in refusals[t].most_common(4):
             lines.append(f"  {t:10s} {k:4d}  {msg}")
-    lines += ["", f"{len(findings)} findings in {out / 'findings'}"]
+    lines += ["", f"{len(findings)} findings in {out / 'findings'}, by cause (one reproducer):"]
+    causes: dict = {}
+    for f in findings:
+        causes.setdefault(f["cause"], []).append(f["dir"])
+    for key, dirs in sorted(causes.items(), key=lambda kv: -len(kv[1])):
+        lines.append(f"  {len(dirs):4d}  {key}\n        {dirs[0]}")
     text = "\n".join(lines)
     (out / "summary.txt").write_text(text + "\n")
     (out / "summary.json").write_text(
