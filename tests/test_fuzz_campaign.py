@@ -1,0 +1,87 @@
+"""Smoke test of the fuzz campaign tool (fuzz/campaign.py): its classification of outcomes and
+one tiny seeded run. The campaign itself is too slow for the test suite (see fuzz/README.md)."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fuzz"))
+campaign = pytest.importorskip("campaign")
+
+
+@pytest.mark.parametrize(
+    "code, err, kind",
+    [
+        (0, "", "ok"),
+        (2, "mindyn: error: --period must be a number > 0\n", "error"),
+        (2, "usage: mindyn base ...\nmindyn: error: bad\n", "error"),
+        (2, "x.py:3: RuntimeWarning: overflow\nmindyn: error: bad\n", "unclear"),
+        (1, "Traceback (most recent call last):\n  ...\nKeyError: 1\n", "trace"),
+        (70, "mindyn: error: unexpected KeyError: 1 (a defect in mindyn)\n", "internal"),
+        (1, "mindyn: error: out of memory: the input asks for more\n", "memory"),
+    ],
+)
+def test_cli_outcomes_are_classified(code, err, kind):
+    assert campaign.cli_class(code, "", err)[0] == kind
+
+
+def _segfault():
+    os.kill(os.getpid(), signal.SIGSEGV)
+
+
+def _sleep():
+    import time
+
+    time.sleep(30)
+
+
+def _allocate():
+    import numpy as np
+
+    a = np.ones(300 << 17)  # 300 MiB, touched
+    return ("ok", str(a.sum()))
+
+
+@pytest.mark.parametrize(
+    "fn, timeout, kind", [(_segfault, 10, "crash"), (_sleep, 1, "hang"), (_allocate, 20, "memory")]
+)
+def test_child_failures_are_findings(fn, timeout, kind):
+    """A signal, a case past its timeout and a peak RSS past the limit (here 200 MiB above what
+    the test process already holds) are findings, not passes."""
+    import resource
+
+    held = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024
+    assert campaign.run_child(fn, timeout, held + 200)[0] == kind
+
+
+def test_oracle_catches_an_inconsistent_base_set():
+    """check_base compares W_b (Y pi) with Newton-Euler: a base set of another robot's geometry
+    (the same joint count and parameter layout, another regrouping) is a wrong answer."""
+    import mindyn
+    import numpy as np
+
+    robot = mindyn.load("planar3")
+    other = mindyn.base_parameters(mindyn.load("puma560_3"))
+    ok = campaign.check_base(
+        robot, mindyn.base_parameters(robot), False, False, np.random.default_rng(0)
+    )
+    assert ok[0] == "ok"
+    assert campaign.check_base(robot, other, False, False, np.random.default_rng(0))[0] == "wrong"
+
+
+def test_tiny_seeded_run(tmp_path):
+    """Two cases; the summary counts them and reruns of a case draw the same input."""
+    out = tmp_path / "run"
+    campaign.main([str(out), "--targets", "trees,api", "--count", "1", "--seed", "5"])
+    doc = json.loads((out / "summary.json").read_text())
+    assert sum(sum(c.values()) for c in doc["counts"].values()) == 2
+    first = (out / "work" / "trees-0.urdf").read_text()
+    ctx = campaign.Context(tmp_path / "again")
+    campaign.make_case(ctx, "trees", 0, 5)
+    assert (tmp_path / "again" / "work" / "trees-0.urdf").read_text() == first
