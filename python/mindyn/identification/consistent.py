@@ -13,10 +13,13 @@ same row weights -- through the base parameters ``p_b = Y pi``, subject to
 
 The residual is taken from the ``c x c`` triangle the estimation reduced the (weighted) system to,
 ``|A p_b - b|^2 = |R p_b - z|^2 + rho``, so the convex problem is small whatever the length of
-the log. It is solved with cvxpy (Clarabel; SCS if Clarabel fails, reported). The fit term is
-measured in units of the residual variance ``s^2`` of the unconstrained fit with all base
-parameters, ``|R p_b - z|^2 / s^2``: it grows by about 1 per standard deviation that the base
-parameters move along any one direction of the estimate's uncertainty.
+the log. Without a prior it is solved with cvxpy (Clarabel; SCS if Clarabel fails, reported);
+with the description's log-det prior, whose weight is chosen from the data by default
+(:mod:`~mindyn.identification.prior`), by a damped Newton descent (the cone solver as
+fallback). The fit term is measured in units of the residual variance ``s^2`` of the
+unconstrained fit with all base parameters, ``|R p_b - z|^2 / s^2``: it grows by about 1 per
+standard deviation that the base parameters move along any one direction of the estimate's
+uncertainty.
 
 Payload (:func:`identify_payload`): the 10 inertial parameters of a body fixed to the last link,
 from ``tau - tau_arm(q, dq, ddq) = W_last(q, dq, ddq) phi`` with the identified arm's torques
@@ -348,20 +351,20 @@ def consistent_estimate(
     cross-validation over contiguous blocks of ``data`` (the logs ``res`` was fitted on; see
     :mod:`~mindyn.identification.prior`), recorded in ``weight_choice``. With a prior, the
     estimate is the minimiser found by a damped Newton descent (:func:`~mindyn.identification
-    .prior.newton_prior`; the conic solver and a smooth refinement if it does not converge),
-    and ``links`` says per link whether the data or the prior determine its parameters.
-    ``W = 0``: no prior; the classical
-    parameters the data leave undetermined are then taken nearest the description. Without a
-    prior, when the unconstrained optimum (all base parameters, no pruning) has a consistent
-    classical realisation, that is the answer (its base parameters equal the least-squares
-    estimate): its realisation nearest the description when that is consistent (no solver
-    runs), else the consistent one nearest the description (one convex solve with ``Y pi =
-    p_b`` imposed). Otherwise the optimum is on the boundary of the consistent set; see
-    :data:`TIE_BREAK_SLACK` for how it is taken. With a prior, the conic solver's answer is
-    refined by a smooth descent of the same objective (:func:`_refine_with_prior`; noted with
-    the gain). After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance
-    are projected onto the positive semidefinite matrices (negative eigenvalues set to zero)
-    and ``Ia, Fv, Fc`` clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
+    .prior.newton_prior`; the conic solver and a smooth refinement if it does not converge), and
+    ``links`` says per link whether the data or the prior determine its parameters. ``W = 0``:
+    no prior; the classical parameters the data leave undetermined are then taken nearest the
+    description. Without a prior, when the unconstrained optimum (all base parameters, no
+    pruning) has a consistent classical realisation, that is the answer (its base parameters
+    equal the least-squares estimate): its realisation nearest the description when that is
+    consistent (no solver runs), else the consistent one nearest the description (one convex
+    solve with ``Y pi = p_b`` imposed). Otherwise the optimum is on the boundary of the
+    consistent set; see :data:`TIE_BREAK_SLACK` for how it is taken. With a prior, when the
+    Newton descent does not converge, the conic solver's answer is refined by a smooth descent
+    of the same objective (:func:`_refine_with_prior`; noted with the gain). After a solve,
+    pseudo-inertias with eigenvalues below zero by solver tolerance are projected onto the
+    positive semidefinite matrices (negative eigenvalues set to zero) and ``Ia, Fv, Fc`` clipped
+    at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
 
     ``progress``, a callable taking a line of text, is told each solve and refinement as it
     starts and ends (they can take seconds each)."""
