@@ -662,6 +662,11 @@ def _weight_lines(cons) -> list[str]:
                 for w, e in zip(ch["candidates"], ch["held_out_residual"])
             )
         )
+        if ch["newton_not_converged"]:
+            lines.append(
+                f"    {ch['newton_not_converged']} of the held-out fits stopped before the Newton "
+                "descent converged (their residuals are approximate)"
+            )
         if ch["at_grid_end"]:
             lines.append(
                 "    the chosen weight is at the end of the candidates: the optimum may lie "
