@@ -1150,9 +1150,10 @@ def register(sub) -> None:
         action="store_true",
         help="also estimate physically consistent classical parameters (every link's "
         "pseudo-inertia positive semidefinite, rotor inertia and friction >= 0) minimising the "
-        "same weighted residual (convex, cvxpy with Clarabel; each solve reported on stderr "
-        "when it is a terminal); JSON: classical, pseudo_inertia_min_eig, total_mass, "
-        "consistent_estimate",
+        "same weighted residual plus the description's prior (convex: a Newton descent with "
+        "the prior, cvxpy with Clarabel without; each solve reported on stderr when it is a "
+        "terminal); the consistent estimate's errors are the headline; JSON: classical, "
+        "pseudo_inertia_min_eig, total_mass, consistent_estimate",
     )
     number(
         p,
@@ -1164,7 +1165,8 @@ def register(sub) -> None:
         "from the description's; the fit term is in units of the noise variance, so W = 1 makes "
         "a divergence of 1 cost as much as one standard deviation of the fit; 0: no prior; "
         f"default: chosen from the data by {FOLDS}-fold cross-validation over contiguous time "
-        f"blocks among {', '.join(f'{w:g}' for w in CANDIDATES)} (reported)",
+        f"blocks among {', '.join(f'{w:g}' for w in CANDIDATES)}, the largest whose held-out "
+        "residual is within one standard error of the smallest (reported)",
     )
     add_description_outputs(p, "identify")
     number(
