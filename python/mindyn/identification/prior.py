@@ -38,6 +38,7 @@ import math
 import numpy as np
 import scipy.linalg as sla
 
+from .._threads import single_threaded_blas
 from .errors import IdentificationError
 
 #: Candidate prior weights (units: one divergence costs W noise variances of the fit): a
@@ -78,14 +79,19 @@ class PriorProblem:
         self.nonneg = layout.extra[layout.nonneg]
         self.J0inv = [0.5 * (A + A.T) for A in (np.linalg.inv(J0) for J0 in J0s)]
         self.E = _basis()
+        self._E16 = self.E.reshape(10, 16)
         self.tr0 = [np.einsum("ij,aji->a", Ji, self.E) for Ji in self.J0inv]
+
+    def J(self, p) -> np.ndarray:
+        """The pseudo-inertia of a link's 10 parameters."""
+        return (p @ self._E16).reshape(4, 4)
 
     def feasible(self, pi) -> bool:
         if np.any(pi[self.nonneg] <= 0):
             return False
         for ix in self.links:
             try:
-                np.linalg.cholesky(np.tensordot(pi[ix], self.E, 1))
+                np.linalg.cholesky(self.J(pi[ix]))
             except np.linalg.LinAlgError:
                 return False
         return True
@@ -98,7 +104,7 @@ class PriorProblem:
         """``sum_l d(J_l, J0_l)`` (the log-det divergence, 0 at the description)."""
         out = 0.0
         for ix, Ji in zip(self.links, self.J0inv):
-            A = Ji @ np.tensordot(pi[ix], self.E, 1)
+            A = Ji @ self.J(pi[ix])
             sign, logdet = np.linalg.slogdet(A)
             out += -logdet + float(np.trace(A)) - 4.0 if sign > 0 else math.inf
         return out
@@ -106,7 +112,7 @@ class PriorProblem:
     def value(self, pi, W, mu) -> float:
         f = self.fit(pi)
         for ix, t0 in zip(self.links, self.tr0):
-            sign, logdet = np.linalg.slogdet(np.tensordot(pi[ix], self.E, 1))
+            sign, logdet = np.linalg.slogdet(self.J(pi[ix]))
             if sign <= 0:
                 return math.inf
             f += W * (-logdet + float(t0 @ pi[ix]))
@@ -122,7 +128,7 @@ class PriorProblem:
         g = self.Q @ pi - self.c
         H = self.Q.copy()
         for ix, t0 in zip(self.links, self.tr0):
-            Jinv = np.linalg.inv(np.tensordot(pi[ix], self.E, 1))
+            Jinv = np.linalg.inv(self.J(pi[ix]))
             A = Jinv @ self.E  # (10, 4, 4)
             g[ix] += W * (t0 - np.einsum("aii->a", A))
             H[np.ix_(ix, ix)] += W * np.einsum("aij,bji->ab", A, A)
@@ -221,6 +227,7 @@ def _cut(count: int, folds: int) -> np.ndarray:
     return np.minimum((np.arange(count) * folds) // max(count, 1), folds - 1)
 
 
+@single_threaded_blas
 def block_triangles(res, data, folds: int = FOLDS) -> np.ndarray:
     """The fit's weighted least-squares problem split into ``folds`` blocks of contiguous time
     (block ``k``: the ``k``-th of ``folds`` consecutive parts of every log): triangles ``S_k``,
