@@ -23,16 +23,19 @@ also prints the error against the torques as logged (``raw``) and on the moving 
 refuses is reported as such.
 
 With ``--consistent`` each command also gets ``--consistent`` (and ``--prior-weight W`` when
-given), and a second table gives, per case: the smallest pseudo-inertia eigenvalue of the
-consistent estimate over all links, the validation error of the consistent estimate against the
-unconstrained one (target: at most 1.1 times), the total mass, the solver's time and the whole
-command's wall time (target for the Panda: 10 s), the smallest mass-matrix eigenvalue over the
-data, and a forward simulation of the consistent model (RK4, computed torque with the same
-model, the log's own rate) along the first identification log: ``stable`` when it stays finite
-(else ``DIVERGED``) and its largest tracking error [rad] is at most 0.05 rad or twice that of
-the same simulation of the description's model (in parentheses; the torque held over a sample
-period of the log and the Coulomb feedforward on the reference velocity leave errors of this
-size with any model), ``WORSE`` when finite but beyond that.
+given; by default the command chooses it from the data), each case prints the weight and, per
+link, the consistent estimate's mass with its standard deviation beside the description's and
+whether the data or the prior determine it (target: within a factor 3 of the description's, or
+determined by the data), and a second table gives, per case: the smallest pseudo-inertia
+eigenvalue of the consistent estimate over all links, the validation error of the consistent
+estimate against the unconstrained one (target: at most 1.1 times), the total mass, the solver's
+time and the whole command's wall time (target for the Panda: 10 s), the smallest mass-matrix
+eigenvalue over the data, and a forward simulation of the consistent model (RK4, computed torque
+with the same model, the log's own rate) along the first identification log: ``stable`` when it
+stays finite (else ``DIVERGED``) and its largest tracking error [rad] is at most 0.05 rad or
+twice that of the same simulation of the description's model (in parentheses; the torque held
+over a sample period of the log and the Coulomb feedforward on the reference velocity leave
+errors of this size with any model), ``WORSE`` when finite but beyond that.
 
 Run: ``.venv/bin/python bench/bench_real_identification.py DIR [--no-offset] [--consistent
 [--prior-weight W]]``.
@@ -119,7 +122,9 @@ def main() -> int:
     ap.add_argument("dir", type=Path, help="folder with panda/, kuka_lwr4/, ur10e/")
     ap.add_argument("--no-offset", action="store_true", help="leave out --offset (torque offsets)")
     ap.add_argument("--consistent", action="store_true", help="also the consistent estimate")
-    ap.add_argument("--prior-weight", type=float, default=0.0, help="with --consistent")
+    ap.add_argument(
+        "--prior-weight", type=float, help="with --consistent (default: the command's choice)"
+    )
     args = ap.parse_args()
     cons_rows = []
     mindyn = [sys.executable, "-m", "mindyn"]
@@ -135,7 +140,11 @@ def main() -> int:
                 + ([] if args.no_offset else ["--offset"])
                 + ["--validate", str(args.dir / val), "--json", str(out)]
                 + (["--consistent"] if args.consistent else [])
-                + (["--prior-weight", str(args.prior_weight)] if args.prior_weight else [])
+                + (
+                    ["--prior-weight", str(args.prior_weight)]
+                    if args.prior_weight is not None
+                    else []
+                )
             )
             print("$ " + " ".join(cmd), flush=True)
             t0 = time.perf_counter()
@@ -208,6 +217,35 @@ def main() -> int:
     return 0
 
 
+def link_masses(ce) -> str:
+    """Per link: the consistent estimate's mass and its standard deviation beside the
+    description's, and whether the data or the prior determine it; ``ok`` when the mass is
+    within a factor 3 of the description's or determined by the data (target), else ``MISSED``.
+    """
+    choice = ce.get("prior_weight_choice")
+    lines = [
+        f"  prior weight {ce['prior_weight']:g}"
+        + (
+            " (chosen: "
+            + ", ".join(
+                f"{w:g}: {e:.4g}" for w, e in zip(choice["candidates"], choice["held_out_residual"])
+            )
+            + " noise variances per equation held out)"
+            if choice
+            else " (given)"
+        )
+    ]
+    for lk in ce.get("links") or []:
+        m, m0 = lk["mass"], lk["description_mass"]
+        near = m0 > 0 and m0 / 3 <= m <= 3 * m0
+        ok = "ok" if near or lk["verdict"] == "data" else "MISSED"
+        lines.append(
+            f"  {lk['link']:<16} mass {m:8.3f} +- {lk['mass_std']:.3g} kg, description "
+            f"{m0:8.3f} kg, {lk['verdict']:<6} {ok}"
+        )
+    return "\n".join(lines)
+
+
 def consistent_row(name, doc, wall, robot_path, log_path):
     """The consistent estimate's figures of one case, and a forward simulation along the log."""
     import mindyn
@@ -217,6 +255,7 @@ def consistent_row(name, doc, wall, robot_path, log_path):
 
     ce = doc["consistent_estimate"]
     eig = min(doc["pseudo_inertia_min_eig"].values())
+    print(link_masses(ce))
     vu = 100 * doc["validation"]["overall_relative"]
     vc = 100 * ce["validation"]["overall_relative"]
     robot = mindyn.load(str(robot_path))

@@ -370,8 +370,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.consistent:
         from ..identification.consistent import consistent_estimate
 
-        cons = consistent_estimate(res, args.prior_weight, progress=_progress())
-    elif args.prior_weight:
+        weight = "auto" if args.prior_weight is None else args.prior_weight
+        cons = consistent_estimate(res, weight, data=logs, progress=_progress())
+    elif args.prior_weight is not None:
         raise ValueError("--prior-weight: expected --consistent as well")
     truth_doc = truth_docs[0] if all(d == truth_docs[0] for d in truth_docs) else None
 
@@ -479,20 +480,29 @@ def cmd_identify(args: argparse.Namespace) -> int:
     )
     for w in res.settings.get("warnings", []):
         out.append(f"  WARNING: {w}")
-    out.append("")
-    out.append(format_table(res, truth))
-    out.append("")
-    # with --consistent, two estimates: each table says whose it is
-    whose = "" if cons is None else " (unconstrained estimate)"
-    out.append(_rms_lines(f"identification data{whose}", fit))
-    if val is not None:
-        out.append(_rms_lines(f"validation data ({', '.join(vfiles)}){whose}", val))
     cfit = cval = None
+    which = ""
     if cons is not None:
         cfit = validate(cons, logs)
         cval = validate(cons, vlogs) if vlogs else None
+        out.append(_headline(cfit, cval, fit, val))
+        which = ", unconstrained least-squares estimate"
+    out.append("")
+    if cons is not None:
+        out.append("Unconstrained least-squares estimate (base parameters):")
+    out.append(format_table(res, truth))
+    out.append("")
+    out.append(_rms_lines(f"identification data{which}", fit))
+    if val is not None:
+        out.append(_rms_lines(f"validation data ({', '.join(vfiles)}){which}", val))
+    if cons is not None:
         out.append("")
         out += _consistent_lines(cons, fit, val, cfit, cval, logs)
+        out.append(_rms_lines("identification data, consistent estimate", cfit))
+        if cval is not None:
+            out.append(
+                _rms_lines(f"validation data ({', '.join(vfiles)}), consistent estimate", cval)
+            )
     print("\n".join(out))
 
     doc = res.to_dict()
@@ -501,9 +511,13 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if cons is not None:
         doc.update(_plain(cons.to_dict()))
         ce = doc["consistent_estimate"]
-        ce["fit"] = _measures_doc(cfit, labels)
+        ce["fit"] = {"estimate": "consistent", **_measures_doc(cfit, labels)}
         if cval is not None:
-            ce["validation"] = {"file": ", ".join(vfiles), **_measures_doc(cval, vlabels)}
+            ce["validation"] = {
+                "estimate": "consistent",
+                "file": ", ".join(vfiles),
+                **_measures_doc(cval, vlabels),
+            }
         ce["mass_matrix_min_eig"] = cons.mass_matrix_min_eig(logs)
     # how a log is read for this model: what 'mindyn predict' does with another log
     doc["reading"] = {
@@ -536,9 +550,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
     doc["fit"] = _measures_doc(fit, labels)
     if val is not None:
         doc["validation"] = {"file": ", ".join(vfiles), **_measures_doc(val, vlabels)}
-    for key in ("fit", "validation"):  # whose figures (the consistent one's: consistent_estimate)
-        if key in doc:
-            doc[key]["estimate"] = "unconstrained"
+    if cons is not None:  # which estimate each set of figures is
+        for key in ("fit", "validation"):
+            if key in doc:
+                doc[key] = {"estimate": "unconstrained least squares", **doc[key]}
     if truth is not None:
         doc["true_values"] = [float(v) for v in truth]
     if args.json:
@@ -717,6 +732,69 @@ def _progress():
     return lambda line: print(f"identify: {line}", file=sys.stderr, flush=True)
 
 
+def _headline(cfit, cval, fit, val) -> str:
+    """The first figures of ``identify --consistent``: the consistent estimate's own errors."""
+    return (
+        "  Headline, the physically consistent estimate: overall relative error "
+        f"{_pct(cfit['overall_relative']).strip()} on the identification data"
+        + (f", {_pct(cval['overall_relative']).strip()} on the validation data" if cval else "")
+        + f" (unconstrained least-squares estimate: {_pct(fit['overall_relative']).strip()}"
+        + (f", {_pct(val['overall_relative']).strip()}" if val else "")
+        + "); each table below names its estimate"
+    )
+
+
+def _weight_lines(cons) -> list[str]:
+    """How the prior's weight was chosen, and per link whether the data or the prior hold it."""
+    ch = cons.weight_choice
+    lines = []
+    if ch is not None:
+        lines.append(
+            f"  prior weight {ch['chosen']:g} chosen by {ch['rule']}; held-out residual per "
+            f"equation [{ch['held_out_unit']}] at each candidate weight (smallest at "
+            f"{ch['smallest_at']:g}, standard error {ch['held_out_standard_error']:.3g}):"
+        )
+        lines.append(
+            "    "
+            + "  ".join(
+                f"{w:g}: {e:.5g}" + (" (chosen)" if w == ch["chosen"] else "")
+                for w, e in zip(ch["candidates"], ch["held_out_residual"])
+            )
+        )
+        if ch["newton_not_converged"]:
+            lines.append(
+                f"    {ch['newton_not_converged']} of the held-out fits stopped before the Newton "
+                "descent converged (their residuals are approximate)"
+            )
+        if ch["at_grid_end"]:
+            lines.append(
+                "    the chosen weight is at the end of the candidates: the optimum may lie "
+                "beyond (give --prior-weight to go further)"
+            )
+    elif cons.prior_weight:
+        lines.append(f"  prior weight {cons.prior_weight:g} (given)")
+    if cons.links:
+        lines.append(
+            "  per link: mass [kg] (standard deviation), description's mass [kg], priors' share "
+            "of the mass's variance; identifiable directions of the link's parameters "
+            "determined by the data; the link's parameters determined by:"
+        )
+        for lk in cons.links:
+            lines.append(
+                f"  {lk['link']:<24} {lk['mass']:10.4g} ({lk['mass_std']:.3g}) "
+                f"{lk['description_mass']:10.4g} {lk['mass_prior_share']:8.3f} "
+                f"{lk['directions_by_data']:3d} of {lk['identifiable_directions']:<3d} "
+                f"{lk['verdict']}"
+            )
+        lines.append(
+            "  (share: -d ln(variance) / d ln(weight), 0 when the data alone fix it, 1 when the "
+            "priors do; identifiable: the combinations of the link's own parameters that the "
+            "torques determine; data: their mean share below 0.5; partly: above, but some of "
+            "them below; prior: none)"
+        )
+    return lines
+
+
 def _consistent_lines(cons, fit, val, cfit, cval, logs) -> list[str]:
     """The lines of ``mindyn identify --consistent``: pseudo-inertias, errors side by side."""
     un = cons.violating_links(True)
@@ -725,6 +803,7 @@ def _consistent_lines(cons, fit, val, cfit, cval, logs) -> list[str]:
         + (f", prior weight {cons.prior_weight:g}" if cons.prior_weight else ", no prior")
         + f"): total mass {cons.total_mass:.4g} kg; fit {cons.fit_increase:.4g} noise variances "
         "worse than the unconstrained fit with all base parameters",
+        *_weight_lines(cons),
         "  smallest pseudo-inertia eigenvalue per link [kg] (unconstrained: its realisation "
         "nearest the description):",
         f"  {'link':<24} {'unconstrained':>14} {'consistent':>14}",
@@ -1059,6 +1138,7 @@ def register(sub) -> None:
     from ..control.simulation import MAX_SAMPLES, MAX_STEPS
     from ..identification.consistent import MAX_PRIOR_WEIGHT
     from ..identification.excitation import MAX_TRAJECTORY_ROWS
+    from ..identification.prior import CANDIDATES, FOLDS
     from .control import add_closed_loop_args
 
     p = add_command(
@@ -1273,19 +1353,23 @@ def register(sub) -> None:
         action="store_true",
         help="also estimate physically consistent classical parameters (every link's "
         "pseudo-inertia positive semidefinite, rotor inertia and friction >= 0) minimising the "
-        "same weighted residual (convex, cvxpy with Clarabel; each solve reported on stderr "
-        "when it is a terminal); JSON: classical, pseudo_inertia_min_eig, total_mass, "
-        "consistent_estimate",
+        "same weighted residual plus the description's prior (convex: a Newton descent with "
+        "the prior, cvxpy with Clarabel without; each solve reported on stderr when it is a "
+        "terminal); the consistent estimate's errors are the headline; JSON: classical, "
+        "pseudo_inertia_min_eig, total_mass, consistent_estimate",
     )
     number(
         p,
         "--prior-weight",
         low=0,
         high=MAX_PRIOR_WEIGHT,
-        default=0.0,
+        default=None,
         help="with --consistent: add W x the log-det divergence of each link's pseudo-inertia "
         "from the description's; the fit term is in units of the noise variance, so W = 1 makes "
-        "a divergence of 1 cost as much as one standard deviation of the fit; 0: no prior",
+        "a divergence of 1 cost as much as one standard deviation of the fit; 0: no prior; "
+        f"default: chosen from the data by {FOLDS}-fold cross-validation over contiguous time "
+        f"blocks among {', '.join(f'{w:g}' for w in CANDIDATES)}, the largest whose held-out "
+        "residual is within one standard error of the smallest (reported)",
     )
     add_description_outputs(p, "identify")
     number(

@@ -13,10 +13,13 @@ same row weights -- through the base parameters ``p_b = Y pi``, subject to
 
 The residual is taken from the ``c x c`` triangle the estimation reduced the (weighted) system to,
 ``|A p_b - b|^2 = |R p_b - z|^2 + rho``, so the convex problem is small whatever the length of
-the log. It is solved with cvxpy (Clarabel; SCS if Clarabel fails, reported). The fit term is
-measured in units of the residual variance ``s^2`` of the unconstrained fit with all base
-parameters, ``|R p_b - z|^2 / s^2``: it grows by about 1 per standard deviation that the base
-parameters move along any one direction of the estimate's uncertainty.
+the log. Without a prior it is solved with cvxpy (Clarabel; SCS if Clarabel fails, reported);
+with the description's log-det prior, whose weight is chosen from the data by default
+(:mod:`~mindyn.identification.prior`), by a damped Newton descent (the cone solver as
+fallback). The fit term is measured in units of the residual variance ``s^2`` of the
+unconstrained fit with all base parameters, ``|R p_b - z|^2 / s^2``: it grows by about 1 per
+standard deviation that the base parameters move along any one direction of the estimate's
+uncertainty.
 
 Payload (:func:`identify_payload`): the 10 inertial parameters of a body fixed to the last link,
 from ``tau - tau_arm(q, dq, ddq) = W_last(q, dq, ddq) phi`` with the identified arm's torques
@@ -207,6 +210,12 @@ class ConsistentResult:
     status: str
     fit_increase: float
     prior_divergence: float | None = None
+    #: How the prior's weight was chosen (None: given): see
+    #: :func:`~mindyn.identification.prior.choose_prior_weight`.
+    weight_choice: dict | None = None
+    #: Per link (with a prior): mass, its standard deviation, and whether the data or the prior
+    #: determine it (:func:`~mindyn.identification.prior.link_report`).
+    links: list | None = None
     notes: list = field(default_factory=list)
     seconds: float = 0.0
 
@@ -266,7 +275,9 @@ class ConsistentResult:
                 "status": self.status,
                 "seconds": self.seconds,
                 "prior_weight": self.prior_weight,
+                "prior_weight_choice": self.weight_choice,
                 "prior_divergence": self.prior_divergence,
+                "links": self.links,
                 "fit_increase_noise_variances": self.fit_increase,
                 "eig_tolerance": EIG_TOL,
                 "base_names": list(self.base.names),
@@ -295,13 +306,18 @@ def nearest_realisation(base: BaseParameters, values) -> np.ndarray:
     return pi0 + np.linalg.lstsq(Y, np.asarray(values, float) - Y @ pi0, rcond=None)[0]
 
 
-def identify_consistent(robot, data, prior_weight: float = 0.0, **kwargs) -> ConsistentResult:
+def identify_consistent(
+    robot, data, prior_weight: float | str = "auto", **kwargs
+) -> ConsistentResult:
     """:func:`~mindyn.identification.identify` (same arguments in ``kwargs``), then
-    :func:`consistent_estimate` on its least-squares problem."""
-    return consistent_estimate(identify(robot, data, **kwargs), prior_weight)
+    :func:`consistent_estimate` on its least-squares problem (the prior's weight chosen on
+    ``data`` by default)."""
+    return consistent_estimate(identify(robot, data, **kwargs), prior_weight, data=data)
 
 
-def _weight(prior_weight) -> float:
+def _weight(prior_weight) -> float | None:
+    if prior_weight is None or (isinstance(prior_weight, str) and prior_weight == "auto"):
+        return None
     try:
         w = float(prior_weight)
     except (TypeError, ValueError, OverflowError):
@@ -318,7 +334,11 @@ def _weight(prior_weight) -> float:
 
 
 def consistent_estimate(
-    res: IdentificationResult, prior_weight: float = 0.0, *, progress=None
+    res: IdentificationResult,
+    prior_weight: float | str = "auto",
+    *,
+    data=None,
+    progress=None,
 ) -> ConsistentResult:
     """The physically consistent classical parameters for the least-squares problem of ``res``
     (see the module documentation).
@@ -327,23 +347,34 @@ def consistent_estimate(
     divergence ``d(J, J0) = -log det(J0^-1 J) + tr(J0^-1 J) - 4`` of each link's pseudo-inertia
     from the description's, to the fit term (which is in units of the noise variance, see the
     module): at ``W = 1`` a divergence of 1 costs as much as moving the base parameters one
-    standard deviation along one direction. ``W = 0`` (default): no prior; the classical
-    parameters the data leave undetermined are then taken nearest the description. Without a
-    prior, when the unconstrained optimum (all base parameters, no pruning) has a consistent
-    classical realisation, that is the answer (its base parameters equal the least-squares
-    estimate): its realisation nearest the description when that is consistent (no solver
-    runs), else the consistent one nearest the description (one convex solve with ``Y pi =
-    p_b`` imposed). Otherwise the optimum is on the boundary of the consistent set; see
-    :data:`TIE_BREAK_SLACK` for how it is taken. With a prior, the conic solver's answer is
-    refined by a smooth descent of the same objective (:func:`_refine_with_prior`; noted with
-    the gain). After a solve, pseudo-inertias with eigenvalues below zero by solver tolerance
-    are projected onto the positive semidefinite matrices (negative eigenvalues set to zero)
-    and ``Ia, Fv, Fc`` clipped at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
+    standard deviation along one direction. ``"auto"`` (default): ``W`` chosen by
+    cross-validation over contiguous blocks of ``data`` (the logs ``res`` was fitted on; see
+    :mod:`~mindyn.identification.prior`), recorded in ``weight_choice``. With a prior, the
+    estimate is the minimiser found by a damped Newton descent (:func:`~mindyn.identification
+    .prior.newton_prior`; the conic solver and a smooth refinement if it does not converge), and
+    ``links`` says per link whether the data or the prior determine its parameters. ``W = 0``:
+    no prior; the classical parameters the data leave undetermined are then taken nearest the
+    description. Without a prior, when the unconstrained optimum (all base parameters, no
+    pruning) has a consistent classical realisation, that is the answer (its base parameters
+    equal the least-squares estimate): its realisation nearest the description when that is
+    consistent (no solver runs), else the consistent one nearest the description (one convex
+    solve with ``Y pi = p_b`` imposed). Otherwise the optimum is on the boundary of the
+    consistent set; see :data:`TIE_BREAK_SLACK` for how it is taken. With a prior, when the
+    Newton descent does not converge, the conic solver's answer is refined by a smooth descent
+    of the same objective (:func:`_refine_with_prior`; noted with the gain). After a solve,
+    pseudo-inertias with eigenvalues below zero by solver tolerance are projected onto the
+    positive semidefinite matrices (negative eigenvalues set to zero) and ``Ia, Fv, Fc`` clipped
+    at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
 
     ``progress``, a callable taking a line of text, is told each solve and refinement as it
     starts and ends (they can take seconds each)."""
     t0 = time.perf_counter()
     W = _weight(prior_weight)
+    if W is None and data is None:
+        raise ModelError(
+            "prior_weight 'auto' chooses the weight on the data the estimate was fitted on: "
+            "pass them as data=, or give a weight"
+        )
     base = res.base
     ls = res.reduced
     if ls is None:
@@ -369,20 +400,51 @@ def consistent_estimate(
         pi_n[layout.extra[layout.nonneg]] >= 0
     )
     pi_un = nearest_realisation(base, res.full)
+    choice, links, start = None, None, None
+    if W != 0:
+        from .prior import (
+            CANDIDATES,
+            PriorProblem,
+            choose_prior_weight,
+            feasible_start,
+            newton_prior,
+        )
+
+        J0s = _prior_matrices(base, layout, pi0, notes)
+        problem = PriorProblem(M, z, s2, layout, J0s)
+        if W is None:
+            with _stage(progress, "prior weight by cross-validation"):
+                W, choice, start = choose_prior_weight(
+                    res, data, layout, J0s, pi0, s2, progress=progress
+                )
     if W == 0 and ok_n:
         pi, solver, status = pi_n, "none", "optimal"
         notes.append("the unconstrained optimum is consistent: returned as it is")
-    else:
-        pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls, progress)
-        if W > 0:
-            J0s = _prior_matrices(base, layout, pi0, None)
+    elif W > 0:
+        with _stage(progress, "Newton descent"):
+            if start is None or not problem.feasible(start):
+                # from the description down a decade at a time to W (a weak prior's minimiser
+                # lies near the cone's boundary, far from the description)
+                start = feasible_start(problem, J0s, layout, pi0)
+                for w in sorted((c for c in CANDIDATES if c > W), reverse=True):
+                    start = newton_prior(problem, w, start)[0]
+            pi, converged, iters = newton_prior(problem, W, start)
+        solver, status = "Newton", f"converged in {iters} steps"
+        if not converged:
+            pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, [], beta_ls, progress)
             with _stage(progress, "refinement of the solver's answer (L-BFGS-B)"):
                 pi, gain = _refine_with_prior(M, z, s2, pi, layout, J0s, W)
-            if gain > 0:
-                notes.append(
-                    f"the cone solver's answer refined by a smooth descent of the same objective "
-                    f"(L-BFGS-B over Cholesky factors of the pseudo-inertias): lower by {gain:.3g}"
-                )
+            notes.append(
+                f"the Newton descent did not converge in {iters} steps: the cone solver's "
+                f"answer instead, refined by a smooth descent of the same objective (L-BFGS-B "
+                f"over Cholesky factors of the pseudo-inertias; lower by {gain:.3g})"
+            )
+        else:
+            from .prior import link_report
+
+            links = link_report(problem, pi, W, base.robot.link_names[1:], pi0, Y)
+    else:
+        pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls, progress)
     realised = W == 0 and (ok_n or any(n.startswith("the unconstrained optimum") for n in notes))
     # Enforce the constraints exactly (solver tolerance): PSD projection, clipping.
     for ix in layout.links:
@@ -416,6 +478,8 @@ def consistent_estimate(
             pi if realised and np.array_equal(res.full, beta_ls) else pi_un, layout
         ),
         prior_weight=W,
+        weight_choice=choice,
+        links=links,
         solver=solver,
         status=status,
         fit_increase=fit_increase(pi),

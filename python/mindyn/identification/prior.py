@@ -1,0 +1,429 @@
+"""The weight of the description's prior in the consistent estimate, chosen from the data, and
+what the estimate owes to the data and to the prior, link by link.
+
+The consistent estimate with a prior (:func:`~mindyn.identification.consistent
+.consistent_estimate`) minimises ``f(pi) = |M pi - z|^2 / s^2 + W sum_links d(J, J0)``. Its
+weight ``W`` is chosen by K-fold cross-validation over contiguous time blocks
+(:func:`choose_prior_weight`): each log is cut into :data:`FOLDS` blocks of consecutive
+samples (or windows); for each candidate weight of :data:`CANDIDATES` and each fold, the
+estimate fitted on the other blocks predicts the held-out block, and the held-out residuals
+(the fit's own weighted residual) are summed over the folds. The weight chosen is the largest
+whose sum is within one standard error of the smallest (the "one-standard-error rule" of
+cross-validation, Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, 7.10;
+the error from the spread of the folds' residuals): a stronger prior that predicts held-out
+motion as well as the weakest, within what the data can tell apart, is preferred, as it keeps
+the directions the data hardly see at physically plausible values. A contiguous block
+is held out rather than scattered samples because neighbouring samples share their errors
+(filtered noise, model error): a block tests the estimate on motion it has not seen.
+
+The objective is smooth and strictly convex inside the cone of positive definite
+pseudo-inertias (the log-det terms are barriers), so each of these solves is a damped Newton
+descent (:func:`newton_prior`, warm-started from the neighbouring weight's answer), milliseconds
+where the conic solver takes seconds; the non-negative rotor-inertia and friction parameters
+enter through a log barrier driven to :data:`BARRIER_END`.
+
+Per link (:func:`link_report`): with the objective's Hessian ``H`` at the estimate, the
+estimate's covariance is ``C = 2 H^-1`` (the objective is twice a negative log posterior). How
+fast it shrinks as the weight grows, ``-d ln C / d ln W``, is the share of the variance the
+priors account for: 0 where the data alone fix a parameter, 1 where they leave it to the
+priors (of this link or of the links whose parameters the data only see together with it);
+below one half, the data determine it. The verdict is taken over the link's identifiable
+directions, its mass reported beside with its standard deviation and share.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.linalg as sla
+
+from .._threads import single_threaded_blas
+from .errors import IdentificationError
+
+#: Candidate prior weights (units: one divergence costs W noise variances of the fit): a
+#: log-scale grid from a prior the data outweigh in every direction they see to one that holds
+#: all but the best-determined directions.
+CANDIDATES = (1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3, 1e4)
+
+#: Contiguous blocks each log is cut into for the cross-validation.
+FOLDS = 5
+
+#: Barrier weight of the non-negative joint parameters at the end of the Newton descent, in
+#: noise variances (the objective is then within ``count x BARRIER_END`` of its minimum).
+BARRIER_END = 1e-9
+
+#: A link direction counts as determined by the data when its posterior variance is below this
+#: fraction of the prior's alone (the data carry more information along it than the prior).
+DATA_SHARE = 0.5
+
+
+def _basis() -> np.ndarray:
+    """``E`` (10, 4, 4): the pseudo-inertia of each unit inertial parameter (the map is
+    linear)."""
+    from .consistent import pseudo_inertia
+
+    return np.array([pseudo_inertia(np.eye(10)[a]) for a in range(10)])
+
+
+class PriorProblem:
+    """``|M pi - z|^2 / s2 + W sum_l (-log det J_l + tr(J0_l^-1 J_l))`` over the classical
+    vector ``pi`` (layout of :class:`~mindyn.identification.consistent._Layout`), its
+    non-negative joint parameters kept positive by a log barrier."""
+
+    def __init__(self, M, z, s2, layout, J0s):
+        self.M, self.z, self.s2 = M, z, s2
+        self.Q = 2.0 * (M.T @ M) / s2
+        self.c = 2.0 * (M.T @ z) / s2
+        self.links = layout.links
+        self.nonneg = layout.extra[layout.nonneg]
+        self.J0inv = [0.5 * (A + A.T) for A in (np.linalg.inv(J0) for J0 in J0s)]
+        self.E = _basis()
+        self._E16 = self.E.reshape(10, 16)
+        self.tr0 = [np.einsum("ij,aji->a", Ji, self.E) for Ji in self.J0inv]
+
+    def J(self, p) -> np.ndarray:
+        """The pseudo-inertia of a link's 10 parameters."""
+        return (p @ self._E16).reshape(4, 4)
+
+    def feasible(self, pi) -> bool:
+        if np.any(pi[self.nonneg] <= 0):
+            return False
+        for ix in self.links:
+            try:
+                np.linalg.cholesky(self.J(pi[ix]))
+            except np.linalg.LinAlgError:
+                return False
+        return True
+
+    def fit(self, pi) -> float:
+        r = self.M @ pi - self.z
+        return float(r @ r) / self.s2
+
+    def prior(self, pi, J0s=None) -> float:
+        """``sum_l d(J_l, J0_l)`` (the log-det divergence, 0 at the description)."""
+        out = 0.0
+        for ix, Ji in zip(self.links, self.J0inv):
+            A = Ji @ self.J(pi[ix])
+            sign, logdet = np.linalg.slogdet(A)
+            out += -logdet + float(np.trace(A)) - 4.0 if sign > 0 else math.inf
+        return out
+
+    def value(self, pi, W, mu) -> float:
+        f = self.fit(pi)
+        for ix, t0 in zip(self.links, self.tr0):
+            sign, logdet = np.linalg.slogdet(self.J(pi[ix]))
+            if sign <= 0:
+                return math.inf
+            f += W * (-logdet + float(t0 @ pi[ix]))
+        if mu > 0 and self.nonneg.size:
+            v = pi[self.nonneg]
+            if np.any(v <= 0):
+                return math.inf
+            f -= mu * float(np.sum(np.log(v)))
+        return f
+
+    def derivatives(self, pi, W, mu, barrier=True):
+        """Gradient and Hessian of :meth:`value` (without the barrier: ``barrier=False``)."""
+        g = self.Q @ pi - self.c
+        H = self.Q.copy()
+        for ix, t0 in zip(self.links, self.tr0):
+            Jinv = np.linalg.inv(self.J(pi[ix]))
+            A = Jinv @ self.E  # (10, 4, 4)
+            g[ix] += W * (t0 - np.einsum("aii->a", A))
+            H[np.ix_(ix, ix)] += W * np.einsum("aij,bji->ab", A, A)
+        if barrier and mu > 0 and self.nonneg.size:
+            v = pi[self.nonneg]
+            g[self.nonneg] -= mu / v
+            H[self.nonneg, self.nonneg] += mu / v**2
+        return g, H
+
+
+def _newton_step(g, H) -> np.ndarray:
+    """``-H^-1 g`` with ``H`` scaled to a unit diagonal (its entries span many decades); a
+    singular ``H`` (a joint parameter no equation of this data involves) by least squares."""
+    d = np.sqrt(np.maximum(np.diag(H), 1e-300))
+    Hs = H / np.outer(d, d)
+    gs = g / d
+    try:
+        step = sla.cho_solve(sla.cho_factor(Hs), -gs)
+    except (np.linalg.LinAlgError, ValueError):
+        step = np.linalg.lstsq(Hs, -gs, rcond=1e-13)[0]
+    return step / d
+
+
+def newton_prior(problem: PriorProblem, W: float, start, max_iter: int = 400):
+    """The minimiser of ``problem`` at weight ``W > 0`` from the strictly feasible ``start``:
+    damped Newton steps (backtracking keeps every pseudo-inertia positive definite and the
+    non-negative parameters positive), the barrier weight of the non-negative parameters
+    lowered tenfold from 1e-2 to :data:`BARRIER_END` noise variances. Returns ``(pi,
+    converged, iterations)``."""
+    pi = np.array(start, dtype=float)
+    if not problem.feasible(pi):
+        raise IdentificationError("consistent estimate: infeasible start of the Newton descent")
+    mu = 1e-2 if problem.nonneg.size else 0.0
+    it = 0
+    converged = False
+    while True:
+        f = problem.value(pi, W, mu)
+        stage_done = False
+        while it < max_iter:
+            it += 1
+            g, H = problem.derivatives(pi, W, mu)
+            step = _newton_step(g, H)
+            dec = -float(g @ step)  # Newton decrement squared
+            if not math.isfinite(dec) or dec <= 1e-10:
+                stage_done = True
+                break
+            alpha = 1.0
+            while alpha > 1e-12:
+                trial = pi + alpha * step
+                ft = problem.value(trial, W, mu) if problem.feasible(trial) else math.inf
+                if ft <= f - 0.25 * alpha * dec:
+                    break
+                alpha *= 0.5
+            else:  # no decrease within round-off: at the minimum to machine precision
+                stage_done = True
+                break
+            pi, f = trial, ft
+            if dec < 1e-8:
+                stage_done = True
+                break
+        if not stage_done:
+            break
+        if mu <= BARRIER_END:
+            converged = True
+            break
+        mu = max(mu * 0.1, BARRIER_END) if mu > BARRIER_END else 0.0
+    return pi, converged, it
+
+
+def feasible_start(problem: PriorProblem, J0s, layout, pi0) -> np.ndarray:
+    """The description's (regularised) pseudo-inertias, and the joint parameters fitted to the
+    data with the links held there (non-negative ones at least a thousandth of their typical
+    size)."""
+    from .consistent import inertial_from_pseudo
+
+    pi = np.array(pi0, dtype=float)
+    for ix, J0 in zip(layout.links, J0s):
+        pi[ix] = inertial_from_pseudo(J0)
+    ex = layout.extra
+    if ex.size:
+        links = np.setdiff1d(np.arange(pi.size), ex)
+        rhs = problem.z - problem.M[:, links] @ pi[links]
+        pi[ex] = np.linalg.lstsq(problem.M[:, ex], rhs, rcond=1e-12)[0]
+        nn = problem.nonneg
+        if nn.size:
+            floor = 1e-3 * max(float(np.max(np.abs(pi[nn]))), 1e-6)
+            pi[nn] = np.maximum(pi[nn], floor)
+    return pi
+
+
+# ---------------------------------------------------------------------------------------------
+# Held-out blocks
+# ---------------------------------------------------------------------------------------------
+def _cut(count: int, folds: int) -> np.ndarray:
+    """The block (0 .. folds-1) of each of ``count`` consecutive items, in contiguous runs."""
+    return np.minimum((np.arange(count) * folds) // max(count, 1), folds - 1)
+
+
+@single_threaded_blas
+def block_triangles(res, data, folds: int = FOLDS) -> np.ndarray:
+    """The fit's weighted least-squares problem split into ``folds`` blocks of contiguous time
+    (block ``k``: the ``k``-th of ``folds`` consecutive parts of every log): triangles ``S_k``,
+    shape (folds, nb+1, nb+1), ``S_k^T S_k = [A_k b_k]^T [A_k b_k]`` over the block's rows with
+    the fit's own row weights."""
+    from .estimation import _logs, _triangle, regressor_rows
+    from .models import energy_row_noise, energy_system, integral_chunks, integral_windows
+
+    base = res.base
+    nb = base.n
+    logs = _logs(data)
+    S = np.zeros((folds, nb + 1, nb + 1))
+
+    def add(k, A):
+        S[k] = _triangle(np.vstack([S[k], A]))
+
+    js = res.joint_sigma
+    if res.model in ("dynamic", "integral"):
+        w = np.ones(base.robot.n)
+        if res.weighted and js is not None:
+            w = 1.0 / np.maximum(js, max(js.max() * 1e-9, 1e-300))
+        for d in logs:
+            if res.model == "dynamic":
+                block = _cut(d.m, folds)
+                vmin = res.settings.get("min_velocity", 0.0)
+                for k in range(folds):
+                    a, b = np.flatnonzero(block == k)[[0, -1]] if np.any(block == k) else (0, -1)
+                    if b < a:
+                        continue
+                    for c0 in range(a, b + 1, 8192):
+                        c1 = min(b + 1, c0 + 8192)
+                        Wr = regressor_rows(base, d, c0, c1)
+                        for j in range(d.n):
+                            A = w[j] * np.column_stack([Wr[:, j, :], d.tau[c0:c1, j]])
+                            if vmin > 0 and base.friction:
+                                A = A[np.abs(d.dq[c0:c1, j]) >= vmin]
+                            add(k, A)
+            else:
+                window = res.settings["integral_window"]
+                total = integral_windows(d.t, window)[0].size
+                block = _cut(total, folds)
+                i0 = 0
+                for Wi, yi in integral_chunks(base, d, window, res.settings["integration"]):
+                    kk = block[i0 : i0 + Wi.shape[0]]
+                    i0 += Wi.shape[0]
+                    for k in np.unique(kk):
+                        sel = kk == k
+                        for j in range(d.n):
+                            add(k, w[j] * np.column_stack([Wi[sel, j], yi[sel, j]]))
+    elif res.model == "energy":
+        window = res.settings["energy_window"]
+        rule = res.settings["integration"]
+        used = [d for d in logs if (d.m - 1) // window > 0]
+        var = None
+        if res.weighted and js is not None:
+            var = [energy_row_noise(d, window) @ js**2 for d in used]
+            floor = 0.1 * np.median(np.concatenate(var))
+        for i, d in enumerate(used):
+            Wd, yd = energy_system(base, d, window, rule)
+            A = np.column_stack([Wd, yd])
+            if var is not None:
+                A = A / np.sqrt(var[i] + floor)[:, None]
+            block = _cut(A.shape[0], folds)
+            for k in range(folds):
+                add(k, A[block == k])
+    else:  # pragma: no cover - identify refuses other models
+        raise IdentificationError(f"unknown model '{res.model}'")
+    return S
+
+
+# ---------------------------------------------------------------------------------------------
+# Choice of the weight
+# ---------------------------------------------------------------------------------------------
+def choose_prior_weight(
+    res, data, layout, J0s, pi0, s2, *, candidates=CANDIDATES, folds=FOLDS, progress=None
+) -> tuple[float, dict, np.ndarray]:
+    """The candidate weight chosen by cross-validation with the one-standard-error rule (see
+    the module documentation). Returns ``(W, record, start)``: the record of the choice for
+    the output (the rule, the candidates, their held-out residuals per equation in noise
+    variances and its standard error) and the last fold's estimate at ``W`` (a feasible warm
+    start for the full fit)."""
+    base = res.base
+    Y = base.Y
+    nb = base.n
+    S = block_triangles(res, data, folds)
+    rows = [S_k for S_k in S if np.any(S_k)]
+    if len(rows) < 2:
+        raise IdentificationError(
+            "consistent estimate: the data give fewer than 2 blocks of equations; the prior's "
+            "weight cannot be chosen by cross-validation (give --prior-weight)"
+        )
+    from .estimation import _triangle
+
+    cands = sorted(float(c) for c in candidates)[::-1]  # from the strongest prior down
+    err = np.zeros((folds, len(cands)))
+    failed = 0
+    equations = res.rows
+    starts = {}
+    for k in range(folds):
+        if not np.any(S[k]):
+            continue
+        T = _triangle(np.vstack([S[i] for i in range(folds) if i != k]))
+        problem = PriorProblem(T[:nb, :nb] @ Y, T[:nb, nb], s2, layout, J0s)
+        pi = feasible_start(problem, J0s, layout, pi0)
+        held = S[k]
+        for i, W in enumerate(cands):
+            pi, ok, _ = newton_prior(problem, W, pi)
+            failed += not ok
+            r = held @ np.append(Y @ pi, -1.0)
+            err[k, i] = float(r @ r) / s2
+            starts[W] = pi
+        if progress is not None:
+            progress(f"consistent estimate: prior weight, fold {k + 1} of {folds} done")
+    used = [k for k in range(folds) if np.any(S[k])]
+    err = err[used]
+    total = err.sum(axis=0)
+    best = int(np.argmin(total))
+    # one standard error of the summed held-out residual at the best weight, from the spread
+    # of the folds' residuals
+    se = float(np.std(err[:, best], ddof=1) * math.sqrt(len(used)))
+    chosen = int(np.flatnonzero(total <= total[best] + se)[0])  # the strongest prior within
+    W = cands[chosen]
+    record = {
+        "rule": (
+            f"{folds}-fold cross-validation over contiguous time blocks (each block's weighted "
+            "residual predicted by the estimate fitted on the other blocks, summed): the "
+            "largest candidate within one standard error of the smallest sum"
+        ),
+        "folds": folds,
+        "candidates": cands[::-1],
+        "held_out_residual": [float(e) / equations for e in total[::-1]],
+        "held_out_standard_error": se / equations,
+        "held_out_per_fold": [[float(e) / equations for e in row[::-1]] for row in err],
+        "held_out_unit": "noise variances per equation",
+        "smallest_at": cands[best],
+        "chosen": W,
+        "at_grid_end": chosen in (0, len(cands) - 1),
+        "newton_not_converged": failed,
+    }
+    return W, record, starts[W]
+
+
+# ---------------------------------------------------------------------------------------------
+# Data or prior, per link
+# ---------------------------------------------------------------------------------------------
+def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict]:
+    """Per link, what the consistent estimate owes to the data and to the priors.
+
+    With ``C = 2 H^-1`` (``H`` the objective's Hessian at ``pi``), the share of a parameter
+    combination's variance that the priors account for is ``-d ln var / d ln W``, from
+    ``W C H_p C / 2`` against ``C`` (``H_p`` the Hessian of the summed divergences): 0 when the
+    data alone fix it, 1 when the priors do. Reported: the mass, its standard deviation
+    ``sqrt(C_mm)`` and the priors' share of its variance (a link's mass alone is seldom
+    identifiable: the data tie it to other links' parameters, whose priors then hold it); the
+    link's identifiable directions (the combinations of its 10 parameters alone that the base
+    parameters determine, ``Y``'s row space within the link's coordinates) and how many of them
+    the data determine (share below :data:`DATA_SHARE`, generalised eigenvalues over that
+    subspace) and their mean share; the verdict: ``data`` (mean share below
+    :data:`DATA_SHARE`), ``partly`` (above, but some direction by the data), ``prior`` (none,
+    or the link has none). ``pi0``: the description's classical vector (its masses beside)."""
+    # the barrier at its final weight: a non-negative parameter at its bound is held there
+    _, H = problem.derivatives(pi, W, BARRIER_END)
+    _, Hfit = problem.derivatives(pi, 0.0, BARRIER_END)
+    Hp = H - Hfit  # W x the priors' Hessian
+    d = np.sqrt(np.maximum(np.diag(H), 1e-300))
+    C = 2.0 * np.linalg.pinv(H / np.outer(d, d), rcond=1e-14, hermitian=True) / np.outer(d, d)
+    Cp = 0.5 * C @ Hp @ C  # the priors' part of the covariance
+    Ys = Y / np.maximum(np.linalg.norm(Y, axis=0), 1e-300)  # columns of unit norm
+    _, sv, Vt = np.linalg.svd(Ys)
+    rows = Vt[: int(np.sum(sv > 1e-9 * sv[0]))]  # orthonormal basis of the row space
+    out = []
+    for nm, ix in zip(names, problem.links):
+        Cl, Pl = C[np.ix_(ix, ix)], Cp[np.ix_(ix, ix)]
+        # directions v of the link alone in the row space: |(I - V^T V) e_ix v| = 0
+        E = np.zeros((Y.shape[1], 10))
+        E[ix, np.arange(10)] = 1.0
+        Nl = sla.null_space(E - rows.T @ (rows @ E), rcond=1e-9)
+        share = np.zeros(0)
+        if Nl.size:
+            A, B = Nl.T @ Pl @ Nl, Nl.T @ Cl @ Nl
+            share = np.clip(sla.eigh(0.5 * (A + A.T), 0.5 * (B + B.T), eigvals_only=True), 0, 1)
+        mass_share = float(np.clip(Pl[9, 9] / Cl[9, 9], 0.0, 1.0)) if Cl[9, 9] > 0 else 1.0
+        by_data = int(np.sum(share < DATA_SHARE))
+        mean = float(share.mean()) if share.size else 1.0
+        verdict = "data" if mean < DATA_SHARE else ("partly" if by_data else "prior")
+        out.append(
+            {
+                "link": nm,
+                "mass": float(pi[ix[9]]),
+                "description_mass": float(pi0[ix[9]]),
+                "mass_std": float(math.sqrt(max(Cl[9, 9], 0.0))),
+                "mass_prior_share": mass_share,
+                "identifiable_directions": int(share.size),
+                "directions_by_data": by_data,
+                "directions_prior_share": mean,
+                "verdict": verdict,
+            }
+        )
+    return out
