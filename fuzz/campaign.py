@@ -693,7 +693,7 @@ def case_controller(ctx, index: int, rng: random.Random) -> Case:
 
         robot = mindyn.load(robot_name)
         base = mindyn.base_parameters(robot, rotor=True, friction=True)
-        g = control.load_gains(gfile, robot)
+        g = control.load_gains(gfile, robot, period=float(period), rotor=True)  # as the CLI
         gen = codegen.generate_controller(
             robot, kind, base=base, gains=g, period=float(period), tau_max=tau_max
         )

@@ -268,7 +268,7 @@ def test_ik_command_refuses_degrees_given_as_radians(tmp_path, capsys, monkeypat
         main(["excite", "puma560", "--start", "90,0,0,0,0,0", "-o", str(tmp_path / "e.csv")]) == 2
     )
     err = capsys.readouterr().err
-    assert "--start 90 (value 1)" in err and "give --degrees" in err, err
+    assert "--start 90 (value 1)" in err and "give --deg" in err, err
 
 
 def test_pose_error_is_position_difference_and_scipy_rotation_vector():

@@ -479,11 +479,13 @@ def generate_controller(
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)
     s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
     if kind == "computed-torque":
-        s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam**2
+        with np.errstate(over="ignore"):  # an infinite square is refused just below
+            s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam**2
         s["kd"] = _setting(g["kd"], n, "kd", 0.0) if "kp" in g else 2 * lam
     else:
         s["kd"] = _setting(g.get("kd"), n, "kd", 0.0)
-        s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam * s["kd"]
+        with np.errstate(over="ignore"):  # an infinite product is refused just below
+            s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam * s["kd"]
     s["gamma"] = _setting(g.get("gamma"), len(names), "gamma", 1.0)
     check = "pd" if kind == "gravity-compensation" else kind
     control.check_sampled_gains(check, s["kp"], s["kd"], lam, period)

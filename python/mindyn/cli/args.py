@@ -64,6 +64,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "identify",
         "identify a payload fixed to the last link, with an identified arm",
     ),
+    "predict": (
+        "identify",
+        "torques an identified model predicts on a log (CSV), to score it any way",
+    ),
     "demo": (
         "demo",
         "the whole chain on a robot: base parameters, excitation, simulated measurement, "

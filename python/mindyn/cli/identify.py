@@ -1434,9 +1434,9 @@ def register(sub) -> None:
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
     p.set_defaults(func=cmd_identify_payload)
 
-    p = sub.add_parser(
+    p = add_command(
+        sub,
         "predict",
-        help="torques an identified model predicts on a log (CSV), to score it any way",
         description="The joint torques W_b(q, dq, ddq) p_b of the base-parameter values of "
         "'mindyn identify --json' on LOG, read as identify read its logs (the filter and "
         "cut-off recorded in the JSON: with the low-pass, the model is evaluated on the "
@@ -1469,5 +1469,7 @@ def register(sub) -> None:
         choices=["Nm", "permille", "current"],
         help="logged torque unit, as identify's (default: as recorded)",
     )
-    p.add_argument("--drive-gain", metavar="K1,...,Kn", help="as identify's (default: as recorded)")
+    joint_vector(
+        p, "--drive-gain", metavar="K", help="as identify's (default: as recorded in the JSON)"
+    )
     p.set_defaults(func=cmd_predict)

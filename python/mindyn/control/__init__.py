@@ -12,6 +12,7 @@ from .controllers import (
     PD,
     AdaptivePD,
     ComputedTorque,
+    ControllerSettingError,
     Gains,
     check_gains,
     check_sampled_gains,
@@ -41,6 +42,7 @@ from .simulation import (
 from .stability import LoopCheck, UnstableLoopError
 
 __all__ = [
+    "ControllerSettingError",
     "CONTROLLERS",
     "PD",
     "AdaptivePD",

@@ -35,6 +35,7 @@ from ..base import BaseParameters, base_parameters
 from ..robot import Robot
 
 __all__ = [
+    "ControllerSettingError",
     "AdaptivePD",
     "CONTROLLERS",
     "ComputedTorque",
@@ -107,18 +108,25 @@ def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 # Controllers
 # ---------------------------------------------------------------------------------------------
+class ControllerSettingError(_core.Error, ValueError):
+    """A gain, period or other controller setting that cannot be used: not a finite number of
+    the right shape, or outside what a sampled loop at the period can take."""
+
+
 def _diag(x, n: int, name: str) -> np.ndarray:
     if isinstance(x, (bool, np.bool_)) or (
         isinstance(x, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in x)
     ):
-        raise ValueError(f"gain '{name}' must be numbers, got a boolean ({x!r})")
+        raise ControllerSettingError(f"gain '{name}' must be numbers, got a boolean ({x!r})")
     a = np.asarray(x, dtype=float)
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.shape != (n,):
-        raise ValueError(f"gain '{name}' must be a scalar or {n} values, got shape {a.shape}")
+        raise ControllerSettingError(
+            f"gain '{name}' must be a scalar or {n} values, got shape {a.shape}"
+        )
     if not np.all(np.isfinite(a)) or np.any(a < 0):
-        raise ValueError(f"gain '{name}' must be finite and non-negative")
+        raise ControllerSettingError(f"gain '{name}' must be finite and non-negative")
     return a
 
 
@@ -131,13 +139,15 @@ def check_period(period, what: str = "period") -> float:
     """``period`` as a float; raises ValueError unless it is a number of seconds in
     [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
     if isinstance(period, (bool, np.bool_)):
-        raise ValueError(f"{what} must be a number of seconds, got {period!r}")
+        raise ControllerSettingError(f"{what} must be a number of seconds, got {period!r}")
     try:
         T = float(period)
     except (TypeError, ValueError):
-        raise ValueError(f"{what} must be a number of seconds, got {period!r}") from None
+        raise ControllerSettingError(
+            f"{what} must be a number of seconds, got {period!r}"
+        ) from None
     if not (MIN_PERIOD <= T <= MAX_PERIOD):
-        raise ValueError(
+        raise ControllerSettingError(
             f"{what} must be a number of seconds in [{MIN_PERIOD:g}, {MAX_PERIOD:g}], got {T:g}"
         )
     return T
@@ -153,7 +163,9 @@ def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
     kp, kd, lam = (np.asarray(x, dtype=float) for x in (kp, kd, lam))
     for name, x in (("kd", kd), ("lambda", lam), ("kp", kp)):
         if not np.all(np.isfinite(x)) or np.any(x < 0):
-            raise ValueError(f"gain '{name}' must be finite and non-negative, got {x.tolist()}")
+            raise ControllerSettingError(
+                f"gain '{name}' must be finite and non-negative, got {x.tolist()}"
+            )
     if kind == "adaptive-pd":
         check_lambda(lam, T)
         return
@@ -164,7 +176,7 @@ def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
         bad = np.flatnonzero(~(left < right))
         if bad.size:
             k = int(bad[0])
-            raise ValueError(
+            raise ControllerSettingError(
                 f"{kind} gains on joint {k + 1} (kp {kp[k]:g}, kd {kd[k]:g}) with the controller "
                 f"period {T:g} s: a sampled loop needs {rule} (here {left[k]:.4g} against "
                 f"{right[k]:.4g})"
@@ -180,7 +192,7 @@ def check_lambda(lam, period: float, what: str = "lambda") -> None:
     bad = np.flatnonzero(~(lam * period < 2.0))
     if bad.size:
         k = int(bad[0])
-        raise ValueError(
+        raise ControllerSettingError(
             f"{what} {lam[k]:g} on joint {k + 1} with the controller period {period:g} s: a "
             f"sampled loop needs Lambda T < 2 (here {lam[k] * period:.3g}), so Lambda < "
             f"{2.0 / period:.4g} at this period"
@@ -224,15 +236,21 @@ class ComputedTorque:
         self.base = base
         self.p_hat = np.asarray(p_hat, dtype=float).copy()
         if self.p_hat.shape != (base.n,):
-            raise ValueError(f"p_hat has shape {self.p_hat.shape}; expected ({base.n},)")
+            raise ControllerSettingError(
+                f"p_hat has shape {self.p_hat.shape}; expected ({base.n},)"
+            )
         self.kp = _diag(kp, n, "kp")
         self.kd = _diag(kd, n, "kd")
         if coulomb not in ("measured", "reference"):
-            raise ValueError(f"coulomb must be 'measured' or 'reference', got '{coulomb}'")
+            raise ControllerSettingError(
+                f"coulomb must be 'measured' or 'reference', got '{coulomb}'"
+            )
         self._coulomb = coulomb
         self.eps = float(coulomb_smoothing)
         if not (math.isfinite(self.eps) and self.eps >= 0):
-            raise ValueError(f"coulomb_smoothing must be a finite number >= 0, got {self.eps}")
+            raise ControllerSettingError(
+                f"coulomb_smoothing must be a finite number >= 0, got {self.eps}"
+            )
         self._p = self.p_hat
         self._fc = np.zeros(n)
         if coulomb == "reference":
@@ -297,11 +315,11 @@ class AdaptivePD:
         self.gamma = _diag(gamma, base.n, "gamma")
         self.p0 = np.asarray(p0, dtype=float).copy()
         if self.p0.shape != (base.n,):
-            raise ValueError(f"p0 has shape {self.p0.shape}; expected ({base.n},)")
+            raise ControllerSettingError(f"p0 has shape {self.p0.shape}; expected ({base.n},)")
         self.adapt = adapt
         self.nu = float(nu)
         if not (math.isfinite(self.nu) and self.nu >= 0):
-            raise ValueError(f"nu must be a finite number >= 0, got {nu}")
+            raise ControllerSettingError(f"nu must be a finite number >= 0, got {nu}")
         self.period = check_period(period)
         check_lambda(self.lam, self.period)
         self.reset()
@@ -313,7 +331,7 @@ class AdaptivePD:
         """Takes ``p0`` (base parameters) as the initial estimate, and resets."""
         p0 = np.asarray(p0, dtype=float)
         if p0.shape != self.p0.shape:
-            raise ValueError(f"p0 has shape {p0.shape}; expected {self.p0.shape}")
+            raise ControllerSettingError(f"p0 has shape {p0.shape}; expected {self.p0.shape}")
         self.p0 = p0.copy()
         self.reset()
 
@@ -415,7 +433,7 @@ def check_gains(
     from .stability import check_loop, workspace_samples
 
     if kind not in CONTROLLERS:
-        raise ValueError(f"unknown controller '{kind}'; use {', '.join(CONTROLLERS)}")
+        raise ControllerSettingError(f"unknown controller '{kind}'; use {', '.join(CONTROLLERS)}")
     T = check_period(period)
     kp, kd, lam = _gain_arrays(kind, gains, robot.n)
     qs = workspace_samples(robot) if qs is None else np.atleast_2d(np.asarray(qs, dtype=float))
@@ -538,7 +556,7 @@ def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = N
             break
         scale *= max(0.1, min(0.9, worst / GAIN_MARGIN))
     else:
-        raise ValueError(
+        raise ControllerSettingError(
             f"no default gains keep a gain margin of {GAIN_MARGIN:g} at a period of {T:g} s "
             f"for '{robot.name}' (margins {margin_text(cs)}): give gains"
         )
@@ -568,7 +586,7 @@ def _reject_duplicate_keys(path: Path):
         for key_node, _ in node.value:
             key = loader.construct_object(key_node, deep=deep)
             if key in seen:
-                raise ValueError(
+                raise ControllerSettingError(
                     f"{path}:{key_node.start_mark.line + 1}: key '{key}' appears twice"
                 )
             seen.add(key)
@@ -610,14 +628,16 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
     try:
         data = yaml.load(decode_text(path), Loader=_reject_duplicate_keys(path))
     except yaml.YAMLError as e:
-        raise ValueError(f"{path}: not valid YAML ({e})") from None
+        raise ControllerSettingError(f"{path}: not valid YAML ({e})") from None
     if data is None:
         data = {}
     if not isinstance(data, dict):
-        raise ValueError(f"{path}: expected a mapping with keys kd, lambda, gamma, nu, kp")
+        raise ControllerSettingError(
+            f"{path}: expected a mapping with keys kd, lambda, gamma, nu, kp"
+        )
     unknown = {str(k) for k in data} - {"kd", "lambda", "gamma", "nu", "kp"}
     if unknown:
-        raise ValueError(
+        raise ControllerSettingError(
             f"{path}: unknown key(s) {', '.join(sorted(unknown))}; "
             "expected kd, lambda, gamma, nu, kp"
         )
@@ -631,10 +651,12 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
             what = f"{bad[0]!r}" if bad else "an empty list"
             if bad and isinstance(bad[0], bool):
                 what = f"the boolean {str(bad[0]).lower()} (YAML reads true/false/yes/no/on/off so)"
-            raise ValueError(f"{path}: '{key}' must be a number or a list of numbers, got {what}")
+            raise ControllerSettingError(
+                f"{path}: '{key}' must be a number or a list of numbers, got {what}"
+            )
         arr = np.asarray(numbers if isinstance(value, list) else numbers[0], dtype=float)
         if key == "nu" and (arr.ndim != 0 or not arr >= 0):
-            raise ValueError(f"{path}: 'nu' must be one number >= 0")
+            raise ControllerSettingError(f"{path}: 'nu' must be one number >= 0")
         gains[key] = arr.tolist()
         given.append(key)
     if given:
@@ -674,7 +696,7 @@ def make_controller(
     False), and in :func:`mindyn.control.simulate` those of the simulated robot (its ``rotor``,
     ``friction`` and ``params``: the controller's ``true_model`` is then True)."""
     if kind not in CONTROLLERS:
-        raise ValueError(f"unknown controller '{kind}'; use {', '.join(CONTROLLERS)}")
+        raise ControllerSettingError(f"unknown controller '{kind}'; use {', '.join(CONTROLLERS)}")
     n = robot.n
     period = check_period(period)
     kp, kd, lam = _gain_arrays(kind, gains, n)

@@ -56,7 +56,7 @@ def read_identification(
     out = dict(doc)
     for key in ("robot", "tip"):
         v = doc.get(key)
-        if v is not None and not isinstance(v, str):
+        if key in doc and not isinstance(v, str) and not (key == "tip" and v is None):
             raise DataError(f"{where}: '{key}' is {_kind(v)}; expected text")
     for key in FLAGS:
         if key in doc and not isinstance(doc[key], bool):
