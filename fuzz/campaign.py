@@ -584,7 +584,9 @@ def case_ident(ctx, index: int, rng: random.Random) -> Case:
     if mutated:
         doc, where, old, new = mutate_json(id_doc, rng)
         jfile.write_text(_dump(doc))
-        if where and where[0] in READ_KEYS.get(kind, ()) and _json_type(old) != _json_type(new):
+        # (a deleted key is no value of another type: an absent flag reads as false)
+        changed = new != "<deleted>" and _json_type(old) != _json_type(new)
+        if where and where[0] in READ_KEYS.get(kind, ()) and changed:
             typo = f"{'/'.join(map(str, where))}: {_json_type(new)} where {_json_type(old)} was"
     else:
         jfile.write_text(json.dumps(id_doc))
