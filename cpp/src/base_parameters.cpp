@@ -29,9 +29,20 @@ namespace {
 // pivots found after it, so that it vanishes on every pivot row (the residual of a column
 // dependent only within the tolerance is not zero there); then with F~ = F(:, pivots) (unit
 // upper triangular), Y = F~^-1 F, which needs no separate factorization.
+// Sizes are measured two ways: relative to the column's own norm (colmax), and entry by entry
+// relative to the entry's row in the units of the parameters (`inv_row` = 1 / row size, `units`:
+// see columnUnits), which tells a residual that is rounding noise of large terms from a small
+// genuine one. `colsize` is the latter of each column, `zero_level` the size up to which a column
+// counts as zero.
+double sizeInRows(const Eigen::Ref<const Eigen::VectorXd>& x, long end,
+                  const Eigen::VectorXd& inv_row, double unit) {
+  return end > 0 ? x.head(end).cwiseAbs().cwiseProduct(inv_row.head(end)).maxCoeff() / unit : 0.0;
+}
+
 int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tol,
-              const Eigen::VectorXd& colmax, const std::vector<long>& colend, double zero_level,
-              RankDecision* out) {
+              const Eigen::VectorXd& colmax, const std::vector<long>& colend,
+              const Eigen::VectorXd& inv_row, const Eigen::VectorXd& units,
+              const Eigen::VectorXd& colsize, double zero_level, RankDecision* out) {
   // Rows are kept in their order; every vector remembers where its non-zero part ends, since
   // the row reduction leaves the rows of the inner links first.
   const long m = Z.rows();
@@ -66,7 +77,7 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
   if (out) residuals.resize(m, P);
   Eigen::VectorXd x(m);
   for (int c : order) {
-    if (colmax[c] <= zero_level) {
+    if (colsize[c] <= zero_level) {
       if (out) out->zero.push_back(c);
       continue;
     }
@@ -78,7 +89,9 @@ int eliminate(const Eigen::MatrixXd& Z, const std::vector<int>& order, double to
     const double rel = end > 0 ? x.head(end).cwiseAbs().maxCoeff(&r) / colmax[c] : 0.0;
     // A matrix of m rows has at most min(m, P) pivots; a residual left once they are all taken
     // is rounding noise, so the column is dependent.
-    if (rel > tol && nb < U.cols()) {
+    // A residual small against its rows is dependent too, however large against its own column
+    // (a column that is itself tiny: its coordinates carry the rounding of their rows).
+    if (rel > tol && nb < U.cols() && sizeInRows(x, end, inv_row, units[c]) > tol) {
       U.col(nb).head(end) = x.head(end);
       uend.push_back(end);
       prow.push_back(static_cast<int>(r));
@@ -155,6 +168,23 @@ BaseSet makeSet(RankDecision decision, const std::vector<std::string>& names) {
   return set;
 }
 
+// A random state: q within the joint limits (+-pi, or +-1 for a prismatic joint, where none are
+// given), dq and ddq uniform in [-2, 2].
+void randomState(const Model& model, std::mt19937& rng, Eigen::VectorXd& q, Eigen::VectorXd& dq,
+                 Eigen::VectorXd& ddq) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int k = 0; k < model.nq(); ++k) {
+    const JointLimits& l = model.joints[k].limits;
+    const bool bounded = std::isfinite(l.lower) && std::isfinite(l.upper);
+    const double lo =
+        bounded ? l.lower : (model.joints[k].type == JointType::Revolute ? -kPi : -1.0);
+    const double hi = bounded ? l.upper : -lo;
+    q[k] = lo + (hi - lo) * 0.5 * (u(rng) + 1.0);
+    dq[k] = 2.0 * u(rng);
+    ddq[k] = 2.0 * u(rng);
+  }
+}
+
 // Samples of the regressors at random states, for the numerical method.
 struct Samples {
   Eigen::MatrixXd W, wL, wH;
@@ -166,7 +196,6 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, int 
   const int n = model.nq(), P = layout.size(n);
   Data data(model);
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
   Samples s;
   s.W.resize(static_cast<long>(m) * n, P);
   s.wL.resize(me, P);
@@ -174,16 +203,7 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, int 
   Eigen::VectorXd q(n), dq(n), ddq(n), wK(P), wP(P);
   Eigen::MatrixXd W(n, P);
   for (int i = 0; i < std::max(m, me); ++i) {
-    for (int k = 0; k < n; ++k) {
-      const JointLimits& l = model.joints[k].limits;
-      const bool bounded = std::isfinite(l.lower) && std::isfinite(l.upper);
-      const double lo =
-          bounded ? l.lower : (model.joints[k].type == JointType::Revolute ? -kPi : -1.0);
-      const double hi = bounded ? l.upper : -lo;
-      q[k] = lo + (hi - lo) * 0.5 * (u(rng) + 1.0);
-      dq[k] = 2.0 * u(rng);
-      ddq[k] = 2.0 * u(rng);
-    }
+    randomState(model, rng, q, dq, ddq);
     if (i < m) {
       regressor(model, data, q, dq, ddq, layout, W);
       s.W.middleRows(static_cast<long>(i) * n, n) = W;
@@ -335,15 +355,18 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
 }  // namespace
 
 RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tolerance,
-                     const std::vector<int>& kinds) {
+                     const std::vector<int>& kinds, const Eigen::VectorXd& units_in) {
   if (static_cast<long>(order.size()) != Z.cols())
     throw std::invalid_argument("echelon: the order must name every column once");
+  if (units_in.size() != 0 && (units_in.size() != Z.cols() || !(units_in.array() > 0).all()))
+    throw std::invalid_argument("echelon: units must be one positive number per column");
   std::vector<char> seen(Z.cols(), 0);
   for (int c : order) {
     if (c < 0 || c >= Z.cols() || seen[c])
       throw std::invalid_argument("echelon: the order must be a permutation");
     seen[c] = 1;
   }
+  const Eigen::VectorXd units = units_in.size() ? units_in : Eigen::VectorXd::Ones(Z.cols()).eval();
   RankDecision d;
   d.tolerance = tolerance;
   Eigen::VectorXd colmax(Z.cols());
@@ -354,12 +377,23 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
     while (end > 0 && Z(end - 1, c) == 0.0) --end;
     colend[c] = end;
   }
-  const double biggest = Z.cols() ? colmax.maxCoeff() : 0.0;
-  const double zero_level = 1e-13 * biggest;
-  eliminate(Z, order, tolerance, colmax, colend, zero_level, &d);
-  d.zero_threshold = 1e-13;
-  for (int c : d.zero)
-    if (biggest > 0) d.largest_zeroed = std::max(d.largest_zeroed, colmax[c] / biggest);
+  // The size of each row in the units of the parameters, and of each column against its rows.
+  Eigen::VectorXd inv_row = Eigen::VectorXd::Zero(Z.rows());
+  for (int c = 0; c < Z.cols(); ++c)
+    inv_row.head(colend[c]) =
+        inv_row.head(colend[c]).cwiseMax(Z.col(c).head(colend[c]).cwiseAbs() / units[c]);
+  // Rows at the rounding level of the largest (a basis function that is zero for the exact
+  // geometry) count at that level.
+  const double row_floor = 1e-13 * (Z.rows() ? inv_row.maxCoeff() : 0.0);
+  for (long r = 0; r < Z.rows(); ++r)
+    inv_row[r] = row_floor > 0 ? 1.0 / std::max(inv_row[r], row_floor) : 0.0;
+  Eigen::VectorXd colsize(Z.cols());
+  for (int c = 0; c < Z.cols(); ++c)
+    colsize[c] = sizeInRows(Z.col(c), colend[c], inv_row, units[c]);
+  constexpr double kZeroLevel = 1e-13;
+  eliminate(Z, order, tolerance, colmax, colend, inv_row, units, colsize, kZeroLevel, &d);
+  d.zero_threshold = kZeroLevel;
+  for (int c : d.zero) d.largest_zeroed = std::max(d.largest_zeroed, colsize[c]);
 
   // Clean rounding in Y: coefficients that are 0 or +-1 to working precision are exactly that.
   // The level sits just above the rounding noise of exact geometry (<= 1e-13 relative): 1e-10
@@ -374,22 +408,37 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
         continue;
       }
       const double rel = colmax[c] > 0 ? colmax[d.pivots[b]] / colmax[c] : 1.0;
-      if (std::abs(y) * rel < kCleanLevel || colmax[c] <= zero_level)
+      if (std::abs(y) * rel < kCleanLevel || colsize[c] <= kZeroLevel)
         y = 0.0;
       else if (std::abs(std::abs(y) - 1.0) < kCleanLevel)
         y = y > 0 ? 1.0 : -1.0;
     }
   for (int b = 0; b < d.Y.rows(); ++b)
     for (int b2 = 0; b2 < d.Y.rows(); ++b2) d.Y(b2, d.pivots[b]) = b == b2 ? 1.0 : 0.0;
-  if (d.rank() > 0) {
-    // Pivot columns are reproduced exactly (identity block of Y); check the regrouped ones.
-    Eigen::VectorXd e(Z.rows());
-    for (int c : d.dependent) {
+  // The check: pivot columns are reproduced exactly (identity block of Y); the regrouped and the
+  // zero ones by Z~ Y, whose evaluation rounds by about eps sum_b |Y(b, c)| |Z~(:, b)|.
+  {
+    Eigen::VectorXd e(Z.rows()), a(Z.rows());
+    constexpr double kEval = 4 * std::numeric_limits<double>::epsilon();
+    double worst = 0;
+    auto check = [&](int c) {
       e = Z.col(c);
-      for (int b = 0; b < d.rank(); ++b)
-        if (d.Y(b, c) != 0.0) e.noalias() -= d.Y(b, c) * Z.col(d.pivots[b]);
-      d.fit_residual = std::max(d.fit_residual, e.norm() / colmax[c]);
-    }
+      a = Z.col(c).cwiseAbs();
+      for (int b = 0; b < d.rank(); ++b) {
+        const double y = d.Y(b, c);
+        if (y == 0.0) continue;
+        e.noalias() -= y * Z.col(d.pivots[b]);
+        a.noalias() += std::abs(y) * Z.col(d.pivots[b]).cwiseAbs();
+      }
+      if (colmax[c] > 0) d.fit_residual = std::max(d.fit_residual, e.norm() / colmax[c]);
+      const double size = sizeInRows(e.cwiseAbs() + kEval * a, Z.rows(), inv_row, units[c]);
+      if (size > worst) {
+        worst = size;
+        d.worst_column = c;
+      }
+    };
+    for (int c : d.dependent) check(c);
+    for (int c : d.zero) check(c);
   }
   // Near-degenerate geometry: say what the neighbouring tolerances would decide.
   const double looser = tolerance * 1e4, tighter = tolerance * 1e-3;
@@ -409,12 +458,13 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
     // Each decision depends only on those before it: with every kept pivot above the looser
     // tolerance, or every dropped residual below the tighter one and no column zeroed that is
     // not exactly zero, the elimination would decide every column as it did.
-    d.rank_looser = d.smallest_kept > looser
-                        ? d.rank()
-                        : eliminate(Z, order, looser, colmax, colend, zero_level, nullptr);
-    d.rank_tighter = d.largest_dropped <= tighter && d.largest_zeroed == 0
-                         ? d.rank()
-                         : eliminate(Z, order, tighter, colmax, colend, 0.0, nullptr);
+    d.rank_looser = d.smallest_kept > looser ? d.rank()
+                                             : eliminate(Z, order, looser, colmax, colend, inv_row,
+                                                         units, colsize, kZeroLevel, nullptr);
+    d.rank_tighter =
+        d.largest_dropped <= tighter && d.largest_zeroed == 0
+            ? d.rank()
+            : eliminate(Z, order, tighter, colmax, colend, inv_row, units, colsize, 0.0, nullptr);
     // Weak columns would go at the looser tolerance measured against their kind.
     d.rank_looser = std::min(d.rank_looser, d.rank() - weak);
   } else {
@@ -422,6 +472,38 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   }
   d.near_degenerate = d.rank_looser != d.rank() || d.rank_tighter != d.rank();
   return d;
+}
+
+Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
+  // The robot's length: the longest root path, joint offsets and prismatic travel added up.
+  const int n = model.nq();
+  std::vector<double> path(n, 0.0);
+  double reach = 0;
+  for (int k = 0; k < n; ++k) {
+    const Joint& j = model.joints[k];
+    double travel = 0;
+    if (j.type == JointType::Prismatic) {
+      const bool bounded = std::isfinite(j.limits.lower) && std::isfinite(j.limits.upper);
+      travel = bounded ? std::max(std::abs(j.limits.lower), std::abs(j.limits.upper)) : 1.0;
+    }
+    const int p = model.parent(k);
+    path[k] = (p >= 0 ? path[p] : 0.0) + j.pre.translation().norm() + j.post.translation().norm() +
+              travel;
+    reach = std::max(reach, path[k]);
+  }
+  // A power of two, so that scaling by it is exact; 1 m for a robot without lengths.
+  const double L =
+      reach > 0 && std::isfinite(reach) ? std::exp2(std::round(std::log2(reach))) : 1.0;
+  Eigen::VectorXd units = Eigen::VectorXd::Ones(layout.size(n));
+  for (int k = 0; k < n; ++k) {
+    const int c0 = k * layout.perLink();
+    for (int i = 6; i < 9; ++i) units[c0 + i] = L;  // MX MY MZ
+    units[c0 + 9] = L * L;                          // M
+    // A prismatic joint's rotor inertia and friction act on its force as a mass does.
+    if (model.joints[k].type == JointType::Prismatic)
+      for (int c = c0 + 10; c < c0 + layout.perLink(); ++c) units[c] = L * L;
+  }
+  return units;
 }
 
 std::vector<int> khalilOrder(int n, ParameterLayout layout) {
@@ -517,6 +599,88 @@ void foldRecursiveMargins(const Model& model, ParameterLayout layout, double tol
     d.rank_looser = std::min(d.rank_looser, d.rank() + dl);
     d.rank_tighter = std::max(d.rank_tighter, d.rank() + dt);
     d.near_degenerate = d.rank_looser != d.rank() || d.rank_tighter != d.rank();
+  }
+}
+
+// The check of each set against the classical dynamics, independent of the method's own
+// coordinates: at random states and for random classical vectors pi (each parameter of the size
+// its column's units make comparable), the inverse dynamics of pi against that of the classical
+// vector holding Y pi at the pivots (the equations-of-motion set), and likewise the Lagrangian
+// and the total energy; the largest difference relative to the largest value is stored in each
+// decision's `consistency`, with the classical parameter whose regrouping misses most.
+void checkRegrouping(const Model& model, ParameterLayout layout, const Eigen::VectorXd& units,
+                     BaseParameters& bp) {
+  const int n = model.nq(), P = layout.size(n);
+  Data data(model);
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  constexpr int kStates = 4, kVectors = 3;
+  struct Acc {
+    double err = 0, size = 0;
+  };
+  BaseSet* sets[] = {&bp.eom, &bp.lagrangian, &bp.energy};
+  Acc acc[3];
+  Eigen::VectorXd q(n), dq(n), ddq(n), pi(P), embedded(P), tau(n), tau_b(n);
+  for (int s = 0; s < kStates; ++s) {
+    randomState(model, rng, q, dq, ddq);
+    for (int v = 0; v < kVectors; ++v) {
+      for (int c = 0; c < P; ++c)
+        pi[c] = (0.5 + 0.5 * std::abs(u(rng))) * (u(rng) < 0 ? -1 : 1) / units[c];
+      for (int i = 0; i < 3; ++i) {
+        const RankDecision& d = sets[i]->decision;
+        embedded.setZero();
+        const Eigen::VectorXd pb = d.Y * pi;
+        for (int b = 0; b < d.rank(); ++b) embedded[d.pivots[b]] = pb[b];
+        double err, size;
+        if (i == 0) {
+          inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+          inverseDynamics(model, data, q, dq, ddq, embedded, layout, tau_b);
+          err = (tau - tau_b).cwiseAbs().maxCoeff();
+          size = tau.cwiseAbs().maxCoeff();
+        } else {
+          const double K = kineticEnergy(model, data, q, dq, pi, layout);
+          const double V = potentialEnergy(model, data, q, pi, layout);
+          const double Kb = kineticEnergy(model, data, q, dq, embedded, layout);
+          const double Vb = potentialEnergy(model, data, q, embedded, layout);
+          err = i == 1 ? std::abs((K - V) - (Kb - Vb)) : std::abs((K + V) - (Kb + Vb));
+          size = std::abs(K) + std::abs(V);
+        }
+        acc[i].err = std::max(acc[i].err, err);
+        acc[i].size = std::max(acc[i].size, size);
+      }
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    RankDecision& d = sets[i]->decision;
+    d.consistency = acc[i].size > 0 ? acc[i].err / acc[i].size : 0.0;
+  }
+}
+
+// Refuses a set whose regrouping does not reproduce the dynamics (see checkRegrouping).
+void refuseInconsistent(const BaseParameters& bp, double tol) {
+  const std::pair<const BaseSet*, const char*> sets[] = {{&bp.eom, "equations of motion"},
+                                                         {&bp.lagrangian, "Lagrangian"},
+                                                         {&bp.energy, "total energy"}};
+  for (const auto& [set, what] : sets) {
+    const RankDecision& d = set->decision;
+    // A tenth of the tolerance: random vectors pi stand for every parameter vector.
+    if (!(d.consistency > 0.1 * tol)) continue;
+    char buf[640];
+    std::snprintf(
+        buf, sizeof buf,
+        "the %s base set (%d parameters at rank tolerance %s) does not reproduce the dynamics: "
+        "at random states its regrouping misses the classical model by %.2g relative, over the "
+        "tolerance (largest regrouping residual at %s); the geometry is near-degenerate "
+        "(smallest kept pivot %.2g, largest regrouped residual %.2g; %d base parameters at "
+        "tolerance %.2g, %d at %.2g)%s",
+        what, d.rank(), shortest(tol).c_str(), d.consistency,
+        d.worst_column >= 0 ? bp.classical_names[d.worst_column].c_str() : "no column",
+        d.smallest_kept, d.largest_dropped, d.rank_looser, tol * 1e4, d.rank_tighter, tol * 1e-3,
+        bp.snappable.empty()
+            ? ": give a looser or tighter rank tolerance"
+            : ": round the joint rotations and axes that are within 1e-3 of right angles (snap), "
+              "or give another rank tolerance");
+    throw ModelError(buf);
   }
 }
 
@@ -626,18 +790,25 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     const int p = c % layout.perLink();
     kinds[c] = p < 6 ? 0 : (p < 9 ? 1 : (p == 9 ? 2 : 3 + (p - 10)));
   }
-  bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds), bp.classical_names);
+  const Eigen::VectorXd units = columnUnits(model, layout);
+  bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds, units), bp.classical_names);
   if (options.method != BaseMethod::Numerical) {
     // The total-energy coordinates are the Lagrangian's with the potential rows negated: a
     // diagonal +-1 row scaling, which leaves every pivot, residual and Y exactly as they are
     // (recursive: the same row space, as the constant's sign does not change it).
     bp.energy = bp.lagrangian;
   } else {
-    bp.energy = makeSet(echelon(ZH, order, tol, kinds), bp.classical_names);
+    bp.energy = makeSet(echelon(ZH, order, tol, kinds, units), bp.classical_names);
   }
-  bp.eom = makeSet(echelon(ZE, order, tol, kinds), bp.classical_names);
+  bp.eom = makeSet(echelon(ZE, order, tol, kinds, units), bp.classical_names);
   if (options.method == BaseMethod::Recursive)
     foldRecursiveMargins(model, layout, tol, space, ZE.rows(), bp);
+  {
+    Model copy = model;
+    bp.snappable = snapRightAngles(copy, 1e-3);
+  }
+  checkRegrouping(model, layout, units, bp);
+  refuseInconsistent(bp, tol);
   bp.lagrangian_equals_energy = bp.lagrangian.decision.pivots == bp.energy.decision.pivots;
   bp.lagrangian_equals_eom = bp.lagrangian.decision.pivots == bp.eom.decision.pivots;
   bp.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -46,7 +46,9 @@ class BaseParameters:
         ``formulas_full``, ``Y``,
         ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
         and ``margin`` (tolerance, smallest kept / largest dropped relative pivot, the counts at
-        the neighbouring tolerances, ``near_degenerate``).
+        the neighbouring tolerances, ``near_degenerate``, and ``consistency``: how far ``W_b Y``
+        is from the classical regressor, relative to the size of its terms; a set over the
+        tolerance is refused with a ModelError when computed).
     offset : bool
         A constant torque offset per joint, ``tau_j = ... + Off_j``: the parameters ``Off1 ..
         OffN`` follow all others, in the base set as in the classical vector, each its own base
@@ -158,6 +160,8 @@ class BaseParameters:
     basis_rows = property(lambda self: self._b.basis_rows)
     terms_formed = property(lambda self: self._b.terms_formed)
     snapped = property(lambda self: self._b.snapped)
+    #: what ``snap`` would round (rotations or axes within 1e-3 of right angles, not exact)
+    snappable = property(lambda self: list(self._b.snappable))
     lagrangian_equals_energy = property(lambda self: self._b.lagrangian_equals_energy)
     lagrangian_equals_eom = property(lambda self: self._b.lagrangian_equals_eom)
 
@@ -262,6 +266,7 @@ class BaseParameters:
             "basis_rows": self.basis_rows,
             "seconds": self.seconds,
             "snapped": self.snapped,
+            "snappable": self.snappable,
         }
         if symbolic:
             out.update(self.symbolic().to_dict())
@@ -314,7 +319,8 @@ def base_parameters(
         margin is reported in ``sets[...]["margin"]``.
     snap : float or bool, optional
         Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
-        1e-3) before computing; what was changed is listed in ``snapped``.
+        1e-3) before computing; what was changed is listed in ``snapped`` (and what it would
+        change, when not given, in ``snappable``).
     samples, seed : int
         Numerical method only: number of random states for the regressor (0: automatic,
         ``max(40, 3 P / n + 20)`` for ``P`` parameters and ``n`` joints; fewer than ``P / n`` are
