@@ -97,8 +97,8 @@ CASES = {
 
 
 # Geometry on which the exact methods' rank decisions cannot be regrouped to the tolerance: they
-# refuse (the numerical method returns a consistent set on both).
-REFUSED_BY_THE_EXACT_METHODS = ("DH twist 89.99", "MDH lengths 1e6 m")
+# refuse (the numerical method returns a consistent set).
+REFUSED_BY_THE_EXACT_METHODS = ("DH twist 89.99",)
 
 
 def returned_or_refused(robot: mindyn.Robot, method: str, rotor: bool, rng) -> str:
@@ -179,3 +179,20 @@ def test_refusal_says_why_and_suggests_snapping_only_where_it_applies(tmp_path):
     exact = tmp_path / "exact.urdf"
     exact.write_text(one_joint("0 1 0", "0 0 0", "0 0 0"))
     assert mindyn.base_parameters(exact).snappable == []
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e4, 1e6, 1e7])
+def test_exact_geometry_at_any_length_scale_has_the_base_set_of_one_metre(tmp_path, scale):
+    """Lengths only scale the regrouping coefficients (by powers of the scale): a table at 1 m
+    and the same at other scales give the same base parameters, each reproducing its dynamics.
+    The projection method pruned genuine coordinates as rounding noise against entries a
+    length squared larger, and returned a wrong set from about 1e4 m on."""
+    sets = {}
+    for s in (1.0, scale):
+        path = tmp_path / f"table{s}.yaml"
+        path.write_text(dh_table(90.0, s, "mdh"))
+        robot = mindyn.load(path)
+        bp = mindyn.base_parameters(robot)
+        assert odd.consistency_error(robot, bp, np.random.default_rng(5)) <= TOL
+        sets[s] = bp.names
+    assert sets[scale] == sets[1.0]

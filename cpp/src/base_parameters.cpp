@@ -474,8 +474,11 @@ RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, do
   return d;
 }
 
-Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
-  // The robot's length: the longest root path, joint offsets and prismatic travel added up.
+namespace {
+
+// The robot's length: the longest root path, joint offsets and prismatic travel added up, as a
+// power of two (so that scaling by it is exact); 1 m for a robot without lengths.
+double robotLength(const Model& model) {
   const int n = model.nq();
   std::vector<double> path(n, 0.0);
   double reach = 0;
@@ -491,9 +494,34 @@ Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
               travel;
     reach = std::max(reach, path[k]);
   }
-  // A power of two, so that scaling by it is exact; 1 m for a robot without lengths.
-  const double L =
-      reach > 0 && std::isfinite(reach) ? std::exp2(std::round(std::log2(reach))) : 1.0;
+  return reach > 0 && std::isfinite(reach) ? std::exp2(std::round(std::log2(reach))) : 1.0;
+}
+
+// The model with every length divided by L (a power of two: exact) and gravity with it, so that
+// the exact methods form their coordinates at lengths of order one: their pruning of rounding
+// noise compares entries of a term that mix lengths to the first and second power, which at
+// kilometres or micrometres drops genuine entries. Coordinates of the scaled model times the
+// column units (columnUnits) are those of the model, row for row up to a power of L per row.
+Model unitLengthModel(const Model& model, double L) {
+  Model m = model;
+  for (Joint& j : m.joints) {
+    j.pre.translation() /= L;
+    j.post.translation() /= L;
+    if (j.type == JointType::Prismatic) {
+      j.limits.lower /= L;
+      j.limits.upper /= L;
+    }
+  }
+  m.gravity /= L;
+  m.tool.translation() /= L;
+  return m;
+}
+
+}  // namespace
+
+Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
+  const int n = model.nq();
+  const double L = robotLength(model);
   Eigen::VectorXd units = Eigen::VectorXd::Ones(layout.size(n));
   for (int k = 0; k < n; ++k) {
     const int c0 = k * layout.perLink();
@@ -706,12 +734,17 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
 
   Eigen::MatrixXd ZL, ZH, ZE;
   IdentifiableSpace space;  // recursive method
+  const Eigen::VectorXd units = columnUnits(model, layout);
+  const double length = robotLength(model);
+  const Model unit_model = length != 1.0 ? unitLengthModel(model, length) : Model{};
+  const Model& exact_model = length != 1.0 ? unit_model : model;
   if (options.method == BaseMethod::Projection) {
-    const InfluenceCoordinates ic = influenceCoordinates(model, layout, options.projection_budget);
+    const InfluenceCoordinates ic =
+        influenceCoordinates(exact_model, layout, options.projection_budget);
     bp.basis_rows = ic.rows();
     bp.terms_formed = ic.terms_formed;
     const Reduced red = reduceRows(ic);
-    ZL = red.Z;
+    ZL = red.Z * units.asDiagonal();
     // Equations of motion: the constant does not reach the torques; friction columns do.
     const long keep = ZL.rows() - (red.constant_row >= 0 ? 1 : 0);
     const int fr = layout.friction ? 2 * n : 0;
@@ -726,8 +759,10 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
   } else if (options.method == BaseMethod::Recursive) {
     // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has
     // no friction columns), the total energy's is the same space.
-    space = recursiveIdentifiable(model, layout, tol);
-    ZE = std::move(space.rows);
+    space = recursiveIdentifiable(exact_model, layout, tol);
+    ZE = space.rows * units.asDiagonal();
+    space.rows.resize(0, 0);
+    space.constant = space.constant * units.asDiagonal();
     ZE.rowwise().normalize();
     // The constant first: it involves no joint, like the rows of the inner links, and leaves
     // the columns' last non-zero rows where they are. Then the rows with an entry off the
@@ -790,7 +825,6 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     const int p = c % layout.perLink();
     kinds[c] = p < 6 ? 0 : (p < 9 ? 1 : (p == 9 ? 2 : 3 + (p - 10)));
   }
-  const Eigen::VectorXd units = columnUnits(model, layout);
   bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds, units), bp.classical_names);
   if (options.method != BaseMethod::Numerical) {
     // The total-energy coordinates are the Lagrangian's with the potential rows negated: a
@@ -802,7 +836,7 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
   }
   bp.eom = makeSet(echelon(ZE, order, tol, kinds, units), bp.classical_names);
   if (options.method == BaseMethod::Recursive)
-    foldRecursiveMargins(model, layout, tol, space, ZE.rows(), bp);
+    foldRecursiveMargins(exact_model, layout, tol, space, ZE.rows(), bp);
   {
     Model copy = model;
     bp.snappable = snapRightAngles(copy, 1e-3);
