@@ -635,7 +635,7 @@ void foldRecursiveMargins(const Model& model, ParameterLayout layout, double tol
 // its column's units make comparable), the inverse dynamics of pi against that of the classical
 // vector holding Y pi at the pivots (the equations-of-motion set), and likewise the Lagrangian
 // and the total energy; the largest difference relative to the largest value is stored in each
-// decision's `consistency`, with the classical parameter whose regrouping misses most.
+// decision's `consistency`.
 void checkRegrouping(const Model& model, ParameterLayout layout, const Eigen::VectorXd& units,
                      BaseParameters& bp) {
   const int n = model.nq(), P = layout.size(n);
@@ -643,45 +643,42 @@ void checkRegrouping(const Model& model, ParameterLayout layout, const Eigen::Ve
   std::mt19937 rng(12345);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   constexpr int kStates = 4, kVectors = 3;
-  struct Acc {
-    double err = 0, size = 0;
-  };
+  // The vectors pi, and for each set the classical vectors holding Y pi at its pivots: one
+  // product with Y per set (Y is dense, rank x P).
+  Eigen::MatrixXd pis(P, kVectors);
+  for (int v = 0; v < kVectors; ++v)
+    for (int c = 0; c < P; ++c)
+      pis(c, v) = (0.5 + 0.5 * std::abs(u(rng))) * (u(rng) < 0 ? -1 : 1) / units[c];
   BaseSet* sets[] = {&bp.eom, &bp.lagrangian, &bp.energy};
-  Acc acc[3];
-  Eigen::VectorXd q(n), dq(n), ddq(n), pi(P), embedded(P), tau(n), tau_b(n);
+  Eigen::MatrixXd embedded[3];
+  for (int i = 0; i < 3; ++i) {
+    const RankDecision& d = sets[i]->decision;
+    const Eigen::MatrixXd pb = d.Y * pis;
+    embedded[i] = Eigen::MatrixXd::Zero(P, kVectors);
+    for (int b = 0; b < d.rank(); ++b) embedded[i].row(d.pivots[b]) = pb.row(b);
+  }
+  double err[3] = {0, 0, 0}, size[3] = {0, 0, 0};
+  Eigen::VectorXd q(n), dq(n), ddq(n), tau(n), tau_b(n);
   for (int s = 0; s < kStates; ++s) {
     randomState(model, rng, q, dq, ddq);
     for (int v = 0; v < kVectors; ++v) {
-      for (int c = 0; c < P; ++c)
-        pi[c] = (0.5 + 0.5 * std::abs(u(rng))) * (u(rng) < 0 ? -1 : 1) / units[c];
-      for (int i = 0; i < 3; ++i) {
-        const RankDecision& d = sets[i]->decision;
-        embedded.setZero();
-        const Eigen::VectorXd pb = d.Y * pi;
-        for (int b = 0; b < d.rank(); ++b) embedded[d.pivots[b]] = pb[b];
-        double err, size;
-        if (i == 0) {
-          inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
-          inverseDynamics(model, data, q, dq, ddq, embedded, layout, tau_b);
-          err = (tau - tau_b).cwiseAbs().maxCoeff();
-          size = tau.cwiseAbs().maxCoeff();
-        } else {
-          const double K = kineticEnergy(model, data, q, dq, pi, layout);
-          const double V = potentialEnergy(model, data, q, pi, layout);
-          const double Kb = kineticEnergy(model, data, q, dq, embedded, layout);
-          const double Vb = potentialEnergy(model, data, q, embedded, layout);
-          err = i == 1 ? std::abs((K - V) - (Kb - Vb)) : std::abs((K + V) - (Kb + Vb));
-          size = std::abs(K) + std::abs(V);
-        }
-        acc[i].err = std::max(acc[i].err, err);
-        acc[i].size = std::max(acc[i].size, size);
+      const auto pi = pis.col(v);
+      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+      inverseDynamics(model, data, q, dq, ddq, embedded[0].col(v), layout, tau_b);
+      err[0] = std::max(err[0], (tau - tau_b).cwiseAbs().maxCoeff());
+      size[0] = std::max(size[0], tau.cwiseAbs().maxCoeff());
+      const double K = kineticEnergy(model, data, q, dq, pi, layout);
+      const double V = potentialEnergy(model, data, q, pi, layout);
+      for (int i = 1; i < 3; ++i) {
+        const double Kb = kineticEnergy(model, data, q, dq, embedded[i].col(v), layout);
+        const double Vb = potentialEnergy(model, data, q, embedded[i].col(v), layout);
+        const double e = i == 1 ? (K - V) - (Kb - Vb) : (K + V) - (Kb + Vb);
+        err[i] = std::max(err[i], std::abs(e));
+        size[i] = std::max(size[i], std::abs(K) + std::abs(V));
       }
     }
   }
-  for (int i = 0; i < 3; ++i) {
-    RankDecision& d = sets[i]->decision;
-    d.consistency = acc[i].size > 0 ? acc[i].err / acc[i].size : 0.0;
-  }
+  for (int i = 0; i < 3; ++i) sets[i]->decision.consistency = size[i] > 0 ? err[i] / size[i] : 0.0;
 }
 
 // Refuses a set whose regrouping does not reproduce the dynamics (see checkRegrouping).
