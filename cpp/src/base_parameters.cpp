@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <random>
 #include <stdexcept>
+#include <tuple>
 #include <type_traits>
 
 #include "mindyn/projection.hpp"
@@ -642,7 +643,7 @@ void checkRegrouping(const Model& model, ParameterLayout layout, const Eigen::Ve
   Data data(model);
   std::mt19937 rng(12345);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  constexpr int kStates = 4, kVectors = 3;
+  constexpr int kStates = 10, kVectors = 3;
   // The vectors pi, and for each set the classical vectors holding Y pi at its pivots: one
   // product with Y per set (Y is dense, rank x P).
   Eigen::MatrixXd pis(P, kVectors);
@@ -683,13 +684,18 @@ void checkRegrouping(const Model& model, ParameterLayout layout, const Eigen::Ve
 
 // Refuses a set whose regrouping does not reproduce the dynamics (see checkRegrouping).
 void refuseInconsistent(const BaseParameters& bp, double tol) {
-  const std::pair<const BaseSet*, const char*> sets[] = {{&bp.eom, "equations of motion"},
-                                                         {&bp.lagrangian, "Lagrangian"},
-                                                         {&bp.energy, "total energy"}};
-  for (const auto& [set, what] : sets) {
+  // A few random vectors pi stand for every parameter vector, whose terms may be distributed
+  // otherwise: the exact methods' torques are checked to a hundredth of the tolerance (a
+  // physical vector's error was up to 100 times theirs on generated odd geometry), the energies
+  // and the sampled method's sets, which fit to about 1e-11, to a tenth.
+  const double eom_share = bp.method == BaseMethod::Numerical ? 0.1 : 0.01;
+  const std::tuple<const BaseSet*, const char*, double> sets[] = {
+      {&bp.eom, "equations of motion", eom_share},
+      {&bp.lagrangian, "Lagrangian", 0.1},
+      {&bp.energy, "total energy", 0.1}};
+  for (const auto& [set, what, share] : sets) {
     const RankDecision& d = set->decision;
-    // A tenth of the tolerance: random vectors pi stand for every parameter vector.
-    if (!(d.consistency > 0.1 * tol)) continue;
+    if (!(d.consistency > share * tol)) continue;
     char buf[640];
     std::snprintf(
         buf, sizeof buf,
