@@ -316,7 +316,10 @@ def base_parameters(
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
     tolerance : float
         Relative size below which a pivot counts as zero (default 1e-9). Every decision's
-        margin is reported in ``sets[...]["margin"]``.
+        margin is reported in ``sets[...]["margin"]``. Each set is checked against the
+        classical inverse dynamics (energies for the Lagrangian and total-energy sets) at random
+        states; one whose regrouping misses them (near-degenerate geometry) raises a ModelError
+        that says by how much and what to try.
     snap : float or bool, optional
         Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
         1e-3) before computing; what was changed is listed in ``snapped`` (and what it would
