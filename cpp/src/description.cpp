@@ -154,14 +154,22 @@ Eigen::Vector3d vec3(const Ctx& c, const YAML::Node& node, const std::string& ke
   return {number(c, node[0], key), number(c, node[1], key), number(c, node[2], key)};
 }
 
+// Rotations by multiples of 90 degrees come out of sin/cos with 1e-17 residues: cleaned here,
+// before they multiply lengths (a residue times a length of 1e6 m is no longer below clean()'s
+// level, and makes exactly degenerate geometry look near-degenerate).
+Eigen::Matrix3d exactRightAngles(Eigen::Matrix3d R) {
+  for (int i = 0; i < 9; ++i)
+    if (std::abs(R.data()[i]) < 1e-15) R.data()[i] = 0.0;
+  return R;
+}
 Eigen::Isometry3d rotX(double a) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  T.linear() = exactRightAngles(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitX()).toRotationMatrix());
   return T;
 }
 Eigen::Isometry3d rotZ(double a) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.linear() = exactRightAngles(Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()).toRotationMatrix());
   return T;
 }
 Eigen::Isometry3d trans(double x, double y, double z) {

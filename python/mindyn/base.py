@@ -60,8 +60,10 @@ class BaseParameters:
         ``formulas_full``, ``Y``,
         ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
         and ``margin`` (tolerance, smallest kept / largest dropped relative pivot, the counts at
-        the neighbouring tolerances, ``near_degenerate``). Each set is a read-only mapping whose
-        ``Y`` and formulas are computed on first access.
+        the neighbouring tolerances, ``near_degenerate``, and ``consistency``: how far ``W_b Y``
+        is from the classical regressor, relative to the size of its terms; a set over the
+        tolerance is refused with a ModelError when computed). Each set is a read-only mapping
+        whose ``Y`` and formulas are computed on first access.
     method_reason : str
         Why this method ran: ``method='recursive'`` when it was given, else the reason of
         :func:`choose_method` (``"the projection method handles at most 256 parameters, ..."``).
@@ -193,6 +195,8 @@ class BaseParameters:
     basis_rows = property(lambda self: self._b.basis_rows)
     terms_formed = property(lambda self: self._b.terms_formed)
     snapped = property(lambda self: self._b.snapped)
+    #: what ``snap`` would round (rotations or axes within 1e-3 of right angles, not exact)
+    snappable = property(lambda self: list(self._b.snappable))
     lagrangian_equals_energy = property(lambda self: self._b.lagrangian_equals_energy)
     lagrangian_equals_eom = property(lambda self: self._b.lagrangian_equals_eom)
 
@@ -297,6 +301,7 @@ class BaseParameters:
             "basis_rows": self.basis_rows,
             "seconds": self.seconds,
             "snapped": self.snapped,
+            "snappable": self.snappable,
         }
         if symbolic:
             out.update(self.symbolic().to_dict())
@@ -376,10 +381,14 @@ def base_parameters(
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
     tolerance : float
         Relative size below which a pivot counts as zero (default 1e-9). Every decision's
-        margin is reported in ``sets[...]["margin"]``.
+        margin is reported in ``sets[...]["margin"]``. Each set is checked against the
+        classical inverse dynamics (energies for the Lagrangian and total-energy sets) at random
+        states; one whose regrouping misses them (near-degenerate geometry) raises a ModelError
+        that says by how much and what to try.
     snap : float or bool, optional
         Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
-        1e-3) before computing; what was changed is listed in ``snapped``.
+        1e-3) before computing; what was changed is listed in ``snapped`` (and what it would
+        change, when not given, in ``snappable``).
     samples, seed : int
         Numerical method only: number of random states for the regressor (0: automatic,
         ``max(40, 3 P / n + 20)`` for ``P`` parameters and ``n`` joints; fewer than ``P / n`` are

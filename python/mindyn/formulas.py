@@ -19,7 +19,11 @@ Symbolic formulas (:func:`symbolic_formulas`)
     a DH/MDH table brings two more symbols, ``C_alphaj`` and ``S_alphaj`` (its cosine and sine;
     ``C^2`` or ``1 - S^2``, whichever is shorter), unless lengths and twists together would need
     more than ``MAX_MONOMIALS`` monomials: then those sines and cosines stay numbers in the
-    coefficients. URDF rotations and the fixed ``theta`` of prismatic joints stay numbers. A length
+    coefficients. A twist that turns a link frame scales that link's pivot coefficients (the
+    inertia about a DH joint axis is ``C^2 ZZ + 2 C S YZ + S^2 YY``): such a row is a polynomial
+    divided by one of ``C, S, C S, C^2, S^2`` of its twist, found by fitting each candidate's
+    multiple of the row, and written ``(...)/(C_alphaj*S_alphaj)``.
+    URDF rotations and the fixed ``theta`` of prismatic joints stay numbers. A length
     that is zero in the description is a structural zero, not a symbol (a non-zero value there
     describes another robot, whose base set can differ: zero offsets are what let parameters
     regroup across parallel or intersecting axes), and the offset of a prismatic joint's variable
@@ -154,18 +158,28 @@ class Formula:
     name: str
     terms: tuple[Term, ...]
     symbols: tuple[str, ...] = ()
+    #: a polynomial every term is divided by (a twist's sines and cosines), or None
+    denominator: Poly | None = None
 
     def __str__(self) -> str:
         return self.text()
 
     def text(self) -> str:
-        """``XXR2 = XX2 - YY2 + 0.18645124*(M2 + M3)``; powers as ``d3^2``."""
-        return self.name + " = " + _join([_term_text(t, self.symbols) for t in self.terms])
+        """``XXR2 = XX2 - YY2 + 0.18645124*(M2 + M3)``; powers as ``d3^2``; with a denominator
+        ``YZR1 = (2*C_alpha1*S_alpha1*YZ1 + S_alpha1^2*YY1)/(2*C_alpha1*S_alpha1)``."""
+        body = _join([_term_text(t, self.symbols) for t in self.terms])
+        if self.denominator is not None:
+            neg, den, _ = _poly_body(self.denominator, self.symbols, latex=False)
+            body = f"{'-' if neg else ''}({body})/({den})"
+        return self.name + " = " + body
 
     def latex(self) -> str:
         """One ``align`` row: ``\\mathrm{XXR}_{2} &= ...``."""
-        parts = [_term_latex(t, self.symbols) for t in self.terms]
-        return f"{_latex_name(self.name)} &= {_join(parts)}"
+        body = _join([_term_latex(t, self.symbols) for t in self.terms])
+        if self.denominator is not None:
+            neg, den, _ = _poly_body(self.denominator, self.symbols, latex=True)
+            body = f"{'-' if neg else ''}\\frac{{{body}}}{{{den}}}"
+        return f"{_latex_name(self.name)} &= {body}"
 
 
 def _join(parts: list[tuple[bool, str]]) -> str:
@@ -480,6 +494,23 @@ MAX_SECONDS = 120.0
 CHECK_TOLERANCE = 1e-10
 
 
+def _value(poly: Poly, x: np.ndarray) -> float:
+    return sum(float(v) * np.prod(x ** np.array(e, dtype=float)) for e, v in poly)
+
+
+def _denominators(ns: int, nt: int) -> list[Poly]:
+    """Candidate denominators of a row of ``Y``: the products of a twist's cosine and sine of
+    degree <= 2 (a link frame turned by a general twist makes its pivot's coefficient one of
+    these, and the row's coefficients ratios with it)."""
+    out: list[Poly] = []
+    for j in range(nt):
+        for c, s in ((1, 0), (0, 1), (1, 1), (2, 0), (0, 2)):
+            e = [0] * (ns + 2 * nt)
+            e[ns + 2 * j], e[ns + 2 * j + 1] = c, s
+            out.append(((tuple(e), Fraction(1)),))
+    return out
+
+
 def _rationalise(c: float) -> Number | None:
     """A fitted monomial coefficient as a fraction, a rounded float, or None for zero."""
     tol = FRACTION_TOLERANCE * max(1.0, abs(c))
@@ -512,7 +543,8 @@ class SymbolicFormulas:
     checked : int
         Number of geometries every formula was checked at (the description's and random ones).
     largest_difference : float
-        Largest difference between a formula evaluated there and the numeric ``Y``.
+        Largest difference between a formula evaluated there and the numeric ``Y``, entry by
+        entry relative to the entry (or to the size lengths give it, if larger).
     """
 
     formulas: list[Formula]
@@ -522,6 +554,8 @@ class SymbolicFormulas:
     classical_names: list[str]
     checked: int
     largest_difference: float
+    #: base index -> the polynomial its row of ``polys`` is divided by (rows without: none)
+    denominators: dict = None  # type: ignore[assignment]
 
     @property
     def text(self) -> list[str]:
@@ -533,7 +567,9 @@ class SymbolicFormulas:
         x = np.asarray(values, dtype=float)
         Y = np.zeros((len(self.names), len(self.classical_names)))
         for (b, c), poly in self.polys.items():
-            Y[b, c] = sum(float(v) * np.prod(x ** np.array(e, dtype=float)) for e, v in poly)
+            Y[b, c] = _value(poly, x)
+        for b, den in (self.denominators or {}).items():
+            Y[b] /= _value(den, x)
         return Y
 
     def to_dict(self) -> dict:
@@ -568,13 +604,17 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     ns = len(geo.symbols)
     twists = list(geo.twists)
     trig_exps = [(0, 0), (1, 0), (0, 1), (2, 0), (1, 1)]  # in (cos, sin), sin^2 = 1 - cos^2
+    # times a denominator of degree 2 (see _denominators): degree 4
+    trig_wide = trig_exps + [(3, 0), (2, 1), (4, 0), (3, 1)]
     if len(_exponents(ns)) > MAX_MONOMIALS:
         raise _core.ModelError(
             f"symbolic formulas: '{robot.name}' has {ns} non-zero lengths, "
             f"{len(_exponents(ns))} monomials of degree <= 2 to recover; at most "
             f"{MAX_MONOMIALS} are supported (about 33 lengths)"
         )
-    if len(_exponents(ns)) * len(trig_exps) ** len(twists) > MAX_MONOMIALS:
+    if len(_exponents(ns)) * len(trig_wide) ** len(twists) <= MAX_MONOMIALS:
+        trig_exps = trig_wide
+    elif len(_exponents(ns)) * len(trig_exps) ** len(twists) > MAX_MONOMIALS:
         twists = []  # too many general twists: their sines and cosines stay numbers
     nt = len(twists)
     geo.twists = twists
@@ -623,8 +663,26 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
             f"the limit is {MAX_SECONDS:.0f} s"
         )
     samples = np.array(samples + [numeric(x, a).ravel() for x, a in fit[1:]])
-    A = _design(np.array([point(x, a) for x, a in fit]), exps)
+    points = np.array([point(x, a) for x, a in fit])
+    A = _design(points, exps)
     C, *_ = np.linalg.lstsq(A, samples, rcond=None)  # (monomials, base * classical)
+    # A row that is no polynomial may be one divided by a twist's cos/sin (the wide basis
+    # holds the products): the first candidate whose multiple of the row fits is taken.
+    denominators: dict[int, Poly] = {}
+    if trig_exps is trig_wide:
+        pinv = np.linalg.pinv(A)
+        for b in range(len(names)):
+            cols = slice(b * P, (b + 1) * P)
+            rows = samples[:, cols]
+            if _fits(A, C[:, cols], rows):
+                continue
+            for den in _denominators(ns, nt):
+                target = rows * _design(points, [e for e, _ in den])[:, :1]
+                fitted = pinv @ target
+                if _fits(A, fitted, target):
+                    C[:, cols] = fitted
+                    denominators[b] = den
+                    break
 
     polys: dict[tuple[int, int], Poly] = {}
     for flat in np.flatnonzero(np.max(np.abs(C), axis=0) > FRACTION_TOLERANCE):
@@ -647,13 +705,21 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
         classical_names=classical,
         checked=0,
         largest_difference=0.0,
+        denominators=denominators,
     )
     worst = 0.0
     checks = [(point(geo.values, alpha0), Y0)]
     checks += [(point(x, a), numeric(x, a)) for x, a in draw(3)]
+    # Entry by entry, against the size the entry has at those lengths: with lengths scaled by s,
+    # Y[b, c] scales by s^(w_b - w_c) (module documentation), so a coefficient of 1 next to one
+    # of 1e12 (lengths of 1e6 m) is checked to 1e-10, not to 100.
+    weight = np.array([_length_weight(c, len(classical) // robot.n) for c in range(P)])
+    power = weight[pivots][:, None] - weight[None, :] if pivots else np.zeros((0, P))
     for x, Yn in checks:
-        diff = float(np.max(np.abs(result.evaluate(x) - Yn))) if Yn.size else 0.0
-        limit = CHECK_TOLERANCE * max(1.0, float(np.max(np.abs(Yn))) if Yn.size else 1.0)
+        size = max(1.0, float(np.max(np.abs(x[:ns]), initial=0.0)))
+        scale = np.maximum(np.abs(Yn), size**power)
+        diff = float(np.max(np.abs(result.evaluate(x) - Yn) / scale)) if Yn.size else 0.0
+        limit = CHECK_TOLERANCE
         if not diff <= limit:
             raise _core.ModelError(
                 f"symbolic formulas: the regrouping coefficients of '{robot.name}' are not "
@@ -675,9 +741,16 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
         worst = max(worst, diff)
     result.checked = len(checks)
     result.largest_difference = worst
-    result.formulas = _gather(names, classical, polys, tuple(symbols))
+    result.formulas = _gather(names, classical, polys, tuple(symbols), denominators)
     result.formulas += [unit_formula(o) for o in bp.names[len(names) :]]
     return result
+
+
+def _length_weight(c: int, per_link: int) -> int:
+    """Power of length in classical parameter ``c``'s unit over the mass's: 2 for inertias (rotor
+    inertia and friction count as inertias), 1 for first moments, 0 for the mass."""
+    p = c % per_link
+    return 1 if 6 <= p <= 8 else 0 if p == 9 else 2
 
 
 def _rounded_right_angles(robot) -> bool:
@@ -705,7 +778,14 @@ def _shorter_trig(poly: list, i: int) -> list:
     return alt_list if len(alt_list) < len(poly) else poly
 
 
-def _gather(names, classical, polys, symbols) -> list[Formula]:
+def _fits(A: np.ndarray, C: np.ndarray, values: np.ndarray) -> bool:
+    """The fitted polynomials reproduce the sampled values (to 1e-9 of their size)."""
+    return bool(
+        np.max(np.abs(A @ C - values), initial=0.0) <= 1e-9 * max(1.0, np.abs(values).max())
+    )
+
+
+def _gather(names, classical, polys, symbols, denominators=None) -> list[Formula]:
     out = []
     for b, name in enumerate(names):
         groups: list[tuple[Poly, list[str]]] = []
@@ -722,7 +802,8 @@ def _gather(names, classical, polys, symbols) -> list[Formula]:
             else:
                 groups.append((poly, [classical[c]]))
         terms = tuple(Term(coef=p, params=tuple(ps)) for p, ps in groups)
-        out.append(Formula(name=name, terms=terms, symbols=symbols))
+        den = (denominators or {}).get(b)
+        out.append(Formula(name=name, terms=terms, symbols=symbols, denominator=den))
     return out
 
 

@@ -69,6 +69,7 @@ py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
   margin["largest_zeroed"] = d.largest_zeroed;
   margin["near_degenerate"] = d.near_degenerate;
   margin["fit_residual"] = d.fit_residual;
+  margin["consistency"] = d.consistency;
   out["margin"] = margin;
   return out;
 }
@@ -477,6 +478,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("terms_formed", [](const PyBase& b) { return b.bp.terms_formed; })
       .def_property_readonly("seconds", [](const PyBase& b) { return b.bp.seconds; })
       .def_property_readonly("snapped", [](const PyBase& b) { return b.snapped; })
+      .def_property_readonly("snappable", [](const PyBase& b) { return b.bp.snappable; })
       .def_property_readonly("model", [](const PyBase& b) { return b.model; })
       .def("values",
            [](const PyBase& b, const Eigen::VectorXd& pi) {

@@ -36,11 +36,18 @@ struct RankDecision {
   // Columns are also compared with the largest column of their kind (inertia, first moment,
   // mass, ...): a kept column that is tiny for its kind (a joint axis tilted by rounding) is weak.
   double weakest_kept = std::numeric_limits<double>::infinity();  // pivot x norm / kind's largest
-  double zero_threshold = 0;  // column norms up to this (relative to the largest) count as zero
-  double largest_zeroed = 0;  // largest such non-zero column norm, relative; 0 if all exact
+  double zero_threshold = 0;  // columns up to this (entries relative to their rows) count as zero
+  double largest_zeroed = 0;  // largest such non-zero column size, relative; 0 if all exact
   bool near_degenerate = false;
   Eigen::SparseMatrix<double> Y;  // rank x columns, Y.col(pivots[b]) = e_b; mostly zero
   double fit_residual = 0;        // max |Z - Z~ Y| relative to max |Z|
+  // W_b Y = W checked against the classical model (computeBaseParameters): the largest
+  // difference of the regrouped dynamics from the classical one at random states, relative to
+  // the largest value; 0 from echelon alone.
+  double consistency = 0;
+  // The column whose regrouping leaves the largest residual in Z (with the rounding of
+  // evaluating Z~ Y), each entry relative to its row in the units of the parameters.
+  int worst_column = -1;
   int rank() const { return static_cast<int>(pivots.size()); }
 };
 
@@ -50,11 +57,27 @@ inline constexpr double kDefaultRankTolerance = 1e-9;
 /// Gaussian elimination of the columns of Z in `order` (a permutation of all column indices).
 /// `kinds` optionally groups the columns (same value: same kind of parameter) for the
 /// weak-column report.
+///
+/// `units` (optional, one positive number per column, e.g. columnUnits) gives each column the
+/// size of its coordinates for parameters of unit size in the robot's own length scale: a
+/// coordinate is compared with the others of its row in those units. A residual is kept as a
+/// pivot only when it is above the tolerance both relative to its own column and relative to its
+/// rows in those units; a column whose entries are all below 1e-13 of their rows counts as zero.
+/// Without `units`, every column counts as of unit size.
 RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order,
-                     double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {});
+                     double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {},
+                     const Eigen::VectorXd& units = {});
 /// The same on a sparse Z (only its non-zero entries are stored and visited).
 RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& order,
-                     double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {});
+                     double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {},
+                     const Eigen::VectorXd& units = {});
+
+/// Size of each column's coordinates in units of the robot's length L (its longest root path,
+/// joint offsets and prismatic travel added up from the base, rounded to a power of two): L^2 for
+/// the mass, L for the first moments, 1 for the inertia, rotor inertia and friction (L^2 for
+/// those of a prismatic joint, which act on its force as a mass does); powers of two, so that
+/// scaling by them is exact.
+Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout);
 
 /// The conventional (Khalil) priority order: link by link from the base; in each link
 /// XX XY XZ YZ ZZ MX MY, then YY MZ M, then Ia, Fv, Fc.
@@ -91,7 +114,10 @@ struct BaseParameters {
   BaseSet lagrangian, energy, eom;  // the three sets; eom is the one used for dynamics
   bool lagrangian_equals_energy = false;
   bool lagrangian_equals_eom = false;
-  int basis_rows = 0;    // projection: non-zero basis functions; numerical: stacked rows
+  int basis_rows = 0;  // projection: non-zero basis functions; numerical: stacked rows
+  /// What snapRightAngles would change (rotations or axes within 1e-3 of right angles that are
+  /// not exactly right), so that a near-degenerate report suggests snapping only where it applies.
+  std::vector<std::string> snappable;
   int terms_formed = 0;  // projection: terms produced by the recursion
   double seconds = 0;    // wall time of the computation
 
@@ -101,6 +127,10 @@ struct BaseParameters {
   Eigen::VectorXd embed(const Eigen::Ref<const Eigen::VectorXd>& base) const;
 };
 
+/// Computes the three sets. Each is checked before it is returned: W_b Y must reproduce the
+/// classical coordinates (RankDecision::consistency within the tolerance); a set that does not --
+/// near-degenerate geometry whose regrouping cannot be evaluated to the tolerance -- is refused
+/// with a ModelError that says which column, how far, and what to do.
 BaseParameters computeBaseParameters(const Model& model, const BaseOptions& options = {});
 
 /// Formula text "NAME = c1*P1 + c2*P2 ...": exact zeros dropped, +-1 written as signs,

@@ -168,10 +168,18 @@ def cmd_base(args: argparse.Namespace) -> int:
         )
     if m["near_degenerate"]:
         lines.append(
-            f"  WARNING        near-degenerate geometry: {m['rank_at_looser_tolerance']} base "
-            f"parameters at tolerance {m['looser_tolerance']:.3g}, "
-            f"{m['rank_at_tighter_tolerance']} at {m['tighter_tolerance']:.3g} "
-            "(consider --snap if joint rotations are meant to be right angles)"
+            f"  WARNING        near-degenerate geometry: {counts['eom']} base parameters at "
+            f"tolerance {m['tolerance']:.3g}, decided by pivots within the band (smallest kept "
+            f"{m['smallest_kept']:.3g}, largest regrouped {m['largest_dropped']:.3g}); "
+            f"{m['rank_at_looser_tolerance']} at {m['looser_tolerance']:.3g}, "
+            f"{m['rank_at_tighter_tolerance']} at {m['tighter_tolerance']:.3g}; the regrouping "
+            f"is checked: W_b Y reproduces the dynamics to {m['consistency']:.2g}"
+            + (
+                f" (--snap would round {len(bp.snappable)} rotation(s) or axes that are within "
+                "1e-3 of right angles)"
+                if bp.snappable
+                else ""
+            )
         )
     if bp.offset:
         lines.append(
