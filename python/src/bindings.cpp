@@ -31,14 +31,6 @@ void bindControl(py::module_& m);
 
 namespace {
 
-ParameterLayout layoutOf(const py::object& rotor, const py::object& friction, bool& given) {
-  given = !rotor.is_none() || !friction.is_none();
-  ParameterLayout l;
-  l.rotor = !rotor.is_none() && rotor.cast<bool>();
-  l.friction = !friction.is_none() && friction.cast<bool>();
-  return l;
-}
-
 Eigen::Matrix4d toMatrix(const Eigen::Isometry3d& T) { return T.matrix(); }
 
 py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
