@@ -41,10 +41,19 @@ def _sleep():
     time.sleep(30)
 
 
+def _held_mib() -> int:
+    """The resident memory of this process now [MiB]."""
+    with open("/proc/self/statm") as f:
+        pages = int(f.read().split()[1])
+    return pages * os.sysconf("SC_PAGE_SIZE") >> 20
+
+
 def _allocate():
     import numpy as np
 
-    a = np.ones(300 << 17)  # 300 MiB, touched
+    # 500 MiB above the parent's resident memory, touched: a forked child counts at most the
+    # pages it shares with its parent, so its peak is at least this and at most their sum
+    a = np.ones((_held_mib() + 500) << 17)
     return ("ok", str(a.sum()))
 
 
@@ -53,13 +62,8 @@ def _allocate():
 )
 def test_child_failures_are_findings(fn, timeout, kind):
     """A signal, a case past its timeout and a peak RSS past the limit (here 200 MiB above what
-    the test process holds now, which a forked child starts from; not the process's peak, which
-    earlier tests of a whole run may have raised far above it) are findings, not passes."""
-    import os
-
-    pages = int(open("/proc/self/statm").read().split()[1])
-    held = pages * os.sysconf("SC_PAGE_SIZE") >> 20
-    assert campaign.run_child(fn, timeout, held + 200)[0] == kind
+    the test process holds now) are findings, not passes."""
+    assert campaign.run_child(fn, timeout, _held_mib() + 200)[0] == kind
 
 
 def test_oracle_catches_an_inconsistent_base_set():
