@@ -134,8 +134,8 @@ class Transmission:
     motors : tuple of str
         Motor (actuator) names.
     types : tuple of str
-        Each motor's transmission type (``SimpleTransmission``, ... or ``matrix`` for a YAML
-        row).
+        Each motor's transmission type (``SimpleTransmission``, ..., ``direct`` for a joint
+        a URDF gives no transmission while others have one, ``matrix`` for a YAML row).
     torque_constant : ndarray, shape (n_m,), read-only
         Motor torque constants [N m/A] the description gives (NaN where none).
     format : str

@@ -102,7 +102,7 @@ def attach_currents(
     between those of ``data`` are left out. Raises DataError naming the first time stamp
     without a match."""
     t_i, cur = read_currents(path, data.n)
-    G, info = current_gains(robot, drive_gain)
+    G, info = current_gains(robot, drive_gain=drive_gain)
     if G.shape[0] != data.n:
         raise DataError(f"drive gains: {G.shape[0]} values for {data.n} joints")
     tol = tolerance if tolerance is not None else 1e-3 * float(np.median(np.diff(data.t)))

@@ -487,7 +487,7 @@ def drive_gains(robot=None, drive_gain=None) -> tuple[np.ndarray, str]:
     return K, "drive table: torque_constant x gear_ratio"
 
 
-def current_gains(robot=None, drive_gain=None) -> tuple[np.ndarray, dict]:
+def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
     """The matrix ``G`` (n, n) that turns motor currents ``i`` (m, n) [A] into joint torques
     ``tau = i @ G`` [N m], and how it was formed.
 
@@ -540,7 +540,7 @@ def convert_torque(tau: np.ndarray, unit: str, robot=None, drive_gain=None):
     if unit_l == "Nm":
         return tau, {"unit": "N m"}
     if unit_l == "current":
-        G, info = current_gains(robot, drive_gain)
+        G, info = current_gains(robot, drive_gain=drive_gain)
         if G.shape[0] != tau.shape[1]:
             raise DataError(f"drive gains: {G.shape[0]} values for {tau.shape[1]} joints")
         return tau @ G, {"unit": "motor current [A]", **info}
