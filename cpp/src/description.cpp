@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -289,12 +291,102 @@ Model parseDocument(const std::string& yaml, const std::string& source) {
   }
 }
 
+/// A list of numbers of length `size` (motors or joints).
+std::vector<double> numbers(const Ctx& c, const YAML::Node& node, const std::string& key,
+                            size_t size) {
+  if (!node.IsSequence() || node.size() != size)
+    c.fail("'" + key + "' must be a list of " + std::to_string(size) + " numbers", node);
+  std::vector<double> v;
+  for (const auto& x : node) v.push_back(number(c, x, key));
+  return v;
+}
+
+/// `transmissions:` either {matrix: [[...], ...] (n_m rows of n), motors: [names], offset: [c],
+/// torque_constant: [K_t]}, or a list of motors {name, joints: {joint: coefficient, ...},
+/// offset, torque_constant}: q_m = T q + c (see transmission.hpp).
+Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model) {
+  const YAML::Node node = root["transmissions"];
+  const size_t n = model.joints.size();
+  Transmission tr;
+  tr.format = "yaml";
+  std::vector<std::vector<double>> rows;
+  std::vector<double> offsets, constants;
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  if (node.IsMap()) {
+    c.where = "transmissions";
+    checkKeys(c, node, {"matrix", "motors", "offset", "torque_constant"}, "transmissions");
+    const YAML::Node M = node["matrix"];
+    if (!M.IsDefined()) c.fail("has no 'matrix' (n_m rows of " + std::to_string(n) + ")", node);
+    if (!M.IsSequence() || M.size() == 0)
+      c.fail("'matrix' must be a list of rows (one per motor) of " + std::to_string(n) + " numbers",
+             M);
+    for (const auto& r : M) rows.push_back(numbers(c, r, "matrix", n));
+    const size_t m = rows.size();
+    for (size_t i = 0; i < m; ++i) tr.motors.push_back("motor" + std::to_string(i + 1));
+    if (node["motors"].IsDefined()) {
+      const YAML::Node names = node["motors"];
+      if (!names.IsSequence() || names.size() != m)
+        c.fail("'motors' must be a list of " + std::to_string(m) + " names", names);
+      for (size_t i = 0; i < m; ++i) tr.motors[i] = text(c, names[i], "motors");
+    }
+    offsets = node["offset"].IsDefined() ? numbers(c, node["offset"], "offset", m)
+                                         : std::vector<double>(m, 0.0);
+    constants = node["torque_constant"].IsDefined()
+                    ? numbers(c, node["torque_constant"], "torque_constant", m)
+                    : std::vector<double>(m, kNaN);
+  } else if (node.IsSequence() && node.size() > 0) {
+    std::map<std::string, size_t> index;
+    for (size_t k = 0; k < n; ++k) index[model.joints[k].name] = k;
+    size_t i = 0;
+    for (const auto& e : node) {
+      c.where = "transmissions, motor " + std::to_string(++i);
+      if (!e.IsMap()) c.fail("a motor must be a mapping, got " + std::string(kindName(e)), e);
+      checkKeys(c, e, {"name", "joints", "offset", "torque_constant"}, "a motor");
+      tr.motors.push_back(text(c, e, "name", "motor" + std::to_string(i)));
+      c.where += " ('" + tr.motors.back() + "')";
+      const YAML::Node js = e["joints"];
+      if (!js.IsDefined() || !js.IsMap() || js.size() == 0)
+        c.fail("'joints' must map joint names to the motor's coefficients, e.g. {j1: 100}",
+               js.IsDefined() ? js : e);
+      std::vector<double> row(n, 0.0);
+      for (const auto& kv : js) {
+        const std::string j = kv.first.Scalar();
+        const auto it = index.find(j);
+        if (it == index.end()) c.fail("joint '" + j + "' is not a joint of the robot", kv.first);
+        row[it->second] = number(c, kv.second, j);
+      }
+      rows.push_back(row);
+      offsets.push_back(optional(c, e, "offset", 0.0));
+      constants.push_back(optional(c, e, "torque_constant", kNaN));
+    }
+  } else {
+    c.where.clear();
+    c.fail(
+        "'transmissions' must be a mapping {matrix, motors, offset, torque_constant} or a "
+        "list of motors {name, joints: {joint: coefficient}, offset, torque_constant}",
+        node);
+  }
+  const auto m = static_cast<Eigen::Index>(rows.size());
+  tr.T.resize(m, static_cast<Eigen::Index>(n));
+  for (Eigen::Index r = 0; r < m; ++r)
+    for (size_t k = 0; k < n; ++k) tr.T(r, static_cast<Eigen::Index>(k)) = rows[r][k];
+  tr.offset = Eigen::Map<const Eigen::VectorXd>(offsets.data(), m);
+  tr.torque_constant = Eigen::Map<const Eigen::VectorXd>(constants.data(), m);
+  tr.types.assign(static_cast<size_t>(m), "matrix");
+  c.where.clear();
+  const std::string who = c.source + ":" + std::to_string(node.Mark().line + 1) + ": transmissions";
+  std::vector<std::string> names;
+  for (const Joint& j : model.joints) names.push_back(j.name);
+  tr.validate(names, who);
+  return tr;
+}
+
 Model build(const Ctx& start, const YAML::Node& root) {
   Ctx c = start;
   const std::string source = c.source;
   checkKeys(c, root,
             {"name", "description", "source", "notes", "convention", "angle_unit", "gravity",
-             "synthetic_inertia", "joints", "tool"},
+             "synthetic_inertia", "joints", "tool", "transmissions"},
             "the description");
   Model model;
   model.name = text(c, root, "name", "robot");
@@ -416,6 +508,7 @@ Model build(const Ctx& start, const YAML::Node& root) {
     }
     model.tool = T;
   }
+  if (root["transmissions"].IsDefined()) model.transmission = readTransmissions(c, root, model);
   model.validate();
   return model;
 }

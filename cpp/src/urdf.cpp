@@ -414,13 +414,278 @@ class NumberCheck {
   bool rewritten_ = false;
 };
 
+// ---------------------------------------------------------------------------------------------
+// Transmissions as ros_control writes them, read from the same XML: ROS 1 <transmission> children
+// of <robot> (<type>, <joint name><role><offset><mechanicalReduction>, <actuator name><role>
+// <mechanicalReduction>) and ROS 2 <ros2_control><transmission name> (<plugin>, <actuator name
+// role><mechanical_reduction>, <joint name role><offset><mechanical_reduction>); either spelling
+// of the reduction is read in either form. Transmissions of other types (PR2's type attribute,
+// other plugins) are left out and named in the notes; one naming no joint of the file too. Each
+// problem of the three types read is refused in one line naming the file, line, transmission
+// and element.
+// ---------------------------------------------------------------------------------------------
+
+class TransmissionReader {
+ public:
+  explicit TransmissionReader(std::string source) : source_(std::move(source)) {}
+
+  /// The transmissions declared under `robot`; `format` is set to "ros1" or "ros2" (a file
+  /// mixing both forms is refused).
+  std::vector<TransmissionGroup> run(const TiXmlElement* robot, std::string* format) {
+    std::vector<TransmissionGroup> groups;
+    for (const TiXmlElement* e = robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
+      if (e->ValueStr() == "transmission") {
+        if (other(e, false)) continue;
+        setFormat(e, "ros1", format);
+        groups.push_back(read(e, false));
+      } else if (e->ValueStr() == "ros2_control") {
+        for (const TiXmlElement* t = e->FirstChildElement("transmission"); t;
+             t = t->NextSiblingElement("transmission")) {
+          if (other(t, true)) continue;
+          setFormat(t, "ros2", format);
+          groups.push_back(read(t, true));
+        }
+      }
+    }
+    std::set<std::string> names, actuators;
+    for (const TransmissionGroup& g : groups) {
+      if (!names.insert(g.name).second)
+        throw ModelError(source_ + ":" + std::to_string(g.line) + ": transmission '" + g.name +
+                         "' is declared twice");
+      for (const std::string& a : g.actuators)
+        if (!actuators.insert(a).second)
+          throw ModelError(source_ + ":" + std::to_string(g.line) + ": transmission '" + g.name +
+                           "': actuator '" + a + "' belongs to another transmission too");
+    }
+    return groups;
+  }
+
+  /// Transmissions of other types (PR2's <transmission type="pr2_mechanism_model/...">, other
+  /// plugins such as HalfDifferentialTransmission), left out: 'name' (type).
+  std::vector<std::string> skipped;
+
+ private:
+  /// True (and noted in `skipped`) for a transmission of a type that is none of the three
+  /// read here nor looks like a misspelling of one (also PR2's type attribute instead of the
+  /// element). Such transmissions are not read.
+  bool other(const TiXmlElement* t, bool ros2) {
+    const TiXmlElement* type = t->FirstChildElement(ros2 ? "plugin" : "type");
+    std::string full = type ? trimmed(type->GetText()) : "";
+    if (!type && !ros2 && t->Attribute("type")) full = t->Attribute("type");
+    const std::vector<std::string> known{"transmission_interface/SimpleTransmission",
+                                         "transmission_interface/DifferentialTransmission",
+                                         "transmission_interface/FourBarLinkageTransmission"};
+    if (full.empty() || std::find(known.begin(), known.end(), full) != known.end() ||
+        !misspelt(full, known).empty())
+      return false;  // read (or refused as a misspelling)
+    const char* name = t->Attribute("name");
+    skipped.push_back("'" + std::string(name ? name : "") + "' (" + full + ")");
+    return true;
+  }
+
+  void setFormat(const TiXmlElement* e, const std::string& form, std::string* format) const {
+    if (!format->empty() && *format != form)
+      throw ModelError(source_ + ":" + std::to_string(e->Row()) +
+                       ": transmissions in both the ROS 1 form (<transmission> in <robot>) and "
+                       "the ROS 2 form (in <ros2_control>); use one");
+    *format = form;
+  }
+
+  [[noreturn]] void fail(const TiXmlElement* at, const std::string& what) const {
+    throw ModelError(source_ + ":" + std::to_string(at->Row()) + ": " + owner_ + ": " + what);
+  }
+
+  static std::string trimmed(const char* text) {
+    std::string s = text ? text : "";
+    size_t b = 0, e = s.size();
+    while (b < e && isXmlSpace(s[b])) ++b;
+    while (e > b && isXmlSpace(s[e - 1])) --e;
+    return s.substr(b, e - b);
+  }
+
+  /// The only child <tag> of `e` (nullptr if none; a second one is refused), after refusing a
+  /// child that looks like a misspelling of one of `known`.
+  const TiXmlElement* only(const TiXmlElement* e, const std::string& tag,
+                           const std::vector<std::string>& known) const {
+    for (const TiXmlElement* c = e->FirstChildElement(); c; c = c->NextSiblingElement()) {
+      const std::string& t = c->ValueStr();
+      if (std::find(known.begin(), known.end(), t) != known.end()) continue;
+      const std::string like = misspelt(t, known);
+      if (!like.empty())
+        fail(c, "<" + e->ValueStr() + "> holds an element <" + t + ">, which ros_control does " +
+                    "not define in this form; is it <" + like + ">?");
+    }
+    const TiXmlElement* found = e->FirstChildElement(tag);
+    if (found && found->NextSiblingElement(tag))
+      fail(found->NextSiblingElement(tag), "<" + e->ValueStr() + "> holds a second <" + tag + ">");
+    return found;
+  }
+
+  /// The number written in element `c` (child of <where>); a non-zero one if `nonzero`.
+  double number(const TiXmlElement* c, const std::string& where, bool nonzero) const {
+    const std::string text = trimmed(c->GetText());
+    const std::string shown =
+        "<" + where + "><" + c->ValueStr() + ">" + text + "</" + c->ValueStr() + ">";
+    if (text.empty()) fail(c, shown + ": expected a number, got none");
+    double v = 0.0;
+    const std::string why = readDecimal(text, &v);
+    if (why == "too large for a double" || (why.empty() && std::abs(v) > kMaxDescriptionValue))
+      fail(c, shown + ": exceeds the bound on the magnitude of a description value");
+    if (!why.empty()) fail(c, shown + ": " + why);
+    if (nonzero && v == 0.0) fail(c, shown + ": a reduction cannot be zero");
+    return v;
+  }
+
+  struct Member {
+    const TiXmlElement* element;
+    std::string name;
+    int role;  // 0-based, -1 if none given
+    double reduction;
+    bool has_reduction;
+    double offset;
+    bool has_offset;
+  };
+
+  TransmissionGroup read(const TiXmlElement* t, bool ros2) {
+    TransmissionGroup g;
+    g.line = t->Row();
+    const char* name = t->Attribute("name");
+    if (!name || !*name) {
+      owner_ = "a transmission";
+      fail(t, "<transmission> has no name attribute");
+    }
+    g.name = name;
+    owner_ = "transmission '" + g.name + "'";
+    const std::string type_tag = ros2 ? "plugin" : "type";
+    const std::string reduction_tag = ros2 ? "mechanical_reduction" : "mechanicalReduction";
+    const std::vector<std::string> known{type_tag, "joint", "actuator"};
+    const TiXmlElement* type = only(t, type_tag, known);
+    const std::string kTypes =
+        "transmission_interface/SimpleTransmission, DifferentialTransmission or "
+        "FourBarLinkageTransmission";
+    if (!type) fail(t, "<transmission> has no <" + type_tag + "> (" + kTypes + ")");
+    const std::string full = trimmed(type->GetText());
+    const std::string prefix = "transmission_interface/";
+    g.type = full.rfind(prefix, 0) == 0 ? full.substr(prefix.size()) : "";
+    if (g.type != "SimpleTransmission" && g.type != "DifferentialTransmission" &&
+        g.type != "FourBarLinkageTransmission")
+      fail(type, "<" + type_tag + ">" + full + "</" + type_tag + ">: is it " +
+                     misspelt(full, {"transmission_interface/SimpleTransmission",
+                                     "transmission_interface/DifferentialTransmission",
+                                     "transmission_interface/FourBarLinkageTransmission"}) +
+                     "?");
+    const size_t count = g.type == "SimpleTransmission" ? 1 : 2;
+    const std::vector<Member> joints = members(t, "joint", count, ros2, reduction_tag);
+    const std::vector<Member> actuators = members(t, "actuator", count, ros2, reduction_tag);
+    for (const Member& a : actuators) {
+      if (!ros2 && !a.has_reduction)
+        fail(a.element, "<actuator name=\"" + a.name + "\"> has no <" + reduction_tag + ">");
+      if (a.has_offset)
+        fail(a.element, "<actuator name=\"" + a.name +
+                            "\"> has an <offset>; "
+                            "ros_control gives offsets to joints");
+      if (ros2 && count == 1 && a.has_reduction)
+        fail(a.element, "<actuator name=\"" + a.name + "\"> has a <" + reduction_tag +
+                            ">; ros2_control's SimpleTransmission reads it from <joint>");
+      g.actuators.push_back(a.name);
+      g.actuator_reduction.push_back(a.has_reduction ? a.reduction : 1.0);
+    }
+    for (const Member& j : joints) {
+      if (!ros2 && count == 1 && j.has_reduction)
+        fail(j.element, "<joint name=\"" + j.name + "\"> has a <" + reduction_tag +
+                            ">; ros_control's SimpleTransmission reads it from <actuator>");
+      g.joints.push_back(j.name);
+      g.joint_reduction.push_back(j.has_reduction ? j.reduction : 1.0);
+      g.joint_offset.push_back(j.has_offset ? j.offset : 0.0);
+    }
+    if (ros2 && count == 1) {  // the reduction is the joint's; keep it as the actuator's
+      g.actuator_reduction[0] = g.joint_reduction[0];
+      g.joint_reduction[0] = 1.0;
+    }
+    return g;
+  }
+
+  /// The `count` <joint> or <actuator> children of transmission `t`, ordered by role.
+  std::vector<Member> members(const TiXmlElement* t, const std::string& kind, size_t count,
+                              bool ros2, const std::string& reduction_tag) const {
+    std::vector<Member> found;
+    for (const TiXmlElement* e = t->FirstChildElement(kind); e; e = e->NextSiblingElement(kind)) {
+      Member m{e, "", -1, 1.0, false, 0.0, false};
+      const char* name = e->Attribute("name");
+      if (!name || !*name) fail(e, "<" + kind + "> has no name attribute");
+      m.name = name;
+      const std::string where = kind + " name=\"" + m.name + "\"";
+      // The other form's spelling is read too (files mix them), but not both at once.
+      const std::string other_tag = ros2 ? "mechanicalReduction" : "mechanical_reduction";
+      std::vector<std::string> known{reduction_tag, other_tag, "offset", "hardwareInterface"};
+      if (!ros2) known.push_back("role");
+      const TiXmlElement* role_e = ros2 ? nullptr : only(e, "role", known);
+      const char* role_a = ros2 ? e->Attribute("role") : nullptr;
+      if (role_e || role_a) {
+        const std::string role = role_e ? trimmed(role_e->GetText()) : trimmed(role_a);
+        for (size_t r = 0; r < count; ++r)
+          if (role == kind + std::to_string(r + 1)) m.role = static_cast<int>(r);
+        if (m.role < 0 && count > 1)
+          fail(role_e ? role_e : e,
+               "<" + where + ">: role '" + role + "' is not " + kind + "1 or " + kind + "2");
+      } else if (count > 1 && !ros2) {
+        fail(e, "<" + where + "> has no <role> (" + kind + "1 or " + kind + "2)");
+      }
+      const TiXmlElement* r = only(e, reduction_tag, known);
+      const TiXmlElement* r2 = only(e, other_tag, known);
+      if (r && r2)
+        fail(r2, "<" + where + "> holds both <" + reduction_tag + "> and <" + other_tag +
+                     ">; give one");
+      if (!r) r = r2;
+      if (r) {
+        m.reduction = number(r, where, true);
+        m.has_reduction = true;
+      }
+      if (const TiXmlElement* o = only(e, "offset", known)) {
+        m.offset = number(o, where, false);
+        m.has_offset = true;
+      }
+      found.push_back(m);
+    }
+    if (found.size() != count)
+      fail(t, "a " + std::string(count == 1 ? "SimpleTransmission" : "two-joint transmission") +
+                  " needs " + std::to_string(count) + " <" + kind + "> element" +
+                  (count > 1 ? "s" : "") + ", found " + std::to_string(found.size()));
+    if (count > 1) {
+      const bool roles = found[0].role >= 0 || found[1].role >= 0;
+      if (roles && (found[0].role < 0 || found[1].role < 0))
+        fail(found[found[0].role < 0 ? 0 : 1].element,
+             "<" + kind + "> has no role while the other has one");
+      if (roles && found[0].role == found[1].role)
+        fail(found[1].element, "two <" + kind + "> elements have the role " + kind +
+                                   std::to_string(found[0].role + 1));
+      if (roles && found[0].role == 1) std::swap(found[0], found[1]);
+      if (found[0].name == found[1].name)
+        fail(found[1].element, "both <" + kind + "> elements name '" + found[0].name + "'");
+    }
+    return found;
+  }
+
+  const std::string source_;
+  std::string owner_;
+};
+
 /// The URDF text urdfdom is to read: `xml` once its links and joints passed NumberCheck, with
 /// numbers written with extra white space rewritten. Text TinyXML cannot parse is returned as
 /// it is, for urdfdom to report.
-std::string checkNumbers(const std::string& xml, const std::string& source) {
+/// The transmissions are read into `groups` and `format`; those of other types are named in
+/// `skipped`.
+std::string checkNumbers(const std::string& xml, const std::string& source,
+                         std::vector<TransmissionGroup>* groups, std::string* format,
+                         std::vector<std::string>* skipped) {
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   TiXmlElement* robot = doc.Error() ? nullptr : doc.FirstChildElement("robot");
+  if (robot) {
+    TransmissionReader reader(source);
+    *groups = reader.run(robot, format);
+    *skipped = reader.skipped;
+  }
   if (!robot || !NumberCheck(source).run(robot)) return xml;
   TiXmlPrinter printer;
   doc.Accept(&printer);
@@ -781,6 +1046,29 @@ class Builder {
   std::vector<double> viscous_, coulomb_;
 };
 
+/// Sets the model's transmission from the groups read; the URDF's joints that are not moving
+/// joints of the model are held at their locked position (fixed: 0; moving: 0 clamped into
+/// their limits, as the Builder locks them).
+void addTransmissions(const urdf::ModelInterface& urdf,
+                      const std::vector<TransmissionGroup>& groups, const std::string& format,
+                      Model* model) {
+  std::vector<std::string> names, locked;
+  std::vector<double> q;
+  for (const Joint& j : model->joints) names.push_back(j.name);
+  for (const auto& [name, j] : urdf.joints_) {
+    if (!j || std::find(names.begin(), names.end(), name) != names.end()) continue;
+    double v = 0.0;
+    if (isMoving(*j) && j->limits && j->type != urdf::Joint::CONTINUOUS &&
+        j->limits->lower <= j->limits->upper)
+      v = std::min(std::max(0.0, j->limits->lower), j->limits->upper);
+    locked.push_back(name);
+    q.push_back(v);
+  }
+  model->transmission =
+      assembleTransmission(groups, format, names, locked, q, model->source, &model->notes);
+  model->validate();
+}
+
 }  // namespace
 
 Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1>& inertial,
@@ -801,10 +1089,25 @@ Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1
 Model parseUrdf(const std::string& xml, const std::string& tip, const std::string& source) {
   try {
     requireUtf8(xml, source);
-    std::string reason;
-    const urdf::ModelInterfaceSharedPtr urdf = parseQuietly(checkNumbers(xml, source), &reason);
+    std::string reason, format;
+    std::vector<TransmissionGroup> groups;
+    std::vector<std::string> skipped;
+    const urdf::ModelInterfaceSharedPtr urdf =
+        parseQuietly(checkNumbers(xml, source, &groups, &format, &skipped), &reason);
     if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
-    return Builder(*urdf, source).build(tip);
+    Model model = Builder(*urdf, source).build(tip);
+    if (!groups.empty()) addTransmissions(*urdf, groups, format, &model);
+    if (!skipped.empty()) {
+      std::string text;
+      for (const std::string& k : skipped) text += (text.empty() ? "" : ", ") + k;
+      model.notes += (model.notes.empty() ? "" : "; ") +
+                     std::string(
+                         "transmissions of other types than SimpleTransmission, "
+                         "DifferentialTransmission and FourBarLinkageTransmission, not "
+                         "read: ") +
+                     text;
+    }
+    return model;
   } catch (const ModelError& e) {
     throw ModelError(escapeControl(e.what()));  // names from the file may hold line breaks
   }

@@ -537,3 +537,63 @@ TEST(Yaml, MessagesStayOneLineOfUtf8) {
   const std::string u = errorOf<ModelError>([] { parseYaml("name: r\xff\n", "u.yaml"); });
   EXPECT_TRUE(contains(u, "u.yaml:1: not UTF-8 text (byte 0xff at offset 7)")) << u;
 }
+
+namespace {
+
+/// A planar arm of 3 joints with the motors of `T` (named a, b, c).
+Model withTransmission(const Eigen::MatrixXd& T) {
+  Model m = planarArm(3);
+  m.transmission.format = "yaml";
+  m.transmission.T = T;
+  m.transmission.offset = Eigen::VectorXd::Zero(T.rows());
+  m.transmission.torque_constant = Eigen::VectorXd::Constant(T.rows(), NAN);
+  for (int i = 0; i < T.rows(); ++i) {
+    m.transmission.motors.push_back(std::string(1, static_cast<char>('a' + i)));
+    m.transmission.types.push_back("matrix");
+  }
+  return m;
+}
+
+}  // namespace
+
+TEST(Transmission, ValidateNamesEachProblem) {
+  Eigen::MatrixXd T = Eigen::MatrixXd::Identity(3, 3) * 50.0;
+  EXPECT_NO_THROW(withTransmission(T).validate());
+  Eigen::MatrixXd idle = T;
+  idle.col(1).setZero();
+  EXPECT_NE(errorOf<ModelError>([&] {
+              withTransmission(idle).validate();
+            }).find("no motor drives joint 'joint2'"),
+            std::string::npos);
+  Eigen::MatrixXd deficient = T;
+  deficient.col(2) = deficient.col(0) + deficient.col(1);
+  EXPECT_NE(
+      errorOf<ModelError>([&] { withTransmission(deficient).validate(); }).find("rank deficient"),
+      std::string::npos);
+  Eigen::MatrixXd nan = T;
+  nan(1, 2) = NAN;
+  EXPECT_NE(errorOf<ModelError>([&] {
+              withTransmission(nan).validate();
+            }).find("motor 'b': its coefficient of joint 'joint3'"),
+            std::string::npos);
+  Model twice = withTransmission(T);
+  twice.transmission.motors[2] = "a";
+  EXPECT_NE(errorOf<ModelError>([&] { twice.validate(); }).find("must be unique"),
+            std::string::npos);
+}
+
+TEST(Transmission, FourBarAndDifferentialMatricesFollowRosControlPositionMaps) {
+  // joint -> actuator positions as ros_control documents them, with offsets o:
+  // four-bar: a1 j1 (x1 - o1), a2 ((x1 - o1) + j2 (x2 - o2));
+  // differential: a1 (j1 (x1 - o1) + j2 (x2 - o2)), a2 (j1 (x1 - o1) - j2 (x2 - o2))
+  TransmissionGroup g{"w",          "FourBarLinkageTransmission",
+                      {"j5", "j6"}, {"m5", "m6"},
+                      {50.0, 40.0}, {1.5, 0.5},
+                      {0.1, -0.2}};
+  const Eigen::Vector2d x(0.3, -0.7), d = x - Eigen::Vector2d(0.1, -0.2);
+  const Eigen::Vector2d fourbar(50.0 * 1.5 * d[0], 40.0 * (d[0] + 0.5 * d[1]));
+  EXPECT_LT((g.matrix() * x + g.offsets() - fourbar).norm(), 1e-12);
+  g.type = "DifferentialTransmission";
+  const Eigen::Vector2d diff(50.0 * (1.5 * d[0] + 0.5 * d[1]), 40.0 * (1.5 * d[0] - 0.5 * d[1]));
+  EXPECT_LT((g.matrix() * x + g.offsets() - diff).norm(), 1e-12);
+}

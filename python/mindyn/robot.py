@@ -11,6 +11,7 @@ friction. A vector's layout is recognised from its length (10n, 11n with ``Ia``,
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -18,7 +19,7 @@ import numpy as np
 
 from . import _args, _core
 
-__all__ = ["Robot", "load", "bundled_robots"]
+__all__ = ["Robot", "Transmission", "load", "bundled_robots"]
 
 _PLANAR = re.compile(r"planar([0-9]+)(h?)")
 # Most joints of a model, as the core's kMaxModelJoints (a test keeps the two equal); checked here
@@ -109,6 +110,52 @@ def _load(robot: str | Path, tip: str | None) -> Robot:
         f"unknown robot '{text}'; bundled robots: {', '.join(bundled_robots())}, "
         "or give a path to a .urdf or .yaml file"
     )
+
+
+def _readonly(a) -> np.ndarray:
+    out = np.array(a, dtype=float)
+    out.flags.writeable = False
+    return out
+
+
+@dataclass(frozen=True)
+class Transmission:
+    """Transmissions between the motors and the joints of a robot (as data: the dynamics do
+    not use them yet).
+
+    Attributes
+    ----------
+    T : ndarray, shape (n_m, n), read-only
+        Motor positions ``q_m = T q + offset``; joint torques ``tau = T^T tau_m``. Row i is
+        motor i, column k joint k; the gear ratios and coupling terms of ros_control's
+        SimpleTransmission, DifferentialTransmission and FourBarLinkageTransmission.
+    offset : ndarray, shape (n_m,), read-only
+        Motor positions at ``q = 0``.
+    motors : tuple of str
+        Motor (actuator) names.
+    types : tuple of str
+        Each motor's transmission type (``SimpleTransmission``, ..., ``direct`` for a joint
+        a URDF gives no transmission while others have one, ``matrix`` for a YAML row).
+    torque_constant : ndarray, shape (n_m,), read-only
+        Motor torque constants [N m/A] the description gives (NaN where none).
+    format : str
+        ``ros1`` or ``ros2`` (the URDF form read) or ``yaml``.
+    groups : tuple of dict
+        The transmissions as declared in a URDF: name, type, joints, actuators,
+        actuator_reduction, joint_reduction, joint_offset.
+    """
+
+    T: np.ndarray
+    offset: np.ndarray
+    motors: tuple
+    types: tuple
+    torque_constant: np.ndarray
+    format: str
+    groups: tuple = field(default=())
+
+    @property
+    def n_motors(self) -> int:
+        return len(self.motors)
 
 
 class Robot:
@@ -227,6 +274,24 @@ class Robot:
         unknown; URDF gives none)."""
         rows = self._m.drives
         return {k: np.array([r[k] for r in rows]) for k in rows[0]}
+
+    @property
+    def transmission(self) -> Transmission | None:
+        """The motors and their coupling to the joints, ``q_m = T q + offset`` and
+        ``tau = T^T tau_m`` (:class:`Transmission`), or None when the description declares no
+        transmissions (each joint driven directly)."""
+        d = self._m.transmission
+        if not d["motors"]:
+            return None
+        return Transmission(
+            T=_readonly(d["T"]),
+            offset=_readonly(d["offset"]),
+            motors=tuple(d["motors"]),
+            types=tuple(d["types"]),
+            torque_constant=_readonly(d["torque_constant"]),
+            format=d["format"],
+            groups=tuple(d["groups"]),
+        )
 
     @property
     def gravity(self) -> np.ndarray:

@@ -162,6 +162,32 @@ PYBIND11_MODULE(_core, m) {
                                }
                                return l;
                              })
+      .def_property_readonly(
+          "transmission",
+          [](const PyModel& s) {
+            const Transmission& t = s.model.transmission;
+            py::dict d;
+            d["format"] = t.format;
+            d["T"] = Eigen::MatrixXd(t.T.rows() == 0 ? Eigen::MatrixXd(0, s.model.nq()) : t.T);
+            d["offset"] = Eigen::VectorXd(t.offset);
+            d["motors"] = t.motors;
+            d["types"] = t.types;
+            d["torque_constant"] = Eigen::VectorXd(t.torque_constant);
+            py::list groups;
+            for (const TransmissionGroup& g : t.groups) {
+              py::dict e;
+              e["name"] = g.name;
+              e["type"] = g.type;
+              e["joints"] = g.joints;
+              e["actuators"] = g.actuators;
+              e["actuator_reduction"] = g.actuator_reduction;
+              e["joint_reduction"] = g.joint_reduction;
+              e["joint_offset"] = g.joint_offset;
+              groups.append(e);
+            }
+            d["groups"] = groups;
+            return d;
+          })
       .def_property_readonly("dh",
                              [](const PyModel& s) {
                                Eigen::MatrixXd d(s.model.dh.size(), 4);

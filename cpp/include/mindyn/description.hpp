@@ -17,6 +17,9 @@
 //           or  {XX, XY, XZ, YY, YZ, ZZ, MX, MY, MZ, M}                     about the link origin
 //     rotor_inertia: Ia           friction: {viscous, coulomb}
 //   tool: {xyz: [..], rpy: [..]}   optional flange frame in the last link frame
+//   transmissions:                 optional motors (transmission.hpp): q_m = T q + offset
+//     {matrix: [[..] n_m rows of n], motors: [names], offset: [..], torque_constant: [..]}
+//     or a list of {name, joints: {joint name: coefficient, ...}, offset, torque_constant}
 //
 // The file is one UTF-8 YAML document with plain values, lists and mappings (no key twice in a
 // mapping, no tags beyond YAML's core ones such as !!str); every number is finite with magnitude

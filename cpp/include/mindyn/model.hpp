@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "mindyn/transmission.hpp"
+
 namespace mindyn {
 
 /// Raised for every description problem found while building or loading a model.
@@ -125,6 +127,10 @@ struct Model {
   Eigen::VectorXd rotor_inertia;  // n, joint side
   Eigen::VectorXd viscous;        // n
   Eigen::VectorXd coulomb;        // n
+  /// Motors and their coupling to the joints (transmission.hpp); empty when the description
+  /// declares none (each joint driven directly). Shown, exported and used to convert motor
+  /// currents; the dynamics do not use it yet.
+  Transmission transmission;
 
   int nq() const { return static_cast<int>(joints.size()); }
   /// Index of the joint that carries joint k's parent link, -1 for the base.

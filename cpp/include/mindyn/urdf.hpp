@@ -33,6 +33,12 @@
 // element, attribute and value. White space around and between numbers is allowed (XML Schema's
 // xs:double collapses it) and read, not taken as 0. A link without <inertial> is massless; the
 // notes name those merged into the model.
+//
+// ros_control <transmission> elements (ROS 1 form in <robot>, ROS 2 form in <ros2_control>) of
+// types SimpleTransmission, DifferentialTransmission and FourBarLinkageTransmission become
+// `Model::transmission` (transmission.hpp); a joint of the model that none drives is driven
+// directly, a joint locked in the model adds a constant to its motors, other types are left
+// out; the notes say which.
 #pragma once
 
 #include <Eigen/Core>

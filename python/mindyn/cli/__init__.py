@@ -41,6 +41,30 @@ def _fmt(x: float, width: int = 10) -> str:
     return f"{x:{width}.4g}"
 
 
+def _transmission_lines(robot) -> list[str]:
+    """The motors of the robot's transmissions, each with its row of ``q_m = T q + offset``."""
+    tr = robot.transmission
+    if tr is None:
+        return []
+    form = {"ros1": "URDF, ROS 1 form", "ros2": "URDF, ROS 2 form"}.get(tr.format, tr.format)
+    out = [
+        "",
+        f"transmissions ({form}): motor positions q_m = T q + offset, joint torques "
+        "tau = T^T tau_m (not used by the dynamics)",
+    ]
+    w = max([5] + [len(m) for m in tr.motors]) + 1
+    wt = max([4] + [len(t) for t in tr.types]) + 1
+    out.append(f"{'#':<3} {'motor':<{w}}{'type':<{wt}}q_m")
+    for i, motor in enumerate(tr.motors):
+        terms = [
+            f"{tr.T[i, k]:+.6g} {robot.joint_names[k]}" for k in range(robot.n) if tr.T[i, k] != 0.0
+        ]
+        if tr.offset[i] != 0.0:
+            terms.append(f"{tr.offset[i]:+.6g}")
+        out.append(f"{'m' + str(i + 1):<3} {motor:<{w}}{tr.types[i]:<{wt}}{' '.join(terms)}")
+    return out
+
+
 def cmd_info(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     n = robot.n
@@ -95,6 +119,7 @@ def cmd_info(args: argparse.Namespace) -> int:
             f"{_fmt(lim['effort'][k], 9)} {_fmt(drv['rated_torque'][k], 7)} "
             f"{_fmt(drv['gear_ratio'][k], 7)}"
         )
+    out.extend(_transmission_lines(robot))
     out.append("")
     out.append("classical parameters about each link-frame origin (SI)")
     names = ["XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "Ia", "Fv", "Fc"]

@@ -1065,7 +1065,9 @@ def _add_data_options(p) -> None:
         "--drive-gain",
         metavar="K",
         help="joint-side drive gains [N m/A] that turn motor currents into joint torques (or "
-        "one value for all joints; default: the robot's drive table)",
+        "one value for all joints); default: the robot's drive table. When the description "
+        "declares transmissions: motor torque constants K_t [N m/A, motor side], torques = "
+        "T^T (K_t x current) (default: the transmissions' torque constants)",
     )
     p.add_argument(
         "--currents",

@@ -6,7 +6,9 @@ Some controllers log the motor currents apart from the joint positions, e.g. a f
 sample of the joint log needs a current sample at the same time, within a tolerance) and sets
 the torques to ``tau = i * K`` with the joint-side drive gains ``K`` of
 :func:`~mindyn.identification.data.drive_gains` (the robot's ``torque_constant * gear_ratio``,
-or gains given per joint).
+or gains given per joint), or, when the description declares transmissions, to
+``tau = T^T (K_t i)`` with the motor torque constants ``K_t`` (see
+:func:`~mindyn.identification.data.current_gains`).
 """
 
 from __future__ import annotations
@@ -23,8 +25,8 @@ from .data import (
     DataError,
     DataFileNotFoundError,
     JointData,
+    current_gains,
     decode_text,
-    drive_gains,
     first_not_increasing,
     parse_cell,
 )
@@ -91,8 +93,8 @@ def attach_currents(
     drive_gain=None,
     tolerance: float | None = None,
 ) -> JointData:
-    """``data`` with its torques replaced by the currents of the file ``path`` times the drive
-    gains (see :func:`~mindyn.identification.data.drive_gains`).
+    """``data`` with its torques replaced by the currents of the file ``path`` converted with
+    the drive gains (see :func:`~mindyn.identification.data.current_gains`).
 
     The files are joined on their time stamps: each sample of ``data`` takes the current sample
     with the nearest time stamp, which must lie within ``tolerance`` seconds (default a
@@ -100,9 +102,9 @@ def attach_currents(
     between those of ``data`` are left out. Raises DataError naming the first time stamp
     without a match."""
     t_i, cur = read_currents(path, data.n)
-    K, source = drive_gains(robot, drive_gain)
-    if K.size != data.n:
-        raise DataError(f"drive gains: {K.size} values for {data.n} joints")
+    G, info = current_gains(robot, drive_gain=drive_gain)
+    if G.shape[0] != data.n:
+        raise DataError(f"drive gains: {G.shape[0]} values for {data.n} joints")
     tol = tolerance if tolerance is not None else 1e-3 * float(np.median(np.diff(data.t)))
     k = np.clip(np.searchsorted(t_i, data.t), 1, t_i.size - 1)
     k = np.where(np.abs(t_i[k - 1] - data.t) <= np.abs(t_i[k] - data.t), k - 1, k)
@@ -118,10 +120,9 @@ def attach_currents(
     processing = dict(data.processing)
     processing["torque"] = {
         "unit": "motor current [A]",
-        "scale_Nm_per_unit": K.tolist(),
-        "formula": f"current x gain ({source})",
+        **info,
         "currents_file": str(path),
         "time_tolerance_s": tol,
         "max_time_offset_s": float(gap.max()),
     }
-    return replace(data, tau=cur[k] * K, processing=processing)
+    return replace(data, tau=cur[k] @ G, processing=processing)

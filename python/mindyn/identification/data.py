@@ -13,7 +13,10 @@ the drive table of the robot description). The torque columns may say their unit
 ``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with ``torque_unit``); the
 reader then needs no ``torque_unit``. Motor currents in A may stand in for the torques, as
 columns ``i1..iN`` (or ``torque_unit="current"``): ``tau = i * K`` with the joint-side drive
-gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K`` given as ``drive_gain``.
+gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K`` given as ``drive_gain``;
+when the description declares transmissions, ``tau = T^T (K_t i)`` with the motor torque
+constants ``K_t`` (``drive_gain``, else the transmission's) and the transmission matrix ``T``
+(see :func:`current_gains`).
 Velocities and accelerations that are not logged are obtained from the positions (velocities) by
 zero-phase low-pass filtering and central differences; the settings are reported in
 :attr:`JointData.processing`.
@@ -484,6 +487,52 @@ def drive_gains(robot=None, drive_gain=None) -> tuple[np.ndarray, str]:
     return K, "drive table: torque_constant x gear_ratio"
 
 
+def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
+    """The matrix ``G`` (n, n) that turns motor currents ``i`` (m, n) [A] into joint torques
+    ``tau = i @ G`` [N m], and how it was formed.
+
+    Without transmissions ``G = diag(K)`` with the joint-side gains of :func:`drive_gains`.
+    When the robot's description declares transmissions (:attr:`~mindyn.Robot.transmission`),
+    current i drives motor i and ``tau = T^T (K_t * i)``, i.e. ``G = diag(K_t) T``, with the
+    motor-side torque constants ``K_t`` [N m/A per motor] given as ``drive_gain`` or else the
+    transmission's ``torque_constant``. Raises DataError when a constant is missing, not finite
+    or zero, or when there are not as many motors as joints."""
+    tr = getattr(robot, "transmission", None) if robot is not None else None
+    if tr is None:
+        K, source = drive_gains(robot, drive_gain)
+        return np.diag(K), {
+            "scale_Nm_per_unit": K.tolist(),
+            "formula": f"current x gain ({source})",
+        }
+    if tr.n_motors != robot.n:
+        raise DataError(
+            f"motor currents: the transmissions of '{robot.name}' have {tr.n_motors} motors for "
+            f"{robot.n} joints; currents are converted for as many motors as joints"
+        )
+    if drive_gain is not None:
+        Kt = np.asarray(drive_gain, dtype=float).reshape(-1)
+        source = "given motor torque constants"
+        if Kt.size != tr.n_motors:
+            raise DataError(f"drive gains: {Kt.size} values for {tr.n_motors} motors")
+    else:
+        Kt = np.array(tr.torque_constant, dtype=float)
+        source = "torque constants of the transmissions"
+    bad = np.flatnonzero(~np.isfinite(Kt) | (Kt == 0))
+    if bad.size:
+        names = ", ".join(tr.motors[b] for b in bad)
+        raise DataError(
+            f"motor currents: no usable torque constant for motor(s) {names} of '{robot.name}' "
+            "(zero, not a finite number or not given); give the motor torque constants "
+            "(--drive-gain Kt1,...,Ktn in N m/A, motor side: the description's transmissions "
+            "apply the gear ratios and couplings)"
+        )
+    return Kt[:, None] * tr.T, {
+        "scale_Nm_per_unit": Kt.tolist(),
+        "formula": f"T^T (torque constant x current) ({source}; T of the transmissions)",
+        "transmission_T": tr.T.tolist(),
+    }
+
+
 def convert_torque(tau: np.ndarray, unit: str, robot=None, drive_gain=None):
     """Torques in N m from the logged unit (``Nm``, ``permille``, or ``current``: motor currents
     in A times the gains of :func:`drive_gains`); returns ``(tau, info)``."""
@@ -491,14 +540,10 @@ def convert_torque(tau: np.ndarray, unit: str, robot=None, drive_gain=None):
     if unit_l == "Nm":
         return tau, {"unit": "N m"}
     if unit_l == "current":
-        K, source = drive_gains(robot, drive_gain)
-        if K.size != tau.shape[1]:
-            raise DataError(f"drive gains: {K.size} values for {tau.shape[1]} joints")
-        return tau * K, {
-            "unit": "motor current [A]",
-            "scale_Nm_per_unit": K.tolist(),
-            "formula": f"current x gain ({source})",
-        }
+        G, info = current_gains(robot, drive_gain=drive_gain)
+        if G.shape[0] != tau.shape[1]:
+            raise DataError(f"drive gains: {G.shape[0]} values for {tau.shape[1]} joints")
+        return tau @ G, {"unit": "motor current [A]", **info}
     if unit_l == "permille":
         if robot is None:
             raise DataError("torque unit 'permille' needs the robot's drive table")

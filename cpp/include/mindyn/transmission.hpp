@@ -1,0 +1,86 @@
+// Transmissions between motors and joints, as data of the model (their dynamics, motor-side
+// inertia and friction, are not modelled yet).
+//
+// Conventions (SI units; positions in rad or m as the joint/motor is revolute or prismatic):
+//   motor positions   q_m = T q + c        T (n_m x n): gear ratios and coupling terms,
+//                                          c (n_m): motor offsets (motor position at q = 0)
+//   motor velocities  dq_m = T dq
+//   joint torques     tau = T^T tau_m      (virtual work: tau_m . dq_m = tau . dq)
+// Row i of T belongs to motor i (`motors[i]`), column k to joint k of the model. A model without
+// transmissions has T empty (n_m = 0): each joint is driven directly, as before.
+//
+// ros_control's types (transmission_interface), with actuator reductions a_i, joint reductions
+// j_k (1 unless given) and joint offsets o_k (0 unless given), x_k = q_k - o_k:
+//   SimpleTransmission             q_m1 = a_1 x_1                       (ROS 1: the reduction of
+//                                                                        <actuator>; ROS 2: of
+//                                                                        <joint>)
+//   DifferentialTransmission       q_m1 = a_1 (j_1 x_1 + j_2 x_2)
+//                                  q_m2 = a_2 (j_1 x_1 - j_2 x_2)
+//   FourBarLinkageTransmission     q_m1 = a_1 j_1 x_1
+//                                  q_m2 = a_2 (x_1 + j_2 x_2)          (motor 2 turns with both)
+// The joint torques follow from T by virtual work. For the differential that is ros_control's
+// own effort map; for the four-bar linkage ros_control's effort map is not the transpose of its
+// position map, and T^T (consistent with the positions) is used here.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace mindyn {
+
+/// One transmission as the description declares it, kept to show and to write it back.
+struct TransmissionGroup {
+  std::string name;
+  /// SimpleTransmission | DifferentialTransmission | FourBarLinkageTransmission (ros_control's
+  /// transmission_interface types).
+  std::string type;
+  std::vector<std::string> joints;     // by role: joint1, joint2
+  std::vector<std::string> actuators;  // by role: actuator1, actuator2
+  std::vector<double> actuator_reduction;
+  std::vector<double> joint_reduction;
+  std::vector<double> joint_offset;
+  int line = 0;  // where it is declared (0: unknown)
+
+  /// The part of T it declares: rows for `actuators`, columns for `joints`.
+  Eigen::MatrixXd matrix() const;
+  /// Motor position of each actuator at q = 0 from the joint offsets: -matrix() * offsets.
+  Eigen::VectorXd offsets() const;
+};
+
+struct Transmission {
+  std::string format;                     // "" (none), "ros1", "ros2" (URDF forms) or "yaml"
+  Eigen::MatrixXd T;                      // n_m x n
+  Eigen::VectorXd offset;                 // n_m: c of q_m = T q + c
+  std::vector<std::string> motors;        // n_m unique names
+  std::vector<std::string> types;         // n_m: its transmission's type, "direct" for a joint
+                                          // without one, "matrix" from YAML rows
+  Eigen::VectorXd torque_constant;        // n_m [N m/A], NaN where the description gives none
+  std::vector<TransmissionGroup> groups;  // as declared in a URDF (empty from YAML)
+
+  bool empty() const { return motors.empty(); }
+  int nm() const { return static_cast<int>(motors.size()); }
+
+  /// Checks sizes against the model's `joint_names`, finiteness and magnitude of every entry,
+  /// unique motor names, that every joint is driven (a non-zero column) and that T has full
+  /// column rank (so that tau = T^T tau_m reaches every joint torque and q_m determines q);
+  /// throws ModelError naming the motor, joint or the rank found.
+  void validate(const std::vector<std::string>& joint_names, const std::string& who) const;
+};
+
+/// The transmission of a model from the declared groups. `joint_names` are the model's joints;
+/// a group's joint that is not one of them but is a joint of the description locked at a
+/// position (`locked_names`, `locked_q`: fixed joints and joints off the loaded chain) adds the
+/// constant T_k q_k to its motors; a group with no joint of the model is dropped, as is one
+/// naming no joint of the description at all (noted; one naming some is refused). When some
+/// groups remain, a joint of the model that none drives gets a direct drive (a motor named
+/// after it, type "direct", ratio 1). `notes` receives a sentence on each of these. Throws
+/// ModelError (prefixed by `source`) for a joint driven twice or an unknown joint name.
+Transmission assembleTransmission(const std::vector<TransmissionGroup>& groups,
+                                  const std::string& format,
+                                  const std::vector<std::string>& joint_names,
+                                  const std::vector<std::string>& locked_names,
+                                  const std::vector<double>& locked_q, const std::string& source,
+                                  std::string* notes);
+
+}  // namespace mindyn
