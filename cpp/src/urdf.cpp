@@ -223,6 +223,9 @@ class NumberCheck {
  public:
   explicit NumberCheck(std::string source) : source_(std::move(source)) {}
 
+  /// Elements that every URDF parser ignores, as "joint 'j1': a second <origin> (line 9)".
+  std::vector<std::string> ignored;
+
   /// Checks the <link> and <joint> elements of `robot` (as urdfdom reads them: the children of
   /// the first <robot>). Numbers written with white space around them or between them other
   /// than single spaces are rewritten in the document; returns true if any was.
@@ -317,10 +320,11 @@ class NumberCheck {
     }
   }
 
-  /// Refuses a child element of `parent` whose name looks like a misspelling of one of `known`,
-  /// and a second one of `unique` (urdfdom reads the first only).
+  /// Refuses a child element of `parent` whose name looks like a misspelling of one of `known`;
+  /// a second one of `unique` goes to `ignored` (urdfdom, and so Pinocchio and ROS, read the
+  /// first only, which published descriptions rely on).
   void checkChildren(const TiXmlElement* parent, const std::vector<std::string>& known,
-                     const std::vector<std::string>& unique) const {
+                     const std::vector<std::string>& unique) {
     std::set<std::string> seen;
     for (const TiXmlElement* c = parent->FirstChildElement(); c; c = c->NextSiblingElement()) {
       const std::string& tag = c->ValueStr();
@@ -331,8 +335,8 @@ class NumberCheck {
                       ">, which URDF does not define; is it <" + like + ">?");
       } else if (std::find(unique.begin(), unique.end(), tag) != unique.end() &&
                  !seen.insert(tag).second) {
-        fail(c, "<" + parent->ValueStr() + "> holds a second <" + tag +
-                    ">; URDF parsers read only the first");
+        ignored.push_back(owner_ + ": a second <" + tag + "> (line " + std::to_string(c->Row()) +
+                          ")");
       }
     }
   }
@@ -674,10 +678,10 @@ class TransmissionReader {
 /// numbers written with extra white space rewritten. Text TinyXML cannot parse is returned as
 /// it is, for urdfdom to report.
 /// The transmissions are read into `groups` and `format`; those of other types are named in
-/// `skipped`.
+/// `skipped`, and elements every URDF parser ignores in `ignored`.
 std::string checkNumbers(const std::string& xml, const std::string& source,
                          std::vector<TransmissionGroup>* groups, std::string* format,
-                         std::vector<std::string>* skipped) {
+                         std::vector<std::string>* skipped, std::vector<std::string>* ignored) {
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   TiXmlElement* robot = doc.Error() ? nullptr : doc.FirstChildElement("robot");
@@ -686,7 +690,11 @@ std::string checkNumbers(const std::string& xml, const std::string& source,
     *groups = reader.run(robot, format);
     *skipped = reader.skipped;
   }
-  if (!robot || !NumberCheck(source).run(robot)) return xml;
+  if (!robot) return xml;
+  NumberCheck check(source);
+  const bool rewritten = check.run(robot);
+  *ignored = check.ignored;
+  if (!rewritten) return xml;
   TiXmlPrinter printer;
   doc.Accept(&printer);
   return printer.Str();
@@ -1091,9 +1099,9 @@ Model parseUrdf(const std::string& xml, const std::string& tip, const std::strin
     requireUtf8(xml, source);
     std::string reason, format;
     std::vector<TransmissionGroup> groups;
-    std::vector<std::string> skipped;
+    std::vector<std::string> skipped, ignored;
     const urdf::ModelInterfaceSharedPtr urdf =
-        parseQuietly(checkNumbers(xml, source, &groups, &format, &skipped), &reason);
+        parseQuietly(checkNumbers(xml, source, &groups, &format, &skipped, &ignored), &reason);
     if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
     Model model = Builder(*urdf, source).build(tip);
     if (!groups.empty()) addTransmissions(*urdf, groups, format, &model);
@@ -1106,6 +1114,12 @@ Model parseUrdf(const std::string& xml, const std::string& tip, const std::strin
                          "DifferentialTransmission and FourBarLinkageTransmission, not "
                          "read: ") +
                      text;
+    }
+    if (!ignored.empty()) {
+      std::string text;
+      for (const std::string& k : ignored) text += (text.empty() ? "" : ", ") + k;
+      model.notes += (model.notes.empty() ? "" : "; ") +
+                     std::string("elements every URDF parser ignores (the first is read): ") + text;
     }
     return model;
   } catch (const ModelError& e) {
