@@ -282,10 +282,15 @@ def test_codegen_warns_when_the_gains_are_not_stable(tmp_path, capsys):
 @pytest.mark.parametrize(
     "settings, message",
     [
-        ({"lambda": 1e200}, "a sampled loop needs Lambda T < 2"),
+        ({"lambda": 1e200}, r"gain 'lambda' must be a number in \[0, 1e\+16\]"),
+        ({"lambda": 1e3}, "a sampled loop needs Lambda T < 2"),
         ({"period": 1e308}, "period must be a number of seconds in"),
         ({"period": 0.5}, "a sampled loop needs Lambda T < 2"),
         ({"kp": 1e9}, "a sampled loop needs K_P T < 2 K_D"),
+        ({"kd": 1e308}, r"gain 'kd' must be a number in \[0, 1e\+16\]"),
+        ({"kd": 1e308, "kp": 1.0}, r"gain 'kd' must be a number in \[0, 1e\+16\]"),
+        ({"gamma": 1e308}, r"'gamma' .*must be a number|'gamma' and 'nu' must be numbers"),
+        ({"nu": float("nan")}, r"nu must be a number in|'gamma' and 'nu' must be numbers"),
     ],
 )
 def test_absurd_settings_are_refused_by_library_and_codegen(settings, message):
@@ -296,10 +301,21 @@ def test_absurd_settings_are_refused_by_library_and_codegen(settings, message):
     period = settings.get("period", 0.004)
     gains.update({k: v for k, v in settings.items() if k != "period"})
     kind = "computed-torque" if "kp" in settings else "adaptive-pd"
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(control.ControllerSettingError, match=message):
         control.make_controller(kind, robot, gains, period=period)
-    with pytest.raises(ValueError, match=message):
+    with pytest.raises(control.ControllerSettingError, match=message):
         generate_controller(robot, kind, gains=gains, period=period)
+
+
+def test_codegen_refusal_of_huge_gains_is_one_line(tmp_path, capfd):
+    """kd = 1e308 overflowed in the gain products: numpy's RuntimeWarnings came before the
+    error (and C clamped the infinite torques at 1e300 where the library gave inf)."""
+    gains = tmp_path / "g.yaml"
+    gains.write_text("kd: 1.0e+308\nnu: 1.0\n")
+    argv = ["codegen", "planar3", "--what", "gravity-compensation", "--lang", "c"]
+    assert main([*argv, "--gains", str(gains), "-o", str(tmp_path / "x")]) == 2
+    out, err = capfd.readouterr()
+    assert err.count("\n") == 1 and "gain 'kd' must be a number in [0, 1e+16]" in err, err
 
 
 @pytest.mark.parametrize(

@@ -108,3 +108,32 @@ def test_symbolic_check_is_entry_by_entry(monkeypatch, tmp_path):
     monkeypatch.setattr(F.SymbolicFormulas, "evaluate", spoiled)
     with pytest.raises(mindyn.ModelError, match="not polynomials"):
         bp.symbolic()
+
+
+@pytest.mark.parametrize("length", [4e2, 4e5])
+def test_small_twist_far_from_one_metre_prints_what_y_holds_or_refuses(tmp_path, length):
+    """A twist of 0.001 deg makes coefficients of sin^2 = 3.05e-10 that multiply squared lengths:
+    rounded to an absolute step (3.046e-10), they moved the printed formula by 6e-5 of its largest
+    coefficient at lengths of 4e5 m. Printed, each formula equals its row of the numeric Y at
+    the description's lengths to 1e-9 of the row's largest coefficient, or the symbolic formulas
+    are refused with the reason."""
+    path = tmp_path / "twist.yaml"
+    inertial = "inertial: {mass: 3, com: [0.3, 0.2, -0.1], inertia: {xx: 2, yy: 3, zz: 4}}"
+    path.write_text(
+        "name: twist\nconvention: mdh\nangle_unit: deg\njoints:\n"
+        f"  - {{name: j1, alpha: 0, d: 0, r: 0, theta: 0, {inertial}}}\n"
+        f"  - {{name: j2, alpha: 89.99, d: {length}, r: 0, theta: 0, {inertial}}}\n"
+        f"  - {{name: j3, alpha: 0.001, d: 0, r: {0.85 * length}, theta: 0, {inertial}}}\n"
+        f"  - {{name: j4, alpha: 0, d: {0.8 * length}, r: 0, theta: 0, {inertial}}}\n"
+    )
+    bp = mindyn.base_parameters(mindyn.load(path))
+    Y = np.asarray(bp.Y)
+    try:
+        sym = bp.symbolic()
+    except mindyn.ModelError as e:
+        assert "at the lengths of 'twist'" in str(e) and "fitted at lengths of about 1 m" in str(e)
+        return
+    # the printed text read back: every coefficient as the reader sees it
+    Ys = sym.evaluate([float(v) for v in sym.symbols.values()])
+    row = np.maximum(np.abs(Y), np.abs(Ys)).max(axis=1, keepdims=True)
+    assert np.max(np.abs(Ys - Y) / row) <= 1e-9

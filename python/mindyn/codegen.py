@@ -489,10 +489,11 @@ def generate_controller(
     s["gamma"] = _setting(g.get("gamma"), len(names), "gamma", 1.0)
     check = "pd" if kind == "gravity-compensation" else kind
     control.check_sampled_gains(check, s["kp"], s["kd"], lam, period)
-    if not (np.all(np.isfinite(s["gamma"])) and np.all(s["gamma"] >= 0)) or not (
-        math.isfinite(s["nu"]) and s["nu"] >= 0
-    ):
-        raise ValueError("gains 'gamma' and 'nu' must be finite and non-negative")
+    big = control.controllers.MAX_GAIN
+    if not (np.all(s["gamma"] >= 0) and np.all(s["gamma"] <= big) and 0 <= s["nu"] <= big):
+        raise control.ControllerSettingError(
+            f"gains 'gamma' and 'nu' must be numbers in [0, {big:g}]"
+        )
     if params is None:
         s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
         if base.offset:

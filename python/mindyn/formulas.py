@@ -519,7 +519,10 @@ def _rationalise(c: float) -> Number | None:
     f = Fraction(c).limit_denominator(MAX_DENOMINATOR)
     if abs(float(f) - c) <= tol:
         return f
-    return float(shortest_decimal(c, 0.1 * tol))
+    # relative to the coefficient itself: a small one (sin^2 of a twist of 0.001 deg, 3e-10)
+    # multiplies squared lengths that may be large, so rounding it to an absolute step would
+    # move the formula at the description's lengths
+    return float(shortest_decimal(c, RELATIVE * abs(c)))
 
 
 @dataclass
@@ -715,10 +718,11 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     # of 1e12 (lengths of 1e6 m) is checked to 1e-10, not to 100.
     weight = np.array([_length_weight(c, len(classical) // robot.n) for c in range(P)])
     power = weight[pivots][:, None] - weight[None, :] if pivots else np.zeros((0, P))
-    for x, Yn in checks:
+    for i, (x, Yn) in enumerate(checks):
         size = max(1.0, float(np.max(np.abs(x[:ns]), initial=0.0)))
         scale = np.maximum(np.abs(Yn), size**power)
-        diff = float(np.max(np.abs(result.evaluate(x) - Yn) / scale)) if Yn.size else 0.0
+        Ys = result.evaluate(x)
+        diff = float(np.max(np.abs(Ys - Yn) / scale)) if Yn.size else 0.0
         limit = CHECK_TOLERANCE
         if not diff <= limit:
             raise _core.ModelError(
@@ -738,6 +742,19 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
                     else ""
                 )
             )
+        if i == 0 and Yn.size:
+            # at the description's own lengths each formula is also checked against its row's
+            # largest coefficient, as a reader compares the printed numbers: coefficients fitted
+            # at lengths of about 1 m and evaluated at lengths far from it can miss there
+            rows = np.maximum(np.abs(Yn), np.abs(Ys)).max(axis=1, keepdims=True)
+            row_diff = float(np.max(np.abs(Ys - Yn) / np.maximum(rows, 1e-300)))
+            if not row_diff <= limit:
+                raise _core.ModelError(
+                    f"symbolic formulas: at the lengths of '{robot.name}' (up to {size:.3g} m) "
+                    f"the coefficients fitted at lengths of about 1 m miss the numeric formulas "
+                    f"by {row_diff:.3g} of a formula's largest coefficient (limit {limit:g}); "
+                    "the numeric formulas (without symbolic) hold at these lengths"
+                )
         worst = max(worst, diff)
     result.checked = len(checks)
     result.largest_difference = worst

@@ -33,6 +33,7 @@ from .args import (
     print_deprecation_notes,
 )
 from .method import base_method
+from .quiet import warnings_after_success
 
 
 def _fmt(x: float, width: int = 10) -> str:
@@ -384,7 +385,7 @@ def main(argv: list[str] | None = None) -> int:
         return e.code if isinstance(e.code, int) else 0
     try:
         prepare_outputs(args)
-        status = args.func(args)
+        status = warnings_after_success(args.func)(args)  # an error stays one line
         sys.stdout.flush()  # a closed pipe shows here, not at exit
         if status == 0:  # an error stays one line
             print_deprecation_notes(args)

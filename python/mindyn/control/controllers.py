@@ -113,6 +113,11 @@ class ControllerSettingError(_core.Error, ValueError):
     the right shape, or outside what a sampled loop at the period can take."""
 
 
+#: Largest gain accepted (kd, kp, lambda, gamma, nu): the bound every number of a description
+#: keeps, which keeps one controller step's arithmetic finite (1e308 gave infinite torques).
+MAX_GAIN = 1e16
+
+
 def _diag(x, n: int, name: str) -> np.ndarray:
     if isinstance(x, (bool, np.bool_)) or (
         isinstance(x, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in x)
@@ -125,8 +130,10 @@ def _diag(x, n: int, name: str) -> np.ndarray:
         raise ControllerSettingError(
             f"gain '{name}' must be a scalar or {n} values, got shape {a.shape}"
         )
-    if not np.all(np.isfinite(a)) or np.any(a < 0):
-        raise ControllerSettingError(f"gain '{name}' must be finite and non-negative")
+    if not np.all(np.isfinite(a)) or np.any(a < 0) or np.any(a > MAX_GAIN):
+        raise ControllerSettingError(
+            f"gain '{name}' must be a number in [0, {MAX_GAIN:g}], got {a.tolist()}"
+        )
     return a
 
 
@@ -161,10 +168,10 @@ def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
     PD, :func:`check_lambda`). The robot's part, ``T M^-1 K_D,eff < 2``, is :func:`check_gains`."""
     T = check_period(period)
     kp, kd, lam = (np.asarray(x, dtype=float) for x in (kp, kd, lam))
-    for name, x in (("kd", kd), ("lambda", lam), ("kp", kp)):
-        if not np.all(np.isfinite(x)) or np.any(x < 0):
+    for name, x in (("lambda", lam), ("kd", kd), ("kp", kp)):
+        if not np.all(np.isfinite(x)) or np.any(x < 0) or np.any(x > MAX_GAIN):
             raise ControllerSettingError(
-                f"gain '{name}' must be finite and non-negative, got {x.tolist()}"
+                f"gain '{name}' must be a number in [0, {MAX_GAIN:g}], got {x.tolist()}"
             )
     if kind == "adaptive-pd":
         check_lambda(lam, T)
@@ -318,8 +325,8 @@ class AdaptivePD:
             raise ControllerSettingError(f"p0 has shape {self.p0.shape}; expected ({base.n},)")
         self.adapt = adapt
         self.nu = float(nu)
-        if not (math.isfinite(self.nu) and self.nu >= 0):
-            raise ControllerSettingError(f"nu must be a finite number >= 0, got {nu}")
+        if not (0 <= self.nu <= MAX_GAIN):
+            raise ControllerSettingError(f"nu must be a number in [0, {MAX_GAIN:g}], got {nu}")
         self.period = check_period(period)
         check_lambda(self.lam, self.period)
         self.reset()
