@@ -8,6 +8,8 @@ own joint, placement and inertia algebra.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import sys
 from collections import defaultdict
 from pathlib import Path
@@ -16,6 +18,7 @@ import mindyn
 import numpy as np
 import pinocchio as pin
 import pytest
+from mindyn.cli import main
 
 # --------------------------------------------------------------------------------------------
 # Worst relative errors seen against each reference, printed at the end of the run.
@@ -46,6 +49,15 @@ def pytest_terminal_summary(terminalreporter):
         terminalreporter.write_sep("-", "worst relative errors")
         for k in sorted(WORST):
             terminalreporter.write_line(f"{k:<55s} {WORST[k]:.2e}")
+
+
+def cli(*argv) -> str:
+    """Runs ``mindyn ARGV`` in this process; returns its standard output; fails on an error."""
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        rc = main([str(a) for a in argv])
+    assert rc == 0, f"mindyn {' '.join(map(str, argv))}: exit {rc}\n{out.getvalue()}"
+    return out.getvalue()
 
 
 # --------------------------------------------------------------------------------------------

@@ -12,9 +12,7 @@
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
-import io
 import json
 import shutil
 import subprocess
@@ -22,20 +20,12 @@ import subprocess
 import mindyn
 import numpy as np
 import pytest
+from conftest import cli
 from mindyn.cli import main
 from mindyn.identification.data import DataError, read_csv, write_csv
 from scipy.integrate import solve_ivp
 
 GCC = shutil.which("gcc")
-
-
-def cli(*argv) -> str:
-    """Runs ``mindyn ARGV`` in this process; returns its standard output; fails on an error."""
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        rc = main([str(a) for a in argv])
-    assert rc == 0, f"mindyn {' '.join(map(str, argv))}: exit {rc}\n{out.getvalue()}"
-    return out.getvalue()
 
 
 @pytest.mark.skipif(GCC is None, reason="gcc is needed to compile the generated C")

@@ -7,9 +7,7 @@ never reverse, breaks in the time stamps)."""
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
-import io
 import json
 import math
 import shutil
@@ -18,7 +16,7 @@ import subprocess
 import mindyn
 import numpy as np
 import pytest
-from mindyn.cli import main
+from conftest import cli
 from mindyn.identification import (
     JointData,
     RankDeficientError,
@@ -30,14 +28,6 @@ from mindyn.identification.preprocess import preprocess, split_at_gaps
 
 CC = shutil.which("cc") or shutil.which("gcc")
 RATE = 500.0
-
-
-def cli(*argv) -> str:
-    out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        rc = main([str(a) for a in argv])
-    assert rc == 0, f"mindyn {' '.join(map(str, argv))}: exit {rc}\n{out.getvalue()}"
-    return out.getvalue()
 
 
 def sines(t, phase=0.0):
