@@ -9,7 +9,6 @@ from .._core import ModelError
 from ..export import classical_terms, write_urdf, write_yaml
 from ..robot import load
 from .args import add_command, add_robot, output_file
-from .quiet import warnings_after_success
 
 
 def register(subparsers) -> None:
@@ -37,7 +36,6 @@ def read_classical(path: str) -> tuple[dict, str | None]:
     return doc["classical"], doc.get("robot")
 
 
-@warnings_after_success
 def cmd_export(args: argparse.Namespace) -> int:
     classical, identified_for = read_classical(args.params)
     robot = load(args.robot, tip=args.tip)

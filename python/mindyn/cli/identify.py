@@ -32,7 +32,6 @@ from .args import (
     seed,
 )
 from .export import add_description_outputs, check_description_kind, write_description
-from .quiet import warnings_after_success
 
 
 # ---------------------------------------------------------------------------------------------
@@ -308,7 +307,6 @@ def _check_lowpass_options(args: argparse.Namespace) -> None:
                 raise ValueError(f"{flag} needs --filter lowpass (got --filter {args.filter})")
 
 
-@warnings_after_success
 def cmd_identify(args: argparse.Namespace) -> int:
     from ..identification import identify, true_base_values, validate
     from ..identification.data import read_truth
@@ -581,7 +579,6 @@ def cmd_identify(args: argparse.Namespace) -> int:
     return 0
 
 
-@warnings_after_success
 def cmd_identify_payload(args: argparse.Namespace) -> int:
     from ..identification.consistent import arm_tip, identify_payload, read_arm
     from ..identification.data import read_truth
@@ -656,7 +653,6 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
     return 0
 
 
-@warnings_after_success
 def cmd_predict(args: argparse.Namespace) -> int:
     from ..identification.data import read_json
     from ..identification.prediction import identified_model, predict

@@ -1,5 +1,6 @@
-"""Numerical warnings of a command: held back until it succeeds, so that an error stays the
-one line it is (numpy's RuntimeWarnings, printed as they happen, came before it)."""
+"""Numerical warnings of a command (every command, through :func:`mindyn.cli.main`): held back
+until it succeeds, so that an error stays the one line it is (numpy's RuntimeWarnings, printed
+as they happen, came before it)."""
 
 from __future__ import annotations
 
