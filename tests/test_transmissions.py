@@ -506,3 +506,19 @@ def test_currents_need_the_motor_torque_constants(tmp_path):
         read_csv(log, robot=robot)
     with pytest.raises(mindyn.Error, match="3 values for 6 motors"):
         read_csv(log, robot=robot, drive_gain=[1.0, 2.0, 3.0])
+
+
+def test_drive_side_is_the_motors_with_transmissions_and_switches_without_changing_the_robot(
+    tmp_path,
+):
+    robot = load_text(tmp_path, six_r_four_bar(False))
+    assert robot.drive_side == "motor"
+    joint = robot.with_drive_side("joint")
+    assert joint.drive_side == "joint" and robot.drive_side == "motor"
+    assert joint.with_drive_side("motor").drive_side == "motor"
+    plain = load_text(tmp_path, arm_urdf(3), name="plain.urdf")
+    assert plain.drive_side == "joint"
+    with pytest.raises(mindyn.ModelError, match="declares no transmissions"):
+        plain.with_drive_side("motor")
+    with pytest.raises(mindyn.ModelError, match="'motor' or 'joint'"):
+        robot.with_drive_side("motors")

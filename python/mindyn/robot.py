@@ -294,6 +294,22 @@ class Robot:
         )
 
     @property
+    def drive_side(self) -> str:
+        """Where the rotor inertia and friction of a parameter vector act: ``"motor"`` when the
+        description declares transmissions (slot k of ``Ia``/``Fv``/``Fc`` is then motor k's, in
+        motor units: ``tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))``), ``"joint"`` otherwise
+        or after :meth:`with_drive_side`."""
+        return self._m.drive_side
+
+    def with_drive_side(self, side: str) -> Robot:
+        """A new robot, the same as this one but with its rotor inertia and friction on the
+        motors (``"motor"``, needs transmissions) or on the joints (``"joint"``); this robot is
+        unchanged."""
+        if side not in ("motor", "joint"):
+            raise _core.ModelError(f"drive side must be 'motor' or 'joint', not {side!r}")
+        return Robot(self._m.with_drive_side(side))
+
+    @property
     def gravity(self) -> np.ndarray:
         """Gravity in the base frame, shape (3,); default (0, 0, -9.81)."""
         return self._m.gravity

@@ -188,6 +188,25 @@ PYBIND11_MODULE(_core, m) {
             d["groups"] = groups;
             return d;
           })
+      .def_property_readonly(
+          "drive_side",
+          [](const PyModel& s) { return std::string(s.model.motorSide() ? "motor" : "joint"); })
+      .def(
+          "with_drive_side",
+          [](const PyModel& s, const std::string& side) {
+            if (side != "motor" && side != "joint")
+              throw ModelError("drive side must be 'motor' or 'joint', not '" + side + "'");
+            if (side == "motor" && s.model.transmission.empty())
+              throw ModelError(s.model.name +
+                               " declares no transmissions: its rotor inertia and friction can "
+                               "only act on the joints");
+            Model copy = s.model;
+            copy.drive_terms_on_motors = side == "motor";
+            return std::make_shared<PyModel>(std::move(copy));
+          },
+          py::arg("side"),
+          "A new model whose rotor inertia and friction act on the motors ('motor') or on the "
+          "joints ('joint'); this one is unchanged.")
       .def_property_readonly("dh",
                              [](const PyModel& s) {
                                Eigen::MatrixXd d(s.model.dh.size(), 4);

@@ -128,9 +128,16 @@ struct Model {
   Eigen::VectorXd viscous;        // n
   Eigen::VectorXd coulomb;        // n
   /// Motors and their coupling to the joints (transmission.hpp); empty when the description
-  /// declares none (each joint driven directly). Shown, exported and used to convert motor
-  /// currents; the dynamics do not use it yet.
+  /// declares none (each joint driven directly).
   Transmission transmission;
+  /// Where the layout's rotor inertia and friction act when the model has transmissions: on
+  /// the motors (true, the default; slot k of Ia/Fv/Fc belongs to motor k, in motor units:
+  /// tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))) or on the joints (false; as without
+  /// transmissions).
+  bool drive_terms_on_motors = true;
+
+  /// True when rotor inertia and friction act through the transmission (see above).
+  bool motorSide() const { return !transmission.empty() && drive_terms_on_motors; }
 
   int nq() const { return static_cast<int>(joints.size()); }
   /// Index of the joint that carries joint k's parent link, -1 for the base.
