@@ -522,3 +522,20 @@ def test_drive_side_is_the_motors_with_transmissions_and_switches_without_changi
         plain.with_drive_side("motor")
     with pytest.raises(mindyn.ModelError, match="'motor' or 'joint'"):
         robot.with_drive_side("motors")
+
+
+def test_friction_model_is_chosen_on_a_new_robot_and_checked(tmp_path):
+    robot = load_text(tmp_path, arm_urdf(3), name="plain.urdf")
+    assert robot.friction_model["kind"] == "coulomb"
+    smooth = robot.with_friction_model("smooth", velocity=[0.01, 0.02, 0.03])
+    assert smooth.friction_model["kind"] == "smooth" and robot.friction_model["kind"] == "coulomb"
+    np.testing.assert_array_equal(smooth.friction_model["velocity"], [0.01, 0.02, 0.03])
+    assert robot.with_friction_model("asymmetric").friction_model["kind"] == "asymmetric"
+    with pytest.raises(mindyn.ModelError, match="coulomb, asymmetric, smooth or stribeck"):
+        robot.with_friction_model("lugre")
+    with pytest.raises(mindyn.ModelError, match="velocity 2 must be positive"):
+        robot.with_friction_model("stribeck", velocity=[0.1, 0.0, 0.1])
+    with pytest.raises(mindyn.ModelError, match="needs a velocity per joint"):
+        robot.with_friction_model("smooth")
+    with pytest.raises(mindyn.ModelError, match="takes no velocity"):
+        robot.with_friction_model("coulomb", velocity=[1.0, 1.0, 1.0])

@@ -310,6 +310,21 @@ class Robot:
         return Robot(self._m.with_drive_side(side))
 
     @property
+    def friction_model(self) -> dict:
+        """The shape of the friction terms: ``{"kind": "coulomb" | "asymmetric" | "smooth" |
+        "stribeck", "velocity": array (n,) of tanh widths / Stribeck velocities [rad/s | m/s],
+        empty for the kinds without one}``."""
+        d = self._m.friction_model
+        return {"kind": d["kind"], "velocity": _readonly(d["velocity"])}
+
+    def with_friction_model(self, kind: str, *, velocity=None) -> Robot:
+        """A new robot, the same as this one but for its friction model (``kind`` coulomb,
+        asymmetric, smooth or stribeck; ``velocity`` shape (n,), positive, for smooth and
+        stribeck); this robot is unchanged."""
+        v = np.zeros(0) if velocity is None else _args.array(velocity, "velocity", (self.n,))
+        return Robot(self._m.with_friction_model(kind, v))
+
+    @property
     def gravity(self) -> np.ndarray:
         """Gravity in the base frame, shape (3,); default (0, 0, -9.81)."""
         return self._m.gravity

@@ -207,6 +207,56 @@ PYBIND11_MODULE(_core, m) {
           py::arg("side"),
           "A new model whose rotor inertia and friction act on the motors ('motor') or on the "
           "joints ('joint'); this one is unchanged.")
+      .def_property_readonly(
+          "friction_model",
+          [](const PyModel& s) {
+            static const char* names[] = {"coulomb", "asymmetric", "smooth", "stribeck"};
+            const FrictionModel& f = s.model.friction_model;
+            py::dict d;
+            d["kind"] = names[static_cast<int>(f.kind)];
+            d["velocity"] = Eigen::VectorXd(f.velocity);
+            return d;
+          })
+      .def(
+          "with_friction_model",
+          [](const PyModel& s, const std::string& kind, const Eigen::VectorXd& velocity) {
+            static const std::pair<const char*, FrictionKind> kinds[] = {
+                {"coulomb", FrictionKind::Coulomb},
+                {"asymmetric", FrictionKind::Asymmetric},
+                {"smooth", FrictionKind::Smooth},
+                {"stribeck", FrictionKind::Stribeck}};
+            FrictionModel f;
+            bool known = false;
+            for (const auto& [name, k] : kinds)
+              if (kind == name) f.kind = k, known = true;
+            if (!known)
+              throw ModelError(
+                  "friction model must be coulomb, asymmetric, smooth or stribeck, "
+                  "not '" +
+                  kind + "'");
+            const bool scaled = f.kind == FrictionKind::Smooth || f.kind == FrictionKind::Stribeck;
+            if (scaled) {
+              if (velocity.size() != s.model.nq())
+                throw ModelError("the " + kind + " friction model needs a velocity per joint (" +
+                                 std::to_string(s.model.nq()) + "), got " +
+                                 std::to_string(velocity.size()));
+              for (int k = 0; k < velocity.size(); ++k)
+                if (!std::isfinite(velocity[k]) || !(velocity[k] > 0.0) ||
+                    velocity[k] > kMaxDescriptionValue)
+                  throw ModelError("the " + kind + " friction model's velocity " +
+                                   std::to_string(k + 1) + " must be positive and finite, not " +
+                                   std::to_string(velocity[k]));
+              f.velocity = velocity;
+            } else if (velocity.size() != 0) {
+              throw ModelError("the " + kind + " friction model takes no velocity");
+            }
+            Model copy = s.model;
+            copy.friction_model = f;
+            return std::make_shared<PyModel>(std::move(copy));
+          },
+          py::arg("kind"), py::arg("velocity") = Eigen::VectorXd(),
+          "A new model with this friction model (coulomb | asymmetric | smooth | stribeck; "
+          "smooth and stribeck need a positive velocity per slot); this one is unchanged.")
       .def_property_readonly("dh",
                              [](const PyModel& s) {
                                Eigen::MatrixXd d(s.model.dh.size(), 4);

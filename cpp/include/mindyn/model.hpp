@@ -93,18 +93,43 @@ inline constexpr const char* kInertialNames[10] = {"XX", "XY", "XZ", "YY", "YZ",
                                                    "ZZ", "MX", "MY", "MZ", "M"};
 
 /// Which optional per-joint parameters follow each link's ten inertial ones.
-/// The classical vector is link by link: [XX1..M1, (Ia1), (Fv1, Fc1), XX2, ...].
+/// The classical vector is link by link: [XX1..M1, (Ia1), (Fv1, Fc1, (F31)), XX2, ...].
+/// Slot k's rotor inertia and friction act on joint k, or on motor k when the model's
+/// `motorSide()` (then with the motor velocity v = T_k dq in place of dq_k below).
 struct ParameterLayout {
   bool rotor = false;     // Ia_k: tau_k += Ia_k * ddq_k
-  bool friction = false;  // Fv_k, Fc_k: tau_k += Fv_k * dq_k + Fc_k * sign(dq_k)
+  bool friction = false;  // Fv_k, Fc_k (, F3_k): tau_k += Fv_k v + friction shapes (FrictionModel)
+  int friction_columns = 2;  // 2, or 3 for the friction models with a third parameter
 
-  int perLink() const { return 10 + (rotor ? 1 : 0) + (friction ? 2 : 0); }
+  int perLink() const { return 10 + (rotor ? 1 : 0) + (friction ? friction_columns : 0); }
   int size(int n) const { return n * perLink(); }
   int rotorIndex(int k) const { return k * perLink() + 10; }
   int viscousIndex(int k) const { return k * perLink() + 10 + (rotor ? 1 : 0); }
   int coulombIndex(int k) const { return viscousIndex(k) + 1; }
+  /// The third friction parameter (Fa of Asymmetric, Fs of Stribeck); only when
+  /// friction_columns == 3.
+  int thirdFrictionIndex(int k) const { return viscousIndex(k) + 2; }
   /// The layout whose size for n joints is `size`, or throws ModelError.
   static ParameterLayout fromSize(int n, long size);
+};
+
+/// The friction model of every slot (joint, or motor when the model's `motorSide()`), with v the
+/// slot's velocity [rad/s | m/s] and w_k its velocity scale (`FrictionModel::velocity`):
+///   Coulomb     Fv v + Fc sign(v)                                   (2 columns, the default)
+///   Asymmetric  Fv v + Fc sign(v) + Fa |sign(v)|                    (3: Coulomb torque Fc + Fa
+///                                                                    moving forward, Fc - Fa
+///                                                                    backward)
+///   Smooth      Fv v + Fc tanh(v / w_k)                             (2: width w_k)
+///   Stribeck    Fv v + Fc sign(v) + Fs sign(v) exp(-(v / w_k)^2)    (3: Stribeck velocity w_k)
+/// sign(0) = 0.
+enum class FrictionKind { Coulomb, Asymmetric, Smooth, Stribeck };
+
+struct FrictionModel {
+  FrictionKind kind = FrictionKind::Coulomb;
+  Eigen::VectorXd velocity;  // n, w_k > 0 for Smooth and Stribeck; empty otherwise
+  int columns() const {
+    return kind == FrictionKind::Asymmetric || kind == FrictionKind::Stribeck ? 3 : 2;
+  }
 };
 
 struct Model {
@@ -135,6 +160,8 @@ struct Model {
   /// tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))) or on the joints (false; as without
   /// transmissions).
   bool drive_terms_on_motors = true;
+  /// The shape of the friction terms (Coulomb unless a friction model is chosen).
+  FrictionModel friction_model;
 
   /// True when rotor inertia and friction act through the transmission (see above).
   bool motorSide() const { return !transmission.empty() && drive_terms_on_motors; }
