@@ -119,12 +119,12 @@ def check(m, path) -> None:
             )
         if m.jnt_stiffness[j] != 0:
             raise _core.ModelError(
-                f"{where} has a spring (stiffness {m.jnt_stiffness[j]!r}); joint springs are "
-                "not in the model"
+                f"{where} has a spring (stiffness {float(m.jnt_stiffness[j])!r}); joint "
+                "springs are not in the model"
             )
         if m.qpos0[m.jnt_qposadr[j]] != 0:
             raise _core.ModelError(
-                f"{where} has ref={m.qpos0[m.jnt_qposadr[j]]!r}; the model's q is MuJoCo's "
+                f"{where} has ref={float(m.qpos0[m.jnt_qposadr[j]])!r}; the model's q is MuJoCo's "
                 "qpos only with ref=0"
             )
         b = int(m.jnt_bodyid[j])
@@ -158,13 +158,13 @@ def check(m, path) -> None:
     for b in range(1, m.nbody):
         if m.body_gravcomp[b] != 0:
             raise _core.ModelError(
-                f"{path}: body '{body_name(m, b)}' has gravcomp={m.body_gravcomp[b]!r}; "
+                f"{path}: body '{body_name(m, b)}' has gravcomp={float(m.body_gravcomp[b])!r}; "
                 "gravity compensation is not in the model"
             )
     if m.opt.density != 0 or m.opt.viscosity != 0:
         raise _core.ModelError(
-            f"{path}: <option density={m.opt.density!r} viscosity={m.opt.viscosity!r}>: fluid "
-            "forces are not in the model"
+            f"{path}: <option density={float(m.opt.density)!r} "
+            f"viscosity={float(m.opt.viscosity)!r}>: fluid forces are not in the model"
         )
     if m.nv == 0:
         raise _core.ModelError(f"{path}: no hinge or slide joint")

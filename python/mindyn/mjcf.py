@@ -241,6 +241,8 @@ def _offsets_comment(robot: Robot, terms: JointTerms) -> str:
 
 
 def _inertial(mass: float, com, inertia) -> dict[str, str]:
+    if mass == 0 and not np.any(inertia):  # MuJoCo takes a zero inertia as diagonal only
+        return {"pos": _vec(com), "mass": "0.0", "diaginertia": "0.0 0.0 0.0"}
     full = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2],
             inertia[1, 2])  # fmt: skip
     return {"pos": _vec(com), "mass": _num(mass), "fullinertia": _vec(full)}
