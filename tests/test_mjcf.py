@@ -463,7 +463,23 @@ def test_cli_export_mjcf_and_urdf_refused_for_an_mjcf_robot(tmp_path):
     np.testing.assert_allclose(mindyn.load(back).parameters(True, True), p, atol=1e-12)
     from mindyn.cli import main
 
-    assert main(["export", str(out), str(ident), "--urdf", str(tmp_path / "x.urdf")]) == 2
+    for option in ("--urdf", "--yaml"):
+        assert main(["export", str(out), str(ident), option, str(tmp_path / "x")]) == 2
+    argv = ["export", str(REPO_UR5), str(ident), "--mjcf", str(back), "--sidecar", "s.yaml"]
+    assert main(argv) == 2 and not (tmp_path / "s.yaml").exists()
+
+
+def test_mjcf_with_a_tip_loads_the_chain_and_is_written_back_whole_only(tmp_path):
+    path = tmp_path / "arm7.xml"
+    path.write_text(ARM7, encoding="utf-8")
+    chain = mindyn.load(path, tip="l4")
+    assert chain.joint_names == ["j1", "j2", "j3", "j4"]
+    whole = mindyn.load(path)
+    # the links beyond l4 are merged into it at q = 0: the whole model's gravity torque there
+    assert_close(chain.gravity_torque(np.zeros(4)), whole.gravity_torque(np.zeros(7))[:4], 1e-12,
+                 "MJCF tip vs whole model")  # fmt: skip
+    with pytest.raises(mindyn.ModelError, match="4 of the file's 7 joints"):
+        write_mjcf(chain, chain.params, tmp_path / "x.xml")
 
 
 def test_cli_identify_consistent_mjcf(tmp_path):

@@ -85,11 +85,12 @@ def add_description_outputs(p, what: str) -> None:
 
 def check_description_kind(robot, source: str, urdf: bool, mjcf=None) -> None:
     """Refuse ``--urdf`` for a robot from a YAML table or an MJCF, ``--yaml`` for one from a
-    URDF, and ``--sidecar`` with ``--mjcf``; ``--mjcf`` takes any robot."""
+    URDF or an MJCF; ``--mjcf`` takes any robot."""
     if mjcf is not None:
         return
-    if urdf and is_mjcf(robot.source):
-        raise ModelError(f"--urdf needs a robot from a URDF: '{source}' is an MJCF; use --mjcf")
+    if is_mjcf(robot.source):
+        want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
+        raise ModelError(f"{want}: '{source}' is an MJCF; use --mjcf")
     if urdf != (robot.convention == "urdf"):
         want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
         kind = "a URDF" if robot.convention == "urdf" else f"a {robot.convention.upper()} table"
