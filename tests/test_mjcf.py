@@ -504,3 +504,25 @@ def test_cli_identify_consistent_mjcf(tmp_path):
     got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
     assert_close(got, robot.inverse_dynamics(q, dq, ddq, p), TOL, "identify --mjcf vs mindyn")
     assert re.search(r"frictionloss=\"0\.0\"", out.read_text())
+
+
+def test_write_back_checked_by_compiling_and_mocap_markers_left_out(tmp_path):
+    """A mocap marker (and what hangs from it) is not part of the robot; a compiler option that
+    overrides the written inertials is caught by compiling the written file."""
+    path = tmp_path / "m.xml"
+    path.write_text(
+        '<mujoco><worldbody><body name="target" mocap="true"><geom size="0.02"/>'
+        '<body name="marker"><geom size="0.01"/></body></body>'
+        '<body name="a"><joint name="h1" axis="0 0 1"/><geom size="0.1"/></body>'
+        "</worldbody></mujoco>"
+    )
+    robot = mindyn.load(path)
+    assert robot.link_names == ["world", "a"]
+    # a sphere of radius 0.1 and density 1000: its mass
+    assert robot.params[9] == pytest.approx(1000 * 4 / 3 * np.pi * 0.1**3, rel=1e-12)
+    write_mjcf(robot, 2 * robot.params, tmp_path / "ok.xml")
+    assert mindyn.load(tmp_path / "ok.xml").params[9] == pytest.approx(2 * robot.params[9])
+    text = path.read_text().replace("<mujoco>", '<mujoco><compiler inertiafromgeom="true"/>')
+    path.write_text(text)
+    with pytest.raises(mindyn.ModelError, match="MuJoCo compiles link 'a' to other inertial"):
+        write_mjcf(robot, 2 * robot.params, tmp_path / "bad.xml")

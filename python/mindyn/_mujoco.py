@@ -207,9 +207,10 @@ def _urdf(m, name: str, damping: bool, friction: bool) -> str:
     parts = [f'<robot name="{_attr(name)}">', f'<link name="{_attr(body_name(m, 0))}"/>']
     link_of = {0: body_name(m, 0)}
     for b in range(1, m.nbody):
-        if m.body_mocapid[b] >= 0:
-            continue  # fixed to the world, holds no joint (checked)
         p = int(m.body_parentid[b])
+        if m.body_mocapid[b] >= 0 or p not in link_of:
+            continue  # a mocap body and what hangs from it: no joint there (checked), not robot
+
         # from the parent's link frame
         pre = _translation(-last_anchor(m, p)) @ _pose(m.body_pos[b], m.body_quat[b])
         parent = link_of[p]

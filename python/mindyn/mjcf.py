@@ -357,6 +357,6 @@ def _verify(robot: Robot, terms: JointTerms, out: Path) -> None:
         if np.linalg.norm(got - want) > 1e-9 * max(np.linalg.norm(want), 1e-300) + 1e-300:
             raise ModelError(
                 f"{out}: MuJoCo compiles link '{link}' to other inertial parameters than "
-                'written (a <compiler> option such as inertiafromgeom="true", boundmass, '
-                "boundinertia or settotalmass overrides them)"
+                'written (a <compiler> option such as inertiafromgeom="true", fusestatic, '
+                "boundmass, boundinertia or settotalmass overrides them)"
             )
