@@ -435,13 +435,18 @@ def test_mjcf_equality_and_mocap_are_refused(tmp_path):
         mindyn.load(path)
 
 
-def test_without_mujoco_the_error_says_what_to_install(tmp_path, monkeypatch):
+def test_without_mujoco_the_error_says_what_to_install(tmp_path, monkeypatch, capsys):
     path = tmp_path / "arm.xml"
     path.write_text(ARM7, encoding="utf-8")
     monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco raises ImportError
     with pytest.raises(mindyn.ModelError) as e:
         mindyn.load(path)
     assert 'pip install "mindyn[mujoco]"' in str(e.value) and "\n" not in str(e.value)
+    from mindyn.cli import main
+
+    assert main(["info", str(path)]) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and 'pip install "mindyn[mujoco]"' in err, err
 
 
 # -- command line -------------------------------------------------------------------------------
