@@ -36,7 +36,11 @@ mujoco = pytest.importorskip("mujoco", reason="the 'mujoco' wheel is not install
 
 REPO_UR5 = __import__("pathlib").Path(__file__).parent.parent / "examples/urdf/ur5.urdf"
 BAXTER = ROBOTS_DIR / "baxter_description/urdf/baxter.urdf"
-TOL = 1e-9
+# MuJoCo before 3.14 diagonalises a fullinertia only to about 1e-6 relative (from 3.14 on, to
+# round-off): the dynamics and the round trip then agree to that, not to the target.
+_OLD = tuple(int(x) for x in mujoco.__version__.split(".")[:2]) < (3, 14)
+TOL = 1e-5 if _OLD else 1e-9
+ROUND_TRIP = 1e-6 if _OLD else 1e-12
 OFF = (
     mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS
     | mujoco.mjtDisableBit.mjDSBL_LIMIT
@@ -153,9 +157,9 @@ def test_mjcf_round_trip_keeps_every_parameter(tmp_path):
         out = write_mjcf(robot, p, tmp_path / f"{name}.xml").path
         again = mindyn.load(out)
         assert again.joint_names == robot.joint_names and again.joint_types == robot.joint_types
-        np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
         np.testing.assert_allclose(again.gravity, robot.gravity, rtol=0, atol=1e-15)
-        np.testing.assert_allclose(again.axes, robot.axes, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(again.axes, robot.axes, rtol=0, atol=ROUND_TRIP)
         for key in ("lower", "upper"):
             np.testing.assert_allclose(again.limits[key], robot.limits[key], atol=1e-12)
 
@@ -385,7 +389,7 @@ def test_mjcf_written_back_keeps_the_file_and_changes_only_the_dynamics(tmp_path
     assert text.count("<inertial") == 8  # l1 .. l7 and the tool merged into l7 (zero)
     again = mindyn.load(out)
     assert again.joint_names == robot.joint_names
-    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
     # MuJoCo simulates the new parameters: its inverse dynamics is mindyn's with them
     q, dq, ddq = states(robot, rng)
     ref, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
@@ -461,11 +465,11 @@ def test_cli_export_mjcf_and_urdf_refused_for_an_mjcf_robot(tmp_path):
     out = tmp_path / "ur5.xml"
     assert f"wrote {out}" in cli("export", REPO_UR5, ident, "--mjcf", out)
     again = mindyn.load(out)
-    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
     # and written back from the MJCF, where --urdf is refused
     back = tmp_path / "back.xml"
     cli("export", out, ident, "--mjcf", back)
-    np.testing.assert_allclose(mindyn.load(back).parameters(True, True), p, atol=1e-12)
+    np.testing.assert_allclose(mindyn.load(back).parameters(True, True), p, atol=ROUND_TRIP)
     from mindyn.cli import main
 
     for option in ("--urdf", "--yaml"):

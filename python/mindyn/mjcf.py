@@ -27,6 +27,7 @@ so on), otherwise on the joints.
 
 from __future__ import annotations
 
+import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -192,12 +193,13 @@ def _check_motor_side(robot: Robot, tr) -> None:
     try:
         import mujoco
     except ImportError:
-        return  # the file is written all the same; MuJoCo >= 3.3 reads tendon armature
-    probe = "<mujoco><worldbody/><tendon/></mujoco>"
-    if not hasattr(mujoco.MjModel.from_xml_string(probe), "tendon_armature"):
+        return  # the file is written all the same, for MuJoCo 3.4 and later
+    # tendon armature came with 3.3.1, and enters MuJoCo's dynamics as T^T Ia T from 3.4 on
+    # (the tests compare mj_inverse with the motor-side formula)
+    if tuple(int(x) for x in re.findall(r"\d+", mujoco.__version__)[:2]) < (3, 4):
         raise ModelError(
-            f"drive terms on the motors go on tendons, and MuJoCo {mujoco.__version__} has no "
-            "tendon armature (3.3 and later have it)"
+            f"drive terms on the motors go on tendons, whose armature MuJoCo "
+            f"{mujoco.__version__} does not take as the motors' inertia (3.4 and later do)"
         )
 
 
@@ -348,13 +350,15 @@ def _set_inertial(body, mass: float, com, inertia) -> None:
 
 
 def _verify(robot: Robot, terms: JointTerms, out: Path) -> None:
-    """Compiles the written file and checks that it gives back the parameters written."""
+    """Compiles the written file and checks that it gives back the parameters written, to
+    1e-5 relative per link: an overriding compiler option changes them far more; MuJoCo before
+    3.14 diagonalises a ``fullinertia`` only to about 1e-6 (from 3.14 on, to round-off)."""
     again = load(out)
     names = dict(zip(again.link_names[1:], range(again.n)))
     for k, link in enumerate(robot.link_names[1:]):
         got = again.params[10 * names[link] : 10 * names[link] + 10]
         want = terms.inertial[10 * k : 10 * k + 10]
-        if np.linalg.norm(got - want) > 1e-9 * max(np.linalg.norm(want), 1e-300) + 1e-300:
+        if np.linalg.norm(got - want) > 1e-5 * max(np.linalg.norm(want), 1e-300) + 1e-300:
             raise ModelError(
                 f"{out}: MuJoCo compiles link '{link}' to other inertial parameters than "
                 'written (a <compiler> option such as inertiafromgeom="true", fusestatic, '
