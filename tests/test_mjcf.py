@@ -25,6 +25,7 @@ from conftest import (
     ROBOTS_DIR,
     URDFS,
     assert_close,
+    body_inertia,
     cli,
     load_urdf_pair,
     pinocchio_model,
@@ -535,3 +536,32 @@ def test_write_back_checked_by_compiling_and_mocap_markers_left_out(tmp_path):
     path.write_text(text)
     with pytest.raises(mindyn.ModelError, match="MuJoCo compiles link 'a' to other inertial"):
         write_mjcf(robot, 2 * robot.params, tmp_path / "bad.xml")
+
+
+def test_exported_mjcf_of_a_tree_is_pinocchio_plus_the_joint_terms(tmp_path):
+    """Baxter whole (head, both arms, grippers: a tree): the MJCF's bodies nest as the tree."""
+    robot = mindyn.load(BAXTER)
+    assert not robot.is_serial
+    model = pin.buildModelFromUrdf(str(BAXTER))
+    locked = [j for j in model.names[1:] if j not in robot.joint_names]  # mimic fingers
+    model = pin.buildReducedModel(model, [model.getJointId(j) for j in locked], pin.neutral(model))
+    assert model.nq == model.nv == robot.n
+    rng = np.random.default_rng(8)
+    p = physical_params(robot, rng)
+    inertial, ia, fv, fc = split(robot, p)
+    out = write_mjcf(robot, p, tmp_path / "baxter.xml").path
+    for k, name in enumerate(robot.joint_names):
+        j = model.getJointId(name)
+        post = robot.joint_post(k)
+        model.inertias[j] = body_inertia(inertial[10 * k : 10 * k + 10], post)
+    q, dq, ddq = states(robot, rng, m=3)
+    idx = [model.idx_qs[model.getJointId(n)] for n in robot.joint_names]
+    rnea = np.zeros_like(q)
+    data = model.createData()
+    for i in range(len(q)):
+        x, v, a = (np.zeros(model.nq) for _ in range(3))
+        x[idx], v[idx], a[idx] = q[i], dq[i], ddq[i]
+        rnea[i] = pin.rnea(model, data, x, v, a)[idx]
+    ref = rnea + ia * ddq + fv * dq + fc * np.sign(dq)
+    got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
+    assert_close(got + fc * np.sign(dq), ref, TOL, "MJCF of a tree vs Pinocchio + terms")
