@@ -97,7 +97,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     if on_motors:
         _check_motor_side(robot, tr)
     root = ET.Element("mujoco", {"model": robot.name})
-    root.append(ET.Comment(_mapping_comment(robot, on_motors)))
+    root.append(_comment(_mapping_comment(robot, on_motors)))
     ET.SubElement(root, "compiler", {"angle": "radian", "inertiafromgeom": "false"})
     ET.SubElement(root, "option", {"gravity": _vec(robot.gravity)})
     world = ET.SubElement(root, "worldbody")
@@ -156,7 +156,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             )
     root.append(actuators)
     if terms.offset is not None:
-        root.append(ET.Comment(_offsets_comment(robot, terms)))
+        root.append(_comment(_offsets_comment(robot, terms)))
         notes.append("torque offsets have no place in MJCF: listed in a comment of the file")
     ET.indent(root, space="  ")
     text = '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, "unicode") + "\n"
@@ -220,6 +220,13 @@ def _drive_terms(terms: JointTerms, k: int, tendon: bool = False) -> dict[str, s
             )
         out[key] = _num(x)
     return out
+
+
+def _comment(text: str):
+    """An XML comment of ``text`` (``--`` may not appear in one: spaced out)."""
+    while "--" in text:
+        text = text.replace("--", "- -")
+    return ET.Comment(text)
 
 
 def _mapping_comment(robot: Robot, on_motors: bool) -> str:
@@ -307,7 +314,7 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
             element = _named(joints, name, "joint", src)
             element.attrib.update(_drive_terms(terms, joint_index[name]))
     if terms.offset is not None:
-        comment = ET.Comment(_offsets_comment(robot, terms))
+        comment = _comment(_offsets_comment(robot, terms))
         comment.tail = "\n"
         doc.root.insert(0, comment)
         notes.append("torque offsets have no place in MJCF: listed in a comment of the file")
