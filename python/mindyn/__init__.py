@@ -11,7 +11,8 @@
 - :mod:`mindyn.control`: Slotine-Li regressor, adaptive PD and other controllers, and the one
   closed-loop simulation (simulated measurements and tracking experiments);
 - :func:`ik`: inverse kinematics; :mod:`mindyn.export`: identified parameters written back
-  into a robot description; :mod:`mindyn.cli`: the ``mindyn`` command.
+  into a robot description, :mod:`mindyn.mjcf` as a MuJoCo MJCF; :mod:`mindyn.cli`: the
+  ``mindyn`` command.
 """
 
 from . import _args

@@ -237,12 +237,13 @@ def write_urdf(
     return written
 
 
-class _UrdfDocument:
-    """A URDF file parsed with its comments, to be edited and written back."""
+class XmlDocument:
+    """An XML description (``kind``: URDF, MJCF) parsed with its comments, to be edited and
+    written back with everything else as it was."""
 
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, kind: str):
         if not path.is_file():
-            raise RobotFileNotFoundError(f"URDF file '{path}' does not exist")
+            raise RobotFileNotFoundError(f"{kind} file '{path}' does not exist")
         self.path = path
         raw = path.read_bytes()
         try:
@@ -259,16 +260,6 @@ class _UrdfDocument:
             raise ModelError(f"{path}:{line}:{col + 1}: not valid XML: {e}") from None
         self.prolog = self._prolog(raw)
         self._names_as_written(raw)
-        if self.root.tag != "robot":
-            raise ModelError(f"{path}: the root element is <{self.root.tag}>, not <robot>")
-        self.links = {e.get("name"): e for e in self.root if e.tag == "link" and e.get("name")}
-        self.joints = [e for e in self.root if e.tag == "joint"]
-        self.entering = {}  # child link -> joint element
-        self.children = {}  # parent link -> joint elements
-        for j in self.joints:
-            child, parent = self._end(j, "child"), self._end(j, "parent")
-            self.entering[child] = j
-            self.children.setdefault(parent, []).append(j)
 
     def _names_as_written(self, raw: bytes) -> None:
         """Turns ElementTree's ``{uri}name`` back into ``prefix:name`` (``name`` for the default
@@ -316,6 +307,33 @@ class _UrdfDocument:
         except StopIteration:
             pass
         return raw[: start[0]].decode("utf-8") if start else ""
+
+    def text(self) -> str:
+        body = ET.tostring(self.root, encoding="unicode")
+        # ElementTree closes empty elements with " />"; URDFs mostly write "/>". Outside comments
+        # and processing instructions, whose text is written as it is, every ">" of the output
+        # ends a tag (ElementTree escapes it in text and attribute values).
+        parts = re.split(r"(<!--.*?-->|<\?.*?\?>)", body, flags=re.DOTALL)
+        for i in range(0, len(parts), 2):
+            parts[i] = parts[i].replace(" />", "/>")
+        return self.prolog + "".join(parts) + "\n"
+
+
+class _UrdfDocument(XmlDocument):
+    """A URDF file parsed with its comments, to be edited and written back."""
+
+    def __init__(self, path: Path):
+        super().__init__(path, "URDF")
+        if self.root.tag != "robot":
+            raise ModelError(f"{path}: the root element is <{self.root.tag}>, not <robot>")
+        self.links = {e.get("name"): e for e in self.root if e.tag == "link" and e.get("name")}
+        self.joints = [e for e in self.root if e.tag == "joint"]
+        self.entering = {}  # child link -> joint element
+        self.children = {}  # parent link -> joint elements
+        for j in self.joints:
+            child, parent = self._end(j, "child"), self._end(j, "parent")
+            self.entering[child] = j
+            self.children.setdefault(parent, []).append(j)
 
     def _end(self, joint, which: str) -> str:
         e = joint.find(which)
@@ -377,40 +395,7 @@ class _UrdfDocument:
         return e
 
     def _set_inertial(self, link, p: np.ndarray, index: int, name: str) -> list[str]:
-        notes = []
-        m = float(p[9])
-        h = np.array(p[6:9], dtype=float)
-        Io = np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]], dtype=float)
-        if m < 0:
-            raise ModelError(
-                f"M{index} = {m!r} (link '{name}') is negative; a URDF mass must be >= 0 "
-                "(export physically consistent parameters)"
-            )
-        if m == 0:
-            if np.any(h != 0):
-                raise ModelError(
-                    f"M{index} = 0 (link '{name}') with a first moment (MX{index}, MY{index}, "
-                    f"MZ{index}) = ({', '.join(repr(float(x)) for x in h)}): no URDF inertial "
-                    "has that"
-                )
-            com, Ic = np.zeros(3), Io
-            notes.append(
-                f"link '{name}': M{index} = 0, no centre of mass; "
-                + (
-                    "zero inertial written"
-                    if not np.any(Io)
-                    else "its rotational inertia is written at the link origin"
-                )
-            )
-        else:
-            com = h / m
-            Ic = Io - (np.dot(h, h) * np.eye(3) - np.outer(h, h)) / m
-            ev = np.linalg.eigvalsh(Ic)
-            if ev[0] < 0 or 2 * ev.max() > ev.sum() * (1 + 1e-12):
-                notes.append(
-                    f"link '{name}': the inertia about its centre of mass (principal moments "
-                    f"{', '.join(f'{v:.4g}' for v in ev)}) is not that of a physical body"
-                )
+        m, com, Ic, notes = centroidal(p, index, name)
         old = [e for e in link if e.tag == "inertial"]
         if old:
             where = list(link).index(old[0])
@@ -460,15 +445,46 @@ class _UrdfDocument:
         dyn.set("damping", _num(viscous))
         dyn.set("friction", _num(coulomb))
 
-    def text(self) -> str:
-        body = ET.tostring(self.root, encoding="unicode")
-        # ElementTree closes empty elements with " />"; URDFs mostly write "/>". Outside comments
-        # and processing instructions, whose text is written as it is, every ">" of the output
-        # ends a tag (ElementTree escapes it in text and attribute values).
-        parts = re.split(r"(<!--.*?-->|<\?.*?\?>)", body, flags=re.DOTALL)
-        for i in range(0, len(parts), 2):
-            parts[i] = parts[i].replace(" />", "/>")
-        return self.prolog + "".join(parts) + "\n"
+
+def centroidal(p: np.ndarray, index: int, name: str, kind: str = "a URDF"):
+    """``(mass, centre of mass, inertia about it, notes)`` of link ``index`` (1-based, named
+    ``name``) from its ten classical parameters ``p``; a zero mass gives the rotational inertia
+    at the link origin. Raises ModelError for a negative mass, or a zero one with a first
+    moment, which no inertial of ``kind`` holds."""
+    notes = []
+    m = float(p[9])
+    h = np.array(p[6:9], dtype=float)
+    Io = np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]], dtype=float)
+    if m < 0:
+        raise ModelError(
+            f"M{index} = {m!r} (link '{name}') is negative; {kind} mass must be >= 0 "
+            "(export physically consistent parameters)"
+        )
+    if m == 0:
+        if np.any(h != 0):
+            raise ModelError(
+                f"M{index} = 0 (link '{name}') with a first moment (MX{index}, MY{index}, "
+                f"MZ{index}) = ({', '.join(repr(float(x)) for x in h)}): no {kind[2:]} "
+                "inertial has that"
+            )
+        notes.append(
+            f"link '{name}': M{index} = 0, no centre of mass; "
+            + (
+                "zero inertial written"
+                if not np.any(Io)
+                else "its rotational inertia is written at the link origin"
+            )
+        )
+        return m, np.zeros(3), Io, notes
+    com = h / m
+    Ic = Io - (np.dot(h, h) * np.eye(3) - np.outer(h, h)) / m
+    ev = np.linalg.eigvalsh(Ic)
+    if ev[0] < 0 or 2 * ev.max() > ev.sum() * (1 + 1e-12):
+        notes.append(
+            f"link '{name}': the inertia about its centre of mass (principal moments "
+            f"{', '.join(f'{v:.4g}' for v in ev)}) is not that of a physical body"
+        )
+    return m, com, Ic, notes
 
 
 def _child_ws(parent, indent: str) -> str:

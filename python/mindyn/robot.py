@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _args, _core
+from . import _args, _core, _mujoco
 
 __all__ = ["Robot", "Transmission", "load", "bundled_robots"]
 
@@ -45,13 +45,17 @@ def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
     robot : str or Path
         A bundled name (``puma560``, ``puma560_3``, ``zcr07s``, ``stanford``, ``planar<N>`` for a
         vertical-plane N-link arm, ``planar<N>h`` for a horizontal one, 1 <= N <= 1000), a URDF
-        file (``.urdf``, ``.xml``) or a YAML DH / MDH table (``.yaml``, ``.yml``).
+        file (``.urdf``, ``.xml``), a MuJoCo MJCF (``.xml`` whose root is ``<mujoco>``, compiled
+        by the optional ``mujoco`` package: hinge and slide joints, ``armature``, ``damping``
+        and ``frictionloss`` as ``Ia``, ``Fv``, ``Fc``, MuJoCo's gravity) or a YAML DH / MDH
+        table (``.yaml``, ``.yml``).
     tip : str, optional
-        URDF only: the link that ends the serial chain root -> tip; moving joints off it are
-        locked at ``q = 0`` (clamped into their limits) and merged. Without it the whole URDF is
-        loaded: a tree when it branches (:attr:`Robot.parents`), its joints numbered depth-first
-        from the root, the children of a link in the order of their joint names (Pinocchio's
-        order). Mimic joints that end a branch are then locked and merged (see ``notes``).
+        URDF and MJCF only: the link that ends the serial chain root -> tip; moving joints off
+        it are locked at ``q = 0`` (clamped into their limits) and merged. Without it the whole
+        description is loaded: a tree when it branches (:attr:`Robot.parents`), its joints
+        numbered depth-first from the root, the children of a link in the order of their joint
+        names (Pinocchio's order). Mimic joints that end a branch are then locked and merged
+        (see ``notes``).
     gravity : array_like, shape (3,), optional
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
@@ -80,6 +84,8 @@ def _load(robot: str | Path, tip: str | None) -> Robot:
     if suffix in (".urdf", ".xml"):
         if not path.is_file():
             raise _core.RobotFileNotFoundError(f"URDF file '{text}' does not exist")
+        if suffix == ".xml" and _mujoco.is_mjcf(path):
+            return Robot(_mujoco.read(text, tip))
         return Robot(_core.load_urdf(text, tip or ""))
     if suffix in (".yaml", ".yml"):
         if tip:

@@ -80,7 +80,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "export": (
         "export",
-        "write identified classical parameters into the robot's URDF or YAML table",
+        "write identified classical parameters into the robot's URDF or YAML table, or an MJCF",
     ),
 }
 
@@ -457,7 +457,9 @@ def prepare_outputs(args: argparse.Namespace) -> None:
 
 def robot_help() -> str:
     return (
-        "a bundled robot (" + ", ".join(bundled_robots()) + "), a URDF file or a YAML DH/MDH table"
+        "a bundled robot ("
+        + ", ".join(bundled_robots())
+        + "), a URDF file, a MuJoCo MJCF (.xml) or a YAML DH/MDH table"
     )
 
 

@@ -6,6 +6,7 @@ import argparse
 import math
 
 from .._core import ModelError
+from .._mujoco import is_mjcf
 from ..export import classical_terms, write_urdf, write_yaml
 from ..robot import load
 from .args import add_command, add_robot, output_file
@@ -18,7 +19,7 @@ def register(subparsers) -> None:
         description="Write the classical parameters of an identification JSON (its 'classical' "
         "map, from 'mindyn identify --consistent --json') into a copy of the robot's "
         "description: a URDF (inertials, joint damping and friction; rotor inertia, friction "
-        "and torque offsets also in a sidecar YAML) or a YAML DH/MDH table.",
+        "and torque offsets also in a sidecar YAML) or a YAML DH/MDH table, or as a MuJoCo MJCF.",
     )
     add_robot(p)
     p.add_argument("params", metavar="ID.json", help="identification JSON with a 'classical' map")
@@ -51,6 +52,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         args.urdf,
         args.yaml,
         args.sidecar,
+        mjcf=args.mjcf,
     )
     return 0
 
@@ -63,6 +65,14 @@ def add_description_outputs(p, what: str) -> None:
     out.add_argument(
         "--yaml", metavar="FILE", type=output_file, help="YAML DH/MDH table to write" + suffix
     )
+    out.add_argument(
+        "--mjcf",
+        metavar="FILE",
+        type=output_file,
+        help="MuJoCo MJCF to write" + suffix + ": inertials, joint armature (Ia), damping (Fv) "
+        "and frictionloss (Fc), transmissions as tendons; a robot read from an MJCF has that "
+        "file written back",
+    )
     p.add_argument(
         "--sidecar",
         metavar="FILE",
@@ -73,20 +83,35 @@ def add_description_outputs(p, what: str) -> None:
     )
 
 
-def check_description_kind(robot, source: str, urdf: bool) -> None:
-    """Refuse ``--urdf`` for a robot from a YAML table and ``--yaml`` for one from a URDF."""
+def check_description_kind(robot, source: str, urdf: bool, mjcf=None) -> None:
+    """Refuse ``--urdf`` for a robot from a YAML table or an MJCF, ``--yaml`` for one from a
+    URDF or an MJCF; ``--mjcf`` takes any robot."""
+    if mjcf is not None:
+        return
+    if is_mjcf(robot.source):
+        want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
+        raise ModelError(f"{want}: '{source}' is an MJCF; use --mjcf")
     if urdf != (robot.convention == "urdf"):
         want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
         kind = "a URDF" if robot.convention == "urdf" else f"a {robot.convention.upper()} table"
         raise ModelError(f"{want}: '{source}' is {kind}; use {'--yaml' if urdf else '--urdf'}")
 
 
-def write_description(robot, classical, what: str, source: str, urdf, yaml, sidecar) -> None:
-    """Write ``classical`` into a copy of the robot's description (``urdf`` or ``yaml`` path) and
-    say what was written; ``what`` names the values in errors, ``source`` the robot argument."""
-    check_description_kind(robot, source, urdf is not None)
+def write_description(
+    robot, classical, what: str, source: str, urdf, yaml, sidecar, *, mjcf=None
+) -> None:
+    """Write ``classical`` into a copy of the robot's description (``urdf`` or ``yaml`` path) or
+    an MJCF (``mjcf``) and say what was written; ``what`` names the values in errors, ``source``
+    the robot argument."""
+    check_description_kind(robot, source, urdf is not None, mjcf)
     terms = classical_terms(robot, classical, what)
-    if urdf is not None:
+    if mjcf is not None:
+        if sidecar is not None:
+            raise ModelError("--sidecar goes with --urdf or --yaml, not --mjcf")
+        from ..mjcf import write_mjcf  # here: not needed by the other outputs
+
+        res = write_mjcf(robot, classical, mjcf)
+    elif urdf is not None:
         res = write_urdf(robot, classical, urdf, sidecar=sidecar)
     else:
         res = write_yaml(robot, classical, yaml, sidecar=sidecar)

@@ -315,16 +315,17 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.validate_currents and not args.validate:
         raise ValueError("--validate-currents: expected --validate with the logs they belong to")
     robot = load(args.robot, tip=args.tip)
-    if (args.urdf or args.yaml or args.sidecar) and not args.consistent:
+    if (args.urdf or args.yaml or args.mjcf or args.sidecar) and not args.consistent:
+        given = "urdf" if args.urdf else "yaml" if args.yaml else "mjcf" if args.mjcf else "sidecar"
         raise ValueError(
-            f"--{'urdf' if args.urdf else 'yaml' if args.yaml else 'sidecar'}: expected "
+            f"--{given}: expected "
             "--consistent as well (only a physically consistent estimate can be written as a robot "
             "description)"
         )
     if args.sidecar and not (args.urdf or args.yaml):
         raise ValueError("--sidecar: expected --urdf or --yaml (the description it goes with)")
-    if args.urdf or args.yaml:
-        check_description_kind(robot, args.robot, args.urdf is not None)
+    if args.urdf or args.yaml or args.mjcf:
+        check_description_kind(robot, args.robot, args.urdf is not None, args.mjcf)
     _check_lowpass_options(args)
     files = list(args.data)
     vfiles = list(args.validate or [])
@@ -558,7 +559,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
-    if args.urdf or args.yaml:
+    if args.urdf or args.yaml or args.mjcf:
         write_description(
             robot,
             doc["classical"],
@@ -567,6 +568,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
             args.urdf,
             args.yaml,
             args.sidecar,
+            mjcf=args.mjcf,
         )
     if args.report:
         from ..identification.excitation import excitation_limits

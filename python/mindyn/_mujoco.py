@@ -1,0 +1,347 @@
+"""MuJoCo MJCF descriptions read through the ``mujoco`` package's own compiler.
+
+``mujoco`` is an optional dependency (``pip install "mindyn[mujoco]"``), imported only when an
+MJCF is read or written. MuJoCo compiles the file (``<default>`` classes, ``<include>``, angle
+units, Euler sequences, inertia from geoms ...); the compiled model is then written as a URDF in
+memory, which the core's URDF parser turns into the model (the one model builder), with each
+joint's ``armature`` as its rotor inertia ``Ia``, ``damping`` as ``Fv`` and ``frictionloss`` as
+``Fc``, and MuJoCo's gravity.
+
+A link frame of the model is the MuJoCo body frame moved to the anchor (``pos``) of the body's
+last joint, with the body's axes; a body with several joints gets one massless link per joint
+before its last one (``BODY__JOINT``). Jointless bodies are merged into the link they hang from.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.parsers.expat
+from pathlib import Path
+
+import numpy as np
+
+from . import _core
+
+#: How to install the optional dependency, for error messages.
+INSTALL = 'pip install "mindyn[mujoco]"'
+
+
+def require(what: str):
+    """The ``mujoco`` module, or a one-line error saying that ``what`` needs it."""
+    try:
+        import mujoco
+    except ImportError:
+        raise _core.ModelError(f"{what} needs the 'mujoco' package: {INSTALL}") from None
+    return mujoco
+
+
+def root_tag(path) -> str | None:
+    """The name of the root element of the XML file ``path`` (``None`` if it cannot be read or
+    is not XML): ``mujoco`` for an MJCF, ``robot`` for a URDF."""
+    found: list[str] = []
+    p = xml.parsers.expat.ParserCreate()
+
+    def first(name, attrs):
+        found.append(name)
+        raise StopIteration
+
+    p.StartElementHandler = first
+    try:
+        with open(path, "rb") as f:
+            p.ParseFile(f)
+    except StopIteration:
+        pass
+    except (OSError, xml.parsers.expat.ExpatError):
+        return None
+    return found[0] if found else None
+
+
+def is_mjcf(path) -> bool:
+    """True when ``path`` is an existing XML file whose root element is ``<mujoco>``."""
+    return Path(str(path)).is_file() and root_tag(path) == "mujoco"
+
+
+def compile_model(path):
+    """MuJoCo's compiled model of the MJCF ``path``, or a one-line ModelError with MuJoCo's
+    reason."""
+    mujoco = require(f"reading the MJCF '{path}'")
+    try:
+        return mujoco.MjModel.from_xml_path(str(path))
+    except ValueError as e:
+        why = "; ".join(s.strip() for s in str(e).splitlines() if s.strip())
+        raise _core.ModelError(f"{path}: MuJoCo cannot compile it: {why}") from None
+
+
+def _name(m, kind, i: int, fallback: str) -> str:
+    mujoco = require("reading an MJCF")
+    return mujoco.mj_id2name(m, kind, i) or fallback
+
+
+def body_name(m, b: int) -> str:
+    mujoco = require("reading an MJCF")
+    return _name(m, mujoco.mjtObj.mjOBJ_BODY, b, "world" if b == 0 else f"body{b}")
+
+
+def joint_name(m, j: int) -> str:
+    mujoco = require("reading an MJCF")
+    return _name(m, mujoco.mjtObj.mjOBJ_JOINT, j, f"joint{j}")
+
+
+def body_joints(m, b: int) -> list[int]:
+    start = int(m.body_jntadr[b])
+    return list(range(start, start + int(m.body_jntnum[b]))) if start >= 0 else []
+
+
+def link_name(m, b: int, j: int) -> str:
+    """The model's name of the link that joint ``j`` of body ``b`` moves."""
+    joints = body_joints(m, b)
+    name = body_name(m, b)
+    return name if j == joints[-1] else f"{name}__{joint_name(m, j)}"
+
+
+def last_anchor(m, b: int) -> np.ndarray:
+    """Where the link frame of body ``b`` sits in the body frame: its last joint's ``pos``."""
+    joints = body_joints(m, b)
+    return np.array(m.jnt_pos[joints[-1]], dtype=float) if joints else np.zeros(3)
+
+
+def check(m, path) -> None:
+    """Refuses, in one line naming the element, what the model cannot represent."""
+    mujoco = require("reading an MJCF")
+    kinds = {int(mujoco.mjtJoint.mjJNT_FREE): "free", int(mujoco.mjtJoint.mjJNT_BALL): "ball"}
+    for j in range(m.njnt):
+        name, body = joint_name(m, j), body_name(m, int(m.jnt_bodyid[j]))
+        where = f"{path}: joint '{name}' (body '{body}')"
+        if int(m.jnt_type[j]) in kinds:
+            raise _core.ModelError(
+                f"{where} is a {kinds[int(m.jnt_type[j])]} joint; multi-DOF joints are not in "
+                "the model (hinge and slide joints are)"
+            )
+        if m.jnt_stiffness[j] != 0:
+            raise _core.ModelError(
+                f"{where} has a spring (stiffness {float(m.jnt_stiffness[j])!r}); joint "
+                "springs are not in the model"
+            )
+        if m.qpos0[m.jnt_qposadr[j]] != 0:
+            raise _core.ModelError(
+                f"{where} has ref={float(m.qpos0[m.jnt_qposadr[j]])!r}; the model's q is MuJoCo's "
+                "qpos only with ref=0"
+            )
+        b = int(m.jnt_bodyid[j])
+        while b != 0:
+            if m.body_mocapid[b] >= 0:
+                raise _core.ModelError(
+                    f"{where} hangs from the mocap body '{body_name(m, b)}', which MuJoCo moves: "
+                    "the joints must be on a tree rooted at the fixed world"
+                )
+            b = int(m.body_parentid[b])
+    if m.neq:
+        raise _core.ModelError(
+            f"{path}: {m.neq} equality constraint(s), the first "
+            f"'{_name(m, mujoco.mjtObj.mjOBJ_EQUALITY, 0, 'equality0')}'; closed chains and "
+            "coupled joints are not in the model"
+        )
+    for t in range(m.ntendon):
+        terms = {
+            "stiffness": m.tendon_stiffness[t],
+            "damping": m.tendon_damping[t],
+            "frictionloss": m.tendon_frictionloss[t],
+            "armature": getattr(m, "tendon_armature", np.zeros(m.ntendon))[t],
+        }
+        given = [f"{k} {float(v)!r}" for k, v in terms.items() if np.any(v != 0)]
+        if given:
+            name = _name(m, mujoco.mjtObj.mjOBJ_TENDON, t, f"tendon{t}")
+            raise _core.ModelError(
+                f"{path}: tendon '{name}' has {', '.join(given)}; tendon dynamics are not read "
+                "(put the terms on the joints)"
+            )
+    for b in range(1, m.nbody):
+        if m.body_gravcomp[b] != 0:
+            raise _core.ModelError(
+                f"{path}: body '{body_name(m, b)}' has gravcomp={float(m.body_gravcomp[b])!r}; "
+                "gravity compensation is not in the model"
+            )
+    if m.opt.density != 0 or m.opt.viscosity != 0:
+        raise _core.ModelError(
+            f"{path}: <option density={float(m.opt.density)!r} "
+            f"viscosity={float(m.opt.viscosity)!r}>: fluid forces are not in the model"
+        )
+    if m.nv == 0:
+        raise _core.ModelError(f"{path}: no hinge or slide joint")
+
+
+def read(path, tip: str | None) -> _core.Model:
+    """The core model of the MJCF ``path`` (``tip`` as for a URDF)."""
+    mujoco = require(f"reading the MJCF '{path}'")
+    m = compile_model(path)
+    check(m, path)
+    disabled = int(m.opt.disableflags)
+    flags = mujoco.mjtDisableBit
+    damper = getattr(flags, "mjDSBL_DAMPER", None) or flags.mjDSBL_PASSIVE
+    frictionloss = int(flags.mjDSBL_FRICTIONLOSS) | int(flags.mjDSBL_CONSTRAINT)
+    urdf = _urdf(
+        m,
+        _model_name(m, path),
+        damping=not disabled & int(damper),
+        friction=not disabled & frictionloss,
+    )
+    core = _core.parse_urdf(urdf, tip or "", str(path))
+    gravity = np.zeros(3) if disabled & int(flags.mjDSBL_GRAVITY) else np.array(m.opt.gravity)
+    core = core.with_gravity(gravity)
+    armature = {joint_name(m, j): float(m.dof_armature[m.jnt_dofadr[j]]) for j in range(m.njnt)}
+    core.rotor_inertia = np.array([armature[name] for name in core.joint_names])
+    return core
+
+
+def _model_name(m, path) -> str:
+    """The ``model`` attribute of ``<mujoco>`` (MuJoCo's default name replaced by the file's
+    stem)."""
+    name = bytes(m.names).split(b"\0")[0].decode("utf-8", "replace")
+    return name if name and name != "MuJoCo Model" else Path(str(path)).stem
+
+
+def _urdf(m, name: str, damping: bool, friction: bool) -> str:
+    """The compiled model ``m`` as URDF text (see the module's docstring)."""
+    mujoco = require("reading an MJCF")
+    hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
+    parts = [f'<robot name="{_attr(name)}">', f'<link name="{_attr(body_name(m, 0))}"/>']
+    link_of = {0: body_name(m, 0)}
+    for b in range(1, m.nbody):
+        p = int(m.body_parentid[b])
+        if m.body_mocapid[b] >= 0 or p not in link_of:
+            continue  # a mocap body and what hangs from it: no joint there (checked), not robot
+
+        # from the parent's link frame
+        pre = _translation(-last_anchor(m, p)) @ _pose(m.body_pos[b], m.body_quat[b])
+        parent = link_of[p]
+        joints = body_joints(m, b)
+        if not joints:
+            link = body_name(m, b)
+            parts.append(_link(link, m, b, np.zeros(3)))
+            parts.append(_joint(f"{link}__fixed", "fixed", parent, link, pre))
+            link_of[b] = link
+            continue
+        previous = np.zeros(3)
+        for j in joints:
+            link = link_name(m, b, j)
+            origin = (pre if j == joints[0] else np.eye(4)) @ _translation(m.jnt_pos[j] - previous)
+            previous = np.array(m.jnt_pos[j], dtype=float)
+            last = j == joints[-1]
+            parts.append(_link(link, m, b if last else None, previous))
+            dof = int(m.jnt_dofadr[j])
+            lo, hi = (float(v) for v in m.jnt_range[j])
+            limited = bool(m.jnt_limited[j])
+            kind = "prismatic" if int(m.jnt_type[j]) != hinge else "revolute"
+            if kind == "revolute" and not limited:
+                kind = "continuous"
+            limit = f'lower="{lo!r}" upper="{hi!r}" ' if limited else ""
+            effort = 0.0
+            if m.jnt_actfrclimited[j]:
+                effort = max(abs(float(v)) for v in m.jnt_actfrcrange[j])
+            extra = (
+                f'<axis xyz="{_vec(m.jnt_axis[j])}"/>'
+                f'<limit {limit}effort="{effort!r}" velocity="0"/>'
+                f'<dynamics damping="{float(m.dof_damping[dof]) if damping else 0.0!r}" '
+                f'friction="{float(m.dof_frictionloss[dof]) if friction else 0.0!r}"/>'
+            )
+            parts.append(_joint(joint_name(m, j), kind, parent, link, origin, extra))
+            parent = link
+        link_of[b] = parent
+    parts.append("</robot>")
+    return "\n".join(parts)
+
+
+def _link(name: str, m, b: int | None, anchor: np.ndarray) -> str:
+    """A URDF link holding body ``b``'s inertia (none: massless), its frame at ``anchor`` in the
+    body frame."""
+    if b is None:
+        inertia, com, mass = np.zeros((3, 3)), np.zeros(3), 0.0
+    else:
+        R = _rotation(m.body_iquat[b])
+        inertia = R @ np.diag(np.asarray(m.body_inertia[b], dtype=float)) @ R.T
+        com = np.asarray(m.body_ipos[b], dtype=float) - anchor
+        mass = float(m.body_mass[b])
+    values = (inertia[0, 0], inertia[0, 1], inertia[0, 2], inertia[1, 1], inertia[1, 2])
+    keys = ("ixx", "ixy", "ixz", "iyy", "iyz")
+    tensor = " ".join(f'{k}="{float(v)!r}"' for k, v in zip(keys, values))
+    return (
+        f'<link name="{_attr(name)}"><inertial><origin xyz="{_vec(com)}" rpy="0 0 0"/>'
+        f'<mass value="{mass!r}"/>'
+        f'<inertia {tensor} izz="{float(inertia[2, 2])!r}"/></inertial></link>'
+    )
+
+
+def _joint(name, kind, parent, child, origin, extra: str = "") -> str:
+    return (
+        f'<joint name="{_attr(name)}" type="{kind}"><parent link="{_attr(parent)}"/>'
+        f'<child link="{_attr(child)}"/><origin xyz="{_vec(origin[:3, 3])}" '
+        f'rpy="{_vec(rpy(origin[:3, :3]))}"/>{extra}</joint>'
+    )
+
+
+def _attr(text: str) -> str:
+    return (
+        text.replace("&", "&amp;").replace('"', "&quot;").replace("<", "&lt;").replace(">", "&gt;")
+    )
+
+
+def _vec(v) -> str:
+    return " ".join(repr(float(x)) for x in v)
+
+
+def _translation(p) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = p
+    return T
+
+
+def _pose(pos, quat) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = _rotation(quat)
+    T[:3, 3] = pos
+    return T
+
+
+def _rotation(quat) -> np.ndarray:
+    """The rotation matrix of a quaternion ``(w, x, y, z)`` (MuJoCo's order), normalised."""
+    w, x, y, z = np.asarray(quat, dtype=float) / np.linalg.norm(quat)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def quaternion(R) -> np.ndarray:
+    """The unit quaternion ``(w, x, y, z)`` of the rotation matrix ``R`` (Shepperd's method:
+    from its largest component), with ``w >= 0``."""
+    R = np.asarray(R, dtype=float)
+    t = np.trace(R)
+    cands = [t, R[0, 0], R[1, 1], R[2, 2]]
+    i = int(np.argmax(cands))
+    if i == 0:
+        s = 2.0 * math.sqrt(1.0 + t)
+        q = [s / 4, (R[2, 1] - R[1, 2]) / s, (R[0, 2] - R[2, 0]) / s, (R[1, 0] - R[0, 1]) / s]
+    elif i == 1:
+        s = 2.0 * math.sqrt(1.0 + R[0, 0] - R[1, 1] - R[2, 2])
+        q = [(R[2, 1] - R[1, 2]) / s, s / 4, (R[0, 1] + R[1, 0]) / s, (R[0, 2] + R[2, 0]) / s]
+    elif i == 2:
+        s = 2.0 * math.sqrt(1.0 + R[1, 1] - R[0, 0] - R[2, 2])
+        q = [(R[0, 2] - R[2, 0]) / s, (R[0, 1] + R[1, 0]) / s, s / 4, (R[1, 2] + R[2, 1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + R[2, 2] - R[0, 0] - R[1, 1])
+        q = [(R[1, 0] - R[0, 1]) / s, (R[0, 2] + R[2, 0]) / s, (R[1, 2] + R[2, 1]) / s, s / 4]
+    q = np.array(q)
+    return -q if q[0] < 0 else q
+
+
+def rpy(R) -> np.ndarray:
+    """URDF roll, pitch, yaw of ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    R = np.asarray(R, dtype=float)
+    c = math.hypot(R[0, 0], R[1, 0])
+    pitch = math.atan2(-R[2, 0], c)
+    if c < 1e-9:  # gimbal lock: the roll is folded into the yaw
+        return np.array([0.0, pitch, math.atan2(-R[0, 1], R[1, 1])])
+    return np.array([math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])])

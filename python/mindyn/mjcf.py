@@ -1,0 +1,373 @@
+"""Identified classical parameters written as a MuJoCo MJCF.
+
+How MuJoCo's terms relate to the model's (``tau = W(q, dq, ddq) p + Ia ddq + Fv dq + Fc sign(dq)``):
+
+- a body's ``<inertial>``: ``mass`` = ``M``, ``pos`` = centre of mass ``(MX, MY, MZ) / M`` and
+  ``fullinertia`` = the inertia about it, in the body frame;
+- a joint's ``armature`` = ``Ia``: MuJoCo adds it to the diagonal of the joint-space inertia
+  (``tau += Ia ddq``, exactly the model's rotor term);
+- a joint's ``damping`` = ``Fv``: a passive force ``-Fv dq`` (exactly the model's viscous term);
+- a joint's ``frictionloss`` = ``Fc``: not a force ``Fc sign(dq)`` but a dry-friction
+  constraint, solved with the other constraints: its force is at most ``Fc`` in magnitude and
+  opposes the motion, and is smaller (soft, set by ``solreffriction``/``solimpfriction``) near
+  zero velocity. ``mj_inverse`` includes the constraint force the soft model gives for the
+  state and acceleration: where the constraint is saturated (the joint moves, MuJoCo's
+  ``efc_state`` linear) that is exactly ``Fc sign(dq)``; with the frictionloss constraint
+  disabled (``mjDSBL_FRICTIONLOSS``) ``mj_inverse`` leaves it out and ``Fc sign(dq)`` is added by
+  hand;
+- torque offsets ``Off`` have no place in MJCF (a comment lists them).
+
+With transmissions (``q_m = T q``, ``tau = T^T tau_m``) each motor is a fixed tendon whose
+coefficients are its row of ``T``, driven by a ``<motor>`` actuator on it with ``gear`` 1 (a
+tendon expresses any coupling matrix, which ``gear`` on joint actuators cannot); when the drive
+terms are on the motors (``drive_side="motor"``, slot k of ``Ia``, ``Fv``, ``Fc`` = motor k)
+they go on the tendon (``armature``, ``damping``, ``frictionloss``: ``tau += T^T Ia T ddq`` and
+so on), otherwise on the joints.
+"""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from . import _mujoco
+from ._core import ModelError
+from .export import Export, JointTerms, XmlDocument, centroidal, classical_terms
+from .robot import Robot, load
+
+__all__ = ["write_mjcf"]
+
+
+def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -> Export:
+    """Writes ``classical`` as the dynamics of ``robot`` in a MuJoCo MJCF.
+
+    Parameters
+    ----------
+    robot : Robot
+        Any robot; one loaded from an MJCF has that file rewritten.
+    classical : mapping or array_like
+        Classical parameters, see :func:`mindyn.export.classical_terms`.
+    path : str or Path
+        The MJCF to write (its folder is created when missing).
+    source : str or Path, optional
+        The description to start from; default ``robot.source``. An MJCF is written back with
+        only its moving bodies' ``<inertial>`` and its joints' ``armature``, ``damping`` and
+        ``frictionloss`` changed (comments and everything else kept; bodies merged into a
+        moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
+        the parameters written. Any other robot gets a new MJCF: one body per link, its frame
+        the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, ``armature``,
+        ``damping``, ``frictionloss``), gravity, a ``tool`` site for a chain, and a ``<motor>``
+        per joint, or per motor on a fixed tendon with transmissions.
+    drive_side : {"joint", "motor"}, optional
+        Where ``Ia``, ``Fv``, ``Fc`` act with transmissions; default the robot's
+        ``drive_side`` (``"joint"`` when it has none).
+
+    Returns
+    -------
+    Export
+        The file written and notes.
+
+    Raises
+    ------
+    ModelError
+        ``classical`` does not fit the robot, a mass is negative (or zero with a first
+        moment), the MJCF to rewrite does not hold the robot's bodies and joints by name,
+        ``mujoco`` is missing where it is needed, or MuJoCo compiles the written file to other
+        parameters.
+    """
+    terms = classical_terms(robot, classical)
+    side = drive_side if drive_side is not None else getattr(robot, "drive_side", "joint")
+    if side not in ("joint", "motor"):
+        raise ModelError(f"drive_side must be 'joint' or 'motor', got {side!r}")
+    src = Path(robot.source if source is None else source)
+    out = Path(path)
+    if _mujoco.is_mjcf(src):
+        return _rewrite(robot, terms, src, out)
+    return _generate(robot, terms, out, side)
+
+
+# -- a new MJCF -------------------------------------------------------------------------------
+def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
+    notes: list[str] = []
+    tr = robot.transmission
+    on_motors = side == "motor" and tr is not None
+    if on_motors:
+        _check_motor_side(robot, tr)
+    root = ET.Element("mujoco", {"model": robot.name})
+    root.append(_comment(_mapping_comment(robot, on_motors)))
+    ET.SubElement(root, "compiler", {"angle": "radian", "inertiafromgeom": "false"})
+    ET.SubElement(root, "option", {"gravity": _vec(robot.gravity)})
+    world = ET.SubElement(root, "worldbody")
+    parents = robot.parents
+    bodies: list[ET.Element] = []
+    lim = robot.limits
+    for k in range(robot.n):
+        parent = world if parents[k] < 0 else bodies[parents[k]]
+        place = robot.joint_pre(k)
+        if parents[k] >= 0:
+            place = robot.joint_post(parents[k]) @ place
+        body = ET.SubElement(parent, "body", {"name": robot.link_names[k + 1], **_pose(place)})
+        bodies.append(body)
+        mass, com, inertia, more = centroidal(
+            terms.inertial[10 * k : 10 * k + 10], k + 1, robot.link_names[k + 1], "an MJCF"
+        )
+        notes += more
+        post = robot.joint_post(k)
+        com = post[:3, :3] @ com + post[:3, 3]
+        inertia = post[:3, :3] @ inertia @ post[:3, :3].T
+        ET.SubElement(body, "inertial", _inertial(mass, com, inertia))
+        joint = {
+            "name": robot.joint_names[k],
+            "type": "hinge" if robot.joint_types[k] == "revolute" else "slide",
+            "axis": _vec(robot.axes[k]),
+        }
+        lo, hi = lim["lower"][k], lim["upper"][k]
+        if np.isfinite(lo) and np.isfinite(hi):
+            joint.update(limited="true", range=_vec((lo, hi)))
+        else:
+            joint["limited"] = "false"
+        if not on_motors:
+            joint.update(_drive_terms(terms, k))
+        ET.SubElement(body, "joint", joint)
+    if robot.is_serial:
+        tool = robot.joint_post(robot.n - 1) @ robot.tool
+        ET.SubElement(bodies[-1], "site", {"name": "tool", **_pose(tool)})
+    actuators = ET.Element("actuator")
+    if tr is None:
+        for name in robot.joint_names:
+            ET.SubElement(actuators, "motor", {"name": name, "joint": name, "gear": "1"})
+    else:
+        tendons = ET.SubElement(root, "tendon")
+        for i, motor in enumerate(tr.motors):
+            fixed = ET.SubElement(tendons, "fixed", {"name": motor})
+            if on_motors:
+                fixed.attrib.update(_drive_terms(terms, i, tendon=True))
+            for k, c in enumerate(tr.T[i]):
+                if c != 0:
+                    ET.SubElement(fixed, "joint", {"joint": robot.joint_names[k], "coef": _num(c)})
+            ET.SubElement(actuators, "motor", {"name": motor, "tendon": motor, "gear": "1"})
+        if np.any(tr.offset != 0):
+            notes.append(
+                "the motor offsets of the transmissions do not change the dynamics; "
+                "the tendon lengths are T q without them"
+            )
+    root.append(actuators)
+    if terms.offset is not None:
+        root.append(_comment(_offsets_comment(robot, terms)))
+        notes.append("torque offsets have no place in MJCF: listed in a comment of the file")
+    ET.indent(root, space="  ")
+    text = '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, "unicode") + "\n"
+    _compiles(text, robot, notes)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text, encoding="utf-8")
+    return Export(out, notes=notes)
+
+
+def _compiles(text: str, robot: Robot, notes: list[str]) -> None:
+    """Has MuJoCo compile the MJCF ``text`` (when installed): its refusal (an inertia that is
+    not physical, a body without mass ...) becomes a one-line ModelError."""
+    try:
+        import mujoco
+    except ImportError:
+        notes.append(f"not compiled by MuJoCo (the 'mujoco' package is missing: {_mujoco.INSTALL})")
+        return
+    try:
+        mujoco.MjModel.from_xml_string(text)
+    except ValueError as e:
+        why = "; ".join(s.strip() for s in str(e).splitlines() if s.strip())
+        raise ModelError(
+            f"MuJoCo refuses the MJCF of robot '{robot.name}' with these parameters: {why} "
+            "(export physically consistent parameters, with positive masses)"
+        ) from None
+
+
+def _check_motor_side(robot: Robot, tr) -> None:
+    if tr.n_motors != robot.n:
+        raise ModelError(
+            f"drive terms on the motors need as many motors as joints: robot '{robot.name}' has "
+            f"{tr.n_motors} motors for {robot.n} joints"
+        )
+    try:
+        import mujoco
+    except ImportError:
+        return  # the file is written all the same, for MuJoCo 3.4 and later
+    # tendon armature came with 3.3.1, and enters MuJoCo's dynamics as T^T Ia T from 3.4 on
+    # (the tests compare mj_inverse with the motor-side formula)
+    if tuple(int(x) for x in re.findall(r"\d+", mujoco.__version__)[:2]) < (3, 4):
+        raise ModelError(
+            f"drive terms on the motors go on tendons, whose armature MuJoCo "
+            f"{mujoco.__version__} does not take as the motors' inertia (3.4 and later do)"
+        )
+
+
+def _drive_terms(terms: JointTerms, k: int, tendon: bool = False) -> dict[str, str]:
+    values = {
+        "armature": terms.rotor,
+        "damping": terms.viscous,
+        "frictionloss": terms.coulomb,
+    }
+    out = {}
+    for key, v in values.items():
+        x = 0.0 if v is None else float(v[k])
+        if x < 0:
+            what = "motor" if tendon else "joint"
+            raise ModelError(
+                f"{key} of {what} {k + 1} would be {x!r}; MuJoCo takes no negative {key} "
+                "(export physically consistent parameters)"
+            )
+        out[key] = _num(x)
+    return out
+
+
+def _comment(text: str):
+    """An XML comment of ``text`` (``--`` may not appear in one: spaced out)."""
+    while "--" in text:
+        text = text.replace("--", "- -")
+    return ET.Comment(text)
+
+
+def _mapping_comment(robot: Robot, on_motors: bool) -> str:
+    where = "each motor's fixed tendon" if on_motors else "each joint"
+    return (
+        f" Written by mindyn export for robot '{robot.name}' ({robot.source}). Bodies: mass, "
+        "centre of mass and inertia about it (fullinertia, body frame = joint frame). On "
+        f"{where}: armature = rotor inertia Ia (tau += Ia ddq), damping = viscous friction Fv "
+        "(tau += Fv dq), frictionloss = Coulomb friction Fc, which MuJoCo applies as a dry-"
+        "friction constraint (at most Fc, opposing the motion, soft near zero velocity), not "
+        "as Fc sign(dq). "
+    )
+
+
+def _offsets_comment(robot: Robot, terms: JointTerms) -> str:
+    values = ", ".join(f"{name} {float(v)!r}" for name, v in zip(robot.joint_names, terms.offset))
+    return (
+        " Torque offsets Off (tau += Off) have no place in MJCF; identified values, per "
+        f"joint: {values} "
+    )
+
+
+def _inertial(mass: float, com, inertia) -> dict[str, str]:
+    if mass == 0 and not np.any(inertia):  # MuJoCo takes a zero inertia as diagonal only
+        return {"pos": _vec(com), "mass": "0.0", "diaginertia": "0.0 0.0 0.0"}
+    full = (inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2],
+            inertia[1, 2])  # fmt: skip
+    return {"pos": _vec(com), "mass": _num(mass), "fullinertia": _vec(full)}
+
+
+def _pose(T) -> dict[str, str]:
+    T = np.asarray(T, dtype=float)
+    return {"pos": _vec(T[:3, 3]), "quat": _vec(_mujoco.quaternion(T[:3, :3]))}
+
+
+def _num(x) -> str:
+    return repr(float(x))
+
+
+def _vec(v) -> str:
+    return " ".join(_num(x) for x in v)
+
+
+# -- an MJCF written back ---------------------------------------------------------------------
+def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
+    m = _mujoco.compile_model(src)
+    doc = XmlDocument(src, "MJCF")
+    if doc.root.tag != "mujoco":
+        raise ModelError(f"{src}: the root element is <{doc.root.tag}>, not <mujoco>")
+    if robot.n != m.nv:
+        raise ModelError(
+            f"{src}: robot '{robot.name}' has {robot.n} of the file's {m.nv} joints (loaded with "
+            "a tip): an MJCF is written back for the whole model only"
+        )
+    bodies = {e.get("name"): e for e in doc.root.iter("body") if e.get("name")}
+    joints = {e.get("name"): e for e in doc.root.iter("joint") if e.get("name")}
+    link_index = {name: k for k, name in enumerate(robot.link_names[1:])}
+    joint_index = {name: k for k, name in enumerate(robot.joint_names)}
+    notes: list[str] = []
+    for b in range(1, m.nbody):
+        jnts = _mujoco.body_joints(m, b)
+        bname = _mujoco.body_name(m, b)
+        for j in jnts[:-1]:  # the massless links between a body's joints
+            k = link_index[_mujoco.link_name(m, b, j)]
+            if np.any(terms.inertial[10 * k : 10 * k + 10] != 0):
+                raise ModelError(
+                    f"link {k + 1} ('{robot.link_names[k + 1]}') between joints of body "
+                    f"'{bname}' has identified inertia; MuJoCo has no body there"
+                )
+        if not jnts:
+            if _moving_ancestor(m, b) and m.body_mass[b] > 0:
+                element = _named(bodies, bname, "body", src)
+                _set_inertial(element, 0.0, np.zeros(3), np.zeros((3, 3)))
+                notes.append(f"body '{bname}' is merged into the link above it: zero <inertial>")
+            continue
+        k = link_index[bname]
+        mass, com, inertia, more = centroidal(
+            terms.inertial[10 * k : 10 * k + 10], k + 1, bname, "an MJCF"
+        )
+        notes += more
+        com = com + _mujoco.last_anchor(m, b)
+        _set_inertial(_named(bodies, bname, "body", src), mass, com, inertia)
+        for j in jnts:
+            name = _mujoco.joint_name(m, j)
+            element = _named(joints, name, "joint", src)
+            element.attrib.update(_drive_terms(terms, joint_index[name]))
+    if terms.offset is not None:
+        comment = _comment(_offsets_comment(robot, terms))
+        comment.tail = "\n"
+        doc.root.insert(0, comment)
+        notes.append("torque offsets have no place in MJCF: listed in a comment of the file")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(doc.text(), encoding="utf-8")
+    _verify(robot, terms, out)
+    return Export(out, notes=notes)
+
+
+def _moving_ancestor(m, b: int) -> bool:
+    b = int(m.body_parentid[b])
+    while b != 0:
+        if m.body_jntnum[b]:
+            return True
+        b = int(m.body_parentid[b])
+    return False
+
+
+def _named(elements: dict, name: str, kind: str, src: Path):
+    if name not in elements:
+        raise ModelError(
+            f'{src}: no <{kind} name="{name}"> in the file itself (unnamed, or from an '
+            "<include>d file): name it there to write the file back"
+        )
+    return elements[name]
+
+
+def _set_inertial(body, mass: float, com, inertia) -> None:
+    old = [e for e in body if e.tag == "inertial"]
+    attrib = _inertial(mass, com, inertia)
+    if old:
+        old[0].attrib.clear()
+        old[0].attrib.update(attrib)
+        for e in old[1:]:
+            body.remove(e)
+        return
+    new = ET.Element("inertial", attrib)
+    new.tail = body.text  # the first child's indentation, kept for it
+    body.insert(0, new)
+
+
+def _verify(robot: Robot, terms: JointTerms, out: Path) -> None:
+    """Compiles the written file and checks that it gives back the parameters written, to
+    1e-5 relative per link: an overriding compiler option changes them far more; MuJoCo before
+    3.14 diagonalises a ``fullinertia`` only to about 1e-6 (from 3.14 on, to round-off)."""
+    again = load(out)
+    names = dict(zip(again.link_names[1:], range(again.n)))
+    for k, link in enumerate(robot.link_names[1:]):
+        got = again.params[10 * names[link] : 10 * names[link] + 10]
+        want = terms.inertial[10 * k : 10 * k + 10]
+        if np.linalg.norm(got - want) > 1e-5 * max(np.linalg.norm(want), 1e-300) + 1e-300:
+            raise ModelError(
+                f"{out}: MuJoCo compiles link '{link}' to other inertial parameters than "
+                'written (a <compiler> option such as inertiafromgeom="true", fusestatic, '
+                "boundmass, boundinertia or settotalmass overrides them)"
+            )

@@ -1,0 +1,567 @@
+"""MuJoCo MJCF out and in, checked against MuJoCo's own inverse dynamics (``mj_inverse``) and
+Pinocchio's ``rnea``.
+
+How MuJoCo's joint terms are compared: ``armature`` (MuJoCo adds it to the diagonal of the
+joint-space inertia) and ``damping`` (a passive force ``-damping * dq``) are in ``mj_inverse``'s
+``qfrc_inverse`` exactly as ``Ia ddq`` and ``Fv dq``. ``frictionloss`` is a soft dry-friction
+constraint, not a force ``Fc sign(dq)``: the comparisons disable it (``mjDSBL_FRICTIONLOSS``)
+and add ``Fc sign(dq)`` on the reference side; a separate check keeps it enabled at moving
+states and asserts MuJoCo's constraint is saturated there (``efc_state`` linear), where its
+force is exactly ``Fc sign(dq)``. Joint limits and contacts are disabled (they are not
+dynamics of the model).
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+
+import mindyn
+import numpy as np
+import pinocchio as pin
+import pytest
+import yaml
+from conftest import (
+    ROBOTS_DIR,
+    URDFS,
+    assert_close,
+    body_inertia,
+    cli,
+    load_urdf_pair,
+    pinocchio_model,
+    set_pinocchio_params,
+)
+from mindyn.mjcf import write_mjcf
+
+mujoco = pytest.importorskip("mujoco", reason="the 'mujoco' wheel is not installed")
+
+REPO_UR5 = __import__("pathlib").Path(__file__).parent.parent / "examples/urdf/ur5.urdf"
+BAXTER = ROBOTS_DIR / "baxter_description/urdf/baxter.urdf"
+# MuJoCo before 3.14 diagonalises a fullinertia only to about 1e-6 relative (from 3.14 on, to
+# round-off): the dynamics and the round trip then agree to that, not to the target.
+_OLD = tuple(int(x) for x in mujoco.__version__.split(".")[:2]) < (3, 14)
+TOL = 1e-5 if _OLD else 1e-9
+ROUND_TRIP = 1e-6 if _OLD else 1e-12
+OFF = (
+    mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS
+    | mujoco.mjtDisableBit.mjDSBL_LIMIT
+    | mujoco.mjtDisableBit.mjDSBL_CONTACT
+)
+
+
+# -- references ---------------------------------------------------------------------------------
+def physical_params(robot, rng, drive: bool = True) -> np.ndarray:
+    """Random physically consistent classical parameters (13 per joint with ``drive``): masses
+    in [0.5, 5] kg, centres of mass within 0.2 m, inertias of a body (principal moments
+    a+b, b+c, a+c) in random axes; Ia, Fv, Fc in [0.1, 1]."""
+    rows = []
+    for _ in range(robot.n):
+        a = rng.uniform(0.01, 0.1, 3)
+        Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        inertia = Q @ np.diag([a[0] + a[1], a[1] + a[2], a[0] + a[2]]) @ Q.T
+        p = mindyn.inertial_from_com(rng.uniform(0.5, 5), rng.uniform(-0.2, 0.2, 3), inertia)
+        rows.append(np.concatenate([p, rng.uniform(0.1, 1.0, 3)]) if drive else p)
+    return np.concatenate(rows)
+
+
+def split(robot, p):
+    rows = np.asarray(p).reshape(robot.n, 13)
+    return rows[:, :10].ravel(), rows[:, 10], rows[:, 11], rows[:, 12]
+
+
+def mj_inverse(m, names, q, dq, ddq, disable=OFF):
+    """MuJoCo's qfrc_inverse at each state, in the order of joint ``names``; and MuJoCo's
+    data of the last one."""
+    m.opt.disableflags = int(disable)
+    d = mujoco.MjData(m)
+    adr = [int(m.jnt_qposadr[m.joint(n).id]) for n in names]
+    dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in names]
+    out = []
+    for qi, dqi, ddqi in zip(np.atleast_2d(q), np.atleast_2d(dq), np.atleast_2d(ddq)):
+        d.qpos[adr], d.qvel[dof], d.qacc[dof] = qi, dqi, ddqi
+        mujoco.mj_inverse(m, d)
+        out.append(d.qfrc_inverse[dof].copy())
+    return np.array(out), d
+
+
+def pin_rnea(model, q, dq, ddq):
+    data = model.createData()
+    return np.array([pin.rnea(model, data, a, b, c) for a, b, c in zip(q, dq, ddq)])
+
+
+def states(robot, rng, m: int = 4, speed=(-2.0, 2.0)):
+    lim = robot.limits
+    lo = np.where(np.isfinite(lim["lower"]), lim["lower"], -np.pi)
+    hi = np.where(np.isfinite(lim["upper"]), lim["upper"], np.pi)
+    q = rng.uniform(lo, hi, (m, robot.n))
+    dq = rng.uniform(*speed, (m, robot.n)) * rng.choice([-1, 1], (m, robot.n))
+    return q, dq, rng.uniform(-2.0, 2.0, (m, robot.n))
+
+
+def arm(case):
+    """(mindyn Robot, Pinocchio model with the same geometry) for a case: Pinocchio's own URDF
+    parser for the example-robot-data arms, else the model conftest builds from the geometry."""
+    if case in ("ur5", "panda"):
+        return load_urdf_pair(case)
+    if case == "baxter_arm":
+        robot = mindyn.load(BAXTER, tip="left_hand_link")
+        return robot, pinocchio_model(robot)
+    robot = mindyn.load(REPO_UR5 if case == "ur5_example" else case)
+    return robot, (None if case == "ur5_example" else pinocchio_model(robot))
+
+
+CASES = ["puma560", "stanford", "zcr07s", "planar3", "ur5_example", "ur5", "panda", "baxter_arm"]
+
+
+# -- MJCF out -----------------------------------------------------------------------------------
+@pytest.mark.parametrize("case", CASES)
+def test_exported_mjcf_inverse_dynamics_is_pinocchio_plus_the_joint_terms(case, tmp_path):
+    robot, model = arm(case)
+    if model is None:  # the repository's UR5: Pinocchio's URDF parser
+        model = pin.buildModelFromUrdf(str(REPO_UR5))
+    rng = np.random.default_rng(11)
+    p = physical_params(robot, rng)
+    inertial, ia, fv, fc = split(robot, p)
+    out = write_mjcf(robot, p, tmp_path / "arm.xml").path
+    if case in ("ur5", "panda", "ur5_example"):
+        set_pinocchio_params(model, robot, inertial)
+    else:
+        model = pinocchio_model(robot, inertial)
+    q, dq, ddq = states(robot, rng)
+    ref = pin_rnea(model, q, dq, ddq) + ia * ddq + fv * dq + fc * np.sign(dq)
+    m = mujoco.MjModel.from_xml_path(str(out))
+    got, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(got + fc * np.sign(dq), ref, TOL, "MJCF mj_inverse vs Pinocchio + Ia, Fv, Fc")
+    assert_close(robot.inverse_dynamics(q, dq, ddq, p), ref, TOL, "mindyn vs Pinocchio + terms")
+    # frictionloss enabled, at moving states: where MuJoCo's dry-friction constraint is
+    # saturated its force is Fc sign(dq), and mj_inverse gives the whole model
+    q, dq, ddq = states(robot, rng, m=2, speed=(1.0, 2.0))
+    got, d = mj_inverse(m, robot.joint_names, q, dq, ddq, disable=_no_limits())
+    friction = d.efc_type[: d.nefc] == mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF
+    linear = (mujoco.mjtConstraintState.mjCNSTRSTATE_LINEARNEG,
+              mujoco.mjtConstraintState.mjCNSTRSTATE_LINEARPOS)  # fmt: skip
+    assert friction.sum() == robot.n and np.isin(d.efc_state[: d.nefc][friction], linear).all()
+    ref = robot.inverse_dynamics(q, dq, ddq, p)
+    assert_close(got[-1], ref[-1], TOL, "MJCF mj_inverse with frictionloss, moving")
+
+
+def _no_limits():
+    return mujoco.mjtDisableBit.mjDSBL_LIMIT | mujoco.mjtDisableBit.mjDSBL_CONTACT
+
+
+def test_mjcf_round_trip_keeps_every_parameter(tmp_path):
+    """URDF -> mindyn -> MJCF -> mindyn: inertial parameters, Ia, Fv, Fc, gravity, axes and
+    limits to 1e-12."""
+    for name in ("ur5", "panda"):
+        robot = mindyn.load(URDFS[name], tip="panda_hand" if name == "panda" else None)
+        p = physical_params(robot, np.random.default_rng(3))
+        out = write_mjcf(robot, p, tmp_path / f"{name}.xml").path
+        again = mindyn.load(out)
+        assert again.joint_names == robot.joint_names and again.joint_types == robot.joint_types
+        np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+        np.testing.assert_allclose(again.gravity, robot.gravity, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(again.axes, robot.axes, rtol=0, atol=ROUND_TRIP)
+        for key in ("lower", "upper"):
+            np.testing.assert_allclose(again.limits[key], robot.limits[key], atol=1e-12)
+
+
+def test_round_trip_of_the_model_own_parameters_and_gravity(tmp_path):
+    robot = mindyn.load(URDFS["ur5"], gravity=[0.5, -1.0, -9.7])
+    out = write_mjcf(robot, robot.params, tmp_path / "ur5.xml").path
+    text = out.read_text()
+    assert 'gravity="0.5 -1.0 -9.7"' in text and "frictionloss" in text
+    again = mindyn.load(out)
+    scale = np.abs(robot.params).max()
+    np.testing.assert_allclose(again.params, robot.params, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_array_equal(again.gravity, robot.gravity)
+    assert not again.rotor_inertia.any() and not again.coulomb.any()
+
+
+# -- transmissions ------------------------------------------------------------------------------
+def dh6(tmp_path, transmissions) -> mindyn.Robot:
+    """A 6R arm (DH) with ``transmissions`` (YAML form)."""
+    rows = [(0.0, np.pi / 2, 0.4), (0.5, 0.0, 0.0), (0.1, np.pi / 2, 0.0),
+            (0.0, -np.pi / 2, 0.45), (0.0, np.pi / 2, 0.0), (0.0, 0.0, 0.1)]  # fmt: skip
+    doc = {
+        "name": "wrist6",
+        "convention": "dh",
+        "joints": [
+            {
+                "name": f"j{k + 1}",
+                "a": a,
+                "alpha": al,
+                "d": d,
+                "theta": 0.0,
+                "inertial": {
+                    "mass": 1.0,
+                    "com": [0.05, 0, 0],
+                    "inertia": {"xx": 0.01, "yy": 0.02, "zz": 0.02},
+                },
+            }
+            for k, (a, al, d) in enumerate(rows)
+        ],  # fmt: skip
+        "transmissions": transmissions,
+    }
+    path = tmp_path / "wrist6.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False), encoding="utf-8")
+    return mindyn.load(path)
+
+
+COUPLED_WRIST = np.diag([100.0, 100.0, 80.0, 50.0, 50.0, 50.0])
+COUPLED_WRIST[5, 4] = 50.0  # motor 6 turns with q5 + q6
+DIFFERENTIAL = np.diag([100.0, 100.0, 80.0, 1.0, 1.0, 50.0])
+DIFFERENTIAL[3:5, 3:5] = [[40.0, 40.0], [40.0, -40.0]]  # motors 4, 5: q4 + q5 and q4 - q5
+
+
+@pytest.mark.parametrize("T", [COUPLED_WRIST, DIFFERENTIAL], ids=["coupled_wrist", "differential"])
+def test_tendon_mjcf_is_the_motor_side_formula(T, tmp_path):
+    robot = dh6(tmp_path, {"matrix": T.tolist(), "motors": [f"m{k + 1}" for k in range(6)]})
+    rng = np.random.default_rng(7)
+    p = physical_params(robot, rng)
+    inertial, ia, fv, fc = split(robot, p)
+    ia, fv, fc = ia * 1e-4, fv * 1e-3, fc * 1e-2  # motor-side magnitudes
+    p = np.column_stack([inertial.reshape(6, 10), ia, fv, fc]).ravel()
+    out = write_mjcf(robot, p, tmp_path / "motor.xml", drive_side="motor").path
+    text = out.read_text()
+    assert text.count("<fixed ") == 6 and 'tendon="m6"' in text
+    m = mujoco.MjModel.from_xml_path(str(out))
+    q, dq, ddq = states(robot, rng)
+    rnea = pin_rnea(pinocchio_model(robot, inertial), q, dq, ddq)
+    # written here: tau = rnea + T^T (Ia T ddq + Fv T dq + Fc sign(T dq))
+    ref = rnea + ((ia * (ddq @ T.T) + fv * (dq @ T.T)) @ T + (fc * np.sign(dq @ T.T)) @ T)
+    got, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    friction = (fc * np.sign(dq @ T.T)) @ T
+    assert_close(got + friction, ref, TOL, "tendon MJCF vs motor-side formula")
+    # the motors drive the joints through T^T: a motor torque tau_m gives joint torques T^T tau_m
+    d = mujoco.MjData(m)
+    tau_m = rng.normal(size=6)
+    d.ctrl[[m.actuator(f"m{k + 1}").id for k in range(6)]] = tau_m
+    mujoco.mj_forward(m, d)
+    dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in robot.joint_names]
+    np.testing.assert_allclose(d.qfrc_actuator[dof], T.T @ tau_m, rtol=1e-12, atol=1e-12)
+    # joint-side terms with the same transmissions: on the joints
+    joint = write_mjcf(robot, p, tmp_path / "joint.xml", drive_side="joint").path
+    got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(joint)), robot.joint_names, q, dq, ddq)
+    assert_close(got + fc * np.sign(dq), rnea + ia * ddq + fv * dq + fc * np.sign(dq), TOL,
+                 "tendon MJCF, joint-side terms")  # fmt: skip
+
+
+def test_motor_side_needs_one_motor_per_joint(tmp_path):
+    T = 50.0 * np.vstack([np.eye(6), np.ones((1, 6))])  # a seventh, redundant motor
+    robot = dh6(tmp_path, {"matrix": T.tolist(), "motors": [f"m{k + 1}" for k in range(7)]})
+    with pytest.raises(mindyn.ModelError, match="7 motors for 6 joints"):
+        write_mjcf(robot, robot.params, tmp_path / "x.xml", drive_side="motor")
+
+
+# -- MJCF in ------------------------------------------------------------------------------------
+ARM7 = """<mujoco model="arm7">
+  <!-- seven revolute joints; defaults by class -->
+  <compiler angle="degree" eulerseq="zyx"/>
+  <option gravity="0.3 -0.2 -9.7"/>
+  <default>
+    <joint armature="0.12" damping="0.6" frictionloss="0.25"/>
+    <geom density="800"/>
+    <default class="wrist">
+      <joint armature="0.015" damping="0.1" frictionloss="0.05" range="-120 120"/>
+    </default>
+  </default>
+  <worldbody>
+    <body name="base" pos="0 0 0.1">
+      <geom type="cylinder" size="0.1 0.05"/>
+      <body name="l1" pos="0 0 0.08" euler="30 0 0">
+        <joint name="j1" axis="0 0 1"/>
+        <geom type="capsule" fromto="0 0 0 0 0 0.3" size="0.05"/>
+        <body name="l2" pos="0 0 0.3" euler="10 20 30">
+          <joint name="j2" axis="0 1 0" pos="0 0 0.02" range="-90 90"/>
+          <inertial pos="0.1 0.02 0.01" mass="2" fullinertia="0.03 0.025 0.02 0.001 0.002 0.003"/>
+          <body name="l3" pos="0.3 0 0" quat="0.9 0.1 0.2 0.3">
+            <joint name="j3" axis="1 0 0"/>
+            <geom type="box" size="0.15 0.04 0.03" pos="0.15 0 0"/>
+            <body name="l4" pos="0.3 0 0" euler="0 -90 0">
+              <joint name="j4" axis="0 0 1" pos="0.01 0.02 0"/>
+              <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.04"/>
+              <body name="l5" pos="0.25 0 0">
+                <joint name="j5" class="wrist" axis="1 0 0"/>
+                <geom type="sphere" size="0.05"/>
+                <body name="l6" pos="0.05 0 0" euler="0 0 45">
+                  <joint name="j6" class="wrist" axis="0 1 0"/>
+                  <geom type="box" size="0.03 0.03 0.03"/>
+                  <body name="l7" pos="0.06 0 0">
+                    <joint name="j7" class="wrist" axis="1 0 0"/>
+                    <geom type="cylinder" size="0.03 0.02" euler="0 90 0"/>
+                    <body name="tool" pos="0.05 0 0"><geom type="sphere" size="0.02"/></body>
+                  </body>
+                </body>
+              </body>
+            </body>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+TREE = """<mujoco model="tree">
+  <default><joint armature="0.05" damping="0.3"/></default>
+  <worldbody>
+    <body name="torso" pos="0 0 0.5">
+      <joint name="waist" axis="0 0 1" frictionloss="0.4"/>
+      <geom type="box" size="0.1 0.2 0.3"/>
+      <body name="left" pos="0 0.25 0.2" axisangle="1 0 0 0.3">
+        <joint name="left1" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+        <body name="left2" pos="0.3 0 0">
+          <joint name="left2" type="slide" axis="1 0 0" damping="2"/>
+          <joint name="left3" axis="0 0 1" pos="0.02 0 0"/>
+          <geom type="sphere" size="0.05" pos="0.1 0 0"/>
+        </body>
+      </body>
+      <body name="right" pos="0 -0.25 0.2">
+        <joint name="right1" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("xml", [ARM7, TREE], ids=["arm7_defaults", "tree"])
+def test_hand_written_mjcf_loads_with_the_dynamics_mujoco_computes(xml, tmp_path):
+    path = tmp_path / "robot.xml"
+    path.write_text(xml, encoding="utf-8")
+    robot = mindyn.load(path)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    assert sorted(robot.joint_names) == sorted(m.joint(j).name for j in range(m.njnt))
+    # the terms the file gives (through its classes), read back
+    by_class = {"j5": 0.015, "j6": 0.015, "j7": 0.015}
+    for k, name in enumerate(robot.joint_names):
+        if xml is ARM7:
+            assert robot.rotor_inertia[k] == by_class.get(name, 0.12)
+            assert robot.coulomb[k] == (0.05 if name in by_class else 0.25)
+        elif name == "left2":
+            assert robot.viscous[k] == 2.0 and robot.joint_types[k] == "prismatic"
+    if xml is ARM7:
+        np.testing.assert_array_equal(robot.gravity, [0.3, -0.2, -9.7])
+        np.testing.assert_allclose(robot.limits["upper"][4:], np.radians(120), rtol=1e-15)
+    else:
+        assert not robot.is_serial
+    rng = np.random.default_rng(5)
+    q, dq, ddq = states(robot, rng)
+    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(True, True))
+    ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(got, ref + robot.coulomb * np.sign(dq), TOL, "MJCF in vs mj_inverse")
+    # the mass matrix with the armature, against MuJoCo's
+    d = mujoco.MjData(m)
+    adr = [int(m.jnt_qposadr[m.joint(n).id]) for n in robot.joint_names]
+    dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in robot.joint_names]
+    d.qpos[adr] = q[0]
+    mujoco.mj_forward(m, d)
+    full = np.zeros((m.nv, m.nv))
+    if hasattr(d, "qM"):  # MuJoCo 3
+        mujoco.mj_fullM(m, full, d.qM)
+    else:  # MuJoCo 4: mj_fullM(m, d, dst)
+        mujoco.mj_fullM(m, d, full)
+    mass = robot.mass_matrix(q[0]) + np.diag(robot.rotor_inertia)
+    assert_close(mass, full[np.ix_(dof, dof)], TOL, "MJCF in mass matrix vs mj_fullM")
+
+
+def test_mjcf_written_back_keeps_the_file_and_changes_only_the_dynamics(tmp_path):
+    src = tmp_path / "arm7.xml"
+    src.write_text(ARM7, encoding="utf-8")
+    robot = mindyn.load(src)
+    # new parameters: the model's inertia scaled and moved, new joint terms
+    rng = np.random.default_rng(2)
+    p = physical_params(robot, rng)
+    out = write_mjcf(robot, p, tmp_path / "identified.xml").path
+    text = out.read_text()
+    assert "<!-- seven revolute joints; defaults by class -->" in text
+    assert '<compiler angle="degree" eulerseq="zyx"/>' in text
+    assert '<body name="l3" pos="0.3 0 0" quat="0.9 0.1 0.2 0.3">' in text
+
+    # the base (fixed to the world) keeps its geom-derived inertia; every other line is kept
+    # but for the inertials and joints
+    def rest(t):
+        t = re.sub(r"\s*<inertial [^>]*/>", "", t)
+        return re.sub(r' (armature|damping|frictionloss)="[^"]*"', "", t).strip()
+
+    assert rest(text) == rest(ARM7)
+    assert text.count("<inertial") == 8  # l1 .. l7 and the tool merged into l7 (zero)
+    again = mindyn.load(out)
+    assert again.joint_names == robot.joint_names
+    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+    # MuJoCo simulates the new parameters: its inverse dynamics is mindyn's with them
+    q, dq, ddq = states(robot, rng)
+    ref, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
+    got = robot.inverse_dynamics(q, dq, ddq, p)
+    assert_close(got, ref + split(robot, p)[3] * np.sign(dq), TOL, "MJCF written back")
+
+
+BAD = {
+    "ball": ('<joint name="b1" type="ball"/>', "joint 'b1' (body 'a') is a ball joint"),
+    "free": ('<freejoint name="f1"/>', "joint 'f1' (body 'a') is a free joint"),
+    "spring": (
+        '<joint name="s1" axis="0 0 1" stiffness="3"/>',
+        "joint 's1' (body 'a') has a spring",
+    ),
+    "ref": ('<joint name="r1" axis="0 0 1" ref="0.2"/>', "joint 'r1' (body 'a') has ref=0.2"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_mjcf_joints_the_model_cannot_hold_are_refused_by_name(case, tmp_path):
+    joint, message = BAD[case]
+    path = tmp_path / "bad.xml"
+    path.write_text(
+        f'<mujoco><compiler angle="radian"/><worldbody><body name="a">{joint}'
+        '<geom size="0.1"/></body></worldbody></mujoco>'
+    )
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load(path)
+    assert message in str(e.value) and "\n" not in str(e.value) and str(path) in str(e.value)
+
+
+def test_mjcf_equality_and_mocap_are_refused(tmp_path):
+    path = tmp_path / "eq.xml"
+    path.write_text(
+        '<mujoco><worldbody><body name="a"><joint name="h1" axis="0 0 1"/><geom size="0.1"/>'
+        '<body name="b"><joint name="h2" axis="0 0 1"/><geom size="0.1"/></body></body>'
+        '</worldbody><equality><joint name="couple" joint1="h1" joint2="h2"/></equality>'
+        "</mujoco>"
+    )
+    with pytest.raises(mindyn.ModelError, match="1 equality constraint.*'couple'"):
+        mindyn.load(path)
+    path.write_text(
+        '<mujoco><worldbody><body name="hand" mocap="true"><body name="f">'
+        '<joint name="h1" axis="0 0 1"/><geom size="0.1"/></body></body></worldbody></mujoco>'
+    )
+    with pytest.raises(mindyn.ModelError, match="joint 'h1' .*mocap body 'hand'"):
+        mindyn.load(path)
+
+
+def test_without_mujoco_the_error_says_what_to_install(tmp_path, monkeypatch, capsys):
+    path = tmp_path / "arm.xml"
+    path.write_text(ARM7, encoding="utf-8")
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # import mujoco raises ImportError
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load(path)
+    assert 'pip install "mindyn[mujoco]"' in str(e.value) and "\n" not in str(e.value)
+    from mindyn.cli import main
+
+    assert main(["info", str(path)]) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and 'pip install "mindyn[mujoco]"' in err, err
+
+
+# -- command line -------------------------------------------------------------------------------
+def test_cli_export_mjcf_and_urdf_refused_for_an_mjcf_robot(tmp_path):
+    import json
+
+    robot = mindyn.load(REPO_UR5)
+    p = physical_params(robot, np.random.default_rng(4))
+    ident = tmp_path / "id.json"
+    names = robot.parameter_names(True, True)
+    ident.write_text(json.dumps({"robot": robot.name, "classical": dict(zip(names, p.tolist()))}))
+    out = tmp_path / "ur5.xml"
+    assert f"wrote {out}" in cli("export", REPO_UR5, ident, "--mjcf", out)
+    again = mindyn.load(out)
+    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+    # and written back from the MJCF, where --urdf is refused
+    back = tmp_path / "back.xml"
+    cli("export", out, ident, "--mjcf", back)
+    np.testing.assert_allclose(mindyn.load(back).parameters(True, True), p, atol=ROUND_TRIP)
+    from mindyn.cli import main
+
+    for option in ("--urdf", "--yaml"):
+        assert main(["export", str(out), str(ident), option, str(tmp_path / "x")]) == 2
+    argv = ["export", str(REPO_UR5), str(ident), "--mjcf", str(back), "--sidecar", "s.yaml"]
+    assert main(argv) == 2 and not (tmp_path / "s.yaml").exists()
+
+
+def test_mjcf_with_a_tip_loads_the_chain_and_is_written_back_whole_only(tmp_path):
+    path = tmp_path / "arm7.xml"
+    path.write_text(ARM7, encoding="utf-8")
+    chain = mindyn.load(path, tip="l4")
+    assert chain.joint_names == ["j1", "j2", "j3", "j4"]
+    whole = mindyn.load(path)
+    # the links beyond l4 are merged into it at q = 0: the whole model's gravity torque there
+    assert_close(chain.gravity_torque(np.zeros(4)), whole.gravity_torque(np.zeros(7))[:4], 1e-12,
+                 "MJCF tip vs whole model")  # fmt: skip
+    with pytest.raises(mindyn.ModelError, match="4 of the file's 7 joints"):
+        write_mjcf(chain, chain.params, tmp_path / "x.xml")
+
+
+def test_cli_identify_consistent_mjcf(tmp_path):
+    """``identify --consistent --mjcf``: MuJoCo's inverse dynamics of the written MJCF is the
+    prediction of the JSON's classical parameters."""
+    import json
+
+    from mindyn.control import simulate_inverse
+    from mindyn.identification.data import write_csv
+    from mindyn.identification.excitation import random_trajectory
+
+    robot = mindyn.load("planar3")
+    log = simulate_inverse(robot, random_trajectory(robot, seed=3), rate=50.0, seed=2)
+    fit = tmp_path / "fit.csv"
+    write_csv(fit, log.t, log.q, log.tau, dq=log.dq)
+    ident, out = tmp_path / "id.json", tmp_path / "planar3.xml"
+    stdout = cli("identify", "planar3", fit, "--consistent", "--json", ident, "--mjcf", out)
+    assert f"wrote {out}" in stdout
+    classical = json.loads(ident.read_text())["classical"]
+    p = np.array([classical[k] for k in robot.param_names])
+    q, dq, ddq = states(robot, np.random.default_rng(1))
+    got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
+    assert_close(got, robot.inverse_dynamics(q, dq, ddq, p), TOL, "identify --mjcf vs mindyn")
+    assert re.search(r"frictionloss=\"0\.0\"", out.read_text())
+
+
+def test_write_back_checked_by_compiling_and_mocap_markers_left_out(tmp_path):
+    """A mocap marker (and what hangs from it) is not part of the robot; a compiler option that
+    overrides the written inertials is caught by compiling the written file."""
+    path = tmp_path / "m.xml"
+    path.write_text(
+        '<mujoco><worldbody><body name="target" mocap="true"><geom size="0.02"/>'
+        '<body name="marker"><geom size="0.01"/></body></body>'
+        '<body name="a"><joint name="h1" axis="0 0 1"/><geom size="0.1"/></body>'
+        "</worldbody></mujoco>"
+    )
+    robot = mindyn.load(path)
+    assert robot.link_names == ["world", "a"]
+    # a sphere of radius 0.1 and density 1000: its mass
+    assert robot.params[9] == pytest.approx(1000 * 4 / 3 * np.pi * 0.1**3, rel=1e-12)
+    write_mjcf(robot, 2 * robot.params, tmp_path / "ok.xml")
+    assert mindyn.load(tmp_path / "ok.xml").params[9] == pytest.approx(2 * robot.params[9])
+    text = path.read_text().replace("<mujoco>", '<mujoco><compiler inertiafromgeom="true"/>')
+    path.write_text(text)
+    with pytest.raises(mindyn.ModelError, match="MuJoCo compiles link 'a' to other inertial"):
+        write_mjcf(robot, 2 * robot.params, tmp_path / "bad.xml")
+
+
+def test_exported_mjcf_of_a_tree_is_pinocchio_plus_the_joint_terms(tmp_path):
+    """Baxter whole (head, both arms, grippers: a tree): the MJCF's bodies nest as the tree."""
+    robot = mindyn.load(BAXTER)
+    assert not robot.is_serial
+    model = pin.buildModelFromUrdf(str(BAXTER))
+    locked = [j for j in model.names[1:] if j not in robot.joint_names]  # mimic fingers
+    model = pin.buildReducedModel(model, [model.getJointId(j) for j in locked], pin.neutral(model))
+    assert model.nq == model.nv == robot.n
+    rng = np.random.default_rng(8)
+    p = physical_params(robot, rng)
+    inertial, ia, fv, fc = split(robot, p)
+    out = write_mjcf(robot, p, tmp_path / "baxter.xml").path
+    for k, name in enumerate(robot.joint_names):
+        j = model.getJointId(name)
+        post = robot.joint_post(k)
+        model.inertias[j] = body_inertia(inertial[10 * k : 10 * k + 10], post)
+    q, dq, ddq = states(robot, rng, m=3)
+    idx = [model.idx_qs[model.getJointId(n)] for n in robot.joint_names]
+    rnea = np.zeros_like(q)
+    data = model.createData()
+    for i in range(len(q)):
+        x, v, a = (np.zeros(model.nq) for _ in range(3))
+        x[idx], v[idx], a[idx] = q[i], dq[i], ddq[i]
+        rnea[i] = pin.rnea(model, data, x, v, a)[idx]
+    ref = rnea + ia * ddq + fv * dq + fc * np.sign(dq)
+    got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
+    assert_close(got + fc * np.sign(dq), ref, TOL, "MJCF of a tree vs Pinocchio + terms")
