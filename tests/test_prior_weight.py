@@ -22,11 +22,12 @@ from mindyn.identification.consistent import (
     _prior_matrices,
     consistent_estimate,
     description_vector,
+    inertial_from_pseudo,
     pseudo_inertia,
 )
 from mindyn.identification.data import JointData, write_csv
 from mindyn.identification.excitation import excitation_limits, random_trajectory
-from mindyn.identification.prior import block_triangles, choose_prior_weight
+from mindyn.identification.prior import MASS_EVIDENCE, block_triangles, choose_prior_weight
 from scipy.optimize import minimize
 
 ROBOT = "zcr07s"  # every link of its description physically consistent
@@ -245,3 +246,38 @@ def test_cli_default_weight_reported(tmp_path, capsys):
         "Unconstrained least-squares estimate"
     )
     assert "consistent estimate:" in text or "consistent estimate" in text
+
+
+def test_mass_verdict_from_the_fit_with_the_mass_held_at_the_description():
+    """Well-excited log, 1 % noise; the truth's third link is nearly a point mass three times
+    the description's at the description's centre of mass (its pseudo-inertia at the
+    description's mass would need three times the second moments the torques show): that mass
+    is reported as determined by the data, the truth within 3 of its data's standard
+    deviations. The first link's mass, which no torque depends on (its regressor column is zero
+    here, vertical first axis), is reported as held by the priors, the fit no worse with it at
+    the description's."""
+    robot = mindyn.load(ROBOT)
+    truth = robot.params.copy().reshape(robot.n, 10)
+    J0 = pseudo_inertia(truth[2])
+    m0, c = J0[3, 3], J0[:3, 3] / J0[3, 3]
+    mt = 3.0 * m0
+    Jt = np.zeros((4, 4))
+    Jt[:3, :3] = mt * (np.outer(c, c) + 1e-4 * np.eye(3))  # radius of gyration 1 cm
+    Jt[:3, 3] = Jt[3, :3] = mt * c
+    Jt[3, 3] = mt
+    truth[2] = inertial_from_pseudo(Jt)
+    truth = truth.reshape(-1)
+    data = _log(robot, truth, noise=0.01)
+    Phi = robot.regressor(data.q, data.dq, data.ddq)
+    assert np.all(Phi[..., 9] == 0.0)  # the first link's mass: no torque depends on it
+    res = identify(robot, data, rsd_threshold=None)
+    c = consistent_estimate(res, data=data)
+    first, third = c.links[0], c.links[2]
+    assert third["mass_verdict"] == "data", third
+    assert third["mass_fit_increase"] >= MASS_EVIDENCE
+    assert third["mass_data_std"] > 0
+    assert abs(third["mass"] - mt) <= 3 * third["mass_data_std"], third
+    assert third["mass"] > 2 * m0
+    assert first["mass_verdict"] == "prior", first
+    assert abs(first["mass_fit_increase"]) < 0.1 * MASS_EVIDENCE
+    assert all(lk["mass_profile_converged"] for lk in c.links)
