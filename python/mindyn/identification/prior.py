@@ -69,9 +69,6 @@ DATA_SHARE = 0.5
 #: deviations: the data reject the description's mass at about 95 %).
 MASS_EVIDENCE = 4.0
 
-#: Largest factor of a link's mass in one step of its profile (:func:`mass_profile`).
-PROFILE_STEP = 1.25
-
 
 def _basis() -> np.ndarray:
     """``E`` (10, 4, 4): the pseudo-inertia of each unit inertial parameter (the map is
@@ -393,36 +390,29 @@ def choose_prior_weight(
 # ---------------------------------------------------------------------------------------------
 # Data or prior, per link
 # ---------------------------------------------------------------------------------------------
-def mass_profile(problem: PriorProblem, pi, W: float) -> list[dict]:
+def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
     """Per link, the fit with its mass held at the description's: the minimiser of the same
-    objective at weight ``W`` with that one parameter fixed, reached from ``pi`` by Newton
-    descents at masses stepped geometrically (at most a factor :data:`PROFILE_STEP` apart; the
-    link's pseudo-inertia scaled to each, which keeps it positive definite), and how much worse
-    it fits the data than ``pi`` [noise variances]; ``converged`` false when a descent stopped
-    at its iteration limit (the increase is then that of the point reached). The description's
-    mass is that of the prior's pseudo-inertia (regularised when the description's is
-    singular)."""
-    from .consistent import inertial_from_pseudo
-
+    objective at weight ``W`` with that one parameter fixed, and how much worse it fits the
+    data than ``pi`` [noise variances]. Reached as the estimate itself is: from ``start`` (the
+    description's pseudo-inertias, which have that mass, see :func:`feasible_start`) by Newton
+    descents at the weights of :data:`CANDIDATES` above ``W``, strongest first, then at ``W``;
+    ``converged`` false when the last descent stopped at its iteration limit (the increase is
+    then that of the point reached). The description's mass is that of the prior's
+    pseudo-inertia (regularised when the description's is singular)."""
     f0 = problem.fit(pi)
     out = []
-    for ix, Ji in zip(problem.links, problem.J0inv):
-        m0 = float(inertial_from_pseudo(np.linalg.inv(Ji))[9])
-        # from the estimate to the description's mass in steps of at most a factor
-        # PROFILE_STEP, each link's pseudo-inertia scaled to the next mass (still positive
-        # definite) and the others refitted
-        x, ok = np.array(pi, dtype=float), True
-        steps = max(1, math.ceil(abs(math.log(m0 / x[ix[9]])) / math.log(PROFILE_STEP)))
-        for m in np.geomspace(x[ix[9]], m0, steps + 1)[1:]:
-            x[ix] *= m / x[ix[9]]
-            x, ok, _ = newton_prior(problem, W, x, fixed=[ix[9]], barrier=BARRIER_END)
-            if not ok:
-                break
-        out.append({"mass": m0, "fit_increase": problem.fit(x) - f0, "converged": ok})
+    for ix in problem.links:
+        x = np.array(start, dtype=float)
+        for w in sorted((c for c in CANDIDATES if c > W), reverse=True):
+            x = newton_prior(problem, w, x, fixed=[ix[9]])[0]
+        x, ok, _ = newton_prior(problem, W, x, fixed=[ix[9]])
+        out.append(
+            {"mass": float(start[ix[9]]), "fit_increase": problem.fit(x) - f0, "converged": ok}
+        )
     return out
 
 
-def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict]:
+def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y, *, start) -> list[dict]:
     """Per link, what the consistent estimate owes to the data and to the priors.
 
     With ``C = 2 H^-1`` (``H`` the objective's Hessian at ``pi``), the share of a parameter
@@ -440,7 +430,8 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict
     holding it at the description's makes the fit worse by at least :data:`MASS_EVIDENCE`
     noise variances (``mass_fit_increase``), with the standard deviation the data give it,
     ``|m - m0| / sqrt(increase)`` (``mass_data_std``), else ``prior``; ``unknown`` when that
-    fit stopped before it converged (``mass_profile_converged``). ``pi0``: the
+    fit stopped before it converged (``mass_profile_converged``). ``start``: the description's
+    pseudo-inertias and fitted joint parameters (:func:`feasible_start`). ``pi0``: the
     description's classical vector (its masses beside)."""
     # the barrier at its final weight: a non-negative parameter at its bound is held there
     _, H = problem.derivatives(pi, W, BARRIER_END)
@@ -449,7 +440,7 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict
     d = np.sqrt(np.maximum(np.diag(H), 1e-300))
     C = 2.0 * np.linalg.pinv(H / np.outer(d, d), rcond=1e-14, hermitian=True) / np.outer(d, d)
     Cp = 0.5 * C @ Hp @ C  # the priors' part of the covariance
-    profile = mass_profile(problem, pi, W)  # one constrained descent per link
+    profile = mass_profile(problem, pi, W, start)  # constrained descents per link
     Ys = Y / np.maximum(np.linalg.norm(Y, axis=0), 1e-300)  # columns of unit norm
     _, sv, Vt = np.linalg.svd(Ys)
     rows = Vt[: int(np.sum(sv > 1e-9 * sv[0]))]  # orthonormal basis of the row space
