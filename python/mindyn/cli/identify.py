@@ -572,7 +572,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
         from ..identification.excitation import excitation_limits
 
         lim, _ = excitation_limits(robot, margin=0.0)
-        paths = write_report(args.report, res, logs, vlogs, val, fit, lim)
+        if cons is None:
+            paths = write_report(args.report, res, logs, vlogs, val, fit, lim)
+        else:  # the headline estimate, named in each plot's title
+            paths = write_report(
+                args.report, cons, logs, vlogs, cval, cfit, lim, estimate="consistent"
+            )
         (Path(args.report) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
         (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
         print(f"wrote report to {Path(args.report)}/: " + ", ".join(p.name for p in paths))
