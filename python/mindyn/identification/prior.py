@@ -351,7 +351,8 @@ def choose_prior_weight(
         pi = feasible_start(problem, J0s, layout, pi0)
         held = S[k]
         for i, W in enumerate(cands):
-            pi, ok, _ = newton_prior(problem, W, pi)
+            # warm from the stronger weight's answer: the barrier already at its final weight
+            pi, ok, _ = newton_prior(problem, W, pi, barrier=1e-2 if i == 0 else BARRIER_END)
             failed += not ok
             r = held @ np.append(Y @ pi, -1.0)
             err[k, i] = float(r @ r) / s2
@@ -402,10 +403,11 @@ def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
     f0 = problem.fit(pi)
     out = []
     for ix in problem.links:
-        x = np.array(start, dtype=float)
+        x, mu = np.array(start, dtype=float), 1e-2
         for w in sorted((c for c in CANDIDATES if c > W), reverse=True):
-            x = newton_prior(problem, w, x, fixed=[ix[9]])[0]
-        x, ok, _ = newton_prior(problem, W, x, fixed=[ix[9]])
+            x = newton_prior(problem, w, x, fixed=[ix[9]], barrier=mu)[0]
+            mu = BARRIER_END  # warm: the barrier already at its final weight
+        x, ok, _ = newton_prior(problem, W, x, fixed=[ix[9]], barrier=mu)
         out.append(
             {"mass": float(start[ix[9]]), "fit_increase": problem.fit(x) - f0, "converged": ok}
         )
