@@ -25,8 +25,9 @@ refuses is reported as such.
 With ``--consistent`` each command also gets ``--consistent`` (and ``--prior-weight W`` when
 given; by default the command chooses it from the data), each case prints the weight and, per
 link, the consistent estimate's mass with its standard deviation beside the description's and
-whether the data or the prior determine it (target: within a factor 3 of the description's, or
-determined by the data), and a second table gives, per case: the smallest pseudo-inertia
+whether the data or the prior determine it (the mass's own verdict: the fit with the mass held
+at the description's; target: within a factor 3 of the description's, or determined by the
+data), and a second table gives, per case: the smallest pseudo-inertia
 eigenvalue of the consistent estimate over all links, the validation error of the consistent
 estimate against the unconstrained one (target: at most 1.1 times), the total mass, the solver's
 time and the whole command's wall time (target for the Panda: 10 s), the smallest mass-matrix
@@ -219,7 +220,7 @@ def main() -> int:
 
 def link_masses(ce) -> str:
     """Per link: the consistent estimate's mass and its standard deviation beside the
-    description's, and whether the data or the prior determine it; ``ok`` when the mass is
+    description's, and whether the data or the prior determine the mass; ``ok`` when the mass is
     within a factor 3 of the description's or determined by the data (target), else ``MISSED``.
     """
     choice = ce.get("prior_weight_choice")
@@ -238,10 +239,14 @@ def link_masses(ce) -> str:
     for lk in ce.get("links") or []:
         m, m0 = lk["mass"], lk["description_mass"]
         near = m0 > 0 and m0 / 3 <= m <= 3 * m0
-        ok = "ok" if near or lk["verdict"] == "data" else "MISSED"
+        data = lk["mass_verdict"] == "data"
+        ok = "ok" if near or data else "MISSED"
         lines.append(
             f"  {lk['link']:<16} mass {m:8.3f} +- {lk['mass_std']:.3g} kg, description "
-            f"{m0:8.3f} kg, {lk['verdict']:<6} {ok}"
+            f"{m0:8.3f} kg, mass by {lk['mass_verdict']:<7}"
+            + (f" (data's +- {lk['mass_data_std']:.3g} kg)" if data else "")
+            + f" fit worse by {lk['mass_fit_increase']:.3g} at the description's, "
+            f"link {lk['verdict']:<6} {ok}"
         )
     return "\n".join(lines)
 

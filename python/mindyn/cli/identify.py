@@ -574,7 +574,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
         from ..identification.excitation import excitation_limits
 
         lim, _ = excitation_limits(robot, margin=0.0)
-        paths = write_report(args.report, res, logs, vlogs, val, fit, lim)
+        if cons is None:
+            paths = write_report(args.report, res, logs, vlogs, val, fit, lim)
+        else:  # the headline estimate, named in each plot's title
+            paths = write_report(
+                args.report, cons, logs, vlogs, cval, cfit, lim, estimate="consistent"
+            )
         (Path(args.report) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
         (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
         print(f"wrote report to {Path(args.report)}/: " + ", ".join(p.name for p in paths))
@@ -772,23 +777,33 @@ def _weight_lines(cons) -> list[str]:
     elif cons.prior_weight:
         lines.append(f"  prior weight {cons.prior_weight:g} (given)")
     if cons.links:
+        from ..identification.prior import MASS_EVIDENCE
+
         lines.append(
-            "  per link: mass [kg] (standard deviation), description's mass [kg], priors' share "
-            "of the mass's variance; identifiable directions of the link's parameters "
-            "determined by the data; the link's parameters determined by:"
+            "  per link: mass [kg] (posterior standard deviation), description's mass [kg], fit "
+            "worse with the mass held at the description's [noise variances], the mass "
+            "determined by (with the data's standard deviation); identifiable directions of "
+            "the link's parameters determined by the data, the link's parameters determined by:"
         )
         for lk in cons.links:
+            sd = lk["mass_data_std"]
             lines.append(
                 f"  {lk['link']:<24} {lk['mass']:10.4g} ({lk['mass_std']:.3g}) "
-                f"{lk['description_mass']:10.4g} {lk['mass_prior_share']:8.3f} "
-                f"{lk['directions_by_data']:3d} of {lk['identifiable_directions']:<3d} "
+                f"{lk['description_mass']:10.4g} {lk['mass_fit_increase']:10.4g} "
+                f"{lk['mass_verdict']:<5}"
+                + (f" ({sd:.3g})" if lk["mass_verdict"] == "data" else " " * 8)
+                + f" {lk['directions_by_data']:3d} of {lk['identifiable_directions']:<3d} "
                 f"{lk['verdict']}"
+                + ("" if lk["mass_profile_converged"] else " (mass profile not converged)")
             )
         lines.append(
-            "  (share: -d ln(variance) / d ln(weight), 0 when the data alone fix it, 1 when the "
-            "priors do; identifiable: the combinations of the link's own parameters that the "
-            "torques determine; data: their mean share below 0.5; partly: above, but some of "
-            "them below; prior: none)"
+            f"  (mass by data: held at the description's, the fit is worse by at least "
+            f"{MASS_EVIDENCE:g} noise variances, the data's standard deviation |m - m0| / "
+            "sqrt(worse); else by the priors; unknown: that fit did not converge; identifiable: "
+            "the combinations of the link's own parameters that the torques determine, by the "
+            "data when the priors' share of their variance, -d ln(variance) / d ln(weight), is "
+            "below 0.5; data: their mean share "
+            "below 0.5; partly: above, but some of them below; prior: none)"
         )
     return lines
 

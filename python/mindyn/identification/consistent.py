@@ -442,7 +442,16 @@ def consistent_estimate(
         else:
             from .prior import link_report
 
-            links = link_report(problem, pi, W, base.robot.link_names[1:], pi0, Y)
+            with _stage(progress, "per link, the fit with its mass held at the description's"):
+                links = link_report(
+                    problem,
+                    pi,
+                    W,
+                    base.robot.link_names[1:],
+                    pi0,
+                    Y,
+                    start=feasible_start(problem, J0s, layout, pi0),
+                )
     else:
         pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls, progress)
     realised = W == 0 and (ok_n or any(n.startswith("the unconstrained optimum") for n in notes))

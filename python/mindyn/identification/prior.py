@@ -28,7 +28,14 @@ fast it shrinks as the weight grows, ``-d ln C / d ln W``, is the share of the v
 priors account for: 0 where the data alone fix a parameter, 1 where they leave it to the
 priors (of this link or of the links whose parameters the data only see together with it);
 below one half, the data determine it. The verdict is taken over the link's identifiable
-directions, its mass reported beside with its standard deviation and share.
+directions. A link's mass alone is seldom identifiable, and the log-det prior is far from
+quadratic (it also keeps the pseudo-inertia positive definite), so the mass has its own verdict
+from the profile of the fit: the estimate recomputed with the mass held at the description's
+(:func:`mass_profile`); when the fit is then worse by at least :data:`MASS_EVIDENCE` noise
+variances (the likelihood ratio of two standard deviations), the data reject the description's
+mass and determine it, with the standard deviation the data give it, ``|m - m0| / sqrt(increase)``;
+otherwise the mass is held by the priors (given what the data fix of the links' other
+parameters).
 """
 
 from __future__ import annotations
@@ -56,6 +63,11 @@ BARRIER_END = 1e-9
 #: A link direction counts as determined by the data when its posterior variance is below this
 #: fraction of the prior's alone (the data carry more information along it than the prior).
 DATA_SHARE = 0.5
+
+#: A link's mass counts as determined by the data when holding it at the description's makes
+#: the fit worse by at least this many noise variances (a likelihood ratio of two standard
+#: deviations: the data reject the description's mass at about 95 %).
+MASS_EVIDENCE = 4.0
 
 
 def _basis() -> np.ndarray:
@@ -152,16 +164,20 @@ def _newton_step(g, H) -> np.ndarray:
     return step / d
 
 
-def newton_prior(problem: PriorProblem, W: float, start, max_iter: int = 400):
+def newton_prior(
+    problem: PriorProblem, W: float, start, max_iter: int = 400, *, fixed=None, barrier=1e-2
+):
     """The minimiser of ``problem`` at weight ``W > 0`` from the strictly feasible ``start``:
     damped Newton steps (backtracking keeps every pseudo-inertia positive definite and the
     non-negative parameters positive), the barrier weight of the non-negative parameters
-    lowered tenfold from 1e-2 to :data:`BARRIER_END` noise variances. Returns ``(pi,
+    lowered tenfold from ``barrier`` to :data:`BARRIER_END` noise variances. ``fixed``: indices
+    held at their values in ``start`` (the minimiser over the others). Returns ``(pi,
     converged, iterations)``."""
     pi = np.array(start, dtype=float)
     if not problem.feasible(pi):
         raise IdentificationError("consistent estimate: infeasible start of the Newton descent")
-    mu = 1e-2 if problem.nonneg.size else 0.0
+    free = np.setdiff1d(np.arange(pi.size), [] if fixed is None else fixed)
+    mu = max(barrier, BARRIER_END) if problem.nonneg.size else 0.0
     it = 0
     converged = False
     while True:
@@ -170,7 +186,8 @@ def newton_prior(problem: PriorProblem, W: float, start, max_iter: int = 400):
         while it < max_iter:
             it += 1
             g, H = problem.derivatives(pi, W, mu)
-            step = _newton_step(g, H)
+            step = np.zeros_like(pi)
+            step[free] = _newton_step(g[free], H[np.ix_(free, free)])
             dec = -float(g @ step)  # Newton decrement squared
             if not math.isfinite(dec) or dec <= 1e-10:
                 stage_done = True
@@ -334,7 +351,8 @@ def choose_prior_weight(
         pi = feasible_start(problem, J0s, layout, pi0)
         held = S[k]
         for i, W in enumerate(cands):
-            pi, ok, _ = newton_prior(problem, W, pi)
+            # warm from the stronger weight's answer: the barrier already at its final weight
+            pi, ok, _ = newton_prior(problem, W, pi, barrier=1e-2 if i == 0 else BARRIER_END)
             failed += not ok
             r = held @ np.append(Y @ pi, -1.0)
             err[k, i] = float(r @ r) / s2
@@ -373,7 +391,30 @@ def choose_prior_weight(
 # ---------------------------------------------------------------------------------------------
 # Data or prior, per link
 # ---------------------------------------------------------------------------------------------
-def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict]:
+def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
+    """Per link, the fit with its mass held at the description's: the minimiser of the same
+    objective at weight ``W`` with that one parameter fixed, and how much worse it fits the
+    data than ``pi`` [noise variances]. Reached as the estimate itself is: from ``start`` (the
+    description's pseudo-inertias, which have that mass, see :func:`feasible_start`) by Newton
+    descents at the weights of :data:`CANDIDATES` above ``W``, strongest first, then at ``W``;
+    ``converged`` false when the last descent stopped at its iteration limit (the increase is
+    then that of the point reached). The description's mass is that of the prior's
+    pseudo-inertia (regularised when the description's is singular)."""
+    f0 = problem.fit(pi)
+    out = []
+    for ix in problem.links:
+        x, mu = np.array(start, dtype=float), 1e-2
+        for w in sorted((c for c in CANDIDATES if c > W), reverse=True):
+            x = newton_prior(problem, w, x, fixed=[ix[9]], barrier=mu)[0]
+            mu = BARRIER_END  # warm: the barrier already at its final weight
+        x, ok, _ = newton_prior(problem, W, x, fixed=[ix[9]], barrier=mu)
+        out.append(
+            {"mass": float(start[ix[9]]), "fit_increase": problem.fit(x) - f0, "converged": ok}
+        )
+    return out
+
+
+def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y, *, start) -> list[dict]:
     """Per link, what the consistent estimate owes to the data and to the priors.
 
     With ``C = 2 H^-1`` (``H`` the objective's Hessian at ``pi``), the share of a parameter
@@ -387,7 +428,13 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict
     the data determine (share below :data:`DATA_SHARE`, generalised eigenvalues over that
     subspace) and their mean share; the verdict: ``data`` (mean share below
     :data:`DATA_SHARE`), ``partly`` (above, but some direction by the data), ``prior`` (none,
-    or the link has none). ``pi0``: the description's classical vector (its masses beside)."""
+    or the link has none). The mass's own verdict (:func:`mass_profile`): ``data`` when
+    holding it at the description's makes the fit worse by at least :data:`MASS_EVIDENCE`
+    noise variances (``mass_fit_increase``), with the standard deviation the data give it,
+    ``|m - m0| / sqrt(increase)`` (``mass_data_std``), else ``prior``; ``unknown`` when that
+    fit stopped before it converged (``mass_profile_converged``). ``start``: the description's
+    pseudo-inertias and fitted joint parameters (:func:`feasible_start`). ``pi0``: the
+    description's classical vector (its masses beside)."""
     # the barrier at its final weight: a non-negative parameter at its bound is held there
     _, H = problem.derivatives(pi, W, BARRIER_END)
     _, Hfit = problem.derivatives(pi, 0.0, BARRIER_END)
@@ -395,6 +442,7 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict
     d = np.sqrt(np.maximum(np.diag(H), 1e-300))
     C = 2.0 * np.linalg.pinv(H / np.outer(d, d), rcond=1e-14, hermitian=True) / np.outer(d, d)
     Cp = 0.5 * C @ Hp @ C  # the priors' part of the covariance
+    profile = mass_profile(problem, pi, W, start)  # constrained descents per link
     Ys = Y / np.maximum(np.linalg.norm(Y, axis=0), 1e-300)  # columns of unit norm
     _, sv, Vt = np.linalg.svd(Ys)
     rows = Vt[: int(np.sum(sv > 1e-9 * sv[0]))]  # orthonormal basis of the row space
@@ -410,6 +458,9 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict
             A, B = Nl.T @ Pl @ Nl, Nl.T @ Cl @ Nl
             share = np.clip(sla.eigh(0.5 * (A + A.T), 0.5 * (B + B.T), eigvals_only=True), 0, 1)
         mass_share = float(np.clip(Pl[9, 9] / Cl[9, 9], 0.0, 1.0)) if Cl[9, 9] > 0 else 1.0
+        held = profile[len(out)]
+        rise = held["fit_increase"]
+        m = float(pi[ix[9]])
         by_data = int(np.sum(share < DATA_SHARE))
         mean = float(share.mean()) if share.size else 1.0
         verdict = "data" if mean < DATA_SHARE else ("partly" if by_data else "prior")
@@ -424,6 +475,12 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y) -> list[dict
                 "directions_by_data": by_data,
                 "directions_prior_share": mean,
                 "verdict": verdict,
+                "mass_verdict": ("data" if rise >= MASS_EVIDENCE else "prior")
+                if held["converged"]
+                else "unknown",
+                "mass_fit_increase": float(rise),
+                "mass_data_std": (abs(m - held["mass"]) / math.sqrt(rise) if rise > 0 else None),
+                "mass_profile_converged": bool(held["converged"]),
             }
         )
     return out

@@ -112,7 +112,15 @@ def _name(data) -> str:
 
 
 def write_report(
-    directory, result, data, validation_data=None, validation=None, fit=None, trajectory_limits=None
+    directory,
+    result,
+    data,
+    validation_data=None,
+    validation=None,
+    fit=None,
+    trajectory_limits=None,
+    *,
+    estimate: str | None = None,
 ) -> list[Path]:
     """Writes the PNG plots of a report folder: measured vs estimated torques on the
     identification data (and on the validation data), and the joint trajectory of the
@@ -120,13 +128,16 @@ def write_report(
     several, each gets its own plots (``torque_identification_2.png``, ...). ``fit`` and
     ``validation`` are the results of :func:`~mindyn.identification.validate` (or the predicted
     torques); a plot's title gives the log's overall relative errors when they are (filtered,
-    raw and moving, see :func:`~mindyn.identification.validate`). Returns the paths written."""
+    raw and moving, see :func:`~mindyn.identification.validate`), and ``estimate``, when given,
+    which estimate ``result`` is (``"consistent"``). Returns the paths written."""
     from .excitation import plot_trajectory
 
     d = Path(directory)
     d.mkdir(parents=True, exist_ok=True)
     out = []
-    tag = f"{result.base.robot.name}, {result.model} model"
+    tag = f"{result.base.robot.name}, {result.model} model" + (
+        f", {estimate} estimate" if estimate else ""
+    )
 
     def series(kind, logs, measures, pred):
         hats = _tau_hats(pred, logs, result)
