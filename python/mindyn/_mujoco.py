@@ -338,10 +338,13 @@ def quaternion(R) -> np.ndarray:
 
 
 def rpy(R) -> np.ndarray:
-    """URDF roll, pitch, yaw of ``R = Rz(yaw) Ry(pitch) Rx(roll)``."""
+    """URDF roll, pitch, yaw of ``R = Rz(yaw) Ry(pitch) Rx(roll)``: the yaw first, then pitch
+    and roll from ``Rz(-yaw) R``, so that the angles give ``R`` back to round-off also at and
+    near pitch = +-pi/2, where roll and yaw are ill-determined (only their sum or difference
+    is)."""
     R = np.asarray(R, dtype=float)
-    c = math.hypot(R[0, 0], R[1, 0])
-    pitch = math.atan2(-R[2, 0], c)
-    if c < 1e-9:  # gimbal lock: the roll is folded into the yaw
-        return np.array([0.0, pitch, math.atan2(-R[0, 1], R[1, 1])])
-    return np.array([math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])])
+    yaw = math.atan2(R[1, 0], R[0, 0])
+    s, c = math.sin(yaw), math.cos(yaw)
+    pitch = math.atan2(-R[2, 0], c * R[0, 0] + s * R[1, 0])
+    roll = math.atan2(s * R[0, 2] - c * R[1, 2], c * R[1, 1] - s * R[0, 1])
+    return np.array([roll, pitch, yaw])
