@@ -114,9 +114,16 @@ CASES = ["puma560", "stanford", "zcr07s", "planar3", "ur5_example", "ur5", "pand
 
 
 # -- MJCF out -----------------------------------------------------------------------------------
+def joint_side(robot):
+    """``robot`` with its rotor inertia and friction on the joints (UR5 and Baxter declare
+    ros_control transmissions: theirs are on the motors by default)."""
+    return robot if robot.transmission is None else robot.with_drive_side("joint")
+
+
 @pytest.mark.parametrize("case", CASES)
 def test_exported_mjcf_inverse_dynamics_is_pinocchio_plus_the_joint_terms(case, tmp_path):
     robot, model = arm(case)
+    robot = joint_side(robot)
     if model is None:  # the repository's UR5: Pinocchio's URDF parser
         model = pin.buildModelFromUrdf(str(REPO_UR5))
     rng = np.random.default_rng(11)
@@ -149,20 +156,26 @@ def _no_limits():
     return mujoco.mjtDisableBit.mjDSBL_LIMIT | mujoco.mjtDisableBit.mjDSBL_CONTACT
 
 
-def test_mjcf_round_trip_keeps_every_parameter(tmp_path):
+@pytest.mark.parametrize("case", ["ur5", "ur5_joint_side", "panda"])
+def test_mjcf_round_trip_keeps_every_parameter(case, tmp_path):
     """URDF -> mindyn -> MJCF -> mindyn: inertial parameters, Ia, Fv, Fc, gravity, axes and
-    limits to 1e-12."""
-    for name in ("ur5", "panda"):
-        robot = mindyn.load(URDFS[name], tip="panda_hand" if name == "panda" else None)
-        p = physical_params(robot, np.random.default_rng(3))
-        out = write_mjcf(robot, p, tmp_path / f"{name}.xml").path
-        again = mindyn.load(out)
-        assert again.joint_names == robot.joint_names and again.joint_types == robot.joint_types
-        np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
-        np.testing.assert_allclose(again.gravity, robot.gravity, rtol=0, atol=1e-15)
-        np.testing.assert_allclose(again.axes, robot.axes, rtol=0, atol=ROUND_TRIP)
-        for key in ("lower", "upper"):
-            np.testing.assert_allclose(again.limits[key], robot.limits[key], atol=1e-12)
+    limits to 1e-12. UR5's motors (ratio 1) carry the drive terms by default: on the joints of
+    the MJCF, they come back as the same joint terms."""
+    name = case.split("_")[0]
+    robot = mindyn.load(URDFS[name], tip="panda_hand" if name == "panda" else None)
+    if case == "ur5_joint_side":
+        robot = robot.with_drive_side("joint")
+    assert robot.drive_side == ("motor" if case == "ur5" else "joint")
+    p = physical_params(robot, np.random.default_rng(3))
+    out = write_mjcf(robot, p, tmp_path / f"{name}.xml").path
+    again = mindyn.load(out)
+    assert again.joint_names == robot.joint_names and again.joint_types == robot.joint_types
+    assert again.transmission is None and again.drive_side == "joint"
+    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+    np.testing.assert_allclose(again.gravity, robot.gravity, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(again.axes, robot.axes, rtol=0, atol=ROUND_TRIP)
+    for key in ("lower", "upper"):
+        np.testing.assert_allclose(again.limits[key], robot.limits[key], atol=1e-12)
 
 
 def test_round_trip_of_the_model_own_parameters_and_gravity(tmp_path):
@@ -175,6 +188,122 @@ def test_round_trip_of_the_model_own_parameters_and_gravity(tmp_path):
     np.testing.assert_allclose(again.params, robot.params, rtol=0, atol=1e-12 * scale)
     np.testing.assert_array_equal(again.gravity, robot.gravity)
     assert not again.rotor_inertia.any() and not again.coulomb.any()
+
+
+# -- drive terms on the motors of simple transmissions ------------------------------------------
+GEARS = [101.0, -101.0, 80.5, 50.0, -50.0, 30.0]
+
+
+def geared_ur5(tmp_path):
+    """example-robot-data's UR5 with its six SimpleTransmissions given these reductions
+    (the file declares 1)."""
+    text = URDFS["ur5"].read_text()
+    assert text.count("<mechanicalReduction>1</mechanicalReduction>") == 6
+    ratios = iter(GEARS)
+    text = re.sub(
+        r"<mechanicalReduction>1</mechanicalReduction>",
+        lambda _: f"<mechanicalReduction>{next(ratios)!r}</mechanicalReduction>",
+        text,
+    )
+    path = tmp_path / "ur5_geared.urdf"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def baxter_rnea(robot, inertial, q, dq, ddq):
+    """Pinocchio's rnea of Baxter whole (its own URDF parser, the mimic fingers locked) with
+    ``inertial``, in the order of ``robot``'s joints."""
+    model = pin.buildModelFromUrdf(str(BAXTER))
+    locked = [j for j in model.names[1:] if j not in robot.joint_names]  # mimic fingers
+    model = pin.buildReducedModel(model, [model.getJointId(j) for j in locked], pin.neutral(model))
+    assert model.nq == model.nv == robot.n
+    for k, name in enumerate(robot.joint_names):
+        model.inertias[model.getJointId(name)] = body_inertia(
+            inertial[10 * k : 10 * k + 10], robot.joint_post(k)
+        )
+    idx = [model.idx_qs[model.getJointId(n)] for n in robot.joint_names]
+    out = np.zeros_like(q)
+    data = model.createData()
+    for i in range(len(q)):
+        x, v, a = (np.zeros(model.nq) for _ in range(3))
+        x[idx], v[idx], a[idx] = q[i], dq[i], ddq[i]
+        out[i] = pin.rnea(model, data, x, v, a)[idx]
+    return out
+
+
+def motor_side_case(case, tmp_path):
+    """(motor-side robot, rnea(inertial, q, dq, ddq) of Pinocchio on the same URDF)."""
+    if case == "baxter":
+        robot = mindyn.load(BAXTER)
+        return robot, lambda p, q, dq, ddq: baxter_rnea(robot, p, q, dq, ddq)
+    path = URDFS["ur5"] if case == "ur5" else geared_ur5(tmp_path)
+    robot, model = mindyn.load(path), pin.buildModelFromUrdf(str(path))
+
+    def rnea(p, q, dq, ddq):
+        set_pinocchio_params(model, robot, p)
+        return pin_rnea(model, q, dq, ddq)
+
+    return robot, rnea
+
+
+@pytest.mark.parametrize("case", ["ur5", "ur5_geared", "baxter"])
+def test_motor_side_mjcf_is_the_motor_formula_and_reads_back_as_joint_terms(case, tmp_path):
+    """UR5 (ratio 1), UR5 with gear ratios (some negative) and Baxter whole (its grippers'
+    transmissions first: T permutes the joints) with the drive terms on the motors: mj_inverse
+    of the MJCF is rnea + T^T (Ia T ddq + Fv T dq + Fc sign(T dq)), written here; the motors
+    act through T^T; read back, the joints carry r^2 Ia, r^2 Fv, |r| Fc with the same
+    dynamics."""
+    robot, rnea = motor_side_case(case, tmp_path)
+    assert robot.drive_side == "motor"
+    T = robot.transmission.T
+    assert (np.count_nonzero(T, axis=1) == 1).all()  # simple transmissions
+    rng = np.random.default_rng(12)
+    p = physical_params(robot, rng)
+    inertial, ia, fv, fc = split(robot, p)  # slot i: motor i
+    out = write_mjcf(robot, p, tmp_path / "motors.xml").path
+    text = out.read_text()
+    assert "<tendon" not in text and text.count("<motor ") == robot.n
+    m = mujoco.MjModel.from_xml_path(str(out))
+    q, dq, ddq = states(robot, rng, m=3)
+    friction = (fc * np.sign(dq @ T.T)) @ T
+    ref = rnea(inertial, q, dq, ddq) + (ia * (ddq @ T.T) + fv * (dq @ T.T)) @ T + friction
+    got, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(got + friction, ref, TOL, "motor-side MJCF vs rnea + T^T (motor terms)")
+    # frictionloss enabled, at moving states: saturated, so mj_inverse is the whole formula
+    q, dq, ddq = states(robot, rng, m=2, speed=(1.0, 2.0))
+    friction = (fc * np.sign(dq @ T.T)) @ T
+    ref = rnea(inertial, q, dq, ddq) + (ia * (ddq @ T.T) + fv * (dq @ T.T)) @ T + friction
+    got, d = mj_inverse(m, robot.joint_names, q, dq, ddq, disable=_no_limits())
+    on_dofs = d.efc_type[: d.nefc] == mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF
+    linear = (mujoco.mjtConstraintState.mjCNSTRSTATE_LINEARNEG,
+              mujoco.mjtConstraintState.mjCNSTRSTATE_LINEARPOS)  # fmt: skip
+    assert on_dofs.sum() == d.nefc == robot.n
+    assert np.isin(d.efc_state[: d.nefc], linear).all()
+    assert_close(got[-1], ref[-1], TOL, "motor-side MJCF with frictionloss, moving")
+    # the motors drive the joints through T^T (actuators on the joints, gear r)
+    d = mujoco.MjData(m)
+    tau_m = rng.normal(size=robot.n)
+    d.ctrl[[m.actuator(name).id for name in robot.transmission.motors]] = tau_m
+    mujoco.mj_forward(m, d)
+    dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in robot.joint_names]
+    np.testing.assert_allclose(d.qfrc_actuator[dof], T.T @ tau_m, rtol=1e-15, atol=0)
+    # read back: a joint-side robot without transmissions, with the motors' terms folded
+    again = mindyn.load(out)
+    assert again.transmission is None and again.drive_side == "joint"
+    assert again.joint_names == robot.joint_names
+    folded = np.column_stack(
+        [inertial.reshape(robot.n, 10), (T**2).T @ ia, (T**2).T @ fv, np.abs(T).T @ fc]
+    ).ravel()
+    np.testing.assert_allclose(
+        again.parameters(True, True), folded, rtol=ROUND_TRIP, atol=ROUND_TRIP
+    )
+    if not np.any(np.abs(T) != (T != 0)):  # ratios 1: the same numbers
+        np.testing.assert_array_equal(again.parameters(True, True)[10::13], folded[10::13])
+    got = again.inverse_dynamics(q, dq, ddq, again.parameters(True, True))
+    assert_close(got, ref, ROUND_TRIP, "motor-side MJCF read back vs the motor formula")
+    got, _ = mj_inverse(m, again.joint_names, q, dq, ddq, disable=_no_limits())
+    assert_close(got, again.inverse_dynamics(q, dq, ddq, again.parameters(True, True)),
+                 ROUND_TRIP, "motor-side MJCF: mj_inverse vs the robot read back")  # fmt: skip
 
 
 # -- transmissions ------------------------------------------------------------------------------
@@ -223,7 +352,10 @@ def test_tendon_mjcf_is_the_motor_side_formula(T, tmp_path):
     p = np.column_stack([inertial.reshape(6, 10), ia, fv, fc]).ravel()
     out = write_mjcf(robot, p, tmp_path / "motor.xml", drive_side="motor").path
     text = out.read_text()
-    assert text.count("<fixed ") == 6 and 'tendon="m6"' in text
+    # the motors coupling joints on tendons, the others on their joint with their ratio
+    coupled = [k for k in range(6) if np.count_nonzero(T[k]) > 1]
+    assert text.count("<fixed ") == len(coupled) and 'joint="j1" gear="100.0"' in text
+    assert all(f'<motor name="m{k + 1}" tendon="m{k + 1}"' in text for k in coupled)
     m = mujoco.MjModel.from_xml_path(str(out))
     q, dq, ddq = states(robot, rng)
     rnea = pin_rnea(pinocchio_model(robot, inertial), q, dq, ddq)
@@ -239,11 +371,27 @@ def test_tendon_mjcf_is_the_motor_side_formula(T, tmp_path):
     mujoco.mj_forward(m, d)
     dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in robot.joint_names]
     np.testing.assert_allclose(d.qfrc_actuator[dof], T.T @ tau_m, rtol=1e-12, atol=1e-12)
-    # joint-side terms with the same transmissions: on the joints
+    # a tendon's terms over several joints cannot be read back (the model read has its terms
+    # on the joints): refused, naming the tendon and its joints
+    joints = ", ".join(f"'j{k + 1}'" for k in np.flatnonzero(T[coupled[0]]))
+    with pytest.raises(
+        mindyn.ModelError, match=f"tendon 'm{coupled[0] + 1}' couples joints {joints}"
+    ):
+        mindyn.load(out)
+    # joint-side terms with the same transmissions: on the joints; read back exactly (tendons
+    # without terms, and actuators, are not dynamics: the robot read has no transmissions)
     joint = write_mjcf(robot, p, tmp_path / "joint.xml", drive_side="joint").path
+    assert "<fixed " in joint.read_text()
     got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(joint)), robot.joint_names, q, dq, ddq)
     assert_close(got + fc * np.sign(dq), rnea + ia * ddq + fv * dq + fc * np.sign(dq), TOL,
                  "tendon MJCF, joint-side terms")  # fmt: skip
+    again = mindyn.load(joint)  # link frames = joint frames, not the DH frames: same dynamics
+    assert again.transmission is None
+    drive = again.parameters(True, True).reshape(6, 13)[:, 10:]
+    np.testing.assert_allclose(drive, np.column_stack([ia, fv, fc]), rtol=0, atol=ROUND_TRIP)
+    got = again.inverse_dynamics(q, dq, ddq, again.parameters(True, True))
+    assert_close(got, rnea + ia * ddq + fv * dq + fc * np.sign(dq), ROUND_TRIP,
+                 "tendon MJCF, joint-side terms read back")  # fmt: skip
 
 
 def test_motor_side_needs_one_motor_per_joint(tmp_path):
@@ -398,6 +546,93 @@ def test_mjcf_written_back_keeps_the_file_and_changes_only_the_dynamics(tmp_path
     assert_close(got, ref + split(robot, p)[3] * np.sign(dq), TOL, "MJCF written back")
 
 
+GEARED = """<mujoco model="geared">
+  <default><joint armature="0.02" damping="0.1" frictionloss="0.05"/></default>
+  <worldbody>
+    <body name="a" pos="0 0 0.2">
+      <joint name="h1" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+      <body name="b" pos="0.3 0 0" euler="0.4 0 0">
+        <joint name="h2" axis="0 1 0"/>
+        <geom type="box" size="0.12 0.03 0.02" pos="0.12 0 0"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <fixed name="motor2" armature="3e-4" damping="2e-3" frictionloss="0.01">
+      <joint joint="h2" coef="-40"/>
+    </fixed>
+  </tendon>
+  <actuator><motor name="motor2" tendon="motor2"/></actuator>
+</mujoco>
+"""
+
+
+def test_mjcf_tendon_over_one_joint_is_folded_onto_it(tmp_path):
+    """A fixed tendon over one joint with coefficient c: its armature, damping, frictionloss
+    act on the joint as c^2 armature, c^2 damping, |c| frictionloss; written back, they are
+    on the joint and zero on the tendon."""
+    path = tmp_path / "geared.xml"
+    path.write_text(GEARED, encoding="utf-8")
+    robot = mindyn.load(path)
+    assert robot.joint_names == ["h1", "h2"]
+    np.testing.assert_allclose(robot.rotor_inertia, [0.02, 0.02 + 1600 * 3e-4], rtol=1e-15)
+    np.testing.assert_allclose(robot.viscous, [0.1, 0.1 + 1600 * 2e-3], rtol=1e-15)
+    np.testing.assert_allclose(robot.coulomb, [0.05, 0.05 + 40 * 0.01], rtol=1e-15)
+    m = mujoco.MjModel.from_xml_path(str(path))
+    rng = np.random.default_rng(6)
+    q, dq, ddq = states(robot, rng)
+    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(True, True))
+    ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(got, ref + robot.coulomb * np.sign(dq), TOL, "MJCF tendon folded vs mj_inverse")
+    # with frictionloss, moving: MuJoCo's joint and tendon dry friction, both saturated
+    q, dq, ddq = states(robot, rng, m=1, speed=(1.0, 2.0))
+    ref, d = mj_inverse(m, robot.joint_names, q, dq, ddq, disable=_no_limits())
+    assert d.nefc == 3 and (d.efc_type == mujoco.mjtConstraint.mjCNSTR_FRICTION_TENDON).sum() == 1
+    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(True, True))
+    assert_close(got, ref, TOL, "MJCF tendon folded, frictionloss moving")
+    # written back: the new terms on the joints, none left on the tendon
+    p = physical_params(robot, rng)
+    out = write_mjcf(robot, p, tmp_path / "back.xml")
+    assert any("tendon 'motor2'" in n for n in out.notes)
+    text = out.path.read_text()
+    assert '<fixed name="motor2" armature="0.0" damping="0.0" frictionloss="0.0">' in text
+    again = mindyn.load(out.path)
+    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+    ref, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out.path)), robot.joint_names, q, dq, ddq)
+    got = robot.inverse_dynamics(q, dq, ddq, p)
+    assert_close(got, ref + split(robot, p)[3] * np.sign(dq), TOL, "MJCF tendon written back")
+
+
+def test_mjcf_tendon_terms_the_model_cannot_hold_are_refused_by_name(tmp_path):
+    body = (
+        '<worldbody><site name="s0"/><body name="a"><joint name="h1" axis="0 0 1"/>'
+        '<geom size="0.1"/><site name="s1" pos="0.1 0 0"/><body name="b" pos="0.2 0 0">'
+        '<joint name="h2" axis="0 0 1"/><geom size="0.1"/></body></body></worldbody>'
+    )
+    cases = {
+        "coupled": (
+            '<fixed name="d" damping="0.2"><joint joint="h1" coef="1"/>'
+            '<joint joint="h2" coef="-1"/></fixed>',
+            "tendon 'd' couples joints 'h1', 'h2' and has damping 0.2",
+        ),
+        "spatial": (
+            '<spatial name="cable" frictionloss="0.3"><site site="s0"/><site site="s1"/></spatial>',
+            "tendon 'cable' is a spatial tendon and has frictionloss 0.3",
+        ),
+        "spring": (
+            '<fixed name="k" stiffness="5"><joint joint="h1" coef="2"/></fixed>',
+            "tendon 'k' has a spring (stiffness 5.0)",
+        ),
+    }
+    path = tmp_path / "tendon.xml"
+    for tendon, message in cases.values():
+        path.write_text(f"<mujoco>{body}<tendon>{tendon}</tendon></mujoco>")
+        with pytest.raises(mindyn.ModelError) as e:
+            mindyn.load(path)
+        assert message in str(e.value) and "\n" not in str(e.value), str(e.value)
+
+
 BAD = {
     "ball": ('<joint name="b1" type="ball"/>', "joint 'b1' (body 'a') is a ball joint"),
     "free": ('<freejoint name="f1"/>', "joint 'f1' (body 'a') is a free joint"),
@@ -539,29 +774,15 @@ def test_write_back_checked_by_compiling_and_mocap_markers_left_out(tmp_path):
 
 
 def test_exported_mjcf_of_a_tree_is_pinocchio_plus_the_joint_terms(tmp_path):
-    """Baxter whole (head, both arms, grippers: a tree): the MJCF's bodies nest as the tree."""
-    robot = mindyn.load(BAXTER)
+    """Baxter whole (head, both arms, grippers: a tree), its drive terms on the joints: the
+    MJCF's bodies nest as the tree."""
+    robot = joint_side(mindyn.load(BAXTER))
     assert not robot.is_serial
-    model = pin.buildModelFromUrdf(str(BAXTER))
-    locked = [j for j in model.names[1:] if j not in robot.joint_names]  # mimic fingers
-    model = pin.buildReducedModel(model, [model.getJointId(j) for j in locked], pin.neutral(model))
-    assert model.nq == model.nv == robot.n
     rng = np.random.default_rng(8)
     p = physical_params(robot, rng)
     inertial, ia, fv, fc = split(robot, p)
     out = write_mjcf(robot, p, tmp_path / "baxter.xml").path
-    for k, name in enumerate(robot.joint_names):
-        j = model.getJointId(name)
-        post = robot.joint_post(k)
-        model.inertias[j] = body_inertia(inertial[10 * k : 10 * k + 10], post)
     q, dq, ddq = states(robot, rng, m=3)
-    idx = [model.idx_qs[model.getJointId(n)] for n in robot.joint_names]
-    rnea = np.zeros_like(q)
-    data = model.createData()
-    for i in range(len(q)):
-        x, v, a = (np.zeros(model.nq) for _ in range(3))
-        x[idx], v[idx], a[idx] = q[i], dq[i], ddq[i]
-        rnea[i] = pin.rnea(model, data, x, v, a)[idx]
-    ref = rnea + ia * ddq + fv * dq + fc * np.sign(dq)
+    ref = baxter_rnea(robot, inertial, q, dq, ddq) + ia * ddq + fv * dq + fc * np.sign(dq)
     got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
     assert_close(got + fc * np.sign(dq), ref, TOL, "MJCF of a tree vs Pinocchio + terms")

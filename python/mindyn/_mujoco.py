@@ -7,6 +7,15 @@ memory, which the core's URDF parser turns into the model (the one model builder
 joint's ``armature`` as its rotor inertia ``Ia``, ``damping`` as ``Fv`` and ``frictionloss`` as
 ``Fc``, and MuJoCo's gravity.
 
+Tendons: a fixed tendon over one joint with coefficient ``c`` (length ``c q``) is folded onto
+that joint, exactly as MuJoCo applies it: its ``armature`` adds ``c^2 armature`` to the joint's
+``Ia``, its ``damping`` ``c^2 damping`` to ``Fv`` and its ``frictionloss`` ``|c| frictionloss``
+to ``Fc``. The model read has its terms on the joints and no transmissions (a URDF in memory can
+carry only ros_control's Simple, Differential and FourBarLinkage forms, not a tendon's general
+row of ``T``): a tendon over several joints, or a spatial one, carrying armature, damping or
+frictionloss (``T^T Ia T`` couples the joints) is refused by name, as is tendon stiffness.
+Tendons without such terms, and actuators, do not enter the dynamics and are not read.
+
 A link frame of the model is the MuJoCo body frame moved to the anchor (``pos``) of the body's
 last joint, with the body's axes; a body with several joints gets one massless link per joint
 before its last one (``BODY__JOINT``). Jointless bodies are merged into the link they hang from.
@@ -142,18 +151,27 @@ def check(m, path) -> None:
             "coupled joints are not in the model"
         )
     for t in range(m.ntendon):
-        terms = {
-            "stiffness": m.tendon_stiffness[t],
-            "damping": m.tendon_damping[t],
-            "frictionloss": m.tendon_frictionloss[t],
-            "armature": getattr(m, "tendon_armature", np.zeros(m.ntendon))[t],
-        }
-        given = [f"{k} {float(v)!r}" for k, v in terms.items() if np.any(v != 0)]
-        if given:
-            name = _name(m, mujoco.mjtObj.mjOBJ_TENDON, t, f"tendon{t}")
+        terms = tendon_terms(m, t)
+        given = [f"{k} {float(v)!r}" for k, v in terms.items() if v != 0]
+        if not given:
+            continue
+        where = f"{path}: tendon '{tendon_name(m, t)}'"
+        if m.tendon_stiffness[t] != 0:
             raise _core.ModelError(
-                f"{path}: tendon '{name}' has {', '.join(given)}; tendon dynamics are not read "
-                "(put the terms on the joints)"
+                f"{where} has a spring (stiffness {float(m.tendon_stiffness[t])!r}); tendon "
+                "springs are not in the model"
+            )
+        wraps = tendon_joints(m, t)
+        if wraps is None or len(wraps) != 1:
+            over = (
+                "is a spatial tendon"
+                if wraps is None
+                else "couples joints " + ", ".join(f"'{joint_name(m, j)}'" for j, _ in wraps)
+            )
+            raise _core.ModelError(
+                f"{where} {over} and has {', '.join(given)}: only the terms of a fixed tendon "
+                "over one joint are read (folded onto it); a tendon's over several joints "
+                "couple them, which joint terms cannot hold (put the terms on the joints)"
             )
     for b in range(1, m.nbody):
         if m.body_gravcomp[b] != 0:
@@ -179,18 +197,75 @@ def read(path, tip: str | None) -> _core.Model:
     flags = mujoco.mjtDisableBit
     damper = getattr(flags, "mjDSBL_DAMPER", None) or flags.mjDSBL_PASSIVE
     frictionloss = int(flags.mjDSBL_FRICTIONLOSS) | int(flags.mjDSBL_CONSTRAINT)
-    urdf = _urdf(
-        m,
-        _model_name(m, path),
-        damping=not disabled & int(damper),
-        friction=not disabled & frictionloss,
-    )
+    armature, damping, friction = joint_terms(m)
+    if disabled & int(damper):
+        damping[:] = 0.0
+    if disabled & frictionloss:
+        friction[:] = 0.0
+    urdf = _urdf(m, _model_name(m, path), damping, friction)
     core = _core.parse_urdf(urdf, tip or "", str(path))
     gravity = np.zeros(3) if disabled & int(flags.mjDSBL_GRAVITY) else np.array(m.opt.gravity)
     core = core.with_gravity(gravity)
-    armature = {joint_name(m, j): float(m.dof_armature[m.jnt_dofadr[j]]) for j in range(m.njnt)}
-    core.rotor_inertia = np.array([armature[name] for name in core.joint_names])
+    by_name = {joint_name(m, j): float(armature[j]) for j in range(m.njnt)}
+    core.rotor_inertia = np.array([by_name[name] for name in core.joint_names])
     return core
+
+
+def tendon_name(m, t: int) -> str:
+    mujoco = require("reading an MJCF")
+    return _name(m, mujoco.mjtObj.mjOBJ_TENDON, t, f"tendon{t}")
+
+
+def tendon_joints(m, t: int) -> list[tuple[int, float]] | None:
+    """The joints of fixed tendon ``t`` with their non-zero coefficients (its length is
+    ``sum c q``), or ``None`` for a spatial tendon."""
+    mujoco = require("reading an MJCF")
+    adr, num = int(m.tendon_adr[t]), int(m.tendon_num[t])
+    if any(int(m.wrap_type[w]) != int(mujoco.mjtWrap.mjWRAP_JOINT) for w in range(adr, adr + num)):
+        return None
+    return [
+        (int(m.wrap_objid[w]), float(m.wrap_prm[w]))
+        for w in range(adr, adr + num)
+        if m.wrap_prm[w] != 0
+    ]
+
+
+def tendon_terms(m, t: int) -> dict[str, float]:
+    armature = getattr(m, "tendon_armature", None)  # MuJoCo 3.3.1 and later
+    return {
+        "stiffness": float(m.tendon_stiffness[t]),
+        "armature": 0.0 if armature is None else float(armature[t]),
+        "damping": float(m.tendon_damping[t]),
+        "frictionloss": float(m.tendon_frictionloss[t]),
+    }
+
+
+def folded_tendons(m) -> list[int]:
+    """The tendons whose armature, damping or frictionloss are folded onto their one joint."""
+    out = []
+    for t in range(m.ntendon):
+        terms = tendon_terms(m, t)
+        wraps = tendon_joints(m, t)
+        if wraps is not None and len(wraps) == 1 and any(v != 0 for v in terms.values()):
+            out.append(t)
+    return out
+
+
+def joint_terms(m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Armature, damping and frictionloss acting on each joint (by joint id): the joint's own
+    plus ``c^2 armature``, ``c^2 damping``, ``|c| frictionloss`` of each fixed tendon over it
+    alone with coefficient ``c`` (what MuJoCo applies through such a tendon)."""
+    dof = np.asarray(m.jnt_dofadr, dtype=int)
+    armature = np.array(m.dof_armature, dtype=float)[dof]
+    damping = np.array(m.dof_damping, dtype=float)[dof]
+    friction = np.array(m.dof_frictionloss, dtype=float)[dof]
+    for t in folded_tendons(m):
+        ((j, c),) = tendon_joints(m, t)
+        terms = tendon_terms(m, t)
+        armature[j] += c * c * terms["armature"]
+        damping[j] += c * c * terms["damping"]
+        friction[j] += abs(c) * terms["frictionloss"]
+    return armature, damping, friction
 
 
 def _model_name(m, path) -> str:
@@ -200,8 +275,9 @@ def _model_name(m, path) -> str:
     return name if name and name != "MuJoCo Model" else Path(str(path)).stem
 
 
-def _urdf(m, name: str, damping: bool, friction: bool) -> str:
-    """The compiled model ``m`` as URDF text (see the module's docstring)."""
+def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray) -> str:
+    """The compiled model ``m`` as URDF text (see the module's docstring), with the viscous and
+    Coulomb friction of each joint (by joint id)."""
     mujoco = require("reading an MJCF")
     hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
     parts = [f'<robot name="{_attr(name)}">', f'<link name="{_attr(body_name(m, 0))}"/>']
@@ -228,7 +304,6 @@ def _urdf(m, name: str, damping: bool, friction: bool) -> str:
             previous = np.array(m.jnt_pos[j], dtype=float)
             last = j == joints[-1]
             parts.append(_link(link, m, b if last else None, previous))
-            dof = int(m.jnt_dofadr[j])
             lo, hi = (float(v) for v in m.jnt_range[j])
             limited = bool(m.jnt_limited[j])
             kind = "prismatic" if int(m.jnt_type[j]) != hinge else "revolute"
@@ -241,8 +316,7 @@ def _urdf(m, name: str, damping: bool, friction: bool) -> str:
             extra = (
                 f'<axis xyz="{_vec(m.jnt_axis[j])}"/>'
                 f'<limit {limit}effort="{effort!r}" velocity="0"/>'
-                f'<dynamics damping="{float(m.dof_damping[dof]) if damping else 0.0!r}" '
-                f'friction="{float(m.dof_frictionloss[dof]) if friction else 0.0!r}"/>'
+                f'<dynamics damping="{float(damping[j])!r}" friction="{float(friction[j])!r}"/>'
             )
             parts.append(_joint(joint_name(m, j), kind, parent, link, origin, extra))
             parent = link

@@ -17,12 +17,27 @@ How MuJoCo's terms relate to the model's (``tau = W(q, dq, ddq) p + Ia ddq + Fv 
   hand;
 - torque offsets ``Off`` have no place in MJCF (a comment lists them).
 
-With transmissions (``q_m = T q``, ``tau = T^T tau_m``) each motor is a fixed tendon whose
-coefficients are its row of ``T``, driven by a ``<motor>`` actuator on it with ``gear`` 1 (a
-tendon expresses any coupling matrix, which ``gear`` on joint actuators cannot); when the drive
-terms are on the motors (``drive_side="motor"``, slot k of ``Ia``, ``Fv``, ``Fc`` = motor k)
-they go on the tendon (``armature``, ``damping``, ``frictionloss``: ``tau += T^T Ia T ddq`` and
-so on), otherwise on the joints.
+With transmissions (``q_m = T q + c``, ``tau = T^T tau_m``), motor by motor (row ``i`` of ``T``):
+
+- a motor whose row has one non-zero entry ``r`` on joint ``k`` (a simple transmission of ratio
+  ``r``, the common case) is a ``<motor>`` actuator on joint ``k`` with ``gear`` = ``r`` (MuJoCo's
+  own form of a gear ratio: joint torque ``r tau_m``). With the drive terms on the motors
+  (``drive_side="motor"``: slot ``i`` of ``Ia``, ``Fv``, ``Fc`` is motor ``i``'s, ``tau +=
+  T^T (Ia T ddq + Fv T dq + Fc sign(T dq))``) they are folded exactly onto joint ``k``:
+  ``armature`` = ``r^2 Ia``, ``damping`` = ``r^2 Fv``, ``frictionloss`` = ``|r| Fc`` (summed when
+  several such motors drive one joint);
+- a motor coupling several joints is a fixed tendon whose coefficients are its row of ``T``
+  (which ``gear`` on a joint actuator cannot express), driven by a ``<motor>`` on the tendon with
+  ``gear`` 1; with the drive terms on the motors they go on the tendon (its ``armature``,
+  ``damping``, ``frictionloss``: ``T_i^T Ia T_i ddq`` and so on; MuJoCo 3.4 and later);
+- with the drive terms on the joints they are the joints' ``armature``, ``damping``,
+  ``frictionloss`` as without transmissions; the motor offsets ``c`` are not written (they do
+  not change the dynamics).
+
+Read back (:mod:`mindyn._mujoco`), such a file gives a robot with its terms on the joints and
+no transmissions: a motor-side robot's simple motors come back as the joint terms above
+(``r^2 Ia`` ..., the same parameters when ``r`` = 1) with the same dynamics; a file with
+tendons carrying terms over several joints is refused.
 """
 
 from __future__ import annotations
@@ -60,7 +75,8 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
         the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, ``armature``,
         ``damping``, ``frictionloss``), gravity, a ``tool`` site for a chain, and a ``<motor>``
-        per joint, or per motor on a fixed tendon with transmissions.
+        per joint, or with transmissions per motor: on its joint with ``gear`` = its ratio, or
+        on a fixed tendon for a motor coupling joints (see the module's docstring).
     drive_side : {"joint", "motor"}, optional
         Where ``Ia``, ``Fv``, ``Fc`` act with transmissions; default the robot's
         ``drive_side`` (``"joint"`` when it has none).
@@ -94,10 +110,13 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     notes: list[str] = []
     tr = robot.transmission
     on_motors = side == "motor" and tr is not None
+    motors = _motor_rows(robot, tr)
+    coupled = [i for i, (_, row) in enumerate(motors) if len(row) > 1]
     if on_motors:
-        _check_motor_side(robot, tr)
+        _check_motor_side(robot, tr, bool(coupled))
+    drive = _joint_drive(robot, terms, motors, on_motors)
     root = ET.Element("mujoco", {"model": robot.name})
-    root.append(_comment(_mapping_comment(robot, on_motors)))
+    root.append(_comment(_mapping_comment(robot, on_motors, tr is not None)))
     ET.SubElement(root, "compiler", {"angle": "radian", "inertiafromgeom": "false"})
     ET.SubElement(root, "option", {"gravity": _vec(robot.gravity)})
     world = ET.SubElement(root, "worldbody")
@@ -129,32 +148,37 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             joint.update(limited="true", range=_vec((lo, hi)))
         else:
             joint["limited"] = "false"
-        if not on_motors:
-            joint.update(_drive_terms(terms, k))
+        joint.update(_attrs(drive[k]))
         ET.SubElement(body, "joint", joint)
     if robot.is_serial:
         tool = robot.joint_post(robot.n - 1) @ robot.tool
         ET.SubElement(bodies[-1], "site", {"name": "tool", **_pose(tool)})
-    actuators = ET.Element("actuator")
-    if tr is None:
-        for name in robot.joint_names:
-            ET.SubElement(actuators, "motor", {"name": name, "joint": name, "gear": "1"})
-    else:
+    if coupled:
         tendons = ET.SubElement(root, "tendon")
-        for i, motor in enumerate(tr.motors):
+        for i in coupled:
+            motor, row = motors[i]
             fixed = ET.SubElement(tendons, "fixed", {"name": motor})
             if on_motors:
-                fixed.attrib.update(_drive_terms(terms, i, tendon=True))
-            for k, c in enumerate(tr.T[i]):
-                if c != 0:
-                    ET.SubElement(fixed, "joint", {"joint": robot.joint_names[k], "coef": _num(c)})
-            ET.SubElement(actuators, "motor", {"name": motor, "tendon": motor, "gear": "1"})
-        if np.any(tr.offset != 0):
-            notes.append(
-                "the motor offsets of the transmissions do not change the dynamics; "
-                "the tendon lengths are T q without them"
-            )
-    root.append(actuators)
+                fixed.attrib.update(_attrs(_slot(terms, i, f"motor '{motor}'")))
+            for k, c in row:
+                ET.SubElement(fixed, "joint", {"joint": robot.joint_names[k], "coef": _num(c)})
+    actuators = ET.SubElement(root, "actuator")
+    for motor, row in motors:
+        if len(row) == 1:
+            ((k, r),) = row
+            on = {"joint": robot.joint_names[k], "gear": _num(r)}
+        else:
+            on = {"tendon": motor, "gear": "1.0"}
+        ET.SubElement(actuators, "motor", {"name": motor, **on})
+    if on_motors and len(coupled) < len(motors):
+        notes.append(
+            "the rotor inertia and friction of each motor driving one joint with ratio r are "
+            "written on that joint as armature r^2 Ia, damping r^2 Fv, frictionloss |r| Fc"
+        )
+    if tr is not None and np.any(tr.offset != 0):
+        notes.append(
+            "the motor offsets of the transmissions do not change the dynamics: not written"
+        )
     if terms.offset is not None:
         root.append(_comment(_offsets_comment(robot, terms)))
         notes.append("torque offsets have no place in MJCF: listed in a comment of the file")
@@ -164,6 +188,33 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text, encoding="utf-8")
     return Export(out, notes=notes)
+
+
+def _motor_rows(robot: Robot, tr) -> list[tuple[str, list[tuple[int, float]]]]:
+    """Each motor's name and the joints its row of ``T`` drives, with the ratios; without
+    transmissions, one motor per joint named after it, ratio 1."""
+    if tr is None:
+        return [(name, [(k, 1.0)]) for k, name in enumerate(robot.joint_names)]
+    return [
+        (name, [(k, float(c)) for k, c in enumerate(tr.T[i]) if c != 0])
+        for i, name in enumerate(tr.motors)
+    ]
+
+
+def _joint_drive(robot: Robot, terms: JointTerms, motors, on_motors: bool) -> np.ndarray:
+    """Armature, damping, frictionloss of each joint (n x 3): the joint terms, or with the
+    terms on the motors those of the motors driving the joint alone, folded onto it."""
+    if not on_motors:
+        return np.array(
+            [_slot(terms, k, f"joint '{name}'") for k, name in enumerate(robot.joint_names)]
+        )
+    drive = np.zeros((robot.n, 3))
+    for i, (motor, row) in enumerate(motors):
+        ia, fv, fc = _slot(terms, i, f"motor '{motor}'")
+        if len(row) == 1:
+            ((k, r),) = row
+            drive[k] += (r * r * ia, r * r * fv, abs(r) * fc)
+    return drive
 
 
 def _compiles(text: str, robot: Robot, notes: list[str]) -> None:
@@ -184,12 +235,14 @@ def _compiles(text: str, robot: Robot, notes: list[str]) -> None:
         ) from None
 
 
-def _check_motor_side(robot: Robot, tr) -> None:
+def _check_motor_side(robot: Robot, tr, coupled: bool) -> None:
     if tr.n_motors != robot.n:
         raise ModelError(
             f"drive terms on the motors need as many motors as joints: robot '{robot.name}' has "
             f"{tr.n_motors} motors for {robot.n} joints"
         )
+    if not coupled:
+        return  # every motor's terms go on its joint
     try:
         import mujoco
     except ImportError:
@@ -198,28 +251,31 @@ def _check_motor_side(robot: Robot, tr) -> None:
     # (the tests compare mj_inverse with the motor-side formula)
     if tuple(int(x) for x in re.findall(r"\d+", mujoco.__version__)[:2]) < (3, 4):
         raise ModelError(
-            f"drive terms on the motors go on tendons, whose armature MuJoCo "
-            f"{mujoco.__version__} does not take as the motors' inertia (3.4 and later do)"
+            f"drive terms on motors coupling several joints go on tendons, whose armature "
+            f"MuJoCo {mujoco.__version__} does not take as the motors' inertia (3.4 and later do)"
         )
 
 
-def _drive_terms(terms: JointTerms, k: int, tendon: bool = False) -> dict[str, str]:
-    values = {
-        "armature": terms.rotor,
-        "damping": terms.viscous,
-        "frictionloss": terms.coulomb,
-    }
-    out = {}
-    for key, v in values.items():
+_DRIVE = ("armature", "damping", "frictionloss")
+
+
+def _slot(terms: JointTerms, k: int, what: str) -> tuple[float, float, float]:
+    """Slot ``k`` of ``Ia``, ``Fv``, ``Fc`` (zero where ``terms`` has none), checked
+    non-negative; ``what`` names it in the error."""
+    out = []
+    for key, v in zip(_DRIVE, (terms.rotor, terms.viscous, terms.coulomb)):
         x = 0.0 if v is None else float(v[k])
         if x < 0:
-            what = "motor" if tendon else "joint"
             raise ModelError(
-                f"{key} of {what} {k + 1} would be {x!r}; MuJoCo takes no negative {key} "
+                f"{key} of {what} would be {x!r}; MuJoCo takes no negative {key} "
                 "(export physically consistent parameters)"
             )
-        out[key] = _num(x)
-    return out
+        out.append(x)
+    return out[0], out[1], out[2]
+
+
+def _attrs(values) -> dict[str, str]:
+    return {key: _num(x) for key, x in zip(_DRIVE, values)}
 
 
 def _comment(text: str):
@@ -229,16 +285,28 @@ def _comment(text: str):
     return ET.Comment(text)
 
 
-def _mapping_comment(robot: Robot, on_motors: bool) -> str:
-    where = "each motor's fixed tendon" if on_motors else "each joint"
-    return (
+def _mapping_comment(robot: Robot, on_motors: bool, transmissions: bool) -> str:
+    text = (
         f" Written by mindyn export for robot '{robot.name}' ({robot.source}). Bodies: mass, "
-        "centre of mass and inertia about it (fullinertia, body frame = joint frame). On "
-        f"{where}: armature = rotor inertia Ia (tau += Ia ddq), damping = viscous friction Fv "
+        "centre of mass and inertia about it (fullinertia, body frame = joint frame). On each "
+        "joint: armature = rotor inertia Ia (tau += Ia ddq), damping = viscous friction Fv "
         "(tau += Fv dq), frictionloss = Coulomb friction Fc, which MuJoCo applies as a dry-"
         "friction constraint (at most Fc, opposing the motion, soft near zero velocity), not "
         "as Fc sign(dq). "
     )
+    if transmissions:
+        text += (
+            "Motors (q_m = T q, tau = T^T tau_m): one driving one joint with ratio r is an "
+            "actuator on the joint with gear r; one coupling joints is a fixed tendon with its "
+            "row of T as coefficients, actuated with gear 1. "
+        )
+    if on_motors:
+        text += (
+            "The rotor inertia and friction are the motors' (tau += T^T (Ia T ddq + Fv T dq + "
+            "Fc sign(T dq))): a motor's on its one joint as armature r^2 Ia, damping r^2 Fv, "
+            "frictionloss |r| Fc; a coupling motor's on its tendon. "
+        )
+    return text
 
 
 def _offsets_comment(robot: Robot, terms: JointTerms) -> str:
@@ -312,7 +380,17 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
         for j in jnts:
             name = _mujoco.joint_name(m, j)
             element = _named(joints, name, "joint", src)
-            element.attrib.update(_drive_terms(terms, joint_index[name]))
+            element.attrib.update(_attrs(_slot(terms, joint_index[name], f"joint '{name}'")))
+    tendons = {e.get("name"): e for e in doc.root.iter("fixed") if e.get("name")}
+    for t in _mujoco.folded_tendons(m):  # read as their joint's terms, now written there
+        name = _mujoco.tendon_name(m, t)
+        element = _named(tendons, name, "fixed", src)
+        terms_t = _mujoco.tendon_terms(m, t)
+        element.attrib.update({k: "0.0" for k in _DRIVE if terms_t[k] != 0})
+        notes.append(
+            f"the armature, damping and frictionloss of tendon '{name}' (over one joint) are "
+            "written on its joint: zero on the tendon"
+        )
     if terms.offset is not None:
         comment = _comment(_offsets_comment(robot, terms))
         comment.tail = "\n"
