@@ -3,8 +3,10 @@ simulation that runs them (:mod:`mindyn.control.simulation`).
 
 The names most used are here: the controllers :class:`AdaptivePD`, :class:`ComputedTorque` and
 :class:`PD` with their gains and registry, the Slotine-Li regressor, and :func:`simulate` with
-its protocols (:class:`Controller`, :class:`Reference`), references and result; the check of
-the sampled loop's stability (:mod:`mindyn.control.stability`, :func:`check_gains`).
+its protocols (:class:`Controller`, :class:`Reference`), references and result; the
+generalised-momentum observer of external torques with its thresholds
+(:mod:`mindyn.control.observer`); the check of the sampled loop's stability
+(:mod:`mindyn.control.stability`, :func:`check_gains`).
 """
 
 from .controllers import (
@@ -25,6 +27,15 @@ from .controllers import (
     slotine_li_regressor,
     slotine_li_regressor_classical,
 )
+from .observer import (
+    MomentumObserver,
+    ObserverThresholds,
+    ThresholdsError,
+    alarm_intervals,
+    calibrate_thresholds,
+    default_observer_gain,
+    load_thresholds,
+)
 from .simulation import (
     Controller,
     CsvTrajectory,
@@ -33,6 +44,7 @@ from .simulation import (
     SimulationResult,
     SimulationTimeoutError,
     SumOfSines,
+    TorqueProfile,
     load_reference,
     simulate,
     simulate_inverse,
@@ -50,6 +62,14 @@ __all__ = [
     "Controller",
     "Gains",
     "LoopCheck",
+    "MomentumObserver",
+    "ObserverThresholds",
+    "ThresholdsError",
+    "TorqueProfile",
+    "alarm_intervals",
+    "calibrate_thresholds",
+    "default_observer_gain",
+    "load_thresholds",
     "CsvTrajectory",
     "Reference",
     "SensorNoise",
