@@ -19,7 +19,7 @@ void requireFinite(const Eigen::VectorXd& v, long size, const char* what) {
 
 }  // namespace
 
-double MomentumObserver::defaultGain(double period) { return M_PI / (10.0 * period); }
+double MomentumObserver::defaultGain(double period) { return 1.0 / (10.0 * period); }
 
 MomentumObserver::MomentumObserver(const Model& model, const BaseParameters& base,
                                    const Eigen::VectorXd& values, const Eigen::VectorXd& gains,

@@ -44,8 +44,11 @@ class MomentumObserver {
                    const Eigen::VectorXd& gains, double period,
                    const Eigen::VectorXd& offset = Eigen::VectorXd(), bool held_torque = true);
 
-  /// The default gain of every joint for `period`: a tenth of the Nyquist frequency,
-  /// K_O = pi / (10 T) [rad/s] (K_O T = 0.314, a = 0.73).
+  /// The default gain of every joint for `period`: a time constant of ten periods,
+  /// K_O = 1 / (10 T) [1/s] (K_O T = 0.1, a = 0.905; a bandwidth of 1/31 of the Nyquist
+  /// frequency). The error of the trapezoid where Coulomb friction switches sign at a velocity
+  /// reversal enters r as about K_O T Fc / 2: the lower K_O T, the smaller these spikes against
+  /// the thresholds, at a delay of -10 T ln(1 - threshold / step) for a step.
   static double defaultGain(double period);
 
   /// Starts at sample 0: p(0) from (q, dq), the integral and r zero, tau the torque of sample 0.

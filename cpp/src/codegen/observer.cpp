@@ -294,7 +294,7 @@ ObserverCode generateObserver(const Model& model, const ParameterSet& params,
                      "; expected a finite number of seconds > 0");
   if (s.p.size() != np || !s.p.allFinite())
     throw ModelError("observer setting 'p' must be " + std::to_string(np) + " finite values");
-  if (s.gains.size() == 0) s.gains = Eigen::VectorXd::Constant(n, M_PI / (10.0 * s.period));
+  if (s.gains.size() == 0) s.gains = Eigen::VectorXd::Constant(n, 1.0 / (10.0 * s.period));
   if (s.gains.size() != n)
     throw ModelError("observer setting 'gains' has " + std::to_string(s.gains.size()) +
                      " values; expected " + std::to_string(n));

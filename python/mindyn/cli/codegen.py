@@ -110,7 +110,7 @@ def register(subparsers) -> None:
         "--observer-gain",
         metavar="K_O",
         help=f"--what {OBSERVER}: gain K_O [1/s], one or one per joint, each below 2 / period "
-        "(default pi / (10 period), a tenth of the Nyquist frequency)",
+        "(default 1 / (10 period), a time constant of ten periods)",
     )
     c.add_argument(
         "--torque-limit",
@@ -297,7 +297,7 @@ def _observer(args, robot, base, out: Path, params, note: str | None = None) -> 
     )
     if note:
         print(note)
-    how = "given" if gains else f"default pi / (10 T) = {default_observer_gain(args.period):.4g}"
+    how = "given" if gains else f"default 1 / (10 T) = {default_observer_gain(args.period):.4g}"
     print("gains K_O [1/s] (" + how + "): " + ", ".join(f"{k:.4g}" for k in code.gains))
     print("wrote " + ", ".join(str(w) for w in written))
     m, s = code.counts["momentum"], code.counts["step"]

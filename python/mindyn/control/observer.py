@@ -18,7 +18,10 @@ its own implicit term. Then ``r_k = a r_{k-1} + c D_k`` with ``a = (1 - K_O T/2)
 T/2)``, ``c = K_O / (1 + K_O T/2)`` and ``D_k`` the external-torque impulse of the period
 (``T tau_ext`` for a held one): the bilinear (Tustin) image of ``K_O / (s + K_O)``, exact up to
 the trapezoid's O(T^3) error on ``beta`` per period. Gains ``0 < K_O T < 2`` (``a > 0``: no
-sign alternation); default ``K_O = pi / (10 T)``, a tenth of the Nyquist frequency.
+sign alternation); default ``K_O = 1 / (10 T)``, a time constant of ten periods. Where a
+velocity reverses, the Coulomb term's sign switches within the period, which the trapezoid
+integrates with an error of up to ``Fc T``: a spike of about ``K_O T Fc / 2`` in ``r``, which
+calibrated thresholds take in and a lower ``K_O T`` keeps small.
 """
 
 from __future__ import annotations
@@ -46,7 +49,8 @@ __all__ = [
 
 
 def default_observer_gain(period: float) -> float:
-    """``K_O = pi / (10 T)`` [1/s]: a tenth of the Nyquist frequency of the period ``T``."""
+    """``K_O = 1 / (10 T)`` [1/s]: a time constant of ten periods ``T`` (a bandwidth of 1/31 of
+    the Nyquist frequency)."""
     return float(_core.MomentumObserver.default_gain(check_period(period)))
 
 
