@@ -12,6 +12,7 @@ import mindyn
 import numpy as np
 import pytest
 from mindyn.control import (
+    ContactWrench,
     MomentumObserver,
     SumOfSines,
     TorqueProfile,
@@ -194,7 +195,7 @@ def test_identified_model_with_noise_detects_steps_without_false_alarms():
 
     starts = 0.1 + 0.15 * np.arange(n)
 
-    def steps(t):
+    def steps(t, q, dq):
         on = (t >= starts - 1e-9) & (t < starts + 0.06 - 1e-9)
         return np.where(on, 10.0, 0.0)
 
@@ -204,3 +205,24 @@ def test_identified_model_with_noise_detects_steps_without_false_alarms():
         i0 = int(np.flatnonzero(res.tau_ext[:, j])[0])
         above = np.flatnonzero(np.abs(r[i0:, j]) > thr[j])
         assert above.size and above[0] * T <= 0.020, f"joint {j + 1}: not detected in 20 ms"
+
+
+def test_contact_wrench_at_the_tool_is_jacobian_transpose_and_observed():
+    """A force at the tool of puma560: the simulator applies J(q)^T w, checked against finite
+    differences of the tool position (virtual work: tau_j = f . d p_tool / d q_j); the residual
+    of the true model then follows it as the discrete filter predicts."""
+    robot = mindyn.load("puma560")
+    force = np.array([30.0, -20.0, 10.0])
+    contact = ContactWrench(np.concatenate([force, np.zeros(3)]), start=0.05, robot=robot)
+    q = np.array([0.3, -0.5, 0.8, 0.2, -0.4, 0.6])
+    h = 1e-6
+    fd = [
+        force @ (robot.fk(q + h * e)[:3, 3] - robot.fk(q - h * e)[:3, 3]) / (2 * h)
+        for e in np.eye(robot.n)
+    ]
+    np.testing.assert_allclose(contact(0.1, q, 0 * q), fd, rtol=1e-6, atol=1e-6)
+    assert np.all(contact(0.0, q, 0 * q) == 0)
+    res, obs, r = run(robot, contact, duration=0.2)
+    want = filter_prediction(res.tau_ext, obs.gains, obs.period)
+    assert np.abs(res.tau_ext).max() > 1.0
+    assert np.abs(r - want).max() <= 1e-6 * np.abs(res.tau_ext).max()

@@ -37,6 +37,7 @@ from .observer import (
     load_thresholds,
 )
 from .simulation import (
+    ContactWrench,
     Controller,
     CsvTrajectory,
     Reference,
@@ -54,6 +55,7 @@ from .simulation import (
 from .stability import LoopCheck, UnstableLoopError
 
 __all__ = [
+    "ContactWrench",
     "ControllerSettingError",
     "CONTROLLERS",
     "PD",

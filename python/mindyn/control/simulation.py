@@ -46,6 +46,7 @@ __all__ = [
     "SimulationTimeoutError",
     "SumOfSines",
     "TorqueProfile",
+    "ContactWrench",
     "load_reference",
     "simulate",
     "simulate_inverse",
@@ -489,10 +490,12 @@ def simulate(
         Wall-time bound of the run (default :data:`MAX_SECONDS`); scipy's RK45 is also bounded
         to :data:`SCIPY_MAX_EVALUATIONS` evaluations per period.
     external : callable, optional
-        An external joint torque acting on the robot (a contact, a collision): ``external(t)``
-        gives the torque (n,) [N m | N] at the sample ``t``, held over the period like the
-        controller's torque (e.g. :class:`TorqueProfile`); logged as ``tau_ext``. The logged
-        torque ``tau`` stays the controller's (a joint-torque sensor-free robot does not see it).
+        An external joint torque acting on the robot (a contact, a collision): ``external(t, q,
+        dq)`` gives the torque (n,) [N m | N] at the sample ``t`` and the true state there, held
+        over the period like the controller's torque (:class:`TorqueProfile`, or
+        :class:`ContactWrench` for a wrench at the tool); logged as ``tau_ext``. The logged
+        torque ``tau`` stays the controller's (a robot without joint torque sensors does not
+        see it).
 
     Raises
     ------
@@ -591,7 +594,7 @@ def simulate(
                 tau = np.clip(tau, -limit, limit)
             out["q"][i], out["dq"][i], out["tau"][i] = q, dq, tau
             if ext is not None:
-                ext[i] = _external_torque(external, t[i], n)
+                ext[i] = _external_torque(external, t[i], q, dq)
             out["ddq"][i] = plant.acceleration(q, dq, tau)
             out["qm"][i], out["dqm"][i] = qm, dqm
             out["taum"][i] = tau + arr["torque"] * rng.standard_normal(n)
@@ -672,8 +675,9 @@ def simulate(
     )
 
 
-def _external_torque(external, t: float, n: int) -> np.ndarray:
-    value = np.asarray(external(t), dtype=float)
+def _external_torque(external, t: float, q, dq) -> np.ndarray:
+    n = q.shape[0]
+    value = np.asarray(external(t, q.copy(), dq.copy()), dtype=float)
     if value.shape != (n,) or not np.all(np.isfinite(value)):
         raise ValueError(
             f"the external torque at t = {t:g} s has shape {value.shape} or is not finite; "
@@ -701,9 +705,35 @@ class TorqueProfile:
         ):
             raise ValueError(f"the interval [{self.start}, {self.stop}] is not a finite span")
 
-    def __call__(self, t: float) -> np.ndarray:
-        on = t >= self.start and (self.stop is None or t < self.stop)
-        return self.torque if on else np.zeros_like(self.torque)
+    def active(self, t: float) -> bool:
+        return t >= self.start and (self.stop is None or t < self.stop)
+
+    def __call__(self, t: float, q=None, dq=None) -> np.ndarray:
+        return self.torque if self.active(t) else np.zeros_like(self.torque)
+
+
+@dataclass
+class ContactWrench(TorqueProfile):
+    """An external wrench at the tool frame's origin, ``torque`` read as ``(fx, fy, fz, mx,
+    my, mz)`` [N, N m] in the base frame, acting from ``start`` to ``stop``: the joint torque
+    ``J(q)^T w`` of the tool Jacobian (:meth:`~mindyn.Robot.jacobian`) at each sample; needs
+    ``robot``."""
+
+    robot: Robot | None = None
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.torque.shape != (6,):
+            raise ValueError(f"a wrench has 6 entries (force, moment), got {self.torque.shape}")
+        if not isinstance(self.robot, Robot):
+            raise ValueError("ContactWrench needs the robot (robot=...)")
+
+    def __call__(self, t: float, q=None, dq=None) -> np.ndarray:
+        n = self.robot.n
+        if not self.active(t):
+            return np.zeros(n)
+        J = self.robot.jacobian(q)  # rows vx vy vz wx wy wz
+        return J.T @ self.torque
 
 
 #: Fewest controller periods per cycle of a periodic reference (its third harmonic sampled
