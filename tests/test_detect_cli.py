@@ -183,3 +183,31 @@ def test_cli_codegen_observer(files, tmp_path):
         ]
     )
     assert_one_line_error(rc, err, "unknown parameter")
+
+
+@pytest.mark.parametrize(
+    "option, value, needle",
+    [
+        ("--quantile", "0", "--quantile"),
+        ("--quantile", "1.5", "--quantile"),
+        ("--margin", "0.5", "--margin"),
+        ("--margin", "nan", "--margin"),
+        ("--gain", "-1", "observer gain K_O of joint 1"),
+        ("--gain", "5000", "expected 0 < K_O < 2 / T = 2000"),
+        ("--gain", "1,2", "--gain"),
+    ],
+)
+def test_bad_settings_are_one_line_errors(files, tmp_path, option, value, needle):
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(tmp_path / "thr.json"),
+            option,
+            value,
+        ]
+    )
+    assert_one_line_error(rc, err, needle)
