@@ -128,7 +128,8 @@ def register(subparsers) -> None:
         metavar="XML",
         type=output_file,
         help="also write a PLCopen XML (TC6 v2.01) project with the Structured Text function "
-        "blocks (the controller, inverse dynamics, gravity and regressor) for CODESYS",
+        "blocks (the controller, inverse dynamics, gravity, regressor and the momentum "
+        "observer) for CODESYS",
     )
     p.add_argument("--name", help="prefix of the generated identifiers (default: robot name)")
     p.add_argument(
@@ -348,7 +349,12 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
     if args.plcopen:
         st = code if args.lang == "st" else generate_controller(robot, kind, lang="st", **same)
         dyn = generate(robot, lang="st", base=base, name=st.name, offset=base.offset)
-        Path(args.plcopen).write_bytes(plcopen_project([st.text, dyn.text], st.name))
+        # the momentum observer of the same model, to run beside the controller
+        obs = generate_observer(
+            robot, "st", base=base, params=st.settings["p0"], period=args.period, name=st.name
+        )
+        texts = [st.text, dyn.text, obs.text]
+        Path(args.plcopen).write_bytes(plcopen_project(texts, st.name))
         written.append(Path(args.plcopen))
     extras = joint_terms(args)
     print(
