@@ -104,3 +104,14 @@ def test_bad_observer_settings_are_refused():
         codegen.generate_observer(robot, period=1e-3, gains=2000.0)
     with pytest.raises(mindyn.Error, match="params"):
         codegen.generate_observer(robot, params=[1.0, 2.0])
+
+
+def test_structured_text_observer_passes_blark():
+    """The function block through a second, independent ST grammar (one joint with friction:
+    blark takes about 20 ms per statement)."""
+    blark = pytest.importorskip("blark")
+    robot = mindyn.load("planar1")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
+    st = codegen.generate_observer(robot, "st", base=base, period=1e-3)
+    result = blark.parse_source_code(st.text[st.text.index("FUNCTION_BLOCK") :])
+    assert result.exception is None, result.exception
