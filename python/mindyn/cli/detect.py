@@ -161,7 +161,8 @@ def register(sub) -> None:
         "detect",
         description="Runs the generalised-momentum observer r = K_O (p - p(0) - int(tau - beta + "
         "r) dt) (p = A(q) dq, beta = -dL/dq + friction + offset, from the base parameters of "
-        "'mindyn identify --json') over LOG at its time stamps (logged dq, no filter) and "
+        "'mindyn identify --json') over LOG at its time stamps (the logged dq, or central "
+        "differences of q where the log has none; no filter) and "
         "reports the residual per joint. --calibrate FILE: LOG is collision-free; writes "
         "per-joint thresholds margin x quantile(|r|) with the gains. --thresholds FILE: marks "
         "the intervals where |r_j| exceeds its threshold (exit status 1 when there is any).",
