@@ -134,6 +134,36 @@ def test_bad_thresholds_file(files, tmp_path, content, needle):
     assert_one_line_error(rc, err, needle)
 
 
+def test_gains_come_from_the_thresholds_file(files, tmp_path):
+    thr = tmp_path / "thr.json"
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(thr),
+            "--gain",
+            "50",
+        ]
+    )
+    assert rc == 0 and json.loads(thr.read_text())["gains"] == [50.0] * N, err
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--thresholds",
+            str(thr),
+            "--gain",
+            "60",
+        ]
+    )
+    assert_one_line_error(rc, err, "--gain")
+
+
 def test_bad_log_and_identification(files):
     rc, _, err = run(["detect", "puma560", str(files / "id.json"), str(files / "notau.csv")])
     assert_one_line_error(rc, err, "tau")

@@ -50,6 +50,8 @@ def cmd_detect(args: argparse.Namespace) -> int:
             "--thresholds and --calibrate exclude each other (calibrate on a "
             "collision-free log, then detect with the file it wrote)"
         )
+    if args.thresholds and args.gain:
+        raise ValueError("--gain: the thresholds file gives the gains it was calibrated with")
     thresholds = load_thresholds(args.thresholds, robot) if args.thresholds else None
     data = _read_log(args.log, robot, doc, args)
     t = data.t
