@@ -241,3 +241,61 @@ def test_bad_settings_are_one_line_errors(files, tmp_path, option, value, needle
         ]
     )
     assert_one_line_error(rc, err, needle)
+
+
+def test_any_mix_of_arguments_gives_status_0_1_or_one_error_line(files, tmp_path_factory):
+    """Valid and invalid values for every option and positional of detect, mixed: status 0 (no
+    alarm) or 1 (alarms, on stdout) with nothing on stderr, or a non-zero status with exactly
+    one error line."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    d = tmp_path_factory.mktemp("detect_mix")
+    thr = d / "thr.json"
+    assert (
+        run(
+            [
+                "detect",
+                "puma560",
+                str(files / "id.json"),
+                str(files / "free.csv"),
+                "--calibrate",
+                str(thr),
+            ]
+        )[0]
+        == 0
+    )
+    (d / "bad.json").write_text("{")
+    bad = ["-1", "0", "nan", "inf", "", "x", "1e308"]
+
+    def opt(name, valid):
+        return st.one_of(st.none(), st.sampled_from(valid + bad).map(lambda v: [name, v]))
+
+    ids = [str(files / "id.json"), str(files / "other.json"), str(d / "bad.json"), "no.json"]
+    logs = [str(files / "free.csv"), str(files / "hit.csv"), str(files / "notau.csv"), "no.csv"]
+    strategy = st.tuples(
+        st.sampled_from(ids),
+        st.sampled_from(logs),
+        opt("--thresholds", [str(thr), str(d / "bad.json"), "no.json"]),
+        opt("--calibrate", [str(d / "out" / "t.json"), str(d)]),
+        opt("--quantile", ["0.5", "1"]),
+        opt("--margin", ["1", "2"]),
+        opt("--gain", ["10", "10,20,30,40,50,60"]),
+        opt("--torque", ["held", "sampled"]),
+    ).map(lambda p: ["detect", "puma560", p[0], p[1], *(a for x in p[2:] if x for a in x)])
+
+    @settings(
+        max_examples=15,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+    )
+    @given(strategy)
+    def check(argv):
+        rc, _, err = run(argv)
+        if rc in (0, 1) and not err:
+            return
+        assert_one_line_error(rc, err)
+
+    check()
