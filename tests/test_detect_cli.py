@@ -299,3 +299,40 @@ def test_any_mix_of_arguments_gives_status_0_1_or_one_error_line(files, tmp_path
         assert_one_line_error(rc, err)
 
     check()
+
+
+def test_model_sigma_needs_calibration_and_standard_deviations(files, tmp_path):
+    rc, _, err = run(
+        ["detect", "puma560", str(files / "id.json"), str(files / "free.csv"), "--model-sigma", "3"]
+    )
+    assert_one_line_error(rc, err, "--model-sigma applies to --calibrate")
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(tmp_path / "t.json"),
+            "--model-sigma",
+            "3",
+        ]
+    )
+    assert_one_line_error(rc, err, "gives no standard deviations")
+    doc = json.loads((files / "id.json").read_text())
+    doc.update(names=doc["base_names"], std=[1e-3] * len(doc["base_names"]))
+    (tmp_path / "id.json").write_text(json.dumps(doc))
+    rc, out, err = run(
+        [
+            "detect",
+            "puma560",
+            str(tmp_path / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(tmp_path / "t.json"),
+            "--model-sigma",
+            "3",
+        ]
+    )
+    assert rc == 0 and "at least 3 sigma" in out, err
+    assert json.loads((tmp_path / "t.json").read_text())["model_sigma"] == 3

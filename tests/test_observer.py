@@ -226,3 +226,39 @@ def test_contact_wrench_at_the_tool_is_jacobian_transpose_and_observed():
     want = filter_prediction(res.tau_ext, obs.gains, obs.period)
     assert np.abs(res.tau_ext).max() > 1.0
     assert np.abs(r - want).max() <= 1e-6 * np.abs(res.tau_ext).max()
+
+
+def test_residual_uncertainty_is_the_residual_of_a_parameter_error():
+    """The residual is linear in the parameter values: an error s in one base parameter changes
+    it by exactly the sensitivity residual_uncertainty gives for a standard deviation s there;
+    for two parameters the deviations add in quadrature."""
+    from mindyn.control import residual_uncertainty
+
+    robot = mindyn.load("puma560")
+    params = plant_params(robot)
+    res = simulate(
+        robot,
+        SumOfSines(robot, period=2.0, fraction=0.3, seed=2),
+        rate=1000.0,
+        duration=0.3,
+        params=params,
+    )
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    v = base.values(params)
+    obs = MomentumObserver(base, v, period=1e-3)
+    r0 = obs.run(res.q, res.dq, res.tau)
+    diffs = []
+    for i, s in ((3, 0.02), (17, 0.05)):
+        std = np.zeros(base.n)
+        std[i] = s
+        dv = v.copy()
+        dv[i] += s
+        diff = MomentumObserver(base, dv, period=1e-3).run(res.q, res.dq, res.tau) - r0
+        got = residual_uncertainty(obs, std, res.q, res.dq)
+        assert np.abs(diff).max() > 1e-4
+        np.testing.assert_allclose(got, np.abs(diff), rtol=1e-9, atol=1e-12)
+        diffs.append(diff)
+    std = np.zeros(base.n)
+    std[[3, 17]] = [0.02, 0.05]
+    both = residual_uncertainty(obs, std, res.q, res.dq)
+    np.testing.assert_allclose(both, np.hypot(*diffs), rtol=1e-9, atol=1e-12)

@@ -35,6 +35,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
         calibrate_thresholds,
         default_observer_gain,
         load_thresholds,
+        residual_uncertainty,
     )
     from ..identification.data import read_json
     from ..identification.prediction import identified_model
@@ -45,6 +46,8 @@ def cmd_detect(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip if args.tip is not None else doc.get("tip"))
     estimate = "consistent" if args.consistent else "unconstrained"
     base, values, _ = identified_model(args.identification, robot, estimate=estimate)
+    if args.model_sigma and not args.calibrate:
+        raise ValueError("--model-sigma applies to --calibrate")
     if args.thresholds and args.calibrate:
         raise ValueError(
             "--thresholds and --calibrate exclude each other (calibrate on a "
@@ -94,6 +97,18 @@ def cmd_detect(args: argparse.Namespace) -> int:
         )
     if args.calibrate:
         thr = calibrate_thresholds(r, quantile=args.quantile, margin=args.margin)
+        info = {"calibration_log": str(args.log), "identification": str(args.identification)}
+        if args.model_sigma:
+            std = _base_std(doc, base, args.identification, estimate)
+            sig = residual_uncertainty(obs, std, data.q, data.dq, t).max(0)
+            band = args.model_sigma * sig
+            print(
+                f"  parameter uncertainty (the identification's standard deviations, "
+                f"correlations left out): largest {args.model_sigma:g} sigma of r per joint "
+                + ", ".join(f"{x:.4g}" for x in band)
+            )
+            thr = np.maximum(thr, band)
+            info["model_sigma"] = args.model_sigma
         out = ObserverThresholds(
             robot.name,
             period,
@@ -101,12 +116,15 @@ def cmd_detect(args: argparse.Namespace) -> int:
             thr,
             args.quantile,
             args.margin,
-            {"calibration_log": str(args.log), "identification": str(args.identification)},
+            info,
         )
         path = out.write(args.calibrate)
         print(
             f"  thresholds = {args.margin:g} x the {args.quantile:g} quantile of |r| "
-            "(this log taken as collision-free): " + ", ".join(f"{x:.4g}" for x in thr)
+            "(this log taken as collision-free)"
+            + (f", at least {args.model_sigma:g} sigma" if args.model_sigma else "")
+            + ": "
+            + ", ".join(f"{x:.4g}" for x in thr)
         )
         print(f"  wrote {path}")
         return 0
@@ -131,6 +149,22 @@ def cmd_detect(args: argparse.Namespace) -> int:
         _plot(args.plot, t, r, thresholds.thresholds, alarms, robot.name)
         print(f"  wrote {args.plot}")
     return 1 if alarms else 0
+
+
+def _base_std(doc, base, where, estimate):
+    """The identification's standard deviation of each base parameter (0 for a pruned one)."""
+    if estimate != "unconstrained":
+        raise ValueError("--model-sigma: the standard deviations are the unconstrained estimate's")
+    names, std = doc.get("names"), doc.get("std")
+    if not (isinstance(names, list) and isinstance(std, list) and len(names) == len(std)):
+        raise ValueError(f"--model-sigma: {where} gives no standard deviations (names, std)")
+    out = np.zeros(base.n)
+    index = {k: i for i, k in enumerate(base.names)}
+    for name, s in zip(names, std, strict=True):
+        if name not in index or not isinstance(s, (int, float)) or not s >= 0:
+            raise ValueError(f"--model-sigma: {where}: '{name}' has no usable standard deviation")
+        out[index[name]] = float(s)
+    return out
 
 
 def _plot(path, t, r, thr, alarms, name):
@@ -186,6 +220,16 @@ def register(sub) -> None:
         help="--calibrate: quantile of |r| (1: the largest)",
     )
     number(p, "--margin", low=1, high=1e6, default=1.5, help="--calibrate: factor on it")
+    number(
+        p,
+        "--model-sigma",
+        low=0,
+        high=100,
+        default=0.0,
+        help="--calibrate: thresholds at least this many standard deviations of the residual "
+        "that the identification's parameter uncertainty explains along LOG (its standard "
+        "deviations, correlations left out; 0: off)",
+    )
     joint_vector(
         p,
         "--gain",

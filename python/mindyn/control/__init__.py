@@ -35,6 +35,7 @@ from .observer import (
     calibrate_thresholds,
     default_observer_gain,
     load_thresholds,
+    residual_uncertainty,
 )
 from .simulation import (
     ContactWrench,
@@ -72,6 +73,7 @@ __all__ = [
     "calibrate_thresholds",
     "default_observer_gain",
     "load_thresholds",
+    "residual_uncertainty",
     "CsvTrajectory",
     "Reference",
     "SensorNoise",

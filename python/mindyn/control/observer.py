@@ -45,6 +45,7 @@ __all__ = [
     "calibrate_thresholds",
     "default_observer_gain",
     "load_thresholds",
+    "residual_uncertainty",
 ]
 
 
@@ -193,6 +194,34 @@ def calibrate_thresholds(
     thr = margin * np.quantile(np.abs(r), quantile, axis=0)
     floor = max(1e-9 * float(thr.max()), 1e-12)
     return np.maximum(thr, floor)
+
+
+def residual_uncertainty(observer: MomentumObserver, std, q, dq, t=None) -> np.ndarray:
+    """The standard deviation (m, n) of the residual that the parameters' uncertainty alone
+    explains along a motion: the residual is linear in the parameter values, so a value error
+    ``dp`` adds the residual of ``dp`` with no torque; with independent errors of standard
+    deviations ``std`` (base.n,) that is ``sqrt(sum_i std_i^2 r_i(t)^2)``, ``r_i`` the residual
+    of the unit value of parameter i. (The identification's correlations are not taken: an
+    estimate, not a bound.) Same period, gains and torque mode as ``observer``."""
+    std = np.asarray(std, dtype=float).reshape(-1)
+    base = observer.base
+    if std.shape != (base.n,) or not np.all(np.isfinite(std) & (std >= 0)):
+        raise ValueError(f"std must be {base.n} finite values >= 0")
+    q = np.ascontiguousarray(q, dtype=float)
+    var = np.zeros(q.shape)
+    zero = np.zeros(q.shape)
+    for i in np.flatnonzero(std):
+        unit = np.zeros(base.n)
+        unit[i] = 1.0
+        o = MomentumObserver(
+            base,
+            unit,
+            period=observer.period,
+            gains=observer.gains,
+            held_torque=observer.held_torque,
+        )
+        var += (std[i] * o.run(q, dq, zero, t)) ** 2
+    return np.sqrt(var)
 
 
 def load_thresholds(path, robot) -> ObserverThresholds:
