@@ -2,7 +2,7 @@
 robot's identification log, false alarms on its validation log, and the smallest external torque
 per joint that would be detected.
 
-    .venv/bin/python bench/bench_real_detection.py DIR [--margin 1.5]
+    .venv/bin/python bench/bench_real_detection.py DIR [--margin 1.5] [--model-sigma K]
 
 ``DIR`` is laid out as for bench/bench_real_identification.py (panda/, kuka_lwr4/, ur10e/; the
 logs' torques in N m). Per robot: ``mindyn identify ROBOT FIT --friction --offset [--rotor]
@@ -71,6 +71,9 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dir", type=Path, help="folder with panda/, kuka_lwr4/, ur10e/")
     ap.add_argument("--margin", type=float, default=1.5, help="thresholds: margin x max |r|")
+    ap.add_argument(
+        "--model-sigma", type=float, default=0.0, help="as detect --model-sigma (0: off)"
+    )
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         for k, (name, robot, fit, val, extra) in enumerate(CASES):
@@ -101,6 +104,8 @@ def main() -> int:
                 str(thr),
                 "--margin",
                 str(args.margin),
+                "--model-sigma",
+                str(args.model_sigma),
             ]
             print(f"  $ mindyn {' '.join(cal)}", flush=True)
             run = mindyn(*cal)
