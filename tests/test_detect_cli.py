@@ -268,8 +268,8 @@ def test_any_mix_of_arguments_gives_status_0_1_or_one_error_line(files, tmp_path
     (d / "bad.json").write_text("{")
     bad = ["-1", "0", "nan", "inf", "", "x", "1e308"]
 
-    def opt(name, valid):
-        return st.one_of(st.none(), st.sampled_from(valid + bad).map(lambda v: [name, v]))
+    def opt(name, valid, invalid=bad):
+        return st.one_of(st.none(), st.sampled_from(valid + invalid).map(lambda v: [name, v]))
 
     ids = [str(files / "id.json"), str(files / "other.json"), str(d / "bad.json"), "no.json"]
     logs = [str(files / "free.csv"), str(files / "hit.csv"), str(files / "notau.csv"), "no.csv"]
@@ -277,7 +277,8 @@ def test_any_mix_of_arguments_gives_status_0_1_or_one_error_line(files, tmp_path
         st.sampled_from(ids),
         st.sampled_from(logs),
         opt("--thresholds", [str(thr), str(d / "bad.json"), "no.json"]),
-        opt("--calibrate", [str(d / "out" / "t.json"), str(d)]),
+        # (files to write: bad values only where they cannot land in the working folder)
+        opt("--calibrate", [str(d / "out" / "t.json")], [str(d), "", str(d / "bad.json" / "x")]),
         opt("--quantile", ["0.5", "1"]),
         opt("--margin", ["1", "2"]),
         opt("--gain", ["10", "10,20,30,40,50,60"]),
