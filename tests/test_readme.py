@@ -203,8 +203,9 @@ def test_readme_examples_made_what_they_say(workdir, env):
     assert head[-6:] == [f"tau{j}[permille]" for j in range(1, 7)]
     removed = json.loads((workdir / "out/id.json").read_text())["removed"]
     said = [o for c, o in OUTPUT.items() if "--params out/id.json" in c]
-    # the code of the identified model and the two controller steps starting from it
-    assert len(said) == 3, said
+    # the code of the identified model, the two controller steps starting from it and the
+    # momentum observer of it
+    assert len(said) == 4, said
     assert all(f"; {len(removed)} pruned in identification" in o for o in said), said
     # the UR5 example follows an optimised excitation: no warning that most base parameters
     # were removed, and the five largest (by the simulation's true values) within 2 % of them

@@ -15,6 +15,11 @@ whichever needs fewer operations), computed torque and PD with gravity compensat
 struct with init and step functions or one Structured Text FUNCTION_BLOCK holding the estimate;
 :class:`CompiledController` runs the C step in :func:`mindyn.control.simulate`, and
 :func:`plcopen_project` packs Structured Text function blocks into a PLCopen XML project.
+
+The momentum observer (:func:`generate_observer`): the step of
+:class:`mindyn.control.MomentumObserver` with ``p = A(q) dq`` and ``beta = -dL/dq + friction +
+offset`` from one momentum pass customised to the robot, to run beside a controller step;
+:class:`CompiledObserver` calls the C step.
 """
 
 from __future__ import annotations
@@ -36,10 +41,13 @@ __all__ = [
     "FUNCTIONS",
     "BaseDynamics",
     "CompiledController",
+    "CompiledObserver",
     "GeneratedCode",
     "GeneratedController",
+    "GeneratedObserver",
     "generate",
     "generate_controller",
+    "generate_observer",
     "plcopen_project",
     "read_parameter_file",
 ]
@@ -527,6 +535,30 @@ def generate_controller(
     return GeneratedController(kind, lang, name, out, header_name, s)
 
 
+def _compile_shared(code: GeneratedCode, what: str):
+    """Compiles generated C into a shared library in a temporary folder with the system C
+    compiler (``$CC``, else ``cc`` or ``gcc``); returns the folder (kept alive by its holder)
+    and the loaded library."""
+    import ctypes
+    import os
+    import shutil
+    import subprocess
+    import tempfile
+
+    cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
+    if not cc:
+        raise _core.ModelError("no C compiler found (set CC, or install cc or gcc)")
+    folder = tempfile.TemporaryDirectory(prefix=f"mindyn-{what}-")
+    path = Path(folder.name)
+    src, so = code.write(path / f"{code.function}.c")[1], path / f"{code.function}.so"
+    cmd = [cc, "-std=c99", "-O2", "-shared", "-fPIC", "-o", str(so), str(src), "-lm"]
+    res = subprocess.run(cmd, capture_output=True, text=True)
+    if res.returncode != 0:
+        first = (res.stderr.strip().splitlines() or ["no message"])[0]
+        raise _core.ModelError(f"compiling the generated {what} with {cc} failed: {first}")
+    return folder, ctypes.CDLL(str(so))
+
+
 class CompiledController:
     """A generated C controller step compiled with the system C compiler (``$CC``, else ``cc``
     or ``gcc``) into a temporary folder and called through ctypes: a controller of
@@ -549,28 +581,13 @@ class CompiledController:
 
     def __init__(self, code: GeneratedController, base: BaseParameters | None = None):
         import ctypes
-        import os
-        import shutil
-        import subprocess
-        import tempfile
 
         if not isinstance(code, GeneratedController) or code.lang != "c":
             raise ValueError("CompiledController needs the C code of generate_controller")
-        cc = os.environ.get("CC") or shutil.which("cc") or shutil.which("gcc")
-        if not cc:
-            raise _core.ModelError("no C compiler found (set CC, or install cc or gcc)")
         self.code = code
         self.base = base
         self.name = code.kind
-        self._dir = tempfile.TemporaryDirectory(prefix="mindyn-ctl-")
-        folder = Path(self._dir.name)
-        src, so = code.write(folder / f"{code.function}.c")[1], folder / f"{code.function}.so"
-        cmd = [cc, "-std=c99", "-O2", "-shared", "-fPIC", "-o", str(so), str(src), "-lm"]
-        res = subprocess.run(cmd, capture_output=True, text=True)
-        if res.returncode != 0:
-            first = (res.stderr.strip().splitlines() or ["no message"])[0]
-            raise _core.ModelError(f"compiling the generated controller with {cc} failed: {first}")
-        self._lib = ctypes.CDLL(str(so))
+        self._dir, self._lib = _compile_shared(code, "controller")
         n, np_ = len(code.settings["kd"]), len(code.names)
         dbl = ctypes.c_double
         fields = [("p", dbl * np_), ("p0", dbl * np_), ("kd", dbl * n)]
@@ -622,6 +639,145 @@ class CompiledController:
         ptrs = [a.ctypes.data_as(self._ptr) for a in args + [tau]]
         self._step(ctypes.byref(self._state), *ptrs)
         return tau
+
+
+class GeneratedObserver(GeneratedCode):
+    """A generated momentum-observer step (see :func:`generate_observer`).
+
+    Attributes (beyond :class:`GeneratedCode`)
+    ------------------------------------------
+    function : str
+        ``NAME_momentum_observer`` (C: ``_t``, ``_init``, ``_reset``, ``_step``; ST: the
+        FUNCTION_BLOCK).
+    counts : dict
+        ``{"momentum": the momentum pass, "step": the whole step}``.
+    gains : ndarray (n,)
+        ``K_O`` [1/s]; ``period`` [s]; ``held_torque``.
+    """
+
+    def __init__(self, lang, name, out, header_name, period, held_torque):
+        super().__init__(lang, name, out, False, header_name)
+        self.function = f"{name}_momentum_observer"
+        self.gains = np.asarray(out["gains"], dtype=float)
+        self.period = float(period)
+        self.held_torque = bool(held_torque)
+
+    def __repr__(self) -> str:
+        s = self.counts["step"]
+        return f"GeneratedObserver({self.lang!r}, {s['mul']} mul {s['add']} add)"
+
+
+def generate_observer(
+    robot: Robot | str,
+    lang: str = "c",
+    *,
+    base: BaseParameters | None = None,
+    params: str | Path | Sequence[float] | None = None,
+    period: float = 0.004,
+    gains=None,
+    held_torque: bool = True,
+    name: str | None = None,
+    header_name: str | None = None,
+    trig: str | None = None,
+) -> GeneratedObserver:
+    """Generates the momentum-observer step of :class:`mindyn.control.MomentumObserver` as C99
+    or Structured Text.
+
+    Parameters
+    ----------
+    robot : Robot or str
+    lang : {"c", "st"}
+    base : BaseParameters, optional
+        The parameter set (default: base parameters with rotor inertia and friction); its
+        offset setting adds a torque offset per joint.
+    params : path or array, optional
+        The parameter values (a file as :func:`read_parameter_file` reads it, e.g. the JSON of
+        ``mindyn identify --json``); default the robot's own values.
+    period : float
+        The controller period [s].
+    gains : scalar or array (n,), optional
+        ``K_O`` [1/s], each in ``(0, 2 / period)``; default
+        :func:`mindyn.control.default_observer_gain`.
+    held_torque : bool
+        The step's torque is the command held over the period (True) or a sampled measurement.
+    """
+    from . import control
+
+    robot = load(robot) if not isinstance(robot, Robot) else robot
+    _check_lang(lang, trig)
+    if base is None:
+        base = base_parameters(robot, rotor=True, friction=True)
+    n, names = robot.n, list(base.names)
+    period = control.controllers.check_period(period)
+    k = control.default_observer_gain(period) if gains is None else gains
+    k = _setting(k, n, "gains", 0.0)
+    if params is None:
+        p = base.values(robot.parameters(base.rotor, base.friction))
+        if base.offset:
+            p = np.concatenate([p, np.zeros(n)])[: len(names)]
+    elif isinstance(params, (str, Path)):
+        p = read_parameter_file(params, names)
+    else:
+        p = _args.array(params, "params", (len(names),))
+    name = name if name is not None else _identifier(robot.name)
+    header_name = header_name or f"{name}_momentum_observer.h"
+    out = _core.generate_observer(
+        base._b,
+        base.offset,
+        name,
+        p,
+        k,
+        period,
+        held_torque=bool(held_torque),
+        lang=lang,
+        header_name=header_name,
+        inline_trig=trig != "libm",
+    )
+    return GeneratedObserver(lang, name, out, header_name, period, held_torque)
+
+
+class CompiledObserver:
+    """A generated C observer step compiled with the system C compiler and called through
+    ctypes: ``r = observer(q, dq, tau)`` per sample (the first call starts it, r = 0), with
+    ``reset()``."""
+
+    def __init__(self, code: GeneratedObserver):
+        import ctypes
+
+        if not isinstance(code, GeneratedObserver) or code.lang != "c":
+            raise ValueError("CompiledObserver needs the C code of generate_observer")
+        self.code = code
+        self._dir, self._lib = _compile_shared(code, "observer")
+        n, np_ = len(code.gains), len(code.names)
+        dbl = ctypes.c_double
+        fields = [("p", dbl * np_), ("ko", dbl * n), ("c", dbl * n), ("period", dbl)]
+        fields += [("half", dbl), ("started", ctypes.c_int)]
+        fields += [(f, dbl * n) for f in ("p_start", "integral", "r", "tau_prev", "beta_prev")]
+        self._State = type("State", (ctypes.Structure,), {"_fields_": fields})
+        self._state = self._State()
+        self._init = getattr(self._lib, f"{code.function}_init")
+        self._step = getattr(self._lib, f"{code.function}_step")
+        self._ptr = ctypes.POINTER(dbl)
+        self._step.argtypes = [ctypes.POINTER(self._State)] + [self._ptr] * 4
+        self._step.restype = None
+        self._n = n
+        self.reset()
+
+    def reset(self) -> None:
+        import ctypes
+
+        self._init(ctypes.byref(self._state))
+
+    def __call__(self, q, dq, tau) -> np.ndarray:
+        import ctypes
+
+        args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, tau)]
+        for a in args:
+            if a.shape != (self._n,):
+                raise ValueError(f"observer inputs must have shape ({self._n},), got {a.shape}")
+        r = np.zeros(self._n)
+        self._step(ctypes.byref(self._state), *[a.ctypes.data_as(self._ptr) for a in args + [r]])
+        return r
 
 
 # ---------------------------------------------------------------------------------------------

@@ -28,6 +28,7 @@ using namespace mindyn;
 using namespace mindyn::pyargs;
 
 void bindControl(py::module_& m);
+void bindObserver(py::module_& m);
 
 namespace {
 
@@ -754,5 +755,6 @@ PYBIND11_MODULE(_core, m) {
   m.def("to_pinocchio_order", [](const Eigen::VectorXd& v) { return toPinocchioOrder(v); });
   m.def("from_pinocchio_order", [](const Eigen::VectorXd& v) { return fromPinocchioOrder(v); });
   bindControl(m);
+  bindObserver(m);
   bindCodegen(m);
 }

@@ -68,6 +68,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "identify",
         "torques an identified model predicts on a log (CSV), to score it any way",
     ),
+    "detect": (
+        "detect",
+        "collision detection: momentum-observer residual of an identified model on a log, "
+        "thresholds calibrated on a collision-free log",
+    ),
     "demo": (
         "demo",
         "the whole chain on a robot: base parameters, excitation, simulated measurement, "

@@ -12,7 +12,7 @@ import numpy as np
 
 from .._core import ModelError
 from ..base import base_parameters
-from ..codegen import CONTROLLERS, generate, generate_controller, plcopen_project
+from ..codegen import CONTROLLERS, generate, generate_controller, generate_observer, plcopen_project
 from ..robot import load
 from .args import (
     add_command,
@@ -21,9 +21,14 @@ from .args import (
     add_robot,
     controller_period,
     joint_terms,
+    joint_values,
+    joint_vector,
     output_file,
 )
 from .method import base_method
+
+#: The --what of the momentum-observer step.
+OBSERVER = "momentum-observer"
 
 
 def register(subparsers) -> None:
@@ -47,7 +52,10 @@ def register(subparsers) -> None:
         help="functions, comma-separated: id (inverse dynamics), gravity, regressor "
         "(default: all three); or one controller step: adaptive-pd (Slotine-Li, as "
         "mindyn.control.AdaptivePD, with its regressor products generated from the recursion "
-        "customised to the robot), computed-torque, gravity-compensation",
+        "customised to the robot), computed-torque, gravity-compensation; or the "
+        f"{OBSERVER} step (the generalised-momentum residual of mindyn.control."
+        "MomentumObserver, with the torque held over the period, to run beside a controller "
+        "step)",
     )
     add_joint_terms(p)
     add_offset(p)
@@ -97,6 +105,13 @@ def register(subparsers) -> None:
         "estimate",
     )
     controller_period(c, default=0.004, help="controller period [s]")
+    joint_vector(
+        c,
+        "--observer-gain",
+        metavar="K_O",
+        help=f"--what {OBSERVER}: gain K_O [1/s], one or one per joint, each below 2 / period "
+        "(default 1 / (10 period), a time constant of ten periods)",
+    )
     c.add_argument(
         "--torque-limit",
         metavar="effort|NM",
@@ -113,7 +128,8 @@ def register(subparsers) -> None:
         metavar="XML",
         type=output_file,
         help="also write a PLCopen XML (TC6 v2.01) project with the Structured Text function "
-        "blocks (the controller, inverse dynamics, gravity and regressor) for CODESYS",
+        "blocks (the controller, inverse dynamics, gravity, regressor and the momentum "
+        "observer) for CODESYS",
     )
     p.add_argument("--name", help="prefix of the generated identifiers (default: robot name)")
     p.add_argument(
@@ -172,14 +188,20 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     params, pruned, threshold = (
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )
-    if args.what.strip() in CONTROLLERS:
+    if args.what.strip() in CONTROLLERS + (OBSERVER,):
         note = _params_note(base.n, args.params, pruned, threshold) if params is not None else None
         given = params if params is not None else args.params
+        if args.what.strip() == OBSERVER:
+            return _observer(args, robot, base, out, given, note)
+        if args.observer_gain is not None:
+            raise ModelError(f"--observer-gain applies to --what {OBSERVER} only")
         return _controller(args, robot, base, out, given, note)
+    if args.observer_gain is not None:
+        raise ModelError(f"--observer-gain applies to --what {OBSERVER} only")
     for opt in ("gains", "torque_limit", "box"):
         if getattr(args, opt) is not None:
             raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
-    if any(w.strip() in CONTROLLERS for w in args.what.split(",")):
+    if any(w.strip() in CONTROLLERS + (OBSERVER,) for w in args.what.split(",")):
         raise ModelError("--what: a controller step is generated alone, not with other functions")
     code = generate(
         robot,
@@ -247,6 +269,44 @@ def _params_note(n: int, path: str, pruned: list[str], threshold: str) -> str:
     )
 
 
+def _observer(args, robot, base, out: Path, params, note: str | None = None) -> int:
+    """``--what momentum-observer``; ``note`` says where the values came from."""
+    from ..control import default_observer_gain
+
+    for opt in ("gains", "torque_limit", "box"):
+        if getattr(args, opt) is not None:
+            raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
+    if args.numeric:
+        raise ModelError(f"--numeric does not apply to the {OBSERVER} step")
+    gains = (
+        joint_values(args.observer_gain, robot.n, "--observer-gain", broadcast=True)
+        if args.observer_gain
+        else None
+    )
+    same = dict(base=base, params=params, period=args.period, gains=gains, name=args.name)
+    code = generate_observer(robot, args.lang, header_name=out.name + ".h", trig=args.trig, **same)
+    written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
+    if args.plcopen:
+        st = code if args.lang == "st" else generate_observer(robot, "st", **same)
+        Path(args.plcopen).write_bytes(plcopen_project([st.text], code.name))
+        written.append(Path(args.plcopen))
+    extras = joint_terms(args)
+    print(
+        f"{robot.name}: momentum observer in {len(code.names)} base parameters"
+        + (f" ({', '.join(extras)})" if extras else "")
+        + f", period {args.period:g} s"
+    )
+    if note:
+        print(note)
+    how = "given" if gains else f"default 1 / (10 T) = {default_observer_gain(args.period):.4g}"
+    print("gains K_O [1/s] (" + how + "): " + ", ".join(f"{k:.4g}" for k in code.gains))
+    print("wrote " + ", ".join(str(w) for w in written))
+    m, s = code.counts["momentum"], code.counts["step"]
+    print(f"momentum pass: {m['mul']} mul, {m['add']} add, {m['trig']} sin/cos")
+    print(f"whole step:    {s['mul']} mul, {s['add']} add, {s['trig']} sin/cos")
+    return 0
+
+
 def _controller(args, robot, base, out: Path, params, note: str | None = None) -> int:
     """``--what adaptive-pd | computed-torque | gravity-compensation``; ``note`` says where the
     initial estimate comes from."""
@@ -289,7 +349,12 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
     if args.plcopen:
         st = code if args.lang == "st" else generate_controller(robot, kind, lang="st", **same)
         dyn = generate(robot, lang="st", base=base, name=st.name, offset=base.offset)
-        Path(args.plcopen).write_bytes(plcopen_project([st.text, dyn.text], st.name))
+        # the momentum observer of the same model, to run beside the controller
+        obs = generate_observer(
+            robot, "st", base=base, params=st.settings["p0"], period=args.period, name=st.name
+        )
+        texts = [st.text, dyn.text, obs.text]
+        Path(args.plcopen).write_bytes(plcopen_project(texts, st.name))
         written.append(Path(args.plcopen))
     extras = joint_terms(args)
     print(

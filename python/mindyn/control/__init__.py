@@ -3,8 +3,10 @@ simulation that runs them (:mod:`mindyn.control.simulation`).
 
 The names most used are here: the controllers :class:`AdaptivePD`, :class:`ComputedTorque` and
 :class:`PD` with their gains and registry, the Slotine-Li regressor, and :func:`simulate` with
-its protocols (:class:`Controller`, :class:`Reference`), references and result; the check of
-the sampled loop's stability (:mod:`mindyn.control.stability`, :func:`check_gains`).
+its protocols (:class:`Controller`, :class:`Reference`), references and result; the
+generalised-momentum observer of external torques with its thresholds
+(:mod:`mindyn.control.observer`); the check of the sampled loop's stability
+(:mod:`mindyn.control.stability`, :func:`check_gains`).
 """
 
 from .controllers import (
@@ -25,7 +27,18 @@ from .controllers import (
     slotine_li_regressor,
     slotine_li_regressor_classical,
 )
+from .observer import (
+    MomentumObserver,
+    ObserverThresholds,
+    ThresholdsError,
+    alarm_intervals,
+    calibrate_thresholds,
+    default_observer_gain,
+    load_thresholds,
+    residual_uncertainty,
+)
 from .simulation import (
+    ContactWrench,
     Controller,
     CsvTrajectory,
     Reference,
@@ -33,6 +46,7 @@ from .simulation import (
     SimulationResult,
     SimulationTimeoutError,
     SumOfSines,
+    TorqueProfile,
     load_reference,
     simulate,
     simulate_inverse,
@@ -42,6 +56,7 @@ from .simulation import (
 from .stability import LoopCheck, UnstableLoopError
 
 __all__ = [
+    "ContactWrench",
     "ControllerSettingError",
     "CONTROLLERS",
     "PD",
@@ -50,6 +65,15 @@ __all__ = [
     "Controller",
     "Gains",
     "LoopCheck",
+    "MomentumObserver",
+    "ObserverThresholds",
+    "ThresholdsError",
+    "TorqueProfile",
+    "alarm_intervals",
+    "calibrate_thresholds",
+    "default_observer_gain",
+    "load_thresholds",
+    "residual_uncertainty",
     "CsvTrajectory",
     "Reference",
     "SensorNoise",

@@ -45,6 +45,8 @@ __all__ = [
     "SimulationResult",
     "SimulationTimeoutError",
     "SumOfSines",
+    "TorqueProfile",
+    "ContactWrench",
     "load_reference",
     "simulate",
     "simulate_inverse",
@@ -322,6 +324,7 @@ class SimulationResult:
     ``p_hat`` (m, nb): the controller's estimate after each call, ``p_true`` (nb,) the true
     values, in the base parameters ``base_names``; ``saturated`` (m, n): torque limited;
     ``params``, ``param_names``: the simulated robot's classical parameters (13 per joint);
+    ``tau_ext`` (m, n): the external joint torque held over each period (None without one);
     ``info``: settings and figures."""
 
     t: np.ndarray
@@ -344,6 +347,7 @@ class SimulationResult:
     p_true: np.ndarray | None = None
     base_names: list = field(default_factory=list)
     saturated: np.ndarray | None = None
+    tau_ext: np.ndarray | None = None
 
     @property
     def controller(self) -> str:
@@ -435,6 +439,7 @@ def simulate(
     endpoint: bool = True,
     base=None,
     max_seconds: float | None = None,
+    external=None,
 ) -> SimulationResult:
     """Closed-loop simulation: the robot tracks ``reference`` under ``controller``.
 
@@ -484,6 +489,13 @@ def simulate(
     max_seconds : float, optional
         Wall-time bound of the run (default :data:`MAX_SECONDS`); scipy's RK45 is also bounded
         to :data:`SCIPY_MAX_EVALUATIONS` evaluations per period.
+    external : callable, optional
+        An external joint torque acting on the robot (a contact, a collision): ``external(t, q,
+        dq)`` gives the torque (n,) [N m | N] at the sample ``t`` and the true state there, held
+        over the period like the controller's torque (:class:`TorqueProfile`, or
+        :class:`ContactWrench` for a wrench at the tool); logged as ``tau_ext``. The logged
+        torque ``tau`` stays the controller's (a robot without joint torque sensors does not
+        see it).
 
     Raises
     ------
@@ -554,6 +566,7 @@ def simulate(
 
     out = {k: np.empty((m, n)) for k in ("q", "dq", "ddq", "tau", "qm", "dqm", "taum", "taud")}
     out["taud"].fill(np.nan)
+    ext = np.zeros((m, n)) if external is not None else None
     taut = np.full((m, n), np.nan)
     sat = np.zeros((m, n), dtype=bool)
     ph = None
@@ -580,6 +593,8 @@ def simulate(
                 sat[i] = np.abs(tau) > limit
                 tau = np.clip(tau, -limit, limit)
             out["q"][i], out["dq"][i], out["tau"][i] = q, dq, tau
+            if ext is not None:
+                ext[i] = _external_torque(external, t[i], q, dq)
             out["ddq"][i] = plant.acceleration(q, dq, tau)
             out["qm"][i], out["dqm"][i] = qm, dqm
             out["taum"][i] = tau + arr["torque"] * rng.standard_normal(n)
@@ -596,7 +611,8 @@ def simulate(
             if i < m - 1 or not endpoint:
                 budget.t = t[i]
                 try:
-                    q, dq = _advance(plant, q, dq, tau, period, substeps, integrator, budget)
+                    acting = tau if ext is None else tau + ext[i]
+                    q, dq = _advance(plant, q, dq, acting, period, substeps, integrator, budget)
                 except ValueError as e:  # the plant's own error, whatever its class
                     if "the integration diverged" not in str(e):
                         raise
@@ -655,7 +671,69 @@ def simulate(
         p_true=pb_true,
         base_names=list(base.names) if base is not None else [],
         saturated=sat,
+        tau_ext=ext,
     )
+
+
+def _external_torque(external, t: float, q, dq) -> np.ndarray:
+    n = q.shape[0]
+    value = np.asarray(external(t, q.copy(), dq.copy()), dtype=float)
+    if value.shape != (n,) or not np.all(np.isfinite(value)):
+        raise ValueError(
+            f"the external torque at t = {t:g} s has shape {value.shape} or is not finite; "
+            f"expected {n} finite torques"
+        )
+    return value
+
+
+@dataclass
+class TorqueProfile:
+    """An external joint torque: ``torque`` (n,) [N m | N] acting from ``start`` to ``stop``
+    [s] (``stop`` None: to the end), zero elsewhere; a callable ``external`` of
+    :func:`simulate` (sampled at the controller samples, held over each period)."""
+
+    torque: np.ndarray
+    start: float = 0.0
+    stop: float | None = None
+
+    def __post_init__(self):
+        self.torque = np.asarray(self.torque, dtype=float)
+        if self.torque.ndim != 1 or not np.all(np.isfinite(self.torque)):
+            raise ValueError("torque must be a vector of finite joint torques")
+        if not math.isfinite(self.start) or (
+            self.stop is not None and not (math.isfinite(self.stop) and self.stop > self.start)
+        ):
+            raise ValueError(f"the interval [{self.start}, {self.stop}] is not a finite span")
+
+    def active(self, t: float) -> bool:
+        return t >= self.start and (self.stop is None or t < self.stop)
+
+    def __call__(self, t: float, q=None, dq=None) -> np.ndarray:
+        return self.torque if self.active(t) else np.zeros_like(self.torque)
+
+
+@dataclass
+class ContactWrench(TorqueProfile):
+    """An external wrench at the tool frame's origin, ``torque`` read as ``(fx, fy, fz, mx,
+    my, mz)`` [N, N m] in the base frame, acting from ``start`` to ``stop``: the joint torque
+    ``J(q)^T w`` of the tool Jacobian (:meth:`~mindyn.Robot.jacobian`) at each sample; needs
+    ``robot``."""
+
+    robot: Robot | None = None
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.torque.shape != (6,):
+            raise ValueError(f"a wrench has 6 entries (force, moment), got {self.torque.shape}")
+        if not isinstance(self.robot, Robot):
+            raise ValueError("ContactWrench needs the robot (robot=...)")
+
+    def __call__(self, t: float, q=None, dq=None) -> np.ndarray:
+        n = self.robot.n
+        if not self.active(t):
+            return np.zeros(n)
+        J = self.robot.jacobian(q)  # rows vx vy vz wx wy wz
+        return J.T @ self.torque
 
 
 #: Fewest controller periods per cycle of a periodic reference (its third harmonic sampled

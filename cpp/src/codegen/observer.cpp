@@ -1,0 +1,431 @@
+// The generated momentum observer (mindyn/codegen/observer.hpp): the momentum p = A(q) dq and
+// beta = -dL/dq + friction + offset by one pass over the links (the formulas of
+// mindyn/momentum.hpp: p_j = S_j . H_j, dK/dq_j = (v_j x S_j) . H_j with H_j the spatial momentum
+// of link j and the links it carries, the gravity torque from the gravity wrenches carried the
+// same way), written into an expression graph on the stages of every joint (stages.hpp) with the
+// parameters as inputs; the observer update around it in C and Structured Text.
+#include "mindyn/codegen/observer.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+#include "builder.hpp"
+#include "internal.hpp"
+
+namespace mindyn::codegen {
+
+namespace {
+
+using internal::AxisShift;
+using internal::Builder;
+using internal::JointStages;
+using internal::jointStages;
+using internal::M3;
+using internal::P10;
+using internal::Rigid;
+using internal::V3;
+
+class MomentumBuilder : public Builder {
+ public:
+  using Builder::Builder;
+
+  struct SV {
+    V3 w, l;
+  };
+
+  // Link velocities v and the gravity acceleration (zero velocities) of each link, in the frame
+  // right after each joint motion (stage frame) and in the link frame.
+  void forward(const std::vector<Ref>& dq) {
+    Graph& g = graph();
+    const int n = model_.nq();
+    dq_ = dq;
+    v_.assign(n, SV{});
+    vs_.assign(n, SV{});
+    ag_.assign(n, V3{});
+    R_.assign(n, M3{});
+    d_.assign(n, V3{});
+    const SV base{zero_, zero_};
+    V3 baseA;
+    for (int i = 0; i < 3; ++i) baseA[i] = g.constant(-gravity_[i]);
+    for (int k = 0; k < n; ++k) {
+      const JointStages& s = stages_[k];
+      const int parent = model_.parent(k);
+      SV v = toChild(s.pre, parent < 0 ? base : v_[parent]);
+      V3 a = rotateToChild(s.pre, parent < 0 ? baseA : ag_[parent]);
+      const V3 u = constVec(s.u);
+      if (s.type == JointType::Revolute) {
+        const Ref angle = g.add(g.input(InputKind::Q, k), g.constant(s.offset));
+        R_[k] = rodrigues(s.u, g.cos(angle), g.sin(angle));
+        v = {mulT(R_[k], v.w), mulT(R_[k], v.l)};
+        a = mulT(R_[k], a);
+        v.w = addv(v.w, scale(u, dq[k]));
+      } else {
+        d_[k] = scale(u, g.input(InputKind::Q, k));
+        v.l = addv(v.l, cross(v.w, d_[k]));
+        v.l = addv(v.l, scale(u, dq[k]));
+      }
+      vs_[k] = v;
+      v_[k] = toChild(s.post, v);
+      ag_[k] = rotateToChild(s.post, a);
+    }
+  }
+
+  // (p, beta) for classical parameters pi (layout `layout`).
+  std::pair<std::vector<Ref>, std::vector<Ref>> momentum(const std::vector<Ref>& pi,
+                                                         ParameterLayout layout) {
+    Graph& g = graph();
+    const int n = model_.nq();
+    std::vector<Ref> p(n, Graph::zero()), beta(n, Graph::zero());
+    std::vector<SV> childH(n, SV{zero_, zero_}), childG(n, SV{zero_, zero_});
+    for (int k = n - 1; k >= 0; --k) {
+      const JointStages& s = stages_[k];
+      P10 par;
+      for (int i = 0; i < 10; ++i) par[i] = pi[k * layout.perLink() + i];
+      SV H = addsv(childH[k], inertia(par, v_[k]));
+      SV G = addsv(childG[k], inertia(par, SV{zero_, ag_[k]}));
+      H = toParent(s.post, H);
+      G = toParent(s.post, G);
+      const V3 u = constVec(s.u);
+      const SV& v = vs_[k];
+      Ref pk, dK, gk;
+      if (s.type == JointType::Revolute) {
+        pk = dot(u, H.w);
+        dK = g.add(dot(cross(v.w, u), H.w), dot(cross(v.l, u), H.l));
+        gk = dot(u, G.w);
+      } else {
+        pk = dot(u, H.l);
+        dK = dot(cross(v.w, u), H.l);
+        gk = dot(u, G.l);
+      }
+      if (layout.rotor) pk = g.add(pk, g.mul(pi[layout.rotorIndex(k)], dq_[k]));
+      Ref b = g.add(gk, -dK);
+      if (layout.friction) {
+        b = g.add(b, g.mul(pi[layout.viscousIndex(k)], dq_[k]));
+        b = g.add(b, g.mul(pi[layout.coulombIndex(k)], g.sign(dq_[k])));
+      }
+      p[k] = pk;
+      beta[k] = b;
+      const int parent = model_.parent(k);
+      if (parent < 0) continue;
+      for (SV* x : {&H, &G}) {
+        if (s.type == JointType::Revolute)
+          *x = {mul(R_[k], x->w), mul(R_[k], x->l)};
+        else
+          x->w = addv(x->w, cross(d_[k], x->l));
+        *x = toParent(s.pre, *x);
+      }
+      childH[parent] = addsv(childH[parent], H);
+      childG[parent] = addsv(childG[parent], G);
+    }
+    return {p, beta};
+  }
+
+ private:
+  V3 subv(const V3& a, const V3& b) { return addv(a, {-b[0], -b[1], -b[2]}); }
+  SV addsv(const SV& a, const SV& b) { return {addv(a.w, b.w), addv(a.l, b.l)}; }
+  SV toChild(const Rigid& T, const SV& x) {
+    if (T.identity()) return x;
+    const M3 R = constMat(T.R);
+    const V3 l = T.t.isZero(0.0) ? x.l : addv(x.l, cross(x.w, constVec(T.t)));
+    return {mulT(R, x.w), mulT(R, l)};
+  }
+  V3 rotateToChild(const Rigid& T, const V3& a) {
+    if (T.R.isIdentity(0.0)) return a;
+    return mulT(constMat(T.R), a);
+  }
+  SV toParent(const Rigid& T, const SV& x) {
+    if (T.identity()) return x;
+    const M3 R = constMat(T.R);
+    const V3 fp = mul(R, x.l);
+    V3 np = mul(R, x.w);
+    if (!T.t.isZero(0.0)) np = addv(np, cross(constVec(T.t), fp));
+    return {np, fp};
+  }
+  // The spatial inertia about the origin applied to a motion vector: (I w + h x l, m l - h x w).
+  SV inertia(const P10& p, const SV& x) {
+    const M3 I = {V3{p[0], p[1], p[2]}, V3{p[1], p[3], p[4]}, V3{p[2], p[4], p[5]}};
+    const V3 h = {p[6], p[7], p[8]};
+    return {addv(mul(I, x.w), cross(h, x.l)), subv(scale(x.l, p[9]), cross(h, x.w))};
+  }
+
+  std::vector<Ref> dq_;
+  std::vector<SV> v_, vs_;
+  std::vector<V3> ag_;
+  std::vector<M3> R_;
+  std::vector<V3> d_;
+};
+
+void addCount(OpCount& c, long mul, long add) {
+  c.mul += mul;
+  c.add += add;
+}
+
+// Statements in C (c->field[i], arg[i]) or Structured Text (field[i + 1]).
+struct Out {
+  bool st;
+  std::ostringstream os;
+  std::string indent;
+  std::string state(const std::string& name, int i) const {
+    return st ? name + "[" + std::to_string(i + 1) + "]"
+              : "c->" + name + "[" + std::to_string(i) + "]";
+  }
+  std::string arg(const std::string& name, int i) const {
+    return name + "[" + std::to_string(st ? i + 1 : i) + "]";
+  }
+  void let(const std::string& lhs, const std::string& rhs) {
+    os << indent << lhs << (st ? " := " : " = ") << rhs << ";\n";
+  }
+};
+
+// The update after the momentum pass (y = p then beta), for a started observer.
+void update(Out& w, const ObserverCode& c) {
+  const int n = c.code.n;
+  const std::string T = w.st ? "period" : "c->period", h = w.st ? "half" : "c->half";
+  for (int k = 0; k < n; ++k) {
+    const std::string torque = c.settings.held_torque ? T + " * " + w.state("tau_prev", k)
+                                                      : h + " * (" + w.arg("tau", k) + " + " +
+                                                            w.state("tau_prev", k) + ")";
+    w.let("s", w.state("integral", k) + " + " + torque + " - " + h + " * (" + w.arg("y", n + k) +
+                   " + " + w.state("beta_prev", k) + ") + " + h + " * " + w.state("r", k));
+    w.let(w.state("r", k),
+          w.state("c", k) + " * (" + w.arg("y", k) + " - " + w.state("p_start", k) + " - s)");
+    w.let(w.state("integral", k), "s + " + h + " * " + w.state("r", k));
+  }
+}
+
+// The state after the first sample (or a reset): p(0) = p, integral and r zero.
+void start(Out& w, const ObserverCode& c) {
+  const int n = c.code.n;
+  for (int k = 0; k < n; ++k) {
+    w.let(w.state("p_start", k), w.arg("y", k));
+    w.let(w.state("integral", k), "0.0");
+    w.let(w.state("r", k), "0.0");
+  }
+}
+
+void carry(Out& w, const ObserverCode& c) {
+  const int n = c.code.n;
+  for (int k = 0; k < n; ++k) {
+    w.let(w.state("tau_prev", k), w.arg("tau", k));
+    w.let(w.state("beta_prev", k), w.arg("y", n + k));
+    w.let(w.arg("r_out", k), w.state("r", k));
+  }
+}
+
+std::vector<std::string> header(const ObserverCode& c) {
+  const int n = c.code.n, np = c.code.params.size();
+  const ParameterSet& ps = c.code.params;
+  std::vector<std::string> out;
+  out.push_back("Generated by mindyn from robot '" + c.code.robot + "' (" + std::to_string(n) +
+                " joints).");
+  out.push_back("");
+  out.push_back("Generalised-momentum observer of external joint torques in the " +
+                std::to_string(np) + (ps.base ? " base" : " classical") + " parameters p" +
+                std::string(ps.layout.rotor ? ", rotor inertia" : "") +
+                (ps.layout.friction ? ", viscous and Coulomb friction" : "") +
+                (ps.offsets ? ", a torque offset per joint" : "") + ":");
+  out.push_back("  r = K_O (p(t) - p(0) - int (tau - beta + r) dt), p = A(q) dq,");
+  out.push_back("  beta = -dL/dq + friction + offset (= g - C^T dq + ...), no accelerations.");
+  out.push_back("Discrete at the period T: the integral advances by " +
+                std::string(c.settings.held_torque ? "T tau_prev (the torque held)"
+                                                   : "T/2 (tau + tau_prev)") +
+                ",");
+  out.push_back("  - T/2 (beta + beta_prev) + T/2 (r + r_prev), r solved from its own term:");
+  out.push_back("  r = c (p - p(0) - s), c = K_O / (1 + K_O T/2): the bilinear image of");
+  out.push_back("  K_O / (s + K_O) acting on the external torque. The first call (or reset) sets");
+  out.push_back("  p(0) and returns r = 0.");
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "Per step: %ld mul, %ld add, %ld sin/cos%s (momentum pass: %ld mul, %ld add).",
+                c.step.mul, c.step.add, c.step.trig,
+                c.step.sign ? (", " + std::to_string(c.step.sign) + " sign").c_str() : "",
+                c.core.mul, c.core.add);
+  out.push_back(buf);
+  out.push_back("Units SI; gravity and all frames as in the robot description.");
+  return out;
+}
+
+}  // namespace
+
+GeneratedFunction generateMomentum(const Model& model, const ParameterSet& params) {
+  const int n = model.nq(), np = params.size(), P = params.layout.size(n);
+  if (params.E.rows() != P || params.E.cols() != np)
+    throw ModelError("codegen: the parameter map does not fit the model");
+  if (params.offsets != 0 && params.offsets != n)
+    throw ModelError("codegen: " + std::to_string(params.offsets) + " torque offsets for " +
+                     std::to_string(n) + " joints");
+  const int off0 = np - params.offsets;
+  GeneratedFunction out;
+  out.function = Function::SlotineLi;  // emitted through the step's own writers only
+  out.n = n;
+  out.np = np;
+  Graph& g = out.graph;
+  MomentumBuilder b(g, model, jointStages(model, std::vector<AxisShift>(n, AxisShift::Keep)));
+  std::vector<Ref> dq(n);
+  for (int k = 0; k < n; ++k) dq[k] = g.input(InputKind::DQ, k);
+  b.forward(dq);
+  std::vector<Ref> p(np);
+  for (int j = 0; j < np; ++j) p[j] = g.input(InputKind::P, j);
+  std::vector<Ref> pi(P, Graph::zero());
+  for (int col = 0; col < P; ++col)
+    for (int j = 0; j < off0; ++j)
+      if (params.E(col, j) != 0.0)
+        pi[col] = g.add(pi[col], g.mul(g.constant(params.E(col, j)), p[j]));
+  auto [mom, beta] = b.momentum(pi, params.layout);
+  for (int k = 0; k < params.offsets; ++k) beta[k] = g.add(beta[k], p[off0 + k]);
+  out.outputs = mom;
+  out.outputs.insert(out.outputs.end(), beta.begin(), beta.end());
+  out.program = schedule(g, out.outputs);
+  jointStages(model, std::vector<AxisShift>(n, AxisShift::Keep), &out.snap);
+  internal::cleanGeometry<3, 1>(model.gravity, false, &out.snap);
+  return out;
+}
+
+ObserverCode generateObserver(const Model& model, const ParameterSet& params,
+                              const ObserverSettings& settings, const std::string& name) {
+  checkIdentifier(name);
+  const int n = model.nq(), np = params.size();
+  ObserverSettings s = settings;
+  if (s.p.size() == 0) s.p = params.values;
+  if (!(std::isfinite(s.period) && s.period > 0))
+    throw ModelError("observer setting 'period' is " + literal(s.period) +
+                     "; expected a finite number of seconds > 0");
+  if (s.p.size() != np || !s.p.allFinite())
+    throw ModelError("observer setting 'p' must be " + std::to_string(np) + " finite values");
+  if (s.gains.size() == 0) s.gains = Eigen::VectorXd::Constant(n, 1.0 / (10.0 * s.period));
+  if (s.gains.size() != n)
+    throw ModelError("observer setting 'gains' has " + std::to_string(s.gains.size()) +
+                     " values; expected " + std::to_string(n));
+  for (int k = 0; k < n; ++k)
+    if (!(s.gains[k] > 0 && s.gains[k] * s.period < 2.0))
+      throw ModelError("observer gain K_O of joint " + std::to_string(k + 1) + " is " +
+                       literal(s.gains[k]) +
+                       "; expected 0 < K_O < 2 / period = " + literal(2.0 / s.period));
+  ObserverCode c;
+  c.settings = s;
+  GeneratedCode& code = c.code;
+  describeModel(code, model);
+  code.name = name;
+  code.params = params;
+  code.values = s.p;
+  code.functions.push_back(generateMomentum(model, params));
+  c.core = code.functions.front().program.count;
+  c.step = c.core;
+  // per joint: s (3 mul; 4 add, 5 with the sampled torque), r (1 mul, 2 add), the integral
+  // (1 mul, 1 add)
+  addCount(c.step, 5L * n, (s.held_torque ? 7L : 8L) * n);
+  return c;
+}
+
+CFiles emitObserverC(const ObserverCode& c, const std::string& header_name, CTrig trig) {
+  const std::string fn = c.code.name + "_momentum_observer", T = fn + "_t";
+  const int n = c.code.n, np = c.code.params.size();
+  const GeneratedFunction& f = c.code.functions.front();
+  std::string NAME = fn;
+  for (char& ch : NAME) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  const std::string N = std::to_string(n), NP = std::to_string(np);
+  std::ostringstream h, src;
+  h << "/*\n";
+  for (const auto& l : header(c)) h << (l.empty() ? " *" : " * " + l) << "\n";
+  h << " */\n#ifndef " << NAME << "_H\n#define " << NAME << "_H\n\n";
+  h << "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
+  h << "#define " << NAME << "_N " << n << "\n#define " << NAME << "_NP " << np << "\n\n";
+  h << "/* Settings (set by " << fn << "_init to the generated values; they may be changed\n"
+    << " * before a reset): p the parameters, ko the gains K_O [1/s], period [s], with\n"
+    << " * c = ko / (1 + ko period / 2) and half = period / 2 derived from them. State: started,\n"
+    << " * p_start = p(0), integral, r, tau_prev, beta_prev. */\n";
+  h << "typedef struct {\n  double p[" << NP << "];\n  double ko[" << N << "];\n  double c[" << N
+    << "];\n  double period;\n  double half;\n  int started;\n";
+  for (const char* s : {"p_start", "integral", "r", "tau_prev", "beta_prev"})
+    h << "  double " << s << "[" << N << "];\n";
+  h << "} " << T << ";\n\n";
+  h << "/* The generated settings; the next step starts the observer. */\n";
+  h << "void " << fn << "_init(" << T << "* c);\n";
+  h << "/* Restarts the observer at the next step (after a change of settings). */\n";
+  h << "void " << fn << "_reset(" << T << "* c);\n";
+  h << "/* One period: measured q, dq and the torque tau -> the residual r_out. */\n";
+  h << "void " << fn << "_step(" << T << "* c, const double q[" << N << "], const double dq[" << N
+    << "],\n    const double tau[" << N << "], double r_out[" << N << "]);\n";
+  h << "\n#ifdef __cplusplus\n}\n#endif\n\n#endif\n";
+
+  src << "/* " << header_name << ": see the header. */\n#include \"" << header_name
+      << "\"\n\n#include <math.h>\n";
+  if (trig == CTrig::Inline && internal::usesTrig(f)) src << "\n" << internal::sincosSource(fn);
+  Out init{false, {}, "  "};
+  for (int j = 0; j < np; ++j) init.let(init.state("p", j), literal(c.settings.p[j]));
+  for (int k = 0; k < n; ++k) init.let(init.state("ko", k), literal(c.settings.gains[k]));
+  init.let("c->period", literal(c.settings.period));
+  src << "\nvoid " << fn << "_reset(" << T << "* c) {\n  int k;\n"
+      << "  c->half = 0.5 * c->period;\n"
+      << "  for (k = 0; k < " << N << "; ++k) c->c[k] = c->ko[k] / (1.0 + c->half * c->ko[k]);\n"
+      << "  c->started = 0;\n}\n";
+  src << "\nvoid " << fn << "_init(" << T << "* c) {\n"
+      << init.os.str() << "  " << fn << "_reset(c);\n}\n";
+  std::ostringstream body;
+  internal::writeCBody(body, f, fn, trig, "y");
+  Out first{false, {}, "    "}, rest{false, {}, "    "}, tail{false, {}, "  "};
+  start(first, c);
+  update(rest, c);
+  carry(tail, c);
+  src << "\nvoid " << fn << "_step(" << T << "* c, const double q[" << N << "], const double dq["
+      << N << "],\n    const double tau[" << N << "], double r_out[" << N << "]) {\n";
+  src << "  const double* const p = c->p;\n  double y[" << 2 * n << "];\n  double s;\n";
+  src << "  /* momentum pass: " << c.core.mul << " mul, " << c.core.add << " add, " << c.core.trig
+      << " sin/cos */\n";
+  src << body.str();
+  src << "  if (!c->started) {\n"
+      << first.os.str() << "    c->started = 1;\n  } else {\n"
+      << rest.os.str() << "  }\n"
+      << tail.os.str() << "  (void)s;\n}\n";
+  return {h.str(), src.str()};
+}
+
+std::string emitObserverST(const ObserverCode& c) {
+  const std::string fn = c.code.name + "_momentum_observer";
+  const int n = c.code.n, np = c.code.params.size();
+  const GeneratedFunction& f = c.code.functions.front();
+  const std::string N = std::to_string(n), NP = std::to_string(np);
+  const std::string vecN = " : ARRAY[1.." + N + "] OF LREAL;\n";
+  std::ostringstream os;
+  for (const auto& l : header(c)) os << (l.empty() ? "(* *)" : "(* " + l + " *)") << "\n";
+  os << "(* Arrays are 1-based: q[k] is joint k, p[j] parameter j. The settings are set on the\n"
+        "   first call and when reset is TRUE, which also restarts the observer. *)\n";
+  os << "\nFUNCTION_BLOCK " << fn << "\n";
+  os << "VAR_INPUT\n  q" << vecN << "  dq" << vecN << "  tau" << vecN
+     << "  reset : BOOL;\nEND_VAR\nVAR_OUTPUT\n  r_out" << vecN << "END_VAR\n";
+  os << "VAR\n  p : ARRAY[1.." << NP << "] OF LREAL;\n  ko" << vecN << "  c" << vecN
+     << "  period : LREAL;\n  half : LREAL;\n  s : LREAL;\n  initialised : BOOL;\n"
+     << "  started : BOOL;\n";
+  for (const char* s : {"p_start", "integral", "r", "tau_prev", "beta_prev"})
+    os << "  " << s << vecN;
+  os << "  y : ARRAY[1.." << 2 * n << "] OF LREAL;\n";
+  std::ostringstream body;
+  const int slots = internal::writeSTBody(body, f, "y");
+  for (int t = 0; t < slots; ++t) os << "  t" << t + 1 << " : LREAL;\n";
+  os << "END_VAR\n";
+  Out init{true, {}, "  "};
+  for (int j = 0; j < np; ++j) init.let(init.state("p", j), literal(c.settings.p[j], true));
+  for (int k = 0; k < n; ++k) init.let(init.state("ko", k), literal(c.settings.gains[k], true));
+  init.let("period", literal(c.settings.period, true));
+  init.let("half", "0.5 * period");
+  for (int k = 0; k < n; ++k)
+    init.let(init.state("c", k),
+             init.state("ko", k) + " / (1.0 + half * " + init.state("ko", k) + ")");
+  init.let("started", "FALSE");
+  init.let("initialised", "TRUE");
+  os << "IF reset OR NOT initialised THEN\n" << init.os.str() << "END_IF;\n";
+  os << body.str();
+  Out first{true, {}, "  "}, rest{true, {}, "  "}, tail{true, {}, ""};
+  start(first, c);
+  update(rest, c);
+  carry(tail, c);
+  os << "IF NOT started THEN\n"
+     << first.os.str() << "  started := TRUE;\nELSE\n"
+     << rest.os.str() << "END_IF;\n"
+     << tail.os.str() << "END_FUNCTION_BLOCK\n";
+  return os.str();
+}
+
+}  // namespace mindyn::codegen

@@ -1,0 +1,257 @@
+"""``mindyn detect``: the generalised-momentum observer of an identified model over a log, its
+residual per joint, thresholds calibrated on a collision-free log, and the intervals where a log
+crosses them."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ..robot import load
+from .args import add_command, add_robot, joint_values, joint_vector, number, output_file
+
+
+def _read_log(path, robot, doc, args):
+    from ..identification.data import read_csv
+
+    reading = doc.get("reading") or {}
+    unit = args.torque_unit or reading.get("torque_unit")
+    gain = args.drive_gain or reading.get("drive_gain")
+    gain = np.array(joint_values(gain, robot.n, "--drive-gain", broadcast=True)) if gain else None
+    data = read_csv(path, robot=robot, torque_unit=unit, filter="none", drive_gain=gain)
+    if data.tau is None:
+        raise ValueError(
+            f"{path}: has no torque columns tau1..tau{robot.n}; the observer needs them"
+        )
+    return data
+
+
+def cmd_detect(args: argparse.Namespace) -> int:
+    from ..control.observer import (
+        MomentumObserver,
+        ObserverThresholds,
+        alarm_intervals,
+        calibrate_thresholds,
+        default_observer_gain,
+        load_thresholds,
+        residual_uncertainty,
+    )
+    from ..identification.data import read_json
+    from ..identification.prediction import identified_model
+
+    doc = read_json(args.identification)
+    if not isinstance(doc, dict):
+        raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
+    robot = load(args.robot, tip=args.tip if args.tip is not None else doc.get("tip"))
+    estimate = "consistent" if args.consistent else "unconstrained"
+    base, values, _ = identified_model(args.identification, robot, estimate=estimate)
+    if args.model_sigma and not args.calibrate:
+        raise ValueError("--model-sigma applies to --calibrate")
+    if args.thresholds and args.calibrate:
+        raise ValueError(
+            "--thresholds and --calibrate exclude each other (calibrate on a "
+            "collision-free log, then detect with the file it wrote)"
+        )
+    if args.thresholds and args.gain:
+        raise ValueError("--gain: the thresholds file gives the gains it was calibrated with")
+    thresholds = load_thresholds(args.thresholds, robot) if args.thresholds else None
+    data = _read_log(args.log, robot, doc, args)
+    t = data.t
+    steps = np.diff(t)
+    period = float(np.median(steps))
+    if thresholds is not None:
+        gains, how = thresholds.gains, f"those of {args.thresholds}"
+    elif args.gain:
+        gains = np.array(joint_values(args.gain, robot.n, "--gain", broadcast=True))
+        how = "given"
+    else:
+        k = default_observer_gain(period)
+        how = f"default 1 / (10 T) with the log's median period T = {period * 1e3:.4g} ms"
+        if k * steps.max() >= 1.0:  # uneven stamps: K_O dt < 2 at the longest step, with margin
+            k = 1.0 / steps.max()
+            how = f"1 / the log's longest step of {steps.max() * 1e3:.4g} ms (below 1 / (10 T))"
+        gains = np.full(robot.n, k)
+    obs = MomentumObserver(
+        base, values, period=period, gains=gains, held_torque=args.torque == "held"
+    )
+    r = obs.run(data.q, data.dq, data.tau, t)
+    n = robot.n
+    print(
+        f"{robot.name}: momentum observer of the {estimate} estimate of {args.identification} "
+        f"({base.n} base parameters) on {args.log}: {t.size} samples over {t[-1] - t[0]:.4g} s "
+        f"(median step {period * 1e3:.4g} ms, {steps.min() * 1e3:.4g} to "
+        f"{steps.max() * 1e3:.4g} ms)"
+    )
+    print(
+        f"  gains K_O [1/s] ({how}): "
+        + ", ".join(f"{k:.4g}" for k in gains)
+        + f"; torque {'held over each step' if args.torque == 'held' else 'sampled (trapezoid)'}"
+    )
+    absr = np.abs(r)
+    print("  residual |r| per joint (max / 99.9 % / RMS):")
+    for j in range(n):
+        print(
+            f"    {j + 1}: {absr[:, j].max():.4g} / {np.quantile(absr[:, j], 0.999):.4g} / "
+            f"{np.sqrt(np.mean(r[:, j] ** 2)):.4g}"
+        )
+    if args.calibrate:
+        thr = calibrate_thresholds(r, quantile=args.quantile, margin=args.margin)
+        info = {"calibration_log": str(args.log), "identification": str(args.identification)}
+        if args.model_sigma:
+            std = _base_std(doc, base, args.identification, estimate)
+            sig = residual_uncertainty(obs, std, data.q, data.dq, t).max(0)
+            band = args.model_sigma * sig
+            print(
+                f"  parameter uncertainty (the identification's standard deviations, "
+                f"correlations left out): largest {args.model_sigma:g} sigma of r per joint "
+                + ", ".join(f"{x:.4g}" for x in band)
+            )
+            thr = np.maximum(thr, band)
+            info["model_sigma"] = args.model_sigma
+        out = ObserverThresholds(
+            robot.name,
+            period,
+            gains,
+            thr,
+            args.quantile,
+            args.margin,
+            info,
+        )
+        path = out.write(args.calibrate)
+        print(
+            f"  thresholds = {args.margin:g} x the {args.quantile:g} quantile of |r| "
+            "(this log taken as collision-free)"
+            + (f", at least {args.model_sigma:g} sigma" if args.model_sigma else "")
+            + ": "
+            + ", ".join(f"{x:.4g}" for x in thr)
+        )
+        print(f"  wrote {path}")
+        return 0
+    if thresholds is None:
+        return 0
+    if not np.isclose(thresholds.period, period, rtol=0.02):
+        print(
+            f"  note: thresholds calibrated at a period of {thresholds.period * 1e3:.4g} ms, "
+            f"this log's is {period * 1e3:.4g} ms"
+        )
+    alarms = alarm_intervals(t, r, thresholds.thresholds)
+    print(
+        "  thresholds: "
+        + ", ".join(f"{x:.4g}" for x in thresholds.thresholds)
+        + f"; {len(alarms)} interval(s) above"
+    )
+    for a in alarms:
+        print(
+            f"    joint {a['joint']}: {a['start']:.4f} s to {a['end']:.4f} s, peak {a['peak']:.4g}"
+        )
+    if args.plot:
+        _plot(args.plot, t, r, thresholds.thresholds, alarms, robot.name)
+        print(f"  wrote {args.plot}")
+    return 1 if alarms else 0
+
+
+def _base_std(doc, base, where, estimate):
+    """The identification's standard deviation of each base parameter (0 for a pruned one)."""
+    if estimate != "unconstrained":
+        raise ValueError("--model-sigma: the standard deviations are the unconstrained estimate's")
+    names, std = doc.get("names"), doc.get("std")
+    if not (isinstance(names, list) and isinstance(std, list) and len(names) == len(std)):
+        raise ValueError(f"--model-sigma: {where} gives no standard deviations (names, std)")
+    out = np.zeros(base.n)
+    index = {k: i for i, k in enumerate(base.names)}
+    for name, s in zip(names, std, strict=True):
+        if name not in index or not isinstance(s, (int, float)) or not s >= 0:
+            raise ValueError(f"--model-sigma: {where}: '{name}' has no usable standard deviation")
+        out[index[name]] = float(s)
+    return out
+
+
+def _plot(path, t, r, thr, alarms, name):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    n = r.shape[1]
+    fig, axes = plt.subplots(n, 1, figsize=(8, 1.6 * n + 0.8), sharex=True, squeeze=False)
+    for j, ax in enumerate(axes[:, 0]):
+        ax.plot(t, r[:, j], lw=0.8)
+        ax.axhline(thr[j], color="r", lw=0.6)
+        ax.axhline(-thr[j], color="r", lw=0.6)
+        for a in alarms:
+            if a["joint"] == j + 1:
+                ax.axvspan(a["start"], a["end"], color="r", alpha=0.2)
+        ax.set_ylabel(f"r{j + 1}")
+    axes[-1, 0].set_xlabel("t [s]")
+    fig.suptitle(f"{name}: momentum-observer residual and thresholds")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def register(sub) -> None:
+    """Adds ``detect`` to the ``mindyn`` subcommands."""
+    p = add_command(
+        sub,
+        "detect",
+        description="Runs the generalised-momentum observer r = K_O (p - p(0) - int(tau - beta + "
+        "r) dt) (p = A(q) dq, beta = -dL/dq + friction + offset, from the base parameters of "
+        "'mindyn identify --json') over LOG at its time stamps (the logged dq, or central "
+        "differences of q where the log has none; no filter) and "
+        "reports the residual per joint. --calibrate FILE: LOG is collision-free; writes "
+        "per-joint thresholds margin x quantile(|r|) with the gains. --thresholds FILE: marks "
+        "the intervals where |r_j| exceeds its threshold (exit status 1 when there is any).",
+    )
+    add_robot(p)
+    p.add_argument("identification", metavar="ID.json", help="JSON of 'mindyn identify'")
+    p.add_argument("log", metavar="LOG", help="CSV log: t, q1..qN, [dq1..dqN], tau1..tauN")
+    p.add_argument("--thresholds", metavar="FILE", help="thresholds written by --calibrate")
+    p.add_argument(
+        "--calibrate", metavar="FILE", type=output_file, help="write thresholds from this log"
+    )
+    number(
+        p,
+        "--quantile",
+        low=0,
+        high=1,
+        low_open=True,
+        default=1.0,
+        help="--calibrate: quantile of |r| (1: the largest)",
+    )
+    number(p, "--margin", low=1, high=1e6, default=1.5, help="--calibrate: factor on it")
+    number(
+        p,
+        "--model-sigma",
+        low=0,
+        high=100,
+        default=0.0,
+        help="--calibrate: thresholds at least this many standard deviations of the residual "
+        "that the identification's parameter uncertainty explains along LOG (its standard "
+        "deviations, correlations left out; 0: off)",
+    )
+    joint_vector(
+        p,
+        "--gain",
+        metavar="K_O",
+        help="observer gains [1/s], one or one per joint (default 1 / (10 T), T the log's "
+        "median step, or 1 / its longest step when that is lower)",
+    )
+    p.add_argument(
+        "--torque",
+        choices=["sampled", "held"],
+        default="sampled",
+        help="the logged torque is a measurement (trapezoid; default) or the command held "
+        "over each step",
+    )
+    p.add_argument("--plot", metavar="PNG", type=output_file, help="plot of r and thresholds")
+    p.add_argument("--consistent", action="store_true", help="the consistent estimate of the JSON")
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille", "current"],
+        help="logged torque unit, as identify's (default: as recorded)",
+    )
+    joint_vector(
+        p, "--drive-gain", metavar="K", help="as identify's (default: as recorded in the JSON)"
+    )
+    p.set_defaults(func=cmd_detect)

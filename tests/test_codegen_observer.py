@@ -1,0 +1,117 @@
+"""The generated momentum-observer step against the library's observer.
+
+The C step (gcc -std=c99 -Wall -Wextra -Werror -pedantic) and the Structured Text function block
+(run by the tree-sitter evaluator of test_codegen, its state kept from call to call) are run over
+a few hundred cycles of a motion with random torques beside mindyn.control.MomentumObserver, whose
+momentum and beta come from the runtime regressors (a different computation: classical regressors
+times the base-parameter map), and compared at every cycle."""
+
+from __future__ import annotations
+
+import re
+
+import mindyn
+import numpy as np
+import pytest
+from conftest import assert_close
+from mindyn import codegen, control
+from random_tree import random_tree_urdf
+from test_codegen import st_tree
+from test_codegen_controller import GCC, STBlock, strict_compile
+
+pytestmark = pytest.mark.skipif(GCC is None, reason="gcc is needed to compile generated C")
+
+
+def motion(robot, cycles, period, seed):
+    """A smooth motion (sum of sines) and random torques."""
+    ref = control.SumOfSines(robot, period=1.0, fraction=0.4, seed=seed)
+    q, dq, _ = ref.evaluate(np.arange(cycles) * period)
+    tau = np.random.default_rng(seed).normal(0, 5.0, q.shape)
+    return q, dq, tau
+
+
+def library_and_generated(robot, base, values, gains, period, held, cycles, seed, trig=None):
+    obs = control.MomentumObserver(base, values, period=period, gains=gains, held_torque=held)
+    code = codegen.generate_observer(
+        robot, base=base, params=values, period=period, gains=gains, held_torque=held, trig=trig
+    )
+    c = codegen.CompiledObserver(code)
+    q, dq, tau = motion(robot, cycles, period, seed)
+    want = obs.run(q, dq, tau)
+    got = np.array([c(q[i], dq[i], tau[i]) for i in range(cycles)])
+    return got, want, code
+
+
+@pytest.mark.parametrize("held", [True, False])
+def test_c_step_equals_the_library_zcr07s(held):
+    """ZCR07S with rotor inertia, friction and offsets, 300 cycles at 1 ms."""
+    robot = mindyn.load("zcr07s")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
+    values = base.values(robot.parameters(True, True))
+    values[-robot.n :] = np.linspace(-0.5, 0.5, robot.n)  # the offsets
+    gains = np.linspace(50.0, 400.0, robot.n)
+    got, want, _ = library_and_generated(robot, base, values, gains, 1e-3, held, 300, 1)
+    assert np.abs(want).max() > 1.0  # the residual moves
+    assert_close(got, want, 1e-12, "generated observer (C) vs library")
+
+
+def test_c_step_equals_the_library_tree(tmp_path):
+    robot = mindyn.load(random_tree_urdf(tmp_path / "tree.urdf", 6, seed=2))
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    values = base.values(robot.parameters(True, True))
+    got, want, _ = library_and_generated(robot, base, values, None, 2e-3, True, 200, 5)
+    assert_close(got, want, 1e-12, "generated observer (C, tree) vs library")
+
+
+def test_c_step_compiles_strictly_without_allocation(tmp_path):
+    robot = mindyn.load("zcr07s")
+    code = codegen.generate_observer(robot, period=1e-3)
+    strict_compile(code, tmp_path)
+    includes = re.findall(r"#include [<\"](.+?)[>\"]", code.source + code.header)
+    assert includes == [code.header_name, "math.h"]
+    assert not re.search(r"\b(malloc|calloc|realloc|free)\(", code.source)
+    assert code.counts["step"]["mul"] > code.counts["momentum"]["mul"] > 0
+    assert "Per step" in code.header
+
+
+def test_structured_text_step_equals_the_library():
+    """puma560 with rotor inertia, friction and offsets: 300 ST cycles against the library and
+    the C step, then a reset restarts the observer."""
+    robot = mindyn.load("puma560")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
+    values = base.values(robot.parameters(True, True))
+    values[-robot.n :] = 0.3  # the offsets
+    period, cycles = 2e-3, 300
+    st = codegen.generate_observer(robot, "st", base=base, params=values, period=period)
+    statements = re.sub(r"\(\*.*?\*\)", "", st.text, flags=re.DOTALL)
+    assert set(re.findall(r"\b([A-Za-z_]\w*)\(", statements)) <= {"SIN", "COS"}
+    block = STBlock(st_tree(st.text), st.function)
+    obs = control.MomentumObserver(base, values, period=period)
+    q, dq, tau = motion(robot, cycles, period, 4)
+    want = obs.run(q, dq, tau)
+    got = np.array(
+        [block({"q": q[i], "dq": dq[i], "tau": tau[i]})["r_out"].copy() for i in range(cycles)]
+    )
+    assert np.abs(want).max() > 1.0
+    assert_close(got, want, 1e-12, "generated observer (ST) vs library")
+    out = block({"q": q[5], "dq": dq[5], "tau": tau[5], "reset": True})["r_out"]
+    assert np.all(out == 0.0)
+
+
+def test_bad_observer_settings_are_refused():
+    robot = mindyn.load("puma560")
+    with pytest.raises(mindyn.Error, match="observer gain K_O of joint 1"):
+        codegen.generate_observer(robot, period=1e-3, gains=2000.0)
+    with pytest.raises(mindyn.Error, match="params"):
+        codegen.generate_observer(robot, params=[1.0, 2.0])
+
+
+def test_structured_text_observer_passes_blark():
+    """The function block through a second, independent ST grammar (one joint with friction:
+    blark takes about 20 ms per statement)."""
+    blark = pytest.importorskip("blark")
+    robot = mindyn.load("planar1")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
+    st = codegen.generate_observer(robot, "st", base=base, period=1e-3)
+    result = blark.parse_source_code(st.text[st.text.index("FUNCTION_BLOCK") :])
+    assert result.exception is None, result.exception

@@ -1,0 +1,339 @@
+"""``mindyn detect``: calibration on a collision-free log, detection on a log with an external
+torque (the simulator's known profile), and one-line errors on bad input. The identification
+JSON is written here from the simulated robot's true base values (a known answer), so that the
+residual is the observer's alone."""
+
+from __future__ import annotations
+
+import json
+
+import mindyn
+import numpy as np
+import pytest
+from mindyn.control import SumOfSines, TorqueProfile, simulate
+from mindyn.identification.data import write_csv
+from test_cli_errors import assert_one_line_error, run
+
+N = 6
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("detect")
+    robot = mindyn.load("puma560")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    params = robot.parameters(True, True)
+    doc = {
+        "robot": "puma560",
+        "rotor": True,
+        "friction": True,
+        "offset": False,
+        "base_names": list(base.names),
+        "base_values": base.values(params).tolist(),
+    }
+    (d / "id.json").write_text(json.dumps(doc))
+    (d / "other.json").write_text(json.dumps({**doc, "robot": "zcr07s"}))
+
+    def log(name, seed, external=None):
+        res = simulate(
+            robot,
+            SumOfSines(robot, period=2.0, fraction=0.4, seed=seed),
+            rate=1000.0,
+            duration=0.6,
+            rotor=True,
+            friction=True,
+            external=external,
+        )
+        write_csv(d / name, res.t, res.q, res.tau, dq=res.dq)
+
+    log("free.csv", 1)
+    torque = np.zeros(N)
+    torque[2] = 5.0
+    log("hit.csv", 1, TorqueProfile(torque, start=0.3, stop=0.4))  # the same motion, then hit
+    write_csv(d / "notau.csv", np.arange(5) * 1e-3, np.zeros((5, N)), None, dq=np.zeros((5, N)))
+    return d
+
+
+def test_calibrate_then_detect_the_injected_torque(files):
+    thr = files / "thr.json"
+    rc, out, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(thr),
+            "--torque",
+            "held",
+        ]
+    )
+    assert rc == 0, err
+    assert "wrote" in out and json.loads(thr.read_text())["robot"] == "puma560"
+    rc, out, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "hit.csv"),
+            "--thresholds",
+            str(thr),
+            "--torque",
+            "held",
+            "--plot",
+            str(files / "r.png"),
+        ]
+    )
+    assert rc == 1, err  # intervals above the thresholds
+    hits = [line for line in out.splitlines() if line.strip().startswith("joint ")]
+    assert hits and hits[0].strip().startswith("joint 3:"), out  # first the joint hit ...
+    start = float(hits[0].split(":")[1].split("s to")[0])
+    assert 0.3 < start <= 0.305, out  # ... from the first sample after the onset
+    assert (files / "r.png").stat().st_size > 0
+    rc, out, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--thresholds",
+            str(thr),
+            "--torque",
+            "held",
+        ]
+    )
+    assert rc == 0 and "0 interval(s) above" in out, out + err
+
+
+@pytest.mark.parametrize(
+    "content, needle",
+    [
+        ("{not json", "not a thresholds JSON file"),
+        ('{"robot": "puma560"}', "lacks period_s, gains, thresholds"),
+        ('{"robot": "zcr07s", "period_s": 0.001, "gains": [1], "thresholds": [1]}', "zcr07s"),
+        (
+            '{"robot": "puma560", "period_s": 0.001, "gains": [1, 1, 1, 1, 1, 1], '
+            '"thresholds": [1, 1, "x", 1, 1, 1]}',
+            "'thresholds' must be a list of 6 numbers",
+        ),
+    ],
+)
+def test_bad_thresholds_file(files, tmp_path, content, needle):
+    bad = tmp_path / "thr.json"
+    bad.write_text(content)
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--thresholds",
+            str(bad),
+        ]
+    )
+    assert_one_line_error(rc, err, needle)
+
+
+def test_gains_come_from_the_thresholds_file(files, tmp_path):
+    thr = tmp_path / "thr.json"
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(thr),
+            "--gain",
+            "50",
+        ]
+    )
+    assert rc == 0 and json.loads(thr.read_text())["gains"] == [50.0] * N, err
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--thresholds",
+            str(thr),
+            "--gain",
+            "60",
+        ]
+    )
+    assert_one_line_error(rc, err, "--gain")
+
+
+def test_bad_log_and_identification(files):
+    rc, _, err = run(["detect", "puma560", str(files / "id.json"), str(files / "notau.csv")])
+    assert_one_line_error(rc, err, "tau")
+    rc, _, err = run(["detect", "puma560", str(files / "other.json"), str(files / "free.csv")])
+    assert_one_line_error(rc, err, "zcr07s")
+
+
+def test_cli_codegen_observer(files, tmp_path):
+    doc = json.loads((files / "id.json").read_text())
+    values = tmp_path / "values.json"  # a JSON mapping of the base parameters
+    values.write_text(json.dumps(dict(zip(doc["base_names"], doc["base_values"], strict=True))))
+    rc, out, err = run(
+        [
+            "codegen",
+            "puma560",
+            "--rotor",
+            "--friction",
+            "--what",
+            "momentum-observer",
+            "--lang",
+            "c",
+            "--params",
+            str(values),
+            "--controller-period",
+            "0.001",
+            "-o",
+            str(tmp_path / "obs"),
+        ]
+    )
+    assert rc == 0, err
+    assert (tmp_path / "obs.c").exists() and (tmp_path / "obs.h").exists()
+    assert "whole step:" in out and "gains K_O [1/s] (default 1 / (10 T) = 100): 100, 100" in out
+    rc, _, err = run(
+        [
+            "codegen",
+            "zcr07s",
+            "--rotor",
+            "--friction",
+            "--what",
+            "momentum-observer",
+            "--lang",
+            "c",
+            "--params",
+            str(values),
+            "-o",
+            str(tmp_path / "obs2"),
+        ]
+    )
+    assert_one_line_error(rc, err, "unknown parameter")
+
+
+@pytest.mark.parametrize(
+    "option, value, needle",
+    [
+        ("--quantile", "0", "--quantile"),
+        ("--quantile", "1.5", "--quantile"),
+        ("--margin", "0.5", "--margin"),
+        ("--margin", "nan", "--margin"),
+        ("--gain", "-1", "observer gain K_O of joint 1"),
+        ("--gain", "5000", "expected 0 < K_O < 2 / T = 2000"),
+        ("--gain", "1,2", "--gain"),
+    ],
+)
+def test_bad_settings_are_one_line_errors(files, tmp_path, option, value, needle):
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(tmp_path / "thr.json"),
+            option,
+            value,
+        ]
+    )
+    assert_one_line_error(rc, err, needle)
+
+
+def test_any_mix_of_arguments_gives_status_0_1_or_one_error_line(files, tmp_path_factory):
+    """Valid and invalid values for every option and positional of detect, mixed: status 0 (no
+    alarm) or 1 (alarms, on stdout) with nothing on stderr, or a non-zero status with exactly
+    one error line."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    d = tmp_path_factory.mktemp("detect_mix")
+    thr = d / "thr.json"
+    assert (
+        run(
+            [
+                "detect",
+                "puma560",
+                str(files / "id.json"),
+                str(files / "free.csv"),
+                "--calibrate",
+                str(thr),
+            ]
+        )[0]
+        == 0
+    )
+    (d / "bad.json").write_text("{")
+    bad = ["-1", "0", "nan", "inf", "", "x", "1e308"]
+
+    def opt(name, valid, invalid=bad):
+        return st.one_of(st.none(), st.sampled_from(valid + invalid).map(lambda v: [name, v]))
+
+    ids = [str(files / "id.json"), str(files / "other.json"), str(d / "bad.json"), "no.json"]
+    logs = [str(files / "free.csv"), str(files / "hit.csv"), str(files / "notau.csv"), "no.csv"]
+    strategy = st.tuples(
+        st.sampled_from(ids),
+        st.sampled_from(logs),
+        opt("--thresholds", [str(thr), str(d / "bad.json"), "no.json"]),
+        # (files to write: bad values only where they cannot land in the working folder)
+        opt("--calibrate", [str(d / "out" / "t.json")], [str(d), "", str(d / "bad.json" / "x")]),
+        opt("--quantile", ["0.5", "1"]),
+        opt("--margin", ["1", "2"]),
+        opt("--gain", ["10", "10,20,30,40,50,60"]),
+        opt("--torque", ["held", "sampled"]),
+    ).map(lambda p: ["detect", "puma560", p[0], p[1], *(a for x in p[2:] if x for a in x)])
+
+    @settings(
+        max_examples=15,
+        deadline=None,
+        derandomize=True,
+        database=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+    )
+    @given(strategy)
+    def check(argv):
+        rc, _, err = run(argv)
+        if rc in (0, 1) and not err:
+            return
+        assert_one_line_error(rc, err)
+
+    check()
+
+
+def test_model_sigma_needs_calibration_and_standard_deviations(files, tmp_path):
+    rc, _, err = run(
+        ["detect", "puma560", str(files / "id.json"), str(files / "free.csv"), "--model-sigma", "3"]
+    )
+    assert_one_line_error(rc, err, "--model-sigma applies to --calibrate")
+    rc, _, err = run(
+        [
+            "detect",
+            "puma560",
+            str(files / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(tmp_path / "t.json"),
+            "--model-sigma",
+            "3",
+        ]
+    )
+    assert_one_line_error(rc, err, "gives no standard deviations")
+    doc = json.loads((files / "id.json").read_text())
+    doc.update(names=doc["base_names"], std=[1e-3] * len(doc["base_names"]))
+    (tmp_path / "id.json").write_text(json.dumps(doc))
+    rc, out, err = run(
+        [
+            "detect",
+            "puma560",
+            str(tmp_path / "id.json"),
+            str(files / "free.csv"),
+            "--calibrate",
+            str(tmp_path / "t.json"),
+            "--model-sigma",
+            "3",
+        ]
+    )
+    assert rc == 0 and "at least 3 sigma" in out, err
+    assert json.loads((tmp_path / "t.json").read_text())["model_sigma"] == 3
