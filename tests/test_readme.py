@@ -94,7 +94,7 @@ def test_every_block_is_run_or_listed_with_a_reason():
         "C++",
         "Benchmarks",
     ], [(b.id, b.section) for b in skipped]
-    assert sum(b.lang == "sh" for b in RUN) == 6 and sum(b.lang == "python" for b in RUN) == 1
+    assert sum(b.lang == "sh" for b in RUN) == 7 and sum(b.lang == "python" for b in RUN) == 1
 
 
 def test_structured_text_blocks_parse():
