@@ -119,3 +119,20 @@ def test_joint_side_keeps_the_terms_on_the_joints(arm):
     for q, dq, ddq in states(robot.n, count=2, seed=4):
         ref = pin.rnea(model, data, q, dq, ddq) + motor_terms(eye, Ia, Fv, Fc, dq, ddq)
         assert rel(joint.inverse_dynamics(q, dq, ddq, params), ref) <= 1e-12
+
+
+def test_the_simulation_plant_applies_the_motor_friction_through_T(arm):
+    """The integrator's forward dynamics (Coulomb torque taken out of the parameters and applied
+    at each motor's velocity, sign or tanh) inverts the reference torques."""
+    robot, model, T, params, (Ia, Fv, Fc) = arm
+    data = model.createData()
+    eps = 0.05
+    exact = mindyn._core.Integrator(robot._m, params, 0.0)
+    smooth = mindyn._core.Integrator(robot._m, params, eps)
+    for q, dq, ddq in states(robot.n, count=3, seed=5):
+        rigid = pin.rnea(model, data, q, dq, ddq)
+        tau = rigid + motor_terms(T, Ia, Fv, Fc, dq, ddq)
+        assert rel(exact.acceleration(q, dq, tau), ddq) <= 1e-9
+        vm = T @ dq
+        tau_s = rigid + T.T @ (Ia * (T @ ddq) + Fv * vm + Fc * np.tanh(vm / eps))
+        assert rel(smooth.acceleration(q, dq, tau_s), ddq) <= 1e-9

@@ -31,6 +31,7 @@ from .models import (
     energy_system,
     integral_chunks,
     integral_windows,
+    moving_equations,
     require_torque,
     torque_noise,
 )
@@ -117,6 +118,9 @@ class IdentificationResult:
             "rotor": self.base.rotor,
             "friction": self.base.friction,
             "offset": self.base.offset,
+            # where Ia/Fv/Fc act: "motor" (slot k is motor k's, through the transmission) or
+            # "joint"
+            "drive_side": self.base.robot.drive_side,
             "names": list(self.names),
             "values": [float(v) for v in self.values],
             "std": [float(v) for v in self.std],
@@ -226,14 +230,14 @@ def dynamic_triangles(
     n, nb = data.n, base.n
     S = np.zeros((n, nb + 1, nb + 1))
     rows = np.zeros(n, dtype=int)
-    skip = min_velocity > 0 and base.friction
+    keep = moving_equations(base, data.dq, min_velocity)
     for a in range(0, data.m, CHUNK_SAMPLES):
         b = min(data.m, a + CHUNK_SAMPLES)
         W = regressor_rows(base, data, a, b)  # (k, n, nb)
         for j in range(n):
             A = np.column_stack([W[:, j, :], data.tau[a:b, j]])
-            if skip:
-                A = A[np.abs(data.dq[a:b, j]) >= min_velocity]
+            if keep is not None:
+                A = A[keep[a:b, j]]
             rows[j] += A.shape[0]
             S[j] = _triangle(np.vstack([S[j], A]))
     return S, rows
