@@ -103,3 +103,21 @@ def test_random_trees_with_coupled_transmissions(tmp_path, seed):
     else:
         assert c["recursive"] == c["numerical"], c
     check_regrouping(robot, seed)
+
+
+def test_cli_base_says_where_the_terms_act_and_the_flag_moves_them(tmp_path):
+    import contextlib
+    import io
+
+    from conftest import cli
+    from mindyn.cli import main
+
+    path, _ = coupled_wrist_urdf(tmp_path / "arm.urdf")
+    motor = cli("base", path, "--rotor", "--friction").splitlines()[0]
+    joint = cli("base", path, "--rotor", "--friction", "--drive-side", "joint").splitlines()[0]
+    assert "on the motors" in motor and "on the joints" in joint
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = main(["base", "puma560", "--rotor", "--drive-side", "motor"])
+    assert rc != 0 and len(err.getvalue().splitlines()) == 1
+    assert "declares no transmissions" in err.getvalue()

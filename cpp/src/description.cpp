@@ -386,7 +386,7 @@ Model build(const Ctx& start, const YAML::Node& root) {
   const std::string source = c.source;
   checkKeys(c, root,
             {"name", "description", "source", "notes", "convention", "angle_unit", "gravity",
-             "synthetic_inertia", "joints", "tool", "transmissions"},
+             "synthetic_inertia", "joints", "tool", "transmissions", "drive_side"},
             "the description");
   Model model;
   model.name = text(c, root, "name", "robot");
@@ -509,6 +509,17 @@ Model build(const Ctx& start, const YAML::Node& root) {
     model.tool = T;
   }
   if (root["transmissions"].IsDefined()) model.transmission = readTransmissions(c, root, model);
+  // Where each joint's rotor_inertia and friction act (Model::drive_terms_on_motors): with
+  // transmissions, on motor k of the joint's slot k ("motor", the default) or on the joint.
+  const std::string side = text(c, root, "drive_side", "");
+  if (!side.empty()) {
+    if (side != "motor" && side != "joint")
+      c.fail("'drive_side' must be 'motor' or 'joint', got '" + escapeControl(side) + "'",
+             root["drive_side"]);
+    if (side == "motor" && model.transmission.empty())
+      c.fail("'drive_side: motor' needs 'transmissions'", root["drive_side"]);
+    model.drive_terms_on_motors = side == "motor";
+  }
   model.validate();
   return model;
 }
