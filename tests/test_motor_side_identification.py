@@ -19,7 +19,7 @@ import pytest
 from conftest import cli
 from coupled_arms import coupled_wrist_urdf, motor_values, wam_like_urdf
 from mindyn.control import SensorNoise, simulate_inverse
-from mindyn.identification import energy_system, identify, true_base_values, validate
+from mindyn.identification import identify, true_base_values, validate
 from mindyn.identification.data import JointData, fill_derivatives, write_csv
 from mindyn.identification.excitation import random_trajectory
 
@@ -84,8 +84,10 @@ def test_base_counts_equal_the_numerical_methods(arms, name):
 def test_noise_free_logs_give_the_true_base_parameters(arms, name):
     """Exact derivatives, no noise: the dynamic model is exact to rounding, the integral model
     to the quadrature of its windows' momentum integrals; both within 1e-6 relative (floor 1e-3
-    of the largest parameter). The energy model's equations hold for the true values to its
-    quadrature error."""
+    of the largest parameter). The energy model, on three runs given as separate logs (its
+    windows must not span the junction of two runs, where the energy jumps without work), is
+    limited by Simpson's rule on its power integrals: measured 5.7e-7 (6R) and 7.7e-7 (7R) with
+    windows of 4 intervals, bound 1e-5."""
     robot, base, _, _, params = arms[name]
     data, truth = make_log(robot, base, params, [4], 0.0, exact=True)
     for model in ("dynamic", "integral"):
@@ -93,10 +95,13 @@ def test_noise_free_logs_give_the_true_base_parameters(arms, name):
         err = relative_error(res.full, truth).max()
         print(f"\n{name} {model} model, noise-free, {base.n} parameters: largest error {err:.2g}")
         assert err <= 1e-6, f"{model}: {err}"
-    W, y = energy_system(base, data, window=10)
-    rel = np.linalg.norm(W @ truth - y) / np.linalg.norm(y)
-    print(f"{name} energy model, true parameters: relative residual {rel:.2g}")
-    assert rel <= 1e-4
+    logs = [make_log(robot, base, params, [s], 0.0, exact=True)[0] for s in (4, 5, 6)]
+    res = identify(
+        robot, logs, model="energy", base=base, rsd_threshold=None, min_velocity=0, energy_window=4
+    )
+    err = relative_error(res.full, truth).max()
+    print(f"{name} energy model, noise-free, 3 runs: largest error {err:.2g}")
+    assert err <= 1e-5
 
 
 @pytest.mark.parametrize("name", sorted(ARMS))

@@ -491,8 +491,10 @@ def add_robot(p: argparse.ArgumentParser) -> None:
 def add_joint_terms(p: argparse.ArgumentParser, verb: str = "include") -> None:
     """``--rotor``, ``--friction`` and ``--drive-side``; ``verb`` says what they do in this
     command."""
-    p.add_argument("--rotor", action="store_true", help=f"{verb} rotor inertia Ia per joint")
-    p.add_argument("--friction", action="store_true", help=f"{verb} Fv, Fc per joint")
+    p.add_argument(
+        "--rotor", action="store_true", help=f"{verb} rotor inertia Ia per joint (or motor)"
+    )
+    p.add_argument("--friction", action="store_true", help=f"{verb} Fv, Fc per joint (or motor)")
     add_drive_side(p)
 
 
