@@ -19,7 +19,7 @@ import pytest
 from conftest import cli
 from coupled_arms import coupled_wrist_urdf, motor_values, wam_like_urdf
 from mindyn.control import SensorNoise, simulate_inverse
-from mindyn.identification import identify, true_base_values, validate
+from mindyn.identification import RankDeficientError, identify, true_base_values, validate
 from mindyn.identification.data import JointData, fill_derivatives, write_csv
 from mindyn.identification.excitation import random_trajectory
 
@@ -189,3 +189,26 @@ def test_cli_identifies_a_coupled_urdf_log_on_the_motors(arms, tmp_path):
     )
     assert "on the joints" in text.splitlines()[0], text
     assert json.loads(out.read_text())["drive_side"] == "joint"
+
+
+def test_a_motor_that_never_moves_is_named_though_its_joints_move(arms):
+    """Joints 5 and 6 of the four-bar wrist move with q5 + q6 constant: motor 6 stands still,
+    so its friction and rotor inertia have no effect; the rank message names the motor (its
+    joints do move) and the options that would lift it."""
+    robot, base, _, _, params = arms["wrist6"]
+    t = np.arange(0, 20, 1 / 250)
+    rng = np.random.default_rng(1)
+    w, a = rng.uniform(0.3, 1.5, (6, 3)), rng.uniform(0.2, 0.5, (6, 3))
+    q = np.column_stack([(a[j] * np.sin(w[j] * t[:, None])).sum(1) for j in range(6)])
+    dq = np.column_stack([(a[j] * w[j] * np.cos(w[j] * t[:, None])).sum(1) for j in range(6)])
+    ddq = np.column_stack(
+        [(-a[j] * w[j] ** 2 * np.sin(w[j] * t[:, None])).sum(1) for j in range(6)]
+    )
+    q[:, 5], dq[:, 5], ddq[:, 5] = 0.2 - q[:, 4], -dq[:, 4], -ddq[:, 4]  # motor 6 held still
+    assert np.abs(robot.slot_velocities(dq)[:, 5]).max() < 1e-12
+    tau = robot.inverse_dynamics(q, dq, ddq, params)
+    with pytest.raises(RankDeficientError) as e:
+        identify(robot, JointData(t, q, dq, ddq, tau, "still motor"), base=base)
+    msg = str(e.value)
+    assert "Motor(s) 'm6' never move" in msg, msg
+    assert "leave out --friction and --rotor" in msg and "Joint(s)" not in msg
