@@ -212,3 +212,25 @@ def test_a_motor_that_never_moves_is_named_though_its_joints_move(arms):
     msg = str(e.value)
     assert "Motor(s) 'm6' never move" in msg, msg
     assert "leave out --friction and --rotor" in msg and "Joint(s)" not in msg
+
+
+def test_prediction_takes_the_drive_side_of_the_identification(arms, tmp_path):
+    """A JSON identified with --drive-side joint predicts with the terms on the joints, though
+    the robot given (the same URDF) has them on the motors by default."""
+    from mindyn.identification.prediction import predict
+
+    robot, base, _, sd, params = arms["wrist6"]
+    data, _ = make_log(robot, base, params, [41, 42], sd)
+    csv = tmp_path / "log.csv"
+    write_csv(csv, data.t, data.q, data.tau, dq=data.dq, ddq=data.ddq)
+    for side in ("joint", "motor"):
+        out = tmp_path / f"{side}.json"
+        cli(
+            "identify", robot.source, csv, "--rotor", "--friction", "--drive-side", side,
+            "--json", out,
+        )  # fmt: skip
+        doc = json.loads(out.read_text())
+        sided = mindyn.base_parameters(robot.with_drive_side(side), rotor=True, friction=True)
+        ref = np.einsum("mnp,p->mn", sided.regressor(data.q, data.dq, data.ddq), doc["base_values"])
+        got = predict(out, data, robot=robot).tau_hat
+        assert np.max(np.abs(got - ref)) <= 1e-9 * np.max(np.abs(ref)), side
