@@ -116,6 +116,8 @@ def test_cli_base_says_where_the_terms_act_and_the_flag_moves_them(tmp_path):
     motor = cli("base", path, "--rotor", "--friction").splitlines()[0]
     joint = cli("base", path, "--rotor", "--friction", "--drive-side", "joint").splitlines()[0]
     assert "on the motors" in motor and "on the joints" in joint
+    track = cli("track", path, "--duration", "0.2").splitlines()[0]
+    assert "on the motors" in track
     err = io.StringIO()
     with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
         rc = main(["base", "puma560", "--rotor", "--drive-side", "motor"])

@@ -520,9 +520,10 @@ def with_drive_side(robot, args):
 
 def drive_side_words(robot, args) -> str:
     """Where the rotor inertia and friction of this command act, in words for its first output
-    line, when the robot has transmissions and they are asked for; "" otherwise."""
+    line, when the robot has transmissions and they are asked for (a command without
+    ``--rotor`` / ``--friction`` always has them); "" otherwise."""
     if robot.transmission is None or not (
-        getattr(args, "rotor", False) or getattr(args, "friction", False)
+        getattr(args, "rotor", True) or getattr(args, "friction", True)
     ):
         return ""
     if robot.drive_side == "motor":
