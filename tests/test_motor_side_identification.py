@@ -15,9 +15,10 @@ import json
 
 import mindyn
 import numpy as np
+import pinocchio as pin
 import pytest
 from conftest import cli
-from coupled_arms import coupled_wrist_urdf, motor_values, wam_like_urdf
+from coupled_arms import coupled_wrist_urdf, motor_terms, motor_values, wam_like_urdf
 from mindyn.control import SensorNoise, simulate_inverse
 from mindyn.identification import RankDeficientError, identify, true_base_values, validate
 from mindyn.identification.data import JointData, fill_derivatives, write_csv
@@ -44,9 +45,31 @@ def arms(tmp_path_factory):
     return {name: _arm(name, tmp) for name in ARMS}
 
 
-def make_log(robot, base, params, seeds, torque_sd, exact=False):
-    """Runs of several trajectories joined with a 1 s gap; derivatives per run (exact ones, or
+@functools.cache
+def _pinocchio(source: str):
+    model = pin.buildModelFromUrdf(source)
+    return model, model.createData()
+
+
+def true_torques(robot, params, T, q, dq, ddq):
+    """Pinocchio's rnea (the URDF's inertia, which params keep) plus the motor terms written
+    out, T^T (Ia T ddq + Fv T dq + Fc sign(T dq)), sample by sample."""
+    model, data = _pinocchio(robot.source)
+    Ia, Fv, Fc = params[10::13], params[11::13], params[12::13]
+    return np.array(
+        [
+            pin.rnea(model, data, q[i], dq[i], ddq[i]) + motor_terms(T, Ia, Fv, Fc, dq[i], ddq[i])
+            for i in range(q.shape[0])
+        ]
+    )
+
+
+def make_log(robot, base, params, seeds, torque_sd, exact=False, T=None):
+    """Runs of several trajectories joined with a 1 s gap: the motion and the torque noise of
+    the simulator, the torques of :func:`true_torques` (slot k on row k of ``T``: the arm's
+    transmission, or the identity for terms on the joints); derivatives per run (exact ones, or
     from the sampled positions and velocities). Returns the data and the true base values."""
+    T = robot.transmission.T if T is None else T
     parts, t, start = [], [], 0.0
     for s in seeds:
         log = simulate_inverse(
@@ -56,11 +79,13 @@ def make_log(robot, base, params, seeds, torque_sd, exact=False):
             noise=SensorNoise(torque=torque_sd),
             seed=s,
         )
+        noise = log.tau - log.tau_true
+        tau = true_torques(robot, params, T, log.q_true, log.dq_true, log.ddq_true) + noise
         if exact:
             dq, ddq = log.dq_true, log.ddq_true
         else:
             dq, ddq, _ = fill_derivatives(log.t, log.q, log.dq, None)
-        parts.append((log.q, dq, ddq, log.tau))
+        parts.append((log.q, dq, ddq, tau))
         t.append(log.t + start)
         start = t[-1][-1] + 1.0
     data = JointData(np.concatenate(t), *(np.concatenate(x) for x in zip(*parts)), source="sim")
@@ -157,7 +182,7 @@ def test_drive_side_joint_gives_the_results_without_transmissions(arms, tmp_path
     assert plain.transmission is None
     joint = robot.with_drive_side("joint")
     jbase = mindyn.base_parameters(joint, rotor=True, friction=True)
-    data, _ = make_log(joint, jbase, params, [5], sd)  # slot k now on joint k
+    data, _ = make_log(joint, jbase, params, [5], sd, T=np.eye(6))  # slot k on joint k
     a = identify(joint, data, rotor=True, friction=True)
     b = identify(plain, data, rotor=True, friction=True)
     assert a.base.names == b.base.names
