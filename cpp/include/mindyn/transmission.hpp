@@ -1,5 +1,6 @@
-// Transmissions between motors and joints, as data of the model (their dynamics, motor-side
-// inertia and friction, are not modelled yet).
+// Transmissions between motors and joints, as data of the model. Their dynamics -- rotor inertia
+// and friction of the motors, acting through T -- are those of the layout's rotor and friction
+// slots when the model's `motorSide()` (model.hpp; computed in cpp/src/drive_terms.hpp).
 //
 // Conventions (SI units; positions in rad or m as the joint/motor is revolute or prismatic):
 //   motor positions   q_m = T q + c        T (n_m x n): gear ratios and coupling terms,
