@@ -54,7 +54,7 @@ def table_with_transmissions(tmp_path, rows):
 
 
 @pytest.mark.parametrize("side", ["motor", "joint"])
-def test_yaml_export_records_the_drive_side_and_reads_back(tmp_path, side):
+def test_yaml_export_records_the_drive_side_and_the_motor_values_and_reads_back(tmp_path, side):
     rows = np.diag([60.0, -100.0, 50.0, 40.0, 40.0, 30.0])
     rows[5, 4] = 30.0  # motor 6 turns with joints 5 and 6
     robot = mindyn.load(table_with_transmissions(tmp_path, rows.tolist())).with_drive_side(side)
@@ -64,17 +64,21 @@ def test_yaml_export_records_the_drive_side_and_reads_back(tmp_path, side):
     assert doc["drive_side"] == side
     back = mindyn.load(res.path)
     assert back.drive_side == side
-    q = back.parameters(rotor=True, friction=True)
-    if side == "joint":  # the slots are the joints': as written
-        np.testing.assert_array_equal(q, p)
-        assert res.sidecar is None
-    else:  # direct drives divided back; the coupled motors 5 and 6 in the sidecar only
-        keep = np.ones(13 * 6, bool)
-        keep[[13 * k + c for k in (4, 5) for c in (10, 11, 12)]] = False
-        np.testing.assert_allclose(q[keep], p[keep], rtol=1e-14)
-        assert (q[~keep] == 0).all()
-        assert any("'j5', 'j6'" in note for note in res.notes), res.notes
-        assert read_joint_terms(res.sidecar)["Ia6"] == p[13 * 5 + 10]
+    # the slots read back as written: the joints' (joint side) or the motors' own values,
+    # coupled motors included (motor side)
+    np.testing.assert_array_equal(back.parameters(rotor=True, friction=True), p)
+    assert res.sidecar is None
+    tr = doc["transmissions"]
+    if side == "joint":
+        assert "rotor_inertia" not in tr and "viscous" not in tr
+    else:
+        assert tr["rotor_inertia"] == list(p[10::13]) and tr["coulomb"] == list(p[12::13])
+        assert any("'j5', 'j6'" in note and "under 'transmissions'" in note for note in res.notes)
+        # the joints carry a direct drive's terms as they act on them
+        r = np.diag(rows)[:4]
+        j = back.with_drive_side("joint").parameters(rotor=True, friction=True)
+        np.testing.assert_allclose(j[10 : 13 * 4 : 13], r**2 * p[10 : 13 * 4 : 13], rtol=1e-15)
+        assert j[13 * 4 + 10] == j[13 * 5 + 10] == 0.0
 
 
 def test_drive_side_key_is_checked(tmp_path):
@@ -106,3 +110,24 @@ def test_motor_side_terms_need_one_motor_per_joint(tmp_path):
         mindyn.base_parameters(robot, friction=True)
     robot.regressor(q, q, q)  # without rotor and friction: nothing to place
     robot.with_drive_side("joint").regressor(q, q, q, rotor=True, friction=True)
+
+
+def test_per_motor_values_in_the_list_form_and_their_check(tmp_path):
+    doc = yaml.safe_load(open(mindyn.load("puma560").source).read())
+    joints = [j["name"] for j in doc["joints"]]
+    motors = [{"name": f"m{k + 1}", "joints": {joints[k]: 50.0}} for k in range(6)]
+    motors[5]["joints"][joints[4]] = 30.0  # motor 6 turns with joints 5 and 6
+    motors[5].update({"rotor_inertia": 2e-4, "viscous": 1e-3, "coulomb": 0.05})
+    doc["transmissions"] = motors
+    path = tmp_path / "list.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    p = mindyn.load(path).parameters(rotor=True, friction=True)
+    assert (p[13 * 5 + 10], p[13 * 5 + 11], p[13 * 5 + 12]) == (2e-4, 1e-3, 0.05)
+    # motor 1 gives none: its joint's (published, joint-side) values divided back
+    joint1 = doc["joints"][0]
+    assert p[10] == pytest.approx(joint1["rotor_inertia"] / 50.0**2, rel=1e-15)
+    motors[5]["viscous"] = -1.0
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    with pytest.raises(mindyn.ModelError, match="motor 'm6': its viscous is -1") as e:
+        mindyn.load(path)
+    assert "\n" not in str(e.value)

@@ -155,7 +155,9 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
     return out
 
 
-def _joint_side_terms(robot: Robot, terms: JointTerms) -> tuple[JointTerms, list[str]]:
+def _joint_side_terms(
+    robot: Robot, terms: JointTerms, kept: str = "in the joint-terms file"
+) -> tuple[JointTerms, list[str]]:
     """The terms as a description's per-joint rotor inertia and friction can carry them (URDF
     ``<dynamics damping friction>``, a YAML table's ``rotor_inertia`` and ``friction``), and
     notes. On the joint side, the terms as they are. On the motor side (slot k is motor k,
@@ -199,7 +201,7 @@ def _joint_side_terms(robot: Robot, terms: JointTerms) -> tuple[JointTerms, list
         notes.append(
             f"joints {names}: the rotor inertia and friction of motors "
             f"{', '.join(repr(m) for m in via)}, which turn with several joints, cannot be "
-            "written per joint: 0 there; the motor values are in the joint-terms file"
+            f"written per joint: 0 there; the motor values are {kept}"
         )
     return out, notes
 
@@ -628,6 +630,29 @@ def _read_yaml(path: Path, what: str):
 
 
 # -- YAML DH / MDH tables -----------------------------------------------------------------------
+def _set_motor_terms(node, robot: Robot, terms: JointTerms, src: Path) -> None:
+    """Writes each motor's own rotor inertia and friction into a table's ``transmissions`` (the
+    matrix form's lists ``rotor_inertia``, ``viscous``, ``coulomb``, or the keys of each motor
+    of the list form), in the order of its motors, on the motor side; removes them on the joint
+    side (the joints' values then hold)."""
+    motor = robot.drive_side == "motor"
+    keys = (("rotor_inertia", terms.rotor), ("viscous", terms.viscous), ("coulomb", terms.coulomb))
+    m = robot.transmission.n_motors
+    if isinstance(node, dict):
+        for key, v in keys:
+            node.pop(key, None)
+            if motor and v is not None:
+                node[key] = [float(x) for x in v[:m]]
+    elif isinstance(node, list) and len(node) == m and all(isinstance(e, dict) for e in node):
+        for k, e in enumerate(node):
+            for key, v in keys:
+                e.pop(key, None)
+                if motor and v is not None:
+                    e[key] = float(v[k])
+    else:
+        raise ModelError(f"{src}: its 'transmissions' are not those robot '{robot.name}' has")
+
+
 def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> Export:
     """Writes the YAML DH/MDH table ``robot`` was loaded from with ``classical`` as its dynamics.
 
@@ -638,10 +663,11 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
     zeros for the absent terms. The rest of the table is kept, in its order; the YAML comments
     of the source are not. Torque offsets ``Off`` have no place in a table: when present they
     go to a sidecar YAML (default ``<path stem>.joints.yaml``), as in :func:`write_urdf`.
-    With transmissions, ``drive_side`` records where the terms act; on the motor side each
-    directly driven joint carries its motor's terms as they act on it (``r^2 Ia``, ``r^2 Fv``,
-    ``|r| Fc``, which the loader divides back), and the motors that turn with several joints,
-    which no joint can carry, go to the sidecar, with a note.
+    With transmissions, ``drive_side`` records where the terms act; on the motor side the
+    motors' own values go under ``transmissions`` (``rotor_inertia``, ``viscous``,
+    ``coulomb``, one per motor, which the loader puts in the motor slots), and each directly
+    driven joint carries its motor's terms as they act on it (``r^2 Ia``, ``r^2 Fv``,
+    ``|r| Fc``; a joint of a coupled motor 0, with a note).
     """
     if robot.convention not in ("dh", "mdh"):
         raise ModelError(
@@ -664,7 +690,9 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
         )
     names = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
     motor_terms = terms
-    terms, reflected = _joint_side_terms(robot, terms)
+    terms, reflected = _joint_side_terms(robot, terms, "under 'transmissions'")
+    if robot.transmission is not None:
+        _set_motor_terms(doc.get("transmissions"), robot, motor_terms, src)
     for k, jn in enumerate(joints):
         if not isinstance(jn, dict):
             raise ModelError(f"{src}: joint {k + 1} is not a mapping")
@@ -697,7 +725,7 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
     old_notes = doc.get("notes")
     doc["notes"] = f"{old_notes.rstrip()} {note}" if isinstance(old_notes, str) else note
     out = Path(path)
-    keep = terms.offset is not None or sidecar is not None or bool(reflected)
+    keep = terms.offset is not None or sidecar is not None
     side = _sidecar_path(sidecar, out) if keep else None
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(yaml.dump(doc, Dumper=_TableDumper, sort_keys=False, width=100), "utf-8")
