@@ -82,17 +82,23 @@ def pin_urdf_chain(path: Path, robot: mindyn.Robot) -> pin.Model:
 
 def pin_torque(model, robot, pi, q, dq, ddq, rotor, friction) -> np.ndarray:
     """tau(pi) by Pinocchio's rnea: link inertias set from pi, rotor inertia as pin armature,
-    friction Fv dq + Fc sign(dq) added."""
+    friction Fv dq + Fc sign(dq) added; for a robot whose rotor inertia and friction act on the
+    motors of its transmissions (URDFs with ros_control transmissions), T^T (Ia T ddq + Fv T dq
+    + Fc sign(T dq)) instead."""
     inertial, ia, fv, fc = split_layout(robot, pi, rotor, friction)
     for k in range(robot.n):
         model.inertias[k + 1] = body_inertia(inertial[10 * k : 10 * k + 10], robot.joint_post(k))
-    model.armature = ia.copy()
+    T = robot.transmission.T if robot.drive_side == "motor" else None
+    model.armature = ia.copy() if T is None else np.zeros(robot.n)
     tau = pin.rnea(model, model.createData(), pin_configuration(model, q), dq, ddq)
+    if T is not None:
+        return tau + T.T @ (ia * (T @ ddq) + fv * (T @ dq) + fc * np.sign(T @ dq))
     return tau + fv * dq + fc * np.sign(dq)
 
 
 def pin_energy(model, robot, pi, q, dq, rotor, friction) -> float:
-    """Total energy by Pinocchio (kinetic + potential) plus the rotors' 1/2 Ia dq^2."""
+    """Total energy by Pinocchio (kinetic + potential) plus the rotors' 1/2 Ia v^2 (v = dq, or
+    the motor speeds T dq on the motor side)."""
     inertial, ia, _, _ = split_layout(robot, pi, rotor, friction)
     for k in range(robot.n):
         model.inertias[k + 1] = body_inertia(inertial[10 * k : 10 * k + 10], robot.joint_post(k))
@@ -100,7 +106,8 @@ def pin_energy(model, robot, pi, q, dq, rotor, friction) -> float:
     x = pin_configuration(model, q)
     kin = pin.computeKineticEnergy(model, data, x, dq)
     pot = pin.computePotentialEnergy(model, data, x)
-    return kin + pot + 0.5 * float(ia @ dq**2)
+    v = dq if robot.drive_side != "motor" else robot.transmission.T @ dq  # the rotors' speeds
+    return kin + pot + 0.5 * float(ia @ v**2)
 
 
 def check_against_rnea(bp, robot, model, rng, what, states=3, tol=1e-11):

@@ -617,6 +617,10 @@ Model unitLengthModel(const Model& model, double L) {
   }
   m.gravity /= L;
   m.tool.translation() /= L;
+  // Motor positions per joint length: a prismatic joint's column of T in motor units per L.
+  if (!m.transmission.empty())
+    for (int k = 0; k < m.nq(); ++k)
+      if (m.joints[k].type == JointType::Prismatic) m.transmission.T.col(k) *= L;
   return m;
 }
 
@@ -630,8 +634,16 @@ Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
     const int c0 = k * layout.perLink();
     for (int i = 6; i < 9; ++i) units[c0 + i] = L;  // MX MY MZ
     units[c0 + 9] = L * L;                          // M
-    // A prismatic joint's rotor inertia and friction act on its force as a mass does.
-    if (model.joints[k].type == JointType::Prismatic)
+    // A prismatic joint's rotor inertia and friction act on its force as a mass does; on the
+    // motor side, those of a motor that drives prismatic joints only.
+    bool prismatic = model.joints[k].type == JointType::Prismatic;
+    if (model.motorSide() && k < model.transmission.nm()) {
+      prismatic = true;
+      for (int a = 0; a < n; ++a)
+        if (model.transmission.T(k, a) != 0.0 && model.joints[a].type != JointType::Prismatic)
+          prismatic = false;
+    }
+    if (prismatic)
       for (int c = c0 + 10; c < c0 + layout.perLink(); ++c) units[c] = L * L;
   }
   return units;
@@ -835,6 +847,7 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
   if (static_cast<int>(order.size()) != P)
     throw ModelError("the parameter order names " + std::to_string(order.size()) +
                      " parameters; the layout has " + std::to_string(P));
+  checkDriveSide(model, layout);
   if (!(options.tolerance > 0 && options.tolerance < 1e-2))
     throw ModelError("the rank tolerance must be in (0, 0.01), got " + shortest(options.tolerance));
 

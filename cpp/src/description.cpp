@@ -4,6 +4,7 @@
 #include <yaml-cpp/parser.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -302,8 +303,10 @@ std::vector<double> numbers(const Ctx& c, const YAML::Node& node, const std::str
 }
 
 /// `transmissions:` either {matrix: [[...], ...] (n_m rows of n), motors: [names], offset: [c],
-/// torque_constant: [K_t]}, or a list of motors {name, joints: {joint: coefficient, ...},
-/// offset, torque_constant}: q_m = T q + c (see transmission.hpp).
+/// torque_constant: [K_t], rotor_inertia: [..], viscous: [..], coulomb: [..]}, or a list of
+/// motors {name, joints: {joint: coefficient, ...}, offset, torque_constant, rotor_inertia,
+/// viscous, coulomb}: q_m = T q + c (see transmission.hpp), the motors' own rotor inertia and
+/// friction (motor side, Transmission).
 Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model) {
   const YAML::Node node = root["transmissions"];
   const size_t n = model.joints.size();
@@ -311,10 +314,14 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
   tr.format = "yaml";
   std::vector<std::vector<double>> rows;
   std::vector<double> offsets, constants;
+  std::vector<double> motor_terms[3];  // rotor_inertia, viscous, coulomb of each motor
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   if (node.IsMap()) {
     c.where = "transmissions";
-    checkKeys(c, node, {"matrix", "motors", "offset", "torque_constant"}, "transmissions");
+    checkKeys(
+        c, node,
+        {"matrix", "motors", "offset", "torque_constant", "rotor_inertia", "viscous", "coulomb"},
+        "transmissions");
     const YAML::Node M = node["matrix"];
     if (!M.IsDefined()) c.fail("has no 'matrix' (n_m rows of " + std::to_string(n) + ")", node);
     if (!M.IsSequence() || M.size() == 0)
@@ -334,6 +341,11 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
     constants = node["torque_constant"].IsDefined()
                     ? numbers(c, node["torque_constant"], "torque_constant", m)
                     : std::vector<double>(m, kNaN);
+    for (const auto& [key, v] :
+         {std::pair<const char*, std::vector<double>*>{"rotor_inertia", &motor_terms[0]},
+          {"viscous", &motor_terms[1]},
+          {"coulomb", &motor_terms[2]}})
+      if (node[key].IsDefined()) *v = numbers(c, node[key], key, m);
   } else if (node.IsSequence() && node.size() > 0) {
     std::map<std::string, size_t> index;
     for (size_t k = 0; k < n; ++k) index[model.joints[k].name] = k;
@@ -341,7 +353,10 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
     for (const auto& e : node) {
       c.where = "transmissions, motor " + std::to_string(++i);
       if (!e.IsMap()) c.fail("a motor must be a mapping, got " + std::string(kindName(e)), e);
-      checkKeys(c, e, {"name", "joints", "offset", "torque_constant"}, "a motor");
+      checkKeys(
+          c, e,
+          {"name", "joints", "offset", "torque_constant", "rotor_inertia", "viscous", "coulomb"},
+          "a motor");
       tr.motors.push_back(text(c, e, "name", "motor" + std::to_string(i)));
       c.where += " ('" + tr.motors.back() + "')";
       const YAML::Node js = e["joints"];
@@ -358,6 +373,11 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
       rows.push_back(row);
       offsets.push_back(optional(c, e, "offset", 0.0));
       constants.push_back(optional(c, e, "torque_constant", kNaN));
+      const char* keys[3] = {"rotor_inertia", "viscous", "coulomb"};
+      for (int t = 0; t < 3; ++t) {
+        motor_terms[t].resize(i - 1, kNaN);  // the motors before, without
+        motor_terms[t].push_back(optional(c, e, keys[t], kNaN));
+      }
     }
   } else {
     c.where.clear();
@@ -373,6 +393,13 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
   tr.offset = Eigen::Map<const Eigen::VectorXd>(offsets.data(), m);
   tr.torque_constant = Eigen::Map<const Eigen::VectorXd>(constants.data(), m);
   tr.types.assign(static_cast<size_t>(m), "matrix");
+  Eigen::VectorXd* fields[3] = {&tr.rotor_inertia, &tr.viscous, &tr.coulomb};
+  for (int t = 0; t < 3; ++t)
+    if (std::any_of(motor_terms[t].begin(), motor_terms[t].end(),
+                    [](double x) { return !std::isnan(x); })) {
+      motor_terms[t].resize(static_cast<size_t>(m), kNaN);
+      *fields[t] = Eigen::Map<const Eigen::VectorXd>(motor_terms[t].data(), m);
+    }
   c.where.clear();
   const std::string who = c.source + ":" + std::to_string(node.Mark().line + 1) + ": transmissions";
   std::vector<std::string> names;
@@ -386,7 +413,7 @@ Model build(const Ctx& start, const YAML::Node& root) {
   const std::string source = c.source;
   checkKeys(c, root,
             {"name", "description", "source", "notes", "convention", "angle_unit", "gravity",
-             "synthetic_inertia", "joints", "tool", "transmissions"},
+             "synthetic_inertia", "joints", "tool", "transmissions", "drive_side"},
             "the description");
   Model model;
   model.name = text(c, root, "name", "robot");
@@ -509,6 +536,17 @@ Model build(const Ctx& start, const YAML::Node& root) {
     model.tool = T;
   }
   if (root["transmissions"].IsDefined()) model.transmission = readTransmissions(c, root, model);
+  // Where each joint's rotor_inertia and friction act (Model::drive_terms_on_motors): with
+  // transmissions, on motor k of the joint's slot k ("motor", the default) or on the joint.
+  const std::string side = text(c, root, "drive_side", "");
+  if (!side.empty()) {
+    if (side != "motor" && side != "joint")
+      c.fail("'drive_side' must be 'motor' or 'joint', got '" + escapeControl(side) + "'",
+             root["drive_side"]);
+    if (side == "motor" && model.transmission.empty())
+      c.fail("'drive_side: motor' needs 'transmissions'", root["drive_side"]);
+    model.drive_terms_on_motors = side == "motor";
+  }
   model.validate();
   return model;
 }

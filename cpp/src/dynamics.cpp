@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "drive_terms.hpp"
 #include "mindyn/spatial.hpp"
 
 namespace mindyn {
@@ -87,17 +88,12 @@ void forcePass(const Model& model, Data& data, const VecRef& dq, const VecRef& d
     data.f[k].tail<3>() = m * b + aw.cross(h) + w.cross(w.cross(h));
   }
   for (int k = n - 1; k >= 0; --k) {
-    double t = data.S[k].dot(data.f[k]);
-    if (joint_terms) {
-      if (layout.rotor) t += params[layout.rotorIndex(k)] * ddq[k];
-      if (layout.friction)
-        t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
-    }
-    tau[k] = t;
+    tau[k] = data.S[k].dot(data.f[k]);
     // f[k] is complete: every child of link k has a larger index and was carried into it.
     const int pk = model.parent(k);
     if (pk >= 0) carryToParent<true>(data.R[k], data.p[k], data.f[k], data.f[pk]);
   }
+  if (joint_terms) drive::addDriveTorques(model, layout, params, dq, ddq, tau);
 }
 
 }  // namespace
@@ -144,12 +140,8 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
       W.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
       if (model.parent(k) >= 0) carryToParent(data.R[k], data.p[k], F, F);  // to the parent link
     }
-    if (layout.rotor) W(j, layout.rotorIndex(j)) = ddq[j];
-    if (layout.friction) {
-      W(j, layout.viscousIndex(j)) = dq[j];
-      W(j, layout.coulombIndex(j)) = sgn(dq[j]);
-    }
   }
+  drive::driveColumns(model, layout, dq, ddq, W);
 }
 
 void energyRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
@@ -170,7 +162,10 @@ void energyRegressors(const Model& model, Data& data, const VecRef& q, const Vec
     wK[c + 5] = 0.5 * w.z() * w.z();
     wK.segment<3>(c + 6) = vl.cross(w);
     wK[c + 9] = 0.5 * vl.squaredNorm();
-    if (layout.rotor) wK[layout.rotorIndex(k)] = 0.5 * dq[k] * dq[k];
+    if (layout.rotor) {
+      const double v = drive::motorVelocity(model, k, dq);
+      wK[layout.rotorIndex(k)] = 0.5 * v * v;
+    }
     wP.segment<3>(c + 6) = -(data.R0[k].transpose() * g);
     wP[c + 9] = -g.dot(data.p0[k]);
   }
@@ -187,7 +182,10 @@ double kineticEnergy(const Model& model, Data& data, const VecRef& q, const VecR
     const Eigen::Vector3d w = data.v[k].head<3>();
     const Eigen::Vector3d vl = data.v[k].tail<3>();
     K += 0.5 * w.dot(I * w) + vl.dot(w.cross(pk.segment<3>(6))) + 0.5 * pk[9] * vl.squaredNorm();
-    if (layout.rotor) K += 0.5 * params[layout.rotorIndex(k)] * dq[k] * dq[k];
+    if (layout.rotor) {
+      const double v = drive::motorVelocity(model, k, dq);
+      K += 0.5 * params[layout.rotorIndex(k)] * v * v;
+    }
   }
   return K;
 }
@@ -243,10 +241,21 @@ void checkSizes(const Model& model, ParameterLayout layout, long q, long dq, lon
   need("q", q);
   need("dq", dq);
   need("ddq", ddq);
+  checkDriveSide(model, layout);
   if (params >= 0 && params != layout.size(static_cast<int>(n)))
     throw std::invalid_argument("params has " + std::to_string(params) + " entries; expected " +
                                 std::to_string(layout.size(static_cast<int>(n))) +
                                 " for this parameter layout");
+}
+
+void checkDriveSide(const Model& model, ParameterLayout layout) {
+  if (!model.motorSide() || (!layout.rotor && !layout.friction) ||
+      model.transmission.nm() == model.nq())
+    return;
+  throw ModelError(model.name + " has " + std::to_string(model.transmission.nm()) + " motors for " +
+                   std::to_string(model.nq()) +
+                   " joints: rotor inertia and friction on the motors need one motor per joint; "
+                   "put them on the joints (drive side 'joint')");
 }
 
 }  // namespace mindyn

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "drive_terms.hpp"
+
 namespace mindyn {
 
 Integrator::Integrator(const Model& model, const Eigen::VectorXd& params, ParameterLayout layout,
@@ -30,10 +32,18 @@ Integrator::Integrator(const Model& model, const Eigen::VectorXd& params, Parame
 
 bool Integrator::acceleration(Data& data, const VecRef& q, const VecRef& dq, const VecRef& tau,
                               VecOut ddq) noexcept {
+  // The Coulomb torque of each slot at its velocity (a motor's on the motor side), through the
+  // transmission to the joints.
+  tau_ = tau;
+  const bool motors = model_.motorSide() && layout_.friction;
   for (int k = 0; k < n_; ++k) {
-    const double v = dq[k];
+    if (fc_[k] == 0.0) continue;
+    const double v = drive::motorVelocity(model_, k, dq);
     const double s = eps_ > 0 ? std::tanh(v / eps_) : (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0));
-    tau_[k] = tau[k] - fc_[k] * s;
+    if (motors)
+      tau_ -= (fc_[k] * s) * model_.transmission.T.row(k).transpose();
+    else
+      tau_[k] -= fc_[k] * s;
   }
   return forwardDynamics(model_, data, q, dq, tau_, params_, layout_, ddq);
 }

@@ -1,5 +1,6 @@
 #include "mindyn/momentum.hpp"
 
+#include "drive_terms.hpp"
 #include "mindyn/spatial.hpp"
 
 namespace mindyn {
@@ -27,8 +28,8 @@ void momentumRegressors(const Model& model, Data& data, const VecRef& q, const V
       Wl.block<1, 10>(k, c0).noalias() -= crossMotion(data.v[k], data.S[k]).transpose() * F;
       if (model.parent(k) >= 0) carryToParent(data.R[k], data.p[k], F, F);
     }
-    if (layout.rotor) Wp(j, layout.rotorIndex(j)) = dq[j];
   }
+  drive::rotorColumns(model, layout, dq, Wp);  // Ia_k t_k v_k
 }
 
 void baseMomentumRegressors(const Model& model, Data& data, const BaseParameters& base,

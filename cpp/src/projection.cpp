@@ -1,6 +1,7 @@
 #include "mindyn/projection.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <bitset>
 #include <cmath>
@@ -801,6 +802,12 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
       waiting += out.reserved;
   }
   if (potential || layout.rotor) cost.rows += 1;  // the constant
+  if (layout.rotor && model.motorSide())          // at most one row per velocity product of a motor
+    for (int k = 0; k < model.transmission.nm(); ++k) {
+      const double nz = static_cast<double>((model.transmission.T.row(k).array() != 0.0).count());
+      cost.rows += nz * (nz + 1) / 2;
+      cost.entries += nz * (nz + 1) / 2;
+    }
   // Peak memory: two stages of kinetic terms, the entries and keys (vectors grown by doubling,
   // so up to twice their size), then the row reduction's sorted copy of the entries.
   cost.bytes = stages * sizeof(QTerm) + 2.0 * sizeof(InfluenceCoordinates::Entry) * cost.entries +
@@ -1088,7 +1095,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         for (int a = 0; a < 4; ++a)
           if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowOf(t), c0 + 6 + a, r[a]});
       }
-      if (layout.rotor)  // on 0.5 dq_k^2
+      if (layout.rotor && !model.motorSide())  // on 0.5 dq_k^2
         entries.push_back({diagonal.row, layout.rotorIndex(k), 1.0});
       if (!last) {
         Stage& next = stage[static_cast<std::size_t>(k + 1)];
@@ -1120,6 +1127,52 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     run(std::true_type{});
   else
     run(std::false_type{});
+
+  // Rotor inertia on the motors. Motor k's rotor has the kinetic energy
+  //   1/2 Ia_k (t_k . dq)^2 = Ia_k [ sum_a t_ka^2 (1/2 dq_a^2) + sum_{a > b} t_ka t_kb (dq_a dq_b)
+  //   ],
+  // a form in dq whose factors of q are all constant: in the basis, Ia_k's coordinates are
+  // t_ka^2 on the function 1/2 dq_a^2 (l0 = J(a, a), every lk = 1), the row of a joint-side rotor
+  // inertia, and t_ka t_kb on dq_a dq_b (l0 = J(a, b), every lk = 1). A diagonal T (t_k = r e_k)
+  // gives r^2 times the joint-side coordinate, so the rotor regroups as on the joints; a coupled
+  // row reaches the functions dq_a dq_b of its joints, where the links' coordinates (the constant
+  // part of their kinetic energy's dq_a dq_b coefficient) are (a row made here if the links
+  // have none there: those functions are then the rotor's alone). On a tree, dq_a dq_b of joints
+  // on different root paths is no link's function: a row of the rotors alone, kept like a
+  // function of the deeper joint. The functions of the basis stay independent, so the
+  // coordinates are exact and the echelon form regroups the rotors with the links as it does the
+  // links among themselves.
+  if (layout.rotor && model.motorSide()) {
+    const Eigen::MatrixXd& T = model.transmission.T;
+    std::map<std::uint64_t, int> wanted;  // key -> row (-1: not found yet)
+    auto keyOf = [&](int a, int b) {      // 0-based joints, a >= b
+      std::uint64_t key = static_cast<std::uint64_t>(pairIndex(a + 1, b + 1));
+      if (tree) key |= kl.end_mask & (static_cast<std::uint64_t>(a + 1) << kl.end_shift);
+      return key;
+    };
+    for (int k = 0; k < n; ++k)
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b <= a && T(k, a) != 0.0; ++b)
+          if (T(k, b) != 0.0) wanted.emplace(keyOf(a, b), -1);
+    for (std::size_t r = 0; r < keys.size(); ++r) {
+      const auto it = wanted.find(keys[r]);
+      if (it != wanted.end() && it->second < 0) it->second = static_cast<int>(r);
+    }
+    for (auto& [key, row] : wanted)
+      if (row < 0) {
+        row = static_cast<int>(keys.size());
+        keys.push_back(key);
+      }
+    for (int k = 0; k < n; ++k)
+      for (int a = 0; a < n; ++a)
+        for (int b = 0; b <= a && T(k, a) != 0.0; ++b)
+          if (T(k, b) != 0.0)
+            entries.push_back({wanted.at(keyOf(a, b)), layout.rotorIndex(k), T(k, a) * T(k, b)});
+    // A row's coordinates by ascending column (the rotor's column may come before the links').
+    std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
+      return x.row != y.row ? x.row < y.row : x.col < y.col;
+    });
+  }
 
   out.keys = std::move(keys);
   out.entries = std::move(entries);

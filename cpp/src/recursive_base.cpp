@@ -146,6 +146,8 @@ Vec6 motionSubspace(const Joint& j) {
 IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layout,
                                         double tolerance) {
   model.validate();
+  if (const std::string why = recursiveRefusal(model, layout, tolerance); !why.empty())
+    throw ModelError(why);
   const int n = model.nq(), P = layout.size(n), per = layout.perLink();
   IdentifiableSpace out;
   out.link_rank.resize(n);
@@ -260,7 +262,40 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   // The rows: per link j, its N_j basis on link j and carried outwards over its subtree,
   // n T_{j,k} = (n T_{j,parent(k)}) T0_k; then the rotor inertia (its own row, or the value of the
   // rows on its regrouping vector) and friction.
-  int rows = 0;
+  // On the motor side (Model::motorSide), motor m's rotor energy 1/2 Ia_m (t_m . dq)^2 is
+  //   Ia_m [ sum_a t_ma^2 (1/2 dq_a^2) + sum_{a > b} t_ma t_mb (dq_a dq_b) ]:
+  // its column is sum_a t_ma^2 D_a + sum_{a > b} t_ma t_mb E_ab, with D_a the column of a
+  // joint-side rotor inertia of joint a and E_ab that of the energy dq_a dq_b. The rows of the
+  // columns (links, D, E) give those of (links, Ia) by that same combination (a linear map of
+  // columns keeps the rows spanning the identifiable space). D_a is taken as above. E_ab is a
+  // column of its own (an own row) when no link's kinetic energy has a constant coefficient on
+  // dq_a dq_b: always when a and b are on different root paths; for b an ancestor of a when the
+  // motion of joint b seen from link a averages out over the joints in between (the mean of a
+  // rotation about u is u u^T; a prismatic joint counts at zero travel), since that coefficient
+  // is the mean motion of joint b times the links' inertia times S_a. Otherwise E_ab may regroup
+  // with the links, which the recursion cannot decide: recursiveRefusal says so.
+  const bool motors = layout.rotor && model.motorSide();
+  const Eigen::MatrixXd& Tm = model.transmission.T;
+  // Adds `v` (rows r .. r + size) for a joint-side column of joint a: to each motor's column.
+  auto rotorEntries = [&](int r, int a, const Eigen::VectorXd& v,
+                          std::vector<Eigen::Triplet<double>>& entries) {
+    for (int m = 0; m < (motors ? n : 1); ++m) {
+      const double c = motors ? Tm(m, a) * Tm(m, a) : 1.0;
+      const int col = layout.rotorIndex(motors ? m : a);
+      if (c == 0.0) continue;
+      for (int i = 0; i < v.size(); ++i)
+        if (v[i] != 0.0) entries.emplace_back(r + i, col, c * v[i]);
+    }
+  };
+  std::vector<std::pair<int, int>> pairs;  // (a, b), a > b, coupled by some motor
+  for (int a = 0; a < n && motors; ++a)
+    for (int b = 0; b < a; ++b)
+      for (int m = 0; m < n; ++m)
+        if (Tm(m, a) != 0.0 && Tm(m, b) != 0.0) {
+          pairs.emplace_back(a, b);
+          break;
+        }
+  int rows = static_cast<int>(pairs.size());
   for (int k = 0; k < n; ++k) {
     rows += out.link_rank[k];
     if (layout.rotor && rotor[k].rows() == 0) ++rows;
@@ -292,15 +327,22 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
       if (layout.rotor && rotor[k].rows() > 0) {
         Eigen::VectorXd v = carried[k] * rotor[k].row(0).transpose();
         if (rotor[k].rows() > 1 && k != j) v += carried[p] * rotor[k].row(1).transpose();
-        put(r0, layout.rotorIndex(k), v);
+        rotorEntries(r0, k, v, entries);
       }
     }
     r0 += nj;
-    if (layout.rotor && rotor[j].rows() == 0) entries.emplace_back(r0++, layout.rotorIndex(j), 1.0);
+    if (layout.rotor && rotor[j].rows() == 0)
+      rotorEntries(r0++, j, Eigen::VectorXd::Ones(1), entries);
     if (layout.friction) {
       entries.emplace_back(r0++, layout.viscousIndex(j), 1.0);
       entries.emplace_back(r0++, layout.coulombIndex(j), 1.0);
     }
+  }
+  for (const auto& [a, b] : pairs) {  // E_ab, its own row
+    for (int m = 0; m < n; ++m)
+      if (Tm(m, a) != 0.0 && Tm(m, b) != 0.0)
+        entries.emplace_back(r0, layout.rotorIndex(m), Tm(m, a) * Tm(m, b));
+    ++r0;
   }
   for (int k = 0; k < n && layout.rotor; ++k)
     if (rotor[k].rows() > 0) out.rotor_regrouped.push_back(k);
@@ -325,6 +367,46 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     out.constant[k * per + 9] = model.gravity.dot(T[k].block<3, 1>(0, 3));
   }
   return out;
+}
+
+std::string recursiveRefusal(const Model& model, ParameterLayout layout, double tolerance) {
+  if (!layout.rotor || !model.motorSide() || model.transmission.nm() != model.nq()) return "";
+  const int n = model.nq();
+  const Eigen::MatrixXd& T = model.transmission.T;
+  for (int a = 0; a < n; ++a)
+    for (int b = 0; b < a; ++b) {
+      int motor = -1;
+      for (int m = 0; m < n && motor < 0; ++m)
+        if (T(m, a) != 0.0 && T(m, b) != 0.0) motor = m;
+      if (motor < 0) continue;
+      // The mean motion of joint b seen from link a (b an ancestor of a), or none.
+      int c = a;
+      std::vector<int> path;
+      while (c >= 0 && c != b) {
+        path.push_back(c);
+        c = model.parent(c);
+      }
+      if (c != b) continue;  // different root paths
+      Vec6 v = motionSubspace(model.joints[b]);
+      const double size = v.norm();
+      for (auto it = path.rbegin(); it != path.rend(); ++it) {
+        const Joint& joint = model.joints[*it];
+        v = motionToChild(joint.pre, v);
+        if (joint.type == JointType::Revolute) {
+          const Eigen::Matrix3d P = joint.axis * joint.axis.transpose();
+          v.head<3>() = P * v.head<3>();
+          v.tail<3>() = P * v.tail<3>();
+        }
+        v = motionToChild(joint.post, v);
+      }
+      if (v.norm() <= tolerance * size) continue;
+      return "the recursive method cannot decide whether the rotor inertia of motor '" +
+             model.transmission.motors[motor] + "', which turns with joints '" +
+             model.joints[b].name + "' and '" + model.joints[a].name +
+             "', regroups with the links (the motion of the first does not average out as seen "
+             "from the second); the projection and numerical methods can";
+    }
+  return "";
 }
 
 }  // namespace mindyn

@@ -1,5 +1,6 @@
 #include "mindyn/slotine_li.hpp"
 
+#include "drive_terms.hpp"
 #include "mindyn/spatial.hpp"
 
 namespace mindyn {
@@ -78,12 +79,8 @@ void slotineLiRegressor(const Model& model, Data& data, SlotineLiData& sl, const
       Y.block<1, 10>(k, c0).noalias() = data.S[k].transpose() * F;
       if (model.parent(k) >= 0) carryToParent(data.R[k], data.p[k], F, F);  // to the parent link
     }
-    if (layout.rotor) Y(j, layout.rotorIndex(j)) = ddqr[j];
-    if (layout.friction) {
-      Y(j, layout.viscousIndex(j)) = dq[j];
-      Y(j, layout.coulombIndex(j)) = sgn(dq[j]);
-    }
   }
+  drive::driveColumns(model, layout, dq, ddqr, Y);
 }
 
 void slotineLiBaseRegressor(const Model& model, Data& data, SlotineLiData& sl,
@@ -111,16 +108,11 @@ void torquePass(const Model& model, Data& data, SlotineLiData& sl, const VecRef&
     f += 0.5 * (crossForce(v, applyInertia(params, c0, vr)) +
                 crossForce(vr, applyInertia(params, c0, v)));
     f += data.f[k];
-    double t = data.S[k].dot(f);
-    if (joint_terms) {
-      if (layout.rotor) t += params[layout.rotorIndex(k)] * ddqr[k];
-      if (layout.friction)
-        t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
-    }
-    tau[k] = t;
+    tau[k] = data.S[k].dot(f);
     const int pk = model.parent(k);
     if (pk >= 0) carryToParent<true>(data.R[k], data.p[k], f, data.f[pk]);
   }
+  if (joint_terms) drive::addDriveTorques(model, layout, params, dq, ddqr, tau);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <utility>
 
 #include "mindyn/model.hpp"
 
@@ -78,6 +79,18 @@ void Transmission::validate(const std::vector<std::string>& joint_names,
     }
     if (!std::isfinite(offset[i]) || std::abs(offset[i]) > kMaxDescriptionValue)
       throw ModelError(motor + ": its offset is not a finite number within the bound");
+    for (const auto& [v, what] :
+         {std::pair<const Eigen::VectorXd*, const char*>{&rotor_inertia, "rotor_inertia"},
+          {&viscous, "viscous"},
+          {&coulomb, "coulomb"}}) {
+      if (v->size() != 0 && v->size() != m)
+        throw ModelError(who + ": " + what + " has " + std::to_string(v->size()) + " entries for " +
+                         std::to_string(m) + " motors");
+      if (v->size() != 0 && !std::isnan((*v)[i]) &&
+          (!std::isfinite((*v)[i]) || (*v)[i] < 0 || (*v)[i] > kMaxDescriptionValue))
+        throw ModelError(motor + ": its " + what + " is " + formatNumber((*v)[i]) +
+                         ", not a finite number >= 0 within the bound on a description value");
+    }
     const double kt = torque_constant[i];
     if (!std::isnan(kt) && (!std::isfinite(kt) || kt == 0.0 || std::abs(kt) > kMaxDescriptionValue))
       throw ModelError(motor + ": its torque constant must be a non-zero finite number");

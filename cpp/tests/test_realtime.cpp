@@ -175,3 +175,65 @@ TEST(Realtime, IntegratorStepsAllocateNothing) {
   EXPECT_EQ(seen, 0);
   EXPECT_TRUE(q.allFinite() && dq.allFinite());
 }
+
+TEST(Realtime, MotorSidePathsAllocateNothing) {
+  // Rotor inertia and friction on the motors of a coupled transmission (motor 6 turns with
+  // joints 5 and 6).
+  Model model = loadYaml(test::robotFile("zcr07s"));
+  const int n = model.nq();
+  Transmission& tr = model.transmission;
+  tr.format = "yaml";
+  tr.T = 50.0 * Eigen::MatrixXd::Identity(n, n);
+  tr.T(n - 1, n - 2) = 30.0;
+  tr.offset = Eigen::VectorXd::Zero(n);
+  tr.torque_constant = Eigen::VectorXd::Constant(n, std::nan(""));
+  for (int k = 0; k < n; ++k) {
+    tr.motors.push_back("m" + std::to_string(k + 1));
+    tr.types.push_back("matrix");
+  }
+  ASSERT_TRUE(model.motorSide());
+  const ParameterLayout layout{true, true};
+  Eigen::VectorXd pi = model.parameters(layout);
+  for (int k = 0; k < n; ++k) {
+    pi[layout.rotorIndex(k)] = 1e-4;
+    pi[layout.viscousIndex(k)] = 1e-3;
+    pi[layout.coulombIndex(k)] = 0.02;
+  }
+  BaseOptions options;
+  options.layout = layout;
+  const BaseParameters bp = computeBaseParameters(model, options);
+  Data data(model);
+  SlotineLiData sl(model, layout);
+  Integrator integ(model, pi, layout, 0.01);
+  std::mt19937 rng(23);
+  const Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n),
+                        ddq = test::random(rng, n);
+  Eigen::VectorXd tau(n), ddq2(n), wK(layout.size(n)), wP(layout.size(n));
+  Eigen::MatrixXd W(n, layout.size(n)), M(n, n), Wp(n, layout.size(n)), Yb(n, bp.eom.size());
+  Eigen::VectorXd x = q, v = dq;
+  bool ok = true;
+  long seen;
+  {
+    Count c;
+    inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+    regressor(model, data, q, dq, ddq, layout, W);
+    energyRegressors(model, data, q, dq, layout, wK, wP);
+    momentumRegressors(model, data, q, dq, layout, Wp, W);
+    ok = std::isfinite(kineticEnergy(model, data, q, dq, pi, layout));
+    massMatrix(model, data, q, pi, layout, M);
+    ok = ok && forwardDynamics(model, data, q, dq, tau, pi, layout, ddq2);
+    slotineLiBaseRegressor(model, data, sl, bp, q, dq, dq, ddq, Yb);
+    slotineLiTorque(model, data, sl, q, dq, dq, ddq, pi, layout, tau);
+    ok = ok && integ.step(data, x, v, tau, 0.004, 2);
+    seen = c.value();
+  }
+  EXPECT_EQ(seen, 0);
+  EXPECT_TRUE(ok);
+  // The motor terms are there: the mass matrix has Ia t_6 t_6^T off the diagonal.
+  EXPECT_NEAR(M(n - 1, n - 2) - M(n - 2, n - 1), 0.0, 1e-12);
+  Model joint = model;
+  joint.drive_terms_on_motors = false;
+  Eigen::MatrixXd Mj(n, n);
+  massMatrix(joint, data, q, pi, layout, Mj);
+  EXPECT_NEAR(M(n - 1, n - 2) - Mj(n - 1, n - 2), 1e-4 * 30.0 * 50.0, 1e-12);
+}

@@ -27,9 +27,14 @@ def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) 
     """The method :func:`base_parameters` runs when none is given, and why: the projection
     method, or the recursive method (exact, the same base set) when any limit of the projection
     method -- joints, parameters, its memory estimate, all checked by the C++ core before
-    computing -- refuses the robot with these joint terms."""
+    computing -- refuses the robot with these joint terms, or the numerical method when the
+    recursive one refuses it too (rotor inertia of motors that couple joints in a way it
+    cannot decide; the reason is given)."""
     refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
     if refused:
+        also = _core.recursive_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
+        if also:
+            return "numerical", f"{refused}; {also}: the numerical method (sampled) runs instead"
         return "recursive", f"{refused}; the recursive method is exact and gives the same base set"
     return "projection", (
         "the default (exact: Gaussian elimination on the exact coordinates of the Lagrangian's "

@@ -138,6 +138,18 @@ def _check_lang(lang: str, trig: str | None) -> None:
         raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
 
 
+def _refuse_motor_side(robot: Robot, rotor: bool, friction: bool) -> None:
+    """The generated code puts rotor inertia and friction on the joints: a robot that has them
+    on its motors (:attr:`~mindyn.Robot.drive_side`) is refused rather than given other
+    dynamics than its own."""
+    if robot.drive_side == "motor" and (rotor or friction):
+        raise _core.ModelError(
+            f"'{robot.name}' has its rotor inertia and friction on the motors (transmissions), "
+            "which the generated code does not model yet: use --drive-side joint "
+            "(Robot.with_drive_side('joint')), or leave out --rotor and --friction"
+        )
+
+
 def _identifier(name: str) -> str:
     s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
     s = re.sub(r"_+", "_", s)
@@ -230,6 +242,7 @@ def generate(
         bp_core = formulas = None
         names = robot.parameter_names(rotor, friction)
         names += [f"Off{k + 1}" for k in range(robot.n) if offset]
+    _refuse_motor_side(robot, rotor, friction)
     values = None
     if params is not None:
         if isinstance(params, (str, Path)):
@@ -482,6 +495,7 @@ def generate_controller(
     _check_lang(lang, trig)
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
+    _refuse_motor_side(base.robot, base.rotor, base.friction)
     n, names = robot.n, list(base.names)
     g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)

@@ -155,6 +155,57 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
     return out
 
 
+def _joint_side_terms(
+    robot: Robot, terms: JointTerms, kept: str = "in the joint-terms file"
+) -> tuple[JointTerms, list[str]]:
+    """The terms as a description's per-joint rotor inertia and friction can carry them (URDF
+    ``<dynamics damping friction>``, a YAML table's ``rotor_inertia`` and ``friction``), and
+    notes. On the joint side, the terms as they are. On the motor side (slot k is motor k,
+    acting as ``t_k^T (Ia_k t_k . ddq + Fv_k v_k + Fc_k sign v_k)``, ``v_k = t_k . dq``): a joint
+    driven by a motor of its own alone (row ``k`` of ``T`` is ``r e_j``) gets its motor's terms as
+    they act on the joint, ``r^2 Ia_k``, ``r^2 Fv_k``, ``|r| Fc_k``, exactly (what the loader
+    divides back); a joint whose motor turns with other joints (or that several motors drive)
+    cannot carry them per joint: 0 there, said in a note (the sidecar has the motor values)."""
+    if robot.drive_side != "motor" or (terms.rotor is None and terms.viscous is None):
+        return terms, []
+    T = robot.transmission.T
+    motors = robot.transmission.motors
+    zeros = np.zeros(robot.n)
+    out = JointTerms(
+        terms.inertial,
+        None if terms.rotor is None else zeros.copy(),
+        None if terms.viscous is None else zeros.copy(),
+        None if terms.coulomb is None else zeros.copy(),
+        terms.offset,
+    )
+    coupled = []
+    for j in range(robot.n):
+        ks = np.flatnonzero(T[:, j])
+        k = int(ks[0]) if ks.size == 1 else -1
+        if k < 0 or np.count_nonzero(T[k]) != 1:
+            coupled.append(j)
+            continue
+        r = float(T[k, j])
+        if terms.rotor is not None:
+            out.rotor[j] = r * r * terms.rotor[k]
+        if terms.viscous is not None:
+            out.viscous[j] = r * r * terms.viscous[k]
+            out.coulomb[j] = abs(r) * terms.coulomb[k]
+    notes = [
+        "rotor inertia and friction on the motors: each directly driven joint carries its "
+        "motor's as they act on the joint (r^2 Ia, r^2 Fv, |r| Fc, r the reduction)"
+    ]
+    if coupled:
+        names = ", ".join(f"'{robot.joint_names[j]}'" for j in coupled)
+        via = sorted({motors[k] for j in coupled for k in np.flatnonzero(T[:, j])})
+        notes.append(
+            f"joints {names}: the rotor inertia and friction of motors "
+            f"{', '.join(repr(m) for m in via)}, which turn with several joints, cannot be "
+            f"written per joint: 0 there; the motor values are {kept}"
+        )
+    return out, notes
+
+
 def _few(names: list[str], most: int = 6) -> str:
     shown = ", ".join(f"'{k}'" for k in names[:most])
     return shown + (f" and {len(names) - most} more" if len(names) > most else "")
@@ -209,7 +260,11 @@ def write_urdf(
     ``<dynamics damping= friction=>``; when the parameters have no friction, the model joints'
     damping and friction are set to 0, so that the file describes the identified model. ``Ia``,
     ``Fv``, ``Fc`` and ``Off`` are also written to the sidecar YAML, with their meaning and unit
-    (:func:`read_joint_terms` reads it back).
+    (:func:`read_joint_terms` reads it back). With rotor inertia and friction on the motors
+    (:attr:`~mindyn.Robot.drive_side`), a directly driven joint's ``<dynamics>`` is its motor's
+    friction as it acts on the joint (``r^2 Fv``, ``|r| Fc``), a joint of a motor that turns
+    with several joints gets 0 (a note says so), and the sidecar has the motor values
+    (``drive_side: motor``, each row naming its motor).
 
     Raises
     ------
@@ -225,7 +280,8 @@ def write_urdf(
     terms = classical_terms(robot, classical)
     src = Path(robot.source if source is None else source)
     doc = _UrdfDocument(src)
-    notes = doc.set_chain(robot, terms)
+    joint_side, reflected = _joint_side_terms(robot, terms)
+    notes = doc.set_chain(robot, joint_side) + reflected
     out = Path(path)
     side = _sidecar_path(sidecar, out) if terms.joint_terms() or sidecar is not None else None
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -528,6 +584,16 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
         "terms": meaning,
         "joints": joints,
     }
+    if robot.drive_side == "motor" and any(k in present for k in ("Ia", "Fv", "Fc")):
+        # row k's Ia, Fv, Fc are motor k's, in motor units, acting through row k of T
+        doc["drive_side"] = "motor"
+        for k, row in enumerate(joints):
+            row["motor"] = robot.transmission.motors[k]
+        doc["terms"]["drive_side"] = (
+            "motor: each row's Ia, Fv, Fc belong to the motor named in it (row k of the "
+            "transmission T, q_m = T q): tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq)), in "
+            "motor units (kg m^2, N m s/rad, N m); Off stays the joint's"
+        )
     head = (
         f"# Joint terms identified for robot '{robot.name}', written by mindyn export beside "
         f"{description.name}.\n# Per joint: the term's value in the unit given under 'units'.\n"
@@ -580,6 +646,29 @@ def _read_yaml(path: Path, what: str):
 
 
 # -- YAML DH / MDH tables -----------------------------------------------------------------------
+def _set_motor_terms(node, robot: Robot, terms: JointTerms, src: Path) -> None:
+    """Writes each motor's own rotor inertia and friction into a table's ``transmissions`` (the
+    matrix form's lists ``rotor_inertia``, ``viscous``, ``coulomb``, or the keys of each motor
+    of the list form), in the order of its motors, on the motor side; removes them on the joint
+    side (the joints' values then hold)."""
+    motor = robot.drive_side == "motor"
+    keys = (("rotor_inertia", terms.rotor), ("viscous", terms.viscous), ("coulomb", terms.coulomb))
+    m = robot.transmission.n_motors
+    if isinstance(node, dict):
+        for key, v in keys:
+            node.pop(key, None)
+            if motor and v is not None:
+                node[key] = [float(x) for x in v[:m]]
+    elif isinstance(node, list) and len(node) == m and all(isinstance(e, dict) for e in node):
+        for k, e in enumerate(node):
+            for key, v in keys:
+                e.pop(key, None)
+                if motor and v is not None:
+                    e[key] = float(v[k])
+    else:
+        raise ModelError(f"{src}: its 'transmissions' are not those robot '{robot.name}' has")
+
+
 def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> Export:
     """Writes the YAML DH/MDH table ``robot`` was loaded from with ``classical`` as its dynamics.
 
@@ -590,6 +679,11 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
     zeros for the absent terms. The rest of the table is kept, in its order; the YAML comments
     of the source are not. Torque offsets ``Off`` have no place in a table: when present they
     go to a sidecar YAML (default ``<path stem>.joints.yaml``), as in :func:`write_urdf`.
+    With transmissions, ``drive_side`` records where the terms act; on the motor side the
+    motors' own values go under ``transmissions`` (``rotor_inertia``, ``viscous``,
+    ``coulomb``, one per motor, which the loader puts in the motor slots), and each directly
+    driven joint carries its motor's terms as they act on it (``r^2 Ia``, ``r^2 Fv``,
+    ``|r| Fc``; a joint of a coupled motor 0, with a note).
     """
     if robot.convention not in ("dh", "mdh"):
         raise ModelError(
@@ -611,6 +705,10 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
             f"'{robot.name}' was loaded from"
         )
     names = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
+    motor_terms = terms
+    terms, reflected = _joint_side_terms(robot, terms, "under 'transmissions'")
+    if robot.transmission is not None:
+        _set_motor_terms(doc.get("transmissions"), robot, motor_terms, src)
     for k, jn in enumerate(joints):
         if not isinstance(jn, dict):
             raise ModelError(f"{src}: joint {k + 1} is not a mapping")
@@ -630,16 +728,26 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
         t for t, v in (("rotor inertia", terms.rotor), ("friction", terms.viscous)) if v is not None
     ]
     what = ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]
+    if robot.transmission is not None and (terms.rotor is not None or terms.viscous is not None):
+        # the side they were identified on; on the motor side the joints carry their motors'
+        # terms as they act on them (the loader divides them back)
+        doc["drive_side"] = robot.drive_side
+        what += (
+            " ("
+            + ("of the motors, per joint" if robot.drive_side == "motor" else "on the joints")
+            + ")"
+        )
     note = f"The {what} of this table are identified values written by mindyn export."
     old_notes = doc.get("notes")
     doc["notes"] = f"{old_notes.rstrip()} {note}" if isinstance(old_notes, str) else note
     out = Path(path)
-    side = _sidecar_path(sidecar, out) if terms.offset is not None or sidecar is not None else None
+    keep = terms.offset is not None or sidecar is not None
+    side = _sidecar_path(sidecar, out) if keep else None
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(yaml.dump(doc, Dumper=_TableDumper, sort_keys=False, width=100), "utf-8")
-    written = Export(out)
+    written = Export(out, notes=reflected)
     if side is not None:
-        _write_sidecar(side, robot, terms, out, urdf=False)
+        _write_sidecar(side, robot, motor_terms, out, urdf=False)
         written.sidecar = side
         if terms.offset is not None:
             written.notes.append(f"torque offsets have no place in a DH/MDH table: see {side}")

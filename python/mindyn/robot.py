@@ -316,6 +316,22 @@ class Robot:
         return Robot(self._m.with_drive_side(side))
 
     @property
+    def drive_matrix(self) -> np.ndarray:
+        """The rows ``t_k`` through which slot ``k``'s rotor inertia and friction act, shape
+        (n, n): the transmission's ``T`` on the motor side (:attr:`drive_side`), the identity
+        otherwise. Slot ``k`` adds ``t_k^T (Ia_k t_k . ddq + Fv_k v_k + Fc_k sign(v_k))`` to the
+        joint torques, ``v_k = t_k . dq``."""
+        if self.drive_side == "motor":
+            return _readonly(np.array(self._m.transmission["T"], dtype=float))
+        return _readonly(np.eye(self.n))
+
+    def slot_velocities(self, dq) -> np.ndarray:
+        """The velocity ``v_k = t_k . dq`` of each rotor/friction slot for joint velocities
+        ``dq`` (n,) or (m, n): the motor velocities on the motor side, ``dq`` otherwise."""
+        dq = np.asarray(dq, dtype=float)
+        return dq if self.drive_side != "motor" else dq @ self.drive_matrix.T
+
+    @property
     def friction_model(self) -> dict:
         """The shape of the friction terms: ``{"kind": "coulomb" | "asymmetric" | "smooth" |
         "stribeck", "velocity": array (n,) of tanh widths / Stribeck velocities [rad/s | m/s],
@@ -419,11 +435,16 @@ class Robot:
         self._m.coulomb = _vector(v, self.n, "coulomb")
 
     def parameter_names(self, rotor: bool = False, friction: bool = False) -> list[str]:
-        """Classical parameter names in the layout with optional ``Ia`` and ``Fv, Fc``."""
+        """Classical parameter names in the layout with optional ``Ia`` and ``Fv, Fc``: ``Ia6``
+        is slot 6's, joint 6's on the joint side, motor 6's (row 6 of ``transmission.T``) on the
+        motor side (:attr:`drive_side`)."""
         return self._m.parameter_names(_args.flag(rotor, "rotor"), _args.flag(friction, "friction"))
 
     def parameters(self, rotor: bool = False, friction: bool = False) -> np.ndarray:
-        """Classical parameter values of the model in that layout."""
+        """Classical parameter values of the model in that layout. :attr:`rotor_inertia`,
+        :attr:`viscous` and :attr:`coulomb` are the joints' (as descriptions give them); on the
+        motor side slot k holds motor k's: its joint's divided by ``r^2``, ``r^2``, ``|r|`` for a
+        motor that alone drives one joint alone with ratio ``r``, 0 for a coupled motor."""
         return self._m.parameters(_args.flag(rotor, "rotor"), _args.flag(friction, "friction"))
 
     # -- dynamics ------------------------------------------------------------------------------

@@ -77,6 +77,7 @@ void bindControl(py::module_& m) {
          bool rotor, bool friction) {
         const long n = s.model.nq();
         const ParameterLayout layout{rotor, friction};
+        checkDriveSide(s.model, layout);
         SlotineLiData sl(s.model, layout);
         return perSample4(s, q, dq, dqr, ddqr, n, layout.size(static_cast<int>(n)),
                           [&](const auto& x, const auto& y, const auto& z, const auto& w,

@@ -18,6 +18,7 @@
 #include "mindyn/model.hpp"
 #include "mindyn/momentum.hpp"
 #include "mindyn/projection.hpp"
+#include "mindyn/recursive_base.hpp"
 #include "mindyn/spatial.hpp"
 #include "mindyn/urdf.hpp"
 #include "py_args.hpp"
@@ -372,6 +373,7 @@ PYBIND11_MODULE(_core, m) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
             const ParameterLayout layout{rotor, friction};
+            checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
             Eigen::MatrixXd W(n, P);
@@ -388,6 +390,7 @@ PYBIND11_MODULE(_core, m) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             const ParameterLayout layout{rotor, friction};
+            checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
             auto [wk, wp] = perSample<2>(batch, {{{P}, {P}}}, [&](const auto& x, auto out) {
@@ -403,6 +406,7 @@ PYBIND11_MODULE(_core, m) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
             const ParameterLayout layout{rotor, friction};
+            checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
             Eigen::MatrixXd Wp(n, P), Wl(n, P);
@@ -701,6 +705,18 @@ PYBIND11_MODULE(_core, m) {
       py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
       "Why the projection method cannot take the model with these joint terms (its joint, "
       "parameter and memory limits, checked before computing), or None when it can.");
+  m.def(
+      "recursive_refusal",
+      [](const std::shared_ptr<PyModel>& model, bool rotor, bool friction) -> py::object {
+        const std::string why =
+            recursiveRefusal(model->model, {rotor, friction}, kDefaultRankTolerance);
+        if (why.empty()) return py::none();
+        return py::str(why);
+      },
+      py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
+      "Why the recursive method cannot take the model with these joint terms (rotor inertia of "
+      "a motor coupling joints whose coupled energy it cannot prove independent of the links'), "
+      "or None when it can.");
   m.def("khalil_order", [](int n, bool rotor, bool friction) {
     return khalilOrder(n, {rotor, friction});
   });

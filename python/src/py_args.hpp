@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "mindyn/dynamics.hpp"
 #include "mindyn/model.hpp"
 #include "py_types.hpp"
 
@@ -181,7 +182,10 @@ inline Eigen::Map<const Eigen::VectorXd> parameterArg(const Array& a, long size,
 inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object& params,
                                            ParameterLayout& layout, bool layout_given) {
   const int n = self.model.nq();
-  if (params.is_none()) return self.model.parameters(layout);
+  if (params.is_none()) {
+    checkDriveSide(self.model, layout);
+    return self.model.parameters(layout);
+  }
   Array a = params.cast<Array>();
   if (a.ndim() != 1) throw ModelError("params must be 1-D");
   const long size = a.shape(0);
@@ -193,6 +197,7 @@ inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object
     layout = ParameterLayout::fromSize(n, size);
   }
   requireFinite(a, "params", "entry");
+  checkDriveSide(self.model, layout);
   return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
 }
 

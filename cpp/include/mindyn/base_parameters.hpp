@@ -75,7 +75,8 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
 /// Size of each column's coordinates in units of the robot's length L (its longest root path,
 /// joint offsets and prismatic travel added up from the base, rounded to a power of two): L^2 for
 /// the mass, L for the first moments, 1 for the inertia, rotor inertia and friction (L^2 for
-/// those of a prismatic joint, which act on its force as a mass does); powers of two, so that
+/// those of a prismatic joint, or of a motor driving only prismatic joints, which act on a
+/// force as a mass does); powers of two, so that
 /// scaling by them is exact.
 Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout);
 

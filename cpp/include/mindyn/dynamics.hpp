@@ -29,7 +29,8 @@ void forwardKinematics(const Model& model, Data& data, const VecRef& q) noexcept
 void computeKinematics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                        const VecRef& ddq, bool with_gravity = true) noexcept;
 
-/// Newton-Euler inverse dynamics: tau = W(q, dq, ddq) * params.
+/// Newton-Euler inverse dynamics: tau = W(q, dq, ddq) * params. Rotor inertia and friction act
+/// on the joints, or through the transmission when Model::motorSide (model.hpp).
 void inverseDynamics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                      const VecRef& ddq, const VecRef& params, ParameterLayout layout,
                      VecOut tau) noexcept;
@@ -45,7 +46,8 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
 
 /// Kinetic and potential energy regressors (rows of length layout.size(n)):
 /// K = wK * params, P = wP * params, total energy H = (wK + wP) * params, Lagrangian (wK - wP).
-/// Friction columns are zero; the rotor column is 0.5 dq_k^2.
+/// Friction columns are zero; the rotor column of slot k is 0.5 v_k^2 (v_k = dq_k, or the motor
+/// velocity t_k . dq on the motor side, see Model::motorSide).
 void energyRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                       ParameterLayout layout, VecOut wK, VecOut wP) noexcept;
 
@@ -54,7 +56,8 @@ double kineticEnergy(const Model& model, Data& data, const VecRef& q, const VecR
 double potentialEnergy(const Model& model, Data& data, const VecRef& q, const VecRef& params,
                        ParameterLayout layout) noexcept;
 
-/// Joint-space inertia matrix A(q) (rotor inertia on the diagonal when in the layout).
+/// Joint-space inertia matrix A(q) (with rotor inertia when in the layout: Ia_k on the diagonal,
+/// or Ia_k t_k t_k^T on the motor side).
 void massMatrix(const Model& model, Data& data, const VecRef& q, const VecRef& params,
                 ParameterLayout layout, MatOut M) noexcept;
 
@@ -64,7 +67,12 @@ bool forwardDynamics(const Model& model, Data& data, const VecRef& q, const VecR
                      const VecRef& tau, const VecRef& params, ParameterLayout layout,
                      VecOut ddq) noexcept;
 
-/// Throws std::invalid_argument naming the argument whose size does not fit the model.
+/// Throws ModelError when the layout's rotor inertia or friction act on the motors
+/// (Model::motorSide) and the transmission has not one motor per joint.
+void checkDriveSide(const Model& model, ParameterLayout layout);
+
+/// Throws std::invalid_argument naming the argument whose size does not fit the model (and
+/// checkDriveSide's ModelError).
 void checkSizes(const Model& model, ParameterLayout layout, long q, long dq, long ddq, long params);
 
 }  // namespace mindyn

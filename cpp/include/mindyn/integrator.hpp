@@ -4,6 +4,8 @@
 //
 //   A(q) ddq + b(q, dq) + c(q) + Fv dq + Fc sigma(dq) = tau,      sigma = sign or tanh(dq / eps),
 //
+// (on the motor side, Model::motorSide, rotor inertia and friction act through the transmission:
+// A includes T^T Ia T, and the friction is T^T (Fv T dq + Fc sigma(T dq)));
 // integrated by `substeps` classical Runge-Kutta (RK4) steps of h = period / substeps (global
 // error O(h^4)). Coulomb friction is taken out of the parameter vector and applied as a torque,
 // so that it can be smoothed (eps > 0) where a switching sign would make the right-hand side

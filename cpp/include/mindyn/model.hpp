@@ -149,9 +149,9 @@ struct Model {
   Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();  // last link (n) frame -> tool frame
 
   Eigen::VectorXd inertial;       // 10 n classical inertial parameters about link origins
-  Eigen::VectorXd rotor_inertia;  // n, joint side
-  Eigen::VectorXd viscous;        // n
-  Eigen::VectorXd coulomb;        // n
+  Eigen::VectorXd rotor_inertia;  // n, joint side (as descriptions give them; see parameters())
+  Eigen::VectorXd viscous;        // n, joint side
+  Eigen::VectorXd coulomb;        // n, joint side
   /// Motors and their coupling to the joints (transmission.hpp); empty when the description
   /// declares none (each joint driven directly).
   Transmission transmission;
@@ -176,7 +176,11 @@ struct Model {
 
   /// Classical parameter names for a layout, e.g. XX1, ..., M1, Ia1, Fv1, Fc1, XX2, ...
   std::vector<std::string> parameterNames(ParameterLayout layout = {}) const;
-  /// Classical parameter values of this model in a layout.
+  /// Classical parameter values of this model in a layout. On the motor side (motorSide()),
+  /// slot k holds motor k's values: its own (transmission.rotor_inertia, viscous, coulomb) where
+  /// the description gives them, otherwise derived from the joint-side rotor_inertia, viscous
+  /// and coulomb: those of its joint divided by r^2, r^2 and |r| for a motor that alone drives
+  /// one joint alone with ratio r, 0 for a motor that turns with several joints.
   Eigen::VectorXd parameters(ParameterLayout layout = {}) const;
 
   /// Checks sizes, finiteness, magnitudes, unit axes and rigid transforms; throws ModelError

@@ -15,15 +15,17 @@
 // v_j) for i >= j; the world-frame inertia also turns, dI_i/dq_j = (S_j x*) I_i - I_i (S_j x).
 // The two contributions to dK/dq_j = sum_i [dv_i/dq_j . h_i + 1/2 v_i . (dI_i/dq_j) v_i] add
 // up to
-//   dK/dq_j = (v_j x S_j) . sum_{i >= j} h_i,      p_j = S_j . sum_{i >= j} h_i  (+ Ia_j dq_j),
+//   dK/dq_j = (v_j x S_j) . sum_{i >= j} h_i,      p_j = S_j . sum_{i >= j} h_i  (+ rotor),
 // (v_j x S_j = v_{j-1} x S_j as S_j x S_j = 0). dP/dq_j is the gravity torque. The rotor
-// energy 1/2 Ia_j dq_j^2 does not depend on q.
+// energy 1/2 Ia_k v_k^2 does not depend on q (v_k = dq_k, or t_k . dq on the motor side: its
+// momentum Ia_k t_k v_k).
 //
 // Frames: as in dynamics.hpp, every spatial quantity is in link coordinates about the link
 // origin; the sums over i >= j are carried from link to link towards the base like the wrench
 // blocks of the Newton-Euler regressor, with the link momentum block (6 x 10, h_k = B_k
 // pi_k: angular momentum I w + m c x v, linear momentum m v + w x m c) in place of the wrench
-// block. Friction columns are zero in both; the rotor column of Wp is dq_k, of Wl zero.
+// block. Friction columns are zero in both; the rotor column of Wp is dq_k e_k
+// (t_k v_k on the motor side), of Wl zero.
 //
 // Every function here allocates nothing and throws nothing after setup (Data built); sizes are
 // preconditions (checked by the Python binding).

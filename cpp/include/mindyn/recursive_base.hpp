@@ -19,11 +19,13 @@
 // space, is then spanned by the rows n T_{j,k} on the links k of the subtree of link j (j and
 // its descendants) for every row n of a basis of N_j: n applied to the inertia of that subtree
 // carried into frame j at q = 0 (T_{j,k}: the parameters of link k expressed in frame j). Rotor
-// inertia and friction are added as columns of their own (see recursiveIdentifiable).
+// inertia and friction are added as columns of their own (see recursiveIdentifiable), on the
+// motor side through the transmission (recursive_base.cpp).
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
+#include <string>
 #include <vector>
 
 #include "mindyn/model.hpp"
@@ -47,7 +49,13 @@ struct IdentifiableSpace {
   double largest_dropped = 0.0;
 };
 
-/// The identifiable space of `model` in `layout`. `tolerance`: relative size below which a
+/// Why the recursive method cannot take `model` in `layout` (rotor inertia of a motor that
+/// turns with two joints whose coupled energy it cannot prove independent of the links', see
+/// recursive_base.cpp), or an empty string when it can.
+std::string recursiveRefusal(const Model& model, ParameterLayout layout, double tolerance);
+
+/// The identifiable space of `model` in `layout`; throws ModelError with recursiveRefusal's
+/// reason when it refuses. `tolerance`: relative size below which a
 /// vector counts as lying in a span (the recursion's own rank decisions, on spans of at most ten
 /// dimensions).
 IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layout,

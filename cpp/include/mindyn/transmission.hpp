@@ -1,5 +1,6 @@
-// Transmissions between motors and joints, as data of the model (their dynamics, motor-side
-// inertia and friction, are not modelled yet).
+// Transmissions between motors and joints, as data of the model. Their dynamics -- rotor inertia
+// and friction of the motors, acting through T -- are those of the layout's rotor and friction
+// slots when the model's `motorSide()` (model.hpp; computed in cpp/src/drive_terms.hpp).
 //
 // Conventions (SI units; positions in rad or m as the joint/motor is revolute or prismatic):
 //   motor positions   q_m = T q + c        T (n_m x n): gear ratios and coupling terms,
@@ -57,6 +58,10 @@ struct Transmission {
                                           // without one, "matrix" from YAML rows
   Eigen::VectorXd torque_constant;        // n_m [N m/A], NaN where the description gives none
   std::vector<TransmissionGroup> groups;  // as declared in a URDF (empty from YAML)
+  /// Motor-side rotor inertia [kg m^2] and viscous [N m s/rad] and Coulomb [N m] friction of
+  /// each motor as a YAML description gives them: n_m entries (NaN for a motor without), or
+  /// empty when it gives none. Model::parameters puts them in the motor slots.
+  Eigen::VectorXd rotor_inertia, viscous, coulomb;
 
   bool empty() const { return motors.empty(); }
   int nm() const { return static_cast<int>(motors.size()); }

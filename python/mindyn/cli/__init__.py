@@ -31,6 +31,7 @@ from .args import (
     output_file,
     prepare_outputs,
     print_deprecation_notes,
+    with_drive_side,
 )
 from .method import base_method
 from .quiet import warnings_after_success
@@ -137,7 +138,7 @@ def cmd_info(args: argparse.Namespace) -> int:
 
 
 def cmd_base(args: argparse.Namespace) -> int:
-    robot = load(args.robot, tip=args.tip)
+    robot = with_drive_side(load(args.robot, tip=args.tip), args)
     order = [s.strip() for s in args.order.split(",")] if args.order else None
     method, why = base_method(robot, args.rotor, args.method, args.friction)
     bp = base_parameters(
@@ -162,7 +163,7 @@ def cmd_base(args: argparse.Namespace) -> int:
     if args.format == "latex":
         print(bp.latex(symbolic=args.symbolic))
         return 0
-    extras = joint_terms(args)
+    extras = joint_terms(args, robot)
     counts = {k: s["n"] for k, s in bp.sets.items()}
     m = bp.margin
     lines = [

@@ -496,9 +496,46 @@ def add_robot(p: argparse.ArgumentParser) -> None:
 
 
 def add_joint_terms(p: argparse.ArgumentParser, verb: str = "include") -> None:
-    """``--rotor`` and ``--friction``; ``verb`` says what they do in this command."""
-    p.add_argument("--rotor", action="store_true", help=f"{verb} rotor inertia Ia per joint")
-    p.add_argument("--friction", action="store_true", help=f"{verb} Fv, Fc per joint")
+    """``--rotor``, ``--friction`` and ``--drive-side``; ``verb`` says what they do in this
+    command."""
+    p.add_argument(
+        "--rotor", action="store_true", help=f"{verb} rotor inertia Ia per joint (or motor)"
+    )
+    p.add_argument("--friction", action="store_true", help=f"{verb} Fv, Fc per joint (or motor)")
+    add_drive_side(p)
+
+
+def add_drive_side(p: argparse.ArgumentParser) -> None:
+    """``--drive-side``: where rotor inertia and friction act when the description declares
+    transmissions."""
+    p.add_argument(
+        "--drive-side",
+        choices=("motor", "joint"),
+        default=None,
+        help="where rotor inertia and friction act when the description declares transmissions: "
+        "on the motors (the default then; Ia, Fv, Fc of slot k are motor k's, "
+        "tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))) or on the joints",
+    )
+
+
+def with_drive_side(robot, args):
+    """The robot with the drive side of ``--drive-side`` (unchanged when not given); ``motor``
+    on a robot without transmissions is refused (ModelError)."""
+    side = getattr(args, "drive_side", None)
+    return robot if side is None else robot.with_drive_side(side)
+
+
+def drive_side_words(robot, args) -> str:
+    """Where the rotor inertia and friction of this command act, in words for its first output
+    line, when the robot has transmissions and they are asked for (a command without
+    ``--rotor`` / ``--friction`` always has them); "" otherwise."""
+    if robot.transmission is None or not (
+        getattr(args, "rotor", True) or getattr(args, "friction", True)
+    ):
+        return ""
+    if robot.drive_side == "motor":
+        return "on the motors through the transmissions (--drive-side joint: on the joints)"
+    return "on the joints (--drive-side joint)"
 
 
 def add_offset(p: argparse.ArgumentParser, verb: str = "include") -> None:
@@ -510,12 +547,18 @@ def add_offset(p: argparse.ArgumentParser, verb: str = "include") -> None:
     )
 
 
-def joint_terms(args) -> list[str]:
+def joint_terms(args, robot=None) -> list[str]:
     """The joint terms a command line asked for (``--rotor``, ``--friction``, ``--offset``), in
-    words, for the first line of a command's output."""
+    words, for the first line of a command's output; with ``robot``, where the rotor inertia
+    and friction act when it has transmissions (:func:`drive_side_words`)."""
     named = (
         ("rotor inertia", "rotor"),
         ("friction", "friction"),
         ("torque offsets", "offset"),
     )
-    return [words for words, flag in named if getattr(args, flag, False)]
+    words = [words for words, flag in named if getattr(args, flag, False)]
+    side = drive_side_words(robot, args) if robot is not None else ""
+    if side:
+        k = 1 + max(i for i, w in enumerate(words) if w in ("rotor inertia", "friction"))
+        words[k - 1] += " " + side
+    return words

@@ -24,6 +24,7 @@ from .args import (
     joint_values,
     joint_vector,
     output_file,
+    with_drive_side,
 )
 from .method import base_method
 
@@ -167,7 +168,7 @@ def _outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
-    robot = load(args.robot, tip=args.tip)
+    robot = with_drive_side(load(args.robot, tip=args.tip), args)
     out = _output_base(args)
     header = out.name + ".h"
     same = dict(

@@ -16,10 +16,12 @@ from .args import (
     ZCR07S_STUDY,
     Number,
     add_command,
+    add_drive_side,
     add_robot,
     check_radians,
     controller_period,
     deprecated,
+    drive_side_words,
     item,
     joint_values,
     joint_vector,
@@ -27,6 +29,7 @@ from .args import (
     output_dir,
     output_file,
     seed,
+    with_drive_side,
 )
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
@@ -101,7 +104,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
 def cmd_track(args: argparse.Namespace) -> int:
     from ..control.simulation import SensorNoise, simulate, summary, write_tracking_report
 
-    robot = load(args.robot, tip=args.tip)
+    robot = with_drive_side(load(args.robot, tip=args.tip), args)
     n = robot.n
     if args.param_error is None:
         args.param_error = 0.3
@@ -128,7 +131,12 @@ def cmd_track(args: argparse.Namespace) -> int:
     s = summary(result, cycle)
     lines = [
         f"{robot.name}: {args.controller}, period {args.period * 1e3:g} ms, {duration:g} s, "
-        f"{ref_text}",
+        f"{ref_text}"
+        + (
+            f"; rotor inertia and friction {drive_side_words(robot, args)}"
+            if drive_side_words(robot, args)
+            else ""
+        ),
     ]
     if args.controller != "pd":
         lines.append(
@@ -330,6 +338,7 @@ def register(sub) -> None:
         "diverges is stopped, each with the figures that explain it (exit status 2).",
     )
     add_robot(p)
+    add_drive_side(p)
     add_closed_loop_args(p, "adaptive-pd")
     from ..control.simulation import MAX_STEPS
 

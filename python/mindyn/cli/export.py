@@ -34,16 +34,19 @@ def read_classical(path: str) -> tuple[dict, str | None]:
     from ..identification.document import read_identification
 
     doc = read_identification(path, need=("classical",), what="identification file", finite=True)
-    return doc["classical"], doc.get("robot")
+    return doc["classical"], doc.get("robot"), doc
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    classical, identified_for = read_classical(args.params)
+    from ..identification.document import robot_on_drive_side
+
+    classical, identified_for, doc = read_classical(args.params)
     robot = load(args.robot, tip=args.tip)
     if identified_for not in (None, robot.name):
         raise ModelError(
             f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"
         )
+    robot = robot_on_drive_side(robot, doc, str(args.params))
     write_description(
         robot,
         classical,

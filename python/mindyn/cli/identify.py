@@ -17,12 +17,14 @@ from ..robot import load
 from .args import (
     ZCR07S_STUDY,
     add_command,
+    add_drive_side,
     add_joint_terms,
     add_offset,
     add_robot,
     check_radians,
     controller_period,
     deprecated,
+    drive_side_words,
     joint_terms,
     joint_values,
     joint_vector,
@@ -30,6 +32,7 @@ from .args import (
     output_dir,
     output_file,
     seed,
+    with_drive_side,
 )
 from .export import add_description_outputs, check_description_kind, write_description
 
@@ -55,7 +58,7 @@ def cmd_excite(args: argparse.Namespace) -> int:
             f"--samples {args.samples}: expected more than 2 x --harmonics = "
             f"{2 * args.harmonics}, so that the highest harmonic is sampled"
         )
-    robot = load(args.robot, tip=args.tip)
+    robot = with_drive_side(load(args.robot, tip=args.tip), args)
     start = None
     if args.start:
         start = np.array(joint_values(args.start, robot.n, "--start", broadcast=True))
@@ -107,7 +110,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from ..identification.data import convert_torque, write_csv
     from .control import reference_and_controller
 
-    robot = load(args.robot, tip=args.tip)
+    robot = with_drive_side(load(args.robot, tip=args.tip), args)
     rate = 1.0 / args.period if args.period else args.rate
     args.period = 1.0 / rate
     ref, ref_text, duration, cycle, controller, _ = reference_and_controller(
@@ -153,6 +156,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         f"{robot.name}: {info['mode']} simulation, {log.t.shape[0]} samples at {rate:g} Hz "
         f"({info['duration_s']:g} s), rotor inertia {'on' if args.rotor else 'off'}, "
         f"friction {'on' if args.friction else 'off'}"
+        + (f", {side}" if (side := drive_side_words(robot, args)) else "")
     )
     if info["mode"] == "tracking":
         err = np.degrees(info["max_tracking_error"])
@@ -314,7 +318,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     if args.validate_currents and not args.validate:
         raise ValueError("--validate-currents: expected --validate with the logs they belong to")
-    robot = load(args.robot, tip=args.tip)
+    robot = with_drive_side(load(args.robot, tip=args.tip), args)
     if (args.urdf or args.yaml or args.mjcf or args.sidecar) and not args.consistent:
         given = "urdf" if args.urdf else "yaml" if args.yaml else "mjcf" if args.mjcf else "sidecar"
         raise ValueError(
@@ -375,13 +379,19 @@ def cmd_identify(args: argparse.Namespace) -> int:
         raise ValueError("--prior-weight: expected --consistent as well")
     truth_doc = truth_docs[0] if all(d == truth_docs[0] for d in truth_docs) else None
 
+    truth_side = None
+    if truth_doc and (args.rotor or args.friction):
+        sim = truth_doc.get("simulation")
+        side = sim.get("drive_side", "joint") if isinstance(sim, dict) else "joint"
+        if side != robot.drive_side:  # its Ia/Fv/Fc are another side's: nothing to compare
+            truth_doc, truth_side = None, side
     truth = true_base_values(base, truth_doc) if truth_doc else None
     fit = validate(res, logs)
     val = validate(res, vlogs) if vlogs else None
 
     data = logs[0]
     proc = data.processing
-    extras = joint_terms(args)
+    extras = joint_terms(args, robot)
     head = (
         f"{robot.name}: {res.model} model, {base.n} base parameters"
         + (f" ({', '.join(extras)})" if extras else "")
@@ -477,6 +487,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
             else ""
         )
     )
+    if truth_side:
+        out.append(
+            f"  note: the log was simulated with rotor inertia and friction on the {truth_side}s, "
+            f"this fit has them on the {robot.drive_side}s: its true values are not compared"
+        )
     for w in res.settings.get("warnings", []):
         out.append(f"  WARNING: {w}")
     cfit = cval = None
@@ -1214,6 +1229,7 @@ def register(sub) -> None:
     )
     p.add_argument("--rotor", action="store_true", help="base parameters with rotor inertia")
     p.add_argument("--friction", action="store_true", help="base parameters with friction")
+    add_drive_side(p)
     joint_vector(
         p, "--start", help="prescribed start position [rad, m] (or one value for all joints)"
     )
@@ -1281,6 +1297,7 @@ def register(sub) -> None:
     )
     p.add_argument("--rotor", action="store_true", help="true robot with rotor inertia")
     p.add_argument("--friction", action="store_true", help="true robot with friction")
+    add_drive_side(p)
     p.add_argument(
         "--torque-noise",
         metavar="SD",

@@ -274,9 +274,14 @@ class ComputedTorque:
     def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
         v = ddq_d - self.kd * (dq - dq_d) - self.kp * (q - q_d)
         self.model_torque = self.base.regressor(q, dq, v) @ self._p
-        if self._fc.any():
-            s = np.tanh(dq_d / self.eps) if self.eps > 0 else np.sign(dq_d)
-            self.model_torque = self.model_torque + self._fc * s
+        if self._fc.any():  # slot k's Coulomb torque at its reference velocity, through t_k
+            robot = self.base.robot
+            v_d = robot.slot_velocities(dq_d)
+            s = np.tanh(v_d / self.eps) if self.eps > 0 else np.sign(v_d)
+            f = self._fc * s
+            self.model_torque = self.model_torque + (
+                f if robot.drive_side != "motor" else robot.drive_matrix.T @ f
+            )
         return self.model_torque
 
 

@@ -43,10 +43,10 @@ from .._core import ModelError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
-from .document import read_identification
+from .document import read_identification, robot_on_drive_side
 from .errors import IdentificationError
 from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
-from .models import require_torque
+from .models import moving_equations, require_torque
 
 __all__ = [
     "ConsistentResult",
@@ -850,6 +850,7 @@ def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.
     arm = read_identification(arm, need=need, what=where)
     if arm["robot"] != robot.name:
         raise ModelError(f"{where}: identified for robot '{arm['robot']}', not '{robot.name}'")
+    robot = robot_on_drive_side(robot, arm, where)
     base = base_parameters(
         robot, rotor=arm["rotor"], friction=arm["friction"], offset=arm["offset"]
     )
@@ -938,8 +939,9 @@ def identify_payload(
         )
         r = (d.tau - tau_arm).reshape(-1)
         A = Wl.reshape(-1, 10)
-        if min_velocity > 0 and base.friction:
-            keep = np.abs(d.dq).reshape(-1) >= min_velocity
+        keep = moving_equations(base, d.dq, min_velocity)
+        if keep is not None:
+            keep = keep.reshape(-1)
             A, r = A[keep], r[keep]
         rows_A.append(A)
         rows_y.append(r)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .data import DataError, read_json
 
-__all__ = ["FLAGS", "read_identification"]
+__all__ = ["FLAGS", "read_identification", "robot_on_drive_side"]
 
 #: The boolean fields: JSON ``true`` / ``false`` only.
 FLAGS = ("rotor", "friction", "offset", "consistent")
@@ -77,6 +77,9 @@ def read_identification(
         names = doc.get("base_names")
         if isinstance(names, list) and len(names) != len(values):
             raise DataError(f"{where}: {len(values)} 'base_values' for {len(names)} 'base_names'")
+    side = doc.get("drive_side")
+    if "drive_side" in doc and side not in ("motor", "joint"):
+        raise DataError(f'{where}: \'drive_side\' is {_kind(side)}; expected "motor" or "joint"')
     classical = doc.get("classical")
     if classical is not None:
         if not isinstance(classical, dict) or not classical:
@@ -88,6 +91,20 @@ def read_identification(
             k: _number(v, f"{where}: 'classical' {k!r}") for k, v in classical.items()
         }
     return out
+
+
+def robot_on_drive_side(robot, doc: dict, where: str = "identification JSON"):
+    """``robot`` with rotor inertia and friction where the identification ``doc`` had them
+    (``drive_side``; a document without it was identified with them on the joints)."""
+    side = doc.get("drive_side", "joint")
+    if robot.drive_side == side:
+        return robot
+    if side == "motor" and robot.transmission is None:
+        raise DataError(
+            f"{where}: identified with rotor inertia and friction on the motors, but "
+            f"'{robot.name}' declares no transmissions"
+        )
+    return robot.with_drive_side(side)
 
 
 def _number(v, where: str) -> float:

@@ -31,6 +31,7 @@ from .models import (
     energy_system,
     integral_chunks,
     integral_windows,
+    moving_equations,
     require_torque,
     torque_noise,
 )
@@ -117,6 +118,9 @@ class IdentificationResult:
             "rotor": self.base.rotor,
             "friction": self.base.friction,
             "offset": self.base.offset,
+            # where Ia/Fv/Fc act: "motor" (slot k is motor k's, through the transmission) or
+            # "joint"
+            "drive_side": self.base.robot.drive_side,
             "names": list(self.names),
             "values": [float(v) for v in self.values],
             "std": [float(v) for v in self.std],
@@ -226,14 +230,14 @@ def dynamic_triangles(
     n, nb = data.n, base.n
     S = np.zeros((n, nb + 1, nb + 1))
     rows = np.zeros(n, dtype=int)
-    skip = min_velocity > 0 and base.friction
+    keep = moving_equations(base, data.dq, min_velocity)
     for a in range(0, data.m, CHUNK_SAMPLES):
         b = min(data.m, a + CHUNK_SAMPLES)
         W = regressor_rows(base, data, a, b)  # (k, n, nb)
         for j in range(n):
             A = np.column_stack([W[:, j, :], data.tau[a:b, j]])
-            if skip:
-                A = A[np.abs(data.dq[a:b, j]) >= min_velocity]
+            if keep is not None:
+                A = A[keep[a:b, j]]
             rows[j] += A.shape[0]
             S[j] = _triangle(np.vstack([S[j], A]))
     return S, rows
@@ -248,7 +252,9 @@ def regressor_rows(base: BaseParameters, data: JointData, a: int, b: int) -> np.
     return base.regressor(data.q[a:b], data.dq[a:b], data.ddq[a:b])
 
 
-def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float, logs=(), speed=0.0):
+def _check_rank(
+    ls: _Reduced, names: list[str], what: str, tol: float, logs=(), speed=0.0, robot=None
+):
     """Raises RankDeficientError when the columns of the regressor are dependent, naming the
     parameters in the dependence and, from the motion of ``logs`` (joint speeds at or above
     ``speed``), the option that would lift it (:func:`_rank_remedies`); returns the condition
@@ -267,7 +273,7 @@ def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float, logs=(), 
             parts.append(f"no effect on this data: {', '.join(zero)}")
         if concerned:
             parts.append(f"dependent on each other in this data: {', '.join(concerned)}")
-        remedies = _rank_remedies(zero + concerned, logs, speed)
+        remedies = _rank_remedies(zero + concerned, logs, speed, robot)
         raise RankDeficientError(
             f"{what}: the stacked regressor has rank {rank} for {ls.c} base parameters; "
             f"this trajectory cannot identify {len(dropped)} of them ({'; '.join(parts)}). "
@@ -282,25 +288,49 @@ def _check_rank(ls: _Reduced, names: list[str], what: str, tol: float, logs=(), 
     return cond
 
 
-def _rank_remedies(concerned: list[str], logs, speed: float) -> list[str]:
+def _rank_remedies(concerned: list[str], logs, speed: float, robot=None) -> list[str]:
     """What would lift a rank deficiency in ``concerned`` (base-parameter names), from the motion
     of ``logs``: a joint that never moves (no speed at or above ``speed``) leaves its friction
     (``--friction``) and rotor inertia (``--rotor``) without effect; a joint that never reverses
-    makes its Coulomb friction a constant, inseparable from its torque offset (``--offset``)."""
+    makes its Coulomb friction a constant, inseparable from its torque offset (``--offset``).
+    With rotor inertia and friction on the motors (``robot``'s drive side), ``Ia``, ``Fv`` and
+    ``Fc`` of slot k follow motor k's motion (its speed in joint units, divided by its largest
+    ratio) and are named after the motor; ``Off`` stays the joint's."""
     logs = list(logs)
     if not logs:
         return []
     dq = np.vstack([d.dq for d in logs])
-    floor = max(speed, 1e-12 * float(np.max(np.abs(dq), initial=0.0)))
-    up = np.any(dq >= floor, axis=0) if dq.size else np.zeros(dq.shape[1], bool)
-    down = np.any(dq <= -floor, axis=0) if dq.size else np.zeros(dq.shape[1], bool)
     kinds: dict[int, set] = {}
     for nm in concerned:
         hit = re.fullmatch(r"(Fv|Fc|Off|Ia)(\d+)", nm)
         if hit:
             kinds.setdefault(int(hit.group(2)), set()).add(hit.group(1))
+    if robot is None or robot.drive_side != "motor":
+        return _remedies(kinds, dq, speed, "Joint(s) " + "{}")
+    T = robot.drive_matrix
+    vm = robot.slot_velocities(dq) / np.max(np.abs(T), axis=1)
+    drive = {k: v - {"Off"} for k, v in kinds.items() if v - {"Off"}}
+    offsets = {k: {"Off"} for k, v in kinds.items() if "Off" in v}
+    motors = robot.transmission.motors
+    names = [f"'{m}'" for m in motors]
+    return _remedies(drive, vm, speed, "Motor(s) {}", names) + _remedies(
+        offsets, dq, speed, "Joint(s) {}"
+    )
+
+
+def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) -> list[str]:
+    """The remedies of :func:`_rank_remedies` for the slots ``kinds`` (1-based index -> kinds of
+    parameter) moving at ``v`` (m, n), ``label`` formatted with their names (their indices
+    unless ``names``)."""
+    floor = max(speed, 1e-12 * float(np.max(np.abs(v), initial=0.0)))
+    up = np.any(v >= floor, axis=0) if v.size else np.zeros(v.shape[1], bool)
+    down = np.any(v <= -floor, axis=0) if v.size else np.zeros(v.shape[1], bool)
     still = [j for j in sorted(kinds) if not (up[j - 1] or down[j - 1])]
     one_way = [j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and {"Fc", "Off"} & kinds[j]]
+
+    def named(js):
+        return label.format(", ".join(str(j) if names is None else names[j - 1] for j in js))
+
     out = []
     speed_txt = f" (speed {speed:g} rad/s | m/s or more)" if speed > 0 else ""
     if still:
@@ -310,13 +340,13 @@ def _rank_remedies(concerned: list[str], logs, speed: float) -> list[str]:
             | {"--offset" for j in still if "Off" in kinds[j] and "Fc" not in kinds[j]}
         )
         out.append(
-            f"Joint(s) {', '.join(map(str, still))} never move{speed_txt} in this data: "
+            f"{named(still)} never move{speed_txt} in this data: "
             + (f"leave out {' and '.join(opts)}, or " if opts else "")
             + "move them."
         )
     if one_way:
         out.append(
-            f"Joint(s) {', '.join(map(str, one_way))} never reverse direction in this data: "
+            f"{named(one_way)} never reverse direction in this data: "
             "their Coulomb friction is a constant torque there, inseparable from a torque offset: "
             "leave out --offset (or --friction), or reverse them."
         )
@@ -523,7 +553,7 @@ def identify(
     else:
         ls = _Reduced(W, y)
     speed = min_velocity if base.friction and model == "dynamic" else 0.0
-    cond = _check_rank(ls, names, what, rank_tolerance, logs, speed)
+    cond = _check_rank(ls, names, what, rank_tolerance, logs, speed, base.robot)
 
     joint_sigma = None
     if weighted and model == "energy":

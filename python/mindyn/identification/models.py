@@ -5,8 +5,9 @@
     ``W_b(q_i, dq_i, ddq_i) p_b = tau_i`` for every sample ``i``, stacked (``m n`` rows).
 ``energy``
     The integral form of the energy theorem over consecutive windows ``[t_a, t_b]`` of
-    ``window`` samples: ``(w_H(t_b) - w_H(t_a)) p_b + Fv_k int dq_k^2 dt + Fc_k int |dq_k| dt
-    + Off_k (q_k(t_b) - q_k(t_a)) = int dq^T tau dt``; no accelerations are needed. The
+    ``window`` samples: ``(w_H(t_b) - w_H(t_a)) p_b + Fv_k int v_k^2 dt + Fc_k int |v_k| dt
+    + Off_k (q_k(t_b) - q_k(t_a)) = int dq^T tau dt``; no accelerations are needed (``v_k`` the
+    velocity of friction slot ``k``: ``dq_k``, or motor ``k``'s ``t_k . dq`` on the motor side). The
     dissipated-energy columns of the friction parameters (and the work of the torque offsets)
     replace their (zero) energy columns; the integrals use the trapezoid or Simpson rule on the
     samples.
@@ -38,6 +39,23 @@ CHUNK_SAMPLES = 8192
 
 
 # ---------------------------------------------------------------------------------------------
+def moving_equations(base: BaseParameters, dq, min_velocity: float) -> np.ndarray | None:
+    """Which equations of the dynamic model to keep with ``min_velocity``: ``(m, n)`` booleans,
+    or None to keep all (no friction, or ``min_velocity`` 0). Joint ``j``'s equation at a sample
+    is left out when a slot whose friction acts on it moves slower than ``min_velocity``: on the
+    joints, joint ``j`` itself; on the motors, each motor ``k`` with ``T[k, j] != 0``, its speed
+    taken in joint units (divided by its largest ``|T[k, :]|``, a direct drive's ratio)."""
+    if not (min_velocity > 0 and base.friction):
+        return None
+    robot = base.robot
+    dq = np.asarray(dq, dtype=float)
+    if robot.drive_side != "motor":
+        return np.abs(dq) >= min_velocity
+    T = robot.drive_matrix
+    slow = np.abs(robot.slot_velocities(dq)) < min_velocity * np.max(np.abs(T), axis=1)
+    return ~(slow.astype(float) @ (T != 0).astype(float) > 0)
+
+
 def dynamic_system(base: BaseParameters, data: JointData, min_velocity: float = 0.0):
     """Stacked dynamic model: ``W`` (r, nb), ``y`` (r,) and the joint of each row (r,).
 
@@ -52,8 +70,9 @@ def dynamic_system(base: BaseParameters, data: JointData, min_velocity: float = 
         W = base.regressor(data.q, data.dq, data.ddq)  # (m, n, nb)
     m, n, nb = W.shape
     W, y, joint = W.reshape(m * n, nb), data.tau.reshape(m * n), np.tile(np.arange(n), m)
-    if min_velocity > 0 and base.friction:
-        keep = np.abs(data.dq).reshape(m * n) >= min_velocity
+    keep = moving_equations(base, data.dq, min_velocity)
+    if keep is not None:
+        keep = keep.reshape(m * n)
         W, y, joint = W[keep], y[keep], joint[keep]
     return W, y, joint
 
@@ -96,8 +115,9 @@ def energy_system(
         integration_f = integration
     names = base.names
     cols = {}
+    v = base.robot.slot_velocities(dq)  # friction power of slot k: (Fv_k v_k + Fc_k sign v_k) v_k
     for k in range(data.n):
-        for kind, f in (("Fv", dq[:, k] ** 2), ("Fc", np.abs(dq[:, k]))):
+        for kind, f in (("Fv", v[:, k] ** 2), ("Fc", np.abs(v[:, k]))):
             name = f"{kind}{k + 1}"
             if name in names:
                 cols[names.index(name)] = f
@@ -167,7 +187,9 @@ def integral_chunks(
 
     Joint ``j``, window ``[t_a, t_b]``:
     ``(W_p,j(t_b) - W_p,j(t_a) + int W_l,j dt) p_b + Fv_j (q_j(t_b) - q_j(t_a))
-    + Fc_j int sign(dq_j) dt + Off_j (t_b - t_a) = int tau_j dt``, with the base momentum regressors
+    + Fc_j int sign(dq_j) dt + Off_j (t_b - t_a) = int tau_j dt`` (on the motor side, motor
+    ``k``'s friction reaches joint ``j`` as ``T[k, j] (Fv_k t_k . (q(t_b) - q(t_a)) + Fc_k int
+    sign(t_k . dq) dt)``), with the base momentum regressors
     ``p = W_p p_b``, ``-dL/dq = W_l p_b`` (:meth:`BaseParameters.momentum_regressors`). The
     momentum is taken at the window's ends only; ``W_l``, the Coulomb term and the torque are
     integrated over the window's samples by Simpson's rule (``simpson``, exact for cubics; any
@@ -204,6 +226,8 @@ def integral_chunks(
     fv = {k: names.index(f"Fv{k + 1}") for k in range(n) if f"Fv{k + 1}" in names}
     fc = {k: names.index(f"Fc{k + 1}") for k in range(n) if f"Fc{k + 1}" in names}
     off = {k: names.index(f"Off{k + 1}") for k in range(n) if f"Off{k + 1}" in names}
+    T = base.robot.drive_matrix
+    v = base.robot.slot_velocities(data.dq)
     per = max(1, CHUNK_SAMPLES // (window + 1))
     for c0 in range(0, a.size, per):
         wa, wb = a[c0 : c0 + per], b[c0 : c0 + per]
@@ -218,10 +242,14 @@ def integral_chunks(
             y = np.einsum("ws,wsj->wj", np.diff(data.t[idx], axis=1), tau[:, :-1])
         else:
             y = np.einsum("ws,wsj->wj", C, tau)
+        # Slot k's friction on joint j is T[k, j] (Fv_k v_k + Fc_k sign v_k), v = T dq: its
+        # viscous integral T[k, j] Fv_k t_k . (q(t_b) - q(t_a)), exactly.
+        dqw = data.q[wb] - data.q[wa]
         for k, col in fv.items():
-            W[:, k, col] = data.q[wb, k] - data.q[wa, k]
+            W[:, :, col] = np.outer(dqw @ T[k], T[k])
         for k, col in fc.items():
-            W[:, k, col] = np.einsum("ws,ws->w", C, np.sign(data.dq[idx, k]))
+            sk = np.einsum("ws,ws->w", C, np.sign(v[idx, k]))
+            W[:, :, col] = np.outer(sk, T[k])
         for k, col in off.items():
             W[:, k, col] = data.t[wb] - data.t[wa]
         yield W, y

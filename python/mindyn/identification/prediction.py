@@ -13,6 +13,7 @@ import numpy as np
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
+from .document import robot_on_drive_side
 from .estimation import CHUNK_SAMPLES
 from .validation import logged_samples
 
@@ -97,6 +98,7 @@ def identified_model(
         robot = load(robot, tip=doc.get("tip"))
         if doc.get("robot") not in (None, robot.name):
             raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
+    robot = robot_on_drive_side(robot, doc, where)
     base = base_parameters(
         robot,
         rotor=bool(doc.get("rotor")),

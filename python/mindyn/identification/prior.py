@@ -251,7 +251,13 @@ def block_triangles(res, data, folds: int = FOLDS) -> np.ndarray:
     shape (folds, nb+1, nb+1), ``S_k^T S_k = [A_k b_k]^T [A_k b_k]`` over the block's rows with
     the fit's own row weights."""
     from .estimation import _logs, _triangle, regressor_rows
-    from .models import energy_row_noise, energy_system, integral_chunks, integral_windows
+    from .models import (
+        energy_row_noise,
+        energy_system,
+        integral_chunks,
+        integral_windows,
+        moving_equations,
+    )
 
     base = res.base
     nb = base.n
@@ -269,7 +275,7 @@ def block_triangles(res, data, folds: int = FOLDS) -> np.ndarray:
         for d in logs:
             if res.model == "dynamic":
                 block = _cut(d.m, folds)
-                vmin = res.settings.get("min_velocity", 0.0)
+                keep = moving_equations(base, d.dq, res.settings.get("min_velocity", 0.0))
                 for k in range(folds):
                     a, b = np.flatnonzero(block == k)[[0, -1]] if np.any(block == k) else (0, -1)
                     if b < a:
@@ -279,8 +285,8 @@ def block_triangles(res, data, folds: int = FOLDS) -> np.ndarray:
                         Wr = regressor_rows(base, d, c0, c1)
                         for j in range(d.n):
                             A = w[j] * np.column_stack([Wr[:, j, :], d.tau[c0:c1, j]])
-                            if vmin > 0 and base.friction:
-                                A = A[np.abs(d.dq[c0:c1, j]) >= vmin]
+                            if keep is not None:
+                                A = A[keep[c0:c1, j]]
                             add(k, A)
             else:
                 window = res.settings["integral_window"]

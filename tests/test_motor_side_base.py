@@ -1,0 +1,125 @@
+"""Base parameters with rotor inertia and friction on the motors of coupled transmissions: the
+counts of the projection, recursive and numerical methods agree (on a coupled-wrist 6R, a
+WAM-like 7R and random trees with random differentials and four-bar linkages), the base
+regressor reproduces the classical dynamics (W_b (Y pi) = tau) at random states, and a case the
+recursive method cannot decide is refused with its reason and left to the others."""
+
+from __future__ import annotations
+
+import mindyn
+import numpy as np
+import pytest
+from coupled_arms import coupled_wrist_urdf, motor_terms, wam_like_urdf
+from random_tree import random_tree_urdf
+
+PREFIX = "transmission_interface/"
+METHODS = ("projection", "recursive", "numerical")
+
+
+def _pair(kind, name, joints, motors, a):
+    parts = [
+        f"<actuator name='{m}'><role>actuator{r + 1}</role>"
+        f"<mechanicalReduction>{a[r]}</mechanicalReduction></actuator>"
+        for r, m in enumerate(motors)
+    ] + [
+        f"<joint name='{j}'><role>joint{r + 1}</role><mechanicalReduction>1</mechanicalReduction>"
+        "</joint>"
+        for r, j in enumerate(joints)
+    ]
+    return f"<transmission name='{name}'><type>{PREFIX}{kind}</type>{''.join(parts)}</transmission>"
+
+
+def coupled_tree(tmp_path, seed, n=6):
+    """A random tree whose joints are coupled in random pairs by differentials and four-bar
+    linkages (random reductions); a joint left over is driven directly."""
+    path = random_tree_urdf(tmp_path / f"tree{seed}.urdf", n=n, seed=seed)
+    names = mindyn.load(path).joint_names
+    rng = np.random.default_rng(seed)
+    order = rng.permutation(len(names))
+    tr = []
+    for i in range(0, len(order) - 1, 2):
+        a, b = names[order[i]], names[order[i + 1]]
+        kind = "DifferentialTransmission" if rng.uniform() < 0.5 else "FourBarLinkageTransmission"
+        red = rng.uniform(5, 50, 2) * rng.choice([-1, 1], 2)
+        tr.append(_pair(kind, f"t{i}", [a, b], [f"m_{a}", f"m_{b}"], red))
+    text = path.read_text().replace("</robot>", "".join(tr) + "</robot>")
+    path.write_text(text)
+    robot = mindyn.load(path)
+    assert robot.drive_side == "motor" and robot.transmission.n_motors == robot.n
+    assert np.count_nonzero(robot.transmission.T) > robot.n  # coupled
+    return robot
+
+
+def counts(robot, methods=METHODS):
+    out = {}
+    for m in methods:
+        b = mindyn.base_parameters(robot, rotor=True, friction=True, method=m)
+        out[m] = {k: s["n"] for k, s in b.sets.items()}
+    return out
+
+
+def check_regrouping(robot, seed=0):
+    """W_b (Y pi) = W pi for random classical pi at random states, and W pi is the rigid bodies'
+    (joint-side dynamics without rotor and friction) plus the motor terms written out."""
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    rng = np.random.default_rng(seed)
+    n = robot.n
+    for _ in range(3):
+        pi = rng.uniform(-1, 1, 13 * n)
+        q, dq, ddq = rng.uniform(-2, 2, (3, n))
+        tau = robot.inverse_dynamics(q, dq, ddq, pi)
+        rigid = pi.copy()
+        for c in (10, 11, 12):
+            rigid[c::13] = 0.0
+        T = robot.transmission.T
+        ref = robot.with_drive_side("joint").inverse_dynamics(q, dq, ddq, rigid) + motor_terms(
+            T, pi[10::13], pi[11::13], pi[12::13], dq, ddq
+        )
+        assert np.max(np.abs(ref - tau)) <= 1e-12 * np.max(np.abs(tau))
+        tb = base.regressor(q, dq, ddq) @ base.values(pi)
+        assert np.max(np.abs(tb - tau)) <= 1e-9 * max(1.0, np.max(np.abs(tau)))
+
+
+@pytest.mark.parametrize("make", [coupled_wrist_urdf, wam_like_urdf])
+def test_counts_agree_and_the_base_regressor_reproduces_the_dynamics(tmp_path, make):
+    path, _ = make(tmp_path / "arm.urdf")
+    robot = mindyn.load(path)
+    c = counts(robot)
+    assert c["projection"] == c["recursive"] == c["numerical"], c
+    check_regrouping(robot)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_trees_with_coupled_transmissions(tmp_path, seed):
+    robot = coupled_tree(tmp_path, seed)
+    refused = mindyn._core.recursive_refusal(robot._m, rotor=True, friction=True)
+    c = counts(robot, ("projection", "numerical") if refused else METHODS)
+    assert c["projection"] == c["numerical"], c
+    if refused:
+        # the reason names a coupled motor, and the method refuses to run with it
+        assert "cannot decide" in refused and "motor" in refused
+        with pytest.raises(mindyn.ModelError, match="cannot decide"):
+            mindyn.base_parameters(robot, rotor=True, friction=True, method="recursive")
+    else:
+        assert c["recursive"] == c["numerical"], c
+    check_regrouping(robot, seed)
+
+
+def test_cli_base_says_where_the_terms_act_and_the_flag_moves_them(tmp_path):
+    import contextlib
+    import io
+
+    from conftest import cli
+    from mindyn.cli import main
+
+    path, _ = coupled_wrist_urdf(tmp_path / "arm.urdf")
+    motor = cli("base", path, "--rotor", "--friction").splitlines()[0]
+    joint = cli("base", path, "--rotor", "--friction", "--drive-side", "joint").splitlines()[0]
+    assert "on the motors" in motor and "on the joints" in joint
+    track = cli("track", path, "--duration", "0.2").splitlines()[0]
+    assert "on the motors" in track
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        rc = main(["base", "puma560", "--rotor", "--drive-side", "motor"])
+    assert rc != 0 and len(err.getvalue().splitlines()) == 1
+    assert "declares no transmissions" in err.getvalue()
