@@ -90,8 +90,7 @@ void forcePass(const Model& model, Data& data, const VecRef& dq, const VecRef& d
     double t = data.S[k].dot(data.f[k]);
     if (joint_terms) {
       if (layout.rotor) t += params[layout.rotorIndex(k)] * ddq[k];
-      if (layout.friction)
-        t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
+      t += frictionTorque(model, layout, params, k, dq[k]);
     }
     tau[k] = t;
     // f[k] is complete: every child of link k has a larger index and was carried into it.
@@ -146,8 +145,9 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
     }
     if (layout.rotor) W(j, layout.rotorIndex(j)) = ddq[j];
     if (layout.friction) {
-      W(j, layout.viscousIndex(j)) = dq[j];
-      W(j, layout.coulombIndex(j)) = sgn(dq[j]);
+      double phi[3] = {0.0, 0.0, 0.0};
+      frictionShapes(model.friction_model, j, dq[j], phi);
+      for (int i = 0; i < layout.friction_columns; ++i) W(j, layout.frictionIndex(j, i)) = phi[i];
     }
   }
 }
@@ -232,8 +232,22 @@ bool forwardDynamics(const Model& model, Data& data, const VecRef& q, const VecR
   return true;
 }
 
+void checkFrictionLayout(const Model& model, ParameterLayout layout) {
+  if (layout.friction && layout.friction_columns != model.friction_model.columns())
+    throw std::invalid_argument(
+        "the parameter layout has " + std::to_string(layout.friction_columns) +
+        " friction columns per joint; the model's " + toString(model.friction_model.kind) +
+        " friction model has " + std::to_string(model.friction_model.columns()));
+  try {
+    model.friction_model.validate(model.nq());
+  } catch (const ModelError& e) {
+    throw std::invalid_argument(e.what());
+  }
+}
+
 void checkSizes(const Model& model, ParameterLayout layout, long q, long dq, long ddq,
                 long params) {
+  checkFrictionLayout(model, layout);
   const long n = model.nq();
   auto need = [n](const char* what, long got) {
     if (got >= 0 && got != n)

@@ -80,8 +80,9 @@ void slotineLiRegressor(const Model& model, Data& data, SlotineLiData& sl, const
     }
     if (layout.rotor) Y(j, layout.rotorIndex(j)) = ddqr[j];
     if (layout.friction) {
-      Y(j, layout.viscousIndex(j)) = dq[j];
-      Y(j, layout.coulombIndex(j)) = sgn(dq[j]);
+      double phi[3] = {0.0, 0.0, 0.0};
+      frictionShapes(model.friction_model, j, dq[j], phi);
+      for (int i = 0; i < layout.friction_columns; ++i) Y(j, layout.frictionIndex(j, i)) = phi[i];
     }
   }
 }
@@ -114,8 +115,7 @@ void torquePass(const Model& model, Data& data, SlotineLiData& sl, const VecRef&
     double t = data.S[k].dot(f);
     if (joint_terms) {
       if (layout.rotor) t += params[layout.rotorIndex(k)] * ddqr[k];
-      if (layout.friction)
-        t += params[layout.viscousIndex(k)] * dq[k] + params[layout.coulombIndex(k)] * sgn(dq[k]);
+      t += frictionTorque(model, layout, params, k, dq[k]);
     }
     tau[k] = t;
     const int pk = model.parent(k);

@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .data import DataError, read_json
 
-__all__ = ["FLAGS", "read_identification"]
+__all__ = ["FLAGS", "read_identification", "with_identified_friction"]
 
 #: The boolean fields: JSON ``true`` / ``false`` only.
 FLAGS = ("rotor", "friction", "offset", "consistent")
@@ -77,6 +77,9 @@ def read_identification(
         names = doc.get("base_names")
         if isinstance(names, list) and len(names) != len(values):
             raise DataError(f"{where}: {len(values)} 'base_values' for {len(names)} 'base_names'")
+    fm = doc.get("friction_model")
+    if fm is not None:
+        out["friction_model"] = _friction_model(fm, where)
     classical = doc.get("classical")
     if classical is not None:
         if not isinstance(classical, dict) or not classical:
@@ -88,6 +91,41 @@ def read_identification(
             k: _number(v, f"{where}: 'classical' {k!r}") for k, v in classical.items()
         }
     return out
+
+
+def _friction_model(fm, where: str) -> dict:
+    """The checked ``friction_model`` field: ``{kind, velocity (per slot, or null), chosen_by}``."""
+    from ..robot import FRICTION_KINDS
+
+    if not isinstance(fm, dict) or fm.get("kind") not in FRICTION_KINDS:
+        kind = fm.get("kind") if isinstance(fm, dict) else fm
+        raise DataError(
+            f"{where}: 'friction_model' kind is {_kind(kind)}; expected one of "
+            + ", ".join(FRICTION_KINDS)
+        )
+    out = dict(fm)
+    v = fm.get("velocity")
+    if v is not None:
+        if not isinstance(v, list):
+            raise DataError(f"{where}: 'friction_model' velocity is {_kind(v)}; expected a list")
+        out["velocity"] = [
+            _number(x, f"{where}: 'friction_model' velocity item {i + 1}") for i, x in enumerate(v)
+        ]
+    return out
+
+
+def with_identified_friction(robot, doc: dict, where: str = "identification JSON"):
+    """``robot`` with the friction model an identification JSON records (``friction_model``;
+    unchanged without one: viscous and Coulomb friction). DataError when the record does not fit
+    the robot."""
+    fm = doc.get("friction_model")
+    if fm is None:
+        return robot
+    fm = _friction_model(fm, where)
+    try:
+        return robot.with_friction_model(fm["kind"], velocity=fm.get("velocity"))
+    except Exception as e:  # a ModelError of the core, in the terms of this file
+        raise DataError(f"{where}: 'friction_model' does not fit '{robot.name}': {e}") from None
 
 
 def _number(v, where: str) -> float:

@@ -296,18 +296,23 @@ def _rank_remedies(concerned: list[str], logs, speed: float) -> list[str]:
     down = np.any(dq <= -floor, axis=0) if dq.size else np.zeros(dq.shape[1], bool)
     kinds: dict[int, set] = {}
     for nm in concerned:
-        hit = re.fullmatch(r"(Fv|Fc|Off|Ia)(\d+)", nm)
+        hit = re.fullmatch(r"(Fv|Fc|Fa|Fs|Off|Ia)(\d+)", nm)
         if hit:
             kinds.setdefault(int(hit.group(2)), set()).add(hit.group(1))
+    coulomb = {"Fc", "Fa", "Fs"}  # the friction terms that are constant while a joint moves one way
     still = [j for j in sorted(kinds) if not (up[j - 1] or down[j - 1])]
-    one_way = [j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and {"Fc", "Off"} & kinds[j]]
+    one_way = [
+        j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and ({"Off"} | coulomb) & kinds[j]
+    ]
+    # the direction-dependent Coulomb term is constant whenever the joint moves, either way
+    level = [j for j in sorted(kinds) if j not in still + one_way and {"Fa", "Off"} <= kinds[j]]
     out = []
     speed_txt = f" (speed {speed:g} rad/s | m/s or more)" if speed > 0 else ""
     if still:
         opts = sorted(
-            {"--friction" for j in still if {"Fv", "Fc"} & kinds[j]}
+            {"--friction" for j in still if ({"Fv"} | coulomb) & kinds[j]}
             | {"--rotor" for j in still if "Ia" in kinds[j]}
-            | {"--offset" for j in still if "Off" in kinds[j] and "Fc" not in kinds[j]}
+            | {"--offset" for j in still if "Off" in kinds[j] and not coulomb & kinds[j]}
         )
         out.append(
             f"Joint(s) {', '.join(map(str, still))} never move{speed_txt} in this data: "
@@ -319,6 +324,12 @@ def _rank_remedies(concerned: list[str], logs, speed: float) -> list[str]:
             f"Joint(s) {', '.join(map(str, one_way))} never reverse direction in this data: "
             "their Coulomb friction is a constant torque there, inseparable from a torque offset: "
             "leave out --offset (or --friction), or reverse them."
+        )
+    if level:
+        out.append(
+            f"Joint(s) {', '.join(map(str, level))}: the direction-dependent Coulomb term Fa is "
+            "a constant torque whenever the joint moves, inseparable from a torque offset: leave "
+            "out --offset, or use another --friction-model."
         )
     return out
 

@@ -13,6 +13,7 @@ import numpy as np
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
+from .document import with_identified_friction
 from .estimation import CHUNK_SAMPLES
 from .validation import logged_samples
 
@@ -97,6 +98,7 @@ def identified_model(
         robot = load(robot, tip=doc.get("tip"))
         if doc.get("robot") not in (None, robot.name):
             raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
+    robot = with_identified_friction(robot, doc, where)
     base = base_parameters(
         robot,
         rotor=bool(doc.get("rotor")),
