@@ -277,3 +277,25 @@ def test_generated_code_refuses_other_friction_models(arm):
     r = arm.with_friction_model("stribeck", velocity=[0.1, 0.1, 0.1])
     with pytest.raises(mindyn.Error, match="Coulomb friction\\s+only"):
         codegen.generate(r, friction=True)
+
+
+def test_simulations_apply_the_robots_friction_model(arm):
+    """Open loop: the torques are the rigid-body ones plus the Stribeck friction written out;
+    closed loop: the plant's applied torques, minus that friction, give the logged
+    accelerations by the rigid-body dynamics."""
+    from mindyn.control import SumOfSines, simulate, simulate_inverse
+
+    w, f3 = np.array([0.15, 0.25, 0.1]), np.array([1.0, 0.7, 0.5])
+    r = arm.with_friction_model("stribeck", velocity=w)
+    r.viscous, r.coulomb, r.third_friction = FV, FC, f3
+    ref = SumOfSines(r, period=2.0)
+    log = simulate_inverse(r, ref, rate=200.0, friction=True)
+    expect = r.inverse_dynamics(log.q_true, log.dq_true, log.ddq_true) + friction_formula(
+        "stribeck", log.dq_true, w, FV, FC, f3
+    )
+    np.testing.assert_allclose(log.tau_true, expect, atol=1e-9)
+    assert "Fs1" in log.param_names
+    closed = simulate(r, ref, rate=200.0, duration=0.5, friction=True)
+    rigid = r.inverse_dynamics(closed.q_true, closed.dq_true, closed.ddq_true)
+    fr = friction_formula("stribeck", closed.dq_true, w, FV, FC, f3)
+    np.testing.assert_allclose(rigid + fr, closed.tau_true, atol=1e-6 * np.abs(fr).max() + 1e-6)

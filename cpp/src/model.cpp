@@ -69,7 +69,7 @@ void FrictionModel::validate(int n) const {
     return;
   }
   if (velocity.size() != n)
-    throw ModelError("the " + kind_name + " friction model needs a velocity per slot (" +
+    throw ModelError("the " + kind_name + " friction model needs a velocity per joint (" +
                      std::to_string(n) + "), got " + std::to_string(velocity.size()));
   for (int k = 0; k < n; ++k)
     if (!std::isfinite(velocity[k]) || !(velocity[k] > 0.0) || velocity[k] > kMaxDescriptionValue)

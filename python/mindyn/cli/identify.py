@@ -501,7 +501,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if base.friction:
         from ..identification.friction import friction_lines
 
-        out += friction_lines(robot, friction.record if friction else None)
+        out += friction_lines(robot, record=friction.record if friction else None)
     for w in res.settings.get("warnings", []):
         out.append(f"  WARNING: {w}")
     cfit = cval = None
@@ -533,7 +533,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if base.friction:
         from ..identification.friction import friction_record
 
-        doc["friction_model"] = friction_record(robot, friction.record if friction else None)
+        doc["friction_model"] = friction_record(robot, record=friction.record if friction else None)
     doc["tip"] = args.tip  # the chain identified (None: the whole description)
     doc["consistent"] = cons is not None
     if cons is not None:

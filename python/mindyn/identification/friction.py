@@ -13,7 +13,8 @@ exp(-(v / w)^2)``.
   :data:`WIDTH_FLOOR` of the joint's largest speed.
 - ``stribeck``: the Stribeck velocity ``w_j`` of each joint is found by a one-dimensional search
   on the fit's residual (:func:`stribeck_search`): a log-spaced grid of :data:`GRID_POINTS`
-  velocities from :data:`WIDTH_FLOOR` of the joint's largest speed to that speed, then a
+  velocities from the joint's velocity noise level (the smooth width above: a smaller Stribeck
+  velocity is not resolved by the data) to its largest speed, then a
   golden-section search on ``log w`` between the grid neighbours of the best point, all joints
   at once (one fit per step: each joint's velocity changes only its own equations' friction
   column), the objective of joint ``j`` its residual in the first (ordinary least-squares) fit.
@@ -23,9 +24,12 @@ exp(-(v / w)^2)``.
   and searched on all fit logs as above) and each scored by cross-validation over contiguous
   time blocks of the fit logs (:func:`~mindyn.identification.prior.block_triangles`: each
   block's residual predicted by the estimate fitted on the other blocks, summed, every model
-  weighted with the same per-joint weights, those of the Coulomb fit); the smallest held-out
-  residual wins. A model the data cannot identify (e.g. ``asymmetric`` with torque offsets,
-  whose ``Fa`` is a constant torque whenever the joint moves) is reported and left out.
+  weighted with the same per-joint weights, those of the Coulomb fit); the simplest model
+  (in the order coulomb, smooth, asymmetric, stribeck) whose summed held-out residual is within
+  one standard error of the smallest (the one-standard-error rule, as for the prior's weight,
+  the error from the spread of the blocks) wins. A model the data cannot identify (e.g.
+  ``asymmetric`` with torque offsets, whose ``Fa`` is a constant torque whenever the joint
+  moves) is reported and left out.
 """
 
 from __future__ import annotations
@@ -74,13 +78,17 @@ def _speeds(logs) -> np.ndarray:
     return np.max(np.vstack([np.abs(d.dq) for d in logs]), axis=0)
 
 
+def _noise_width(logs) -> np.ndarray:
+    """:data:`WIDTH_NOISE_FACTOR` x each joint's velocity noise, at least :data:`WIDTH_FLOOR` x
+    its largest speed."""
+    noise = torque_noise([d.dq for d in logs])
+    return np.maximum(WIDTH_NOISE_FACTOR * noise, WIDTH_FLOOR * _speeds(logs))
+
+
 def smooth_width(logs) -> tuple[np.ndarray, str]:
     """The smooth model's tanh width per joint from the velocities of ``logs`` (see the module
     documentation), and the rule in words."""
-    noise = torque_noise([d.dq for d in logs])
-    top = _speeds(logs)
-    floor = WIDTH_FLOOR * top
-    w = np.maximum(WIDTH_NOISE_FACTOR * noise, floor)
+    w = _noise_width(logs)
     if not np.all(w > 0):
         still = [str(j + 1) for j in np.flatnonzero(~(w > 0))]
         raise IdentificationError(
@@ -114,7 +122,7 @@ def _objective(base: BaseParameters, logs, fit: dict, per_joint: bool) -> np.nda
     return np.full(n, res.sigma)
 
 
-def stribeck_search(base: BaseParameters, logs, fit: dict) -> tuple[np.ndarray, dict]:
+def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarray, dict]:
     """The Stribeck velocity per joint minimising the fit's residual (see the module
     documentation): ``(velocity, record)``; ``base`` is a Stribeck base set (its velocities are
     replaced)."""
@@ -126,7 +134,9 @@ def stribeck_search(base: BaseParameters, logs, fit: dict) -> tuple[np.ndarray, 
             f"Stribeck friction: joint(s) {', '.join(still)} never move in the fit data; their "
             "Stribeck velocity cannot be searched (leave out --friction, or move them)"
         )
-    lo, hi = np.log(WIDTH_FLOOR * top), np.log(top)
+    # below the velocity's noise level (the smooth width) the data cannot resolve the velocity
+    lo = np.log(np.minimum(_noise_width(logs), 0.5 * top))
+    hi = np.log(top)
     grid = np.linspace(lo, hi, GRID_POINTS)  # (G, n), log velocities
     per_joint = fit.get("model", "dynamic") != "energy"
     evaluations = 0
@@ -153,8 +163,9 @@ def stribeck_search(base: BaseParameters, logs, fit: dict) -> tuple[np.ndarray, 
             x[j] = _golden(f, grid, best, np.array([j]), start=x)[j]
     record = {
         "search": (
-            f"log-spaced grid of {GRID_POINTS} velocities from {WIDTH_FLOOR:g} x to 1 x each "
-            f"joint's largest speed, then {GOLDEN_STEPS} golden-section steps on log velocity, "
+            f"log-spaced grid of {GRID_POINTS} velocities from the joint's velocity noise level "
+            f"(the smooth width rule) to its largest speed, then {GOLDEN_STEPS} golden-section "
+            "steps on log velocity, "
             + (
                 "all joints at once, each on its own residual (first OLS fit)"
                 if per_joint
@@ -250,7 +261,7 @@ def friction_model(
             r, b = make(k, _speeds(logs).clip(min=1e-300))
             if progress is not None:
                 progress("friction: searching the Stribeck velocities")
-            w, search = stribeck_search(b, logs, fit)
+            w, search = stribeck_search(b, logs, fit=fit)
             b = b.with_friction_velocity(w)
             r = b.robot
             rec.update(
@@ -265,7 +276,7 @@ def friction_model(
         out.record["chosen_by"] = "default" if kind == "coulomb" else "given"
         return out
     folds = FOLDS if folds is None else folds
-    choices, scores, refused = {}, {}, {}
+    choices, scores, per_fold, refused = {}, {}, {}, {}
     common = None
     for k in KINDS:
         try:
@@ -276,7 +287,7 @@ def friction_model(
             continue
         if common is None:  # the Coulomb fit's weights for every model
             common = res.joint_sigma
-        scores[k] = held_out_residual(res, logs, folds, common)
+        scores[k], per_fold[k] = held_out_residual(res, logs, folds=folds, joint_sigma=common)
         choices[k] = c
         if progress is not None:
             progress(f"friction: {k} held-out residual {scores[k]:.4g}")
@@ -287,26 +298,35 @@ def friction_model(
             + ")"
         )
     best = min(scores, key=lambda k: (scores[k], KINDS.index(k)))
-    out = choices[best]
+    # one standard error of the best model's summed held-out residual, from its folds' spread
+    err = per_fold[best]
+    se = float(np.std(err, ddof=1) * math.sqrt(err.size)) if err.size > 1 else 0.0
+    chosen = next(k for k in KINDS if k in scores and scores[k] <= scores[best] + se)
+    out = choices[chosen]
     out.record.update(
         chosen_by="held-out data",
         rule=(
             f"{folds}-fold cross-validation over contiguous time blocks of the fit logs (each "
             "block's residual predicted by the estimate fitted on the other blocks, summed, "
-            "with the Coulomb fit's per-joint weights): the smallest"
+            "with the Coulomb fit's per-joint weights): the simplest model (coulomb, smooth, "
+            "asymmetric, stribeck) within one standard error of the smallest"
         ),
+        smallest=best,
+        standard_error=se,
         candidates={k: float(v) for k, v in scores.items()},
+        candidates_per_fold={k: [float(x) for x in v] for k, v in per_fold.items()},
         candidates_unit="weighted residual per equation",
         not_identifiable=refused,
     )
     return out
 
 
-def held_out_residual(res, logs, folds: int, joint_sigma=None) -> float:
+def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float, np.ndarray]:
     """The summed held-out residual per equation of the fit ``res`` over ``folds`` contiguous
     blocks of ``logs`` (:func:`~mindyn.identification.prior.block_triangles`), each block
-    predicted by the least-squares estimate of all base parameters on the other blocks; rows
-    weighted with ``joint_sigma`` when given (else the fit's own weights)."""
+    predicted by the least-squares estimate of all base parameters on the other blocks, and
+    each block's share: ``(total, per block)``; rows weighted with ``joint_sigma`` when given
+    (else the fit's own weights)."""
     from .estimation import _triangle
     from .prior import block_triangles
 
@@ -317,16 +337,17 @@ def held_out_residual(res, logs, folds: int, joint_sigma=None) -> float:
     used = [k for k in range(folds) if np.any(S[k])]
     if len(used) < 2:
         raise IdentificationError("friction model auto: the data give fewer than 2 blocks")
-    total = 0.0
+    err = []
     for k in used:
         T = _triangle(np.vstack([S[i] for i in used if i != k]))
         p = np.linalg.lstsq(T[:nb, :nb], T[:nb, nb], rcond=None)[0]
         r = S[k] @ np.append(p, -1.0)
-        total += float(r @ r)
-    return total / max(res.rows, 1)
+        err.append(float(r @ r) / max(res.rows, 1))
+    err = np.array(err)
+    return float(err.sum()), err
 
 
-def friction_record(robot: Robot, record: dict | None = None) -> dict:
+def friction_record(robot: Robot, *, record: dict | None = None) -> dict:
     """The JSON record of an identification's friction model: ``kind``, ``velocity`` (per slot,
     or None), ``chosen_by`` (``default``, ``given`` or ``held-out data``) and how (``record`` of
     :func:`friction_model`; None: the robot's own model, viscous and Coulomb by default)."""
@@ -341,9 +362,9 @@ def friction_record(robot: Robot, record: dict | None = None) -> dict:
     return out
 
 
-def friction_lines(robot: Robot, record: dict | None = None) -> list[str]:
+def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
     """The output lines that state the friction model and how it was chosen."""
-    rec = friction_record(robot, record)
+    rec = friction_record(robot, record=record)
     formula = {
         "coulomb": "Fv v + Fc sign(v)",
         "asymmetric": "Fv v + Fc sign(v) + Fa |sign(v)|",
