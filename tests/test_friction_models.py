@@ -13,8 +13,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from conftest import cli, pinocchio_model
-from mindyn.identification import JointData, identify
-from mindyn.identification.friction import friction_model
+from mindyn.identification import JointData, identify, select_friction_model
 from random_arm import random_arm_yaml
 
 KINDS = ("coulomb", "asymmetric", "smooth", "stribeck")
@@ -177,7 +176,7 @@ FV, FC = np.array([0.8, 0.5, 0.3]), np.array([1.5, 1.0, 0.6])
 def test_noise_free_recovery_with_the_searched_stribeck_velocity(arm, kind, f3):
     w = np.array([0.15, 0.25, 0.1])
     log = make_log(arm, kind, w, FV, FC, f3)
-    choice = friction_model(arm, [log], kind, fit={"min_velocity": 0.0})
+    choice = select_friction_model(arm, [log], kind, fit={"min_velocity": 0.0})
     res = identify(choice.robot, log, base=choice.base, rsd_threshold=None, min_velocity=0.0)
     base, expect = truth(arm, kind, w, FV, FC, f3)
     assert list(res.base.names) == list(base.names)
@@ -191,7 +190,7 @@ def test_noise_free_recovery_with_the_searched_stribeck_velocity(arm, kind, f3):
 def test_noise_free_recovery_smooth_with_given_width(arm):
     w = np.array([0.05, 0.08, 0.03])
     log = make_log(arm, "smooth", w, FV, FC, 0.0)
-    choice = friction_model(arm, [log], "smooth", width=w)
+    choice = select_friction_model(arm, [log], "smooth", width=w)
     res = identify(choice.robot, log, base=choice.base, rsd_threshold=None, min_velocity=0.0)
     _, expect = truth(arm, "smooth", w, FV, FC, 0.0)
     np.testing.assert_allclose(res.full, expect, rtol=1e-6, atol=1e-6 * np.abs(expect).max())
@@ -219,7 +218,7 @@ def test_energy_and_integral_models_carry_the_stribeck_terms(arm, model):
 )
 def test_auto_picks_the_true_family_on_held_out_data(arm, kind, f3, w):
     log = make_log(arm, kind, w, FV, FC, f3, noise=0.01, seed=3)
-    choice = friction_model(arm, [log], "auto")
+    choice = select_friction_model(arm, [log], "auto")
     rec = choice.record
     assert rec["chosen_by"] == "held-out data"
     assert rec["kind"] == kind, rec["candidates"]

@@ -355,7 +355,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     )
     friction = None
     if args.friction_model is not None or args.friction_width is not None:
-        from ..identification.friction import friction_model
+        from ..identification.friction import select_friction_model
 
         if args.friction_model is None:
             raise ValueError("--friction-width: expected --friction-model smooth or auto")
@@ -365,7 +365,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
             if not all(math.isfinite(w) and w > 0 for w in width):
                 raise ValueError("--friction-width: every width must be a positive number")
         args.friction = True
-        friction = friction_model(
+        friction = select_friction_model(
             robot,
             logs,
             args.friction_model,

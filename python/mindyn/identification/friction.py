@@ -212,7 +212,7 @@ def _golden(f, grid, best, joints, start=None) -> np.ndarray:
     return x
 
 
-def friction_model(
+def select_friction_model(
     robot: Robot,
     logs,
     kind: str = "coulomb",
@@ -350,7 +350,7 @@ def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float
 def friction_record(robot: Robot, *, record: dict | None = None) -> dict:
     """The JSON record of an identification's friction model: ``kind``, ``velocity`` (per slot,
     or None), ``chosen_by`` (``default``, ``given`` or ``held-out data``) and how (``record`` of
-    :func:`friction_model`; None: the robot's own model, viscous and Coulomb by default)."""
+    :func:`select_friction_model`; None: the robot's own model, viscous and Coulomb by default)."""
     fm = robot.friction_model
     out = {
         "kind": fm["kind"],
