@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from conftest import cli, pinocchio_model
-from mindyn.identification import JointData, identify, select_friction_model
+from mindyn.identification import JointData, identify, select_friction_model, write_csv
 from random_arm import random_arm_yaml
 
 KINDS = ("coulomb", "asymmetric", "smooth", "stribeck")
@@ -226,7 +226,6 @@ def test_auto_picks_the_true_family_on_held_out_data(arm, kind, f3, w):
 
 
 def test_cli_records_the_friction_model_and_predict_uses_it(arm, tmp_path):
-    from mindyn.identification import write_csv
 
     w, f3 = np.array([0.15, 0.25, 0.1]), np.array([1.0, 0.7, 0.5])
     log = make_log(arm, "stribeck", w, FV, FC, f3)
@@ -248,8 +247,7 @@ def test_cli_records_the_friction_model_and_predict_uses_it(arm, tmp_path):
     np.testing.assert_allclose(tau_hat, log.tau, atol=1e-4 * np.abs(log.tau).max())
 
 
-def test_cli_default_is_unchanged_and_options_are_checked(arm, tmp_path):
-    from mindyn.identification import write_csv
+def test_cli_default_is_unchanged_and_options_are_checked(arm, tmp_path, capsys):
 
     log = make_log(arm, "coulomb", None, FV, FC, 0.0, noise=0.01)
     csv = tmp_path / "log.csv"
@@ -264,10 +262,16 @@ def test_cli_default_is_unchanged_and_options_are_checked(arm, tmp_path):
     )
     from mindyn.cli import main
 
-    for extra in (["--friction-width", "0.1"], ["--friction-model", "smooth", "--friction-width",
-                                                  "-1"],
-                  ["--friction-model", "stribeck", "--friction-width", "0.1"]):  # fmt: skip
+    bad = [
+        (["--friction-width", "0.1"], "expected --friction-model smooth or auto"),
+        (["--friction-model", "smooth", "--friction-width", "-1"], "must be a positive number"),
+        (["--friction-model", "stribeck", "--friction-width", "0.1"], "only with --friction-model"),
+    ]
+    capsys.readouterr()
+    for extra, message in bad:
         assert main(["identify", str(robot_path), str(csv), *extra]) != 0
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err
 
 
 def test_generated_code_refuses_other_friction_models(arm):
@@ -298,3 +302,21 @@ def test_simulations_apply_the_robots_friction_model(arm):
     rigid = r.inverse_dynamics(closed.q_true, closed.dq_true, closed.ddq_true)
     fr = friction_formula("stribeck", closed.dq_true, w, FV, FC, f3)
     np.testing.assert_allclose(rigid + fr, closed.tau_true, atol=1e-6 * np.abs(fr).max() + 1e-6)
+
+
+def test_codegen_refuses_parameters_identified_with_another_friction_model(arm, tmp_path, capsys):
+    from mindyn.cli import main
+
+    w = np.full(3, 0.05)
+    log = make_log(arm, "smooth", w, FV, FC, 0.0)
+    csv = tmp_path / "log.csv"
+    write_csv(csv, log.t, log.q, log.tau, log.dq, log.ddq)
+    robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
+    cli("identify", robot_path, csv, "--friction-model", "smooth", "--friction-width", "0.05",
+        "--filter", "none", "--json", tmp_path / "id.json")  # fmt: skip
+    capsys.readouterr()
+    # the smooth model has the same parameter names as viscous + Coulomb: the JSON says which
+    rc = main(["codegen", str(robot_path), "--lang", "c", "--friction", "--params",
+               str(tmp_path / "id.json"), "-o", str(tmp_path / "gen")])  # fmt: skip
+    assert rc != 0
+    assert "smooth friction model" in capsys.readouterr().err
