@@ -320,3 +320,31 @@ def test_codegen_refuses_parameters_identified_with_another_friction_model(arm, 
                str(tmp_path / "id.json"), "-o", str(tmp_path / "gen")])  # fmt: skip
     assert rc != 0
     assert "smooth friction model" in capsys.readouterr().err
+
+
+def test_descriptions_refuse_other_friction_models(arm, tmp_path, capsys):
+    """A robot description holds viscous and Coulomb friction only: export and identify
+    --yaml refuse another model (the smooth one has the same parameter names)."""
+    from mindyn.cli import main
+
+    robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
+    names = arm.parameter_names(False, True)
+    doc = {
+        "robot": arm.name,
+        "classical": dict(zip(names, map(float, arm.parameters(False, True)))),
+        "friction_model": {"kind": "smooth", "velocity": [0.1, 0.1, 0.1], "chosen_by": "given"},
+    }
+    (tmp_path / "id.json").write_text(json.dumps(doc))
+    capsys.readouterr()
+    rc = main(["export", str(robot_path), str(tmp_path / "id.json"), "--yaml",
+               str(tmp_path / "out.yaml")])  # fmt: skip
+    assert rc != 0 and "smooth friction model" in capsys.readouterr().err
+    assert not (tmp_path / "out.yaml").exists()
+    doc["friction_model"]["kind"] = "coulomb"
+    del doc["friction_model"]["velocity"]
+    (tmp_path / "id.json").write_text(json.dumps(doc))
+    assert main(["export", str(robot_path), str(tmp_path / "id.json"), "--yaml",
+                 str(tmp_path / "out.yaml")]) == 0  # fmt: skip
+    rc = main(["identify", str(robot_path), "x.csv", "--friction-model", "stribeck",
+               "--consistent", "--yaml", str(tmp_path / "o.yaml")])  # fmt: skip
+    assert rc != 0 and "not the stribeck friction model" in capsys.readouterr().err

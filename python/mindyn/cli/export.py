@@ -26,19 +26,21 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_export)
 
 
-def read_classical(path: str) -> tuple[dict, str | None]:
-    """The 'classical' map of an identification JSON and the robot it names (None if none),
-    or a one-line error naming the file."""
+def read_classical(path: str) -> tuple[dict, str | None, dict | None]:
+    """The 'classical' map of an identification JSON, the robot it names (None if none) and its
+    friction model (None if not recorded), or a one-line error naming the file."""
     # here: not needed by the other commands
     from ..identification.document import read_identification
 
     doc = read_identification(path, need=("classical",), what="identification file", finite=True)
-    return doc["classical"], doc.get("robot")
+    return doc["classical"], doc.get("robot"), doc.get("friction_model")
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    classical, identified_for = read_classical(args.params)
+    classical, identified_for, friction = read_classical(args.params)
     robot = load(args.robot, tip=args.tip)
+    if friction is not None:
+        robot = robot.with_friction_model(friction["kind"], velocity=friction.get("velocity"))
     if identified_for not in (None, robot.name):
         raise ModelError(
             f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"
@@ -85,6 +87,12 @@ def write_description(robot, classical, what: str, source: str, urdf, yaml, side
     """Write ``classical`` into a copy of the robot's description (``urdf`` or ``yaml`` path) and
     say what was written; ``what`` names the values in errors, ``source`` the robot argument."""
     check_description_kind(robot, source, urdf is not None)
+    kind = robot.friction_model["kind"]
+    if kind != "coulomb" and any(k.startswith(("Fv", "Fc")) for k in classical):
+        raise ModelError(
+            f"{what}: identified with the {kind} friction model; a robot description holds "
+            "viscous and Coulomb friction only (identify with --friction-model coulomb)"
+        )
     terms = classical_terms(robot, classical, what)
     if urdf is not None:
         res = write_urdf(robot, classical, urdf, sidecar=sidecar)

@@ -321,6 +321,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
             "--consistent as well (only a physically consistent estimate can be written as a robot "
             "description)"
         )
+    if (args.urdf or args.yaml) and args.friction_model not in (None, "coulomb", "auto"):
+        raise ValueError(
+            f"--{'urdf' if args.urdf else 'yaml'}: a robot description holds viscous and Coulomb "
+            f"friction only, not the {args.friction_model} friction model"
+        )
     if args.sidecar and not (args.urdf or args.yaml):
         raise ValueError("--sidecar: expected --urdf or --yaml (the description it goes with)")
     if args.urdf or args.yaml:
