@@ -7,10 +7,12 @@ The friction models (:attr:`mindyn.Robot.friction_model`), per slot with velocit
 exp(-(v / w)^2)``.
 
 - ``smooth``: the width ``w_j`` of joint ``j`` is given, or derived from the data
-  (:func:`smooth_width`): :data:`WIDTH_NOISE_FACTOR` times the white-noise level of the joint's
-  velocity as the fit uses it (after filtering), estimated from its second differences like the
-  torque noise (:func:`~mindyn.identification.models.torque_noise`), and at least
-  :data:`WIDTH_FLOOR` of the joint's largest speed.
+  (:func:`smooth_width`): the speed below which the data do not determine the sign of the
+  velocity, the threshold of the error measures' moving samples
+  (:func:`~mindyn.identification.validation.moving_threshold`: 3 times the noise level of the
+  joint's velocity as the fit uses it, recorded by the data path for the filtered velocity or
+  estimated from second differences, and at least 0.001 of the joint's largest speed), the
+  largest over the fit logs.
 - ``stribeck``: the Stribeck velocity ``w_j`` of each joint is found by a one-dimensional search
   on the fit's residual (:func:`stribeck_search`): a log-spaced grid of :data:`GRID_POINTS`
   velocities from the joint's velocity noise level (the smooth width above: a smaller Stribeck
@@ -43,7 +45,6 @@ import numpy as np
 from ..base import BaseParameters
 from ..robot import FRICTION_KINDS, Robot
 from .errors import IdentificationError
-from .models import torque_noise
 
 #: The friction models, simplest first (a tie in the held-out residual goes to the simpler).
 KINDS = ("coulomb", "smooth", "asymmetric", "stribeck")
@@ -51,11 +52,6 @@ KINDS = ("coulomb", "smooth", "asymmetric", "stribeck")
 #: What ``--friction-model`` accepts.
 CHOICES = (*FRICTION_KINDS, "auto")
 
-#: The smooth model's width: this many times the velocity's white-noise level ...
-WIDTH_NOISE_FACTOR = 3.0
-#: ... and at least this fraction of the joint's largest speed (also the lower end of the
-#: Stribeck search).
-WIDTH_FLOOR = 1e-3
 
 #: Points of the Stribeck search's log-spaced grid, and golden-section steps after it.
 GRID_POINTS = 13
@@ -78,28 +74,30 @@ def _speeds(logs) -> np.ndarray:
     return np.max(np.vstack([np.abs(d.dq) for d in logs]), axis=0)
 
 
-def _noise_width(logs) -> np.ndarray:
-    """:data:`WIDTH_NOISE_FACTOR` x each joint's velocity noise, at least :data:`WIDTH_FLOOR` x
-    its largest speed."""
-    noise = torque_noise([d.dq for d in logs])
-    return np.maximum(WIDTH_NOISE_FACTOR * noise, WIDTH_FLOOR * _speeds(logs))
+def _noise_width(logs) -> tuple[np.ndarray, str]:
+    """Per joint, the speed below which the sign of the velocity is not determined by the data:
+    the moving threshold of the error measures
+    (:func:`~mindyn.identification.validation.moving_threshold`: 3 x the noise level of the
+    velocity as the fit uses it, at least 0.001 x the joint's largest speed), the largest over
+    ``logs``; and the rule in words."""
+    from .validation import logged_samples, moving_threshold
+
+    # the logged samples carry the data path's noise level of the filtered velocity
+    rules = [moving_threshold(d if logged_samples(d) is None else logged_samples(d)) for d in logs]
+    return np.max([w for w, _ in rules], axis=0), rules[0][1]
 
 
 def smooth_width(logs) -> tuple[np.ndarray, str]:
     """The smooth model's tanh width per joint from the velocities of ``logs`` (see the module
     documentation), and the rule in words."""
-    w = _noise_width(logs)
+    w, rule = _noise_width(logs)
     if not np.all(w > 0):
         still = [str(j + 1) for j in np.flatnonzero(~(w > 0))]
         raise IdentificationError(
             f"smooth friction: joint(s) {', '.join(still)} never move in the fit data; their tanh "
             "width cannot be derived (give --friction-width, or leave out --friction)"
         )
-    rule = (
-        f"{WIDTH_NOISE_FACTOR:g} x the velocity's white-noise level (second differences, median "
-        f"absolute deviation), at least {WIDTH_FLOOR:g} of the joint's largest speed"
-    )
-    return w, rule
+    return w, rule.replace("|dq_j| >= ", "w_j = ")
 
 
 def _fit(base: BaseParameters, logs, fit: dict):
@@ -135,7 +133,7 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
             "Stribeck velocity cannot be searched (leave out --friction, or move them)"
         )
     # below the velocity's noise level (the smooth width) the data cannot resolve the velocity
-    lo = np.log(np.minimum(_noise_width(logs), 0.5 * top))
+    lo = np.log(np.minimum(_noise_width(logs)[0], 0.5 * top))
     hi = np.log(top)
     grid = np.linspace(lo, hi, GRID_POINTS)  # (G, n), log velocities
     per_joint = fit.get("model", "dynamic") != "energy"
