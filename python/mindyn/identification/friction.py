@@ -16,7 +16,8 @@ exp(-(v / w)^2)``.
 - ``stribeck``: the Stribeck velocity ``w_j`` of each joint is found by a one-dimensional search
   on the fit's residual (:func:`stribeck_search`): a log-spaced grid of :data:`GRID_POINTS`
   velocities from the joint's velocity noise level (the smooth width above: a smaller Stribeck
-  velocity is not resolved by the data) to its largest speed, then a
+  velocity is not resolved by the data; the dynamic model: at least its ``min_velocity``, below
+  which it has no equation) to its largest speed, then a
   golden-section search on ``log w`` between the grid neighbours of the best point, all joints
   at once (one fit per step: each joint's velocity changes only its own equations' friction
   column), the objective of joint ``j`` its residual in the first (ordinary least-squares) fit.
@@ -100,6 +101,15 @@ def smooth_width(logs) -> tuple[np.ndarray, str]:
     return w, rule.replace("|dq_j| >= ", "w_j = ")
 
 
+def _default(option: str):
+    """The default of an option of :func:`~mindyn.identification.identify`."""
+    import inspect
+
+    from .estimation import identify
+
+    return inspect.signature(identify).parameters[option].default
+
+
 def _fit(base: BaseParameters, logs, fit: dict):
     from .estimation import identify
 
@@ -132,8 +142,12 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
             f"Stribeck friction: joint(s) {', '.join(still)} never move in the fit data; their "
             "Stribeck velocity cannot be searched (leave out --friction, or move them)"
         )
-    # below the velocity's noise level (the smooth width) the data cannot resolve the velocity
-    lo = np.log(np.minimum(_noise_width(logs)[0], 0.5 * top))
+    # Below the velocity's noise level (the smooth width) the data do not resolve the velocity,
+    # and the dynamic model has no equation below its min_velocity.
+    floor = _noise_width(logs)[0]
+    if fit.get("model", "dynamic") == "dynamic":
+        floor = np.maximum(floor, fit.get("min_velocity", _default("min_velocity")))
+    lo = np.log(np.minimum(floor, 0.5 * top))
     hi = np.log(top)
     grid = np.linspace(lo, hi, GRID_POINTS)  # (G, n), log velocities
     per_joint = fit.get("model", "dynamic") != "energy"
@@ -162,8 +176,8 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
     record = {
         "search": (
             f"log-spaced grid of {GRID_POINTS} velocities from the joint's velocity noise level "
-            f"(the smooth width rule) to its largest speed, then {GOLDEN_STEPS} golden-section "
-            "steps on log velocity, "
+            "(the smooth width rule; the dynamic model: at least its min_velocity) to its "
+            f"largest speed, then {GOLDEN_STEPS} golden-section steps on log velocity, "
             + (
                 "all joints at once, each on its own residual (first OLS fit)"
                 if per_joint
