@@ -214,11 +214,12 @@ def test_energy_and_integral_models_carry_the_stribeck_terms(arm, model):
     [
         ("stribeck", np.array([1.5, 1.0, 0.8]), np.array([0.15, 0.25, 0.1])),
         ("asymmetric", np.array([0.6, -0.5, 0.4]), None),
+        ("smooth", 0.0, np.full(3, 0.05)),  # the width given (as --friction-width)
     ],
 )
 def test_auto_picks_the_true_family_on_held_out_data(arm, kind, f3, w):
     log = make_log(arm, kind, w, FV, FC, f3, noise=0.01, seed=3)
-    choice = select_friction_model(arm, [log], "auto")
+    choice = select_friction_model(arm, [log], "auto", width=w if kind == "smooth" else None)
     rec = choice.record
     assert rec["chosen_by"] == "held-out data"
     assert rec["kind"] == kind, rec["candidates"]
