@@ -27,7 +27,8 @@ exp(-(v / w)^2)``.
   and searched on all fit logs as above) and each scored by cross-validation over contiguous
   time blocks of the fit logs (:func:`~mindyn.identification.prior.block_triangles`: each
   block's residual predicted by the estimate fitted on the other blocks, summed, every model
-  weighted with the same per-joint weights, those of the Coulomb fit); the simplest model
+  weighted with the same per-joint weights, those of the Coulomb fit; every sample of a block
+  scored, also those the dynamic model leaves out of the fit as slower than ``min_velocity``); the simplest model
   (in the order coulomb, smooth, asymmetric, stribeck) whose summed held-out residual is within
   one standard error of the smallest (the one-standard-error rule, as for the prior's weight,
   the error from the spread of the blocks) wins. A model the data cannot identify (e.g.
@@ -336,15 +337,22 @@ def select_friction_model(
 def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float, np.ndarray]:
     """The summed held-out residual per equation of the fit ``res`` over ``folds`` contiguous
     blocks of ``logs`` (:func:`~mindyn.identification.prior.block_triangles`), each block
-    predicted by the least-squares estimate of all base parameters on the other blocks, and
-    each block's share: ``(total, per block)``; rows weighted with ``joint_sigma`` when given
-    (else the fit's own weights)."""
+    predicted by the least-squares estimate of all base parameters on the other blocks (fitted
+    on the fit's equations, scored on every sample, those the dynamic model leaves out as slower
+    than ``min_velocity`` included), and each block's share: ``(total, per block)``; rows
+    weighted with ``joint_sigma`` when given (else the fit's own weights)."""
     from .estimation import _triangle
     from .prior import block_triangles
 
     if joint_sigma is not None and res.model != "energy":
         res = dataclasses.replace(res, joint_sigma=np.asarray(joint_sigma), weighted=True)
     S = block_triangles(res, logs, folds)
+    # a block is predicted at every sample, also where the fit leaves the equations of slow
+    # joints out (min_velocity): a model's switching at rest counts against it
+    held = S
+    if res.settings.get("min_velocity", 0.0) > 0:
+        every = dataclasses.replace(res, settings={**res.settings, "min_velocity": 0.0})
+        held = block_triangles(every, logs, folds)
     nb = res.base.n
     used = [k for k in range(folds) if np.any(S[k])]
     if len(used) < 2:
@@ -353,7 +361,7 @@ def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float
     for k in used:
         T = _triangle(np.vstack([S[i] for i in used if i != k]))
         p = np.linalg.lstsq(T[:nb, :nb], T[:nb, nb], rcond=None)[0]
-        r = S[k] @ np.append(p, -1.0)
+        r = held[k] @ np.append(p, -1.0)
         err.append(float(r @ r) / max(res.rows, 1))
     err = np.array(err)
     return float(err.sum()), err
