@@ -28,10 +28,10 @@ exp(-(v / w)^2)``.
   time blocks of the fit logs (:func:`~mindyn.identification.prior.block_triangles`: each
   block's residual predicted by the estimate fitted on the other blocks, summed, every model
   weighted with the same per-joint weights, those of the Coulomb fit; every sample of a block
-  scored, also those the dynamic model leaves out of the fit as slower than ``min_velocity``); the simplest model
-  (in the order coulomb, smooth, asymmetric, stribeck) whose summed held-out residual is within
-  one standard error of the smallest (the one-standard-error rule, as for the prior's weight,
-  the error from the spread of the blocks) wins. A model the data cannot identify (e.g.
+  scored, also those the dynamic model leaves out of the fit as slower than ``min_velocity``);
+  the simplest model (in the order coulomb, smooth, asymmetric, stribeck) whose summed held-out
+  residual is within one standard error of the smallest (the one-standard-error rule, as for
+  the prior's weight, the error from the spread of the blocks) wins. A model the data cannot identify (e.g.
   ``asymmetric`` with torque offsets, whose ``Fa`` is a constant torque whenever the joint
   moves) is reported and left out.
 """
