@@ -31,9 +31,9 @@ exp(-(v / w)^2)``.
   scored, also those the dynamic model leaves out of the fit as slower than ``min_velocity``);
   the simplest model (in the order coulomb, smooth, asymmetric, stribeck) whose summed held-out
   residual is within one standard error of the smallest (the one-standard-error rule, as for
-  the prior's weight, the error from the spread of the blocks) wins. A model the data cannot identify (e.g.
-  ``asymmetric`` with torque offsets, whose ``Fa`` is a constant torque whenever the joint
-  moves) is reported and left out.
+  the prior's weight, the error from the spread of the blocks) wins. A model the data cannot
+  identify (e.g. ``asymmetric`` with torque offsets, whose ``Fa`` is a constant torque whenever
+  the joint moves) is reported and left out.
 """
 
 from __future__ import annotations
