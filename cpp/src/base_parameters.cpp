@@ -14,6 +14,7 @@
 #include <tuple>
 #include <type_traits>
 
+#include "mindyn/dynamics.hpp"
 #include "mindyn/projection.hpp"
 #include "mindyn/recursive_base.hpp"
 #include "mindyn/spatial.hpp"
@@ -607,12 +608,14 @@ double robotLength(const Model& model) {
 // column units (columnUnits) are those of the model, row for row up to a power of L per row.
 Model unitLengthModel(const Model& model, double L) {
   Model m = model;
-  for (Joint& j : m.joints) {
+  for (int k = 0; k < m.nq(); ++k) {
+    Joint& j = m.joints[k];
     j.pre.translation() /= L;
     j.post.translation() /= L;
     if (j.type == JointType::Prismatic) {
       j.limits.lower /= L;
       j.limits.upper /= L;
+      if (m.friction_model.scaled()) m.friction_model.velocity[k] /= L;  // a speed, m/s
     }
   }
   m.gravity /= L;
@@ -655,10 +658,8 @@ std::vector<int> khalilOrder(int n, ParameterLayout layout) {
     const int c0 = k * layout.perLink();
     for (int p : {0, 1, 2, 4, 5, 6, 7, 3, 8, 9}) order.push_back(c0 + p);
     if (layout.rotor) order.push_back(layout.rotorIndex(k));
-    if (layout.friction) {
-      order.push_back(layout.viscousIndex(k));
-      order.push_back(layout.coulombIndex(k));
-    }
+    for (int i = 0; layout.friction && i < layout.friction_columns; ++i)
+      order.push_back(layout.frictionIndex(k, i));
   }
   return order;
 }
@@ -843,6 +844,11 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
   const int n = model.nq();
   const ParameterLayout layout = options.layout;
   const int P = layout.size(n);
+  try {
+    checkFrictionLayout(model, layout);
+  } catch (const std::invalid_argument& e) {
+    throw ModelError(e.what());
+  }
   std::vector<int> order = options.order.empty() ? khalilOrder(n, layout) : options.order;
   if (static_cast<int>(order.size()) != P)
     throw ModelError("the parameter order names " + std::to_string(order.size()) +
@@ -876,15 +882,14 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     ZL = sparse(Zs);
     // Equations of motion: the constant does not reach the torques; friction columns do.
     const long keep = Zs.rows() - (red.constant_row >= 0 ? 1 : 0);
-    const int fr = layout.friction ? 2 * n : 0;
+    const int fc = layout.friction ? layout.friction_columns : 0;
+    const int fr = fc * n;
     Eigen::MatrixXd Z = Eigen::MatrixXd::Zero(keep + fr, P);
     long row = 0;
     for (long r = 0; r < Zs.rows(); ++r)
       if (r != red.constant_row) Z.row(row++) = Zs.row(r);
-    for (int k = 0; k < n && layout.friction; ++k) {
-      Z(keep + 2 * k, layout.viscousIndex(k)) = 1.0;
-      Z(keep + 2 * k + 1, layout.coulombIndex(k)) = 1.0;
-    }
+    for (int k = 0; k < n; ++k)
+      for (int i = 0; i < fc; ++i) Z(keep + fc * k + i, layout.frictionIndex(k, i)) = 1.0;
     ZE = sparse(Z);
   } else if (options.method == BaseMethod::Recursive) {
     // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has
@@ -907,7 +912,7 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
     // friction columns, without their friction entries.
     std::vector<char> friction(P, 0);
     for (int k = 0; k < n && layout.friction; ++k)
-      friction[layout.viscousIndex(k)] = friction[layout.coulombIndex(k)] = 1;
+      for (int i = 0; i < layout.friction_columns; ++i) friction[layout.frictionIndex(k, i)] = 1;
     std::vector<long> kept(ZE.rows(), -1);  // a row's row in ZL
     for (int c = 0; c < P; ++c)
       if (!friction[c])

@@ -4,7 +4,7 @@
 // t_k of the transmission T (model.hpp): with the slot velocity v_k = t_k . dq and acceleration
 // a_k = t_k . ddq its joint torques are
 //   t_k^T (Ia_k a_k + sum_j F_kj phi_j(v_k)),
-// phi the friction features of the slot (today Fv v + Fc sign(v): phi = (v, sign v)), its kinetic
+// phi the friction features of the slot (frictionShapes of the model's friction model), its kinetic
 // energy 1/2 Ia_k v_k^2, its share of the mass matrix Ia_k t_k t_k^T and of the momentum
 // Ia_k t_k v_k. Every function here allocates nothing and throws nothing; `checkDriveSide` (at
 // setup) makes sure T has one row per slot when they are used.
@@ -23,11 +23,10 @@ inline double motorVelocity(const Model& model, int k, const VecRef& dq) noexcep
 
 /// The friction features of slot k at slot velocity v, one per friction column of the layout:
 /// the slot's friction torque is sum_j params[viscousIndex(k) + j] * out[j].
-inline void frictionFeatures(const Model& /*model*/, ParameterLayout /*layout*/, int /*k*/,
-                             double v, double* out) noexcept {
-  out[0] = v;
-  out[1] = sgn(v);
-  out[2] = 0.0;  // the third column of the friction models that have one is not modelled here
+inline void frictionFeatures(const Model& model, ParameterLayout /*layout*/, int k, double v,
+                             double* out) noexcept {
+  out[2] = 0.0;  // the friction models without a third column leave it
+  frictionShapes(model.friction_model, k, v, out);
 }
 
 /// Adds to `tau` the joint torques of every slot's rotor inertia (at `ddq`) and friction (at

@@ -230,8 +230,22 @@ bool forwardDynamics(const Model& model, Data& data, const VecRef& q, const VecR
   return true;
 }
 
+void checkFrictionLayout(const Model& model, ParameterLayout layout) {
+  if (layout.friction && layout.friction_columns != model.friction_model.columns())
+    throw std::invalid_argument(
+        "the parameter layout has " + std::to_string(layout.friction_columns) +
+        " friction columns per joint; the model's " + toString(model.friction_model.kind) +
+        " friction model has " + std::to_string(model.friction_model.columns()));
+  try {
+    model.friction_model.validate(model.nq());
+  } catch (const ModelError& e) {
+    throw std::invalid_argument(e.what());
+  }
+}
+
 void checkSizes(const Model& model, ParameterLayout layout, long q, long dq, long ddq,
                 long params) {
+  checkFrictionLayout(model, layout);
   const long n = model.nq();
   auto need = [n](const char* what, long got) {
     if (got >= 0 && got != n)

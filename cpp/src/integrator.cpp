@@ -14,36 +14,41 @@ Integrator::Integrator(const Model& model, const Eigen::VectorXd& params, Parame
       n_(model.nq()),
       layout_(layout),
       params_(params),
-      fc_(Eigen::VectorXd::Zero(model.nq())),
+      friction_(Eigen::MatrixXd::Zero(model.nq(), 3)),
       eps_(coulomb_smoothing) {
   checkSizes(model, layout, -1, -1, -1, params.size());
   if (!params.allFinite()) throw std::invalid_argument("params contains NaN or infinite values");
   if (!(eps_ >= 0) || !std::isfinite(eps_))
     throw std::invalid_argument("coulomb_smoothing must be a finite number >= 0, got " +
                                 std::to_string(eps_));
-  if (layout.friction) {
-    for (int k = 0; k < n_; ++k) {
-      fc_[k] = params_[layout.coulombIndex(k)];
-      params_[layout.coulombIndex(k)] = 0.0;
-    }
+  if (layout.friction) {  // all but the viscous column, applied as torques
+    for (int k = 0; k < n_; ++k)
+      for (int i = 1; i < layout.friction_columns; ++i) {
+        friction_(k, i) = params_[layout.frictionIndex(k, i)];
+        params_[layout.frictionIndex(k, i)] = 0.0;
+      }
   }
   for (Eigen::VectorXd* v : {&tau_, &k1_, &k2_, &k3_, &k4_, &qs_, &vs_, &v2_, &v3_}) v->resize(n_);
 }
 
 bool Integrator::acceleration(Data& data, const VecRef& q, const VecRef& dq, const VecRef& tau,
                               VecOut ddq) noexcept {
-  // The Coulomb torque of each slot at its velocity (a motor's on the motor side), through the
-  // transmission to the joints.
+  // The friction torques other than the viscous one of each slot at its velocity (a motor's on
+  // the motor side), through the transmission to the joints.
   tau_ = tau;
-  const bool motors = model_.motorSide() && layout_.friction;
+  if (!layout_.friction) return forwardDynamics(model_, data, q, dq, tau_, params_, layout_, ddq);
+  const bool motors = model_.motorSide();
   for (int k = 0; k < n_; ++k) {
-    if (fc_[k] == 0.0) continue;
     const double v = drive::motorVelocity(model_, k, dq);
-    const double s = eps_ > 0 ? std::tanh(v / eps_) : (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0));
+    double phi[3] = {0.0, 0.0, 0.0};
+    frictionShapes(model_.friction_model, k, v, phi, eps_);
+    double f = 0.0;
+    for (int i = 1; i < layout_.friction_columns; ++i) f += friction_(k, i) * phi[i];
+    if (f == 0.0) continue;
     if (motors)
-      tau_ -= (fc_[k] * s) * model_.transmission.T.row(k).transpose();
+      tau_ -= f * model_.transmission.T.row(k).transpose();
     else
-      tau_[k] -= fc_[k] * s;
+      tau_[k] -= f;
   }
   return forwardDynamics(model_, data, q, dq, tau_, params_, layout_, ddq);
 }

@@ -33,20 +33,53 @@ bool Model::supports(int j, int k) const {
   return k == j;
 }
 
-ParameterLayout ParameterLayout::fromSize(int n, long size) {
+ParameterLayout ParameterLayout::fromSize(int n, long size, int friction_columns) {
   for (int r = 0; r < 2; ++r)
     for (int f = 0; f < 2; ++f) {
       ParameterLayout l{r == 1, f == 1};
+      l.friction_columns = friction_columns;
       if (l.size(n) == size) return l;
     }
+  const std::string fr = friction_columns == 3 ? "Fv, Fc, F3" : "Fv, Fc";
   throw ModelError("a parameter vector of " + std::to_string(size) +
                    " entries fits no layout for " + std::to_string(n) + " joints (expected " +
                    std::to_string(10 * n) + ", " + std::to_string(11 * n) + " with Ia, " +
-                   std::to_string(12 * n) + " with Fv, Fc, or " + std::to_string(13 * n) +
-                   " with all)");
+                   std::to_string((10 + friction_columns) * n) + " with " + fr + ", or " +
+                   std::to_string((11 + friction_columns) * n) + " with all)");
+}
+
+namespace {
+const char* const kFrictionNames[] = {"coulomb", "asymmetric", "smooth", "stribeck"};
+}  // namespace
+
+const char* toString(FrictionKind kind) { return kFrictionNames[static_cast<int>(kind)]; }
+
+FrictionKind frictionKindOf(const std::string& name) {
+  for (int k = 0; k < 4; ++k)
+    if (name == kFrictionNames[k]) return static_cast<FrictionKind>(k);
+  throw ModelError("friction model must be coulomb, asymmetric, smooth or stribeck, not '" +
+                   escapeControl(name) + "'");
+}
+
+void FrictionModel::validate(int n) const {
+  const std::string kind_name = toString(kind);
+  if (!scaled()) {
+    if (velocity.size() != 0)
+      throw ModelError("the " + kind_name + " friction model takes no velocity");
+    return;
+  }
+  if (velocity.size() != n)
+    throw ModelError("the " + kind_name + " friction model needs a velocity per joint (" +
+                     std::to_string(n) + "), got " + std::to_string(velocity.size()));
+  for (int k = 0; k < n; ++k)
+    if (!std::isfinite(velocity[k]) || !(velocity[k] > 0.0) || velocity[k] > kMaxDescriptionValue)
+      throw ModelError("the " + kind_name + " friction model's velocity " + std::to_string(k + 1) +
+                       " must be positive, finite and at most 1e16, not " +
+                       std::to_string(velocity[k]));
 }
 
 std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
+  const char* third = friction_model.kind == FrictionKind::Stribeck ? "Fs" : "Fa";
   std::vector<std::string> names;
   names.reserve(layout.size(nq()));
   for (int k = 0; k < nq(); ++k) {
@@ -56,6 +89,7 @@ std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
     if (layout.friction) {
       names.push_back("Fv" + idx);
       names.push_back("Fc" + idx);
+      if (layout.friction_columns == 3) names.push_back(third + idx);
     }
   }
   return names;
@@ -70,6 +104,8 @@ Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
     if (layout.friction) {
       p[layout.viscousIndex(k)] = viscous[k];
       p[layout.coulombIndex(k)] = coulomb[k];
+      if (layout.friction_columns == 3)
+        p[layout.thirdFrictionIndex(k)] = third_friction.size() == n ? third_friction[k] : 0.0;
     }
   }
   if (!motorSide() || transmission.nm() != n) return p;
@@ -94,6 +130,12 @@ Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
     if (layout.friction) {
       p[layout.viscousIndex(k)] = own(transmission.viscous, alone ? viscous[j] / (r * r) : 0.0);
       p[layout.coulombIndex(k)] = own(transmission.coulomb, alone ? coulomb[j] / std::abs(r) : 0.0);
+      // r Fa |sign(r dq)| = (r Fa) |sign(dq)|; r Fs sign(r dq) ... = |r| Fs sign(dq) ...
+      if (layout.friction_columns == 3) {
+        const double t = third_friction.size() == n && alone ? third_friction[j] : 0.0;
+        p[layout.thirdFrictionIndex(k)] =
+            alone ? t / (friction_model.kind == FrictionKind::Asymmetric ? r : std::abs(r)) : 0.0;
+      }
     }
   }
   return p;
@@ -139,8 +181,17 @@ void Model::validate() const {
   for (const auto* v : {&rotor_inertia, &viscous, &coulomb})
     if (v->size() != n) throw ModelError(who() + ": per-joint parameter vector of wrong size");
   if (!inertial.allFinite()) throw ModelError(who() + ": inertial parameters are not finite");
-  if (!rotor_inertia.allFinite() || !viscous.allFinite() || !coulomb.allFinite())
+  if (third_friction.size() != 0 && third_friction.size() != n)
+    throw ModelError(who() + ": " + std::to_string(third_friction.size()) +
+                     " third friction parameters for " + std::to_string(n) + " joints");
+  if (!rotor_inertia.allFinite() || !viscous.allFinite() || !coulomb.allFinite() ||
+      !third_friction.allFinite())
     throw ModelError(who() + ": rotor inertia or friction is not finite");
+  try {
+    friction_model.validate(n);
+  } catch (const ModelError& e) {
+    throw ModelError(who() + ": " + e.what());
+  }
   if (!gravity.allFinite()) throw ModelError(who() + ": gravity is not finite");
   if (link_names.size() != static_cast<size_t>(n + 1))
     throw ModelError(who() + ": expected " + std::to_string(n + 1) + " link names");
@@ -175,6 +226,8 @@ void Model::validate() const {
     checkBound(joint, "rotor inertia", rotor_inertia[k], V);
     checkBound(joint, "viscous friction", viscous[k], V);
     checkBound(joint, "Coulomb friction", coulomb[k], V);
+    if (third_friction.size() == n)
+      checkBound(joint, "third friction parameter", third_friction[k], V);
   }
   for (const Joint& j : joints) {
     const auto joint = [&] { return who() + ", joint '" + j.name + "'"; };

@@ -299,7 +299,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   for (int k = 0; k < n; ++k) {
     rows += out.link_rank[k];
     if (layout.rotor && rotor[k].rows() == 0) ++rows;
-    if (layout.friction) rows += 2;
+    if (layout.friction) rows += layout.friction_columns;
   }
   // The rows are sparse: those of link j are zero outside the columns of its subtree, whose
   // total size grows as n log n on a random tree (as n^2 only on a long chain).
@@ -333,10 +333,8 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     r0 += nj;
     if (layout.rotor && rotor[j].rows() == 0)
       rotorEntries(r0++, j, Eigen::VectorXd::Ones(1), entries);
-    if (layout.friction) {
-      entries.emplace_back(r0++, layout.viscousIndex(j), 1.0);
-      entries.emplace_back(r0++, layout.coulombIndex(j), 1.0);
-    }
+    for (int i = 0; layout.friction && i < layout.friction_columns; ++i)
+      entries.emplace_back(r0++, layout.frictionIndex(j, i), 1.0);
   }
   for (const auto& [a, b] : pairs) {  // E_ab, its own row
     for (int m = 0; m < n; ++m)

@@ -3,6 +3,8 @@
 // active.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "malloc_counter.hpp"
 #include "mindyn/base_parameters.hpp"
 #include "mindyn/dynamics.hpp"
@@ -236,4 +238,51 @@ TEST(Realtime, MotorSidePathsAllocateNothing) {
   Eigen::MatrixXd Mj(n, n);
   massMatrix(joint, data, q, pi, layout, Mj);
   EXPECT_NEAR(M(n - 1, n - 2) - Mj(n - 1, n - 2), 1e-4 * 30.0 * 50.0, 1e-12);
+
+// Every friction model on the per-call paths: no allocation, and the regressor's friction
+// columns equal the models' formulas written out here.
+TEST(Realtime, FrictionModelsAllocateNothing) {
+  Model model = loadYaml(test::robotFile("puma560"));
+  const int n = model.nq();
+  for (FrictionKind kind : {FrictionKind::Coulomb, FrictionKind::Asymmetric, FrictionKind::Smooth,
+                            FrictionKind::Stribeck}) {
+    model.friction_model.kind = kind;
+    model.friction_model.velocity = model.friction_model.scaled()
+                                        ? Eigen::VectorXd::LinSpaced(n, 0.05, 0.3)
+                                        : Eigen::VectorXd();
+    model.third_friction = Eigen::VectorXd::LinSpaced(n, 0.5, 1.0);
+    const ParameterLayout layout = model.layout(true, true);
+    checkSizes(model, layout, n, n, n, layout.size(n));
+    const Eigen::VectorXd pi = model.parameters(layout);
+    std::mt19937 rng(5);
+    Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n), ddq = test::random(rng, n);
+    dq[1] = 0.0;
+    Eigen::VectorXd tau(n), ddq2(n);
+    Eigen::MatrixXd W(n, layout.size(n));
+    Integrator integ(model, pi, layout, 0.0);
+    Data data(model);
+    bool ok = true;
+    {
+      Count c;
+      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+      regressor(model, data, q, dq, ddq, layout, W);
+      ok = integ.acceleration(data, q, dq, tau, ddq2);
+      EXPECT_EQ(c.value(), 0) << toString(kind);
+    }
+    EXPECT_TRUE(ok);
+    EXPECT_LT((ddq2 - ddq).norm(), 1e-8 * (1 + ddq.norm())) << toString(kind);
+    EXPECT_LT((W * pi - tau).norm(), 1e-9 * (1 + tau.norm())) << toString(kind);
+    for (int k = 0; k < n; ++k) {
+      const double v = dq[k], s = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+      const double w = model.friction_model.scaled() ? model.friction_model.velocity[k] : 1.0;
+      EXPECT_EQ(W(k, layout.viscousIndex(k)), v);
+      const double c1 = kind == FrictionKind::Smooth ? std::tanh(v / w) : s;
+      EXPECT_DOUBLE_EQ(W(k, layout.coulombIndex(k)), c1) << toString(kind);
+      if (layout.friction_columns == 3) {
+        const double c2 =
+            kind == FrictionKind::Asymmetric ? std::abs(s) : s * std::exp(-(v / w) * (v / w));
+        EXPECT_DOUBLE_EQ(W(k, layout.thirdFrictionIndex(k)), c2) << toString(kind);
+      }
+    }
+  }
 }

@@ -113,6 +113,17 @@ class BaseParameters:
             offset=self.offset if offset is None else offset,
         )
 
+    def with_friction_velocity(self, velocity) -> BaseParameters:
+        """The same base set for the robot whose friction model (smooth or Stribeck) has the
+        velocity scale ``velocity`` (n,) instead: the friction parameters are base parameters
+        of their own, so only the regressor's friction columns change."""
+        kind = self.robot.friction_model["kind"]
+        v = _args.array(velocity, "velocity", (self.robot.n,))
+        robot = self.robot.with_friction_model(kind, velocity=v)
+        out = BaseParameters(self._b.with_friction_velocity(v), robot, self.offset, self.options)
+        out.method_reason = self.method_reason
+        return out
+
     @cached_property
     def sets(self) -> dict:
         """The three sets as mappings (see the class attributes), built on first use; each

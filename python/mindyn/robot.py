@@ -2,10 +2,12 @@
 
 Every per-sample method takes one sample, arrays of shape ``(n,)``, or a batch of ``m`` samples,
 arrays of shape ``(m, n)``, and returns the matching shape. Parameter vectors follow the classical
-layout ``[XX1 XY1 XZ1 YY1 YZ1 ZZ1 MX1 MY1 MZ1 M1 (Ia1) (Fv1 Fc1) XX2 ...]``: inertial parameters
-about each link-frame origin, optionally followed per joint by rotor inertia and viscous / Coulomb
-friction. A vector's layout is recognised from its length (10n, 11n with ``Ia``, 12n with
-``Fv, Fc``, 13n with all three).
+layout ``[XX1 XY1 XZ1 YY1 YZ1 ZZ1 MX1 MY1 MZ1 M1 (Ia1) (Fv1 Fc1 (F31)) XX2 ...]``: inertial
+parameters about each link-frame origin, optionally followed per joint by rotor inertia and the
+friction parameters of the robot's friction model (:attr:`Robot.friction_model`: viscous and
+Coulomb, and a third, ``Fa`` or ``Fs``, for the asymmetric and Stribeck models). A vector's
+layout is recognised from its length (10n, 11n with ``Ia``, (10 + c) n with the ``c`` friction
+columns, (11 + c) n with all).
 """
 
 from __future__ import annotations
@@ -18,6 +20,9 @@ from pathlib import Path
 import numpy as np
 
 from . import _args, _core, _mujoco
+
+#: The friction models of :meth:`Robot.with_friction_model`.
+FRICTION_KINDS = ("coulomb", "asymmetric", "smooth", "stribeck")
 
 __all__ = ["Robot", "Transmission", "load", "bundled_robots"]
 
@@ -181,7 +186,8 @@ class Robot:
 
     Notes
     -----
-    The parameter values (``params``, ``rotor_inertia``, ``viscous``, ``coulomb``) can be
+    The parameter values (``params``, ``rotor_inertia``, ``viscous``, ``coulomb``,
+    ``third_friction``) can be
     assigned: what is derived from a robot depends on its geometry and gravity only (base
     parameter sets, base dynamics, inverse kinematics) or takes the values when it is made
     (generated code with baked-in values, simulators, controllers' default estimates), so
@@ -434,10 +440,21 @@ class Robot:
     def coulomb(self, v) -> None:
         self._m.coulomb = _vector(v, self.n, "coulomb")
 
+    @property
+    def third_friction(self) -> np.ndarray:
+        """The third friction parameter per slot (``Fa`` of the asymmetric, ``Fs`` of the
+        Stribeck friction model), shape (n,); zero unless assigned."""
+        return self._m.third_friction
+
+    @third_friction.setter
+    def third_friction(self, v) -> None:
+        self._m.third_friction = _vector(v, self.n, "third_friction")
+
     def parameter_names(self, rotor: bool = False, friction: bool = False) -> list[str]:
-        """Classical parameter names in the layout with optional ``Ia`` and ``Fv, Fc``: ``Ia6``
-        is slot 6's, joint 6's on the joint side, motor 6's (row 6 of ``transmission.T``) on the
-        motor side (:attr:`drive_side`)."""
+        """Classical parameter names in the layout with optional ``Ia`` and the friction
+        model's columns (``Fv, Fc``, and ``Fa`` or ``Fs``): ``Ia6`` is slot 6's, joint 6's on
+        the joint side, motor 6's (row 6 of ``transmission.T``) on the motor side
+        (:attr:`drive_side`)."""
         return self._m.parameter_names(_args.flag(rotor, "rotor"), _args.flag(friction, "friction"))
 
     def parameters(self, rotor: bool = False, friction: bool = False) -> np.ndarray:
@@ -490,6 +507,14 @@ class Robot:
         k, p = self._energies(q, dq, params)
         return k + p
 
+    def friction_shapes(self, dq) -> np.ndarray:
+        """The friction columns of every slot at the slot velocities ``dq`` (:attr:`friction_model`:
+        ``v, sign v`` (coulomb), ``v, sign v, |sign v|`` (asymmetric), ``v, tanh(v / w)``
+        (smooth), ``v, sign v, sign v exp(-(v / w)^2)`` (stribeck)), shape (n, c) or (m, n, c):
+        a slot's friction torque is its friction parameters dotted with its row."""
+        (dq,) = _args.batch(self.n, dq=dq)
+        return self._m.friction_shapes(dq)
+
     def energy_regressors(self, q, dq, rotor: bool = False, friction: bool = False):
         """``(w_K, w_P)`` with ``K = w_K @ params`` and ``P = w_P @ params``; shape (P,) or
         (m, P) each."""
@@ -523,7 +548,14 @@ class Robot:
         return self._m.energy_regressors(q, dq, *self._layout(rotor, friction))
 
     def _params(self, params, name: str = "params"):
-        return _args.params(params, name, self.n)
+        return _args.params(params, name, self.n, self.layout_sizes)
+
+    @property
+    def layout_sizes(self) -> tuple[int, int, int, int]:
+        """Parameters per joint of the four classical layouts: 10, 11 with ``Ia``, ``10 + c``
+        with the ``c`` friction columns of the friction model, ``11 + c`` with all."""
+        c = len(self._m.parameter_names(False, True)) // self.n - 10
+        return 10, 11, 10 + c, 11 + c
 
     @staticmethod
     def _layout(rotor, friction) -> tuple[bool, bool]:

@@ -68,7 +68,7 @@ void bindCodegen(py::module_& m) {
         // Base parameters carry the model they were computed for (possibly a snapped copy).
         const Model& model = base_core ? base_core->model->model : model_core->model;
         ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
-                                    : classicalParameterSet(model, {rotor, friction});
+                                    : classicalParameterSet(model, model.layout(rotor, friction));
         if (formulas) {
           if (!base_core || static_cast<long>(formulas->size()) != ps.size())
             throw py::value_error("formulas: one per base parameter, with base parameters");

@@ -76,7 +76,7 @@ void bindControl(py::module_& m) {
       [](PyModel& s, const Array& q, const Array& dq, const Array& dqr, const Array& ddqr,
          bool rotor, bool friction) {
         const long n = s.model.nq();
-        const ParameterLayout layout{rotor, friction};
+        const ParameterLayout layout = s.model.layout(rotor, friction);
         checkDriveSide(s.model, layout);
         SlotineLiData sl(s.model, layout);
         return perSample4(s, q, dq, dqr, ddqr, n, layout.size(static_cast<int>(n)),

@@ -209,49 +209,21 @@ PYBIND11_MODULE(_core, m) {
           py::arg("side"),
           "A new model whose rotor inertia and friction act on the motors ('motor') or on the "
           "joints ('joint'); this one is unchanged.")
-      .def_property_readonly(
-          "friction_model",
-          [](const PyModel& s) {
-            static const char* names[] = {"coulomb", "asymmetric", "smooth", "stribeck"};
-            const FrictionModel& f = s.model.friction_model;
-            py::dict d;
-            d["kind"] = names[static_cast<int>(f.kind)];
-            d["velocity"] = Eigen::VectorXd(f.velocity);
-            return d;
-          })
+      .def_property_readonly("friction_model",
+                             [](const PyModel& s) {
+                               const FrictionModel& f = s.model.friction_model;
+                               py::dict d;
+                               d["kind"] = toString(f.kind);
+                               d["velocity"] = Eigen::VectorXd(f.velocity);
+                               return d;
+                             })
       .def(
           "with_friction_model",
           [](const PyModel& s, const std::string& kind, const Eigen::VectorXd& velocity) {
-            static const std::pair<const char*, FrictionKind> kinds[] = {
-                {"coulomb", FrictionKind::Coulomb},
-                {"asymmetric", FrictionKind::Asymmetric},
-                {"smooth", FrictionKind::Smooth},
-                {"stribeck", FrictionKind::Stribeck}};
             FrictionModel f;
-            bool known = false;
-            for (const auto& [name, k] : kinds)
-              if (kind == name) f.kind = k, known = true;
-            if (!known)
-              throw ModelError(
-                  "friction model must be coulomb, asymmetric, smooth or stribeck, "
-                  "not '" +
-                  kind + "'");
-            const bool scaled = f.kind == FrictionKind::Smooth || f.kind == FrictionKind::Stribeck;
-            if (scaled) {
-              if (velocity.size() != s.model.nq())
-                throw ModelError("the " + kind + " friction model needs a velocity per joint (" +
-                                 std::to_string(s.model.nq()) + "), got " +
-                                 std::to_string(velocity.size()));
-              for (int k = 0; k < velocity.size(); ++k)
-                if (!std::isfinite(velocity[k]) || !(velocity[k] > 0.0) ||
-                    velocity[k] > kMaxDescriptionValue)
-                  throw ModelError("the " + kind + " friction model's velocity " +
-                                   std::to_string(k + 1) + " must be positive and finite, not " +
-                                   std::to_string(velocity[k]));
-              f.velocity = velocity;
-            } else if (velocity.size() != 0) {
-              throw ModelError("the " + kind + " friction model takes no velocity");
-            }
+            f.kind = frictionKindOf(kind);
+            f.velocity = velocity;
+            f.validate(s.model.nq());
             Model copy = s.model;
             copy.friction_model = f;
             return std::make_shared<PyModel>(std::move(copy));
@@ -312,16 +284,28 @@ PYBIND11_MODULE(_core, m) {
               throw ModelError("coulomb must be n finite values");
             s.model.coulomb = v;
           })
+      .def_property(
+          "third_friction",
+          [](const PyModel& s) {
+            return s.model.third_friction.size() == s.model.nq()
+                       ? Eigen::VectorXd(s.model.third_friction)
+                       : Eigen::VectorXd(Eigen::VectorXd::Zero(s.model.nq()));
+          },
+          [](PyModel& s, const Eigen::VectorXd& v) {
+            if (v.size() != s.model.nq() || !v.allFinite())
+              throw ModelError("third_friction must be n finite values");
+            s.model.third_friction = v;
+          })
       .def(
           "parameter_names",
           [](const PyModel& s, bool rotor, bool friction) {
-            return s.model.parameterNames({rotor, friction});
+            return s.model.parameterNames(s.model.layout(rotor, friction));
           },
           py::arg("rotor") = false, py::arg("friction") = false)
       .def(
           "parameters",
           [](const PyModel& s, bool rotor, bool friction) {
-            return s.model.parameters({rotor, friction});
+            return s.model.parameters(s.model.layout(rotor, friction));
           },
           py::arg("rotor") = false, py::arg("friction") = false)
       .def(
@@ -372,7 +356,7 @@ PYBIND11_MODULE(_core, m) {
              bool friction) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
-            const ParameterLayout layout{rotor, friction};
+            const ParameterLayout layout = s.model.layout(rotor, friction);
             checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
@@ -389,7 +373,7 @@ PYBIND11_MODULE(_core, m) {
           [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
-            const ParameterLayout layout{rotor, friction};
+            const ParameterLayout layout = s.model.layout(rotor, friction);
             checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
@@ -405,7 +389,7 @@ PYBIND11_MODULE(_core, m) {
           [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
-            const ParameterLayout layout{rotor, friction};
+            const ParameterLayout layout = s.model.layout(rotor, friction);
             checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
@@ -418,6 +402,22 @@ PYBIND11_MODULE(_core, m) {
             return py::make_tuple(wp, wl);
           },
           py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false)
+      .def(
+          "friction_shapes",
+          [](PyModel& s, const Array& dq) {
+            const long n = s.model.nq();
+            const int c = s.model.friction_model.columns();
+            SampleBatch batch({{&dq, "dq"}}, n);
+            return perSample<1>(batch, {{{n, c}}}, [&](const auto& x, auto out) {
+              for (int k = 0; k < n; ++k) {
+                double phi[3] = {0.0, 0.0, 0.0};
+                frictionShapes(s.model.friction_model, k, x[0][k], phi);
+                for (int i = 0; i < c; ++i) out[0][k * c + i] = phi[i];
+              }
+            })[0];
+          },
+          py::arg("dq"),
+          "The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c).")
       .def(
           "energies",
           [](PyModel& s, const Array& q, const Array& dq, const py::object& params) {
@@ -544,6 +544,20 @@ PYBIND11_MODULE(_core, m) {
                              [](const PyBase& b) { return b.bp.classical_names; })
       .def_property_readonly("rotor", [](const PyBase& b) { return b.bp.layout.rotor; })
       .def_property_readonly("friction", [](const PyBase& b) { return b.bp.layout.friction; })
+      .def(
+          "with_friction_velocity",
+          [](const PyBase& b, const Eigen::VectorXd& velocity) {
+            // The friction columns are base parameters of their own: the set does not depend
+            // on the velocity scale, only the regressor's columns do.
+            Model copy = b.model->model;
+            copy.friction_model.velocity = velocity;
+            copy.friction_model.validate(copy.nq());
+            auto out = std::make_shared<PyBase>(b);
+            out->model = std::make_shared<PyModel>(std::move(copy));
+            return out;
+          },
+          py::arg("velocity"),
+          "The same base set for the model with its friction model's velocity scale replaced.")
       .def_property_readonly("method",
                              [](const PyBase& b) {
                                switch (b.bp.method) {
@@ -645,7 +659,7 @@ PYBIND11_MODULE(_core, m) {
           out->model = model;
         }
         BaseOptions o;
-        o.layout = {rotor, friction};
+        o.layout = out->model->model.layout(rotor, friction);
         o.order = order;
         o.tolerance = tolerance;
         o.samples = samples;
@@ -698,7 +712,8 @@ PYBIND11_MODULE(_core, m) {
   m.def(
       "projection_refusal",
       [](const std::shared_ptr<PyModel>& model, bool rotor, bool friction) -> py::object {
-        const std::string why = projectionRefusal(model->model, {rotor, friction});
+        const std::string why =
+            projectionRefusal(model->model, model->model.layout(rotor, friction));
         if (why.empty()) return py::none();
         return py::str(why);
       },

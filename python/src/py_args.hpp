@@ -178,7 +178,8 @@ inline Eigen::Map<const Eigen::VectorXd> parameterArg(const Array& a, long size,
 
 /// A classical parameter vector for `self`'s model. None: the model's own values in `layout`.
 /// With `layout_given` the size must fit `layout`; otherwise the layout is read off the size
-/// (10, 11, 12 or 13 entries per joint) and returned in `layout`.
+/// (10, 11, 10 + c or 11 + c entries per joint, c the friction model's columns) and returned in
+/// `layout`.
 inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object& params,
                                            ParameterLayout& layout, bool layout_given) {
   const int n = self.model.nq();
@@ -194,7 +195,7 @@ inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object
       throw ModelError("params has " + std::to_string(size) + " entries; this layout expects " +
                        std::to_string(layout.size(n)));
   } else {
-    layout = ParameterLayout::fromSize(n, size);
+    layout = self.model.layoutOfSize(size);
   }
   requireFinite(a, "params", "entry");
   checkDriveSide(self.model, layout);

@@ -9,15 +9,60 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 
 #include "mindyn/data.hpp"
 #include "mindyn/model.hpp"
+#include "mindyn/spatial.hpp"
 
 namespace mindyn {
 
 using VecRef = Eigen::Ref<const Eigen::VectorXd>;
 using VecOut = Eigen::Ref<Eigen::VectorXd>;
 using MatOut = Eigen::Ref<Eigen::MatrixXd>;
+
+/// The friction columns of slot k at its velocity v (the one place they are formed): phi[i]
+/// multiplies friction parameter i (layout.frictionIndex(k, i)) in the slot's torque, i below
+/// f.columns() (model.hpp, FrictionModel): Coulomb {v, s}, Asymmetric {v, s, |s|}, Smooth
+/// {v, tanh(v / w_k)}, Stribeck {v, s, s exp(-(v / w_k)^2)}, with s = sign(v) (sign(0) = 0), or
+/// s = tanh(v / eps) when `sign_smoothing` eps > 0 (the simulation plant's smoothing). The
+/// friction model must be valid for the model's slots (FrictionModel::validate).
+inline void frictionShapes(const FrictionModel& f, int k, double v, double* phi,
+                           double sign_smoothing = 0.0) noexcept {
+  const double s = sign_smoothing > 0.0 ? std::tanh(v / sign_smoothing) : sgn(v);
+  phi[0] = v;
+  switch (f.kind) {
+    case FrictionKind::Coulomb:
+      phi[1] = s;
+      break;
+    case FrictionKind::Asymmetric:
+      phi[1] = s;
+      phi[2] = std::abs(s);
+      break;
+    case FrictionKind::Smooth:
+      phi[1] = std::tanh(v / f.velocity[k]);
+      break;
+    case FrictionKind::Stribeck: {
+      const double r = v / f.velocity[k];
+      phi[1] = s;
+      phi[2] = s * std::exp(-r * r);
+      break;
+    }
+  }
+}
+
+/// Slot k's friction torque sum_i params[layout.frictionIndex(k, i)] phi_i(v) (frictionShapes);
+/// zero without friction in the layout.
+inline double frictionTorque(const Model& model, ParameterLayout layout, const VecRef& params,
+                             int k, double v) noexcept {
+  if (!layout.friction) return 0.0;
+  double phi[3] = {0.0, 0.0, 0.0};
+  frictionShapes(model.friction_model, k, v, phi);
+  double t = 0.0;
+  for (int i = 0; i < layout.friction_columns; ++i)
+    t += params[layout.frictionIndex(k, i)] * phi[i];
+  return t;
+}
 
 /// The kinematic pass of every algorithm here, of the Slotine-Li functions and of the inverse
 /// kinematics: the pose of every link relative to its parent (data.R, p) and to the base
@@ -34,6 +79,10 @@ void computeKinematics(const Model& model, Data& data, const VecRef& q, const Ve
 void inverseDynamics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                      const VecRef& ddq, const VecRef& params, ParameterLayout layout,
                      VecOut tau) noexcept;
+
+/// Throws std::invalid_argument unless a layout with friction has the friction model's columns
+/// and the friction model is valid for the model (checkSizes calls it).
+void checkFrictionLayout(const Model& model, ParameterLayout layout);
 
 /// Gravity torque c(q) (friction and rotor inertia do not contribute).
 void gravityTorque(const Model& model, Data& data, const VecRef& q, const VecRef& params,

@@ -2,14 +2,15 @@
 // closed-loop simulations. A discrete-time controller computes a torque once per period; the
 // robot then moves under that torque for the period,
 //
-//   A(q) ddq + b(q, dq) + c(q) + Fv dq + Fc sigma(dq) = tau,      sigma = sign or tanh(dq / eps),
+//   A(q) ddq + b(q, dq) + c(q) + Fv dq + f(dq) = tau,
 //
-// (on the motor side, Model::motorSide, rotor inertia and friction act through the transmission:
-// A includes T^T Ia T, and the friction is T^T (Fv T dq + Fc sigma(T dq)));
+// f the friction shapes of the model's friction model (model.hpp) with sign(dq) replaced by
+// tanh(dq / eps) when eps > 0 (on the motor side, Model::motorSide, rotor inertia and friction
+// act through the transmission: A includes T^T Ia T, and the friction is T^T f(T dq)),
 // integrated by `substeps` classical Runge-Kutta (RK4) steps of h = period / substeps (global
-// error O(h^4)). Coulomb friction is taken out of the parameter vector and applied as a torque,
-// so that it can be smoothed (eps > 0) where a switching sign would make the right-hand side
-// discontinuous.
+// error O(h^4)). The friction terms other than the viscous one are taken out of the parameter
+// vector and applied as a torque, so that the sign in them can be smoothed (eps > 0) where a
+// switching sign would make the right-hand side discontinuous.
 #pragma once
 
 #include <Eigen/Core>
@@ -44,8 +45,8 @@ class Integrator {
   const Model& model_;
   int n_;
   ParameterLayout layout_;
-  Eigen::VectorXd params_;  // Coulomb entries zeroed
-  Eigen::VectorXd fc_;      // Coulomb coefficients (zero without friction in the layout)
+  Eigen::VectorXd params_;    // friction entries but the viscous ones zeroed
+  Eigen::MatrixXd friction_;  // n x 3: those entries (column 0 unused; zero without friction)
   double eps_;
   Eigen::VectorXd tau_, k1_, k2_, k3_, k4_, qs_, vs_, v2_, v3_;  // workspace
 };

@@ -109,8 +109,11 @@ struct ParameterLayout {
   /// The third friction parameter (Fa of Asymmetric, Fs of Stribeck); only when
   /// friction_columns == 3.
   int thirdFrictionIndex(int k) const { return viscousIndex(k) + 2; }
-  /// The layout whose size for n joints is `size`, or throws ModelError.
-  static ParameterLayout fromSize(int n, long size);
+  /// Friction column i (0: Fv, 1: Fc, 2: the third) of slot k.
+  int frictionIndex(int k, int i) const { return viscousIndex(k) + i; }
+  /// The layout whose size for n joints is `size` with `friction_columns` friction columns
+  /// (Model::layoutOfSize gives the model's), or throws ModelError.
+  static ParameterLayout fromSize(int n, long size, int friction_columns = 2);
 };
 
 /// The friction model of every slot (joint, or motor when the model's `motorSide()`), with v the
@@ -130,7 +133,17 @@ struct FrictionModel {
   int columns() const {
     return kind == FrictionKind::Asymmetric || kind == FrictionKind::Stribeck ? 3 : 2;
   }
+  /// True for the kinds with a velocity scale (Smooth, Stribeck).
+  bool scaled() const { return kind == FrictionKind::Smooth || kind == FrictionKind::Stribeck; }
+  /// Throws ModelError (one line) unless `velocity` has n positive finite entries (at most
+  /// kMaxDescriptionValue) for a scaled kind and none otherwise.
+  void validate(int n) const;
 };
+
+/// "coulomb", "asymmetric", "smooth" or "stribeck".
+const char* toString(FrictionKind kind);
+/// The kind of a name of toString, or throws ModelError naming the four.
+FrictionKind frictionKindOf(const std::string& name);
 
 struct Model {
   std::string name;
@@ -152,6 +165,9 @@ struct Model {
   Eigen::VectorXd rotor_inertia;  // n, joint side (as descriptions give them; see parameters())
   Eigen::VectorXd viscous;        // n, joint side
   Eigen::VectorXd coulomb;        // n, joint side
+  /// n, the third friction parameter of the friction model (Fa of Asymmetric, Fs of
+  /// Stribeck), joint side; empty reads as zero.
+  Eigen::VectorXd third_friction;
   /// Motors and their coupling to the joints (transmission.hpp); empty when the description
   /// declares none (each joint driven directly).
   Transmission transmission;
@@ -174,7 +190,21 @@ struct Model {
   /// True when joint j supports joint k: j == k or j is an ancestor of k.
   bool supports(int j, int k) const;
 
+  /// The layout with or without rotor inertia and friction, its friction columns those of
+  /// `friction_model` (the one place a layout is formed from these two choices).
+  ParameterLayout layout(bool rotor, bool friction) const {
+    ParameterLayout l{rotor, friction};
+    l.friction_columns = friction_model.columns();
+    return l;
+  }
+  /// The layout of a parameter vector of `size` entries (10, 11, 10 + c or 11 + c per joint,
+  /// c the friction model's columns), or throws ModelError.
+  ParameterLayout layoutOfSize(long size) const {
+    return ParameterLayout::fromSize(nq(), size, friction_model.columns());
+  }
+
   /// Classical parameter names for a layout, e.g. XX1, ..., M1, Ia1, Fv1, Fc1, XX2, ...
+  /// (the third friction column Fa_k for Asymmetric, Fs_k for Stribeck)
   std::vector<std::string> parameterNames(ParameterLayout layout = {}) const;
   /// Classical parameter values of this model in a layout. On the motor side (motorSide()),
   /// slot k holds motor k's values: its own (transmission.rotor_inertia, viscous, coulomb) where

@@ -27,9 +27,9 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_export)
 
 
-def read_classical(path: str) -> tuple[dict, str | None]:
-    """The 'classical' map of an identification JSON and the robot it names (None if none),
-    or a one-line error naming the file."""
+def read_classical(path: str) -> tuple[dict, str | None, dict | None]:
+    """The 'classical' map of an identification JSON, the robot it names (None if none) and its
+    friction model (None if not recorded), or a one-line error naming the file."""
     # here: not needed by the other commands
     from ..identification.document import read_identification
 
@@ -38,7 +38,7 @@ def read_classical(path: str) -> tuple[dict, str | None]:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from ..identification.document import robot_on_drive_side
+    from ..identification.document import robot_on_drive_side, with_identified_friction
 
     classical, identified_for, doc = read_classical(args.params)
     robot = load(args.robot, tip=args.tip)
@@ -47,6 +47,7 @@ def cmd_export(args: argparse.Namespace) -> int:
             f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"
         )
     robot = robot_on_drive_side(robot, doc, str(args.params))
+    robot = with_identified_friction(robot, doc, str(args.params))
     write_description(
         robot,
         classical,
@@ -107,6 +108,12 @@ def write_description(
     an MJCF (``mjcf``) and say what was written; ``what`` names the values in errors, ``source``
     the robot argument."""
     check_description_kind(robot, source, urdf is not None, mjcf)
+    kind = robot.friction_model["kind"]
+    if kind != "coulomb" and any(k.startswith(("Fv", "Fc")) for k in classical):
+        raise ModelError(
+            f"{what}: identified with the {kind} friction model; a robot description holds "
+            "viscous and Coulomb friction only (identify with --friction-model coulomb)"
+        )
     terms = classical_terms(robot, classical, what)
     if mjcf is not None:
         if sidecar is not None:

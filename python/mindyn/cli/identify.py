@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..base import base_parameters
-from ..robot import load
+from ..robot import FRICTION_KINDS, load
 from .args import (
     ZCR07S_STUDY,
     add_command,
@@ -326,6 +326,16 @@ def cmd_identify(args: argparse.Namespace) -> int:
             "--consistent as well (only a physically consistent estimate can be written as a robot "
             "description)"
         )
+    if (args.urdf or args.yaml or args.mjcf) and args.friction_model not in (
+        None,
+        "coulomb",
+        "auto",
+    ):
+        given = "urdf" if args.urdf else "yaml" if args.yaml else "mjcf"
+        raise ValueError(
+            f"--{given}: a robot description holds viscous and Coulomb friction only, not the "
+            f"{args.friction_model} friction model"
+        )
     if args.sidecar and not (args.urdf or args.yaml):
         raise ValueError("--sidecar: expected --urdf or --yaml (the description it goes with)")
     if args.urdf or args.yaml or args.mjcf:
@@ -349,20 +359,42 @@ def cmd_identify(args: argparse.Namespace) -> int:
     vparts = [_read_filtered(f, robot, args, c, cutoff=vcut) for f, c in zip(vfiles, vcur)]
     vlogs = [d for ds in vparts for d in ds]
     vlabels = [d.source if len(ds) > 1 else f for f, ds in zip(vfiles, vparts) for d in ds]
-    base = base_parameters(robot, rotor=args.rotor, friction=args.friction, offset=args.offset)
-    try:
-        res = identify(
+    fit_options = dict(
+        model=args.model,
+        weighted=not args.ols,
+        rsd_threshold=args.rsd_threshold,
+        energy_window=args.energy_window,
+        integration=args.integration,
+        integral_window=args.integral_window,
+        min_velocity=args.min_velocity,
+    )
+    friction = None
+    if args.friction_model is not None or args.friction_width is not None:
+        from ..identification.friction import select_friction_model
+
+        if args.friction_model is None:
+            raise ValueError("--friction-width: expected --friction-model smooth or auto")
+        width = None
+        if args.friction_width is not None:
+            width = joint_values(args.friction_width, robot.n, "--friction-width", broadcast=True)
+            if not all(math.isfinite(w) and w > 0 for w in width):
+                raise ValueError("--friction-width: every width must be a positive number")
+        args.friction = True
+        friction = select_friction_model(
             robot,
             logs,
-            model=args.model,
-            base=base,
-            weighted=not args.ols,
-            rsd_threshold=args.rsd_threshold,
-            energy_window=args.energy_window,
-            integration=args.integration,
-            integral_window=args.integral_window,
-            min_velocity=args.min_velocity,
+            args.friction_model,
+            rotor=args.rotor,
+            offset=args.offset,
+            width=width,
+            fit=fit_options,
+            progress=_progress(),
         )
+        robot, base = friction.robot, friction.base
+    else:
+        base = base_parameters(robot, rotor=args.rotor, friction=args.friction, offset=args.offset)
+    try:
+        res = identify(robot, logs, base=base, **fit_options)
     except np.linalg.LinAlgError as e:
         raise ValueError(
             f"{args.model} model on {' + '.join(files)}: the least-squares problem of the base "
@@ -492,6 +524,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
             f"  note: the log was simulated with rotor inertia and friction on the {truth_side}s, "
             f"this fit has them on the {robot.drive_side}s: its true values are not compared"
         )
+    if base.friction:
+        from ..identification.friction import friction_lines
+
+        out += friction_lines(robot, record=friction.record if friction else None)
     for w in res.settings.get("warnings", []):
         out.append(f"  WARNING: {w}")
     cfit = cval = None
@@ -520,6 +556,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
     print("\n".join(out))
 
     doc = res.to_dict()
+    if base.friction:
+        from ..identification.friction import friction_record
+
+        doc["friction_model"] = friction_record(robot, record=friction.record if friction else None)
     doc["tip"] = args.tip  # the chain identified (None: the whole description)
     doc["consistent"] = cons is not None
     if cons is not None:
@@ -1434,6 +1474,21 @@ def register(sub) -> None:
         low=0,
         default=0.01,
         help="dynamic model with friction: leave out joint equations slower than this [rad/s, m/s]",
+    )
+    p.add_argument(
+        "--friction-model",
+        choices=[*FRICTION_KINDS, "auto"],
+        help="friction per joint (implies --friction): coulomb Fv v + Fc sign v (the default), "
+        "asymmetric + Fa |sign v| (direction-dependent Coulomb), smooth Fv v + Fc tanh(v / w) "
+        "(w from the data's velocity noise unless --friction-width), stribeck + Fs sign v "
+        "exp(-(v / w)^2) (w searched per joint on the fit's residual), or auto (the one with "
+        "the smallest residual on held-out blocks of the fit logs); the choice is reported",
+    )
+    joint_vector(
+        p,
+        "--friction-width",
+        help="--friction-model smooth or auto: the tanh width w [rad/s, m/s], positive (or "
+        "one value for all joints)",
     )
     p.set_defaults(func=cmd_identify)
 

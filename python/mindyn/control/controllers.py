@@ -102,7 +102,7 @@ def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
     ``C dq`` is the velocity-product torque and ``dA/dt - 2 C`` is skew-symmetric. ``params``: any
     classical layout (default the model's inertial parameters)."""
     q, dq = _args.batch(robot.n, q=q, dq=dq)
-    return _core.coriolis_matrix(robot._m, q, dq, _args.params(params, "params", robot.n))
+    return _core.coriolis_matrix(robot._m, q, dq, robot._params(params))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -383,9 +383,10 @@ class Gains(dict):
 
 
 def plant_parameters(robot: Robot, rotor: bool, friction: bool = True) -> np.ndarray:
-    """The description's parameters in the 13-per-joint layout, rotor inertia and friction
-    zero unless asked for (the simulated robot of :func:`mindyn.control.simulate`)."""
-    p = robot.parameters(True, True).reshape(robot.n, 13).copy()
+    """The description's parameters in the full layout (rotor inertia and the friction model's
+    columns, ``robot.layout_sizes[3]`` per joint), rotor inertia and friction zero unless asked
+    for (the simulated robot of :func:`mindyn.control.simulate`)."""
+    p = robot.parameters(True, True).reshape(robot.n, -1).copy()
     if not rotor:
         p[:, 10] = 0.0
     if not friction:
@@ -394,11 +395,11 @@ def plant_parameters(robot: Robot, rotor: bool, friction: bool = True) -> np.nda
 
 
 def base_values(base: BaseParameters, params) -> np.ndarray:
-    """The base-parameter values of classical parameters ``params`` in the full layout (13 per
-    joint: with rotor inertia and friction), whatever the layout of ``base``."""
+    """The base-parameter values of classical parameters ``params`` in the full layout (with
+    rotor inertia and friction, :func:`plant_parameters`), whatever the layout of ``base``."""
     n = base.robot.n
-    full = np.asarray(params, dtype=float).reshape(n, 13)
-    cols = list(range(10)) + [10] * base.rotor + [11, 12] * base.friction
+    full = np.asarray(params, dtype=float).reshape(n, base.robot.layout_sizes[3])
+    cols = list(range(10)) + [10] * base.rotor + list(range(11, full.shape[1])) * base.friction
     values = base.values(full[:, cols].reshape(-1))
     if base.offset:
         values = np.concatenate([values, np.zeros(n)])[: len(base.names)]

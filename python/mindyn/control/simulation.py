@@ -241,33 +241,37 @@ class SensorNoise:
 def _true_params(robot: Robot, rotor: bool, friction: bool, params=None):
     names = robot.parameter_names(True, True)
     if params is None:
-        p = robot.parameters(True, True).reshape(robot.n, 13).copy()
+        p = robot.parameters(True, True).reshape(robot.n, -1).copy()
         if not rotor:
             p[:, 10] = 0.0
         if not friction:
             p[:, 11:] = 0.0
         params = p.reshape(-1)
-    return names, expand_params(robot.n, params)
+    return names, expand_params(robot.n, params, robot.layout_sizes)
 
 
-def expand_params(n: int, params) -> np.ndarray:
-    """A classical vector of any layout (10 n, 11 n with Ia, 12 n with Fv Fc, 13 n with all)
-    in the full 13 n layout, absent entries zero."""
+def expand_params(n: int, params, sizes=(10, 11, 12, 13)) -> np.ndarray:
+    """A classical vector of any layout (``sizes`` per joint: 10, 11 with Ia, 10 + c with the c
+    friction columns, 11 + c with all; ``Robot.layout_sizes``) in the full layout (the last),
+    absent entries zero."""
     p = np.asarray(params, dtype=float).reshape(-1)
     per = p.shape[0] // n if n else 0
-    if per * n != p.shape[0] or per not in (10, 11, 12, 13):
+    if per * n != p.shape[0] or per not in sizes:
         raise ValueError(
-            f"params has {p.shape[0]} entries; expected {10 * n}, {11 * n}, {12 * n} or {13 * n}"
+            f"params has {p.shape[0]} entries; expected "
+            + ", ".join(str(k * n) for k in sizes[:-1])
+            + f" or {sizes[-1] * n}"
         )
     if not np.isfinite(p).all():
         raise ValueError("params contains NaN or infinite values")
+    c = sizes[2] - 10
     blocks = p.reshape(n, per)
-    out = np.zeros((n, 13))
+    out = np.zeros((n, sizes[3]))
     out[:, :10] = blocks[:, :10]
-    if per in (11, 13):
+    if per in (sizes[1], sizes[3]):
         out[:, 10] = blocks[:, 10]
-    if per in (12, 13):
-        out[:, 11:] = blocks[:, -2:]
+    if per in (sizes[2], sizes[3]):
+        out[:, 11:] = blocks[:, -c:]
     return out.reshape(-1)
 
 
@@ -323,7 +327,8 @@ class SimulationResult:
     ``tau_true_model``: the same with the true parameters (adaptive controllers);
     ``p_hat`` (m, nb): the controller's estimate after each call, ``p_true`` (nb,) the true
     values, in the base parameters ``base_names``; ``saturated`` (m, n): torque limited;
-    ``params``, ``param_names``: the simulated robot's classical parameters (13 per joint);
+    ``params``, ``param_names``: the simulated robot's classical parameters (the full layout:
+    rotor inertia and its friction model's columns per joint);
     ``tau_ext`` (m, n): the external joint torque held over each period (None without one);
     ``info``: settings and figures."""
 
@@ -469,7 +474,8 @@ def simulate(
     rotor, friction : bool
         Give the simulated robot its rotor inertia / friction (from the description).
     params : array, optional
-        True classical parameters (any layout, e.g. 13 n with Ia, Fv, Fc per joint); overrides
+        True classical parameters (any layout, e.g. 13 n with Ia, Fv, Fc per joint; the friction
+        model's columns are those of ``robot.friction_model``); overrides
         ``rotor`` and ``friction``.
     noise : SensorNoise, optional
     torque_limit : None, "effort" or array (n,)
@@ -561,7 +567,7 @@ def simulate(
     bound = _divergence_bound(robot, qd)
     base = base if base is not None else getattr(controller, "base", None)
     pb_true = None
-    if base is not None and len(base.classical_names) == 13 * n:
+    if base is not None and len(base.classical_names) == robot.layout_sizes[3] * n:
         pb_true = base.values(p_true)
 
     out = {k: np.empty((m, n)) for k in ("q", "dq", "ddq", "tau", "qm", "dqm", "taum", "taud")}

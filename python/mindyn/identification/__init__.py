@@ -7,6 +7,8 @@
 - :mod:`~mindyn.identification.models`: the regression systems (dynamic, energy and integral
   models);
 - :mod:`~mindyn.identification.estimation`: least squares with statistics and pruning;
+- :mod:`~mindyn.identification.friction`: the friction model of an identification (given,
+  derived from the data, or chosen on held-out data);
 - :mod:`~mindyn.identification.validation`: torque prediction and error measures (against the
   filtered torques, the torques as logged, and on moving samples);
 - :mod:`~mindyn.identification.prediction`: an identification's torques on any log;
@@ -22,6 +24,7 @@ from .consistent import ConsistentResult, identify_consistent, identify_payload
 from .data import DataError, JointData, read_csv, write_csv
 from .errors import IdentificationError, RankDeficientError
 from .estimation import IdentificationResult, identify
+from .friction import FrictionChoice, select_friction_model
 from .models import MODELS, dynamic_system, energy_system, integral_system
 from .validation import error_measures, true_base_values, validate
 
@@ -29,6 +32,7 @@ __all__ = [
     "MODELS",
     "ConsistentResult",
     "DataError",
+    "FrictionChoice",
     "IdentificationError",
     "IdentificationResult",
     "JointData",
@@ -41,6 +45,7 @@ __all__ = [
     "identify_payload",
     "integral_system",
     "read_csv",
+    "select_friction_model",
     "true_base_values",
     "validate",
     "write_csv",

@@ -43,7 +43,7 @@ from .._core import ModelError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
-from .document import read_identification, robot_on_drive_side
+from .document import read_identification, robot_on_drive_side, with_identified_friction
 from .errors import IdentificationError
 from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
 from .models import moving_equations, require_torque
@@ -851,6 +851,7 @@ def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.
     if arm["robot"] != robot.name:
         raise ModelError(f"{where}: identified for robot '{arm['robot']}', not '{robot.name}'")
     robot = robot_on_drive_side(robot, arm, where)
+    robot = with_identified_friction(robot, arm, where)
     base = base_parameters(
         robot, rotor=arm["rotor"], friction=arm["friction"], offset=arm["offset"]
     )

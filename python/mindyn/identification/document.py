@@ -14,7 +14,7 @@ from pathlib import Path
 
 from .data import DataError, read_json
 
-__all__ = ["FLAGS", "read_identification", "robot_on_drive_side"]
+__all__ = ["FLAGS", "read_identification", "robot_on_drive_side", "with_identified_friction"]
 
 #: The boolean fields: JSON ``true`` / ``false`` only.
 FLAGS = ("rotor", "friction", "offset", "consistent")
@@ -80,6 +80,9 @@ def read_identification(
     side = doc.get("drive_side")
     if "drive_side" in doc and side not in ("motor", "joint"):
         raise DataError(f'{where}: \'drive_side\' is {_kind(side)}; expected "motor" or "joint"')
+    fm = doc.get("friction_model")
+    if fm is not None:
+        out["friction_model"] = _friction_model(fm, where)
     classical = doc.get("classical")
     if classical is not None:
         if not isinstance(classical, dict) or not classical:
@@ -105,6 +108,41 @@ def robot_on_drive_side(robot, doc: dict, where: str = "identification JSON"):
             f"'{robot.name}' declares no transmissions"
         )
     return robot.with_drive_side(side)
+
+
+def _friction_model(fm, where: str) -> dict:
+    """The checked ``friction_model`` field: ``{kind, velocity (per slot, or null), chosen_by}``."""
+    from ..robot import FRICTION_KINDS
+
+    if not isinstance(fm, dict) or fm.get("kind") not in FRICTION_KINDS:
+        kind = fm.get("kind") if isinstance(fm, dict) else fm
+        raise DataError(
+            f"{where}: 'friction_model' kind is {_kind(kind)}; expected one of "
+            + ", ".join(FRICTION_KINDS)
+        )
+    out = dict(fm)
+    v = fm.get("velocity")
+    if v is not None:
+        if not isinstance(v, list):
+            raise DataError(f"{where}: 'friction_model' velocity is {_kind(v)}; expected a list")
+        out["velocity"] = [
+            _number(x, f"{where}: 'friction_model' velocity item {i + 1}") for i, x in enumerate(v)
+        ]
+    return out
+
+
+def with_identified_friction(robot, doc: dict, where: str = "identification JSON"):
+    """``robot`` with the friction model an identification JSON records (``friction_model``;
+    unchanged without one: viscous and Coulomb friction). DataError when the record does not fit
+    the robot."""
+    fm = doc.get("friction_model")
+    if fm is None:
+        return robot
+    fm = _friction_model(fm, where)
+    try:
+        return robot.with_friction_model(fm["kind"], velocity=fm.get("velocity"))
+    except Exception as e:  # a ModelError of the core, in the terms of this file
+        raise DataError(f"{where}: 'friction_model' does not fit '{robot.name}': {e}") from None
 
 
 def _number(v, where: str) -> float:

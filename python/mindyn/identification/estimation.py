@@ -302,7 +302,7 @@ def _rank_remedies(concerned: list[str], logs, speed: float, robot=None) -> list
     dq = np.vstack([d.dq for d in logs])
     kinds: dict[int, set] = {}
     for nm in concerned:
-        hit = re.fullmatch(r"(Fv|Fc|Off|Ia)(\d+)", nm)
+        hit = re.fullmatch(r"(Fv|Fc|Fa|Fs|Off|Ia)(\d+)", nm)
         if hit:
             kinds.setdefault(int(hit.group(2)), set()).add(hit.group(1))
     if robot is None or robot.drive_side != "motor":
@@ -325,8 +325,13 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
     floor = max(speed, 1e-12 * float(np.max(np.abs(v), initial=0.0)))
     up = np.any(v >= floor, axis=0) if v.size else np.zeros(v.shape[1], bool)
     down = np.any(v <= -floor, axis=0) if v.size else np.zeros(v.shape[1], bool)
+    coulomb = {"Fc", "Fa", "Fs"}  # the friction terms that are constant while a joint moves one way
     still = [j for j in sorted(kinds) if not (up[j - 1] or down[j - 1])]
-    one_way = [j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and {"Fc", "Off"} & kinds[j]]
+    one_way = [
+        j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and ({"Off"} | coulomb) & kinds[j]
+    ]
+    # the direction-dependent Coulomb term is constant whenever the joint moves, either way
+    level = [j for j in sorted(kinds) if j not in still + one_way and {"Fa", "Off"} <= kinds[j]]
 
     def named(js):
         return label.format(", ".join(str(j) if names is None else names[j - 1] for j in js))
@@ -335,9 +340,9 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
     speed_txt = f" (speed {speed:g} rad/s | m/s or more)" if speed > 0 else ""
     if still:
         opts = sorted(
-            {"--friction" for j in still if {"Fv", "Fc"} & kinds[j]}
+            {"--friction" for j in still if ({"Fv"} | coulomb) & kinds[j]}
             | {"--rotor" for j in still if "Ia" in kinds[j]}
-            | {"--offset" for j in still if "Off" in kinds[j] and "Fc" not in kinds[j]}
+            | {"--offset" for j in still if "Off" in kinds[j] and not coulomb & kinds[j]}
         )
         out.append(
             f"{named(still)} never move{speed_txt} in this data: "
@@ -349,6 +354,12 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
             f"{named(one_way)} never reverse direction in this data: "
             "their Coulomb friction is a constant torque there, inseparable from a torque offset: "
             "leave out --offset (or --friction), or reverse them."
+        )
+    if level:
+        out.append(
+            f"{named(level)}: the direction-dependent Coulomb term Fa is "
+            "a constant torque whenever the joint moves, inseparable from a torque offset: leave "
+            "out --offset, or use another --friction-model."
         )
     return out
 

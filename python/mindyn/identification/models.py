@@ -5,9 +5,12 @@
     ``W_b(q_i, dq_i, ddq_i) p_b = tau_i`` for every sample ``i``, stacked (``m n`` rows).
 ``energy``
     The integral form of the energy theorem over consecutive windows ``[t_a, t_b]`` of
-    ``window`` samples: ``(w_H(t_b) - w_H(t_a)) p_b + Fv_k int v_k^2 dt + Fc_k int |v_k| dt
-    + Off_k (q_k(t_b) - q_k(t_a)) = int dq^T tau dt``; no accelerations are needed (``v_k`` the
-    velocity of friction slot ``k``: ``dq_k``, or motor ``k``'s ``t_k . dq`` on the motor side). The
+    ``window`` samples: ``(w_H(t_b) - w_H(t_a)) p_b + sum_i F_i,k int v_k phi_i(v_k) dt
+    + Off_k (q_k(t_b) - q_k(t_a)) = int dq^T tau dt``, ``phi_i`` the friction columns of the
+    robot's friction model (:meth:`~mindyn.Robot.friction_shapes`; ``Fv_k int v_k^2 dt + Fc_k
+    int |v_k| dt`` for viscous and Coulomb friction) at the velocity ``v_k`` of friction slot
+    ``k`` (``dq_k``, or motor ``k``'s ``t_k . dq`` on the motor side); no accelerations are
+    needed. The
     dissipated-energy columns of the friction parameters (and the work of the torque offsets)
     replace their (zero) energy columns; the integrals use the trapezoid or Simpson rule on the
     samples.
@@ -20,6 +23,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 from scipy import integrate
@@ -77,6 +81,27 @@ def dynamic_system(base: BaseParameters, data: JointData, min_velocity: float = 
     return W, y, joint
 
 
+def friction_columns(base: BaseParameters, dq: np.ndarray) -> dict[int, tuple[int, np.ndarray]]:
+    """The friction parameters among the base parameters: base column -> (slot, its friction
+    column at the joint velocities ``dq`` (m, n), shape (m,)), the column ``i`` of the robot's
+    friction model (:meth:`~mindyn.Robot.friction_shapes`; ``Fv``, ``Fc``, then ``Fa`` or
+    ``Fs``) at the slot's velocity (:meth:`~mindyn.Robot.slot_velocities`: the joint's, or its
+    motor's on the motor side)."""
+    if not base.friction:
+        return {}
+    names = list(base.names)
+    # joint 1's friction names (Fv1, Fc1, then Fa1 or Fs1)
+    classical = base.robot.parameter_names(False, True)[10 : base.robot.layout_sizes[2]]
+    kinds = [re.sub(r"\d+$", "", nm) for nm in classical]
+    phi = base.robot.friction_shapes(base.robot.slot_velocities(dq))  # (m, n, c)
+    out = {}
+    for k in range(dq.shape[1]):
+        for i, kind in enumerate(kinds):
+            if f"{kind}{k + 1}" in names:
+                out[names.index(f"{kind}{k + 1}")] = (k, phi[:, k, i])
+    return out
+
+
 def _cumulative(f: np.ndarray, t: np.ndarray, rule: str) -> np.ndarray:
     """Cumulative integral of the samples ``f`` (m, ...) over ``t`` (m,), starting at 0."""
     if rule == "trapezoid":
@@ -114,13 +139,8 @@ def energy_system(
         power_int = None
         integration_f = integration
     names = base.names
-    cols = {}
-    v = base.robot.slot_velocities(dq)  # friction power of slot k: (Fv_k v_k + Fc_k sign v_k) v_k
-    for k in range(data.n):
-        for kind, f in (("Fv", v[:, k] ** 2), ("Fc", np.abs(v[:, k]))):
-            name = f"{kind}{k + 1}"
-            if name in names:
-                cols[names.index(name)] = f
+    v = base.robot.slot_velocities(dq)  # friction power of slot k: its friction torque times v_k
+    cols = {c: v[:, k] * f for c, (k, f) in friction_columns(base, dq).items()}
     F = np.column_stack([power] + list(cols.values())) if cols else power[:, None]
     cum = _cumulative(F, t, integration_f)
     if power_int is not None:
@@ -187,9 +207,11 @@ def integral_chunks(
 
     Joint ``j``, window ``[t_a, t_b]``:
     ``(W_p,j(t_b) - W_p,j(t_a) + int W_l,j dt) p_b + Fv_j (q_j(t_b) - q_j(t_a))
-    + Fc_j int sign(dq_j) dt + Off_j (t_b - t_a) = int tau_j dt`` (on the motor side, motor
-    ``k``'s friction reaches joint ``j`` as ``T[k, j] (Fv_k t_k . (q(t_b) - q(t_a)) + Fc_k int
-    sign(t_k . dq) dt)``), with the base momentum regressors
+    + sum_i F_i,j int phi_i(dq_j) dt + Off_j (t_b - t_a) = int tau_j dt``, ``phi_i`` the friction
+    columns of the robot's friction model after the viscous one (``Fc_j int sign(dq_j) dt``
+    for Coulomb friction; :meth:`~mindyn.Robot.friction_shapes`; on the motor side, motor ``k``'s
+    friction reaches joint ``j`` as ``T[k, j] (Fv_k t_k . (q(t_b) - q(t_a)) + sum_i F_i,k int
+    phi_i(t_k . dq) dt)``), with the base momentum regressors
     ``p = W_p p_b``, ``-dL/dq = W_l p_b`` (:meth:`BaseParameters.momentum_regressors`). The
     momentum is taken at the window's ends only; ``W_l``, the Coulomb term and the torque are
     integrated over the window's samples by Simpson's rule (``simpson``, exact for cubics; any
@@ -224,7 +246,7 @@ def integral_chunks(
     n, nb = data.n, base.n
     names = list(base.names)
     fv = {k: names.index(f"Fv{k + 1}") for k in range(n) if f"Fv{k + 1}" in names}
-    fc = {k: names.index(f"Fc{k + 1}") for k in range(n) if f"Fc{k + 1}" in names}
+    shapes = {c: kf for c, kf in friction_columns(base, data.dq).items() if c not in fv.values()}
     off = {k: names.index(f"Off{k + 1}") for k in range(n) if f"Off{k + 1}" in names}
     T = base.robot.drive_matrix
     v = base.robot.slot_velocities(data.dq)
@@ -247,8 +269,8 @@ def integral_chunks(
         dqw = data.q[wb] - data.q[wa]
         for k, col in fv.items():
             W[:, :, col] = np.outer(dqw @ T[k], T[k])
-        for k, col in fc.items():
-            sk = np.einsum("ws,ws->w", C, np.sign(v[idx, k]))
+        for col, (k, f) in shapes.items():
+            sk = np.einsum("ws,ws->w", C, f[idx])
             W[:, :, col] = np.outer(sk, T[k])
         for k, col in off.items():
             W[:, k, col] = data.t[wb] - data.t[wa]

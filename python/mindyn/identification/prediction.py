@@ -13,7 +13,7 @@ import numpy as np
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
-from .document import robot_on_drive_side
+from .document import robot_on_drive_side, with_identified_friction
 from .estimation import CHUNK_SAMPLES
 from .validation import logged_samples
 
@@ -99,6 +99,7 @@ def identified_model(
         if doc.get("robot") not in (None, robot.name):
             raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
     robot = robot_on_drive_side(robot, doc, where)
+    robot = with_identified_friction(robot, doc, where)
     base = base_parameters(
         robot,
         rotor=bool(doc.get("rotor")),

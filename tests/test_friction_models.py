@@ -1,0 +1,351 @@
+"""Friction models (viscous + Coulomb, direction-dependent Coulomb, smooth Coulomb, Stribeck):
+their regressor columns and torques against the formulas written out here, the rigid part
+against Pinocchio, base-parameter counts by the three methods, and identification from logs
+this module generates with known friction (noise-free recovery, the Stribeck velocity found by
+the search, the model chosen on held-out data)."""
+
+from __future__ import annotations
+
+import json
+
+import mindyn
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import cli, pinocchio_model
+from mindyn.identification import JointData, identify, select_friction_model, write_csv
+from random_arm import random_arm_yaml
+
+KINDS = ("coulomb", "asymmetric", "smooth", "stribeck")
+
+
+def sign(v):
+    return np.sign(v)  # sign(0) = 0
+
+
+def friction_formula(kind, v, w, fv, fc, f3):
+    """The friction torque of each joint written out (the models' definitions)."""
+    if kind == "coulomb":
+        return fv * v + fc * sign(v)
+    if kind == "asymmetric":
+        return fv * v + fc * sign(v) + f3 * np.abs(sign(v))
+    if kind == "smooth":
+        return fv * v + fc * np.tanh(v / w)
+    return fv * v + fc * sign(v) + f3 * sign(v) * np.exp(-((v / w) ** 2))
+
+
+def columns_formula(kind, v, w):
+    """The friction columns of one joint, written out."""
+    cols = [v]
+    if kind == "smooth":
+        cols.append(np.tanh(v / w))
+    else:
+        cols.append(sign(v))
+    if kind == "asymmetric":
+        cols.append(np.abs(sign(v)))
+    if kind == "stribeck":
+        cols.append(sign(v) * np.exp(-((v / w) ** 2)))
+    return np.array(cols)
+
+
+def with_kind(robot, kind, w):
+    return robot.with_friction_model(kind, velocity=w if kind in ("smooth", "stribeck") else None)
+
+
+@pytest.fixture(scope="module")
+def arm(tmp_path_factory):
+    return mindyn.load(random_arm_yaml(tmp_path_factory.mktemp("arm") / "arm.yaml", n=3, seed=4))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_regressor_and_torques_follow_the_formulas(kind, rng):
+    robot = mindyn.load("puma560")
+    n = robot.n
+    w = rng.uniform(0.05, 0.5, n)
+    r = with_kind(robot, kind, w)
+    q, ddq = rng.normal(size=n), rng.normal(size=n)
+    dq = rng.normal(size=n) * 0.3
+    dq[2] = 0.0  # at rest: sign(0) = 0
+    c = 3 if kind in ("asymmetric", "stribeck") else 2
+    W = r.regressor(q, dq, ddq, rotor=True, friction=True)
+    assert W.shape == (n, n * (11 + c))
+    names = r.parameter_names(True, True)
+    third = {"asymmetric": "Fa", "stribeck": "Fs"}.get(kind)
+    W0 = robot.regressor(q, dq, ddq, rotor=True)  # rigid part and rotor
+    for k in range(n):
+        block = W[:, k * (11 + c) : (k + 1) * (11 + c)]
+        np.testing.assert_allclose(block[:, :11], W0[:, 11 * k : 11 * k + 11], atol=1e-12)
+        expect = np.zeros((n, c))
+        expect[k] = columns_formula(kind, dq[k], w[k])
+        np.testing.assert_allclose(block[:, 11:], expect, atol=1e-15)
+        assert names[k * (11 + c) + 11 : (k + 1) * (11 + c)] == (
+            [f"Fv{k + 1}", f"Fc{k + 1}"] + ([f"{third}{k + 1}"] if third else [])
+        )
+    # the rigid part against Pinocchio's recursive Newton-Euler
+    pm = pinocchio_model(robot)
+    tau_pin = pin.rnea(pm, pm.createData(), q, dq, ddq)
+    np.testing.assert_allclose(W0[:, [i for i in range(11 * n) if i % 11 < 10]] @ robot.params,
+                               tau_pin, atol=1e-9)  # fmt: skip
+    # inverse dynamics with a parameter vector of the model's layout (read off its size)
+    fv, fc, f3 = rng.uniform(0.5, 2, n), rng.uniform(0.5, 2, n), rng.uniform(-1, 1, n)
+    p = np.zeros((n, 10 + c))
+    p[:, :10] = robot.params.reshape(n, 10)
+    p[:, 10], p[:, 11] = fv, fc
+    if c == 3:
+        p[:, 12] = f3
+    tau = r.inverse_dynamics(q, dq, ddq, p.reshape(-1))
+    expect = tau_pin + friction_formula(kind, dq, w, fv, fc, f3 if c == 3 else 0.0)
+    np.testing.assert_allclose(tau, expect, atol=1e-9)
+    # the simulation plant's forward dynamics inverts it (sign not smoothed)
+    plant = mindyn._core.Integrator(r._m, p.reshape(-1), 0.0)
+    np.testing.assert_allclose(plant.acceleration(q, dq, tau), ddq, atol=1e-8)
+    np.testing.assert_allclose(r.forward_dynamics(q, dq, tau, p.reshape(-1)), ddq, atol=1e-8)
+
+
+def test_third_friction_parameter_is_stored_and_named(arm):
+    r = arm.with_friction_model("stribeck", velocity=[0.1, 0.2, 0.3])
+    r.third_friction = [1.0, 2.0, 3.0]
+    names = r.parameter_names(False, True)
+    p = r.parameters(False, True)
+    assert len(p) == 13 * r.n
+    assert [p[names.index(f"Fs{k + 1}")] for k in range(3)] == [1.0, 2.0, 3.0]
+    assert "Fa2" in r.with_friction_model("asymmetric").parameter_names(False, True)
+    assert r.layout_sizes == (10, 11, 13, 14)
+
+
+@pytest.mark.parametrize(
+    "velocity, message",
+    [([0.1, -0.2, 0.3], "positive"), ([0.1, 0.2], "shape"), (None, "velocity")],
+)
+def test_friction_model_errors_are_one_line(arm, velocity, message):
+    with pytest.raises(mindyn.Error, match=message):
+        arm.with_friction_model("stribeck", velocity=velocity)
+    with pytest.raises(mindyn.Error, match="coulomb, asymmetric, smooth or stribeck"):
+        arm.with_friction_model("viscous")
+
+
+@pytest.mark.parametrize("kind", ["asymmetric", "stribeck"])
+def test_third_column_is_a_base_parameter_by_all_three_methods(arm, kind):
+    r = with_kind(arm, kind, np.full(arm.n, 0.2))
+    coulomb = mindyn.base_parameters(arm, friction=True).n
+    counts = {m: mindyn.base_parameters(r, friction=True, method=m) for m in
+              ("projection", "recursive", "numerical")}  # fmt: skip
+    for m, b in counts.items():
+        assert b.n == coulomb + arm.n, m
+        assert all(f"F{'a' if kind == 'asymmetric' else 's'}{k + 1}" in b.names
+                   for k in range(arm.n))  # fmt: skip
+
+
+def make_log(robot, kind, w, fv, fc, f3, *, seconds=8.0, rate=200.0, noise=0.0, seed=0):
+    """A log of a multi-sine motion (analytic q, dq, ddq) whose torques are the rigid-body ones
+    plus the friction written out here, with white noise of ``noise`` times each joint's RMS."""
+    rng = np.random.default_rng(seed)
+    n = robot.n
+    t = np.arange(0, seconds, 1 / rate)
+    q, dq, ddq = (np.zeros((t.size, n)) for _ in range(3))
+    for k in range(n):
+        for h in range(1, 4):
+            a = rng.uniform(0.2, 0.5) / h
+            om = 2 * np.pi * 0.25 * h * (1 + 0.1 * k)
+            ph = rng.uniform(0, 2 * np.pi)
+            q[:, k] += a * np.sin(om * t + ph)
+            dq[:, k] += a * om * np.cos(om * t + ph)
+            ddq[:, k] -= a * om**2 * np.sin(om * t + ph)
+    tau = robot.inverse_dynamics(q, dq, ddq) + friction_formula(kind, dq, w, fv, fc, f3)
+    if noise:
+        tau = tau + noise * tau.std(axis=0) * rng.standard_normal(tau.shape)
+    return JointData(t, q, dq, ddq, tau, f"{kind} log")
+
+
+def truth(robot, kind, w, fv, fc, f3):
+    r = with_kind(robot, kind, w)
+    r.viscous, r.coulomb = fv, fc
+    if kind in ("asymmetric", "stribeck"):
+        r.third_friction = f3
+    b = mindyn.base_parameters(r, friction=True)
+    return b, b.values(r.parameters(False, True))
+
+
+FV, FC = np.array([0.8, 0.5, 0.3]), np.array([1.5, 1.0, 0.6])
+
+
+@pytest.mark.parametrize(
+    "kind, f3",
+    [("asymmetric", np.array([0.4, -0.3, 0.2])), ("stribeck", np.array([1.0, 0.7, 0.5]))],
+)
+def test_noise_free_recovery_with_the_searched_stribeck_velocity(arm, kind, f3):
+    w = np.array([0.15, 0.25, 0.1])
+    log = make_log(arm, kind, w, FV, FC, f3)
+    choice = select_friction_model(arm, [log], kind, fit={"min_velocity": 0.0})
+    res = identify(choice.robot, log, base=choice.base, rsd_threshold=None, min_velocity=0.0)
+    base, expect = truth(arm, kind, w, FV, FC, f3)
+    assert list(res.base.names) == list(base.names)
+    np.testing.assert_allclose(res.full, expect, rtol=1e-6, atol=1e-6 * np.abs(expect).max())
+    if kind == "stribeck":
+        found = np.asarray(choice.record["velocity"])
+        assert np.all(np.abs(found / w - 1) <= 1e-3), found
+        assert choice.record["chosen_by"] == "given"
+
+
+def test_noise_free_recovery_smooth_with_given_width(arm):
+    w = np.array([0.05, 0.08, 0.03])
+    log = make_log(arm, "smooth", w, FV, FC, 0.0)
+    choice = select_friction_model(arm, [log], "smooth", width=w)
+    res = identify(choice.robot, log, base=choice.base, rsd_threshold=None, min_velocity=0.0)
+    _, expect = truth(arm, "smooth", w, FV, FC, 0.0)
+    np.testing.assert_allclose(res.full, expect, rtol=1e-6, atol=1e-6 * np.abs(expect).max())
+
+
+@pytest.mark.parametrize("model", ["energy", "integral"])
+def test_energy_and_integral_models_carry_the_stribeck_terms(arm, model):
+    w, f3 = np.array([0.15, 0.25, 0.1]), np.array([1.0, 0.7, 0.5])
+    log = make_log(arm, "stribeck", w, FV, FC, f3, rate=1000.0, seconds=6.0)
+    base, expect = truth(arm, "stribeck", w, FV, FC, f3)
+    res = identify(base.robot, log, model=model, base=base, rsd_threshold=None, weighted=False)
+    names = list(base.names)
+    for k in range(arm.n):  # quadrature of the switching terms: 1 % on 1 kHz samples
+        for nm, v in (("Fc", FC), ("Fs", f3)):
+            got = res.full[names.index(f"{nm}{k + 1}")]
+            assert abs(got / v[k] - 1) < 0.02, (model, nm, k, got, v[k])
+
+
+@pytest.mark.parametrize(
+    "kind, f3, w",
+    [
+        ("stribeck", np.array([1.5, 1.0, 0.8]), np.array([0.15, 0.25, 0.1])),
+        ("asymmetric", np.array([0.6, -0.5, 0.4]), None),
+        ("smooth", 0.0, np.full(3, 0.05)),  # the width given (as --friction-width)
+    ],
+)
+def test_auto_picks_the_true_family_on_held_out_data(arm, kind, f3, w):
+    log = make_log(arm, kind, w, FV, FC, f3, noise=0.01, seed=3)
+    choice = select_friction_model(arm, [log], "auto", width=w if kind == "smooth" else None)
+    rec = choice.record
+    assert rec["chosen_by"] == "held-out data"
+    assert rec["kind"] == kind, rec["candidates"]
+    assert set(rec["candidates"]) == set(KINDS)
+
+
+def test_cli_records_the_friction_model_and_predict_uses_it(arm, tmp_path):
+
+    w, f3 = np.array([0.15, 0.25, 0.1]), np.array([1.0, 0.7, 0.5])
+    log = make_log(arm, "stribeck", w, FV, FC, f3)
+    csv = tmp_path / "log.csv"
+    write_csv(csv, log.t, log.q, log.tau, log.dq, log.ddq)
+    robot_path = tmp_path / "arm.yaml"
+    random_arm_yaml(robot_path, n=3, seed=4)
+    out = cli("identify", robot_path, csv, "--friction-model", "stribeck", "--filter", "none",
+              "--min-velocity", "0", "--json", tmp_path / "id.json")  # fmt: skip
+    assert "friction model stribeck" in out
+    doc = json.loads((tmp_path / "id.json").read_text())
+    fm = doc["friction_model"]
+    assert fm["kind"] == "stribeck" and fm["chosen_by"] == "given" and doc["friction"]
+    assert np.all(np.abs(np.asarray(fm["velocity"]) / w - 1) <= 1e-3)
+    cli("predict", robot_path, tmp_path / "id.json", csv, "--filter", "none",
+        "-o", tmp_path / "pred.csv")  # fmt: skip
+    pred = np.genfromtxt(tmp_path / "pred.csv", delimiter=",", names=True)
+    tau_hat = np.column_stack([pred[f"tau_hat{k + 1}"] for k in range(3)])
+    np.testing.assert_allclose(tau_hat, log.tau, atol=1e-4 * np.abs(log.tau).max())
+
+
+def test_cli_default_is_unchanged_and_options_are_checked(arm, tmp_path, capsys):
+
+    log = make_log(arm, "coulomb", None, FV, FC, 0.0, noise=0.01)
+    csv = tmp_path / "log.csv"
+    write_csv(csv, log.t, log.q, log.tau, log.dq, log.ddq)
+    robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
+    cli("identify", robot_path, csv, "--friction", "--json", tmp_path / "a.json")
+    cli("identify", robot_path, csv, "--friction-model", "coulomb", "--json", tmp_path / "b.json")
+    a, b = (json.loads((tmp_path / f).read_text()) for f in ("a.json", "b.json"))
+    assert a["base_values"] == b["base_values"] and a["base_names"] == b["base_names"]
+    assert (
+        a["friction_model"]["kind"] == "coulomb" and a["friction_model"]["chosen_by"] == "default"
+    )
+    from mindyn.cli import main
+
+    bad = [
+        (["--friction-width", "0.1"], "expected --friction-model smooth or auto"),
+        (["--friction-model", "smooth", "--friction-width", "-1"], "must be a positive number"),
+        (["--friction-model", "stribeck", "--friction-width", "0.1"], "only with --friction-model"),
+    ]
+    capsys.readouterr()
+    for extra, message in bad:
+        assert main(["identify", str(robot_path), str(csv), *extra]) != 0
+        err = capsys.readouterr().err
+        assert message in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_generated_code_refuses_other_friction_models(arm):
+    from mindyn import codegen
+
+    r = arm.with_friction_model("stribeck", velocity=[0.1, 0.1, 0.1])
+    with pytest.raises(mindyn.Error, match="Coulomb friction\\s+only"):
+        codegen.generate(r, friction=True)
+
+
+def test_simulations_apply_the_robots_friction_model(arm):
+    """Open loop: the torques are the rigid-body ones plus the Stribeck friction written out;
+    closed loop: the plant's applied torques, minus that friction, give the logged
+    accelerations by the rigid-body dynamics."""
+    from mindyn.control import SumOfSines, simulate, simulate_inverse
+
+    w, f3 = np.array([0.15, 0.25, 0.1]), np.array([1.0, 0.7, 0.5])
+    r = arm.with_friction_model("stribeck", velocity=w)
+    r.viscous, r.coulomb, r.third_friction = FV, FC, f3
+    ref = SumOfSines(r, period=2.0)
+    log = simulate_inverse(r, ref, rate=200.0, friction=True)
+    expect = r.inverse_dynamics(log.q_true, log.dq_true, log.ddq_true) + friction_formula(
+        "stribeck", log.dq_true, w, FV, FC, f3
+    )
+    np.testing.assert_allclose(log.tau_true, expect, atol=1e-9)
+    assert "Fs1" in log.param_names
+    closed = simulate(r, ref, rate=200.0, duration=0.5, friction=True)
+    rigid = r.inverse_dynamics(closed.q_true, closed.dq_true, closed.ddq_true)
+    fr = friction_formula("stribeck", closed.dq_true, w, FV, FC, f3)
+    np.testing.assert_allclose(rigid + fr, closed.tau_true, atol=1e-6 * np.abs(fr).max() + 1e-6)
+
+
+def test_codegen_refuses_parameters_identified_with_another_friction_model(arm, tmp_path, capsys):
+    from mindyn.cli import main
+
+    w = np.full(3, 0.05)
+    log = make_log(arm, "smooth", w, FV, FC, 0.0)
+    csv = tmp_path / "log.csv"
+    write_csv(csv, log.t, log.q, log.tau, log.dq, log.ddq)
+    robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
+    cli("identify", robot_path, csv, "--friction-model", "smooth", "--friction-width", "0.05",
+        "--filter", "none", "--json", tmp_path / "id.json")  # fmt: skip
+    capsys.readouterr()
+    # the smooth model has the same parameter names as viscous + Coulomb: the JSON says which
+    rc = main(["codegen", str(robot_path), "--lang", "c", "--friction", "--params",
+               str(tmp_path / "id.json"), "-o", str(tmp_path / "gen")])  # fmt: skip
+    assert rc != 0
+    assert "smooth friction model" in capsys.readouterr().err
+
+
+def test_descriptions_refuse_other_friction_models(arm, tmp_path, capsys):
+    """A robot description holds viscous and Coulomb friction only: export and identify
+    --yaml refuse another model (the smooth one has the same parameter names)."""
+    from mindyn.cli import main
+
+    robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
+    names = arm.parameter_names(False, True)
+    doc = {
+        "robot": arm.name,
+        "classical": dict(zip(names, map(float, arm.parameters(False, True)))),
+        "friction_model": {"kind": "smooth", "velocity": [0.1, 0.1, 0.1], "chosen_by": "given"},
+    }
+    (tmp_path / "id.json").write_text(json.dumps(doc))
+    capsys.readouterr()
+    rc = main(["export", str(robot_path), str(tmp_path / "id.json"), "--yaml",
+               str(tmp_path / "out.yaml")])  # fmt: skip
+    assert rc != 0 and "smooth friction model" in capsys.readouterr().err
+    assert not (tmp_path / "out.yaml").exists()
+    doc["friction_model"]["kind"] = "coulomb"
+    del doc["friction_model"]["velocity"]
+    (tmp_path / "id.json").write_text(json.dumps(doc))
+    assert main(["export", str(robot_path), str(tmp_path / "id.json"), "--yaml",
+                 str(tmp_path / "out.yaml")]) == 0  # fmt: skip
+    rc = main(["identify", str(robot_path), "x.csv", "--friction-model", "stribeck",
+               "--consistent", "--yaml", str(tmp_path / "o.yaml")])  # fmt: skip
+    assert rc != 0 and "not the stribeck friction model" in capsys.readouterr().err
