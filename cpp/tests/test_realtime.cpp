@@ -238,6 +238,7 @@ TEST(Realtime, MotorSidePathsAllocateNothing) {
   Eigen::MatrixXd Mj(n, n);
   massMatrix(joint, data, q, pi, layout, Mj);
   EXPECT_NEAR(M(n - 1, n - 2) - Mj(n - 1, n - 2), 1e-4 * 30.0 * 50.0, 1e-12);
+}
 
 // Every friction model on the per-call paths: no allocation, and the regressor's friction
 // columns equal the models' formulas written out here.
