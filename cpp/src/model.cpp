@@ -56,6 +56,8 @@ std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
     if (layout.friction) {
       names.push_back("Fv" + idx);
       names.push_back("Fc" + idx);
+      if (layout.friction_columns == 3)
+        names.push_back((friction_model.kind == FrictionKind::Stribeck ? "Fs" : "Fa") + idx);
     }
   }
   return names;
@@ -70,6 +72,7 @@ Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
     if (layout.friction) {
       p[layout.viscousIndex(k)] = viscous[k];
       p[layout.coulombIndex(k)] = coulomb[k];
+      if (layout.friction_columns == 3) p[layout.thirdFrictionIndex(k)] = 0.0;  // not described
     }
   }
   return p;

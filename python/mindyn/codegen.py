@@ -165,7 +165,14 @@ def generate(
         Functions to generate: ``inverse_dynamics`` (alias ``id``), ``gravity``, ``regressor``;
         a comma-separated string is accepted.
     rotor, friction : bool
-        Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
+        Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint, or per
+        motor when ``robot.drive_side`` is ``"motor"`` (a description with transmissions, unless
+        :meth:`Robot.with_drive_side` put them on the joints): motor k's velocity ``t_k . dq``
+        and acceleration ``t_k . ddq`` (``t_k`` row k of ``T``) formed once each, its torque
+        taken back to the joints by ``t_k^T``. The friction terms follow
+        ``robot.friction_model`` (Coulomb, direction-dependent, smooth with ``tanh``, Stribeck
+        with ``exp``; its velocities baked in; a third column ``Fa``/``Fs`` per slot where the
+        model has one); the header says which and where.
     params : path or array, optional
         Parameter values, shape (np,): an array, or a file read by
         :func:`read_parameter_file`. Default: the robot's own values (``p_b = Y pi``).
@@ -220,7 +227,7 @@ def generate(
         formulas = bp.formulas
     else:
         bp_core = formulas = None
-        names = robot.parameter_names(rotor, friction)
+        names = list(_core.classical_parameter_names(robot._m, rotor=rotor, friction=friction))
         names += [f"Off{k + 1}" for k in range(robot.n) if offset]
     values = None
     if params is not None:
@@ -448,7 +455,10 @@ def generate_controller(
     lang : {"c", "st"}
     base : BaseParameters, optional
         The parameter set (default: base parameters with rotor inertia and friction); its
-        offset setting adds a torque offset per joint.
+        offset setting adds a torque offset per joint. Its robot decides where rotor inertia
+        and friction act and the friction model, as in :func:`generate` (rotor inertia through
+        the reference acceleration ``t_k . ddq_r``, friction at the motor velocity
+        ``t_k . dq``).
     gains : dict, optional
         ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
         gives them (the default: for ``period``, the robot with its rotor inertia). Gains that

@@ -45,7 +45,16 @@ py::dict counts(const OpCount& c) {
   d["neg"] = c.neg;
   d["trig"] = c.trig;
   d["sign"] = c.sign;
+  d["tanh"] = c.tanh;
+  d["exp"] = c.exp;
   return d;
+}
+
+// All classical parameters of the model with these joint terms, friction in the model's
+// friction model.
+ParameterSet classicalSet(const Model& model, bool rotor, bool friction) {
+  return classicalParameterSet(
+      model, ParameterLayout{rotor, friction, friction ? model.friction_model.columns() : 2});
 }
 
 struct PyBaseDynamics {
@@ -68,7 +77,7 @@ void bindCodegen(py::module_& m) {
         // Base parameters carry the model they were computed for (possibly a snapped copy).
         const Model& model = base_core ? base_core->model->model : model_core->model;
         ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
-                                    : classicalParameterSet(model, {rotor, friction});
+                                    : classicalSet(model, rotor, friction);
         if (formulas) {
           if (!base_core || static_cast<long>(formulas->size()) != ps.size())
             throw py::value_error("formulas: one per base parameter, with base parameters");
@@ -121,6 +130,15 @@ void bindCodegen(py::module_& m) {
       "Generated code and operation counts. base=None: the classical parameters; offset: a "
       "torque offset per joint after them; formulas: the text of each base parameter's "
       "formula in the header comment (default: full precision).");
+
+  m.def(
+      "classical_parameter_names",
+      [](const PyModel& model, bool rotor, bool friction) {
+        return classicalSet(model.model, rotor, friction).names;
+      },
+      py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
+      "The classical parameters generated code takes (friction in the model's friction "
+      "model).");
 
   py::class_<PyBaseDynamics, std::shared_ptr<PyBaseDynamics>>(m, "BaseDynamics")
       .def(py::init([](const PyBase& base_core, bool offset) {

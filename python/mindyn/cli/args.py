@@ -494,6 +494,39 @@ def add_joint_terms(p: argparse.ArgumentParser, verb: str = "include") -> None:
     p.add_argument("--friction", action="store_true", help=f"{verb} Fv, Fc per joint")
 
 
+def add_drive_side(p: argparse.ArgumentParser) -> None:
+    """``--drive-side joint|motor``: where rotor inertia and friction act on a robot with
+    transmissions (:func:`drive_side`)."""
+    p.add_argument(
+        "--drive-side",
+        choices=["joint", "motor"],
+        help="where --rotor and --friction act: on the motors through the transmissions "
+        "(q_m = T q, tau = T^T tau_m; the default when the description declares transmissions) "
+        "or on the joints (the default, and the only choice, without transmissions)",
+    )
+
+
+def drive_side(robot, args):
+    """``robot`` with ``--drive-side`` applied (unchanged when not given), and the words saying
+    where rotor inertia and friction act, for a command's output ("" when neither is asked
+    for)."""
+    side = getattr(args, "drive_side", None)
+    if side is not None:
+        robot = robot.with_drive_side(side)
+    if not (getattr(args, "rotor", False) or getattr(args, "friction", False)):
+        return robot, ""
+    if robot.drive_side == "motor":
+        n = len(robot.transmission.motors)
+        how = "--drive-side motor" if side else "the default with transmissions"
+        return robot, (
+            f"rotor inertia and friction on the {n} motors (q_m = T q, tau = T^T tau_m; {how}"
+            + ("" if side else "; --drive-side joint puts them on the joints")
+            + ")"
+        )
+    why = "--drive-side joint" if side else "no transmissions declared"
+    return robot, f"rotor inertia and friction on the joints ({why})"
+
+
 def add_offset(p: argparse.ArgumentParser, verb: str = "include") -> None:
     """``--offset``: a constant torque offset per joint (Off1 .. OffN)."""
     p.add_argument(
