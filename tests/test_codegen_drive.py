@@ -23,7 +23,15 @@ import pytest
 from conftest import assert_close
 from mindyn import codegen
 from mindyn.cli import main
-from test_codegen import GCC, CFunctions, STInterpreter, compile_c, skewed_urdf, st_tree
+from test_codegen import (
+    GCC,
+    CFunctions,
+    STInterpreter,
+    compile_c,
+    compile_shared,
+    skewed_urdf,
+    st_tree,
+)
 from test_codegen_controller import STBlock, strict_compile
 from test_transmissions import pair, simple
 
@@ -84,6 +92,13 @@ def arm(arms, name: str, kind: str, side: str = "motor"):
     w = 0.5 * np.abs(robot.transmission.T).sum(axis=1)
     robot = robot.with_friction_model(kind, velocity=w if kind in ("smooth", "stribeck") else None)
     return robot.with_drive_side(side), model
+
+
+def compiled(code, folder, n: int) -> CFunctions:
+    """The generated C compiled without optimisation (the classical regressors are long; the
+    base-parameter code compiles with -O1), warnings as errors."""
+    source = code.write(folder / f"{code.name}.c")[1]
+    return CFunctions(compile_shared(source, folder / f"lib{code.name}.so", "-O0"), code, n)
 
 
 def rows(robot) -> np.ndarray:
@@ -167,7 +182,7 @@ def test_generated_c_equals_newton_euler_plus_the_drive_terms(
     per = 13 + (kind in ("asymmetric", "stribeck"))
     third = {"asymmetric": ["Fa"], "stribeck": ["Fs"]}.get(kind, [])
     assert code.names[10:per] == ["Ia1", "Fv1", "Fc1"] + [f"{x}1" for x in third]
-    c = CFunctions(compile_c(code, tmp_path, name), code, robot.n)
+    c = compiled(code, tmp_path, robot.n)
     data = model.createData()
     pi = drive_values(robot, rng, per)
     for q, dq, ddq in states(robot, rng, 3):
@@ -191,13 +206,15 @@ def test_generated_c_equals_newton_euler_plus_the_drive_terms(
 @pytest.mark.parametrize("kind", ["coulomb", "smooth"])
 def test_base_parameter_code_is_the_regressor_at_the_pivots(name, kind, arms, tmp_path, rng):
     """Base parameters (numerical method): W_b = W[:, pivots] and tau = W[:, pivots] p for
-    random p, gravity likewise, 1e-12."""
+    random p, gravity likewise, 1e-12; the same from the runtime base dynamics (the tape of the
+    generated recursion)."""
     robot, model = arm(arms, name, kind)
     bp = mindyn.base_parameters(robot, rotor=True, friction=True, method="numerical")
     code = codegen.generate(robot, base=bp, name=f"b{name}")
     c = CFunctions(compile_c(code, tmp_path, f"b{name}"), code, robot.n)
     pivots = bp.sets["eom"]["pivots"]
     data = model.createData()
+    runtime = codegen.BaseDynamics(bp)
     for q, dq, ddq in states(robot, rng, 2):
         Wb = classical_regressor(robot, model, data, q, dq, ddq, 13)[:, pivots]
         p = rng.normal(size=bp.n)
@@ -205,6 +222,8 @@ def test_base_parameter_code_is_the_regressor_at_the_pivots(name, kind, arms, tm
         assert_close(c.id(q, dq, ddq, p), Wb @ p, 1e-12, "generated C id_b with drive")
         G = classical_regressor(robot, model, data, q, 0 * dq, 0 * ddq, 13)[:, pivots]
         assert_close(c.gravity(q, p), G @ p, 1e-12, "generated C gravity_b with drive")
+        assert_close(runtime.inverse_dynamics(q, dq, ddq, p), Wb @ p, 1e-12, "runtime id_b drive")
+        assert_close(runtime.regressor(q, dq, ddq), Wb, 1e-12, "runtime W_b with drive")
 
 
 @pytest.mark.parametrize("kind", ["smooth", "stribeck"])
@@ -216,7 +235,7 @@ def test_structured_text_with_drive_terms_evaluates_like_the_c(kind, arms, tmp_p
     same = dict(rotor=True, friction=True, base=False, what="id,regressor")
     st = codegen.generate(robot, lang="st", name="c6st", **same)
     code = codegen.generate(robot, name="c6c", **same)
-    c = CFunctions(compile_c(code, tmp_path, "c6c"), code, robot.n)
+    c = compiled(code, tmp_path, robot.n)
     text = st.text
     assert max(len(line) for line in text.splitlines()) <= 100
     statements = re.sub(r"\(\*.*?\*\)", "", text, flags=re.DOTALL)
@@ -237,6 +256,17 @@ def test_structured_text_with_drive_terms_evaluates_like_the_c(kind, arms, tmp_p
         assert_close(W, c.regressor(q, dq, ddq), 1e-12, f"ST regressor vs C ({kind} friction)")
     if kind == "smooth":
         assert {0, 1, 2} <= reached  # |x| = 0, below 0.125 and between; above 20 just below
+
+
+def test_structured_text_with_tanh_and_exp_passes_blark():
+    blark = pytest.importorskip("blark")
+    robot = mindyn.load("planar2")
+    for kind in ("smooth", "stribeck"):
+        r = robot.with_friction_model(kind, velocity=[0.1, 0.2])
+        st = codegen.generate(r, lang="st", what="id", friction=True, base=False)
+        assert "EXP(" in st.text
+        result = blark.parse_source_code(st.text)
+        assert result.exception is None, result.exception
 
 
 def test_structured_text_tanh_saturates_without_overflow(arms):
@@ -340,15 +370,30 @@ def slotine_li_columns(robot, model, data, q, dq, dqr, ddqr, columns, per: int) 
 
 
 @pytest.mark.parametrize(
-    "name, kind, nu", [("coupled6r", "smooth", 0.0), ("wam7r", "coulomb", 0.4)]
+    "name, kind, nu, base",
+    [
+        ("coupled6r", "smooth", 0.0, "numerical"),
+        ("wam7r", "coulomb", 0.4, "numerical"),
+        ("coupled6r", "stribeck", 0.3, "classical"),
+        ("wam7r", "asymmetric", 0.0, "classical"),
+    ],
 )
-def test_adaptive_step_with_transmissions_matches_the_formula(name, kind, nu, arms, tmp_path, rng):
+def test_adaptive_step_with_transmissions_matches_the_formula(
+    name, kind, nu, base, arms, tmp_path, rng
+):
     """tau = Y_b p - kd s and p - period gamma Y_b^T s / (1 + nu |Y_b|^2) with Y_b the Slotine-Li
     regressor written out (Pinocchio plus the drive terms at dq and ddq_r) at the base set's
-    pivots; the C compiles under -Werror, includes math.h only and allocates nothing."""
+    pivots (numerical method), or all its columns (classical parameters: the friction models
+    with a third column); the C compiles under -Werror, includes math.h only and allocates
+    nothing."""
     robot, model = arm(arms, name, kind)
-    bp = mindyn.base_parameters(robot, rotor=True, friction=True, method="numerical")
-    n, nb = robot.n, bp.n
+    per = 13 + (kind in ("asymmetric", "stribeck"))
+    if base == "classical":
+        bp, columns = False, list(range(per * robot.n))
+    else:
+        bp = mindyn.base_parameters(robot, rotor=True, friction=True, method="numerical")
+        columns = bp.sets["eom"]["pivots"]
+    n, nb = robot.n, len(columns)
     gains = {"kd": rng.uniform(1, 50, n), "lambda": rng.uniform(1, 20, n), "nu": nu}
     gains["gamma"] = rng.uniform(0.5, 2.0, nb)
     p0 = rng.normal(size=nb)
@@ -360,9 +405,8 @@ def test_adaptive_step_with_transmissions_matches_the_formula(name, kind, nu, ar
     ]
     assert not re.search(r"\b(malloc|calloc|realloc|free)\(", code.source)
     assert f"Rotor inertia and friction on the {n} motors" in code.header
-    ctl = codegen.CompiledController(code, bp)
+    ctl = codegen.CompiledController(code)
     data = model.createData()
-    pivots = bp.sets["eom"]["pivots"]
     for q, dq, _ in states(robot, rng, 3):
         qd, dqd, ddqd = rng.uniform(-1, 1, (3, n))
         p = ctl.p_hat
@@ -370,7 +414,7 @@ def test_adaptive_step_with_transmissions_matches_the_formula(name, kind, nu, ar
         e, de = q - qd, dq - dqd
         lam = gains["lambda"]
         dqr, ddqr, s = dqd - lam * e, ddqd - lam * de, de + lam * e
-        Y = slotine_li_columns(robot, model, data, q, dq, dqr, ddqr, pivots, 13)
+        Y = slotine_li_columns(robot, model, data, q, dq, dqr, ddqr, columns, per)
         assert_close(tau, Y @ p - gains["kd"] * s, 1e-12, "generated adaptive step: tau")
         step = 0.002 * gains["gamma"] * (Y.T @ s) / (1.0 + nu * np.sum(Y * Y))
         assert_close(ctl.p_hat, p - step, 1e-12, "generated adaptive step: estimate")

@@ -428,7 +428,7 @@ def generate_controller(
     robot: Robot | str,
     kind: str = "adaptive-pd",
     lang: str = "c",
-    base: BaseParameters | None = None,
+    base: BaseParameters | bool | None = None,
     gains: dict | None = None,
     params: str | Path | Sequence[float] | None = None,
     period: float = 0.004,
@@ -453,12 +453,12 @@ def generate_controller(
     robot : Robot or str
     kind : {"adaptive-pd", "computed-torque", "gravity-compensation"}
     lang : {"c", "st"}
-    base : BaseParameters, optional
-        The parameter set (default: base parameters with rotor inertia and friction); its
-        offset setting adds a torque offset per joint. Its robot decides where rotor inertia
-        and friction act and the friction model, as in :func:`generate` (rotor inertia through
-        the reference acceleration ``t_k . ddq_r``, friction at the motor velocity
-        ``t_k . dq``).
+    base : BaseParameters or False, optional
+        The parameter set (default: base parameters with rotor inertia and friction; ``False``:
+        all classical parameters with rotor inertia and friction); a base set's offset setting
+        adds a torque offset per joint. Its robot decides where rotor inertia and friction act
+        and the friction model, as in :func:`generate` (rotor inertia through the reference
+        acceleration ``t_k . ddq_r``, friction at the motor velocity ``t_k . dq``).
     gains : dict, optional
         ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
         gives them (the default: for ``period``, the robot with its rotor inertia). Gains that
@@ -482,9 +482,14 @@ def generate_controller(
     if kind not in CONTROLLERS:
         raise ValueError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
     _check_lang(lang, trig)
+    classical = base is False
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
-    n, names = robot.n, list(base.names)
+    if classical:
+        names = list(_core.classical_parameter_names(robot._m, rotor=True, friction=True))
+    else:
+        names = list(base.names)
+    n = robot.n
     g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)
     s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
@@ -504,7 +509,9 @@ def generate_controller(
         raise control.ControllerSettingError(
             f"gains 'gamma' and 'nu' must be numbers in [0, {big:g}]"
         )
-    if params is None:
+    if params is None and classical:
+        s["p0"] = None  # the robot's classical values, as the generator reads them
+    elif params is None:
         s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
         if base.offset:
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
@@ -525,15 +532,17 @@ def generate_controller(
     fn = f"{name}_{kind.replace('-', '_')}"
     header_name = header_name or f"{fn}.h"
     out = _core.generate_controller(
-        base._b,
-        base.offset,
+        None if classical else base._b,
+        False if classical else base.offset,
         kind,
         name,
         s,
         lang=lang,
         header_name=header_name,
         inline_trig=trig != "libm",
+        model=robot._m if classical else None,
     )
+    s["p0"] = np.asarray(out["values"], dtype=float)
     return GeneratedController(kind, lang, name, out, header_name, s)
 
 

@@ -225,9 +225,14 @@ void bindController(py::module_& m) {
       "generate_controller",
       [](const std::shared_ptr<PyBase>& base_core, bool offset, const std::string& kind,
          const std::string& name, const py::dict& settings, const std::string& lang,
-         const std::string& header_name, bool inlineTrig) {
-        const Model& model = base_core->model->model;
-        ParameterSet ps = baseParameterSet(model, base_core->bp);
+         const std::string& header_name, bool inlineTrig,
+         const std::shared_ptr<PyModel>& model_core) {
+        if (!base_core && !model_core)
+          throw py::value_error("generate_controller: base parameters or a model");
+        const Model& model = base_core ? base_core->model->model : model_core->model;
+        // without base parameters: all classical ones, with rotor inertia and friction
+        ParameterSet ps =
+            base_core ? baseParameterSet(model, base_core->bp) : classicalSet(model, true, true);
         if (offset) ps = withOffsets(model, std::move(ps));
         Controller k = kind == "adaptive-pd"       ? Controller::AdaptivePD
                        : kind == "computed-torque" ? Controller::ComputedTorque
@@ -280,6 +285,7 @@ void bindController(py::module_& m) {
       },
       py::arg("base"), py::arg("offset"), py::arg("kind"), py::arg("name"), py::arg("settings"),
       py::arg("lang") = "c", py::arg("header_name") = "controller.h", py::arg("inline_trig") = true,
+      py::arg("model") = std::shared_ptr<PyModel>(),
       "A generated controller step (adaptive-pd, computed-torque, gravity-compensation) and its "
       "operation counts.");
 }

@@ -180,7 +180,11 @@ std::string emitST(const GeneratedCode& code) {
       os << "END_VAR\n";
     }
     const OpCount& c = f.program.count;
-    os << "(* " << c.mul << " mul, " << c.add << " add, " << c.trig << " sin/cos *)\n";
+    os << "(* " << c.mul << " mul, " << c.add << " add, " << c.trig << " sin/cos";
+    for (const auto& [count, what] :
+         {std::pair{c.sign, " sign"}, std::pair{c.tanh, " tanh"}, std::pair{c.exp, " exp"}})
+      if (count) os << ", " << count << what;
+    os << " *)\n";
     os << body.str() << "END_FUNCTION_BLOCK\n";
   }
   return os.str();
