@@ -14,6 +14,7 @@ models with a third column.
 
 from __future__ import annotations
 
+import json
 import re
 
 import mindyn
@@ -470,7 +471,7 @@ def test_cli_codegen_puts_the_drive_terms_on_the_motors_and_says_so(arms, tmp_pa
     ident = tmp_path / "id.json"
     doc = {"robot": "coupled6r", "names": bp.names, "values": [0.1] * bp.n, "removed": []}
     doc.update(rotor=True, friction=True, friction_model={"kind": "smooth", "velocity": [3.0] * 6})
-    ident.write_text(__import__("json").dumps(doc))
+    ident.write_text(json.dumps(doc))
     assert main([*argv, "--params", str(ident)]) == 0
     text = capsys.readouterr().out
     assert f"friction model: smooth (tanh widths 3, 3, 3, 3, 3, 3), from {ident}" in text
@@ -487,5 +488,24 @@ def test_cli_codegen_puts_the_drive_terms_on_the_motors_and_says_so(arms, tmp_pa
 def test_cli_drive_side_errors(robot, extra, message, tmp_path, capsys):
     argv = ["codegen", robot, "--lang", "c", "--rotor", "-o", str(tmp_path / "x"), *extra]
     assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mindyn: error: ") and message in err[0], err
+
+
+@pytest.mark.parametrize(
+    "recorded, message",
+    [
+        ("smooth", "'friction_model' must be {kind, velocity}"),
+        ({"kind": "lugre"}, "coulomb, asymmetric, smooth or stribeck, not 'lugre'"),
+        ({"kind": "smooth", "velocity": ["fast", 1]}, "velocity must be a list of numbers"),
+        ({"kind": "smooth", "velocity": [0.1, -1.0]}, "velocity 2 must be positive"),
+    ],
+)
+def test_cli_friction_model_of_a_json_is_checked(recorded, message, tmp_path, capsys):
+    ident = tmp_path / "id.json"
+    doc = {"names": [], "values": [], "removed": [], "friction_model": recorded}
+    ident.write_text(json.dumps(doc))
+    argv = ["codegen", "planar2", "--lang", "c", "--friction", "--params", str(ident)]
+    assert main([*argv, "-o", str(tmp_path / "x")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("mindyn: error: ") and message in err[0], err

@@ -49,8 +49,9 @@ std::vector<std::string> driveLines(const GeneratedCode& code) {
   const std::string slot = code.motor_side ? "motor" : "joint";
   if (code.motor_side) {
     lines.push_back("Rotor inertia and friction on the " + std::to_string(code.T.rows()) +
-                    " motors: slot k of Ia, Fv, Fc is motor k's, in motor units,");
-    lines.push_back("tau += T^T (Ia T ddq + friction(T dq)) with the rows of T (q_m = T q):");
+                    " motors (slot k of Ia, Fv, Fc is motor k's,");
+    lines.push_back(
+        "in motor units): tau += T^T (Ia T ddq + friction(T dq)), T's rows (q_m = T q):");
     for (long k = 0; k < code.T.rows(); ++k) {
       std::string row;
       for (long j = 0; j < code.T.cols(); ++j) {
