@@ -47,6 +47,7 @@ ParameterLayout ParameterLayout::fromSize(int n, long size) {
 }
 
 std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
+  const char* third = friction_model.kind == FrictionKind::Stribeck ? "Fs" : "Fa";
   std::vector<std::string> names;
   names.reserve(layout.size(nq()));
   for (int k = 0; k < nq(); ++k) {
@@ -56,8 +57,7 @@ std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
     if (layout.friction) {
       names.push_back("Fv" + idx);
       names.push_back("Fc" + idx);
-      if (layout.friction_columns == 3)
-        names.push_back((friction_model.kind == FrictionKind::Stribeck ? "Fs" : "Fa") + idx);
+      if (layout.friction_columns == 3) names.push_back(third + idx);
     }
   }
   return names;
