@@ -198,7 +198,8 @@ def test_generated_c_equals_newton_euler_plus_the_drive_terms(
         assert f"Rotor inertia and friction on the {robot.n} motors" in header
         assert "m6 = 40.0 q5 + 36.0 q6" in header or name != "coupled6r"
     else:
-        assert "on the joints" not in header and "motors:" not in header
+        assert "on the joints, not through the transmissions" in header
+        assert "motors (" not in header
     formula = {"coulomb": "Fc sign(v).", "asymmetric": "Fa |sign(v)|", "smooth": "tanh(v / w)"}
     assert formula.get(kind, "Fs sign(v) exp(-(v / w)^2)") in header
 

@@ -47,6 +47,8 @@ std::vector<std::string> driveLines(const GeneratedCode& code) {
   const ParameterLayout& layout = code.params.layout;
   if (!layout.rotor && !layout.friction) return lines;
   const std::string slot = code.motor_side ? "motor" : "joint";
+  if (!code.motor_side && !code.motors.empty())
+    lines.push_back("Rotor inertia and friction on the joints, not through the transmissions.");
   if (code.motor_side) {
     lines.push_back("Rotor inertia and friction on the " + std::to_string(code.T.rows()) +
                     " motors (slot k of Ia, Fv, Fc is motor k's,");

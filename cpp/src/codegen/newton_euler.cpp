@@ -170,8 +170,8 @@ void describeModel(GeneratedCode& code, const Model& model) {
   code.joints.clear();
   code.parents.clear();
   code.motor_side = model.motorSide();
-  code.motors = code.motor_side ? model.transmission.motors : std::vector<std::string>();
-  code.T = code.motor_side ? model.transmission.T : Eigen::MatrixXd();
+  code.motors = model.transmission.motors;
+  code.T = model.transmission.T;
   code.friction = model.friction_model;
   if (model.isSerial()) return;
   for (const Joint& j : model.joints) code.joints.push_back(j.name);

@@ -147,7 +147,8 @@ struct GeneratedCode {
   std::vector<std::string> joints;
   std::vector<int> parents;
   // Where rotor inertia and friction act (for the header comment): on the motors when
-  // `motor_side`, q_m = T q with `motors` the rows of T; and the friction model.
+  // `motor_side`; the transmissions, q_m = T q with `motors` the rows of T (none: empty); and
+  // the friction model.
   bool motor_side = false;
   std::vector<std::string> motors;
   Eigen::MatrixXd T;
