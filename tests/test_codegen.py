@@ -40,11 +40,14 @@ pytestmark = pytest.mark.skipif(GCC is None, reason="gcc is needed to compile ge
 # --------------------------------------------------------------------------------------------
 
 
-def skewed_urdf(rng: np.random.Generator) -> str:
-    """A 6R arm with random joint origins, rotations and axes and random physical links."""
+def skewed_urdf(
+    rng: np.random.Generator, n: int = 6, name: str = "skewed6r", extra: str = ""
+) -> str:
+    """An nR arm (joints j1..jn) with random joint origins, rotations and axes and random
+    physical links; `extra` is written inside <robot> after them (transmissions)."""
     links = ['<link name="base"/>']
     joints = []
-    for k in range(1, 7):
+    for k in range(1, n + 1):
         m = rng.uniform(0.5, 3.0)
         c = rng.uniform(-0.1, 0.1, 3)
         A = rng.normal(size=(3, 3))
@@ -66,7 +69,7 @@ def skewed_urdf(rng: np.random.Generator) -> str:
             f'rpy="{rpy[0]} {rpy[1]} {rpy[2]}"/><axis xyz="{axis[0]} {axis[1]} {axis[2]}"/>'
             '<limit lower="-3" upper="3" effort="100" velocity="3"/></joint>'
         )
-    return '<robot name="skewed6r">' + "".join(links + joints) + "</robot>"
+    return f'<robot name="{name}">' + "".join(links + joints) + extra + "</robot>"
 
 
 def rx90_yaml(rng: np.random.Generator) -> str:
@@ -389,9 +392,9 @@ def st_tree(text: str):
 
 class STInterpreter:
     """Runs one FUNCTION_BLOCK of a tree-sitter parse tree: LREAL scalars and arrays, :=, + - *
-    /, unary minus, comparisons, IF/ELSIF/ELSE, SIN, COS. Identifiers are case-insensitive."""
+    /, unary minus, comparisons, IF/ELSIF/ELSE, SIN, COS, EXP. Identifiers are case-insensitive."""
 
-    FUNCS = {"sin": np.sin, "cos": np.cos}
+    FUNCS = {"sin": np.sin, "cos": np.cos, "exp": np.exp}
 
     def __init__(self, tree, fb_name: str):
         self.fb = None

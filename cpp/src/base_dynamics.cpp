@@ -71,6 +71,10 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
         return SinCos;
       case Op::Sign:
         return Sign;
+      case Op::Tanh:
+        return Tanh;
+      case Op::Exp:
+        return Exp;
       case Op::Mul:
         return Mul;
       default:
@@ -176,6 +180,10 @@ Tape::Tape(const GeneratedFunction& f) : count_(f.program.count) {
       }
       case Mul:
       case Sign:
+      case Tanh:
+        break;
+      case Exp:
+        in.b = n.a.negative() ? 1 : 0;
         break;
       case Add:
       case Sub:
@@ -234,6 +242,12 @@ void Tape::run(const double* q, const double* dq, const double* ddq, const doubl
           const double x = v[c[i].a];
           dst[i] = x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : 0.0);
         }
+        break;
+      case Tanh:
+        for (std::uint32_t i = b; i < e; ++i) dst[i] = std::tanh(v[c[i].a]);
+        break;
+      case Exp:
+        for (std::uint32_t i = b; i < e; ++i) dst[i] = std::exp(c[i].b ? -v[c[i].a] : v[c[i].a]);
         break;
     }
   }

@@ -476,7 +476,8 @@ TEST(SinCos, WithinOneRoundingOfTheCLibrary) {
 }
 
 // Every kind of tape instruction: lone sines and cosines and pairs, products, sums and
-// differences, products fused into a sum from either side, signs; against direct formulas.
+// differences, products fused into a sum from either side, signs, tanh, exp of a value and of
+// its negative; against direct formulas.
 TEST(BaseDynamics, TapeEvaluatesEveryInstructionKind) {
   GeneratedFunction f;
   Graph& g = f.graph;
@@ -486,10 +487,23 @@ TEST(BaseDynamics, TapeEvaluatesEveryInstructionKind) {
   const Sym a0 = in(InputKind::DDQ, 0), a1 = in(InputKind::DDQ, 1), a2 = in(InputKind::DDQ, 2);
   const Sym p0 = in(InputKind::P, 0);
   const Sym s2{&g, g.sin(q2.r)}, c2{&g, g.cos(q2.r)};
-  const std::vector<Sym> outs{
-      {&g, g.sin(q0.r)}, {&g, g.cos(q1.r)},  s2 * c2 + p0,      d0 * d1,      d0 + d1,
-      d0 - d1,           d0 * a1 + a0,       d1 * a0 - a1,      a2 - d2 * a0, -(d2 * d1),
-      2.5 * p0,          {&g, g.sign(d0.r)}, {&g, g.sign(d2.r)}};
+  const std::vector<Sym> outs{{&g, g.sin(q0.r)},
+                              {&g, g.cos(q1.r)},
+                              s2 * c2 + p0,
+                              d0 * d1,
+                              d0 + d1,
+                              d0 - d1,
+                              d0 * a1 + a0,
+                              d1 * a0 - a1,
+                              a2 - d2 * a0,
+                              -(d2 * d1),
+                              2.5 * p0,
+                              {&g, g.sign(d0.r)},
+                              {&g, g.sign(d2.r)},
+                              {&g, g.tanh(d0.r)},
+                              {&g, g.tanh(-(d1 * a0).r)},
+                              {&g, g.exp(-(d1 * d1).r)},
+                              {&g, g.exp(a2.r)}};
   for (const Sym& o : outs) f.outputs.push_back(o.r);
   f.program = schedule(g, f.outputs);
   Tape tape(f);
@@ -507,11 +521,17 @@ TEST(BaseDynamics, TapeEvaluatesEveryInstructionKind) {
                                      -(dq[2] * dq[1]),
                                      2.5 * p[0],
                                      -1.0,
-                                     0.0};
+                                     0.0,
+                                     std::tanh(dq[0]),
+                                     -std::tanh(dq[1] * ddq[0]),
+                                     std::exp(-dq[1] * dq[1]),
+                                     std::exp(ddq[2])};
   std::vector<double> out(expected.size());
   tape.run(q, dq, ddq, p, out.data());
   for (size_t i = 0; i < out.size(); ++i) EXPECT_NEAR(out[i], expected[i], 1e-15) << i;
   EXPECT_EQ(tape.count().trig, 4);
+  EXPECT_EQ(tape.count().tanh, 2);
+  EXPECT_EQ(tape.count().exp, 2);
 }
 
 TEST(BaseDynamics, TheCounterSeesAllocations) {

@@ -138,18 +138,6 @@ def _check_lang(lang: str, trig: str | None) -> None:
         raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
 
 
-def _refuse_motor_side(robot: Robot, rotor: bool, friction: bool) -> None:
-    """The generated code puts rotor inertia and friction on the joints: a robot that has them
-    on its motors (:attr:`~mindyn.Robot.drive_side`) is refused rather than given other
-    dynamics than its own."""
-    if robot.drive_side == "motor" and (rotor or friction):
-        raise _core.ModelError(
-            f"'{robot.name}' has its rotor inertia and friction on the motors (transmissions), "
-            "which the generated code does not model yet: use --drive-side joint "
-            "(Robot.with_drive_side('joint')), or leave out --rotor and --friction"
-        )
-
-
 def _identifier(name: str) -> str:
     s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
     s = re.sub(r"_+", "_", s)
@@ -185,7 +173,14 @@ def generate(
         Functions to generate: ``inverse_dynamics`` (alias ``id``), ``gravity``, ``regressor``;
         a comma-separated string is accepted.
     rotor, friction : bool
-        Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
+        Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint, or per
+        motor when ``robot.drive_side`` is ``"motor"`` (a description with transmissions, unless
+        :meth:`Robot.with_drive_side` put them on the joints): motor k's velocity ``t_k . dq``
+        and acceleration ``t_k . ddq`` (``t_k`` row k of ``T``) formed once each, its torque
+        taken back to the joints by ``t_k^T``. The friction terms follow
+        ``robot.friction_model`` (Coulomb, direction-dependent, smooth with ``tanh``, Stribeck
+        with ``exp``; its velocities baked in; a third column ``Fa``/``Fs`` per slot where the
+        model has one); the header says which and where.
     params : path or array, optional
         Parameter values, shape (np,): an array, or a file read by
         :func:`read_parameter_file`. Default: the robot's own values (``p_b = Y pi``).
@@ -240,9 +235,8 @@ def generate(
         formulas = bp.formulas
     else:
         bp_core = formulas = None
-        names = robot.parameter_names(rotor, friction)
+        names = list(_core.classical_parameter_names(robot._m, rotor=rotor, friction=friction))
         names += [f"Off{k + 1}" for k in range(robot.n) if offset]
-    _refuse_motor_side(robot, rotor, friction)
     values = None
     if params is not None:
         if isinstance(params, (str, Path)):
@@ -442,7 +436,7 @@ def generate_controller(
     robot: Robot | str,
     kind: str = "adaptive-pd",
     lang: str = "c",
-    base: BaseParameters | None = None,
+    base: BaseParameters | bool | None = None,
     gains: dict | None = None,
     params: str | Path | Sequence[float] | None = None,
     period: float = 0.004,
@@ -467,9 +461,12 @@ def generate_controller(
     robot : Robot or str
     kind : {"adaptive-pd", "computed-torque", "gravity-compensation"}
     lang : {"c", "st"}
-    base : BaseParameters, optional
-        The parameter set (default: base parameters with rotor inertia and friction); its
-        offset setting adds a torque offset per joint.
+    base : BaseParameters or False, optional
+        The parameter set (default: base parameters with rotor inertia and friction; ``False``:
+        all classical parameters with rotor inertia and friction); a base set's offset setting
+        adds a torque offset per joint. Its robot decides where rotor inertia and friction act
+        and the friction model, as in :func:`generate` (rotor inertia through the reference
+        acceleration ``t_k . ddq_r``, friction at the motor velocity ``t_k . dq``).
     gains : dict, optional
         ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
         gives them (the default: for ``period``, the robot with its rotor inertia). Gains that
@@ -493,10 +490,14 @@ def generate_controller(
     if kind not in CONTROLLERS:
         raise ValueError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
     _check_lang(lang, trig)
+    classical = base is False
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
-    _refuse_motor_side(base.robot, base.rotor, base.friction)
-    n, names = robot.n, list(base.names)
+    if classical:
+        names = list(_core.classical_parameter_names(robot._m, rotor=True, friction=True))
+    else:
+        names = list(base.names)
+    n = robot.n
     g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)
     s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
@@ -516,7 +517,9 @@ def generate_controller(
         raise control.ControllerSettingError(
             f"gains 'gamma' and 'nu' must be numbers in [0, {big:g}]"
         )
-    if params is None:
+    if params is None and classical:
+        s["p0"] = None  # the robot's classical values, as the generator reads them
+    elif params is None:
         s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
         if base.offset:
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
@@ -537,15 +540,17 @@ def generate_controller(
     fn = f"{name}_{kind.replace('-', '_')}"
     header_name = header_name or f"{fn}.h"
     out = _core.generate_controller(
-        base._b,
-        base.offset,
+        None if classical else base._b,
+        False if classical else base.offset,
         kind,
         name,
         s,
         lang=lang,
         header_name=header_name,
         inline_trig=trig != "libm",
+        model=robot._m if classical else None,
     )
+    s["p0"] = np.asarray(out["values"], dtype=float)
     return GeneratedController(kind, lang, name, out, header_name, s)
 
 

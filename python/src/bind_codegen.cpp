@@ -45,8 +45,13 @@ py::dict counts(const OpCount& c) {
   d["neg"] = c.neg;
   d["trig"] = c.trig;
   d["sign"] = c.sign;
+  d["tanh"] = c.tanh;
+  d["exp"] = c.exp;
   return d;
 }
+
+// All classical parameters of the model with these joint terms, friction in the model's
+// friction model.
 
 struct PyBaseDynamics {
   std::unique_ptr<BaseDynamics> bd;
@@ -121,6 +126,15 @@ void bindCodegen(py::module_& m) {
       "Generated code and operation counts. base=None: the classical parameters; offset: a "
       "torque offset per joint after them; formulas: the text of each base parameter's "
       "formula in the header comment (default: full precision).");
+
+  m.def(
+      "classical_parameter_names",
+      [](const PyModel& model, bool rotor, bool friction) {
+        return classicalParameterSet(model.model, model.model.layout(rotor, friction)).names;
+      },
+      py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
+      "The classical parameters generated code takes (friction in the model's friction "
+      "model).");
 
   py::class_<PyBaseDynamics, std::shared_ptr<PyBaseDynamics>>(m, "BaseDynamics")
       .def(py::init([](const PyBase& base_core, bool offset) {
@@ -207,9 +221,14 @@ void bindController(py::module_& m) {
       "generate_controller",
       [](const std::shared_ptr<PyBase>& base_core, bool offset, const std::string& kind,
          const std::string& name, const py::dict& settings, const std::string& lang,
-         const std::string& header_name, bool inlineTrig) {
-        const Model& model = base_core->model->model;
-        ParameterSet ps = baseParameterSet(model, base_core->bp);
+         const std::string& header_name, bool inlineTrig,
+         const std::shared_ptr<PyModel>& model_core) {
+        if (!base_core && !model_core)
+          throw py::value_error("generate_controller: base parameters or a model");
+        const Model& model = base_core ? base_core->model->model : model_core->model;
+        // without base parameters: all classical ones, with rotor inertia and friction
+        ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
+                                    : classicalParameterSet(model, model.layout(true, true));
         if (offset) ps = withOffsets(model, std::move(ps));
         Controller k = kind == "adaptive-pd"       ? Controller::AdaptivePD
                        : kind == "computed-torque" ? Controller::ComputedTorque
@@ -262,6 +281,7 @@ void bindController(py::module_& m) {
       },
       py::arg("base"), py::arg("offset"), py::arg("kind"), py::arg("name"), py::arg("settings"),
       py::arg("lang") = "c", py::arg("header_name") = "controller.h", py::arg("inline_trig") = true,
+      py::arg("model") = std::shared_ptr<PyModel>(),
       "A generated controller step (adaptive-pd, computed-torque, gravity-compensation) and its "
       "operation counts.");
 }

@@ -42,9 +42,10 @@ class Tape {
 
  private:
   // Mul: a * b; Add, Sub: a + c, a - c; MulAdd, MulSub: a * b + c, a * b - c; SubMul:
-  // c - a * b; SinCos: sin a to slot b, cos a to slot c; Sign: sign(a).
-  enum Kind : std::uint8_t { Mul, Add, Sub, MulAdd, MulSub, SubMul, SinCos, Sign };
-  static constexpr int kKinds = 8;
+  // c - a * b; SinCos: sin a to slot b, cos a to slot c; Sign: sign(a); Tanh: tanh(a); Exp:
+  // exp(a), of -a when b is 1.
+  enum Kind : std::uint8_t { Mul, Add, Sub, MulAdd, MulSub, SubMul, SinCos, Sign, Tanh, Exp };
+  static constexpr int kKinds = 10;
   struct Run {
     Kind kind;
     std::uint32_t begin, end;  // range in code_; results go to slots first_ + begin ...

@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <initializer_list>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -54,6 +55,29 @@ struct Component {
 struct Pending {
   std::array<Component, 3> n, f;  // moment about the origin, force
 };
+
+// Throws ModelError unless the model can carry the layout's rotor inertia and friction: on the
+// motors (Model::motorSide()) one motor per slot, and with friction as many friction columns as
+// the model's friction model has, with a velocity scale per slot where it needs one.
+inline void checkDriveTerms(const Model& model, ParameterLayout layout) {
+  const int n = model.nq();
+  if (model.motorSide() && (layout.rotor || layout.friction) && model.transmission.nm() != n)
+    throw ModelError(
+        "codegen: rotor inertia and friction on the motors need one motor per "
+        "joint; " +
+        model.name + " has " + std::to_string(model.transmission.nm()) + " motors for " +
+        std::to_string(n) + " joints (put them on the joints)");
+  if (!layout.friction) return;
+  const FrictionModel& fm = model.friction_model;
+  if (layout.friction_columns != fm.columns())
+    throw ModelError("codegen: the parameters have " + std::to_string(layout.friction_columns) +
+                     " friction columns per joint; the friction model of " + model.name + " has " +
+                     std::to_string(fm.columns()));
+  const bool scaled = fm.kind == FrictionKind::Smooth || fm.kind == FrictionKind::Stribeck;
+  if (scaled && fm.velocity.size() != n)
+    throw ModelError("codegen: the friction model needs a velocity scale per joint (" +
+                     std::to_string(n) + "), it has " + std::to_string(fm.velocity.size()));
+}
 
 class Builder {
  public:
@@ -160,19 +184,73 @@ class Builder {
         const V3 extra = cross(scale(u, q_[k]), values(w.f));
         for (int i = 0; i < 3; ++i) w.n[i].rest = g_.add(value(w.n[i]), extra[i]);
       }
-      if (joint_terms) {
-        if (layout.rotor) t = g_.add(t, g_.mul(pi[layout.rotorIndex(k)], ddq_[k]));
-        if (layout.friction) {
-          t = g_.add(t, g_.mul(pi[layout.viscousIndex(k)], dq_[k]));
-          t = g_.add(t, g_.mul(pi[layout.coulombIndex(k)], g_.sign(dq_[k])));
-        }
-      }
       tau[k] = t;
       const int parent = model_.parent(k);
       if (parent < 0) continue;
       append(children[parent], rigidBackward(s.pre, std::move(w)));
     }
+    if (joint_terms) addDriveTerms(tau, pi, layout, dq_, ddq_);
     return tau;
+  }
+
+  // Rotor inertia and friction of the layout added to the joint torques `tau`: slot k's act on
+  // joint k, or, when the model's motorSide(), on motor k. With t_k row k of T (e_k on the
+  // joints), the slot's acceleration a_k = t_k . acc and velocity v_k = t_k . vel are formed
+  // once (zero entries of T skipped, entries of +-1 without a product), its torque
+  // Ia_k a_k + friction(v_k) (frictionTorque) taken back to the joints by t_k^T.
+  void addDriveTerms(std::vector<Ref>& tau, const std::vector<Ref>& pi, ParameterLayout layout,
+                     const std::vector<Ref>& vel, const std::vector<Ref>& acc) {
+    if (!layout.rotor && !layout.friction) return;
+    const int n = model_.nq();
+    const bool motors = model_.motorSide();
+    auto slotSum = [&](int k, const std::vector<Ref>& x) {
+      if (!motors) return x[k];
+      Ref s = Graph::zero();
+      for (int j = 0; j < n; ++j)
+        if (model_.transmission.T(k, j) != 0.0)
+          s = g_.add(s, g_.mul(g_.constant(model_.transmission.T(k, j)), x[j]));
+      return s;
+    };
+    for (int k = 0; k < n; ++k) {
+      const Ref ia = layout.rotor ? pi[layout.rotorIndex(k)] : Graph::zero();
+      std::array<Ref, 3> f{Graph::zero(), Graph::zero(), Graph::zero()};
+      if (layout.friction) {
+        f[0] = pi[layout.viscousIndex(k)];
+        f[1] = pi[layout.coulombIndex(k)];
+        if (layout.friction_columns == 3) f[2] = pi[layout.thirdFrictionIndex(k)];
+      }
+      Ref t = Graph::zero();
+      if (ia != Graph::zero()) t = g_.mul(ia, slotSum(k, acc));
+      if (f[0] != Graph::zero() || f[1] != Graph::zero() || f[2] != Graph::zero())
+        t = g_.add(t, frictionTorque(f, k, slotSum(k, vel)));
+      if (t == Graph::zero()) continue;
+      if (!motors) {
+        tau[k] = g_.add(tau[k], t);
+        continue;
+      }
+      for (int j = 0; j < n; ++j)
+        if (model_.transmission.T(k, j) != 0.0)
+          tau[j] = g_.add(tau[j], g_.mul(g_.constant(model_.transmission.T(k, j)), t));
+    }
+  }
+
+  // The friction torque of slot k at its velocity v, with f = (Fv, Fc, third parameter) and the
+  // model's FrictionModel (w_k its velocity scale, baked in as 1 / w_k):
+  //   Coulomb Fv v + Fc sign(v); Asymmetric + Fa |sign(v)| (as sign(v) sign(v));
+  //   Smooth Fv v + Fc tanh(v / w_k); Stribeck Fv v + Fc sign(v) + Fs sign(v) exp(-(v / w_k)^2).
+  Ref frictionTorque(const std::array<Ref, 3>& f, int k, Ref v) {
+    const FrictionModel& fm = model_.friction_model;
+    Ref t = g_.mul(f[0], v);
+    if (fm.kind == FrictionKind::Smooth) {
+      const Ref x = g_.mul(g_.constant(1.0 / fm.velocity[k]), v);
+      return g_.add(t, g_.mul(f[1], g_.tanh(x)));
+    }
+    const Ref s = g_.sign(v);
+    t = g_.add(t, g_.mul(f[1], s));
+    if (f[2] == Graph::zero()) return t;
+    if (fm.kind == FrictionKind::Asymmetric) return g_.add(t, g_.mul(f[2], g_.mul(s, s)));
+    const Ref x = g_.mul(g_.constant(1.0 / fm.velocity[k]), v);
+    return g_.add(t, g_.mul(f[2], g_.mul(s, g_.exp(-g_.mul(x, x)))));
   }
 
  protected:

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <functional>
 #include <sstream>
+#include <utility>
 
 #include "internal.hpp"
 #include "mindyn/codegen/emit_st.hpp"
@@ -190,13 +191,15 @@ std::vector<std::string> header(const ControllerCode& c) {
       out.push_back("(within +-tau_max), e = q - q_d, de = dq - dq_d.");
       break;
   }
-  char buf[200];
-  std::snprintf(buf, sizeof buf,
-                "Per step: %ld mul, %ld add, %ld sin/cos%s%s (%d joints, %d parameters).",
-                c.step.mul, c.step.add, c.step.trig,
-                c.step.sign ? (", " + std::to_string(c.step.sign) + " sign").c_str() : "",
-                c.divisions ? (", " + std::to_string(c.divisions) + " div").c_str() : "", n, np);
-  out.push_back(buf);
+  std::string per = "Per step: " + std::to_string(c.step.mul) + " mul, " +
+                    std::to_string(c.step.add) + " add, " + std::to_string(c.step.trig) +
+                    " sin/cos";
+  for (const auto& [count, what] :
+       {std::pair{c.step.sign, " sign"}, std::pair{c.step.tanh, " tanh"},
+        std::pair{c.step.exp, " exp"}, std::pair{static_cast<long>(c.divisions), " div"}})
+    if (count) per += ", " + std::to_string(count) + what;
+  out.push_back(per + " (" + std::to_string(n) + " joints, " + std::to_string(np) +
+                " parameters).");
   for (const auto& v : c.variants)
     out.push_back("  " + std::string(toString(v.form)) + ": " + std::to_string(v.count.mul) +
                   " mul, " + std::to_string(v.count.add) + " add");

@@ -40,6 +40,53 @@ std::string wrap(const std::string& text, size_t width, const std::string& inden
   return out + line;
 }
 
+// The lines of the header that say where rotor inertia and friction act and the friction
+// formula, when the parameters have them.
+std::vector<std::string> driveLines(const GeneratedCode& code) {
+  std::vector<std::string> lines;
+  const ParameterLayout& layout = code.params.layout;
+  if (!layout.rotor && !layout.friction) return lines;
+  const std::string slot = code.motor_side ? "motor" : "joint";
+  if (!code.motor_side && !code.motors.empty())
+    lines.push_back("Rotor inertia and friction on the joints, not through the transmissions.");
+  if (code.motor_side) {
+    lines.push_back("Rotor inertia and friction on the " + std::to_string(code.T.rows()) +
+                    " motors (slot k of Ia, Fv, Fc is motor k's,");
+    lines.push_back(
+        "in motor units): tau += T^T (Ia T ddq + friction(T dq)), T's rows (q_m = T q):");
+    for (long k = 0; k < code.T.rows(); ++k) {
+      std::string row;
+      for (long j = 0; j < code.T.cols(); ++j) {
+        const double t = code.T(k, j);
+        if (t == 0.0) continue;
+        const std::string mag = std::abs(t) == 1.0 ? "" : literal(std::abs(t)) + " ";
+        row += (row.empty() ? (t < 0 ? "-" : "") : (t < 0 ? " - " : " + ")) + mag + "q" +
+               std::to_string(j + 1);
+      }
+      std::istringstream split(
+          wrap(std::to_string(k + 1) + ". " + code.motors[static_cast<size_t>(k)] + " = " + row, 88,
+               "    "));
+      for (std::string part; std::getline(split, part);) lines.push_back("  " + part);
+    }
+  }
+  if (!layout.friction) return lines;
+  static const char* const formula[] = {"Fv v + Fc sign(v)", "Fv v + Fc sign(v) + Fa |sign(v)|",
+                                        "Fv v + Fc tanh(v / w)",
+                                        "Fv v + Fc sign(v) + Fs sign(v) exp(-(v / w)^2)"};
+  static const char* const scale[] = {"", "", "tanh width", "Stribeck velocity"};
+  const int kind = static_cast<int>(code.friction.kind);
+  lines.push_back("Friction of each " + slot + " at its velocity v (sign(0) = 0):");
+  std::string f = formula[kind];
+  if (scale[kind][0] != '\0') {
+    f += std::string(", w the ") + scale[kind] + " per " + slot + ":";
+    for (long k = 0; k < code.friction.velocity.size(); ++k)
+      f += (k ? ", " : " ") + literal(code.friction.velocity[k]);
+  }
+  std::istringstream split(wrap(f + ".", 86, "  "));
+  for (std::string part; std::getline(split, part);) lines.push_back("  " + part);
+  return lines;
+}
+
 }  // namespace
 
 std::vector<std::string> describe(const GeneratedCode& code) {
@@ -53,7 +100,10 @@ std::vector<std::string> describe(const GeneratedCode& code) {
                                    " classical parameters";
   std::vector<std::string> extras;
   if (ps.layout.rotor) extras.push_back("rotor inertia");
-  if (ps.layout.friction) extras.push_back("viscous and Coulomb friction");
+  static const char* const frictionWords[] = {
+      "viscous and Coulomb friction", "viscous and direction-dependent Coulomb friction",
+      "viscous and smooth Coulomb friction", "viscous, Coulomb and Stribeck friction"};
+  if (ps.layout.friction) extras.push_back(frictionWords[static_cast<int>(code.friction.kind)]);
   if (ps.offsets) extras.push_back("a torque offset per joint (not in the gravity torque)");
   if (!extras.empty()) {
     what += ", with ";
@@ -62,6 +112,7 @@ std::vector<std::string> describe(const GeneratedCode& code) {
   std::istringstream whatLines(wrap(what + ".", 90, "  "));
   for (std::string part; std::getline(whatLines, part);) lines.push_back(part);
   lines.push_back("Units SI; gravity and all frames as in the robot description.");
+  for (const auto& l : driveLines(code)) lines.push_back(l);
   if (!code.parents.empty()) {
     lines.push_back(
         "A tree: the joints in the order of q, dq, ddq and tau, each with the one it is");
@@ -94,6 +145,8 @@ std::vector<std::string> describe(const GeneratedCode& code) {
                     " sin/cos";
     if (c.neg) l += ", " + std::to_string(c.neg) + " neg";
     if (c.sign) l += ", " + std::to_string(c.sign) + " sign";
+    if (c.tanh) l += ", " + std::to_string(c.tanh) + " tanh";
+    if (c.exp) l += ", " + std::to_string(c.exp) + " exp";
     lines.push_back(l);
   }
   lines.push_back("");
@@ -230,6 +283,12 @@ class CWriter {
         case Op::Sign:
           os << "(double)((" << operand(n.a) << " > 0.0) - (" << operand(n.a) << " < 0.0))";
           break;
+        case Op::Tanh:
+          os << "tanh(" << operand(n.a) << ")";
+          break;
+        case Op::Exp:
+          os << "exp(" << signedValue(n.a) << ")";
+          break;
         case Op::Add:
           os << operand(n.a) << (n.b.negative() ? " - " : " + ") << operand(n.b);
           break;
@@ -303,7 +362,7 @@ CFiles emitC(const GeneratedCode& code, const std::string& header_name, CTrig tr
   h << "/*\n";
   for (const auto& l : describe(code)) h << (l.empty() ? " *" : " * " + l) << "\n";
   h << " *\n * The regressor W is row-major, N x NP: tau[i] = sum_j W[i * NP + j] p[j]";
-  h << (code.params.layout.friction ? " (Coulomb\n * columns use sign(dq))" : "") << ".\n */\n";
+  h << (code.params.layout.friction ? " (friction\n * columns as above)" : "") << ".\n */\n";
   h << "#ifndef " << NAME << "_H\n#define " << NAME << "_H\n\n";
   h << "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
   h << "#define " << NAME << "_N " << code.n << "\n";

@@ -10,6 +10,30 @@ namespace mindyn::codegen {
 
 namespace {
 
+// t := tanh(a) without TANH (not an IEC 61131-3 function), within 2 ulp, never overflowing:
+// +-1 beyond |a| > 20 (tanh rounds to +-1 there), (1 - e) / (1 + e) with e = EXP(-2 |a|) down to
+// |a| = 0.125, below that its Taylor series to a^15 (truncation under 3e-18 relative). `t` is
+// not `a`.
+void writeTanh(std::ostream& os, const std::string& t, const std::string& a) {
+  // the series a (1 - x (1/3 - x (2/15 - x (17/315 - ...)))), x = a^2
+  static const double c[] = {
+      1.0 / 3.0,         2.0 / 15.0,          17.0 / 315.0,          62.0 / 2835.0,
+      1382.0 / 155925.0, 21844.0 / 6081075.0, 929569.0 / 638512875.0};
+  os << "IF " << a << " > 20.0 THEN\n  " << t << " := 1.0;\n";
+  os << "ELSIF " << a << " < -20.0 THEN\n  " << t << " := -1.0;\n";
+  os << "ELSIF " << a << " > 0.125 THEN\n  " << t << " := EXP(-2.0 * " << a << ");\n  " << t
+     << " := (1.0 - " << t << ") / (1.0 + " << t << ");\n";
+  os << "ELSIF " << a << " < -0.125 THEN\n  " << t << " := EXP(2.0 * " << a << ");\n  " << t
+     << " := (" << t << " - 1.0) / (1.0 + " << t << ");\n";
+  os << "ELSE\n  " << t << " := " << a << " * " << a << ";\n  " << t << " := " << a << " * (1.0";
+  const int m = static_cast<int>(sizeof c / sizeof c[0]);
+  for (int k = 0; k < m; ++k) {
+    os << (k % 2 ? "\n    - " : " - ") << t << " * " << (k + 1 < m ? "(" : "")
+       << literal(c[k], true);
+  }
+  os << std::string(m, ')') << ";\nEND_IF;\n";
+}
+
 class STWriter {
  public:
   explicit STWriter(const GeneratedFunction& f, std::string out = "")
@@ -54,18 +78,23 @@ class STWriter {
       const Node& n = f_.graph.node(id);
       const std::string a = operand(n.a);
       const std::string b = (n.op == Op::Add || n.op == Op::Mul) ? operand(n.b) : "";
-      // operands whose last reader is this statement free their slots for the result
-      for (Ref r : {n.a, n.b})
-        if (slot_[r.id()] >= 0 && last[r.id()] == static_cast<int>(i)) {
-          free.push_back(slot_[r.id()]);
-          last[r.id()] = -2;
-        }
+      // operands whose last reader is this statement free their slots for the result, except
+      // for tanh, which writes its result before it last reads its operand
+      auto release = [&] {
+        for (Ref r : {n.a, n.b})
+          if (slot_[r.id()] >= 0 && last[r.id()] == static_cast<int>(i)) {
+            free.push_back(slot_[r.id()]);
+            last[r.id()] = -2;
+          }
+      };
+      if (n.op != Op::Tanh) release();
       if (free.empty()) {
         slot_[id] = slots_++;
       } else {
         slot_[id] = free.back();
         free.pop_back();
       }
+      if (n.op == Op::Tanh) release();
       const std::string t = operand(Ref(id, false));
       switch (n.op) {
         case Op::Sin:
@@ -77,6 +106,12 @@ class STWriter {
         case Op::Sign:
           os << "IF " << a << " > 0.0 THEN\n  " << t << " := 1.0;\nELSIF " << a << " < 0.0 THEN\n  "
              << t << " := -1.0;\nELSE\n  " << t << " := 0.0;\nEND_IF;\n";
+          break;
+        case Op::Tanh:
+          writeTanh(os, t, a);
+          break;
+        case Op::Exp:
+          os << t << " := EXP(" << signedValue(n.a) << ");\n";
           break;
         case Op::Add:
           os << t << " := " << a << (n.b.negative() ? " - " : " + ") << b << ";\n";
@@ -145,7 +180,11 @@ std::string emitST(const GeneratedCode& code) {
       os << "END_VAR\n";
     }
     const OpCount& c = f.program.count;
-    os << "(* " << c.mul << " mul, " << c.add << " add, " << c.trig << " sin/cos *)\n";
+    os << "(* " << c.mul << " mul, " << c.add << " add, " << c.trig << " sin/cos";
+    for (const auto& [count, what] :
+         {std::pair{c.sign, " sign"}, std::pair{c.tanh, " tanh"}, std::pair{c.exp, " exp"}})
+      if (count) os << ", " << count << what;
+    os << " *)\n";
     os << body.str() << "END_FUNCTION_BLOCK\n";
   }
   return os.str();

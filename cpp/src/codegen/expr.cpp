@@ -111,6 +111,22 @@ Ref Graph::sign(Ref x) {
   return Ref(intern(n), x.negative());
 }
 
+Ref Graph::tanh(Ref x) {
+  if (isConstant(x)) return constant(std::tanh(constantValue(x)));
+  Node n;
+  n.op = Op::Tanh;
+  n.a = x.abs();
+  return Ref(intern(n), x.negative());  // tanh(-x) = -tanh(x)
+}
+
+Ref Graph::exp(Ref x) {
+  if (isConstant(x)) return constant(std::exp(constantValue(x)));
+  Node n;
+  n.op = Op::Exp;
+  n.a = x;
+  return Ref(intern(n), false);
+}
+
 Ref Graph::add(Ref a, Ref b) {
   if (a.id() == 0) return b;
   if (b.id() == 0) return a;
@@ -197,6 +213,12 @@ std::vector<double> Graph::evaluate(const InputValues& in) const {
       case Op::Sign:
         v[i] = sgn(val(n.a));
         break;
+      case Op::Tanh:
+        v[i] = std::tanh(val(n.a));
+        break;
+      case Op::Exp:
+        v[i] = std::exp(val(n.a));
+        break;
       case Op::Add:
         v[i] = val(n.a) + val(n.b);
         break;
@@ -244,6 +266,12 @@ Program schedule(const Graph& graph, const std::vector<Ref>& outputs) {
         break;
       case Op::Sign:
         prog.count.sign++;
+        break;
+      case Op::Tanh:
+        prog.count.tanh++;
+        break;
+      case Op::Exp:
+        prog.count.exp++;
         break;
       case Op::Add:
         prog.count.add++;

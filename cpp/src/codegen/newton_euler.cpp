@@ -54,6 +54,7 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
     throw ModelError("codegen: " + std::to_string(params.offsets) + " torque offsets for " +
                      std::to_string(n) + " joints");
   const int off0 = np - params.offsets;  // the first offset in p
+  internal::checkDriveTerms(model, params.layout);
 
   GeneratedFunction out;
   out.function = function;
@@ -168,6 +169,10 @@ void describeModel(GeneratedCode& code, const Model& model) {
   code.n = model.nq();
   code.joints.clear();
   code.parents.clear();
+  code.motor_side = model.motorSide();
+  code.motors = model.transmission.motors;
+  code.T = model.transmission.T;
+  code.friction = model.friction_model;
   if (model.isSerial()) return;
   for (const Joint& j : model.joints) code.joints.push_back(j.name);
   for (int k = 0; k < model.nq(); ++k) code.parents.push_back(model.parent(k));

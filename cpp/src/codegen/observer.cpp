@@ -256,6 +256,15 @@ GeneratedFunction generateMomentum(const Model& model, const ParameterSet& param
   if (params.offsets != 0 && params.offsets != n)
     throw ModelError("codegen: " + std::to_string(params.offsets) + " torque offsets for " +
                      std::to_string(n) + " joints");
+  const ParameterLayout& layout = params.layout;
+  if ((layout.rotor || layout.friction) && model.motorSide())
+    throw ModelError(
+        "codegen: the generated momentum observer has rotor inertia and friction on "
+        "the joints only, not on the motors (use --drive-side joint)");
+  if (layout.friction && model.friction_model.kind != FrictionKind::Coulomb)
+    throw ModelError(std::string("codegen: the generated momentum observer has viscous and "
+                                 "Coulomb friction only, not the ") +
+                     toString(model.friction_model.kind) + " friction model");
   const int off0 = np - params.offsets;
   GeneratedFunction out;
   out.function = Function::SlotineLi;  // emitted through the step's own writers only

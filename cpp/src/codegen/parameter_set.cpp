@@ -6,18 +6,7 @@
 
 namespace mindyn::codegen {
 
-namespace {
-// The generated code forms viscous and Coulomb friction only.
-void requireCoulomb(const Model& model, ParameterLayout layout) {
-  if (layout.friction && model.friction_model.kind != FrictionKind::Coulomb)
-    throw ModelError(std::string("codegen: generated code has viscous and Coulomb friction "
-                                 "only, not the ") +
-                     toString(model.friction_model.kind) + " friction model");
-}
-}  // namespace
-
 ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
-  requireCoulomb(model, bp.layout);
   ParameterSet s;
   s.layout = bp.layout;
   s.base = true;
@@ -31,7 +20,6 @@ ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
 }
 
 ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout) {
-  requireCoulomb(model, layout);
   ParameterSet s;
   s.layout = layout;
   s.base = false;

@@ -106,11 +106,6 @@ class SlotineLiBuilder : public Builder {
       f = toParent(s.post, f);
       const V3 u = constVec(s.u);
       Ref t = dot(u, s.type == JointType::Revolute ? f.w : f.l);
-      if (layout.rotor) t = g.add(t, g.mul(pi[layout.rotorIndex(k)], ddqr_[k]));
-      if (layout.friction) {
-        t = g.add(t, g.mul(pi[layout.viscousIndex(k)], dq_[k]));
-        t = g.add(t, g.mul(pi[layout.coulombIndex(k)], g.sign(dq_[k])));
-      }
       tau[k] = t;
       const int parent = model_.parent(k);
       if (parent < 0) continue;
@@ -120,6 +115,8 @@ class SlotineLiBuilder : public Builder {
         f.w = addv(f.w, cross(d_[k], f.l));
       children[parent] = addsv(children[parent], toParent(s.pre, f));
     }
+    // rotor inertia through the reference acceleration, friction through the actual velocity
+    addDriveTerms(tau, pi, layout, dq_, ddqr_);
     return tau;
   }
 
@@ -170,7 +167,9 @@ std::vector<Ref> adjoint(Graph& g, const std::vector<Ref>& out, const std::vecto
     const Node& n = g.node(id);
     if (n.op == Op::Input) dep[id] = n.kind == InputKind::P;
     if (n.op == Op::Add || n.op == Op::Mul) dep[id] = dep[n.a.id()] || dep[n.b.id()];
-    if (n.op == Op::Sin || n.op == Op::Cos || n.op == Op::Sign) dep[id] = dep[n.a.id()];
+    if (n.op == Op::Sin || n.op == Op::Cos || n.op == Op::Sign || n.op == Op::Tanh ||
+        n.op == Op::Exp)
+      dep[id] = dep[n.a.id()];
   }
   std::vector<Ref> adj(size, Graph::zero()), grad(np, Graph::zero());
   for (size_t k = 0; k < out.size(); ++k)
@@ -198,6 +197,7 @@ GeneratedFunction slotineLiWith(const Model& model, const ParameterSet& params, 
                                 bool pass, bool adjointPass) {
   const int n = model.nq(), np = params.size(), P = params.layout.size(n);
   const int off0 = np - params.offsets;
+  internal::checkDriveTerms(model, params.layout);
   GeneratedFunction out;
   out.function = Function::SlotineLi;
   out.n = n;

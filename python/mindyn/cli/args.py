@@ -538,6 +538,26 @@ def drive_side_words(robot, args) -> str:
     return "on the joints (--drive-side joint)"
 
 
+def drive_side(robot, args):
+    """``robot`` with ``--drive-side`` applied (:func:`with_drive_side`), and the words saying
+    where rotor inertia and friction act, for a command's output ("" when neither is asked
+    for)."""
+    side = getattr(args, "drive_side", None)
+    robot = with_drive_side(robot, args)
+    if not (getattr(args, "rotor", False) or getattr(args, "friction", False)):
+        return robot, ""
+    if robot.drive_side == "motor":
+        n = len(robot.transmission.motors)
+        how = "--drive-side motor" if side else "the default with transmissions"
+        return robot, (
+            f"rotor inertia and friction on the {n} motors (q_m = T q, tau = T^T tau_m; {how}"
+            + ("" if side else "; --drive-side joint puts them on the joints")
+            + ")"
+        )
+    why = "--drive-side joint" if side else "no transmissions declared"
+    return robot, f"rotor inertia and friction on the joints ({why})"
+
+
 def add_offset(p: argparse.ArgumentParser, verb: str = "include") -> None:
     """``--offset``: a constant torque offset per joint (Off1 .. OffN)."""
     p.add_argument(

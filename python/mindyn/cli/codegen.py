@@ -20,11 +20,11 @@ from .args import (
     add_offset,
     add_robot,
     controller_period,
+    drive_side,
     joint_terms,
     joint_values,
     joint_vector,
     output_file,
-    with_drive_side,
 )
 from .method import base_method
 
@@ -65,8 +65,9 @@ def register(subparsers) -> None:
         metavar="FILE",
         help="base-parameter values: the JSON that 'mindyn identify --json' writes (the "
         "parameters it pruned for a high relative standard deviation are taken as zero, and "
-        "the output says how many), a JSON mapping, or 'NAME value' lines; default: the "
-        "robot's own values",
+        "the output says how many; the friction model it records, friction_model: {kind, "
+        "velocity}, is the generated code's, else Coulomb), a JSON mapping, or 'NAME value' "
+        "lines; default: the robot's own values",
     )
     method_help = (
         "how the base parameters are found, as 'mindyn base --method': the exact projection "
@@ -168,7 +169,9 @@ def _outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
-    robot = with_drive_side(load(args.robot, tip=args.tip), args)
+    robot = load(args.robot, tip=args.tip)
+    robot, friction_note = _with_friction_model(robot, args)
+    robot, drive_note = drive_side(robot, args)
     out = _output_base(args)
     header = out.name + ".h"
     same = dict(
@@ -186,6 +189,9 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     base = base_parameters(
         robot, rotor=args.rotor, friction=args.friction, offset=args.offset, method=method
     )
+    for note in (drive_note, friction_note):
+        if note:
+            print(note)
     params, pruned, threshold = (
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )
@@ -398,6 +404,42 @@ def _warn_unstable(robot, gains, kind: str, period: float) -> None:
             f"mindyn: warning: the gains baked in are not stable: the {check.text()}",
             file=sys.stderr,
         )
+
+
+def _with_friction_model(robot, args):
+    """``robot`` with the friction model a ``--params`` JSON records (``friction_model: {kind,
+    velocity}``), else as it is (Coulomb); and the line saying which, when ``--friction``."""
+    from ..identification.data import DataError, read_json
+
+    recorded = None
+    if args.params:
+        try:
+            doc = read_json(args.params)
+        except (DataError, FileNotFoundError):
+            doc = None
+        if isinstance(doc, dict) and doc.get("friction_model") is not None:
+            recorded = doc["friction_model"]
+            if not (isinstance(recorded, dict) and isinstance(recorded.get("kind"), str)):
+                raise ModelError(
+                    f"{args.params}: 'friction_model' must be {{kind, velocity}}, got {recorded!r}"
+                )
+            velocity = recorded.get("velocity")
+            if velocity is not None and not (
+                isinstance(velocity, list)
+                and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in velocity)
+            ):
+                raise ModelError(
+                    f"{args.params}: friction_model velocity must be a list of numbers"
+                )
+            robot = robot.with_friction_model(recorded["kind"], velocity=velocity or None)
+    if not args.friction:
+        return robot, ""
+    model = robot.friction_model
+    scale = {"smooth": "tanh widths", "stribeck": "Stribeck velocities"}.get(model["kind"])
+    words = f"friction model: {model['kind']}"
+    if scale:
+        words += f" ({scale} " + ", ".join(f"{v:g}" for v in model["velocity"]) + ")"
+    return robot, words + (f", from {args.params}" if recorded else " (the default)")
 
 
 def _identified_params(path: str, robot, base, args):

@@ -21,6 +21,8 @@ enum class Op : std::uint8_t {
   Sign,  // sign(x) in {-1, 0, 1}
   Add,   // a + b; a is positive, b carries its sign
   Mul,   // a * b; both positive, a.id <= b.id
+  Tanh,  // tanh(a) (smooth Coulomb friction)
+  Exp,   // exp(a) (Stribeck friction); a keeps its sign
 };
 
 // DQR, DDQR, S: the reference velocity and acceleration and the sliding variable of the
@@ -77,7 +79,7 @@ struct Node {
   Op op = Op::Const;
   InputKind kind = InputKind::Q;  // Input
   int index = 0;                  // Input: joint or parameter index
-  Ref a, b;                       // operands (Sin, Cos, Sign: a only)
+  Ref a, b;                       // operands (Sin, Cos, Sign, Tanh, Exp: a only)
   double value = 0;               // Const
 };
 
@@ -88,7 +90,9 @@ struct OpCount {
   long neg = 0;   // negations left over at the outputs
   long trig = 0;  // sin and cos calls
   long sign = 0;  // sign() evaluations (Coulomb friction)
-  long total() const { return mul + add + neg + trig + sign; }
+  long tanh = 0;  // tanh calls (smooth Coulomb friction)
+  long exp = 0;   // exp calls (Stribeck friction)
+  long total() const { return mul + add + neg + trig + sign + tanh + exp; }
 };
 
 /// Values of the inputs when a graph is evaluated.
@@ -114,6 +118,8 @@ class Graph {
   Ref sin(Ref x);
   Ref cos(Ref x);
   Ref sign(Ref x);
+  Ref tanh(Ref x);
+  Ref exp(Ref x);
   Ref add(Ref a, Ref b);
   Ref sub(Ref a, Ref b) { return add(a, -b); }
   Ref mul(Ref a, Ref b);

@@ -146,6 +146,13 @@ struct GeneratedCode {
   // parent (Model::parents), for the header comment.
   std::vector<std::string> joints;
   std::vector<int> parents;
+  // Where rotor inertia and friction act (for the header comment): on the motors when
+  // `motor_side`; the transmissions, q_m = T q with `motors` the rows of T (none: empty); and
+  // the friction model.
+  bool motor_side = false;
+  std::vector<std::string> motors;
+  Eigen::MatrixXd T;
+  FrictionModel friction;
   ParameterSet params;
   Eigen::VectorXd values;  // the parameter values (baked in when numeric)
   bool numeric = false;
@@ -159,7 +166,8 @@ GeneratedCode generateCode(const Model& model, const ParameterSet& params,
                            bool numeric = false, const Eigen::VectorXd& values = {},
                            Objective objective = Objective::Operations);
 
-/// Sets the robot's name and joint count of `code`, and for a tree its joints and parents.
+/// Sets the robot's name and joint count of `code`, for a tree its joints and parents, and where
+/// rotor inertia and friction act.
 void describeModel(GeneratedCode& code, const Model& model);
 
 /// What the geometry snap changed, over all functions of `code`.
