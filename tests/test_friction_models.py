@@ -275,14 +275,6 @@ def test_cli_default_is_unchanged_and_options_are_checked(arm, tmp_path, capsys)
         assert message in err and len(err.strip().splitlines()) == 1, err
 
 
-def test_generated_code_refuses_other_friction_models(arm):
-    from mindyn import codegen
-
-    r = arm.with_friction_model("stribeck", velocity=[0.1, 0.1, 0.1])
-    with pytest.raises(mindyn.Error, match="Coulomb friction\\s+only"):
-        codegen.generate(r, friction=True)
-
-
 def test_simulations_apply_the_robots_friction_model(arm):
     """Open loop: the torques are the rigid-body ones plus the Stribeck friction written out;
     closed loop: the plant's applied torques, minus that friction, give the logged
@@ -305,7 +297,7 @@ def test_simulations_apply_the_robots_friction_model(arm):
     np.testing.assert_allclose(rigid + fr, closed.tau_true, atol=1e-6 * np.abs(fr).max() + 1e-6)
 
 
-def test_codegen_refuses_parameters_identified_with_another_friction_model(arm, tmp_path, capsys):
+def test_codegen_takes_the_friction_model_identified(arm, tmp_path, capsys):
     from mindyn.cli import main
 
     w = np.full(3, 0.05)
@@ -319,8 +311,9 @@ def test_codegen_refuses_parameters_identified_with_another_friction_model(arm, 
     # the smooth model has the same parameter names as viscous + Coulomb: the JSON says which
     rc = main(["codegen", str(robot_path), "--lang", "c", "--friction", "--params",
                str(tmp_path / "id.json"), "-o", str(tmp_path / "gen")])  # fmt: skip
-    assert rc != 0
-    assert "smooth friction model" in capsys.readouterr().err
+    assert rc == 0
+    assert "friction model: smooth" in capsys.readouterr().out
+    assert "Fv v + Fc tanh(v / w)" in (tmp_path / "gen.h").read_text()
 
 
 def test_descriptions_refuse_other_friction_models(arm, tmp_path, capsys):

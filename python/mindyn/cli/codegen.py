@@ -468,13 +468,6 @@ def _identified_params(path: str, robot, base, args):
             f"{'with ' + said if said else 'without --rotor, --friction and --offset'}; "
             "give codegen the same --rotor and --friction (and --offset) as identify"
         )
-    fm = doc.get("friction_model") if doc.get("friction") else None
-    kind = fm.get("kind") if isinstance(fm, dict) else fm
-    if kind not in (None, "coulomb"):
-        raise ModelError(
-            f"{path}: identified with the {kind} friction model; the generated code has viscous "
-            "and Coulomb friction only (identify with --friction-model coulomb)"
-        )
     names, values = doc["names"], doc["values"]
     try:
         pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]
