@@ -30,6 +30,7 @@ import json
 import math
 import re
 import sys
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -301,7 +302,8 @@ def _read_csv(
     if robot is not None:
         n = robot.n
     text = decode_text(path)
-    reader = csv.reader(io.StringIO(text, newline=""))
+    stream = io.StringIO(text, newline="")
+    reader = csv.reader(stream)
     try:
         try:
             header = next(reader)
@@ -313,7 +315,8 @@ def _read_csv(
         n = cols["n"]
         rows = []
         first_line = reader.line_num + 1
-        for row in reader:
+        values = _fast_values(text[stream.tell() :], len(header), cols["t"])
+        for row in reader if values is None else ():
             if not row or (len(row) == 1 and not row[0].strip()):
                 continue
             if len(row) != len(header):
@@ -323,13 +326,8 @@ def _read_csv(
             rows.append((reader.line_num, row))
     except csv.Error as e:
         raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
-    if len(rows) < 2:
-        raise DataError(f"{path}: {len(rows)} data row(s); at least 2 samples are needed")
-    names = [h.strip() for h in header]
-    values = np.empty((len(rows), len(header)))
-    for r, (line, row) in enumerate(rows):
-        for c, v in enumerate(row):
-            values[r, c] = parse_cell(v, f"{path}, line {line}, column {names[c]}")
+    if values is None:
+        values = _strict_values(rows, header, path)
     t = values[:, cols["t"]]
     r = first_not_increasing(t)
     if r is not None:
@@ -348,7 +346,7 @@ def _read_csv(
     dq = block("dq")
     ddq = block("ddq")
     tau = block("tau")
-    processing: dict = {"samples": len(rows), "first_data_line": first_line}
+    processing: dict = {"samples": values.shape[0], "first_data_line": first_line}
     header_unit = cols["torque_unit"]
     if tau is not None and header_unit is not None:
         if _unit_key(header_unit) not in ("Nm", "permille", "current"):
@@ -379,6 +377,67 @@ def _read_csv(
                 f"{np.max(np.abs(values)):.3g}); the log's values are too large to process"
             )
     return JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
+
+
+def _strict_values(rows: list, header: list[str], path: Path) -> np.ndarray:
+    """The cells of ``rows`` (``(line, cells)`` pairs) parsed one by one by :func:`parse_cell`:
+    the first that is not a finite decimal number raises DataError naming its line and column.
+    At least 2 rows are required."""
+    if len(rows) < 2:
+        raise DataError(f"{path}: {len(rows)} data row(s); at least 2 samples are needed")
+    names = [h.strip() for h in header]
+    values = np.empty((len(rows), len(header)))
+    for r, (line, row) in enumerate(rows):
+        for c, v in enumerate(row):
+            values[r, c] = parse_cell(v, f"{path}, line {line}, column {names[c]}")
+    return values
+
+
+# Every character a data block of plain decimal numbers may hold. Over these characters a cell
+# that numpy's reader converts completely (blanks around it aside) is a number of the grammar of
+# _NUMBER: its conversion is C's strtod grammar (sign, digits with an optional point, exponent),
+# without the words (nan, inf), hexadecimal, digit-group underscores or non-ASCII digits, whose
+# characters are not among these.
+_PLAIN = b"0123456789.eE+-, \t\n"
+
+
+def _fast_values(block: str, columns: int, t_col: int) -> np.ndarray | None:
+    """The data rows ``block`` (the text after the header) as an array (rows, ``columns``),
+    parsed at once by numpy, or None when it cannot vouch that the strict cell-by-cell reading
+    (:func:`_strict_values` after ``csv.reader``) gives the same array: a character outside
+    :data:`_PLAIN` (quotes, words, a line break other than LF or CR LF, non-ASCII), a row of
+    another length or of blanks, a cell numpy does not convert, a value that is not finite,
+    fewer than 2 rows, time (column ``t_col``) not strictly increasing. The strict reading then
+    runs and names the line and column of what is wrong. The values are the same bit for bit:
+    numpy converts with Python's correctly rounded ``PyOS_string_to_double``, as ``float()``."""
+    if not block.isascii():
+        return None
+    data = block.encode("ascii")
+    if b"\r" in data:  # CR LF line ends read as LF; a lone CR ends a line for csv, not numpy
+        data = data.replace(b"\r\n", b"\n")
+        if b"\r" in data:
+            return None
+    if data.translate(None, _PLAIN):
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # "input contained no data"
+            values = np.loadtxt(
+                io.BytesIO(data),
+                delimiter=",",
+                comments=None,
+                quotechar=None,
+                ndmin=2,
+                dtype=np.float64,
+                encoding="ascii",
+            )
+    except (ValueError, UserWarning):
+        return None
+    if values.shape[0] < 2 or values.shape[1] != columns or not np.isfinite(values).all():
+        return None
+    if first_not_increasing(values[:, t_col]) is not None:
+        return None
+    return values
 
 
 def parse_cell(text: str, where: str) -> float:
