@@ -336,3 +336,24 @@ def test_a_break_in_the_log_is_refused_whole_and_fitted_as_segments():
     assert np.max(np.abs(res.full - true)[big] / np.abs(true)[big]) < 1e-3
     bridged = identify(robot, preprocess(whole, cutoff=4.0, edge=1.25, gap=np.inf), **kw)
     assert np.max(np.abs(bridged.full - true)[big] / np.abs(true)[big]) > 0.05
+
+
+@pytest.mark.parametrize("chunk", [173, 100000])
+def test_block_parallel_filter_equals_scipys_zero_phase_filter_of_the_whole_regressor(
+    monkeypatch, chunk
+):
+    from mindyn.identification import preprocess as P
+    from scipy import signal
+
+    robot = mindyn.load("zcr07s")
+    base = mindyn.base_parameters(robot, friction=True)
+    log, _, _, _ = _friction_log(robot, np.arange(0, 8.0, 1 / 250.0), seed=3)
+    d = preprocess(log, cutoff=4.0)
+    f = d.regressor_filter
+    assert f.sos is not None and 0 < f.padlen < f.q.shape[0]
+    monkeypatch.setattr(P, "_CHUNK", chunk)  # many blocks, or one
+    got = f.regressor(base)
+    whole = base.regressor(f.q, f.dq, f.ddq)
+    want = signal.sosfiltfilt(f.sos, whole, axis=0, padlen=f.padlen)[f.keep]
+    assert got.shape == want.shape == (d.m, robot.n, base.n)
+    np.testing.assert_array_equal(got, want)

@@ -96,12 +96,18 @@ class ParallelFilter:
     """The regressor columns filtered like the torques: ``regressor(base)`` evaluates
     ``base.regressor`` on the filtered full-rate motion, applies the same zero-phase low-pass,
     then the same edge drop and decimation, giving (m, n, nb) rows that match the preprocessed
-    torques. Columns are filtered in blocks of at most :data:`PARALLEL_BUDGET` bytes; the result
-    is kept per base-parameter set."""
+    torques; the result is kept per base-parameter set.
 
-    def __init__(self, q, dq, ddq, lowpass, keep: slice):
+    With the filter's second-order sections ``sos`` and its ``padlen`` (a log that is not an
+    averaged period), the zero-phase filter runs block by block over time on all columns at
+    once (:func:`_filtfilt_blocks`, the same arithmetic as ``scipy.signal.sosfiltfilt``): the
+    regressor is evaluated twice, never held whole. Otherwise ``lowpass`` filters whole columns,
+    in blocks of at most :data:`PARALLEL_BUDGET` bytes."""
+
+    def __init__(self, q, dq, ddq, lowpass, keep: slice, *, sos=None, padlen=None):
         self.q, self.dq, self.ddq = q, dq, ddq
         self.lowpass, self.keep = lowpass, keep
+        self.sos, self.padlen = sos, padlen
         self._cache: dict = {}
 
     def regressor(self, base) -> np.ndarray:
@@ -112,6 +118,15 @@ class ParallelFilter:
         m, n = self.q.shape
         nb = base.n
         idx = np.arange(m)[self.keep]
+        if self.sos is not None:
+
+            def rows(a, b):
+                W = base.regressor(self.q[a:b], self.dq[a:b], self.ddq[a:b])
+                return W.reshape(b - a, n * nb)
+
+            out = _filtfilt_blocks(self.sos, self.padlen, rows, m, idx).reshape(idx.size, n, nb)
+            self._cache[key] = (base, out)
+            return out
         out = np.empty((idx.size, n, nb))
         block = max(1, min(nb, PARALLEL_BUDGET // (8 * m * n)))
         for c0 in range(0, nb, block):
@@ -123,6 +138,36 @@ class ParallelFilter:
             out[:, :, c0:c1] = self.lowpass(W)[idx]
         self._cache[key] = (base, out)
         return out
+
+
+def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndarray:
+    """``scipy.signal.sosfiltfilt(sos, x, axis=0, padlen=padlen)[idx]`` of a signal ``x``
+    (m, w) given by ``rows(a, b)`` -> ``x[a:b]``, without holding ``x`` whole: the forward pass
+    runs block by block keeping the filter state at the start of each block, the backward pass
+    runs from the last block to the first, recomputing each block's forward output from its
+    state. The operations, and so the values, are those of ``sosfiltfilt`` (odd extension of
+    ``padlen`` samples at each end, the steady-state initial conditions of ``sosfilt_zi``
+    scaled by the first sample of each pass); ``x`` is produced twice. Blocks are laid out with
+    time along the last axis, where ``sosfilt`` works without transposing copies."""
+    zi = signal.sosfilt_zi(sos)[:, None, :]  # (sections, 1, 2): state per column
+    head, tail = rows(0, padlen + 1).T, rows(m - padlen - 1, m).T
+    left = 2 * head[:, :1] - head[:, padlen:0:-1]
+    right = 2 * tail[:, -1:] - tail[:, -2 : -(padlen + 2) : -1]
+    _, z = signal.sosfilt(sos, left, zi=zi * left[:, :1])
+    bounds = [(a, min(m, a + _CHUNK)) for a in range(0, m, _CHUNK)]
+    states = []
+    for a, b in bounds:
+        states.append(z)
+        _, z = signal.sosfilt(sos, rows(a, b).T, zi=z)
+    y, z = signal.sosfilt(sos, right, zi=z)
+    _, z = signal.sosfilt(sos, y[:, ::-1], zi=zi * y[:, -1:])
+    out = np.empty((idx.size, head.shape[0]))
+    for (a, b), state in zip(reversed(bounds), reversed(states)):
+        y, _ = signal.sosfilt(sos, rows(a, b).T, zi=state)
+        y, z = signal.sosfilt(sos, y[:, ::-1], zi=z)
+        lo, hi = np.searchsorted(idx, [a, b])
+        out[lo:hi] = y[:, b - 1 - idx[lo:hi]].T
+    return out
 
 
 def timing(t: np.ndarray) -> dict:
@@ -432,13 +477,14 @@ def preprocess(
     periodic = cycle is not None
     m = q.shape[0]
 
+    padlen = min(m - 1, max(3 * (2 * len(sos) + 1), int(3 * rate / fc)))
+
     def lowpass(x):
         if periodic:  # one period, filtered as the periodic signal it is
             reps = 1 + 2 * int(math.ceil(3 * rate / fc / m))
             y = signal.sosfiltfilt(sos, np.concatenate([x] * reps, axis=0), axis=0)
             k = reps // 2
             return y[k * m : (k + 1) * m]
-        padlen = min(m - 1, max(3 * (2 * len(sos) + 1), int(3 * rate / fc)))
         return signal.sosfiltfilt(sos, x, axis=0, padlen=padlen)
 
     def derivative(x):
@@ -496,7 +542,8 @@ def preprocess(
     )
     info["samples"] = out.m
     if info["parallel_filtering"]:
-        out.regressor_filter = ParallelFilter(qf, dqf, ddqf, lowpass, keep)
+        blocks = {} if periodic else {"sos": sos, "padlen": padlen}
+        out.regressor_filter = ParallelFilter(qf, dqf, ddqf, lowpass, keep, **blocks)
     out.processing["velocity"] = {"source": info["velocity"]}
     out.processing["acceleration"] = {"source": info["acceleration"]}
     with_dq = logged_dq and data.dq is not None
