@@ -12,13 +12,14 @@ statistics, pruning) and the validation on the fit data; then the command itself
 end to end in a new process. Unless ``--no-strict``, the log is read again through the strict
 cell-by-cell path alone and identified again: the arrays read and the estimates must be the
 same bit for bit (the script exits non-zero otherwise). Wall-clock times on a shared machine
-grow with its load: the load average is printed beside them.
+grow with its load while the CPU times stay: both are printed, and the load average.
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -44,30 +45,32 @@ def identify_stages(robot_name: str, path: Path, strict: bool = False):
     from mindyn.identification.preprocess import preprocess, split_at_gaps
 
     times = {}
-    t0 = time.perf_counter()
+    clock = [time.perf_counter(), time.process_time()]
+
+    def lap(stage):
+        now = [time.perf_counter(), time.process_time()]
+        times[stage] = (now[0] - clock[0], now[1] - clock[1])
+        clock[:] = now
+
     robot = mindyn.load(robot_name)
-    times["load robot"] = time.perf_counter() - t0
+    lap("load robot")
     fast = D._fast_values
     if strict:
         D._fast_values = lambda *a: None
     try:
-        t0 = time.perf_counter()
+        clock[:] = [time.perf_counter(), time.process_time()]
         raw = D.read_csv(path, robot=robot, filter="none")
-        times["read CSV"] = time.perf_counter() - t0
+        lap("read CSV")
     finally:
         D._fast_values = fast
-    t0 = time.perf_counter()
     logs = [preprocess(seg) for seg in split_at_gaps(raw)]
-    times["data path (filter, edges, decimation)"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    lap("data path (filter, edges, decimation)")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    times["base parameters"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    lap("base parameters")
     res = identify(robot, logs, model="dynamic", base=base)
-    times["fit (parallel-filtered regressor, WLS, pruning)"] = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    lap("fit (parallel-filtered regressor, WLS, pruning)")
     validate(res, logs)
-    times["validation on the fit data"] = time.perf_counter() - t0
+    lap("validation on the fit data")
     return times, raw, res
 
 
@@ -89,19 +92,26 @@ def main() -> int:
         print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
         times, raw, res = identify_stages(args.robot, path)
         print(f"{raw.m} samples, {raw.n} joints; {len(res.names)} parameters kept")
-        for stage, s in times.items():
-            print(f"  {stage:<50} {s:8.2f} s")
-        print(f"  {'total of the stages':<50} {sum(times.values()):8.2f} s")
+        print(f"  {'stage':<50} {'wall [s]':>9} {'CPU [s]':>9}")
+        for stage, (wall, cpu) in times.items():
+            print(f"  {stage:<50} {wall:9.2f} {cpu:9.2f}")
+        wall, cpu = (sum(w[k] for w in times.values()) for k in (0, 1))
+        print(f"  {'total of the stages':<50} {wall:9.2f} {cpu:9.2f}")
         argv = [sys.executable, "-m", "mindyn", "identify", args.robot, str(path)]
         argv += ["--rotor", "--friction", "--json", str(Path(tmp) / "id.json")]
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         subprocess.run(argv, check=True, stdout=subprocess.DEVNULL)
-        print(f"  {'mindyn identify, end to end (new process)':<50} {time.perf_counter() - t0:8.2f} s")
+        wall = time.perf_counter() - t0
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = sum(getattr(after, k) - getattr(before, k) for k in ("ru_utime", "ru_stime"))
+        print(f"  {'mindyn identify, end to end (new process)':<50} {wall:9.2f} {cpu:9.2f}")
         print(f"load average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
         if args.no_strict:
             return 0
         s_times, s_raw, s_res = identify_stages(args.robot, path, strict=True)
-        print(f"strict cell-by-cell reading: {s_times['read CSV']:.2f} s")
+        wall, cpu = s_times["read CSV"]
+        print(f"strict cell-by-cell reading: {wall:.2f} s wall, {cpu:.2f} s CPU")
         same_data = all(
             getattr(raw, k).tobytes() == getattr(s_raw, k).tobytes()
             for k in ("t", "q", "dq", "ddq", "tau")

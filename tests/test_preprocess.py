@@ -357,3 +357,19 @@ def test_block_parallel_filter_equals_scipys_zero_phase_filter_of_the_whole_regr
     want = signal.sosfiltfilt(f.sos, whole, axis=0, padlen=f.padlen)[f.keep]
     assert got.shape == want.shape == (d.m, robot.n, base.n)
     np.testing.assert_array_equal(got, want)
+
+
+def test_block_filter_of_columns_zero_somewhere_or_everywhere_equals_scipys(monkeypatch):
+    from mindyn.identification import preprocess as P
+    from scipy import signal
+
+    sos = signal.butter(4, 0.1, output="sos")
+    monkeypatch.setattr(P, "_CHUNK", 50)
+    x = np.random.default_rng(0).normal(size=(1000, 5))
+    x[:, 1] = 0.0  # zero throughout: not filtered
+    x[:, 3] = 0.0
+    x[500:520, 3] = 1.0  # zero at both ends only: every column is filtered
+    idx = np.arange(1000)[30:970:7]
+    for y in (x, x[:, [1]], x[:, [1, 3]], np.zeros((1000, 2))):
+        got = P._filtfilt_blocks(sos, 30, lambda a, b, y=y: y[a:b], 1000, idx)
+        np.testing.assert_array_equal(got, signal.sosfiltfilt(sos, y, axis=0, padlen=30)[idx])

@@ -148,9 +148,32 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
     state. The operations, and so the values, are those of ``sosfiltfilt`` (odd extension of
     ``padlen`` samples at each end, the steady-state initial conditions of ``sosfilt_zi``
     scaled by the first sample of each pass); ``x`` is produced twice. Blocks are laid out with
-    time along the last axis, where ``sosfilt`` works without transposing copies."""
-    zi = signal.sosfilt_zi(sos)[:, None, :]  # (sections, 1, 2): state per column
+    time along the last axis, where ``sosfilt`` works without transposing copies. Columns that
+    are zero in every sample (a regressor's structural zeros) are not filtered: their output is
+    zero, as ``sosfiltfilt``'s."""
     head, tail = rows(0, padlen + 1).T, rows(m - padlen - 1, m).T
+    cols = np.flatnonzero(np.any(head != 0, axis=1) | np.any(tail != 0, axis=1))
+    passed = _forward_states(sos, padlen, rows, m, head, tail, cols)
+    if passed is None:  # a column zero at both ends moves in between: filter every column
+        cols = np.arange(head.shape[0])
+        passed = _forward_states(sos, padlen, rows, m, head, tail, cols)
+    bounds, states, z = passed
+    out = np.zeros((idx.size, head.shape[0]))
+    for (a, b), state in zip(reversed(bounds), reversed(states)):
+        y, _ = signal.sosfilt(sos, rows(a, b).T[cols], zi=state)
+        y, z = signal.sosfilt(sos, y[:, ::-1], zi=z)
+        lo, hi = np.searchsorted(idx, [a, b])
+        out[lo:hi, cols] = y[:, b - 1 - idx[lo:hi]].T
+    return out
+
+
+def _forward_states(sos, padlen, rows, m, head, tail, cols):
+    """The forward pass of :func:`_filtfilt_blocks` over columns ``cols`` of the signal:
+    ``(bounds, states, z)``, the blocks, the filter state at the start of each, and the state
+    of the backward pass after the right extension; None when a column not in ``cols`` is not
+    zero somewhere."""
+    zi = signal.sosfilt_zi(sos)[:, None, :]  # (sections, 1, 2): state per column
+    head, tail = head[cols], tail[cols]
     left = 2 * head[:, :1] - head[:, padlen:0:-1]
     right = 2 * tail[:, -1:] - tail[:, -2 : -(padlen + 2) : -1]
     _, z = signal.sosfilt(sos, left, zi=zi * left[:, :1])
@@ -158,16 +181,13 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
     states = []
     for a, b in bounds:
         states.append(z)
-        _, z = signal.sosfilt(sos, rows(a, b).T, zi=z)
+        x = rows(a, b).T
+        if cols.size < x.shape[0] and np.any(np.delete(x, cols, axis=0) != 0):
+            return None
+        _, z = signal.sosfilt(sos, x[cols], zi=z)
     y, z = signal.sosfilt(sos, right, zi=z)
     _, z = signal.sosfilt(sos, y[:, ::-1], zi=zi * y[:, -1:])
-    out = np.empty((idx.size, head.shape[0]))
-    for (a, b), state in zip(reversed(bounds), reversed(states)):
-        y, _ = signal.sosfilt(sos, rows(a, b).T, zi=state)
-        y, z = signal.sosfilt(sos, y[:, ::-1], zi=z)
-        lo, hi = np.searchsorted(idx, [a, b])
-        out[lo:hi] = y[:, b - 1 - idx[lo:hi]].T
-    return out
+    return bounds, states, z
 
 
 def timing(t: np.ndarray) -> dict:
