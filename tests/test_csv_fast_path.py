@@ -68,38 +68,34 @@ _BAD = [
 _ODD = ['"1.5"', '" 2e1"']
 
 
-def _random_log(rng) -> tuple[str, bool]:
-    """CSV text of a 2-joint log and whether it was spoiled."""
+def _random_log(rng) -> str:
+    """CSV text of a 2-joint log, valid or spoiled at random places."""
     n, m = 2, int(rng.integers(2, 40))
     header = ["t", "q1", "q2", "dq1", "dq2", "tau1", "tau2"]
     t = np.cumsum(rng.uniform(1e-3, 1e-2, m))
     vals = np.column_stack([t, rng.normal(scale=10.0 ** rng.integers(-3, 4), size=(m, 3 * n))])
     cells = [[_spell(float(v), rng) for v in row] for row in vals]
-    spoiled = False
     for _ in range(int(rng.integers(0, 3))):
-        r, c = int(rng.integers(m)), int(rng.integers(len(header)))
-        k = int(rng.integers(8))
+        r = int(rng.integers(m))
+        c, k = int(rng.integers(len(cells[r]))), int(rng.integers(8))
         if k < 4:
             cells[r][c] = str(rng.choice(_BAD))
-            spoiled = True
         elif k == 4:
             cells[r][c] = str(rng.choice(_ODD))
         elif k == 5:
             cells[r].append("1")  # a value too many
-            spoiled = True
         elif k == 6:
             cells[r] = cells[r][:-1]  # a value too few
-            spoiled = True
         elif r > 0:
             cells[r][0] = cells[r - 1][0]  # time not increasing
-            spoiled = True
     lines = [",".join(header)] + [",".join(row) for row in cells]
     for _ in range(int(rng.integers(0, 2))):  # blank lines are skipped
         lines.insert(int(rng.integers(2, len(lines) + 1)), str(rng.choice(["", "", "", " \t"])))
-    if rng.random() < 0.2:
-        lines.insert(0, "# a comment")
+    if rng.random() < 0.3:  # a comment, ASCII or not, before the header
+        lines.insert(0, str(rng.choice(["# a comment", "# mesuré à 1 kHz, ±0.1 N m"])))
     end = str(rng.choice(["\n", "\r\n", "\r"], p=[0.6, 0.3, 0.1]))
-    return end.join(lines) + (end if rng.random() < 0.7 else ""), spoiled
+    bom = "\ufeff" if rng.random() < 0.2 else ""
+    return bom + end.join(lines) + (end if rng.random() < 0.7 else "")
 
 
 def _read(path, strict: bool, monkeypatch):
@@ -125,7 +121,7 @@ def test_fast_and_strict_paths_agree_on_random_logs(tmp_path, monkeypatch):
 
     monkeypatch.setattr(D, "_fast_values", counting)
     for k in range(300):
-        text, spoiled = _random_log(rng)
+        text = _random_log(rng)
         path = tmp_path / f"log{k}.csv"
         path.write_bytes(text.encode())
         calls.clear()
@@ -134,19 +130,19 @@ def test_fast_and_strict_paths_agree_on_random_logs(tmp_path, monkeypatch):
         strict = _read(path, True, monkeypatch)
         if isinstance(strict, str) or isinstance(fast, str):
             assert fast == strict, text
+            assert not calls[0], text  # what the strict path refuses never passes the fast one
             spoiled_count += 1
             continue
         for name in ("t", "q", "dq", "ddq", "tau"):
             a, b = getattr(fast, name), getattr(strict, name)
             assert a.tobytes() == b.tobytes(), (name, text)
         assert fast.processing == strict.processing
-        assert not (spoiled and calls[0])  # a spoiled log never passes the fast path
     # both kinds were met in numbers: the comparison is not vacuous
-    assert fast_used > 80 and spoiled_count > 80, (fast_used, spoiled_count)
+    assert fast_used > 50 and spoiled_count > 80, (fast_used, spoiled_count)
 
 
 def _cell_through_fast_path(cell: str):
-    return D._fast_values(f"0,{cell}\n1,1\n", 2, 0)
+    return D._fast_values(f"0,{cell}\n1,1\n".encode(), 2, 0)
 
 
 def test_every_short_cell_spelling_is_accepted_exactly_as_the_grammar_says():
@@ -182,7 +178,7 @@ def test_hard_rounding_cases_are_bit_identical_to_float():
         cells.append(f"{digits[0]}.{digits[1:]}e{int(rng.integers(-340, 309))}")
     cells = [c for c in cells if np.isfinite(float(c))]
     text = "".join(f"{i},{c}\n" for i, c in enumerate(cells))
-    got = D._fast_values(text, 2, 0)
+    got = D._fast_values(text.encode(), 2, 0)
     assert got is not None
     want = np.array([float(c) for c in cells])
     assert got[:, 1].tobytes() == want.tobytes()

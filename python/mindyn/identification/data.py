@@ -294,6 +294,27 @@ def read_csv(
 
 
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+_BOM = b"\xef\xbb\xbf"
+# a line of text and its end: LF, CR LF or CR, as io.StringIO(text, newline="") splits lines
+_LINE = re.compile(r"[^\r\n]*(?:\r\n|\r|\n)|[^\r\n]+")
+
+
+class _Lines:
+    """The lines of a text for ``csv.reader``, as ``io.StringIO(text, newline="")`` gives them,
+    with ``end``: the offset after the last line given (where the data rows start once the
+    header is read)."""
+
+    def __init__(self, text: str):
+        self._lines = _LINE.finditer(text)
+        self.end = 0
+
+    def __iter__(self):
+        return self
+
+    def __next__(self) -> str:
+        line = next(self._lines)
+        self.end = line.end()
+        return line.group()
 
 
 def _read_csv(
@@ -301,9 +322,10 @@ def _read_csv(
 ) -> JointData:
     if robot is not None:
         n = robot.n
-    text = decode_text(path)
-    stream = io.StringIO(text, newline="")
-    reader = csv.reader(stream)
+    raw = path.read_bytes()
+    text = _decoded(raw, path)
+    lines = _Lines(text)
+    reader = csv.reader(lines)
     try:
         try:
             header = next(reader)
@@ -315,7 +337,10 @@ def _read_csv(
         n = cols["n"]
         rows = []
         first_line = reader.line_num + 1
-        values = _fast_values(text[stream.tell() :], len(header), cols["t"])
+        # the data rows' bytes: after a byte-order mark and the header's text
+        start = len(_BOM) if raw.startswith(_BOM) else 0
+        start += lines.end if text.isascii() else len(text[: lines.end].encode())
+        values = _fast_values(raw[start:], len(header), cols["t"])
         for row in reader if values is None else ():
             if not row or (len(row) == 1 and not row[0].strip()):
                 continue
@@ -401,8 +426,8 @@ def _strict_values(rows: list, header: list[str], path: Path) -> np.ndarray:
 _PLAIN = b"0123456789.eE+-, \t\n"
 
 
-def _fast_values(block: str, columns: int, t_col: int) -> np.ndarray | None:
-    """The data rows ``block`` (the text after the header) as an array (rows, ``columns``),
+def _fast_values(data: bytes, columns: int, t_col: int) -> np.ndarray | None:
+    """The data rows ``data`` (the bytes after the header) as an array (rows, ``columns``),
     parsed at once by numpy, or None when it cannot vouch that the strict cell-by-cell reading
     (:func:`_strict_values` after ``csv.reader``) gives the same array: a character outside
     :data:`_PLAIN` (quotes, words, a line break other than LF or CR LF, non-ASCII), a row of
@@ -410,9 +435,8 @@ def _fast_values(block: str, columns: int, t_col: int) -> np.ndarray | None:
     fewer than 2 rows, time (column ``t_col``) not strictly increasing. The strict reading then
     runs and names the line and column of what is wrong. The values are the same bit for bit:
     numpy converts with Python's correctly rounded ``PyOS_string_to_double``, as ``float()``."""
-    if not block.isascii():
+    if not data.isascii():
         return None
-    data = block.encode("ascii")
     if b"\r" in data:  # CR LF line ends read as LF; a lone CR ends a line for csv, not numpy
         data = data.replace(b"\r\n", b"\n")
         if b"\r" in data:
@@ -461,7 +485,11 @@ def parse_cell(text: str, where: str) -> float:
 def decode_text(path: Path) -> str:
     """The file's text as UTF-8 (a leading byte-order mark is skipped), or DataError naming the
     line and byte offset of the first byte that is not UTF-8."""
-    data = path.read_bytes()
+    return _decoded(path.read_bytes(), path)
+
+
+def _decoded(data: bytes, path: Path) -> str:
+    """``data`` (of the file ``path``) as :func:`decode_text` decodes it."""
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as e:
