@@ -49,6 +49,7 @@ import numpy as np
 from scipy import signal
 from scipy.interpolate import CubicSpline
 
+from .._threads import evaluated_ahead
 from .data import DataError, JointData, check_cutoff
 
 __all__ = [
@@ -148,7 +149,8 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
     state. The operations, and so the values, are those of ``sosfiltfilt`` (odd extension of
     ``padlen`` samples at each end, the steady-state initial conditions of ``sosfilt_zi``
     scaled by the first sample of each pass); ``x`` is produced twice. Blocks are laid out with
-    time along the last axis, where ``sosfilt`` works without transposing copies. Columns that
+    time along the last axis, where ``sosfilt`` works without transposing copies; blocks are
+    produced ahead on threads (:func:`~mindyn._threads.evaluated_ahead`). Columns that
     are zero in every sample (a regressor's structural zeros) are not filtered: their output is
     zero, as ``sosfiltfilt``'s."""
     head, tail = rows(0, padlen + 1).T, rows(m - padlen - 1, m).T
@@ -159,8 +161,9 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
         passed = _forward_states(sos, padlen, rows, m, head, tail, cols)
     bounds, states, z = passed
     out = np.zeros((idx.size, head.shape[0]))
-    for (a, b), state in zip(reversed(bounds), reversed(states)):
-        y, _ = signal.sosfilt(sos, rows(a, b).T[cols], zi=state)
+    back = bounds[::-1]
+    for (a, b), state, x in zip(back, reversed(states), evaluated_ahead(rows, back)):
+        y, _ = signal.sosfilt(sos, x.T[cols], zi=state)
         y, z = signal.sosfilt(sos, y[:, ::-1], zi=z)
         lo, hi = np.searchsorted(idx, [a, b])
         out[lo:hi, cols] = y[:, b - 1 - idx[lo:hi]].T
@@ -179,9 +182,9 @@ def _forward_states(sos, padlen, rows, m, head, tail, cols):
     _, z = signal.sosfilt(sos, left, zi=zi * left[:, :1])
     bounds = [(a, min(m, a + _CHUNK)) for a in range(0, m, _CHUNK)]
     states = []
-    for a, b in bounds:
+    for x in evaluated_ahead(rows, bounds):
         states.append(z)
-        x = rows(a, b).T
+        x = x.T
         if cols.size < x.shape[0] and np.any(np.delete(x, cols, axis=0) != 0):
             return None
         _, z = signal.sosfilt(sos, x[cols], zi=z)
