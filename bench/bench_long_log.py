@@ -54,15 +54,16 @@ def identify_stages(robot_name: str, path: Path, strict: bool = False):
 
     robot = mindyn.load(robot_name)
     lap("load robot")
-    fast = D._fast_values
-    if strict:
+    fast = getattr(D, "_fast_values", None)  # absent from a reader without the fast path
+    if strict and fast is not None:
         D._fast_values = lambda *a: None
     try:
         clock[:] = [time.perf_counter(), time.process_time()]
         raw = D.read_csv(path, robot=robot, filter="none")
         lap("read CSV")
     finally:
-        D._fast_values = fast
+        if fast is not None:
+            D._fast_values = fast
     logs = [preprocess(seg) for seg in split_at_gaps(raw)]
     lap("data path (filter, edges, decimation)")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
