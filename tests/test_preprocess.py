@@ -338,9 +338,12 @@ def test_a_break_in_the_log_is_refused_whole_and_fitted_as_segments():
     assert np.max(np.abs(bridged.full - true)[big] / np.abs(true)[big]) > 0.05
 
 
-@pytest.mark.parametrize("chunk", [173, 100000])
+@pytest.mark.parametrize(
+    "chunk, budget",
+    [(173, 0), (173, 8 * 173 * 100 * 4), (173, 2**28), (100000, 2**28)],
+)
 def test_block_parallel_filter_equals_scipys_zero_phase_filter_of_the_whole_regressor(
-    monkeypatch, chunk
+    monkeypatch, chunk, budget
 ):
     from mindyn.identification import preprocess as P
     from scipy import signal
@@ -352,6 +355,7 @@ def test_block_parallel_filter_equals_scipys_zero_phase_filter_of_the_whole_regr
     f = d.regressor_filter
     assert f.sos is not None and 0 < f.padlen < f.q.shape[0]
     monkeypatch.setattr(P, "_CHUNK", chunk)  # many blocks, or one
+    monkeypatch.setattr(P, "PARALLEL_BUDGET", budget)  # none, a few or all blocks kept
     got = f.regressor(base)
     whole = base.regressor(f.q, f.dq, f.ddq)
     want = signal.sosfiltfilt(f.sos, whole, axis=0, padlen=f.padlen)[f.keep]
@@ -365,6 +369,7 @@ def test_block_filter_of_columns_zero_somewhere_or_everywhere_equals_scipys(monk
 
     sos = signal.butter(4, 0.1, output="sos")
     monkeypatch.setattr(P, "_CHUNK", 50)
+    monkeypatch.setattr(P, "PARALLEL_BUDGET", 8 * 50 * 5 * 3)  # the last few blocks kept
     x = np.random.default_rng(0).normal(size=(1000, 5))
     x[:, 1] = 0.0  # zero throughout: not filtered
     x[:, 3] = 0.0

@@ -43,7 +43,9 @@ data path on their own and are then fitted together (as several logs are).
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections import deque
 
 import numpy as np
 from scipy import signal
@@ -148,7 +150,8 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
     runs from the last block to the first, recomputing each block's forward output from its
     state. The operations, and so the values, are those of ``sosfiltfilt`` (odd extension of
     ``padlen`` samples at each end, the steady-state initial conditions of ``sosfilt_zi``
-    scaled by the first sample of each pass); ``x`` is produced twice. Blocks are laid out with
+    scaled by the first sample of each pass); ``x`` is produced twice, but for the last blocks,
+    kept from the forward pass within :data:`PARALLEL_BUDGET` bytes. Blocks are laid out with
     time along the last axis, where ``sosfilt`` works without transposing copies; blocks are
     produced ahead on threads (:func:`~mindyn._threads.evaluated_ahead`). Columns that
     are zero in every sample (a regressor's structural zeros) are not filtered: their output is
@@ -159,11 +162,13 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
     if passed is None:  # a column zero at both ends moves in between: filter every column
         cols = np.arange(head.shape[0])
         passed = _forward_states(sos, padlen, rows, m, head, tail, cols)
-    bounds, states, z = passed
+    bounds, states, z, kept = passed
     out = np.zeros((idx.size, head.shape[0]))
     back = bounds[::-1]
-    for (a, b), state, x in zip(back, reversed(states), evaluated_ahead(rows, back)):
-        y, _ = signal.sosfilt(sos, x.T[cols], zi=state)
+    again = (x.T[cols] for x in evaluated_ahead(rows, back[len(kept) :]))
+    blocks = itertools.chain(reversed(kept), again)
+    for (a, b), state, x in zip(back, reversed(states), blocks):
+        y, _ = signal.sosfilt(sos, x, zi=state)
         y, z = signal.sosfilt(sos, y[:, ::-1], zi=z)
         lo, hi = np.searchsorted(idx, [a, b])
         out[lo:hi, cols] = y[:, b - 1 - idx[lo:hi]].T
@@ -172,9 +177,10 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
 
 def _forward_states(sos, padlen, rows, m, head, tail, cols):
     """The forward pass of :func:`_filtfilt_blocks` over columns ``cols`` of the signal:
-    ``(bounds, states, z)``, the blocks, the filter state at the start of each, and the state
-    of the backward pass after the right extension; None when a column not in ``cols`` is not
-    zero somewhere."""
+    ``(bounds, states, z, kept)``, the blocks, the filter state at the start of each, the state
+    of the backward pass after the right extension, and the columns ``cols`` of the last blocks
+    (as many as :data:`PARALLEL_BUDGET` holds: the backward pass starts with them); None when a
+    column not in ``cols`` is not zero somewhere."""
     zi = signal.sosfilt_zi(sos)[:, None, :]  # (sections, 1, 2): state per column
     head, tail = head[cols], tail[cols]
     left = 2 * head[:, :1] - head[:, padlen:0:-1]
@@ -182,15 +188,18 @@ def _forward_states(sos, padlen, rows, m, head, tail, cols):
     _, z = signal.sosfilt(sos, left, zi=zi * left[:, :1])
     bounds = [(a, min(m, a + _CHUNK)) for a in range(0, m, _CHUNK)]
     states = []
+    kept: deque = deque(maxlen=PARALLEL_BUDGET // (8 * _CHUNK * max(cols.size, 1)))
     for x in evaluated_ahead(rows, bounds):
         states.append(z)
         x = x.T
         if cols.size < x.shape[0] and np.any(np.delete(x, cols, axis=0) != 0):
             return None
-        _, z = signal.sosfilt(sos, x[cols], zi=z)
+        x = x[cols]
+        kept.append(x)
+        _, z = signal.sosfilt(sos, x, zi=z)
     y, z = signal.sosfilt(sos, right, zi=z)
     _, z = signal.sosfilt(sos, y[:, ::-1], zi=zi * y[:, -1:])
-    return bounds, states, z
+    return bounds, states, z, list(kept)
 
 
 def timing(t: np.ndarray) -> dict:
