@@ -189,12 +189,15 @@ def _forward_states(sos, padlen, rows, m, head, tail, cols):
     bounds = [(a, min(m, a + _CHUNK)) for a in range(0, m, _CHUNK)]
     states = []
     kept: deque = deque(maxlen=PARALLEL_BUDGET // (8 * _CHUNK * max(cols.size, 1)))
+    others = None
     for x in evaluated_ahead(rows, bounds):
         states.append(z)
-        x = x.T
-        if cols.size < x.shape[0] and np.any(np.delete(x, cols, axis=0) != 0):
+        if others is None:  # the columns outside cols
+            others = np.ones(x.shape[1], dtype=bool)
+            others[cols] = False
+        if others.any() and np.any(np.any(x != 0, axis=0)[others]):
             return None
-        x = x[cols]
+        x = x.T[cols]
         kept.append(x)
         _, z = signal.sosfilt(sos, x, zi=z)
     y, z = signal.sosfilt(sos, right, zi=z)
