@@ -86,6 +86,7 @@ py::dict limitsDict(const JointLimits& l) {
 }  // namespace
 
 void bindCodegen(pybind11::module_& m);
+void bindCsv(pybind11::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "mindyn C++ core: models, linear-in-parameters dynamics, kinematics";
@@ -755,4 +756,5 @@ PYBIND11_MODULE(_core, m) {
   m.def("from_pinocchio_order", [](const Eigen::VectorXd& v) { return fromPinocchioOrder(v); });
   bindControl(m);
   bindCodegen(m);
+  bindCsv(m);
 }

@@ -25,19 +25,17 @@ zero-phase low-pass filtering and central differences; the settings are reported
 from __future__ import annotations
 
 import csv
-import io
 import json
 import math
 import re
 import sys
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from scipy import signal
 
-from .._core import Error
+from .._core import Error, parse_csv_numbers
 
 __all__ = [
     "DataError",
@@ -418,46 +416,17 @@ def _strict_values(rows: list, header: list[str], path: Path) -> np.ndarray:
     return values
 
 
-# Every character a data block of plain decimal numbers may hold. Over these characters a cell
-# that numpy's reader converts completely (blanks around it aside) is a number of the grammar of
-# _NUMBER: its conversion is C's strtod grammar (sign, digits with an optional point, exponent),
-# without the words (nan, inf), hexadecimal, digit-group underscores or non-ASCII digits, whose
-# characters are not among these.
-_PLAIN = b"0123456789.eE+-, \t\n"
-
-
 def _fast_values(data: bytes, columns: int, t_col: int) -> np.ndarray | None:
     """The data rows ``data`` (the bytes after the header) as an array (rows, ``columns``),
-    parsed at once by numpy, or None when it cannot vouch that the strict cell-by-cell reading
-    (:func:`_strict_values` after ``csv.reader``) gives the same array: a character outside
-    :data:`_PLAIN` (quotes, words, a line break other than LF or CR LF, non-ASCII), a row of
-    another length or of blanks, a cell numpy does not convert, a value that is not finite,
-    fewer than 2 rows, time (column ``t_col``) not strictly increasing. The strict reading then
-    runs and names the line and column of what is wrong. The values are the same bit for bit:
-    numpy converts with Python's correctly rounded ``PyOS_string_to_double``, as ``float()``."""
-    if not data.isascii():
-        return None
-    if b"\r" in data:  # CR LF line ends read as LF; a lone CR ends a line for csv, not numpy
-        data = data.replace(b"\r\n", b"\n")
-        if b"\r" in data:
-            return None
-    if data.translate(None, _PLAIN):
-        return None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")  # "input contained no data"
-            values = np.loadtxt(
-                io.BytesIO(data),
-                delimiter=",",
-                comments=None,
-                quotechar=None,
-                ndmin=2,
-                dtype=np.float64,
-                encoding="ascii",
-            )
-    except (ValueError, UserWarning):
-        return None
-    if values.shape[0] < 2 or values.shape[1] != columns or not np.isfinite(values).all():
+    parsed at once (``_core.parse_csv_numbers``: the grammar of :func:`parse_cell`, values
+    correctly rounded as ``float()`` rounds them), or None when it cannot vouch that the strict
+    cell-by-cell reading (:func:`_strict_values` after ``csv.reader``) gives the same array: a
+    cell that is not a plain decimal number (quotes, words, other characters, a value out of the
+    range of a double), a line break other than LF or CR LF, a row of another length, fewer
+    than 2 rows, time (column ``t_col``) not strictly increasing. The strict reading then runs
+    and names the line and column of what is wrong."""
+    values = parse_csv_numbers(data, columns)
+    if values is None or values.shape[0] < 2 or not np.isfinite(values).all():
         return None
     if first_not_increasing(values[:, t_col]) is not None:
         return None
