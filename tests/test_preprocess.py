@@ -355,7 +355,7 @@ def test_block_parallel_filter_equals_scipys_zero_phase_filter_of_the_whole_regr
     f = d.regressor_filter
     assert f.sos is not None and 0 < f.padlen < f.q.shape[0]
     monkeypatch.setattr(P, "_CHUNK", chunk)  # many blocks, or one
-    monkeypatch.setattr(P, "PARALLEL_BUDGET", budget)  # none, a few or all blocks kept
+    monkeypatch.setattr(P, "KEEP_BUDGET", budget)  # none, a few or all blocks kept
     got = f.regressor(base)
     whole = base.regressor(f.q, f.dq, f.ddq)
     want = signal.sosfiltfilt(f.sos, whole, axis=0, padlen=f.padlen)[f.keep]
@@ -369,7 +369,7 @@ def test_block_filter_of_columns_zero_somewhere_or_everywhere_equals_scipys(monk
 
     sos = signal.butter(4, 0.1, output="sos")
     monkeypatch.setattr(P, "_CHUNK", 50)
-    monkeypatch.setattr(P, "PARALLEL_BUDGET", 8 * 50 * 5 * 3)  # the last few blocks kept
+    monkeypatch.setattr(P, "KEEP_BUDGET", 8 * 50 * 5 * 3)  # the last few blocks kept
     x = np.random.default_rng(0).normal(size=(1000, 5))
     x[:, 1] = 0.0  # zero throughout: not filtered
     x[:, 3] = 0.0

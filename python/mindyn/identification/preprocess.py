@@ -77,6 +77,9 @@ JITTER_TOLERANCE = 1e-3
 EDGE_PERIODS = 2.0
 #: Bytes of full-rate regressor columns filtered at once by :class:`ParallelFilter`.
 PARALLEL_BUDGET = 256 * 2**20
+#: Bytes of full-rate regressor blocks the block-wise parallel filter keeps from its forward pass
+#: for its backward pass (each block not kept is evaluated again).
+KEEP_BUDGET = 256 * 2**20
 #: Samples whose regressor is evaluated at once.
 _CHUNK = 8192
 
@@ -103,8 +106,8 @@ class ParallelFilter:
 
     With the filter's second-order sections ``sos`` and its ``padlen`` (a log that is not an
     averaged period), the zero-phase filter runs block by block over time on all columns at
-    once, with the arithmetic of ``scipy.signal.sosfiltfilt``: the regressor is evaluated about
-    twice, never held whole, on two threads. Otherwise ``lowpass`` filters whole columns, in
+    once, with the arithmetic of ``scipy.signal.sosfiltfilt``: the regressor is evaluated once
+    or twice per block (:data:`KEEP_BUDGET`), on two threads, never held whole. Otherwise ``lowpass`` filters whole columns, in
     blocks of at most :data:`PARALLEL_BUDGET` bytes."""
 
     def __init__(self, q, dq, ddq, lowpass, keep: slice, *, sos=None, padlen=None):
@@ -151,7 +154,7 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
     state. The operations, and so the values, are those of ``sosfiltfilt`` (odd extension of
     ``padlen`` samples at each end, the steady-state initial conditions of ``sosfilt_zi``
     scaled by the first sample of each pass); ``x`` is produced twice, but for the last blocks,
-    kept from the forward pass within :data:`PARALLEL_BUDGET` bytes. Blocks are laid out with
+    kept from the forward pass within :data:`KEEP_BUDGET` bytes. Blocks are laid out with
     time along the last axis, where ``sosfilt`` works without transposing copies; blocks are
     produced ahead on threads (:func:`~mindyn._threads.evaluated_ahead`). Columns that
     are zero in every sample (a regressor's structural zeros) are not filtered: their output is
@@ -179,7 +182,7 @@ def _forward_states(sos, padlen, rows, m, head, tail, cols):
     """The forward pass of :func:`_filtfilt_blocks` over columns ``cols`` of the signal:
     ``(bounds, states, z, kept)``, the blocks, the filter state at the start of each, the state
     of the backward pass after the right extension, and the columns ``cols`` of the last blocks
-    (as many as :data:`PARALLEL_BUDGET` holds: the backward pass starts with them); None when a
+    (as many as :data:`KEEP_BUDGET` holds: the backward pass starts with them); None when a
     column not in ``cols`` is not zero somewhere."""
     zi = signal.sosfilt_zi(sos)[:, None, :]  # (sections, 1, 2): state per column
     head, tail = head[cols], tail[cols]
@@ -188,7 +191,7 @@ def _forward_states(sos, padlen, rows, m, head, tail, cols):
     _, z = signal.sosfilt(sos, left, zi=zi * left[:, :1])
     bounds = [(a, min(m, a + _CHUNK)) for a in range(0, m, _CHUNK)]
     states = []
-    kept: deque = deque(maxlen=PARALLEL_BUDGET // (8 * _CHUNK * max(cols.size, 1)))
+    kept: deque = deque(maxlen=KEEP_BUDGET // (8 * _CHUNK * max(cols.size, 1)))
     others = None
     for x in evaluated_ahead(rows, bounds):
         states.append(z)
