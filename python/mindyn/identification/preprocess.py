@@ -107,8 +107,8 @@ class ParallelFilter:
     With the filter's second-order sections ``sos`` and its ``padlen`` (a log that is not an
     averaged period), the zero-phase filter runs block by block over time on all columns at
     once, with the arithmetic of ``scipy.signal.sosfiltfilt``: the regressor is evaluated once
-    or twice per block (:data:`KEEP_BUDGET`), on two threads, never held whole. Otherwise ``lowpass`` filters whole columns, in
-    blocks of at most :data:`PARALLEL_BUDGET` bytes."""
+    or twice per block (:data:`KEEP_BUDGET`), on two threads, never held whole. Otherwise
+    ``lowpass`` filters whole columns, in blocks of at most :data:`PARALLEL_BUDGET` bytes."""
 
     def __init__(self, q, dq, ddq, lowpass, keep: slice, *, sos=None, padlen=None):
         self.q, self.dq, self.ddq = q, dq, ddq
