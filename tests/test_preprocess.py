@@ -336,3 +336,45 @@ def test_a_break_in_the_log_is_refused_whole_and_fitted_as_segments():
     assert np.max(np.abs(res.full - true)[big] / np.abs(true)[big]) < 1e-3
     bridged = identify(robot, preprocess(whole, cutoff=4.0, edge=1.25, gap=np.inf), **kw)
     assert np.max(np.abs(bridged.full - true)[big] / np.abs(true)[big]) > 0.05
+
+
+@pytest.mark.parametrize(
+    "chunk, budget",
+    [(173, 0), (173, 8 * 173 * 100 * 4), (173, 2**28), (100000, 2**28)],
+)
+def test_block_parallel_filter_equals_scipys_zero_phase_filter_of_the_whole_regressor(
+    monkeypatch, chunk, budget
+):
+    from mindyn.identification import preprocess as P
+    from scipy import signal
+
+    robot = mindyn.load("zcr07s")
+    base = mindyn.base_parameters(robot, friction=True)
+    log, _, _, _ = _friction_log(robot, np.arange(0, 8.0, 1 / 250.0), seed=3)
+    d = preprocess(log, cutoff=4.0)
+    f = d.regressor_filter
+    assert f.sos is not None and 0 < f.padlen < f.q.shape[0]
+    monkeypatch.setattr(P, "_CHUNK", chunk)  # many blocks, or one
+    monkeypatch.setattr(P, "KEEP_BUDGET", budget)  # none, a few or all blocks kept
+    got = f.regressor(base)
+    whole = base.regressor(f.q, f.dq, f.ddq)
+    want = signal.sosfiltfilt(f.sos, whole, axis=0, padlen=f.padlen)[f.keep]
+    assert got.shape == want.shape == (d.m, robot.n, base.n)
+    np.testing.assert_array_equal(got, want)
+
+
+def test_block_filter_of_columns_zero_somewhere_or_everywhere_equals_scipys(monkeypatch):
+    from mindyn.identification import preprocess as P
+    from scipy import signal
+
+    sos = signal.butter(4, 0.1, output="sos")
+    monkeypatch.setattr(P, "_CHUNK", 50)
+    monkeypatch.setattr(P, "KEEP_BUDGET", 8 * 50 * 5 * 3)  # the last few blocks kept
+    x = np.random.default_rng(0).normal(size=(1000, 5))
+    x[:, 1] = 0.0  # zero throughout: not filtered
+    x[:, 3] = 0.0
+    x[500:520, 3] = 1.0  # zero at both ends only: every column is filtered
+    idx = np.arange(1000)[30:970:7]
+    for y in (x, x[:, [1]], x[:, [1, 3]], np.zeros((1000, 2))):
+        got = P._filtfilt_blocks(sos, 30, lambda a, b, y=y: y[a:b], 1000, idx)
+        np.testing.assert_array_equal(got, signal.sosfiltfilt(sos, y, axis=0, padlen=30)[idx])

@@ -88,6 +88,7 @@ py::dict limitsDict(const JointLimits& l) {
 }  // namespace
 
 void bindCodegen(pybind11::module_& m);
+void bindCsv(pybind11::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "mindyn C++ core: models, linear-in-parameters dynamics, kinematics";
@@ -788,4 +789,5 @@ PYBIND11_MODULE(_core, m) {
   bindControl(m);
   bindObserver(m);
   bindCodegen(m);
+  bindCsv(m);
 }

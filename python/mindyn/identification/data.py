@@ -25,7 +25,6 @@ zero-phase low-pass filtering and central differences; the settings are reported
 from __future__ import annotations
 
 import csv
-import io
 import json
 import math
 import re
@@ -36,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
-from .._core import Error
+from .._core import Error, parse_csv_numbers
 
 __all__ = [
     "DataError",
@@ -293,6 +292,27 @@ def read_csv(
 
 
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+_BOM = b"\xef\xbb\xbf"
+# a line of text and its end: LF, CR LF or CR, as io.StringIO(text, newline="") splits lines
+_LINE = re.compile(r"[^\r\n]*(?:\r\n|\r|\n)|[^\r\n]+")
+
+
+class _Lines:
+    """The lines of a text for ``csv.reader``, as ``io.StringIO(text, newline="")`` gives them,
+    with ``end``: the offset after the last line given (where the data rows start once the
+    header is read)."""
+
+    def __init__(self, text: str):
+        self._lines = _LINE.finditer(text)
+        self.end = 0
+
+    def __iter__(self):
+        return self
+
+    def __next__(self) -> str:
+        line = next(self._lines)
+        self.end = line.end()
+        return line.group()
 
 
 def _read_csv(
@@ -300,8 +320,10 @@ def _read_csv(
 ) -> JointData:
     if robot is not None:
         n = robot.n
-    text = decode_text(path)
-    reader = csv.reader(io.StringIO(text, newline=""))
+    raw = path.read_bytes()
+    text = _decoded(raw, path)
+    lines = _Lines(text)
+    reader = csv.reader(lines)
     try:
         try:
             header = next(reader)
@@ -313,7 +335,11 @@ def _read_csv(
         n = cols["n"]
         rows = []
         first_line = reader.line_num + 1
-        for row in reader:
+        # the data rows' bytes: after a byte-order mark and the header's text
+        start = len(_BOM) if raw.startswith(_BOM) else 0
+        start += lines.end if text.isascii() else len(text[: lines.end].encode())
+        values = _fast_values(raw[start:], len(header), cols["t"])
+        for row in reader if values is None else ():
             if not row or (len(row) == 1 and not row[0].strip()):
                 continue
             if len(row) != len(header):
@@ -323,13 +349,8 @@ def _read_csv(
             rows.append((reader.line_num, row))
     except csv.Error as e:
         raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
-    if len(rows) < 2:
-        raise DataError(f"{path}: {len(rows)} data row(s); at least 2 samples are needed")
-    names = [h.strip() for h in header]
-    values = np.empty((len(rows), len(header)))
-    for r, (line, row) in enumerate(rows):
-        for c, v in enumerate(row):
-            values[r, c] = parse_cell(v, f"{path}, line {line}, column {names[c]}")
+    if values is None:
+        values = _strict_values(rows, header, path)
     t = values[:, cols["t"]]
     r = first_not_increasing(t)
     if r is not None:
@@ -348,7 +369,7 @@ def _read_csv(
     dq = block("dq")
     ddq = block("ddq")
     tau = block("tau")
-    processing: dict = {"samples": len(rows), "first_data_line": first_line}
+    processing: dict = {"samples": values.shape[0], "first_data_line": first_line}
     header_unit = cols["torque_unit"]
     if tau is not None and header_unit is not None:
         if _unit_key(header_unit) not in ("Nm", "permille", "current"):
@@ -381,6 +402,37 @@ def _read_csv(
     return JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
 
 
+def _strict_values(rows: list, header: list[str], path: Path) -> np.ndarray:
+    """The cells of ``rows`` (``(line, cells)`` pairs) parsed one by one by :func:`parse_cell`:
+    the first that is not a finite decimal number raises DataError naming its line and column.
+    At least 2 rows are required."""
+    if len(rows) < 2:
+        raise DataError(f"{path}: {len(rows)} data row(s); at least 2 samples are needed")
+    names = [h.strip() for h in header]
+    values = np.empty((len(rows), len(header)))
+    for r, (line, row) in enumerate(rows):
+        for c, v in enumerate(row):
+            values[r, c] = parse_cell(v, f"{path}, line {line}, column {names[c]}")
+    return values
+
+
+def _fast_values(data: bytes, columns: int, t_col: int) -> np.ndarray | None:
+    """The data rows ``data`` (the bytes after the header) as an array (rows, ``columns``),
+    parsed at once (``_core.parse_csv_numbers``: the grammar of :func:`parse_cell`, values
+    correctly rounded as ``float()`` rounds them), or None when it cannot vouch that the strict
+    cell-by-cell reading (:func:`_strict_values` after ``csv.reader``) gives the same array: a
+    cell that is not a plain decimal number (quotes, words, other characters, a value out of the
+    range of a double), a line break other than LF or CR LF, a row of another length, fewer
+    than 2 rows, time (column ``t_col``) not strictly increasing. The strict reading then runs
+    and names the line and column of what is wrong."""
+    values = parse_csv_numbers(data, columns)
+    if values is None or values.shape[0] < 2 or not np.isfinite(values).all():
+        return None
+    if first_not_increasing(values[:, t_col]) is not None:
+        return None
+    return values
+
+
 def parse_cell(text: str, where: str) -> float:
     """A CSV cell as a finite double: a decimal number in ASCII (``-1.25``, ``3e-4``, blanks
     around it allowed); anything else (``1_000``, ``0x10``, non-ASCII digits, NaN, infinities, a
@@ -402,7 +454,11 @@ def parse_cell(text: str, where: str) -> float:
 def decode_text(path: Path) -> str:
     """The file's text as UTF-8 (a leading byte-order mark is skipped), or DataError naming the
     line and byte offset of the first byte that is not UTF-8."""
-    data = path.read_bytes()
+    return _decoded(path.read_bytes(), path)
+
+
+def _decoded(data: bytes, path: Path) -> str:
+    """``data`` (of the file ``path``) as :func:`decode_text` decodes it."""
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as e:

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
-from .._threads import single_threaded_blas
+from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData
@@ -106,9 +106,13 @@ class IdentificationResult:
         evaluated :data:`CHUNK_SAMPLES` samples at a time; on preprocessed data whose torques
         were low-pass filtered, the regressor columns are filtered alike (parallel filtering)."""
         out = np.empty((data.m, data.n))
-        for a in range(0, data.m, CHUNK_SAMPLES):
-            b = min(data.m, a + CHUNK_SAMPLES)
-            out[a:b] = regressor_rows(self.base, data, a, b) @ self.full
+        bounds = [(a, min(data.m, a + CHUNK_SAMPLES)) for a in range(0, data.m, CHUNK_SAMPLES)]
+        if data.regressor_filter is None:  # evaluated on threads, a few chunks ahead
+            rows = evaluated_ahead(lambda a, b: regressor_rows(self.base, data, a, b), bounds)
+        else:  # the filtered columns, computed once
+            rows = (regressor_rows(self.base, data, a, b) for a, b in bounds)
+        for (a, b), W in zip(bounds, rows):
+            out[a:b] = W @ self.full
         return out
 
     def to_dict(self) -> dict:

@@ -249,7 +249,6 @@ def integral_chunks(
     shapes = {c: kf for c, kf in friction_columns(base, data.dq).items() if c not in fv.values()}
     off = {k: names.index(f"Off{k + 1}") for k in range(n) if f"Off{k + 1}" in names}
     T = base.robot.drive_matrix
-    v = base.robot.slot_velocities(data.dq)
     per = max(1, CHUNK_SAMPLES // (window + 1))
     for c0 in range(0, a.size, per):
         wa, wb = a[c0 : c0 + per], b[c0 : c0 + per]

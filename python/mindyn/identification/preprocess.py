@@ -43,12 +43,15 @@ data path on their own and are then fitted together (as several logs are).
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections import deque
 
 import numpy as np
 from scipy import signal
 from scipy.interpolate import CubicSpline
 
+from .._threads import evaluated_ahead
 from .data import DataError, JointData, check_cutoff
 
 __all__ = [
@@ -74,6 +77,9 @@ JITTER_TOLERANCE = 1e-3
 EDGE_PERIODS = 2.0
 #: Bytes of full-rate regressor columns filtered at once by :class:`ParallelFilter`.
 PARALLEL_BUDGET = 256 * 2**20
+#: Bytes of full-rate regressor blocks the block-wise parallel filter keeps from its forward pass
+#: for its backward pass (each block not kept is evaluated again).
+KEEP_BUDGET = 256 * 2**20
 #: Samples whose regressor is evaluated at once.
 _CHUNK = 8192
 
@@ -96,12 +102,18 @@ class ParallelFilter:
     """The regressor columns filtered like the torques: ``regressor(base)`` evaluates
     ``base.regressor`` on the filtered full-rate motion, applies the same zero-phase low-pass,
     then the same edge drop and decimation, giving (m, n, nb) rows that match the preprocessed
-    torques. Columns are filtered in blocks of at most :data:`PARALLEL_BUDGET` bytes; the result
-    is kept per base-parameter set."""
+    torques; the result is kept per base-parameter set.
 
-    def __init__(self, q, dq, ddq, lowpass, keep: slice):
+    With the filter's second-order sections ``sos`` and its ``padlen`` (a log that is not an
+    averaged period), the zero-phase filter runs block by block over time on all columns at
+    once, with the arithmetic of ``scipy.signal.sosfiltfilt``: the regressor is evaluated once
+    or twice per block (:data:`KEEP_BUDGET`), on two threads, never held whole. Otherwise
+    ``lowpass`` filters whole columns, in blocks of at most :data:`PARALLEL_BUDGET` bytes."""
+
+    def __init__(self, q, dq, ddq, lowpass, keep: slice, *, sos=None, padlen=None):
         self.q, self.dq, self.ddq = q, dq, ddq
         self.lowpass, self.keep = lowpass, keep
+        self.sos, self.padlen = sos, padlen
         self._cache: dict = {}
 
     def regressor(self, base) -> np.ndarray:
@@ -112,6 +124,15 @@ class ParallelFilter:
         m, n = self.q.shape
         nb = base.n
         idx = np.arange(m)[self.keep]
+        if self.sos is not None:
+
+            def rows(a, b):
+                W = base.regressor(self.q[a:b], self.dq[a:b], self.ddq[a:b])
+                return W.reshape(b - a, n * nb)
+
+            out = _filtfilt_blocks(self.sos, self.padlen, rows, m, idx).reshape(idx.size, n, nb)
+            self._cache[key] = (base, out)
+            return out
         out = np.empty((idx.size, n, nb))
         block = max(1, min(nb, PARALLEL_BUDGET // (8 * m * n)))
         for c0 in range(0, nb, block):
@@ -123,6 +144,68 @@ class ParallelFilter:
             out[:, :, c0:c1] = self.lowpass(W)[idx]
         self._cache[key] = (base, out)
         return out
+
+
+def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndarray:
+    """``scipy.signal.sosfiltfilt(sos, x, axis=0, padlen=padlen)[idx]`` of a signal ``x``
+    (m, w) given by ``rows(a, b)`` -> ``x[a:b]``, without holding ``x`` whole: the forward pass
+    runs block by block keeping the filter state at the start of each block, the backward pass
+    runs from the last block to the first, recomputing each block's forward output from its
+    state. The operations, and so the values, are those of ``sosfiltfilt`` (odd extension of
+    ``padlen`` samples at each end, the steady-state initial conditions of ``sosfilt_zi``
+    scaled by the first sample of each pass); ``x`` is produced twice, but for the last blocks,
+    kept from the forward pass within :data:`KEEP_BUDGET` bytes. Blocks are laid out with
+    time along the last axis, where ``sosfilt`` works without transposing copies; blocks are
+    produced ahead on threads (:func:`~mindyn._threads.evaluated_ahead`). Columns that
+    are zero in every sample (a regressor's structural zeros) are not filtered: their output is
+    zero, as ``sosfiltfilt``'s."""
+    head, tail = rows(0, padlen + 1).T, rows(m - padlen - 1, m).T
+    cols = np.flatnonzero(np.any(head != 0, axis=1) | np.any(tail != 0, axis=1))
+    passed = _forward_states(sos, padlen, rows, m, head, tail, cols)
+    if passed is None:  # a column zero at both ends moves in between: filter every column
+        cols = np.arange(head.shape[0])
+        passed = _forward_states(sos, padlen, rows, m, head, tail, cols)
+    bounds, states, z, kept = passed
+    out = np.zeros((idx.size, head.shape[0]))
+    back = bounds[::-1]
+    again = (x.T[cols] for x in evaluated_ahead(rows, back[len(kept) :]))
+    blocks = itertools.chain(reversed(kept), again)
+    for (a, b), state, x in zip(back, reversed(states), blocks):
+        y, _ = signal.sosfilt(sos, x, zi=state)
+        y, z = signal.sosfilt(sos, y[:, ::-1], zi=z)
+        lo, hi = np.searchsorted(idx, [a, b])
+        out[lo:hi, cols] = y[:, b - 1 - idx[lo:hi]].T
+    return out
+
+
+def _forward_states(sos, padlen, rows, m, head, tail, cols):
+    """The forward pass of :func:`_filtfilt_blocks` over columns ``cols`` of the signal:
+    ``(bounds, states, z, kept)``, the blocks, the filter state at the start of each, the state
+    of the backward pass after the right extension, and the columns ``cols`` of the last blocks
+    (as many as :data:`KEEP_BUDGET` holds: the backward pass starts with them); None when a
+    column not in ``cols`` is not zero somewhere."""
+    zi = signal.sosfilt_zi(sos)[:, None, :]  # (sections, 1, 2): state per column
+    head, tail = head[cols], tail[cols]
+    left = 2 * head[:, :1] - head[:, padlen:0:-1]
+    right = 2 * tail[:, -1:] - tail[:, -2 : -(padlen + 2) : -1]
+    _, z = signal.sosfilt(sos, left, zi=zi * left[:, :1])
+    bounds = [(a, min(m, a + _CHUNK)) for a in range(0, m, _CHUNK)]
+    states = []
+    kept: deque = deque(maxlen=KEEP_BUDGET // (8 * _CHUNK * max(cols.size, 1)))
+    others = None
+    for x in evaluated_ahead(rows, bounds):
+        states.append(z)
+        if others is None:  # the columns outside cols
+            others = np.ones(x.shape[1], dtype=bool)
+            others[cols] = False
+        if others.any() and np.any(np.any(x != 0, axis=0)[others]):
+            return None
+        x = x.T[cols]
+        kept.append(x)
+        _, z = signal.sosfilt(sos, x, zi=z)
+    y, z = signal.sosfilt(sos, right, zi=z)
+    _, z = signal.sosfilt(sos, y[:, ::-1], zi=zi * y[:, -1:])
+    return bounds, states, z, list(kept)
 
 
 def timing(t: np.ndarray) -> dict:
@@ -432,13 +515,14 @@ def preprocess(
     periodic = cycle is not None
     m = q.shape[0]
 
+    padlen = min(m - 1, max(3 * (2 * len(sos) + 1), int(3 * rate / fc)))
+
     def lowpass(x):
         if periodic:  # one period, filtered as the periodic signal it is
             reps = 1 + 2 * int(math.ceil(3 * rate / fc / m))
             y = signal.sosfiltfilt(sos, np.concatenate([x] * reps, axis=0), axis=0)
             k = reps // 2
             return y[k * m : (k + 1) * m]
-        padlen = min(m - 1, max(3 * (2 * len(sos) + 1), int(3 * rate / fc)))
         return signal.sosfiltfilt(sos, x, axis=0, padlen=padlen)
 
     def derivative(x):
@@ -496,7 +580,8 @@ def preprocess(
     )
     info["samples"] = out.m
     if info["parallel_filtering"]:
-        out.regressor_filter = ParallelFilter(qf, dqf, ddqf, lowpass, keep)
+        blocks = {} if periodic else {"sos": sos, "padlen": padlen}
+        out.regressor_filter = ParallelFilter(qf, dqf, ddqf, lowpass, keep, **blocks)
     out.processing["velocity"] = {"source": info["velocity"]}
     out.processing["acceleration"] = {"source": info["acceleration"]}
     with_dq = logged_dq and data.dq is not None
