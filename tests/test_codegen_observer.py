@@ -18,6 +18,7 @@ from mindyn import codegen, control
 from random_tree import random_tree_urdf
 from test_codegen import st_tree
 from test_codegen_controller import GCC, STBlock, strict_compile
+from test_codegen_drive import coupled6r, drive_values
 
 pytestmark = pytest.mark.skipif(GCC is None, reason="gcc is needed to compile generated C")
 
@@ -61,6 +62,46 @@ def test_c_step_equals_the_library_tree(tmp_path):
     values = base.values(robot.parameters(True, True))
     got, want, _ = library_and_generated(robot, base, values, None, 2e-3, True, 200, 5)
     assert_close(got, want, 1e-12, "generated observer (C, tree) vs library")
+
+
+@pytest.mark.parametrize("kind, held", [("stribeck", True), ("smooth", False)])
+def test_c_and_st_steps_with_drive_terms_on_coupled_motors(kind, held, tmp_path, rng):
+    """A 6R with a four-bar wrist (motor 6 turns with q5 + q6), rotor inertia and friction on
+    the motors (Stribeck or smooth), base parameters with offsets: 300 C and ST cycles against
+    the library, whose p and beta come from the runtime regressors. The drive terms matter: the
+    same motion with the motors' rotor and friction values zeroed gives another residual."""
+    path = tmp_path / "coupled6r.urdf"
+    path.write_text(coupled6r())
+    robot = mindyn.load(path)
+    T = robot.transmission.T
+    assert robot.drive_side == "motor" and np.count_nonzero(T[5]) == 2
+    robot = robot.with_friction_model(kind, velocity=0.5 * np.abs(T).sum(axis=1))
+    base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
+    per = 14 if kind == "stribeck" else 13
+    pi = drive_values(robot, rng, per)
+    values = base.values(pi)
+    values[-robot.n :] = np.linspace(-0.2, 0.3, robot.n)  # the offsets
+    period, cycles = 1e-3, 300
+    got, want, code = library_and_generated(robot, base, values, None, period, held, cycles, 7)
+    assert np.abs(want).max() > 1.0
+    assert_close(got, want, 1e-12, f"generated observer (C, motors, {kind}) vs library")
+    fn = "exp" if kind == "stribeck" else "tanh"  # one per motor
+    assert code.counts["step"][fn] == robot.n and f", {robot.n} {fn}" in code.header
+    assert "m6 = " in code.header and f"Fc {'sign' if fn == 'exp' else 'tanh'}(v" in code.header
+    st = codegen.generate_observer(
+        robot, "st", base=base, params=values, period=period, held_torque=held
+    )
+    block = STBlock(st_tree(st.text), st.function)
+    q, dq, tau = motion(robot, cycles, period, 7)
+    st_r = [block({"q": q[i], "dq": dq[i], "tau": tau[i]})["r_out"].copy() for i in range(cycles)]
+    assert_close(np.array(st_r), want, 1e-12, f"generated observer (ST, motors, {kind}) vs library")
+    drive = pi.copy()
+    for k in range(robot.n):
+        drive[k * per + 10 : (k + 1) * per] = 0.0
+    rigid = base.values(drive)
+    rigid[-robot.n :] = values[-robot.n :]
+    other = control.MomentumObserver(base, rigid, period=period, held_torque=held).run(q, dq, tau)
+    assert np.abs(other - want).max() > 1e-3 * np.abs(want).max()
 
 
 def test_c_step_compiles_strictly_without_allocation(tmp_path):

@@ -7,6 +7,7 @@ the search, the model chosen on held-out data)."""
 from __future__ import annotations
 
 import json
+import re
 
 import mindyn
 import numpy as np
@@ -314,6 +315,14 @@ def test_codegen_takes_the_friction_model_identified(arm, tmp_path, capsys):
     assert rc == 0
     assert "friction model: smooth" in capsys.readouterr().out
     assert "Fv v + Fc tanh(v / w)" in (tmp_path / "gen.h").read_text()
+    # and the momentum observer of the same model (one tanh per joint in its step)
+    rc = main(["codegen", str(robot_path), "--lang", "c", "--friction", "--params",
+               str(tmp_path / "id.json"), "--what", "momentum-observer", "--controller-period",
+               "0.001", "-o", str(tmp_path / "obs")])  # fmt: skip
+    assert rc == 0
+    assert re.search(r"whole step: .*, 3 tanh$", capsys.readouterr().out, re.MULTILINE)
+    header = (tmp_path / "obs.h").read_text()
+    assert "Fv v + Fc tanh(v / w)" in header and "viscous and smooth Coulomb friction" in header
 
 
 def test_descriptions_refuse_other_friction_models(arm, tmp_path, capsys):

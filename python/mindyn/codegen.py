@@ -708,7 +708,9 @@ def generate_observer(
     lang : {"c", "st"}
     base : BaseParameters, optional
         The parameter set (default: base parameters with rotor inertia and friction); its
-        offset setting adds a torque offset per joint.
+        offset setting adds a torque offset per joint. Its robot decides where rotor inertia
+        and friction act and the friction model, as in :func:`generate`: the momentum gets
+        ``t_k Ia_k (t_k . dq)``, beta the friction ``t_k f(t_k . dq)``.
     params : path or array, optional
         The parameter values (a file as :func:`read_parameter_file` reads it, e.g. the JSON of
         ``mindyn identify --json``); default the robot's own values.

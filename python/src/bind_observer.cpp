@@ -35,6 +35,8 @@ py::dict countsOf(const codegen::OpCount& c) {
   d["add"] = c.add;
   d["trig"] = c.trig;
   d["sign"] = c.sign;
+  d["tanh"] = c.tanh;
+  d["exp"] = c.exp;
   return d;
 }
 

@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "drive_terms.hpp"
 #include "mindyn/codegen/expr.hpp"
 #include "mindyn/model.hpp"
 #include "stages.hpp"
@@ -55,29 +56,6 @@ struct Component {
 struct Pending {
   std::array<Component, 3> n, f;  // moment about the origin, force
 };
-
-// Throws ModelError unless the model can carry the layout's rotor inertia and friction: on the
-// motors (Model::motorSide()) one motor per slot, and with friction as many friction columns as
-// the model's friction model has, with a velocity scale per slot where it needs one.
-inline void checkDriveTerms(const Model& model, ParameterLayout layout) {
-  const int n = model.nq();
-  if (model.motorSide() && (layout.rotor || layout.friction) && model.transmission.nm() != n)
-    throw ModelError(
-        "codegen: rotor inertia and friction on the motors need one motor per "
-        "joint; " +
-        model.name + " has " + std::to_string(model.transmission.nm()) + " motors for " +
-        std::to_string(n) + " joints (put them on the joints)");
-  if (!layout.friction) return;
-  const FrictionModel& fm = model.friction_model;
-  if (layout.friction_columns != fm.columns())
-    throw ModelError("codegen: the parameters have " + std::to_string(layout.friction_columns) +
-                     " friction columns per joint; the friction model of " + model.name + " has " +
-                     std::to_string(fm.columns()));
-  const bool scaled = fm.kind == FrictionKind::Smooth || fm.kind == FrictionKind::Stribeck;
-  if (scaled && fm.velocity.size() != n)
-    throw ModelError("codegen: the friction model needs a velocity scale per joint (" +
-                     std::to_string(n) + "), it has " + std::to_string(fm.velocity.size()));
-}
 
 class Builder {
  public:
@@ -189,72 +167,42 @@ class Builder {
       if (parent < 0) continue;
       append(children[parent], rigidBackward(s.pre, std::move(w)));
     }
-    if (joint_terms) addDriveTerms(tau, pi, layout, dq_, ddq_);
+    if (joint_terms) addDriveTerms(g_, model_, pi, layout, ddq_, tau, dq_, tau);
     return tau;
   }
 
-  // Rotor inertia and friction of the layout added to the joint torques `tau`: slot k's act on
-  // joint k, or, when the model's motorSide(), on motor k. With t_k row k of T (e_k on the
-  // joints), the slot's acceleration a_k = t_k . acc and velocity v_k = t_k . vel are formed
-  // once (zero entries of T skipped, entries of +-1 without a product), its torque
-  // Ia_k a_k + friction(v_k) (frictionTorque) taken back to the joints by t_k^T.
-  void addDriveTerms(std::vector<Ref>& tau, const std::vector<Ref>& pi, ParameterLayout layout,
-                     const std::vector<Ref>& vel, const std::vector<Ref>& acc) {
-    if (!layout.rotor && !layout.friction) return;
-    const int n = model_.nq();
-    const bool motors = model_.motorSide();
-    auto slotSum = [&](int k, const std::vector<Ref>& x) {
-      if (!motors) return x[k];
-      Ref s = Graph::zero();
-      for (int j = 0; j < n; ++j)
-        if (model_.transmission.T(k, j) != 0.0)
-          s = g_.add(s, g_.mul(g_.constant(model_.transmission.T(k, j)), x[j]));
-      return s;
-    };
-    for (int k = 0; k < n; ++k) {
-      const Ref ia = layout.rotor ? pi[layout.rotorIndex(k)] : Graph::zero();
-      std::array<Ref, 3> f{Graph::zero(), Graph::zero(), Graph::zero()};
-      if (layout.friction) {
-        f[0] = pi[layout.viscousIndex(k)];
-        f[1] = pi[layout.coulombIndex(k)];
-        if (layout.friction_columns == 3) f[2] = pi[layout.thirdFrictionIndex(k)];
-      }
-      Ref t = Graph::zero();
-      if (ia != Graph::zero()) t = g_.mul(ia, slotSum(k, acc));
-      if (f[0] != Graph::zero() || f[1] != Graph::zero() || f[2] != Graph::zero())
-        t = g_.add(t, frictionTorque(f, k, slotSum(k, vel)));
-      if (t == Graph::zero()) continue;
-      if (!motors) {
-        tau[k] = g_.add(tau[k], t);
-        continue;
-      }
-      for (int j = 0; j < n; ++j)
-        if (model_.transmission.T(k, j) != 0.0)
-          tau[j] = g_.add(tau[j], g_.mul(g_.constant(model_.transmission.T(k, j)), t));
-    }
-  }
-
-  // The friction torque of slot k at its velocity v, with f = (Fv, Fc, third parameter) and the
-  // model's FrictionModel (w_k its velocity scale, baked in as 1 / w_k):
-  //   Coulomb Fv v + Fc sign(v); Asymmetric + Fa |sign(v)| (as sign(v) sign(v));
-  //   Smooth Fv v + Fc tanh(v / w_k); Stribeck Fv v + Fc sign(v) + Fs sign(v) exp(-(v / w_k)^2).
-  Ref frictionTorque(const std::array<Ref, 3>& f, int k, Ref v) {
-    const FrictionModel& fm = model_.friction_model;
-    Ref t = g_.mul(f[0], v);
-    if (fm.kind == FrictionKind::Smooth) {
-      const Ref x = g_.mul(g_.constant(1.0 / fm.velocity[k]), v);
-      return g_.add(t, g_.mul(f[1], g_.tanh(x)));
-    }
-    const Ref s = g_.sign(v);
-    t = g_.add(t, g_.mul(f[1], s));
-    if (f[2] == Graph::zero()) return t;
-    if (fm.kind == FrictionKind::Asymmetric) return g_.add(t, g_.mul(f[2], g_.mul(s, s)));
-    const Ref x = g_.mul(g_.constant(1.0 / fm.velocity[k]), v);
-    return g_.add(t, g_.mul(f[2], g_.mul(s, g_.exp(-g_.mul(x, x)))));
-  }
-
  protected:
+  // A spatial vector in a link frame: a motion (angular velocity, linear velocity of the origin)
+  // or a force (moment about the origin, force).
+  struct SV {
+    V3 w, l;
+  };
+
   Graph& graph() { return g_; }
+  V3 subv(const V3& a, const V3& b) { return addv(a, {-b[0], -b[1], -b[2]}); }
+  SV addsv(const SV& a, const SV& b) { return {addv(a.w, b.w), addv(a.l, b.l)}; }
+  // Motion vector of the parent in the frame of a constant transform (x_parent = R x + t).
+  SV toChild(const Rigid& T, const SV& x) {
+    if (T.identity()) return x;
+    const M3 R = constMat(T.R);
+    const V3 l = T.t.isZero(0.0) ? x.l : addv(x.l, cross(x.w, constVec(T.t)));
+    return {mulT(R, x.w), mulT(R, l)};
+  }
+  // Wrench (moment, force) in the parent frame of a constant transform.
+  SV toParent(const Rigid& T, const SV& x) {
+    if (T.identity()) return x;
+    const M3 R = constMat(T.R);
+    const V3 fp = mul(R, x.l);
+    V3 np = mul(R, x.w);
+    if (!T.t.isZero(0.0)) np = addv(np, cross(constVec(T.t), fp));
+    return {np, fp};
+  }
+  // The spatial inertia about the origin applied to a motion vector: (I w + h x l, m l - h x w).
+  SV inertia(const P10& p, const SV& x) {
+    const M3 I = {V3{p[0], p[1], p[2]}, V3{p[1], p[3], p[4]}, V3{p[2], p[4], p[5]}};
+    const V3 h = {p[6], p[7], p[8]};
+    return {addv(mul(I, x.w), cross(h, x.l)), subv(scale(x.l, p[9]), cross(h, x.w))};
+  }
   V3 constVec(const Eigen::Vector3d& v) {
     return {g_.constant(v[0]), g_.constant(v[1]), g_.constant(v[2])};
   }

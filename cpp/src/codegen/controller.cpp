@@ -24,6 +24,9 @@ const char* toString(Controller c) {
 
 namespace {
 
+using internal::addCount;
+using internal::Writer;
+
 // A setting vector: `size` finite entries >= 0 (or any finite value when `signed_`), infinite
 // allowed when `infinite`.
 void check(const Eigen::VectorXd& v, long size, const char* name, bool signed_ = false,
@@ -39,50 +42,6 @@ void check(const Eigen::VectorXd& v, long size, const char* name, bool signed_ =
                        (signed_ ? "number" : "number >= 0") + (infinite ? " or infinity" : ""));
   }
 }
-
-void addCount(OpCount& c, long mul, long add) {
-  c.mul += mul;
-  c.add += add;
-}
-
-// Statements of a step in C or Structured Text.
-struct Writer {
-  bool st;
-  std::ostringstream os;
-  std::string indent;
-  // a setting or state entry: c->name[i] / name[i + 1]
-  std::string field(const std::string& name, int i) const {
-    return st ? name + "[" + std::to_string(i + 1) + "]"
-              : "c->" + name + "[" + std::to_string(i) + "]";
-  }
-  std::string scalar(const std::string& name) const { return st ? name : "c->" + name; }
-  // an argument or local array entry
-  std::string at(const std::string& name, int i) const {
-    return name + "[" + std::to_string(st ? i + 1 : i) + "]";
-  }
-  std::string num(double v) const {
-    if (std::isinf(v)) v = v > 0 ? 1e300 : -1e300;
-    return literal(v, st);
-  }
-  void set(const std::string& lhs, const std::string& rhs) {
-    os << indent << lhs << (st ? " := " : " = ") << rhs << ";\n";
-  }
-  void clamp(const std::string& x, const std::string& lo, const std::string& hi) {
-    if (st) {
-      os << indent << "IF " << x << " > " << hi << " THEN\n"
-         << indent << "  " << x << " := " << hi << ";\n"
-         << indent << "ELSIF " << x << " < " << lo << " THEN\n"
-         << indent << "  " << x << " := " << lo << ";\n"
-         << indent << "END_IF;\n";
-    } else {
-      os << indent << "if (" << x << " > " << hi << ") " << x << " = " << hi << ";\n"
-         << indent << "else if (" << x << " < " << lo << ") " << x << " = " << lo << ";\n";
-    }
-  }
-  void comment(const std::string& text) {
-    os << indent << (st ? "(* " : "/* ") << text << (st ? " *)\n" : " */\n");
-  }
-};
 
 struct Field {
   const char* name;

@@ -40,8 +40,17 @@ std::string wrap(const std::string& text, size_t width, const std::string& inden
   return out + line;
 }
 
-// The lines of the header that say where rotor inertia and friction act and the friction
-// formula, when the parameters have them.
+}  // namespace
+
+namespace internal {
+
+std::string frictionWords(FrictionKind kind) {
+  static const char* const words[] = {
+      "viscous and Coulomb friction", "viscous and direction-dependent Coulomb friction",
+      "viscous and smooth Coulomb friction", "viscous, Coulomb and Stribeck friction"};
+  return words[static_cast<int>(kind)];
+}
+
 std::vector<std::string> driveLines(const GeneratedCode& code) {
   std::vector<std::string> lines;
   const ParameterLayout& layout = code.params.layout;
@@ -87,7 +96,7 @@ std::vector<std::string> driveLines(const GeneratedCode& code) {
   return lines;
 }
 
-}  // namespace
+}  // namespace internal
 
 std::vector<std::string> describe(const GeneratedCode& code) {
   std::vector<std::string> lines;
@@ -100,10 +109,7 @@ std::vector<std::string> describe(const GeneratedCode& code) {
                                    " classical parameters";
   std::vector<std::string> extras;
   if (ps.layout.rotor) extras.push_back("rotor inertia");
-  static const char* const frictionWords[] = {
-      "viscous and Coulomb friction", "viscous and direction-dependent Coulomb friction",
-      "viscous and smooth Coulomb friction", "viscous, Coulomb and Stribeck friction"};
-  if (ps.layout.friction) extras.push_back(frictionWords[static_cast<int>(code.friction.kind)]);
+  if (ps.layout.friction) extras.push_back(internal::frictionWords(code.friction.kind));
   if (ps.offsets) extras.push_back("a torque offset per joint (not in the gravity torque)");
   if (!extras.empty()) {
     what += ", with ";
@@ -112,7 +118,7 @@ std::vector<std::string> describe(const GeneratedCode& code) {
   std::istringstream whatLines(wrap(what + ".", 90, "  "));
   for (std::string part; std::getline(whatLines, part);) lines.push_back(part);
   lines.push_back("Units SI; gravity and all frames as in the robot description.");
-  for (const auto& l : driveLines(code)) lines.push_back(l);
+  for (const auto& l : internal::driveLines(code)) lines.push_back(l);
   if (!code.parents.empty()) {
     lines.push_back(
         "A tree: the joints in the order of q, dq, ddq and tau, each with the one it is");

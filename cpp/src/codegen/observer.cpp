@@ -7,8 +7,8 @@
 #include "mindyn/codegen/observer.hpp"
 
 #include <cmath>
-#include <cstdio>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "builder.hpp"
@@ -18,6 +18,7 @@ namespace mindyn::codegen {
 
 namespace {
 
+using internal::addCount;
 using internal::AxisShift;
 using internal::Builder;
 using internal::JointStages;
@@ -26,14 +27,11 @@ using internal::M3;
 using internal::P10;
 using internal::Rigid;
 using internal::V3;
+using internal::Writer;
 
 class MomentumBuilder : public Builder {
  public:
   using Builder::Builder;
-
-  struct SV {
-    V3 w, l;
-  };
 
   // Link velocities v and the gravity acceleration (zero velocities) of each link, in the frame
   // right after each joint motion (stage frame) and in the link frame.
@@ -99,14 +97,8 @@ class MomentumBuilder : public Builder {
         dK = dot(cross(v.w, u), H.l);
         gk = dot(u, G.l);
       }
-      if (layout.rotor) pk = g.add(pk, g.mul(pi[layout.rotorIndex(k)], dq_[k]));
-      Ref b = g.add(gk, -dK);
-      if (layout.friction) {
-        b = g.add(b, g.mul(pi[layout.viscousIndex(k)], dq_[k]));
-        b = g.add(b, g.mul(pi[layout.coulombIndex(k)], g.sign(dq_[k])));
-      }
       p[k] = pk;
-      beta[k] = b;
+      beta[k] = g.add(gk, -dK);
       const int parent = model_.parent(k);
       if (parent < 0) continue;
       for (SV* x : {&H, &G}) {
@@ -119,35 +111,16 @@ class MomentumBuilder : public Builder {
       childH[parent] = addsv(childH[parent], H);
       childG[parent] = addsv(childG[parent], G);
     }
+    // the rotors' momentum t_k Ia_k (t_k . dq) (their kinetic energy does not depend on q) and
+    // the friction t_k f(t_k . dq) in beta
+    internal::addDriveTerms(g, model_, pi, layout, dq_, p, dq_, beta);
     return {p, beta};
   }
 
  private:
-  V3 subv(const V3& a, const V3& b) { return addv(a, {-b[0], -b[1], -b[2]}); }
-  SV addsv(const SV& a, const SV& b) { return {addv(a.w, b.w), addv(a.l, b.l)}; }
-  SV toChild(const Rigid& T, const SV& x) {
-    if (T.identity()) return x;
-    const M3 R = constMat(T.R);
-    const V3 l = T.t.isZero(0.0) ? x.l : addv(x.l, cross(x.w, constVec(T.t)));
-    return {mulT(R, x.w), mulT(R, l)};
-  }
   V3 rotateToChild(const Rigid& T, const V3& a) {
     if (T.R.isIdentity(0.0)) return a;
     return mulT(constMat(T.R), a);
-  }
-  SV toParent(const Rigid& T, const SV& x) {
-    if (T.identity()) return x;
-    const M3 R = constMat(T.R);
-    const V3 fp = mul(R, x.l);
-    V3 np = mul(R, x.w);
-    if (!T.t.isZero(0.0)) np = addv(np, cross(constVec(T.t), fp));
-    return {np, fp};
-  }
-  // The spatial inertia about the origin applied to a motion vector: (I w + h x l, m l - h x w).
-  SV inertia(const P10& p, const SV& x) {
-    const M3 I = {V3{p[0], p[1], p[2]}, V3{p[1], p[3], p[4]}, V3{p[2], p[4], p[5]}};
-    const V3 h = {p[6], p[7], p[8]};
-    return {addv(mul(I, x.w), cross(h, x.l)), subv(scale(x.l, p[9]), cross(h, x.w))};
   }
 
   std::vector<Ref> dq_;
@@ -157,60 +130,38 @@ class MomentumBuilder : public Builder {
   std::vector<V3> d_;
 };
 
-void addCount(OpCount& c, long mul, long add) {
-  c.mul += mul;
-  c.add += add;
-}
-
-// Statements in C (c->field[i], arg[i]) or Structured Text (field[i + 1]).
-struct Out {
-  bool st;
-  std::ostringstream os;
-  std::string indent;
-  std::string state(const std::string& name, int i) const {
-    return st ? name + "[" + std::to_string(i + 1) + "]"
-              : "c->" + name + "[" + std::to_string(i) + "]";
-  }
-  std::string arg(const std::string& name, int i) const {
-    return name + "[" + std::to_string(st ? i + 1 : i) + "]";
-  }
-  void let(const std::string& lhs, const std::string& rhs) {
-    os << indent << lhs << (st ? " := " : " = ") << rhs << ";\n";
-  }
-};
-
 // The update after the momentum pass (y = p then beta), for a started observer.
-void update(Out& w, const ObserverCode& c) {
+void update(Writer& w, const ObserverCode& c) {
   const int n = c.code.n;
-  const std::string T = w.st ? "period" : "c->period", h = w.st ? "half" : "c->half";
+  const std::string T = w.scalar("period"), h = w.scalar("half");
   for (int k = 0; k < n; ++k) {
-    const std::string torque = c.settings.held_torque ? T + " * " + w.state("tau_prev", k)
-                                                      : h + " * (" + w.arg("tau", k) + " + " +
-                                                            w.state("tau_prev", k) + ")";
-    w.let("s", w.state("integral", k) + " + " + torque + " - " + h + " * (" + w.arg("y", n + k) +
-                   " + " + w.state("beta_prev", k) + ") + " + h + " * " + w.state("r", k));
-    w.let(w.state("r", k),
-          w.state("c", k) + " * (" + w.arg("y", k) + " - " + w.state("p_start", k) + " - s)");
-    w.let(w.state("integral", k), "s + " + h + " * " + w.state("r", k));
+    const std::string torque =
+        c.settings.held_torque ? T + " * " + w.field("tau_prev", k)
+                               : h + " * (" + w.at("tau", k) + " + " + w.field("tau_prev", k) + ")";
+    w.set("s", w.field("integral", k) + " + " + torque + " - " + h + " * (" + w.at("y", n + k) +
+                   " + " + w.field("beta_prev", k) + ") + " + h + " * " + w.field("r", k));
+    w.set(w.field("r", k),
+          w.field("c", k) + " * (" + w.at("y", k) + " - " + w.field("p_start", k) + " - s)");
+    w.set(w.field("integral", k), "s + " + h + " * " + w.field("r", k));
   }
 }
 
 // The state after the first sample (or a reset): p(0) = p, integral and r zero.
-void start(Out& w, const ObserverCode& c) {
+void start(Writer& w, const ObserverCode& c) {
   const int n = c.code.n;
   for (int k = 0; k < n; ++k) {
-    w.let(w.state("p_start", k), w.arg("y", k));
-    w.let(w.state("integral", k), "0.0");
-    w.let(w.state("r", k), "0.0");
+    w.set(w.field("p_start", k), w.at("y", k));
+    w.set(w.field("integral", k), "0.0");
+    w.set(w.field("r", k), "0.0");
   }
 }
 
-void carry(Out& w, const ObserverCode& c) {
+void carry(Writer& w, const ObserverCode& c) {
   const int n = c.code.n;
   for (int k = 0; k < n; ++k) {
-    w.let(w.state("tau_prev", k), w.arg("tau", k));
-    w.let(w.state("beta_prev", k), w.arg("y", n + k));
-    w.let(w.arg("r_out", k), w.state("r", k));
+    w.set(w.field("tau_prev", k), w.at("tau", k));
+    w.set(w.field("beta_prev", k), w.at("y", n + k));
+    w.set(w.at("r_out", k), w.field("r", k));
   }
 }
 
@@ -221,11 +172,19 @@ std::vector<std::string> header(const ObserverCode& c) {
   out.push_back("Generated by mindyn from robot '" + c.code.robot + "' (" + std::to_string(n) +
                 " joints).");
   out.push_back("");
+  std::vector<std::string> extras;
+  if (ps.layout.rotor) extras.push_back("rotor inertia");
+  if (ps.layout.friction) extras.push_back(internal::frictionWords(c.code.friction.kind));
+  if (ps.offsets) extras.push_back("a torque offset per joint");
   out.push_back("Generalised-momentum observer of external joint torques in the " +
                 std::to_string(np) + (ps.base ? " base" : " classical") + " parameters p" +
-                std::string(ps.layout.rotor ? ", rotor inertia" : "") +
-                (ps.layout.friction ? ", viscous and Coulomb friction" : "") +
-                (ps.offsets ? ", a torque offset per joint" : "") + ":");
+                (extras.empty() ? ":" : ","));
+  if (!extras.empty()) {
+    std::string with = "with ";
+    for (size_t i = 0; i < extras.size(); ++i)
+      with += (i ? (i + 1 == extras.size() ? " and " : ", ") : "") + extras[i];
+    out.push_back(with + ":");
+  }
   out.push_back("  r = K_O (p(t) - p(0) - int (tau - beta + r) dt), p = A(q) dq,");
   out.push_back("  beta = -dL/dq + friction + offset (= g - C^T dq + ...), no accelerations.");
   out.push_back("Discrete at the period T: the integral advances by " +
@@ -236,14 +195,26 @@ std::vector<std::string> header(const ObserverCode& c) {
   out.push_back("  r = c (p - p(0) - s), c = K_O / (1 + K_O T/2): the bilinear image of");
   out.push_back("  K_O / (s + K_O) acting on the external torque. The first call (or reset) sets");
   out.push_back("  p(0) and returns r = 0.");
-  char buf[200];
-  std::snprintf(buf, sizeof buf,
-                "Per step: %ld mul, %ld add, %ld sin/cos%s (momentum pass: %ld mul, %ld add).",
-                c.step.mul, c.step.add, c.step.trig,
-                c.step.sign ? (", " + std::to_string(c.step.sign) + " sign").c_str() : "",
-                c.core.mul, c.core.add);
-  out.push_back(buf);
+  std::string per = "Per step: " + std::to_string(c.step.mul) + " mul, " +
+                    std::to_string(c.step.add) + " add, " + std::to_string(c.step.trig) +
+                    " sin/cos";
+  for (const auto& [count, what] : {std::pair{c.step.sign, " sign"},
+                                    std::pair{c.step.tanh, " tanh"}, std::pair{c.step.exp, " exp"}})
+    if (count) per += ", " + std::to_string(count) + what;
+  out.push_back(per + " (momentum pass: " + std::to_string(c.core.mul) + " mul, " +
+                std::to_string(c.core.add) + " add).");
   out.push_back("Units SI; gravity and all frames as in the robot description.");
+  const std::vector<std::string> drive = internal::driveLines(c.code);
+  out.insert(out.end(), drive.begin(), drive.end());
+  if (!drive.empty()) {
+    const bool m = c.code.motor_side;
+    std::string l = "In the observer:";
+    if (ps.layout.rotor) l += m ? " p += T^T Ia T dq" : " p += Ia dq";
+    if (ps.layout.friction)
+      l += std::string(ps.layout.rotor ? "," : "") +
+           (m ? " beta += T^T friction(T dq)" : " beta += friction(dq)");
+    out.push_back(l + ".");
+  }
   return out;
 }
 
@@ -256,15 +227,7 @@ GeneratedFunction generateMomentum(const Model& model, const ParameterSet& param
   if (params.offsets != 0 && params.offsets != n)
     throw ModelError("codegen: " + std::to_string(params.offsets) + " torque offsets for " +
                      std::to_string(n) + " joints");
-  const ParameterLayout& layout = params.layout;
-  if ((layout.rotor || layout.friction) && model.motorSide())
-    throw ModelError(
-        "codegen: the generated momentum observer has rotor inertia and friction on "
-        "the joints only, not on the motors (use --drive-side joint)");
-  if (layout.friction && model.friction_model.kind != FrictionKind::Coulomb)
-    throw ModelError(std::string("codegen: the generated momentum observer has viscous and "
-                                 "Coulomb friction only, not the ") +
-                     toString(model.friction_model.kind) + " friction model");
+  internal::checkDriveTerms(model, params.layout);
   const int off0 = np - params.offsets;
   GeneratedFunction out;
   out.function = Function::SlotineLi;  // emitted through the step's own writers only
@@ -362,10 +325,10 @@ CFiles emitObserverC(const ObserverCode& c, const std::string& header_name, CTri
   src << "/* " << header_name << ": see the header. */\n#include \"" << header_name
       << "\"\n\n#include <math.h>\n";
   if (trig == CTrig::Inline && internal::usesTrig(f)) src << "\n" << internal::sincosSource(fn);
-  Out init{false, {}, "  "};
-  for (int j = 0; j < np; ++j) init.let(init.state("p", j), literal(c.settings.p[j]));
-  for (int k = 0; k < n; ++k) init.let(init.state("ko", k), literal(c.settings.gains[k]));
-  init.let("c->period", literal(c.settings.period));
+  Writer init{false, {}, "  "};
+  for (int j = 0; j < np; ++j) init.set(init.field("p", j), literal(c.settings.p[j]));
+  for (int k = 0; k < n; ++k) init.set(init.field("ko", k), literal(c.settings.gains[k]));
+  init.set("c->period", literal(c.settings.period));
   src << "\nvoid " << fn << "_reset(" << T << "* c) {\n  int k;\n"
       << "  c->half = 0.5 * c->period;\n"
       << "  for (k = 0; k < " << N << "; ++k) c->c[k] = c->ko[k] / (1.0 + c->half * c->ko[k]);\n"
@@ -374,7 +337,7 @@ CFiles emitObserverC(const ObserverCode& c, const std::string& header_name, CTri
       << init.os.str() << "  " << fn << "_reset(c);\n}\n";
   std::ostringstream body;
   internal::writeCBody(body, f, fn, trig, "y");
-  Out first{false, {}, "    "}, rest{false, {}, "    "}, tail{false, {}, "  "};
+  Writer first{false, {}, "    "}, rest{false, {}, "    "}, tail{false, {}, "  "};
   start(first, c);
   update(rest, c);
   carry(tail, c);
@@ -414,19 +377,19 @@ std::string emitObserverST(const ObserverCode& c) {
   const int slots = internal::writeSTBody(body, f, "y");
   for (int t = 0; t < slots; ++t) os << "  t" << t + 1 << " : LREAL;\n";
   os << "END_VAR\n";
-  Out init{true, {}, "  "};
-  for (int j = 0; j < np; ++j) init.let(init.state("p", j), literal(c.settings.p[j], true));
-  for (int k = 0; k < n; ++k) init.let(init.state("ko", k), literal(c.settings.gains[k], true));
-  init.let("period", literal(c.settings.period, true));
-  init.let("half", "0.5 * period");
+  Writer init{true, {}, "  "};
+  for (int j = 0; j < np; ++j) init.set(init.field("p", j), literal(c.settings.p[j], true));
+  for (int k = 0; k < n; ++k) init.set(init.field("ko", k), literal(c.settings.gains[k], true));
+  init.set("period", literal(c.settings.period, true));
+  init.set("half", "0.5 * period");
   for (int k = 0; k < n; ++k)
-    init.let(init.state("c", k),
-             init.state("ko", k) + " / (1.0 + half * " + init.state("ko", k) + ")");
-  init.let("started", "FALSE");
-  init.let("initialised", "TRUE");
+    init.set(init.field("c", k),
+             init.field("ko", k) + " / (1.0 + half * " + init.field("ko", k) + ")");
+  init.set("started", "FALSE");
+  init.set("initialised", "TRUE");
   os << "IF reset OR NOT initialised THEN\n" << init.os.str() << "END_IF;\n";
   os << body.str();
-  Out first{true, {}, "  "}, rest{true, {}, "  "}, tail{true, {}, ""};
+  Writer first{true, {}, "  "}, rest{true, {}, "  "}, tail{true, {}, ""};
   start(first, c);
   update(rest, c);
   carry(tail, c);

@@ -31,10 +31,6 @@ class SlotineLiBuilder : public Builder {
  public:
   using Builder::Builder;
 
-  struct SV {
-    V3 w, l;
-  };
-
   void forward(const std::vector<Ref>& dq, const std::vector<Ref>& dqr,
                const std::vector<Ref>& ddqr) {
     Graph& g = graph();
@@ -116,40 +112,16 @@ class SlotineLiBuilder : public Builder {
       children[parent] = addsv(children[parent], toParent(s.pre, f));
     }
     // rotor inertia through the reference acceleration, friction through the actual velocity
-    addDriveTerms(tau, pi, layout, dq_, ddqr_);
+    internal::addDriveTerms(g, model_, pi, layout, ddqr_, tau, dq_, tau);
     return tau;
   }
 
  private:
-  V3 subv(const V3& a, const V3& b) { return addv(a, {-b[0], -b[1], -b[2]}); }
-  SV addsv(const SV& a, const SV& b) { return {addv(a.w, b.w), addv(a.l, b.l)}; }
-  // Motion vector of the parent in the frame of a constant transform (x_parent = R x + t).
-  SV toChild(const Rigid& T, const SV& x) {
-    if (T.identity()) return x;
-    const M3 R = constMat(T.R);
-    const V3 l = T.t.isZero(0.0) ? x.l : addv(x.l, cross(x.w, constVec(T.t)));
-    return {mulT(R, x.w), mulT(R, l)};
-  }
-  // Wrench (moment, force) in the parent frame of a constant transform.
-  SV toParent(const Rigid& T, const SV& x) {
-    if (T.identity()) return x;
-    const M3 R = constMat(T.R);
-    const V3 fp = mul(R, x.l);
-    V3 np = mul(R, x.w);
-    if (!T.t.isZero(0.0)) np = addv(np, cross(constVec(T.t), fp));
-    return {np, fp};
-  }
   SV crossMotion(const SV& a, const SV& b) {
     return {cross(a.w, b.w), addv(cross(a.w, b.l), cross(a.l, b.w))};
   }
   SV crossForce(const SV& a, const SV& x) {
     return {addv(cross(a.w, x.w), cross(a.l, x.l)), cross(a.w, x.l)};
-  }
-  // The spatial inertia about the origin applied to a motion vector: (I w + h x l, m l - h x w).
-  SV inertia(const P10& p, const SV& x) {
-    const M3 I = {V3{p[0], p[1], p[2]}, V3{p[1], p[3], p[4]}, V3{p[2], p[4], p[5]}};
-    const V3 h = {p[6], p[7], p[8]};
-    return {addv(mul(I, x.w), cross(h, x.l)), subv(scale(x.l, p[9]), cross(h, x.w))};
   }
 
   std::vector<Ref> dqr_, ddqr_;

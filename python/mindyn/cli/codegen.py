@@ -308,9 +308,12 @@ def _observer(args, robot, base, out: Path, params, note: str | None = None) -> 
     how = "given" if gains else f"default 1 / (10 T) = {default_observer_gain(args.period):.4g}"
     print("gains K_O [1/s] (" + how + "): " + ", ".join(f"{k:.4g}" for k in code.gains))
     print("wrote " + ", ".join(str(w) for w in written))
-    m, s = code.counts["momentum"], code.counts["step"]
-    print(f"momentum pass: {m['mul']} mul, {m['add']} add, {m['trig']} sin/cos")
-    print(f"whole step:    {s['mul']} mul, {s['add']} add, {s['trig']} sin/cos")
+    for label, c in (
+        ("momentum pass:", code.counts["momentum"]),
+        ("whole step:", code.counts["step"]),
+    ):
+        calls = "".join(f", {c[f]} {f}" for f in ("sign", "tanh", "exp") if c[f])
+        print(f"{label:<15}{c['mul']} mul, {c['add']} add, {c['trig']} sin/cos{calls}")
     return 0
 
 
