@@ -22,7 +22,10 @@ done
 apt_packages=(build-essential cmake ninja-build pkg-config python3 python3-venv python3-dev
   libeigen3-dev liborocos-kdl-dev liburdfdom-dev libyaml-cpp-dev libtinyxml-dev)
 if ((test)); then
-  apt_packages+=(libgtest-dev libbenchmark-dev clang-format git valgrind)
+  # libx11-6, libsm6, libglib2.0-0: the shared libraries the drake wheel (a reference in the
+  # tests) loads
+  apt_packages+=(libgtest-dev libbenchmark-dev clang-format git valgrind libx11-6 libsm6
+    libglib2.0-0)
 fi
 
 missing=()

@@ -18,7 +18,10 @@ import pinocchio as pin
 import pytest
 from conftest import ROBOTS_DIR, URDFS, assert_close
 
-pytest.importorskip("pydrake", reason="the 'drake' wheel is not installed for this Python")
+try:
+    import pydrake  # noqa: F401
+except ImportError as e:  # not installed, or a system library it loads is missing
+    pytest.skip(f"drake is not usable here: {e}", allow_module_level=True)
 from pydrake.multibody.parsing import Parser  # noqa: E402
 from pydrake.multibody.plant import MultibodyPlant  # noqa: E402
 from pydrake.multibody.tree import MultibodyForces  # noqa: E402
