@@ -539,3 +539,36 @@ def test_friction_model_is_chosen_on_a_new_robot_and_checked(tmp_path):
         robot.with_friction_model("smooth")
     with pytest.raises(mindyn.ModelError, match="takes no velocity"):
         robot.with_friction_model("coulomb", velocity=[1.0, 1.0, 1.0])
+
+
+@pytest.mark.parametrize("kind", ["coulomb", "asymmetric", "stribeck"])
+def test_direct_drives_from_joint_values_have_the_joint_side_dynamics(tmp_path, kind):
+    """A motor that alone drives one joint with ratio r, its values derived from the joint's
+    (r^2 Ia, r^2 Fv, |r| Fc and the third friction term written out here), gives the joint-side
+    dynamics exactly, with the friction velocity scales in motor units (|r| w)."""
+    ratios = (-3.0, 7.0)
+    parts = "".join(simple(f"t{k}", f"j{k}", f"m{k}", r) for k, r in zip((1, 2), ratios))
+    robot = load_text(tmp_path, arm_urdf(2, parts))
+    rng = np.random.default_rng(3)
+    robot.rotor_inertia, robot.viscous = rng.uniform(0.1, 1.0, 2), rng.uniform(0.1, 1.0, 2)
+    robot.coulomb, robot.third_friction = rng.uniform(0.1, 1.0, 2), rng.uniform(0.1, 1.0, 2)
+    w = np.array([0.3, 0.5])
+    joint = robot.with_drive_side("joint")
+    motor = robot.with_drive_side("motor")
+    if kind == "stribeck":
+        joint = joint.with_friction_model(kind, velocity=w)
+        motor = motor.with_friction_model(kind, velocity=np.abs(ratios) * w)
+    elif kind == "asymmetric":
+        joint, motor = joint.with_friction_model(kind), motor.with_friction_model(kind)
+    r = np.array(ratios)
+    pm = motor.parameters(True, True).reshape(2, -1)
+    np.testing.assert_allclose(pm[:, 10], robot.rotor_inertia / r**2, rtol=1e-15)
+    np.testing.assert_allclose(pm[:, 11], robot.viscous / r**2, rtol=1e-15)
+    np.testing.assert_allclose(pm[:, 12], robot.coulomb / np.abs(r), rtol=1e-15)
+    if kind != "coulomb":  # r Fa |sign(r dq)| = (r Fa) |sign dq|; r Fs sign(r dq) = |r| Fs sign dq
+        third = robot.third_friction / (r if kind == "asymmetric" else np.abs(r))
+        np.testing.assert_allclose(pm[:, 13], third, rtol=1e-15)
+    q, dq, ddq = rng.uniform(-1, 1, (3, 20, 2))
+    tj = joint.inverse_dynamics(q, dq, ddq, joint.parameters(True, True))
+    tm = motor.inverse_dynamics(q, dq, ddq, motor.parameters(True, True))
+    np.testing.assert_allclose(tm, tj, rtol=1e-12, atol=1e-12 * np.abs(tj).max())
