@@ -25,6 +25,7 @@ const char* toString(Controller c) {
 namespace {
 
 using internal::addCount;
+using internal::openStepHeader;
 using internal::Writer;
 
 // A setting vector: `size` finite entries >= 0 (or any finite value when `signed_`), infinite
@@ -237,15 +238,9 @@ CFiles emitControllerC(const ControllerCode& c, const std::string& header_name, 
   const std::string fn = c.code.name + "_" + kind, T = fn + "_t";
   const int n = c.code.n, np = c.code.params.size();
   const GeneratedFunction& f = c.code.functions.front();
-  std::string NAME = fn;
-  for (char& ch : NAME) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
   const std::string N = std::to_string(n), NP = std::to_string(np);
   std::ostringstream h, src;
-  h << "/*\n";
-  for (const auto& l : header(c)) h << (l.empty() ? " *" : " * " + l) << "\n";
-  h << " */\n#ifndef " << NAME << "_H\n#define " << NAME << "_H\n\n";
-  h << "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
-  h << "#define " << NAME << "_N " << n << "\n#define " << NAME << "_NP " << np << "\n\n";
+  openStepHeader(h, fn, header(c), n, np);
   h << "/* Settings and state: set by " << fn << "_init to the generated values; the settings\n"
     << " * may be changed between steps. p is the estimate (p0 its initial value). */\n";
   h << "typedef struct {\n  double p[" << NP << "];\n";

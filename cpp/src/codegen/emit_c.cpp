@@ -51,6 +51,17 @@ std::string frictionWords(FrictionKind kind) {
   return words[static_cast<int>(kind)];
 }
 
+void openStepHeader(std::ostream& h, const std::string& fn, const std::vector<std::string>& lines,
+                    int n, int np) {
+  std::string NAME = fn;
+  for (char& ch : NAME) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+  h << "/*\n";
+  for (const auto& l : lines) h << (l.empty() ? " *" : " * " + l) << "\n";
+  h << " */\n#ifndef " << NAME << "_H\n#define " << NAME << "_H\n\n";
+  h << "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
+  h << "#define " << NAME << "_N " << n << "\n#define " << NAME << "_NP " << np << "\n\n";
+}
+
 std::vector<std::string> driveLines(const GeneratedCode& code) {
   std::vector<std::string> lines;
   const ParameterLayout& layout = code.params.layout;

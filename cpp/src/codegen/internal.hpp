@@ -32,6 +32,11 @@ std::string frictionWords(FrictionKind kind);
 /// and the friction formula with its velocity scales, when the parameters have them.
 std::vector<std::string> driveLines(const GeneratedCode& code);
 
+/// C: the opening of a step's header: `lines` as its comment, the include guard FN_H (`fn` in
+/// capitals), extern "C" and the sizes FN_N = n and FN_NP = np.
+void openStepHeader(std::ostream& h, const std::string& fn, const std::vector<std::string>& lines,
+                    int n, int np);
+
 /// C: the statements of one function, its outputs assigned to out[0], out[1], ...
 void writeCBody(std::ostream& os, const GeneratedFunction& f, const std::string& prefix, CTrig trig,
                 const std::string& out);

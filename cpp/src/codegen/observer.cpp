@@ -24,6 +24,7 @@ using internal::Builder;
 using internal::JointStages;
 using internal::jointStages;
 using internal::M3;
+using internal::openStepHeader;
 using internal::P10;
 using internal::Rigid;
 using internal::V3;
@@ -295,15 +296,9 @@ CFiles emitObserverC(const ObserverCode& c, const std::string& header_name, CTri
   const std::string fn = c.code.name + "_momentum_observer", T = fn + "_t";
   const int n = c.code.n, np = c.code.params.size();
   const GeneratedFunction& f = c.code.functions.front();
-  std::string NAME = fn;
-  for (char& ch : NAME) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
   const std::string N = std::to_string(n), NP = std::to_string(np);
   std::ostringstream h, src;
-  h << "/*\n";
-  for (const auto& l : header(c)) h << (l.empty() ? " *" : " * " + l) << "\n";
-  h << " */\n#ifndef " << NAME << "_H\n#define " << NAME << "_H\n\n";
-  h << "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
-  h << "#define " << NAME << "_N " << n << "\n#define " << NAME << "_NP " << np << "\n\n";
+  openStepHeader(h, fn, header(c), n, np);
   h << "/* Settings (set by " << fn << "_init to the generated values; they may be changed\n"
     << " * before a reset): p the parameters, ko the gains K_O [1/s], period [s], with\n"
     << " * c = ko / (1 + ko period / 2) and half = period / 2 derived from them. State: started,\n"

@@ -262,6 +262,19 @@ def joint_vector(p, *flags: str, help: str, **kwargs):
     )
 
 
+def add_recorded_torque_reading(p) -> None:
+    """``--torque-unit`` and ``--drive-gain`` of a command reading a log the way an
+    identification JSON records (predict, detect): given, they replace the recorded ones."""
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille", "current"],
+        help="logged torque unit, as identify's (default: as recorded)",
+    )
+    joint_vector(
+        p, "--drive-gain", metavar="K", help="as identify's (default: as recorded in the JSON)"
+    )
+
+
 def joint_values(values, n: int, what: str, *, broadcast: bool = False) -> list[float]:
     """The values of a :func:`joint_vector` option for ``n`` joints (one value for all of them
     when ``broadcast``), or a one-line error naming the option."""

@@ -297,12 +297,7 @@ def _observer(args, robot, base, out: Path, params, note: str | None = None) -> 
         st = code if args.lang == "st" else generate_observer(robot, "st", **same)
         Path(args.plcopen).write_bytes(plcopen_project([st.text], code.name))
         written.append(Path(args.plcopen))
-    extras = joint_terms(args)
-    print(
-        f"{robot.name}: momentum observer in {len(code.names)} base parameters"
-        + (f" ({', '.join(extras)})" if extras else "")
-        + f", period {args.period:g} s"
-    )
+    _say_step(robot, "momentum observer", code, args)
     if note:
         print(note)
     how = "given" if gains else f"default 1 / (10 T) = {default_observer_gain(args.period):.4g}"
@@ -366,12 +361,7 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
         texts = [st.text, dyn.text, obs.text]
         Path(args.plcopen).write_bytes(plcopen_project(texts, st.name))
         written.append(Path(args.plcopen))
-    extras = joint_terms(args)
-    print(
-        f"{robot.name}: {kind} step in {len(code.names)} base parameters"
-        + (f" ({', '.join(extras)})" if extras else "")
-        + f", period {args.period:g} s"
-    )
+    _say_step(robot, f"{kind} step", code, args)
     if note:
         print(note)
     if gains.note:
@@ -502,3 +492,14 @@ def _identified_params(path: str, robot, base, args):
     threshold = doc.get("rsd_threshold")
     said = f"{threshold:g} %" if isinstance(threshold, (int, float)) else "the threshold"
     return out, [k for k in base.names if k in pruned], said
+
+
+def _say_step(robot, what: str, code, args) -> None:
+    """The first line of a generated step's report: what, in how many base parameters with which
+    joint terms, at which period."""
+    extras = joint_terms(args)
+    print(
+        f"{robot.name}: {what} in {len(code.names)} base parameters"
+        + (f" ({', '.join(extras)})" if extras else "")
+        + f", period {args.period:g} s"
+    )

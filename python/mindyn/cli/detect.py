@@ -9,7 +9,15 @@ import argparse
 import numpy as np
 
 from ..robot import load
-from .args import add_command, add_robot, joint_values, joint_vector, number, output_file
+from .args import (
+    add_command,
+    add_recorded_torque_reading,
+    add_robot,
+    joint_values,
+    joint_vector,
+    number,
+    output_file,
+)
 
 
 def _read_log(path, robot, doc, args):
@@ -246,12 +254,5 @@ def register(sub) -> None:
     )
     p.add_argument("--plot", metavar="PNG", type=output_file, help="plot of r and thresholds")
     p.add_argument("--consistent", action="store_true", help="the consistent estimate of the JSON")
-    p.add_argument(
-        "--torque-unit",
-        choices=["Nm", "permille", "current"],
-        help="logged torque unit, as identify's (default: as recorded)",
-    )
-    joint_vector(
-        p, "--drive-gain", metavar="K", help="as identify's (default: as recorded in the JSON)"
-    )
+    add_recorded_torque_reading(p)
     p.set_defaults(func=cmd_detect)

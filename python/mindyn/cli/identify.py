@@ -20,6 +20,7 @@ from .args import (
     add_drive_side,
     add_joint_terms,
     add_offset,
+    add_recorded_torque_reading,
     add_robot,
     check_radians,
     controller_period,
@@ -1551,12 +1552,5 @@ def register(sub) -> None:
     )
     number(p, "--cutoff", low=0, low_open=True, help="cut-off [Hz] instead of the recorded one")
     p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
-    p.add_argument(
-        "--torque-unit",
-        choices=["Nm", "permille", "current"],
-        help="logged torque unit, as identify's (default: as recorded)",
-    )
-    joint_vector(
-        p, "--drive-gain", metavar="K", help="as identify's (default: as recorded in the JSON)"
-    )
+    add_recorded_torque_reading(p)
     p.set_defaults(func=cmd_predict)
