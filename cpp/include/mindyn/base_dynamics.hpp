@@ -11,6 +11,8 @@
 // operation. The per-call functions allocate nothing and throw nothing; sizes are
 // preconditions (the Python binding checks them). One object per thread: the workspace is
 // inside.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

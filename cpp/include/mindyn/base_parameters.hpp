@@ -4,6 +4,8 @@
 // method (recursive_base.hpp: the identifiable space link by link, cost linear in the number of
 // links, then the same echelon form) and the sampled numerical method (regressor samples, QR),
 // for cross-checking.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

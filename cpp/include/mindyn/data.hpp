@@ -1,6 +1,8 @@
 // Per-call workspace of the dynamics algorithms, the Slotine-Li functions and the IK chain. Built
 // once from a Model; after that the algorithms write into it and allocate nothing. One thread
 // at a time: every thread that computes uses a Data of its own.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Cholesky>

@@ -25,6 +25,8 @@
 // mapping, no tags beyond YAML's core ones such as !!str); every number is finite with magnitude
 // at most kMaxDescriptionValue (a key given without a value, `xx:`, is refused: leave the key out
 // for its default); at most kMaxModelJoints joints.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <string>

@@ -6,6 +6,8 @@
 // are fed here too). Every function here allocates nothing and throws nothing; sizes are
 // preconditions, which a caller checks once at setup with `checkSizes` (the Python binding checks
 // its arguments itself, with messages in the terms of its own arguments).
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

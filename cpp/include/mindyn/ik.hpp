@@ -12,6 +12,8 @@
 //
 // After construction nothing allocates or throws: IkSolver::solve() and ChainKinematics::pose()
 // and poseAndJacobian() are real-time safe. An object holds its workspace: one per thread.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Cholesky>

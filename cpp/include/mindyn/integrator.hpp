@@ -11,6 +11,8 @@
 // error O(h^4)). The friction terms other than the viscous one are taken out of the parameter
 // vector and applied as a torque, so that the sign in them can be smoothed (eps > 0) where a
 // switching sign would make the right-hand side discontinuous.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -7,6 +7,8 @@
 //  - segment inertias are the model's classical parameters (about the link origin, link axes);
 //  - Jacobians follow KDL: rows 0-2 linear velocity, rows 3-5 angular velocity, reference point
 //    the tool frame origin, all expressed in the base frame.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

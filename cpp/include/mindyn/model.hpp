@@ -5,6 +5,8 @@
 // Topology: joint k (0-based) moves link k+1 relative to the link carried by joint parent(k), or
 // relative to the base (link 0) when parent(k) == -1. Joints are numbered so that a parent comes
 // before its children (parent(k) < k). A serial chain has parent(k) = k - 1.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -29,6 +29,8 @@
 //
 // Every function here allocates nothing and throws nothing after setup (Data built); sizes are
 // preconditions (checked by the Python binding).
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include "mindyn/base_parameters.hpp"

@@ -21,6 +21,8 @@
 //
 // Friction and rotor terms come from the momentum regressors and the Newton-Euler regressor of
 // the layout (their friction columns), so the observer follows their model.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

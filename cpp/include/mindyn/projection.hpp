@@ -1,5 +1,5 @@
 // The projection kernel: exact coordinates of every influence coefficient of the Lagrangian in
-// the basis of F_L = Y0 x Y1 x ... x Yn (method: docs, sections 2-4).
+// the basis of F_L = Y0 x Y1 x ... x Yn (method: docs/base-parameters.md).
 //
 // Basis functions are multi-indices (l0; l1 .. ln):
 //   l0 = 0        the constant 1 (potential part);
@@ -14,6 +14,8 @@
 // same stage): a link's energies involve only the joints of its root path, so J(i, j) occurs
 // only for i and j on one root path, and lk = 1 for every joint off the path. A basis function
 // that does not involve a branch is one row, whichever branches give it coordinates.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

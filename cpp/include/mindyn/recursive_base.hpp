@@ -21,6 +21,8 @@
 // carried into frame j at q = 0 (T_{j,k}: the parameters of link k expressed in frame j). Rotor
 // inertia and friction are added as columns of their own (see recursiveIdentifiable), on the
 // motor side through the transmission (recursive_base.cpp).
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -11,6 +11,8 @@
 // below 1e-17), evaluated in Estrin's scheme for a short dependency chain. The quadrant k mod 4
 // selects (cos, sin) of k pi/2 from a table and the angle-sum formulas combine them. Within
 // 2.2e-16 of the C library; beyond 1e6 rad, and for NaN and infinities, the C library's values.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <cmath>

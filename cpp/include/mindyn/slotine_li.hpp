@@ -14,6 +14,8 @@
 //
 // which for dqr = dq, ddqr = ddq is the ordinary Newton-Euler force I a + v x* I v. Conventions as
 // in dynamics.hpp. Every function here allocates nothing and throws nothing.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -3,6 +3,8 @@
 // cross products, the carry of wrenches from a link to its parent, and the pose error of two
 // frames. Spatial vectors are (angular; linear) about a frame origin in that frame's axes, as in
 // dynamics.hpp. Everything here is inline, allocates nothing and throws nothing.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

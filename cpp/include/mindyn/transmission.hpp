@@ -22,6 +22,8 @@
 // The joint torques follow from T by virtual work. For the differential that is ros_control's
 // own effort map; for the four-bar linkage ros_control's effort map is not the transpose of its
 // position map, and T^T (consistent with the positions) is used here.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -39,6 +39,8 @@
 // `Model::transmission` (transmission.hpp); a joint of the model that none drives is driven
 // directly, a joint locked in the model adds a constant to its motors, other types are left
 // out; the notes say which.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -10,6 +10,8 @@
 //   gravity-compensation: tau = sat(g(q) p - K_P e - K_D de)
 //
 // (|Y|^2 only when generated with nu > 0.) Infinite bounds are written as +-1e300.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

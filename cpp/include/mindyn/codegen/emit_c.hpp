@@ -13,6 +13,8 @@
 // Sines and cosines: by default (CTrig::Inline) each angle's pair comes from a static routine in
 // the source, without branches or calls for |x| <= 1e6 (the C library's sin and cos beyond, and
 // for NaN and infinities), within 2.2e-16 of the C library; CTrig::Libm calls sin and cos.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <string>

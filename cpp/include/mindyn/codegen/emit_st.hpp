@@ -7,6 +7,8 @@
 // (NAME_gravity without dq, ddq; NAME_regressor with W : ARRAY[1..N, 1..NP] OF LREAL and no p;
 // with baked-in parameters no p). Temporaries are local LREAL variables, reused once dead; only
 // SIN and COS are called, products are written out (no **), one operation per line.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <string>

@@ -4,6 +4,8 @@
 // (a Ref is a node with a sign), so x*y, (-x)*y and -(x*y) are one node, and a - b and b - a are
 // one node used with opposite signs: negation costs nothing until it reaches an output. A sum
 // that cancels one of the terms of an operand, x + (-x + y), is that remaining term.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <cstdint>

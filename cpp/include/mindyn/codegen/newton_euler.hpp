@@ -21,6 +21,8 @@
 // link of most arms) sees sparse velocities. The wrench is carried as linear forms in the
 // parameters through sums and signed permutations, so that equal kinematic coefficients of
 // different links share one product. Which frame each link uses is chosen by operation count.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>

@@ -9,6 +9,8 @@
 //             - T/2 (beta + beta_prev) + T/2 r_prev,
 //         r = c (p - p(0) - s), c = K_O / (1 + K_O T/2),  integral = s + T/2 r,
 // the same update as mindyn::MomentumObserver.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Core>
