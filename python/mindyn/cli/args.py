@@ -2,7 +2,7 @@
 every numeric and output-path option: each says what it accepts, in its error message and in
 its ``--help`` line alike.
 
-The conventions of every command (README.md's "Command line" section states them too):
+The conventions of every command (docs/cli.md states them too):
 
 - angles are in radians (lengths in metres); ``--deg`` takes the angles of an option, and the
   revolute joints' values of a joint vector, in degrees;
