@@ -341,6 +341,26 @@ def test_a_broken_link_fails_the_build(tmp_path):
     assert "no-such-page.md" in res.stderr and "no-such-section" in res.stderr, res.stderr[-2000:]
 
 
+def _slug(heading: str) -> str:
+    """The anchor of a heading, as MkDocs' and GitHub's renderers make it for plain headings."""
+    return re.sub(r"\s+", "-", re.sub(r"[^\w\s-]", "", heading.strip().lower()))
+
+
+def test_readme_links_into_the_manual_resolve():
+    """The README is read outside the site (on the repository's page), so the strict build does
+    not see its links: each relative link names an existing file, and a heading of it."""
+    links = re.findall(r"\]\(([^)\s]+)\)", README.read_text())
+    local = [link for link in links if not re.match(r"\w+://", link)]
+    assert len(local) >= 10, local
+    for link in local:
+        path, _, anchor = link.partition("#")
+        target = REPO / path
+        assert target.is_file(), link
+        if anchor:
+            headings = re.findall(r"^#+ (.+)$", target.read_text(), re.M)
+            assert anchor in {_slug(h) for h in headings}, link
+
+
 def _hook():
     spec = importlib.util.spec_from_file_location("cli_reference", DOCS / "hooks/cli_reference.py")
     module = importlib.util.module_from_spec(spec)
