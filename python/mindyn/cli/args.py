@@ -54,8 +54,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "closed-loop joint tracking simulation: adaptive PD, computed torque or PD",
     ),
     "ik": ("control", "position inverse kinematics of the tool frame, inside the joint limits"),
-    "excite": ("identify", "optimised Fourier excitation trajectory for identification"),
-    "simulate": ("identify", "simulated joint log along a trajectory (stand-in for a robot)"),
+    "excite": ("excite", "optimised Fourier excitation trajectory for identification"),
+    "simulate": ("simulate", "simulated joint log along a trajectory (stand-in for a robot)"),
     "identify": (
         "identify",
         "identify base parameters from joint logs (dynamic, integral or energy model)",
@@ -65,7 +65,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "identify a payload fixed to the last link, with an identified arm",
     ),
     "predict": (
-        "identify",
+        "predict",
         "torques an identified model predicts on a log (CSV), to score it any way",
     ),
     "detect": (
