@@ -13,8 +13,12 @@ recorded by the file of its code; consecutive calls in one file are one visit. P
 number of distinct files entered, the number of re-entries (a visit to a file the flow had
 already left: a call back into it after calls into other files), and the re-entries per file.
 Module bodies run by imports are left out (they are loading, not the flow); returns are not
-calls, so coming back to a caller is not counted, only calling into it again. ``--show``
-prints the visits in order.
+calls, so coming back to a caller is not counted, only calling into it again. The counts are
+printed three ways: every call; with the utility and core modules (robot, base parameters,
+argument checks) left out, a call into one not ending its caller's visit; and the workflow's
+own flow, the calls made by the command line's modules and the workflow modules (the code
+between the command line and the algorithms; what the algorithms call in turn is left out).
+``--show`` prints the visits of the last in order.
 """
 
 from __future__ import annotations
@@ -47,6 +51,24 @@ UTILITY = {
 }
 
 
+class _Workflow(set):
+    """The command line's files and the workflow modules of the identification."""
+
+    def __contains__(self, name) -> bool:
+        return name.startswith("cli/") or super().__contains__(name)
+
+
+WORKFLOW = _Workflow(
+    {
+        "cli/*.py",
+        "identification/reading.py",
+        "identification/summary.py",
+        "identification/terminal.py",
+        "identification/workflow.py",
+    }
+)
+
+
 def reentries(visits: list[str]) -> tuple[set[str], collections.Counter]:
     """The files visited and, per file, the visits after the first."""
     seen: set[str] = set()
@@ -74,28 +96,32 @@ def make_logs(robot_path: str, folder: Path, rate: float) -> tuple[Path, Path]:
     return paths[0], paths[1]
 
 
-def trace(argv: list[str]) -> tuple[list[str], int]:
-    """The visits (files relative to the package, in order) and the exit status."""
+def trace(argv: list[str]) -> tuple[list[tuple[str, str | None]], int]:
+    """The calls into the package's files, in order, each as (its file, its caller's file or
+    None), consecutive repeats of a pair left out; and the exit status."""
     from mindyn.cli import main
 
-    visits: list[str] = []
+    calls: list[tuple[str, str | None]] = []
     names: dict[str, str | None] = {}  # file of a code object -> its name in the package
 
     def package_name(filename: str) -> str | None:
-        path = Path(filename).resolve()
-        return str(path.relative_to(PACKAGE)) if path.is_relative_to(PACKAGE) else None
+        if filename not in names:
+            path = Path(filename).resolve()
+            names[filename] = (
+                str(path.relative_to(PACKAGE)) if path.is_relative_to(PACKAGE) else None
+            )
+        return names[filename]
 
     def profile(frame, event, arg):
-        if event != "call":
+        if event != "call" or frame.f_code.co_name == "<module>":
             return
-        code = frame.f_code
-        if code.co_name == "<module>":
+        name = package_name(frame.f_code.co_filename)
+        if name is None:
             return
-        name = names.get(code.co_filename, "")
-        if name == "":
-            name = names[code.co_filename] = package_name(code.co_filename)
-        if name is not None and (not visits or visits[-1] != name):
-            visits.append(name)
+        back = frame.f_back
+        pair = (name, package_name(back.f_code.co_filename) if back is not None else None)
+        if not calls or calls[-1] != pair:
+            calls.append(pair)
 
     out = io.StringIO()
     sys.setprofile(profile)
@@ -104,7 +130,24 @@ def trace(argv: list[str]) -> tuple[list[str], int]:
             status = main(argv)
     finally:
         sys.setprofile(None)
-    return visits, status
+    return calls, status
+
+
+def collapsed(names: list[str]) -> list[str]:
+    return [v for k, v in enumerate(names) if k == 0 or names[k - 1] != v]
+
+
+def show(title: str, visits: list[str], listing: bool) -> None:
+    seen, again = reentries(visits)
+    print(title)
+    print(
+        f"  files entered: {len(seen)}; visits: {len(visits)}; re-entries (into a file already "
+        f"left): {sum(again.values())}"
+    )
+    for name in sorted(seen):
+        print(f"    {name:<40} re-entered {again[name]:4d} times")
+    if listing:
+        print("  visits in order: " + " > ".join(visits))
 
 
 def main() -> int:
@@ -126,29 +169,26 @@ def main() -> int:
             argv += ["--consistent"]
             if not opts.no_urdf:
                 argv += ["--urdf", str(folder / "out.urdf")]
-        visits, status = trace(argv)
+        calls, status = trace(argv)
     if status != 0:
         print(f"identify failed with status {status}", file=sys.stderr)
         return 1
-    seen, again = reentries(visits)
-    # the same with the utility and core modules transparent: a call into one of them does not
-    # end its caller's visit
-    flow = [v for v in visits if v not in UTILITY]
-    flow = [v for k, v in enumerate(flow) if k == 0 or flow[k - 1] != v]
-    fseen, fagain = reentries(flow)
     print("mindyn identify ROBOT fit.csv " + " ".join(argv[3:]).replace(tmp, "."))
-    print(f"  files entered: {len(seen)}")
-    print(f"  visits: {len(visits)}; re-entries (into a file already left): {sum(again.values())}")
-    for name in sorted(seen):
-        print(f"    {name:<40} re-entered {again[name]:4d} times")
-    print(f"  without the utility and core modules ({', '.join(sorted(UTILITY))}):")
-    print(f"  files entered: {len(fseen)}; visits: {len(flow)}; re-entries: {sum(fagain.values())}")
-    for name in sorted(fseen):
-        print(f"    {name:<40} re-entered {fagain[name]:4d} times")
-    if opts.show:
-        print("  visits in order:")
-        for v in visits:
-            print(f"    {v}")
+    show("every call into the package:", collapsed([f for f, _ in calls]), False)
+    useful = [(f, c) for f, c in calls if f not in UTILITY]
+    show(
+        f"the utility and core modules left out ({', '.join(sorted(UTILITY))}):",
+        collapsed([f for f, _ in useful]),
+        False,
+    )
+    layer = [(f, c) for f, c in useful if f in WORKFLOW or (c is not None and c in WORKFLOW)]
+    show(
+        "the workflow's own flow: the calls made by the command line and the workflow modules "
+        f"({', '.join(sorted(WORKFLOW - {'cli/*.py'}))}, cli/*.py), utility and core modules "
+        "left out:",
+        collapsed([f for f, _ in layer]),
+        opts.show,
+    )
     return 0
 
 

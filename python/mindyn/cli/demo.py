@@ -187,14 +187,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
             out / f"torque_identification_{model}.png",
             data.t,
             data.tau,
-            fit["tau_hat"],
+            fit["tau_hat"][0],
             f"{robot.name}, {model} model: excitation trajectory",
         )
         plot_torques(
             out / f"torque_validation_{model}.png",
             vdata.t,
             vdata.tau,
-            val["tau_hat"],
+            val["tau_hat"][0],
             f"{robot.name}, {model} model: validation trajectory",
         )
     print(f"    noise sd (reference) [N m]:               {_joints(sd)}")
