@@ -8,17 +8,17 @@ with torque noise, in a temporary folder), then runs, in this process,
 
     mindyn identify ROBOT fit.csv --validate val.csv --consistent --urdf out.urdf --json id.json
 
-under ``sys.setprofile``. Every Python call whose code lies in the ``mindyn`` package is
-recorded by the file of its code; consecutive calls in one file are one visit. Printed: the
-number of distinct files entered, the number of re-entries (a visit to a file the flow had
-already left: a call back into it after calls into other files), and the re-entries per file.
-Module bodies run by imports are left out (they are loading, not the flow); returns are not
-calls, so coming back to a caller is not counted, only calling into it again. The counts are
+under ``sys.setprofile``. A call into a file of the ``mindyn`` package none of whose frames is
+active enters that file; consecutive entries into one file are one visit. Printed: the number of
+distinct files entered, the number of re-entries (a visit to a file the flow had already left:
+every frame of it returned, then a call back into it after visits to other files), and the
+re-entries per file. A file calling its own functions, or being returned to, does not re-enter it;
+module bodies run by imports are left out (they are loading, not the flow). The counts are
 printed three ways: every call; with the utility and core modules (robot, base parameters,
-argument checks) left out, a call into one not ending its caller's visit; and the workflow's
-own flow, the calls made by the command line's modules and the workflow modules (the code
-between the command line and the algorithms; what the algorithms call in turn is left out).
-``--show`` prints the visits of the last in order.
+argument checks) left out, a call into one not ending its caller's visit; and the workflow's own
+flow, the calls made by the command line's modules and the workflow modules (the code between
+the command line and the algorithms; what the algorithms call in turn is left out). ``--show``
+prints the visits of the last in order.
 """
 
 from __future__ import annotations
@@ -61,6 +61,7 @@ class _Workflow(set):
 WORKFLOW = _Workflow(
     {
         "cli/*.py",
+        "identification/options.py",
         "identification/reading.py",
         "identification/summary.py",
         "identification/terminal.py",
@@ -112,11 +113,19 @@ def trace(argv: list[str]) -> tuple[list[tuple[str, str | None]], int]:
             )
         return names[filename]
 
+    stack: list[str | None] = []  # the package file of each active frame (None: outside)
+
     def profile(frame, event, arg):
-        if event != "call" or frame.f_code.co_name == "<module>":
+        if event == "return":
+            if stack:
+                stack.pop()
+            return
+        if event != "call":
             return
         name = package_name(frame.f_code.co_filename)
-        if name is None:
+        entered = name is not None and name not in stack and frame.f_code.co_name != "<module>"
+        stack.append(name)
+        if not entered:
             return
         back = frame.f_back
         pair = (name, package_name(back.f_code.co_filename) if back is not None else None)

@@ -25,7 +25,7 @@ def _progress():
 
 def reading_options(args: argparse.Namespace, robot):
     """The :class:`~mindyn.identification.reading.ReadingOptions` of the command line."""
-    from ..identification.reading import ReadingOptions
+    from ..identification.options import ReadingOptions
 
     gain = args.drive_gain
     return ReadingOptions(
@@ -45,7 +45,7 @@ def reading_options(args: argparse.Namespace, robot):
 
 def identify_options(args: argparse.Namespace, robot):
     """The :class:`~mindyn.identification.workflow.IdentifyOptions` of the command line."""
-    from ..identification.workflow import IdentifyOptions
+    from ..identification.options import IdentifyOptions
 
     width = args.friction_width
     if width is not None and args.friction_model is not None:
@@ -136,9 +136,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
         options=reading,
     )
     report = run(robot, logs, options=options, tip=args.tip, progress=_progress())
+    doc = report.to_dict()
     text = report.format()
     print(text)
-    doc = report.to_dict()
     if args.json:
         _write_json(args.json, doc)
     if args.urdf or args.yaml or args.mjcf:

@@ -10,8 +10,9 @@ from .args import add_command, add_recorded_torque_reading, add_robot, number, o
 
 def cmd_predict(args: argparse.Namespace) -> int:
     from ..identification.data import read_json
+    from ..identification.options import ReadingOptions
     from ..identification.prediction import identified_model, predict
-    from ..identification.reading import ReadingOptions, read_log
+    from ..identification.reading import read_log
 
     doc = read_json(args.identification)
     if not isinstance(doc, dict):

@@ -17,7 +17,9 @@
 - :mod:`~mindyn.identification.currents`: torques from motor currents logged apart;
 - :mod:`~mindyn.identification.report`: tables and plots;
 - :mod:`~mindyn.identification.workflow`: the workflow of ``mindyn identify`` as a library:
-  :class:`IdentifyOptions`, :func:`load_logs` (:mod:`~mindyn.identification.reading`),
+  :class:`IdentifyOptions` and :class:`ReadingOptions`
+  (:mod:`~mindyn.identification.options`), :func:`load_logs`
+  (:mod:`~mindyn.identification.reading`),
   :func:`run` returning an :class:`IdentificationReport`
   (:mod:`~mindyn.identification.summary`: its JSON by ``to_dict()``;
   :mod:`~mindyn.identification.terminal`: its text by ``format()``).
@@ -31,10 +33,11 @@ from .errors import IdentificationError, RankDeficientError
 from .estimation import IdentificationResult, identify
 from .friction import FrictionChoice, select_friction_model
 from .models import MODELS, dynamic_system, energy_system, integral_system
-from .reading import Logs, ReadingOptions, load_logs
+from .options import IdentifyOptions, ReadingOptions
+from .reading import Logs, load_logs
 from .summary import IdentificationReport
 from .validation import error_measures, true_base_values, validate
-from .workflow import IdentifyOptions, run
+from .workflow import run
 
 __all__ = [
     "MODELS",

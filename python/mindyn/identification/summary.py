@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from .consistent import ConsistentResult
     from .estimation import IdentificationResult
     from .friction import FrictionChoice
+    from .options import IdentifyOptions
     from .reading import Logs
 
 
@@ -74,42 +75,38 @@ def measures_doc(v: dict, files: list) -> dict:
     return out
 
 
-def segments(ds) -> dict:
-    """A log cut at its breaks: segment count, shortest and longest [s], each one's span."""
-    spans = [d.processing["segment"]["t_s"] for d in ds]
-    length = [b - a for a, b in spans]
-    return {
-        "count": len(ds),
-        "shortest_s": min(length),
-        "longest_s": max(length),
-        "spans_s": spans,
-    }
-
-
 @dataclass(frozen=True, kw_only=True)
 class IdentificationReport:
-    """What one identification found (:func:`~mindyn.identification.workflow.run`).
+    """What one identification found (:func:`~mindyn.identification.workflow.run`), each
+    quantity computed once.
 
     ``robot``: the robot identified (with the friction model chosen); ``options``: the
-    :class:`~mindyn.identification.workflow.IdentifyOptions`; ``logs``: the
+    :class:`~mindyn.identification.options.IdentifyOptions`; ``logs``: the
     :class:`~mindyn.identification.reading.Logs`; ``base``: the base set; ``result``: the
-    unconstrained least-squares fit; ``friction``: the friction choice (None: the robot's own
-    model); ``consistent``: the physically consistent estimate (None unless asked for);
-    ``fit``, ``validation``: the error measures of the unconstrained estimate on the fit and
-    validation logs (:func:`~mindyn.identification.validate`; validation None without
-    validation logs), ``consistent_fit``, ``consistent_validation`` those of the consistent
-    estimate; ``mass_matrix_min_eig``: the smallest eigenvalue of the consistent model's mass
-    matrix over the fit logs; ``truth``: the true base values when the logs are simulated;
-    ``truth_side``: the drive side of a simulation whose true values cannot be compared;
-    ``tip``: the chain identified."""
+    unconstrained least-squares fit (``result_doc`` its JSON fields); ``friction``: the friction
+    choice (None: the robot's own model), ``friction_record`` and ``friction_lines`` the
+    friction model and how it was chosen, for the JSON and the text (None and empty without
+    friction); ``consistent``: the physically consistent estimate (None unless asked for;
+    ``consistent_doc`` its JSON fields); ``fit``, ``validation``: the error measures of the
+    unconstrained estimate on the fit and validation logs
+    (:func:`~mindyn.identification.validate`; validation None without validation logs),
+    ``consistent_fit``, ``consistent_validation`` those of the consistent estimate;
+    ``mass_matrix_min_eig``: the smallest eigenvalue of the consistent model's mass matrix over
+    the fit logs; ``truth``: the true base values when the logs are simulated; ``truth_side``:
+    the drive side of a simulation whose true values cannot be compared; ``tip``: the chain
+    identified."""
 
     robot: Robot
-    options: Any
+    options: IdentifyOptions
     logs: Logs
     base: BaseParameters
     result: IdentificationResult
+    result_doc: dict
     friction: FrictionChoice | None
+    friction_record: dict | None
+    friction_lines: list[str]
     consistent: ConsistentResult | None
+    consistent_doc: dict | None
     fit: dict
     validation: dict | None
     consistent_fit: dict | None
@@ -119,15 +116,6 @@ class IdentificationReport:
     truth_side: str | None
     tip: str | None = None
 
-    @property
-    def friction_record(self) -> dict | None:
-        """The friction model and how it was chosen (None without friction)."""
-        if not self.base.friction:
-            return None
-        from .friction import friction_record
-
-        return friction_record(self.robot, record=self.friction.record if self.friction else None)
-
     def format(self) -> str:
         """The terminal text of ``mindyn identify``."""
         from .terminal import format_identification
@@ -136,16 +124,15 @@ class IdentificationReport:
 
     def to_dict(self) -> dict:
         """The JSON document of ``mindyn identify --json``."""
-        cons, logs = self.consistent, self.logs
+        cons, logs = self.consistent_doc, self.logs
         fit, val = logs.fit, logs.validation
-        data = fit.logs
-        doc = self.result.to_dict()
-        if self.base.friction:
+        doc = dict(self.result_doc)
+        if self.friction_record is not None:
             doc["friction_model"] = self.friction_record
         doc["tip"] = self.tip  # the chain identified (None: the whole description)
         doc["consistent"] = cons is not None
         if cons is not None:
-            doc.update(plain(cons.to_dict()))
+            doc.update(plain(cons))
             ce = doc["consistent_estimate"]
             ce["fit"] = {"estimate": "consistent", **measures_doc(self.consistent_fit, fit.labels)}
             if self.consistent_validation is not None:
@@ -155,27 +142,27 @@ class IdentificationReport:
                     **measures_doc(self.consistent_validation, val.labels),
                 }
             ce["mass_matrix_min_eig"] = self.mass_matrix_min_eig
-        doc["reading"] = logs.record()
+        doc["reading"] = dict(logs.record)
         doc["data"] = {
             "file": fit.files[0] if len(fit.files) == 1 else None,
             "files": list(fit.files),
-            "samples": sum(int(d.processing.get("samples", d.m)) for d in data),  # as logged
-            "samples_used": sum(d.m for d in data),  # after resampling, edges and decimation
-            "processing": plain(data[0].processing),
+            "samples": sum(fit.logged),  # as logged
+            "samples_used": sum(fit.samples),  # after resampling, edges and decimation
+            "processing": plain(fit.logs[0].processing),
             "logs": [
                 {
                     "file": f,
-                    "samples": int(d.processing.get("samples", d.m)),
-                    "samples_used": d.m,
+                    "samples": logged,
+                    "samples_used": m,
                     "processing": plain(d.processing),
                 }
-                for f, d in zip(fit.labels, data)
+                for f, d, m, logged in zip(fit.labels, fit.logs, fit.samples, fit.logged)
             ],
         }
         doc["data"]["segments"] = [
-            {"file": f, **segments(ds)}
-            for f, ds in zip(fit.files + val.files, fit.parts + val.parts)
-            if len(ds) > 1
+            {"file": f, **seg}
+            for f, seg in zip(fit.files + val.files, fit.segments + val.segments)
+            if seg is not None
         ]
         doc["fit"] = measures_doc(self.fit, fit.labels)
         if self.validation is not None:

@@ -8,8 +8,6 @@ import math
 import re
 from pathlib import Path
 
-from .summary import segments
-
 
 def joint_term_words(robot, *, rotor: bool, friction: bool, offset: bool) -> list[str]:
     """The joint terms identified, in words, for the first line (with where the rotor inertia
@@ -35,20 +33,20 @@ def _head(report) -> list[str]:
         + (f" ({', '.join(extras)})" if extras else "")
         + ", "
     )
-    logs = fit.logs
-    if len(logs) == 1:
-        return [head + f"{logs[0].m} samples at {logs[0].rate:.4g} Hz from {fit.files[0]}"]
-    out = [head + f"{sum(d.m for d in logs)} samples from {len(logs)} logs fitted together:"]
+    if len(fit.logs) == 1:
+        return [head + f"{fit.samples[0]} samples at {fit.rates[0]:.4g} Hz from {fit.files[0]}"]
+    out = [head + f"{sum(fit.samples)} samples from {len(fit.logs)} logs fitted together:"]
     k = 0
-    for f, ds in zip(fit.files, fit.parts):  # a file cut at breaks: one line for its segments
+    for f, ds, seg in zip(fit.files, fit.parts, fit.segments):
+        # a file cut at breaks: one line for its segments
         infos = res.settings["logs"][k : k + len(ds)]
-        k += len(ds)
+        m = fit.samples[k : k + len(ds)]
         eq = sum(i["equations"] for i in infos)
-        if len(ds) == 1:
-            out.append(f"    {f}: {ds[0].m} samples at {ds[0].rate:.4g} Hz, {eq} equations")
+        if seg is None:
+            out.append(f"    {f}: {m[0]} samples at {fit.rates[k]:.4g} Hz, {eq} equations")
         else:
-            out.append(f"    {f}: {_segments_line(ds)}, {sum(d.m for d in ds)} samples, {eq} "
-                       "equations")  # fmt: skip
+            out.append(f"    {f}: {_segments_line(seg)}, {sum(m)} samples, {eq} equations")
+        k += len(ds)
     return out
 
 
@@ -156,10 +154,7 @@ def _kept(report) -> list[str]:
             "true values are not compared"
         )
     if base.friction:
-        from .friction import friction_lines
-
-        rec = report.friction.record if report.friction else None
-        out += friction_lines(report.robot, record=rec)
+        out += report.friction_lines
     for w in res.settings.get("warnings", []):
         out.append(f"  WARNING: {w}")
     return out
@@ -187,7 +182,9 @@ def format_identification(report) -> str:
         out.append(_rms_lines(f"validation data ({', '.join(vfiles)}){which}", val))
     if cons is not None:
         out.append("")
-        out += _consistent_lines(cons, fit, val, cfit, cval, report.mass_matrix_min_eig)
+        out += _consistent_lines(
+            report.consistent_doc, fit, val, cfit, cval, report.mass_matrix_min_eig
+        )
         out.append(_rms_lines("identification data, consistent estimate", cfit))
         if cval is not None:
             out.append(
@@ -251,9 +248,10 @@ def _headline(cfit, cval, fit, val) -> str:
     )
 
 
-def _weight_lines(cons) -> list[str]:
-    """How the prior's weight was chosen, and per link whether the data or the prior hold it."""
-    ch = cons.weight_choice
+def _weight_lines(ce: dict) -> list[str]:
+    """How the prior's weight was chosen, and per link whether the data or the prior hold it
+    (``ce``: the consistent estimate's ``consistent_estimate`` JSON fields)."""
+    ch = ce["prior_weight_choice"]
     lines = []
     if ch is not None:
         lines.append(
@@ -278,9 +276,9 @@ def _weight_lines(cons) -> list[str]:
                 "    the chosen weight is at the end of the candidates: the optimum may lie "
                 "beyond (give --prior-weight to go further)"
             )
-    elif cons.prior_weight:
-        lines.append(f"  prior weight {cons.prior_weight:g} (given)")
-    if cons.links:
+    elif ce["prior_weight"]:
+        lines.append(f"  prior weight {ce['prior_weight']:g} (given)")
+    if ce["links"]:
         from .prior import MASS_EVIDENCE
 
         lines.append(
@@ -289,7 +287,7 @@ def _weight_lines(cons) -> list[str]:
             "determined by (with the data's standard deviation); identifiable directions of "
             "the link's parameters determined by the data, the link's parameters determined by:"
         )
-        for lk in cons.links:
+        for lk in ce["links"]:
             sd = lk["mass_data_std"]
             lines.append(
                 f"  {lk['link']:<24} {lk['mass']:10.4g} ({lk['mass_std']:.3g}) "
@@ -312,21 +310,29 @@ def _weight_lines(cons) -> list[str]:
     return lines
 
 
-def _consistent_lines(cons, fit, val, cfit, cval, low) -> list[str]:
-    """The lines of ``mindyn identify --consistent``: pseudo-inertias, errors side by side."""
-    un = cons.violating_links(True)
+def _consistent_lines(doc, fit, val, cfit, cval, low) -> list[str]:
+    """The lines of ``mindyn identify --consistent``: pseudo-inertias, errors side by side
+    (``doc``: the consistent estimate's JSON fields, ``low``: its mass matrix's smallest
+    eigenvalue over the data)."""
+    ce = doc["consistent_estimate"]
+    un = ce["unconstrained_violating_links"]
+    weight = ce["prior_weight"]
     lines = [
-        f"Physically consistent estimate ({cons.solver}, {cons.status}, {cons.seconds:.3g} s"
-        + (f", prior weight {cons.prior_weight:g}" if cons.prior_weight else ", no prior")
-        + f"): total mass {cons.total_mass:.4g} kg; fit {cons.fit_increase:.4g} noise variances "
-        "worse than the unconstrained fit with all base parameters",
-        *_weight_lines(cons),
+        f"Physically consistent estimate ({ce['solver']}, {ce['status']}, {ce['seconds']:.3g} s"
+        + (f", prior weight {weight:g}" if weight else ", no prior")
+        + f"): total mass {doc['total_mass']:.4g} kg; fit "
+        f"{ce['fit_increase_noise_variances']:.4g} noise variances worse than the unconstrained "
+        "fit with all base parameters",
+        *_weight_lines(ce),
         "  smallest pseudo-inertia eigenvalue per link [kg] (unconstrained: its realisation "
         "nearest the description):",
         f"  {'link':<24} {'unconstrained':>14} {'consistent':>14}",
     ]
-    for nm, a, b in zip(cons.link_names, cons.unconstrained_min_eig, cons.min_eig):
-        lines.append(f"  {nm:<24} {a:14.4g} {b:14.4g}" + ("  violated" if nm in un else ""))
+    before = ce["unconstrained_pseudo_inertia_min_eig"]
+    for nm, b in doc["pseudo_inertia_min_eig"].items():
+        lines.append(
+            f"  {nm:<24} {before[nm]:14.4g} {b:14.4g}" + ("  violated" if nm in un else "")
+        )
     lines.append(
         "  unconstrained estimate violates physical consistency at: " + ", ".join(un)
         if un
@@ -353,14 +359,13 @@ def _consistent_lines(cons, fit, val, cfit, cval, low) -> list[str]:
         f"  mass matrix of the consistent model: smallest eigenvalue over the data {low:.4g} "
         + ("(positive definite at every sample)" if low > 0 else "(NOT positive definite)")
     )
-    for note in cons.notes:
+    for note in ce["notes"]:
         lines.append(f"  note: {note}")
     return lines
 
 
-def _segments_line(ds) -> str:
+def _segments_line(s: dict) -> str:
     """One line for a log cut at its breaks (the segments themselves are in the JSON)."""
-    s = segments(ds)
     return (
         f"cut at {s['count'] - 1} break(s) in its time stamps into {s['count']} segments "
         f"(shortest {s['shortest_s']:.4g} s, longest {s['longest_s']:.4g} s)"

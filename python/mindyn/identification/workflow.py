@@ -13,85 +13,45 @@ workflow on the command line::
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
 from .data import JointData
 from .errors import IdentificationError
-from .reading import Logs, LogSet, ReadingOptions, check_width, load_logs
+from .options import OPTION_NAMES, IdentifyOptions, ReadingOptions
+from .reading import Logs, LogSet, load_logs
 from .summary import IdentificationReport
 
 __all__ = ["IdentificationReport", "IdentifyOptions", "ReadingOptions", "load_logs", "run"]
 
-MODELS = ("dynamic", "integral", "energy")
-INTEGRATIONS = ("simpson", "trapezoid", "zoh")
+
+def _fit_keywords(options: IdentifyOptions) -> dict:
+    """The keywords of :func:`~mindyn.identification.identify` the options give."""
+    return dict(
+        model=options.model,
+        weighted=options.weighted,
+        rsd_threshold=options.rsd_threshold,
+        energy_window=options.energy_window,
+        integration=options.integration,
+        integral_window=options.integral_window,
+        min_velocity=options.min_velocity,
+    )
 
 
-@dataclass(frozen=True, kw_only=True)
-class IdentifyOptions:
-    """The options of one identification, with the defaults of ``mindyn identify``.
-
-    ``model``: dynamic, integral or energy; ``rotor``, ``friction``, ``offset``: the joint terms
-    identified; ``weighted``: weighted (else ordinary) least squares; ``rsd_threshold`` [%]:
-    parameters above it removed (0 keeps all); ``energy_window``, ``integral_window``: sample
-    intervals per window; ``integration``: simpson, trapezoid or zoh; ``min_velocity``: joint
-    equations slower than this left out (dynamic model with friction); ``friction_model``: a
-    friction kind or ``auto`` (implies ``friction``), ``friction_width``: the tanh widths
-    (smooth or auto); ``consistent``: also the physically consistent estimate, with
-    ``prior_weight`` (None: chosen from the data)."""
-
-    model: str = "dynamic"
-    rotor: bool = False
-    friction: bool = False
-    offset: bool = False
-    weighted: bool = True
-    rsd_threshold: float = 30.0
-    energy_window: int = 10
-    integration: str = "simpson"
-    integral_window: int = 40
-    min_velocity: float = 0.01
-    friction_model: str | None = None
-    friction_width: tuple[float, ...] | None = None
-    consistent: bool = False
-    prior_weight: float | None = None
-
-    def __post_init__(self):
-        if self.model not in MODELS:
-            raise IdentificationError(f"model '{self.model}': expected one of {', '.join(MODELS)}")
-        if self.integration not in INTEGRATIONS:
-            raise IdentificationError(
-                f"integration '{self.integration}': expected one of {', '.join(INTEGRATIONS)}"
-            )
-        if self.friction_width is not None:
-            if self.friction_model is None:
-                raise IdentificationError(
-                    "--friction-width: expected --friction-model smooth or auto"
-                )
-            object.__setattr__(self, "friction_width", tuple(self.friction_width))
-        if self.friction_model is not None:
-            object.__setattr__(self, "friction", True)
-        if self.prior_weight is not None and not self.consistent:
-            raise IdentificationError("--prior-weight: expected --consistent as well")
-
-    def fit_options(self) -> dict:
-        """The keywords of :func:`~mindyn.identification.identify` these options give."""
-        return dict(
-            model=self.model,
-            weighted=self.weighted,
-            rsd_threshold=self.rsd_threshold,
-            energy_window=self.energy_window,
-            integration=self.integration,
-            integral_window=self.integral_window,
-            min_velocity=self.min_velocity,
+def _check_width(width, n: int) -> list[float]:
+    """Friction widths for ``n`` joints (one value: the same for all), each positive."""
+    w = [float(x) for x in width]
+    if len(w) == 1:
+        w *= n
+    if len(w) != n:
+        raise IdentificationError(
+            f"--friction-width needs {n} values (or one for all), got {len(w)}"
         )
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-
-OPTION_NAMES = frozenset(f.name for f in fields(IdentifyOptions))
+    if not all(math.isfinite(x) and x > 0 for x in w):
+        raise IdentificationError("--friction-width: every width must be a positive number")
+    return w
 
 
 def _as_logs(logs, model: str) -> Logs:
@@ -120,43 +80,70 @@ def _truth(robot, base, logs: Logs, options: IdentifyOptions):
     return (true_base_values(base, doc) if doc else None), side
 
 
-def _fit(robot, data: list, files: list, options: IdentifyOptions, progress):
-    """The friction choice (or None), the robot and base set it gives, and the fit."""
+def _friction(robot, data: list, options: IdentifyOptions, progress):
+    """The friction choice (or None), the robot and base set it gives, and the friction model's
+    record and lines (None and none without friction)."""
     from ..base import base_parameters
-    from .estimation import identify
 
-    friction = None
+    if options.friction_model is None:
+        base = base_parameters(
+            robot, rotor=options.rotor, friction=options.friction, offset=options.offset
+        )
+        if not base.friction:
+            return None, robot, base, None, []
+    from .friction import friction_lines, friction_record, select_friction_model
+
+    choice = None
     if options.friction_model is not None:
-        from .friction import select_friction_model
-
         width = None
         if options.friction_width is not None:
-            width = check_width(options.friction_width, robot.n)
-        friction = select_friction_model(
+            width = _check_width(options.friction_width, robot.n)
+        choice = select_friction_model(
             robot,
             data,
             options.friction_model,
             rotor=options.rotor,
             offset=options.offset,
             width=width,
-            fit=options.fit_options(),
+            fit=_fit_keywords(options),
             progress=progress,
         )
-        robot, base = friction.robot, friction.base
-    else:
-        base = base_parameters(
-            robot, rotor=options.rotor, friction=options.friction, offset=options.offset
-        )
+        robot, base = choice.robot, choice.base
+    record = choice.record if choice else None
+    return (
+        choice,
+        robot,
+        base,
+        friction_record(robot, record=record),
+        friction_lines(robot, record=record),
+    )
+
+
+def _fit(robot, base, data: list, files: list, options: IdentifyOptions):
+    """The least-squares fit and its JSON fields."""
+    from .estimation import identify
+
     try:
-        res = identify(robot, data, base=base, **options.fit_options())
+        res = identify(robot, data, base=base, **_fit_keywords(options))
     except np.linalg.LinAlgError as e:
         raise IdentificationError(
-            f"{options.model} model on {' + '.join(files)}: the "
-            f"least-squares problem of the base regressor of this data is singular ({e}); the "
-            f"data do not determine the {base.n} base parameters: use a longer or richer log, "
-            "or fewer parameters"
+            f"{options.model} model on {' + '.join(files)}: the least-squares problem of the "
+            f"base regressor of this data is singular ({e}); the data do not determine the "
+            f"{base.n} base parameters: use a longer or richer log, or fewer parameters"
         ) from None
-    return friction, robot, base, res
+    return res, res.to_dict()
+
+
+def _consistent(res, data: list, options: IdentifyOptions, progress):
+    """The consistent estimate, its JSON fields and its mass matrix's smallest eigenvalue over
+    the data (None, None, None unless asked for)."""
+    if not options.consistent:
+        return None, None, None
+    from .consistent import consistent_estimate
+
+    weight = "auto" if options.prior_weight is None else options.prior_weight
+    cons = consistent_estimate(res, weight, data=data, progress=progress)
+    return cons, cons.to_dict(), cons.mass_matrix_min_eig(data)
 
 
 def run(
@@ -176,7 +163,8 @@ def run(
     estimate when asked for, the error measures on the fit and validation logs, the true values
     when the logs are simulated. ``tip``: the chain identified (as ``load(robot, tip=...)``),
     recorded in the JSON; ``progress``: a callable taking one line per step of the long
-    solves."""
+    solves. Each stage runs once, in order: friction model, fit, consistent estimate, error
+    measures."""
     if options is not None and keywords:
         raise IdentificationError(f"run: give options or {', '.join(keywords)}, not both")
     unknown = sorted(set(keywords) - OPTION_NAMES)
@@ -188,30 +176,34 @@ def run(
     opts = options or IdentifyOptions(**keywords)
     logs = _as_logs(logs, opts.model)
     data, vdata = logs.fit.logs, logs.validation.logs
+    choice, robot, base, record, lines = _friction(robot, data, opts, progress)
+    res, res_doc = _fit(robot, base, data, logs.fit.files, opts)
+    cons, cons_doc, low = _consistent(res, data, opts, progress)
     from .validation import validate
 
-    friction, robot, base, res = _fit(robot, data, logs.fit.files, opts, progress)
-    cons = None
-    if opts.consistent:
-        from .consistent import consistent_estimate
-
-        weight = "auto" if opts.prior_weight is None else opts.prior_weight
-        cons = consistent_estimate(res, weight, data=data, progress=progress)
-    truth, truth_side = _truth(robot, base, logs, opts)
+    fit = validate(res, data)
+    val = validate(res, vdata) if vdata else None
+    cfit = validate(cons, data) if cons is not None else None
+    cval = validate(cons, vdata) if cons is not None and vdata else None
+    truth, side = _truth(robot, base, logs, opts)
     return IdentificationReport(
         robot=robot,
         options=opts,
         logs=logs,
         base=base,
         result=res,
-        friction=friction,
+        result_doc=res_doc,
+        friction=choice,
+        friction_record=record,
+        friction_lines=lines,
         consistent=cons,
-        fit=validate(res, data),
-        validation=validate(res, vdata) if vdata else None,
-        consistent_fit=validate(cons, data) if cons is not None else None,
-        consistent_validation=validate(cons, vdata) if cons is not None and vdata else None,
-        mass_matrix_min_eig=cons.mass_matrix_min_eig(data) if cons is not None else None,
+        consistent_doc=cons_doc,
+        fit=fit,
+        validation=val,
+        consistent_fit=cfit,
+        consistent_validation=cval,
+        mass_matrix_min_eig=low,
         truth=truth,
-        truth_side=truth_side,
+        truth_side=side,
         tip=tip,
     )
