@@ -44,11 +44,11 @@ ZCR07S_STUDY = (
 )
 
 #: The commands, in the order ``mindyn --help`` lists them: the module of :mod:`mindyn.cli` that
-#: defines each (its ``register(subparsers)`` declares the options of all its commands; "" for
-#: :mod:`mindyn.cli` itself) and the command's summary.
+#: defines each (its ``register(subparsers)`` declares the options of all its commands) and the
+#: command's summary.
 COMMANDS: dict[str, tuple[str, str]] = {
-    "info": ("", "print a robot model: joints, geometry, limits, parameters"),
-    "base": ("", "base inertial parameters: counts of the three sets, formulas, rank margin"),
+    "info": ("info", "print a robot model: joints, geometry, limits, parameters"),
+    "base": ("base", "base inertial parameters: counts of the three sets, formulas, rank margin"),
     "track": (
         "control",
         "closed-loop joint tracking simulation: adaptive PD, computed torque or PD",

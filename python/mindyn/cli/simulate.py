@@ -29,7 +29,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         write_tracking_report,
     )
     from ..identification.data import convert_torque, write_csv
-    from .control import reference_and_controller
+    from .closed_loop import reference_and_controller
 
     robot = with_drive_side(load(args.robot, tip=args.tip), args)
     rate = 1.0 / args.period if args.period else args.rate
@@ -110,7 +110,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 def register(sub) -> None:
     """Adds ``simulate`` to the ``mindyn`` subcommands."""
     from ..control.simulation import MAX_SAMPLES, MAX_STEPS
-    from .control import add_closed_loop_args
+    from .closed_loop import add_closed_loop_args
 
     p = add_command(
         sub,
