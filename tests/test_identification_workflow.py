@@ -78,13 +78,13 @@ def test_run_gives_the_json_of_identify_validate_consistent(logs, tmp_path, monk
         return original(self, data)
 
     monkeypatch.setattr(ConsistentResult, "mass_matrix_min_eig", counted)
-    opts = dict(friction=True, consistent=True, prior_weight=0.1)
+    opts = dict(friction=True, consistent=True)  # the prior's weight chosen from the data
     report = run(robot, load_logs([fit], robot, validate=[val]), **opts)
     text = report.format()
     doc = report.to_dict()
     assert len(calls) == 1  # computed once, in run(); the text and the JSON read it
     out = tmp_path / "id.json"
-    argv = ["--validate", val, "--consistent", "--prior-weight", "0.1", "--json", out]
+    argv = ["--validate", val, "--consistent", "--json", out]
     cli_text = cli("identify", "planar2", fit, "--friction", *argv)
     assert _round_trip(doc) == _timeless(json.loads(out.read_text()))
     assert doc["validation"]["file"] == str(val)
@@ -142,3 +142,14 @@ def test_workflow_errors_are_one_line_mindyn_errors(logs):
         load_logs([fit], robot, filter="butter", edge=1.0)
     with pytest.raises(mindyn.Error, match="one per log"):
         load_logs([fit], robot, currents=[fit, fit])
+
+
+def test_logs_read_otherwise_give_the_same_fit_and_no_reading_record(logs):
+    from mindyn.identification import read_csv
+
+    robot, fit, _ = logs
+    loaded = run(robot, load_logs([fit], robot, filter="butter"), friction=True).to_dict()
+    given = run(robot, [read_csv(fit, robot)], friction=True).to_dict()
+    assert given["base_values"] == loaded["base_values"]
+    assert loaded["reading"]["filter"] == "butter"
+    assert given["reading"] is None  # how they were read is not known: not recorded

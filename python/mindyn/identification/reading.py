@@ -232,26 +232,31 @@ class Logs(Sequence):
     the cut-off the validation logs were filtered at (``cutoff``: the highest of the fit logs'
     with the low-pass, else None) and the truth sidecars of the fit files (``truth``); made from
     them, ``record``: how the logs were read, for the JSON (what ``mindyn predict`` does with
-    another log). As a sequence: the fit logs."""
+    another log; None when ``reading`` is: logs read otherwise). As a sequence: the fit
+    logs."""
 
     fit: LogSet
     validation: LogSet = field(default_factory=lambda: LogSet([], []))
-    reading: ReadingOptions = field(default_factory=ReadingOptions)
+    reading: ReadingOptions | None = None
     model: str = "dynamic"
     cutoff: float | None = None
     truth: list = field(default_factory=list)
-    record: dict = field(init=False)
+    record: dict | None = field(init=False)
 
     def __post_init__(self):
         r = self.reading
-        record = {
-            "filter": r.filter,
-            "cutoff_Hz": self.cutoff if r.filter == "lowpass" else r.cutoff,
-            "edge_s": r.edge,
-            "torque_unit": r.torque_unit,
-            "drive_gain": None if r.drive_gain is None else list(r.drive_gain),
-            "topic": r.topic,
-        }
+        record = (
+            None
+            if r is None
+            else {
+                "filter": r.filter,
+                "cutoff_Hz": self.cutoff if r.filter == "lowpass" else r.cutoff,
+                "edge_s": r.edge,
+                "torque_unit": r.torque_unit,
+                "drive_gain": None if r.drive_gain is None else list(r.drive_gain),
+                "topic": r.topic,
+            }
+        )
         object.__setattr__(self, "record", record)
 
     def __getitem__(self, k):

@@ -142,7 +142,7 @@ class IdentificationReport:
                     **measures_doc(self.consistent_validation, val.labels),
                 }
             ce["mass_matrix_min_eig"] = self.mass_matrix_min_eig
-        doc["reading"] = dict(logs.record)
+        doc["reading"] = None if logs.record is None else dict(logs.record)
         doc["data"] = {
             "file": fit.files[0] if len(fit.files) == 1 else None,
             "files": list(fit.files),
