@@ -57,11 +57,11 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "excite": ("excite", "optimised Fourier excitation trajectory for identification"),
     "simulate": ("simulate", "simulated joint log along a trajectory (stand-in for a robot)"),
     "identify": (
-        "identify",
+        "identify_args",
         "identify base parameters from joint logs (dynamic, integral or energy model)",
     ),
     "identify-payload": (
-        "identify",
+        "identify_args",
         "identify a payload fixed to the last link, with an identified arm",
     ),
     "predict": (

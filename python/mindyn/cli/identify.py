@@ -1,6 +1,6 @@
 """CLI: ``mindyn identify`` and ``mindyn identify-payload``, the identification workflow of
 :mod:`mindyn.identification.workflow` on the command line: arguments -> options -> logs ->
-run -> text and files."""
+run -> text and files (the arguments are declared in :mod:`mindyn.cli.identify_args`)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,6 @@ from pathlib import Path
 from ..robot import load
 from .args import joint_values, with_drive_side
 from .export import check_description_kind, write_description
-from .identify_args import add_identify, add_identify_payload
 
 
 def _progress():
@@ -191,9 +190,3 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
     if args.json:
         _write_json(args.json, plain({"robot": robot.name, "files": files, **res.to_dict()}))
     return 0
-
-
-def register(sub) -> None:
-    """Adds ``identify`` and ``identify-payload`` to the ``mindyn`` subcommands."""
-    add_identify(sub, cmd_identify)
-    add_identify_payload(sub, cmd_identify_payload)

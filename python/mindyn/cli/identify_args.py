@@ -1,5 +1,6 @@
-"""The options of ``mindyn identify`` and ``mindyn identify-payload``: how a log is read and
-pre-processed (shared), what is identified and how, what is written."""
+"""The options of ``mindyn identify`` and ``mindyn identify-payload`` (run by
+:mod:`mindyn.cli.identify`): how a log is read and pre-processed (shared), what is identified
+and how, what is written."""
 
 from __future__ import annotations
 
@@ -262,3 +263,11 @@ def add_identify_payload(sub, func) -> None:
     )
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
     p.set_defaults(func=func)
+
+
+def register(sub) -> None:
+    """Adds ``identify`` and ``identify-payload`` to the ``mindyn`` subcommands."""
+    from .identify import cmd_identify, cmd_identify_payload
+
+    add_identify(sub, cmd_identify)
+    add_identify_payload(sub, cmd_identify_payload)
