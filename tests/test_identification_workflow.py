@@ -153,3 +153,11 @@ def test_logs_read_otherwise_give_the_same_fit_and_no_reading_record(logs):
     assert given["base_values"] == loaded["base_values"]
     assert loaded["reading"]["filter"] == "butter"
     assert given["reading"] is None  # how they were read is not known: not recorded
+
+
+def test_logs_read_for_another_model_are_refused(logs):
+    robot, fit, _ = logs
+    with pytest.raises(mindyn.Error, match="load_logs\\(..., model='integral'\\)"):
+        run(robot, load_logs([fit], robot), model="integral")
+    got = run(robot, load_logs([fit], robot, model="integral"), model="integral")
+    assert got.result.model == "integral"

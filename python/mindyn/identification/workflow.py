@@ -1,8 +1,9 @@
-"""The identification workflow: the options of one identification (:class:`IdentifyOptions`)
-and :func:`run`, which fits the base parameters to the logs of :func:`load_logs`, optionally
-chooses the friction model and estimates physically consistent parameters, scores the
-estimates on the fit and validation logs and returns an :class:`IdentificationReport` (its
-JSON document by ``to_dict()``, its terminal text by ``format()``). ``mindyn identify`` is this
+"""The identification workflow: :func:`run`, with the options of
+:class:`~mindyn.identification.options.IdentifyOptions`, fits the base parameters to the logs
+of :func:`~mindyn.identification.reading.load_logs`, optionally chooses the friction model and
+estimates physically consistent parameters, scores the estimates on the fit and validation
+logs and returns an :class:`~mindyn.identification.summary.IdentificationReport` (its JSON
+document by ``to_dict()``, its terminal text by ``format()``). ``mindyn identify`` is this
 workflow on the command line::
 
     logs = load_logs(["fit.csv"], robot, validate=["val.csv"])
@@ -175,6 +176,14 @@ def run(
         )
     opts = options or IdentifyOptions(**keywords)
     logs = _as_logs(logs, opts.model)
+    r = logs.reading
+    if r is not None and r.filter == "lowpass" and r.decimate and logs.model != opts.model:
+        if "dynamic" in (logs.model, opts.model):  # decimated for the dynamic model only
+            raise IdentificationError(
+                f"run(model='{opts.model}'): the logs were read for the {logs.model} model "
+                f"(decimated for the dynamic model only); read them with "
+                f"load_logs(..., model='{opts.model}')"
+            )
     data, vdata = logs.fit.logs, logs.validation.logs
     choice, robot, base, record, lines = _friction(robot, data, opts, progress)
     res, res_doc = _fit(robot, base, data, logs.fit.files, opts)
