@@ -117,7 +117,7 @@ def test_options_are_keyword_only_with_the_command_lines_defaults(logs):
     robot, fit, _ = logs
     args = build_parser("identify").parse_args(["identify", "planar2", str(fit)])
     assert identify_options(args, robot) == IdentifyOptions()
-    assert reading_options(args, robot) == ReadingOptions()
+    assert reading_options(args) == ReadingOptions()
     with pytest.raises(TypeError):
         IdentifyOptions("dynamic")
     with pytest.raises(TypeError):

@@ -22,11 +22,11 @@ def _progress():
     return lambda line: print(f"identify: {line}", file=sys.stderr, flush=True)
 
 
-def reading_options(args: argparse.Namespace, robot):
-    """The :class:`~mindyn.identification.reading.ReadingOptions` of the command line."""
+def reading_options(args: argparse.Namespace):
+    """The :class:`~mindyn.identification.options.ReadingOptions` of the command line (the drive
+    gains as given, as the JSON records them)."""
     from ..identification.options import ReadingOptions
 
-    gain = args.drive_gain
     return ReadingOptions(
         filter=args.filter,
         cutoff=args.cutoff,
@@ -35,15 +35,13 @@ def reading_options(args: argparse.Namespace, robot):
         edge=args.edge,
         decimate=not args.no_decimate,
         torque_unit=args.torque_unit,
-        drive_gain=None
-        if gain is None
-        else joint_values(gain, robot.n, "--drive-gain", broadcast=True),
+        drive_gain=args.drive_gain,
         topic=args.topic,
     )
 
 
 def identify_options(args: argparse.Namespace, robot):
-    """The :class:`~mindyn.identification.workflow.IdentifyOptions` of the command line."""
+    """The :class:`~mindyn.identification.options.IdentifyOptions` of the command line."""
     from ..identification.options import IdentifyOptions
 
     width = args.friction_width
@@ -123,7 +121,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         raise ValueError("--validate-currents: expected --validate with the logs they belong to")
     robot = with_drive_side(load(args.robot, tip=args.tip), args)
     _check_outputs(args, robot)
-    reading = reading_options(args, robot)
+    reading = reading_options(args)
     options = identify_options(args, robot)
     logs = load_logs(
         args.data,
@@ -174,7 +172,7 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
         args.data,
         robot,
         currents=args.currents,
-        options=reading_options(args, robot),
+        options=reading_options(args),
         what="the payload data",
     )
     res = identify_payload(
