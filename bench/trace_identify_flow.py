@@ -115,6 +115,16 @@ def trace(argv: list[str]) -> tuple[list[tuple[str, str | None]], int]:
 
     stack: list[str | None] = []  # the package file of each active frame (None: outside)
 
+    def caller(back) -> str | None:
+        """The package file that made a call: the nearest frame in the package outside the
+        utility modules (a call through a decorator or a helper is its caller's)."""
+        while back is not None:
+            name = package_name(back.f_code.co_filename)
+            if name is not None and name not in UTILITY:
+                return name
+            back = back.f_back
+        return None
+
     def profile(frame, event, arg):
         if event == "return":
             if stack:
@@ -127,8 +137,7 @@ def trace(argv: list[str]) -> tuple[list[tuple[str, str | None]], int]:
         stack.append(name)
         if not entered:
             return
-        back = frame.f_back
-        pair = (name, package_name(back.f_code.co_filename) if back is not None else None)
+        pair = (name, caller(frame.f_back))
         if not calls or calls[-1] != pair:
             calls.append(pair)
 
