@@ -161,3 +161,11 @@ def test_logs_read_for_another_model_are_refused(logs):
         run(robot, load_logs([fit], robot), model="integral")
     got = run(robot, load_logs([fit], robot, model="integral"), model="integral")
     assert got.result.model == "integral"
+
+
+def test_one_path_alone_is_one_log_and_an_unknown_model_is_named(logs):
+    robot, fit, val = logs
+    got = load_logs(fit, robot, validate=str(val))
+    assert got.fit.files == [str(fit)] and got.validation.files == [str(val)]
+    with pytest.raises(mindyn.Error, match="model 'dynamc'"):
+        load_logs([fit], robot, model="dynamc")

@@ -8,12 +8,13 @@ from __future__ import annotations
 from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from os import PathLike
 from pathlib import Path
 
 import numpy as np
 
 from .data import DataError, JointData
-from .options import ReadingOptions
+from .options import MODELS, ReadingOptions
 
 
 @contextmanager
@@ -279,9 +280,9 @@ def load_logs(
     **reading,
 ) -> Logs:
     """The logs at ``paths`` (CSV or ROS bags, fitted together) and the validation logs at
-    ``validate``, read as ``options`` (a :class:`ReadingOptions`) or the keywords of
-    :class:`ReadingOptions` say. ``currents`` / ``validate_currents``: a motor-current file per
-    log. ``model``: the regression model the logs are for (the window models integrate over
+    ``validate`` (a path alone: a list of it), read as ``options`` (a :class:`ReadingOptions`)
+    or the keywords of :class:`ReadingOptions` say. ``currents`` / ``validate_currents``: a
+    motor-current file per log. ``model``: the regression model the logs are for (the window models integrate over
     the logged samples: no decimation for them). ``what``: the logs' name in errors.
 
     A log simulated for another robot (its truth sidecar says so) is refused before any is read;
@@ -290,7 +291,12 @@ def load_logs(
     if options is not None and reading:
         raise DataError(f"load_logs: give options or {', '.join(reading)}, not both")
     opts = options or ReadingOptions(**reading)
-    files, vfiles = [str(p) for p in paths], [str(p) for p in validate or ()]
+    if model not in MODELS:
+        raise DataError(f"load_logs: model '{model}': expected one of {', '.join(MODELS)}")
+    one = (str, PathLike)  # one path given alone: a list of it
+    paths = [paths] if isinstance(paths, one) else paths
+    validate = [validate] if isinstance(validate, one) else validate or ()
+    files, vfiles = [str(p) for p in paths], [str(p) for p in validate]
     if not files:
         raise DataError("load_logs: expected at least one log")
     if validate_currents and not vfiles:
