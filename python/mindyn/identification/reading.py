@@ -282,8 +282,9 @@ def load_logs(
     """The logs at ``paths`` (CSV or ROS bags, fitted together) and the validation logs at
     ``validate`` (a path alone: a list of it), read as ``options`` (a :class:`ReadingOptions`)
     or the keywords of :class:`ReadingOptions` say. ``currents`` / ``validate_currents``: a
-    motor-current file per log. ``model``: the regression model the logs are for (the window models integrate over
-    the logged samples: no decimation for them). ``what``: the logs' name in errors.
+    motor-current file per log. ``model``: the regression model the logs are for (the window
+    models integrate over the logged samples: no decimation for them). ``what``: the logs'
+    name in errors.
 
     A log simulated for another robot (its truth sidecar says so) is refused before any is read;
     with the low-pass the fit logs average their periods (``periods``/``period``) and the
