@@ -447,7 +447,9 @@ def test_last_resort_is_one_line_naming_the_exception(monkeypatch):
     def broken(args):
         raise TypeError("first line\nsecond line")
 
-    monkeypatch.setattr(cli, "cmd_info", broken)
+    import mindyn.cli.info
+
+    monkeypatch.setattr(mindyn.cli.info, "cmd_info", broken)
     rc, _, err = run(["info", "planar2"])
     assert rc == 70 and err.count("\n") == 1
     assert err.startswith("mindyn: error: unexpected TypeError: first line; second line")

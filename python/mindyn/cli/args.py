@@ -44,28 +44,28 @@ ZCR07S_STUDY = (
 )
 
 #: The commands, in the order ``mindyn --help`` lists them: the module of :mod:`mindyn.cli` that
-#: defines each (its ``register(subparsers)`` declares the options of all its commands; "" for
-#: :mod:`mindyn.cli` itself) and the command's summary.
+#: defines each (its ``register(subparsers)`` declares the options of all its commands) and the
+#: command's summary.
 COMMANDS: dict[str, tuple[str, str]] = {
-    "info": ("", "print a robot model: joints, geometry, limits, parameters"),
-    "base": ("", "base inertial parameters: counts of the three sets, formulas, rank margin"),
+    "info": ("info", "print a robot model: joints, geometry, limits, parameters"),
+    "base": ("base", "base inertial parameters: counts of the three sets, formulas, rank margin"),
     "track": (
         "control",
         "closed-loop joint tracking simulation: adaptive PD, computed torque or PD",
     ),
     "ik": ("control", "position inverse kinematics of the tool frame, inside the joint limits"),
-    "excite": ("identify", "optimised Fourier excitation trajectory for identification"),
-    "simulate": ("identify", "simulated joint log along a trajectory (stand-in for a robot)"),
+    "excite": ("excite", "optimised Fourier excitation trajectory for identification"),
+    "simulate": ("simulate", "simulated joint log along a trajectory (stand-in for a robot)"),
     "identify": (
-        "identify",
+        "identify_args",
         "identify base parameters from joint logs (dynamic, integral or energy model)",
     ),
     "identify-payload": (
-        "identify",
+        "identify_args",
         "identify a payload fixed to the last link, with an identified arm",
     ),
     "predict": (
-        "identify",
+        "predict",
         "torques an identified model predicts on a log (CSV), to score it any way",
     ),
     "detect": (

@@ -33,8 +33,8 @@ def _joints(values, fmt: str = "{:8.3g}") -> str:
 
 def cmd_demo(args: argparse.Namespace) -> int:
     from ..control.simulation import SensorNoise, noise_from_spec, simulate
-    from ..identification import identify, true_base_values, validate
-    from ..identification.data import convert_torque, read_csv, write_csv
+    from ..identification import load_logs, run, true_base_values
+    from ..identification.data import convert_torque, write_csv
     from ..identification.excitation import (
         excitation_limits,
         optimize_excitation,
@@ -138,8 +138,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     # 4. identification ---------------------------------------------------------------------------
     t0 = _step(4, "identification (weighted least squares, RSD pruning at 30 %)")
-    data = read_csv(files["measurement"], robot)  # the torque unit from the header
-    vdata = read_csv(files["validation"], robot)
+    # the torque unit from the header; derivatives by a zero-phase Butterworth filter
+    logs = load_logs([files["measurement"]], robot, validate=[files["validation"]], filter="butter")
+    data, vdata = logs.fit.logs[0], logs.validation.logs[0]
     dv = data.processing["acceleration"]
     print(
         f"    read {data.m} samples, torques in {data.processing['torque']['unit']} (as the "
@@ -149,8 +150,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     truth = true_base_values(base, {"names": log_e.param_names, "values": log_e.params})
     results = {}
     for model in ("dynamic", "integral", "energy"):
-        res = identify(robot, data, model=model, base=base, integration="zoh", energy_window=10)
-        fit, val = validate(res, data), validate(res, vdata)
+        rep = run(robot, logs, model=model, rotor=True, friction=True, integration="zoh")
+        res, fit, val = rep.result, rep.fit, rep.validation
         results[model] = (res, fit, val)
         kept = len(res.names)
         err = np.abs(res.full - truth)
@@ -186,14 +187,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
             out / f"torque_identification_{model}.png",
             data.t,
             data.tau,
-            fit["tau_hat"],
+            fit["tau_hat"][0],
             f"{robot.name}, {model} model: excitation trajectory",
         )
         plot_torques(
             out / f"torque_validation_{model}.png",
             vdata.t,
             vdata.tau,
-            val["tau_hat"],
+            val["tau_hat"][0],
             f"{robot.name}, {model} model: validation trajectory",
         )
     print(f"    noise sd (reference) [N m]:               {_joints(sd)}")

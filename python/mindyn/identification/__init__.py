@@ -15,7 +15,14 @@
 - :mod:`~mindyn.identification.consistent`: physically consistent classical parameters and
   payload identification (convex, cvxpy);
 - :mod:`~mindyn.identification.currents`: torques from motor currents logged apart;
-- :mod:`~mindyn.identification.report`: tables and plots.
+- :mod:`~mindyn.identification.report`: tables and plots;
+- :mod:`~mindyn.identification.workflow`: the workflow of ``mindyn identify`` as a library:
+  :class:`IdentifyOptions` and :class:`ReadingOptions`
+  (:mod:`~mindyn.identification.options`), :func:`load_logs`
+  (:mod:`~mindyn.identification.reading`),
+  :func:`run` returning an :class:`IdentificationReport`
+  (:mod:`~mindyn.identification.summary`: its JSON by ``to_dict()``;
+  :mod:`~mindyn.identification.terminal`: its text by ``format()``).
 
 The names below are the ones a workflow needs; the modules hold the rest.
 """
@@ -26,7 +33,11 @@ from .errors import IdentificationError, RankDeficientError
 from .estimation import IdentificationResult, identify
 from .friction import FrictionChoice, select_friction_model
 from .models import MODELS, dynamic_system, energy_system, integral_system
+from .options import IdentifyOptions, ReadingOptions
+from .reading import Logs, load_logs
+from .summary import IdentificationReport
 from .validation import error_measures, true_base_values, validate
+from .workflow import run
 
 __all__ = [
     "MODELS",
@@ -34,9 +45,13 @@ __all__ = [
     "DataError",
     "FrictionChoice",
     "IdentificationError",
+    "IdentificationReport",
     "IdentificationResult",
+    "IdentifyOptions",
     "JointData",
+    "Logs",
     "RankDeficientError",
+    "ReadingOptions",
     "dynamic_system",
     "energy_system",
     "error_measures",
@@ -44,7 +59,9 @@ __all__ = [
     "identify_consistent",
     "identify_payload",
     "integral_system",
+    "load_logs",
     "read_csv",
+    "run",
     "select_friction_model",
     "true_base_values",
     "validate",

@@ -1,0 +1,135 @@
+"""The closed loop shared by ``mindyn track`` and ``mindyn simulate``: its options (reference,
+controller, gains, parameter error, torque limit, integration) and the reference and controller
+they give."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..base import base_parameters
+from .args import number, output_dir
+
+
+def reference_and_controller(args: argparse.Namespace, robot, default_duration):
+    """The reference, its text, the simulated time, the per-cycle span and the controller of
+    ``mindyn track`` and ``mindyn simulate`` (``--trajectory``, ``--cycle``, ``--controller``,
+    ``--gains``, ``--param-error``, ``--seed``); ``default_duration(reference)`` gives the
+    simulated time when ``--duration`` is not given. Returns also the base parameters of the
+    estimate (None for PD)."""
+    from .. import control
+    from ..control.simulation import SumOfSines, load_reference
+
+    n = robot.n
+    period = args.period
+    if args.cycle is not None and args.cycle < 20 * period:
+        raise ValueError(
+            f"--cycle {args.cycle:g} s: expected at least 20 controller periods "
+            f"(--controller-period {period:g} s), so that the reference's third harmonic is "
+            "sampled about 7 times per oscillation"
+        )
+    if args.trajectory:
+        reference = load_reference(args.trajectory, n)
+        ref_text = f"trajectory {args.trajectory} ({reference.duration:g} s)"
+        duration = args.duration or reference.duration
+        cycle = args.cycle or duration
+    else:
+        reference = SumOfSines(robot, period=args.cycle or 10.0, seed=args.seed)
+        ref_text = f"sum of sines within the limits, {reference.period:g} s cycle"
+        duration = args.duration or default_duration(reference)
+        cycle = reference.period
+    from ..control.simulation import check_steps
+
+    try:  # before any set-up work
+        check_steps(duration, 1.0 / period, args.substeps if args.integrator == "rk4" else 1)
+    except ValueError as e:
+        raise ValueError(
+            f"--duration {duration:g} with --controller-period {period:g}: {e}"
+            + (" (the duration is two cycles unless given)" if args.duration is None else "")
+        ) from None
+    if duration < period:
+        raise ValueError(
+            f"--duration {duration:g} s is shorter than one --controller-period {period:g} s"
+        )
+    if args.controller == "computed-torque" and args.gains is None and args.param_error is None:
+        return reference, ref_text, duration, cycle, None, None  # the simulator's default
+    # the simulated robot: track's has rotor inertia and friction, simulate's as its flags say
+    rotor, friction = getattr(args, "rotor", True), getattr(args, "friction", True)
+    if args.gains:
+        gains = control.load_gains(args.gains, robot, period=period, rotor=rotor)
+    else:
+        gains = control.default_gains(robot, period=period, rotor=rotor)
+    base = p_hat = None
+    if args.controller != "pd":
+        from ..control.controllers import base_values, plant_parameters
+
+        base = base_parameters(robot, rotor=True, friction=True)
+        p_true = base_values(base, plant_parameters(robot, rotor, friction))
+        error = 0.3 if args.param_error is None else args.param_error
+        p_hat = control.perturbed_parameters(p_true, error, args.seed)
+    controller = control.make_controller(args.controller, robot, gains, p_hat, base, period)
+    controller.gains = gains
+    return reference, ref_text, duration, cycle, controller, base
+
+
+def add_closed_loop_args(p, default: str) -> None:
+    """The reference, controller and integration options shared by ``track`` and ``simulate``
+    (``default``: the default controller)."""
+    from ..control.controllers import CONTROLLERS
+
+    p.add_argument(
+        "--controller",
+        choices=CONTROLLERS,
+        default=default,
+        help=f"tracking controller (default {default})",
+    )
+    p.add_argument(
+        "--gains",
+        metavar="FILE",
+        help="YAML with kd, lambda, gamma, nu (adaptive PD) and optionally kp (PD: default "
+        "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
+    )
+    p.add_argument(
+        "--trajectory",
+        metavar="FILE",
+        help="reference: the JSON of 'mindyn excite' (its Fourier series) or a CSV with columns "
+        "t, q1..qN [, dq1..dqN, ddq1..ddqN] (default: a sum of sines within the joint limits)",
+    )
+    number(
+        p,
+        "--cycle",
+        low=0,
+        high=1e6,
+        low_open=True,
+        help="period of the default reference and of the per-cycle figures [s], at least 20 "
+        "controller periods (default 10)",
+    )
+    number(
+        p,
+        "--param-error",
+        low=0,
+        high=10,
+        help="relative error of the initial base-parameter estimate of adaptive PD and computed "
+        "torque (default 0.3: +-30 %); simulate's computed torque without --gains and "
+        "--param-error has the true parameters",
+    )
+    number(p, "--substeps", low=1, high=1000, integer=True, default=4, help="RK4 steps per period")
+    p.add_argument(
+        "--integrator",
+        choices=["rk4", "scipy"],
+        default="rk4",
+        help="rk4: fixed-step Runge-Kutta, --substeps steps per controller period (default); "
+        "scipy: scipy's adaptive RK45 between controller samples",
+    )
+    p.add_argument(
+        "--torque-limit",
+        choices=["effort", "none"],
+        default="none",
+        help="effort: saturate each joint's torque at the robot's effort limit; none: no limit "
+        "(default)",
+    )
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        type=output_dir,
+        help="write the tracking report here: summary.json, log.csv and plots",
+    )

@@ -1,0 +1,273 @@
+"""The options of ``mindyn identify`` and ``mindyn identify-payload`` (run by
+:mod:`mindyn.cli.identify`): how a log is read and pre-processed (shared), what is identified
+and how, what is written."""
+
+from __future__ import annotations
+
+from ..robot import FRICTION_KINDS
+from .args import (
+    add_command,
+    add_joint_terms,
+    add_offset,
+    add_robot,
+    deprecated,
+    joint_vector,
+    number,
+    output_dir,
+    output_file,
+)
+from .export import add_description_outputs
+
+
+def add_data_options(p) -> None:
+    """The options of ``identify`` that say how a log is read and preprocessed (shared with
+    ``identify-payload``)."""
+    p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille", "current"],
+        help="logged torque unit; permille: value x rated torque x gear ratio / 1000; current: "
+        "motor current [A] x drive gain (--drive-gain, else torque_constant x gear_ratio of the "
+        "drive table) (default: the unit the CSV header gives, as in tau1[permille], or current "
+        "for columns i1..in, else Nm)",
+    )
+    joint_vector(
+        p,
+        "--drive-gain",
+        metavar="K",
+        help="joint-side drive gains [N m/A] that turn motor currents into joint torques (or "
+        "one value for all joints); default: the robot's drive table. When the description "
+        "declares transmissions: motor torque constants K_t [N m/A, motor side], torques = "
+        "T^T (K_t x current) (default: the transmissions' torque constants)",
+    )
+    p.add_argument(
+        "--currents",
+        nargs="+",
+        metavar="CSV",
+        help="motor currents from separate files (t, i1..in, other columns ignored), one per "
+        "LOG in the same order, joined on the time stamps (each sample of the log needs a "
+        "current sample within 1/1000 of its sample period); torques = currents x drive gains, "
+        "torque columns of the log are ignored",
+    )
+    p.add_argument(
+        "--filter",
+        choices=["lowpass", "butter", "savgol", "none"],
+        default="lowpass",
+        help="lowpass (default): the identification data path: uniform resampling of jittered "
+        "time stamps, one zero-phase Butterworth low-pass of positions, logged velocities, "
+        "torques and regressor columns, derivatives of the filtered signals, filter edges "
+        "dropped, decimation; butter, savgol, none: only derive missing velocities and "
+        "accelerations (torques unfiltered; butter and savgol refuse unevenly spaced time "
+        "stamps, none differences them as they are)",
+    )
+    number(
+        p,
+        "--cutoff",
+        low=0,
+        low_open=True,
+        help="cut-off [Hz], below half the log's rate; lowpass: default 10 x the excited band of "
+        "the identification log's positions (at most rate / 10), the validation log filtered at "
+        "the same cut-off; butter: default min(10, rate / 10)",
+    )
+    g = p.add_mutually_exclusive_group()
+    number(
+        g,
+        "--periods",
+        low=1,
+        high=100000,
+        integer=True,
+        help="lowpass: the identification log holds this many periods of a periodic excitation; "
+        "they are averaged sample by sample",
+    )
+    period = number(
+        g,
+        "--excitation-period",
+        dest="period",
+        low=0,
+        low_open=True,
+        help="lowpass: period [s] of a periodic excitation; the whole periods the "
+        "identification log holds are averaged",
+    )
+    deprecated(g, "--period", period)
+    number(
+        p,
+        "--edge",
+        low=0,
+        help="lowpass: seconds dropped at each end after filtering (default 2 / cut-off; none "
+        "for an averaged period)",
+    )
+    p.add_argument(
+        "--no-decimate",
+        action="store_true",
+        help="lowpass: keep every sample (default for the dynamic model: decimate to at least "
+        "10 x the cut-off; the integral and energy models keep every sample)",
+    )
+
+
+def add_identify(sub, func) -> None:
+    """``mindyn identify``, run by ``func``."""
+    from ..identification.consistent import MAX_PRIOR_WEIGHT
+    from ..identification.prior import CANDIDATES, FOLDS
+
+    p = add_command(
+        sub,
+        "identify",
+        description="Least-squares identification of the base parameters from CSV logs "
+        "(t, q1..qn, [dq1..dqn], tau1..taun) or ROS bags (sensor_msgs/JointState: position, "
+        "[velocity], effort, joints matched by name), one or several fitted together, with "
+        "statistics (RSD), pruning of parameters with large RSD, error measures (overall "
+        "relative error, per-joint RMS, relative error and NRMS of the effort limit, scaled "
+        "condition number) on the fit and on validation logs, against the filtered torques, "
+        "against the torques as logged and on moving samples only, JSON output and a plot "
+        "report.",
+    )
+    add_robot(p)
+    p.add_argument(
+        "data",
+        nargs="+",
+        metavar="LOG",
+        help="CSV log (t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun or currents i1..in) or "
+        "ROS bag (a ROS 2 bag folder, .mcap, .db3, or a ROS 1 .bag); several logs are fitted "
+        "together (derivatives taken on each log alone, regression systems stacked)",
+    )
+    p.add_argument(
+        "--model",
+        choices=["dynamic", "integral", "energy"],
+        default="dynamic",
+        help="dynamic: tau = W(q, dq, ddq) p per sample (needs accelerations); integral: each "
+        "joint's equation of motion integrated over windows (momentum difference, no "
+        "accelerations); energy: the energy theorem over windows (one equation per window)",
+    )
+    add_joint_terms(p, "identify")
+    add_offset(p, "identify")
+    p.add_argument(
+        "--validate", nargs="+", metavar="LOG", help="log(s) (CSV or bag) for validation"
+    )
+    p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
+    p.add_argument("--report", metavar="DIR", type=output_dir, help="write plots and tables to DIR")
+    number(
+        p,
+        "--rsd-threshold",
+        low=0,
+        default=30.0,
+        help="remove parameters with RSD above this % (0 keeps all)",
+    )
+    add_data_options(p)
+    p.add_argument(
+        "--validate-currents",
+        nargs="+",
+        metavar="CSV",
+        help="as --currents, one per --validate log",
+    )
+    p.add_argument("--ols", action="store_true", help="ordinary instead of weighted least squares")
+    p.add_argument(
+        "--consistent",
+        action="store_true",
+        help="also estimate physically consistent classical parameters (every link's "
+        "pseudo-inertia positive semidefinite, rotor inertia and friction >= 0) minimising the "
+        "same weighted residual plus the description's prior (convex: a Newton descent with "
+        "the prior, cvxpy with Clarabel without; each solve reported on stderr when it is a "
+        "terminal); the consistent estimate's errors are the headline; JSON: classical, "
+        "pseudo_inertia_min_eig, total_mass, consistent_estimate",
+    )
+    number(
+        p,
+        "--prior-weight",
+        low=0,
+        high=MAX_PRIOR_WEIGHT,
+        default=None,
+        help="with --consistent: add W x the log-det divergence of each link's pseudo-inertia "
+        "from the description's; the fit term is in units of the noise variance, so W = 1 makes "
+        "a divergence of 1 cost as much as one standard deviation of the fit; 0: no prior; "
+        f"default: chosen from the data by {FOLDS}-fold cross-validation over contiguous time "
+        f"blocks among {', '.join(f'{w:g}' for w in CANDIDATES)}, the largest whose held-out "
+        "residual is within one standard error of the smallest (reported)",
+    )
+    add_description_outputs(p, "identify")
+    number(
+        p,
+        "--energy-window",
+        low=1,
+        high=1000000,
+        integer=True,
+        default=10,
+        help="sample intervals per energy equation",
+    )
+    p.add_argument(
+        "--integration",
+        choices=["simpson", "trapezoid", "zoh"],
+        default="simpson",
+        help="energy and integral model integration rule (zoh: torque held over each period)",
+    )
+    number(
+        p,
+        "--integral-window",
+        low=1,
+        high=1000000,
+        integer=True,
+        default=40,
+        help="sample intervals per integral-model window (one equation per joint and window)",
+    )
+    number(
+        p,
+        "--min-velocity",
+        low=0,
+        default=0.01,
+        help="dynamic model with friction: leave out joint equations slower than this [rad/s, m/s]",
+    )
+    p.add_argument(
+        "--friction-model",
+        choices=[*FRICTION_KINDS, "auto"],
+        help="friction per joint (implies --friction): coulomb Fv v + Fc sign v (the default), "
+        "asymmetric + Fa |sign v| (direction-dependent Coulomb), smooth Fv v + Fc tanh(v / w) "
+        "(w from the data's velocity noise unless --friction-width), stribeck + Fs sign v "
+        "exp(-(v / w)^2) (w searched per joint on the fit's residual), or auto (the one with "
+        "the smallest residual on held-out blocks of the fit logs); the choice is reported",
+    )
+    joint_vector(
+        p,
+        "--friction-width",
+        help="--friction-model smooth or auto: the tanh width w [rad/s, m/s], positive (or "
+        "one value for all joints)",
+    )
+    p.set_defaults(func=func)
+
+
+def add_identify_payload(sub, func) -> None:
+    """``mindyn identify-payload``, run by ``func``."""
+    p = add_command(
+        sub,
+        "identify-payload",
+        description="The 10 inertial parameters (XX XY XZ YY YZ ZZ MX MY MZ M about the last "
+        "link frame's origin, in its frame) of a payload rigidly fixed to the last link, from "
+        "logs with the payload: tau - tau_arm = W_last phi, with tau_arm from the identified arm "
+        "(the JSON of 'mindyn identify': its classical map when present, else its base values; "
+        "friction, rotor inertia and offsets as identified; the chain to the --tip it was "
+        "identified with, unless --tip is given). Least squares with standard "
+        "deviations, and the estimate with a positive semidefinite pseudo-inertia (cvxpy, "
+        "Clarabel). Refused, naming them, when the data do not determine all 10 parameters.",
+    )
+    add_robot(p)
+    p.add_argument("identification", metavar="ID.json", help="JSON of 'mindyn identify'")
+    p.add_argument("data", nargs="+", metavar="LOG", help="log(s) with the payload, as identify's")
+    add_data_options(p)
+    number(
+        p,
+        "--min-velocity",
+        low=0,
+        default=0.01,
+        help="arm with friction: leave out joint equations slower than this [rad/s, m/s]",
+    )
+    p.add_argument(
+        "--no-consistent", action="store_true", help="least squares only (no convex solve)"
+    )
+    p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
+    p.set_defaults(func=func)
+
+
+def register(sub) -> None:
+    """Adds ``identify`` and ``identify-payload`` to the ``mindyn`` subcommands."""
+    from .identify import cmd_identify, cmd_identify_payload
+
+    add_identify(sub, cmd_identify)
+    add_identify_payload(sub, cmd_identify_payload)

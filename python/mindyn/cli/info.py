@@ -1,0 +1,118 @@
+"""CLI: ``mindyn info``, a robot model: joints, geometry, limits, transmissions, parameters."""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+import numpy as np
+
+from ..robot import load
+from .args import add_command, add_robot
+
+
+def _fmt(x: float, width: int = 10) -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "-".rjust(width)
+    return f"{x:{width}.4g}"
+
+
+def _transmission_lines(robot) -> list[str]:
+    """The motors of the robot's transmissions, each with its row of ``q_m = T q + offset``."""
+    tr = robot.transmission
+    if tr is None:
+        return []
+    form = {"ros1": "URDF, ROS 1 form", "ros2": "URDF, ROS 2 form"}.get(tr.format, tr.format)
+    out = [
+        "",
+        f"transmissions ({form}): motor positions q_m = T q + offset, joint torques "
+        "tau = T^T tau_m (not used by the dynamics)",
+    ]
+    w = max([5] + [len(m) for m in tr.motors]) + 1
+    wt = max([4] + [len(t) for t in tr.types]) + 1
+    out.append(f"{'#':<3} {'motor':<{w}}{'type':<{wt}}q_m")
+    for i, motor in enumerate(tr.motors):
+        terms = [
+            f"{tr.T[i, k]:+.6g} {robot.joint_names[k]}" for k in range(robot.n) if tr.T[i, k] != 0.0
+        ]
+        if tr.offset[i] != 0.0:
+            terms.append(f"{tr.offset[i]:+.6g}")
+        out.append(f"{'m' + str(i + 1):<3} {motor:<{w}}{tr.types[i]:<{wt}}{' '.join(terms)}")
+    return out
+
+
+def cmd_info(args: argparse.Namespace) -> int:
+    robot = load(args.robot, tip=args.tip)
+    n = robot.n
+    out = []
+    tree = not robot.is_serial
+    shape = f", a tree of {robot.branches} branches" if tree else ""
+    out.append(f"robot      {robot.name}  ({n} joints, {robot.convention}{shape})")
+    out.append(f"source     {robot.source}")
+    g = robot.gravity
+    out.append(f"gravity    [{g[0]:g}, {g[1]:g}, {g[2]:g}] m/s^2")
+    if robot.synthetic_inertia:
+        out.append("inertia    SYNTHETIC: the inertial values are invented, not measured")
+    if robot.notes:
+        out.append(f"notes      {robot.notes.strip()}")
+    out.append("")
+    lim = robot.limits
+    drv = robot.drives
+    deg = {"revolute": 180.0 / math.pi, "prismatic": 1.0}
+    dh = robot.dh
+    w = max([13] + [len(j) for j in robot.joint_names]) + 1  # joint-name column
+    # a tree: the link each joint hangs from (the base link, or the link of its parent joint)
+    hang = [robot.link_names[p + 1] for p in robot.parents] if tree else []
+    wp = max([12] + [len(h) for h in hang]) + 1 if tree else 0
+    parent_head = f"{'parent link':<{wp}}" if tree else ""
+    if robot.convention in ("dh", "mdh") and len(dh):
+        if robot.convention == "dh":
+            head = f"{'a [m]':>9} {'alpha[deg]':>10} {'d [m]':>9} {'theta[deg]':>10}"
+        else:
+            head = f"{'d [m]':>9} {'alpha[deg]':>10} {'r [m]':>9} {'theta[deg]':>10}"
+    else:
+        head = f"{'axis (joint frame)':>30}"
+    out.append(
+        f"{'#':>2} {'joint':<{w}}{parent_head}{'type':<10}{head} {'lower':>9} {'upper':>9} "
+        f"{'vel':>9} {'effort':>9} {'rated':>7} {'gear':>7}"
+    )
+    out.append(
+        "   (limits in deg, deg/s for revolute joints; m, m/s for prismatic; effort N m or N)"
+    )
+    for k in range(n):
+        t = robot.joint_types[k]
+        s = deg[t]
+        if robot.convention in ("dh", "mdh") and len(dh):
+            a, alpha, d, theta = dh[k]
+            geo = f"{a:9.4f} {math.degrees(alpha):10.3f} {d:9.4f} {math.degrees(theta):10.3f}"
+        else:
+            ax = robot.axes[k]
+            geo = f"[{ax[0]:8.4f} {ax[1]:8.4f} {ax[2]:8.4f}]".rjust(30)
+        out.append(
+            f"{k + 1:>2} {robot.joint_names[k]:<{w}}{hang[k] if tree else '':<{wp}}{t:<10}{geo} "
+            f"{_fmt(lim['lower'][k] * s, 9)} {_fmt(lim['upper'][k] * s, 9)} "
+            f"{_fmt(lim['velocity'][k] * s, 9)} "
+            f"{_fmt(lim['effort'][k], 9)} {_fmt(drv['rated_torque'][k], 7)} "
+            f"{_fmt(drv['gear_ratio'][k], 7)}"
+        )
+    out.extend(_transmission_lines(robot))
+    out.append("")
+    out.append("classical parameters about each link-frame origin (SI)")
+    names = ["XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "Ia", "Fv", "Fc"]
+    wl = max([10] + [len(x) + 1 for x in robot.link_names[1:]])  # link-name column
+    out.append(f"{'link':<{wl}}" + "".join(f"{c:>11}" for c in names))
+    p = robot.params.reshape(n, 10)
+    extra = np.column_stack([robot.rotor_inertia, robot.viscous, robot.coulomb])
+    for k in range(n):
+        row = list(p[k]) + list(extra[k])
+        out.append(f"{robot.link_names[k + 1]:<{wl}}" + "".join(f"{v:11.4g}" for v in row))
+    out.append(f"total moving mass {p[:, 9].sum():.4g} kg")
+    print("\n".join(out))
+    return 0
+
+
+def register(sub) -> None:
+    """Adds ``info`` to the ``mindyn`` subcommands."""
+    p = add_command(sub, "info")
+    add_robot(p)
+    p.set_defaults(func=cmd_info)

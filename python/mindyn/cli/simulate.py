@@ -1,0 +1,181 @@
+"""CLI: ``mindyn simulate``, a simulated joint log (a stand-in for a robot)."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ..robot import load
+from .args import (
+    add_command,
+    add_drive_side,
+    add_robot,
+    controller_period,
+    drive_side_words,
+    number,
+    output_file,
+    seed,
+    with_drive_side,
+)
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from ..control.simulation import (
+        SensorNoise,
+        noise_from_spec,
+        simulate,
+        simulate_inverse,
+        write_tracking_report,
+    )
+    from ..identification.data import convert_torque, write_csv
+    from .closed_loop import reference_and_controller
+
+    robot = with_drive_side(load(args.robot, tip=args.tip), args)
+    rate = 1.0 / args.period if args.period else args.rate
+    args.period = 1.0 / rate
+    ref, ref_text, duration, cycle, controller, _ = reference_and_controller(
+        args, robot, lambda r: r.duration
+    )
+    ref_tau = None
+    if args.torque_noise and args.torque_noise.strip().endswith("%"):
+        t = np.linspace(0, ref.duration, 200)
+        ref_tau = robot.inverse_dynamics(*ref.evaluate(t))
+    noise = SensorNoise(
+        torque=noise_from_spec(args.torque_noise, robot, "torque", ref_tau),
+        position=noise_from_spec(args.position_noise, robot, "position"),
+        velocity=noise_from_spec(args.velocity_noise, robot, "velocity"),
+        quantization=noise_from_spec(args.quantization, robot, "quantization"),
+    )
+    kwargs = dict(
+        rate=rate,
+        duration=duration,
+        rotor=args.rotor,
+        friction=args.friction,
+        noise=noise,
+        seed=args.seed,
+    )
+    if args.mode == "tracking":
+        limit = None if args.torque_limit == "none" else args.torque_limit
+        log = simulate(
+            robot,
+            ref,
+            controller,
+            substeps=args.substeps,
+            integrator=args.integrator,
+            torque_limit=limit,
+            **kwargs,
+        )
+    else:
+        log = simulate_inverse(robot, ref, **kwargs)
+    path = log.save(args.output, robot.name, robot.joint_names)
+    if args.torque_unit == "permille":
+        scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
+        write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
+    info = log.info
+    print(
+        f"{robot.name}: {info['mode']} simulation, {log.t.shape[0]} samples at {rate:g} Hz "
+        f"({info['duration_s']:g} s), rotor inertia {'on' if args.rotor else 'off'}, "
+        f"friction {'on' if args.friction else 'off'}"
+        + (f", {side}" if (side := drive_side_words(robot, args)) else "")
+    )
+    if info["mode"] == "tracking":
+        err = np.degrees(info["max_tracking_error"])
+        print(
+            f"  controller {info['controller']}; max tracking error per joint [deg]: "
+            + " ".join(f"{e:.3g}" for e in err)
+        )
+        for note in (
+            getattr(getattr(controller, "gains", None), "note", ""),
+            info.get("stability"),
+        ):
+            if note:
+                print(f"  {note}")
+    nz = info["noise"]
+    print("  torque noise sd per joint: " + " ".join(f"{v:.3g}" for v in nz["torque"]))
+    if any(nz["quantization"]) or any(nz["position"]) or any(nz["velocity"]):
+        print(
+            f"  encoder step {max(nz['quantization']):.3g}, position noise "
+            f"{max(nz['position']):.3g}, velocity noise {max(nz['velocity']):.3g}"
+        )
+    unit = " (torques in permille of rated torque)" if args.torque_unit == "permille" else ""
+    print(f"  wrote {path}{unit} and {path.with_name(path.stem + '.truth.json')}")
+    if args.report:
+        header = {"robot": robot.name, "reference": ref_text, "seed": args.seed}
+        write_tracking_report(log, args.report, cycle, header)
+        print(f"  report: {args.report}/ (summary.json, log.csv, plots)")
+    return 0
+
+
+def register(sub) -> None:
+    """Adds ``simulate`` to the ``mindyn`` subcommands."""
+    from ..control.simulation import MAX_SAMPLES, MAX_STEPS
+    from .closed_loop import add_closed_loop_args
+
+    p = add_command(
+        sub,
+        "simulate",
+        description="Produces what a joint controller would log (t, q, dq, tau): the robot with "
+        "its true parameters integrated (RK4) under a tracking controller, or torques from "
+        "inverse dynamics along the reference (--mode inverse); optional sensor noise and "
+        "encoder quantisation. Also writes <output>.truth.json with the true parameters. "
+        "The controller and the reference are those of 'mindyn track' (default: computed torque "
+        "with the true parameters and Coulomb friction on the reference velocity, K_P = 400, "
+        "K_D = 40; a sum of sines within the limits when no --trajectory is given).",
+    )
+    add_robot(p)
+    p.add_argument(
+        "--mode",
+        choices=["tracking", "inverse"],
+        default="tracking",
+        help="tracking: the robot integrated under the controller (default); inverse: torques "
+        "from inverse dynamics along the reference, no controller",
+    )
+    add_closed_loop_args(p, "computed-torque")
+    g = p.add_mutually_exclusive_group()
+    number(
+        g, "--rate", low=0, high=1e6, low_open=True, default=250.0, help="control and log rate [Hz]"
+    )
+    controller_period(g, low=1e-6, high=1e3, help="control and log period [s] (1 / rate)")
+    number(
+        p,
+        "--duration",
+        low=0,
+        high=1e6,
+        low_open=True,
+        help=f"seconds (default: one period of the reference); at most {MAX_SAMPLES:,} samples "
+        f"(duration x rate) and {MAX_STEPS:,} integration steps (x substeps)",
+    )
+    p.add_argument("--rotor", action="store_true", help="true robot with rotor inertia")
+    p.add_argument("--friction", action="store_true", help="true robot with friction")
+    add_drive_side(p)
+    p.add_argument(
+        "--torque-noise",
+        metavar="SD",
+        help="torque noise sd: one value, one per joint (comma-separated), or P%% of each "
+        "joint's effort limit; in [0, 1e6] N m or [0, 100] %%",
+    )
+    p.add_argument(
+        "--position-noise", metavar="SD", help="position noise sd (rad, m), each in [0, 1]"
+    )
+    p.add_argument(
+        "--velocity-noise", metavar="SD", help="velocity noise sd (rad/s, m/s), each in [0, 100]"
+    )
+    p.add_argument("--quantization", metavar="STEP", help="encoder step (rad, m), each in [0, 1]")
+    seed(p, "--seed", help="noise seed")
+    p.add_argument(
+        "--torque-unit",
+        choices=["Nm", "permille"],
+        default="Nm",
+        help="write torques in N m or in permille of rated torque (drive table; the header "
+        "then says tau1[permille]...)",
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="CSV",
+        type=output_file,
+        help="log to write (and its .truth.json beside it)",
+    )
+    p.set_defaults(func=cmd_simulate)

@@ -1,0 +1,106 @@
+"""The options of an identification: how its logs are read (:class:`ReadingOptions`) and
+what is identified and how (:class:`IdentifyOptions`), keyword-only, with the defaults of
+``mindyn identify``, checked when made."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+from .data import DataError
+from .errors import IdentificationError
+
+FILTERS = ("lowpass", "butter", "savgol", "none")
+MODELS = ("dynamic", "integral", "energy")
+INTEGRATIONS = ("simpson", "trapezoid", "zoh")
+
+
+@dataclass(frozen=True, kw_only=True)
+class IdentifyOptions:
+    """The options of one identification, with the defaults of ``mindyn identify``.
+
+    ``model``: dynamic, integral or energy; ``rotor``, ``friction``, ``offset``: the joint terms
+    identified; ``weighted``: weighted (else ordinary) least squares; ``rsd_threshold`` [%]:
+    parameters above it removed (0 keeps all); ``energy_window``, ``integral_window``: sample
+    intervals per window; ``integration``: simpson, trapezoid or zoh; ``min_velocity``: joint
+    equations slower than this left out (dynamic model with friction); ``friction_model``: a
+    friction kind or ``auto`` (implies ``friction``), ``friction_width``: the tanh widths
+    (smooth or auto); ``consistent``: also the physically consistent estimate, with
+    ``prior_weight`` (None: chosen from the data)."""
+
+    model: str = "dynamic"
+    rotor: bool = False
+    friction: bool = False
+    offset: bool = False
+    weighted: bool = True
+    rsd_threshold: float = 30.0
+    energy_window: int = 10
+    integration: str = "simpson"
+    integral_window: int = 40
+    min_velocity: float = 0.01
+    friction_model: str | None = None
+    friction_width: tuple[float, ...] | None = None
+    consistent: bool = False
+    prior_weight: float | None = None
+
+    def __post_init__(self):
+        if self.model not in MODELS:
+            raise IdentificationError(f"model '{self.model}': expected one of {', '.join(MODELS)}")
+        if self.integration not in INTEGRATIONS:
+            raise IdentificationError(
+                f"integration '{self.integration}': expected one of {', '.join(INTEGRATIONS)}"
+            )
+        if self.friction_width is not None:
+            if self.friction_model is None:
+                raise IdentificationError(
+                    "--friction-width: expected --friction-model smooth or auto"
+                )
+            object.__setattr__(self, "friction_width", tuple(self.friction_width))
+        if self.friction_model is not None:
+            object.__setattr__(self, "friction", True)
+        if self.prior_weight is not None and not self.consistent:
+            raise IdentificationError("--prior-weight: expected --consistent as well")
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+OPTION_NAMES = frozenset(f.name for f in fields(IdentifyOptions))
+
+
+@dataclass(frozen=True, kw_only=True)
+class ReadingOptions:
+    """How a log is read and pre-processed (the options of ``mindyn identify`` of the same
+    names).
+
+    ``filter``: ``lowpass`` (the identification data path of
+    :func:`~mindyn.identification.preprocess.preprocess`: resampling, one zero-phase low-pass,
+    edges dropped, decimation), or ``butter``, ``savgol``, ``none`` (derivatives only);
+    ``cutoff`` [Hz] (None: from the data); ``periods`` / ``period`` [s]: a periodic excitation
+    averaged (lowpass, fit logs only); ``edge`` [s] dropped at each end (lowpass); ``decimate``
+    (lowpass, dynamic model only); ``torque_unit`` (None: as the file says), ``drive_gain`` (per
+    joint, or one for all), ``topic`` (ROS bag)."""
+
+    filter: str = "lowpass"
+    cutoff: float | None = None
+    periods: int | None = None
+    period: float | None = None
+    edge: float | None = None
+    decimate: bool = True
+    torque_unit: str | None = None
+    drive_gain: tuple[float, ...] | None = None
+    topic: str | None = None
+
+    def __post_init__(self):
+        if self.filter not in FILTERS:
+            raise DataError(f"filter '{self.filter}': expected one of {', '.join(FILTERS)}")
+        if self.drive_gain is not None:
+            object.__setattr__(self, "drive_gain", tuple(float(g) for g in self.drive_gain))
+        if self.filter != "lowpass":  # the options of the low-pass path, refused with another
+            for flag, value in (
+                ("--periods", self.periods),
+                ("--excitation-period", self.period),
+                ("--edge", self.edge),
+                ("--no-decimate", None if self.decimate else True),
+            ):
+                if value is not None:
+                    raise DataError(f"{flag} needs --filter lowpass (got --filter {self.filter})")

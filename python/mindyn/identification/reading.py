@@ -1,0 +1,322 @@
+"""Reading the logs of an identification: how a log is read (:class:`ReadingOptions`), one log
+read and pre-processed (:func:`read_log`), and the fit and validation logs of one
+identification together (:func:`load_logs`, :class:`Logs`), with the rule that validation logs
+are filtered at the fit's cut-off."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
+from os import PathLike
+from pathlib import Path
+
+import numpy as np
+
+from .data import DataError, JointData
+from .options import MODELS, ReadingOptions
+
+
+@contextmanager
+def _named_filter_error(path, opts: ReadingOptions):
+    """A filter that cannot be designed at the cut-off, named as such."""
+    try:
+        yield
+    except np.linalg.LinAlgError as e:
+        if opts.filter not in ("butter", "lowpass"):
+            raise
+        raise DataError(
+            f"--cutoff {opts.cutoff:g} Hz: the zero-phase Butterworth filter "
+            f"of {path} is singular at this cutoff ({e}); expected a cutoff of at least 1e-4 of "
+            "half the log's sample rate"
+            if opts.cutoff is not None
+            else f"{path}: the Butterworth filter for the derivatives is singular ({e})"
+        ) from None
+
+
+def _gains(opts: ReadingOptions, n: int) -> np.ndarray | None:
+    """The drive gains for ``n`` joints (one value given: the same for all), or None."""
+    if opts.drive_gain is None:
+        return None
+    g = list(opts.drive_gain)
+    if len(g) == 1:
+        g *= n
+    if len(g) != n:
+        raise DataError(f"--drive-gain needs {n} values (or one for all), got {len(g)}")
+    return np.array(g)
+
+
+def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
+    from .data import convert_torque
+    from .rosbag import read_rosbag
+
+    current = unit == "current"
+    data = read_rosbag(
+        path,
+        robot,
+        topic=opts.topic,
+        torque_unit="Nm" if current or not unit else unit,
+        filter="none" if opts.filter == "lowpass" else opts.filter,
+        cutoff=opts.cutoff,
+    )
+    if current:  # effort in A: the gains (given or of the drive table) turn it into N m
+        tau, info = convert_torque(data.tau, "current", robot, gain)
+        data = replace(data, tau=tau, processing={**data.processing, "torque": info})
+    return data
+
+
+def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=None) -> list:
+    """The logs at ``paths`` as read (CSV or ROS bag; torques from the ``currents`` file of
+    each when given), by stages: which are bags, then (after the truth sidecars, when a list
+    ``truth`` is given to fill) the reads, then the currents joined."""
+    from .data import read_csv, read_truth
+    from .rosbag import is_rosbag
+
+    gain = _gains(opts, robot.n)
+    bags = [is_rosbag(p) for p in paths]
+    for p, bag in zip(paths, bags):
+        if Path(p).is_dir() and not bag:
+            raise DataError(f"'{p}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
+    if truth is not None:  # a log simulated for another robot is refused before any is read
+        truth += [read_truth(p, robot) for p in paths]
+    out = []
+    for p, bag, cur in zip(paths, bags, currents):
+        unit = None if cur else opts.torque_unit
+        with _named_filter_error(p, opts):
+            out.append(
+                _read_bag(p, robot, opts, unit, gain)
+                if bag
+                else read_csv(
+                    p,
+                    robot=robot,
+                    torque_unit=unit,
+                    require_torque=not cur and require_torque,
+                    filter="none" if opts.filter == "lowpass" else opts.filter,
+                    cutoff=opts.cutoff,
+                    drive_gain=gain,
+                )
+            )
+    if any(currents):
+        from .currents import attach_currents
+
+        out = [
+            d if c is None else attach_currents(d, c, robot, gain) for d, c in zip(out, currents)
+        ]
+    for p, d in zip(paths, out):
+        unit = d.processing["torque"]["unit"]
+        if gain is not None and not unit.startswith("motor current"):
+            raise DataError(
+                f"--drive-gain: {p} holds torques in {unit}, not motor currents; expected "
+                "--torque-unit current, columns i1..in or --currents"
+            )
+    return out
+
+
+def _processed(paths, raws, opts: ReadingOptions, cutoff, periodic, decimate) -> list[list]:
+    """The logs ``raws`` of ``paths`` through the data path: with the low-pass, cut at their
+    breaks and each segment through :func:`~mindyn.identification.preprocess.preprocess`;
+    otherwise each checked for evenly spaced time stamps."""
+    from .preprocess import preprocess, require_even_stamps, split_at_gaps
+
+    if opts.filter != "lowpass":
+        for d in raws:
+            require_even_stamps(d, opts.filter)
+        return [[d] for d in raws]
+    out = []
+    for p, raw in zip(paths, raws):
+        segments = split_at_gaps(raw)
+        if len(segments) > 1 and (opts.periods or opts.period):
+            raise DataError(
+                f"--periods/--excitation-period: {p} has {len(segments) - 1} break(s) in its "
+                "time stamps; a periodic log to be averaged must be one continuous recording"
+            )
+        with _named_filter_error(p, opts):
+            out.append(
+                [
+                    preprocess(
+                        seg,
+                        cutoff=cutoff if cutoff is not None else opts.cutoff,
+                        periods=opts.periods if periodic else None,
+                        period=opts.period if periodic else None,
+                        edge=opts.edge,
+                        decimate=decimate,
+                    )
+                    for seg in segments
+                ]
+            )
+    return out
+
+
+def read_log(
+    path,
+    robot,
+    *,
+    options: ReadingOptions | None = None,
+    currents=None,
+    cutoff: float | None = None,
+    periodic: bool = False,
+    decimate: bool = True,
+    require_torque: bool = True,
+) -> list[JointData]:
+    """The log at ``path`` (a CSV or a ROS bag; torques from the ``currents`` file when given)
+    as a list of logs: with the ``lowpass`` filter cut at its breaks
+    (:func:`~mindyn.identification.preprocess.split_at_gaps`) and each segment through
+    :func:`~mindyn.identification.preprocess.preprocess` (``cutoff`` overrides the options';
+    periods averaged only when ``periodic``; decimated when ``decimate`` and the options allow);
+    otherwise one log. A filter that cannot be designed at the cut-off is named as such."""
+    opts = options or ReadingOptions()
+    raws = _raw([path], robot, opts, [currents], require_torque)
+    return _processed([path], raws, opts, cutoff, periodic, decimate and opts.decimate)[0]
+
+
+def paired(logs: Sequence, currents, flag: str, logs_flag: str) -> list:
+    """One currents file per log (or none)."""
+    if not currents:
+        return [None] * len(logs)
+    if len(currents) != len(logs):
+        raise DataError(
+            f"{flag}: {len(currents)} currents file(s) for {len(logs)} log(s) of {logs_flag}; "
+            "expected one per log, in the same order"
+        )
+    return list(currents)
+
+
+def segments(ds: list[JointData]) -> dict:
+    """A log cut at its breaks: segment count, shortest and longest [s], each one's span."""
+    spans = [d.processing["segment"]["t_s"] for d in ds]
+    length = [b - a for a, b in spans]
+    return {
+        "count": len(ds),
+        "shortest_s": min(length),
+        "longest_s": max(length),
+        "spans_s": spans,
+    }
+
+
+@dataclass(frozen=True)
+class LogSet:
+    """The logs of some files: ``parts[k]`` the logs of ``files[k]`` (several when the file was
+    cut at breaks in its time stamps); made from them, ``logs`` all of them in order, ``labels``
+    each one's name (the file, or the segment's source), ``samples`` and ``rates`` each one's
+    sample count and mean rate [Hz] as used, ``logged`` its sample count as logged, and
+    ``segments`` per file the segments of :func:`segments` (None for a file not cut)."""
+
+    files: list[str]
+    parts: list[list[JointData]]
+    logs: list[JointData] = field(init=False)
+    labels: list[str] = field(init=False)
+    samples: list[int] = field(init=False)
+    rates: list[float] = field(init=False)
+    logged: list[int] = field(init=False)
+    segments: list[dict | None] = field(init=False)
+
+    def __post_init__(self):
+        logs = [d for ds in self.parts for d in ds]
+        made = dict(
+            logs=logs,
+            labels=[
+                d.source if len(ds) > 1 else f for f, ds in zip(self.files, self.parts) for d in ds
+            ],
+            samples=[d.m for d in logs],
+            rates=[d.rate for d in logs],
+            logged=[int(d.processing.get("samples", d.m)) for d in logs],
+            segments=[segments(ds) if len(ds) > 1 else None for ds in self.parts],
+        )
+        for name, value in made.items():
+            object.__setattr__(self, name, value)
+
+
+@dataclass(frozen=True)
+class Logs(Sequence):
+    """The logs of one identification (:func:`load_logs`): ``fit`` and ``validation``
+    (:class:`LogSet`, validation empty when none), how they were read (``reading``, ``model``),
+    the cut-off the validation logs were filtered at (``cutoff``: the highest of the fit logs'
+    with the low-pass, else None) and the truth sidecars of the fit files (``truth``); made from
+    them, ``record``: how the logs were read, for the JSON (what ``mindyn predict`` does with
+    another log; None when ``reading`` is: logs read otherwise). As a sequence: the fit
+    logs."""
+
+    fit: LogSet
+    validation: LogSet = field(default_factory=lambda: LogSet([], []))
+    reading: ReadingOptions | None = None
+    model: str = "dynamic"
+    cutoff: float | None = None
+    truth: list = field(default_factory=list)
+    record: dict | None = field(init=False)
+
+    def __post_init__(self):
+        r = self.reading
+        record = (
+            None
+            if r is None
+            else {
+                "filter": r.filter,
+                "cutoff_Hz": self.cutoff if r.filter == "lowpass" else r.cutoff,
+                "edge_s": r.edge,
+                "torque_unit": r.torque_unit,
+                "drive_gain": None if r.drive_gain is None else list(r.drive_gain),
+                "topic": r.topic,
+            }
+        )
+        object.__setattr__(self, "record", record)
+
+    def __getitem__(self, k):
+        return self.fit.logs[k]
+
+    def __len__(self) -> int:
+        return len(self.fit.logs)
+
+
+def load_logs(
+    paths: Sequence,
+    robot,
+    *,
+    validate: Sequence = (),
+    currents: Sequence | None = None,
+    validate_currents: Sequence | None = None,
+    model: str = "dynamic",
+    options: ReadingOptions | None = None,
+    what: str = "the identification data",
+    **reading,
+) -> Logs:
+    """The logs at ``paths`` (CSV or ROS bags, fitted together) and the validation logs at
+    ``validate`` (a path alone: a list of it), read as ``options`` (a :class:`ReadingOptions`)
+    or the keywords of :class:`ReadingOptions` say. ``currents`` / ``validate_currents``: a
+    motor-current file per log. ``model``: the regression model the logs are for (the window
+    models integrate over the logged samples: no decimation for them). ``what``: the logs'
+    name in errors.
+
+    A log simulated for another robot (its truth sidecar says so) is refused before any is read;
+    with the low-pass the fit logs average their periods (``periods``/``period``) and the
+    validation logs are filtered at the fit's cut-off, the highest of the fit logs'."""
+    if options is not None and reading:
+        raise DataError(f"load_logs: give options or {', '.join(reading)}, not both")
+    opts = options or ReadingOptions(**reading)
+    if model not in MODELS:
+        raise DataError(f"load_logs: model '{model}': expected one of {', '.join(MODELS)}")
+    one = (str, PathLike)  # one path given alone: a list of it
+    paths = [paths] if isinstance(paths, one) else paths
+    validate = [validate] if isinstance(validate, one) else validate or ()
+    files, vfiles = [str(p) for p in paths], [str(p) for p in validate]
+    if not files:
+        raise DataError("load_logs: expected at least one log")
+    if validate_currents and not vfiles:
+        raise DataError("--validate-currents: expected --validate with the logs they belong to")
+    cur = paired(files, currents, "--currents", what)
+    vcur = paired(vfiles, validate_currents, "--validate-currents", "--validate")
+    truth: list = []
+    raws = _raw(files + vfiles, robot, opts, cur + vcur, True, truth)
+    decimate = model == "dynamic" and opts.decimate
+    parts = _processed(files, raws[: len(files)], opts, None, True, decimate)
+    pres = [d.processing.get("preprocess") for ds in parts for d in ds]
+    cutoff = max(p["filter"]["cutoff_Hz"] for p in pres) if all(pres) else None
+    vparts = _processed(vfiles, raws[len(files) :], opts, cutoff, False, decimate)
+    truth = truth[: len(files)]
+    return Logs(
+        LogSet(files, parts),
+        LogSet(vfiles, vparts),
+        reading=opts,
+        model=model,
+        cutoff=cutoff,
+        truth=truth,
+    )

@@ -1,0 +1,218 @@
+"""The identification workflow: :func:`run`, with the options of
+:class:`~mindyn.identification.options.IdentifyOptions`, fits the base parameters to the logs
+of :func:`~mindyn.identification.reading.load_logs`, optionally chooses the friction model and
+estimates physically consistent parameters, scores the estimates on the fit and validation
+logs and returns an :class:`~mindyn.identification.summary.IdentificationReport` (its JSON
+document by ``to_dict()``, its terminal text by ``format()``). ``mindyn identify`` is this
+workflow on the command line::
+
+    logs = load_logs(["fit.csv"], robot, validate=["val.csv"])
+    report = run(robot, logs, friction=True, consistent=True)
+    print(report.format())
+    doc = report.to_dict()
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from .data import JointData
+from .errors import IdentificationError
+from .options import OPTION_NAMES, IdentifyOptions, ReadingOptions
+from .reading import Logs, LogSet, load_logs
+from .summary import IdentificationReport
+
+__all__ = ["IdentificationReport", "IdentifyOptions", "ReadingOptions", "load_logs", "run"]
+
+
+def _fit_keywords(options: IdentifyOptions) -> dict:
+    """The keywords of :func:`~mindyn.identification.identify` the options give."""
+    return dict(
+        model=options.model,
+        weighted=options.weighted,
+        rsd_threshold=options.rsd_threshold,
+        energy_window=options.energy_window,
+        integration=options.integration,
+        integral_window=options.integral_window,
+        min_velocity=options.min_velocity,
+    )
+
+
+def _check_width(width, n: int) -> list[float]:
+    """Friction widths for ``n`` joints (one value: the same for all), each positive."""
+    w = [float(x) for x in width]
+    if len(w) == 1:
+        w *= n
+    if len(w) != n:
+        raise IdentificationError(
+            f"--friction-width needs {n} values (or one for all), got {len(w)}"
+        )
+    if not all(math.isfinite(x) and x > 0 for x in w):
+        raise IdentificationError("--friction-width: every width must be a positive number")
+    return w
+
+
+def _as_logs(logs, model: str) -> Logs:
+    if isinstance(logs, Logs):
+        return logs
+    if isinstance(logs, JointData):
+        logs = [logs]
+    logs = list(logs)
+    names = [d.source or f"log {k + 1}" for k, d in enumerate(logs)]
+    return Logs(LogSet(names, [[d] for d in logs]), model=model, truth=[None] * len(logs))
+
+
+def _truth(robot, base, logs: Logs, options: IdentifyOptions):
+    """The true base values when every fit log is simulated with the same truth, and the drive
+    side of a truth that cannot be compared (its rotor and friction values another side's)."""
+    from .validation import true_base_values
+
+    docs = logs.truth
+    doc = docs[0] if docs and all(d == docs[0] for d in docs) else None
+    side = None
+    if doc and (options.rotor or options.friction):
+        sim = doc.get("simulation")
+        logged = sim.get("drive_side", "joint") if isinstance(sim, dict) else "joint"
+        if logged != robot.drive_side:  # its Ia/Fv/Fc are another side's: nothing to compare
+            doc, side = None, logged
+    return (true_base_values(base, doc) if doc else None), side
+
+
+def _friction(robot, data: list, options: IdentifyOptions, progress):
+    """The friction choice (or None), the robot and base set it gives, and the friction model's
+    record and lines (None and none without friction)."""
+    from ..base import base_parameters
+
+    if options.friction_model is None:
+        base = base_parameters(
+            robot, rotor=options.rotor, friction=options.friction, offset=options.offset
+        )
+        if not base.friction:
+            return None, robot, base, None, []
+    from .friction import friction_lines, friction_record, select_friction_model
+
+    choice = None
+    if options.friction_model is not None:
+        width = None
+        if options.friction_width is not None:
+            width = _check_width(options.friction_width, robot.n)
+        choice = select_friction_model(
+            robot,
+            data,
+            options.friction_model,
+            rotor=options.rotor,
+            offset=options.offset,
+            width=width,
+            fit=_fit_keywords(options),
+            progress=progress,
+        )
+        robot, base = choice.robot, choice.base
+    record = choice.record if choice else None
+    return (
+        choice,
+        robot,
+        base,
+        friction_record(robot, record=record),
+        friction_lines(robot, record=record),
+    )
+
+
+def _fit(robot, base, data: list, files: list, options: IdentifyOptions):
+    """The least-squares fit and its JSON fields."""
+    from .estimation import identify
+
+    try:
+        res = identify(robot, data, base=base, **_fit_keywords(options))
+    except np.linalg.LinAlgError as e:
+        raise IdentificationError(
+            f"{options.model} model on {' + '.join(files)}: the least-squares problem of the "
+            f"base regressor of this data is singular ({e}); the data do not determine the "
+            f"{base.n} base parameters: use a longer or richer log, or fewer parameters"
+        ) from None
+    return res, res.to_dict()
+
+
+def _consistent(res, data: list, options: IdentifyOptions, progress):
+    """The consistent estimate, its JSON fields and its mass matrix's smallest eigenvalue over
+    the data (None, None, None unless asked for)."""
+    if not options.consistent:
+        return None, None, None
+    from .consistent import consistent_estimate
+
+    weight = "auto" if options.prior_weight is None else options.prior_weight
+    cons = consistent_estimate(res, weight, data=data, progress=progress)
+    return cons, cons.to_dict(), cons.mass_matrix_min_eig(data)
+
+
+def run(
+    robot,
+    logs: Logs | Sequence[JointData] | JointData,
+    *,
+    options: IdentifyOptions | None = None,
+    tip: str | None = None,
+    progress: Callable[[str], None] | None = None,
+    **keywords,
+) -> IdentificationReport:
+    """Identify the base parameters of ``robot`` from ``logs`` (a :class:`Logs` of
+    :func:`load_logs`, with its validation logs, or logs read otherwise) with ``options`` or the
+    keywords of :class:`IdentifyOptions` (``friction=True``, ``consistent=True``, ...).
+
+    Returns an :class:`IdentificationReport`: the fit, the friction choice and the consistent
+    estimate when asked for, the error measures on the fit and validation logs, the true values
+    when the logs are simulated. ``tip``: the chain identified (as ``load(robot, tip=...)``),
+    recorded in the JSON; ``progress``: a callable taking one line per step of the long
+    solves. Each stage runs once, in order: friction model, fit, consistent estimate, error
+    measures."""
+    if options is not None and keywords:
+        raise IdentificationError(f"run: give options or {', '.join(keywords)}, not both")
+    unknown = sorted(set(keywords) - OPTION_NAMES)
+    if unknown:
+        raise IdentificationError(
+            f"run: unknown option(s) {', '.join(unknown)}; expected some of "
+            + ", ".join(sorted(OPTION_NAMES))
+        )
+    opts = options or IdentifyOptions(**keywords)
+    logs = _as_logs(logs, opts.model)
+    r = logs.reading
+    if r is not None and r.filter == "lowpass" and r.decimate and logs.model != opts.model:
+        if "dynamic" in (logs.model, opts.model):  # decimated for the dynamic model only
+            raise IdentificationError(
+                f"run(model='{opts.model}'): the logs were read for the {logs.model} model "
+                f"(decimated for the dynamic model only); read them with "
+                f"load_logs(..., model='{opts.model}')"
+            )
+    data, vdata = logs.fit.logs, logs.validation.logs
+    choice, robot, base, record, lines = _friction(robot, data, opts, progress)
+    res, res_doc = _fit(robot, base, data, logs.fit.files, opts)
+    cons, cons_doc, low = _consistent(res, data, opts, progress)
+    from .validation import validate
+
+    fit = validate(res, data)
+    val = validate(res, vdata) if vdata else None
+    cfit = validate(cons, data) if cons is not None else None
+    cval = validate(cons, vdata) if cons is not None and vdata else None
+    truth, side = _truth(robot, base, logs, opts)
+    return IdentificationReport(
+        robot=robot,
+        options=opts,
+        logs=logs,
+        base=base,
+        result=res,
+        result_doc=res_doc,
+        friction=choice,
+        friction_record=record,
+        friction_lines=lines,
+        consistent=cons,
+        consistent_doc=cons_doc,
+        fit=fit,
+        validation=val,
+        consistent_fit=cfit,
+        consistent_validation=cval,
+        mass_matrix_min_eig=low,
+        truth=truth,
+        truth_side=side,
+        tip=tip,
+    )
