@@ -38,8 +38,8 @@ twice that of the same simulation of the description's model (in parentheses; th
 over a sample period of the log and the Coulomb feedforward on the reference velocity leave
 errors of this size with any model), ``WORSE`` when finite but beyond that.
 
-With ``--friction-model KIND`` (coulomb, asymmetric, smooth, stribeck or auto) every command gets
-that option, and each case prints the friction model used (for ``auto`` the candidates'
+With ``--friction-model KIND`` (coulomb, asymmetric, smooth, stribeck, dahl or auto) every
+command gets that option, and each case prints the friction model used (for ``auto`` the candidates'
 held-out residuals). Every case prints each joint's validation error relative to that joint's
 torque (``validation.relative`` and its ``raw`` and ``moving`` counterparts of the JSON), e.g.
 the UR10e's joint 6 (target with ``auto``: at most 30 %).
@@ -134,7 +134,7 @@ def main() -> int:
     )
     ap.add_argument(
         "--friction-model",
-        choices=["coulomb", "asymmetric", "smooth", "stribeck", "auto"],
+        choices=["coulomb", "asymmetric", "smooth", "stribeck", "dahl", "auto"],
         help="give every command this --friction-model (default: none, viscous + Coulomb)",
     )
     args = ap.parse_args()
