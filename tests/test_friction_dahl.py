@@ -205,3 +205,39 @@ def test_dahl_needs_the_dynamic_model(arm):
     log, _ = dahl_log(arm, seconds=2.0)
     with pytest.raises(mindyn.Error, match="only with the dynamic model"):
         select_friction_model(arm, [log], "dahl", fit={"model": "energy"})
+
+
+def test_auto_picks_dahl_on_a_dahl_log(arm):
+    log, _ = dahl_log(arm, noise=0.01, seed=3)
+    choice = select_friction_model(arm, [log], "auto")
+    rec = choice.record
+    assert rec["chosen_by"] == "held-out data" and rec["kind"] == "dahl", rec["candidates"]
+    assert "dahl" in rec["candidates"] and isinstance(choice.base.sigma, np.ndarray)
+
+
+def test_auto_leaves_out_a_fit_whose_friction_drives_the_motion(arm):
+    """A log whose low-speed torque pushes the joints along (Stribeck term Fs = -2 Fc: f(v)
+    sign(v) = -Fc just above zero, below a twentieth of the speeds) is not friction: auto leaves
+    the Stribeck fit that reproduces it out, naming the slots, and chooses among the others."""
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 8.0, 1 / 200)
+    q, dq, ddq = (np.zeros((t.size, 3)) for _ in range(3))
+    for k in range(3):
+        for h in (1, 2, 3):
+            a, om, ph = rng.uniform(0.2, 0.5) / h, 2 * np.pi * 0.25 * h * (1 + 0.1 * k), 1.0 * k
+            q[:, k] += a * np.sin(om * t + ph)
+            dq[:, k] += a * om * np.cos(om * t + ph)
+            ddq[:, k] -= a * om**2 * np.sin(om * t + ph)
+    w = np.full(3, 0.05)
+    s = np.sign(dq)
+    tau = (
+        arm.inverse_dynamics(q, dq, ddq) + FV * dq + FC * s - 2 * FC * s * np.exp(-((dq / w) ** 2))
+    )
+    tau += 0.01 * tau.std(axis=0) * rng.standard_normal(tau.shape)
+    log = JointData(t, q, dq, ddq, tau, "active log")
+    rec = select_friction_model(arm, [log], "auto").record
+    assert "stribeck" not in rec["candidates"] and rec["kind"] != "stribeck"
+    why = rec["not_dissipative"]["stribeck"]
+    assert all(f"slot {k}" in why for k in (1, 2, 3)), why
+    # the same fit given explicitly is the user's choice: kept
+    assert select_friction_model(arm, [log], "stribeck").record["kind"] == "stribeck"

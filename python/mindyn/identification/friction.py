@@ -52,7 +52,11 @@ the simulation plant has none either (a robot's friction model is one of the cor
   residual is within one standard error of the smallest (the one-standard-error rule, as for
   the prior's weight, the error from the spread of the blocks) wins. A model the data cannot
   identify (e.g. ``asymmetric`` with torque offsets, whose ``Fa`` is a constant torque whenever
-  the joint moves) is reported and left out.
+  the joint moves) is reported and left out, and so is one whose fitted friction is not
+  friction: a friction torque is dissipative, ``f(v) v >= 0`` at every speed, and a fit whose
+  ``f(v) sign(v)`` is significantly negative at some speed (:func:`active_friction`, e.g. a
+  Stribeck term ``Fs`` below ``-Fc``: friction pushing the joint along as it starts) fits
+  something other than friction there (when every model's fit is such, none is left out).
 """
 
 from __future__ import annotations
@@ -368,7 +372,7 @@ def select_friction_model(
         out.record["chosen_by"] = "default" if kind == "coulomb" else "given"
         return out
     folds = FOLDS if folds is None else folds
-    choices, scores, per_fold, refused = {}, {}, {}, {}
+    choices, scores, per_fold, refused, active_fits = {}, {}, {}, {}, {}
     common = None
     for k in KINDS:
         try:
@@ -381,8 +385,16 @@ def select_friction_model(
             common = res.joint_sigma
         scores[k], per_fold[k] = held_out_residual(res, logs, folds=folds, joint_sigma=common)
         choices[k] = c
+        active = active_friction(res, logs)
+        if active:
+            active_fits[k] = active
         if progress is not None:
             progress(f"friction: {k} held-out residual {scores[k]:.4g}")
+    if len(active_fits) < len(scores):  # a fit that is not friction competes only with such
+        for k in active_fits:
+            del scores[k]
+    else:
+        active_fits = {}
     if not scores:
         raise IdentificationError(
             "friction model auto: no friction model can be identified from this data ("
@@ -401,7 +413,8 @@ def select_friction_model(
             f"{folds}-fold cross-validation over contiguous time blocks of the fit logs (each "
             "block's residual predicted by the estimate fitted on the other blocks, summed, "
             "with the Coulomb fit's per-joint weights): the simplest model (coulomb, smooth, "
-            "asymmetric, stribeck, dahl) within one standard error of the smallest"
+            "asymmetric, stribeck, dahl) within one standard error of the smallest, among those "
+            "whose fitted friction is dissipative"
         ),
         smallest=best,
         standard_error=se,
@@ -409,8 +422,59 @@ def select_friction_model(
         candidates_per_fold={k: [float(x) for x in v] for k, v in per_fold.items()},
         candidates_unit="weighted residual per equation",
         not_identifiable=refused,
+        not_dissipative=active_fits,
     )
     return out
+
+
+#: A fitted friction torque counts as pushing a slot along its motion when ``f(v) sign(v)`` is
+#: below zero by more than this many of its standard deviations (about 98 % one-sided).
+ACTIVE_SIGMAS = 2.0
+
+
+def active_friction(res, logs) -> str | None:
+    """Why the friction fitted in ``res`` is not friction, or None: a friction torque is
+    dissipative, ``f(v) v >= 0`` at every speed; the slots whose fitted ``f(v) sign(v)`` is
+    below zero by more than :data:`ACTIVE_SIGMAS` standard deviations (the parameters' standard
+    deviations of the fit, taken as independent) at some speed from just above zero to the
+    largest of ``logs``, either way (the steady friction of the Dahl model: ``sign(v)`` for
+    its state)."""
+    base = res.base
+    if not base.friction:
+        return None
+    robot = base.robot
+    names = list(base.names)
+    std = dict(zip(res.names, np.asarray(res.std, float)))
+    classical = robot.parameter_names(False, True)[10 : robot.layout_sizes[2]]
+    kinds = [nm.rstrip("0123456789") for nm in classical]
+    top = np.max(np.vstack([np.abs(robot.slot_velocities(d.dq)) for d in logs]), axis=0)
+    speeds = np.geomspace(1e-9, 1.0, 40)[:, None] * np.maximum(top, 1e-300)  # (S, n)
+    phis = {sgn: robot.friction_shapes(sgn * speeds) for sgn in (1.0, -1.0)}  # (S, n, c)
+    bad = []
+    for k in range(robot.n):
+        for sgn, phi in phis.items():
+            value = np.zeros(speeds.shape[0])
+            var = np.zeros(speeds.shape[0])
+            for i, kind in enumerate(kinds):
+                nm = f"{kind}{k + 1}"
+                if nm in names:
+                    col = sgn * phi[:, k, i]
+                    value += col * res.full[names.index(nm)]
+                    var += (col * std.get(nm, 0.0)) ** 2
+            low = value < -ACTIVE_SIGMAS * np.sqrt(var)
+            if np.any(low):
+                at = int(np.argmax(low))
+                bad.append(
+                    f"slot {k + 1} at v = {sgn * speeds[at, k]:.3g}: f(v) sign(v) = "
+                    f"{value[at]:.3g} +- {math.sqrt(var[at]):.2g}"
+                )
+                break
+    if not bad:
+        return None
+    return (
+        "the fitted friction drives the motion (f(v) v < 0 beyond "
+        f"{ACTIVE_SIGMAS:g} standard deviations): " + "; ".join(bad)
+    )
 
 
 def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float, np.ndarray]:
@@ -497,6 +561,8 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
         )
     for k, why in (rec.get("not_identifiable") or {}).items():
         lines.append(f"    {k}: not identifiable here ({why})")
+    for k, why in (rec.get("not_dissipative") or {}).items():
+        lines.append(f"    {k}: left out, not friction here ({why})")
     return lines
 
 
