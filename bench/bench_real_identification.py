@@ -279,8 +279,12 @@ def link_masses(ce) -> str:
         ok = "ok" if near or data else "MISSED"
         lines.append(
             f"  {lk['link']:<16} mass {m:8.3f} +- {lk['mass_std']:.3g} kg, description "
-            f"{m0:8.3f} kg, mass by {lk['mass_verdict']:<7}"
-            + (f" (data's +- {lk['mass_data_std']:.3g} kg)" if data else "")
+            f"{m0:8.3f} kg, mass by {lk['mass_verdict']:<10}"
+            + (
+                f" (data's +- {lk['mass_data_std']:.3g} kg)"
+                if lk["mass_verdict"] in ("data", "data+prior")
+                else ""
+            )
             + f" fit worse by {lk['mass_fit_increase']:.3g} at the description's, "
             f"link {lk['verdict']:<6} {ok}"
         )
