@@ -241,3 +241,19 @@ def test_auto_leaves_out_a_fit_whose_friction_drives_the_motion(arm):
     assert all(f"slot {k}" in why for k in (1, 2, 3)), why
     # the same fit given explicitly is the user's choice: kept
     assert select_friction_model(arm, [log], "stribeck").record["kind"] == "stribeck"
+
+
+def test_identify_refuses_to_write_a_description_of_a_dahl_estimate(arm, tmp_path, capsys):
+    from mindyn.cli import main
+
+    log, _ = dahl_log(arm, noise=0.01, seed=3)
+    write_csv(tmp_path / "fit.csv", log.t, log.q, log.tau, log.dq, log.ddq)
+    robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
+    capsys.readouterr()
+    rc = main(["identify", str(robot_path), str(tmp_path / "fit.csv"), "--friction-model", "auto",
+               "--filter", "none", "--consistent", "--prior-weight", "1", "--yaml",
+               str(tmp_path / "out.yaml")])  # fmt: skip
+    captured = capsys.readouterr()
+    assert "friction model dahl" in captured.out
+    assert rc != 0 and "Dahl friction model" in captured.err, captured.err
+    assert len(captured.err.strip().splitlines()) == 1 and not (tmp_path / "out.yaml").exists()

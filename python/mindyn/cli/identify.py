@@ -616,6 +616,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
         print(f"wrote {args.json}")
     if args.urdf or args.yaml or args.mjcf:
+        from ..identification.document import refuse_state
+
+        refuse_state(doc, "a robot description", "the consistent estimate")
         write_description(
             robot,
             doc["classical"],
