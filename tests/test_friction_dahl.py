@@ -257,3 +257,66 @@ def test_identify_refuses_to_write_a_description_of_a_dahl_estimate(arm, tmp_pat
     assert "friction model dahl" in captured.out
     assert rc != 0 and "Dahl friction model" in captured.err, captured.err
     assert len(captured.err.strip().splitlines()) == 1 and not (tmp_path / "out.yaml").exists()
+
+
+def _dahl_robot(arm):
+    r = arm.with_friction_model("coulomb")
+    r.viscous, r.coulomb = FV, FC
+    p = r.parameters(True, True).reshape(r.n, -1).copy()
+    p[:, 10] = 0.0  # no rotor inertia
+    plant = p.copy()
+    plant[:, 12] = 0.0  # the Coulomb term is the Dahl state's
+    return r, p.reshape(-1), plant.reshape(-1)
+
+
+def test_open_loop_simulation_follows_an_independent_integration(arm):
+    from mindyn.control import SumOfSines, simulate_inverse
+
+    r, _, plant = _dahl_robot(arm)
+    ref = SumOfSines(r, period=2.0)
+    log = simulate_inverse(r, ref, rate=500.0, friction=True, dahl_sigma=SIGMA)
+    z = dahl_integrated(log.t, lambda s: ref.evaluate(s)[1], SIGMA)
+    np.testing.assert_allclose(log.friction_state, z, atol=1e-3)
+    rigid = r.inverse_dynamics(log.q_true, log.dq_true, log.ddq_true, plant)  # + viscous
+    np.testing.assert_allclose(log.tau_true - rigid, FC * z, atol=2e-3 * FC.max())
+    assert log.info["dahl"]["sigma"] == SIGMA.tolist()
+
+
+def test_closed_loop_plant_integrates_the_state_with_the_motion(arm):
+    """The plant with Dahl friction against scipy's adaptive RK45 of the same equations written
+    out here (forward dynamics of the rigid body with viscous friction, the torque held over each
+    period minus Fc z, dz/dt = sigma (dq - z |dq|)), from the same start, period by period."""
+    from mindyn.control import SumOfSines, simulate
+    from scipy.integrate import solve_ivp
+
+    r, _, plant = _dahl_robot(arm)
+    log = simulate(r, SumOfSines(r, period=2.0), rate=200.0, duration=0.5, friction=True,
+                   dahl_sigma=SIGMA)  # fmt: skip
+    n, period = r.n, 1 / 200.0
+    x = np.concatenate([log.q_true[0], log.dq_true[0], np.zeros(n)])
+    for i in range(log.t.size - 1):
+        tau = log.tau_true[i]
+
+        def f(_t, x, tau=tau):
+            q, dq, z = x[:n], x[n : 2 * n], x[2 * n :]
+            ddq = r.forward_dynamics(q, dq, tau - FC * z, plant)
+            return np.concatenate([dq, ddq, SIGMA * (dq - z * np.abs(dq))])
+
+        x = solve_ivp(f, (0, period), x, rtol=1e-10, atol=1e-12).y[:, -1]
+        np.testing.assert_allclose(x[:n], log.q_true[i + 1], atol=1e-6)
+        np.testing.assert_allclose(x[2 * n :], log.friction_state[i + 1], atol=1e-4)
+    assert np.ptp(log.friction_state, axis=0).min() > 0.5  # the state moved
+
+
+def test_simulation_checks_the_dahl_options(arm):
+    from mindyn.control import SumOfSines, simulate
+
+    r, _, _ = _dahl_robot(arm)
+    ref = SumOfSines(r, period=2.0)
+    for kw, message in (
+        ({"friction": False, "dahl_sigma": SIGMA}, "friction=True"),
+        ({"friction": True, "dahl_sigma": -SIGMA}, "positive"),
+        ({"friction": True, "dahl_sigma": SIGMA, "integrator": "scipy"}, "rk4"),
+    ):
+        with pytest.raises(ValueError, match=message):
+            simulate(r, ref, rate=200.0, duration=0.1, **kw)

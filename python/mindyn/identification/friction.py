@@ -14,9 +14,10 @@ regressor is linear in ``Fv`` and ``Fc`` (the Coulomb column is ``z`` instead of
 ``sign(v)``). The state follows the positions the regressor is evaluated on: the low-pass
 filtered ones on preprocessed data, so position noise above the cut-off does not move it; below
 the cut-off, a step smaller than the presliding displacement moves ``z`` only part of the way.
-Dynamic model only (its state needs the samples in order). Generated code, the momentum
-observer and robot descriptions have no friction state and refuse an identification with it;
-the simulation plant has none either (a robot's friction model is one of the core's).
+Dynamic model only (its state needs the samples in order). The simulation integrates the state
+with the plant (:func:`mindyn.control.simulate` and :func:`~mindyn.control.simulate_inverse`,
+``dahl_sigma``); generated code, the momentum observer and robot descriptions have no friction
+state and refuse an identification with it.
 
 - ``smooth``: the width ``w_j`` of joint ``j`` is given, or derived from the data
   (:func:`smooth_width`): the speed below which the data do not determine the sign of the
