@@ -549,7 +549,8 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
         )
     if rec.get("sigma") is not None:
         lines.append(
-            "    Dahl sigma [1/rad | 1/m] (1 / presliding displacement): "
+            "    Dahl sigma [1/rad | 1/m of the slot's position, the motor's on the motor side] "
+            "(1 / presliding displacement): "
             + " ".join(f"{v:.4g}" for v in rec["sigma"])
             + f" ({rec['sigma_rule']}; the state follows the low-pass filtered positions)"
         )
