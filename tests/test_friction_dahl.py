@@ -320,3 +320,25 @@ def test_simulation_checks_the_dahl_options(arm):
     ):
         with pytest.raises(ValueError, match=message):
             simulate(r, ref, rate=200.0, duration=0.1, **kw)
+
+
+def test_stateless_steps_refuse_a_dahl_base_set(arm):
+    from mindyn.control import MomentumObserver
+    from mindyn.identification.friction import dahl_base
+
+    base = dahl_base(mindyn.base_parameters(arm, friction=True), SIGMA)
+    with pytest.raises(mindyn.Error, match="no Dahl friction state"):
+        MomentumObserver(base, np.ones(base.n), period=0.001)
+    with pytest.raises(mindyn.Error, match="one sample has none"):
+        base.regressor(np.zeros(3), np.zeros(3), np.zeros(3))
+    # a path: the Coulomb column is the state, the rest the coulomb model's regressor
+    q = np.linspace(0, 0.05, 11)[:, None] * np.array([1.0, -1.0, 0.5])
+    W = base.regressor(q, np.ones_like(q), np.zeros_like(q))
+    W0 = mindyn.base_parameters(arm, friction=True).regressor(q, np.ones_like(q), np.zeros_like(q))
+    names = list(base.names)
+    fc = [names.index(f"Fc{k + 1}") for k in range(3)]
+    other = [c for c in range(base.n) if c not in fc]
+    np.testing.assert_array_equal(W[:, :, other], W0[:, :, other])
+    for k, c in enumerate(fc):
+        np.testing.assert_allclose(W[:, k, c], dahl_state(q, SIGMA)[:, k], atol=1e-15)
+        assert not np.any(np.delete(W[:, :, c], k, axis=1))

@@ -664,11 +664,12 @@ class DahlBase(BaseParameters):
         return hit[1][row : row + q.shape[0]]
 
     def regressor(self, q, dq, ddq) -> np.ndarray:
+        if np.ndim(q) == 1:
+            raise IdentificationError(
+                "Dahl friction: its state follows the positions of a path, shape (m, n); one "
+                "sample has none (a controller or observer step keeps no Dahl state)"
+            )
         W = super().regressor(q, dq, ddq)
-        if W.ndim == 2:  # one sample: a path at rest, z = 0
-            for _, c in self._fc:
-                W[:, c] = 0.0
-            return W
         q = np.asarray(q, dtype=float)
         T = self.robot.drive_matrix  # slot k's Coulomb torque reaches joint j times T[k, j]
         z = self.state(q)
