@@ -38,8 +38,8 @@ twice that of the same simulation of the description's model (in parentheses; th
 over a sample period of the log and the Coulomb feedforward on the reference velocity leave
 errors of this size with any model), ``WORSE`` when finite but beyond that.
 
-With ``--friction-model KIND`` (coulomb, asymmetric, smooth, stribeck or auto) every command gets
-that option, and each case prints the friction model used (for ``auto`` the candidates'
+With ``--friction-model KIND`` (coulomb, asymmetric, smooth, stribeck, dahl or auto) every
+command gets that option, and each case prints the friction model used (for ``auto`` the candidates'
 held-out residuals). Every case prints each joint's validation error relative to that joint's
 torque (``validation.relative`` and its ``raw`` and ``moving`` counterparts of the JSON), e.g.
 the UR10e's joint 6 (target with ``auto``: at most 30 %).
@@ -134,7 +134,7 @@ def main() -> int:
     )
     ap.add_argument(
         "--friction-model",
-        choices=["coulomb", "asymmetric", "smooth", "stribeck", "auto"],
+        choices=["coulomb", "asymmetric", "smooth", "stribeck", "dahl", "auto"],
         help="give every command this --friction-model (default: none, viscous + Coulomb)",
     )
     args = ap.parse_args()
@@ -279,8 +279,12 @@ def link_masses(ce) -> str:
         ok = "ok" if near or data else "MISSED"
         lines.append(
             f"  {lk['link']:<16} mass {m:8.3f} +- {lk['mass_std']:.3g} kg, description "
-            f"{m0:8.3f} kg, mass by {lk['mass_verdict']:<7}"
-            + (f" (data's +- {lk['mass_data_std']:.3g} kg)" if data else "")
+            f"{m0:8.3f} kg, mass by {lk['mass_verdict']:<10}"
+            + (
+                f" (data's +- {lk['mass_data_std']:.3g} kg)"
+                if lk["mass_verdict"] in ("data", "data+prior")
+                else ""
+            )
             + f" fit worse by {lk['mass_fit_increase']:.3g} at the description's, "
             f"link {lk['verdict']:<6} {ok}"
         )

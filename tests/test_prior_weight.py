@@ -296,6 +296,33 @@ def test_mass_verdict_from_the_fit_with_the_mass_held_at_the_description():
     assert all(lk["mass_profile_converged"] for lk in c.links)
 
 
+def test_a_mass_the_prior_moves_with_the_moments_the_data_fix_is_not_held_by_the_prior():
+    """The truth's third link is the description's scaled by 0.2 (same centre of mass and radii
+    of gyration, a fifth of the mass and moments). Its mass alone hardly changes the fit (held
+    at the description's, the fit is not 4 noise variances worse), but the data fix its moments
+    and the log-det prior ties the mass to them: the estimate sits far from the description's
+    mass, nearer the truth, and is reported as determined by the data through the prior
+    (``data+prior``: the whole objective is worse at the description's mass), not as held by
+    the prior."""
+    robot = mindyn.load(ROBOT)
+    truth = robot.params.copy().reshape(robot.n, 10)
+    truth[2] *= 0.2
+    data = _log(robot, truth.reshape(-1), noise=0.01)
+    c = consistent_estimate(identify(robot, data, rsd_threshold=None), data=data)
+    third = c.links[2]
+    m0, mt = third["description_mass"], truth[2, 9]
+    assert third["mass_fit_increase"] < MASS_EVIDENCE, third
+    assert third["mass_objective_increase"] >= MASS_EVIDENCE, third
+    assert third["mass_verdict"] == "data+prior", third
+    assert abs(third["mass"] - mt) < 0.5 * abs(third["mass"] - m0), third
+    assert third["mass_data_std"] > 0
+    # a link reported as held by the prior has the description's mass within the estimate's
+    # resolution: the whole objective not 4 noise variances worse there
+    for lk in c.links:
+        if lk["mass_verdict"] == "prior":
+            assert lk["mass_objective_increase"] < MASS_EVIDENCE, lk
+
+
 def test_mass_profile_equals_a_brute_force_minimisation():
     """Two-link arm, the second link's truth nearly a point mass three times the description's:
     the fit with each mass held at the description's, from the Newton descent of the profile,

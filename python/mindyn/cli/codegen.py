@@ -411,6 +411,9 @@ def _with_friction_model(robot, args):
         except (DataError, FileNotFoundError):
             doc = None
         if isinstance(doc, dict) and doc.get("friction_model") is not None:
+            from ..identification.document import refuse_state
+
+            refuse_state(doc, "generated code", str(args.params))
             recorded = doc["friction_model"]
             if not (isinstance(recorded, dict) and isinstance(recorded.get("kind"), str)):
                 raise ModelError(

@@ -51,6 +51,9 @@ def cmd_detect(args: argparse.Namespace) -> int:
     doc = read_json(args.identification)
     if not isinstance(doc, dict):
         raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
+    from ..identification.document import refuse_state
+
+    refuse_state(doc, "the momentum observer", str(args.identification))
     robot = load(args.robot, tip=args.tip if args.tip is not None else doc.get("tip"))
     estimate = "consistent" if args.consistent else "unconstrained"
     base, values, _ = identified_model(args.identification, robot, estimate=estimate)

@@ -38,9 +38,14 @@ def read_classical(path: str) -> tuple[dict, str | None, dict | None]:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from ..identification.document import robot_on_drive_side, with_identified_friction
+    from ..identification.document import (
+        refuse_state,
+        robot_on_drive_side,
+        with_identified_friction,
+    )
 
     classical, identified_for, doc = read_classical(args.params)
+    refuse_state(doc, "a robot description", str(args.params))
     robot = load(args.robot, tip=args.tip)
     if identified_for not in (None, robot.name):
         raise ModelError(

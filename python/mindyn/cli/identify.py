@@ -139,6 +139,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if args.json:
         _write_json(args.json, doc)
     if args.urdf or args.yaml or args.mjcf:
+        from ..identification.document import refuse_state
+
+        refuse_state(doc, "a robot description", "the consistent estimate")
         write_description(
             report.robot,
             doc["classical"],

@@ -217,11 +217,13 @@ def add_identify(sub, func) -> None:
     )
     p.add_argument(
         "--friction-model",
-        choices=[*FRICTION_KINDS, "auto"],
+        choices=[*FRICTION_KINDS, "dahl", "auto"],
         help="friction per joint (implies --friction): coulomb Fv v + Fc sign v (the default), "
         "asymmetric + Fa |sign v| (direction-dependent Coulomb), smooth Fv v + Fc tanh(v / w) "
         "(w from the data's velocity noise unless --friction-width), stribeck + Fs sign v "
-        "exp(-(v / w)^2) (w searched per joint on the fit's residual), or auto (the one with "
+        "exp(-(v / w)^2) (w searched per joint on the fit's residual), dahl Fv v + Fc z with "
+        "the presliding state dz/dq = sigma (1 - z sign v) following the filtered positions "
+        "(sigma searched per joint on the fit's residual; dynamic model), or auto (the one with "
         "the smallest residual on held-out blocks of the fit logs); the choice is reported",
     )
     joint_vector(

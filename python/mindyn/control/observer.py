@@ -76,6 +76,13 @@ class MomentumObserver:
     def __init__(
         self, base: BaseParameters, values, *, period: float, gains=None, held_torque=True
     ):
+        from ..identification.friction import DahlBase
+
+        if isinstance(base, DahlBase):
+            raise ControllerSettingError(
+                "the momentum observer has no Dahl friction state: give it a base set of a "
+                "static friction model"
+            )
         n = base.robot.n
         self.base = base
         self.period = check_period(period)

@@ -330,6 +330,7 @@ class SimulationResult:
     ``params``, ``param_names``: the simulated robot's classical parameters (the full layout:
     rotor inertia and its friction model's columns per joint);
     ``tau_ext`` (m, n): the external joint torque held over each period (None without one);
+    ``friction_state`` (m, n): the plant's Dahl state at each sample (None without one);
     ``info``: settings and figures."""
 
     t: np.ndarray
@@ -353,6 +354,7 @@ class SimulationResult:
     base_names: list = field(default_factory=list)
     saturated: np.ndarray | None = None
     tau_ext: np.ndarray | None = None
+    friction_state: np.ndarray | None = None
 
     @property
     def controller(self) -> str:
@@ -445,6 +447,7 @@ def simulate(
     base=None,
     max_seconds: float | None = None,
     external=None,
+    dahl_sigma=None,
 ) -> SimulationResult:
     """Closed-loop simulation: the robot tracks ``reference`` under ``controller``.
 
@@ -503,6 +506,14 @@ def simulate(
         torque ``tau`` stays the controller's (a robot without joint torque sensors does not
         see it).
 
+    dahl_sigma : array_like (n,), optional
+        Dahl presliding friction in the plant (with ``friction``, the coulomb friction model,
+        friction on the joints, the rk4 integrator): the true robot's Coulomb term
+        ``Fc sign(dq)`` becomes ``Fc z``, the state ``z`` integrated with the plant's (RK4 on
+        ``dz/dt = sigma (dq - z |dq|)``, ``z = 0`` at the start); ``sigma`` [1/rad | 1/m] the
+        inverse presliding displacement. The controller's model keeps ``Fc sign(dq)`` (the Dahl
+        model's steady state). Recorded in ``info["dahl"]`` with the state at each sample.
+
     Raises
     ------
     UnstableLoopError
@@ -525,7 +536,10 @@ def simulate(
         raise ValueError(f"substeps must be an integer >= 1, got {substeps}")
     names, p_true = _true_params(robot, rotor, friction, params)
     eps = float(coulomb_smoothing)
-    plant = _core.Integrator(robot._m, p_true, eps)
+    dahl, p_plant = _dahl_plant(robot, friction, p_true, dahl_sigma)
+    if dahl is not None and integrator != "rk4":
+        raise ValueError("dahl_sigma: the rk4 integrator only (the state integrates with it)")
+    plant = _core.Integrator(robot._m, p_plant, eps)
     if controller is None:
         controller = default_controller(robot, p_true, coulomb_smoothing=eps)
     T = _span(reference, duration)
@@ -579,6 +593,8 @@ def simulate(
     if hasattr(controller, "reset"):
         controller.reset()
     q, dq = qd[0].copy(), dqd[0].copy()
+    z = np.zeros(n)  # the Dahl state (with dahl_sigma)
+    states = np.zeros((m, n)) if dahl is not None else None
     t0 = time.perf_counter()
     # A diverging loop shows as a non-finite torque, reported as such (not as warnings).
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
@@ -601,7 +617,11 @@ def simulate(
             out["q"][i], out["dq"][i], out["tau"][i] = q, dq, tau
             if ext is not None:
                 ext[i] = _external_torque(external, t[i], q, dq)
-            out["ddq"][i] = plant.acceleration(q, dq, tau)
+            if dahl is None:
+                out["ddq"][i] = plant.acceleration(q, dq, tau)
+            else:
+                states[i] = z
+                out["ddq"][i] = plant.acceleration(q, dq, tau - dahl[1] * z)
             out["qm"][i], out["dqm"][i] = qm, dqm
             out["taum"][i] = tau + arr["torque"] * rng.standard_normal(n)
             model_torque = getattr(controller, "model_torque", None)
@@ -618,7 +638,11 @@ def simulate(
                 budget.t = t[i]
                 try:
                     acting = tau if ext is None else tau + ext[i]
-                    q, dq = _advance(plant, q, dq, acting, period, substeps, integrator, budget)
+                    if dahl is None:
+                        q, dq = _advance(plant, q, dq, acting, period, substeps, integrator, budget)
+                    else:
+                        budget.check("integration")
+                        q, dq, z = _advance_dahl(plant, q, dq, z, acting, period, substeps, *dahl)
                 except ValueError as e:  # the plant's own error, whatever its class
                     if "the integration diverged" not in str(e):
                         raise
@@ -656,6 +680,8 @@ def simulate(
     }
     if check is not None:
         info["stability"] = check.text()
+    if dahl is not None:
+        info["dahl"] = {"sigma": dahl[0].tolist(), "state": "friction_state, 0 at the start"}
     adaptive = ph is not None and pb_true is not None
     return SimulationResult(
         t,
@@ -679,6 +705,7 @@ def simulate(
         base_names=list(base.names) if base is not None else [],
         saturated=sat,
         tau_ext=ext,
+        friction_state=states,
     )
 
 
@@ -782,6 +809,49 @@ class _TooManySteps(_core.Error):
     right-hand side, caught by ``_advance`` and reported there as a diverging loop)."""
 
 
+def _dahl_plant(robot: Robot, friction: bool, p_true, dahl_sigma):
+    """``((sigma, Fc), plant parameters)`` of a plant with Dahl friction (its Coulomb column
+    zero: the Dahl term ``Fc z`` replaces it), or ``(None, p_true)`` without ``dahl_sigma``."""
+    if dahl_sigma is None:
+        return None, p_true
+    n = robot.n
+    if not friction:
+        raise ValueError("dahl_sigma: expected friction=True (the plant's Coulomb friction)")
+    if robot.friction_model["kind"] != "coulomb" or robot.drive_side == "motor":
+        raise ValueError(
+            "dahl_sigma: the Dahl state replaces Coulomb friction on the joints; this robot has "
+            f"the {robot.friction_model['kind']} friction model on its {robot.drive_side}s"
+        )
+    sigma = np.array(np.broadcast_to(np.asarray(dahl_sigma, dtype=float), (n,)))
+    if not np.all(np.isfinite(sigma) & (sigma > 0)):
+        raise ValueError("dahl_sigma: expected positive finite values, one per joint")
+    p = np.array(p_true, dtype=float).reshape(n, -1)
+    fc = p[:, 12].copy()  # per joint: 10 inertial, Ia, Fv, Fc
+    p[:, 12] = 0.0
+    return (sigma, fc), p.reshape(-1)
+
+
+def _advance_dahl(plant, q, dq, z, tau, period, substeps, sigma, fc):
+    """One period of the plant with Dahl friction: classical RK4, ``substeps`` steps, of
+    ``(q, dq, z)`` with ``ddq = FD(q, dq, tau - Fc z)``, ``dz/dt = sigma (dq - z |dq|)``."""
+    h = period / substeps
+
+    def f(x):
+        q, dq, z = x
+        return (dq, plant.acceleration(q, dq, tau - fc * z), sigma * (dq - z * np.abs(dq)))
+
+    x = (q, dq, z)
+    for _ in range(substeps):
+        k1 = f(x)
+        k2 = f(tuple(a + h / 2 * b for a, b in zip(x, k1)))
+        k3 = f(tuple(a + h / 2 * b for a, b in zip(x, k2)))
+        k4 = f(tuple(a + h * b for a, b in zip(x, k3)))
+        x = tuple(a + h / 6 * (b + 2 * c + 2 * d + e) for a, b, c, d, e in zip(x, k1, k2, k3, k4))
+    if not all(np.all(np.isfinite(a)) for a in x):
+        raise ValueError("the integration diverged (non-finite state)")
+    return x
+
+
 def _advance(plant, q, dq, tau, period, substeps, integrator, budget=None):
     if budget is not None:
         budget.check("integration")
@@ -853,12 +923,17 @@ def simulate_inverse(
     params=None,
     noise: SensorNoise | None = None,
     seed: int = 0,
+    dahl_sigma=None,
 ) -> SimulationResult:
     """Open-loop: the motion is the reference, torques by inverse dynamics along it (true
-    parameters), then measurement noise. Arguments as :func:`simulate`."""
+    parameters), then measurement noise. Arguments as :func:`simulate`; with ``dahl_sigma`` the
+    Dahl state follows the reference's positions sample by sample
+    (:func:`~mindyn.identification.friction.dahl_state`, exact for a path straight between
+    samples)."""
     robot = load(robot)
     n = robot.n
     names, p_true = _true_params(robot, rotor, friction, params)
+    dahl, p_plant = _dahl_plant(robot, friction, p_true, dahl_sigma)
     noise = noise or SensorNoise()
     arr = noise.arrays(n)
     rng = np.random.default_rng(seed)
@@ -867,7 +942,13 @@ def simulate_inverse(
     t = np.arange(m) / rate
     t0 = time.perf_counter()
     q, dq, ddq = reference.evaluate(t)
-    tau = robot.inverse_dynamics(q, dq, ddq, p_true)
+    tau = robot.inverse_dynamics(q, dq, ddq, p_plant)
+    states = None
+    if dahl is not None:
+        from ..identification.friction import dahl_state
+
+        states = dahl_state(q, dahl[0])
+        tau = tau + dahl[1] * states
     qm = noise.measure_q(q, rng, arr)
     dqm = dq + arr["velocity"] * rng.standard_normal(dq.shape)
     taum = tau + arr["torque"] * rng.standard_normal(tau.shape)
@@ -883,7 +964,11 @@ def simulate_inverse(
         "max_tracking_error": [0.0] * n,
         "seconds": time.perf_counter() - t0,
     }
-    return SimulationResult(t, qm, dqm, taum, q, dq, ddq, tau, q, dq, ddq, info, p_true, names)
+    if dahl is not None:
+        info["dahl"] = {"sigma": dahl[0].tolist(), "state": "friction_state, 0 at the start"}
+    return SimulationResult(
+        t, qm, dqm, taum, q, dq, ddq, tau, q, dq, ddq, info, p_true, names, friction_state=states
+    )
 
 
 #: Largest noise levels :func:`noise_from_spec` accepts, per kind (SI units; torque noise in

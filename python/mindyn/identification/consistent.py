@@ -43,7 +43,12 @@ from .._core import ModelError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
-from .document import read_identification, robot_on_drive_side, with_identified_friction
+from .document import (
+    read_identification,
+    robot_on_drive_side,
+    with_identified_friction,
+    with_identified_state,
+)
 from .errors import IdentificationError
 from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
 from .models import moving_equations, require_torque
@@ -855,6 +860,7 @@ def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.
     base = base_parameters(
         robot, rotor=arm["rotor"], friction=arm["friction"], offset=arm["offset"]
     )
+    base = with_identified_state(base, arm, where)
     if arm["base_names"] != list(base.names):
         tip = arm.get("tip")
         raise ModelError(

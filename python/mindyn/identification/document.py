@@ -14,7 +14,14 @@ from pathlib import Path
 
 from .data import DataError, read_json
 
-__all__ = ["FLAGS", "read_identification", "robot_on_drive_side", "with_identified_friction"]
+__all__ = [
+    "FLAGS",
+    "read_identification",
+    "refuse_state",
+    "robot_on_drive_side",
+    "with_identified_friction",
+    "with_identified_state",
+]
 
 #: The boolean fields: JSON ``true`` / ``false`` only.
 FLAGS = ("rotor", "friction", "offset", "consistent")
@@ -114,13 +121,24 @@ def _friction_model(fm, where: str) -> dict:
     """The checked ``friction_model`` field: ``{kind, velocity (per slot, or null), chosen_by}``."""
     from ..robot import FRICTION_KINDS
 
-    if not isinstance(fm, dict) or fm.get("kind") not in FRICTION_KINDS:
+    kinds = (*FRICTION_KINDS, "dahl")
+    if not isinstance(fm, dict) or fm.get("kind") not in kinds:
         kind = fm.get("kind") if isinstance(fm, dict) else fm
         raise DataError(
-            f"{where}: 'friction_model' kind is {_kind(kind)}; expected one of "
-            + ", ".join(FRICTION_KINDS)
+            f"{where}: 'friction_model' kind is {_kind(kind)}; expected one of " + ", ".join(kinds)
         )
     out = dict(fm)
+    if fm["kind"] == "dahl":
+        sigma = fm.get("sigma")
+        if not isinstance(sigma, list):
+            raise DataError(
+                f"{where}: 'friction_model' dahl: 'sigma' is {_kind(sigma)}; expected a list"
+            )
+        out["sigma"] = [
+            _number(x, f"{where}: 'friction_model' sigma item {i + 1}") for i, x in enumerate(sigma)
+        ]
+        if not all(x > 0 for x in out["sigma"]):
+            raise DataError(f"{where}: 'friction_model' sigma: every value must be positive")
     v = fm.get("velocity")
     if v is not None:
         if not isinstance(v, list):
@@ -139,10 +157,40 @@ def with_identified_friction(robot, doc: dict, where: str = "identification JSON
     if fm is None:
         return robot
     fm = _friction_model(fm, where)
+    if fm["kind"] == "dahl":  # the core's coulomb model; its Coulomb column is the Dahl state
+        fm = {"kind": "coulomb"}
     try:
         return robot.with_friction_model(fm["kind"], velocity=fm.get("velocity"))
     except Exception as e:  # a ModelError of the core, in the terms of this file
         raise DataError(f"{where}: 'friction_model' does not fit '{robot.name}': {e}") from None
+
+
+def with_identified_state(base, doc: dict, where: str = "identification JSON"):
+    """``base`` (formed for the robot of :func:`with_identified_friction`) as the Dahl base set
+    when the identification JSON records the Dahl friction model, else ``base``."""
+    fm = doc.get("friction_model")
+    if fm is None or fm.get("kind") != "dahl":
+        return base
+    from .friction import dahl_base
+
+    sigma = _friction_model(fm, where)["sigma"]
+    if len(sigma) != base.robot.n:
+        raise DataError(
+            f"{where}: 'friction_model' sigma has {len(sigma)} values; expected {base.robot.n}"
+        )
+    return dahl_base(base, sigma)
+
+
+def refuse_state(doc, what: str, where: str = "identification JSON") -> None:
+    """DataError when the identification JSON ``doc`` records the Dahl friction model: ``what``
+    (generated code, a description, ...) has no friction state per joint."""
+    fm = doc.get("friction_model") if isinstance(doc, dict) else None
+    if isinstance(fm, dict) and fm.get("kind") == "dahl":
+        raise DataError(
+            f"{where}: identified with the Dahl friction model, whose torque depends on a "
+            f"presliding state integrated along the positions; {what} has no such state (identify "
+            "with --friction-model coulomb, smooth, asymmetric or stribeck)"
+        )
 
 
 def _number(v, where: str) -> float:

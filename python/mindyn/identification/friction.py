@@ -4,7 +4,20 @@ data.
 The friction models (:attr:`mindyn.Robot.friction_model`), per slot with velocity ``v``:
 ``coulomb`` ``Fv v + Fc sign(v)``; ``asymmetric`` ``Fv v + Fc sign(v) + Fa |sign(v)|``;
 ``smooth`` ``Fv v + Fc tanh(v / w)``; ``stribeck`` ``Fv v + Fc sign(v) + Fs sign(v)
-exp(-(v / w)^2)``.
+exp(-(v / w)^2)``; and, beside the core's models, ``dahl`` ``Fv v + Fc z`` with the presliding
+state ``z`` of the Dahl model, ``dz/dq = sigma (1 - z sign(v))``, ``z`` in ``[-1, 1]``
+(:class:`DahlBase`): rate-independent, so ``z`` is a function of the slot's position path,
+integrated exactly sample by sample (:func:`dahl_state`), 0 at a log's start. At rest ``z``
+keeps the value it had when the joint stopped: the torque held by stiction, which no function
+of the velocity gives. ``sigma`` is the inverse of the presliding displacement; given it, the
+regressor is linear in ``Fv`` and ``Fc`` (the Coulomb column is ``z`` instead of
+``sign(v)``). The state follows the positions the regressor is evaluated on: the low-pass
+filtered ones on preprocessed data, so position noise above the cut-off does not move it; below
+the cut-off, a step smaller than the presliding displacement moves ``z`` only part of the way.
+Dynamic model only (its state needs the samples in order). The simulation integrates the state
+with the plant (:func:`mindyn.control.simulate` and :func:`~mindyn.control.simulate_inverse`,
+``dahl_sigma``); generated code, the momentum observer and robot descriptions have no friction
+state and refuse an identification with it.
 
 - ``smooth``: the width ``w_j`` of joint ``j`` is given, or derived from the data
   (:func:`smooth_width`): the speed below which the data do not determine the sign of the
@@ -23,17 +36,28 @@ exp(-(v / w)^2)``.
   column), the objective of joint ``j`` its residual in the first (ordinary least-squares) fit.
   The energy model has one equation for all joints: there the joints are searched one after
   the other on the overall residual.
-- ``auto``: the four models are fitted (the smooth width and the Stribeck velocities derived
+- ``dahl``: ``sigma_j`` is found by the same search (:func:`dahl_search`) on a log-spaced grid
+  from ``2 / r_j``, ``r_j`` the joint's range of motion in the fit logs (a longer presliding
+  displacement never saturates: a spring over the whole motion), to ``1 / (w_j dt)``, ``w_j``
+  the smooth width above (the speed below which the data do not tell the direction) and ``dt``
+  the logged sample interval (a shorter one is covered within one sample at that speed: ``z``
+  is ``sign(v)`` on the samples, the Coulomb model); on the motor side in the motor's units.
+- ``auto``: the five models are fitted (the smooth width and the Stribeck velocities derived
   and searched on all fit logs as above) and each scored by cross-validation over contiguous
   time blocks of the fit logs (:func:`~mindyn.identification.prior.block_triangles`: each
   block's residual predicted by the estimate fitted on the other blocks, summed, every model
   weighted with the same per-joint weights, those of the Coulomb fit; every sample of a block
   scored, also those the dynamic model leaves out of the fit as slower than ``min_velocity``);
-  the simplest model (in the order coulomb, smooth, asymmetric, stribeck) whose summed held-out
+  the simplest model (in the order coulomb, smooth, asymmetric, stribeck, dahl: the stateful
+  model last) whose summed held-out
   residual is within one standard error of the smallest (the one-standard-error rule, as for
   the prior's weight, the error from the spread of the blocks) wins. A model the data cannot
   identify (e.g. ``asymmetric`` with torque offsets, whose ``Fa`` is a constant torque whenever
-  the joint moves) is reported and left out.
+  the joint moves) is reported and left out, and so is one whose fitted friction is not
+  friction: a friction torque is dissipative, ``f(v) v >= 0`` at every speed, and a fit whose
+  ``f(v) sign(v)`` is significantly negative at some speed (:func:`active_friction`, e.g. a
+  Stribeck term ``Fs`` below ``-Fc``: friction pushing the joint along as it starts) fits
+  something other than friction there (when every model's fit is such, none is left out).
 """
 
 from __future__ import annotations
@@ -49,10 +73,10 @@ from ..robot import FRICTION_KINDS, Robot
 from .errors import IdentificationError
 
 #: The friction models, simplest first (a tie in the held-out residual goes to the simpler).
-KINDS = ("coulomb", "smooth", "asymmetric", "stribeck")
+KINDS = ("coulomb", "smooth", "asymmetric", "stribeck", "dahl")
 
 #: What ``--friction-model`` accepts.
-CHOICES = (*FRICTION_KINDS, "auto")
+CHOICES = (*FRICTION_KINDS, "dahl", "auto")
 
 
 #: Points of the Stribeck search's log-spaced grid, and golden-section steps after it.
@@ -135,7 +159,6 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
     """The Stribeck velocity per joint minimising the fit's residual (see the module
     documentation): ``(velocity, record)``; ``base`` is a Stribeck base set (its velocities are
     replaced)."""
-    n = base.robot.n
     top = _speeds(logs)
     if not np.all(top > 0):
         still = [str(j + 1) for j in np.flatnonzero(~(top > 0))]
@@ -150,14 +173,31 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
         floor = np.maximum(floor, fit.get("min_velocity", _default("min_velocity")))
     lo = np.log(np.minimum(floor, 0.5 * top))
     hi = np.log(top)
-    grid = np.linspace(lo, hi, GRID_POINTS)  # (G, n), log velocities
+    x, record = _log_search(lambda w: base.with_friction_velocity(w), lo, hi, logs, fit)
+    record["search"] = (
+        f"log-spaced grid of {GRID_POINTS} velocities from the joint's velocity noise level "
+        "(the smooth width rule; the dynamic model: at least its min_velocity) to its "
+        f"largest speed, then {GOLDEN_STEPS} golden-section steps on log velocity, "
+        + record["search"]
+    )
+    return x, record
+
+
+def _log_search(make, lo, hi, logs, fit: dict) -> tuple[np.ndarray, dict]:
+    """The scale per joint between ``exp(lo)`` and ``exp(hi)`` (n,) minimising the fit's
+    residual of the base set ``make(scale)``: a log-spaced grid of :data:`GRID_POINTS`, then
+    :data:`GOLDEN_STEPS` golden-section steps between the grid neighbours of the best point, all
+    joints at once on their own residuals, or (the energy model) one joint at a time on the
+    overall residual. ``(scale, record)``."""
+    n = lo.shape[0]
+    grid = np.linspace(lo, hi, GRID_POINTS)  # (G, n), log scales
     per_joint = fit.get("model", "dynamic") != "energy"
     evaluations = 0
 
     def f(logw: np.ndarray) -> np.ndarray:
         nonlocal evaluations
         evaluations += 1
-        return _objective(base.with_friction_velocity(np.exp(logw)), logs, fit, per_joint)
+        return _objective(make(np.exp(logw)), logs, fit, per_joint)
 
     if per_joint:
         values = np.array([f(g) for g in grid])  # (G, n)
@@ -176,14 +216,9 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
             x[j] = _golden(f, grid, best, np.array([j]), start=x)[j]
     record = {
         "search": (
-            f"log-spaced grid of {GRID_POINTS} velocities from the joint's velocity noise level "
-            "(the smooth width rule; the dynamic model: at least its min_velocity) to its "
-            f"largest speed, then {GOLDEN_STEPS} golden-section steps on log velocity, "
-            + (
-                "all joints at once, each on its own residual (first OLS fit)"
-                if per_joint
-                else "one joint at a time on the overall residual"
-            )
+            "all joints at once, each on its own residual (first OLS fit)"
+            if per_joint
+            else "one joint at a time on the overall residual"
         ),
         "fits": evaluations,
         "range": [[float(a), float(b)] for a, b in zip(np.exp(lo), np.exp(hi))],
@@ -192,6 +227,42 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
         ],
     }
     return np.exp(x), record
+
+
+def dahl_search(base: DahlBase, logs, *, fit: dict) -> tuple[np.ndarray, dict]:
+    """The Dahl ``sigma`` per joint minimising the fit's residual (see the module
+    documentation): ``(sigma, record)``; ``base`` is a Dahl base set (its sigma is replaced)."""
+    from .validation import logged_samples
+
+    robot = base.robot
+    T = robot.drive_matrix if robot.drive_side == "motor" else np.eye(robot.n)
+    span = np.max([np.ptp(d.q @ T.T, axis=0) for d in logs], axis=0)  # slot positions
+    if not np.all(span > 0):
+        still = [str(j + 1) for j in np.flatnonzero(~(span > 0))]
+        raise IdentificationError(
+            f"Dahl friction: joint(s) {', '.join(still)} never move in the fit data; their "
+            "presliding displacement cannot be searched (leave out --friction, or move them)"
+        )
+    # The presliding displacement 1/sigma lies between the distance a joint travels in one
+    # sample at the speed below which the data do not tell its direction (shorter: the state
+    # is sign(dq) on the samples, the Coulomb model) and half its range of motion (longer: the
+    # state never saturates, a spring over the whole motion).
+    width = np.max(np.abs(T) * _noise_width(logs)[0], axis=1)  # in slot units
+    dt = np.median(
+        np.concatenate(
+            [np.diff((d if logged_samples(d) is None else logged_samples(d)).t) for d in logs]
+        )
+    )
+    hi = np.log(1.0 / np.maximum(width * dt, 1e-300))
+    lo = np.log(2.0 / span)
+    hi = np.maximum(hi, lo + math.log(10.0))
+    sigma, record = _log_search(base.with_sigma, lo, hi, logs, fit)
+    record["search"] = (
+        f"log-spaced grid of {GRID_POINTS} values of sigma from 2 / the joint's range of motion "
+        "to 1 / (its velocity noise level (the smooth width rule) x the logged sample interval), "
+        f"then {GOLDEN_STEPS} golden-section steps on log sigma, " + record["search"]
+    )
+    return sigma, record
 
 
 def _golden(f, grid, best, joints, start=None) -> np.ndarray:
@@ -280,6 +351,19 @@ def select_friction_model(
             rec.update(
                 velocity=[float(v) for v in w], velocity_rule=search["search"], search=search
             )
+        elif k == "dahl":
+            r, b = make("coulomb")
+            if fit.get("model", "dynamic") != "dynamic":
+                raise IdentificationError(
+                    f"Dahl friction: only with the dynamic model (its state follows the "
+                    f"positions sample by sample), not the {fit['model']} model"
+                )
+            b = dahl_base(b, 1.0)
+            if progress is not None:
+                progress("friction: searching the Dahl sigma (inverse presliding displacement)")
+            sigma, search = dahl_search(b, logs, fit=fit)
+            b = b.with_sigma(sigma)
+            rec.update(sigma=[float(v) for v in sigma], sigma_rule=search["search"], search=search)
         else:
             r, b = make(k)
         return FrictionChoice(r, b, rec)
@@ -289,7 +373,7 @@ def select_friction_model(
         out.record["chosen_by"] = "default" if kind == "coulomb" else "given"
         return out
     folds = FOLDS if folds is None else folds
-    choices, scores, per_fold, refused = {}, {}, {}, {}
+    choices, scores, per_fold, refused, active_fits = {}, {}, {}, {}, {}
     common = None
     for k in KINDS:
         try:
@@ -302,8 +386,16 @@ def select_friction_model(
             common = res.joint_sigma
         scores[k], per_fold[k] = held_out_residual(res, logs, folds=folds, joint_sigma=common)
         choices[k] = c
+        active = active_friction(res, logs)
+        if active:
+            active_fits[k] = active
         if progress is not None:
             progress(f"friction: {k} held-out residual {scores[k]:.4g}")
+    if len(active_fits) < len(scores):  # a fit that is not friction competes only with such
+        for k in active_fits:
+            del scores[k]
+    else:
+        active_fits = {}
     if not scores:
         raise IdentificationError(
             "friction model auto: no friction model can be identified from this data ("
@@ -322,7 +414,8 @@ def select_friction_model(
             f"{folds}-fold cross-validation over contiguous time blocks of the fit logs (each "
             "block's residual predicted by the estimate fitted on the other blocks, summed, "
             "with the Coulomb fit's per-joint weights): the simplest model (coulomb, smooth, "
-            "asymmetric, stribeck) within one standard error of the smallest"
+            "asymmetric, stribeck, dahl) within one standard error of the smallest, among those "
+            "whose fitted friction is dissipative"
         ),
         smallest=best,
         standard_error=se,
@@ -330,8 +423,59 @@ def select_friction_model(
         candidates_per_fold={k: [float(x) for x in v] for k, v in per_fold.items()},
         candidates_unit="weighted residual per equation",
         not_identifiable=refused,
+        not_dissipative=active_fits,
     )
     return out
+
+
+#: A fitted friction torque counts as pushing a slot along its motion when ``f(v) sign(v)`` is
+#: below zero by more than this many of its standard deviations (about 98 % one-sided).
+ACTIVE_SIGMAS = 2.0
+
+
+def active_friction(res, logs) -> str | None:
+    """Why the friction fitted in ``res`` is not friction, or None: a friction torque is
+    dissipative, ``f(v) v >= 0`` at every speed; the slots whose fitted ``f(v) sign(v)`` is
+    below zero by more than :data:`ACTIVE_SIGMAS` standard deviations (the parameters' standard
+    deviations of the fit, taken as independent) at some speed from just above zero to the
+    largest of ``logs``, either way (the steady friction of the Dahl model: ``sign(v)`` for
+    its state)."""
+    base = res.base
+    if not base.friction:
+        return None
+    robot = base.robot
+    names = list(base.names)
+    std = dict(zip(res.names, np.asarray(res.std, float)))
+    classical = robot.parameter_names(False, True)[10 : robot.layout_sizes[2]]
+    kinds = [nm.rstrip("0123456789") for nm in classical]
+    top = np.max(np.vstack([np.abs(robot.slot_velocities(d.dq)) for d in logs]), axis=0)
+    speeds = np.geomspace(1e-9, 1.0, 40)[:, None] * np.maximum(top, 1e-300)  # (S, n)
+    phis = {sgn: robot.friction_shapes(sgn * speeds) for sgn in (1.0, -1.0)}  # (S, n, c)
+    bad = []
+    for k in range(robot.n):
+        for sgn, phi in phis.items():
+            value = np.zeros(speeds.shape[0])
+            var = np.zeros(speeds.shape[0])
+            for i, kind in enumerate(kinds):
+                nm = f"{kind}{k + 1}"
+                if nm in names:
+                    col = sgn * phi[:, k, i]
+                    value += col * res.full[names.index(nm)]
+                    var += (col * std.get(nm, 0.0)) ** 2
+            low = value < -ACTIVE_SIGMAS * np.sqrt(var)
+            if np.any(low):
+                at = int(np.argmax(low))
+                bad.append(
+                    f"slot {k + 1} at v = {sgn * speeds[at, k]:.3g}: f(v) sign(v) = "
+                    f"{value[at]:.3g} +- {math.sqrt(var[at]):.2g}"
+                )
+                break
+    if not bad:
+        return None
+    return (
+        "the fitted friction drives the motion (f(v) v < 0 beyond "
+        f"{ACTIVE_SIGMAS:g} standard deviations): " + "; ".join(bad)
+    )
 
 
 def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float, np.ndarray]:
@@ -379,6 +523,8 @@ def friction_record(robot: Robot, *, record: dict | None = None) -> dict:
     }
     if record:
         out.update({k: v for k, v in record.items() if k not in out or k == "chosen_by"})
+        if record.get("kind") == "dahl":  # the core's coulomb model, its Coulomb column z
+            out["kind"] = "dahl"
     return out
 
 
@@ -390,6 +536,7 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
         "asymmetric": "Fv v + Fc sign(v) + Fa |sign(v)|",
         "smooth": "Fv v + Fc tanh(v / w)",
         "stribeck": "Fv v + Fc sign(v) + Fs sign(v) exp(-(v / w)^2)",
+        "dahl": "Fv v + Fc z, dz/dq = sigma (1 - z sign(v)), z = 0 at a log's start",
     }[rec["kind"]]
     how = {"default": "the default", "given": "given"}.get(rec["chosen_by"], rec["chosen_by"])
     lines = [f"  friction model {rec['kind']}: {formula} per joint ({how})"]
@@ -400,6 +547,13 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
             + " ".join(f"{v:.4g}" for v in rec["velocity"])
             + (f" ({rec['velocity_rule']})" if rec.get("velocity_rule") else "")
         )
+    if rec.get("sigma") is not None:
+        lines.append(
+            "    Dahl sigma [1/rad | 1/m of the slot's position, the motor's on the motor side] "
+            "(1 / presliding displacement): "
+            + " ".join(f"{v:.4g}" for v in rec["sigma"])
+            + f" ({rec['sigma_rule']}; the state follows the low-pass filtered positions)"
+        )
     if rec.get("candidates"):
         lines.append(
             "    held-out residual per equation (weighted): "
@@ -409,4 +563,130 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
         )
     for k, why in (rec.get("not_identifiable") or {}).items():
         lines.append(f"    {k}: not identifiable here ({why})")
+    for k, why in (rec.get("not_dissipative") or {}).items():
+        lines.append(f"    {k}: left out, not friction here ({why})")
     return lines
+
+
+# ---------------------------------------------------------------------------------------------
+# The Dahl model: a presliding state per joint that follows the positions.
+
+
+def dahl_state(q, sigma, *, z0=None) -> np.ndarray:
+    """The Dahl state ``z`` (m, n) of the position path ``q`` (m, n): ``dz/dq_j = sigma_j (1 -
+    z_j sign(dq_j))``, ``z(0) = z0`` (default 0), integrated exactly between consecutive
+    samples with the joint moving one way: over a run of steps of sign ``s``,
+    ``z = s + (z_a - s) exp(-sigma sum |dq|)`` from the run's first state ``z_a`` (a step that
+    does not move keeps ``z``). Rate-independent: ``z`` is a function of the path only; it
+    stays in ``[-1, 1]`` from a start in it."""
+    q = np.asarray(q, dtype=float)
+    if q.ndim == 1:
+        q = q[None, :]
+    m, n = q.shape
+    sigma = np.broadcast_to(np.asarray(sigma, float), (n,))
+    start = np.zeros(n) if z0 is None else np.broadcast_to(np.asarray(z0, float), (n,))
+    z = np.empty_like(q)
+    if m == 0:
+        return z
+    z[0] = start
+    step = np.diff(q, axis=0)
+    for j in range(n):
+        s = np.sign(step[:, j])
+        # a step that does not move takes the sign of the last that did (its factor is 1)
+        last = np.maximum.accumulate(np.where(s != 0, np.arange(s.size), 0))
+        run = s[last] if s.size else s
+        run = np.where(run == 0, 1.0, run)
+        travel = sigma[j] * np.abs(step[:, j])
+        cuts = np.flatnonzero(np.diff(run)) + 1
+        zc = start[j]
+        for a, b in zip(np.r_[0, cuts], np.r_[cuts, s.size]):
+            seg = run[a] + (zc - run[a]) * np.exp(-np.cumsum(travel[a:b]))
+            z[a + 1 : b + 1, j] = seg
+            zc = seg[-1]
+    return z
+
+
+def _path(q: np.ndarray) -> tuple[np.ndarray, int]:
+    """The whole position path a block of rows ``q`` was cut from (a view of rows of a 2-D
+    array, as the data path evaluates the regressor block by block) and the block's first row in
+    it; ``(q, 0)`` when ``q`` is not such a view."""
+    parent = q.base
+    if (
+        isinstance(parent, np.ndarray)
+        and parent.ndim == 2
+        and parent.shape[1] == q.shape[1]
+        and parent.flags.c_contiguous
+        and q.strides == parent.strides
+    ):
+        offset = q.__array_interface__["data"][0] - parent.__array_interface__["data"][0]
+        row, rest = divmod(offset, parent.strides[0])
+        if rest == 0 and 0 <= row and row + q.shape[0] <= parent.shape[0]:
+            return parent, int(row)
+    return q, 0
+
+
+class DahlBase(BaseParameters):
+    """A base set with viscous and Coulomb friction whose Coulomb column is the Dahl state
+    instead of ``sign(v_k)``: slot ``k``'s friction is ``Fv_k v_k + Fc_k z_k`` with ``z_k``
+    the :func:`dahl_state` of its position path (the joint's, or on the motor side motor
+    ``k``'s ``t_k . q``) at ``sigma_k`` (the inverse presliding displacement [1/rad | 1/m] of
+    the slot's position); on the motor side it reaches joint ``j`` times ``T[k, j]``. The
+    regressor of a block of samples takes ``z`` from the whole path the block belongs to (a
+    view of a larger array: the data path's blocks), else from the block's own path, starting
+    at rest (``z = 0``) at its first sample."""
+
+    def __init__(self, base: BaseParameters, sigma):
+        super().__init__(base._b, base.robot, base.offset, base.options)
+        self.method_reason = base.method_reason
+        n = base.robot.n
+        self.sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (n,)).copy()
+        if not np.all(np.isfinite(self.sigma) & (self.sigma > 0)):
+            raise IdentificationError("Dahl friction: sigma must be positive per joint")
+        names = list(base.names)
+        self._fc = [(j, names.index(f"Fc{j + 1}")) for j in range(n) if f"Fc{j + 1}" in names]
+        self._paths: dict = {}
+
+    def with_sigma(self, sigma) -> DahlBase:
+        """The same base set at another ``sigma`` (n,)."""
+        return DahlBase(self, sigma)
+
+    def state(self, q) -> np.ndarray:
+        """The Dahl state of each slot at the joint positions ``q`` (m, n) (see the class
+        documentation)."""
+        path, row = _path(q)
+        key = id(path)
+        hit = self._paths.get(key)
+        if hit is None or hit[0] is not path or hit[1].shape[0] != path.shape[0]:
+            robot = self.robot
+            slots = path if robot.drive_side != "motor" else path @ robot.drive_matrix.T
+            hit = (path, dahl_state(slots, self.sigma))
+            self._paths = {key: hit}  # the last path only: the data path goes block by block
+        return hit[1][row : row + q.shape[0]]
+
+    def regressor(self, q, dq, ddq) -> np.ndarray:
+        if np.ndim(q) == 1:
+            raise IdentificationError(
+                "Dahl friction: its state follows the positions of a path, shape (m, n); one "
+                "sample has none (a controller or observer step keeps no Dahl state)"
+            )
+        W = super().regressor(q, dq, ddq)
+        q = np.asarray(q, dtype=float)
+        T = self.robot.drive_matrix  # slot k's Coulomb torque reaches joint j times T[k, j]
+        z = self.state(q)
+        for k, c in self._fc:
+            W[:, :, c] = z[:, k, None] * T[k]
+        return W
+
+
+def dahl_base(base: BaseParameters, sigma) -> DahlBase:
+    """The Dahl base set of ``base`` (viscous and Coulomb friction on the joints) at ``sigma``
+    (n,); IdentificationError for a base set it cannot be (no friction, another friction
+    model)."""
+    if not base.friction:
+        raise IdentificationError("Dahl friction: expected a base set with friction (--friction)")
+    if base.robot.friction_model["kind"] != "coulomb":
+        raise IdentificationError(
+            "Dahl friction replaces the Coulomb column of the coulomb model; "
+            f"not of the {base.robot.friction_model['kind']} model"
+        )
+    return DahlBase(base, sigma)

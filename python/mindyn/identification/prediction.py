@@ -13,7 +13,7 @@ import numpy as np
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
-from .document import robot_on_drive_side, with_identified_friction
+from .document import robot_on_drive_side, with_identified_friction, with_identified_state
 from .estimation import CHUNK_SAMPLES
 from .validation import logged_samples
 
@@ -106,6 +106,7 @@ def identified_model(
         friction=bool(doc.get("friction")),
         offset=bool(doc.get("offset")),
     )
+    base = with_identified_state(base, doc, where)
     src = doc
     if estimate == "consistent":
         src = doc.get("consistent_estimate")

@@ -34,8 +34,11 @@ from the profile of the fit: the estimate recomputed with the mass held at the d
 (:func:`mass_profile`); when the fit is then worse by at least :data:`MASS_EVIDENCE` noise
 variances (the likelihood ratio of two standard deviations), the data reject the description's
 mass and determine it, with the standard deviation the data give it, ``|m - m0| / sqrt(increase)``;
-otherwise the mass is held by the priors (given what the data fix of the links' other
-parameters).
+when the fit is not, but the whole objective is (the log-det prior ties a link's mass to its
+first and second moments: with those fixed by the data, the prior itself moves the mass away
+from the description's), the mass is determined by the data through the prior
+(``data+prior``); otherwise the mass is held by the priors: the description's mass is then within
+two standard deviations of the estimate's.
 """
 
 from __future__ import annotations
@@ -403,10 +406,11 @@ def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
     data than ``pi`` [noise variances]. Reached as the estimate itself is: from ``start`` (the
     description's pseudo-inertias, which have that mass, see :func:`feasible_start`) by Newton
     descents at the weights of :data:`CANDIDATES` above ``W``, strongest first, then at ``W``;
+    ``objective_increase``: how much higher the whole objective (fit and priors) is there;
     ``converged`` false when the last descent stopped at its iteration limit (the increase is
     then that of the point reached). The description's mass is that of the prior's
     pseudo-inertia (regularised when the description's is singular)."""
-    f0 = problem.fit(pi)
+    f0, v0 = problem.fit(pi), problem.value(pi, W, 0.0)
     out = []
     for ix in problem.links:
         x, mu = np.array(start, dtype=float), 1e-2
@@ -415,7 +419,12 @@ def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
             mu = BARRIER_END  # warm: the barrier already at its final weight
         x, ok, _ = newton_prior(problem, W, x, fixed=[ix[9]], barrier=mu)
         out.append(
-            {"mass": float(start[ix[9]]), "fit_increase": problem.fit(x) - f0, "converged": ok}
+            {
+                "mass": float(start[ix[9]]),
+                "fit_increase": problem.fit(x) - f0,
+                "objective_increase": problem.value(x, W, 0.0) - v0,
+                "converged": ok,
+            }
         )
     return out
 
@@ -437,10 +446,15 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y, *, start) ->
     or the link has none). The mass's own verdict (:func:`mass_profile`): ``data`` when
     holding it at the description's makes the fit worse by at least :data:`MASS_EVIDENCE`
     noise variances (``mass_fit_increase``), with the standard deviation the data give it,
-    ``|m - m0| / sqrt(increase)`` (``mass_data_std``), else ``prior``; ``unknown`` when that
-    fit stopped before it converged (``mass_profile_converged``). ``start``: the description's
-    pseudo-inertias and fitted joint parameters (:func:`feasible_start`). ``pi0``: the
-    description's classical vector (its masses beside)."""
+    ``|m - m0| / sqrt(increase)`` (``mass_data_std``); ``data+prior`` when the fit alone does
+    not reject the description's mass but the whole objective does, by at least as much
+    (``mass_objective_increase``): the priors tie the mass to the link's other parameters,
+    which the data fix, and so place it away from the description's (``mass_data_std`` from
+    that increase); else ``prior``, the description's mass within the estimate's resolution;
+    ``unknown`` when that fit stopped before it converged (``mass_profile_converged``).
+    ``start``: the description's pseudo-inertias and fitted joint parameters
+    (:func:`feasible_start`). ``pi0``: the description's classical vector (its masses
+    beside)."""
     # the barrier at its final weight: a non-negative parameter at its bound is held there
     _, H = problem.derivatives(pi, W, BARRIER_END)
     _, Hfit = problem.derivatives(pi, 0.0, BARRIER_END)
@@ -465,8 +479,14 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y, *, start) ->
             share = np.clip(sla.eigh(0.5 * (A + A.T), 0.5 * (B + B.T), eigvals_only=True), 0, 1)
         mass_share = float(np.clip(Pl[9, 9] / Cl[9, 9], 0.0, 1.0)) if Cl[9, 9] > 0 else 1.0
         held = profile[len(out)]
-        rise = held["fit_increase"]
+        rise, whole = held["fit_increase"], held["objective_increase"]
         m = float(pi[ix[9]])
+        if rise >= MASS_EVIDENCE:
+            mass_verdict, evidence = "data", rise
+        elif whole >= MASS_EVIDENCE:
+            mass_verdict, evidence = "data+prior", whole
+        else:
+            mass_verdict, evidence = "prior", 0.0
         by_data = int(np.sum(share < DATA_SHARE))
         mean = float(share.mean()) if share.size else 1.0
         verdict = "data" if mean < DATA_SHARE else ("partly" if by_data else "prior")
@@ -481,11 +501,12 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y, *, start) ->
                 "directions_by_data": by_data,
                 "directions_prior_share": mean,
                 "verdict": verdict,
-                "mass_verdict": ("data" if rise >= MASS_EVIDENCE else "prior")
-                if held["converged"]
-                else "unknown",
+                "mass_verdict": mass_verdict if held["converged"] else "unknown",
                 "mass_fit_increase": float(rise),
-                "mass_data_std": (abs(m - held["mass"]) / math.sqrt(rise) if rise > 0 else None),
+                "mass_objective_increase": float(whole),
+                "mass_data_std": (
+                    abs(m - held["mass"]) / math.sqrt(evidence) if evidence > 0 else None
+                ),
                 "mass_profile_converged": bool(held["converged"]),
             }
         )

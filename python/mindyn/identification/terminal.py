@@ -292,8 +292,8 @@ def _weight_lines(ce: dict) -> list[str]:
             lines.append(
                 f"  {lk['link']:<24} {lk['mass']:10.4g} ({lk['mass_std']:.3g}) "
                 f"{lk['description_mass']:10.4g} {lk['mass_fit_increase']:10.4g} "
-                f"{lk['mass_verdict']:<5}"
-                + (f" ({sd:.3g})" if lk["mass_verdict"] == "data" else " " * 8)
+                f"{lk['mass_verdict']:<10}"
+                + (f" ({sd:.3g})" if lk["mass_verdict"] in ("data", "data+prior") else " " * 8)
                 + f" {lk['directions_by_data']:3d} of {lk['identifiable_directions']:<3d} "
                 f"{lk['verdict']}"
                 + ("" if lk["mass_profile_converged"] else " (mass profile not converged)")
@@ -301,7 +301,10 @@ def _weight_lines(ce: dict) -> list[str]:
         lines.append(
             f"  (mass by data: held at the description's, the fit is worse by at least "
             f"{MASS_EVIDENCE:g} noise variances, the data's standard deviation |m - m0| / "
-            "sqrt(worse); else by the priors; unknown: that fit did not converge; identifiable: "
+            "sqrt(worse); data+prior: the fit not, but the whole objective worse by as much "
+            "(the prior ties the mass to the link's moments, which the data fix), standard "
+            "deviation from that; else by the priors (the description's mass within two "
+            "standard deviations); unknown: that fit did not converge; identifiable: "
             "the combinations of the link's own parameters that the torques determine, by the "
             "data when the priors' share of their variance, -d ln(variance) / d ln(weight), is "
             "below 0.5; data: their mean share "
