@@ -13,8 +13,10 @@ import numpy as np
 from .._core import ModelError
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, generate, generate_controller, generate_observer, plcopen_project
+from ..codegen.generation import identifier
 from ..robot import load
 from .args import (
+    UsageError,
     add_command,
     add_joint_terms,
     add_offset,
@@ -25,6 +27,7 @@ from .args import (
     joint_values,
     joint_vector,
     output_file,
+    output_path,
 )
 from .method import base_method
 
@@ -46,7 +49,11 @@ def register(subparsers) -> None:
         "struct, init and step; ST: one FUNCTION_BLOCK) and its operation counts.",
     )
     add_robot(p)
-    p.add_argument("--lang", choices=["c", "st"], required=True, help="C99 or Structured Text")
+    p.add_argument(
+        "--lang",
+        choices=["c", "st"],
+        help="C99 or Structured Text (needed with -o; --plcopen alone generates Structured Text)",
+    )
     p.add_argument(
         "--what",
         default="id,gravity,regressor",
@@ -129,42 +136,79 @@ def register(subparsers) -> None:
         "--plcopen",
         metavar="XML",
         type=output_file,
-        help="also write a PLCopen XML (TC6 v2.01) project with the Structured Text function "
+        nargs="?",
+        const=True,  # --plcopen alone: the default path
+        help="write a PLCopen XML (TC6 v2.01) project with the Structured Text function "
         "blocks (the controller, inverse dynamics, gravity, regressor and the momentum "
-        "observer) for CODESYS",
+        f"observer) for CODESYS; without XML: {DEFAULT_FOLDER}/NAME.xml (a folder: NAME.xml "
+        "inside it), the path written is printed",
     )
     p.add_argument("--name", help="prefix of the generated identifiers (default: robot name)")
     p.add_argument(
         "-o",
         "--output",
-        required=True,
         metavar="FILE",
         type=output_file,
-        help="C: FILE.c and FILE.h; ST: FILE",
+        help="C: FILE.c and FILE.h; ST: FILE; a folder: NAME.c and NAME.h, or NAME.st, inside "
+        "it (NAME: --name, or the robot's name, with the controller or observer step's); "
+        "-o, --plcopen or both",
     )
     p.set_defaults(func=cmd_codegen, outputs=_outputs)
 
 
-def _output_base(args: argparse.Namespace) -> Path:
-    """``-o``'s path without the ``.c``/``.h`` a C output may be given with."""
-    out = Path(args.output)
+#: Where ``--plcopen`` without a path writes (NAME.xml), relative to the current folder.
+DEFAULT_FOLDER = "mindyn-codegen"
+
+
+def _stem(args: argparse.Namespace, robot) -> str:
+    """The default file name (without extension) of what codegen writes: the generated
+    identifiers' prefix, with the controller or observer step's name."""
+    name = args.name if args.name is not None else identifier(robot.name)
+    what = args.what.strip()
+    return f"{name}_{what.replace('-', '_')}" if what in CONTROLLERS + (OBSERVER,) else name
+
+
+def _output_base(args: argparse.Namespace, robot) -> Path | None:
+    """``-o``'s path without the ``.c``/``.h`` a C output may be given with (a folder: the
+    default name inside it, by :func:`~mindyn.cli.args.output_path`), or None without -o."""
+    if args.output is None:
+        return None
+    ext = ".st" if args.lang == "st" else ""
+    out = output_path(args.output, _stem(args, robot) + ext)
     return out.with_suffix("") if args.lang == "c" and out.suffix in (".c", ".h") else out
+
+
+def _plcopen_path(args: argparse.Namespace, name: str) -> Path:
+    """Where the PLCopen XML goes: ``--plcopen``'s path, or NAME.xml in its folder or in
+    :data:`DEFAULT_FOLDER` (created)."""
+    given = args.plcopen if isinstance(args.plcopen, str) else None
+    return output_path(given, f"{DEFAULT_FOLDER}/{name}.xml")
 
 
 def _outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
     """The files codegen writes (C: NAME.c and NAME.h; ST: the file; the PLCopen XML), for the
-    command line's one rule on outputs."""
-    out = _output_base(args)
-    files = (
-        [
-            ("--output", out.with_suffix(".c"), False),
-            ("--output", out.parent / (out.name + ".h"), False),
-        ]
-        if args.lang == "c"
-        else [("--output", out, False)]
-    )
-    if args.plcopen:
-        files.append(("--plcopen", Path(args.plcopen), False))
+    command line's one rule on outputs (a folder given: the files inside it are named later)."""
+    if args.output is not None and args.lang is None:
+        raise UsageError("--lang is required with -o (c or st)")
+    if args.output is None and args.plcopen is None:
+        raise UsageError("nothing to write: give -o FILE (with --lang), --plcopen [XML] or both")
+    files = []
+    if args.output is not None and args.output.into_folder:
+        files.append(("--output", Path(args.output), True))
+    elif args.output is not None:
+        out = Path(args.output)
+        if args.lang == "c" and out.suffix in (".c", ".h"):
+            out = out.with_suffix("")
+        files += (
+            [
+                ("--output", out.with_suffix(".c"), False),
+                ("--output", out.parent / (out.name + ".h"), False),
+            ]
+            if args.lang == "c"
+            else [("--output", out, False)]
+        )
+    if isinstance(args.plcopen, str):
+        files.append(("--plcopen", Path(args.plcopen), args.plcopen.into_folder))
     return files
 
 
@@ -172,8 +216,9 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     robot = load(args.robot, tip=args.tip)
     robot, friction_note = _with_friction_model(robot, args)
     robot, drive_note = drive_side(robot, args)
-    out = _output_base(args)
-    header = out.name + ".h"
+    args.lang = args.lang or "st"  # --plcopen alone
+    out = _output_base(args, robot)
+    header = (out.name if out is not None else _stem(args, robot)) + ".h"
     same = dict(
         lang=args.lang,
         what=args.what,
@@ -221,7 +266,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     )
     # the classical-parameter recursion generated the same way, for its operation counts
     classical = generate(robot, name=code.name, base=False, **same)
-    written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
+    written = _write(code, out, args.lang)
     extras = joint_terms(args)
     print(
         f"{robot.name}: {len(code.names)} base parameters"
@@ -231,14 +276,13 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     )
     if params is not None:
         print(_params_note(len(code.names), args.params, pruned, threshold))
-    if args.plcopen:
+    if args.plcopen is not None:
         st = (
             code
             if args.lang == "st"
             else generate(robot, base=base, name=code.name, **dict(same, lang="st"))
         )
-        Path(args.plcopen).write_bytes(plcopen_project([st.text], code.name))
-        written.append(Path(args.plcopen))
+        written.append(_write_plcopen(args, [st], code.name, code.name))
     print("wrote " + ", ".join(str(w) for w in written))
     snap = code.geometry_snap
     if snap["count"]:
@@ -249,6 +293,21 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     print()
     print("\n".join(operation_table(code, classical)))
     return 0
+
+
+def _write(code, out: Path | None, lang: str) -> list[Path]:
+    """Writes ``code`` to ``-o``'s path (C: .c and .h), or nothing without -o."""
+    if out is None:
+        return []
+    return code.write(out.with_suffix(".c") if lang == "c" else out)
+
+
+def _write_plcopen(args: argparse.Namespace, codes: list, project: str, name: str) -> Path:
+    """Writes the PLCopen XML project ``project`` of ``codes`` (Structured Text), by default as
+    NAME.xml; returns its path."""
+    path = _plcopen_path(args, name)
+    path.write_bytes(plcopen_project(codes, project))
+    return path
 
 
 def operation_table(code, classical) -> list[str]:
@@ -291,12 +350,12 @@ def _observer(args, robot, base, out: Path, params, note: str | None = None) -> 
         else None
     )
     same = dict(base=base, params=params, period=args.period, gains=gains, name=args.name)
-    code = generate_observer(robot, args.lang, header_name=out.name + ".h", trig=args.trig, **same)
-    written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
-    if args.plcopen:
+    header = (out.name if out is not None else _stem(args, robot)) + ".h"
+    code = generate_observer(robot, args.lang, header_name=header, trig=args.trig, **same)
+    written = _write(code, out, args.lang)
+    if args.plcopen is not None:
         st = code if args.lang == "st" else generate_observer(robot, "st", **same)
-        Path(args.plcopen).write_bytes(plcopen_project([st.text], code.name))
-        written.append(Path(args.plcopen))
+        written.append(_write_plcopen(args, [st], code.name, code.function))
     _say_step(robot, "momentum observer", code, args)
     if note:
         print(note)
@@ -347,20 +406,19 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
             raise ModelError(f"--box must be a number >= 0, got {args.box:g}")
         p0 = generate_controller(robot, kind, lang="st", **same).settings["p0"]
         same.update(p_min=p0 - args.box * np.abs(p0), p_max=p0 + args.box * np.abs(p0))
+    header = (out.name if out is not None else _stem(args, robot)) + ".h"
     code = generate_controller(
-        robot, kind, lang=args.lang, header_name=out.name + ".h", trig=args.trig, **same
+        robot, kind, lang=args.lang, header_name=header, trig=args.trig, **same
     )
-    written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
-    if args.plcopen:
+    written = _write(code, out, args.lang)
+    if args.plcopen is not None:
         st = code if args.lang == "st" else generate_controller(robot, kind, lang="st", **same)
         dyn = generate(robot, lang="st", base=base, name=st.name, offset=base.offset)
         # the momentum observer of the same model, to run beside the controller
         obs = generate_observer(
             robot, "st", base=base, params=st.settings["p0"], period=args.period, name=st.name
         )
-        texts = [st.text, dyn.text, obs.text]
-        Path(args.plcopen).write_bytes(plcopen_project(texts, st.name))
-        written.append(Path(args.plcopen))
+        written.append(_write_plcopen(args, [st, dyn, obs], st.name, st.function))
     _say_step(robot, f"{kind} step", code, args)
     if note:
         print(note)
