@@ -5,24 +5,15 @@ file; the missing folders are created and the path written is stated."""
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 from pathlib import Path
 
 import mindyn
 import numpy as np
 import pytest
-from mindyn import cli
 from mindyn.cli.args import output_file, output_path
 from test_codegen_blocks import NS
-
-
-def run(argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = cli.main([str(a) for a in argv])
-    return rc, out.getvalue(), err.getvalue()
+from test_export import consistent_params, run
 
 
 def test_output_path_rule(tmp_path, monkeypatch):
@@ -107,8 +98,6 @@ def test_codegen_needs_an_output(tmp_path, monkeypatch, argv, message):
 def test_export_into_a_folder(tmp_path):
     robot = mindyn.load("puma560")
     rng = np.random.default_rng(1)
-    from test_export import consistent_params
-
     ident = tmp_path / "id.json"
     ident.write_text(json.dumps({"classical": consistent_params(robot, rng)}))
     out = tmp_path / "desc"
