@@ -157,6 +157,8 @@ def cmd_base(args: argparse.Namespace) -> int:
         text = json.dumps(doc, indent=2)
         if args.json:
             Path(args.json).write_text(text + "\n")
+            if args.format != "json":  # standard output carries the document otherwise
+                print(f"wrote {args.json}")
         if args.format == "json":
             print(text)
             return 0

@@ -435,7 +435,7 @@ def output_path(value: str | None, default: str) -> Path:
     (an existing one, or any path ending in ``/``) means ``default``'s file name inside that
     folder; no value means ``default`` itself (relative to the current folder); any other path
     is the file. The missing folders of the file are created. Commands state the path they
-    wrote ("wrote PATH")."""
+    wrote ("wrote PATH", unless standard output carries a JSON document)."""
     if value is None:
         path = Path(default)
     elif getattr(value, "into_folder", False) or Path(value).is_dir():
@@ -514,7 +514,8 @@ def prepare_outputs(args: argparse.Namespace) -> None:
     (compared as resolved paths), and the missing folders of each are created. The outputs are
     :func:`declared_outputs`, or those that the command's ``outputs(args)`` (a parser default)
     lists when it writes files the options only imply (``codegen -o NAME``: NAME.c and
-    NAME.h); the commands state the paths they wrote."""
+    NAME.h); the commands state the paths they wrote (on standard output, unless it carries
+    the JSON document of ``--format json``)."""
     if callable(getattr(args, "outputs", None)):
         outputs = args.outputs(args)  # the command names the files in a folder given
     else:
