@@ -119,9 +119,13 @@ def test_plcopen_from_blocks_validates_and_holds_the_same_program(tmp_path):
     dyn = codegen.generate(robot, lang="st", base=base)
     obs = codegen.generate_observer(robot, "st", base=base)
     out = tmp_path / "project.xml"
-    out.write_bytes(codegen.plcopen_project([ctl, dyn, obs.program], "zcr07s"))
+    project = codegen.plcopen_project([ctl, dyn, obs.program], "zcr07s", comment="a test")
+    out.write_bytes(project)
     xmlschema.XMLSchema(str(XSD)).validate(str(out))
-    pous = ET.parse(out).getroot().findall("x:types/x:pous/x:pou", NS)
+    root = ET.parse(out).getroot()
+    assert root.find("x:contentHeader", NS).get("name") == "zcr07s"
+    assert root.find("x:contentHeader/x:Comment", NS).text == "a test"
+    pous = root.findall("x:types/x:pous/x:pou", NS)
     blocks = [b for c in (ctl, dyn, obs) for b in c.program.blocks]
     assert [p.get("name") for p in pous] == [b.name for b in blocks]
     assert len(pous) == 5

@@ -32,7 +32,7 @@ def _program(code) -> _core.STProgram:
     )
 
 
-def plcopen_project(codes: Sequence, project: str, comment: str = "") -> bytes:
+def plcopen_project(codes: Sequence, project: str, *, comment: str = "") -> bytes:
     """A PLCopen XML (TC6 XML v2.01) project with the FUNCTION_BLOCKs of generated Structured
     Text as POUs (interface variables typed, bodies in ``<ST><xhtml:p>``, the comments before
     the blocks as each POU's documentation), ready for import into CODESYS and other IEC 61131-3
