@@ -815,6 +815,10 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
   return cost;
 }
 
+ProjectionLimits projectionLimits() {
+  return {kMaxJoints, kMaxTreeJoints, (64 - kL0Bits - 6) / kJointBits, kProjectionMaxParameters};
+}
+
 std::string projectionRefusal(const Model& model, ParameterLayout layout, double budget) {
   model.validate();
   const int n = model.nq(), P = layout.size(n);
@@ -828,7 +832,7 @@ std::string projectionRefusal(const Model& model, ParameterLayout layout, double
            " joints on a tree" + has + std::to_string(n);
   if (!kl.fits)
     return "the projection method handles root paths of up to " +
-           std::to_string((64 - kL0Bits - 6) / kJointBits) +
+           std::to_string(projectionLimits().root_path_joints) +
            " joints on a tree, the longest of "
            "this " +
            std::to_string(n) + "-joint tree has " + std::to_string(kl.longest);

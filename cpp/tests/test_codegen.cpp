@@ -376,6 +376,43 @@ TEST(Codegen, EmittersNameEverything) {
                ModelError);
 }
 
+TEST(Codegen, StructuredTextBlocksAreTheProgram) {
+  const Model model = loadYaml(test::robotFile("puma560_3"));
+  const BaseParameters bp = computeBaseParameters(model);
+  const int np = static_cast<int>(bp.eom.names.size());
+  const GeneratedCode code =
+      generateCode(model, baseParameterSet(model, bp),
+                   {Function::InverseDynamics, Function::Gravity, Function::Regressor}, "puma3");
+  const STProgram program = programST(code);
+  EXPECT_EQ(writeST(program), emitST(code));
+  ASSERT_EQ(program.blocks.size(), 3u);
+  const auto names = [](const std::vector<STVariable>& vs) {
+    std::string out;
+    for (const auto& v : vs) out += v.name + " : " + declaredType(v) + "; ";
+    return out;
+  };
+  const std::string P = "ARRAY[1.." + std::to_string(np) + "] OF LREAL; ";
+  const std::string Q = "ARRAY[1..3] OF LREAL; ";
+  const STFunctionBlock& id = program.blocks[0];
+  EXPECT_EQ(id.name, "puma3_inverse_dynamics");
+  EXPECT_EQ(names(id.inputs), "q : " + Q + "dq : " + Q + "ddq : " + Q + "p : " + P);
+  EXPECT_EQ(names(id.outputs), "tau : " + Q);
+  EXPECT_EQ(names(program.blocks[1].inputs), "q : " + Q + "p : " + P);
+  const STFunctionBlock& reg = program.blocks[2];
+  ASSERT_EQ(reg.outputs.size(), 1u);
+  EXPECT_EQ(reg.outputs[0].dims, (std::vector<std::pair<int, int>>{{1, 3}, {1, np}}));
+  for (const auto& b : program.blocks) {
+    EXPECT_FALSE(b.locals.empty());
+    for (size_t k = 0; k < b.locals.size(); ++k) {
+      EXPECT_EQ(b.locals[k].name, "t" + std::to_string(k + 1));
+      EXPECT_EQ(declaredType(b.locals[k]), "LREAL");
+      // each temporary is assigned in the body
+      EXPECT_NE(b.body.find(b.locals[k].name + " := "), std::string::npos);
+    }
+    EXPECT_NE(b.note.find(" mul, "), std::string::npos);
+  }
+}
+
 TEST(BaseDynamics, TapesMatchTheClassicalRecursionAndAllocateNothing) {
   std::mt19937 rng(5);
   for (const char* name : {"puma560", "zcr07s", "stanford"}) {

@@ -383,12 +383,13 @@ def base_parameters(
         link, cost linear in the number of joints, then the same echelon form: the same base
         set and ``Y``); or sampled regressors with QR (for cross-checks). The projection
         method's basis grows geometrically along runs of parallel or general joint axes: its
-        memory is estimated before computing (an upper bound) and a chain over the 8 GiB
-        budget, or of more than 18 joints, is refused with a ModelError that gives the
-        estimate; the recursive method handles such chains, and so does the numerical one, up
-        to its own budget of 2 GiB (about 340 joints). All three handle trees
-        (``Robot.parents``); on a tree the projection method takes at most 16 joints on one
-        root path and 44 in all, and at most 256 parameters in all. Default (``None``): the
+        memory is estimated before computing (an upper bound) and a chain over its memory
+        budget, or beyond its joint limits, is refused with a ModelError that gives the
+        estimate or the limit; the recursive method handles such chains, and so does the
+        numerical one, up to its own budget of 2 GiB (about 340 joints). All three handle trees
+        (``Robot.parents``). The projection method's limits (joints on a chain, on a tree and on
+        one root path of a tree, parameters, memory budget) are those of the C++ core,
+        ``mindyn._core.projection_limits()``. Default (``None``): the
         projection method, or the recursive one where a limit of the projection method refuses
         the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
         ``method_reason``).

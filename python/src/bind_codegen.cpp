@@ -62,6 +62,39 @@ struct PyBaseDynamics {
 void bindController(py::module_& m);
 
 void bindCodegen(py::module_& m) {
+  py::class_<STVariable>(m, "STVariable",
+                         "A variable of a generated FUNCTION_BLOCK: name, IEC 61131-3 elementary "
+                         "type (LREAL, BOOL), array bounds (lower, upper) per dimension.")
+      .def_readonly("name", &STVariable::name)
+      .def_readonly("type", &STVariable::type)
+      .def_readonly("dims", &STVariable::dims)
+      .def_property_readonly("declared_type", &declaredType,
+                             "The declaration's type (ARRAY[1..6] OF LREAL).")
+      .def("__repr__", [](const STVariable& v) {
+        return "STVariable('" + v.name + " : " + declaredType(v) + "')";
+      });
+  py::class_<STFunctionBlock>(m, "STFunctionBlock",
+                              "A generated FUNCTION_BLOCK: name, inputs (VAR_INPUT), outputs "
+                              "(VAR_OUTPUT), locals (VAR), a note (comment after the "
+                              "declarations) and the body's statements.")
+      .def_readonly("name", &STFunctionBlock::name)
+      .def_readonly("inputs", &STFunctionBlock::inputs)
+      .def_readonly("outputs", &STFunctionBlock::outputs)
+      .def_readonly("locals", &STFunctionBlock::locals)
+      .def_readonly("note", &STFunctionBlock::note)
+      .def_readonly("body", &STFunctionBlock::body)
+      .def("__repr__",
+           [](const STFunctionBlock& b) { return "STFunctionBlock('" + b.name + "')"; });
+  py::class_<STProgram>(m, "STProgram",
+                        "A generated Structured Text program as blocks: the comments before "
+                        "the function blocks, and the blocks.")
+      .def_readonly("comments", &STProgram::comments)
+      .def_readonly("blocks", &STProgram::blocks)
+      .def("text", &writeST, "The Structured Text the generator writes for these blocks.")
+      .def("__repr__", [](const STProgram& p) {
+        return "STProgram(" + std::to_string(p.blocks.size()) + " function blocks)";
+      });
+
   bindController(m);
   m.def(
       "generate_code",
@@ -104,7 +137,9 @@ void bindCodegen(py::module_& m) {
           out["header"] = files.header;
           out["source"] = files.source;
         } else if (lang == "st") {
-          out["text"] = emitST(code);
+          STProgram program = programST(code);
+          out["text"] = writeST(program);
+          out["program"] = std::move(program);
         } else {
           throw py::value_error("lang must be 'c' or 'st', got '" + lang + "'");
         }
@@ -260,7 +295,9 @@ void bindController(py::module_& m) {
           out["header"] = files.header;
           out["source"] = files.source;
         } else if (lang == "st") {
-          out["text"] = emitControllerST(c);
+          STProgram program = controllerProgramST(c);
+          out["text"] = writeST(program);
+          out["program"] = std::move(program);
         } else {
           throw py::value_error("lang must be 'c' or 'st', got '" + lang + "'");
         }

@@ -69,7 +69,9 @@ void bindObserver(py::module_& m) {
           out["header"] = files.header;
           out["source"] = files.source;
         } else if (lang == "st") {
-          out["text"] = emitObserverST(c);
+          STProgram program = observerProgramST(c);
+          out["text"] = writeST(program);
+          out["program"] = std::move(program);
         } else {
           throw py::value_error("lang must be 'c' or 'st', got '" + lang + "'");
         }

@@ -711,6 +711,21 @@ PYBIND11_MODULE(_core, m) {
       "Upper bounds of what the projection method forms (terms, rows, entries) and its memory "
       "estimate in bytes, counted on sparsity patterns before computing; `budget`: the limit.");
   m.def(
+      "projection_limits",
+      [] {
+        const ProjectionLimits l = projectionLimits();
+        py::dict d;
+        d["chain_joints"] = l.chain_joints;
+        d["tree_joints"] = l.tree_joints;
+        d["root_path_joints"] = l.root_path_joints;
+        d["parameters"] = l.parameters;
+        d["budget_bytes"] = kProjectionBudget;
+        return d;
+      },
+      "The projection method's limits, as projection_refusal checks them: most joints on a "
+      "chain, on a tree and on one root path of a tree, most parameters, the memory budget in "
+      "bytes.");
+  m.def(
       "projection_refusal",
       [](const std::shared_ptr<PyModel>& model, bool rotor, bool friction) -> py::object {
         const std::string why =

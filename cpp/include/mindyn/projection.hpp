@@ -92,6 +92,18 @@ inline constexpr double kProjectionBudget = 8.0 * 1024 * 1024 * 1024;
 /// it groups rows by bit masks of their columns.
 inline constexpr int kProjectionMaxParameters = 256;
 
+/// The projection method's limits on a model, besides its memory budget (kProjectionBudget):
+/// most joints of a serial chain (its packed basis index), of a tree, and on one root path of
+/// a tree; most parameters (kProjectionMaxParameters). projectionRefusal checks them; they are
+/// here so that texts describing the method (the command line's help) read them.
+struct ProjectionLimits {
+  int chain_joints;
+  int tree_joints;
+  int root_path_joints;
+  int parameters;
+};
+ProjectionLimits projectionLimits();
+
 /// Why the projection method cannot take `model` in `layout` with `budget` bytes, or an empty
 /// string when it can: every limit it has, in one place, checked before computing in the order
 /// the method meets them: joints (18 on a serial chain, the packed index; 44 on a tree and 16 on

@@ -286,38 +286,42 @@ CFiles emitControllerC(const ControllerCode& c, const std::string& header_name, 
   return {h.str(), src.str()};
 }
 
-std::string emitControllerST(const ControllerCode& c) {
+STProgram controllerProgramST(const ControllerCode& c) {
+  using internal::stScalar;
   const std::string kind = toString(c.kind);
-  const std::string fn = c.code.name + "_" + kind;
   const int n = c.code.n, np = c.code.params.size();
   const GeneratedFunction& f = c.code.functions.front();
-  const std::string N = std::to_string(n), NP = std::to_string(np);
-  const std::string vecN = " : ARRAY[1.." + N + "] OF LREAL;\n";
-  const std::string vecP = " : ARRAY[1.." + NP + "] OF LREAL;\n";
-  std::ostringstream os;
-  for (const auto& l : header(c)) os << (l.empty() ? "(* *)" : "(* " + l + " *)") << "\n";
-  os << "(* Arrays are 1-based: q[k] is joint k, p[j] parameter j. The settings are set on the\n"
-        "   first call and when reset is TRUE, which also sets the estimate p back to p0. *)\n";
-  Writer s{true, {}, ""};
-  stepBody(s, c, fn, CTrig::Libm);
-  os << "\nFUNCTION_BLOCK " << fn << "\n";
-  os << "VAR_INPUT\n";
-  for (const char* v : {"q", "dq", "q_d", "dq_d", "ddq_d"}) os << "  " << v << vecN;
-  os << "  reset : BOOL;\nEND_VAR\nVAR_OUTPUT\n  tau" << vecN << "END_VAR\n";
-  os << "VAR\n  p" << vecP;
-  for (const Field& fd : fields(c)) os << "  " << fd.name << (fd.perParameter ? vecP : vecN);
-  if (normalised(c)) os << "  nu : LREAL;\n  den : LREAL;\n";
-  if (c.kind == Controller::AdaptivePD) os << "  period : LREAL;\n";
-  os << "  initialised : BOOL;\n";
-  os << "  e" << vecN << "  de" << vecN;
+  const auto vecN = [n](const std::string& name) { return internal::stVector(name, n); };
+  STProgram p;
+  p.comments = header(c);
+  p.comments.push_back(
+      "Arrays are 1-based: q[k] is joint k, p[j] parameter j. The settings are set on the\n"
+      "   first call and when reset is TRUE, which also sets the estimate p back to p0.");
+  STFunctionBlock b;
+  b.name = c.code.name + "_" + kind;
+  for (const char* v : {"q", "dq", "q_d", "dq_d", "ddq_d"}) b.inputs.push_back(vecN(v));
+  b.inputs.push_back(stScalar("reset", "BOOL"));
+  b.outputs.push_back(vecN("tau"));
+  b.locals.push_back(internal::stVector("p", np));
+  for (const Field& fd : fields(c))
+    b.locals.push_back(fd.perParameter ? internal::stVector(fd.name, np) : vecN(fd.name));
+  if (normalised(c)) {
+    b.locals.push_back(stScalar("nu"));
+    b.locals.push_back(stScalar("den"));
+  }
+  if (c.kind == Controller::AdaptivePD) b.locals.push_back(stScalar("period"));
+  b.locals.push_back(stScalar("initialised", "BOOL"));
+  b.locals.push_back(vecN("e"));
+  b.locals.push_back(vecN("de"));
   if (c.kind == Controller::AdaptivePD)
-    os << "  le" << vecN << "  dqr" << vecN << "  ddqr" << vecN << "  s" << vecN;
-  if (c.kind == Controller::ComputedTorque) os << "  ddq" << vecN;
-  os << "  y : ARRAY[1.." << f.outputs.size() << "] OF LREAL;\n";
+    for (const char* v : {"le", "dqr", "ddqr", "s"}) b.locals.push_back(vecN(v));
+  if (c.kind == Controller::ComputedTorque) b.locals.push_back(vecN("ddq"));
+  b.locals.push_back(internal::stVector("y", static_cast<int>(f.outputs.size())));
   std::ostringstream probe;
   const int slots = internal::writeSTBody(probe, f, "y");
-  for (int t = 0; t < slots; ++t) os << "  t" << t + 1 << " : LREAL;\n";
-  os << "END_VAR\n";
+  for (int t = 0; t < slots; ++t) b.locals.push_back(stScalar("t" + std::to_string(t + 1)));
+  Writer s{true, {}, ""};
+  stepBody(s, c, b.name, CTrig::Libm);
   Writer init{true, {}, "  "};
   for (const Field& fd : fields(c))
     for (long i = 0; i < fd.values->size(); ++i)
@@ -326,9 +330,11 @@ std::string emitControllerST(const ControllerCode& c) {
   if (c.kind == Controller::AdaptivePD) init.set("period", init.num(c.settings.period));
   for (int j = 0; j < np; ++j) init.set(init.field("p", j), init.field("p0", j));
   init.set("initialised", "TRUE");
-  os << "IF reset OR NOT initialised THEN\n" << init.os.str() << "END_IF;\n";
-  os << s.os.str() << "END_FUNCTION_BLOCK\n";
-  return os.str();
+  b.body = "IF reset OR NOT initialised THEN\n" + init.os.str() + "END_IF;\n" + s.os.str();
+  p.blocks.push_back(std::move(b));
+  return p;
 }
+
+std::string emitControllerST(const ControllerCode& c) { return writeST(controllerProgramST(c)); }
 
 }  // namespace mindyn::codegen

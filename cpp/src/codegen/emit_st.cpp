@@ -152,42 +152,73 @@ int internal::writeSTBody(std::ostream& os, const GeneratedFunction& f, const st
   return w.slots();
 }
 
-std::string emitST(const GeneratedCode& code) {
-  checkIdentifier(code.name);
-  const std::string N = std::to_string(code.n), NP = std::to_string(code.params.size());
+std::string declaredType(const STVariable& v) {
+  if (v.dims.empty()) return v.type;
+  std::string t = "ARRAY[";
+  for (size_t i = 0; i < v.dims.size(); ++i)
+    t +=
+        (i ? ", " : "") + std::to_string(v.dims[i].first) + ".." + std::to_string(v.dims[i].second);
+  return t + "] OF " + v.type;
+}
+
+std::string writeST(const STProgram& program) {
   std::ostringstream os;
-  for (const auto& l : describe(code)) os << "(* " << l << " *)\n";
-  os << "(* Arrays are 1-based: q[k] is joint k, p[j] parameter j; regressor W[i, j]. *)\n";
-  for (const auto& f : code.functions) {
-    STWriter w(f);
-    std::ostringstream body;
-    w.body(body);
-    os << "\nFUNCTION_BLOCK " << code.name << "_" << toString(f.function) << "\n";
-    os << "VAR_INPUT\n  q : ARRAY[1.." << N << "] OF LREAL;\n";
-    if (f.function != Function::Gravity)
-      os << "  dq : ARRAY[1.." << N << "] OF LREAL;\n  ddq : ARRAY[1.." << N << "] OF LREAL;\n";
-    if (f.function != Function::Regressor && !f.numeric)
-      os << "  p : ARRAY[1.." << NP << "] OF LREAL;\n";
-    os << "END_VAR\nVAR_OUTPUT\n";
-    if (f.function == Function::Regressor)
-      os << "  W : ARRAY[1.." << N << ", 1.." << NP << "] OF LREAL;\n";
-    else
-      os << "  tau : ARRAY[1.." << N << "] OF LREAL;\n";
-    os << "END_VAR\n";
-    if (w.slots() > 0) {
-      os << "VAR\n";
-      for (int s = 0; s < w.slots(); ++s) os << "  t" << s + 1 << " : LREAL;\n";
+  for (const auto& c : program.comments) os << (c.empty() ? "(* *)" : "(* " + c + " *)") << "\n";
+  for (const auto& b : program.blocks) {
+    checkIdentifier(b.name);
+    os << "\nFUNCTION_BLOCK " << b.name << "\n";
+    for (const auto& [section, vars] :
+         {std::pair{"VAR_INPUT", &b.inputs}, std::pair{"VAR_OUTPUT", &b.outputs},
+          std::pair{"VAR", &b.locals}}) {
+      if (vars->empty() && std::string(section) == "VAR") continue;
+      os << section << "\n";
+      for (const auto& v : *vars) os << "  " << v.name << " : " << declaredType(v) << ";\n";
       os << "END_VAR\n";
     }
-    const OpCount& c = f.program.count;
-    os << "(* " << c.mul << " mul, " << c.add << " add, " << c.trig << " sin/cos";
-    for (const auto& [count, what] :
-         {std::pair{c.sign, " sign"}, std::pair{c.tanh, " tanh"}, std::pair{c.exp, " exp"}})
-      if (count) os << ", " << count << what;
-    os << " *)\n";
-    os << body.str() << "END_FUNCTION_BLOCK\n";
+    if (!b.note.empty()) os << "(* " << b.note << " *)\n";
+    os << b.body << "END_FUNCTION_BLOCK\n";
   }
   return os.str();
 }
+
+STProgram programST(const GeneratedCode& code) {
+  checkIdentifier(code.name);
+  const int n = code.n, np = static_cast<int>(code.params.size());
+  const auto vec = internal::stVector;
+  STProgram p;
+  p.comments = describe(code);
+  p.comments.push_back("Arrays are 1-based: q[k] is joint k, p[j] parameter j; regressor W[i, j].");
+  for (const auto& f : code.functions) {
+    STFunctionBlock b;
+    b.name = code.name + "_" + toString(f.function);
+    b.inputs.push_back(vec("q", n));
+    if (f.function != Function::Gravity) {
+      b.inputs.push_back(vec("dq", n));
+      b.inputs.push_back(vec("ddq", n));
+    }
+    if (f.function != Function::Regressor && !f.numeric) b.inputs.push_back(vec("p", np));
+    if (f.function == Function::Regressor)
+      b.outputs.push_back(STVariable{"W", "LREAL", {{1, n}, {1, np}}});
+    else
+      b.outputs.push_back(vec("tau", n));
+    STWriter w(f);
+    std::ostringstream body;
+    w.body(body);
+    for (int s = 0; s < w.slots(); ++s)
+      b.locals.push_back(internal::stScalar("t" + std::to_string(s + 1)));
+    const OpCount& c = f.program.count;
+    std::ostringstream note;
+    note << c.mul << " mul, " << c.add << " add, " << c.trig << " sin/cos";
+    for (const auto& [count, what] :
+         {std::pair{c.sign, " sign"}, std::pair{c.tanh, " tanh"}, std::pair{c.exp, " exp"}})
+      if (count) note << ", " << count << what;
+    b.note = note.str();
+    b.body = body.str();
+    p.blocks.push_back(std::move(b));
+  }
+  return p;
+}
+
+std::string emitST(const GeneratedCode& code) { return writeST(programST(code)); }
 
 }  // namespace mindyn::codegen

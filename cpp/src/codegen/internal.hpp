@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "mindyn/codegen/emit_c.hpp"
+#include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
 
 namespace mindyn::codegen::internal {
@@ -48,6 +49,13 @@ std::string sincosSource(const std::string& prefix);
 /// Structured Text: the statements of one function with its outputs assigned to out[1],
 /// out[2], ...; returns the number of LREAL temporaries t1 .. tK they use.
 int writeSTBody(std::ostream& os, const GeneratedFunction& f, const std::string& out);
+/// Structured Text: an LREAL array [1..size], a scalar of `type`.
+inline STVariable stVector(const std::string& name, int size) {
+  return STVariable{name, "LREAL", {{1, size}}};
+}
+inline STVariable stScalar(const std::string& name, const std::string& type = "LREAL") {
+  return STVariable{name, type, {}};
+}
 
 inline void addCount(OpCount& c, long mul, long add) {
   c.mul += mul;

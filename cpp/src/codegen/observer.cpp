@@ -349,29 +349,33 @@ CFiles emitObserverC(const ObserverCode& c, const std::string& header_name, CTri
   return {h.str(), src.str()};
 }
 
-std::string emitObserverST(const ObserverCode& c) {
-  const std::string fn = c.code.name + "_momentum_observer";
+STProgram observerProgramST(const ObserverCode& c) {
+  using internal::stScalar;
   const int n = c.code.n, np = c.code.params.size();
   const GeneratedFunction& f = c.code.functions.front();
-  const std::string N = std::to_string(n), NP = std::to_string(np);
-  const std::string vecN = " : ARRAY[1.." + N + "] OF LREAL;\n";
-  std::ostringstream os;
-  for (const auto& l : header(c)) os << (l.empty() ? "(* *)" : "(* " + l + " *)") << "\n";
-  os << "(* Arrays are 1-based: q[k] is joint k, p[j] parameter j. The settings are set on the\n"
-        "   first call and when reset is TRUE, which also restarts the observer. *)\n";
-  os << "\nFUNCTION_BLOCK " << fn << "\n";
-  os << "VAR_INPUT\n  q" << vecN << "  dq" << vecN << "  tau" << vecN
-     << "  reset : BOOL;\nEND_VAR\nVAR_OUTPUT\n  r_out" << vecN << "END_VAR\n";
-  os << "VAR\n  p : ARRAY[1.." << NP << "] OF LREAL;\n  ko" << vecN << "  c" << vecN
-     << "  period : LREAL;\n  half : LREAL;\n  s : LREAL;\n  initialised : BOOL;\n"
-     << "  started : BOOL;\n";
-  for (const char* s : {"p_start", "integral", "r", "tau_prev", "beta_prev"})
-    os << "  " << s << vecN;
-  os << "  y : ARRAY[1.." << 2 * n << "] OF LREAL;\n";
+  const auto vecN = [n](const std::string& name) { return internal::stVector(name, n); };
+  STProgram p;
+  p.comments = header(c);
+  p.comments.push_back(
+      "Arrays are 1-based: q[k] is joint k, p[j] parameter j. The settings are set on the\n"
+      "   first call and when reset is TRUE, which also restarts the observer.");
+  STFunctionBlock b;
+  b.name = c.code.name + "_momentum_observer";
+  for (const char* v : {"q", "dq", "tau"}) b.inputs.push_back(vecN(v));
+  b.inputs.push_back(stScalar("reset", "BOOL"));
+  b.outputs.push_back(vecN("r_out"));
+  b.locals.push_back(internal::stVector("p", np));
+  b.locals.push_back(vecN("ko"));
+  b.locals.push_back(vecN("c"));
+  for (const char* v : {"period", "half", "s"}) b.locals.push_back(stScalar(v));
+  b.locals.push_back(stScalar("initialised", "BOOL"));
+  b.locals.push_back(stScalar("started", "BOOL"));
+  for (const char* v : {"p_start", "integral", "r", "tau_prev", "beta_prev"})
+    b.locals.push_back(vecN(v));
+  b.locals.push_back(internal::stVector("y", 2 * n));
   std::ostringstream body;
   const int slots = internal::writeSTBody(body, f, "y");
-  for (int t = 0; t < slots; ++t) os << "  t" << t + 1 << " : LREAL;\n";
-  os << "END_VAR\n";
+  for (int t = 0; t < slots; ++t) b.locals.push_back(stScalar("t" + std::to_string(t + 1)));
   Writer init{true, {}, "  "};
   for (int j = 0; j < np; ++j) init.set(init.field("p", j), literal(c.settings.p[j], true));
   for (int k = 0; k < n; ++k) init.set(init.field("ko", k), literal(c.settings.gains[k], true));
@@ -382,17 +386,17 @@ std::string emitObserverST(const ObserverCode& c) {
              init.field("ko", k) + " / (1.0 + half * " + init.field("ko", k) + ")");
   init.set("started", "FALSE");
   init.set("initialised", "TRUE");
-  os << "IF reset OR NOT initialised THEN\n" << init.os.str() << "END_IF;\n";
-  os << body.str();
   Writer first{true, {}, "  "}, rest{true, {}, "  "}, tail{true, {}, ""};
   start(first, c);
   update(rest, c);
   carry(tail, c);
-  os << "IF NOT started THEN\n"
-     << first.os.str() << "  started := TRUE;\nELSE\n"
-     << rest.os.str() << "END_IF;\n"
-     << tail.os.str() << "END_FUNCTION_BLOCK\n";
-  return os.str();
+  b.body = "IF reset OR NOT initialised THEN\n" + init.os.str() + "END_IF;\n" + body.str() +
+           "IF NOT started THEN\n" + first.os.str() + "  started := TRUE;\nELSE\n" + rest.os.str() +
+           "END_IF;\n" + tail.os.str();
+  p.blocks.push_back(std::move(b));
+  return p;
 }
+
+std::string emitObserverST(const ObserverCode& c) { return writeST(observerProgramST(c)); }
 
 }  // namespace mindyn::codegen

@@ -19,7 +19,7 @@ from .args import (
     output_file,
     with_drive_side,
 )
-from .method import base_method
+from .method import base_method, projection_limits_text
 
 
 def cmd_base(args: argparse.Namespace) -> int:
@@ -42,6 +42,8 @@ def cmd_base(args: argparse.Namespace) -> int:
         text = json.dumps(doc, indent=2)
         if args.json:
             Path(args.json).write_text(text + "\n")
+            if args.format != "json":  # standard output carries the document otherwise
+                print(f"wrote {args.json}")
         if args.format == "json":
             print(text)
             return 0
@@ -135,9 +137,8 @@ def register(sub) -> None:
         "the recursive method (exact, the same base set, cost linear in the number of joints) "
         "or the numerical method (sampled regressor + QR), on chains and trees. Without "
         "--method, a robot whose projection cost estimate is over its budget (or beyond the "
-        "projection method's limits: more than 18 joints on a chain, 44 on a tree or 16 on one "
-        "of its root paths, more than 256 parameters) is computed by the recursive method, and "
-        "the output says so.",
+        f"projection method's limits: more than {projection_limits_text()}) is computed by the "
+        "recursive method, and the output says so.",
     )
     add_robot(p)
     add_joint_terms(p)
@@ -152,8 +153,8 @@ def register(sub) -> None:
         choices=["projection", "recursive", "numerical"],
         default=None,
         help="default: projection, or recursive (the same base set) where the projection "
-        "method's limits (18 joints on a chain; 44 on a tree, 16 on a root path) or its cost "
-        "estimate refuse the robot",
+        f"method's limits ({projection_limits_text(parameters=False)}) or its cost estimate "
+        "refuse the robot",
     )
     p.add_argument(
         "--format",

@@ -172,6 +172,8 @@ def cmd_ik(args: argparse.Namespace) -> int:
     }
     if args.json:
         Path(args.json).write_text(json.dumps(doc, indent=2) + "\n")
+        if args.format != "json":  # standard output carries the document otherwise
+            print(f"wrote {args.json}")
     if args.format == "json":
         print(json.dumps(doc, indent=2))
     else:

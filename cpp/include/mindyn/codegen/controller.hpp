@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "mindyn/codegen/emit_c.hpp"
+#include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
 
 namespace mindyn::codegen {
@@ -57,6 +58,8 @@ CFiles emitControllerC(const ControllerCode& c, const std::string& header_name,
                        CTrig trig = CTrig::Inline);
 
 /// Structured Text: FUNCTION_BLOCK NAME_KIND.
+/// Its blocks (see STProgram), and their text writeST(controllerProgramST(c)).
+STProgram controllerProgramST(const ControllerCode& c);
 std::string emitControllerST(const ControllerCode& c);
 
 }  // namespace mindyn::codegen

@@ -17,6 +17,7 @@
 #include <string>
 
 #include "mindyn/codegen/emit_c.hpp"
+#include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
 
 namespace mindyn::codegen {
@@ -49,6 +50,8 @@ CFiles emitObserverC(const ObserverCode& c, const std::string& header_name,
                      CTrig trig = CTrig::Inline);
 
 /// Structured Text: FUNCTION_BLOCK NAME_momentum_observer.
+/// Its blocks (see STProgram), and their text writeST(observerProgramST(c)).
+STProgram observerProgramST(const ObserverCode& c);
 std::string emitObserverST(const ObserverCode& c);
 
 }  // namespace mindyn::codegen

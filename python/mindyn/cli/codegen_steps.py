@@ -1,0 +1,149 @@
+"""``mindyn codegen --what adaptive-pd | computed-torque | gravity-compensation |
+momentum-observer``: one generated controller or observer step, its report and its PLCopen
+project."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .._core import ModelError
+from ..codegen import generate, generate_controller, generate_observer
+from .args import joint_terms, joint_values
+from .codegen_output import OBSERVER, _stem, _write, _write_plcopen
+
+
+def _observer(args, robot, base, out: Path, params, note: str | None = None) -> int:
+    """``--what momentum-observer``; ``note`` says where the values came from."""
+    from ..control import default_observer_gain
+
+    for opt in ("gains", "torque_limit", "box"):
+        if getattr(args, opt) is not None:
+            raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
+    if args.numeric:
+        raise ModelError(f"--numeric does not apply to the {OBSERVER} step")
+    gains = (
+        joint_values(args.observer_gain, robot.n, "--observer-gain", broadcast=True)
+        if args.observer_gain
+        else None
+    )
+    same = dict(base=base, params=params, period=args.period, gains=gains, name=args.name)
+    header = (out.name if out is not None else _stem(args, robot)) + ".h"
+    code = generate_observer(robot, args.lang, header_name=header, trig=args.trig, **same)
+    written = _write(code, out, args.lang)
+    if args.plcopen is not None:
+        st = code if args.lang == "st" else generate_observer(robot, "st", **same)
+        written.append(_write_plcopen(args, [st], code.name, code.function))
+    _say_step(robot, "momentum observer", code, args)
+    if note:
+        print(note)
+    how = "given" if gains else f"default 1 / (10 T) = {default_observer_gain(args.period):.4g}"
+    print("gains K_O [1/s] (" + how + "): " + ", ".join(f"{k:.4g}" for k in code.gains))
+    print("wrote " + ", ".join(str(w) for w in written))
+    for label, c in (
+        ("momentum pass:", code.counts["momentum"]),
+        ("whole step:", code.counts["step"]),
+    ):
+        calls = "".join(f", {c[f]} {f}" for f in ("sign", "tanh", "exp") if c[f])
+        print(f"{label:<15}{c['mul']} mul, {c['add']} add, {c['trig']} sin/cos{calls}")
+    return 0
+
+
+def _controller(args, robot, base, out: Path, params, note: str | None = None) -> int:
+    """``--what adaptive-pd | computed-torque | gravity-compensation``; ``note`` says where the
+    initial estimate comes from."""
+    from .. import control
+
+    kind = args.what.strip()
+    if args.numeric:
+        raise ModelError("--numeric does not apply to controller steps (p is their state)")
+    if not (math.isfinite(args.period) and args.period > 0):
+        raise ModelError(
+            f"--controller-period must be a positive number of seconds, got {args.period:g}"
+        )
+    if args.gains:
+        gains = control.load_gains(args.gains, robot, period=args.period, rotor=True)
+    else:
+        gains = control.default_gains(robot, period=args.period, rotor=True)
+    limit = args.torque_limit
+    if limit is not None and limit != "effort":
+        try:
+            limit = float(limit)
+        except ValueError:
+            raise ModelError(
+                f"--torque-limit: expected 'effort' or a number, got '{limit}'"
+            ) from None
+        if not (math.isfinite(limit) and limit > 0):
+            raise ModelError(f"--torque-limit must be positive, got {limit:g}")
+    same = dict(base=base, gains=gains, params=params, period=args.period, name=args.name)
+    same.update(tau_max=limit)
+    if args.box is not None:
+        if kind != "adaptive-pd":
+            raise ModelError("--box (a box on the estimate) applies to --what adaptive-pd only")
+        if not (math.isfinite(args.box) and args.box >= 0):
+            raise ModelError(f"--box must be a number >= 0, got {args.box:g}")
+        p0 = generate_controller(robot, kind, lang="st", **same).settings["p0"]
+        same.update(p_min=p0 - args.box * np.abs(p0), p_max=p0 + args.box * np.abs(p0))
+    header = (out.name if out is not None else _stem(args, robot)) + ".h"
+    code = generate_controller(
+        robot, kind, lang=args.lang, header_name=header, trig=args.trig, **same
+    )
+    written = _write(code, out, args.lang)
+    if args.plcopen is not None:
+        st = code if args.lang == "st" else generate_controller(robot, kind, lang="st", **same)
+        dyn = generate(robot, lang="st", base=base, name=st.name, offset=base.offset)
+        # the momentum observer of the same model, to run beside the controller
+        obs = generate_observer(
+            robot, "st", base=base, params=st.settings["p0"], period=args.period, name=st.name
+        )
+        written.append(_write_plcopen(args, [st, dyn, obs], st.name, st.function))
+    _say_step(robot, f"{kind} step", code, args)
+    if note:
+        print(note)
+    if gains.note:
+        print(gains.note)
+    _warn_unstable(robot, gains, kind, args.period)
+    print("wrote " + ", ".join(str(w) for w in written))
+    print()
+    print(f"{'':<34}{'mul':>8}{'add':>7}{'trig':>7}{'sign':>7}{'div':>7}")
+    for f, c in code.counts.items():
+        label = "whole step" if f == "step" else f
+        print(
+            f"{label:<34}{c['mul']:>8}{c['add']:>7}{c['trig']:>7}{c['sign']:>7}{c.get('div', 0):>7}"
+        )
+    if code.variants:
+        print()
+        print("forms of Y p and Y^T s (* used: the fewest multiplications plus additions):")
+        for form, c in code.variants.items():
+            mark = "*" if form == code.form else " "
+            print(f" {mark} {form:<52}{c['mul']:>6} mul{c['add']:>6} add")
+    return 0
+
+
+def _warn_unstable(robot, gains, kind: str, period: float) -> None:
+    """Warns on stderr when the sampled loop of the gains baked in is unstable at ``period``
+    (the robot with its rotor inertia; :func:`mindyn.control.check_gains`)."""
+    from .. import control
+
+    check = control.check_gains(
+        robot, gains, "pd" if kind == "gravity-compensation" else kind, period=period, rotor=True
+    )
+    if not check.stable:
+        print(
+            f"mindyn: warning: the gains baked in are not stable: the {check.text()}",
+            file=sys.stderr,
+        )
+
+
+def _say_step(robot, what: str, code, args) -> None:
+    """The first line of a generated step's report: what, in how many base parameters with which
+    joint terms, at which period."""
+    extras = joint_terms(args)
+    print(
+        f"{robot.name}: {what} in {len(code.names)} base parameters"
+        + (f" ({', '.join(extras)})" if extras else "")
+        + f", period {args.period:g} s"
+    )

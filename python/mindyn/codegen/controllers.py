@@ -1,0 +1,283 @@
+"""Generated controller steps (:func:`generate_controller`: adaptive PD, computed torque, PD
+with gravity compensation) and the momentum-observer step (:func:`generate_observer`), in C99 or
+Structured Text."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .. import _args, _core
+from ..base import BaseParameters, base_parameters
+from ..robot import Robot, load
+from .generation import GeneratedCode, _check_lang, identifier
+from .parameters import read_parameter_file
+
+CONTROLLERS = ("adaptive-pd", "computed-torque", "gravity-compensation")
+
+
+class GeneratedController(GeneratedCode):
+    """A generated controller step (see :func:`generate_controller`).
+
+    Attributes (beyond :class:`GeneratedCode`)
+    ------------------------------------------
+    kind : str
+        ``adaptive-pd``, ``computed-torque`` or ``gravity-compensation``.
+    function : str
+        The C / ST name of the step: ``NAME_adaptive_pd`` (C: ``NAME_adaptive_pd_t``,
+        ``NAME_adaptive_pd_init``, ``NAME_adaptive_pd_step``; ST: the FUNCTION_BLOCK).
+    counts : dict
+        ``{"slotine_li" | "inverse_dynamics" | "gravity": counts of the dynamics part,
+        "step": counts of the whole step (with ``div``)}``.
+    variants : dict
+        Adaptive PD: the counts of each way of forming ``Y p`` and ``Y^T s`` (``form``: the one
+        used, the fewest multiplications plus additions).
+    settings : dict
+        The settings the step starts with (``kd``, ``lambda``, ``gamma``, ``kp``, ``p_min``,
+        ``p_max``, ``tau_max``, ``nu``, ``period``; arrays).
+    """
+
+    def __init__(self, kind, lang, name, out, header_name, settings):
+        super().__init__(lang, name, out, False, header_name)
+        self.kind = kind
+        self.function = f"{name}_{kind.replace('-', '_')}"
+        self.variants = {k: dict(v) for k, v in out["variants"].items()}
+        self.form = out["form"]
+        self.settings = settings
+
+    def __repr__(self) -> str:
+        s = self.counts["step"]
+        return f"GeneratedController({self.kind!r}, {self.lang!r}, {s['mul']} mul {s['add']} add)"
+
+
+def _setting(value, size: int, name: str, default: float) -> np.ndarray:
+    if value is None:
+        return np.full(size, default)
+    a = np.asarray(value, dtype=float)
+    if a.ndim == 0:
+        a = np.full(size, float(a))
+    if a.shape != (size,):
+        raise ValueError(f"setting '{name}' must be a scalar or {size} values, got shape {a.shape}")
+    return a
+
+
+def generate_controller(
+    robot: Robot | str,
+    kind: str = "adaptive-pd",
+    lang: str = "c",
+    base: BaseParameters | bool | None = None,
+    gains: dict | None = None,
+    params: str | Path | Sequence[float] | None = None,
+    period: float = 0.004,
+    p_min=None,
+    p_max=None,
+    tau_max=None,
+    name: str | None = None,
+    header_name: str | None = None,
+    trig: str | None = None,
+) -> GeneratedController:
+    """Generates one controller step as C99 or Structured Text.
+
+    ``adaptive-pd`` is :class:`mindyn.control.AdaptivePD` (same sign convention, same
+    adaptation step, ``nu`` normalisation when ``gains["nu"] > 0``) with the products ``Y p``
+    and ``Y^T s`` of the Slotine-Li regressor generated from its recursion customised to the
+    robot, then a torque limit and a box on the estimate; ``computed-torque`` is
+    :class:`mindyn.control.ComputedTorque`, ``gravity-compensation`` is PD plus the gravity
+    torque ``g(q) p``.
+
+    Parameters
+    ----------
+    robot : Robot or str
+    kind : {"adaptive-pd", "computed-torque", "gravity-compensation"}
+    lang : {"c", "st"}
+    base : BaseParameters or False, optional
+        The parameter set (default: base parameters with rotor inertia and friction; ``False``:
+        all classical parameters with rotor inertia and friction); a base set's offset setting
+        adds a torque offset per joint. Its robot decides where rotor inertia and friction act
+        and the friction model, as in :func:`generate` (rotor inertia through the reference
+        acceleration ``t_k . ddq_r``, friction at the motor velocity ``t_k . dq``).
+    gains : dict, optional
+        ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
+        gives them (the default: for ``period``, the robot with its rotor inertia). Gains that
+        no sampled loop at ``period`` tolerates are refused
+        (:func:`mindyn.control.check_sampled_gains`). ``kp`` defaults to ``lambda**2`` for
+        computed torque (with ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and
+        ``lambda kd`` for gravity compensation.
+    params : path or array, optional
+        The initial estimate ``p0`` (a file as :func:`read_parameter_file` reads it, e.g. the JSON
+        of ``mindyn identify --json``); default the robot's own values.
+    period : float
+        Controller period [s] (adaptive PD: the adaptation step).
+    p_min, p_max : scalar or array (np,), optional
+        Box on the estimate (default unbounded).
+    tau_max : None, "effort", scalar or array (n,)
+        Torque limit (default none; ``"effort"``: the model's effort limits).
+    """
+    from .. import control
+
+    robot = load(robot) if not isinstance(robot, Robot) else robot
+    if kind not in CONTROLLERS:
+        raise ValueError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
+    _check_lang(lang, trig)
+    classical = base is False
+    if base is None:
+        base = base_parameters(robot, rotor=True, friction=True)
+    if classical:
+        names = list(_core.classical_parameter_names(robot._m, rotor=True, friction=True))
+    else:
+        names = list(base.names)
+    n = robot.n
+    g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
+    lam = _setting(g.get("lambda"), n, "lambda", 10.0)
+    s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
+    if kind == "computed-torque":
+        with np.errstate(over="ignore"):  # an infinite square is refused just below
+            s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam**2
+        s["kd"] = _setting(g["kd"], n, "kd", 0.0) if "kp" in g else 2 * lam
+    else:
+        s["kd"] = _setting(g.get("kd"), n, "kd", 0.0)
+        with np.errstate(over="ignore"):  # an infinite product is refused just below
+            s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam * s["kd"]
+    s["gamma"] = _setting(g.get("gamma"), len(names), "gamma", 1.0)
+    check = "pd" if kind == "gravity-compensation" else kind
+    control.check_sampled_gains(check, s["kp"], s["kd"], lam, period)
+    big = control.controllers.MAX_GAIN
+    if not (np.all(s["gamma"] >= 0) and np.all(s["gamma"] <= big) and 0 <= s["nu"] <= big):
+        raise control.ControllerSettingError(
+            f"gains 'gamma' and 'nu' must be numbers in [0, {big:g}]"
+        )
+    if params is None and classical:
+        s["p0"] = None  # the robot's classical values, as the generator reads them
+    elif params is None:
+        s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
+        if base.offset:
+            s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
+    elif isinstance(params, (str, Path)):
+        s["p0"] = read_parameter_file(params, names)
+    else:
+        s["p0"] = _args.array(params, "params", (len(names),))
+    s["p_min"] = _setting(p_min, len(names), "p_min", -math.inf)
+    s["p_max"] = _setting(p_max, len(names), "p_max", math.inf)
+    if isinstance(tau_max, str):
+        if tau_max != "effort":
+            raise ValueError(f"tau_max must be None, 'effort' or {n} values, got '{tau_max}'")
+        tau_max = robot.limits["effort"]
+        if not np.all(np.isfinite(tau_max)):
+            raise ValueError(f"robot '{robot.name}' does not give effort limits for all joints")
+    s["tau_max"] = _setting(tau_max, n, "tau_max", math.inf)
+    name = name if name is not None else identifier(robot.name)
+    fn = f"{name}_{kind.replace('-', '_')}"
+    header_name = header_name or f"{fn}.h"
+    out = _core.generate_controller(
+        None if classical else base._b,
+        False if classical else base.offset,
+        kind,
+        name,
+        s,
+        lang=lang,
+        header_name=header_name,
+        inline_trig=trig != "libm",
+        model=robot._m if classical else None,
+    )
+    s["p0"] = np.asarray(out["values"], dtype=float)
+    return GeneratedController(kind, lang, name, out, header_name, s)
+
+
+class GeneratedObserver(GeneratedCode):
+    """A generated momentum-observer step (see :func:`generate_observer`).
+
+    Attributes (beyond :class:`GeneratedCode`)
+    ------------------------------------------
+    function : str
+        ``NAME_momentum_observer`` (C: ``_t``, ``_init``, ``_reset``, ``_step``; ST: the
+        FUNCTION_BLOCK).
+    counts : dict
+        ``{"momentum": the momentum pass, "step": the whole step}``.
+    gains : ndarray (n,)
+        ``K_O`` [1/s]; ``period`` [s]; ``held_torque``.
+    """
+
+    def __init__(self, lang, name, out, header_name, period, held_torque):
+        super().__init__(lang, name, out, False, header_name)
+        self.function = f"{name}_momentum_observer"
+        self.gains = np.asarray(out["gains"], dtype=float)
+        self.period = float(period)
+        self.held_torque = bool(held_torque)
+
+    def __repr__(self) -> str:
+        s = self.counts["step"]
+        return f"GeneratedObserver({self.lang!r}, {s['mul']} mul {s['add']} add)"
+
+
+def generate_observer(
+    robot: Robot | str,
+    lang: str = "c",
+    *,
+    base: BaseParameters | None = None,
+    params: str | Path | Sequence[float] | None = None,
+    period: float = 0.004,
+    gains=None,
+    held_torque: bool = True,
+    name: str | None = None,
+    header_name: str | None = None,
+    trig: str | None = None,
+) -> GeneratedObserver:
+    """Generates the momentum-observer step of :class:`mindyn.control.MomentumObserver` as C99
+    or Structured Text.
+
+    Parameters
+    ----------
+    robot : Robot or str
+    lang : {"c", "st"}
+    base : BaseParameters, optional
+        The parameter set (default: base parameters with rotor inertia and friction); its
+        offset setting adds a torque offset per joint. Its robot decides where rotor inertia
+        and friction act and the friction model, as in :func:`generate`: the momentum gets
+        ``t_k Ia_k (t_k . dq)``, beta the friction ``t_k f(t_k . dq)``.
+    params : path or array, optional
+        The parameter values (a file as :func:`read_parameter_file` reads it, e.g. the JSON of
+        ``mindyn identify --json``); default the robot's own values.
+    period : float
+        The controller period [s].
+    gains : scalar or array (n,), optional
+        ``K_O`` [1/s], each in ``(0, 2 / period)``; default
+        :func:`mindyn.control.default_observer_gain`.
+    held_torque : bool
+        The step's torque is the command held over the period (True) or a sampled measurement.
+    """
+    from .. import control
+
+    robot = load(robot) if not isinstance(robot, Robot) else robot
+    _check_lang(lang, trig)
+    if base is None:
+        base = base_parameters(robot, rotor=True, friction=True)
+    n, names = robot.n, list(base.names)
+    period = control.controllers.check_period(period)
+    k = control.default_observer_gain(period) if gains is None else gains
+    k = _setting(k, n, "gains", 0.0)
+    if params is None:
+        p = base.values(robot.parameters(base.rotor, base.friction))
+        if base.offset:
+            p = np.concatenate([p, np.zeros(n)])[: len(names)]
+    elif isinstance(params, (str, Path)):
+        p = read_parameter_file(params, names)
+    else:
+        p = _args.array(params, "params", (len(names),))
+    name = name if name is not None else identifier(robot.name)
+    header_name = header_name or f"{name}_momentum_observer.h"
+    out = _core.generate_observer(
+        base._b,
+        base.offset,
+        name,
+        p,
+        k,
+        period,
+        held_torque=bool(held_torque),
+        lang=lang,
+        header_name=header_name,
+        inline_trig=trig != "libm",
+    )
+    return GeneratedObserver(lang, name, out, header_name, period, held_torque)

@@ -1,0 +1,233 @@
+"""Generated inverse-dynamics code: the Newton-Euler recursion of a robot customised to its
+model and base parameters, as C99 or IEC 61131-3 Structured Text (:func:`generate`), and the
+generated-code object the controller and observer steps extend (:class:`GeneratedCode`)."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from .. import _args, _core
+from ..base import BaseParameters, base_parameters
+from ..robot import Robot, load
+from .parameters import read_parameter_file
+
+FUNCTIONS = ("inverse_dynamics", "gravity", "regressor")
+_ALIASES = {"id": "inverse_dynamics"}
+
+
+class GeneratedCode:
+    """Generated code and its operation counts.
+
+    Attributes
+    ----------
+    lang : {"c", "st"}
+    name : str
+        Prefix of the generated functions (``NAME_inverse_dynamics`` ...).
+    header, source : str
+        C only: the header and source texts.
+    text : str
+        Structured Text only: the FUNCTION_BLOCKs.
+    program : mindyn._core.STProgram
+        Structured Text only: the same program as blocks (``comments``; ``blocks``, each with
+        ``name``, typed ``inputs``, ``outputs``, ``locals``, a ``note`` and the ``body``), from
+        which the C++ core wrote ``text`` (``program.text() == text``) and
+        :func:`plcopen_project` writes the PLCopen XML.
+    counts : dict
+        Per function: ``{"mul", "add", "neg", "trig", "sign"}`` operation counts.
+    names : list of str
+        The parameters ``p`` in order.
+    values : ndarray, shape (np,)
+        Their values (the robot's own, or those given; baked in when ``numeric``).
+    geometry_snap : dict
+        Constants of the geometry (joint transforms and axes, gravity) within ``tolerance``
+        (1e-9) of 0 are taken as 0, and rotation or axis entries then alone in their row and
+        column as +-1; ``count``: how many changed by more than round-off (e.g. cos
+        1.57079632679 = 4.9e-12 from a URDF's truncated pi/2), ``largest``: the largest change.
+        Also stated in the generated header comment.
+    """
+
+    def __init__(self, lang: str, name: str, out: dict, numeric: bool, header_name: str):
+        self.lang = lang
+        self.header_name = header_name
+        self.name = name
+        self.numeric = numeric
+        self.header = out.get("header")
+        self.source = out.get("source")
+        self.text = out.get("text")
+        self.program = out.get("program")
+        self.counts = {k: dict(v) for k, v in out["counts"].items()}
+        self.names = list(out["names"])
+        self.values = np.asarray(out["values"], dtype=float)
+        self.geometry_snap = dict(out["geometry_snap"])
+
+    def write(self, path: str | Path) -> list[Path]:
+        """Writes the code: C to ``path`` (``.c`` added when missing) and the header beside it
+        under ``header_name`` (the name the source includes); ST to ``path``. Returns the paths
+        written."""
+        path = Path(path)
+        if self.lang == "st":
+            path.write_text(self.text)
+            return [path]
+        src = path if path.suffix == ".c" else path.with_suffix(".c")
+        hdr = src.parent / self.header_name
+        hdr.write_text(self.header)
+        src.write_text(self.source)
+        return [hdr, src]
+
+    def __repr__(self) -> str:
+        c = ", ".join(f"{k}: {v['mul']} mul {v['add']} add" for k, v in self.counts.items())
+        return f"GeneratedCode({self.lang!r}, {self.name!r}, {c})"
+
+
+def _functions(what) -> list[str]:
+    if isinstance(what, str):
+        what = [w.strip() for w in what.split(",") if w.strip()]
+    out = []
+    for w in what:
+        w = _ALIASES.get(w, w)
+        if w not in FUNCTIONS:
+            raise ValueError(f"unknown function '{w}' (choose from id, gravity, regressor)")
+        if w not in out:
+            out.append(w)
+    if not out:
+        raise ValueError("no function to generate")
+    return out
+
+
+def _check_lang(lang: str, trig: str | None) -> None:
+    if lang not in ("c", "st"):
+        raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
+    if trig is not None and lang != "c":
+        raise ValueError("trig applies to C only; Structured Text uses SIN and COS")
+    if trig not in (None, "inline", "libm"):
+        raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
+
+
+def identifier(name: str) -> str:
+    """The default prefix of generated identifiers: ``name`` in letters, digits and single
+    underscores, starting with a letter, at most 40 characters."""
+    s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
+    s = re.sub(r"_+", "_", s)
+    if not s or not s[0].isalpha():
+        s = "robot_" + s
+    return s[:40].rstrip("_")
+
+
+def generate(
+    robot: Robot | str,
+    lang: str = "c",
+    what: Sequence[str] | str = FUNCTIONS,
+    rotor: bool = False,
+    friction: bool = False,
+    params: str | Path | Sequence[float] | None = None,
+    numeric: bool = False,
+    name: str | None = None,
+    base: bool | BaseParameters = True,
+    header_name: str | None = None,
+    minimise: str = "operations",
+    trig: str | None = None,
+    offset: bool = False,
+) -> GeneratedCode:
+    """Generates inverse-dynamics code for ``robot``.
+
+    Parameters
+    ----------
+    robot : Robot or str
+        Anything :func:`mindyn.load` accepts.
+    lang : {"c", "st"}
+        C99 (header and source) or IEC 61131-3 Structured Text.
+    what : sequence of str or str
+        Functions to generate: ``inverse_dynamics`` (alias ``id``), ``gravity``, ``regressor``;
+        a comma-separated string is accepted.
+    rotor, friction : bool
+        Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint, or per
+        motor when ``robot.drive_side`` is ``"motor"`` (a description with transmissions, unless
+        :meth:`Robot.with_drive_side` put them on the joints): motor k's velocity ``t_k . dq``
+        and acceleration ``t_k . ddq`` (``t_k`` row k of ``T``) formed once each, its torque
+        taken back to the joints by ``t_k^T``. The friction terms follow
+        ``robot.friction_model`` (Coulomb, direction-dependent, smooth with ``tanh``, Stribeck
+        with ``exp``; its velocities baked in; a third column ``Fa``/``Fs`` per slot where the
+        model has one); the header says which and where.
+    params : path or array, optional
+        Parameter values, shape (np,): an array, or a file read by
+        :func:`read_parameter_file`. Default: the robot's own values (``p_b = Y pi``).
+    numeric : bool
+        Bake the values into inverse_dynamics and gravity (they then take no ``p``).
+    name : str, optional
+        Prefix of the generated identifiers (default: from the robot's name).
+    base : bool or BaseParameters
+        Base parameters (default: by the method :func:`mindyn.base_parameters` chooses), a
+        given :class:`BaseParameters`, or ``False`` for all classical parameters (the classical
+        recursion, for comparison). The header lists the base parameters with their formulas as
+        ``BaseParameters.formulas`` writes them.
+    header_name : str, optional
+        C: the header file name the source includes (default ``NAME.h``).
+    minimise : {"operations", "additions"}
+        What the choice among exact formulations of the recursion minimises (where the
+        along-axis translations go, and whether a link's wrench is formed in its own frame or
+        in the joint frame before the joint motion): multiplications plus additions, ties to
+        fewer additions (default), or additions first, ties to fewer multiplications.
+    trig : {"inline", "libm"}, optional
+        C only: how sines and cosines are evaluated. ``"inline"`` (default): one call per
+        angle of a routine in the generated source gives both, without branches or library
+        calls for ``|x| <= 1e6`` and within 2.2e-16 of the C library (which it calls beyond, and
+        for NaN and infinities); ``"libm"``: ``sin`` and ``cos`` of ``math.h``. Structured Text
+        always uses ``SIN`` and ``COS``.
+    offset : bool
+        A constant torque offset per joint, ``Off1 .. OffN``, after the other parameters: added
+        to the inverse dynamics, a unit column of the regressor, not part of the gravity torque
+        (taken from ``base`` when a :class:`BaseParameters` is given).
+    """
+    robot = load(robot) if not isinstance(robot, Robot) else robot
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    numeric = _args.flag(numeric, "numeric")
+    offset = _args.flag(offset, "offset")
+    if not isinstance(base, BaseParameters):
+        base = _args.flag(base, "base")
+    _check_lang(lang, trig)
+    fs = _functions(what)
+    name = name if name is not None else identifier(robot.name)
+    if isinstance(base, BaseParameters):
+        if base.rotor != rotor or base.friction != friction:
+            rotor, friction = base.rotor, base.friction
+        offset = base.offset
+        bp_core = base._b
+        names = base.names
+        formulas = base.formulas[: bp_core.n]
+    elif base:
+        # the projection method, or the recursive one where the projection method refuses
+        bp = base_parameters(robot, rotor=rotor, friction=friction)
+        bp_core = bp._b
+        names = bp.names + [f"Off{k + 1}" for k in range(robot.n) if offset]
+        formulas = bp.formulas
+    else:
+        bp_core = formulas = None
+        names = list(_core.classical_parameter_names(robot._m, rotor=rotor, friction=friction))
+        names += [f"Off{k + 1}" for k in range(robot.n) if offset]
+    values = None
+    if params is not None:
+        if isinstance(params, (str, Path)):
+            values = read_parameter_file(params, names)
+        else:
+            values = _args.array(params, "params", (len(names),))
+    out = _core.generate_code(
+        robot._m,
+        bp_core,
+        rotor=rotor,
+        friction=friction,
+        functions=fs,
+        name=name,
+        numeric=numeric,
+        values=values,
+        lang=lang,
+        header_name=header_name or f"{name}.h",
+        minimise=minimise,
+        inline_trig=trig != "libm",
+        offset=offset,
+        formulas=formulas,  # as mindyn base prints them (BaseParameters.formulas)
+    )
+    return GeneratedCode(lang, name, out, numeric, header_name or f"{name}.h")

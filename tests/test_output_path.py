@@ -1,0 +1,134 @@
+"""The command line's one rule for the files it writes (mindyn.cli.args.output_path): a path
+naming a folder (an existing one, or one ending in '/') means the command's default file name
+inside it; no path (``codegen --plcopen`` alone) means the default path; any other path is the
+file; the missing folders are created and the path written is stated."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import mindyn
+import numpy as np
+import pytest
+from mindyn.cli.args import output_file, output_path
+from test_codegen_blocks import NS
+from test_export import consistent_params, run
+
+
+def test_output_path_rule(tmp_path, monkeypatch):
+    # a file path: that file, its missing folders created
+    deep = tmp_path / "a" / "b" / "x.json"
+    assert output_path(output_file(str(deep)), "d.json") == deep
+    assert deep.parent.is_dir() and not deep.exists()
+    # an existing folder: the default name inside it
+    assert output_path(output_file(str(tmp_path)), "sub/d.json") == tmp_path / "d.json"
+    # a path ending in '/' is a folder, created
+    new = str(tmp_path / "new") + "/"
+    assert output_path(output_file(new), "d.json") == tmp_path / "new" / "d.json"
+    assert (tmp_path / "new").is_dir()
+    # no path: the default, relative to the current folder, its folder created
+    monkeypatch.chdir(tmp_path)
+    assert output_path(None, "defaults/d.json") == Path("defaults/d.json")
+    assert (tmp_path / "defaults").is_dir()
+
+
+def test_codegen_plcopen_alone_writes_the_default_path(tmp_path, monkeypatch):
+    """--plcopen without a path and without -o: the project in mindyn-codegen/, created,
+    stated (the schema check of such a project: test_codegen_blocks.py)."""
+    monkeypatch.chdir(tmp_path)
+    rc, out, err = run(["codegen", "planar2", "--plcopen"])
+    assert rc == 0, err
+    path = tmp_path / "mindyn-codegen" / "planar2.xml"
+    assert "wrote mindyn-codegen/planar2.xml" in out
+    assert _pous(path) == ["planar2_inverse_dynamics", "planar2_gravity", "planar2_regressor"]
+    assert [p.name for p in tmp_path.rglob("*") if p.is_file()] == ["planar2.xml"]
+    # a controller step: its own default name
+    rc, out, err = run(["codegen", "planar2", "--what", "gravity-compensation", "--plcopen"])
+    assert rc == 0, err
+    assert "wrote mindyn-codegen/planar2_gravity_compensation.xml" in out
+    path = tmp_path / "mindyn-codegen" / "planar2_gravity_compensation.xml"
+    names = ["planar2_gravity_compensation", "planar2_inverse_dynamics", "planar2_gravity"]
+    assert _pous(path) == names + ["planar2_regressor", "planar2_momentum_observer"]
+
+
+def _pous(path: Path) -> list[str]:
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    return [p.get("name") for p in root.findall("x:types/x:pous/x:pou", NS)]
+
+
+def test_codegen_outputs_follow_the_rule(tmp_path):
+    # -o a folder: NAME.st inside it; --plcopen a new folder ending in '/': created, NAME.xml
+    folder = str(tmp_path / "plc") + "/"
+    rc, out, err = run(["codegen", "planar2", "--lang", "st", "-o", tmp_path, "--plcopen", folder])
+    assert rc == 0, err
+    st, xml = tmp_path / "planar2.st", tmp_path / "plc" / "planar2.xml"
+    assert f"wrote {st}, {xml}" in out
+    assert st.read_text().count("FUNCTION_BLOCK planar2_") == 3
+    # C into a folder: NAME_KIND.c and .h, the source including that header
+    rc, out, err = run(
+        ["codegen", "planar2", "--lang", "c", "--what", "adaptive-pd", "-o", tmp_path]
+    )
+    assert rc == 0, err
+    src = tmp_path / "planar2_adaptive_pd.c"
+    assert '#include "planar2_adaptive_pd.h"' in src.read_text()
+    assert (tmp_path / "planar2_adaptive_pd.h").is_file() and str(src) in out
+    # a file path in missing folders: created
+    deep = tmp_path / "x" / "y" / "dyn.st"
+    rc, out, err = run(["codegen", "planar2", "--lang", "st", "-o", deep])
+    assert rc == 0 and deep.is_file() and f"wrote {deep}" in out
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["codegen", "planar2"], "nothing to write"),
+        (["codegen", "planar2", "-o", "x.st"], "--lang is required with -o"),
+    ],
+)
+def test_codegen_needs_an_output(tmp_path, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    rc, out, err = run(argv)
+    assert rc == 2 and len(err.splitlines()) == 1 and message in err, err
+    assert not any(tmp_path.iterdir())
+
+
+def test_export_into_a_folder(tmp_path):
+    robot = mindyn.load("puma560")
+    rng = np.random.default_rng(1)
+    ident = tmp_path / "id.json"
+    ident.write_text(json.dumps({"classical": consistent_params(robot, rng)}))
+    out = tmp_path / "desc"
+    out.mkdir()
+    rc, stdout, err = run(["export", "puma560", ident, "--yaml", out])
+    assert rc == 0, err
+    assert f"wrote {out / 'puma560_export.yaml'}" in stdout
+    assert mindyn.load(out / "puma560_export.yaml").n == 6
+
+
+def test_identify_json_and_simulate_into_folders(tmp_path):
+    """identify --json and simulate -o given folders (one existing, one new ending in '/'):
+    ROBOT_COMMAND.json / .csv inside them, stated; the JSON is the identification's."""
+    from mindyn.control.simulation import simulate_inverse
+    from mindyn.identification.excitation import random_trajectory
+
+    robot = mindyn.load("planar2")
+    lim = {"lower": -np.ones(2), "upper": np.ones(2)}
+    traj = random_trajectory(robot, seed=1, limits=lim)
+    (tmp_path / "traj.json").write_text(json.dumps(traj.to_dict()))
+    log = simulate_inverse(robot, traj, seed=3)
+    log.save(tmp_path / "log.csv", "planar2")
+    rc, out, err = run(["identify", "planar2", tmp_path / "log.csv", "--json", tmp_path])
+    assert rc == 0, err
+    path = tmp_path / "planar2_identify.json"
+    assert f"wrote {path}" in out
+    doc = json.loads(path.read_text())
+    assert doc["names"] == mindyn.base_parameters(robot).names
+    new = str(tmp_path / "sim") + "/"
+    argv = ["simulate", "planar2", "--trajectory", tmp_path / "traj.json", "-o", new]
+    rc, out, err = run(argv)
+    assert rc == 0, err
+    assert (tmp_path / "sim" / "planar2_simulate.csv").is_file()
+    assert str(tmp_path / "sim" / "planar2_simulate.csv") in out
