@@ -597,10 +597,12 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     not a polynomial of degree <= 2 in them."""
     robot = bp.robot
     geo = _Geometry(robot)
-    names = list(bp._b.names)
-    classical = list(bp._b.classical_names)
-    pivots = list(bp._b.pivots)
-    Y0 = np.array(bp._b.Y)
+    # the link parameters: the torque offsets (the layout's joint block, last) are their own
+    k = bp.robot.n if bp.offset else 0
+    names = list(bp._b.names)[: bp.n - k]
+    classical = list(bp._b.classical_names)[: len(bp._b.classical_names) - k]
+    pivots = list(bp._b.pivots)[: bp.n - k]
+    Y0 = np.array(bp._b.Y)[: bp.n - k, : len(classical)]
     P = len(classical)
     order = pivots + [c for c in range(P) if c not in set(pivots)]
 
