@@ -106,3 +106,41 @@ def test_energy_and_integral_models_carry_the_offset_columns(rng):
     expected = np.zeros((a.size, n, n))
     expected[:, range(n), range(n)] = (data.t[b] - data.t[a])[:, None]
     np.testing.assert_allclose(Wi[:, :, cols], expected, rtol=0, atol=1e-12)
+
+
+LIFT = """<?xml version="1.0"?>
+<robot name="lift">
+  <link name="base"/>
+  <link name="carriage">
+    <inertial>
+      <origin xyz="0.1 0 0.05"/>
+      <mass value="3.0"/>
+      <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/>
+    </inertial>
+  </link>
+  <joint name="lift" type="prismatic">
+    <parent link="base"/>
+    <child link="carriage"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="0" upper="1" effort="100" velocity="1"/>
+  </joint>
+</robot>
+"""
+
+
+def test_a_vertical_lift_regroups_its_mass_into_the_offset(tmp_path):
+    # tau = M (ddq + g) + Ia ddq + Off = (Ia + M) ddq + (Off + g M): two base parameters, by hand
+    path = tmp_path / "lift.urdf"
+    path.write_text(LIFT)
+    robot = mindyn.load(path)
+    g = 9.81
+    for method in ("projection", "recursive", "numerical"):
+        bp = mindyn.base_parameters(robot, rotor=True, offset=True, method=method)
+        assert bp.names == ["IaR1", "OffR1"], method
+        names = bp.classical_names
+        Y = np.zeros((2, len(names)))
+        Y[0, names.index("Ia1")] = Y[0, names.index("M1")] = 1.0
+        Y[1, names.index("Off1")], Y[1, names.index("M1")] = 1.0, g
+        np.testing.assert_allclose(bp.Y, Y, rtol=0, atol=1e-9, err_msg=method)
+    # without rotor inertia the mass column ddq + g is not constant: M1 and Off1 stay apart
+    assert mindyn.base_parameters(robot, offset=True).names == ["M1", "Off1"]

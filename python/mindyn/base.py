@@ -75,9 +75,11 @@ class BaseParameters:
     offset : bool
         A constant torque offset per joint, ``tau_j = ... + Off_j``: the parameters ``Off1 ..
         OffN`` (the core's parameter layout names them) follow all others, in the base set as
-        in the classical vector, each its own base parameter (its regressor column is 1 in its
-        joint's equation, 0 elsewhere). The equations-of-motion set in ``sets`` ends with
-        them; the Lagrangian and total-energy sets do not contain them.
+        in the classical vector, each a base parameter (its regressor column is 1 in its
+        joint's equation, 0 elsewhere). A link parameter whose column differs from others by a
+        constant regroups into the offset (a vertical prismatic joint's mass ``M`` beside its
+        rotor inertia: ``IaR = Ia + M``, ``OffR = Off + g M``). The equations-of-motion set in
+        ``sets`` ends with them; the Lagrangian and total-energy sets do not contain them.
     """
 
     def __init__(
