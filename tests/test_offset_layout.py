@@ -11,6 +11,7 @@ from pathlib import Path
 
 import mindyn
 import numpy as np
+import pytest
 from mindyn.identification import models
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -144,3 +145,11 @@ def test_a_vertical_lift_regroups_its_mass_into_the_offset(tmp_path):
         np.testing.assert_allclose(bp.Y, Y, rtol=0, atol=1e-9, err_msg=method)
     # without rotor inertia the mass column ddq + g is not constant: M1 and Off1 stay apart
     assert mindyn.base_parameters(robot, offset=True).names == ["M1", "Off1"]
+
+
+def test_symbolic_formulas_refuse_offsets_that_took_link_parameters(tmp_path):
+    path = tmp_path / "lift.urdf"
+    path.write_text(LIFT)
+    bp = mindyn.base_parameters(mindyn.load(path), rotor=True, offset=True)
+    with pytest.raises(mindyn.Error, match="torque offsets OffR1 of 'lift' take link parameters"):
+        bp.symbolic()

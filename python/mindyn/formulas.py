@@ -599,6 +599,13 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     geo = _Geometry(robot)
     # the link parameters: the torque offsets (the layout's joint block, last) are their own
     k = bp.robot.n if bp.offset else 0
+    if k and np.count_nonzero(np.array(bp._b.Y)[bp.n - k :]) != k:
+        regrouped = [nm for nm in list(bp._b.names)[bp.n - k :] if nm not in bp.classical_names]
+        raise _core.ModelError(
+            f"symbolic formulas: the torque offsets {', '.join(regrouped)} of '{robot.name}' "
+            "take link parameters that act as constant torques; the link parameters' symbolic "
+            "formulas are those of the base parameters without offsets"
+        )
     names = list(bp._b.names)[: bp.n - k]
     classical = list(bp._b.classical_names)[: len(bp._b.classical_names) - k]
     pivots = list(bp._b.pivots)[: bp.n - k]
