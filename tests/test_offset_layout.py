@@ -153,3 +153,11 @@ def test_symbolic_formulas_refuse_offsets_that_took_link_parameters(tmp_path):
     bp = mindyn.base_parameters(mindyn.load(path), rotor=True, offset=True)
     with pytest.raises(mindyn.Error, match="torque offsets OffR1 of 'lift' take link parameters"):
         bp.symbolic()
+
+
+def test_asymmetric_friction_stays_apart_from_the_offset():
+    # Fa |sign(dq)| is 1 while the joint moves but 0 at rest: not the constant column of Off
+    robot = mindyn.load("puma560").with_friction_model("asymmetric")
+    bp = mindyn.base_parameters(robot, friction=True, offset=True)
+    without = mindyn.base_parameters(robot, friction=True)
+    assert bp.names == without.names + [f"Off{k + 1}" for k in range(robot.n)]

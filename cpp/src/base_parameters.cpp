@@ -1029,6 +1029,9 @@ void joinJointBlock(const Model& model, ParameterLayout layout, const BaseOption
     A.leftCols(n).setZero();
     for (long s = 0; s < m; ++s) {
       randomState(model, rng, q, dq, ddq);
+      // at rest every fourth state: friction that is constant while a joint moves (Fa |sign v|)
+      // is not constant then
+      if (s % 4 == 0) dq.setZero();
       regressor(model, data, q, dq, ddq, links, W);
       for (int k = 0; k < n; ++k) A(s * n + k, k) = 1.0;
       for (int b = 0; b < nb; ++b) A.block(s * n, n + b, n, 1) = W.col(d.pivots[b]);
