@@ -661,6 +661,7 @@ std::vector<int> khalilOrder(int n, ParameterLayout layout) {
     for (int i = 0; layout.friction && i < layout.friction_columns; ++i)
       order.push_back(layout.frictionIndex(k, i));
   }
+  for (int k = 0; layout.offset && k < n; ++k) order.push_back(layout.offsetIndex(n, k));
   return order;
 }
 
@@ -837,9 +838,8 @@ void refuseInconsistent(const BaseParameters& bp, double tol) {
   }
 }
 
-}  // namespace
-
-BaseParameters computeBaseParameters(const Model& model, const BaseOptions& options) {
+// The sets of the link blocks (options.layout without the joint block).
+BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const int n = model.nq();
   const ParameterLayout layout = options.layout;
@@ -989,6 +989,143 @@ BaseParameters computeBaseParameters(const Model& model, const BaseOptions& opti
   refuseInconsistent(bp, tol);
   bp.lagrangian_equals_energy = bp.lagrangian.decision.pivots == bp.energy.decision.pivots;
   bp.lagrangian_equals_eom = bp.lagrangian.decision.pivots == bp.eom.decision.pivots;
+  bp.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return bp;
+}
+
+// The joint block of `layout` (torque offsets) joined to the link sets `bp`. An offset's column
+// is e_k in every state; a combination of link columns can be too: a vertical prismatic joint's
+// mass column is m (ddq + g), its rotor inertia's Ia ddq, so M - Ia is the constant m g. Each
+// offset stays a base parameter (after all link ones), and a link base column that is a
+// combination of the offsets and the link columns after it in priority regroups into them (the
+// mass above: Ia + M, Off_k + g M, the offset taking the weight), decided on sampled regressors:
+// a column's residual after the offsets and those columns, relative to its size, at most the
+// rank tolerance. The Lagrangian and the total energy do not contain offsets (their Y has zero
+// columns there).
+void joinJointBlock(const Model& model, ParameterLayout layout, const BaseOptions& options,
+                    BaseParameters& bp) {
+  const int n = model.nq(), P = layout.size(n), first = layout.offsetIndex(n, 0);
+  const ParameterLayout links = layout.links();
+  bp.layout = layout;
+  bp.classical_names = model.parameterNames(layout);
+  for (BaseSet* set : {&bp.lagrangian, &bp.energy, &bp.eom})
+    set->decision.Y.conservativeResize(set->size(), P);
+  RankDecision d = bp.eom.decision;
+  const int nb = d.rank();
+  // Sampled base regressor of the link set, n rows per state, and the offsets' columns.
+  const long m = std::max(20, 3 * (nb + n) / std::max(1, n) + 20), rows = m * n;
+  const double bytes = 8.0 * rows * (3.0 * (nb + n));
+  if (bytes > options.numerical_budget)
+    throw ModelError("torque offsets: comparing them with the " + std::to_string(nb) +
+                     " link base parameters would need about " +
+                     shortest(std::round(bytes / 1073741824.0 * 10) / 10) +
+                     " GiB, over the numerical method's budget");
+  Eigen::MatrixXd A(rows, n + nb);  // [offsets | link base columns]
+  {
+    Data data(model);
+    std::mt19937 rng(options.seed);
+    Eigen::VectorXd q(n), dq(n), ddq(n);
+    Eigen::MatrixXd W(n, links.size(n));
+    A.leftCols(n).setZero();
+    for (long s = 0; s < m; ++s) {
+      randomState(model, rng, q, dq, ddq);
+      // at rest every fourth state: friction that is constant while a joint moves (Fa |sign v|)
+      // is not constant then
+      if (s % 4 == 0) dq.setZero();
+      regressor(model, data, q, dq, ddq, links, W);
+      for (int k = 0; k < n; ++k) A(s * n + k, k) = 1.0;
+      for (int b = 0; b < nb; ++b) A.block(s * n, n + b, n, 1) = W.col(d.pivots[b]);
+    }
+  }
+  // Gram-Schmidt (twice) in priority order: the offsets, then the link base columns.
+  Eigen::MatrixXd Q(rows, n + nb);
+  for (int k = 0; k < n; ++k) Q.col(k) = A.col(k).normalized();
+  int kept = n;
+  std::vector<int> keep, drop;
+  std::vector<double> residual;
+  for (int b = nb - 1; b >= 0; --b) {  // last first: a dependent column is the earliest
+    Eigen::VectorXd r = A.col(n + b);
+    const double size = r.norm();
+    for (int pass = 0; pass < 2; ++pass) r -= Q.leftCols(kept) * (Q.leftCols(kept).transpose() * r);
+    const double rel = size > 0 ? r.norm() / size : 0.0;
+    if (rel <= options.tolerance) {
+      drop.push_back(b);
+      residual.push_back(rel);
+    } else {
+      Q.col(kept++) = r / r.norm();
+      keep.push_back(b);
+    }
+  }
+  std::reverse(keep.begin(), keep.end());
+  std::reverse(drop.begin(), drop.end());
+  std::reverse(residual.begin(), residual.end());
+  std::vector<Eigen::Triplet<double>> entries;
+  if (drop.empty()) {
+    entries.reserve(static_cast<size_t>(d.Y.nonZeros()) + n);
+    for (int c = 0; c < d.Y.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(d.Y, c); it; ++it)
+        entries.emplace_back(it.row(), it.col(), it.value());
+    for (int k = 0; k < n; ++k) {
+      entries.emplace_back(nb + k, first + k, 1.0);
+      d.pivots.push_back(first + k);
+      d.pivot_size.push_back(1.0);
+    }
+  } else {
+    // Each dropped column as a combination of the kept link columns and the offsets; its row
+    // of Y folds into theirs.
+    const int nk = static_cast<int>(keep.size());
+    Eigen::MatrixXd K(rows, nk + n), D(rows, static_cast<long>(drop.size()));
+    for (int i = 0; i < nk; ++i) K.col(i) = A.col(n + keep[i]);
+    K.rightCols(n) = A.leftCols(n);
+    for (size_t j = 0; j < drop.size(); ++j) D.col(static_cast<long>(j)) = A.col(n + drop[j]);
+    Eigen::MatrixXd X = K.colPivHouseholderQr().solve(D);
+    // the least-squares round-off on the columns a dropped one does not involve: exact zeros
+    for (long j = 0; j < X.cols(); ++j)
+      for (long i = 0; i < X.rows(); ++i)
+        if (std::abs(X(i, j)) * K.col(i).norm() <= 1e-10 * D.col(j).norm()) X(i, j) = 0.0;
+    const Eigen::MatrixXd Yd(d.Y);
+    Eigen::MatrixXd Yn(nk + n, P);
+    for (int i = 0; i < nk; ++i) Yn.row(i) = Yd.row(keep[i]);
+    Yn.bottomRows(n).setZero();
+    for (int k = 0; k < n; ++k) Yn(nk + k, first + k) = 1.0;
+    for (size_t j = 0; j < drop.size(); ++j) Yn += X.col(static_cast<long>(j)) * Yd.row(drop[j]);
+    for (int c = 0; c < P; ++c)
+      for (int r = 0; r < nk + n; ++r)
+        if (Yn(r, c) != 0.0) entries.emplace_back(r, c, Yn(r, c));
+    std::vector<int> pivots;
+    std::vector<double> sizes;
+    for (int i : keep) {
+      pivots.push_back(d.pivots[i]);
+      sizes.push_back(d.pivot_size[i]);
+    }
+    for (size_t j = 0; j < drop.size(); ++j) {
+      d.dependent.push_back(d.pivots[drop[j]]);
+      d.residual.push_back(residual[j]);
+    }
+    for (int k = 0; k < n; ++k) {
+      pivots.push_back(first + k);
+      sizes.push_back(1.0);
+    }
+    d.pivots = pivots;
+    d.pivot_size = sizes;
+  }
+  const int added = n - static_cast<int>(drop.size());
+  d.Y.resize(static_cast<long>(d.pivots.size()), P);
+  d.Y.setFromTriplets(entries.begin(), entries.end());
+  if (d.rank_looser >= 0) d.rank_looser += added;
+  if (d.rank_tighter >= 0) d.rank_tighter += added;
+  bp.eom = makeSet(std::move(d), bp.classical_names);
+}
+
+}  // namespace
+
+BaseParameters computeBaseParameters(const Model& model, const BaseOptions& options) {
+  if (!options.layout.offset) return linkBaseParameters(model, options);
+  const auto start = std::chrono::steady_clock::now();
+  BaseOptions links = options;
+  links.layout = options.layout.links();
+  BaseParameters bp = linkBaseParameters(model, links);
+  joinJointBlock(model, options.layout, options, bp);
   bp.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return bp;
 }

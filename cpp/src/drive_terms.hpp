@@ -59,6 +59,23 @@ inline void addDriveTorques(const Model& model, ParameterLayout layout, const Ve
   }
 }
 
+/// Adds each joint's torque offset (the layout's joint block) to `tau`: a joint torque on either
+/// drive side.
+inline void addOffsets(ParameterLayout layout, const VecRef& params, VecOut tau) noexcept {
+  if (!layout.offset) return;
+  const int n = static_cast<int>(tau.size());
+  tau += params.segment(layout.offsetIndex(n, 0), n);
+}
+
+/// Writes the offset columns of a regressor W (n x layout.size(n)): e_k, the torque a unit
+/// offset of joint k gives (the inverse-dynamics regressor and -dL/dq + offsets of the momentum
+/// regressors).
+inline void offsetColumns(ParameterLayout layout, MatOut W) noexcept {
+  if (!layout.offset) return;
+  const int n = static_cast<int>(W.rows());
+  W.middleCols(layout.offsetIndex(n, 0), n).setIdentity();
+}
+
 /// Writes the rotor columns of a regressor W (n x layout.size(n), the other entries of those
 /// columns zero) at slot accelerations from `ddq` (the momentum's at velocities: pass dq).
 inline void rotorColumns(const Model& model, ParameterLayout layout, const VecRef& ddq,

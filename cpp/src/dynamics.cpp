@@ -109,6 +109,7 @@ void inverseDynamics(const Model& model, Data& data, const VecRef& q, const VecR
                      VecOut tau) noexcept {
   computeKinematics(model, data, q, dq, ddq, true);
   forcePass(model, data, dq, ddq, params, layout, true, tau);
+  drive::addOffsets(layout, params, tau);
 }
 
 void gravityTorque(const Model& model, Data& data, const VecRef& q, const VecRef& params,
@@ -142,6 +143,7 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
     }
   }
   drive::driveColumns(model, layout, dq, ddq, W);
+  drive::offsetColumns(layout, W);
 }
 
 void energyRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
@@ -169,6 +171,8 @@ void energyRegressors(const Model& model, Data& data, const VecRef& q, const Vec
     wP.segment<3>(c + 6) = -(data.R0[k].transpose() * g);
     wP[c + 9] = -g.dot(data.p0[k]);
   }
+  // An offset's work Off_k q_k, so that differences over a window are the energy model's.
+  if (layout.offset) wP.segment(layout.offsetIndex(data.n, 0), data.n) = q;
 }
 
 double kineticEnergy(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
@@ -224,6 +228,7 @@ bool forwardDynamics(const Model& model, Data& data, const VecRef& q, const VecR
   if (data.llt.info() != Eigen::Success) return false;
   motionPass(model, data, dq, data.zeros, true);
   forcePass(model, data, dq, data.zeros, params, layout, true, data.tmp);
+  drive::addOffsets(layout, params, data.tmp);
   data.tmp = tau - data.tmp;
   data.llt.solveInPlace(data.tmp);
   ddq = data.tmp;

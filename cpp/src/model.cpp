@@ -33,6 +33,8 @@ bool Model::supports(int j, int k) const {
   return k == j;
 }
 
+std::string offsetName(int k) { return kOffsetPrefix + std::to_string(k + 1); }
+
 ParameterLayout ParameterLayout::fromSize(int n, long size, int friction_columns) {
   for (int r = 0; r < 2; ++r)
     for (int f = 0; f < 2; ++f) {
@@ -92,12 +94,14 @@ std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
       if (layout.friction_columns == 3) names.push_back(third + idx);
     }
   }
+  if (layout.offset)
+    for (int k = 0; k < nq(); ++k) names.push_back(offsetName(k));
   return names;
 }
 
 Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
   const int n = nq();
-  Eigen::VectorXd p(layout.size(n));
+  Eigen::VectorXd p = Eigen::VectorXd::Zero(layout.size(n));  // offsets: 0
   for (int k = 0; k < n; ++k) {
     p.segment<10>(k * layout.perLink()) = inertial.segment<10>(10 * k);
     if (layout.rotor) p[layout.rotorIndex(k)] = rotor_inertia[k];

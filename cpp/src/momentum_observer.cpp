@@ -50,7 +50,8 @@ MomentumObserver::MomentumObserver(const Model& model, const BaseParameters& bas
     const int per = base.layout.perLink(), first = 10 + (base.layout.rotor ? 1 : 0);
     const auto& piv = base.eom.decision.pivots;
     for (size_t b = 0; b < piv.size(); ++b)
-      if (piv[b] % per >= first) friction_.push_back(static_cast<long>(b));
+      if (piv[b] < base.layout.linkSize(n) && piv[b] % per >= first)
+        friction_.push_back(static_cast<long>(b));
   }
   W_.setZero(n, P);
   Wp_.setZero(n, P);

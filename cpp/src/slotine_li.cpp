@@ -81,6 +81,7 @@ void slotineLiRegressor(const Model& model, Data& data, SlotineLiData& sl, const
     }
   }
   drive::driveColumns(model, layout, dq, ddqr, Y);
+  drive::offsetColumns(layout, Y);
 }
 
 void slotineLiBaseRegressor(const Model& model, Data& data, SlotineLiData& sl,
@@ -112,7 +113,9 @@ void torquePass(const Model& model, Data& data, SlotineLiData& sl, const VecRef&
     const int pk = model.parent(k);
     if (pk >= 0) carryToParent<true>(data.R[k], data.p[k], f, data.f[pk]);
   }
-  if (joint_terms) drive::addDriveTorques(model, layout, params, dq, ddqr, tau);
+  if (!joint_terms) return;
+  drive::addDriveTorques(model, layout, params, dq, ddqr, tau);
+  drive::addOffsets(layout, params, tau);
 }
 
 }  // namespace

@@ -123,6 +123,43 @@ TEST(Realtime, SlotineLiPathsAllocateNothing) {
   }
 }
 
+TEST(Realtime, OffsetLayoutsAllocateNothing) {
+  for (const auto& [name, model] : test::chainsAndTrees()) {
+    Data data(model);
+    const int n = model.nq();
+    ParameterLayout layout{true, true};
+    layout.offset = true;
+    BaseOptions options;
+    options.layout = layout;
+    const BaseParameters bp = computeBaseParameters(model, options);
+    SlotineLiData sl(model, layout);
+    const Eigen::VectorXd pi = model.parameters(layout);
+    std::mt19937 rng(23);
+    const Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n),
+                          ddq = test::random(rng, n);
+    const int P = layout.size(n), nb = bp.eom.size();
+    Eigen::VectorXd tau(n), ddq2(n), wK(P), wP(P), wb(nb);
+    Eigen::MatrixXd W(n, P), Wp(n, P), Wb(n, nb), Wpb(n, nb), Wlb(n, nb), Y(n, P);
+    bool ok = true;
+    Count c;
+    for (int i = 0; i < 3; ++i) {
+      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
+      regressor(model, data, q, dq, ddq, layout, W);
+      energyRegressors(model, data, q, dq, layout, wK, wP);
+      momentumRegressors(model, data, q, dq, layout, Wp, W);
+      ok = ok && forwardDynamics(model, data, q, dq, tau, pi, layout, ddq2);
+      baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
+      baseEnergyRegressor(model, data, bp, q, dq, wK, wP, wb);
+      baseMomentumRegressors(model, data, bp, q, dq, Wp, W, Wpb, Wlb);
+      slotineLiRegressor(model, data, sl, q, dq, dq, ddq, layout, Y);
+      slotineLiTorque(model, data, sl, q, dq, dq, ddq, pi, layout, tau);
+    }
+    const long seen = c.value();
+    EXPECT_EQ(seen, 0) << name;
+    EXPECT_TRUE(ok && Wb.allFinite() && wb.allFinite() && Wlb.allFinite() && tau.allFinite());
+  }
+}
+
 TEST(Realtime, InverseKinematicsAllocatesNothing) {
   for (const char* name : {"puma560", "zcr07s"}) {
     const Model model = loadYaml(test::robotFile(name));

@@ -74,9 +74,12 @@ class BaseParameters:
         :func:`choose_method` (``"the projection method handles at most 256 parameters, ..."``).
     offset : bool
         A constant torque offset per joint, ``tau_j = ... + Off_j``: the parameters ``Off1 ..
-        OffN`` follow all others, in the base set as in the classical vector, each its own base
-        parameter (its regressor column is 1 in its joint's equation, 0 elsewhere). The
-        three sets in ``sets`` describe the rigid-body, rotor and friction part only.
+        OffN`` (the core's parameter layout names them) follow all others, in the base set as
+        in the classical vector, each a base parameter (its regressor column is 1 in its
+        joint's equation, 0 elsewhere). A link parameter whose column differs from others by a
+        constant regroups into the offset (a vertical prismatic joint's mass ``M`` beside its
+        rotor inertia: ``IaR = Ia + M``, ``OffR = Off + g M``). The equations-of-motion set in
+        ``sets`` ends with them; the Lagrangian and total-energy sets do not contain them.
     """
 
     def __init__(
@@ -88,10 +91,11 @@ class BaseParameters:
     ):
         self._b = core
         self.robot = robot
-        self.offset = bool(offset)
+        self.offset = bool(core.offset)
+        if self.offset != bool(offset):
+            raise _core.ModelError("offset does not match the core's parameter layout")
         # the settings it was computed with (tolerance, snap, samples, seed), for symbolic()
         self.options = dict(options or {})
-        self._off = [f"Off{k + 1}" for k in range(robot.n)] if self.offset else []
         self.method_reason = ""  # set by base_parameters
 
     def for_robot(
@@ -152,8 +156,8 @@ class BaseParameters:
             )
         return out
 
-    n = property(lambda self: self._b.n + len(self._off))
-    names = property(lambda self: list(self._b.names) + self._off)
+    n = property(lambda self: self._b.n)
+    names = property(lambda self: list(self._b.names))
 
     @cached_property
     def formulas(self) -> list[str]:
@@ -164,13 +168,12 @@ class BaseParameters:
     @cached_property
     def formulas_full(self) -> list[str]:
         """The regrouping formulas at full precision, one term per classical parameter."""
-        return list(self._b.formulas) + [f"{o} = {o}" for o in self._off]
+        return list(self._b.formulas)
 
     def formula_terms(self) -> list[_formulas.Formula]:
         """The readable formulas as :class:`mindyn.formulas.Formula` objects (``str()`` gives
         the text, ``.latex()`` a LaTeX row)."""
-        out = self._readable("eom", list(self._b.names))
-        return out + [_formulas.unit_formula(o) for o in self._off]
+        return self._readable("eom", list(self._b.names))
 
     @cached_property
     def _symbolic(self) -> _formulas.SymbolicFormulas:
@@ -190,20 +193,9 @@ class BaseParameters:
             return _formulas.latex(self.symbolic().formulas)
         return _formulas.latex(self.formula_terms())
 
-    @property
-    def Y(self) -> np.ndarray:
-        Y = self._b.Y
-        if not self.offset:
-            return Y
-        k = len(self._off)
-        return np.block([[Y, np.zeros((Y.shape[0], k))], [np.zeros((k, Y.shape[1])), np.eye(k)]])
-
-    @property
-    def pivots(self) -> list[int]:
-        P = len(self._b.classical_names)
-        return list(self._b.pivots) + list(range(P, P + len(self._off)))
-
-    classical_names = property(lambda self: list(self._b.classical_names) + self._off)
+    Y = property(lambda self: self._b.Y)
+    pivots = property(lambda self: list(self._b.pivots))
+    classical_names = property(lambda self: list(self._b.classical_names))
     rotor = property(lambda self: self._b.rotor)
     friction = property(lambda self: self._b.friction)
     method = property(lambda self: self._b.method)
@@ -231,54 +223,44 @@ class BaseParameters:
         With offsets, a vector without them (shape (P - n_joints,)) is accepted too: its
         offsets are zero."""
         P = len(self._b.classical_names)
-        if not self.offset:
-            return self._b.values(_args.array(params, "params", (P,)))
+        links = P - self._offsets
         p = params
-        if isinstance(p, (list, tuple, np.ndarray)) and np.shape(p) == (P,):
-            p = np.concatenate([_args.array(p, "params", (P,)), np.zeros(len(self._off))])
-        p = _args.array(p, "params", (P + len(self._off),))
-        return np.concatenate([self._b.values(p[:P]), p[P:]])
+        if self.offset and isinstance(p, (list, tuple, np.ndarray)) and np.shape(p) == (links,):
+            p = np.concatenate([_args.array(p, "params", (links,)), np.zeros(self._offsets)])
+        return self._b.values(_args.array(p, "params", (P,)))
 
     def embed(self, base) -> np.ndarray:
         """A classical vector with ``base`` at the pivot positions and zeros elsewhere, so that
         ``values(embed(p_b)) == p_b`` and any inverse dynamics linear in the classical
         parameters gives the same torques for it."""
-        base = _args.array(base, "base", (self.n,))
-        k = len(self._off)
-        if not k:
-            return self._b.embed(base)
-        return np.concatenate([self._b.embed(base[:-k]), base[-k:]])
+        return self._b.embed(_args.array(base, "base", (self.n,)))
 
-    def _with_offset(self, W: np.ndarray, value: float) -> np.ndarray:
-        """``W`` (..., n_joints, nb) with the offset columns appended: ``value`` times the
-        identity per sample (the regressor) or zero (energies, momenta)."""
-        if not self.offset:
-            return W
-        eye = np.broadcast_to(value * np.eye(self.robot.n), W.shape[:-1] + (self.robot.n,))
-        return np.concatenate([W, eye], axis=-1)
+    @property
+    def _offsets(self) -> int:
+        """Entries of the classical vector's joint block (the torque offsets): n or 0."""
+        return self.robot.n if self.offset else 0
 
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
         ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row."""
         q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
-        return self._with_offset(self._b.regressor(q, dq, ddq), 1.0)
+        return self._b.regressor(q, dq, ddq)
 
     def energy_regressor(self, q, dq) -> np.ndarray:
         """Base total-energy regressor ``w_H,b``, shape (n,) or (m, n), over the
-        equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant (offset columns zero)."""
+        equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant; an offset's column is
+        its work ``q_j`` (``Off_j q_j``), so that differences over a window are the
+        energy model's columns."""
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
-        w = self._b.energy_regressor(q, dq)
-        if not self.offset:
-            return w
-        return np.concatenate([w, np.zeros(w.shape[:-1] + (len(self._off),))], axis=-1)
+        return self._b.energy_regressor(q, dq)
 
     def momentum_regressors(self, q, dq):
         """Base momentum regressors ``(W_p,b, W_l,b)``, shape (n_joints, n) or (m, n_joints, n)
         each, over the equations-of-motion set: ``p = A(q) dq = W_p,b @ p_b`` and
-        ``-dL/dq = W_l,b @ p_b`` (see ``Robot.momentum_regressors``)."""
+        ``-dL/dq + offsets = W_l,b @ p_b`` (an offset's column is 1 in its joint's row of
+        ``W_l,b``, 0 in ``W_p,b``; see ``Robot.momentum_regressors``)."""
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
-        wp, wl = self._b.momentum_regressors(q, dq)
-        return self._with_offset(wp, 0.0), self._with_offset(wl, 0.0)
+        return self._b.momentum_regressors(q, dq)
 
     def to_dict(self, symbolic: bool = False) -> dict:
         """A JSON-ready summary (counts, names, formulas, margins); with ``symbolic``, also
@@ -464,6 +446,7 @@ def base_parameters(
         samples=int(samples),
         seed=int(seed),
         snap=float(snap or 0.0),
+        offset=offset,
     )
     options = {"tolerance": float(tolerance), "snap": float(snap or 0.0)}
     options.update(samples=int(samples), seed=int(seed))

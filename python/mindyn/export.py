@@ -24,6 +24,7 @@ import numpy as np
 import yaml
 
 from . import _args
+from ._core import OFFSET_PREFIX as _OFF
 from ._core import ModelError, RobotFileNotFoundError
 from .robot import Robot
 
@@ -45,7 +46,7 @@ _TERMS = {
     ),
     "Fv": ("viscous friction: tau += Fv * dq", "N m s/rad", "N s/m"),
     "Fc": ("Coulomb friction: tau += Fc * sign(dq)", "N m", "N"),
-    "Off": ("constant torque offset: tau += Off", "N m", "N"),
+    _OFF: (f"constant torque offset: tau += {_OFF}", "N m", "N"),
 }
 
 
@@ -62,7 +63,7 @@ class JointTerms:
 
     def joint_terms(self) -> dict[str, np.ndarray]:
         """The per-joint terms present, by their name prefix (``Ia``, ``Fv``, ``Fc``, ``Off``)."""
-        out = {"Ia": self.rotor, "Fv": self.viscous, "Fc": self.coulomb, "Off": self.offset}
+        out = {"Ia": self.rotor, "Fv": self.viscous, "Fc": self.coulomb, _OFF: self.offset}
         return {k: v for k, v in out.items() if v is not None}
 
 
@@ -109,9 +110,7 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
         raise ModelError(f"{what}: the names must be text, got {bad[0]!r}")
     has = {p: any(k.startswith(p) and k[len(p) :].isdigit() for k in keys) for p in _TERMS}
     rotor, friction = has["Ia"], has["Fv"] or has["Fc"]
-    expected = robot.parameter_names(rotor, friction)
-    if has["Off"]:
-        expected += [f"Off{k + 1}" for k in range(n)]
+    expected = robot.parameter_names(rotor, friction, offset=has[_OFF])
     missing = [k for k in expected if k not in classical]
     unknown = [k for k in keys if k not in set(expected)]
     if missing or unknown:
@@ -120,7 +119,7 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
             parts.append(f"unknown {_few(unknown)}")
         if missing:
             parts.append(f"missing {_few(missing)}")
-        extras = [t for t, on in (("Ia", rotor), ("Fv, Fc", friction), ("Off", has["Off"])) if on]
+        extras = [t for t, on in (("Ia", rotor), ("Fv, Fc", friction), (_OFF, has[_OFF])) if on]
         layout = "XX..M" + "".join(f", {t}" for t in extras)
         raise ModelError(
             f"{what}: {'; '.join(parts)} (robot '{robot.name}' has {n} joints: expected "
@@ -150,8 +149,8 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
         out.rotor = column("Ia")
     if friction:
         out.viscous, out.coulomb = column("Fv"), column("Fc")
-    if has["Off"]:
-        out.offset = column("Off")
+    if has[_OFF]:
+        out.offset = column(_OFF)
     return out
 
 
@@ -592,7 +591,7 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
         doc["terms"]["drive_side"] = (
             "motor: each row's Ia, Fv, Fc belong to the motor named in it (row k of the "
             "transmission T, q_m = T q): tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq)), in "
-            "motor units (kg m^2, N m s/rad, N m); Off stays the joint's"
+            f"motor units (kg m^2, N m s/rad, N m); {_OFF} stays the joint's"
         )
     head = (
         f"# Joint terms identified for robot '{robot.name}', written by mindyn export beside "

@@ -597,10 +597,19 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
     not a polynomial of degree <= 2 in them."""
     robot = bp.robot
     geo = _Geometry(robot)
-    names = list(bp._b.names)
-    classical = list(bp._b.classical_names)
-    pivots = list(bp._b.pivots)
-    Y0 = np.array(bp._b.Y)
+    # the link parameters: the torque offsets (the layout's joint block, last) are their own
+    k = bp.robot.n if bp.offset else 0
+    if k and np.count_nonzero(np.array(bp._b.Y)[bp.n - k :]) != k:
+        regrouped = [nm for nm in list(bp._b.names)[bp.n - k :] if nm not in bp.classical_names]
+        raise _core.ModelError(
+            f"symbolic formulas: the torque offsets {', '.join(regrouped)} of '{robot.name}' "
+            "take link parameters that act as constant torques; the link parameters' symbolic "
+            "formulas are those of the base parameters without offsets"
+        )
+    names = list(bp._b.names)[: bp.n - k]
+    classical = list(bp._b.classical_names)[: len(bp._b.classical_names) - k]
+    pivots = list(bp._b.pivots)[: bp.n - k]
+    Y0 = np.array(bp._b.Y)[: bp.n - k, : len(classical)]
     P = len(classical)
     order = pivots + [c for c in range(P) if c not in set(pivots)]
 

@@ -49,6 +49,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _mujoco
+from ._core import OFFSET_PREFIX as _OFF
 from ._core import ModelError
 from .export import Export, JointTerms, XmlDocument, centroidal, classical_terms
 from .robot import Robot, load
@@ -312,7 +313,7 @@ def _mapping_comment(robot: Robot, on_motors: bool, transmissions: bool) -> str:
 def _offsets_comment(robot: Robot, terms: JointTerms) -> str:
     values = ", ".join(f"{name} {float(v)!r}" for name, v in zip(robot.joint_names, terms.offset))
     return (
-        " Torque offsets Off (tau += Off) have no place in MJCF; identified values, per "
+        f" Torque offsets {_OFF} (tau += {_OFF}) have no place in MJCF; identified values, per "
         f"joint: {values} "
     )
 

@@ -450,19 +450,25 @@ class Robot:
     def third_friction(self, v) -> None:
         self._m.third_friction = _vector(v, self.n, "third_friction")
 
-    def parameter_names(self, rotor: bool = False, friction: bool = False) -> list[str]:
+    def parameter_names(
+        self, rotor: bool = False, friction: bool = False, *, offset: bool = False
+    ) -> list[str]:
         """Classical parameter names in the layout with optional ``Ia`` and the friction
         model's columns (``Fv, Fc``, and ``Fa`` or ``Fs``): ``Ia6`` is slot 6's, joint 6's on
         the joint side, motor 6's (row 6 of ``transmission.T``) on the motor side
-        (:attr:`drive_side`)."""
-        return self._m.parameter_names(_args.flag(rotor, "rotor"), _args.flag(friction, "friction"))
+        (:attr:`drive_side`); with ``offset``, a torque offset per joint after all others
+        (``Off6``: joint 6's on either side)."""
+        return self._m.parameter_names(*self._layout(rotor, friction, offset))
 
-    def parameters(self, rotor: bool = False, friction: bool = False) -> np.ndarray:
+    def parameters(
+        self, rotor: bool = False, friction: bool = False, *, offset: bool = False
+    ) -> np.ndarray:
         """Classical parameter values of the model in that layout. :attr:`rotor_inertia`,
         :attr:`viscous` and :attr:`coulomb` are the joints' (as descriptions give them); on the
         motor side slot k holds motor k's: its joint's divided by ``r^2``, ``r^2``, ``|r|`` for a
-        motor that alone drives one joint alone with ratio ``r``, 0 for a coupled motor."""
-        return self._m.parameters(_args.flag(rotor, "rotor"), _args.flag(friction, "friction"))
+        motor that alone drives one joint alone with ratio ``r``, 0 for a coupled motor. Torque
+        offsets (``offset``) are 0: a description gives none."""
+        return self._m.parameters(*self._layout(rotor, friction, offset))
 
     # -- dynamics ------------------------------------------------------------------------------
     def inverse_dynamics(self, q, dq, ddq, params=None) -> np.ndarray:
@@ -473,10 +479,13 @@ class Robot:
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._m.inverse_dynamics(q, dq, ddq, self._params(params))
 
-    def regressor(self, q, dq, ddq, rotor: bool = False, friction: bool = False) -> np.ndarray:
-        """Classical regressor ``W``, shape (n, P) or (m, n, P), with ``tau = W @ params``."""
+    def regressor(
+        self, q, dq, ddq, rotor: bool = False, friction: bool = False, *, offset: bool = False
+    ) -> np.ndarray:
+        """Classical regressor ``W``, shape (n, P) or (m, n, P), with ``tau = W @ params``
+        (an offset's column is 1 in its joint's row)."""
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
-        return self._m.regressor(q, dq, ddq, *self._layout(rotor, friction))
+        return self._m.regressor(q, dq, ddq, *self._layout(rotor, friction, offset))
 
     def gravity_torque(self, q, params=None) -> np.ndarray:
         """Gravity torque ``c(q)``, shape (n,) or (m, n)."""
@@ -515,10 +524,13 @@ class Robot:
         (dq,) = _args.batch(self.n, dq=dq)
         return self._m.friction_shapes(dq)
 
-    def energy_regressors(self, q, dq, rotor: bool = False, friction: bool = False):
+    def energy_regressors(
+        self, q, dq, rotor: bool = False, friction: bool = False, *, offset: bool = False
+    ):
         """``(w_K, w_P)`` with ``K = w_K @ params`` and ``P = w_P @ params``; shape (P,) or
-        (m, P) each."""
-        return self._energy_regressors(q, dq, rotor, friction)
+        (m, P) each. An offset's column of ``w_P`` is its work ``q_j`` (``Off_j q_j``, not an
+        energy), so that differences over a window are the energy model's columns."""
+        return self._energy_regressors(q, dq, rotor, friction, offset)
 
     def energy_regressor(self, q, dq, rotor: bool = False, friction: bool = False) -> np.ndarray:
         """Total-energy regressor ``w_H = w_K + w_P`` (``H = w_H @ params``)."""
@@ -530,22 +542,26 @@ class Robot:
         wk, wp = self._energy_regressors(q, dq, rotor, friction)
         return wk - wp
 
-    def momentum_regressors(self, q, dq, rotor: bool = False, friction: bool = False):
+    def momentum_regressors(
+        self, q, dq, rotor: bool = False, friction: bool = False, *, offset: bool = False
+    ):
         """``(W_p, W_l)``, shape (n, P) or (m, n, P) each, of the momentum form of the equations
         of motion ``tau = d/dt p - dL/dq + friction``: generalized momentum
         ``p = A(q) dq = W_p @ params`` and ``-dL/dq = W_l @ params`` (minus the gradient of the
         Lagrangian ``K - P``: the gravity torque minus ``dK/dq``). Neither needs an acceleration;
-        their friction columns are zero, the rotor column of ``W_p`` is ``dq``."""
+        their friction columns are zero, the rotor column of ``W_p`` is ``dq``. With ``offset``,
+        ``W_l @ params`` is ``-dL/dq`` plus the offsets (an offset's column is 1 in its joint's
+        row of ``W_l``, 0 in ``W_p``)."""
         q, dq = _args.batch(self.n, q=q, dq=dq)
-        return self._m.momentum_regressors(q, dq, *self._layout(rotor, friction))
+        return self._m.momentum_regressors(q, dq, *self._layout(rotor, friction, offset))
 
     def _energies(self, q, dq, params):
         q, dq = _args.batch(self.n, q=q, dq=dq)
         return self._m.energies(q, dq, self._params(params))
 
-    def _energy_regressors(self, q, dq, rotor, friction):
+    def _energy_regressors(self, q, dq, rotor, friction, offset=False):
         q, dq = _args.batch(self.n, q=q, dq=dq)
-        return self._m.energy_regressors(q, dq, *self._layout(rotor, friction))
+        return self._m.energy_regressors(q, dq, *self._layout(rotor, friction, offset))
 
     def _params(self, params, name: str = "params"):
         return _args.params(params, name, self.n, self.layout_sizes)
@@ -558,8 +574,12 @@ class Robot:
         return 10, 11, 10 + c, 11 + c
 
     @staticmethod
-    def _layout(rotor, friction) -> tuple[bool, bool]:
-        return _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    def _layout(rotor, friction, offset=False) -> tuple[bool, bool, bool]:
+        return (
+            _args.flag(rotor, "rotor"),
+            _args.flag(friction, "friction"),
+            _args.flag(offset, "offset"),
+        )
 
     # -- kinematics (Orocos KDL) ---------------------------------------------------------------
     def _kinematics(self) -> _core.Kinematics:

@@ -112,7 +112,7 @@ void bindCodegen(py::module_& m) {
             throw py::value_error("formulas: one per base parameter, with base parameters");
           ps.formulas = *formulas;
         }
-        if (offset) ps = withOffsets(model, std::move(ps));
+        if (offset && !ps.offsets) ps = withOffsets(model, std::move(ps));
         std::vector<Function> fs;
         for (const auto& f : functions) fs.push_back(functionOf(f));
         if (values && values->size() != ps.size())
@@ -164,18 +164,20 @@ void bindCodegen(py::module_& m) {
 
   m.def(
       "classical_parameter_names",
-      [](const PyModel& model, bool rotor, bool friction) {
-        return classicalParameterSet(model.model, model.model.layout(rotor, friction)).names;
+      [](const PyModel& model, bool rotor, bool friction, bool offset) {
+        return classicalParameterSet(model.model, model.model.layout(rotor, friction, offset))
+            .names;
       },
       py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
+      py::arg("offset") = false,
       "The classical parameters generated code takes (friction in the model's friction "
-      "model).");
+      "model; the torque offsets last).");
 
   py::class_<PyBaseDynamics, std::shared_ptr<PyBaseDynamics>>(m, "BaseDynamics")
       .def(py::init([](const PyBase& base_core, bool offset) {
              const Model& model = base_core.model->model;
              ParameterSet ps = baseParameterSet(model, base_core.bp);
-             if (offset) ps = withOffsets(model, std::move(ps));
+             if (offset && !ps.offsets) ps = withOffsets(model, std::move(ps));
              auto out = std::make_shared<PyBaseDynamics>();
              py::gil_scoped_release release;
              out->bd = std::make_unique<BaseDynamics>(model, ps);
@@ -264,7 +266,7 @@ void bindController(py::module_& m) {
         // without base parameters: all classical ones, with rotor inertia and friction
         ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
                                     : classicalParameterSet(model, model.layout(true, true));
-        if (offset) ps = withOffsets(model, std::move(ps));
+        if (offset && !ps.offsets) ps = withOffsets(model, std::move(ps));
         Controller k = kind == "adaptive-pd"       ? Controller::AdaptivePD
                        : kind == "computed-torque" ? Controller::ComputedTorque
                        : kind == "gravity-compensation"

@@ -51,7 +51,7 @@ void bindObserver(py::module_& m) {
         using namespace mindyn::codegen;
         const Model& model = base_core->model->model;
         ParameterSet ps = baseParameterSet(model, base_core->bp);
-        if (offset) ps = withOffsets(model, std::move(ps));
+        if (offset && !ps.offsets) ps = withOffsets(model, std::move(ps));
         ObserverSettings s;
         s.p = p;
         s.gains = gains;

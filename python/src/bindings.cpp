@@ -103,6 +103,8 @@ PYBIND11_MODULE(_core, m) {
                                      py::make_tuple(error, py::handle(PyExc_ValueError)));
   py::register_exception<FileError>(m, "RobotFileNotFoundError",
                                     py::make_tuple(error, py::handle(PyExc_FileNotFoundError)));
+  // The prefix of the torque offsets' parameter names (Off1, ...), as the layout spells it.
+  m.attr("OFFSET_PREFIX") = std::string(kOffsetPrefix);
 
   py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model")
       .def_property_readonly("n", [](const PyModel& s) { return s.model.nq(); })
@@ -299,16 +301,16 @@ PYBIND11_MODULE(_core, m) {
           })
       .def(
           "parameter_names",
-          [](const PyModel& s, bool rotor, bool friction) {
-            return s.model.parameterNames(s.model.layout(rotor, friction));
+          [](const PyModel& s, bool rotor, bool friction, bool offset) {
+            return s.model.parameterNames(s.model.layout(rotor, friction, offset));
           },
-          py::arg("rotor") = false, py::arg("friction") = false)
+          py::arg("rotor") = false, py::arg("friction") = false, py::arg("offset") = false)
       .def(
           "parameters",
-          [](const PyModel& s, bool rotor, bool friction) {
-            return s.model.parameters(s.model.layout(rotor, friction));
+          [](const PyModel& s, bool rotor, bool friction, bool offset) {
+            return s.model.parameters(s.model.layout(rotor, friction, offset));
           },
-          py::arg("rotor") = false, py::arg("friction") = false)
+          py::arg("rotor") = false, py::arg("friction") = false, py::arg("offset") = false)
       .def(
           "inverse_dynamics",
           [](PyModel& s, const Array& q, const Array& dq, const Array& ddq,
@@ -354,10 +356,10 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "regressor",
           [](PyModel& s, const Array& q, const Array& dq, const Array& ddq, bool rotor,
-             bool friction) {
+             bool friction, bool offset) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}, {&ddq, "ddq"}}, n);
-            const ParameterLayout layout = s.model.layout(rotor, friction);
+            const ParameterLayout layout = s.model.layout(rotor, friction, offset);
             checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
@@ -368,13 +370,13 @@ PYBIND11_MODULE(_core, m) {
             })[0];
           },
           py::arg("q"), py::arg("dq"), py::arg("ddq"), py::arg("rotor") = false,
-          py::arg("friction") = false)
+          py::arg("friction") = false, py::arg("offset") = false)
       .def(
           "energy_regressors",
-          [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction) {
+          [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction, bool offset) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
-            const ParameterLayout layout = s.model.layout(rotor, friction);
+            const ParameterLayout layout = s.model.layout(rotor, friction, offset);
             checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
@@ -384,13 +386,14 @@ PYBIND11_MODULE(_core, m) {
             });
             return py::make_tuple(wk, wp);
           },
-          py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false)
+          py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false,
+          py::arg("offset") = false)
       .def(
           "momentum_regressors",
-          [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction) {
+          [](PyModel& s, const Array& q, const Array& dq, bool rotor, bool friction, bool offset) {
             const long n = s.model.nq();
             SampleBatch batch({{&q, "q"}, {&dq, "dq"}}, n);
-            const ParameterLayout layout = s.model.layout(rotor, friction);
+            const ParameterLayout layout = s.model.layout(rotor, friction, offset);
             checkDriveSide(s.model, layout);
             const long P = layout.size(static_cast<int>(n));
             Data data(s.model);
@@ -402,7 +405,8 @@ PYBIND11_MODULE(_core, m) {
             });
             return py::make_tuple(wp, wl);
           },
-          py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false)
+          py::arg("q"), py::arg("dq"), py::arg("rotor") = false, py::arg("friction") = false,
+          py::arg("offset") = false)
       .def(
           "friction_shapes",
           [](PyModel& s, const Array& dq) {
@@ -545,6 +549,7 @@ PYBIND11_MODULE(_core, m) {
                              [](const PyBase& b) { return b.bp.classical_names; })
       .def_property_readonly("rotor", [](const PyBase& b) { return b.bp.layout.rotor; })
       .def_property_readonly("friction", [](const PyBase& b) { return b.bp.layout.friction; })
+      .def_property_readonly("offset", [](const PyBase& b) { return b.bp.layout.offset; })
       .def(
           "with_friction_velocity",
           [](const PyBase& b, const Eigen::VectorXd& velocity) {
@@ -650,7 +655,7 @@ PYBIND11_MODULE(_core, m) {
       "base_parameters",
       [](const std::shared_ptr<PyModel>& model, bool rotor, bool friction,
          const std::string& method, const std::vector<int>& order, double tolerance, int samples,
-         unsigned seed, double snap) {
+         unsigned seed, double snap, bool offset) {
         auto out = std::make_shared<PyBase>();
         if (snap > 0) {
           Model copy = model->model;
@@ -660,7 +665,7 @@ PYBIND11_MODULE(_core, m) {
           out->model = model;
         }
         BaseOptions o;
-        o.layout = out->model->model.layout(rotor, friction);
+        o.layout = out->model->model.layout(rotor, friction, offset);
         o.order = order;
         o.tolerance = tolerance;
         o.samples = samples;
@@ -683,7 +688,7 @@ PYBIND11_MODULE(_core, m) {
       py::arg("model"), py::arg("rotor") = false, py::arg("friction") = false,
       py::arg("method") = "projection", py::arg("order") = std::vector<int>(),
       py::arg("tolerance") = kDefaultRankTolerance, py::arg("samples") = 0, py::arg("seed") = 1u,
-      py::arg("snap") = 0.0);
+      py::arg("snap") = 0.0, py::arg("offset") = false);
   m.def(
       "influence_coordinates",
       [](const std::shared_ptr<PyModel>& model, bool rotor) {

@@ -83,14 +83,16 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
 Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout);
 
 /// The conventional (Khalil) priority order: link by link from the base; in each link
-/// XX XY XZ YZ ZZ MX MY, then YY MZ M, then Ia, Fv, Fc.
+/// XX XY XZ YZ ZZ MX MY, then YY MZ M, then Ia, Fv, Fc; then the joint block (offsets).
 std::vector<int> khalilOrder(int n, ParameterLayout layout);
 
 enum class BaseMethod { Projection, Numerical, Recursive };
 
 struct BaseOptions {
   ParameterLayout layout;
-  std::vector<int> order;  // empty: khalilOrder
+  /// A permutation of the link parameters (layout.linkSize(n) entries); empty: khalilOrder.
+  /// The joint block (torque offsets) follows them, each offset a base parameter of its own.
+  std::vector<int> order;
   double tolerance = kDefaultRankTolerance;
   BaseMethod method = BaseMethod::Projection;
   int samples = 0;    // numerical method: number of random states (0: automatic)

@@ -77,7 +77,8 @@ void computeKinematics(const Model& model, Data& data, const VecRef& q, const Ve
                        const VecRef& ddq, bool with_gravity = true) noexcept;
 
 /// Newton-Euler inverse dynamics: tau = W(q, dq, ddq) * params. Rotor inertia and friction act
-/// on the joints, or through the transmission when Model::motorSide (model.hpp).
+/// on the joints, or through the transmission when Model::motorSide (model.hpp); torque offsets
+/// on the joints.
 void inverseDynamics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                      const VecRef& ddq, const VecRef& params, ParameterLayout layout,
                      VecOut tau) noexcept;
@@ -86,19 +87,21 @@ void inverseDynamics(const Model& model, Data& data, const VecRef& q, const VecR
 /// and the friction model is valid for the model (checkSizes calls it).
 void checkFrictionLayout(const Model& model, ParameterLayout layout);
 
-/// Gravity torque c(q) (friction and rotor inertia do not contribute).
+/// Gravity torque c(q) (friction, rotor inertia and torque offsets do not contribute).
 void gravityTorque(const Model& model, Data& data, const VecRef& q, const VecRef& params,
                    ParameterLayout layout, VecOut tau) noexcept;
 
 /// Classical regressor W (n x layout.size(n)) with tau = W * params. On a tree, the block of link
-/// k is zero on the rows of joints that do not support it.
+/// k is zero on the rows of joints that do not support it; the offset column of joint k is e_k.
 void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq, const VecRef& ddq,
                ParameterLayout layout, MatOut W) noexcept;
 
 /// Kinetic and potential energy regressors (rows of length layout.size(n)):
 /// K = wK * params, P = wP * params, total energy H = (wK + wP) * params, Lagrangian (wK - wP).
 /// Friction columns are zero; the rotor column of slot k is 0.5 v_k^2 (v_k = dq_k, or the motor
-/// velocity t_k . dq on the motor side, see Model::motorSide).
+/// velocity t_k . dq on the motor side, see Model::motorSide). The offset column of joint k in
+/// wP is q_k, the offset's work (it is not an energy: kineticEnergy and potentialEnergy leave
+/// offsets out), so that wP differences over a window give the energy model's offset columns.
 void energyRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                       ParameterLayout layout, VecOut wK, VecOut wP) noexcept;
 
@@ -112,8 +115,8 @@ double potentialEnergy(const Model& model, Data& data, const VecRef& q, const Ve
 void massMatrix(const Model& model, Data& data, const VecRef& q, const VecRef& params,
                 ParameterLayout layout, MatOut M) noexcept;
 
-/// ddq = A(q)^-1 (tau - b(q, dq) - c(q) - friction). Returns false, leaving ddq unchanged,
-/// when A(q) is not positive definite for these parameters.
+/// ddq = A(q)^-1 (tau - b(q, dq) - c(q) - friction - offsets). Returns false, leaving ddq
+/// unchanged, when A(q) is not positive definite for these parameters.
 bool forwardDynamics(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                      const VecRef& tau, const VecRef& params, ParameterLayout layout,
                      VecOut ddq) noexcept;

@@ -94,17 +94,32 @@ struct Joint {
 inline constexpr const char* kInertialNames[10] = {"XX", "XY", "XZ", "YY", "YZ",
                                                    "ZZ", "MX", "MY", "MZ", "M"};
 
-/// Which optional per-joint parameters follow each link's ten inertial ones.
-/// The classical vector is link by link: [XX1..M1, (Ia1), (Fv1, Fc1, (F31)), XX2, ...].
+/// Which optional per-joint parameters a classical parameter vector holds, and where.
+/// The vector is link by link, then one block over the joints:
+///   [XX1..M1, (Ia1), (Fv1, Fc1, (F31)), XX2, ..., (Off1, ..., Offn)].
 /// Slot k's rotor inertia and friction act on joint k, or on motor k when the model's
 /// `motorSide()` (then with the motor velocity v = T_k dq in place of dq_k below).
+///
+/// Terms of a joint's torque that belong to no link and no motor (the torque offset Off_k) form
+/// the block after the last link: they keep their place and their meaning whatever the other
+/// terms, the order of the link blocks or the drive side (an offset adds to joint k's torque
+/// even when rotor inertia and friction act on the motors). A further per-joint term joins that
+/// block here (a flag, its index, its name in parameterNames, its column in the regressors of
+/// dynamics.hpp) and nowhere else.
 struct ParameterLayout {
   bool rotor = false;     // Ia_k: tau_k += Ia_k * ddq_k
   bool friction = false;  // Fv_k, Fc_k (, F3_k): tau_k += Fv_k v + friction shapes (FrictionModel)
   int friction_columns = 2;  // 2, or 3 for the friction models with a third parameter
+  /// Off_k: tau_k += Off_k, a constant joint torque (a joint's, never a motor's). Its column is
+  /// e_k in the inverse-dynamics regressor and in -dL/dq of the momentum regressors (beta of a
+  /// momentum observer), and q_k in the potential-energy regressor (the offset's work: the
+  /// energy model's column over a window is q_k(t1) - q_k(t0)).
+  bool offset = false;
 
   int perLink() const { return 10 + (rotor ? 1 : 0) + (friction ? friction_columns : 0); }
-  int size(int n) const { return n * perLink(); }
+  /// Entries of the link blocks (the classical vector without the joint block).
+  int linkSize(int n) const { return n * perLink(); }
+  int size(int n) const { return linkSize(n) + (offset ? n : 0); }
   int rotorIndex(int k) const { return k * perLink() + 10; }
   int viscousIndex(int k) const { return k * perLink() + 10 + (rotor ? 1 : 0); }
   int coulombIndex(int k) const { return viscousIndex(k) + 1; }
@@ -113,10 +128,25 @@ struct ParameterLayout {
   int thirdFrictionIndex(int k) const { return viscousIndex(k) + 2; }
   /// Friction column i (0: Fv, 1: Fc, 2: the third) of slot k.
   int frictionIndex(int k, int i) const { return viscousIndex(k) + i; }
+  /// Joint k's torque offset, of n joints; only when `offset`.
+  int offsetIndex(int n, int k) const { return linkSize(n) + k; }
+  /// The same layout without the joint block (what the link-by-link algorithms take).
+  ParameterLayout links() const {
+    ParameterLayout l = *this;
+    l.offset = false;
+    return l;
+  }
   /// The layout whose size for n joints is `size` with `friction_columns` friction columns
-  /// (Model::layoutOfSize gives the model's), or throws ModelError.
+  /// and no offsets (Model::layoutOfSize gives the model's), or throws ModelError. Offsets are
+  /// never inferred from a size: 11 n is rotor inertia, not offsets.
   static ParameterLayout fromSize(int n, long size, int friction_columns = 2);
 };
+
+/// The prefix of the torque offsets' names: the one place it is spelled (the bindings give it
+/// to Python as OFFSET_PREFIX).
+inline constexpr const char kOffsetPrefix[] = "Off";
+/// The name of joint k's (0-based) torque offset: "Off1" for k = 0.
+std::string offsetName(int k);
 
 /// The friction model of every slot (joint, or motor when the model's `motorSide()`), with v the
 /// slot's velocity [rad/s | m/s] and w_k its velocity scale (`FrictionModel::velocity`):
@@ -194,9 +224,10 @@ struct Model {
 
   /// The layout with or without rotor inertia and friction, its friction columns those of
   /// `friction_model` (the one place a layout is formed from these two choices).
-  ParameterLayout layout(bool rotor, bool friction) const {
+  ParameterLayout layout(bool rotor, bool friction, bool offset = false) const {
     ParameterLayout l{rotor, friction};
     l.friction_columns = friction_model.columns();
+    l.offset = offset;
     return l;
   }
   /// The layout of a parameter vector of `size` entries (10, 11, 10 + c or 11 + c per joint,
@@ -206,13 +237,14 @@ struct Model {
   }
 
   /// Classical parameter names for a layout, e.g. XX1, ..., M1, Ia1, Fv1, Fc1, XX2, ...
-  /// (the third friction column Fa_k for Asymmetric, Fs_k for Stribeck)
+  /// (the third friction column Fa_k for Asymmetric, Fs_k for Stribeck), then Off1, ..., Offn
   std::vector<std::string> parameterNames(ParameterLayout layout = {}) const;
   /// Classical parameter values of this model in a layout. On the motor side (motorSide()),
   /// slot k holds motor k's values: its own (transmission.rotor_inertia, viscous, coulomb) where
   /// the description gives them, otherwise derived from the joint-side rotor_inertia, viscous
   /// and coulomb: those of its joint divided by r^2, r^2 and |r| for a motor that alone drives
-  /// one joint alone with ratio r, 0 for a motor that turns with several joints.
+  /// one joint alone with ratio r, 0 for a motor that turns with several joints. Offsets are 0
+  /// (a description gives none).
   Eigen::VectorXd parameters(ParameterLayout layout = {}) const;
 
   /// Checks sizes, finiteness, magnitudes, unit axes and rigid transforms; throws ModelError

@@ -41,7 +41,8 @@
 namespace mindyn {
 
 /// Wp (n x layout.size(n)): p = A(q) dq = Wp pi. Wl (n x layout.size(n)): -dL/dq = Wl pi =
-/// -dK/dq + c(q), c the gravity torque.
+/// -dK/dq + c(q), c the gravity torque; with torque offsets in the layout, Wl pi is
+/// -dL/dq + offsets (their columns e_k, zero in Wp).
 void momentumRegressors(const Model& model, Data& data, const VecRef& q, const VecRef& dq,
                         ParameterLayout layout, MatOut Wp, MatOut Wl) noexcept;
 

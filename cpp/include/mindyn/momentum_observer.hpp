@@ -38,7 +38,8 @@ namespace mindyn {
 class MomentumObserver {
  public:
   /// `values`: p_b of `base` (base.eom.size()); `gains`: K_O per joint [1/s], each in
-  /// (0, 2 / period); `offset`: a constant torque per joint (empty: none); `held_torque`: the
+  /// (0, 2 / period); `offset`: a constant torque per joint besides those of the base set's
+  /// layout (its offsets are base parameters, in `values`; empty: none); `held_torque`: the
   /// torque is the command held over each period (else sampled, integrated by the trapezoid).
   /// Throws ModelError on a wrong size, a non-finite value or a gain out of range.
   /// Allocates (once); `model` and `base` must outlive it.

@@ -97,8 +97,8 @@ def cmd_base(args: argparse.Namespace) -> int:
         )
     if bp.offset:
         lines.append(
-            f"  offsets        Off1..Off{robot.n} after the equations-of-motion set, one base "
-            f"parameter each ({bp.n} in all)"
+            f"  offsets        {bp.names[-robot.n]}..{bp.names[-1]} after the "
+            f"equations-of-motion set, one base parameter each ({bp.n} in all)"
         )
     for s in bp.snapped:
         lines.append(f"  snapped        {s}")

@@ -200,14 +200,15 @@ def generate(
         formulas = base.formulas[: bp_core.n]
     elif base:
         # the projection method, or the recursive one where the projection method refuses
-        bp = base_parameters(robot, rotor=rotor, friction=friction)
+        bp = base_parameters(robot, rotor=rotor, friction=friction, offset=offset)
         bp_core = bp._b
-        names = bp.names + [f"Off{k + 1}" for k in range(robot.n) if offset]
+        names = bp.names
         formulas = bp.formulas
     else:
         bp_core = formulas = None
-        names = list(_core.classical_parameter_names(robot._m, rotor=rotor, friction=friction))
-        names += [f"Off{k + 1}" for k in range(robot.n) if offset]
+        names = list(
+            _core.classical_parameter_names(robot._m, rotor=rotor, friction=friction, offset=offset)
+        )
     values = None
     if params is not None:
         if isinstance(params, (str, Path)):

@@ -102,11 +102,10 @@ class MomentumObserver:
             )
         self.gains = k
         self.held_torque = bool(held_torque)
-        core = values[: base.n - n] if base.offset else values
-        offset = values[base.n - n :] if base.offset else np.zeros(n)
         self.values = values
+        # the offsets are base parameters of the core's layout: in values, not a separate vector
         self._o = _core.MomentumObserver(
-            base._b, core, k, self.period, offset, held_torque=self.held_torque
+            base._b, values, k, self.period, np.zeros(n), held_torque=self.held_torque
         )
 
     def reset(self, q, dq, tau) -> None:

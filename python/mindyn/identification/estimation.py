@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
+from .._core import OFFSET_PREFIX as OFF
 from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
@@ -306,15 +307,15 @@ def _rank_remedies(concerned: list[str], logs, speed: float, robot=None) -> list
     dq = np.vstack([d.dq for d in logs])
     kinds: dict[int, set] = {}
     for nm in concerned:
-        hit = re.fullmatch(r"(Fv|Fc|Fa|Fs|Off|Ia)(\d+)", nm)
+        hit = re.fullmatch(rf"(Fv|Fc|Fa|Fs|{OFF}|Ia)(\d+)", nm)
         if hit:
             kinds.setdefault(int(hit.group(2)), set()).add(hit.group(1))
     if robot is None or robot.drive_side != "motor":
         return _remedies(kinds, dq, speed, "Joint(s) " + "{}")
     T = robot.drive_matrix
     vm = robot.slot_velocities(dq) / np.max(np.abs(T), axis=1)
-    drive = {k: v - {"Off"} for k, v in kinds.items() if v - {"Off"}}
-    offsets = {k: {"Off"} for k, v in kinds.items() if "Off" in v}
+    drive = {k: v - {OFF} for k, v in kinds.items() if v - {OFF}}
+    offsets = {k: {OFF} for k, v in kinds.items() if OFF in v}
     motors = robot.transmission.motors
     names = [f"'{m}'" for m in motors]
     return _remedies(drive, vm, speed, "Motor(s) {}", names) + _remedies(
@@ -332,10 +333,10 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
     coulomb = {"Fc", "Fa", "Fs"}  # the friction terms that are constant while a joint moves one way
     still = [j for j in sorted(kinds) if not (up[j - 1] or down[j - 1])]
     one_way = [
-        j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and ({"Off"} | coulomb) & kinds[j]
+        j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and ({OFF} | coulomb) & kinds[j]
     ]
     # the direction-dependent Coulomb term is constant whenever the joint moves, either way
-    level = [j for j in sorted(kinds) if j not in still + one_way and {"Fa", "Off"} <= kinds[j]]
+    level = [j for j in sorted(kinds) if j not in still + one_way and {"Fa", OFF} <= kinds[j]]
 
     def named(js):
         return label.format(", ".join(str(j) if names is None else names[j - 1] for j in js))
@@ -346,7 +347,7 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
         opts = sorted(
             {"--friction" for j in still if ({"Fv"} | coulomb) & kinds[j]}
             | {"--rotor" for j in still if "Ia" in kinds[j]}
-            | {"--offset" for j in still if "Off" in kinds[j] and not coulomb & kinds[j]}
+            | {"--offset" for j in still if OFF in kinds[j] and not coulomb & kinds[j]}
         )
         out.append(
             f"{named(still)} never move{speed_txt} in this data: "

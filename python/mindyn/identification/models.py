@@ -138,7 +138,6 @@ def energy_system(
     else:
         power_int = None
         integration_f = integration
-    names = base.names
     v = base.robot.slot_velocities(dq)  # friction power of slot k: its friction torque times v_k
     cols = {c: v[:, k] * f for c, (k, f) in friction_columns(base, dq).items()}
     F = np.column_stack([power] + list(cols.values())) if cols else power[:, None]
@@ -147,12 +146,9 @@ def energy_system(
         cum[:, 0] = power_int
     dI = np.diff(cum[ends], axis=0)
     y = dI[:, 0]
+    # an offset's work Off_k (q_k(t_b) - q_k(t_a)) is exact in W: its energy column is q_k
     for j, c in enumerate(cols):
         W[:, c] = dI[:, j + 1]
-    for k in range(data.n):
-        # an offset's work: Off_k int dq_k dt = Off_k (q_k(t_b) - q_k(t_a)), exactly
-        if f"Off{k + 1}" in names:
-            W[:, names.index(f"Off{k + 1}")] = np.diff(data.q[ends, k])
     return W, y
 
 
@@ -212,7 +208,8 @@ def integral_chunks(
     for Coulomb friction; :meth:`~mindyn.Robot.friction_shapes`; on the motor side, motor ``k``'s
     friction reaches joint ``j`` as ``T[k, j] (Fv_k t_k . (q(t_b) - q(t_a)) + sum_i F_i,k int
     phi_i(t_k . dq) dt)``), with the base momentum regressors
-    ``p = W_p p_b``, ``-dL/dq = W_l p_b`` (:meth:`BaseParameters.momentum_regressors`). The
+    ``p = W_p p_b``, ``-dL/dq + offsets = W_l p_b`` (:meth:`BaseParameters.momentum_regressors`:
+    an offset's column of ``W_l`` is 1, its integral ``t_b - t_a``). The
     momentum is taken at the window's ends only; ``W_l``, the Coulomb term and the torque are
     integrated over the window's samples by Simpson's rule (``simpson``, exact for cubics; any
     number of intervals) or the trapezoid rule; ``zoh`` takes the logged torque as held over each
@@ -247,7 +244,6 @@ def integral_chunks(
     names = list(base.names)
     fv = {k: names.index(f"Fv{k + 1}") for k in range(n) if f"Fv{k + 1}" in names}
     shapes = {c: kf for c, kf in friction_columns(base, data.dq).items() if c not in fv.values()}
-    off = {k: names.index(f"Off{k + 1}") for k in range(n) if f"Off{k + 1}" in names}
     T = base.robot.drive_matrix
     per = max(1, CHUNK_SAMPLES // (window + 1))
     for c0 in range(0, a.size, per):
@@ -257,6 +253,7 @@ def integral_chunks(
         Wp = Wp.reshape(idx.shape + (n, nb))
         Wl = Wl.reshape(idx.shape + (n, nb))
         C = np.array([_quadrature(data.t[i], rule) for i in idx])  # (k, window + 1)
+        # an offset's column of Wl is 1 in its joint's row: its integral is t_b - t_a
         W = Wp[:, -1] - Wp[:, 0] + np.einsum("ws,wsjp->wjp", C, Wl)
         tau = data.tau[idx]  # (k, window + 1, n)
         if integration == "zoh":
@@ -271,8 +268,6 @@ def integral_chunks(
         for col, (k, f) in shapes.items():
             sk = np.einsum("ws,ws->w", C, f[idx])
             W[:, :, col] = np.outer(sk, T[k])
-        for k, col in off.items():
-            W[:, k, col] = data.t[wb] - data.t[wa]
         yield W, y
 
 

@@ -49,7 +49,7 @@ const char* toString(Function f);
 /// The parameter vector `p` a generated function takes, and how it maps to the classical
 /// parameters: pi = E p.
 struct ParameterSet {
-  ParameterLayout layout;
+  ParameterLayout layout;  // of the link blocks (without offsets: those are `offsets`)
   bool base = true;
   std::vector<std::string> names;
   std::vector<std::string> formulas;  // base: "XXR2 = XX2 - YY2 + ..."; classical: empty
@@ -62,9 +62,10 @@ struct ParameterSet {
   int size() const { return static_cast<int>(names.size()); }
 };
 
-/// The equations-of-motion base set of `bp`: pi = embed(p_b).
+/// The equations-of-motion base set of `bp`: pi = embed(p_b); with the torque offsets of its
+/// layout as the last n entries.
 ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp);
-/// All classical parameters of a layout (E = identity).
+/// All classical parameters of a layout (E = identity; its offsets the last n entries).
 ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout);
 /// The set with a torque offset per joint appended (names Off1..OffN, values 0, formulas
 /// "Offk = Offk" for a base set). Throws ModelError when it has offsets already.
