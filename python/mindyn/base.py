@@ -260,6 +260,7 @@ class BaseParameters:
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
         ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row."""
+        self.robot._require_single_dof("BaseParameters.regressor")
         q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
         return self._with_offset(self._b.regressor(q, dq, ddq), 1.0)
 

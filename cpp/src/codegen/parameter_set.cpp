@@ -7,6 +7,7 @@
 namespace mindyn::codegen {
 
 ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
+  requireSingleDof(model, "code generation");
   ParameterSet s;
   s.layout = bp.layout;
   s.base = true;
@@ -20,6 +21,7 @@ ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
 }
 
 ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout) {
+  requireSingleDof(model, "code generation");
   ParameterSet s;
   s.layout = layout;
   s.base = false;

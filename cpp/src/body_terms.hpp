@@ -1,0 +1,58 @@
+// The per-link terms of the Newton-Euler passes, in one place for the single-DOF dynamics
+// (dynamics.cpp) and the multibody ones (multibody.cpp): a link's wrench from its classical
+// parameters and motion, the same as a linear map of the parameters, and a link's pose in the
+// base frame. Spatial vectors (angular; linear) as in spatial.hpp; nothing allocates or throws.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "mindyn/spatial.hpp"
+
+namespace mindyn {
+
+/// The wrench f = I a + v x* (I v) a link of ten classical parameters `p` (XX .. M about its
+/// origin, its axes) needs for its spatial velocity v and acceleration a (gravity included in a),
+/// in its frame about its origin: the one body term of the Newton-Euler passes.
+template <class P>
+inline Vector6d bodyWrench(const P& p, const Vector6d& v, const Vector6d& a) noexcept {
+  Eigen::Matrix3d I;
+  I << p[0], p[1], p[2], p[1], p[3], p[4], p[2], p[4], p[5];
+  const Eigen::Vector3d h = p.template segment<3>(6);
+  const Eigen::Vector3d w = v.head<3>();
+  const Eigen::Vector3d aw = a.head<3>();
+  const Eigen::Vector3d b = a.tail<3>() + w.cross(v.tail<3>());
+  Vector6d f;
+  f.head<3>() = I * aw + w.cross(I * w) - b.cross(h);
+  f.tail<3>() = p[9] * b + aw.cross(h) + w.cross(w.cross(h));
+  return f;
+}
+
+/// The same wrench as a linear map of the ten parameters: bodyWrench(p, v, a) = F p.
+inline void bodyRegressor(const Vector6d& v, const Vector6d& a,
+                          Eigen::Matrix<double, 6, 10>& F) noexcept {
+  const Eigen::Vector3d w = v.head<3>();
+  const Eigen::Vector3d aw = a.head<3>();
+  const Eigen::Vector3d b = a.tail<3>() + w.cross(v.tail<3>());
+  const Eigen::Matrix3d Sw = skew(w);
+  F.setZero();
+  F.block<3, 6>(0, 0) = inertiaMap(aw) + Sw * inertiaMap(w);
+  F.block<3, 3>(0, 6) = -skew(b);
+  F.block<3, 3>(3, 6) = skew(aw) + Sw * Sw;
+  F.block<3, 1>(3, 9) = b;
+}
+
+/// Link k's pose in the base frame from its pose (R, p) in its parent link, whose pose in the
+/// base frame is (R0p, p0p), or from the base (`has_parent` false).
+inline void placeInBase(bool has_parent, const Eigen::Matrix3d& R0p, const Eigen::Vector3d& p0p,
+                        const Eigen::Matrix3d& R, const Eigen::Vector3d& p, Eigen::Matrix3d& R0,
+                        Eigen::Vector3d& p0) noexcept {
+  if (!has_parent) {
+    R0 = R;
+    p0 = p;
+  } else {
+    p0 = p0p + R0p * p;
+    R0 = R0p * R;
+  }
+}
+
+}  // namespace mindyn
