@@ -20,6 +20,7 @@ import pinocchio as pin
 import pytest
 from conftest import assert_close, body_inertia, se3
 from mindyn import codegen
+from mindyn.identification import identify
 from random_tree import random_multidof_tree_yaml, random_tree_urdf
 
 TOL = 1e-12
@@ -28,6 +29,8 @@ FLOATING = {
     "talos": ROBOTS / "talos_data" / "robots" / "talos_reduced.urdf",
     "solo12": ROBOTS / "solo_description" / "robots" / "solo12.urdf",
     "go1": ROBOTS / "go1_description" / "urdf" / "go1.urdf",
+    "anymal": ROBOTS / "anymal_c_simple_description" / "urdf" / "anymal.urdf",
+    "g1": ROBOTS / "g1_description" / "urdf" / "g1_29dof_rev_1_0.urdf",
 }
 PLANAR = {"tiago": ROBOTS / "tiago_description" / "robots" / "tiago_no_hand.urdf"}
 
@@ -276,6 +279,10 @@ def test_multidof_models_are_refused_where_unsupported(tmp_path):
     ):
         with pytest.raises(mindyn.ModelError, match="has the floating joint 'root_joint'"):
             call()
+    with pytest.raises(mindyn.ModelError, match="joint 0 \\('root_joint'\\) is floating"):
+        robot.joint_transform(0, 0.1)
+    with pytest.raises(mindyn.ModelError, match="identification takes revolute"):
+        identify(robot, None)
     with pytest.raises(mindyn.ModelError, match="code generation takes revolute"):
         codegen.generate(robot, base=False)
     assert_close(robot.gravity_torque(q), robot.inverse_dynamics(q, 0 * v, 0 * a), 0, "gravity")
@@ -302,3 +309,22 @@ def test_urdf_floating_and_planar_joints_in_a_tree_agree_with_pinocchio(tmp_path
     assert {"floating", "planar"} & set(robot.joint_types)
     model = pin.buildModelFromUrdf(str(path))
     compare(robot, model, np.random.default_rng(seed))
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_numerical_base_parameters_of_random_multidof_trees(tmp_path, seed):
+    robot = mindyn.load(random_multidof_tree_yaml(tmp_path / "tree.yaml", n=9, seed=seed))
+    model, bodies = geometry_pair(robot)
+    data, cols, rng = (
+        model.createData(),
+        pin_regressor_columns(robot.n, bodies),
+        np.random.default_rng(5),
+    )
+    W = np.vstack(
+        [
+            pin.computeJointTorqueRegressor(model, data, *random_state(robot, rng))[:, cols]
+            for _ in range(12)
+        ]
+    )
+    s = np.linalg.svd(W / np.linalg.norm(W, axis=0).clip(1e-300), compute_uv=False)
+    assert mindyn.base_parameters(robot).n == int(np.sum(s > 1e-9 * s[0]))

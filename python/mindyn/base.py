@@ -392,7 +392,10 @@ def base_parameters(
         root path and 44 in all, and at most 256 parameters in all. Default (``None``): the
         projection method, or the recursive one where a limit of the projection method refuses
         the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
-        ``method_reason``).
+        ``method_reason``). A robot with multi-DOF joints (spherical, universal, cylindrical,
+        planar, floating; :attr:`Robot.single_dof` false) takes the numerical method only,
+        without rotor inertia or friction: the exact methods refuse it and the default falls
+        back to the numerical one.
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).

@@ -436,8 +436,14 @@ class Robot:
 
     def joint_transform(self, k: int, q: float) -> np.ndarray:
         """4x4 transform from the link of joint ``parents[k]`` (the base when -1; ``k-1`` in a
-        chain) to link ``k`` (0-based ``k``) at joint value ``q``."""
+        chain) to link ``k`` (0-based ``k``) at joint value ``q`` (a revolute or prismatic
+        joint)."""
         self._check_joint(k)
+        if self.joint_types[k] not in _SINGLE_DOF:
+            raise _core.ModelError(
+                f"joint_transform takes a revolute or prismatic joint; joint {k} "
+                f"('{self.joint_names[k]}') is {self.joint_types[k]}"
+            )
         return self._m.joint_transform(k, _args.number(q, "q"))
 
     def joint_pre(self, k: int) -> np.ndarray:
