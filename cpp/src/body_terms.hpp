@@ -55,4 +55,23 @@ inline void placeInBase(bool has_parent, const Eigen::Matrix3d& R0p, const Eigen
   }
 }
 
+/// Link k's velocity v and acceleration a from its joint: those of its parent (v_parent,
+/// a_parent) or of the base (at rest, accelerating by a_base) carried into link k (at R, p in
+/// its parent), plus the joint's velocity vj and acceleration aj (S ddq and its bias) and the
+/// motion cross product v x vj.
+inline void linkMotion(bool has_parent, const Eigen::Matrix3d& R, const Eigen::Vector3d& p,
+                       const Vector6d& v_parent, const Vector6d& a_parent, const Vector6d& a_base,
+                       const Vector6d& vj, const Vector6d& aj, Vector6d& v, Vector6d& a) noexcept {
+  if (has_parent) {
+    v = motionToChild(R, p, v_parent) + vj;
+    a = motionToChild(R, p, a_parent) + aj;
+  } else {
+    v = vj;
+    a = motionToChild(R, p, a_base) + aj;
+  }
+  // a += v x vj (motion cross product, written out: no temporary)
+  a.head<3>() += v.head<3>().cross(vj.head<3>());
+  a.tail<3>() += v.head<3>().cross(vj.tail<3>()) + v.tail<3>().cross(vj.head<3>());
+}
+
 }  // namespace mindyn

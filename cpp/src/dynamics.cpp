@@ -46,23 +46,9 @@ void motionPass(const Model& model, Data& data, const VecRef& dq, const VecRef& 
   if (with_gravity) a_base.tail<3>() = -model.gravity;
   for (int k = 0; k < data.n; ++k) {
     const Vector6d& S = data.S[k];
-    const int pk = model.parent(k);
-    Vector6d v, a;
-    if (pk < 0) {
-      v.setZero();
-      a = motionToChild(data.R[k], data.p[k], a_base);
-    } else {
-      v = motionToChild(data.R[k], data.p[k], data.v[pk]);
-      a = motionToChild(data.R[k], data.p[k], data.a[pk]);
-    }
-    const Vector6d vj = S * dq[k];
-    v += vj;
-    // a += S ddq + v x vj (motion cross product, written out: no temporary)
-    a += S * ddq[k];
-    a.head<3>() += v.head<3>().cross(vj.head<3>());
-    a.tail<3>() += v.head<3>().cross(vj.tail<3>()) + v.tail<3>().cross(vj.head<3>());
-    data.v[k] = v;
-    data.a[k] = a;
+    const int pk = std::max(model.parent(k), 0);  // the base: not read
+    linkMotion(model.parent(k) >= 0, data.R[k], data.p[k], data.v[pk], data.a[pk], a_base,
+               S * dq[k], S * ddq[k], data.v[k], data.a[k]);
   }
 }
 

@@ -102,26 +102,15 @@ void motionPass(const Model& model, MultibodyData& data, const VecRef& v, const 
     const Joint& j = model.joints[k];
     const int d = data.dof[k], iv = data.iv[k];
     const auto S = data.S[k].leftCols(d);
-    const int pk = model.parent(k);
-    Vector6d vk, ak;
-    if (pk < 0) {
-      vk.setZero();
-      ak = motionToChild(data.R[k], data.p[k], a_base);
-    } else {
-      vk = motionToChild(data.R[k], data.p[k], data.v[pk]);
-      ak = motionToChild(data.R[k], data.p[k], data.a[pk]);
-    }
-    const Vector6d vj = S * v.segment(iv, d);
-    vk += vj;
-    ak += S * a.segment(iv, d) + crossMotion(vk, vj);
+    Vector6d aj = S * a.segment(iv, d);
     if (j.type == JointType::Universal) {
-      // d/dt (R2^T axis) = -(axis2 x R2^T axis) dq2, in the moved frame
+      // the bias d/dt (R2^T axis) dq1 = -(axis2 x R2^T axis) dq1 dq2, in the moved frame
       const Eigen::Vector3d s0 = j.post.linear() * data.S[k].col(0).head<3>();
-      const Eigen::Vector3d cj = -v[iv] * v[iv + 1] * j.axis2.cross(s0);
-      ak += toLink(j, angular(cj));
+      aj += toLink(j, angular(-v[iv] * v[iv + 1] * j.axis2.cross(s0)));
     }
-    data.v[k] = vk;
-    data.a[k] = ak;
+    const int pk = std::max(model.parent(k), 0);  // the base: not read
+    linkMotion(model.parent(k) >= 0, data.R[k], data.p[k], data.v[pk], data.a[pk], a_base,
+               S * v.segment(iv, d), aj, data.v[k], data.a[k]);
   }
 }
 
