@@ -328,3 +328,18 @@ def test_numerical_base_parameters_of_random_multidof_trees(tmp_path, seed):
     )
     s = np.linalg.svd(W / np.linalg.norm(W, axis=0).clip(1e-300), compute_uv=False)
     assert mindyn.base_parameters(robot).n == int(np.sum(s > 1e-9 * s[0]))
+
+
+def test_batches_of_states_give_the_single_states():
+    robot, _ = urdf_pair("solo12")
+    rng = np.random.default_rng(4)
+    states = [random_state(robot, rng) for _ in range(3)]
+    q, v, a = (np.array(x) for x in zip(*states, strict=True))
+    tau = robot.inverse_dynamics(q, v, a)
+    assert tau.shape == (3, robot.nv)
+    for i, (qi, vi, ai) in enumerate(states):
+        assert_close(tau[i], robot.inverse_dynamics(qi, vi, ai), 0, "batch")
+        assert_close(robot.mass_matrix(q)[i], robot.mass_matrix(qi), 0, "batch")
+        assert_close(robot.kinetic_energy(q, v)[i], robot.kinetic_energy(qi, vi), 0, "batch")
+    with pytest.raises(mindyn.ModelError, match="batches of equal length"):
+        robot.inverse_dynamics(q, v[:2], a)
