@@ -20,6 +20,7 @@ import pinocchio as pin
 import pytest
 from conftest import assert_close, body_inertia, se3
 from mindyn import codegen
+from mindyn.control import slotine_li_regressor_classical
 from mindyn.identification import identify
 from random_tree import random_multidof_tree_yaml, random_tree_urdf
 
@@ -343,3 +344,44 @@ def test_batches_of_states_give_the_single_states():
         assert_close(robot.kinetic_energy(q, v)[i], robot.kinetic_energy(qi, vi), 0, "batch")
     with pytest.raises(mindyn.ModelError, match="batches of equal length"):
         robot.inverse_dynamics(q, v[:2], a)
+
+
+@pytest.mark.parametrize("name", ["solo12", "tiago", "tree"])
+def test_slotine_li_regressor_and_coriolis_matrix_agree_with_pinocchio(tmp_path, name):
+    """The Coriolis matrix C(q, v) gives Pinocchio's velocity-product torque (rnea with a = 0 minus
+    its gravity), dM/dt - 2 C is skew-symmetric with dM/dt by central differences of Pinocchio's
+    crba along pin.integrate, and C is Pinocchio's computeCoriolisMatrix where the model has no
+    universal joint (Pinocchio 4's misses the turning of the universal joint's subspace: its C v
+    is not its own velocity product there); then Y(q, v, vr, ar) pi = M ar + C vr + g with
+    Pinocchio's M and g."""
+    if name == "tree":
+        robot = mindyn.load(random_multidof_tree_yaml(tmp_path / "tree.yaml", n=9, seed=5))
+        model, bodies = geometry_pair(robot)
+    else:
+        (robot, model), bodies = urdf_pair(name), None
+    data = model.createData()
+    rng = np.random.default_rng(2)
+
+    def pin_m(qp):
+        M = pin.crba(model, data, qp)
+        return np.triu(M) + np.triu(M, 1).T
+
+    for _ in range(2):
+        q, v, a = random_state(robot, rng)
+        vr, ar = rng.uniform(-2, 2, (2, robot.nv))
+        qp = q if bodies is not None else pin_q(robot, model, q)
+        g = pin.computeGeneralizedGravity(model, data, qp).copy()
+        b = pin.rnea(model, data, qp, v, 0 * v) - g
+        C = mindyn.coriolis_matrix(robot, q, v)
+        assert_close(C @ v, b, TOL, "coriolis matrix times v")
+        h = 1e-6
+        dM = (pin_m(pin.integrate(model, qp, h * v)) - pin_m(pin.integrate(model, qp, -h * v))) / (
+            2 * h
+        )
+        N = dM - 2 * C
+        assert_close(N + N.T, 0 * N, 1e-7 * np.linalg.norm(dM), "dM/dt - 2 C skew")
+        if "universal" not in robot.joint_types:
+            Cp = pin.computeCoriolisMatrix(model, data, qp, v).copy()  # a view of data.C
+            assert_close(C, Cp, TOL, "coriolis matrix")
+        Y = slotine_li_regressor_classical(robot, q, v, vr, ar)
+        assert_close(Y @ robot.params, pin_m(qp) @ ar + C @ vr + g, TOL, "slotine-li regressor")

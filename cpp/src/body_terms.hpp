@@ -41,6 +41,17 @@ inline void bodyRegressor(const Vector6d& v, const Vector6d& a,
   F.block<3, 1>(3, 9) = b;
 }
 
+/// I u = inertiaRegressor(u) [XX XY XZ YY YZ ZZ MX MY MZ M] for the spatial inertia of ten
+/// classical parameters about the link origin: I (w, l) = (I_o w + h x l, M l - h x w).
+inline Eigen::Matrix<double, 6, 10> inertiaRegressor(const Vector6d& u) noexcept {
+  Eigen::Matrix<double, 6, 10> K = Eigen::Matrix<double, 6, 10>::Zero();
+  K.block<3, 6>(0, 0) = inertiaMap(u.head<3>());
+  K.block<3, 3>(0, 6) = -skew(u.tail<3>());
+  K.block<3, 3>(3, 6) = skew(u.head<3>());
+  K.block<3, 1>(3, 9) = u.tail<3>();
+  return K;
+}
+
 /// Link k's pose in the base frame from its pose (R, p) in its parent link, whose pose in the
 /// base frame is (R0p, p0p), or from the base (`has_parent` false).
 inline void placeInBase(bool has_parent, const Eigen::Matrix3d& R0p, const Eigen::Vector3d& p0p,

@@ -91,23 +91,28 @@ void jointMotion(const Joint& j, const double* q, Eigen::Matrix3d& Rj, Eigen::Ve
 
 inline int blockStart(int k) { return 10 * k; }
 
+/// The bias dS/dt u of joint k's motion subspace along the velocity v, applied to u (v itself
+/// in the dynamics, the reference velocity in the Slotine-Li regressor), in link k's frame: zero
+/// but for the universal joint, whose first column R2^T axis turns with the second coordinate,
+/// d/dt (R2^T axis) = -(axis2 x R2^T axis) dq2 in the moved frame.
+inline Vector6d jointBias(const Model& model, const MultibodyData& data, int k, const VecRef& v,
+                          const VecRef& u) noexcept {
+  const Joint& j = model.joints[k];
+  if (j.type != JointType::Universal) return Vector6d::Zero();
+  const int iv = data.iv[k];
+  const Eigen::Vector3d s0 = j.post.linear() * data.S[k].col(0).head<3>();
+  return toLink(j, angular(-u[iv] * v[iv + 1] * j.axis2.cross(s0)));
+}
+
 /// Spatial velocities and accelerations of every link (data.v, a); needs forwardKinematics.
-/// The bias acceleration of the universal joint (the only kind whose subspace turns with q) is
-/// formed here from v.
 void motionPass(const Model& model, MultibodyData& data, const VecRef& v, const VecRef& a,
                 bool with_gravity) noexcept {
   Vector6d a_base = Vector6d::Zero();
   if (with_gravity) a_base.tail<3>() = -model.gravity;
   for (int k = 0; k < data.n; ++k) {
-    const Joint& j = model.joints[k];
     const int d = data.dof[k], iv = data.iv[k];
     const auto S = data.S[k].leftCols(d);
-    Vector6d aj = S * a.segment(iv, d);
-    if (j.type == JointType::Universal) {
-      // the bias d/dt (R2^T axis) dq1 = -(axis2 x R2^T axis) dq1 dq2, in the moved frame
-      const Eigen::Vector3d s0 = j.post.linear() * data.S[k].col(0).head<3>();
-      aj += toLink(j, angular(-v[iv] * v[iv + 1] * j.axis2.cross(s0)));
-    }
+    const Vector6d aj = S * a.segment(iv, d) + jointBias(model, data, k, v, v);
     const int pk = std::max(model.parent(k), 0);  // the base: not read
     linkMotion(model.parent(k) >= 0, data.R[k], data.p[k], data.v[pk], data.a[pk], a_base,
                S * v.segment(iv, d), aj, data.v[k], data.a[k]);
@@ -144,10 +149,13 @@ MultibodyData::MultibodyData(const Model& model)
       v(n),
       a(n),
       f(n),
+      vr(n, Vector6d::Zero()),
+      ar(n, Vector6d::Zero()),
       zeros(Eigen::VectorXd::Zero(nv)),
       unit(Eigen::VectorXd::Zero(nv)),
       tmp(Eigen::VectorXd::Zero(nv)),
       M(Eigen::MatrixXd::Zero(nv, nv)),
+      Yw(Eigen::MatrixXd::Zero(nv, 10 * n)),
       llt(nv) {
   for (int k = 0, i = 0, j = 0; k < n; ++k) {
     iq[k] = i;
@@ -194,6 +202,58 @@ void regressor(const Model& model, MultibodyData& data, const VecRef& q, const V
           data.S[k].leftCols(data.dof[k]).transpose() * F;
       if (model.parent(k) >= 0) carryToParent(data.R[k], data.p[k], F, F);
     }
+  }
+}
+
+void slotineLiRegressor(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
+                        const VecRef& vr, const VecRef& ar, MatOut Y) noexcept {
+  forwardKinematics(model, data, q);
+  motionPass(model, data, v, data.zeros, false);  // the actual link velocities data.v
+  Vector6d a_base = Vector6d::Zero();
+  a_base.tail<3>() = -model.gravity;
+  for (int k = 0; k < data.n; ++k) {
+    const int d = data.dof[k], iv = data.iv[k];
+    const auto S = data.S[k].leftCols(d);
+    const Vector6d aj = S * ar.segment(iv, d) + jointBias(model, data, k, v, vr);
+    const Vector6d sj = S * vr.segment(iv, d);
+    const int pk = model.parent(k);
+    if (pk < 0) {
+      data.vr[k] = sj;
+      data.ar[k] = motionToChild(data.R[k], data.p[k], a_base);
+    } else {
+      data.vr[k] = motionToChild(data.R[k], data.p[k], data.vr[pk]) + sj;
+      data.ar[k] = motionToChild(data.R[k], data.p[k], data.ar[pk]);
+    }
+    data.ar[k] += aj + crossMotion(data.v[k], sj);
+  }
+  Y.setZero();
+  for (int k = 0; k < data.n; ++k) {
+    const Vector6d &vk = data.v[k], &vrk = data.vr[k];
+    auto& F = data.F;
+    F = inertiaRegressor(data.ar[k] - 0.5 * crossMotion(vk, vrk)) +
+        0.5 * (crossForceMatrix(vk) * inertiaRegressor(vrk) +
+               crossForceMatrix(vrk) * inertiaRegressor(vk));
+    for (int i = k; i >= 0; i = model.parent(i)) {
+      Y.block(data.iv[i], blockStart(k), data.dof[i], 10).noalias() =
+          data.S[i].leftCols(data.dof[i]).transpose() * F;
+      if (model.parent(i) >= 0) carryToParent(data.R[i], data.p[i], F, F);
+    }
+  }
+}
+
+void coriolisMatrix(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
+                    const VecRef& params, MatOut C) noexcept {
+  // column i: the response to the reference velocity e_i, the gravity (vr = 0) taken off
+  Eigen::MatrixXd& Y = data.Yw;
+  slotineLiRegressor(model, data, q, v, data.zeros, data.zeros, Y);
+  data.tmp.noalias() = Y * params;
+  data.unit.setZero();
+  for (int i = 0; i < data.nv; ++i) {
+    data.unit[i] = 1.0;
+    slotineLiRegressor(model, data, q, v, data.unit, data.zeros, Y);
+    C.col(i).noalias() = Y * params;
+    C.col(i) -= data.tmp;
+    data.unit[i] = 0.0;
   }
 }
 

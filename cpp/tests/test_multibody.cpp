@@ -64,6 +64,13 @@ TEST(Multibody, EveryKindIsConsistent) {
   EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(M).info(), Eigen::Success);  // positive definite
   EXPECT_LE(std::abs(2 * kineticEnergy(model, data, q, v, pi) - v.dot(M * v)),
             1e-12 * v.dot(M * v));
+  // Slotine-Li: Y(q, v, v, a) = the regressor; C(q, v) v = b(q, v)
+  Eigen::MatrixXd Y(nv, 10 * n), C(nv, nv);
+  slotineLiRegressor(model, data, q, v, v, a, Y);
+  EXPECT_LE((Y - W).norm(), 1e-12 * W.norm());
+  coriolisMatrix(model, data, q, v, pi, C);
+  inverseDynamics(model, data, q, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv), pi, g);
+  EXPECT_LE((C * v + g - b).norm(), 1e-12 * b.norm());
   Eigen::VectorXd a2(nv);
   ASSERT_TRUE(forwardDynamics(model, data, q, v, tau, pi, a2));
   EXPECT_LE((a2 - a).norm(), 1e-9 * a.norm());

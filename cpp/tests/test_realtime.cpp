@@ -299,7 +299,7 @@ TEST(Realtime, MultibodyPathsAllocateNothing) {
     randomConfiguration(model, rng, q);
     const Eigen::VectorXd v = test::random(rng, nv), a = test::random(rng, nv);
     Eigen::VectorXd tau(nv), a2(nv);
-    Eigen::MatrixXd W(nv, 10 * n), M(nv, nv);
+    Eigen::MatrixXd W(nv, 10 * n), M(nv, nv), C(nv, nv);
     double e = 0;
     bool ok = true;
     test::Count c;
@@ -308,6 +308,8 @@ TEST(Realtime, MultibodyPathsAllocateNothing) {
       regressor(model, data, q, v, a, W);
       massMatrix(model, data, q, model.inertial, M);
       ok = ok && forwardDynamics(model, data, q, v, tau, model.inertial, a2);
+      slotineLiRegressor(model, data, q, v, a, v, W);
+      coriolisMatrix(model, data, q, v, model.inertial, C);
       e += kineticEnergy(model, data, q, v, model.inertial) +
            potentialEnergy(model, data, q, model.inertial);
     }

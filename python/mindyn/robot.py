@@ -74,7 +74,8 @@ def load(robot: str | Path, tip: str | None = None, gravity=None, *, root_joint=
         (Pinocchio's conventions: quaternions ``(x, y, z, w)``, a free-flyer's velocity linear
         first in its body's axes); its dynamics (:meth:`Robot.inverse_dynamics`,
         :meth:`Robot.regressor`, :meth:`Robot.mass_matrix`, :meth:`Robot.forward_dynamics`,
-        energies) and numerical base parameters are computed, other functions refuse it.
+        energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor) and
+        numerical base parameters are computed, other functions refuse it.
     gravity : array_like, shape (3,), optional
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
@@ -245,7 +246,7 @@ class Robot:
         """True when every joint is revolute or prismatic (nq = nv = n)."""
         return self._m.single_dof
 
-    def _multibody(self, fn, *arrays, params=None, rows: bool = False):
+    def _multibody(self, fn, *arrays, params=_NO_PARAMS, rows: bool = False):
         """A multibody function of the core on one sample (1-D arrays) or a batch (2-D)."""
         arrays = [np.asarray(a, dtype=float) for a in arrays]
         extra = () if params is _NO_PARAMS else (None if params is None else np.asarray(params),)
@@ -539,7 +540,7 @@ class Robot:
         (multi-DOF joints: (nv, 10 n), no rotor inertia or friction)."""
         if not self._m.single_dof:
             self._refuse_drive_terms(rotor, friction)
-            return self._multibody(_core.multibody_regressor, q, dq, ddq, params=_NO_PARAMS)
+            return self._multibody(_core.multibody_regressor, q, dq, ddq)
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._m.regressor(q, dq, ddq, *self._layout(rotor, friction))
 

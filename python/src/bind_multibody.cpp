@@ -88,6 +88,27 @@ void bindMultibody(py::module_& m) {
       },
       py::arg("model"), py::arg("q"), py::arg("v"), py::arg("tau"), py::arg("params") = py::none());
   m.def(
+      "multibody_slotine_li_regressor",
+      [](const PyModel& s, const Vec& q, const Vec& v, const Vec& vr, const Vec& ar) {
+        checked(s, q, &v, &vr, "vr", std::nullopt);
+        checked(s, q, &v, &ar, "ar", std::nullopt);
+        MultibodyData data(s.model);
+        Eigen::MatrixXd Y(data.nv, 10 * data.n);
+        slotineLiRegressor(s.model, data, q, v, vr, ar, Y);
+        return Y;
+      },
+      py::arg("model"), py::arg("q"), py::arg("v"), py::arg("vr"), py::arg("ar"));
+  m.def(
+      "multibody_coriolis_matrix",
+      [](const PyModel& s, const Vec& q, const Vec& v, const std::optional<Vec>& params) {
+        const Vec p = checked(s, q, &v, nullptr, "", params);
+        MultibodyData data(s.model);
+        Eigen::MatrixXd C(data.nv, data.nv);
+        coriolisMatrix(s.model, data, q, v, p, C);
+        return C;
+      },
+      py::arg("model"), py::arg("q"), py::arg("v"), py::arg("params") = py::none());
+  m.def(
       "multibody_energies",
       [](const PyModel& s, const Vec& q, const Vec& v, const std::optional<Vec>& params) {
         const Vec p = checked(s, q, &v, nullptr, "", params);

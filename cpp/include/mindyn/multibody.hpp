@@ -41,9 +41,11 @@ struct MultibodyData {
   std::vector<Eigen::Matrix3d> R, R0;  // link k in its parent link, and in the base frame
   std::vector<Eigen::Vector3d> p, p0;
   std::vector<Vector6d> v, a, f;
+  std::vector<Vector6d> vr, ar;  // Slotine-Li: reference velocity and acceleration of each link
   Eigen::Matrix<double, 6, 10> F;
   Eigen::VectorXd zeros, unit, tmp;  // nv
   Eigen::MatrixXd M;                 // nv x nv
+  Eigen::MatrixXd Yw;                // nv x 10 n, the Coriolis matrix's regressor
   Eigen::LLT<Eigen::MatrixXd> llt;
 };
 
@@ -73,6 +75,17 @@ double kineticEnergy(const Model& model, MultibodyData& data, const VecRef& q, c
                      const VecRef& params) noexcept;
 double potentialEnergy(const Model& model, MultibodyData& data, const VecRef& q,
                        const VecRef& params) noexcept;
+
+/// The Slotine-Li regressor Y (nv x 10 n): Y(q, v, vr, ar) params = M(q) ar + C(q, v) vr + g(q)
+/// (slotine_li.hpp: the Newton-Euler factorisation f = I (a_r - v x v_r / 2) + (v x* I v_r +
+/// v_r x* I v) / 2, with dM/dt - 2 C skew-symmetric), vr and ar of velocitySize entries.
+void slotineLiRegressor(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
+                        const VecRef& vr, const VecRef& ar, MatOut Y) noexcept;
+
+/// The Coriolis matrix C(q, v) (nv x nv) of the same factorisation for these parameters:
+/// C(q, v) v = b(q, v), dM/dt - 2 C skew-symmetric.
+void coriolisMatrix(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
+                    const VecRef& params, MatOut C) noexcept;
 
 /// Kinetic and potential energy regressors (rows of 10 n): K = wK params, P = wP params.
 void energyRegressors(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
