@@ -385,3 +385,31 @@ def test_slotine_li_regressor_and_coriolis_matrix_agree_with_pinocchio(tmp_path,
             assert_close(C, Cp, TOL, "coriolis matrix")
         Y = slotine_li_regressor_classical(robot, q, v, vr, ar)
         assert_close(Y @ robot.params, pin_m(qp) @ ar + C @ vr + g, TOL, "slotine-li regressor")
+
+
+@pytest.mark.parametrize("name", ["talos", "tiago", "tree"])
+def test_link_poses_and_momentum_agree_with_pinocchio(tmp_path, name):
+    """Link poses against Pinocchio's forwardKinematics (oMi, times the link offset post of a
+    geometry-built model), the momentum against computeCentroidalMomentum moved from the centre
+    of mass to the base origin."""
+    if name == "tree":
+        robot = mindyn.load(random_multidof_tree_yaml(tmp_path / "tree.yaml", n=9, seed=6))
+        model, bodies = geometry_pair(robot)
+    else:
+        (robot, model), bodies = urdf_pair(name), None
+    data = model.createData()
+    rng = np.random.default_rng(9)
+    for _ in range(2):
+        q, v, _ = random_state(robot, rng)
+        qp = q if bodies is not None else pin_q(robot, model, q)
+        pin.forwardKinematics(model, data, qp)
+        poses = robot.link_poses(q)
+        for k in range(robot.n):
+            expected = data.oMi[k + 1 if bodies is None else bodies[k]].homogeneous
+            if bodies is not None:
+                expected = expected @ robot.joint_post(k)
+            assert_close(poses[k], expected, TOL, "link poses")
+        hg = pin.computeCentroidalMomentum(model, data, qp, v)
+        com = data.com[0]
+        expected = np.concatenate([hg.linear, hg.angular + np.cross(com, hg.linear)])
+        assert_close(robot.momentum(q, v), expected, TOL, "momentum")

@@ -299,6 +299,20 @@ double kineticEnergy(const Model& model, MultibodyData& data, const VecRef& q, c
   return K;
 }
 
+Vector6d momentum(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
+                  const VecRef& params) noexcept {
+  forwardKinematics(model, data, q);
+  motionPass(model, data, v, data.zeros, false);
+  Vector6d h = Vector6d::Zero();  // (angular; linear) about the base origin, base axes
+  for (int k = 0; k < data.n; ++k) {
+    const Vector6d hk = inertiaRegressor(data.v[k]) * params.segment<10>(blockStart(k));
+    carryToParent<true>(data.R0[k], data.p0[k], hk, h);
+  }
+  Vector6d out;
+  out << h.tail<3>(), h.head<3>();
+  return out;
+}
+
 double potentialEnergy(const Model& model, MultibodyData& data, const VecRef& q,
                        const VecRef& params) noexcept {
   forwardKinematics(model, data, q);

@@ -310,6 +310,7 @@ TEST(Realtime, MultibodyPathsAllocateNothing) {
       ok = ok && forwardDynamics(model, data, q, v, tau, model.inertial, a2);
       slotineLiRegressor(model, data, q, v, a, v, W);
       coriolisMatrix(model, data, q, v, model.inertial, C);
+      e += momentum(model, data, q, v, model.inertial).norm();
       e += kineticEnergy(model, data, q, v, model.inertial) +
            potentialEnergy(model, data, q, model.inertial);
     }

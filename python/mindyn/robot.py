@@ -649,6 +649,17 @@ class Robot:
                 "numerical base parameters)"
             )
 
+    def link_poses(self, q) -> np.ndarray:
+        """The pose of every link in the base frame at q (:attr:`nq` entries), shape (n, 4, 4);
+        link k is the link joint k moves (any joint kinds)."""
+        return np.array(_core.multibody_link_poses(self._m, np.asarray(q, dtype=float)))
+
+    def momentum(self, q, dq, params=None) -> np.ndarray:
+        """The momentum of the whole system at (q, dq) (:attr:`nq`, :attr:`nv` entries), shape
+        (6,): linear momentum, then angular momentum about the base origin, both in base axes;
+        ``params`` the 10 n inertial parameters (default the model's)."""
+        return self._multibody(_core.multibody_momentum, q, dq, params=params)
+
     def _refuse_drive_terms(self, rotor, friction) -> None:
         if _args.flag(rotor, "rotor") or _args.flag(friction, "friction"):
             raise _core.ModelError(

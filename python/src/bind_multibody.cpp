@@ -109,6 +109,31 @@ void bindMultibody(py::module_& m) {
       },
       py::arg("model"), py::arg("q"), py::arg("v"), py::arg("params") = py::none());
   m.def(
+      "multibody_momentum",
+      [](const PyModel& s, const Vec& q, const Vec& v, const std::optional<Vec>& params) {
+        const Vec p = checked(s, q, &v, nullptr, "", params);
+        MultibodyData data(s.model);
+        return Vec(momentum(s.model, data, q, v, p));
+      },
+      py::arg("model"), py::arg("q"), py::arg("v"), py::arg("params") = py::none(),
+      "The system's momentum (linear; angular about the base origin), base axes.");
+  m.def(
+      "multibody_link_poses",
+      [](const PyModel& s, const Vec& q) {
+        checked(s, q, nullptr, nullptr, "", std::nullopt);
+        MultibodyData data(s.model);
+        forwardKinematics(s.model, data, q);
+        std::vector<Eigen::Matrix4d> poses;
+        for (int k = 0; k < data.n; ++k) {
+          Eigen::Matrix4d T = Eigen::Matrix4d::Identity();
+          T.topLeftCorner<3, 3>() = data.R0[k];
+          T.topRightCorner<3, 1>() = data.p0[k];
+          poses.push_back(T);
+        }
+        return poses;
+      },
+      py::arg("model"), py::arg("q"), "The pose of every link in the base frame (n 4x4).");
+  m.def(
       "multibody_energies",
       [](const PyModel& s, const Vec& q, const Vec& v, const std::optional<Vec>& params) {
         const Vec p = checked(s, q, &v, nullptr, "", params);

@@ -70,6 +70,11 @@ void massMatrix(const Model& model, MultibodyData& data, const VecRef& q, const 
 bool forwardDynamics(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
                      const VecRef& tau, const VecRef& params, VecOut a) noexcept;
 
+/// The momentum of the whole system (linear; angular about the base origin), both in base axes:
+/// the sum of the links' I v carried to the base (note: linear first, as Pinocchio's Force).
+Vector6d momentum(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
+                  const VecRef& params) noexcept;
+
 /// Kinetic and potential energy (the potential zero at the base origin, gravity model.gravity).
 double kineticEnergy(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
                      const VecRef& params) noexcept;
