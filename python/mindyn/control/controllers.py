@@ -96,6 +96,7 @@ def slotine_li_regressor_classical(
     if not robot.single_dof:
         robot._refuse_drive_terms(rotor, friction)
         return robot._multibody(_core.multibody_slotine_li_regressor, q, dq, dqr, ddqr)
+    q, dq, dqr, ddqr = _args.batch(robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     return _core.slotine_li_regressor_classical(robot._m, q, dq, dqr, ddqr, rotor, friction)
 
