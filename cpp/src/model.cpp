@@ -82,7 +82,8 @@ void requireSingleDof(const Model& model, const std::string& what) {
       throw ModelError(what + " takes revolute and prismatic joints only; model '" + model.name +
                        "' has the " + toString(j.type) + " joint '" + j.name +
                        "' (its inverse dynamics, regressor, mass matrix, forward dynamics, "
-                       "energies and numerical base parameters are available)");
+                       "energies, momentum, Slotine-Li regressor, Coriolis matrix and numerical "
+                       "base parameters are available)");
 }
 
 void checkConfiguration(const Model& model, const Eigen::Ref<const Eigen::VectorXd>& q) {

@@ -645,8 +645,9 @@ class Robot:
             raise _core.ModelError(
                 f"{what} takes revolute and prismatic joints only; robot '{self.name}' has the "
                 f"{self.joint_types[k]} joint '{self.joint_names[k]}' (multi-DOF joints have "
-                "inverse dynamics, regressor, mass matrix, forward dynamics, energies and "
-                "numerical base parameters)"
+                "inverse dynamics, regressor, mass matrix, forward dynamics, energies, "
+                "momentum, link poses, Slotine-Li regressor, Coriolis matrix and numerical base "
+                "parameters)"
             )
 
     def link_poses(self, q) -> np.ndarray:
