@@ -413,3 +413,17 @@ def test_link_poses_and_momentum_agree_with_pinocchio(tmp_path, name):
         com = data.com[0]
         expected = np.concatenate([hg.linear, hg.angular + np.cross(com, hg.linear)])
         assert_close(robot.momentum(q, v), expected, TOL, "momentum")
+
+
+def test_a_floating_chain_to_a_tip_agrees_with_pinocchio_locking_the_other_joints():
+    """TALOS's left arm on its floating base (tip given): the joints off the chain locked at 0
+    clamped into their limits and merged, as Pinocchio's buildReducedModel locks them."""
+    robot = mindyn.load(FLOATING["talos"], tip="arm_left_7_link", root_joint="floating")
+    assert robot.joint_types[0] == "floating" and robot.n == 10
+    full = pin.buildModelFromUrdf(str(FLOATING["talos"]), pin.JointModelFreeFlyer())
+    lock = [full.getJointId(n) for n in full.names[1:] if n not in robot.joint_names]
+    q0 = pin.neutral(full)
+    for jid in lock:
+        i = full.joints[jid].idx_q
+        q0[i] = min(max(0.0, full.lowerPositionLimit[i]), full.upperPositionLimit[i])
+    compare(robot, pin.buildReducedModel(full, lock, q0), np.random.default_rng(1))
