@@ -12,6 +12,7 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
+import yaml
 
 _MOVING = ("revolute", "continuous", "prismatic")
 
@@ -22,6 +23,7 @@ def random_tree_urdf(
     seed: int = 0,
     fixed: int | None = None,
     branches: bool = True,
+    moving: tuple[str, ...] = _MOVING,
 ) -> Path:
     """Writes a random tree with ``n`` moving joints and ``fixed`` fixed joints (default
     ``n // 3 + 1``) to ``path`` and returns the path.
@@ -30,13 +32,14 @@ def random_tree_urdf(
     exist (the tree does not reduce to a chain). Fixed joints may sit before the first moving
     joint (part of the base), between moving joints, or end in a leaf without a moving joint
     below (folded into the body above); leaf links of fixed joints sometimes have no inertial
-    element."""
+    element. ``moving`` lists the kinds of moving joints drawn (``floating`` and ``planar``,
+    the latter in the xy plane of its frame, may be added)."""
     if n < 1 or (branches and n < 2):
         raise ValueError(f"n = {n}: a random tree needs at least {2 if branches else 1} joints")
     rng = np.random.default_rng(seed)
     fixed = n // 3 + 1 if fixed is None else fixed
     for _ in range(1000):
-        kinds = [str(rng.choice(_MOVING)) for _ in range(n)] + ["fixed"] * fixed
+        kinds = [str(rng.choice(moving)) for _ in range(n)] + ["fixed"] * fixed
         rng.shuffle(kinds)
         parents = [int(rng.integers(0, k + 1)) for k in range(len(kinds))]  # 0 = base link
         if not branches or _moving_leaves(kinds, parents) >= 2:
@@ -101,7 +104,9 @@ def _joint(rng: np.random.Generator, name: str, kind: str, parent: str, child: s
         f'    <origin xyz="{_vec(xyz)}" rpy="{_vec(rpy)}"/>\n'
         f'    <parent link="{parent}"/>\n    <child link="{child}"/>\n'
     )
-    if kind != "fixed":
+    if kind == "planar":
+        text += '    <axis xyz="0 0 1"/>\n'
+    elif kind not in ("fixed", "floating"):
         text += f'    <axis xyz="{_vec(_axis(rng))}"/>\n'
     if kind == "revolute":
         lo, hi = -rng.uniform(0.5, 3.0), rng.uniform(0.5, 3.0)
@@ -148,3 +153,50 @@ def _link(name: str, inertial: str | None) -> str:
     if inertial is None:
         return f"  <link name={quoteattr(name)}/>"
     return f"  <link name={quoteattr(name)}>\n{inertial}  </link>"
+
+
+_MULTI = ("revolute", "prismatic", "spherical", "universal", "cylindrical", "planar", "floating")
+
+
+def random_multidof_tree_yaml(path: Path, n: int = 8, seed: int = 0, kinds=_MULTI) -> Path:
+    """Writes a random tree of ``n`` joints of the given ``kinds`` (drawn with replacement, each
+    kind at least once when ``n`` allows) as a modified-DH YAML description to ``path``: every
+    joint hangs from a random earlier link (``parent``, depth-first order), alpha, d, theta, r
+    random, inertial
+    values physically consistent. Returns the path."""
+    rng = np.random.default_rng(seed)
+    drawn = list(kinds)[:n] + [str(rng.choice(kinds)) for _ in range(n - min(n, len(kinds)))]
+    rng.shuffle(drawn)
+    joints, parents = [], []
+    for k, kind in enumerate(drawn):
+        # depth-first order (Pinocchio's crba needs each subtree's velocities contiguous): the
+        # parent is the base, the joint before or one of its ancestors
+        chain = [k]
+        while chain[-1] > 0:
+            chain.append(parents[chain[-1] - 1])
+        parents.append(int(rng.choice(chain)))
+        mass = float(rng.uniform(0.3, 4.0))
+        inertia = com_inertia(rng, mass, 0.2)
+        joints.append(
+            {
+                "name": f"j{k + 1}_{kind}",
+                "type": kind,
+                "parent": parents[k],
+                "alpha": float(rng.uniform(-np.pi, np.pi)),
+                "d": float(rng.uniform(-0.3, 0.3)),
+                "theta": float(rng.uniform(-np.pi, np.pi)),
+                "r": float(rng.uniform(-0.3, 0.3)),
+                "inertial": {
+                    "mass": mass,
+                    "com": rng.uniform(-0.15, 0.15, 3).tolist(),
+                    "inertia": {key: float(inertia[a, b]) for key, (a, b) in _YAML_TENSOR.items()},
+                },
+            }
+        )
+    doc = {"name": f"multidof{n}_{seed}", "convention": "mdh", "joints": joints}
+    path = Path(path)
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+_YAML_TENSOR = {"xx": (0, 0), "xy": (0, 1), "xz": (0, 2), "yy": (1, 1), "yz": (1, 2), "zz": (2, 2)}

@@ -96,16 +96,14 @@ def test_malformed_urdf(tmp_path):
         mindyn.load(path)
 
 
-def test_urdf_floating_joint_unsupported(tmp_path):
+def test_urdf_floating_and_planar_joints_load_as_multi_dof_joints(tmp_path):
+    """Formerly refused; now a free-flyer (nq 7, nv 6) and a planar joint (nq 4, nv 3)."""
     path = write(tmp_path, "float.urdf", urdf(joint("free", "base", "l1", "floating"), link("l1")))
-    with pytest.raises(ValueError, match=r"float\.urdf.*'free'.*'floating'.*not supported"):
-        mindyn.load(path)
-
-
-def test_urdf_planar_joint_unsupported(tmp_path):
+    robot = mindyn.load(path)
+    assert (robot.joint_types, robot.nq, robot.nv) == (["floating"], 7, 6)
     path = write(tmp_path, "planar.urdf", urdf(joint("pl", "base", "l1", "planar"), link("l1")))
-    with pytest.raises(ValueError, match="'pl'.*'planar'.*not supported"):
-        mindyn.load(path)
+    robot = mindyn.load(path)
+    assert (robot.joint_types, robot.nq, robot.nv) == (["planar"], 4, 3)
 
 
 def test_urdf_without_moving_joint(tmp_path):
@@ -164,7 +162,7 @@ def test_yaml_unknown_key_typo(tmp_path):
     "change, match",
     [
         (("convention: dh", "convention: xyz"), "'convention' must be 'dh' or 'mdh'"),
-        (("name: a, a: 0.4", "name: a, type: spherical, a: 0.4"), "joint type 'spherical'"),
+        (("name: a, a: 0.4", "name: a, type: ball, a: 0.4"), "joint type 'ball'"),
         (("a: 0.3", "a: abc"), "'a' must be a number"),
         (("mass: 1.0", "mass: -1.0"), "mass is negative"),
         (("com: [-0.2, 0, 0]", "com: [-0.2, 0]"), "'com' must be a list of 3 numbers"),

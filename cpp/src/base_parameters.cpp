@@ -9,12 +9,14 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <tuple>
 #include <type_traits>
 
 #include "mindyn/dynamics.hpp"
+#include "mindyn/multibody.hpp"
 #include "mindyn/projection.hpp"
 #include "mindyn/recursive_base.hpp"
 #include "mindyn/spatial.hpp"
@@ -253,6 +255,67 @@ void randomState(const Model& model, std::mt19937& rng, Eigen::VectorXd& q, Eige
   }
 }
 
+// The dynamics the numerical method samples and the regrouping check evaluates, at a random
+// state it holds: the single-DOF algorithms (dynamics.hpp) in the layout, or the multibody ones
+// (multibody.hpp, inertial parameters only) on a model with multi-DOF joints.
+struct Dynamics {
+  Dynamics(const Model& m, ParameterLayout l)
+      : model(m), layout(l), multi(!m.singleDof()), nv(m.velocitySize()) {
+    if (multi) {
+      mb.emplace(model);
+      q.resize(model.configSize());
+    } else {
+      data.emplace(model);
+      q.resize(nv);
+    }
+    dq.resize(nv);
+    ddq.resize(nv);
+  }
+  void randomState(std::mt19937& rng) {
+    if (!multi) return mindyn::randomState(model, rng, q, dq, ddq);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    randomConfiguration(model, rng, q);
+    for (int i = 0; i < nv; ++i) {
+      dq[i] = 2.0 * u(rng);
+      ddq[i] = 2.0 * u(rng);
+    }
+  }
+  void regressor(MatOut W) {
+    if (multi)
+      mindyn::regressor(model, *mb, q, dq, ddq, W);
+    else
+      mindyn::regressor(model, *data, q, dq, ddq, layout, W);
+  }
+  void energyRegressors(VecOut wK, VecOut wP) {
+    if (multi)
+      mindyn::energyRegressors(model, *mb, q, dq, wK, wP);
+    else
+      mindyn::energyRegressors(model, *data, q, dq, layout, wK, wP);
+  }
+  void inverseDynamics(const VecRef& pi, VecOut tau) {
+    if (multi)
+      mindyn::inverseDynamics(model, *mb, q, dq, ddq, pi, tau);
+    else
+      mindyn::inverseDynamics(model, *data, q, dq, ddq, pi, layout, tau);
+  }
+  double kinetic(const VecRef& pi) {
+    return multi ? kineticEnergy(model, *mb, q, dq, pi)
+                 : kineticEnergy(model, *data, q, dq, pi, layout);
+  }
+  double potential(const VecRef& pi) {
+    return multi ? potentialEnergy(model, *mb, q, pi)
+                 : potentialEnergy(model, *data, q, pi, layout);
+  }
+
+  const Model& model;
+  ParameterLayout layout;
+  bool multi;
+  int nv;
+  std::optional<Data> data;
+  std::optional<MultibodyData> mb;
+  Eigen::VectorXd q, dq, ddq;
+};
+
 // Samples of the regressors at random states, for the numerical method.
 struct Samples {
   Eigen::MatrixXd W, wL, wH;
@@ -261,23 +324,24 @@ struct Samples {
 // `m` states give the regressor rows (n each); the energy rows (one per state) come from the
 // first `me` states and further ones when me > m.
 Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, int me, unsigned seed) {
-  const int n = model.nq(), P = layout.size(n);
-  Data data(model);
+  const int P = layout.size(model.nq());
+  Dynamics dyn(model, layout);
+  const int n = dyn.nv;  // regressor rows per state
   std::mt19937 rng(seed);
   Samples s;
   s.W.resize(static_cast<long>(m) * n, P);
   s.wL.resize(me, P);
   s.wH.resize(me, P);
-  Eigen::VectorXd q(n), dq(n), ddq(n), wK(P), wP(P);
+  Eigen::VectorXd wK(P), wP(P);
   Eigen::MatrixXd W(n, P);
   for (int i = 0; i < std::max(m, me); ++i) {
-    randomState(model, rng, q, dq, ddq);
+    dyn.randomState(rng);
     if (i < m) {
-      regressor(model, data, q, dq, ddq, layout, W);
+      dyn.regressor(W);
       s.W.middleRows(static_cast<long>(i) * n, n) = W;
     }
     if (i < me) {
-      energyRegressors(model, data, q, dq, layout, wK, wP);
+      dyn.energyRegressors(wK, wP);
       s.wL.row(i) = (wK - wP).transpose();
       s.wH.row(i) = (wK + wP).transpose();
     }
@@ -761,8 +825,9 @@ void foldRecursiveMargins(const Model& model, ParameterLayout layout, double tol
 // decision's `consistency`.
 void checkRegrouping(const Model& model, ParameterLayout layout, const Eigen::VectorXd& units,
                      BaseParameters& bp) {
-  const int n = model.nq(), P = layout.size(n);
-  Data data(model);
+  const int P = layout.size(model.nq());
+  Dynamics dyn(model, layout);
+  const int n = dyn.nv;
   std::mt19937 rng(12345);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   constexpr int kStates = 10, kVectors = 3;
@@ -782,20 +847,20 @@ void checkRegrouping(const Model& model, ParameterLayout layout, const Eigen::Ve
     for (int b = 0; b < d.rank(); ++b) embedded[i].row(d.pivots[b]) = pb.row(b);
   }
   double err[3] = {0, 0, 0}, size[3] = {0, 0, 0};
-  Eigen::VectorXd q(n), dq(n), ddq(n), tau(n), tau_b(n);
+  Eigen::VectorXd tau(n), tau_b(n);
   for (int s = 0; s < kStates; ++s) {
-    randomState(model, rng, q, dq, ddq);
+    dyn.randomState(rng);
     for (int v = 0; v < kVectors; ++v) {
       const auto pi = pis.col(v);
-      inverseDynamics(model, data, q, dq, ddq, pi, layout, tau);
-      inverseDynamics(model, data, q, dq, ddq, embedded[0].col(v), layout, tau_b);
+      dyn.inverseDynamics(pi, tau);
+      dyn.inverseDynamics(embedded[0].col(v), tau_b);
       err[0] = std::max(err[0], (tau - tau_b).cwiseAbs().maxCoeff());
       size[0] = std::max(size[0], tau.cwiseAbs().maxCoeff());
-      const double K = kineticEnergy(model, data, q, dq, pi, layout);
-      const double V = potentialEnergy(model, data, q, pi, layout);
+      const double K = dyn.kinetic(pi);
+      const double V = dyn.potential(pi);
       for (int i = 1; i < 3; ++i) {
-        const double Kb = kineticEnergy(model, data, q, dq, embedded[i].col(v), layout);
-        const double Vb = potentialEnergy(model, data, q, embedded[i].col(v), layout);
+        const double Kb = dyn.kinetic(embedded[i].col(v));
+        const double Vb = dyn.potential(embedded[i].col(v));
         const double e = i == 1 ? (K - V) - (Kb - Vb) : (K + V) - (Kb + Vb);
         err[i] = std::max(err[i], std::abs(e));
         size[i] = std::max(size[i], std::abs(K) + std::abs(V));
@@ -854,6 +919,16 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     throw ModelError("the parameter order names " + std::to_string(order.size()) +
                      " parameters; the layout has " + std::to_string(P));
   checkDriveSide(model, layout);
+  if (!model.singleDof()) {
+    if (options.method != BaseMethod::Numerical)
+      requireSingleDof(model, options.method == BaseMethod::Projection ? "the projection method"
+                                                                       : "the recursive method");
+    if (layout.rotor || layout.friction)
+      throw ModelError(
+          "rotor inertia and friction are defined for revolute and prismatic joints "
+          "only; model '" +
+          model.name + "' has multi-DOF joints");
+  }
   if (!(options.tolerance > 0 && options.tolerance < 1e-2))
     throw ModelError("the rank tolerance must be in (0, 0.01), got " + shortest(options.tolerance));
 
@@ -937,15 +1012,16 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     // the tolerance: the regressor stacks n rows per state, the energies one.
     const int m = options.samples > 0 ? options.samples : std::max(40, 3 * P / std::max(1, n) + 20);
     const int me = std::max(m, P + std::max(20, P / 2));
-    if (static_cast<long>(m) * n < P)
+    const int nv = model.velocitySize();  // regressor rows per state
+    if (static_cast<long>(m) * nv < P)
       throw ModelError("samples = " + std::to_string(m) + " states give " +
-                       std::to_string(static_cast<long>(m) * n) + " regressor rows for " +
+                       std::to_string(static_cast<long>(m) * nv) + " regressor rows for " +
                        std::to_string(P) + " parameters; give at least " +
-                       std::to_string((P + n - 1) / n) + " (0: automatic)");
+                       std::to_string((P + nv - 1) / nv) + " (0: automatic)");
     // Peak memory: the samples (regressor and two energy matrices), and for the regressor's
     // elimination its triangular factor and residuals (rows x P each), F and Y (P x P, stored
     // sparse: up to half as much again as dense).
-    const double rows = static_cast<double>(m) * n;
+    const double rows = static_cast<double>(m) * nv;
     const double bytes = 8.0 * P * (3.0 * rows + 2.0 * me + 2.5 * P);
     if (bytes > options.numerical_budget) {
       char buf[320];

@@ -451,6 +451,7 @@ Model build(const Ctx& start, const YAML::Node& root) {
   const std::set<std::string> geo = conv == "dh"
                                         ? std::set<std::string>{"a", "alpha", "d", "theta"}
                                         : std::set<std::string>{"alpha", "d", "theta", "r"};
+  std::vector<int> parents;
   for (int k = 0; k < n; ++k) {
     const YAML::Node jn = joints[k];
     Joint j;
@@ -459,16 +460,45 @@ Model build(const Ctx& start, const YAML::Node& root) {
     j.name = text(c, jn, "name", "joint" + std::to_string(k + 1));
     c.where = "joint " + std::to_string(k + 1) + " ('" + j.name + "')";
     std::set<std::string> allowed = geo;
-    allowed.insert(
-        {"name", "type", "limits", "drive", "inertial", "rotor_inertia", "friction", "link"});
+    allowed.insert({"name", "type", "limits", "drive", "inertial", "rotor_inertia", "friction",
+                    "link", "parent"});
     checkKeys(c, jn, allowed, "the joint");
     const std::string type = text(c, jn, "type", "revolute");
     if (type == "revolute" || type == "continuous")
       j.type = JointType::Revolute;
     else if (type == "prismatic")
       j.type = JointType::Prismatic;
+    else if (type == "spherical")
+      j.type = JointType::Spherical;
+    else if (type == "universal")
+      j.type = JointType::Universal;
+    else if (type == "cylindrical")
+      j.type = JointType::Cylindrical;
+    else if (type == "planar")
+      j.type = JointType::Planar;
+    else if (type == "floating")
+      j.type = JointType::FreeFlyer;
     else
-      c.fail("joint type '" + type + "' is not supported (revolute or prismatic)", jn["type"]);
+      c.fail("joint type '" + escapeControl(type) +
+                 "' is not supported (revolute, continuous, prismatic, spherical, universal, "
+                 "cylindrical, planar or floating)",
+             jn["type"]);
+    if (!j.singleDof())
+      for (const char* key : {"limits", "drive", "rotor_inertia", "friction"})
+        if (jn[key].IsDefined())
+          c.fail(std::string("'") + key +
+                     "' is given for revolute and prismatic joints only, not "
+                     "for this " +
+                     type + " joint",
+                 jn[key]);
+    // The joint carrying the parent link: 1-based index of an earlier joint, 0 for the base
+    // (default: the joint before, a serial chain).
+    const double parent = optional(c, jn, "parent", k);
+    if (parent != std::floor(parent) || parent < 0 || parent > k)
+      c.fail("'parent' must be 0 (the base) or the number of an earlier joint (1 to " +
+                 std::to_string(k) + ")",
+             jn["parent"]);
+    parents.push_back(static_cast<int>(parent) - 1);
     DHRow row;
     if (conv == "dh") {
       row.a = optional(c, jn, "a", 0);
@@ -521,6 +551,8 @@ Model build(const Ctx& start, const YAML::Node& root) {
     model.joints.push_back(j);
   }
   c.where.clear();
+  for (int k = 0; k < n; ++k)
+    if (parents[k] != k - 1) model.parents = parents;
   if (root["tool"].IsDefined()) {
     const YAML::Node t = root["tool"];
     checkKeys(c, t, {"xyz", "rpy"}, "tool");

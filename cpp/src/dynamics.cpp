@@ -1,8 +1,10 @@
 #include "mindyn/dynamics.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
+#include "body_terms.hpp"
 #include "drive_terms.hpp"
 #include "mindyn/spatial.hpp"
 
@@ -28,14 +30,9 @@ void forwardKinematics(const Model& model, Data& data, const VecRef& q) noexcept
     }
     data.R[k] = j.pre.linear() * Rj * j.post.linear();
     data.p[k] = j.pre.translation() + j.pre.linear() * tj;
-    const int pk = model.parent(k);
-    if (pk < 0) {
-      data.R0[k] = data.R[k];
-      data.p0[k] = data.p[k];
-    } else {
-      data.p0[k] = data.p0[pk] + data.R0[pk] * data.p[k];
-      data.R0[k] = data.R0[pk] * data.R[k];
-    }
+    const int pk = std::max(model.parent(k), 0);  // the base: not read
+    placeInBase(model.parent(k) >= 0, data.R0[pk], data.p0[pk], data.R[k], data.p[k], data.R0[k],
+                data.p0[k]);
   }
 }
 
@@ -49,23 +46,9 @@ void motionPass(const Model& model, Data& data, const VecRef& dq, const VecRef& 
   if (with_gravity) a_base.tail<3>() = -model.gravity;
   for (int k = 0; k < data.n; ++k) {
     const Vector6d& S = data.S[k];
-    const int pk = model.parent(k);
-    Vector6d v, a;
-    if (pk < 0) {
-      v.setZero();
-      a = motionToChild(data.R[k], data.p[k], a_base);
-    } else {
-      v = motionToChild(data.R[k], data.p[k], data.v[pk]);
-      a = motionToChild(data.R[k], data.p[k], data.a[pk]);
-    }
-    const Vector6d vj = S * dq[k];
-    v += vj;
-    // a += S ddq + v x vj (motion cross product, written out: no temporary)
-    a += S * ddq[k];
-    a.head<3>() += v.head<3>().cross(vj.head<3>());
-    a.tail<3>() += v.head<3>().cross(vj.tail<3>()) + v.tail<3>().cross(vj.head<3>());
-    data.v[k] = v;
-    data.a[k] = a;
+    const int pk = std::max(model.parent(k), 0);  // the base: not read
+    linkMotion(model.parent(k) >= 0, data.R[k], data.p[k], data.v[pk], data.a[pk], a_base,
+               S * dq[k], S * ddq[k], data.v[k], data.a[k]);
   }
 }
 
@@ -74,19 +57,8 @@ void forcePass(const Model& model, Data& data, const VecRef& dq, const VecRef& d
                const VecRef& params, ParameterLayout layout, bool joint_terms,
                VecOut tau) noexcept {
   const int n = data.n;
-  for (int k = 0; k < n; ++k) {
-    const auto pk = params.segment<10>(blockStart(layout, k));
-    Eigen::Matrix3d I;
-    I << pk[0], pk[1], pk[2], pk[1], pk[3], pk[4], pk[2], pk[4], pk[5];
-    const Eigen::Vector3d h = pk.segment<3>(6);
-    const double m = pk[9];
-    const Eigen::Vector3d w = data.v[k].head<3>();
-    const Eigen::Vector3d vl = data.v[k].tail<3>();
-    const Eigen::Vector3d aw = data.a[k].head<3>();
-    const Eigen::Vector3d b = data.a[k].tail<3>() + w.cross(vl);
-    data.f[k].head<3>() = I * aw + w.cross(I * w) - b.cross(h);
-    data.f[k].tail<3>() = m * b + aw.cross(h) + w.cross(w.cross(h));
-  }
+  for (int k = 0; k < n; ++k)
+    data.f[k] = bodyWrench(params.segment<10>(blockStart(layout, k)), data.v[k], data.a[k]);
   for (int k = n - 1; k >= 0; --k) {
     tau[k] = data.S[k].dot(data.f[k]);
     // f[k] is complete: every child of link k has a larger index and was carried into it.
@@ -124,17 +96,8 @@ void regressor(const Model& model, Data& data, const VecRef& q, const VecRef& dq
   const int n = data.n;
   W.setZero();
   for (int j = 0; j < n; ++j) {
-    const Eigen::Vector3d w = data.v[j].head<3>();
-    const Eigen::Vector3d vl = data.v[j].tail<3>();
-    const Eigen::Vector3d aw = data.a[j].head<3>();
-    const Eigen::Vector3d b = data.a[j].tail<3>() + w.cross(vl);
-    const Eigen::Matrix3d Sw = skew(w);
     Matrix6x10& F = data.F;
-    F.setZero();
-    F.block<3, 6>(0, 0) = inertiaMap(aw) + Sw * inertiaMap(w);
-    F.block<3, 3>(0, 6) = -skew(b);
-    F.block<3, 3>(3, 6) = skew(aw) + Sw * Sw;
-    F.block<3, 1>(3, 9) = b;
+    bodyRegressor(data.v[j], data.a[j], F);
     const int c0 = blockStart(layout, j);
     // Link j's wrench block reaches the joints that support it: j and its ancestors.
     for (int k = j; k >= 0; k = model.parent(k)) {

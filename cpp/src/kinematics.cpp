@@ -51,6 +51,7 @@ KDL::Frame toKdl(const Eigen::Isometry3d& T) {
 }
 
 KDL::Chain toKdlChain(const Model& model, bool with_inertia) {
+  requireSingleDof(model, "the KDL kinematics");
   model.validate();
   if (!model.isSerial())
     throw ModelError("model '" + model.name +

@@ -9,9 +9,16 @@
 
 namespace mindyn {
 
-const char* toString(JointType type) {
-  return type == JointType::Revolute ? "revolute" : "prismatic";
-}
+namespace {
+const char* const kJointNames[] = {"revolute",    "prismatic", "spherical", "universal",
+                                   "cylindrical", "planar",    "floating"};
+constexpr int kJointNq[] = {1, 1, 4, 2, 2, 4, 7};
+constexpr int kJointNv[] = {1, 1, 3, 2, 2, 3, 6};
+}  // namespace
+
+const char* toString(JointType type) { return kJointNames[static_cast<int>(type)]; }
+int configSize(JointType type) { return kJointNq[static_cast<int>(type)]; }
+int velocitySize(JointType type) { return kJointNv[static_cast<int>(type)]; }
 
 Eigen::Isometry3d Joint::transform(double q) const {
   Eigen::Isometry3d J = Eigen::Isometry3d::Identity();
@@ -20,6 +27,88 @@ Eigen::Isometry3d Joint::transform(double q) const {
   else
     J.translation() = axis * q;
   return pre * J * post;
+}
+
+Eigen::Isometry3d Joint::transform(const double* q) const {
+  Eigen::Isometry3d J = Eigen::Isometry3d::Identity();
+  switch (type) {
+    case JointType::Revolute:
+    case JointType::Prismatic:
+      return transform(q[0]);
+    case JointType::Spherical:
+      J.linear() = Eigen::Quaterniond(q[3], q[0], q[1], q[2]).toRotationMatrix();
+      break;
+    case JointType::Universal:
+      J.linear() =
+          (Eigen::AngleAxisd(q[0], axis) * Eigen::AngleAxisd(q[1], axis2)).toRotationMatrix();
+      break;
+    case JointType::Cylindrical:
+      J.linear() = Eigen::AngleAxisd(q[1], axis).toRotationMatrix();
+      J.translation() = axis * q[0];
+      break;
+    case JointType::Planar:
+      J.linear() << q[2], -q[3], 0.0, q[3], q[2], 0.0, 0.0, 0.0, 1.0;
+      J.translation() << q[0], q[1], 0.0;
+      break;
+    case JointType::FreeFlyer:
+      J.linear() = Eigen::Quaterniond(q[6], q[3], q[4], q[5]).toRotationMatrix();
+      J.translation() << q[0], q[1], q[2];
+      break;
+  }
+  return pre * J * post;
+}
+
+int Model::configSize() const {
+  int s = 0;
+  for (const Joint& j : joints) s += j.nq();
+  return s;
+}
+
+int Model::velocitySize() const {
+  int s = 0;
+  for (const Joint& j : joints) s += j.nv();
+  return s;
+}
+
+bool Model::singleDof() const {
+  for (const Joint& j : joints)
+    if (!j.singleDof()) return false;
+  return true;
+}
+
+void requireSingleDof(const Model& model, const std::string& what) {
+  for (const Joint& j : model.joints)
+    if (!j.singleDof())
+      throw ModelError(what + " takes revolute and prismatic joints only; model '" + model.name +
+                       "' has the " + toString(j.type) + " joint '" + j.name +
+                       "' (its inverse dynamics, regressor, mass matrix, forward dynamics, "
+                       "energies, momentum, Slotine-Li regressor, Coriolis matrix and numerical "
+                       "base parameters are available)");
+}
+
+void checkConfiguration(const Model& model, const Eigen::Ref<const Eigen::VectorXd>& q) {
+  if (q.size() != model.configSize())
+    throw std::invalid_argument("q has " + std::to_string(q.size()) +
+                                " entries; the model's "
+                                "configuration has " +
+                                std::to_string(model.configSize()));
+  int i = 0;
+  for (const Joint& j : model.joints) {
+    int start = -1, len = 0;
+    if (j.type == JointType::Spherical) start = 0, len = 4;
+    if (j.type == JointType::FreeFlyer) start = 3, len = 4;
+    if (j.type == JointType::Planar) start = 2, len = 2;
+    if (start >= 0) {
+      const double norm = q.segment(i + start, len).norm();
+      if (!(std::abs(norm - 1.0) <= 1e-6))
+        throw std::invalid_argument(
+            std::string("the ") + (len == 4 ? "quaternion" : "(cos, sin) pair") + " of the " +
+            toString(j.type) + " joint '" + j.name + "' (q entries " + std::to_string(i + start) +
+            " to " + std::to_string(i + start + len - 1) + ") has norm " + std::to_string(norm) +
+            ", not 1");
+    }
+    i += j.nq();
+  }
 }
 
 bool Model::isSerial() const {
@@ -251,6 +340,12 @@ void Model::validate() const {
     }
     if (!j.axis.allFinite() || std::abs(j.axis.norm() - 1.0) > 1e-9)
       throw ModelError(joint() + ": axis is not a unit vector");
+    if (j.type == JointType::Universal &&
+        (!j.axis2.allFinite() || std::abs(j.axis2.norm() - 1.0) > 1e-9 ||
+         j.axis.cross(j.axis2).norm() < 1e-6))
+      throw ModelError(joint() +
+                       ": the universal joint's second axis is not a unit vector "
+                       "independent of the first");
     if (!isRigid(j.pre) || !isRigid(j.post))
       throw ModelError(joint() + ": origin is not a rigid transform");
     if (j.limits.lower > j.limits.upper)
@@ -391,6 +486,7 @@ Data::Data(const Model& model)
       tmp(Eigen::VectorXd::Zero(n)),
       M(Eigen::MatrixXd::Zero(n, n)),
       llt(n) {
+  requireSingleDof(model, "this function");
   for (int k = 0; k < n; ++k) {
     const Joint& j = model.joints[k];
     const Eigen::Matrix3d Rt = j.post.linear().transpose();

@@ -821,6 +821,11 @@ ProjectionLimits projectionLimits() {
 
 std::string projectionRefusal(const Model& model, ParameterLayout layout, double budget) {
   model.validate();
+  try {
+    requireSingleDof(model, "the projection method");
+  } catch (const ModelError& e) {
+    return e.what();
+  }
   const int n = model.nq(), P = layout.size(n);
   const KeyLayout kl = keyLayout(model);
   const std::string has = ", the model has ";
@@ -847,6 +852,7 @@ std::string projectionRefusal(const Model& model, ParameterLayout layout, double
 
 InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout,
                                           double budget) {
+  requireSingleDof(model, "the projection method");
   model.validate();
   const int n = model.nq();
   const KeyLayout kl = keyLayout(model);

@@ -145,6 +145,7 @@ Vec6 motionSubspace(const Joint& j) {
 
 IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layout,
                                         double tolerance) {
+  requireSingleDof(model, "the recursive method");
   model.validate();
   if (const std::string why = recursiveRefusal(model, layout, tolerance); !why.empty())
     throw ModelError(why);
@@ -368,6 +369,11 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
 }
 
 std::string recursiveRefusal(const Model& model, ParameterLayout layout, double tolerance) {
+  try {
+    requireSingleDof(model, "the recursive method");
+  } catch (const ModelError& e) {
+    return e.what();
+  }
   if (!layout.rotor || !model.motorSide() || model.transmission.nm() != model.nq()) return "";
   const int n = model.nq();
   const Eigen::MatrixXd& T = model.transmission.T;

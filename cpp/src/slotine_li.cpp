@@ -1,22 +1,12 @@
 #include "mindyn/slotine_li.hpp"
 
+#include "body_terms.hpp"
 #include "drive_terms.hpp"
 #include "mindyn/spatial.hpp"
 
 namespace mindyn {
 
 namespace {
-
-// I u = K(u) [XX XY XZ YY YZ ZZ MX MY MZ M] for the spatial inertia about the link origin:
-// I (w, l) = (I_o w + h x l, M l - h x w).
-inline Matrix6x10 inertiaRegressor(const Vector6d& u) {
-  Matrix6x10 K = Matrix6x10::Zero();
-  K.block<3, 6>(0, 0) = inertiaMap(u.head<3>());
-  K.block<3, 3>(0, 6) = -skew(u.tail<3>());
-  K.block<3, 3>(3, 6) = skew(u.head<3>());
-  K.block<3, 1>(3, 9) = u.tail<3>();
-  return K;
-}
 
 // Spatial inertia of ten classical parameters applied to a motion vector.
 inline Vector6d applyInertia(const Eigen::Ref<const Eigen::VectorXd>& p, int c0,

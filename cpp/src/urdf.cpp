@@ -746,14 +746,18 @@ std::string joinNames(const std::vector<std::string>& names) {
 /// Builds the Model once the URDF text has been parsed.
 class Builder {
  public:
-  Builder(const urdf::ModelInterface& urdf, std::string source)
-      : urdf_(urdf), source_(std::move(source)) {}
+  Builder(const urdf::ModelInterface& urdf, std::string source, std::string root_joint)
+      : urdf_(urdf), source_(std::move(source)), root_joint_(std::move(root_joint)) {}
 
   Model build(const std::string& tip_name) {
     root_ = urdf_.getRoot();
     if (!root_) fail("has no root link");
+    if (!root_joint_.empty() && root_joint_ != "floating" && root_joint_ != "planar")
+      throw ModelError("the root joint must be 'floating' or 'planar' (or none), not '" +
+                       escapeControl(root_joint_) + "'");
     checkTree();
     if (!tip_name.empty()) return buildChain(findTip(tip_name));
+    if (!root_joint_.empty()) return buildTree();
     std::vector<std::string> leaves;
     collectLeaves(root_, &leaves);
     if (leaves.empty()) {
@@ -776,6 +780,7 @@ class Builder {
     for (const auto& l : path) on_path_.insert(l->name);
 
     Model model = emptyModel();
+    addRootJoint(&model);
     Eigen::Isometry3d fixed = Eigen::Isometry3d::Identity();  // since the last moving link
     for (size_t i = 1; i < path.size(); ++i) {
       const urdf::Joint& uj = *path[i]->parent_joint;
@@ -799,7 +804,9 @@ class Builder {
   /// with no other moving joint below are locked and merged.
   Model buildTree() {
     Model model = emptyModel();
-    addSubtree(*root_, -1, Eigen::Isometry3d::Identity(), &model);
+    addRootJoint(&model);
+    if (!model.joints.empty()) model.parents.push_back(-1);
+    addSubtree(*root_, model.joints.empty() ? -1 : 0, Eigen::Isometry3d::Identity(), &model);
     return finish(&model, "mimic joints locked at q = 0 (clamped to limits) and merged: ");
   }
 
@@ -837,8 +844,24 @@ class Builder {
     model.name = urdf_.getName();
     model.source = source_;
     model.convention = "urdf";
-    model.link_names.push_back(root_->name);
+    model.link_names.push_back(root_joint_.empty() ? root_->name : std::string("world"));
     return model;
+  }
+
+  /// With a root joint requested: the free-flyer or planar joint "root_joint" from the world
+  /// to the root link, which becomes the first moving body (with every link rigidly attached
+  /// to it).
+  void addRootJoint(Model* model) {
+    if (root_joint_.empty()) return;
+    Joint j;
+    j.name = "root_joint";
+    j.type = root_joint_ == "floating" ? JointType::FreeFlyer : JointType::Planar;
+    viscous_.push_back(0.0);
+    coulomb_.push_back(0.0);
+    model->joints.push_back(j);
+    model->link_names.push_back(root_->name);
+    bodies_.push_back(root_.get());
+    on_path_.insert(root_->name);
   }
 
   /// Appends the moving joint `uj` (origin `pre` from its parent body's frame) and its child
@@ -851,19 +874,34 @@ class Builder {
       j.type = JointType::Revolute;
     else if (uj.type == urdf::Joint::PRISMATIC)
       j.type = JointType::Prismatic;
+    else if (uj.type == urdf::Joint::FLOATING)
+      j.type = JointType::FreeFlyer;
+    else if (uj.type == urdf::Joint::PLANAR)
+      j.type = JointType::Planar;
     else
       fail("joint '" + uj.name + "' has type '" + urdfTypeName(uj.type) +
-           "', which is not supported (revolute, continuous, prismatic and fixed joints are)");
+           "', which is not supported (revolute, continuous, prismatic, floating, planar and "
+           "fixed joints are)");
     if (uj.mimic)
       fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
            "', which is not supported; load a chain that ends before it with a tip link (tip= "
            "in Python and C++, --tip on the command line), e.g. its parent link '" +
            uj.parent_link_name + "', which locks it at q = 0");
     const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
-    if (axis.norm() < 1e-12) fail("joint '" + uj.name + "' has a zero or invalid axis");
-    j.axis = axis.normalized();
+    if (j.type != JointType::FreeFlyer && axis.norm() < 1e-12)  // a floating joint has none
+      fail("joint '" + uj.name + "' has a zero or invalid axis");
+    j.axis = j.type == JointType::FreeFlyer ? Eigen::Vector3d::UnitZ() : axis.normalized();
     j.pre = pre;
-    if (uj.limits) {
+    if (j.type == JointType::Planar) {
+      // the motion in the plane normal to <axis>: J in a frame A whose z is the axis,
+      // T = pre A J A^T
+      const Eigen::Matrix3d A =
+          Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), j.axis).toRotationMatrix();
+      j.pre.linear() = j.pre.linear() * A;
+      j.post.linear() = A.transpose();
+      j.axis = Eigen::Vector3d::UnitZ();
+    }
+    if (uj.limits && j.singleDof()) {
       const urdf::JointLimits& lim = *uj.limits;
       // urdfdom reports absent lower/upper as 0/0 and absent velocity/effort as 0: not given.
       if (uj.type != urdf::Joint::CONTINUOUS && !(lim.lower == 0.0 && lim.upper == 0.0)) {
@@ -1045,6 +1083,7 @@ class Builder {
 
   const urdf::ModelInterface& urdf_;
   const std::string source_;
+  const std::string root_joint_;
   urdf::LinkConstSharedPtr root_;
   std::set<std::string> on_path_;  // links of the model's moving joints (chain: the whole path)
   std::map<std::string, bool> moving_below_;
@@ -1094,7 +1133,8 @@ Eigen::Matrix<double, 10, 1> transformInertial(const Eigen::Matrix<double, 10, 1
   return out;
 }
 
-Model parseUrdf(const std::string& xml, const std::string& tip, const std::string& source) {
+Model parseUrdf(const std::string& xml, const std::string& tip, const std::string& source,
+                const std::string& root_joint) {
   try {
     requireUtf8(xml, source);
     std::string reason, format;
@@ -1103,7 +1143,7 @@ Model parseUrdf(const std::string& xml, const std::string& tip, const std::strin
     const urdf::ModelInterfaceSharedPtr urdf =
         parseQuietly(checkNumbers(xml, source, &groups, &format, &skipped, &ignored), &reason);
     if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
-    Model model = Builder(*urdf, source).build(tip);
+    Model model = Builder(*urdf, source, root_joint).build(tip);
     if (!groups.empty()) addTransmissions(*urdf, groups, format, &model);
     if (!skipped.empty()) {
       std::string text;
@@ -1127,7 +1167,7 @@ Model parseUrdf(const std::string& xml, const std::string& tip, const std::strin
   }
 }
 
-Model loadUrdf(const std::string& path, const std::string& tip) {
+Model loadUrdf(const std::string& path, const std::string& tip, const std::string& root_joint) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) throw FileError("URDF file '" + path + "' does not exist");
@@ -1137,7 +1177,7 @@ Model loadUrdf(const std::string& path, const std::string& tip) {
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw FileError("URDF file '" + path + "' cannot be read");
-  return parseUrdf(text.str(), tip, path);
+  return parseUrdf(text.str(), tip, path, root_joint);
 }
 
 }  // namespace mindyn

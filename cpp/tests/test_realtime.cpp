@@ -11,6 +11,7 @@
 #include "mindyn/ik.hpp"
 #include "mindyn/integrator.hpp"
 #include "mindyn/momentum.hpp"
+#include "mindyn/multibody.hpp"
 #include "mindyn/slotine_li.hpp"
 #include "test_util.hpp"
 
@@ -322,5 +323,36 @@ TEST(Realtime, FrictionModelsAllocateNothing) {
         EXPECT_DOUBLE_EQ(W(k, layout.thirdFrictionIndex(k)), c2) << toString(kind);
       }
     }
+  }
+}
+
+TEST(Realtime, MultibodyPathsAllocateNothing) {
+  for (const char* convention : {"mdh", "dh"}) {
+    const Model model = test::everyJointKind(convention);
+    MultibodyData data(model);
+    const int nv = model.velocitySize(), n = model.nq();
+    std::mt19937 rng(4);
+    Eigen::VectorXd q(model.configSize());
+    randomConfiguration(model, rng, q);
+    const Eigen::VectorXd v = test::random(rng, nv), a = test::random(rng, nv);
+    Eigen::VectorXd tau(nv), a2(nv);
+    Eigen::MatrixXd W(nv, 10 * n), M(nv, nv), C(nv, nv);
+    double e = 0;
+    bool ok = true;
+    test::Count c;
+    for (int i = 0; i < 3; ++i) {
+      inverseDynamics(model, data, q, v, a, model.inertial, tau);
+      regressor(model, data, q, v, a, W);
+      massMatrix(model, data, q, model.inertial, M);
+      ok = ok && forwardDynamics(model, data, q, v, tau, model.inertial, a2);
+      slotineLiRegressor(model, data, q, v, a, v, W);
+      coriolisMatrix(model, data, q, v, model.inertial, C);
+      e += momentum(model, data, q, v, model.inertial).norm();
+      e += kineticEnergy(model, data, q, v, model.inertial) +
+           potentialEnergy(model, data, q, model.inertial);
+    }
+    EXPECT_EQ(c.value(), 0) << convention;
+    EXPECT_TRUE(ok);
+    EXPECT_TRUE(std::isfinite(e));
   }
 }

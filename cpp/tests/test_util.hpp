@@ -139,4 +139,30 @@ inline std::vector<std::pair<std::string, Model>> chainsAndTrees() {
   return out;
 }
 
+/// A tree with one joint of each kind, some with a DH link offset (post) to exercise it.
+inline Model everyJointKind(const char* convention = "mdh") {
+  const std::string yaml = std::string("name: every\nconvention: ") + convention + R"(
+joints:
+  - {name: fly, type: floating, alpha: 0.3, d: 0.1, theta: 0.2, r: 0.1,
+     inertial: {mass: 3.0, com: [0.1, 0.0, -0.05], inertia: {xx: 0.1, yy: 0.2, zz: 0.15, xy: 0.01}}}
+  - {name: ball, type: spherical, alpha: 1.1, d: 0.3, theta: -0.4, r: 0.2,
+     inertial: {mass: 1.5, com: [0.0, 0.2, 0.1], inertia: {xx: 0.05, yy: 0.04, zz: 0.03, yz: 0.005}}}
+  - {name: cardan, type: universal, alpha: -0.7, d: 0.2, theta: 0.9, r: -0.1,
+     inertial: {mass: 1.0, com: [0.1, 0.1, 0.0], inertia: {xx: 0.02, yy: 0.03, zz: 0.025}}}
+  - {name: cyl, type: cylindrical, parent: 1, alpha: 0.5, d: -0.2, theta: 0.1, r: 0.3,
+     inertial: {mass: 0.8, com: [0.0, 0.0, 0.2], inertia: {xx: 0.02, yy: 0.02, zz: 0.01}}}
+  - {name: slide, type: planar, parent: 4, alpha: 0.2, d: 0.1, theta: 1.2, r: 0.0,
+     inertial: {mass: 0.6, com: [0.05, 0.0, 0.0], inertia: {xx: 0.01, yy: 0.012, zz: 0.011}}}
+  - {name: hinge, type: revolute, parent: 2, alpha: 1.0, d: 0.25, theta: 0.0, r: 0.1,
+     inertial: {mass: 0.7, com: [0.1, 0.0, 0.0], inertia: {xx: 0.01, yy: 0.01, zz: 0.01}}}
+  - {name: rail, type: prismatic, parent: 6, alpha: -1.2, d: 0.1, theta: 0.3, r: 0.2,
+     inertial: {mass: 0.4, com: [0.0, 0.1, 0.0], inertia: {xx: 0.005, yy: 0.004, zz: 0.006}}}
+)";
+  if (std::string(convention) == "mdh") return parseYaml(yaml);
+  std::string dh = yaml;  // DH rows: a in place of r
+  for (size_t at = dh.find(" r: "); at != std::string::npos; at = dh.find(" r: ", at))
+    dh.replace(at, 4, " a: ");
+  return parseYaml(dh);
+}
+
 }  // namespace mindyn::test

@@ -243,6 +243,7 @@ class BaseParameters:
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
         ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row."""
+        self.robot._require_single_dof("BaseParameters.regressor")
         q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
         return self._b.regressor(q, dq, ddq)
 
@@ -374,7 +375,10 @@ def base_parameters(
         ``mindyn._core.projection_limits()``. Default (``None``): the
         projection method, or the recursive one where a limit of the projection method refuses
         the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
-        ``method_reason``).
+        ``method_reason``). A robot with multi-DOF joints (spherical, universal, cylindrical,
+        planar, floating; :attr:`Robot.single_dof` false) takes the numerical method only,
+        without rotor inertia or friction: the exact methods refuse it and the default falls
+        back to the numerical one.
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).

@@ -32,6 +32,10 @@ _PLANAR = re.compile(r"planar([0-9]+)(h?)")
 _MAX_JOINTS = 1000
 
 
+_NO_PARAMS = object()  # a multibody function that takes no parameter vector
+_SINGLE_DOF = ("revolute", "prismatic")
+
+
 def bundled_robots() -> list[str]:
     """Names accepted by :func:`load` besides file paths (``planar<N>`` for 1 <= N <= 1000)."""
     names = sorted(p.stem for p in _robot_dir().iterdir() if p.suffix == ".yaml")
@@ -42,7 +46,7 @@ def _robot_dir() -> Path:
     return Path(str(resources.files("mindyn") / "robots"))
 
 
-def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
+def load(robot: str | Path, tip: str | None = None, gravity=None, *, root_joint=None) -> Robot:
     """Load a robot.
 
     Parameters
@@ -61,6 +65,17 @@ def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
         numbered depth-first from the root, the children of a link in the order of their joint
         names (Pinocchio's order). Mimic joints that end a branch are then locked and merged
         (see ``notes``).
+    root_joint : {"floating", "planar"}, optional
+        URDF only: a free-flyer (floating base) or planar joint ``root_joint`` between a base
+        link ``world`` and the root link, which becomes the first moving body (Pinocchio's
+        ``buildModel`` with a ``JointModelFreeFlyer`` or ``JointModelPlanar`` root). Such a
+        robot and one with ``floating``, ``planar`` (URDF) or ``spherical``, ``universal``,
+        ``cylindrical`` joints (YAML) has ``nq`` configuration and ``nv`` velocity entries
+        (Pinocchio's conventions: quaternions ``(x, y, z, w)``, a free-flyer's velocity linear
+        first in its body's axes); its dynamics (:meth:`Robot.inverse_dynamics`,
+        :meth:`Robot.regressor`, :meth:`Robot.mass_matrix`, :meth:`Robot.forward_dynamics`,
+        energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor) and
+        numerical base parameters are computed, other functions refuse it.
     gravity : array_like, shape (3,), optional
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
@@ -76,11 +91,11 @@ def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
         joint and attribute named). A URDF link without ``<inertial>`` is massless and named in
         ``notes``.
     """
-    out = _load(robot, tip)
+    out = _load(robot, tip, root_joint)
     return out if gravity is None else out.with_gravity(gravity)
 
 
-def _load(robot: str | Path, tip: str | None) -> Robot:
+def _load(robot: str | Path, tip: str | None, root_joint: str | None = None) -> Robot:
     if isinstance(robot, Robot):
         return robot
     text = str(robot)
@@ -90,8 +105,15 @@ def _load(robot: str | Path, tip: str | None) -> Robot:
         if not path.is_file():
             raise _core.RobotFileNotFoundError(f"URDF file '{text}' does not exist")
         if suffix == ".xml" and _mujoco.is_mjcf(path):
+            if root_joint:
+                raise _core.ModelError("root_joint= applies to URDF files only, not to MJCF")
             return Robot(_mujoco.read(text, tip))
-        return Robot(_core.load_urdf(text, tip or ""))
+        return Robot(_core.load_urdf(text, tip or "", root_joint or ""))
+    if root_joint:
+        raise _core.ModelError(
+            f"root_joint= applies to URDF files only, not to '{text}' "
+            "(a YAML table writes a 'floating' or 'planar' joint instead)"
+        )
     if suffix in (".yaml", ".yml"):
         if tip:
             raise _core.ModelError("tip= applies to URDF chains only, not to a DH/MDH table")
@@ -204,7 +226,36 @@ class Robot:
     # -- description ---------------------------------------------------------------------------
     @property
     def n(self) -> int:
+        """Number of joints (and of moving links); the size of q and dq when every joint is
+        revolute or prismatic (:attr:`nq`, :attr:`nv` otherwise)."""
         return self._m.n
+
+    @property
+    def nq(self) -> int:
+        """Size of the configuration q (Pinocchio's nq: 4 per spherical, 7 per free-flyer, 4 per
+        planar joint)."""
+        return self._m.nq
+
+    @property
+    def nv(self) -> int:
+        """Size of the velocity, acceleration and torque vectors (Pinocchio's nv)."""
+        return self._m.nv
+
+    @property
+    def single_dof(self) -> bool:
+        """True when every joint is revolute or prismatic (nq = nv = n)."""
+        return self._m.single_dof
+
+    def _multibody(self, fn, *arrays, params=_NO_PARAMS, rows: bool = False):
+        """A multibody function of the core on one sample (1-D arrays) or a batch (2-D)."""
+        arrays = [np.asarray(a, dtype=float) for a in arrays]
+        extra = () if params is _NO_PARAMS else (None if params is None else np.asarray(params),)
+        if all(a.ndim == 1 for a in arrays):
+            return fn(self._m, *arrays, *extra)
+        if not all(a.ndim == 2 and len(a) == len(arrays[0]) for a in arrays):
+            raise _core.ModelError("all inputs must be single samples or batches of equal length")
+        out = [fn(self._m, *x, *extra) for x in zip(*arrays, strict=True)]
+        return tuple(np.array(c) for c in zip(*out, strict=True)) if rows else np.array(out)
 
     @property
     def name(self) -> str:
@@ -386,8 +437,14 @@ class Robot:
 
     def joint_transform(self, k: int, q: float) -> np.ndarray:
         """4x4 transform from the link of joint ``parents[k]`` (the base when -1; ``k-1`` in a
-        chain) to link ``k`` (0-based ``k``) at joint value ``q``."""
+        chain) to link ``k`` (0-based ``k``) at joint value ``q`` (a revolute or prismatic
+        joint)."""
         self._check_joint(k)
+        if self.joint_types[k] not in _SINGLE_DOF:
+            raise _core.ModelError(
+                f"joint_transform takes a revolute or prismatic joint; joint {k} "
+                f"('{self.joint_names[k]}') is {self.joint_types[k]}"
+            )
         return self._m.joint_transform(k, _args.number(q, "q"))
 
     def joint_pre(self, k: int) -> np.ndarray:
@@ -475,7 +532,12 @@ class Robot:
         """Joint torques ``tau = W(q, dq, ddq) @ params`` by Newton-Euler.
 
         ``params`` defaults to the model's inertial parameters; any vector in a classical layout is
-        accepted, physically meaningful or not. Returns shape (n,) or (m, n)."""
+        accepted, physically meaningful or not. Returns shape (n,) or (m, n).
+
+        With multi-DOF joints (not :attr:`single_dof`): q of :attr:`nq`, dq and ddq of
+        :attr:`nv` entries, ``params`` the 10 n inertial ones, tau of :attr:`nv`."""
+        if not self._m.single_dof:
+            return self._multibody(_core.multibody_inverse_dynamics, q, dq, ddq, params=params)
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._m.inverse_dynamics(q, dq, ddq, self._params(params))
 
@@ -483,22 +545,33 @@ class Robot:
         self, q, dq, ddq, rotor: bool = False, friction: bool = False, *, offset: bool = False
     ) -> np.ndarray:
         """Classical regressor ``W``, shape (n, P) or (m, n, P), with ``tau = W @ params``
-        (an offset's column is 1 in its joint's row)."""
+        (an offset's column is 1 in its joint's row; multi-DOF joints: (nv, 10 n), no rotor
+        inertia, friction or offsets)."""
+        if not self._m.single_dof:
+            self._refuse_drive_terms(rotor, friction, offset)
+            return self._multibody(_core.multibody_regressor, q, dq, ddq)
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._m.regressor(q, dq, ddq, *self._layout(rotor, friction, offset))
 
     def gravity_torque(self, q, params=None) -> np.ndarray:
-        """Gravity torque ``c(q)``, shape (n,) or (m, n)."""
+        """Gravity torque ``c(q)``, shape (n,) or (m, n) (multi-DOF joints: nv)."""
+        if not self._m.single_dof:
+            z = np.zeros(np.shape(q)[:-1] + (self.nv,))
+            return self.inverse_dynamics(q, z, z, params)
         return self._m.gravity_torque(_args.samples(q, "q", self.n), self._params(params))
 
     def mass_matrix(self, q, params=None) -> np.ndarray:
-        """Joint-space inertia ``A(q)``, shape (n, n) or (m, n, n)."""
+        """Joint-space inertia ``A(q)``, shape (n, n) or (m, n, n) (multi-DOF joints: nv)."""
+        if not self._m.single_dof:
+            return self._multibody(_core.multibody_mass_matrix, q, params=params)
         return self._m.mass_matrix(_args.samples(q, "q", self.n), self._params(params))
 
     def forward_dynamics(self, q, dq, tau, params=None) -> np.ndarray:
         """Joint accelerations ``A(q)^-1 (tau - b - c - friction)``, shape (n,) or (m, n).
 
         Raises ValueError when ``A(q)`` is not positive definite for ``params``."""
+        if not self._m.single_dof:
+            return self._multibody(_core.multibody_forward_dynamics, q, dq, tau, params=params)
         q, dq, tau = _args.batch(self.n, q=q, dq=dq, tau=tau)
         return self._m.forward_dynamics(q, dq, tau, self._params(params))
 
@@ -508,6 +581,10 @@ class Robot:
 
     def potential_energy(self, q, params=None):
         """Potential energy ``-sum g . (M_k p_k + R_k MS_k)``: float or shape (m,)."""
+        if not self._m.single_dof:
+            q = np.asarray(q, dtype=float)
+            dq = np.zeros(q.shape[:-1] + (self.nv,))
+            return self._multibody(_core.multibody_energies, q, dq, params=params, rows=True)[1]
         q = _args.samples(q, "q", self.n)
         return self._m.energies(q, np.zeros_like(q), self._params(params))[1]
 
@@ -552,14 +629,18 @@ class Robot:
         their friction columns are zero, the rotor column of ``W_p`` is ``dq``. With ``offset``,
         ``W_l @ params`` is ``-dL/dq`` plus the offsets (an offset's column is 1 in its joint's
         row of ``W_l``, 0 in ``W_p``)."""
+        self._require_single_dof("momentum_regressors")
         q, dq = _args.batch(self.n, q=q, dq=dq)
         return self._m.momentum_regressors(q, dq, *self._layout(rotor, friction, offset))
 
     def _energies(self, q, dq, params):
+        if not self._m.single_dof:
+            return self._multibody(_core.multibody_energies, q, dq, params=params, rows=True)
         q, dq = _args.batch(self.n, q=q, dq=dq)
         return self._m.energies(q, dq, self._params(params))
 
     def _energy_regressors(self, q, dq, rotor, friction, offset=False):
+        self._require_single_dof("the energy regressors")
         q, dq = _args.batch(self.n, q=q, dq=dq)
         return self._m.energy_regressors(q, dq, *self._layout(rotor, friction, offset))
 
@@ -573,6 +654,40 @@ class Robot:
         c = len(self._m.parameter_names(False, True)) // self.n - 10
         return 10, 11, 10 + c, 11 + c
 
+    def _require_single_dof(self, what: str) -> None:
+        """Refuses a robot with multi-DOF joints in one line naming the first."""
+        if not self._m.single_dof:
+            k = next(k for k, t in enumerate(self.joint_types) if t not in _SINGLE_DOF)
+            raise _core.ModelError(
+                f"{what} takes revolute and prismatic joints only; robot '{self.name}' has the "
+                f"{self.joint_types[k]} joint '{self.joint_names[k]}' (multi-DOF joints have "
+                "inverse dynamics, regressor, mass matrix, forward dynamics, energies, "
+                "momentum, link poses, Slotine-Li regressor, Coriolis matrix and numerical base "
+                "parameters)"
+            )
+
+    def link_poses(self, q) -> np.ndarray:
+        """The pose of every link in the base frame at q (:attr:`nq` entries), shape (n, 4, 4);
+        link k is the link joint k moves (any joint kinds)."""
+        return np.array(_core.multibody_link_poses(self._m, np.asarray(q, dtype=float)))
+
+    def momentum(self, q, dq, params=None) -> np.ndarray:
+        """The momentum of the whole system at (q, dq) (:attr:`nq`, :attr:`nv` entries), shape
+        (6,): linear momentum, then angular momentum about the base origin, both in base axes;
+        ``params`` the 10 n inertial parameters (default the model's)."""
+        return self._multibody(_core.multibody_momentum, q, dq, params=params)
+
+    def _refuse_drive_terms(self, rotor, friction, offset=False) -> None:
+        if (
+            _args.flag(rotor, "rotor")
+            or _args.flag(friction, "friction")
+            or _args.flag(offset, "offset")
+        ):
+            raise _core.ModelError(
+                "rotor inertia, friction and offset columns are defined for revolute and prismatic "
+                f"joints only; robot '{self.name}' has multi-DOF joints"
+            )
+
     @staticmethod
     def _layout(rotor, friction, offset=False) -> tuple[bool, bool, bool]:
         return (
@@ -583,6 +698,7 @@ class Robot:
 
     # -- kinematics (Orocos KDL) ---------------------------------------------------------------
     def _kinematics(self) -> _core.Kinematics:
+        self._require_single_dof("the kinematics (KDL)")
         if self._kin is None:
             self._kin = _core.Kinematics(self._m)
         return self._kin
@@ -590,6 +706,7 @@ class Robot:
     def fk(self, q, link: int = -1) -> np.ndarray:
         """4x4 pose in the base frame of link ``link`` (0-based: the link moved by joint
         ``link``) or of the tool frame (``-1``; for a tree the last link's frame)."""
+        self._require_single_dof("fk")
         q = _vector(q, self.n, "q")
         _args.integer(link, "link")
         if not -1 <= link < self.n:
@@ -603,6 +720,7 @@ class Robot:
         """Geometric Jacobian of the tool frame, shape (6, n): rows vx vy vz wx wy wz in the
         base frame, reference point the tool-frame origin. For a tree, of the last link's frame,
         with zero columns for the joints not on its path from the base."""
+        self._require_single_dof("jacobian")
         q = _vector(q, self.n, "q")
         if self.is_serial:
             return self._kinematics().jacobian(q)

@@ -30,6 +30,7 @@ using namespace mindyn::pyargs;
 
 void bindControl(py::module_& m);
 void bindObserver(py::module_& m);
+void bindMultibody(py::module_& m);
 
 namespace {
 
@@ -108,6 +109,9 @@ PYBIND11_MODULE(_core, m) {
 
   py::class_<PyModel, std::shared_ptr<PyModel>>(m, "Model")
       .def_property_readonly("n", [](const PyModel& s) { return s.model.nq(); })
+      .def_property_readonly("nq", [](const PyModel& s) { return s.model.configSize(); })
+      .def_property_readonly("nv", [](const PyModel& s) { return s.model.velocitySize(); })
+      .def_property_readonly("single_dof", [](const PyModel& s) { return s.model.singleDof(); })
       .def_property_readonly("name", [](const PyModel& s) { return s.model.name; })
       .def_property_readonly("source", [](const PyModel& s) { return s.model.source; })
       .def_property_readonly("convention", [](const PyModel& s) { return s.model.convention; })
@@ -767,10 +771,10 @@ PYBIND11_MODULE(_core, m) {
       py::arg("text"), py::arg("source") = "<string>");
   m.def(
       "load_urdf",
-      [](const std::string& path, const std::string& tip) {
-        return std::make_shared<PyModel>(loadUrdf(path, tip));
+      [](const std::string& path, const std::string& tip, const std::string& root_joint) {
+        return std::make_shared<PyModel>(loadUrdf(path, tip, root_joint));
       },
-      py::arg("path"), py::arg("tip") = "");
+      py::arg("path"), py::arg("tip") = "", py::arg("root_joint") = "");
   m.def(
       "parse_urdf",
       [](const std::string& xml, const std::string& tip, const std::string& source) {
@@ -810,4 +814,5 @@ PYBIND11_MODULE(_core, m) {
   bindObserver(m);
   bindCodegen(m);
   bindCsv(m);
+  bindMultibody(m);
 }

@@ -9,7 +9,12 @@
 //   gravity: [gx, gy, gz]       optional, default [0, 0, -9.81]
 //   synthetic_inertia: bool     the inertial values are invented
 //   joints: list of
-//     name, type: revolute | prismatic
+//     name, type: revolute | continuous | prismatic, or the multi-DOF pairs spherical |
+//           universal | cylindrical | planar | floating (model.hpp, JointType: axis z of the
+//           joint frame; universal's second axis x; planar in the xy plane), which take no
+//           limits, drive, rotor_inertia or friction
+//     parent: 0 for the base or the number (1-based) of an earlier joint; default the joint
+//           before (a serial chain)
 //     dh: a, alpha, d, theta     mdh: alpha, d, theta, r   (theta / d resp. r is the joint offset)
 //     limits: {lower, upper, velocity, acceleration, effort}
 //     drive: {rated_torque, gear_ratio, torque_constant}   motor side; torque_constant in N m/A

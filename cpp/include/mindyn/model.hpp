@@ -44,9 +44,50 @@ inline constexpr double kMaxDescriptionValue = 1e16;
 /// with 10 n^2 (80 MB at 1000 joints); no serial manipulator comes near it.
 inline constexpr int kMaxModelJoints = 1000;
 
-enum class JointType { Revolute, Prismatic };
+/// The kinematic pairs. Revolute and prismatic joints have one degree of freedom; the others are
+/// the multi-degree-of-freedom pairs, which only the multibody algorithms (multibody.hpp) take.
+/// Every other algorithm (the single-DOF dynamics of dynamics.hpp, base parameters by the
+/// projection and recursive methods, code generation, KDL kinematics, IK, identification)
+/// refuses a model with one (requireSingleDof) in one line naming the joint.
+///
+/// Configuration q (nq entries) and velocity v (nv entries) of each kind follow Pinocchio's
+/// JointModel* convention, so that a state of Pinocchio is a state of mindyn unchanged. The
+/// joint motion J(q) acts in the joint frame (after `pre`); v is the velocity of the frame moved
+/// by J relative to the joint frame, expressed in the moved frame ("body" components):
+///   Revolute     nq = nv = 1  q: angle about `axis`
+///   Prismatic    nq = nv = 1  q: displacement along `axis`
+///   Spherical    nq = 4, nv = 3  q: unit quaternion (x, y, z, w) of J's rotation about the
+///                             origin; v: angular velocity (Pinocchio's JointModelSpherical)
+///   Universal    nq = nv = 2  J = Rot(axis, q1) Rot(axis2, q2), axis2 in the frame after the
+///                             first rotation (Pinocchio's JointModelUniversal)
+///   Cylindrical  nq = nv = 2  q: (displacement along `axis`, angle about `axis`) (Pinocchio: a
+///                             composite of a prismatic and a revolute joint on one axis)
+///   Planar       nq = 4, nv = 3  q: (x, y, cos t, sin t), J = Trans(x, y, 0) Rot(z, t) in the
+///                             joint frame's xy plane; v: (vx, vy, wz) (Pinocchio's
+///                             JointModelPlanar)
+///   FreeFlyer    nq = 7, nv = 6  q: (x, y, z, qx, qy, qz, qw), the position and unit
+///                             quaternion of the moved frame; v: (linear; angular) velocity of
+///                             the moved frame, both in its own axes, the linear one of its
+///                             origin -- LINEAR FIRST, as Pinocchio's JointModelFreeFlyer (the
+///                             spatial vectors inside mindyn are angular first)
+/// The quaternions and (cos t, sin t) must have norm 1 (checkConfiguration); none is normalised.
+/// q of a model is the joints' q one after the other, v the same (Model::configSize,
+/// velocitySize; Pinocchio's nq and nv).
+///
+/// Written in a description: YAML `type:` revolute, continuous, prismatic, spherical,
+/// universal, cylindrical, planar or floating (multi-DOF axes: the DH/MDH joint frame's z for
+/// `axis`, its x for universal's `axis2`, its xy plane for planar); URDF `floating` (a
+/// free-flyer) and `planar` (the plane normal to <axis>) joints, and a free-flyer or planar root
+/// joint added above the root link on request (loadUrdf's `root_joint`). URDF has no spherical or
+/// universal joint and the chains of revolute joints through massless links that stand for them
+/// are kept as such (their dynamics are the same; their velocities are the joint rates).
+enum class JointType { Revolute, Prismatic, Spherical, Universal, Cylindrical, Planar, FreeFlyer };
 
 const char* toString(JointType type);
+
+/// Configuration and velocity sizes of one joint of a kind (see JointType).
+int configSize(JointType type);
+int velocitySize(JointType type);
 
 /// Limits of one joint; a value that the description does not give is NaN.
 struct JointLimits {
@@ -82,12 +123,19 @@ struct Joint {
   JointType type = JointType::Revolute;
   Eigen::Isometry3d pre = Eigen::Isometry3d::Identity();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d axis2 = Eigen::Vector3d::UnitX();  // universal joints' second axis
   Eigen::Isometry3d post = Eigen::Isometry3d::Identity();
   JointLimits limits;
   Drive drive;
 
-  /// Homogeneous transform T_{parent,k}(q).
+  int nq() const { return configSize(type); }
+  int nv() const { return velocitySize(type); }
+  bool singleDof() const { return type == JointType::Revolute || type == JointType::Prismatic; }
+
+  /// Homogeneous transform T_{parent,k}(q) of a single-DOF joint.
   Eigen::Isometry3d transform(double q) const;
+  /// The same for any kind, from the joint's nq() configuration entries.
+  Eigen::Isometry3d transform(const double* q) const;
 };
 
 /// Names of the ten classical inertial parameters of one link, in storage order.
@@ -214,7 +262,14 @@ struct Model {
   /// True when rotor inertia and friction act through the transmission (see above).
   bool motorSide() const { return !transmission.empty() && drive_terms_on_motors; }
 
+  /// Number of joints (and of moving links). The name is historical: it is the size of q only
+  /// when every joint is revolute or prismatic (singleDof()); configSize() and velocitySize()
+  /// are the sizes of q and v in general (Pinocchio's nq and nv).
   int nq() const { return static_cast<int>(joints.size()); }
+  int configSize() const;
+  int velocitySize() const;
+  /// True when every joint is revolute or prismatic.
+  bool singleDof() const;
   /// Index of the joint that carries joint k's parent link, -1 for the base.
   int parent(int k) const { return parents.empty() ? k - 1 : parents[static_cast<size_t>(k)]; }
   /// True when every joint's parent is the joint before it (a serial chain).
@@ -255,6 +310,14 @@ struct Model {
   /// are taken as given and keep the bound itself.
   void validate() const;
 };
+
+/// Throws ModelError "<what> takes revolute and prismatic joints only; model '<name>' has the
+/// <kind> joint '<joint>' (...)" unless model.singleDof().
+void requireSingleDof(const Model& model, const std::string& what);
+
+/// Throws std::invalid_argument naming the joint unless every quaternion and planar (cos, sin)
+/// pair of the configuration q (model.configSize() entries, checked) has norm 1 within 1e-6.
+void checkConfiguration(const Model& model, const Eigen::Ref<const Eigen::VectorXd>& q);
 
 /// Ten classical parameters about the link origin from mass, centre of mass and the inertia
 /// tensor about the COM, all in the same (link) axes.

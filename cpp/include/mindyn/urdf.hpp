@@ -15,7 +15,12 @@
 // `Model::parents` set, its joints numbered depth-first from the root, the children of a link in
 // the order of their joint names (urdfdom's order, which Pinocchio's URDF parser follows too, so
 // that joint k is Pinocchio's joint k + 1). A tree's tool frame is the identity (on the last
-// link). Floating and planar joints are refused by name. A mimic joint has no place in the model
+// link). Floating and planar joints become free-flyer and planar joints (model.hpp, JointType;
+// a planar joint moves in the plane normal to its <axis>). With `root_joint` "floating" or
+// "planar" a joint of that kind named "root_joint" is put between a base link "world" and the
+// root link, which becomes the first moving body with every link rigidly attached to it (the
+// floating base, as Pinocchio's buildModel with a JointModelFreeFlyer or JointModelPlanar root);
+// the whole URDF is then a tree even with one leaf. A mimic joint has no place in the model
 // (its coupling to another joint): it is refused on a chain given by a tip, and without a tip it
 // is locked at q = 0 clamped into its limits and merged like a joint off the chain (grippers'
 // mirrored fingers), unless moving joints hang below it (refused).
@@ -54,11 +59,12 @@ namespace mindyn {
 /// Loads the chain root -> `tip` of the URDF file `path`; an empty `tip` loads the whole URDF
 /// (a chain or a tree, see above). Throws FileError if the file is missing or unreadable,
 /// ModelError for any description problem.
-Model loadUrdf(const std::string& path, const std::string& tip = "");
+Model loadUrdf(const std::string& path, const std::string& tip = "",
+               const std::string& root_joint = "");
 
 /// The same from URDF text; `source` names it in error messages and in `Model::source`.
 Model parseUrdf(const std::string& xml, const std::string& tip = "",
-                const std::string& source = "string");
+                const std::string& source = "string", const std::string& root_joint = "");
 
 /// Moves ten classical parameters (XX XY XZ YY YZ ZZ MX MY MZ M, about the child origin in child
 /// axes) to the parent frame, `parent_T_child` mapping child coordinates to parent coordinates:

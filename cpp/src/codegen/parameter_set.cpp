@@ -10,6 +10,7 @@ namespace mindyn::codegen {
 // The layout's joint block (torque offsets) is the set's last `offsets` entries; E and `layout`
 // cover the link blocks.
 ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
+  requireSingleDof(model, "code generation");
   ParameterSet s;
   s.layout = bp.layout.links();
   s.base = true;
@@ -25,6 +26,7 @@ ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
 }
 
 ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout) {
+  requireSingleDof(model, "code generation");
   ParameterSet s;
   s.layout = layout.links();
   s.base = false;

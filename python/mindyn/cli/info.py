@@ -81,7 +81,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     )
     for k in range(n):
         t = robot.joint_types[k]
-        s = deg[t]
+        s = deg.get(t, 1.0)  # multi-DOF joints have no limits (NaN)
         if robot.convention in ("dh", "mdh") and len(dh):
             a, alpha, d, theta = dh[k]
             geo = f"{a:9.4f} {math.degrees(alpha):10.3f} {d:9.4f} {math.degrees(theta):10.3f}"

@@ -91,7 +91,11 @@ def slotine_li_regressor(base: BaseParameters, q, dq, dqr, ddqr) -> np.ndarray:
 def slotine_li_regressor_classical(
     robot: Robot, q, dq, dqr, ddqr, rotor: bool = False, friction: bool = False
 ) -> np.ndarray:
-    """Slotine-Li regressor in the classical layout, shape (n, P) or (m, n, P)."""
+    """Slotine-Li regressor in the classical layout, shape (n, P) or (m, n, P) (multi-DOF
+    joints: (nv, 10 n), q of nq entries, the others of nv, no rotor inertia or friction)."""
+    if not robot.single_dof:
+        robot._refuse_drive_terms(rotor, friction)
+        return robot._multibody(_core.multibody_slotine_li_regressor, q, dq, dqr, ddqr)
     q, dq, dqr, ddqr = _args.batch(robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     return _core.slotine_li_regressor_classical(robot._m, q, dq, dqr, ddqr, rotor, friction)
@@ -100,7 +104,10 @@ def slotine_li_regressor_classical(
 def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
     """Coriolis matrix ``C(q, dq)`` of the Christoffel symbols, shape (n, n) or (m, n, n):
     ``C dq`` is the velocity-product torque and ``dA/dt - 2 C`` is skew-symmetric. ``params``: any
-    classical layout (default the model's inertial parameters)."""
+    classical layout (default the model's inertial parameters; multi-DOF joints: (nv, nv), the
+    inertial parameters only)."""
+    if not robot.single_dof:
+        return robot._multibody(_core.multibody_coriolis_matrix, q, dq, params=params)
     q, dq = _args.batch(robot.n, q=q, dq=dq)
     return _core.coriolis_matrix(robot._m, q, dq, robot._params(params))
 

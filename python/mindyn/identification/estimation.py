@@ -511,6 +511,7 @@ def identify(
     if rsd_threshold is not None and not math.isfinite(rsd_threshold):
         raise ValueError(f"rsd_threshold must be a finite number or None, got {rsd_threshold}")
     robot = load(robot)
+    robot._require_single_dof("identification")
     logs = _logs(data)
     for d in logs:
         if d.n != robot.n:

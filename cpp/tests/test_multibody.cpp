@@ -1,0 +1,104 @@
+// The multibody algorithms (multi-DOF joints, floating bases): on single-DOF models they give
+// what the single-DOF dynamics give (those are checked against Pinocchio and KDL elsewhere); on
+// a model with every joint kind the regressor, the mass matrix, the kinetic energy and forward
+// dynamics agree with inverse dynamics. The comparison with Pinocchio itself is in
+// tests/test_multibody.py, the allocation test in test_realtime.cpp.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "mindyn/description.hpp"
+#include "mindyn/multibody.hpp"
+#include "test_util.hpp"
+
+using namespace mindyn;
+
+TEST(Multibody, SingleDofModelsGiveTheSingleDofDynamics) {
+  for (const auto& [name, model] : test::chainsAndTrees()) {
+    Data data(model);
+    MultibodyData mb(model);
+    const int n = model.nq();
+    const ParameterLayout layout;
+    const Eigen::VectorXd pi = model.parameters(layout);
+    std::mt19937 rng(3);
+    const Eigen::VectorXd q = test::random(rng, n), dq = test::random(rng, n),
+                          ddq = test::random(rng, n);
+    Eigen::VectorXd t1(n), t2(n), a1(n), a2(n);
+    Eigen::MatrixXd W1(n, 10 * n), W2(n, 10 * n), M1(n, n), M2(n, n);
+    inverseDynamics(model, data, q, dq, ddq, pi, layout, t1);
+    inverseDynamics(model, mb, q, dq, ddq, pi, t2);
+    regressor(model, data, q, dq, ddq, layout, W1);
+    regressor(model, mb, q, dq, ddq, W2);
+    massMatrix(model, data, q, pi, layout, M1);
+    massMatrix(model, mb, q, pi, M2);
+    ASSERT_TRUE(forwardDynamics(model, data, q, dq, t1, pi, layout, a1));
+    ASSERT_TRUE(forwardDynamics(model, mb, q, dq, t1, pi, a2));
+    EXPECT_LE((t1 - t2).norm(), 1e-12 * t1.norm()) << name;
+    EXPECT_LE((W1 - W2).norm(), 1e-12 * W1.norm()) << name;
+    EXPECT_LE((M1 - M2).norm(), 1e-12 * M1.norm()) << name;
+    EXPECT_LE((a1 - a2).norm(), 1e-9 * a1.norm()) << name;
+    EXPECT_NEAR(kineticEnergy(model, data, q, dq, pi, layout), kineticEnergy(model, mb, q, dq, pi),
+                1e-12 * std::abs(kineticEnergy(model, mb, q, dq, pi)) + 1e-300);
+  }
+}
+
+TEST(Multibody, EveryKindIsConsistent) {
+  const Model model = test::everyJointKind();
+  ASSERT_EQ(model.configSize(), 7 + 4 + 2 + 2 + 4 + 1 + 1);
+  ASSERT_EQ(model.velocitySize(), 6 + 3 + 2 + 2 + 3 + 1 + 1);
+  MultibodyData data(model);
+  const int nv = model.velocitySize(), n = model.nq();
+  std::mt19937 rng(9);
+  Eigen::VectorXd q(model.configSize());
+  randomConfiguration(model, rng, q);
+  const Eigen::VectorXd v = test::random(rng, nv), a = test::random(rng, nv);
+  const Eigen::VectorXd& pi = model.inertial;
+  Eigen::VectorXd tau(nv), g(nv), b(nv);
+  Eigen::MatrixXd W(nv, 10 * n), M(nv, nv);
+  inverseDynamics(model, data, q, v, a, pi, tau);
+  regressor(model, data, q, v, a, W);
+  EXPECT_LE((W * pi - tau).norm(), 1e-12 * tau.norm());
+  massMatrix(model, data, q, pi, M);
+  inverseDynamics(model, data, q, v, Eigen::VectorXd::Zero(nv), pi, b);
+  EXPECT_LE((M * a + b - tau).norm(), 1e-12 * tau.norm());
+  EXPECT_EQ(Eigen::LLT<Eigen::MatrixXd>(M).info(), Eigen::Success);  // positive definite
+  EXPECT_LE(std::abs(2 * kineticEnergy(model, data, q, v, pi) - v.dot(M * v)),
+            1e-12 * v.dot(M * v));
+  // Slotine-Li: Y(q, v, v, a) = the regressor; C(q, v) v = b(q, v)
+  Eigen::MatrixXd Y(nv, 10 * n), C(nv, nv);
+  slotineLiRegressor(model, data, q, v, v, a, Y);
+  EXPECT_LE((Y - W).norm(), 1e-12 * W.norm());
+  coriolisMatrix(model, data, q, v, pi, C);
+  inverseDynamics(model, data, q, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv), pi, g);
+  EXPECT_LE((C * v + g - b).norm(), 1e-12 * b.norm());
+  Eigen::VectorXd a2(nv);
+  ASSERT_TRUE(forwardDynamics(model, data, q, v, tau, pi, a2));
+  EXPECT_LE((a2 - a).norm(), 1e-9 * a.norm());
+}
+
+TEST(Multibody, MultiDofModelsAreRefusedByTheSingleDofAlgorithms) {
+  const Model model = test::everyJointKind();
+  try {
+    Data data(model);
+    FAIL() << "Data accepted a multi-DOF model";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("the floating joint 'fly'"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(Multibody, ConfigurationNormsAreChecked) {
+  const Model model = test::everyJointKind();
+  std::mt19937 rng(2);
+  Eigen::VectorXd q(model.configSize());
+  randomConfiguration(model, rng, q);
+  checkConfiguration(model, q);
+  q[7] *= 1.01;  // the spherical joint's quaternion
+  try {
+    checkConfiguration(model, q);
+    FAIL() << "a non-unit quaternion was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("spherical joint 'ball'"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(checkMultibodySizes(model, q.size(), 3, -1, -1), std::invalid_argument);
+}
