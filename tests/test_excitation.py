@@ -180,7 +180,7 @@ def test_bad_requests_are_errors():
             np.zeros((3, 2)),
             np.zeros((3, 2)),
             np.zeros((3, 2)),
-            "rank",
+            criterion="rank",
         )
     with pytest.raises(ValueError, match="do not fit together"):
         FourierTrajectory(np.zeros((2, 3)), np.zeros((2, 4)), np.zeros(2), 0.1)

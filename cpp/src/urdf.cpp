@@ -822,7 +822,7 @@ class Builder {
         if (movingBelow(*child))
           fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
                "', which is not supported, and moving joints hang below it; load a chain that "
-               "avoids it with a tip link (tip= in Python and C++, --tip on the command line)");
+               "avoids it with a tip link (tip=)");
         continue;  // locked at q = 0 and merged into the body above by accumulate()
       }
       on_path_.insert(child->name);
@@ -856,8 +856,8 @@ class Builder {
            "', which is not supported (revolute, continuous, prismatic and fixed joints are)");
     if (uj.mimic)
       fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
-           "', which is not supported; load a chain that ends before it with a tip link (tip= "
-           "in Python and C++, --tip on the command line), e.g. its parent link '" +
+           "', which is not supported; load a chain that ends before it with a tip link "
+           "(tip=), e.g. its parent link '" +
            uj.parent_link_name + "', which locks it at q = 0");
     const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
     if (axis.norm() < 1e-12) fail("joint '" + uj.name + "' has a zero or invalid axis");

@@ -16,7 +16,7 @@ import numpy as np
 
 from . import _args, _core
 from . import formulas as _formulas
-from .robot import Robot, load
+from .robot import Robot, as_robot
 
 __all__ = ["BaseParameters", "base_parameters", "choose_method"]
 
@@ -95,11 +95,13 @@ class BaseParameters:
         self.method_reason = ""  # set by base_parameters
 
     def for_robot(
-        self, robot: Robot, order: Sequence[int] | Sequence[str] | None = None, offset=None
+        self, robot: Robot, *, order: Sequence[int] | Sequence[str] | None = None, offset=None
     ) -> BaseParameters:
         """The base parameters of ``robot`` (e.g. the same description at other lengths) by the
         same method, joint terms and settings as these; ``order`` (as :func:`base_parameters`
         takes it) replaces the column priority order, ``offset`` the offsets, when given."""
+        _args.instance(robot, "robot", Robot)
+        offset = _args.optional(_args.flag, offset, "offset")
         return base_parameters(
             robot,
             rotor=self.rotor,
@@ -184,8 +186,9 @@ class BaseParameters:
         ``Off_j = Off_j``. Computed on first use."""
         return self._symbolic
 
-    def latex(self, symbolic: bool = False) -> str:
+    def latex(self, *, symbolic: bool = False) -> str:
         """The formulas (numeric, or symbolic) as a LaTeX ``align*`` environment."""
+        symbolic = _args.flag(symbolic, "symbolic")
         if symbolic:
             return _formulas.latex(self.symbolic().formulas)
         return _formulas.latex(self.formula_terms())
@@ -194,9 +197,11 @@ class BaseParameters:
     def Y(self) -> np.ndarray:
         Y = self._b.Y
         if not self.offset:
-            return Y
+            return _args.readonly(Y)
         k = len(self._off)
-        return np.block([[Y, np.zeros((Y.shape[0], k))], [np.zeros((k, Y.shape[1])), np.eye(k)]])
+        return _args.readonly(
+            np.block([[Y, np.zeros((Y.shape[0], k))], [np.zeros((k, Y.shape[1])), np.eye(k)]])
+        )
 
     @property
     def pivots(self) -> list[int]:
@@ -280,9 +285,10 @@ class BaseParameters:
         wp, wl = self._b.momentum_regressors(q, dq)
         return self._with_offset(wp, 0.0), self._with_offset(wl, 0.0)
 
-    def to_dict(self, symbolic: bool = False) -> dict:
+    def to_dict(self, *, symbolic: bool = False) -> dict:
         """A JSON-ready summary (counts, names, formulas, margins); with ``symbolic``, also
         ``formulas_symbolic``, ``symbols`` and ``symbolic_check`` (see :meth:`symbolic`)."""
+        symbolic = _args.flag(symbolic, "symbolic")
         out = {
             "robot": self.robot.name,
             "method": self.method,
@@ -360,6 +366,7 @@ def _plain(d: dict) -> dict:
 
 def base_parameters(
     robot: Robot | str,
+    *,
     rotor: bool = False,
     friction: bool = False,
     method: str | None = None,
@@ -414,17 +421,14 @@ def base_parameters(
         Add a constant torque offset per joint, ``Off1 .. OffN``, after all other parameters
         (see :class:`BaseParameters`); ``order`` does not name them.
     """
-    robot = load(robot) if not isinstance(robot, Robot) else robot
+    robot = as_robot(robot)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     offset = _args.flag(offset, "offset")
     if method is None:
         method, reason = choose_method(robot, rotor=rotor, friction=friction)
     else:
         reason = f"method={method!r}"
-    if method not in ("projection", "recursive", "numerical"):
-        raise _core.ModelError(
-            f"method is {method!r}; expected 'projection', 'recursive' or 'numerical'"
-        )
+    _args.choice(method, "method", ("projection", "recursive", "numerical"))
     tolerance = _args.number(tolerance, "tolerance", positive=True)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)
@@ -432,24 +436,25 @@ def base_parameters(
         snap = _args.number(snap, "snap", minimum=0.0)
     idx: list[int] = []
     if order is not None:
-        names = robot.parameter_names(rotor, friction)
+        names = robot.parameter_names(rotor=rotor, friction=friction)
         lookup = {name: i for i, name in enumerate(names)}
         if isinstance(order, (str, bytes)) or not hasattr(order, "__iter__"):
-            raise _core.ModelError(
-                f"order is {order!r}; expected a sequence of parameter indices or names"
+            raise _args.fail(
+                "order", f"is {order!r}; expected a sequence of parameter indices or names"
             )
         for item in order:
             if isinstance(item, str):
                 if item not in lookup:
-                    raise _core.ModelError(f"order: unknown parameter '{item}'")
+                    raise _args.fail("order", f"names an unknown parameter '{item}'")
                 idx.append(lookup[item])
             else:
                 idx.append(_args.integer(item, "order entry"))
         if sorted(idx) != list(range(len(names))):
             missing = [names[i] for i in sorted(set(range(len(names))) - set(idx))]
-            raise _core.ModelError(
-                f"order must name each of the {len(names)} parameters exactly once"
-                + (f"; missing: {', '.join(missing[:8])}" if missing else "")
+            raise _args.fail(
+                "order",
+                f"must name each of the {len(names)} parameters exactly once"
+                + (f"; missing: {', '.join(missing[:8])}" if missing else ""),
             )
     if snap is True:
         snap = 1e-3

@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from . import _args, _core
+from ._args import ArgumentError
 from .base import BaseParameters, base_parameters
 from .robot import Robot, load
 
@@ -121,21 +122,21 @@ def _functions(what) -> list[str]:
     for w in what:
         w = _ALIASES.get(w, w)
         if w not in FUNCTIONS:
-            raise ValueError(f"unknown function '{w}' (choose from id, gravity, regressor)")
+            raise ArgumentError(f"unknown function '{w}' (choose from id, gravity, regressor)")
         if w not in out:
             out.append(w)
     if not out:
-        raise ValueError("no function to generate")
+        raise ArgumentError("no function to generate")
     return out
 
 
 def _check_lang(lang: str, trig: str | None) -> None:
     if lang not in ("c", "st"):
-        raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
+        raise ArgumentError(f"lang must be 'c' or 'st', got '{lang}'")
     if trig is not None and lang != "c":
-        raise ValueError("trig applies to C only; Structured Text uses SIN and COS")
+        raise ArgumentError("trig applies to C only; Structured Text uses SIN and COS")
     if trig not in (None, "inline", "libm"):
-        raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
+        raise ArgumentError(f"trig must be 'inline' or 'libm', got '{trig}'")
 
 
 def _identifier(name: str) -> str:
@@ -272,6 +273,8 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
     or a plain list in order; or text with one ``NAME value`` (or ``NAME = value``) per line,
     ``#`` comments allowed. Every name must be given exactly once; unknown names are an error.
     """
+    from .identification.data import DataError
+
     path = Path(path)
     if not path.is_file():
         raise _core.RobotFileNotFoundError(f"parameter file '{path}' does not exist")
@@ -282,19 +285,19 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
         try:
             data = json.loads(text)
         except json.JSONDecodeError as e:
-            raise ValueError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+            raise DataError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
         if isinstance(data, list):
             if len(data) != len(names):
-                raise ValueError(f"{path}: {len(data)} values; expected {len(names)}")
+                raise DataError(f"{path}: {len(data)} values; expected {len(names)}")
             mapping = dict(zip(names, data))
         elif isinstance(data, dict) and "names" in data and "values" in data:
             if len(data["names"]) != len(data["values"]):
-                raise ValueError(f"{path}: 'names' and 'values' differ in length")
+                raise DataError(f"{path}: 'names' and 'values' differ in length")
             mapping = dict(zip(data["names"], data["values"]))
         elif isinstance(data, dict):
             mapping = data
         else:
-            raise ValueError(f"{path}: expected a JSON mapping or list")
+            raise DataError(f"{path}: expected a JSON mapping or list")
     else:
         for lineno, line in enumerate(text.splitlines(), 1):
             line = line.split("#", 1)[0].strip()
@@ -302,26 +305,26 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
                 continue
             m = re.fullmatch(r"([A-Za-z_][A-Za-z0-9_]*)\s*(?:=|:|\s)\s*(" + _NUMBER + r")", line)
             if not m:
-                raise ValueError(f"{path}:{lineno}: expected 'NAME value', got '{line}'")
+                raise DataError(f"{path}:{lineno}: expected 'NAME value', got '{line}'")
             if m.group(1) in mapping:
-                raise ValueError(f"{path}:{lineno}: '{m.group(1)}' given twice")
+                raise DataError(f"{path}:{lineno}: '{m.group(1)}' given twice")
             mapping[m.group(1)] = float(m.group(2))
     unknown = [k for k in mapping if k not in names]
     if unknown:
-        raise ValueError(
+        raise DataError(
             f"{path}: unknown parameter(s) {', '.join(unknown[:5])}; expected {', '.join(names)}"
         )
     missing = [k for k in names if k not in mapping]
     if missing:
-        raise ValueError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
+        raise DataError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
     values = np.empty(len(names))
     for i, k in enumerate(names):
         try:
             values[i] = float(mapping[k])
         except (TypeError, ValueError):
-            raise ValueError(f"{path}: value of '{k}' is not a number") from None
+            raise DataError(f"{path}: value of '{k}' is not a number") from None
         if not math.isfinite(values[i]):
-            raise ValueError(f"{path}: value of '{k}' is not finite")
+            raise DataError(f"{path}: value of '{k}' is not finite")
     return values
 
 
@@ -374,7 +377,9 @@ class BaseDynamics:
     def _values(self, p):
         if p is None:
             rob = self.base.robot
-            return self.base.values(rob.parameters(self.base.rotor, self.base.friction))
+            return self.base.values(
+                rob.parameters(rotor=self.base.rotor, friction=self.base.friction)
+            )
         return _args.array(p, "p", (self.np,))
 
     def __repr__(self) -> str:
@@ -428,7 +433,9 @@ def _setting(value, size: int, name: str, default: float) -> np.ndarray:
     if a.ndim == 0:
         a = np.full(size, float(a))
     if a.shape != (size,):
-        raise ValueError(f"setting '{name}' must be a scalar or {size} values, got shape {a.shape}")
+        raise ArgumentError(
+            f"setting '{name}' must be a scalar or {size} values, got shape {a.shape}"
+        )
     return a
 
 
@@ -488,7 +495,7 @@ def generate_controller(
 
     robot = load(robot) if not isinstance(robot, Robot) else robot
     if kind not in CONTROLLERS:
-        raise ValueError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
+        raise ArgumentError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
     _check_lang(lang, trig)
     classical = base is False
     if base is None:
@@ -520,7 +527,7 @@ def generate_controller(
     if params is None and classical:
         s["p0"] = None  # the robot's classical values, as the generator reads them
     elif params is None:
-        s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
+        s["p0"] = base.values(robot.parameters(rotor=base.rotor, friction=base.friction))
         if base.offset:
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
     elif isinstance(params, (str, Path)):
@@ -531,10 +538,10 @@ def generate_controller(
     s["p_max"] = _setting(p_max, len(names), "p_max", math.inf)
     if isinstance(tau_max, str):
         if tau_max != "effort":
-            raise ValueError(f"tau_max must be None, 'effort' or {n} values, got '{tau_max}'")
+            raise ArgumentError(f"tau_max must be None, 'effort' or {n} values, got '{tau_max}'")
         tau_max = robot.limits["effort"]
         if not np.all(np.isfinite(tau_max)):
-            raise ValueError(f"robot '{robot.name}' does not give effort limits for all joints")
+            raise ArgumentError(f"robot '{robot.name}' does not give effort limits for all joints")
     s["tau_max"] = _setting(tau_max, n, "tau_max", math.inf)
     name = name if name is not None else _identifier(robot.name)
     fn = f"{name}_{kind.replace('-', '_')}"
@@ -602,7 +609,7 @@ class CompiledController:
         import ctypes
 
         if not isinstance(code, GeneratedController) or code.lang != "c":
-            raise ValueError("CompiledController needs the C code of generate_controller")
+            raise ArgumentError("CompiledController needs the C code of generate_controller")
         self.code = code
         self.base = base
         self.name = code.kind
@@ -653,7 +660,9 @@ class CompiledController:
         args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, q_d, dq_d, ddq_d)]
         for a in args:
             if a.shape != (self._n,):
-                raise ValueError(f"controller inputs must have shape ({self._n},), got {a.shape}")
+                raise ArgumentError(
+                    f"controller inputs must have shape ({self._n},), got {a.shape}"
+                )
         tau = np.zeros(self._n)
         ptrs = [a.ctypes.data_as(self._ptr) for a in args + [tau]]
         self._step(ctypes.byref(self._state), *ptrs)
@@ -733,7 +742,7 @@ def generate_observer(
     k = control.default_observer_gain(period) if gains is None else gains
     k = _setting(k, n, "gains", 0.0)
     if params is None:
-        p = base.values(robot.parameters(base.rotor, base.friction))
+        p = base.values(robot.parameters(rotor=base.rotor, friction=base.friction))
         if base.offset:
             p = np.concatenate([p, np.zeros(n)])[: len(names)]
     elif isinstance(params, (str, Path)):
@@ -766,7 +775,7 @@ class CompiledObserver:
         import ctypes
 
         if not isinstance(code, GeneratedObserver) or code.lang != "c":
-            raise ValueError("CompiledObserver needs the C code of generate_observer")
+            raise ArgumentError("CompiledObserver needs the C code of generate_observer")
         self.code = code
         self._dir, self._lib = _compile_shared(code, "observer")
         n, np_ = len(code.gains), len(code.names)
@@ -795,7 +804,7 @@ class CompiledObserver:
         args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, tau)]
         for a in args:
             if a.shape != (self._n,):
-                raise ValueError(f"observer inputs must have shape ({self._n},), got {a.shape}")
+                raise ArgumentError(f"observer inputs must have shape ({self._n},), got {a.shape}")
         r = np.zeros(self._n)
         self._step(ctypes.byref(self._state), *[a.ctypes.data_as(self._ptr) for a in args + [r]])
         return r
@@ -827,7 +836,9 @@ def _function_blocks(text: str) -> list[dict]:
             while lines[i].strip() != "END_VAR":
                 d = _DECL.fullmatch(lines[i])
                 if not d:
-                    raise ValueError(f"FUNCTION_BLOCK {name}: unexpected declaration '{lines[i]}'")
+                    raise RuntimeError(
+                        f"FUNCTION_BLOCK {name}: unexpected declaration '{lines[i]}'"
+                    )
                 dims = []
                 if d.group(2):
                     for r in d.group(2).split(","):

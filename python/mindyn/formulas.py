@@ -135,7 +135,7 @@ def _tidy(s: str) -> str:
     return f"{mant}e{int(exp)}"
 
 
-def round_coefficient(x: float, scale: float = 0.0) -> float:
+def round_coefficient(x: float, *, scale: float = 0.0) -> float:
     """``x`` without its round-off: the shortest decimal within ``RELATIVE * |x| + ABSOLUTE *
     scale`` (``scale``: the largest coefficient of the formula), e.g. ``0.18645124000000002`` ->
     ``0.18645124``, ``1.0000000000000002`` -> ``1``."""
@@ -336,7 +336,7 @@ def numeric_formulas(
             tol = RELATIVE * abs(y) + ABSOLUTE * scale
             if abs(y) <= ABSOLUTE * scale:
                 continue  # round-off of an exact zero
-            r = round_coefficient(y, scale)
+            r = round_coefficient(y, scale=scale)
             if abs(abs(r) - 1.0) == 0.0:
                 groups.append((y, r, [classical_names[c]]))
                 continue
@@ -590,7 +590,7 @@ class SymbolicFormulas:
         return latex(self.formulas)
 
 
-def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
+def symbolic_formulas(bp, *, seed: int = 20240607) -> SymbolicFormulas:
     """The regrouping formulas of ``bp`` (a :class:`mindyn.BaseParameters`) in the symbols of its
     robot's description (see the module documentation for the symbols, the degree bound and the
     checks). Raises ModelError when the base set changes with the lengths or a coefficient is
@@ -736,8 +736,7 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
                 )
                 + (
                     "; its joint origins hold rotations within 1e-3 of right angles but not at "
-                    "them (rounded angles such as 1.5708 for pi/2): snap them (snap=True, "
-                    "mindyn base --snap)"
+                    "them (rounded angles such as 1.5708 for pi/2): snap them (snap=True)"
                     if _rounded_right_angles(robot)
                     else ""
                 )

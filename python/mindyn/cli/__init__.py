@@ -27,6 +27,7 @@ from .args import (
     add_robot,
     deprecated,
     joint_terms,
+    library_options_as_flags,
     number,
     output_file,
     prepare_outputs,
@@ -370,7 +371,7 @@ def _one_line(text: object) -> str:
 
 
 def _error(text: object) -> None:
-    print(f"mindyn: error: {_one_line(text)}", file=sys.stderr)
+    print(f"mindyn: error: {_one_line(library_options_as_flags(str(text)))}", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -70,7 +70,9 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     from ..control.simulation import check_steps
 
     try:  # before any set-up work
-        check_steps(duration, 1.0 / period, args.substeps if args.integrator == "rk4" else 1)
+        check_steps(
+            duration, 1.0 / period, substeps=args.substeps if args.integrator == "rk4" else 1
+        )
     except ValueError as e:
         raise ValueError(
             f"--duration {duration:g} with --controller-period {period:g}: {e}"
@@ -93,10 +95,12 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         from ..control.controllers import base_values, plant_parameters
 
         base = base_parameters(robot, rotor=True, friction=True)
-        p_true = base_values(base, plant_parameters(robot, rotor, friction))
+        p_true = base_values(base, plant_parameters(robot, rotor, friction=friction))
         error = 0.3 if args.param_error is None else args.param_error
-        p_hat = control.perturbed_parameters(p_true, error, args.seed)
-    controller = control.make_controller(args.controller, robot, gains, p_hat, base, period)
+        p_hat = control.perturbed_parameters(p_true, error, seed=args.seed)
+    controller = control.make_controller(
+        args.controller, robot, gains, p_hat, base=base, period=period
+    )
     controller.gains = gains
     return reference, ref_text, duration, cycle, controller, base
 
@@ -128,7 +132,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         seed=args.seed,
         endpoint=False,
     )
-    s = summary(result, cycle)
+    s = summary(result, cycle=cycle)
     lines = [
         f"{robot.name}: {args.controller}, period {args.period * 1e3:g} ms, {duration:g} s, "
         f"{ref_text}"
@@ -175,7 +179,7 @@ def cmd_track(args: argparse.Namespace) -> int:
     if args.output:
         from ..identification.data import truth_path
 
-        path = result.save(args.output, robot.name)
+        path = result.save(args.output, robot_name=robot.name)
         lines.append(
             f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"
         )
@@ -194,7 +198,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         }
         if robot.name == "zcr07s" and args.controller == "adaptive-pd":
             header["zcr07s_max_error_deg"] = ZCR07S_STUDY_MAX_ERROR_DEG
-        write_tracking_report(result, args.report, cycle, header)
+        write_tracking_report(result, args.report, cycle=cycle, header=header)
         lines.append(f"report: {args.report}/ (summary.json, log.csv, plots)")
     print("\n".join(lines))
     return 0

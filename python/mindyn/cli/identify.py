@@ -122,7 +122,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         t = np.linspace(0, ref.duration, 200)
         ref_tau = robot.inverse_dynamics(*ref.evaluate(t))
     noise = SensorNoise(
-        torque=noise_from_spec(args.torque_noise, robot, "torque", ref_tau),
+        torque=noise_from_spec(args.torque_noise, robot, "torque", reference_torque=ref_tau),
         position=noise_from_spec(args.position_noise, robot, "position"),
         velocity=noise_from_spec(args.velocity_noise, robot, "velocity"),
         quantization=noise_from_spec(args.quantization, robot, "quantization"),
@@ -148,7 +148,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         )
     else:
         log = simulate_inverse(robot, ref, **kwargs)
-    path = log.save(args.output, robot.name, robot.joint_names)
+    path = log.save(args.output, robot_name=robot.name, joint_names=robot.joint_names)
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
         write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
@@ -182,7 +182,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     print(f"  wrote {path}{unit} and {path.with_name(path.stem + '.truth.json')}")
     if args.report:
         header = {"robot": robot.name, "reference": ref_text, "seed": args.seed}
-        write_tracking_report(log, args.report, cycle, header)
+        write_tracking_report(log, args.report, cycle=cycle, header=header)
         print(f"  report: {args.report}/ (summary.json, log.csv, plots)")
     return 0
 
@@ -245,7 +245,7 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
             cutoff=args.cutoff,
         )
         if current:  # effort in A: the gains (given or of the drive table) turn it into N m
-            tau, info = convert_torque(data.tau, "current", robot, gain)
+            tau, info = convert_torque(data.tau, "current", robot, drive_gain=gain)
             data = replace(data, tau=tau, processing={**data.processing, "torque": info})
     else:
         data = read_csv(
@@ -258,7 +258,7 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
             drive_gain=gain,
         )
     if currents:
-        data = attach_currents(data, currents, robot, gain)
+        data = attach_currents(data, currents, robot, drive_gain=gain)
     if not getattr(args, "_raw", False):  # the raw read of the lowpass path: resampled later
         from ..identification.preprocess import require_even_stamps
 
@@ -384,7 +384,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         friction = select_friction_model(
             robot,
             logs,
-            args.friction_model,
+            kind=args.friction_model,
             rotor=args.rotor,
             offset=args.offset,
             width=width,
@@ -407,7 +407,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         from ..identification.consistent import consistent_estimate
 
         weight = "auto" if args.prior_weight is None else args.prior_weight
-        cons = consistent_estimate(res, weight, data=logs, progress=_progress())
+        cons = consistent_estimate(res, prior_weight=weight, data=logs, progress=_progress())
     elif args.prior_weight is not None:
         raise ValueError("--prior-weight: expected --consistent as well")
     truth_doc = truth_docs[0] if all(d == truth_docs[0] for d in truth_docs) else None
@@ -541,7 +541,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     out.append("")
     if cons is not None:
         out.append("Unconstrained least-squares estimate (base parameters):")
-    out.append(format_table(res, truth))
+    out.append(format_table(res, truth=truth))
     out.append("")
     out.append(_rms_lines(f"identification data{which}", fit))
     if val is not None:
@@ -631,10 +631,25 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
         lim, _ = excitation_limits(robot, margin=0.0)
         if cons is None:
-            paths = write_report(args.report, res, logs, vlogs, val, fit, lim)
+            paths = write_report(
+                args.report,
+                res,
+                logs,
+                validation_data=vlogs,
+                validation=val,
+                fit=fit,
+                trajectory_limits=lim,
+            )
         else:  # the headline estimate, named in each plot's title
             paths = write_report(
-                args.report, cons, logs, vlogs, cval, cfit, lim, estimate="consistent"
+                args.report,
+                cons,
+                logs,
+                validation_data=vlogs,
+                validation=cval,
+                fit=cfit,
+                trajectory_limits=lim,
+                estimate="consistent",
             )
         (Path(args.report) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
         (Path(args.report) / "table.txt").write_text("\n".join(out) + "\n")
@@ -698,7 +713,7 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
         + ("" if res.min_eig >= 0 else " (physically inconsistent)")
     )
     if res.consistent is not None:
-        c = res.derived(True)
+        c = res.derived(consistent=True)
         out.append(
             f"  consistent ({res.solver}, {res.status}): mass {c['mass']:.5g} kg, centre of "
             "mass "
@@ -866,7 +881,7 @@ def _weight_lines(cons) -> list[str]:
 
 def _consistent_lines(cons, fit, val, cfit, cval, logs) -> list[str]:
     """The lines of ``mindyn identify --consistent``: pseudo-inertias, errors side by side."""
-    un = cons.violating_links(True)
+    un = cons.violating_links(unconstrained=True)
     lines = [
         f"Physically consistent estimate ({cons.solver}, {cons.status}, {cons.seconds:.3g} s"
         + (f", prior weight {cons.prior_weight:g}" if cons.prior_weight else ", no prior")

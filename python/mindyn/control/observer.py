@@ -33,8 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _core
+from .. import _args, _core
 from ..base import BaseParameters
+from ..robot import Robot
 from .controllers import ControllerSettingError, check_period
 
 __all__ = [
@@ -184,13 +185,11 @@ def calibrate_thresholds(
     """Per-joint thresholds ``margin * quantile(|r_j|)`` from the residual (m, n) of a
     collision-free log (``quantile`` 1: the largest). A joint whose residual is zero throughout
     gets ``1e-9`` times the largest threshold (or 1e-12), never zero."""
-    r = np.asarray(residual, dtype=float)
-    if r.ndim != 2 or r.shape[0] < 2 or not np.all(np.isfinite(r)):
-        raise ValueError("the residual must be a finite (m, n) array of at least 2 samples")
-    if not (0 < quantile <= 1):
-        raise ValueError(f"quantile must be in (0, 1], got {quantile:g}")
-    if not (math.isfinite(margin) and margin >= 1):
-        raise ValueError(f"margin must be a number >= 1, got {margin:g}")
+    r = _args.array(residual, "residual", (None, None))
+    if r.shape[0] < 2:
+        raise _args.fail("residual", f"has {r.shape[0]} samples; expected at least 2")
+    quantile = _args.number(quantile, "quantile", positive=True, maximum=1.0)
+    margin = _args.number(margin, "margin", minimum=1.0)
     thr = margin * np.quantile(np.abs(r), quantile, axis=0)
     floor = max(1e-9 * float(thr.max()), 1e-12)
     return np.maximum(thr, floor)
@@ -203,11 +202,14 @@ def residual_uncertainty(observer: MomentumObserver, std, q, dq, t=None) -> np.n
     deviations ``std`` (base.n,) that is ``sqrt(sum_i std_i^2 r_i(t)^2)``, ``r_i`` the residual
     of the unit value of parameter i. (The identification's correlations are not taken: an
     estimate, not a bound.) Same period, gains and torque mode as ``observer``."""
-    std = np.asarray(std, dtype=float).reshape(-1)
+    _args.instance(observer, "observer", MomentumObserver)
     base = observer.base
-    if std.shape != (base.n,) or not np.all(np.isfinite(std) & (std >= 0)):
-        raise ValueError(f"std must be {base.n} finite values >= 0")
-    q = np.ascontiguousarray(q, dtype=float)
+    std = _args.array(std, "std", (base.n,))
+    if np.any(std < 0):
+        raise _args.fail("std", "has a negative entry; expected standard deviations >= 0")
+    q, dq = _args.batch(base.robot.n, q=q, dq=dq)
+    if t is not None:
+        t = _args.array(t, "t", (q.shape[0] if q.ndim == 2 else 1,))
     var = np.zeros(q.shape)
     zero = np.zeros(q.shape)
     for i in np.flatnonzero(std):
@@ -227,6 +229,8 @@ def residual_uncertainty(observer: MomentumObserver, std, q, dq, t=None) -> np.n
 def load_thresholds(path, robot) -> ObserverThresholds:
     """The thresholds file of ``mindyn detect`` for ``robot``; :class:`ThresholdsError` when it
     is not JSON, lacks a field, holds a non-number or was made for another robot."""
+    _args.path(path, "path")
+    _args.instance(robot, "robot", Robot)
     where = str(path)
     try:
         doc = json.loads(Path(path).read_text())
@@ -273,9 +277,9 @@ def alarm_intervals(t, residual, thresholds) -> list[dict]:
     """The intervals where ``|r_j| > threshold_j``: one dict per interval and joint, in time
     order, with ``joint`` (1-based), ``start``, ``end`` (time of its last sample above) and
     ``peak`` (the largest |r_j| in it, signed)."""
-    t = np.asarray(t, dtype=float)
-    r = np.asarray(residual, dtype=float)
-    thr = np.asarray(thresholds, dtype=float)
+    t = _args.array(t, "t", (None,))
+    r = _args.array(residual, "residual", (t.shape[0], None))
+    thr = _args.array(thresholds, "thresholds", (r.shape[1],))
     over = np.abs(r) > thr
     out = []
     for j in range(r.shape[1]):

@@ -100,7 +100,7 @@ def _margin(kp, kd, minv, T) -> np.ndarray:
     return np.where(~stable, 0.0, np.where(capped, _MARGIN_CAP, np.exp(lo)))
 
 
-def workspace_samples(robot: Robot, count: int | None = None, seed: int = 0) -> np.ndarray:
+def workspace_samples(robot: Robot, *, count: int | None = None, seed: int = 0) -> np.ndarray:
     """``count`` configurations, shape (count, n): the middle of the limits, then uniform ones
     inside them (joints without limits: revolute in [-pi, pi], prismatic in [-1, 1] m). By
     default :data:`SAMPLES`, fewer beyond 12 joints (``SAMPLES * 12 / n``, at least 6: the check
@@ -160,7 +160,7 @@ class LoopCheck:
             f"{len(self.q) and 'checked on ' + ', '.join(self.cases)})"
         )
 
-    def error(self, what: str = "") -> UnstableLoopError:
+    def error(self, *, what: str = "") -> UnstableLoopError:
         """The error that refuses this loop, ``what`` naming the gains."""
         fix = "lower the gains or the controller period"
         return UnstableLoopError(

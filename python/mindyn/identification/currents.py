@@ -90,6 +90,7 @@ def attach_currents(
     data: JointData,
     path,
     robot=None,
+    *,
     drive_gain=None,
     tolerance: float | None = None,
 ) -> JointData:

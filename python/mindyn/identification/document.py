@@ -36,7 +36,7 @@ def read_identification(
         Not a JSON object, a needed field missing, or a field of the wrong type or range."""
     if isinstance(source, (str, Path)):
         where = str(source)
-        doc = read_json(source, what, finite=finite)
+        doc = read_json(source, what=what, finite=finite)
     else:
         where, doc = what, source
     obj = doc if isinstance(doc, dict) else {}
@@ -44,7 +44,7 @@ def read_identification(
     if "classical" in missing:
         raise DataError(
             f"{where} has no 'classical' map of classical parameter values (it is written by "
-            "'mindyn identify --consistent --json')"
+            "an identification with consistent=True)"
         )
     if not isinstance(doc, dict):
         raise DataError(f"{where}: expected a JSON object (the JSON of mindyn identify)")
@@ -96,7 +96,7 @@ def read_identification(
     return out
 
 
-def robot_on_drive_side(robot, doc: dict, where: str = "identification JSON"):
+def robot_on_drive_side(robot, doc: dict, *, where: str = "identification JSON"):
     """``robot`` with rotor inertia and friction where the identification ``doc`` had them
     (``drive_side``; a document without it was identified with them on the joints)."""
     side = doc.get("drive_side", "joint")
@@ -131,7 +131,7 @@ def _friction_model(fm, where: str) -> dict:
     return out
 
 
-def with_identified_friction(robot, doc: dict, where: str = "identification JSON"):
+def with_identified_friction(robot, doc: dict, *, where: str = "identification JSON"):
     """``robot`` with the friction model an identification JSON records (``friction_model``;
     unchanged without one: viscous and Coulomb friction). DataError when the record does not fit
     the robot."""

@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import _args
 from ..base import BaseParameters
 from ..robot import FRICTION_KINDS, Robot
 from .errors import IdentificationError
@@ -97,7 +98,7 @@ def smooth_width(logs) -> tuple[np.ndarray, str]:
         still = [str(j + 1) for j in np.flatnonzero(~(w > 0))]
         raise IdentificationError(
             f"smooth friction: joint(s) {', '.join(still)} never move in the fit data; their tanh "
-            "width cannot be derived (give --friction-width, or leave out --friction)"
+            "width cannot be derived (give friction_width=, or leave out friction=True)"
         )
     return w, rule.replace("|dq_j| >= ", "w_j = ")
 
@@ -141,7 +142,7 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
         still = [str(j + 1) for j in np.flatnonzero(~(top > 0))]
         raise IdentificationError(
             f"Stribeck friction: joint(s) {', '.join(still)} never move in the fit data; their "
-            "Stribeck velocity cannot be searched (leave out --friction, or move them)"
+            "Stribeck velocity cannot be searched (leave out friction=True, or move them)"
         )
     # Below the velocity's noise level (the smooth width) the data do not resolve the velocity,
     # and the dynamic model has no equation below its min_velocity.
@@ -228,8 +229,8 @@ def _golden(f, grid, best, joints, start=None) -> np.ndarray:
 def select_friction_model(
     robot: Robot,
     logs,
-    kind: str = "coulomb",
     *,
+    kind: str = "coulomb",
     rotor: bool = False,
     offset: bool = False,
     width=None,
@@ -243,19 +244,30 @@ def select_friction_model(
     the smooth width (unless ``width`` is given, one value or one per joint), the Stribeck
     velocities and ``auto`` are decided."""
     from ..base import base_parameters
+    from .estimation import _logs
     from .prior import FOLDS
 
-    if kind not in CHOICES:
-        raise IdentificationError(
-            f"friction model must be {', '.join(CHOICES[:-1])} or auto, not {kind!r}"
-        )
+    _args.instance(robot, "robot", Robot)
+    logs = _logs(logs, "logs")
+    _args.choice(kind, "kind", CHOICES)
+    rotor, offset = _args.flag(rotor, "rotor"), _args.flag(offset, "offset")
+    _args.optional(_args.mapping, fit, "fit")
+    folds = _args.optional(_args.integer, folds, "folds", 2)
+    _args.optional(_args.function, progress, "progress")
     fit = dict(fit or {})
     n = robot.n
     given_width = None
     if width is not None:
-        given_width = np.broadcast_to(np.asarray(width, float), (n,)).copy()
+        if np.ndim(width) == 0:
+            given_width = np.full(n, _args.number(width, "width", positive=True))
+        else:
+            given_width = _args.array(width, "width", (n,))
         if kind not in ("smooth", "auto"):
-            raise IdentificationError("--friction-width: only with --friction-model smooth or auto")
+            raise _args.fail(
+                "width",
+                f"applies only with friction_model='smooth' or friction_model='auto' (kind "
+                f"{kind!r})",
+            )
 
     def make(k: str, velocity=None):
         r = robot.with_friction_model(k, velocity=velocity)
@@ -265,7 +277,7 @@ def select_friction_model(
         rec: dict = {"kind": k, "velocity": None}
         if k == "smooth":
             if given_width is not None:
-                w, rule = given_width, "given (--friction-width)"
+                w, rule = given_width, "given"
             else:
                 w, rule = smooth_width(logs)
             rec.update(velocity=[float(v) for v in w], velocity_rule=rule)
@@ -346,13 +358,13 @@ def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float
 
     if joint_sigma is not None and res.model != "energy":
         res = dataclasses.replace(res, joint_sigma=np.asarray(joint_sigma), weighted=True)
-    S = block_triangles(res, logs, folds)
+    S = block_triangles(res, logs, folds=folds)
     # a block is predicted at every sample, also where the fit leaves the equations of slow
     # joints out (min_velocity): a model's switching at rest counts against it
     held = S
     if res.settings.get("min_velocity", 0.0) > 0:
         every = dataclasses.replace(res, settings={**res.settings, "min_velocity": 0.0})
-        held = block_triangles(every, logs, folds)
+        held = block_triangles(every, logs, folds=folds)
     nb = res.base.n
     used = [k for k in range(folds) if np.any(S[k])]
     if len(used) < 2:

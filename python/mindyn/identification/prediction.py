@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
@@ -80,17 +81,17 @@ def identified_model(
     (``consistent_estimate.base_values``). Returns ``(base, values, doc)`` (``doc`` empty for a
     result)."""
     if estimate not in ("unconstrained", "consistent"):
-        raise ValueError(f"estimate must be 'unconstrained' or 'consistent', got '{estimate}'")
+        raise ArgumentError(f"estimate must be 'unconstrained' or 'consistent', got '{estimate}'")
     if hasattr(identification, "base") and hasattr(identification, "full"):
         if estimate == "consistent" and not hasattr(identification, "classical"):
-            raise ValueError("estimate 'consistent' needs a consistent result")
+            raise ArgumentError("estimate 'consistent' needs a consistent result")
         return identification.base, np.asarray(identification.full, dtype=float), {}
     where = str(identification) if not isinstance(identification, dict) else "identification"
     doc = read_json(identification) if not isinstance(identification, dict) else identification
     if not (isinstance(doc, dict) and {"base_names", "base_values"} <= doc.keys()):
         raise DataError(f"{where}: not the JSON of 'mindyn identify' (no base_names/base_values)")
     if robot is None:
-        raise ValueError("identified_model: the robot is needed with an identification JSON")
+        raise ArgumentError("identified_model: the robot is needed with an identification JSON")
     if isinstance(robot, Robot):
         if doc.get("robot") not in (None, robot.name):
             raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
@@ -98,8 +99,8 @@ def identified_model(
         robot = load(robot, tip=doc.get("tip"))
         if doc.get("robot") not in (None, robot.name):
             raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
-    robot = robot_on_drive_side(robot, doc, where)
-    robot = with_identified_friction(robot, doc, where)
+    robot = robot_on_drive_side(robot, doc, where=where)
+    robot = with_identified_friction(robot, doc, where=where)
     base = base_parameters(
         robot,
         rotor=bool(doc.get("rotor")),
@@ -110,7 +111,9 @@ def identified_model(
     if estimate == "consistent":
         src = doc.get("consistent_estimate")
         if not isinstance(src, dict) or "base_values" not in src:
-            raise DataError(f"{where}: holds no consistent estimate (identify --consistent)")
+            raise DataError(
+                f"{where}: holds no consistent estimate (identify with consistent=True)"
+            )
     names, values = src.get("base_names", doc["base_names"]), src["base_values"]
     if list(names) != list(base.names):
         raise DataError(

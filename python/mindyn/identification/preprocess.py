@@ -226,7 +226,7 @@ def timing(t: np.ndarray) -> dict:
     }
 
 
-def excited_band(q: np.ndarray, dt: float, energy: float = BAND_ENERGY) -> float:
+def excited_band(q: np.ndarray, dt: float, *, energy: float = BAND_ENERGY) -> float:
     """Frequency [Hz] below which ``energy`` of the spectral energy of the positions ``q`` (m, n)
     on a uniform grid of step ``dt`` lies, all joints together; the straight line between the
     first and last sample is removed first (a motion that does not return to its start would
@@ -291,7 +291,7 @@ def _check_periodic(Q: np.ndarray, cycle: dict, src: str, duration: float) -> No
         raise DataError(
             f"{src}: the log ({duration:.6g} s) is not {count} period(s) of "
             f"{cycle['period_s']:.6g} s: joint {j + 1}'s {what} {detail}; give the number of "
-            "periods the log holds (--periods) or the excitation's period (--period)"
+            "periods the log holds (periods=) or the excitation's period (period=)"
         )
 
 
@@ -315,17 +315,17 @@ def require_even_stamps(data: JointData, filter: str) -> None:
     if tm["jitter"] <= JITTER_TOLERANCE and tm["gaps"] == 0:
         return
     raise DataError(
-        f"{data.source or 'data'}: --filter {filter} derives the "
+        f"{data.source or 'data'}: filter='{filter}' derives the "
         + " and ".join("velocities" if w == "velocity" else "accelerations" for w in derived)
         + " as if the samples were evenly spaced, but its time stamps are not (intervals "
         f"{1e3 * tm['min_dt_s']:.4g} to {1e3 * tm['max_dt_s']:.4g} ms about a median of "
         f"{1e3 * tm['median_dt_s']:.4g} ms, jitter {100 * tm['jitter']:.3g} %, {tm['gaps']} "
-        "gap(s)); use --filter lowpass (the default), which resamples onto a uniform grid and "
+        "gap(s)); use filter='lowpass' (the default), which resamples onto a uniform grid and "
         "cuts the log at its breaks"
     )
 
 
-def split_at_gaps(data: JointData, gap: float = SEGMENT_GAP) -> list[JointData]:
+def split_at_gaps(data: JointData, *, gap: float = SEGMENT_GAP) -> list[JointData]:
     """``data`` cut at every sample interval longer than ``gap`` median intervals: a list of
     :class:`JointData` segments (one when there is no break), each with ``processing["segment"]``
     giving its index, count and time span, and its source naming the span."""
@@ -358,6 +358,7 @@ def split_at_gaps(data: JointData, gap: float = SEGMENT_GAP) -> list[JointData]:
 
 def preprocess(
     data: JointData,
+    *,
     cutoff: float | None = None,
     order: int = 4,
     periods: int | None = None,
@@ -510,7 +511,7 @@ def preprocess(
     else:
         fc = float(cutoff)
         info["cutoff_source"] = "given"
-        check_cutoff(fc, rate, float(t[-1] - t[0]), src)
+        check_cutoff(fc, rate, float(t[-1] - t[0]), source=src)
     sos = signal.butter(order, fc, fs=rate, output="sos")
     periodic = cycle is not None
     m = q.shape[0]

@@ -26,7 +26,7 @@ def _pyplot():
     return plt
 
 
-def plot_torques(path, t, tau, tau_hat, title: str = "", unit: str = "N m") -> Path:
+def plot_torques(path, t, tau, tau_hat, *, title: str = "", unit: str = "N m") -> Path:
     """Measured and estimated torque per joint, one panel each (as the ZCR07S study, Fig. 6-7).
     ``t`` (m,), ``tau``, ``tau_hat`` (m, n)."""
     plt = _pyplot()
@@ -58,7 +58,7 @@ def plot_torques(path, t, tau, tau_hat, title: str = "", unit: str = "N m") -> P
     return path
 
 
-def format_table(result, truth=None) -> str:
+def format_table(result, *, truth=None) -> str:
     """Terminal table of an :class:`~mindyn.identification.IdentificationResult`: name,
     estimate, standard deviation, RSD and, when ``truth`` (base values, shape (nb,)) is given,
     the true value and the relative error."""
@@ -115,11 +115,11 @@ def write_report(
     directory,
     result,
     data,
+    *,
     validation_data=None,
     validation=None,
     fit=None,
     trajectory_limits=None,
-    *,
     estimate: str | None = None,
 ) -> list[Path]:
     """Writes the PNG plots of a report folder: measured vs estimated torques on the
@@ -157,7 +157,7 @@ def write_report(
                     log.t,
                     log.tau,
                     hat,
-                    f"{tag}: {kind} data ({_name(log)}){err}",
+                    title=f"{tag}: {kind} data ({_name(log)}){err}",
                 )
             )
 
@@ -179,7 +179,7 @@ def write_report(
                 log.q,
                 log.dq,
                 log.ddq,
-                trajectory_limits,
+                limits=trajectory_limits,
                 title=f"{result.base.robot.name}: excitation trajectory (identification data"
                 + (f", {_name(log)})" if len(logs) > 1 else ")"),
             )

@@ -54,6 +54,7 @@ def _reader_classes():
 def read_rosbag(
     path,
     robot,
+    *,
     topic: str | None = None,
     torque_unit: str = "Nm",
     require_torque: bool = True,
@@ -115,7 +116,7 @@ def read_rosbag(
             if len(topics) > 1:
                 raise DataError(
                     f"{path}: several JointState topics ({', '.join(topics)}); choose one with "
-                    "topic= (--topic)"
+                    "topic="
                 )
             topic = topics[0]
         elif topic not in topics:
