@@ -250,7 +250,6 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "with_gravity",
           [](const PyModel& s, const Eigen::Vector3d& g) {
-            if (!g.allFinite()) throw ArgumentError("gravity must be finite");
             Model copy = s.model;
             copy.gravity = g;
             copy.validate();  // the bound on every number holds for gravity too
@@ -266,28 +265,24 @@ PYBIND11_MODULE(_core, m) {
             if (v.size() != s.model.inertial.size())
               throw ArgumentError("inertial must have " + std::to_string(s.model.inertial.size()) +
                                   " entries");
-            if (!v.allFinite()) throw ArgumentError("inertial contains NaN or infinity");
             s.model.inertial = v;
           })
       .def_property(
           "rotor_inertia", [](const PyModel& s) { return Eigen::VectorXd(s.model.rotor_inertia); },
           [](PyModel& s, const Eigen::VectorXd& v) {
-            if (v.size() != s.model.nq() || !v.allFinite())
-              throw ArgumentError("rotor_inertia must be n finite values");
+            if (v.size() != s.model.nq()) throw ArgumentError("rotor_inertia must have n entries");
             s.model.rotor_inertia = v;
           })
       .def_property(
           "viscous", [](const PyModel& s) { return Eigen::VectorXd(s.model.viscous); },
           [](PyModel& s, const Eigen::VectorXd& v) {
-            if (v.size() != s.model.nq() || !v.allFinite())
-              throw ArgumentError("viscous must be n finite values");
+            if (v.size() != s.model.nq()) throw ArgumentError("viscous must have n entries");
             s.model.viscous = v;
           })
       .def_property(
           "coulomb", [](const PyModel& s) { return Eigen::VectorXd(s.model.coulomb); },
           [](PyModel& s, const Eigen::VectorXd& v) {
-            if (v.size() != s.model.nq() || !v.allFinite())
-              throw ArgumentError("coulomb must be n finite values");
+            if (v.size() != s.model.nq()) throw ArgumentError("coulomb must have n entries");
             s.model.coulomb = v;
           })
       .def_property(
@@ -298,8 +293,7 @@ PYBIND11_MODULE(_core, m) {
                        : Eigen::VectorXd(Eigen::VectorXd::Zero(s.model.nq()));
           },
           [](PyModel& s, const Eigen::VectorXd& v) {
-            if (v.size() != s.model.nq() || !v.allFinite())
-              throw ArgumentError("third_friction must be n finite values");
+            if (v.size() != s.model.nq()) throw ArgumentError("third_friction must have n entries");
             s.model.third_friction = v;
           })
       .def(
@@ -592,17 +586,8 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("snapped", [](const PyBase& b) { return b.snapped; })
       .def_property_readonly("snappable", [](const PyBase& b) { return b.bp.snappable; })
       .def_property_readonly("model", [](const PyBase& b) { return b.model; })
-      .def("values",
-           [](const PyBase& b, const Eigen::VectorXd& pi) {
-             if (!pi.allFinite()) throw ArgumentError("params contains NaN or infinite values");
-             return b.bp.values(pi);
-           })
-      .def("embed",
-           [](const PyBase& b, const Eigen::VectorXd& pb) {
-             if (!pb.allFinite())
-               throw ArgumentError("base parameter vector contains NaN or infinite values");
-             return b.bp.embed(pb);
-           })
+      .def("values", [](const PyBase& b, const Eigen::VectorXd& pi) { return b.bp.values(pi); })
+      .def("embed", [](const PyBase& b, const Eigen::VectorXd& pb) { return b.bp.embed(pb); })
       .def(
           "regressor",
           [](PyBase& b, const Array& q, const Array& dq, const Array& ddq) {

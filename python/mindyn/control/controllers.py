@@ -148,8 +148,9 @@ MIN_PERIOD, MAX_PERIOD = 1e-6, 1e3
 
 
 def check_period(period, *, what: str = "period") -> float:
-    """``period`` as a float; raises ValueError unless it is a number of seconds in
-    [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
+    """``period`` as a float; raises ControllerSettingError (an ArgumentError) unless it is a
+    number of seconds in [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
+    _args.text(what, "what")
     if isinstance(period, (bool, np.bool_)):
         raise ControllerSettingError(f"{what} must be a number of seconds, got {period!r}")
     try:
@@ -483,6 +484,10 @@ def controller_check(robot: Robot, controller, params, period: float):
     controllers) against the simulated robot of classical parameters ``params`` (13 per joint)
     at ``period`` [s]: the controller's own model (``base`` and ``p0`` / ``p_hat``) at the
     sampled configurations."""
+    _args.instance(robot, "robot", Robot)
+    _args.function(controller, "controller")
+    params = _args.array(params, "params", (None,))
+    period = _args.number(period, "period", positive=True)
     from .stability import check_loop, workspace_samples
 
     n = robot.n

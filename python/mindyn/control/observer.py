@@ -77,16 +77,22 @@ class MomentumObserver:
     def __init__(
         self, base: BaseParameters, values, *, period: float, gains=None, held_torque=True
     ):
+        _args.instance(base, "base", BaseParameters)
         n = base.robot.n
         self.base = base
         self.period = check_period(period)
-        values = np.asarray(values, dtype=float).reshape(-1)
+        values = _args.array(values, "values", (None,))
         if values.shape != (base.n,):
             raise ControllerSettingError(
                 f"values has {values.size} entries; the base parameters have {base.n}"
             )
-        k = default_observer_gain(self.period) if gains is None else gains
-        k = np.broadcast_to(np.asarray(k, dtype=float), (n,)).copy()
+        if gains is None:
+            k = np.full(n, default_observer_gain(self.period))
+        elif np.ndim(gains) == 0:
+            k = np.full(n, _args.number(gains, "gains"))
+        else:
+            k = _args.array(gains, "gains", (n,))
+        held_torque = _args.flag(held_torque, "held_torque")
         bad = np.flatnonzero(~((k > 0) & (k * self.period < 2)))
         if bad.size:
             j = int(bad[0])
@@ -105,31 +111,52 @@ class MomentumObserver:
 
     def reset(self, q, dq, tau) -> None:
         """Sample 0: ``p(0)`` from ``(q, dq)``, the integral and ``r`` zero."""
-        self._o.reset(np.asarray(q, float), np.asarray(dq, float), np.asarray(tau, float))
+        n = self.base.robot.n
+        q, dq, tau = (_args.array(x, k, (n,)) for x, k in ((q, "q"), (dq, "dq"), (tau, "tau")))
+        self._o.reset(q, dq, tau)
 
     def step(self, q, dq, tau) -> np.ndarray:
         """The residual ``r_k`` (n,) of the next sample."""
-        return self._o.step(np.asarray(q, float), np.asarray(dq, float), np.asarray(tau, float))
+        n = self.base.robot.n
+        q, dq, tau = (_args.array(x, k, (n,)) for x, k in ((q, "q"), (dq, "dq"), (tau, "tau")))
+        return self._o.step(q, dq, tau)
 
     def run(self, q, dq, tau, t=None) -> np.ndarray:
         """The residual (m, n) of a log: 0 at sample 0. Sampled at the period, or at the time
         stamps ``t`` (m,) when given (uneven steps; each must keep ``K_O dt < 2``)."""
-        return self._o.run(
-            np.ascontiguousarray(q, dtype=float),
-            np.ascontiguousarray(dq, dtype=float),
-            np.ascontiguousarray(tau, dtype=float),
-            None if t is None else np.ascontiguousarray(t, dtype=float),
-        )
+        n = self.base.robot.n
+        q = _args.array(q, "q", (None, n), unit="joint")
+        if q.shape[0] < 1:
+            raise _args.fail("q", f"has shape {q.shape}; expected a log of shape (m, {n}), m >= 1")
+        m = q.shape[0]
+        dq = _args.array(dq, "dq", (m, n), unit="joint")
+        tau = _args.array(tau, "tau", (m, n), unit="joint")
+        if t is not None:
+            t = _args.array(t, "t", (m,))
+            dt = np.diff(t)
+            bad = np.flatnonzero(~(dt > 0))
+            if bad.size:
+                raise _args.fail("t", f"is not strictly increasing at sample {int(bad[0]) + 2}")
+            kmax = float(self.gains.max())
+            bad = np.flatnonzero(~(kmax * dt < 2.0))
+            if bad.size:
+                i = int(bad[0])
+                raise _args.fail(
+                    "t",
+                    f"has a time step of {dt[i]:g} s at sample {i + 2}, which makes K_O dt >= 2 "
+                    f"(largest K_O {kmax:g} 1/s); lower the gains below 2 / dt",
+                )
+        return self._o.run(q, dq, tau, t)
 
     @property
     def momentum(self) -> np.ndarray:
         """``p = W_p,b p_b`` of the last sample."""
-        return self._o.momentum
+        return _args.readonly(self._o.momentum)
 
     @property
     def beta(self) -> np.ndarray:
         """``beta = W_l,b p_b + friction + offset`` of the last sample."""
-        return self._o.beta
+        return _args.readonly(self._o.beta)
 
     def filter_coefficients(self) -> tuple[np.ndarray, np.ndarray]:
         """``(a, c)`` per joint: ``r_k = a r_{k-1} + c D_k``."""

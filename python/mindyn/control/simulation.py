@@ -375,7 +375,7 @@ class SimulationResult:
     @property
     def error(self) -> np.ndarray:
         """True position error ``q_true - q_d``, shape (m, n), rad."""
-        return self.q_true - self.qd
+        return _args.readonly(self.q_true - self.qd)
 
     def max_error_deg(self, *, t_from: float = 0.0) -> np.ndarray:
         """Largest ``|q - q_d|`` per joint in degrees, from ``t_from`` on."""

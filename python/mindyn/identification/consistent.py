@@ -97,6 +97,7 @@ _NAME = re.compile(r"([A-Za-z]+?)([0-9]+)")
 def pseudo_inertia(p) -> np.ndarray:
     """The 4x4 pseudo-inertia ``[[tr(I)/2 1 - I, h], [h^T, m]]`` of the 10 inertial parameters
     ``XX XY XZ YY YZ ZZ MX MY MZ M`` (about the link-frame origin, in its frame)."""
+    p = _args.array(p, "p", (10,))
     xx, xy, xz, yy, yz, zz, mx, my, mz, m = np.asarray(p, dtype=float)
     inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
     J = np.empty((4, 4))
@@ -109,6 +110,7 @@ def pseudo_inertia(p) -> np.ndarray:
 def inertial_from_pseudo(J) -> np.ndarray:
     """The 10 inertial parameters of a pseudo-inertia (inverse of :func:`pseudo_inertia`):
     ``I = tr(S) 1 - S`` for its upper-left block ``S``."""
+    J = _args.array(J, "J", (4, 4))
     J = 0.5 * (np.asarray(J, dtype=float) + np.asarray(J, dtype=float).T)
     inertia = np.trace(J[:3, :3]) * np.eye(3) - J[:3, :3]
     return np.array(
@@ -232,7 +234,7 @@ class ConsistentResult:
     @property
     def robot_params(self) -> np.ndarray:
         """The classical vector without offsets, in the layout ``Robot`` methods take."""
-        return self.classical[: _Layout(self.base).robot_params]
+        return _args.readonly(self.classical[: _Layout(self.base).robot_params])
 
     @property
     def total_mass(self) -> float:

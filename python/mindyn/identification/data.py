@@ -681,6 +681,13 @@ def differentiate(
     -------
     (xf, dx, info) : filtered signal (m, n), derivative (m, n), settings dict.
     """
+    t = _args.array(t, "t", (None,))
+    x = _args.array(x, "x", (t.shape[0],) + ((None,) if np.ndim(x) == 2 else ()))
+    _args.choice(filter, "filter", ("butter", "savgol", "none"))
+    cutoff = _args.optional(_args.number, cutoff, "cutoff", positive=True)
+    order = _args.integer(order, "order", 1)
+    window = _args.optional(_args.number, window, "window", positive=True)
+    polyorder = _args.integer(polyorder, "polyorder", 0)
     m = t.shape[0]
     rate = (m - 1) / (t[-1] - t[0])
     jitter = float(np.max(np.abs(np.diff(t) * rate - 1.0))) if m > 1 else 0.0
@@ -789,6 +796,7 @@ def write_trajectory_csv(path, t, q, dq, ddq) -> Path:
 
 def truth_path(csv_path) -> Path:
     """``data.csv`` -> ``data.truth.json``: the true parameters of a simulated log."""
+    _args.path(csv_path, "csv_path")
     p = Path(csv_path)
     return p.with_name(p.stem + ".truth.json")
 
@@ -798,6 +806,10 @@ def read_truth(csv_path, robot=None) -> dict | None:
     sidecar that names another robot (``robot``) or other joints (``joints``, in order) than
     ``robot``'s is refused: the log was simulated for another robot, whatever its joint
     count."""
+    from ..robot import Robot
+
+    _args.path(csv_path, "csv_path")
+    _args.optional(_args.instance, robot, "robot", Robot)
     p = truth_path(csv_path)
     if not p.is_file():
         return None
@@ -814,6 +826,11 @@ def read_truth(csv_path, robot=None) -> dict | None:
 def check_log_robot(doc: dict, robot, where: str) -> None:
     """Refuses a document (a truth sidecar, an identification JSON) whose ``robot`` name or
     ``joints`` names differ from ``robot``'s; either field may be absent (or an empty name)."""
+    from ..robot import Robot
+
+    _args.mapping(doc, "doc")
+    _args.instance(robot, "robot", Robot)
+    _args.text(where, "where")
     name = doc.get("robot")
     if name not in (None, "") and name != robot.name:
         raise DataError(

@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .. import _args
 from .data import DataError, read_json
 
 __all__ = ["FLAGS", "read_identification", "robot_on_drive_side", "with_identified_friction"]
@@ -34,6 +35,10 @@ def read_identification(
     ------
     DataError
         Not a JSON object, a needed field missing, or a field of the wrong type or range."""
+    _args.instance(source, "source", (dict, str, Path), "an identification JSON (a dict or a path)")
+    _args.instance(need, "need", (tuple, list), "a tuple of field names")
+    _args.text(what, "what")
+    finite = _args.flag(finite, "finite")
     if isinstance(source, (str, Path)):
         where = str(source)
         doc = read_json(source, what=what, finite=finite)
@@ -99,6 +104,11 @@ def read_identification(
 def robot_on_drive_side(robot, doc: dict, *, where: str = "identification JSON"):
     """``robot`` with rotor inertia and friction where the identification ``doc`` had them
     (``drive_side``; a document without it was identified with them on the joints)."""
+    from ..robot import Robot
+
+    _args.instance(robot, "robot", Robot)
+    _args.mapping(doc, "doc")
+    _args.text(where, "where")
     side = doc.get("drive_side", "joint")
     if robot.drive_side == side:
         return robot
@@ -135,6 +145,11 @@ def with_identified_friction(robot, doc: dict, *, where: str = "identification J
     """``robot`` with the friction model an identification JSON records (``friction_model``;
     unchanged without one: viscous and Coulomb friction). DataError when the record does not fit
     the robot."""
+    from ..robot import Robot
+
+    _args.instance(robot, "robot", Robot)
+    _args.mapping(doc, "doc")
+    _args.text(where, "where")
     fm = doc.get("friction_model")
     if fm is None:
         return robot

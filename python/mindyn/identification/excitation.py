@@ -34,10 +34,11 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize
 
+from .. import _args
 from .._args import ArgumentError
 from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
-from ..robot import Robot, load
+from ..robot import Robot, as_robot, load
 from .errors import IdentificationError
 
 __all__ = [
@@ -76,6 +77,10 @@ def check_sampling(harmonics: int, freq: float, rate: float, *, periods: float =
     ``harmonics`` harmonics of ``freq`` [Hz]: a rate above ``2 N freq`` (each period of the
     highest harmonic sampled more than twice) and at most :data:`MAX_TRAJECTORY_ROWS` samples.
     Returns the number of samples."""
+    harmonics = _args.integer(harmonics, "harmonics", 1)
+    freq = _args.number(freq, "freq", positive=True)
+    rate = _args.number(rate, "rate", positive=True)
+    periods = _args.number(periods, "periods", positive=True)
     rate, periods, period = float(rate), float(periods), 1.0 / float(freq)
     top = harmonics * freq
     if not (math.isfinite(rate) and rate > 2 * top):
@@ -242,6 +247,9 @@ def excitation_limits(robot: Robot, *, margin: float = 0.05, overrides: dict | N
     their range, velocities and accelerations in magnitude). Where the description gives no
     limit (NaN) a fallback is used (``FALLBACK``) and noted. ``overrides`` may give any of the
     four arrays (or scalars) to replace the robot's values."""
+    _args.instance(robot, "robot", Robot)
+    margin = _args.number(margin, "margin", minimum=0.0, below=0.5)
+    _args.optional(_args.mapping, overrides, "overrides")
     lim = robot.limits
     n = robot.n
     overrides = overrides or {}
@@ -303,6 +311,9 @@ def criterion_value(base: BaseParameters, q, dq, ddq, *, criterion: str = "cond"
     """The criterion in its reported form on samples ``q, dq, ddq`` (each (m, n)): the condition
     number for ``cond``, ``log det(W^T W / rows)`` for ``logdet`` and the log Hadamard ratio
     ``log prod diag(G) - log det(G)`` for ``hadamard``."""
+    _args.instance(base, "base", BaseParameters)
+    q, dq, ddq = _args.batch(base.robot.n, q=q, dq=dq, ddq=ddq)
+    _args.choice(criterion, "criterion", CRITERIA)
     if criterion not in CRITERIA:
         raise ArgumentError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
     W = base.regressor(q, dq, ddq).reshape(-1, base.n)
@@ -492,6 +503,14 @@ def random_trajectory(
     validation trajectory. ``limits``: all four arrays as returned by
     :func:`excitation_limits`, or some of them as overrides of the robot's (then ``margin``
     applies)."""
+    robot = as_robot(robot)
+    harmonics = _args.integer(harmonics, "harmonics", 1)
+    freq = _args.number(freq, "freq", positive=True)
+    seed = _args.integer(seed, "seed", 0)
+    _args.optional(_args.mapping, limits, "limits")
+    start = _args.optional(_args.array, start, "start", (robot.n,))
+    fill = _args.number(fill, "fill", positive=True, maximum=1.0)
+    margin = _args.number(margin, "margin", minimum=0.0, below=0.5)
     robot = load(robot)
     keys = ("lower", "upper", "velocity", "acceleration")
     if limits is None or not all(k in limits for k in keys):
@@ -574,6 +593,21 @@ def optimize_excitation(
         Print progress to ``stream`` (default stderr): a line per start, redrawn during it on a
         terminal, else a line every :data:`PROGRESS_SECONDS` within a start.
     """
+    robot = as_robot(robot)
+    harmonics = _args.integer(harmonics, "harmonics", 2)
+    freq = _args.number(freq, "freq", positive=True)
+    _args.choice(criterion, "criterion", CRITERIA)
+    starts = _args.integer(starts, "starts", 1)
+    seed = _args.integer(seed, "seed", 0)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    _args.optional(_args.instance, base, "base", BaseParameters)
+    samples = _args.integer(samples, "samples", 1)
+    grid = _args.optional(_args.integer, grid, "grid", 1)
+    maxiter = _args.integer(maxiter, "maxiter", 1)
+    margin = _args.number(margin, "margin", minimum=0.0, below=0.5)
+    _args.optional(_args.mapping, limits, "limits")
+    start = _args.optional(_args.array, start, "start", (robot.n,))
+    progress = _args.flag(progress, "progress")
     if criterion not in CRITERIA:
         raise ArgumentError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
     if harmonics < 2:
@@ -790,6 +824,13 @@ def _free_from(prob: _Problem, traj: FourierTrajectory) -> np.ndarray:
 
 def plot_trajectory(path, t, q, dq, ddq, *, limits: dict | None = None, title: str = "") -> Path:
     """PNG of positions, velocities and accelerations per joint (limits dashed)."""
+    _args.path(path, "path")
+    t = _args.array(t, "t", (None,))
+    q = _args.array(q, "q", (t.shape[0], None))
+    dq = _args.array(dq, "dq", q.shape)
+    ddq = _args.array(ddq, "ddq", q.shape)
+    _args.optional(_args.mapping, limits, "limits")
+    _args.text(title, "title", empty=True)
     import matplotlib
 
     matplotlib.use("Agg")

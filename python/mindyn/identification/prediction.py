@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _args
 from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
@@ -80,8 +81,17 @@ def identified_model(
     ``base_names``). ``estimate``: ``unconstrained`` (``base_values``) or ``consistent``
     (``consistent_estimate.base_values``). Returns ``(base, values, doc)`` (``doc`` empty for a
     result)."""
-    if estimate not in ("unconstrained", "consistent"):
-        raise ArgumentError(f"estimate must be 'unconstrained' or 'consistent', got '{estimate}'")
+    _args.choice(estimate, "estimate", ("unconstrained", "consistent"))
+    _args.optional(
+        _args.instance, robot, "robot", (Robot, str, Path), "a Robot, a robot name or a path"
+    )
+    if not (hasattr(identification, "base") and hasattr(identification, "full")):
+        _args.instance(
+            identification,
+            "identification",
+            (dict, str, Path),
+            "an identification (a result, or its JSON as a dict or path)",
+        )
     if hasattr(identification, "base") and hasattr(identification, "full"):
         if estimate == "consistent" and not hasattr(identification, "classical"):
             raise ArgumentError("estimate 'consistent' needs a consistent result")
@@ -91,7 +101,7 @@ def identified_model(
     if not (isinstance(doc, dict) and {"base_names", "base_values"} <= doc.keys()):
         raise DataError(f"{where}: not the JSON of 'mindyn identify' (no base_names/base_values)")
     if robot is None:
-        raise ArgumentError("identified_model: the robot is needed with an identification JSON")
+        raise _args.fail("robot", "is None; the robot is needed with an identification JSON")
     if isinstance(robot, Robot):
         if doc.get("robot") not in (None, robot.name):
             raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
@@ -143,8 +153,10 @@ def predict(
     motion at each logged time stamp between the dropped filter edges (``data.logged``: no
     decimation, no filtering of the prediction); otherwise on the samples as given. Segments
     are stacked in order."""
+    from .estimation import _logs
+
+    logs = _logs(data)
     base, values, doc = identified_model(identification, robot, estimate=estimate)
-    logs = [data] if isinstance(data, JointData) else list(data)
     if not logs:
         raise DataError("predict: no data")
     parts = []
