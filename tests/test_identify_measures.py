@@ -377,7 +377,7 @@ def test_several_logs_refuse_a_wrong_joint_count(two_logs):
     short = replace(d, q=d.q[:, :3], dq=d.dq[:, :3], ddq=d.ddq[:, :3], tau=d.tau[:, :3])
     with pytest.raises(DataError, match="has 3 joints"):
         identify(robot, [d, short], base=base)
-    with pytest.raises(ValueError, match="non-empty sequence"):
+    with pytest.raises(ValueError, match="^data must be a JointData or a non-empty list"):
         identify(robot, [], base=base)
 
 

@@ -79,14 +79,16 @@ def test_integrator_against_scipy_and_errors():
     # RK4 at h = 1 ms: ~1e-12 of the state; scipy at rtol 1e-12: 1e-9 covers both
     assert np.allclose(qn, sol.y[:2, -1], rtol=0, atol=1e-9)
     assert np.allclose(dqn, sol.y[2:, -1], rtol=0, atol=1e-9)
-    with pytest.raises(ValueError, match="dt must be"):
-        plant.step(q, dq, tau, 0.0, 1)
-    with pytest.raises(ValueError, match="substeps must be"):
-        plant.step(q, dq, tau, 0.1, 0)
-    with pytest.raises(ValueError, match="coulomb_smoothing"):
-        _core.Integrator(robot._m, p, -1.0)
-    with pytest.raises(ValueError, match="tau"):
+    # the binding guards the sizes; the settings are checked by simulate, first
+    with pytest.raises(mindyn.ArgumentError, match="^tau has 3 entries"):
         plant.step(q, dq, np.zeros(3), 0.1, 1)
+    ref = SumOfSines(robot, period=1.0)
+    with pytest.raises(mindyn.ArgumentError, match="^substeps is 0; expected an integer >= 1"):
+        simulate(robot, ref, substeps=0, duration=0.1)
+    with pytest.raises(mindyn.ArgumentError, match="^coulomb_smoothing is -1.0; expected"):
+        simulate(robot, ref, coulomb_smoothing=-1.0, duration=0.1)
+    with pytest.raises(mindyn.ArgumentError, match="^rate is 0.0; expected a positive number"):
+        simulate(robot, ref, rate=0.0, duration=0.1)
 
 
 # --------------------------------------------------------------------------------------------

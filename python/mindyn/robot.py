@@ -82,7 +82,7 @@ def load(robot: str | Path, *, tip: str | None = None, gravity=None) -> Robot:
     return out if gravity is None else out.with_gravity(gravity)
 
 
-def as_robot(robot, name: str = "robot") -> Robot:
+def as_robot(robot, *, name: str = "robot") -> Robot:
     """``robot`` itself, or the robot :func:`load` gives for a bundled name or a path (the
     ``robot`` argument of the public functions); ArgumentError naming ``name`` otherwise."""
     if isinstance(robot, Robot):

@@ -174,8 +174,8 @@ def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
     PD, :func:`check_lambda`). The robot's part, ``T M^-1 K_D,eff < 2``, is :func:`check_gains`."""
     _args.choice(kind, "kind", CONTROLLERS)
     T = check_period(period)
-    kp, kd, lam = (
-        np.asarray(_args.number(x, name) if np.ndim(x) == 0 else _args.array(x, name, (None,)))
+    kp, kd, lam = (  # the values are checked below, with the gains' own messages
+        _args.array(x, name, (None,) * min(np.ndim(x), 1), finite=False)
         for x, name in ((kp, "kp"), (kd, "kd"), (lam, "lam"))
     )
     for name, x in (("lambda", lam), ("kd", kd), ("kp", kp)):

@@ -414,7 +414,7 @@ def preprocess(
     edge = _args.optional(_args.number, edge, "edge", minimum=0.0)
     decimate = _args.flag(decimate, "decimate")
     parallel = _args.flag(parallel, "parallel")
-    gap = _args.number(gap, "gap", positive=True)
+    gap = gap if gap == np.inf else _args.number(gap, "gap", positive=True)
     src = data.source or "data"
     if not (isinstance(order, (int, np.integer)) and 1 <= order <= 10):
         raise DataError(f"filter order must be an integer from 1 to 10, got {order}")

@@ -70,9 +70,10 @@ def format_table(result, *, truth=None) -> str:
     """Terminal table of an :class:`~mindyn.identification.IdentificationResult`: name,
     estimate, standard deviation, RSD and, when ``truth`` (base values, shape (nb,)) is given,
     the true value and the relative error."""
+    from .consistent import ConsistentResult
     from .estimation import IdentificationResult
 
-    _args.instance(result, "result", IdentificationResult)
+    _args.instance(result, "result", (IdentificationResult, ConsistentResult))
     truth = _args.optional(_args.array, truth, "truth", (result.base.n,))
     names = list(result.base.names)
     width = max(8, max(len(n) for n in names))
@@ -148,7 +149,7 @@ def write_report(
     _args.path(directory, "directory")
     _args.instance(result, "result", (IdentificationResult, ConsistentResult))
     _logs(data)
-    if validation_data is not None:
+    if not (validation_data is None or isinstance(validation_data, list) and not validation_data):
         _logs(validation_data, "validation_data")
     _args.optional(_args.mapping, trajectory_limits, "trajectory_limits")
     _args.optional(_args.choice, estimate, "estimate", ("unconstrained", "consistent"))

@@ -127,7 +127,9 @@ def validate(result: IdentificationResult, data: JointData | Sequence[JointData]
       ``rule``, and ``fraction``: the share of each joint's samples counted.
 
     Each entry of ``logs`` has its own ``raw`` and ``moving``."""
-    _args.instance(result, "result", IdentificationResult)
+    from .consistent import ConsistentResult
+
+    _args.instance(result, "result", (IdentificationResult, ConsistentResult))
     logs = _logs(data)
     robot = result.base.robot
     effort = robot.limits["effort"]
