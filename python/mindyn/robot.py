@@ -105,12 +105,12 @@ def _load(robot: str | Path, tip: str | None) -> Robot:
         return Robot(_core.load_urdf(text, tip or ""))
     if suffix in (".yaml", ".yml"):
         if tip:
-            raise _core.ModelError("tip= applies to URDF chains only, not to a DH/MDH table")
+            raise _args.ArgumentError("tip= applies to URDF chains only, not to a DH/MDH table")
         if not path.is_file():
             raise _core.RobotFileNotFoundError(f"robot description '{text}' does not exist")
         return Robot(_core.load_yaml(text))
     if tip:
-        raise _core.ModelError(
+        raise _args.ArgumentError(
             f"tip= applies to URDF files only, not to the bundled robot '{text}'"
         )
     m = _PLANAR.fullmatch(text)
