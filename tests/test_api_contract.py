@@ -705,6 +705,17 @@ def test_options_after_the_data_are_keyword_only(api, name):
 DATA_WITH_DEFAULT = {"params", "q0", "t", "dq", "ddq", "robot", "controller", "p_hat"}
 
 
+def test_base_parameters_method_auto_says_why_it_chose():
+    from mindyn.base import choose_method
+
+    auto = mindyn.base_parameters(ROBOT, method="auto")
+    method, reason = choose_method(ROBOT)
+    assert (auto.method, auto.method_reason) == (method, reason)
+    assert mindyn.base_parameters(ROBOT).method_reason == reason
+    given = mindyn.base_parameters(ROBOT, method="recursive")
+    assert (given.method, given.method_reason) == ("recursive", "method='recursive'")
+
+
 def test_identify_refuses_options_by_position():
     with pytest.raises(TypeError):
         identification.identify(ROBOT, LOG, "dynamic", True)

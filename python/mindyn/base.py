@@ -385,7 +385,7 @@ def base_parameters(
         A robot or anything :func:`mindyn.load` accepts.
     rotor, friction : bool
         Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
-    method : {"projection", "recursive", "numerical"}, optional
+    method : {"auto", "projection", "recursive", "numerical"}, optional
         Exact projection method; exact recursive method (the identifiable space link by
         link, cost linear in the number of joints, then the same echelon form: the same base
         set and ``Y``); or sampled regressors with QR (for cross-checks). The projection
@@ -395,10 +395,10 @@ def base_parameters(
         estimate; the recursive method handles such chains, and so does the numerical one, up
         to its own budget of 2 GiB (about 340 joints). All three handle trees
         (``Robot.parents``); on a tree the projection method takes at most 16 joints on one
-        root path and 44 in all, and at most 256 parameters in all. Default (``None``): the
-        projection method, or the recursive one where a limit of the projection method refuses
-        the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
-        ``method_reason``).
+        root path and 44 in all, and at most 256 parameters in all. Default (``None`` or
+        ``"auto"``): the projection method, or the recursive one where a limit of the projection
+        method refuses the robot (:func:`choose_method`; the choice and its reason are in
+        ``method`` and ``method_reason``).
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
@@ -424,11 +424,11 @@ def base_parameters(
     robot = as_robot(robot)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     offset = _args.flag(offset, "offset")
-    if method is None:
+    _args.optional(_args.choice, method, "method", ("auto", "projection", "recursive", "numerical"))
+    if method is None or method == "auto":
         method, reason = choose_method(robot, rotor=rotor, friction=friction)
     else:
         reason = f"method={method!r}"
-    _args.choice(method, "method", ("projection", "recursive", "numerical"))
     tolerance = _args.number(tolerance, "tolerance", positive=True)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)
