@@ -113,7 +113,7 @@ def bench(robot, kind, cc, cflags, steps, repeats, folder: Path):
     lib_us = float("nan")
     if kind == "adaptive-pd":
         ctl = control.make_controller(
-            kind, robot, control.default_gains(robot, rotor=True), None, base
+            kind, robot, control.default_gains(robot, rotor=True), None, base=base
         )
         m = min(steps, 500)
         t0 = time.perf_counter()

@@ -48,7 +48,7 @@ def bench_identification(tmp: Path) -> None:
     traj = random_trajectory(robot, seed=1)
     noise = SensorNoise(torque=0.01 * robot.limits["effort"], quantization=2 * np.pi / 2**20)
     log = simulate(robot, traj, rotor=True, friction=True, noise=noise, seed=1)
-    csv = log.save(tmp / "zcr07s.csv", robot.name)
+    csv = log.save(tmp / "zcr07s.csv", robot_name=robot.name)
     print(f"identification: zcr07s, {log.t.size} samples (10 s at 250 Hz), 52 base parameters")
 
     stages = {}

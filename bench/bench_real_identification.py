@@ -304,7 +304,7 @@ def consistent_row(name, doc, wall, robot_path, log_path):
     vu = 100 * doc["validation"]["overall_relative"]
     vc = 100 * ce["validation"]["overall_relative"]
     robot = mindyn.load(str(robot_path))
-    names = robot.parameter_names(doc["rotor"], doc["friction"])
+    names = robot.parameter_names(rotor=doc["rotor"], friction=doc["friction"])
     params = np.array([doc["classical"][nm] for nm in names])
     data = read_csv(log_path, robot=robot, filter="butter")
     span = data.t[-1] - data.t[0]

@@ -46,19 +46,19 @@ def main() -> None:
 
     robot = mindyn.load("zcr07s")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    p_true = base.values(robot.parameters(True, True))
-    p0 = control.perturbed_parameters(p_true, args.error, args.seed)
+    p_true = base.values(robot.parameters(rotor=True, friction=True))
+    p0 = control.perturbed_parameters(p_true, args.error, seed=args.seed)
     gains = control.default_gains(robot, rotor=True)  # the study's (the robot has its rotors)
     cycle = 10.0
     ref = control.SumOfSines(robot, period=cycle, seed=args.seed)
     duration = cycle * args.cycles
 
     runs = {
-        "adaptive-pd": control.make_controller("adaptive-pd", robot, gains, p0, base),
+        "adaptive-pd": control.make_controller("adaptive-pd", robot, gains, p0, base=base),
         "frozen-estimate": control.make_controller(
-            "adaptive-pd", robot, dict(gains, gamma=0.0), p0, base
+            "adaptive-pd", robot, dict(gains, gamma=0.0), p0, base=base
         ),
-        "computed-torque": control.make_controller("computed-torque", robot, gains, p0, base),
+        "computed-torque": control.make_controller("computed-torque", robot, gains, p0, base=base),
         "pd": control.make_controller("pd", robot, gains),
     }
     if args.generated:
@@ -82,9 +82,11 @@ def main() -> None:
             endpoint=False,
         )
         header = {"run": name, "param_error": args.error, "seed": args.seed}
-        summaries[name] = control.write_tracking_report(result, out / name, cycle, header)
+        summaries[name] = control.write_tracking_report(
+            result, out / name, cycle=cycle, header=header
+        )
         summaries[name]["max_error_last_cycle_deg"] = result.max_error_deg(
-            duration - cycle
+            t_from=duration - cycle
         ).tolist()
         print(f"{name}: done")
 

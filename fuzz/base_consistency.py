@@ -179,7 +179,7 @@ def draw(rng: np.random.Generator, index: int, folder: Path) -> tuple[Path, str]
 
 def consistency_error(robot: mindyn.Robot, bp, rng: np.random.Generator, states: int = 4) -> float:
     """Largest |W_b Y pi - tau| / max_j sum_c |W_jc pi_c| over random states."""
-    pi = robot.parameters(bp.rotor, bp.friction)
+    pi = robot.parameters(rotor=bp.rotor, friction=bp.friction)
     lim = robot.limits
     lo = np.where(np.isfinite(lim["lower"]), lim["lower"], -np.pi)
     hi = np.where(np.isfinite(lim["upper"]), lim["upper"], np.pi)

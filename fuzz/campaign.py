@@ -288,8 +288,8 @@ def odd_urdf(rng: random.Random, path: Path, pinocchio: bool) -> Path:
 def check_base(robot, bp, rotor: bool, friction: bool, nprng) -> tuple[str, str]:
     """W_b (Y pi) against Newton-Euler (plus the rotor and friction columns) at three random
     states, relative to the largest sum of absolute terms of tau = W pi."""
-    p = robot.parameters(rotor, friction)
-    full = robot.parameter_names(rotor, friction)
+    p = robot.parameters(rotor=rotor, friction=friction)
+    full = robot.parameter_names(rotor=rotor, friction=friction)
     rigid = set(robot.parameter_names())
     extra = [i for i, name in enumerate(full) if name not in rigid]
     pb = bp.values(p)
@@ -297,7 +297,7 @@ def check_base(robot, bp, rotor: bool, friction: bool, nprng) -> tuple[str, str]
     for _ in range(3):
         q = nprng.uniform(-2, 2, robot.n)
         dq, ddq = nprng.uniform(-2, 2, robot.n), nprng.uniform(-2, 2, robot.n)
-        W = robot.regressor(q, dq, ddq, rotor, friction)
+        W = robot.regressor(q, dq, ddq, rotor=rotor, friction=friction)
         tau = robot.inverse_dynamics(q, dq, ddq) + W[:, extra] @ p[extra]
         scale = np.abs(W) @ np.abs(p)
         worst = max(worst, rel_err(bp.regressor(q, dq, ddq) @ pb, tau, scale))
@@ -492,8 +492,8 @@ def check_estimate(doc: dict, out: str, robot_name: str = IDENT_ROBOT) -> tuple[
     bp = mindyn.base_parameters(
         robot, rotor=bool(doc.get("rotor")), friction=bool(doc.get("friction"))
     )
-    p = robot.parameters(bp.rotor, bp.friction)
-    joint_terms = [k for k, name in enumerate(robot.parameter_names(bp.rotor, bp.friction))
+    p = robot.parameters(rotor=bp.rotor, friction=bp.friction)
+    joint_terms = [k for k, name in enumerate(robot.parameter_names(rotor=bp.rotor, friction=bp.friction))
                    if name.startswith(("Ia", "Fv", "Fc"))]  # fmt: skip
     p[joint_terms] = 0.0  # the logs are simulated without rotor inertia and friction
     truth = dict(zip(bp.names, bp.values(p), strict=True))

@@ -1,6 +1,6 @@
-"""Bad arguments to the public Python API: every one gives a mindyn.ModelError (a ValueError)
-whose message names the argument, instead of a pybind11 "incompatible function arguments" error,
-a numpy error or a wrong number."""
+"""Bad arguments to the public Python API: every one gives a mindyn.ArgumentError (a ValueError
+and a TypeError) whose message names the argument, instead of a pybind11 "incompatible function
+arguments" error, a numpy error or a wrong number."""
 
 from __future__ import annotations
 
@@ -90,7 +90,7 @@ def _cases():
 
 @pytest.mark.parametrize("call, arg, value", list(_cases()))
 def test_bad_per_sample_argument(call, arg, value):
-    with pytest.raises(mindyn.ModelError) as e:
+    with pytest.raises(mindyn.ArgumentError) as e:
         call(value)
     msg = str(e.value)
     assert msg.startswith(f"{arg} "), msg
@@ -119,7 +119,7 @@ OTHER = {
 @pytest.mark.parametrize("call, arg", OTHER.values(), ids=OTHER.keys())
 @pytest.mark.parametrize("value", BAD_PARAMS.values(), ids=BAD_PARAMS.keys())
 def test_bad_parameter_vector(call, arg, value):
-    with pytest.raises(mindyn.ModelError) as e:
+    with pytest.raises(mindyn.ArgumentError) as e:
         call(value)
     assert str(e.value).startswith(f"{arg} "), str(e.value)
 
@@ -180,21 +180,25 @@ BAD_MISC = {
 
 @pytest.mark.parametrize("call, arg", BAD_MISC.values(), ids=BAD_MISC.keys())
 def test_bad_other_argument(call, arg):
-    with pytest.raises(mindyn.ModelError) as e:
+    with pytest.raises(mindyn.ArgumentError) as e:
         call()
     assert str(e.value).startswith(f"{arg} "), str(e.value)
 
 
 def test_message_states_expected_and_given():
     with pytest.raises(
-        mindyn.ModelError, match=r"^dq has shape \(5,\); expected \(6,\) or \(m, 6\)$"
+        mindyn.ArgumentError, match=r"^dq has shape \(5,\); expected \(6,\) or \(m, 6\)$"
     ):
         ROBOT.inverse_dynamics(Z, np.zeros(5), Z)
-    with pytest.raises(mindyn.ModelError, match=r"^q is None; expected an array of shape \(6,\)"):
+    with pytest.raises(
+        mindyn.ArgumentError, match=r"^q is None; expected an array of shape \(6,\)"
+    ):
         ROBOT.gravity_torque(None)
-    with pytest.raises(mindyn.ModelError, match=r"^q has dtype complex128; expected real numbers"):
+    with pytest.raises(
+        mindyn.ArgumentError, match=r"^q has dtype complex128; expected real numbers"
+    ):
         ROBOT.mass_matrix(np.zeros(6, dtype=complex))
-    with pytest.raises(mindyn.ModelError, match=r"^q contains NaN at sample 1, joint 3"):
+    with pytest.raises(mindyn.ArgumentError, match=r"^q contains NaN at sample 1, joint 3"):
         ROBOT.gravity_torque(np.stack([Z, nan6]))
 
 

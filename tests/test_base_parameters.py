@@ -324,13 +324,13 @@ def test_zcr07s_khalil_relations_reproduce_pinocchio(rng):
     """Independent of the projection: Khalil's formulas, as derived above, reproduce Pinocchio's
     torques (rnea + armature + friction) for random classical parameters."""
     robot = mindyn.load("zcr07s")
-    names = robot.parameter_names(True, True)
+    names = robot.parameter_names(rotor=True, friction=True)
     pivots, Y = khalil_matrix(names, khalil_zcr07s(names))
     model = pinocchio_model(robot)
     for _ in range(3):
         pi = random_classical(names, rng)
         q, dq, ddq = random_state(robot, rng)
-        W = robot.regressor(q, dq, ddq, True, True)
+        W = robot.regressor(q, dq, ddq, rotor=True, friction=True)
         ref = pin_torque(model, robot, pi, q, dq, ddq, True, True)
         assert_close(W[:, pivots] @ (Y @ pi), ref, 1e-9, "Khalil ZCR07S formulas vs rnea")
 
@@ -339,11 +339,11 @@ def test_zcr07s_seed_print_breaks_the_torque_identity(rng):
     """The study's printed MY4R = MY4 + MZ5, MY5R = MY5 - MZ6 and its d4-free XXR3 / MXR3 do not
     reproduce the torques of its own MDH table: each breaks tau = W_b p_b."""
     robot = mindyn.load("zcr07s")
-    names = robot.parameter_names(True, True)
+    names = robot.parameter_names(rotor=True, friction=True)
     expected = khalil_zcr07s(names)
     col = {name: i for i, name in enumerate(names)}
     q, dq, ddq = random_state(robot, rng)
-    W = robot.regressor(q, dq, ddq, True, True)
+    W = robot.regressor(q, dq, ddq, rotor=True, friction=True)
     pi = random_classical(names, rng)
     pivots, Y = khalil_matrix(names, expected)
     assert_close(W[:, pivots] @ (Y @ pi), W @ pi, 1e-12, "Khalil ZCR07S formulas vs W pi")
@@ -806,7 +806,7 @@ def swapped_order(names: list[str]) -> list[str]:
 
 def test_user_order_changes_kept_parameters(rng):
     robot = mindyn.load("zcr07s")
-    names = robot.parameter_names(True, True)
+    names = robot.parameter_names(rotor=True, friction=True)
     default = zcr07s_bp()
     custom = mindyn.base_parameters(robot, rotor=True, friction=True, order=swapped_order(names))
     assert custom.n == default.n == 52
@@ -991,7 +991,7 @@ def test_gravity_is_fixed_per_robot(rng):
         flat.gravity = [0.0, 0.0, -9.81]
     q, dq, ddq = (rng.uniform(-1.0, 1.0, (5, 2)) for _ in range(3))
     for robot, bp in ((flat, bp_flat), (heavy, bp_heavy)):
-        p = robot.parameters(bp.rotor, bp.friction)
+        p = robot.parameters(rotor=bp.rotor, friction=bp.friction)
         tau = bp.regressor(q, dq, ddq) @ bp.values(p)
         np.testing.assert_allclose(tau, robot.inverse_dynamics(q, dq, ddq), rtol=0, atol=1e-9)
     # the two answers differ by the gravity torque, which is not small on a vertical arm

@@ -14,7 +14,7 @@ from mindyn.control import coriolis_matrix, slotine_li_regressor, slotine_li_reg
 ROBOT = mindyn.load("puma560")
 BASE = mindyn.base_parameters(ROBOT, rotor=True, friction=True)
 BD = BaseDynamics(BASE)
-P13 = ROBOT.parameters(True, True)
+P13 = ROBOT.parameters(rotor=True, friction=True)
 
 # name -> (number of per-sample arguments, function of them)
 FUNCTIONS = {

@@ -55,7 +55,7 @@ def files(tmp_path_factory):
     traj = random_trajectory(robot, seed=1, limits={"lower": -np.ones(2), "upper": np.ones(2)})
     (d / "traj.json").write_text(json.dumps(traj.to_dict()))
     log = simulate_inverse(robot, traj, noise=SensorNoise(torque=0.01), seed=3)
-    log.save(d / "log.csv", "planar2")
+    log.save(d / "log.csv", robot_name="planar2")
     (d / "file.txt").write_text("a file, not a folder\n")
     return d
 

@@ -131,7 +131,7 @@ def test_simulate_closed_loop_writes_a_log_that_follows_the_dynamics(tmp_path):
     assert d.m == 101 and np.allclose(np.diff(d.t), 0.004, rtol=0, atol=1e-12)
     truth = json.loads(log.with_name("pd.truth.json").read_text())
     p = np.array(truth["values"])
-    assert truth["names"] == robot.parameter_names(True, True)
+    assert truth["names"] == robot.parameter_names(rotor=True, friction=True)
 
     # from each logged state, the logged torque held over one period (what the controller
     # applies) must lead to the next logged state: scipy's RK45 at rtol 1e-10 against the

@@ -189,7 +189,7 @@ def test_generated_c_matches_pinocchio(name, minimise, trig, robots, tmp_path, r
     assert code.names == bp.names
     c = CFunctions(compile_c(code, tmp_path, name), code, robot.n)
     data = model.createData()
-    own = robot.parameters(rotor, friction)
+    own = robot.parameters(rotor=rotor, friction=friction)
     per = len(own) // robot.n
     # the robot's own parameters, then random (non-physical) inertial parameters
     for trial in range(2):
@@ -363,14 +363,16 @@ def test_runtime_base_dynamics_matches_pinocchio(rng):
         ref = pin.rnea(model, data, Q[i], DQ[i], DDQ[i])
         ref += joint_terms(robot, DQ[i], DDQ[i], True, True)
         assert_close(tau[i], ref, 1e-10, "runtime base NE vs Pinocchio")
-        assert_close(W[i] @ bp.values(robot.parameters(True, True)), ref, 1e-10, "runtime W_b")
+        assert_close(
+            W[i] @ bp.values(robot.parameters(rotor=True, friction=True)), ref, 1e-10, "runtime W_b"
+        )
         g = pin.computeGeneralizedGravity(model, data, Q[i])
         assert_close(bd.gravity(Q[i]), g, 1e-10, "runtime gravity vs Pinocchio")
     with pytest.raises(ValueError, match="q has shape"):
         bd.inverse_dynamics(np.zeros(5), np.zeros(6), np.zeros(6))
     with pytest.raises(ValueError, match="NaN"):
         bd.gravity(np.full(6, np.nan))
-    p_bad = bp.values(robot.parameters(True, True))
+    p_bad = bp.values(robot.parameters(rotor=True, friction=True))
     with pytest.raises(ValueError, match=rf"p has shape \({bp.n - 1},\); expected \({bp.n},\)"):
         bd.gravity(Q[0], p_bad[:-1])
     p_bad[2] = np.inf
@@ -530,7 +532,7 @@ def test_structured_text_parses_and_evaluates_like_the_c(name, robots, tmp_path,
     assert max(len(line) for line in text.splitlines()) <= 100
     assert f"robot '{robot.name}'" in text and "mul" in text
     tree = st_tree(text)
-    p = bp.values(robot.parameters(rotor, friction))
+    p = bp.values(robot.parameters(rotor=rotor, friction=friction))
     q, dq, ddq = random_state(robot, rng)
     dq[0] = 0.0  # sign(0) branch of the Coulomb term
     ins = {"q": q, "dq": dq, "ddq": ddq, "p": p}

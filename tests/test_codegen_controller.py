@@ -142,10 +142,12 @@ def in_the_loop(robot_name, kind, duration, substeps, error, seed, period):
     gains, same initial estimate = the true base parameters off by +-`error`)."""
     robot = mindyn.load(robot_name)
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    p0 = control.perturbed_parameters(base.values(robot.parameters(True, True)), error, seed)
+    p0 = control.perturbed_parameters(
+        base.values(robot.parameters(rotor=True, friction=True)), error, seed=seed
+    )
     gains = control.default_gains(robot)
     ref = control.SumOfSines(robot, period=period, seed=seed)
-    library = control.make_controller(kind, robot, gains, p0, base)
+    library = control.make_controller(kind, robot, gains, p0, base=base)
     code = codegen.generate_controller(robot, kind, base=base, gains=gains, params=p0)
     generated = codegen.CompiledController(code, base)
     run = dict(rate=250.0, duration=duration, substeps=substeps, rotor=True, friction=True)

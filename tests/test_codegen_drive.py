@@ -501,7 +501,7 @@ def test_cli_drive_side_errors(robot, extra, message, tmp_path, capsys):
     "recorded, message",
     [
         ("smooth", "'friction_model' must be {kind, velocity}"),
-        ({"kind": "lugre"}, "coulomb, asymmetric, smooth or stribeck, not 'lugre'"),
+        ({"kind": "lugre"}, "'lugre'; expected one of 'coulomb', 'asymmetric', 'smooth'"),
         ({"kind": "smooth", "velocity": ["fast", 1]}, "velocity must be a list of numbers"),
         ({"kind": "smooth", "velocity": [0.1, -1.0]}, "velocity 2 must be positive"),
     ],

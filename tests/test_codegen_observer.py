@@ -48,7 +48,7 @@ def test_c_step_equals_the_library_zcr07s(held):
     """ZCR07S with rotor inertia, friction and offsets, 300 cycles at 1 ms."""
     robot = mindyn.load("zcr07s")
     base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
-    values = base.values(robot.parameters(True, True))
+    values = base.values(robot.parameters(rotor=True, friction=True))
     values[-robot.n :] = np.linspace(-0.5, 0.5, robot.n)  # the offsets
     gains = np.linspace(50.0, 400.0, robot.n)
     got, want, _ = library_and_generated(robot, base, values, gains, 1e-3, held, 300, 1)
@@ -59,7 +59,7 @@ def test_c_step_equals_the_library_zcr07s(held):
 def test_c_step_equals_the_library_tree(tmp_path):
     robot = mindyn.load(random_tree_urdf(tmp_path / "tree.urdf", 6, seed=2))
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    values = base.values(robot.parameters(True, True))
+    values = base.values(robot.parameters(rotor=True, friction=True))
     got, want, _ = library_and_generated(robot, base, values, None, 2e-3, True, 200, 5)
     assert_close(got, want, 1e-12, "generated observer (C, tree) vs library")
 
@@ -120,7 +120,7 @@ def test_structured_text_step_equals_the_library():
     the C step, then a reset restarts the observer."""
     robot = mindyn.load("puma560")
     base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
-    values = base.values(robot.parameters(True, True))
+    values = base.values(robot.parameters(rotor=True, friction=True))
     values[-robot.n :] = 0.3  # the offsets
     period, cycles = 2e-3, 300
     st = codegen.generate_observer(robot, "st", base=base, params=values, period=period)

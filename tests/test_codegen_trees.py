@@ -65,7 +65,7 @@ def test_generated_c_of_a_tree_matches_pinocchio(case, rotor, friction, tmp_path
     assert joints in code.header  # the order of q, with the joint each is mounted on
     classical = generate(robot, what="id", base=False, rotor=rotor, friction=friction, name="cl")
     cl = CFunctions(compile_c(classical, tmp_path, "cl"), classical, robot.n)
-    pi = robot.parameters(rotor, friction)
+    pi = robot.parameters(rotor=rotor, friction=friction)
     p = bp.values(pi)
     tape = BaseDynamics(bp)  # the same program, run at run time
     data = model.createData()
@@ -91,7 +91,7 @@ def test_structured_text_of_a_tree_evaluates_like_the_c(tmp_path, rng):
     code = generate(robot, base=bp, name="tree_c")
     c = CFunctions(compile_c(code, tmp_path, "tree_c"), code, robot.n)
     tree = st_tree(st.text)
-    p = bp.values(robot.parameters(True, True))
+    p = bp.values(robot.parameters(rotor=True, friction=True))
     q, dq, ddq = random_state(robot, rng)
     ins = {"q": q, "dq": dq, "ddq": ddq, "p": p}
     tau = STInterpreter(tree, "tree_st_inverse_dynamics").run(ins)["tau"]

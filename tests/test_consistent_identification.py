@@ -68,7 +68,7 @@ def test_consistent_optimum_equals_unconstrained_when_it_is_consistent():
     truth = scaled_links(robot, [1.1, 0.9, 1.2, 0.8, 1.05, 0.95])  # differs from the description
     data = make_log(robot, truth)
     res = identify(robot, data, rsd_threshold=None)
-    cons = consistent_estimate(res, 0.0)
+    cons = consistent_estimate(res, prior_weight=0.0)
     beta_true = res.base.values(truth)
     scale = np.linalg.norm(beta_true)
     # tolerance: noise-free data, the least-squares solve is exact to ~1e-12 relative
@@ -126,7 +126,7 @@ def test_prior_optimum_matches_independent_scipy_solve():
     data = make_log(robot, bad.reshape(-1), noise=0.01)
     res = identify(robot, data, rsd_threshold=None)
     W = 1.0
-    cons = consistent_estimate(res, W)
+    cons = consistent_estimate(res, prior_weight=W)
     assert cons.violating_links() != []  # the unconstrained estimate is inconsistent
     assert np.all(cons.min_eig >= -EIG_TOL)  # (c)
 
@@ -186,12 +186,12 @@ def test_boundary_optimum_without_prior_matches_bounded_least_squares():
     from scipy.optimize import lsq_linear
 
     robot = mindyn.load(ROBOT)
-    p = robot.parameters(False, True).reshape(robot.n, 12)
+    p = robot.parameters(rotor=False, friction=True).reshape(robot.n, 12)
     p[:, 10] = [0.5, -0.4, 0.3, 0.2, 0.1, 0.1]  # Fv, one negative
     p[:, 11] = [0.8, 0.6, 0.5, 0.3, 0.2, 0.2]  # Fc
     data = make_log(robot, p.reshape(-1), noise=0.01)
     res = identify(robot, data, friction=True, rsd_threshold=None, min_velocity=0.0)
-    cons = consistent_estimate(res, 0.0)
+    cons = consistent_estimate(res, prior_weight=0.0)
     assert np.all(cons.min_eig >= -EIG_TOL)
     names = res.base.names
     lo = np.array([0.0 if nm[:2] in ("Fv", "Fc") else -np.inf for nm in names])
@@ -223,7 +223,7 @@ def test_prior_weight_pulls_toward_description_monotonically():
     res = identify(robot, data, rsd_threshold=None)
     div, fit = [], []
     for W in (0.01, 1.0, 100.0):
-        c = consistent_estimate(res, W)
+        c = consistent_estimate(res, prior_weight=W)
         div.append(c.prior_divergence)
         fit.append(c.fit_increase)
     assert div[0] > div[1] > div[2]
@@ -241,7 +241,7 @@ def test_identify_consistent_api_and_mass_matrix():
     assert doc["total_mass"] == pytest.approx(sum(robot.params.reshape(6, 10)[:, 9]), rel=0.2)
     assert c.mass_matrix_min_eig(data) > 0
     with pytest.raises(ValueError, match="prior_weight"):
-        consistent_estimate(c.unconstrained, -1)
+        consistent_estimate(c.unconstrained, prior_weight=-1)
 
 
 def test_consistent_model_simulates_stably_along_the_trajectory():
@@ -312,7 +312,7 @@ def test_payload_mass_within_two_percent_at_one_percent_noise(seed):
     data = make_log(robot, _with_payload(robot, phi), seed=seed, noise=0.01, rate=100.0)
     res = identify_payload(robot, _arm_doc(robot), data)
     assert abs(res.derived()["mass"] - m) / m <= 0.02
-    assert abs(res.derived(True)["mass"] - m) / m <= 0.02
+    assert abs(res.derived(consistent=True)["mass"] - m) / m <= 0.02
     # the reported sigma explains the error (within 5 sigma)
     assert abs(res.values[9] - m) <= 5 * res.std[9]
 

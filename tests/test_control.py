@@ -84,7 +84,7 @@ def test_adaptive_pd_feedback_and_update_signs(rng):
 # Closed loop
 # --------------------------------------------------------------------------------------------
 def _per_cycle_rms(result, cycle):
-    s = summary(result, cycle)
+    s = summary(result, cycle=cycle)
     return np.array([np.sqrt(np.mean(np.square(r))) for r in s["rms_error_deg_per_cycle"]]), s
 
 
@@ -95,7 +95,7 @@ def test_adaptive_pd_learns_the_model_from_zero():
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     gains = control.default_gains(robot)
     ref = SumOfSines(robot, period=2.0)
-    ada = control.make_controller("adaptive-pd", robot, gains, np.zeros(base.n), base)
+    ada = control.make_controller("adaptive-pd", robot, gains, np.zeros(base.n), base=base)
     r = _run(robot, ada, ref, 10.0)
     rms, s = _per_cycle_rms(r, 2.0)
     assert np.all(np.diff(rms) < 0), rms
@@ -104,7 +104,7 @@ def test_adaptive_pd_learns_the_model_from_zero():
     assert tp[-1] < 0.2 * tp[0]
     pd = control.make_controller("pd", robot, gains)
     rp = _run(robot, pd, ref, 10.0)
-    assert np.all(rp.max_error_deg(8.0) > 5 * r.max_error_deg(8.0))
+    assert np.all(rp.max_error_deg(t_from=8.0) > 5 * r.max_error_deg(t_from=8.0))
 
 
 def test_zcr07s_setting_tracks_better_than_pd_and_improves():
@@ -113,19 +113,19 @@ def test_zcr07s_setting_tracks_better_than_pd_and_improves():
     PD and the same controller with the estimate frozen are worse."""
     robot = mindyn.load("zcr07s")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    p = base.values(robot.parameters(True, True))
+    p = base.values(robot.parameters(rotor=True, friction=True))
     p0 = control.perturbed_parameters(p, 0.3, seed=0)
     gains = control.default_gains(robot, rotor=True)
     assert gains["kd"] == [400, 350, 130, 22, 9, 2] and gains["gamma"] == 1
     ref = SumOfSines(robot, period=2.5)
-    ada = control.make_controller("adaptive-pd", robot, gains, p0, base)
+    ada = control.make_controller("adaptive-pd", robot, gains, p0, base=base)
     r = _run(robot, ada, ref, 7.5)
     rms, s = _per_cycle_rms(r, 2.5)
     assert rms[-1] < rms[0]
     tp = [np.sqrt(np.mean(np.square(x))) for x in s["torque_prediction_rms_per_cycle"]]
     assert np.all(np.diff(tp) < 0), tp
     assert s["parameter_error_norm"][-1] < s["parameter_error_norm"][0]
-    frozen = control.make_controller("adaptive-pd", robot, dict(gains, gamma=0.0), p0, base)
+    frozen = control.make_controller("adaptive-pd", robot, dict(gains, gamma=0.0), p0, base=base)
     rf = _run(robot, frozen, ref, 7.5)
     assert _per_cycle_rms(rf, 2.5)[0][-1] > rms[-1]
     pd = control.make_controller("pd", robot, gains)
@@ -139,18 +139,20 @@ def test_normalised_adaptation_keeps_large_gains_stable_at_4ms():
     the estimate, cycle by cycle."""
     robot = mindyn.load("zcr07s")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    p = base.values(robot.parameters(True, True))
+    p = base.values(robot.parameters(rotor=True, friction=True))
     p0 = control.perturbed_parameters(p, 0.3, seed=0)
     gains = control.default_gains(robot, rotor=True)
     ref = SumOfSines(robot, period=2.5)
-    plain = control.make_controller("adaptive-pd", robot, dict(gains, gamma=5.0), p0, base)
+    plain = control.make_controller("adaptive-pd", robot, dict(gains, gamma=5.0), p0, base=base)
     with pytest.raises(ValueError, match="diverged"):
         _run(robot, plain, ref, 7.5)
-    slow = control.make_controller("adaptive-pd", robot, gains, p0, base)
+    slow = control.make_controller("adaptive-pd", robot, gains, p0, base=base)
     r1 = _run(robot, slow, ref, 7.5)
-    fast = control.make_controller("adaptive-pd", robot, dict(gains, gamma=5.0, nu=0.01), p0, base)
+    fast = control.make_controller(
+        "adaptive-pd", robot, dict(gains, gamma=5.0, nu=0.01), p0, base=base
+    )
     r5 = _run(robot, fast, ref, 7.5)
-    assert np.all(r5.max_error_deg(5.0) < 1.5 * r1.max_error_deg(5.0))
+    assert np.all(r5.max_error_deg(t_from=5.0) < 1.5 * r1.max_error_deg(t_from=5.0))
     rms, s = _per_cycle_rms(r5, 2.5)
     assert rms[-1] < rms[0]
     assert s["parameter_error_norm"][-1] < s["parameter_error_norm"][0]

@@ -22,7 +22,7 @@ def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("detect")
     robot = mindyn.load("puma560")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    params = robot.parameters(True, True)
+    params = robot.parameters(rotor=True, friction=True)
     doc = {
         "robot": "puma560",
         "rotor": True,

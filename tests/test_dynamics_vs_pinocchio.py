@@ -218,14 +218,16 @@ def test_batches_equal_single_calls(name, rng):
     calls = {
         "inverse_dynamics": lambda q, dq, x: robot.inverse_dynamics(q, dq, x),
         "inverse_dynamics(p)": lambda q, dq, x: robot.inverse_dynamics(q, dq, x, p),
-        "regressor": lambda q, dq, x: robot.regressor(q, dq, x, True, True),
+        "regressor": lambda q, dq, x: robot.regressor(q, dq, x, rotor=True, friction=True),
         "mass_matrix": lambda q, dq, x: robot.mass_matrix(q),
         "gravity_torque": lambda q, dq, x: robot.gravity_torque(q),
         "forward_dynamics": lambda q, dq, x: robot.forward_dynamics(q, dq, x),
         "kinetic_energy": lambda q, dq, x: robot.kinetic_energy(q, dq, p),
         "potential_energy": lambda q, dq, x: robot.potential_energy(q),
         "energy": lambda q, dq, x: robot.energy(q, dq),
-        "energy_regressor": lambda q, dq, x: robot.energy_regressor(q, dq, True, True),
+        "energy_regressor": lambda q, dq, x: robot.energy_regressor(
+            q, dq, rotor=True, friction=True
+        ),
         "lagrangian_regressor": lambda q, dq, x: robot.lagrangian_regressor(q, dq),
     }
     for what, f in calls.items():

@@ -49,19 +49,19 @@ def test_energy_regressors_times_params(name, rng):
         q, dq, _ = random_state(robot, rng)
         for rotor, friction in [(False, False), (True, False), (False, True), (True, True)]:
             p = robot.parameters(rotor=rotor, friction=friction)
-            wk, wp = robot.energy_regressors(q, dq, rotor, friction)
+            wk, wp = robot.energy_regressors(q, dq, rotor=rotor, friction=friction)
             assert wk.shape == wp.shape == (len(p),)
             K = robot.kinetic_energy(q, dq, p)
             P = robot.potential_energy(q, p)
             assert_close(wk @ p, K, 1e-12, "wK @ params == K")
             assert_close(wp @ p, P, 1e-12, "wP @ params == P")
-            wh = robot.energy_regressor(q, dq, rotor, friction)
+            wh = robot.energy_regressor(q, dq, rotor=rotor, friction=friction)
             assert_close(wh, wk + wp, 0.0, "wH == wK + wP")
             assert_close(wh @ p, robot.energy(q, dq, p), 1e-12, "wH @ params == H")
-            wl = robot.lagrangian_regressor(q, dq, rotor, friction)
+            wl = robot.lagrangian_regressor(q, dq, rotor=rotor, friction=friction)
             assert_close(wl, wk - wp, 0.0, "wL == wK - wP")
             assert_close(wl @ p, K - P, 1e-12, "wL @ params == K - P")
-            names = robot.parameter_names(rotor, friction)
+            names = robot.parameter_names(rotor=rotor, friction=friction)
             for k in range(n):
                 if rotor:
                     i = names.index(f"Ia{k + 1}")

@@ -47,6 +47,8 @@ def test_every_error_class_of_the_package_derives_from_mindyn_error(module, name
     ("cls", "standard"),
     [
         (mindyn.ModelError, ValueError),
+        (mindyn.ArgumentError, ValueError),
+        (mindyn.ArgumentError, TypeError),
         (mindyn.RobotFileNotFoundError, FileNotFoundError),
         (IdentificationError, ValueError),
         (RankDeficientError, ValueError),
@@ -84,7 +86,7 @@ def test_raised_errors_are_caught_by_either_handler(tmp_path):
     e = raises_both(
         ValueError, lambda: robot._m.inverse_dynamics(np.zeros(5), np.zeros(6), np.zeros(6), None)
     )
-    assert isinstance(e, mindyn.ModelError) and "q has shape (5,)" in str(e)
+    assert isinstance(e, mindyn.ArgumentError) and "q has shape (5,)" in str(e)
     e = raises_both(FileNotFoundError, lambda: read_csv(tmp_path / "missing.csv"))
     assert isinstance(e, DataFileNotFoundError)
     bad = tmp_path / "bad.csv"

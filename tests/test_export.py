@@ -377,7 +377,7 @@ def test_inertia_that_is_not_physical_is_written_and_noted(tree, tmp_path):
 def test_vector_input_and_offsets(tree, tmp_path):
     robot = mindyn.load(tree, tip="tool")
     classical = consistent_params(robot, np.random.default_rng(7), rotor=False)
-    vector = np.array([classical[k] for k in robot.parameter_names(False, True)])
+    vector = np.array([classical[k] for k in robot.parameter_names(rotor=False, friction=True)])
     a, b = tmp_path / "a.urdf", tmp_path / "b.urdf"
     write_urdf(robot, vector, a)
     classical.update({"Off1": 0.5, "Off2": -1.0, "Off3": 2.0})
@@ -436,8 +436,10 @@ def test_yaml_roundtrip(name, tmp_path):
     res = write_yaml(robot, classical, out)
     assert res.sidecar is None
     back = mindyn.load(out)
-    names = robot.parameter_names(True, True)
-    np.testing.assert_array_equal(back.parameters(True, True), [classical[k] for k in names])
+    names = robot.parameter_names(rotor=True, friction=True)
+    np.testing.assert_array_equal(
+        back.parameters(rotor=True, friction=True), [classical[k] for k in names]
+    )
     for k in range(robot.n):  # geometry, limits and drives untouched
         np.testing.assert_array_equal(back.joint_transform(k, 0.4), robot.joint_transform(k, 0.4))
     for a, b in ((back.limits, robot.limits), (back.drives, robot.drives)):
@@ -476,7 +478,7 @@ def test_classical_terms_layouts():
     np.testing.assert_array_equal(t.rotor, [11, 24])
     np.testing.assert_array_equal(t.coulomb, [13, 26])
     np.testing.assert_array_equal(t.inertial[10:], np.arange(14.0, 24.0))
-    with pytest.raises(mindyn.ModelError):
+    with pytest.raises(mindyn.ArgumentError, match="^classical parameters has shape"):
         classical_terms(robot, np.ones(21))
 
 

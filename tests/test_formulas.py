@@ -45,14 +45,14 @@ EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "urdf"
     ],
 )
 def test_round_coefficient_removes_round_off(x, scale, expected):
-    assert F.round_coefficient(x, scale) == expected
+    assert F.round_coefficient(x, scale=scale) == expected
 
 
 @pytest.mark.parametrize("x", [0.1234567890123, 1 / 3, -2.718281828459045, 1.5e-8, 123456.789])
 def test_round_coefficient_keeps_real_digits(x):
     """A value with more digits than the round-off is kept to within 1e-13 of itself: 1/3 keeps
     13 or more significant digits, and a value already short is returned unchanged."""
-    r = F.round_coefficient(x, 1.0)
+    r = F.round_coefficient(x, scale=1.0)
     assert abs(r - x) <= 1e-13 * abs(x) + 1e-15
     if len(repr(x)) <= 14:
         assert r == x
@@ -378,7 +378,7 @@ def test_zcr07s_rows_by_hand_reproduce_the_torques(rng):
     classical parameters through the regressor columns of the kept parameters (independent of
     the projection: only the regressor W, tau = W pi)."""
     robot = mindyn.load("zcr07s")
-    names = robot.parameter_names(True, True)
+    names = robot.parameter_names(rotor=True, friction=True)
     lengths = {"d2": 0.025, "d3": 0.455, "d4": 0.035, "r4": 0.420}
     kept = mindyn.base_parameters(robot, rotor=True, friction=True).names
     hand = dict(zip(ZCR07S_BY_HAND, formula_rows(list(ZCR07S_BY_HAND.values()), names, lengths)))
@@ -388,7 +388,7 @@ def test_zcr07s_rows_by_hand_reproduce_the_torques(rng):
     for _ in range(3):
         q, dq, ddq = rng.uniform(-2, 2, (3, robot.n))
         pi = rng.uniform(-1, 1, len(names))
-        W = robot.regressor(q, dq, ddq, True, True)
+        W = robot.regressor(q, dq, ddq, rotor=True, friction=True)
         assert_close(W[:, pivots] @ (Y @ pi), W @ pi, 1e-12, "ZCR07S rows by hand vs W pi")
 
 

@@ -108,7 +108,7 @@ def test_state_follows_the_closed_form_and_an_independent_integration():
 def test_fit_recovers_sigma_and_fc_and_the_static_models_are_worse_at_rest(arm):
     log, _ = dahl_log(arm)
     fit = {"min_velocity": 0.0, "rsd_threshold": None}
-    choice = select_friction_model(arm, [log], "dahl", fit=fit)
+    choice = select_friction_model(arm, [log], kind="dahl", fit=fit)
     rec = choice.record
     assert rec["kind"] == "dahl" and rec["chosen_by"] == "given"
     sigma = np.asarray(rec["sigma"])
@@ -132,7 +132,7 @@ def test_fit_recovers_sigma_and_fc_and_the_static_models_are_worse_at_rest(arm):
     held = np.sqrt(np.mean((FC * dahl_state(log.q, SIGMA))[rest] ** 2))
     assert dahl < 1e-3 * held
     for kind in ("coulomb", "smooth", "stribeck"):
-        c = select_friction_model(arm, [log], kind, fit=fit)
+        c = select_friction_model(arm, [log], kind=kind, fit=fit)
         static = at_rest(identify(c.robot, log, base=c.base, **fit))
         assert static > 0.3 * held > 10 * dahl, (kind, static, held, dahl)
 
@@ -161,7 +161,7 @@ def test_generated_code_and_descriptions_refuse_the_dahl_state(arm, tmp_path, ca
 
     robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
     base = mindyn.base_parameters(arm, friction=True)
-    names = arm.parameter_names(False, True)
+    names = arm.parameter_names(rotor=False, friction=True)
     doc = {
         "robot": arm.name,
         "friction": True,
@@ -169,7 +169,7 @@ def test_generated_code_and_descriptions_refuse_the_dahl_state(arm, tmp_path, ca
         "offset": False,
         "base_names": list(base.names),
         "base_values": [1.0] * base.n,
-        "classical": dict(zip(names, map(float, arm.parameters(False, True)))),
+        "classical": dict(zip(names, map(float, arm.parameters(rotor=False, friction=True)))),
         "friction_model": {"kind": "dahl", "sigma": [50.0, 50.0, 50.0], "chosen_by": "given"},
     }
     (tmp_path / "id.json").write_text(json.dumps(doc))
@@ -204,12 +204,12 @@ def test_generated_code_and_descriptions_refuse_the_dahl_state(arm, tmp_path, ca
 def test_dahl_needs_the_dynamic_model(arm):
     log, _ = dahl_log(arm, seconds=2.0)
     with pytest.raises(mindyn.Error, match="only with the dynamic model"):
-        select_friction_model(arm, [log], "dahl", fit={"model": "energy"})
+        select_friction_model(arm, [log], kind="dahl", fit={"model": "energy"})
 
 
 def test_auto_picks_dahl_on_a_dahl_log(arm):
     log, _ = dahl_log(arm, noise=0.01, seed=3)
-    choice = select_friction_model(arm, [log], "auto")
+    choice = select_friction_model(arm, [log], kind="auto")
     rec = choice.record
     assert rec["chosen_by"] == "held-out data" and rec["kind"] == "dahl", rec["candidates"]
     assert "dahl" in rec["candidates"] and isinstance(choice.base.sigma, np.ndarray)
@@ -235,12 +235,12 @@ def test_auto_leaves_out_a_fit_whose_friction_drives_the_motion(arm):
     )
     tau += 0.01 * tau.std(axis=0) * rng.standard_normal(tau.shape)
     log = JointData(t, q, dq, ddq, tau, "active log")
-    rec = select_friction_model(arm, [log], "auto").record
+    rec = select_friction_model(arm, [log], kind="auto").record
     assert "stribeck" not in rec["candidates"] and rec["kind"] != "stribeck"
     why = rec["not_dissipative"]["stribeck"]
     assert all(f"slot {k}" in why for k in (1, 2, 3)), why
     # the same fit given explicitly is the user's choice: kept
-    assert select_friction_model(arm, [log], "stribeck").record["kind"] == "stribeck"
+    assert select_friction_model(arm, [log], kind="stribeck").record["kind"] == "stribeck"
 
 
 def test_identify_refuses_to_write_a_description_of_a_dahl_estimate(arm, tmp_path, capsys):
@@ -262,7 +262,7 @@ def test_identify_refuses_to_write_a_description_of_a_dahl_estimate(arm, tmp_pat
 def _dahl_robot(arm):
     r = arm.with_friction_model("coulomb")
     r.viscous, r.coulomb = FV, FC
-    p = r.parameters(True, True).reshape(r.n, -1).copy()
+    p = r.parameters(rotor=True, friction=True).reshape(r.n, -1).copy()
     p[:, 10] = 0.0  # no rotor inertia
     plant = p.copy()
     plant[:, 12] = 0.0  # the Coulomb term is the Dahl state's

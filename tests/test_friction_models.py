@@ -70,7 +70,7 @@ def test_regressor_and_torques_follow_the_formulas(kind, rng):
     c = 3 if kind in ("asymmetric", "stribeck") else 2
     W = r.regressor(q, dq, ddq, rotor=True, friction=True)
     assert W.shape == (n, n * (11 + c))
-    names = r.parameter_names(True, True)
+    names = r.parameter_names(rotor=True, friction=True)
     third = {"asymmetric": "Fa", "stribeck": "Fs"}.get(kind)
     W0 = robot.regressor(q, dq, ddq, rotor=True)  # rigid part and rotor
     for k in range(n):
@@ -106,11 +106,11 @@ def test_regressor_and_torques_follow_the_formulas(kind, rng):
 def test_third_friction_parameter_is_stored_and_named(arm):
     r = arm.with_friction_model("stribeck", velocity=[0.1, 0.2, 0.3])
     r.third_friction = [1.0, 2.0, 3.0]
-    names = r.parameter_names(False, True)
-    p = r.parameters(False, True)
+    names = r.parameter_names(rotor=False, friction=True)
+    p = r.parameters(rotor=False, friction=True)
     assert len(p) == 13 * r.n
     assert [p[names.index(f"Fs{k + 1}")] for k in range(3)] == [1.0, 2.0, 3.0]
-    assert "Fa2" in r.with_friction_model("asymmetric").parameter_names(False, True)
+    assert "Fa2" in r.with_friction_model("asymmetric").parameter_names(rotor=False, friction=True)
     assert r.layout_sizes == (10, 11, 13, 14)
 
 
@@ -121,7 +121,7 @@ def test_third_friction_parameter_is_stored_and_named(arm):
 def test_friction_model_errors_are_one_line(arm, velocity, message):
     with pytest.raises(mindyn.Error, match=message):
         arm.with_friction_model("stribeck", velocity=velocity)
-    with pytest.raises(mindyn.Error, match="coulomb, asymmetric, smooth or stribeck"):
+    with pytest.raises(mindyn.ArgumentError, match="'coulomb', 'asymmetric', 'smooth', 'stribeck'"):
         arm.with_friction_model("viscous")
 
 
@@ -164,7 +164,7 @@ def truth(robot, kind, w, fv, fc, f3):
     if kind in ("asymmetric", "stribeck"):
         r.third_friction = f3
     b = mindyn.base_parameters(r, friction=True)
-    return b, b.values(r.parameters(False, True))
+    return b, b.values(r.parameters(rotor=False, friction=True))
 
 
 FV, FC = np.array([0.8, 0.5, 0.3]), np.array([1.5, 1.0, 0.6])
@@ -177,7 +177,7 @@ FV, FC = np.array([0.8, 0.5, 0.3]), np.array([1.5, 1.0, 0.6])
 def test_noise_free_recovery_with_the_searched_stribeck_velocity(arm, kind, f3):
     w = np.array([0.15, 0.25, 0.1])
     log = make_log(arm, kind, w, FV, FC, f3)
-    choice = select_friction_model(arm, [log], kind, fit={"min_velocity": 0.0})
+    choice = select_friction_model(arm, [log], kind=kind, fit={"min_velocity": 0.0})
     res = identify(choice.robot, log, base=choice.base, rsd_threshold=None, min_velocity=0.0)
     base, expect = truth(arm, kind, w, FV, FC, f3)
     assert list(res.base.names) == list(base.names)
@@ -191,7 +191,7 @@ def test_noise_free_recovery_with_the_searched_stribeck_velocity(arm, kind, f3):
 def test_noise_free_recovery_smooth_with_given_width(arm):
     w = np.array([0.05, 0.08, 0.03])
     log = make_log(arm, "smooth", w, FV, FC, 0.0)
-    choice = select_friction_model(arm, [log], "smooth", width=w)
+    choice = select_friction_model(arm, [log], kind="smooth", width=w)
     res = identify(choice.robot, log, base=choice.base, rsd_threshold=None, min_velocity=0.0)
     _, expect = truth(arm, "smooth", w, FV, FC, 0.0)
     np.testing.assert_allclose(res.full, expect, rtol=1e-6, atol=1e-6 * np.abs(expect).max())
@@ -220,7 +220,7 @@ def test_energy_and_integral_models_carry_the_stribeck_terms(arm, model):
 )
 def test_auto_picks_the_true_family_on_held_out_data(arm, kind, f3, w):
     log = make_log(arm, kind, w, FV, FC, f3, noise=0.01, seed=3)
-    choice = select_friction_model(arm, [log], "auto", width=w if kind == "smooth" else None)
+    choice = select_friction_model(arm, [log], kind="auto", width=w if kind == "smooth" else None)
     rec = choice.record
     assert rec["chosen_by"] == "held-out data"
     assert rec["kind"] == kind, rec["candidates"]
@@ -331,10 +331,10 @@ def test_descriptions_refuse_other_friction_models(arm, tmp_path, capsys):
     from mindyn.cli import main
 
     robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
-    names = arm.parameter_names(False, True)
+    names = arm.parameter_names(rotor=False, friction=True)
     doc = {
         "robot": arm.name,
-        "classical": dict(zip(names, map(float, arm.parameters(False, True)))),
+        "classical": dict(zip(names, map(float, arm.parameters(rotor=False, friction=True)))),
         "friction_model": {"kind": "smooth", "velocity": [0.1, 0.1, 0.1], "chosen_by": "given"},
     }
     (tmp_path / "id.json").write_text(json.dumps(doc))

@@ -455,14 +455,14 @@ def test_cli_identify_energy_and_rank_error(tmp_path, capsys):
     traj.a[0] = 0  # joint 1 held: its inertia ZZR1 has no effect on the torques
     traj.b[0] = 0
     log = simulate_inverse(robot, traj)
-    log.save(tmp_path / "one.csv", "planar2")
+    log.save(tmp_path / "one.csv", robot_name="planar2")
     rc = cli.main(["identify", "planar2", str(tmp_path / "one.csv")])
     err = capsys.readouterr().err
     assert rc == 2 and err.count("\n") == 1
     assert err.startswith("mindyn: error: dynamic model on") and "cannot identify" in err
     assert "no effect on this data: ZZR1" in err
     full = random_trajectory(robot, seed=1, limits={"lower": -np.ones(2), "upper": np.ones(2)})
-    simulate_inverse(robot, full).save(tmp_path / "ok.csv", "planar2")
+    simulate_inverse(robot, full).save(tmp_path / "ok.csv", robot_name="planar2")
     rc = cli.main(
         [
             "identify",

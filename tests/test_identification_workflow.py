@@ -46,7 +46,9 @@ def logs(tmp_path_factory):
         log = simulate_inverse(
             robot, traj, rate=100.0, friction=True, noise=SensorNoise(torque=0.02), seed=seed
         )
-        paths.append(log.save(folder / f"{name}.csv", robot.name, robot.joint_names))
+        paths.append(
+            log.save(folder / f"{name}.csv", robot_name=robot.name, joint_names=robot.joint_names)
+        )
     return robot, paths[0], paths[1]
 
 

@@ -127,7 +127,7 @@ def test_predict_is_the_model_torque_and_the_generated_code_gives_it(tmp_path):
     t = np.arange(0, 30, 1 / RATE)
     q, dq, ddq = sines(t)
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    truth = robot.parameters(True, True) * np.repeat([1.0, 1.0], 13)
+    truth = robot.parameters(rotor=True, friction=True) * np.repeat([1.0, 1.0], 13)
     truth[[10, 23]] = 0.05  # rotor inertia Ia
     truth[[11, 24]] = [0.3, 0.2]  # viscous
     truth[[12, 25]] = [0.4, 0.25]  # Coulomb
@@ -194,7 +194,7 @@ def test_rank_deficiency_names_the_offset_when_a_joint_never_reverses():
         identify(robot, JointData(t, q, dq, ddq, tau, "one-way"), base=base)
     msg = str(e.value)
     assert "dependent on each other in this data: Fc2, Off2" in msg
-    assert "Joint(s) 2 never reverse" in msg and "leave out --offset" in msg
+    assert "Joint(s) 2 never reverse" in msg and "leave out offset=True" in msg
     assert "Joint(s) 1" not in msg
     # both joints reversing: the same parameters are identified
     q, dq, ddq = sines(t)
@@ -219,7 +219,7 @@ def test_a_joint_that_never_moves_names_the_friction():
         identify(robot, JointData(t, q, dq, ddq, tau, "still"), base=base)
     msg = str(e.value)
     assert "no effect on this data: Fv6, Fc6" in msg
-    assert "Joint(s) 6 never move" in msg and "leave out --friction" in msg
+    assert "Joint(s) 6 never move" in msg and "leave out friction=True" in msg
     assert "--offset" not in msg and "never reverse" not in msg
 
 
@@ -248,7 +248,7 @@ def test_a_rank_deficiency_on_a_log_with_breaks_counts_its_segments():
     msg = str(e.value)
     assert msg.startswith("dynamic model on oneway.csv (21 segments): ")
     assert "s to" not in msg and len(msg) < 600
-    assert "leave out --offset" in msg
+    assert "leave out offset=True" in msg
 
 
 def test_a_log_with_twenty_breaks_is_summarised_in_one_line(tmp_path):

@@ -94,7 +94,7 @@ def test_measures_and_scaled_condition_number_match_numpy(two_logs):
     (_, d1), (_, d2) = logs
     res = identify(robot, [d1, d2], base=base, rsd_threshold=None, min_velocity=0.05)
     # Scaled condition number of the stacked regressor, with the rows min_velocity leaves out
-    W = np.vstack([dynamic_system(base, d, 0.05)[0] for d in (d1, d2)])
+    W = np.vstack([dynamic_system(base, d, min_velocity=0.05)[0] for d in (d1, d2)])
     cond = np.linalg.cond(W / np.linalg.norm(W, axis=0))
     assert res.cond == pytest.approx(cond, rel=1e-6)  # SVD of a triangle vs of W: round-off
     assert res.to_dict()["condition_number_scaled"] == pytest.approx(cond, rel=1e-6)
@@ -155,7 +155,7 @@ def test_energy_model_stacks_the_windows_of_each_log(two_logs):
         rsd_threshold=None,
         energy_window=5,
     )
-    systems = [energy_system(base, d, 5) for d in (d1, d2)]  # none across the junction
+    systems = [energy_system(base, d, window=5) for d in (d1, d2)]  # none across the junction
     W = np.vstack([s[0] for s in systems])
     y = np.concatenate([s[1] for s in systems])
     p, *_ = np.linalg.lstsq(W, y, rcond=None)
@@ -177,7 +177,7 @@ def test_integral_model_stacks_the_windows_of_each_log(two_logs):
         rsd_threshold=None,
         integral_window=8,
     )
-    systems = [integral_system(base, d, 8) for d in (d1, d2)]
+    systems = [integral_system(base, d, window=8) for d in (d1, d2)]
     W = np.vstack([s[0].reshape(-1, base.n) for s in systems])
     y = np.concatenate([s[1].reshape(-1) for s in systems])
     p, *_ = np.linalg.lstsq(W, y, rcond=None)
@@ -377,7 +377,7 @@ def test_several_logs_refuse_a_wrong_joint_count(two_logs):
     short = replace(d, q=d.q[:, :3], dq=d.dq[:, :3], ddq=d.ddq[:, :3], tau=d.tau[:, :3])
     with pytest.raises(DataError, match="has 3 joints"):
         identify(robot, [d, short], base=base)
-    with pytest.raises(ValueError, match="non-empty sequence"):
+    with pytest.raises(ValueError, match="^data must be a JointData or a non-empty list"):
         identify(robot, [], base=base)
 
 

@@ -74,7 +74,7 @@ def test_joint_transform_is_pre_motion_post(name, rng):
         )
         assert_close(robot.joint_transform(k, q), T, 1e-14, "joint_transform == pre J post")
         assert np.linalg.norm(robot.axes[k]) == pytest.approx(1.0, abs=1e-12)
-    with pytest.raises(IndexError):
+    with pytest.raises(mindyn.ArgumentError, match="^k is "):
         robot.joint_transform(robot.n, 0.0)
 
 
@@ -84,11 +84,11 @@ def test_fk_is_product_of_joint_transforms(name, rng):
     for _ in range(3):
         q, _, _ = random_state(robot, rng)
         assert_close(robot.fk(q), chain(robot, q) @ robot.tool, 1e-12, "fk == prod T_k @ tool")
-        assert_close(robot.fk(q, -1), robot.fk(q), 0.0, "fk(link=-1) == tool")
+        assert_close(robot.fk(q, link=-1), robot.fk(q), 0.0, "fk(link=-1) == tool")
         for k in range(robot.n):
-            assert_close(robot.fk(q, k), chain(robot, q, k), 1e-12, "fk(link k) == prod T")
-    with pytest.raises(IndexError):
-        robot.fk(q, robot.n)
+            assert_close(robot.fk(q, link=k), chain(robot, q, k), 1e-12, "fk(link k) == prod T")
+    with pytest.raises(mindyn.ArgumentError, match="^link is "):
+        robot.fk(q, link=robot.n)
 
 
 @pytest.mark.parametrize("name", BUNDLED)
@@ -104,7 +104,7 @@ def test_fk_and_jacobian_match_pinocchio_bundled(name, rng):
         for k in range(robot.n):
             # Pinocchio's joint frame k moved by post_k is mindyn's link frame k
             ref = data.oMi[k + 1].homogeneous @ robot.joint_post(k)
-            assert_close(robot.fk(q, k), ref, 1e-12, "fk(link) vs pin oMi")
+            assert_close(robot.fk(q, link=k), ref, 1e-12, "fk(link) vs pin oMi")
         J = pin.computeFrameJacobian(model, data, q, fid, LWA)
         assert_close(robot.jacobian(q), J, 1e-12, "jacobian vs pin (LOCAL_WORLD_ALIGNED)")
         assert_close(
@@ -125,7 +125,9 @@ def test_fk_and_jacobian_match_pinocchio_urdf(case, rng):
         assert_close(robot.fk(q), data.oMf[fid].homogeneous, 1e-12, "fk vs pin oMf (URDF tip)")
         # URDF link frames are the joint frames: link k == oMi[k + 1]
         for k in range(robot.n):
-            assert_close(robot.fk(q, k), data.oMi[k + 1].homogeneous, 1e-12, "fk(link) vs pin oMi")
+            assert_close(
+                robot.fk(q, link=k), data.oMi[k + 1].homogeneous, 1e-12, "fk(link) vs pin oMi"
+            )
         # the tool is the fixed transform from the last joint frame to the tip frame
         assert_close(
             robot.tool,
@@ -168,10 +170,10 @@ def test_planar2_closed_form(vertical, rng):
     robot = mindyn.load("planar2" if vertical else "planar2h")
     l1 = l2 = 0.5
     zero = np.zeros(2)
-    o = robot.fk(zero, 0)[:3, 3]  # joint 1 origin
+    o = robot.fk(zero, link=0)[:3, 3]  # joint 1 origin
     e1 = (robot.fk(zero)[:3, 3] - o) / (l1 + l2)  # x axis of the plane: the arm at q = 0
     e2 = (robot.fk(np.array([np.pi / 2, 0.0]))[:3, 3] - o) / (l1 + l2)  # q1 = 90 deg
-    z = robot.fk(zero, 0)[:3, 2]  # the joint axis
+    z = robot.fk(zero, link=0)[:3, 2]  # the joint axis
     assert np.linalg.norm(e1) == pytest.approx(1.0, abs=1e-12)
     assert np.linalg.norm(e2) == pytest.approx(1.0, abs=1e-12)
     assert e1 @ e2 == pytest.approx(0.0, abs=1e-12)

@@ -250,7 +250,7 @@ def test_nan_in_batches_and_other_arguments():
     dq[0] = np.inf
     with pytest.raises(ValueError, match="dq contains an infinite value at joint 1"):
         robot.inverse_dynamics(np.zeros(6), dq, np.zeros(6))
-    p = robot.params
+    p = robot.params.copy()
     p[3] = np.nan
     with pytest.raises(ValueError, match="params contains NaN"):
         robot.inverse_dynamics(np.zeros(6), np.zeros(6), np.zeros(6), p)
@@ -354,11 +354,11 @@ def test_cli_console_script():
         (("info", "missing.urdf"), "URDF file 'missing.urdf' does not exist"),
         (("info", "missing.yaml"), "missing.yaml"),
         (("info", "puma999"), "unknown robot 'puma999'"),
-        (("info", "puma560", "--tip", "link6"), "tip= applies to URDF"),
-        (("info", "GOOD.yaml", "--tip", "b"), "tip= applies to URDF"),
+        (("info", "puma560", "--tip", "link6"), "--tip applies to URDF"),
+        (("info", "GOOD.yaml", "--tip", "b"), "--tip applies to URDF"),
         (("info", "BAD.yaml"), "not valid YAML"),
         (("info", "BAD.urdf"), "not a valid URDF"),
-        (("info", URDFS["panda"], "--tip", "panda_rightfinger"), "--tip on the command line"),
+        (("info", URDFS["panda"], "--tip", "panda_rightfinger"), "a tip link (--tip)"),
     ],
 )
 def test_cli_errors_are_one_line(tmp_path, args, match):

@@ -81,12 +81,12 @@ def test_one_joint_check_is_the_jury_closed_form(tmp_path, T):
         lam = rng.uniform(0.05, 3.0) / T
         lam = lam if rng.uniform() < 0.5 else min(lam, 1.9 / T)
         gains = {"kd": kd, "lambda": lam}
-        pd = control.check_gains(robot, gains, "pd", period=T, rotor=False, qs=qs)
+        pd = control.check_gains(robot, gains, kind="pd", period=T, rotor=False, qs=qs)
         assert pd.stable == jury_stable(m, lam * kd, kd, T)
         assert math.isclose(pd.ratio, kd * T / m, rel_tol=1e-9)
         if pd.stable:
             assert math.isclose(pd.gain_margin, 2 * m / (kd * T), rel_tol=1e-3)
-        ada = control.check_gains(robot, gains, "adaptive-pd", period=T, rotor=False, qs=qs)
+        ada = control.check_gains(robot, gains, kind="adaptive-pd", period=T, rotor=False, qs=qs)
         assert ada.stable == jury_stable(m, kd * lam, kd + m * lam, T)
         seen |= {pd.stable, ada.stable}
     assert seen == {True, False}
@@ -102,7 +102,7 @@ def test_verdict_agrees_with_a_simulated_run(tmp_path):
     for a, stable in ((1.8, True), (2.2, False)):
         kd = a * m / T
         gains = {"kd": kd, "lambda": 1.0}
-        assert control.check_gains(robot, gains, "pd", period=T, rotor=False).stable == stable
+        assert control.check_gains(robot, gains, kind="pd", period=T, rotor=False).stable == stable
         pd = control.make_controller("pd", robot, gains)
 
         def opaque(*args, pd=pd):
@@ -353,14 +353,14 @@ def test_compiled_step_with_unstable_gains_is_refused_before_the_run():
 
     robot = mindyn.load("planar2")
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    p0 = base_values(base, plant_parameters(robot, False, False))  # simulate's robot
+    p0 = base_values(base, plant_parameters(robot, False, friction=False))  # simulate's robot
     ref = SumOfSines(robot, period=2.0)
     fine = control.default_gains(robot, rotor=False)
     bad = dict(fine, kd=[40.0 * k for k in fine["kd"]])
     for gains, stable in ((fine, True), (bad, False)):
         code = codegen.generate_controller(robot, "adaptive-pd", base=base, gains=gains, params=p0)
         compiled = codegen.CompiledController(code, base)
-        library = control.make_controller("adaptive-pd", robot, gains, p0, base)
+        library = control.make_controller("adaptive-pd", robot, gains, p0, base=base)
         if stable:
             a = simulate(robot, ref, compiled, duration=0.5)
             b = simulate(robot, ref, library, duration=0.5)

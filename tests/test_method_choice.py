@@ -99,7 +99,7 @@ def test_refusal_names_each_limit(tmp_path):
     assert refusal(t45._m).startswith("the projection method handles at most 44 joints on a tree")
     # the same reason through base_parameters: the refusal is what the choice reports
     assert mindyn.base_parameters(t26).method_reason.startswith(refusal(t26._m))
-    with pytest.raises(mindyn.ModelError, match="at most 256 parameters.*--method recursive"):
+    with pytest.raises(mindyn.ModelError, match="at most 256 parameters.*method='recursive'"):
         mindyn.base_parameters(t26, method="projection")
 
 

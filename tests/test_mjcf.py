@@ -171,7 +171,9 @@ def test_mjcf_round_trip_keeps_every_parameter(case, tmp_path):
     again = mindyn.load(out)
     assert again.joint_names == robot.joint_names and again.joint_types == robot.joint_types
     assert again.transmission is None and again.drive_side == "joint"
-    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+    np.testing.assert_allclose(
+        again.parameters(rotor=True, friction=True), p, rtol=0, atol=ROUND_TRIP
+    )
     np.testing.assert_allclose(again.gravity, robot.gravity, rtol=0, atol=1e-15)
     np.testing.assert_allclose(again.axes, robot.axes, rtol=0, atol=ROUND_TRIP)
     for key in ("lower", "upper"):
@@ -295,14 +297,17 @@ def test_motor_side_mjcf_is_the_motor_formula_and_reads_back_as_joint_terms(case
         [inertial.reshape(robot.n, 10), (T**2).T @ ia, (T**2).T @ fv, np.abs(T).T @ fc]
     ).ravel()
     np.testing.assert_allclose(
-        again.parameters(True, True), folded, rtol=ROUND_TRIP, atol=ROUND_TRIP
+        again.parameters(rotor=True, friction=True), folded, rtol=ROUND_TRIP, atol=ROUND_TRIP
     )
     if not np.any(np.abs(T) != (T != 0)):  # ratios 1: the same numbers
-        np.testing.assert_array_equal(again.parameters(True, True)[10::13], folded[10::13])
-    got = again.inverse_dynamics(q, dq, ddq, again.parameters(True, True))
+        np.testing.assert_array_equal(
+            again.parameters(rotor=True, friction=True)[10::13], folded[10::13]
+        )
+    got = again.inverse_dynamics(q, dq, ddq, again.parameters(rotor=True, friction=True))
     assert_close(got, ref, ROUND_TRIP, "motor-side MJCF read back vs the motor formula")
     got, _ = mj_inverse(m, again.joint_names, q, dq, ddq, disable=_no_limits())
-    assert_close(got, again.inverse_dynamics(q, dq, ddq, again.parameters(True, True)),
+    p_again = again.parameters(rotor=True, friction=True)
+    assert_close(got, again.inverse_dynamics(q, dq, ddq, p_again),
                  ROUND_TRIP, "motor-side MJCF: mj_inverse vs the robot read back")  # fmt: skip
 
 
@@ -387,9 +392,9 @@ def test_tendon_mjcf_is_the_motor_side_formula(T, tmp_path):
                  "tendon MJCF, joint-side terms")  # fmt: skip
     again = mindyn.load(joint)  # link frames = joint frames, not the DH frames: same dynamics
     assert again.transmission is None
-    drive = again.parameters(True, True).reshape(6, 13)[:, 10:]
+    drive = again.parameters(rotor=True, friction=True).reshape(6, 13)[:, 10:]
     np.testing.assert_allclose(drive, np.column_stack([ia, fv, fc]), rtol=0, atol=ROUND_TRIP)
-    got = again.inverse_dynamics(q, dq, ddq, again.parameters(True, True))
+    got = again.inverse_dynamics(q, dq, ddq, again.parameters(rotor=True, friction=True))
     assert_close(got, rnea + ia * ddq + fv * dq + fc * np.sign(dq), ROUND_TRIP,
                  "tendon MJCF, joint-side terms read back")  # fmt: skip
 
@@ -497,7 +502,7 @@ def test_hand_written_mjcf_loads_with_the_dynamics_mujoco_computes(xml, tmp_path
         assert not robot.is_serial
     rng = np.random.default_rng(5)
     q, dq, ddq = states(robot, rng)
-    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(True, True))
+    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(rotor=True, friction=True))
     ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
     assert_close(got, ref + robot.coulomb * np.sign(dq), TOL, "MJCF in vs mj_inverse")
     # the mass matrix with the armature, against MuJoCo's
@@ -538,7 +543,9 @@ def test_mjcf_written_back_keeps_the_file_and_changes_only_the_dynamics(tmp_path
     assert text.count("<inertial") == 8  # l1 .. l7 and the tool merged into l7 (zero)
     again = mindyn.load(out)
     assert again.joint_names == robot.joint_names
-    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+    np.testing.assert_allclose(
+        again.parameters(rotor=True, friction=True), p, rtol=0, atol=ROUND_TRIP
+    )
     # MuJoCo simulates the new parameters: its inverse dynamics is mindyn's with them
     q, dq, ddq = states(robot, rng)
     ref, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
@@ -582,14 +589,14 @@ def test_mjcf_tendon_over_one_joint_is_folded_onto_it(tmp_path):
     m = mujoco.MjModel.from_xml_path(str(path))
     rng = np.random.default_rng(6)
     q, dq, ddq = states(robot, rng)
-    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(True, True))
+    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(rotor=True, friction=True))
     ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
     assert_close(got, ref + robot.coulomb * np.sign(dq), TOL, "MJCF tendon folded vs mj_inverse")
     # with frictionloss, moving: MuJoCo's joint and tendon dry friction, both saturated
     q, dq, ddq = states(robot, rng, m=1, speed=(1.0, 2.0))
     ref, d = mj_inverse(m, robot.joint_names, q, dq, ddq, disable=_no_limits())
     assert d.nefc == 3 and (d.efc_type == mujoco.mjtConstraint.mjCNSTR_FRICTION_TENDON).sum() == 1
-    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(True, True))
+    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(rotor=True, friction=True))
     assert_close(got, ref, TOL, "MJCF tendon folded, frictionloss moving")
     # written back: the new terms on the joints, none left on the tendon
     p = physical_params(robot, rng)
@@ -598,7 +605,9 @@ def test_mjcf_tendon_over_one_joint_is_folded_onto_it(tmp_path):
     text = out.path.read_text()
     assert '<fixed name="motor2" armature="0.0" damping="0.0" frictionloss="0.0">' in text
     again = mindyn.load(out.path)
-    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+    np.testing.assert_allclose(
+        again.parameters(rotor=True, friction=True), p, rtol=0, atol=ROUND_TRIP
+    )
     ref, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out.path)), robot.joint_names, q, dq, ddq)
     got = robot.inverse_dynamics(q, dq, ddq, p)
     assert_close(got, ref + split(robot, p)[3] * np.sign(dq), TOL, "MJCF tendon written back")
@@ -696,16 +705,20 @@ def test_cli_export_mjcf_and_urdf_refused_for_an_mjcf_robot(tmp_path):
     robot = mindyn.load(REPO_UR5)
     p = physical_params(robot, np.random.default_rng(4))
     ident = tmp_path / "id.json"
-    names = robot.parameter_names(True, True)
+    names = robot.parameter_names(rotor=True, friction=True)
     ident.write_text(json.dumps({"robot": robot.name, "classical": dict(zip(names, p.tolist()))}))
     out = tmp_path / "ur5.xml"
     assert f"wrote {out}" in cli("export", REPO_UR5, ident, "--mjcf", out)
     again = mindyn.load(out)
-    np.testing.assert_allclose(again.parameters(True, True), p, rtol=0, atol=ROUND_TRIP)
+    np.testing.assert_allclose(
+        again.parameters(rotor=True, friction=True), p, rtol=0, atol=ROUND_TRIP
+    )
     # and written back from the MJCF, where --urdf is refused
     back = tmp_path / "back.xml"
     cli("export", out, ident, "--mjcf", back)
-    np.testing.assert_allclose(mindyn.load(back).parameters(True, True), p, atol=ROUND_TRIP)
+    np.testing.assert_allclose(
+        mindyn.load(back).parameters(rotor=True, friction=True), p, atol=ROUND_TRIP
+    )
     from mindyn.cli import main
 
     for option in ("--urdf", "--yaml"):

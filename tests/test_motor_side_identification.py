@@ -236,7 +236,7 @@ def test_a_motor_that_never_moves_is_named_though_its_joints_move(arms):
         identify(robot, JointData(t, q, dq, ddq, tau, "still motor"), base=base)
     msg = str(e.value)
     assert "Motor(s) 'm6' never move" in msg, msg
-    assert "leave out --friction and --rotor" in msg and "Joint(s)" not in msg
+    assert "leave out friction=True and rotor=True" in msg and "Joint(s)" not in msg
 
 
 def test_prediction_takes_the_drive_side_of_the_identification(arms, tmp_path):

@@ -35,7 +35,7 @@ def filter_prediction(ext, gains, period):
 def plant_params(robot):
     """Rotor inertia and viscous friction (no Coulomb step, which the trapezoid does not
     integrate exactly at a velocity reversal)."""
-    p = robot.parameters(True, True).reshape(robot.n, 13).copy()
+    p = robot.parameters(rotor=True, friction=True).reshape(robot.n, 13).copy()
     p[:, 12] = 0.0
     return p.reshape(-1)
 

@@ -76,9 +76,9 @@ def test_robot_regressor_with_offsets_is_the_regressor_and_identity_columns(rng)
     Wo = robot.regressor(q, dq, ddq, True, True, offset=True)
     np.testing.assert_array_equal(Wo[..., : W.shape[-1]], W)
     np.testing.assert_array_equal(Wo[..., W.shape[-1] :], np.broadcast_to(np.eye(n), (4, n, n)))
-    names = robot.parameter_names(True, True, offset=True)
+    names = robot.parameter_names(rotor=True, friction=True, offset=True)
     assert names[-n:] == [f"Off{k + 1}" for k in range(n)]
-    assert names[:-n] == robot.parameter_names(True, True)
+    assert names[:-n] == robot.parameter_names(rotor=True, friction=True)
 
 
 def _log(robot, rng, m=401):
@@ -99,11 +99,11 @@ def test_energy_and_integral_models_carry_the_offset_columns(rng):
     assert cols == list(range(base.n - n, base.n))
     data = _log(robot, rng)
     window = 40
-    W, _ = models.energy_system(base, data, window)
+    W, _ = models.energy_system(base, data, window=window)
     ends = np.arange(0, data.m, window)
     np.testing.assert_allclose(W[:, cols], np.diff(data.q[ends], axis=0), rtol=0, atol=1e-12)
     a, b = models.integral_windows(data.t, window)
-    Wi, _ = models.integral_system(base, data, window)
+    Wi, _ = models.integral_system(base, data, window=window)
     expected = np.zeros((a.size, n, n))
     expected[:, range(n), range(n)] = (data.t[b] - data.t[a])[:, None]
     np.testing.assert_allclose(Wi[:, :, cols], expected, rtol=0, atol=1e-12)

@@ -119,7 +119,7 @@ def test_identify_json_and_simulate_into_folders(tmp_path):
     traj = random_trajectory(robot, seed=1, limits=lim)
     (tmp_path / "traj.json").write_text(json.dumps(traj.to_dict()))
     log = simulate_inverse(robot, traj, seed=3)
-    log.save(tmp_path / "log.csv", "planar2")
+    log.save(tmp_path / "log.csv", robot_name="planar2")
     rc, out, err = run(["identify", "planar2", tmp_path / "log.csv", "--json", tmp_path])
     assert rc == 0, err
     path = tmp_path / "planar2_identify.json"

@@ -233,7 +233,12 @@ def test_parameter_names_and_layouts(name):
                     assert values[names.index(f"Fv{k + 1}")] == robot.viscous[k]
                     assert values[names.index(f"Fc{k + 1}")] == robot.coulomb[k]
     # the full layout starts XX1..M1, Ia1, Fv1, Fc1, XX2
-    assert robot.parameter_names(True, True)[:14] == INERTIAL_1 + ["Ia1", "Fv1", "Fc1", "XX2"]
+    assert robot.parameter_names(rotor=True, friction=True)[:14] == INERTIAL_1 + [
+        "Ia1",
+        "Fv1",
+        "Fc1",
+        "XX2",
+    ]
 
 
 INERTIAL_1 = [f"{s}1" for s in INERTIAL]
@@ -271,9 +276,10 @@ def test_params_setter_validation(rng):
     np.testing.assert_array_equal(robot.params, p)
     robot.params = list(p)  # any sequence
     np.testing.assert_array_equal(robot.params, p)
-    # a copy comes back: changing it leaves the model alone
+    # a read-only array comes back: an entry cannot be changed in place (and silently lost)
     got = robot.params
-    got[0] = 123.0
+    with pytest.raises(ValueError, match="read-only"):
+        got[0] = 123.0
     assert robot.params[0] == p[0]
     for bad, match in [
         (np.zeros(29), r"params.*shape \(29,\).*\(30,\)"),

@@ -167,7 +167,7 @@ def _friction_log(robot, t, seed=0, vel_noise=0.0, tau_noise=0.0):
     friction computed here, with noise; returns the log and the true base values."""
     traj = random_trajectory(robot, harmonics=5, freq=0.1, seed=seed)
     q, dq, ddq = traj.evaluate(t)
-    p = robot.parameters(True, True).reshape(robot.n, 13).copy()
+    p = robot.parameters(rotor=True, friction=True).reshape(robot.n, 13).copy()
     p[:, 10] = 0.0
     fv, fc = 0.5 + 0.1 * np.arange(robot.n), 1.0 + 0.2 * np.arange(robot.n)
     p[:, 11], p[:, 12] = 0.0, 0.0
@@ -177,7 +177,7 @@ def _friction_log(robot, t, seed=0, vel_noise=0.0, tau_noise=0.0):
     dqm = dq + vel_noise * rng.standard_normal(dq.shape)
     taum = tau + tau_noise * rng.standard_normal(tau.shape)
     log = JointData(t, q, dqm, np.zeros_like(q), taum, source=f"sim{seed}")
-    names = robot.parameter_names(True, True)
+    names = robot.parameter_names(rotor=True, friction=True)
     return log, {"names": names, "values": p.reshape(-1)}, tau, traj
 
 

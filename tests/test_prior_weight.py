@@ -81,7 +81,7 @@ def test_default_weight_gives_plausible_masses_where_links_are_poorly_excited():
     data = _log(robot, truth, slow=0.05, coulomb=0.1)
     res = identify(robot, data, rsd_threshold=None)
     m_true = truth.reshape(robot.n, 10)[:, 9]
-    bare = consistent_estimate(res, 0.0)
+    bare = consistent_estimate(res, prior_weight=0.0)
     ratio = _masses(bare) / m_true
     assert np.any((ratio > 3) | (ratio < 1 / 3)), ratio
     auto = consistent_estimate(res, data=data)
@@ -133,7 +133,7 @@ def test_held_out_blocks_add_up_to_the_fit(model, friction):
     res = identify(
         robot, data, model=model, friction=friction, rsd_threshold=None, integral_window=10
     )
-    S = block_triangles(res, data, 4)
+    S = block_triangles(res, data, folds=4)
     G = sum(Sk.T @ Sk for Sk in S)
     ls = res.reduced
     F = np.zeros((ls.c + 1, ls.c + 1))

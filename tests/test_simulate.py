@@ -20,7 +20,7 @@ from test_cli_workflow import cli
 
 def save_like_excite(traj, csv_path):
     """The CSV (sampled at 250 Hz) and the JSON (coefficients) of ``mindyn excite``."""
-    write_trajectory_csv(csv_path, *traj.sample(250.0))
+    write_trajectory_csv(csv_path, *traj.sample(rate=250.0))
     csv_path.with_suffix(".json").write_text(json.dumps(traj.to_dict()))
 
 
@@ -34,7 +34,7 @@ def test_integrator_is_the_rk4_of_the_forward_dynamics_with_coulomb_as_a_torque(
     Python loop) and the C++ integrator take the same steps: equal to round-off."""
     robot = mindyn.load("zcr07s")
     n = robot.n
-    p = robot.parameters(True, True)
+    p = robot.parameters(rotor=True, friction=True)
     fc = p.reshape(n, 13)[:, 12].copy()
     p0 = p.reshape(n, 13).copy()
     p0[:, 12] = 0.0
@@ -67,7 +67,7 @@ def test_integrator_is_the_rk4_of_the_forward_dynamics_with_coulomb_as_a_torque(
 
 def test_integrator_against_scipy_and_errors():
     robot = mindyn.load("planar2")
-    p = robot.parameters(True, True)
+    p = robot.parameters(rotor=True, friction=True)
     plant = _core.Integrator(robot._m, p)
     q, dq, tau = np.array([0.3, -0.4]), np.array([0.5, 1.0]), np.array([2.0, -1.0])
 
@@ -79,14 +79,16 @@ def test_integrator_against_scipy_and_errors():
     # RK4 at h = 1 ms: ~1e-12 of the state; scipy at rtol 1e-12: 1e-9 covers both
     assert np.allclose(qn, sol.y[:2, -1], rtol=0, atol=1e-9)
     assert np.allclose(dqn, sol.y[2:, -1], rtol=0, atol=1e-9)
-    with pytest.raises(ValueError, match="dt must be"):
-        plant.step(q, dq, tau, 0.0, 1)
-    with pytest.raises(ValueError, match="substeps must be"):
-        plant.step(q, dq, tau, 0.1, 0)
-    with pytest.raises(ValueError, match="coulomb_smoothing"):
-        _core.Integrator(robot._m, p, -1.0)
-    with pytest.raises(ValueError, match="tau"):
+    # the binding guards the sizes; the settings are checked by simulate, first
+    with pytest.raises(mindyn.ArgumentError, match="^tau has 3 entries"):
         plant.step(q, dq, np.zeros(3), 0.1, 1)
+    ref = SumOfSines(robot, period=1.0)
+    with pytest.raises(mindyn.ArgumentError, match="^substeps is 0; expected an integer >= 1"):
+        simulate(robot, ref, substeps=0, duration=0.1)
+    with pytest.raises(mindyn.ArgumentError, match="^coulomb_smoothing is -1.0; expected"):
+        simulate(robot, ref, coulomb_smoothing=-1.0, duration=0.1)
+    with pytest.raises(mindyn.ArgumentError, match="^rate is 0.0; expected a positive number"):
+        simulate(robot, ref, rate=0.0, duration=0.1)
 
 
 # --------------------------------------------------------------------------------------------
@@ -174,7 +176,7 @@ def test_default_controller_is_computed_torque_on_the_true_model():
     """Computed torque with the true parameters and Coulomb friction on the reference velocity:
     on the reference (e = 0) its torque is the inverse dynamics with Fc sign(dq_d)."""
     robot = mindyn.load("zcr07s")
-    p = robot.parameters(True, True)
+    p = robot.parameters(rotor=True, friction=True)
     ctl = control.default_controller(robot, p)
     traj = random_trajectory(robot, seed=1)
     q, dq, ddq = (x[0] for x in traj.evaluate(0.37))
@@ -206,7 +208,7 @@ def test_simulate_and_track_run_the_same_closed_loop(tmp_path):
     assert (da.m, db.m) == (100, 101)
     assert np.array_equal(da.q, db.q[:100]) and np.array_equal(da.tau, db.tau[:100])
     truth = json.loads(b.with_name("sim.truth.json").read_text())
-    assert truth["values"] == robot.parameters(True, True).tolist()
+    assert truth["values"] == robot.parameters(rotor=True, friction=True).tolist()
 
 
 def test_simulate_with_feedback_controllers_and_rotor(tmp_path):

@@ -62,7 +62,7 @@ def test_friction_and_rotor_columns(rng):
     model = pinocchio_model(robot)
     data = model.createData()
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
-    pb = base.values(robot.parameters(True, True))
+    pb = base.values(robot.parameters(rotor=True, friction=True))
     q, dq, _ = random_state(robot, rng)
     dqr, ddqr = rng.uniform(-2, 2, (2, robot.n))
     M, C, g = pin_terms(model, data, q, dq)

@@ -493,7 +493,7 @@ def test_currents_of_a_coupled_wrist_convert_through_T_not_per_joint(tmp_path):
         + "\n".join(",".join(repr(float(v)) for v in [t[s], *i[s]]) for s in range(t.size)),
         encoding="utf-8",
     )  # fmt: skip
-    joined = attach_currents(data, cur, robot, Kt)
+    joined = attach_currents(data, cur, robot, drive_gain=Kt)
     np.testing.assert_allclose(joined.tau, tau, rtol=1e-9, atol=1e-9 * np.abs(tau).max())
 
 
@@ -520,7 +520,7 @@ def test_drive_side_is_the_motors_with_transmissions_and_switches_without_changi
     assert plain.drive_side == "joint"
     with pytest.raises(mindyn.ModelError, match="declares no transmissions"):
         plain.with_drive_side("motor")
-    with pytest.raises(mindyn.ModelError, match="'motor' or 'joint'"):
+    with pytest.raises(mindyn.ArgumentError, match="^side is .*'motor', 'joint'"):
         robot.with_drive_side("motors")
 
 
@@ -531,7 +531,7 @@ def test_friction_model_is_chosen_on_a_new_robot_and_checked(tmp_path):
     assert smooth.friction_model["kind"] == "smooth" and robot.friction_model["kind"] == "coulomb"
     np.testing.assert_array_equal(smooth.friction_model["velocity"], [0.01, 0.02, 0.03])
     assert robot.with_friction_model("asymmetric").friction_model["kind"] == "asymmetric"
-    with pytest.raises(mindyn.ModelError, match="coulomb, asymmetric, smooth or stribeck"):
+    with pytest.raises(mindyn.ArgumentError, match="'coulomb', 'asymmetric', 'smooth', 'stribeck'"):
         robot.with_friction_model("lugre")
     with pytest.raises(mindyn.ModelError, match="velocity 2 must be positive"):
         robot.with_friction_model("stribeck", velocity=[0.1, 0.0, 0.1])
@@ -561,7 +561,7 @@ def test_direct_drives_from_joint_values_have_the_joint_side_dynamics(tmp_path, 
     elif kind == "asymmetric":
         joint, motor = joint.with_friction_model(kind), motor.with_friction_model(kind)
     r = np.array(ratios)
-    pm = motor.parameters(True, True).reshape(2, -1)
+    pm = motor.parameters(rotor=True, friction=True).reshape(2, -1)
     np.testing.assert_allclose(pm[:, 10], robot.rotor_inertia / r**2, rtol=1e-15)
     np.testing.assert_allclose(pm[:, 11], robot.viscous / r**2, rtol=1e-15)
     np.testing.assert_allclose(pm[:, 12], robot.coulomb / np.abs(r), rtol=1e-15)
@@ -569,6 +569,6 @@ def test_direct_drives_from_joint_values_have_the_joint_side_dynamics(tmp_path, 
         third = robot.third_friction / (r if kind == "asymmetric" else np.abs(r))
         np.testing.assert_allclose(pm[:, 13], third, rtol=1e-15)
     q, dq, ddq = rng.uniform(-1, 1, (3, 20, 2))
-    tj = joint.inverse_dynamics(q, dq, ddq, joint.parameters(True, True))
-    tm = motor.inverse_dynamics(q, dq, ddq, motor.parameters(True, True))
+    tj = joint.inverse_dynamics(q, dq, ddq, joint.parameters(rotor=True, friction=True))
+    tm = motor.inverse_dynamics(q, dq, ddq, motor.parameters(rotor=True, friction=True))
     np.testing.assert_allclose(tm, tj, rtol=1e-12, atol=1e-12 * np.abs(tj).max())

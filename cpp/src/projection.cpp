@@ -861,8 +861,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     const std::string refused = projectionRefusal(model, layout, budget);
     if (!refused.empty())
       throw ModelError(refused +
-                       "; the recursive method (--method recursive, method='recursive') gives the "
-                       "same base set, the numerical method (--method numerical) a sampled one");
+                       "; the recursive method (method='recursive') gives the same base set, the "
+                       "numerical method (method='numerical') a sampled one");
   }
   std::vector<Eigen::Isometry3d> pre, post;
   alignedFrames(model, pre, post);

@@ -829,7 +829,7 @@ class Builder {
         if (movingBelow(*child))
           fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
                "', which is not supported, and moving joints hang below it; load a chain that "
-               "avoids it with a tip link (tip= in Python and C++, --tip on the command line)");
+               "avoids it with a tip link (tip=)");
         continue;  // locked at q = 0 and merged into the body above by accumulate()
       }
       on_path_.insert(child->name);
@@ -884,8 +884,8 @@ class Builder {
            "fixed joints are)");
     if (uj.mimic)
       fail("joint '" + uj.name + "' mimics joint '" + uj.mimic->joint_name +
-           "', which is not supported; load a chain that ends before it with a tip link (tip= "
-           "in Python and C++, --tip on the command line), e.g. its parent link '" +
+           "', which is not supported; load a chain that ends before it with a tip link "
+           "(tip=), e.g. its parent link '" +
            uj.parent_link_name + "', which locks it at q = 0");
     const Eigen::Vector3d axis(uj.axis.x, uj.axis.y, uj.axis.z);
     if (j.type != JointType::FreeFlyer && axis.norm() < 1e-12)  // a floating joint has none

@@ -198,7 +198,7 @@ TEST(Projection, OverBudgetIsRefusedBeforeComputing) {
   } catch (const ModelError& e) {
     const std::string msg = e.what();
     EXPECT_NE(msg.find("6-joint chain"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("--method numerical"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("method='numerical'"), std::string::npos) << msg;
   }
   EXPECT_NO_THROW(influenceCoordinates(model, {}, c.bytes));
   BaseOptions o;

@@ -16,7 +16,7 @@
 """
 
 from . import _args
-from ._core import Error, ModelError, RobotFileNotFoundError
+from ._core import ArgumentError, Error, ModelError, RobotFileNotFoundError
 from ._core import from_pinocchio_order as _from_pin
 from ._core import inertial_from_com as _from_com
 from ._core import inertial_from_urdf as _from_urdf
@@ -27,6 +27,7 @@ from .inverse_kinematics import ik
 from .robot import Robot, bundled_robots, load
 
 __all__ = [
+    "ArgumentError",
     "BaseParameters",
     "Error",
     "base_parameters",

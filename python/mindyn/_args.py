@@ -1,6 +1,10 @@
-"""Argument checks of the public Python API: every array argument goes through :func:`array`
-(or :func:`samples` for per-sample arguments), which converts it to a C-contiguous float64 array
-and raises :class:`mindyn.ModelError` naming the argument, the expected shape and what was given.
+"""Argument checks of the public Python API, the one place that writes the messages of
+:class:`mindyn.ArgumentError` (a ``mindyn.Error``, ``ValueError`` and ``TypeError``): every public
+function checks its arguments here in its first lines. Every array argument goes through
+:func:`array` (or :func:`samples` for per-sample arguments), which converts it to a C-contiguous
+float64 array; options go through :func:`flag`, :func:`integer`, :func:`number`, :func:`choice`,
+:func:`text` and the others below. Each message names the argument, what was expected and what was
+given.
 """
 
 from __future__ import annotations
@@ -10,9 +14,28 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ._core import ModelError
+from ._core import ArgumentError
 
-__all__ = ["array", "samples", "batch", "flag", "integer", "number", "params"]
+__all__ = [
+    "ArgumentError",
+    "array",
+    "batch",
+    "choice",
+    "fail",
+    "flag",
+    "function",
+    "instance",
+    "integer",
+    "mapping",
+    "number",
+    "optional",
+    "params",
+    "path",
+    "protocol",
+    "readonly",
+    "samples",
+    "text",
+]
 
 
 def _describe(x) -> str:
@@ -37,11 +60,11 @@ def _shape_text(shape: Sequence) -> str:
 def _convert(x, name: str, expected: str) -> np.ndarray:
     """``x`` as a float64 array; `expected` is the shape text for the message."""
     if x is None or isinstance(x, (str, bytes, dict, set)):
-        raise ModelError(f"{name} is {_describe(x)}; expected an array of shape {expected}")
+        raise ArgumentError(f"{name} is {_describe(x)}; expected an array of shape {expected}")
     try:
         a = np.asarray(x)
     except (ValueError, TypeError):
-        raise ModelError(
+        raise ArgumentError(
             f"{name} is {_describe(x)} that is not a regular array (rows of unequal length?); "
             f"expected an array of shape {expected}"
         ) from None
@@ -50,7 +73,7 @@ def _convert(x, name: str, expected: str) -> np.ndarray:
         or np.issubdtype(a.dtype, np.integer)
         or a.dtype == np.bool_
     ):
-        raise ModelError(
+        raise ArgumentError(
             f"{name} has dtype {a.dtype}; expected real numbers in an array of shape {expected}"
         )
     return np.ascontiguousarray(a, dtype=np.float64)
@@ -68,20 +91,24 @@ def _finite(a: np.ndarray, name: str, unit: str) -> None:
         where = f"sample {idx[0]}, joint {idx[1] + 1}"
     else:
         where = "index " + str(idx)
-    raise ModelError(f"{name} contains {what} at {where}; expected finite values")
+    raise ArgumentError(f"{name} contains {what} at {where}; expected finite values")
 
 
-def _wrong_shape(name: str, a: np.ndarray, expected: str) -> ModelError:
-    return ModelError(f"{name} has shape {a.shape}; expected {expected}")
+def _wrong_shape(name: str, a: np.ndarray, expected: str) -> ArgumentError:
+    return ArgumentError(f"{name} has shape {a.shape}; expected {expected}")
 
 
-def array(x, name: str, shape: Sequence[int | None], *, unit: str = "entry") -> np.ndarray:
-    """``x`` as a finite C-contiguous float64 array of ``shape`` (``None``: any length there)."""
+def array(
+    x, name: str, shape: Sequence[int | None], *, unit: str = "entry", finite: bool = True
+) -> np.ndarray:
+    """``x`` as a finite (unless not ``finite``: NaN allowed, for a value that is not known)
+    C-contiguous float64 array of ``shape`` (``None``: any length there)."""
     expected = _shape_text(["*" if d is None else d for d in shape])
     a = _convert(x, name, expected)
     if a.ndim != len(shape) or any(d is not None and a.shape[i] != d for i, d in enumerate(shape)):
         raise _wrong_shape(name, a, expected)
-    _finite(a, name, unit)
+    if finite:
+        _finite(a, name, unit)
     return a
 
 
@@ -90,7 +117,7 @@ def samples(x, name: str, n: int) -> np.ndarray:
     expected = f"({n},) or (m, {n})"
     a = _convert(x, name, expected)
     if a.ndim not in (1, 2):
-        raise ModelError(
+        raise ArgumentError(
             f"{name} must be 1-D ({n},) or 2-D (m, {n}), got {a.ndim}-D shape {a.shape}"
         )
     if not (a.shape == (n,) or (a.ndim == 2 and a.shape[1] == n)):
@@ -106,7 +133,7 @@ def batch(n: int, **arrays) -> list[np.ndarray]:
     first_name, first = next(iter(arrays)), out[0]
     for (name, _), a in zip(arrays.items(), out):
         if a.shape != first.shape:
-            raise ModelError(
+            raise ArgumentError(
                 f"{name} has shape {a.shape}; expected {first.shape} like {first_name}: all "
                 f"inputs must be single samples ({n},) or batches of equal length (m, {n})"
             )
@@ -118,29 +145,46 @@ def flag(x, name: str) -> bool:
     refused)."""
     if isinstance(x, (bool, np.bool_)) or (isinstance(x, numbers.Integral) and x in (0, 1)):
         return bool(x)
-    raise ModelError(f"{name} is {_describe(x)}; expected True or False")
+    raise ArgumentError(f"{name} is {_describe(x)}; expected True or False")
 
 
-def integer(x, name: str, minimum: int | None = None) -> int:
-    """An integer option (bools refused), at least ``minimum``."""
+def integer(x, name: str, minimum: int | None = None, *, maximum: int | None = None) -> int:
+    """An integer option (bools refused), at least ``minimum`` and at most ``maximum``."""
     if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Integral):
-        raise ModelError(f"{name} is {_describe(x)}; expected an integer")
+        raise ArgumentError(f"{name} is {_describe(x)}; expected an integer")
+    if minimum is not None and maximum is not None and not minimum <= x <= maximum:
+        raise ArgumentError(f"{name} is {x}; expected an integer from {minimum} to {maximum}")
     if minimum is not None and x < minimum:
-        raise ModelError(f"{name} is {x}; expected an integer >= {minimum}")
+        raise ArgumentError(f"{name} is {x}; expected an integer >= {minimum}")
+    if maximum is not None and x > maximum:
+        raise ArgumentError(f"{name} is {x}; expected an integer <= {maximum}")
     return int(x)
 
 
-def number(x, name: str, *, positive: bool = False, minimum: float | None = None) -> float:
-    """A finite real option; ``positive``: > 0; ``minimum``: >= that."""
+def number(
+    x,
+    name: str,
+    *,
+    positive: bool = False,
+    minimum: float | None = None,
+    maximum: float | None = None,
+    below: float | None = None,
+) -> float:
+    """A finite real option; ``positive``: > 0; ``minimum``: >= that; ``maximum``: <= that;
+    ``below``: < that."""
     if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
-        raise ModelError(f"{name} is {_describe(x)}; expected a number")
+        raise ArgumentError(f"{name} is {_describe(x)}; expected a number")
     v = float(x)
     if not np.isfinite(v):
-        raise ModelError(f"{name} is {v}; expected a finite number")
+        raise ArgumentError(f"{name} is {v}; expected a finite number")
     if positive and not v > 0:
-        raise ModelError(f"{name} is {v}; expected a positive number")
+        raise ArgumentError(f"{name} is {v}; expected a positive number")
     if minimum is not None and v < minimum:
-        raise ModelError(f"{name} is {v}; expected a number >= {minimum}")
+        raise ArgumentError(f"{name} is {v}; expected a number >= {minimum}")
+    if maximum is not None and v > maximum:
+        raise ArgumentError(f"{name} is {v}; expected a number <= {maximum}")
+    if below is not None and not v < below:
+        raise ArgumentError(f"{name} is {v}; expected a number < {below}")
     return v
 
 
@@ -154,11 +198,89 @@ def params(x, name: str, n: int, sizes_per_joint: Sequence[int] = (10, 11, 12, 1
     what = ", ".join(f"{k} n" for k in sizes_per_joint)
     a = _convert(x, name, expected)
     if a.ndim != 1:
-        raise ModelError(f"{name} must be 1-D, got shape {a.shape}; expected {expected} or None")
+        raise ArgumentError(f"{name} must be 1-D, got shape {a.shape}; expected {expected} or None")
     if a.shape[0] not in sizes:
-        raise ModelError(
+        raise ArgumentError(
             f"{name} has shape {a.shape}: {a.shape[0]} entries fits no layout for {n} joints; "
             f"expected {expected} ({what}) or None"
         )
     _finite(a, name, "entry")
     return a
+
+
+def fail(name: str, message: str) -> ArgumentError:
+    """The error of argument ``name`` for a check made elsewhere: ``name`` then ``message``."""
+    return ArgumentError(f"{name} {message}")
+
+
+def optional(check, x, name: str, *args, **kwargs):
+    """``None``, or ``x`` through ``check`` (one of the functions here)."""
+    return None if x is None else check(x, name, *args, **kwargs)
+
+
+def choice(x, name: str, choices):
+    """One of the strings ``choices``."""
+    if not isinstance(x, str) or x not in choices:
+        listed = ", ".join(repr(c) for c in choices)
+        raise ArgumentError(f"{name} is {_describe(x)}; expected one of {listed}")
+    return x
+
+
+def text(x, name: str, *, empty: bool = False) -> str:
+    """A string (non-empty unless ``empty``)."""
+    if not isinstance(x, str):
+        raise ArgumentError(f"{name} is {_describe(x)}; expected a string")
+    if not empty and not x.strip():
+        raise ArgumentError(f"{name} is empty; expected a non-empty string")
+    return x
+
+
+def instance(x, name: str, kind, what: str | None = None):
+    """An object of class ``kind`` (a class or a tuple of classes); ``what`` names it in the
+    message (default the class name)."""
+    if not isinstance(x, kind):
+        if what is None:
+            kinds = kind if isinstance(kind, tuple) else (kind,)
+            what = " or ".join(f"a {k.__name__}" for k in kinds)
+        raise ArgumentError(f"{name} is {_describe(x)}; expected {what}")
+    return x
+
+
+def readonly(a) -> np.ndarray:
+    """``a`` as a read-only float array (what a getter returns: assigning to an entry raises
+    instead of changing a copy that is then lost)."""
+    out = np.array(a, dtype=float)
+    out.flags.writeable = False
+    return out
+
+
+def function(x, name: str):
+    """A callable."""
+    if not callable(x):
+        raise ArgumentError(f"{name} is {_describe(x)}; expected a callable")
+    return x
+
+
+def path(x, name: str):
+    """A file or folder path (str or os.PathLike; not an empty string)."""
+    if isinstance(x, str) and x:
+        return x
+    if hasattr(x, "__fspath__") and not isinstance(x, (bytes, str)):
+        return x
+    raise ArgumentError(f"{name} is {_describe(x)}; expected a path")
+
+
+def mapping(x, name: str):
+    """A mapping (a dict)."""
+    from collections.abc import Mapping
+
+    if not isinstance(x, Mapping):
+        raise ArgumentError(f"{name} is {_describe(x)}; expected a mapping (a dict)")
+    return x
+
+
+def protocol(x, name: str, method: str, what: str):
+    """An object with a callable ``method`` (``what`` names the kind in the message)."""
+    if not callable(getattr(x, method, None)):
+        raise ArgumentError(f"{name} is {_describe(x)}; expected {what}")
+    return x

@@ -16,7 +16,7 @@ import numpy as np
 
 from . import _args, _core
 from . import formulas as _formulas
-from .robot import Robot, load
+from .robot import Robot, as_robot
 
 __all__ = ["BaseParameters", "base_parameters", "choose_method"]
 
@@ -99,11 +99,13 @@ class BaseParameters:
         self.method_reason = ""  # set by base_parameters
 
     def for_robot(
-        self, robot: Robot, order: Sequence[int] | Sequence[str] | None = None, offset=None
+        self, robot: Robot, *, order: Sequence[int] | Sequence[str] | None = None, offset=None
     ) -> BaseParameters:
         """The base parameters of ``robot`` (e.g. the same description at other lengths) by the
         same method, joint terms and settings as these; ``order`` (as :func:`base_parameters`
         takes it) replaces the column priority order, ``offset`` the offsets, when given."""
+        _args.instance(robot, "robot", Robot)
+        offset = _args.optional(_args.flag, offset, "offset")
         return base_parameters(
             robot,
             rotor=self.rotor,
@@ -187,13 +189,14 @@ class BaseParameters:
         ``Off_j = Off_j``. Computed on first use."""
         return self._symbolic
 
-    def latex(self, symbolic: bool = False) -> str:
+    def latex(self, *, symbolic: bool = False) -> str:
         """The formulas (numeric, or symbolic) as a LaTeX ``align*`` environment."""
+        symbolic = _args.flag(symbolic, "symbolic")
         if symbolic:
             return _formulas.latex(self.symbolic().formulas)
         return _formulas.latex(self.formula_terms())
 
-    Y = property(lambda self: self._b.Y)
+    Y = property(lambda self: _args.readonly(self._b.Y))
     pivots = property(lambda self: list(self._b.pivots))
     classical_names = property(lambda self: list(self._b.classical_names))
     rotor = property(lambda self: self._b.rotor)
@@ -263,9 +266,10 @@ class BaseParameters:
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.momentum_regressors(q, dq)
 
-    def to_dict(self, symbolic: bool = False) -> dict:
+    def to_dict(self, *, symbolic: bool = False) -> dict:
         """A JSON-ready summary (counts, names, formulas, margins); with ``symbolic``, also
         ``formulas_symbolic``, ``symbols`` and ``symbolic_check`` (see :meth:`symbolic`)."""
+        symbolic = _args.flag(symbolic, "symbolic")
         out = {
             "robot": self.robot.name,
             "method": self.method,
@@ -343,6 +347,7 @@ def _plain(d: dict) -> dict:
 
 def base_parameters(
     robot: Robot | str,
+    *,
     rotor: bool = False,
     friction: bool = False,
     method: str | None = None,
@@ -361,7 +366,7 @@ def base_parameters(
         A robot or anything :func:`mindyn.load` accepts.
     rotor, friction : bool
         Include rotor inertia ``Ia`` and viscous / Coulomb friction ``Fv, Fc`` per joint.
-    method : {"projection", "recursive", "numerical"}, optional
+    method : {"auto", "projection", "recursive", "numerical"}, optional
         Exact projection method; exact recursive method (the identifiable space link by
         link, cost linear in the number of joints, then the same echelon form: the same base
         set and ``Y``); or sampled regressors with QR (for cross-checks). The projection
@@ -372,7 +377,7 @@ def base_parameters(
         numerical one, up to its own budget of 2 GiB (about 340 joints). All three handle trees
         (``Robot.parents``). The projection method's limits (joints on a chain, on a tree and on
         one root path of a tree, parameters, memory budget) are those of the C++ core,
-        ``mindyn._core.projection_limits()``. Default (``None``): the
+        ``mindyn._core.projection_limits()``. Default (``None`` or ``"auto"``): the
         projection method, or the recursive one where a limit of the projection method refuses
         the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
         ``method_reason``). A robot with multi-DOF joints (spherical, universal, cylindrical,
@@ -401,17 +406,14 @@ def base_parameters(
         Add a constant torque offset per joint, ``Off1 .. OffN``, after all other parameters
         (see :class:`BaseParameters`); ``order`` does not name them.
     """
-    robot = load(robot) if not isinstance(robot, Robot) else robot
+    robot = as_robot(robot)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     offset = _args.flag(offset, "offset")
-    if method is None:
+    _args.optional(_args.choice, method, "method", ("auto", "projection", "recursive", "numerical"))
+    if method is None or method == "auto":
         method, reason = choose_method(robot, rotor=rotor, friction=friction)
     else:
         reason = f"method={method!r}"
-    if method not in ("projection", "recursive", "numerical"):
-        raise _core.ModelError(
-            f"method is {method!r}; expected 'projection', 'recursive' or 'numerical'"
-        )
     tolerance = _args.number(tolerance, "tolerance", positive=True)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)
@@ -419,24 +421,25 @@ def base_parameters(
         snap = _args.number(snap, "snap", minimum=0.0)
     idx: list[int] = []
     if order is not None:
-        names = robot.parameter_names(rotor, friction)
+        names = robot.parameter_names(rotor=rotor, friction=friction)
         lookup = {name: i for i, name in enumerate(names)}
         if isinstance(order, (str, bytes)) or not hasattr(order, "__iter__"):
-            raise _core.ModelError(
-                f"order is {order!r}; expected a sequence of parameter indices or names"
+            raise _args.fail(
+                "order", f"is {order!r}; expected a sequence of parameter indices or names"
             )
         for item in order:
             if isinstance(item, str):
                 if item not in lookup:
-                    raise _core.ModelError(f"order: unknown parameter '{item}'")
+                    raise _args.fail("order", f"names an unknown parameter '{item}'")
                 idx.append(lookup[item])
             else:
                 idx.append(_args.integer(item, "order entry"))
         if sorted(idx) != list(range(len(names))):
             missing = [names[i] for i in sorted(set(range(len(names))) - set(idx))]
-            raise _core.ModelError(
-                f"order must name each of the {len(names)} parameters exactly once"
-                + (f"; missing: {', '.join(missing[:8])}" if missing else "")
+            raise _args.fail(
+                "order",
+                f"must name each of the {len(names)} parameters exactly once"
+                + (f"; missing: {', '.join(missing[:8])}" if missing else ""),
             )
     if snap is True:
         snap = 1e-3

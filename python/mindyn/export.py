@@ -78,13 +78,15 @@ class Export:
 
 
 # -- the classical parameters -----------------------------------------------------------------
-def classical_terms(robot: Robot, classical, what: str = "classical parameters") -> JointTerms:
+def classical_terms(robot: Robot, classical, *, what: str = "classical parameters") -> JointTerms:
     """Checks ``classical`` against ``robot`` and splits it.
 
     ``classical`` is a mapping ``{name: value}`` holding exactly the names of one classical
     layout of the robot (``robot.parameter_names(rotor, friction)``), optionally with ``Off1 ..
     OffN``, or a vector in a classical layout (length 10 n, 11 n, 12 n or 13 n). ``what`` names
     the input in error messages."""
+    _args.instance(robot, "robot", Robot)
+    _args.text(what, "what")
     n = robot.n
     if isinstance(classical, Mapping):
         return _from_mapping(robot, classical, what)
@@ -110,7 +112,7 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
         raise ModelError(f"{what}: the names must be text, got {bad[0]!r}")
     has = {p: any(k.startswith(p) and k[len(p) :].isdigit() for k in keys) for p in _TERMS}
     rotor, friction = has["Ia"], has["Fv"] or has["Fc"]
-    expected = robot.parameter_names(rotor, friction, offset=has[_OFF])
+    expected = robot.parameter_names(rotor=rotor, friction=friction, offset=has[_OFF])
     missing = [k for k in expected if k not in classical]
     unknown = [k for k in keys if k not in set(expected)]
     if missing or unknown:
@@ -271,6 +273,10 @@ def write_urdf(
         ``classical`` does not fit the robot, a mass is negative (or zero with a first moment),
         the robot is not from a URDF, or ``source`` does not hold the robot's joints.
     """
+    _args.instance(robot, "robot", Robot)
+    _args.path(path, "path")
+    _args.optional(_args.path, source, "source")
+    _args.optional(_args.path, sidecar, "sidecar")
     if robot.convention != "urdf":
         raise ModelError(
             f"robot '{robot.name}' is a {robot.convention} table, not a URDF"
@@ -501,7 +507,7 @@ class _UrdfDocument(XmlDocument):
         dyn.set("friction", _num(coulomb))
 
 
-def centroidal(p: np.ndarray, index: int, name: str, kind: str = "a URDF"):
+def centroidal(p: np.ndarray, index: int, name: str, *, kind: str = "a URDF"):
     """``(mass, centre of mass, inertia about it, notes)`` of link ``index`` (1-based, named
     ``name``) from its ten classical parameters ``p``; a zero mass gives the rotational inertia
     at the link origin. Raises ModelError for a negative mass, or a zero one with a first
@@ -604,6 +610,7 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
 def read_joint_terms(path) -> dict[str, float]:
     """The joint terms of a sidecar YAML written by :func:`write_urdf` or :func:`write_yaml`, as
     ``{"Ia1": ..., "Fv1": ..., "Fc1": ..., "Off1": ..., ...}`` (the terms it holds)."""
+    _args.path(path, "path")
     p = Path(path)
     doc = _read_yaml(p, "joint-terms file")
     rows = doc.get("joints") if isinstance(doc, dict) else None
@@ -684,6 +691,10 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
     driven joint carries its motor's terms as they act on it (``r^2 Ia``, ``r^2 Fv``,
     ``|r| Fc``; a joint of a coupled motor 0, with a note).
     """
+    _args.instance(robot, "robot", Robot)
+    _args.path(path, "path")
+    _args.optional(_args.path, source, "source")
+    _args.optional(_args.path, sidecar, "sidecar")
     if robot.convention not in ("dh", "mdh"):
         raise ModelError(
             f"robot '{robot.name}' is not from a YAML DH/MDH table ({robot.convention}): "

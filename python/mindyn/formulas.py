@@ -89,7 +89,7 @@ from typing import Union
 
 import numpy as np
 
-from . import _core
+from . import _args, _core
 from .robot import Robot
 
 __all__ = [
@@ -117,6 +117,8 @@ Poly = tuple[tuple[tuple[int, ...], Number], ...]
 # -- numbers ------------------------------------------------------------------------------------
 def shortest_decimal(x: float, tol: float) -> str:
     """The shortest decimal (1 to 17 significant digits) within ``tol`` of ``x``, as text."""
+    x = _args.number(x, "x")
+    tol = _args.number(tol, "tol", minimum=0.0)
     x = float(x)
     if x == 0.0 or not math.isfinite(x):
         return "0" if x == 0.0 else repr(x)
@@ -135,10 +137,12 @@ def _tidy(s: str) -> str:
     return f"{mant}e{int(exp)}"
 
 
-def round_coefficient(x: float, scale: float = 0.0) -> float:
+def round_coefficient(x: float, *, scale: float = 0.0) -> float:
     """``x`` without its round-off: the shortest decimal within ``RELATIVE * |x| + ABSOLUTE *
     scale`` (``scale``: the largest coefficient of the formula), e.g. ``0.18645124000000002`` ->
     ``0.18645124``, ``1.0000000000000002`` -> ``1``."""
+    x = _args.number(x, "x")
+    scale = _args.number(scale, "scale", minimum=0.0)
     return float(shortest_decimal(x, RELATIVE * abs(x) + ABSOLUTE * abs(scale)))
 
 
@@ -306,11 +310,15 @@ def _num_latex(c: Number) -> str:
 
 def unit_formula(name: str) -> Formula:
     """``name = name`` (a parameter that is its own base parameter, e.g. a torque offset)."""
+    _args.text(name, "name")
     return Formula(name=name, terms=(Term(coef=(((), 1.0),), params=(name,)),))
 
 
 def latex(formulas: Sequence[Formula]) -> str:
     """The formulas as one LaTeX ``align*`` environment."""
+    _args.instance(formulas, "formulas", (list, tuple), "a list of Formula")
+    if not all(isinstance(f, Formula) for f in formulas):
+        raise _args.fail("formulas", "must hold Formula objects")
     body = " \\\\\n".join(f.latex() for f in formulas)
     return "\\begin{align*}\n" + body + "\n\\end{align*}"
 
@@ -321,6 +329,15 @@ def numeric_formulas(
 ) -> list[Formula]:
     """Readable formulas of the rows of ``Y``: coefficients rounded (:func:`round_coefficient`),
     terms whose coefficients agree within that rounding gathered, ``+-1`` kept as signs."""
+    Y = _args.array(Y, "Y", (None, None))
+    _args.instance(names, "names", (list, tuple), "a list of names")
+    _args.instance(classical_names, "classical_names", (list, tuple), "a list of names")
+    if len(names) != Y.shape[0]:
+        raise _args.fail("names", f"has {len(names)} names; Y has {Y.shape[0]} rows")
+    if len(classical_names) != Y.shape[1]:
+        raise _args.fail(
+            "classical_names", f"has {len(classical_names)} names; Y has {Y.shape[1]} columns"
+        )
     Y = np.asarray(Y, dtype=float)
     out = []
     for b, name in enumerate(names):
@@ -336,7 +353,7 @@ def numeric_formulas(
             tol = RELATIVE * abs(y) + ABSOLUTE * scale
             if abs(y) <= ABSOLUTE * scale:
                 continue  # round-off of an exact zero
-            r = round_coefficient(y, scale)
+            r = round_coefficient(y, scale=scale)
             if abs(abs(r) - 1.0) == 0.0:
                 groups.append((y, r, [classical_names[c]]))
                 continue
@@ -590,11 +607,13 @@ class SymbolicFormulas:
         return latex(self.formulas)
 
 
-def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
+def symbolic_formulas(bp, *, seed: int = 20240607) -> SymbolicFormulas:
     """The regrouping formulas of ``bp`` (a :class:`mindyn.BaseParameters`) in the symbols of its
     robot's description (see the module documentation for the symbols, the degree bound and the
     checks). Raises ModelError when the base set changes with the lengths or a coefficient is
     not a polynomial of degree <= 2 in them."""
+    _args.protocol(bp, "bp", "regressor", "a BaseParameters")
+    seed = _args.integer(seed, "seed", 0)
     robot = bp.robot
     geo = _Geometry(robot)
     # the link parameters: the torque offsets (the layout's joint block, last) are their own
@@ -745,8 +764,7 @@ def symbolic_formulas(bp, seed: int = 20240607) -> SymbolicFormulas:
                 )
                 + (
                     "; its joint origins hold rotations within 1e-3 of right angles but not at "
-                    "them (rounded angles such as 1.5708 for pi/2): snap them (snap=True, "
-                    "mindyn base --snap)"
+                    "them (rounded angles such as 1.5708 for pi/2): snap them (snap=True)"
                     if _rounded_right_angles(robot)
                     else ""
                 )

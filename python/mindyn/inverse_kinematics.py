@@ -23,6 +23,7 @@ from typing import Callable
 import numpy as np
 
 from . import _args, _core
+from ._args import ArgumentError
 from .robot import Robot
 
 __all__ = [
@@ -68,16 +69,16 @@ def _pose(T, name: str) -> np.ndarray:
     T = _args.array(T, name, (4, 4))
     R = T[:3, :3]
     if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
-        raise _core.ModelError(f"{name}: the upper-left 3x3 block is not a rotation matrix")
+        raise ArgumentError(f"{name}: the upper-left 3x3 block is not a rotation matrix")
     if np.any(T[3] != [0.0, 0.0, 0.0, 1.0]):
-        raise _core.ModelError(f"{name}: the last row must be (0, 0, 0, 1)")
+        raise ArgumentError(f"{name}: the last row must be (0, 0, 0, 1)")
     return T
 
 
 # ---------------------------------------------------------------------------------------------
 # Velocity IK
 # ---------------------------------------------------------------------------------------------
-def damped_pinv(J, damping: float = 0.05, threshold: float = 0.02) -> np.ndarray:
+def damped_pinv(J, *, damping: float = 0.05, threshold: float = 0.02) -> np.ndarray:
     """Damped pseudo-inverse ``V diag(s / (s^2 + lambda^2)) U^T`` of ``J`` (m x n).
 
     ``lambda^2 = damping^2 (1 - (s_min / threshold)^2)`` when the smallest singular value
@@ -103,17 +104,22 @@ def damped_pinv(J, damping: float = 0.05, threshold: float = 0.02) -> np.ndarray
 def _task_rows(task) -> list[int]:
     if isinstance(task, str):
         if task not in TASKS:
-            raise ValueError(f"task must be one of {', '.join(TASKS)} or a list of rows 0..5")
+            raise ArgumentError(f"task must be one of {', '.join(TASKS)} or a list of rows 0..5")
         return TASKS[task]
+    if not isinstance(task, (list, tuple, np.ndarray)):
+        raise _args.fail("task", f"is {task!r}; expected one of {', '.join(TASKS)} or rows 0..5")
+    if any(isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, np.integer)) for r in task):
+        raise _args.fail("task", "rows must be distinct integers in 0..5")
     rows = [int(r) for r in task]
     if not rows or any(r < 0 or r > 5 for r in rows) or len(set(rows)) != len(rows):
-        raise ValueError("task rows must be distinct integers in 0..5")
+        raise ArgumentError("task rows must be distinct integers in 0..5")
     return rows
 
 
 def limits_gradient(robot: Robot, q) -> np.ndarray:
     """A null-space motion that moves joints towards the middle of their limits:
     ``-(q - q_mid) / half_range^2`` (zero for joints without limits)."""
+    _args.instance(robot, "robot", Robot)
     lim = robot.limits
     lo, hi = lim["lower"], lim["upper"]
     ok = np.isfinite(lo) & np.isfinite(hi) & (hi > lo)
@@ -158,17 +164,18 @@ def velocity_ik(
     -------
     dq : ndarray (n,)
     """
+    _args.instance(robot, "robot", Robot)
     robot._require_serial("inverse kinematics (velocity_ik)")
     q = _args.array(q, "q", (robot.n,), unit="joint")
     rows = _task_rows(task)
     x = _args.array(twist, "twist", (len(rows),))
     J = robot.jacobian(q)[rows]
-    Jp = damped_pinv(J, damping, threshold)
+    Jp = damped_pinv(J, damping=damping, threshold=threshold)
     dq = Jp @ x
     if nullspace is not None:
         if isinstance(nullspace, str):
             if nullspace != "limits":
-                raise ValueError("nullspace must be None, an array, a callable or 'limits'")
+                raise ArgumentError("nullspace must be None, an array, a callable or 'limits'")
             z = limits_gradient(robot, q)
         elif callable(nullspace):
             z = np.asarray(nullspace(q), dtype=float)
@@ -182,12 +189,16 @@ def velocity_ik(
 # ---------------------------------------------------------------------------------------------
 # Cartesian paths: callables t -> (T_d (4, 4), twist_d (6,))
 # ---------------------------------------------------------------------------------------------
-def circle_path(T0, radius: float, period: float, normal=(0.0, 0.0, 1.0)):
+def circle_path(T0, radius: float, period: float, *, normal=(0.0, 0.0, 1.0)):
     """A circle through the position of ``T0`` at constant orientation: centre
     ``p0 - radius u``, ``p(t) = c + radius (cos(w t) u + sin(w t) v)``, ``(u, v, normal)``
     right-handed, ``w = 2 pi / period``."""
     T0 = _pose(T0, "T0")
-    nrm = np.asarray(normal, dtype=float)
+    radius = _args.number(radius, "radius", positive=True)
+    period = _args.number(period, "period", positive=True)
+    nrm = _args.array(normal, "normal", (3,))
+    if not np.linalg.norm(nrm) > 0:
+        raise _args.fail("normal", "is the zero vector; expected a direction")
     nrm = nrm / np.linalg.norm(nrm)
     u = np.cross(nrm, [1.0, 0.0, 0.0])
     if np.linalg.norm(u) < 1e-6:
@@ -211,6 +222,7 @@ def line_path(T0, T1, duration: float):
     time scaling ``s(t)`` (zero speed and acceleration at both ends)."""
     T0 = _pose(T0, "T0")
     T1 = _pose(T1, "T1")
+    duration = _args.number(duration, "duration", positive=True)
     dp = T1[:3, 3] - T0[:3, 3]
     rv = _core.pose_error(T0, T1)[3:]
 
@@ -252,6 +264,7 @@ def resolved_rate(
     q0,
     path: Callable[[float], tuple],
     duration: float,
+    *,
     dt: float = 0.004,
     gain: float = 10.0,
     **velocity_options,
@@ -261,9 +274,12 @@ def resolved_rate(
     ``dq = velocity_ik(q, dx)`` over ``dt`` (the joints are assumed to follow the commanded
     velocity). ``velocity_options`` go to :func:`velocity_ik` (``nullspace``, ``damping``, ...).
     """
+    _args.instance(robot, "robot", Robot)
     robot._require_serial("inverse kinematics (resolved_rate)")
-    if not (duration > 0 and dt > 0):
-        raise ValueError("duration and dt must be positive")
+    _args.function(path, "path")
+    duration = _args.number(duration, "duration", positive=True)
+    dt = _args.number(dt, "dt", positive=True)
+    gain = _args.number(gain, "gain", minimum=0.0)
     q = _args.array(q0, "q0", (robot.n,), unit="joint").copy()
     K = int(round(duration / dt)) + 1
     t = np.arange(K) * dt
@@ -327,6 +343,7 @@ def ik_solve(
     seed : int
         Seed of the restart points (same seed, same answer).
     """
+    _args.instance(robot, "robot", Robot)
     robot._require_serial("inverse kinematics (ik_solve)")
     T = _pose(T_target, "T_target")
     if q0 is not None:

@@ -48,7 +48,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _mujoco
+from . import _args, _mujoco
 from ._core import OFFSET_PREFIX as _OFF
 from ._core import ModelError
 from .export import Export, JointTerms, XmlDocument, centroidal, classical_terms
@@ -95,10 +95,12 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         ``mujoco`` is missing where it is needed, or MuJoCo compiles the written file to other
         parameters.
     """
+    _args.instance(robot, "robot", Robot)
+    _args.path(path, "path")
+    _args.optional(_args.path, source, "source")
     terms = classical_terms(robot, classical)
     side = drive_side if drive_side is not None else getattr(robot, "drive_side", "joint")
-    if side not in ("joint", "motor"):
-        raise ModelError(f"drive_side must be 'joint' or 'motor', got {side!r}")
+    _args.choice(side, "drive_side", ("joint", "motor"))
     src = Path(robot.source if source is None else source)
     out = Path(path)
     if _mujoco.is_mjcf(src):
@@ -132,7 +134,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
         body = ET.SubElement(parent, "body", {"name": robot.link_names[k + 1], **_pose(place)})
         bodies.append(body)
         mass, com, inertia, more = centroidal(
-            terms.inertial[10 * k : 10 * k + 10], k + 1, robot.link_names[k + 1], "an MJCF"
+            terms.inertial[10 * k : 10 * k + 10], k + 1, robot.link_names[k + 1], kind="an MJCF"
         )
         notes += more
         post = robot.joint_post(k)
@@ -373,7 +375,7 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
             continue
         k = link_index[bname]
         mass, com, inertia, more = centroidal(
-            terms.inertial[10 * k : 10 * k + 10], k + 1, bname, "an MJCF"
+            terms.inertial[10 * k : 10 * k + 10], k + 1, bname, kind="an MJCF"
         )
         notes += more
         com = com + _mujoco.last_anchor(m, b)

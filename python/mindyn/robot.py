@@ -24,7 +24,7 @@ from . import _args, _core, _mujoco
 #: The friction models of :meth:`Robot.with_friction_model`.
 FRICTION_KINDS = ("coulomb", "asymmetric", "smooth", "stribeck")
 
-__all__ = ["Robot", "Transmission", "load", "bundled_robots"]
+__all__ = ["Robot", "Transmission", "as_robot", "load", "bundled_robots"]
 
 _PLANAR = re.compile(r"planar([0-9]+)(h?)")
 # Most joints of a model, as the core's kMaxModelJoints (a test keeps the two equal); checked here
@@ -46,7 +46,9 @@ def _robot_dir() -> Path:
     return Path(str(resources.files("mindyn") / "robots"))
 
 
-def load(robot: str | Path, tip: str | None = None, gravity=None, *, root_joint=None) -> Robot:
+def load(
+    robot: str | Path, *, tip: str | None = None, gravity=None, root_joint: str | None = None
+) -> Robot:
     """Load a robot.
 
     Parameters
@@ -91,8 +93,20 @@ def load(robot: str | Path, tip: str | None = None, gravity=None, *, root_joint=
         joint and attribute named). A URDF link without ``<inertial>`` is massless and named in
         ``notes``.
     """
+    _args.instance(robot, "robot", (Robot, str, Path), "a Robot, a bundled robot name or a path")
+    _args.optional(_args.text, tip, "tip")
+    _args.optional(_args.text, root_joint, "root_joint")
     out = _load(robot, tip, root_joint)
     return out if gravity is None else out.with_gravity(gravity)
+
+
+def as_robot(robot, *, name: str = "robot") -> Robot:
+    """``robot`` itself, or the robot :func:`load` gives for a bundled name or a path (the
+    ``robot`` argument of the public functions); ArgumentError naming ``name`` otherwise."""
+    if isinstance(robot, Robot):
+        return robot
+    _args.instance(robot, name, (Robot, str, Path), "a Robot, a bundled robot name or a path")
+    return load(robot)
 
 
 def _load(robot: str | Path, tip: str | None, root_joint: str | None = None) -> Robot:
@@ -116,12 +130,12 @@ def _load(robot: str | Path, tip: str | None, root_joint: str | None = None) -> 
         )
     if suffix in (".yaml", ".yml"):
         if tip:
-            raise _core.ModelError("tip= applies to URDF chains only, not to a DH/MDH table")
+            raise _args.ArgumentError("tip= applies to URDF chains only, not to a DH/MDH table")
         if not path.is_file():
             raise _core.RobotFileNotFoundError(f"robot description '{text}' does not exist")
         return Robot(_core.load_yaml(text))
     if tip:
-        raise _core.ModelError(
+        raise _args.ArgumentError(
             f"tip= applies to URDF files only, not to the bundled robot '{text}'"
         )
     m = _PLANAR.fullmatch(text)
@@ -146,9 +160,7 @@ def _load(robot: str | Path, tip: str | None, root_joint: str | None = None) -> 
 
 
 def _readonly(a) -> np.ndarray:
-    out = np.array(a, dtype=float)
-    out.flags.writeable = False
-    return out
+    return _args.readonly(a)
 
 
 @dataclass(frozen=True)
@@ -201,7 +213,7 @@ class Robot:
     param_names : list of str
         Names of the classical inertial parameters (``10 n``).
     params : ndarray, shape (10 n,)
-        Their values (a copy; assign to change the model).
+        Their values (read-only; assign a whole vector to change the model).
     gravity : ndarray, shape (3,)
         Fixed once loaded (``mindyn.load(..., gravity=g)``, :meth:`with_gravity`): base
         parameter sets and the code generated from them depend on it.
@@ -315,20 +327,20 @@ class Robot:
     @property
     def axes(self) -> np.ndarray:
         """Joint axes, shape (n, 3), each in its joint frame."""
-        return self._m.axes
+        return _readonly(self._m.axes)
 
     @property
     def dh(self) -> np.ndarray:
         """DH rows ``(a, alpha, d, theta)`` for ``dh``; MDH ``(d_j, alpha_j, r_j, theta_j)`` as
         ``(a, alpha, d, theta)`` for ``mdh``; empty for URDF. Shape (n, 4) or (0, 4)."""
-        return self._m.dh
+        return _readonly(self._m.dh)
 
     @property
     def limits(self) -> dict[str, np.ndarray]:
         """Joint limits as arrays of shape (n,): lower, upper, velocity, acceleration, effort
         (NaN where the description gives none)."""
         rows = self._m.limits
-        return {k: np.array([r[k] for r in rows]) for k in rows[0]}
+        return {k: _readonly([r[k] for r in rows]) for k in rows[0]}
 
     @property
     def drives(self) -> dict[str, np.ndarray]:
@@ -336,7 +348,7 @@ class Robot:
         (``rated_torque``, ``gear_ratio``, ``torque_constant``), shape (n,) each (NaN when
         unknown; URDF gives none)."""
         rows = self._m.drives
-        return {k: np.array([r[k] for r in rows]) for k in rows[0]}
+        return {k: _readonly([r[k] for r in rows]) for k in rows[0]}
 
     @property
     def transmission(self) -> Transmission | None:
@@ -368,8 +380,7 @@ class Robot:
         """A new robot, the same as this one but with its rotor inertia and friction on the
         motors (``"motor"``, needs transmissions) or on the joints (``"joint"``); this robot is
         unchanged."""
-        if side not in ("motor", "joint"):
-            raise _core.ModelError(f"drive side must be 'motor' or 'joint', not {side!r}")
+        _args.choice(side, "side", ("motor", "joint"))
         return Robot(self._m.with_drive_side(side))
 
     @property
@@ -385,7 +396,7 @@ class Robot:
     def slot_velocities(self, dq) -> np.ndarray:
         """The velocity ``v_k = t_k . dq`` of each rotor/friction slot for joint velocities
         ``dq`` (n,) or (m, n): the motor velocities on the motor side, ``dq`` otherwise."""
-        dq = np.asarray(dq, dtype=float)
+        dq = _args.samples(dq, "dq", self.n)
         return dq if self.drive_side != "motor" else dq @ self.drive_matrix.T
 
     @property
@@ -400,13 +411,14 @@ class Robot:
         """A new robot, the same as this one but for its friction model (``kind`` coulomb,
         asymmetric, smooth or stribeck; ``velocity`` shape (n,), positive, for smooth and
         stribeck); this robot is unchanged."""
+        _args.choice(kind, "kind", FRICTION_KINDS)
         v = np.zeros(0) if velocity is None else _args.array(velocity, "velocity", (self.n,))
         return Robot(self._m.with_friction_model(kind, v))
 
     @property
     def gravity(self) -> np.ndarray:
         """Gravity in the base frame, shape (3,); default (0, 0, -9.81)."""
-        return self._m.gravity
+        return _readonly(self._m.gravity)
 
     @gravity.setter
     def gravity(self, g) -> None:
@@ -415,16 +427,16 @@ class Robot:
             "mindyn.load(..., gravity=g)"
         )
 
-    def with_gravity(self, g) -> Robot:
-        """A new robot, the same as this one but for gravity ``g`` (shape (3,), base frame,
+    def with_gravity(self, gravity) -> Robot:
+        """A new robot, the same as this one but for ``gravity`` (shape (3,), base frame,
         m/s^2), with its own model: this robot, and base parameter sets, generated code or
         solvers made from it, are unchanged."""
-        return Robot(self._m.with_gravity(_args.array(g, "gravity", (3,))))
+        return Robot(self._m.with_gravity(_args.array(gravity, "gravity", (3,))))
 
     @property
     def tool(self) -> np.ndarray:
         """4x4 transform from the last link frame to the tool frame (the identity for a tree)."""
-        return self._m.tool
+        return _readonly(self._m.tool)
 
     def _require_serial(self, what: str) -> None:
         """Raises ModelError unless the robot is a serial chain; ``what`` names the operation."""
@@ -432,7 +444,7 @@ class Robot:
             raise _core.ModelError(
                 f"{what} needs a serial chain; robot '{self.name}' is a tree ({self.n} joints, "
                 f"{self.branches} branches): load the chain to the link concerned with "
-                "mindyn.load(..., tip=link) (--tip on the command line)"
+                "mindyn.load(..., tip='<link>')"
             )
 
     def joint_transform(self, k: int, q: float) -> np.ndarray:
@@ -456,18 +468,16 @@ class Robot:
         return self._m.joint_post(k)
 
     def _check_joint(self, k: int) -> None:
-        _args.integer(k, "k")
-        if not 0 <= k < self.n:
-            raise IndexError(f"joint index {k} out of range for {self.n} joints")
+        _args.integer(k, "k", 0, maximum=self.n - 1)
 
     # -- parameters ----------------------------------------------------------------------------
     @property
     def param_names(self) -> list[str]:
-        return self._m.parameter_names(False, False)
+        return self._m.parameter_names(rotor=False, friction=False)
 
     @property
     def params(self) -> np.ndarray:
-        return self._m.inertial
+        return _readonly(self._m.inertial)
 
     @params.setter
     def params(self, value) -> None:
@@ -475,7 +485,7 @@ class Robot:
 
     @property
     def rotor_inertia(self) -> np.ndarray:
-        return self._m.rotor_inertia
+        return _readonly(self._m.rotor_inertia)
 
     @rotor_inertia.setter
     def rotor_inertia(self, v) -> None:
@@ -483,7 +493,7 @@ class Robot:
 
     @property
     def viscous(self) -> np.ndarray:
-        return self._m.viscous
+        return _readonly(self._m.viscous)
 
     @viscous.setter
     def viscous(self, v) -> None:
@@ -491,7 +501,7 @@ class Robot:
 
     @property
     def coulomb(self) -> np.ndarray:
-        return self._m.coulomb
+        return _readonly(self._m.coulomb)
 
     @coulomb.setter
     def coulomb(self, v) -> None:
@@ -501,14 +511,14 @@ class Robot:
     def third_friction(self) -> np.ndarray:
         """The third friction parameter per slot (``Fa`` of the asymmetric, ``Fs`` of the
         Stribeck friction model), shape (n,); zero unless assigned."""
-        return self._m.third_friction
+        return _readonly(self._m.third_friction)
 
     @third_friction.setter
     def third_friction(self, v) -> None:
         self._m.third_friction = _vector(v, self.n, "third_friction")
 
     def parameter_names(
-        self, rotor: bool = False, friction: bool = False, *, offset: bool = False
+        self, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ) -> list[str]:
         """Classical parameter names in the layout with optional ``Ia`` and the friction
         model's columns (``Fv, Fc``, and ``Fa`` or ``Fs``): ``Ia6`` is slot 6's, joint 6's on
@@ -518,7 +528,7 @@ class Robot:
         return self._m.parameter_names(*self._layout(rotor, friction, offset))
 
     def parameters(
-        self, rotor: bool = False, friction: bool = False, *, offset: bool = False
+        self, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ) -> np.ndarray:
         """Classical parameter values of the model in that layout. :attr:`rotor_inertia`,
         :attr:`viscous` and :attr:`coulomb` are the joints' (as descriptions give them); on the
@@ -542,7 +552,7 @@ class Robot:
         return self._m.inverse_dynamics(q, dq, ddq, self._params(params))
 
     def regressor(
-        self, q, dq, ddq, rotor: bool = False, friction: bool = False, *, offset: bool = False
+        self, q, dq, ddq, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ) -> np.ndarray:
         """Classical regressor ``W``, shape (n, P) or (m, n, P), with ``tau = W @ params``
         (an offset's column is 1 in its joint's row; multi-DOF joints: (nv, 10 n), no rotor
@@ -602,25 +612,25 @@ class Robot:
         return self._m.friction_shapes(dq)
 
     def energy_regressors(
-        self, q, dq, rotor: bool = False, friction: bool = False, *, offset: bool = False
+        self, q, dq, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ):
         """``(w_K, w_P)`` with ``K = w_K @ params`` and ``P = w_P @ params``; shape (P,) or
         (m, P) each. An offset's column of ``w_P`` is its work ``q_j`` (``Off_j q_j``, not an
         energy), so that differences over a window are the energy model's columns."""
         return self._energy_regressors(q, dq, rotor, friction, offset)
 
-    def energy_regressor(self, q, dq, rotor: bool = False, friction: bool = False) -> np.ndarray:
+    def energy_regressor(self, q, dq, *, rotor: bool = False, friction: bool = False) -> np.ndarray:
         """Total-energy regressor ``w_H = w_K + w_P`` (``H = w_H @ params``)."""
         wk, wp = self._energy_regressors(q, dq, rotor, friction)
         return wk + wp
 
-    def lagrangian_regressor(self, q, dq, rotor: bool = False, friction: bool = False):
+    def lagrangian_regressor(self, q, dq, *, rotor: bool = False, friction: bool = False):
         """Lagrangian regressor ``w_L = w_K - w_P`` (``L = w_L @ params``)."""
         wk, wp = self._energy_regressors(q, dq, rotor, friction)
         return wk - wp
 
     def momentum_regressors(
-        self, q, dq, rotor: bool = False, friction: bool = False, *, offset: bool = False
+        self, q, dq, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ):
         """``(W_p, W_l)``, shape (n, P) or (m, n, P) each, of the momentum form of the equations
         of motion ``tau = d/dt p - dL/dq + friction``: generalized momentum
@@ -651,7 +661,7 @@ class Robot:
     def layout_sizes(self) -> tuple[int, int, int, int]:
         """Parameters per joint of the four classical layouts: 10, 11 with ``Ia``, ``10 + c``
         with the ``c`` friction columns of the friction model, ``11 + c`` with all."""
-        c = len(self._m.parameter_names(False, True)) // self.n - 10
+        c = len(self._m.parameter_names(rotor=False, friction=True)) // self.n - 10
         return 10, 11, 10 + c, 11 + c
 
     def _require_single_dof(self, what: str) -> None:
@@ -669,12 +679,15 @@ class Robot:
     def link_poses(self, q) -> np.ndarray:
         """The pose of every link in the base frame at q (:attr:`nq` entries), shape (n, 4, 4);
         link k is the link joint k moves (any joint kinds)."""
-        return np.array(_core.multibody_link_poses(self._m, np.asarray(q, dtype=float)))
+        q = _args.array(q, "q", (self.nq,))
+        return np.array(_core.multibody_link_poses(self._m, q))
 
     def momentum(self, q, dq, params=None) -> np.ndarray:
         """The momentum of the whole system at (q, dq) (:attr:`nq`, :attr:`nv` entries), shape
         (6,): linear momentum, then angular momentum about the base origin, both in base axes;
         ``params`` the 10 n inertial parameters (default the model's)."""
+        q, dq = _args.array(q, "q", (self.nq,)), _args.array(dq, "dq", (self.nv,))
+        params = _args.optional(_args.array, params, "params", (10 * self.n,))
         return self._multibody(_core.multibody_momentum, q, dq, params=params)
 
     def _refuse_drive_terms(self, rotor, friction, offset=False) -> None:
@@ -703,14 +716,12 @@ class Robot:
             self._kin = _core.Kinematics(self._m)
         return self._kin
 
-    def fk(self, q, link: int = -1) -> np.ndarray:
+    def fk(self, q, *, link: int = -1) -> np.ndarray:
         """4x4 pose in the base frame of link ``link`` (0-based: the link moved by joint
         ``link``) or of the tool frame (``-1``; for a tree the last link's frame)."""
         self._require_single_dof("fk")
         q = _vector(q, self.n, "q")
-        _args.integer(link, "link")
-        if not -1 <= link < self.n:
-            raise IndexError(f"link index {link} out of range for {self.n} links")
+        _args.integer(link, "link", -1, maximum=self.n - 1)
         if not self.is_serial:
             pose = _core.link_poses(self._m, q)[link]
             return pose @ self.tool if link < 0 else pose

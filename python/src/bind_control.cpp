@@ -104,8 +104,6 @@ void bindControl(py::module_& m) {
       .def(py::init([](const PyModel& s, const py::object& params, double coulomb_smoothing) {
              ParameterLayout layout;
              const Eigen::VectorXd p = classicalParameters(s, params, layout, false);
-             if (!(coulomb_smoothing >= 0) || !std::isfinite(coulomb_smoothing))
-               throw ModelError("coulomb_smoothing must be a finite number >= 0");
              return std::make_unique<PyIntegrator>(s, p, layout, coulomb_smoothing);
            }),
            py::arg("model"), py::arg("params") = py::none(), py::arg("coulomb_smoothing") = 0.0,
@@ -115,9 +113,6 @@ void bindControl(py::module_& m) {
           "step",
           [](PyIntegrator& g, const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
              const Eigen::VectorXd& tau, double dt, int substeps) {
-            if (!(dt > 0) || !std::isfinite(dt))
-              throw ModelError("dt must be a positive number of seconds");
-            if (substeps < 1) throw ModelError("substeps must be at least 1");
             Eigen::VectorXd x = vectorArg(q, g.n, "q"), v = vectorArg(dq, g.n, "dq");
             const Eigen::VectorXd t = vectorArg(tau, g.n, "tau");
             bool ok;

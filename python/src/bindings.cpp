@@ -73,7 +73,7 @@ const BaseSet& setOf(const BaseParameters& bp, const std::string& name) {
   if (name == "lagrangian") return bp.lagrangian;
   if (name == "energy") return bp.energy;
   if (name == "eom") return bp.eom;
-  throw ModelError("set must be 'lagrangian', 'energy' or 'eom', got '" + name + "'");
+  throw ArgumentError("set must be 'lagrangian', 'energy' or 'eom', got '" + name + "'");
 }
 
 py::dict limitsDict(const JointLimits& l) {
@@ -102,6 +102,11 @@ PYBIND11_MODULE(_core, m) {
   m.attr("Error") = error;
   py::register_exception<ModelError>(m, "ModelError",
                                      py::make_tuple(error, py::handle(PyExc_ValueError)));
+  // mindyn.ArgumentError: an argument of a wrong type or value (mindyn/_args.py raises it for
+  // the public functions, the bindings' guards for direct calls).
+  py::register_exception<ArgumentError>(
+      m, "ArgumentError",
+      py::make_tuple(error, py::handle(PyExc_ValueError), py::handle(PyExc_TypeError)));
   py::register_exception<FileError>(m, "RobotFileNotFoundError",
                                     py::make_tuple(error, py::handle(PyExc_FileNotFoundError)));
   // The prefix of the torque offsets' parameter names (Off1, ...), as the layout spells it.
@@ -204,7 +209,7 @@ PYBIND11_MODULE(_core, m) {
           "with_drive_side",
           [](const PyModel& s, const std::string& side) {
             if (side != "motor" && side != "joint")
-              throw ModelError("drive side must be 'motor' or 'joint', not '" + side + "'");
+              throw ArgumentError("drive side must be 'motor' or 'joint', not '" + side + "'");
             if (side == "motor" && s.model.transmission.empty())
               throw ModelError(s.model.name +
                                " declares no transmissions: its rotor inertia and friction can "
@@ -251,7 +256,6 @@ PYBIND11_MODULE(_core, m) {
       .def(
           "with_gravity",
           [](const PyModel& s, const Eigen::Vector3d& g) {
-            if (!g.allFinite()) throw ModelError("gravity must be finite");
             Model copy = s.model;
             copy.gravity = g;
             copy.validate();  // the bound on every number holds for gravity too
@@ -265,30 +269,26 @@ PYBIND11_MODULE(_core, m) {
           "inertial", [](const PyModel& s) { return Eigen::VectorXd(s.model.inertial); },
           [](PyModel& s, const Eigen::VectorXd& v) {
             if (v.size() != s.model.inertial.size())
-              throw ModelError("inertial must have " + std::to_string(s.model.inertial.size()) +
-                               " entries");
-            if (!v.allFinite()) throw ModelError("inertial contains NaN or infinity");
+              throw ArgumentError("inertial must have " + std::to_string(s.model.inertial.size()) +
+                                  " entries");
             s.model.inertial = v;
           })
       .def_property(
           "rotor_inertia", [](const PyModel& s) { return Eigen::VectorXd(s.model.rotor_inertia); },
           [](PyModel& s, const Eigen::VectorXd& v) {
-            if (v.size() != s.model.nq() || !v.allFinite())
-              throw ModelError("rotor_inertia must be n finite values");
+            if (v.size() != s.model.nq()) throw ArgumentError("rotor_inertia must have n entries");
             s.model.rotor_inertia = v;
           })
       .def_property(
           "viscous", [](const PyModel& s) { return Eigen::VectorXd(s.model.viscous); },
           [](PyModel& s, const Eigen::VectorXd& v) {
-            if (v.size() != s.model.nq() || !v.allFinite())
-              throw ModelError("viscous must be n finite values");
+            if (v.size() != s.model.nq()) throw ArgumentError("viscous must have n entries");
             s.model.viscous = v;
           })
       .def_property(
           "coulomb", [](const PyModel& s) { return Eigen::VectorXd(s.model.coulomb); },
           [](PyModel& s, const Eigen::VectorXd& v) {
-            if (v.size() != s.model.nq() || !v.allFinite())
-              throw ModelError("coulomb must be n finite values");
+            if (v.size() != s.model.nq()) throw ArgumentError("coulomb must have n entries");
             s.model.coulomb = v;
           })
       .def_property(
@@ -299,8 +299,7 @@ PYBIND11_MODULE(_core, m) {
                        : Eigen::VectorXd(Eigen::VectorXd::Zero(s.model.nq()));
           },
           [](PyModel& s, const Eigen::VectorXd& v) {
-            if (v.size() != s.model.nq() || !v.allFinite())
-              throw ModelError("third_friction must be n finite values");
+            if (v.size() != s.model.nq()) throw ArgumentError("third_friction must have n entries");
             s.model.third_friction = v;
           })
       .def(
@@ -463,8 +462,8 @@ PYBIND11_MODULE(_core, m) {
   // class below holds chains only).
   const auto requireSize = [](const Eigen::VectorXd& q, int n, const char* name) {
     if (q.size() != n)
-      throw ModelError(std::string(name) + " has " + std::to_string(q.size()) +
-                       " entries; the model has " + std::to_string(n) + " joints");
+      throw ArgumentError(std::string(name) + " has " + std::to_string(q.size()) +
+                          " entries; the model has " + std::to_string(n) + " joints");
   };
   m.def(
       "link_poses",
@@ -596,17 +595,8 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("snapped", [](const PyBase& b) { return b.snapped; })
       .def_property_readonly("snappable", [](const PyBase& b) { return b.bp.snappable; })
       .def_property_readonly("model", [](const PyBase& b) { return b.model; })
-      .def("values",
-           [](const PyBase& b, const Eigen::VectorXd& pi) {
-             if (!pi.allFinite()) throw ModelError("params contains NaN or infinite values");
-             return b.bp.values(pi);
-           })
-      .def("embed",
-           [](const PyBase& b, const Eigen::VectorXd& pb) {
-             if (!pb.allFinite())
-               throw ModelError("base parameter vector contains NaN or infinite values");
-             return b.bp.embed(pb);
-           })
+      .def("values", [](const PyBase& b, const Eigen::VectorXd& pi) { return b.bp.values(pi); })
+      .def("embed", [](const PyBase& b, const Eigen::VectorXd& pb) { return b.bp.embed(pb); })
       .def(
           "regressor",
           [](PyBase& b, const Array& q, const Array& dq, const Array& ddq) {
@@ -681,8 +671,8 @@ PYBIND11_MODULE(_core, m) {
         else if (method == "recursive")
           o.method = BaseMethod::Recursive;
         else
-          throw ModelError("method must be 'projection', 'recursive' or 'numerical', got '" +
-                           method + "'");
+          throw ArgumentError("method must be 'projection', 'recursive' or 'numerical', got '" +
+                              method + "'");
         {
           py::gil_scoped_release release;
           out->bp = computeBaseParameters(out->model->model, o);

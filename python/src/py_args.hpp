@@ -1,6 +1,8 @@
-// Argument checks shared by the binding translation units: per-sample arrays of shape (n,) or
-// (m, n), finiteness with the position of the first bad value, classical parameter vectors and
-// 4x4 poses. Every failure is a ModelError (a ValueError in Python) naming the argument.
+// The bindings' guards: per-sample arrays of shape (n,) or (m, n), classical parameter vectors
+// and vectors of their sizes, so that no binding reads or writes out of bounds. Every failure is
+// an ArgumentError naming the argument. The checks that make an input usable (finite values,
+// ranges, choices) and the user's messages are the Python layer's (mindyn/_args.py), which the
+// public functions call first.
 #pragma once
 
 #include <pybind11/numpy.h>
@@ -10,6 +12,7 @@
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,6 +24,13 @@
 namespace mindyn::pyargs {
 
 namespace py = pybind11;
+
+/// A binding's argument that is not what it must be: mindyn.ArgumentError in Python (a
+/// mindyn.Error, ValueError and TypeError).
+class ArgumentError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 using Array = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -38,39 +48,22 @@ inline long samples(const Array& a, long n, const char* name) {
   const std::string want = std::to_string(n);
   if (a.ndim() == 1) {
     if (a.shape(0) != n)
-      throw ModelError(std::string(name) + " has shape " + shapeOf(a) + "; expected (" + want +
-                       ",) or (m, " + want + ")");
+      throw ArgumentError(std::string(name) + " has shape " + shapeOf(a) + "; expected (" + want +
+                          ",) or (m, " + want + ")");
     return -1;
   }
   if (a.ndim() == 2) {
     if (a.shape(1) != n)
-      throw ModelError(std::string(name) + " has shape " + shapeOf(a) + "; expected (m, " + want +
-                       ")");
+      throw ArgumentError(std::string(name) + " has shape " + shapeOf(a) + "; expected (m, " +
+                          want + ")");
     return a.shape(0);
   }
-  throw ModelError(std::string(name) + " must be 1-D (n,) or 2-D (m, n), got " +
-                   std::to_string(a.ndim()) + "-D");
-}
-
-/// Rejects NaN and infinite entries; the message gives the sample and the joint (or `entry`).
-inline void requireFinite(const Array& a, const char* name, const char* entry = "joint") {
-  const double* p = a.data();
-  const long size = static_cast<long>(a.size());
-  for (long i = 0; i < size; ++i) {
-    if (std::isfinite(p[i])) continue;
-    std::string s =
-        std::string(name) + " contains " + (std::isnan(p[i]) ? "NaN" : "an infinite value");
-    if (a.ndim() == 2)
-      s += " at sample " + std::to_string(i / a.shape(1)) + ", " + entry + " " +
-           std::to_string(i % a.shape(1) + 1);
-    else
-      s += std::string(" at ") + entry + " " + std::to_string(i + 1);
-    throw ModelError(s);
-  }
+  throw ArgumentError(std::string(name) + " must be 1-D (n,) or 2-D (m, n), got " +
+                      std::to_string(a.ndim()) + "-D");
 }
 
 /// A group of per-sample arguments of width n, checked together: all single samples of shape
-/// (n,) or all batches of one length m >= 0, shape (m, n), every entry finite. Outputs get a
+/// (n,) or all batches of one length m >= 0, shape (m, n). Outputs get a
 /// leading axis of length m for a batch (none for a single sample), and forEach visits the m
 /// samples (none for an empty batch); perSample below is the loop the bindings use.
 class SampleBatch {
@@ -79,12 +72,11 @@ class SampleBatch {
     long m = -2;
     for (const auto& [a, name] : args) {
       const long s = samples(*a, n, name);
-      requireFinite(*a, name);
       if (m == -2)
         m = s;
       else if (s != m)
-        throw ModelError(std::string(name) +
-                         ": all inputs must be single samples or batches of equal length");
+        throw ArgumentError(std::string(name) +
+                            ": all inputs must be single samples or batches of equal length");
       args_.push_back(a);
     }
     m_ = m;
@@ -154,25 +146,19 @@ inline Eigen::Map<Eigen::VectorXd> vectorAt(double* p, long n) {
   return Eigen::Map<Eigen::VectorXd>(p, n);
 }
 
-/// A vector argument of exactly n finite entries.
+/// A vector argument of exactly n entries.
 inline Eigen::VectorXd vectorArg(const Eigen::VectorXd& v, long n, const char* name) {
   if (v.size() != n)
-    throw ModelError(std::string(name) + " has " + std::to_string(v.size()) +
-                     " entries; expected " + std::to_string(n));
-  for (long i = 0; i < n; ++i)
-    if (!std::isfinite(v[i]))
-      throw ModelError(std::string(name) + " contains " +
-                       (std::isnan(v[i]) ? "NaN" : "an infinite value") + " at joint " +
-                       std::to_string(i + 1));
+    throw ArgumentError(std::string(name) + " has " + std::to_string(v.size()) +
+                        " entries; expected " + std::to_string(n));
   return v;
 }
 
-/// A 1-D parameter vector of exactly `size` finite entries (p of a base set, for instance).
+/// A 1-D parameter vector of exactly `size` entries (p of a base set, for instance).
 inline Eigen::Map<const Eigen::VectorXd> parameterArg(const Array& a, long size, const char* name) {
   if (a.ndim() != 1 || a.shape(0) != size)
-    throw ModelError(std::string(name) + " has shape " + shapeOf(a) + "; expected (" +
-                     std::to_string(size) + ",)");
-  requireFinite(a, name, "entry");
+    throw ArgumentError(std::string(name) + " has shape " + shapeOf(a) + "; expected (" +
+                        std::to_string(size) + ",)");
   return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
 }
 
@@ -188,16 +174,15 @@ inline Eigen::VectorXd classicalParameters(const PyModel& self, const py::object
     return self.model.parameters(layout);
   }
   Array a = params.cast<Array>();
-  if (a.ndim() != 1) throw ModelError("params must be 1-D");
+  if (a.ndim() != 1) throw ArgumentError("params must be 1-D");
   const long size = a.shape(0);
   if (layout_given) {
     if (size != layout.size(n))
-      throw ModelError("params has " + std::to_string(size) + " entries; this layout expects " +
-                       std::to_string(layout.size(n)));
+      throw ArgumentError("params has " + std::to_string(size) + " entries; this layout expects " +
+                          std::to_string(layout.size(n)));
   } else {
     layout = self.model.layoutOfSize(size);
   }
-  requireFinite(a, "params", "entry");
   checkDriveSide(self.model, layout);
   return Eigen::Map<const Eigen::VectorXd>(a.data(), size);
 }

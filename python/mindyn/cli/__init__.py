@@ -14,6 +14,7 @@ from .args import (
     COMMANDS,
     Parser,
     UsageError,
+    library_options_as_flags,
     prepare_outputs,
     print_deprecation_notes,
 )
@@ -67,7 +68,7 @@ def _one_line(text: object) -> str:
 
 
 def _error(text: object) -> None:
-    print(f"mindyn: error: {_one_line(text)}", file=sys.stderr)
+    print(f"mindyn: error: {_one_line(library_options_as_flags(str(text)))}", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:

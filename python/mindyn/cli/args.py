@@ -659,3 +659,43 @@ def joint_terms(args, robot=None) -> list[str]:
         k = 1 + max(i for i, w in enumerate(words) if w in ("rotor inertia", "friction"))
         words[k - 1] += " " + side
     return words
+
+
+#: Library keywords that library messages name (``friction=True``, ``tip='link'``,
+#: ``prior_weight=``) whose command-line flag is the keyword with dashes (``--prior-weight``).
+LIBRARY_OPTIONS = (
+    "consistent",
+    "drive_gain",
+    "filter",
+    "friction",
+    "friction_model",
+    "friction_width",
+    "method",
+    "offset",
+    "period",
+    "periods",
+    "position_noise",
+    "prior_weight",
+    "quantization",
+    "rotor",
+    "snap",
+    "tip",
+    "topic",
+    "torque_noise",
+    "velocity_noise",
+)
+_LIBRARY_OPTION = re.compile(
+    r"\b(" + "|".join(LIBRARY_OPTIONS) + r")=(?:True\b|'([^']*)'|(?![\w'\"]))"
+)
+
+
+def library_options_as_flags(text: str) -> str:
+    """A library message as the command line says it: the keywords of :data:`LIBRARY_OPTIONS`
+    as their flags (``offset=True`` -> ``--offset``, ``method='recursive'`` ->
+    ``--method recursive``, ``prior_weight=`` -> ``--prior-weight``)."""
+
+    def flag(m: re.Match) -> str:
+        name = "--" + m.group(1).replace("_", "-")
+        return name if m.group(2) is None else f"{name} {m.group(2)}"
+
+    return _LIBRARY_OPTION.sub(flag, text)

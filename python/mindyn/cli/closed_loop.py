@@ -40,7 +40,9 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     from ..control.simulation import check_steps
 
     try:  # before any set-up work
-        check_steps(duration, 1.0 / period, args.substeps if args.integrator == "rk4" else 1)
+        check_steps(
+            duration, 1.0 / period, substeps=args.substeps if args.integrator == "rk4" else 1
+        )
     except ValueError as e:
         raise ValueError(
             f"--duration {duration:g} with --controller-period {period:g}: {e}"
@@ -63,10 +65,12 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         from ..control.controllers import base_values, plant_parameters
 
         base = base_parameters(robot, rotor=True, friction=True)
-        p_true = base_values(base, plant_parameters(robot, rotor, friction))
+        p_true = base_values(base, plant_parameters(robot, rotor, friction=friction))
         error = 0.3 if args.param_error is None else args.param_error
-        p_hat = control.perturbed_parameters(p_true, error, args.seed)
-    controller = control.make_controller(args.controller, robot, gains, p_hat, base, period)
+        p_hat = control.perturbed_parameters(p_true, error, seed=args.seed)
+    controller = control.make_controller(
+        args.controller, robot, gains, p_hat, base=base, period=period
+    )
     controller.gains = gains
     return reference, ref_text, duration, cycle, controller, base
 

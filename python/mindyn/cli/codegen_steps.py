@@ -129,7 +129,11 @@ def _warn_unstable(robot, gains, kind: str, period: float) -> None:
     from .. import control
 
     check = control.check_gains(
-        robot, gains, "pd" if kind == "gravity-compensation" else kind, period=period, rotor=True
+        robot,
+        gains,
+        kind="pd" if kind == "gravity-compensation" else kind,
+        period=period,
+        rotor=True,
     )
     if not check.stable:
         print(

@@ -66,7 +66,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         seed=args.seed,
         endpoint=False,
     )
-    s = summary(result, cycle)
+    s = summary(result, cycle=cycle)
     lines = [
         f"{robot.name}: {args.controller}, period {args.period * 1e3:g} ms, {duration:g} s, "
         f"{ref_text}"
@@ -113,7 +113,7 @@ def cmd_track(args: argparse.Namespace) -> int:
     if args.output:
         from ..identification.data import truth_path
 
-        path = result.save(args.output, robot.name)
+        path = result.save(args.output, robot_name=robot.name)
         lines.append(
             f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"
         )
@@ -132,7 +132,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         }
         if robot.name == "zcr07s" and args.controller == "adaptive-pd":
             header["zcr07s_max_error_deg"] = ZCR07S_STUDY_MAX_ERROR_DEG
-        write_tracking_report(result, args.report, cycle, header)
+        write_tracking_report(result, args.report, cycle=cycle, header=header)
         lines.append(f"report: {args.report}/ (summary.json, log.csv, plots)")
     print("\n".join(lines))
     return 0

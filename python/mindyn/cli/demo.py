@@ -93,14 +93,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     print(
         f"    validation trajectory: random Fourier series within the limits (condition number "
-        f"{criterion_value(base, *val_traj.evaluate(t[::10]), 'cond'):.4g})"
+        f"{criterion_value(base, *val_traj.evaluate(t[::10]), criterion='cond'):.4g})"
     )
     _done(t0)
 
     # 3. simulated measurement -------------------------------------------------------------------
     t0 = _step(3, "simulated measurement (true parameters, computed-torque tracking at 250 Hz)")
     ref_tau = robot.inverse_dynamics(*exc.trajectory.evaluate(t[::5]))
-    sd = noise_from_spec(f"{args.noise:g}%", robot, "torque", ref_tau)
+    sd = noise_from_spec(f"{args.noise:g}%", robot, "torque", reference_torque=ref_tau)
     noise = SensorNoise(torque=sd, quantization=2 * np.pi / 2**20)
     kw = dict(rotor=True, friction=True, noise=noise, rate=250.0)
     log_e = simulate(robot, exc.trajectory, seed=args.seed + 1, **kw)
@@ -110,7 +110,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     )
     files = {}
     for name, log in (("measurement", log_e), ("validation", log_v)):
-        p = log.save(out / f"{name}.csv", robot.name)
+        p = log.save(out / f"{name}.csv", robot_name=robot.name)
         if permille:  # torques as the ZCR07S study's controller logs them: per mille of rated
             scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
             write_csv(p, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
@@ -172,7 +172,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
             "      largest base parameters, estimate / true: "
             + ", ".join(f"{base.names[b]} {res.full[b]:.4g} / {truth[b]:.4g}" for b in big)
         )
-        (out / f"identification_{model}.txt").write_text(format_table(res, truth) + "\n")
+        (out / f"identification_{model}.txt").write_text(format_table(res, truth=truth) + "\n")
         doc = res.to_dict()
         doc["fit"] = {"overall_relative": fit["overall_relative"], "rms": fit["rms"].tolist()}
         doc["validation"] = {
@@ -188,14 +188,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
             data.t,
             data.tau,
             fit["tau_hat"][0],
-            f"{robot.name}, {model} model: excitation trajectory",
+            title=f"{robot.name}, {model} model: excitation trajectory",
         )
         plot_torques(
             out / f"torque_validation_{model}.png",
             vdata.t,
             vdata.tau,
             val["tau_hat"][0],
-            f"{robot.name}, {model} model: validation trajectory",
+            title=f"{robot.name}, {model} model: validation trajectory",
         )
     print(f"    noise sd (reference) [N m]:               {_joints(sd)}")
     if robot.name == "zcr07s":

@@ -51,8 +51,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise ModelError(
             f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"
         )
-    robot = robot_on_drive_side(robot, doc, str(args.params))
-    robot = with_identified_friction(robot, doc, str(args.params))
+    robot = robot_on_drive_side(robot, doc, where=str(args.params))
+    robot = with_identified_friction(robot, doc, where=str(args.params))
     write_description(
         robot,
         classical,
@@ -119,7 +119,7 @@ def write_description(
             f"{what}: identified with the {kind} friction model; a robot description holds "
             "viscous and Coulomb friction only (identify with --friction-model coulomb)"
         )
-    terms = classical_terms(robot, classical, what)
+    terms = classical_terms(robot, classical, what=what)
     if mjcf is not None:
         if sidecar is not None:
             raise ModelError("--sidecar goes with --urdf or --yaml, not --mjcf")

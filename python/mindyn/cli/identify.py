@@ -97,11 +97,15 @@ def _write_report(folder: str, report, doc: dict, text: str) -> None:
     lim, _ = excitation_limits(report.robot, margin=0.0)
     logs, vlogs = report.logs.fit.logs, report.logs.validation.logs
     if report.consistent is None:
-        paths = write_report(folder, report.result, logs, vlogs, report.validation, report.fit, lim)
+        paths = write_report(
+            folder, report.result, logs, validation_data=vlogs, validation=report.validation,
+            fit=report.fit, trajectory_limits=lim,
+        )  # fmt: skip
     else:  # the headline estimate, named in each plot's title
         paths = write_report(
-            folder, report.consistent, logs, vlogs, report.consistent_validation,
-            report.consistent_fit, lim, estimate="consistent",
+            folder, report.consistent, logs, validation_data=vlogs,
+            validation=report.consistent_validation, fit=report.consistent_fit,
+            trajectory_limits=lim, estimate="consistent",
         )  # fmt: skip
     (Path(folder) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
     (Path(folder) / "table.txt").write_text(text + "\n")

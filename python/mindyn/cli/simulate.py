@@ -42,7 +42,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         t = np.linspace(0, ref.duration, 200)
         ref_tau = robot.inverse_dynamics(*ref.evaluate(t))
     noise = SensorNoise(
-        torque=noise_from_spec(args.torque_noise, robot, "torque", ref_tau),
+        torque=noise_from_spec(args.torque_noise, robot, "torque", reference_torque=ref_tau),
         position=noise_from_spec(args.position_noise, robot, "position"),
         velocity=noise_from_spec(args.velocity_noise, robot, "velocity"),
         quantization=noise_from_spec(args.quantization, robot, "quantization"),
@@ -68,7 +68,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         )
     else:
         log = simulate_inverse(robot, ref, **kwargs)
-    path = log.save(args.output, robot.name, robot.joint_names)
+    path = log.save(args.output, robot_name=robot.name, joint_names=robot.joint_names)
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
         write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
@@ -102,7 +102,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     print(f"  wrote {path}{unit} and {path.with_name(path.stem + '.truth.json')}")
     if args.report:
         header = {"robot": robot.name, "reference": ref_text, "seed": args.seed}
-        write_tracking_report(log, args.report, cycle, header)
+        write_tracking_report(log, args.report, cycle=cycle, header=header)
         print(f"  report: {args.report}/ (summary.json, log.csv, plots)")
     return 0
 

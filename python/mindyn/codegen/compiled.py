@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _core
+from .._args import ArgumentError
 from ..base import BaseParameters
 from .controllers import GeneratedController, GeneratedObserver
 from .generation import GeneratedCode
@@ -62,7 +63,7 @@ class CompiledController:
         import ctypes
 
         if not isinstance(code, GeneratedController) or code.lang != "c":
-            raise ValueError("CompiledController needs the C code of generate_controller")
+            raise ArgumentError("CompiledController needs the C code of generate_controller")
         self.code = code
         self.base = base
         self.name = code.kind
@@ -113,7 +114,9 @@ class CompiledController:
         args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, q_d, dq_d, ddq_d)]
         for a in args:
             if a.shape != (self._n,):
-                raise ValueError(f"controller inputs must have shape ({self._n},), got {a.shape}")
+                raise ArgumentError(
+                    f"controller inputs must have shape ({self._n},), got {a.shape}"
+                )
         tau = np.zeros(self._n)
         ptrs = [a.ctypes.data_as(self._ptr) for a in args + [tau]]
         self._step(ctypes.byref(self._state), *ptrs)
@@ -129,7 +132,7 @@ class CompiledObserver:
         import ctypes
 
         if not isinstance(code, GeneratedObserver) or code.lang != "c":
-            raise ValueError("CompiledObserver needs the C code of generate_observer")
+            raise ArgumentError("CompiledObserver needs the C code of generate_observer")
         self.code = code
         self._dir, self._lib = _compile_shared(code, "observer")
         n, np_ = len(code.gains), len(code.names)
@@ -158,7 +161,7 @@ class CompiledObserver:
         args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, tau)]
         for a in args:
             if a.shape != (self._n,):
-                raise ValueError(f"observer inputs must have shape ({self._n},), got {a.shape}")
+                raise ArgumentError(f"observer inputs must have shape ({self._n},), got {a.shape}")
         r = np.zeros(self._n)
         self._step(ctypes.byref(self._state), *[a.ctypes.data_as(self._ptr) for a in args + [r]])
         return r

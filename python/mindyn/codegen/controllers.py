@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _args, _core
+from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .generation import GeneratedCode, _check_lang, identifier
@@ -60,7 +61,9 @@ def _setting(value, size: int, name: str, default: float) -> np.ndarray:
     if a.ndim == 0:
         a = np.full(size, float(a))
     if a.shape != (size,):
-        raise ValueError(f"setting '{name}' must be a scalar or {size} values, got shape {a.shape}")
+        raise ArgumentError(
+            f"setting '{name}' must be a scalar or {size} values, got shape {a.shape}"
+        )
     return a
 
 
@@ -120,7 +123,7 @@ def generate_controller(
 
     robot = load(robot) if not isinstance(robot, Robot) else robot
     if kind not in CONTROLLERS:
-        raise ValueError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
+        raise ArgumentError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
     _check_lang(lang, trig)
     classical = base is False
     if base is None:
@@ -152,7 +155,7 @@ def generate_controller(
     if params is None and classical:
         s["p0"] = None  # the robot's classical values, as the generator reads them
     elif params is None:
-        s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
+        s["p0"] = base.values(robot.parameters(rotor=base.rotor, friction=base.friction))
         if base.offset:
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
     elif isinstance(params, (str, Path)):
@@ -163,10 +166,10 @@ def generate_controller(
     s["p_max"] = _setting(p_max, len(names), "p_max", math.inf)
     if isinstance(tau_max, str):
         if tau_max != "effort":
-            raise ValueError(f"tau_max must be None, 'effort' or {n} values, got '{tau_max}'")
+            raise ArgumentError(f"tau_max must be None, 'effort' or {n} values, got '{tau_max}'")
         tau_max = robot.limits["effort"]
         if not np.all(np.isfinite(tau_max)):
-            raise ValueError(f"robot '{robot.name}' does not give effort limits for all joints")
+            raise ArgumentError(f"robot '{robot.name}' does not give effort limits for all joints")
     s["tau_max"] = _setting(tau_max, n, "tau_max", math.inf)
     name = name if name is not None else identifier(robot.name)
     fn = f"{name}_{kind.replace('-', '_')}"
@@ -259,7 +262,7 @@ def generate_observer(
     k = control.default_observer_gain(period) if gains is None else gains
     k = _setting(k, n, "gains", 0.0)
     if params is None:
-        p = base.values(robot.parameters(base.rotor, base.friction))
+        p = base.values(robot.parameters(rotor=base.rotor, friction=base.friction))
         if base.offset:
             p = np.concatenate([p, np.zeros(n)])[: len(names)]
     elif isinstance(params, (str, Path)):

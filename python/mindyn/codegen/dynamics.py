@@ -58,7 +58,9 @@ class BaseDynamics:
     def _values(self, p):
         if p is None:
             rob = self.base.robot
-            return self.base.values(rob.parameters(self.base.rotor, self.base.friction))
+            return self.base.values(
+                rob.parameters(rotor=self.base.rotor, friction=self.base.friction)
+            )
         return _args.array(p, "p", (self.np,))
 
     def __repr__(self) -> str:

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _args, _core
+from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .parameters import read_parameter_file
@@ -90,21 +91,21 @@ def _functions(what) -> list[str]:
     for w in what:
         w = _ALIASES.get(w, w)
         if w not in FUNCTIONS:
-            raise ValueError(f"unknown function '{w}' (choose from id, gravity, regressor)")
+            raise ArgumentError(f"unknown function '{w}' (choose from id, gravity, regressor)")
         if w not in out:
             out.append(w)
     if not out:
-        raise ValueError("no function to generate")
+        raise ArgumentError("no function to generate")
     return out
 
 
 def _check_lang(lang: str, trig: str | None) -> None:
     if lang not in ("c", "st"):
-        raise ValueError(f"lang must be 'c' or 'st', got '{lang}'")
+        raise ArgumentError(f"lang must be 'c' or 'st', got '{lang}'")
     if trig is not None and lang != "c":
-        raise ValueError("trig applies to C only; Structured Text uses SIN and COS")
+        raise ArgumentError("trig applies to C only; Structured Text uses SIN and COS")
     if trig not in (None, "inline", "libm"):
-        raise ValueError(f"trig must be 'inline' or 'libm', got '{trig}'")
+        raise ArgumentError(f"trig must be 'inline' or 'libm', got '{trig}'")
 
 
 def identifier(name: str) -> str:

@@ -22,6 +22,8 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
     or a plain list in order; or text with one ``NAME value`` (or ``NAME = value``) per line,
     ``#`` comments allowed. Every name must be given exactly once; unknown names are an error.
     """
+    from ..identification.data import DataError
+
     path = Path(path)
     if not path.is_file():
         raise _core.RobotFileNotFoundError(f"parameter file '{path}' does not exist")
@@ -32,19 +34,19 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
         try:
             data = json.loads(text)
         except json.JSONDecodeError as e:
-            raise ValueError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+            raise DataError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
         if isinstance(data, list):
             if len(data) != len(names):
-                raise ValueError(f"{path}: {len(data)} values; expected {len(names)}")
+                raise DataError(f"{path}: {len(data)} values; expected {len(names)}")
             mapping = dict(zip(names, data))
         elif isinstance(data, dict) and "names" in data and "values" in data:
             if len(data["names"]) != len(data["values"]):
-                raise ValueError(f"{path}: 'names' and 'values' differ in length")
+                raise DataError(f"{path}: 'names' and 'values' differ in length")
             mapping = dict(zip(data["names"], data["values"]))
         elif isinstance(data, dict):
             mapping = data
         else:
-            raise ValueError(f"{path}: expected a JSON mapping or list")
+            raise DataError(f"{path}: expected a JSON mapping or list")
     else:
         for lineno, line in enumerate(text.splitlines(), 1):
             line = line.split("#", 1)[0].strip()
@@ -52,24 +54,24 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
                 continue
             m = re.fullmatch(r"([A-Za-z_][A-Za-z0-9_]*)\s*(?:=|:|\s)\s*(" + _NUMBER + r")", line)
             if not m:
-                raise ValueError(f"{path}:{lineno}: expected 'NAME value', got '{line}'")
+                raise DataError(f"{path}:{lineno}: expected 'NAME value', got '{line}'")
             if m.group(1) in mapping:
-                raise ValueError(f"{path}:{lineno}: '{m.group(1)}' given twice")
+                raise DataError(f"{path}:{lineno}: '{m.group(1)}' given twice")
             mapping[m.group(1)] = float(m.group(2))
     unknown = [k for k in mapping if k not in names]
     if unknown:
-        raise ValueError(
+        raise DataError(
             f"{path}: unknown parameter(s) {', '.join(unknown[:5])}; expected {', '.join(names)}"
         )
     missing = [k for k in names if k not in mapping]
     if missing:
-        raise ValueError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
+        raise DataError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
     values = np.empty(len(names))
     for i, k in enumerate(names):
         try:
             values[i] = float(mapping[k])
         except (TypeError, ValueError):
-            raise ValueError(f"{path}: value of '{k}' is not a number") from None
+            raise DataError(f"{path}: value of '{k}' is not a number") from None
         if not math.isfinite(values[i]):
-            raise ValueError(f"{path}: value of '{k}' is not finite")
+            raise DataError(f"{path}: value of '{k}' is not finite")
     return values

@@ -84,21 +84,25 @@ def slotine_li_regressor(base: BaseParameters, q, dq, dqr, ddqr) -> np.ndarray:
     -------
     ndarray, shape (n, base.n) or (m, n, base.n)
     """
+    _args.instance(base, "base", BaseParameters)
     q, dq, dqr, ddqr = _args.batch(base.robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
     return _core.slotine_li_regressor(base._b, q, dq, dqr, ddqr)
 
 
 def slotine_li_regressor_classical(
-    robot: Robot, q, dq, dqr, ddqr, rotor: bool = False, friction: bool = False
+    robot: Robot, q, dq, dqr, ddqr, *, rotor: bool = False, friction: bool = False
 ) -> np.ndarray:
     """Slotine-Li regressor in the classical layout, shape (n, P) or (m, n, P) (multi-DOF
     joints: (nv, 10 n), q of nq entries, the others of nv, no rotor inertia or friction)."""
+    _args.instance(robot, "robot", Robot)
     if not robot.single_dof:
         robot._refuse_drive_terms(rotor, friction)
         return robot._multibody(_core.multibody_slotine_li_regressor, q, dq, dqr, ddqr)
     q, dq, dqr, ddqr = _args.batch(robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
-    return _core.slotine_li_regressor_classical(robot._m, q, dq, dqr, ddqr, rotor, friction)
+    return _core.slotine_li_regressor_classical(
+        robot._m, q, dq, dqr, ddqr, rotor=rotor, friction=friction
+    )
 
 
 def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
@@ -106,6 +110,7 @@ def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
     ``C dq`` is the velocity-product torque and ``dA/dt - 2 C`` is skew-symmetric. ``params``: any
     classical layout (default the model's inertial parameters; multi-DOF joints: (nv, nv), the
     inertial parameters only)."""
+    _args.instance(robot, "robot", Robot)
     if not robot.single_dof:
         return robot._multibody(_core.multibody_coriolis_matrix, q, dq, params=params)
     q, dq = _args.batch(robot.n, q=q, dq=dq)
@@ -115,7 +120,7 @@ def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 # Controllers
 # ---------------------------------------------------------------------------------------------
-class ControllerSettingError(_core.Error, ValueError):
+class ControllerSettingError(_args.ArgumentError):
     """A gain, period or other controller setting that cannot be used: not a finite number of
     the right shape, or outside what a sampled loop at the period can take."""
 
@@ -149,9 +154,10 @@ def _diag(x, n: int, name: str) -> np.ndarray:
 MIN_PERIOD, MAX_PERIOD = 1e-6, 1e3
 
 
-def check_period(period, what: str = "period") -> float:
-    """``period`` as a float; raises ValueError unless it is a number of seconds in
-    [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
+def check_period(period, *, what: str = "period") -> float:
+    """``period`` as a float; raises ControllerSettingError (an ArgumentError) unless it is a
+    number of seconds in [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
+    _args.text(what, "what")
     if isinstance(period, (bool, np.bool_)):
         raise ControllerSettingError(f"{what} must be a number of seconds, got {period!r}")
     try:
@@ -173,8 +179,12 @@ def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
     whatever the robot (one joint of any inertia ``m``: ``K_P T < 2 K_D`` for PD; with an exact
     model ``K_D T < 2`` and ``K_P T < 2 K_D`` for computed torque; ``Lambda T < 2`` for adaptive
     PD, :func:`check_lambda`). The robot's part, ``T M^-1 K_D,eff < 2``, is :func:`check_gains`."""
+    _args.choice(kind, "kind", CONTROLLERS)
     T = check_period(period)
-    kp, kd, lam = (np.asarray(x, dtype=float) for x in (kp, kd, lam))
+    kp, kd, lam = (  # the values are checked below, with the gains' own messages
+        _args.array(x, name, (None,) * min(np.ndim(x), 1), finite=False)
+        for x, name in ((kp, "kp"), (kd, "kd"), (lam, "lam"))
+    )
     for name, x in (("lambda", lam), ("kd", kd), ("kp", kp)):
         if not np.all(np.isfinite(x)) or np.any(x < 0) or np.any(x > MAX_GAIN):
             raise ControllerSettingError(
@@ -197,7 +207,7 @@ def check_sampled_gains(kind: str, kp, kd, lam, period: float) -> None:
             )
 
 
-def check_lambda(lam, period: float, what: str = "lambda") -> None:
+def check_lambda(lam, period: float, *, what: str = "lambda") -> None:
     """Raises ValueError unless ``Lambda T < 2`` on every joint: the adaptive PD's feedforward
     ``M ddq_r`` with ``ddq_r = ddq_d - Lambda de`` is a velocity feedback of gain ``M Lambda``,
     and a sampled loop needs ``T M^-1 K_D,eff`` below 2 (one joint: ``(K_D / m + Lambda) T < 2``),
@@ -243,6 +253,7 @@ class ComputedTorque:
         p_hat,
         kp,
         kd,
+        *,
         coulomb: str = "measured",
         coulomb_smoothing: float = 0.0,
     ):
@@ -276,7 +287,9 @@ class ComputedTorque:
 
     def use_parameters(self, p_hat) -> None:
         """Takes ``p_hat`` (base parameters) as the fixed model."""
-        self.__init__(self.base, p_hat, self.kp, self.kd, self._coulomb, self.eps)
+        self.__init__(
+            self.base, p_hat, self.kp, self.kd, coulomb=self._coulomb, coulomb_smoothing=self.eps
+        )
 
     def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
         v = ddq_d - self.kd * (dq - dq_d) - self.kp * (q - q_d)
@@ -323,6 +336,7 @@ class AdaptivePD:
         lam,
         gamma,
         p0,
+        *,
         adapt: bool = True,
         nu: float = 0.0,
         period: float = 0.004,
@@ -389,11 +403,11 @@ class Gains(dict):
     note: str = ""
 
 
-def plant_parameters(robot: Robot, rotor: bool, friction: bool = True) -> np.ndarray:
+def plant_parameters(robot: Robot, rotor: bool, *, friction: bool = True) -> np.ndarray:
     """The description's parameters in the full layout (rotor inertia and the friction model's
     columns, ``robot.layout_sizes[3]`` per joint), rotor inertia and friction zero unless asked
     for (the simulated robot of :func:`mindyn.control.simulate`)."""
-    p = robot.parameters(True, True).reshape(robot.n, -1).copy()
+    p = robot.parameters(rotor=True, friction=True).reshape(robot.n, -1).copy()
     if not rotor:
         p[:, 10] = 0.0
     if not friction:
@@ -435,8 +449,8 @@ def _gain_arrays(kind: str, gains: dict, n: int):
 def check_gains(
     robot: Robot,
     gains: dict,
-    kind: str = "adaptive-pd",
     *,
+    kind: str = "adaptive-pd",
     period: float = 0.004,
     rotor: bool | None = None,
     qs=None,
@@ -450,6 +464,10 @@ def check_gains(
     the controller's model is the simulated robot's own (the true parameters, the default of
     :func:`make_controller` in :func:`~mindyn.control.simulate`). Returns a
     :class:`~mindyn.control.stability.LoopCheck`."""
+    _args.instance(robot, "robot", Robot)
+    _args.mapping(gains, "gains")
+    _args.choice(kind, "kind", CONTROLLERS)
+    _args.optional(_args.flag, rotor, "rotor")
     from .stability import check_loop, workspace_samples
 
     if kind not in CONTROLLERS:
@@ -473,6 +491,10 @@ def controller_check(robot: Robot, controller, params, period: float):
     controllers) against the simulated robot of classical parameters ``params`` (13 per joint)
     at ``period`` [s]: the controller's own model (``base`` and ``p0`` / ``p_hat``) at the
     sampled configurations."""
+    _args.instance(robot, "robot", Robot)
+    _args.function(controller, "controller")
+    params = _args.array(params, "params", (None,))
+    period = _args.number(period, "period", positive=True)
     from .stability import check_loop, workspace_samples
 
     n = robot.n
@@ -530,13 +552,15 @@ def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = N
     of). ``kp`` for PD is
     ``Lambda K_D``; computed torque uses ``K_P = Lambda^2``, ``K_D = 2 Lambda``. The result's
     ``note`` states the choice and the margin."""
+    _args.instance(robot, "robot", Robot)
+    _args.optional(_args.flag, rotor, "rotor")
     from .stability import GAIN_MARGIN, workspace_samples
 
     T = check_period(period)
     qs = workspace_samples(robot)
 
     def checks(g):
-        return [check_gains(robot, g, k, period=T, rotor=rotor, qs=qs) for k in CONTROLLERS]
+        return [check_gains(robot, g, kind=k, period=T, rotor=rotor, qs=qs) for k in CONTROLLERS]
 
     def margin_text(cs):
         return ", ".join(f"{c.kind} {c.gain_margin:.3g}" for c in cs)
@@ -636,6 +660,9 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
     normalisation, a scalar), ``kp`` (numbers or lists of numbers; a key given twice, a boolean
     or a string is refused; missing keys take :func:`default_gains` at ``period`` for
     ``rotor``)."""
+    _args.path(path, "path")
+    _args.instance(robot, "robot", Robot)
+    _args.optional(_args.flag, rotor, "rotor")
     import yaml
 
     path = Path(path)
@@ -687,8 +714,11 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
     return gains
 
 
-def perturbed_parameters(p, fraction: float, seed: int = 0) -> np.ndarray:
+def perturbed_parameters(p, fraction: float, *, seed: int = 0) -> np.ndarray:
     """``p * (1 + fraction * u)``, ``u`` uniform in [-1, 1] per entry (seeded)."""
+    p = _args.array(p, "p", (None,))
+    fraction = _args.number(fraction, "fraction", minimum=0.0)
+    seed = _args.integer(seed, "seed", 0)
     p = np.asarray(p, dtype=float)
     u = np.random.default_rng(seed).uniform(-1.0, 1.0, p.shape)
     return p * (1.0 + fraction * u)
@@ -703,9 +733,9 @@ def make_controller(
     robot: Robot,
     gains: dict,
     p_hat=None,
+    *,
     base: BaseParameters | None = None,
     period: float = 0.004,
-    *,
     rotor: bool = True,
     friction: bool = True,
 ):
@@ -715,6 +745,11 @@ def make_controller(
     those of the description (its rotor inertia and friction unless ``rotor`` / ``friction`` is
     False), and in :func:`mindyn.control.simulate` those of the simulated robot (its ``rotor``,
     ``friction`` and ``params``: the controller's ``true_model`` is then True)."""
+    _args.choice(kind, "kind", CONTROLLERS)
+    _args.instance(robot, "robot", Robot)
+    _args.mapping(gains, "gains")
+    _args.optional(_args.instance, base, "base", BaseParameters)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     if kind not in CONTROLLERS:
         raise ControllerSettingError(f"unknown controller '{kind}'; use {', '.join(CONTROLLERS)}")
     n = robot.n
@@ -726,7 +761,7 @@ def make_controller(
     base = base if base is not None else base_parameters(robot, rotor=True, friction=True)
     true = p_hat is None
     if true:
-        p_hat = base_values(base, plant_parameters(robot, rotor, friction))
+        p_hat = base_values(base, plant_parameters(robot, rotor, friction=friction))
     if kind == "computed-torque":
         ctl = ComputedTorque(base, p_hat, kp, kd)
     else:
@@ -737,10 +772,16 @@ def make_controller(
     return ctl
 
 
-def default_controller(robot: Robot, params, omega: float = 20.0, coulomb_smoothing: float = 0.0):
+def default_controller(
+    robot: Robot, params, *, omega: float = 20.0, coulomb_smoothing: float = 0.0
+):
     """The controller of the simulated logs: computed torque with the true parameters ``params``
     (classical, 13 per joint), Coulomb friction as a feedforward on the reference velocity, and
     ``K_P = omega^2``, ``K_D = 2 omega`` (critical damping at ``omega`` rad/s)."""
+    _args.instance(robot, "robot", Robot)
+    params = _args.array(params, "params", (robot.layout_sizes[3] * robot.n,))
+    omega = _args.number(omega, "omega", positive=True)
+    coulomb_smoothing = _args.number(coulomb_smoothing, "coulomb_smoothing", minimum=0.0)
     base = base_parameters(robot, rotor=True, friction=True)
     return ComputedTorque(
         base,

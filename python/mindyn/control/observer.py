@@ -33,8 +33,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _core
+from .. import _args, _core
 from ..base import BaseParameters
+from ..robot import Robot
 from .controllers import ControllerSettingError, check_period
 
 __all__ = [
@@ -83,16 +84,22 @@ class MomentumObserver:
                 "the momentum observer has no Dahl friction state: give it a base set of a "
                 "static friction model"
             )
+        _args.instance(base, "base", BaseParameters)
         n = base.robot.n
         self.base = base
         self.period = check_period(period)
-        values = np.asarray(values, dtype=float).reshape(-1)
+        values = _args.array(values, "values", (None,))
         if values.shape != (base.n,):
             raise ControllerSettingError(
                 f"values has {values.size} entries; the base parameters have {base.n}"
             )
-        k = default_observer_gain(self.period) if gains is None else gains
-        k = np.broadcast_to(np.asarray(k, dtype=float), (n,)).copy()
+        if gains is None:
+            k = np.full(n, default_observer_gain(self.period))
+        elif np.ndim(gains) == 0:
+            k = np.full(n, _args.number(gains, "gains"))
+        else:
+            k = _args.array(gains, "gains", (n,))
+        held_torque = _args.flag(held_torque, "held_torque")
         bad = np.flatnonzero(~((k > 0) & (k * self.period < 2)))
         if bad.size:
             j = int(bad[0])
@@ -110,31 +117,52 @@ class MomentumObserver:
 
     def reset(self, q, dq, tau) -> None:
         """Sample 0: ``p(0)`` from ``(q, dq)``, the integral and ``r`` zero."""
-        self._o.reset(np.asarray(q, float), np.asarray(dq, float), np.asarray(tau, float))
+        n = self.base.robot.n
+        q, dq, tau = (_args.array(x, k, (n,)) for x, k in ((q, "q"), (dq, "dq"), (tau, "tau")))
+        self._o.reset(q, dq, tau)
 
     def step(self, q, dq, tau) -> np.ndarray:
         """The residual ``r_k`` (n,) of the next sample."""
-        return self._o.step(np.asarray(q, float), np.asarray(dq, float), np.asarray(tau, float))
+        n = self.base.robot.n
+        q, dq, tau = (_args.array(x, k, (n,)) for x, k in ((q, "q"), (dq, "dq"), (tau, "tau")))
+        return self._o.step(q, dq, tau)
 
     def run(self, q, dq, tau, t=None) -> np.ndarray:
         """The residual (m, n) of a log: 0 at sample 0. Sampled at the period, or at the time
         stamps ``t`` (m,) when given (uneven steps; each must keep ``K_O dt < 2``)."""
-        return self._o.run(
-            np.ascontiguousarray(q, dtype=float),
-            np.ascontiguousarray(dq, dtype=float),
-            np.ascontiguousarray(tau, dtype=float),
-            None if t is None else np.ascontiguousarray(t, dtype=float),
-        )
+        n = self.base.robot.n
+        q = _args.array(q, "q", (None, n), unit="joint")
+        if q.shape[0] < 1:
+            raise _args.fail("q", f"has shape {q.shape}; expected a log of shape (m, {n}), m >= 1")
+        m = q.shape[0]
+        dq = _args.array(dq, "dq", (m, n), unit="joint")
+        tau = _args.array(tau, "tau", (m, n), unit="joint")
+        if t is not None:
+            t = _args.array(t, "t", (m,))
+            dt = np.diff(t)
+            bad = np.flatnonzero(~(dt > 0))
+            if bad.size:
+                raise _args.fail("t", f"is not strictly increasing at sample {int(bad[0]) + 2}")
+            kmax = float(self.gains.max())
+            bad = np.flatnonzero(~(kmax * dt < 2.0))
+            if bad.size:
+                i = int(bad[0])
+                raise _args.fail(
+                    "t",
+                    f"has a time step of {dt[i]:g} s at sample {i + 2}, which makes K_O dt >= 2 "
+                    f"(largest K_O {kmax:g} 1/s); lower the gains below 2 / dt",
+                )
+        return self._o.run(q, dq, tau, t)
 
     @property
     def momentum(self) -> np.ndarray:
         """``p = W_p,b p_b`` of the last sample."""
-        return self._o.momentum
+        return _args.readonly(self._o.momentum)
 
     @property
     def beta(self) -> np.ndarray:
         """``beta = W_l,b p_b + friction + offset`` of the last sample."""
-        return self._o.beta
+        return _args.readonly(self._o.beta)
 
     def filter_coefficients(self) -> tuple[np.ndarray, np.ndarray]:
         """``(a, c)`` per joint: ``r_k = a r_{k-1} + c D_k``."""
@@ -190,13 +218,11 @@ def calibrate_thresholds(
     """Per-joint thresholds ``margin * quantile(|r_j|)`` from the residual (m, n) of a
     collision-free log (``quantile`` 1: the largest). A joint whose residual is zero throughout
     gets ``1e-9`` times the largest threshold (or 1e-12), never zero."""
-    r = np.asarray(residual, dtype=float)
-    if r.ndim != 2 or r.shape[0] < 2 or not np.all(np.isfinite(r)):
-        raise ValueError("the residual must be a finite (m, n) array of at least 2 samples")
-    if not (0 < quantile <= 1):
-        raise ValueError(f"quantile must be in (0, 1], got {quantile:g}")
-    if not (math.isfinite(margin) and margin >= 1):
-        raise ValueError(f"margin must be a number >= 1, got {margin:g}")
+    r = _args.array(residual, "residual", (None, None))
+    if r.shape[0] < 2:
+        raise _args.fail("residual", f"has {r.shape[0]} samples; expected at least 2")
+    quantile = _args.number(quantile, "quantile", positive=True, maximum=1.0)
+    margin = _args.number(margin, "margin", minimum=1.0)
     thr = margin * np.quantile(np.abs(r), quantile, axis=0)
     floor = max(1e-9 * float(thr.max()), 1e-12)
     return np.maximum(thr, floor)
@@ -209,11 +235,14 @@ def residual_uncertainty(observer: MomentumObserver, std, q, dq, t=None) -> np.n
     deviations ``std`` (base.n,) that is ``sqrt(sum_i std_i^2 r_i(t)^2)``, ``r_i`` the residual
     of the unit value of parameter i. (The identification's correlations are not taken: an
     estimate, not a bound.) Same period, gains and torque mode as ``observer``."""
-    std = np.asarray(std, dtype=float).reshape(-1)
+    _args.instance(observer, "observer", MomentumObserver)
     base = observer.base
-    if std.shape != (base.n,) or not np.all(np.isfinite(std) & (std >= 0)):
-        raise ValueError(f"std must be {base.n} finite values >= 0")
-    q = np.ascontiguousarray(q, dtype=float)
+    std = _args.array(std, "std", (base.n,))
+    if np.any(std < 0):
+        raise _args.fail("std", "has a negative entry; expected standard deviations >= 0")
+    q, dq = _args.batch(base.robot.n, q=q, dq=dq)
+    if t is not None:
+        t = _args.array(t, "t", (q.shape[0] if q.ndim == 2 else 1,))
     var = np.zeros(q.shape)
     zero = np.zeros(q.shape)
     for i in np.flatnonzero(std):
@@ -233,6 +262,8 @@ def residual_uncertainty(observer: MomentumObserver, std, q, dq, t=None) -> np.n
 def load_thresholds(path, robot) -> ObserverThresholds:
     """The thresholds file of ``mindyn detect`` for ``robot``; :class:`ThresholdsError` when it
     is not JSON, lacks a field, holds a non-number or was made for another robot."""
+    _args.path(path, "path")
+    _args.instance(robot, "robot", Robot)
     where = str(path)
     try:
         doc = json.loads(Path(path).read_text())
@@ -279,9 +310,9 @@ def alarm_intervals(t, residual, thresholds) -> list[dict]:
     """The intervals where ``|r_j| > threshold_j``: one dict per interval and joint, in time
     order, with ``joint`` (1-based), ``start``, ``end`` (time of its last sample above) and
     ``peak`` (the largest |r_j| in it, signed)."""
-    t = np.asarray(t, dtype=float)
-    r = np.asarray(residual, dtype=float)
-    thr = np.asarray(thresholds, dtype=float)
+    t = _args.array(t, "t", (None,))
+    r = _args.array(residual, "residual", (t.shape[0], None))
+    thr = _args.array(thresholds, "thresholds", (r.shape[1],))
     over = np.abs(r) > thr
     out = []
     for j in range(r.shape[1]):

@@ -34,8 +34,10 @@ from typing import Protocol
 
 import numpy as np
 
-from .. import _core
-from ..robot import Robot, load
+from .. import _args, _core
+from .._args import ArgumentError
+from ..base import BaseParameters
+from ..robot import Robot, as_robot, load
 
 __all__ = [
     "Controller",
@@ -98,11 +100,15 @@ class SumOfSines:
     ``fraction`` of the velocity limit (joints without limits: half range pi/2, 1 rad/s).
     ``duration`` is one period."""
 
-    def __init__(self, robot: Robot, period: float = 10.0, fraction: float = 0.5, seed: int = 0):
+    def __init__(self, robot: Robot, *, period: float = 10.0, fraction: float = 0.5, seed: int = 0):
+        _args.instance(robot, "robot", Robot)
+        period = _args.number(period, "period", positive=True)
+        fraction = _args.number(fraction, "fraction", positive=True, maximum=1.0)
+        seed = _args.integer(seed, "seed", 0)
         if not period > 0:
-            raise ValueError(f"period must be positive, got {period}")
+            raise ArgumentError(f"period must be positive, got {period}")
         if not 0 < fraction <= 1:
-            raise ValueError(f"fraction must be in (0, 1], got {fraction}")
+            raise ArgumentError(f"fraction must be in (0, 1], got {fraction}")
         lim = robot.limits
         lo = np.where(np.isfinite(lim["lower"]), lim["lower"], -np.pi / 2)
         hi = np.where(np.isfinite(lim["upper"]), lim["upper"], np.pi / 2)
@@ -136,6 +142,8 @@ class CsvTrajectory:
     def __init__(self, path: str | Path, n: int):
         from scipy.interpolate import CubicSpline
 
+        from ..identification.data import DataError
+
         path = Path(path)
         if not path.is_file():
             from .._core import RobotFileNotFoundError
@@ -150,26 +158,26 @@ class CsvTrajectory:
                     rows.append([float(c) for c in row])
                 except ValueError:
                     if rows or lineno > 1:
-                        raise ValueError(
+                        raise DataError(
                             f"{path}:{lineno}: non-numeric value in a data line"
                         ) from None
                     continue  # header
         if len({len(r) for r in rows}) > 1:
-            raise ValueError(f"{path}: rows have different numbers of columns")
+            raise DataError(f"{path}: rows have different numbers of columns")
         if len(rows) < 4:
-            raise ValueError(f"{path}: need at least 4 samples, found {len(rows)}")
+            raise DataError(f"{path}: need at least 4 samples, found {len(rows)}")
         data = np.array(rows, dtype=float)
         cols = data.shape[1]
         if cols not in (1 + n, 1 + 2 * n, 1 + 3 * n):
-            raise ValueError(
+            raise DataError(
                 f"{path}: {cols} columns; expected t and q1..q{n} ({1 + n}), plus dq "
                 f"({1 + 2 * n}) and ddq ({1 + 3 * n})"
             )
         if not np.all(np.isfinite(data)):
-            raise ValueError(f"{path}: contains NaN or infinite values")
+            raise DataError(f"{path}: contains NaN or infinite values")
         t = data[:, 0]
         if np.any(np.diff(t) <= 0):
-            raise ValueError(f"{path}: time column must be strictly increasing")
+            raise DataError(f"{path}: time column must be strictly increasing")
         self.n = n
         self.t0, self.t1 = float(t[0]), float(t[-1])
         self.duration = self.t1 - self.t0
@@ -193,13 +201,15 @@ def load_reference(path, n: int):
     """A reference from the JSON of ``mindyn excite`` (its exact Fourier series) or from a CSV
     (:class:`CsvTrajectory`, e.g. the CSV ``mindyn excite`` writes) for a robot of ``n`` joints;
     raises ValueError when the file gives another number of joints."""
+    _args.path(path, "path")
+    n = _args.integer(n, "n", 1)
     from ..identification.excitation import FourierTrajectory
 
     p = Path(path)
     if p.suffix.lower() == ".json":
         ref = FourierTrajectory.load(p)
         if ref.n != n:
-            raise ValueError(f"{path} has {ref.n} joints; the robot has {n}")
+            raise ArgumentError(f"{path} has {ref.n} joints; the robot has {n}")
         return ref
     return CsvTrajectory(p, n)
 
@@ -224,11 +234,11 @@ class SensorNoise:
             try:
                 v = np.broadcast_to(v, (n,)).copy()
             except ValueError:
-                raise ValueError(
+                raise ArgumentError(
                     f"{k} noise has shape {v.shape}; expected a scalar or ({n},)"
                 ) from None
             if (v < 0).any() or not np.isfinite(v).all():
-                raise ValueError(f"{k} noise must be finite and non-negative, got {v.tolist()}")
+                raise ArgumentError(f"{k} noise must be finite and non-negative, got {v.tolist()}")
             out[k] = v
         return out
 
@@ -239,31 +249,31 @@ class SensorNoise:
 
 
 def _true_params(robot: Robot, rotor: bool, friction: bool, params=None):
-    names = robot.parameter_names(True, True)
+    names = robot.parameter_names(rotor=True, friction=True)
     if params is None:
-        p = robot.parameters(True, True).reshape(robot.n, -1).copy()
+        p = robot.parameters(rotor=True, friction=True).reshape(robot.n, -1).copy()
         if not rotor:
             p[:, 10] = 0.0
         if not friction:
             p[:, 11:] = 0.0
         params = p.reshape(-1)
-    return names, expand_params(robot.n, params, robot.layout_sizes)
+    return names, expand_params(robot.n, params, sizes=robot.layout_sizes)
 
 
-def expand_params(n: int, params, sizes=(10, 11, 12, 13)) -> np.ndarray:
+def expand_params(n: int, params, *, sizes=(10, 11, 12, 13)) -> np.ndarray:
     """A classical vector of any layout (``sizes`` per joint: 10, 11 with Ia, 10 + c with the c
     friction columns, 11 + c with all; ``Robot.layout_sizes``) in the full layout (the last),
     absent entries zero."""
     p = np.asarray(params, dtype=float).reshape(-1)
     per = p.shape[0] // n if n else 0
     if per * n != p.shape[0] or per not in sizes:
-        raise ValueError(
+        raise ArgumentError(
             f"params has {p.shape[0]} entries; expected "
             + ", ".join(str(k * n) for k in sizes[:-1])
             + f" or {sizes[-1] * n}"
         )
     if not np.isfinite(p).all():
-        raise ValueError("params contains NaN or infinite values")
+        raise ArgumentError("params contains NaN or infinite values")
     c = sizes[2] - 10
     blocks = p.reshape(n, per)
     out = np.zeros((n, sizes[3]))
@@ -283,20 +293,20 @@ MAX_SAMPLES = 1_000_000
 MAX_STEPS = 4_000_000
 
 
-def check_steps(duration: float, rate: float, substeps: int = 1) -> int:
+def check_steps(duration: float, rate: float, *, substeps: int = 1) -> int:
     """Number of samples of a simulation of ``duration`` s at ``rate`` Hz with ``substeps``
     integration steps each; raises ValueError unless all are finite and positive and within
     :data:`MAX_SAMPLES` and :data:`MAX_STEPS` (the message gives the counts and the limits)."""
     duration, rate = float(duration), float(rate)
     if not (math.isfinite(duration) and duration > 0):
-        raise ValueError(f"duration must be a positive number of seconds, got {duration:g}")
+        raise ArgumentError(f"duration must be a positive number of seconds, got {duration:g}")
     if not (math.isfinite(rate) and rate > 0):
-        raise ValueError(f"rate must be a positive number of Hz, got {rate:g}")
+        raise ArgumentError(f"rate must be a positive number of Hz, got {rate:g}")
     if not substeps >= 1:
-        raise ValueError(f"substeps must be at least 1, got {substeps}")
+        raise ArgumentError(f"substeps must be at least 1, got {substeps}")
     samples = duration * rate
     if samples > MAX_SAMPLES or samples * substeps > MAX_STEPS:
-        raise ValueError(
+        raise ArgumentError(
             f"{duration:g} s at {rate:g} Hz are {samples:.4g} samples"
             + (f" x {substeps} substeps = {samples * substeps:.4g} steps" if substeps > 1 else "")
             + f"; at most {MAX_SAMPLES:,} samples and {MAX_STEPS:,} integration steps are "
@@ -309,7 +319,7 @@ def _span(reference, duration):
     if duration is not None:
         return float(duration)
     if getattr(reference, "duration", None) is None:
-        raise ValueError("duration is needed for a reference without a duration")
+        raise ArgumentError("duration is needed for a reference without a duration")
     return float(reference.duration)
 
 
@@ -367,9 +377,9 @@ class SimulationResult:
     @property
     def error(self) -> np.ndarray:
         """True position error ``q_true - q_d``, shape (m, n), rad."""
-        return self.q_true - self.qd
+        return _args.readonly(self.q_true - self.qd)
 
-    def max_error_deg(self, t_from: float = 0.0) -> np.ndarray:
+    def max_error_deg(self, *, t_from: float = 0.0) -> np.ndarray:
         """Largest ``|q - q_d|`` per joint in degrees, from ``t_from`` on."""
         sel = self.t >= t_from
         return np.degrees(np.abs(self.error[sel]).max(axis=0))
@@ -378,14 +388,14 @@ class SimulationResult:
         """RMS position error per joint in degrees over ``t0 <= t < t1``."""
         sel = (self.t >= t0) & (self.t < t1)
         if not np.any(sel):
-            raise ValueError(f"no samples in [{t0}, {t1})")
+            raise ArgumentError(f"no samples in [{t0}, {t1})")
         return np.degrees(np.sqrt(np.mean(self.error[sel] ** 2, axis=0)))
 
     def final_error_deg(self) -> np.ndarray:
         """``q - q_d`` at the last sample, degrees."""
         return np.degrees(self.error[-1])
 
-    def save(self, path, robot_name: str = "", joint_names=None) -> Path:
+    def save(self, path, *, robot_name: str = "", joint_names=None) -> Path:
         """Writes ``t, q, dq, tau`` (the logged values, torques in N m) to ``path`` as
         ``mindyn identify`` reads it and the true parameters and settings to the sidecar
         ``<stem>.truth.json``, with the robot's name and ``joint_names`` (when given), by which
@@ -414,16 +424,16 @@ def _torque_limit(robot: Robot, torque_limit):
     n = robot.n
     if isinstance(torque_limit, str):
         if torque_limit != "effort":
-            raise ValueError(f"torque_limit must be None, 'effort' or {n} values")
+            raise ArgumentError(f"torque_limit must be None, 'effort' or {n} values")
         limit = np.asarray(robot.limits["effort"], dtype=float)
         if not np.all(np.isfinite(limit)):
-            raise ValueError(f"robot '{robot.name}' does not give effort limits for all joints")
+            raise ArgumentError(f"robot '{robot.name}' does not give effort limits for all joints")
         return limit
-    limit = np.asarray(torque_limit, dtype=float)
-    if limit.ndim == 0:
-        limit = np.full(n, float(limit))
-    if limit.shape != (n,) or not np.all(np.isfinite(limit)) or np.any(limit < 0):
-        raise ValueError(f"torque_limit must be None, 'effort' or {n} finite values >= 0")
+    if np.ndim(torque_limit) == 0:
+        return np.full(n, _args.number(torque_limit, "torque_limit", minimum=0.0))
+    limit = _args.array(torque_limit, "torque_limit", (n,))
+    if np.any(limit < 0):
+        raise _args.fail("torque_limit", f"must be None, 'effort' or {n} finite values >= 0")
     return limit
 
 
@@ -526,38 +536,56 @@ def simulate(
     SimulationTimeoutError
         When the run exceeds ``max_seconds``.
     """
+    robot = as_robot(robot)
+    _args.protocol(reference, "reference", "evaluate", "a Reference (an object with evaluate(t))")
+    _args.optional(_args.function, controller, "controller")
+    rate = _args.number(rate, "rate", positive=True)
+    duration = _args.optional(_args.number, duration, "duration", positive=True)
+    substeps = _args.integer(substeps, "substeps", 1)
+    _args.choice(integrator, "integrator", ("rk4", "scipy"))
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    params = _args.optional(_args.array, params, "params", (None,))
+    _args.optional(_args.instance, noise, "noise", SensorNoise)
+    seed = _args.integer(seed, "seed", 0)
+    coulomb_smoothing = _args.number(coulomb_smoothing, "coulomb_smoothing", minimum=0.0)
+    endpoint = _args.flag(endpoint, "endpoint")
+    _args.optional(_args.instance, base, "base", BaseParameters)
+    max_seconds = _args.optional(_args.number, max_seconds, "max_seconds", positive=True)
+    _args.optional(_args.function, external, "external")
     from .controllers import default_controller
 
     robot = load(robot)
     n = robot.n
     if integrator not in ("rk4", "scipy"):
-        raise ValueError(f"integrator must be 'rk4' or 'scipy', got '{integrator}'")
+        raise ArgumentError(f"integrator must be 'rk4' or 'scipy', got '{integrator}'")
     if not (isinstance(substeps, (int, np.integer)) and substeps >= 1):
-        raise ValueError(f"substeps must be an integer >= 1, got {substeps}")
+        raise ArgumentError(f"substeps must be an integer >= 1, got {substeps}")
     names, p_true = _true_params(robot, rotor, friction, params)
     eps = float(coulomb_smoothing)
     dahl, p_plant = _dahl_plant(robot, friction, p_true, dahl_sigma)
     if dahl is not None and integrator != "rk4":
-        raise ValueError("dahl_sigma: the rk4 integrator only (the state integrates with it)")
+        raise _args.ArgumentError(
+            "dahl_sigma: the rk4 integrator only (the state integrates with it)"
+        )
     plant = _core.Integrator(robot._m, p_plant, eps)
     if controller is None:
         controller = default_controller(robot, p_true, coulomb_smoothing=eps)
     T = _span(reference, duration)
-    m = check_steps(T, rate, substeps if integrator == "rk4" else 1)
+    m = check_steps(T, rate, substeps=substeps if integrator == "rk4" else 1)
     period = 1.0 / rate
     if not endpoint:
         m -= 1
     if m < 1:
-        raise ValueError(f"duration {T:g} s is shorter than one period {period:g} s")
+        raise ArgumentError(f"duration {T:g} s is shorter than one period {period:g} s")
     own = getattr(controller, "period", None)
     if own is not None and not math.isclose(own, period, rel_tol=1e-9):
-        raise ValueError(
+        raise ArgumentError(
             f"the controller was made for a period of {own:g} s; the simulation runs at "
             f"{period:g} s"
         )
     cycle = getattr(reference, "period", None)
     if isinstance(cycle, (int, float)) and not period * MIN_SAMPLES_PER_CYCLE <= cycle:
-        raise ValueError(
+        raise ArgumentError(
             f"the controller period {period:g} s is not far below the reference's period "
             f"{cycle:g} s: at least {MIN_SAMPLES_PER_CYCLE} periods per cycle are needed"
         )
@@ -569,7 +597,7 @@ def simulate(
         controller.use_parameters(base_values(controller.base, p_true))
     check = controller_check(robot, controller, p_true, period)
     if check is not None and not check.stable and limit is None:
-        raise check.error("the controller")  # (a torque limit bounds an unstable linear loop)
+        raise check.error(what="the controller")  # (a torque limit bounds an unstable linear loop)
     budget = _Budget(max_seconds)
     noise = noise or SensorNoise()
     arr = noise.arrays(n)
@@ -577,7 +605,7 @@ def simulate(
     t = np.arange(m) * period
     qd, dqd, ddqd = (np.asarray(x, dtype=float) for x in reference.evaluate(t))
     if qd.shape != (m, n) or dqd.shape != (m, n) or ddqd.shape != (m, n):
-        raise ValueError(f"the reference gives shape {qd.shape}; expected ({m}, {n}) joints")
+        raise ArgumentError(f"the reference gives shape {qd.shape}; expected ({m}, {n}) joints")
     bound = _divergence_bound(robot, qd)
     base = base if base is not None else getattr(controller, "base", None)
     pb_true = None
@@ -603,7 +631,7 @@ def simulate(
             dqm = dq + arr["velocity"] * rng.standard_normal(n)
             tau = np.asarray(controller(t[i], qm, dqm, qd[i], dqd[i], ddqd[i]), dtype=float)
             if tau.shape != (n,):
-                raise ValueError(
+                raise ArgumentError(
                     f"the controller returned shape {tau.shape} at t = {t[i]:g} s; expected "
                     f"{n} torques"
                 )
@@ -713,7 +741,7 @@ def _external_torque(external, t: float, q, dq) -> np.ndarray:
     n = q.shape[0]
     value = np.asarray(external(t, q.copy(), dq.copy()), dtype=float)
     if value.shape != (n,) or not np.all(np.isfinite(value)):
-        raise ValueError(
+        raise ArgumentError(
             f"the external torque at t = {t:g} s has shape {value.shape} or is not finite; "
             f"expected {n} finite torques"
         )
@@ -733,11 +761,11 @@ class TorqueProfile:
     def __post_init__(self):
         self.torque = np.asarray(self.torque, dtype=float)
         if self.torque.ndim != 1 or not np.all(np.isfinite(self.torque)):
-            raise ValueError("torque must be a vector of finite joint torques")
+            raise ArgumentError("torque must be a vector of finite joint torques")
         if not math.isfinite(self.start) or (
             self.stop is not None and not (math.isfinite(self.stop) and self.stop > self.start)
         ):
-            raise ValueError(f"the interval [{self.start}, {self.stop}] is not a finite span")
+            raise ArgumentError(f"the interval [{self.start}, {self.stop}] is not a finite span")
 
     def active(self, t: float) -> bool:
         return t >= self.start and (self.stop is None or t < self.stop)
@@ -758,9 +786,9 @@ class ContactWrench(TorqueProfile):
     def __post_init__(self):
         super().__post_init__()
         if self.torque.shape != (6,):
-            raise ValueError(f"a wrench has 6 entries (force, moment), got {self.torque.shape}")
+            raise ArgumentError(f"a wrench has 6 entries (force, moment), got {self.torque.shape}")
         if not isinstance(self.robot, Robot):
-            raise ValueError("ContactWrench needs the robot (robot=...)")
+            raise ArgumentError("ContactWrench needs the robot (robot=...)")
 
     def __call__(self, t: float, q=None, dq=None) -> np.ndarray:
         n = self.robot.n
@@ -791,7 +819,7 @@ class _Budget:
     def __init__(self, max_seconds):
         limit = MAX_SECONDS if max_seconds is None else float(max_seconds)
         if not (math.isfinite(limit) and limit > 0):
-            raise ValueError(f"max_seconds must be a positive number, got {max_seconds}")
+            raise ArgumentError(f"max_seconds must be a positive number, got {max_seconds}")
         self.limit = limit
         self.deadline = time.perf_counter() + limit
         self.t = 0.0  # simulated time of the period being integrated
@@ -816,15 +844,18 @@ def _dahl_plant(robot: Robot, friction: bool, p_true, dahl_sigma):
         return None, p_true
     n = robot.n
     if not friction:
-        raise ValueError("dahl_sigma: expected friction=True (the plant's Coulomb friction)")
+        raise _args.ArgumentError(
+            "dahl_sigma: expected friction=True (the plant's Coulomb friction)"
+        )
     if robot.friction_model["kind"] != "coulomb" or robot.drive_side == "motor":
-        raise ValueError(
+        raise _args.ArgumentError(
             "dahl_sigma: the Dahl state replaces Coulomb friction on the joints; this robot has "
             f"the {robot.friction_model['kind']} friction model on its {robot.drive_side}s"
         )
-    sigma = np.array(np.broadcast_to(np.asarray(dahl_sigma, dtype=float), (n,)))
-    if not np.all(np.isfinite(sigma) & (sigma > 0)):
-        raise ValueError("dahl_sigma: expected positive finite values, one per joint")
+    sigma = _args.array(dahl_sigma, "dahl_sigma", (None,) * np.ndim(dahl_sigma))
+    sigma = np.array(np.broadcast_to(sigma, (n,))) if sigma.size in (1, n) else sigma
+    if sigma.shape != (n,) or not np.all(sigma > 0):
+        raise _args.ArgumentError("dahl_sigma: expected positive finite values, one per joint")
     p = np.array(p_true, dtype=float).reshape(n, -1)
     fc = p[:, 12].copy()  # per joint: 10 inertial, Ia, Fv, Fc
     p[:, 12] = 0.0
@@ -848,7 +879,9 @@ def _advance_dahl(plant, q, dq, z, tau, period, substeps, sigma, fc):
         k4 = f(tuple(a + h * b for a, b in zip(x, k3)))
         x = tuple(a + h / 6 * (b + 2 * c + 2 * d + e) for a, b, c, d, e in zip(x, k1, k2, k3, k4))
     if not all(np.all(np.isfinite(a)) for a in x):
-        raise ValueError("the integration diverged (non-finite state)")
+        from .stability import UnstableLoopError
+
+        raise UnstableLoopError("the integration diverged (non-finite state)")
     return x
 
 
@@ -858,6 +891,8 @@ def _advance(plant, q, dq, tau, period, substeps, integrator, budget=None):
     if integrator == "rk4":
         return plant.step(q, dq, tau, period, substeps)
     from scipy.integrate import solve_ivp
+
+    from .stability import UnstableLoopError
 
     n = q.shape[0]
     calls = [0]
@@ -875,16 +910,16 @@ def _advance(plant, q, dq, tau, period, substeps, integrator, budget=None):
             f, (0.0, period), np.concatenate([q, dq]), rtol=1e-8, atol=1e-10, t_eval=[period]
         )
     except _TooManySteps:
-        raise ValueError(
+        raise UnstableLoopError(
             f"scipy RK45 needed more than {SCIPY_MAX_EVALUATIONS:,} evaluations within one "
             f"controller period of {period:g} s at t = {budget.t if budget else 0:.4f} s: the "
             "motion is stiff or the closed loop unstable (the rk4 integrator takes fixed steps)"
         ) from None
     if not sol.success:
-        raise ValueError(f"the integrator failed: {sol.message}")
+        raise UnstableLoopError(f"the integrator failed: {sol.message}")
     x = sol.y[:, -1]
     if not np.all(np.isfinite(x)):
-        raise ValueError("the integration diverged (non-finite state)")
+        raise UnstableLoopError("the integration diverged (non-finite state)")
     return x[:n], x[n:]
 
 
@@ -916,6 +951,7 @@ def _diverged(what: str, check):
 def simulate_inverse(
     robot: Robot | str,
     reference,
+    *,
     rate: float = 250.0,
     duration: float | None = None,
     rotor: bool = False,
@@ -930,6 +966,14 @@ def simulate_inverse(
     Dahl state follows the reference's positions sample by sample
     (:func:`~mindyn.identification.friction.dahl_state`, exact for a path straight between
     samples)."""
+    robot = as_robot(robot)
+    _args.protocol(reference, "reference", "evaluate", "a Reference (an object with evaluate(t))")
+    rate = _args.number(rate, "rate", positive=True)
+    duration = _args.optional(_args.number, duration, "duration", positive=True)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    params = _args.optional(_args.array, params, "params", (None,))
+    _args.optional(_args.instance, noise, "noise", SensorNoise)
+    seed = _args.integer(seed, "seed", 0)
     robot = load(robot)
     n = robot.n
     names, p_true = _true_params(robot, rotor, friction, params)
@@ -977,52 +1021,56 @@ def simulate_inverse(
 NOISE_LIMITS = {"torque": 1e6, "position": 1.0, "velocity": 100.0, "quantization": 1.0}
 
 
-def noise_from_spec(spec: str | None, robot: Robot, what: str, reference_torque=None) -> np.ndarray:
+def noise_from_spec(
+    spec: str | None, robot: Robot, what: str, *, reference_torque=None
+) -> np.ndarray:
     """Parses a noise level: ``"0.5"`` (all joints), ``"0.5,0.5,0.2"`` (per joint) or ``"1%"``
     (torque only: percent of each joint's effort limit, or of the peak reference torque where
     the description gives no effort limit). Values must be finite, non-negative and at most
     :data:`NOISE_LIMITS` (percentages at most 100)."""
     n = robot.n
-    opt = "--quantization" if what == "quantization" else f"--{what}-noise"
+    opt = "quantization=" if what == "quantization" else f"{what}_noise="
     if spec is None or spec == "":
         return np.zeros(n)
     s = spec.strip()
     if s.endswith("%"):
         if what != "torque":
-            raise ValueError(f"{opt}: a percentage applies to torque noise only")
+            raise ArgumentError(f"{opt}: a percentage applies to torque noise only")
         try:
             pct = float(s[:-1])
         except ValueError:
             pct = math.nan
         if not (math.isfinite(pct) and 0 <= pct <= 100):
-            raise ValueError(f"{opt}: expected a percentage in [0, 100], got '{spec}'")
+            raise ArgumentError(f"{opt}: expected a percentage in [0, 100], got '{spec}'")
         eff = np.array(robot.limits["effort"], dtype=float)
         if reference_torque is not None:
             peak = np.abs(np.asarray(reference_torque)).max(0)
             eff = np.where(np.isfinite(eff) & (eff > 0), eff, peak)
         if not np.isfinite(eff).all():
-            raise ValueError("torque noise in %: the robot has no effort limits")
+            raise ArgumentError("torque noise in %: the robot has no effort limits")
         return pct / 100.0 * eff
     try:
         vals = [float(v) for v in s.split(",")]
     except ValueError:
-        raise ValueError(f"{opt}: '{spec}' is not a number or list of numbers") from None
+        raise ArgumentError(f"{opt}: '{spec}' is not a number or list of numbers") from None
     if len(vals) == 1:
         vals = vals * n
     if len(vals) != n:
-        raise ValueError(f"{opt}: {len(vals)} values for {n} joints")
+        raise ArgumentError(f"{opt}: {len(vals)} values for {n} joints")
     top = NOISE_LIMITS[what]
     if any(not (math.isfinite(v) and 0 <= v <= top) for v in vals):
-        raise ValueError(f"{opt}: expected finite values in [0, {top:g}], got '{spec}'")
+        raise ArgumentError(f"{opt}: expected finite values in [0, {top:g}], got '{spec}'")
     return np.array(vals)
 
 
 # ---------------------------------------------------------------------------------------------
 # Report
 # ---------------------------------------------------------------------------------------------
-def summary(result: SimulationResult, cycle: float | None = None) -> dict:
+def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
     """Figures of a run: max / final / RMS-per-cycle position errors (deg), and for adaptive runs
     the torque prediction error ``Y (p_hat - p)`` and the parameter error per cycle."""
+    _args.instance(result, "result", SimulationResult)
+    cycle = _args.optional(_args.number, cycle, "cycle", positive=True)
     T = result.t[-1] + result.period
     cycle = cycle if cycle else T
     edges = np.arange(0.0, T + 1e-9, cycle)
@@ -1065,12 +1113,17 @@ def summary(result: SimulationResult, cycle: float | None = None) -> dict:
 def write_tracking_report(
     result: SimulationResult,
     folder: str | Path,
+    *,
     cycle: float | None = None,
     header: dict | None = None,
 ) -> dict:
     """Writes ``summary.json``, ``log.csv`` and plots (``tracking_error.png``, ``torque.png``,
     and for adaptive runs ``parameters.png``, ``torque_prediction.png``) into ``folder``.
     Returns the summary."""
+    _args.instance(result, "result", SimulationResult)
+    _args.path(folder, "folder")
+    cycle = _args.optional(_args.number, cycle, "cycle", positive=True)
+    _args.optional(_args.mapping, header, "header")
     import matplotlib
 
     matplotlib.use("Agg")
@@ -1079,7 +1132,7 @@ def write_tracking_report(
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     s = dict(header or {})
-    s.update(summary(result, cycle))
+    s.update(summary(result, cycle=cycle))
     (folder / "summary.json").write_text(json.dumps(s, indent=2) + "\n")
 
     n = result.q.shape[1]

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import _args
 from .._core import Error
 from ..robot import Robot
 
@@ -62,6 +63,10 @@ def loop_matrix(kp, kd, minv, period: float) -> np.ndarray:
     """``Phi`` of one period of ``M dde = u``, ``u = -kp e - kd de`` held (module docstring);
     ``kp``, ``kd``: (n, n) or (n,) (diagonal) effective gains, ``minv``: ``M^-1`` (n, n); or
     stacks of them, (k, n, n), giving (k, 2n, 2n)."""
+    kp = _args.array(kp, "kp", (None,) * np.ndim(kp))
+    kd = _args.array(kd, "kd", (None,) * np.ndim(kd))
+    minv = _args.array(minv, "minv", (None,) * np.ndim(minv))
+    period = _args.number(period, "period", positive=True)
     minv = np.asarray(minv, dtype=float)
     minv = minv if minv.ndim >= 2 else np.atleast_2d(minv)
     n = minv.shape[-1]
@@ -100,11 +105,14 @@ def _margin(kp, kd, minv, T) -> np.ndarray:
     return np.where(~stable, 0.0, np.where(capped, _MARGIN_CAP, np.exp(lo)))
 
 
-def workspace_samples(robot: Robot, count: int | None = None, seed: int = 0) -> np.ndarray:
+def workspace_samples(robot: Robot, *, count: int | None = None, seed: int = 0) -> np.ndarray:
     """``count`` configurations, shape (count, n): the middle of the limits, then uniform ones
     inside them (joints without limits: revolute in [-pi, pi], prismatic in [-1, 1] m). By
     default :data:`SAMPLES`, fewer beyond 12 joints (``SAMPLES * 12 / n``, at least 6: the check
     costs ``n^3`` per configuration)."""
+    _args.instance(robot, "robot", Robot)
+    count = _args.optional(_args.integer, count, "count", 1)
+    seed = _args.integer(seed, "seed", 0)
     if count is None:
         count = max(6, min(SAMPLES, SAMPLES * 12 // max(robot.n, 1)))
     lim = robot.limits
@@ -160,7 +168,7 @@ class LoopCheck:
             f"{len(self.q) and 'checked on ' + ', '.join(self.cases)})"
         )
 
-    def error(self, what: str = "") -> UnstableLoopError:
+    def error(self, *, what: str = "") -> UnstableLoopError:
         """The error that refuses this loop, ``what`` naming the gains."""
         fix = "lower the gains or the controller period"
         return UnstableLoopError(
@@ -184,6 +192,15 @@ def check_loop(
     """The check of one controller: ``plant_inverses`` and ``models`` lists of (m, n, n) stacks
     of ``M^-1`` and ``M_hat`` at the configurations ``qs`` (m, n), each plant checked with the
     model beside it; ``cases`` names them."""
+    _args.text(kind, "kind")
+    kp = _args.array(kp, "kp", (None,) * np.ndim(kp))
+    kd = _args.array(kd, "kd", (None,) * np.ndim(kd))
+    lam = _args.array(lam, "lam", (None,) * np.ndim(lam))
+    period = _args.number(period, "period", positive=True)
+    _args.instance(plant_inverses, "plant_inverses", (list, tuple), "a list of arrays")
+    _args.instance(models, "models", (list, tuple), "a list of arrays")
+    qs = _args.array(qs, "qs", (None, None))
+    _args.instance(cases, "cases", (list, tuple), "a list of names")
     T = float(period)
     worst = (math.inf, 0.0, 0.0, None)  # margin, radius, ratio, q
     rho_max, ratio_max = 0.0, 0.0

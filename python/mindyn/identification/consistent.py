@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import numbers
 import re
 import time
 import warnings
@@ -39,6 +40,7 @@ from pathlib import Path
 import numpy as np
 import scipy.linalg as sla
 
+from .. import _args
 from .._core import ModelError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
@@ -100,6 +102,7 @@ _NAME = re.compile(r"([A-Za-z]+?)([0-9]+)")
 def pseudo_inertia(p) -> np.ndarray:
     """The 4x4 pseudo-inertia ``[[tr(I)/2 1 - I, h], [h^T, m]]`` of the 10 inertial parameters
     ``XX XY XZ YY YZ ZZ MX MY MZ M`` (about the link-frame origin, in its frame)."""
+    p = _args.array(p, "p", (10,))
     xx, xy, xz, yy, yz, zz, mx, my, mz, m = np.asarray(p, dtype=float)
     inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
     J = np.empty((4, 4))
@@ -112,6 +115,7 @@ def pseudo_inertia(p) -> np.ndarray:
 def inertial_from_pseudo(J) -> np.ndarray:
     """The 10 inertial parameters of a pseudo-inertia (inverse of :func:`pseudo_inertia`):
     ``I = tr(S) 1 - S`` for its upper-left block ``S``."""
+    J = _args.array(J, "J", (4, 4))
     J = 0.5 * (np.asarray(J, dtype=float) + np.asarray(J, dtype=float).T)
     inertia = np.trace(J[:3, :3]) * np.eye(3) - J[:3, :3]
     return np.array(
@@ -235,13 +239,13 @@ class ConsistentResult:
     @property
     def robot_params(self) -> np.ndarray:
         """The classical vector without offsets, in the layout ``Robot`` methods take."""
-        return self.classical[: _Layout(self.base).robot_params]
+        return _args.readonly(self.classical[: _Layout(self.base).robot_params])
 
     @property
     def total_mass(self) -> float:
         return float(sum(self.classical[ix[9]] for ix in _Layout(self.base).links))
 
-    def violating_links(self, unconstrained: bool = True) -> list[str]:
+    def violating_links(self, *, unconstrained: bool = True) -> list[str]:
         eig = self.unconstrained_min_eig if unconstrained else self.min_eig
         return [nm for nm, e in zip(self.link_names, eig) if e < -EIG_TOL]
 
@@ -290,7 +294,7 @@ class ConsistentResult:
                 "unconstrained_pseudo_inertia_min_eig": {
                     nm: float(v) for nm, v in zip(self.link_names, self.unconstrained_min_eig)
                 },
-                "unconstrained_violating_links": self.violating_links(True),
+                "unconstrained_violating_links": self.violating_links(unconstrained=True),
                 "notes": list(self.notes),
             },
         }
@@ -299,7 +303,7 @@ class ConsistentResult:
 def description_vector(base: BaseParameters) -> np.ndarray:
     """The description's classical parameters in the layout of ``base`` (offsets zero)."""
     robot = base.robot
-    p = robot.parameters(base.rotor, base.friction)
+    p = robot.parameters(rotor=base.rotor, friction=base.friction)
     return np.concatenate([p, np.zeros(robot.n if base.offset else 0)])
 
 
@@ -312,25 +316,28 @@ def nearest_realisation(base: BaseParameters, values) -> np.ndarray:
 
 
 def identify_consistent(
-    robot, data, prior_weight: float | str = "auto", **kwargs
+    robot, data, *, prior_weight: float | str = "auto", **kwargs
 ) -> ConsistentResult:
     """:func:`~mindyn.identification.identify` (same arguments in ``kwargs``), then
     :func:`consistent_estimate` on its least-squares problem (the prior's weight chosen on
     ``data`` by default)."""
-    return consistent_estimate(identify(robot, data, **kwargs), prior_weight, data=data)
+    _weight(prior_weight)
+    return consistent_estimate(
+        identify(robot, data, **kwargs), prior_weight=prior_weight, data=data
+    )
 
 
 def _weight(prior_weight) -> float | None:
     if prior_weight is None or (isinstance(prior_weight, str) and prior_weight == "auto"):
         return None
-    try:
-        w = float(prior_weight)
-    except (TypeError, ValueError, OverflowError):
-        raise ModelError(
-            f"prior_weight is {prior_weight!r}; expected a number from 0 to {MAX_PRIOR_WEIGHT:g}"
-        ) from None
+    if isinstance(prior_weight, str) or not isinstance(prior_weight, numbers.Real):
+        raise _args.fail(
+            "prior_weight",
+            f"is {prior_weight!r}; expected 'auto' or a number from 0 to {MAX_PRIOR_WEIGHT:g}",
+        )
+    w = _args.number(prior_weight, "prior_weight", minimum=0.0)
     if not (0 <= w <= MAX_PRIOR_WEIGHT):
-        raise ModelError(
+        raise _args.ArgumentError(
             f"prior_weight is {w:g}; expected a number from 0 to {MAX_PRIOR_WEIGHT:g} (at "
             f"{MAX_PRIOR_WEIGHT:g} the prior already outweighs the fit by that factor, and the "
             "convex solvers lose accuracy beyond it)"
@@ -340,8 +347,8 @@ def _weight(prior_weight) -> float | None:
 
 def consistent_estimate(
     res: IdentificationResult,
-    prior_weight: float | str = "auto",
     *,
+    prior_weight: float | str = "auto",
     data=None,
     progress=None,
 ) -> ConsistentResult:
@@ -374,9 +381,11 @@ def consistent_estimate(
     ``progress``, a callable taking a line of text, is told each solve and refinement as it
     starts and ends (they can take seconds each)."""
     t0 = time.perf_counter()
+    _args.instance(res, "res", IdentificationResult)
     W = _weight(prior_weight)
+    _args.optional(_args.function, progress, "progress")
     if W is None and data is None:
-        raise ModelError(
+        raise _args.ArgumentError(
             "prior_weight 'auto' chooses the weight on the data the estimate was fitted on: "
             "pass them as data=, or give a weight"
         )
@@ -742,7 +751,7 @@ def _run(
     raise IdentificationError(
         f"consistent estimate: the convex {what}problem (least squares under positive "
         "semidefinite pseudo-inertias) was not solved: " + "; ".join(tried) + "; the data may "
-        "be badly scaled (a longer or richer log, or a smaller --prior-weight, may help)"
+        "be badly scaled (a longer or richer log, or a smaller prior_weight=, may help)"
     )
 
 
@@ -776,7 +785,7 @@ class PayloadResult:
     status: str | None = None
     seconds: float = 0.0
 
-    def derived(self, consistent: bool = False) -> dict:
+    def derived(self, *, consistent: bool = False) -> dict:
         p = self.consistent if consistent else self.values
         out = body_quantities(p)
         if consistent:
@@ -817,7 +826,7 @@ class PayloadResult:
                 "pseudo_inertia_min_eig": self.consistent_min_eig,
                 "solver": self.solver,
                 "status": self.status,
-                **plain(self.derived(True)),
+                **plain(self.derived(consistent=True)),
             },
             "arm_values": self.arm_values,
             "seconds": self.seconds,
@@ -841,22 +850,22 @@ class _LastLink:
         return self.robot.regressor(q, dq, ddq)[..., self.cols]
 
 
-def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.ndarray, str]:
+def read_arm(robot: Robot, arm, *, where: str = "arm") -> tuple[BaseParameters, np.ndarray, str]:
     """The base set and base values of an identified arm: the JSON of ``mindyn identify``
     (a dict or a path), checked by :func:`~mindyn.identification.document.read_identification`.
     Uses ``classical`` when present (the consistent estimate), else ``base_values``."""
     if isinstance(arm, (str, Path)):
         where = str(arm)
         try:
-            arm = read_json(arm, "identification JSON")
+            arm = read_json(arm, what="identification JSON")
         except DataError as ex:
             raise ModelError(f"{where}: not a JSON file of mindyn identify ({ex})") from None
     need = ("robot", "base_names", "base_values", "rotor", "friction", "offset")
     arm = read_identification(arm, need=need, what=where)
     if arm["robot"] != robot.name:
         raise ModelError(f"{where}: identified for robot '{arm['robot']}', not '{robot.name}'")
-    robot = robot_on_drive_side(robot, arm, where)
-    robot = with_identified_friction(robot, arm, where)
+    robot = robot_on_drive_side(robot, arm, where=where)
+    robot = with_identified_friction(robot, arm, where=where)
     base = base_parameters(
         robot, rotor=arm["rotor"], friction=arm["friction"], offset=arm["offset"]
     )
@@ -867,10 +876,10 @@ def read_arm(robot: Robot, arm, where: str = "arm") -> tuple[BaseParameters, np.
             f"{where}: its base parameters ({len(arm['base_names'])}) are not those of robot "
             f"'{robot.name}' ({base.n}, {robot.n} joints); "
             + (
-                f"it was identified on the chain ending at --tip {tip}: load the robot with "
+                f"it was identified on the chain ending at tip='{tip}': load the robot with "
                 "that tip"
                 if tip
-                else "identified with another description or another --tip?"
+                else "identified with another description or another tip=?"
             )
         )
     classical = arm.get("classical")
@@ -896,7 +905,7 @@ def arm_tip(arm, robot) -> str | None:
         return None
     if isinstance(arm, (str, Path)):
         try:
-            arm = read_json(arm, "identification JSON")
+            arm = read_json(arm, what="identification JSON")
         except DataError:
             return None  # read_arm names the problem
     tip = arm.get("tip") if isinstance(arm, dict) else None
@@ -907,6 +916,7 @@ def identify_payload(
     robot: Robot | str,
     arm,
     data: JointData | list[JointData],
+    *,
     consistent: bool = True,
     min_velocity: float = 0.01,
     rank_tolerance: float = 1e-9,
@@ -924,6 +934,11 @@ def identify_payload(
     hides some parameters) do not determine all 10 parameters: the rank and the undetermined
     parameters and combinations are named."""
     t0 = time.perf_counter()
+    _args.instance(robot, "robot", (Robot, str, Path), "a Robot, a bundled robot name or a path")
+    _args.instance(arm, "arm", (dict, str, Path), "an identification (its JSON as a dict or path)")
+    consistent = _args.flag(consistent, "consistent")
+    min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
+    rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)
     robot = load(robot, tip=arm_tip(arm, robot) if isinstance(robot, (str, Path)) else None)
     robot._require_serial("payload identification (a payload on the last link)")
     base, beta, used = read_arm(robot, arm)

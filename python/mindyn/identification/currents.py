@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _args
 from .data import (
     DataError,
     DataFileNotFoundError,
@@ -39,6 +40,8 @@ def read_currents(path, n: int) -> tuple[np.ndarray, np.ndarray]:
     ``t, i1..in`` and any further columns (ignored). Raises DataError naming the file, line and
     column of a missing column, a value that is not a finite number, or a time that does not
     increase."""
+    _args.path(path, "path")
+    n = _args.integer(n, "n", 1)
     path = Path(path)
     if not path.is_file():
         raise DataFileNotFoundError(f"currents file '{path}' does not exist")
@@ -90,6 +93,7 @@ def attach_currents(
     data: JointData,
     path,
     robot=None,
+    *,
     drive_gain=None,
     tolerance: float | None = None,
 ) -> JointData:
@@ -101,6 +105,13 @@ def attach_currents(
     thousandth of the median sample period of ``data``); current samples before, after or
     between those of ``data`` are left out. Raises DataError naming the first time stamp
     without a match."""
+    from ..robot import Robot
+
+    _args.instance(data, "data", JointData)
+    _args.path(path, "path")
+    _args.optional(_args.instance, robot, "robot", Robot)
+    drive_gain = _args.optional(_args.array, drive_gain, "drive_gain", (data.n,))
+    tolerance = _args.optional(_args.number, tolerance, "tolerance", positive=True)
     t_i, cur = read_currents(path, data.n)
     G, info = current_gains(robot, drive_gain=drive_gain)
     if G.shape[0] != data.n:

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 from scipy import signal
 
+from .. import _args
 from .._core import Error, parse_csv_numbers
 
 __all__ = [
@@ -236,6 +237,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
 def read_csv(
     path,
     robot=None,
+    *,
     n: int | None = None,
     torque_unit: str | None = None,
     require_torque: bool = True,
@@ -278,6 +280,19 @@ def read_csv(
         named), a file that is not UTF-8 text (line and byte offset named), time not strictly
         increasing (line named), fewer than 2 samples, derivatives that overflow.
     """
+    from ..robot import Robot
+
+    _args.path(path, "path")
+    _args.optional(_args.instance, robot, "robot", Robot)
+    n = _args.optional(_args.integer, n, "n", 1)
+    _args.optional(_args.text, torque_unit, "torque_unit")
+    require_torque = _args.flag(require_torque, "require_torque")
+    _args.choice(filter, "filter", ("butter", "savgol", "none"))
+    cutoff = _args.optional(_args.number, cutoff, "cutoff", positive=True)
+    order = _args.integer(order, "order", 1)
+    window = _args.optional(_args.number, window, "window", positive=True)
+    polyorder = _args.integer(polyorder, "polyorder", 0)
+    drive_gain = _args.optional(_args.array, drive_gain, "drive_gain", (None,))
     path = Path(path)
     if not path.is_file():
         raise DataFileNotFoundError(f"data file '{path}' does not exist")
@@ -387,7 +402,9 @@ def _read_csv(
         # overflow is checked below and reported once, not as numpy warnings
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             if tau is not None:
-                tau, unit_info = convert_torque(tau, torque_unit or "Nm", robot, drive_gain)
+                tau, unit_info = convert_torque(
+                    tau, torque_unit or "Nm", robot, drive_gain=drive_gain
+                )
                 processing["torque"] = unit_info
             dq, ddq, deriv = fill_derivatives(t, q, dq, ddq, **derivatives)
     except DataError as e:
@@ -468,7 +485,7 @@ def _decoded(data: bytes, path: Path) -> str:
         ) from None
 
 
-def read_json(path, what: str = "JSON file", finite: bool = False):
+def read_json(path, *, what: str = "JSON file", finite: bool = False):
     """The document of a JSON file, read as :func:`decode_text` reads text: DataFileNotFoundError
     when ``path`` (the ``what``) does not exist, DataError naming the file, line and column when
     it is not JSON, or, with ``finite``, when it holds NaN or Infinity (which Python's json
@@ -491,7 +508,7 @@ def read_json(path, what: str = "JSON file", finite: bool = False):
 
 
 def _no_constant(name: str) -> float:
-    raise ValueError(f"holds {name}; expected finite numbers")
+    raise DataError(f"holds {name}; expected finite numbers")
 
 
 def first_not_increasing(t: np.ndarray) -> int | None:
@@ -512,7 +529,7 @@ def _unit_key(unit: str) -> str:
     return u
 
 
-def drive_gains(robot=None, drive_gain=None) -> tuple[np.ndarray, str]:
+def drive_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, str]:
     """Joint-side drive gains ``K`` [N m/A per joint] that turn motor currents into joint
     torques, and where they come from: ``drive_gain`` (n,) when given, else the robot's drive
     table, ``torque_constant * gear_ratio``. Raises DataError when a gain is missing, not
@@ -538,7 +555,7 @@ def drive_gains(robot=None, drive_gain=None) -> tuple[np.ndarray, str]:
             f"torque unit 'current': the description of '{robot.name}' gives no torque constant "
             f"/ gear ratio for joint(s) {', '.join(str(k + 1) for k in bad)}; add "
             "drive: {torque_constant, gear_ratio} to its YAML or give the joint-side gains "
-            "(--drive-gain K1,...,Kn in N m/A)"
+            "(drive_gain=, K1,...,Kn in N m/A)"
         )
     return K, "drive table: torque_constant x gear_ratio"
 
@@ -555,7 +572,7 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
     or zero, or when there are not as many motors as joints."""
     tr = getattr(robot, "transmission", None) if robot is not None else None
     if tr is None:
-        K, source = drive_gains(robot, drive_gain)
+        K, source = drive_gains(robot, drive_gain=drive_gain)
         return np.diag(K), {
             "scale_Nm_per_unit": K.tolist(),
             "formula": f"current x gain ({source})",
@@ -579,7 +596,7 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
         raise DataError(
             f"motor currents: no usable torque constant for motor(s) {names} of '{robot.name}' "
             "(zero, not a finite number or not given); give the motor torque constants "
-            "(--drive-gain Kt1,...,Ktn in N m/A, motor side: the description's transmissions "
+            "(drive_gain=, Kt1,...,Ktn in N m/A, motor side: the description's transmissions "
             "apply the gear ratios and couplings)"
         )
     return Kt[:, None] * tr.T, {
@@ -589,7 +606,7 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
     }
 
 
-def convert_torque(tau: np.ndarray, unit: str, robot=None, drive_gain=None):
+def convert_torque(tau: np.ndarray, unit: str, robot=None, *, drive_gain=None):
     """Torques in N m from the logged unit (``Nm``, ``permille``, or ``current``: motor currents
     in A times the gains of :func:`drive_gains`); returns ``(tau, info)``."""
     unit_l = _unit_key(unit)
@@ -620,7 +637,7 @@ def convert_torque(tau: np.ndarray, unit: str, robot=None, drive_gain=None):
     raise DataError(f"unknown torque unit '{unit}'; use Nm, permille or current")
 
 
-def check_cutoff(fc: float, rate: float, span: float, source: str = "the log") -> None:
+def check_cutoff(fc: float, rate: float, span: float, *, source: str = "the log") -> None:
     """Refuses a low-pass cut-off ``fc`` [Hz] outside (1 / span, rate / 2): at or above half the
     sample ``rate`` there is no filter to design, and below one cycle over the log's ``span`` [s]
     a low-pass leaves little more than the mean."""
@@ -639,6 +656,7 @@ def check_cutoff(fc: float, rate: float, span: float, source: str = "the log") -
 def differentiate(
     t: np.ndarray,
     x: np.ndarray,
+    *,
     filter: str = "butter",
     cutoff: float | None = None,
     order: int = 4,
@@ -663,6 +681,14 @@ def differentiate(
     -------
     (xf, dx, info) : filtered signal (m, n), derivative (m, n), settings dict.
     """
+    t = _args.array(t, "t", (None,))
+    # the values may overflow and the filter be unknown: DataErrors below name the log
+    x = _args.array(x, "x", (t.shape[0],) + ((None,) if np.ndim(x) == 2 else ()), finite=False)
+    _args.text(filter, "filter")
+    cutoff = _args.optional(_args.number, cutoff, "cutoff", positive=True)
+    order = _args.integer(order, "order", 1)
+    window = _args.optional(_args.number, window, "window", positive=True)
+    polyorder = _args.integer(polyorder, "polyorder", 0)
     m = t.shape[0]
     rate = (m - 1) / (t[-1] - t[0])
     jitter = float(np.max(np.abs(np.diff(t) * rate - 1.0))) if m > 1 else 0.0
@@ -735,22 +761,19 @@ def _header(n: int, kinds) -> list[str]:
     return ["t"] + [f"{k}{j}" for k in kinds for j in range(1, n + 1)]
 
 
-def write_csv(path, t, q, tau, dq=None, ddq=None, torque_unit: str | None = None) -> Path:
+def write_csv(path, t, q, tau, dq=None, ddq=None, *, torque_unit: str | None = None) -> Path:
     """Write ``t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun``; shapes (m,) and (m, n). With
     ``torque_unit`` (e.g. ``"permille"``) the torque columns say it: ``tau1[permille]``."""
-    arrays = [np.asarray(t, dtype=float)[:, None], np.asarray(q, dtype=float)]
+    _args.path(path, "path")
+    t = _args.array(t, "t", (None,))
+    arrays = [t[:, None], _args.array(q, "q", (t.shape[0], None))]
     kinds = ["q"]
-    for kind, a in (("dq", dq), ("ddq", ddq)):
-        if a is not None:
-            arrays.append(np.asarray(a, dtype=float))
-            kinds.append(kind)
-    if tau is not None:
-        arrays.append(np.asarray(tau, dtype=float))
-        kinds.append("tau")
     n = arrays[1].shape[1]
-    for a in arrays[1:]:
-        if a.shape != arrays[1].shape:
-            raise ValueError(f"array shapes differ: {a.shape} vs {arrays[1].shape}")
+    for kind, a in (("dq", dq), ("ddq", ddq), ("tau", tau)):
+        if a is not None:
+            arrays.append(_args.array(a, kind, (t.shape[0], n)))
+            kinds.append(kind)
+    _args.optional(_args.text, torque_unit, "torque_unit")
     header = _header(n, kinds)
     if torque_unit is not None and tau is not None:
         header = [f"{h}[{torque_unit}]" if h.startswith("tau") else h for h in header]
@@ -774,6 +797,7 @@ def write_trajectory_csv(path, t, q, dq, ddq) -> Path:
 
 def truth_path(csv_path) -> Path:
     """``data.csv`` -> ``data.truth.json``: the true parameters of a simulated log."""
+    _args.path(csv_path, "csv_path")
     p = Path(csv_path)
     return p.with_name(p.stem + ".truth.json")
 
@@ -783,10 +807,14 @@ def read_truth(csv_path, robot=None) -> dict | None:
     sidecar that names another robot (``robot``) or other joints (``joints``, in order) than
     ``robot``'s is refused: the log was simulated for another robot, whatever its joint
     count."""
+    from ..robot import Robot
+
+    _args.path(csv_path, "csv_path")
+    _args.optional(_args.instance, robot, "robot", Robot)
     p = truth_path(csv_path)
     if not p.is_file():
         return None
-    d = read_json(p, "truth file")
+    d = read_json(p, what="truth file")
     if not isinstance(d, dict):
         raise DataError(f"{p}: a truth file is a JSON object")
     if "names" not in d or "values" not in d:
@@ -799,6 +827,11 @@ def read_truth(csv_path, robot=None) -> dict | None:
 def check_log_robot(doc: dict, robot, where: str) -> None:
     """Refuses a document (a truth sidecar, an identification JSON) whose ``robot`` name or
     ``joints`` names differ from ``robot``'s; either field may be absent (or an empty name)."""
+    from ..robot import Robot
+
+    _args.mapping(doc, "doc")
+    _args.instance(robot, "robot", Robot)
+    _args.text(where, "where")
     name = doc.get("robot")
     if name not in (None, "") and name != robot.name:
         raise DataError(

@@ -12,15 +12,14 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from .. import _args
 from .data import DataError, read_json
 
 __all__ = [
     "FLAGS",
     "read_identification",
-    "refuse_state",
     "robot_on_drive_side",
     "with_identified_friction",
-    "with_identified_state",
 ]
 
 #: The boolean fields: JSON ``true`` / ``false`` only.
@@ -41,9 +40,13 @@ def read_identification(
     ------
     DataError
         Not a JSON object, a needed field missing, or a field of the wrong type or range."""
+    _args.instance(source, "source", (dict, str, Path), "an identification JSON (a dict or a path)")
+    _args.instance(need, "need", (tuple, list), "a tuple of field names")
+    _args.text(what, "what")
+    finite = _args.flag(finite, "finite")
     if isinstance(source, (str, Path)):
         where = str(source)
-        doc = read_json(source, what, finite=finite)
+        doc = read_json(source, what=what, finite=finite)
     else:
         where, doc = what, source
     obj = doc if isinstance(doc, dict) else {}
@@ -51,7 +54,7 @@ def read_identification(
     if "classical" in missing:
         raise DataError(
             f"{where} has no 'classical' map of classical parameter values (it is written by "
-            "'mindyn identify --consistent --json')"
+            "an identification with consistent=True)"
         )
     if not isinstance(doc, dict):
         raise DataError(f"{where}: expected a JSON object (the JSON of mindyn identify)")
@@ -103,9 +106,14 @@ def read_identification(
     return out
 
 
-def robot_on_drive_side(robot, doc: dict, where: str = "identification JSON"):
+def robot_on_drive_side(robot, doc: dict, *, where: str = "identification JSON"):
     """``robot`` with rotor inertia and friction where the identification ``doc`` had them
     (``drive_side``; a document without it was identified with them on the joints)."""
+    from ..robot import Robot
+
+    _args.instance(robot, "robot", Robot)
+    _args.mapping(doc, "doc")
+    _args.text(where, "where")
     side = doc.get("drive_side", "joint")
     if robot.drive_side == side:
         return robot
@@ -149,10 +157,15 @@ def _friction_model(fm, where: str) -> dict:
     return out
 
 
-def with_identified_friction(robot, doc: dict, where: str = "identification JSON"):
+def with_identified_friction(robot, doc: dict, *, where: str = "identification JSON"):
     """``robot`` with the friction model an identification JSON records (``friction_model``;
     unchanged without one: viscous and Coulomb friction). DataError when the record does not fit
     the robot."""
+    from ..robot import Robot
+
+    _args.instance(robot, "robot", Robot)
+    _args.mapping(doc, "doc")
+    _args.text(where, "where")
     fm = doc.get("friction_model")
     if fm is None:
         return robot
@@ -189,7 +202,7 @@ def refuse_state(doc, what: str, where: str = "identification JSON") -> None:
         raise DataError(
             f"{where}: identified with the Dahl friction model, whose torque depends on a "
             f"presliding state integrated along the positions; {what} has no such state (identify "
-            "with --friction-model coulomb, smooth, asymmetric or stribeck)"
+            "with friction_model='coulomb', 'smooth', 'asymmetric' or 'stribeck')"
         )
 
 

@@ -20,10 +20,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 
+from .. import _args
 from .._core import OFFSET_PREFIX as OFF
 from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
-from ..robot import Robot, load
+from ..robot import Robot, as_robot
 from .data import DataError, JointData
 from .errors import IdentificationError, RankDeficientError
 from .models import (
@@ -222,7 +223,7 @@ def _triangle(A: np.ndarray) -> np.ndarray:
 
 
 def dynamic_triangles(
-    base: BaseParameters, data: JointData, min_velocity: float = 0.0
+    base: BaseParameters, data: JointData, *, min_velocity: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray]:
     """The dynamic model of :func:`dynamic_system` reduced per joint without forming it: for
     each joint ``j``, the triangle ``S_j`` ((nb+1) x (nb+1)) with ``S_j^T S_j = [W_j y_j]^T
@@ -296,8 +297,9 @@ def _check_rank(
 def _rank_remedies(concerned: list[str], logs, speed: float, robot=None) -> list[str]:
     """What would lift a rank deficiency in ``concerned`` (base-parameter names), from the motion
     of ``logs``: a joint that never moves (no speed at or above ``speed``) leaves its friction
-    (``--friction``) and rotor inertia (``--rotor``) without effect; a joint that never reverses
-    makes its Coulomb friction a constant, inseparable from its torque offset (``--offset``).
+    (``friction=True``) and rotor inertia (``rotor=True``) without effect; a joint that never
+    reverses makes its Coulomb friction a constant, inseparable from its torque offset
+    (``offset=True``). Options are named as the library's keywords (the CLI names its flags).
     With rotor inertia and friction on the motors (``robot``'s drive side), ``Ia``, ``Fv`` and
     ``Fc`` of slot k follow motor k's motion (its speed in joint units, divided by its largest
     ratio) and are named after the motor; ``Off`` stays the joint's."""
@@ -345,9 +347,9 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
     speed_txt = f" (speed {speed:g} rad/s | m/s or more)" if speed > 0 else ""
     if still:
         opts = sorted(
-            {"--friction" for j in still if ({"Fv"} | coulomb) & kinds[j]}
-            | {"--rotor" for j in still if "Ia" in kinds[j]}
-            | {"--offset" for j in still if OFF in kinds[j] and not coulomb & kinds[j]}
+            {"friction=True" for j in still if ({"Fv"} | coulomb) & kinds[j]}
+            | {"rotor=True" for j in still if "Ia" in kinds[j]}
+            | {"offset=True" for j in still if OFF in kinds[j] and not coulomb & kinds[j]}
         )
         out.append(
             f"{named(still)} never move{speed_txt} in this data: "
@@ -358,13 +360,13 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
         out.append(
             f"{named(one_way)} never reverse direction in this data: "
             "their Coulomb friction is a constant torque there, inseparable from a torque offset: "
-            "leave out --offset (or --friction), or reverse them."
+            "leave out offset=True (or friction=True), or reverse them."
         )
     if level:
         out.append(
             f"{named(level)}: the direction-dependent Coulomb term Fa is "
             "a constant torque whenever the joint moves, inseparable from a torque offset: leave "
-            "out --offset, or use another --friction-model."
+            "out offset=True, or use another friction_model=."
         )
     return out
 
@@ -412,11 +414,13 @@ def _sources(logs: list[JointData]) -> str:
     return " + ".join(n if k == 0 else f"{n} ({k} segments)" for n, k in out)
 
 
-def _logs(data) -> list[JointData]:
+def _logs(data, name: str = "data") -> list[JointData]:
     """One log or a sequence of logs as a non-empty list of :class:`JointData`."""
-    logs = [data] if isinstance(data, JointData) else list(data)
+    if isinstance(data, JointData):
+        return [data]
+    logs = list(data) if isinstance(data, (list, tuple)) else []
     if not logs or not all(isinstance(d, JointData) for d in logs):
-        raise ValueError("data must be a JointData or a non-empty sequence of JointData")
+        raise _args.fail(name, "must be a JointData or a non-empty list of JointData")
     return logs
 
 
@@ -429,6 +433,7 @@ def _rsd(p: np.ndarray, std: np.ndarray) -> np.ndarray:
 def identify(
     robot: Robot | str,
     data: JointData | Sequence[JointData],
+    *,
     model: str = "dynamic",
     rotor: bool = False,
     friction: bool = False,
@@ -496,23 +501,19 @@ def identify(
         The data do not excite every base parameter (they are named).
     """
     t0 = time.perf_counter()
-    if model not in MODELS:
-        raise ValueError(f"unknown model '{model}'; use dynamic, energy or integral")
-    if not (isinstance(energy_window, (int, np.integer)) and energy_window >= 1):
-        raise ValueError(
-            f"energy window must be an integer >= 1 sample interval, got {energy_window}"
-        )
-    if not (isinstance(integral_window, (int, np.integer)) and integral_window >= 1):
-        raise ValueError(
-            f"integral window must be an integer >= 1 sample interval, got {integral_window}"
-        )
-    if not (math.isfinite(min_velocity) and min_velocity >= 0):
-        raise ValueError(f"min_velocity must be a finite number >= 0, got {min_velocity}")
-    if rsd_threshold is not None and not math.isfinite(rsd_threshold):
-        raise ValueError(f"rsd_threshold must be a finite number or None, got {rsd_threshold}")
-    robot = load(robot)
+    robot = as_robot(robot)
     robot._require_single_dof("identification")
     logs = _logs(data)
+    _args.choice(model, "model", MODELS)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    _args.optional(_args.instance, base, "base", BaseParameters)
+    weighted = _args.flag(weighted, "weighted")
+    rsd_threshold = _args.optional(_args.number, rsd_threshold, "rsd_threshold")
+    energy_window = _args.integer(energy_window, "energy_window", 1)
+    _args.choice(integration, "integration", ("simpson", "trapezoid", "zoh"))
+    integral_window = _args.integer(integral_window, "integral_window", 1)
+    min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
+    rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)
     for d in logs:
         if d.n != robot.n:
             raise DataError(
@@ -533,7 +534,7 @@ def identify(
         joint_rows = np.zeros(robot.n, dtype=int)
         log_rows = []
         for d in logs:  # each log's system on its own samples; per joint, merged by QR
-            Sd, rd = dynamic_triangles(base, d, min_velocity)
+            Sd, rd = dynamic_triangles(base, d, min_velocity=min_velocity)
             S = np.stack([_triangle(np.vstack([a, b])) for a, b in zip(S, Sd)])
             joint_rows += rd
             log_rows.append(int(rd.sum()))
@@ -547,7 +548,7 @@ def identify(
         _enough(model, rows, nb, logs, settings, integral_window)
         S = np.zeros((robot.n, nb + 1, nb + 1))
         for d in logs:  # windows within each log; per joint, merged by QR
-            for Wi, yi in integral_chunks(base, d, integral_window, integration):
+            for Wi, yi in integral_chunks(base, d, window=integral_window, integration=integration):
                 for j in range(robot.n):
                     S[j] = _triangle(np.vstack([S[j], np.column_stack([Wi[:, j], yi[:, j]])]))
         joint_rows = np.full(robot.n, rows // robot.n)
@@ -557,7 +558,9 @@ def identify(
         rows = sum(log_rows)
         _enough(model, rows, nb, logs, settings, energy_window)
         used = [d for d, r in zip(logs, log_rows) if r > 0]  # logs with a whole window
-        parts = [energy_system(base, d, energy_window, integration) for d in used]
+        parts = [
+            energy_system(base, d, window=energy_window, integration=integration) for d in used
+        ]
         W = np.vstack([w for w, _ in parts])
         y = np.concatenate([v for _, v in parts])
         settings.update({"energy_window": energy_window, "integration": integration})

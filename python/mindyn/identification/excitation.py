@@ -34,9 +34,12 @@ from pathlib import Path
 import numpy as np
 from scipy.optimize import minimize
 
+from .. import _args
+from .._args import ArgumentError
 from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
-from ..robot import Robot, load
+from ..robot import Robot, as_robot, load
+from .errors import IdentificationError
 
 __all__ = [
     "CRITERIA",
@@ -69,23 +72,27 @@ FALLBACK = {
 }
 
 
-def check_sampling(harmonics: int, freq: float, rate: float, periods: float = 1.0) -> int:
+def check_sampling(harmonics: int, freq: float, rate: float, *, periods: float = 1.0) -> int:
     """Raises ValueError unless ``rate`` [Hz] samples ``periods`` periods of a trajectory of
     ``harmonics`` harmonics of ``freq`` [Hz]: a rate above ``2 N freq`` (each period of the
     highest harmonic sampled more than twice) and at most :data:`MAX_TRAJECTORY_ROWS` samples.
     Returns the number of samples."""
+    harmonics = _args.integer(harmonics, "harmonics", 1)
+    freq = _args.number(freq, "freq", positive=True)
+    rate = _args.number(rate, "rate", positive=True)
+    periods = _args.number(periods, "periods", positive=True)
     rate, periods, period = float(rate), float(periods), 1.0 / float(freq)
     top = harmonics * freq
     if not (math.isfinite(rate) and rate > 2 * top):
-        raise ValueError(
+        raise ArgumentError(
             f"sample rate {rate:g} Hz does not sample the highest harmonic ({harmonics} x "
             f"{freq:g} Hz = {top:g} Hz); expected a rate above {2 * top:g} Hz"
         )
     if not (math.isfinite(periods) and periods > 0):
-        raise ValueError(f"periods must be a positive number, got {periods:g}")
+        raise ArgumentError(f"periods must be a positive number, got {periods:g}")
     rows = periods * period * rate + 1
     if rows > MAX_TRAJECTORY_ROWS:
-        raise ValueError(
+        raise ArgumentError(
             f"{periods:g} period(s) of {period:g} s at {rate:g} Hz are {rows:.4g} rows; "
             f"at most {MAX_TRAJECTORY_ROWS:,} are written (lower the rate)"
         )
@@ -116,12 +123,12 @@ class FourierTrajectory:
         self.b = np.atleast_2d(np.asarray(self.b, dtype=float))
         self.q0 = np.asarray(self.q0, dtype=float).reshape(-1)
         if self.a.shape != self.b.shape or self.a.shape[0] != self.q0.shape[0]:
-            raise ValueError(
+            raise ArgumentError(
                 f"Fourier coefficients a {self.a.shape}, b {self.b.shape} and offsets q0 "
                 f"{self.q0.shape} do not fit together; expected (n, N), (n, N), (n,)"
             )
         if not self.freq > 0:
-            raise ValueError(f"base frequency must be positive, got {self.freq}")
+            raise ArgumentError(f"base frequency must be positive, got {self.freq}")
 
     @property
     def n(self) -> int:
@@ -148,14 +155,14 @@ class FourierTrajectory:
         c = np.hstack([self.a, self.b, self.q0[:, None]])  # (n, 2N+1)
         return bq @ c.T, bd @ c.T, bdd @ c.T
 
-    def sample(self, rate: float = 250.0, periods: float = 1.0):
+    def sample(self, *, rate: float = 250.0, periods: float = 1.0):
         """``(t, q, dq, ddq)`` sampled at ``rate`` Hz over ``periods`` periods, both ends
         included; ``t`` shape (m,), the others (m, n).
 
         The rate must be above twice the highest harmonic's frequency (``2 N freq``: each of its
         periods is then sampled more than twice), and the samples at most
         :data:`MAX_TRAJECTORY_ROWS`."""
-        check_sampling(self.harmonics, self.freq, rate, periods)
+        check_sampling(self.harmonics, self.freq, rate, periods=periods)
         m = int(round(periods * self.period * rate)) + 1
         t = np.arange(m) / rate
         return (t, *self.evaluate(t))
@@ -173,20 +180,22 @@ class FourierTrajectory:
 
     @classmethod
     def from_dict(cls, d: dict) -> FourierTrajectory:
+        from .data import DataError
+
         try:
             return cls(np.array(d["a"]), np.array(d["b"]), np.array(d["q0"]), float(d["freq"]))
         except KeyError as e:
-            raise ValueError(f"Fourier trajectory: missing entry {e}") from None
+            raise DataError(f"Fourier trajectory: missing entry {e}") from None
 
     @classmethod
     def load(cls, path) -> FourierTrajectory:
         """Reads the JSON written by :meth:`ExcitationResult.save` (or :meth:`to_dict`)."""
-        from .data import read_json
+        from .data import DataError, read_json
 
         path = Path(path)
-        d = read_json(path, "trajectory file")
+        d = read_json(path, what="trajectory file")
         if not isinstance(d, dict):
-            raise ValueError(f"{path}: expected a JSON object (the excitation's coefficients)")
+            raise DataError(f"{path}: expected a JSON object (the excitation's coefficients)")
         return cls.from_dict(d.get("trajectory", d))
 
 
@@ -230,7 +239,7 @@ def _reduction(N: int, freq: float, start: float | None):
     return R, r
 
 
-def excitation_limits(robot: Robot, margin: float = 0.05, overrides: dict | None = None):
+def excitation_limits(robot: Robot, *, margin: float = 0.05, overrides: dict | None = None):
     """Limits used for the excitation: arrays ``lower``, ``upper``, ``velocity``,
     ``acceleration`` of shape (n,), and a list of notes for every fallback taken.
 
@@ -238,6 +247,9 @@ def excitation_limits(robot: Robot, margin: float = 0.05, overrides: dict | None
     their range, velocities and accelerations in magnitude). Where the description gives no
     limit (NaN) a fallback is used (``FALLBACK``) and noted. ``overrides`` may give any of the
     four arrays (or scalars) to replace the robot's values."""
+    _args.instance(robot, "robot", Robot)
+    margin = _args.number(margin, "margin", minimum=0.0, below=0.5)
+    _args.optional(_args.mapping, overrides, "overrides")
     lim = robot.limits
     n = robot.n
     overrides = overrides or {}
@@ -265,12 +277,12 @@ def excitation_limits(robot: Robot, margin: float = 0.05, overrides: dict | None
                     f"joint {k + 1}: no {key} position limit given; using {sign * fb:g} {unit}"
                 )
         if out["lower"][k] >= out["upper"][k]:
-            raise ValueError(
+            raise ArgumentError(
                 f"joint {k + 1}: lower position limit {out['lower'][k]:g} is not below the "
                 f"upper limit {out['upper'][k]:g}"
             )
     if not 0 <= margin < 0.5:
-        raise ValueError(f"margin must be in [0, 0.5), got {margin}")
+        raise ArgumentError(f"margin must be in [0, 0.5), got {margin}")
     mid = 0.5 * (out["lower"] + out["upper"])
     half = 0.5 * (out["upper"] - out["lower"]) * (1 - margin)
     out["lower"], out["upper"] = mid - half, mid + half
@@ -295,12 +307,15 @@ def _criterion(G: np.ndarray, rows: int, criterion: str) -> float:
     return float(np.sum(np.log(d)) - logdet)
 
 
-def criterion_value(base: BaseParameters, q, dq, ddq, criterion: str = "cond") -> float:
+def criterion_value(base: BaseParameters, q, dq, ddq, *, criterion: str = "cond") -> float:
     """The criterion in its reported form on samples ``q, dq, ddq`` (each (m, n)): the condition
     number for ``cond``, ``log det(W^T W / rows)`` for ``logdet`` and the log Hadamard ratio
     ``log prod diag(G) - log det(G)`` for ``hadamard``."""
+    _args.instance(base, "base", BaseParameters)
+    q, dq, ddq = _args.batch(base.robot.n, q=q, dq=dq, ddq=ddq)
+    _args.choice(criterion, "criterion", CRITERIA)
     if criterion not in CRITERIA:
-        raise ValueError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
+        raise ArgumentError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
     W = base.regressor(q, dq, ddq).reshape(-1, base.n)
     J = _criterion(W.T @ W, W.shape[0], criterion)
     if criterion == "cond":
@@ -354,7 +369,7 @@ class ExcitationResult:
             "trajectory": self.trajectory.to_dict(),
         }
 
-    def save(self, csv_path, rate: float = 250.0, periods: float = 1.0) -> dict:
+    def save(self, csv_path, *, rate: float = 250.0, periods: float = 1.0) -> dict:
         """Writes ``<stem>.csv`` (``t, q1..qn, dq1..dqn, ddq1..ddqn`` sampled at ``rate`` Hz),
         ``<stem>.json`` (coefficients, criterion, limits) and ``<stem>.png`` (plot). Returns the
         three paths."""
@@ -362,13 +377,19 @@ class ExcitationResult:
 
         csv_path = Path(csv_path)
         csv_path.parent.mkdir(parents=True, exist_ok=True)
-        t, q, dq, ddq = self.trajectory.sample(rate, periods)
+        t, q, dq, ddq = self.trajectory.sample(rate=rate, periods=periods)
         write_trajectory_csv(csv_path, t, q, dq, ddq)
         json_path = csv_path.with_suffix(".json")
         json_path.write_text(json.dumps(self.to_dict(), indent=2) + "\n")
         png_path = csv_path.with_suffix(".png")
         plot_trajectory(
-            png_path, t, q, dq, ddq, self.limits, title=f"{self.robot}: excitation trajectory"
+            png_path,
+            t,
+            q,
+            dq,
+            ddq,
+            limits=self.limits,
+            title=f"{self.robot}: excitation trajectory",
         )
         return {"csv": csv_path, "json": json_path, "png": png_path}
 
@@ -468,6 +489,7 @@ def _scale_into_limits(traj: FourierTrajectory, limits: dict, grid: int, fixed_q
 
 def random_trajectory(
     robot: Robot | str,
+    *,
     harmonics: int = 5,
     freq: float = 0.1,
     seed: int = 0,
@@ -481,6 +503,14 @@ def random_trajectory(
     validation trajectory. ``limits``: all four arrays as returned by
     :func:`excitation_limits`, or some of them as overrides of the robot's (then ``margin``
     applies)."""
+    robot = as_robot(robot)
+    harmonics = _args.integer(harmonics, "harmonics", 1)
+    freq = _args.number(freq, "freq", positive=True)
+    seed = _args.integer(seed, "seed", 0)
+    _args.optional(_args.mapping, limits, "limits")
+    start = _args.optional(_args.array, start, "start", (robot.n,))
+    fill = _args.number(fill, "fill", positive=True, maximum=1.0)
+    margin = _args.number(margin, "margin", minimum=0.0, below=0.5)
     robot = load(robot)
     keys = ("lower", "upper", "velocity", "acceleration")
     if limits is None or not all(k in limits for k in keys):
@@ -515,6 +545,7 @@ def random_trajectory(
 @single_threaded_blas
 def optimize_excitation(
     robot: Robot | str,
+    *,
     harmonics: int = 5,
     freq: float = 0.1,
     criterion: str = "cond",
@@ -562,19 +593,34 @@ def optimize_excitation(
         Print progress to ``stream`` (default stderr): a line per start, redrawn during it on a
         terminal, else a line every :data:`PROGRESS_SECONDS` within a start.
     """
+    robot = as_robot(robot)
+    harmonics = _args.integer(harmonics, "harmonics", 2)
+    freq = _args.number(freq, "freq", positive=True)
+    _args.choice(criterion, "criterion", CRITERIA)
+    starts = _args.integer(starts, "starts", 1)
+    seed = _args.integer(seed, "seed", 0)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    _args.optional(_args.instance, base, "base", BaseParameters)
+    samples = _args.integer(samples, "samples", 1)
+    grid = _args.optional(_args.integer, grid, "grid", 1)
+    maxiter = _args.integer(maxiter, "maxiter", 1)
+    margin = _args.number(margin, "margin", minimum=0.0, below=0.5)
+    _args.optional(_args.mapping, limits, "limits")
+    start = _args.optional(_args.array, start, "start", (robot.n,))
+    progress = _args.flag(progress, "progress")
     if criterion not in CRITERIA:
-        raise ValueError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
+        raise ArgumentError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
     if harmonics < 2:
-        raise ValueError(
+        raise ArgumentError(
             f"harmonics must be at least 2 (one is spent on zero start/end velocity and "
             f"acceleration), got {harmonics}"
         )
     if not freq > 0:
-        raise ValueError(f"base frequency must be positive, got {freq}")
+        raise ArgumentError(f"base frequency must be positive, got {freq}")
     if starts < 1:
-        raise ValueError(f"starts must be at least 1, got {starts}")
+        raise ArgumentError(f"starts must be at least 1, got {starts}")
     if not samples > 2 * harmonics:
-        raise ValueError(
+        raise ArgumentError(
             f"{samples} regressor samples per period do not sample the highest of {harmonics} "
             f"harmonics; expected more than {2 * harmonics}"
         )
@@ -587,16 +633,16 @@ def optimize_excitation(
     if start is not None:
         start = np.asarray(start, dtype=float).reshape(-1)
         if start.shape != (robot.n,):
-            raise ValueError(f"start has shape {start.shape}; expected ({robot.n},)")
+            raise ArgumentError(f"start has shape {start.shape}; expected ({robot.n},)")
         bad = np.flatnonzero((start < lim["lower"]) | (start > lim["upper"]))
         if bad.size:
             k = int(bad[0])
-            raise ValueError(
+            raise ArgumentError(
                 f"start position of joint {k + 1} ({start[k]:g}) is outside its limits "
                 f"[{lim['lower'][k]:g}, {lim['upper'][k]:g}] (after the {margin:g} margin)"
             )
     if samples * robot.n < base.n:
-        raise ValueError(
+        raise ArgumentError(
             f"{samples} samples x {robot.n} joints = {samples * robot.n} regressor rows are "
             f"fewer than the {base.n} base parameters; raise samples"
         )
@@ -629,8 +675,8 @@ def optimize_excitation(
         t0 = time.perf_counter()
         guess = random_trajectory(
             robot,
-            harmonics,
-            freq,
+            harmonics=harmonics,
+            freq=freq,
             seed=int(rng.integers(2**31)),
             limits=lim,
             start=start,
@@ -700,7 +746,7 @@ def optimize_excitation(
             best = (x, J, J0, guess)
     x, J, J0, guess = best
     if J >= 60.0:  # no start found a trajectory with a full-rank regressor
-        raise ValueError(
+        raise IdentificationError(
             f"no excitation found that excites all {base.n} base parameters of {robot.name} "
             "within the limits; widen the limits or add harmonics"
         )
@@ -718,7 +764,7 @@ def optimize_excitation(
         traj = _scale_into_limits(traj, _tighten(lim, 1e-3), fine, start is not None)
         q, dq, ddq = traj.evaluate(t)
     tm = np.arange(samples) * (traj.period / samples)
-    value = criterion_value(base, *traj.evaluate(tm), criterion)
+    value = criterion_value(base, *traj.evaluate(tm), criterion=criterion)
     elapsed = time.perf_counter() - t_begin
     say(f"excite: best {shown} {value:.6g} (initial guess {report(J0):.6g}), {elapsed:.1f} s")
     return ExcitationResult(
@@ -776,8 +822,15 @@ def _free_from(prob: _Problem, traj: FourierTrajectory) -> np.ndarray:
     return np.concatenate(x)
 
 
-def plot_trajectory(path, t, q, dq, ddq, limits: dict | None = None, title: str = "") -> Path:
+def plot_trajectory(path, t, q, dq, ddq, *, limits: dict | None = None, title: str = "") -> Path:
     """PNG of positions, velocities and accelerations per joint (limits dashed)."""
+    _args.path(path, "path")
+    t = _args.array(t, "t", (None,))
+    q = _args.array(q, "q", (t.shape[0], None))
+    dq = _args.array(dq, "dq", q.shape)
+    ddq = _args.array(ddq, "ddq", q.shape)
+    _args.optional(_args.mapping, limits, "limits")
+    _args.text(title, "title", empty=True)
     import matplotlib
 
     matplotlib.use("Agg")

@@ -68,6 +68,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import _args
 from ..base import BaseParameters
 from ..robot import FRICTION_KINDS, Robot
 from .errors import IdentificationError
@@ -121,7 +122,7 @@ def smooth_width(logs) -> tuple[np.ndarray, str]:
         still = [str(j + 1) for j in np.flatnonzero(~(w > 0))]
         raise IdentificationError(
             f"smooth friction: joint(s) {', '.join(still)} never move in the fit data; their tanh "
-            "width cannot be derived (give --friction-width, or leave out --friction)"
+            "width cannot be derived (give friction_width=, or leave out friction=True)"
         )
     return w, rule.replace("|dq_j| >= ", "w_j = ")
 
@@ -164,7 +165,7 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
         still = [str(j + 1) for j in np.flatnonzero(~(top > 0))]
         raise IdentificationError(
             f"Stribeck friction: joint(s) {', '.join(still)} never move in the fit data; their "
-            "Stribeck velocity cannot be searched (leave out --friction, or move them)"
+            "Stribeck velocity cannot be searched (leave out friction=True, or move them)"
         )
     # Below the velocity's noise level (the smooth width) the data do not resolve the velocity,
     # and the dynamic model has no equation below its min_velocity.
@@ -241,7 +242,7 @@ def dahl_search(base: DahlBase, logs, *, fit: dict) -> tuple[np.ndarray, dict]:
         still = [str(j + 1) for j in np.flatnonzero(~(span > 0))]
         raise IdentificationError(
             f"Dahl friction: joint(s) {', '.join(still)} never move in the fit data; their "
-            "presliding displacement cannot be searched (leave out --friction, or move them)"
+            "presliding displacement cannot be searched (leave out friction=True, or move them)"
         )
     # The presliding displacement 1/sigma lies between the distance a joint travels in one
     # sample at the speed below which the data do not tell its direction (shorter: the state
@@ -299,8 +300,8 @@ def _golden(f, grid, best, joints, start=None) -> np.ndarray:
 def select_friction_model(
     robot: Robot,
     logs,
-    kind: str = "coulomb",
     *,
+    kind: str = "coulomb",
     rotor: bool = False,
     offset: bool = False,
     width=None,
@@ -314,19 +315,30 @@ def select_friction_model(
     the smooth width (unless ``width`` is given, one value or one per joint), the Stribeck
     velocities and ``auto`` are decided."""
     from ..base import base_parameters
+    from .estimation import _logs
     from .prior import FOLDS
 
-    if kind not in CHOICES:
-        raise IdentificationError(
-            f"friction model must be {', '.join(CHOICES[:-1])} or auto, not {kind!r}"
-        )
+    _args.instance(robot, "robot", Robot)
+    logs = _logs(logs, "logs")
+    _args.choice(kind, "kind", CHOICES)
+    rotor, offset = _args.flag(rotor, "rotor"), _args.flag(offset, "offset")
+    _args.optional(_args.mapping, fit, "fit")
+    folds = _args.optional(_args.integer, folds, "folds", 2)
+    _args.optional(_args.function, progress, "progress")
     fit = dict(fit or {})
     n = robot.n
     given_width = None
     if width is not None:
-        given_width = np.broadcast_to(np.asarray(width, float), (n,)).copy()
+        if np.ndim(width) == 0:
+            given_width = np.full(n, _args.number(width, "width", positive=True))
+        else:
+            given_width = _args.array(width, "width", (n,))
         if kind not in ("smooth", "auto"):
-            raise IdentificationError("--friction-width: only with --friction-model smooth or auto")
+            raise _args.fail(
+                "width",
+                f"applies only with friction_model='smooth' or friction_model='auto' (kind "
+                f"{kind!r})",
+            )
 
     def make(k: str, velocity=None):
         r = robot.with_friction_model(k, velocity=velocity)
@@ -336,7 +348,7 @@ def select_friction_model(
         rec: dict = {"kind": k, "velocity": None}
         if k == "smooth":
             if given_width is not None:
-                w, rule = given_width, "given (--friction-width)"
+                w, rule = given_width, "given"
             else:
                 w, rule = smooth_width(logs)
             rec.update(velocity=[float(v) for v in w], velocity_rule=rule)
@@ -446,7 +458,7 @@ def active_friction(res, logs) -> str | None:
     robot = base.robot
     names = list(base.names)
     std = dict(zip(res.names, np.asarray(res.std, float)))
-    classical = robot.parameter_names(False, True)[10 : robot.layout_sizes[2]]
+    classical = robot.parameter_names(rotor=False, friction=True)[10 : robot.layout_sizes[2]]
     kinds = [nm.rstrip("0123456789") for nm in classical]
     top = np.max(np.vstack([np.abs(robot.slot_velocities(d.dq)) for d in logs]), axis=0)
     speeds = np.geomspace(1e-9, 1.0, 40)[:, None] * np.maximum(top, 1e-300)  # (S, n)
@@ -490,13 +502,13 @@ def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float
 
     if joint_sigma is not None and res.model != "energy":
         res = dataclasses.replace(res, joint_sigma=np.asarray(joint_sigma), weighted=True)
-    S = block_triangles(res, logs, folds)
+    S = block_triangles(res, logs, folds=folds)
     # a block is predicted at every sample, also where the fit leaves the equations of slow
     # joints out (min_velocity): a model's switching at rest counts against it
     held = S
     if res.settings.get("min_velocity", 0.0) > 0:
         every = dataclasses.replace(res, settings={**res.settings, "min_velocity": 0.0})
-        held = block_triangles(every, logs, folds)
+        held = block_triangles(every, logs, folds=folds)
     nb = res.base.n
     used = [k for k in range(folds) if np.any(S[k])]
     if len(used) < 2:
@@ -683,7 +695,9 @@ def dahl_base(base: BaseParameters, sigma) -> DahlBase:
     (n,); IdentificationError for a base set it cannot be (no friction, another friction
     model)."""
     if not base.friction:
-        raise IdentificationError("Dahl friction: expected a base set with friction (--friction)")
+        raise IdentificationError(
+            "Dahl friction: expected a base set with friction (friction=True)"
+        )
     if base.robot.friction_model["kind"] != "coulomb":
         raise IdentificationError(
             "Dahl friction replaces the Coulomb column of the coulomb model; "

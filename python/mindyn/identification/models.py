@@ -28,6 +28,8 @@ import re
 import numpy as np
 from scipy import integrate
 
+from .. import _args
+from .._args import ArgumentError
 from ..base import BaseParameters
 from .data import DataError, JointData
 from .errors import IdentificationError
@@ -60,13 +62,16 @@ def moving_equations(base: BaseParameters, dq, min_velocity: float) -> np.ndarra
     return ~(slow.astype(float) @ (T != 0).astype(float) > 0)
 
 
-def dynamic_system(base: BaseParameters, data: JointData, min_velocity: float = 0.0):
+def dynamic_system(base: BaseParameters, data: JointData, *, min_velocity: float = 0.0):
     """Stacked dynamic model: ``W`` (r, nb), ``y`` (r,) and the joint of each row (r,).
 
     With ``min_velocity > 0`` and Coulomb friction in the model, the equation of joint ``j`` at a
     sample where ``|dq_j| < min_velocity`` is left out: there the sign of the velocity, and so
     the Coulomb term, is not determined by the data (a torque held over a sample period, stiction,
     velocity noise). ``r = m n`` minus those equations."""
+    _args.instance(base, "base", BaseParameters)
+    _args.instance(data, "data", JointData)
+    min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
     require_torque(data)
     if data.regressor_filter is not None:  # preprocessed: columns filtered like the torques
         W = data.regressor_filter.regressor(base)
@@ -91,7 +96,9 @@ def friction_columns(base: BaseParameters, dq: np.ndarray) -> dict[int, tuple[in
         return {}
     names = list(base.names)
     # joint 1's friction names (Fv1, Fc1, then Fa1 or Fs1)
-    classical = base.robot.parameter_names(False, True)[10 : base.robot.layout_sizes[2]]
+    classical = base.robot.parameter_names(rotor=False, friction=True)[
+        10 : base.robot.layout_sizes[2]
+    ]
     kinds = [re.sub(r"\d+$", "", nm) for nm in classical]
     phi = base.robot.friction_shapes(base.robot.slot_velocities(dq))  # (m, n, c)
     out = {}
@@ -109,18 +116,22 @@ def _cumulative(f: np.ndarray, t: np.ndarray, rule: str) -> np.ndarray:
     if rule == "simpson":
         if hasattr(integrate, "cumulative_simpson"):
             return integrate.cumulative_simpson(f, x=t, axis=0, initial=0)
-        raise ValueError("Simpson integration needs scipy >= 1.12; use trapezoid")
-    raise ValueError(f"unknown integration rule '{rule}'; use trapezoid or simpson")
+        raise ArgumentError("Simpson integration needs scipy >= 1.12; use trapezoid")
+    raise ArgumentError(f"unknown integration rule '{rule}'; use trapezoid or simpson")
 
 
 def energy_system(
-    base: BaseParameters, data: JointData, window: int = 1, integration: str = "simpson"
+    base: BaseParameters, data: JointData, *, window: int = 1, integration: str = "simpson"
 ):
     """Energy model over non-overlapping windows of ``window`` sample intervals:
     ``W`` (r, nb) and ``y`` (r,), ``r = (m - 1) // window``."""
+    _args.instance(base, "base", BaseParameters)
+    _args.instance(data, "data", JointData)
+    window = _args.integer(window, "window", 1)
+    _args.choice(integration, "integration", ("simpson", "trapezoid", "zoh"))
     require_torque(data)
     if window < 1:
-        raise ValueError(f"energy window must be at least 1 sample interval, got {window}")
+        raise ArgumentError(f"energy window must be at least 1 sample interval, got {window}")
     t, dq = data.t, data.dq
     ends = np.arange(0, data.m, window)
     if ends.size < 2:
@@ -160,7 +171,7 @@ def integral_windows(t: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray
     non-overlapping windows from its first sample (a window's last sample is the next one's
     first), the incomplete rest of a segment left out. No window spans a gap."""
     if window < 1:
-        raise ValueError(f"integral window must be at least 1 sample interval, got {window}")
+        raise ArgumentError(f"integral window must be at least 1 sample interval, got {window}")
     dt = np.diff(t)
     if dt.size == 0:
         return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
@@ -183,20 +194,24 @@ def _quadrature(t: np.ndarray, rule: str) -> np.ndarray:
         return c
     if rule == "simpson":
         return integrate.simpson(np.eye(k), x=t, axis=0)
-    raise ValueError(f"unknown integration rule '{rule}'; use trapezoid, simpson or zoh")
+    raise ArgumentError(f"unknown integration rule '{rule}'; use trapezoid, simpson or zoh")
 
 
 def integral_system(
-    base: BaseParameters, data: JointData, window: int = 40, integration: str = "simpson"
+    base: BaseParameters, data: JointData, *, window: int = 40, integration: str = "simpson"
 ):
     """Integral model: ``W`` (w, n, nb), ``y`` (w, n) for ``w`` windows (:func:`integral_windows`)
     (see :func:`integral_chunks`)."""
-    parts = list(integral_chunks(base, data, window, integration))
+    _args.instance(base, "base", BaseParameters)
+    _args.instance(data, "data", JointData)
+    window = _args.integer(window, "window", 1)
+    _args.choice(integration, "integration", ("simpson", "trapezoid", "zoh"))
+    parts = list(integral_chunks(base, data, window=window, integration=integration))
     return np.concatenate([W for W, _ in parts]), np.concatenate([y for _, y in parts])
 
 
 def integral_chunks(
-    base: BaseParameters, data: JointData, window: int = 40, integration: str = "simpson"
+    base: BaseParameters, data: JointData, *, window: int = 40, integration: str = "simpson"
 ):
     """The integral model's equations, :data:`CHUNK_SAMPLES` samples' worth of windows at a time:
     yields ``(W, y)``, shapes (k, n, nb) and (k, n), for consecutive runs of ``k`` windows.

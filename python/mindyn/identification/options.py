@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
 
+from .. import _args
 from .data import DataError
 from .errors import IdentificationError
 
@@ -43,6 +44,23 @@ class IdentifyOptions:
     prior_weight: float | None = None
 
     def __post_init__(self):
+        _args.choice(self.model, "model", MODELS)
+        for name in ("rotor", "friction", "offset", "weighted", "consistent"):
+            object.__setattr__(self, name, _args.flag(getattr(self, name), name))
+        object.__setattr__(
+            self, "rsd_threshold", _args.number(self.rsd_threshold, "rsd_threshold", minimum=0.0)
+        )
+        for name in ("energy_window", "integral_window"):
+            object.__setattr__(self, name, _args.integer(getattr(self, name), name, 1))
+        _args.choice(self.integration, "integration", INTEGRATIONS)
+        object.__setattr__(
+            self, "min_velocity", _args.number(self.min_velocity, "min_velocity", minimum=0.0)
+        )
+        _args.optional(_args.text, self.friction_model, "friction_model")
+        if self.prior_weight is not None:
+            object.__setattr__(
+                self, "prior_weight", _args.number(self.prior_weight, "prior_weight", minimum=0.0)
+            )
         if self.model not in MODELS:
             raise IdentificationError(f"model '{self.model}': expected one of {', '.join(MODELS)}")
         if self.integration not in INTEGRATIONS:

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _args
+from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData, read_json
@@ -79,18 +81,27 @@ def identified_model(
     ``base_names``). ``estimate``: ``unconstrained`` (``base_values``) or ``consistent``
     (``consistent_estimate.base_values``). Returns ``(base, values, doc)`` (``doc`` empty for a
     result)."""
-    if estimate not in ("unconstrained", "consistent"):
-        raise ValueError(f"estimate must be 'unconstrained' or 'consistent', got '{estimate}'")
+    _args.choice(estimate, "estimate", ("unconstrained", "consistent"))
+    _args.optional(
+        _args.instance, robot, "robot", (Robot, str, Path), "a Robot, a robot name or a path"
+    )
+    if not (hasattr(identification, "base") and hasattr(identification, "full")):
+        _args.instance(
+            identification,
+            "identification",
+            (dict, str, Path),
+            "an identification (a result, or its JSON as a dict or path)",
+        )
     if hasattr(identification, "base") and hasattr(identification, "full"):
         if estimate == "consistent" and not hasattr(identification, "classical"):
-            raise ValueError("estimate 'consistent' needs a consistent result")
+            raise ArgumentError("estimate 'consistent' needs a consistent result")
         return identification.base, np.asarray(identification.full, dtype=float), {}
     where = str(identification) if not isinstance(identification, dict) else "identification"
     doc = read_json(identification) if not isinstance(identification, dict) else identification
     if not (isinstance(doc, dict) and {"base_names", "base_values"} <= doc.keys()):
         raise DataError(f"{where}: not the JSON of 'mindyn identify' (no base_names/base_values)")
     if robot is None:
-        raise ValueError("identified_model: the robot is needed with an identification JSON")
+        raise _args.fail("robot", "is None; the robot is needed with an identification JSON")
     if isinstance(robot, Robot):
         if doc.get("robot") not in (None, robot.name):
             raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
@@ -98,8 +109,8 @@ def identified_model(
         robot = load(robot, tip=doc.get("tip"))
         if doc.get("robot") not in (None, robot.name):
             raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
-    robot = robot_on_drive_side(robot, doc, where)
-    robot = with_identified_friction(robot, doc, where)
+    robot = robot_on_drive_side(robot, doc, where=where)
+    robot = with_identified_friction(robot, doc, where=where)
     base = base_parameters(
         robot,
         rotor=bool(doc.get("rotor")),
@@ -111,7 +122,9 @@ def identified_model(
     if estimate == "consistent":
         src = doc.get("consistent_estimate")
         if not isinstance(src, dict) or "base_values" not in src:
-            raise DataError(f"{where}: holds no consistent estimate (identify --consistent)")
+            raise DataError(
+                f"{where}: holds no consistent estimate (identify with consistent=True)"
+            )
     names, values = src.get("base_names", doc["base_names"]), src["base_values"]
     if list(names) != list(base.names):
         raise DataError(
@@ -141,8 +154,10 @@ def predict(
     motion at each logged time stamp between the dropped filter edges (``data.logged``: no
     decimation, no filtering of the prediction); otherwise on the samples as given. Segments
     are stacked in order."""
+    from .estimation import _logs
+
+    logs = _logs(data)
     base, values, doc = identified_model(identification, robot, estimate=estimate)
-    logs = [data] if isinstance(data, JointData) else list(data)
     if not logs:
         raise DataError("predict: no data")
     parts = []

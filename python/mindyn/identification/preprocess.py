@@ -51,6 +51,7 @@ import numpy as np
 from scipy import signal
 from scipy.interpolate import CubicSpline
 
+from .. import _args
 from .._threads import evaluated_ahead
 from .data import DataError, JointData, check_cutoff
 
@@ -212,6 +213,7 @@ def timing(t: np.ndarray) -> dict:
     """Statistics of the sample intervals of ``t`` (m,): median, min, max [s], ``jitter`` (largest
     deviation from the median relative to it), ``rms_jitter`` and the number of ``gaps`` longer
     than 1.5 median intervals."""
+    t = _args.array(t, "t", (None,))
     dt = np.diff(t)
     med = float(np.median(dt))
     dev = np.abs(dt - med) / med
@@ -226,11 +228,14 @@ def timing(t: np.ndarray) -> dict:
     }
 
 
-def excited_band(q: np.ndarray, dt: float, energy: float = BAND_ENERGY) -> float:
+def excited_band(q: np.ndarray, dt: float, *, energy: float = BAND_ENERGY) -> float:
     """Frequency [Hz] below which ``energy`` of the spectral energy of the positions ``q`` (m, n)
     on a uniform grid of step ``dt`` lies, all joints together; the straight line between the
     first and last sample is removed first (a motion that does not return to its start would
     otherwise show as a broad-band ramp) and a Hann window applied."""
+    q = _args.array(q, "q", (None, None))
+    dt = _args.number(dt, "dt", positive=True)
+    energy = _args.number(energy, "energy", positive=True, maximum=1.0)
     m = q.shape[0]
     ramp = np.linspace(0.0, 1.0, m)[:, None] * (q[-1] - q[0])
     x = (q - q[0] - ramp) * np.hanning(m)[:, None]
@@ -291,7 +296,7 @@ def _check_periodic(Q: np.ndarray, cycle: dict, src: str, duration: float) -> No
         raise DataError(
             f"{src}: the log ({duration:.6g} s) is not {count} period(s) of "
             f"{cycle['period_s']:.6g} s: joint {j + 1}'s {what} {detail}; give the number of "
-            "periods the log holds (--periods) or the excitation's period (--period)"
+            "periods the log holds (periods=) or the excitation's period (period=)"
         )
 
 
@@ -302,6 +307,8 @@ def require_even_stamps(data: JointData, filter: str) -> None:
     1.5 of it (gaps). The data path of :func:`preprocess` resamples such a log onto a uniform
     grid first; these filters do not. ``none`` (central differences on the time stamps, which
     ``numpy.gradient`` takes as they are) is not refused."""
+    _args.instance(data, "data", JointData)
+    _args.text(filter, "filter")
     if filter not in ("butter", "savgol"):
         return
     derived = [
@@ -315,17 +322,17 @@ def require_even_stamps(data: JointData, filter: str) -> None:
     if tm["jitter"] <= JITTER_TOLERANCE and tm["gaps"] == 0:
         return
     raise DataError(
-        f"{data.source or 'data'}: --filter {filter} derives the "
+        f"{data.source or 'data'}: filter='{filter}' derives the "
         + " and ".join("velocities" if w == "velocity" else "accelerations" for w in derived)
         + " as if the samples were evenly spaced, but its time stamps are not (intervals "
         f"{1e3 * tm['min_dt_s']:.4g} to {1e3 * tm['max_dt_s']:.4g} ms about a median of "
         f"{1e3 * tm['median_dt_s']:.4g} ms, jitter {100 * tm['jitter']:.3g} %, {tm['gaps']} "
-        "gap(s)); use --filter lowpass (the default), which resamples onto a uniform grid and "
+        "gap(s)); use filter='lowpass' (the default), which resamples onto a uniform grid and "
         "cuts the log at its breaks"
     )
 
 
-def split_at_gaps(data: JointData, gap: float = SEGMENT_GAP) -> list[JointData]:
+def split_at_gaps(data: JointData, *, gap: float = SEGMENT_GAP) -> list[JointData]:
     """``data`` cut at every sample interval longer than ``gap`` median intervals: a list of
     :class:`JointData` segments (one when there is no break), each with ``processing["segment"]``
     giving its index, count and time span, and its source naming the span."""
@@ -358,6 +365,7 @@ def split_at_gaps(data: JointData, gap: float = SEGMENT_GAP) -> list[JointData]:
 
 def preprocess(
     data: JointData,
+    *,
     cutoff: float | None = None,
     order: int = 4,
     periods: int | None = None,
@@ -398,6 +406,15 @@ def preprocess(
     DataError
         Bad settings (named), too short a log for the filter, the periods or the edges.
     """
+    _args.instance(data, "data", JointData)
+    cutoff = _args.optional(_args.number, cutoff, "cutoff", positive=True)
+    order = _args.integer(order, "order", 1, maximum=10)
+    periods = _args.optional(_args.integer, periods, "periods", 1)
+    period = _args.optional(_args.number, period, "period", positive=True)
+    edge = _args.optional(_args.number, edge, "edge", minimum=0.0)
+    decimate = _args.flag(decimate, "decimate")
+    parallel = _args.flag(parallel, "parallel")
+    gap = gap if gap == np.inf else _args.number(gap, "gap", positive=True)
     src = data.source or "data"
     if not (isinstance(order, (int, np.integer)) and 1 <= order <= 10):
         raise DataError(f"filter order must be an integer from 1 to 10, got {order}")
@@ -510,7 +527,7 @@ def preprocess(
     else:
         fc = float(cutoff)
         info["cutoff_source"] = "given"
-        check_cutoff(fc, rate, float(t[-1] - t[0]), src)
+        check_cutoff(fc, rate, float(t[-1] - t[0]), source=src)
     sos = signal.butter(order, fc, fs=rate, output="sos")
     periodic = cycle is not None
     m = q.shape[0]
@@ -660,6 +677,9 @@ def concatenate(logs) -> JointData:
     no derivative is taken across the joins), regressor filters kept per log. The processing
     of each log is listed under ``processing["logs"]``; ``processing["preprocess"]`` is the first
     log's, with ``"logs"`` listing every log's."""
+    from .estimation import _logs
+
+    logs = _logs(logs, "logs")
     logs = list(logs)
     if not logs:
         raise DataError("no logs to concatenate")

@@ -115,7 +115,7 @@ class PriorProblem:
         r = self.M @ pi - self.z
         return float(r @ r) / self.s2
 
-    def prior(self, pi, J0s=None) -> float:
+    def prior(self, pi, *, J0s=None) -> float:
         """``sum_l d(J_l, J0_l)`` (the log-det divergence, 0 at the description)."""
         out = 0.0
         for ix, Ji in zip(self.links, self.J0inv):
@@ -138,7 +138,7 @@ class PriorProblem:
             f -= mu * float(np.sum(np.log(v)))
         return f
 
-    def derivatives(self, pi, W, mu, barrier=True):
+    def derivatives(self, pi, W, mu, *, barrier=True):
         """Gradient and Hessian of :meth:`value` (without the barrier: ``barrier=False``)."""
         g = self.Q @ pi - self.c
         H = self.Q.copy()
@@ -168,7 +168,7 @@ def _newton_step(g, H) -> np.ndarray:
 
 
 def newton_prior(
-    problem: PriorProblem, W: float, start, max_iter: int = 400, *, fixed=None, barrier=1e-2
+    problem: PriorProblem, W: float, start, *, max_iter: int = 400, fixed=None, barrier=1e-2
 ):
     """The minimiser of ``problem`` at weight ``W > 0`` from the strictly feasible ``start``:
     damped Newton steps (backtracking keeps every pseudo-inertia positive definite and the
@@ -248,7 +248,7 @@ def _cut(count: int, folds: int) -> np.ndarray:
 
 
 @single_threaded_blas
-def block_triangles(res, data, folds: int = FOLDS) -> np.ndarray:
+def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
     """The fit's weighted least-squares problem split into ``folds`` blocks of contiguous time
     (block ``k``: the ``k``-th of ``folds`` consecutive parts of every log): triangles ``S_k``,
     shape (folds, nb+1, nb+1), ``S_k^T S_k = [A_k b_k]^T [A_k b_k]`` over the block's rows with
@@ -296,7 +296,9 @@ def block_triangles(res, data, folds: int = FOLDS) -> np.ndarray:
                 total = integral_windows(d.t, window)[0].size
                 block = _cut(total, folds)
                 i0 = 0
-                for Wi, yi in integral_chunks(base, d, window, res.settings["integration"]):
+                for Wi, yi in integral_chunks(
+                    base, d, window=window, integration=res.settings["integration"]
+                ):
                     kk = block[i0 : i0 + Wi.shape[0]]
                     i0 += Wi.shape[0]
                     for k in np.unique(kk):
@@ -312,7 +314,7 @@ def block_triangles(res, data, folds: int = FOLDS) -> np.ndarray:
             var = [energy_row_noise(d, window) @ js**2 for d in used]
             floor = 0.1 * np.median(np.concatenate(var))
         for i, d in enumerate(used):
-            Wd, yd = energy_system(base, d, window, rule)
+            Wd, yd = energy_system(base, d, window=window, integration=rule)
             A = np.column_stack([Wd, yd])
             if var is not None:
                 A = A / np.sqrt(var[i] + floor)[:, None]
@@ -338,12 +340,12 @@ def choose_prior_weight(
     base = res.base
     Y = base.Y
     nb = base.n
-    S = block_triangles(res, data, folds)
+    S = block_triangles(res, data, folds=folds)
     rows = [S_k for S_k in S if np.any(S_k)]
     if len(rows) < 2:
         raise IdentificationError(
             "consistent estimate: the data give fewer than 2 blocks of equations; the prior's "
-            "weight cannot be chosen by cross-validation (give --prior-weight)"
+            "weight cannot be chosen by cross-validation (give prior_weight=)"
         )
     from .estimation import _triangle
 

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _args
+from ..robot import as_robot
 from .data import DataError, JointData
 from .options import MODELS, ReadingOptions
 
@@ -60,7 +62,7 @@ def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
         cutoff=opts.cutoff,
     )
     if current:  # effort in A: the gains (given or of the drive table) turn it into N m
-        tau, info = convert_torque(data.tau, "current", robot, gain)
+        tau, info = convert_torque(data.tau, "current", robot, drive_gain=gain)
         data = replace(data, tau=tau, processing={**data.processing, "torque": info})
     return data
 
@@ -100,7 +102,8 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
         from .currents import attach_currents
 
         out = [
-            d if c is None else attach_currents(d, c, robot, gain) for d, c in zip(out, currents)
+            d if c is None else attach_currents(d, c, robot, drive_gain=gain)
+            for d, c in zip(out, currents)
         ]
     for p, d in zip(paths, out):
         unit = d.processing["torque"]["unit"]
@@ -289,6 +292,19 @@ def load_logs(
     A log simulated for another robot (its truth sidecar says so) is refused before any is read;
     with the low-pass the fit logs average their periods (``periods``/``period``) and the
     validation logs are filtered at the fit's cut-off, the highest of the fit logs'."""
+    robot = as_robot(robot)
+    one = (str, PathLike)
+    for name, value in (("paths", paths), ("validate", validate)):
+        if not isinstance(value, one):
+            _args.instance(value, name, (list, tuple), "a path or a list of paths")
+            for p in value:
+                _args.instance(p, name, one, "a path or a list of paths")
+    for name, value in (("currents", currents), ("validate_currents", validate_currents)):
+        if value is not None:
+            _args.instance(value, name, (list, tuple), "a list of paths (one per log)")
+    _args.choice(model, "model", MODELS)
+    _args.optional(_args.instance, options, "options", ReadingOptions)
+    _args.text(what, "what")
     if options is not None and reading:
         raise DataError(f"load_logs: give options or {', '.join(reading)}, not both")
     opts = options or ReadingOptions(**reading)

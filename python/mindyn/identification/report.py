@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _args
+
 __all__ = ["format_table", "plot_torques", "write_report"]
 
 # The ZCR07S study, Table 6: RMS torque error [N m] of the identified ZCR07S model, per joint, on
@@ -26,9 +28,15 @@ def _pyplot():
     return plt
 
 
-def plot_torques(path, t, tau, tau_hat, title: str = "", unit: str = "N m") -> Path:
+def plot_torques(path, t, tau, tau_hat, *, title: str = "", unit: str = "N m") -> Path:
     """Measured and estimated torque per joint, one panel each (as the ZCR07S study, Fig. 6-7).
     ``t`` (m,), ``tau``, ``tau_hat`` (m, n)."""
+    _args.path(path, "path")
+    t = _args.array(t, "t", (None,))
+    tau = _args.array(tau, "tau", (t.shape[0], None))
+    tau_hat = _args.array(tau_hat, "tau_hat", tau.shape)
+    _args.text(title, "title", empty=True)
+    _args.text(unit, "unit")
     plt = _pyplot()
     n = tau.shape[1]
     cols = 2 if n > 3 else 1
@@ -58,10 +66,15 @@ def plot_torques(path, t, tau, tau_hat, title: str = "", unit: str = "N m") -> P
     return path
 
 
-def format_table(result, truth=None) -> str:
+def format_table(result, *, truth=None) -> str:
     """Terminal table of an :class:`~mindyn.identification.IdentificationResult`: name,
     estimate, standard deviation, RSD and, when ``truth`` (base values, shape (nb,)) is given,
     the true value and the relative error."""
+    from .consistent import ConsistentResult
+    from .estimation import IdentificationResult
+
+    _args.instance(result, "result", (IdentificationResult, ConsistentResult))
+    truth = _args.optional(_args.array, truth, "truth", (result.base.n,))
     names = list(result.base.names)
     width = max(8, max(len(n) for n in names))
     head = f"{'#':>3}  {'parameter':<{width}} {'estimate':>13} {'std':>11} {'RSD %':>8}"
@@ -115,11 +128,11 @@ def write_report(
     directory,
     result,
     data,
+    *,
     validation_data=None,
     validation=None,
     fit=None,
     trajectory_limits=None,
-    *,
     estimate: str | None = None,
 ) -> list[Path]:
     """Writes the PNG plots of a report folder: measured vs estimated torques on the
@@ -130,6 +143,16 @@ def write_report(
     torques); a plot's title gives the log's overall relative errors when they are (filtered,
     raw and moving, see :func:`~mindyn.identification.validate`), and ``estimate``, when given,
     which estimate ``result`` is (``"consistent"``). Returns the paths written."""
+    from .consistent import ConsistentResult
+    from .estimation import IdentificationResult, _logs
+
+    _args.path(directory, "directory")
+    _args.instance(result, "result", (IdentificationResult, ConsistentResult))
+    _logs(data)
+    if not (validation_data is None or isinstance(validation_data, list) and not validation_data):
+        _logs(validation_data, "validation_data")
+    _args.optional(_args.mapping, trajectory_limits, "trajectory_limits")
+    _args.optional(_args.choice, estimate, "estimate", ("unconstrained", "consistent"))
     from .excitation import plot_trajectory
 
     d = Path(directory)
@@ -157,7 +180,7 @@ def write_report(
                     log.t,
                     log.tau,
                     hat,
-                    f"{tag}: {kind} data ({_name(log)}){err}",
+                    title=f"{tag}: {kind} data ({_name(log)}){err}",
                 )
             )
 
@@ -179,7 +202,7 @@ def write_report(
                 log.q,
                 log.dq,
                 log.ddq,
-                trajectory_limits,
+                limits=trajectory_limits,
                 title=f"{result.base.robot.name}: excitation trajectory (identification data"
                 + (f", {_name(log)})" if len(logs) > 1 else ")"),
             )

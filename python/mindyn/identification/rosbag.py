@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import _args
 from .data import (
     DataError,
     DataFileNotFoundError,
@@ -33,6 +34,7 @@ _ROS1_JOINT_STATE = "sensor_msgs/JointState"
 def is_rosbag(path) -> bool:
     """A ROS 2 bag folder (with ``metadata.yaml``), an ``.mcap`` / ``.db3`` file or a ROS 1
     ``.bag`` file."""
+    _args.path(path, "path")
     p = Path(path)
     if p.is_dir():
         return (p / "metadata.yaml").is_file()
@@ -54,6 +56,7 @@ def _reader_classes():
 def read_rosbag(
     path,
     robot,
+    *,
     topic: str | None = None,
     torque_unit: str = "Nm",
     require_torque: bool = True,
@@ -93,6 +96,13 @@ def read_rosbag(
         velocities or efforts missing or not finite, time stamps not increasing, fewer than 2
         samples, or ``rosbags`` not installed.
     """
+    from ..robot import Robot
+
+    _args.path(path, "path")
+    _args.instance(robot, "robot", Robot)
+    _args.optional(_args.text, topic, "topic")
+    _args.text(torque_unit, "torque_unit")
+    require_torque = _args.flag(require_torque, "require_torque")
     path = Path(path)
     if not path.exists():
         raise DataFileNotFoundError(f"ROS bag '{path}' does not exist")
@@ -115,7 +125,7 @@ def read_rosbag(
             if len(topics) > 1:
                 raise DataError(
                     f"{path}: several JointState topics ({', '.join(topics)}); choose one with "
-                    "topic= (--topic)"
+                    "topic="
                 )
             topic = topics[0]
         elif topic not in topics:

@@ -175,7 +175,7 @@ def format_identification(report) -> str:
     out.append("")
     if cons is not None:
         out.append("Unconstrained least-squares estimate (base parameters):")
-    out.append(format_table(report.result, report.truth))
+    out.append(format_table(report.result, truth=report.truth))
     out.append("")
     out.append(_rms_lines(f"identification data{which}", fit))
     if val is not None:
@@ -224,7 +224,7 @@ def format_payload(res, robot, files: list, identification: str, tip_note: str =
         + ("" if res.min_eig >= 0 else " (physically inconsistent)")
     )
     if res.consistent is not None:
-        c = res.derived(True)
+        c = res.derived(consistent=True)
         out.append(
             f"  consistent ({res.solver}, {res.status}): mass {c['mass']:.5g} kg, centre of "
             "mass "

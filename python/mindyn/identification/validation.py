@@ -7,9 +7,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from .. import _args
 from ..base import BaseParameters
 from .data import DataError, JointData
-from .estimation import IdentificationResult
+from .estimation import IdentificationResult, _logs
 from .models import require_torque, torque_noise
 
 #: A joint's sample counts as moving when its speed is at least this many times the noise level
@@ -21,7 +22,7 @@ MOVING_NOISE_FACTOR = 3.0
 MOVING_PEAK_FRACTION = 1e-3
 
 
-def error_measures(tau: np.ndarray, tau_hat: np.ndarray, effort=None, *, mask=None) -> dict:
+def error_measures(tau: np.ndarray, tau_hat: np.ndarray, *, effort=None, mask=None) -> dict:
     """The usual torque-error measures of an identified model, from measured ``tau`` and
     predicted ``tau_hat`` (m, n):
 
@@ -36,10 +37,12 @@ def error_measures(tau: np.ndarray, tau_hat: np.ndarray, effort=None, *, mask=No
     ``mask`` (m, n) of bool, optional: only the samples it marks count, joint by joint (the
     RMS of a joint with none is NaN); ``counted`` then gives each joint's count.
     """
-    tau = np.asarray(tau, dtype=float)
-    err = tau - np.asarray(tau_hat, dtype=float)
+    tau = _args.array(tau, "tau", (None, None))
+    err = tau - _args.array(tau_hat, "tau_hat", tau.shape)
+    if effort is not None:
+        effort = _args.array(effort, "effort", (tau.shape[1],), finite=False)
     if mask is not None:
-        mask = np.asarray(mask, dtype=bool)
+        mask = _args.array(mask, "mask", tau.shape) != 0
         tau, err = np.where(mask, tau, 0.0), np.where(mask, err, 0.0)
         count = mask.sum(axis=0)
     else:
@@ -124,9 +127,10 @@ def validate(result: IdentificationResult, data: JointData | Sequence[JointData]
       ``rule``, and ``fraction``: the share of each joint's samples counted.
 
     Each entry of ``logs`` has its own ``raw`` and ``moving``."""
-    logs = [data] if isinstance(data, JointData) else list(data)
-    if not logs:
-        raise DataError("validate: no data")
+    from .consistent import ConsistentResult
+
+    _args.instance(result, "result", (IdentificationResult, ConsistentResult))
+    logs = _logs(data)
     robot = result.base.robot
     effort = robot.limits["effort"]
     per = []
@@ -137,7 +141,7 @@ def validate(result: IdentificationResult, data: JointData | Sequence[JointData]
         pred = result.predict(d)
         per.append(
             {
-                **error_measures(d.tau, pred, effort),
+                **error_measures(d.tau, pred, effort=effort),
                 "source": d.source,
                 "samples": d.m,
                 "tau_hat": pred,
@@ -145,7 +149,7 @@ def validate(result: IdentificationResult, data: JointData | Sequence[JointData]
             }
         )
     out = error_measures(
-        np.vstack([d.tau for d in logs]), np.vstack([p["tau_hat"] for p in per]), effort
+        np.vstack([d.tau for d in logs]), np.vstack([p["tau_hat"] for p in per]), effort=effort
     )
     out["tau_hat"] = (
         per[0]["tau_hat"] if isinstance(data, JointData) else [p["tau_hat"] for p in per]
@@ -166,13 +170,13 @@ def _raw_and_moving(result, logs: list, effort, known=None) -> dict:
     hats = [k["tau_hat"] for k in known] if known is not None else [result.predict(r) for r in raws]
     tau = np.vstack([r.tau for r in raws])
     hat = np.vstack(hats)
-    raw = error_measures(tau, hat, effort)
+    raw = error_measures(tau, hat, effort=effort)
     raw.update({"samples": int(tau.shape[0]), "against": RAW_AGAINST, "tau_hat": hats[0]})
     if len(logs) > 1:
         raw["tau_hat"] = hats
     thr = [moving_threshold(r) for r in raws]
     mask = np.vstack([np.abs(r.dq) >= t for r, (t, _) in zip(raws, thr)])
-    moving = error_measures(tau, hat, effort, mask=mask)
+    moving = error_measures(tau, hat, effort=effort, mask=mask)
     moving.update(
         {
             "samples": int(tau.shape[0]),
@@ -188,6 +192,10 @@ def _raw_and_moving(result, logs: list, effort, known=None) -> dict:
 def true_base_values(base: BaseParameters, truth: dict) -> np.ndarray:
     """Base-parameter values of a truth sidecar (classical names/values, any layout) in the layout
     of ``base``; classical parameters absent from the truth count as zero."""
+    _args.instance(base, "base", BaseParameters)
+    _args.mapping(truth, "truth")
+    if not {"names", "values"} <= truth.keys():
+        raise _args.fail("truth", "must have 'names' and 'values' (a truth sidecar)")
     lookup = dict(zip(truth["names"], truth["values"]))
     pi = np.array([float(lookup.get(nm, 0.0)) for nm in base.classical_names])
     return base.values(pi)

@@ -19,6 +19,8 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from .. import _args
+from ..robot import as_robot
 from .data import JointData
 from .errors import IdentificationError
 from .options import OPTION_NAMES, IdentifyOptions, ReadingOptions
@@ -60,7 +62,14 @@ def _as_logs(logs, model: str) -> Logs:
         return logs
     if isinstance(logs, JointData):
         logs = [logs]
+    if isinstance(logs, (str, bytes)) or not hasattr(logs, "__iter__"):
+        raise _args.ArgumentError(
+            f"logs is {type(logs).__name__}; expected the Logs of load_logs, a JointData or a "
+            "list of them"
+        )
     logs = list(logs)
+    for d in logs:
+        _args.instance(d, "logs", JointData, "the Logs of load_logs, a JointData or a list of them")
     names = [d.source or f"log {k + 1}" for k, d in enumerate(logs)]
     return Logs(LogSet(names, [[d] for d in logs]), model=model, truth=[None] * len(logs))
 
@@ -102,7 +111,7 @@ def _friction(robot, data: list, options: IdentifyOptions, progress):
         choice = select_friction_model(
             robot,
             data,
-            options.friction_model,
+            kind=options.friction_model,
             rotor=options.rotor,
             offset=options.offset,
             width=width,
@@ -143,7 +152,7 @@ def _consistent(res, data: list, options: IdentifyOptions, progress):
     from .consistent import consistent_estimate
 
     weight = "auto" if options.prior_weight is None else options.prior_weight
-    cons = consistent_estimate(res, weight, data=data, progress=progress)
+    cons = consistent_estimate(res, prior_weight=weight, data=data, progress=progress)
     return cons, cons.to_dict(), cons.mass_matrix_min_eig(data)
 
 
@@ -166,6 +175,10 @@ def run(
     recorded in the JSON; ``progress``: a callable taking one line per step of the long
     solves. Each stage runs once, in order: friction model, fit, consistent estimate, error
     measures."""
+    robot = as_robot(robot)
+    _args.optional(_args.instance, options, "options", IdentifyOptions)
+    _args.optional(_args.text, tip, "tip")
+    _args.optional(_args.function, progress, "progress")
     if options is not None and keywords:
         raise IdentificationError(f"run: give options or {', '.join(keywords)}, not both")
     unknown = sorted(set(keywords) - OPTION_NAMES)
