@@ -89,6 +89,7 @@ py::dict limitsDict(const JointLimits& l) {
 
 void bindCodegen(pybind11::module_& m);
 void bindCsv(pybind11::module_& m);
+void bindFilter(pybind11::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "mindyn C++ core: models, linear-in-parameters dynamics, kinematics";
@@ -790,4 +791,5 @@ PYBIND11_MODULE(_core, m) {
   bindObserver(m);
   bindCodegen(m);
   bindCsv(m);
+  bindFilter(m);
 }
