@@ -29,6 +29,7 @@ import math
 import re
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -87,9 +88,9 @@ class GeneratedCode:
         self.header_name = header_name
         self.name = name
         self.numeric = numeric
-        self.header = out.get("header")
-        self.source = out.get("source")
-        self.text = out.get("text")
+        self.header: str | None = out.get("header")  # C: the header and the source
+        self.source: str | None = out.get("source")
+        self.text: str | None = out.get("text")  # Structured Text
         self.counts = {k: dict(v) for k, v in out["counts"].items()}
         self.names = list(out["names"])
         self.values = np.asarray(out["values"], dtype=float)
@@ -101,8 +102,10 @@ class GeneratedCode:
         written."""
         path = Path(path)
         if self.lang == "st":
+            assert self.text is not None
             path.write_text(self.text)
             return [path]
+        assert self.header is not None and self.source is not None
         src = path if path.suffix == ".c" else path.with_suffix(".c")
         hdr = src.parent / self.header_name
         hdr.write_text(self.header)
@@ -245,7 +248,7 @@ def generate(
             values = _args.array(params, "params", (len(names),))
     out = _core.generate_code(
         robot._m,
-        bp_core,
+        bp_core,  # type: ignore[arg-type]  # None: the classical parameters (the stub omits it)
         rotor=rotor,
         friction=friction,
         functions=fs,
@@ -325,6 +328,10 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
     return values
 
 
+#: numpy's array type, for annotations in classes where ``np`` names an attribute
+_Array = np.ndarray
+
+
 class BaseDynamics:
     """Inverse dynamics, gravity torque and base regressor in the base parameters, by the
     customised Newton-Euler recursion flattened at construction (C++, allocation-free per call).
@@ -356,17 +363,17 @@ class BaseDynamics:
     counts = property(lambda self: self._d.counts)
     geometry_snap = property(lambda self: self._d.geometry_snap)
 
-    def inverse_dynamics(self, q, dq, ddq, p=None) -> np.ndarray:
+    def inverse_dynamics(self, q, dq, ddq, p=None) -> _Array:
         """tau, shape (n,) or (m, n) for batches of q, dq, ddq; ``p`` shape (np,), default the
         robot's own base-parameter values."""
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._d.inverse_dynamics(q, dq, ddq, self._values(p))
 
-    def gravity(self, q, p=None) -> np.ndarray:
+    def gravity(self, q, p=None) -> _Array:
         """Gravity torque, shape (n,) or (m, n)."""
         return self._d.gravity(_args.samples(q, "q", self.n), self._values(p))
 
-    def regressor(self, q, dq, ddq) -> np.ndarray:
+    def regressor(self, q, dq, ddq) -> _Array:
         """W_b, shape (n, np) or (m, n, np): ``tau = W_b @ p``."""
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._d.regressor(q, dq, ddq)
@@ -493,14 +500,16 @@ def generate_controller(
     classical = base is False
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
-    if classical:
+    bp = None if classical else base
+    assert bp is None or isinstance(bp, BaseParameters)
+    if bp is None:
         names = list(_core.classical_parameter_names(robot._m, rotor=True, friction=True))
     else:
-        names = list(base.names)
+        names = list(bp.names)
     n = robot.n
     g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)
-    s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
+    s: dict[str, Any] = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
     if kind == "computed-torque":
         with np.errstate(over="ignore"):  # an infinite square is refused just below
             s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam**2
@@ -517,11 +526,12 @@ def generate_controller(
         raise control.ControllerSettingError(
             f"gains 'gamma' and 'nu' must be numbers in [0, {big:g}]"
         )
-    if params is None and classical:
+    if params is None and bp is None:
         s["p0"] = None  # the robot's classical values, as the generator reads them
     elif params is None:
-        s["p0"] = base.values(robot.parameters(base.rotor, base.friction))
-        if base.offset:
+        assert bp is not None
+        s["p0"] = bp.values(robot.parameters(bp.rotor, bp.friction))
+        if bp.offset:
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
     elif isinstance(params, (str, Path)):
         s["p0"] = read_parameter_file(params, names)
@@ -540,8 +550,8 @@ def generate_controller(
     fn = f"{name}_{kind.replace('-', '_')}"
     header_name = header_name or f"{fn}.h"
     out = _core.generate_controller(
-        None if classical else base._b,
-        False if classical else base.offset,
+        None if bp is None else bp._b,  # type: ignore[arg-type]  # None: the classical parameters
+        False if bp is None else bp.offset,
         kind,
         name,
         s,
@@ -554,7 +564,7 @@ def generate_controller(
     return GeneratedController(kind, lang, name, out, header_name, s)
 
 
-def _compile_shared(code: GeneratedCode, what: str):
+def _compile_shared(code: GeneratedController | GeneratedObserver, what: str):
     """Compiles generated C into a shared library in a temporary folder with the system C
     compiler (``$CC``, else ``cc`` or ``gcc``); returns the folder (kept alive by its holder)
     and the loaded library."""
@@ -609,7 +619,7 @@ class CompiledController:
         self._dir, self._lib = _compile_shared(code, "controller")
         n, np_ = len(code.settings["kd"]), len(code.names)
         dbl = ctypes.c_double
-        fields = [("p", dbl * np_), ("p0", dbl * np_), ("kd", dbl * n)]
+        fields: list[tuple[str, Any]] = [("p", dbl * np_), ("p0", dbl * np_), ("kd", dbl * n)]
         if code.kind == "adaptive-pd":
             fields += [("lambda_", dbl * n), ("gamma", dbl * np_)]
             fields += [("p_min", dbl * np_), ("p_max", dbl * np_)]

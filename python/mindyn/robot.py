@@ -42,7 +42,7 @@ def _robot_dir() -> Path:
     return Path(str(resources.files("mindyn") / "robots"))
 
 
-def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
+def load(robot: Robot | str | Path, tip: str | None = None, gravity=None) -> Robot:
     """Load a robot.
 
     Parameters
@@ -80,7 +80,7 @@ def load(robot: str | Path, tip: str | None = None, gravity=None) -> Robot:
     return out if gravity is None else out.with_gravity(gravity)
 
 
-def _load(robot: str | Path, tip: str | None) -> Robot:
+def _load(robot: Robot | str | Path, tip: str | None) -> Robot:
     if isinstance(robot, Robot):
         return robot
     text = str(robot)

@@ -237,6 +237,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             if args.lang == "st"
             else generate(robot, base=base, name=code.name, **dict(same, lang="st"))
         )
+        assert st.text is not None  # Structured Text
         Path(args.plcopen).write_bytes(plcopen_project([st.text], code.name))
         written.append(Path(args.plcopen))
     print("wrote " + ", ".join(str(w) for w in written))
@@ -295,6 +296,7 @@ def _observer(args, robot, base, out: Path, params, note: str | None = None) -> 
     written = code.write(out.with_suffix(".c") if args.lang == "c" else out)
     if args.plcopen:
         st = code if args.lang == "st" else generate_observer(robot, "st", **same)
+        assert st.text is not None  # Structured Text
         Path(args.plcopen).write_bytes(plcopen_project([st.text], code.name))
         written.append(Path(args.plcopen))
     _say_step(robot, "momentum observer", code, args)
@@ -358,6 +360,7 @@ def _controller(args, robot, base, out: Path, params, note: str | None = None) -
         obs = generate_observer(
             robot, "st", base=base, params=st.settings["p0"], period=args.period, name=st.name
         )
+        assert st.text is not None and dyn.text is not None and obs.text is not None  # ST
         texts = [st.text, dyn.text, obs.text]
         Path(args.plcopen).write_bytes(plcopen_project(texts, st.name))
         written.append(Path(args.plcopen))

@@ -200,6 +200,7 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
 
     from ..identification.currents import attach_currents
     from ..identification.data import DataError, convert_torque, read_csv
+    from ..identification.models import require_torque
     from ..identification.rosbag import is_rosbag, read_rosbag
 
     if args.filter == "lowpass":
@@ -245,7 +246,7 @@ def _read(path, robot, args, currents=None, cutoff=None, periodic=False):
             cutoff=args.cutoff,
         )
         if current:  # effort in A: the gains (given or of the drive table) turn it into N m
-            tau, info = convert_torque(data.tau, "current", robot, gain)
+            tau, info = convert_torque(require_torque(data), "current", robot, gain)
             data = replace(data, tau=tau, processing={**data.processing, "torque": info})
     else:
         data = read_csv(
@@ -549,6 +550,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if cons is not None:
         out.append("")
         out += _consistent_lines(cons, fit, val, cfit, cval, logs)
+        assert cfit is not None  # validated with cons
         out.append(_rms_lines("identification data, consistent estimate", cfit))
         if cval is not None:
             out.append(
@@ -565,6 +567,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     doc["consistent"] = cons is not None
     if cons is not None:
         doc.update(_plain(cons.to_dict()))
+        assert cfit is not None  # validated with cons
         ce = doc["consistent_estimate"]
         ce["fit"] = {"estimate": "consistent", **_measures_doc(cfit, labels)}
         if cval is not None:
@@ -1083,6 +1086,7 @@ def _three_measures(v: dict) -> list[str]:
     rows = [("filtered (the torques the fit saw)", v)]
     if raw is None:
         return ["  (the torques as logged are not known for this data: no raw or moving measure)"]
+    assert mov is not None  # measured with raw
     rows += [("raw (the torques as logged)", raw), ("moving (raw, moving samples)", mov)]
     lines = [
         f"  {'measure':<34} {'overall':>9}  {'samples':>8}  RMS per joint [N m | N]",

@@ -89,6 +89,13 @@ INERTIAL = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
 _NAME = re.compile(r"([A-Za-z]+?)([0-9]+)")
 
 
+def _name_kind(name: str) -> str:
+    """The kind of a classical parameter name: ``Ia`` of ``Ia3``."""
+    m = _NAME.fullmatch(name)
+    assert m is not None, name  # a kind and a joint number
+    return m.group(1)
+
+
 # ---------------------------------------------------------------------------------------------
 # Pseudo-inertia
 # ---------------------------------------------------------------------------------------------
@@ -165,7 +172,7 @@ class _Layout:
         self.links = [np.array([where[f"{k}{j + 1}"] for k in INERTIAL]) for j in range(n)]
         inertial = set(np.concatenate(self.links).tolist())
         self.extra = np.array([i for i in range(len(names)) if i not in inertial], dtype=int)
-        kinds = [_NAME.fullmatch(names[i]).group(1) for i in self.extra]
+        kinds = [_name_kind(names[i]) for i in self.extra]
         self.nonneg = np.array([k in ("Ia", "Fv", "Fc") for k in kinds], dtype=bool)
         self.robot_params = len(names) - (n if base.offset else 0)
 
@@ -569,7 +576,7 @@ def _refine_with_prior(M, z, s2, pi, layout: _Layout, J0s, W: float) -> tuple[np
         lam, V = np.linalg.eigh(J)
         floor = 1e-9 * max(1.0, float(lam[-1]))  # a factor of a singular answer: just inside
         root = V * np.sqrt(np.maximum(lam, floor))
-        R = np.linalg.qr(root.T, mode="r")
+        R = np.asarray(np.linalg.qr(root.T, mode="r"))  # numpy types it as the tuple result
         x0.extend((R.T * np.where(np.diag(R) < 0, -1.0, 1.0))[tril])
     nonneg = set(extra[layout.nonneg].tolist())
     start = [max(v, 0.0) if i in nonneg else v for v, i in zip(np.asarray(pi, float)[extra], extra)]
@@ -772,10 +779,10 @@ class PayloadResult:
     seconds: float = 0.0
 
     def derived(self, consistent: bool = False) -> dict:
-        p = self.consistent if consistent else self.values
-        out = body_quantities(p)
         if consistent:
-            return out
+            return body_quantities(self.consistent)
+        p = self.values
+        out = body_quantities(p)
         # first-order propagation: central differences of the derived quantities
         f0 = _flat(out)
         Jac = np.zeros((f0.size, 10))

@@ -11,8 +11,12 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .data import DataError, read_json
+
+if TYPE_CHECKING:
+    from ..robot import Robot
 
 __all__ = ["FLAGS", "read_identification", "robot_on_drive_side", "with_identified_friction"]
 
@@ -96,7 +100,7 @@ def read_identification(
     return out
 
 
-def robot_on_drive_side(robot, doc: dict, where: str = "identification JSON"):
+def robot_on_drive_side(robot: Robot, doc: dict, where: str = "identification JSON") -> Robot:
     """``robot`` with rotor inertia and friction where the identification ``doc`` had them
     (``drive_side``; a document without it was identified with them on the joints)."""
     side = doc.get("drive_side", "joint")
@@ -131,7 +135,7 @@ def _friction_model(fm, where: str) -> dict:
     return out
 
 
-def with_identified_friction(robot, doc: dict, where: str = "identification JSON"):
+def with_identified_friction(robot: Robot, doc: dict, where: str = "identification JSON") -> Robot:
     """``robot`` with the friction model an identification JSON records (``friction_model``;
     unchanged without one: viscous and Coulomb friction). DataError when the record does not fit
     the robot."""

@@ -16,6 +16,7 @@ import re
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 import scipy.linalg as sla
@@ -200,7 +201,7 @@ class _Reduced:
     def solve(self, keep: list[int]):
         """Estimate of the columns ``keep``: ``(p, std, sigma2)``."""
         k = len(keep)
-        T = np.linalg.qr(np.column_stack([self.R[:, keep], self.z]), mode="r")
+        T = _r_factor(np.column_stack([self.R[:, keep], self.z]))
         rss = self.rho + (float(T[k, k] ** 2) if T.shape[0] > k else 0.0)
         Rk = T[:k, :k]
         ps = sla.solve_triangular(Rk, T[:k, k])
@@ -211,10 +212,15 @@ class _Reduced:
         return ps / scale, np.sqrt(var), sigma2
 
 
+def _r_factor(A: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.qr(A, mode="r")``: the array R (typed by numpy as its tuple result)."""
+    return cast(np.ndarray, np.linalg.qr(A, mode="r"))
+
+
 def _triangle(A: np.ndarray) -> np.ndarray:
     """The upper triangular R of ``A = Q R``, padded with zero rows to square ``(k, k)``."""
     k = A.shape[1]
-    R = np.linalg.qr(A, mode="r")
+    R = _r_factor(A)
     if R.shape[0] < k:
         R = np.vstack([R, np.zeros((k - R.shape[0], k))])
     return R
@@ -235,6 +241,7 @@ def dynamic_triangles(
     S = np.zeros((n, nb + 1, nb + 1))
     rows = np.zeros(n, dtype=int)
     keep = moving_equations(base, data.dq, min_velocity)
+    assert data.tau is not None  # require_torque
     for a in range(0, data.m, CHUNK_SAMPLES):
         b = min(data.m, a + CHUNK_SAMPLES)
         W = regressor_rows(base, data, a, b)  # (k, n, nb)

@@ -68,6 +68,7 @@ def dynamic_system(base: BaseParameters, data: JointData, min_velocity: float = 
     the Coulomb term, is not determined by the data (a torque held over a sample period, stiction,
     velocity noise). ``r = m n`` minus those equations."""
     require_torque(data)
+    assert data.tau is not None
     if data.regressor_filter is not None:  # preprocessed: columns filtered like the torques
         W = data.regressor_filter.regressor(base)
     else:
@@ -119,6 +120,7 @@ def energy_system(
     """Energy model over non-overlapping windows of ``window`` sample intervals:
     ``W`` (r, nb) and ``y`` (r,), ``r = (m - 1) // window``."""
     require_torque(data)
+    assert data.tau is not None
     if window < 1:
         raise ValueError(f"energy window must be at least 1 sample interval, got {window}")
     t, dq = data.t, data.dq
@@ -237,6 +239,7 @@ def integral_chunks(
     Longer windows give fewer equations (``n`` per window); a motion faster than the window
     is still integrated exactly up to the quadrature error."""
     require_torque(data)
+    assert data.tau is not None
     a, b = integral_windows(data.t, window)
     if a.size == 0:
         raise IdentificationError(
@@ -303,6 +306,8 @@ def energy_row_noise(data: JointData, window: int) -> np.ndarray:
     return np.array(rows)
 
 
-def require_torque(data: JointData) -> None:
+def require_torque(data: JointData) -> np.ndarray:
+    """The torques of ``data``; a :class:`DataError` when it has none."""
     if data.tau is None:
         raise DataError(f"{data.source or 'data'}: no torque columns tau1..tau{data.n}")
+    return data.tau
