@@ -45,7 +45,14 @@ from ..robot import Robot, load
 from .data import DataError, JointData, read_json
 from .document import read_identification, robot_on_drive_side, with_identified_friction
 from .errors import IdentificationError
-from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
+from .estimation import (
+    IdentificationResult,
+    _logs,
+    _Reduced,
+    identify,
+    predicted_torques,
+    regressor_rows,
+)
 from .models import moving_equations, require_torque
 
 __all__ = [
@@ -248,13 +255,9 @@ class ConsistentResult:
         return [nm for nm, e in zip(self.link_names, eig) if e < -EIG_TOL]
 
     def predict(self, data: JointData) -> np.ndarray:
-        """Joint torques of the consistent estimate on ``data``, shape (m, n)."""
-        out = np.empty((data.m, data.n))
-        step = 8192
-        for a in range(0, data.m, step):
-            b = min(data.m, a + step)
-            out[a:b] = regressor_rows(self.base, data, a, b) @ self.full
-        return out
+        """Joint torques of the consistent estimate on ``data``, shape (m, n)
+        (:func:`~mindyn.identification.estimation.predicted_torques`)."""
+        return predicted_torques(self.base, self.full, data)
 
     def mass_matrix_min_eig(self, data) -> float:
         """Smallest eigenvalue of the joint-space inertia ``A(q)`` of the identified classical

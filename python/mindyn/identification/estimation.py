@@ -21,7 +21,7 @@ from typing import cast
 import numpy as np
 import scipy.linalg as sla
 
-from .._threads import evaluated_ahead, single_threaded_blas
+from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData
@@ -103,18 +103,9 @@ class IdentificationResult:
     reduced: _Reduced | None = field(default=None, repr=False, compare=False)
 
     def predict(self, data: JointData) -> np.ndarray:
-        """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n); the regressor is
-        evaluated :data:`CHUNK_SAMPLES` samples at a time; on preprocessed data whose torques
-        were low-pass filtered, the regressor columns are filtered alike (parallel filtering)."""
-        out = np.empty((data.m, data.n))
-        bounds = [(a, min(data.m, a + CHUNK_SAMPLES)) for a in range(0, data.m, CHUNK_SAMPLES)]
-        if data.regressor_filter is None:  # evaluated on threads, a few chunks ahead
-            rows = evaluated_ahead(lambda a, b: regressor_rows(self.base, data, a, b), bounds)
-        else:  # the filtered columns, computed once
-            rows = (regressor_rows(self.base, data, a, b) for a, b in bounds)
-        for (a, b), W in zip(bounds, rows):
-            out[a:b] = W @ self.full
-        return out
+        """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n)
+        (:func:`predicted_torques`)."""
+        return predicted_torques(self.base, self.full, data)
 
     def to_dict(self) -> dict:
         return {
@@ -252,6 +243,27 @@ def dynamic_triangles(
             rows[j] += A.shape[0]
             S[j] = _triangle(np.vstack([S[j], A]))
     return S, rows
+
+
+def predicted_torques(base: BaseParameters, full: np.ndarray, data: JointData) -> np.ndarray:
+    """Joint torques ``W_b(q, dq, ddq) @ full`` of the base-parameter values ``full`` on
+    ``data``, shape (m, n). On preprocessed data whose torques were low-pass filtered: from the
+    regressor columns filtered alike (parallel filtering, computed once), :data:`CHUNK_SAMPLES`
+    samples at a time. Otherwise by Newton-Euler with the classical vector that carries
+    ``full`` (:meth:`~mindyn.BaseParameters.embed`; the torque offsets added joint by joint):
+    the same torques to round-off, without forming the regressor (a fraction of its cost on a
+    long log)."""
+    if data.regressor_filter is not None or data.m == 0:
+        out = np.empty((data.m, data.n))
+        for a in range(0, data.m, CHUNK_SAMPLES):
+            b = min(data.m, a + CHUNK_SAMPLES)
+            out[a:b] = regressor_rows(base, data, a, b) @ full
+        return out
+    robot = base.robot
+    pi = base.embed(full)
+    P = len(robot.parameter_names(base.rotor, base.friction))
+    tau = robot.inverse_dynamics(data.q, data.dq, data.ddq, pi[:P]).reshape(data.m, data.n)
+    return tau + pi[P:] if pi.size > P else tau
 
 
 def regressor_rows(base: BaseParameters, data: JointData, a: int, b: int) -> np.ndarray:
