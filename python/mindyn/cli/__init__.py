@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .._core import ModelError, RobotFileNotFoundError
+from .._threads import reuse_freed_memory
 from ..base import base_parameters
 from ..robot import load
 from .args import (
@@ -385,6 +386,7 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as e:  # --help
         return e.code if isinstance(e.code, int) else 0
     try:
+        reuse_freed_memory()  # long logs: large temporaries reused, not mapped anew each time
         prepare_outputs(args)
         status = warnings_after_success(args.func)(args)  # an error stays one line
         sys.stdout.flush()  # a closed pipe shows here, not at exit
