@@ -21,7 +21,7 @@ from typing import cast
 import numpy as np
 import scipy.linalg as sla
 
-from .._threads import single_threaded_blas
+from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, JointData
@@ -262,8 +262,17 @@ def predicted_torques(base: BaseParameters, full: np.ndarray, data: JointData) -
     robot = base.robot
     pi = base.embed(full)
     P = len(robot.parameter_names(base.rotor, base.friction))
-    tau = robot.inverse_dynamics(data.q, data.dq, data.ddq, pi[:P]).reshape(data.m, data.n)
-    return tau + pi[P:] if pi.size > P else tau
+    classical = pi[:P]
+
+    def torques(a, b):
+        return robot.inverse_dynamics(data.q[a:b], data.dq[a:b], data.ddq[a:b], classical)
+
+    out = np.empty((data.m, data.n))
+    step = 8 * CHUNK_SAMPLES
+    bounds = [(a, min(data.m, a + step)) for a in range(0, data.m, step)]
+    for (a, b), tau in zip(bounds, evaluated_ahead(torques, bounds)):  # on threads
+        out[a:b] = tau.reshape(b - a, data.n)
+    return out + pi[P:] if pi.size > P else out
 
 
 def regressor_rows(base: BaseParameters, data: JointData, a: int, b: int) -> np.ndarray:
