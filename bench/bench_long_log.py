@@ -40,6 +40,7 @@ def identify_stages(robot_name: str, path: Path, strict: bool = False):
     """The stages of ``mindyn identify ROBOT LOG --rotor --friction`` timed; returns the times,
     the raw data read and the result."""
     import mindyn
+    from mindyn._threads import reuse_freed_memory
     from mindyn.identification import data as D
     from mindyn.identification import identify, validate
     from mindyn.identification.preprocess import preprocess, split_at_gaps
@@ -52,6 +53,7 @@ def identify_stages(robot_name: str, path: Path, strict: bool = False):
         times[stage] = (now[0] - clock[0], now[1] - clock[1])
         clock[:] = now
 
+    reuse_freed_memory()  # as the command line does for its process
     robot = mindyn.load(robot_name)
     lap("load robot")
     fast = getattr(D, "_fast_values", None)  # absent from a reader without the fast path

@@ -21,4 +21,5 @@ def test_version_is_pyprojects():
 
 def test_typed_marker_and_license_are_shipped():
     assert (resources.files("mindyn") / "py.typed").is_file()
+    assert (resources.files("mindyn") / "_core.pyi").is_file()  # the extension's stub
     assert "BSD 3-Clause" in (ROOT / "LICENSE").read_text(encoding="utf-8")

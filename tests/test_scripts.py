@@ -37,7 +37,7 @@ def bash(script: str, stdin: str = "", cwd: Path = ROOT) -> subprocess.Completed
 
 
 def test_scripts_parse():
-    for name in ("bootstrap.sh", "test", "requirements.sh", "mindyn", "lock"):
+    for name in ("bootstrap.sh", "test", "requirements.sh", "mindyn", "lock", "stubs"):
         done = bash(f"bash -n scripts/{name}")
         assert done.returncode == 0, (name, done.stderr)
 

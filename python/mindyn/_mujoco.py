@@ -260,7 +260,9 @@ def joint_terms(m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     damping = np.array(m.dof_damping, dtype=float)[dof]
     friction = np.array(m.dof_frictionloss, dtype=float)[dof]
     for t in folded_tendons(m):
-        ((j, c),) = tendon_joints(m, t)
+        joints = tendon_joints(m, t)
+        assert joints is not None  # a folded tendon is fixed
+        ((j, c),) = joints
         terms = tendon_terms(m, t)
         armature[j] += c * c * terms["armature"]
         damping[j] += c * c * terms["damping"]

@@ -19,6 +19,7 @@ import xml.parsers.expat
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
@@ -136,7 +137,7 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
             x = float(v)
         except OverflowError:  # an integer beyond a double
             raise ModelError(
-                f"{what}: '{k}' is an integer of {len(str(abs(int(v))))} digits, too large "
+                f"{what}: '{k}' is an integer of {len(str(abs(math.trunc(v))))} digits, too large "
                 "for a double"
             ) from None
         if not math.isfinite(x):
@@ -169,6 +170,7 @@ def _joint_side_terms(
     cannot carry them per joint: 0 there, said in a note (the sidecar has the motor values)."""
     if robot.drive_side != "motor" or (terms.rotor is None and terms.viscous is None):
         return terms, []
+    assert robot.transmission is not None  # the motor side has one
     T = robot.transmission.T
     motors = robot.transmission.motors
     zeros = np.zeros(robot.n)
@@ -187,9 +189,10 @@ def _joint_side_terms(
             coupled.append(j)
             continue
         r = float(T[k, j])
-        if terms.rotor is not None:
+        if terms.rotor is not None and out.rotor is not None:
             out.rotor[j] = r * r * terms.rotor[k]
-        if terms.viscous is not None:
+        if terms.viscous is not None and out.viscous is not None:
+            assert terms.coulomb is not None and out.coulomb is not None  # given with viscous
             out.viscous[j] = r * r * terms.viscous[k]
             out.coulomb[j] = abs(r) * terms.coulomb[k]
     notes = [
@@ -326,12 +329,12 @@ class XmlDocument:
         """Turns ElementTree's ``{uri}name`` back into ``prefix:name`` (``name`` for the default
         namespace, as urdfdom reads it) and declares the namespaces on the root again, so that
         the file is written with the names and declarations it had."""
-        declared = {}
+        declared: dict[str, str] = {}
         for _, (prefix, uri) in ET.iterparse(io.BytesIO(raw), events=("start-ns",)):
             declared.setdefault(prefix, uri)
         if not declared:
             return
-        prefix_of = {}
+        prefix_of: dict[str, str] = {}
         for prefix, uri in declared.items():
             prefix_of.setdefault(uri, prefix)
 
@@ -390,7 +393,7 @@ class _UrdfDocument(XmlDocument):
         self.links = {e.get("name"): e for e in self.root if e.tag == "link" and e.get("name")}
         self.joints = [e for e in self.root if e.tag == "joint"]
         self.entering = {}  # child link -> joint element
-        self.children = {}  # parent link -> joint elements
+        self.children: dict[str, list] = {}  # parent link -> joint elements
         for j in self.joints:
             child, parent = self._end(j, "child"), self._end(j, "parent")
             self.entering[child] = j
@@ -583,7 +586,7 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
         row.update({key: float(v[k]) for key, v in present.items()})
         row["units"] = {key: _TERMS[key][unit] for key in present}
         joints.append(row)
-    doc = {
+    doc: dict[str, Any] = {
         "robot": robot.name,
         "description": description.name,
         "terms": meaning,
@@ -592,6 +595,7 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
     if robot.drive_side == "motor" and any(k in present for k in ("Ia", "Fv", "Fc")):
         # row k's Ia, Fv, Fc are motor k's, in motor units, acting through row k of T
         doc["drive_side"] = "motor"
+        assert robot.transmission is not None  # the motor side has one
         for k, row in enumerate(joints):
             row["motor"] = robot.transmission.motors[k]
         doc["terms"]["drive_side"] = (
@@ -659,6 +663,7 @@ def _set_motor_terms(node, robot: Robot, terms: JointTerms, src: Path) -> None:
     side (the joints' values then hold)."""
     motor = robot.drive_side == "motor"
     keys = (("rotor_inertia", terms.rotor), ("viscous", terms.viscous), ("coulomb", terms.coulomb))
+    assert robot.transmission is not None  # a table with transmissions
     m = robot.transmission.n_motors
     if isinstance(node, dict):
         for key, v in keys:
@@ -729,6 +734,7 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
             jn["rotor_inertia"] = float(terms.rotor[k])
         jn.pop("friction", None)
         if terms.viscous is not None:
+            assert terms.coulomb is not None  # given with viscous
             jn["friction"] = {
                 "viscous": float(terms.viscous[k]),
                 "coulomb": float(terms.coulomb[k]),

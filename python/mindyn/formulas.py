@@ -222,7 +222,7 @@ def _num_text(c: Number) -> str:
 def _monomials(poly: Poly, symbols: Sequence[str], latex: bool) -> list[tuple[bool, str]]:
     """Positive monomials first, then by degree (highest first), then by symbol order."""
 
-    def key(item):
+    def key(item: tuple[tuple[int, ...], Number]):
         e, c = item
         return (c < 0, -sum(e), [-x for x in e])
 
@@ -235,7 +235,7 @@ def _monomials(poly: Poly, symbols: Sequence[str], latex: bool) -> list[tuple[bo
                     vars_.append(_latex_symbol(s, k))
                 else:
                     vars_.append(s if k == 1 else f"{s}^{k}")
-        a = abs(c)
+        a = abs(c) if isinstance(c, Fraction) else abs(float(c))
         num = _num_latex(a) if latex else _num_text(a)
         sep = r"\," if latex else "*"
         if vars_:
@@ -348,7 +348,7 @@ def numeric_formulas(
         # a term joins the first group within twice its tolerance
         raws: list[float] = []
         where: list[int] = []
-        for c in np.flatnonzero(row):
+        for c in np.flatnonzero(row).tolist():
             y = float(row[c])
             tol = RELATIVE * abs(y) + ABSOLUTE * scale
             if abs(y) <= ABSOLUTE * scale:
@@ -414,7 +414,7 @@ class _Geometry:
                 f"'{self.convention}'; expected dh, mdh or urdf"
             )
 
-    def build(self, values: np.ndarray, twists: Sequence[float] = ()) -> Robot:
+    def build(self, values: np.ndarray, twists: Sequence[float] | np.ndarray = ()) -> Robot:
         """The robot with the symbol lengths ``values`` and, when given, the angles ``twists``
         (rad) for the joints in ``self.twists``."""
         robot = self.robot

@@ -313,6 +313,7 @@ def _mapping_comment(robot: Robot, on_motors: bool, transmissions: bool) -> str:
 
 
 def _offsets_comment(robot: Robot, terms: JointTerms) -> str:
+    assert terms.offset is not None  # called when there are offsets
     values = ", ".join(f"{name} {float(v)!r}" for name, v in zip(robot.joint_names, terms.offset))
     return (
         f" Torque offsets {_OFF} (tau += {_OFF}) have no place in MJCF; identified values, per "
@@ -446,7 +447,7 @@ def _verify(robot: Robot, terms: JointTerms, out: Path) -> None:
     for k, link in enumerate(robot.link_names[1:]):
         got = again.params[10 * names[link] : 10 * names[link] + 10]
         want = terms.inertial[10 * k : 10 * k + 10]
-        if np.linalg.norm(got - want) > 1e-5 * max(np.linalg.norm(want), 1e-300) + 1e-300:
+        if np.linalg.norm(got - want) > 1e-5 * max(float(np.linalg.norm(want)), 1e-300) + 1e-300:
             raise ModelError(
                 f"{out}: MuJoCo compiles link '{link}' to other inertial parameters than "
                 'written (a <compiler> option such as inertiafromgeom="true", fusestatic, '

@@ -47,7 +47,11 @@ def _robot_dir() -> Path:
 
 
 def load(
-    robot: str | Path, *, tip: str | None = None, gravity=None, root_joint: str | None = None
+    robot: Robot | str | Path,
+    *,
+    tip: str | None = None,
+    gravity=None,
+    root_joint: str | None = None,
 ) -> Robot:
     """Load a robot.
 
@@ -109,7 +113,7 @@ def as_robot(robot, *, name: str = "robot") -> Robot:
     return load(robot)
 
 
-def _load(robot: str | Path, tip: str | None, root_joint: str | None = None) -> Robot:
+def _load(robot: Robot | str | Path, tip: str | None, root_joint: str | None = None) -> Robot:
     if isinstance(robot, Robot):
         return robot
     text = str(robot)

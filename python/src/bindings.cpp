@@ -90,6 +90,7 @@ py::dict limitsDict(const JointLimits& l) {
 
 void bindCodegen(pybind11::module_& m);
 void bindCsv(pybind11::module_& m);
+void bindFilter(pybind11::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "mindyn C++ core: models, linear-in-parameters dynamics, kinematics";
@@ -805,4 +806,5 @@ PYBIND11_MODULE(_core, m) {
   bindCodegen(m);
   bindCsv(m);
   bindMultibody(m);
+  bindFilter(m);
 }

@@ -10,6 +10,7 @@ import os
 import sys
 
 from .._core import ModelError, RobotFileNotFoundError
+from .._threads import reuse_freed_memory
 from .args import (
     COMMANDS,
     Parser,
@@ -83,6 +84,7 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as e:  # --help
         return e.code if isinstance(e.code, int) else 0
     try:
+        reuse_freed_memory()  # long logs: large temporaries reused, not mapped anew each time
         prepare_outputs(args)
         status = warnings_after_success(args.func)(args)  # an error stays one line
         sys.stdout.flush()  # a closed pipe shows here, not at exit

@@ -10,6 +10,7 @@ import argparse
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -102,7 +103,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     ref_tau = robot.inverse_dynamics(*exc.trajectory.evaluate(t[::5]))
     sd = noise_from_spec(f"{args.noise:g}%", robot, "torque", reference_torque=ref_tau)
     noise = SensorNoise(torque=sd, quantization=2 * np.pi / 2**20)
-    kw = dict(rotor=True, friction=True, noise=noise, rate=250.0)
+    kw: dict[str, Any] = dict(rotor=True, friction=True, noise=noise, rate=250.0)
     log_e = simulate(robot, exc.trajectory, seed=args.seed + 1, **kw)
     log_v = simulate(robot, val_traj, seed=args.seed + 2, **kw)
     permille = bool(np.isfinite(robot.drives["rated_torque"]).all()) and bool(
@@ -237,7 +238,7 @@ def _codegen(robot_arg: str, out: Path) -> None:
     tables = {}
     for lang, ext in (("c", "c"), ("st", "st")):
         target = out / f"inverse_dynamics.{ext}"
-        same = dict(lang=lang, rotor=True, friction=True)
+        same: dict[str, Any] = dict(lang=lang, rotor=True, friction=True)
         code = generate(robot, base=base, header_name="inverse_dynamics.h", **same)
         classical = generate(robot, base=False, name=code.name, **same)
         code.write(target)

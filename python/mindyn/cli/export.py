@@ -27,9 +27,9 @@ def register(subparsers) -> None:
     p.set_defaults(func=cmd_export)
 
 
-def read_classical(path: str) -> tuple[dict, str | None, dict | None]:
-    """The 'classical' map of an identification JSON, the robot it names (None if none) and its
-    friction model (None if not recorded), or a one-line error naming the file."""
+def read_classical(path: str) -> tuple[dict, str | None, dict]:
+    """The 'classical' map of an identification JSON, the robot it names (None if none) and the
+    whole document, or a one-line error naming the file."""
     # here: not needed by the other commands
     from ..identification.document import read_identification
 

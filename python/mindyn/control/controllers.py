@@ -246,6 +246,8 @@ class ComputedTorque:
     the measured velocity chatters about zero speed)."""
 
     name = "computed-torque"
+    #: set by :func:`make_controller`: ``p_hat`` is the simulated robot's own parameters
+    true_model: bool = False
 
     def __init__(
         self,
@@ -287,8 +289,14 @@ class ComputedTorque:
 
     def use_parameters(self, p_hat) -> None:
         """Takes ``p_hat`` (base parameters) as the fixed model."""
-        self.__init__(
-            self.base, p_hat, self.kp, self.kd, coulomb=self._coulomb, coulomb_smoothing=self.eps
+        ComputedTorque.__init__(
+            self,
+            self.base,
+            p_hat,
+            self.kp,
+            self.kd,
+            coulomb=self._coulomb,
+            coulomb_smoothing=self.eps,
         )
 
     def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
@@ -328,6 +336,8 @@ class AdaptivePD:
     """
 
     name = "adaptive-pd"
+    #: set by :func:`make_controller`: ``p0`` is the simulated robot's own parameters
+    true_model: bool = False
 
     def __init__(
         self,
@@ -517,6 +527,7 @@ def controller_check(robot: Robot, controller, params, period: float):
     m = robot.mass_matrix(qs, params)
     models = [m]
     if kind != "pd":
+        assert base is not None and p_hat is not None
         k = len(qs)
         eye = np.broadcast_to(np.eye(n), (k, n, n)).reshape(k * n, n)
         qq = np.repeat(qs, n, axis=0)

@@ -30,7 +30,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -83,8 +83,11 @@ class Reference(Protocol):
     time) and ``evaluate(t)``: positions, velocities and accelerations at times ``t`` (shape
     (m,), from 0), three (m, n) arrays."""
 
-    n: int
-    duration: float
+    @property
+    def n(self) -> int: ...  # an attribute or a read-only property
+
+    @property
+    def duration(self) -> float: ...
 
     def evaluate(self, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]: ...
 
@@ -403,6 +406,7 @@ class SimulationResult:
         # imported here: the identification package (and scipy.signal) is not needed to simulate
         from ..identification.data import truth_path, write_csv
 
+        assert self.params is not None  # a simulation's result has the plant's parameters
         path = write_csv(path, self.t, self.q, self.tau, dq=self.dq)
         truth = {
             "robot": robot_name,
@@ -594,7 +598,8 @@ def simulate(
     limit = _torque_limit(robot, torque_limit)
 
     if getattr(controller, "true_model", False):  # the true parameters: the simulated robot's
-        controller.use_parameters(base_values(controller.base, p_true))
+        model: Any = controller  # a model-based controller: ComputedTorque, AdaptivePD
+        model.use_parameters(base_values(model.base, p_true))
     check = controller_check(robot, controller, p_true, period)
     if check is not None and not check.stable and limit is None:
         raise check.error(what="the controller")  # (a torque limit bounds an unstable linear loop)
@@ -660,8 +665,9 @@ def simulate(
                 if ph is None:
                     ph = np.zeros((m, len(p_hat)))
                 ph[i] = p_hat
-                if pb_true is not None and getattr(controller, "Y", None) is not None:
-                    taut[i] = controller.Y @ pb_true
+                Y = getattr(controller, "Y", None)
+                if pb_true is not None and Y is not None:
+                    taut[i] = Y @ pb_true
             if i < m - 1 or not endpoint:
                 budget.t = t[i]
                 try:
@@ -791,6 +797,7 @@ class ContactWrench(TorqueProfile):
             raise ArgumentError("ContactWrench needs the robot (robot=...)")
 
     def __call__(self, t: float, q=None, dq=None) -> np.ndarray:
+        assert self.robot is not None  # __post_init__ requires it
         n = self.robot.n
         if not self.active(t):
             return np.zeros(n)
@@ -1178,6 +1185,7 @@ def write_tracking_report(
         ax[0].set_ylabel("(p_hat - p) / max(|p|, 1% max|p|)")
         ax[0].set_title("base-parameter estimates: error, one line per parameter")
         ax[0].grid(alpha=0.3)
+        assert result.tau_true_model is not None  # with the estimates of an adaptive controller
         d = result.tau_model - result.tau_true_model
         for k in range(n):
             ax[1].plot(result.t, d[:, k], lw=0.6, label=f"joint {k + 1}")

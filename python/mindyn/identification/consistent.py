@@ -52,7 +52,14 @@ from .document import (
     with_identified_state,
 )
 from .errors import IdentificationError
-from .estimation import IdentificationResult, _logs, _Reduced, identify, regressor_rows
+from .estimation import (
+    IdentificationResult,
+    _logs,
+    _Reduced,
+    identify,
+    predicted_torques,
+    regressor_rows,
+)
 from .models import moving_equations, require_torque
 
 __all__ = [
@@ -94,6 +101,13 @@ MAX_PRIOR_WEIGHT = 1e6
 
 INERTIAL = ("XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M")
 _NAME = re.compile(r"([A-Za-z]+?)([0-9]+)")
+
+
+def _name_kind(name: str) -> str:
+    """The kind of a classical parameter name: ``Ia`` of ``Ia3``."""
+    m = _NAME.fullmatch(name)
+    assert m is not None, name  # a kind and a joint number
+    return m.group(1)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -174,7 +188,7 @@ class _Layout:
         self.links = [np.array([where[f"{k}{j + 1}"] for k in INERTIAL]) for j in range(n)]
         inertial = set(np.concatenate(self.links).tolist())
         self.extra = np.array([i for i in range(len(names)) if i not in inertial], dtype=int)
-        kinds = [_NAME.fullmatch(names[i]).group(1) for i in self.extra]
+        kinds = [_name_kind(names[i]) for i in self.extra]
         self.nonneg = np.array([k in ("Ia", "Fv", "Fc") for k in kinds], dtype=bool)
         self.robot_params = len(names) - (n if base.offset else 0)
 
@@ -250,13 +264,9 @@ class ConsistentResult:
         return [nm for nm, e in zip(self.link_names, eig) if e < -EIG_TOL]
 
     def predict(self, data: JointData) -> np.ndarray:
-        """Joint torques of the consistent estimate on ``data``, shape (m, n)."""
-        out = np.empty((data.m, data.n))
-        step = 8192
-        for a in range(0, data.m, step):
-            b = min(data.m, a + step)
-            out[a:b] = regressor_rows(self.base, data, a, b) @ self.full
-        return out
+        """Joint torques of the consistent estimate on ``data``, shape (m, n)
+        (:func:`~mindyn.identification.estimation.predicted_torques`)."""
+        return predicted_torques(self.base, self.full, data)
 
     def mass_matrix_min_eig(self, data) -> float:
         """Smallest eigenvalue of the joint-space inertia ``A(q)`` of the identified classical
@@ -583,7 +593,7 @@ def _refine_with_prior(M, z, s2, pi, layout: _Layout, J0s, W: float) -> tuple[np
         lam, V = np.linalg.eigh(J)
         floor = 1e-9 * max(1.0, float(lam[-1]))  # a factor of a singular answer: just inside
         root = V * np.sqrt(np.maximum(lam, floor))
-        R = np.linalg.qr(root.T, mode="r")
+        R = np.asarray(np.linalg.qr(root.T, mode="r"))  # numpy types it as the tuple result
         x0.extend((R.T * np.where(np.diag(R) < 0, -1.0, 1.0))[tril])
     nonneg = set(extra[layout.nonneg].tolist())
     start = [max(v, 0.0) if i in nonneg else v for v, i in zip(np.asarray(pi, float)[extra], extra)]
@@ -786,10 +796,10 @@ class PayloadResult:
     seconds: float = 0.0
 
     def derived(self, *, consistent: bool = False) -> dict:
-        p = self.consistent if consistent else self.values
-        out = body_quantities(p)
         if consistent:
-            return out
+            return body_quantities(self.consistent)
+        p = self.values
+        out = body_quantities(p)
         # first-order propagation: central differences of the derived quantities
         f0 = _flat(out)
         Jac = np.zeros((f0.size, 10))

@@ -31,6 +31,7 @@ import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any, Protocol
 
 import numpy as np
 from scipy import signal
@@ -58,6 +59,13 @@ class DataError(Error, ValueError):
 
 class DataFileNotFoundError(Error, FileNotFoundError):
     """A data file that does not exist."""
+
+
+class RegressorFilter(Protocol):
+    """What :attr:`JointData.regressor_filter` provides: the regressor columns of a base-parameter
+    set filtered like the torques, shape (m, n, nb)."""
+
+    def regressor(self, base: Any) -> np.ndarray: ...
 
 
 @dataclass
@@ -94,7 +102,7 @@ class JointData:
     tau: np.ndarray | None = None
     source: str = ""
     processing: dict = field(default_factory=dict)
-    regressor_filter: object = None
+    regressor_filter: RegressorFilter | None = None
     logged: JointData | None = None
 
     @property

@@ -11,16 +11,15 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .. import _args
 from .data import DataError, read_json
 
-__all__ = [
-    "FLAGS",
-    "read_identification",
-    "robot_on_drive_side",
-    "with_identified_friction",
-]
+if TYPE_CHECKING:
+    from ..robot import Robot
+
+__all__ = ["FLAGS", "read_identification", "robot_on_drive_side", "with_identified_friction"]
 
 #: The boolean fields: JSON ``true`` / ``false`` only.
 FLAGS = ("rotor", "friction", "offset", "consistent")
@@ -106,7 +105,7 @@ def read_identification(
     return out
 
 
-def robot_on_drive_side(robot, doc: dict, *, where: str = "identification JSON"):
+def robot_on_drive_side(robot: Robot, doc: dict, *, where: str = "identification JSON") -> Robot:
     """``robot`` with rotor inertia and friction where the identification ``doc`` had them
     (``drive_side``; a document without it was identified with them on the joints)."""
     from ..robot import Robot
@@ -157,7 +156,9 @@ def _friction_model(fm, where: str) -> dict:
     return out
 
 
-def with_identified_friction(robot, doc: dict, *, where: str = "identification JSON"):
+def with_identified_friction(
+    robot: Robot, doc: dict, *, where: str = "identification JSON"
+) -> Robot:
     """``robot`` with the friction model an identification JSON records (``friction_model``;
     unchanged without one: viscous and Coulomb friction). DataError when the record does not fit
     the robot."""

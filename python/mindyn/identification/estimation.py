@@ -16,6 +16,7 @@ import re
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 import scipy.linalg as sla
@@ -104,18 +105,9 @@ class IdentificationResult:
     reduced: _Reduced | None = field(default=None, repr=False, compare=False)
 
     def predict(self, data: JointData) -> np.ndarray:
-        """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n); the regressor is
-        evaluated :data:`CHUNK_SAMPLES` samples at a time; on preprocessed data whose torques
-        were low-pass filtered, the regressor columns are filtered alike (parallel filtering)."""
-        out = np.empty((data.m, data.n))
-        bounds = [(a, min(data.m, a + CHUNK_SAMPLES)) for a in range(0, data.m, CHUNK_SAMPLES)]
-        if data.regressor_filter is None:  # evaluated on threads, a few chunks ahead
-            rows = evaluated_ahead(lambda a, b: regressor_rows(self.base, data, a, b), bounds)
-        else:  # the filtered columns, computed once
-            rows = (regressor_rows(self.base, data, a, b) for a, b in bounds)
-        for (a, b), W in zip(bounds, rows):
-            out[a:b] = W @ self.full
-        return out
+        """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n)
+        (:func:`predicted_torques`)."""
+        return predicted_torques(self.base, self.full, data)
 
     def to_dict(self) -> dict:
         return {
@@ -202,7 +194,7 @@ class _Reduced:
     def solve(self, keep: list[int]):
         """Estimate of the columns ``keep``: ``(p, std, sigma2)``."""
         k = len(keep)
-        T = np.linalg.qr(np.column_stack([self.R[:, keep], self.z]), mode="r")
+        T = _r_factor(np.column_stack([self.R[:, keep], self.z]))
         rss = self.rho + (float(T[k, k] ** 2) if T.shape[0] > k else 0.0)
         Rk = T[:k, :k]
         ps = sla.solve_triangular(Rk, T[:k, k])
@@ -213,10 +205,15 @@ class _Reduced:
         return ps / scale, np.sqrt(var), sigma2
 
 
+def _r_factor(A: np.ndarray) -> np.ndarray:
+    """``numpy.linalg.qr(A, mode="r")``: the array R (typed by numpy as its tuple result)."""
+    return cast(np.ndarray, np.linalg.qr(A, mode="r"))
+
+
 def _triangle(A: np.ndarray) -> np.ndarray:
     """The upper triangular R of ``A = Q R``, padded with zero rows to square ``(k, k)``."""
     k = A.shape[1]
-    R = np.linalg.qr(A, mode="r")
+    R = _r_factor(A)
     if R.shape[0] < k:
         R = np.vstack([R, np.zeros((k - R.shape[0], k))])
     return R
@@ -237,6 +234,7 @@ def dynamic_triangles(
     S = np.zeros((n, nb + 1, nb + 1))
     rows = np.zeros(n, dtype=int)
     keep = moving_equations(base, data.dq, min_velocity)
+    assert data.tau is not None  # require_torque
     for a in range(0, data.m, CHUNK_SAMPLES):
         b = min(data.m, a + CHUNK_SAMPLES)
         W = regressor_rows(base, data, a, b)  # (k, n, nb)
@@ -247,6 +245,36 @@ def dynamic_triangles(
             rows[j] += A.shape[0]
             S[j] = _triangle(np.vstack([S[j], A]))
     return S, rows
+
+
+def predicted_torques(base: BaseParameters, full: np.ndarray, data: JointData) -> np.ndarray:
+    """Joint torques ``W_b(q, dq, ddq) @ full`` of the base-parameter values ``full`` on
+    ``data``, shape (m, n). On preprocessed data whose torques were low-pass filtered: from the
+    regressor columns filtered alike (parallel filtering, computed once), :data:`CHUNK_SAMPLES`
+    samples at a time. Otherwise by Newton-Euler with the classical vector that carries
+    ``full`` (:meth:`~mindyn.BaseParameters.embed`; the torque offsets added joint by joint):
+    the same torques to round-off, without forming the regressor (a fraction of its cost on a
+    long log)."""
+    if data.regressor_filter is not None or data.m == 0:
+        out = np.empty((data.m, data.n))
+        for a in range(0, data.m, CHUNK_SAMPLES):
+            b = min(data.m, a + CHUNK_SAMPLES)
+            out[a:b] = regressor_rows(base, data, a, b) @ full
+        return out
+    robot = base.robot
+    pi = base.embed(full)
+    P = len(robot.parameter_names(rotor=base.rotor, friction=base.friction))
+    classical = pi[:P]
+
+    def torques(a, b):
+        return robot.inverse_dynamics(data.q[a:b], data.dq[a:b], data.ddq[a:b], classical)
+
+    out = np.empty((data.m, data.n))
+    step = 8 * CHUNK_SAMPLES
+    bounds = [(a, min(data.m, a + step)) for a in range(0, data.m, step)]
+    for (a, b), tau in zip(bounds, evaluated_ahead(torques, bounds)):  # on threads
+        out[a:b] = tau.reshape(b - a, data.n)
+    return out + pi[P:] if pi.size > P else out
 
 
 def regressor_rows(base: BaseParameters, data: JointData, a: int, b: int) -> np.ndarray:

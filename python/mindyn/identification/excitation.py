@@ -408,7 +408,7 @@ class _Problem:
         cq, cd, cdd = _basis(t_con, N, freq)
         self.R, self.r = [], []
         for k in range(n):
-            R, r = _reduction(N, freq, None if start is None else self.start[k])
+            R, r = _reduction(N, freq, None if self.start is None else self.start[k])
             self.R.append(R)
             self.r.append(r)
         self.nf = self.R[0].shape[1]
@@ -744,6 +744,7 @@ def optimize_excitation(
         )
         if best is None or J < best[1]:
             best = (x, J, J0, guess)
+    assert best is not None  # starts >= 1
     x, J, J0, guess = best
     if J >= 60.0:  # no start found a trajectory with a full-rank regressor
         raise IdentificationError(
@@ -764,7 +765,8 @@ def optimize_excitation(
         traj = _scale_into_limits(traj, _tighten(lim, 1e-3), fine, start is not None)
         q, dq, ddq = traj.evaluate(t)
     tm = np.arange(samples) * (traj.period / samples)
-    value = criterion_value(base, *traj.evaluate(tm), criterion=criterion)
+    qm, dqm, ddqm = traj.evaluate(tm)
+    value = criterion_value(base, qm, dqm, ddqm, criterion=criterion)
     elapsed = time.perf_counter() - t_begin
     say(f"excite: best {shown} {value:.6g} (initial guess {report(J0):.6g}), {elapsed:.1f} s")
     return ExcitationResult(

@@ -110,7 +110,7 @@ def _noise_width(logs) -> tuple[np.ndarray, str]:
     from .validation import logged_samples, moving_threshold
 
     # the logged samples carry the data path's noise level of the filtered velocity
-    rules = [moving_threshold(d if logged_samples(d) is None else logged_samples(d)) for d in logs]
+    rules = [moving_threshold(logged_samples(d) or d) for d in logs]
     return np.max([w for w, _ in rules], axis=0), rules[0][1]
 
 

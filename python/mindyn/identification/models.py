@@ -73,6 +73,7 @@ def dynamic_system(base: BaseParameters, data: JointData, *, min_velocity: float
     _args.instance(data, "data", JointData)
     min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
     require_torque(data)
+    assert data.tau is not None
     if data.regressor_filter is not None:  # preprocessed: columns filtered like the torques
         W = data.regressor_filter.regressor(base)
     else:
@@ -130,6 +131,7 @@ def energy_system(
     window = _args.integer(window, "window", 1)
     _args.choice(integration, "integration", ("simpson", "trapezoid", "zoh"))
     require_torque(data)
+    assert data.tau is not None
     if window < 1:
         raise ArgumentError(f"energy window must be at least 1 sample interval, got {window}")
     t, dq = data.t, data.dq
@@ -249,6 +251,7 @@ def integral_chunks(
     Longer windows give fewer equations (``n`` per window); a motion faster than the window
     is still integrated exactly up to the quadrature error."""
     require_torque(data)
+    assert data.tau is not None
     a, b = integral_windows(data.t, window)
     if a.size == 0:
         raise IdentificationError(
@@ -313,6 +316,8 @@ def energy_row_noise(data: JointData, window: int) -> np.ndarray:
     return np.array(rows)
 
 
-def require_torque(data: JointData) -> None:
+def require_torque(data: JointData) -> np.ndarray:
+    """The torques of ``data``; a :class:`DataError` when it has none."""
     if data.tau is None:
         raise DataError(f"{data.source or 'data'}: no torque columns tau1..tau{data.n}")
+    return data.tau

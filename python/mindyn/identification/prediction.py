@@ -17,6 +17,7 @@ from ..robot import Robot, load
 from .data import DataError, JointData, read_json
 from .document import robot_on_drive_side, with_identified_friction, with_identified_state
 from .estimation import CHUNK_SAMPLES
+from .models import require_torque
 from .validation import logged_samples
 
 __all__ = ["Prediction", "identified_model", "predict"]
@@ -118,14 +119,16 @@ def identified_model(
         offset=bool(doc.get("offset")),
     )
     base = with_identified_state(base, doc, where)
-    src = doc
+    src: dict = doc
     if estimate == "consistent":
-        src = doc.get("consistent_estimate")
-        if not isinstance(src, dict) or "base_values" not in src:
+        consistent = doc.get("consistent_estimate")
+        if not isinstance(consistent, dict) or "base_values" not in consistent:
             raise DataError(
                 f"{where}: holds no consistent estimate (identify with consistent=True)"
             )
-    names, values = src.get("base_names", doc["base_names"]), src["base_values"]
+        src = consistent
+    names = src["base_names"] if "base_names" in src else doc["base_names"]
+    values = src["base_values"]
     if list(names) != list(base.names):
         raise DataError(
             f"{where}: its base parameters ({', '.join(map(str, names[:6]))}, ...) are not "
@@ -196,7 +199,7 @@ def predict(
         dq,
         ddq,
         tau_hat,
-        np.vstack([s.tau for s in parts]) if has_tau else None,
+        np.vstack([require_torque(s) for s in parts]) if has_tau else None,
         base,
         values,
         info,

@@ -45,13 +45,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections import deque
 
 import numpy as np
 from scipy import signal
 from scipy.interpolate import CubicSpline
 
 from .. import _args
+from .._core import sosfilt_rows
 from .._threads import evaluated_ahead
 from .data import DataError, JointData, check_cutoff
 
@@ -154,59 +154,70 @@ def _filtfilt_blocks(sos, padlen: int, rows, m: int, idx: np.ndarray) -> np.ndar
     runs from the last block to the first, recomputing each block's forward output from its
     state. The operations, and so the values, are those of ``sosfiltfilt`` (odd extension of
     ``padlen`` samples at each end, the steady-state initial conditions of ``sosfilt_zi``
-    scaled by the first sample of each pass); ``x`` is produced twice, but for the last blocks,
-    kept from the forward pass within :data:`KEEP_BUDGET` bytes. Blocks are laid out with
-    time along the last axis, where ``sosfilt`` works without transposing copies; blocks are
-    produced ahead on threads (:func:`~mindyn._threads.evaluated_ahead`). Columns that
-    are zero in every sample (a regressor's structural zeros) are not filtered: their output is
-    zero, as ``sosfiltfilt``'s."""
-    head, tail = rows(0, padlen + 1).T, rows(m - padlen - 1, m).T
-    cols = np.flatnonzero(np.any(head != 0, axis=1) | np.any(tail != 0, axis=1))
-    passed = _forward_states(sos, padlen, rows, m, head, tail, cols)
+    scaled by the first sample of each pass; each section's update as ``sosfilt`` makes it);
+    ``x`` is produced twice, but for the last blocks, kept from the forward pass within
+    :data:`KEEP_BUDGET` bytes. The sections run down the rows of each block, all columns side
+    by side (``_core.sosfilt_rows``, without the interpreter lock), while the next blocks are
+    produced on threads (:func:`~mindyn._threads.evaluated_ahead`). Columns that are zero in
+    every sample (a regressor's structural zeros) are not filtered: their output is zero, as
+    ``sosfiltfilt``'s."""
+
+    def block(a, b):  # with adjacent columns, as the filter reads them
+        return np.ascontiguousarray(rows(a, b))
+
+    head, tail = block(0, padlen + 1), block(m - padlen - 1, m)
+    cols = np.flatnonzero(np.any(head != 0, axis=0) | np.any(tail != 0, axis=0))
+    passed = _forward_states(sos, padlen, block, m, head, tail, cols)
     if passed is None:  # a column zero at both ends moves in between: filter every column
-        cols = np.arange(head.shape[0])
-        passed = _forward_states(sos, padlen, rows, m, head, tail, cols)
+        cols = np.arange(head.shape[1])
+        passed = _forward_states(sos, padlen, block, m, head, tail, cols)
     bounds, states, z, kept = passed
-    out = np.zeros((idx.size, head.shape[0]))
+    out = np.zeros((idx.size, head.shape[1]))
     back = bounds[::-1]
-    again = (x.T[cols] for x in evaluated_ahead(rows, back[len(kept) :]))
-    blocks = itertools.chain(reversed(kept), again)
-    for (a, b), state, x in zip(back, reversed(states), blocks):
-        y, _ = signal.sosfilt(sos, x, zi=state)
-        y, z = signal.sosfilt(sos, y[:, ::-1], zi=z)
+    # the kept blocks hold the columns cols already; the others are read at them
+    again = ((x, cols) for x in evaluated_ahead(block, back[len(kept) :]))
+    blocks = itertools.chain(((x, None) for x in reversed(kept)), again)
+    for (a, b), state, (x, pick) in zip(back, reversed(states), blocks):
+        y = np.empty((b - a, cols.size))
+        sosfilt_rows(sos, x, state, pick, y)  # the block's forward output, from its state
+        sosfilt_rows(sos, y[::-1], z, None, y[::-1])  # backward, in place
         lo, hi = np.searchsorted(idx, [a, b])
-        out[lo:hi, cols] = y[:, b - 1 - idx[lo:hi]].T
+        out[lo:hi, cols] = y[idx[lo:hi] - a]
     return out
 
 
 def _forward_states(sos, padlen, rows, m, head, tail, cols):
     """The forward pass of :func:`_filtfilt_blocks` over columns ``cols`` of the signal:
-    ``(bounds, states, z, kept)``, the blocks, the filter state at the start of each, the state
-    of the backward pass after the right extension, and the columns ``cols`` of the last blocks
-    (as many as :data:`KEEP_BUDGET` holds: the backward pass starts with them); None when a
-    column not in ``cols`` is not zero somewhere."""
-    zi = signal.sosfilt_zi(sos)[:, None, :]  # (sections, 1, 2): state per column
-    head, tail = head[cols], tail[cols]
-    left = 2 * head[:, :1] - head[:, padlen:0:-1]
-    right = 2 * tail[:, -1:] - tail[:, -2 : -(padlen + 2) : -1]
-    _, z = signal.sosfilt(sos, left, zi=zi * left[:, :1])
+    ``(bounds, states, z, kept)``, the blocks, the filter state at the start of each
+    (sections, 2, columns), the state of the backward pass after the right extension, and the
+    columns ``cols`` of the last blocks (as many as :data:`KEEP_BUDGET` holds: the backward
+    pass starts with them); None when a column not in ``cols`` is not zero somewhere."""
+    zi = signal.sosfilt_zi(sos)[:, :, None]  # (sections, 2, 1): state per column
+    head, tail = head[:, cols], tail[:, cols]
+    left = np.ascontiguousarray(2 * head[:1] - head[padlen:0:-1])
+    right = np.ascontiguousarray(2 * tail[-1:] - tail[-2 : -(padlen + 2) : -1])
+    z = zi * left[0]
+    sosfilt_rows(sos, left, z)
     bounds = [(a, min(m, a + _CHUNK)) for a in range(0, m, _CHUNK)]
     states = []
-    kept: deque = deque(maxlen=KEEP_BUDGET // (8 * _CHUNK * max(cols.size, 1)))
+    keep = min(len(bounds), KEEP_BUDGET // (8 * _CHUNK * max(cols.size, 1)))
+    kept = []
     others = None
-    for x in evaluated_ahead(rows, bounds):
-        states.append(z)
+    for k, x in enumerate(evaluated_ahead(rows, bounds)):
+        states.append(z.copy())
         if others is None:  # the columns outside cols
             others = np.ones(x.shape[1], dtype=bool)
             others[cols] = False
         if others.any() and np.any(np.any(x != 0, axis=0)[others]):
             return None
-        x = x.T[cols]
-        kept.append(x)
-        _, z = signal.sosfilt(sos, x, zi=z)
-    y, z = signal.sosfilt(sos, right, zi=z)
-    _, z = signal.sosfilt(sos, y[:, ::-1], zi=zi * y[:, -1:])
-    return bounds, states, z, list(kept)
+        if k >= len(bounds) - keep:
+            kept.append(np.take(x, cols, axis=1))  # C-ordered, as the filter reads it
+        sosfilt_rows(sos, x, z, cols)
+    y = np.empty_like(right)
+    sosfilt_rows(sos, right, z, None, y)
+    z = zi * y[-1]
+    sosfilt_rows(sos, y[::-1], z)
+    return bounds, states, z, kept
 
 
 def timing(t: np.ndarray) -> dict:
@@ -448,6 +459,7 @@ def preprocess(
                 raise DataError(f"periods must be a whole number >= 1, got {periods}")
             T, count = duration / periods, int(periods)
         else:
+            assert period is not None
             if not (math.isfinite(period) and period > 0):
                 raise DataError(f"period must be a positive number of seconds, got {period}")
             T, count = float(period), int(math.floor(duration / period * (1 + 1e-9)))
@@ -646,9 +658,12 @@ def _logged_samples(data, tu, qf, dqf, ddqf, drop, cycle, fc, rate, logged_dq) -
             states = [x[drop : m - drop] for x in (qf, dqf, ddqf)]
         else:
             states = [CubicSpline(tu, x, axis=0)(t[sel]) for x in (qf, dqf, ddqf)]
+    q_s, dq_s, ddq_s = states
     return JointData(
         data.t[sel],
-        *states,
+        q_s,
+        dq_s,
+        ddq_s,
         None if data.tau is None else data.tau[sel],
         source=data.source,
         processing={"velocity_noise": noise},
@@ -695,9 +710,15 @@ def concatenate(logs) -> JointData:
         t = d.t - d.t[0] + (0.0 if end is None else end + step)
         ts.append(t)
         end = float(t[-1])
+    q, dq, ddq, tau = (
+        np.concatenate([getattr(d, k) for d in logs]) for k in ("q", "dq", "ddq", "tau")
+    )
     out = JointData(
         np.concatenate(ts),
-        *(np.concatenate([getattr(d, k) for d in logs]) for k in ("q", "dq", "ddq", "tau")),
+        q,
+        dq,
+        ddq,
+        tau,
         source=" + ".join(d.source or "data" for d in logs),
         processing={"logs": [d.processing for d in logs]},
     )

@@ -277,6 +277,7 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
             w = 1.0 / np.maximum(js, max(js.max() * 1e-9, 1e-300))
         for d in logs:
             if res.model == "dynamic":
+                assert d.tau is not None  # the fit's logs have torques
                 block = _cut(d.m, folds)
                 keep = moving_equations(base, d.dq, res.settings.get("min_velocity", 0.0))
                 for k in range(folds):
@@ -468,7 +469,7 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y, *, start) ->
     Ys = Y / np.maximum(np.linalg.norm(Y, axis=0), 1e-300)  # columns of unit norm
     _, sv, Vt = np.linalg.svd(Ys)
     rows = Vt[: int(np.sum(sv > 1e-9 * sv[0]))]  # orthonormal basis of the row space
-    out = []
+    out: list[dict] = []
     for nm, ix in zip(names, problem.links):
         Cl, Pl = C[np.ix_(ix, ix)], Cp[np.ix_(ix, ix)]
         # directions v of the link alone in the row space: |(I - V^T V) e_ix v| = 0

@@ -4,6 +4,7 @@ known truth."""
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Protocol
 
 import numpy as np
 
@@ -108,7 +109,17 @@ def moving_threshold(data: JointData) -> tuple[np.ndarray, str]:
 RAW_AGAINST = "the torques as logged, at the logged samples (no low-pass), edges excluded"
 
 
-def validate(result: IdentificationResult, data: JointData | Sequence[JointData]) -> dict:
+class Predictor(Protocol):
+    """What :func:`validate` uses of a result (an :class:`IdentificationResult`, a consistent
+    one): its base parameters and its torques predicted on a log."""
+
+    @property
+    def base(self) -> BaseParameters: ...
+
+    def predict(self, data: JointData) -> np.ndarray: ...
+
+
+def validate(result: Predictor, data: JointData | Sequence[JointData]) -> dict:
     """Torque prediction on ``data`` (one log or several), with the measures of
     :func:`error_measures` over all logs stacked (``overall_relative``, ``relative``, ``rms``,
     ``nrms`` against the robot's effort limits, ``nrms_missing``), the predicted torques
@@ -135,13 +146,13 @@ def validate(result: IdentificationResult, data: JointData | Sequence[JointData]
     effort = robot.limits["effort"]
     per = []
     for d in logs:
-        require_torque(d)
+        tau = require_torque(d)
         if d.n != robot.n:
             raise DataError(f"{d.source or 'data'} has {d.n} joints; expected {robot.n}")
         pred = result.predict(d)
         per.append(
             {
-                **error_measures(d.tau, pred, effort=effort),
+                **error_measures(tau, pred, effort=effort),
                 "source": d.source,
                 "samples": d.m,
                 "tau_hat": pred,
@@ -149,7 +160,9 @@ def validate(result: IdentificationResult, data: JointData | Sequence[JointData]
             }
         )
     out = error_measures(
-        np.vstack([d.tau for d in logs]), np.vstack([p["tau_hat"] for p in per]), effort=effort
+        np.vstack([require_torque(d) for d in logs]),
+        np.vstack([p["tau_hat"] for p in per]),
+        effort=effort,
     )
     out["tau_hat"] = (
         per[0]["tau_hat"] if isinstance(data, JointData) else [p["tau_hat"] for p in per]
@@ -164,11 +177,12 @@ def validate(result: IdentificationResult, data: JointData | Sequence[JointData]
 def _raw_and_moving(result, logs: list, effort, known=None) -> dict:
     """``raw`` and ``moving`` of :func:`validate` over ``logs`` stacked (``known``: their
     ``raw`` entries computed already, whose ``tau_hat`` is reused)."""
-    raws = [logged_samples(d) for d in logs]
-    if any(r is None or r.tau is None for r in raws):
+    found = [logged_samples(d) for d in logs]
+    raws = [r for r in found if r is not None and r.tau is not None]
+    if len(raws) < len(found):
         return {"raw": None, "moving": None}
     hats = [k["tau_hat"] for k in known] if known is not None else [result.predict(r) for r in raws]
-    tau = np.vstack([r.tau for r in raws])
+    tau = np.vstack([require_torque(r) for r in raws])
     hat = np.vstack(hats)
     raw = error_measures(tau, hat, effort=effort)
     raw.update({"samples": int(tau.shape[0]), "against": RAW_AGAINST, "tau_hat": hats[0]})
