@@ -169,5 +169,5 @@ def test_one_path_alone_is_one_log_and_an_unknown_model_is_named(logs):
     robot, fit, val = logs
     got = load_logs(fit, robot, validate=str(val))
     assert got.fit.files == [str(fit)] and got.validation.files == [str(val)]
-    with pytest.raises(mindyn.Error, match="model 'dynamc'"):
+    with pytest.raises(mindyn.ArgumentError, match="model is a str 'dynamc'"):
         load_logs([fit], robot, model="dynamc")

@@ -152,6 +152,7 @@ def integer(x, name: str, minimum: int | None = None, *, maximum: int | None = N
     """An integer option (bools refused), at least ``minimum`` and at most ``maximum``."""
     if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Integral):
         raise ArgumentError(f"{name} is {_describe(x)}; expected an integer")
+    x = int(x)
     if minimum is not None and maximum is not None and not minimum <= x <= maximum:
         raise ArgumentError(f"{name} is {x}; expected an integer from {minimum} to {maximum}")
     if minimum is not None and x < minimum:

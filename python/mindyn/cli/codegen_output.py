@@ -66,7 +66,7 @@ def _outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
             else [("--output", out, False)]
         )
     if isinstance(args.plcopen, str):
-        files.append(("--plcopen", Path(args.plcopen), args.plcopen.into_folder))
+        files.append(("--plcopen", Path(args.plcopen), getattr(args.plcopen, "into_folder", False)))
     return files
 
 

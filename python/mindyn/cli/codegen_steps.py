@@ -16,7 +16,7 @@ from .args import joint_terms, joint_values
 from .codegen_output import OBSERVER, _stem, _write, _write_plcopen
 
 
-def _observer(args, robot, base, out: Path, params, note: str | None = None) -> int:
+def _observer(args, robot, base, out: Path | None, params, note: str | None = None) -> int:
     """``--what momentum-observer``; ``note`` says where the values came from."""
     from ..control import default_observer_gain
 
@@ -52,7 +52,7 @@ def _observer(args, robot, base, out: Path, params, note: str | None = None) -> 
     return 0
 
 
-def _controller(args, robot, base, out: Path, params, note: str | None = None) -> int:
+def _controller(args, robot, base, out: Path | None, params, note: str | None = None) -> int:
     """``--what adaptive-pd | computed-torque | gravity-compensation``; ``note`` says where the
     initial estimate comes from."""
     from .. import control

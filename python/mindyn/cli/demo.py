@@ -153,6 +153,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     for model in ("dynamic", "integral", "energy"):
         rep = run(robot, logs, model=model, rotor=True, friction=True, integration="zoh")
         res, fit, val = rep.result, rep.fit, rep.validation
+        assert fit is not None and val is not None  # the demo always validates
         results[model] = (res, fit, val)
         kept = len(res.names)
         err = np.abs(res.full - truth)

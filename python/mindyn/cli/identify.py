@@ -46,7 +46,7 @@ def identify_options(args: argparse.Namespace, robot):
 
     width = args.friction_width
     if width is not None and args.friction_model is not None:
-        width = joint_values(width, robot.n, "--friction-width", broadcast=True)
+        width = tuple(joint_values(width, robot.n, "--friction-width", broadcast=True))
     return IdentifyOptions(
         model=args.model,
         rotor=args.rotor,

@@ -5,6 +5,7 @@ observer (:class:`CompiledObserver`)."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -12,10 +13,9 @@ from .. import _core
 from .._args import ArgumentError
 from ..base import BaseParameters
 from .controllers import GeneratedController, GeneratedObserver
-from .generation import GeneratedCode
 
 
-def _compile_shared(code: GeneratedCode, what: str):
+def _compile_shared(code: GeneratedController | GeneratedObserver, what: str):
     """Compiles generated C into a shared library in a temporary folder with the system C
     compiler (``$CC``, else ``cc`` or ``gcc``); returns the folder (kept alive by its holder)
     and the loaded library."""
@@ -70,7 +70,7 @@ class CompiledController:
         self._dir, self._lib = _compile_shared(code, "controller")
         n, np_ = len(code.settings["kd"]), len(code.names)
         dbl = ctypes.c_double
-        fields = [("p", dbl * np_), ("p0", dbl * np_), ("kd", dbl * n)]
+        fields: list[tuple[str, Any]] = [("p", dbl * np_), ("p0", dbl * np_), ("kd", dbl * n)]
         if code.kind == "adaptive-pd":
             fields += [("lambda_", dbl * n), ("gamma", dbl * np_)]
             fields += [("p_min", dbl * np_), ("p_max", dbl * np_)]
@@ -137,7 +137,12 @@ class CompiledObserver:
         self._dir, self._lib = _compile_shared(code, "observer")
         n, np_ = len(code.gains), len(code.names)
         dbl = ctypes.c_double
-        fields = [("p", dbl * np_), ("ko", dbl * n), ("c", dbl * n), ("period", dbl)]
+        fields: list[tuple[str, Any]] = [
+            ("p", dbl * np_),
+            ("ko", dbl * n),
+            ("c", dbl * n),
+            ("period", dbl),
+        ]
         fields += [("half", dbl), ("started", ctypes.c_int)]
         fields += [(f, dbl * n) for f in ("p_start", "integral", "r", "tau_prev", "beta_prev")]
         self._State = type("State", (ctypes.Structure,), {"_fields_": fields})

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any, cast
 
 import numpy as np
 
@@ -128,14 +129,15 @@ def generate_controller(
     classical = base is False
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
+    bp = cast(BaseParameters, base)  # unless classical
     if classical:
         names = list(_core.classical_parameter_names(robot._m, rotor=True, friction=True))
     else:
-        names = list(base.names)
+        names = list(bp.names)
     n = robot.n
     g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)
-    s = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
+    s: dict[str, Any] = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
     if kind == "computed-torque":
         with np.errstate(over="ignore"):  # an infinite square is refused just below
             s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam**2
@@ -155,8 +157,8 @@ def generate_controller(
     if params is None and classical:
         s["p0"] = None  # the robot's classical values, as the generator reads them
     elif params is None:
-        s["p0"] = base.values(robot.parameters(rotor=base.rotor, friction=base.friction))
-        if base.offset:
+        s["p0"] = bp.values(robot.parameters(rotor=bp.rotor, friction=bp.friction))
+        if bp.offset:
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
     elif isinstance(params, (str, Path)):
         s["p0"] = read_parameter_file(params, names)
@@ -175,8 +177,8 @@ def generate_controller(
     fn = f"{name}_{kind.replace('-', '_')}"
     header_name = header_name or f"{fn}.h"
     out = _core.generate_controller(
-        None if classical else base._b,
-        False if classical else base.offset,
+        None if classical else bp._b,  # type: ignore[arg-type]  # None: classical parameters
+        False if classical else bp.offset,
         kind,
         name,
         s,

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-import numpy as np
+from numpy import ndarray
 
 from .. import _args, _core
 from ..base import BaseParameters
@@ -40,17 +40,17 @@ class BaseDynamics:
     counts = property(lambda self: self._d.counts)
     geometry_snap = property(lambda self: self._d.geometry_snap)
 
-    def inverse_dynamics(self, q, dq, ddq, p=None) -> np.ndarray:
+    def inverse_dynamics(self, q, dq, ddq, p=None) -> ndarray:
         """tau, shape (n,) or (m, n) for batches of q, dq, ddq; ``p`` shape (np,), default the
         robot's own base-parameter values."""
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._d.inverse_dynamics(q, dq, ddq, self._values(p))
 
-    def gravity(self, q, p=None) -> np.ndarray:
+    def gravity(self, q, p=None) -> ndarray:
         """Gravity torque, shape (n,) or (m, n)."""
         return self._d.gravity(_args.samples(q, "q", self.n), self._values(p))
 
-    def regressor(self, q, dq, ddq) -> np.ndarray:
+    def regressor(self, q, dq, ddq) -> ndarray:
         """W_b, shape (n, np) or (m, n, np): ``tau = W_b @ p``."""
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._d.regressor(q, dq, ddq)

@@ -71,10 +71,12 @@ class GeneratedCode:
         written."""
         path = Path(path)
         if self.lang == "st":
+            assert self.text is not None
             path.write_text(self.text)
             return [path]
         src = path if path.suffix == ".c" else path.with_suffix(".c")
         hdr = src.parent / self.header_name
+        assert self.header is not None and self.source is not None
         hdr.write_text(self.header)
         src.write_text(self.source)
         return [hdr, src]
@@ -218,7 +220,7 @@ def generate(
             values = _args.array(params, "params", (len(names),))
     out = _core.generate_code(
         robot._m,
-        bp_core,
+        bp_core,  # type: ignore[arg-type]  # None: the classical parameters (the binding takes it)
         rotor=rotor,
         friction=friction,
         functions=fs,

@@ -627,7 +627,7 @@ def simulate(
         controller.reset()
     q, dq = qd[0].copy(), dqd[0].copy()
     z = np.zeros(n)  # the Dahl state (with dahl_sigma)
-    states = np.zeros((m, n)) if dahl is not None else None
+    states = np.zeros((m, n))  # the Dahl state per sample (with dahl_sigma)
     t0 = time.perf_counter()
     # A diverging loop shows as a non-finite torque, reported as such (not as warnings).
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
@@ -739,7 +739,7 @@ def simulate(
         base_names=list(base.names) if base is not None else [],
         saturated=sat,
         tau_ext=ext,
-        friction_state=states,
+        friction_state=states if dahl is not None else None,
     )
 
 

@@ -254,8 +254,10 @@ def predicted_torques(base: BaseParameters, full: np.ndarray, data: JointData) -
     samples at a time. Otherwise by Newton-Euler with the classical vector that carries
     ``full`` (:meth:`~mindyn.BaseParameters.embed`; the torque offsets added joint by joint):
     the same torques to round-off, without forming the regressor (a fraction of its cost on a
-    long log)."""
-    if data.regressor_filter is not None or data.m == 0:
+    long log). A base set of its own kind (the Dahl model's, whose friction column is a state
+    along the positions) is always evaluated through its regressor."""
+    own_regressor = type(base) is not BaseParameters
+    if data.regressor_filter is not None or data.m == 0 or own_regressor:
         out = np.empty((data.m, data.n))
         for a in range(0, data.m, CHUNK_SAMPLES):
             b = min(data.m, a + CHUNK_SAMPLES)

@@ -249,11 +249,7 @@ def dahl_search(base: DahlBase, logs, *, fit: dict) -> tuple[np.ndarray, dict]:
     # is sign(dq) on the samples, the Coulomb model) and half its range of motion (longer: the
     # state never saturates, a spring over the whole motion).
     width = np.max(np.abs(T) * _noise_width(logs)[0], axis=1)  # in slot units
-    dt = np.median(
-        np.concatenate(
-            [np.diff((d if logged_samples(d) is None else logged_samples(d)).t) for d in logs]
-        )
-    )
+    dt = np.median(np.concatenate([np.diff((logged_samples(d) or d).t) for d in logs]))
     hi = np.log(1.0 / np.maximum(width * dt, 1e-300))
     lo = np.log(2.0 / span)
     hi = np.maximum(hi, lo + math.log(10.0))

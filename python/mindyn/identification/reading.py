@@ -62,6 +62,7 @@ def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
         cutoff=opts.cutoff,
     )
     if current:  # effort in A: the gains (given or of the drive table) turn it into N m
+        assert data.tau is not None  # read with its effort column
         tau, info = convert_torque(data.tau, "current", robot, drive_gain=gain)
         data = replace(data, tau=tau, processing={**data.processing, "torque": info})
     return data

@@ -132,6 +132,7 @@ class IdentificationReport:
         doc["tip"] = self.tip  # the chain identified (None: the whole description)
         doc["consistent"] = cons is not None
         if cons is not None:
+            assert self.consistent_fit is not None  # computed with the consistent estimate
             doc.update(plain(cons))
             ce = doc["consistent_estimate"]
             ce["fit"] = {"estimate": "consistent", **measures_doc(self.consistent_fit, fit.labels)}

@@ -486,7 +486,7 @@ def _three_measures(v: dict) -> list[str]:
     torques as logged, and on the moving samples only."""
     raw, mov = v.get("raw"), v.get("moving")
     rows = [("filtered (the torques the fit saw)", v)]
-    if raw is None:
+    if raw is None or mov is None:
         return ["  (the torques as logged are not known for this data: no raw or moving measure)"]
     rows += [("raw (the torques as logged)", raw), ("moving (raw, moving samples)", mov)]
     lines = [
