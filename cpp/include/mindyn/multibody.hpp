@@ -14,6 +14,8 @@
 // at setup with checkMultibodySizes (and the unit norms of q with checkConfiguration).
 // On a model whose joints are all revolute or prismatic these functions give what dynamics.hpp
 // gives with the inertial-only layout.
+//
+// Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
 #include <Eigen/Cholesky>
