@@ -18,10 +18,11 @@ combinations of them (its ``rank``), and gives the minimum-norm solution in thei
 Log format (CSV, one header line, one row per sample, comma-separated, as
 :mod:`~mindyn.identification.data` reads its cells)::
 
-    t, q1..q<nq>, dq1..dq<nv>, ddq1..ddq<nv>, [tau1..tau<na>], [<link>.fx .. <link>.tz]
+    [t], q1..q<nq>, dq1..dq<nv>, ddq1..ddq<nv>, [tau1..tau<na>], [<link>.fx .. <link>.tz]
 
-``q`` is the robot's configuration in its nq convention (a free-flyer's position, then its unit
-quaternion x, y, z, w); ``dq``, ``ddq`` its nv velocities and accelerations (a free-flyer's linear
+``t`` (s) is optional and not used (the log gives its derivatives); ``q`` is the robot's
+configuration in its nq convention (a free-flyer's position, then its unit quaternion x, y, z,
+w); ``dq``, ``ddq`` its nv velocities and accelerations (a free-flyer's linear
 then angular velocity in its body's axes, as Pinocchio); ``tau1..tau<na>`` the generalized forces
 of the actuated coordinates (nv minus the root's, in that order); for each contact link, six
 columns ``<link>.fx, <link>.fy, <link>.fz, <link>.tx, <link>.ty, <link>.tz``: the force (N) and
