@@ -280,21 +280,45 @@ def identify_floating(
         )
     if base is None:
         base = base_parameters(robot, method="numerical")
-    systems = [floating_system(robot, log, model=model) for log in logs]
     cols = _pivots(base)
-    A = np.vstack([W[:, cols] for W, _ in systems])
-    b = np.concatenate([y for _, y in systems])
-    U, s, Vt = np.linalg.svd(A, full_matrices=False)
-    tol = (max(A.shape) * np.finfo(float).eps if tolerance is None else tolerance) * s[0]
+    # the stacked system reduced chunk by chunk to its triangle: (R, Q^T b), the sum of b^2
+    R, c = np.zeros((0, base.n)), np.zeros(0)
+    bb, rows = 0.0, 0
+    for log in logs:
+        _check_log(robot, log)
+        for a in range(0, len(log.q), _CHUNK):
+            W, y = floating_system(robot, _samples(log, a, a + _CHUNK), model=model)
+            Q, R = np.linalg.qr(np.vstack([R, W[:, cols]]))
+            c = Q.T @ np.concatenate([c, y])
+            bb, rows = bb + float(y @ y), rows + len(y)
+    U, s, Vt = np.linalg.svd(R, full_matrices=False)
+    tol = (max(rows, base.n) * np.finfo(float).eps if tolerance is None else tolerance) * s[0]
     rank = int(np.sum(s > tol))
     if model == "full" and rank < base.n:
         raise IdentificationError(
             f"the logs identify {rank} of the {base.n} base parameters (singular values below "
             f"{tol:.3g}); excite more motion or add logs"
         )
-    x = Vt[:rank].T @ ((U[:, :rank].T @ b) / s[:rank])
-    rms = float(np.sqrt(np.mean((A @ x - b) ** 2)))
+    x = Vt[:rank].T @ ((U[:, :rank].T @ c) / s[:rank])
+    fit = float(np.sum((R @ x - c) ** 2))
+    rms = float(np.sqrt(max(bb - float(c @ c) + fit, 0.0) / rows))
     return FloatingResult(base, x, rank, Vt[:rank], model, rms)
+
+
+_CHUNK = 256  # samples per block of the stacked system (bounded memory on long logs)
+
+
+def _samples(log: FloatingLog, a: int, b: int) -> FloatingLog:
+    """Samples a..b-1 of a log."""
+    return FloatingLog(
+        np.asarray(log.q)[a:b],
+        np.asarray(log.dq)[a:b],
+        np.asarray(log.ddq)[a:b],
+        None if log.tau is None else np.asarray(log.tau)[a:b],
+        {k: np.asarray(w)[a:b] for k, w in log.wrenches.items()},
+        log.wrench_frame,
+        log.source,
+    )
 
 
 def read_floating_csv(path, robot: Robot, *, wrench_frame: str = "world") -> FloatingLog:
