@@ -206,5 +206,16 @@ def test_csv_logs_with_sensor_frame_wrenches_identify_and_bad_files_are_refused(
     (tmp_path / "cell.csv").write_text(head + "\n" + "\n".join(rows))
     with pytest.raises(DataError, match=":5: column 'q1': 'abc' is not a number"):
         read_floating_csv(tmp_path / "cell.csv", robot)
+    bad = dict(read.wrenches, nope=read.wrenches["FL_LOWER_LEG"])
+    with pytest.raises(IdentificationError, match="a wrench on 'nope', no moving link"):
+        identify_floating(robot, FloatingLog(read.q, read.dq, read.ddq, read.tau, bad))
+    bad = dict(read.wrenches, FL_LOWER_LEG=read.wrenches["FL_LOWER_LEG"].copy())
+    bad["FL_LOWER_LEG"][7, 4] = np.nan
+    with pytest.raises(
+        IdentificationError, match="'FL_LOWER_LEG' has a non-finite value .sample 7"
+    ):
+        identify_floating(robot, FloatingLog(read.q, read.dq, read.ddq, read.tau, bad))
+    with pytest.raises(IdentificationError, match="full model needs the joint torques"):
+        identify_floating(robot, FloatingLog(read.q, read.dq, read.ddq, None, read.wrenches))
     with pytest.raises(IdentificationError, match="free-flyer or planar root joint"):
         identify_floating(mindyn.load(FLOATING["solo12"]), read)

@@ -165,22 +165,26 @@ def _check_log(robot: Robot, log: FloatingLog) -> tuple[int, list[int]]:
             f"wrench_frame must be 'world' or 'local', not {log.wrench_frame!r}"
         )
     links = []
+    names = robot.link_names[1:]
     for name, w in log.wrenches.items():
-        links.append(_link_index(robot, name))
+        if name not in names:
+            raise IdentificationError(
+                f"{log.source}: a wrench on {name!r}, no moving link of robot '{robot.name}' "
+                f"({', '.join(names)})"
+            )
+        links.append(names.index(name))
         if np.shape(w) != (m, 6):
             raise IdentificationError(
                 f"{log.source}: the wrench of link {name!r} has shape {np.shape(w)}, "
                 f"expected ({m}, 6)"
             )
-    for name, a in (
-        ("q", log.q),
-        ("dq", log.dq),
-        ("ddq", log.ddq),
-        ("tau", log.tau),
-        *log.wrenches.items(),
-    ):
-        if a is not None and not np.all(np.isfinite(a)):
-            raise IdentificationError(f"{log.source}: {name} has a non-finite value")
+    blocks = [("q", log.q), ("dq", log.dq), ("ddq", log.ddq), ("tau", log.tau)]
+    blocks += [(f"the wrench of link {k!r}", w) for k, w in log.wrenches.items()]
+    for name, a in blocks:
+        bad = None if a is None else np.flatnonzero(~np.isfinite(np.asarray(a, dtype=float)))
+        if bad is not None and len(bad):
+            row = int(bad[0]) // int(np.shape(a)[1])
+            raise IdentificationError(f"{log.source}: {name} has a non-finite value (sample {row})")
     if m == 0:
         raise IdentificationError(f"{log.source}: the log has no sample")
     return r, links
