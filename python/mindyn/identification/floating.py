@@ -181,8 +181,10 @@ def _check_log(robot: Robot, log: FloatingLog) -> tuple[int, list[int]]:
     blocks = [("q", log.q), ("dq", log.dq), ("ddq", log.ddq), ("tau", log.tau)]
     blocks += [(f"the wrench of link {k!r}", w) for k, w in log.wrenches.items()]
     for name, a in blocks:
-        bad = None if a is None else np.flatnonzero(~np.isfinite(np.asarray(a, dtype=float)))
-        if bad is not None and len(bad):
+        if a is None:
+            continue
+        bad = np.flatnonzero(~np.isfinite(np.asarray(a, dtype=float)))
+        if len(bad):
             row = int(bad[0]) // int(np.shape(a)[1])
             raise IdentificationError(f"{log.source}: {name} has a non-finite value (sample {row})")
     if m == 0:
