@@ -33,6 +33,7 @@ from mindyn.identification import (
     currents,
     document,
     excitation,
+    floating,
     prediction,
     preprocess,
     report,
@@ -91,6 +92,27 @@ URDF = """<robot name="two">
 """
 
 
+def _floating() -> tuple[mindyn.Robot, floating.FloatingLog]:
+    """The URDF's robot on a free-flyer root and a log of random states with a wrench on b."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        (Path(d) / "two.urdf").write_text(URDF)
+        robot = mindyn.load(Path(d) / "two.urdf", root_joint="floating")
+    rng = np.random.default_rng(0)
+    m = 30
+    quat = rng.normal(size=(m, 4))
+    q = np.hstack([rng.normal(size=(m, 3)), quat / np.linalg.norm(quat, axis=1)[:, None]])
+    q = np.hstack([q, rng.uniform(-1, 1, (m, 2))])
+    dq, ddq = rng.normal(size=(m, 8)), rng.normal(size=(m, 8))
+    return robot, floating.FloatingLog(
+        q, dq, ddq, rng.normal(size=(m, 2)), {"b": rng.normal(size=(m, 6))}
+    )
+
+
+FLOATING, FLOATING_LOG = _floating()
+
+
 def _files(tmp: Path) -> dict:
     log_csv = tmp / "log.csv"
     identification.write_csv(log_csv, LOG.t, LOG.q, LOG.tau)
@@ -119,6 +141,15 @@ def _files(tmp: Path) -> dict:
     from test_rosbag import messages, robot_log, write_bag
 
     bag = write_bag(tmp / "bag", messages(ROBOT, robot_log(ROBOT, m=200)))
+    floating_csv = tmp / "floating.csv"
+    L = FLOATING_LOG
+    header = [f"q{i + 1}" for i in range(9)] + [f"dq{i + 1}" for i in range(8)]
+    header += [f"ddq{i + 1}" for i in range(8)] + ["tau1", "tau2"]
+    header += [f"b.{a}" for a in ("fx", "fy", "fz", "tx", "ty", "tz")]
+    table = np.hstack([L.q, L.dq, L.ddq, L.tau, L.wrenches["b"]])
+    floating_csv.write_text(
+        ",".join(header) + "\n" + "".join(",".join(map(repr, r.tolist())) + "\n" for r in table)
+    )
     arm_json = tmp / "arm.json"
     assert cli_main(["identify", "planar2", str(log_csv), "--json", str(arm_json)]) == 0
     return {
@@ -132,6 +163,7 @@ def _files(tmp: Path) -> dict:
         "thresholds": thresholds,
         "reference": reference,
         "sidecar": sidecar,
+        "floating_csv": floating_csv,
     }
 
 
@@ -423,6 +455,26 @@ def _api(tmp: Path) -> dict:
             {},
         ),
         "identification.read_csv": (identification.read_csv, (f["log_csv"], ROBOT), {}),
+        "identification.floating.contact_jacobian": (
+            floating.contact_jacobian,
+            (FLOATING, FLOATING_LOG.q[0], "b"),
+            {"frame": "local"},
+        ),
+        "identification.floating.floating_system": (
+            floating.floating_system,
+            (FLOATING, FLOATING_LOG),
+            {"model": "base"},
+        ),
+        "identification.floating.identify_floating": (
+            floating.identify_floating,
+            (FLOATING, FLOATING_LOG),
+            {"model": "full", "base": None, "tolerance": 1e-9},
+        ),
+        "identification.floating.read_floating_csv": (
+            floating.read_floating_csv,
+            (f["floating_csv"], FLOATING),
+            {"wrench_frame": "world"},
+        ),
         "identification.write_csv": (
             identification.write_csv,
             (tmp / "w.csv", LOG.t, LOG.q, LOG.tau),

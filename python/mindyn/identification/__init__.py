@@ -15,6 +15,8 @@
 - :mod:`~mindyn.identification.consistent`: physically consistent classical parameters and
   payload identification (convex, cvxpy);
 - :mod:`~mindyn.identification.currents`: torques from motor currents logged apart;
+- :mod:`~mindyn.identification.floating`: floating-base robots from logs with contact wrenches
+  (the full and the base-link models, free flight);
 - :mod:`~mindyn.identification.report`: tables and plots;
 - :mod:`~mindyn.identification.workflow`: the workflow of ``mindyn identify`` as a library:
   :class:`IdentifyOptions` and :class:`ReadingOptions`

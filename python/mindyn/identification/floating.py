@@ -1,0 +1,414 @@
+"""Identification of a floating-base robot (a free-flyer or planar root joint) from logs with
+measured contact wrenches, or in free flight.
+
+The equations of motion with contacts are ``W(q, dq, ddq) params = S^T tau + sum_c J_c^T f_c``:
+``W`` the classical regressor (``Robot.regressor``, nv rows), ``S^T tau`` the joint torques in the
+rows of the actuated coordinates and zero in the root joint's (6 for a free-flyer, 3 for a planar
+root: nothing drives the base), ``f_c`` the wrench the environment applies on contact link ``c``
+and ``J_c`` that link's Jacobian (:func:`contact_jacobian`). Two models come from them:
+
+- ``"full"``: every row; needs the joint torques (with no contact, free flight);
+- ``"base"`` (the base-link model): the root joint's rows only, whose left side is zero: needs no
+  joint torques, only the motion and the wrenches.
+
+The parameters are estimated as the numerical method's base parameters of the robot
+(:func:`mindyn.base_parameters`) by least squares; the base-link model may identify fewer
+combinations of them (its ``rank``), and gives the minimum-norm solution in their span.
+
+Log format (CSV, one header line, one row per sample, comma-separated, as
+:mod:`~mindyn.identification.data` reads its cells)::
+
+    [t], q1..q<nq>, dq1..dq<nv>, ddq1..ddq<nv>, [tau1..tau<na>], [<link>.fx .. <link>.tz]
+
+``t`` (s) is optional and not used (the log gives its derivatives); ``q`` is the robot's
+configuration in its nq convention (a free-flyer's position, then its unit quaternion x, y, z,
+w); ``dq``, ``ddq`` its nv velocities and accelerations (a free-flyer's linear
+then angular velocity in its body's axes, as Pinocchio); ``tau1..tau<na>`` the generalized forces
+of the actuated coordinates (nv minus the root's, in that order); for each contact link, six
+columns ``<link>.fx, <link>.fy, <link>.fz, <link>.tx, <link>.ty, <link>.tz``: the force (N) and
+the moment (N m) the environment applies on the link, about the link's origin, in world axes
+(``wrench_frame="world"``, Pinocchio's LOCAL_WORLD_ALIGNED) or in the link's own axes
+(``"local"``, as a force/torque sensor fixed to the link measures it). Columns may come in any
+order; each once.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .. import _args, _core
+from ..base import BaseParameters, base_parameters
+from ..robot import Robot
+from .data import DataError, DataFileNotFoundError, decode_text, parse_cell
+from .errors import IdentificationError
+
+__all__ = [
+    "FloatingLog",
+    "FloatingResult",
+    "contact_jacobian",
+    "floating_system",
+    "identify_floating",
+    "read_floating_csv",
+]
+
+WRENCH_AXES = ("fx", "fy", "fz", "tx", "ty", "tz")
+_FRAMES = ("world", "local")
+_MODELS = ("full", "base")
+
+
+def _root_dofs(robot: Robot) -> int:
+    """The unactuated coordinates of the root joint: 6 (free-flyer) or 3 (planar); refuses a
+    robot whose root is another joint."""
+    kind = robot.joint_types[0] if robot.n else ""
+    if kind == "floating":
+        return 6
+    if kind == "planar":
+        return 3
+    raise IdentificationError(
+        f"floating-base identification needs a free-flyer or planar root joint; robot "
+        f"'{robot.name}' has the {kind or 'no'} joint '{robot.joint_names[0] if robot.n else ''}' "
+        "at its root (load it with root_joint='floating' or 'planar')"
+    )
+
+
+def _link_index(robot: Robot, link: str | int) -> int:
+    names = robot.link_names[1:]
+    if isinstance(link, (int, np.integer)) and not isinstance(link, bool):
+        if 0 <= link < robot.n:
+            return int(link)
+        raise _args.fail("link", f"is {link}; expected a joint index in 0..{robot.n - 1}")
+    _args.instance(link, "link", (str, int), "a link name or a joint index")
+    if link in names:
+        return names.index(link)
+    raise _args.fail(
+        "link", f"is {link!r}, no moving link of robot '{robot.name}' ({', '.join(names)})"
+    )
+
+
+def contact_jacobian(robot: Robot, q, link: str | int, *, frame: str = "world") -> np.ndarray:
+    """The Jacobian of a link's origin, shape (6, nv): ``[v; w] = J dq`` with ``v`` the velocity
+    of the link's origin and ``w`` the link's angular velocity, in world axes (``frame="world"``,
+    Pinocchio's ``getFrameJacobian`` with LOCAL_WORLD_ALIGNED) or in the link's axes
+    (``"local"``, Pinocchio's LOCAL). A wrench ``f = (force, moment about the origin)`` in the
+    same axes acting on the link gives the generalized force ``J^T f``.
+
+    ``link`` is a name of ``robot.link_names`` (not the fixed world) or a joint index k (the link
+    joint k moves). Built from the momentum of a unit point mass with unit rotational inertia
+    placed at the link's origin, which is linear in dq: exact, no differencing."""
+    _args.instance(robot, "robot", Robot)
+    frame = _args.choice(frame, "frame", _FRAMES)
+    k = _link_index(robot, link)
+    q = _args.array(q, "q", (robot.nq,))
+    pose = robot.link_poses(q)[k]
+    names = robot.param_names
+    probe = np.zeros(10 * robot.n)
+    for name in ("XX", "YY", "ZZ", "M"):
+        probe[names.index(f"{name}{k + 1}")] = 1.0
+    # the momentum of each unit velocity, one column each: (nv, 6) rows (linear; angular about
+    # the base origin)
+    h = robot._multibody(
+        _core.multibody_momentum, np.tile(q, (robot.nv, 1)), np.eye(robot.nv), params=probe
+    )
+    v = h[:, :3]
+    J = np.vstack([v.T, (h[:, 3:] - np.cross(pose[:3, 3], v)).T])
+    if frame == "local":
+        R = pose[:3, :3]
+        J = np.vstack([R.T @ J[:3], R.T @ J[3:]])
+    return J
+
+
+@dataclass
+class FloatingLog:
+    """A floating-base log: ``q`` (m, nq), ``dq`` and ``ddq`` (m, nv), ``tau`` (m, na) of the
+    actuated coordinates or None, ``wrenches`` per contact link name (m, 6) (force then moment
+    about the link's origin, in ``wrench_frame`` axes: ``"world"`` or ``"local"``)."""
+
+    q: np.ndarray
+    dq: np.ndarray
+    ddq: np.ndarray
+    tau: np.ndarray | None = None
+    wrenches: dict[str, np.ndarray] = field(default_factory=dict)
+    wrench_frame: str = "world"
+    source: str = "<memory>"
+
+    @property
+    def m(self) -> int:
+        return len(self.q)
+
+
+def _check_log(robot: Robot, log: FloatingLog) -> tuple[int, list[int]]:
+    _args.instance(robot, "robot", Robot)
+    _args.instance(log, "log", FloatingLog)
+    r = _root_dofs(robot)
+    m = len(np.asarray(log.q))
+    for name, a, width in (
+        ("q", log.q, robot.nq),
+        ("dq", log.dq, robot.nv),
+        ("ddq", log.ddq, robot.nv),
+    ):
+        if np.shape(a) != (m, width):
+            raise IdentificationError(
+                f"{log.source}: {name} has shape {np.shape(a)}, expected ({m}, {width})"
+            )
+    if log.tau is not None and np.shape(log.tau) != (m, robot.nv - r):
+        raise IdentificationError(
+            f"{log.source}: tau has shape {np.shape(log.tau)}, expected ({m}, {robot.nv - r}) "
+            "(the actuated coordinates)"
+        )
+    if log.wrench_frame not in _FRAMES:
+        raise IdentificationError(
+            f"wrench_frame must be 'world' or 'local', not {log.wrench_frame!r}"
+        )
+    links = []
+    names = robot.link_names[1:]
+    for name, w in log.wrenches.items():
+        if name not in names:
+            raise IdentificationError(
+                f"{log.source}: a wrench on {name!r}, no moving link of robot '{robot.name}' "
+                f"({', '.join(names)})"
+            )
+        links.append(names.index(name))
+        if np.shape(w) != (m, 6):
+            raise IdentificationError(
+                f"{log.source}: the wrench of link {name!r} has shape {np.shape(w)}, "
+                f"expected ({m}, 6)"
+            )
+    blocks = [("q", log.q), ("dq", log.dq), ("ddq", log.ddq), ("tau", log.tau)]
+    blocks += [(f"the wrench of link {k!r}", w) for k, w in log.wrenches.items()]
+    for name, a in blocks:
+        if a is None:
+            continue
+        bad = np.flatnonzero(~np.isfinite(np.asarray(a, dtype=float)))
+        if len(bad):
+            row = int(bad[0]) // int(np.shape(a)[1])
+            raise IdentificationError(f"{log.source}: {name} has a non-finite value (sample {row})")
+    if m == 0:
+        raise IdentificationError(f"{log.source}: the log has no sample")
+    return r, links
+
+
+def floating_system(robot: Robot, log: FloatingLog, *, model: str = "full"):
+    """The stacked system ``(W, b)`` of a floating-base log: ``W`` the classical regressor rows
+    (m * rows, 10 n), ``b`` the measured generalized forces ``S^T tau + sum_c J_c^T f_c``
+    (``model="full"``: all nv rows per sample, needs ``tau``) or ``sum_c J_c^T f_c`` in the root
+    joint's rows (``model="base"``: needs no torques)."""
+    _args.choice(model, "model", _MODELS)
+    r, links = _check_log(robot, log)
+    if model == "full" and log.tau is None:
+        raise IdentificationError(
+            f"{log.source}: the full model needs the joint torques (tau columns); the base-link "
+            "model (model='base') needs none"
+        )
+    rows = robot.nv if model == "full" else r
+    W = np.asarray(robot.regressor(log.q, log.dq, log.ddq))[:, :rows, :]
+    b = np.zeros((log.m, rows))
+    if model == "full":
+        b[:, r:] = log.tau
+    for (_, f), k in zip(log.wrenches.items(), links, strict=True):
+        for i in range(log.m):
+            J = contact_jacobian(robot, log.q[i], k, frame=log.wrench_frame)
+            b[i] += (J.T @ f[i])[:rows]
+    return W.reshape(-1, W.shape[-1]), b.reshape(-1)
+
+
+@dataclass
+class FloatingResult:
+    """A floating-base identification: ``values`` the estimated base values of ``base`` (the
+    minimum-norm solution when the model's ``rank`` is below ``base.n``), ``span`` (rank, n_b):
+    an orthonormal basis of the combinations of base values the data identified, ``model``
+    ("full" or "base"), ``rms`` the fit's residual (generalized-force units)."""
+
+    base: BaseParameters
+    values: np.ndarray
+    rank: int
+    span: np.ndarray
+    model: str
+    rms: float
+
+    def residual(self, log: FloatingLog) -> np.ndarray:
+        """Predicted minus measured generalized forces of ``log`` in this result's model, shape
+        (m * rows,)."""
+        W, b = floating_system(self.base.robot, log, model=self.model)
+        return W[:, _pivots(self.base)] @ self.values - b
+
+
+def _pivots(base: BaseParameters) -> np.ndarray:
+    """The classical columns of the base set: ``W[:, pivots] @ values(p) == W @ p``."""
+    e = base.embed(np.arange(1.0, base.n + 1))
+    order = np.argsort(e)[-base.n :]
+    return order[np.argsort(e[order])]
+
+
+def identify_floating(
+    robot: Robot,
+    logs,
+    *,
+    model: str = "full",
+    base: BaseParameters | None = None,
+    tolerance: float | None = None,
+) -> FloatingResult:
+    """Base parameters of a floating-base robot from one or more :class:`FloatingLog` (see the
+    module's docstring for the equations and the CSV format, :func:`read_floating_csv`).
+
+    ``model``: ``"full"`` (joint torques and wrenches; free flight is the case with no wrench)
+    or ``"base"`` (the root joint's rows: wrenches and motion only). ``base`` defaults to the
+    numerical method's base parameters of ``robot``. ``tolerance`` (relative to the largest
+    singular value of the base regressor; default ``max(rows, n_b) * eps``) decides the rank:
+    a rank below ``n_b`` is stated in ``rank`` and ``span``, and the full model refuses it."""
+    _args.instance(robot, "robot", Robot)
+    _args.choice(model, "model", _MODELS)
+    if isinstance(logs, FloatingLog):
+        logs = [logs]
+    elif not (
+        isinstance(logs, (list, tuple)) and logs and all(isinstance(x, FloatingLog) for x in logs)
+    ):
+        raise _args.fail("logs", "is not a FloatingLog or a non-empty list of them")
+    _args.optional(_args.instance, base, "base", BaseParameters)
+    if base is not None and (
+        base.robot.nv != robot.nv
+        or base.robot.param_names != robot.param_names
+        or len(base.embed(np.zeros(base.n))) != 10 * robot.n
+    ):
+        raise _args.fail(
+            "base", "is not a set of the robot's 10 n inertial parameters (another robot?)"
+        )
+    _args.optional(_args.number, tolerance, "tolerance", positive=True, below=1.0)
+    if model == "base" and not any(log.wrenches for log in logs):
+        raise IdentificationError(
+            "the base-link model needs contact wrenches: in free flight its equations are "
+            "homogeneous (W_base p = 0) and give the parameters only up to a scale; use "
+            "model='full' with the joint torques"
+        )
+    if base is None:
+        base = base_parameters(robot, method="numerical")
+    cols = _pivots(base)
+    # the stacked system reduced chunk by chunk to its triangle: (R, Q^T b), the sum of b^2
+    R, c = np.zeros((0, base.n)), np.zeros(0)
+    bb, rows = 0.0, 0
+    for log in logs:
+        _check_log(robot, log)
+        for a in range(0, len(log.q), _CHUNK):
+            W, y = floating_system(robot, _samples(log, a, a + _CHUNK), model=model)
+            Q, R = np.linalg.qr(np.vstack([R, W[:, cols]]))
+            c = Q.T @ np.concatenate([c, y])
+            bb, rows = bb + float(y @ y), rows + len(y)
+    U, s, Vt = np.linalg.svd(R, full_matrices=False)
+    tol = (max(rows, base.n) * np.finfo(float).eps if tolerance is None else tolerance) * s[0]
+    rank = int(np.sum(s > tol))
+    if model == "full" and rank < base.n:
+        raise IdentificationError(
+            f"the logs identify {rank} of the {base.n} base parameters (singular values below "
+            f"{tol:.3g}); excite more motion or add logs"
+        )
+    x = Vt[:rank].T @ ((U[:, :rank].T @ c) / s[:rank])
+    fit = float(np.sum((R @ x - c) ** 2))
+    rms = float(np.sqrt(max(bb - float(c @ c) + fit, 0.0) / rows))
+    return FloatingResult(base, x, rank, Vt[:rank], model, rms)
+
+
+_CHUNK = 256  # samples per block of the stacked system (bounded memory on long logs)
+
+
+def _samples(log: FloatingLog, a: int, b: int) -> FloatingLog:
+    """Samples a..b-1 of a log."""
+    return FloatingLog(
+        np.asarray(log.q)[a:b],
+        np.asarray(log.dq)[a:b],
+        np.asarray(log.ddq)[a:b],
+        None if log.tau is None else np.asarray(log.tau)[a:b],
+        {k: np.asarray(w)[a:b] for k, w in log.wrenches.items()},
+        log.wrench_frame,
+        log.source,
+    )
+
+
+def read_floating_csv(path, robot: Robot, *, wrench_frame: str = "world") -> FloatingLog:
+    """A floating-base log from CSV (the format of the module's docstring): the contact links are
+    the ``<link>.fx``-style column groups of the header; ``tau`` columns are optional (all of
+    them or none). Strict: a missing, repeated or unknown column, an incomplete wrench group, a
+    row of another length or a cell that is not a number raise DataError naming the file, line
+    and column."""
+    path = Path(_args.path(path, "path"))
+    _args.instance(robot, "robot", Robot)
+    wrench_frame = _args.choice(wrench_frame, "wrench_frame", _FRAMES)
+    if not path.is_file():
+        raise DataFileNotFoundError(f"{path}: no such file")
+    rows = [
+        row for row in csv.reader(io.StringIO(decode_text(path))) if any(c.strip() for c in row)
+    ]
+    if not rows:
+        raise DataError(f"{path}: empty file (expected a header line)")
+    header = [c.strip() for c in rows[0]]
+    r = _root_dofs(robot)
+    groups = {
+        "q": [f"q{i + 1}" for i in range(robot.nq)],
+        "dq": [f"dq{i + 1}" for i in range(robot.nv)],
+        "ddq": [f"ddq{i + 1}" for i in range(robot.nv)],
+        "tau": [f"tau{i + 1}" for i in range(robot.nv - r)],
+    }
+    index: dict[str, int] = {}
+    for j, name in enumerate(header):
+        if name in index:
+            raise DataError(f"{path}:1: column {name!r} appears twice")
+        index[name] = j
+    known = {"t", *(c for g in groups.values() for c in g)}
+    links: dict[str, list[str]] = {}
+    for name in header:
+        if name in known:
+            continue
+        link, dot, axis = name.rpartition(".")
+        if not dot or axis not in WRENCH_AXES:
+            raise DataError(
+                f"{path}:1: unknown column {name!r} (expected t, q1..q{robot.nq}, "
+                f"dq1..dq{robot.nv}, ddq1..ddq{robot.nv}, tau1..tau{robot.nv - r} and "
+                "<link>.fx/.fy/.fz/.tx/.ty/.tz)"
+            )
+        _link_as_data_error(robot, link, path)
+        links.setdefault(link, [])
+    for g in ("q", "dq", "ddq"):
+        missing = [c for c in groups[g] if c not in index]
+        if missing:
+            raise DataError(f"{path}:1: missing column {missing[0]!r}")
+    has_tau = [c in index for c in groups["tau"]]
+    if any(has_tau) and not all(has_tau):
+        raise DataError(f"{path}:1: missing column {groups['tau'][has_tau.index(False)]!r}")
+    for link in links:
+        links[link] = [f"{link}.{a}" for a in WRENCH_AXES]
+        missing = [c for c in links[link] if c not in index]
+        if missing:
+            raise DataError(f"{path}:1: missing column {missing[0]!r} of link {link!r}'s wrench")
+    values = np.empty((len(rows) - 1, len(header)))
+    for i, row in enumerate(rows[1:]):
+        if len(row) != len(header):
+            raise DataError(f"{path}:{i + 2}: {len(row)} cells, the header has {len(header)}")
+        for j, cell in enumerate(row):
+            values[i, j] = parse_cell(cell, f"{path}:{i + 2}: column {header[j]!r}")
+    if len(values) == 0:
+        raise DataError(f"{path}: no data row")
+
+    def block(names: list[str]) -> np.ndarray:
+        return values[:, [index[c] for c in names]]
+
+    return FloatingLog(
+        q=block(groups["q"]),
+        dq=block(groups["dq"]),
+        ddq=block(groups["ddq"]),
+        tau=block(groups["tau"]) if all(has_tau) else None,
+        wrenches={link: block(cols) for link, cols in links.items()},
+        wrench_frame=wrench_frame,
+        source=str(path),
+    )
+
+
+def _link_as_data_error(robot: Robot, link: str, path: Path) -> None:
+    names = robot.link_names[1:]
+    if link not in names:
+        raise DataError(
+            f"{path}:1: no moving link {link!r} in robot '{robot.name}' for the wrench columns "
+            f"{link}.fx..{link}.tz (links: {', '.join(names)})"
+        )
