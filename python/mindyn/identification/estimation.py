@@ -21,7 +21,7 @@ from typing import cast
 import numpy as np
 import scipy.linalg as sla
 
-from .. import _args
+from .. import _args, _core
 from .._core import OFFSET_PREFIX as OFF
 from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
@@ -532,7 +532,13 @@ def identify(
     """
     t0 = time.perf_counter()
     robot = as_robot(robot)
-    robot._require_single_dof("identification")
+    if not robot.single_dof:
+        raise _core.ModelError(
+            f"identify takes revolute and prismatic joints only; robot '{robot.name}' has joints "
+            "of several degrees of freedom: identify it with "
+            "mindyn.identification.identify_floating (joint torques and contact wrenches, or "
+            "free flight)"
+        )
     logs = _logs(data)
     _args.choice(model, "model", MODELS)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
