@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from ..robot import load
-from .args import joint_values, with_drive_side
+from .args import joint_values, library_options_as_flags, with_drive_side
 from .export import check_description_kind, write_description
 
 
@@ -138,7 +138,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     )
     report = run(robot, logs, options=options, tip=args.tip, progress=_progress())
     doc = report.to_dict()
-    text = report.format()
+    text = library_options_as_flags(report.format())  # the report names keywords
     print(text)
     if args.json:
         _write_json(args.json, doc)

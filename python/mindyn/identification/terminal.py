@@ -16,9 +16,9 @@ def joint_term_words(robot, *, rotor: bool, friction: bool, offset: bool) -> lis
     words = [w for w, on in named if on]
     if robot.transmission is not None and (rotor or friction):
         words[int(rotor and friction)] += (
-            " on the motors through the transmissions (--drive-side joint: on the joints)"
+            " on the motors through the transmissions (drive_side='joint': on the joints)"
             if robot.drive_side == "motor"
-            else " on the joints (--drive-side joint)"
+            else " on the joints (drive_side='joint')"
         )
     return words
 
@@ -110,7 +110,7 @@ def _settings(report) -> list[str]:
         out.append(
             f"  no joint equation below {res.settings['min_velocity']:g} rad/s left out"
             if res.settings["min_velocity"] > 0
-            else "  all joint equations kept (--min-velocity 0)"
+            else "  all joint equations kept (min_velocity=0)"
         )
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
@@ -274,7 +274,7 @@ def _weight_lines(ce: dict) -> list[str]:
         if ch["at_grid_end"]:
             lines.append(
                 "    the chosen weight is at the end of the candidates: the optimum may lie "
-                "beyond (give --prior-weight to go further)"
+                "beyond (give prior_weight= to go further)"
             )
     elif ce["prior_weight"]:
         lines.append(f"  prior weight {ce['prior_weight']:g} (given)")
