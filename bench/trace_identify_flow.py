@@ -47,7 +47,11 @@ UTILITY = {
     "base.py",
     "robot.py",
     "cli/args.py",
+    "cli/flags.py",
+    "cli/number_options.py",
+    "cli/outputs.py",
     "cli/quiet.py",
+    "cli/robot_options.py",
 }
 
 

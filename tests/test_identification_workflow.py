@@ -11,7 +11,7 @@ import mindyn
 import numpy as np
 import pytest
 from conftest import cli
-from mindyn.cli.args import library_options_as_flags
+from mindyn.cli.flags import library_options_as_flags
 from mindyn.identification import (
     IdentificationReport,
     IdentifyOptions,

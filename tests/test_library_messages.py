@@ -13,7 +13,7 @@ from pathlib import Path
 
 import mindyn
 import pytest
-from mindyn.cli.args import library_options_as_flags
+from mindyn.cli.flags import library_options_as_flags
 
 ROOT = Path(__file__).resolve().parents[1]
 # The terminal text of an identification (``report.format()``, identification/terminal.py) is

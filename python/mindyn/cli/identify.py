@@ -10,8 +10,10 @@ import sys
 from pathlib import Path
 
 from ..robot import load
-from .args import joint_values, library_options_as_flags, with_drive_side
 from .export import check_description_kind, write_description
+from .flags import library_options_as_flags
+from .number_options import joint_values
+from .robot_options import with_drive_side
 
 
 def _progress():
