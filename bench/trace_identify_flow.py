@@ -69,6 +69,8 @@ WORKFLOW = _Workflow(
         "identification/reading.py",
         "identification/summary.py",
         "identification/terminal.py",
+        "identification/terminal_consistent.py",
+        "identification/terminal_header.py",
         "identification/workflow.py",
     }
 )
