@@ -47,7 +47,11 @@ UTILITY = {
     "base.py",
     "robot.py",
     "cli/args.py",
+    "cli/flags.py",
+    "cli/number_options.py",
+    "cli/outputs.py",
     "cli/quiet.py",
+    "cli/robot_options.py",
 }
 
 
@@ -65,6 +69,8 @@ WORKFLOW = _Workflow(
         "identification/reading.py",
         "identification/summary.py",
         "identification/terminal.py",
+        "identification/terminal_consistent.py",
+        "identification/terminal_header.py",
         "identification/workflow.py",
     }
 )

@@ -257,7 +257,7 @@ def test_ik_command_refuses_degrees_given_as_radians(tmp_path, capsys, monkeypat
     capsys.readouterr()
     assert np.allclose(seen["q0"], np.radians([10, 20, 0, 40, 50, 60]) + [0, 0, 0.3, 0, 0, 0])
     # a revolute joint whose limits reach past 2 pi takes a start up to its limit in radians
-    from mindyn.cli.args import check_radians
+    from mindyn.cli.number_options import check_radians
 
     wide = mindyn.load(write_wide_urdf(tmp_path))
     check_radians([7.0, 100.0], "--q0", "--deg", wide)  # 100 m on the prismatic joint

@@ -1,4 +1,4 @@
-"""The command line's one rule for the files it writes (mindyn.cli.args.output_path): a path
+"""The command line's one rule for the files it writes (mindyn.cli.outputs.output_path): a path
 naming a folder (an existing one, or one ending in '/') means the command's default file name
 inside it; no path (``codegen --plcopen`` alone) means the default path; any other path is the
 file; the missing folders are created and the path written is stated."""
@@ -11,7 +11,7 @@ from pathlib import Path
 import mindyn
 import numpy as np
 import pytest
-from mindyn.cli.args import output_file, output_path
+from mindyn.cli.outputs import output_file, output_path
 from test_codegen_blocks import NS
 from test_export import consistent_params, run
 

@@ -11,14 +11,9 @@ import sys
 
 from .._core import ModelError, RobotFileNotFoundError
 from .._threads import reuse_freed_memory
-from .args import (
-    COMMANDS,
-    Parser,
-    UsageError,
-    library_options_as_flags,
-    prepare_outputs,
-    print_deprecation_notes,
-)
+from .args import COMMANDS, Parser, UsageError, print_deprecation_notes
+from .flags import library_options_as_flags
+from .outputs import prepare_outputs
 from .quiet import warnings_after_success
 
 

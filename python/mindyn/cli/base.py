@@ -8,18 +8,11 @@ from pathlib import Path
 
 from ..base import base_parameters
 from ..robot import load
-from .args import (
-    add_command,
-    add_joint_terms,
-    add_offset,
-    add_robot,
-    deprecated,
-    joint_terms,
-    number,
-    output_file,
-    with_drive_side,
-)
+from .args import add_command, deprecated
 from .method import base_method, projection_limits_text
+from .number_options import number
+from .outputs import output_file
+from .robot_options import add_joint_terms, add_offset, add_robot, joint_terms, with_drive_side
 
 
 def cmd_base(args: argparse.Namespace) -> int:

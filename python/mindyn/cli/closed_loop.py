@@ -7,7 +7,8 @@ from __future__ import annotations
 import argparse
 
 from ..base import base_parameters
-from .args import number, output_dir
+from .number_options import number
+from .outputs import output_dir
 
 
 def reference_and_controller(args: argparse.Namespace, robot, default_duration):

@@ -10,17 +10,7 @@ from .._core import ModelError
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, generate
 from ..robot import load
-from .args import (
-    add_command,
-    add_joint_terms,
-    add_offset,
-    add_robot,
-    controller_period,
-    drive_side,
-    joint_terms,
-    joint_vector,
-    output_file,
-)
+from .args import add_command
 from .codegen_output import (
     DEFAULT_FOLDER,
     OBSERVER,
@@ -33,6 +23,9 @@ from .codegen_output import (
 from .codegen_params import _identified_params, _params_note, _with_friction_model
 from .codegen_steps import _controller, _observer
 from .method import base_method
+from .number_options import controller_period, joint_vector
+from .outputs import output_file
+from .robot_options import add_joint_terms, add_offset, add_robot, drive_side, joint_terms
 
 
 def register(subparsers) -> None:

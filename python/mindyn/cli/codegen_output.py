@@ -1,6 +1,7 @@
 """Where ``mindyn codegen`` writes: ``-o`` (C: NAME.c and NAME.h; ST: the file) and the PLCopen
-XML of ``--plcopen``, by the command line's one output rule (:func:`~mindyn.cli.args.output_path`:
-a folder means the default name inside it; ``--plcopen`` alone: :data:`DEFAULT_FOLDER`)."""
+XML of ``--plcopen``, by the command line's one output rule
+(:func:`~mindyn.cli.outputs.output_path`: a folder means the default name inside it;
+``--plcopen`` alone: :data:`DEFAULT_FOLDER`)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,8 @@ from pathlib import Path
 
 from ..codegen import CONTROLLERS, plcopen_project
 from ..codegen.generation import identifier
-from .args import UsageError, output_path
+from .args import UsageError
+from .outputs import output_path
 
 #: The --what of the momentum-observer step.
 OBSERVER = "momentum-observer"
@@ -28,7 +30,7 @@ def _stem(args: argparse.Namespace, robot) -> str:
 
 def _output_base(args: argparse.Namespace, robot) -> Path | None:
     """``-o``'s path without the ``.c``/``.h`` a C output may be given with (a folder: the
-    default name inside it, by :func:`~mindyn.cli.args.output_path`), or None without -o."""
+    default name inside it, by :func:`~mindyn.cli.outputs.output_path`), or None without -o."""
     if args.output is None:
         return None
     ext = ".st" if args.lang == "st" else ""

@@ -12,8 +12,9 @@ import numpy as np
 
 from .._core import ModelError
 from ..codegen import generate, generate_controller, generate_observer
-from .args import joint_terms, joint_values
 from .codegen_output import OBSERVER, _stem, _write, _write_plcopen
+from .number_options import joint_values
+from .robot_options import joint_terms
 
 
 def _observer(args, robot, base, out: Path | None, params, note: str | None = None) -> int:

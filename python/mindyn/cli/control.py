@@ -11,25 +11,20 @@ from pathlib import Path
 import numpy as np
 
 from ..robot import load
-from .args import (
-    ZCR07S_STUDY,
+from .args import ZCR07S_STUDY, add_command, deprecated
+from .closed_loop import add_closed_loop_args, reference_and_controller
+from .number_options import (
     Number,
-    add_command,
-    add_drive_side,
-    add_robot,
     check_radians,
     controller_period,
-    deprecated,
-    drive_side_words,
     item,
     joint_values,
     joint_vector,
     number,
-    output_file,
     seed,
-    with_drive_side,
 )
-from .closed_loop import add_closed_loop_args, reference_and_controller
+from .outputs import output_file
+from .robot_options import add_drive_side, add_robot, drive_side_words, with_drive_side
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]

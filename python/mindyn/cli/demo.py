@@ -16,7 +16,10 @@ import numpy as np
 
 from ..base import base_parameters
 from ..robot import bundled_robots, load
-from .args import ZCR07S_STUDY, add_command, deprecated, number, output_dir, robot_arg, seed
+from .args import ZCR07S_STUDY, add_command, deprecated
+from .number_options import number, seed
+from .outputs import output_dir
+from .robot_options import robot_arg
 
 
 def _step(no: int, title: str) -> float:

@@ -9,15 +9,10 @@ import argparse
 import numpy as np
 
 from ..robot import load
-from .args import (
-    add_command,
-    add_recorded_torque_reading,
-    add_robot,
-    joint_values,
-    joint_vector,
-    number,
-    output_file,
-)
+from .args import add_command
+from .number_options import add_recorded_torque_reading, joint_values, joint_vector, number
+from .outputs import output_file
+from .robot_options import add_robot
 
 
 def _read_log(path, robot, doc, args):

@@ -8,20 +8,10 @@ from pathlib import Path
 import numpy as np
 
 from ..robot import load
-from .args import (
-    ZCR07S_STUDY,
-    add_command,
-    add_drive_side,
-    add_robot,
-    check_radians,
-    deprecated,
-    joint_values,
-    joint_vector,
-    number,
-    output_file,
-    seed,
-    with_drive_side,
-)
+from .args import ZCR07S_STUDY, add_command, deprecated
+from .number_options import check_radians, joint_values, joint_vector, number, seed
+from .outputs import output_file
+from .robot_options import add_drive_side, add_robot, with_drive_side
 
 
 def cmd_excite(args: argparse.Namespace) -> int:

@@ -9,7 +9,9 @@ from .._core import ModelError
 from .._mujoco import is_mjcf
 from ..export import classical_terms, write_urdf, write_yaml
 from ..robot import load
-from .args import add_command, add_robot, output_file
+from .args import add_command
+from .outputs import output_file
+from .robot_options import add_robot
 
 
 def register(subparsers) -> None:

@@ -10,8 +10,10 @@ import sys
 from pathlib import Path
 
 from ..robot import load
-from .args import joint_values, with_drive_side
 from .export import check_description_kind, write_description
+from .flags import library_options_as_flags
+from .number_options import joint_values
+from .robot_options import with_drive_side
 
 
 def _progress():
@@ -138,7 +140,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     )
     report = run(robot, logs, options=options, tip=args.tip, progress=_progress())
     doc = report.to_dict()
-    text = report.format()
+    text = library_options_as_flags(report.format())  # the report names keywords
     print(text)
     if args.json:
         _write_json(args.json, doc)

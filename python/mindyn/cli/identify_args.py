@@ -5,18 +5,11 @@ and how, what is written."""
 from __future__ import annotations
 
 from ..robot import FRICTION_KINDS
-from .args import (
-    add_command,
-    add_joint_terms,
-    add_offset,
-    add_robot,
-    deprecated,
-    joint_vector,
-    number,
-    output_dir,
-    output_file,
-)
+from .args import add_command, deprecated
 from .export import add_description_outputs
+from .number_options import joint_vector, number
+from .outputs import output_dir, output_file
+from .robot_options import add_joint_terms, add_offset, add_robot
 
 
 def add_data_options(p) -> None:

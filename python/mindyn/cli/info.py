@@ -8,7 +8,8 @@ import math
 import numpy as np
 
 from ..robot import load
-from .args import add_command, add_robot
+from .args import add_command
+from .robot_options import add_robot
 
 
 def _fmt(x: float, width: int = 10) -> str:

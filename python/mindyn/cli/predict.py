@@ -5,7 +5,10 @@ from __future__ import annotations
 import argparse
 
 from ..robot import load
-from .args import add_command, add_recorded_torque_reading, add_robot, number, output_file
+from .args import add_command
+from .number_options import add_recorded_torque_reading, number
+from .outputs import output_file
+from .robot_options import add_robot
 
 
 def cmd_predict(args: argparse.Namespace) -> int:

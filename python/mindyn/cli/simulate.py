@@ -7,17 +7,10 @@ import argparse
 import numpy as np
 
 from ..robot import load
-from .args import (
-    add_command,
-    add_drive_side,
-    add_robot,
-    controller_period,
-    drive_side_words,
-    number,
-    output_file,
-    seed,
-    with_drive_side,
-)
+from .args import add_command
+from .number_options import controller_period, number, seed
+from .outputs import output_file
+from .robot_options import add_drive_side, add_robot, drive_side_words, with_drive_side
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:

@@ -70,13 +70,13 @@ class IdentifyOptions:
         if self.friction_width is not None:
             if self.friction_model is None:
                 raise IdentificationError(
-                    "--friction-width: expected --friction-model smooth or auto"
+                    "friction_width=: expected friction_model='smooth' or 'auto'"
                 )
             object.__setattr__(self, "friction_width", tuple(self.friction_width))
         if self.friction_model is not None:
             object.__setattr__(self, "friction", True)
         if self.prior_weight is not None and not self.consistent:
-            raise IdentificationError("--prior-weight: expected --consistent as well")
+            raise IdentificationError("prior_weight=: expected consistent=True as well")
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -114,11 +114,11 @@ class ReadingOptions:
         if self.drive_gain is not None:
             object.__setattr__(self, "drive_gain", tuple(float(g) for g in self.drive_gain))
         if self.filter != "lowpass":  # the options of the low-pass path, refused with another
-            for flag, value in (
-                ("--periods", self.periods),
-                ("--excitation-period", self.period),
-                ("--edge", self.edge),
-                ("--no-decimate", None if self.decimate else True),
+            for given, value in (
+                ("periods=", self.periods),
+                ("period=", self.period),
+                ("edge=", self.edge),
+                ("decimate=False", None if self.decimate else True),
             ):
                 if value is not None:
-                    raise DataError(f"{flag} needs --filter lowpass (got --filter {self.filter})")
+                    raise DataError(f"{given} needs filter='lowpass' (got filter='{self.filter}')")

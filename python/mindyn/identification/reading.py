@@ -28,7 +28,7 @@ def _named_filter_error(path, opts: ReadingOptions):
         if opts.filter not in ("butter", "lowpass"):
             raise
         raise DataError(
-            f"--cutoff {opts.cutoff:g} Hz: the zero-phase Butterworth filter "
+            f"cutoff={opts.cutoff:g} Hz: the zero-phase Butterworth filter "
             f"of {path} is singular at this cutoff ({e}); expected a cutoff of at least 1e-4 of "
             "half the log's sample rate"
             if opts.cutoff is not None
@@ -44,7 +44,7 @@ def _gains(opts: ReadingOptions, n: int) -> np.ndarray | None:
     if len(g) == 1:
         g *= n
     if len(g) != n:
-        raise DataError(f"--drive-gain needs {n} values (or one for all), got {len(g)}")
+        raise DataError(f"drive_gain= needs {n} values (or one for all), got {len(g)}")
     return np.array(g)
 
 
@@ -110,8 +110,8 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
         unit = d.processing["torque"]["unit"]
         if gain is not None and not unit.startswith("motor current"):
             raise DataError(
-                f"--drive-gain: {p} holds torques in {unit}, not motor currents; expected "
-                "--torque-unit current, columns i1..in or --currents"
+                f"drive_gain=: {p} holds torques in {unit}, not motor currents; expected "
+                "torque_unit='current', columns i1..in or currents="
             )
     return out
 
@@ -131,7 +131,7 @@ def _processed(paths, raws, opts: ReadingOptions, cutoff, periodic, decimate) ->
         segments = split_at_gaps(raw)
         if len(segments) > 1 and (opts.periods or opts.period):
             raise DataError(
-                f"--periods/--excitation-period: {p} has {len(segments) - 1} break(s) in its "
+                f"periods=/period=: {p} has {len(segments) - 1} break(s) in its "
                 "time stamps; a periodic log to be averaged must be one continuous recording"
             )
         with _named_filter_error(p, opts):
@@ -173,13 +173,14 @@ def read_log(
     return _processed([path], raws, opts, cutoff, periodic, decimate and opts.decimate)[0]
 
 
-def paired(logs: Sequence, currents, flag: str, logs_flag: str) -> list:
-    """One currents file per log (or none)."""
+def paired(logs: Sequence, currents, given: str, logs_given: str) -> list:
+    """One currents file per log (or none); ``given`` / ``logs_given``: the keyword of the
+    currents and the name of the logs in the message."""
     if not currents:
         return [None] * len(logs)
     if len(currents) != len(logs):
         raise DataError(
-            f"{flag}: {len(currents)} currents file(s) for {len(logs)} log(s) of {logs_flag}; "
+            f"{given}: {len(currents)} currents file(s) for {len(logs)} log(s) of {logs_given}; "
             "expected one per log, in the same order"
         )
     return list(currents)
@@ -318,9 +319,9 @@ def load_logs(
     if not files:
         raise DataError("load_logs: expected at least one log")
     if validate_currents and not vfiles:
-        raise DataError("--validate-currents: expected --validate with the logs they belong to")
-    cur = paired(files, currents, "--currents", what)
-    vcur = paired(vfiles, validate_currents, "--validate-currents", "--validate")
+        raise DataError("validate_currents=: expected validate= with the logs they belong to")
+    cur = paired(files, currents, "currents=", what)
+    vcur = paired(vfiles, validate_currents, "validate_currents=", "validate=")
     truth: list = []
     raws = _raw(files + vfiles, robot, opts, cur + vcur, True, truth)
     decimate = model == "dynamic" and opts.decimate

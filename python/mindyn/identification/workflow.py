@@ -50,10 +50,10 @@ def _check_width(width, n: int) -> list[float]:
         w *= n
     if len(w) != n:
         raise IdentificationError(
-            f"--friction-width needs {n} values (or one for all), got {len(w)}"
+            f"friction_width= needs {n} values (or one for all), got {len(w)}"
         )
     if not all(math.isfinite(x) and x > 0 for x in w):
-        raise IdentificationError("--friction-width: every width must be a positive number")
+        raise IdentificationError("friction_width=: every width must be a positive number")
     return w
 
 

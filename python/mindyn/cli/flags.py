@@ -1,0 +1,69 @@
+"""Library messages as the command line says them: the library's keywords (``offset=True``,
+``prior_weight=``) as the command's flags (``--offset``, ``--prior-weight``)."""
+
+from __future__ import annotations
+
+import re
+
+#: Library keywords that library messages name (``friction=True``, ``tip='link'``,
+#: ``prior_weight=``) whose command-line flag is the keyword with dashes (``--prior-weight``).
+LIBRARY_OPTIONS = (
+    "consistent",
+    "currents",
+    "cutoff",
+    "decimate",
+    "drive_gain",
+    "drive_side",
+    "edge",
+    "filter",
+    "friction",
+    "friction_model",
+    "friction_width",
+    "method",
+    "min_velocity",
+    "offset",
+    "period",
+    "periods",
+    "position_noise",
+    "prior_weight",
+    "quantization",
+    "rotor",
+    "snap",
+    "tip",
+    "topic",
+    "torque_noise",
+    "torque_unit",
+    "validate",
+    "validate_currents",
+    "velocity_noise",
+)
+# the keywords whose flag is not their name with dashes: (keyword, value) -> flag, None for any
+# value (the value then follows the flag)
+_FLAG_OF = {("period", None): "--excitation-period", ("decimate", "False"): "--no-decimate"}
+_NUMBER = r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
+_LIBRARY_OPTION = re.compile(
+    r"\b(" + "|".join(LIBRARY_OPTIONS) + r")="
+    r"(?:(True|False)\b|'([^']*)'(?: or '([^']*)')?|(" + _NUMBER + r")(?![\w.])|(?![\w'\"]))"
+)
+
+
+def library_options_as_flags(text: str) -> str:
+    """A library message as the command line says it: the keywords of :data:`LIBRARY_OPTIONS`
+    as their flags (``offset=True`` -> ``--offset``, ``decimate=False`` -> ``--no-decimate``,
+    ``method='recursive'`` -> ``--method recursive``, ``friction_model='smooth' or 'auto'`` ->
+    ``--friction-model smooth or auto``, ``min_velocity=0`` -> ``--min-velocity 0``,
+    ``prior_weight=`` -> ``--prior-weight``, ``period=`` -> ``--excitation-period``)."""
+
+    def flag(m: re.Match) -> str:
+        key, truth, word, other, number = m.groups()
+        special = _FLAG_OF.get((key, truth))
+        if special is not None:
+            return special
+        if truth == "False":  # no flag says it
+            return m.group(0)
+        name = _FLAG_OF.get((key, None), "--" + key.replace("_", "-"))
+        if word is not None:
+            return f"{name} {word}" + ("" if other is None else f" or {other}")
+        return name if number is None else f"{name} {number}"
+
+    return _LIBRARY_OPTION.sub(flag, text)

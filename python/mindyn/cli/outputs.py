@@ -1,0 +1,169 @@
+"""The command line's one rule for the files and folders it writes: the validated types of the
+output options (:func:`output_file`, :func:`output_dir`), the path a default name takes
+(:func:`output_path`) and the checks and folders made before a command runs
+(:func:`prepare_outputs`)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+from .args import UsageError
+
+
+def _nearest_existing(path: Path) -> Path:
+    path = path.absolute()
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
+def _check_parent(path: Path, text: str) -> None:
+    anc = _nearest_existing(path.parent)
+    if not anc.is_dir():
+        raise argparse.ArgumentTypeError(f"'{text}': '{anc}' is a file, not a folder")
+    if not os.access(anc, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"'{text}': the folder '{anc}' is not writable")
+
+
+class OutputPath(str):
+    """An output option's value (a ``str``), marked as a file or a folder to write, so that
+    :func:`prepare_outputs` finds every output of a command line; ``into_folder``: a file
+    option given an existing folder (or a path ending in ``/``), which :func:`output_path`
+    turns into the command's default file name inside it."""
+
+    folder = False
+    into_folder = False
+
+
+class OutputFolder(OutputPath):
+    folder = True
+
+
+def output_file(text: str) -> str:
+    """An argparse ``type``: a file to write, by the rule of :func:`output_path` (a folder
+    means the command's default file name inside it; the missing folders are created by
+    :func:`prepare_outputs`)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file name to write, got an empty string")
+    path = Path(text)
+    if path.is_dir() or text.endswith(("/", os.sep)):
+        if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):
+            raise argparse.ArgumentTypeError(f"the folder '{text}' is not writable")
+        if not path.exists():
+            _check_parent(path, text)
+        value = OutputPath(text)
+        value.into_folder = True
+        return value
+    if path.exists() and not os.access(path, os.W_OK):
+        raise argparse.ArgumentTypeError(f"'{text}' exists and is not writable")
+    _check_parent(path, text)
+    return OutputPath(text)
+
+
+def output_path(value: str | None, default: str) -> Path:
+    """The one rule for the file an output option of any command names: a path naming a folder
+    (an existing one, or any path ending in ``/``) means ``default``'s file name inside that
+    folder; no value means ``default`` itself (relative to the current folder); any other path
+    is the file. The missing folders of the file are created. Commands state the path they
+    wrote ("wrote PATH", unless standard output carries a JSON document)."""
+    if value is None:
+        path = Path(default)
+    elif getattr(value, "into_folder", False) or Path(value).is_dir():
+        path = Path(value) / Path(default).name
+    else:
+        path = Path(value)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+output_file.__name__ = "file name"
+
+
+def output_dir(text: str) -> str:
+    """An argparse ``type``: a folder to write into (created when missing)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a folder to write into, got an empty string")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"'{text}' is a file; expected a folder to write into")
+    if path.is_dir() and not os.access(path, os.W_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"the folder '{text}' is not writable")
+    if not path.exists():
+        _check_parent(path, text)
+    return OutputFolder(text)
+
+
+output_dir.__name__ = "folder"
+
+
+#: The extension of an output option's default file name (:func:`default_file_name`), by the
+#: option's destination; CSV for ``-o``.
+_EXTENSIONS = {
+    "json": ".json",
+    "calibrate": ".json",
+    "urdf": ".urdf",
+    "yaml": ".yaml",
+    "mjcf": ".xml",
+    "sidecar": ".joints.yaml",
+    "plot": ".png",
+    "output": ".csv",
+}
+
+
+def default_file_name(args: argparse.Namespace, dest: str) -> str:
+    """The file an output option writes when given a folder: ROBOT_COMMAND.EXT, ROBOT the
+    robot argument (a bundled name, or its description file's name without extension)."""
+    robot = Path(str(getattr(args, "robot", "") or "mindyn")).stem or "mindyn"
+    return f"{robot}_{getattr(args, 'command', 'mindyn')}{_EXTENSIONS.get(dest, '')}"
+
+
+def _into_folders(args: argparse.Namespace) -> None:
+    """Every file option given a folder names :func:`default_file_name` inside it
+    (:func:`output_path`), for the commands that write what their options name."""
+    for dest, value in vars(args).items():
+        if isinstance(value, OutputPath) and value.into_folder:
+            path = output_path(value, default_file_name(args, dest))
+            setattr(args, dest, OutputPath(str(path)))
+
+
+def declared_outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
+    """The outputs a command line names: ``(option, path, is_folder)`` for every value of an
+    option typed :func:`output_file` or :func:`output_dir`."""
+    found = []
+    for dest, value in vars(args).items():
+        for v in value if isinstance(value, list) else [value]:
+            if isinstance(v, OutputPath):
+                found.append(("--" + dest.replace("_", "-"), Path(v), v.folder or v.into_folder))
+    return found
+
+
+def prepare_outputs(args: argparse.Namespace) -> None:
+    """The one rule for the outputs of every command, applied before the command writes
+    anything: a file option given a folder names its default file inside it
+    (:func:`output_path`, :func:`default_file_name`), no two outputs may be the same file
+    (compared as resolved paths), and the missing folders of each are created. The outputs are
+    :func:`declared_outputs`, or those that the command's ``outputs(args)`` (a parser default)
+    lists when it writes files the options only imply (``codegen -o NAME``: NAME.c and
+    NAME.h); the commands state the paths they wrote (on standard output, unless it carries
+    the JSON document of ``--format json``)."""
+    if callable(getattr(args, "outputs", None)):
+        outputs = args.outputs(args)  # the command names the files in a folder given
+    else:
+        _into_folders(args)
+        outputs = declared_outputs(args)
+    seen: dict[Path, tuple[str, Path]] = {}
+    for option, path, folder in outputs:
+        if folder:  # files inside it are named by the command (output_path)
+            continue
+        key = path.resolve()
+        if key in seen:
+            other, first = seen[key]
+            raise UsageError(
+                f"{option} '{path}' is also the file {other} writes ('{first}'): give each "
+                "output its own file"
+            )
+        seen[key] = (option, path)
+    for _, path, folder in outputs:
+        (path if folder else path.parent).mkdir(parents=True, exist_ok=True)

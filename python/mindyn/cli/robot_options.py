@@ -1,0 +1,133 @@
+"""The robot argument of the commands and the options of the joint terms: rotor, friction,
+offsets and the side of the transmissions they act on."""
+
+from __future__ import annotations
+
+import argparse
+import re
+
+from ..robot import bundled_robots
+
+
+def robot_help() -> str:
+    return (
+        "a bundled robot ("
+        + ", ".join(bundled_robots())
+        + "), a URDF file, a MuJoCo MJCF (.xml) or a YAML DH/MDH table"
+    )
+
+
+def robot_arg(text: str) -> str:
+    """An argparse ``type`` for ROBOT: the name, file or ``planar<N>`` is checked by the loader;
+    here only what cannot reach it (an empty name, a ``planar<N>`` whose N is no integer the
+    model builder takes)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a robot name or file, got an empty string")
+    m = re.fullmatch(r"planar(\d+)h?", text)
+    if m and (len(m.group(1)) > 9 or int(m.group(1)) > 2**31 - 1):
+        raise argparse.ArgumentTypeError(
+            f"'{text}': planar<N> takes a joint count N, not {m.group(1)}"
+        )
+    return text
+
+
+robot_arg.__name__ = "robot"
+
+
+def add_robot(p: argparse.ArgumentParser) -> None:
+    """The positional ROBOT and ``--tip`` (the last link of a URDF chain)."""
+    p.add_argument("robot", metavar="ROBOT", type=robot_arg, help=robot_help())
+    p.add_argument(
+        "--tip",
+        help="URDF: the link that ends the chain root -> TIP (default: the whole URDF, a tree "
+        "if it branches)",
+    )
+
+
+def add_joint_terms(p: argparse.ArgumentParser, verb: str = "include") -> None:
+    """``--rotor``, ``--friction`` and ``--drive-side``; ``verb`` says what they do in this
+    command."""
+    p.add_argument(
+        "--rotor", action="store_true", help=f"{verb} rotor inertia Ia per joint (or motor)"
+    )
+    p.add_argument("--friction", action="store_true", help=f"{verb} Fv, Fc per joint (or motor)")
+    add_drive_side(p)
+
+
+def add_drive_side(p: argparse.ArgumentParser) -> None:
+    """``--drive-side``: where rotor inertia and friction act when the description declares
+    transmissions."""
+    p.add_argument(
+        "--drive-side",
+        choices=("motor", "joint"),
+        default=None,
+        help="where rotor inertia and friction act when the description declares transmissions: "
+        "on the motors (the default then; Ia, Fv, Fc of slot k are motor k's, "
+        "tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))) or on the joints",
+    )
+
+
+def with_drive_side(robot, args):
+    """The robot with the drive side of ``--drive-side`` (unchanged when not given); ``motor``
+    on a robot without transmissions is refused (ModelError)."""
+    side = getattr(args, "drive_side", None)
+    return robot if side is None else robot.with_drive_side(side)
+
+
+def drive_side_words(robot, args) -> str:
+    """Where the rotor inertia and friction of this command act, in words for its first output
+    line, when the robot has transmissions and they are asked for (a command without
+    ``--rotor`` / ``--friction`` always has them); "" otherwise."""
+    if robot.transmission is None or not (
+        getattr(args, "rotor", True) or getattr(args, "friction", True)
+    ):
+        return ""
+    if robot.drive_side == "motor":
+        return "on the motors through the transmissions (--drive-side joint: on the joints)"
+    return "on the joints (--drive-side joint)"
+
+
+def drive_side(robot, args):
+    """``robot`` with ``--drive-side`` applied (:func:`with_drive_side`), and the words saying
+    where rotor inertia and friction act, for a command's output ("" when neither is asked
+    for)."""
+    side = getattr(args, "drive_side", None)
+    robot = with_drive_side(robot, args)
+    if not (getattr(args, "rotor", False) or getattr(args, "friction", False)):
+        return robot, ""
+    if robot.drive_side == "motor":
+        n = len(robot.transmission.motors)
+        how = "--drive-side motor" if side else "the default with transmissions"
+        return robot, (
+            f"rotor inertia and friction on the {n} motors (q_m = T q, tau = T^T tau_m; {how}"
+            + ("" if side else "; --drive-side joint puts them on the joints")
+            + ")"
+        )
+    why = "--drive-side joint" if side else "no transmissions declared"
+    return robot, f"rotor inertia and friction on the joints ({why})"
+
+
+def add_offset(p: argparse.ArgumentParser, verb: str = "include") -> None:
+    """``--offset``: a constant torque offset per joint (Off1 .. OffN)."""
+    p.add_argument(
+        "--offset",
+        action="store_true",
+        help=f"{verb} a constant torque offset per joint, Off1..OffN (tau_j = ... + Off_j)",
+    )
+
+
+def joint_terms(args, robot=None) -> list[str]:
+    """The joint terms a command line asked for (``--rotor``, ``--friction``, ``--offset``), in
+    words, for the first line of a command's output; with ``robot``, where the rotor inertia
+    and friction act when it has transmissions (:func:`drive_side_words`)."""
+    named = (
+        ("rotor inertia", "rotor"),
+        ("friction", "friction"),
+        ("torque offsets", "offset"),
+    )
+    words = [words for words, flag in named if getattr(args, flag, False)]
+    side = drive_side_words(robot, args) if robot is not None else ""
+    if side:
+        k = 1 + max(i for i, w in enumerate(words) if w in ("rotor inertia", "friction"))
+        words[k - 1] += " " + side
+    return words
