@@ -662,6 +662,7 @@ WRONG_VALUE: dict[tuple[str, str], object] = {
     ("identification.rosbag.read_rosbag", "topic"): SKIP,
     ("identification.rosbag.read_rosbag", "torque_unit"): SKIP,
     ("identification.excitation.check_sampling", "rate"): 0.5,  # below twice the top harmonic
+    ("export.classical_terms", "classical"): {"XX9": 1.0},  # no name of the robot's
     ("codegen.generate_controller", "gains"): {"kd": 1.0, "lamda": 5.0},  # a key misspelt
     ("codegen.generate_controller", "p_min"): 200.0,  # above p_max
     ("codegen.generate_controller", "tau_max"): -1.0,
