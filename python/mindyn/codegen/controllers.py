@@ -15,7 +15,7 @@ import numpy as np
 from .. import _args, _core
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
-from .generation import GeneratedCode, _check_lang, _check_names, _parameter_values, identifier
+from .generation import GeneratedCode, _check_lang, _check_options, _parameter_values, identifier
 
 __all__ = [
     "CONTROLLERS",
@@ -153,7 +153,7 @@ def generate_controller(
     robot = load(robot) if not isinstance(robot, Robot) else robot
     _args.choice(kind, "kind", CONTROLLERS)
     _check_lang(lang, trig)
-    _check_names(name, header_name)
+    _check_options(name, header_name, params)
     if base is not None and base is not False:
         _args.instance(base, "base", BaseParameters, "a BaseParameters, False or None")
     period = _args.number(period, "period", positive=True)
@@ -297,7 +297,7 @@ def generate_observer(
 
     robot = load(robot) if not isinstance(robot, Robot) else robot
     _check_lang(lang, trig)
-    _check_names(name, header_name)
+    _check_options(name, header_name, params)
     _args.optional(_args.instance, base, "base", BaseParameters)
     held_torque = _args.flag(held_torque, "held_torque")
     period = control.controllers.check_period(period)

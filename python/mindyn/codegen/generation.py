@@ -122,10 +122,13 @@ _IDENTIFIER = re.compile(r"[A-Za-z](?:_?[A-Za-z0-9])*")
 _HEADER = re.compile(r"[A-Za-z0-9_.+-]+\.h")
 
 
-def _check_names(name, header_name) -> None:
-    """Checks the prefix of generated identifiers (letters, digits and single underscores, first
-    a letter, at most 40 characters, as the generator requires) and
-    the header file name (a plain file name ending in ``.h``), when given."""
+def _check_options(name, header_name, params) -> None:
+    """Checks the parameter values (None, a file, or a vector; its length is checked once the
+    parameters are known), the prefix of generated identifiers (letters, digits and single
+    underscores, first a letter, at most 40 characters, as the generator requires) and the
+    header file name (a plain file name ending in ``.h``), when given."""
+    if params is not None and not isinstance(params, (str, Path)):
+        _args.array(params, "params", (None,))
     ok = name is None or _IDENTIFIER.fullmatch(_args.text(name, "name"))
     if not ok or (name is not None and len(name) > 40):
         raise _args.fail(
@@ -234,7 +237,7 @@ def generate(
         base = _args.flag(base, "base")
     _check_lang(lang, trig)
     fs = _functions(what)
-    _check_names(name, header_name)
+    _check_options(name, header_name, params)
     _args.choice(minimise, "minimise", ("operations", "additions"))
     name = name if name is not None else identifier(robot.name)
     if isinstance(base, BaseParameters):
