@@ -1,8 +1,9 @@
 """The argument contract of the public Python API, walked function by function.
 
 The public functions are enumerated from the package (``__all__`` of ``mindyn``, of
-``mindyn.identification``, ``mindyn.control``, ``mindyn.inverse_kinematics``, ``mindyn.export``
-and ``mindyn.mjcf``, and the public methods of ``Robot`` and ``BaseParameters``); each has a
+``mindyn.identification``, ``mindyn.control``, ``mindyn.codegen``, ``mindyn.inverse_kinematics``,
+``mindyn.export`` and ``mindyn.mjcf``, the public methods of ``Robot`` and ``BaseParameters``, and
+the constructors and methods of the classes of ``mindyn.codegen``); each has a
 valid baseline call below, which is run once. Then every argument of the baseline is replaced,
 one at a time, by a value of a wrong type and by a wrong value of the right type: each call must
 raise ``mindyn.ArgumentError`` (a ``mindyn.Error``, ``ValueError`` and ``TypeError``) whose one
@@ -13,10 +14,12 @@ read-only arrays.
 from __future__ import annotations
 
 import inspect
+import json
 import re
 from pathlib import Path
 
 import mindyn
+import mindyn.codegen as codegen
 import mindyn.control as control
 import mindyn.export as export
 import mindyn.formulas as formulas
@@ -208,393 +211,464 @@ def _api(tmp: Path) -> dict:
         six_log.t, six_log.q, six_log.dq, six_log.ddq_true, six_log.tau, "payload"
     )
     return {
-        "control.controllers.check_period": (controllers.check_period, (0.004,), {}),
-        "control.controllers.controller_check": (
-            controllers.controller_check,
-            (ROBOT, pd, P13, 0.004),
-            {},
-        ),
-        "control.stability.check_loop": (
-            stability.check_loop,
-            ("pd", kp, kd, lam, 0.004, [np.linalg.inv(mm)], [mm], qs, ["robot"]),
-            {},
-        ),
-        "control.stability.loop_matrix": (stability.loop_matrix, (kp, kd, np.eye(N), 0.004), {}),
-        "control.stability.workspace_samples": (
-            stability.workspace_samples,
+        **_codegen_api(tmp),
+        **{
+            "control.controllers.check_period": (controllers.check_period, (0.004,), {}),
+            "control.controllers.controller_check": (
+                controllers.controller_check,
+                (ROBOT, pd, P13, 0.004),
+                {},
+            ),
+            "control.stability.check_loop": (
+                stability.check_loop,
+                ("pd", kp, kd, lam, 0.004, [np.linalg.inv(mm)], [mm], qs, ["robot"]),
+                {},
+            ),
+            "control.stability.loop_matrix": (
+                stability.loop_matrix,
+                (kp, kd, np.eye(N), 0.004),
+                {},
+            ),
+            "control.stability.workspace_samples": (
+                stability.workspace_samples,
+                (ROBOT,),
+                {"count": 5, "seed": 1},
+            ),
+            "formulas.latex": (formulas.latex, (BASE.formula_terms(),), {}),
+            "formulas.numeric_formulas": (
+                formulas.numeric_formulas,
+                (np.array(BASE.Y), list(BASE.names), list(BASE.classical_names)),
+                {},
+            ),
+            "formulas.round_coefficient": (formulas.round_coefficient, (0.1,), {"scale": 1.0}),
+            "formulas.shortest_decimal": (formulas.shortest_decimal, (0.1, 1e-9), {}),
+            "formulas.symbolic_formulas": (formulas.symbolic_formulas, (BASE,), {"seed": 1}),
+            "formulas.unit_formula": (formulas.unit_formula, ("Off1",), {}),
+            "identification.consistent.consistent_estimate": (
+                consistent.consistent_estimate,
+                (RESULT,),
+                {"prior_weight": 1e-3},
+            ),
+            "identification.consistent.pseudo_inertia": (consistent.pseudo_inertia, (p10,), {}),
+            "identification.consistent.inertial_from_pseudo": (
+                consistent.inertial_from_pseudo,
+                (consistent.pseudo_inertia(p10),),
+                {},
+            ),
+            "identification.currents.read_currents": (
+                currents.read_currents,
+                (f["currents"], N),
+                {},
+            ),
+            "identification.currents.attach_currents": (
+                currents.attach_currents,
+                (LOG, f["currents"], ROBOT),
+                {"drive_gain": [1.0, 1.0]},
+            ),
+            "identification.data.check_log_robot": (
+                logs.check_log_robot,
+                ({"robot": "planar2"}, ROBOT, "the log"),
+                {},
+            ),
+            "identification.data.differentiate": (
+                logs.differentiate,
+                (LOG.t, LOG.q),
+                {"filter": "butter", "order": 4},
+            ),
+            "identification.data.read_truth": (logs.read_truth, (f["sim_csv"], ROBOT), {}),
+            "identification.data.truth_path": (logs.truth_path, (f["sim_csv"],), {}),
+            "identification.data.write_trajectory_csv": (
+                logs.write_trajectory_csv,
+                (tmp / "traj.csv", LOG.t, LOG.q, LOG.dq, LOG.ddq),
+                {},
+            ),
+            "identification.document.read_identification": (
+                document.read_identification,
+                (f["arm_json"],),
+                {"need": ("robot",), "finite": False},
+            ),
+            "identification.document.robot_on_drive_side": (
+                document.robot_on_drive_side,
+                (ROBOT, arm),
+                {"where": "arm"},
+            ),
+            "identification.document.with_identified_friction": (
+                document.with_identified_friction,
+                (ROBOT, arm),
+                {"where": "arm"},
+            ),
+            "identification.excitation.check_sampling": (
+                excitation.check_sampling,
+                (5, 0.1, 100.0),
+                {"periods": 1.0},
+            ),
+            "identification.excitation.criterion_value": (
+                excitation.criterion_value,
+                (BASE, LOG.q, LOG.dq, LOG.ddq),
+                {"criterion": "cond"},
+            ),
+            "identification.excitation.excitation_limits": (
+                excitation.excitation_limits,
+                (ROBOT,),
+                {"margin": 0.05},
+            ),
+            "identification.excitation.random_trajectory": (
+                excitation.random_trajectory,
+                (ROBOT,),
+                {"harmonics": 3, "seed": 1},
+            ),
+            "identification.excitation.optimize_excitation": (
+                excitation.optimize_excitation,
+                (ROBOT,),
+                {"harmonics": 2, "starts": 1, "maxiter": 2, "samples": 20, "progress": False},
+            ),
+            "identification.excitation.plot_trajectory": (
+                excitation.plot_trajectory,
+                (tmp / "trajectory.png", LOG.t, LOG.q, LOG.dq, LOG.ddq),
+                {"title": "sines"},
+            ),
+            "identification.prediction.identified_model": (
+                prediction.identified_model,
+                (RESULT,),
+                {"estimate": "unconstrained"},
+            ),
+            "identification.prediction.predict": (prediction.predict, (RESULT, LOG), {}),
+            "identification.preprocess.concatenate": (preprocess.concatenate, ([LOG],), {}),
+            "identification.preprocess.excited_band": (
+                preprocess.excited_band,
+                (LOG.q, 0.005),
+                {"energy": 0.9},
+            ),
+            "identification.preprocess.preprocess": (preprocess.preprocess, (LOG,), {"order": 4}),
+            "identification.preprocess.require_even_stamps": (
+                preprocess.require_even_stamps,
+                (LOG, "butter"),
+                {},
+            ),
+            "identification.preprocess.timing": (preprocess.timing, (LOG.t,), {}),
+            "identification.report.format_table": (report.format_table, (RESULT,), {}),
+            "identification.report.plot_torques": (
+                report.plot_torques,
+                (tmp / "torques.png", LOG.t, LOG.tau, LOG.tau),
+                {"title": "sines"},
+            ),
+            "identification.report.write_report": (
+                report.write_report,
+                (tmp / "rep", RESULT, LOG),
+                {},
+            ),
+            "identification.rosbag.is_rosbag": (rosbag.is_rosbag, (f["log_csv"],), {}),
+            "identification.identify_payload": (
+                identification.identify_payload,
+                (six, six_arm, payload_log),
+                {"consistent": False, "min_velocity": 0.01},
+            ),
+            "identification.rosbag.read_rosbag": (
+                rosbag.read_rosbag,
+                (f["bag"], ROBOT),
+                {"topic": "/joint_states", "torque_unit": "Nm"},
+            ),
+            # mindyn
+            "mindyn.load": (mindyn.load, ("planar2",), {"gravity": [0.0, 0.0, -9.81]}),
+            "mindyn.base_parameters": (
+                mindyn.base_parameters,
+                (ROBOT,),
+                {"rotor": False, "friction": False, "method": "projection", "tolerance": 1e-9},
+            ),
+            "mindyn.to_pinocchio_order": (mindyn.to_pinocchio_order, (ROBOT.params,), {}),
+            "mindyn.from_pinocchio_order": (mindyn.from_pinocchio_order, (ROBOT.params,), {}),
+            "mindyn.inertial_from_com": (
+                mindyn.inertial_from_com,
+                (1.0, np.zeros(3), np.eye(3)),
+                {},
+            ),
+            "mindyn.inertial_from_urdf": (
+                mindyn.inertial_from_urdf,
+                (1.0, np.zeros(3), np.eye(3), np.eye(3)),
+                {},
+            ),
+            "mindyn.coriolis_matrix": (mindyn.coriolis_matrix, (ROBOT, Q, Z), {}),
+            "mindyn.slotine_li_regressor": (mindyn.slotine_li_regressor, (BASE, Q, Z, Z, Z), {}),
+            "mindyn.ik": (mindyn.ik, (ROBOT, T0), {}),
+            # Robot
+            "Robot.parameter_names": (ROBOT.parameter_names, (), {"rotor": True, "friction": True}),
+            "Robot.parameters": (ROBOT.parameters, (), {"rotor": True, "friction": True}),
+            "Robot.inverse_dynamics": (ROBOT.inverse_dynamics, (Q, Z, Z, ROBOT.params), {}),
+            "Robot.regressor": (ROBOT.regressor, (Q, Z, Z), {"rotor": True, "friction": False}),
+            "Robot.gravity_torque": (ROBOT.gravity_torque, (Q,), {}),
+            "Robot.mass_matrix": (ROBOT.mass_matrix, (Q,), {}),
+            "Robot.link_poses": (ROBOT.link_poses, (Q,), {}),
+            "Robot.momentum": (ROBOT.momentum, (Q, Z), {}),
+            "Robot.forward_dynamics": (ROBOT.forward_dynamics, (Q, Z, Z), {}),
+            "Robot.kinetic_energy": (ROBOT.kinetic_energy, (Q, Z), {}),
+            "Robot.potential_energy": (ROBOT.potential_energy, (Q,), {}),
+            "Robot.energy": (ROBOT.energy, (Q, Z), {}),
+            "Robot.friction_shapes": (ROBOT.friction_shapes, (Z,), {}),
+            "Robot.energy_regressors": (ROBOT.energy_regressors, (Q, Z), {"rotor": True}),
+            "Robot.energy_regressor": (ROBOT.energy_regressor, (Q, Z), {"friction": True}),
+            "Robot.lagrangian_regressor": (ROBOT.lagrangian_regressor, (Q, Z), {"rotor": False}),
+            "Robot.momentum_regressors": (ROBOT.momentum_regressors, (Q, Z), {"rotor": True}),
+            "Robot.fk": (ROBOT.fk, (Q,), {"link": 0}),
+            "Robot.jacobian": (ROBOT.jacobian, (Q,), {}),
+            "Robot.joint_transform": (ROBOT.joint_transform, (1, 0.3), {}),
+            "Robot.joint_pre": (ROBOT.joint_pre, (1,), {}),
+            "Robot.joint_post": (ROBOT.joint_post, (0,), {}),
+            "Robot.with_gravity": (ROBOT.with_gravity, ([0.0, -9.81, 0.0],), {}),
+            "Robot.with_friction_model": (
+                ROBOT.with_friction_model,
+                ("smooth",),
+                {"velocity": [0.1, 0.1]},
+            ),
+            "Robot.slot_velocities": (ROBOT.slot_velocities, (Z,), {}),
+            # BaseParameters
+            "BaseParameters.values": (BASE.values, (ROBOT.params,), {}),
+            "BaseParameters.embed": (BASE.embed, (np.ones(BASE.n),), {}),
+            "BaseParameters.regressor": (BASE.regressor, (Q, Z, Z), {}),
+            "BaseParameters.energy_regressor": (BASE.energy_regressor, (Q, Z), {}),
+            "BaseParameters.momentum_regressors": (BASE.momentum_regressors, (Q, Z), {}),
+            "BaseParameters.latex": (BASE.latex, (), {"symbolic": False}),
+            "BaseParameters.to_dict": (BASE.to_dict, (), {"symbolic": False}),
+            "BaseParameters.for_robot": (BASE.for_robot, (ROBOT,), {"offset": True}),
+            # identification
+            "identification.identify": (
+                identification.identify,
+                (ROBOT, LOG),
+                {"model": "dynamic", "rsd_threshold": 30.0, "min_velocity": 0.01},
+            ),
+            "identification.dynamic_system": (
+                identification.dynamic_system,
+                (BASE, LOG),
+                {"min_velocity": 0.0},
+            ),
+            "identification.energy_system": (
+                identification.energy_system,
+                (BASE, LOG),
+                {"window": 5},
+            ),
+            "identification.integral_system": (
+                identification.integral_system,
+                (BASE, LOG),
+                {"window": 20, "integration": "trapezoid"},
+            ),
+            "identification.validate": (identification.validate, (RESULT, LOG), {}),
+            "identification.load_logs": (
+                identification.load_logs,
+                ([f["log_csv"]], ROBOT),
+                {"model": "dynamic"},
+            ),
+            "identification.run": (
+                identification.run,
+                (ROBOT, LOG),
+                {"friction": False, "rsd_threshold": 30.0, "min_velocity": 0.01},
+            ),
+            "identification.error_measures": (
+                identification.error_measures,
+                (LOG.tau, LOG.tau + 0.1),
+                {},
+            ),
+            "identification.true_base_values": (
+                identification.true_base_values,
+                (BASE, truth),
+                {},
+            ),
+            "identification.read_csv": (identification.read_csv, (f["log_csv"], ROBOT), {}),
+            "identification.floating.contact_jacobian": (
+                floating.contact_jacobian,
+                (FLOATING, FLOATING_LOG.q[0], "b"),
+                {"frame": "local"},
+            ),
+            "identification.floating.floating_system": (
+                floating.floating_system,
+                (FLOATING, FLOATING_LOG),
+                {"model": "base"},
+            ),
+            "identification.floating.identify_floating": (
+                floating.identify_floating,
+                (FLOATING, FLOATING_LOG),
+                {"model": "full", "base": None, "tolerance": 1e-9},
+            ),
+            "identification.floating.read_floating_csv": (
+                floating.read_floating_csv,
+                (f["floating_csv"], FLOATING),
+                {"wrench_frame": "world"},
+            ),
+            "identification.write_csv": (
+                identification.write_csv,
+                (tmp / "w.csv", LOG.t, LOG.q, LOG.tau),
+                {},
+            ),
+            # control
+            "control.slotine_li_regressor_classical": (
+                control.slotine_li_regressor_classical,
+                (ROBOT, Q, Z, Z, Z),
+                {"rotor": True},
+            ),
+            "control.simulate_inverse": (
+                control.simulate_inverse,
+                (ROBOT, control.SumOfSines(ROBOT, period=0.5)),
+                {"rate": 100.0},
+            ),
+            "control.summary": (control.summary, (sim,), {}),
+            "control.perturbed_parameters": (
+                control.perturbed_parameters,
+                (ROBOT.params, 0.1),
+                {"seed": 1},
+            ),
+            "control.default_gains": (control.default_gains, (ROBOT,), {"period": 0.004}),
+            "control.default_observer_gain": (control.default_observer_gain, (0.004,), {}),
+            "control.calibrate_thresholds": (
+                control.calibrate_thresholds,
+                (np.abs(LOG.tau[:50]),),
+                {"quantile": 0.99, "margin": 1.5},
+            ),
+            "control.default_controller": (control.default_controller, (ROBOT, P13), {}),
+            # inverse kinematics
+            "inverse_kinematics.ik_solve": (inverse_kinematics.ik_solve, (ROBOT, T0), {}),
+            "inverse_kinematics.pose_error": (inverse_kinematics.pose_error, (T0, T0), {}),
+            "inverse_kinematics.pose_from_xyz_rpy": (
+                inverse_kinematics.pose_from_xyz_rpy,
+                (np.zeros(3), np.zeros(3)),
+                {},
+            ),
+            "inverse_kinematics.damped_pinv": (
+                inverse_kinematics.damped_pinv,
+                (ROBOT.jacobian(Q),),
+                {"damping": 0.05},
+            ),
+            "inverse_kinematics.velocity_ik": (
+                inverse_kinematics.velocity_ik,
+                (ROBOT, Q, np.zeros(3)),
+                {"task": "position", "damping": 0.05},
+            ),
+            "inverse_kinematics.limits_gradient": (
+                inverse_kinematics.limits_gradient,
+                (ROBOT, Q),
+                {},
+            ),
+            "Robot.with_drive_side": (ROBOT.with_drive_side, ("joint",), {}),
+            "BaseParameters.with_friction_velocity": (
+                smooth.with_friction_velocity,
+                ([0.2, 0.2],),
+                {},
+            ),
+            "control.alarm_intervals": (
+                control.alarm_intervals,
+                (LOG.t, LOG.tau, np.ones(N)),
+                {},
+            ),
+            "control.check_gains": (control.check_gains, (ROBOT, GAINS), {"kind": "pd"}),
+            "control.check_sampled_gains": (
+                control.check_sampled_gains,
+                ("pd", kp, kd, lam, 0.004),
+                {},
+            ),
+            "control.load_gains": (control.load_gains, (f["gains"], ROBOT), {"period": 0.004}),
+            "control.load_reference": (control.load_reference, (f["reference"], N), {}),
+            "control.load_thresholds": (control.load_thresholds, (f["thresholds"], ROBOT), {}),
+            "control.make_controller": (
+                control.make_controller,
+                ("pd", ROBOT, GAINS),
+                {"period": 0.004},
+            ),
+            "control.residual_uncertainty": (
+                control.residual_uncertainty,
+                (observer, np.ones(BASE.n), LOG.q[:20], LOG.dq[:20]),
+                {},
+            ),
+            "control.simulate": (
+                control.simulate,
+                (ROBOT, control.SumOfSines(ROBOT, period=0.5)),
+                {"duration": 0.1, "rate": 250.0, "seed": 1},
+            ),
+            "control.write_tracking_report": (
+                control.write_tracking_report,
+                (closed, tmp / "report"),
+                {},
+            ),
+            "identification.identify_consistent": (
+                identification.identify_consistent,
+                (ROBOT, LOG),
+                {"prior_weight": 1e-3},
+            ),
+            "identification.select_friction_model": (
+                identification.select_friction_model,
+                (ROBOT, [LOG]),
+                {"kind": "coulomb", "folds": 2},
+            ),
+            "inverse_kinematics.circle_path": (
+                inverse_kinematics.circle_path,
+                (T0, 0.05, 2.0),
+                {"normal": [0.0, 0.0, 1.0]},
+            ),
+            "inverse_kinematics.line_path": (inverse_kinematics.line_path, (T0, T0, 1.0), {}),
+            "inverse_kinematics.resolved_rate": (
+                inverse_kinematics.resolved_rate,
+                (ROBOT, Q, inverse_kinematics.line_path(T0, T0, 0.1), 0.1),
+                {"dt": 0.01, "gain": 5.0},
+            ),
+            "export.read_joint_terms": (export.read_joint_terms, (f["sidecar"],), {}),
+            "export.write_urdf": (export.write_urdf, (two, two_classical, tmp / "w.urdf"), {}),
+            "mjcf.write_mjcf": (mjcf.write_mjcf, (two, two_classical, tmp / "w.xml"), {}),
+            # export
+            "export.classical_terms": (export.classical_terms, (ROBOT, classical), {}),
+            "export.write_yaml": (
+                export.write_yaml,
+                (TABLE, dict(zip(TABLE.param_names, TABLE.params)), tmp / "w.yaml"),
+                {"source": None},
+            ),
+        },
+    }
+
+
+def _codegen_api(tmp: Path) -> dict:
+    """Baseline calls of mindyn.codegen: generation, parameter files, controller and observer
+    steps (their C compiled), PLCopen projects and the runtime base dynamics."""
+    p = BASE.values(ROBOT.params)
+    names_file = tmp / "params.json"
+    names_file.write_text(json.dumps(dict(zip(BASE.names, p.tolist()))))
+    st = codegen.generate(ROBOT, lang="st", base=BASE)
+    names = {"name": "two", "header_name": "two.h"}
+    code = codegen.generate(ROBOT, base=BASE, **names)
+    ctl_code = codegen.generate_controller(ROBOT, base=BASE, gains=GAINS, params=p)
+    obs_code = codegen.generate_observer(ROBOT, base=BASE, params=p)
+    ctl = codegen.CompiledController(ctl_code, BASE)
+    obs = codegen.CompiledObserver(obs_code)
+    bd = codegen.BaseDynamics(BASE)
+    return {
+        "codegen.generate": (
+            codegen.generate,
             (ROBOT,),
-            {"count": 5, "seed": 1},
+            {"lang": "c", "what": "id,gravity", "rotor": False, "friction": False, "params": p}
+            | {"numeric": False, "base": True, "minimise": "operations", "trig": "inline"}
+            | {"offset": False}
+            | names,
         ),
-        "formulas.latex": (formulas.latex, (BASE.formula_terms(),), {}),
-        "formulas.numeric_formulas": (
-            formulas.numeric_formulas,
-            (np.array(BASE.Y), list(BASE.names), list(BASE.classical_names)),
-            {},
+        "codegen.generate_controller": (
+            codegen.generate_controller,
+            (ROBOT, "adaptive-pd"),
+            {"lang": "c", "base": BASE, "gains": GAINS, "params": p, "period": 0.004}
+            | {"p_min": -100.0, "p_max": 100.0, "tau_max": 50.0, "trig": "libm"}
+            | names,
         ),
-        "formulas.round_coefficient": (formulas.round_coefficient, (0.1,), {"scale": 1.0}),
-        "formulas.shortest_decimal": (formulas.shortest_decimal, (0.1, 1e-9), {}),
-        "formulas.symbolic_formulas": (formulas.symbolic_formulas, (BASE,), {"seed": 1}),
-        "formulas.unit_formula": (formulas.unit_formula, ("Off1",), {}),
-        "identification.consistent.consistent_estimate": (
-            consistent.consistent_estimate,
-            (RESULT,),
-            {"prior_weight": 1e-3},
-        ),
-        "identification.consistent.pseudo_inertia": (consistent.pseudo_inertia, (p10,), {}),
-        "identification.consistent.inertial_from_pseudo": (
-            consistent.inertial_from_pseudo,
-            (consistent.pseudo_inertia(p10),),
-            {},
-        ),
-        "identification.currents.read_currents": (
-            currents.read_currents,
-            (f["currents"], N),
-            {},
-        ),
-        "identification.currents.attach_currents": (
-            currents.attach_currents,
-            (LOG, f["currents"], ROBOT),
-            {"drive_gain": [1.0, 1.0]},
-        ),
-        "identification.data.check_log_robot": (
-            logs.check_log_robot,
-            ({"robot": "planar2"}, ROBOT, "the log"),
-            {},
-        ),
-        "identification.data.differentiate": (
-            logs.differentiate,
-            (LOG.t, LOG.q),
-            {"filter": "butter", "order": 4},
-        ),
-        "identification.data.read_truth": (logs.read_truth, (f["sim_csv"], ROBOT), {}),
-        "identification.data.truth_path": (logs.truth_path, (f["sim_csv"],), {}),
-        "identification.data.write_trajectory_csv": (
-            logs.write_trajectory_csv,
-            (tmp / "traj.csv", LOG.t, LOG.q, LOG.dq, LOG.ddq),
-            {},
-        ),
-        "identification.document.read_identification": (
-            document.read_identification,
-            (f["arm_json"],),
-            {"need": ("robot",), "finite": False},
-        ),
-        "identification.document.robot_on_drive_side": (
-            document.robot_on_drive_side,
-            (ROBOT, arm),
-            {"where": "arm"},
-        ),
-        "identification.document.with_identified_friction": (
-            document.with_identified_friction,
-            (ROBOT, arm),
-            {"where": "arm"},
-        ),
-        "identification.excitation.check_sampling": (
-            excitation.check_sampling,
-            (5, 0.1, 100.0),
-            {"periods": 1.0},
-        ),
-        "identification.excitation.criterion_value": (
-            excitation.criterion_value,
-            (BASE, LOG.q, LOG.dq, LOG.ddq),
-            {"criterion": "cond"},
-        ),
-        "identification.excitation.excitation_limits": (
-            excitation.excitation_limits,
+        "codegen.generate_observer": (
+            codegen.generate_observer,
             (ROBOT,),
-            {"margin": 0.05},
+            {"lang": "c", "base": BASE, "params": p, "period": 0.004, "gains": [20.0, 20.0]}
+            | {"held_torque": True, "trig": "inline"}
+            | names,
         ),
-        "identification.excitation.random_trajectory": (
-            excitation.random_trajectory,
-            (ROBOT,),
-            {"harmonics": 3, "seed": 1},
-        ),
-        "identification.excitation.optimize_excitation": (
-            excitation.optimize_excitation,
-            (ROBOT,),
-            {"harmonics": 2, "starts": 1, "maxiter": 2, "samples": 20, "progress": False},
-        ),
-        "identification.excitation.plot_trajectory": (
-            excitation.plot_trajectory,
-            (tmp / "trajectory.png", LOG.t, LOG.q, LOG.dq, LOG.ddq),
-            {"title": "sines"},
-        ),
-        "identification.prediction.identified_model": (
-            prediction.identified_model,
-            (RESULT,),
-            {"estimate": "unconstrained"},
-        ),
-        "identification.prediction.predict": (prediction.predict, (RESULT, LOG), {}),
-        "identification.preprocess.concatenate": (preprocess.concatenate, ([LOG],), {}),
-        "identification.preprocess.excited_band": (
-            preprocess.excited_band,
-            (LOG.q, 0.005),
-            {"energy": 0.9},
-        ),
-        "identification.preprocess.preprocess": (preprocess.preprocess, (LOG,), {"order": 4}),
-        "identification.preprocess.require_even_stamps": (
-            preprocess.require_even_stamps,
-            (LOG, "butter"),
-            {},
-        ),
-        "identification.preprocess.timing": (preprocess.timing, (LOG.t,), {}),
-        "identification.report.format_table": (report.format_table, (RESULT,), {}),
-        "identification.report.plot_torques": (
-            report.plot_torques,
-            (tmp / "torques.png", LOG.t, LOG.tau, LOG.tau),
-            {"title": "sines"},
-        ),
-        "identification.report.write_report": (report.write_report, (tmp / "rep", RESULT, LOG), {}),
-        "identification.rosbag.is_rosbag": (rosbag.is_rosbag, (f["log_csv"],), {}),
-        "identification.identify_payload": (
-            identification.identify_payload,
-            (six, six_arm, payload_log),
-            {"consistent": False, "min_velocity": 0.01},
-        ),
-        "identification.rosbag.read_rosbag": (
-            rosbag.read_rosbag,
-            (f["bag"], ROBOT),
-            {"topic": "/joint_states", "torque_unit": "Nm"},
-        ),
-        # mindyn
-        "mindyn.load": (mindyn.load, ("planar2",), {"gravity": [0.0, 0.0, -9.81]}),
-        "mindyn.base_parameters": (
-            mindyn.base_parameters,
-            (ROBOT,),
-            {"rotor": False, "friction": False, "method": "projection", "tolerance": 1e-9},
-        ),
-        "mindyn.to_pinocchio_order": (mindyn.to_pinocchio_order, (ROBOT.params,), {}),
-        "mindyn.from_pinocchio_order": (mindyn.from_pinocchio_order, (ROBOT.params,), {}),
-        "mindyn.inertial_from_com": (
-            mindyn.inertial_from_com,
-            (1.0, np.zeros(3), np.eye(3)),
-            {},
-        ),
-        "mindyn.inertial_from_urdf": (
-            mindyn.inertial_from_urdf,
-            (1.0, np.zeros(3), np.eye(3), np.eye(3)),
-            {},
-        ),
-        "mindyn.coriolis_matrix": (mindyn.coriolis_matrix, (ROBOT, Q, Z), {}),
-        "mindyn.slotine_li_regressor": (mindyn.slotine_li_regressor, (BASE, Q, Z, Z, Z), {}),
-        "mindyn.ik": (mindyn.ik, (ROBOT, T0), {}),
-        # Robot
-        "Robot.parameter_names": (ROBOT.parameter_names, (), {"rotor": True, "friction": True}),
-        "Robot.parameters": (ROBOT.parameters, (), {"rotor": True, "friction": True}),
-        "Robot.inverse_dynamics": (ROBOT.inverse_dynamics, (Q, Z, Z, ROBOT.params), {}),
-        "Robot.regressor": (ROBOT.regressor, (Q, Z, Z), {"rotor": True, "friction": False}),
-        "Robot.gravity_torque": (ROBOT.gravity_torque, (Q,), {}),
-        "Robot.mass_matrix": (ROBOT.mass_matrix, (Q,), {}),
-        "Robot.link_poses": (ROBOT.link_poses, (Q,), {}),
-        "Robot.momentum": (ROBOT.momentum, (Q, Z), {}),
-        "Robot.forward_dynamics": (ROBOT.forward_dynamics, (Q, Z, Z), {}),
-        "Robot.kinetic_energy": (ROBOT.kinetic_energy, (Q, Z), {}),
-        "Robot.potential_energy": (ROBOT.potential_energy, (Q,), {}),
-        "Robot.energy": (ROBOT.energy, (Q, Z), {}),
-        "Robot.friction_shapes": (ROBOT.friction_shapes, (Z,), {}),
-        "Robot.energy_regressors": (ROBOT.energy_regressors, (Q, Z), {"rotor": True}),
-        "Robot.energy_regressor": (ROBOT.energy_regressor, (Q, Z), {"friction": True}),
-        "Robot.lagrangian_regressor": (ROBOT.lagrangian_regressor, (Q, Z), {"rotor": False}),
-        "Robot.momentum_regressors": (ROBOT.momentum_regressors, (Q, Z), {"rotor": True}),
-        "Robot.fk": (ROBOT.fk, (Q,), {"link": 0}),
-        "Robot.jacobian": (ROBOT.jacobian, (Q,), {}),
-        "Robot.joint_transform": (ROBOT.joint_transform, (1, 0.3), {}),
-        "Robot.joint_pre": (ROBOT.joint_pre, (1,), {}),
-        "Robot.joint_post": (ROBOT.joint_post, (0,), {}),
-        "Robot.with_gravity": (ROBOT.with_gravity, ([0.0, -9.81, 0.0],), {}),
-        "Robot.with_friction_model": (
-            ROBOT.with_friction_model,
-            ("smooth",),
-            {"velocity": [0.1, 0.1]},
-        ),
-        "Robot.slot_velocities": (ROBOT.slot_velocities, (Z,), {}),
-        # BaseParameters
-        "BaseParameters.values": (BASE.values, (ROBOT.params,), {}),
-        "BaseParameters.embed": (BASE.embed, (np.ones(BASE.n),), {}),
-        "BaseParameters.regressor": (BASE.regressor, (Q, Z, Z), {}),
-        "BaseParameters.energy_regressor": (BASE.energy_regressor, (Q, Z), {}),
-        "BaseParameters.momentum_regressors": (BASE.momentum_regressors, (Q, Z), {}),
-        "BaseParameters.latex": (BASE.latex, (), {"symbolic": False}),
-        "BaseParameters.to_dict": (BASE.to_dict, (), {"symbolic": False}),
-        "BaseParameters.for_robot": (BASE.for_robot, (ROBOT,), {"offset": True}),
-        # identification
-        "identification.identify": (
-            identification.identify,
-            (ROBOT, LOG),
-            {"model": "dynamic", "rsd_threshold": 30.0, "min_velocity": 0.01},
-        ),
-        "identification.dynamic_system": (
-            identification.dynamic_system,
-            (BASE, LOG),
-            {"min_velocity": 0.0},
-        ),
-        "identification.energy_system": (identification.energy_system, (BASE, LOG), {"window": 5}),
-        "identification.integral_system": (
-            identification.integral_system,
-            (BASE, LOG),
-            {"window": 20, "integration": "trapezoid"},
-        ),
-        "identification.validate": (identification.validate, (RESULT, LOG), {}),
-        "identification.load_logs": (
-            identification.load_logs,
-            ([f["log_csv"]], ROBOT),
-            {"model": "dynamic"},
-        ),
-        "identification.run": (
-            identification.run,
-            (ROBOT, LOG),
-            {"friction": False, "rsd_threshold": 30.0, "min_velocity": 0.01},
-        ),
-        "identification.error_measures": (
-            identification.error_measures,
-            (LOG.tau, LOG.tau + 0.1),
-            {},
-        ),
-        "identification.true_base_values": (
-            identification.true_base_values,
-            (BASE, truth),
-            {},
-        ),
-        "identification.read_csv": (identification.read_csv, (f["log_csv"], ROBOT), {}),
-        "identification.floating.contact_jacobian": (
-            floating.contact_jacobian,
-            (FLOATING, FLOATING_LOG.q[0], "b"),
-            {"frame": "local"},
-        ),
-        "identification.floating.floating_system": (
-            floating.floating_system,
-            (FLOATING, FLOATING_LOG),
-            {"model": "base"},
-        ),
-        "identification.floating.identify_floating": (
-            floating.identify_floating,
-            (FLOATING, FLOATING_LOG),
-            {"model": "full", "base": None, "tolerance": 1e-9},
-        ),
-        "identification.floating.read_floating_csv": (
-            floating.read_floating_csv,
-            (f["floating_csv"], FLOATING),
-            {"wrench_frame": "world"},
-        ),
-        "identification.write_csv": (
-            identification.write_csv,
-            (tmp / "w.csv", LOG.t, LOG.q, LOG.tau),
-            {},
-        ),
-        # control
-        "control.slotine_li_regressor_classical": (
-            control.slotine_li_regressor_classical,
-            (ROBOT, Q, Z, Z, Z),
-            {"rotor": True},
-        ),
-        "control.simulate_inverse": (
-            control.simulate_inverse,
-            (ROBOT, control.SumOfSines(ROBOT, period=0.5)),
-            {"rate": 100.0},
-        ),
-        "control.summary": (control.summary, (sim,), {}),
-        "control.perturbed_parameters": (
-            control.perturbed_parameters,
-            (ROBOT.params, 0.1),
-            {"seed": 1},
-        ),
-        "control.default_gains": (control.default_gains, (ROBOT,), {"period": 0.004}),
-        "control.default_observer_gain": (control.default_observer_gain, (0.004,), {}),
-        "control.calibrate_thresholds": (
-            control.calibrate_thresholds,
-            (np.abs(LOG.tau[:50]),),
-            {"quantile": 0.99, "margin": 1.5},
-        ),
-        "control.default_controller": (control.default_controller, (ROBOT, P13), {}),
-        # inverse kinematics
-        "inverse_kinematics.ik_solve": (inverse_kinematics.ik_solve, (ROBOT, T0), {}),
-        "inverse_kinematics.pose_error": (inverse_kinematics.pose_error, (T0, T0), {}),
-        "inverse_kinematics.pose_from_xyz_rpy": (
-            inverse_kinematics.pose_from_xyz_rpy,
-            (np.zeros(3), np.zeros(3)),
-            {},
-        ),
-        "inverse_kinematics.damped_pinv": (
-            inverse_kinematics.damped_pinv,
-            (ROBOT.jacobian(Q),),
-            {"damping": 0.05},
-        ),
-        "inverse_kinematics.velocity_ik": (
-            inverse_kinematics.velocity_ik,
-            (ROBOT, Q, np.zeros(3)),
-            {"task": "position", "damping": 0.05},
-        ),
-        "inverse_kinematics.limits_gradient": (inverse_kinematics.limits_gradient, (ROBOT, Q), {}),
-        "Robot.with_drive_side": (ROBOT.with_drive_side, ("joint",), {}),
-        "BaseParameters.with_friction_velocity": (
-            smooth.with_friction_velocity,
-            ([0.2, 0.2],),
-            {},
-        ),
-        "control.alarm_intervals": (
-            control.alarm_intervals,
-            (LOG.t, LOG.tau, np.ones(N)),
-            {},
-        ),
-        "control.check_gains": (control.check_gains, (ROBOT, GAINS), {"kind": "pd"}),
-        "control.check_sampled_gains": (
-            control.check_sampled_gains,
-            ("pd", kp, kd, lam, 0.004),
-            {},
-        ),
-        "control.load_gains": (control.load_gains, (f["gains"], ROBOT), {"period": 0.004}),
-        "control.load_reference": (control.load_reference, (f["reference"], N), {}),
-        "control.load_thresholds": (control.load_thresholds, (f["thresholds"], ROBOT), {}),
-        "control.make_controller": (
-            control.make_controller,
-            ("pd", ROBOT, GAINS),
-            {"period": 0.004},
-        ),
-        "control.residual_uncertainty": (
-            control.residual_uncertainty,
-            (observer, np.ones(BASE.n), LOG.q[:20], LOG.dq[:20]),
-            {},
-        ),
-        "control.simulate": (
-            control.simulate,
-            (ROBOT, control.SumOfSines(ROBOT, period=0.5)),
-            {"duration": 0.1, "rate": 250.0, "seed": 1},
-        ),
-        "control.write_tracking_report": (
-            control.write_tracking_report,
-            (closed, tmp / "report"),
-            {},
-        ),
-        "identification.identify_consistent": (
-            identification.identify_consistent,
-            (ROBOT, LOG),
-            {"prior_weight": 1e-3},
-        ),
-        "identification.select_friction_model": (
-            identification.select_friction_model,
-            (ROBOT, [LOG]),
-            {"kind": "coulomb", "folds": 2},
-        ),
-        "inverse_kinematics.circle_path": (
-            inverse_kinematics.circle_path,
-            (T0, 0.05, 2.0),
-            {"normal": [0.0, 0.0, 1.0]},
-        ),
-        "inverse_kinematics.line_path": (inverse_kinematics.line_path, (T0, T0, 1.0), {}),
-        "inverse_kinematics.resolved_rate": (
-            inverse_kinematics.resolved_rate,
-            (ROBOT, Q, inverse_kinematics.line_path(T0, T0, 0.1), 0.1),
-            {"dt": 0.01, "gain": 5.0},
-        ),
-        "export.read_joint_terms": (export.read_joint_terms, (f["sidecar"],), {}),
-        "export.write_urdf": (export.write_urdf, (two, two_classical, tmp / "w.urdf"), {}),
-        "mjcf.write_mjcf": (mjcf.write_mjcf, (two, two_classical, tmp / "w.xml"), {}),
-        # export
-        "export.classical_terms": (export.classical_terms, (ROBOT, classical), {}),
-        "export.write_yaml": (
-            export.write_yaml,
-            (TABLE, dict(zip(TABLE.param_names, TABLE.params)), tmp / "w.yaml"),
-            {"source": None},
-        ),
+        "codegen.read_parameter_file": (codegen.read_parameter_file, (names_file, BASE.names), {}),
+        "codegen.plcopen_project": (codegen.plcopen_project, ([st], "two"), {"comment": "c"}),
+        "codegen.generation.identifier": (codegen.generation.identifier, ("two arms",), {}),
+        "codegen.GeneratedCode.write": (code.write, (tmp / "two.c",), {}),
+        "codegen.BaseDynamics": (codegen.BaseDynamics, (BASE,), {}),
+        "codegen.BaseDynamics.inverse_dynamics": (bd.inverse_dynamics, (Q, Z, Z, p), {}),
+        "codegen.BaseDynamics.gravity": (bd.gravity, (Q, p), {}),
+        "codegen.BaseDynamics.regressor": (bd.regressor, (Q, Z, Z), {}),
+        "codegen.CompiledController": (codegen.CompiledController, (ctl_code, BASE), {}),
+        "codegen.CompiledController.__call__": (ctl.__call__, (0.0, Q, Z, Q, Z, Z), {}),
+        "codegen.CompiledObserver": (codegen.CompiledObserver, (obs_code,), {}),
+        "codegen.CompiledObserver.__call__": (obs.__call__, (Q, Z, Z), {}),
     }
 
 
@@ -603,6 +677,11 @@ NOT_WALKED = {
     "mindyn.bundled_robots": "takes no argument",
     "BaseParameters.formula_terms": "takes no argument",
     "BaseParameters.symbolic": "takes no argument",
+    "codegen.GeneratedCode": "the result of generate, not built by the user",
+    "codegen.GeneratedController": "the result of generate_controller, not built by the user",
+    "codegen.GeneratedObserver": "the result of generate_observer, not built by the user",
+    "codegen.CompiledController.reset": "takes no argument",
+    "codegen.CompiledObserver.reset": "takes no argument",
 }
 
 # Wrong values of the right type where the generic ones (NaN for numbers, a NaN entry for
@@ -635,6 +714,16 @@ WRONG_VALUE: dict[tuple[str, str], object] = {
     ("identification.rosbag.read_rosbag", "topic"): SKIP,
     ("identification.rosbag.read_rosbag", "torque_unit"): SKIP,
     ("identification.excitation.check_sampling", "rate"): 0.5,  # below twice the top harmonic
+    ("export.classical_terms", "classical"): {"XX9": 1.0},  # no name of the robot's
+    ("codegen.generate_controller", "gains"): {"kd": 1.0, "lamda": 5.0},  # a key misspelt
+    ("codegen.generate_controller", "p_min"): 200.0,  # above p_max
+    ("codegen.generate_controller", "tau_max"): -1.0,
+    ("codegen.generate_observer", "gains"): [20.0, 1000.0],  # beyond 2 / period
+    ("codegen.read_parameter_file", "names"): ["a", "a"],
+    ("codegen.plcopen_project", "codes"): [codegen.generate("planar1")],  # C, not ST
+    ("codegen.plcopen_project", "project"): "",
+    ("codegen.plcopen_project", "comment"): SKIP,  # any text
+    ("codegen.generation.identifier", "name"): "",
 }
 
 
@@ -685,8 +774,8 @@ def _enumerated() -> dict:
     import importlib
 
     modules = ["mindyn", "mindyn.inverse_kinematics", "mindyn.export", "mindyn.mjcf"]
-    modules += ["mindyn.formulas", "mindyn.identification", "mindyn.control"]
-    for package in ("identification", "control"):
+    modules += ["mindyn.formulas", "mindyn.identification", "mindyn.control", "mindyn.codegen"]
+    for package in ("identification", "control", "codegen"):
         folder = Path(mindyn.__file__).parent / package
         modules += [f"mindyn.{package}.{p.stem}" for p in sorted(folder.glob("[!_]*.py"))]
     out = {}
@@ -700,6 +789,14 @@ def _enumerated() -> dict:
         for name, obj in vars(cls).items():
             if not name.startswith("_") and inspect.isfunction(obj):
                 out[f"{cls.__name__}.{name}"] = obj
+    for public in codegen.__all__:  # the classes of codegen: constructors and methods
+        cls = getattr(codegen, public)
+        if not inspect.isclass(cls):
+            continue
+        out[f"codegen.{public}"] = cls
+        for name, obj in vars(cls).items():
+            if (not name.startswith("_") or name == "__call__") and inspect.isfunction(obj):
+                out[f"codegen.{public}.{name}"] = obj
     return out
 
 
@@ -707,6 +804,7 @@ def test_every_enumerated_public_function_is_walked(api):
     found = _enumerated()
     assert {"mindyn.load", "identification.identify", "Robot.regressor"} <= found.keys()
     assert "identification.excitation.optimize_excitation" in found
+    assert {"codegen.generate", "codegen.BaseDynamics.gravity"} <= found.keys()
     walked = {getattr(fn, "__func__", fn) for fn, _, _ in api.values()}
     missing = sorted(
         name for name, obj in found.items() if obj not in walked and name not in NOT_WALKED

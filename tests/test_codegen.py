@@ -332,12 +332,20 @@ def test_truncated_right_angles_are_taken_as_exact_and_reported(robots, tmp_path
 
 
 def test_unknown_objective_is_refused(robots):
-    with pytest.raises(ValueError, match="minimise must be"):
+    with pytest.raises(mindyn.ArgumentError, match="minimise is a str 'time'; expected one of"):
         generate(robots["rx90"][0], what="id", minimise="time")
-    with pytest.raises(ValueError, match="trig must be 'inline' or 'libm'"):
+    with pytest.raises(mindyn.ArgumentError, match="trig is a str 'table'; expected one of"):
         generate(robots["rx90"][0], what="id", trig="table")
-    with pytest.raises(ValueError, match="trig applies to C only"):
+    with pytest.raises(mindyn.ArgumentError, match="trig applies to C only"):
         generate(robots["rx90"][0], what="id", lang="st", trig="libm")
+    with pytest.raises(mindyn.ArgumentError, match="what names an unknown function 'torque'"):
+        generate(robots["rx90"][0], what="id,torque")
+    with pytest.raises(mindyn.ArgumentError, match="name 'my-arm' is not an identifier"):
+        generate(robots["rx90"][0], what="id", name="my-arm")
+    with pytest.raises(mindyn.ArgumentError, match="header_name is 'arm'"):
+        generate(robots["rx90"][0], what="id", header_name="arm")
+    with pytest.raises(TypeError):  # options are keyword-only
+        generate(robots["rx90"][0], "st")  # type: ignore[misc]
 
 
 def test_fewer_operations_than_published_customised_recursions(robots):

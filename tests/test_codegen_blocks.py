@@ -60,7 +60,7 @@ def _codes():
         for kind in codegen.CONTROLLERS:
             yield codegen.generate_controller(robot, kind, lang="st")
         yield codegen.generate_controller(robot, lang="st", gains={"kd": 2.0, "nu": 0.1})
-        yield codegen.generate_observer(robot, "st")
+        yield codegen.generate_observer(robot, lang="st")
 
 
 def test_blocks_hold_the_generated_text():
@@ -117,7 +117,7 @@ def test_plcopen_from_blocks_validates_and_holds_the_same_program(tmp_path):
     base = mindyn.base_parameters(robot, rotor=True, friction=True)
     ctl = codegen.generate_controller(robot, lang="st", base=base)
     dyn = codegen.generate(robot, lang="st", base=base)
-    obs = codegen.generate_observer(robot, "st", base=base)
+    obs = codegen.generate_observer(robot, lang="st", base=base)
     out = tmp_path / "project.xml"
     project = codegen.plcopen_project([ctl, dyn, obs.program], "zcr07s", comment="a test")
     out.write_bytes(project)

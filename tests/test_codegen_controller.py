@@ -325,5 +325,5 @@ def test_bad_settings_are_refused():
         codegen.generate_controller("planar2", params=[1.0] * 11, p_min=2.0)
     with pytest.raises(ValueError, match="'kd'"):
         codegen.generate_controller("planar2", gains={"kd": -1.0})
-    with pytest.raises(ValueError, match="unknown controller"):
+    with pytest.raises(mindyn.ArgumentError, match="kind is a str 'pid'; expected one of"):
         codegen.generate_controller("planar2", "pid")

@@ -89,7 +89,7 @@ def test_c_and_st_steps_with_drive_terms_on_coupled_motors(kind, held, tmp_path,
     assert code.counts["step"][fn] == robot.n and f", {robot.n} {fn}" in code.header
     assert "m6 = " in code.header and f"Fc {'sign' if fn == 'exp' else 'tanh'}(v" in code.header
     st = codegen.generate_observer(
-        robot, "st", base=base, params=values, period=period, held_torque=held
+        robot, lang="st", base=base, params=values, period=period, held_torque=held
     )
     block = STBlock(st_tree(st.text), st.function)
     q, dq, tau = motion(robot, cycles, period, 7)
@@ -123,7 +123,7 @@ def test_structured_text_step_equals_the_library():
     values = base.values(robot.parameters(rotor=True, friction=True))
     values[-robot.n :] = 0.3  # the offsets
     period, cycles = 2e-3, 300
-    st = codegen.generate_observer(robot, "st", base=base, params=values, period=period)
+    st = codegen.generate_observer(robot, lang="st", base=base, params=values, period=period)
     statements = re.sub(r"\(\*.*?\*\)", "", st.text, flags=re.DOTALL)
     assert set(re.findall(r"\b([A-Za-z_]\w*)\(", statements)) <= {"SIN", "COS"}
     block = STBlock(st_tree(st.text), st.function)
@@ -141,7 +141,7 @@ def test_structured_text_step_equals_the_library():
 
 def test_bad_observer_settings_are_refused():
     robot = mindyn.load("puma560")
-    with pytest.raises(mindyn.Error, match="observer gain K_O of joint 1"):
+    with pytest.raises(mindyn.ArgumentError, match="gains gives observer gain K_O of joint 1"):
         codegen.generate_observer(robot, period=1e-3, gains=2000.0)
     with pytest.raises(mindyn.Error, match="params"):
         codegen.generate_observer(robot, params=[1.0, 2.0])
@@ -153,6 +153,6 @@ def test_structured_text_observer_passes_blark():
     blark = pytest.importorskip("blark")
     robot = mindyn.load("planar1")
     base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
-    st = codegen.generate_observer(robot, "st", base=base, period=1e-3)
+    st = codegen.generate_observer(robot, lang="st", base=base, period=1e-3)
     result = blark.parse_source_code(st.text[st.text.index("FUNCTION_BLOCK") :])
     assert result.exception is None, result.exception

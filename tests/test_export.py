@@ -394,11 +394,13 @@ def test_vector_input_and_offsets(tree, tmp_path):
     [
         ({"M2": -0.5}, "M2 = -0.5 (link 'l2') is negative"),
         ({"M2": 0.0}, "M2 = 0 (link 'l2') with a first moment"),
-        ({"XX4": 1.0}, "unknown 'XX4'"),
-        ({"XX3": None}, "missing 'XX3'"),
-        ({"Fv2": None}, "missing 'Fv2'"),
-        ({"ZZ1": float("nan")}, "'ZZ1' is nan; expected a finite number"),
-        ({"ZZ1": "1"}, "'ZZ1' is '1'; expected a number"),
+        # the mapping argument itself: an ArgumentError naming it
+        ({"XX4": 1.0}, "classical parameters: unknown 'XX4'"),
+        ({"XX3": None}, "classical parameters: missing 'XX3'"),
+        ({"Fv2": None}, "classical parameters: missing 'Fv2'"),
+        ({"ZZ1": float("nan")}, "classical parameters: 'ZZ1' is nan; expected a finite number"),
+        ({"ZZ1": "1"}, "classical parameters: 'ZZ1' is '1'; expected a number"),
+        ({1: 1.0}, "classical parameters: the names must be text, got 1"),
     ],
 )
 def test_urdf_bad_parameters(tree, tmp_path, change, message):
@@ -409,8 +411,12 @@ def test_urdf_bad_parameters(tree, tmp_path, change, message):
             del classical[k]
         else:
             classical[k] = v
-    with pytest.raises(mindyn.ModelError, match=message.replace("(", r"\(").replace(")", r"\)")):
+    # values that are not a physical body are the model's; a mapping that is not one of the
+    # robot's classical layouts is an argument error
+    error = mindyn.ArgumentError if message.startswith("classical") else mindyn.ModelError
+    with pytest.raises(error, match=message.replace("(", r"\(").replace(")", r"\)")) as e:
         write_urdf(robot, classical, tmp_path / "x.urdf")
+    assert isinstance(e.value, mindyn.ArgumentError) == (error is mindyn.ArgumentError)
     assert not (tmp_path / "x.urdf").exists()
 
 
@@ -625,3 +631,22 @@ def test_identify_urdf_needs_consistent_and_a_urdf_robot(tmp_path):
     assert rc == 2 and "expected --consistent" in err, err
     rc, _, err = run(["identify", UR5, fit, "--consistent", "--sidecar", tmp_path / "x.yaml"])
     assert rc == 2 and "--sidecar: expected --urdf or --yaml" in err, err
+
+
+def test_a_classical_map_read_from_a_file_is_a_data_error(tmp_path):
+    """The same map that is an argument error of classical_terms is the data's error once the
+    command line read it from an identification file (the message names the file)."""
+    from mindyn.cli.export import write_description
+    from mindyn.identification.data import DataError
+
+    robot = mindyn.load("puma560_3")
+    classical = _params_of("puma560_3")
+    del classical["XX2"]
+    with pytest.raises(mindyn.ArgumentError, match="missing 'XX2'"):
+        classical_terms(robot, classical)
+    with pytest.raises(DataError, match=r"^id.json: 'classical': missing 'XX2'") as e:
+        write_description(
+            robot, classical, "id.json: 'classical'", "puma560_3", None, tmp_path / "o.yaml", None
+        )
+    assert not isinstance(e.value, mindyn.ArgumentError)
+    assert not (tmp_path / "o.yaml").exists()

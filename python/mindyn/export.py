@@ -25,6 +25,7 @@ import numpy as np
 import yaml
 
 from . import _args
+from ._args import ArgumentError
 from ._core import OFFSET_PREFIX as _OFF
 from ._core import ModelError, RobotFileNotFoundError
 from .robot import Robot
@@ -84,8 +85,9 @@ def classical_terms(robot: Robot, classical, *, what: str = "classical parameter
 
     ``classical`` is a mapping ``{name: value}`` holding exactly the names of one classical
     layout of the robot (``robot.parameter_names(rotor, friction)``), optionally with ``Off1 ..
-    OffN``, or a vector in a classical layout (length 10 n, 11 n, 12 n or 13 n). ``what`` names
-    the input in error messages."""
+    OffN``, or a vector in a classical layout (length 10 n, 11 n, 12 n or 13 n); anything else
+    (names missing or unknown, a value that is not a finite number) is an
+    :class:`~mindyn.ArgumentError`. ``what`` names the input in error messages."""
     _args.instance(robot, "robot", Robot)
     _args.text(what, "what")
     n = robot.n
@@ -110,7 +112,7 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
     keys = list(classical)
     bad = [k for k in keys if not isinstance(k, str)]
     if bad:
-        raise ModelError(f"{what}: the names must be text, got {bad[0]!r}")
+        raise ArgumentError(f"{what}: the names must be text, got {bad[0]!r}")
     has = {p: any(k.startswith(p) and k[len(p) :].isdigit() for k in keys) for p in _TERMS}
     rotor, friction = has["Ia"], has["Fv"] or has["Fc"]
     expected = robot.parameter_names(rotor=rotor, friction=friction, offset=has[_OFF])
@@ -124,7 +126,7 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
             parts.append(f"missing {_few(missing)}")
         extras = [t for t, on in (("Ia", rotor), ("Fv, Fc", friction), (_OFF, has[_OFF])) if on]
         layout = "XX..M" + "".join(f", {t}" for t in extras)
-        raise ModelError(
+        raise ArgumentError(
             f"{what}: {'; '.join(parts)} (robot '{robot.name}' has {n} joints: expected "
             f"{layout} for joints 1..{n}, {len(expected)} names)"
         )
@@ -132,16 +134,16 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
     for k in expected:
         v = classical[k]
         if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
-            raise ModelError(f"{what}: '{k}' is {v!r}; expected a number")
+            raise ArgumentError(f"{what}: '{k}' is {v!r}; expected a number")
         try:
             x = float(v)
         except OverflowError:  # an integer beyond a double
-            raise ModelError(
+            raise ArgumentError(
                 f"{what}: '{k}' is an integer of {len(str(abs(math.trunc(v))))} digits, too large "
                 "for a double"
             ) from None
         if not math.isfinite(x):
-            raise ModelError(f"{what}: '{k}' is {x}; expected a finite number")
+            raise ArgumentError(f"{what}: '{k}' is {x}; expected a finite number")
         values[k] = x
 
     def column(prefix: str) -> np.ndarray:

@@ -73,7 +73,7 @@ void bindObserver(py::module_& m) {
           out["text"] = writeST(program);
           out["program"] = std::move(program);
         } else {
-          throw py::value_error("lang must be 'c' or 'st', got '" + lang + "'");
+          throw ArgumentError("lang: '" + lang + "'; expected 'c' or 'st'");
         }
         py::dict cnt;
         cnt["momentum"] = countsOf(c.core);

@@ -33,10 +33,10 @@ def _observer(args, robot, base, out: Path | None, params, note: str | None = No
     )
     same = dict(base=base, params=params, period=args.period, gains=gains, name=args.name)
     header = (out.name if out is not None else _stem(args, robot)) + ".h"
-    code = generate_observer(robot, args.lang, header_name=header, trig=args.trig, **same)
+    code = generate_observer(robot, lang=args.lang, header_name=header, trig=args.trig, **same)
     written = _write(code, out, args.lang)
     if args.plcopen is not None:
-        st = code if args.lang == "st" else generate_observer(robot, "st", **same)
+        st = code if args.lang == "st" else generate_observer(robot, lang="st", **same)
         written.append(_write_plcopen(args, [st], code.name, code.function))
     _say_step(robot, "momentum observer", code, args)
     if note:
@@ -98,7 +98,7 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
         dyn = generate(robot, lang="st", base=base, name=st.name, offset=base.offset)
         # the momentum observer of the same model, to run beside the controller
         obs = generate_observer(
-            robot, "st", base=base, params=st.settings["p0"], period=args.period, name=st.name
+            robot, lang="st", base=base, params=st.settings["p0"], period=args.period, name=st.name
         )
         written.append(_write_plcopen(args, [st, dyn, obs], st.name, st.function))
     _say_step(robot, f"{kind} step", code, args)

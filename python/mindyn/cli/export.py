@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 
-from .._core import ModelError
+from .._core import ArgumentError, ModelError
 from .._mujoco import is_mjcf
 from ..export import classical_terms, write_urdf, write_yaml
 from ..robot import load
@@ -121,7 +121,12 @@ def write_description(
             f"{what}: identified with the {kind} friction model; a robot description holds "
             "viscous and Coulomb friction only (identify with --friction-model coulomb)"
         )
-    terms = classical_terms(robot, classical, what=what)
+    try:  # values read from a file: their errors are the data's
+        terms = classical_terms(robot, classical, what=what)
+    except ArgumentError as e:
+        from ..identification.data import DataError
+
+        raise DataError(str(e)) from None
     if mjcf is not None:
         if sidecar is not None:
             raise ModelError("--sidecar goes with --urdf or --yaml, not --mjcf")

@@ -9,10 +9,11 @@ from typing import Any
 
 import numpy as np
 
-from .. import _core
-from .._args import ArgumentError
+from .. import _args, _core
 from ..base import BaseParameters
 from .controllers import GeneratedController, GeneratedObserver
+
+__all__ = ["CompiledController", "CompiledObserver"]
 
 
 def _compile_shared(code: GeneratedController | GeneratedObserver, what: str):
@@ -62,8 +63,12 @@ class CompiledController:
     def __init__(self, code: GeneratedController, base: BaseParameters | None = None):
         import ctypes
 
-        if not isinstance(code, GeneratedController) or code.lang != "c":
-            raise ArgumentError("CompiledController needs the C code of generate_controller")
+        _args.instance(code, "code", GeneratedController, "the C code of generate_controller")
+        if code.lang != "c":
+            raise _args.fail(
+                "code", "is Structured Text; expected the C code of generate_controller"
+            )
+        _args.optional(_args.instance, base, "base", BaseParameters)
         self.code = code
         self.base = base
         self.name = code.kind
@@ -111,12 +116,11 @@ class CompiledController:
     def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
         import ctypes
 
-        args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, q_d, dq_d, ddq_d)]
-        for a in args:
-            if a.shape != (self._n,):
-                raise ArgumentError(
-                    f"controller inputs must have shape ({self._n},), got {a.shape}"
-                )
+        _args.number(t, "t")
+        args = [
+            _args.array(a, k, (self._n,), unit="joint")
+            for k, a in zip(("q", "dq", "q_d", "dq_d", "ddq_d"), (q, dq, q_d, dq_d, ddq_d))
+        ]
         tau = np.zeros(self._n)
         ptrs = [a.ctypes.data_as(self._ptr) for a in args + [tau]]
         self._step(ctypes.byref(self._state), *ptrs)
@@ -131,8 +135,9 @@ class CompiledObserver:
     def __init__(self, code: GeneratedObserver):
         import ctypes
 
-        if not isinstance(code, GeneratedObserver) or code.lang != "c":
-            raise ArgumentError("CompiledObserver needs the C code of generate_observer")
+        _args.instance(code, "code", GeneratedObserver, "the C code of generate_observer")
+        if code.lang != "c":
+            raise _args.fail("code", "is Structured Text; expected the C code of generate_observer")
         self.code = code
         self._dir, self._lib = _compile_shared(code, "observer")
         n, np_ = len(code.gains), len(code.names)
@@ -163,10 +168,10 @@ class CompiledObserver:
     def __call__(self, q, dq, tau) -> np.ndarray:
         import ctypes
 
-        args = [np.ascontiguousarray(a, dtype=float) for a in (q, dq, tau)]
-        for a in args:
-            if a.shape != (self._n,):
-                raise ArgumentError(f"observer inputs must have shape ({self._n},), got {a.shape}")
+        args = [
+            _args.array(a, k, (self._n,), unit="joint")
+            for k, a in zip(("q", "dq", "tau"), (q, dq, tau))
+        ]
         r = np.zeros(self._n)
         self._step(ctypes.byref(self._state), *[a.ctypes.data_as(self._ptr) for a in args + [r]])
         return r

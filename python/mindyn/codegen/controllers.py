@@ -5,6 +5,7 @@ Structured Text."""
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, cast
@@ -12,11 +13,17 @@ from typing import Any, cast
 import numpy as np
 
 from .. import _args, _core
-from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
-from .generation import GeneratedCode, _check_lang, identifier
-from .parameters import read_parameter_file
+from .generation import GeneratedCode, _check_lang, _check_options, _parameter_values, identifier
+
+__all__ = [
+    "CONTROLLERS",
+    "GeneratedController",
+    "GeneratedObserver",
+    "generate_controller",
+    "generate_observer",
+]
 
 CONTROLLERS = ("adaptive-pd", "computed-torque", "gravity-compensation")
 
@@ -55,22 +62,43 @@ class GeneratedController(GeneratedCode):
         return f"GeneratedController({self.kind!r}, {self.lang!r}, {s['mul']} mul {s['add']} add)"
 
 
-def _setting(value, size: int, name: str, default: float) -> np.ndarray:
+def _setting(value, size: int, name: str, default: float, *, infinite: bool = False):
+    """A setting as ``size`` values: None (``default``), a number or an array of ``size``
+    numbers; NaN refused, infinities too unless ``infinite`` (a bound that may be absent)."""
     if value is None:
         return np.full(size, default)
-    a = np.asarray(value, dtype=float)
-    if a.ndim == 0:
-        a = np.full(size, float(a))
-    if a.shape != (size,):
-        raise ArgumentError(
-            f"setting '{name}' must be a scalar or {size} values, got shape {a.shape}"
+    if isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)):
+        a = np.full(size, float(value))
+    else:
+        a = _args.array(value, name, (size,), finite=False)
+    if np.isnan(a).any() or not (infinite or np.isfinite(a).all()):
+        raise _args.fail(
+            name,
+            f"contains {'NaN' if np.isnan(a).any() else 'infinity'}; expected "
+            f"{'numbers' if infinite else 'finite numbers'} (a scalar or {size} values)",
         )
     return a
+
+
+_GAINS = ("kd", "lambda", "gamma", "nu", "kp")
+
+
+def _gains(gains) -> dict:
+    """The gains mapping: known keys only, each a number or an array (checked where used)."""
+    g = dict(_args.mapping(gains, "gains"))
+    unknown = [k for k in g if k not in _GAINS]
+    if unknown:
+        raise _args.fail(
+            "gains",
+            f"has unknown key(s) {', '.join(map(repr, unknown))}; expected {', '.join(_GAINS)}",
+        )
+    return g
 
 
 def generate_controller(
     robot: Robot | str,
     kind: str = "adaptive-pd",
+    *,
     lang: str = "c",
     base: BaseParameters | bool | None = None,
     gains: dict | None = None,
@@ -123,9 +151,15 @@ def generate_controller(
     from .. import control
 
     robot = load(robot) if not isinstance(robot, Robot) else robot
-    if kind not in CONTROLLERS:
-        raise ArgumentError(f"unknown controller '{kind}' (choose from {', '.join(CONTROLLERS)})")
+    _args.choice(kind, "kind", CONTROLLERS)
     _check_lang(lang, trig)
+    _check_options(name, header_name, params)
+    if base is not None and base is not False:
+        _args.instance(base, "base", BaseParameters, "a BaseParameters, False or None")
+    period = _args.number(period, "period", positive=True)
+    gains = None if gains is None else _gains(gains)
+    if isinstance(tau_max, str) and tau_max != "effort":
+        raise _args.fail("tau_max", f"is '{tau_max}'; expected None, 'effort' or {robot.n} values")
     classical = base is False
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
@@ -160,19 +194,25 @@ def generate_controller(
         s["p0"] = bp.values(robot.parameters(rotor=bp.rotor, friction=bp.friction))
         if bp.offset:
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
-    elif isinstance(params, (str, Path)):
-        s["p0"] = read_parameter_file(params, names)
     else:
-        s["p0"] = _args.array(params, "params", (len(names),))
-    s["p_min"] = _setting(p_min, len(names), "p_min", -math.inf)
-    s["p_max"] = _setting(p_max, len(names), "p_max", math.inf)
+        s["p0"] = _parameter_values(params, names)
+    s["p_min"] = _setting(p_min, len(names), "p_min", -math.inf, infinite=True)
+    s["p_max"] = _setting(p_max, len(names), "p_max", math.inf, infinite=True)
+    if np.any(s["p_min"] > s["p_max"]):
+        i = int(np.argmax(s["p_min"] > s["p_max"]))
+        raise _args.fail(
+            "p_min", f"exceeds p_max at '{names[i]}' ({s['p_min'][i]:g} > {s['p_max'][i]:g})"
+        )
     if isinstance(tau_max, str):
-        if tau_max != "effort":
-            raise ArgumentError(f"tau_max must be None, 'effort' or {n} values, got '{tau_max}'")
         tau_max = robot.limits["effort"]
         if not np.all(np.isfinite(tau_max)):
-            raise ArgumentError(f"robot '{robot.name}' does not give effort limits for all joints")
-    s["tau_max"] = _setting(tau_max, n, "tau_max", math.inf)
+            raise _args.fail(
+                "tau_max",
+                f"is 'effort' but robot '{robot.name}' does not give effort limits for all joints",
+            )
+    s["tau_max"] = _setting(tau_max, n, "tau_max", math.inf, infinite=True)
+    if not np.all(s["tau_max"] > 0):
+        raise _args.fail("tau_max", "must be positive")
     name = name if name is not None else identifier(robot.name)
     fn = f"{name}_{kind.replace('-', '_')}"
     header_name = header_name or f"{fn}.h"
@@ -219,8 +259,8 @@ class GeneratedObserver(GeneratedCode):
 
 def generate_observer(
     robot: Robot | str,
-    lang: str = "c",
     *,
+    lang: str = "c",
     base: BaseParameters | None = None,
     params: str | Path | Sequence[float] | None = None,
     period: float = 0.004,
@@ -257,20 +297,28 @@ def generate_observer(
 
     robot = load(robot) if not isinstance(robot, Robot) else robot
     _check_lang(lang, trig)
-    if base is None:
-        base = base_parameters(robot, rotor=True, friction=True)
-    n, names = robot.n, list(base.names)
+    _check_options(name, header_name, params)
+    _args.optional(_args.instance, base, "base", BaseParameters)
+    held_torque = _args.flag(held_torque, "held_torque")
     period = control.controllers.check_period(period)
+    n = robot.n
     k = control.default_observer_gain(period) if gains is None else gains
     k = _setting(k, n, "gains", 0.0)
-    if params is None:
+    bad = np.flatnonzero(~((k > 0) & (k < 2 / period)))
+    if bad.size:
+        raise _args.fail(
+            "gains",
+            f"gives observer gain K_O of joint {bad[0] + 1} as {k[bad[0]]:g} 1/s; expected "
+            f"(0, 2 / period) = (0, {2 / period:g})",
+        )
+    if base is None:
+        base = base_parameters(robot, rotor=True, friction=True)
+    names = list(base.names)
+    p = _parameter_values(params, names)
+    if p is None:
         p = base.values(robot.parameters(rotor=base.rotor, friction=base.friction))
         if base.offset:
             p = np.concatenate([p, np.zeros(n)])[: len(names)]
-    elif isinstance(params, (str, Path)):
-        p = read_parameter_file(params, names)
-    else:
-        p = _args.array(params, "params", (len(names),))
     name = name if name is not None else identifier(robot.name)
     header_name = header_name or f"{name}_momentum_observer.h"
     out = _core.generate_observer(

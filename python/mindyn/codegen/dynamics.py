@@ -8,6 +8,8 @@ from numpy import ndarray
 from .. import _args, _core
 from ..base import BaseParameters
 
+__all__ = ["BaseDynamics"]
+
 
 class BaseDynamics:
     """Inverse dynamics, gravity torque and base regressor in the base parameters, by the
@@ -31,7 +33,7 @@ class BaseDynamics:
     """
 
     def __init__(self, base: BaseParameters):
-        self.base = base
+        self.base = _args.instance(base, "base", BaseParameters)
         self._d = _core.BaseDynamics(base._b, offset=base.offset)
 
     n = property(lambda self: self._d.n)

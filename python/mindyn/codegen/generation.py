@@ -11,10 +11,11 @@ from pathlib import Path
 import numpy as np
 
 from .. import _args, _core
-from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .parameters import read_parameter_file
+
+__all__ = ["FUNCTIONS", "GeneratedCode", "generate", "identifier"]
 
 FUNCTIONS = ("inverse_dynamics", "gravity", "regressor")
 _ALIASES = {"id": "inverse_dynamics"}
@@ -69,7 +70,7 @@ class GeneratedCode:
         """Writes the code: C to ``path`` (``.c`` added when missing) and the header beside it
         under ``header_name`` (the name the source includes); ST to ``path``. Returns the paths
         written."""
-        path = Path(path)
+        path = Path(_args.path(path, "path"))
         if self.lang == "st":
             assert self.text is not None
             path.write_text(self.text)
@@ -89,30 +90,72 @@ class GeneratedCode:
 def _functions(what) -> list[str]:
     if isinstance(what, str):
         what = [w.strip() for w in what.split(",") if w.strip()]
+    elif not isinstance(what, (list, tuple)) or not all(isinstance(w, str) for w in what):
+        raise _args.fail("what", "must be a string or a list of strings (id, gravity, regressor)")
     out = []
     for w in what:
         w = _ALIASES.get(w, w)
         if w not in FUNCTIONS:
-            raise ArgumentError(f"unknown function '{w}' (choose from id, gravity, regressor)")
+            raise _args.fail(
+                "what",
+                f"names an unknown function '{w}'; expected inverse_dynamics (id), gravity, "
+                "regressor",
+            )
         if w not in out:
             out.append(w)
     if not out:
-        raise ArgumentError("no function to generate")
+        raise _args.fail(
+            "what", "names no function; expected inverse_dynamics (id), gravity, regressor"
+        )
     return out
 
 
-def _check_lang(lang: str, trig: str | None) -> None:
-    if lang not in ("c", "st"):
-        raise ArgumentError(f"lang must be 'c' or 'st', got '{lang}'")
+def _check_lang(lang, trig) -> None:
+    _args.choice(lang, "lang", ("c", "st"))
+    _args.optional(_args.choice, trig, "trig", ("inline", "libm"))
     if trig is not None and lang != "c":
-        raise ArgumentError("trig applies to C only; Structured Text uses SIN and COS")
-    if trig not in (None, "inline", "libm"):
-        raise ArgumentError(f"trig must be 'inline' or 'libm', got '{trig}'")
+        raise _args.fail("trig", "applies to C only; Structured Text uses SIN and COS")
+
+
+# as the C++ generator requires (Structured Text forbids double and trailing underscores)
+_IDENTIFIER = re.compile(r"[A-Za-z](?:_?[A-Za-z0-9])*")
+_HEADER = re.compile(r"[A-Za-z0-9_.+-]+\.h")
+
+
+def _check_options(name, header_name, params) -> None:
+    """Checks the parameter values (None, a file, or a vector; its length is checked once the
+    parameters are known), the prefix of generated identifiers (letters, digits and single
+    underscores, first a letter, at most 40 characters, as the generator requires) and the
+    header file name (a plain file name ending in ``.h``), when given."""
+    if params is not None and not isinstance(params, (str, Path)):
+        _args.array(params, "params", (None,))
+    ok = name is None or _IDENTIFIER.fullmatch(_args.text(name, "name"))
+    if not ok or (name is not None and len(name) > 40):
+        raise _args.fail(
+            "name",
+            f"'{name}' is not an identifier (letters, digits and single underscores, starting "
+            "with a letter, at most 40 characters)",
+        )
+    if header_name is not None and not _HEADER.fullmatch(_args.text(header_name, "header_name")):
+        raise _args.fail(
+            "header_name", f"is '{header_name}'; expected a file name ending in '.h' (no folder)"
+        )
+
+
+def _parameter_values(params, names: Sequence[str]):
+    """``params`` (None, a file for :func:`read_parameter_file`, or an array) as values of
+    ``names``; None stays None."""
+    if params is None:
+        return None
+    if isinstance(params, (str, Path)):
+        return read_parameter_file(params, names)
+    return _args.array(params, "params", (len(names),))
 
 
 def identifier(name: str) -> str:
     """The default prefix of generated identifiers: ``name`` in letters, digits and single
     underscores, starting with a letter, at most 40 characters."""
+    _args.text(name, "name")
     s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_")
     s = re.sub(r"_+", "_", s)
     if not s or not s[0].isalpha():
@@ -122,6 +165,7 @@ def identifier(name: str) -> str:
 
 def generate(
     robot: Robot | str,
+    *,
     lang: str = "c",
     what: Sequence[str] | str = FUNCTIONS,
     rotor: bool = False,
@@ -193,6 +237,8 @@ def generate(
         base = _args.flag(base, "base")
     _check_lang(lang, trig)
     fs = _functions(what)
+    _check_options(name, header_name, params)
+    _args.choice(minimise, "minimise", ("operations", "additions"))
     name = name if name is not None else identifier(robot.name)
     if isinstance(base, BaseParameters):
         if base.rotor != rotor or base.friction != friction:
@@ -212,12 +258,7 @@ def generate(
         names = list(
             _core.classical_parameter_names(robot._m, rotor=rotor, friction=friction, offset=offset)
         )
-    values = None
-    if params is not None:
-        if isinstance(params, (str, Path)):
-            values = read_parameter_file(params, names)
-        else:
-            values = _args.array(params, "params", (len(names),))
+    values = _parameter_values(params, names)
     out = _core.generate_code(
         robot._m,
         bp_core,  # type: ignore[arg-type]  # None: the classical parameters (the binding takes it)

@@ -10,7 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _core
+from .. import _args, _core
+
+__all__ = ["read_parameter_file"]
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
 
@@ -24,11 +26,18 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
     """
     from ..identification.data import DataError
 
-    path = Path(path)
+    path = Path(_args.path(path, "path"))
+    if isinstance(names, (str, bytes)) or not isinstance(names, Sequence):
+        raise _args.fail("names", "must be a list of parameter names")
+    names = list(names)
+    if not names or not all(isinstance(k, str) and k for k in names):
+        raise _args.fail("names", "must be a non-empty list of non-empty strings")
+    twice = sorted({k for k in names if names.count(k) > 1})
+    if twice:
+        raise _args.fail("names", f"gives {', '.join(twice[:5])} more than once")
     if not path.is_file():
         raise _core.RobotFileNotFoundError(f"parameter file '{path}' does not exist")
     text = path.read_text()
-    names = list(names)
     mapping: dict[str, float] = {}
     if path.suffix.lower() == ".json" or text.lstrip().startswith(("{", "[")):
         try:

@@ -6,8 +6,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from .. import _core
+from .. import _args, _core
 from .generation import GeneratedCode
+
+__all__ = ["PLCOPEN_NS", "plcopen_project"]
 
 PLCOPEN_NS = "http://www.plcopen.org/xml/tc6_0201"
 _XHTML_NS = "http://www.w3.org/1999/xhtml"
@@ -15,20 +17,21 @@ _XHTML_NS = "http://www.w3.org/1999/xhtml"
 _SECTIONS = (("inputs", "inputVars"), ("outputs", "outputVars"), ("locals", "localVars"))
 
 
-def _program(code) -> _core.STProgram:
+def _program(code, i: int) -> _core.STProgram:
     """The blocks of generated Structured Text: a :class:`GeneratedCode` in ``lang="st"`` or an
-    :class:`mindyn._core.STProgram`."""
+    :class:`mindyn._core.STProgram` (entry ``i`` of ``codes``)."""
     if isinstance(code, _core.STProgram):
         return code
     if isinstance(code, GeneratedCode) and code.program is not None:
         return code.program
     if isinstance(code, GeneratedCode):
-        raise _core.ModelError(
-            f"plcopen_project needs Structured Text (lang='st'), got {code.lang!r} code"
+        raise _args.fail(
+            "codes", f"entry {i} is {code.lang!r} code; expected Structured Text (lang='st')"
         )
-    raise _core.ModelError(
-        "plcopen_project takes generated Structured Text (the GeneratedCode of lang='st', or its "
-        f"program), got {type(code).__name__}"
+    raise _args.fail(
+        "codes",
+        f"entry {i} is a {type(code).__name__}; expected generated Structured Text (the "
+        "GeneratedCode of lang='st', or its program)",
     )
 
 
@@ -42,7 +45,11 @@ def plcopen_project(codes: Sequence, project: str, *, comment: str = "") -> byte
     import datetime
     import xml.etree.ElementTree as ET
 
-    programs = [_program(c) for c in codes]
+    if isinstance(codes, (str, bytes)) or not isinstance(codes, Sequence) or not codes:
+        raise _args.fail("codes", "must be a non-empty list of generated Structured Text")
+    programs = [_program(c, i) for i, c in enumerate(codes)]
+    _args.text(project, "project")
+    _args.text(comment, "comment", empty=True)
     ET.register_namespace("", PLCOPEN_NS)
     ET.register_namespace("xhtml", _XHTML_NS)
 
