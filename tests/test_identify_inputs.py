@@ -249,7 +249,7 @@ def test_export_refuses_a_huge_integer_in_the_python_api():
     robot = mindyn.load(UR5)
     classical = dict(zip(robot.param_names, robot.params.tolist()))
     classical["M1"] = 10**400
-    with pytest.raises(mindyn.ModelError, match="401 digits, too large for a double"):
+    with pytest.raises(mindyn.ArgumentError, match="401 digits, too large for a double"):
         classical_terms(robot, classical)
 
 
