@@ -6,11 +6,10 @@ import argparse
 import math
 
 from .._core import ArgumentError, ModelError
-from .._mujoco import is_mjcf
 from ..export import classical_terms, write_urdf, write_yaml
 from ..robot import load
 from .args import add_command
-from .outputs import output_file
+from .outputs import add_description_outputs, check_description_kind
 from .robot_options import add_robot
 
 
@@ -66,46 +65,6 @@ def cmd_export(args: argparse.Namespace) -> int:
         mjcf=args.mjcf,
     )
     return 0
-
-
-def add_description_outputs(p, what: str) -> None:
-    """``--urdf FILE``, ``--yaml FILE`` (one of them) and ``--sidecar FILE`` on parser ``p``."""
-    out = p.add_mutually_exclusive_group(required=what == "export")
-    suffix = "" if what == "export" else " with the consistent estimate (needs --consistent)"
-    out.add_argument("--urdf", metavar="FILE", type=output_file, help="URDF to write" + suffix)
-    out.add_argument(
-        "--yaml", metavar="FILE", type=output_file, help="YAML DH/MDH table to write" + suffix
-    )
-    out.add_argument(
-        "--mjcf",
-        metavar="FILE",
-        type=output_file,
-        help="MuJoCo MJCF to write" + suffix + ": inertials, joint armature (Ia), damping (Fv) "
-        "and frictionloss (Fc), transmissions as tendons; a robot read from an MJCF has that "
-        "file written back",
-    )
-    p.add_argument(
-        "--sidecar",
-        metavar="FILE",
-        type=output_file,
-        help="YAML for the joint terms (rotor inertia, friction, offsets); default: "
-        "<FILE stem>.joints.yaml beside FILE, written when there are joint terms (URDF) or "
-        "torque offsets (YAML table)",
-    )
-
-
-def check_description_kind(robot, source: str, urdf: bool, mjcf=None) -> None:
-    """Refuse ``--urdf`` for a robot from a YAML table or an MJCF, ``--yaml`` for one from a
-    URDF or an MJCF; ``--mjcf`` takes any robot."""
-    if mjcf is not None:
-        return
-    if is_mjcf(robot.source):
-        want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
-        raise ModelError(f"{want}: '{source}' is an MJCF; use --mjcf")
-    if urdf != (robot.convention == "urdf"):
-        want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
-        kind = "a URDF" if robot.convention == "urdf" else f"a {robot.convention.upper()} table"
-        raise ModelError(f"{want}: '{source}' is {kind}; use {'--yaml' if urdf else '--urdf'}")
 
 
 def write_description(

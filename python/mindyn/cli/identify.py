@@ -10,9 +10,10 @@ import sys
 from pathlib import Path
 
 from ..robot import load
-from .export import check_description_kind, write_description
+from .export import write_description
 from .flags import library_options_as_flags
 from .number_options import joint_values
+from .outputs import check_description_kind
 from .robot_options import with_drive_side
 
 

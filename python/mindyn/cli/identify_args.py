@@ -6,9 +6,8 @@ from __future__ import annotations
 
 from ..robot import FRICTION_KINDS
 from .args import add_command, deprecated
-from .export import add_description_outputs
 from .number_options import joint_vector, number
-from .outputs import output_dir, output_file
+from .outputs import add_description_outputs, output_dir, output_file
 from .robot_options import add_joint_terms, add_offset, add_robot
 
 

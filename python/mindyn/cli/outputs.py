@@ -1,7 +1,8 @@
 """The command line's one rule for the files and folders it writes: the validated types of the
 output options (:func:`output_file`, :func:`output_dir`), the path a default name takes
-(:func:`output_path`) and the checks and folders made before a command runs
-(:func:`prepare_outputs`)."""
+(:func:`output_path`), the checks and folders made before a command runs
+(:func:`prepare_outputs`), and the robot-description outputs (:func:`add_description_outputs`)
+with the check that one fits the robot before any work is done (:func:`check_description_kind`)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,8 @@ import argparse
 import os
 from pathlib import Path
 
+from .._core import ModelError
+from .._mujoco import is_mjcf
 from .args import UsageError
 
 
@@ -167,3 +170,43 @@ def prepare_outputs(args: argparse.Namespace) -> None:
         seen[key] = (option, path)
     for _, path, folder in outputs:
         (path if folder else path.parent).mkdir(parents=True, exist_ok=True)
+
+
+def add_description_outputs(p, what: str) -> None:
+    """``--urdf FILE``, ``--yaml FILE`` (one of them) and ``--sidecar FILE`` on parser ``p``."""
+    out = p.add_mutually_exclusive_group(required=what == "export")
+    suffix = "" if what == "export" else " with the consistent estimate (needs --consistent)"
+    out.add_argument("--urdf", metavar="FILE", type=output_file, help="URDF to write" + suffix)
+    out.add_argument(
+        "--yaml", metavar="FILE", type=output_file, help="YAML DH/MDH table to write" + suffix
+    )
+    out.add_argument(
+        "--mjcf",
+        metavar="FILE",
+        type=output_file,
+        help="MuJoCo MJCF to write" + suffix + ": inertials, joint armature (Ia), damping (Fv) "
+        "and frictionloss (Fc), transmissions as tendons; a robot read from an MJCF has that "
+        "file written back",
+    )
+    p.add_argument(
+        "--sidecar",
+        metavar="FILE",
+        type=output_file,
+        help="YAML for the joint terms (rotor inertia, friction, offsets); default: "
+        "<FILE stem>.joints.yaml beside FILE, written when there are joint terms (URDF) or "
+        "torque offsets (YAML table)",
+    )
+
+
+def check_description_kind(robot, source: str, urdf: bool, mjcf=None) -> None:
+    """Refuse ``--urdf`` for a robot from a YAML table or an MJCF, ``--yaml`` for one from a
+    URDF or an MJCF; ``--mjcf`` takes any robot."""
+    if mjcf is not None:
+        return
+    if is_mjcf(robot.source):
+        want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
+        raise ModelError(f"{want}: '{source}' is an MJCF; use --mjcf")
+    if urdf != (robot.convention == "urdf"):
+        want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
+        kind = "a URDF" if robot.convention == "urdf" else f"a {robot.convention.upper()} table"
+        raise ModelError(f"{want}: '{source}' is {kind}; use {'--yaml' if urdf else '--urdf'}")
