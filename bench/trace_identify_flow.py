@@ -37,8 +37,9 @@ PACKAGE = Path(mindyn.__file__).resolve().parent
 REPO = Path(__file__).resolve().parents[1]
 
 
-# Modules every concern calls into (the robot, base parameters, argument checks, threads, the
-# command line's argument helpers): their re-entries are reported apart.
+# Modules every concern calls into (the robot, base parameters, the log type, argument checks,
+# threads, the command line's argument and output-file helpers): their re-entries are reported
+# apart.
 UTILITY = {
     "_args.py",
     "_mujoco.py",
@@ -46,6 +47,7 @@ UTILITY = {
     "_version.py",
     "base.py",
     "robot.py",
+    "identification/joint_data.py",
     "cli/args.py",
     "cli/flags.py",
     "cli/number_options.py",

@@ -30,10 +30,11 @@ The names below are the ones a workflow needs; the modules hold the rest.
 """
 
 from .consistent import ConsistentResult, identify_consistent, identify_payload
-from .data import DataError, JointData, read_csv, write_csv
+from .data import DataError, read_csv, write_csv
 from .errors import IdentificationError, RankDeficientError
 from .estimation import IdentificationResult, identify
 from .friction import FrictionChoice, select_friction_model
+from .joint_data import JointData
 from .models import MODELS, dynamic_system, energy_system, integral_system
 from .options import IdentifyOptions, ReadingOptions
 from .reading import Logs, load_logs

@@ -44,7 +44,7 @@ from .. import _args
 from .._core import ModelError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
-from .data import DataError, JointData, read_json
+from .data import DataError, read_json
 from .document import (
     read_identification,
     robot_on_drive_side,
@@ -60,6 +60,7 @@ from .estimation import (
     predicted_torques,
     regressor_rows,
 )
+from .joint_data import JointData
 from .models import moving_equations, require_torque
 
 __all__ = [

@@ -29,15 +29,14 @@ import json
 import math
 import re
 import sys
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
 
 import numpy as np
 from scipy import signal
 
 from .. import _args
 from .._core import Error, parse_csv_numbers
+from .joint_data import JointData
 
 __all__ = [
     "DataError",
@@ -59,83 +58,6 @@ class DataError(Error, ValueError):
 
 class DataFileNotFoundError(Error, FileNotFoundError):
     """A data file that does not exist."""
-
-
-class RegressorFilter(Protocol):
-    """What :attr:`JointData.regressor_filter` provides: the regressor columns of a base-parameter
-    set filtered like the torques, shape (m, n, nb)."""
-
-    def regressor(self, base: Any) -> np.ndarray: ...
-
-
-@dataclass
-class JointData:
-    """Samples of a joint-space log.
-
-    Attributes
-    ----------
-    t : ndarray, shape (m,)
-    q, dq, ddq : ndarray, shape (m, n)
-    tau : ndarray, shape (m, n), or None for a trajectory without torques
-    source : str
-        Where the data came from (file name).
-    processing : dict
-        How ``dq`` / ``ddq`` were obtained (``logged`` or the filter and its settings) and the
-        torque unit conversion.
-    regressor_filter : optional
-        Set by :func:`~mindyn.identification.preprocess.preprocess`: the low-pass, edge drop and
-        decimation that turned the logged torques into ``tau``, to be applied alike to the
-        regressor columns (parallel filtering); its ``regressor(base)`` gives them, shape
-        (m, n, nb).
-    logged : JointData, optional
-        Set by :func:`~mindyn.identification.preprocess.preprocess`: the samples as logged (time
-        stamps and torques as read, between the dropped filter edges) with the filtered motion
-        at those stamps, on which the model's torques are compared with the logged ones
-        (:func:`~mindyn.identification.validate`, ``raw`` and ``moving``), and its
-        ``processing["velocity_noise"]`` (see :func:`~mindyn.identification.preprocess.preprocess`).
-    """
-
-    t: np.ndarray
-    q: np.ndarray
-    dq: np.ndarray
-    ddq: np.ndarray
-    tau: np.ndarray | None = None
-    source: str = ""
-    processing: dict = field(default_factory=dict)
-    regressor_filter: RegressorFilter | None = None
-    logged: JointData | None = None
-
-    @property
-    def m(self) -> int:
-        return self.t.shape[0]
-
-    @property
-    def n(self) -> int:
-        return self.q.shape[1]
-
-    @property
-    def rate(self) -> float:
-        """Mean sampling rate [Hz]."""
-        return (self.m - 1) / (self.t[-1] - self.t[0]) if self.m > 1 else float("nan")
-
-    def evaluate(self, t):
-        """Reference interface (as
-        :class:`~mindyn.identification.excitation.FourierTrajectory`): positions, velocities,
-        accelerations at times ``t`` counted from the first sample, by cubic-spline
-        interpolation, (m, n) each."""
-        from scipy.interpolate import CubicSpline
-
-        if not hasattr(self, "_splines"):
-            self._splines = tuple(
-                CubicSpline(self.t, x, axis=0) for x in (self.q, self.dq, self.ddq)
-            )
-        t = np.atleast_1d(np.asarray(t, dtype=float)) + self.t[0]
-        t = np.clip(t, self.t[0], self.t[-1])
-        return tuple(s(t) for s in self._splines)
-
-    @property
-    def duration(self) -> float:
-        return float(self.t[-1] - self.t[0])
 
 
 _COLUMN = re.compile(r"(t|q|dq|ddq|tau)([1-9][0-9]*)?")

@@ -26,8 +26,9 @@ from .._core import OFFSET_PREFIX as OFF
 from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, as_robot
-from .data import DataError, JointData
+from .data import DataError
 from .errors import IdentificationError, RankDeficientError
+from .joint_data import JointData
 from .models import (
     MODELS,
     energy_row_noise,

@@ -31,8 +31,9 @@ from scipy import integrate
 from .. import _args
 from .._args import ArgumentError
 from ..base import BaseParameters
-from .data import DataError, JointData
+from .data import DataError
 from .errors import IdentificationError
+from .joint_data import JointData
 
 MODELS = ("dynamic", "energy", "integral")
 

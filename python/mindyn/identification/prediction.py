@@ -14,9 +14,10 @@ from .. import _args
 from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
-from .data import DataError, JointData, read_json
+from .data import DataError, read_json
 from .document import robot_on_drive_side, with_identified_friction, with_identified_state
 from .estimation import CHUNK_SAMPLES
+from .joint_data import JointData
 from .models import require_torque
 from .validation import logged_samples
 

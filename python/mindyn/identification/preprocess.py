@@ -53,7 +53,8 @@ from scipy.interpolate import CubicSpline
 from .. import _args
 from .._core import sosfilt_rows
 from .._threads import evaluated_ahead
-from .data import DataError, JointData, check_cutoff
+from .data import DataError, check_cutoff
+from .joint_data import JointData
 
 __all__ = [
     "CUTOFF_FACTOR",

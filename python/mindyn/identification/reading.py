@@ -15,7 +15,8 @@ import numpy as np
 
 from .. import _args
 from ..robot import as_robot
-from .data import DataError, JointData
+from .data import DataError
+from .joint_data import JointData
 from .options import MODELS, ReadingOptions
 
 

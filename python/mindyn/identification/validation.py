@@ -10,8 +10,9 @@ import numpy as np
 
 from .. import _args
 from ..base import BaseParameters
-from .data import DataError, JointData
+from .data import DataError
 from .estimation import IdentificationResult, _logs
+from .joint_data import JointData
 from .models import require_torque, torque_noise
 
 #: A joint's sample counts as moving when its speed is at least this many times the noise level

@@ -21,8 +21,8 @@ import numpy as np
 
 from .. import _args
 from ..robot import as_robot
-from .data import JointData
 from .errors import IdentificationError
+from .joint_data import JointData
 from .options import OPTION_NAMES, IdentifyOptions, ReadingOptions
 from .reading import Logs, LogSet, load_logs
 from .summary import IdentificationReport
