@@ -7,6 +7,7 @@ from __future__ import annotations
 from ..robot import FRICTION_KINDS
 from .args import add_command, deprecated
 from .export import add_description_outputs
+from .identify_floating import FLOATING_MODELS, add_floating_options
 from .number_options import joint_vector, number
 from .outputs import output_dir, output_file
 from .robot_options import add_joint_terms, add_offset, add_robot
@@ -125,11 +126,15 @@ def add_identify(sub, func) -> None:
     )
     p.add_argument(
         "--model",
-        choices=["dynamic", "integral", "energy"],
-        default="dynamic",
-        help="dynamic: tau = W(q, dq, ddq) p per sample (needs accelerations); integral: each "
-        "joint's equation of motion integrated over windows (momentum difference, no "
-        "accelerations); energy: the energy theorem over windows (one equation per window)",
+        choices=["dynamic", "integral", "energy", *FLOATING_MODELS],
+        default=None,
+        help="dynamic (the default): tau = W(q, dq, ddq) p per sample (needs accelerations); "
+        "integral: each joint's equation of motion integrated over windows (momentum "
+        "difference, no accelerations); energy: the energy theorem over windows (one equation "
+        "per window). A floating-base robot (a free-flyer or planar root): full (the default "
+        "there: W p = S^T tau + sum_c J_c^T f_c, every equation of motion, joint torques and "
+        "contact wrenches) or base (the base-link model: the root's equations, contact "
+        "wrenches and motion only, no joint torques)",
     )
     add_joint_terms(p, "identify")
     add_offset(p, "identify")
@@ -177,6 +182,7 @@ def add_identify(sub, func) -> None:
         "residual is within one standard error of the smallest (reported)",
     )
     add_description_outputs(p, "identify")
+    add_floating_options(p)
     number(
         p,
         "--energy-window",

@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _args, _core
+from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot
 from .data import DataError, DataFileNotFoundError, decode_text, parse_cell
@@ -221,7 +222,11 @@ class FloatingResult:
     """A floating-base identification: ``values`` the estimated base values of ``base`` (the
     minimum-norm solution when the model's ``rank`` is below ``base.n``), ``span`` (rank, n_b):
     an orthonormal basis of the combinations of base values the data identified, ``model``
-    ("full" or "base"), ``rms`` the fit's residual (generalized-force units)."""
+    ("full" or "base"), ``rms`` the fit's residual (generalized-force units), ``rows`` the
+    equations fitted, ``sigma`` the residual's standard deviation ``sqrt(RSS / (rows - rank))``
+    and ``std`` the standard deviation of each value (``sigma`` through the least-squares
+    covariance ``sigma^2 V diag(1/s^2) V^T`` of the identified span), NaN for a value the data
+    do not determine alone (outside ``span``: only combinations of it are identified)."""
 
     base: BaseParameters
     values: np.ndarray
@@ -229,12 +234,23 @@ class FloatingResult:
     span: np.ndarray
     model: str
     rms: float
+    std: np.ndarray
+    sigma: float
+    rows: int
 
     def residual(self, log: FloatingLog) -> np.ndarray:
         """Predicted minus measured generalized forces of ``log`` in this result's model, shape
         (m * rows,)."""
+        predicted, measured = self.forces(log)
+        return (predicted - measured).reshape(-1)
+
+    def forces(self, log: FloatingLog) -> tuple[np.ndarray, np.ndarray]:
+        """The generalized forces of ``log`` in this result's model, predicted by the estimate
+        and measured (``S^T tau + sum_c J_c^T f_c``; the base-link model: the root's rows), each
+        of shape (m, rows)."""
         W, b = floating_system(self.base.robot, log, model=self.model)
-        return W[:, _pivots(self.base)] @ self.values - b
+        shape = (log.m, len(b) // max(log.m, 1))
+        return (W[:, _pivots(self.base)] @ self.values).reshape(shape), b.reshape(shape)
 
 
 def _pivots(base: BaseParameters) -> np.ndarray:
@@ -244,6 +260,7 @@ def _pivots(base: BaseParameters) -> np.ndarray:
     return order[np.argsort(e[order])]
 
 
+@single_threaded_blas  # a QR of a few thousand rows: one BLAS thread is faster on a loaded machine
 def identify_floating(
     robot: Robot,
     logs,
@@ -307,8 +324,17 @@ def identify_floating(
         )
     x = Vt[:rank].T @ ((U[:, :rank].T @ c) / s[:rank])
     fit = float(np.sum((R @ x - c) ** 2))
-    rms = float(np.sqrt(max(bb - float(c @ c) + fit, 0.0) / rows))
-    return FloatingResult(base, x, rank, Vt[:rank], model, rms)
+    rss = max(bb - float(c @ c) + fit, 0.0)
+    rms = float(np.sqrt(rss / rows))
+    sigma = float(np.sqrt(rss / (rows - rank))) if rows > rank else float("nan")
+    V = Vt[:rank].T
+    std = sigma * np.sqrt(np.einsum("ij,j,ij->i", V, 1.0 / s[:rank] ** 2, V))
+    # a value is determined alone when its unit vector lies in the identified span
+    std[np.einsum("ij,ij->i", V, V) < 1.0 - _IN_SPAN] = np.nan
+    return FloatingResult(base, x, rank, Vt[:rank], model, rms, std, sigma, rows)
+
+
+_IN_SPAN = 1e-9  # a unit vector whose projection on the span falls short by more is outside it
 
 
 _CHUNK = 256  # samples per block of the stacked system (bounded memory on long logs)
@@ -373,7 +399,13 @@ def read_floating_csv(path, robot: Robot, *, wrench_frame: str = "world") -> Flo
     for g in ("q", "dq", "ddq"):
         missing = [c for c in groups[g] if c not in index]
         if missing:
-            raise DataError(f"{path}:1: missing column {missing[0]!r}")
+            why = ""
+            if g != "q":
+                why = (
+                    f" (a floating-base log carries its velocities dq1..dq{robot.nv} and "
+                    f"accelerations ddq1..ddq{robot.nv}: they are not derived from q)"
+                )
+            raise DataError(f"{path}:1: missing column {missing[0]!r}{why}")
     has_tau = [c in index for c in groups["tau"]]
     if any(has_tau) and not all(has_tau):
         raise DataError(f"{path}:1: missing column {groups['tau'][has_tau.index(False)]!r}")
