@@ -37,6 +37,7 @@ from mindyn.identification import (
     document,
     excitation,
     floating,
+    floating_workflow,
     prediction,
     preprocess,
     report,
@@ -491,6 +492,21 @@ def _api(tmp: Path) -> dict:
                 floating.read_floating_csv,
                 (f["floating_csv"], FLOATING),
                 {"wrench_frame": "world"},
+            ),
+            "identification.floating_workflow.coordinate_names": (
+                floating_workflow.coordinate_names,
+                (FLOATING,),
+                {},
+            ),
+            "identification.floating_workflow.load_floating_logs": (
+                floating_workflow.load_floating_logs,
+                ([f["floating_csv"]], FLOATING),
+                {"validate": [f["floating_csv"]], "wrench_frame": "world", "contacts": ["b"]},
+            ),
+            "identification.floating_workflow.run_floating": (
+                floating_workflow.run_floating,
+                (FLOATING, floating_workflow.load_floating_logs([f["floating_csv"]], FLOATING)),
+                {"model": "full", "tolerance": 1e-9},
             ),
             "identification.write_csv": (
                 identification.write_csv,

@@ -45,9 +45,9 @@ def cmd_export(args: argparse.Namespace) -> int:
         with_identified_friction,
     )
 
+    robot = load_robot(args, command="export")
     classical, identified_for, doc = read_classical(args.params)
     refuse_state(doc, "a robot description", str(args.params))
-    robot = load_robot(args, command="export")
     if identified_for not in (None, robot.name):
         raise ModelError(
             f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"

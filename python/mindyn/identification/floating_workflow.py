@@ -145,8 +145,8 @@ def load_floating_logs(
             _args.text(c, "contacts")
             if c not in names:
                 raise _args.fail(
-                    "contacts",
-                    f"names {c!r}, no moving link of robot '{robot.name}' ({', '.join(names)})",
+                    "contacts=:",
+                    f"{c!r} is no moving link of robot '{robot.name}' ({', '.join(names)})",
                 )
         declared = tuple(dict.fromkeys(contacts))
     return FloatingLogs(
