@@ -113,7 +113,11 @@ def add_identify(sub, func) -> None:
         "relative error, per-joint RMS, relative error and NRMS of the effort limit, scaled "
         "condition number) on the fit and on validation logs, against the filtered torques, "
         "against the torques as logged and on moving samples only, JSON output and a plot "
-        "report.",
+        "report. A floating-base robot (a free-flyer or planar root: --root-joint, or the root "
+        "joint of a YAML table) is identified from CSV logs with contact wrenches (q1..q<nq>, "
+        "dq1..dq<nv>, ddq1..ddq<nv>, [tau1..tau<na>], <LINK>.fx, .fy, .fz, .tx, .ty, .tz per "
+        "contact link) by ordinary least squares: --model full or base, --contact, "
+        "--wrench-frame, --validate and --json apply, the other options are refused.",
     )
     add_robot(p)
     p.add_argument(
