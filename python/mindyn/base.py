@@ -35,8 +35,8 @@ def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) 
         k = next(k for k, t in enumerate(robot.joint_types) if t not in ("revolute", "prismatic"))
         return "numerical", (
             f"the {robot.joint_types[k]} joint '{robot.joint_names[k]}' has several degrees of "
-            "freedom, which the projection and recursive methods do not take: the numerical "
-            "method (sampled) runs"
+            "freedom: the projection method takes revolute and prismatic joints only, and so "
+            "does the recursive method; the numerical method (sampled) runs"
         )
     refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
     if refused:
