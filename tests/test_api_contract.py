@@ -37,6 +37,7 @@ from mindyn.identification import (
     document,
     excitation,
     floating,
+    floating_motion,
     floating_workflow,
     prediction,
     preprocess,
@@ -491,7 +492,12 @@ def _api(tmp: Path) -> dict:
             "identification.floating.read_floating_csv": (
                 floating.read_floating_csv,
                 (f["floating_csv"], FLOATING),
-                {"wrench_frame": "world"},
+                {"wrench_frame": "world", "filter": "savgol", "cutoff": 5.0},
+            ),
+            "identification.floating_motion.configuration_derivatives": (
+                floating_motion.configuration_derivatives,
+                (FLOATING, np.arange(30) * 0.01, FLOATING_LOG.q),
+                {"filter": "none", "cutoff": 5.0},
             ),
             "identification.floating_workflow.coordinate_names": (
                 floating_workflow.coordinate_names,
@@ -501,7 +507,13 @@ def _api(tmp: Path) -> dict:
             "identification.floating_workflow.load_floating_logs": (
                 floating_workflow.load_floating_logs,
                 ([f["floating_csv"]], FLOATING),
-                {"validate": [f["floating_csv"]], "wrench_frame": "world", "contacts": ["b"]},
+                {
+                    "validate": [f["floating_csv"]],
+                    "wrench_frame": "world",
+                    "contacts": ["b"],
+                    "filter": "none",
+                    "cutoff": 5.0,
+                },
             ),
             "identification.floating_workflow.run_floating": (
                 floating_workflow.run_floating,

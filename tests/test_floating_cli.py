@@ -244,16 +244,20 @@ def test_bad_floating_input_is_refused_in_one_line(tmp_path):
     )  # fmt: skip
     q = table.copy()
     q[4, 3:7] *= 1.5  # a quaternion of norm 1.5
-    refused("identify", SOLO, write(tmp_path / "q.csv", q, header), *ff, match="quaternion")
+    refused(
+        "identify", SOLO, write(tmp_path / "q.csv", q, header), *ff,
+        match="q.csv:6: the quaternion of the floating joint 'root_joint' (columns q4..q7) has "
+        "norm 1.5, not 1",
+    )  # fmt: skip
     # a free-flyer's log read for a planar root: the columns do not fit
     refused("identify", SOLO, good, "--root-joint", "planar", match="unknown column")
     no_dq = write(tmp_path / "v.csv", table, header, drop=[h for h in header if "dq" in h])
-    refused("identify", SOLO, no_dq, *ff, match="not derived from q")
+    refused("identify", SOLO, no_dq, *ff, match="no dq and ddq columns and no time column 't'")
     no_tau = write(tmp_path / "t.csv", table, header, drop=[h for h in header if "tau" in h])
     refused("identify", SOLO, no_tau, *ff, match="the full model needs them (the base-link")
     refused("identify", SOLO, good, *ff, "--rotor", match="--rotor: does not apply")
     refused("identify", SOLO, good, *ff, "--consistent", match="--consistent: does not apply")
-    refused("identify", SOLO, good, *ff, "--cutoff", "5", match="--cutoff: does not apply")
+    refused("identify", SOLO, good, *ff, "--edge", "0.5", match="--edge: does not apply")
     refused("identify", SOLO, good, *ff, "--model", "energy", match="not the energy model")
     (tmp_path / "log.bag").write_bytes(b"#ROSBAG V2.0\n")
     refused("identify", SOLO, tmp_path / "log.bag", *ff, match="ROS bags are read for fixed")

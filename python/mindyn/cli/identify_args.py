@@ -52,7 +52,9 @@ def add_data_options(p) -> None:
         "torques and regressor columns, derivatives of the filtered signals, filter edges "
         "dropped, decimation; butter, savgol, none: only derive missing velocities and "
         "accelerations (torques unfiltered; butter and savgol refuse unevenly spaced time "
-        "stamps, none differences them as they are)",
+        "stamps, none differences them as they are). A floating-base log: the dq and ddq it "
+        "lacks are derived by butter (lowpass too), savgol or none, torques and wrenches as "
+        "logged",
     )
     number(
         p,
@@ -61,7 +63,8 @@ def add_data_options(p) -> None:
         low_open=True,
         help="cut-off [Hz], below half the log's rate; lowpass: default 10 x the excited band of "
         "the identification log's positions (at most rate / 10), the validation log filtered at "
-        "the same cut-off; butter: default min(10, rate / 10)",
+        "the same cut-off; butter (and a floating-base log's derivatives): default min(10, "
+        "rate / 10)",
     )
     g = p.add_mutually_exclusive_group()
     number(
@@ -115,9 +118,10 @@ def add_identify(sub, func) -> None:
         "against the torques as logged and on moving samples only, JSON output and a plot "
         "report. A floating-base robot (a free-flyer or planar root: --root-joint, or the root "
         "joint of a YAML table) is identified from CSV logs with contact wrenches (q1..q<nq>, "
-        "dq1..dq<nv>, ddq1..ddq<nv>, [tau1..tau<na>], <LINK>.fx, .fy, .fz, .tx, .ty, .tz per "
-        "contact link) by ordinary least squares: --model full or base, --contact, "
-        "--wrench-frame, --validate and --json apply, the other options are refused.",
+        "[dq1..dq<nv>, ddq1..ddq<nv>], [tau1..tau<na>], <LINK>.fx, .fy, .fz, .tx, .ty, .tz per "
+        "contact link; without dq and ddq, a t column to derive them) by ordinary least "
+        "squares: --model full or base, --contact, --wrench-frame, --validate, --json, --filter "
+        "and --cutoff apply, the other options are refused.",
     )
     add_robot(p)
     p.add_argument(

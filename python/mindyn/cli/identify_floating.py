@@ -12,7 +12,7 @@ from .args import UsageError
 #: The options of ``identify`` a floating-base log takes: ROBOT, LOG, --tip, --root-joint,
 #: --model, --validate, --json and the two below. Every other option given is refused.
 _APPLY = {"robot", "data", "tip", "root_joint", "model", "validate", "json", "contact"}
-_APPLY |= {"wrench_frame", "func", "command"}
+_APPLY |= {"wrench_frame", "filter", "cutoff", "func", "command"}
 
 FLOATING_MODELS = ("full", "base")
 
@@ -84,7 +84,8 @@ def _refuse_fixed_base_options(args: argparse.Namespace) -> None:
             raise UsageError(
                 f"{flag}: does not apply to a floating-base robot (its logs carry q, dq, "
                 "ddq, joint torques and contact wrenches, fitted by ordinary least squares; "
-                "options: --model full|base, --contact, --wrench-frame, --validate, --json)"
+                "options: --model full|base, --contact, --wrench-frame, --validate, --json, and "
+                "--filter butter|savgol|none, --cutoff for a log without dq or ddq)"
             )
 
 
@@ -115,6 +116,8 @@ def cmd_identify_floating(args: argparse.Namespace, robot) -> int:
         validate=args.validate or (),
         wrench_frame=args.wrench_frame or "world",
         contacts=args.contact,
+        filter="butter" if args.filter == "lowpass" else args.filter,
+        cutoff=args.cutoff,
     )
     report = run_floating(robot, logs, model=model)
     print(report.format())

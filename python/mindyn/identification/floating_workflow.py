@@ -93,14 +93,14 @@ def _paths(paths, name: str, *, empty: bool = False) -> list[str]:
     return [str(_args.path(p, name)) for p in paths]
 
 
-def _read(path: str, robot: Robot, frame: str, contacts: tuple[str, ...] | None) -> FloatingLog:
+def _read(path: str, robot: Robot, frame: str, contacts, derive: dict) -> FloatingLog:
     p = Path(path)
     if p.is_dir() or p.suffix.lower() in _BAGS:
         raise DataError(
             f"{path}: a floating-base log is a CSV file (q, dq, ddq, tau and wrench columns); "
             "ROS bags are read for fixed-base robots only"
         )
-    log = read_floating_csv(p, robot, wrench_frame=frame)
+    log = read_floating_csv(p, robot, wrench_frame=frame, **derive)
     if contacts is not None:
         missing = [c for c in contacts if c not in log.wrenches]
         if missing:
@@ -125,16 +125,24 @@ def load_floating_logs(
     validate=(),
     wrench_frame: str = "world",
     contacts: Sequence[str] | None = None,
+    filter: str = "butter",
+    cutoff: float | None = None,
 ) -> FloatingLogs:
     """The fit logs ``paths`` and validation logs ``validate`` (CSV paths) of a floating-base
     robot, read by :func:`~mindyn.identification.floating.read_floating_csv` with
-    ``wrench_frame`` (``"world"`` or ``"local"``). ``contacts``: the links in contact, each a
-    moving link of the robot; every log must then carry the six wrench columns of each and of
-    no other link (DataError naming the file). Default: the wrench columns each log has."""
+    ``wrench_frame`` (``"world"`` or ``"local"``), and ``filter`` and ``cutoff`` for a log
+    without velocities or accelerations (derived from its configurations, each log alone).
+    ``contacts``: the links in contact, each a moving link of the robot; every log must then
+    carry the six wrench columns of each and of no other link (DataError naming the file).
+    Default: the wrench columns each log has."""
     _args.instance(robot, "robot", Robot)
     fit = _paths(paths, "paths")
     val = _paths(validate, "validate", empty=True)
     frame = _args.choice(wrench_frame, "wrench_frame", _FRAMES)
+    derive = dict(
+        filter=_args.choice(filter, "filter", ("butter", "savgol", "none")),
+        cutoff=_args.optional(_args.number, cutoff, "cutoff", positive=True),
+    )
     _root_dofs(robot)
     declared = None
     if contacts is not None:
@@ -150,8 +158,8 @@ def load_floating_logs(
                 )
         declared = tuple(dict.fromkeys(contacts))
     return FloatingLogs(
-        [_read(p, robot, frame, declared) for p in fit],
-        [_read(p, robot, frame, declared) for p in val],
+        [_read(p, robot, frame, declared, derive) for p in fit],
+        [_read(p, robot, frame, declared, derive) for p in val],
         fit,
         val,
         frame,
@@ -253,8 +261,15 @@ class FloatingReport:
                 "files": list(logs.files),
                 "samples": sum(log.m for log in logs.fit),
                 "logs": [
-                    {"file": f, "samples": log.m, "contacts": sorted(log.wrenches)}
-                    for f, log in zip(logs.files, logs.fit, strict=True)
+                    {
+                        "file": f,
+                        "samples": log.m,
+                        "contacts": sorted(log.wrenches),
+                        "derivatives": dict(log.processing),
+                    }
+                    for f, log in zip(
+                        logs.files + logs.validation_files, logs.fit + logs.validation, strict=True
+                    )
                 ],
             },
             "fit": _measures_doc(self.fit),
@@ -280,6 +295,7 @@ class FloatingReport:
             f"  data           {', '.join(logs.files)}: {sum(log.m for log in logs.fit)} samples, "
             f"{res.rows} equations; contact wrenches "
             + (f"on {', '.join(contacts)} ({axes})" if contacts else "none (free flight)"),
+            f"  derivatives    {_derivative_words(logs)}",
             f"  base set       {self.base.n} base parameters ({self.base.method} method)",
             "  rank           "
             + (f"full model {res.rank} of {self.base.n}; " if res.model == "full" else "")
@@ -314,6 +330,28 @@ class FloatingReport:
         if diff is not None:
             words += f", its values {diff:.2g} from the full model's (relative, on its span)"
         return words
+
+
+def _derivative_words(logs: FloatingLogs) -> str:
+    """How the logs' velocities and accelerations were obtained, in words."""
+    words = []
+    for f, log in zip(logs.files + logs.validation_files, logs.fit + logs.validation):
+        p = log.processing
+        if p.get("velocity") == "logged" and p.get("acceleration") == "logged":
+            how = "dq and ddq logged"
+        else:
+            what = "dq and ddq" if p.get("velocity") != "logged" else "ddq"
+            how = f"{what} derived ({p.get('filter', '?')}"
+            if p.get("cutoff_Hz") is not None:
+                how += f", cut-off {p['cutoff_Hz']:.3g} Hz"
+            if p.get("window_s") is not None:
+                how += f", window {p['window_s']:.3g} s"
+            how += f"; {p.get('rate_Hz', float('nan')):.4g} Hz samples"
+            how += f"; {p.get('edge_samples', 0)} samples dropped at each end)"
+        words.append((f, how))
+    if len({h for _, h in words}) == 1:
+        return words[0][1] + ("" if len(words) == 1 else " in every log")
+    return "; ".join(f"{f}: {h}" for f, h in words)
 
 
 def _measure_lines(title: str, m: dict, coordinates: list[str]) -> list[str]:
