@@ -190,28 +190,36 @@ def test_a_planar_root_base_link_model_identifies_combinations_only(tmp_path):
     assert doc["coordinates"][:3] == ["root_joint.fx", "root_joint.fy", "root_joint.tz"]
 
 
-def test_noisy_torques_and_wrenches_validate_within_the_noise(tmp_path):
-    """Known noise on the torques (0.05 N m) and the wrenches (0.5 N, 0.05 N m): on a validation
-    log the RMS error of the predicted generalized forces the CLI reports is within 1.2 times
-    the RMS of the noise those measurements carry, and the standard deviations it gives
-    describe the estimate's actual error."""
-    robot, model = pair(SOLO)
+@pytest.mark.parametrize(
+    "name, contacts, m",
+    [("solo12", FEET, 300), ("talos", ["leg_left_6_link", "leg_right_6_link"], 150)],
+)
+def test_noisy_torques_and_wrenches_validate_within_the_noise(tmp_path, name, contacts, m):
+    """Known noise on the torques (0.05 N m) and the wrenches (0.5 N, 0.05 N m), a quadruped on
+    its four feet and a humanoid on its two: on a validation log the RMS error of the predicted
+    generalized forces the CLI reports is within 1.2 times the RMS of the noise those
+    measurements carry, and the standard deviations it gives describe the estimate's actual
+    error."""
+    urdf = str(FLOATING[name])
+    robot, model = pair(urdf)
     rng = np.random.default_rng(21)
-    table, header, _ = simulate(robot, model, FEET, rng, 300, noise=True)
+    table, header, _ = simulate(robot, model, contacts, rng, m, noise=True)
     fit = write(tmp_path / "fit.csv", table, header)
-    table, header, noise = simulate(robot, model, FEET, rng, 80, noise=True)
+    table, header, noise = simulate(robot, model, contacts, rng, 60, noise=True)
     val = write(tmp_path / "val.csv", table, header)
     out = tmp_path / "id.json"
-    cli("identify", SOLO, fit, "--root-joint", "floating", "--validate", val, "--json", out)
+    cli("identify", urdf, fit, "--root-joint", "floating", "--validate", val, "--json", out)
     doc = json.loads(out.read_text())
     ratio = doc["validation"]["rms_all"] / np.sqrt(np.mean(noise**2))
-    print(f"validation RMS / noise RMS = {ratio:.3f}")
+    print(f"{name}: validation RMS / noise RMS = {ratio:.3f}")
     assert ratio <= 1.2, ratio
     per = np.array(doc["validation"]["rms"]) / np.sqrt(np.mean(noise**2, axis=0))
-    assert per.max() <= 1.5, per
+    # per coordinate too, looser: a coordinate with little noise (an arm joint, torque noise
+    # only) sees the estimate's own error relatively more
+    assert per.max() <= 2.5, per
     _, true = truth(robot)
     z = (np.array(doc["values"]) - true) / np.array(doc["std"])
-    print(f"RMS of (estimate - truth) / std = {np.sqrt(np.mean(z**2)):.3f}")
+    print(f"{name}: RMS of (estimate - truth) / std = {np.sqrt(np.mean(z**2)):.3f}")
     assert 0.3 < np.sqrt(np.mean(z**2)) < 3.0
 
 
