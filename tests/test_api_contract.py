@@ -37,6 +37,8 @@ from mindyn.identification import (
     document,
     excitation,
     floating,
+    floating_motion,
+    floating_workflow,
     prediction,
     preprocess,
     report,
@@ -490,7 +492,33 @@ def _api(tmp: Path) -> dict:
             "identification.floating.read_floating_csv": (
                 floating.read_floating_csv,
                 (f["floating_csv"], FLOATING),
-                {"wrench_frame": "world"},
+                {"wrench_frame": "world", "filter": "savgol", "cutoff": 5.0},
+            ),
+            "identification.floating_motion.configuration_derivatives": (
+                floating_motion.configuration_derivatives,
+                (FLOATING, np.arange(30) * 0.01, FLOATING_LOG.q),
+                {"filter": "none", "cutoff": 5.0},
+            ),
+            "identification.floating_workflow.coordinate_names": (
+                floating_workflow.coordinate_names,
+                (FLOATING,),
+                {},
+            ),
+            "identification.floating_workflow.load_floating_logs": (
+                floating_workflow.load_floating_logs,
+                ([f["floating_csv"]], FLOATING),
+                {
+                    "validate": [f["floating_csv"]],
+                    "wrench_frame": "world",
+                    "contacts": ["b"],
+                    "filter": "none",
+                    "cutoff": 5.0,
+                },
+            ),
+            "identification.floating_workflow.run_floating": (
+                floating_workflow.run_floating,
+                (FLOATING, floating_workflow.load_floating_logs([f["floating_csv"]], FLOATING)),
+                {"model": "full", "tolerance": 1e-9},
             ),
             "identification.write_csv": (
                 identification.write_csv,

@@ -7,16 +7,22 @@ import json
 from pathlib import Path
 
 from ..base import base_parameters
-from ..robot import load
 from .args import add_command, deprecated
 from .method import base_method, projection_limits_text
 from .number_options import number
 from .outputs import output_file
-from .robot_options import add_joint_terms, add_offset, add_robot, joint_terms, with_drive_side
+from .robot_options import (
+    add_joint_terms,
+    add_offset,
+    add_robot,
+    joint_terms,
+    load_robot,
+    with_drive_side,
+)
 
 
 def cmd_base(args: argparse.Namespace) -> int:
-    robot = with_drive_side(load(args.robot, tip=args.tip), args)
+    robot = with_drive_side(load_robot(args), args)
     order = [s.strip() for s in args.order.split(",")] if args.order else None
     method, why = base_method(robot, args.rotor, args.method, args.friction)
     bp = base_parameters(
@@ -131,7 +137,8 @@ def register(sub) -> None:
         "or the numerical method (sampled regressor + QR), on chains and trees. Without "
         "--method, a robot whose projection cost estimate is over its budget (or beyond the "
         f"projection method's limits: more than {projection_limits_text()}) is computed by the "
-        "recursive method, and the output says so.",
+        "recursive method, a robot with joints of several degrees of freedom (--root-joint, "
+        "the multi-DOF joints of a YAML table) by the numerical method, and the output says so.",
     )
     add_robot(p)
     add_joint_terms(p)

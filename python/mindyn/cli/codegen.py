@@ -9,7 +9,6 @@ import argparse
 from .._core import ModelError
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, generate
-from ..robot import load
 from .args import add_command
 from .codegen_output import (
     DEFAULT_FOLDER,
@@ -25,7 +24,14 @@ from .codegen_steps import _controller, _observer
 from .method import base_method
 from .number_options import controller_period, joint_vector
 from .outputs import output_file
-from .robot_options import add_joint_terms, add_offset, add_robot, drive_side, joint_terms
+from .robot_options import (
+    add_joint_terms,
+    add_offset,
+    add_robot,
+    drive_side,
+    joint_terms,
+    load_robot,
+)
 
 
 def register(subparsers) -> None:
@@ -150,7 +156,7 @@ def register(subparsers) -> None:
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
-    robot = load(args.robot, tip=args.tip)
+    robot = load_robot(args, command="codegen")
     robot, friction_note = _with_friction_model(robot, args)
     robot, drive_note = drive_side(robot, args)
     args.lang = args.lang or "st"  # --plcopen alone

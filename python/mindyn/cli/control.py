@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 
-from ..robot import load
 from .args import ZCR07S_STUDY, add_command, deprecated
 from .closed_loop import add_closed_loop_args, reference_and_controller
 from .number_options import (
@@ -24,7 +23,7 @@ from .number_options import (
     seed,
 )
 from .outputs import output_file
-from .robot_options import add_drive_side, add_robot, drive_side_words, with_drive_side
+from .robot_options import add_drive_side, add_robot, drive_side_words, load_robot, with_drive_side
 
 #: The ZCR07S study's maximum position errors on the real ZCR07S, joints 1-6 [deg].
 ZCR07S_STUDY_MAX_ERROR_DEG = [0.06, 0.22, 0.34, 0.29, 0.45, 0.85]
@@ -37,7 +36,7 @@ def _row(label: str, values, fmt: str = "{:9.4f}") -> str:
 def cmd_track(args: argparse.Namespace) -> int:
     from ..control.simulation import SensorNoise, simulate, summary, write_tracking_report
 
-    robot = with_drive_side(load(args.robot, tip=args.tip), args)
+    robot = with_drive_side(load_robot(args, command="track"), args)
     n = robot.n
     if args.param_error is None:
         args.param_error = 0.3
@@ -136,7 +135,7 @@ def cmd_track(args: argparse.Namespace) -> int:
 def cmd_ik(args: argparse.Namespace) -> int:
     from ..inverse_kinematics import ik_solve, pose_from_xyz_rpy
 
-    robot = load(args.robot, tip=args.tip)
+    robot = load_robot(args, command="ik")
     scale = np.pi / 180.0 if args.deg else 1.0
     if not args.deg:
         check_radians(args.rpy, "--rpy", "--deg")

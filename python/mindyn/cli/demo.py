@@ -19,7 +19,7 @@ from ..robot import bundled_robots, load
 from .args import ZCR07S_STUDY, add_command, deprecated
 from .number_options import number, seed
 from .outputs import output_dir
-from .robot_options import robot_arg
+from .robot_options import require_single_dof, robot_arg
 
 
 def _step(no: int, title: str) -> float:
@@ -48,6 +48,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     t_all = time.perf_counter()
     robot = load(args.robot)
+    require_single_dof(robot, "demo")
     out = Path(args.out or f"mindyn-demo-{robot.name}")
     out.mkdir(parents=True, exist_ok=True)
     print(f"mindyn demo: {robot.name} ({robot.n} joints), files in {out}/")

@@ -8,11 +8,10 @@ import argparse
 
 import numpy as np
 
-from ..robot import load
 from .args import add_command
 from .number_options import add_recorded_torque_reading, joint_values, joint_vector, number
 from .outputs import output_file
-from .robot_options import add_robot
+from .robot_options import add_robot, load_robot
 
 
 def _read_log(path, robot, doc, args):
@@ -49,7 +48,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
     from ..identification.document import refuse_state
 
     refuse_state(doc, "the momentum observer", str(args.identification))
-    robot = load(args.robot, tip=args.tip if args.tip is not None else doc.get("tip"))
+    robot = load_robot(args, tip=doc.get("tip"), command="detect")
     estimate = "consistent" if args.consistent else "unconstrained"
     base, values, _ = identified_model(args.identification, robot, estimate=estimate)
     if args.model_sigma and not args.calibrate:

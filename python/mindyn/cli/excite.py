@@ -7,11 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..robot import load
 from .args import ZCR07S_STUDY, add_command, deprecated
 from .number_options import check_radians, joint_values, joint_vector, number, seed
 from .outputs import output_file
-from .robot_options import add_drive_side, add_robot, with_drive_side
+from .robot_options import add_drive_side, add_robot, load_robot, with_drive_side
 
 
 def cmd_excite(args: argparse.Namespace) -> int:
@@ -32,7 +31,7 @@ def cmd_excite(args: argparse.Namespace) -> int:
             f"--samples {args.samples}: expected more than 2 x --harmonics = "
             f"{2 * args.harmonics}, so that the highest harmonic is sampled"
         )
-    robot = with_drive_side(load(args.robot, tip=args.tip), args)
+    robot = with_drive_side(load_robot(args, command="excite"), args)
     start = None
     if args.start:
         start = np.array(joint_values(args.start, robot.n, "--start", broadcast=True))

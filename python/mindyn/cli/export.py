@@ -7,10 +7,9 @@ import math
 
 from .._core import ArgumentError, ModelError
 from ..export import classical_terms, write_urdf, write_yaml
-from ..robot import load
 from .args import add_command
 from .outputs import add_description_outputs, check_description_kind
-from .robot_options import add_robot
+from .robot_options import add_robot, load_robot
 
 
 def register(subparsers) -> None:
@@ -45,9 +44,9 @@ def cmd_export(args: argparse.Namespace) -> int:
         with_identified_friction,
     )
 
+    robot = load_robot(args, command="export")
     classical, identified_for, doc = read_classical(args.params)
     refuse_state(doc, "a robot description", str(args.params))
-    robot = load(args.robot, tip=args.tip)
     if identified_for not in (None, robot.name):
         raise ModelError(
             f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"

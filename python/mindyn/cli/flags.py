@@ -9,6 +9,7 @@ import re
 #: ``prior_weight=``) whose command-line flag is the keyword with dashes (``--prior-weight``).
 LIBRARY_OPTIONS = (
     "consistent",
+    "contacts",
     "currents",
     "cutoff",
     "decimate",
@@ -21,12 +22,14 @@ LIBRARY_OPTIONS = (
     "friction_width",
     "method",
     "min_velocity",
+    "model",
     "offset",
     "period",
     "periods",
     "position_noise",
     "prior_weight",
     "quantization",
+    "root_joint",
     "rotor",
     "snap",
     "tip",
@@ -36,10 +39,15 @@ LIBRARY_OPTIONS = (
     "validate",
     "validate_currents",
     "velocity_noise",
+    "wrench_frame",
 )
 # the keywords whose flag is not their name with dashes: (keyword, value) -> flag, None for any
 # value (the value then follows the flag)
-_FLAG_OF = {("period", None): "--excitation-period", ("decimate", "False"): "--no-decimate"}
+_FLAG_OF = {
+    ("period", None): "--excitation-period",
+    ("decimate", "False"): "--no-decimate",
+    ("contacts", None): "--contact",
+}
 _NUMBER = r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
 _LIBRARY_OPTION = re.compile(
     r"\b(" + "|".join(LIBRARY_OPTIONS) + r")="

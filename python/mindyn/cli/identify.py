@@ -9,12 +9,12 @@ import json
 import sys
 from pathlib import Path
 
-from ..robot import load
 from .export import write_description
 from .flags import library_options_as_flags
+from .identify_floating import cmd_identify_floating, refuse_floating_options
 from .number_options import joint_values
 from .outputs import check_description_kind
-from .robot_options import with_drive_side
+from .robot_options import load_robot, with_drive_side
 
 
 def _progress():
@@ -115,7 +115,8 @@ def _write_report(folder: str, report, doc: dict, text: str) -> None:
     print(f"wrote report to {Path(folder)}/: " + ", ".join(p.name for p in paths))
 
 
-def _write_json(path: str, doc: dict) -> None:
+def write_json(path: str, doc: dict) -> None:
+    """Writes the JSON document of an identification to ``path`` and says so."""
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     Path(path).write_text(json.dumps(doc, indent=2) + "\n")
     print(f"wrote {path}")
@@ -126,7 +127,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
 
     if args.validate_currents and not args.validate:
         raise ValueError("--validate-currents: expected --validate with the logs they belong to")
-    robot = with_drive_side(load(args.robot, tip=args.tip), args)
+    robot = load_robot(args)
+    if not robot.single_dof:  # a floating-base robot: its own workflow
+        return cmd_identify_floating(args, robot)
+    refuse_floating_options(args)
+    args.model = args.model or "dynamic"
+    robot = with_drive_side(robot, args)
     _check_outputs(args, robot)
     reading = reading_options(args)
     options = identify_options(args, robot)
@@ -144,7 +150,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     text = library_options_as_flags(report.format())  # the report names keywords
     print(text)
     if args.json:
-        _write_json(args.json, doc)
+        write_json(args.json, doc)
     if args.urdf or args.yaml or args.mjcf:
         from ..identification.document import refuse_state
 
@@ -176,7 +182,7 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
             f"--tip {args.tip}: {args.identification} was identified on the chain ending at "
             f"--tip {tip}; the payload sits on that chain's last link"
         )
-    robot = load(args.robot, tip=args.tip or tip)
+    robot = load_robot(args, tip=tip, command="identify-payload")
     read_arm(robot, args.identification)  # its errors before reading the logs
     logs = load_logs(
         args.data,
@@ -196,5 +202,5 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
     note = f", chain to --tip {tip} as identified" if tip and not args.tip else ""
     print(format_payload(res, robot, files, args.identification, note))
     if args.json:
-        _write_json(args.json, plain({"robot": robot.name, "files": files, **res.to_dict()}))
+        write_json(args.json, plain({"robot": robot.name, "files": files, **res.to_dict()}))
     return 0

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from ..robot import FRICTION_KINDS
 from .args import add_command, deprecated
+from .identify_floating import FLOATING_MODELS, add_floating_options
 from .number_options import joint_vector, number
 from .outputs import add_description_outputs, output_dir, output_file
 from .robot_options import add_joint_terms, add_offset, add_robot
@@ -50,7 +51,9 @@ def add_data_options(p) -> None:
         "torques and regressor columns, derivatives of the filtered signals, filter edges "
         "dropped, decimation; butter, savgol, none: only derive missing velocities and "
         "accelerations (torques unfiltered; butter and savgol refuse unevenly spaced time "
-        "stamps, none differences them as they are)",
+        "stamps, none differences them as they are). A floating-base log: the dq and ddq it "
+        "lacks are derived by butter (lowpass too), savgol or none, torques and wrenches as "
+        "logged",
     )
     number(
         p,
@@ -59,7 +62,8 @@ def add_data_options(p) -> None:
         low_open=True,
         help="cut-off [Hz], below half the log's rate; lowpass: default 10 x the excited band of "
         "the identification log's positions (at most rate / 10), the validation log filtered at "
-        "the same cut-off; butter: default min(10, rate / 10)",
+        "the same cut-off; butter (and a floating-base log's derivatives): default min(10, "
+        "rate / 10)",
     )
     g = p.add_mutually_exclusive_group()
     number(
@@ -111,7 +115,12 @@ def add_identify(sub, func) -> None:
         "relative error, per-joint RMS, relative error and NRMS of the effort limit, scaled "
         "condition number) on the fit and on validation logs, against the filtered torques, "
         "against the torques as logged and on moving samples only, JSON output and a plot "
-        "report.",
+        "report. A floating-base robot (a free-flyer or planar root: --root-joint, or the root "
+        "joint of a YAML table) is identified from CSV logs with contact wrenches (q1..q<nq>, "
+        "[dq1..dq<nv>, ddq1..ddq<nv>], [tau1..tau<na>], <LINK>.fx, .fy, .fz, .tx, .ty, .tz per "
+        "contact link; without dq and ddq, a t column to derive them) by ordinary least "
+        "squares: --model full or base, --contact, --wrench-frame, --validate, --json, --filter "
+        "and --cutoff apply, the other options are refused.",
     )
     add_robot(p)
     p.add_argument(
@@ -124,11 +133,15 @@ def add_identify(sub, func) -> None:
     )
     p.add_argument(
         "--model",
-        choices=["dynamic", "integral", "energy"],
-        default="dynamic",
-        help="dynamic: tau = W(q, dq, ddq) p per sample (needs accelerations); integral: each "
-        "joint's equation of motion integrated over windows (momentum difference, no "
-        "accelerations); energy: the energy theorem over windows (one equation per window)",
+        choices=["dynamic", "integral", "energy", *FLOATING_MODELS],
+        default=None,
+        help="dynamic (the default): tau = W(q, dq, ddq) p per sample (needs accelerations); "
+        "integral: each joint's equation of motion integrated over windows (momentum "
+        "difference, no accelerations); energy: the energy theorem over windows (one equation "
+        "per window). A floating-base robot (a free-flyer or planar root): full (the default "
+        "there: W p = S^T tau + sum_c J_c^T f_c, every equation of motion, joint torques and "
+        "contact wrenches) or base (the base-link model: the root's equations, contact "
+        "wrenches and motion only, no joint torques)",
     )
     add_joint_terms(p, "identify")
     add_offset(p, "identify")
@@ -176,6 +189,7 @@ def add_identify(sub, func) -> None:
         "residual is within one standard error of the smallest (reported)",
     )
     add_description_outputs(p, "identify")
+    add_floating_options(p)
     number(
         p,
         "--energy-window",

@@ -7,9 +7,8 @@ import math
 
 import numpy as np
 
-from ..robot import load
 from .args import add_command
-from .robot_options import add_robot
+from .robot_options import add_robot, load_robot
 
 
 def _fmt(x: float, width: int = 10) -> str:
@@ -43,7 +42,7 @@ def _transmission_lines(robot) -> list[str]:
 
 
 def cmd_info(args: argparse.Namespace) -> int:
-    robot = load(args.robot, tip=args.tip)
+    robot = load_robot(args)
     n = robot.n
     out = []
     tree = not robot.is_serial
@@ -52,6 +51,11 @@ def cmd_info(args: argparse.Namespace) -> int:
     out.append(f"source     {robot.source}")
     g = robot.gravity
     out.append(f"gravity    [{g[0]:g}, {g[1]:g}, {g[2]:g}] m/s^2")
+    if not robot.single_dof:
+        out.append(
+            f"state      nq {robot.nq} configuration and nv {robot.nv} velocity coordinates "
+            "(joints of several degrees of freedom; quaternions x, y, z, w)"
+        )
     if robot.synthetic_inertia:
         out.append("inertia    SYNTHETIC: the inertial values are invented, not measured")
     if robot.notes:

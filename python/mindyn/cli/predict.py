@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from ..robot import load
 from .args import add_command
 from .number_options import add_recorded_torque_reading, number
 from .outputs import output_file
-from .robot_options import add_robot
+from .robot_options import add_robot, load_robot
 
 
 def cmd_predict(args: argparse.Namespace) -> int:
@@ -20,7 +19,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
     doc = read_json(args.identification)
     if not isinstance(doc, dict):
         raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
-    robot = load(args.robot, tip=args.tip if args.tip is not None else doc.get("tip"))
+    robot = load_robot(args, tip=doc.get("tip"), command="predict")
     estimate = "consistent" if args.consistent else "unconstrained"
     identified_model(args.identification, robot, estimate=estimate)  # errors before reading
     recorded = doc.get("reading")

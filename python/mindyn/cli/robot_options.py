@@ -1,12 +1,18 @@
-"""The robot argument of the commands and the options of the joint terms: rotor, friction,
-offsets and the side of the transmissions they act on."""
+"""The robot argument of the commands (ROBOT, ``--tip``, ``--root-joint``, loaded by
+:func:`load_robot`) and the options of the joint terms: rotor, friction, offsets and the side of
+the transmissions they act on."""
 
 from __future__ import annotations
 
 import argparse
 import re
 
-from ..robot import bundled_robots
+from ..robot import bundled_robots, load
+from .args import UsageError
+
+#: The root joints ``--root-joint`` puts between the world and a URDF's root link
+#: (``mindyn.load(..., root_joint=)``).
+ROOT_JOINTS = ("floating", "planar")
 
 
 def robot_help() -> str:
@@ -35,12 +41,54 @@ robot_arg.__name__ = "robot"
 
 
 def add_robot(p: argparse.ArgumentParser) -> None:
-    """The positional ROBOT and ``--tip`` (the last link of a URDF chain)."""
+    """The positional ROBOT, ``--tip`` (the last link of a URDF chain) and ``--root-joint`` (a
+    free-flyer or planar joint above a URDF's root link); :func:`load_robot` loads them."""
     p.add_argument("robot", metavar="ROBOT", type=robot_arg, help=robot_help())
     p.add_argument(
         "--tip",
         help="URDF: the link that ends the chain root -> TIP (default: the whole URDF, a tree "
         "if it branches)",
+    )
+    p.add_argument(
+        "--root-joint",
+        choices=ROOT_JOINTS,
+        default=None,
+        help="URDF: a joint between the world and the root link, making a floating-base robot: "
+        "floating (a free-flyer: q = position, unit quaternion x, y, z, w; 6 velocities, linear "
+        "then angular in the base's axes) or planar (x, y, cos, sin of the yaw; 3 velocities), "
+        "as Pinocchio's root joints (default: the root link fixed to the world)",
+    )
+
+
+def load_robot(args: argparse.Namespace, *, tip: str | None = None, command: str = ""):
+    """The robot of ``args``: ROBOT with ``--tip`` (else ``tip``) and ``--root-joint``
+    (``mindyn.load``). With ``command``, a command that takes revolute and prismatic joints
+    only: a robot with joints of several degrees of freedom (a root joint, or spherical,
+    universal, cylindrical, planar, floating joints of a YAML table) is refused in one line
+    (:func:`require_single_dof`)."""
+    given_tip = getattr(args, "tip", None)
+    robot = load(
+        args.robot,
+        tip=given_tip if given_tip is not None else tip,
+        root_joint=getattr(args, "root_joint", None),
+    )
+    if command:
+        require_single_dof(robot, command)
+    return robot
+
+
+def require_single_dof(robot, command: str) -> None:
+    """Refuses (UsageError) a robot with joints of several degrees of freedom in ``command``,
+    which takes revolute and prismatic joints only, naming the first such joint and what the
+    command line does with such a robot."""
+    if robot.single_dof:
+        return
+    k = next(k for k, t in enumerate(robot.joint_types) if t not in ("revolute", "prismatic"))
+    raise UsageError(
+        f"{command} takes revolute and prismatic joints only; robot '{robot.name}' has the "
+        f"{robot.joint_types[k]} joint '{robot.joint_names[k]}' (nq {robot.nq}, nv "
+        f"{robot.nv}); for such a robot: info, base (numerical method) and, with a floating or "
+        "planar root, identify"
     )
 
 

@@ -6,11 +6,10 @@ import argparse
 
 import numpy as np
 
-from ..robot import load
 from .args import add_command
 from .number_options import controller_period, number, seed
 from .outputs import output_file
-from .robot_options import add_drive_side, add_robot, drive_side_words, with_drive_side
+from .robot_options import add_drive_side, add_robot, drive_side_words, load_robot, with_drive_side
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -24,7 +23,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from ..identification.data import convert_torque, write_csv
     from .closed_loop import reference_and_controller
 
-    robot = with_drive_side(load(args.robot, tip=args.tip), args)
+    robot = with_drive_side(load_robot(args, command="simulate"), args)
     rate = 1.0 / args.period if args.period else args.rate
     args.period = 1.0 / rate
     ref, ref_text, duration, cycle, controller, _ = reference_and_controller(

@@ -18,9 +18,10 @@ combinations of them (its ``rank``), and gives the minimum-norm solution in thei
 Log format (CSV, one header line, one row per sample, comma-separated, as
 :mod:`~mindyn.identification.data` reads its cells)::
 
-    [t], q1..q<nq>, dq1..dq<nv>, ddq1..ddq<nv>, [tau1..tau<na>], [<link>.fx .. <link>.tz]
+    [t], q1..q<nq>, [dq1..dq<nv>], [ddq1..ddq<nv>], [tau1..tau<na>], [<link>.fx .. <link>.tz]
 
-``t`` (s) is optional and not used (the log gives its derivatives); ``q`` is the robot's
+``t`` (s) is needed only when ``dq`` or ``ddq`` is not logged (they are then derived: see
+:func:`read_floating_csv`); ``q`` is the robot's
 configuration in its nq convention (a free-flyer's position, then its unit quaternion x, y, z,
 w); ``dq``, ``ddq`` its nv velocities and accelerations (a free-flyer's linear
 then angular velocity in its body's axes, as Pinocchio); ``tau1..tau<na>`` the generalized forces
@@ -42,9 +43,10 @@ from pathlib import Path
 import numpy as np
 
 from .. import _args, _core
+from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot
-from .data import DataError, DataFileNotFoundError, decode_text, parse_cell
+from .data import DataError, DataFileNotFoundError, decode_text, differentiate, parse_cell
 from .errors import IdentificationError
 
 __all__ = [
@@ -135,6 +137,7 @@ class FloatingLog:
     wrenches: dict[str, np.ndarray] = field(default_factory=dict)
     wrench_frame: str = "world"
     source: str = "<memory>"
+    processing: dict = field(default_factory=dict)  # how dq and ddq were obtained
 
     @property
     def m(self) -> int:
@@ -221,7 +224,11 @@ class FloatingResult:
     """A floating-base identification: ``values`` the estimated base values of ``base`` (the
     minimum-norm solution when the model's ``rank`` is below ``base.n``), ``span`` (rank, n_b):
     an orthonormal basis of the combinations of base values the data identified, ``model``
-    ("full" or "base"), ``rms`` the fit's residual (generalized-force units)."""
+    ("full" or "base"), ``rms`` the fit's residual (generalized-force units), ``rows`` the
+    equations fitted, ``sigma`` the residual's standard deviation ``sqrt(RSS / (rows - rank))``
+    and ``std`` the standard deviation of each value (``sigma`` through the least-squares
+    covariance ``sigma^2 V diag(1/s^2) V^T`` of the identified span), NaN for a value the data
+    do not determine alone (outside ``span``: only combinations of it are identified)."""
 
     base: BaseParameters
     values: np.ndarray
@@ -229,12 +236,23 @@ class FloatingResult:
     span: np.ndarray
     model: str
     rms: float
+    std: np.ndarray
+    sigma: float
+    rows: int
 
     def residual(self, log: FloatingLog) -> np.ndarray:
         """Predicted minus measured generalized forces of ``log`` in this result's model, shape
         (m * rows,)."""
+        predicted, measured = self.forces(log)
+        return (predicted - measured).reshape(-1)
+
+    def forces(self, log: FloatingLog) -> tuple[np.ndarray, np.ndarray]:
+        """The generalized forces of ``log`` in this result's model, predicted by the estimate
+        and measured (``S^T tau + sum_c J_c^T f_c``; the base-link model: the root's rows), each
+        of shape (m, rows)."""
         W, b = floating_system(self.base.robot, log, model=self.model)
-        return W[:, _pivots(self.base)] @ self.values - b
+        shape = (log.m, len(b) // max(log.m, 1))
+        return (W[:, _pivots(self.base)] @ self.values).reshape(shape), b.reshape(shape)
 
 
 def _pivots(base: BaseParameters) -> np.ndarray:
@@ -244,6 +262,7 @@ def _pivots(base: BaseParameters) -> np.ndarray:
     return order[np.argsort(e[order])]
 
 
+@single_threaded_blas  # a QR of a few thousand rows: one BLAS thread is faster on a loaded machine
 def identify_floating(
     robot: Robot,
     logs,
@@ -307,8 +326,17 @@ def identify_floating(
         )
     x = Vt[:rank].T @ ((U[:, :rank].T @ c) / s[:rank])
     fit = float(np.sum((R @ x - c) ** 2))
-    rms = float(np.sqrt(max(bb - float(c @ c) + fit, 0.0) / rows))
-    return FloatingResult(base, x, rank, Vt[:rank], model, rms)
+    rss = max(bb - float(c @ c) + fit, 0.0)
+    rms = float(np.sqrt(rss / rows))
+    sigma = float(np.sqrt(rss / (rows - rank))) if rows > rank else float("nan")
+    V = Vt[:rank].T
+    std = sigma * np.sqrt(np.einsum("ij,j,ij->i", V, 1.0 / s[:rank] ** 2, V))
+    # a value is determined alone when its unit vector lies in the identified span
+    std[np.einsum("ij,ij->i", V, V) < 1.0 - _IN_SPAN] = np.nan
+    return FloatingResult(base, x, rank, Vt[:rank], model, rms, std, sigma, rows)
+
+
+_IN_SPAN = 1e-9  # a unit vector whose projection on the span falls short by more is outside it
 
 
 _CHUNK = 256  # samples per block of the stacked system (bounded memory on long logs)
@@ -324,18 +352,34 @@ def _samples(log: FloatingLog, a: int, b: int) -> FloatingLog:
         {k: np.asarray(w)[a:b] for k, w in log.wrenches.items()},
         log.wrench_frame,
         log.source,
+        log.processing,
     )
 
 
-def read_floating_csv(path, robot: Robot, *, wrench_frame: str = "world") -> FloatingLog:
+def read_floating_csv(
+    path,
+    robot: Robot,
+    *,
+    wrench_frame: str = "world",
+    filter: str = "butter",
+    cutoff: float | None = None,
+) -> FloatingLog:
     """A floating-base log from CSV (the format of the module's docstring): the contact links are
     the ``<link>.fx``-style column groups of the header; ``tau`` columns are optional (all of
     them or none). Strict: a missing, repeated or unknown column, an incomplete wrench group, a
-    row of another length or a cell that is not a number raise DataError naming the file, line
-    and column."""
+    row of another length, a cell that is not a number, a quaternion (or planar (cos, sin)
+    pair) whose norm is not 1 within 1e-6 raise DataError naming the file, line and column.
+
+    A log without the ``dq`` columns (or the ``ddq`` columns) gets them derived from its ``t``
+    and ``q`` columns (or its ``dq``) by ``filter`` and ``cutoff``
+    (:func:`~mindyn.identification.floating_motion.configuration_derivatives`: the rules of
+    the fixed-base logs, with the body-axis velocities of the free-flyer, spherical and planar
+    joints); torques and wrenches are used as logged. ``processing`` of the log says which."""
     path = Path(_args.path(path, "path"))
     _args.instance(robot, "robot", Robot)
     wrench_frame = _args.choice(wrench_frame, "wrench_frame", _FRAMES)
+    _args.choice(filter, "filter", ("butter", "savgol", "none"))
+    cutoff = _args.optional(_args.number, cutoff, "cutoff", positive=True)
     if not path.is_file():
         raise DataFileNotFoundError(f"{path}: no such file")
     rows = [
@@ -370,10 +414,18 @@ def read_floating_csv(path, robot: Robot, *, wrench_frame: str = "world") -> Flo
             )
         _link_as_data_error(robot, link, path)
         links.setdefault(link, [])
+    logged = {}
     for g in ("q", "dq", "ddq"):
         missing = [c for c in groups[g] if c not in index]
-        if missing:
+        logged[g] = not missing
+        if missing and (g == "q" or len(missing) < len(groups[g])):
             raise DataError(f"{path}:1: missing column {missing[0]!r}")
+    if not (logged["dq"] and logged["ddq"]) and "t" not in index:
+        what = "dq and ddq" if not logged["dq"] else "ddq"
+        raise DataError(
+            f"{path}:1: no {what} columns and no time column 't' to derive them from (a "
+            f"floating-base log carries t, or dq1..dq{robot.nv} and ddq1..ddq{robot.nv})"
+        )
     has_tau = [c in index for c in groups["tau"]]
     if any(has_tau) and not all(has_tau):
         raise DataError(f"{path}:1: missing column {groups['tau'][has_tau.index(False)]!r}")
@@ -394,15 +446,74 @@ def read_floating_csv(path, robot: Robot, *, wrench_frame: str = "world") -> Flo
     def block(names: list[str]) -> np.ndarray:
         return values[:, [index[c] for c in names]]
 
+    q = block(groups["q"])
+    _check_norms(robot, q, path)
+    dq = block(groups["dq"]) if logged["dq"] else None
+    ddq = block(groups["ddq"]) if logged["ddq"] else None
+    processing: dict = {"velocity": "logged", "acceleration": "logged"}
+    keep = slice(None)
+    if dq is None or ddq is None:
+        from .floating_motion import configuration_derivatives, edge_samples
+
+        t = values[:, index["t"]]
+        try:
+            if dq is None:
+                _, dq, derived, processing = configuration_derivatives(
+                    robot, t, q, filter=filter, cutoff=cutoff
+                )
+                ddq = derived if ddq is None else ddq
+            else:
+                _, ddq, processing = differentiate(t, dq, filter=filter, cutoff=cutoff)
+                processing = {
+                    **processing,
+                    "velocity": "logged",
+                    "acceleration": "differentiated velocities",
+                    "edge_samples": edge_samples(processing),
+                }
+        except DataError as e:
+            raise DataError(f"{path}: {e}") from None
+        edge = processing["edge_samples"]
+        if len(q) <= 2 * edge:
+            raise DataError(
+                f"{path}: {len(q)} samples, no more than the {edge} at each end whose derivatives "
+                f"by {filter} are not the motion's"
+            )
+        keep = slice(edge, len(q) - edge)
+        values, q, dq, ddq = values[keep], q[keep], dq[keep], ddq[keep]
     return FloatingLog(
-        q=block(groups["q"]),
-        dq=block(groups["dq"]),
-        ddq=block(groups["ddq"]),
+        q=q,
+        dq=dq,
+        ddq=ddq,
         tau=block(groups["tau"]) if all(has_tau) else None,
         wrenches={link: block(cols) for link, cols in links.items()},
         wrench_frame=wrench_frame,
         source=str(path),
+        processing=processing,
     )
+
+
+_NORM_TOLERANCE = 1e-6  # the model's: a quaternion or (cos, sin) pair of another norm is refused
+
+
+def _check_norms(robot: Robot, q: np.ndarray, path: Path) -> None:
+    """Refuses a quaternion or planar (cos, sin) pair of the log whose norm is not 1, naming the
+    line and the columns."""
+    i = 0
+    for kind, name in zip(robot.joint_types, robot.joint_names, strict=True):
+        start, size, nq = {"floating": (3, 4, 7), "spherical": (0, 4, 4), "planar": (2, 2, 4)}.get(
+            kind, (0, 0, 2 if kind in ("universal", "cylindrical") else 1)
+        )
+        if size:
+            norm = np.linalg.norm(q[:, i + start : i + start + size], axis=1)
+            bad = np.flatnonzero(~(np.abs(norm - 1.0) <= _NORM_TOLERANCE))
+            if len(bad):
+                what = "quaternion" if size == 4 else "(cos, sin) pair"
+                raise DataError(
+                    f"{path}:{bad[0] + 2}: the {what} of the {kind} joint '{name}' (columns "
+                    f"q{i + start + 1}..q{i + start + size}) has norm {norm[bad[0]]:.9g}, not 1 "
+                    f"(within {_NORM_TOLERANCE:g})"
+                )
+        i += nq
 
 
 def _link_as_data_error(robot: Robot, link: str, path: Path) -> None:

@@ -1,0 +1,126 @@
+"""CLI: ``mindyn identify`` on a floating-base robot (a free-flyer or planar root joint), the
+workflow of :mod:`mindyn.identification.floating_workflow` on the command line: its options
+(``--contact``, ``--wrench-frame``, ``--model full|base``), the refusal of the options that do
+not apply to it, and the run."""
+
+from __future__ import annotations
+
+import argparse
+
+from .args import UsageError
+
+#: The options of ``identify`` a floating-base log takes: ROBOT, LOG, --tip, --root-joint,
+#: --model, --validate, --json and the two below. Every other option given is refused.
+_APPLY = {"robot", "data", "tip", "root_joint", "model", "validate", "json", "contact"}
+_APPLY |= {"wrench_frame", "filter", "cutoff", "func", "command"}
+
+FLOATING_MODELS = ("full", "base")
+
+
+def add_floating_options(p: argparse.ArgumentParser) -> None:
+    """``--contact`` and ``--wrench-frame`` of ``identify`` (floating-base robots)."""
+    p.add_argument(
+        "--contact",
+        nargs="+",
+        metavar="LINK",
+        help="floating-base robot: the links in contact, whose wrench columns <LINK>.fx, .fy, "
+        ".fz, .tx, .ty, .tz every log must carry (a log with another link's wrench is refused); "
+        "default: the wrench columns each log has (none: free flight)",
+    )
+    p.add_argument(
+        "--wrench-frame",
+        choices=("world", "local"),
+        default=None,
+        help="floating-base robot: the axes of the logged wrenches (force, then moment about "
+        "the link's origin): world (the default) or local, the link's own axes (a "
+        "force/torque sensor fixed to it)",
+    )
+
+
+def refuse_floating_options(args: argparse.Namespace) -> None:
+    """Refuses ``--contact``, ``--wrench-frame`` and ``--model full|base`` on a robot that has
+    no floating or planar root."""
+    given = [
+        flag
+        for flag, on in (
+            ("--contact", args.contact is not None),
+            ("--wrench-frame", args.wrench_frame is not None),
+            (f"--model {args.model}", args.model in FLOATING_MODELS),
+        )
+        if on
+    ]
+    if given:
+        raise UsageError(
+            f"{given[0]}: applies to a floating-base robot (a free-flyer or planar root joint: "
+            "--root-joint floating|planar with a URDF, or the root joint of a YAML table); "
+            "the models of a fixed-base robot are dynamic, integral and energy"
+        )
+
+
+def _identify_parser() -> argparse.ArgumentParser:
+    """The parser of ``identify`` alone."""
+    from . import build_parser
+
+    parser = build_parser("identify")
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return sub.choices["identify"]
+
+
+def _refuse_fixed_base_options(args: argparse.Namespace) -> None:
+    """Refuses, naming the first, an option of ``identify`` given on the command line that a
+    floating-base log does not take (joint terms, the fixed-base reading and pre-processing, the
+    consistent estimate, descriptions, reports, currents, bags)."""
+    parser = _identify_parser()
+    defaults = vars(parser.parse_args(["ROBOT", "LOG"]))
+    for dest, value in vars(args).items():
+        if dest in _APPLY or dest.startswith("_") or dest not in defaults:
+            continue
+        if value != defaults[dest]:
+            flag = next(
+                max(a.option_strings, key=len)
+                for a in parser._actions
+                if a.dest == dest and a.option_strings and a.help != argparse.SUPPRESS
+            )
+            raise UsageError(
+                f"{flag}: does not apply to a floating-base robot (its logs carry q, dq, "
+                "ddq, joint torques and contact wrenches, fitted by ordinary least squares; "
+                "options: --model full|base, --contact, --wrench-frame, --validate, --json, and "
+                "--filter butter|savgol|none, --cutoff for a log without dq or ddq)"
+            )
+
+
+def cmd_identify_floating(args: argparse.Namespace, robot) -> int:
+    """``mindyn identify`` on ``robot``, a floating-base robot."""
+    from ..identification.floating_workflow import load_floating_logs, run_floating
+    from .identify import write_json
+
+    if robot.joint_types[0] not in ("floating", "planar"):
+        k = next(k for k, t in enumerate(robot.joint_types) if t not in ("revolute", "prismatic"))
+        raise UsageError(
+            f"identify: robot '{robot.name}' has the {robot.joint_types[k]} joint "
+            f"'{robot.joint_names[k]}' and no floating or planar root joint: the fixed-base "
+            "identification takes revolute and prismatic joints only, the floating-base one a "
+            "free-flyer or planar root (--root-joint floating|planar with a URDF)"
+        )
+    _refuse_fixed_base_options(args)
+    model = args.model or "full"
+    if model not in FLOATING_MODELS:
+        raise UsageError(
+            f"--model {model}: a floating-base robot is identified by the full model (joint "
+            "torques and contact wrenches) or the base-link model (--model base: the root's "
+            f"equations, no joint torques), not the {model} model"
+        )
+    logs = load_floating_logs(
+        args.data,
+        robot,
+        validate=args.validate or (),
+        wrench_frame=args.wrench_frame or "world",
+        contacts=args.contact,
+        filter="butter" if args.filter == "lowpass" else args.filter,
+        cutoff=args.cutoff,
+    )
+    report = run_floating(robot, logs, model=model)
+    print(report.format())
+    if args.json:
+        write_json(args.json, report.to_dict())
+    return 0
