@@ -51,7 +51,7 @@ def identify_options(args: argparse.Namespace, robot):
     if width is not None and args.friction_model is not None:
         width = tuple(joint_values(width, robot.n, "--friction-width", broadcast=True))
     return IdentifyOptions(
-        model=args.model,
+        model=args.model or "dynamic",  # None: the default (full on a floating base)
         rotor=args.rotor,
         friction=args.friction,
         offset=args.offset,
@@ -131,7 +131,6 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if not robot.single_dof:  # a floating-base robot: its own workflow
         return cmd_identify_floating(args, robot)
     refuse_floating_options(args)
-    args.model = args.model or "dynamic"
     robot = with_drive_side(robot, args)
     _check_outputs(args, robot)
     reading = reading_options(args)
