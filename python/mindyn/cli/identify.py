@@ -9,9 +9,11 @@ import json
 import sys
 from pathlib import Path
 
+from .args import UsageError
 from .export import write_description
 from .flags import library_options_as_flags
-from .identify_floating import cmd_identify_floating, refuse_floating_options
+from .identify_args import FLOATING_MODELS
+from .identify_floating import cmd_identify_floating
 from .number_options import joint_values
 from .outputs import check_description_kind
 from .robot_options import load_robot, with_drive_side
@@ -120,6 +122,26 @@ def write_json(path: str, doc: dict) -> None:
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     Path(path).write_text(json.dumps(doc, indent=2) + "\n")
     print(f"wrote {path}")
+
+
+def refuse_floating_options(args: argparse.Namespace) -> None:
+    """Refuses ``--contact``, ``--wrench-frame`` and ``--model full|base`` on a robot that has
+    no floating or planar root."""
+    given = [
+        flag
+        for flag, on in (
+            ("--contact", args.contact is not None),
+            ("--wrench-frame", args.wrench_frame is not None),
+            (f"--model {args.model}", args.model in FLOATING_MODELS),
+        )
+        if on
+    ]
+    if given:
+        raise UsageError(
+            f"{given[0]}: applies to a floating-base robot (a free-flyer or planar root joint: "
+            "--root-joint floating|planar with a URDF, or the root joint of a YAML table); "
+            "the models of a fixed-base robot are dynamic, integral and energy"
+        )
 
 
 def cmd_identify(args: argparse.Namespace) -> int:

@@ -6,10 +6,12 @@ from __future__ import annotations
 
 from ..robot import FRICTION_KINDS
 from .args import add_command, deprecated
-from .identify_floating import FLOATING_MODELS, add_floating_options
 from .number_options import joint_vector, number
 from .outputs import add_description_outputs, output_dir, output_file
 from .robot_options import add_joint_terms, add_offset, add_robot
+
+#: The models of ``identify`` on a floating-base robot (free-flyer or planar root).
+FLOATING_MODELS = ("full", "base")
 
 
 def add_data_options(p) -> None:
@@ -189,7 +191,23 @@ def add_identify(sub, func) -> None:
         "residual is within one standard error of the smallest (reported)",
     )
     add_description_outputs(p, "identify")
-    add_floating_options(p)
+    # floating-base robots only (refused on others by cmd_identify)
+    p.add_argument(
+        "--contact",
+        nargs="+",
+        metavar="LINK",
+        help="floating-base robot: the links in contact, whose wrench columns <LINK>.fx, .fy, "
+        ".fz, .tx, .ty, .tz every log must carry (a log with another link's wrench is refused); "
+        "default: the wrench columns each log has (none: free flight)",
+    )
+    p.add_argument(
+        "--wrench-frame",
+        choices=("world", "local"),
+        default=None,
+        help="floating-base robot: the axes of the logged wrenches (force, then moment about "
+        "the link's origin): world (the default) or local, the link's own axes (a "
+        "force/torque sensor fixed to it)",
+    )
     number(
         p,
         "--energy-window",

@@ -1,60 +1,19 @@
 """CLI: ``mindyn identify`` on a floating-base robot (a free-flyer or planar root joint), the
 workflow of :mod:`mindyn.identification.floating_workflow` on the command line: its options
-(``--contact``, ``--wrench-frame``, ``--model full|base``), the refusal of the options that do
-not apply to it, and the run."""
+(declared with identify's others in :mod:`mindyn.cli.identify_args`), the refusal of the options
+that do not apply to it, and the run."""
 
 from __future__ import annotations
 
 import argparse
 
 from .args import UsageError
+from .identify_args import FLOATING_MODELS
 
 #: The options of ``identify`` a floating-base log takes: ROBOT, LOG, --tip, --root-joint,
 #: --model, --validate, --json and the two below. Every other option given is refused.
 _APPLY = {"robot", "data", "tip", "root_joint", "model", "validate", "json", "contact"}
 _APPLY |= {"wrench_frame", "filter", "cutoff", "func", "command"}
-
-FLOATING_MODELS = ("full", "base")
-
-
-def add_floating_options(p: argparse.ArgumentParser) -> None:
-    """``--contact`` and ``--wrench-frame`` of ``identify`` (floating-base robots)."""
-    p.add_argument(
-        "--contact",
-        nargs="+",
-        metavar="LINK",
-        help="floating-base robot: the links in contact, whose wrench columns <LINK>.fx, .fy, "
-        ".fz, .tx, .ty, .tz every log must carry (a log with another link's wrench is refused); "
-        "default: the wrench columns each log has (none: free flight)",
-    )
-    p.add_argument(
-        "--wrench-frame",
-        choices=("world", "local"),
-        default=None,
-        help="floating-base robot: the axes of the logged wrenches (force, then moment about "
-        "the link's origin): world (the default) or local, the link's own axes (a "
-        "force/torque sensor fixed to it)",
-    )
-
-
-def refuse_floating_options(args: argparse.Namespace) -> None:
-    """Refuses ``--contact``, ``--wrench-frame`` and ``--model full|base`` on a robot that has
-    no floating or planar root."""
-    given = [
-        flag
-        for flag, on in (
-            ("--contact", args.contact is not None),
-            ("--wrench-frame", args.wrench_frame is not None),
-            (f"--model {args.model}", args.model in FLOATING_MODELS),
-        )
-        if on
-    ]
-    if given:
-        raise UsageError(
-            f"{given[0]}: applies to a floating-base robot (a free-flyer or planar root joint: "
-            "--root-joint floating|planar with a URDF, or the root joint of a YAML table); "
-            "the models of a fixed-base robot are dynamic, integral and energy"
-        )
 
 
 def _identify_parser() -> argparse.ArgumentParser:
