@@ -487,7 +487,7 @@ def _api(tmp: Path) -> dict:
             "identification.floating.identify_floating": (
                 floating.identify_floating,
                 (FLOATING, FLOATING_LOG),
-                {"model": "full", "base": None, "tolerance": 1e-9},
+                {"model": "full", "base": None, "tolerance": 1e-9, "weighted": True},
             ),
             "identification.floating.read_floating_csv": (
                 floating.read_floating_csv,
@@ -518,7 +518,7 @@ def _api(tmp: Path) -> dict:
             "identification.floating_workflow.run_floating": (
                 floating_workflow.run_floating,
                 (FLOATING, floating_workflow.load_floating_logs([f["floating_csv"]], FLOATING)),
-                {"model": "full", "tolerance": 1e-9},
+                {"model": "full", "tolerance": 1e-9, "weighted": False},
             ),
             "identification.write_csv": (
                 identification.write_csv,

@@ -35,10 +35,23 @@ def pair(path: str, root: str = "floating"):
     return mindyn.load(path, root_joint=root), pin.buildModelFromUrdf(path, joint)
 
 
-def simulate(robot, model, contacts, rng, m: int, *, noise: bool = False, local: bool = False):
+def simulate(
+    robot,
+    model,
+    contacts,
+    rng,
+    m: int,
+    *,
+    noise: bool = False,
+    local: bool = False,
+    sizes: tuple[float, float, float] = (TAU_NOISE, FORCE_NOISE, MOMENT_NOISE),
+):
     """m samples: (table with the log's columns, header, the noise's generalized forces (m,
     nv)). Wrenches about each contact link's origin in world axes (or the link's own); without
-    contacts (free flight) random torques and the accelerations of Pinocchio's aba."""
+    contacts (free flight) random torques and the accelerations of Pinocchio's aba. With
+    ``noise``, Gaussian noise of the standard deviations ``sizes`` on the joint torques, the
+    wrenches' forces and their moments."""
+    tau_noise, force_noise, moment_noise = sizes
     data = model.createData()
     r = model.joints[1].nv
     rows, noise_gf = [], []
@@ -57,8 +70,8 @@ def simulate(robot, model, contacts, rng, m: int, *, noise: bool = False, local:
             f += np.linalg.pinv(A[:r]) @ (F[:r] - A[:r] @ f)
         tau = (F - A @ f)[r:]
         assert np.abs((F - A @ f)[:r]).max() < 1e-8 * max(1.0, np.abs(F).max())
-        n_tau = rng.normal(0.0, TAU_NOISE, tau.shape) if noise else 0 * tau
-        scale = np.tile([FORCE_NOISE] * 3 + [MOMENT_NOISE] * 3, len(contacts))
+        n_tau = rng.normal(0.0, tau_noise, tau.shape) if noise else 0 * tau
+        scale = np.tile([force_noise] * 3 + [moment_noise] * 3, len(contacts))
         n_f = scale * rng.normal(size=f.shape) if noise else 0 * f
         noise_gf.append(np.r_[np.zeros(r), n_tau] + A @ n_f)
         rows.append(np.r_[q, v, a, tau + n_tau, f + n_f])

@@ -120,9 +120,10 @@ def add_identify(sub, func) -> None:
         "report. A floating-base robot (a free-flyer or planar root: --root-joint, or the root "
         "joint of a YAML table) is identified from CSV logs with contact wrenches (q1..q<nq>, "
         "[dq1..dq<nv>, ddq1..ddq<nv>], [tau1..tau<na>], <LINK>.fx, .fy, .fz, .tx, .ty, .tz per "
-        "contact link; without dq and ddq, a t column to derive them) by ordinary least "
-        "squares: --model full or base, --contact, --wrench-frame, --validate, --json, --filter "
-        "and --cutoff apply, the other options are refused.",
+        "contact link; without dq and ddq, a t column to derive them) by weighted least "
+        "squares, one noise level per coordinate: --model full or base, --contact, "
+        "--wrench-frame, --validate, --json, --ols, --filter and --cutoff apply, the other "
+        "options are refused.",
     )
     add_robot(p)
     p.add_argument(
@@ -166,7 +167,12 @@ def add_identify(sub, func) -> None:
         metavar="CSV",
         help="as --currents, one per --validate log",
     )
-    p.add_argument("--ols", action="store_true", help="ordinary instead of weighted least squares")
+    p.add_argument(
+        "--ols",
+        action="store_true",
+        help="ordinary instead of weighted least squares (weights per joint; on a floating-base "
+        "robot, per coordinate: the root's and each joint's)",
+    )
     p.add_argument(
         "--consistent",
         action="store_true",

@@ -11,8 +11,8 @@ from .args import UsageError
 from .identify_args import FLOATING_MODELS
 
 #: The options of ``identify`` a floating-base log takes: ROBOT, LOG, --tip, --root-joint,
-#: --model, --validate, --json and the two below. Every other option given is refused.
-_APPLY = {"robot", "data", "tip", "root_joint", "model", "validate", "json", "contact"}
+#: --model, --validate, --json, --ols and those below. Every other option given is refused.
+_APPLY = {"robot", "data", "tip", "root_joint", "model", "validate", "json", "ols", "contact"}
 _APPLY |= {"wrench_frame", "filter", "cutoff", "func", "command"}
 
 
@@ -42,9 +42,9 @@ def _refuse_fixed_base_options(args: argparse.Namespace) -> None:
             )
             raise UsageError(
                 f"{flag}: does not apply to a floating-base robot (its logs carry q, dq, "
-                "ddq, joint torques and contact wrenches, fitted by ordinary least squares; "
-                "options: --model full|base, --contact, --wrench-frame, --validate, --json, and "
-                "--filter butter|savgol|none, --cutoff for a log without dq or ddq)"
+                "ddq, joint torques and contact wrenches, fitted by weighted least squares; "
+                "options: --model full|base, --contact, --wrench-frame, --validate, --json, "
+                "--ols, and --filter butter|savgol|none, --cutoff for a log without dq or ddq)"
             )
 
 
@@ -78,7 +78,7 @@ def cmd_identify_floating(args: argparse.Namespace, robot) -> int:
         filter="butter" if args.filter == "lowpass" else args.filter,
         cutoff=args.cutoff,
     )
-    report = run_floating(robot, logs, model=model)
+    report = run_floating(robot, logs, model=model, weighted=not args.ols)
     print(report.format())
     if args.json:
         write_json(args.json, report.to_dict())

@@ -12,8 +12,9 @@ and ``J_c`` that link's Jacobian (:func:`contact_jacobian`). Two models come fro
   joint torques, only the motion and the wrenches.
 
 The parameters are estimated as the numerical method's base parameters of the robot
-(:func:`mindyn.base_parameters`) by least squares; the base-link model may identify fewer
-combinations of them (its ``rank``), and gives the minimum-norm solution in their span.
+(:func:`mindyn.base_parameters`) by weighted least squares, one noise level per coordinate
+(:func:`identify_floating`); the base-link model may identify fewer combinations of them (its
+``rank``), and gives the minimum-norm solution in their span.
 
 Log format (CSV, one header line, one row per sample, comma-separated, as
 :mod:`~mindyn.identification.data` reads its cells)::
@@ -37,6 +38,7 @@ from __future__ import annotations
 
 import csv
 import io
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -48,6 +50,7 @@ from ..base import BaseParameters, base_parameters
 from ..robot import Robot
 from .data import DataError, DataFileNotFoundError, decode_text, differentiate, parse_cell
 from .errors import IdentificationError
+from .estimation import _triangle
 
 __all__ = [
     "FloatingLog",
@@ -224,11 +227,21 @@ class FloatingResult:
     """A floating-base identification: ``values`` the estimated base values of ``base`` (the
     minimum-norm solution when the model's ``rank`` is below ``base.n``), ``span`` (rank, n_b):
     an orthonormal basis of the combinations of base values the data identified, ``model``
-    ("full" or "base"), ``rms`` the fit's residual (generalized-force units), ``rows`` the
-    equations fitted, ``sigma`` the residual's standard deviation ``sqrt(RSS / (rows - rank))``
-    and ``std`` the standard deviation of each value (``sigma`` through the least-squares
-    covariance ``sigma^2 V diag(1/s^2) V^T`` of the identified span), NaN for a value the data
-    do not determine alone (outside ``span``: only combinations of it are identified)."""
+    ("full" or "base"), ``rms`` the fit's residual (generalized-force units, unweighted),
+    ``rows`` the equations fitted.
+
+    ``weighted``: weighted least squares (the default of :func:`identify_floating`), each
+    coordinate's equations (each of the root's, each actuated joint's) weighted by
+    ``1 / coordinate_sigma``: the noise's standard deviation in that coordinate, estimated from
+    its residual (generalized-force units, one per row of a sample, in the rows' order; None
+    for ordinary least squares); ``weighting`` says how in words (and why not, when the weights
+    could not be estimated). ``sigma`` is the standard deviation of the final fit's (weighted)
+    residual ``sqrt(RSS_w / (rows - rank))``: dimensionless and about 1 when weighted, in
+    generalized-force units for ordinary least squares.
+    ``std`` the standard deviation of each value: ``sigma`` through the (weighted)
+    least-squares covariance ``sigma^2 V diag(1/s^2) V^T`` of the identified span, NaN for a
+    value the data do not determine alone (outside ``span``: only combinations of it are
+    identified)."""
 
     base: BaseParameters
     values: np.ndarray
@@ -239,6 +252,9 @@ class FloatingResult:
     std: np.ndarray
     sigma: float
     rows: int
+    weighted: bool = False
+    coordinate_sigma: np.ndarray | None = None
+    weighting: str = "none (ordinary least squares)"
 
     def residual(self, log: FloatingLog) -> np.ndarray:
         """Predicted minus measured generalized forces of ``log`` in this result's model, shape
@@ -270,6 +286,7 @@ def identify_floating(
     model: str = "full",
     base: BaseParameters | None = None,
     tolerance: float | None = None,
+    weighted: bool = True,
 ) -> FloatingResult:
     """Base parameters of a floating-base robot from one or more :class:`FloatingLog` (see the
     module's docstring for the equations and the CSV format, :func:`read_floating_csv`).
@@ -278,7 +295,31 @@ def identify_floating(
     or ``"base"`` (the root joint's rows: wrenches and motion only). ``base`` defaults to the
     numerical method's base parameters of ``robot``. ``tolerance`` (relative to the largest
     singular value of the base regressor; default ``max(rows, n_b) * eps``) decides the rank:
-    a rank below ``n_b`` is stated in ``rank`` and ``span``, and the full model refuses it."""
+    a rank below ``n_b`` is stated in ``rank`` and ``span``, and the full model refuses it.
+
+    ``weighted`` (default): weighted least squares, its weights from the residuals as the
+    fixed-base identification's, per coordinate: each of the root joint's (a free-flyer's fx,
+    fy, fz, tx, ty, tz in its body's axes; a planar root's fx, fy, tz) and each actuated
+    joint's, since each carries the noise of other sensors (contact force/torque sensors through
+    the contact Jacobians, joint torque sensors) through other lever arms: one per axis rather
+    than one per force and one per moment, because a root moment mixes the force noise through
+    the lever arms of the contacts, which differ per axis. A first ordinary fit gives each
+    coordinate's noise ``sigma_g = sqrt(rss_g / (m_g - h_g))`` (its residual sum of squares
+    over its equations less its leverage ``h_g``, the degrees of freedom the fit takes from
+    it); the next fit weights its equations by ``1 / sigma_g``, and its residuals give the
+    ``sigma_g`` again, until none changes by more than 1 % (at most 20 fits): one weighted fit
+    after an ordinary one is not enough when the noise levels differ much, since the ordinary
+    fit's error then inflates the residual of the precise coordinates. The last fit gives the
+    values and their standard deviations. A ``sigma_g`` below 1e-9 of the largest (a
+    coordinate fitted to round-off) is raised to that floor, which bounds the weights' ratio;
+    when the ordinary fit's residual is itself round-off (below 1.5e-8 of the measured forces:
+    noise-free data) or no equation is left beyond the parameters, the fit stays ordinary. Each
+    is stated in ``weighting``. ``weighted=False``: ordinary least squares, one noise level for
+    every equation.
+
+    The stacked system is reduced chunk by chunk (bounded memory on long logs) to one triangle
+    per coordinate, ``S_g^T S_g = [W_g y_g]^T [W_g y_g]``, (n_b + 1)^2 each: every fit and each
+    coordinate's residual come from these triangles, without a second pass over the logs."""
     _args.instance(robot, "robot", Robot)
     _args.choice(model, "model", _MODELS)
     if isinstance(logs, FloatingLog):
@@ -297,6 +338,7 @@ def identify_floating(
             "base", "is not a set of the robot's 10 n inertial parameters (another robot?)"
         )
     _args.optional(_args.number, tolerance, "tolerance", positive=True, below=1.0)
+    weighted = _args.flag(weighted, "weighted")
     if model == "base" and not any(log.wrenches for log in logs):
         raise IdentificationError(
             "the base-link model needs contact wrenches: in free flight its equations are "
@@ -305,37 +347,147 @@ def identify_floating(
         )
     if base is None:
         base = base_parameters(robot, method="numerical")
-    cols = _pivots(base)
-    # the stacked system reduced chunk by chunk to its triangle: (R, Q^T b), the sum of b^2
-    R, c = np.zeros((0, base.n)), np.zeros(0)
-    bb, rows = 0.0, 0
-    for log in logs:
-        _check_log(robot, log)
-        for a in range(0, len(log.q), _CHUNK):
-            W, y = floating_system(robot, _samples(log, a, a + _CHUNK), model=model)
-            Q, R = np.linalg.qr(np.vstack([R, W[:, cols]]))
-            c = Q.T @ np.concatenate([c, y])
-            bb, rows = bb + float(y @ y), rows + len(y)
-    U, s, Vt = np.linalg.svd(R, full_matrices=False)
-    tol = (max(rows, base.n) * np.finfo(float).eps if tolerance is None else tolerance) * s[0]
+    nb = base.n
+    S, rows = _coordinate_triangles(robot, logs, model, base)
+    k = len(S)
+    U, s, Vt, z = _reduce(S, np.ones(k))
+    # the first (ordinary) fit decides the rank: row weights change neither the regressor's row
+    # space nor, therefore, the combinations the data identify
+    tol = (max(rows, nb) * np.finfo(float).eps if tolerance is None else tolerance) * s[0]
     rank = int(np.sum(s > tol))
-    if model == "full" and rank < base.n:
+    if model == "full" and rank < nb:
         raise IdentificationError(
-            f"the logs identify {rank} of the {base.n} base parameters (singular values below "
+            f"the logs identify {rank} of the {nb} base parameters (singular values below "
             f"{tol:.3g}); excite more motion or add logs"
         )
-    x = Vt[:rank].T @ ((U[:, :rank].T @ c) / s[:rank])
-    fit = float(np.sum((R @ x - c) ** 2))
-    rss = max(bb - float(c @ c) + fit, 0.0)
-    rms = float(np.sqrt(rss / rows))
-    sigma = float(np.sqrt(rss / (rows - rank))) if rows > rank else float("nan")
+    x, rss = _solve(S, U, s, Vt, z, rank)
+    weights, coordinate_sigma, weighting = np.ones(k), None, "none (ordinary least squares)"
+    exact = float(rss.sum()) <= _ROUND_OFF**2 * float(np.sum(S[:, :, -1] ** 2))
+    if weighted and rows <= rank:
+        weighting = "none: no equation is left beyond the parameters to measure the noise with"
+    elif weighted and exact:
+        weighting = (
+            "none: the ordinary fit's residual is at round-off (below "
+            f"{_ROUND_OFF:.2g} of the measured forces): no noise to weight by"
+        )
+    elif weighted:
+        weights, coordinate_sigma, weighting, (x, s, Vt, rss) = _weights(
+            S, s, Vt, rss, rank, rows // k
+        )
+    rms = float(np.sqrt(rss.sum() / rows))
+    wrss = float(weights**2 @ rss)
+    sigma = float(np.sqrt(wrss / (rows - rank))) if rows > rank else float("nan")
     V = Vt[:rank].T
     std = sigma * np.sqrt(np.einsum("ij,j,ij->i", V, 1.0 / s[:rank] ** 2, V))
     # a value is determined alone when its unit vector lies in the identified span
     std[np.einsum("ij,ij->i", V, V) < 1.0 - _IN_SPAN] = np.nan
-    return FloatingResult(base, x, rank, Vt[:rank], model, rms, std, sigma, rows)
+    return FloatingResult(
+        base,
+        x,
+        rank,
+        Vt[:rank],
+        model,
+        rms,
+        std,
+        sigma,
+        rows,
+        coordinate_sigma is not None,
+        coordinate_sigma,
+        weighting,
+    )
 
 
+def _coordinate_triangles(
+    robot: Robot, logs: Sequence[FloatingLog], model: str, base: BaseParameters
+) -> tuple[np.ndarray, int]:
+    """The stacked system of ``logs`` reduced per coordinate (the rows of one coordinate of every
+    sample): triangles ``S`` (k, n_b + 1, n_b + 1) with ``S_g^T S_g = [W_g y_g]^T [W_g y_g]``
+    (``W_g`` the base regressor's rows), merged chunk by chunk by QR; and the equation count."""
+    cols = _pivots(base)
+    k = robot.nv if model == "full" else _root_dofs(robot)
+    S = np.zeros((k, base.n + 1, base.n + 1))
+    rows = 0
+    for log in logs:
+        _check_log(robot, log)
+        for a in range(0, len(log.q), _CHUNK):
+            W, y = floating_system(robot, _samples(log, a, a + _CHUNK), model=model)
+            A = np.column_stack([W[:, cols], y]).reshape(-1, k, base.n + 1)
+            for g in range(k):
+                S[g] = _triangle(np.vstack([S[g], A[:, g]]))
+            rows += len(y)
+    return S, rows
+
+
+def _reduce(S: np.ndarray, weights: np.ndarray):
+    """The coordinates' triangles ``S`` weighted by ``weights`` and stacked, reduced to the SVD
+    ``U diag(s) Vt`` of the weighted base regressor and ``z``, the weighted measurements
+    projected on its column space (``W_w = Q R``, ``z = Q^T y_w``)."""
+    nb = S.shape[1] - 1
+    T = _triangle(np.vstack(list(weights[:, None, None] * S)))
+    U, s, Vt = np.linalg.svd(T[:nb, :nb])
+    return U, s, Vt, T[:nb, nb]
+
+
+def _solve(S, U, s, Vt, z, rank: int) -> tuple[np.ndarray, np.ndarray]:
+    """The minimum-norm least-squares solution in the first ``rank`` singular directions of a
+    reduced system (:func:`_reduce`), and each coordinate's unweighted residual sum of
+    squares, ``|y_g - W_g x|^2 = |S_g [x; -1]|^2``."""
+    x = Vt[:rank].T @ ((U[:, :rank].T @ z) / s[:rank])
+    return x, np.sum((S @ np.append(x, -1.0)) ** 2, axis=1)
+
+
+def _weights(S, s, Vt, rss, rank: int, m_g: int):
+    """The weights of the coordinates (``1 / sigma_g``), their ``sigma_g``, the weighting in
+    words and the weighted fit ``(x, s, Vt, rss)`` (:func:`_solve`), from the ordinary fit
+    (``s``, ``Vt``, each coordinate's ``rss``): each coordinate's noise from its residual and
+    the degrees of freedom the fit leaves it (:func:`_coordinate_sigma`), then from the weighted
+    fit's residual, again, until no ``sigma_g`` changes by more than :data:`_SETTLED` (at most
+    :data:`_MAX_REWEIGHTS` weighted fits); a ``sigma_g`` below :data:`_SIGMA_FLOOR` of the
+    largest is raised to it (a coordinate fitted to round-off would otherwise take an unbounded
+    weight)."""
+    new = _coordinate_sigma(S, np.ones(len(S)), s, Vt, rss, rank, m_g)
+    fits = 0
+    while True:
+        fits += 1
+        floor = float(new.max()) * _SIGMA_FLOOR
+        low = np.flatnonzero(new < floor)
+        sigma = np.maximum(new, floor)
+        weights = 1.0 / sigma
+        U, s, Vt, z = _reduce(S, weights)
+        x, rss = _solve(S, U, s, Vt, z, rank)
+        new = _coordinate_sigma(S, weights, s, Vt, rss, rank, m_g)
+        change = float(np.max(np.abs(np.maximum(new, floor) / sigma - 1.0)))
+        if change <= _SETTLED or fits == _MAX_REWEIGHTS:
+            break
+    plural = "" if fits == 1 else "s"
+    words = "per coordinate, 1 / sigma of its residual: a first ordinary fit, then " + (
+        f"the weighted fit's until the sigmas settled within {_SETTLED:.0%} ({fits} weighted "
+        f"fit{plural})"
+        if change <= _SETTLED
+        else f"{fits} weighted fits, the sigmas still changing by {change:.1%} in the last"
+    )
+    if len(low):
+        words += (
+            f"; {len(low)} coordinate(s) (rows {', '.join(str(g + 1) for g in low)} of each "
+            f"sample) fitted to round-off: their sigma raised to {_SIGMA_FLOOR:g} of the largest"
+        )
+    return weights, sigma, words, (x, s, Vt, rss)
+
+
+def _coordinate_sigma(S, weights, s, Vt, rss, rank: int, m_g: int) -> np.ndarray:
+    """Each coordinate's residual standard deviation ``sqrt(rss_g / (m_g - h_g))``: ``m_g`` its
+    equations, ``h_g`` its leverage in the weighted fit (the trace of its block of the hat
+    matrix, ``|w_g W_g V_r diag(1/s_r)|_F^2``, the residual's degrees of freedom it takes; at
+    least one is left)."""
+    M = Vt[:rank].T / s[:rank]
+    h = weights**2 * np.sum((S[:, :, :-1] @ M) ** 2, axis=(1, 2))
+    return np.sqrt(rss / np.maximum(m_g - h, 1.0))
+
+
+_ROUND_OFF = 1.5e-8  # sqrt(eps): a smaller relative residual is round-off, not noise
+_SIGMA_FLOOR = 1e-9  # a coordinate's residual sigma is at least this fraction of the largest
+_SETTLED = 1e-2  # the weights have settled when no coordinate's sigma changes by more
+_MAX_REWEIGHTS = 20  # weighted fits at most
 _IN_SPAN = 1e-9  # a unit vector whose projection on the span falls short by more is outside it
 
 

@@ -53,6 +53,10 @@ __all__ = [
 
 _ROOT_AXES = {6: ("fx", "fy", "fz", "tx", "ty", "tz"), 3: ("fx", "fy", "tz")}
 _BAGS = (".bag", ".mcap", ".db3")
+ESTIMATOR_WORDS = {
+    True: "weighted least squares, per coordinate",
+    False: "ordinary least squares",
+}
 MODEL_WORDS = {
     "full": "full model: joint torques and contact wrenches, every equation of motion",
     "base": "base-link model: the root's equations, contact wrenches and motion only",
@@ -243,7 +247,12 @@ class FloatingReport:
             "nq": robot.nq,
             "nv": robot.nv,
             "model": res.model,
-            "estimator": "ordinary least squares",
+            "estimator": ESTIMATOR_WORDS[res.weighted],
+            "weighted": res.weighted,
+            "weighting": res.weighting,
+            "noise_sigma": (
+                None if res.coordinate_sigma is None else nan_list(res.coordinate_sigma)
+            ),
             "wrench_frame": logs.wrench_frame,
             "contacts": contacts,
             "base_method": self.base.method,
@@ -288,8 +297,8 @@ class FloatingReport:
         contacts = sorted({c for log in logs.fit for c in log.wrenches})
         axes = "world axes" if logs.wrench_frame == "world" else "each link's axes"
         out = [
-            f"{robot.name}: floating-base identification, {MODEL_WORDS[res.model]} (ordinary "
-            "least squares)",
+            f"{robot.name}: floating-base identification, {MODEL_WORDS[res.model]} "
+            f"({ESTIMATOR_WORDS[res.weighted]})",
             f"  root           {robot.joint_types[0]} joint '{robot.joint_names[0]}', {r} "
             f"unactuated coordinates; nq {robot.nq}, nv {robot.nv}, {robot.nv - r} joint torques",
             f"  data           {', '.join(logs.files)}: {sum(log.m for log in logs.fit)} samples, "
@@ -300,7 +309,13 @@ class FloatingReport:
             "  rank           "
             + (f"full model {res.rank} of {self.base.n}; " if res.model == "full" else "")
             + self._base_link_words(),
+            f"  weighting      {res.weighting}",
         ]
+        if res.coordinate_sigma is not None:
+            noise = ", ".join(
+                f"{c} {v:.3g}" for c, v in zip(self.coordinates, res.coordinate_sigma)
+            )
+            out.append(f"  noise sigma    {noise} (N, N m)")
         out.append("")
         out.append(f"{'#':>3}  {'parameter':<12}{'value':>14}{'std':>12}{'std %':>9}")
         for i, (name, v, sd) in enumerate(zip(self.base.names, res.values, res.std), 1):
@@ -369,17 +384,20 @@ def run_floating(
     *,
     model: str = "full",
     tolerance: float | None = None,
+    weighted: bool = True,
 ) -> FloatingReport:
     """Identify the base parameters of a floating-base ``robot`` from ``logs``
     (:func:`load_floating_logs`) with ``model`` (``"full"`` or ``"base"``, as
     :func:`~mindyn.identification.floating.identify_floating`; ``tolerance`` its rank
-    tolerance). With the full model and contact wrenches, the base-link model is fitted too, to
-    state its rank and how far its values are from the full model's. The base set is the
-    numerical method's (:func:`mindyn.base_parameters`)."""
+    tolerance; ``weighted`` its weighted least squares, per coordinate, or ordinary ones with
+    ``weighted=False``). With the full model and contact wrenches, the base-link model is fitted
+    too (weighted alike), to state its rank and how far its values are from the full model's.
+    The base set is the numerical method's (:func:`mindyn.base_parameters`)."""
     _args.instance(robot, "robot", Robot)
     _args.instance(logs, "logs", FloatingLogs)
     model = _args.choice(model, "model", _MODELS)
     _args.optional(_args.number, tolerance, "tolerance", positive=True, below=1.0)
+    weighted = _args.flag(weighted, "weighted")
     _root_dofs(robot)
     if model == "full":
         files = logs.files + logs.validation_files
@@ -390,10 +408,11 @@ def run_floating(
                 "the full model needs them (the base-link model, model='base', does not)"
             )
     base = base_parameters(robot, method="numerical")
-    result = identify_floating(robot, logs.fit, model=model, base=base, tolerance=tolerance)
+    fit = dict(base=base, tolerance=tolerance, weighted=weighted)
+    result = identify_floating(robot, logs.fit, model=model, **fit)
     link: FloatingResult | None = result if model == "base" else None
     if model == "full" and any(log.wrenches for log in logs.fit):
-        link = identify_floating(robot, logs.fit, model="base", base=base, tolerance=tolerance)
+        link = identify_floating(robot, logs.fit, model="base", **fit)
     names = coordinate_names(robot)
     if model == "base":
         names = names[: _root_dofs(robot)]
