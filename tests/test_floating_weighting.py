@@ -37,9 +37,9 @@ def case(name: str):
         import tempfile
         from pathlib import Path
 
-        folder = Path(tempfile.mkdtemp(prefix="fbw-tree-"))
-        urdf = str(random_tree_urdf(folder / "tree.urdf", n=7, seed=3, moving=("revolute",)))
-        robot, model = pair(urdf)
+        with tempfile.TemporaryDirectory() as folder:
+            path = Path(folder) / "tree.urdf"
+            robot, model = pair(str(random_tree_urdf(path, n=7, seed=3, moving=("revolute",))))
         children = set(robot.parents)
         leaves = [robot.link_names[k + 1] for k in range(robot.n) if k not in children][:2]
         return robot, model, leaves, 150, 4, True
@@ -185,9 +185,9 @@ def test_identify_takes_ols_and_its_json_is_the_library_report(tmp_path):
     doc = json.loads(out.read_text())
     assert doc == json.loads(json.dumps(library(robot, [fit]).to_dict()))
     assert doc["weighted"] is True and doc["estimator"].startswith("weighted least squares")
-    assert len(doc["noise_sigma"]) == robot.nv == len(doc["coordinates"])
+    assert len(doc["coordinate_sigma"]) == robot.nv == len(doc["coordinates"])
     added = np.sqrt(np.mean(noise**2, axis=0))
-    assert_close(doc["noise_sigma"], added, 0.25, "CLI noise per coordinate")
+    assert_close(doc["coordinate_sigma"], added, 0.25, "CLI noise per coordinate")
     assert "(weighted least squares, per coordinate)" in text and "noise sigma" in text
     assert "weighting      per coordinate" in text
     text = cli(*argv, "--ols")
@@ -196,11 +196,11 @@ def test_identify_takes_ols_and_its_json_is_the_library_report(tmp_path):
 
     report = run_floating(robot, load_floating_logs([fit], robot), weighted=False)
     assert ols == json.loads(json.dumps(report.to_dict()))
-    assert ols["weighted"] is False and ols["noise_sigma"] is None
+    assert ols["weighted"] is False and ols["coordinate_sigma"] is None
     assert ols["estimator"] == "ordinary least squares" and "(ordinary least squares)" in text
     assert ols["values"] != doc["values"]
     # the base-link model is weighted too (the root's six coordinates), and takes --ols
     cli(*argv, "--model", "base")
     link = json.loads(out.read_text())
-    assert link["weighted"] is True and len(link["noise_sigma"]) == 6
-    assert_close(link["noise_sigma"], added[:6], 0.25, "CLI noise per root coordinate")
+    assert link["weighted"] is True and len(link["coordinate_sigma"]) == 6
+    assert_close(link["coordinate_sigma"], added[:6], 0.25, "CLI noise per root coordinate")

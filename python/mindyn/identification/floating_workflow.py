@@ -250,7 +250,7 @@ class FloatingReport:
             "estimator": ESTIMATOR_WORDS[res.weighted],
             "weighted": res.weighted,
             "weighting": res.weighting,
-            "noise_sigma": (
+            "coordinate_sigma": (
                 None if res.coordinate_sigma is None else nan_list(res.coordinate_sigma)
             ),
             "wrench_frame": logs.wrench_frame,
