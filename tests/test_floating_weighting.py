@@ -25,6 +25,8 @@ from test_multibody import FLOATING
 # noise standard deviations (joint torques N m, wrench forces N, wrench moments N m)
 NOISY_FORCES = (0.01, 1.0, 0.1)
 NOISY_MOMENTS = (0.01, 0.1, 1.0)
+NOISY_TORQUES = (1.0, 0.1, 0.01)
+MIXES = {"moments": NOISY_MOMENTS, "forces": NOISY_FORCES, "torques": NOISY_TORQUES}
 TALOS_FEET = ["leg_left_6_link", "leg_right_6_link"]
 
 
@@ -69,17 +71,17 @@ def figures(z: np.ndarray) -> tuple[float, float]:
 
 @pytest.mark.parametrize("name", ["solo12", "talos", "tree"])
 def test_weighted_standard_deviations_describe_the_error_where_ordinary_ones_do_not(name):
-    """For each noise mix (moments noisiest, forces noisiest): the default (weighted) fit's z
-    has an RMS within [0.7, 1.3] and at least 95 % within 3, pooled over the logs; its noise
-    per coordinate is the added noise's RMS within 25 %; on a validation log its prediction
-    misses the measured generalized forces by no more than 1.2 times the noise (overall) and
-    twice (per coordinate). Ordinary least squares (one noise level for every equation), on the
-    same logs, misses the z criterion in at least one of the mixes."""
+    """For each noise mix (moments, forces or joint torques noisiest, 100:10:1): the default
+    (weighted) fit's z has an RMS within [0.7, 1.3] and at least 95 % within 3, pooled over the
+    logs; its noise per coordinate is the added noise's RMS within 25 %; on a validation log its
+    prediction misses the measured generalized forces by no more than 1.2 times the noise
+    (overall) and twice (per coordinate). Ordinary least squares (one noise level for every
+    equation), on the same logs, misses the z criterion in at least one of the mixes."""
     robot, model, contacts, m, pool, local = case(name)
     base = mindyn.base_parameters(robot, method="numerical")
     truth = base.values(robot.params)
     ols_off = []
-    for mix, sizes in (("moments", NOISY_MOMENTS), ("forces", NOISY_FORCES)):
+    for mix, sizes in MIXES.items():
         rng = np.random.default_rng(60)
         logs, noises, z = [], [], []
         for _ in range(pool):
