@@ -1,6 +1,6 @@
 """Generated C of floating-base inverse dynamics against Pinocchio.
 
-Solo12 (example-robot-data) with a free-flyer root (Pinocchio's URDF parser with
+Solo12 and Go1 (example-robot-data) with a free-flyer root (Pinocchio's URDF parser with
 JointModelFreeFlyer) and with a planar root, and random trees (tests/random_tree.py) loaded with a
 free-flyer root: the generated C, compiled with gcc -std=c99 -Wall -Wextra -Werror -pedantic and
 called through ctypes, against Pinocchio's rnea, generalized gravity and the base regressor's
@@ -31,9 +31,9 @@ TOL = 1e-12
 FEET = ["FL_LOWER_LEG", "FR_LOWER_LEG", "HL_LOWER_LEG", "HR_LOWER_LEG"]
 
 
-def solo(root: str = "floating"):
+def solo(root: str = "floating", name: str = "solo12"):
     joint = pin.JointModelFreeFlyer() if root == "floating" else pin.JointModelPlanar()
-    path = FLOATING["solo12"]
+    path = FLOATING[name]
     return mindyn.load(path, root_joint=root), pin.buildModelFromUrdf(str(path), joint)
 
 
@@ -75,11 +75,13 @@ def contact_terms(model, data, qp, links, f, frame):
     return out
 
 
-@pytest.mark.parametrize("root", ["floating", "planar"])
-def test_generated_c_of_a_floating_quadruped_matches_pinocchio(root, tmp_path, rng):
-    robot, model = solo(root)
+@pytest.mark.parametrize(
+    "name, root", [("solo12", "floating"), ("go1", "floating"), ("solo12", "planar")]
+)
+def test_generated_c_of_a_floating_quadruped_matches_pinocchio(name, root, tmp_path, rng):
+    robot, model = solo(root, name)
     bp = mindyn.base_parameters(robot)  # the numerical method: the only one for a floating base
-    code = codegen.generate(robot, base=bp, name=f"solo_{root}")
+    code = codegen.generate(robot, base=bp, name=f"{name}_{root}")
     assert code.contacts == [] and f"_NQ {robot.nq}" in code.header
     c = Floating(code, tmp_path, robot)
     p = bp.values(robot.params)
@@ -88,10 +90,10 @@ def test_generated_c_of_a_floating_quadruped_matches_pinocchio(root, tmp_path, r
         q, v, a = random_state(robot, rng)
         qp = pin_q(robot, model, q)
         ref = pin.rnea(model, data, qp, v, a).copy()
-        assert_close(c.id(q, v, a, p), ref, TOL, f"generated C id, Solo12 {root} vs rnea")
+        assert_close(c.id(q, v, a, p), ref, TOL, f"generated C id, {name} {root} vs rnea")
         g = pin.computeGeneralizedGravity(model, data, qp)
-        assert_close(c.gravity(q, p), g, TOL, f"generated C gravity, Solo12 {root}")
-        assert_close(c.regressor(q, v, a) @ p, ref, TOL, f"generated C W_b p, Solo12 {root}")
+        assert_close(c.gravity(q, p), g, TOL, f"generated C gravity, {name} {root}")
+        assert_close(c.regressor(q, v, a) @ p, ref, TOL, f"generated C W_b p, {name} {root}")
 
 
 @pytest.mark.parametrize("frame", ["world", "local"])
