@@ -183,6 +183,11 @@ def test_what_a_floating_base_cannot_have_is_refused_in_one_line(tmp_path):
             "names the link 'FL_LOWER_LEG' twice",
         ),
         (
+            lambda: codegen.generate(robot, what="gravity", contacts=FEET),
+            mindyn.ModelError,
+            "contact wrenches enter the inverse dynamics only",
+        ),
+        (
             lambda: codegen.generate(robot, contacts=FEET, wrench_frame="body"),
             mindyn.ArgumentError,
             "wrench_frame is a str 'body'",

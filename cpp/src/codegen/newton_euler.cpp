@@ -5,6 +5,7 @@
 // frame of each link's wrench (Plan) with the fewest operations.
 #include "mindyn/codegen/newton_euler.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <string>
 #include <utility>
@@ -225,6 +226,9 @@ GeneratedCode generateCode(const Model& model, const ParameterSet& params,
         "codegen: contact wrenches apply to a floating base (a free-flyer or planar "
         "root joint); model '" +
         model.name + "' has a fixed base");
+  if (!contacts.links.empty() &&
+      std::find(functions.begin(), functions.end(), Function::InverseDynamics) == functions.end())
+    throw ModelError("codegen: contact wrenches enter the inverse dynamics only; generate it too");
   for (size_t c = 0; c < contacts.links.size(); ++c) {
     const int k = contacts.links[c];
     if (k < 0 || k >= model.nq())
