@@ -19,10 +19,10 @@ import mindyn
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import assert_close
+from conftest import assert_close, cli
 from mindyn import codegen
 from random_tree import random_multidof_tree_yaml, random_tree_urdf
-from test_codegen import GCC, compile_c, ptr
+from test_codegen import GCC, compile_c, compile_shared, ptr
 from test_multibody import FLOATING, pin_q, random_state
 
 pytestmark = pytest.mark.skipif(GCC is None, reason="gcc is needed to compile generated C")
@@ -213,3 +213,25 @@ def test_what_a_floating_base_cannot_have_is_refused_in_one_line(tmp_path):
         with pytest.raises(error) as e:
             call()
         assert text in str(e.value) and "\n" not in str(e.value), str(e.value)
+
+
+def test_the_command_line_generates_it_for_a_urdf_with_its_own_floating_joint(tmp_path, rng):
+    """A URDF whose root link carries a `floating` joint (Pinocchio's parser: a free-flyer)."""
+    text = FLOATING["solo12"].read_text()
+    at = text.index("<link ")
+    joint = '<joint name="float" type="floating"><parent link="world"/><child link="base_link"/>'
+    path = tmp_path / "solo_float.urdf"
+    path.write_text(text[:at] + f'<link name="world"/>\n{joint}</joint>\n' + text[at:])
+    out = cli("codegen", path, "--lang", "c", "-o", tmp_path / "solo_cli", "--numeric")
+    assert "inverse_dynamics" in out
+    robot, model = mindyn.load(path), pin.buildModelFromUrdf(str(path))
+    assert robot.joint_types[0] == "floating" and model.nq == robot.nq
+    lib = compile_shared(tmp_path / "solo_cli.c", tmp_path / "libsolo_cli.so")
+    data = model.createData()
+    for _ in range(2):
+        q, v, a = random_state(robot, rng)
+        tau = np.zeros(robot.nv)
+        args = [np.ascontiguousarray(x) for x in (q, v, a)]
+        lib.solo_inverse_dynamics(*[ptr(x) for x in args], ptr(tau))
+        ref = pin.rnea(model, data, pin_q(robot, model, q), v, a)
+        assert_close(tau, ref, TOL, "generated C id by the command line, floating joint")
