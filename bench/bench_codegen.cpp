@@ -9,13 +9,9 @@
 // With MINDYN_BENCH_CALLGRIND=N in the environment (under valgrind --tool=callgrind
 // --instr-atstart=no) it times nothing and makes N calls per robot and implementation instead,
 // each bracketed by callgrind client requests and dumped as "robot/implementation".
-#include <dlfcn.h>
-
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <functional>
 #include <kdl/chainidsolver_recursive_newton_euler.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
@@ -24,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_common.hpp"
 #include "mindyn/base_dynamics.hpp"
 #include "mindyn/codegen/emit_c.hpp"
 #include "mindyn/description.hpp"
@@ -32,38 +29,12 @@
 #include "mindyn/urdf.hpp"
 #include "pinocchio_adapter.hpp"
 
-#if __has_include(<valgrind/callgrind.h>)
-#include <valgrind/callgrind.h>
-#else  // no valgrind headers: the callgrind mode runs without client requests
-#define CALLGRIND_START_INSTRUMENTATION
-#define CALLGRIND_STOP_INSTRUMENTATION
-#define CALLGRIND_ZERO_STATS
-#define CALLGRIND_DUMP_STATS_AT(label) ((void)(label))
-#endif
-
 using namespace mindyn;
-using Clock = std::chrono::steady_clock;
+using bench::Impl;
 
 namespace {
 
 using IdFn = void (*)(const double*, const double*, const double*, const double*, double*);
-
-// Mean time per call in ns, the best over repetitions (the least disturbed by other load on a
-// shared machine). The implementations take turns within each repetition, so that a slow phase
-// of the machine weighs on all of them alike rather than on whichever ran during it.
-using Impl = std::pair<const char*, std::function<void(int)>>;  // name, loop body
-
-std::vector<double> timeInTurns(const std::vector<Impl>& impls, int calls, int repetitions) {
-  std::vector<double> best(impls.size(), 1e300);
-  for (int r = 0; r < repetitions; ++r)
-    for (size_t k = 0; k < impls.size(); ++k) {
-      const auto t0 = Clock::now();
-      for (int i = 0; i < calls; ++i) impls[k].second(i);
-      const double ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / calls;
-      best[k] = std::min(best[k], ns);
-    }
-  return best;
-}
 
 volatile double sink = 0;
 
@@ -125,23 +96,9 @@ int main(int argc, char** argv) {
     // The generated C twice: sines and cosines inline (the default) and from math.h.
     std::vector<void*> libs;
     const auto build = [&](const std::string& file, codegen::CTrig trig) -> IdFn {
-      const codegen::CFiles files = codegen::emitC(code, file + ".h", trig);
-      std::ofstream(work + "/" + file + ".h") << files.header;
-      std::ofstream(work + "/" + file + ".c") << files.source;
-      const std::string so = work + "/lib" + file + ".so";
-      const std::string cmd =
-          "cc -std=c99 " + flags + " -fPIC -shared -o " + so + " " + work + "/" + file + ".c -lm";
-      if (std::system(cmd.c_str()) != 0) {
-        std::fprintf(stderr, "compiling the generated C failed: %s\n", cmd.c_str());
-        return nullptr;
-      }
-      void* lib = dlopen(("./" + so).c_str(), RTLD_NOW | RTLD_LOCAL);
-      if (!lib) {
-        std::fprintf(stderr, "dlopen: %s\n", dlerror());
-        return nullptr;
-      }
-      libs.push_back(lib);
-      return reinterpret_cast<IdFn>(dlsym(lib, (name + "_bench_inverse_dynamics").c_str()));
+      return reinterpret_cast<IdFn>(bench::compiledSymbol(codegen::emitC(code, file + ".h", trig),
+                                                          work, file, flags,
+                                                          name + "_bench_inverse_dynamics", libs));
     };
     const IdFn gen = build(name + "_bench", codegen::CTrig::Inline);
     const IdFn genLibm = build(name + "_bench_libm", codegen::CTrig::Libm);
@@ -244,19 +201,11 @@ int main(int argc, char** argv) {
     };
     if (callgrind > 0) {
       // One dump per implementation, "robot/implementation", for scripts/bench_codegen.
-      for (const auto& [impl, body] : impls) {
-        for (int i = 0; i < 2 * S; ++i) body(i);  // first-call effects stay out of the count
-        const std::string label = name + "/" + impl;
-        CALLGRIND_START_INSTRUMENTATION;
-        CALLGRIND_ZERO_STATS;
-        for (long i = 0; i < callgrind; ++i) body(static_cast<int>(i));
-        CALLGRIND_DUMP_STATS_AT(label.c_str());
-        CALLGRIND_STOP_INSTRUMENTATION;
-      }
+      bench::callgrindEach(name, impls, callgrind, 2 * S);
       closeLibs();
       continue;
     }
-    const std::vector<double> t = timeInTurns(impls, 2000, 150);
+    const std::vector<double> t = bench::timeInTurns(impls, 2000, 150);
     const double tGen = t[0], tLibm = t[1], tTape = t[2], tNe = t[3], tPin = t[4], tKdl = t[5];
     const auto& c = code.functions[0].program.count;
     const auto& k = classical.program.count;

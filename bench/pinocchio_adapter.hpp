@@ -18,6 +18,7 @@
 #include <pinocchio/multibody.hpp>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "mindyn/model.hpp"
 
@@ -55,8 +56,15 @@ inline pinocchio::SE3 toPinocchioSE3(const Eigen::Isometry3d& T) {
   return pinocchio::SE3(Eigen::Matrix3d(T.linear()), Eigen::Vector3d(T.translation()));
 }
 
-/// The joint model for one mindyn joint.
+/// The joint model for one mindyn joint: revolute, prismatic, or a free-flyer or planar joint
+/// (Pinocchio's JointModelFreeFlyer, JointModelPlanar: mindyn's q and v conventions are theirs).
 inline pinocchio::JointModel toPinocchioJoint(const Joint& joint, PinocchioJoints joints) {
+  if (joint.type == JointType::FreeFlyer)
+    return pinocchio::JointModel(pinocchio::JointModelFreeFlyer());
+  if (joint.type == JointType::Planar) return pinocchio::JointModel(pinocchio::JointModelPlanar());
+  if (!joint.singleDof())
+    throw ModelError(std::string("the benchmark's Pinocchio model takes no ") +
+                     toString(joint.type) + " joint");
   const Eigen::Vector3d& a = joint.axis;
   const bool revolute = joint.type == JointType::Revolute;
   if (joints == PinocchioJoints::Specialized) {
@@ -86,11 +94,18 @@ inline pinocchio::Model toPinocchioModel(const Model& model, const Eigen::Vector
   pinocchio::Model pm;
   pm.name = model.name;
   pm.gravity = pinocchio::Motion(Eigen::Vector3d(model.gravity), Eigen::Vector3d::Zero());
+  // per joint: its Pinocchio joint and body frame (a tree: each joint on its parent's)
+  std::vector<pinocchio::JointIndex> ids;
+  std::vector<int> body_frames;
   pinocchio::JointIndex parent = 0;
   Eigen::Isometry3d post_prev = Eigen::Isometry3d::Identity();
   int parent_frame = 0;  // "universe"
   for (int k = 0; k < model.nq(); ++k) {
     const Joint& j = model.joints[k];
+    const int pk = model.parent(k);
+    parent = pk < 0 ? 0 : ids[pk];
+    post_prev = pk < 0 ? Eigen::Isometry3d::Identity() : model.joints[pk].post;
+    parent_frame = pk < 0 ? 0 : body_frames[pk];
     const std::string& link = model.link_names[k + 1];
     const pinocchio::JointIndex id =
         pm.addJoint(parent, toPinocchioJoint(j, joints), toPinocchioSE3(post_prev * j.pre), j.name);
@@ -98,6 +113,8 @@ inline pinocchio::Model toPinocchioModel(const Model& model, const Eigen::Vector
     pm.appendBodyToJoint(id, toPinocchioInertia(inertial.segment<10>(10 * k), link), post);
     const int joint_frame = static_cast<int>(pm.addJointFrame(id, parent_frame));
     parent_frame = static_cast<int>(pm.addBodyFrame(link, id, post, joint_frame));
+    ids.push_back(id);
+    body_frames.push_back(parent_frame);
     parent = id;
     post_prev = j.post;
   }

@@ -668,7 +668,7 @@ def _codegen_api(tmp: Path) -> dict:
             (ROBOT,),
             {"lang": "c", "what": "id,gravity", "rotor": False, "friction": False, "params": p}
             | {"numeric": False, "base": True, "minimise": "operations", "trig": "inline"}
-            | {"offset": False}
+            | {"offset": False, "contacts": (), "wrench_frame": "world"}
             | names,
         ),
         "codegen.generate_controller": (

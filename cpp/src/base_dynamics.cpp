@@ -270,6 +270,7 @@ BaseDynamics::BaseDynamics(const Model& model, const BaseParameters& base)
 
 BaseDynamics::BaseDynamics(const Model& model, const codegen::ParameterSet& ps)
     : n_(model.nq()), np_(ps.size()), layout_(ps.layout), names_(ps.names) {
+  requireSingleDof(model, "the runtime base-parameter dynamics");
   for (Function f : {Function::InverseDynamics, Function::Gravity, Function::Regressor}) {
     const GeneratedFunction g = codegen::generate(model, ps, f);
     (f == Function::InverseDynamics ? id_

@@ -14,6 +14,7 @@
 #include "mindyn/codegen/emit_c.hpp"
 #include "mindyn/codegen/emit_st.hpp"
 #include "mindyn/codegen/newton_euler.hpp"
+#include "mindyn/multibody.hpp"
 #include "mindyn/sincos.hpp"
 #include "mindyn/slotine_li.hpp"
 #include "mindyn/urdf.hpp"
@@ -852,5 +853,100 @@ TEST(CodegenTree, BaseParameterCodeMatchesTheRuntimeRecursion) {
       baseRegressor(model, data, bp, q, dq, ddq, W, Wb);
       EXPECT_LT((Wt - Wb).norm() / std::max(1.0, Wb.norm()), 1e-10) << what;
     }
+  }
+}
+
+namespace {
+
+// A random tree (test::randomTree) under a free-flyer or planar joint with random constant
+// transforms on the fixed base: the tree's joints on the base are mounted on the floating body.
+Model floatingTree(std::mt19937& rng, JointType root) {
+  Model tree = test::randomTree(rng, 6, false);
+  Model m = tree;
+  m.name = "floating";
+  Joint j;
+  j.name = "fly";
+  j.type = root;
+  j.pre.linear() = Eigen::AngleAxisd(0.4, test::randomUnit(rng)).toRotationMatrix();
+  j.pre.translation() = random(rng, 3, 0.3);
+  j.post.linear() = Eigen::AngleAxisd(-0.8, test::randomUnit(rng)).toRotationMatrix();
+  j.post.translation() = random(rng, 3, 0.2);
+  m.joints.insert(m.joints.begin(), j);
+  m.link_names.insert(m.link_names.begin() + 1, "body");
+  m.parents.assign(1, -1);
+  for (int k = 0; k < tree.nq(); ++k) m.parents.push_back(tree.parent(k) + 1);
+  m.inertial.resize(10 * m.nq());
+  m.inertial << inertialFromCom(4.0, Eigen::Vector3d(0.1, -0.05, 0.02),
+                                Eigen::Vector3d(0.2, 0.3, 0.25).asDiagonal()),
+      tree.inertial;
+  m.rotor_inertia = m.viscous = m.coulomb = Eigen::VectorXd::Zero(m.nq());
+  m.validate();
+  return m;
+}
+
+Eigen::VectorXd evaluated(const GeneratedFunction& f, const InputValues& in) {
+  const auto v = f.graph.evaluate(in);
+  Eigen::VectorXd out(f.outputs.size());
+  for (size_t i = 0; i < f.outputs.size(); ++i) out[i] = f.graph.value(v, f.outputs[i]);
+  return out;
+}
+
+}  // namespace
+
+// The generated recursion of a floating base against the multibody algorithms (which agree with
+// Pinocchio's): inverse dynamics, gravity and regressor; the contact terms by virtual work: the
+// change of tau that the wrenches make, times any joint velocity w, is minus the wrenches' power
+// on the links' velocities for w (the links' velocities from the multibody motion pass).
+TEST(CodegenFloating, MatchesTheMultibodyDynamicsAndTheContactsPower) {
+  std::mt19937 rng(20261126);
+  for (JointType root : {JointType::FreeFlyer, JointType::Planar}) {
+    const Model model = floatingTree(rng, root);
+    const int nv = model.velocitySize(), n = model.nq();
+    const ParameterSet ps = classicalParameterSet(model, {});
+    MultibodyData data(model);
+    Eigen::VectorXd q(model.configSize());
+    randomConfiguration(model, rng, q);
+    const Eigen::VectorXd dq = random(rng, nv), ddq = random(rng, nv), pi = model.inertial;
+    Eigen::VectorXd ref(nv), g(nv);
+    inverseDynamics(model, data, q, dq, ddq, pi, ref);
+    inverseDynamics(model, data, q, Eigen::VectorXd::Zero(nv), Eigen::VectorXd::Zero(nv), pi, g);
+    InputValues in{q.data(), dq.data(), ddq.data(), pi.data()};
+    const auto id = generate(model, ps, Function::InverseDynamics);
+    EXPECT_LT(relErr(evaluated(id, in), ref), 1e-12) << toString(root);
+    EXPECT_LT(relErr(evaluated(generate(model, ps, Function::Gravity), in), g), 1e-12);
+    const Eigen::VectorXd W = evaluated(generate(model, ps, Function::Regressor), in);
+    EXPECT_LT(relErr(Eigen::Map<const Eigen::MatrixXd>(W.data(), 10 * n, nv).transpose() * pi, ref),
+              1e-12);
+    const std::vector<int> links = {2, n - 1, 0};
+    const Eigen::VectorXd f = random(rng, 18, 5.0), w = random(rng, nv);
+    Eigen::VectorXd ignored(nv);
+    inverseDynamics(model, data, q, w, Eigen::VectorXd::Zero(nv), pi, ignored);  // data.v: J w
+    for (bool world : {true, false}) {
+      in.f = f.data();
+      const auto withContacts = generate(model, ps, Function::InverseDynamics, false, {},
+                                         Objective::Operations, Contacts{links, world});
+      const Eigen::VectorXd change = evaluated(withContacts, in) - ref;
+      double power = 0;
+      for (size_t c = 0; c < links.size(); ++c) {
+        const int k = links[c];
+        const Eigen::Matrix3d R = world ? data.R0[k] : Eigen::Matrix3d::Identity();
+        // force on the origin's velocity, moment on the angular velocity (link axes)
+        power += (R.transpose() * f.segment<3>(6 * c)).dot(data.v[k].tail<3>()) +
+                 (R.transpose() * f.segment<3>(6 * c + 3)).dot(data.v[k].head<3>());
+      }
+      EXPECT_NEAR(change.dot(w), -power, 1e-12 * f.norm() * w.norm() * 10) << world;
+      EXPECT_GT(std::abs(power), 1e-3);
+    }
+  }
+}
+
+TEST(CodegenFloating, OtherMultiDofJointsAreRefusedNamingTheJoint) {
+  const Model model = test::everyJointKind();
+  try {
+    classicalParameterSet(model, {});
+    FAIL() << "a spherical joint was accepted";
+  } catch (const ModelError& e) {
+    EXPECT_NE(std::string(e.what()).find("has the spherical joint 'ball'"), std::string::npos)
+        << e.what();
   }
 }

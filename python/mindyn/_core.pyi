@@ -413,9 +413,9 @@ def coriolis_matrix(model: Model, q: typing.Annotated[numpy.typing.ArrayLike, nu
     ...
 def from_pinocchio_order(arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
     ...
-def generate_code(model: Model, base: BaseParameters, rotor: bool = False, friction: bool = False, functions: collections.abc.Sequence[str] = ['inverse_dynamics'], name: str = 'robot', numeric: bool = False, values: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, lang: str = 'c', header_name: str = 'robot.h', minimise: str = 'operations', inline_trig: bool = True, offset: bool = False, formulas: collections.abc.Sequence[str] | None = None) -> dict:
+def generate_code(model: Model, base: BaseParameters, rotor: bool = False, friction: bool = False, functions: collections.abc.Sequence[str] = ['inverse_dynamics'], name: str = 'robot', numeric: bool = False, values: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, lang: str = 'c', header_name: str = 'robot.h', minimise: str = 'operations', inline_trig: bool = True, offset: bool = False, formulas: collections.abc.Sequence[str] | None = None, contacts: collections.abc.Sequence[typing.SupportsInt | typing.SupportsIndex] = [], world_wrenches: bool = True) -> dict:
     """
-    Generated code and operation counts. base=None: the classical parameters; offset: a torque offset per joint after them; formulas: the text of each base parameter's formula in the header comment (default: full precision).
+    Generated code and operation counts. base=None: the classical parameters; offset: a torque offset per joint after them; formulas: the text of each base parameter's formula in the header comment (default: full precision); contacts: the links (joint indices) whose wrenches a floating base's inverse dynamics takes, in world axes or (world_wrenches=False) the links' own.
     """
 def generate_controller(base: BaseParameters, offset: bool, kind: str, name: str, settings: dict, lang: str = 'c', header_name: str = 'controller.h', inline_trig: bool = True, model: Model = None) -> dict:
     """

@@ -101,7 +101,8 @@ void bindCodegen(py::module_& m) {
          bool rotor, bool friction, const std::vector<std::string>& functions,
          const std::string& name, bool numeric, const std::optional<Eigen::VectorXd>& values,
          const std::string& lang, const std::string& header_name, const std::string& minimise,
-         bool inlineTrig, bool offset, const std::optional<std::vector<std::string>>& formulas) {
+         bool inlineTrig, bool offset, const std::optional<std::vector<std::string>>& formulas,
+         const std::vector<int>& contacts, bool worldWrenches) {
         // Base parameters carry the model they were computed for (possibly a snapped copy).
         const Model& model = base_core ? base_core->model->model : model_core->model;
         ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
@@ -124,7 +125,7 @@ void bindCodegen(py::module_& m) {
         {
           py::gil_scoped_release release;
           code = generateCode(model, ps, fs, name, numeric, values ? *values : Eigen::VectorXd(),
-                              objective);
+                              objective, Contacts{contacts, worldWrenches});
         }
         py::dict out;
         if (lang == "c") {
@@ -153,9 +154,12 @@ void bindCodegen(py::module_& m) {
       py::arg("header_name") = "robot.h", py::arg("minimise") = "operations",
       py::arg("inline_trig") = true, py::arg("offset") = false,
       py::arg("formulas") = std::optional<std::vector<std::string>>(),
+      py::arg("contacts") = std::vector<int>(), py::arg("world_wrenches") = true,
       "Generated code and operation counts. base=None: the classical parameters; offset: a "
       "torque offset per joint after them; formulas: the text of each base parameter's "
-      "formula in the header comment (default: full precision).");
+      "formula in the header comment (default: full precision); contacts: the links (joint "
+      "indices) whose wrenches a floating base's inverse dynamics takes, in world axes or "
+      "(world_wrenches=False) the links' own.");
 
   m.def(
       "classical_parameter_names",
@@ -258,6 +262,7 @@ void bindController(py::module_& m) {
         if (!base_core && !model_core)
           throw ArgumentError("generate_controller: base parameters or a model");
         const Model& model = base_core ? base_core->model->model : model_core->model;
+        requireSingleDof(model, "a generated controller");
         // without base parameters: all classical ones, with rotor inertia and friction
         ParameterSet ps = base_core ? baseParameterSet(model, base_core->bp)
                                     : classicalParameterSet(model, model.layout(true, true));

@@ -50,6 +50,7 @@ void bindObserver(py::module_& m) {
          const std::string& lang, const std::string& header_name, bool inlineTrig) {
         using namespace mindyn::codegen;
         const Model& model = base_core->model->model;
+        requireSingleDof(model, "a generated momentum observer");
         ParameterSet ps = baseParameterSet(model, base_core->bp);
         if (offset && !ps.offsets) ps = withOffsets(model, std::move(ps));
         ObserverSettings s;

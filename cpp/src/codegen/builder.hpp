@@ -7,6 +7,12 @@
 // component of the moment (revolute) or of the force (prismatic) right after the joint motion.
 // A link's wrench is formed in its own frame or in the joint frame before the joint motion
 // (LinkForm), with its parameters turned by the joint angle.
+//
+// A floating base: a free-flyer or planar joint on the fixed base moves its link by its velocity
+// and acceleration inputs (rootForward), gravity turned into the link's axes by the joint's
+// rotation; its generalised forces are the components of the wrench in the moved frame. Contact
+// wrenches (setContacts) are subtracted from their links' wrenches, turned from world axes down
+// the joints when given in world axes.
 #pragma once
 
 #include <Eigen/Core>
@@ -63,11 +69,28 @@ class Builder {
       : g_(g), model_(model), stages_(std::move(stages)) {
     zero_ = {Graph::zero(), Graph::zero(), Graph::zero()};
     gravity_ = cleanGeometry<3, 1>(model.gravity, false, nullptr);
+    for (int k = 0, i = 0, j = 0; k < model.nq(); ++k) {
+      iq_.push_back(i);
+      iv_.push_back(j);
+      i += model.joints[k].nq();
+      j += model.joints[k].nv();
+    }
   }
 
-  // Forward pass: fills the joint trigonometry and the motion of every link frame.
+  // The links that receive a contact wrench in the inverse dynamics: link `links[c]` (the link
+  // joint links[c] moves) the wrench f[6 c .. 6 c + 5] (force, moment about the link's origin)
+  // in world axes (`world`) or in the link's axes; it is subtracted from the link's wrench.
+  void setContacts(const std::vector<int>& links, bool world) {
+    contacts_ = links;
+    contactWorld_ = world;
+  }
+
+  // Forward pass: fills the joint trigonometry and the motion of every link frame. dq and ddq
+  // have an entry per velocity coordinate (one per joint on a model of single-DOF joints).
   void forward(const std::vector<Ref>& dq, const std::vector<Ref>& ddq, bool gravity) {
     const int n = model_.nq();
+    rootR_.assign(n, M3{});
+    quat_.assign(n, M3{});
     q_.assign(n, Graph::zero());
     jointR_.assign(n, M3{});
     jointC_.assign(n, Graph::one());
@@ -84,7 +107,12 @@ class Builder {
       const JointStages& s = stages_[k];
       const int parent = model_.parent(k);
       Motion m = rigidForward(s.pre, parent < 0 ? base : link_[parent]);
-      const Ref qk = g_.input(InputKind::Q, k);
+      if (isRoot(s.type)) {
+        // on the fixed base (checkCodegenJoints): m.a is the gravity term, w and dw are zero
+        link_[k] = rigidForward(s.post, rootForward(k, m.a, dq, ddq));
+        continue;
+      }
+      const Ref qk = g_.input(InputKind::Q, iq_[k]);
       const V3 u = constVec(s.u);
       if (s.type == JointType::Revolute) {
         const Ref angle = g_.add(qk, g_.constant(s.offset));
@@ -92,24 +120,24 @@ class Builder {
         jointC_[k] = c;
         jointS_[k] = sn;
         jointR_[k] = rodrigues(s.u, c, sn);
-        const V3 wj = scale(u, dq[k]);
+        const V3 wj = scale(u, dq[iv_[k]]);
         // the link's motion in the joint frame before the joint motion (same origin)
-        linkPre_[k] = {addv(m.w, wj), addv(addv(m.dw, scale(u, ddq[k])), cross(m.w, wj)), m.a};
+        linkPre_[k] = {addv(m.w, wj), addv(addv(m.dw, scale(u, ddq[iv_[k]])), cross(m.w, wj)), m.a};
         for (int i = 0; i < 3; ++i)
           if (std::abs(s.u[i]) == 1.0) linkPre_[k].axis = i;
         linkPre_[k].wp = m.w;
         linkPre_[k].dwp = m.dw;
         const V3 wr = mulT(jointR_[k], m.w);
         m.w = addv(wr, wj);
-        m.dw = addv(addv(mulT(jointR_[k], m.dw), scale(u, ddq[k])), cross(wr, wj));
+        m.dw = addv(addv(mulT(jointR_[k], m.dw), scale(u, ddq[iv_[k]])), cross(wr, wj));
         m.a = mulT(jointR_[k], m.a);
       } else {
         q_[k] = qk;
         const V3 d = scale(u, qk);
         // a' = a + U d + 2 w x (u dq) + u ddq
         V3 a = addv(m.a, uTimes(m, d));
-        a = addv(a, scale(cross(m.w, scale(u, dq[k])), g_.constant(2.0)));
-        m.a = addv(a, scale(u, ddq[k]));
+        a = addv(a, scale(cross(m.w, scale(u, dq[iv_[k]])), g_.constant(2.0)));
+        m.a = addv(a, scale(u, ddq[iv_[k]]));
       }
       afterA_[k] = m.a;
       m = rigidForward(s.post, m);
@@ -127,7 +155,7 @@ class Builder {
   std::vector<Ref> torques(const std::vector<Ref>& pi, ParameterLayout layout, bool joint_terms,
                            const std::vector<LinkForm>& forms) {
     const int n = model_.nq();
-    std::vector<Ref> tau(n, Graph::zero());
+    std::vector<Ref> tau(model_.velocitySize(), Graph::zero());
     std::vector<Pending> children(n);  // the children's wrenches in each link's frame
     for (int k = n - 1; k >= 0; --k) {
       const JointStages& s = stages_[k];
@@ -137,7 +165,22 @@ class Builder {
       const LinkForm form = forms[k];
       const bool pre = form.frame != 0 && s.type == JointType::Revolute;
       if (!pre) append(w, linkWrench(link_[k], body(own)));
+      for (size_t c = 0; c < contacts_.size(); ++c)
+        if (contacts_[c] == k) append(w, contactWrench(k, static_cast<int>(c)));
       w = rigidBackward(s.post, w);
+      if (isRoot(s.type)) {  // on the fixed base: no parent
+        // tau of a free-flyer: (force; moment) in the moved frame; of a planar joint fx, fy, nz
+        const int iv = iv_[k];
+        if (s.type == JointType::FreeFlyer) {
+          for (int i = 0; i < 3; ++i) tau[iv + i] = value(w.f[i]);
+          for (int i = 0; i < 3; ++i) tau[iv + 3 + i] = value(w.n[i]);
+        } else {
+          tau[iv] = value(w.f[0]);
+          tau[iv + 1] = value(w.f[1]);
+          tau[iv + 2] = value(w.n[2]);
+        }
+        continue;
+      }
       const V3 u = constVec(s.u);
       Ref t;
       if (s.type == JointType::Revolute) {
@@ -162,7 +205,7 @@ class Builder {
         const V3 extra = cross(scale(u, q_[k]), values(w.f));
         for (int i = 0; i < 3; ++i) w.n[i].rest = g_.add(value(w.n[i]), extra[i]);
       }
-      tau[k] = t;
+      tau[iv_[k]] = t;
       const int parent = model_.parent(k);
       if (parent < 0) continue;
       append(children[parent], rigidBackward(s.pre, std::move(w)));
@@ -177,6 +220,105 @@ class Builder {
   struct SV {
     V3 w, l;
   };
+
+  static bool isRoot(JointType t) { return t == JointType::FreeFlyer || t == JointType::Planar; }
+
+  // The motion of the frame moved by root joint k (a free-flyer or planar joint on the fixed
+  // base), in its axes, from its velocity and acceleration coordinates (linear first, as
+  // Pinocchio's; a free-flyer's acceleration is the derivative of its body velocity, whose
+  // origin then accelerates by al + w x vl) and `g`, the base's upward acceleration in the joint
+  // frame. Fills rootR_[k], the joint's rotation.
+  Motion rootForward(int k, const V3& g, const std::vector<Ref>& dq, const std::vector<Ref>& ddq) {
+    const int iq = iq_[k], iv = iv_[k];
+    const JointType type = model_.joints[k].type;
+    V3 vl, al;
+    Motion m;
+    if (type == JointType::FreeFlyer) {
+      const Ref x = g_.input(InputKind::Q, iq + 3), y = g_.input(InputKind::Q, iq + 4),
+                z = g_.input(InputKind::Q, iq + 5), w = g_.input(InputKind::Q, iq + 6);
+      // R = 1 + 2 S (a unit quaternion x, y, z, w), S as below
+      quat_[k] = {V3{-g_.add(g_.mul(y, y), g_.mul(z, z)), g_.sub(g_.mul(x, y), g_.mul(z, w)),
+                     g_.add(g_.mul(x, z), g_.mul(y, w))},
+                  V3{g_.add(g_.mul(x, y), g_.mul(z, w)), -g_.add(g_.mul(x, x), g_.mul(z, z)),
+                     g_.sub(g_.mul(y, z), g_.mul(x, w))},
+                  V3{g_.sub(g_.mul(x, z), g_.mul(y, w)), g_.add(g_.mul(y, z), g_.mul(x, w)),
+                     -g_.add(g_.mul(x, x), g_.mul(y, y))}};
+      const Ref two = g_.constant(2.0);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+          rootR_[k][i][j] = g_.mul(two, quat_[k][i][j]);
+          if (i == j) rootR_[k][i][j] = g_.add(Graph::one(), rootR_[k][i][j]);
+        }
+      vl = {dq[iv], dq[iv + 1], dq[iv + 2]};
+      al = {ddq[iv], ddq[iv + 1], ddq[iv + 2]};
+      m.w = {dq[iv + 3], dq[iv + 4], dq[iv + 5]};
+      m.dw = {ddq[iv + 3], ddq[iv + 4], ddq[iv + 5]};
+    } else {  // planar: q = (x, y, cos t, sin t), v = (vx, vy, wz)
+      const Ref c = g_.input(InputKind::Q, iq + 2), sn = g_.input(InputKind::Q, iq + 3);
+      rootR_[k] = {V3{c, -sn, Graph::zero()}, V3{sn, c, Graph::zero()},
+                   V3{Graph::zero(), Graph::zero(), Graph::one()}};
+      vl = {dq[iv], dq[iv + 1], Graph::zero()};
+      al = {ddq[iv], ddq[iv + 1], Graph::zero()};
+      m.w = {Graph::zero(), Graph::zero(), dq[iv + 2]};
+      m.dw = {Graph::zero(), Graph::zero(), ddq[iv + 2]};
+    }
+    m.a = addv(addv(al, cross(m.w, vl)), rootTurnBack(k, g));
+    return m;
+  }
+
+  // R^T x for root joint k's rotation R. A free-flyer's R = 1 + 2 S: for a constant x (the
+  // gravity term) x + S^T (2 x), whose constant factors fold.
+  V3 rootTurnBack(int k, const V3& x) {
+    if (model_.joints[k].type != JointType::FreeFlyer ||
+        !(g_.isConstant(x[0]) && g_.isConstant(x[1]) && g_.isConstant(x[2])))
+      return mulT(rootR_[k], x);
+    V3 y = x;
+    for (int i = 0; i < 3; ++i) {
+      if (x[i] == Graph::zero()) continue;
+      const Ref c = g_.constant(2.0 * g_.constantValue(x[i]));
+      for (int j = 0; j < 3; ++j) y[j] = g_.add(y[j], g_.mul(c, quat_[k][i][j]));
+    }
+    return y;
+  }
+
+  // Minus contact c's wrench on link k, in link k's axes: a world-axes wrench is turned down the
+  // joints from the base to the link (the rotations of each joint's constant transforms and of
+  // its motion); the moment is about the link's origin in either axes.
+  Pending contactWrench(int k, int c) {
+    V3 n, f;
+    for (int i = 0; i < 3; ++i) {
+      f[i] = g_.input(InputKind::F, 6 * c + i);
+      n[i] = g_.input(InputKind::F, 6 * c + 3 + i);
+    }
+    if (contactWorld_) {
+      std::vector<int> path;
+      for (int j = k; j >= 0; j = model_.parent(j)) path.push_back(j);
+      for (auto it = path.rbegin(); it != path.rend(); ++it) {
+        const JointStages& s = stages_[*it];
+        auto turn = [&](const Rigid& T) {
+          if (T.R.isIdentity(0.0)) return;
+          const M3 R = constMat(T.R);
+          n = mulT(R, n);
+          f = mulT(R, f);
+        };
+        turn(s.pre);
+        if (isRoot(s.type)) {
+          n = rootTurnBack(*it, n);
+          f = rootTurnBack(*it, f);
+        } else if (s.type == JointType::Revolute) {
+          n = mulT(jointR_[*it], n);
+          f = mulT(jointR_[*it], f);
+        }
+        turn(s.post);
+      }
+    }
+    Pending w;
+    for (int i = 0; i < 3; ++i) {
+      w.n[i].rest = -n[i];
+      w.f[i].rest = -f[i];
+    }
+    return w;
+  }
 
   Graph& graph() { return g_; }
   V3 subv(const V3& a, const V3& b) { return addv(a, {-b[0], -b[1], -b[2]}); }
@@ -592,6 +734,11 @@ class Builder {
   std::vector<JointStages> stages_;
   Eigen::Vector3d gravity_;
   V3 zero_;
+  std::vector<int> iq_, iv_;  // each joint's first configuration and velocity coordinate
+  std::vector<int> contacts_;
+  bool contactWorld_ = true;
+  std::vector<M3> quat_;   // S of each free-flyer's rotation R = 1 + 2 S
+  std::vector<M3> rootR_;  // the rotation of each root joint's motion
   std::vector<Ref> q_, dq_, ddq_;
   std::vector<M3> jointR_;
   std::vector<Ref> jointC_, jointS_;

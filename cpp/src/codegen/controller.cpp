@@ -173,6 +173,7 @@ std::vector<std::string> header(const ControllerCode& c) {
 ControllerCode generateController(const Model& model, const ParameterSet& params, Controller kind,
                                   const ControllerSettings& settings, const std::string& name) {
   checkIdentifier(name);
+  requireSingleDof(model, "a generated controller");
   const int n = model.nq(), np = params.size();
   ControllerSettings s = settings;
   if (s.p0.size() == 0) s.p0 = params.values;

@@ -109,6 +109,60 @@ std::vector<std::string> driveLines(const GeneratedCode& code) {
 
 }  // namespace internal
 
+namespace {
+
+std::string range(const char* name, int first, int size) {
+  return std::string(name) + "[" + std::to_string(first) +
+         (size > 1 ? ".." + std::to_string(first + size - 1) : "") + "]";
+}
+
+// A floating base: the coordinates of each joint, and the contact wrenches.
+std::vector<std::string> floatingLines(const GeneratedCode& code) {
+  std::vector<std::string> lines;
+  lines.push_back("A floating base: q has " + std::to_string(code.nq) +
+                  " entries, dq, ddq and tau " + std::to_string(code.nv) +
+                  " (Pinocchio's convention);");
+  lines.push_back("each joint's entries, and the joint it is mounted on:");
+  int iq = 0, iv = 0;
+  for (size_t k = 0; k < code.joints.size(); ++k) {
+    const int p = code.parents[k];
+    const bool ff = code.kinds[k] == JointType::FreeFlyer,
+               planar = code.kinds[k] == JointType::Planar;
+    const int nq = ff ? 7 : planar ? 4 : 1, nv = ff ? 6 : planar ? 3 : 1;
+    lines.push_back("  " + std::to_string(k + 1) + ". " + code.joints[k] + " (" +
+                    toString(code.kinds[k]) + ", on " +
+                    (p < 0 ? std::string("the base") : code.joints[static_cast<size_t>(p)]) +
+                    "): " + range("q", iq, nq) + ", " + range("dq", iv, nv));
+    if (ff) {
+      lines.push_back(
+          "     q: position, then unit quaternion (x, y, z, w), which must have norm 1");
+      lines.push_back(
+          "     (not normalised here); dq: linear, then angular velocity of the body in");
+      lines.push_back(
+          "     its own axes; ddq: their derivative; tau: force, then moment about the");
+      lines.push_back("     body's origin, in its axes.");
+    } else if (planar) {
+      lines.push_back(
+          "     q: (x, y, cos t, sin t), (cos t, sin t) of norm 1; dq: (vx, vy, wz) in the");
+      lines.push_back("     body's axes; tau: (fx, fy, tz).");
+    }
+    iq += nq;
+    iv += nv;
+  }
+  if (!code.contacts.empty()) {
+    lines.push_back(
+        "Contact wrenches f, 6 per link: force, then moment about the link's origin, in");
+    lines.push_back(code.contact_world ? "world axes:" : "the link's own axes:");
+    for (size_t c = 0; c < code.contacts.size(); ++c)
+      lines.push_back("  " + std::to_string(c + 1) + ". " + code.contacts[c] + ": " +
+                      range("f", 6 * static_cast<int>(c), 6));
+    lines.push_back("inverse_dynamics gives tau = M(q) ddq + b(q, dq) + g(q) - sum_c J_c^T f_c.");
+  }
+  return lines;
+}
+
+}  // namespace
+
 std::vector<std::string> describe(const GeneratedCode& code) {
   std::vector<std::string> lines;
   const ParameterSet& ps = code.params;
@@ -130,7 +184,9 @@ std::vector<std::string> describe(const GeneratedCode& code) {
   for (std::string part; std::getline(whatLines, part);) lines.push_back(part);
   lines.push_back("Units SI; gravity and all frames as in the robot description.");
   for (const auto& l : internal::driveLines(code)) lines.push_back(l);
-  if (!code.parents.empty()) {
+  if (code.floating) {
+    for (const auto& l : floatingLines(code)) lines.push_back(l);
+  } else if (!code.parents.empty()) {
     lines.push_back(
         "A tree: the joints in the order of q, dq, ddq and tau, each with the one it is");
     lines.push_back("mounted on:");
@@ -343,13 +399,17 @@ class CWriter {
 };
 
 std::string signature(const GeneratedCode& code, const GeneratedFunction& f) {
-  const std::string N = std::to_string(code.n), NP = std::to_string(code.params.size());
-  std::string s = "void " + code.name + "_" + toString(f.function) + "(const double q[" + N + "]";
+  // q of nq entries, dq, ddq and tau of nv: both n but for a floating base
+  const int nq = code.floating ? code.nq : code.n, nv = code.floating ? code.nv : code.n;
+  const std::string Q = std::to_string(nq), N = std::to_string(nv),
+                    NP = std::to_string(code.params.size());
+  std::string s = "void " + code.name + "_" + toString(f.function) + "(const double q[" + Q + "]";
   if (f.function != Function::Gravity)
     s += ", const double dq[" + N + "], const double ddq[" + N + "]";
   if (f.function == Function::Regressor)
-    return s + ", double W[" + std::to_string(code.n * code.params.size()) + "])";
+    return s + ", double W[" + std::to_string(nv * code.params.size()) + "])";
   if (!f.numeric) s += ", const double p[" + NP + "]";
+  if (f.contacts) s += ", const double f[" + std::to_string(6 * f.contacts) + "]";
   return s + ", double tau[" + N + "])";
 }
 
@@ -378,11 +438,18 @@ CFiles emitC(const GeneratedCode& code, const std::string& header_name, CTrig tr
   std::ostringstream h, c;
   h << "/*\n";
   for (const auto& l : describe(code)) h << (l.empty() ? " *" : " * " + l) << "\n";
-  h << " *\n * The regressor W is row-major, N x NP: tau[i] = sum_j W[i * NP + j] p[j]";
+  h << " *\n * The regressor W is row-major, " << (code.floating ? "NV" : "N")
+    << " x NP: tau[i] = sum_j W[i * NP + j] p[j]";
   h << (code.params.layout.friction ? " (friction\n * columns as above)" : "") << ".\n */\n";
   h << "#ifndef " << NAME << "_H\n#define " << NAME << "_H\n\n";
   h << "#ifdef __cplusplus\nextern \"C\" {\n#endif\n\n";
-  h << "#define " << NAME << "_N " << code.n << "\n";
+  if (code.floating) {
+    h << "#define " << NAME << "_NQ " << code.nq << "\n";
+    h << "#define " << NAME << "_NV " << code.nv << "\n";
+    h << "#define " << NAME << "_NC " << code.contacts.size() << "\n";
+  } else {
+    h << "#define " << NAME << "_N " << code.n << "\n";
+  }
   h << "#define " << NAME << "_NP " << np << "\n\n";
   h << "/* Parameter names and values, in the order of p. */\n";
   h << "extern const char* const " << code.name << "_parameter_names[" << np << "];\n";

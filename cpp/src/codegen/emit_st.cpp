@@ -183,6 +183,9 @@ std::string writeST(const STProgram& program) {
 
 STProgram programST(const GeneratedCode& code) {
   checkIdentifier(code.name);
+  if (code.floating)
+    throw ModelError("Structured Text is generated for a fixed base only; robot '" + code.robot +
+                     "' has a floating base (generate C)");
   const int n = code.n, np = static_cast<int>(code.params.size());
   const auto vec = internal::stVector;
   STProgram p;

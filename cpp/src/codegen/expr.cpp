@@ -199,6 +199,7 @@ std::vector<double> Graph::evaluate(const InputValues& in) const {
                             : n.kind == InputKind::DQR  ? in.dqr
                             : n.kind == InputKind::DDQR ? in.ddqr
                             : n.kind == InputKind::S    ? in.s
+                            : n.kind == InputKind::F    ? in.f
                                                         : in.p;
         if (!src) throw std::invalid_argument("codegen: evaluate() is missing an input array");
         v[i] = src[n.index];

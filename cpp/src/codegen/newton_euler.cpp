@@ -5,6 +5,7 @@
 // frame of each link's wrench (Plan) with the fewest operations.
 #include "mindyn/codegen/newton_euler.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <string>
 #include <utility>
@@ -38,8 +39,9 @@ const char* toString(Function f) {
 namespace {
 
 GeneratedFunction generateWith(const Model& model, const ParameterSet& params, Function function,
-                               bool numeric, const Eigen::VectorXd& values, const Plan& plan) {
-  const int n = model.nq(), np = params.size();
+                               bool numeric, const Eigen::VectorXd& values, const Plan& plan,
+                               const Contacts& contacts) {
+  const int n = model.nq(), nv = model.velocitySize(), np = params.size();
   const int P = params.layout.size(n);
   if (params.E.rows() != P || params.E.cols() != np)
     throw ModelError("codegen: the parameter map does not fit the model (" +
@@ -58,15 +60,19 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
 
   GeneratedFunction out;
   out.function = function;
-  out.n = n;
+  out.n = nv;
   out.np = np;
   out.numeric = numeric && function != Function::Regressor;
   Graph& g = out.graph;
   Builder b(g, model, jointStages(model, plan.shift));
+  if (function == Function::InverseDynamics && !contacts.links.empty()) {
+    b.setContacts(contacts.links, contacts.world);
+    out.contacts = static_cast<int>(contacts.links.size());
+  }
 
-  std::vector<Ref> dq(n, Graph::zero()), ddq(n, Graph::zero());
+  std::vector<Ref> dq(nv, Graph::zero()), ddq(nv, Graph::zero());
   if (function != Function::Gravity)
-    for (int k = 0; k < n; ++k) {
+    for (int k = 0; k < nv; ++k) {
       dq[k] = g.input(InputKind::DQ, k);
       ddq[k] = g.input(InputKind::DDQ, k);
     }
@@ -78,11 +84,11 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
     return pi;
   };
   if (function == Function::Regressor) {
-    out.outputs.assign(static_cast<size_t>(n) * np, Graph::zero());
+    out.outputs.assign(static_cast<size_t>(nv) * np, Graph::zero());
     for (int col = 0; col < off0; ++col) {
       const auto pi = classical([&](int c) { return g.constant(params.E(c, col)); });
       const auto tau = b.torques(pi, params.layout, true, plan.link);
-      for (int i = 0; i < n; ++i) out.outputs[static_cast<size_t>(i) * np + col] = tau[i];
+      for (int i = 0; i < nv; ++i) out.outputs[static_cast<size_t>(i) * np + col] = tau[i];
     }
     for (int k = 0; k < params.offsets; ++k)
       out.outputs[static_cast<size_t>(k) * np + off0 + k] = g.constant(1.0);
@@ -107,13 +113,15 @@ GeneratedFunction generateWith(const Model& model, const ParameterSet& params, F
 }  // namespace
 
 GeneratedFunction generate(const Model& model, const ParameterSet& params, Function function,
-                           bool numeric, const Eigen::VectorXd& values, Objective objective) {
+                           bool numeric, const Eigen::VectorXd& values, Objective objective,
+                           const Contacts& contacts) {
+  checkCodegenJoints(model, params.layout);
   // Choose, joint by joint, where the along-axis translation goes and in which frame the link's
   // wrench is formed, keeping a change when it lowers the operation count; repeat while a
   // pass improves.
   const int n = model.nq();
   Plan plan{std::vector<AxisShift>(n, AxisShift::Keep), std::vector<LinkForm>(n)};
-  GeneratedFunction best = generateWith(model, params, function, numeric, values, plan);
+  GeneratedFunction best = generateWith(model, params, function, numeric, values, plan, contacts);
   auto better = [objective](const OpCount& a, const OpCount& b) {
     if (objective == Objective::Additions)
       return a.add < b.add || (a.add == b.add && a.mul < b.mul);
@@ -121,7 +129,7 @@ GeneratedFunction generate(const Model& model, const ParameterSet& params, Funct
     return ta < tb || (ta == tb && a.add < b.add);
   };
   auto attempt = [&](const Plan& trial) {
-    GeneratedFunction f = generateWith(model, params, function, numeric, values, trial);
+    GeneratedFunction f = generateWith(model, params, function, numeric, values, trial, contacts);
     if (!better(f.program.count, best.program.count)) return false;
     best = std::move(f);
     plan = trial;
@@ -133,6 +141,7 @@ GeneratedFunction generate(const Model& model, const ParameterSet& params, Funct
   for (int pass = 0; pass < 3; ++pass) {
     bool improved = false;
     for (int k = n - 1; k >= 0; --k) {
+      if (!model.joints[k].singleDof()) continue;  // a floating base's joint: no axis
       for (AxisShift sh : {AxisShift::Keep, AxisShift::ToPre, AxisShift::ToPost}) {
         if (sh == plan.shift[k]) continue;
         Plan trial = plan;
@@ -161,7 +170,7 @@ GeneratedFunction internal::generateWithLinkForm(const Model& model, const Param
   const int n = model.nq();
   Plan plan{std::vector<AxisShift>(n, AxisShift::Keep),
             std::vector<LinkForm>(n, LinkForm{form % 4, form >= 4})};
-  return generateWith(model, params, function, false, {}, plan);
+  return generateWith(model, params, function, false, {}, plan, {});
 }
 
 void describeModel(GeneratedCode& code, const Model& model) {
@@ -173,8 +182,15 @@ void describeModel(GeneratedCode& code, const Model& model) {
   code.motors = model.transmission.motors;
   code.T = model.transmission.T;
   code.friction = model.friction_model;
-  if (model.isSerial()) return;
-  for (const Joint& j : model.joints) code.joints.push_back(j.name);
+  code.floating = !model.singleDof();
+  code.nq = model.configSize();
+  code.nv = model.velocitySize();
+  code.kinds.clear();
+  if (model.isSerial() && !code.floating) return;
+  for (const Joint& j : model.joints) {
+    code.joints.push_back(j.name);
+    code.kinds.push_back(j.type);
+  }
   for (int k = 0; k < model.nq(); ++k) code.parents.push_back(model.parent(k));
 }
 
@@ -198,18 +214,39 @@ void checkIdentifier(const std::string& name) {
 
 GeneratedCode generateCode(const Model& model, const ParameterSet& params,
                            const std::vector<Function>& functions, const std::string& name,
-                           bool numeric, const Eigen::VectorXd& values, Objective objective) {
+                           bool numeric, const Eigen::VectorXd& values, Objective objective,
+                           const Contacts& contacts) {
   checkIdentifier(name);
   if (functions.empty()) throw ModelError("codegen: no function to generate");
+  checkCodegenJoints(model, params.layout);
   GeneratedCode code;
   describeModel(code, model);
+  if (!contacts.links.empty() && !code.floating)
+    throw ModelError(
+        "codegen: contact wrenches apply to a floating base (a free-flyer or planar "
+        "root joint); model '" +
+        model.name + "' has a fixed base");
+  if (!contacts.links.empty() &&
+      std::find(functions.begin(), functions.end(), Function::InverseDynamics) == functions.end())
+    throw ModelError("codegen: contact wrenches enter the inverse dynamics only; generate it too");
+  for (size_t c = 0; c < contacts.links.size(); ++c) {
+    const int k = contacts.links[c];
+    if (k < 0 || k >= model.nq())
+      throw ModelError("codegen: contact link " + std::to_string(k) + " is not a moving link (0.." +
+                       std::to_string(model.nq() - 1) + ")");
+    for (size_t d = 0; d < c; ++d)
+      if (contacts.links[d] == k)
+        throw ModelError("codegen: contact link '" + model.link_names[k + 1] + "' given twice");
+    code.contacts.push_back(model.link_names[k + 1]);
+  }
+  code.contact_world = contacts.world;
   code.name = name;
   code.params = params;
   code.values = values.size() ? values : params.values;
   code.numeric = numeric;
   code.objective = objective;
   for (Function f : functions)
-    code.functions.push_back(generate(model, params, f, numeric, values, objective));
+    code.functions.push_back(generate(model, params, f, numeric, values, objective, contacts));
   return code;
 }
 

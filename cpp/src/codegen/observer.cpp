@@ -222,6 +222,7 @@ std::vector<std::string> header(const ObserverCode& c) {
 }  // namespace
 
 GeneratedFunction generateMomentum(const Model& model, const ParameterSet& params) {
+  requireSingleDof(model, "a generated momentum observer");
   const int n = model.nq(), np = params.size(), P = params.layout.size(n);
   if (params.E.rows() != P || params.E.cols() != np)
     throw ModelError("codegen: the parameter map does not fit the model");

@@ -7,10 +7,34 @@
 
 namespace mindyn::codegen {
 
+void checkCodegenJoints(const Model& model, ParameterLayout layout) {
+  for (int k = 0; k < model.nq(); ++k) {
+    const Joint& j = model.joints[k];
+    if (j.singleDof()) continue;
+    const bool root = j.type == JointType::FreeFlyer || j.type == JointType::Planar;
+    if (!root)
+      throw ModelError(
+          "code generation takes revolute and prismatic joints, and a free-flyer or "
+          "planar joint on the fixed base; model '" +
+          model.name + "' has the " + toString(j.type) + " joint '" + j.name + "'");
+    if (model.parent(k) >= 0)
+      throw ModelError(
+          "code generation takes a free-flyer or planar joint on the fixed base "
+          "only; the " +
+          std::string(toString(j.type)) + " joint '" + j.name + "' of model '" + model.name +
+          "' is mounted on the joint '" + model.joints[model.parent(k)].name + "'");
+    if (layout.rotor || layout.friction || layout.offset)
+      throw ModelError(
+          "code generation for a floating base takes the inertial parameters only "
+          "(no rotor inertia, friction or torque offsets); model '" +
+          model.name + "' has the " + toString(j.type) + " joint '" + j.name + "'");
+  }
+}
+
 // The layout's joint block (torque offsets) is the set's last `offsets` entries; E and `layout`
 // cover the link blocks.
 ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
-  requireSingleDof(model, "code generation");
+  checkCodegenJoints(model, bp.layout);
   ParameterSet s;
   s.layout = bp.layout.links();
   s.base = true;
@@ -26,7 +50,7 @@ ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp) {
 }
 
 ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout) {
-  requireSingleDof(model, "code generation");
+  checkCodegenJoints(model, layout);
   ParameterSet s;
   s.layout = layout.links();
   s.base = false;
@@ -40,6 +64,7 @@ ParameterSet classicalParameterSet(const Model& model, ParameterLayout layout) {
 
 ParameterSet withOffsets(const Model& model, ParameterSet s) {
   if (s.offsets) throw ModelError("codegen: the parameter set has torque offsets already");
+  checkCodegenJoints(model, model.layout(false, false, true));
   const int n = model.nq(), np = s.size();
   for (int k = 0; k < n; ++k) {
     const std::string name = offsetName(k);

@@ -255,6 +255,7 @@ GeneratedFunction internal::generateSlotineLiForm(const Model& model, const Para
 
 GeneratedFunction generateSlotineLi(const Model& model, const ParameterSet& params, bool normalised,
                                     std::vector<SlotineLiVariant>* variants) {
+  requireSingleDof(model, "the generated Slotine-Li products");
   const int n = model.nq();
   if (params.E.rows() != params.layout.size(n) || params.E.cols() != params.size())
     throw ModelError("codegen: the parameter map does not fit the model");

@@ -50,9 +50,23 @@ class GeneratedCode:
         column as +-1; ``count``: how many changed by more than round-off (e.g. cos
         1.57079632679 = 4.9e-12 from a URDF's truncated pi/2), ``largest``: the largest change.
         Also stated in the generated header comment.
+    contacts : list of str
+        The contact links whose wrenches the inverse dynamics takes (``f``, 6 per link, in this
+        order), empty for none.
+    wrench_frame : {"world", "local"}
+        The axes of the contact wrenches.
     """
 
-    def __init__(self, lang: str, name: str, out: dict, numeric: bool, header_name: str):
+    def __init__(
+        self,
+        lang: str,
+        name: str,
+        out: dict,
+        numeric: bool,
+        header_name: str,
+        contacts: Sequence[str] = (),
+        wrench_frame: str = "world",
+    ):
         self.lang = lang
         self.header_name = header_name
         self.name = name
@@ -65,6 +79,8 @@ class GeneratedCode:
         self.names = list(out["names"])
         self.values = np.asarray(out["values"], dtype=float)
         self.geometry_snap = dict(out["geometry_snap"])
+        self.contacts = list(contacts)
+        self.wrench_frame = wrench_frame
 
     def write(self, path: str | Path) -> list[Path]:
         """Writes the code: C to ``path`` (``.c`` added when missing) and the header beside it
@@ -152,6 +168,31 @@ def _parameter_values(params, names: Sequence[str]):
     return _args.array(params, "params", (len(names),))
 
 
+def _contact_links(robot: Robot, contacts) -> list[int]:
+    """The joint indices of the contact links ``contacts`` (names of moving links of a robot with
+    a floating base)."""
+    if isinstance(contacts, (str, bytes)) or not isinstance(contacts, Sequence):
+        raise _args.fail("contacts", "must be a sequence of link names")
+    names = robot.link_names[1:]
+    links = []
+    for c in contacts:
+        if not isinstance(c, str) or c not in names:
+            raise _args.fail(
+                "contacts",
+                f"names {c!r}, no moving link of robot '{robot.name}' ({', '.join(names)})",
+            )
+        if names.index(c) in links:
+            raise _args.fail("contacts", f"names the link {c!r} twice")
+        links.append(names.index(c))
+    if links and not any(kind in ("floating", "planar") for kind in robot.joint_types):
+        raise _args.fail(
+            "contacts",
+            f"apply to a floating base (a free-flyer or planar root joint); robot "
+            f"'{robot.name}' has a fixed base (load it with root_joint='floating')",
+        )
+    return links
+
+
 def identifier(name: str) -> str:
     """The default prefix of generated identifiers: ``name`` in letters, digits and single
     underscores, starting with a letter, at most 40 characters."""
@@ -178,8 +219,21 @@ def generate(
     minimise: str = "operations",
     trig: str | None = None,
     offset: bool = False,
+    contacts: Sequence[str] = (),
+    wrench_frame: str = "world",
 ) -> GeneratedCode:
     """Generates inverse-dynamics code for ``robot``.
+
+    A floating base (a robot loaded with ``root_joint="floating"`` or ``"planar"``, or any
+    free-flyer or planar joint on the fixed base, revolute and prismatic joints below it): C
+    only, the inertial parameters only (no ``rotor``, ``friction`` or ``offset``); ``q`` has
+    ``robot.nq`` entries and ``dq``, ``ddq`` and ``tau`` ``robot.nv``, in Pinocchio's
+    convention (a free-flyer's ``q``: position, then unit quaternion x, y, z, w, which the code
+    requires of norm 1 and does not normalise; its ``dq``: linear, then angular velocity in the
+    body's axes; ``ddq`` their derivative; its ``tau``: the force and moment on the body about
+    its origin, in its axes). The inverse dynamics equals Pinocchio's ``rnea``, minus
+    ``sum_c J_c^T f_c`` with ``contacts``; its first entries (the root joint's) are then the
+    base wrench the contacts leave unexplained, zero when the motion agrees with them.
 
     Parameters
     ----------
@@ -228,6 +282,16 @@ def generate(
         A constant torque offset per joint, ``Off1 .. OffN``, after the other parameters: added
         to the inverse dynamics, a unit column of the regressor, not part of the gravity torque
         (taken from ``base`` when a :class:`BaseParameters` is given).
+    contacts : sequence of str
+        A floating base only: links (names of ``robot.link_names``, not the fixed world) that
+        receive a contact wrench; the inverse dynamics then takes ``f``, 6 entries per link in
+        this order (force, then moment about the link's origin) after ``p``, and gives
+        ``rnea(q, dq, ddq) - sum_c J_c^T f_c``, ``J_c`` the Jacobian of the link's origin (as
+        :func:`mindyn.identification.floating.contact_jacobian`).
+    wrench_frame : {"world", "local"}
+        The axes of the contact wrenches: world axes (default; Pinocchio's LOCAL_WORLD_ALIGNED,
+        as :class:`mindyn.identification.floating.FloatingLog`), or the link's own (a force/torque
+        sensor's), which spares the rotations.
     """
     robot = load(robot) if not isinstance(robot, Robot) else robot
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
@@ -239,6 +303,8 @@ def generate(
     fs = _functions(what)
     _check_options(name, header_name, params)
     _args.choice(minimise, "minimise", ("operations", "additions"))
+    _args.choice(wrench_frame, "wrench_frame", ("world", "local"))
+    links = _contact_links(robot, contacts)
     name = name if name is not None else identifier(robot.name)
     if isinstance(base, BaseParameters):
         if base.rotor != rotor or base.friction != friction:
@@ -274,5 +340,9 @@ def generate(
         inline_trig=trig != "libm",
         offset=offset,
         formulas=formulas,  # as mindyn base prints them (BaseParameters.formulas)
+        contacts=links,
+        world_wrenches=wrench_frame == "world",
     )
-    return GeneratedCode(lang, name, out, numeric, header_name or f"{name}.h")
+    return GeneratedCode(
+        lang, name, out, numeric, header_name or f"{name}.h", list(contacts), wrench_frame
+    )

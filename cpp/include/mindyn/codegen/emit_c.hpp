@@ -6,6 +6,10 @@
 //   void NAME_regressor(const double q[N], const double dq[N], const double ddq[N],
 //                       double W[N * NP]);          /* row-major: tau = W p */
 //
+// A floating base (a free-flyer or planar joint on the fixed base, GeneratedCode::floating): q has
+// NQ entries, dq, ddq and tau NV (NAME_NQ, NAME_NV in place of NAME_N), and an inverse dynamics
+// with contacts takes `const double f[6 * NC]` after p (tau = rnea - sum_c J_c^T f_c).
+//
 // With baked-in (numeric) parameters the `p` argument is absent. The header lists the
 // parameters in order, with their definitions, in a comment and as NAME_parameter_names. Each
 // function computes all its sines and cosines first, then the recursion in graph order.

@@ -28,10 +28,11 @@ enum class Op : std::uint8_t {
 };
 
 // DQR, DDQR, S: the reference velocity and acceleration and the sliding variable of the
-// Slotine-Li controller step (local arrays of the generated step function).
-enum class InputKind : std::uint8_t { Q, DQ, DDQ, P, DQR, DDQR, S };
+// Slotine-Li controller step (local arrays of the generated step function). F: the contact
+// wrenches of a floating-base inverse dynamics (6 per contact link).
+enum class InputKind : std::uint8_t { Q, DQ, DDQ, P, DQR, DDQR, S, F };
 
-/// The argument name of an input kind in generated code: q, dq, ddq, p, dqr, ddqr, s.
+/// The argument name of an input kind in generated code: q, dq, ddq, p, dqr, ddqr, s, f.
 inline const char* inputName(InputKind k) {
   switch (k) {
     case InputKind::Q:
@@ -48,6 +49,8 @@ inline const char* inputName(InputKind k) {
       return "ddqr";
     case InputKind::S:
       return "s";
+    case InputKind::F:
+      return "f";
   }
   return "?";
 }
@@ -106,6 +109,7 @@ struct InputValues {
   const double* dqr = nullptr;
   const double* ddqr = nullptr;
   const double* s = nullptr;
+  const double* f = nullptr;
 };
 
 class Graph {

@@ -22,6 +22,10 @@
 // parameters through sums and signed permutations, so that equal kinematic coefficients of
 // different links share one product. Which frame each link uses is chosen by operation count.
 //
+// A floating base (checkCodegenJoints): a free-flyer or planar joint on the fixed base, revolute
+// and prismatic joints below; q, dq and ddq in Pinocchio's convention (model.hpp), the
+// inertial parameters only, and the inverse dynamics optionally with contact wrenches (Contacts).
+//
 // Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
@@ -62,6 +66,12 @@ struct ParameterSet {
   int size() const { return static_cast<int>(names.size()); }
 };
 
+/// Throws ModelError unless code can be generated for the model's joints: revolute and prismatic
+/// joints, and free-flyer or planar joints on the fixed base (a floating base: its q, dq and ddq
+/// in Pinocchio's convention, model.hpp), which take the inertial parameters only (`layout`
+/// without rotor inertia, friction or torque offsets). The message names the joint.
+void checkCodegenJoints(const Model& model, ParameterLayout layout);
+
 /// The equations-of-motion base set of `bp`: pi = embed(p_b); with the torque offsets of its
 /// layout as the last n entries.
 ParameterSet baseParameterSet(const Model& model, const BaseParameters& bp);
@@ -91,11 +101,21 @@ struct GeometrySnap {
   }
 };
 
+/// The contact wrenches a floating-base inverse dynamics takes (the input f, 6 per contact):
+/// link `links[c]` (the link joint links[c] moves) receives f[6 c .. 6 c + 5], the force and then
+/// the moment about the link's origin, in world axes (`world`, Pinocchio's LOCAL_WORLD_ALIGNED)
+/// or in the link's own axes; the function gives tau = rnea(q, dq, ddq) - sum_c J_c^T f_c.
+struct Contacts {
+  std::vector<int> links;
+  bool world = true;
+};
+
 /// One generated function.
 struct GeneratedFunction {
   Function function = Function::InverseDynamics;
-  int n = 0;             // joints
+  int n = 0;             // joints (velocity coordinates: the size of tau)
   int np = 0;            // parameters
+  int contacts = 0;      // contact wrenches (inverse dynamics of a floating base)
   bool numeric = false;  // parameter values baked in (inverse dynamics and gravity only)
   Graph graph;
   /// tau (n entries) or the regressor, row-major n x np.
@@ -116,9 +136,11 @@ const char* toString(Objective o);
 /// Joint by joint, the recursion chooses where the along-axis translation goes and in which
 /// frame the link's wrench is formed (its own, or the joint frame before the joint motion with
 /// the parameters turned by the joint angle), keeping what lowers the count by `objective`.
+/// `contacts` (inverse dynamics only) subtract the generalised forces of contact wrenches.
 GeneratedFunction generate(const Model& model, const ParameterSet& params, Function function,
                            bool numeric = false, const Eigen::VectorXd& values = {},
-                           Objective objective = Objective::Operations);
+                           Objective objective = Objective::Operations,
+                           const Contacts& contacts = {});
 
 /// How the Slotine-Li products are formed: from the columns of the regressor Y, or Y p by one
 /// force pass with the parameters as inputs, and Y^T s by the reverse (adjoint) pass of s^T Y p.
@@ -145,10 +167,17 @@ struct GeneratedCode {
   std::string robot;  // model name, for the header comment
   std::string name;   // identifier prefix of the generated functions
   int n = 0;
+  // A floating base (a free-flyer or planar joint on the fixed base): the sizes of q and of
+  // dq, ddq, tau (otherwise both n), and the contact links' names and wrench axes.
+  bool floating = false;
+  int nq = 0, nv = 0;
+  std::vector<std::string> contacts;
+  bool contact_world = true;
   // A tree (empty for a serial chain): the joint names in the order of q, and each joint's
   // parent (Model::parents), for the header comment.
   std::vector<std::string> joints;
   std::vector<int> parents;
+  std::vector<JointType> kinds;  // with a floating base: each joint's kind
   // Where rotor inertia and friction act (for the header comment): on the motors when
   // `motor_side`; the transmissions, q_m = T q with `motors` the rows of T (none: empty); and
   // the friction model.
@@ -164,10 +193,13 @@ struct GeneratedCode {
 };
 
 /// Generates `functions` under `name` (a C identifier; throws ModelError otherwise).
+/// `contacts`: the contact wrenches of a floating base's inverse dynamics (ModelError on a
+/// fixed-base model, or a link index out of range or given twice).
 GeneratedCode generateCode(const Model& model, const ParameterSet& params,
                            const std::vector<Function>& functions, const std::string& name,
                            bool numeric = false, const Eigen::VectorXd& values = {},
-                           Objective objective = Objective::Operations);
+                           Objective objective = Objective::Operations,
+                           const Contacts& contacts = {});
 
 /// Sets the robot's name and joint count of `code`, for a tree its joints and parents, and where
 /// rotor inertia and friction act.
