@@ -23,6 +23,7 @@ from conftest import assert_close, cli
 from mindyn import codegen
 from random_tree import random_multidof_tree_yaml, random_tree_urdf
 from test_codegen import GCC, compile_c, compile_shared, ptr
+from test_floating_cli import refused
 from test_multibody import FLOATING, pin_q, random_state
 
 pytestmark = pytest.mark.skipif(GCC is None, reason="gcc is needed to compile generated C")
@@ -235,3 +236,41 @@ def test_the_command_line_generates_it_for_a_urdf_with_its_own_floating_joint(tm
         lib.solo_inverse_dynamics(*[ptr(x) for x in args], ptr(tau))
         ref = pin.rnea(model, data, pin_q(robot, model, q), v, a)
         assert_close(tau, ref, TOL, "generated C id by the command line, floating joint")
+
+
+def test_the_command_line_takes_a_root_joint_and_contacts(tmp_path, rng):
+    """`mindyn codegen URDF --root-joint floating --contact ...`: the C the command line writes
+    (base parameters, the robot's values) against rnea - sum J_c^T f_c by Pinocchio; the options
+    that do not apply to a floating base are refused in one line."""
+    robot, model = solo()
+    path = FLOATING["solo12"]
+    feet = FEET[:2]
+    out = cli(
+        "codegen", path, "--root-joint", "floating", "--lang", "c", "-o", tmp_path / "s",
+        "--name", "s", "--contact", *feet, "--wrench-frame", "local",
+    )  # fmt: skip
+    assert "inverse_dynamics" in out
+    header = (tmp_path / "s.h").read_text()
+    assert all(f"{link}: f[{6 * k}..{6 * k + 5}]" in header for k, link in enumerate(feet))
+    lib = compile_shared(tmp_path / "s.c", tmp_path / "libs.so")
+    bp = mindyn.base_parameters(robot)
+    p = np.ascontiguousarray(bp.values(robot.params))
+    data = model.createData()
+    for _ in range(3):
+        q, v, a = random_state(robot, rng)
+        f = rng.uniform(-20, 20, 6 * len(feet))
+        qp = pin_q(robot, model, q)
+        ref = pin.rnea(model, data, qp, v, a) - contact_terms(model, data, qp, feet, f, "local")
+        tau = np.zeros(robot.nv)
+        args = [np.ascontiguousarray(x) for x in (q, v, a)]
+        lib.s_inverse_dynamics(*[ptr(x) for x in args], ptr(p), ptr(f), ptr(tau))
+        assert_close(tau, ref, TOL, "generated C id with contacts by the command line")
+    for argv, said in [
+        (["--what", "adaptive-pd", "--lang", "c"], "codegen --what adaptive-pd takes revolute"),
+        (["--lang", "st"], "Structured Text is generated for a fixed base only"),
+        (["--lang", "c", "--contact", "nope"], "--contact names 'nope', no moving link"),
+    ]:
+        refused("codegen", path, "--root-joint", "floating", "-o", tmp_path / "x", *argv,
+                match=said)  # fmt: skip
+    refused("codegen", "planar2", "--lang", "c", "--contact", "a", "-o", tmp_path / "y",
+            match="--contact: applies to a floating-base robot")  # fmt: skip

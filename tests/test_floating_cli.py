@@ -314,7 +314,7 @@ def test_base_and_info_take_a_root_joint_and_other_commands_refuse_it_in_one_lin
         ["simulate", "-o", tmp_path / "s.csv"],
         ["track"],
         ["ik", "--xyz", "0", "0", "1"],
-        ["codegen", "-o", tmp_path / "x.c", "--lang", "c"],
+        ["codegen", "-o", tmp_path / "x.c", "--lang", "c", "--what", "adaptive-pd"],
         ["export", ident, "--urdf", tmp_path / "o.urdf"],
         ["detect", ident, log],
         ["predict", ident, log, "-o", tmp_path / "p.csv"],

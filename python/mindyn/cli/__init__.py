@@ -9,10 +9,10 @@ import importlib
 import os
 import sys
 
-from .._core import ModelError, RobotFileNotFoundError
+from .._core import ArgumentError, ModelError, RobotFileNotFoundError
 from .._threads import reuse_freed_memory
 from .args import COMMANDS, Parser, UsageError, print_deprecation_notes
-from .flags import library_options_as_flags
+from .flags import argument_as_flag, library_options_as_flags
 from .outputs import prepare_outputs
 from .quiet import warnings_after_success
 
@@ -64,7 +64,10 @@ def _one_line(text: object) -> str:
 
 
 def _error(text: object) -> None:
-    print(f"mindyn: error: {_one_line(library_options_as_flags(str(text)))}", file=sys.stderr)
+    said = str(text)
+    if isinstance(text, ArgumentError):  # it starts with the library argument's name
+        said = argument_as_flag(said)
+    print(f"mindyn: error: {_one_line(library_options_as_flags(said))}", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -31,6 +31,7 @@ from .robot_options import (
     drive_side,
     joint_terms,
     load_robot,
+    require_single_dof,
 )
 
 
@@ -66,6 +67,21 @@ def register(subparsers) -> None:
     )
     add_joint_terms(p)
     add_offset(p)
+    p.add_argument(
+        "--contact",
+        nargs="+",
+        metavar="LINK",
+        help="floating-base robot, C inverse dynamics: the links in contact, whose wrenches "
+        "(force, then moment about the link's origin) the function takes after the parameters, "
+        "6 per link in this order, and returns tau = rnea - sum J_c^T f_c (default: none)",
+    )
+    p.add_argument(
+        "--wrench-frame",
+        choices=("world", "local"),
+        default="world",
+        help="with --contact: the axes of the contact wrenches, world (the default) or local, "
+        "the link's own axes",
+    )
     p.add_argument(
         "--params",
         metavar="FILE",
@@ -156,7 +172,12 @@ def register(subparsers) -> None:
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
-    robot = load_robot(args, command="codegen")
+    robot = load_robot(args)  # a floating base: C inverse dynamics, gravity, regressor only
+    if args.contact and robot.single_dof:
+        raise ModelError(
+            "--contact: applies to a floating-base robot (--root-joint floating|planar, or a "
+            "floating or planar joint at the root of the description)"
+        )
     robot, friction_note = _with_friction_model(robot, args)
     robot, drive_note = drive_side(robot, args)
     args.lang = args.lang or "st"  # --plcopen alone
@@ -184,6 +205,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )
     if args.what.strip() in CONTROLLERS + (OBSERVER,):
+        require_single_dof(robot, f"codegen --what {args.what.strip()}")
         note = _params_note(base.n, args.params, pruned, threshold) if params is not None else None
         given = params if params is not None else args.params
         if args.what.strip() == OBSERVER:
@@ -198,8 +220,10 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
     if any(w.strip() in CONTROLLERS + (OBSERVER,) for w in args.what.split(",")):
         raise ModelError("--what: a controller step is generated alone, not with other functions")
+    contacts = dict(contacts=args.contact or (), wrench_frame=args.wrench_frame)
     code = generate(
         robot,
+        **contacts,
         params=params if params is not None else args.params,
         name=args.name,
         header_name=header,
@@ -208,7 +232,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         **same,
     )
     # the classical-parameter recursion generated the same way, for its operation counts
-    classical = generate(robot, name=code.name, base=False, **same)
+    classical = generate(robot, name=code.name, base=False, **contacts, **same)
     written = _write(code, out, args.lang)
     extras = joint_terms(args)
     print(

@@ -75,3 +75,13 @@ def library_options_as_flags(text: str) -> str:
         return name if number is None else f"{name} {number}"
 
     return _LIBRARY_OPTION.sub(flag, text)
+
+
+def argument_as_flag(text: str) -> str:
+    """An argument error of the library (``contacts names 'x', ...``: it starts with the
+    argument's name) as the command line says it, when that argument is one of
+    :data:`LIBRARY_OPTIONS` (``--contact names 'x', ...``)."""
+    key, sep, rest = text.partition(" ")
+    if not sep or key not in LIBRARY_OPTIONS:
+        return text
+    return _FLAG_OF.get((key, None), "--" + key.replace("_", "-")) + sep + rest
