@@ -85,7 +85,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             if note:
                 print(f"  {note}")
     nz = info["noise"]
-    print("  torque noise sd per joint: " + " ".join(f"{v:.3g}" for v in nz["torque"]))
+    print(
+        "  torque noise sd per joint: "
+        + " ".join(f"{v:.3g}" for v in nz["torque"])
+        + _noise_basis(args.torque_noise, robot)
+    )
     if any(nz["quantization"]) or any(nz["position"]) or any(nz["velocity"]):
         print(
             f"  encoder step {max(nz['quantization']):.3g}, position noise "
@@ -98,6 +102,28 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         write_tracking_report(log, args.report, cycle=cycle, header=header)
         print(f"  report: {args.report}/ (summary.json, log.csv, plots)")
     return 0
+
+
+def _noise_basis(spec: str | None, robot) -> str:
+    """The unit of the torque noise and, given in percent, what it was taken of per joint."""
+    from ..control.simulation import torque_noise_scale
+
+    if not spec:
+        return ""
+    if not spec.strip().endswith("%"):
+        return " [N m | N]"
+    pct = spec.strip()[:-1].strip()
+    _, limited = torque_noise_scale(robot)
+    if limited.all():
+        return f" [N m | N], {pct} % of each joint's effort limit"
+    if not limited.any():
+        peak = "peak torque along the reference (no effort limits)"
+        return f" [N m | N], {pct} % of each joint's {peak}"
+    none = ", ".join(str(j + 1) for j in np.flatnonzero(~limited))
+    return (
+        f" [N m | N], {pct} % of the effort limit; of the peak torque along the reference for "
+        f"joint(s) {none}, which have none"
+    )
 
 
 def register(sub) -> None:
@@ -146,7 +172,8 @@ def register(sub) -> None:
         "--torque-noise",
         metavar="SD",
         help="torque noise sd: one value, one per joint (comma-separated), or P%% of each "
-        "joint's effort limit; in [0, 1e6] N m or [0, 100] %%",
+        "joint's effort limit (of its peak torque along the reference where the description "
+        "gives none); in [0, 1e6] N m or [0, 100] %%",
     )
     p.add_argument(
         "--position-noise", metavar="SD", help="position noise sd (rad, m), each in [0, 1]"

@@ -1028,6 +1028,19 @@ def simulate_inverse(
 NOISE_LIMITS = {"torque": 1e6, "position": 1.0, "velocity": 100.0, "quantization": 1.0}
 
 
+def torque_noise_scale(robot: Robot, reference_torque=None) -> tuple[np.ndarray, np.ndarray]:
+    """Per joint, the torque a percentage of torque noise is taken of: the effort limit, or,
+    where the description gives none, the peak of ``|reference_torque|`` (shape (m, n), the
+    torques along the reference; without it such a joint's entry is NaN). Returns the
+    torques and, per joint, whether it is the effort limit."""
+    eff = np.array(robot.limits["effort"], dtype=float)
+    limited = np.isfinite(eff) & (eff > 0)
+    peak = np.full(robot.n, np.nan)
+    if reference_torque is not None:
+        peak = np.abs(np.asarray(reference_torque, dtype=float)).max(0)
+    return np.where(limited, eff, peak), limited
+
+
 def noise_from_spec(
     spec: str | None, robot: Robot, what: str, *, reference_torque=None
 ) -> np.ndarray:
@@ -1049,10 +1062,7 @@ def noise_from_spec(
             pct = math.nan
         if not (math.isfinite(pct) and 0 <= pct <= 100):
             raise ArgumentError(f"{opt}: expected a percentage in [0, 100], got '{spec}'")
-        eff = np.array(robot.limits["effort"], dtype=float)
-        if reference_torque is not None:
-            peak = np.abs(np.asarray(reference_torque)).max(0)
-            eff = np.where(np.isfinite(eff) & (eff > 0), eff, peak)
+        eff, _ = torque_noise_scale(robot, reference_torque)
         if not np.isfinite(eff).all():
             raise ArgumentError("torque noise in %: the robot has no effort limits")
         return pct / 100.0 * eff
