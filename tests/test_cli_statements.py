@@ -99,3 +99,35 @@ def test_a_tree_refused_by_ik_names_the_tip_option_as_each_interface_spells_it()
     robot = mindyn.load(urdf)
     with pytest.raises(mindyn.ModelError, match="tip='<link>'"):
         mindyn.ik(robot, np.eye(4))
+
+
+@pytest.mark.parametrize("cell", ["1_0", "0x1", "\u0661", "nan", "1e999"])
+def test_a_trajectory_csv_cell_that_is_not_a_decimal_number_is_named(cell, tmp_path):
+    """A reference CSV's cells follow a log's rule (ASCII decimals): Python's float() would read
+    '1_0' as 10 and an Arabic-Indic one as 1, a silently different trajectory."""
+    rows = ["t,q1,q2", "0,0,0", "0.25,0.05,0", f"0.5,{cell},0", "0.75,0.05,0", "1,0.1,0"]
+    (tmp_path / "ref.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    rc, _, err = run(["simulate", "planar2", "--trajectory", tmp_path / "ref.csv", "-o", tmp_path])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "ref.csv, line 4, column q1" in err, err
+    assert not (tmp_path / "planar2_simulate.csv").exists()
+
+
+def test_a_trajectory_csv_that_is_not_utf8_is_one_line(tmp_path):
+    (tmp_path / "ref.csv").write_bytes(b"t,q1,q2\n0,0,0\n0.25,0.05,0\n0.5,\xff,0\n1,0.1,0\n")
+    rc, _, err = run(["simulate", "planar2", "--trajectory", tmp_path / "ref.csv", "-o", tmp_path])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "line 4: not UTF-8" in err and "defect" not in err, err
+
+
+def test_a_trajectory_csv_of_decimals_is_followed(tmp_path):
+    """The reference read back: at rest at its knots' end, the positions the file gives."""
+    rows = ["t,q1,q2"] + [f"{t:g},{0.1 * t:g},{-0.2 * t:g}" for t in (0, 0.25, 0.5, 0.75, 1)]
+    (tmp_path / "ref.csv").write_text("\n".join(rows) + "\n")
+    rc, _, err = run(
+        ["simulate", "planar2", "--trajectory", tmp_path / "ref.csv", "--mode", "inverse",
+         "-o", tmp_path / "log.csv"]
+    )  # fmt: skip
+    assert rc == 0, err
+    log = np.loadtxt(tmp_path / "log.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(log[:, 1:3], np.c_[0.1 * log[:, 0], -0.2 * log[:, 0]], atol=1e-12)

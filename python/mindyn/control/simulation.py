@@ -145,7 +145,7 @@ class CsvTrajectory:
     def __init__(self, path: str | Path, n: int):
         from scipy.interpolate import CubicSpline
 
-        from ..identification.data import DataError
+        from ..identification.data import DataError, decode_text, parse_cell
 
         path = Path(path)
         if not path.is_file():
@@ -153,18 +153,28 @@ class CsvTrajectory:
 
             raise RobotFileNotFoundError(f"trajectory file '{path}' does not exist")
         rows: list[list[float]] = []
-        with path.open(newline="") as f:
-            for lineno, row in enumerate(csv.reader(f), 1):
-                if not row or all(not c.strip() for c in row):
-                    continue
+        header: list[str] = []
+        # cells as a log's (identification.data.parse_cell): ASCII decimals, so that '1_000',
+        # hex or non-ASCII digits are refused, not read as Python's float() reads them
+        for lineno, row in enumerate(csv.reader(decode_text(path).splitlines()), 1):
+            if not row or all(not c.strip() for c in row):
+                continue
+            if lineno == 1:
                 try:
-                    rows.append([float(c) for c in row])
-                except ValueError:
-                    if rows or lineno > 1:
-                        raise DataError(
-                            f"{path}:{lineno}: non-numeric value in a data line"
-                        ) from None
-                    continue  # header
+                    parse_cell(row[0], "")
+                except DataError:
+                    header = [c.strip() for c in row]  # a first line whose t is not a number
+                    continue
+            rows.append(
+                [
+                    parse_cell(
+                        c,
+                        f"{path}, line {lineno}, column "
+                        + (header[j] if j < len(header) else str(j + 1)),
+                    )
+                    for j, c in enumerate(row)
+                ]
+            )
         if len({len(r) for r in rows}) > 1:
             raise DataError(f"{path}: rows have different numbers of columns")
         if len(rows) < 4:
