@@ -131,3 +131,12 @@ def test_a_trajectory_csv_of_decimals_is_followed(tmp_path):
     assert rc == 0, err
     log = np.loadtxt(tmp_path / "log.csv", delimiter=",", skiprows=1)
     np.testing.assert_allclose(log[:, 1:3], np.c_[0.1 * log[:, 0], -0.2 * log[:, 0]], atol=1e-12)
+
+
+def test_a_wrong_options_object_is_named_with_its_class():
+    from mindyn.identification import run
+
+    robot = mindyn.load("planar2")
+    expected = r"options is a dict; expected an IdentifyOptions$"
+    with pytest.raises(mindyn.ArgumentError, match=expected):
+        run(robot, [], options={"rotor": True})
