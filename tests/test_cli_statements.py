@@ -140,3 +140,27 @@ def test_a_wrong_options_object_is_named_with_its_class():
     expected = r"options is a dict; expected an IdentifyOptions$"
     with pytest.raises(mindyn.ArgumentError, match=expected):
         run(robot, [], options={"rotor": True})
+
+
+def test_excite_says_when_the_optimiser_improved_on_no_start(monkeypatch, tmp_path):
+    """SLSQP stopping at its first point on every start (as on a base set with columns 1e-13 of
+    the others) leaves a random trajectory: the output and the JSON say so, with its message."""
+    from mindyn.identification import excitation
+    from scipy.optimize import OptimizeResult
+
+    def stuck(fun, x0, **kw):
+        msg = "Inequality constraints incompatible"
+        return OptimizeResult(x=np.array(x0), success=False, message=msg, nit=1)
+
+    monkeypatch.setattr(excitation, "minimize", stuck)
+    rc, out, err = run(["excite", "planar2", "--starts", "2", "--quiet", "-o", tmp_path / "a.csv"])
+    assert rc == 0, err
+    (line,) = [s for s in out.splitlines() if "WARNING" in s]
+    assert "none of the 2 start(s) (Inequality constraints incompatible)" in line, line
+    doc = json.loads((tmp_path / "a.json").read_text())
+    assert len(doc["warnings"]) == 1 and not any(s["improved"] for s in doc["starts"])
+    monkeypatch.undo()
+    rc, out, err = run(["excite", "planar2", "--starts", "1", "--quiet", "-o", tmp_path / "b.csv"])
+    assert rc == 0 and "WARNING" not in out, out
+    doc = json.loads((tmp_path / "b.json").read_text())
+    assert doc["warnings"] == [] and doc["value"] < doc["initial_value"]
