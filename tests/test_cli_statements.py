@@ -164,3 +164,12 @@ def test_excite_says_when_the_optimiser_improved_on_no_start(monkeypatch, tmp_pa
     assert rc == 0 and "WARNING" not in out, out
     doc = json.loads((tmp_path / "b.json").read_text())
     assert doc["warnings"] == [] and doc["value"] < doc["initial_value"]
+
+
+@pytest.mark.parametrize("tolerance", [0.01, 0.5])
+def test_a_rank_tolerance_out_of_range_is_an_argument_error(tolerance):
+    """The range the command line states, (0, 0.01), holds for the library's keyword too, as an
+    ArgumentError naming it (the core's refusal was a ModelError, as for a bad description)."""
+    with pytest.raises(mindyn.ArgumentError, match=r"^tolerance is .*; expected a number < 0\.01$"):
+        mindyn.base_parameters("planar2", tolerance=tolerance)
+    assert mindyn.base_parameters("planar2h", tolerance=0.009).n == 4  # ZZR1, ZZ2, MX2, MY2
