@@ -173,3 +173,14 @@ def test_a_rank_tolerance_out_of_range_is_an_argument_error(tolerance):
     with pytest.raises(mindyn.ArgumentError, match=r"^tolerance is .*; expected a number < 0\.01$"):
         mindyn.base_parameters("planar2", tolerance=tolerance)
     assert mindyn.base_parameters("planar2h", tolerance=0.009).n == 4  # ZZR1, ZZ2, MX2, MY2
+
+
+@pytest.mark.parametrize("option", [{"tip": "link3"}, {"root_joint": "floating"}])
+def test_a_loaded_robot_refuses_a_tip_or_root_joint_instead_of_ignoring_it(option):
+    """mindyn.load(robot, tip=...) returned the whole robot unchanged: a chain asked for, a tree
+    (or another chain) silently given."""
+    robot = mindyn.load("puma560")
+    (key,) = option
+    with pytest.raises(mindyn.ArgumentError, match=f"^{key}= applies to a description file"):
+        mindyn.load(robot, **option)
+    assert mindyn.load(robot, gravity=[0, 0, -1.62]).gravity[2] == -1.62  # this one applies

@@ -100,6 +100,12 @@ def load(
     _args.instance(robot, "robot", (Robot, str, Path), "a Robot, a bundled robot name or a path")
     _args.optional(_args.text, tip, "tip")
     _args.optional(_args.text, root_joint, "root_joint")
+    if isinstance(robot, Robot) and (tip or root_joint):  # a loaded robot has its joints
+        given = "tip=" if tip else "root_joint="
+        raise _args.ArgumentError(
+            f"{given} applies to a description file, not to the loaded Robot '{robot.name}' "
+            f"(load its file with {given})"
+        )
     out = _load(robot, tip, root_joint)
     return out if gravity is None else out.with_gravity(gravity)
 
