@@ -184,3 +184,25 @@ def test_a_loaded_robot_refuses_a_tip_or_root_joint_instead_of_ignoring_it(optio
     with pytest.raises(mindyn.ArgumentError, match=f"^{key}= applies to a description file"):
         mindyn.load(robot, **option)
     assert mindyn.load(robot, gravity=[0, 0, -1.62]).gravity[2] == -1.62  # this one applies
+
+
+@pytest.mark.parametrize(
+    "option",
+    [
+        ["--controller", "pd"],
+        ["--substeps", "8"],
+        ["--integrator", "scipy"],
+        ["--torque-limit", "effort"],
+        ["--param-error", "0.1"],
+    ],
+)
+def test_simulate_inverse_refuses_the_closed_loops_options(option, tmp_path):
+    """--mode inverse has no controller: a controller, gains or integrator given with it were
+    ignored without a word, the log then not what the options asked for."""
+    argv = ["simulate", "planar2", "--mode", "inverse", "--duration", "0.2", "-o", tmp_path]
+    rc, _, err = run(argv + option)
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"mindyn: error: {option[0]}: an option of the closed loop"), err
+    assert not (tmp_path / "planar2_simulate.csv").exists()
+    rc, _, err = run(argv)
+    assert rc == 0 and (tmp_path / "planar2_simulate.csv").is_file(), err

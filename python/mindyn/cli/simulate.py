@@ -12,6 +12,22 @@ from .number_options import controller_period, number, seed
 from .outputs import output_file
 from .robot_options import add_drive_side, add_robot, drive_side_words, with_drive_side
 
+#: The options of the closed loop, which --mode inverse (no controller) does not take
+TRACKING_ONLY = ("controller", "gains", "param_error", "substeps", "integrator", "torque_limit")
+
+
+def _check_mode(args: argparse.Namespace) -> None:
+    """--mode inverse refuses the closed loop's options instead of ignoring them."""
+    if args.mode != "inverse":
+        return
+    for dest in TRACKING_ONLY:
+        if getattr(args, dest) != args.tracking_defaults[dest]:
+            flag = "--" + dest.replace("_", "-")
+            raise ValueError(
+                f"{flag}: an option of the closed loop (--mode tracking); --mode inverse has no "
+                "controller (the torques of the inverse dynamics along the reference)"
+            )
+
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     from ..control.simulation import (
@@ -24,6 +40,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from ..identification.data import convert_torque, write_csv
     from .closed_loop import reference_and_controller
 
+    _check_mode(args)
     robot = with_drive_side(load(args.robot, tip=args.tip), args)
     rate = 1.0 / args.period if args.period else args.rate
     args.period = 1.0 / rate
@@ -148,9 +165,12 @@ def register(sub) -> None:
         choices=["tracking", "inverse"],
         default="tracking",
         help="tracking: the robot integrated under the controller (default); inverse: torques "
-        "from inverse dynamics along the reference, no controller",
+        "from inverse dynamics along the reference, no controller (the closed loop's options "
+        "--controller, --gains, --param-error, --substeps, --integrator, --torque-limit are "
+        "refused)",
     )
     add_closed_loop_args(p, "computed-torque")
+    p.set_defaults(tracking_defaults={dest: p.get_default(dest) for dest in TRACKING_ONLY})
     g = p.add_mutually_exclusive_group()
     number(
         g, "--rate", low=0, high=1e6, low_open=True, default=250.0, help="control and log rate [Hz]"
