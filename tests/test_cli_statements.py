@@ -156,9 +156,10 @@ def test_excite_says_when_the_optimiser_improved_on_no_start(monkeypatch, tmp_pa
     rc, out, err = run(["excite", "planar2", "--starts", "2", "--quiet", "-o", tmp_path / "a.csv"])
     assert rc == 0, err
     (line,) = [s for s in out.splitlines() if "WARNING" in s]
-    assert "none of the 2 start(s) (Inequality constraints incompatible)" in line, line
+    assert "failed on all 2 start(s) without improving on any (Inequality constraints" in line
     doc = json.loads((tmp_path / "a.json").read_text())
-    assert len(doc["warnings"]) == 1 and not any(s["improved"] for s in doc["starts"])
+    assert len(doc["warnings"]) == 1
+    assert not any(s["improved"] or s["converged"] for s in doc["starts"])
     monkeypatch.undo()
     rc, out, err = run(["excite", "planar2", "--starts", "1", "--quiet", "-o", tmp_path / "b.csv"])
     assert rc == 0 and "WARNING" not in out, out
@@ -206,3 +207,17 @@ def test_simulate_inverse_refuses_the_closed_loops_options(option, tmp_path):
     assert not (tmp_path / "planar2_simulate.csv").exists()
     rc, _, err = run(argv)
     assert rc == 0 and (tmp_path / "planar2_simulate.csv").is_file(), err
+
+
+def test_excite_does_not_warn_when_the_start_is_already_optimal(tmp_path):
+    """One joint, one base parameter: every trajectory has cond 1, so no start can improve; the
+    optimiser converges at once and nothing is wrong."""
+    (tmp_path / "one.yaml").write_text(
+        "name: one\nconvention: mdh\njoints:\n"
+        "  - {name: j1, type: revolute, alpha: 0, d: 0, theta: 0, r: 0,\n"
+        "     inertial: {mass: 2.0, com: [0.2, 0, 0], inertia: {xx: 0.01, yy: 0.02, zz: 0.02}}}\n"
+    )
+    rc, out, err = run(["excite", tmp_path / "one.yaml", "--quiet", "-o", tmp_path / "e.csv"])
+    assert rc == 0 and "WARNING" not in out, out
+    doc = json.loads((tmp_path / "e.json").read_text())
+    assert doc["value"] == pytest.approx(1.0) and doc["warnings"] == []

@@ -332,8 +332,9 @@ class ExcitationResult:
     ``value`` / ``initial_value`` are in the reported form of :func:`criterion_value` (the
     latter for ``initial_trajectory``, the starting guess of the best start); ``starts`` lists
     per random start its initial and final value, iterations, seconds, the optimiser's
-    message and whether it improved on the start, in the same form; ``warnings`` says when no
-    start improved (the trajectory is then a random one). That form is smaller-is-better for
+    message, whether it converged and whether it improved on the start, in the same form;
+    ``warnings`` says when the optimiser failed without improving on any start (the trajectory
+    is then a random one). That form is smaller-is-better for
     ``cond`` and ``hadamard`` and larger-is-better for ``logdet`` (``log det(W^T W / rows)``,
     maximised)."""
 
@@ -740,6 +741,7 @@ def optimize_excitation(
                 "seconds": dt,
                 "message": str(res.message),
                 "improved": bool(J < J0),
+                "converged": bool(res.success),
             }
         )
         say(
@@ -752,11 +754,11 @@ def optimize_excitation(
     assert best is not None  # starts >= 1
     x, J, J0, guess = best
     warnings = []
-    if not any(r["improved"] for r in runs):  # the result is a random guess: say so
+    if not any(r["improved"] or r["converged"] for r in runs):  # a random guess: say so
         why = "; ".join(sorted({r["message"] for r in runs}))
         warnings.append(
-            f"the optimiser (SLSQP) improved on none of the {starts} start(s) ({why}): the "
-            f"trajectory is the best random start's, {shown} {report(J0):.6g}"
+            f"the optimiser (SLSQP) failed on all {starts} start(s) without improving on any "
+            f"({why}): the trajectory is the best random start's, {shown} {report(J0):.6g}"
         )
         say(f"excite: WARNING: {warnings[-1]}")
     if J >= 60.0:  # no start found a trajectory with a full-rank regressor
