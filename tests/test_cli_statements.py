@@ -221,3 +221,25 @@ def test_excite_does_not_warn_when_the_start_is_already_optimal(tmp_path):
     assert rc == 0 and "WARNING" not in out, out
     doc = json.loads((tmp_path / "e.json").read_text())
     assert doc["value"] == pytest.approx(1.0) and doc["warnings"] == []
+
+
+@pytest.mark.parametrize("key", ["velocity", "acceleration", "effort"])
+def test_a_negative_limit_in_a_yaml_table_is_refused_by_name(key, tmp_path):
+    """A URDF's negative <limit velocity/effort> was refused, a YAML table's was read: a
+    negative effort then counted as no limit in simulate's noise and saturated the torque of
+    track --torque-limit effort at a negative bound (the loop diverged)."""
+
+    def table(sign: int) -> str:
+        limits = {"lower": -1, "upper": 1, "velocity": 3, "acceleration": 10, "effort": 5}
+        limits[key] *= sign
+        given = "{" + ", ".join(f"{k}: {v}" for k, v in limits.items()) + "}"
+        return TWO_LINK.replace("{lower: -170, upper: 170, velocity: 3, effort: 50}", given)
+
+    (tmp_path / "arm.yaml").write_text(table(-1))
+    expected = rf"arm.yaml:\d+: joint 1 \('shoulder'\): limits: '{key}' is -\d+: a limit on the "
+    with pytest.raises(mindyn.ModelError, match=expected + "magnitude cannot be negative"):
+        mindyn.load(tmp_path / "arm.yaml")
+    (tmp_path / "arm.yaml").write_text(table(1))
+    value = mindyn.load(tmp_path / "arm.yaml").limits[key][0]
+    degree = np.pi / 180 if key != "effort" else 1.0  # angle_unit: deg
+    assert value == pytest.approx({"velocity": 3, "acceleration": 10, "effort": 5}[key] * degree)
