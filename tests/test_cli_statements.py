@@ -243,3 +243,25 @@ def test_a_negative_limit_in_a_yaml_table_is_refused_by_name(key, tmp_path):
     value = mindyn.load(tmp_path / "arm.yaml").limits[key][0]
     degree = np.pi / 180 if key != "effort" else 1.0  # angle_unit: deg
     assert value == pytest.approx({"velocity": 3, "acceleration": 10, "effort": 5}[key] * degree)
+
+
+def test_a_trajectory_json_of_another_robot_is_refused(tmp_path):
+    """An excitation keeps the limits of the robot it was made for: simulate and track took
+    one of another robot with as many joints without a word. simulate states its reference."""
+    from mindyn.identification.excitation import random_trajectory
+
+    for name in ("planar2", "planar2h"):
+        traj = random_trajectory(mindyn.load(name), seed=1)
+        doc = {"robot": name, "trajectory": traj.to_dict()}
+        (tmp_path / f"{name}.json").write_text(json.dumps(doc))
+    for cmd in (["simulate", "-o", tmp_path / "log.csv"], ["track", "--duration", "0.2"]):
+        argv = [cmd[0], "planar2", "--trajectory", tmp_path / "planar2h.json", *cmd[1:]]
+        rc, _, err = run(argv)
+        assert rc == 2 and len(err.splitlines()) == 1, err
+        assert "planar2h.json: an excitation of robot 'planar2h', not 'planar2'" in err, err
+    argv = ["simulate", "planar2", "--trajectory", tmp_path / "planar2.json", "--mode", "inverse"]
+    rc, out, err = run([*argv, "-o", tmp_path / "log.csv"])
+    assert rc == 0, err
+    assert out.splitlines()[1] == f"  reference: trajectory {tmp_path / 'planar2.json'} (10 s)"
+    rc, out, err = run(["simulate", "planar2", "--mode", "inverse", "-o", tmp_path / "b.csv"])
+    assert out.splitlines()[1] == "  reference: sum of sines within the limits, 10 s cycle"

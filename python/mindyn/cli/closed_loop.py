@@ -29,7 +29,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
             "sampled about 7 times per oscillation"
         )
     if args.trajectory:
-        reference = load_reference(args.trajectory, n)
+        reference = load_reference(args.trajectory, n, robot=robot)
         ref_text = f"trajectory {args.trajectory} ({reference.duration:g} s)"
         duration = args.duration or reference.duration
         cycle = args.cycle or duration

@@ -89,6 +89,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         f"friction {'on' if args.friction else 'off'}"
         + (f", {side}" if (side := drive_side_words(robot, args)) else "")
     )
+    print(f"  reference: {ref_text}")
     if info["mode"] == "tracking":
         err = np.degrees(info["max_tracking_error"])
         print(

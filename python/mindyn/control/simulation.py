@@ -210,12 +210,15 @@ class CsvTrajectory:
         return q, dq, ddq
 
 
-def load_reference(path, n: int):
+def load_reference(path, n: int, *, robot: Robot | None = None):
     """A reference from the JSON of ``mindyn excite`` (its exact Fourier series) or from a CSV
     (:class:`CsvTrajectory`, e.g. the CSV ``mindyn excite`` writes) for a robot of ``n`` joints;
-    raises ValueError when the file gives another number of joints."""
+    raises ValueError when the file gives another number of joints, and, given ``robot``, when
+    the JSON names another robot (whose limits the excitation kept)."""
     _args.path(path, "path")
     n = _args.integer(n, "n", 1)
+    _args.optional(_args.instance, robot, "robot", Robot)
+    from ..identification.data import DataError, read_json
     from ..identification.excitation import FourierTrajectory
 
     p = Path(path)
@@ -223,6 +226,12 @@ def load_reference(path, n: int):
         ref = FourierTrajectory.load(p)
         if ref.n != n:
             raise ArgumentError(f"{path} has {ref.n} joints; the robot has {n}")
+        made_for = read_json(p, what="trajectory file").get("robot")
+        if robot is not None and made_for not in (None, robot.name):
+            raise DataError(
+                f"{path}: an excitation of robot '{made_for}', not '{robot.name}' (it keeps the "
+                "limits of the robot it was made for)"
+            )
         return ref
     return CsvTrajectory(p, n)
 
