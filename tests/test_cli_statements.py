@@ -265,3 +265,18 @@ def test_a_trajectory_json_of_another_robot_is_refused(tmp_path):
     assert out.splitlines()[1] == f"  reference: trajectory {tmp_path / 'planar2.json'} (10 s)"
     rc, out, err = run(["simulate", "planar2", "--mode", "inverse", "-o", tmp_path / "b.csv"])
     assert out.splitlines()[1] == "  reference: sum of sines within the limits, 10 s cycle"
+
+
+def test_codegen_refuses_a_controller_period_for_functions_without_one(tmp_path):
+    """--controller-period with the inverse dynamics, gravity or regressor was ignored (they are
+    functions of the state), while --gains, --box and --torque-limit were refused there."""
+    argv = ["codegen", "planar2", "--lang", "c", "-o", tmp_path / "a"]
+    rc, _, err = run([*argv, "--controller-period", "0.01"])
+    assert rc == 2 and "--controller-period applies to controller and" in err, err
+    assert not (tmp_path / "a.c").exists()
+    step = ["--what", "momentum-observer", "--controller-period", "0.01"]
+    rc, out, err = run([*argv, *step])
+    assert rc == 0 and "period 0.01 s" in out, err
+    assert "K_O [1/s] (default 1 / (10 T) = 10)" in out  # 1 / (10 x 0.01 s)
+    rc, out, err = run([*argv, "--what", "momentum-observer"])
+    assert rc == 0 and "period 0.004 s" in out, err  # the default, stated

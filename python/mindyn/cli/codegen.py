@@ -27,6 +27,9 @@ from .number_options import controller_period, joint_vector
 from .outputs import output_file
 from .robot_options import add_joint_terms, add_offset, add_robot, drive_side, joint_terms
 
+#: The default controller period [s] of the generated controller and observer steps
+PERIOD = 0.004
+
 
 def register(subparsers) -> None:
     p = add_command(
@@ -106,7 +109,9 @@ def register(subparsers) -> None:
         "the robot's default gains, as 'mindyn track' uses them); --params gives the initial "
         "estimate",
     )
-    controller_period(c, default=0.004, help="controller period [s]")
+    controller_period(
+        c, help=f"controller period [s] of the controller and observer steps (default {PERIOD:g})"
+    )
     joint_vector(
         c,
         "--observer-gain",
@@ -178,6 +183,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )
     if args.what.strip() in CONTROLLERS + (OBSERVER,):
+        args.period = PERIOD if args.period is None else args.period
         note = _params_note(base.n, args.params, pruned, threshold) if params is not None else None
         given = params if params is not None else args.params
         if args.what.strip() == OBSERVER:
@@ -190,6 +196,8 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     for opt in ("gains", "torque_limit", "box"):
         if getattr(args, opt) is not None:
             raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
+    if args.period is not None:  # the functions of q have no period
+        raise ModelError(f"--controller-period applies to controller and {OBSERVER} steps only")
     if any(w.strip() in CONTROLLERS + (OBSERVER,) for w in args.what.split(",")):
         raise ModelError("--what: a controller step is generated alone, not with other functions")
     code = generate(
