@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import math
 
 import mindyn
 import numpy as np
@@ -280,3 +281,50 @@ def test_codegen_refuses_a_controller_period_for_functions_without_one(tmp_path)
     assert "K_O [1/s] (default 1 / (10 T) = 10)" in out  # 1 / (10 x 0.01 s)
     rc, out, err = run([*argv, "--what", "momentum-observer"])
     assert rc == 0 and "period 0.004 s" in out, err  # the default, stated
+
+
+DAMPED = """\
+name: damped
+convention: mdh
+joints:
+  - {name: j1, type: revolute, alpha: 0, d: 0, theta: 0, r: 0, friction: {viscous: 3.0},
+     inertial: {mass: 2.0, com: [0.1, 0, 0], inertia: {xx: 0.001, yy: 0.001, zz: 0.0001}}}
+"""
+
+
+class _Ramp:
+    """q_d = v t: the robot starts at speed v."""
+
+    duration = 0.2
+
+    def evaluate(self, t):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return 0.5 * t[:, None], np.full((t.size, 1), 0.5), np.zeros((t.size, 1))
+
+
+def test_rk4_steps_follow_the_plants_damping_rate(tmp_path):
+    """A joint whose viscous friction is fast on its inertia (rate Fv / I = 3 / (1e-4 + 2 x 0.1^2)
+    = 149 1/s here, 1.4e4 1/s on the xArm7's wrist) made RK4 with 4 steps per period diverge
+    (|R(h lambda)| > 1 beyond h lambda = 2.785) at t = 0; the default steps keep h lambda <= 2
+    and the free motion then decays, as the exact v0 exp(-lambda t) does."""
+    from mindyn.control import simulation
+
+    (tmp_path / "damped.yaml").write_text(DAMPED)
+    robot = mindyn.load(tmp_path / "damped.yaml")
+    rate = 3.0 / (1e-4 + 2.0 * 0.1**2)
+    period = 0.04  # h lambda = 1.49 with 4 steps: 4 suffice
+    steps, found = simulation.rk4_substeps(robot, robot.parameters(friction=True), period)
+    assert found == pytest.approx(rate, rel=1e-12) and steps == 4
+    period = 0.1  # 14.9 for the period: 8 steps
+    steps, _ = simulation.rk4_substeps(robot, robot.parameters(friction=True), period)
+    assert steps == 8 == math.ceil(period * rate / 2.0)
+
+    def idle(t, q, dq, q_d, dq_d, ddq_d):
+        return np.zeros(1)
+
+    res = simulation.simulate(robot, _Ramp(), idle, rate=10.0, friction=True)
+    assert res.info["substeps"] == 8
+    assert np.all(np.isfinite(res.dq)) and np.all(np.abs(res.dq[1:, 0]) < 0.5 * 0.5)
+    assert "damping rate 149 1/s" in res.info["integrator"]
+    with pytest.raises(mindyn.Error, match="diverged"):  # the former default
+        simulation.simulate(robot, _Ramp(), idle, rate=10.0, friction=True, substeps=4)

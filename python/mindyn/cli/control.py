@@ -87,6 +87,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         lines.append(f"  {gains.note}")
     if "stability" in result.info:
         lines.append(f"  {result.info['stability']}")
+    lines.append(f"  integration: {result.info['integrator']}")
     lines.append("")
     lines.append(_row("joint", range(1, n + 1), "{:>9d}"))
     lines.append(_row("max |q - q_d| [deg]", s["max_error_deg"]))
@@ -121,9 +122,7 @@ def cmd_track(args: argparse.Namespace) -> int:
             "seed": args.seed,
             "noise": list(args.noise),
             "torque_limit": args.torque_limit,
-            "integrator": f"{args.integrator} ({args.substeps} steps per period)"
-            if args.integrator == "rk4"
-            else "scipy RK45",
+            "integrator": result.info["integrator"],
         }
         if robot.name == "zcr07s" and args.controller == "adaptive-pd":
             header["zcr07s_max_error_deg"] = ZCR07S_STUDY_MAX_ERROR_DEG

@@ -102,6 +102,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         ):
             if note:
                 print(f"  {note}")
+        print(f"  integration: {info['integrator']}")
     nz = info["noise"]
     print(
         "  torque noise sd per joint: "
