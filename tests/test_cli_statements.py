@@ -1,6 +1,8 @@
-"""What the commands state about the choices they made for the user, and how their refusals
-name the options, on inputs the other tests do not take: a description with an effort limit on
-some joints only, a tree given to a command that needs a chain."""
+"""What the commands and functions state about the choices they made for the user, and the
+inputs they refuse instead of taking silently, on inputs the other tests do not take: a
+description with an effort limit on some joints only or a negative one, a tree given where a
+chain is needed, reference files with odd cells or of another robot, options that do not apply
+to the mode or function asked for, an optimiser that fails, a plant too stiff for RK4's step."""
 
 from __future__ import annotations
 
