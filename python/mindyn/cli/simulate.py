@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from ..robot import load
-from .args import add_command
+from .args import add_command, given_options, remember_defaults
 from .number_options import controller_period, number, seed
 from .outputs import output_file
 from .robot_options import add_drive_side, add_robot, drive_side_words, with_drive_side
@@ -18,15 +18,12 @@ TRACKING_ONLY = ("controller", "gains", "param_error", "substeps", "integrator",
 
 def _check_mode(args: argparse.Namespace) -> None:
     """--mode inverse refuses the closed loop's options instead of ignoring them."""
-    if args.mode != "inverse":
-        return
-    for dest in TRACKING_ONLY:
-        if getattr(args, dest) != args.tracking_defaults[dest]:
-            flag = "--" + dest.replace("_", "-")
-            raise ValueError(
-                f"{flag}: an option of the closed loop (--mode tracking); --mode inverse has no "
-                "controller (the torques of the inverse dynamics along the reference)"
-            )
+    given = given_options(args, *TRACKING_ONLY) if args.mode == "inverse" else []
+    if given:
+        raise ValueError(
+            f"{given[0]}: an option of the closed loop (--mode tracking); --mode inverse has no "
+            "controller (the torques of the inverse dynamics along the reference)"
+        )
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -172,7 +169,7 @@ def register(sub) -> None:
         "refused)",
     )
     add_closed_loop_args(p, "computed-torque")
-    p.set_defaults(tracking_defaults={dest: p.get_default(dest) for dest in TRACKING_ONLY})
+    remember_defaults(p, *TRACKING_ONLY)
     g = p.add_mutually_exclusive_group()
     number(
         g, "--rate", low=0, high=1e6, low_open=True, default=250.0, help="control and log rate [Hz]"
