@@ -330,3 +330,13 @@ def test_rk4_steps_follow_the_plants_damping_rate(tmp_path):
     assert "damping rate 149 1/s" in res.info["integrator"]
     with pytest.raises(mindyn.Error, match="diverged"):  # the former default
         simulation.simulate(robot, _Ramp(), idle, rate=10.0, friction=True, substeps=4)
+
+
+def test_codegen_numeric_needs_a_function_that_takes_the_values(tmp_path):
+    """--numeric with the regressor alone was ignored, and the output said 'values baked in'."""
+    argv = ["codegen", "planar2", "--lang", "c", "--numeric", "-o", tmp_path / "a"]
+    rc, _, err = run([*argv, "--what", "regressor"])
+    assert rc == 2 and "--numeric applies to the inverse dynamics and gravity" in err, err
+    rc, out, err = run([*argv, "--what", "gravity,regressor"])
+    assert rc == 0 and "values baked in" in out, err
+    assert "const double p[" not in (tmp_path / "a.h").read_text()  # gravity takes no p

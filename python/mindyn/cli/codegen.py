@@ -8,7 +8,7 @@ import argparse
 
 from .._core import ModelError
 from ..base import base_parameters
-from ..codegen import CONTROLLERS, generate
+from ..codegen import CONTROLLERS, FUNCTIONS, generate
 from ..robot import load
 from .args import add_command
 from .codegen_output import (
@@ -198,6 +198,11 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
     if args.period is not None:  # the functions of q have no period
         raise ModelError(f"--controller-period applies to controller and {OBSERVER} steps only")
+    if args.numeric and not {w.strip() for w in args.what.split(",")} & {"id", *FUNCTIONS[:2]}:
+        raise ModelError(
+            "--numeric applies to the inverse dynamics and gravity (the regressor takes no "
+            "parameter values)"
+        )
     if any(w.strip() in CONTROLLERS + (OBSERVER,) for w in args.what.split(",")):
         raise ModelError("--what: a controller step is generated alone, not with other functions")
     code = generate(
