@@ -340,3 +340,14 @@ def test_codegen_numeric_needs_a_function_that_takes_the_values(tmp_path):
     rc, out, err = run([*argv, "--what", "gravity,regressor"])
     assert rc == 0 and "values baked in" in out, err
     assert "const double p[" not in (tmp_path / "a.h").read_text()  # gravity takes no p
+
+
+@pytest.mark.parametrize("cmd", [["track"], ["simulate", "-o", "OUT"]])
+def test_a_parameter_error_for_pd_is_refused(cmd, tmp_path):
+    """PD has no model: --param-error with it was ignored."""
+    argv = [cmd[0], "planar2", "--controller", "pd", "--duration", "0.2"]
+    argv += [a.replace("OUT", str(tmp_path / "log.csv")) for a in cmd[1:]]
+    rc, _, err = run([*argv, "--param-error", "0.5"])
+    assert rc == 2 and err.startswith("mindyn: error: --param-error: --controller pd"), err
+    rc, _, err = run(argv)
+    assert rc == 0, err

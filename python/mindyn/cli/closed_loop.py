@@ -11,6 +11,15 @@ from .number_options import number
 from .outputs import output_dir
 
 
+def check_controller_options(args: argparse.Namespace) -> None:
+    """--param-error sets a model's estimate: PD has none (it was ignored)."""
+    if args.controller == "pd" and args.param_error is not None:
+        raise ValueError(
+            "--param-error: --controller pd has no model (the error is that of the estimate of "
+            "adaptive-pd and computed-torque)"
+        )
+
+
 def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     """The reference, its text, the simulated time, the per-cycle span and the controller of
     ``mindyn track`` and ``mindyn simulate`` (``--trajectory``, ``--cycle``, ``--controller``,

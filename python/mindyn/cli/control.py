@@ -12,7 +12,7 @@ import numpy as np
 
 from ..robot import load
 from .args import ZCR07S_STUDY, add_command, deprecated
-from .closed_loop import add_closed_loop_args, reference_and_controller
+from .closed_loop import add_closed_loop_args, check_controller_options, reference_and_controller
 from .number_options import (
     Number,
     check_radians,
@@ -37,6 +37,7 @@ def _row(label: str, values, fmt: str = "{:9.4f}") -> str:
 def cmd_track(args: argparse.Namespace) -> int:
     from ..control.simulation import SensorNoise, simulate, summary, write_tracking_report
 
+    check_controller_options(args)
     robot = with_drive_side(load(args.robot, tip=args.tip), args)
     n = robot.n
     if args.param_error is None:

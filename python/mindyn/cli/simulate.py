@@ -35,9 +35,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         write_tracking_report,
     )
     from ..identification.data import convert_torque, write_csv
-    from .closed_loop import reference_and_controller
+    from .closed_loop import check_controller_options, reference_and_controller
 
     _check_mode(args)
+    check_controller_options(args)
     robot = with_drive_side(load(args.robot, tip=args.tip), args)
     rate = 1.0 / args.period if args.period else args.rate
     args.period = 1.0 / rate
