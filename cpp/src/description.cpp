@@ -531,6 +531,11 @@ Model build(const Ctx& start, const YAML::Node& root) {
       j.limits.acceleration = optional(c, l, "acceleration", nan) * s;
       j.limits.effort = optional(c, l, "effort", nan);
       if (j.limits.lower > j.limits.upper) c.fail("lower limit above upper limit", l);
+      for (const char* key : {"velocity", "acceleration", "effort"})
+        if (optional(c, l, key, 0.0) < 0.0)  // as a URDF's <limit> (urdf.cpp)
+          c.fail(std::string("limits: '") + key + "' is " + l[key].as<std::string>() +
+                     ": a limit on the magnitude cannot be negative",
+                 l[key]);
     }
     if (jn["drive"].IsDefined()) {
       checkKeys(c, jn["drive"], {"rated_torque", "gear_ratio", "torque_constant"}, "drive");

@@ -242,7 +242,9 @@ def instance(x, name: str, kind, what: str | None = None):
     if not isinstance(x, kind):
         if what is None:
             kinds = kind if isinstance(kind, tuple) else (kind,)
-            what = " or ".join(f"a {k.__name__}" for k in kinds)
+            what = " or ".join(
+                f"{'an' if k.__name__[0] in 'AEIOU' else 'a'} {k.__name__}" for k in kinds
+            )
         raise ArgumentError(f"{name} is {_describe(x)}; expected {what}")
     return x
 

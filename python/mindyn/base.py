@@ -21,6 +21,8 @@ from .robot import Robot, as_robot
 __all__ = ["BaseParameters", "base_parameters", "choose_method"]
 
 DEFAULT_TOLERANCE = 1e-9
+#: The rank tolerance is below this (a larger relative pivot is no round-off; the core refuses it)
+MAX_TOLERANCE = 0.01
 
 
 def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) -> tuple[str, str]:
@@ -396,11 +398,11 @@ def base_parameters(
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
     tolerance : float
-        Relative size below which a pivot counts as zero (default 1e-9). Every decision's
-        margin is reported in ``sets[...]["margin"]``. Each set is checked against the
-        classical inverse dynamics (energies for the Lagrangian and total-energy sets) at random
-        states; one whose regrouping misses them (near-degenerate geometry) raises a ModelError
-        that says by how much and what to try.
+        Relative size below which a pivot counts as zero (default 1e-9, below 0.01). Every
+        decision's margin is reported in ``sets[...]["margin"]``. Each set is checked against
+        the classical inverse dynamics (energies for the Lagrangian and total-energy sets) at
+        random states; one whose regrouping misses them (near-degenerate geometry) raises a
+        ModelError that says by how much and what to try.
     snap : float or bool, optional
         Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
         1e-3) before computing; what was changed is listed in ``snapped`` (and what it would
@@ -422,7 +424,7 @@ def base_parameters(
         method, reason = choose_method(robot, rotor=rotor, friction=friction)
     else:
         reason = f"method={method!r}"
-    tolerance = _args.number(tolerance, "tolerance", positive=True)
+    tolerance = _args.number(tolerance, "tolerance", positive=True, below=MAX_TOLERANCE)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)
     if snap is not None and not isinstance(snap, bool):

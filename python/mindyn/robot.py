@@ -100,6 +100,12 @@ def load(
     _args.instance(robot, "robot", (Robot, str, Path), "a Robot, a bundled robot name or a path")
     _args.optional(_args.text, tip, "tip")
     _args.optional(_args.text, root_joint, "root_joint")
+    if isinstance(robot, Robot) and (tip or root_joint):  # a loaded robot has its joints
+        given = "tip=" if tip else "root_joint="
+        raise _args.ArgumentError(
+            f"{given} applies to a description file, not to the loaded Robot '{robot.name}' "
+            f"(load its file with {given})"
+        )
     out = _load(robot, tip, root_joint)
     return out if gravity is None else out.with_gravity(gravity)
 
@@ -447,8 +453,8 @@ class Robot:
         if not self.is_serial:
             raise _core.ModelError(
                 f"{what} needs a serial chain; robot '{self.name}' is a tree ({self.n} joints, "
-                f"{self.branches} branches): load the chain to the link concerned with "
-                "mindyn.load(..., tip='<link>')"
+                f"{self.branches} branches): load the chain to the link concerned, "
+                "tip='<link>'"
             )
 
     def joint_transform(self, k: int, q: float) -> np.ndarray:
@@ -537,7 +543,7 @@ class Robot:
         """Classical parameter values of the model in that layout. :attr:`rotor_inertia`,
         :attr:`viscous` and :attr:`coulomb` are the joints' (as descriptions give them); on the
         motor side slot k holds motor k's: its joint's divided by ``r^2``, ``r^2``, ``|r|`` for a
-        motor that alone drives one joint alone with ratio ``r``, 0 for a coupled motor. Torque
+        motor that alone drives one joint, with ratio ``r``, 0 for a coupled motor. Torque
         offsets (``offset``) are 0: a description gives none."""
         return self._m.parameters(*self._layout(rotor, friction, offset))
 

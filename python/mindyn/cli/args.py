@@ -153,6 +153,20 @@ def deprecated(p, old: str, target: argparse.Action | None = None, *, new: str =
     return p.add_argument(old, action=_Deprecated, target=target, new=new, **kwargs)
 
 
+def remember_defaults(p: argparse.ArgumentParser, *dests: str) -> None:
+    """Records the defaults of the options ``dests`` of ``p``, so that :func:`given_options`
+    tells which of them a command line set (an option that applies in one mode only is then
+    refused in the others instead of ignored)."""
+    p.set_defaults(_option_defaults={d: p.get_default(d) for d in dests})
+
+
+def given_options(args: argparse.Namespace, *dests: str) -> list[str]:
+    """The flags (``--param-error``) of the options ``dests`` (recorded by
+    :func:`remember_defaults`) that the command line set to other than their defaults."""
+    defaults = args._option_defaults
+    return ["--" + d.replace("_", "-") for d in dests if getattr(args, d) != defaults[d]]
+
+
 def deprecation_notes(args: argparse.Namespace) -> list[str]:
     """The notes the former spellings on a command line left."""
     return list(getattr(args, "_notes", None) or [])

@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from ..base import base_parameters
+from ..base import MAX_TOLERANCE, base_parameters
 from .args import add_command, deprecated
 from .method import base_method, projection_limits_text
 from .number_options import number
@@ -180,7 +180,7 @@ def register(sub) -> None:
         "--rank-tolerance",
         dest="tolerance",
         low=0,
-        high=0.01,
+        high=MAX_TOLERANCE,
         low_open=True,
         high_open=True,
         default=1e-9,

@@ -11,6 +11,15 @@ from .number_options import number
 from .outputs import output_dir
 
 
+def check_controller_options(args: argparse.Namespace) -> None:
+    """--param-error sets a model's estimate: PD has none (it was ignored)."""
+    if args.controller == "pd" and args.param_error is not None:
+        raise ValueError(
+            "--param-error: --controller pd has no model (the error is that of the estimate of "
+            "adaptive-pd and computed-torque)"
+        )
+
+
 def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     """The reference, its text, the simulated time, the per-cycle span and the controller of
     ``mindyn track`` and ``mindyn simulate`` (``--trajectory``, ``--cycle``, ``--controller``,
@@ -29,7 +38,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
             "sampled about 7 times per oscillation"
         )
     if args.trajectory:
-        reference = load_reference(args.trajectory, n)
+        reference = load_reference(args.trajectory, n, robot=robot)
         ref_text = f"trajectory {args.trajectory} ({reference.duration:g} s)"
         duration = args.duration or reference.duration
         cycle = args.cycle or duration
@@ -38,11 +47,13 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         ref_text = f"sum of sines within the limits, {reference.period:g} s cycle"
         duration = args.duration or default_duration(reference)
         cycle = reference.period
-    from ..control.simulation import check_steps
+    from ..control.simulation import MIN_SUBSTEPS, check_steps
 
     try:  # before any set-up work
         check_steps(
-            duration, 1.0 / period, substeps=args.substeps if args.integrator == "rk4" else 1
+            duration,
+            1.0 / period,
+            substeps=(args.substeps or MIN_SUBSTEPS) if args.integrator == "rk4" else 1,
         )
     except ValueError as e:
         raise ValueError(
@@ -117,7 +128,15 @@ def add_closed_loop_args(p, default: str) -> None:
         "torque (default 0.3: +-30 %); simulate's computed torque without --gains and "
         "--param-error has the true parameters",
     )
-    number(p, "--substeps", low=1, high=1000, integer=True, default=4, help="RK4 steps per period")
+    number(
+        p,
+        "--substeps",
+        low=1,
+        high=1000,
+        integer=True,
+        help="RK4 steps per period (default: at least 4, more where the robot's viscous friction "
+        "on its inertia needs them for RK4 to stay stable; stated in the output)",
+    )
     p.add_argument(
         "--integrator",
         choices=["rk4", "scipy"],

@@ -8,7 +8,7 @@ import argparse
 
 from .._core import ModelError
 from ..base import base_parameters
-from ..codegen import CONTROLLERS, generate
+from ..codegen import CONTROLLERS, FUNCTIONS, generate
 from .args import add_command
 from .codegen_output import (
     DEFAULT_FOLDER,
@@ -33,6 +33,9 @@ from .robot_options import (
     load_robot,
     require_single_dof,
 )
+
+#: The default controller period [s] of the generated controller and observer steps
+PERIOD = 0.004
 
 
 def register(subparsers) -> None:
@@ -128,7 +131,9 @@ def register(subparsers) -> None:
         "the robot's default gains, as 'mindyn track' uses them); --params gives the initial "
         "estimate",
     )
-    controller_period(c, default=0.004, help="controller period [s]")
+    controller_period(
+        c, help=f"controller period [s] of the controller and observer steps (default {PERIOD:g})"
+    )
     joint_vector(
         c,
         "--observer-gain",
@@ -206,6 +211,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     )
     if args.what.strip() in CONTROLLERS + (OBSERVER,):
         require_single_dof(robot, f"codegen --what {args.what.strip()}")
+        args.period = PERIOD if args.period is None else args.period
         note = _params_note(base.n, args.params, pruned, threshold) if params is not None else None
         given = params if params is not None else args.params
         if args.what.strip() == OBSERVER:
@@ -218,6 +224,13 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     for opt in ("gains", "torque_limit", "box"):
         if getattr(args, opt) is not None:
             raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
+    if args.period is not None:  # the functions of q have no period
+        raise ModelError(f"--controller-period applies to controller and {OBSERVER} steps only")
+    if args.numeric and not {w.strip() for w in args.what.split(",")} & {"id", *FUNCTIONS[:2]}:
+        raise ModelError(
+            "--numeric applies to the inverse dynamics and gravity (the regressor takes no "
+            "parameter values)"
+        )
     if any(w.strip() in CONTROLLERS + (OBSERVER,) for w in args.what.split(",")):
         raise ModelError("--what: a controller step is generated alone, not with other functions")
     contacts = dict(contacts=args.contact or (), wrench_frame=args.wrench_frame)

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .args import ZCR07S_STUDY, add_command, deprecated
-from .closed_loop import add_closed_loop_args, reference_and_controller
+from .closed_loop import add_closed_loop_args, check_controller_options, reference_and_controller
 from .number_options import (
     Number,
     check_radians,
@@ -36,6 +36,7 @@ def _row(label: str, values, fmt: str = "{:9.4f}") -> str:
 def cmd_track(args: argparse.Namespace) -> int:
     from ..control.simulation import SensorNoise, simulate, summary, write_tracking_report
 
+    check_controller_options(args)
     robot = with_drive_side(load_robot(args, command="track"), args)
     n = robot.n
     if args.param_error is None:
@@ -86,6 +87,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         lines.append(f"  {gains.note}")
     if "stability" in result.info:
         lines.append(f"  {result.info['stability']}")
+    lines.append(f"  integration: {result.info['integrator']}")
     lines.append("")
     lines.append(_row("joint", range(1, n + 1), "{:>9d}"))
     lines.append(_row("max |q - q_d| [deg]", s["max_error_deg"]))
@@ -120,9 +122,7 @@ def cmd_track(args: argparse.Namespace) -> int:
             "seed": args.seed,
             "noise": list(args.noise),
             "torque_limit": args.torque_limit,
-            "integrator": f"{args.integrator} ({args.substeps} steps per period)"
-            if args.integrator == "rk4"
-            else "scipy RK45",
+            "integrator": result.info["integrator"],
         }
         if robot.name == "zcr07s" and args.controller == "adaptive-pd":
             header["zcr07s_max_error_deg"] = ZCR07S_STUDY_MAX_ERROR_DEG

@@ -8,10 +8,13 @@ import argparse
 
 import numpy as np
 
-from .args import add_command
+from .args import add_command, given_options, remember_defaults
 from .number_options import add_recorded_torque_reading, joint_values, joint_vector, number
 from .outputs import output_file
 from .robot_options import add_robot, load_robot
+
+#: The options of --calibrate, refused without it
+CALIBRATE_ONLY = ("quantile", "margin", "model_sigma")
 
 
 def _read_log(path, robot, doc, args):
@@ -51,8 +54,9 @@ def cmd_detect(args: argparse.Namespace) -> int:
     robot = load_robot(args, tip=doc.get("tip"), command="detect")
     estimate = "consistent" if args.consistent else "unconstrained"
     base, values, _ = identified_model(args.identification, robot, estimate=estimate)
-    if args.model_sigma and not args.calibrate:
-        raise ValueError("--model-sigma applies to --calibrate")
+    given = given_options(args, *CALIBRATE_ONLY) if not args.calibrate else []
+    if given:  # (they were ignored)
+        raise ValueError(f"{given[0]} applies to --calibrate")
     if args.thresholds and args.calibrate:
         raise ValueError(
             "--thresholds and --calibrate exclude each other (calibrate on a "
@@ -235,6 +239,7 @@ def register(sub) -> None:
         "that the identification's parameter uncertainty explains along LOG (its standard "
         "deviations, correlations left out; 0: off)",
     )
+    remember_defaults(p, *CALIBRATE_ONLY)
     joint_vector(
         p,
         "--gain",

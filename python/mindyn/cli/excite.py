@@ -64,6 +64,8 @@ def cmd_excite(args: argparse.Namespace) -> int:
         f"(period {res.trajectory.period:g} s), {len(res.base_names)} base parameters"
     )
     print(f"  {shown}: {res.value:.6g} (initial guess {res.initial_value:.6g})")
+    for warning in res.warnings:
+        print(f"  WARNING: {warning}")
     print(f"  limits respected on a fine grid (largest relative excess {res.max_violation:.2g})")
     print(f"  wrote {paths['csv']} ({args.rate:g} Hz), {paths['json']}, {paths['png']}")
     return 0

@@ -6,10 +6,23 @@ import argparse
 
 import numpy as np
 
-from .args import add_command
+from .args import add_command, given_options, remember_defaults
 from .number_options import controller_period, number, seed
 from .outputs import output_file
 from .robot_options import add_drive_side, add_robot, drive_side_words, load_robot, with_drive_side
+
+#: The options of the closed loop, which --mode inverse (no controller) does not take
+TRACKING_ONLY = ("controller", "gains", "param_error", "substeps", "integrator", "torque_limit")
+
+
+def _check_mode(args: argparse.Namespace) -> None:
+    """--mode inverse refuses the closed loop's options instead of ignoring them."""
+    given = given_options(args, *TRACKING_ONLY) if args.mode == "inverse" else []
+    if given:
+        raise ValueError(
+            f"{given[0]}: an option of the closed loop (--mode tracking); --mode inverse has no "
+            "controller (the torques of the inverse dynamics along the reference)"
+        )
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -21,8 +34,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         write_tracking_report,
     )
     from ..identification.data import convert_torque, write_csv
-    from .closed_loop import reference_and_controller
+    from .closed_loop import check_controller_options, reference_and_controller
 
+    _check_mode(args)
+    check_controller_options(args)
     robot = with_drive_side(load_robot(args, command="simulate"), args)
     rate = 1.0 / args.period if args.period else args.rate
     args.period = 1.0 / rate
@@ -71,6 +86,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         f"friction {'on' if args.friction else 'off'}"
         + (f", {side}" if (side := drive_side_words(robot, args)) else "")
     )
+    print(f"  reference: {ref_text}")
     if info["mode"] == "tracking":
         err = np.degrees(info["max_tracking_error"])
         print(
@@ -83,8 +99,13 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         ):
             if note:
                 print(f"  {note}")
+        print(f"  integration: {info['integrator']}")
     nz = info["noise"]
-    print("  torque noise sd per joint: " + " ".join(f"{v:.3g}" for v in nz["torque"]))
+    print(
+        "  torque noise sd per joint: "
+        + " ".join(f"{v:.3g}" for v in nz["torque"])
+        + _noise_basis(args.torque_noise, robot)
+    )
     if any(nz["quantization"]) or any(nz["position"]) or any(nz["velocity"]):
         print(
             f"  encoder step {max(nz['quantization']):.3g}, position noise "
@@ -97,6 +118,28 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         write_tracking_report(log, args.report, cycle=cycle, header=header)
         print(f"  report: {args.report}/ (summary.json, log.csv, plots)")
     return 0
+
+
+def _noise_basis(spec: str | None, robot) -> str:
+    """The unit of the torque noise and, given in percent, what it was taken of per joint."""
+    from ..control.simulation import torque_noise_scale
+
+    if not spec:
+        return ""
+    if not spec.strip().endswith("%"):
+        return " [N m | N]"
+    pct = spec.strip()[:-1].strip()
+    _, limited = torque_noise_scale(robot)
+    if limited.all():
+        return f" [N m | N], {pct} % of each joint's effort limit"
+    if not limited.any():
+        peak = "peak torque along the reference (no effort limits)"
+        return f" [N m | N], {pct} % of each joint's {peak}"
+    none = ", ".join(str(j + 1) for j in np.flatnonzero(~limited))
+    return (
+        f" [N m | N], {pct} % of the effort limit; of the peak torque along the reference for "
+        f"joint(s) {none}, which have none"
+    )
 
 
 def register(sub) -> None:
@@ -121,9 +164,12 @@ def register(sub) -> None:
         choices=["tracking", "inverse"],
         default="tracking",
         help="tracking: the robot integrated under the controller (default); inverse: torques "
-        "from inverse dynamics along the reference, no controller",
+        "from inverse dynamics along the reference, no controller (the closed loop's options "
+        "--controller, --gains, --param-error, --substeps, --integrator, --torque-limit are "
+        "refused)",
     )
     add_closed_loop_args(p, "computed-torque")
+    remember_defaults(p, *TRACKING_ONLY)
     g = p.add_mutually_exclusive_group()
     number(
         g, "--rate", low=0, high=1e6, low_open=True, default=250.0, help="control and log rate [Hz]"
@@ -145,7 +191,8 @@ def register(sub) -> None:
         "--torque-noise",
         metavar="SD",
         help="torque noise sd: one value, one per joint (comma-separated), or P%% of each "
-        "joint's effort limit; in [0, 1e6] N m or [0, 100] %%",
+        "joint's effort limit (of its peak torque along the reference where the description "
+        "gives none); in [0, 1e6] N m or [0, 100] %%",
     )
     p.add_argument(
         "--position-noise", metavar="SD", help="position noise sd (rad, m), each in [0, 1]"

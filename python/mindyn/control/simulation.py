@@ -145,7 +145,7 @@ class CsvTrajectory:
     def __init__(self, path: str | Path, n: int):
         from scipy.interpolate import CubicSpline
 
-        from ..identification.data import DataError
+        from ..identification.data import DataError, decode_text, parse_cell
 
         path = Path(path)
         if not path.is_file():
@@ -153,18 +153,28 @@ class CsvTrajectory:
 
             raise RobotFileNotFoundError(f"trajectory file '{path}' does not exist")
         rows: list[list[float]] = []
-        with path.open(newline="") as f:
-            for lineno, row in enumerate(csv.reader(f), 1):
-                if not row or all(not c.strip() for c in row):
-                    continue
+        header: list[str] = []
+        # cells as a log's (identification.data.parse_cell): ASCII decimals, so that '1_000',
+        # hex or non-ASCII digits are refused, not read as Python's float() reads them
+        for lineno, row in enumerate(csv.reader(decode_text(path).splitlines()), 1):
+            if not row or all(not c.strip() for c in row):
+                continue
+            if lineno == 1:
                 try:
-                    rows.append([float(c) for c in row])
-                except ValueError:
-                    if rows or lineno > 1:
-                        raise DataError(
-                            f"{path}:{lineno}: non-numeric value in a data line"
-                        ) from None
-                    continue  # header
+                    parse_cell(row[0], "")
+                except DataError:
+                    header = [c.strip() for c in row]  # a first line whose t is not a number
+                    continue
+            rows.append(
+                [
+                    parse_cell(
+                        c,
+                        f"{path}, line {lineno}, column "
+                        + (header[j] if j < len(header) else str(j + 1)),
+                    )
+                    for j, c in enumerate(row)
+                ]
+            )
         if len({len(r) for r in rows}) > 1:
             raise DataError(f"{path}: rows have different numbers of columns")
         if len(rows) < 4:
@@ -200,12 +210,15 @@ class CsvTrajectory:
         return q, dq, ddq
 
 
-def load_reference(path, n: int):
+def load_reference(path, n: int, *, robot: Robot | None = None):
     """A reference from the JSON of ``mindyn excite`` (its exact Fourier series) or from a CSV
     (:class:`CsvTrajectory`, e.g. the CSV ``mindyn excite`` writes) for a robot of ``n`` joints;
-    raises ValueError when the file gives another number of joints."""
+    raises ValueError when the file gives another number of joints, and, given ``robot``, when
+    the JSON names another robot (whose limits the excitation kept)."""
     _args.path(path, "path")
     n = _args.integer(n, "n", 1)
+    _args.optional(_args.instance, robot, "robot", Robot)
+    from ..identification.data import DataError, read_json
     from ..identification.excitation import FourierTrajectory
 
     p = Path(path)
@@ -213,6 +226,12 @@ def load_reference(path, n: int):
         ref = FourierTrajectory.load(p)
         if ref.n != n:
             raise ArgumentError(f"{path} has {ref.n} joints; the robot has {n}")
+        made_for = read_json(p, what="trajectory file").get("robot")
+        if robot is not None and made_for not in (None, robot.name):
+            raise DataError(
+                f"{path}: an excitation of robot '{made_for}', not '{robot.name}' (it keeps the "
+                "limits of the robot it was made for)"
+            )
         return ref
     return CsvTrajectory(p, n)
 
@@ -261,6 +280,53 @@ def _true_params(robot: Robot, rotor: bool, friction: bool, params=None):
             p[:, 11:] = 0.0
         params = p.reshape(-1)
     return names, expand_params(robot.n, params, sizes=robot.layout_sizes)
+
+
+#: RK4's step times the plant's fastest damping rate is kept below this (RK4 is stable on the
+#: negative real axis up to 2.785); the default steps per period are at least MIN_SUBSTEPS.
+RK4_STEP_RATE = 2.0
+MIN_SUBSTEPS = 4
+
+
+def _why(substeps: int, rate: float | None) -> str:
+    """Why a simulation takes ``substeps`` RK4 steps per period (``rate``: the plant's fastest
+    damping rate when the steps were derived from it, None when given)."""
+    if rate is None:
+        return ", as given"
+    if substeps == MIN_SUBSTEPS:
+        return f", the default; the plant's fastest damping rate {rate:.3g} 1/s needs no more"
+    return (
+        f", so that the step times the plant's fastest damping rate {rate:.3g} 1/s (viscous "
+        f"friction on inertia) stays below {RK4_STEP_RATE:g}"
+    )
+
+
+def rk4_substeps(robot: Robot, params, period: float) -> tuple[int, float]:
+    """The RK4 steps per controller ``period`` the plant needs, and its fastest damping rate
+    ``lambda`` [1/s]: the largest eigenvalue of ``M(q)^-1 D`` over :func:`workspace_samples`,
+    ``M`` the mass matrix and ``D`` the viscous friction's ``d tau / d dq`` of the classical
+    ``params`` (rotor inertia and friction included; on the motors, ``T^T diag(Fv) T``).
+    Explicit RK4 diverges once its step exceeds 2.785 / lambda (a light wrist link with a large
+    damping, as in the xArm7 of example-robot-data: lambda = 1.4e4 1/s), so the steps are
+    ``max(MIN_SUBSTEPS, ceil(period lambda / RK4_STEP_RATE))``."""
+    from .stability import workspace_samples
+
+    n = robot.n
+    names = robot.parameter_names(rotor=True, friction=True)
+    p = expand_params(n, params, sizes=robot.layout_sizes)
+    viscous = np.where([name.startswith("Fv") for name in names], p, 0.0)
+    rate = 0.0
+    if np.any(viscous != 0.0):
+        eye, zero = np.eye(n), np.zeros(n)
+        for q in workspace_samples(robot):
+            damping = np.stack(
+                [robot.regressor(q, eye[j], zero, rotor=True, friction=True) @ viscous
+                 for j in range(n)],
+                axis=1,
+            )  # fmt: skip
+            eig = np.linalg.eigvals(np.linalg.solve(robot.mass_matrix(q, p), damping))
+            rate = max(rate, float(np.max(eig.real)))
+    return max(MIN_SUBSTEPS, math.ceil(period * rate / RK4_STEP_RATE)), rate
 
 
 def expand_params(n: int, params, *, sizes=(10, 11, 12, 13)) -> np.ndarray:
@@ -448,7 +514,7 @@ def simulate(
     *,
     rate: float = 250.0,
     duration: float | None = None,
-    substeps: int = 4,
+    substeps: int | None = None,
     integrator: str = "rk4",
     rotor: bool = False,
     friction: bool = False,
@@ -483,8 +549,10 @@ def simulate(
         Controller and log rate [Hz] (default 250 Hz, a 4 ms period).
     duration : float, optional
         Simulated time [s]; default the reference's period (or duration).
-    substeps : int
-        RK4 steps per control period.
+    substeps : int, optional
+        RK4 steps per control period. Default: :func:`rk4_substeps`, at least 4 and as many as
+        the robot's viscous friction on its inertia needs for RK4 to stay stable (recorded in
+        the result's ``info``).
     integrator : {"rk4", "scipy"}
         Fixed-step RK4 (C++ ``mindyn::Integrator``) or scipy's adaptive RK45 per period
         (rtol 1e-8).
@@ -545,7 +613,7 @@ def simulate(
     _args.optional(_args.function, controller, "controller")
     rate = _args.number(rate, "rate", positive=True)
     duration = _args.optional(_args.number, duration, "duration", positive=True)
-    substeps = _args.integer(substeps, "substeps", 1)
+    substeps = _args.optional(_args.integer, substeps, "substeps", 1)
     _args.choice(integrator, "integrator", ("rk4", "scipy"))
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     params = _args.optional(_args.array, params, "params", (None,))
@@ -562,9 +630,13 @@ def simulate(
     n = robot.n
     if integrator not in ("rk4", "scipy"):
         raise ArgumentError(f"integrator must be 'rk4' or 'scipy', got '{integrator}'")
-    if not (isinstance(substeps, (int, np.integer)) and substeps >= 1):
+    if substeps is not None and not (isinstance(substeps, (int, np.integer)) and substeps >= 1):
         raise ArgumentError(f"substeps must be an integer >= 1, got {substeps}")
     names, p_true = _true_params(robot, rotor, friction, params)
+    damping_rate = None
+    if substeps is None and integrator == "rk4":
+        substeps, damping_rate = rk4_substeps(robot, p_true, 1.0 / rate)
+    substeps = substeps or MIN_SUBSTEPS  # (scipy's RK45 chooses its own steps)
     eps = float(coulomb_smoothing)
     dahl, p_plant = _dahl_plant(robot, friction, p_true, dahl_sigma)
     if dahl is not None and integrator != "rk4":
@@ -699,7 +771,8 @@ def simulate(
         "controller": getattr(controller, "name", type(controller).__name__),
         "rate_Hz": rate,
         "substeps": substeps,
-        "integrator": f"RK4 ({substeps} steps per period), torque held over each period"
+        "integrator": f"RK4 ({substeps} steps per period{_why(substeps, damping_rate)}), torque "
+        "held over each period"
         if integrator == "rk4"
         else "scipy RK45, torque held over each period",
         "duration_s": T,
@@ -1028,6 +1101,19 @@ def simulate_inverse(
 NOISE_LIMITS = {"torque": 1e6, "position": 1.0, "velocity": 100.0, "quantization": 1.0}
 
 
+def torque_noise_scale(robot: Robot, reference_torque=None) -> tuple[np.ndarray, np.ndarray]:
+    """Per joint, the torque a percentage of torque noise is taken of: the effort limit, or,
+    where the description gives none, the peak of ``|reference_torque|`` (shape (m, n), the
+    torques along the reference; without it such a joint's entry is NaN). Returns the
+    torques and, per joint, whether it is the effort limit."""
+    eff = np.array(robot.limits["effort"], dtype=float)
+    limited = np.isfinite(eff) & (eff > 0)
+    peak = np.full(robot.n, np.nan)
+    if reference_torque is not None:
+        peak = np.abs(np.asarray(reference_torque, dtype=float)).max(0)
+    return np.where(limited, eff, peak), limited
+
+
 def noise_from_spec(
     spec: str | None, robot: Robot, what: str, *, reference_torque=None
 ) -> np.ndarray:
@@ -1049,10 +1135,7 @@ def noise_from_spec(
             pct = math.nan
         if not (math.isfinite(pct) and 0 <= pct <= 100):
             raise ArgumentError(f"{opt}: expected a percentage in [0, 100], got '{spec}'")
-        eff = np.array(robot.limits["effort"], dtype=float)
-        if reference_torque is not None:
-            peak = np.abs(np.asarray(reference_torque)).max(0)
-            eff = np.where(np.isfinite(eff) & (eff > 0), eff, peak)
+        eff, _ = torque_noise_scale(robot, reference_torque)
         if not np.isfinite(eff).all():
             raise ArgumentError("torque noise in %: the robot has no effort limits")
         return pct / 100.0 * eff

@@ -331,9 +331,12 @@ class ExcitationResult:
 
     ``value`` / ``initial_value`` are in the reported form of :func:`criterion_value` (the
     latter for ``initial_trajectory``, the starting guess of the best start); ``starts`` lists
-    per random start its initial and final value, iterations, seconds and the optimiser's
-    message, in the same form. That form is smaller-is-better for ``cond`` and ``hadamard``
-    and larger-is-better for ``logdet`` (``log det(W^T W / rows)``, maximised)."""
+    per random start its initial and final value, iterations, seconds, the optimiser's
+    message, whether it converged and whether it improved on the start, in the same form;
+    ``warnings`` says when the optimiser failed without improving on any start (the trajectory
+    is then a random one). That form is smaller-is-better for
+    ``cond`` and ``hadamard`` and larger-is-better for ``logdet`` (``log det(W^T W / rows)``,
+    maximised)."""
 
     robot: str
     trajectory: FourierTrajectory
@@ -350,6 +353,7 @@ class ExcitationResult:
     seed: int = 0
     max_violation: float = 0.0
     initial_trajectory: FourierTrajectory | None = None
+    warnings: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return {
@@ -365,6 +369,7 @@ class ExcitationResult:
             "max_limit_violation": self.max_violation,
             "limits": {k: np.asarray(v).tolist() for k, v in self.limits.items()},
             "notes": self.notes,
+            "warnings": self.warnings,
             "starts": self.starts,
             "trajectory": self.trajectory.to_dict(),
         }
@@ -735,6 +740,8 @@ def optimize_excitation(
                 "iterations": int(res.nit),
                 "seconds": dt,
                 "message": str(res.message),
+                "improved": bool(J < J0),
+                "converged": bool(res.success),
             }
         )
         say(
@@ -746,6 +753,14 @@ def optimize_excitation(
             best = (x, J, J0, guess)
     assert best is not None  # starts >= 1
     x, J, J0, guess = best
+    warnings = []
+    if not any(r["improved"] or r["converged"] for r in runs):  # a random guess: say so
+        why = "; ".join(sorted({r["message"] for r in runs}))
+        warnings.append(
+            f"the optimiser (SLSQP) failed on all {starts} start(s) without improving on any "
+            f"({why}): the trajectory is the best random start's, {shown} {report(J0):.6g}"
+        )
+        say(f"excite: WARNING: {warnings[-1]}")
     if J >= 60.0:  # no start found a trajectory with a full-rank regressor
         raise IdentificationError(
             f"no excitation found that excites all {base.n} base parameters of {robot.name} "
@@ -785,6 +800,7 @@ def optimize_excitation(
         seed=seed,
         max_violation=_relative_violation(q, dq, ddq, lim),
         initial_trajectory=guess,
+        warnings=warnings,
     )
 
 

@@ -1,0 +1,353 @@
+"""What the commands and functions state about the choices they made for the user, and the
+inputs they refuse instead of taking silently, on inputs the other tests do not take: a
+description with an effort limit on some joints only or a negative one, a tree given where a
+chain is needed, reference files with odd cells or of another robot, options that do not apply
+to the mode or function asked for, an optimiser that fails, a plant too stiff for RK4's step."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import json
+import math
+
+import mindyn
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import ROBOTS_DIR, pinocchio_model
+from mindyn import cli
+
+# a vertical two-link arm (joint 1's axis horizontal), an effort limit on joint 1 only
+TWO_LINK = """\
+name: half_limited
+convention: mdh
+angle_unit: deg
+joints:
+  - name: shoulder
+    type: revolute
+    alpha: 90
+    d: 0
+    theta: 0
+    r: 0
+    limits: {lower: -170, upper: 170, velocity: 3, effort: 50}
+    inertial: {mass: 2.0, com: [0.2, 0, 0], inertia: {xx: 0.01, yy: 0.02, zz: 0.02}}
+  - name: elbow
+    type: revolute
+    alpha: 0
+    d: 0.4
+    theta: 0
+    r: 0
+    limits: {lower: -150, upper: 150, velocity: 3}
+    inertial: {mass: 1.0, com: [0.15, 0, 0], inertia: {xx: 0.005, yy: 0.01, zz: 0.01}}
+"""
+
+
+def run(argv) -> tuple[int, str, str]:
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = cli.main([str(a) for a in argv])
+    return rc, out.getvalue(), err.getvalue()
+
+
+def test_torque_noise_in_percent_states_what_it_is_taken_of(tmp_path):
+    """`simulate --torque-noise 1%` on joints without an effort limit takes the peak torque
+    along the reference: the output says so per joint, and the levels are 1 % of the effort
+    limit and of the gravity torque that a resting reference needs (Pinocchio)."""
+    (tmp_path / "arm.yaml").write_text(TWO_LINK)
+    q = np.array([0.3, -0.5])
+    rows = "\n".join(f"{t:g},{q[0]},{q[1]}" for t in np.linspace(0.0, 1.0, 11))
+    (tmp_path / "rest.csv").write_text("t,q1,q2\n" + rows + "\n")
+    rc, out, err = run(
+        [
+            "simulate",
+            tmp_path / "arm.yaml",
+            "--trajectory",
+            tmp_path / "rest.csv",
+            "--mode",
+            "inverse",
+            "--torque-noise",
+            "1%",
+            "-o",
+            tmp_path / "log.csv",
+        ]
+    )
+    assert rc == 0, err
+    robot = mindyn.load(tmp_path / "arm.yaml")
+    model = pinocchio_model(robot)
+    g = pin.computeGeneralizedGravity(model, model.createData(), q)
+    assert abs(g[1]) > 0.1  # the elbow holds a torque at rest
+    truth = json.loads((tmp_path / "log.truth.json").read_text())
+    sd = np.array(truth["simulation"]["noise"]["torque"])
+    np.testing.assert_allclose(sd, [0.01 * 50.0, 0.01 * abs(g[1])], rtol=1e-9)
+    (line,) = [s for s in out.splitlines() if "torque noise sd" in s]
+    assert "1 % of the effort limit" in line, line
+    assert "peak torque along the reference for joint(s) 2" in line, line
+
+
+def test_torque_noise_in_newton_metres_states_its_unit(tmp_path):
+    rc, out, err = run(
+        ["simulate", "planar2", "--mode", "inverse", "--torque-noise", "0.1", "-o", tmp_path]
+    )
+    assert rc == 0, err
+    (line,) = [s for s in out.splitlines() if "torque noise sd" in s]
+    assert line.split(":")[1].split() == ["0.1", "0.1", "[N", "m", "|", "N]"], line
+
+
+def test_a_tree_refused_by_ik_names_the_tip_option_as_each_interface_spells_it():
+    urdf = ROBOTS_DIR / "solo_description/robots/solo12.urdf"
+    rc, _, err = run(["ik", urdf, "--xyz", "0.2", "0.1", "-0.2"])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "--tip <link>" in err and "mindyn.load(" not in err, err
+    robot = mindyn.load(urdf)
+    with pytest.raises(mindyn.ModelError, match="tip='<link>'"):
+        mindyn.ik(robot, np.eye(4))
+
+
+@pytest.mark.parametrize("cell", ["1_0", "0x1", "\u0661", "nan", "1e999"])
+def test_a_trajectory_csv_cell_that_is_not_a_decimal_number_is_named(cell, tmp_path):
+    """A reference CSV's cells follow a log's rule (ASCII decimals): Python's float() would read
+    '1_0' as 10 and an Arabic-Indic one as 1, a silently different trajectory."""
+    rows = ["t,q1,q2", "0,0,0", "0.25,0.05,0", f"0.5,{cell},0", "0.75,0.05,0", "1,0.1,0"]
+    (tmp_path / "ref.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    rc, _, err = run(["simulate", "planar2", "--trajectory", tmp_path / "ref.csv", "-o", tmp_path])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "ref.csv, line 4, column q1" in err, err
+    assert not (tmp_path / "planar2_simulate.csv").exists()
+
+
+def test_a_trajectory_csv_that_is_not_utf8_is_one_line(tmp_path):
+    (tmp_path / "ref.csv").write_bytes(b"t,q1,q2\n0,0,0\n0.25,0.05,0\n0.5,\xff,0\n1,0.1,0\n")
+    rc, _, err = run(["simulate", "planar2", "--trajectory", tmp_path / "ref.csv", "-o", tmp_path])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "line 4: not UTF-8" in err and "defect" not in err, err
+
+
+def test_a_trajectory_csv_of_decimals_is_followed(tmp_path):
+    """The reference read back: at rest at its knots' end, the positions the file gives."""
+    rows = ["t,q1,q2"] + [f"{t:g},{0.1 * t:g},{-0.2 * t:g}" for t in (0, 0.25, 0.5, 0.75, 1)]
+    (tmp_path / "ref.csv").write_text("\n".join(rows) + "\n")
+    rc, _, err = run(
+        ["simulate", "planar2", "--trajectory", tmp_path / "ref.csv", "--mode", "inverse",
+         "-o", tmp_path / "log.csv"]
+    )  # fmt: skip
+    assert rc == 0, err
+    log = np.loadtxt(tmp_path / "log.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(log[:, 1:3], np.c_[0.1 * log[:, 0], -0.2 * log[:, 0]], atol=1e-12)
+
+
+def test_a_wrong_options_object_is_named_with_its_class():
+    from mindyn.identification import run
+
+    robot = mindyn.load("planar2")
+    expected = r"options is a dict; expected an IdentifyOptions$"
+    with pytest.raises(mindyn.ArgumentError, match=expected):
+        run(robot, [], options={"rotor": True})
+
+
+def test_excite_says_when_the_optimiser_improved_on_no_start(monkeypatch, tmp_path):
+    """SLSQP stopping at its first point on every start (as on a base set with columns 1e-13 of
+    the others) leaves a random trajectory: the output and the JSON say so, with its message."""
+    from mindyn.identification import excitation
+    from scipy.optimize import OptimizeResult
+
+    def stuck(fun, x0, **kw):
+        msg = "Inequality constraints incompatible"
+        return OptimizeResult(x=np.array(x0), success=False, message=msg, nit=1)
+
+    monkeypatch.setattr(excitation, "minimize", stuck)
+    rc, out, err = run(["excite", "planar2", "--starts", "2", "--quiet", "-o", tmp_path / "a.csv"])
+    assert rc == 0, err
+    (line,) = [s for s in out.splitlines() if "WARNING" in s]
+    assert "failed on all 2 start(s) without improving on any (Inequality constraints" in line
+    doc = json.loads((tmp_path / "a.json").read_text())
+    assert len(doc["warnings"]) == 1
+    assert not any(s["improved"] or s["converged"] for s in doc["starts"])
+    monkeypatch.undo()
+    rc, out, err = run(["excite", "planar2", "--starts", "1", "--quiet", "-o", tmp_path / "b.csv"])
+    assert rc == 0 and "WARNING" not in out, out
+    doc = json.loads((tmp_path / "b.json").read_text())
+    assert doc["warnings"] == [] and doc["value"] < doc["initial_value"]
+
+
+@pytest.mark.parametrize("tolerance", [0.01, 0.5])
+def test_a_rank_tolerance_out_of_range_is_an_argument_error(tolerance):
+    """The range the command line states, (0, 0.01), holds for the library's keyword too, as an
+    ArgumentError naming it (the core's refusal was a ModelError, as for a bad description)."""
+    with pytest.raises(mindyn.ArgumentError, match=r"^tolerance is .*; expected a number < 0\.01$"):
+        mindyn.base_parameters("planar2", tolerance=tolerance)
+    assert mindyn.base_parameters("planar2h", tolerance=0.009).n == 4  # ZZR1, ZZ2, MX2, MY2
+
+
+@pytest.mark.parametrize("option", [{"tip": "link3"}, {"root_joint": "floating"}])
+def test_a_loaded_robot_refuses_a_tip_or_root_joint_instead_of_ignoring_it(option):
+    """mindyn.load(robot, tip=...) returned the whole robot unchanged: a chain asked for, a tree
+    (or another chain) silently given."""
+    robot = mindyn.load("puma560")
+    (key,) = option
+    with pytest.raises(mindyn.ArgumentError, match=f"^{key}= applies to a description file"):
+        mindyn.load(robot, **option)
+    assert mindyn.load(robot, gravity=[0, 0, -1.62]).gravity[2] == -1.62  # this one applies
+
+
+@pytest.mark.parametrize(
+    "option",
+    [
+        ["--controller", "pd"],
+        ["--substeps", "8"],
+        ["--integrator", "scipy"],
+        ["--torque-limit", "effort"],
+        ["--param-error", "0.1"],
+    ],
+)
+def test_simulate_inverse_refuses_the_closed_loops_options(option, tmp_path):
+    """--mode inverse has no controller: a controller, gains or integrator given with it were
+    ignored without a word, the log then not what the options asked for."""
+    argv = ["simulate", "planar2", "--mode", "inverse", "--duration", "0.2", "-o", tmp_path]
+    rc, _, err = run(argv + option)
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert err.startswith(f"mindyn: error: {option[0]}: an option of the closed loop"), err
+    assert not (tmp_path / "planar2_simulate.csv").exists()
+    rc, _, err = run(argv)
+    assert rc == 0 and (tmp_path / "planar2_simulate.csv").is_file(), err
+
+
+def test_excite_does_not_warn_when_the_start_is_already_optimal(tmp_path):
+    """One joint, one base parameter: every trajectory has cond 1, so no start can improve; the
+    optimiser converges at once and nothing is wrong."""
+    (tmp_path / "one.yaml").write_text(
+        "name: one\nconvention: mdh\njoints:\n"
+        "  - {name: j1, type: revolute, alpha: 0, d: 0, theta: 0, r: 0,\n"
+        "     inertial: {mass: 2.0, com: [0.2, 0, 0], inertia: {xx: 0.01, yy: 0.02, zz: 0.02}}}\n"
+    )
+    rc, out, err = run(["excite", tmp_path / "one.yaml", "--quiet", "-o", tmp_path / "e.csv"])
+    assert rc == 0 and "WARNING" not in out, out
+    doc = json.loads((tmp_path / "e.json").read_text())
+    assert doc["value"] == pytest.approx(1.0) and doc["warnings"] == []
+
+
+@pytest.mark.parametrize("key", ["velocity", "acceleration", "effort"])
+def test_a_negative_limit_in_a_yaml_table_is_refused_by_name(key, tmp_path):
+    """A URDF's negative <limit velocity/effort> was refused, a YAML table's was read: a
+    negative effort then counted as no limit in simulate's noise and saturated the torque of
+    track --torque-limit effort at a negative bound (the loop diverged)."""
+
+    def table(sign: int) -> str:
+        limits = {"lower": -1, "upper": 1, "velocity": 3, "acceleration": 10, "effort": 5}
+        limits[key] *= sign
+        given = "{" + ", ".join(f"{k}: {v}" for k, v in limits.items()) + "}"
+        return TWO_LINK.replace("{lower: -170, upper: 170, velocity: 3, effort: 50}", given)
+
+    (tmp_path / "arm.yaml").write_text(table(-1))
+    expected = rf"arm.yaml:\d+: joint 1 \('shoulder'\): limits: '{key}' is -\d+: a limit on the "
+    with pytest.raises(mindyn.ModelError, match=expected + "magnitude cannot be negative"):
+        mindyn.load(tmp_path / "arm.yaml")
+    (tmp_path / "arm.yaml").write_text(table(1))
+    value = mindyn.load(tmp_path / "arm.yaml").limits[key][0]
+    degree = np.pi / 180 if key != "effort" else 1.0  # angle_unit: deg
+    assert value == pytest.approx({"velocity": 3, "acceleration": 10, "effort": 5}[key] * degree)
+
+
+def test_a_trajectory_json_of_another_robot_is_refused(tmp_path):
+    """An excitation keeps the limits of the robot it was made for: simulate and track took
+    one of another robot with as many joints without a word. simulate states its reference."""
+    from mindyn.identification.excitation import random_trajectory
+
+    for name in ("planar2", "planar2h"):
+        traj = random_trajectory(mindyn.load(name), seed=1)
+        doc = {"robot": name, "trajectory": traj.to_dict()}
+        (tmp_path / f"{name}.json").write_text(json.dumps(doc))
+    for cmd in (["simulate", "-o", tmp_path / "log.csv"], ["track", "--duration", "0.2"]):
+        argv = [cmd[0], "planar2", "--trajectory", tmp_path / "planar2h.json", *cmd[1:]]
+        rc, _, err = run(argv)
+        assert rc == 2 and len(err.splitlines()) == 1, err
+        assert "planar2h.json: an excitation of robot 'planar2h', not 'planar2'" in err, err
+    argv = ["simulate", "planar2", "--trajectory", tmp_path / "planar2.json", "--mode", "inverse"]
+    rc, out, err = run([*argv, "-o", tmp_path / "log.csv"])
+    assert rc == 0, err
+    assert out.splitlines()[1] == f"  reference: trajectory {tmp_path / 'planar2.json'} (10 s)"
+    rc, out, err = run(["simulate", "planar2", "--mode", "inverse", "-o", tmp_path / "b.csv"])
+    assert out.splitlines()[1] == "  reference: sum of sines within the limits, 10 s cycle"
+
+
+def test_codegen_refuses_a_controller_period_for_functions_without_one(tmp_path):
+    """--controller-period with the inverse dynamics, gravity or regressor was ignored (they are
+    functions of the state), while --gains, --box and --torque-limit were refused there."""
+    argv = ["codegen", "planar2", "--lang", "c", "-o", tmp_path / "a"]
+    rc, _, err = run([*argv, "--controller-period", "0.01"])
+    assert rc == 2 and "--controller-period applies to controller and" in err, err
+    assert not (tmp_path / "a.c").exists()
+    step = ["--what", "momentum-observer", "--controller-period", "0.01"]
+    rc, out, err = run([*argv, *step])
+    assert rc == 0 and "period 0.01 s" in out, err
+    assert "K_O [1/s] (default 1 / (10 T) = 10)" in out  # 1 / (10 x 0.01 s)
+    rc, out, err = run([*argv, "--what", "momentum-observer"])
+    assert rc == 0 and "period 0.004 s" in out, err  # the default, stated
+
+
+DAMPED = """\
+name: damped
+convention: mdh
+joints:
+  - {name: j1, type: revolute, alpha: 0, d: 0, theta: 0, r: 0, friction: {viscous: 3.0},
+     inertial: {mass: 2.0, com: [0.1, 0, 0], inertia: {xx: 0.001, yy: 0.001, zz: 0.0001}}}
+"""
+
+
+class _Ramp:
+    """q_d = v t: the robot starts at speed v."""
+
+    duration = 0.2
+
+    def evaluate(self, t):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return 0.5 * t[:, None], np.full((t.size, 1), 0.5), np.zeros((t.size, 1))
+
+
+def test_rk4_steps_follow_the_plants_damping_rate(tmp_path):
+    """A joint whose viscous friction is fast on its inertia (rate Fv / I = 3 / (1e-4 + 2 x 0.1^2)
+    = 149 1/s here, 1.4e4 1/s on the xArm7's wrist) made RK4 with 4 steps per period diverge
+    (|R(h lambda)| > 1 beyond h lambda = 2.785) at t = 0; the default steps keep h lambda <= 2
+    and the free motion then decays, as the exact v0 exp(-lambda t) does."""
+    from mindyn.control import simulation
+
+    (tmp_path / "damped.yaml").write_text(DAMPED)
+    robot = mindyn.load(tmp_path / "damped.yaml")
+    rate = 3.0 / (1e-4 + 2.0 * 0.1**2)
+    period = 0.04  # h lambda = 1.49 with 4 steps: 4 suffice
+    steps, found = simulation.rk4_substeps(robot, robot.parameters(friction=True), period)
+    assert found == pytest.approx(rate, rel=1e-12) and steps == 4
+    period = 0.1  # 14.9 for the period: 8 steps
+    steps, _ = simulation.rk4_substeps(robot, robot.parameters(friction=True), period)
+    assert steps == 8 == math.ceil(period * rate / 2.0)
+
+    def idle(t, q, dq, q_d, dq_d, ddq_d):
+        return np.zeros(1)
+
+    res = simulation.simulate(robot, _Ramp(), idle, rate=10.0, friction=True)
+    assert res.info["substeps"] == 8
+    assert np.all(np.isfinite(res.dq)) and np.all(np.abs(res.dq[1:, 0]) < 0.5 * 0.5)
+    assert "damping rate 149 1/s" in res.info["integrator"]
+    with pytest.raises(mindyn.Error, match="diverged"):  # the former default
+        simulation.simulate(robot, _Ramp(), idle, rate=10.0, friction=True, substeps=4)
+
+
+def test_codegen_numeric_needs_a_function_that_takes_the_values(tmp_path):
+    """--numeric with the regressor alone was ignored, and the output said 'values baked in'."""
+    argv = ["codegen", "planar2", "--lang", "c", "--numeric", "-o", tmp_path / "a"]
+    rc, _, err = run([*argv, "--what", "regressor"])
+    assert rc == 2 and "--numeric applies to the inverse dynamics and gravity" in err, err
+    rc, out, err = run([*argv, "--what", "gravity,regressor"])
+    assert rc == 0 and "values baked in" in out, err
+    assert "const double p[" not in (tmp_path / "a.h").read_text()  # gravity takes no p
+
+
+@pytest.mark.parametrize("cmd", [["track"], ["simulate", "-o", "OUT"]])
+def test_a_parameter_error_for_pd_is_refused(cmd, tmp_path):
+    """PD has no model: --param-error with it was ignored."""
+    argv = [cmd[0], "planar2", "--controller", "pd", "--duration", "0.2"]
+    argv += [a.replace("OUT", str(tmp_path / "log.csv")) for a in cmd[1:]]
+    rc, _, err = run([*argv, "--param-error", "0.5"])
+    assert rc == 2 and err.startswith("mindyn: error: --param-error: --controller pd"), err
+    rc, _, err = run(argv)
+    assert rc == 0, err
