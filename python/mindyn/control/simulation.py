@@ -636,7 +636,7 @@ def simulate(
     damping_rate = None
     if substeps is None and integrator == "rk4":
         substeps, damping_rate = rk4_substeps(robot, p_true, 1.0 / rate)
-    substeps = substeps or MIN_SUBSTEPS  # (scipy's RK45 chooses its own steps)
+    substeps = int(substeps or MIN_SUBSTEPS)  # (scipy's RK45 chooses its own steps)
     eps = float(coulomb_smoothing)
     dahl, p_plant = _dahl_plant(robot, friction, p_true, dahl_sigma)
     if dahl is not None and integrator != "rk4":

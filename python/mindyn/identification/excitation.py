@@ -755,7 +755,7 @@ def optimize_excitation(
     x, J, J0, guess = best
     warnings = []
     if not any(r["improved"] or r["converged"] for r in runs):  # a random guess: say so
-        why = "; ".join(sorted({r["message"] for r in runs}))
+        why = "; ".join(sorted({str(r["message"]) for r in runs}))
         warnings.append(
             f"the optimiser (SLSQP) failed on all {starts} start(s) without improving on any "
             f"({why}): the trajectory is the best random start's, {shown} {report(J0):.6g}"
