@@ -160,6 +160,17 @@ def remember_defaults(p: argparse.ArgumentParser, *dests: str) -> None:
     p.set_defaults(_option_defaults={d: p.get_default(d) for d in dests})
 
 
+def remember_flags(p: argparse.ArgumentParser) -> None:
+    """Records the flag and the default of every option of ``p`` (``args._flags``: dest ->
+    (flag, default)), so that a mode that takes few of them can refuse the others by name."""
+    flags = {
+        a.dest: (max(a.option_strings, key=len), a.default)
+        for a in p._actions
+        if a.option_strings and a.help != argparse.SUPPRESS and a.dest != "help"
+    }
+    p.set_defaults(_flags=flags)
+
+
 def given_options(args: argparse.Namespace, *dests: str) -> list[str]:
     """The flags (``--param-error``) of the options ``dests`` (recorded by
     :func:`remember_defaults`) that the command line set to other than their defaults."""

@@ -5,7 +5,7 @@ and how, what is written."""
 from __future__ import annotations
 
 from ..robot import FRICTION_KINDS
-from .args import add_command, deprecated
+from .args import add_command, deprecated, remember_flags
 from .number_options import joint_vector, number
 from .outputs import add_description_outputs, output_dir, output_file
 from .robot_options import add_joint_terms, add_offset, add_robot
@@ -263,6 +263,7 @@ def add_identify(sub, func) -> None:
         "one value for all joints)",
     )
     p.set_defaults(func=func)
+    remember_flags(p)  # the floating-base command refuses the options it does not take
 
 
 def add_identify_payload(sub, func) -> None:

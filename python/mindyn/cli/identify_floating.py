@@ -16,30 +16,12 @@ _APPLY = {"robot", "data", "tip", "root_joint", "model", "validate", "json", "ol
 _APPLY |= {"wrench_frame", "filter", "cutoff", "func", "command"}
 
 
-def _identify_parser() -> argparse.ArgumentParser:
-    """The parser of ``identify`` alone."""
-    from . import build_parser
-
-    parser = build_parser("identify")
-    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    return sub.choices["identify"]
-
-
 def _refuse_fixed_base_options(args: argparse.Namespace) -> None:
     """Refuses, naming the first, an option of ``identify`` given on the command line that a
     floating-base log does not take (joint terms, the fixed-base reading and pre-processing, the
     consistent estimate, descriptions, reports, currents, bags)."""
-    parser = _identify_parser()
-    defaults = vars(parser.parse_args(["ROBOT", "LOG"]))
-    for dest, value in vars(args).items():
-        if dest in _APPLY or dest.startswith("_") or dest not in defaults:
-            continue
-        if value != defaults[dest]:
-            flag = next(
-                max(a.option_strings, key=len)
-                for a in parser._actions
-                if a.dest == dest and a.option_strings and a.help != argparse.SUPPRESS
-            )
+    for dest, (flag, default) in args._flags.items():
+        if dest not in _APPLY and getattr(args, dest, default) != default:
             raise UsageError(
                 f"{flag}: does not apply to a floating-base robot (its logs carry q, dq, "
                 "ddq, joint torques and contact wrenches, fitted by weighted least squares; "
