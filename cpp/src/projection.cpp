@@ -821,10 +821,14 @@ ProjectionLimits projectionLimits() {
 
 std::string projectionRefusal(const Model& model, ParameterLayout layout, double budget) {
   model.validate();
-  try {
-    requireSingleDof(model, "the projection method");
-  } catch (const ModelError& e) {
-    return e.what();
+  if (!model.singleDof()) {
+    // The method runs on the single-DOF expansion (expandToSingleDof): its limits apply there.
+    const Model expanded = expandToSingleDof(model).model;
+    std::string why = projectionRefusal(expanded, layout, budget);
+    if (!why.empty())
+      why += " (model '" + model.name + "' with each multi-DOF joint counted as its chain of " +
+             std::to_string(expanded.nq()) + " single-DOF joints in all)";
+    return why;
   }
   const int n = model.nq(), P = layout.size(n);
   const KeyLayout kl = keyLayout(model);
