@@ -438,7 +438,7 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
     if (width <= 64)
       collect(rs, first[g], std::uint64_t{0});
     else
-      collect(rs, 0, std::array<std::uint64_t, 4>{});
+      collect(rs, 0, std::array<std::uint64_t, kProjectionMaxParameters / 64>{});
     // Rows of equal pattern, combined: a bucket of k rows with s entries gives min(k, s) rows.
     long bound = 0;
     for (int i = 0; i < nbuckets; ++i) {

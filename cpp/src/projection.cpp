@@ -25,6 +25,8 @@ constexpr int kL0Bits = 10;
 constexpr int kJointBits = 3;
 constexpr int kMaxJoints = (64 - kL0Bits) / kJointBits;  // 18
 constexpr int kMaxTreeJoints = 44;                       // n(n + 1)/2 pairs in kL0Bits
+static_assert(kProjectionMaxParameters % 64 == 0 && kProjectionMaxParameters >= 15 * kMaxTreeJoints,
+              "the row reduction's masks hold every column of a tree of the most joints");
 
 inline int pairIndex(int i, int j) {  // 1-based, j <= i
   return i * (i - 1) / 2 + j;
