@@ -71,7 +71,7 @@ class BaseParameters:
         whose ``Y`` and formulas are computed on first access.
     method_reason : str
         Why this method ran: ``method='recursive'`` when it was given, else the reason of
-        :func:`choose_method` (``"the projection method handles at most 256 parameters, ..."``).
+        :func:`choose_method` (``"the projection method handles at most 18 joints, ..."``).
     offset : bool
         A constant torque offset per joint, ``tau_j = ... + Off_j``: the parameters ``Off1 ..
         OffN`` (the core's parameter layout names them) follow all others, in the base set as
@@ -381,9 +381,10 @@ def base_parameters(
         projection method, or the recursive one where a limit of the projection method refuses
         the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
         ``method_reason``). A robot with multi-DOF joints (spherical, universal, cylindrical,
-        planar, floating; :attr:`Robot.single_dof` false) takes the numerical method only,
-        without rotor inertia or friction: the exact methods refuse it and the default falls
-        back to the numerical one.
+        planar, floating; :attr:`Robot.single_dof` false) takes the three methods, without
+        rotor inertia or friction: the exact ones run on each pair written as a chain of
+        single-DOF joints through massless links (the manual's base-parameters page), whose
+        joints the projection method's limits count, and the default chooses as above.
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).
