@@ -148,11 +148,16 @@ def test_the_default_method_follows_the_single_dof_rule():
     solo, _ = urdf_pair("solo12")
     bp = mindyn.base_parameters(solo)
     assert bp.method == "projection" and bp.method_reason.startswith("the default (exact")
+    expanded = "each multi-DOF joint taken as its chain of single-DOF joints"
+    assert expanded in bp.method_reason
     g1, _ = urdf_pair("g1")
     method, reason = mindyn.base.choose_method(g1)
     assert method == "recursive"
     assert reason.startswith(_core.projection_refusal(g1._m))
-    assert reason.endswith("the recursive method is exact and gives the same base set")
+    assert "the recursive method is exact and gives the same base set" in reason
+    assert expanded in reason
+    # a single-DOF robot's reason does not mention it
+    assert expanded not in mindyn.base_parameters("puma560").method_reason
 
 
 def test_rotor_inertia_and_friction_stay_refused_on_multidof_joints():

@@ -31,15 +31,25 @@ def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) 
     recursive one refuses it too (rotor inertia of motors that couple joints in a way it
     cannot decide; the reason is given)."""
     refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
+    # the exact methods run on a multi-DOF robot's single-DOF expansion: said so
+    pairs = "" if robot.single_dof else _EXPANDED
     if refused:
         also = _core.recursive_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
         if also:
             return "numerical", f"{refused}; {also}: the numerical method (sampled) runs instead"
-        return "recursive", f"{refused}; the recursive method is exact and gives the same base set"
+        return "recursive", (
+            f"{refused}; the recursive method is exact and gives the same base set{pairs}"
+        )
     return "projection", (
         "the default (exact: Gaussian elimination on the exact coordinates of the Lagrangian's "
-        "coefficients in a finite basis of functions of the joints, no sampling)"
+        f"coefficients in a finite basis of functions of the joints, no sampling){pairs}"
     )
+
+
+_EXPANDED = (
+    ", each multi-DOF joint taken as its chain of single-DOF joints through massless links "
+    "(the same motions of the links)"
+)
 
 
 class BaseParameters:
