@@ -82,8 +82,8 @@ void requireSingleDof(const Model& model, const std::string& what) {
       throw ModelError(what + " takes revolute and prismatic joints only; model '" + model.name +
                        "' has the " + toString(j.type) + " joint '" + j.name +
                        "' (its inverse dynamics, regressor, mass matrix, forward dynamics, "
-                       "energies, momentum, Slotine-Li regressor, Coriolis matrix and numerical "
-                       "base parameters are available)");
+                       "energies, momentum, Slotine-Li regressor, Coriolis matrix and base "
+                       "parameters are available)");
 }
 
 SingleDofExpansion expandToSingleDof(const Model& model) {

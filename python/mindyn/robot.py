@@ -81,7 +81,8 @@ def load(
         first in its body's axes); its dynamics (:meth:`Robot.inverse_dynamics`,
         :meth:`Robot.regressor`, :meth:`Robot.mass_matrix`, :meth:`Robot.forward_dynamics`,
         energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor) and
-        numerical base parameters are computed, other functions refuse it.
+        base parameters (every method, no rotor inertia or friction) are computed, other
+        functions refuse it.
     gravity : array_like, shape (3,), optional
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
