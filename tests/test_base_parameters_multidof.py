@@ -160,8 +160,10 @@ def test_the_default_method_follows_the_single_dof_rule():
     assert expanded not in mindyn.base_parameters("puma560").method_reason
 
 
-def test_rotor_inertia_and_friction_stay_refused_on_multidof_joints():
+def test_rotor_inertia_friction_and_offsets_stay_refused_on_multidof_joints():
     robot, _ = urdf_pair("solo12")
     for method in (*EXACT, "numerical", None):
         with pytest.raises(mindyn.ModelError, match="rotor inertia and friction are defined"):
             mindyn.base_parameters(robot, method=method, rotor=True)
+        with pytest.raises(mindyn.ModelError, match="torque offsets are defined for revolute"):
+            mindyn.base_parameters(robot, method=method, offset=True)

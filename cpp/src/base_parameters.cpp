@@ -1240,6 +1240,9 @@ void joinJointBlock(const Model& model, ParameterLayout layout, const BaseOption
 
 BaseParameters computeBaseParameters(const Model& model, const BaseOptions& options) {
   if (!options.layout.offset) return linkBaseParameters(model, options);
+  if (!model.singleDof())
+    throw ModelError("torque offsets are defined for revolute and prismatic joints only; model '" +
+                     model.name + "' has multi-DOF joints");
   const auto start = std::chrono::steady_clock::now();
   BaseOptions links = options;
   links.layout = options.layout.links();
