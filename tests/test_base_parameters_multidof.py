@@ -69,7 +69,8 @@ def check_rnea(robot, model, bodies, bp, rng, states: int = 3) -> float:
 
 def check_methods(robot, model, bodies, methods, states: int, seed: int = 0):
     """Counts of the given methods equal to the numerical method's and to Pinocchio's stacked
-    rank; the exact methods give one base set; W_b (Y pi) = rnea(pi) for each."""
+    rank (the Lagrangian and total-energy sets to the numerical method's, from sampled
+    energies); the exact methods give one base set; W_b (Y pi) = rnea(pi) for each."""
     rng = np.random.default_rng(seed)
     rank, _ = pinocchio_rank(robot, model, rng, states, bodies)
     numerical = mindyn.base_parameters(robot, method="numerical")
@@ -77,6 +78,8 @@ def check_methods(robot, model, bodies, methods, states: int, seed: int = 0):
     sets = {m: mindyn.base_parameters(robot, method=m) for m in methods}
     for m, bp in sets.items():
         assert bp.method == m and bp.n == rank, (robot.name, m, bp.n, rank)
+        for k in ("lagrangian", "energy"):
+            assert bp.sets[k]["n"] == numerical.sets[k]["n"], (robot.name, m, k)
         check_rnea(robot, model, bodies, bp, rng)
     if len(sets) == 2:
         assert sets["projection"].names == sets["recursive"].names
