@@ -271,7 +271,8 @@ def test_multidof_models_are_refused_where_unsupported(tmp_path):
         lambda: robot.fk(q),
         lambda: robot.momentum_regressors(q, v),
         lambda: robot.energy_regressors(q, v),
-        lambda: mindyn.base_parameters(robot).regressor(q, v, a),
+        lambda: mindyn.base_parameters(robot).energy_regressor(q, v),
+        lambda: mindyn.base_parameters(robot).momentum_regressors(q, v),
     ):
         with pytest.raises(mindyn.ModelError, match="has the floating joint 'root_joint'"):
             call()

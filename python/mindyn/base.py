@@ -255,8 +255,11 @@ class BaseParameters:
 
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
-        ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row."""
-        self.robot._require_single_dof("BaseParameters.regressor")
+        ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row. Multi-DOF
+        joints: ``q``, ``dq``, ``ddq`` and the rows as :meth:`Robot.regressor` (``nq``, ``nv``),
+        its columns at the pivots."""
+        if not self.robot.single_dof:
+            return self.robot.regressor(q, dq, ddq)[..., self.pivots]
         q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
         return self._b.regressor(q, dq, ddq)
 
@@ -265,6 +268,7 @@ class BaseParameters:
         equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant; an offset's column is
         its work ``q_j`` (``Off_j q_j``), so that differences over a window are the
         energy model's columns."""
+        self.robot._require_single_dof("BaseParameters.energy_regressor")
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.energy_regressor(q, dq)
 
@@ -273,6 +277,7 @@ class BaseParameters:
         each, over the equations-of-motion set: ``p = A(q) dq = W_p,b @ p_b`` and
         ``-dL/dq + offsets = W_l,b @ p_b`` (an offset's column is 1 in its joint's row of
         ``W_l,b``, 0 in ``W_p,b``; see ``Robot.momentum_regressors``)."""
+        self.robot._require_single_dof("BaseParameters.momentum_regressors")
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.momentum_regressors(q, dq)
 

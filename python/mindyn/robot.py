@@ -677,8 +677,8 @@ class Robot:
                 f"{what} takes revolute and prismatic joints only; robot '{self.name}' has the "
                 f"{self.joint_types[k]} joint '{self.joint_names[k]}' (multi-DOF joints have "
                 "inverse dynamics, regressor, mass matrix, forward dynamics, energies, "
-                "momentum, link poses, Slotine-Li regressor, Coriolis matrix and numerical base "
-                "parameters)"
+                "momentum, link poses, Slotine-Li regressor, Coriolis matrix, base parameters "
+                "and the base regressor)"
             )
 
     def link_poses(self, q) -> np.ndarray:
