@@ -87,6 +87,7 @@ void requireSingleDof(const Model& model, const std::string& what) {
 }
 
 SingleDofExpansion expandToSingleDof(const Model& model) {
+  model.validate();  // sizes (inertial, link names, parents) are used below
   SingleDofExpansion out;
   const int n = model.nq();
   if (model.singleDof()) {

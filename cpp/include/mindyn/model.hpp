@@ -331,6 +331,7 @@ void requireSingleDof(const Model& model, const std::string& what);
 /// and accelerations as with the pair, so the regressor and energies of the real links span the
 /// same functions. Only the link inertia is kept: no rotor inertia, friction, transmission or
 /// limits on the added joints. A model of revolute and prismatic joints comes back unchanged.
+/// Throws ModelError for a model that Model::validate refuses.
 struct SingleDofExpansion {
   Model model;
   /// Per joint of `model`: the joint of the original model whose link it moves (its last
