@@ -438,7 +438,7 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
     if (width <= 64)
       collect(rs, first[g], std::uint64_t{0});
     else
-      collect(rs, 0, std::array<std::uint64_t, 4>{});
+      collect(rs, 0, std::array<std::uint64_t, kProjectionMaxParameters / 64>{});
     // Rows of equal pattern, combined: a bucket of k rows with s entries gives min(k, s) rows.
     long bound = 0;
     for (int i = 0; i < nbuckets; ++i) {
@@ -797,14 +797,32 @@ namespace {
 // (and with them the near-degenerate flag) come from the recursion run again at those tolerances
 // (its rows are independent by construction, so their number is the rank; the Lagrangian's count
 // moves with it).
-void foldRecursiveMargins(const Model& model, ParameterLayout layout, double tol,
-                          const IdentifiableSpace& space, long rows, BaseParameters& bp) {
+// The recursion's rows with the columns in their units, then each row normalised (its norm
+// summed in column order).
+Eigen::SparseMatrix<double> recursiveCoordinates(Eigen::SparseMatrix<double> Z,
+                                                 const Eigen::VectorXd& units) {
+  Eigen::VectorXd norm2 = Eigen::VectorXd::Zero(Z.rows());
+  for (int c = 0; c < Z.cols(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it) {
+      it.valueRef() *= units[c];
+      norm2[it.row()] += it.value() * it.value();
+    }
+  for (int c = 0; c < Z.cols(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it)
+      it.valueRef() /= std::sqrt(norm2[it.row()]);
+  return Z;
+}
+
+// `count(t)`: the number of base parameters with the recursion at tolerance t, `rows` at tol.
+template <class Count>
+void foldRecursiveMargins(double tol, const IdentifiableSpace& space, long rows, Count count,
+                          BaseParameters& bp) {
   const double looser = tol * 1e4, tighter = tol * 1e-3;
   const bool close = space.smallest_kept < looser * 10 || space.largest_dropped > tighter / 10;
   int dl = 0, dt = 0;
   if (close) {
-    dl = static_cast<int>(recursiveIdentifiable(model, layout, looser).rows.rows() - rows);
-    dt = static_cast<int>(recursiveIdentifiable(model, layout, tighter).rows.rows() - rows);
+    dl = static_cast<int>(count(looser) - rows);
+    dt = static_cast<int>(count(tighter) - rows);
   }
   for (BaseSet* set : {&bp.lagrangian, &bp.energy, &bp.eom}) {
     RankDecision& d = set->decision;
@@ -920,9 +938,6 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
                      " parameters; the layout has " + std::to_string(P));
   checkDriveSide(model, layout);
   if (!model.singleDof()) {
-    if (options.method != BaseMethod::Numerical)
-      requireSingleDof(model, options.method == BaseMethod::Projection ? "the projection method"
-                                                                       : "the recursive method");
     if (layout.rotor || layout.friction)
       throw ModelError(
           "rotor inertia and friction are defined for revolute and prismatic joints "
@@ -947,13 +962,28 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
   const double length = robotLength(model);
   const Model unit_model = length != 1.0 ? unitLengthModel(model, length) : Model{};
   const Model& exact_model = length != 1.0 ? unit_model : model;
+  // A model with multi-DOF joints: the exact methods run on its single-DOF expansion (each pair
+  // a chain of single-DOF joints through massless links, expandToSingleDof), whose coordinates
+  // on the real links' columns span the real model's (docs/base-parameters.md).
+  const bool expand = !model.singleDof() && options.method != BaseMethod::Numerical;
+  const SingleDofExpansion expansion =
+      expand ? expandToSingleDof(exact_model) : SingleDofExpansion{};
+  const Model& kernel = expand ? expansion.model : exact_model;
+  Eigen::SparseMatrix<double> real;  // the real links' columns of the expansion's
+  if (expand) {
+    std::vector<Eigen::Triplet<double>> ones;
+    for (int c = 0; c < P; ++c)
+      ones.emplace_back(expansion.column[static_cast<std::size_t>(c)], c, 1.0);
+    real.resize(10 * kernel.nq(), P);
+    real.setFromTriplets(ones.begin(), ones.end());
+  }
   if (options.method == BaseMethod::Projection) {
-    const InfluenceCoordinates ic =
-        influenceCoordinates(exact_model, layout, options.projection_budget);
+    const InfluenceCoordinates ic = influenceCoordinates(kernel, layout, options.projection_budget);
     bp.basis_rows = ic.rows();
     bp.terms_formed = ic.terms_formed;
     const Reduced red = reduceRows(ic);
-    const Eigen::MatrixXd Zs = red.Z * units.asDiagonal();
+    const Eigen::MatrixXd Zs =
+        expand ? Eigen::MatrixXd(red.Z * real * units.asDiagonal()) : red.Z * units.asDiagonal();
     ZL = sparse(Zs);
     // Equations of motion: the constant does not reach the torques; friction columns do.
     const long keep = Zs.rows() - (red.constant_row >= 0 ? 1 : 0);
@@ -969,19 +999,14 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
   } else if (options.method == BaseMethod::Recursive) {
     // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has
     // no friction columns), the total energy's is the same space.
-    space = recursiveIdentifiable(exact_model, layout, tol);
-    ZE = std::move(space.rows);
+    space = recursiveIdentifiable(kernel, layout, tol);
+    if (expand) {
+      ZE = recursiveCoordinates(space.rows * real, units);
+      space.constant = space.constant * real;
+    } else {
+      ZE = recursiveCoordinates(std::move(space.rows), units);
+    }
     space.constant = space.constant * units.asDiagonal();
-    // The columns in their units, then each row normalised (its norm summed in column order).
-    Eigen::VectorXd norm2 = Eigen::VectorXd::Zero(ZE.rows());
-    for (int c = 0; c < P; ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(ZE, c); it; ++it) {
-        it.valueRef() *= units[c];
-        norm2[it.row()] += it.value() * it.value();
-      }
-    for (int c = 0; c < P; ++c)
-      for (Eigen::SparseMatrix<double>::InnerIterator it(ZE, c); it; ++it)
-        it.valueRef() /= std::sqrt(norm2[it.row()]);
     // The constant first: it involves no joint, like the rows of the inner links, and leaves
     // the columns' last non-zero rows where they are. Then the rows with an entry off the
     // friction columns, without their friction entries.
@@ -1055,8 +1080,26 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     bp.energy = makeSet(echelon(ZH, order, tol, kinds, units), bp.classical_names);
   }
   bp.eom = makeSet(echelon(ZE, order, tol, kinds, units), bp.classical_names);
-  if (options.method == BaseMethod::Recursive)
-    foldRecursiveMargins(exact_model, layout, tol, space, ZE.rows(), bp);
+  if (options.method == BaseMethod::Recursive) {
+    if (expand) {
+      // The expansion's rows are independent, the real links' columns of them need not be: the
+      // counts at the neighbouring tolerances are the echelon form's ranks of those columns of
+      // the recursion's rows at those tolerances.
+      const auto rank = [&](double t) {
+        const Eigen::SparseMatrix<double> Z =
+            recursiveCoordinates(recursiveIdentifiable(kernel, layout, t).rows * real, units);
+        return static_cast<long>(echelon(Z, order, tol, kinds, units).rank());
+      };
+      foldRecursiveMargins(tol, space, bp.eom.size(), rank, bp);
+    } else {
+      foldRecursiveMargins(
+          tol, space, ZE.rows(),
+          [&](double t) {
+            return static_cast<long>(recursiveIdentifiable(exact_model, layout, t).rows.rows());
+          },
+          bp);
+    }
+  }
   {
     Model copy = model;
     bp.snappable = snapRightAngles(copy, 1e-3);
@@ -1197,6 +1240,9 @@ void joinJointBlock(const Model& model, ParameterLayout layout, const BaseOption
 
 BaseParameters computeBaseParameters(const Model& model, const BaseOptions& options) {
   if (!options.layout.offset) return linkBaseParameters(model, options);
+  if (!model.singleDof())
+    throw ModelError("torque offsets are defined for revolute and prismatic joints only; model '" +
+                     model.name + "' has multi-DOF joints");
   const auto start = std::chrono::steady_clock::now();
   BaseOptions links = options;
   links.layout = options.layout.links();

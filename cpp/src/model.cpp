@@ -82,8 +82,88 @@ void requireSingleDof(const Model& model, const std::string& what) {
       throw ModelError(what + " takes revolute and prismatic joints only; model '" + model.name +
                        "' has the " + toString(j.type) + " joint '" + j.name +
                        "' (its inverse dynamics, regressor, mass matrix, forward dynamics, "
-                       "energies, momentum, Slotine-Li regressor, Coriolis matrix and numerical "
-                       "base parameters are available)");
+                       "energies, momentum, Slotine-Li regressor, Coriolis matrix and base "
+                       "parameters are available)");
+}
+
+SingleDofExpansion expandToSingleDof(const Model& model) {
+  model.validate();  // sizes (inertial, link names, parents) are used below
+  SingleDofExpansion out;
+  const int n = model.nq();
+  if (model.singleDof()) {
+    out.model = model;
+    for (int k = 0; k < n; ++k) out.link.push_back(k);
+    for (int c = 0; c < 10 * n; ++c) out.column.push_back(c);
+    return out;
+  }
+  Model& m = out.model;
+  m.name = model.name;
+  m.source = model.source;
+  m.convention = model.convention;
+  m.gravity = model.gravity;
+  m.tool = model.tool;
+  m.synthetic_inertia = model.synthetic_inertia;
+  m.link_names.push_back(model.link_names.empty() ? "base" : model.link_names[0]);
+  std::vector<int> last(static_cast<std::size_t>(n));  // each joint's last factor
+  std::vector<std::pair<JointType, Eigen::Vector3d>> factors;
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY(),
+                        z = Eigen::Vector3d::UnitZ();
+  constexpr JointType R = JointType::Revolute, P = JointType::Prismatic;
+  for (int k = 0; k < n; ++k) {
+    const Joint& j = model.joints[static_cast<std::size_t>(k)];
+    switch (j.type) {
+      case JointType::Revolute:
+      case JointType::Prismatic:
+        factors = {{j.type, j.axis}};
+        break;
+      case JointType::Spherical:
+        factors = {{R, z}, {R, y}, {R, x}};
+        break;
+      case JointType::Universal:
+        factors = {{R, j.axis}, {R, j.axis2}};
+        break;
+      case JointType::Cylindrical:
+        factors = {{P, j.axis}, {R, j.axis}};
+        break;
+      case JointType::Planar:
+        factors = {{P, x}, {P, y}, {R, z}};
+        break;
+      case JointType::FreeFlyer:
+        factors = {{P, x}, {P, y}, {P, z}, {R, z}, {R, y}, {R, x}};
+        break;
+    }
+    const int f = static_cast<int>(factors.size());
+    const int p = model.parent(k);
+    for (int i = 0; i < f; ++i) {
+      Joint e;
+      e.name = f == 1 ? j.name : j.name + "[" + std::to_string(i + 1) + "]";
+      e.type = factors[static_cast<std::size_t>(i)].first;
+      e.axis = factors[static_cast<std::size_t>(i)].second;
+      if (i == 0) e.pre = j.pre;
+      if (i == f - 1) {
+        e.post = j.post;
+        if (f == 1) e.limits = j.limits;
+      }
+      m.parents.push_back(i > 0 ? m.nq() - 1 : (p < 0 ? -1 : last[static_cast<std::size_t>(p)]));
+      m.joints.push_back(e);
+      out.link.push_back(i == f - 1 ? k : -1);
+      m.link_names.push_back(i == f - 1 ? model.link_names[static_cast<std::size_t>(k + 1)]
+                                        : e.name + ".link");
+    }
+    last[static_cast<std::size_t>(k)] = m.nq() - 1;
+  }
+  const int ne = m.nq();
+  m.inertial = Eigen::VectorXd::Zero(10 * ne);
+  for (int e = 0; e < ne; ++e) {
+    const int k = out.link[static_cast<std::size_t>(e)];
+    if (k >= 0) m.inertial.segment<10>(10 * e) = model.inertial.segment<10>(10 * k);
+  }
+  out.column.resize(static_cast<std::size_t>(10 * n));
+  for (int e = 0; e < ne; ++e)
+    if (const int k = out.link[static_cast<std::size_t>(e)]; k >= 0)
+      for (int c = 0; c < 10; ++c) out.column[static_cast<std::size_t>(10 * k + c)] = 10 * e + c;
+  m.rotor_inertia = m.viscous = m.coulomb = Eigen::VectorXd::Zero(ne);
+  return out;
 }
 
 void checkConfiguration(const Model& model, const Eigen::Ref<const Eigen::VectorXd>& q) {

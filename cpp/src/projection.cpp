@@ -25,6 +25,8 @@ constexpr int kL0Bits = 10;
 constexpr int kJointBits = 3;
 constexpr int kMaxJoints = (64 - kL0Bits) / kJointBits;  // 18
 constexpr int kMaxTreeJoints = 44;                       // n(n + 1)/2 pairs in kL0Bits
+static_assert(kProjectionMaxParameters % 64 == 0 && kProjectionMaxParameters >= 15 * kMaxTreeJoints,
+              "the row reduction's masks hold every column of a tree of the most joints");
 
 inline int pairIndex(int i, int j) {  // 1-based, j <= i
   return i * (i - 1) / 2 + j;
@@ -821,10 +823,14 @@ ProjectionLimits projectionLimits() {
 
 std::string projectionRefusal(const Model& model, ParameterLayout layout, double budget) {
   model.validate();
-  try {
-    requireSingleDof(model, "the projection method");
-  } catch (const ModelError& e) {
-    return e.what();
+  if (!model.singleDof()) {
+    // The method runs on the single-DOF expansion (expandToSingleDof): its limits apply there.
+    const Model expanded = expandToSingleDof(model).model;
+    std::string why = projectionRefusal(expanded, layout, budget);
+    if (!why.empty())
+      why += " (model '" + model.name + "' with each multi-DOF joint counted as its chain of " +
+             std::to_string(expanded.nq()) + " single-DOF joints in all)";
+    return why;
   }
   const int n = model.nq(), P = layout.size(n);
   const KeyLayout kl = keyLayout(model);

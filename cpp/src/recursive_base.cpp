@@ -369,11 +369,9 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
 }
 
 std::string recursiveRefusal(const Model& model, ParameterLayout layout, double tolerance) {
-  try {
-    requireSingleDof(model, "the recursive method");
-  } catch (const ModelError& e) {
-    return e.what();
-  }
+  // A multi-DOF joint: the method runs on the single-DOF expansion (expandToSingleDof), whose
+  // joints have no rotor inertia.
+  if (!model.singleDof()) return "";
   if (!layout.rotor || !model.motorSide() || model.transmission.nm() != model.nq()) return "";
   const int n = model.nq();
   const Eigen::MatrixXd& T = model.transmission.T;

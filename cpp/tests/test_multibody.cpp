@@ -102,3 +102,65 @@ TEST(Multibody, ConfigurationNormsAreChecked) {
   }
   EXPECT_THROW(checkMultibodySizes(model, q.size(), 3, -1, -1), std::invalid_argument);
 }
+
+// The single-DOF expansion of every kind (expandToSingleDof): at the configuration of the pairs
+// that the factors' coordinates give (Z-Y-X angles to a quaternion, the planar angle to its
+// cosine and sine), every real link has the same pose in the base frame, and the potential
+// energies agree (the added links are massless).
+TEST(Multibody, TheSingleDofExpansionMovesEveryRealLinkAsThePairs) {
+  const Model model = test::everyJointKind();
+  const SingleDofExpansion ex = expandToSingleDof(model);
+  const Model& e = ex.model;
+  ASSERT_TRUE(e.singleDof());
+  EXPECT_EQ(e.nq(), 6 + 3 + 2 + 2 + 3 + 1 + 1);
+  ASSERT_EQ(static_cast<int>(ex.column.size()), 10 * model.nq());
+  for (int c = 0; c < 10 * model.nq(); ++c) EXPECT_EQ(e.inertial[ex.column[c]], model.inertial[c]);
+  EXPECT_EQ(e.inertial.sum(), model.inertial.sum());  // the others are zero
+  MultibodyData dm(model), de(e);
+  std::mt19937 rng(4);
+  for (int trial = 0; trial < 5; ++trial) {
+    const Eigen::VectorXd th = 2.0 * test::random(rng, e.nq());
+    Eigen::VectorXd q(model.configSize());
+    auto zyx = [&](int i, double* out) {
+      const Eigen::Quaterniond r(Eigen::AngleAxisd(th[i], Eigen::Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(th[i + 1], Eigen::Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(th[i + 2], Eigen::Vector3d::UnitX()));
+      out[0] = r.x(), out[1] = r.y(), out[2] = r.z(), out[3] = r.w();
+    };
+    int i = 0, iq = 0;  // first factor, first q entry of each pair
+    for (const Joint& j : model.joints) {
+      double* out = q.data() + iq;
+      switch (j.type) {
+        case JointType::Spherical:
+          zyx(i, out);
+          i += 3;
+          break;
+        case JointType::Planar:
+          out[0] = th[i], out[1] = th[i + 1], out[2] = std::cos(th[i + 2]);
+          out[3] = std::sin(th[i + 2]);
+          i += 3;
+          break;
+        case JointType::FreeFlyer:
+          out[0] = th[i], out[1] = th[i + 1], out[2] = th[i + 2];
+          zyx(i + 3, out + 3);
+          i += 6;
+          break;
+        default:  // revolute, prismatic, universal, cylindrical: the factors' coordinates
+          for (int f = 0; f < j.nq(); ++f) out[f] = th[i++];
+      }
+      iq += j.nq();
+    }
+    ASSERT_EQ(i, e.nq());
+    forwardKinematics(model, dm, q);
+    forwardKinematics(e, de, th);
+    for (int k = 0, f = 0; f < e.nq(); ++f) {
+      if (ex.link[f] < 0) continue;
+      ASSERT_EQ(ex.link[f], k);
+      EXPECT_LE((dm.R0[k] - de.R0[f]).norm(), 1e-12) << model.joints[k].name;
+      EXPECT_LE((dm.p0[k] - de.p0[f]).norm(), 1e-12) << model.joints[k].name;
+      ++k;
+    }
+    const double V = potentialEnergy(model, dm, q, model.inertial);
+    EXPECT_NEAR(potentialEnergy(e, de, th, e.inertial), V, 1e-12 * std::abs(V));
+  }
+}

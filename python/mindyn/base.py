@@ -41,15 +41,25 @@ def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) 
             "does the recursive method; the numerical method (sampled) runs"
         )
     refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
+    # the exact methods run on a multi-DOF robot's single-DOF expansion: said so
+    pairs = "" if robot.single_dof else _EXPANDED
     if refused:
         also = _core.recursive_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
         if also:
             return "numerical", f"{refused}; {also}: the numerical method (sampled) runs instead"
-        return "recursive", f"{refused}; the recursive method is exact and gives the same base set"
+        return "recursive", (
+            f"{refused}; the recursive method is exact and gives the same base set{pairs}"
+        )
     return "projection", (
         "the default (exact: Gaussian elimination on the exact coordinates of the Lagrangian's "
-        "coefficients in a finite basis of functions of the joints, no sampling)"
+        f"coefficients in a finite basis of functions of the joints, no sampling){pairs}"
     )
+
+
+_EXPANDED = (
+    ", each multi-DOF joint taken as its chain of single-DOF joints through massless links "
+    "(the same motions of the links)"
+)
 
 
 class BaseParameters:
@@ -81,7 +91,7 @@ class BaseParameters:
         whose ``Y`` and formulas are computed on first access.
     method_reason : str
         Why this method ran: ``method='recursive'`` when it was given, else the reason of
-        :func:`choose_method` (``"the projection method handles at most 256 parameters, ..."``).
+        :func:`choose_method` (``"the projection method handles at most 18 joints, ..."``).
     offset : bool
         A constant torque offset per joint, ``tau_j = ... + Off_j``: the parameters ``Off1 ..
         OffN`` (the core's parameter layout names them) follow all others, in the base set as
@@ -255,8 +265,11 @@ class BaseParameters:
 
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
-        ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row."""
-        self.robot._require_single_dof("BaseParameters.regressor")
+        ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row. Multi-DOF
+        joints: ``q``, ``dq``, ``ddq`` and the rows as :meth:`Robot.regressor` (``nq``, ``nv``),
+        its columns at the pivots."""
+        if not self.robot.single_dof:
+            return self.robot.regressor(q, dq, ddq)[..., self.pivots]
         q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
         return self._b.regressor(q, dq, ddq)
 
@@ -265,6 +278,7 @@ class BaseParameters:
         equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant; an offset's column is
         its work ``q_j`` (``Off_j q_j``), so that differences over a window are the
         energy model's columns."""
+        self.robot._require_single_dof("BaseParameters.energy_regressor")
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.energy_regressor(q, dq)
 
@@ -273,6 +287,7 @@ class BaseParameters:
         each, over the equations-of-motion set: ``p = A(q) dq = W_p,b @ p_b`` and
         ``-dL/dq + offsets = W_l,b @ p_b`` (an offset's column is 1 in its joint's row of
         ``W_l,b``, 0 in ``W_p,b``; see ``Robot.momentum_regressors``)."""
+        self.robot._require_single_dof("BaseParameters.momentum_regressors")
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.momentum_regressors(q, dq)
 
@@ -391,9 +406,10 @@ def base_parameters(
         projection method, or the recursive one where a limit of the projection method refuses
         the robot (:func:`choose_method`; the choice and its reason are in ``method`` and
         ``method_reason``). A robot with multi-DOF joints (spherical, universal, cylindrical,
-        planar, floating; :attr:`Robot.single_dof` false) takes the numerical method only,
-        without rotor inertia or friction: the exact methods refuse it and the default falls
-        back to the numerical one.
+        planar, floating; :attr:`Robot.single_dof` false) takes the three methods, without
+        rotor inertia or friction: the exact ones run on each pair written as a chain of
+        single-DOF joints through massless links (the manual's base-parameters page), whose
+        joints the projection method's limits count, and the default chooses as above.
     order : sequence of int or str, optional
         Column priority: every classical parameter once, by index or name (``"XX1"``).
         Default: Khalil's order (link by link; ``YY, MZ, M`` last in each link; then ``Ia``).

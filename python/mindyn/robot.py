@@ -81,7 +81,8 @@ def load(
         first in its body's axes); its dynamics (:meth:`Robot.inverse_dynamics`,
         :meth:`Robot.regressor`, :meth:`Robot.mass_matrix`, :meth:`Robot.forward_dynamics`,
         energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor) and
-        numerical base parameters are computed, other functions refuse it.
+        base parameters (every method, no rotor inertia or friction) are computed, other
+        functions refuse it.
     gravity : array_like, shape (3,), optional
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
@@ -682,8 +683,8 @@ class Robot:
                 f"{what} takes revolute and prismatic joints only; robot '{self.name}' has the "
                 f"{self.joint_types[k]} joint '{self.joint_names[k]}' (multi-DOF joints have "
                 "inverse dynamics, regressor, mass matrix, forward dynamics, energies, "
-                "momentum, link poses, Slotine-Li regressor, Coriolis matrix and numerical base "
-                "parameters)"
+                "momentum, link poses, Slotine-Li regressor, Coriolis matrix, base parameters "
+                "and the base regressor)"
             )
 
     def link_poses(self, q) -> np.ndarray:

@@ -5,6 +5,10 @@
 // links, then the same echelon form) and the sampled numerical method (regressor samples, QR),
 // for cross-checking.
 //
+// Multi-DOF joints: the exact methods run on the single-DOF expansion (expandToSingleDof) and
+// keep the real links' columns (docs/base-parameters.md, "Joints of several degrees of
+// freedom"); rotor inertia and friction are refused there.
+//
 // Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 

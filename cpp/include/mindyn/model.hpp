@@ -45,10 +45,11 @@ inline constexpr double kMaxDescriptionValue = 1e16;
 inline constexpr int kMaxModelJoints = 1000;
 
 /// The kinematic pairs. Revolute and prismatic joints have one degree of freedom; the others are
-/// the multi-degree-of-freedom pairs, which only the multibody algorithms (multibody.hpp) take.
-/// Every other algorithm (the single-DOF dynamics of dynamics.hpp, base parameters by the
-/// projection and recursive methods, code generation, KDL kinematics, IK, identification)
-/// refuses a model with one (requireSingleDof) in one line naming the joint.
+/// the multi-degree-of-freedom pairs, which the multibody algorithms (multibody.hpp) take, and
+/// base parameters by every method (the projection and recursive methods through
+/// expandToSingleDof). Every other algorithm (the single-DOF dynamics of dynamics.hpp, code
+/// generation, KDL kinematics, IK, identification) refuses a model with one
+/// (requireSingleDof) in one line naming the joint.
 ///
 /// Configuration q (nq entries) and velocity v (nv entries) of each kind follow Pinocchio's
 /// JointModel* convention, so that a state of Pinocchio is a state of mindyn unchanged. The
@@ -314,6 +315,33 @@ struct Model {
 /// Throws ModelError "<what> takes revolute and prismatic joints only; model '<name>' has the
 /// <kind> joint '<joint>' (...)" unless model.singleDof().
 void requireSingleDof(const Model& model, const std::string& what);
+
+/// A model with the same real links whose multi-DOF joints are each replaced by a chain of
+/// single-DOF joints through massless intermediate links, with the same motion of every real
+/// link (docs/base-parameters.md, "Joints of several degrees of freedom"): in the joint frame
+/// (after `pre`),
+///   Spherical    revolute about z, y, x (J = Rz Ry Rx, the Z-Y-X angles of the rotation)
+///   Universal    revolute about `axis`, then about `axis2`
+///   Cylindrical  prismatic along `axis`, then revolute about `axis`
+///   Planar       prismatic along x, along y, then revolute about z
+///   FreeFlyer    prismatic along x, y, z, then revolute about z, y, x
+/// The first joint of a chain keeps `pre`, the last `post` and the real link's inertia; the
+/// others have identity frames and no inertia. The charts are singular on a set of measure zero
+/// (Z-Y-X angles at +-pi/2 of the middle one), elsewhere each real link has the same velocities
+/// and accelerations as with the pair, so the regressor and energies of the real links span the
+/// same functions. Only the link inertia is kept: no rotor inertia, friction, transmission or
+/// limits on the added joints. A model of revolute and prismatic joints comes back unchanged.
+/// Throws ModelError for a model that Model::validate refuses.
+struct SingleDofExpansion {
+  Model model;
+  /// Per joint of `model`: the joint of the original model whose link it moves (its last
+  /// factor), or -1 for a massless intermediate link.
+  std::vector<int> link;
+  /// The columns of the classical link parameters (10 per link) of the original model in those
+  /// of `model`: original column c is column column[c].
+  std::vector<int> column;
+};
+SingleDofExpansion expandToSingleDof(const Model& model);
 
 /// Throws std::invalid_argument naming the joint unless every quaternion and planar (cos, sin)
 /// pair of the configuration q (model.configSize() entries, checked) has norm 1 within 1e-6.

@@ -15,6 +15,10 @@
 // only for i and j on one root path, and lk = 1 for every joint off the path. A basis function
 // that does not involve a branch is one row, whichever branches give it coordinates.
 //
+// A model with multi-DOF joints runs as its single-DOF expansion (expandToSingleDof, model.hpp;
+// the basis functions of each pair and why the real links' columns suffice:
+// docs/base-parameters.md, "Joints of several degrees of freedom"); its joints are counted there.
+//
 // Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
@@ -89,8 +93,12 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout = {});
 inline constexpr double kProjectionBudget = 8.0 * 1024 * 1024 * 1024;
 
 /// Most parameters (columns, friction included) the projection method's row reduction takes:
-/// it groups rows by bit masks of their columns.
-inline constexpr int kProjectionMaxParameters = 256;
+/// it groups rows by bit masks of their columns, of 11 words of 64 bits. That is more than a
+/// tree of the most joints the basis index holds (44) has with every per-joint column (ten
+/// inertial, rotor inertia, three friction, an offset: 660), so the joint limits and the memory
+/// budget refuse a model first; the masks are a fixed size so that grouping allocates nothing
+/// per row.
+inline constexpr int kProjectionMaxParameters = 11 * 64;
 
 /// The projection method's limits on a model, besides its memory budget (kProjectionBudget):
 /// most joints of a serial chain (its packed basis index), of a tree, and on one root path of
@@ -109,8 +117,7 @@ ProjectionLimits projectionLimits();
 /// the method meets them: joints (18 on a serial chain, the packed index; 44 on a tree and 16 on
 /// one root path), parameters (kProjectionMaxParameters) and memory (projectionCost's estimate
 /// against `budget`). The text starts with "the projection method" and names the limit and the
-/// model's value ("the projection method handles at most 256 parameters, the model has 320 (32
-/// joints, 10 per joint)").
+/// model's value ("the projection method handles at most 18 joints, the model has 20").
 std::string projectionRefusal(const Model& model, ParameterLayout layout = {},
                               double budget = kProjectionBudget);
 

@@ -22,6 +22,10 @@
 // inertia and friction are added as columns of their own (see recursiveIdentifiable), on the
 // motor side through the transmission (recursive_base.cpp).
 //
+// A model with multi-DOF joints runs as its single-DOF expansion (expandToSingleDof, model.hpp;
+// docs/base-parameters.md, "Joints of several degrees of freedom"): computeBaseParameters keeps
+// the real links' columns of its rows, which need not be independent there.
+//
 // Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 

@@ -20,7 +20,7 @@ def base_method(robot, rotor: bool, method: str | None, friction: bool = False) 
 def projection_limits_text(*, parameters: bool = True) -> str:
     """The projection method's joint (and parameter) limits in words, from the C++ core's
     ``projection_limits()``: "18 joints on a chain, 44 on a tree or 16 on one of its root
-    paths, 256 parameters"."""
+    paths, 704 parameters"."""
     lim = _core.projection_limits()
     text = (
         f"{lim['chain_joints']} joints on a chain, {lim['tree_joints']} on a tree or "

@@ -1,0 +1,173 @@
+"""Base parameters of robots with multi-DOF joints and floating bases by the three methods: the
+exact projection and recursive methods run on the single-DOF expansion of each pair
+(docs/base-parameters.md, "Joints of several degrees of freedom"). Their counts are checked
+against the rank of Pinocchio's joint-torque regressors stacked at random states and against
+the numerical method; their base sets against Pinocchio's rnea (W_b (Y pi) = rnea(pi) for a
+random pi); the known floating-base results (the floating body's ten parameters and the total
+mass identifiable) against the same regressors.
+
+One robot per test: floating TALOS by the projection method takes several seconds and is
+compared in bench/bench_base_parameters_multidof.py instead."""
+
+from __future__ import annotations
+
+import mindyn
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import assert_close
+from mindyn import _core
+from random_tree import random_multidof_tree_yaml
+from test_multibody import (
+    FLOATING,
+    geometry_pair,
+    in_row_space,
+    pin_q,
+    pinocchio_rank,
+    random_state,
+    urdf_pair,
+)
+
+EXACT = ("projection", "recursive")
+
+
+def with_parameters(model, bodies, pi):
+    """A copy of a pin.Model whose link k has the classical parameters pi[10k:10k+10] (about the
+    link origin, in mindyn's order), for the URDF models (link k is body k + 1, its frame the
+    joint's)."""
+    m = model.copy()
+    pinp = mindyn.to_pinocchio_order(pi)
+    for k in range(len(pi) // 10):
+        m.inertias[k + 1 if bodies is None else bodies[k]] = pin.Inertia.FromDynamicParameters(
+            np.asarray(pinp[10 * k : 10 * k + 10], dtype=float)
+        )
+    return m
+
+
+def check_rnea(robot, model, bodies, bp, rng, states: int = 3) -> float:
+    """W_b (Y pi) (BaseParameters.regressor, the classical regressor's columns at the pivots)
+    against Pinocchio's rnea(pi) at random states, pi random with each parameter
+    of its robot's size (the robot's own values times a random factor in +-[0.5, 1.5], plus a
+    random part so that zero parameters are not zero)."""
+    pi = robot.params * rng.uniform(0.5, 1.5, robot.params.size) * rng.choice([-1, 1], 10 * robot.n)
+    pi = pi + rng.uniform(-0.1, 0.1, pi.size) * np.abs(robot.params).max()
+    if bodies is None:
+        model_pi = with_parameters(model, None, pi)
+    else:
+        model_pi, _ = geometry_pair(robot, pi)
+    data = model_pi.createData()
+    pb = bp.Y @ pi
+    worst = 0.0
+    for _ in range(states):
+        q, v, a = random_state(robot, rng)
+        qp = q if bodies is not None else pin_q(robot, model, q)
+        tau = pin.rnea(model_pi, data, qp, v, a)
+        got = bp.regressor(q, v, a) @ pb
+        assert_close(got, tau, 1e-9, f"{robot.name} {bp.method}: W_b (Y pi) vs rnea(pi)")
+        worst = max(worst, float(np.abs(got - tau).max() / np.abs(tau).max()))
+    return worst
+
+
+def check_methods(robot, model, bodies, methods, states: int, seed: int = 0):
+    """Counts of the given methods equal to the numerical method's and to Pinocchio's stacked
+    rank (the Lagrangian and total-energy sets to the numerical method's, from sampled
+    energies); the exact methods give one base set; W_b (Y pi) = rnea(pi) for each."""
+    rng = np.random.default_rng(seed)
+    rank, _ = pinocchio_rank(robot, model, rng, states, bodies)
+    numerical = mindyn.base_parameters(robot, method="numerical")
+    assert numerical.n == rank, robot.name
+    sets = {m: mindyn.base_parameters(robot, method=m) for m in methods}
+    for m, bp in sets.items():
+        assert bp.method == m and bp.n == rank, (robot.name, m, bp.n, rank)
+        for k in ("lagrangian", "energy"):
+            assert bp.sets[k]["n"] == numerical.sets[k]["n"], (robot.name, m, k)
+        check_rnea(robot, model, bodies, bp, rng)
+    if len(sets) == 2:
+        assert sets["projection"].names == sets["recursive"].names
+        assert_close(sets["projection"].Y, sets["recursive"].Y, 1e-9, "Y of the exact methods")
+    return rank
+
+
+@pytest.mark.parametrize("name", ["solo12", "go1", "anymal", "tiago"])
+def test_quadrupeds_and_a_planar_base_by_every_method(name):
+    """A free-flyer root (Solo12, Go1, ANYmal: 18 joints in the expansion) and a planar root
+    (TIAGo): projection, recursive and numerical counts equal Pinocchio's rank."""
+    robot, model = urdf_pair(name)
+    check_methods(robot, model, None, EXACT, states=8)
+
+
+def test_talos_with_a_free_flyer_by_the_recursive_method():
+    """TALOS on a free-flyer (38 joints in the expansion): the recursive method's count is
+    Pinocchio's rank (the projection method's, 7 s, is in the benchmark)."""
+    robot, model = urdf_pair("talos")
+    assert _core.projection_refusal(robot._m) is None  # it runs, over the time of a test
+    check_methods(robot, model, None, ("recursive",), states=12)
+
+
+def test_g1_with_a_free_flyer_by_the_recursive_method():
+    """G1 on a free-flyer: the recursive method's count is Pinocchio's rank; the projection
+    method's memory estimate for its expansion is over the budget, and it says so."""
+    robot, model = urdf_pair("g1")
+    check_methods(robot, model, None, ("recursive",), states=12)
+    why = _core.projection_refusal(robot._m)
+    assert why.startswith("the projection method would need up to") and "over its budget" in why
+    assert "each multi-DOF joint counted as its chain of 35 single-DOF joints" in why
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_random_multidof_trees_by_every_method(tmp_path, seed):
+    """Random trees of every joint kind (spherical, universal, cylindrical, planar, floating,
+    revolute, prismatic; a Pinocchio model built with its own joint models)."""
+    robot = mindyn.load(random_multidof_tree_yaml(tmp_path / "tree.yaml", n=9, seed=seed))
+    assert {"spherical", "universal", "cylindrical"} <= set(robot.joint_types)
+    model, bodies = geometry_pair(robot)
+    check_methods(robot, model, bodies, EXACT, states=12, seed=seed)
+
+
+@pytest.mark.parametrize("method", EXACT)
+def test_a_floating_base_makes_the_root_body_and_the_total_mass_identifiable(method):
+    """Known floating-base results, by the exact methods: each of the floating body's ten
+    parameters is a base parameter (its ten regressor columns in Pinocchio's stack are
+    independent), and the total mass is identifiable (a combination of the base parameters),
+    neither of which holds on the fixed base."""
+    floating, model = urdf_pair("solo12")
+    fixed = mindyn.load(FLOATING["solo12"])
+    assert fixed.single_dof and fixed.n == floating.n - 1
+    bf = mindyn.base_parameters(floating, method=method)
+    bx = mindyn.base_parameters(fixed, method=method)
+    assert bf.method == method and bx.method == method
+    assert set(range(10)) <= set(bf.pivots)
+    _, W = pinocchio_rank(floating, model, np.random.default_rng(3), states=4)
+    assert np.linalg.matrix_rank(W[:, :10]) == 10
+    total = np.zeros(10 * floating.n)
+    total[9::10] = 1.0
+    assert in_row_space(bf.Y, total) < 1e-9
+    assert in_row_space(bx.Y, total[10:]) > 1e-3  # a fixed base hides the total mass
+
+
+def test_the_default_method_follows_the_single_dof_rule():
+    """Without a method: the projection method where none of its limits refuses the expansion
+    (Solo12), else the recursive method, with the projection method's reason (G1: its memory
+    estimate), as on a single-DOF robot."""
+    solo, _ = urdf_pair("solo12")
+    bp = mindyn.base_parameters(solo)
+    assert bp.method == "projection" and bp.method_reason.startswith("the default (exact")
+    expanded = "each multi-DOF joint taken as its chain of single-DOF joints"
+    assert expanded in bp.method_reason
+    g1, _ = urdf_pair("g1")
+    method, reason = mindyn.base.choose_method(g1)
+    assert method == "recursive"
+    assert reason.startswith(_core.projection_refusal(g1._m))
+    assert "the recursive method is exact and gives the same base set" in reason
+    assert expanded in reason
+    # a single-DOF robot's reason does not mention it
+    assert expanded not in mindyn.base_parameters("puma560").method_reason
+
+
+def test_rotor_inertia_friction_and_offsets_stay_refused_on_multidof_joints():
+    robot, _ = urdf_pair("solo12")
+    for method in (*EXACT, "numerical", None):
+        with pytest.raises(mindyn.ModelError, match="rotor inertia and friction are defined"):
+            mindyn.base_parameters(robot, method=method, rotor=True)
+        with pytest.raises(mindyn.ModelError, match="torque offsets are defined for revolute"):
+            mindyn.base_parameters(robot, method=method, offset=True)
