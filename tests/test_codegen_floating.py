@@ -81,7 +81,7 @@ def contact_terms(model, data, qp, links, f, frame):
 )
 def test_generated_c_of_a_floating_quadruped_matches_pinocchio(name, root, tmp_path, rng):
     robot, model = solo(root, name)
-    bp = mindyn.base_parameters(robot)  # the numerical method: the only one for a floating base
+    bp = mindyn.base_parameters(robot)  # the default method, on the single-DOF expansion
     code = codegen.generate(robot, base=bp, name=f"{name}_{root}")
     assert code.contacts == [] and f"_NQ {robot.nq}" in code.header
     c = Floating(code, tmp_path, robot)

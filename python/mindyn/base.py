@@ -31,15 +31,7 @@ def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) 
     method -- joints, parameters, its memory estimate, all checked by the C++ core before
     computing -- refuses the robot with these joint terms, or the numerical method when the
     recursive one refuses it too (rotor inertia of motors that couple joints in a way it
-    cannot decide; the reason is given) or the robot has joints of several degrees of freedom.
-    """
-    if not robot.single_dof:
-        k = next(k for k, t in enumerate(robot.joint_types) if t not in ("revolute", "prismatic"))
-        return "numerical", (
-            f"the {robot.joint_types[k]} joint '{robot.joint_names[k]}' has several degrees of "
-            "freedom: the projection method takes revolute and prismatic joints only, and so "
-            "does the recursive method; the numerical method (sampled) runs"
-        )
+    cannot decide; the reason is given)."""
     refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
     # the exact methods run on a multi-DOF robot's single-DOF expansion: said so
     pairs = "" if robot.single_dof else _EXPANDED

@@ -137,8 +137,9 @@ def register(sub) -> None:
         "or the numerical method (sampled regressor + QR), on chains and trees. Without "
         "--method, a robot whose projection cost estimate is over its budget (or beyond the "
         f"projection method's limits: more than {projection_limits_text()}) is computed by the "
-        "recursive method, a robot with joints of several degrees of freedom (--root-joint, "
-        "the multi-DOF joints of a YAML table) by the numerical method, and the output says so.",
+        "recursive method, and the output says so; joints of several degrees of freedom "
+        "(--root-joint, the multi-DOF joints of a YAML table) are taken by the exact methods as "
+        "chains of single-DOF joints through massless links.",
     )
     add_robot(p)
     add_joint_terms(p)
