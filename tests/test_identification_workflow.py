@@ -175,3 +175,24 @@ def test_one_path_alone_is_one_log_and_an_unknown_model_is_named(logs):
     assert got.fit.files == [str(fit)] and got.validation.files == [str(val)]
     with pytest.raises(mindyn.ArgumentError, match="model is a str 'dynamc'"):
         load_logs([fit], robot, model="dynamc")
+
+
+@pytest.mark.parametrize(
+    "width", [-1, 0, float("nan"), "a", True, [], [0.1, -2.0], [0.1, "b"], [0.1, 0.2, 0.3]]
+)
+def test_a_friction_width_is_refused_naming_friction_width(logs, width):
+    """A width that is not a positive number, or one per joint, is an argument error naming the
+    keyword (as --friction-width is on the command line), not a TypeError or a bare
+    ValueError."""
+    robot, fit, _ = logs
+    data = load_logs([fit], robot)
+    with pytest.raises(mindyn.ArgumentError, match=r"^friction_width "):
+        run(robot, data, friction=True, friction_model="smooth", friction_width=width)
+
+
+def test_one_friction_width_is_every_joints(logs):
+    robot, fit, _ = logs
+    data = load_logs([fit], robot)
+    for width in (0.05, [0.05], (0.05, 0.05), np.array([0.05, 0.05])):
+        doc = run(robot, data, friction_model="smooth", friction_width=width).to_dict()
+        assert doc["friction_model"]["velocity"] == [0.05, 0.05], doc["friction_model"]

@@ -4,15 +4,30 @@ what is identified and how (:class:`IdentifyOptions`), keyword-only, with the de
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import asdict, dataclass, fields
 
+import numpy as np
+
 from .. import _args
+from ..robot import FRICTION_KINDS
 from .data import DataError
 from .errors import IdentificationError
 
 FILTERS = ("lowpass", "butter", "savgol", "none")
 MODELS = ("dynamic", "integral", "energy")
 INTEGRATIONS = ("simpson", "trapezoid", "zoh")
+FRICTION_MODELS = (*FRICTION_KINDS, "dahl", "auto")
+
+
+def _widths(width) -> tuple[float, ...]:
+    """``friction_width``: one positive number (every joint's) or one per joint; the count is
+    checked against the robot by the workflow."""
+    if isinstance(width, numbers.Real) or not isinstance(width, (list, tuple, np.ndarray)):
+        return (_args.number(width, "friction_width", positive=True),)
+    if len(width) == 0:
+        raise _args.fail("friction_width", "is empty; expected a positive number or one per joint")
+    return tuple(_args.number(w, "friction_width", positive=True) for w in width)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -24,9 +39,10 @@ class IdentifyOptions:
     parameters above it removed (0 keeps all); ``energy_window``, ``integral_window``: sample
     intervals per window; ``integration``: simpson, trapezoid or zoh; ``min_velocity``: joint
     equations slower than this left out (dynamic model with friction); ``friction_model``: a
-    friction kind or ``auto`` (implies ``friction``), ``friction_width``: the tanh widths
-    (smooth or auto); ``consistent``: also the physically consistent estimate, with
-    ``prior_weight`` (None: chosen from the data)."""
+    friction kind, ``dahl`` or ``auto`` (implies ``friction``), ``friction_width``: the tanh
+    width, one positive number for every joint or one per joint (smooth or auto only);
+    ``consistent``: also the physically consistent estimate, with ``prior_weight`` (None:
+    chosen from the data)."""
 
     model: str = "dynamic"
     rotor: bool = False
@@ -56,7 +72,7 @@ class IdentifyOptions:
         object.__setattr__(
             self, "min_velocity", _args.number(self.min_velocity, "min_velocity", minimum=0.0)
         )
-        _args.optional(_args.text, self.friction_model, "friction_model")
+        _args.optional(_args.choice, self.friction_model, "friction_model", FRICTION_MODELS)
         if self.prior_weight is not None:
             object.__setattr__(
                 self, "prior_weight", _args.number(self.prior_weight, "prior_weight", minimum=0.0)
@@ -68,11 +84,18 @@ class IdentifyOptions:
                 f"integration '{self.integration}': expected one of {', '.join(INTEGRATIONS)}"
             )
         if self.friction_width is not None:
-            if self.friction_model is None:
-                raise IdentificationError(
-                    "friction_width=: expected friction_model='smooth' or 'auto'"
+            object.__setattr__(self, "friction_width", _widths(self.friction_width))
+            if self.friction_model not in ("smooth", "auto"):
+                got = (
+                    "no friction model is given"
+                    if self.friction_model is None
+                    else f"got friction_model='{self.friction_model}'"
                 )
-            object.__setattr__(self, "friction_width", tuple(self.friction_width))
+                raise _args.fail(
+                    "friction_width",
+                    "applies only with friction_model='smooth' or 'auto' (the tanh width of the "
+                    f"smooth model); {got}",
+                )
         if self.friction_model is not None:
             object.__setattr__(self, "friction", True)
         if self.prior_weight is not None and not self.consistent:

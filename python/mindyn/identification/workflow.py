@@ -14,7 +14,6 @@ workflow on the command line::
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -44,16 +43,13 @@ def _fit_keywords(options: IdentifyOptions) -> dict:
 
 
 def _check_width(width, n: int) -> list[float]:
-    """Friction widths for ``n`` joints (one value: the same for all), each positive."""
+    """Friction widths for ``n`` joints (one value: the same for all; each positive, as
+    :class:`IdentifyOptions` checked)."""
     w = [float(x) for x in width]
     if len(w) == 1:
         w *= n
     if len(w) != n:
-        raise IdentificationError(
-            f"friction_width= needs {n} values (or one for all), got {len(w)}"
-        )
-    if not all(math.isfinite(x) and x > 0 for x in w):
-        raise IdentificationError("friction_width=: every width must be a positive number")
+        raise _args.fail("friction_width", f"has {len(w)} values; expected {n} (or one for all)")
     return w
 
 
