@@ -196,3 +196,24 @@ def test_one_friction_width_is_every_joints(logs):
     for width in (0.05, [0.05], (0.05, 0.05), np.array([0.05, 0.05])):
         doc = run(robot, data, friction_model="smooth", friction_width=width).to_dict()
         assert doc["friction_model"]["velocity"] == [0.05, 0.05], doc["friction_model"]
+
+
+def test_logs_read_for_another_robot_are_refused(logs, tmp_path):
+    """planar2h has as many joints as planar2 (and the same joint names): logs read for one
+    identify nothing of the other, and run() says so instead of fitting them."""
+    import shutil
+
+    robot, fit, _ = logs
+    plain = tmp_path / "plain.csv"  # the log alone, without the truth sidecar naming planar2
+    shutil.copy(fit, plain)
+    other = mindyn.load("planar2h")
+    assert other.n == robot.n and other.name != robot.name
+    read = load_logs([plain], other)
+    assert (read.robot, read.joints) == (other.name, tuple(other.joint_names))
+    with pytest.raises(mindyn.ArgumentError, match=r"^logs were read for robot 'planar2h'"):
+        run(robot, read, friction=True)
+    with pytest.raises(mindyn.ArgumentError, match=r"^logs were read for robot 'planar2'"):
+        run("planar2h", load_logs([plain], robot))
+    # the same robot loaded again is the robot the logs were read for
+    report = run(mindyn.load("planar2"), load_logs([plain], robot), friction=True)
+    assert report.robot.name == "planar2"

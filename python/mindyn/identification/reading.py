@@ -237,7 +237,9 @@ class Logs(Sequence):
     """The logs of one identification (:func:`load_logs`): ``fit`` and ``validation``
     (:class:`LogSet`, validation empty when none), how they were read (``reading``, ``model``),
     the cut-off the validation logs were filtered at (``cutoff``: the highest of the fit logs'
-    with the low-pass, else None) and the truth sidecars of the fit files (``truth``); made from
+    with the low-pass, else None), the truth sidecars of the fit files (``truth``) and the
+    robot they were read for (``robot``, its name, and ``joints``, its joint names; None for
+    logs read otherwise), which :func:`~mindyn.identification.workflow.run` requires; made from
     them, ``record``: how the logs were read, for the JSON (what ``mindyn predict`` does with
     another log; None when ``reading`` is: logs read otherwise). As a sequence: the fit
     logs."""
@@ -248,6 +250,8 @@ class Logs(Sequence):
     model: str = "dynamic"
     cutoff: float | None = None
     truth: list = field(default_factory=list)
+    robot: str | None = None
+    joints: tuple[str, ...] | None = None
     record: dict | None = field(init=False)
 
     def __post_init__(self):
@@ -338,4 +342,6 @@ def load_logs(
         model=model,
         cutoff=cutoff,
         truth=truth,
+        robot=robot.name,
+        joints=tuple(robot.joint_names),
     )

@@ -53,8 +53,17 @@ def _check_width(width, n: int) -> list[float]:
     return w
 
 
-def _as_logs(logs, model: str) -> Logs:
+def _as_logs(logs, model: str, robot) -> Logs:
     if isinstance(logs, Logs):
+        read_for = (logs.robot, logs.joints)
+        if logs.robot is not None and read_for != (robot.name, tuple(robot.joint_names)):
+            raise _args.fail(
+                "logs",
+                f"were read for robot '{logs.robot}' (joints {', '.join(logs.joints or ())}), "
+                f"not for robot '{robot.name}' (joints {', '.join(robot.joint_names)}): a log of "
+                "another robot, even with as many joints, identifies nothing of this one; read "
+                "them with load_logs(paths, robot) for this robot",
+            )
         return logs
     if isinstance(logs, JointData):
         logs = [logs]
@@ -184,7 +193,7 @@ def run(
             + ", ".join(sorted(OPTION_NAMES))
         )
     opts = options or IdentifyOptions(**keywords)
-    logs = _as_logs(logs, opts.model)
+    logs = _as_logs(logs, opts.model, robot)
     r = logs.reading
     if r is not None and r.filter == "lowpass" and r.decimate and logs.model != opts.model:
         if "dynamic" in (logs.model, opts.model):  # decimated for the dynamic model only
