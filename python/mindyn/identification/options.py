@@ -100,12 +100,45 @@ class IdentifyOptions:
             object.__setattr__(self, "friction", True)
         if self.prior_weight is not None and not self.consistent:
             raise IdentificationError("prior_weight=: expected consistent=True as well")
+        self._refuse_what_does_not_apply()
+
+    def _refuse_what_does_not_apply(self) -> None:
+        """An option set to other than its default where it has no effect is refused, naming
+        it: the window of one model with another, the integration rule with the dynamic model,
+        ``min_velocity`` without friction or with a window model."""
+        dynamic = self.model == "dynamic"
+        got = f"got model='{self.model}'"
+        for name, applies, where, why in (
+            ("energy_window", self.model == "energy", "model='energy'", got),
+            ("integral_window", self.model == "integral", "model='integral'", got),
+            ("integration", not dynamic, "model='energy' or 'integral'", got),
+            (
+                "min_velocity",
+                dynamic and self.friction,
+                "model='dynamic' with friction (friction=True or friction_model=)",
+                got if not dynamic else "the model has no friction",
+            ),
+        ):
+            if not applies and getattr(self, name) != _DEFAULTS[name]:
+                raise _args.fail(name, f"applies only with {where}; {why}")
 
     def to_dict(self) -> dict:
         return asdict(self)
 
 
 OPTION_NAMES = frozenset(f.name for f in fields(IdentifyOptions))
+_DEFAULTS = {f.name: f.default for f in fields(IdentifyOptions)}
+
+
+def check_cutoff(filter: str, cutoff: float | None) -> None:
+    """A cut-off is that of a Butterworth filter: refused with another filter (``savgol``,
+    ``none``), which would ignore it."""
+    if cutoff is not None and filter not in ("lowpass", "butter"):
+        raise _args.fail(
+            "cutoff",
+            "applies only with filter='lowpass' or 'butter' (the cut-off of a Butterworth "
+            f"filter); got filter='{filter}'",
+        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -116,9 +149,10 @@ class ReadingOptions:
     ``filter``: ``lowpass`` (the identification data path of
     :func:`~mindyn.identification.preprocess.preprocess`: resampling, one zero-phase low-pass,
     edges dropped, decimation), or ``butter``, ``savgol``, ``none`` (derivatives only);
-    ``cutoff`` [Hz] (None: from the data); ``periods`` / ``period`` [s]: a periodic excitation
-    averaged (lowpass, fit logs only); ``edge`` [s] dropped at each end (lowpass); ``decimate``
-    (lowpass, dynamic model only); ``torque_unit`` (None: as the file says), ``drive_gain`` (per
+    ``cutoff`` [Hz] (None: from the data; lowpass and butter only); ``periods`` / ``period``
+    [s]: a periodic excitation averaged (lowpass, fit logs only); ``edge`` [s] dropped at each
+    end (lowpass); ``decimate`` (lowpass, dynamic model only); ``torque_unit`` (None: as the
+    file says; not with a currents file for every log), ``drive_gain`` (per
     joint, or one for all), ``topic`` (ROS bag)."""
 
     filter: str = "lowpass"
@@ -136,6 +170,7 @@ class ReadingOptions:
             raise DataError(f"filter '{self.filter}': expected one of {', '.join(FILTERS)}")
         if self.drive_gain is not None:
             object.__setattr__(self, "drive_gain", tuple(float(g) for g in self.drive_gain))
+        check_cutoff(self.filter, self.cutoff)
         if self.filter != "lowpass":  # the options of the low-pass path, refused with another
             for given, value in (
                 ("periods=", self.periods),

@@ -78,6 +78,12 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
 
     gain = _gains(opts, robot.n)
     bags = [is_rosbag(p) for p in paths]
+    if opts.topic is not None and not any(bags):
+        raise _args.fail("topic=", "applies to ROS bags; none of the logs is one")
+    if opts.torque_unit is not None and all(c is not None for c in currents):
+        raise _args.fail(
+            "torque_unit=", "does not apply: every log's torques come from its currents file"
+        )
     for p, bag in zip(paths, bags):
         if Path(p).is_dir() and not bag:
             raise DataError(f"'{p}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
@@ -317,6 +323,12 @@ def load_logs(
     opts = options or ReadingOptions(**reading)
     if model not in MODELS:
         raise DataError(f"load_logs: model '{model}': expected one of {', '.join(MODELS)}")
+    if not opts.decimate and model != "dynamic":
+        raise _args.fail(
+            "decimate=False",
+            f"applies only to the dynamic model (the integral and energy models keep every "
+            f"sample); got model='{model}'",
+        )
     one = (str, PathLike)  # one path given alone: a list of it
     paths = [paths] if isinstance(paths, one) else paths
     validate = [validate] if isinstance(validate, one) else validate or ()
