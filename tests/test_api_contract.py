@@ -511,7 +511,7 @@ def _api(tmp: Path) -> dict:
                     "validate": [f["floating_csv"]],
                     "wrench_frame": "world",
                     "contacts": ["b"],
-                    "filter": "none",
+                    "filter": "butter",
                     "cutoff": 5.0,
                 },
             ),

@@ -472,7 +472,8 @@ def test_last_resort_is_one_line_naming_the_exception(monkeypatch):
         ["excite", "planar2", "--quiet", "--starts", "1", "--maxiter", "3", "-o", "OUT/e.csv"],
         ["simulate", "planar2", "--trajectory", "TRAJ", "--duration", "0.2", "-o", "OUT/s.csv"],
         ["track", "planar2", "--cycle", "0.4", "--duration", "0.1", "-o", "OUT/t.csv"],
-        ["identify", "planar2", "LOG", "--json", "OUT/i.json", "--energy-window", "1"],
+        ["identify", "planar2", "LOG", "--json", "OUT/i.json", "--model", "energy"]
+        + ["--energy-window", "1"],
         # the tool pose at q = (0.3, 0.5) rad: (0.826, 0, 0.506) m, pitch -0.8 rad
         ["ik", "planar2", "--xyz", "0.826022", "0", "0.506438", "--rpy", "1.570796", "-0.8", "0"]
         + ["--pose-tolerance", "1e-3", "--seed", "4294967295"],

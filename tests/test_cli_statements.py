@@ -351,3 +351,27 @@ def test_a_parameter_error_for_pd_is_refused(cmd, tmp_path):
     assert rc == 2 and err.startswith("mindyn: error: --param-error: --controller pd"), err
     rc, _, err = run(argv)
     assert rc == 0, err
+
+
+@pytest.mark.parametrize(
+    "argv, said",
+    [
+        (["--lang", "st", "--trig", "libm"], "--trig applies to C only"),
+        (["--lang", "c", "--what", "id,foo"], "--what names an unknown function 'foo'"),
+        (["--lang", "c", "--what", ","], "--what names no function"),
+        (["--lang", "c", "--name", "1abc"], "--name '1abc' is not an identifier"),
+        (["--lang", "st", "--what", "adaptive-pd", "--trig", "inline"], "--trig applies to C"),
+        (["--lang", "c", "--what", "computed-torque", "--name", "a__b"], "--name 'a__b' is not"),
+        (["--lang", "st", "--what", "momentum-observer", "--trig", "libm"], "--trig applies"),
+        (
+            ["--lang", "c", "--what", "momentum-observer", "--observer-gain", "1000"],
+            "--observer-gain gives observer gain K_O of joint 1 as 1000 1/s",
+        ),
+    ],
+)
+def test_codegen_refusals_name_the_flags(argv, said, tmp_path):
+    """The library's refusals of generate, generate_controller and generate_observer name their
+    keywords (trig, what, name, gains); the command line names its flags instead."""
+    rc, _, err = run(["codegen", "planar2", *argv, "-o", tmp_path / "x"])
+    assert rc == 2 and err.startswith(f"mindyn: error: {said}"), err
+    assert err.count("\n") == 1, err

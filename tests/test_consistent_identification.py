@@ -406,6 +406,10 @@ def test_cli_consistent_and_payload(tmp_path, capsys):
         (["identify-payload", "puma560", "{json}", "{fit}"], "not 'puma560'"),
         (["identify-payload", ROBOT, "{missing}", "{fit}"], "does not exist"),
         (["identify-payload", ROBOT, "{fit}", "{fit}"], "not a JSON file"),
+        (
+            ["identify-payload", ROBOT, "{json}", "{fit}", "--min-velocity", "0"],
+            "--min-velocity applies only to an arm identified with friction",
+        ),
     ],
 )
 def test_cli_bad_input_one_line(tmp_path, capsys, argv, message):
@@ -420,3 +424,12 @@ def test_cli_bad_input_one_line(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1, err
     assert message in err
+
+
+def test_a_min_velocity_for_an_arm_without_friction_is_refused():
+    """min_velocity leaves out the equations of slow joints for the arm's Coulomb friction: an
+    arm identified without friction has none, and the option would be ignored."""
+    robot = mindyn.load(ROBOT)
+    data = make_log(robot, robot.params, rate=20.0)
+    with pytest.raises(mindyn.ArgumentError, match="^min_velocity applies only to an arm"):
+        identify_payload(robot, _arm_doc(robot), data, min_velocity=0.0, consistent=False)

@@ -279,6 +279,9 @@ def test_bad_floating_input_is_refused_in_one_line(tmp_path):
     refused("identify", SOLO, good, *ff, "--rotor", match="--rotor: does not apply")
     refused("identify", SOLO, good, *ff, "--consistent", match="--consistent: does not apply")
     refused("identify", SOLO, good, *ff, "--edge", "0.5", match="--edge: does not apply")
+    for f in ("savgol", "none"):  # their derivatives have no cut-off
+        refused("identify", SOLO, no_dq, *ff, "--filter", f, "--cutoff", "5",
+                match="--cutoff applies only with --filter lowpass or butter")  # fmt: skip
     refused("identify", SOLO, good, *ff, "--model", "energy", match="not the energy model")
     (tmp_path / "log.bag").write_bytes(b"#ROSBAG V2.0\n")
     refused("identify", SOLO, tmp_path / "log.bag", *ff, match="ROS bags are read for fixed")

@@ -265,8 +265,8 @@ def test_cli_default_is_unchanged_and_options_are_checked(arm, tmp_path, capsys)
     from mindyn.cli import main
 
     bad = [
-        (["--friction-width", "0.1"], "expected --friction-model smooth or auto"),
-        (["--friction-model", "smooth", "--friction-width", "-1"], "must be a positive number"),
+        (["--friction-width", "0.1"], "applies only with --friction-model smooth or auto"),
+        (["--friction-model", "smooth", "--friction-width", "-1"], "expected a positive number"),
         (["--friction-model", "stribeck", "--friction-width", "0.1"], "only with --friction-model"),
     ]
     capsys.readouterr()

@@ -175,3 +175,45 @@ def test_one_path_alone_is_one_log_and_an_unknown_model_is_named(logs):
     assert got.fit.files == [str(fit)] and got.validation.files == [str(val)]
     with pytest.raises(mindyn.ArgumentError, match="model is a str 'dynamc'"):
         load_logs([fit], robot, model="dynamc")
+
+
+@pytest.mark.parametrize(
+    "width", [-1, 0, float("nan"), "a", True, [], [0.1, -2.0], [0.1, "b"], [0.1, 0.2, 0.3]]
+)
+def test_a_friction_width_is_refused_naming_friction_width(logs, width):
+    """A width that is not a positive number, or one per joint, is an argument error naming the
+    keyword (as --friction-width is on the command line), not a TypeError or a bare
+    ValueError."""
+    robot, fit, _ = logs
+    data = load_logs([fit], robot)
+    with pytest.raises(mindyn.ArgumentError, match=r"^friction_width "):
+        run(robot, data, friction=True, friction_model="smooth", friction_width=width)
+
+
+def test_one_friction_width_is_every_joints(logs):
+    robot, fit, _ = logs
+    data = load_logs([fit], robot)
+    for width in (0.05, [0.05], (0.05, 0.05), np.array([0.05, 0.05])):
+        doc = run(robot, data, friction_model="smooth", friction_width=width).to_dict()
+        assert doc["friction_model"]["velocity"] == [0.05, 0.05], doc["friction_model"]
+
+
+def test_logs_read_for_another_robot_are_refused(logs, tmp_path):
+    """planar2h has as many joints as planar2 (and the same joint names): logs read for one
+    identify nothing of the other, and run() says so instead of fitting them."""
+    import shutil
+
+    robot, fit, _ = logs
+    plain = tmp_path / "plain.csv"  # the log alone, without the truth sidecar naming planar2
+    shutil.copy(fit, plain)
+    other = mindyn.load("planar2h")
+    assert other.n == robot.n and other.name != robot.name
+    read = load_logs([plain], other)
+    assert (read.robot, read.joints) == (other.name, tuple(other.joint_names))
+    with pytest.raises(mindyn.ArgumentError, match=r"^logs were read for robot 'planar2h'"):
+        run(robot, read, friction=True)
+    with pytest.raises(mindyn.ArgumentError, match=r"^logs were read for robot 'planar2'"):
+        run("planar2h", load_logs([plain], robot))
+    # the same robot loaded again is the robot the logs were read for
+    report = run(mindyn.load("planar2"), load_logs([plain], robot), friction=True)
+    assert report.robot.name == "planar2"

@@ -371,3 +371,104 @@ def test_excite_reports_progress_within_a_start_to_a_log(monkeypatch):
     within = [x for x in stream.getvalue().splitlines() if ": iteration " in x]
     assert len(within) >= 2 and all(x.startswith("  start 1/1: iteration") for x in within)
     assert "\r" not in stream.getvalue()
+
+
+# -- options that do not apply ----------------------------------------------------------------
+@pytest.fixture(scope="module")
+def planar_log(tmp_path_factory):
+    return simulate(tmp_path_factory.mktemp("planar") / "planar2.csv", "planar2")
+
+
+@pytest.mark.parametrize(
+    "argv, said",
+    [
+        (["--filter", "none", "--cutoff", "5"], "--cutoff applies only with --filter lowpass or"),
+        (["--filter", "savgol", "--cutoff", "5"], "--cutoff applies only with --filter lowpass"),
+        (["--model", "energy", "--integral-window", "10"], "--integral-window applies only"),
+        (["--integral-window", "10"], "--integral-window applies only with --model integral"),
+        (["--energy-window", "5"], "--energy-window applies only with --model energy"),
+        (["--model", "integral", "--energy-window", "5"], "--energy-window applies only"),
+        (["--integration", "zoh"], "--integration applies only with --model energy or integral"),
+        (["--min-velocity", "0"], "--min-velocity applies only"),
+        (["--model", "energy", "--friction", "--min-velocity", "0.05"], "--min-velocity applies"),
+        (["--model", "integral", "--no-decimate"], "--no-decimate applies only to the dynamic"),
+        (["--topic", "/joint_states"], "--topic applies to ROS bags"),
+        (["--friction-model", "coulomb", "--friction-width", "0.1"], "--friction-width applies"),
+    ],
+)
+def test_an_option_that_does_not_apply_is_refused(planar_log, argv, said):
+    """An option that has no effect in the mode asked for is refused in one line naming its
+    flag, not ignored."""
+    rc, _, err = run(["identify", "planar2", planar_log, *argv])
+    one_line_error(rc, err, said)
+
+
+def _preprocessing(doc):
+    return doc["settings"]["preprocessing"]
+
+
+@pytest.mark.parametrize(
+    "argv, taken",
+    [
+        (["--filter", "butter", "--cutoff", "5"], lambda d: d["reading"]["cutoff_Hz"] == 5),
+        (
+            ["--cutoff", "5", "--no-decimate"],
+            # 250 Hz kept (decimated to 10 x the cut-off, 50 Hz, by default)
+            lambda d: (
+                (_preprocessing(d)["filter"]["cutoff_Hz"], _preprocessing(d)["decimation"])
+                == (5, 1)
+            ),
+        ),
+        (
+            ["--model", "integral", "--integral-window", "20", "--integration", "zoh"],
+            lambda d: (
+                (d["settings"]["integral_window"], d["settings"]["integration"]) == (20, "zoh")
+            ),
+        ),
+        (
+            ["--model", "energy", "--energy-window", "5", "--integration", "trapezoid"],
+            lambda d: (
+                (d["settings"]["energy_window"], d["settings"]["integration"]) == (5, "trapezoid")
+            ),
+        ),
+        (["--friction", "--min-velocity", "0.02"], lambda d: d["settings"]["min_velocity"] == 0.02),
+        (
+            ["--friction-model", "smooth", "--friction-width", "0.05"],
+            lambda d: d["friction_model"]["velocity"] == [0.05, 0.05],
+        ),
+    ],
+)
+def test_an_option_where_it_applies_is_taken(planar_log, argv, taken, tmp_path):
+    """The same options where they apply are taken: the JSON records the values given."""
+    rc, _, err = run(["identify", "planar2", planar_log, *argv, "--json", tmp_path / "a.json"])
+    assert rc == 0, err
+    doc = json.loads((tmp_path / "a.json").read_text())
+    assert taken(doc), (argv, doc["settings"])
+
+
+def test_the_library_refuses_the_same_combinations(planar_log):
+    """IdentifyOptions, ReadingOptions and load_logs refuse them as argument errors naming the
+    keyword."""
+    from mindyn.identification import IdentifyOptions, ReadingOptions, load_logs
+
+    robot = mindyn.load("planar2")
+    for kw, name in [
+        (dict(integration="zoh"), "integration"),
+        (dict(model="integral", energy_window=3), "energy_window"),
+        (dict(model="energy", integral_window=3), "integral_window"),
+        (dict(min_velocity=0.0), "min_velocity"),
+        (dict(model="integral", friction=True, min_velocity=0.0), "min_velocity"),
+    ]:
+        with pytest.raises(mindyn.ArgumentError, match=f"^{name} applies only"):
+            IdentifyOptions(**kw)
+    for f in ("none", "savgol"):
+        with pytest.raises(mindyn.ArgumentError, match="^cutoff applies only"):
+            ReadingOptions(filter=f, cutoff=5.0)
+    with pytest.raises(mindyn.ArgumentError, match="^decimate=False applies only"):
+        load_logs([planar_log], robot, model="energy", decimate=False)
+    with pytest.raises(mindyn.ArgumentError, match="^topic= applies to ROS bags"):
+        load_logs([planar_log], robot, topic="/joint_states")
+    # the defaults, and the options where they apply, are taken
+    IdentifyOptions(model="energy", energy_window=3, integration="zoh")
+    IdentifyOptions(friction_model="stribeck", min_velocity=0.0)
+    ReadingOptions(filter="butter", cutoff=5.0)

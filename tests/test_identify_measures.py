@@ -347,6 +347,7 @@ def test_current_errors_are_one_line(drive_arm, tmp_path, capsys):
         (["zcr07s", str(zcr), "--torque-unit", "current"], "gives no torque constant"),
         ([arm, str(q), "--currents", str(c), "--drive-gain", "1,2"], "--drive-gain needs 3 values"),
         ([arm, str(q), "--validate-currents", str(c)], "expected --validate"),
+        ([arm, str(q), "--currents", str(c), "--torque-unit", "Nm"], "--torque-unit does not"),
         (["zcr07s", str(zcr), "--drive-gain", "2"], "not motor currents"),
     ]
     for argv, msg in cases:

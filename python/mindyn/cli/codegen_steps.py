@@ -10,8 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .._core import ModelError
+from .._core import ArgumentError, ModelError
 from ..codegen import generate, generate_controller, generate_observer
+from .args import UsageError
 from .codegen_output import OBSERVER, _stem, _write, _write_plcopen
 from .number_options import joint_values
 from .robot_options import joint_terms
@@ -33,7 +34,13 @@ def _observer(args, robot, base, out: Path | None, params, note: str | None = No
     )
     same = dict(base=base, params=params, period=args.period, gains=gains, name=args.name)
     header = (out.name if out is not None else _stem(args, robot)) + ".h"
-    code = generate_observer(robot, lang=args.lang, header_name=header, trig=args.trig, **same)
+    try:
+        code = generate_observer(robot, lang=args.lang, header_name=header, trig=args.trig, **same)
+    except ArgumentError as e:  # the library's keyword gains is --observer-gain here
+        key, sep, rest = str(e).partition(" ")
+        if key == "gains":
+            raise UsageError(f"--observer-gain{sep}{rest}") from None
+        raise
     written = _write(code, out, args.lang)
     if args.plcopen is not None:
         st = code if args.lang == "st" else generate_observer(robot, lang="st", **same)

@@ -6,7 +6,8 @@ from __future__ import annotations
 import re
 
 #: Library keywords that library messages name (``friction=True``, ``tip='link'``,
-#: ``prior_weight=``) whose command-line flag is the keyword with dashes (``--prior-weight``).
+#: ``prior_weight=``) whose command-line flag is the keyword with dashes (``--prior-weight``),
+#: those of identification and of the generated code (``what``, ``trig``, ``name``) alike.
 LIBRARY_OPTIONS = (
     "consistent",
     "contacts",
@@ -16,13 +17,20 @@ LIBRARY_OPTIONS = (
     "drive_gain",
     "drive_side",
     "edge",
+    "energy_window",
     "filter",
     "friction",
     "friction_model",
     "friction_width",
+    "integral_window",
+    "integration",
+    "lang",
     "method",
     "min_velocity",
+    "minimise",
     "model",
+    "name",
+    "numeric",
     "offset",
     "period",
     "periods",
@@ -36,9 +44,11 @@ LIBRARY_OPTIONS = (
     "topic",
     "torque_noise",
     "torque_unit",
+    "trig",
     "validate",
     "validate_currents",
     "velocity_noise",
+    "what",
     "wrench_frame",
 )
 # the keywords whose flag is not their name with dashes: (keyword, value) -> flag, None for any

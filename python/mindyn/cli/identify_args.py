@@ -65,7 +65,7 @@ def add_data_options(p) -> None:
         help="cut-off [Hz], below half the log's rate; lowpass: default 10 x the excited band of "
         "the identification log's positions (at most rate / 10), the validation log filtered at "
         "the same cut-off; butter (and a floating-base log's derivatives): default min(10, "
-        "rate / 10)",
+        "rate / 10); savgol and none have none (refused)",
     )
     g = p.add_mutually_exclusive_group()
     number(
@@ -97,8 +97,8 @@ def add_data_options(p) -> None:
     p.add_argument(
         "--no-decimate",
         action="store_true",
-        help="lowpass: keep every sample (default for the dynamic model: decimate to at least "
-        "10 x the cut-off; the integral and energy models keep every sample)",
+        help="lowpass, dynamic model: keep every sample (default: decimate to at least 10 x the "
+        "cut-off; the integral and energy models keep every sample)",
     )
 
 
@@ -221,7 +221,7 @@ def add_identify(sub, func) -> None:
         high=1000000,
         integer=True,
         default=10,
-        help="sample intervals per energy equation",
+        help="energy model: sample intervals per energy equation",
     )
     p.add_argument(
         "--integration",
@@ -236,7 +236,7 @@ def add_identify(sub, func) -> None:
         high=1000000,
         integer=True,
         default=40,
-        help="sample intervals per integral-model window (one equation per joint and window)",
+        help="integral model: sample intervals per window (one equation per joint and window)",
     )
     number(
         p,

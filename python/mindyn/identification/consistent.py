@@ -923,13 +923,17 @@ def arm_tip(arm, robot) -> str | None:
     return tip if isinstance(tip, str) else None
 
 
+#: The default ``min_velocity`` of :func:`identify_payload` [rad/s, m/s] (as identify's).
+PAYLOAD_MIN_VELOCITY = 0.01
+
+
 def identify_payload(
     robot: Robot | str,
     arm,
     data: JointData | list[JointData],
     *,
     consistent: bool = True,
-    min_velocity: float = 0.01,
+    min_velocity: float = PAYLOAD_MIN_VELOCITY,
     rank_tolerance: float = 1e-9,
 ) -> PayloadResult:
     """Inertial parameters of a payload rigidly fixed to the last link, from logs ``data`` with
@@ -953,6 +957,12 @@ def identify_payload(
     robot = load(robot, tip=arm_tip(arm, robot) if isinstance(robot, (str, Path)) else None)
     robot._require_serial("payload identification (a payload on the last link)")
     base, beta, used = read_arm(robot, arm)
+    if not base.friction and min_velocity != PAYLOAD_MIN_VELOCITY:
+        raise _args.fail(
+            "min_velocity",
+            "applies only to an arm identified with friction (it leaves out the equations of "
+            "joints too slow for the sign of their Coulomb friction); this arm has none",
+        )
     logs = _logs(data)
     last = _LastLink(robot)
     names = [f"{k}{robot.n}" for k in INERTIAL]

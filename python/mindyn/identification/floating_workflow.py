@@ -41,6 +41,7 @@ from .floating import (
     identify_floating,
     read_floating_csv,
 )
+from .options import check_cutoff
 from .summary import nan_list, plain
 
 __all__ = [
@@ -147,6 +148,7 @@ def load_floating_logs(
         filter=_args.choice(filter, "filter", ("butter", "savgol", "none")),
         cutoff=_args.optional(_args.number, cutoff, "cutoff", positive=True),
     )
+    check_cutoff(derive["filter"], derive["cutoff"])
     _root_dofs(robot)
     declared = None
     if contacts is not None:

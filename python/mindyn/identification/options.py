@@ -4,15 +4,30 @@ what is identified and how (:class:`IdentifyOptions`), keyword-only, with the de
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import asdict, dataclass, fields
 
+import numpy as np
+
 from .. import _args
+from ..robot import FRICTION_KINDS
 from .data import DataError
 from .errors import IdentificationError
 
 FILTERS = ("lowpass", "butter", "savgol", "none")
 MODELS = ("dynamic", "integral", "energy")
 INTEGRATIONS = ("simpson", "trapezoid", "zoh")
+FRICTION_MODELS = (*FRICTION_KINDS, "dahl", "auto")
+
+
+def _widths(width) -> tuple[float, ...]:
+    """``friction_width``: one positive number (every joint's) or one per joint; the count is
+    checked against the robot by the workflow."""
+    if isinstance(width, numbers.Real) or not isinstance(width, (list, tuple, np.ndarray)):
+        return (_args.number(width, "friction_width", positive=True),)
+    if len(width) == 0:
+        raise _args.fail("friction_width", "is empty; expected a positive number or one per joint")
+    return tuple(_args.number(w, "friction_width", positive=True) for w in width)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -24,9 +39,10 @@ class IdentifyOptions:
     parameters above it removed (0 keeps all); ``energy_window``, ``integral_window``: sample
     intervals per window; ``integration``: simpson, trapezoid or zoh; ``min_velocity``: joint
     equations slower than this left out (dynamic model with friction); ``friction_model``: a
-    friction kind or ``auto`` (implies ``friction``), ``friction_width``: the tanh widths
-    (smooth or auto); ``consistent``: also the physically consistent estimate, with
-    ``prior_weight`` (None: chosen from the data)."""
+    friction kind, ``dahl`` or ``auto`` (implies ``friction``), ``friction_width``: the tanh
+    width, one positive number for every joint or one per joint (smooth or auto only);
+    ``consistent``: also the physically consistent estimate, with ``prior_weight`` (None:
+    chosen from the data)."""
 
     model: str = "dynamic"
     rotor: bool = False
@@ -56,7 +72,7 @@ class IdentifyOptions:
         object.__setattr__(
             self, "min_velocity", _args.number(self.min_velocity, "min_velocity", minimum=0.0)
         )
-        _args.optional(_args.text, self.friction_model, "friction_model")
+        _args.optional(_args.choice, self.friction_model, "friction_model", FRICTION_MODELS)
         if self.prior_weight is not None:
             object.__setattr__(
                 self, "prior_weight", _args.number(self.prior_weight, "prior_weight", minimum=0.0)
@@ -68,21 +84,61 @@ class IdentifyOptions:
                 f"integration '{self.integration}': expected one of {', '.join(INTEGRATIONS)}"
             )
         if self.friction_width is not None:
-            if self.friction_model is None:
-                raise IdentificationError(
-                    "friction_width=: expected friction_model='smooth' or 'auto'"
+            object.__setattr__(self, "friction_width", _widths(self.friction_width))
+            if self.friction_model not in ("smooth", "auto"):
+                got = (
+                    "no friction model is given"
+                    if self.friction_model is None
+                    else f"got friction_model='{self.friction_model}'"
                 )
-            object.__setattr__(self, "friction_width", tuple(self.friction_width))
+                raise _args.fail(
+                    "friction_width",
+                    "applies only with friction_model='smooth' or 'auto' (the tanh width of the "
+                    f"smooth model); {got}",
+                )
         if self.friction_model is not None:
             object.__setattr__(self, "friction", True)
         if self.prior_weight is not None and not self.consistent:
             raise IdentificationError("prior_weight=: expected consistent=True as well")
+        self._refuse_what_does_not_apply()
+
+    def _refuse_what_does_not_apply(self) -> None:
+        """An option set to other than its default where it has no effect is refused, naming
+        it: the window of one model with another, the integration rule with the dynamic model,
+        ``min_velocity`` without friction or with a window model."""
+        dynamic = self.model == "dynamic"
+        got = f"got model='{self.model}'"
+        for name, applies, where, why in (
+            ("energy_window", self.model == "energy", "model='energy'", got),
+            ("integral_window", self.model == "integral", "model='integral'", got),
+            ("integration", not dynamic, "model='energy' or 'integral'", got),
+            (
+                "min_velocity",
+                dynamic and self.friction,
+                "model='dynamic' with friction (friction=True or friction_model=)",
+                got if not dynamic else "the model has no friction",
+            ),
+        ):
+            if not applies and getattr(self, name) != _DEFAULTS[name]:
+                raise _args.fail(name, f"applies only with {where}; {why}")
 
     def to_dict(self) -> dict:
         return asdict(self)
 
 
 OPTION_NAMES = frozenset(f.name for f in fields(IdentifyOptions))
+_DEFAULTS = {f.name: f.default for f in fields(IdentifyOptions)}
+
+
+def check_cutoff(filter: str, cutoff: float | None) -> None:
+    """A cut-off is that of a Butterworth filter: refused with another filter (``savgol``,
+    ``none``), which would ignore it."""
+    if cutoff is not None and filter not in ("lowpass", "butter"):
+        raise _args.fail(
+            "cutoff",
+            "applies only with filter='lowpass' or 'butter' (the cut-off of a Butterworth "
+            f"filter); got filter='{filter}'",
+        )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -93,9 +149,10 @@ class ReadingOptions:
     ``filter``: ``lowpass`` (the identification data path of
     :func:`~mindyn.identification.preprocess.preprocess`: resampling, one zero-phase low-pass,
     edges dropped, decimation), or ``butter``, ``savgol``, ``none`` (derivatives only);
-    ``cutoff`` [Hz] (None: from the data); ``periods`` / ``period`` [s]: a periodic excitation
-    averaged (lowpass, fit logs only); ``edge`` [s] dropped at each end (lowpass); ``decimate``
-    (lowpass, dynamic model only); ``torque_unit`` (None: as the file says), ``drive_gain`` (per
+    ``cutoff`` [Hz] (None: from the data; lowpass and butter only); ``periods`` / ``period``
+    [s]: a periodic excitation averaged (lowpass, fit logs only); ``edge`` [s] dropped at each
+    end (lowpass); ``decimate`` (lowpass, dynamic model only); ``torque_unit`` (None: as the
+    file says; not with a currents file for every log), ``drive_gain`` (per
     joint, or one for all), ``topic`` (ROS bag)."""
 
     filter: str = "lowpass"
@@ -113,6 +170,7 @@ class ReadingOptions:
             raise DataError(f"filter '{self.filter}': expected one of {', '.join(FILTERS)}")
         if self.drive_gain is not None:
             object.__setattr__(self, "drive_gain", tuple(float(g) for g in self.drive_gain))
+        check_cutoff(self.filter, self.cutoff)
         if self.filter != "lowpass":  # the options of the low-pass path, refused with another
             for given, value in (
                 ("periods=", self.periods),

@@ -78,6 +78,12 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
 
     gain = _gains(opts, robot.n)
     bags = [is_rosbag(p) for p in paths]
+    if opts.topic is not None and not any(bags):
+        raise _args.fail("topic=", "applies to ROS bags; none of the logs is one")
+    if opts.torque_unit is not None and all(c is not None for c in currents):
+        raise _args.fail(
+            "torque_unit=", "does not apply: every log's torques come from its currents file"
+        )
     for p, bag in zip(paths, bags):
         if Path(p).is_dir() and not bag:
             raise DataError(f"'{p}' is a folder but not a ROS 2 bag (it has no metadata.yaml)")
@@ -237,7 +243,9 @@ class Logs(Sequence):
     """The logs of one identification (:func:`load_logs`): ``fit`` and ``validation``
     (:class:`LogSet`, validation empty when none), how they were read (``reading``, ``model``),
     the cut-off the validation logs were filtered at (``cutoff``: the highest of the fit logs'
-    with the low-pass, else None) and the truth sidecars of the fit files (``truth``); made from
+    with the low-pass, else None), the truth sidecars of the fit files (``truth``) and the
+    robot they were read for (``robot``, its name, and ``joints``, its joint names; None for
+    logs read otherwise), which :func:`~mindyn.identification.workflow.run` requires; made from
     them, ``record``: how the logs were read, for the JSON (what ``mindyn predict`` does with
     another log; None when ``reading`` is: logs read otherwise). As a sequence: the fit
     logs."""
@@ -248,6 +256,8 @@ class Logs(Sequence):
     model: str = "dynamic"
     cutoff: float | None = None
     truth: list = field(default_factory=list)
+    robot: str | None = None
+    joints: tuple[str, ...] | None = None
     record: dict | None = field(init=False)
 
     def __post_init__(self):
@@ -313,6 +323,12 @@ def load_logs(
     opts = options or ReadingOptions(**reading)
     if model not in MODELS:
         raise DataError(f"load_logs: model '{model}': expected one of {', '.join(MODELS)}")
+    if not opts.decimate and model != "dynamic":
+        raise _args.fail(
+            "decimate=False",
+            f"applies only to the dynamic model (the integral and energy models keep every "
+            f"sample); got model='{model}'",
+        )
     one = (str, PathLike)  # one path given alone: a list of it
     paths = [paths] if isinstance(paths, one) else paths
     validate = [validate] if isinstance(validate, one) else validate or ()
@@ -338,4 +354,6 @@ def load_logs(
         model=model,
         cutoff=cutoff,
         truth=truth,
+        robot=robot.name,
+        joints=tuple(robot.joint_names),
     )

@@ -14,7 +14,6 @@ workflow on the command line::
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -44,21 +43,27 @@ def _fit_keywords(options: IdentifyOptions) -> dict:
 
 
 def _check_width(width, n: int) -> list[float]:
-    """Friction widths for ``n`` joints (one value: the same for all), each positive."""
+    """Friction widths for ``n`` joints (one value: the same for all; each positive, as
+    :class:`IdentifyOptions` checked)."""
     w = [float(x) for x in width]
     if len(w) == 1:
         w *= n
     if len(w) != n:
-        raise IdentificationError(
-            f"friction_width= needs {n} values (or one for all), got {len(w)}"
-        )
-    if not all(math.isfinite(x) and x > 0 for x in w):
-        raise IdentificationError("friction_width=: every width must be a positive number")
+        raise _args.fail("friction_width", f"has {len(w)} values; expected {n} (or one for all)")
     return w
 
 
-def _as_logs(logs, model: str) -> Logs:
+def _as_logs(logs, model: str, robot) -> Logs:
     if isinstance(logs, Logs):
+        read_for = (logs.robot, logs.joints)
+        if logs.robot is not None and read_for != (robot.name, tuple(robot.joint_names)):
+            raise _args.fail(
+                "logs",
+                f"were read for robot '{logs.robot}' (joints {', '.join(logs.joints or ())}), "
+                f"not for robot '{robot.name}' (joints {', '.join(robot.joint_names)}): a log of "
+                "another robot, even with as many joints, identifies nothing of this one; read "
+                "them with load_logs(paths, robot) for this robot",
+            )
         return logs
     if isinstance(logs, JointData):
         logs = [logs]
@@ -188,7 +193,7 @@ def run(
             + ", ".join(sorted(OPTION_NAMES))
         )
     opts = options or IdentifyOptions(**keywords)
-    logs = _as_logs(logs, opts.model)
+    logs = _as_logs(logs, opts.model, robot)
     r = logs.reading
     if r is not None and r.filter == "lowpass" and r.decimate and logs.model != opts.model:
         if "dynamic" in (logs.model, opts.model):  # decimated for the dynamic model only
