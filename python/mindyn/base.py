@@ -9,6 +9,7 @@ uses the same set (a constant in the energy cancels in differences).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 
@@ -18,7 +19,7 @@ from . import _args, _core
 from . import formulas as _formulas
 from .robot import Robot, as_robot
 
-__all__ = ["BaseParameters", "base_parameters", "choose_method"]
+__all__ = ["BaseParameters", "base_parameters", "choose_method", "rounded_right_angles"]
 
 DEFAULT_TOLERANCE = 1e-9
 #: The rank tolerance is below this (a larger relative pivot is no round-off; the core refuses it)
@@ -107,6 +108,8 @@ class BaseParameters:
         # the settings it was computed with (tolerance, snap, samples, seed), for symbolic()
         self.options = dict(options or {})
         self.method_reason = ""  # set by base_parameters
+        #: what the snap did and why (see :func:`base_parameters`)
+        self.snap_decision: dict = {"mode": "off", "applied": False}
 
     def for_robot(
         self, robot: Robot, *, order: Sequence[int] | Sequence[str] | None = None, offset=None
@@ -125,7 +128,7 @@ class BaseParameters:
             tolerance=float(self.options.get("tolerance", 1e-9)),
             samples=int(self.options.get("samples", 0)),
             seed=int(self.options.get("seed", 1)),
-            snap=float(self.options.get("snap", 0.0)),
+            snap=self.options.get("snap", "auto"),
             offset=self.offset if offset is None else offset,
         )
 
@@ -315,6 +318,7 @@ class BaseParameters:
             "seconds": self.seconds,
             "snapped": self.snapped,
             "snappable": self.snappable,
+            "snap": _plain(self.snap_decision),
         }
         if symbolic:
             out.update(self.symbolic().to_dict())
@@ -355,6 +359,88 @@ def _plain(d: dict) -> dict:
     return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in d.items()}
 
 
+# --------------------------------------------------------------------------------------------
+# The default snap: right angles the description writes rounded
+# --------------------------------------------------------------------------------------------
+#: Largest deviation from a right angle that ``snappable`` lists (the C++ core's window)
+SNAP_WINDOW = 1e-3
+#: Deviations this close to a decimal rounding of a right angle are that rounding: 16 units of
+#: round-off of an angle of size 2 pi (the angles are read back from the composed rotation)
+_ROUNDING_MATCH = 16 * np.finfo(float).eps * 2 * np.pi
+_ANGLES = re.compile(r"^(.*): rotation \(yaw, pitch, roll\) = \(([^)]*)\) rad")
+_AXIS = re.compile(r"^(joint '.*' axis) \(([^)]*)\) snapped")
+
+
+def _decimal_roundings() -> np.ndarray:
+    """``|round(m pi/2, d) - m pi/2|`` for m = 1..4 and d = 0..17 decimals, and the sums and
+    differences of two of them (a rotation composed of two rounded angles), sorted."""
+    one = {abs(round(m * np.pi / 2, d) - m * np.pi / 2) for m in range(1, 5) for d in range(18)}
+    one = np.array(sorted(one))
+    two = np.abs(np.concatenate([one[:, None] + one[None, :], one[:, None] - one[None, :]]))
+    return np.unique(np.concatenate([one, two.ravel()]))
+
+
+_ROUNDINGS = _decimal_roundings()
+
+
+def _is_rounding(deviation: float) -> bool:
+    """Whether ``deviation`` from a right angle is a right angle written with fewer decimals
+    than a double holds (1.5708, 1.57079632679; several of them composed), or round-off."""
+    if deviation <= _ROUNDING_MATCH:
+        return True
+    k = int(np.searchsorted(_ROUNDINGS, deviation))
+    near = _ROUNDINGS[max(k - 1, 0) : k + 1]
+    return bool(np.min(np.abs(near - deviation)) <= _ROUNDING_MATCH)
+
+
+def rounded_right_angles(snappable: Sequence[str]) -> dict:
+    """Which of the near right angles ``snappable`` lists (rotations and axes within 1e-3 of a
+    right angle, :attr:`BaseParameters.snappable`) are right angles written rounded, and the
+    snap tolerance that rounds those and nothing else.
+
+    An angle is a rounded right angle when its deviation from the nearest multiple of pi/2 is
+    exactly (to round-off) what writing that multiple with ``d`` decimals leaves, for some
+    ``d`` (``1.5708``: 3.67e-6; ``1.57079632679``: 4.9e-12; one such term composed with
+    another), or is itself at round-off. A deliberate angle (a calibrated offset of 1e-3 rad, a
+    tilt of 2e-5 rad written with its own digits) matches none of these and is real geometry;
+    so is an axis component above round-off. Returns ``rounded`` and ``real`` (what, deviation
+    in rad), ``largest_rounding``, ``smallest_real`` (None when there is none), ``separable``
+    (every rounding below every real deviation) and ``tolerance``: the snap tolerance, twice the
+    largest rounding (at most the geometric mean of it and the smallest real deviation), 0 when
+    nothing is rounded or the two cannot be separated.
+    """
+    rounded: list[tuple[str, float]] = []
+    real: list[tuple[str, float]] = []
+    for entry in snappable:
+        if m := _ANGLES.match(entry):
+            what = m.group(1)
+            for name, value in zip(("yaw", "pitch", "roll"), m.group(2).split(",")):
+                a = float(value)
+                dev = abs(a - round(a / (np.pi / 2)) * (np.pi / 2))
+                if 0 < dev <= SNAP_WINDOW:
+                    (rounded if _is_rounding(dev) else real).append((f"{what} {name}", dev))
+        elif m := _AXIS.match(entry):
+            what = m.group(1)
+            for name, value in zip("xyz", m.group(2).split(",")):
+                dev = abs(float(value))
+                if 0 < dev <= SNAP_WINDOW:
+                    (rounded if dev <= _ROUNDING_MATCH else real).append((f"{what} {name}", dev))
+    largest = max((d for _, d in rounded), default=0.0)
+    smallest = min((d for _, d in real), default=None)
+    separable = smallest is None or largest < smallest
+    tolerance = 0.0
+    if rounded and separable:
+        tolerance = 2 * largest if smallest is None else min(2 * largest, np.sqrt(largest * smallest))
+    return {
+        "rounded": rounded,
+        "real": real,
+        "largest_rounding": largest,
+        "smallest_real": smallest,
+        "separable": separable,
+        "tolerance": tolerance,
+    }
+
+
 def base_parameters(
     robot: Robot | str,
     *,
@@ -363,7 +449,7 @@ def base_parameters(
     method: str | None = None,
     order: Sequence[int] | Sequence[str] | None = None,
     tolerance: float = DEFAULT_TOLERANCE,
-    snap: float | bool | None = None,
+    snap: float | bool | str | None = "auto",
     samples: int = 0,
     seed: int = 1,
     offset: bool = False,
@@ -427,7 +513,9 @@ def base_parameters(
     tolerance = _args.number(tolerance, "tolerance", positive=True, below=MAX_TOLERANCE)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)
-    if snap is not None and not isinstance(snap, bool):
+    if isinstance(snap, str):
+        _args.choice(snap, "snap", ("auto",))
+    elif snap is not None and not isinstance(snap, bool):
         snap = _args.number(snap, "snap", minimum=0.0)
     idx: list[int] = []
     if order is not None:
@@ -452,21 +540,77 @@ def base_parameters(
                 + (f"; missing: {', '.join(missing[:8])}" if missing else ""),
             )
     if snap is True:
-        snap = 1e-3
-    core = _core.base_parameters(
-        robot._m,
-        rotor=rotor,
-        friction=friction,
-        method=method,
-        order=idx,
-        tolerance=float(tolerance),
-        samples=int(samples),
-        seed=int(seed),
-        snap=float(snap or 0.0),
-        offset=offset,
-    )
-    options = {"tolerance": float(tolerance), "snap": float(snap or 0.0)}
+        snap = SNAP_WINDOW
+
+    def compute(at: float) -> _core.BaseParameters:
+        return _core.base_parameters(
+            robot._m,
+            rotor=rotor,
+            friction=friction,
+            method=method,
+            order=idx,
+            tolerance=float(tolerance),
+            samples=int(samples),
+            seed=int(seed),
+            snap=at,
+            offset=offset,
+        )
+
+    if snap == "auto":
+        core, decision = _auto_snap(robot, compute)
+    else:
+        core = compute(float(snap or 0.0))
+        decision = {"mode": "given" if snap else "off", "applied": bool(core.snapped)}
+        decision.update(tolerance=float(snap or 0.0))
+    options = {"tolerance": float(tolerance), "snap": snap if snap == "auto" else float(snap or 0)}
     options.update(samples=int(samples), seed=int(seed))
     out = BaseParameters(core, robot, offset, options)
     out.method_reason = reason
+    out.snap_decision = decision
     return out
+
+
+def _auto_snap(robot: Robot, compute) -> tuple[_core.BaseParameters, dict]:
+    """``snap="auto"``: the base parameters with the right angles the description writes
+    rounded snapped (:func:`rounded_right_angles`), checked against the description's own
+    inverse dynamics; and the decision."""
+    try:
+        core = compute(0.0)
+        listed = list(core.snappable)
+    except _core.ModelError:  # refused unsnapped: what is near a right angle, from a snap
+        core, listed = None, list(compute(SNAP_WINDOW).snapped)
+    found = rounded_right_angles(listed)
+    decision = {"mode": "auto", "applied": False, **found}
+    decision["rounded"] = [list(x) for x in found["rounded"]]
+    decision["real"] = [list(x) for x in found["real"]]
+    if found["tolerance"] > 0:
+        snapped = compute(found["tolerance"])
+        check = _snap_check(robot, snapped)
+        bound = 100 * found["largest_rounding"] + 1e-10
+        decision.update(check=check, check_bound=bound)
+        if check is None or check <= bound:
+            decision["applied"] = True
+            return snapped, decision
+        decision["refused"] = (
+            f"the snapped base set reproduces the description's torques only to {check:.2g} "
+            f"(over {bound:.2g})"
+        )
+    if core is None:
+        core = compute(0.0)  # raises the refusal, as without snapping
+    return core, decision
+
+
+def _snap_check(robot: Robot, core: _core.BaseParameters) -> float | None:
+    """Largest difference, relative to the largest torque, between the snapped base model
+    (``W_b Y p``) and the description's inverse dynamics at a few random states, with the
+    description's link parameters; None where not checked (multi-DOF joints, over 200 joints:
+    the classical regressors would take too much memory)."""
+    if not robot.single_dof or robot.n > 200:
+        return None
+    rng = np.random.default_rng(0)
+    q, dq, ddq = (rng.uniform(-1.0, 1.0, (4, robot.n)) for _ in range(3))
+    p = dict(zip(robot.param_names, robot.params))
+    classical = np.array([p.get(name, 0.0) for name in core.classical_names])
+    tau = robot.inverse_dynamics(q, dq, ddq)
+    model = core.regressor(q, dq, ddq) @ core.values(classical)
+    return float(np.max(np.abs(model - tau)) / max(np.max(np.abs(tau)), np.finfo(float).tiny))
