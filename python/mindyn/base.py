@@ -224,6 +224,43 @@ class BaseParameters:
     lagrangian_equals_energy = property(lambda self: self._b.lagrangian_equals_energy)
     lagrangian_equals_eom = property(lambda self: self._b.lagrangian_equals_eom)
 
+    def snap_report(self, *, detail: bool = True) -> list[str]:
+        """What the snap did, in sentences (none when nothing was near a right angle): with the
+        default ``snap="auto"``, the rounded right angles rounded to them (how many, the largest
+        deviation, the tolerance, the check against the description's torques) or why nothing
+        was, and the deliberate angles kept; with ``detail``, each rotation changed too."""
+        d = self.snap_decision
+        if d.get("mode") != "auto" or not (d.get("rounded") or d.get("real")):
+            return list(self.snapped)
+        rounded, real = d["rounded"], d["real"]
+        if d["applied"]:
+            check = d.get("check")
+            checked = (
+                f"the snapped model reproduces the description's torques to {check:.2g}"
+                if check is not None
+                else "not checked against the description (multi-DOF joints or over 200 joints)"
+            )
+            out = [
+                f"{len(rounded)} right angle(s) written rounded (largest deviation "
+                f"{d['largest_rounding']:.2g} rad, a decimal rounding of a multiple of pi/2) "
+                f"rounded to them (snap auto, tolerance {d['tolerance']:.2g}; snap off keeps "
+                f"them); {checked}"
+            ]
+        else:
+            why = d.get("refused") or (
+                f"a deliberate angle ({d['smallest_real']:.2g} rad) is closer to a right angle "
+                f"than a rounded one ({d['largest_rounding']:.2g} rad)"
+                if rounded
+                else "none is a rounded right angle"
+            )
+            out = [f"nothing snapped (snap auto): {why}"]
+        if real:
+            out.append(
+                f"kept as written: {len(real)} deliberate angle(s) near right angles, smallest "
+                f"deviation {d['smallest_real']:.2g} rad ({real[0][0]})"
+            )
+        return out + (list(self.snapped) if detail else [])
+
     @property
     def margin(self) -> dict:
         """Rank-decision report of the equations-of-motion set."""
@@ -372,36 +409,39 @@ _AXIS = re.compile(r"^(joint '.*' axis) \(([^)]*)\) snapped")
 
 
 def _decimal_roundings() -> np.ndarray:
-    """``|round(m pi/2, d) - m pi/2|`` for m = 1..4 and d = 0..17 decimals, and the sums and
-    differences of two of them (a rotation composed of two rounded angles), sorted."""
-    one = {abs(round(m * np.pi / 2, d) - m * np.pi / 2) for m in range(1, 5) for d in range(18)}
-    one = np.array(sorted(one))
-    two = np.abs(np.concatenate([one[:, None] + one[None, :], one[:, None] - one[None, :]]))
-    return np.unique(np.concatenate([one, two.ravel()]))
+    """``|round(m pi/2, d) - m pi/2|`` for m = 1..4 and d = 0..17 decimals, sorted. (Not their
+    sums: the sum of two roundings of one angle is a round decimal, 1.571 - 1.57 = 1e-3, which
+    is how a deliberate offset is written.)"""
+    return np.array(
+        sorted(
+            {abs(round(m * np.pi / 2, d) - m * np.pi / 2) for m in range(1, 5) for d in range(18)}
+        )
+    )
 
 
 _ROUNDINGS = _decimal_roundings()
 
 
-def _is_rounding(deviation: float) -> bool:
+def _is_rounding(deviation: float, floor: float = 0.0) -> bool:
     """Whether ``deviation`` from a right angle is a right angle written with fewer decimals
-    than a double holds (1.5708, 1.57079632679; several of them composed), or round-off."""
-    if deviation <= _ROUNDING_MATCH:
+    than a double holds (1.5708, 1.57079632679), or round-off, or at most ``floor``."""
+    if deviation <= max(_ROUNDING_MATCH, floor):
         return True
     k = int(np.searchsorted(_ROUNDINGS, deviation))
     near = _ROUNDINGS[max(k - 1, 0) : k + 1]
     return bool(np.min(np.abs(near - deviation)) <= _ROUNDING_MATCH)
 
 
-def rounded_right_angles(snappable: Sequence[str]) -> dict:
+def rounded_right_angles(snappable: Sequence[str], *, tolerance: float = DEFAULT_TOLERANCE) -> dict:
     """Which of the near right angles ``snappable`` lists (rotations and axes within 1e-3 of a
     right angle, :attr:`BaseParameters.snappable`) are right angles written rounded, and the
     snap tolerance that rounds those and nothing else.
 
     An angle is a rounded right angle when its deviation from the nearest multiple of pi/2 is
     exactly (to round-off) what writing that multiple with ``d`` decimals leaves, for some
-    ``d`` (``1.5708``: 3.67e-6; ``1.57079632679``: 4.9e-12; one such term composed with
-    another), or is itself at round-off. A deliberate angle (a calibrated offset of 1e-3 rad, a
+    ``d`` (``1.5708``: 3.67e-6; ``1.57079632679``: 4.9e-12), or is at most the rank
+    ``tolerance`` (a column that small is below what the rank decision resolves: no geometry
+    the base set could use). A deliberate angle (a calibrated offset of 1e-3 rad, a
     tilt of 2e-5 rad written with its own digits) matches none of these and is real geometry;
     so is an axis component above round-off. Returns ``rounded`` and ``real`` (what, deviation
     in rad), ``largest_rounding``, ``smallest_real`` (None when there is none), ``separable``
@@ -418,19 +458,23 @@ def rounded_right_angles(snappable: Sequence[str]) -> dict:
                 a = float(value)
                 dev = abs(a - round(a / (np.pi / 2)) * (np.pi / 2))
                 if 0 < dev <= SNAP_WINDOW:
-                    (rounded if _is_rounding(dev) else real).append((f"{what} {name}", dev))
+                    is_rounding = _is_rounding(dev, tolerance)
+                    (rounded if is_rounding else real).append((f"{what} {name}", dev))
         elif m := _AXIS.match(entry):
             what = m.group(1)
             for name, value in zip("xyz", m.group(2).split(",")):
                 dev = abs(float(value))
                 if 0 < dev <= SNAP_WINDOW:
-                    (rounded if dev <= _ROUNDING_MATCH else real).append((f"{what} {name}", dev))
+                    small = dev <= max(_ROUNDING_MATCH, tolerance)
+                    (rounded if small else real).append((f"{what} {name}", dev))
     largest = max((d for _, d in rounded), default=0.0)
     smallest = min((d for _, d in real), default=None)
     separable = smallest is None or largest < smallest
     tolerance = 0.0
     if rounded and separable:
-        tolerance = 2 * largest if smallest is None else min(2 * largest, np.sqrt(largest * smallest))
+        tolerance = (
+            2 * largest if smallest is None else min(2 * largest, np.sqrt(largest * smallest))
+        )
     return {
         "rounded": rounded,
         "real": real,
@@ -557,7 +601,7 @@ def base_parameters(
         )
 
     if snap == "auto":
-        core, decision = _auto_snap(robot, compute)
+        core, decision = _auto_snap(robot, compute, tolerance)
     else:
         core = compute(float(snap or 0.0))
         decision = {"mode": "given" if snap else "off", "applied": bool(core.snapped)}
@@ -570,7 +614,7 @@ def base_parameters(
     return out
 
 
-def _auto_snap(robot: Robot, compute) -> tuple[_core.BaseParameters, dict]:
+def _auto_snap(robot: Robot, compute, tolerance: float) -> tuple[_core.BaseParameters, dict]:
     """``snap="auto"``: the base parameters with the right angles the description writes
     rounded snapped (:func:`rounded_right_angles`), checked against the description's own
     inverse dynamics; and the decision."""
@@ -579,7 +623,7 @@ def _auto_snap(robot: Robot, compute) -> tuple[_core.BaseParameters, dict]:
         listed = list(core.snappable)
     except _core.ModelError:  # refused unsnapped: what is near a right angle, from a snap
         core, listed = None, list(compute(SNAP_WINDOW).snapped)
-    found = rounded_right_angles(listed)
+    found = rounded_right_angles(listed, tolerance=tolerance)
     decision = {"mode": "auto", "applied": False, **found}
     decision["rounded"] = [list(x) for x in found["rounded"]]
     decision["real"] = [list(x) for x in found["real"]]

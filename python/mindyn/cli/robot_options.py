@@ -223,37 +223,6 @@ def snap_keyword(args: argparse.Namespace):
 
 
 def snap_lines(bp, label: str = "  snapped        ", *, detail: bool = True) -> list[str]:
-    """What the base set's snap did, as output lines (empty when nothing was near a right
-    angle); with ``detail``, each rotation changed too."""
-    d = bp.snap_decision
-    if d.get("mode") != "auto" or not (d.get("rounded") or d.get("real")):
-        return [f"{label}{s}" for s in bp.snapped]
-    rounded, real = d["rounded"], d["real"]
-    if d["applied"]:
-        check = d.get("check")
-        checked = (
-            f"the snapped model reproduces the description's torques to {check:.2g}"
-            if check is not None
-            else "not checked against the description (multi-DOF joints or over 200 joints)"
-        )
-        head = (
-            f"{label}{len(rounded)} right angle(s) written rounded (largest deviation "
-            f"{d['largest_rounding']:.2g} rad, a decimal rounding of a multiple of pi/2) "
-            f"rounded to them (--snap auto, tolerance {d['tolerance']:.2g}; --snap off keeps "
-            f"them); {checked}"
-        )
-    else:
-        why = d.get("refused") or (
-            f"a deliberate angle ({d['smallest_real']:.2g} rad) is closer to a right angle "
-            f"than a rounded one ({d['largest_rounding']:.2g} rad)"
-            if rounded
-            else "none is a rounded right angle"
-        )
-        head = f"{label}nothing snapped (--snap auto): {why}"
-    out = [head]
-    if real:
-        out.append(
-            f"{label}kept as written: {len(real)} deliberate angle(s) near right angles, "
-            f"smallest deviation {d['smallest_real']:.2g} rad ({real[0][0]})"
-        )
-    return out + ([f"{label}{s}" for s in bp.snapped] if detail else [])
+    """What the base set's snap did (:meth:`mindyn.BaseParameters.snap_report`), one output line
+    each under ``label``."""
+    return [label + line for line in bp.snap_report(detail=detail)]

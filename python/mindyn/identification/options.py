@@ -26,7 +26,9 @@ class IdentifyOptions:
     equations slower than this left out (dynamic model with friction); ``friction_model``: a
     friction kind or ``auto`` (implies ``friction``), ``friction_width``: the tanh widths
     (smooth or auto); ``consistent``: also the physically consistent estimate, with
-    ``prior_weight`` (None: chosen from the data)."""
+    ``prior_weight`` (None: chosen from the data); ``snap``: the rotations near right angles
+    rounded before the base set is computed, as ``snap=`` of :func:`mindyn.base_parameters`
+    (``"auto"``: the right angles the description writes rounded; False: none)."""
 
     model: str = "dynamic"
     rotor: bool = False
@@ -42,6 +44,7 @@ class IdentifyOptions:
     friction_width: tuple[float, ...] | None = None
     consistent: bool = False
     prior_weight: float | None = None
+    snap: str | float | bool = "auto"
 
     def __post_init__(self):
         _args.choice(self.model, "model", MODELS)
@@ -57,6 +60,10 @@ class IdentifyOptions:
             self, "min_velocity", _args.number(self.min_velocity, "min_velocity", minimum=0.0)
         )
         _args.optional(_args.text, self.friction_model, "friction_model")
+        if isinstance(self.snap, str):
+            _args.choice(self.snap, "snap", ("auto",))
+        elif not isinstance(self.snap, bool):
+            object.__setattr__(self, "snap", _args.number(self.snap, "snap", minimum=0.0))
         if self.prior_weight is not None:
             object.__setattr__(
                 self, "prior_weight", _args.number(self.prior_weight, "prior_weight", minimum=0.0)
