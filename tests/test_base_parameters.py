@@ -950,7 +950,7 @@ def test_cli_snap_reports(tmp_path, rng):
     path = tmp_path / "rounded.urdf"
     path.write_text(mdh_urdf("1.5708", rng))
     # 1.5708 for pi/2 separates Ia2 from ZZ2 by cos(1.5708) = -3.7e-6: flagged
-    r = run_cli("base", path, "--rotor")
+    r = run_cli("base", path, "--rotor", "--snap", "off")
     assert r.returncode == 0, r.stderr
     assert "equations of motion 41" in r.stdout
     warning = next(line for line in r.stdout.splitlines() if "WARNING" in line)
@@ -960,6 +960,10 @@ def test_cli_snap_reports(tmp_path, rng):
     assert r.returncode == 0, r.stderr
     assert len([line for line in r.stdout.splitlines() if "  snapped  " in line]) == 4
     assert "equations of motion 40" in r.stdout and "WARNING" not in r.stdout
+    # by default, 1.5708 is a right angle written with 4 decimals: rounded, and said so
+    r = run_cli("base", path, "--rotor")
+    assert "equations of motion 40" in r.stdout and "WARNING" not in r.stdout
+    assert "4 right angle(s) written rounded" in r.stdout
 
 
 @pytest.mark.parametrize(

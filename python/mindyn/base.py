@@ -229,6 +229,7 @@ class BaseParameters:
         default ``snap="auto"``, the rounded right angles rounded to them (how many, the largest
         deviation, the tolerance, the check against the description's torques) or why nothing
         was, and the deliberate angles kept; with ``detail``, each rotation changed too."""
+        detail = _args.flag(detail, "detail")
         d = self.snap_decision
         if d.get("mode") != "auto" or not (d.get("rounded") or d.get("real")):
             return list(self.snapped)

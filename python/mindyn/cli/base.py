@@ -91,8 +91,8 @@ def cmd_base(args: argparse.Namespace) -> int:
             f"{m['rank_at_tighter_tolerance']} at {m['tighter_tolerance']:.3g}; the regrouping "
             f"is checked: W_b Y reproduces the dynamics to {m['consistency']:.2g}"
             + (
-                f" (--snap 1e-3 would round {len(bp.snappable)} rotation(s) or axes that are "
-                "within 1e-3 of right angles)"
+                f" (--snap would round {len(bp.snappable)} rotation(s) or axes that are within "
+                "1e-3 of right angles)"
                 if bp.snappable
                 else ""
             )
