@@ -242,10 +242,10 @@ class BaseParameters:
                 else "not checked against the description (multi-DOF joints or over 200 joints)"
             )
             out = [
-                f"{len(rounded)} right angle(s) written rounded (largest deviation "
-                f"{d['largest_rounding']:.2g} rad, a decimal rounding of a multiple of pi/2) "
-                f"rounded to them (snap auto, tolerance {d['tolerance']:.2g}; snap off keeps "
-                f"them); {checked}"
+                f"{len(rounded)} right angle(s) written rounded (each off by a decimal "
+                f"rounding of a multiple of pi/2 or by at most the rank tolerance; largest "
+                f"{d['largest_rounding']:.2g} rad) rounded to them (snap auto, tolerance "
+                f"{d['tolerance']:.2g}; snap off keeps them); {checked}"
             ]
         else:
             why = d.get("refused") or (
