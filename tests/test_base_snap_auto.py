@@ -17,7 +17,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from conftest import ROBOTS_DIR, pinocchio_model
-from mindyn.identification import run
+from mindyn.identification import IdentifyOptions, run
 from mindyn.identification.joint_data import JointData
 
 KINOVA = ROBOTS_DIR / "kinova_description/robots/kinova.urdf"  # 1.57079632679, 3.14159265359
@@ -230,3 +230,17 @@ def test_cli_snap_option(tmp_path):
     bad = cli("base", KINOVA, "--snap", "sometimes")
     assert bad.returncode != 0 and len(bad.stderr.strip().splitlines()) == 1
     assert "expected auto, off or a finite number" in bad.stderr
+
+
+def test_identification_snap_option(rng):
+    """``snap=False`` identifies the base set of the angles as written (larger than the
+    default's on the Kinova), said so in the JSON, and a snap that is not "auto", a flag or a
+    tolerance is refused naming it."""
+    robot = mindyn.load(KINOVA)
+    report = run(robot, simulated_log(robot, rng), snap=False)
+    assert report.base.snap_decision["mode"] == "off"
+    assert report.base.n == mindyn.base_parameters(robot, snap=False).n
+    assert report.base.n > mindyn.base_parameters(robot).n
+    assert report.to_dict()["base_snap"]["applied"] is False
+    with pytest.raises(mindyn.ArgumentError, match="snap"):
+        IdentifyOptions(snap="sometimes")
