@@ -534,10 +534,17 @@ def base_parameters(
         the classical inverse dynamics (energies for the Lagrangian and total-energy sets) at
         random states; one whose regrouping misses them (near-degenerate geometry) raises a
         ModelError that says by how much and what to try.
-    snap : float or bool, optional
-        Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
-        1e-3) before computing; what was changed is listed in ``snapped`` (and what it would
-        change, when not given, in ``snappable``).
+    snap : "auto", float or bool, optional
+        Which joint-origin rotations near multiples of pi/2 are rounded to them before
+        computing. ``"auto"`` (the default): the right angles the description writes rounded
+        (:func:`rounded_right_angles`: a deviation that is a decimal rounding of the right angle,
+        1.5708 or 1.57079632679, or at most ``tolerance``), never a deliberate angle, and only
+        when a snap tolerance separates the two; the snapped set is checked against the
+        description's own inverse dynamics (within 100 times the largest rounding; else nothing
+        is snapped). A number: every rotation within this many radians (``True``: 1e-3).
+        ``False``, ``None`` or 0: none. What was done and why is in ``snap_decision`` and
+        :meth:`~BaseParameters.snap_report`, what was changed in ``snapped`` (what a snap of
+        1e-3 would change, when nothing was snapped, in ``snappable``).
     samples, seed : int
         Numerical method only: number of random states for the regressor (0: automatic,
         ``max(40, 3 P / n + 20)`` for ``P`` parameters and ``n`` joints; fewer than ``P / n`` are
@@ -601,6 +608,7 @@ def base_parameters(
             offset=offset,
         )
 
+    decision: dict
     if snap == "auto":
         core, decision = _auto_snap(robot, compute, tolerance)
     else:
