@@ -242,5 +242,11 @@ def test_identification_snap_option(rng):
     assert report.base.n == mindyn.base_parameters(robot, snap=False).n
     assert report.base.n > mindyn.base_parameters(robot).n
     assert report.to_dict()["base_snap"]["applied"] is False
+    # a friction velocity scale changes only the friction columns: the same snap
+    smooth = mindyn.base_parameters(
+        robot.with_friction_model("smooth", velocity=[0.1] * robot.n), friction=True
+    )
+    assert smooth.with_friction_velocity([0.2] * robot.n).snap_decision == smooth.snap_decision
+    assert smooth.snap_decision["applied"]
     with pytest.raises(mindyn.ArgumentError, match="snap"):
         IdentifyOptions(snap="sometimes")

@@ -141,6 +141,7 @@ class BaseParameters:
         robot = self.robot.with_friction_model(kind, velocity=v)
         out = BaseParameters(self._b.with_friction_velocity(v), robot, self.offset, self.options)
         out.method_reason = self.method_reason
+        out.snap_decision = self.snap_decision  # the same geometry, snapped the same way
         return out
 
     @cached_property
