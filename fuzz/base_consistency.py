@@ -260,7 +260,9 @@ def main(argv=None) -> int:
         for method in METHODS:
             rotor = friction = bool(rng.uniform() < 0.3)
             try:
-                bp = mindyn.base_parameters(robot, method=method, rotor=rotor, friction=friction)
+                bp = mindyn.base_parameters(
+                    robot, method=method, rotor=rotor, friction=friction, snap=False
+                )
                 err = consistency_error(robot, bp, rng)
             except mindyn.Error as e:
                 msg = str(e)

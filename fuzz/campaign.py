@@ -343,7 +343,9 @@ def case_trees(ctx, index: int, rng: random.Random) -> Case:
         nprng = np.random.default_rng(seed)
         robot = mindyn.load(path)
         try:
-            bp = mindyn.base_parameters(robot, method=method, rotor=rotor, friction=friction)
+            bp = mindyn.base_parameters(  # the geometry as written, as check_base takes it
+                robot, method=method, rotor=rotor, friction=friction, snap=False
+            )
         except BaseException as e:  # noqa: BLE001 - the CLI accepted what the API refuses
             cls, detail = api_refusal(e)
             return ("unclear" if cls == "error" else cls), f"API refuses, CLI ran: {detail}"

@@ -430,6 +430,7 @@ def _api(tmp: Path) -> dict:
             "BaseParameters.momentum_regressors": (BASE.momentum_regressors, (Q, Z), {}),
             "BaseParameters.latex": (BASE.latex, (), {"symbolic": False}),
             "BaseParameters.to_dict": (BASE.to_dict, (), {"symbolic": False}),
+            "BaseParameters.snap_report": (BASE.snap_report, (), {"detail": False}),
             "BaseParameters.for_robot": (BASE.for_robot, (ROBOT,), {"offset": True}),
             # identification
             "identification.identify": (

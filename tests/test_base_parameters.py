@@ -564,9 +564,12 @@ def test_arm_urdf(rel, rng):
     if rel in PUBLISHED:
         assert mindyn.base_parameters(robot).n == PUBLISHED[rel]
     for rotor_friction in (False, True):
-        bp = mindyn.base_parameters(robot, rotor=rotor_friction, friction=rotor_friction)
+        # the description's own geometry, its rounded right angles as written
+        bp = mindyn.base_parameters(
+            robot, rotor=rotor_friction, friction=rotor_friction, snap=False
+        )
         num = mindyn.base_parameters(
-            robot, rotor=rotor_friction, friction=rotor_friction, method="numerical"
+            robot, rotor=rotor_friction, friction=rotor_friction, method="numerical", snap=False
         )
         if rel in NEAR_EXACT:
             assert bp.margin["near_degenerate"]
@@ -768,7 +771,7 @@ def test_rounded_right_angles_are_flagged_and_snapped(tmp_path, rng):
     assert not exact.margin["near_degenerate"] and exact.margin["smallest_kept"] > 1e-3
 
     rounded_robot = mindyn.load(rounded_path)
-    rounded = mindyn.base_parameters(rounded_robot, rotor=True, friction=True)
+    rounded = mindyn.base_parameters(rounded_robot, rotor=True, friction=True, snap=False)
     m = rounded.margin
     assert m["near_degenerate"] or m["smallest_kept"] < 1e-4
     assert rounded.n > exact.n  # 1.5708 is not a right angle: more parameters are identifiable
@@ -947,7 +950,7 @@ def test_cli_snap_reports(tmp_path, rng):
     path = tmp_path / "rounded.urdf"
     path.write_text(mdh_urdf("1.5708", rng))
     # 1.5708 for pi/2 separates Ia2 from ZZ2 by cos(1.5708) = -3.7e-6: flagged
-    r = run_cli("base", path, "--rotor")
+    r = run_cli("base", path, "--rotor", "--snap", "off")
     assert r.returncode == 0, r.stderr
     assert "equations of motion 41" in r.stdout
     warning = next(line for line in r.stdout.splitlines() if "WARNING" in line)
@@ -957,6 +960,10 @@ def test_cli_snap_reports(tmp_path, rng):
     assert r.returncode == 0, r.stderr
     assert len([line for line in r.stdout.splitlines() if "  snapped  " in line]) == 4
     assert "equations of motion 40" in r.stdout and "WARNING" not in r.stdout
+    # by default, 1.5708 is a right angle written with 4 decimals: rounded, and said so
+    r = run_cli("base", path, "--rotor")
+    assert "equations of motion 40" in r.stdout and "WARNING" not in r.stdout
+    assert "4 right angle(s) written rounded" in r.stdout
 
 
 @pytest.mark.parametrize(

@@ -316,19 +316,27 @@ def test_truncated_right_angles_are_taken_as_exact_and_reported(robots, tmp_path
     # The UR5 URDF turns two joint frames by the pitch 1.57079632679 (pi/2 to 11 decimals): in
     # each rotation two entries are cos(1.57079632679) = 4.9e-12, taken as 0 (the values still
     # match Pinocchio's on the unrounded model to 1e-10, test_generated_c_matches_pinocchio).
+    # The base set's default snap (snap="auto") already rounds those angles in the model the
+    # code is generated from; the geometry as written (snap=False) shows codegen's own rounding.
     ur5 = robots["ur5"][0]
-    code = generate(ur5, what="id,gravity")
+    as_written = mindyn.base_parameters(ur5, snap=False)
+    code = generate(ur5, what="id,gravity", base=as_written)
     snap = code.geometry_snap
     assert snap["count"] >= 4 and snap["tolerance"] == 1e-9, snap
     assert snap["largest"] == pytest.approx(abs(np.cos(1.57079632679)), rel=1e-3)
     assert f"Geometry: {snap['count']} constants within 1e-09 of 0 or +-1 taken as" in code.header
-    assert BaseDynamics(mindyn.base_parameters(ur5)).geometry_snap == snap
+    assert BaseDynamics(as_written).geometry_snap == snap
+    assert generate(ur5, what="id,gravity").geometry_snap["count"] == 0  # snapped before
     exact = generate(robots["puma560"][0], what="id")  # DH in degrees: round-off residues only
     assert exact.geometry_snap["count"] == 0 and "Geometry:" not in exact.header
-    assert main(["codegen", str(URDFS["ur5"]), "--lang", "st", "-o", str(tmp_path / "u.st")]) == 0
+    argv = ["codegen", str(URDFS["ur5"]), "--lang", "st", "-o", str(tmp_path / "u.st")]
+    assert main([*argv, "--snap", "off"]) == 0
     out = capsys.readouterr().out
     assert "constants within 1e-09 of 0 or +-1 taken as exact" in out
     assert "(largest change 4.9e-12)" in out
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "base set: 2 right angle(s) written rounded" in out and "constants within" not in out
 
 
 def test_unknown_objective_is_refused(robots):

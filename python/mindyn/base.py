@@ -9,6 +9,7 @@ uses the same set (a constant in the energy cancels in differences).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 
@@ -18,7 +19,7 @@ from . import _args, _core
 from . import formulas as _formulas
 from .robot import Robot, as_robot
 
-__all__ = ["BaseParameters", "base_parameters", "choose_method"]
+__all__ = ["BaseParameters", "base_parameters", "choose_method", "rounded_right_angles"]
 
 DEFAULT_TOLERANCE = 1e-9
 #: The rank tolerance is below this (a larger relative pivot is no round-off; the core refuses it)
@@ -109,6 +110,8 @@ class BaseParameters:
         # the settings it was computed with (tolerance, snap, samples, seed), for symbolic()
         self.options = dict(options or {})
         self.method_reason = ""  # set by base_parameters
+        #: what the snap did and why (see :func:`base_parameters`)
+        self.snap_decision: dict = {"mode": "off", "applied": False}
 
     def for_robot(
         self, robot: Robot, *, order: Sequence[int] | Sequence[str] | None = None, offset=None
@@ -127,7 +130,7 @@ class BaseParameters:
             tolerance=float(self.options.get("tolerance", 1e-9)),
             samples=int(self.options.get("samples", 0)),
             seed=int(self.options.get("seed", 1)),
-            snap=float(self.options.get("snap", 0.0)),
+            snap=self.options.get("snap", "auto"),
             offset=self.offset if offset is None else offset,
         )
 
@@ -140,6 +143,7 @@ class BaseParameters:
         robot = self.robot.with_friction_model(kind, velocity=v)
         out = BaseParameters(self._b.with_friction_velocity(v), robot, self.offset, self.options)
         out.method_reason = self.method_reason
+        out.snap_decision = self.snap_decision  # the same geometry, snapped the same way
         return out
 
     @cached_property
@@ -222,6 +226,44 @@ class BaseParameters:
     snappable = property(lambda self: list(self._b.snappable))
     lagrangian_equals_energy = property(lambda self: self._b.lagrangian_equals_energy)
     lagrangian_equals_eom = property(lambda self: self._b.lagrangian_equals_eom)
+
+    def snap_report(self, *, detail: bool = True) -> list[str]:
+        """What the snap did, in sentences (none when nothing was near a right angle): with the
+        default ``snap="auto"``, the rounded right angles rounded to them (how many, the largest
+        deviation, the tolerance, the check against the description's torques) or why nothing
+        was, and the deliberate angles kept; with ``detail``, each rotation changed too."""
+        detail = _args.flag(detail, "detail")
+        d = self.snap_decision
+        if d.get("mode") != "auto" or not (d.get("rounded") or d.get("real")):
+            return list(self.snapped)
+        rounded, real = d["rounded"], d["real"]
+        if d["applied"]:
+            check = d.get("check")
+            checked = (
+                f"the snapped model reproduces the description's torques to {check:.2g}"
+                if check is not None
+                else "not checked against the description (multi-DOF joints or over 200 joints)"
+            )
+            out = [
+                f"{len(rounded)} right angle(s) written rounded (each off by a decimal "
+                f"rounding of a multiple of pi/2 or by at most the rank tolerance; largest "
+                f"{d['largest_rounding']:.2g} rad) rounded to them (snap auto, tolerance "
+                f"{d['tolerance']:.2g}; snap off keeps them); {checked}"
+            ]
+        else:
+            why = d.get("refused") or (
+                f"a deliberate angle ({d['smallest_real']:.2g} rad) is closer to a right angle "
+                f"than a rounded one ({d['largest_rounding']:.2g} rad)"
+                if rounded
+                else "none is a rounded right angle"
+            )
+            out = [f"nothing snapped (snap auto): {why}"]
+        if real:
+            out.append(
+                f"kept as written: {len(real)} deliberate angle(s) near right angles, smallest "
+                f"deviation {d['smallest_real']:.2g} rad ({real[0][0]})"
+            )
+        return out + (list(self.snapped) if detail else [])
 
     @property
     def margin(self) -> dict:
@@ -322,6 +364,7 @@ class BaseParameters:
             "seconds": self.seconds,
             "snapped": self.snapped,
             "snappable": self.snappable,
+            "snap": _plain(self.snap_decision),
         }
         if symbolic:
             out.update(self.symbolic().to_dict())
@@ -362,6 +405,95 @@ def _plain(d: dict) -> dict:
     return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in d.items()}
 
 
+# --------------------------------------------------------------------------------------------
+# The default snap: right angles the description writes rounded
+# --------------------------------------------------------------------------------------------
+#: Largest deviation from a right angle that ``snappable`` lists (the C++ core's window)
+SNAP_WINDOW = 1e-3
+#: Deviations this close to a decimal rounding of a right angle are that rounding: 16 units of
+#: round-off of an angle of size 2 pi (the angles are read back from the composed rotation)
+_ROUNDING_MATCH = 16 * np.finfo(float).eps * 2 * np.pi
+_ANGLES = re.compile(r"^(.*): rotation \(yaw, pitch, roll\) = \(([^)]*)\) rad")
+_AXIS = re.compile(r"^(joint '.*' axis) \(([^)]*)\) snapped")
+
+
+def _decimal_roundings() -> np.ndarray:
+    """``|round(m pi/2, d) - m pi/2|`` for m = 1..4 and d = 0..17 decimals, sorted. (Not their
+    sums: the sum of two roundings of one angle is a round decimal, 1.571 - 1.57 = 1e-3, which
+    is how a deliberate offset is written.)"""
+    return np.array(
+        sorted(
+            {abs(round(m * np.pi / 2, d) - m * np.pi / 2) for m in range(1, 5) for d in range(18)}
+        )
+    )
+
+
+_ROUNDINGS = _decimal_roundings()
+
+
+def _is_rounding(deviation: float, floor: float = 0.0) -> bool:
+    """Whether ``deviation`` from a right angle is a right angle written with fewer decimals
+    than a double holds (1.5708, 1.57079632679), or round-off, or at most ``floor``."""
+    if deviation <= max(_ROUNDING_MATCH, floor):
+        return True
+    k = int(np.searchsorted(_ROUNDINGS, deviation))
+    near = _ROUNDINGS[max(k - 1, 0) : k + 1]
+    return bool(np.min(np.abs(near - deviation)) <= _ROUNDING_MATCH)
+
+
+def rounded_right_angles(snappable: Sequence[str], *, tolerance: float = DEFAULT_TOLERANCE) -> dict:
+    """Which of the near right angles ``snappable`` lists (rotations and axes within 1e-3 of a
+    right angle, :attr:`BaseParameters.snappable`) are right angles written rounded, and the
+    snap tolerance that rounds those and nothing else.
+
+    An angle is a rounded right angle when its deviation from the nearest multiple of pi/2 is
+    exactly (to round-off) what writing that multiple with ``d`` decimals leaves, for some
+    ``d`` (``1.5708``: 3.67e-6; ``1.57079632679``: 4.9e-12), or is at most the rank
+    ``tolerance`` (a column that small is below what the rank decision resolves: no geometry
+    the base set could use). A deliberate angle (a calibrated offset of 1e-3 rad, a
+    tilt of 2e-5 rad written with its own digits) matches none of these and is real geometry;
+    so is an axis component above round-off. Returns ``rounded`` and ``real`` (what, deviation
+    in rad), ``largest_rounding``, ``smallest_real`` (None when there is none), ``separable``
+    (every rounding below every real deviation) and ``tolerance``: the snap tolerance, twice the
+    largest rounding (at most the geometric mean of it and the smallest real deviation), 0 when
+    nothing is rounded or the two cannot be separated.
+    """
+    rounded: list[tuple[str, float]] = []
+    real: list[tuple[str, float]] = []
+    for entry in snappable:
+        if m := _ANGLES.match(entry):
+            what = m.group(1)
+            for name, value in zip(("yaw", "pitch", "roll"), m.group(2).split(",")):
+                a = float(value)
+                dev = abs(a - round(a / (np.pi / 2)) * (np.pi / 2))
+                if 0 < dev <= SNAP_WINDOW:
+                    is_rounding = _is_rounding(dev, tolerance)
+                    (rounded if is_rounding else real).append((f"{what} {name}", dev))
+        elif m := _AXIS.match(entry):
+            what = m.group(1)
+            for name, value in zip("xyz", m.group(2).split(",")):
+                dev = abs(float(value))
+                if 0 < dev <= SNAP_WINDOW:
+                    small = dev <= max(_ROUNDING_MATCH, tolerance)
+                    (rounded if small else real).append((f"{what} {name}", dev))
+    largest = max((d for _, d in rounded), default=0.0)
+    smallest = min((d for _, d in real), default=None)
+    separable = smallest is None or largest < smallest
+    tolerance = 0.0
+    if rounded and separable:
+        tolerance = (
+            2 * largest if smallest is None else min(2 * largest, np.sqrt(largest * smallest))
+        )
+    return {
+        "rounded": rounded,
+        "real": real,
+        "largest_rounding": largest,
+        "smallest_real": smallest,
+        "separable": separable,
+        "tolerance": tolerance,
+    }
+
+
 def base_parameters(
     robot: Robot | str,
     *,
@@ -370,7 +502,7 @@ def base_parameters(
     method: str | None = None,
     order: Sequence[int] | Sequence[str] | None = None,
     tolerance: float = DEFAULT_TOLERANCE,
-    snap: float | bool | None = None,
+    snap: float | bool | str | None = "auto",
     samples: int = 0,
     seed: int = 1,
     offset: bool = False,
@@ -411,10 +543,17 @@ def base_parameters(
         the classical inverse dynamics (energies for the Lagrangian and total-energy sets) at
         random states; one whose regrouping misses them (near-degenerate geometry) raises a
         ModelError that says by how much and what to try.
-    snap : float or bool, optional
-        Round joint-origin rotations within this many radians of multiples of pi/2 (``True``:
-        1e-3) before computing; what was changed is listed in ``snapped`` (and what it would
-        change, when not given, in ``snappable``).
+    snap : "auto", float or bool, optional
+        Which joint-origin rotations near multiples of pi/2 are rounded to them before
+        computing. ``"auto"`` (the default): the right angles the description writes rounded
+        (:func:`rounded_right_angles`: a deviation that is a decimal rounding of the right angle,
+        1.5708 or 1.57079632679, or at most ``tolerance``), never a deliberate angle, and only
+        when a snap tolerance separates the two; the snapped set is checked against the
+        description's own inverse dynamics (within 100 times the largest rounding; else nothing
+        is snapped). A number: every rotation within this many radians (``True``: 1e-3).
+        ``False``, ``None`` or 0: none. What was done and why is in ``snap_decision`` and
+        :meth:`~BaseParameters.snap_report`, what was changed in ``snapped`` (what a snap of
+        1e-3 would change, when nothing was snapped, in ``snappable``).
     samples, seed : int
         Numerical method only: number of random states for the regressor (0: automatic,
         ``max(40, 3 P / n + 20)`` for ``P`` parameters and ``n`` joints; fewer than ``P / n`` are
@@ -435,7 +574,9 @@ def base_parameters(
     tolerance = _args.number(tolerance, "tolerance", positive=True, below=MAX_TOLERANCE)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)
-    if snap is not None and not isinstance(snap, bool):
+    if isinstance(snap, str):
+        _args.choice(snap, "snap", ("auto",))
+    elif snap is not None and not isinstance(snap, bool):
         snap = _args.number(snap, "snap", minimum=0.0)
     idx: list[int] = []
     if order is not None:
@@ -460,21 +601,78 @@ def base_parameters(
                 + (f"; missing: {', '.join(missing[:8])}" if missing else ""),
             )
     if snap is True:
-        snap = 1e-3
-    core = _core.base_parameters(
-        robot._m,
-        rotor=rotor,
-        friction=friction,
-        method=method,
-        order=idx,
-        tolerance=float(tolerance),
-        samples=int(samples),
-        seed=int(seed),
-        snap=float(snap or 0.0),
-        offset=offset,
-    )
-    options = {"tolerance": float(tolerance), "snap": float(snap or 0.0)}
+        snap = SNAP_WINDOW
+
+    def compute(at: float) -> _core.BaseParameters:
+        return _core.base_parameters(
+            robot._m,
+            rotor=rotor,
+            friction=friction,
+            method=method,
+            order=idx,
+            tolerance=float(tolerance),
+            samples=int(samples),
+            seed=int(seed),
+            snap=at,
+            offset=offset,
+        )
+
+    decision: dict
+    if snap == "auto":
+        core, decision = _auto_snap(robot, compute, tolerance)
+    else:
+        core = compute(float(snap or 0.0))
+        decision = {"mode": "given" if snap else "off", "applied": bool(core.snapped)}
+        decision.update(tolerance=float(snap or 0.0))
+    options = {"tolerance": float(tolerance), "snap": snap if snap == "auto" else float(snap or 0)}
     options.update(samples=int(samples), seed=int(seed))
     out = BaseParameters(core, robot, offset, options)
     out.method_reason = reason
+    out.snap_decision = decision
     return out
+
+
+def _auto_snap(robot: Robot, compute, tolerance: float) -> tuple[_core.BaseParameters, dict]:
+    """``snap="auto"``: the base parameters with the right angles the description writes
+    rounded snapped (:func:`rounded_right_angles`), checked against the description's own
+    inverse dynamics; and the decision."""
+    try:
+        core = compute(0.0)
+        listed = list(core.snappable)
+    except _core.ModelError:  # refused unsnapped: what is near a right angle, from a snap
+        core, listed = None, list(compute(SNAP_WINDOW).snapped)
+    found = rounded_right_angles(listed, tolerance=tolerance)
+    decision = {"mode": "auto", "applied": False, **found}
+    decision["rounded"] = [list(x) for x in found["rounded"]]
+    decision["real"] = [list(x) for x in found["real"]]
+    if found["tolerance"] > 0:
+        snapped = compute(found["tolerance"])
+        check = _snap_check(robot, snapped)
+        bound = 100 * found["largest_rounding"] + 1e-10
+        decision.update(check=check, check_bound=bound)
+        if check is None or check <= bound:
+            decision["applied"] = True
+            return snapped, decision
+        decision["refused"] = (
+            f"the snapped base set reproduces the description's torques only to {check:.2g} "
+            f"(over {bound:.2g})"
+        )
+    if core is None:
+        core = compute(0.0)  # raises the refusal, as without snapping
+    return core, decision
+
+
+def _snap_check(robot: Robot, core: _core.BaseParameters) -> float | None:
+    """Largest difference, relative to the largest torque, between the snapped base model
+    (``W_b Y p``) and the description's inverse dynamics at a few random states, with the
+    description's link parameters; None where not checked (multi-DOF joints, over 200 joints:
+    the classical regressors would take too much memory)."""
+    if not robot.single_dof or robot.n > 200:
+        return None
+    rng = np.random.default_rng(0)
+    q, dq, ddq = (rng.uniform(-1.0, 1.0, (4, robot.n)) for _ in range(3))
+    p = dict(zip(robot.param_names, robot.params))
+    classical = np.array([p.get(name, 0.0) for name in core.classical_names])
+    tau = robot.inverse_dynamics(q, dq, ddq)
+    model = core.regressor(q, dq, ddq) @ core.values(classical)
+    return float(np.max(np.abs(model - tau)) / max(np.max(np.abs(tau)), np.finfo(float).tiny))

@@ -15,8 +15,11 @@ from .robot_options import (
     add_joint_terms,
     add_offset,
     add_robot,
+    add_snap,
     joint_terms,
     load_robot,
+    snap_keyword,
+    snap_lines,
     with_drive_side,
 )
 
@@ -33,7 +36,7 @@ def cmd_base(args: argparse.Namespace) -> int:
         method=method,
         order=order,
         tolerance=args.tolerance,
-        snap=args.snap,
+        snap=snap_keyword(args),
     )
     tree = {} if robot.is_serial else {"parents": robot.parents}  # 0-based, -1 the base
     if args.format == "json" or args.json:
@@ -99,8 +102,7 @@ def cmd_base(args: argparse.Namespace) -> int:
             f"  offsets        {bp.names[-robot.n]}..{bp.names[-1]} after the "
             f"equations-of-motion set, one base parameter each ({bp.n} in all)"
         )
-    for s in bp.snapped:
-        lines.append(f"  snapped        {s}")
+    lines += snap_lines(bp)
     if bp.no_effect:
         lines.append(f"  no effect      {' '.join(bp.no_effect)}")
     what = {
@@ -188,15 +190,5 @@ def register(sub) -> None:
         help="relative pivot size below which a column is dependent (the rank decision)",
     )
     deprecated(p, "--tolerance", rank_tolerance)
-    number(
-        p,
-        "--snap",
-        low=0,
-        high=0.1,
-        nargs="?",
-        const=1e-3,
-        default=None,
-        metavar="RAD",
-        help="round joint rotations within RAD (1e-3 when given alone) of multiples of pi/2",
-    )
+    add_snap(p)
     p.set_defaults(func=cmd_base)

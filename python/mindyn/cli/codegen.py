@@ -28,10 +28,13 @@ from .robot_options import (
     add_joint_terms,
     add_offset,
     add_robot,
+    add_snap,
     drive_side,
     joint_terms,
     load_robot,
     require_single_dof,
+    snap_keyword,
+    snap_lines,
 )
 
 #: The default controller period [s] of the generated controller and observer steps
@@ -70,6 +73,7 @@ def register(subparsers) -> None:
     )
     add_joint_terms(p)
     add_offset(p)
+    add_snap(p)
     p.add_argument(
         "--contact",
         nargs="+",
@@ -201,7 +205,12 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     if method != "projection" and args.method is None:
         print(f"base parameters by the {method} method: {why}")
     base = base_parameters(
-        robot, rotor=args.rotor, friction=args.friction, offset=args.offset, method=method
+        robot,
+        rotor=args.rotor,
+        friction=args.friction,
+        offset=args.offset,
+        method=method,
+        snap=snap_keyword(args),
     )
     for note in (drive_note, friction_note):
         if note:
@@ -270,6 +279,8 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             f"geometry: {snap['count']} constants within {snap['tolerance']:g} of 0 or +-1 "
             f"taken as exact (largest change {snap['largest']:.2g})"
         )
+    for line in snap_lines(base, "base set: ", detail=False):
+        print(line)
     print()
     print("\n".join(operation_table(code, classical)))
     return 0

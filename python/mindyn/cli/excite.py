@@ -10,10 +10,19 @@ import numpy as np
 from .args import ZCR07S_STUDY, add_command, deprecated
 from .number_options import check_radians, joint_values, joint_vector, number, seed
 from .outputs import output_file
-from .robot_options import add_drive_side, add_robot, load_robot, with_drive_side
+from .robot_options import (
+    add_drive_side,
+    add_robot,
+    add_snap,
+    load_robot,
+    snap_keyword,
+    snap_lines,
+    with_drive_side,
+)
 
 
 def cmd_excite(args: argparse.Namespace) -> int:
+    from ..base import base_parameters
     from ..identification.excitation import check_sampling, optimize_excitation
 
     if Path(args.output).suffix.lower() in (".json", ".png"):
@@ -40,8 +49,10 @@ def cmd_excite(args: argparse.Namespace) -> int:
             start = np.where(rev, np.radians(start), start)
         else:
             check_radians(start, "--start", "--deg", robot)
+    base = base_parameters(robot, rotor=args.rotor, friction=args.friction, snap=snap_keyword(args))
     res = optimize_excitation(
         robot,
+        base=base,
         harmonics=args.harmonics,
         freq=args.freq,
         criterion=args.criterion,
@@ -64,6 +75,8 @@ def cmd_excite(args: argparse.Namespace) -> int:
         f"(period {res.trajectory.period:g} s), {len(res.base_names)} base parameters"
     )
     print(f"  {shown}: {res.value:.6g} (initial guess {res.initial_value:.6g})")
+    for line in snap_lines(base, "  base set: ", detail=False):
+        print(line)
     for warning in res.warnings:
         print(f"  WARNING: {warning}")
     print(f"  limits respected on a fine grid (largest relative excess {res.max_violation:.2g})")
@@ -134,6 +147,7 @@ def register(sub) -> None:
     p.add_argument("--rotor", action="store_true", help="base parameters with rotor inertia")
     p.add_argument("--friction", action="store_true", help="base parameters with friction")
     add_drive_side(p)
+    add_snap(p)
     joint_vector(
         p, "--start", help="prescribed start position [rad, m] (or one value for all joints)"
     )

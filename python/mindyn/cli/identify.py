@@ -16,7 +16,7 @@ from .identify_args import FLOATING_MODELS
 from .identify_floating import cmd_identify_floating
 from .number_options import joint_values
 from .outputs import check_description_kind
-from .robot_options import load_robot, with_drive_side
+from .robot_options import load_robot, snap_keyword, with_drive_side
 
 
 def _progress():
@@ -67,6 +67,7 @@ def identify_options(args: argparse.Namespace, robot):
         friction_width=width,
         consistent=args.consistent,
         prior_weight=args.prior_weight,
+        snap=snap_keyword(args),
     )
 
 

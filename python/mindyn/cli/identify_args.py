@@ -8,7 +8,7 @@ from ..robot import FRICTION_KINDS
 from .args import add_command, deprecated, remember_flags
 from .number_options import joint_vector, number
 from .outputs import add_description_outputs, output_dir, output_file
-from .robot_options import add_joint_terms, add_offset, add_robot
+from .robot_options import add_joint_terms, add_offset, add_robot, add_snap
 
 #: The models of ``identify`` on a floating-base robot (free-flyer or planar root).
 FLOATING_MODELS = ("full", "base")
@@ -148,6 +148,7 @@ def add_identify(sub, func) -> None:
     )
     add_joint_terms(p, "identify")
     add_offset(p, "identify")
+    add_snap(p)
     p.add_argument(
         "--validate", nargs="+", metavar="LOG", help="log(s) (CSV or bag) for validation"
     )

@@ -9,6 +9,7 @@ import re
 
 from ..robot import bundled_robots, load
 from .args import UsageError
+from .number_options import Number
 
 #: The root joints ``--root-joint`` puts between the world and a URDF's root link
 #: (``mindyn.load(..., root_joint=)``).
@@ -179,3 +180,49 @@ def joint_terms(args, robot=None) -> list[str]:
         k = 1 + max(i for i, w in enumerate(words) if w in ("rotor inertia", "friction"))
         words[k - 1] += " " + side
     return words
+
+
+def _snap_value(text: str):
+    """``--snap``'s value: ``auto``, ``off`` or a tolerance in rad in (0, 0.1]."""
+    s = text.strip().lower()
+    if s in ("auto", "off"):
+        return s
+    try:
+        return Number(0, 0.1, low_open=True)(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(
+            f"expected auto, off or a finite number in (0, 0.1] (rad), got '{text}'"
+        ) from None
+
+
+_snap_value.__name__ = "snap"  # argparse names the type by this
+
+
+def add_snap(p: argparse.ArgumentParser) -> None:
+    """``--snap [auto|off|RAD]``: which joint rotations near right angles are rounded to them
+    before the base parameters are computed (``snap=`` of :func:`mindyn.base_parameters`)."""
+    p.add_argument(
+        "--snap",
+        type=_snap_value,
+        nargs="?",
+        const=1e-3,
+        default="auto",
+        metavar="auto|off|RAD",
+        help="round joint rotations to multiples of pi/2 before computing the base parameters: "
+        "auto (the default) rounds the right angles the description writes with fewer digits "
+        "than a double holds (1.5708, 1.57079632679), never a deliberate small angle; off "
+        "keeps the description as written; RAD (1e-3 when given alone) rounds every rotation "
+        "within RAD",
+    )
+
+
+def snap_keyword(args: argparse.Namespace):
+    """The ``snap=`` keyword of ``--snap``: "auto", False (off) or the tolerance."""
+    value = getattr(args, "snap", "auto")
+    return False if value == "off" else value
+
+
+def snap_lines(bp, label: str = "  snapped        ", *, detail: bool = True) -> list[str]:
+    """What the base set's snap did (:meth:`mindyn.BaseParameters.snap_report`), one output line
+    each under ``label``."""
+    return [label + line for line in bp.snap_report(detail=detail)]

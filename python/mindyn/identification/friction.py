@@ -304,12 +304,13 @@ def select_friction_model(
     fit: dict | None = None,
     folds: int | None = None,
     progress=None,
+    snap="auto",
 ) -> FrictionChoice:
     """The robot with the friction model ``kind`` (:data:`CHOICES`) for identifying it from
     ``logs`` with the :func:`~mindyn.identification.identify` options ``fit``, and the base set
     with friction (and ``rotor``, ``offset``) for it; see the module documentation for how
     the smooth width (unless ``width`` is given, one value or one per joint), the Stribeck
-    velocities and ``auto`` are decided."""
+    velocities and ``auto`` are decided. ``snap``: as in :func:`mindyn.base_parameters`."""
     from ..base import base_parameters
     from .estimation import _logs
     from .prior import FOLDS
@@ -338,7 +339,7 @@ def select_friction_model(
 
     def make(k: str, velocity=None):
         r = robot.with_friction_model(k, velocity=velocity)
-        return r, base_parameters(r, rotor=rotor, friction=True, offset=offset)
+        return r, base_parameters(r, rotor=rotor, friction=True, offset=offset, snap=snap)
 
     def one(k: str) -> FrictionChoice:
         rec: dict = {"kind": k, "velocity": None}

@@ -42,7 +42,9 @@ class IdentifyOptions:
     friction kind, ``dahl`` or ``auto`` (implies ``friction``), ``friction_width``: the tanh
     width, one positive number for every joint or one per joint (smooth or auto only);
     ``consistent``: also the physically consistent estimate, with ``prior_weight`` (None:
-    chosen from the data)."""
+    chosen from the data); ``snap``: the rotations near right angles rounded before the base
+    set is computed, as ``snap=`` of :func:`mindyn.base_parameters` (``"auto"``: the right
+    angles the description writes rounded; False: none)."""
 
     model: str = "dynamic"
     rotor: bool = False
@@ -58,6 +60,7 @@ class IdentifyOptions:
     friction_width: tuple[float, ...] | None = None
     consistent: bool = False
     prior_weight: float | None = None
+    snap: str | float | bool = "auto"
 
     def __post_init__(self):
         _args.choice(self.model, "model", MODELS)
@@ -73,6 +76,10 @@ class IdentifyOptions:
             self, "min_velocity", _args.number(self.min_velocity, "min_velocity", minimum=0.0)
         )
         _args.optional(_args.choice, self.friction_model, "friction_model", FRICTION_MODELS)
+        if isinstance(self.snap, str):
+            _args.choice(self.snap, "snap", ("auto",))
+        elif not isinstance(self.snap, bool):
+            object.__setattr__(self, "snap", _args.number(self.snap, "snap", minimum=0.0))
         if self.prior_weight is not None:
             object.__setattr__(
                 self, "prior_weight", _args.number(self.prior_weight, "prior_weight", minimum=0.0)

@@ -130,6 +130,7 @@ class IdentificationReport:
         if self.friction_record is not None:
             doc["friction_model"] = self.friction_record
         doc["tip"] = self.tip  # the chain identified (None: the whole description)
+        doc["base_snap"] = {**self.base.snap_decision, "snapped": list(self.base.snapped)}
         doc["consistent"] = cons is not None
         if cons is not None:
             assert self.consistent_fit is not None  # computed with the consistent estimate

@@ -117,6 +117,7 @@ def _settings(report) -> list[str]:
             if res.settings["min_velocity"] > 0
             else "  all joint equations kept (min_velocity=0)"
         )
+    out += [f"  base set: {line}" for line in base.snap_report(detail=False)]
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
         out.append(

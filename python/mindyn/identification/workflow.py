@@ -102,7 +102,11 @@ def _friction(robot, data: list, options: IdentifyOptions, progress):
 
     if options.friction_model is None:
         base = base_parameters(
-            robot, rotor=options.rotor, friction=options.friction, offset=options.offset
+            robot,
+            rotor=options.rotor,
+            friction=options.friction,
+            offset=options.offset,
+            snap=options.snap,
         )
         if not base.friction:
             return None, robot, base, None, []
@@ -122,6 +126,7 @@ def _friction(robot, data: list, options: IdentifyOptions, progress):
             width=width,
             fit=_fit_keywords(options),
             progress=progress,
+            snap=options.snap,
         )
         robot, base = choice.robot, choice.base
     record = choice.record if choice else None

@@ -1,0 +1,252 @@
+"""The default snap (``snap="auto"``): right angles a description writes rounded (1.5708,
+1.57079632679) are rounded to them before the base set is computed, so that nothing downstream
+estimates parameters whose regressor columns are the rounding; a deliberate angle near a right
+angle (a calibrated offset of 1e-3 rad) is kept. Counts are checked against Pinocchio's
+regressor rank and the numerical method of the geometry the test writes, identification
+against the known answer of a log the test simulates."""
+
+from __future__ import annotations
+
+import math
+import re
+import subprocess
+import sys
+
+import mindyn
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import ROBOTS_DIR, pinocchio_model
+from mindyn.identification import IdentifyOptions, run
+from mindyn.identification.joint_data import JointData
+
+KINOVA = ROBOTS_DIR / "kinova_description/robots/kinova.urdf"  # 1.57079632679, 3.14159265359
+XARM = ROBOTS_DIR / "xarm_description/urdf/xarm7.urdf"  # pi/2 written 1.5708
+
+
+def rewrite_right_angles(text: str, write) -> str:
+    """``text`` with every number of a joint origin's ``rpy`` within 1e-4 of a multiple of pi/2
+    (k pi/2, k != 0) replaced by ``write(k)``, in the order of the file."""
+
+    def number(m: re.Match) -> str:
+        x = float(m.group(0))
+        k = round(x / (math.pi / 2))
+        return write(k) if k and abs(x - k * math.pi / 2) < 1e-4 else m.group(0)
+
+    def rpy(m: re.Match) -> str:
+        return 'rpy="' + re.sub(r"-?[\d.]+(?:[eE][-+]?\d+)?", number, m.group(1)) + '"'
+
+    def joint(m: re.Match) -> str:
+        return re.sub(r'rpy="([^"]*)"', rpy, m.group(0))
+
+    return re.sub(r"<joint\b.*?</joint>", joint, text, flags=re.DOTALL)
+
+
+def exact(k: int) -> str:
+    return repr(k * math.pi / 2)
+
+
+def load(path, rotor: bool) -> mindyn.Robot:
+    """The robot of ``path``; with ``rotor``, its rotor inertia on the joints."""
+    robot = mindyn.load(path)
+    return robot.with_drive_side("joint") if rotor and robot.transmission else robot
+
+
+def pinocchio_rank(path, rng, rotor: bool = False, states: int = 60) -> int:
+    """Rank of Pinocchio's stacked joint-torque regressor of the robot of ``path`` at random
+    states (relative singular value tolerance 1e-8); with ``rotor``, beside a rotor inertia
+    column per joint (its acceleration in its own joint's row)."""
+    model = pinocchio_model(mindyn.load(path))
+    data = model.createData()
+    rows = []
+    for _ in range(states):
+        q, dq, ddq = (rng.uniform(-2, 2, model.nv) for _ in range(3))
+        W = pin.computeJointTorqueRegressor(model, data, q, dq, ddq)
+        rows.append(np.hstack([W, np.diag(ddq)]) if rotor else W)
+    s = np.linalg.svd(np.vstack(rows), compute_uv=False)
+    return int(np.sum(s > 1e-8 * s[0]))
+
+
+def written(tmp_path, name: str, text: str):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize(
+    "source, rounding, rotor",
+    [
+        (KINOVA, None, False),  # as shipped: 1.57079632679, 3.14159265359, 1.570796327
+        (XARM, None, True),  # as shipped: 1.5708, 3.7e-6 rad off
+        (KINOVA, lambda k: repr(k * math.pi / 2 + k * 1e-12), False),  # 1e-12 rad per right angle
+    ],
+    ids=["kinova", "xarm7", "kinova-1e-12"],
+)
+def test_rounded_right_angles_give_the_count_of_the_exact_geometry(
+    tmp_path, rng, source, rounding, rotor
+):
+    text = source.read_text()
+    rounded = source
+    if rounding is not None:
+        rounded = written(tmp_path, "rounded.urdf", rewrite_right_angles(text, rounding))
+    exact_path = written(tmp_path, "exact.urdf", rewrite_right_angles(text, exact))
+    count = mindyn.base_parameters(
+        load(exact_path, rotor), rotor=rotor, method="numerical", snap=False
+    ).n
+    assert count == pinocchio_rank(exact_path, rng, rotor)
+
+    robot = load(rounded, rotor)
+    bp = mindyn.base_parameters(robot, rotor=rotor)
+    assert bp.n == count
+    assert bp.snap_decision["applied"] and bp.snap_decision["rounded"]
+    assert not bp.snap_decision["real"]
+    assert not bp.margin["near_degenerate"]
+    assert bp.snap_report()[0].startswith(f"{len(bp.snap_decision['rounded'])} right angle(s)")
+    # the decision is in the JSON document
+    assert bp.to_dict()["snap"]["applied"] is True
+    # turned off, the description as written: round-off columns kept or decided in the band
+    off = mindyn.base_parameters(robot, rotor=rotor, snap=False)
+    assert off.snap_decision == {"mode": "off", "applied": False, "tolerance": 0.0}
+    assert off.n > count or off.margin["near_degenerate"]
+
+
+def test_a_deliberate_offset_near_a_right_angle_is_kept(tmp_path, rng):
+    """One right angle of the xArm7 tilted by 1e-3 rad (a calibration), the others written
+    with 4 decimals (as shipped), rotor inertia on the joints: the default snaps the rounded
+    ones only and keeps the parameters the tilt makes identifiable; forcing a snap of 1e-2
+    rounds the tilt away too."""
+    text = XARM.read_text()
+    first = [True]
+
+    def tilted(k: int) -> str:
+        if first[0]:
+            first[0] = False
+            return repr(k * math.pi / 2 + 1e-3)
+        return repr(round(k * math.pi / 2, 4))
+
+    def reference(k: int) -> str:  # the same tilt, the other right angles exact
+        if first[0]:
+            first[0] = False
+            return repr(k * math.pi / 2 + 1e-3)
+        return exact(k)
+
+    path = written(tmp_path, "tilted.urdf", rewrite_right_angles(text, tilted))
+    first[0] = True
+    ref = written(tmp_path, "reference.urdf", rewrite_right_angles(text, reference))
+    plain = written(tmp_path, "exact.urdf", rewrite_right_angles(text, exact))
+    count = mindyn.base_parameters(load(ref, True), rotor=True, method="numerical", snap=False).n
+    assert count == pinocchio_rank(ref, rng, rotor=True)
+    # the tilt makes more parameters identifiable
+    assert count > pinocchio_rank(plain, rng, rotor=True)
+
+    robot = load(path, True)
+    bp = mindyn.base_parameters(robot, rotor=True)
+    assert bp.n == count
+    d = bp.snap_decision
+    assert d["applied"] and d["rounded"]
+    assert len(d["real"]) == 1 and d["real"][0][1] == pytest.approx(1e-3, rel=1e-6)
+    assert d["tolerance"] < 1e-3
+    assert any(line.startswith("kept as written: 1 deliberate") for line in bp.snap_report())
+    forced = mindyn.base_parameters(robot, rotor=True, snap=1e-2)
+    assert forced.n == pinocchio_rank(plain, rng, rotor=True)
+
+
+def test_rounded_and_deliberate_angles_that_overlap_are_not_snapped(tmp_path, rng):
+    """A deliberate tilt of 1e-6 rad beside right angles written 1.5708 (3.7e-6 rad off): no
+    tolerance separates them, so nothing is snapped, and the output says why."""
+    text = XARM.read_text()
+    first = [True]
+
+    def mixed(k: int) -> str:
+        if first[0]:
+            first[0] = False
+            return repr(k * math.pi / 2 + 1e-6)
+        return repr(round(k * math.pi / 2, 4))
+
+    path = written(tmp_path, "mixed.urdf", rewrite_right_angles(text, mixed))
+    bp = mindyn.base_parameters(load(path, True), rotor=True)
+    d = bp.snap_decision
+    assert not d["applied"] and not d["separable"] and bp.snapped == []
+    assert "a deliberate angle" in bp.snap_report()[0]
+
+
+def simulated_log(robot: mindyn.Robot, rng, noise: float = 0.01) -> JointData:
+    """A smooth multi-sine trajectory of 20 s at 100 Hz, with torques from the robot's own
+    inverse dynamics plus Gaussian noise of ``noise`` times each joint's torque spread."""
+    t = np.arange(0.0, 20.0, 0.01)
+    w = 2 * np.pi * 0.1 * np.arange(1, 6)
+    a = rng.uniform(-0.25, 0.25, (robot.n, 5))
+    b = rng.uniform(-0.25, 0.25, (robot.n, 5))
+    s, c = np.sin(np.outer(t, w)), np.cos(np.outer(t, w))
+    q = s @ a.T + c @ b.T
+    dq = (c * w) @ a.T - (s * w) @ b.T
+    ddq = -(s * w**2) @ a.T - (c * w**2) @ b.T
+    tau = robot.inverse_dynamics(q, dq, ddq)
+    tau = tau + noise * tau.std(axis=0) * rng.standard_normal(tau.shape)
+    return JointData(t, q, dq, ddq, tau, "simulated")
+
+
+def test_identification_of_a_rounded_pi_robot_matches_the_truth(rng):
+    """The Kinova arm as shipped (right angles written with 9 and 11 decimals), a simulated
+    log with 1 % torque noise: every estimate of the default base set is within 5 sigma of the
+    true base value and of its size (no estimate of a round-off column), and the snap is
+    stated in the text and the JSON document."""
+    robot = mindyn.load(KINOVA)
+    log = simulated_log(robot, rng)
+    report = run(robot, log, rsd_threshold=0.0)
+    base, res = report.base, report.result
+    truth = base.values(robot.params)
+    assert res.names == base.names  # rsd_threshold=0: every base parameter kept
+    est, std = np.asarray(res.values), np.asarray(res.std)
+    assert np.all(np.abs(est - truth) <= 5 * std + 1e-9 * np.abs(truth).max()), (
+        np.abs(est - truth) / std
+    )
+    assert np.abs(est).max() < 100 * np.abs(truth).max()
+    # the decision is stated
+    assert base.snap_decision["applied"]
+    assert report.to_dict()["base_snap"]["applied"] is True
+    assert any(
+        "base set: " in line and "right angle(s)" in line for line in report.format().splitlines()
+    )
+
+
+def test_cli_snap_option(tmp_path):
+    """``--snap off`` keeps the description as written, ``--snap auto`` is the default and
+    says what it did; a value that is not auto, off or a tolerance is refused in one line."""
+
+    def cli(*args):
+        return subprocess.run(
+            [sys.executable, "-m", "mindyn", *map(str, args)],
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+
+    default = cli("base", KINOVA)
+    assert default.returncode == 0, default.stderr
+    assert "right angle(s) written rounded" in default.stdout and "WARNING" not in default.stdout
+    off = cli("base", KINOVA, "--snap", "off")
+    assert "WARNING        near-degenerate" in off.stdout
+    bad = cli("base", KINOVA, "--snap", "sometimes")
+    assert bad.returncode != 0 and len(bad.stderr.strip().splitlines()) == 1
+    assert "expected auto, off or a finite number" in bad.stderr
+
+
+def test_identification_snap_option(rng):
+    """``snap=False`` identifies the base set of the angles as written (larger than the
+    default's on the Kinova), said so in the JSON, and a snap that is not "auto", a flag or a
+    tolerance is refused naming it."""
+    robot = mindyn.load(KINOVA)
+    report = run(robot, simulated_log(robot, rng), snap=False)
+    assert report.base.snap_decision["mode"] == "off"
+    assert report.base.n == mindyn.base_parameters(robot, snap=False).n
+    assert report.base.n > mindyn.base_parameters(robot).n
+    assert report.to_dict()["base_snap"]["applied"] is False
+    # a friction velocity scale changes only the friction columns: the same snap
+    smooth = mindyn.base_parameters(
+        robot.with_friction_model("smooth", velocity=[0.1] * robot.n), friction=True
+    )
+    assert smooth.with_friction_velocity([0.2] * robot.n).snap_decision == smooth.snap_decision
+    assert smooth.snap_decision["applied"]
+    with pytest.raises(mindyn.ArgumentError, match="snap"):
+        IdentifyOptions(snap="sometimes")
