@@ -269,6 +269,7 @@ def test_the_command_line_takes_a_root_joint_and_contacts(tmp_path, rng):
         (["--what", "adaptive-pd", "--lang", "c"], "codegen --what adaptive-pd takes revolute"),
         (["--lang", "st"], "Structured Text is generated for a fixed base only"),
         (["--lang", "c", "--contact", "nope"], "--contact names 'nope', no moving link"),
+        (["--lang", "c", "--wrench-frame", "local"], "--wrench-frame: applies with --contact"),
     ]:
         refused("codegen", path, "--root-joint", "floating", "-o", tmp_path / "x", *argv,
                 match=said)  # fmt: skip

@@ -85,7 +85,7 @@ def register(subparsers) -> None:
     p.add_argument(
         "--wrench-frame",
         choices=("world", "local"),
-        default="world",
+        default=None,
         help="with --contact: the axes of the contact wrenches, world (the default) or local, "
         "the link's own axes",
     )
@@ -182,6 +182,8 @@ def register(subparsers) -> None:
 
 def cmd_codegen(args: argparse.Namespace) -> int:
     robot = load_robot(args)  # a floating base: C inverse dynamics, gravity, regressor only
+    if args.wrench_frame is not None and not args.contact:
+        raise ModelError("--wrench-frame: applies with --contact (the contact wrenches' axes)")
     if args.contact and robot.single_dof:
         raise ModelError(
             "--contact: applies to a floating-base robot (--root-joint floating|planar, or a "
@@ -242,7 +244,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         )
     if any(w.strip() in CONTROLLERS + (OBSERVER,) for w in args.what.split(",")):
         raise ModelError("--what: a controller step is generated alone, not with other functions")
-    contacts = dict(contacts=args.contact or (), wrench_frame=args.wrench_frame)
+    contacts = dict(contacts=args.contact or (), wrench_frame=args.wrench_frame or "world")
     code = generate(
         robot,
         **contacts,
