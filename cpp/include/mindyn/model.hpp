@@ -47,9 +47,9 @@ inline constexpr int kMaxModelJoints = 1000;
 /// The kinematic pairs. Revolute and prismatic joints have one degree of freedom; the others are
 /// the multi-degree-of-freedom pairs, which the multibody algorithms (multibody.hpp) take, and
 /// base parameters by every method (the projection and recursive methods through
-/// expandToSingleDof). Every other algorithm (the single-DOF dynamics of dynamics.hpp, code
-/// generation, KDL kinematics, IK, identification) refuses a model with one
-/// (requireSingleDof) in one line naming the joint.
+/// expandToSingleDof) and code generation of a floating or planar root (codegen/newton_euler.hpp).
+/// Every other algorithm (the single-DOF dynamics of dynamics.hpp, KDL kinematics, IK, controller
+/// steps) refuses a model with one (requireSingleDof) in one line naming the joint.
 ///
 /// Configuration q (nq entries) and velocity v (nv entries) of each kind follow Pinocchio's
 /// JointModel* convention, so that a state of Pinocchio is a state of mindyn unchanged. The
