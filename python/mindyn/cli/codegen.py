@@ -244,7 +244,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         )
     if any(w.strip() in CONTROLLERS + (OBSERVER,) for w in args.what.split(",")):
         raise ModelError("--what: a controller step is generated alone, not with other functions")
-    contacts = dict(contacts=args.contact or (), wrench_frame=args.wrench_frame or "world")
+    contacts: dict = {"contacts": args.contact or [], "wrench_frame": args.wrench_frame or "world"}
     code = generate(
         robot,
         **contacts,
