@@ -153,16 +153,10 @@ def deprecated(p, old: str, target: argparse.Action | None = None, *, new: str =
     return p.add_argument(old, action=_Deprecated, target=target, new=new, **kwargs)
 
 
-def remember_defaults(p: argparse.ArgumentParser, *dests: str) -> None:
-    """Records the defaults of the options ``dests`` of ``p``, so that :func:`given_options`
-    tells which of them a command line set (an option that applies in one mode only is then
-    refused in the others instead of ignored)."""
-    p.set_defaults(_option_defaults={d: p.get_default(d) for d in dests})
-
-
 def remember_flags(p: argparse.ArgumentParser) -> None:
     """Records the flag and the default of every option of ``p`` (``args._flags``: dest ->
-    (flag, default)), so that a mode that takes few of them can refuse the others by name."""
+    (flag, default)), so that :func:`given_options` tells which of them a command line set.
+    Called after the last option is added."""
     flags = {
         a.dest: (max(a.option_strings, key=len), a.default)
         for a in p._actions
@@ -173,9 +167,10 @@ def remember_flags(p: argparse.ArgumentParser) -> None:
 
 def given_options(args: argparse.Namespace, *dests: str) -> list[str]:
     """The flags (``--param-error``) of the options ``dests`` (recorded by
-    :func:`remember_defaults`) that the command line set to other than their defaults."""
-    defaults = args._option_defaults
-    return ["--" + d.replace("_", "-") for d in dests if getattr(args, d) != defaults[d]]
+    :func:`remember_flags`) that the command line set to other than their defaults: an option
+    that applies in one mode only is then refused in the others instead of ignored."""
+    flags = args._flags
+    return [flags[d][0] for d in dests if getattr(args, d) != flags[d][1]]
 
 
 def deprecation_notes(args: argparse.Namespace) -> list[str]:

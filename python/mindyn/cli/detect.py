@@ -8,7 +8,7 @@ import argparse
 
 import numpy as np
 
-from .args import add_command, given_options, remember_defaults
+from .args import add_command, given_options, remember_flags
 from .number_options import add_recorded_torque_reading, joint_values, joint_vector, number
 from .outputs import output_file
 from .robot_options import add_robot, load_robot
@@ -239,7 +239,7 @@ def register(sub) -> None:
         "that the identification's parameter uncertainty explains along LOG (its standard "
         "deviations, correlations left out; 0: off)",
     )
-    remember_defaults(p, *CALIBRATE_ONLY)
+    remember_flags(p)
     joint_vector(
         p,
         "--gain",

@@ -65,6 +65,11 @@ _LIBRARY_OPTION = re.compile(
 )
 
 
+def _flag(key: str) -> str:
+    """The flag of library keyword ``key`` whatever its value (``contacts`` -> ``--contact``)."""
+    return _FLAG_OF.get((key, None), "--" + key.replace("_", "-"))
+
+
 def library_options_as_flags(text: str) -> str:
     """A library message as the command line says it: the keywords of :data:`LIBRARY_OPTIONS`
     as their flags (``offset=True`` -> ``--offset``, ``decimate=False`` -> ``--no-decimate``,
@@ -79,7 +84,7 @@ def library_options_as_flags(text: str) -> str:
             return special
         if truth == "False":  # no flag says it
             return m.group(0)
-        name = _FLAG_OF.get((key, None), "--" + key.replace("_", "-"))
+        name = _flag(key)
         if word is not None:
             return f"{name} {word}" + ("" if other is None else f" or {other}")
         return name if number is None else f"{name} {number}"
@@ -94,4 +99,4 @@ def argument_as_flag(text: str) -> str:
     key, sep, rest = text.partition(" ")
     if not sep or key not in LIBRARY_OPTIONS:
         return text
-    return _FLAG_OF.get((key, None), "--" + key.replace("_", "-")) + sep + rest
+    return _flag(key) + sep + rest

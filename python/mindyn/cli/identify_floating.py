@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 
-from .args import UsageError
+from .args import UsageError, given_options
 from .identify_args import FLOATING_MODELS
 
 #: The options of ``identify`` a floating-base log takes: ROBOT, LOG, --tip, --root-joint,
@@ -20,14 +20,14 @@ def _refuse_fixed_base_options(args: argparse.Namespace) -> None:
     """Refuses, naming the first, an option of ``identify`` given on the command line that a
     floating-base log does not take (joint terms, the fixed-base reading and pre-processing, the
     consistent estimate, descriptions, reports, currents, bags)."""
-    for dest, (flag, default) in args._flags.items():
-        if dest not in _APPLY and getattr(args, dest, default) != default:
-            raise UsageError(
-                f"{flag}: does not apply to a floating-base robot (its logs carry q, dq, "
-                "ddq, joint torques and contact wrenches, fitted by weighted least squares; "
-                "options: --model full|base, --contact, --wrench-frame, --validate, --json, "
-                "--ols, and --filter butter|savgol|none, --cutoff for a log without dq or ddq)"
-            )
+    given = given_options(args, *(d for d in args._flags if d not in _APPLY))
+    if given:
+        raise UsageError(
+            f"{given[0]}: does not apply to a floating-base robot (its logs carry q, dq, "
+            "ddq, joint torques and contact wrenches, fitted by weighted least squares; "
+            "options: --model full|base, --contact, --wrench-frame, --validate, --json, "
+            "--ols, and --filter butter|savgol|none, --cutoff for a log without dq or ddq)"
+        )
 
 
 def cmd_identify_floating(args: argparse.Namespace, robot) -> int:

@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from .args import add_command, given_options, remember_defaults
+from .args import add_command, given_options, remember_flags
 from .number_options import controller_period, number, seed
 from .outputs import output_file
 from .robot_options import add_drive_side, add_robot, drive_side_words, load_robot, with_drive_side
@@ -169,7 +169,7 @@ def register(sub) -> None:
         "refused)",
     )
     add_closed_loop_args(p, "computed-torque")
-    remember_defaults(p, *TRACKING_ONLY)
+    remember_flags(p)
     g = p.add_mutually_exclusive_group()
     number(
         g, "--rate", low=0, high=1e6, low_open=True, default=250.0, help="control and log rate [Hz]"
