@@ -1,7 +1,8 @@
 // The per-link terms of the Newton-Euler passes, in one place for the single-DOF dynamics
 // (dynamics.cpp) and the multibody ones (multibody.cpp): a link's wrench from its classical
-// parameters and motion, the same as a linear map of the parameters, and a link's pose in the
-// base frame. Spatial vectors (angular; linear) as in spatial.hpp; nothing allocates or throws.
+// parameters and motion, the same as a linear map of the parameters, a link's pose in the
+// base frame, and its energies as linear maps of the parameters. Spatial vectors (angular; linear)
+// as in spatial.hpp; nothing allocates or throws.
 #pragma once
 
 #include <Eigen/Core>
@@ -83,6 +84,26 @@ inline void linkMotion(bool has_parent, const Eigen::Matrix3d& R, const Eigen::V
   // a += v x vj (motion cross product, written out: no temporary)
   a.head<3>() += v.head<3>().cross(vj.head<3>());
   a.tail<3>() += v.head<3>().cross(vj.tail<3>()) + v.tail<3>().cross(vj.head<3>());
+}
+
+/// A link's kinetic and potential energy as linear maps of its ten classical parameters:
+/// K = wK . p (wK from its spatial velocity v, its frame) and P = wP . p (wP from its pose R0,
+/// p0 in the base frame and the gravity g there).
+template <class K, class Pot>
+inline void linkEnergyTerms(const Vector6d& v, const Eigen::Matrix3d& R0, const Eigen::Vector3d& p0,
+                            const Eigen::Vector3d& g, K&& wK, Pot&& wP) noexcept {
+  const Eigen::Vector3d w = v.head<3>();
+  const Eigen::Vector3d vl = v.tail<3>();
+  wK[0] = 0.5 * w.x() * w.x();
+  wK[1] = w.x() * w.y();
+  wK[2] = w.x() * w.z();
+  wK[3] = 0.5 * w.y() * w.y();
+  wK[4] = w.y() * w.z();
+  wK[5] = 0.5 * w.z() * w.z();
+  wK.template segment<3>(6) = vl.cross(w);
+  wK[9] = 0.5 * vl.squaredNorm();
+  wP.template segment<3>(6) = -(R0.transpose() * g);
+  wP[9] = -g.dot(p0);
 }
 
 }  // namespace mindyn

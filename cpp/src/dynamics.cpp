@@ -116,23 +116,12 @@ void energyRegressors(const Model& model, Data& data, const VecRef& q, const Vec
   wP.setZero();
   const Eigen::Vector3d& g = model.gravity;
   for (int k = 0; k < data.n; ++k) {
-    const Eigen::Vector3d w = data.v[k].head<3>();
-    const Eigen::Vector3d vl = data.v[k].tail<3>();
     const int c = blockStart(layout, k);
-    wK[c + 0] = 0.5 * w.x() * w.x();
-    wK[c + 1] = w.x() * w.y();
-    wK[c + 2] = w.x() * w.z();
-    wK[c + 3] = 0.5 * w.y() * w.y();
-    wK[c + 4] = w.y() * w.z();
-    wK[c + 5] = 0.5 * w.z() * w.z();
-    wK.segment<3>(c + 6) = vl.cross(w);
-    wK[c + 9] = 0.5 * vl.squaredNorm();
+    linkEnergyTerms(data.v[k], data.R0[k], data.p0[k], g, wK.segment<10>(c), wP.segment<10>(c));
     if (layout.rotor) {
       const double v = drive::motorVelocity(model, k, dq);
       wK[layout.rotorIndex(k)] = 0.5 * v * v;
     }
-    wP.segment<3>(c + 6) = -(data.R0[k].transpose() * g);
-    wP[c + 9] = -g.dot(data.p0[k]);
   }
   // An offset's work Off_k q_k, so that differences over a window are the energy model's.
   if (layout.offset) wP.segment(layout.offsetIndex(data.n, 0), data.n) = q;

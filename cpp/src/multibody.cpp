@@ -332,15 +332,8 @@ void energyRegressors(const Model& model, MultibodyData& data, const VecRef& q, 
   wP.setZero();
   const Eigen::Vector3d& g = model.gravity;
   for (int k = 0; k < data.n; ++k) {
-    const Eigen::Vector3d w = data.v[k].head<3>();
-    const Eigen::Vector3d vl = data.v[k].tail<3>();
     const int c = blockStart(k);
-    wK.segment<6>(c) << 0.5 * w.x() * w.x(), w.x() * w.y(), w.x() * w.z(), 0.5 * w.y() * w.y(),
-        w.y() * w.z(), 0.5 * w.z() * w.z();
-    wK.segment<3>(c + 6) = vl.cross(w);
-    wK[c + 9] = 0.5 * vl.squaredNorm();
-    wP.segment<3>(c + 6) = -(data.R0[k].transpose() * g);
-    wP[c + 9] = -g.dot(data.p0[k]);
+    linkEnergyTerms(data.v[k], data.R0[k], data.p0[k], g, wK.segment<10>(c), wP.segment<10>(c));
   }
 }
 
