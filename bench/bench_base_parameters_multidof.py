@@ -11,7 +11,8 @@ methods: the number of base parameters (equations of motion), the median wall ti
 ``--runs`` calls (the Python API end to end: the C++ computation, its checks and the Python
 object; the formulas are not written), and the numerical method's time over each exact
 method's. The projection method runs where its limits (joints and memory estimate of the
-single-DOF expansion) admit the robot; otherwise its refusal is printed. The target on TALOS:
+model as it runs it: a floating root kept, other multi-DOF joints expanded) admit the robot;
+otherwise its refusal is printed. The target on TALOS:
 the recursive method at least 5 times faster than the numerical one.
 """
 

@@ -158,15 +158,25 @@ def _link(name: str, inertial: str | None) -> str:
 _MULTI = ("revolute", "prismatic", "spherical", "universal", "cylindrical", "planar", "floating")
 
 
-def random_multidof_tree_yaml(path: Path, n: int = 8, seed: int = 0, kinds=_MULTI) -> Path:
+def random_multidof_tree_yaml(
+    path: Path,
+    n: int = 8,
+    seed: int = 0,
+    kinds=_MULTI,
+    *,
+    first: str | None = None,
+    serial: bool = False,
+) -> Path:
     """Writes a random tree of ``n`` joints of the given ``kinds`` (drawn with replacement, each
     kind at least once when ``n`` allows) as a modified-DH YAML description to ``path``: every
-    joint hangs from a random earlier link (``parent``, depth-first order), alpha, d, theta, r
-    random, inertial
-    values physically consistent. Returns the path."""
+    joint hangs from a random earlier link (``parent``, depth-first order), or from the one
+    before with ``serial``; ``first`` sets the kind of the first joint, which hangs from the
+    base; alpha, d, theta, r random, inertial values physically consistent. Returns the path."""
     rng = np.random.default_rng(seed)
     drawn = list(kinds)[:n] + [str(rng.choice(kinds)) for _ in range(n - min(n, len(kinds)))]
     rng.shuffle(drawn)
+    if first is not None:
+        drawn[0] = first
     joints, parents = [], []
     for k, kind in enumerate(drawn):
         # depth-first order (Pinocchio's crba needs each subtree's velocities contiguous): the
@@ -174,7 +184,7 @@ def random_multidof_tree_yaml(path: Path, n: int = 8, seed: int = 0, kinds=_MULT
         chain = [k]
         while chain[-1] > 0:
             chain.append(parents[chain[-1] - 1])
-        parents.append(int(rng.choice(chain)))
+        parents.append(k if serial else int(rng.choice(chain)))
         mass = float(rng.uniform(0.3, 4.0))
         inertia = com_inertia(rng, mass, 0.2)
         joints.append(

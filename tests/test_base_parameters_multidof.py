@@ -6,8 +6,8 @@ the numerical method; their base sets against Pinocchio's rnea (W_b (Y pi) = rne
 random pi); the known floating-base results (the floating body's ten parameters and the total
 mass identifiable) against the same regressors.
 
-One robot per test: floating TALOS by the projection method takes several seconds and is
-compared in bench/bench_base_parameters_multidof.py instead."""
+The projection method takes a floating root as it is (not expanded); TALOS and G1 on a
+free-flyer by it take 2 and 4 s (bench/bench_base_parameters_multidof.py times the methods)."""
 
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ import pinocchio as pin
 import pytest
 from conftest import assert_close
 from mindyn import _core
+from mindyn.base import AUTO_PROJECTION_TERMS, choose_method
 from random_tree import random_multidof_tree_yaml
 from test_multibody import (
     FLOATING,
@@ -96,22 +97,16 @@ def test_quadrupeds_and_a_planar_base_by_every_method(name):
     check_methods(robot, model, None, EXACT, states=8)
 
 
-def test_talos_with_a_free_flyer_by_the_recursive_method():
-    """TALOS on a free-flyer (38 joints in the expansion): the recursive method's count is
-    Pinocchio's rank (the projection method's, 7 s, is in the benchmark)."""
-    robot, model = urdf_pair("talos")
-    assert _core.projection_refusal(robot._m) is None  # it runs, over the time of a test
-    check_methods(robot, model, None, ("recursive",), states=12)
-
-
-def test_g1_with_a_free_flyer_by_the_recursive_method():
-    """G1 on a free-flyer: the recursive method's count is Pinocchio's rank; the projection
-    method's memory estimate for its expansion is over the budget, and it says so."""
-    robot, model = urdf_pair("g1")
-    check_methods(robot, model, None, ("recursive",), states=12)
-    why = _core.projection_refusal(robot._m)
-    assert why.startswith("the projection method would need up to") and "over its budget" in why
-    assert "each multi-DOF joint counted as its chain of 35 single-DOF joints" in why
+@pytest.mark.parametrize("name", ["talos", "g1"])
+def test_humanoids_with_a_free_flyer_by_every_method(name):
+    """TALOS and G1 on a free-flyer (33 and 30 joints): projection, recursive and numerical
+    counts equal Pinocchio's rank, and the exact sets reproduce rnea. The projection method
+    takes the floating root natively (its six velocities and the gravity direction in its
+    frame); run as the chain of six single-DOF joints, G1 needed over 21 GiB."""
+    robot, model = urdf_pair(name)
+    cost = _core.projection_cost(robot._m)
+    assert cost["bytes"] < 0.75 * cost["budget"], cost
+    check_methods(robot, model, None, EXACT, states=12)
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -122,6 +117,38 @@ def test_random_multidof_trees_by_every_method(tmp_path, seed):
     assert {"spherical", "universal", "cylindrical"} <= set(robot.joint_types)
     model, bodies = geometry_pair(robot)
     check_methods(robot, model, bodies, EXACT, states=12, seed=seed)
+
+
+@pytest.mark.parametrize("serial", [False, True])
+@pytest.mark.parametrize("seed", range(2))
+def test_random_floating_roots_by_every_method(tmp_path, seed, serial):
+    """A free-flyer hanging from the world (the projection method's native floating root),
+    under it random trees or chains of every other kind, with another free-flyer below it (run
+    as its chain of single-DOF joints): counts, Lagrangian and energy sets equal the numerical
+    method's and Pinocchio's rank; the exact sets agree and reproduce rnea."""
+    robot = mindyn.load(
+        random_multidof_tree_yaml(
+            tmp_path / "tree.yaml", n=6, seed=10 + seed, first="floating", serial=serial
+        )
+    )
+    assert robot.joint_types[0] == "floating" and robot.joint_types.count("floating") >= 1
+    model, bodies = geometry_pair(robot)
+    check_methods(robot, model, bodies, EXACT, states=12, seed=seed)
+
+
+@pytest.mark.parametrize("name", ["solo12", "tiago", "talos"])
+def test_the_projection_cost_bounds_what_it_forms_and_chooses_the_default(name):
+    """projection_cost estimates the model the projection method runs (a floating root kept,
+    other pairs expanded): an upper bound of the terms and rows it forms; the default method
+    follows it, with the same base set."""
+    robot, _ = urdf_pair(name)
+    cost = _core.projection_cost(robot._m)
+    bp = mindyn.base_parameters(robot, method="projection")
+    assert bp.terms_formed <= cost["terms"], (bp.terms_formed, cost)
+    assert bp.basis_rows <= cost["rows"], (bp.basis_rows, cost)
+    method, _ = choose_method(robot)
+    assert (method == "recursive") == (cost["terms"] > AUTO_PROJECTION_TERMS)
+    assert mindyn.base_parameters(robot).names == bp.names
 
 
 @pytest.mark.parametrize("method", EXACT)
@@ -146,18 +173,26 @@ def test_a_floating_base_makes_the_root_body_and_the_total_mass_identifiable(met
 
 
 def test_the_default_method_follows_the_single_dof_rule():
-    """Without a method: the projection method where none of its limits refuses the expansion
-    (Solo12), else the recursive method, with the projection method's reason (G1: its memory
-    estimate), as on a single-DOF robot."""
+    """Without a method: the projection method where none of its limits refuses the model and
+    its cost estimate is under AUTO_PROJECTION_TERMS, saying how the pairs were taken (Solo12:
+    the floating root as it is; TIAGo: the planar root expanded), else the recursive method,
+    with the projection method's reason (G1: the terms it would form), as on a single-DOF
+    robot."""
     solo, _ = urdf_pair("solo12")
     bp = mindyn.base_parameters(solo)
     assert bp.method == "projection" and bp.method_reason.startswith("the default (exact")
     expanded = "each multi-DOF joint taken as its chain of single-DOF joints"
-    assert expanded in bp.method_reason
+    assert "the floating root taken as it is" in bp.method_reason
+    assert expanded not in bp.method_reason
+    tiago, _ = urdf_pair("tiago")
+    method, reason = choose_method(tiago)
+    assert method == "projection" and expanded in reason
     g1, _ = urdf_pair("g1")
-    method, reason = mindyn.base.choose_method(g1)
+    assert _core.projection_refusal(g1._m) is None
+    method, reason = choose_method(g1)
+    assert _core.projection_cost(g1._m)["terms"] > AUTO_PROJECTION_TERMS
     assert method == "recursive"
-    assert reason.startswith(_core.projection_refusal(g1._m))
+    assert reason.startswith("the projection method would form up to")
     assert "the recursive method is exact and gives the same base set" in reason
     assert expanded in reason
     # a single-DOF robot's reason does not mention it
@@ -171,3 +206,60 @@ def test_rotor_inertia_friction_and_offsets_stay_refused_on_multidof_joints():
             mindyn.base_parameters(robot, method=method, rotor=True)
         with pytest.raises(mindyn.ModelError, match="torque offsets are defined for revolute"):
             mindyn.base_parameters(robot, method=method, offset=True)
+
+
+def test_a_floating_body_s_lagrangian_in_the_projection_basis(tmp_path):
+    """A free body hanging from the world, in the projection method's own basis
+    (influence_coordinates, its floating root taken as it is): sum_r Z[r] pi * f_r, the basis
+    functions evaluated from their names at a random twist v, gravity direction u = R^T g / |g|
+    and height h = g . p / |g|, equals the closed form L = 1/2 m |v_o|^2 + m v_o . (w x c)
+    + 1/2 w^T I_o w + |g| (m h + u . m c)."""
+    import yaml
+
+    rng = np.random.default_rng(3)
+    inertia = {"xx": 0.3, "xy": 0.02, "xz": -0.01, "yy": 0.25, "yz": 0.03, "zz": 0.2}
+    doc = {
+        "name": "body",
+        "convention": "mdh",
+        "joints": [
+            {
+                "name": "free",
+                "type": "floating",
+                "parent": 0,
+                "alpha": 0.0,
+                "d": 0.0,
+                "theta": 0.0,
+                "r": 0.0,
+                "inertial": {"mass": 2.5, "com": [0.1, -0.2, 0.05], "inertia": inertia},
+            }
+        ],
+    }
+    path = tmp_path / "body.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    robot = mindyn.load(path)
+    Z, basis = _core.influence_coordinates(robot._m)
+    # the non-zero rows: the six squares, the three products of w, the six of v_o and w off
+    # the diagonal (v_o . (w x c)); u and h
+    assert len(basis) == 6 + 3 + 6 + 4, basis
+    xx, xy, xz, yy, yz, zz, mx, my, mz, m = robot.params
+    Io = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    mc = np.array([mx, my, mz])
+    g = np.linalg.norm(robot.gravity)
+    for _ in range(5):
+        w, vo = rng.normal(size=3), rng.normal(size=3)
+        u = rng.normal(size=3)
+        u /= np.linalg.norm(u)
+        h = rng.normal()
+        values = dict(zip(("vx1", "vy1", "vz1", "wx1", "wy1", "wz1"), (*vo, *w), strict=True))
+        values.update({"ux1": u[0], "uy1": u[1], "uz1": u[2], "h1": h})
+
+        def f(name: str) -> float:
+            out = 1.0
+            for factor in name.split("*"):
+                base, _, power = factor.partition("^")
+                out *= (float(base) if base[0].isdigit() else values[base]) ** int(power or 1)
+            return out
+
+        lagrangian = sum(Z[r] @ robot.params * f(name) for r, name in enumerate(basis))
+        closed = 0.5 * m * vo @ vo + vo @ np.cross(w, mc) + 0.5 * w @ Io @ w + g * (m * h + u @ mc)
+        assert abs(lagrangian - closed) <= 1e-12 * (abs(closed) + 1), (lagrangian, closed)

@@ -964,10 +964,13 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
   const Model& exact_model = length != 1.0 ? unit_model : model;
   // A model with multi-DOF joints: the exact methods run on its single-DOF expansion (each pair
   // a chain of single-DOF joints through massless links, expandToSingleDof), whose coordinates
-  // on the real links' columns span the real model's (docs/base-parameters.md).
+  // on the real links' columns span the real model's (docs/base-parameters.md). The projection
+  // method keeps a floating root as it is: its recursion takes the free body's twist and
+  // gravity direction natively.
   const bool expand = !model.singleDof() && options.method != BaseMethod::Numerical;
   const SingleDofExpansion expansion =
-      expand ? expandToSingleDof(exact_model) : SingleDofExpansion{};
+      expand ? expandToSingleDof(exact_model, options.method == BaseMethod::Projection)
+             : SingleDofExpansion{};
   const Model& kernel = expand ? expansion.model : exact_model;
   Eigen::SparseMatrix<double> real;  // the real links' columns of the expansion's
   if (expand) {

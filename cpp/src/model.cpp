@@ -86,7 +86,7 @@ void requireSingleDof(const Model& model, const std::string& what) {
                        "parameters are available)");
 }
 
-SingleDofExpansion expandToSingleDof(const Model& model) {
+SingleDofExpansion expandToSingleDof(const Model& model, bool keep_free_flyer_roots) {
   model.validate();  // sizes (inertial, link names, parents) are used below
   SingleDofExpansion out;
   const int n = model.nq();
@@ -129,7 +129,10 @@ SingleDofExpansion expandToSingleDof(const Model& model) {
         factors = {{P, x}, {P, y}, {R, z}};
         break;
       case JointType::FreeFlyer:
-        factors = {{P, x}, {P, y}, {P, z}, {R, z}, {R, y}, {R, x}};
+        if (keep_free_flyer_roots && model.parent(k) < 0)
+          factors = {{JointType::FreeFlyer, j.axis}};
+        else
+          factors = {{P, x}, {P, y}, {P, z}, {R, z}, {R, y}, {R, x}};
         break;
     }
     const int f = static_cast<int>(factors.size());

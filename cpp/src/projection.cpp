@@ -31,6 +31,39 @@ static_assert(kProjectionMaxParameters % 64 == 0 && kProjectionMaxParameters >= 
 inline int pairIndex(int i, int j) {  // 1-based, j <= i
   return i * (i - 1) / 2 + j;
 }
+// A free-flyer joint whose parent is the world: the projection method takes it natively (its
+// stage is formed from the base twist and the gravity direction in base axes, below).
+inline bool isFloatingRoot(const Model& model, int k) {
+  return model.joints[static_cast<std::size_t>(k)].type == JointType::FreeFlyer &&
+         model.parent(k) < 0;
+}
+bool hasFloatingRoot(const Model& model) {
+  for (int k = 0; k < model.nq(); ++k)
+    if (isFloatingRoot(model, k)) return true;
+  return false;
+}
+// Every joint is revolute, prismatic or a floating root: the recursion takes the model as it is.
+bool recursionTakes(const Model& model) {
+  for (int k = 0; k < model.nq(); ++k)
+    if (!model.joints[static_cast<std::size_t>(k)].singleDof() && !isFloatingRoot(model, k))
+      return false;
+  return true;
+}
+// 1-based index of each joint's first velocity (Pinocchio's v): the velocities the basis
+// functions' products dq_i dq_j number.
+std::vector<int> velocityIndex(const Model& model) {
+  std::vector<int> v(static_cast<std::size_t>(model.nq()));
+  int i = 1;
+  for (int k = 0; k < model.nq(); ++k) {
+    v[static_cast<std::size_t>(k)] = i;
+    i += model.joints[static_cast<std::size_t>(k)].nv();
+  }
+  return v;
+}
+// The 1-based velocity index of component a (0..5, angular first as mindyn's twists) of a
+// free-flyer whose first velocity is v0: Pinocchio's v is linear first.
+inline int floatingVelocity(int v0, int a) { return v0 + (a < 3 ? a + 3 : a - 3); }
+
 inline std::uint64_t withJoint(std::uint64_t key, int joint, int l) {  // joint 0-based, l 1-based
   return key | (static_cast<std::uint64_t>(l - 1) << (kL0Bits + kJointBits * joint));
 }
@@ -56,7 +89,7 @@ KeyLayout keyLayout(const Model& model) {
     kl.shift[static_cast<std::size_t>(k)] = kL0Bits + kJointBits * pos[static_cast<std::size_t>(k)];
     kl.longest = std::max(kl.longest, pos[static_cast<std::size_t>(k)] + 1);
   }
-  if (model.isSerial()) {
+  if (model.isSerial() && !hasFloatingRoot(model)) {  // a floating root: a tree's keys
     kl.fits = n <= kMaxJoints;
     return kl;
   }
@@ -398,7 +431,7 @@ struct QTerm {
   Sym6 Q;
 };
 struct VTerm {
-  int i;              // 1-based joint whose rate multiplies this term
+  int i;              // 1-based velocity (Pinocchio's v) that multiplies this term
   std::uint64_t key;  // joint indices only
   Vector6d x;
 };
@@ -437,7 +470,7 @@ void alignedFrames(const Model& model, std::vector<Eigen::Isometry3d>& pre,
   for (int k = 0; k < n; ++k) {
     const Joint& j = model.joints[k];
     Eigen::Isometry3d C = Eigen::Isometry3d::Identity();
-    C.linear() = alignZ(j.axis);
+    if (j.singleDof()) C.linear() = alignZ(j.axis);  // a free-flyer's twist: in its moved frame
     pre[k] = j.pre * C;
     post[k] = C.inverse() * j.post;
   }
@@ -558,17 +591,34 @@ BasisFunction unpackBasis(std::uint64_t key, int n) {
 std::string BasisFunction::toString(const Model& model) const {
   std::string s;
   auto add = [&s](const std::string& f) { s += (s.empty() ? "" : "*") + f; };
+  // The name of 1-based velocity i: dqK of joint K, vxK .. wzK of a floating root K.
+  const std::vector<int> first = velocityIndex(model);
+  auto velocity = [&](int i) {
+    int k = 0;
+    while (k + 1 < model.nq() && first[static_cast<std::size_t>(k + 1)] <= i) ++k;
+    const std::string K = std::to_string(k + 1);
+    if (!model.joints[static_cast<std::size_t>(k)].singleDof()) {
+      static const char* c[] = {"vx", "vy", "vz", "wx", "wy", "wz"};
+      return c[i - first[static_cast<std::size_t>(k)]] + K;
+    }
+    return "dq" + K;
+  };
   if (l0 > 0) {
     const int i = static_cast<int>(std::floor((1 + std::sqrt(8.0 * l0 - 7)) / 2));
     const int j = l0 - i * (i - 1) / 2;
     if (i == j)
-      add("0.5*dq" + std::to_string(i) + "^2");
+      add("0.5*" + velocity(i) + "^2");
     else
-      add("dq" + std::to_string(j) + "*dq" + std::to_string(i));
+      add(velocity(j) + "*" + velocity(i));
   }
   for (size_t k = 0; k < l.size(); ++k) {
     const std::string q = "q" + std::to_string(k + 1);
-    if (model.joints[k].type == JointType::Revolute) {
+    if (model.joints[k].type == JointType::FreeFlyer) {
+      // ux, uy, uz: the direction of gravity in the floating body's moved frame, R^T g / |g|; h:
+      // the position of its origin along gravity, g . p / |g|
+      static const char* f[] = {"", "ux", "uy", "uz", "h"};
+      if (l[k] > 1) add(f[l[k] - 1] + std::to_string(k + 1));
+    } else if (model.joints[k].type == JointType::Revolute) {
       static const char* f[] = {"", "cos(%)", "sin(%)", "cos(2%)", "sin(2%)"};
       if (l[k] > 1) {
         std::string t = f[l[k] - 1];
@@ -639,6 +689,8 @@ Eigen::MatrixXd InfluenceCoordinates::dense() const {
 
 ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
   model.validate();
+  if (!recursionTakes(model))  // what the recursion runs on (see projectionRefusal)
+    return projectionCost(expandToSingleDof(model, true).model, layout);
   const int n = model.nq();
   std::vector<Eigen::Isometry3d> pre, post;
   alignedFrames(model, pre, post);
@@ -685,9 +737,14 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
     const int parent = model.parent(k);
     PatternStage& in = stage[static_cast<std::size_t>(parent + 1)];
     PatternStage& out = stage[static_cast<std::size_t>(k + 1)];
-    auto &Q = in.Q, &Qnext = out.Q;
-    auto &V = in.V, &Vnext = out.V, &R = in.R, &Rnext = out.R;
-    const double held = in.held;
+    // A floating root starts from nothing of the world's stage (its terms: below).
+    const PatternStage none;
+    const PatternStage& from = isFloatingRoot(model, k) ? none : in;
+    const auto& Q = from.Q;
+    const auto &V = from.V, &R = from.R;
+    auto& Qnext = out.Q;
+    auto &Vnext = out.V, &Rnext = out.R;
+    const double held = from.held;
     const Eigen::Isometry3d prevPost = parent < 0 ? Eigen::Isometry3d::Identity() : post[parent];
     const Matrix6d Cd = jointMap(prevPost * pre[k]);
     bool C[6][6];
@@ -706,8 +763,9 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
     }
     double formed = 0, vterms = 0;
     for (const auto& e : V) vterms += e.second;
+    const bool floating = isFloatingRoot(model, k);
     // the recursion reserves the next stage at its bound
-    out.reserved = last ? 0.0 : held * (revolute ? 5 : 3) + vterms * 3 + 1;
+    out.reserved = last ? 0.0 : floating ? 21.0 : held * (revolute ? 5 : 3) + vterms * 3 + 1;
     stages = std::max(stages, waiting - in.reserved + held + out.reserved);
     auto add = [&](int kind, Mask m, double count, bool newRow) {
       formed += count;
@@ -718,6 +776,18 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
       if (newRow) cost.rows += count;
       if (!last) Qnext[{kind, m}] += count;
     };
+    if (floating) {  // the base twist's products, the twist and the gravity terms (see below)
+      for (int a = 0; a < 6; ++a) {
+        for (int b = a; b < 6; ++b) add(kAny, 1u << kSym.idx[a][b], 1, true);
+        Vnext[1u << a] += 1;
+      }
+      if (model.gravity.squaredNorm() > 0.0)
+        for (int a = 0; a < 4; ++a) {
+          Rnext[1u << a] += 1;
+          cost.rows += 1;
+        }
+      for (const auto& e : Qnext) out.held += e.second;
+    }
     for (const auto& [km, count] : Q) {
       Mask where = 0;
       for (int i = 0; i < kinds[km.first].count; ++i) where |= 1u << kinds[km.first].idx[i];
@@ -741,7 +811,7 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
         }
       }
     }
-    Vnext.clear();
+    if (!floating) Vnext.clear();
     for (const auto& [x, count] : V) {
       const unsigned y = applyPattern<6>(Cd, x, false);
       if (y == 0) continue;
@@ -764,9 +834,11 @@ ProjectionCost projectionCost(const Model& model, ParameterLayout layout) {
         add(revolute ? kCross2 : kCross5, cross, count, true);
       }
     }
-    Vnext[1u << s] += 1;
-    add(revolute ? kDiag2 : kDiag5, 1u << kSym.idx[s][s], 1, true);
-    for (const auto& e : Qnext) out.held += e.second;
+    if (!floating) {
+      Vnext[1u << s] += 1;
+      add(revolute ? kDiag2 : kDiag5, 1u << kSym.idx[s][s], 1, true);
+      for (const auto& e : Qnext) out.held += e.second;
+    }
 
     const Eigen::Matrix4d Pre = (prevPost * pre[k]).matrix();
     for (const auto& [r, count] : R) {
@@ -823,24 +895,33 @@ ProjectionLimits projectionLimits() {
 
 std::string projectionRefusal(const Model& model, ParameterLayout layout, double budget) {
   model.validate();
-  if (!model.singleDof()) {
-    // The method runs on the single-DOF expansion (expandToSingleDof): its limits apply there.
-    const Model expanded = expandToSingleDof(model).model;
+  if (!recursionTakes(model)) {
+    // The method runs on the single-DOF expansion (expandToSingleDof), a floating root kept as
+    // it is: its limits apply there.
+    const Model expanded = expandToSingleDof(model, true).model;
     std::string why = projectionRefusal(expanded, layout, budget);
     if (!why.empty())
       why += " (model '" + model.name + "' with each multi-DOF joint counted as its chain of " +
              std::to_string(expanded.nq()) + " single-DOF joints in all)";
     return why;
   }
-  const int n = model.nq(), P = layout.size(n);
+  const int n = model.nq(), P = layout.size(n), nv = model.velocitySize();
   const KeyLayout kl = keyLayout(model);
+  const bool floating = hasFloatingRoot(model);
   const std::string has = ", the model has ";
-  if (model.isSerial() && !kl.fits)
+  if (floating && (layout.rotor || layout.friction))
+    return "the projection method takes rotor inertia and friction on revolute and prismatic "
+           "joints only; model '" +
+           model.name + "' has a floating root";
+  if (model.isSerial() && !floating && !kl.fits)
     return "the projection method handles at most " + std::to_string(kMaxJoints) + " joints" + has +
            std::to_string(n);
-  if (!model.isSerial() && n * (n + 1) / 2 >= (1 << kL0Bits))
+  if ((!model.isSerial() || floating) && nv * (nv + 1) / 2 >= (1 << kL0Bits))
     return "the projection method handles at most " + std::to_string(kMaxTreeJoints) +
-           " joints on a tree" + has + std::to_string(n);
+           " joints on a tree" +
+           (floating ? " (a floating root counted as its six velocities)" + has +
+                           std::to_string(nv) + " velocities"
+                     : has + std::to_string(n));
   if (!kl.fits)
     return "the projection method handles root paths of up to " +
            std::to_string(projectionLimits().root_path_joints) +
@@ -858,9 +939,10 @@ std::string projectionRefusal(const Model& model, ParameterLayout layout, double
 
 InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout layout,
                                           double budget) {
-  requireSingleDof(model, "the projection method");
+  if (!recursionTakes(model)) requireSingleDof(model, "the projection method");
   model.validate();
   const int n = model.nq();
+  const std::vector<int> vel = velocityIndex(model);
   const KeyLayout kl = keyLayout(model);
   const bool tree = kl.end_mask != 0;
   {
@@ -956,7 +1038,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
   InfluenceCoordinates out;
   out.layout = layout;
   out.n = n;
-  if (!model.isSerial()) {
+  if (tree) {  // a tree, or a chain under a floating root: keys with their deepest joint
     out.parents.resize(static_cast<std::size_t>(n));
     for (int k = 0; k < n; ++k) out.parents[static_cast<std::size_t>(k)] = model.parent(k);
     out.end_shift = kl.end_shift;
@@ -1023,6 +1105,16 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
       // Kinetic part: Q_k = Ad Q_parent(k) Ad^T + cross terms + 2 S S^T dq_k^2.
       Qnext.clear();
       if (!last) Qnext.reserve(most);
+      // A floating root starts from nothing of the world's stage: its terms are formed below.
+      const bool floating = isFloatingRoot(model, k);
+      std::vector<QTerm> worldQ;
+      std::vector<VTerm> worldV;
+      std::vector<RTerm> worldR;
+      if (floating) {
+        worldQ.swap(Q);
+        worldV.swap(V);
+        worldR.swap(R);
+      }
       for (const QTerm& t : Q) {
         Sym6 B;
         C.congruence(t.Q, kinds[t.kind], B);
@@ -1068,7 +1160,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
           const std::uint64_t key = through(t.key, l);
           Vnext.push_back({t.i, key, parts[l]});
           // x S^T + S x^T
-          QTerm cross{withL0(kTree ? (key & others) | end : key, pairIndex(k + 1, t.i)),
+          QTerm cross{withL0(kTree ? (key & others) | end : key,
+                             pairIndex(vel[static_cast<std::size_t>(k)], t.i)),
                       -1,
                       revolute ? kCross2 : kCross5,
                       0.0,
@@ -1081,11 +1174,14 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
           add(cross);
         }
       }
-      Vnext.push_back({k + 1, 0, S});
-      QTerm diagonal{withL0(end, pairIndex(k + 1, k + 1)), -1, revolute ? kDiag2 : kDiag5, 2.0, {}};
+      const int vk = vel[static_cast<std::size_t>(k)];
+      QTerm diagonal{withL0(end, pairIndex(vk, vk)), -1, revolute ? kDiag2 : kDiag5, 2.0, {}};
       diagonal.Q[kSym.idx[s][s]] = 2.0;
-      if (layout.rotor) rowOf(diagonal);  // Ia_k's coordinate is on this row
-      add(diagonal);
+      if (!floating) {
+        Vnext.push_back({vk, 0, S});
+        if (layout.rotor) rowOf(diagonal);  // Ia_k's coordinate is on this row
+        add(diagonal);
+      }
 
       // Potential part: g~^T T_k.
       Rnext.clear();
@@ -1102,6 +1198,34 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
           if (prune(parts[l], ptol))
             Rnext.push_back({through(t.key, l), l == 0 ? t.row : -1, parts[l]});
       }
+      if (floating) {
+        // The floating body's twist v (angular; linear, in its moved frame): six independent
+        // velocities, T = 1/2 v^T M v, the products v_a v_b on link k. Its potential,
+        // g^T T_k = |g| (u^T, h): u = R^T g / |g| (on the sphere, so its three components are
+        // independent functions) and h = g . p / |g|, four functions of its configuration.
+        for (int a = 0; a < 6; ++a)
+          for (int b = a; b < 6; ++b) {
+            const int i = floatingVelocity(vk, a), j = floatingVelocity(vk, b);
+            QTerm t{withL0(end, pairIndex(std::max(i, j), std::min(i, j))),
+                    -1,
+                    kAny,
+                    a == b ? 2.0 : 1.0,
+                    {}};
+            t.Q[kSym.idx[a][b]] = t.scale;
+            add(t);
+          }
+        for (int a = 0; a < 6; ++a)
+          Vnext.push_back({floatingVelocity(vk, a), 0, Vector6d::Unit(a)});
+        if (const double g = model.gravity.norm(); g > 0.0)
+          for (int a = 0; a < 4; ++a) {
+            Row4d r = Row4d::Zero();
+            r[a] = g;
+            Rnext.push_back({end | (static_cast<std::uint64_t>(a + 1) << shift), -1, r});
+          }
+        Q.swap(worldQ);
+        V.swap(worldV);
+        R.swap(worldR);
+      }
       out.terms_formed += formed + static_cast<int>(Rnext.size());
 
       // Project link k's potential parameters.
@@ -1111,7 +1235,7 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
         for (int a = 0; a < 4; ++a)
           if (std::abs(r[a]) > kNoise * scale) entries.push_back({rowOf(t), c0 + 6 + a, r[a]});
       }
-      if (layout.rotor && !model.motorSide())  // on 0.5 dq_k^2
+      if (layout.rotor && !model.motorSide() && !floating)  // on 0.5 dq_k^2
         entries.push_back({diagonal.row, layout.rotorIndex(k), 1.0});
       if (!last) {
         Stage& next = stage[static_cast<std::size_t>(k + 1)];
@@ -1162,7 +1286,8 @@ InfluenceCoordinates influenceCoordinates(const Model& model, ParameterLayout la
     const Eigen::MatrixXd& T = model.transmission.T;
     std::map<std::uint64_t, int> wanted;  // key -> row (-1: not found yet)
     auto keyOf = [&](int a, int b) {      // 0-based joints, a >= b
-      std::uint64_t key = static_cast<std::uint64_t>(pairIndex(a + 1, b + 1));
+      std::uint64_t key = static_cast<std::uint64_t>(
+          pairIndex(vel[static_cast<std::size_t>(a)], vel[static_cast<std::size_t>(b)]));
       if (tree) key |= kl.end_mask & (static_cast<std::uint64_t>(a + 1) << kl.end_shift);
       return key;
     };

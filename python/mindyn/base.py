@@ -26,14 +26,28 @@ DEFAULT_TOLERANCE = 1e-9
 MAX_TOLERANCE = 0.01
 
 
+#: Terms the projection method may form before the default prefers the recursive method (the
+#: same base set, exact): about a second of the recursion (a floating humanoid forms 2e7 to 8e7
+#: terms in 2 to 4 s, where the recursive method takes milliseconds).
+AUTO_PROJECTION_TERMS = 1e7
+
+
 def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) -> tuple[str, str]:
     """The method :func:`base_parameters` runs when none is given, and why: the projection
     method, or the recursive method (exact, the same base set) when any limit of the projection
     method -- joints, parameters, its memory estimate, all checked by the C++ core before
-    computing -- refuses the robot with these joint terms, or the numerical method when the
-    recursive one refuses it too (rotor inertia of motors that couple joints in a way it
-    cannot decide; the reason is given)."""
+    computing -- refuses the robot with these joint terms or when the projection method would
+    form more than :data:`AUTO_PROJECTION_TERMS` terms (its cost estimate, counted before
+    computing), or the numerical method when the recursive one refuses it too (rotor inertia
+    of motors that couple joints in a way it cannot decide; the reason is given)."""
     refused = _core.projection_refusal(robot._m, rotor=bool(rotor), friction=bool(friction))
+    if not refused:
+        terms = _core.projection_cost(robot._m, rotor=bool(rotor))["terms"]
+        if terms > AUTO_PROJECTION_TERMS:
+            refused = (
+                f"the projection method would form up to {terms:.2g} terms (over "
+                f"{AUTO_PROJECTION_TERMS:.0e}, about a second; method='projection' runs it)"
+            )
     # the exact methods run on a multi-DOF robot's single-DOF expansion: said so
     pairs = "" if robot.single_dof else _EXPANDED
     if refused:
@@ -43,15 +57,27 @@ def choose_method(robot: Robot, *, rotor: bool = False, friction: bool = False) 
         return "recursive", (
             f"{refused}; the recursive method is exact and gives the same base set{pairs}"
         )
+    roots = [k for k, t in enumerate(robot.joint_types) if t == "floating" and robot.parents[k] < 0]
+    if roots:  # the projection method takes a floating root as it is
+        others = sum(not _single_dof_kind(t) for t in robot.joint_types) - len(roots)
+        pairs = _FLOATING_ROOT + (_EXPANDED.replace(", each", " and each other") if others else "")
     return "projection", (
         "the default (exact: Gaussian elimination on the exact coordinates of the Lagrangian's "
         f"coefficients in a finite basis of functions of the joints, no sampling){pairs}"
     )
 
 
+def _single_dof_kind(kind: str) -> bool:
+    return kind in ("revolute", "continuous", "prismatic")
+
+
 _EXPANDED = (
     ", each multi-DOF joint taken as its chain of single-DOF joints through massless links "
     "(the same motions of the links)"
+)
+_FLOATING_ROOT = (
+    ", the floating root taken as it is (its body's twist and the direction of gravity in its "
+    "frame)"
 )
 
 

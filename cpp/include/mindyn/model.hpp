@@ -331,6 +331,8 @@ void requireSingleDof(const Model& model, const std::string& what);
 /// and accelerations as with the pair, so the regressor and energies of the real links span the
 /// same functions. Only the link inertia is kept: no rotor inertia, friction, transmission or
 /// limits on the added joints. A model of revolute and prismatic joints comes back unchanged.
+/// With `keep_free_flyer_roots`, a free-flyer joint whose parent is the world stays as it is
+/// (the projection method takes a floating base natively: docs/base-parameters.md).
 /// Throws ModelError for a model that Model::validate refuses.
 struct SingleDofExpansion {
   Model model;
@@ -341,7 +343,7 @@ struct SingleDofExpansion {
   /// of `model`: original column c is column column[c].
   std::vector<int> column;
 };
-SingleDofExpansion expandToSingleDof(const Model& model);
+SingleDofExpansion expandToSingleDof(const Model& model, bool keep_free_flyer_roots = false);
 
 /// Throws std::invalid_argument naming the joint unless every quaternion and planar (cos, sin)
 /// pair of the configuration q (model.configSize() entries, checked) has norm 1 within 1e-6.

@@ -3,7 +3,7 @@
 //
 // Basis functions are multi-indices (l0; l1 .. ln):
 //   l0 = 0        the constant 1 (potential part);
-//   l0 = J(i, j)  = i(i-1)/2 + j, 1 <= j <= i <= n: 0.5 dq_i^2 when i == j, dq_i dq_j otherwise;
+//   l0 = J(i, j)  = i(i-1)/2 + j, 1 <= j <= i <= nv: 0.5 dq_i^2 when i == j, dq_i dq_j otherwise;
 //   lk in 1..5    1, cos q_k, sin q_k, cos 2q_k, sin 2q_k for a revolute joint k;
 //   lk in 1..3    1, q_k, q_k^2 for a prismatic joint k.
 // The coordinates are computed by a recursion over the joints on the body twists (kinetic part)
@@ -18,6 +18,14 @@
 // A model with multi-DOF joints runs as its single-DOF expansion (expandToSingleDof, model.hpp;
 // the basis functions of each pair and why the real links' columns suffice:
 // docs/base-parameters.md, "Joints of several degrees of freedom"); its joints are counted there.
+// A free-flyer hanging from the world (a floating base) is taken as it is: the body's twist v
+// (six velocities, Pinocchio's v order in the products' numbering) starts its stage, and its
+// potential is |g| times the four functions u = R^T g / |g| (three components, independent on
+// the sphere) and h = g . p / |g| of its configuration, the factor of the free-flyer in the keys
+// (lk = 2..5: ux, uy, uz, h). The kinetic energy depends on the body's configuration only
+// through v, so no chart and none of its trigonometric products enter (docs/base-parameters.md,
+// "A floating base").
+//   l0 = J(i, j) numbers velocities, not joints: i, j are 1-based indices of v.
 //
 // Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
@@ -52,7 +60,8 @@ struct InfluenceCoordinates {
   std::vector<std::uint64_t> keys;  // packed multi-index of each row
   std::vector<Entry> entries;       // the non-zero coordinates; a row's by ascending column
   int terms_formed = 0;             // kinetic + potential terms produced by the recursion
-  /// A tree's: the parent of each joint (empty for a serial chain) and where its keys keep the
+  /// A tree's (or a chain's under a floating root): the parent of each joint (empty for a
+  /// serial chain's keys) and where its keys keep the
   /// deepest joint they involve; its keys give each joint's factor at the joint's position on
   /// its root path (for a serial chain, at the joint's index, as packBasis).
   std::vector<int> parents;
