@@ -303,7 +303,7 @@ def test_base_and_info_take_a_root_joint_and_other_commands_refuse_it_in_one_lin
         [pin.computeJointTorqueRegressor(model, data, *random_state(robot, rng)) for _ in range(30)]
     )
     assert doc["n_base"] == np.linalg.matrix_rank(stack) and doc["method"] == "projection"
-    assert "chain of single-DOF joints" in doc["method_reason"]
+    assert "the floating root taken as it is" in doc["method_reason"]
     info = cli("info", urdf, "--root-joint", "floating")
     assert f"nq {robot.nq} configuration and nv {robot.nv} velocity" in info
     assert robot.nq == robot.n + 6 and "floating" in info
