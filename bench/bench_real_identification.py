@@ -44,13 +44,36 @@ held-out residuals). Every case prints each joint's validation error relative to
 torque (``validation.relative`` and its ``raw`` and ``moving`` counterparts of the JSON), e.g.
 the UR10e's joint 6 (target with ``auto``: at most 30 %).
 
+With ``--weight-grid W1,W2,...`` (implies ``--consistent``) each case is also run with
+``--prior-weight`` at each of those weights (0: no prior), and a table per case gives, per
+weight, the consistent / unconstrained validation ratio (target at most 1.1), whether every link
+mass is within a factor 3 of the description's or reported as determined by the data
+(``masses``: the links that miss it; ``raw``: the ratio against the torques as logged), and per
+link the mass over the description's with the mass's verdict (``d`` data, ``d+p`` data+prior,
+``p`` prior). Below it, the weight that each
+rule of choosing it would take from the default run's cross-validation record (its held-out
+residual per fold and candidate, so no rule looks at the validation log): ``one-SE`` (the
+default: the largest weight whose summed held-out residual is within one standard error of the
+smallest, the error from the folds' spread at the best weight), ``paired one-SE`` (the same
+with the standard error of the fold-by-fold difference from the best weight, which leaves out
+what the folds share at every weight), ``minimum`` (the smallest summed held-out residual), and
+``L-curve corner``: over the grid, the weight of largest curvature of the log of the prior's
+divergence against the log of the fit's residual (``fit_increase_noise_variances`` plus the
+unconstrained fit's own, ``rows - nb`` noise variances), derivatives by finite differences in
+the log of the weight (the grid's positive weights), and ``GCV``: the grid's weight of smallest
+generalised cross-validation score ``n |r|^2 / (n - df)^2`` (``n`` equations, ``|r|^2`` the
+fit's residual, ``df = tr(H^-1 Q)`` the effective number of parameters, ``Q`` the Hessian of
+the fit term and ``H`` that of the whole objective at the estimate), computed in this process on
+the same least-squares problem as the command (its options parsed by the command's parser).
+
 Run: ``.venv/bin/python bench/bench_real_identification.py DIR [--no-offset] [--consistent
-[--prior-weight W]] [--friction-model KIND]``.
+[--prior-weight W]] [--friction-model KIND] [--weight-grid W1,W2,...]``.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import subprocess
@@ -137,7 +160,17 @@ def main() -> int:
         choices=["coulomb", "asymmetric", "smooth", "stribeck", "dahl", "auto"],
         help="give every command this --friction-model (default: none, viscous + Coulomb)",
     )
+    ap.add_argument(
+        "--weight-grid",
+        type=lambda text: [float(w) for w in text.split(",")],
+        help="comma-separated prior weights: the consistent estimate at each (0: no prior)",
+    )
     args = ap.parse_args()
+    if args.weight_grid is not None:
+        if args.prior_weight is not None:
+            ap.error("--weight-grid: the default run chooses its weight; leave out --prior-weight")
+        args.consistent = True
+    grids = []
     cons_rows = []
     mindyn = [sys.executable, "-m", "mindyn"]
     rows = []
@@ -163,6 +196,10 @@ def main() -> int:
             t0 = time.perf_counter()
             run = subprocess.run(mindyn + cmd[1:], capture_output=True, text=True)
             wall = time.perf_counter() - t0
+            if args.weight_grid is not None and run.returncode == 0:
+                table = weight_grid(cmd, args, out)
+                gcv = gcv_weight(cmd, [w for w in args.weight_grid if w > 0])
+                grids.append((name, json.loads(out.read_text()), table, gcv))
             if run.returncode != 0:
                 msg = (run.stderr.strip().splitlines() or ["failed"])[-1]
                 print(f"  refused: {msg}")
@@ -251,7 +288,162 @@ def main() -> int:
             "consistent solve [s]; wall: the whole command [s]; min eig A: smallest mass-matrix "
             "eigenvalue over the identification data)"
         )
+    for name, doc, table, gcv in grids:
+        print()
+        print(weight_table(name, doc, table, gcv))
     return 0
+
+
+def gcv_weight(cmd, weights) -> float | None:
+    """The weight of ``weights`` of smallest generalised cross-validation score on the
+    least-squares problem of the command ``cmd`` (identified here without the consistent
+    estimate, then the consistent estimate at each weight)."""
+    import numpy as np
+    from mindyn.cli import build_parser
+    from mindyn.cli.identify import identify_options, read_logs
+    from mindyn.cli.robot_options import load_robot, with_drive_side
+    from mindyn.identification.consistent import (
+        _Layout,
+        _prior_matrices,
+        consistent_estimate,
+        description_vector,
+    )
+    from mindyn.identification.prior import BARRIER_END, PriorProblem
+    from mindyn.identification.workflow import run
+
+    if not weights:
+        return None
+    args = build_parser("identify").parse_args(cmd[1:])
+    robot = with_drive_side(load_robot(args), args)
+    options = identify_options(args, robot)
+    logs = read_logs(args, robot, options)
+    options = dataclasses.replace(options, consistent=False)
+    res = run(robot, logs, options=options).result
+    base, ls = res.base, res.reduced
+    layout = _Layout(base)
+    pi0 = description_vector(base)
+    # the consistent estimate's fit term |M pi - z|^2 / s2 (its noise variance unfloored)
+    problem = PriorProblem(
+        (ls.R * ls.norms) @ base.Y,
+        ls.z,
+        ls.rho / (ls.r - base.n),
+        layout,
+        _prior_matrices(base, layout, pi0, None),
+    )
+    scores = []
+    for w in weights:
+        pi = consistent_estimate(res, prior_weight=w).classical
+        _, H = problem.derivatives(pi, w, BARRIER_END)
+        d = np.sqrt(np.maximum(np.diag(H), 1e-300))
+        Hinv = np.linalg.pinv(H / np.outer(d, d), hermitian=True, rcond=1e-14) / np.outer(d, d)
+        df = float(np.trace(Hinv @ problem.Q))
+        rss = ls.rho / problem.s2 + problem.fit(pi)
+        scores.append(ls.r * rss / (ls.r - df) ** 2)
+    return float(weights[int(np.argmin(scores))])
+
+
+def weight_grid(cmd, args, out) -> list:
+    """The JSON of the command ``cmd`` (``--consistent`` without a weight, its output ``out``)
+    rerun with ``--prior-weight`` at each weight of ``args.weight_grid``."""
+    docs = []
+    grid_out = out.with_name(out.stem + "_grid.json")
+    cmd = [str(grid_out) if x == str(out) else x for x in cmd]
+    for w in args.weight_grid:
+        run = subprocess.run(
+            [sys.executable, "-m", "mindyn", *cmd[1:], "--prior-weight", repr(w)],
+            capture_output=True,
+            text=True,
+        )
+        if run.returncode != 0:
+            docs.append((w, (run.stderr.strip().splitlines() or ["failed"])[-1]))
+        else:
+            docs.append((w, json.loads(grid_out.read_text())))
+    return docs
+
+
+def _mass_ok(lk) -> bool:
+    m, m0 = lk["mass"], lk["description_mass"]
+    return (m0 > 0 and m0 / 3 <= m <= 3 * m0) or lk["mass_verdict"] == "data"
+
+
+def weight_table(name, doc, table, gcv=None) -> str:
+    """Per prior weight: the validation ratio, the mass target and each link's mass over the
+    description's with its verdict; then the weight each rule of choosing it takes."""
+    short = {"data": "d", "data+prior": "d+p", "prior": "p", "unknown": "?"}
+    vu = doc["validation"]["overall_relative"]
+    lines = [f"{name}: consistent estimate over the prior weight (default run's choice first)"]
+    ce = doc["consistent_estimate"]
+    rows = [("default " + f"{ce['prior_weight']:g}", doc)] + [(f"{w:g}", d) for w, d in table]
+    for label, d in rows:
+        if isinstance(d, str):
+            lines.append(f"  W {label:>14}: refused: {d}")
+            continue
+        c = d["consistent_estimate"]
+        ratio = c["validation"]["overall_relative"] / vu
+        links = c.get("links") or []
+        miss = [str(k + 1) for k, lk in enumerate(links) if not _mass_ok(lk)]
+        raw = c["validation"].get("raw"), doc["validation"].get("raw")
+        raw_ratio = raw[0]["overall_relative"] / raw[1]["overall_relative"] if all(raw) else None
+        lines.append(
+            f"  W {label:>14}: ratio {ratio:6.3f} {'ok ' if ratio <= 1.1 else 'MISSED'} (raw "
+            + ("-" if raw_ratio is None else f"{raw_ratio:.3f}")
+            + ")  masses "
+            + (("MISSED " + ",".join(miss)) if miss else ("ok" if links else "-"))
+            + "  "
+            + " ".join(
+                f"{lk['mass'] / lk['description_mass']:.2f}{short[lk['mass_verdict']]}"
+                for lk in links
+            )
+        )
+    lines.append(
+        "  (per link: mass / description's mass and its verdict: d data, d+p data+prior, p prior)"
+    )
+    ch = ce.get("prior_weight_choice")
+    rules = selection_rules(ch) if ch else {}
+    corner = l_curve_corner(doc, table)
+    if corner is not None:
+        rules["L-curve corner"] = corner
+    if gcv is not None:
+        rules["GCV"] = gcv
+    if rules:
+        lines.append("  " + ", ".join(f"{r} -> W {w:g}" for r, w in rules.items()))
+    return "\n".join(lines)
+
+
+def l_curve_corner(doc, table) -> float | None:
+    """The grid's weight of largest curvature of (log residual, log divergence) over log W."""
+    import numpy as np
+
+    pts = [(w, d["consistent_estimate"]) for w, d in table if w > 0 and not isinstance(d, str)]
+    if len(pts) < 3:
+        return None
+    own = doc["rows"] - len(doc["base_names"])  # the unconstrained fit's residual [s^2]
+    t = np.log([w for w, _ in pts])
+    x = np.log([own + c["fit_increase_noise_variances"] for _, c in pts])
+    y = np.log([c["prior_divergence"] for _, c in pts])
+    dx, dy = np.gradient(x, t), np.gradient(y, t)
+    ddx, ddy = np.gradient(dx, t), np.gradient(dy, t)
+    kappa = (dx * ddy - dy * ddx) / np.maximum(dx**2 + dy**2, 1e-300) ** 1.5
+    return float(pts[int(np.argmax(kappa))][0])
+
+
+def selection_rules(choice) -> dict:
+    """The weight each rule takes from a cross-validation record (``prior_weight_choice``)."""
+    import numpy as np
+
+    cands = np.array(choice["candidates"])
+    err = np.array(choice["held_out_per_fold"])  # folds x candidates, weakest prior first
+    total = err.sum(axis=0)
+    best = int(np.argmin(total))
+    k = err.shape[0]
+    se = float(np.std(err[:, best], ddof=1) * np.sqrt(k))
+    diff = err - err[:, [best]]
+    se_paired = np.std(diff, axis=0, ddof=1) * np.sqrt(k)
+    return {
+        "one-SE": float(cands[np.flatnonzero(total <= total[best] + se)[-1]]),
+        "paired one-SE": float(cands[np.flatnonzero(diff.sum(axis=0) <= se_paired)[-1]]),
+        "minimum": float(cands[best]),
+    }
 
 
 def link_masses(ce) -> str:

@@ -145,8 +145,24 @@ def refuse_floating_options(args: argparse.Namespace) -> None:
         )
 
 
+def read_logs(args: argparse.Namespace, robot, options):
+    """The identification and validation logs of the command line, read for the regression
+    model of ``options`` (its :class:`~mindyn.identification.options.IdentifyOptions`)."""
+    from ..identification.workflow import load_logs
+
+    return load_logs(
+        args.data,
+        robot,
+        validate=args.validate or (),
+        currents=args.currents,
+        validate_currents=args.validate_currents,
+        model=options.model,
+        options=reading_options(args),
+    )
+
+
 def cmd_identify(args: argparse.Namespace) -> int:
-    from ..identification.workflow import load_logs, run
+    from ..identification.workflow import run
 
     if args.validate_currents and not args.validate:
         raise ValueError("--validate-currents: expected --validate with the logs they belong to")
@@ -156,17 +172,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     refuse_floating_options(args)
     robot = with_drive_side(robot, args)
     _check_outputs(args, robot)
-    reading = reading_options(args)
     options = identify_options(args, robot)
-    logs = load_logs(
-        args.data,
-        robot,
-        validate=args.validate or (),
-        currents=args.currents,
-        validate_currents=args.validate_currents,
-        model=options.model,
-        options=reading,
-    )
+    logs = read_logs(args, robot, options)
     report = run(robot, logs, options=options, tip=args.tip, progress=_progress())
     doc = report.to_dict()
     text = library_options_as_flags(report.format())  # the report names keywords
