@@ -281,6 +281,7 @@ class BaseParameters:
         """Classical parameters that do not appear in the equations of motion at all."""
         return self.sets["eom"]["no_effect"]
 
+    @_args.finite_results("params")
     def values(self, params) -> np.ndarray:
         """``p_b = Y @ params``; ``params`` in the classical layout of this set, shape (P,).
         With offsets, a vector without them (shape (P - n_joints,)) is accepted too: its
@@ -292,6 +293,7 @@ class BaseParameters:
             p = np.concatenate([_args.array(p, "params", (links,)), np.zeros(self._offsets)])
         return self._b.values(_args.array(p, "params", (P,)))
 
+    @_args.finite_results("base")
     def embed(self, base) -> np.ndarray:
         """A classical vector with ``base`` at the pivot positions and zeros elsewhere, so that
         ``values(embed(p_b)) == p_b`` and any inverse dynamics linear in the classical
@@ -303,6 +305,7 @@ class BaseParameters:
         """Entries of the classical vector's joint block (the torque offsets): n or 0."""
         return self.robot.n if self.offset else 0
 
+    @_args.finite_results("q", "dq", "ddq")
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
         ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row. Multi-DOF
@@ -313,6 +316,7 @@ class BaseParameters:
         q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
         return self._b.regressor(q, dq, ddq)
 
+    @_args.finite_results("q", "dq")
     def energy_regressor(self, q, dq) -> np.ndarray:
         """Base total-energy regressor ``w_H,b``, shape (n,) or (m, n), over the
         equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant; an offset's column is
@@ -322,6 +326,7 @@ class BaseParameters:
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.energy_regressor(q, dq)
 
+    @_args.finite_results("q", "dq")
     def momentum_regressors(self, q, dq):
         """Base momentum regressors ``(W_p,b, W_l,b)``, shape (n_joints, n) or (m, n_joints, n)
         each, over the equations-of-motion set: ``p = A(q) dq = W_p,b @ p_b`` and

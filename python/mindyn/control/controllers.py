@@ -66,6 +66,7 @@ ZCR07S_STUDY_GAINS = {
 # ---------------------------------------------------------------------------------------------
 # Regressors
 # ---------------------------------------------------------------------------------------------
+@_args.finite_results("q", "dq", "dqr", "ddqr")
 def slotine_li_regressor(base: BaseParameters, q, dq, dqr, ddqr) -> np.ndarray:
     """Slotine-Li regressor in base parameters.
 
@@ -89,6 +90,7 @@ def slotine_li_regressor(base: BaseParameters, q, dq, dqr, ddqr) -> np.ndarray:
     return _core.slotine_li_regressor(base._b, q, dq, dqr, ddqr)
 
 
+@_args.finite_results("q", "dq", "dqr", "ddqr")
 def slotine_li_regressor_classical(
     robot: Robot, q, dq, dqr, ddqr, *, rotor: bool = False, friction: bool = False
 ) -> np.ndarray:
@@ -105,6 +107,7 @@ def slotine_li_regressor_classical(
     )
 
 
+@_args.finite_results("q", "dq", "params")
 def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
     """Coriolis matrix ``C(q, dq)`` of the Christoffel symbols, shape (n, n) or (m, n, n):
     ``C dq`` is the velocity-product torque and ``dA/dt - 2 C`` is skew-symmetric. ``params``: any
