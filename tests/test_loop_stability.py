@@ -161,14 +161,23 @@ def test_viscous_friction_fed_back_by_the_model_is_checked(tmp_path, model_frict
     # what the check said before it took friction in: the sampled double integrator, stable
     frictionless = loop_matrix([m * kp], [m * kd], [[1.0 / m]], T)
     assert np.max(np.abs(np.linalg.eigvals(frictionless))) < 0.99
-    # the closed form of the held damped joint under u = -m kp e - (m kd - d_hat) de
-    feedback = np.array([[1.0, 0.0], [0.0, 1.0], [-m * kp, -(m * kd - model_friction * d)]])
-    closed_form = np.max(np.abs(np.linalg.eigvals(held_damped_step(m, d, T) @ feedback)))
-    assert (closed_form < 1.0) == stable
+
+    def closed_form(d_hat: float) -> float:
+        """Spectral radius of the held damped joint under u = -m kp e - (m kd - d_hat) de."""
+        feedback = np.array([[1.0, 0.0], [0.0, 1.0], [-m * kp, -(m * kd - d_hat)]])
+        return np.max(np.abs(np.linalg.eigvals(held_damped_step(m, d, T) @ feedback)))
+
+    assert (closed_form(model_friction * d) < 1.0) == stable
     check = controller_check(robot, ctl, truth, T)
     assert check.stable == stable
-    assert math.isclose(check.spectral_radius, closed_form, rel_tol=1e-9)
+    assert math.isclose(check.spectral_radius, closed_form(model_friction * d), rel_tol=1e-9)
     assert "viscous friction" in check.text()
+    # the model's friction could grow by friction_margin: the closed form's boundary
+    if stable:
+        grown = model_friction * d * check.friction_margin
+        assert closed_form(0.999 * grown) < 1.0 < closed_form(1.001 * grown)
+    else:
+        assert check.friction_margin == 0.0
 
     def opaque(*args):
         return ctl(*args)

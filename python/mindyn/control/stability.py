@@ -30,8 +30,11 @@ large friction (``Fv T / m`` of 60 on the xArm7's wrist at 4 ms) reaches its fri
 speed within a period, so that a model that feeds back more viscous friction than the robot has
 (``D_hat > D``) makes the sampled loop diverge whatever the gains. The figures reported are the
 spectral radius, the *gain margin* (the factor by which the gains ``K_P``, ``K_D`` could grow,
-the model's ``D_hat`` fixed, before the loop goes unstable) and the *gain/period ratio*
-``max |eig(T M^-1 K_D,eff)|``, which a sampled loop without friction needs below 2.
+the model's ``D_hat`` fixed, before the loop goes unstable), the *viscous-friction margin of the
+model* (the factor by which ``D_hat`` could grow, the gains fixed; with the true friction it is
+barely above 1 where the friction is fast: an adaptive estimate that grows past it diverges)
+and the *gain/period ratio* ``max |eig(T M^-1 K_D,eff)|``, which a sampled loop without
+friction needs below 2.
 
 Not covered (:data:`COVERED`, stated with each verdict): gravity and the velocity terms (slow
 beside the feedback at the periods of joint controllers), Coulomb friction (a relay: it has no
@@ -131,18 +134,28 @@ def _radius(ad, bd, kp, kd) -> np.ndarray:
 _UNSTABLE = 1.0 + 1e-9
 
 
-def _margin(ad, bd, kp, kd, fed) -> np.ndarray:
-    """For each loop of a stack, the largest factor g (up to ``_MARGIN_CAP``) with the loop of
-    ``g kp, g kd - fed`` stable (the model's viscous friction ``fed`` fixed); 0 where the loop is
-    unstable already (bisection on log g from 1, all loops at once)."""
-    stable = _radius(ad, bd, kp, kd - fed) <= _UNSTABLE
-    capped = _radius(ad, bd, _MARGIN_CAP * kp, _MARGIN_CAP * kd - fed) <= _UNSTABLE
+def _scaled_gains(g, ad, bd, kp, kd, fed) -> np.ndarray:
+    """Spectral radii of the loops with the gains times ``g``, the model's friction fixed."""
+    return _radius(ad, bd, g * kp, g * kd - fed)
+
+
+def _scaled_friction(g, ad, bd, kp, kd, fed) -> np.ndarray:
+    """Spectral radii of the loops with the model's viscous friction times ``g``."""
+    return _radius(ad, bd, kp, kd - g * fed)
+
+
+def _largest_factor(radius, *loops) -> np.ndarray:
+    """For each loop of a stack, the largest factor g (up to ``_MARGIN_CAP``) with the loop
+    stable, ``radius(g, *loops)`` giving the spectral radii of the loops at factors ``g``
+    (k, 1, 1) or (1, 1, 1); 0 where the loop is unstable at g = 1 (bisection on log g from 1,
+    all loops at once)."""
+    stable = radius(np.ones((1, 1, 1)), *loops) <= _UNSTABLE
+    capped = radius(np.full((1, 1, 1), _MARGIN_CAP), *loops) <= _UNSTABLE
     lo = np.zeros(stable.shape)
     hi = np.full(stable.shape, math.log(_MARGIN_CAP))
     for _ in range(14):  # log g to 4e-4: the margin to 0.05 %
         mid = 0.5 * (lo + hi)
-        g = np.exp(mid)[:, None, None]
-        ok = _radius(ad, bd, g * kp, g * kd - fed) <= _UNSTABLE
+        ok = radius(np.exp(mid)[:, None, None], *loops) <= _UNSTABLE
         lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
     return np.where(~stable, 0.0, np.where(capped, _MARGIN_CAP, np.exp(lo)))
 
@@ -184,7 +197,11 @@ class LoopCheck:
     ``stable``: every sampled loop has spectral radius at most 1; ``gain_margin``: the smallest
     over the samples (0 when unstable); ``spectral_radius`` the largest; ``ratio`` the largest
     ``|eig(T M^-1 K_D,eff)|`` (a sampled loop without friction needs it below 2); ``q`` the
-    configuration of the smallest margin; ``cases`` the plant/model pairs checked (text)."""
+    configuration of the smallest margin; ``cases`` the plant/model pairs checked (text);
+    ``friction_margin`` the factor by which the viscous friction the controller's model feeds
+    back could grow, the gains fixed, before a loop goes unstable (the smallest; 0 when
+    unstable; None when the model feeds back none): an estimate that adaptation moves past it
+    makes the loop diverge."""
 
     kind: str
     period: float
@@ -194,9 +211,7 @@ class LoopCheck:
     ratio: float
     q: np.ndarray
     cases: list = field(default_factory=list)
-    #: the controller's model feeds back viscous friction (which, above the robot's, makes a
-    #: sampled loop diverge whatever the gains)
-    model_friction: bool = False
+    friction_margin: float | None = None
 
     def text(self) -> str:
         """One line: the verdict and the figures that explain it."""
@@ -205,6 +220,12 @@ class LoopCheck:
             if self.gain_margin < _MARGIN_CAP
             else f"gain margin above {_MARGIN_CAP:g}"
         )
+        if self.friction_margin is not None:
+            margin += (
+                f", viscous-friction margin of the controller's model {self.friction_margin:.4g}"
+                if self.friction_margin < _MARGIN_CAP
+                else f", viscous-friction margin of the controller's model above {_MARGIN_CAP:g}"
+            )
         verdict = "stable" if self.stable else "UNSTABLE"
         return (
             f"sampled {self.kind} loop at a period of {self.period:g} s: {verdict} "
@@ -219,7 +240,7 @@ class LoopCheck:
             ", or the viscous friction of the controller's model (above the robot's, it makes "
             "the sampled loop diverge whatever the gains where the friction is fast beside the "
             "period)"
-            if self.model_friction
+            if self.friction_margin is not None
             else ""
         )
         return UnstableLoopError(
@@ -262,16 +283,18 @@ def check_loop(
     model_damping = _stacks(model_damping, "model_damping", len(plant_inverses))
     T = float(period)
     worst = (math.inf, 0.0, 0.0, None)  # margin, radius, ratio, q
-    rho_max, ratio_max, fed_any = 0.0, 0.0, False
+    rho_max, ratio_max, friction = 0.0, 0.0, None
     for minv, m_hat, damping, fed in zip(plant_inverses, models, plant_damping, model_damping):
         kpe, kde = effective_gains(kind, kp, kd, lam, m_hat)
         kpe, kde = np.broadcast_to(kpe, minv.shape), np.broadcast_to(kde, minv.shape)
         ad, bd = plant_step(minv, T, damping)
         fed = np.zeros(minv.shape) if fed is None or kind == "pd" else fed
-        fed_any = fed_any or bool(np.any(fed != 0.0))
         rho = _radius(ad, bd, kpe, kde - fed)
         ratio = np.max(np.abs(np.linalg.eigvals(T * minv @ kde)), axis=-1)
-        margin = _margin(ad, bd, kpe, kde, fed)
+        margin = _largest_factor(_scaled_gains, ad, bd, kpe, kde, fed)
+        if np.any(fed != 0.0):
+            f = _largest_factor(_scaled_friction, ad, bd, kpe, kde, fed)
+            friction = min(float(f.min()), math.inf if friction is None else friction)
         rho_max, ratio_max = max(rho_max, float(rho.max())), max(ratio_max, float(ratio.max()))
         i = int(np.argmin(margin))
         if margin[i] < worst[0]:
@@ -285,7 +308,7 @@ def check_loop(
         ratio_max,
         np.asarray(worst[3]),
         list(cases),
-        fed_any,
+        friction,
     )
 
 
