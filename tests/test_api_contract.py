@@ -895,6 +895,94 @@ def test_options_after_the_data_are_keyword_only(api, name):
         )
 
 
+def _all_finite(out, depth: int = 0) -> bool:
+    """Whether every float in ``out`` (arrays, numbers, and the tuples, lists, dicts and
+    dataclasses that hold them, four levels deep) is finite."""
+    import dataclasses
+    import numbers
+
+    if depth > 4:
+        return True
+    if isinstance(out, (tuple, list)):
+        return all(_all_finite(x, depth + 1) for x in out)
+    if isinstance(out, dict):
+        return all(_all_finite(x, depth + 1) for x in out.values())
+    if dataclasses.is_dataclass(out) and not isinstance(out, type):
+        return all(_all_finite(getattr(out, f.name), depth + 1) for f in dataclasses.fields(out))
+    if isinstance(out, (np.ndarray, numbers.Number)) and not isinstance(out, bool):
+        a = np.asarray(out)
+        return not np.issubdtype(a.dtype, np.inexact) or bool(np.isfinite(a).all())
+    return True
+
+
+HUGE = 1e300  # finite, but its square overflows the double range
+# the compiled generated C steps: generated code checks nothing (as the real-time C++ paths)
+UNCHECKED = {"codegen.CompiledController.__call__", "codegen.CompiledObserver.__call__"}
+
+
+@pytest.mark.parametrize("name", WALK)
+def test_huge_finite_inputs_raise_or_give_finite_results(api, name):
+    """Every float array argument of the baseline with its first entry set to 1e300: the call
+    raises a ``mindyn.Error`` in one line, or returns finite numbers wherever the baseline did:
+    never a silent inf or NaN from an overflow."""
+    fn, args, kwargs = api[name]
+    baseline_finite = _all_finite(fn(*args, **kwargs)) and name not in UNCHECKED
+    for i, (arg, value, by_keyword) in enumerate(_arguments(fn, args, kwargs)):
+        if not (isinstance(value, np.ndarray) and value.dtype.kind == "f" and value.size):
+            continue
+        huge = value.copy()
+        huge.flat[0] = HUGE
+        a, kw = list(args), dict(kwargs)
+        if by_keyword:
+            kw[arg] = huge
+        else:
+            a[i] = huge
+        try:
+            out = fn(*a, **kw)
+        except mindyn.Error as e:
+            assert "\n" not in str(e), f"{name}, {arg} = 1e300: {e}"
+            continue
+        assert _all_finite(out) or not baseline_finite, (
+            f"{name}: {arg} with an entry of 1e300 gave a result with inf or NaN, silently"
+        )
+
+
+OVERFLOWING = {  # a velocity of 1e200: its square, in the velocity products, overflows
+    "Robot.inverse_dynamics": lambda r, q, v: r.inverse_dynamics(q, v, 0 * q),
+    "Robot.regressor": lambda r, q, v: r.regressor(q, v, 0 * q),
+    "Robot.forward_dynamics": lambda r, q, v: r.forward_dynamics(q, v, 0 * q),
+    "Robot.kinetic_energy": lambda r, q, v: r.kinetic_energy(q, v),
+    "Robot.energy": lambda r, q, v: r.energy(q, v),
+    "Robot.energy_regressors": lambda r, q, v: r.energy_regressors(q, v),
+    "Robot.energy_regressor": lambda r, q, v: r.energy_regressor(q, v),
+    "Robot.lagrangian_regressor": lambda r, q, v: r.lagrangian_regressor(q, v),
+    "Robot.momentum_regressors": lambda r, q, v: r.momentum_regressors(q, v),
+    "BaseParameters.regressor": lambda r, q, v: BASE.regressor(q, v, 0 * q),
+    "BaseParameters.energy_regressor": lambda r, q, v: BASE.energy_regressor(q, v),
+    "BaseParameters.momentum_regressors": lambda r, q, v: BASE.momentum_regressors(q, v),
+    "slotine_li_regressor": lambda r, q, v: mindyn.slotine_li_regressor(BASE, q, v, v, 0 * q),
+}
+
+
+@pytest.mark.parametrize("name", OVERFLOWING)
+@pytest.mark.parametrize("batch", [False, True])
+def test_an_overflowing_result_names_the_function_and_the_input(name, batch):
+    """A velocity of 1e200 on planar2 (finite; the dynamics square it: 1e400 overflows, and
+    the unchecked result was NaN): ArgumentError naming the function and the velocity, one
+    line; the same call at 1e100 gives finite numbers (no bound below the overflow)."""
+    q, v = Q.copy(), np.array([1e200, 0.5])
+    if batch:
+        q, v = np.vstack([Q, q]), np.vstack([Z, v])
+    with pytest.raises(ArgumentError) as e:
+        OVERFLOWING[name](ROBOT, q, v)
+    msg = str(e.value)
+    assert "\n" not in msg and name.split(".")[-1] in msg and "overflows" in msg, msg
+    where = "(sample 1, entry 1)" if batch else "(entry 1)"
+    assert re.search(r"largest entries: dq\w* 1e\+200 " + re.escape(where), msg), msg
+    out = OVERFLOWING[name](ROBOT, q, np.where(np.abs(v) > 1.0, 1e100, v))
+    assert _all_finite(out)
+
+
 # arguments with a default that are data, not options (they may be given by position)
 DATA_WITH_DEFAULT = {"params", "q0", "t", "dq", "ddq", "robot", "controller", "p_hat"}
 

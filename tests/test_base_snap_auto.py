@@ -250,3 +250,108 @@ def test_identification_snap_option(rng):
     assert smooth.snap_decision["applied"]
     with pytest.raises(mindyn.ArgumentError, match="snap"):
         IdentifyOptions(snap="sometimes")
+
+
+SNAP_URDF = """<robot name="snap">
+  <link name="base"/>
+  <link name="a"><inertial><mass value="1.0"/><origin xyz="0.1 0.02 0.03"/>
+    <inertia ixx="0.02" ixy="0" ixz="0" iyy="0.03" iyz="0" izz="0.04"/></inertial></link>
+  <link name="b"><inertial><mass value="0.8"/><origin xyz="0.05 0.1 -0.02"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/></inertial></link>
+  <link name="c"><inertial><mass value="0.6"/><origin xyz="0.02 -0.03 0.1"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.015" iyz="0" izz="0.02"/></inertial></link>
+  <link name="d"><inertial><mass value="0.4"/><origin xyz="0.03 0.04 0.05"/>
+    <inertia ixx="0.005" ixy="0" ixz="0" iyy="0.006" iyz="0" izz="0.007"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="a"/>
+    <origin xyz="0 0 0.3" rpy="0 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="j2" type="revolute"><parent link="a"/><child link="b"/>
+    <origin xyz="0.2 0 0" rpy="1.5708 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="j3" type="revolute"><parent link="b"/><child link="c"/>
+    <origin xyz="0 0.25 0" rpy="-1.57079632679 0 3.14159"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="j4" type="revolute"><parent link="c"/><child link="d"/>
+    <origin xyz="0.1 0 0.1" rpy="0 0.0004 0"/><axis xyz="0.0002 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+</robot>
+"""
+
+
+def description_near_right_angles(text: str) -> list[tuple]:
+    """From the URDF text alone (ElementTree): ``(joint index, joint name, frame, component,
+    value, multiple of pi/2, deviation)`` of every rpy angle within 1e-3 of a multiple of pi/2
+    without being one, and of every component of the unit axis within 1e-3 of 0 without being
+    0 (a rotation about one axis or a roll-then-yaw one: its yaw, pitch, roll are the rpy's)."""
+    import xml.etree.ElementTree as ET
+
+    out = []
+    for k, joint in enumerate(ET.fromstring(text).iter("joint")):
+        name = joint.get("name")
+        rpy = [float(x) for x in joint.find("origin").get("rpy").split()]
+        for component, value in zip(("yaw", "pitch", "roll"), rpy[::-1]):
+            right = round(value / (math.pi / 2)) * (math.pi / 2)
+            if 0 < abs(value - right) <= 1e-3:
+                out.append((k, name, "origin", component, value, right, abs(value - right)))
+        axis = np.array([float(x) for x in joint.find("axis").get("xyz").split()])
+        for component, value in zip("xyz", axis / np.linalg.norm(axis)):  # a unit axis
+            if 0 < abs(value) <= 1e-3:
+                out.append((k, name, "axis", component, value, 0.0, abs(value)))
+    return out
+
+
+def test_snap_changes_are_the_description_angles(tmp_path):
+    """The core's structured list of what a snap rounds (``snap_changes``: joint, frame,
+    component, value, snapped value, deviation) against the URDF's own numbers, read
+    independently; its text (``BaseParameters.snappable``) names the same joints; the default
+    snap rounds the decimal roundings (1.5708, 1.57079632679, 3.14159) and keeps the
+    deliberate 4e-4 rad tilt and the 2e-4 axis component."""
+    from mindyn.base import snap_changes
+
+    path = written(tmp_path, "snap.urdf", SNAP_URDF)
+    robot = mindyn.load(path)
+    expected = description_near_right_angles(SNAP_URDF)
+    assert len(expected) == 5
+    got = snap_changes(robot)
+    assert len(got) == len(expected)
+    for c, (k, name, frame, component, value, right, deviation) in zip(got, expected):
+        assert (c["joint"], c["joint_name"], c["frame"], c["component"]) == (
+            k,
+            name,
+            frame,
+            component,
+        )
+        assert math.isclose(c["value"], value, rel_tol=0, abs_tol=1e-13)
+        assert math.isclose(c["snapped"], right, rel_tol=0, abs_tol=1e-15)
+        assert math.isclose(c["deviation"], deviation, rel_tol=1e-9, abs_tol=1e-15)
+    listed = mindyn.base_parameters(robot, snap=False).snappable
+    assert {n for _, n, *_ in expected} == {re.match(r"joint '(\w+)'", x)[1] for x in listed}
+    decision = mindyn.base_parameters(robot).snap_decision
+    assert decision["applied"]
+    assert sorted(w for w, _ in decision["rounded"]) == [
+        "joint 'j2' origin roll",
+        "joint 'j3' origin roll",
+        "joint 'j3' origin yaw",
+    ]
+    assert sorted(w for w, _ in decision["real"]) == [
+        "joint 'j4' axis x",
+        "joint 'j4' origin pitch",
+    ]
+
+
+def test_the_default_snap_computes_the_base_set_once(tmp_path, monkeypatch):
+    """When the default snap rounds angles, the base set is computed once (snapped), not first
+    as written to find what is near a right angle."""
+    from mindyn import _core
+
+    robot = mindyn.load(written(tmp_path, "snap.urdf", SNAP_URDF))
+    calls = []
+    original = _core.base_parameters
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs.get("snap"))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(_core, "base_parameters", counted)
+    assert mindyn.base_parameters(robot).snap_decision["applied"]
+    assert len(calls) == 1 and calls[0] > 0

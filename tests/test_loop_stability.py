@@ -116,6 +116,85 @@ def test_verdict_agrees_with_a_simulated_run(tmp_path):
                 simulate(robot, ref, opaque, duration=2.0)
 
 
+def damped_joint_urdf(path, izz: float, damping: float) -> str:
+    """``one_joint_urdf`` with viscous friction ``damping`` [N m s/rad] and no Coulomb
+    friction."""
+    one_joint_urdf(path, izz)
+    text = path.read_text().replace(
+        "</joint>", f'<dynamics damping="{damping!r}" friction="0"/></joint>'
+    )
+    path.write_text(text)
+    return str(path)
+
+
+def held_damped_step(m: float, d: float, T: float) -> np.ndarray:
+    """``[[e], [de]]`` after ``T`` of ``m dde + d de = u`` from ``(e, de, u)``, u held: the closed
+    form (``a = d / m``: ``de(T) = de e^(-aT) + u / d (1 - e^(-aT))``, ``e`` its integral), as
+    the 2x3 matrix acting on ``(e, de, u)``."""
+    a = d / m
+    decay = math.exp(-a * T)
+    rise = (1.0 - decay) / a
+    return np.array([[1.0, rise, (T - rise) / d], [0.0, decay, (1.0 - decay) / d]])
+
+
+@pytest.mark.parametrize("model_friction, stable", [(1.3, False), (0.7, True)])
+def test_viscous_friction_fed_back_by_the_model_is_checked(tmp_path, model_friction, stable):
+    """A light joint with a large viscous friction (``Fv T / m`` = 4 at 4 ms) under computed
+    torque whose model has ``model_friction`` times the robot's ``Fv``: the frictionless loop
+    (the sampled double integrator alone) is stable either way, but a model feeding back more
+    friction than the robot has diverges. The verdict against the closed form of the held
+    damped joint (its 2x2 loop's eigenvalues) and a simulated run of a controller the check
+    does not know (RK4 of the true dynamics); the controller itself is refused before the run,
+    the message naming the model's friction."""
+    from mindyn.control.controllers import base_values, controller_check, plant_parameters
+    from mindyn.control.stability import loop_matrix
+
+    m, d, T = 1e-3, 1.0, 0.004
+    robot = mindyn.load(damped_joint_urdf(tmp_path / "damped.urdf", m, d))
+    kp, kd = 100.0, 20.0  # computed torque: K_P,eff = m kp, K_D,eff = m kd
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    truth = plant_parameters(robot, True, friction=True)
+    p_hat = base_values(base, truth)
+    p_hat[base.names.index("Fv1")] *= model_friction
+    gains = {"kd": kd, "kp": kp, "lambda": kp / kd}
+    ctl = control.make_controller("computed-torque", robot, gains, p_hat, base=base, period=T)
+    # what the check said before it took friction in: the sampled double integrator, stable
+    frictionless = loop_matrix([m * kp], [m * kd], [[1.0 / m]], T)
+    assert np.max(np.abs(np.linalg.eigvals(frictionless))) < 0.99
+
+    def closed_form(d_hat: float) -> float:
+        """Spectral radius of the held damped joint under u = -m kp e - (m kd - d_hat) de."""
+        feedback = np.array([[1.0, 0.0], [0.0, 1.0], [-m * kp, -(m * kd - d_hat)]])
+        return np.max(np.abs(np.linalg.eigvals(held_damped_step(m, d, T) @ feedback)))
+
+    assert (closed_form(model_friction * d) < 1.0) == stable
+    check = controller_check(robot, ctl, truth, T)
+    assert check.stable == stable
+    assert math.isclose(check.spectral_radius, closed_form(model_friction * d), rel_tol=1e-9)
+    assert "viscous friction" in check.text()
+    # the model's friction could grow by friction_margin: the closed form's boundary
+    if stable:
+        grown = model_friction * d * check.friction_margin
+        assert closed_form(0.999 * grown) < 1.0 < closed_form(1.001 * grown)
+    else:
+        assert check.friction_margin == 0.0
+
+    def opaque(*args):
+        return ctl(*args)
+
+    ref = SumOfSines(robot, period=2.0)
+    run = {"rotor": True, "friction": True, "duration": 1.0, "rate": 1.0 / T}
+    if stable:  # bounded: the under-compensated friction lags, by far less than a turn
+        r = simulate(robot, ref, opaque, **run)
+        assert np.degrees(np.abs(r.error).max()) < 45.0
+        simulate(robot, ref, ctl, **run)
+    else:
+        with pytest.raises(control.UnstableLoopError, match="diverged"):
+            simulate(robot, ref, opaque, **run)
+        with pytest.raises(control.UnstableLoopError, match="UNSTABLE.*controller's model"):
+            simulate(robot, ref, ctl, **run)
+
+
 # --------------------------------------------------------------------------------------------
 # Default gains: the closed-loop table
 # --------------------------------------------------------------------------------------------

@@ -1270,8 +1270,15 @@ void baseEnergyRegressor(const Model& model, Data& data, const BaseParameters& b
   for (size_t b = 0; b < piv.size(); ++b) wb[static_cast<long>(b)] = wK[piv[b]] + wP[piv[b]];
 }
 
-std::vector<std::string> snapRightAngles(Model& model, double tolerance) {
+std::vector<std::string> snapRightAngles(Model& model, double tolerance,
+                                         std::vector<SnapChange>* changes) {
   std::vector<std::string> report;
+  int joint = 0;
+  auto record = [&](const char* frame, const char* component, double value, double snapped) {
+    if (changes)
+      changes->push_back({joint, model.joints[static_cast<size_t>(joint)].name, frame, component,
+                          value, snapped, std::abs(value - snapped)});
+  };
   auto snapAngle = [tolerance](double a, bool& changed) {
     const double k = std::round(a / (kPi / 2));
     const double s = k * (kPi / 2);
@@ -1281,7 +1288,7 @@ std::vector<std::string> snapRightAngles(Model& model, double tolerance) {
     }
     return a;
   };
-  auto snapRotation = [&](Eigen::Isometry3d& T, const std::string& what) {
+  auto snapRotation = [&](Eigen::Isometry3d& T, const std::string& what, const char* frame) {
     const Eigen::Matrix3d R = T.linear();
     // Already exactly a signed permutation: nothing to do.
     bool exact = true;
@@ -1307,19 +1314,25 @@ std::vector<std::string> snapRightAngles(Model& model, double tolerance) {
     }
     if (!changed) return;
     T.linear() = Rs;
+    static const char* const kAngles[] = {"yaw", "pitch", "roll"};
+    for (int i = 0; i < 3; ++i)
+      if (s[i] != ypr[i]) record(frame, kAngles[i], ypr[i], s[i]);
     report.push_back(
         what + ": rotation (yaw, pitch, roll) = (" + shortest(ypr[0]) + ", " + shortest(ypr[1]) +
         ", " + shortest(ypr[2]) + ") rad -> (" + shortest(s[0]) + ", " + shortest(s[1]) + ", " +
         shortest(s[2]) + ")" +
         (all_right ? ", all multiples of pi/2" : ", angles near multiples of pi/2 rounded"));
   };
-  for (Joint& j : model.joints) {
-    snapRotation(j.pre, "joint '" + j.name + "' origin");
-    snapRotation(j.post, "joint '" + j.name + "' link frame");
+  for (; joint < static_cast<int>(model.joints.size()); ++joint) {
+    Joint& j = model.joints[static_cast<size_t>(joint)];
+    snapRotation(j.pre, "joint '" + j.name + "' origin", "origin");
+    snapRotation(j.post, "joint '" + j.name + "' link frame", "link frame");
     Eigen::Vector3d a = j.axis;
     bool changed = false;
+    static const char* const kAxes[] = {"x", "y", "z"};
     for (int i = 0; i < 3; ++i) {
       if (a[i] != 0.0 && std::abs(a[i]) <= tolerance) {
+        record("axis", kAxes[i], a[i], 0.0);
         a[i] = 0.0;
         changed = true;
       }

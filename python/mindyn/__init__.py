@@ -67,6 +67,7 @@ def from_pinocchio_order(params):
     return _from_pin(_args.array(params, "params", (None,)))
 
 
+@_args.finite_results("mass", "com", "inertia")
 def inertial_from_com(mass, com, inertia):
     """The ten inertial parameters about the link origin ``[XX XY XZ YY YZ ZZ MX MY MZ M]`` of a
     body of ``mass`` with centre of mass ``com`` (3,) and inertia tensor ``inertia`` (3, 3) about
@@ -78,6 +79,7 @@ def inertial_from_com(mass, com, inertia):
     )
 
 
+@_args.finite_results("mass", "com", "rotation", "inertia")
 def inertial_from_urdf(mass, com, rotation, inertia):
     """As :func:`inertial_from_com` for a URDF ``<inertial>``: ``inertia`` (3, 3) about the
     centre of mass in the axes of its origin, which is rotated by ``rotation`` (3, 3) from the

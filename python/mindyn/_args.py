@@ -5,10 +5,18 @@ function checks its arguments here in its first lines. Every array argument goes
 float64 array; options go through :func:`flag`, :func:`integer`, :func:`number`, :func:`choice`,
 :func:`text` and the others below. Each message names the argument, what was expected and what was
 given.
+
+Finite inputs can still be too large for a computation: a velocity of 1e200 squares past the
+double range (1.8e308) and the dynamics would return inf or NaN. Every public function of the
+joint state is decorated with :func:`finite_results`, which checks its result instead (the bound
+depends on the robot, the parameters and the function, the result does not): a result that is
+not finite raises :class:`ArgumentError` naming the function and its largest inputs.
 """
 
 from __future__ import annotations
 
+import functools
+import inspect
 import numbers
 from collections.abc import Sequence
 
@@ -22,6 +30,7 @@ __all__ = [
     "batch",
     "choice",
     "fail",
+    "finite_results",
     "flag",
     "function",
     "instance",
@@ -29,6 +38,7 @@ __all__ = [
     "mapping",
     "number",
     "optional",
+    "overflow",
     "params",
     "path",
     "protocol",
@@ -287,3 +297,67 @@ def protocol(x, name: str, method: str, what: str):
     if not callable(getattr(x, method, None)):
         raise ArgumentError(f"{name} is {_describe(x)}; expected {what}")
     return x
+
+
+def _all_finite(out) -> bool:
+    """Whether every number of ``out`` (an array, a number, or a tuple, list or dict of them)
+    is finite; other values count as finite."""
+    if isinstance(out, (tuple, list)):
+        return all(_all_finite(x) for x in out)
+    if isinstance(out, dict):
+        return all(_all_finite(x) for x in out.values())
+    if isinstance(out, (np.ndarray, numbers.Number)) and not isinstance(out, bool):
+        a = np.asarray(out)
+        return not np.issubdtype(a.dtype, np.inexact) or bool(np.isfinite(a).all())
+    return True
+
+
+def _largest(name: str, x) -> tuple[float, str]:
+    """The largest magnitude of input ``x`` and where it is (text)."""
+    a = np.asarray(x, dtype=float)
+    if a.size == 0:
+        return 0.0, name
+    i = tuple(int(k) for k in np.unravel_index(int(np.argmax(np.abs(a))), a.shape))
+    if a.ndim == 0:
+        where = ""
+    elif a.ndim == 1:
+        where = f" (entry {i[0] + 1})"
+    elif a.ndim == 2:
+        where = f" (sample {i[0]}, entry {i[1] + 1})"
+    else:
+        where = f" (index {i})"
+    return float(abs(a[i])), f"{name} {float(a[i]):.3g}{where}"
+
+
+def finite_results(*names: str):
+    """Decorator of a public function of the joint state: its result (array, number or tuple of
+    them) must be finite, or :class:`ArgumentError` names the function and the largest entry of
+    each of its inputs ``names`` (which were checked finite: the computation overflowed)."""
+
+    def decorate(fn):
+        signature = inspect.signature(fn)
+        label = fn.__qualname__
+
+        @functools.wraps(fn)
+        def checked(*args, **kwargs):
+            out = fn(*args, **kwargs)
+            if _all_finite(out):
+                return out
+            given = signature.bind(*args, **kwargs).arguments
+            raise overflow(label, **{n: given[n] for n in names if given.get(n) is not None})
+
+        return checked
+
+    return decorate
+
+
+def overflow(function: str, **inputs) -> ArgumentError:
+    """The error of ``function`` whose computation overflowed the double range for the finite
+    ``inputs``: it names the largest entry of each, the largest first."""
+    found = sorted((_largest(name, x) for name, x in inputs.items()), key=lambda f: -f[0])
+    listed = ", ".join(text for _, text in found)
+    return ArgumentError(
+        f"{function}: the result overflows the double range (inf or NaN) for finite inputs too "
+        f"large for it; largest entries: {listed}; expected inputs whose products in the "
+        "computation stay below 1.8e308"
+    )

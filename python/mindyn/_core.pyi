@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ArgumentError', 'BaseDynamics', 'BaseParameters', 'Error', 'IkSolver', 'Integrator', 'Kinematics', 'Model', 'ModelError', 'MomentumObserver', 'OFFSET_PREFIX', 'RobotFileNotFoundError', 'STFunctionBlock', 'STProgram', 'STVariable', 'base_parameters', 'classical_parameter_names', 'coriolis_matrix', 'from_pinocchio_order', 'generate_code', 'generate_controller', 'generate_observer', 'inertial_from_com', 'inertial_from_urdf', 'influence_coordinates', 'khalil_order', 'link_poses', 'load_urdf', 'load_yaml', 'multibody_coriolis_matrix', 'multibody_energies', 'multibody_forward_dynamics', 'multibody_inverse_dynamics', 'multibody_link_poses', 'multibody_mass_matrix', 'multibody_momentum', 'multibody_regressor', 'multibody_slotine_li_regressor', 'parse_csv_numbers', 'parse_urdf', 'parse_yaml', 'planar_arm', 'pose_error', 'projection_cost', 'projection_limits', 'projection_refusal', 'recursive_refusal', 'slotine_li_regressor', 'slotine_li_regressor_classical', 'sosfilt_rows', 'to_pinocchio_order', 'tool_jacobian']
+__all__: list[str] = ['ArgumentError', 'BaseDynamics', 'BaseParameters', 'Error', 'IkSolver', 'Integrator', 'Kinematics', 'Model', 'ModelError', 'MomentumObserver', 'OFFSET_PREFIX', 'RobotFileNotFoundError', 'STFunctionBlock', 'STProgram', 'STVariable', 'base_parameters', 'classical_parameter_names', 'coriolis_matrix', 'from_pinocchio_order', 'generate_code', 'generate_controller', 'generate_observer', 'inertial_from_com', 'inertial_from_urdf', 'influence_coordinates', 'khalil_order', 'link_poses', 'load_urdf', 'load_yaml', 'multibody_coriolis_matrix', 'multibody_energies', 'multibody_forward_dynamics', 'multibody_inverse_dynamics', 'multibody_link_poses', 'multibody_mass_matrix', 'multibody_momentum', 'multibody_regressor', 'multibody_slotine_li_regressor', 'parse_csv_numbers', 'parse_urdf', 'parse_yaml', 'planar_arm', 'pose_error', 'projection_cost', 'projection_limits', 'projection_refusal', 'recursive_refusal', 'slotine_li_regressor', 'slotine_li_regressor_classical', 'snap_changes', 'sosfilt_rows', 'to_pinocchio_order', 'tool_jacobian']
 class Error(Exception):
     """
     Base class of the errors mindyn raises.
@@ -499,6 +499,10 @@ def slotine_li_regressor(base: BaseParameters, q: typing.Annotated[numpy.typing.
     """
 def slotine_li_regressor_classical(model: Model, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], dq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], dqr: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], ddqr: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], rotor: bool = False, friction: bool = False) -> numpy.typing.NDArray[numpy.float64]:
     ...
+def snap_changes(model: Model, tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.001) -> tuple[list, list[str]]:
+    """
+    What a snap of `tolerance` [rad] would round in the model (which is unchanged): each angle and axis component rounded (dicts: joint, joint_name, frame 'origin' | 'link frame' | 'axis', component 'yaw' | 'pitch' | 'roll' | 'x' | 'y' | 'z', value, snapped, deviation) and the lines of text that describe the changes.
+    """
 def sosfilt_rows(sos: numpy.ndarray, x: numpy.ndarray, z: numpy.ndarray, cols: typing.Any = None, out: typing.Any = None) -> None:
     """
     Second-order sections `sos` (sections, 6; a0 = 1) run down the rows of `x` (samples, columns; rows in any order, e.g. reversed, columns adjacent), on the columns `cols` of `x` (all when None), from the state `z` (sections, 2, columns), which is updated in place; the output is written into `out` (samples, columns; it may be `x` itself) unless None. Per column the values are scipy.signal.sosfilt's.

@@ -9,7 +9,6 @@ uses the same set (a constant in the energy cancels in differences).
 
 from __future__ import annotations
 
-import re
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 
@@ -19,7 +18,13 @@ from . import _args, _core
 from . import formulas as _formulas
 from .robot import Robot, as_robot
 
-__all__ = ["BaseParameters", "base_parameters", "choose_method", "rounded_right_angles"]
+__all__ = [
+    "BaseParameters",
+    "base_parameters",
+    "choose_method",
+    "rounded_right_angles",
+    "snap_changes",
+]
 
 DEFAULT_TOLERANCE = 1e-9
 #: The rank tolerance is below this (a larger relative pivot is no round-off; the core refuses it)
@@ -248,7 +253,8 @@ class BaseParameters:
     basis_rows = property(lambda self: self._b.basis_rows)
     terms_formed = property(lambda self: self._b.terms_formed)
     snapped = property(lambda self: self._b.snapped)
-    #: what ``snap`` would round (rotations or axes within 1e-3 of right angles, not exact)
+    #: what ``snap`` would round (rotations or axes within 1e-3 of right angles, not exact), as
+    #: text; the same as data: :func:`snap_changes`
     snappable = property(lambda self: list(self._b.snappable))
     lagrangian_equals_energy = property(lambda self: self._b.lagrangian_equals_energy)
     lagrangian_equals_eom = property(lambda self: self._b.lagrangian_equals_eom)
@@ -301,6 +307,7 @@ class BaseParameters:
         """Classical parameters that do not appear in the equations of motion at all."""
         return self.sets["eom"]["no_effect"]
 
+    @_args.finite_results("params")
     def values(self, params) -> np.ndarray:
         """``p_b = Y @ params``; ``params`` in the classical layout of this set, shape (P,).
         With offsets, a vector without them (shape (P - n_joints,)) is accepted too: its
@@ -312,6 +319,7 @@ class BaseParameters:
             p = np.concatenate([_args.array(p, "params", (links,)), np.zeros(self._offsets)])
         return self._b.values(_args.array(p, "params", (P,)))
 
+    @_args.finite_results("base")
     def embed(self, base) -> np.ndarray:
         """A classical vector with ``base`` at the pivot positions and zeros elsewhere, so that
         ``values(embed(p_b)) == p_b`` and any inverse dynamics linear in the classical
@@ -323,6 +331,7 @@ class BaseParameters:
         """Entries of the classical vector's joint block (the torque offsets): n or 0."""
         return self.robot.n if self.offset else 0
 
+    @_args.finite_results("q", "dq", "ddq")
     def regressor(self, q, dq, ddq) -> np.ndarray:
         """Base regressor ``W_b``, shape (n_joints, n) or (m, n_joints, n):
         ``tau = W_b @ values(params)``; an offset column is 1 in its joint's row. Multi-DOF
@@ -333,6 +342,7 @@ class BaseParameters:
         q, dq, ddq = _args.batch(self.robot.n, q=q, dq=dq, ddq=ddq)
         return self._b.regressor(q, dq, ddq)
 
+    @_args.finite_results("q", "dq")
     def energy_regressor(self, q, dq) -> np.ndarray:
         """Base total-energy regressor ``w_H,b``, shape (n,) or (m, n), over the
         equations-of-motion set: ``H = w_H,b @ p_b`` up to a constant; an offset's column is
@@ -342,6 +352,7 @@ class BaseParameters:
         q, dq = _args.batch(self.robot.n, q=q, dq=dq)
         return self._b.energy_regressor(q, dq)
 
+    @_args.finite_results("q", "dq")
     def momentum_regressors(self, q, dq):
         """Base momentum regressors ``(W_p,b, W_l,b)``, shape (n_joints, n) or (m, n_joints, n)
         each, over the equations-of-motion set: ``p = A(q) dq = W_p,b @ p_b`` and
@@ -439,8 +450,6 @@ SNAP_WINDOW = 1e-3
 #: Deviations this close to a decimal rounding of a right angle are that rounding: 16 units of
 #: round-off of an angle of size 2 pi (the angles are read back from the composed rotation)
 _ROUNDING_MATCH = 16 * np.finfo(float).eps * 2 * np.pi
-_ANGLES = re.compile(r"^(.*): rotation \(yaw, pitch, roll\) = \(([^)]*)\) rad")
-_AXIS = re.compile(r"^(joint '.*' axis) \(([^)]*)\) snapped")
 
 
 def _decimal_roundings() -> np.ndarray:
@@ -467,9 +476,25 @@ def _is_rounding(deviation: float, floor: float = 0.0) -> bool:
     return bool(np.min(np.abs(near - deviation)) <= _ROUNDING_MATCH)
 
 
-def rounded_right_angles(snappable: Sequence[str], *, tolerance: float = DEFAULT_TOLERANCE) -> dict:
-    """Which of the near right angles ``snappable`` lists (rotations and axes within 1e-3 of a
-    right angle, :attr:`BaseParameters.snappable`) are right angles written rounded, and the
+def snap_changes(robot: Robot | str, *, tolerance: float = SNAP_WINDOW) -> list[dict]:
+    """What a snap of ``tolerance`` [rad] would round in ``robot`` (unchanged), as the core
+    computes it: one dict per angle or axis component, with ``joint`` (0-based) and
+    ``joint_name``, ``frame`` (``"origin"``: the joint's rotation before its motion, ``"link
+    frame"``: the one after it, ``"axis"``), ``component`` (``"yaw"``, ``"pitch"``, ``"roll"``
+    of the rotation ``Rz(yaw) Ry(pitch) Rx(roll)``, or ``"x"``, ``"y"``, ``"z"`` of the axis),
+    ``value`` (the angle or component), ``snapped`` (the multiple of pi/2, or 0) and
+    ``deviation`` (``|value - snapped|``, in (0, tolerance]). The same changes as text are
+    :attr:`BaseParameters.snappable` (``tolerance`` 1e-3) and :attr:`BaseParameters.snapped`."""
+    robot = as_robot(robot)
+    tolerance = _args.number(tolerance, "tolerance", positive=True)
+    return list(_core.snap_changes(robot._m, tolerance)[0])
+
+
+def rounded_right_angles(
+    changes: Sequence[Mapping], *, tolerance: float = DEFAULT_TOLERANCE
+) -> dict:
+    """Which of the near right angles ``changes`` lists (:func:`snap_changes` of a robot: angles
+    and axis components within 1e-3 of a right angle) are right angles written rounded, and the
     snap tolerance that rounds those and nothing else.
 
     An angle is a rounded right angle when its deviation from the nearest multiple of pi/2 is
@@ -484,24 +509,20 @@ def rounded_right_angles(snappable: Sequence[str], *, tolerance: float = DEFAULT
     largest rounding (at most the geometric mean of it and the smallest real deviation), 0 when
     nothing is rounded or the two cannot be separated.
     """
+    _args.instance(changes, "changes", (list, tuple), "a list of the dicts of snap_changes")
+    tolerance = _args.number(tolerance, "tolerance", minimum=0.0)
     rounded: list[tuple[str, float]] = []
     real: list[tuple[str, float]] = []
-    for entry in snappable:
-        if m := _ANGLES.match(entry):
-            what = m.group(1)
-            for name, value in zip(("yaw", "pitch", "roll"), m.group(2).split(",")):
-                a = float(value)
-                dev = abs(a - round(a / (np.pi / 2)) * (np.pi / 2))
-                if 0 < dev <= SNAP_WINDOW:
-                    is_rounding = _is_rounding(dev, tolerance)
-                    (rounded if is_rounding else real).append((f"{what} {name}", dev))
-        elif m := _AXIS.match(entry):
-            what = m.group(1)
-            for name, value in zip("xyz", m.group(2).split(",")):
-                dev = abs(float(value))
-                if 0 < dev <= SNAP_WINDOW:
-                    small = dev <= max(_ROUNDING_MATCH, tolerance)
-                    (rounded if small else real).append((f"{what} {name}", dev))
+    for change in changes:
+        try:
+            what = f"joint '{change['joint_name']}' {change['frame']} {change['component']}"
+            dev, axis = float(change["deviation"]), change["frame"] == "axis"
+        except (TypeError, KeyError, ValueError):
+            raise _args.fail("changes", f"holds {change!r}, not an entry of snap_changes") from None
+        if not 0 < dev <= SNAP_WINDOW:
+            continue
+        small = dev <= max(_ROUNDING_MATCH, tolerance) if axis else _is_rounding(dev, tolerance)
+        (rounded if small else real).append((what, dev))
     largest = max((d for _, d in rounded), default=0.0)
     smallest = min((d for _, d in real), default=None)
     separable = smallest is None or largest < smallest
@@ -660,14 +681,11 @@ def base_parameters(
 
 def _auto_snap(robot: Robot, compute, tolerance: float) -> tuple[_core.BaseParameters, dict]:
     """``snap="auto"``: the base parameters with the right angles the description writes
-    rounded snapped (:func:`rounded_right_angles`), checked against the description's own
-    inverse dynamics; and the decision."""
-    try:
-        core = compute(0.0)
-        listed = list(core.snappable)
-    except _core.ModelError:  # refused unsnapped: what is near a right angle, from a snap
-        core, listed = None, list(compute(SNAP_WINDOW).snapped)
-    found = rounded_right_angles(listed, tolerance=tolerance)
+    rounded snapped (:func:`rounded_right_angles` of the model's :func:`snap_changes`), checked
+    against the description's own inverse dynamics; and the decision. The base set is computed
+    once: snapped, or as written when nothing is snapped (or the snapped set fails the
+    check)."""
+    found = rounded_right_angles(snap_changes(robot), tolerance=tolerance)
     decision = {"mode": "auto", "applied": False, **found}
     decision["rounded"] = [list(x) for x in found["rounded"]]
     decision["real"] = [list(x) for x in found["real"]]
@@ -683,9 +701,7 @@ def _auto_snap(robot: Robot, compute, tolerance: float) -> tuple[_core.BaseParam
             f"the snapped base set reproduces the description's torques only to {check:.2g} "
             f"(over {bound:.2g})"
         )
-    if core is None:
-        core = compute(0.0)  # raises the refusal, as without snapping
-    return core, decision
+    return compute(0.0), decision  # (a refusal of the description as written is raised)
 
 
 def _snap_check(robot: Robot, core: _core.BaseParameters) -> float | None:

@@ -404,6 +404,7 @@ class Robot:
             return _readonly(np.array(self._m.transmission["T"], dtype=float))
         return _readonly(np.eye(self.n))
 
+    @_args.finite_results("dq")
     def slot_velocities(self, dq) -> np.ndarray:
         """The velocity ``v_k = t_k . dq`` of each rotor/friction slot for joint velocities
         ``dq`` (n,) or (m, n): the motor velocities on the motor side, ``dq`` otherwise."""
@@ -458,6 +459,7 @@ class Robot:
                 "tip='<link>'"
             )
 
+    @_args.finite_results("q")
     def joint_transform(self, k: int, q: float) -> np.ndarray:
         """4x4 transform from the link of joint ``parents[k]`` (the base when -1; ``k-1`` in a
         chain) to link ``k`` (0-based ``k``) at joint value ``q`` (a revolute or prismatic
@@ -549,6 +551,7 @@ class Robot:
         return self._m.parameters(*self._layout(rotor, friction, offset))
 
     # -- dynamics ------------------------------------------------------------------------------
+    @_args.finite_results("q", "dq", "ddq", "params")
     def inverse_dynamics(self, q, dq, ddq, params=None) -> np.ndarray:
         """Joint torques ``tau = W(q, dq, ddq) @ params`` by Newton-Euler.
 
@@ -562,6 +565,7 @@ class Robot:
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._m.inverse_dynamics(q, dq, ddq, self._params(params))
 
+    @_args.finite_results("q", "dq", "ddq")
     def regressor(
         self, q, dq, ddq, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ) -> np.ndarray:
@@ -574,6 +578,7 @@ class Robot:
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._m.regressor(q, dq, ddq, *self._layout(rotor, friction, offset))
 
+    @_args.finite_results("q", "params")
     def gravity_torque(self, q, params=None) -> np.ndarray:
         """Gravity torque ``c(q)``, shape (n,) or (m, n) (multi-DOF joints: nv)."""
         if not self._m.single_dof:
@@ -581,12 +586,14 @@ class Robot:
             return self.inverse_dynamics(q, z, z, params)
         return self._m.gravity_torque(_args.samples(q, "q", self.n), self._params(params))
 
+    @_args.finite_results("q", "params")
     def mass_matrix(self, q, params=None) -> np.ndarray:
         """Joint-space inertia ``A(q)``, shape (n, n) or (m, n, n) (multi-DOF joints: nv)."""
         if not self._m.single_dof:
             return self._multibody(_core.multibody_mass_matrix, q, params=params)
         return self._m.mass_matrix(_args.samples(q, "q", self.n), self._params(params))
 
+    @_args.finite_results("q", "dq", "tau", "params")
     def forward_dynamics(self, q, dq, tau, params=None) -> np.ndarray:
         """Joint accelerations ``A(q)^-1 (tau - b - c - friction)``, shape (n,) or (m, n).
 
@@ -596,10 +603,12 @@ class Robot:
         q, dq, tau = _args.batch(self.n, q=q, dq=dq, tau=tau)
         return self._m.forward_dynamics(q, dq, tau, self._params(params))
 
+    @_args.finite_results("q", "dq", "params")
     def kinetic_energy(self, q, dq, params=None):
         """Kinetic energy (rotor inertia included when ``params`` has it): float or shape (m,)."""
         return self._energies(q, dq, params)[0]
 
+    @_args.finite_results("q", "params")
     def potential_energy(self, q, params=None):
         """Potential energy ``-sum g . (M_k p_k + R_k MS_k)``: float or shape (m,)."""
         if not self._m.single_dof:
@@ -609,11 +618,13 @@ class Robot:
         q = _args.samples(q, "q", self.n)
         return self._m.energies(q, np.zeros_like(q), self._params(params))[1]
 
+    @_args.finite_results("q", "dq", "params")
     def energy(self, q, dq, params=None):
         """Total energy ``H = K + P``: float or shape (m,)."""
         k, p = self._energies(q, dq, params)
         return k + p
 
+    @_args.finite_results("dq")
     def friction_shapes(self, dq) -> np.ndarray:
         """The friction columns of every slot at the slot velocities ``dq`` (:attr:`friction_model`:
         ``v, sign v`` (coulomb), ``v, sign v, |sign v|`` (asymmetric), ``v, tanh(v / w)``
@@ -622,6 +633,7 @@ class Robot:
         (dq,) = _args.batch(self.n, dq=dq)
         return self._m.friction_shapes(dq)
 
+    @_args.finite_results("q", "dq")
     def energy_regressors(
         self, q, dq, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ):
@@ -630,16 +642,19 @@ class Robot:
         energy), so that differences over a window are the energy model's columns."""
         return self._energy_regressors(q, dq, rotor, friction, offset)
 
+    @_args.finite_results("q", "dq")
     def energy_regressor(self, q, dq, *, rotor: bool = False, friction: bool = False) -> np.ndarray:
         """Total-energy regressor ``w_H = w_K + w_P`` (``H = w_H @ params``)."""
         wk, wp = self._energy_regressors(q, dq, rotor, friction)
         return wk + wp
 
+    @_args.finite_results("q", "dq")
     def lagrangian_regressor(self, q, dq, *, rotor: bool = False, friction: bool = False):
         """Lagrangian regressor ``w_L = w_K - w_P`` (``L = w_L @ params``)."""
         wk, wp = self._energy_regressors(q, dq, rotor, friction)
         return wk - wp
 
+    @_args.finite_results("q", "dq")
     def momentum_regressors(
         self, q, dq, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ):
@@ -687,12 +702,14 @@ class Robot:
                 "and the base regressor)"
             )
 
+    @_args.finite_results("q")
     def link_poses(self, q) -> np.ndarray:
         """The pose of every link in the base frame at q (:attr:`nq` entries), shape (n, 4, 4);
         link k is the link joint k moves (any joint kinds)."""
         q = _args.array(q, "q", (self.nq,))
         return np.array(_core.multibody_link_poses(self._m, q))
 
+    @_args.finite_results("q", "dq", "params")
     def momentum(self, q, dq, params=None) -> np.ndarray:
         """The momentum of the whole system at (q, dq) (:attr:`nq`, :attr:`nv` entries), shape
         (6,): linear momentum, then angular momentum about the base origin, both in base axes;
@@ -727,6 +744,7 @@ class Robot:
             self._kin = _core.Kinematics(self._m)
         return self._kin
 
+    @_args.finite_results("q")
     def fk(self, q, *, link: int = -1) -> np.ndarray:
         """4x4 pose in the base frame of link ``link`` (0-based: the link moved by joint
         ``link``) or of the tool frame (``-1``; for a tree the last link's frame)."""
@@ -738,6 +756,7 @@ class Robot:
             return pose @ self.tool if link < 0 else pose
         return self._kinematics().pose(q, link)
 
+    @_args.finite_results("q")
     def jacobian(self, q) -> np.ndarray:
         """Geometric Jacobian of the tool frame, shape (6, n): rows vx vy vz wx wy wz in the
         base frame, reference point the tool-frame origin. For a tree, of the last link's frame,

@@ -685,6 +685,31 @@ PYBIND11_MODULE(_core, m) {
       py::arg("tolerance") = kDefaultRankTolerance, py::arg("samples") = 0, py::arg("seed") = 1u,
       py::arg("snap") = 0.0, py::arg("offset") = false);
   m.def(
+      "snap_changes",
+      [](const std::shared_ptr<PyModel>& model, double tolerance) {
+        Model copy = model->model;
+        std::vector<SnapChange> changes;
+        const std::vector<std::string> lines = snapRightAngles(copy, tolerance, &changes);
+        py::list entries;
+        for (const SnapChange& c : changes) {
+          py::dict d;
+          d["joint"] = c.joint;
+          d["joint_name"] = c.joint_name;
+          d["frame"] = c.frame;
+          d["component"] = c.component;
+          d["value"] = c.value;
+          d["snapped"] = c.snapped;
+          d["deviation"] = c.deviation;
+          entries.append(d);
+        }
+        return py::make_tuple(entries, lines);
+      },
+      py::arg("model"), py::arg("tolerance") = 1e-3,
+      "What a snap of `tolerance` [rad] would round in the model (which is unchanged): each "
+      "angle and axis component rounded (dicts: joint, joint_name, frame 'origin' | 'link "
+      "frame' | 'axis', component 'yaw' | 'pitch' | 'roll' | 'x' | 'y' | 'z', value, snapped, "
+      "deviation) and the lines of text that describe the changes.");
+  m.def(
       "influence_coordinates",
       [](const std::shared_ptr<PyModel>& model, bool rotor) {
         const InfluenceCoordinates ic = influenceCoordinates(model->model, {rotor, false});

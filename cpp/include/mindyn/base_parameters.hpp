@@ -158,9 +158,24 @@ void baseEnergyRegressor(const Model& model, Data& data, const BaseParameters& b
                          const VecRef& q, const VecRef& dq, VecOut wK, VecOut wP,
                          VecOut wb) noexcept;
 
+/// One angle or axis component that snapRightAngles rounds.
+struct SnapChange {
+  int joint = 0;           // 0-based joint index
+  std::string joint_name;  // its name
+  std::string frame;       // "origin" (the rotation before the joint motion), "link frame" (the
+                           // one after it) or "axis"
+  std::string component;   // "yaw", "pitch", "roll" (of the rotation Rz(yaw) Ry(pitch) Rx(roll))
+                           // or "x", "y", "z" (of the axis)
+  double value = 0;        // the angle [rad] or axis component as the model has it
+  double snapped = 0;      // what the snap makes of it (a multiple of pi/2, or 0)
+  double deviation = 0;    // |value - snapped|, in (0, tolerance]
+};
+
 /// Rounds joint-origin rotations that are within `tolerance` [rad] of multiples of pi/2 (per
 /// roll-pitch-yaw angle) and axis components within `tolerance` of 0 or +-1; returns one line per
-/// change made.
-std::vector<std::string> snapRightAngles(Model& model, double tolerance = 1e-3);
+/// change made (text for display) and, when `changes` is given, appends to it each angle and axis
+/// component rounded (the same changes as data).
+std::vector<std::string> snapRightAngles(Model& model, double tolerance = 1e-3,
+                                         std::vector<SnapChange>* changes = nullptr);
 
 }  // namespace mindyn

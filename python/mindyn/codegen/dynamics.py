@@ -42,16 +42,19 @@ class BaseDynamics:
     counts = property(lambda self: self._d.counts)
     geometry_snap = property(lambda self: self._d.geometry_snap)
 
+    @_args.finite_results("q", "dq", "ddq", "p")
     def inverse_dynamics(self, q, dq, ddq, p=None) -> ndarray:
         """tau, shape (n,) or (m, n) for batches of q, dq, ddq; ``p`` shape (np,), default the
         robot's own base-parameter values."""
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._d.inverse_dynamics(q, dq, ddq, self._values(p))
 
+    @_args.finite_results("q", "p")
     def gravity(self, q, p=None) -> ndarray:
         """Gravity torque, shape (n,) or (m, n)."""
         return self._d.gravity(_args.samples(q, "q", self.n), self._values(p))
 
+    @_args.finite_results("q", "dq", "ddq")
     def regressor(self, q, dq, ddq) -> ndarray:
         """W_b, shape (n, np) or (m, n, np): ``tau = W_b @ p``."""
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)

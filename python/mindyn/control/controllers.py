@@ -66,6 +66,7 @@ ZCR07S_STUDY_GAINS = {
 # ---------------------------------------------------------------------------------------------
 # Regressors
 # ---------------------------------------------------------------------------------------------
+@_args.finite_results("q", "dq", "dqr", "ddqr")
 def slotine_li_regressor(base: BaseParameters, q, dq, dqr, ddqr) -> np.ndarray:
     """Slotine-Li regressor in base parameters.
 
@@ -89,6 +90,7 @@ def slotine_li_regressor(base: BaseParameters, q, dq, dqr, ddqr) -> np.ndarray:
     return _core.slotine_li_regressor(base._b, q, dq, dqr, ddqr)
 
 
+@_args.finite_results("q", "dq", "dqr", "ddqr")
 def slotine_li_regressor_classical(
     robot: Robot, q, dq, dqr, ddqr, *, rotor: bool = False, friction: bool = False
 ) -> np.ndarray:
@@ -105,6 +107,7 @@ def slotine_li_regressor_classical(
     )
 
 
+@_args.finite_results("q", "dq", "params")
 def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
     """Coriolis matrix ``C(q, dq)`` of the Christoffel symbols, shape (n, n) or (m, n, n):
     ``C dq`` is the velocity-product torque and ``dA/dt - 2 C`` is skew-symmetric. ``params``: any
@@ -485,14 +488,40 @@ def check_gains(
     T = check_period(period)
     kp, kd, lam = _gain_arrays(kind, gains, robot.n)
     qs = workspace_samples(robot) if qs is None else np.atleast_2d(np.asarray(qs, dtype=float))
-    plants, models, cases = [], [], []
+    plants, models, damping, cases = [], [], [], []
     for r in _rotor_cases(rotor):
-        m = robot.mass_matrix(qs, plant_parameters(robot, r))
+        p = plant_parameters(robot, r)
+        m = robot.mass_matrix(qs, p)
         plants.append(np.linalg.inv(m))
         models.append(m)
+        damping.append(plant_damping(robot, p, qs))
         cases.append(f"robot {'with' if r else 'without'} rotor inertia")
     cases.append(f"{len(qs)} configurations, the controller's model the robot's own")
-    return check_loop(kind, kp, kd, lam, T, plants, models, qs, cases)
+    return check_loop(
+        kind,
+        kp,
+        kd,
+        lam,
+        T,
+        plants,
+        models,
+        qs,
+        cases,
+        plant_damping=damping,
+        model_damping=damping,
+    )
+
+
+def plant_damping(robot: Robot, params, qs) -> np.ndarray:
+    """The viscous friction's ``d tau / d dq`` of the robot of classical ``params`` (full
+    layout) at ``qs`` (:func:`~mindyn.control.stability.viscous_damping`), (m, n, n)."""
+    from .stability import viscous_damping
+
+    def regressor(q, dq, ddq):
+        return robot.regressor(q, dq, ddq, rotor=True, friction=True)
+
+    names = robot.parameter_names(rotor=True, friction=True)
+    return viscous_damping(regressor, names, params, qs)
 
 
 def controller_check(robot: Robot, controller, params, period: float):
@@ -505,7 +534,8 @@ def controller_check(robot: Robot, controller, params, period: float):
     _args.function(controller, "controller")
     params = _args.array(params, "params", (None,))
     period = _args.number(period, "period", positive=True)
-    from .stability import check_loop, workspace_samples
+    from .simulation import expand_params
+    from .stability import check_loop, viscous_damping, workspace_samples
 
     n = robot.n
     kind = getattr(controller, "name", None)
@@ -525,7 +555,7 @@ def controller_check(robot: Robot, controller, params, period: float):
         return None
     qs = workspace_samples(robot)
     m = robot.mass_matrix(qs, params)
-    models = [m]
+    models, fed = [m], None
     if kind != "pd":
         assert base is not None and p_hat is not None
         k = len(qs)
@@ -534,8 +564,22 @@ def controller_check(robot: Robot, controller, params, period: float):
         cols = base.regressor(qq, np.zeros_like(qq), eye) @ p_hat
         grav = base.regressor(qs, np.zeros_like(qs), np.zeros_like(qs)) @ p_hat
         models = [cols.reshape(k, n, n).transpose(0, 2, 1) - grav[:, :, None]]
+        fed = [viscous_damping(base.regressor, base.names, p_hat, qs)]
+    full = expand_params(n, params, sizes=robot.layout_sizes)
     cases = ["the controller's model", f"{len(qs)} configurations"]
-    return check_loop(kind, kp, kd, lam, period, [np.linalg.inv(m)], models, qs, cases)
+    return check_loop(
+        kind,
+        kp,
+        kd,
+        lam,
+        period,
+        [np.linalg.inv(m)],
+        models,
+        qs,
+        cases,
+        plant_damping=[plant_damping(robot, full, qs)],
+        model_damping=fed,
+    )
 
 
 #: Bandwidth of the derived default gains where the period allows it [rad/s]: ``Lambda``

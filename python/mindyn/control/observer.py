@@ -228,6 +228,7 @@ def calibrate_thresholds(
     return np.maximum(thr, floor)
 
 
+@_args.finite_results("std", "q", "dq", "t")
 def residual_uncertainty(observer: MomentumObserver, std, q, dq, t=None) -> np.ndarray:
     """The standard deviation (m, n) of the residual that the parameters' uncertainty alone
     explains along a motion: the residual is linear in the parameter values, so a value error

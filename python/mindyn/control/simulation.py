@@ -309,23 +309,18 @@ def rk4_substeps(robot: Robot, params, period: float) -> tuple[int, float]:
     Explicit RK4 diverges once its step exceeds 2.785 / lambda (a light wrist link with a large
     damping, as in the xArm7 of example-robot-data: lambda = 1.4e4 1/s), so the steps are
     ``max(MIN_SUBSTEPS, ceil(period lambda / RK4_STEP_RATE))``."""
+    from .controllers import plant_damping
     from .stability import workspace_samples
 
-    n = robot.n
     names = robot.parameter_names(rotor=True, friction=True)
-    p = expand_params(n, params, sizes=robot.layout_sizes)
+    p = expand_params(robot.n, params, sizes=robot.layout_sizes)
     viscous = np.where([name.startswith("Fv") for name in names], p, 0.0)
     rate = 0.0
     if np.any(viscous != 0.0):
-        eye, zero = np.eye(n), np.zeros(n)
-        for q in workspace_samples(robot):
-            damping = np.stack(
-                [robot.regressor(q, eye[j], zero, rotor=True, friction=True) @ viscous
-                 for j in range(n)],
-                axis=1,
-            )  # fmt: skip
-            eig = np.linalg.eigvals(np.linalg.solve(robot.mass_matrix(q, p), damping))
-            rate = max(rate, float(np.max(eig.real)))
+        qs = workspace_samples(robot)
+        damping = plant_damping(robot, viscous, qs)
+        eig = np.linalg.eigvals(np.linalg.solve(robot.mass_matrix(qs, p), damping))
+        rate = float(np.max(eig.real))
     return max(MIN_SUBSTEPS, math.ceil(period * rate / RK4_STEP_RATE)), rate
 
 

@@ -2,26 +2,43 @@
 holds its torque (zero-order hold), so gains that a continuous loop tolerates can make the
 sampled loop diverge.
 
-The check linearises the closed loop about rest at configurations sampled over the workspace:
-the robot is ``M(q) dde = u`` over one period (gravity and velocity terms are slow beside the
-feedback), and each controller is a PD law on ``e = q - q_d`` with effective gains
+The check linearises the closed loop about rest at configurations sampled over the workspace.
+The robot is ``M(q) dde + D(q) de = u`` over one period, ``D`` the viscous friction's
+``d tau / d dq`` (on the motors ``T^T diag(Fv) T``). Each controller is a PD law on
+``e = q - q_d`` with effective gains, plus the viscous friction its model feeds back on the
+measured velocity, ``D_hat de`` (none for PD):
 
 - PD: ``u = -K_P e - K_D de``;
-- computed torque: ``u = M_hat (-K_P e - K_D de)`` (``M_hat``: the controller's model);
-- adaptive PD: ``u = M_hat ddq_r - K_D s = -(K_D Lambda) e - (K_D + M_hat Lambda) de`` (the
-  feedforward ``Y p_hat`` holds ``M_hat ddq_r`` with ``ddq_r = ddq_d - Lambda de``).
+- computed torque: ``u = M_hat (-K_P e - K_D de) + D_hat de`` (``M_hat``, ``D_hat``: the
+  controller's model);
+- adaptive PD: ``u = M_hat ddq_r - K_D s + D_hat de = -(K_D Lambda) e - (K_D + M_hat Lambda -
+  D_hat) de`` (the feedforward ``Y p_hat`` holds ``M_hat ddq_r + D_hat dq`` with
+  ``ddq_r = ddq_d - Lambda de``).
 
-One period of ``M dde = u`` with ``u`` held is exactly ``x_{k+1} = Phi x_k``, ``x = (e, de)``::
+One period of the linear plant with ``u`` held is exactly ``x_{k+1} = A_d x_k + B_d u_k``,
+``x = (e, de)``, from the matrix exponential of ``[[0, I, 0], [0, -B D, B], [0, 0, 0]] T``
+(``B = M^-1``); without friction it is the closed form::
 
     Phi = [[I - T^2/2 B K_P,  T I - T^2/2 B K_D],
-           [   -T B K_P,          I - T B K_D   ]]      B = M^-1
+           [   -T B K_P,          I - T B K_D   ]]
 
-and the loop is stable when the spectral radius of ``Phi`` is below 1 at every sampled
-configuration. For one joint of inertia ``m`` this is ``0 < K_D T / m < 2`` and
-``K_P T < 2 K_D`` (the Jury conditions of its characteristic polynomial). The figures reported
-are the spectral radius, the *gain margin* (the factor by which all gains could grow before the
-loop goes unstable) and the *gain/period ratio* ``max |eig(T M^-1 K_D,eff)|``, which a sampled
-loop needs below 2.
+and the loop is stable when the spectral radius of ``Phi = A_d - B_d [K_P  K_D - D_hat]`` is
+below 1 at every sampled configuration. For one joint of inertia ``m`` without friction this is
+``0 < K_D T / m < 2`` and ``K_P T < 2 K_D`` (the Jury conditions of its characteristic
+polynomial). Viscous friction matters where it is fast beside the period: a light link with a
+large friction (``Fv T / m`` of 60 on the xArm7's wrist at 4 ms) reaches its friction-limited
+speed within a period, so that a model that feeds back more viscous friction than the robot has
+(``D_hat > D``) makes the sampled loop diverge whatever the gains. The figures reported are the
+spectral radius, the *gain margin* (the factor by which the gains ``K_P``, ``K_D`` could grow,
+the model's ``D_hat`` fixed, before the loop goes unstable), the *viscous-friction margin of the
+model* (the factor by which ``D_hat`` could grow, the gains fixed; with the true friction it is
+barely above 1 where the friction is fast: an adaptive estimate that grows past it diverges)
+and the *gain/period ratio* ``max |eig(T M^-1 K_D,eff)|``, which a sampled loop without
+friction needs below 2.
+
+Not covered (:data:`COVERED`, stated with each verdict): gravity and the velocity terms (slow
+beside the feedback at the periods of joint controllers), Coulomb friction (a relay: it has no
+linear part) and the adaptation of adaptive PD (the estimate is taken as it is when checked).
 """
 
 from __future__ import annotations
@@ -50,6 +67,11 @@ __all__ = [
 GAIN_MARGIN = 3.0
 #: Configurations at which the mass matrix is sampled (the middle of the limits and random ones).
 SAMPLES = 24
+#: What the linearised check covers (said with its verdict).
+COVERED = (
+    "linearised at rest: inertia and viscous friction of the robot and of the controller's "
+    "model; not gravity, Coulomb friction or adaptation"
+)
 #: Largest gain margin searched (a margin above it is reported as at least this).
 _MARGIN_CAP = 1e3
 
@@ -59,29 +81,52 @@ class UnstableLoopError(Error, ValueError):
     tracking error grew without bound)."""
 
 
-def loop_matrix(kp, kd, minv, period: float) -> np.ndarray:
-    """``Phi`` of one period of ``M dde = u``, ``u = -kp e - kd de`` held (module docstring);
-    ``kp``, ``kd``: (n, n) or (n,) (diagonal) effective gains, ``minv``: ``M^-1`` (n, n); or
-    stacks of them, (k, n, n), giving (k, 2n, 2n)."""
+def loop_matrix(kp, kd, minv, period: float, *, damping=None) -> np.ndarray:
+    """``Phi`` of one period of ``M dde + D de = u``, ``u = -kp e - kd de`` held (module
+    docstring); ``kp``, ``kd``: (n, n) or (n,) (diagonal) effective gains, ``minv``: ``M^-1``
+    (n, n), ``damping``: ``D`` (n, n) (default none); or stacks of them, (k, n, n), giving
+    (k, 2n, 2n)."""
     kp = _args.array(kp, "kp", (None,) * np.ndim(kp))
     kd = _args.array(kd, "kd", (None,) * np.ndim(kd))
     minv = _args.array(minv, "minv", (None,) * np.ndim(minv))
     period = _args.number(period, "period", positive=True)
-    minv = np.asarray(minv, dtype=float)
+    damping = _args.optional(_args.array, damping, "damping", (None,) * np.ndim(damping))
     minv = minv if minv.ndim >= 2 else np.atleast_2d(minv)
+    kp, kd = (np.diag(k) if np.ndim(k) == 1 else k for k in (kp, kd))
+    return _closed(*plant_step(minv, float(period), damping), kp, kd)
+
+
+def plant_step(minv, T: float, damping=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(A_d, B_d)``, stacks (k, 2n, 2n) and (k, 2n, n): one period ``T`` of
+    ``M dde + D de = u`` with ``u`` held, ``x = (e, de)`` (module docstring); the closed form
+    without ``damping`` ``D``, else the matrix exponential."""
     n = minv.shape[-1]
-    kp, kd = (np.diag(k) if np.ndim(k) == 1 else np.asarray(k, dtype=float) for k in (kp, kd))
-    T = float(period)
-    bp, bd = minv @ kp, minv @ kd
-    eye = np.broadcast_to(np.eye(n), bp.shape)
-    top = np.concatenate([eye - 0.5 * T * T * bp, T * eye - 0.5 * T * T * bd], axis=-1)
-    bottom = np.concatenate([-T * bp, eye - T * bd], axis=-1)
-    return np.concatenate([top, bottom], axis=-2)
+    eye = np.broadcast_to(np.eye(n), minv.shape)
+    zero = np.zeros(minv.shape)
+    if damping is None:
+        ad = np.concatenate(
+            [np.concatenate([eye, T * eye], -1), np.concatenate([zero, eye], -1)], -2
+        )
+        return ad, np.concatenate([0.5 * T * T * minv, T * minv], axis=-2)
+    from scipy.linalg import expm
+
+    rows = [
+        np.concatenate([zero, eye, zero], -1),
+        np.concatenate([zero, -minv @ np.broadcast_to(damping, minv.shape), minv], -1),
+        np.concatenate([zero, zero, zero], -1),
+    ]
+    step = expm(np.concatenate(rows, -2) * T)
+    return step[..., : 2 * n, : 2 * n], step[..., : 2 * n, 2 * n :]
 
 
-def _radius(kp, kd, minv, T) -> np.ndarray:
+def _closed(ad, bd, kp, kd) -> np.ndarray:
+    """``A_d - B_d [kp kd]``: the sampled loop of the feedback ``u = -kp e - kd de``."""
+    return ad - bd @ np.concatenate([kp, kd], axis=-1)
+
+
+def _radius(ad, bd, kp, kd) -> np.ndarray:
     """Spectral radius of each loop of a stack."""
-    return np.max(np.abs(np.linalg.eigvals(loop_matrix(kp, kd, minv, T))), axis=-1)
+    return np.max(np.abs(np.linalg.eigvals(_closed(ad, bd, kp, kd))), axis=-1)
 
 
 #: Spectral radius above which a loop counts as unstable: 1 plus round-off (a loop with no
@@ -89,18 +134,28 @@ def _radius(kp, kd, minv, T) -> np.ndarray:
 _UNSTABLE = 1.0 + 1e-9
 
 
-def _margin(kp, kd, minv, T) -> np.ndarray:
-    """For each loop of a stack, the largest factor g (up to ``_MARGIN_CAP``) with the loop of
-    ``g kp, g kd`` stable; 0 where the loop is unstable already (bisection on log g, all loops
-    at once; the stable set of g is an interval from 0 for the loops here)."""
-    stable = _radius(kp, kd, minv, T) <= _UNSTABLE
-    capped = _radius(_MARGIN_CAP * kp, _MARGIN_CAP * kd, minv, T) <= _UNSTABLE
+def _scaled_gains(g, ad, bd, kp, kd, fed) -> np.ndarray:
+    """Spectral radii of the loops with the gains times ``g``, the model's friction fixed."""
+    return _radius(ad, bd, g * kp, g * kd - fed)
+
+
+def _scaled_friction(g, ad, bd, kp, kd, fed) -> np.ndarray:
+    """Spectral radii of the loops with the model's viscous friction times ``g``."""
+    return _radius(ad, bd, kp, kd - g * fed)
+
+
+def _largest_factor(radius, *loops) -> np.ndarray:
+    """For each loop of a stack, the largest factor g (up to ``_MARGIN_CAP``) with the loop
+    stable, ``radius(g, *loops)`` giving the spectral radii of the loops at factors ``g``
+    (k, 1, 1) or (1, 1, 1); 0 where the loop is unstable at g = 1 (bisection on log g from 1,
+    all loops at once)."""
+    stable = radius(np.ones((1, 1, 1)), *loops) <= _UNSTABLE
+    capped = radius(np.full((1, 1, 1), _MARGIN_CAP), *loops) <= _UNSTABLE
     lo = np.zeros(stable.shape)
     hi = np.full(stable.shape, math.log(_MARGIN_CAP))
     for _ in range(14):  # log g to 4e-4: the margin to 0.05 %
         mid = 0.5 * (lo + hi)
-        g = np.exp(mid)[:, None, None]
-        ok = _radius(g * kp, g * kd, minv, T) <= _UNSTABLE
+        ok = radius(np.exp(mid)[:, None, None], *loops) <= _UNSTABLE
         lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
     return np.where(~stable, 0.0, np.where(capped, _MARGIN_CAP, np.exp(lo)))
 
@@ -141,8 +196,12 @@ class LoopCheck:
 
     ``stable``: every sampled loop has spectral radius at most 1; ``gain_margin``: the smallest
     over the samples (0 when unstable); ``spectral_radius`` the largest; ``ratio`` the largest
-    ``|eig(T M^-1 K_D,eff)|`` (a sampled loop needs it below 2); ``q`` the configuration of the
-    smallest margin; ``cases`` the plant/model pairs checked (text)."""
+    ``|eig(T M^-1 K_D,eff)|`` (a sampled loop without friction needs it below 2); ``q`` the
+    configuration of the smallest margin; ``cases`` the plant/model pairs checked (text);
+    ``friction_margin`` the factor by which the viscous friction the controller's model feeds
+    back could grow, the gains fixed, before a loop goes unstable (the smallest; 0 when
+    unstable; None when the model feeds back none): an estimate that adaptation moves past it
+    makes the loop diverge."""
 
     kind: str
     period: float
@@ -152,6 +211,7 @@ class LoopCheck:
     ratio: float
     q: np.ndarray
     cases: list = field(default_factory=list)
+    friction_margin: float | None = None
 
     def text(self) -> str:
         """One line: the verdict and the figures that explain it."""
@@ -160,17 +220,29 @@ class LoopCheck:
             if self.gain_margin < _MARGIN_CAP
             else f"gain margin above {_MARGIN_CAP:g}"
         )
+        if self.friction_margin is not None:
+            margin += (
+                f", viscous-friction margin of the controller's model {self.friction_margin:.4g}"
+                if self.friction_margin < _MARGIN_CAP
+                else f", viscous-friction margin of the controller's model above {_MARGIN_CAP:g}"
+            )
         verdict = "stable" if self.stable else "UNSTABLE"
         return (
             f"sampled {self.kind} loop at a period of {self.period:g} s: {verdict} "
             f"(spectral radius {self.spectral_radius:.6g}, {margin}; largest eigenvalue of "
             f"T M^-1 K_D,eff {self.ratio:.3g}, a sampled loop needs it below 2; "
-            f"{len(self.q) and 'checked on ' + ', '.join(self.cases)})"
+            f"{len(self.q) and 'checked on ' + ', '.join(self.cases) + '; '}{COVERED})"
         )
 
     def error(self, *, what: str = "") -> UnstableLoopError:
         """The error that refuses this loop, ``what`` naming the gains."""
-        fix = "lower the gains or the controller period"
+        fix = "lower the gains or the controller period" + (
+            ", or the viscous friction of the controller's model (above the robot's, it makes "
+            "the sampled loop diverge whatever the gains where the friction is fast beside the "
+            "period)"
+            if self.friction_margin is not None
+            else ""
+        )
         return UnstableLoopError(
             f"{what + ': ' if what else ''}the {self.text()}; {fix}"
             if not self.stable
@@ -188,10 +260,16 @@ def check_loop(
     models,
     qs: np.ndarray,
     cases: list,
+    *,
+    plant_damping=None,
+    model_damping=None,
 ) -> LoopCheck:
     """The check of one controller: ``plant_inverses`` and ``models`` lists of (m, n, n) stacks
     of ``M^-1`` and ``M_hat`` at the configurations ``qs`` (m, n), each plant checked with the
-    model beside it; ``cases`` names them."""
+    model beside it; ``cases`` names them. ``plant_damping`` and ``model_damping``: lists beside
+    them of (m, n, n) stacks (:func:`viscous_damping`), the viscous friction of the plant and
+    the one the controller's model feeds back (``None``, or a ``None`` entry: none; a PD
+    controller has no model, its ``model_damping`` is ignored)."""
     _args.text(kind, "kind")
     kp = _args.array(kp, "kp", (None,) * np.ndim(kp))
     kd = _args.array(kd, "kd", (None,) * np.ndim(kd))
@@ -201,15 +279,22 @@ def check_loop(
     _args.instance(models, "models", (list, tuple), "a list of arrays")
     qs = _args.array(qs, "qs", (None, None))
     _args.instance(cases, "cases", (list, tuple), "a list of names")
+    plant_damping = _stacks(plant_damping, "plant_damping", len(plant_inverses))
+    model_damping = _stacks(model_damping, "model_damping", len(plant_inverses))
     T = float(period)
     worst = (math.inf, 0.0, 0.0, None)  # margin, radius, ratio, q
-    rho_max, ratio_max = 0.0, 0.0
-    for minv, m_hat in zip(plant_inverses, models):
+    rho_max, ratio_max, friction = 0.0, 0.0, None
+    for minv, m_hat, damping, fed in zip(plant_inverses, models, plant_damping, model_damping):
         kpe, kde = effective_gains(kind, kp, kd, lam, m_hat)
         kpe, kde = np.broadcast_to(kpe, minv.shape), np.broadcast_to(kde, minv.shape)
-        rho = _radius(kpe, kde, minv, T)
+        ad, bd = plant_step(minv, T, damping)
+        fed = np.zeros(minv.shape) if fed is None or kind == "pd" else fed
+        rho = _radius(ad, bd, kpe, kde - fed)
         ratio = np.max(np.abs(np.linalg.eigvals(T * minv @ kde)), axis=-1)
-        margin = _margin(kpe, kde, minv, T)
+        margin = _largest_factor(_scaled_gains, ad, bd, kpe, kde, fed)
+        if np.any(fed != 0.0):
+            f = _largest_factor(_scaled_friction, ad, bd, kpe, kde, fed)
+            friction = min(float(f.min()), math.inf if friction is None else friction)
         rho_max, ratio_max = max(rho_max, float(rho.max())), max(ratio_max, float(ratio.max()))
         i = int(np.argmin(margin))
         if margin[i] < worst[0]:
@@ -223,4 +308,32 @@ def check_loop(
         ratio_max,
         np.asarray(worst[3]),
         list(cases),
+        friction,
     )
+
+
+def _stacks(stacks, name: str, count: int) -> list:
+    if stacks is None:
+        return [None] * count
+    _args.instance(stacks, name, (list, tuple), "a list of arrays or None")
+    if len(stacks) != count:
+        raise _args.fail(name, f"has {len(stacks)} entries; expected {count}, one per plant")
+    return [None if d is None else _args.array(d, name, (None, None, None)) for d in stacks]
+
+
+def viscous_damping(regressor, names, params, qs) -> np.ndarray:
+    """``D``, a stack (m, n, n) at the configurations ``qs`` (m, n): the viscous friction's
+    ``d tau / d dq`` of the model ``tau = regressor(q, dq, ddq) @ params`` (``names``: its
+    columns; the columns ``Fv*``, linear in the velocity). Coulomb friction is left out (a
+    relay: it has no linear part)."""
+    qs = np.asarray(qs, dtype=float)
+    viscous = np.where([str(x).startswith("Fv") for x in names], params, 0.0)
+    m, n = qs.shape
+    damping = np.zeros((m, n, n))
+    if viscous.any():
+        zero = np.zeros_like(qs)
+        for j in range(n):
+            unit = np.zeros_like(qs)
+            unit[:, j] = 1.0
+            damping[:, :, j] = regressor(qs, unit, zero) @ viscous
+    return damping

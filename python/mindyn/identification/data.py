@@ -620,6 +620,9 @@ def differentiate(
     window = _args.optional(_args.number, window, "window", positive=True)
     polyorder = _args.integer(polyorder, "polyorder", 0)
     m = t.shape[0]
+    if m > 1 and not np.all(np.diff(t) > 0):
+        k = int(np.flatnonzero(~(np.diff(t) > 0))[0])
+        raise _args.fail("t", f"is not increasing (t[{k + 1}] = {t[k + 1]:.6g} after {t[k]:.6g})")
     rate = (m - 1) / (t[-1] - t[0])
     jitter = float(np.max(np.abs(np.diff(t) * rate - 1.0))) if m > 1 else 0.0
     info: dict = {"rate_Hz": rate, "timing_jitter": jitter}

@@ -221,6 +221,7 @@ def _forward_states(sos, padlen, rows, m, head, tail, cols):
     return bounds, states, z, kept
 
 
+@_args.finite_results("t")
 def timing(t: np.ndarray) -> dict:
     """Statistics of the sample intervals of ``t`` (m,): median, min, max [s], ``jitter`` (largest
     deviation from the median relative to it), ``rms_jitter`` and the number of ``gaps`` longer
