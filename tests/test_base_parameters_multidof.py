@@ -253,13 +253,17 @@ def test_a_floating_body_s_lagrangian_in_the_projection_basis(tmp_path):
         values = dict(zip(("vx1", "vy1", "vz1", "wx1", "wy1", "wz1"), (*vo, *w), strict=True))
         values.update({"ux1": u[0], "uy1": u[1], "uz1": u[2], "h1": h})
 
-        def f(name: str) -> float:
-            out = 1.0
-            for factor in name.split("*"):
-                base, _, power = factor.partition("^")
-                out *= (float(base) if base[0].isdigit() else values[base]) ** int(power or 1)
-            return out
-
-        lagrangian = sum(Z[r] @ robot.params * f(name) for r, name in enumerate(basis))
+        lagrangian = sum(
+            Z[r] @ robot.params * _evaluate(name, values) for r, name in enumerate(basis)
+        )
         closed = 0.5 * m * vo @ vo + vo @ np.cross(w, mc) + 0.5 * w @ Io @ w + g * (m * h + u @ mc)
         assert abs(lagrangian - closed) <= 1e-12 * (abs(closed) + 1), (lagrangian, closed)
+
+
+def _evaluate(name: str, values: dict) -> float:
+    """A basis function's value from its name (factors joined by ``*``, powers by ``^``)."""
+    out = 1.0
+    for factor in name.split("*"):
+        base, _, power = factor.partition("^")
+        out *= (float(base) if base[0].isdigit() else values[base]) ** int(power or 1)
+    return out
