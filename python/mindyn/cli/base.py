@@ -6,7 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
-from ..base import MAX_TOLERANCE, base_parameters
+from ..base import AUTO_PROJECTION_TERMS, MAX_TOLERANCE, base_parameters
 from .args import add_command, deprecated
 from .method import base_method, projection_limits_text
 from .number_options import number
@@ -137,11 +137,13 @@ def register(sub) -> None:
         description="Base inertial parameters by the projection method (exact; the default), "
         "the recursive method (exact, the same base set, cost linear in the number of joints) "
         "or the numerical method (sampled regressor + QR), on chains and trees. Without "
-        "--method, a robot whose projection cost estimate is over its budget (or beyond the "
-        f"projection method's limits: more than {projection_limits_text()}) is computed by the "
-        "recursive method, and the output says so; joints of several degrees of freedom "
-        "(--root-joint, the multi-DOF joints of a YAML table) are taken by the exact methods as "
-        "chains of single-DOF joints through massless links.",
+        "--method, a robot whose projection cost estimate is over its budget or over "
+        f"{AUTO_PROJECTION_TERMS:.0e} terms (about a second), or beyond the projection method's "
+        f"limits (more than {projection_limits_text()}), is computed by the recursive method, "
+        "and the output says so; joints of several degrees of freedom (--root-joint, the "
+        "multi-DOF joints of a YAML table) are taken by the exact methods as chains of "
+        "single-DOF joints through massless links, except a floating root, which the "
+        "projection method takes as it is.",
     )
     add_robot(p)
     add_joint_terms(p)
