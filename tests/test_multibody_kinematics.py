@@ -14,6 +14,7 @@ import pinocchio as pin
 import pytest
 import yaml
 from conftest import assert_close, se3
+from mindyn import inverse_kinematics
 from mindyn.identification.floating import contact_jacobian
 from random_tree import random_multidof_tree_yaml
 from test_multibody import geometry_pair, pin_q, random_state, urdf_pair
@@ -203,3 +204,20 @@ def test_kinematics_of_multidof_robots_check_their_arguments():
         robot.mass_matrix(q, params=np.ones(3))
     with pytest.raises(mindyn.ArgumentError, match=r"^q contains NaN at sample 1, coordinate 3"):
         robot.kinetic_energy(np.vstack([q, nan_q]), np.vstack([v, v]))
+
+
+def test_inverse_kinematics_refuses_multidof_chains_naming_the_joint(tmp_path):
+    """fk and jacobian take a serial chain of multi-DOF joints; the inverse kinematics does not
+    (its steps add dq to q), in one line naming the first multi-DOF joint."""
+    robot = tree_with_tool(tmp_path, 1)
+    assert robot.is_serial
+    q = random_state(robot, np.random.default_rng(0))[0]
+    kind = next(t for t in robot.joint_types if t not in ("revolute", "prismatic"))
+    path = inverse_kinematics.line_path(robot.fk(q), robot.fk(q), 0.1)
+    for call in (
+        lambda: inverse_kinematics.velocity_ik(robot, q, np.zeros(6)),
+        lambda: inverse_kinematics.resolved_rate(robot, q, path, 0.1),
+        lambda: mindyn.ik(robot, robot.fk(q)),
+    ):
+        with pytest.raises(mindyn.ModelError, match=f"has the {kind} joint"):
+            call()

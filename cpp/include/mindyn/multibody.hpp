@@ -1,6 +1,6 @@
-// Rigid-body dynamics of a model with joints of any kind (model.hpp, JointType): revolute,
-// prismatic, spherical, universal, cylindrical, planar and free-flyer joints, a serial chain or a
-// tree, with a fixed base or a floating one (a free-flyer or planar joint at the root).
+// Rigid-body dynamics and kinematics of a model with joints of any kind (model.hpp, JointType):
+// revolute, prismatic, spherical, universal, cylindrical, planar and free-flyer joints, a serial
+// chain or a tree, with a fixed base or a floating one (a free-flyer or planar joint at the root).
 //
 // q has model.configSize() entries and v, a, tau model.velocitySize() (Pinocchio's nq and nv, its
 // joint conventions: see JointType). tau of a free-flyer joint is the wrench (force; torque) the
