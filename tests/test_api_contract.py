@@ -7,8 +7,10 @@ the constructors and methods of the classes of ``mindyn.codegen``); each has a
 valid baseline call below, which is run once. Then every argument of the baseline is replaced,
 one at a time, by a value of a wrong type and by a wrong value of the right type: each call must
 raise ``mindyn.ArgumentError`` (a ``mindyn.Error``, ``ValueError`` and ``TypeError``) whose one
-line names the argument. Options after the data arguments are keyword-only. Getters return
-read-only arrays.
+line names the argument. The functions that take a robot with multi-DOF joints on their own
+paths (dynamics, kinematics, Slotine-Li regressor, Coriolis matrix) are walked a second time on
+such a robot (``[multi-DOF]``). Options after the data arguments are keyword-only. Getters
+return read-only arrays.
 """
 
 from __future__ import annotations
@@ -214,6 +216,7 @@ def _api(tmp: Path) -> dict:
     )
     return {
         **_codegen_api(tmp),
+        **_multidof_api(),
         **{
             "control.controllers.check_period": (controllers.check_period, (0.004,), {}),
             "control.controllers.controller_check": (
@@ -649,6 +652,57 @@ def _api(tmp: Path) -> dict:
     }
 
 
+def _multidof() -> tuple[mindyn.Robot, np.ndarray, np.ndarray]:
+    """A random tree of every joint kind (revolute, prismatic, spherical, universal,
+    cylindrical, planar, floating) and a configuration and a velocity of it."""
+    import tempfile
+
+    from random_tree import random_multidof_tree_yaml
+
+    with tempfile.TemporaryDirectory() as d:
+        robot = mindyn.load(random_multidof_tree_yaml(Path(d) / "tree.yaml", n=7, seed=1))
+    quat = [0.1, -0.2, 0.3, np.sqrt(1 - 0.14)]
+    q_of = {
+        "spherical": quat,
+        "universal": [0.3, -0.2],
+        "cylindrical": [0.1, 0.4],
+        "planar": [0.1, 0.2, np.cos(0.5), np.sin(0.5)],
+        "floating": [0.1, 0.2, 0.3, *quat],
+    }
+    q = np.concatenate([q_of.get(kind, [0.3]) for kind in robot.joint_types])
+    return robot, q, np.linspace(-1.0, 1.0, robot.nv)
+
+
+def _multidof_api() -> dict:
+    """Baseline calls of the functions that take a robot with multi-DOF joints, which take
+    their own paths (q of nq entries, the others of nv)."""
+    r, q, v = _multidof()
+    assert not r.single_dof and len(set(r.joint_types)) == 7
+    base = mindyn.base_parameters(r)
+    calls = {
+        "Robot.inverse_dynamics": (r.inverse_dynamics, (q, v, v, r.params), {}),
+        "Robot.regressor": (r.regressor, (q, v, v), {"rotor": False, "friction": False}),
+        "Robot.gravity_torque": (r.gravity_torque, (q,), {}),
+        "Robot.mass_matrix": (r.mass_matrix, (q,), {}),
+        "Robot.link_poses": (r.link_poses, (q,), {}),
+        "Robot.momentum": (r.momentum, (q, v, r.params), {}),
+        "Robot.forward_dynamics": (r.forward_dynamics, (q, v, v), {}),
+        "Robot.kinetic_energy": (r.kinetic_energy, (q, v), {}),
+        "Robot.potential_energy": (r.potential_energy, (q,), {}),
+        "Robot.energy": (r.energy, (q, v), {}),
+        "Robot.fk": (r.fk, (q,), {"link": 0}),
+        "Robot.jacobian": (r.jacobian, (q,), {}),
+        "BaseParameters.regressor": (base.regressor, (q, v, v), {}),
+        "mindyn.coriolis_matrix": (mindyn.coriolis_matrix, (r, q, v), {}),
+        "control.slotine_li_regressor_classical": (
+            control.slotine_li_regressor_classical,
+            (r, q, v, v, v),
+            {"rotor": False},
+        ),
+    }
+    return {f"{name}[multi-DOF]": call for name, call in calls.items()}
+
+
 def _codegen_api(tmp: Path) -> dict:
     """Baseline calls of mindyn.codegen: generation, parameter files, controller and observer
     steps (their C compiled), PLCopen projects and the runtime base dynamics."""
@@ -722,6 +776,7 @@ WRONG_VALUE: dict[tuple[str, str], object] = {
     ("Robot.joint_pre", "k"): 5,
     ("Robot.joint_post", "k"): -1,
     ("Robot.fk", "link"): 7,
+    ("Robot.fk[multi-DOF]", "link"): 7,
     ("Robot.with_drive_side", "side"): "motors",
     ("control.check_gains", "kind"): "lqr",
     ("control.check_sampled_gains", "kind"): "lqr",

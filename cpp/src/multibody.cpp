@@ -182,6 +182,24 @@ void forwardKinematics(const Model& model, MultibodyData& data, const VecRef& q)
   }
 }
 
+void frameJacobian(const Model& model, MultibodyData& data, const VecRef& q, int link,
+                   const Eigen::Isometry3d& placement, ReferenceFrame frame, MatOut J) noexcept {
+  forwardKinematics(model, data, q);
+  const Eigen::Vector3d o = data.p0[link] + data.R0[link] * placement.translation();
+  // the rows' axes in the base frame: the base's (identity) or the frame's
+  const Eigen::Matrix3d Rt = frame == ReferenceFrame::Local
+                                 ? Eigen::Matrix3d((data.R0[link] * placement.linear()).transpose())
+                                 : Eigen::Matrix3d::Identity();
+  J.setZero();
+  for (int k = link; k >= 0; k = model.parent(k))
+    for (int i = 0; i < data.dof[k]; ++i) {
+      const Eigen::Vector3d w = data.R0[k] * data.S[k].col(i).head<3>();
+      const Eigen::Vector3d v = data.R0[k] * data.S[k].col(i).tail<3>() + w.cross(o - data.p0[k]);
+      J.col(data.iv[k] + i).head<3>().noalias() = Rt * v;
+      J.col(data.iv[k] + i).tail<3>().noalias() = Rt * w;
+    }
+}
+
 void inverseDynamics(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,
                      const VecRef& a, const VecRef& params, VecOut tau) noexcept {
   forwardKinematics(model, data, q);

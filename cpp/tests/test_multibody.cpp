@@ -76,6 +76,46 @@ TEST(Multibody, EveryKindIsConsistent) {
   EXPECT_LE((a2 - a).norm(), 1e-9 * a.norm());
 }
 
+// The frame Jacobian times v is the velocity of the frame that the recursive velocity pass gives
+// (link k's (angular; linear) velocity in its own axes, carried to the frame's origin), in the
+// frame's axes (Local) and in the base's (LocalWorldAligned).
+TEST(Multibody, TheFrameJacobianGivesTheVelocityOfTheRecursivePass) {
+  const Model model = test::everyJointKind();
+  MultibodyData data(model);
+  const int nv = model.velocitySize();
+  std::mt19937 rng(5);
+  Eigen::VectorXd q(model.configSize());
+  randomConfiguration(model, rng, q);
+  const Eigen::VectorXd v = test::random(rng, nv);
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  X.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  X.translation() << 0.2, -0.1, 0.3;
+  Eigen::MatrixXd J(6, nv), Jw(6, nv);
+  kineticEnergy(model, data, q, v, model.inertial);  // leaves the link velocities in data.v
+  const std::vector<Vector6d> vk = data.v;
+  for (int k = 0; k < model.nq(); ++k) {
+    const Eigen::Vector3d w = vk[k].head<3>(), o = vk[k].tail<3>() + w.cross(X.translation());
+    Vector6d local;
+    local << X.linear().transpose() * o, X.linear().transpose() * w;
+    frameJacobian(model, data, q, k, X, ReferenceFrame::Local, J);
+    frameJacobian(model, data, q, k, X, ReferenceFrame::LocalWorldAligned, Jw);
+    EXPECT_LE((J * v - local).norm(), 1e-13 * local.norm()) << k;
+    const Eigen::Matrix3d R = data.R0[k] * X.linear();
+    Vector6d world;
+    world << R * local.head<3>(), R * local.tail<3>();
+    EXPECT_LE((Jw * v - world).norm(), 1e-13 * world.norm()) << k;
+    for (int c = 0; c < nv; ++c) {  // the columns of joints off the path to link k are zero
+      int j = 0;
+      while (j + 1 < model.nq() && data.iv[j + 1] <= c) ++j;
+      bool on_path = false;
+      for (int i = k; i >= 0; i = model.parent(i)) on_path = on_path || i == j;
+      if (!on_path) {
+        EXPECT_EQ(J.col(c).norm(), 0.0) << k << " " << c;
+      }
+    }
+  }
+}
+
 TEST(Multibody, MultiDofModelsAreRefusedByTheSingleDofAlgorithms) {
   const Model model = test::everyJointKind();
   try {

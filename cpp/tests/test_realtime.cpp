@@ -336,7 +336,9 @@ TEST(Realtime, MultibodyPathsAllocateNothing) {
     randomConfiguration(model, rng, q);
     const Eigen::VectorXd v = test::random(rng, nv), a = test::random(rng, nv);
     Eigen::VectorXd tau(nv), a2(nv);
-    Eigen::MatrixXd W(nv, 10 * n), M(nv, nv), C(nv, nv);
+    Eigen::MatrixXd W(nv, 10 * n), M(nv, nv), C(nv, nv), J(6, nv);
+    Eigen::Isometry3d placement = Eigen::Isometry3d::Identity();
+    placement.translation() << 0.1, -0.2, 0.3;
     double e = 0;
     bool ok = true;
     test::Count c;
@@ -350,6 +352,10 @@ TEST(Realtime, MultibodyPathsAllocateNothing) {
       e += momentum(model, data, q, v, model.inertial).norm();
       e += kineticEnergy(model, data, q, v, model.inertial) +
            potentialEnergy(model, data, q, model.inertial);
+      for (const auto frame : {ReferenceFrame::LocalWorldAligned, ReferenceFrame::Local}) {
+        frameJacobian(model, data, q, n - 1, placement, frame, J);
+        e += J.norm();
+      }
     }
     EXPECT_EQ(c.value(), 0) << convention;
     EXPECT_TRUE(ok);

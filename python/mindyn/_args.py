@@ -97,8 +97,8 @@ def _finite(a: np.ndarray, name: str, unit: str) -> None:
     what = "NaN" if np.isnan(a[idx]) else "an infinite value"
     if a.ndim == 1:
         where = f"{unit} {idx[0] + 1}"
-    elif a.ndim == 2 and unit == "joint":
-        where = f"sample {idx[0]}, joint {idx[1] + 1}"
+    elif a.ndim == 2 and unit != "entry":
+        where = f"sample {idx[0]}, {unit} {idx[1] + 1}"
     else:
         where = "index " + str(idx)
     raise ArgumentError(f"{name} contains {what} at {where}; expected finite values")
@@ -122,8 +122,10 @@ def array(
     return a
 
 
-def samples(x, name: str, n: int) -> np.ndarray:
-    """A per-sample argument: shape (n,) for one sample or (m, n) for m samples (m >= 0)."""
+def samples(x, name: str, n: int, *, unit: str = "joint") -> np.ndarray:
+    """A per-sample argument: shape (n,) for one sample or (m, n) for m samples (m >= 0);
+    ``unit`` names an entry in the message of a non-finite one (``coordinate`` for a robot with
+    multi-DOF joints, whose entries are not joints)."""
     expected = f"({n},) or (m, {n})"
     a = _convert(x, name, expected)
     if a.ndim not in (1, 2):
@@ -132,20 +134,26 @@ def samples(x, name: str, n: int) -> np.ndarray:
         )
     if not (a.shape == (n,) or (a.ndim == 2 and a.shape[1] == n)):
         raise _wrong_shape(name, a, f"(m, {n})" if a.ndim == 2 else expected)
-    _finite(a, name, "joint")
+    _finite(a, name, unit)
     return a
 
 
-def batch(n: int, **arrays) -> list[np.ndarray]:
+def batch(n: int | dict[str, int], **arrays) -> list[np.ndarray]:
     """Several per-sample arguments that must agree: all single samples or batches of one
-    length. Returned in the order given."""
-    out = [samples(x, name, n) for name, x in arrays.items()]
+    length. ``n`` is the size of each, or a dict of each argument's size (a robot with multi-DOF
+    joints: q of nq entries, the others of nv; their entries are then coordinates, not joints).
+    Returned in the order given."""
+    sizes = n if isinstance(n, dict) else dict.fromkeys(arrays, n)
+    unit = "coordinate" if isinstance(n, dict) else "joint"
+    out = [samples(x, name, sizes[name], unit=unit) for name, x in arrays.items()]
     first_name, first = next(iter(arrays)), out[0]
     for (name, _), a in zip(arrays.items(), out):
-        if a.shape != first.shape:
+        if a.shape[:-1] != first.shape[:-1] or a.ndim != first.ndim:
+            size = sizes[name]
             raise ArgumentError(
-                f"{name} has shape {a.shape}; expected {first.shape} like {first_name}: all "
-                f"inputs must be single samples ({n},) or batches of equal length (m, {n})"
+                f"{name} has shape {a.shape}; expected "
+                f"{first.shape[:-1] + (size,)} like {first_name}: all inputs must be single "
+                f"samples ({size},) or batches of equal length (m, {size})"
             )
     return out
 

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ArgumentError', 'BaseDynamics', 'BaseParameters', 'Error', 'IkSolver', 'Integrator', 'Kinematics', 'Model', 'ModelError', 'MomentumObserver', 'OFFSET_PREFIX', 'RobotFileNotFoundError', 'STFunctionBlock', 'STProgram', 'STVariable', 'base_parameters', 'classical_parameter_names', 'coriolis_matrix', 'from_pinocchio_order', 'generate_code', 'generate_controller', 'generate_observer', 'inertial_from_com', 'inertial_from_urdf', 'influence_coordinates', 'khalil_order', 'link_poses', 'load_urdf', 'load_yaml', 'multibody_coriolis_matrix', 'multibody_energies', 'multibody_forward_dynamics', 'multibody_inverse_dynamics', 'multibody_link_poses', 'multibody_mass_matrix', 'multibody_momentum', 'multibody_regressor', 'multibody_slotine_li_regressor', 'parse_csv_numbers', 'parse_urdf', 'parse_yaml', 'planar_arm', 'pose_error', 'projection_cost', 'projection_limits', 'projection_refusal', 'recursive_refusal', 'slotine_li_regressor', 'slotine_li_regressor_classical', 'snap_changes', 'sosfilt_rows', 'to_pinocchio_order', 'tool_jacobian']
+__all__: list[str] = ['ArgumentError', 'BaseDynamics', 'BaseParameters', 'Error', 'IkSolver', 'Integrator', 'Kinematics', 'Model', 'ModelError', 'MomentumObserver', 'OFFSET_PREFIX', 'RobotFileNotFoundError', 'STFunctionBlock', 'STProgram', 'STVariable', 'base_parameters', 'classical_parameter_names', 'coriolis_matrix', 'from_pinocchio_order', 'generate_code', 'generate_controller', 'generate_observer', 'inertial_from_com', 'inertial_from_urdf', 'influence_coordinates', 'khalil_order', 'link_poses', 'load_urdf', 'load_yaml', 'multibody_coriolis_matrix', 'multibody_energies', 'multibody_forward_dynamics', 'multibody_frame_jacobian', 'multibody_inverse_dynamics', 'multibody_link_poses', 'multibody_mass_matrix', 'multibody_momentum', 'multibody_regressor', 'multibody_slotine_li_regressor', 'parse_csv_numbers', 'parse_urdf', 'parse_yaml', 'planar_arm', 'pose_error', 'projection_cost', 'projection_limits', 'projection_refusal', 'recursive_refusal', 'slotine_li_regressor', 'slotine_li_regressor_classical', 'snap_changes', 'sosfilt_rows', 'to_pinocchio_order', 'tool_jacobian']
 class Error(Exception):
     """
     Base class of the errors mindyn raises.
@@ -447,6 +447,10 @@ def multibody_energies(model: Model, q: typing.Annotated[numpy.typing.ArrayLike,
     ...
 def multibody_forward_dynamics(model: Model, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], tau: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], params: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
     ...
+def multibody_frame_jacobian(model: Model, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], link: typing.SupportsInt | typing.SupportsIndex, placement: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[4, 4]"], local: bool) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
+    """
+    The Jacobian (6 x nv, linear rows first) of the frame at `placement` (4x4) in link `link`: base axes, or the frame's own (local).
+    """
 def multibody_inverse_dynamics(model: Model, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], v: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], a: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"], params: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
     ...
 def multibody_link_poses(model: Model, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"]) -> list[typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]]:

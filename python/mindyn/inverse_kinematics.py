@@ -166,6 +166,7 @@ def velocity_ik(
     """
     _args.instance(robot, "robot", Robot)
     robot._require_serial("inverse kinematics (velocity_ik)")
+    robot._require_single_dof("inverse kinematics (velocity_ik)")
     q = _args.array(q, "q", (robot.n,), unit="joint")
     rows = _task_rows(task)
     x = _args.array(twist, "twist", (len(rows),))
@@ -276,6 +277,7 @@ def resolved_rate(
     """
     _args.instance(robot, "robot", Robot)
     robot._require_serial("inverse kinematics (resolved_rate)")
+    robot._require_single_dof("inverse kinematics (resolved_rate)")
     _args.function(path, "path")
     duration = _args.number(duration, "duration", positive=True)
     dt = _args.number(dt, "dt", positive=True)

@@ -80,7 +80,8 @@ def load(
         (Pinocchio's conventions: quaternions ``(x, y, z, w)``, a free-flyer's velocity linear
         first in its body's axes); its dynamics (:meth:`Robot.inverse_dynamics`,
         :meth:`Robot.regressor`, :meth:`Robot.mass_matrix`, :meth:`Robot.forward_dynamics`,
-        energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor) and
+        energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor), its
+        kinematics (:meth:`Robot.link_poses`, :meth:`Robot.fk`, :meth:`Robot.jacobian`) and
         base parameters (every method, no rotor inertia or friction) are computed, other
         functions refuse it.
     gravity : array_like, shape (3,), optional
@@ -269,15 +270,19 @@ class Robot:
         """True when every joint is revolute or prismatic (nq = nv = n)."""
         return self._m.single_dof
 
-    def _multibody(self, fn, *arrays, params=_NO_PARAMS, rows: bool = False):
-        """A multibody function of the core on one sample (1-D arrays) or a batch (2-D)."""
-        arrays = [np.asarray(a, dtype=float) for a in arrays]
-        extra = () if params is _NO_PARAMS else (None if params is None else np.asarray(params),)
-        if all(a.ndim == 1 for a in arrays):
-            return fn(self._m, *arrays, *extra)
-        if not all(a.ndim == 2 and len(a) == len(arrays[0]) for a in arrays):
-            raise _core.ModelError("all inputs must be single samples or batches of equal length")
-        out = [fn(self._m, *x, *extra) for x in zip(*arrays, strict=True)]
+    def _multibody(self, fn, *, params=_NO_PARAMS, rows: bool = False, **arrays):
+        """A multibody function of the core on one sample (1-D arrays) or a batch (2-D), its
+        arguments checked (:mod:`._args`) under their names, in the order given: ``q`` of
+        :attr:`nq` entries, the others of :attr:`nv`; ``params`` the 10 n inertial parameters
+        or None (the model's)."""
+        sizes = {name: self.nq if name == "q" else self.nv for name in arrays}
+        checked = _args.batch(sizes, **arrays)
+        extra = ()
+        if params is not _NO_PARAMS:
+            extra = (_args.params(params, "params", self.n, (10,)),)
+        if checked[0].ndim == 1:
+            return fn(self._m, *checked, *extra)
+        out = [fn(self._m, *x, *extra) for x in zip(*checked, strict=True)]
         return tuple(np.array(c) for c in zip(*out, strict=True)) if rows else np.array(out)
 
     @property
@@ -561,7 +566,9 @@ class Robot:
         With multi-DOF joints (not :attr:`single_dof`): q of :attr:`nq`, dq and ddq of
         :attr:`nv` entries, ``params`` the 10 n inertial ones, tau of :attr:`nv`."""
         if not self._m.single_dof:
-            return self._multibody(_core.multibody_inverse_dynamics, q, dq, ddq, params=params)
+            return self._multibody(
+                _core.multibody_inverse_dynamics, q=q, dq=dq, ddq=ddq, params=params
+            )
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._m.inverse_dynamics(q, dq, ddq, self._params(params))
 
@@ -574,7 +581,7 @@ class Robot:
         inertia, friction or offsets)."""
         if not self._m.single_dof:
             self._refuse_drive_terms(rotor, friction, offset)
-            return self._multibody(_core.multibody_regressor, q, dq, ddq)
+            return self._multibody(_core.multibody_regressor, q=q, dq=dq, ddq=ddq)
         q, dq, ddq = _args.batch(self.n, q=q, dq=dq, ddq=ddq)
         return self._m.regressor(q, dq, ddq, *self._layout(rotor, friction, offset))
 
@@ -590,7 +597,7 @@ class Robot:
     def mass_matrix(self, q, params=None) -> np.ndarray:
         """Joint-space inertia ``A(q)``, shape (n, n) or (m, n, n) (multi-DOF joints: nv)."""
         if not self._m.single_dof:
-            return self._multibody(_core.multibody_mass_matrix, q, params=params)
+            return self._multibody(_core.multibody_mass_matrix, q=q, params=params)
         return self._m.mass_matrix(_args.samples(q, "q", self.n), self._params(params))
 
     @_args.finite_results("q", "dq", "tau", "params")
@@ -599,7 +606,9 @@ class Robot:
 
         Raises ValueError when ``A(q)`` is not positive definite for ``params``."""
         if not self._m.single_dof:
-            return self._multibody(_core.multibody_forward_dynamics, q, dq, tau, params=params)
+            return self._multibody(
+                _core.multibody_forward_dynamics, q=q, dq=dq, tau=tau, params=params
+            )
         q, dq, tau = _args.batch(self.n, q=q, dq=dq, tau=tau)
         return self._m.forward_dynamics(q, dq, tau, self._params(params))
 
@@ -612,9 +621,10 @@ class Robot:
     def potential_energy(self, q, params=None):
         """Potential energy ``-sum g . (M_k p_k + R_k MS_k)``: float or shape (m,)."""
         if not self._m.single_dof:
-            q = np.asarray(q, dtype=float)
+            q = _args.samples(q, "q", self.nq, unit="coordinate")
             dq = np.zeros(q.shape[:-1] + (self.nv,))
-            return self._multibody(_core.multibody_energies, q, dq, params=params, rows=True)[1]
+            fn = _core.multibody_energies
+            return self._multibody(fn, q=q, dq=dq, params=params, rows=True)[1]
         q = _args.samples(q, "q", self.n)
         return self._m.energies(q, np.zeros_like(q), self._params(params))[1]
 
@@ -671,7 +681,7 @@ class Robot:
 
     def _energies(self, q, dq, params):
         if not self._m.single_dof:
-            return self._multibody(_core.multibody_energies, q, dq, params=params, rows=True)
+            return self._multibody(_core.multibody_energies, q=q, dq=dq, params=params, rows=True)
         q, dq = _args.batch(self.n, q=q, dq=dq)
         return self._m.energies(q, dq, self._params(params))
 
@@ -698,8 +708,8 @@ class Robot:
                 f"{what} takes revolute and prismatic joints only; robot '{self.name}' has the "
                 f"{self.joint_types[k]} joint '{self.joint_names[k]}' (multi-DOF joints have "
                 "inverse dynamics, regressor, mass matrix, forward dynamics, energies, "
-                "momentum, link poses, Slotine-Li regressor, Coriolis matrix, base parameters "
-                "and the base regressor)"
+                "momentum, link poses, fk, jacobian, Slotine-Li regressor, Coriolis matrix, "
+                "base parameters and the base regressor)"
             )
 
     @_args.finite_results("q")
@@ -715,8 +725,7 @@ class Robot:
         (6,): linear momentum, then angular momentum about the base origin, both in base axes;
         ``params`` the 10 n inertial parameters (default the model's)."""
         q, dq = _args.array(q, "q", (self.nq,)), _args.array(dq, "dq", (self.nv,))
-        params = _args.optional(_args.array, params, "params", (10 * self.n,))
-        return self._multibody(_core.multibody_momentum, q, dq, params=params)
+        return self._multibody(_core.multibody_momentum, q=q, dq=dq, params=params)
 
     def _refuse_drive_terms(self, rotor, friction, offset=False) -> None:
         if (
@@ -747,10 +756,14 @@ class Robot:
     @_args.finite_results("q")
     def fk(self, q, *, link: int = -1) -> np.ndarray:
         """4x4 pose in the base frame of link ``link`` (0-based: the link moved by joint
-        ``link``) or of the tool frame (``-1``; for a tree the last link's frame)."""
-        self._require_single_dof("fk")
-        q = _vector(q, self.n, "q")
+        ``link``) or of the tool frame (``-1``; for a tree the last link's frame). With
+        multi-DOF joints (not :attr:`single_dof`) q has :attr:`nq` entries."""
+        single = self._m.single_dof
+        q = _vector(q, self.n, "q") if single else _vector(q, self.nq, "q", "coordinate")
         _args.integer(link, "link", -1, maximum=self.n - 1)
+        if not single:
+            pose = self.link_poses(q)[link]
+            return pose @ self.tool if link < 0 else pose
         if not self.is_serial:
             pose = _core.link_poses(self._m, q)[link]
             return pose @ self.tool if link < 0 else pose
@@ -760,8 +773,15 @@ class Robot:
     def jacobian(self, q) -> np.ndarray:
         """Geometric Jacobian of the tool frame, shape (6, n): rows vx vy vz wx wy wz in the
         base frame, reference point the tool-frame origin. For a tree, of the last link's frame,
-        with zero columns for the joints not on its path from the base."""
-        self._require_single_dof("jacobian")
+        with zero columns for the joints not on its path from the base.
+
+        With multi-DOF joints (not :attr:`single_dof`): q of :attr:`nq` entries, shape (6, nv),
+        ``[v; w] = J dq`` with dq in the velocity convention of :attr:`nv` (a free-flyer's
+        linear velocity first, in its body's axes; Pinocchio's ``getFrameJacobian`` with
+        LOCAL_WORLD_ALIGNED)."""
+        if not self._m.single_dof:
+            q = _vector(q, self.nq, "q", "coordinate")
+            return _core.multibody_frame_jacobian(self._m, q, self.n - 1, self.tool, False)
         q = _vector(q, self.n, "q")
         if self.is_serial:
             return self._kinematics().jacobian(q)

@@ -134,6 +134,26 @@ void bindMultibody(py::module_& m) {
       },
       py::arg("model"), py::arg("q"), "The pose of every link in the base frame (n 4x4).");
   m.def(
+      "multibody_frame_jacobian",
+      [](const PyModel& s, const Vec& q, int link, const Eigen::Matrix4d& placement, bool local) {
+        checked(s, q, nullptr, nullptr, "", std::nullopt);
+        if (link < 0 || link >= s.model.nq())
+          throw ModelError("link is " + std::to_string(link) + "; the model's links are 0.." +
+                           std::to_string(s.model.nq() - 1));
+        if (!placement.allFinite()) throw ModelError("placement has a value that is not finite");
+        Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+        X.linear() = placement.topLeftCorner<3, 3>();
+        X.translation() = placement.topRightCorner<3, 1>();
+        MultibodyData data(s.model);
+        Eigen::MatrixXd J(6, data.nv);
+        frameJacobian(s.model, data, q, link, X,
+                      local ? ReferenceFrame::Local : ReferenceFrame::LocalWorldAligned, J);
+        return J;
+      },
+      py::arg("model"), py::arg("q"), py::arg("link"), py::arg("placement"), py::arg("local"),
+      "The Jacobian (6 x nv, linear rows first) of the frame at `placement` (4x4) in link `link`: "
+      "base axes, or the frame's own (local).");
+  m.def(
       "multibody_energies",
       [](const PyModel& s, const Vec& q, const Vec& v, const std::optional<Vec>& params) {
         const Vec p = checked(s, q, &v, nullptr, "", params);

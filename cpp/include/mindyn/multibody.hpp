@@ -1,6 +1,6 @@
-// Rigid-body dynamics of a model with joints of any kind (model.hpp, JointType): revolute,
-// prismatic, spherical, universal, cylindrical, planar and free-flyer joints, a serial chain or a
-// tree, with a fixed base or a floating one (a free-flyer or planar joint at the root).
+// Rigid-body dynamics and kinematics of a model with joints of any kind (model.hpp, JointType):
+// revolute, prismatic, spherical, universal, cylindrical, planar and free-flyer joints, a serial
+// chain or a tree, with a fixed base or a floating one (a free-flyer or planar joint at the root).
 //
 // q has model.configSize() entries and v, a, tau model.velocitySize() (Pinocchio's nq and nv, its
 // joint conventions: see JointType). tau of a free-flyer joint is the wrench (force; torque) the
@@ -53,6 +53,20 @@ struct MultibodyData {
 
 /// Poses of every link (data.R, p, R0, p0) and the joints' motion subspaces at q.
 void forwardKinematics(const Model& model, MultibodyData& data, const VecRef& q) noexcept;
+
+/// The axes of a frame Jacobian's rows (Pinocchio's ReferenceFrame): the base frame's
+/// (LOCAL_WORLD_ALIGNED) or the frame's own (LOCAL).
+enum class ReferenceFrame { LocalWorldAligned, Local };
+
+/// The Jacobian J (6 x nv) of a frame fixed to link `link` (0-based: the link joint `link`
+/// moves) at `placement` in that link's frame, at q: (v; w) = J v_q with v the velocity of the
+/// frame's origin and w the frame's angular velocity, in the base axes (LocalWorldAligned) or in
+/// the frame's own axes (Local) -- LINEAR FIRST, as Pinocchio's getFrameJacobian. Column block
+/// of joint k: its motion subspace S_k (link k, about its origin) carried to the frame's origin;
+/// zero for the joints not on the path from the base to `link`. Runs forwardKinematics (data.R0,
+/// p0 are the poses at q afterwards); 0 <= link < n is a precondition.
+void frameJacobian(const Model& model, MultibodyData& data, const VecRef& q, int link,
+                   const Eigen::Isometry3d& placement, ReferenceFrame frame, MatOut J) noexcept;
 
 /// Recursive Newton-Euler inverse dynamics: tau = M(q) a + b(q, v) + g(q) (Pinocchio's rnea).
 void inverseDynamics(const Model& model, MultibodyData& data, const VecRef& q, const VecRef& v,

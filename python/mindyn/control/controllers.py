@@ -99,7 +99,9 @@ def slotine_li_regressor_classical(
     _args.instance(robot, "robot", Robot)
     if not robot.single_dof:
         robot._refuse_drive_terms(rotor, friction)
-        return robot._multibody(_core.multibody_slotine_li_regressor, q, dq, dqr, ddqr)
+        return robot._multibody(
+            _core.multibody_slotine_li_regressor, q=q, dq=dq, dqr=dqr, ddqr=ddqr
+        )
     q, dq, dqr, ddqr = _args.batch(robot.n, q=q, dq=dq, dqr=dqr, ddqr=ddqr)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     return _core.slotine_li_regressor_classical(
@@ -115,7 +117,7 @@ def coriolis_matrix(robot: Robot, q, dq, params=None) -> np.ndarray:
     inertial parameters only)."""
     _args.instance(robot, "robot", Robot)
     if not robot.single_dof:
-        return robot._multibody(_core.multibody_coriolis_matrix, q, dq, params=params)
+        return robot._multibody(_core.multibody_coriolis_matrix, q=q, dq=dq, params=params)
     q, dq = _args.batch(robot.n, q=q, dq=dq)
     return _core.coriolis_matrix(robot._m, q, dq, robot._params(params))
 

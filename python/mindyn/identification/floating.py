@@ -103,28 +103,13 @@ def contact_jacobian(robot: Robot, q, link: str | int, *, frame: str = "world") 
     same axes acting on the link gives the generalized force ``J^T f``.
 
     ``link`` is a name of ``robot.link_names`` (not the fixed world) or a joint index k (the link
-    joint k moves). Built from the momentum of a unit point mass with unit rotational inertia
-    placed at the link's origin, which is linear in dq: exact, no differencing."""
+    joint k moves). Built from the joints' motion subspaces (the multibody kinematics of
+    :meth:`mindyn.Robot.jacobian`)."""
     _args.instance(robot, "robot", Robot)
     frame = _args.choice(frame, "frame", _FRAMES)
     k = _link_index(robot, link)
-    q = _args.array(q, "q", (robot.nq,))
-    pose = robot.link_poses(q)[k]
-    names = robot.param_names
-    probe = np.zeros(10 * robot.n)
-    for name in ("XX", "YY", "ZZ", "M"):
-        probe[names.index(f"{name}{k + 1}")] = 1.0
-    # the momentum of each unit velocity, one column each: (nv, 6) rows (linear; angular about
-    # the base origin)
-    h = robot._multibody(
-        _core.multibody_momentum, np.tile(q, (robot.nv, 1)), np.eye(robot.nv), params=probe
-    )
-    v = h[:, :3]
-    J = np.vstack([v.T, (h[:, 3:] - np.cross(pose[:3, 3], v)).T])
-    if frame == "local":
-        R = pose[:3, :3]
-        J = np.vstack([R.T @ J[:3], R.T @ J[3:]])
-    return J
+    q = _args.array(q, "q", (robot.nq,), unit="coordinate")
+    return _core.multibody_frame_jacobian(robot._m, q, k, np.eye(4), frame == "local")
 
 
 @dataclass
