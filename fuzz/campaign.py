@@ -10,6 +10,9 @@ rerun alone with ``--case``):
               coordinate axis, angles written rounded, lengths 1e-9..1e9 m): ``mindyn base`` with
               a random method; oracle ``W_b (Y pi) = tau`` (Newton-Euler) at random states, and
               Pinocchio's rnea on every third case
+  floating    the same robots on a free-flyer (``--root-joint floating``): oracle
+              ``W_b (Y pi) = tau`` of the multibody inverse dynamics at random states (unit
+              quaternions) and, for an exact method, the other exact method's count
   symbolic    random DH / MDH tables with odd twists and lengths: ``mindyn base --symbolic``;
               oracle: the formulas evaluated at the description's symbols equal the numeric Y
   ident       ``identify --consistent``, ``export`` and ``identify-payload`` on logs simulated by
@@ -69,7 +72,9 @@ ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "examples" / "urdf" / "ur5.urdf"
 FINDINGS = ("trace", "internal", "unclear", "crash", "hang", "memory", "wrong")
 CLASSES = ("ok", "error") + FINDINGS + ("tool",)
-TARGETS = ("trees", "symbolic", "ident", "controller", "data", "cli", "files", "api")
+TARGETS = ("trees", "symbolic", "ident", "controller", "data", "cli", "files", "api", "floating")
+#: The targets run when none is given.
+DEFAULT_TARGETS = (*TARGETS[:5], "floating")
 ORACLE_TOL = 1e-9
 
 
@@ -333,7 +338,9 @@ def case_trees(ctx, index: int, rng: random.Random) -> Case:
     path = odd_urdf(rng, ctx.work / f"trees-{index}.urdf", pin_case)
     method = rng.choice(["projection", "recursive", "numerical"])
     rotor, friction = rng.random() < 0.3, rng.random() < 0.3
-    argv = ["base", path, "--method", method] + ["--rotor"] * rotor + ["--friction"] * friction
+    # the geometry as written (--snap off), as the oracle's base set takes it
+    argv = ["base", path, "--method", method, "--snap", "off"]
+    argv += ["--rotor"] * rotor + ["--friction"] * friction
     seed = rng.randrange(2**32)
 
     def fn():
@@ -355,6 +362,65 @@ def case_trees(ctx, index: int, rng: random.Random) -> Case:
         return cls, detail
 
     return Case("trees", index, f"base {method} {path.name}", fn, argv, [path])
+
+
+def random_floating_state(robot, nprng) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """q (a unit quaternion for the free-flyer), v and its derivative, each entry in [-2, 2]."""
+    q = nprng.uniform(-2, 2, robot.nq)
+    quat = nprng.normal(size=4)
+    q[3:7] = quat / np.linalg.norm(quat)  # the root free-flyer: x y z, qx qy qz qw
+    return q, nprng.uniform(-2, 2, robot.nv), nprng.uniform(-2, 2, robot.nv)
+
+
+def check_floating_base(robot, bp, nprng) -> tuple[str, str]:
+    """W_b (Y pi) against the multibody inverse dynamics at three random states, relative to
+    the largest sum of absolute terms of tau = W pi."""
+    p = robot.params
+    pb = bp.values(p)
+    worst = 0.0
+    for _ in range(3):
+        q, v, a = random_floating_state(robot, nprng)
+        W = robot.regressor(q, v, a)
+        scale = np.abs(W) @ np.abs(p)
+        worst = max(
+            worst, rel_err(bp.regressor(q, v, a) @ pb, robot.inverse_dynamics(q, v, a), scale)
+        )
+    near = bp.margin.get("near_degenerate")
+    detail = f"W_b (Y pi) vs tau: {worst:.3g} relative (near_degenerate={near}, n_b={bp.n})"
+    return ("wrong" if not worst <= ORACLE_TOL else "ok"), detail
+
+
+def case_floating(ctx, index: int, rng: random.Random) -> Case:
+    path = odd_urdf(rng, ctx.work / f"floating-{index}.urdf", False)
+    method = rng.choice(["projection", "recursive", "numerical"])
+    argv = ["base", path, "--root-joint", "floating", "--method", method, "--snap", "off"]
+    seed = rng.randrange(2**32)
+
+    def fn():
+        cls, detail = cli_class(*run_cli(argv))
+        if cls != "ok":
+            return cls, detail
+        robot = mindyn.load(path, root_joint="floating")
+        try:
+            bp = mindyn.base_parameters(robot, method=method, snap=False)
+        except BaseException as e:  # noqa: BLE001 - the CLI accepted what the API refuses
+            cls, detail = api_refusal(e)
+            return ("unclear" if cls == "error" else cls), f"API refuses, CLI ran: {detail}"
+        cls, detail = check_floating_base(robot, bp, np.random.default_rng(seed))
+        if cls != "ok" or method == "numerical" or bp.margin.get("near_degenerate"):
+            return cls, detail
+        other = "recursive" if method == "projection" else "projection"
+        try:
+            n_other = mindyn.base_parameters(robot, method=other, snap=False).n
+        except BaseException as e:  # noqa: BLE001 - a refusal of the other method is its own
+            return "ok", f"{detail}; the {other} method refuses: {api_refusal(e)[1]}"
+        if n_other != bp.n:
+            return "wrong", f"{detail}; the {other} method gives {n_other} base parameters"
+        return cls, detail
+
+    return Case(
+        "floating", index, f"base --root-joint floating {method} {path.name}", fn, argv, [path]
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1035,6 +1101,7 @@ MAKERS = {
     "cli": case_cli,
     "files": case_files,
     "api": case_api,
+    "floating": case_floating,
 }
 
 
@@ -1095,7 +1162,7 @@ def summary_table(counts: dict) -> str:
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("out", type=Path, help="output folder (summary and findings)")
-    p.add_argument("--targets", default=",".join(TARGETS[:5]), help="comma-separated")
+    p.add_argument("--targets", default=",".join(DEFAULT_TARGETS), help="comma-separated")
     p.add_argument("--count", type=int, default=200, help="cases per target (default 200)")
     p.add_argument("--budget", type=float, default=1800.0, help="total seconds (default 1800)")
     p.add_argument("--seed", type=int, default=0)

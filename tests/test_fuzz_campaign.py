@@ -81,12 +81,50 @@ def test_oracle_catches_an_inconsistent_base_set():
     assert campaign.check_base(robot, other, False, False, np.random.default_rng(0))[0] == "wrong"
 
 
+def test_the_floating_oracle_catches_an_inconsistent_base_set(tmp_path):
+    """check_floating_base compares W_b (Y pi) with the multibody inverse dynamics at states
+    with unit quaternions: the base set of the robot passes, that of another geometry with the
+    same joints (the same layout) is a wrong answer."""
+    import mindyn
+    import numpy as np
+
+    def floating(length: float):
+        path = tmp_path / f"arm{length}.urdf"
+        path.write_text(_TWO_LINKS.format(length=length))
+        return mindyn.load(path, root_joint="floating")
+
+    robot, other = floating(0.4), floating(0.7)
+    assert robot.joint_types[0] == "floating"
+    rng = np.random.default_rng(0)
+    bp = mindyn.base_parameters(robot)
+    assert campaign.check_floating_base(robot, bp, rng)[0] == "ok"
+    wrong = mindyn.base_parameters(other)
+    assert campaign.check_floating_base(robot, wrong, rng)[0] == "wrong"
+
+
+_TWO_LINKS = """<robot name="arm">
+  <link name="base"><inertial><mass value="3"/><inertia ixx="0.1" iyy="0.2" izz="0.15"
+    ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="l1"><inertial><origin xyz="0.1 0.02 0"/><mass value="1.5"/><inertia ixx="0.02"
+    iyy="0.03" izz="0.025" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="l2"><inertial><origin xyz="0.2 0 0.01"/><mass value="1"/><inertia ixx="0.01"
+    iyy="0.02" izz="0.015" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.1"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="{length} 0 0" rpy="1.2 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+</robot>
+"""
+
+
 def test_tiny_seeded_run(tmp_path):
-    """Two cases; the summary counts them and reruns of a case draw the same input."""
+    """Three cases; the summary counts them and reruns of a case draw the same input."""
     out = tmp_path / "run"
-    campaign.main([str(out), "--targets", "trees,api", "--count", "1", "--seed", "5"])
+    campaign.main([str(out), "--targets", "trees,api,floating", "--count", "1", "--seed", "5"])
     doc = json.loads((out / "summary.json").read_text())
-    assert sum(sum(c.values()) for c in doc["counts"].values()) == 2
+    assert sum(sum(c.values()) for c in doc["counts"].values()) == 3
     first = (out / "work" / "trees-0.urdf").read_text()
     ctx = campaign.Context(tmp_path / "again")
     campaign.make_case(ctx, "trees", 0, 5)
