@@ -326,3 +326,16 @@ def test_base_and_info_take_a_root_joint_and_other_commands_refuse_it_in_one_lin
             refused(argv[0], *robot_args, *argv[1:], match="takes revolute and prismatic joints")
     refused("demo", yaml, match="demo takes revolute and prismatic joints only")
     refused("base", "puma560", "--root-joint", "floating", match="--root-joint applies to URDF")
+
+
+def test_the_default_method_s_reason_names_the_command_s_flags():
+    """G1 on a free-flyer: the projection method would form more terms than the default's
+    budget, so ``mindyn base`` runs the recursive method and says how to force the projection
+    method by the command's flag, not by the library's keyword (``method='projection'``)."""
+    g1 = FLOATING["g1"]
+    text = cli("base", g1, "--root-joint", "floating")
+    line = next(s for s in text.splitlines() if s.strip().startswith("method"))
+    assert line.split()[1] == "recursive:" and "would form up to" in line
+    assert "--method projection runs it" in line and "method=" not in line
+    doc = json.loads(cli("base", g1, "--root-joint", "floating", "--format", "json"))
+    assert "--method projection" in doc["method_reason"] and "method=" not in doc["method_reason"]
