@@ -339,3 +339,16 @@ def test_the_default_method_s_reason_names_the_command_s_flags():
     assert "--method projection runs it" in line and "method=" not in line
     doc = json.loads(cli("base", g1, "--root-joint", "floating", "--format", "json"))
     assert "--method projection" in doc["method_reason"] and "method=" not in doc["method_reason"]
+
+
+@pytest.mark.parametrize("root", ["floating", "planar"])
+def test_info_says_how_the_root_joint_s_configuration_is_written(tmp_path, root):
+    """A free-flyer's configuration holds a quaternion x, y, z, w; a planar joint's its angle's
+    cos, sin and no quaternion (Pinocchio's JointModelPlanar: x, y, cos, sin)."""
+    urdf = str(random_tree_urdf(tmp_path / "tree.urdf", n=4, seed=3, moving=("revolute",)))
+    robot, model = pair(urdf, root)
+    assert robot.nq == model.nq
+    state = next(s for s in cli("info", urdf, "--root-joint", root).splitlines() if "nq" in s)
+    assert f"nq {model.nq} configuration and nv {model.nv} velocity" in state
+    assert ("quaternion" in state) == (root == "floating")
+    assert ("cos, sin" in state) == (root == "planar")

@@ -52,9 +52,18 @@ def cmd_info(args: argparse.Namespace) -> int:
     g = robot.gravity
     out.append(f"gravity    [{g[0]:g}, {g[1]:g}, {g[2]:g}] m/s^2")
     if not robot.single_dof:
+        kinds = set(robot.joint_types)
+        forms = [
+            form
+            for form, of in (
+                ("quaternions x, y, z, w", {"floating", "spherical"}),
+                ("a planar joint's angle as its cos, sin", {"planar"}),
+            )
+            if kinds & of
+        ]
         out.append(
             f"state      nq {robot.nq} configuration and nv {robot.nv} velocity coordinates "
-            "(joints of several degrees of freedom; quaternions x, y, z, w)"
+            f"(joints of several degrees of freedom{''.join('; ' + f for f in forms)})"
         )
     if robot.synthetic_inertia:
         out.append("inertia    SYNTHETIC: the inertial values are invented, not measured")
