@@ -237,6 +237,19 @@ def choice(x, name: str, choices):
     return x
 
 
+def snap(x, name: str = "snap"):
+    """The snap option of the base parameters: ``"auto"``, a rotation tolerance in rad (>= 0,
+    as a float), ``True`` / ``False`` or ``None``."""
+    if isinstance(x, bool) or x is None or (isinstance(x, str) and x == "auto"):
+        return x
+    if isinstance(x, str):
+        raise ArgumentError(
+            f"{name} is {x!r}; expected 'auto', a rotation tolerance in rad (>= 0), True (1e-3) "
+            "or False / None (no snap)"
+        )
+    return number(x, name, minimum=0.0)
+
+
 def text(x, name: str, *, empty: bool = False) -> str:
     """A string (non-empty unless ``empty``)."""
     if not isinstance(x, str):
