@@ -353,7 +353,10 @@ def finite_results(*names: str):
 
         @functools.wraps(fn)
         def checked(*args, **kwargs):
-            out = fn(*args, **kwargs)
+            # an overflow shows in the result, checked here: numpy's warnings of it would reach
+            # the user before the error
+            with np.errstate(over="ignore", invalid="ignore"):
+                out = fn(*args, **kwargs)
             if _all_finite(out):
                 return out
             given = signature.bind(*args, **kwargs).arguments
