@@ -344,7 +344,8 @@ def test_the_default_method_s_reason_names_the_command_s_flags():
 @pytest.mark.parametrize("root", ["floating", "planar"])
 def test_info_says_how_the_root_joint_s_configuration_is_written(tmp_path, root):
     """A free-flyer's configuration holds a quaternion x, y, z, w; a planar joint's its angle's
-    cos, sin and no quaternion (Pinocchio's JointModelPlanar: x, y, cos, sin)."""
+    cos, sin and no quaternion (Pinocchio's JointModelPlanar: x, y, cos, sin). The joint table
+    gives a planar joint's normal as its axis and a free-flyer none."""
     urdf = str(random_tree_urdf(tmp_path / "tree.urdf", n=4, seed=3, moving=("revolute",)))
     robot, model = pair(urdf, root)
     assert robot.nq == model.nq
@@ -352,3 +353,8 @@ def test_info_says_how_the_root_joint_s_configuration_is_written(tmp_path, root)
     assert f"nq {model.nq} configuration and nv {model.nv} velocity" in state
     assert ("quaternion" in state) == (root == "floating")
     assert ("cos, sin" in state) == (root == "planar")
+    # a free-flyer has no axis (it showed the default z axis); a planar joint its plane's normal
+    text = cli("info", urdf, "--root-joint", root)
+    row = next(s.split() for s in text.splitlines() if s.split()[:2] == ["1", "root_joint"])
+    axis = row[row.index(root) + 1]  # the column after the type
+    assert axis == ("-" if root == "floating" else "["), row

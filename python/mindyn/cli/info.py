@@ -101,7 +101,11 @@ def cmd_info(args: argparse.Namespace) -> int:
             geo = f"{a:9.4f} {math.degrees(alpha):10.3f} {d:9.4f} {math.degrees(theta):10.3f}"
         else:
             ax = robot.axes[k]
-            geo = f"[{ax[0]:8.4f} {ax[1]:8.4f} {ax[2]:8.4f}]".rjust(30)
+            geo = (
+                "-".rjust(30)  # a free body or a ball joint turns about every axis
+                if t in ("floating", "spherical")
+                else f"[{ax[0]:8.4f} {ax[1]:8.4f} {ax[2]:8.4f}]".rjust(30)
+            )
         out.append(
             f"{k + 1:>2} {robot.joint_names[k]:<{w}}{hang[k] if tree else '':<{wp}}{t:<10}{geo} "
             f"{_fmt(lim['lower'][k] * s, 9)} {_fmt(lim['upper'][k] * s, 9)} "
