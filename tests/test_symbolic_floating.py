@@ -3,7 +3,8 @@ planar): the description is rebuilt at other lengths with its root joint as it i
 
 The robot: a free (or planar) body carrying a two-link arm. The formulas, evaluated at other
 lengths, give base parameters whose regressor reproduces Pinocchio's inverse dynamics of that
-robot, and the total mass of the robot is a base parameter of the root body."""
+robot, and the total mass of the robot is a base parameter of the root body. A description
+whose base set changes with its lengths (ANYmal) is refused naming the parameters that change."""
 
 from __future__ import annotations
 
@@ -65,3 +66,26 @@ def test_floating_root_symbolic_formulas_at_other_lengths(tmp_path, root):
         v, a = rng.uniform(-2, 2, (2, model.nv))
         tau = pin.rnea(model, data, q, v, a)
         np.testing.assert_allclose(ob.regressor(q, v, a) @ values, tau, rtol=1e-9, atol=1e-9)
+
+
+def test_a_base_set_that_changes_with_the_lengths_names_the_parameters():
+    """ANYmal's lengths are special: at the general lengths the symbolic fit draws, its base set
+    has as many parameters but named otherwise (regrouped or not). The refusal said '68 ... with
+    the description's lengths, 68 with others', as if nothing changed; it names them now: those
+    it lost are the description's base parameters, those it gained are not."""
+    import re
+
+    from test_multibody import FLOATING
+
+    robot = mindyn.load(FLOATING["anymal"])
+    bp = mindyn.base_parameters(robot)
+    with pytest.raises(mindyn.ModelError) as info:
+        bp.symbolic()
+    message = str(info.value)
+    assert f"({bp.n} base parameters with the description's lengths, {bp.n} with others" in message
+    found = re.search(r"with others; (.*?) in place of (.*?)\)", message)
+    assert found, message
+    gained = [s for s in found.group(1).split(", ") if s != "..."]
+    lost = [s for s in found.group(2).split(", ") if s != "..."]
+    assert gained and lost
+    assert all(name in bp.names for name in lost) and not set(gained) & set(bp.names)

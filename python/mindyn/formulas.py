@@ -677,11 +677,19 @@ def symbolic_formulas(bp, *, seed: int = 20240607) -> SymbolicFormulas:
     def numeric(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
         other = bp.for_robot(geo.build(values, angles), order=order, offset=False)
         if other.names != names or other.pivots != pivots:
+            gained = [nm for nm in other.names if nm not in names]
+            lost = [nm for nm in names if nm not in other.names]
+            which = (
+                f"; {', '.join(gained[:3])}{', ...' if len(gained) > 3 else ''} in place of "
+                f"{', '.join(lost[:3])}{', ...' if len(lost) > 3 else ''}"
+                if gained or lost
+                else "; other pivots"
+            )
             raise _core.ModelError(
                 f"symbolic formulas: the base set of '{robot.name}' changes when its lengths "
                 f"vary ({len(names)} base parameters with the description's lengths, "
-                f"{len(other.names)} with others): the description's lengths are special, and "
-                "its formulas have no form valid for general lengths"
+                f"{len(other.names)} with others{which}): the description's lengths are "
+                "special, and its formulas have no form valid for general lengths"
             )
         return np.array(other.Y)
 
