@@ -267,3 +267,20 @@ def _evaluate(name: str, values: dict) -> float:
         base, _, power = factor.partition("^")
         out *= (float(base) if base[0].isdigit() else values[base]) ** int(power or 1)
     return out
+
+
+def test_a_forced_projection_refusal_says_how_the_joints_were_counted():
+    """TIAGo (the full description) on a planar root: 49 joints, 51 once the planar pair is
+    taken as its three single-DOF joints, over the projection method's 44 on a tree. The
+    refusal with method='projection' says how 51 was counted, as the default method's reason
+    does (it named 51 joints of a 49-joint model without saying why)."""
+    path = FLOATING["talos"].parents[2] / "tiago_description" / "robots" / "tiago.urdf"
+    robot = mindyn.load(path, root_joint="planar")
+    expanded = robot.n - 1 + 3  # the planar pair: x, y, yaw
+    assert robot.n == 49 and robot.nv == expanded
+    _, reason = choose_method(robot)
+    with pytest.raises(mindyn.ModelError) as info:
+        mindyn.base_parameters(robot, method="projection")
+    message = str(info.value)
+    assert f"the model has {expanded} (" in message and "counted as its chain" in message
+    assert message.startswith(reason.split("; the recursive method")[0])

@@ -355,3 +355,19 @@ def test_the_default_snap_computes_the_base_set_once(tmp_path, monkeypatch):
     monkeypatch.setattr(_core, "base_parameters", counted)
     assert mindyn.base_parameters(robot).snap_decision["applied"]
     assert len(calls) == 1 and calls[0] > 0
+
+
+@pytest.mark.parametrize("value", ["off", "sometimes"])
+def test_a_snap_word_other_than_auto_is_refused_naming_what_snap_takes(value):
+    """``snap="off"`` (the command line's word) is not the library's: the error lists what
+    ``snap`` takes (it said "expected one of 'auto'", as if a number or False were refused),
+    the same for base_parameters and the identification options."""
+    for call in (
+        lambda: mindyn.base_parameters("puma560", snap=value),
+        lambda: IdentifyOptions(snap=value),
+    ):
+        with pytest.raises(mindyn.ArgumentError) as info:
+            call()
+        message = str(info.value)
+        assert message.startswith(f"snap is '{value}'; expected 'auto'")
+        assert "rotation tolerance in rad" in message and "False" in message

@@ -23,7 +23,7 @@ from conftest import assert_close, cli
 from mindyn import codegen
 from random_tree import random_multidof_tree_yaml, random_tree_urdf
 from test_codegen import GCC, compile_c, compile_shared, ptr
-from test_floating_cli import refused
+from test_floating_cli import refused, run
 from test_multibody import FLOATING, pin_q, random_state
 
 pytestmark = pytest.mark.skipif(GCC is None, reason="gcc is needed to compile generated C")
@@ -275,3 +275,7 @@ def test_the_command_line_takes_a_root_joint_and_contacts(tmp_path, rng):
                 match=said)  # fmt: skip
     refused("codegen", "planar2", "--lang", "c", "--contact", "a", "-o", tmp_path / "y",
             match="--contact: applies to a floating-base robot")  # fmt: skip
+    for terms in ("--rotor", "--friction"):  # one line alone: no method statement before it
+        argv = ["codegen", path, "--root-joint", "floating", "--lang", "c", terms]
+        refused(*argv, "-o", tmp_path / "x", match="rotor inertia and friction are defined for")
+        assert run(*argv, "-o", tmp_path / "x")[1] == ""

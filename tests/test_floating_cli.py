@@ -326,3 +326,35 @@ def test_base_and_info_take_a_root_joint_and_other_commands_refuse_it_in_one_lin
             refused(argv[0], *robot_args, *argv[1:], match="takes revolute and prismatic joints")
     refused("demo", yaml, match="demo takes revolute and prismatic joints only")
     refused("base", "puma560", "--root-joint", "floating", match="--root-joint applies to URDF")
+
+
+def test_the_default_method_s_reason_names_the_command_s_flags():
+    """G1 on a free-flyer: the projection method would form more terms than the default's
+    budget, so ``mindyn base`` runs the recursive method and says how to force the projection
+    method by the command's flag, not by the library's keyword (``method='projection'``)."""
+    g1 = FLOATING["g1"]
+    text = cli("base", g1, "--root-joint", "floating")
+    line = next(s for s in text.splitlines() if s.strip().startswith("method"))
+    assert line.split()[1] == "recursive:" and "would form up to" in line
+    assert "--method projection runs it" in line and "method=" not in line
+    doc = json.loads(cli("base", g1, "--root-joint", "floating", "--format", "json"))
+    assert "--method projection" in doc["method_reason"] and "method=" not in doc["method_reason"]
+
+
+@pytest.mark.parametrize("root", ["floating", "planar"])
+def test_info_says_how_the_root_joint_s_configuration_is_written(tmp_path, root):
+    """A free-flyer's configuration holds a quaternion x, y, z, w; a planar joint's its angle's
+    cos, sin and no quaternion (Pinocchio's JointModelPlanar: x, y, cos, sin). The joint table
+    gives a planar joint's normal as its axis and a free-flyer none."""
+    urdf = str(random_tree_urdf(tmp_path / "tree.urdf", n=4, seed=3, moving=("revolute",)))
+    robot, model = pair(urdf, root)
+    assert robot.nq == model.nq
+    state = next(s for s in cli("info", urdf, "--root-joint", root).splitlines() if "nq" in s)
+    assert f"nq {model.nq} configuration and nv {model.nv} velocity" in state
+    assert ("quaternion" in state) == (root == "floating")
+    assert ("cos, sin" in state) == (root == "planar")
+    # a free-flyer has no axis (it showed the default z axis); a planar joint its plane's normal
+    text = cli("info", urdf, "--root-joint", root)
+    row = next(s.split() for s in text.splitlines() if s.split()[:2] == ["1", "root_joint"])
+    axis = row[row.index(root) + 1]  # the column after the type
+    assert axis == ("-" if root == "floating" else "["), row

@@ -450,3 +450,51 @@ def test_compiled_step_with_unstable_gains_is_refused_before_the_run():
         for ctl in (compiled, library):
             with pytest.raises(control.UnstableLoopError, match="UNSTABLE"):
                 simulate(robot, ref, ctl, duration=0.5)
+
+
+@pytest.mark.parametrize("kind", ["raise", "lower"])
+def test_an_unstable_loop_s_advice_is_the_gain_factors_that_make_it_stable(tmp_path, kind):
+    """The held damped joint of the test above, unstable in two ways: under computed torque
+    whose model feeds back 1.3 times the robot's viscous friction with K_D below the excess
+    (more gain makes it stable, less does not), and under PD with gains past the sampling limit
+    (less gain makes it stable). The range of factors on the gains the refusal names is stable
+    by the closed form, the grid's factors just outside it are not, and the advice goes the way
+    that works (it said "lower the gains" whatever the loop)."""
+    from mindyn.control.controllers import base_values, controller_check, plant_parameters
+    from mindyn.control.stability import _GAIN_GRID
+
+    m, d, T = 1e-3, 1.0, 0.004
+    robot = mindyn.load(damped_joint_urdf(tmp_path / "damped.urdf", m, d))
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    truth = plant_parameters(robot, True, friction=True)
+    if kind == "raise":  # computed torque: K_P,eff = m kp, K_D,eff = m kd
+        p_hat = base_values(base, truth)
+        p_hat[base.names.index("Fv1")] *= 1.3
+        gains = {"kd": 20.0, "kp": 100.0, "lambda": 5.0}
+        ctl = control.make_controller("computed-torque", robot, gains, p_hat, base=base, period=T)
+        kp_eff, kd_eff, d_hat = m * 100.0, m * 20.0, 1.3 * d
+    else:  # PD: no model, K_P = Lambda K_D
+        ctl = control.make_controller("pd", robot, {"kd": 5.0, "lambda": 10.0}, period=T)
+        kp_eff, kd_eff, d_hat = 50.0, 5.0, 0.0
+
+    def closed_form(g: float) -> float:
+        """Spectral radius under u = -g kp_eff e - (g kd_eff - d_hat) de."""
+        feedback = np.array([[1.0, 0.0], [0.0, 1.0], [-g * kp_eff, -(g * kd_eff - d_hat)]])
+        return np.max(np.abs(np.linalg.eigvals(held_damped_step(m, d, T) @ feedback)))
+
+    assert closed_form(1.0) > 1.0
+    check = controller_check(robot, ctl, truth, T)
+    assert not check.stable and check.stable_gains is not None
+    low, high = check.stable_gains
+    assert (low > 1.0) == (kind == "raise") and (high < 1.0) == (kind == "lower")
+    inside = [g for g in _GAIN_GRID if low <= g <= high]
+    assert inside and all(closed_form(g) <= 1.0 + 1e-9 for g in inside)
+    for g in _GAIN_GRID:  # the grid's neighbours of the range
+        if math.isclose(g, low / 10**0.25) or math.isclose(g, high * 10**0.25):
+            assert closed_form(g) > 1.0, g
+    run = {"rotor": True, "friction": True, "duration": 1.0, "rate": 1.0 / T}
+    with pytest.raises(control.UnstableLoopError) as info:
+        simulate(robot, SumOfSines(robot, period=2.0), ctl, **run)
+    message = str(info.value)
+    assert f"{kind} the gains: the loop is stable with K_P and K_D times {low:.3g}" in message
+    assert message.count("\n") == 0

@@ -981,6 +981,21 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     real.setFromTriplets(ones.begin(), ones.end());
   }
   if (options.method == BaseMethod::Projection) {
+    if (expand) {
+      // the refusal of the model as given says how its multi-DOF joints were counted (the
+      // expansion's alone named a joint count the model does not have)
+      const std::string why = projectionRefusal(exact_model, layout, options.projection_budget);
+      const std::string kernel_why = projectionRefusal(kernel, layout, options.projection_budget);
+      if (!why.empty() && !kernel_why.empty()) {
+        try {
+          influenceCoordinates(kernel, layout, options.projection_budget);
+        } catch (const ModelError& e) {
+          const std::string what = e.what();
+          if (what.rfind(kernel_why, 0) != 0) throw;
+          throw ModelError(why + what.substr(kernel_why.size()));
+        }
+      }
+    }
     const InfluenceCoordinates ic = influenceCoordinates(kernel, layout, options.projection_budget);
     bp.basis_rows = ic.rows();
     bp.terms_formed = ic.terms_formed;

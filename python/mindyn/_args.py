@@ -245,6 +245,19 @@ def choice(x, name: str, choices):
     return x
 
 
+def snap(x, name: str = "snap"):
+    """The snap option of the base parameters: ``"auto"``, a rotation tolerance in rad (>= 0,
+    as a float), ``True`` / ``False`` or ``None``."""
+    if isinstance(x, bool) or x is None or (isinstance(x, str) and x == "auto"):
+        return x
+    if isinstance(x, str):
+        raise ArgumentError(
+            f"{name} is {x!r}; expected 'auto', a rotation tolerance in rad (>= 0), True (1e-3) "
+            "or False / None (no snap)"
+        )
+    return number(x, name, minimum=0.0)
+
+
 def text(x, name: str, *, empty: bool = False) -> str:
     """A string (non-empty unless ``empty``)."""
     if not isinstance(x, str):
@@ -348,7 +361,10 @@ def finite_results(*names: str):
 
         @functools.wraps(fn)
         def checked(*args, **kwargs):
-            out = fn(*args, **kwargs)
+            # an overflow shows in the result, checked here: numpy's warnings of it would reach
+            # the user before the error
+            with np.errstate(over="ignore", invalid="ignore"):
+                out = fn(*args, **kwargs)
             if _all_finite(out):
                 return out
             given = signature.bind(*args, **kwargs).arguments

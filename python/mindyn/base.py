@@ -621,10 +621,7 @@ def base_parameters(
     tolerance = _args.number(tolerance, "tolerance", positive=True, below=MAX_TOLERANCE)
     samples = _args.integer(samples, "samples", minimum=0)
     seed = _args.integer(seed, "seed", minimum=0)
-    if isinstance(snap, str):
-        _args.choice(snap, "snap", ("auto",))
-    elif snap is not None and not isinstance(snap, bool):
-        snap = _args.number(snap, "snap", minimum=0.0)
+    snap = _args.snap(snap)
     idx: list[int] = []
     if order is not None:
         names = robot.parameter_names(rotor=rotor, friction=friction)

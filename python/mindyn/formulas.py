@@ -399,6 +399,12 @@ class _Geometry:
                 if min(abs(math.cos(self.rows[k, 1])), abs(math.sin(self.rows[k, 1]))) > 1e-9
             ]
         elif self.convention == "urdf":
+            other = sorted({t for t in types if t not in _URDF_KIND})
+            if other:
+                raise _core.ModelError(
+                    f"symbolic formulas: robot '{robot.name}' has {', '.join(other)} joints; "
+                    f"expected {', '.join(_URDF_KIND)} joints"
+                )
             self.pre = [np.array(robot.joint_pre(k)) for k in range(robot.n)]
             self.axes = np.array(robot.axes, dtype=float)
             for k in range(robot.n):
@@ -450,7 +456,7 @@ class _Geometry:
             xyz = " ".join(repr(float(v)) for v in pre[k][:3, 3])
             rpy = " ".join(repr(float(v)) for v in _rpy(pre[k][:3, :3]))
             axis = " ".join(repr(float(v)) for v in self.axes[k])
-            kind = "continuous" if robot.joint_types[k] == "revolute" else "prismatic"
+            kind = _URDF_KIND[robot.joint_types[k]]
             limit = '<limit lower="-1" upper="1" effort="1" velocity="1"/>'
             xml.append(
                 f'<joint name="J{k + 1}" type="{kind}"><parent link="L{robot.parents[k] + 1}"/>'
@@ -461,6 +467,16 @@ class _Geometry:
         xml.append("</robot>")
         core = _core.parse_urdf("\n".join(xml), "", "<symbolic geometry>")
         return Robot(core).with_gravity(robot.gravity)
+
+
+#: The URDF joint type that rebuilds a joint of each kind at other lengths (a revolute joint
+#: without limits, a floating or planar root as it is)
+_URDF_KIND = {
+    "revolute": "continuous",
+    "prismatic": "prismatic",
+    "floating": "floating",
+    "planar": "planar",
+}
 
 
 def _rpy(R: np.ndarray) -> tuple[float, float, float]:
@@ -661,11 +677,19 @@ def symbolic_formulas(bp, *, seed: int = 20240607) -> SymbolicFormulas:
     def numeric(values: np.ndarray, angles: np.ndarray) -> np.ndarray:
         other = bp.for_robot(geo.build(values, angles), order=order, offset=False)
         if other.names != names or other.pivots != pivots:
+            gained = [nm for nm in other.names if nm not in names]
+            lost = [nm for nm in names if nm not in other.names]
+            which = (
+                f"; {', '.join(gained[:3])}{', ...' if len(gained) > 3 else ''} in place of "
+                f"{', '.join(lost[:3])}{', ...' if len(lost) > 3 else ''}"
+                if gained or lost
+                else "; other pivots"
+            )
             raise _core.ModelError(
                 f"symbolic formulas: the base set of '{robot.name}' changes when its lengths "
                 f"vary ({len(names)} base parameters with the description's lengths, "
-                f"{len(other.names)} with others): the description's lengths are special, and "
-                "its formulas have no form valid for general lengths"
+                f"{len(other.names)} with others{which}): the description's lengths are "
+                "special, and its formulas have no form valid for general lengths"
             )
         return np.array(other.Y)
 

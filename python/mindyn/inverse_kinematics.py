@@ -68,7 +68,11 @@ def pose_from_xyz_rpy(xyz, rpy) -> np.ndarray:
 def _pose(T, name: str) -> np.ndarray:
     T = _args.array(T, name, (4, 4))
     R = T[:3, :3]
-    if np.abs(R.T @ R - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0:
+    # a rotation's entries are at most 1: larger ones are refused before R^T R (which could
+    # overflow)
+    if np.abs(R).max() > 1.0 + 1e-6 or np.abs(R.T @ R - np.eye(3)).max() > 1e-6:
+        raise ArgumentError(f"{name}: the upper-left 3x3 block is not a rotation matrix")
+    if np.linalg.det(R) < 0:
         raise ArgumentError(f"{name}: the upper-left 3x3 block is not a rotation matrix")
     if np.any(T[3] != [0.0, 0.0, 0.0, 1.0]):
         raise ArgumentError(f"{name}: the last row must be (0, 0, 0, 1)")

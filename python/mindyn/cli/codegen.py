@@ -204,8 +204,6 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         offset=args.offset,
     )
     method, why = base_method(robot, args.rotor, args.method, args.friction)
-    if method != "projection" and args.method is None:
-        print(f"base parameters by the {method} method: {why}")
     base = base_parameters(
         robot,
         rotor=args.rotor,
@@ -214,6 +212,8 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         method=method,
         snap=snap_keyword(args),
     )
+    if method != "projection" and args.method is None:  # said once the method ran
+        print(f"base parameters by the {method} method: {why}")
     for note in (drive_note, friction_note):
         if note:
             print(note)

@@ -52,9 +52,18 @@ def cmd_info(args: argparse.Namespace) -> int:
     g = robot.gravity
     out.append(f"gravity    [{g[0]:g}, {g[1]:g}, {g[2]:g}] m/s^2")
     if not robot.single_dof:
+        kinds = set(robot.joint_types)
+        forms = [
+            form
+            for form, of in (
+                ("quaternions x, y, z, w", {"floating", "spherical"}),
+                ("a planar joint's angle as its cos, sin", {"planar"}),
+            )
+            if kinds & of
+        ]
         out.append(
             f"state      nq {robot.nq} configuration and nv {robot.nv} velocity coordinates "
-            "(joints of several degrees of freedom; quaternions x, y, z, w)"
+            f"(joints of several degrees of freedom{''.join('; ' + f for f in forms)})"
         )
     if robot.synthetic_inertia:
         out.append("inertia    SYNTHETIC: the inertial values are invented, not measured")
@@ -92,7 +101,11 @@ def cmd_info(args: argparse.Namespace) -> int:
             geo = f"{a:9.4f} {math.degrees(alpha):10.3f} {d:9.4f} {math.degrees(theta):10.3f}"
         else:
             ax = robot.axes[k]
-            geo = f"[{ax[0]:8.4f} {ax[1]:8.4f} {ax[2]:8.4f}]".rjust(30)
+            geo = (
+                "-".rjust(30)  # a free body or a ball joint turns about every axis
+                if t in ("floating", "spherical")
+                else f"[{ax[0]:8.4f} {ax[1]:8.4f} {ax[2]:8.4f}]".rjust(30)
+            )
         out.append(
             f"{k + 1:>2} {robot.joint_names[k]:<{w}}{hang[k] if tree else '':<{wp}}{t:<10}{geo} "
             f"{_fmt(lim['lower'][k] * s, 9)} {_fmt(lim['upper'][k] * s, 9)} "

@@ -7,14 +7,17 @@ from __future__ import annotations
 
 from .. import _core
 from ..base import choose_method
+from .flags import library_options_as_flags
 
 
 def base_method(robot, rotor: bool, method: str | None, friction: bool = False) -> tuple[str, str]:
     """The method ``mindyn base`` runs and why: the one given, else the library's choice
-    (:func:`mindyn.base.choose_method`)."""
+    (:func:`mindyn.base.choose_method`), its reason naming the command's flags
+    (``--method projection``, not the library's ``method='projection'``)."""
     if method is not None:
         return method, "--method " + method
-    return choose_method(robot, rotor=rotor, friction=friction)
+    method, why = choose_method(robot, rotor=rotor, friction=friction)
+    return method, library_options_as_flags(why)
 
 
 def projection_limits_text(*, parameters: bool = True) -> str:

@@ -28,7 +28,8 @@ below 1 at every sampled configuration. For one joint of inertia ``m`` without f
 polynomial). Viscous friction matters where it is fast beside the period: a light link with a
 large friction (``Fv T / m`` of 60 on the xArm7's wrist at 4 ms) reaches its friction-limited
 speed within a period, so that a model that feeds back more viscous friction than the robot has
-(``D_hat > D``) makes the sampled loop diverge whatever the gains. The figures reported are the
+(``D_hat > D``) makes the sampled loop diverge unless ``K_D`` outweighs the excess (more gain,
+not less). The figures reported are the
 spectral radius, the *gain margin* (the factor by which the gains ``K_P``, ``K_D`` could grow,
 the model's ``D_hat`` fixed, before the loop goes unstable), the *viscous-friction margin of the
 model* (the factor by which ``D_hat`` could grow, the gains fixed; with the true friction it is
@@ -201,7 +202,11 @@ class LoopCheck:
     ``friction_margin`` the factor by which the viscous friction the controller's model feeds
     back could grow, the gains fixed, before a loop goes unstable (the smallest; 0 when
     unstable; None when the model feeds back none): an estimate that adaptation moves past it
-    makes the loop diverge."""
+    makes the loop diverge. ``stable_gains``, for an unstable loop: the range ``(low, high)`` of
+    factors on the gains (``K_P``, ``K_D``; the model's friction fixed) found stable on
+    :data:`_GAIN_GRID` (the one nearest 1), None when none is: lowering or raising the gains is
+    the next step only where it works (a model feeding back more viscous friction than the
+    robot has needs ``K_D`` above the excess, more gain, not less)."""
 
     kind: str
     period: float
@@ -212,6 +217,7 @@ class LoopCheck:
     q: np.ndarray
     cases: list = field(default_factory=list)
     friction_margin: float | None = None
+    stable_gains: tuple[float, float] | None = None
 
     def text(self) -> str:
         """One line: the verdict and the figures that explain it."""
@@ -236,13 +242,28 @@ class LoopCheck:
 
     def error(self, *, what: str = "") -> UnstableLoopError:
         """The error that refuses this loop, ``what`` naming the gains."""
-        fix = "lower the gains or the controller period" + (
-            ", or the viscous friction of the controller's model (above the robot's, it makes "
-            "the sampled loop diverge whatever the gains where the friction is fast beside the "
-            "period)"
+        friction = (
+            "the viscous friction of the controller's model (above the robot's, it makes the "
+            "sampled loop diverge where the friction is fast beside the period unless K_D "
+            "outweighs the excess)"
             if self.friction_margin is not None
             else ""
         )
+        found = self.stable_gains
+        if found is None:
+            fix = (
+                f"no factor on the gains from {_GAIN_GRID[0]:g} to {_GAIN_GRID[-1]:g} makes it "
+                "stable: lower the controller period" + (f", or {friction}" if friction else "")
+            )
+        else:
+            low, high = found
+            fix = (
+                f"{'raise' if low > 1 else 'lower'} the gains: the loop is stable with K_P and "
+                f"K_D times {low:.3g} to {high:.3g} (factors from {_GAIN_GRID[0]:g} to "
+                f"{_GAIN_GRID[-1]:g} tried)"
+                + ("" if low > 1 else " or at a shorter controller period")
+                + (f"; or lower {friction}" if friction else "")
+            )
         return UnstableLoopError(
             f"{what + ': ' if what else ''}the {self.text()}; {fix}"
             if not self.stable
@@ -284,6 +305,7 @@ def check_loop(
     T = float(period)
     worst = (math.inf, 0.0, 0.0, None)  # margin, radius, ratio, q
     rho_max, ratio_max, friction = 0.0, 0.0, None
+    stable_at = np.ones(len(_GAIN_GRID), dtype=bool)  # every loop, at each factor on the gains
     for minv, m_hat, damping, fed in zip(plant_inverses, models, plant_damping, model_damping):
         kpe, kde = effective_gains(kind, kp, kd, lam, m_hat)
         kpe, kde = np.broadcast_to(kpe, minv.shape), np.broadcast_to(kde, minv.shape)
@@ -296,6 +318,11 @@ def check_loop(
             f = _largest_factor(_scaled_friction, ad, bd, kpe, kde, fed)
             friction = min(float(f.min()), math.inf if friction is None else friction)
         rho_max, ratio_max = max(rho_max, float(rho.max())), max(ratio_max, float(ratio.max()))
+        if not np.all(margin > 0):  # unstable: which factors on the gains would do
+            for k, g in enumerate(_GAIN_GRID):
+                if stable_at[k]:
+                    radii = _scaled_gains(np.full((1, 1, 1), g), ad, bd, kpe, kde, fed)
+                    stable_at[k] = bool(np.all(radii <= _UNSTABLE))
         i = int(np.argmin(margin))
         if margin[i] < worst[0]:
             worst = (float(margin[i]), float(rho[i]), float(ratio[i]), qs[i])
@@ -309,7 +336,30 @@ def check_loop(
         np.asarray(worst[3]),
         list(cases),
         friction,
+        None if worst[0] > 0 else _stable_range(stable_at),
     )
+
+
+#: Factors on the gains tried when a loop is unstable (:attr:`LoopCheck.stable_gains`): a
+#: quarter of a decade apart, from 1 / _MARGIN_CAP to _MARGIN_CAP.
+_GAIN_GRID = np.logspace(-3, 3, 25)
+
+
+def _stable_range(stable_at: np.ndarray) -> tuple[float, float] | None:
+    """The run of consecutive factors of :data:`_GAIN_GRID` marked stable nearest to 1, as
+    (smallest, largest), or None."""
+    runs, k = [], 0
+    while k < len(stable_at):
+        if stable_at[k]:
+            j = k
+            while j + 1 < len(stable_at) and stable_at[j + 1]:
+                j += 1
+            runs.append((float(_GAIN_GRID[k]), float(_GAIN_GRID[j])))
+            k = j
+        k += 1
+    if not runs:
+        return None
+    return min(runs, key=lambda r: abs(math.log(max(r[0], min(r[1], 1.0)))))
 
 
 def _stacks(stacks, name: str, count: int) -> list:

@@ -317,7 +317,8 @@ def criterion_value(base: BaseParameters, q, dq, ddq, *, criterion: str = "cond"
     if criterion not in CRITERIA:
         raise ArgumentError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
     W = base.regressor(q, dq, ddq).reshape(-1, base.n)
-    gram = W.T @ W
+    with np.errstate(over="ignore", invalid="ignore"):  # checked on the next line
+        gram = W.T @ W
     if not np.isfinite(gram).all():
         raise _args.overflow("criterion_value", q=q, dq=dq, ddq=ddq)
     J = _criterion(gram, W.shape[0], criterion)

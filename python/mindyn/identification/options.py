@@ -76,10 +76,7 @@ class IdentifyOptions:
             self, "min_velocity", _args.number(self.min_velocity, "min_velocity", minimum=0.0)
         )
         _args.optional(_args.choice, self.friction_model, "friction_model", FRICTION_MODELS)
-        if isinstance(self.snap, str):
-            _args.choice(self.snap, "snap", ("auto",))
-        elif not isinstance(self.snap, bool):
-            object.__setattr__(self, "snap", _args.number(self.snap, "snap", minimum=0.0))
+        object.__setattr__(self, "snap", _args.snap(self.snap))
         if self.prior_weight is not None:
             object.__setattr__(
                 self, "prior_weight", _args.number(self.prior_weight, "prior_weight", minimum=0.0)

@@ -252,6 +252,9 @@ def excited_band(q: np.ndarray, dt: float, *, energy: float = BAND_ENERGY) -> fl
     m = q.shape[0]
     ramp = np.linspace(0.0, 1.0, m)[:, None] * (q[-1] - q[0])
     x = (q - q[0] - ramp) * np.hanning(m)[:, None]
+    largest = np.abs(x).max() if x.size else 0.0
+    if largest > 0:  # the band is the same for x / largest, whose power cannot overflow
+        x = x / largest
     power = np.sum(np.abs(np.fft.rfft(x, axis=0)) ** 2, axis=1)
     freq = np.fft.rfftfreq(m, dt)
     total = power.sum()

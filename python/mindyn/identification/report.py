@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import _args
+from .validation import norm
 
 __all__ = ["format_table", "plot_torques", "write_report"]
 
@@ -45,7 +46,7 @@ def plot_torques(path, t, tau, tau_hat, *, title: str = "", unit: str = "N m") -
     axes = np.atleast_1d(axes).reshape(-1)
     for k in range(n):
         ax = axes[k]
-        rms = float(np.sqrt(np.mean((tau[:, k] - tau_hat[:, k]) ** 2)))
+        rms = float(norm(tau[:, k] - tau_hat[:, k])) / math.sqrt(max(len(tau), 1))
         ax.plot(t, tau[:, k], lw=0.7, color="0.55", label="measured")
         ax.plot(t, tau_hat[:, k], lw=1.0, color="C3", label="estimated")
         ax.set_title(f"joint {k + 1}   RMS error {rms:.3g} {unit}", fontsize=9)

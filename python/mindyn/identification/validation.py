@@ -50,12 +50,12 @@ def error_measures(tau: np.ndarray, tau_hat: np.ndarray, *, effort=None, mask=No
     else:
         count = np.full(tau.shape[1], tau.shape[0])
     with np.errstate(divide="ignore", invalid="ignore"):
-        rms = np.where(count > 0, np.sqrt(np.sum(err**2, axis=0) / np.maximum(count, 1)), np.nan)
-    norm = np.linalg.norm(tau, axis=0)
+        rms = np.where(count > 0, norm(err, axis=0) / np.sqrt(np.maximum(count, 1)), np.nan)
+    norms = norm(tau, axis=0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.where(norm > 0, np.linalg.norm(err, axis=0) / norm, np.nan)
-    total = float(np.linalg.norm(tau))
-    overall = float(np.linalg.norm(err)) / total if total > 0 else float("nan")
+        rel = np.where(norms > 0, norm(err, axis=0) / norms, np.nan)
+    total = float(norm(tau))
+    overall = float(norm(err)) / total if total > 0 else float("nan")
     lim = np.full(tau.shape[1], np.nan) if effort is None else np.asarray(effort, dtype=float)
     has = np.isfinite(lim) & (lim > 0)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -70,6 +70,19 @@ def error_measures(tau: np.ndarray, tau_hat: np.ndarray, *, effort=None, mask=No
     if mask is not None:
         out["counted"] = count
     return out
+
+
+def norm(x: np.ndarray, axis: int | None = None) -> np.ndarray | float:
+    """``np.linalg.norm(x, axis=axis)`` (2-norm of the entries) of finite ``x`` without
+    overflow: the squares of entries beyond 1e154 overflow, those of ``x`` over its largest
+    magnitude do not."""
+    x = np.asarray(x, dtype=float)
+    if not x.size:
+        return np.asarray(np.linalg.norm(x, axis=axis))
+    scale = np.abs(x).max(axis=axis, keepdims=True)
+    scale = np.where(scale > 0, scale, 1.0)
+    out = np.linalg.norm(x / scale, axis=axis, keepdims=True) * scale
+    return float(out.item()) if axis is None else np.squeeze(out, axis=axis)
 
 
 def logged_samples(data: JointData) -> JointData | None:
