@@ -498,3 +498,25 @@ def test_an_unstable_loop_s_advice_is_the_gain_factors_that_make_it_stable(tmp_p
     message = str(info.value)
     assert f"{kind} the gains: the loop is stable with K_P and K_D times {low:.3g}" in message
     assert message.count("\n") == 0
+
+
+def test_a_diverged_loop_s_advice_follows_the_check_made_before_the_run(tmp_path):
+    """A run that diverges where the check found the loop stable is told what the check leaves
+    out (not to lower the gains, which the check found fine); where the check found it
+    unstable, its own next step (here: lower the gains, as K_D T / m above 2 needs)."""
+    from mindyn.control.simulation import _diverged
+
+    T, m = 0.004, 0.05
+    robot = mindyn.load(one_joint_urdf(tmp_path / "one.urdf", m))
+    for a, stable in ((1.8, True), (2.2, False)):
+        check = control.check_gains(
+            robot, {"kd": a * m / T, "lambda": 1.0}, kind="pd", period=T, rotor=False
+        )
+        assert check.stable == stable
+        text = str(_diverged("the state became non-finite after t = 1 s", check))
+        assert text.startswith("the closed loop diverged: the state became non-finite")
+        if stable:
+            assert "what it leaves out (gravity, Coulomb friction, adaptation)" in text
+            assert "lower the gains" not in text
+        else:
+            assert text.endswith(check.advice()) and "lower the gains" in check.advice()

@@ -1017,10 +1017,11 @@ def _amount(robot: Robot, k: int, value: float) -> str:
 def _diverged(what: str, check):
     from .stability import UnstableLoopError
 
-    why = f" ({check.text()})" if check is not None else ""
-    return UnstableLoopError(
-        f"the closed loop diverged: {what}{why}; lower the gains or the controller period"
-    )
+    if check is None:
+        return UnstableLoopError(
+            f"the closed loop diverged: {what}; lower the gains or the controller period"
+        )
+    return UnstableLoopError(f"the closed loop diverged: {what} ({check.text()}); {check.advice()}")
 
 
 def simulate_inverse(

@@ -242,6 +242,27 @@ class LoopCheck:
 
     def error(self, *, what: str = "") -> UnstableLoopError:
         """The error that refuses this loop, ``what`` naming the gains."""
+        return UnstableLoopError(
+            f"{what + ': ' if what else ''}the {self.text()}; {self.advice()}"
+            if not self.stable
+            else self.text()
+        )
+
+    def advice(self) -> str:
+        """The next step for a loop this check found unstable (the gain factors found stable,
+        or the period), or, for one it found stable that diverged all the same, what the check
+        leaves out."""
+        if self.stable:
+            drift = (
+                ", such as an adapted model whose viscous friction grew past the margin above"
+                if self.friction_margin is not None
+                else ""
+            )
+            return (
+                "the check before the run found the loop stable: what it leaves out (gravity, "
+                f"Coulomb friction, adaptation) made it diverge{drift}; try a shorter controller "
+                "period, other gains or a controller without adaptation"
+            )
         friction = (
             "the viscous friction of the controller's model (above the robot's, it makes the "
             "sampled loop diverge where the friction is fast beside the period unless K_D "
@@ -264,11 +285,7 @@ class LoopCheck:
                 + ("" if low > 1 else " or at a shorter controller period")
                 + (f"; or lower {friction}" if friction else "")
             )
-        return UnstableLoopError(
-            f"{what + ': ' if what else ''}the {self.text()}; {fix}"
-            if not self.stable
-            else self.text()
-        )
+        return fix
 
 
 def check_loop(
