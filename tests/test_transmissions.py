@@ -572,3 +572,137 @@ def test_direct_drives_from_joint_values_have_the_joint_side_dynamics(tmp_path, 
     tj = joint.inverse_dynamics(q, dq, ddq, joint.parameters(rotor=True, friction=True))
     tm = motor.inverse_dynamics(q, dq, ddq, motor.parameters(rotor=True, friction=True))
     np.testing.assert_allclose(tm, tj, rtol=1e-12, atol=1e-12 * np.abs(tj).max())
+
+
+# ---- a floating or planar base: a joint of several degrees of freedom has no motor ----------
+
+
+def declared_rows(path) -> dict[str, dict[str, float]]:
+    """Each actuator's row of T, {joint: coefficient}, from the ROS 1 <transmission> elements of
+    the URDF at `path` read with ElementTree, by ros_control's documented position maps (a
+    joint's mechanicalReduction 1 unless given; roles by <role>, else the order)."""
+    import xml.etree.ElementTree as ET
+
+    def reduction(e) -> float:
+        r = e.find("mechanicalReduction")
+        return 1.0 if r is None else float(r.text)
+
+    def by_role(es, kind):
+        return sorted(es, key=lambda e: e.findtext("role") or f"{kind}{es.index(e) + 1}")
+
+    rows = {}
+    for t in ET.parse(path).getroot().iter("transmission"):
+        kind = t.findtext("type").rsplit("/", 1)[-1]
+        acts = by_role(t.findall("actuator"), "actuator")
+        js = by_role(t.findall("joint"), "joint")
+        a = [reduction(e) for e in acts]
+        j = [reduction(e) for e in js]
+        names = [e.get("name") for e in js]
+        if kind == "SimpleTransmission":
+            rows[acts[0].get("name")] = {names[0]: a[0] * j[0]}
+        else:  # DifferentialTransmission: a1 (j1 x1 + j2 x2), a2 (j1 x1 - j2 x2)
+            assert kind == "DifferentialTransmission"
+            rows[acts[0].get("name")] = {names[0]: a[0] * j[0], names[1]: a[0] * j[1]}
+            rows[acts[1].get("name")] = {names[0]: a[1] * j[0], names[1]: -a[1] * j[1]}
+    return rows
+
+
+def assert_declared(robot, rows, base: str, direct=()) -> None:
+    """The base joint has a zero column and no motor; each declared motor has its declared row,
+    each joint of `direct` a motor of its name with ratio 1, and there are no other motors."""
+    tr = robot.transmission
+    k = robot.joint_names.index(base)
+    assert base not in tr.motors and not np.any(tr.T[:, k]), (tr.motors, tr.T[:, k])
+    expected = dict(rows) | {d: {d: 1.0} for d in direct}
+    assert sorted(tr.motors) == sorted(expected)
+    for i, motor in enumerate(tr.motors):
+        want = np.zeros(robot.n)
+        for joint, c in expected[motor].items():
+            want[robot.joint_names.index(joint)] = c
+        np.testing.assert_array_equal(tr.T[i], want, err_msg=motor)
+    assert tr.types.count("direct") == len(direct)
+    said = [s for s in robot.notes.split(";") if "driven directly" in s]
+    assert not any(f"'{base}'" in s for s in said), said
+
+
+TIAGO = "tiago_description/robots/tiago_no_hand.urdf"
+
+
+def test_a_planar_mobile_base_has_no_motor_and_the_arm_s_motors_are_as_declared(robots_dir):
+    """TIAGo on a planar root: its 12 declared motors (one a differential wrist with a negative
+    reduction), none for the planar joint, whose column of T is zero; `mindyn info` lists no
+    motor of the root joint."""
+    path = robots_dir / TIAGO
+    robot = mindyn.load(path, root_joint="planar")
+    rows = declared_rows(path)
+    assert len(rows) == 12 and robot.n == 13
+    assert_declared(robot, rows, "root_joint")
+    assert robot.transmission.T.shape == (12, 13)
+    from conftest import cli
+
+    text = cli("info", path, "--root-joint", "planar")
+    motors = [s for s in text.splitlines() if s.startswith("m") and s.split()[0][1:].isdigit()]
+    assert len(motors) == 12 and not any("root_joint" in s for s in motors)
+    assert "driven directly" not in text
+
+
+FLOATING_FILE = (
+    "<link name='world'/><link name='base'><inertial><mass value='3'/><inertia ixx='0.1' "
+    "ixy='0' ixz='0' iyy='0.2' iyz='0' izz='0.3'/></inertial></link>"
+    "<joint name='float' type='floating'><parent link='world'/><child link='base'/></joint>"
+)
+
+
+def floating_arm(tmp_path, root: str, extra: str = "") -> tuple:
+    """The 4R arm with a simple transmission on j1 and a differential on j2, j3 (j4 has none) on
+    a floating or planar root joint, or under a floating joint of its own file ('file');
+    returns (path, robot, the base joint's name)."""
+    parts = simple("t1", "j1", "m1", 50.0)
+    parts += pair("DifferentialTransmission", "w", ("j2", "j3"), ("m2", "m3"), (20.0, -30.0),
+                  (1.5, 2.0))  # fmt: skip
+    text = arm_urdf(4, parts + extra)
+    if root == "file":
+        text = text.replace("<link name='base'/>", FLOATING_FILE)
+    path = tmp_path / "arm.urdf"
+    path.write_text(text, encoding="utf-8")
+    if root == "file":
+        return path, mindyn.load(path), "float"
+    return path, mindyn.load(path, root_joint=root), "root_joint"
+
+
+@pytest.mark.parametrize("root", ["floating", "planar", "file"])
+def test_a_floating_or_planar_root_has_no_motor_and_a_zero_column(tmp_path, root):
+    path, robot, base = floating_arm(tmp_path, root)
+    assert not robot.single_dof
+    assert_declared(robot, declared_rows(path), base, direct=("j4",))
+    assert "several degrees of freedom" in robot.notes and f"'{base}'" in robot.notes
+
+
+def test_export_of_a_floating_robot_writes_the_transmissions_back_unchanged(tmp_path):
+    path, robot, base = floating_arm(tmp_path, "file")
+    out = tmp_path / "out.urdf"
+    write_urdf(robot, robot.params * 1.1, out)
+    again = mindyn.load(out)
+    np.testing.assert_array_equal(again.transmission.T, robot.transmission.T)
+    assert again.transmission.motors == robot.transmission.motors
+    assert_declared(again, declared_rows(out), base, direct=("j4",))
+
+
+@pytest.mark.parametrize("root", ["floating", "planar", "file"])
+def test_a_transmission_naming_a_floating_or_planar_joint_is_refused_in_one_line(
+    tmp_path, root, capsys
+):
+    joint = "float" if root == "file" else "root_joint"
+    kind = "planar" if root == "planar" else "floating"
+    extra = simple("tb", joint, "mb", 2.0)
+    with pytest.raises(mindyn.ModelError) as e:
+        floating_arm(tmp_path, root, extra)
+    message = str(e.value)
+    assert "\n" not in message
+    assert f"transmission 'tb': joint '{joint}' is a {kind} joint of several degrees" in message
+    from mindyn.cli import main
+
+    argv = ["info", str(tmp_path / "arm.urdf")] + ([] if root == "file" else ["--root-joint", root])
+    assert main(argv) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"joint '{joint}' is a {kind} joint" in err

@@ -936,7 +936,6 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
   if (static_cast<int>(order.size()) != P)
     throw ModelError("the parameter order names " + std::to_string(order.size()) +
                      " parameters; the layout has " + std::to_string(P));
-  checkDriveSide(model, layout);
   if (!model.singleDof()) {
     if (layout.rotor || layout.friction)
       throw ModelError(
@@ -944,6 +943,7 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
           "only; model '" +
           model.name + "' has multi-DOF joints");
   }
+  checkDriveSide(model, layout);  // after: a multi-DOF joint has no motor
   if (!(options.tolerance > 0 && options.tolerance < 1e-2))
     throw ModelError("the rank tolerance must be in (0, 0.01), got " + shortest(options.tolerance));
 

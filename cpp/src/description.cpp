@@ -402,9 +402,7 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
     }
   c.where.clear();
   const std::string who = c.source + ":" + std::to_string(node.Mark().line + 1) + ": transmissions";
-  std::vector<std::string> names;
-  for (const Joint& j : model.joints) names.push_back(j.name);
-  tr.validate(names, who);
+  tr.validate(model.joints, who);
   return tr;
 }
 

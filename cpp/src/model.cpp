@@ -381,11 +381,7 @@ void Model::validate() const {
                          std::to_string(parents[k]) + " is not in [-1, " + std::to_string(k - 1) +
                          "] (a parent joint comes before its children; -1 is the base)");
   }
-  if (!transmission.empty()) {
-    std::vector<std::string> names;
-    for (const Joint& j : joints) names.push_back(j.name);
-    transmission.validate(names, who());
-  }
+  transmission.validate(joints, who());
   const double V = kMaxDescriptionValue;
   const double L = 100 * V;  // a length or mass folded from up to 100 inputs
   for (int i = 0; i < 3; ++i) checkBound(who, "gravity component", gravity[i], V);

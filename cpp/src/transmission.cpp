@@ -53,10 +53,9 @@ Eigen::VectorXd TransmissionGroup::offsets() const {
   return -M * o;
 }
 
-void Transmission::validate(const std::vector<std::string>& joint_names,
-                            const std::string& who) const {
+void Transmission::validate(const std::vector<Joint>& joints, const std::string& who) const {
   if (empty()) return;
-  const auto n = static_cast<Eigen::Index>(joint_names.size());
+  const auto n = static_cast<Eigen::Index>(joints.size());
   const Eigen::Index m = nm();
   if (T.rows() != m || T.cols() != n || offset.size() != m || torque_constant.size() != m ||
       static_cast<Eigen::Index>(types.size()) != m)
@@ -74,7 +73,7 @@ void Transmission::validate(const std::vector<std::string>& joint_names,
       const double t = T(i, k);
       if (!std::isfinite(t) || std::abs(t) > kMaxDescriptionValue)
         throw ModelError(motor + ": its coefficient of joint '" +
-                         joint_names[static_cast<size_t>(k)] + "' is " + formatNumber(t) +
+                         joints[static_cast<size_t>(k)].name + "' is " + formatNumber(t) +
                          ", not a finite number within the bound on a description value");
     }
     if (!std::isfinite(offset[i]) || std::abs(offset[i]) > kMaxDescriptionValue)
@@ -95,28 +94,43 @@ void Transmission::validate(const std::vector<std::string>& joint_names,
     if (!std::isnan(kt) && (!std::isfinite(kt) || kt == 0.0 || std::abs(kt) > kMaxDescriptionValue))
       throw ModelError(motor + ": its torque constant must be a non-zero finite number");
   }
+  // a multi-DOF joint has no motor (a zero column); the single-DOF joints' columns form S
   std::vector<std::string> idle;
-  for (Eigen::Index k = 0; k < n; ++k)
-    if (T.col(k).cwiseAbs().maxCoeff() == 0.0) idle.push_back(joint_names[static_cast<size_t>(k)]);
+  std::vector<Eigen::Index> single;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Joint& j = joints[static_cast<size_t>(k)];
+    const bool driven = T.col(k).cwiseAbs().maxCoeff() != 0.0;
+    if (j.singleDof()) {
+      single.push_back(k);
+      if (!driven) idle.push_back(j.name);
+    } else if (driven) {
+      throw ModelError(who + ", joint '" + j.name + "': a " + toString(j.type) +
+                       " joint has several degrees of freedom and no motor of the transmission "
+                       "(its column of the transmission matrix must be zero)");
+    }
+  }
   if (!idle.empty())
     throw ModelError(who + ": no motor drives joint" + (idle.size() > 1 ? "s " : " ") +
                      quoted(idle) + " (its column of the transmission matrix is zero)");
-  if (m < n)
-    throw ModelError(who + ": " + std::to_string(m) + " motors cannot drive " + std::to_string(n) +
+  const auto ns = static_cast<Eigen::Index>(single.size());
+  if (ns == 0) return;
+  if (m < ns)
+    throw ModelError(who + ": " + std::to_string(m) + " motors cannot drive " + std::to_string(ns) +
                      " joints (the transmission matrix needs full column " + "rank)");
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(T);
+  Eigen::MatrixXd S(m, ns);
+  for (Eigen::Index c = 0; c < ns; ++c) S.col(c) = T.col(single[static_cast<size_t>(c)]);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(S);
   const Eigen::VectorXd s = svd.singularValues();
   const double tol =
-      static_cast<double>(std::max(m, n)) * std::numeric_limits<double>::epsilon() * s[0] * 16.0;
-  if (s[n - 1] <= tol)
+      static_cast<double>(std::max(m, ns)) * std::numeric_limits<double>::epsilon() * s[0] * 16.0;
+  if (s[ns - 1] <= tol)
     throw ModelError(who + ": the transmission matrix is rank deficient (smallest singular value " +
-                     formatNumber(s[n - 1]) + " of largest " + formatNumber(s[0]) +
+                     formatNumber(s[ns - 1]) + " of largest " + formatNumber(s[0]) +
                      "): the motors do not determine every joint");
 }
 
 Transmission assembleTransmission(const std::vector<TransmissionGroup>& groups,
-                                  const std::string& format,
-                                  const std::vector<std::string>& joint_names,
+                                  const std::string& format, const std::vector<Joint>& joints,
                                   const std::vector<std::string>& locked_names,
                                   const std::vector<double>& locked_q, const std::string& source,
                                   std::string* notes) {
@@ -127,12 +141,12 @@ Transmission assembleTransmission(const std::vector<TransmissionGroup>& groups,
                      ": transmission '" + g.name + "': " + what);
   };
   std::map<std::string, int> index;
-  for (size_t k = 0; k < joint_names.size(); ++k) index[joint_names[k]] = static_cast<int>(k);
+  for (size_t k = 0; k < joints.size(); ++k) index[joints[k].name] = static_cast<int>(k);
   std::map<std::string, double> locked;
   for (size_t k = 0; k < locked_names.size(); ++k) locked[locked_names[k]] = locked_q.at(k);
   std::map<std::string, std::string> driven_by;  // joint -> transmission
   std::vector<std::string> dropped, held, foreign;
-  const auto n = static_cast<Eigen::Index>(joint_names.size());
+  const auto n = static_cast<Eigen::Index>(joints.size());
   std::vector<Eigen::RowVectorXd> rows;
   std::vector<double> offsets;
   for (const TransmissionGroup& g : groups) {
@@ -147,6 +161,10 @@ Transmission assembleTransmission(const std::vector<TransmissionGroup>& groups,
     }
     for (const std::string& j : g.joints) {
       if (index.count(j)) {
+        const Joint& joint = joints[static_cast<size_t>(index.at(j))];
+        if (!joint.singleDof())
+          fail(g, "joint '" + j + "' is a " + toString(joint.type) +
+                      " joint of several degrees of freedom, which no transmission drives");
         any = true;
       } else if (!locked.count(j)) {
         fail(g, "joint '" + j + "' is not a joint of the robot");
@@ -179,17 +197,22 @@ Transmission assembleTransmission(const std::vector<TransmissionGroup>& groups,
       if (!index.count(j)) held.push_back("'" + j + "' (transmission '" + g.name + "')");
     tr.groups.push_back(g);
   }
-  std::vector<std::string> direct;
+  std::vector<std::string> direct, passive;
   if (!tr.groups.empty())
-    for (size_t k = 0; k < joint_names.size(); ++k) {
-      if (driven_by.count(joint_names[k])) continue;
+    for (size_t k = 0; k < joints.size(); ++k) {
+      const std::string& name = joints[k].name;
+      if (driven_by.count(name)) continue;
+      if (!joints[k].singleDof()) {  // no motor: its column of T stays zero
+        passive.push_back("'" + name + "'");
+        continue;
+      }
       Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(n);
       row[static_cast<Eigen::Index>(k)] = 1.0;
       rows.push_back(row);
       offsets.push_back(0.0);
-      tr.motors.push_back(joint_names[k]);
+      tr.motors.push_back(name);
       tr.types.push_back("direct");
-      direct.push_back("'" + joint_names[k] + "'");
+      direct.push_back("'" + name + "'");
     }
   const auto m = static_cast<Eigen::Index>(rows.size());
   tr.T.resize(m, n);
@@ -216,6 +239,11 @@ Transmission assembleTransmission(const std::vector<TransmissionGroup>& groups,
     text += std::string(text.empty() ? "" : "; ") +
             "joints without a transmission, driven directly (a motor of their name, ratio 1): " +
             join(direct);
+  if (!passive.empty())
+    text += std::string(text.empty() ? "" : "; ") +
+            "joints of several degrees of freedom, driven by no motor (a zero column of the "
+            "transmission matrix): " +
+            join(passive);
   if (notes && !text.empty()) *notes += (notes->empty() ? "" : "; ") + text;
   return tr;
 }

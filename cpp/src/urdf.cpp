@@ -1112,7 +1112,7 @@ void addTransmissions(const urdf::ModelInterface& urdf,
     q.push_back(v);
   }
   model->transmission =
-      assembleTransmission(groups, format, names, locked, q, model->source, &model->notes);
+      assembleTransmission(groups, format, model->joints, locked, q, model->source, &model->notes);
   model->validate();
 }
 

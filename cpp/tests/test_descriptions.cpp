@@ -588,6 +588,38 @@ TEST(Transmission, ValidateNamesEachProblem) {
             std::string::npos);
 }
 
+TEST(Transmission, AMultiDofJointHasAZeroColumnAndTheRankIsTheOtherJoints) {
+  // joint1 a free-flyer (a floating base): two motors drive joint2 and joint3
+  const auto floating = [](const Eigen::MatrixXd& T) {
+    Model m = withTransmission(T);
+    m.joints[0].type = JointType::FreeFlyer;
+    return m;
+  };
+  Eigen::MatrixXd T(2, 3);
+  T << 0.0, 50.0, 0.0, 0.0, 10.0, 40.0;
+  EXPECT_NO_THROW(floating(T).validate());
+  Eigen::MatrixXd driven = T;
+  driven(1, 0) = 2.0;
+  const std::string e = errorOf<ModelError>([&] { floating(driven).validate(); });
+  EXPECT_NE(e.find("joint 'joint1': a floating joint has several degrees of freedom"),
+            std::string::npos)
+      << e;
+  Eigen::MatrixXd idle = T;
+  idle.col(2).setZero();
+  EXPECT_NE(errorOf<ModelError>([&] {
+              floating(idle).validate();
+            }).find("no motor drives joint 'joint3'"),
+            std::string::npos);
+  Eigen::MatrixXd deficient = T;
+  deficient.col(2) = 2.0 * deficient.col(1);
+  EXPECT_NE(errorOf<ModelError>([&] { floating(deficient).validate(); }).find("rank deficient"),
+            std::string::npos);
+  Eigen::MatrixXd one = T.bottomRows(1);  // one motor for two single-DOF joints
+  EXPECT_NE(
+      errorOf<ModelError>([&] { floating(one).validate(); }).find("1 motors cannot drive 2 joints"),
+      std::string::npos);
+}
+
 TEST(Transmission, FourBarAndDifferentialMatricesFollowRosControlPositionMaps) {
   // joint -> actuator positions as ros_control documents them, with offsets o:
   // four-bar: a1 j1 (x1 - o1), a2 ((x1 - o1) + j2 (x2 - o2));

@@ -185,14 +185,16 @@ class Transmission:
     T : ndarray, shape (n_m, n), read-only
         Motor positions ``q_m = T q + offset``; joint torques ``tau = T^T tau_m``. Row i is
         motor i, column k joint k; the gear ratios and coupling terms of ros_control's
-        SimpleTransmission, DifferentialTransmission and FourBarLinkageTransmission.
+        SimpleTransmission, DifferentialTransmission and FourBarLinkageTransmission. The column
+        of a joint of several degrees of freedom (a floating or planar base) is zero: no motor.
     offset : ndarray, shape (n_m,), read-only
         Motor positions at ``q = 0``.
     motors : tuple of str
         Motor (actuator) names.
     types : tuple of str
-        Each motor's transmission type (``SimpleTransmission``, ..., ``direct`` for a joint
-        a URDF gives no transmission while others have one, ``matrix`` for a YAML row).
+        Each motor's transmission type (``SimpleTransmission``, ..., ``direct`` for a revolute
+        or prismatic joint a URDF gives no transmission while others have one, ``matrix`` for a
+        YAML row).
     torque_constant : ndarray, shape (n_m,), read-only
         Motor torque constants [N m/A] the description gives (NaN where none).
     format : str

@@ -8,7 +8,9 @@
 //   motor velocities  dq_m = T dq
 //   joint torques     tau = T^T tau_m      (virtual work: tau_m . dq_m = tau . dq)
 // Row i of T belongs to motor i (`motors[i]`), column k to joint k of the model. A model without
-// transmissions has T empty (n_m = 0): each joint is driven directly, as before.
+// transmissions has T empty (n_m = 0): each joint is driven directly, as before. A joint of
+// several degrees of freedom (a floating or planar base, Joint::singleDof() false) is driven by
+// no motor: one column cannot describe it, and its column of T is zero.
 //
 // ros_control's types (transmission_interface), with actuator reductions a_i, joint reductions
 // j_k (1 unless given) and joint offsets o_k (0 unless given), x_k = q_k - o_k:
@@ -31,6 +33,8 @@
 #include <vector>
 
 namespace mindyn {
+
+struct Joint;  // model.hpp
 
 /// One transmission as the description declares it, kept to show and to write it back.
 struct TransmissionGroup {
@@ -68,24 +72,25 @@ struct Transmission {
   bool empty() const { return motors.empty(); }
   int nm() const { return static_cast<int>(motors.size()); }
 
-  /// Checks sizes against the model's `joint_names`, finiteness and magnitude of every entry,
-  /// unique motor names, that every joint is driven (a non-zero column) and that T has full
-  /// column rank (so that tau = T^T tau_m reaches every joint torque and q_m determines q);
+  /// Checks sizes against the model's `joints`, finiteness and magnitude of every entry,
+  /// unique motor names, that every single-DOF joint is driven (a non-zero column) and no
+  /// multi-DOF joint is (a zero column), and that the single-DOF joints' columns of T have full
+  /// column rank (so that tau = T^T tau_m reaches their torques and q_m determines them);
   /// throws ModelError naming the motor, joint or the rank found.
-  void validate(const std::vector<std::string>& joint_names, const std::string& who) const;
+  void validate(const std::vector<Joint>& joints, const std::string& who) const;
 };
 
-/// The transmission of a model from the declared groups. `joint_names` are the model's joints;
+/// The transmission of a model from the declared groups. `joints` are the model's joints;
 /// a group's joint that is not one of them but is a joint of the description locked at a
 /// position (`locked_names`, `locked_q`: fixed joints and joints off the loaded chain) adds the
 /// constant T_k q_k to its motors; a group with no joint of the model is dropped, as is one
 /// naming no joint of the description at all (noted; one naming some is refused). When some
-/// groups remain, a joint of the model that none drives gets a direct drive (a motor named
-/// after it, type "direct", ratio 1). `notes` receives a sentence on each of these. Throws
-/// ModelError (prefixed by `source`) for a joint driven twice or an unknown joint name.
+/// groups remain, a single-DOF joint of the model that none drives gets a direct drive (a motor
+/// named after it, type "direct", ratio 1); a multi-DOF joint gets no motor (a zero column).
+/// `notes` receives a sentence on each of these. Throws ModelError (prefixed by `source`) for a
+/// joint driven twice, an unknown joint name or a group naming a multi-DOF joint of the model.
 Transmission assembleTransmission(const std::vector<TransmissionGroup>& groups,
-                                  const std::string& format,
-                                  const std::vector<std::string>& joint_names,
+                                  const std::string& format, const std::vector<Joint>& joints,
                                   const std::vector<std::string>& locked_names,
                                   const std::vector<double>& locked_q, const std::string& source,
                                   std::string* notes);
