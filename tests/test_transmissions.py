@@ -644,6 +644,12 @@ def test_a_planar_mobile_base_has_no_motor_and_the_arm_s_motors_are_as_declared(
     motors = [s for s in text.splitlines() if s.startswith("m") and s.split()[0][1:].isdigit()]
     assert len(motors) == 12 and not any("root_joint" in s for s in motors)
     assert "driven directly" not in text
+    # what the motors' terms do, as the robot takes them: not at all with a planar base, through
+    # T on the motor side without it
+    assert "rotor inertia and friction are not modelled with joints of several" in text
+    fixed = cli("info", path)
+    assert mindyn.load(path).drive_side == "motor"
+    assert "the motors' rotor inertia and friction act through T" in fixed
 
 
 FLOATING_FILE = (

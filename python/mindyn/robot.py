@@ -404,9 +404,11 @@ class Robot:
     @property
     def drive_matrix(self) -> np.ndarray:
         """The rows ``t_k`` through which slot ``k``'s rotor inertia and friction act, shape
-        (n, n): the transmission's ``T`` on the motor side (:attr:`drive_side`), the identity
-        otherwise. Slot ``k`` adds ``t_k^T (Ia_k t_k . ddq + Fv_k v_k + Fc_k sign(v_k))`` to the
-        joint torques, ``v_k = t_k . dq``."""
+        (n_m, n): the transmission's ``T`` on the motor side (:attr:`drive_side`; ``n_m`` motors,
+        as many as joints unless the robot has joints of several degrees of freedom, which no
+        motor drives), the identity (n, n) otherwise. Slot ``k`` adds
+        ``t_k^T (Ia_k t_k . ddq + Fv_k v_k + Fc_k sign(v_k))`` to the joint torques,
+        ``v_k = t_k . dq``."""
         if self.drive_side == "motor":
             return _readonly(np.array(self._m.transmission["T"], dtype=float))
         return _readonly(np.eye(self.n))

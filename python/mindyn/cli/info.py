@@ -23,10 +23,18 @@ def _transmission_lines(robot) -> list[str]:
     if tr is None:
         return []
     form = {"ros1": "URDF, ROS 1 form", "ros2": "URDF, ROS 2 form"}.get(tr.format, tr.format)
+    if not robot.single_dof:
+        acts = (
+            "rotor inertia and friction are not modelled with joints of several degrees of freedom"
+        )
+    elif robot.drive_side == "motor":
+        acts = "with --rotor / --friction the motors' rotor inertia and friction act through T"
+    else:
+        acts = "rotor inertia and friction stay on the joints (drive side: joint)"
     out = [
         "",
         f"transmissions ({form}): motor positions q_m = T q + offset, joint torques "
-        "tau = T^T tau_m (not used by the dynamics)",
+        f"tau = T^T tau_m; {acts}",
     ]
     w = max([5] + [len(m) for m in tr.motors]) + 1
     wt = max([4] + [len(t) for t in tr.types]) + 1
