@@ -33,7 +33,7 @@ MAX_TOLERANCE = 0.01
 
 #: Terms the projection method may form before the default prefers the recursive method (the
 #: same base set, exact): about a second of the recursion (a floating humanoid forms 2e7 to 8e7
-#: terms in 2 to 4 s, where the recursive method takes milliseconds).
+#: terms in 1 to 4 s, where the recursive method takes milliseconds).
 AUTO_PROJECTION_TERMS = 1e7
 
 
