@@ -243,25 +243,6 @@ def test_numerical_base_parameters_of_floating_and_planar_bases(name):
         assert_close(W[:, bp.pivots] @ (bp.Y @ pi), W @ pi, 1e-9, "base regressor times Y pi")
 
 
-def test_a_floating_base_makes_the_root_body_and_the_total_mass_identifiable():
-    """Known floating-base results: every parameter of the floating body enters the base set
-    (its ten regressor columns are independent), and the total mass is identifiable (a
-    combination of base parameters), neither of which holds on a fixed base."""
-    floating, model = urdf_pair("solo12")
-    fixed = mindyn.load(FLOATING["solo12"])
-    assert fixed.single_dof and fixed.n == floating.n - 1
-    bf = mindyn.base_parameters(floating, method="numerical")
-    bx = mindyn.base_parameters(fixed, method="numerical")
-    root = floating.param_names[:10]
-    assert set(root) <= {name.replace("R", "") for name in bf.names}
-    _, W = pinocchio_rank(floating, model, np.random.default_rng(3), states=4)
-    assert np.linalg.matrix_rank(W[:, :10]) == 10
-    total = np.zeros(10 * floating.n)
-    total[9::10] = 1.0
-    assert in_row_space(bf.Y, total) < 1e-9
-    assert in_row_space(bx.Y, total[10:]) > 1e-3  # a fixed base hides the total mass
-
-
 def test_multidof_models_are_refused_where_unsupported(tmp_path):
     robot, _ = urdf_pair("solo12")
     with pytest.raises(mindyn.ModelError, match="rotor inertia and friction"):
