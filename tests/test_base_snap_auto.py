@@ -67,6 +67,24 @@ def pinocchio_rank(path, rng, rotor: bool = False, states: int = 60) -> int:
     return int(np.sum(s > 1e-8 * s[0]))
 
 
+def rounded(k: int) -> str:
+    """k right angles written with four decimals, as shipped descriptions write them."""
+    return repr(round(k * math.pi / 2, 4))
+
+
+def first_tilted(tilt: float, others):
+    """A rewrite of the right angles: the first tilted by ``tilt`` rad, the others ``others(k)``."""
+    first = [True]
+
+    def angle(k: int) -> str:
+        if first[0]:
+            first[0] = False
+            return repr(k * math.pi / 2 + tilt)
+        return others(k)
+
+    return angle
+
+
 def written(tmp_path, name: str, text: str):
     path = tmp_path / name
     path.write_text(text)
@@ -116,22 +134,9 @@ def test_a_deliberate_offset_near_a_right_angle_is_kept(tmp_path, rng):
     ones only and keeps the parameters the tilt makes identifiable; forcing a snap of 1e-2
     rounds the tilt away too."""
     text = XARM.read_text()
-    first = [True]
-
-    def tilted(k: int) -> str:
-        if first[0]:
-            first[0] = False
-            return repr(k * math.pi / 2 + 1e-3)
-        return repr(round(k * math.pi / 2, 4))
-
-    def reference(k: int) -> str:  # the same tilt, the other right angles exact
-        if first[0]:
-            first[0] = False
-            return repr(k * math.pi / 2 + 1e-3)
-        return exact(k)
-
+    tilted = first_tilted(1e-3, rounded)
+    reference = first_tilted(1e-3, exact)  # the same tilt, the other right angles exact
     path = written(tmp_path, "tilted.urdf", rewrite_right_angles(text, tilted))
-    first[0] = True
     ref = written(tmp_path, "reference.urdf", rewrite_right_angles(text, reference))
     plain = written(tmp_path, "exact.urdf", rewrite_right_angles(text, exact))
     count = mindyn.base_parameters(load(ref, True), rotor=True, method="numerical", snap=False).n
@@ -155,14 +160,7 @@ def test_rounded_and_deliberate_angles_that_overlap_are_not_snapped(tmp_path, rn
     """A deliberate tilt of 1e-6 rad beside right angles written 1.5708 (3.7e-6 rad off): no
     tolerance separates them, so nothing is snapped, and the output says why."""
     text = XARM.read_text()
-    first = [True]
-
-    def mixed(k: int) -> str:
-        if first[0]:
-            first[0] = False
-            return repr(k * math.pi / 2 + 1e-6)
-        return repr(round(k * math.pi / 2, 4))
-
+    mixed = first_tilted(1e-6, rounded)
     path = written(tmp_path, "mixed.urdf", rewrite_right_angles(text, mixed))
     bp = mindyn.base_parameters(load(path, True), rotor=True)
     d = bp.snap_decision
