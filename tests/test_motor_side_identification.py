@@ -239,6 +239,33 @@ def test_a_motor_that_never_moves_is_named_though_its_joints_move(arms):
     assert "leave out friction=True and rotor=True" in msg and "Joint(s)" not in msg
 
 
+def test_a_direction_dependent_coulomb_term_on_a_motor_is_named_beside_the_offsets(arms):
+    """With friction on the motors, motor k's direction-dependent Coulomb term Fa adds the
+    constant torque T[k]^T Fa whenever the motor moves, and the joints' offsets span every
+    constant joint torque: the two are inseparable on any motion. The rank message says so and
+    names the remedy (it said to use a richer trajectory, which cannot help)."""
+    robot, _, _, _, _ = arms["wrist6"]
+    robot = robot.with_friction_model("asymmetric")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True, offset=True)
+    t = np.arange(0, 20, 1 / 250)
+    rng = np.random.default_rng(2)
+    w, a = rng.uniform(0.3, 1.5, (6, 3)), rng.uniform(0.2, 0.5, (6, 3))
+    q = np.column_stack([(a[j] * np.sin(w[j] * t[:, None])).sum(1) for j in range(6)])
+    dq = np.column_stack([(a[j] * w[j] * np.cos(w[j] * t[:, None])).sum(1) for j in range(6)])
+    ddq = np.column_stack(
+        [(-a[j] * w[j] ** 2 * np.sin(w[j] * t[:, None])).sum(1) for j in range(6)]
+    )
+    vm = robot.slot_velocities(dq)
+    assert (vm.max(axis=0) > 0.1).all() and (vm.min(axis=0) < -0.1).all()  # each motor reverses
+    tau = np.einsum("mnp,p->mn", base.regressor(q, dq, ddq), np.ones(base.n))
+    with pytest.raises(RankDeficientError) as e:
+        identify(robot, JointData(t, q, dq, ddq, tau, "asymmetric"), base=base)
+    msg = str(e.value)
+    assert "Fa is a constant torque whenever the motor moves" in msg, msg
+    assert "leave out offset=True, or use another friction_model=" in msg, msg
+    assert "richer excitation" not in msg, msg
+
+
 def test_prediction_takes_the_drive_side_of_the_identification(arms, tmp_path):
     """A JSON identified with --drive-side joint predicts with the terms on the joints, though
     the robot given (the same URDF) has them on the motors by default."""

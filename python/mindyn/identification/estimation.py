@@ -351,15 +351,20 @@ def _rank_remedies(concerned: list[str], logs, speed: float, robot=None) -> list
     offsets = {k: {OFF} for k, v in kinds.items() if OFF in v}
     motors = robot.transmission.motors
     names = [f"'{m}'" for m in motors]
-    return _remedies(drive, vm, speed, "Motor(s) {}", names) + _remedies(
+    # the joints' offsets span every constant joint torque, so a motor's direction-dependent
+    # Coulomb term (a constant T^T column whenever the motor moves) is inseparable from them
+    return _remedies(drive, vm, speed, "Motor(s) {}", names, offsets=bool(offsets)) + _remedies(
         offsets, dq, speed, "Joint(s) {}"
     )
 
 
-def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) -> list[str]:
+def _remedies(
+    kinds: dict, v: np.ndarray, speed: float, label: str, names=None, *, offsets: bool = False
+) -> list[str]:
     """The remedies of :func:`_rank_remedies` for the slots ``kinds`` (1-based index -> kinds of
     parameter) moving at ``v`` (m, n), ``label`` formatted with their names (their indices
-    unless ``names``)."""
+    unless ``names``); ``offsets``: torque offsets of the joints are among the dependent
+    parameters, listed apart (motor slots)."""
     floor = max(speed, 1e-12 * float(np.max(np.abs(v), initial=0.0)))
     up = np.any(v >= floor, axis=0) if v.size else np.zeros(v.shape[1], bool)
     down = np.any(v <= -floor, axis=0) if v.size else np.zeros(v.shape[1], bool)
@@ -369,7 +374,11 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
         j for j in sorted(kinds) if (up[j - 1] != down[j - 1]) and ({OFF} | coulomb) & kinds[j]
     ]
     # the direction-dependent Coulomb term is constant whenever the joint moves, either way
-    level = [j for j in sorted(kinds) if j not in still + one_way and {"Fa", OFF} <= kinds[j]]
+    level = [
+        j
+        for j in sorted(kinds)
+        if j not in still + one_way and "Fa" in kinds[j] and (offsets or OFF in kinds[j])
+    ]
 
     def named(js):
         return label.format(", ".join(str(j) if names is None else names[j - 1] for j in js))
@@ -396,8 +405,9 @@ def _remedies(kinds: dict, v: np.ndarray, speed: float, label: str, names=None) 
     if level:
         out.append(
             f"{named(level)}: the direction-dependent Coulomb term Fa is "
-            "a constant torque whenever the joint moves, inseparable from a torque offset: leave "
-            "out offset=True, or use another friction_model=."
+            f"a constant torque whenever the {'motor' if offsets else 'joint'} moves, "
+            "inseparable from a torque offset: leave out offset=True, or use another "
+            "friction_model=."
         )
     return out
 
