@@ -34,6 +34,7 @@ _MAX_JOINTS = 1000
 
 _NO_PARAMS = object()  # a multibody function that takes no parameter vector
 _SINGLE_DOF = ("revolute", "prismatic")
+_FRAMES = ("world", "local")  # the axes of a Jacobian's rows (Robot.jacobian)
 
 
 def bundled_robots() -> list[str]:
@@ -774,22 +775,33 @@ class Robot:
         return self._kinematics().pose(q, link)
 
     @_args.finite_results("q")
-    def jacobian(self, q) -> np.ndarray:
-        """Geometric Jacobian of the tool frame, shape (6, n): rows vx vy vz wx wy wz in the
-        base frame, reference point the tool-frame origin. For a tree, of the last link's frame,
-        with zero columns for the joints not on its path from the base.
+    def jacobian(self, q, *, link: int = -1, frame: str = "world") -> np.ndarray:
+        """Geometric Jacobian of a link's frame, shape (6, n): ``[v; w] = J dq``, ``v`` the
+        velocity of the frame's origin (its reference point) and ``w`` the frame's angular
+        velocity.
+
+        ``link`` is a link as :meth:`fk` takes it: 0-based, the link moved by joint ``link``,
+        or ``-1`` (default) the tool frame (for a tree the last link's frame), with zero
+        columns for the joints not on the link's path from the base. ``frame`` gives the rows'
+        axes: ``"world"`` (default) the base frame's (Pinocchio's ``getFrameJacobian`` with
+        LOCAL_WORLD_ALIGNED), ``"local"`` the frame's own (LOCAL); a wrench (force, moment about
+        the frame's origin) in those axes acting on the link gives the joint torques ``J^T f``.
 
         With multi-DOF joints (not :attr:`single_dof`): q of :attr:`nq` entries, shape (6, nv),
-        ``[v; w] = J dq`` with dq in the velocity convention of :attr:`nv` (a free-flyer's
-        linear velocity first, in its body's axes; Pinocchio's ``getFrameJacobian`` with
-        LOCAL_WORLD_ALIGNED)."""
-        if not self._m.single_dof:
-            q = _vector(q, self.nq, "q", "coordinate")
-            return _core.multibody_frame_jacobian(self._m, q, self.n - 1, self.tool, False)
-        q = _vector(q, self.n, "q")
-        if self.is_serial:
-            return self._kinematics().jacobian(q)
-        return _core.tool_jacobian(self._m, q)
+        dq in the velocity convention of :attr:`nv` (a free-flyer's linear velocity first, in
+        its body's axes)."""
+        single = self._m.single_dof
+        q = _vector(q, self.n, "q") if single else _vector(q, self.nq, "q", "coordinate")
+        link = _args.integer(link, "link", -1, maximum=self.n - 1)
+        local = _args.choice(frame, "frame", _FRAMES) == "local"
+        if single and link < 0 and not local:
+            return (
+                self._kinematics().jacobian(q)
+                if self.is_serial
+                else _core.tool_jacobian(self._m, q)
+            )
+        k, placement = (self.n - 1, self.tool) if link < 0 else (link, np.eye(4))
+        return _core.multibody_frame_jacobian(self._m, q, k, placement, local)
 
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, convention={self.convention!r})"

@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _args, _core
+from .. import _args
 from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot
@@ -103,13 +103,9 @@ def contact_jacobian(robot: Robot, q, link: str | int, *, frame: str = "world") 
     same axes acting on the link gives the generalized force ``J^T f``.
 
     ``link`` is a name of ``robot.link_names`` (not the fixed world) or a joint index k (the link
-    joint k moves). Built from the joints' motion subspaces (the multibody kinematics of
-    :meth:`mindyn.Robot.jacobian`)."""
+    joint k moves): :meth:`mindyn.Robot.jacobian` of that link."""
     _args.instance(robot, "robot", Robot)
-    frame = _args.choice(frame, "frame", _FRAMES)
-    k = _link_index(robot, link)
-    q = _args.array(q, "q", (robot.nq,), unit="coordinate")
-    return _core.multibody_frame_jacobian(robot._m, q, k, np.eye(4), frame == "local")
+    return robot.jacobian(q, link=_link_index(robot, link), frame=frame)
 
 
 @dataclass
