@@ -16,6 +16,7 @@ import pytest
 import yaml
 from conftest import assert_close, load_urdf_pair, se3
 from mindyn import inverse_kinematics
+from mindyn.control import slotine_li_regressor_classical
 from mindyn.identification.floating import contact_jacobian
 from random_tree import random_multidof_tree_yaml, random_tree_urdf
 from test_multibody import geometry_pair, pin_q, random_state, urdf_pair
@@ -259,3 +260,59 @@ def test_inverse_kinematics_refuses_multidof_chains_naming_the_joint(tmp_path):
     ):
         with pytest.raises(mindyn.ModelError, match=f"has the {kind} joint"):
             call()
+
+
+@pytest.mark.parametrize("name", ["solo12", "tiago", "tree0"])
+def test_a_configuration_whose_quaternion_is_not_unit_is_an_argument_error(tmp_path, name):
+    """A quaternion or planar (cos, sin) pair of q off norm 1 by more than 1e-6 is a bad
+    argument at every public entry taking q of a multi-DOF robot: ArgumentError naming q, the
+    joint, its coordinates (1-based), the norm (computed here) and the tolerance; within the
+    tolerance it is accepted (nothing is normalised). It was the core's ModelError."""
+    robot = tree_with_tool(tmp_path, 0) if name == "tree0" else urdf_pair(name)[0]
+    q, v, a = random_state(robot, np.random.default_rng(2))
+    kinds = {"floating": (3, 4, 7), "spherical": (0, 4, 4), "planar": (2, 2, 4)}
+    starts, i = [], 0  # the unit blocks, from the joint kinds and Pinocchio's nq of each
+    for kind, joint in zip(robot.joint_types, robot.joint_names, strict=True):
+        start, size, nq = kinds.get(kind, (0, 0, 2 if kind in ("universal", "cylindrical") else 1))
+        if size:
+            starts.append((i + start, size, kind, joint))
+        i += nq
+    assert i == robot.nq and starts
+    start, size, kind, joint = starts[-1]
+    bad = q.copy()
+    bad[start : start + size] *= 1.0 + 3e-5
+    norm = np.linalg.norm(bad[start : start + size])
+    base = mindyn.base_parameters(robot, method="numerical")
+    calls = {
+        "inverse_dynamics": lambda x: robot.inverse_dynamics(x, v, a),
+        "regressor": lambda x: robot.regressor(x, v, a),
+        "mass_matrix": lambda x: robot.mass_matrix(x),
+        "forward_dynamics": lambda x: robot.forward_dynamics(x, v, a),
+        "gravity_torque": lambda x: robot.gravity_torque(x),
+        "energy": lambda x: robot.energy(x, v),
+        "kinetic_energy": lambda x: robot.kinetic_energy(x, v),
+        "potential_energy": lambda x: robot.potential_energy(x),
+        "momentum": lambda x: robot.momentum(x, v),
+        "link_poses": lambda x: robot.link_poses(x),
+        "fk": lambda x: robot.fk(x, link=0),
+        "jacobian": lambda x: robot.jacobian(x, frame="local"),
+        "contact_jacobian": lambda x: contact_jacobian(robot, x, 0),
+        "coriolis_matrix": lambda x: mindyn.coriolis_matrix(robot, x, v),
+        "slotine_li_regressor_classical": lambda x: slotine_li_regressor_classical(
+            robot, x, v, v, a
+        ),
+        "BaseParameters.regressor": lambda x: base.regressor(x, v, a),
+    }
+    what = "quaternion" if size == 4 else r"\(cos, sin\) pair"
+    message = (
+        rf"^q has the {what} of the {kind} joint '{joint}' \(coordinates {start + 1} to "
+        rf"{start + size}\) of norm {norm:.9g}; expected norm 1 within 1e-06"
+    )
+    near = q.copy()
+    near[start : start + size] *= 1.0 + 1e-8  # within the tolerance: accepted as given
+    for label, call in calls.items():
+        with pytest.raises(mindyn.ArgumentError, match=message):
+            call(bad)
+        assert np.all(np.isfinite(call(near))), label
+    with pytest.raises(mindyn.ArgumentError, match=rf"^q has the {what} .*\(sample 1, coord"):
+        robot.mass_matrix(np.vstack([q, bad]))

@@ -34,6 +34,9 @@ _MAX_JOINTS = 1000
 
 _NO_PARAMS = object()  # a multibody function that takes no parameter vector
 _SINGLE_DOF = ("revolute", "prismatic")
+# (start, size, nq) of the unit-norm block of a joint's configuration; nq of the other kinds
+_UNIT_BLOCKS = {"floating": (3, 4, 7), "spherical": (0, 4, 4), "planar": (2, 2, 4)}
+_NQ = {"universal": 2, "cylindrical": 2}
 _FRAMES = ("world", "local")  # the axes of a Jacobian's rows (Robot.jacobian)
 
 
@@ -79,7 +82,8 @@ def load(
         robot and one with ``floating``, ``planar`` (URDF) or ``spherical``, ``universal``,
         ``cylindrical`` joints (YAML) has ``nq`` configuration and ``nv`` velocity entries
         (Pinocchio's conventions: quaternions ``(x, y, z, w)``, a free-flyer's velocity linear
-        first in its body's axes); its dynamics (:meth:`Robot.inverse_dynamics`,
+        first in its body's axes; a quaternion or planar ``(cos, sin)`` of q off norm 1 by more
+        than 1e-6 raises ArgumentError, none is normalised); its dynamics (:meth:`Robot.inverse_dynamics`,
         :meth:`Robot.regressor`, :meth:`Robot.mass_matrix`, :meth:`Robot.forward_dynamics`,
         energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor), its
         kinematics (:meth:`Robot.link_poses`, :meth:`Robot.fk`, :meth:`Robot.jacobian`) and
@@ -280,6 +284,8 @@ class Robot:
         or None (the model's)."""
         sizes = {name: self.nq if name == "q" else self.nv for name in arrays}
         checked = _args.batch(sizes, **arrays)
+        if "q" in arrays:
+            self._unit_norms(checked[list(arrays).index("q")])
         extra = ()
         if params is not _NO_PARAMS:
             extra = (_args.params(params, "params", self.n, (10,)),)
@@ -287,6 +293,28 @@ class Robot:
             return fn(self._m, *checked, *extra)
         out = [fn(self._m, *x, *extra) for x in zip(*checked, strict=True)]
         return tuple(np.array(c) for c in zip(*out, strict=True)) if rows else np.array(out)
+
+    def _configuration(self, q, name: str = "q") -> np.ndarray:
+        """One configuration of :attr:`nq` entries, checked (:mod:`._args`): its quaternions and
+        (cos, sin) pairs of norm 1."""
+        return self._unit_norms(_args.array(q, name, (self.nq,), unit="coordinate"), name)
+
+    def _unit_norms(self, q: np.ndarray, name: str = "q") -> np.ndarray:
+        return _args.unit_norms(q, name, self._unit_blocks())
+
+    def _unit_blocks(self) -> list[tuple[int, int, str]]:
+        """The entries of a configuration q that must have norm 1 (none is normalised), as
+        ``(start, size, what)``: the unit quaternion (x, y, z, w) of a spherical or free-flyer
+        joint, the (cos t, sin t) of a planar joint, ``what`` naming it ("quaternion of the
+        floating joint 'root_joint'"); empty for revolute and prismatic joints only."""
+        out, i = [], 0
+        for kind, joint in zip(self.joint_types, self.joint_names, strict=True):
+            start, size, nq = _UNIT_BLOCKS.get(kind, (0, 0, _NQ.get(kind, 1)))
+            if size:
+                what = "quaternion" if size == 4 else "(cos, sin) pair"
+                out.append((i + start, size, f"{what} of the {kind} joint '{joint}'"))
+            i += nq
+        return out
 
     @property
     def name(self) -> str:
@@ -721,8 +749,7 @@ class Robot:
     def link_poses(self, q) -> np.ndarray:
         """The pose of every link in the base frame at q (:attr:`nq` entries), shape (n, 4, 4);
         link k is the link joint k moves (any joint kinds)."""
-        q = _args.array(q, "q", (self.nq,))
-        return np.array(_core.multibody_link_poses(self._m, q))
+        return np.array(_core.multibody_link_poses(self._m, self._configuration(q)))
 
     @_args.finite_results("q", "dq", "params")
     def momentum(self, q, dq, params=None) -> np.ndarray:
@@ -764,7 +791,7 @@ class Robot:
         ``link``) or of the tool frame (``-1``; for a tree the last link's frame). With
         multi-DOF joints (not :attr:`single_dof`) q has :attr:`nq` entries."""
         single = self._m.single_dof
-        q = _vector(q, self.n, "q") if single else _vector(q, self.nq, "q", "coordinate")
+        q = _vector(q, self.n, "q") if single else self._configuration(q)
         _args.integer(link, "link", -1, maximum=self.n - 1)
         if not single:
             pose = self.link_poses(q)[link]
@@ -791,7 +818,7 @@ class Robot:
         dq in the velocity convention of :attr:`nv` (a free-flyer's linear velocity first, in
         its body's axes)."""
         single = self._m.single_dof
-        q = _vector(q, self.n, "q") if single else _vector(q, self.nq, "q", "coordinate")
+        q = _vector(q, self.n, "q") if single else self._configuration(q)
         link = _args.integer(link, "link", -1, maximum=self.n - 1)
         local = _args.choice(frame, "frame", _FRAMES) == "local"
         if single and link < 0 and not local:
