@@ -81,14 +81,14 @@ def load(
         ``buildModel`` with a ``JointModelFreeFlyer`` or ``JointModelPlanar`` root). Such a
         robot and one with ``floating``, ``planar`` (URDF) or ``spherical``, ``universal``,
         ``cylindrical`` joints (YAML) has ``nq`` configuration and ``nv`` velocity entries
-        (Pinocchio's conventions: quaternions ``(x, y, z, w)``, a free-flyer's velocity linear
-        first in its body's axes; a quaternion or planar ``(cos, sin)`` of q off norm 1 by more
-        than 1e-6 raises ArgumentError, none is normalised); its dynamics (:meth:`Robot.inverse_dynamics`,
+        (Pinocchio's conventions: quaternions ``(x, y, z, w)``, a free-flyer's velocity linear first
+        in its body's axes; a quaternion or planar ``(cos, sin)`` of q off norm 1 by more than 1e-6
+        raises ArgumentError, none is normalised); its dynamics (:meth:`Robot.inverse_dynamics`,
         :meth:`Robot.regressor`, :meth:`Robot.mass_matrix`, :meth:`Robot.forward_dynamics`,
         energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor), its
-        kinematics (:meth:`Robot.link_poses`, :meth:`Robot.fk`, :meth:`Robot.jacobian`) and
-        base parameters (every method, no rotor inertia or friction) are computed, other
-        functions refuse it.
+        kinematics (:meth:`Robot.link_poses`, :meth:`Robot.fk`, :meth:`Robot.jacobian`) and base
+        parameters (every method, no rotor inertia or friction) are computed, other functions refuse
+        it.
     gravity : array_like, shape (3,), optional
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
@@ -420,14 +420,20 @@ class Robot:
         """Where the rotor inertia and friction of a parameter vector act: ``"motor"`` when the
         description declares transmissions (slot k of ``Ia``/``Fv``/``Fc`` is then motor k's, in
         motor units: ``tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))``), ``"joint"`` otherwise
-        or after :meth:`with_drive_side`."""
-        return self._m.drive_side
+        or after :meth:`with_drive_side`. Always ``"joint"`` for a robot with joints of several
+        degrees of freedom (not :attr:`single_dof`): it has no rotor inertia or friction terms,
+        so none acts on a motor, whatever transmissions it declares."""
+        return self._m.drive_side if self._m.single_dof else "joint"
 
     def with_drive_side(self, side: str) -> Robot:
         """A new robot, the same as this one but with its rotor inertia and friction on the
-        motors (``"motor"``, needs transmissions) or on the joints (``"joint"``); this robot is
-        unchanged."""
+        motors (``"motor"``, needs transmissions and revolute and prismatic joints only) or on
+        the joints (``"joint"``); this robot is unchanged."""
         _args.choice(side, "side", ("motor", "joint"))
+        if side == "motor":
+            self._require_single_dof(
+                "drive side 'motor' (rotor inertia and friction on the motors)"
+            )
         return Robot(self._m.with_drive_side(side))
 
     @property
