@@ -553,6 +553,7 @@ def test_a_root_joint_added_by_the_loader_is_not_written_and_loads_back(tmp_path
     assert rc == 0, err
     assert by_cli.read_text() == out.read_text()
     assert stdout.count(f"note: the {root} root joint 'root_joint' was added by the loader") == 1
+    assert f"load the file with --root-joint {root} for the same robot" in stdout
     # an MJCF is written with hinge and slide joints only: refused (it wrote the root as a slide)
     with pytest.raises(mindyn.ModelError, match=f"has the {root} joint 'root_joint'"):
         write_mjcf(robot, classical, tmp_path / "solo.xml")

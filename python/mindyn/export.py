@@ -438,8 +438,8 @@ class _UrdfDocument(XmlDocument):
             kind = robot.joint_types[0]
             notes.append(
                 f"the {kind} root joint 'root_joint' was added by the loader above the root link "
-                f"'{bodies[0]}' and is not written: load the file with root_joint='{kind}' "
-                f"(--root-joint {kind}) for the same robot"
+                f"'{bodies[0]}' and is not written: load the file with root_joint='{kind}' for the "
+                "same robot"
             )
         body_set = set(bodies)
         for k, name in enumerate(bodies):

@@ -8,6 +8,7 @@ import math
 from .._core import ArgumentError, ModelError
 from ..export import classical_terms, write_urdf, write_yaml
 from .args import add_command
+from .flags import library_options_as_flags
 from .outputs import add_description_outputs, check_description_kind
 from .robot_options import add_robot, load_robot, require_single_dof
 
@@ -103,4 +104,4 @@ def write_description(
         line += f" and {res.sidecar}"
     print(line)
     for note in res.notes:
-        print(f"  note: {note}")
+        print(f"  note: {library_options_as_flags(note)}")
