@@ -279,3 +279,52 @@ def test_the_command_line_takes_a_root_joint_and_contacts(tmp_path, rng):
         argv = ["codegen", path, "--root-joint", "floating", "--lang", "c", terms]
         refused(*argv, "-o", tmp_path / "x", match="rotor inertia and friction are defined for")
         assert run(*argv, "-o", tmp_path / "x")[1] == ""
+
+
+def test_the_command_line_runs_the_generator_once(tmp_path, rng, monkeypatch):
+    """`mindyn codegen` runs the generator once: the classical-parameter recursion, generated
+    only for its operation counts, is generated too with --classical-counts only (it doubled
+    the time of a humanoid on a free-flyer). The files written are the library's generate()
+    with the same base parameters, byte for byte, and the C equals Pinocchio's rnea."""
+    from mindyn import _core
+
+    calls = []
+    real = _core.generate_code
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs.get("name"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(_core, "generate_code", counted)
+    robot, model = solo()
+    argv = ["codegen", FLOATING["solo12"], "--root-joint", "floating", "--lang", "c", "--name", "s"]
+    out = cli(*argv, "-o", tmp_path / "s")
+    assert len(calls) == 1
+    assert "--classical-counts" in out and "classical parameters" not in out
+    code = codegen.generate(robot, lang="c", base=mindyn.base_parameters(robot), name="s")
+    assert len(calls) == 2
+    assert (tmp_path / "s.c").read_text() == code.source
+    assert (tmp_path / "s.h").read_text() == code.header
+    names = len(robot.parameter_names())
+    assert f"{len(code.names)} base parameters; {names} classical" in out
+    lib = compile_shared(tmp_path / "s.c", tmp_path / "libs.so")
+    p = np.ascontiguousarray(code.values)
+    data = model.createData()
+    for _ in range(2):
+        q, v, a = random_state(robot, rng)
+        tau = np.zeros(robot.nv)
+        lib.s_inverse_dynamics(*[ptr(np.ascontiguousarray(x)) for x in (q, v, a, p)], ptr(tau))
+        ref = pin.rnea(model, data, pin_q(robot, model, q), v, a)
+        assert_close(tau, ref, TOL, "generated C id by the command line, generated once")
+    # with the classical counts: the classical recursion generated too, its counts beside
+    calls.clear()
+    (tmp_path / "both").mkdir()
+    both = cli(*argv, "-o", tmp_path / "both" / "s", "--classical-counts")
+    classical = codegen.generate(robot, lang="c", base=False, name="s")
+    assert len(calls) == 3 and calls[:2] == ["s", "s"]
+    row = both.splitlines()[-3].split()
+    assert row[0] == "inverse_dynamics"
+    counts = [code.counts["inverse_dynamics"][k] for k in ("mul", "add", "trig")]
+    counts += [classical.counts["inverse_dynamics"][k] for k in ("mul", "add", "trig")]
+    assert [int(x) for x in row[1:]] == counts
+    assert (tmp_path / "both" / "s.c").read_text() == code.source

@@ -25,9 +25,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
-from conftest import URDFS, assert_close
+from conftest import ROBOTS_DIR, URDFS, assert_close
 from mindyn import cli
 from mindyn.export import classical_terms, read_joint_terms, write_urdf, write_yaml
+from mindyn.mjcf import write_mjcf
 from random_arm import random_arm_yaml
 from random_tree import com_inertia
 
@@ -514,6 +515,48 @@ def test_cli_export(tree, tmp_path):
     rc, _, err = run(["export", "puma560", ident, "--yaml", tmp_path / "p.yaml"])
     assert rc == 0, err
     assert mindyn.load(tmp_path / "p.yaml").n == 6
+
+
+@pytest.mark.parametrize("root", ["floating", "planar"])
+def test_a_root_joint_added_by_the_loader_is_not_written_and_loads_back(tmp_path, root):
+    """write_urdf and `mindyn export --urdf` of a robot loaded with root_joint= (Solo12 with a
+    free-flyer or planar root): the file holds the robot without the loader's root joint (a
+    URDF joint of the file would be doubled by the same loading), one note says so and how to
+    load it; loaded again with the same root joint, the robot has the same joints and, for
+    random physically consistent parameters, the original's inverse dynamics with them, by
+    mindyn and by Pinocchio's own parser and rnea on the written file (1e-12)."""
+    from test_multibody import pin_q, random_state
+
+    solo = ROBOTS_DIR / "solo_description/robots/solo12.urdf"
+    robot = mindyn.load(solo, root_joint=root)
+    rng = np.random.default_rng(4)
+    classical = consistent_params(robot, rng, rotor=False, friction=False)
+    p = inertial_vector(robot, classical)
+    out = tmp_path / "solo.urdf"
+    said = [n for n in write_urdf(robot, classical, out).notes if "root_joint" in n]
+    assert len(said) == 1 and "not written" in said[0] and f"root_joint='{root}'" in said[0]
+    again = mindyn.load(out, root_joint=root)
+    assert (again.joint_names, again.joint_types) == (robot.joint_names, robot.joint_types)
+    joint = pin.JointModelFreeFlyer() if root == "floating" else pin.JointModelPlanar()
+    model = pin.buildModelFromUrdf(str(out), joint)
+    data = model.createData()
+    for _ in range(3):
+        q, v, a = random_state(robot, rng)
+        tau = robot.inverse_dynamics(q, v, a, params=p)
+        assert_close(again.inverse_dynamics(q, v, a), tau, 1e-12, "exported root: mindyn")
+        ref = pin.rnea(model, data, pin_q(again, model, q), v, a)
+        assert_close(ref, tau, 1e-12, "exported root: Pinocchio on the file")
+    ident = tmp_path / "id.json"
+    ident.write_text(json.dumps({"robot": robot.name, "classical": classical}))
+    by_cli = tmp_path / "cli.urdf"
+    rc, stdout, err = run(["export", solo, ident, "--root-joint", root, "--urdf", by_cli])
+    assert rc == 0, err
+    assert by_cli.read_text() == out.read_text()
+    assert stdout.count(f"note: the {root} root joint 'root_joint' was added by the loader") == 1
+    assert f"load the file with --root-joint {root} for the same robot" in stdout
+    # an MJCF is written with hinge and slide joints only: refused (it wrote the root as a slide)
+    with pytest.raises(mindyn.ModelError, match=f"has the {root} joint 'root_joint'"):
+        write_mjcf(robot, classical, tmp_path / "solo.xml")
 
 
 def _params_of(name) -> dict:

@@ -1,7 +1,8 @@
-"""Kinematics of robots with multi-DOF joints: Robot.fk, Robot.jacobian and the frame Jacobian
-of a link (identification.floating.contact_jacobian) against Pinocchio's framesForwardKinematics
-and getFrameJacobian (LOCAL_WORLD_ALIGNED and LOCAL) on Solo12 with a free-flyer root, TIAGo with
-a planar root and random trees of every joint kind with a tool frame; then against central
+"""Kinematics of robots with multi-DOF joints: Robot.fk, Robot.jacobian of any link in world or
+local axes and the frame Jacobian of a link (identification.floating.contact_jacobian) against
+Pinocchio's framesForwardKinematics and getFrameJacobian (LOCAL_WORLD_ALIGNED and LOCAL) on Solo12
+with a free-flyer root, TIAGo with a planar root, random trees of every joint kind with a tool
+frame and single-DOF chains and trees; then against central
 differences of the link poses along each velocity coordinate, the configuration moved by each
 joint's own motion (unit quaternions turned by the exponential of the angular velocity), which
 uses no Jacobian code of mindyn or Pinocchio."""
@@ -13,10 +14,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yaml
-from conftest import assert_close, se3
+from conftest import assert_close, load_urdf_pair, se3
 from mindyn import inverse_kinematics
+from mindyn.control import slotine_li_regressor_classical
 from mindyn.identification.floating import contact_jacobian
-from random_tree import random_multidof_tree_yaml
+from random_tree import random_multidof_tree_yaml, random_tree_urdf
 from test_multibody import geometry_pair, pin_q, random_state, urdf_pair
 
 TOL = 1e-12
@@ -34,11 +36,27 @@ def tree_with_tool(tmp_path, seed: int) -> mindyn.Robot:
     return mindyn.load(path)
 
 
+# robots of revolute and prismatic joints only: DH with a tool, DH with a prismatic joint, a
+# URDF chain with a fixed tip, a random URDF tree (branches, prismatic and continuous joints)
+SINGLE_DOF = ("puma560", "stanford", "panda", "urdftree")
+
+
+def single_dof_robot(tmp_path, name: str) -> mindyn.Robot:
+    if name == "panda":
+        return load_urdf_pair("panda", tip="panda_hand")[0]
+    if name == "urdftree":
+        robot = mindyn.load(random_tree_urdf(tmp_path / "tree.urdf", 7, 2))
+        assert not robot.is_serial
+        return robot
+    return mindyn.load(name)
+
+
 def kinematic_pair(tmp_path, name: str):
     """(robot, pin.Model with a frame per link and one for the tool, frame ids, tool frame id,
     Pinocchio's q of mindyn's)."""
-    if name.startswith("tree"):
-        robot = tree_with_tool(tmp_path, int(name[4:]))
+    if name.startswith("tree") or name in SINGLE_DOF:
+        robot = tree_with_tool(tmp_path, int(name[4:])) if name.startswith("tree") else None
+        robot = robot or single_dof_robot(tmp_path, name)
         model, bodies = geometry_pair(robot)
         to_pin = np.asarray
     else:
@@ -57,10 +75,15 @@ def kinematic_pair(tmp_path, name: str):
     return robot, model, ids, model.addFrame(tool), to_pin
 
 
-@pytest.mark.parametrize("name", ["solo12", "tiago", "tree0", "tree1", "tree2"])
+@pytest.mark.parametrize("name", [*SINGLE_DOF, "solo12", "tiago", "tree0", "tree1", "tree2"])
 def test_fk_and_jacobians_agree_with_pinocchio(tmp_path, name):
+    """Robot.fk and Robot.jacobian(q, link=k, frame=...) of every link and of the tool frame
+    (link=-1) against Pinocchio's oMf and getFrameJacobian of a frame at the link's origin,
+    LOCAL_WORLD_ALIGNED ("world") and LOCAL ("local"): single-DOF chains (DH, URDF) and a
+    single-DOF tree, robots with a free-flyer or planar root and random trees of every joint
+    kind; contact_jacobian is the same Jacobian."""
     robot, model, ids, tool, to_pin = kinematic_pair(tmp_path, name)
-    assert not robot.single_dof
+    assert robot.single_dof == (name in SINGLE_DOF)
     if name.startswith("tree"):
         assert not np.allclose(robot.tool, np.eye(4))
     data = model.createData()
@@ -69,21 +92,32 @@ def test_fk_and_jacobians_agree_with_pinocchio(tmp_path, name):
         q = random_state(robot, rng)[0]
         pin.framesForwardKinematics(model, data, to_pin(q))
         pin.computeJointJacobians(model, data, to_pin(q))
-        for k in range(robot.n):
-            assert_close(robot.fk(q, link=k), data.oMf[ids[k]].homogeneous, TOL, "fk (links)")
+        for k, fid in [*enumerate(ids), (-1, tool)]:
+            assert_close(robot.fk(q, link=k), data.oMf[fid].homogeneous, TOL, "fk")
             for frame, ref in FRAMES:
-                expected = pin.getFrameJacobian(model, data, ids[k], ref)
-                assert_close(
-                    contact_jacobian(robot, q, k, frame=frame),
-                    expected,
-                    TOL,
-                    f"frame jacobian of a link ({frame})",
-                )
-        assert_close(robot.fk(q), data.oMf[tool].homogeneous, TOL, "fk (tool)")
+                J = robot.jacobian(q, link=k, frame=frame)
+                assert J.shape == (6, robot.nv)
+                expected = pin.getFrameJacobian(model, data, fid, ref)
+                assert_close(J, expected, TOL, f"jacobian(link=k, frame={frame!r})")
+                if k >= 0:
+                    assert np.array_equal(contact_jacobian(robot, q, k, frame=frame), J)
         expected = pin.getFrameJacobian(model, data, tool, pin.LOCAL_WORLD_ALIGNED)
-        J = robot.jacobian(q)
-        assert J.shape == (6, robot.nv)
-        assert_close(J, expected, TOL, "jacobian (tool)")
+        assert_close(robot.jacobian(q), expected, TOL, "jacobian (default: tool, world)")
+
+
+def test_jacobian_checks_link_and_frame():
+    """A link out of range or not an integer, a frame not 'world' or 'local': ArgumentError
+    naming the argument."""
+    for robot in (mindyn.load("puma560"), urdf_pair("solo12")[0]):
+        q = random_state(robot, np.random.default_rng(0))[0]
+        for link in (robot.n, -2, 1.0, True, "1"):
+            with pytest.raises(mindyn.ArgumentError, match=r"^link is "):
+                robot.jacobian(q, link=link)
+        for frame in ("base", "LOCAL", None, 1):
+            with pytest.raises(mindyn.ArgumentError, match=r"^frame is .*'world', 'local'"):
+                robot.jacobian(q, frame=frame)
+    with pytest.raises(mindyn.ArgumentError, match=r"^frame is "):
+        contact_jacobian(robot, q, 0, frame="base")
 
 
 def exp_quaternion(quat, w):
@@ -138,12 +172,15 @@ def vee(S):
     return np.array([S[2, 1], S[0, 2], S[1, 0]])
 
 
-@pytest.mark.parametrize("name", ["solo12", "tiago", "tree0", "tree1"])
+@pytest.mark.parametrize("name", ["puma560", "urdftree", "solo12", "tiago", "tree0", "tree1"])
 def test_jacobians_are_the_derivatives_of_the_link_poses(tmp_path, name):
-    """Column i of the Jacobians: the central difference of the pose (Robot.fk) along the unit
-    velocity e_i, the translation's derivative the origin's velocity, dR R^T the angular one."""
+    """Column i of the Jacobians of a link and of the tool frame: the central difference of the
+    pose (Robot.fk) along the unit velocity e_i, the translation's derivative the origin's
+    velocity, dR R^T the angular one (world axes), both turned by R^T (local axes)."""
     if name.startswith("tree"):
         robot = tree_with_tool(tmp_path, int(name[4:]))
+    elif name in SINGLE_DOF:
+        robot = single_dof_robot(tmp_path, name)
     else:
         robot = urdf_pair(name)[0]
     rng = np.random.default_rng(5)
@@ -162,13 +199,15 @@ def test_jacobians_are_the_derivatives_of_the_link_poses(tmp_path, name):
     for k in links:
         R = robot.fk(q, link=k)[:3, :3]
         local = np.vstack([R.T @ J[k][:3], R.T @ J[k][3:]])
-        if k < 0:
-            assert_close(robot.jacobian(q), J[k], 1e-7, "jacobian against differences")
+        world_j = robot.jacobian(q, link=k)
+        assert_close(world_j, J[k], 1e-7, "jacobian against differences")
+        local_j = robot.jacobian(q, link=k, frame="local")
+        assert_close(local_j, local, 1e-7, "jacobian against differences")
+        if k >= 0:
+            assert np.array_equal(contact_jacobian(robot, q, k, frame="world"), world_j)
+            assert np.array_equal(contact_jacobian(robot, q, k, frame="local"), local_j)
         else:
-            world = contact_jacobian(robot, q, k, frame="world")
-            assert_close(world, J[k], 1e-7, "frame jacobian against differences")
-            local_j = contact_jacobian(robot, q, k, frame="local")
-            assert_close(local_j, local, 1e-7, "frame jacobian against differences")
+            assert np.array_equal(robot.jacobian(q), world_j)
 
 
 def test_kinematics_of_multidof_robots_check_their_arguments():
@@ -221,3 +260,59 @@ def test_inverse_kinematics_refuses_multidof_chains_naming_the_joint(tmp_path):
     ):
         with pytest.raises(mindyn.ModelError, match=f"has the {kind} joint"):
             call()
+
+
+@pytest.mark.parametrize("name", ["solo12", "tiago", "tree0"])
+def test_a_configuration_whose_quaternion_is_not_unit_is_an_argument_error(tmp_path, name):
+    """A quaternion or planar (cos, sin) pair of q off norm 1 by more than 1e-6 is a bad
+    argument at every public entry taking q of a multi-DOF robot: ArgumentError naming q, the
+    joint, its coordinates (1-based), the norm (computed here) and the tolerance; within the
+    tolerance it is accepted (nothing is normalised). It was the core's ModelError."""
+    robot = tree_with_tool(tmp_path, 0) if name == "tree0" else urdf_pair(name)[0]
+    q, v, a = random_state(robot, np.random.default_rng(2))
+    kinds = {"floating": (3, 4, 7), "spherical": (0, 4, 4), "planar": (2, 2, 4)}
+    starts, i = [], 0  # the unit blocks, from the joint kinds and Pinocchio's nq of each
+    for kind, joint in zip(robot.joint_types, robot.joint_names, strict=True):
+        start, size, nq = kinds.get(kind, (0, 0, 2 if kind in ("universal", "cylindrical") else 1))
+        if size:
+            starts.append((i + start, size, kind, joint))
+        i += nq
+    assert i == robot.nq and starts
+    start, size, kind, joint = starts[-1]
+    bad = q.copy()
+    bad[start : start + size] *= 1.0 + 3e-5
+    norm = np.linalg.norm(bad[start : start + size])
+    base = mindyn.base_parameters(robot, method="numerical")
+    calls = {
+        "inverse_dynamics": lambda x: robot.inverse_dynamics(x, v, a),
+        "regressor": lambda x: robot.regressor(x, v, a),
+        "mass_matrix": lambda x: robot.mass_matrix(x),
+        "forward_dynamics": lambda x: robot.forward_dynamics(x, v, a),
+        "gravity_torque": lambda x: robot.gravity_torque(x),
+        "energy": lambda x: robot.energy(x, v),
+        "kinetic_energy": lambda x: robot.kinetic_energy(x, v),
+        "potential_energy": lambda x: robot.potential_energy(x),
+        "momentum": lambda x: robot.momentum(x, v),
+        "link_poses": lambda x: robot.link_poses(x),
+        "fk": lambda x: robot.fk(x, link=0),
+        "jacobian": lambda x: robot.jacobian(x, frame="local"),
+        "contact_jacobian": lambda x: contact_jacobian(robot, x, 0),
+        "coriolis_matrix": lambda x: mindyn.coriolis_matrix(robot, x, v),
+        "slotine_li_regressor_classical": lambda x: slotine_li_regressor_classical(
+            robot, x, v, v, a
+        ),
+        "BaseParameters.regressor": lambda x: base.regressor(x, v, a),
+    }
+    what = "quaternion" if size == 4 else r"\(cos, sin\) pair"
+    message = (
+        rf"^q has the {what} of the {kind} joint '{joint}' \(coordinates {start + 1} to "
+        rf"{start + size}\) of norm {norm:.9g}; expected norm 1 within 1e-06"
+    )
+    near = q.copy()
+    near[start : start + size] *= 1.0 + 1e-8  # within the tolerance: accepted as given
+    for label, call in calls.items():
+        with pytest.raises(mindyn.ArgumentError, match=message):
+            call(bad)
+        assert np.all(np.isfinite(call(near))), label
+    with pytest.raises(mindyn.ArgumentError, match=rf"^q has the {what} .*\(sample 1, coord"):
+        robot.mass_matrix(np.vstack([q, bad]))

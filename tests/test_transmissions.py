@@ -684,6 +684,38 @@ def test_a_floating_or_planar_root_has_no_motor_and_a_zero_column(tmp_path, root
     assert "several degrees of freedom" in robot.notes and f"'{base}'" in robot.notes
 
 
+@pytest.mark.parametrize("root", ["floating", "planar", "file"])
+def test_a_multidof_robot_reports_no_drive_term_on_the_motors(tmp_path, root, capsys):
+    """A robot with a joint of several degrees of freedom has no rotor inertia or friction
+    terms (refused), so none acts on a motor: drive_side is "joint" although its file declares
+    transmissions (read here with ElementTree), while the same arm on a fixed base reports
+    "motor"; the motor side is refused in one line naming the joint (library and --drive-side);
+    `mindyn info` says the terms are not modelled."""
+    path, robot, base = floating_arm(tmp_path, root)
+    assert len(declared_rows(path)) == 3 and robot.transmission is not None
+    assert robot.drive_side == "joint"
+    assert robot.with_drive_side("joint").drive_side == "joint"
+    kind = "planar" if root == "planar" else "floating"
+    with pytest.raises(mindyn.ModelError, match=f"has the {kind} joint '{base}'"):
+        robot.with_drive_side("motor")
+    q = np.r_[np.zeros(robot.nq - 4), 0.1, 0.2, 0.3, 0.4]
+    q[3 if kind == "floating" else 2] = 1.0  # a unit quaternion (x, y, z, w), a (cos, sin)
+    with pytest.raises(mindyn.ModelError, match="defined for revolute and prismatic joints"):
+        robot.regressor(q, np.zeros(robot.nv), np.zeros(robot.nv), rotor=True)
+    if root != "file":
+        assert mindyn.load(path).drive_side == "motor"  # the arm on a fixed base
+    from conftest import cli
+    from mindyn.cli import main
+
+    given = [] if root == "file" else ["--root-joint", root]
+    text = cli("info", path, *given)
+    assert "rotor inertia and friction are not modelled with joints of several" in text
+    assert "act through T" not in text and "drive side: motor" not in text
+    assert main(["base", str(path), *given, "--drive-side", "motor"]) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"has the {kind} joint '{base}'" in err, err
+
+
 def test_export_of_a_floating_robot_writes_the_transmissions_back_unchanged(tmp_path):
     path, robot, base = floating_arm(tmp_path, "file")
     out = tmp_path / "out.urdf"

@@ -45,7 +45,12 @@ __all__ = [
     "readonly",
     "samples",
     "text",
+    "unit_norms",
 ]
+
+#: How far from 1 the norm of a configuration's unit quaternion or (cos, sin) pair may be (the
+#: core's check of a configuration): none is normalised.
+UNIT_NORM_TOLERANCE = 1e-6
 
 
 def _describe(x) -> str:
@@ -156,6 +161,23 @@ def batch(n: int | dict[str, int], **arrays) -> list[np.ndarray]:
                 f"samples ({size},) or batches of equal length (m, {size})"
             )
     return out
+
+
+def unit_norms(q: np.ndarray, name: str, blocks) -> np.ndarray:
+    """``q``, a configuration (nq,) or batch (m, nq) already checked by :func:`array` or
+    :func:`samples`, whose ``blocks`` ``(start, size, what)`` (a quaternion or a (cos, sin) pair,
+    ``what`` naming it) each have norm 1 within :data:`UNIT_NORM_TOLERANCE`."""
+    for start, size, what in blocks:
+        norm = np.linalg.norm(q[..., start : start + size], axis=-1)
+        bad = np.flatnonzero(~(np.abs(norm - 1.0) <= UNIT_NORM_TOLERANCE))
+        if bad.size:
+            sample = f"sample {bad[0]}, " if q.ndim == 2 else ""
+            raise ArgumentError(
+                f"{name} has the {what} ({sample}coordinates {start + 1} to {start + size}) of "
+                f"norm {norm.flat[bad[0]]:.9g}; expected norm 1 within {UNIT_NORM_TOLERANCE:g} "
+                "(it is not normalised)"
+            )
+    return q
 
 
 def flag(x, name: str) -> bool:

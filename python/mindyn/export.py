@@ -236,7 +236,9 @@ def write_urdf(
     Parameters
     ----------
     robot : Robot
-        Loaded from a URDF (with the ``tip`` the parameters were identified for).
+        Loaded from a URDF (with the ``tip`` the parameters were identified for). A floating or
+        planar root joint the loader added (``root_joint=``) is not written, as the source does
+        not hold it (a note says so): load the written file with the same ``root_joint``.
     classical : mapping or array_like
         Classical parameters, see :func:`classical_terms`: about each link-frame origin, in link
         axes; a link frame is the URDF frame of the link that the moving joint moves.
@@ -405,16 +407,40 @@ class _UrdfDocument(XmlDocument):
         e = joint.find(which)
         return e.get("link", "") if e is not None else ""
 
+    def added_root(self, robot: Robot) -> bool:
+        """Whether the robot's first joint is the free-flyer or planar ``root_joint`` the loader
+        put above the file's root link (``load(..., root_joint=...)``), not a joint of the file:
+        the file's root link, entered by no joint, is the robot's first body, below ``world``."""
+        bodies = robot.link_names[1:]
+        return (
+            bool(bodies)
+            and robot.link_names[0] == "world"
+            and robot.joint_names[0] == "root_joint"
+            and robot.joint_types[0] in ("floating", "planar")
+            and bodies[0] in self.links
+            and bodies[0] not in self.entering
+        )
+
     def set_chain(self, robot: Robot, terms: JointTerms) -> list[str]:
         bodies = robot.link_names[1:]
+        added = self.added_root(robot)
         for k, name in enumerate(bodies):
             j = self.entering.get(name)
+            if added and k == 0:
+                continue
             if name not in self.links or j is None or j.get("name") != robot.joint_names[k]:
                 raise ModelError(
                     f"{self.path}: has no joint '{robot.joint_names[k]}' moving link '{name}': "
                     f"it is not the URDF robot '{robot.name}' was loaded from"
                 )
         notes = []
+        if added:  # a URDF holds it as a joint of the file, which the same loading would double
+            kind = robot.joint_types[0]
+            notes.append(
+                f"the {kind} root joint 'root_joint' was added by the loader above the root link "
+                f"'{bodies[0]}' and is not written: load the file with root_joint='{kind}' for the "
+                "same robot"
+            )
         body_set = set(bodies)
         for k, name in enumerate(bodies):
             merged = [
@@ -430,6 +456,8 @@ class _UrdfDocument(XmlDocument):
                     f"whose <inertial> was removed: {', '.join(merged)}"
                 )
         for k, name in enumerate(bodies):
+            if added and k == 0:
+                continue
             fv = 0.0 if terms.viscous is None else terms.viscous[k]
             fc = 0.0 if terms.coulomb is None else terms.coulomb[k]
             self._set_dynamics(self.entering[name], fv, fc)

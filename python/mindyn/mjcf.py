@@ -92,10 +92,12 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     ModelError
         ``classical`` does not fit the robot, a mass is negative (or zero with a first
         moment), the MJCF to rewrite does not hold the robot's bodies and joints by name,
-        ``mujoco`` is missing where it is needed, or MuJoCo compiles the written file to other
-        parameters.
+        ``mujoco`` is missing where it is needed, MuJoCo compiles the written file to other
+        parameters, or the robot has joints of several degrees of freedom (written here as
+        hinge and slide joints only).
     """
     _args.instance(robot, "robot", Robot)
+    robot._require_single_dof("write_mjcf")
     _args.path(path, "path")
     _args.optional(_args.path, source, "source")
     terms = classical_terms(robot, classical)

@@ -34,6 +34,10 @@ _MAX_JOINTS = 1000
 
 _NO_PARAMS = object()  # a multibody function that takes no parameter vector
 _SINGLE_DOF = ("revolute", "prismatic")
+# (start, size, nq) of the unit-norm block of a joint's configuration; nq of the other kinds
+_UNIT_BLOCKS = {"floating": (3, 4, 7), "spherical": (0, 4, 4), "planar": (2, 2, 4)}
+_NQ = {"universal": 2, "cylindrical": 2}
+_FRAMES = ("world", "local")  # the axes of a Jacobian's rows (Robot.jacobian)
 
 
 def bundled_robots() -> list[str]:
@@ -77,13 +81,14 @@ def load(
         ``buildModel`` with a ``JointModelFreeFlyer`` or ``JointModelPlanar`` root). Such a
         robot and one with ``floating``, ``planar`` (URDF) or ``spherical``, ``universal``,
         ``cylindrical`` joints (YAML) has ``nq`` configuration and ``nv`` velocity entries
-        (Pinocchio's conventions: quaternions ``(x, y, z, w)``, a free-flyer's velocity linear
-        first in its body's axes); its dynamics (:meth:`Robot.inverse_dynamics`,
+        (Pinocchio's conventions: quaternions ``(x, y, z, w)``, a free-flyer's velocity linear first
+        in its body's axes; a quaternion or planar ``(cos, sin)`` of q off norm 1 by more than 1e-6
+        raises ArgumentError, none is normalised); its dynamics (:meth:`Robot.inverse_dynamics`,
         :meth:`Robot.regressor`, :meth:`Robot.mass_matrix`, :meth:`Robot.forward_dynamics`,
         energies, :func:`mindyn.coriolis_matrix`, the classical Slotine-Li regressor), its
-        kinematics (:meth:`Robot.link_poses`, :meth:`Robot.fk`, :meth:`Robot.jacobian`) and
-        base parameters (every method, no rotor inertia or friction) are computed, other
-        functions refuse it.
+        kinematics (:meth:`Robot.link_poses`, :meth:`Robot.fk`, :meth:`Robot.jacobian`) and base
+        parameters (every method, no rotor inertia or friction) are computed, other functions refuse
+        it.
     gravity : array_like, shape (3,), optional
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
@@ -279,6 +284,8 @@ class Robot:
         or None (the model's)."""
         sizes = {name: self.nq if name == "q" else self.nv for name in arrays}
         checked = _args.batch(sizes, **arrays)
+        if "q" in arrays:
+            self._unit_norms(checked[list(arrays).index("q")])
         extra = ()
         if params is not _NO_PARAMS:
             extra = (_args.params(params, "params", self.n, (10,)),)
@@ -286,6 +293,28 @@ class Robot:
             return fn(self._m, *checked, *extra)
         out = [fn(self._m, *x, *extra) for x in zip(*checked, strict=True)]
         return tuple(np.array(c) for c in zip(*out, strict=True)) if rows else np.array(out)
+
+    def _configuration(self, q, name: str = "q") -> np.ndarray:
+        """One configuration of :attr:`nq` entries, checked (:mod:`._args`): its quaternions and
+        (cos, sin) pairs of norm 1."""
+        return self._unit_norms(_args.array(q, name, (self.nq,), unit="coordinate"), name)
+
+    def _unit_norms(self, q: np.ndarray, name: str = "q") -> np.ndarray:
+        return _args.unit_norms(q, name, self._unit_blocks())
+
+    def _unit_blocks(self) -> list[tuple[int, int, str]]:
+        """The entries of a configuration q that must have norm 1 (none is normalised), as
+        ``(start, size, what)``: the unit quaternion (x, y, z, w) of a spherical or free-flyer
+        joint, the (cos t, sin t) of a planar joint, ``what`` naming it ("quaternion of the
+        floating joint 'root_joint'"); empty for revolute and prismatic joints only."""
+        out, i = [], 0
+        for kind, joint in zip(self.joint_types, self.joint_names, strict=True):
+            start, size, nq = _UNIT_BLOCKS.get(kind, (0, 0, _NQ.get(kind, 1)))
+            if size:
+                what = "quaternion" if size == 4 else "(cos, sin) pair"
+                out.append((i + start, size, f"{what} of the {kind} joint '{joint}'"))
+            i += nq
+        return out
 
     @property
     def name(self) -> str:
@@ -391,14 +420,20 @@ class Robot:
         """Where the rotor inertia and friction of a parameter vector act: ``"motor"`` when the
         description declares transmissions (slot k of ``Ia``/``Fv``/``Fc`` is then motor k's, in
         motor units: ``tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))``), ``"joint"`` otherwise
-        or after :meth:`with_drive_side`."""
-        return self._m.drive_side
+        or after :meth:`with_drive_side`. Always ``"joint"`` for a robot with joints of several
+        degrees of freedom (not :attr:`single_dof`): it has no rotor inertia or friction terms,
+        so none acts on a motor, whatever transmissions it declares."""
+        return self._m.drive_side if self._m.single_dof else "joint"
 
     def with_drive_side(self, side: str) -> Robot:
         """A new robot, the same as this one but with its rotor inertia and friction on the
-        motors (``"motor"``, needs transmissions) or on the joints (``"joint"``); this robot is
-        unchanged."""
+        motors (``"motor"``, needs transmissions and revolute and prismatic joints only) or on
+        the joints (``"joint"``); this robot is unchanged."""
         _args.choice(side, "side", ("motor", "joint"))
+        if side == "motor":
+            self._require_single_dof(
+                "drive side 'motor' (rotor inertia and friction on the motors)"
+            )
         return Robot(self._m.with_drive_side(side))
 
     @property
@@ -720,8 +755,7 @@ class Robot:
     def link_poses(self, q) -> np.ndarray:
         """The pose of every link in the base frame at q (:attr:`nq` entries), shape (n, 4, 4);
         link k is the link joint k moves (any joint kinds)."""
-        q = _args.array(q, "q", (self.nq,))
-        return np.array(_core.multibody_link_poses(self._m, q))
+        return np.array(_core.multibody_link_poses(self._m, self._configuration(q)))
 
     @_args.finite_results("q", "dq", "params")
     def momentum(self, q, dq, params=None) -> np.ndarray:
@@ -763,7 +797,7 @@ class Robot:
         ``link``) or of the tool frame (``-1``; for a tree the last link's frame). With
         multi-DOF joints (not :attr:`single_dof`) q has :attr:`nq` entries."""
         single = self._m.single_dof
-        q = _vector(q, self.n, "q") if single else _vector(q, self.nq, "q", "coordinate")
+        q = _vector(q, self.n, "q") if single else self._configuration(q)
         _args.integer(link, "link", -1, maximum=self.n - 1)
         if not single:
             pose = self.link_poses(q)[link]
@@ -774,22 +808,33 @@ class Robot:
         return self._kinematics().pose(q, link)
 
     @_args.finite_results("q")
-    def jacobian(self, q) -> np.ndarray:
-        """Geometric Jacobian of the tool frame, shape (6, n): rows vx vy vz wx wy wz in the
-        base frame, reference point the tool-frame origin. For a tree, of the last link's frame,
-        with zero columns for the joints not on its path from the base.
+    def jacobian(self, q, *, link: int = -1, frame: str = "world") -> np.ndarray:
+        """Geometric Jacobian of a link's frame, shape (6, n): ``[v; w] = J dq``, ``v`` the
+        velocity of the frame's origin (its reference point) and ``w`` the frame's angular
+        velocity.
+
+        ``link`` is a link as :meth:`fk` takes it: 0-based, the link moved by joint ``link``,
+        or ``-1`` (default) the tool frame (for a tree the last link's frame), with zero
+        columns for the joints not on the link's path from the base. ``frame`` gives the rows'
+        axes: ``"world"`` (default) the base frame's (Pinocchio's ``getFrameJacobian`` with
+        LOCAL_WORLD_ALIGNED), ``"local"`` the frame's own (LOCAL); a wrench (force, moment about
+        the frame's origin) in those axes acting on the link gives the joint torques ``J^T f``.
 
         With multi-DOF joints (not :attr:`single_dof`): q of :attr:`nq` entries, shape (6, nv),
-        ``[v; w] = J dq`` with dq in the velocity convention of :attr:`nv` (a free-flyer's
-        linear velocity first, in its body's axes; Pinocchio's ``getFrameJacobian`` with
-        LOCAL_WORLD_ALIGNED)."""
-        if not self._m.single_dof:
-            q = _vector(q, self.nq, "q", "coordinate")
-            return _core.multibody_frame_jacobian(self._m, q, self.n - 1, self.tool, False)
-        q = _vector(q, self.n, "q")
-        if self.is_serial:
-            return self._kinematics().jacobian(q)
-        return _core.tool_jacobian(self._m, q)
+        dq in the velocity convention of :attr:`nv` (a free-flyer's linear velocity first, in
+        its body's axes)."""
+        single = self._m.single_dof
+        q = _vector(q, self.n, "q") if single else self._configuration(q)
+        link = _args.integer(link, "link", -1, maximum=self.n - 1)
+        local = _args.choice(frame, "frame", _FRAMES) == "local"
+        if single and link < 0 and not local:
+            return (
+                self._kinematics().jacobian(q)
+                if self.is_serial
+                else _core.tool_jacobian(self._m, q)
+            )
+        k, placement = (self.n - 1, self.tool) if link < 0 else (link, np.eye(4))
+        return _core.multibody_frame_jacobian(self._m, q, k, placement, local)
 
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, convention={self.convention!r})"

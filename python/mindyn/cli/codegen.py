@@ -47,12 +47,12 @@ def register(subparsers) -> None:
         "codegen",
         description="Generate the Newton-Euler recursion customised to the robot, in its base "
         "parameters, as C99 (header + source) or IEC 61131-3 Structured Text, and print its "
-        "operation counts beside those of the classical-parameter recursion generated the "
-        "same way. Constants of the geometry within 1e-9 of 0 (or of +-1, for rotation "
-        "entries alone in their row and column) are taken as exact; how many (beyond "
+        "operation counts (with --classical-counts beside those of the classical-parameter "
+        "recursion generated the same way). Constants of the geometry within 1e-9 of 0 (or of +-1, "
+        "for rotation entries alone in their row and column) are taken as exact; how many (beyond "
         "round-off) is printed and stated in the generated header. With --what adaptive-pd, "
-        "computed-torque or gravity-compensation: one controller step instead (C: a state "
-        "struct, init and step; ST: one FUNCTION_BLOCK) and its operation counts.",
+        "computed-torque or gravity-compensation: one controller step instead (C: a state struct, "
+        "init and step; ST: one FUNCTION_BLOCK) and its operation counts.",
     )
     add_robot(p)
     p.add_argument(
@@ -88,6 +88,13 @@ def register(subparsers) -> None:
         default=None,
         help="with --contact: the axes of the contact wrenches, world (the default) or local, "
         "the link's own axes",
+    )
+    p.add_argument(
+        "--classical-counts",
+        action="store_true",
+        help="also generate the classical-parameter recursion the same way and print its "
+        "operation counts beside the base-parameter ones (a second generation, which takes "
+        "longer than the first: on a humanoid on a free-flyer several times as long)",
     )
     p.add_argument(
         "--params",
@@ -222,6 +229,11 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     )
     if args.what.strip() in CONTROLLERS + (OBSERVER,):
         require_single_dof(robot, f"codegen --what {args.what.strip()}")
+        if args.classical_counts:
+            raise ModelError(
+                "--classical-counts applies to the inverse dynamics, gravity and regressor, "
+                "not to a controller or observer step"
+            )
         args.period = PERIOD if args.period is None else args.period
         note = _params_note(base.n, args.params, pruned, threshold) if params is not None else None
         given = params if params is not None else args.params
@@ -255,15 +267,19 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         base=base,
         **same,
     )
-    # the classical-parameter recursion generated the same way, for its operation counts
-    classical = generate(robot, name=code.name, base=False, **contacts, **same)
+    # the classical-parameter recursion generated the same way, for its operation counts only:
+    # on request (a second generation)
+    classical = None
+    if args.classical_counts:
+        classical = generate(robot, name=code.name, base=False, **contacts, **same)
     written = _write(code, out, args.lang)
     extras = joint_terms(args)
+    layout = dict(rotor=args.rotor, friction=args.friction, offset=args.offset)
     print(
         f"{robot.name}: {len(code.names)} base parameters"
         + (f" ({', '.join(extras)})" if extras else "")
         + (", values baked in" if args.numeric else "")
-        + f"; {len(classical.names)} classical"
+        + f"; {len(robot.parameter_names(**layout))} classical"
     )
     if params is not None:
         print(_params_note(len(code.names), args.params, pruned, threshold))
@@ -284,21 +300,30 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     for line in snap_lines(base, "base set: ", detail=False):
         print(line)
     print()
+    if classical is None:
+        print(
+            "operation counts of the base-parameter recursion (--classical-counts: beside "
+            "those of the classical-parameter one, generated too)"
+        )
     print("\n".join(operation_table(code, classical)))
     return 0
 
 
-def operation_table(code, classical) -> list[str]:
+def operation_table(code, classical=None) -> list[str]:
     """The lines of the operation counts of each function of ``code`` (base parameters) beside
-    those of ``classical`` (the classical-parameter recursion generated the same way)."""
+    those of ``classical`` (the classical-parameter recursion generated the same way), if
+    given."""
+    beside = classical is not None
     lines = [
-        f"{'function':<18}{'base parameters':>22}    {'classical parameters':>22}",
-        f"{'':<18}{'mul':>8}{'add':>7}{'trig':>7}    {'mul':>8}{'add':>7}{'trig':>7}",
+        f"{'function':<18}{'base parameters':>22}"
+        + (f"    {'classical parameters':>22}" if beside else ""),
+        f"{'':<18}{'mul':>8}{'add':>7}{'trig':>7}"
+        + (f"    {'mul':>8}{'add':>7}{'trig':>7}" if beside else ""),
     ]
     for f, c in code.counts.items():
-        k = classical.counts[f]
-        lines.append(
-            f"{f:<18}{c['mul']:>8}{c['add']:>7}{c['trig']:>7}    "
-            f"{k['mul']:>8}{k['add']:>7}{k['trig']:>7}"
-        )
+        line = f"{f:<18}{c['mul']:>8}{c['add']:>7}{c['trig']:>7}"
+        if beside:
+            k = classical.counts[f]
+            line += f"    {k['mul']:>8}{k['add']:>7}{k['trig']:>7}"
+        lines.append(line)
     return lines

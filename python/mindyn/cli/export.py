@@ -8,8 +8,9 @@ import math
 from .._core import ArgumentError, ModelError
 from ..export import classical_terms, write_urdf, write_yaml
 from .args import add_command
+from .flags import library_options_as_flags
 from .outputs import add_description_outputs, check_description_kind
-from .robot_options import add_robot, load_robot
+from .robot_options import add_robot, load_robot, require_single_dof
 
 
 def register(subparsers) -> None:
@@ -44,7 +45,9 @@ def cmd_export(args: argparse.Namespace) -> int:
         with_identified_friction,
     )
 
-    robot = load_robot(args, command="export")
+    robot = load_robot(args)
+    if args.mjcf is not None:  # MJCF: hinge and slide joints (a root joint: see write_urdf)
+        require_single_dof(robot, "export --mjcf")
     classical, identified_for, doc = read_classical(args.params)
     refuse_state(doc, "a robot description", str(args.params))
     if identified_for not in (None, robot.name):
@@ -101,4 +104,4 @@ def write_description(
         line += f" and {res.sidecar}"
     print(line)
     for note in res.notes:
-        print(f"  note: {note}")
+        print(f"  note: {library_options_as_flags(note)}")

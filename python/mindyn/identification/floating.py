@@ -44,7 +44,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import _args, _core
+from .. import _args
 from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot
@@ -103,13 +103,9 @@ def contact_jacobian(robot: Robot, q, link: str | int, *, frame: str = "world") 
     same axes acting on the link gives the generalized force ``J^T f``.
 
     ``link`` is a name of ``robot.link_names`` (not the fixed world) or a joint index k (the link
-    joint k moves). Built from the joints' motion subspaces (the multibody kinematics of
-    :meth:`mindyn.Robot.jacobian`)."""
+    joint k moves): :meth:`mindyn.Robot.jacobian` of that link."""
     _args.instance(robot, "robot", Robot)
-    frame = _args.choice(frame, "frame", _FRAMES)
-    k = _link_index(robot, link)
-    q = _args.array(q, "q", (robot.nq,), unit="coordinate")
-    return _core.multibody_frame_jacobian(robot._m, q, k, np.eye(4), frame == "local")
+    return robot.jacobian(q, link=_link_index(robot, link), frame=frame)
 
 
 @dataclass
@@ -629,28 +625,18 @@ def read_floating_csv(
     )
 
 
-_NORM_TOLERANCE = 1e-6  # the model's: a quaternion or (cos, sin) pair of another norm is refused
-
-
 def _check_norms(robot: Robot, q: np.ndarray, path: Path) -> None:
     """Refuses a quaternion or planar (cos, sin) pair of the log whose norm is not 1, naming the
     line and the columns."""
-    i = 0
-    for kind, name in zip(robot.joint_types, robot.joint_names, strict=True):
-        start, size, nq = {"floating": (3, 4, 7), "spherical": (0, 4, 4), "planar": (2, 2, 4)}.get(
-            kind, (0, 0, 2 if kind in ("universal", "cylindrical") else 1)
-        )
-        if size:
-            norm = np.linalg.norm(q[:, i + start : i + start + size], axis=1)
-            bad = np.flatnonzero(~(np.abs(norm - 1.0) <= _NORM_TOLERANCE))
-            if len(bad):
-                what = "quaternion" if size == 4 else "(cos, sin) pair"
-                raise DataError(
-                    f"{path}:{bad[0] + 2}: the {what} of the {kind} joint '{name}' (columns "
-                    f"q{i + start + 1}..q{i + start + size}) has norm {norm[bad[0]]:.9g}, not 1 "
-                    f"(within {_NORM_TOLERANCE:g})"
-                )
-        i += nq
+    tolerance = _args.UNIT_NORM_TOLERANCE
+    for start, size, what in robot._unit_blocks():
+        norm = np.linalg.norm(q[:, start : start + size], axis=1)
+        bad = np.flatnonzero(~(np.abs(norm - 1.0) <= tolerance))
+        if len(bad):
+            raise DataError(
+                f"{path}:{bad[0] + 2}: the {what} (columns q{start + 1}..q{start + size}) has "
+                f"norm {norm[bad[0]]:.9g}, not 1 (within {tolerance:g})"
+            )
 
 
 def _link_as_data_error(robot: Robot, link: str, path: Path) -> None:
