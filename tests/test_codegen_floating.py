@@ -328,3 +328,21 @@ def test_the_command_line_runs_the_generator_once(tmp_path, rng, monkeypatch):
     counts += [classical.counts["inverse_dynamics"][k] for k in ("mul", "add", "trig")]
     assert [int(x) for x in row[1:]] == counts
     assert (tmp_path / "both" / "s.c").read_text() == code.source
+
+
+def test_a_single_dof_robot_gets_the_classical_counts_by_default(tmp_path):
+    """The classical-parameter recursion's counts, beside the base ones, are the default on a
+    robot of single-DOF joints (cheap there) and equal the library's; --no-classical-counts
+    leaves the second generation out."""
+    classical = codegen.generate("puma560", lang="c", base=False, name="p")
+    base = codegen.generate("puma560", lang="c", name="p")
+    out = cli("codegen", "puma560", "--lang", "c", "--name", "p", "-o", tmp_path / "p")
+    row = next(line.split() for line in out.splitlines() if line.startswith("inverse_dynamics"))
+    want = [base.counts["inverse_dynamics"][k] for k in ("mul", "add", "trig")]
+    want += [classical.counts["inverse_dynamics"][k] for k in ("mul", "add", "trig")]
+    assert [int(x) for x in row[1:]] == want
+    off = cli("codegen", "puma560", "--lang", "c", "--name", "p", "-o", tmp_path / "q",
+              "--no-classical-counts")  # fmt: skip
+    row = next(line.split() for line in off.splitlines() if line.startswith("inverse_dynamics"))
+    assert [int(x) for x in row[1:]] == want[:3]
+    assert "classical parameters" not in off and "--classical-counts" in off

@@ -47,12 +47,14 @@ def register(subparsers) -> None:
         "codegen",
         description="Generate the Newton-Euler recursion customised to the robot, in its base "
         "parameters, as C99 (header + source) or IEC 61131-3 Structured Text, and print its "
-        "operation counts (with --classical-counts beside those of the classical-parameter "
-        "recursion generated the same way). Constants of the geometry within 1e-9 of 0 (or of +-1, "
-        "for rotation entries alone in their row and column) are taken as exact; how many (beyond "
-        "round-off) is printed and stated in the generated header. With --what adaptive-pd, "
-        "computed-torque or gravity-compensation: one controller step instead (C: a state struct, "
-        "init and step; ST: one FUNCTION_BLOCK) and its operation counts.",
+        "operation counts beside those of the classical-parameter recursion generated the "
+        "same way (by default for robots of single-DOF joints only: on a floating base the "
+        "second generation takes several times as long as the first). Constants of the "
+        "geometry within 1e-9 of 0 (or of +-1, for rotation entries alone in their row and "
+        "column) are taken as exact; how many (beyond round-off) is printed and stated in the "
+        "generated header. With --what adaptive-pd, computed-torque or gravity-compensation: "
+        "one controller step instead (C: a state struct, init and step; ST: one "
+        "FUNCTION_BLOCK) and its operation counts.",
     )
     add_robot(p)
     p.add_argument(
@@ -91,10 +93,12 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--classical-counts",
-        action="store_true",
+        action=argparse.BooleanOptionalAction,
+        default=None,
         help="also generate the classical-parameter recursion the same way and print its "
         "operation counts beside the base-parameter ones (a second generation, which takes "
-        "longer than the first: on a humanoid on a free-flyer several times as long)",
+        "longer than the first: on a humanoid on a free-flyer several times as long); "
+        "default: on for a robot of single-DOF joints, off with joints of several DOF",
     )
     p.add_argument(
         "--params",
@@ -229,7 +233,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     )
     if args.what.strip() in CONTROLLERS + (OBSERVER,):
         require_single_dof(robot, f"codegen --what {args.what.strip()}")
-        if args.classical_counts:
+        if args.classical_counts:  # given (None: the default)
             raise ModelError(
                 "--classical-counts applies to the inverse dynamics, gravity and regressor, "
                 "not to a controller or observer step"
@@ -270,7 +274,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     # the classical-parameter recursion generated the same way, for its operation counts only:
     # on request (a second generation)
     classical = None
-    if args.classical_counts:
+    if args.classical_counts or (args.classical_counts is None and robot.single_dof):
         classical = generate(robot, name=code.name, base=False, **contacts, **same)
     written = _write(code, out, args.lang)
     extras = joint_terms(args)
@@ -303,7 +307,9 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     if classical is None:
         print(
             "operation counts of the base-parameter recursion (--classical-counts: beside "
-            "those of the classical-parameter one, generated too)"
+            "those of the classical-parameter one, generated too"
+            + ("" if args.classical_counts is False else "; off by default with multi-DOF joints")
+            + ")"
         )
     print("\n".join(operation_table(code, classical)))
     return 0
