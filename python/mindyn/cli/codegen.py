@@ -154,7 +154,10 @@ def register(subparsers) -> None:
         "--box",
         type=float,
         metavar="F",
-        help="keep each estimate within F |p0| of its initial value p0 (default: unbounded)",
+        help="keep each estimate within F |p0| of its initial value p0 (default, base "
+        "parameters: the box of 'mindyn track', each base parameter within a third of the change "
+        "that alone makes the linearised sampled loop unstable, about the description's values; "
+        "stated in the output)",
     )
     p.add_argument(
         "--plcopen",
