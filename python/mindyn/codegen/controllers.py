@@ -144,10 +144,11 @@ def generate_controller(
     period : float
         Controller period [s] (adaptive PD: the adaptation step).
     p_min, p_max : scalar or array (np,), optional
-        Box on the estimate (``-inf`` / ``inf``: a side open). Default, adaptive PD on base
-        parameters: :func:`mindyn.control.estimate_box` about the description's values, the box
-        :func:`mindyn.control.make_controller` gives the library's controller (its note in
-        ``settings["box"]``); otherwise unbounded.
+        Box on the estimate (``-inf`` / ``inf``: a side open; an initial estimate outside it is
+        refused). Default, adaptive PD on base parameters: :func:`mindyn.control.estimate_box`
+        about the description's values, the box :func:`mindyn.control.make_controller` gives
+        the library's controller, the initial estimate projected onto it (the note in
+        ``settings["box"]`` says on how many parameters); otherwise unbounded.
     tau_max : None, "effort", scalar or array (n,)
         Torque limit (default none; ``"effort"``: the model's effort limits).
     """
@@ -212,6 +213,13 @@ def generate_controller(
         raise _args.fail(
             "p_min", f"exceeds p_max at '{names[i]}' ({s['p_min'][i]:g} > {s['p_max'][i]:g})"
         )
+    if s["p0"] is not None and s["box"].startswith("estimate box"):
+        # the derived box: the initial estimate projected onto it, as the library's (a given
+        # box refuses an estimate outside it)
+        out_of = (s["p0"] < s["p_min"]) | (s["p0"] > s["p_max"])
+        if out_of.any():
+            s["p0"] = np.clip(s["p0"], s["p_min"], s["p_max"])
+            s["box"] += f"; the initial estimate moved into it on {int(out_of.sum())}"
     if isinstance(tau_max, str):
         tau_max = robot.limits["effort"]
         if not np.all(np.isfinite(tau_max)):

@@ -363,7 +363,8 @@ class AdaptivePD:
     period : float
         Controller period [s]: the explicit Euler step of the adaptation law.
     p_min, p_max : array of shape (base.n,), optional
-        Box on the estimate (parameter projection: after each step ``p_hat`` is clipped to it;
+        Box on the estimate (parameter projection: ``p0`` and ``p_hat`` after each step are
+        clipped to it;
         ``-inf`` / ``inf`` entries leave a side open; default unbounded).
         :func:`estimate_box` derives one from the linearised check of the sampled loop
         (:func:`make_controller` uses it by default).
@@ -413,7 +414,9 @@ class AdaptivePD:
         self.reset()
 
     def reset(self) -> None:
-        self.p_hat = self.p0.copy()
+        """The estimate back to ``p0``, projected onto the box (as the generated step's initial
+        estimate is)."""
+        self.p_hat = np.clip(self.p0, self.p_min, self.p_max)
 
     #: how the box was set: "derived" (:meth:`derive_box`), "given" or "none"
     box = "none"
@@ -435,6 +438,7 @@ class AdaptivePD:
             params=params,
         )
         self.box = "derived"
+        self.reset()
 
     def use_parameters(self, p0) -> None:
         """Takes ``p0`` (base parameters) as the initial estimate, and resets."""
@@ -611,6 +615,8 @@ def controller_check(robot: Robot, controller, params, period: float):
         kp = getattr(controller, "kp", lam * controller.kd)
         p_hat = getattr(controller, "p0", None)
         p_hat = getattr(controller, "p_hat", None) if p_hat is None else p_hat
+        if p_hat is not None and hasattr(controller, "p_min"):  # the estimate starts in its box
+            p_hat = np.clip(p_hat, controller.p_min, controller.p_max)
     else:
         return None
     base = getattr(controller, "base", None)
@@ -688,7 +694,10 @@ def adaptation_check(controller, q_d, dq_d, ddq_d, period: float) -> str | None:
     )
     if lo is not None and hi is not None:
         bounded = int(np.sum(np.isfinite(lo) | np.isfinite(hi)))
-        text += f"; estimate projected onto a box ({bounded} of {len(lo)} parameters bounded)"
+        text += f"; estimate projected onto a box ({bounded} of {len(lo)} parameters bounded"
+        p0 = getattr(controller, "p0", None)
+        moved = 0 if p0 is None else int(np.sum((p0 < lo) | (p0 > hi)))
+        text += f", the initial estimate moved into it on {moved})" if moved else ")"
     return text
 
 
