@@ -53,7 +53,6 @@ __all__ = [
     "check_period",
     "check_sampled_gains",
     "controller_check",
-    "adaptation_check",
     "default_gains",
     "estimate_box",
     "load_gains",
@@ -738,17 +737,17 @@ def estimate_box(
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     from .stability import GAIN_MARGIN, deviation_bounds, workspace_samples
 
+    params = _args.optional(_args.array, params, "params", (robot.layout_sizes[3] * robot.n,))
+    qs = _args.optional(_args.array, qs, "qs", (None, robot.n))
+    if base.robot.n != robot.n:
+        raise _args.fail("base", f"is of a robot of {base.robot.n} joints; expected {robot.n}")
     T = check_period(period)
     n, nb = robot.n, base.n
     _, kd, lam = _gain_arrays("adaptive-pd", gains, n)
-    if params is None:
-        full = plant_parameters(robot, rotor, friction=friction)
-    else:
-        full = _args.array(params, "params", (robot.layout_sizes[3] * n,))
+    full = plant_parameters(robot, rotor, friction=friction) if params is None else params
     p_d = base_values(base, full)
     if qs is None:
         qs = workspace_samples(robot, count=BOX_SAMPLES)
-    qs = np.atleast_2d(np.asarray(qs, dtype=float))
     k = len(qs)
     zero = np.zeros_like(qs)
     eye = np.broadcast_to(np.eye(n), (k, n, n)).reshape(k * n, n)

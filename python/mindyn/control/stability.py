@@ -65,7 +65,6 @@ __all__ = [
     "GAIN_MARGIN",
     "LoopCheck",
     "adaptation_step_ratio",
-    "deviation_bounds",
     "UnstableLoopError",
     "check_loop",
     "loop_matrix",
@@ -436,13 +435,27 @@ def adaptation_step_ratio(Y, kd, gamma, nu: float, period: float) -> np.ndarray:
     joints: ``lambda_max(K_D^-1/2 K_I K_D^-1/2) < 1``. Since ``lambda_max(...) <= T max(Gamma)
     |Y|_F^2 / min(K_D)``, ``nu >= c T max(Gamma) / min(K_D)`` keeps the ratio below ``1 / c``
     for any ``Y``."""
-    Y = np.asarray(Y, dtype=float)
+    if np.ndim(Y) not in (2, 3):
+        raise _args.fail("Y", f"has {np.ndim(Y)} dimensions; expected (n, p) or (m, n, p)")
+    Y = _args.array(Y, "Y", (None,) * np.ndim(Y))
+    n, p = Y.shape[-2:]
+    kd = _args.array(kd, "kd", (n,))
+    gamma = _args.array(
+        np.broadcast_to(gamma, (p,)) if np.ndim(gamma) == 0 else gamma, "gamma", (p,)
+    )
+    nu = _args.number(nu, "nu", minimum=0.0)
+    period = _args.number(period, "period", positive=True)
+    if not (np.all(kd > 0) and np.all(gamma >= 0)):
+        raise _args.fail("kd", "and gamma must be positive (kd) and non-negative (gamma)")
     Y = Y[None] if Y.ndim == 2 else Y
-    w = 1.0 / np.sqrt(np.asarray(kd, dtype=float))
-    g = np.sqrt(np.broadcast_to(np.asarray(gamma, dtype=float), Y.shape[-1:]))
-    Z = w[:, None] * Y * g  # K_D^-1/2 Y Gamma^1/2
+    # scaled by the largest entry of each regressor: finite for regressors of any size
+    big = np.abs(Y).max(axis=(-2, -1))
+    big = np.where(big > 0, big, 1.0)
+    Y = Y / big[:, None, None]
+    Z = Y / np.sqrt(kd)[:, None] * np.sqrt(gamma)  # K_D^-1/2 Y Gamma^1/2, scaled
     top = np.linalg.eigvalsh(Z @ np.swapaxes(Z, -1, -2))[..., -1]
-    return float(period) * top / (1.0 + float(nu) * np.sum(Y * Y, axis=(-2, -1)))
+    with np.errstate(over="ignore"):
+        return period * top / (1.0 / big**2 + nu * np.sum(Y * Y, axis=(-2, -1)))
 
 
 def deviation_bounds(
