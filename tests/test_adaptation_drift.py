@@ -38,7 +38,7 @@ def test_step_condition_is_the_largest_stable_adaptation_gain(nu):
     (T a^2) (the closed form of the one-joint derivation); the library's AdaptivePD in closed
     loop converges at 0.8 Gamma* (the error never grows, ends below 2 %) and not at
     1.25 Gamma* (nu = 0: the loop diverges; nu > 0 bounds each step, and the estimate error
-    grows tenfold to a limit cycle)."""
+    grows tenfold to a limit cycle); the simulator's report says so."""
     robot = mindyn.load("planar1h")
     base = mindyn.base_parameters(robot)
     p = base.values(robot.parameters())
@@ -51,16 +51,22 @@ def test_step_condition_is_the_largest_stable_adaptation_gain(nu):
     run = dict(rate=1.0 / T, duration=duration)
 
     ctl = control.AdaptivePD(base, kd, lam, 0.8 * g_star, 1.2 * p, nu=nu, period=T)
-    err = np.abs(control.simulate(robot, ref, ctl, **run).p_hat[:, 0] - p[0])
+    r = control.simulate(robot, ref, ctl, **run)
+    err = np.abs(r.p_hat[:, 0] - p[0])
     assert err.max() <= err[0] * (1 + 1e-9) and err[-1] < 0.02 * err[0]
+    assert "at most 0.8 (" in r.info["stability"] and "NOT MET" not in r.info["stability"]
 
     ctl = control.AdaptivePD(base, kd, lam, 1.25 * g_star, 1.2 * p, nu=nu, period=T)
     if nu == 0:
-        with pytest.raises(control.UnstableLoopError, match="diverged"):
+        with pytest.raises(
+            control.UnstableLoopError, match=r"(?s)diverged.*at most 1.25 \(.{0,50}NOT MET"
+        ):
             control.simulate(robot, ref, ctl, **run)
     else:  # the normalisation bounds each step: the estimate error grows to a limit cycle
-        err = np.abs(control.simulate(robot, ref, ctl, **run).p_hat[:, 0] - p[0])
+        r = control.simulate(robot, ref, ctl, **run)
+        err = np.abs(r.p_hat[:, 0] - p[0])
         assert err.max() > 10.0 * err[0] and err[-1] > err[0]
+        assert "at most 1.25 (" in r.info["stability"] and "NOT MET" in r.info["stability"]
 
 
 def test_default_nu_keeps_the_step_condition_for_any_regressor(rng):
