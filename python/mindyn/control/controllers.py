@@ -688,7 +688,12 @@ def adaptation_check(controller, q_d, dq_d, ddq_d, period: float) -> str | None:
     text = (
         f"adaptation step condition along the reference: T lambda_max(K_D^-1/2 Y Gamma Y^T "
         f"K_D^-1/2) / (1 + nu |Y|^2) at most {ratio:.3g} (the sampled update needs it below 1"
-        + ("; NOT MET: the estimate oscillates with growing amplitude" if ratio >= 1 else "")
+        + (
+            "; NOT MET: the update is unstable where the reference holds it above 1, and "
+            "diverges if it stays there long"
+            if ratio >= 1
+            else ""
+        )
         + (f"; Gamma could grow {1.0 / ratio:.3g} times, nu fixed" if ratio > 0 else "")
         + f"; {len(pick)} samples)"
     )
