@@ -124,9 +124,10 @@ def add_closed_loop_args(p, default: str) -> None:
         "--estimate-box",
         choices=["derived", "none"],
         help="adaptive PD: derived (the default): project the estimate onto a box about the "
-        "description's base parameters, each within a third of the change that alone makes the "
-        "linearised sampled loop unstable (parameters the loop does not see, such as Coulomb "
-        "friction, unbounded; stated in the output); none: no box",
+        "description's base parameters, each one the linearised sampled loop sees within a "
+        "third of a common fraction (at which the parameters moving together keep the loop "
+        "stable) of the change that alone makes that loop unstable (the others, such as "
+        "Coulomb friction, unbounded; stated in the output); none: no box",
     )
     p.add_argument(
         "--trajectory",

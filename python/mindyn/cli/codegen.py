@@ -155,9 +155,8 @@ def register(subparsers) -> None:
         type=float,
         metavar="F",
         help="keep each estimate within F |p0| of its initial value p0 (default, base "
-        "parameters: the box of 'mindyn track', each base parameter within a third of the change "
-        "that alone makes the linearised sampled loop unstable, about the description's values; "
-        "stated in the output)",
+        "parameters: the box of 'mindyn track' about the description's values, p0 projected "
+        "onto it; stated in the output)",
     )
     p.add_argument(
         "--plcopen",

@@ -205,9 +205,9 @@ def register(sub) -> None:
         "smallest effective inertia of each joint, lowered until the sampled loops keep a gain "
         "margin of 3, Gamma = 1 normalised by nu = 3 Gamma T / min K_D (the sampled update's "
         "step condition T lambda_max(K_D^-1/2 Y Gamma Y^T K_D^-1/2) / (1 + nu |Y|^2) < 1 kept "
-        "below a third); the estimate is kept in a box about the description's values, each "
-        "base parameter within a third of the change that alone makes the linearised sampled "
-        "loop unstable (--estimate-box none: no box); the output states the choice and the "
+        "below a third); the estimate is kept in a box about the description's values where "
+        "the linearised sampled loop stays stable with the parameters moving together "
+        "(--estimate-box none: no box); the output states the choice and the "
         "step condition along the reference. A loop that the linearised check finds unstable "
         "is refused, one that diverges is stopped, each with the figures that explain it "
         "(exit status 2).",

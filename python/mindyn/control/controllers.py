@@ -423,8 +423,9 @@ class AdaptivePD:
 
     def derive_box(self, params=None, *, rotor: bool = True, friction: bool = True) -> None:
         """Sets the box on the estimate to :func:`estimate_box` of this controller's gains and
-        period about the description's values (``rotor``, ``friction``) or about the
-        classical parameters ``params`` (full layout: a simulated robot's)."""
+        period about the description's values (``rotor``, ``friction``) or the classical
+        parameters ``params`` (full layout: a simulated robot's), and projects the estimate
+        onto it (:meth:`reset`)."""
         robot = self.base.robot
         gains = {"kd": self.kd, "lambda": self.lam}
         self.p_min, self.p_max, self.box_note = estimate_box(
@@ -720,30 +721,44 @@ def estimate_box(
     rotor: bool = True,
     friction: bool = True,
     params=None,
+    center=None,
     qs=None,
 ) -> tuple[np.ndarray, np.ndarray, str]:
     """The default box on adaptive PD's estimate (parameter projection), ``(p_min, p_max,
-    note)``: around the description's base parameters ``p_d`` (its rotor inertia and friction
-    as ``rotor`` and ``friction`` say), each parameter may move by a third
-    (:data:`~mindyn.control.stability.GAIN_MARGIN`) of the change that, that parameter alone
-    moved, makes the linearised sampled loop of adaptive PD with ``gains`` at ``period``
-    unstable for the robot of the description (:func:`~mindyn.control.stability.
-    deviation_bounds`, mass matrix and viscous friction at :func:`~mindyn.control.stability.
-    workspace_samples`). Estimate drift (the gradient follows what the model cannot
-    represent: the torque held over a period, Coulomb friction, noise) then cannot take the
-    model where the sampled loop diverges: an inertia estimate that drops until ``K_D + M_hat
-    Lambda`` no longer damps, a viscous friction estimate that grows past the robot's where the
-    friction is fast beside the period. Parameters that the linearised loop does not see
-    (Coulomb friction, gravity-only combinations) get no bound (infinite sides). ``params``:
-    the robot's classical parameters in the full layout to centre on instead (a simulated
-    robot's). The note states the bounds' figures."""
+    note)``, about ``center`` (base parameters; default the description's values): a part of
+    the region where the linearised sampled loop of adaptive PD with ``gains`` at ``period``
+    stays stable that holds with the parameters moving together.
+
+    For the robot of the description (its rotor inertia and friction as ``rotor`` and
+    ``friction`` say; ``params``: classical parameters in the full layout instead, a simulated
+    robot's) and the model ``center``, ``d_j`` is the change of parameter ``j`` alone (down or
+    up) that makes the loop unstable (:func:`~mindyn.control.stability.deviation_bounds`, mass
+    matrix and viscous friction at :data:`BOX_SAMPLES` configurations of
+    :func:`~mindyn.control.stability.workspace_samples`); ``f`` the largest common fraction of
+    them at which the box's corners and random points keep the loop stable
+    (:func:`~mindyn.control.stability.box_fraction`: 1, 1/2, 1/4, ..., at least ``1 / N``,
+    where every point of the box lies in the convex hull of the single-parameter limits). Each
+    side is a third (:data:`~mindyn.control.stability.GAIN_MARGIN`) of ``f d_j``. Estimate
+    drift (the gradient follows what the model cannot represent: the torque held over a
+    period, Coulomb friction, noise) then cannot take the model where the sampled loop
+    diverges: an inertia estimate that drops until ``K_D + M_hat Lambda`` no longer damps, a
+    viscous friction estimate that grows past the robot's where the friction is fast beside
+    the period. Parameters that the linearised loop does not see (Coulomb friction,
+    gravity-only combinations) get no bound (infinite sides). The note states the figures."""
     _args.instance(robot, "robot", Robot)
     _args.instance(base, "base", BaseParameters)
     _args.mapping(gains, "gains")
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
-    from .stability import GAIN_MARGIN, deviation_bounds, workspace_samples
+    from .stability import (
+        BOX_POINTS,
+        GAIN_MARGIN,
+        box_fraction,
+        deviation_bounds,
+        workspace_samples,
+    )
 
     params = _args.optional(_args.array, params, "params", (robot.layout_sizes[3] * robot.n,))
+    center = _args.optional(_args.array, center, "center", (base.n,))
     qs = _args.optional(_args.array, qs, "qs", (None, robot.n))
     if base.robot.n != robot.n:
         raise _args.fail("base", f"is of a robot of {base.robot.n} joints; expected {robot.n}")
@@ -752,6 +767,7 @@ def estimate_box(
     _, kd, lam = _gain_arrays("adaptive-pd", gains, n)
     full = plant_parameters(robot, rotor, friction=friction) if params is None else params
     p_d = base_values(base, full)
+    p_c = p_d if center is None else center
     if qs is None:
         qs = workspace_samples(robot, count=BOX_SAMPLES)
     k = len(qs)
@@ -764,24 +780,31 @@ def estimate_box(
     viscous = np.array([str(x).startswith("Fv") for x in base.names])
     vel = base.regressor(qq, eye, np.zeros_like(qq)).reshape(k, n, n, nb) - grav[:, None]
     fric = np.where(viscous, vel, 0.0).transpose(3, 0, 2, 1)
-    m = np.einsum("jkic,j->kic", inertia, p_d)
-    fed = np.einsum("jkic,j->kic", fric, p_d)
+    minv = np.linalg.inv(robot.mass_matrix(qs, full))
+    m_hat = np.einsum("jkic,j->kic", inertia, p_c)
+    fed = np.einsum("jkic,j->kic", fric, p_c)
     damping = plant_damping(robot, full, qs)
-    down, up = deviation_bounds(kd, lam, T, np.linalg.inv(m), m, damping, fed, inertia, fric)
-    lo, hi = p_d - down / GAIN_MARGIN, p_d + up / GAIN_MARGIN
-    bounded = np.isfinite(lo) | np.isfinite(hi)
+    loop = (kd, lam, T, minv, m_hat, damping, fed, inertia, fric)
+    down, up = deviation_bounds(*loop)
+    seen = np.isfinite(down) | np.isfinite(up)
+    fraction = box_fraction(*loop, down, up)
+    share = GAIN_MARGIN / fraction
+    lo, hi = p_c - down / share, p_c + up / share
     with np.errstate(divide="ignore", invalid="ignore"):
-        rel = np.minimum(down, up) / GAIN_MARGIN / np.abs(p_d)
-    tight = [i for i in np.argsort(rel) if bounded[i] and np.isfinite(rel[i])][:2]
+        rel = np.minimum(down, up) / share / np.abs(p_c)
+    tight = [i for i in np.argsort(rel) if seen[i] and np.isfinite(rel[i])][:2]
+    where = "the description's values" if center is None else "the initial estimate"
     note = (
-        f"estimate box: {int(bounded.sum())} of {nb} base parameters bounded, each to a third of "
-        f"the change that alone makes the linearised sampled loop at {T:g} s unstable about the "
-        f"description's values ({len(qs)} configurations; {nb - int(bounded.sum())} the loop "
-        "does not see, such as Coulomb friction, unbounded)"
+        f"estimate box about {where}: {int(seen.sum())} of {nb} base parameters bounded, each "
+        f"to 1/{share:.4g} of the change that alone makes the linearised sampled loop at "
+        f"{T:g} s unstable (a third of the largest common fraction, {fraction:.4g}, at which "
+        f"the box's corners and {BOX_POINTS} random points keep it stable; {len(qs)} "
+        f"configurations; {nb - int(seen.sum())} the loop does not see, such as Coulomb "
+        "friction, unbounded)"
         + (
             "; tightest "
             + ", ".join(
-                f"{base.names[i]} {p_d[i]:.4g} in [{lo[i]:.4g}, {hi[i]:.4g}]" for i in tight
+                f"{base.names[i]} {p_c[i]:.4g} in [{lo[i]:.4g}, {hi[i]:.4g}]" for i in tight
             )
             if tight
             else ""
@@ -1013,9 +1036,9 @@ def make_controller(
     ``friction`` and ``params``: the controller's ``true_model`` is then True).
 
     ``box`` (adaptive PD): the box on the estimate: True, :func:`estimate_box` about the
-    description's values as ``rotor`` and ``friction`` say (its note is the controller's
-    ``box_note``; :func:`mindyn.control.simulate` derives it again about the simulated robot
-    when ``p_hat`` is its own); False, none; or ``(p_min, p_max)``."""
+    description's values as ``rotor`` and ``friction`` say, ``p_hat`` projected onto it (its
+    note is the controller's ``box_note``; :func:`mindyn.control.simulate` derives it again
+    for the simulated robot when ``p_hat`` is its own); False, none; or ``(p_min, p_max)``."""
     _args.choice(kind, "kind", CONTROLLERS)
     _args.instance(robot, "robot", Robot)
     _args.mapping(gains, "gains")

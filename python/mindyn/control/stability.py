@@ -43,8 +43,10 @@ linear part) and the adaptation of adaptive PD (the estimate is taken as it is w
 For the adaptation, two conditions of its own, reported beside the verdict by
 :func:`mindyn.control.simulate`: the step condition of the sampled update
 (:func:`adaptation_step_ratio`, below 1 along the reference), and the box on the estimate
-(:func:`deviation_bounds`, :func:`mindyn.control.estimate_box`), which keeps each parameter
-within a third of the change that alone makes this check's loop unstable: the gradient, fed
+(:func:`deviation_bounds`, :func:`box_fraction`, :func:`mindyn.control.estimate_box`), which
+gives each parameter the loop sees a third of a common fraction of the change that alone makes
+this check's loop unstable, the fraction one at which the parameters moving together keep it
+stable: the gradient, fed
 by what the model cannot represent (the torque held over a period, Coulomb friction, noise),
 otherwise drifts the estimate there (on the xArm7 at 4 ms, the wrist's viscous friction above
 the robot's and its inertia below: the loop diverged after 2.5 s).
@@ -499,3 +501,40 @@ def deviation_bounds(
         bound = np.where(small, np.exp(lo) * scale, 0.0)
         out.append(np.where(capped | ~np.isfinite(scale), np.inf, bound))
     return out[0], out[1]
+
+
+#: Random points of the box (besides its two uniform corners) at which :func:`box_fraction`
+#: checks the parameters moving together.
+BOX_POINTS = 32
+
+
+def box_fraction(
+    kd, lam, period: float, minv, m_hat, damping, fed, inertia, friction, down, up, *, seed=0
+) -> float:
+    """The largest common fraction ``f`` of the single-parameter limits ``down``, ``up``
+    (:func:`deviation_bounds`) at which the box ``[-f down, f up]`` about the model keeps the
+    sampled adaptive-PD loop stable with the parameters moving together, checked at its two
+    uniform corners (every parameter down, every parameter up) and :data:`BOX_POINTS` random
+    points (seeded): the largest of 1, 1/2, 1/4, ... that passes, and at least ``1 / N`` (``N``
+    the parameters with a finite limit), where every point of the box has
+    ``sum_j |d_j| / limit_j <= 1``, inside the convex hull of the single-parameter limits.
+    Arguments as :func:`deviation_bounds`."""
+    kd, lam = np.asarray(kd, dtype=float), np.asarray(lam, dtype=float)
+    kpe, kde = effective_gains("adaptive-pd", kd, kd, lam, m_hat)
+    kde = np.broadcast_to(kde, minv.shape) - fed
+    ad, bd = plant_step(minv, float(period), damping)
+    sens = inertia * lam - friction  # (p, m, n, n)
+    lo = np.where(np.isfinite(down), down, 0.0)
+    hi = np.where(np.isfinite(up), up, 0.0)
+    seen = int(np.sum(np.isfinite(down) | np.isfinite(up)))
+    u = np.random.default_rng(seed).uniform(-1.0, 1.0, (BOX_POINTS, len(lo)))
+    unit = np.vstack([-lo, hi, np.where(u < 0, u * lo, u * hi)])  # (points, p)
+    floor = 1.0 / max(seen, 1)
+    f = 1.0
+    while f > floor:
+        moved = kde + np.einsum("ap,pmij->amij", f * unit, sens)
+        radius = _radius(ad, bd, np.broadcast_to(kpe, moved.shape), moved)
+        if np.all(radius <= _UNSTABLE):
+            return f
+        f *= 0.5
+    return floor
