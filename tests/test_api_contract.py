@@ -224,6 +224,16 @@ def _api(tmp: Path) -> dict:
                 (ROBOT, pd, P13, 0.004),
                 {},
             ),
+            "control.estimate_box": (
+                control.estimate_box,
+                (ROBOT, BASE, GAINS),
+                {"period": 0.004, "qs": qs[:2]},
+            ),
+            "control.stability.adaptation_step_ratio": (
+                stability.adaptation_step_ratio,
+                (np.ones((3, N, BASE.n)), kd, 1.0, 0.5, 0.004),
+                {},
+            ),
             "control.stability.check_loop": (
                 stability.check_loop,
                 ("pd", kp, kd, lam, 0.004, [np.linalg.inv(mm)], [mm], qs, ["robot"]),

@@ -101,7 +101,9 @@ def check_adaptive_steps(robot, nu, offset, rng, method="projection", what="") -
     gamma = rng.uniform(0.5, 2.0, np_)
     gains = {"kd": rng.uniform(1, 50, n), "lambda": rng.uniform(1, 20, n), "gamma": gamma, "nu": nu}
     p0 = rng.normal(size=np_)
-    code = codegen.generate_controller(robot, base=base, gains=gains, params=p0, period=0.002)
+    code = codegen.generate_controller(
+        robot, base=base, gains=gains, params=p0, period=0.002, p_min=-np.inf, p_max=np.inf
+    )
     ctl = codegen.CompiledController(code, base)
     for _ in range(3):
         q, dq, _ = random_state(robot, rng)

@@ -13,6 +13,11 @@ from .outputs import output_dir
 
 def check_controller_options(args: argparse.Namespace) -> None:
     """--param-error sets a model's estimate: PD has none (it was ignored)."""
+    if getattr(args, "estimate_box", None) is not None and args.controller != "adaptive-pd":
+        raise ValueError(
+            f"--estimate-box: a box on the estimate of adaptive-pd (--controller is "
+            f"{args.controller})"
+        )
     if args.controller == "pd" and args.param_error is not None:
         raise ValueError(
             "--param-error: --controller pd has no model (the error is that of the estimate of "
@@ -80,9 +85,20 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         p_true = base_values(base, plant_parameters(robot, rotor, friction=friction))
         error = 0.3 if args.param_error is None else args.param_error
         p_hat = control.perturbed_parameters(p_true, error, seed=args.seed)
+    box = getattr(args, "estimate_box", None) != "none"
     controller = control.make_controller(
-        args.controller, robot, gains, p_hat, base=base, period=period
+        args.controller,
+        robot,
+        gains,
+        p_hat,
+        base=base,
+        period=period,
+        rotor=rotor,
+        friction=friction,
+        box=box,
     )
+    if getattr(controller, "box_note", ""):
+        gains.note = f"{gains.note}; {controller.box_note}" if gains.note else controller.box_note
     controller.gains = gains
     return reference, ref_text, duration, cycle, controller, base
 
@@ -103,6 +119,15 @@ def add_closed_loop_args(p, default: str) -> None:
         metavar="FILE",
         help="YAML with kd, lambda, gamma, nu (adaptive PD) and optionally kp (PD: default "
         "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
+    )
+    p.add_argument(
+        "--estimate-box",
+        choices=["derived", "none"],
+        help="adaptive PD: derived (the default): project the estimate onto a box about the "
+        "description's base parameters, each one the linearised sampled loop sees within a "
+        "third of a common fraction (at which the parameters moving together keep the loop "
+        "stable) of the change that alone makes that loop unstable (the others, such as "
+        "Coulomb friction, unbounded; stated in the output); none: no box",
     )
     p.add_argument(
         "--trajectory",

@@ -165,7 +165,9 @@ def register(subparsers) -> None:
         "--box",
         type=float,
         metavar="F",
-        help="keep each estimate within F |p0| of its initial value p0 (default: unbounded)",
+        help="keep each estimate within F |p0| of its initial value p0 (default, base "
+        "parameters: the box of 'mindyn track' about the description's values, p0 projected "
+        "onto it; stated in the output)",
     )
     p.add_argument(
         "--plcopen",

@@ -113,6 +113,9 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
         print(note)
     if gains.note:
         print(gains.note)
+    if kind == "adaptive-pd":
+        box = code.settings["box"]
+        print(box if box.startswith("estimate box") else f"estimate box: {box}")
     _warn_unstable(robot, gains, kind, args.period)
     print("wrote " + ", ".join(str(w) for w in written))
     print()

@@ -203,9 +203,14 @@ def register(sub) -> None:
         "Gamma = 1) when their sampled loops are stable at --period, otherwise derived from the "
         "mass matrix sampled over the workspace and the period: Lambda = 10 and K_D = 40 x the "
         "smallest effective inertia of each joint, lowered until the sampled loops keep a gain "
-        "margin of 3, Gamma = 1 normalised by nu = 3 Gamma T / (2 min K_D); the output states "
-        "the choice. A loop that the linearised check finds unstable is refused, one that "
-        "diverges is stopped, each with the figures that explain it (exit status 2).",
+        "margin of 3, Gamma = 1 normalised by nu = 3 Gamma T / min K_D (the sampled update's "
+        "step condition T lambda_max(K_D^-1/2 Y Gamma Y^T K_D^-1/2) / (1 + nu |Y|^2) < 1 kept "
+        "below a third); the estimate is kept in a box about the description's values where "
+        "the linearised sampled loop stays stable with the parameters moving together "
+        "(--estimate-box none: no box); the output states the choice and the "
+        "step condition along the reference. A loop that the linearised check finds unstable "
+        "is refused, one that diverges is stopped, each with the figures that explain it "
+        "(exit status 2).",
     )
     add_robot(p)
     add_drive_side(p)

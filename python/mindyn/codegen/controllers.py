@@ -144,7 +144,11 @@ def generate_controller(
     period : float
         Controller period [s] (adaptive PD: the adaptation step).
     p_min, p_max : scalar or array (np,), optional
-        Box on the estimate (default unbounded).
+        Box on the estimate (``-inf`` / ``inf``: a side open; an initial estimate outside it is
+        refused). Default, adaptive PD on base parameters: :func:`mindyn.control.estimate_box`
+        about the description's values, the box :func:`mindyn.control.make_controller` gives
+        the library's controller, the initial estimate projected onto it (the note in
+        ``settings["box"]`` says on how many parameters); otherwise unbounded.
     tau_max : None, "effort", scalar or array (n,)
         Torque limit (default none; ``"effort"``: the model's effort limits).
     """
@@ -196,6 +200,12 @@ def generate_controller(
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
     else:
         s["p0"] = _parameter_values(params, names)
+    s["box"] = "given" if p_min is not None or p_max is not None else "none"
+    if kind == "adaptive-pd" and p_min is None and p_max is None and not classical:
+        # the library's default box (make_controller): about the description's values
+        p_min, p_max, s["box"] = control.estimate_box(
+            robot, bp, {"kd": s["kd"], "lambda": lam}, period=period
+        )
     s["p_min"] = _setting(p_min, len(names), "p_min", -math.inf, infinite=True)
     s["p_max"] = _setting(p_max, len(names), "p_max", math.inf, infinite=True)
     if np.any(s["p_min"] > s["p_max"]):
@@ -203,6 +213,13 @@ def generate_controller(
         raise _args.fail(
             "p_min", f"exceeds p_max at '{names[i]}' ({s['p_min'][i]:g} > {s['p_max'][i]:g})"
         )
+    if s["p0"] is not None and s["box"].startswith("estimate box"):
+        # the derived box: the initial estimate projected onto it, as the library's (a given
+        # box refuses an estimate outside it)
+        out_of = (s["p0"] < s["p_min"]) | (s["p0"] > s["p_max"])
+        if out_of.any():
+            s["p0"] = np.clip(s["p0"], s["p_min"], s["p_max"])
+            s["box"] += f"; the initial estimate moved into it on {int(out_of.sum())}"
     if isinstance(tau_max, str):
         tau_max = robot.limits["effort"]
         if not np.all(np.isfinite(tau_max)):

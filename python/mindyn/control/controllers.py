@@ -10,13 +10,18 @@ ddq_d)`` once per period on the measured state, the torque held until the next c
       e = q - q_d                 s = dq - dq_r = de + Lambda e
       dq_r = dq_d - Lambda e      ddq_r = ddq_d - Lambda de
       tau = Y(q, dq, dq_r, ddq_r) p_hat - K_D s
-      dp_hat/dt = -Gamma Y^T s / (1 + nu |Y|^2)     (explicit Euler over one period)
+      dp_hat/dt = -Gamma Y^T s / (1 + nu |Y|^2)     (explicit Euler over one period,
+                                                     then p_hat clipped to [p_min, p_max])
 
   with ``Y p = A(q) ddq_r + C(q, dq) dq_r + c(q) (+ Fv dq + Fc sign dq)`` the Slotine-Li regressor
   (:func:`slotine_li_regressor`); ``K_P = Lambda K_D``. ``nu = 0`` is the Slotine-Li law; ``nu > 0``
   normalises the step by the squared Frobenius norm of ``Y`` (normalised gradient), which bounds
   the change of the estimate per period by ``T Gamma |s| / (nu |Y|)`` and keeps large adaptation
-  gains usable at a slow controller rate (plain Euler steps diverge there).
+  gains usable at a slow controller rate (plain Euler steps diverge there): the sampled update
+  needs ``T lambda_max(K_D^-1/2 Y Gamma Y^T K_D^-1/2) / (1 + nu |Y|^2) < 1``
+  (:func:`~mindyn.control.stability.adaptation_step_ratio`). The box (parameter projection,
+  :func:`estimate_box` by default in :func:`make_controller`) keeps the estimate where the
+  linearised sampled loop stays stable.
 - :class:`ComputedTorque`: ``tau = W_b(q, dq, ddq_d - K_D de - K_P e) p_hat`` with fixed
   parameters (Coulomb friction on the measured or, :func:`default_controller`, on the reference
   velocity).
@@ -49,6 +54,7 @@ __all__ = [
     "check_sampled_gains",
     "controller_check",
     "default_gains",
+    "estimate_box",
     "load_gains",
     "make_controller",
     "perturbed_parameters",
@@ -228,6 +234,23 @@ def check_lambda(lam, period: float, *, what: str = "lambda") -> None:
         )
 
 
+def _bound(x, size: int, name: str, fill: float) -> np.ndarray:
+    """A side of the box on the estimate: None (``fill``, open), a number or ``size`` numbers
+    (infinities allowed, NaN not)."""
+    if x is None:
+        return np.full(size, fill)
+    try:
+        a = np.array(x, dtype=float)
+    except (TypeError, ValueError):
+        raise ControllerSettingError(f"{name} must be numbers, got {x!r}") from None
+    a = np.full(size, float(a)) if a.ndim == 0 else a
+    if a.shape != (size,) or np.isnan(a).any():
+        raise ControllerSettingError(
+            f"{name} must be a number or {size} numbers (no NaN), got shape {a.shape}"
+        )
+    return a
+
+
 class PD:
     """Plain PD: ``tau = -K_P e - K_D de`` (no model)."""
 
@@ -338,6 +361,12 @@ class AdaptivePD:
         Normalisation of the adaptation step (>= 0; 0: the plain Slotine-Li law).
     period : float
         Controller period [s]: the explicit Euler step of the adaptation law.
+    p_min, p_max : array of shape (base.n,), optional
+        Box on the estimate (parameter projection: ``p0`` and ``p_hat`` after each step are
+        clipped to it;
+        ``-inf`` / ``inf`` entries leave a side open; default unbounded).
+        :func:`estimate_box` derives one from the linearised check of the sampled loop
+        (:func:`make_controller` uses it by default).
     """
 
     name = "adaptive-pd"
@@ -355,11 +384,22 @@ class AdaptivePD:
         adapt: bool = True,
         nu: float = 0.0,
         period: float = 0.004,
+        p_min=None,
+        p_max=None,
     ):
         n = base.robot.n
         self.base = base
         self.kd = _diag(kd, n, "kd")
         self.lam = _diag(lam, n, "lambda")
+        self.p_min, self.p_max = (
+            _bound(x, base.n, name, fill)
+            for x, name, fill in ((p_min, "p_min", -math.inf), (p_max, "p_max", math.inf))
+        )
+        if np.any(self.p_min > self.p_max):
+            k = int(np.argmax(self.p_min > self.p_max))
+            raise ControllerSettingError(
+                f"p_min exceeds p_max at '{base.names[k]}' ({self.p_min[k]:g} > {self.p_max[k]:g})"
+            )
         self.gamma = _diag(gamma, base.n, "gamma")
         self.p0 = np.asarray(p0, dtype=float).copy()
         if self.p0.shape != (base.n,):
@@ -373,7 +413,32 @@ class AdaptivePD:
         self.reset()
 
     def reset(self) -> None:
-        self.p_hat = self.p0.copy()
+        """The estimate back to ``p0``, projected onto the box (as the generated step's initial
+        estimate is)."""
+        self.p_hat = np.clip(self.p0, self.p_min, self.p_max)
+
+    #: how the box was set: "derived" (:meth:`derive_box`), "given" or "none"
+    box = "none"
+    box_note = ""
+
+    def derive_box(self, params=None, *, rotor: bool = True, friction: bool = True) -> None:
+        """Sets the box on the estimate to :func:`estimate_box` of this controller's gains and
+        period about the description's values (``rotor``, ``friction``) or the classical
+        parameters ``params`` (full layout: a simulated robot's), and projects the estimate
+        onto it (:meth:`reset`)."""
+        robot = self.base.robot
+        gains = {"kd": self.kd, "lambda": self.lam}
+        self.p_min, self.p_max, self.box_note = estimate_box(
+            robot,
+            self.base,
+            gains,
+            period=self.period,
+            rotor=rotor,
+            friction=friction,
+            params=params,
+        )
+        self.box = "derived"
+        self.reset()
 
     def use_parameters(self, p0) -> None:
         """Takes ``p0`` (base parameters) as the initial estimate, and resets."""
@@ -403,7 +468,7 @@ class AdaptivePD:
             step = self.period * self.gamma * (Y.T @ s)
             if self.nu:
                 step /= 1.0 + self.nu * float(np.sum(Y * Y))
-            self.p_hat = self.p_hat - step
+            self.p_hat = np.clip(self.p_hat - step, self.p_min, self.p_max)
         return tau
 
 
@@ -550,6 +615,8 @@ def controller_check(robot: Robot, controller, params, period: float):
         kp = getattr(controller, "kp", lam * controller.kd)
         p_hat = getattr(controller, "p0", None)
         p_hat = getattr(controller, "p_hat", None) if p_hat is None else p_hat
+        if p_hat is not None and hasattr(controller, "p_min"):  # the estimate starts in its box
+            p_hat = np.clip(p_hat, controller.p_min, controller.p_max)
     else:
         return None
     base = getattr(controller, "base", None)
@@ -584,6 +651,168 @@ def controller_check(robot: Robot, controller, params, period: float):
     )
 
 
+#: Reference samples at which :func:`adaptation_check` evaluates the step condition.
+STEP_SAMPLES = 400
+
+
+def adaptation_check(controller, q_d, dq_d, ddq_d, period: float) -> str | None:
+    """The step condition of an adaptive PD's sampled update along the reference (one text
+    line; None for other controllers): the largest ``T lambda_max(K_D^-1/2 Y Gamma Y^T
+    K_D^-1/2) / (1 + nu |Y|^2)`` over up to :data:`STEP_SAMPLES` samples of the reference
+    (``Y`` on the reference, where ``s = 0``), which the update needs below 1
+    (:func:`~mindyn.control.stability.adaptation_step_ratio`), and the largest factor on
+    ``Gamma`` that keeps it so; with the box on the estimate when the controller has one.
+    ``controller``: an :class:`AdaptivePD` or a compiled generated adaptive-PD step given its
+    ``base``."""
+    from .stability import adaptation_step_ratio
+
+    settings = getattr(getattr(controller, "code", None), "settings", None)
+    base = getattr(controller, "base", None)
+    if getattr(controller, "name", None) != "adaptive-pd" or base is None:
+        return None
+    if isinstance(settings, dict):
+        kd, gamma, nu = settings["kd"], settings["gamma"], settings["nu"]
+        lo, hi = settings.get("p_min"), settings.get("p_max")
+        adapt = True
+    else:
+        kd, gamma, nu = controller.kd, controller.gamma, controller.nu
+        lo, hi = controller.p_min, controller.p_max
+        adapt = controller.adapt
+    if not adapt:
+        return "adaptation off"
+    m, n = np.shape(q_d)
+    pick = np.unique(np.linspace(0, m - 1, min(m, STEP_SAMPLES)).round().astype(int))
+    Y = slotine_li_regressor(base, q_d[pick], dq_d[pick], dq_d[pick], ddq_d[pick])
+    if np.size(gamma) == base.n + n:  # a generated step with a torque offset per joint
+        Y = np.concatenate([Y, np.broadcast_to(np.eye(n), (len(pick), n, n))], axis=-1)
+    ratio = float(np.max(adaptation_step_ratio(Y, kd, gamma, nu, period)))
+    text = (
+        f"adaptation step condition along the reference: T lambda_max(K_D^-1/2 Y Gamma Y^T "
+        f"K_D^-1/2) / (1 + nu |Y|^2) at most {ratio:.3g} (the sampled update needs it below 1"
+        + (
+            "; NOT MET: the update is unstable where the reference holds it above 1, and "
+            "diverges if it stays there long"
+            if ratio >= 1
+            else ""
+        )
+        + (f"; Gamma could grow {1.0 / ratio:.3g} times, nu fixed" if ratio > 0 else "")
+        + f"; {len(pick)} samples)"
+    )
+    if lo is not None and hi is not None:
+        bounded = int(np.sum(np.isfinite(lo) | np.isfinite(hi)))
+        text += f"; estimate projected onto a box ({bounded} of {len(lo)} parameters bounded"
+        p0 = getattr(controller, "p0", None)
+        moved = 0 if p0 is None else int(np.sum((p0 < lo) | (p0 > hi)))
+        text += f", the initial estimate moved into it on {moved})" if moved else ")"
+    return text
+
+
+#: Configurations at which :func:`estimate_box` checks each parameter's change (the cost is a
+#: loop check per parameter and bisection step).
+BOX_SAMPLES = 8
+
+
+def estimate_box(
+    robot: Robot,
+    base: BaseParameters,
+    gains: dict,
+    *,
+    period: float = 0.004,
+    rotor: bool = True,
+    friction: bool = True,
+    params=None,
+    center=None,
+    qs=None,
+) -> tuple[np.ndarray, np.ndarray, str]:
+    """The default box on adaptive PD's estimate (parameter projection), ``(p_min, p_max,
+    note)``, about ``center`` (base parameters; default the description's values): a part of
+    the region where the linearised sampled loop of adaptive PD with ``gains`` at ``period``
+    stays stable that holds with the parameters moving together.
+
+    For the robot of the description (its rotor inertia and friction as ``rotor`` and
+    ``friction`` say; ``params``: classical parameters in the full layout instead, a simulated
+    robot's) and the model ``center``, ``d_j`` is the change of parameter ``j`` alone (down or
+    up) that makes the loop unstable (:func:`~mindyn.control.stability.deviation_bounds`, mass
+    matrix and viscous friction at :data:`BOX_SAMPLES` configurations of
+    :func:`~mindyn.control.stability.workspace_samples`); ``f`` the largest common fraction of
+    them at which the box's corners and random points keep the loop stable
+    (:func:`~mindyn.control.stability.box_fraction`: 1, 1/2, 1/4, ..., at least ``1 / N``,
+    where every point of the box lies in the convex hull of the single-parameter limits). Each
+    side is a third (:data:`~mindyn.control.stability.GAIN_MARGIN`) of ``f d_j``. Estimate
+    drift (the gradient follows what the model cannot represent: the torque held over a
+    period, Coulomb friction, noise) then cannot take the model where the sampled loop
+    diverges: an inertia estimate that drops until ``K_D + M_hat Lambda`` no longer damps, a
+    viscous friction estimate that grows past the robot's where the friction is fast beside
+    the period. Parameters that the linearised loop does not see (Coulomb friction,
+    gravity-only combinations) get no bound (infinite sides). The note states the figures."""
+    _args.instance(robot, "robot", Robot)
+    _args.instance(base, "base", BaseParameters)
+    _args.mapping(gains, "gains")
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    from .stability import (
+        BOX_POINTS,
+        GAIN_MARGIN,
+        box_fraction,
+        deviation_bounds,
+        workspace_samples,
+    )
+
+    params = _args.optional(_args.array, params, "params", (robot.layout_sizes[3] * robot.n,))
+    center = _args.optional(_args.array, center, "center", (base.n,))
+    qs = _args.optional(_args.array, qs, "qs", (None, robot.n))
+    if base.robot.n != robot.n:
+        raise _args.fail("base", f"is of a robot of {base.robot.n} joints; expected {robot.n}")
+    T = check_period(period)
+    n, nb = robot.n, base.n
+    _, kd, lam = _gain_arrays("adaptive-pd", gains, n)
+    full = plant_parameters(robot, rotor, friction=friction) if params is None else params
+    p_d = base_values(base, full)
+    p_c = p_d if center is None else center
+    if qs is None:
+        qs = workspace_samples(robot, count=BOX_SAMPLES)
+    k = len(qs)
+    zero = np.zeros_like(qs)
+    eye = np.broadcast_to(np.eye(n), (k, n, n)).reshape(k * n, n)
+    qq = np.repeat(qs, n, axis=0)
+    grav = base.regressor(qs, zero, zero)  # (k, n, nb)
+    cols = base.regressor(qq, np.zeros_like(qq), eye).reshape(k, n, n, nb)  # [k, c, i, j]
+    inertia = (cols - grav[:, None]).transpose(3, 0, 2, 1)  # [j, k, i, c]
+    viscous = np.array([str(x).startswith("Fv") for x in base.names])
+    vel = base.regressor(qq, eye, np.zeros_like(qq)).reshape(k, n, n, nb) - grav[:, None]
+    fric = np.where(viscous, vel, 0.0).transpose(3, 0, 2, 1)
+    minv = np.linalg.inv(robot.mass_matrix(qs, full))
+    m_hat = np.einsum("jkic,j->kic", inertia, p_c)
+    fed = np.einsum("jkic,j->kic", fric, p_c)
+    damping = plant_damping(robot, full, qs)
+    loop = (kd, lam, T, minv, m_hat, damping, fed, inertia, fric)
+    down, up = deviation_bounds(*loop)
+    seen = np.isfinite(down) | np.isfinite(up)
+    fraction = box_fraction(*loop, down, up)
+    share = GAIN_MARGIN / fraction
+    lo, hi = p_c - down / share, p_c + up / share
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.minimum(down, up) / share / np.abs(p_c)
+    tight = [i for i in np.argsort(rel) if seen[i] and np.isfinite(rel[i])][:2]
+    where = "the description's values" if center is None else "the initial estimate"
+    note = (
+        f"estimate box about {where}: {int(seen.sum())} of {nb} base parameters bounded, each "
+        f"to 1/{share:.4g} of the change that alone makes the linearised sampled loop at "
+        f"{T:g} s unstable (a third of the largest common fraction, {fraction:.4g}, at which "
+        f"the box's corners and {BOX_POINTS} random points keep it stable; {len(qs)} "
+        f"configurations; {nb - int(seen.sum())} the loop does not see, such as Coulomb "
+        "friction, unbounded)"
+        + (
+            "; tightest "
+            + ", ".join(
+                f"{base.names[i]} {p_c[i]:.4g} in [{lo[i]:.4g}, {hi[i]:.4g}]" for i in tight
+            )
+            if tight
+            else ""
+        )
+    )
+    return lo, hi, note
+
+
 #: Bandwidth of the derived default gains where the period allows it [rad/s]: ``Lambda``
 #: (position error) and ``K_D`` per unit of effective inertia.
 DEFAULT_LAMBDA, DEFAULT_KD_PER_INERTIA = 10.0, 40.0
@@ -603,10 +832,11 @@ def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = N
     computed torque and adaptive PD with the true model (:func:`check_gains`) keep a gain
     margin of
     :data:`~mindyn.control.stability.GAIN_MARGIN`; adaptation gains 1 with the step normalised
-    by ``nu = 3 Gamma T / (2 min K_D)`` (one joint: the adaptation ``d = Y p_hat`` is an
-    integral of ``s`` of gain ``T Gamma |Y|^2`` per period, stable for ``T Gamma |Y|^2 < 2 K_D``,
-    which the normalised step ``T Gamma |Y|^2 / (1 + nu |Y|^2) < T Gamma / nu`` keeps a third
-    of). ``kp`` for PD is
+    by ``nu = 3 Gamma T / min K_D`` (the sampled update is an integral action on ``s`` of gain
+    ``K_I = T Y Gamma Y^T / (1 + nu |Y|^2)`` per period, stable for
+    ``lambda_max(K_D^-1/2 K_I K_D^-1/2) < 1``,
+    :func:`~mindyn.control.stability.adaptation_step_ratio`; this ``nu`` keeps it below a third
+    for any ``Y``). ``kp`` for PD is
     ``Lambda K_D``; computed torque uses ``K_P = Lambda^2``, ``K_D = 2 Lambda``. The result's
     ``note`` states the choice and the margin."""
     _args.instance(robot, "robot", Robot)
@@ -650,7 +880,7 @@ def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = N
     scale = 1.0
     for _ in range(40):
         g = Gains(kd=(scale * kd).tolist(), **{"lambda": (scale * lam).tolist()}, gamma=1.0)
-        g["nu"] = GAIN_MARGIN * g["gamma"] * T / (2.0 * min(g["kd"]))
+        g["nu"] = GAIN_MARGIN * g["gamma"] * T / min(g["kd"])
         cs = checks(g)
         worst = min(c.gain_margin for c in cs)
         if worst >= GAIN_MARGIN:
@@ -668,8 +898,9 @@ def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = N
         f"joint, Lambda = {DEFAULT_LAMBDA:g}"
         + (f", lowered for the period {T:g} s" if lowered else "")
         + f" (mass matrix sampled at {len(qs)} configurations, robot {where}); adaptation "
-        f"gains 1 normalised by nu = {g['nu']:.3g} (= {GAIN_MARGIN:g} Gamma T / (2 min K_D), "
-        "so that an adaptation step adds at most a third of the damping the period allows); "
+        f"gains 1 normalised by nu = {g['nu']:.3g} (= {GAIN_MARGIN:g} Gamma T / min K_D: the "
+        "sampled update's step condition, T lambda_max(K_D^-1/2 Y Gamma Y^T K_D^-1/2) / "
+        "(1 + nu |Y|^2) < 1, kept below a third for any Y); "
         f"gain margins of the sampled loops at {T:g} s: {margin_text(cs)}"
     )
     return g
@@ -795,13 +1026,19 @@ def make_controller(
     period: float = 0.004,
     rotor: bool = True,
     friction: bool = True,
+    box=True,
 ):
     """A controller by name (:data:`CONTROLLERS`) with ``gains`` as from :func:`default_gains` /
     :func:`load_gains`, for the controller ``period`` [s]. ``base`` defaults to the base
     parameters with rotor inertia and friction; ``p_hat`` (base parameters) to the true ones:
     those of the description (its rotor inertia and friction unless ``rotor`` / ``friction`` is
     False), and in :func:`mindyn.control.simulate` those of the simulated robot (its ``rotor``,
-    ``friction`` and ``params``: the controller's ``true_model`` is then True)."""
+    ``friction`` and ``params``: the controller's ``true_model`` is then True).
+
+    ``box`` (adaptive PD): the box on the estimate: True, :func:`estimate_box` about the
+    description's values as ``rotor`` and ``friction`` say, ``p_hat`` projected onto it (its
+    note is the controller's ``box_note``; :func:`mindyn.control.simulate` derives it again
+    for the simulated robot when ``p_hat`` is its own); False, none; or ``(p_min, p_max)``."""
     _args.choice(kind, "kind", CONTROLLERS)
     _args.instance(robot, "robot", Robot)
     _args.mapping(gains, "gains")
@@ -822,9 +1059,28 @@ def make_controller(
     if kind == "computed-torque":
         ctl = ComputedTorque(base, p_hat, kp, kd)
     else:
+        lo = hi = None
+        if box is not True and box is not False and box is not None:
+            if not (isinstance(box, (tuple, list)) and len(box) == 2):
+                raise ControllerSettingError("box must be True, False or (p_min, p_max)")
+            lo, hi = box
         ctl = AdaptivePD(
-            base, kd, lam, gains.get("gamma", 1.0), p_hat, nu=gains.get("nu", 0.0), period=period
+            base,
+            kd,
+            lam,
+            gains.get("gamma", 1.0),
+            p_hat,
+            nu=gains.get("nu", 0.0),
+            period=period,
+            p_min=lo,
+            p_max=hi,
         )
+        if box is True:
+            ctl.derive_box(rotor=rotor, friction=friction)
+        elif lo is not None:
+            ctl.box, ctl.box_note = "given", "estimate box: given"
+        else:
+            ctl.box_note = "estimate box: none"
     ctl.true_model = true
     return ctl
 

@@ -667,6 +667,8 @@ def simulate(
     if getattr(controller, "true_model", False):  # the true parameters: the simulated robot's
         model: Any = controller  # a model-based controller: ComputedTorque, AdaptivePD
         model.use_parameters(base_values(model.base, p_true))
+        if getattr(model, "box", None) == "derived":  # the box about the simulated robot
+            model.derive_box(p_true)
     check = controller_check(robot, controller, p_true, period)
     if check is not None and not check.stable and limit is None:
         raise check.error(what="the controller")  # (a torque limit bounds an unstable linear loop)
@@ -678,6 +680,10 @@ def simulate(
     qd, dqd, ddqd = (np.asarray(x, dtype=float) for x in reference.evaluate(t))
     if qd.shape != (m, n) or dqd.shape != (m, n) or ddqd.shape != (m, n):
         raise ArgumentError(f"the reference gives shape {qd.shape}; expected ({m}, {n}) joints")
+    if check is not None:
+        from .controllers import adaptation_check
+
+        check.adaptation = adaptation_check(controller, qd, dqd, ddqd, period) or ""
     bound = _divergence_bound(robot, qd)
     base = base if base is not None else getattr(controller, "base", None)
     pb_true = None

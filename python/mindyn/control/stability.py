@@ -40,6 +40,16 @@ friction needs below 2.
 Not covered (:data:`COVERED`, stated with each verdict): gravity and the velocity terms (slow
 beside the feedback at the periods of joint controllers), Coulomb friction (a relay: it has no
 linear part) and the adaptation of adaptive PD (the estimate is taken as it is when checked).
+For the adaptation, two conditions of its own, reported beside the verdict by
+:func:`mindyn.control.simulate`: the step condition of the sampled update
+(:func:`adaptation_step_ratio`, below 1 along the reference), and the box on the estimate
+(:func:`deviation_bounds`, :func:`box_fraction`, :func:`mindyn.control.estimate_box`), which
+gives each parameter the loop sees a third of a common fraction of the change that alone makes
+this check's loop unstable, the fraction one at which the parameters moving together keep it
+stable: the gradient, fed
+by what the model cannot represent (the torque held over a period, Coulomb friction, noise),
+otherwise drifts the estimate there (on the xArm7 at 4 ms, the wrist's viscous friction above
+the robot's and its inertia below: the loop diverged after 2.5 s).
 """
 
 from __future__ import annotations
@@ -56,6 +66,7 @@ from ..robot import Robot
 __all__ = [
     "GAIN_MARGIN",
     "LoopCheck",
+    "adaptation_step_ratio",
     "UnstableLoopError",
     "check_loop",
     "loop_matrix",
@@ -218,6 +229,9 @@ class LoopCheck:
     cases: list = field(default_factory=list)
     friction_margin: float | None = None
     stable_gains: tuple[float, float] | None = None
+    #: adaptive PD along a reference: the adaptation's step condition and box (text, set by
+    #: :func:`mindyn.control.simulate`; empty otherwise)
+    adaptation: str = ""
 
     def text(self) -> str:
         """One line: the verdict and the figures that explain it."""
@@ -238,6 +252,7 @@ class LoopCheck:
             f"(spectral radius {self.spectral_radius:.6g}, {margin}; largest eigenvalue of "
             f"T M^-1 K_D,eff {self.ratio:.3g}, a sampled loop needs it below 2; "
             f"{len(self.q) and 'checked on ' + ', '.join(self.cases) + '; '}{COVERED})"
+            + (f"; {self.adaptation}" if self.adaptation else "")
         )
 
     def error(self, *, what: str = "") -> UnstableLoopError:
@@ -404,3 +419,122 @@ def viscous_damping(regressor, names, params, qs) -> np.ndarray:
             unit[:, j] = 1.0
             damping[:, :, j] = regressor(qs, unit, zero) @ viscous
     return damping
+
+
+def adaptation_step_ratio(Y, kd, gamma, nu: float, period: float) -> np.ndarray:
+    """The step condition of the sampled adaptation law (one value per regressor of the stack
+    ``Y``, (m, n, p) or (n, p)): ``T lambda_max(K_D^-1/2 Y Gamma Y^T K_D^-1/2) / (1 + nu |Y|^2)``,
+    which the discrete update needs below 1.
+
+    The update ``p_hat <- p_hat - T Gamma Y^T s / (1 + nu |Y|^2)``, applied from the next
+    period, changes the model torque ``Y p_hat`` by ``-K_I s`` per period, ``K_I = T Y Gamma Y^T
+    / (1 + nu |Y|^2)``: an integral action on ``s`` around the PD loop ``M ds/dt = -K_D s + Y
+    p_tilde``. One joint, the torque held over a period: ``s+ = a s + b d``, ``d+ = d - k_I s``
+    with ``a = exp(-K_D T / m)``, ``b = (1 - a) / K_D``; the characteristic polynomial
+    ``z^2 - (1 + a) z + a + b k_I`` has its roots inside the unit circle exactly when
+    ``a + b k_I < 1``, i.e. ``k_I < K_D`` (whatever the inertia, the period and ``a``; the
+    full sampled loop with the position error flips within a few per cent of it). Several
+    joints: ``lambda_max(K_D^-1/2 K_I K_D^-1/2) < 1``. Since ``lambda_max(...) <= T max(Gamma)
+    |Y|_F^2 / min(K_D)``, ``nu >= c T max(Gamma) / min(K_D)`` keeps the ratio below ``1 / c``
+    for any ``Y``."""
+    if np.ndim(Y) not in (2, 3):
+        raise _args.fail("Y", f"has {np.ndim(Y)} dimensions; expected (n, p) or (m, n, p)")
+    Y = _args.array(Y, "Y", (None,) * np.ndim(Y))
+    n, p = Y.shape[-2:]
+    kd = _args.array(kd, "kd", (n,))
+    gamma = _args.array(
+        np.broadcast_to(gamma, (p,)) if np.ndim(gamma) == 0 else gamma, "gamma", (p,)
+    )
+    nu = _args.number(nu, "nu", minimum=0.0)
+    period = _args.number(period, "period", positive=True)
+    if not (np.all(kd > 0) and np.all(gamma >= 0)):
+        raise _args.fail("kd", "and gamma must be positive (kd) and non-negative (gamma)")
+    Y = Y[None] if Y.ndim == 2 else Y
+    # scaled by the largest entry of each regressor: finite for regressors of any size
+    big = np.abs(Y).max(axis=(-2, -1))
+    big = np.where(big > 0, big, 1.0)
+    Y = Y / big[:, None, None]
+    Z = Y / np.sqrt(kd)[:, None] * np.sqrt(gamma)  # K_D^-1/2 Y Gamma^1/2, scaled
+    top = np.linalg.eigvalsh(Z @ np.swapaxes(Z, -1, -2))[..., -1]
+    with np.errstate(over="ignore"):
+        return period * top / (1.0 / big**2 + nu * np.sum(Y * Y, axis=(-2, -1)))
+
+
+def deviation_bounds(
+    kd, lam, period: float, minv, m_hat, damping, fed, inertia, friction
+) -> tuple[np.ndarray, np.ndarray]:
+    """For each model parameter alone, the largest decrease and increase of its value that keep
+    every sampled adaptive-PD loop stable (the linearised check of the module docstring), the
+    other parameters at the model's values.
+
+    ``minv``, ``m_hat``, ``damping``, ``fed``: (m, n, n) stacks of the robot's ``M^-1`` and
+    ``D`` and the model's ``M_hat`` and ``D_hat`` at m configurations; ``inertia`` and
+    ``friction``: (p, m, n, n), each parameter's part of ``M_hat`` and of ``D_hat`` (per unit
+    value). A parameter moved by ``d`` changes ``K_D,eff - D_hat`` by ``d (M_j Lambda - D_j)``.
+    Returns ``(down, up)`` (p,) each: ``inf`` where no finite change makes a loop unstable (a
+    parameter the linearised loop does not see, or up to :data:`_MARGIN_CAP` times the change
+    that doubles the loop's velocity gain), 0 where any change does."""
+    kd, lam = np.asarray(kd, dtype=float), np.asarray(lam, dtype=float)
+    kpe, kde = effective_gains("adaptive-pd", kd, kd, lam, m_hat)
+    kde = np.broadcast_to(kde, minv.shape) - fed
+    ad, bd = plant_step(minv, float(period), damping)
+    sens = inertia * lam - friction  # (p, m, n, n)
+    p = sens.shape[0]
+    size = np.abs(sens).max(axis=(1, 2, 3))
+    scale = np.where(size > 0, np.abs(kde).max() / np.where(size > 0, size, 1.0), np.inf)
+    out = []
+    for sign in (-1.0, 1.0):
+
+        def radius(x, sign=sign):
+            step = (sign * x * np.where(np.isfinite(scale), scale, 0.0))[:, None, None, None]
+            moved = kde + step * sens
+            return _radius(ad, bd, np.broadcast_to(kpe, moved.shape), moved).max(axis=1)
+
+        lo = np.full(p, math.log(1e-6))
+        hi = np.full(p, math.log(_MARGIN_CAP))
+        small = radius(np.exp(lo)) <= _UNSTABLE
+        capped = radius(np.exp(hi)) <= _UNSTABLE
+        for _ in range(10):  # log x to 2 %: the bound to 2 %
+            mid = 0.5 * (lo + hi)
+            ok = radius(np.exp(mid)) <= _UNSTABLE
+            lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+        bound = np.where(small, np.exp(lo) * scale, 0.0)
+        out.append(np.where(capped | ~np.isfinite(scale), np.inf, bound))
+    return out[0], out[1]
+
+
+#: Random points of the box (besides its two uniform corners) at which :func:`box_fraction`
+#: checks the parameters moving together.
+BOX_POINTS = 32
+
+
+def box_fraction(
+    kd, lam, period: float, minv, m_hat, damping, fed, inertia, friction, down, up, *, seed=0
+) -> float:
+    """The largest common fraction ``f`` of the single-parameter limits ``down``, ``up``
+    (:func:`deviation_bounds`) at which the box ``[-f down, f up]`` about the model keeps the
+    sampled adaptive-PD loop stable with the parameters moving together, checked at its two
+    uniform corners (every parameter down, every parameter up) and :data:`BOX_POINTS` random
+    points (seeded): the largest of 1, 1/2, 1/4, ... that passes, and at least ``1 / N`` (``N``
+    the parameters with a finite limit), where every point of the box has
+    ``sum_j |d_j| / limit_j <= 1``, inside the convex hull of the single-parameter limits.
+    Arguments as :func:`deviation_bounds`."""
+    kd, lam = np.asarray(kd, dtype=float), np.asarray(lam, dtype=float)
+    kpe, kde = effective_gains("adaptive-pd", kd, kd, lam, m_hat)
+    kde = np.broadcast_to(kde, minv.shape) - fed
+    ad, bd = plant_step(minv, float(period), damping)
+    sens = inertia * lam - friction  # (p, m, n, n)
+    lo = np.where(np.isfinite(down), down, 0.0)
+    hi = np.where(np.isfinite(up), up, 0.0)
+    seen = int(np.sum(np.isfinite(down) | np.isfinite(up)))
+    u = np.random.default_rng(seed).uniform(-1.0, 1.0, (BOX_POINTS, len(lo)))
+    unit = np.vstack([-lo, hi, np.where(u < 0, u * lo, u * hi)])  # (points, p)
+    floor = 1.0 / max(seen, 1)
+    f = 1.0
+    while f > floor:
+        moved = kde + np.einsum("ap,pmij->amij", f * unit, sens)
+        radius = _radius(ad, bd, np.broadcast_to(kpe, moved.shape), moved)
+        if np.all(radius <= _UNSTABLE):
+            return f
+        f *= 0.5
+    return floor
