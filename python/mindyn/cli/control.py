@@ -73,9 +73,10 @@ def cmd_track(args: argparse.Namespace) -> int:
     ]
     if args.controller != "pd":
         lines.append(
-            f"  initial base-parameter estimate: true values x (1 + {args.param_error:g} u), "
-            f"u uniform in [-1, 1] (seed {args.seed}); {base.n} base parameters "
-            "with rotor inertia and friction"
+            f"  initial estimate: the base parameters of the robot with each link's mass and "
+            f"second moments and each rotor inertia and friction coefficient x "
+            f"|1 + {args.param_error:g} u|, u uniform in [-1, 1] (seed {args.seed}), every link "
+            f"kept physically consistent; {base.n} base parameters with rotor inertia and friction"
         )
     if args.noise[0] > 0 or args.noise[1] > 0:
         lines.append(
