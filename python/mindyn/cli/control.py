@@ -176,10 +176,11 @@ def cmd_ik(args: argparse.Namespace) -> int:
             f"{robot.name}: {r.status} (pose error {r.error:.3g}, {r.iterations} iterations, "
             f"{r.attempts} attempt{'s' if r.attempts != 1 else ''})"
         )
+        width = max([16, *map(len, robot.joint_names)])
         for k in range(robot.n):
-            unit = "rad" if robot.joint_types[k] == "revolute" else "m"
+            unit = "rad" if robot.joint_types[k] == "revolute" else "m  "
             extra = f"  {np.degrees(r.q[k]):10.4f} deg" if unit == "rad" else ""
-            print(f"  {robot.joint_names[k]:<16} {r.q[k]:12.6f} {unit}{extra}")
+            print(f"  {robot.joint_names[k]:<{width}} {r.q[k]:12.6f} {unit}{extra}".rstrip())
     if not r.success:
         print(
             f"mindyn: error: no joint solution inside the limits reached the pose "
