@@ -277,7 +277,7 @@ def register(sub) -> None:
         nargs=3,
         default=[0.0, 0.0, 0.0],
         metavar=("R", "P", "Y"),
-        help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention)",
+        help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention); default 0 0 0",
     )
     joint_vector(p, "--q0", help="start [rad, m] (default: the middle of the limits)")
     p.add_argument(
