@@ -556,6 +556,11 @@ def _api(tmp: Path) -> dict:
                 (ROBOT.params, 0.1),
                 {"seed": 1},
             ),
+            "control.consistent_perturbation": (
+                control.consistent_perturbation,
+                (ROBOT, P13, 0.1),
+                {"seed": 1},
+            ),
             "control.default_gains": (control.default_gains, (ROBOT,), {"period": 0.004}),
             "control.default_observer_gain": (control.default_observer_gain, (0.004,), {}),
             "control.calibrate_thresholds": (

@@ -161,6 +161,11 @@ def test_simulate_step_count_is_bounded(files):
         ("--torque-noise", "abc%", "--torque-noise: expected a percentage in [0, 100]"),
         ("--torque-noise", "1e308", "--torque-noise: expected finite values in [0, 1e+06]"),
         ("--velocity-noise", "nan", "--velocity-noise: expected finite values in [0, 100]"),
+        # an empty value is no level (it was read as 0: a run without the noise asked for)
+        ("--torque-noise", "", "--torque-noise: expected a number"),
+        ("--position-noise", " ", "--position-noise: expected a number"),
+        ("--quantization", "", "--quantization: expected a number"),
+        ("--torque-noise", "1,,2", "--torque-noise: expected a number"),
     ],
 )
 def test_simulate_noise_levels_are_bounded(option, value, needle, files, tmp_path):

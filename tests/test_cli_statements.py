@@ -375,3 +375,31 @@ def test_codegen_refusals_name_the_flags(argv, said, tmp_path):
     rc, _, err = run(["codegen", "planar2", *argv, "-o", tmp_path / "x"])
     assert rc == 2 and err.startswith(f"mindyn: error: {said}"), err
     assert err.count("\n") == 1, err
+
+
+def test_info_gives_the_motor_terms_the_dynamics_use():
+    """xArm7 (example-robot-data): its URDF gives each joint damping and friction and a
+    SimpleTransmission of ratio 100; the table listed the joints' damping (10) under 'Fv' while
+    --rotor / --friction use and identify the motors' (10 / 100^2). The table now says its Ia,
+    Fv, Fc are the joints', and the motors' follow, from the URDF's numbers."""
+    import xml.etree.ElementTree as ET
+
+    path = ROBOTS_DIR / "xarm_description/urdf/xarm7.urdf"
+    rc, out, err = run(["info", str(path)])
+    assert rc == 0, err
+    assert "Ia, Fv, Fc: the joints', as the description gives them" in out
+    rows = out.split("rotor inertia and friction on the motors")[1].splitlines()[2:]
+    doc = ET.parse(path).getroot()
+    joints = {j.get("name"): j for j in doc.iter("joint") if j.get("type")}
+    ratio = {
+        t.find("joint").get("name"): float(t.find("actuator/mechanicalReduction").text)
+        for t in doc.iter("transmission")
+    }
+    for k, row in enumerate(rows[:7]):
+        name = f"joint{k + 1}"
+        dyn = joints[name].find("dynamics")
+        r = ratio[name]
+        ia, fv, fc = map(float, row.split()[2:5])
+        assert ia == 0.0
+        assert fv == pytest.approx(float(dyn.get("damping")) / r**2, rel=1e-3)
+        assert fc == pytest.approx(float(dyn.get("friction")) / abs(r), rel=1e-3)

@@ -8,6 +8,7 @@ import math
 import mindyn
 import numpy as np
 import pytest
+from conftest import ROBOTS_DIR
 from mindyn import cli
 from mindyn.identification.data import read_csv
 from mindyn.identification.excitation import (
@@ -17,6 +18,8 @@ from mindyn.identification.excitation import (
     optimize_excitation,
     random_trajectory,
 )
+
+KINOVA = ROBOTS_DIR / "kinova_description/robots/kinova.urdf"
 
 
 def seed_formula(a, b, q0, f, t):
@@ -217,3 +220,25 @@ def test_cli_excite_writes_csv_json_png(tmp_path, capsys):
     np.testing.assert_allclose(d.q, q, atol=1e-10)
     np.testing.assert_allclose(d.ddq, ddq, atol=1e-9)
     assert doc["criterion"] == "cond" and doc["value"] < doc["initial_value"]
+
+
+def test_the_criterion_takes_motor_terms_in_joint_units():
+    """Kinova's motors drive their joints with a ratio of 160: with the rotor inertia and
+    friction on the motors, their base columns are 160^2 (Ia, Fv) and 160 (Fc) times the
+    joint-side ones, and the condition number was that of the gear ratio (4e5 where the joint
+    side gives 1e2: the optimiser failed on every start). Each criterion now equals the one of
+    the same robot with the terms on the joints, on the same samples."""
+    robot = mindyn.load(KINOVA)
+    assert robot.drive_side == "motor" and np.allclose(np.abs(np.diag(robot.transmission.T)), 160)
+    motor = mindyn.base_parameters(robot, rotor=True, friction=True)
+    joint = mindyn.base_parameters(robot.with_drive_side("joint"), rotor=True, friction=True)
+    assert motor.names == joint.names
+    rng = np.random.default_rng(4)
+    q, dq, ddq = rng.uniform(-1, 1, (3, 200, robot.n))
+    for criterion in ("cond", "logdet", "hadamard"):
+        a = criterion_value(motor, q, dq, ddq, criterion=criterion)
+        b = criterion_value(joint, q, dq, ddq, criterion=criterion)
+        assert a == pytest.approx(b, rel=1e-9, abs=1e-9), criterion
+    # the joint side's own value, from numpy on the regressor the test forms
+    W = joint.regressor(q, dq, ddq).reshape(-1, joint.n)
+    assert criterion_value(motor, q, dq, ddq) == pytest.approx(np.linalg.cond(W), rel=1e-6)

@@ -507,3 +507,30 @@ def test_demo_runs_end_to_end(tmp_path, capsys):
         assert (tmp_path / "demo" / f).is_file(), f
     doc = json.loads((tmp_path / "demo" / "identification_dynamic.json").read_text())
     assert len(doc["validation"]["rms"]) == 2
+
+
+def test_table_error_column_of_a_true_zero_is_a_dash():
+    """A true value of 0 has no relative error: the column shows '-', not 'nan'; the others
+    show 100 |estimate - true| / |true|."""
+    from mindyn.identification import identify
+    from mindyn.identification.report import format_table
+
+    robot = mindyn.load("planar2")
+    t = np.arange(400) / 200.0
+    w = np.array([1.3, 2.1])
+    q, dq = np.sin(w * t[:, None]), w * np.cos(w * t[:, None])
+    ddq = -(w**2) * q
+    tau = robot.inverse_dynamics(q, dq, ddq)
+    result = identify(robot, JointData(t, q, dq, ddq, tau, "sines"))
+    truth = result.base.values(robot.params).copy()
+    truth[0] = 0.0
+    text = format_table(result, truth=truth)
+    rows = {w[1]: w for w in map(str.split, text.splitlines()[1:]) if w and w[0].isdigit()}
+    assert "nan" not in text and len(rows) == len(result.names)
+    first = result.base.names[0]
+    assert rows[first][-1] == "-"
+    for k, name in enumerate(result.base.names[1:], 1):
+        if name in rows:
+            i = result.names.index(name)
+            want = 100 * abs(result.values[i] - truth[k]) / abs(truth[k])
+            assert float(rows[name][-1]) == pytest.approx(want, rel=2e-3, abs=1e-3)

@@ -263,6 +263,8 @@ def test_a_log_with_twenty_breaks_is_summarised_in_one_line(tmp_path):
     lines = out.splitlines()
     seg = [ln for ln in lines if "segment" in ln]
     assert len([ln for ln in seg if "21 segments" in ln and "20 break(s)" in ln]) == 1
+    # one log (its segments fitted together), not 21 logs
+    assert "from 1 log, its 21 segments fitted together:" in lines[0], lines[0]
     assert sum("low-pass:" in ln for ln in lines) == 1
     assert sum("time stamps:" in ln for ln in lines) == 1
     assert len(out) < 4000

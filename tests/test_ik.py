@@ -290,3 +290,21 @@ def test_pose_error_is_position_difference_and_scipy_rotation_vector():
         # rounding of the rotation matrices (1e-16) shows as 1e-8 in the axis within 1e-9 of pi
         tol = 1e-7 if np.pi - angle < 1e-6 else 1e-12
         assert np.abs(e[3:] - angle * axis).max() <= tol, angle
+
+
+def test_ik_command_aligns_long_joint_names(tmp_path, capsys):
+    """Joint names longer than 16 characters (Panda's 'panda_finger_joint1') shifted their
+    values out of the column; every value now starts in the same column and reads back as the
+    JSON's."""
+    text = write_wide_urdf(tmp_path).read_text().replace('"j1"', '"a_rather_long_joint_name"')
+    path = tmp_path / "long.urdf"
+    path.write_text(text)
+    args = ["ik", str(path), "--xyz", "0", "0", "0.5"]
+    assert main([*args, "--format", "json"]) in (0, 1)
+    q = json.loads(capsys.readouterr().out)["q"]
+    main(args)
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("  ")]
+    assert [ln.split()[0] for ln in lines] == ["a_rather_long_joint_name", "j2"]
+    ends = {ln.index(" rad") if " rad" in ln else ln.index(" m") for ln in lines}
+    assert len(ends) == 1, lines
+    assert [float(ln.split()[1]) for ln in lines] == pytest.approx(q, abs=1e-6)

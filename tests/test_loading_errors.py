@@ -69,6 +69,26 @@ def test_missing_path_without_suffix(tmp_path):
         mindyn.load(path)
 
 
+def test_paths_that_are_no_description_say_what_a_robot_is(tmp_path, monkeypatch):
+    """A folder, an existing file of another kind and a missing MJCF are refused naming every
+    form a robot takes (MJCF among them), a folder that has a bundled robot's name does not hide
+    it."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "arm").mkdir()
+    (tmp_path / "puma560").mkdir()
+    write(tmp_path, "log.csv", "t,q1,tau1\n0,0,0\n")
+    forms = "a .urdf file, a MuJoCo MJCF .xml file or a YAML DH/MDH table"
+    with pytest.raises(mindyn.RobotFileNotFoundError, match=f"'arm' is a folder.*{forms}"):
+        mindyn.load("arm")
+    with pytest.raises(mindyn.ModelError, match=f"'log.csv' is not a robot description.*{forms}"):
+        mindyn.load("log.csv")
+    with pytest.raises(mindyn.RobotFileNotFoundError, match="robot file 'arm.xml' does not exist"):
+        mindyn.load("arm.xml")
+    with pytest.raises(mindyn.ModelError, match=f"unknown robot 'puma999'.*{forms}"):
+        mindyn.load("puma999")
+    assert mindyn.load("puma560").n == 6
+
+
 def test_unknown_bundled_name():
     with pytest.raises(ValueError, match="unknown robot 'puma999'.*puma560") as info:
         mindyn.load("puma999")

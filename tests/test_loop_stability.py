@@ -11,7 +11,7 @@ import math
 import mindyn
 import numpy as np
 import pytest
-from conftest import URDFS
+from conftest import ROBOTS_DIR, URDFS
 from mindyn import control
 from mindyn.cli import main
 from mindyn.codegen import generate_controller
@@ -234,8 +234,9 @@ def test_closed_loop_table_runs_with_default_settings(name, kind, period, rotor)
         [str(URDFS["ur5"])],
         [str(URDFS["panda"]), "--tip", "panda_link8"],
         ["planar3"],
+        [str(ROBOTS_DIR / "kinova_description/robots/kinova.urdf")],
     ],
-    ids=["example-ur5", "erd-ur5", "panda", "planar3"],
+    ids=["example-ur5", "erd-ur5", "panda", "planar3", "kinova"],
 )
 def test_track_urdf_arms_with_default_settings(robot, kind, capsys):
     """``mindyn track`` on the URDF arms, with the default estimate error and without: runs,
@@ -250,6 +251,51 @@ def test_track_urdf_arms_with_default_settings(robot, kind, capsys):
         row = next(line for line in out.splitlines() if line.startswith("max |q - q_d|"))
         errors = [float(v) for v in row.split()[5:]]
         assert max(errors) < (10.0 if kind == "adaptive-pd" else 90.0), row
+
+
+KINOVA = ROBOTS_DIR / "kinova_description/robots/kinova.urdf"
+
+
+def test_the_default_estimate_error_keeps_a_physical_robot():
+    """On the Kinova arm, base parameters each off by up to 30 % give a model whose mass matrix
+    is not positive definite for most seeds (no controller can use it: the default track was
+    refused as unstable); the perturbation of the classical parameters keeps every link's
+    pseudo-inertia positive semidefinite, each mass within the fraction, and the mass matrix
+    positive definite, for every seed; a fraction of 0 changes nothing."""
+    from mindyn.control.controllers import base_values, plant_parameters
+    from mindyn.control.stability import workspace_samples
+    from mindyn.identification.consistent import pseudo_inertia
+
+    robot = mindyn.load(KINOVA)
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    full = plant_parameters(robot, True)
+    qs = workspace_samples(robot)
+    n = robot.n
+    cols = np.repeat(qs, n, axis=0), np.tile(np.eye(n), (len(qs), 1))
+
+    def smallest(p_base):  # the model's mass matrix from its base regressor, as a controller's
+        tau = base.regressor(cols[0], np.zeros_like(cols[0]), cols[1]) @ p_base
+        grav = base.regressor(qs, np.zeros_like(qs), np.zeros_like(qs)) @ p_base
+        m = tau.reshape(len(qs), n, n).transpose(0, 2, 1) - grav[:, :, None]
+        return np.linalg.eigvalsh(0.5 * (m + m.transpose(0, 2, 1))).min()
+
+    p_true = base_values(base, full)
+    indefinite = sum(
+        smallest(control.perturbed_parameters(p_true, 0.3, seed=s)) <= 0 for s in range(10)
+    )
+    assert indefinite >= 3  # the base-parameter perturbation is not a physical robot
+    m0 = full.reshape(n, -1)[:, 9]
+    for s in range(10):
+        p = control.consistent_perturbation(robot, full, 0.3, seed=s)
+        links = p.reshape(n, -1)
+        assert np.all(np.abs(links[:, 9] / m0 - 1) <= 0.3 + 1e-12)
+        for link in links:
+            J = pseudo_inertia(link[:10])
+            assert np.linalg.eigvalsh(J).min() >= -1e-12 * np.abs(J).max()
+        assert smallest(base_values(base, p)) > 0
+        assert np.linalg.eigvalsh(robot.mass_matrix(qs, p)).min() > 0
+    same = control.consistent_perturbation(robot, full, 0.0, seed=3)
+    assert np.allclose(same, full, rtol=1e-14, atol=1e-15 * np.abs(full).max())
 
 
 def test_zcr07s_study_gains_kept_where_stable_and_said_where_not():

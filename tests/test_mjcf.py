@@ -176,7 +176,8 @@ def test_mjcf_round_trip_keeps_every_parameter(case, tmp_path):
     )
     np.testing.assert_allclose(again.gravity, robot.gravity, rtol=0, atol=1e-15)
     np.testing.assert_allclose(again.axes, robot.axes, rtol=0, atol=ROUND_TRIP)
-    for key in ("lower", "upper"):
+    # the effort limits too (the joints' actuatorfrcrange); MJCF has no velocity limit
+    for key in ("lower", "upper", "effort"):
         np.testing.assert_allclose(again.limits[key], robot.limits[key], atol=1e-12)
 
 
@@ -285,10 +286,17 @@ def test_motor_side_mjcf_is_the_motor_formula_and_reads_back_as_joint_terms(case
     # the motors drive the joints through T^T (actuators on the joints, gear r)
     d = mujoco.MjData(m)
     tau_m = rng.normal(size=robot.n)
-    d.ctrl[[m.actuator(name).id for name in robot.transmission.motors]] = tau_m
+    effort = robot.limits["effort"]
+    tau_m *= min(1.0, 0.5 * np.min(effort / np.abs(T.T @ tau_m)))  # within the effort limits
+    ids = [m.actuator(name).id for name in robot.transmission.motors]
+    d.ctrl[ids] = tau_m
     mujoco.mj_forward(m, d)
     dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in robot.joint_names]
     np.testing.assert_allclose(d.qfrc_actuator[dof], T.T @ tau_m, rtol=1e-15, atol=0)
+    # beyond them, the joint's torque is its effort limit (the joints' actuatorfrcrange)
+    d.ctrl[ids] = 4 * tau_m / np.min(np.abs(T.T @ tau_m) / effort)
+    mujoco.mj_forward(m, d)
+    np.testing.assert_allclose(np.abs(d.qfrc_actuator[dof]), effort, rtol=1e-15)
     # read back: a joint-side robot without transmissions, with the motors' terms folded
     again = mindyn.load(out)
     assert again.transmission is None and again.drive_side == "joint"

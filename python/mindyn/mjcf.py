@@ -74,8 +74,9 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         ``frictionloss`` changed (comments and everything else kept; bodies merged into a
         moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
-        the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, ``armature``,
-        ``damping``, ``frictionloss``), gravity, a ``tool`` site for a chain, and a ``<motor>``
+        the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, the effort
+        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), gravity, a
+        ``tool`` site for a chain, and a ``<motor>``
         per joint, or with transmissions per motor: on its joint with ``gear`` = its ratio, or
         on a fixed tendon for a motor coupling joints (see the module's docstring).
     drive_side : {"joint", "motor"}, optional
@@ -153,6 +154,9 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             joint.update(limited="true", range=_vec((lo, hi)))
         else:
             joint["limited"] = "false"
+        effort = lim["effort"][k]
+        if np.isfinite(effort) and effort > 0:  # read back as the joint's effort limit
+            joint.update(actuatorfrclimited="true", actuatorfrcrange=_vec((-effort, effort)))
         joint.update(_attrs(drive[k]))
         ET.SubElement(body, "joint", joint)
     if robot.is_serial:

@@ -134,7 +134,8 @@ def _load(robot: Robot | str | Path, tip: str | None, root_joint: str | None = N
     suffix = path.suffix.lower()
     if suffix in (".urdf", ".xml"):
         if not path.is_file():
-            raise _core.RobotFileNotFoundError(f"URDF file '{text}' does not exist")
+            kind = "URDF" if suffix == ".urdf" else "robot"
+            raise _core.RobotFileNotFoundError(f"{kind} file '{text}' does not exist")
         if suffix == ".xml" and _mujoco.is_mjcf(path):
             if root_joint:
                 raise _core.ModelError("root_joint= applies to URDF files only, not to MJCF")
@@ -166,14 +167,27 @@ def _load(robot: Robot | str | Path, tip: str | None, root_joint: str | None = N
     bundled = _robot_dir() / f"{text}.yaml"
     if "/" not in text and bundled.is_file():
         return Robot(_core.load_yaml(str(bundled)))
+    if path.is_dir():
+        raise _core.RobotFileNotFoundError(
+            f"'{text}' is a folder, not a robot: give its description, {_FORMS}"
+        )
+    if path.is_file():
+        raise _core.ModelError(
+            f"'{text}' is not a robot description: expected a bundled robot or {_FORMS}"
+        )
     if "/" in text or suffix:
         raise _core.RobotFileNotFoundError(
-            f"'{text}' is neither an existing .urdf/.yaml file nor a bundled robot"
+            f"'{text}' is neither an existing file nor a bundled robot (a robot is a bundled "
+            f"name or {_FORMS})"
         )
     raise _core.ModelError(
         f"unknown robot '{text}'; bundled robots: {', '.join(bundled_robots())}, "
-        "or give a path to a .urdf or .yaml file"
+        f"or give the path of {_FORMS}"
     )
+
+
+#: The description files a robot is read from (said when a path is none of them).
+_FORMS = "a .urdf file, a MuJoCo MJCF .xml file or a YAML DH/MDH table (.yaml, .yml)"
 
 
 def _readonly(a) -> np.ndarray:

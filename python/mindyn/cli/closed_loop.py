@@ -82,9 +82,13 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         from ..control.controllers import base_values, plant_parameters
 
         base = base_parameters(robot, rotor=True, friction=True)
-        p_true = base_values(base, plant_parameters(robot, rotor, friction=friction))
         error = 0.3 if args.param_error is None else args.param_error
-        p_hat = control.perturbed_parameters(p_true, error, seed=args.seed)
+        p_hat = base_values(
+            base,
+            control.consistent_perturbation(
+                robot, plant_parameters(robot, rotor, friction=friction), error, seed=args.seed
+            ),
+        )
     box = getattr(args, "estimate_box", None) != "none"
     controller = control.make_controller(
         args.controller,
@@ -149,9 +153,10 @@ def add_closed_loop_args(p, default: str) -> None:
         "--param-error",
         low=0,
         high=10,
-        help="relative error of the initial base-parameter estimate of adaptive PD and computed "
-        "torque (default 0.3: +-30 %); simulate's computed torque without --gains and "
-        "--param-error has the true parameters",
+        help="relative error of the initial estimate of adaptive PD and computed torque: each "
+        "link's mass and second moments and each rotor inertia and friction coefficient off by "
+        "up to this fraction, every link kept physically consistent (default 0.3: +-30 %); "
+        "simulate's computed torque without --gains and --param-error has the true parameters",
     )
     number(
         p,

@@ -73,9 +73,10 @@ def cmd_track(args: argparse.Namespace) -> int:
     ]
     if args.controller != "pd":
         lines.append(
-            f"  initial base-parameter estimate: true values x (1 + {args.param_error:g} u), "
-            f"u uniform in [-1, 1] (seed {args.seed}); {base.n} base parameters "
-            "with rotor inertia and friction"
+            f"  initial estimate: the base parameters of the robot with each link's mass and "
+            f"second moments and each rotor inertia and friction coefficient x "
+            f"|1 + {args.param_error:g} u|, u uniform in [-1, 1] (seed {args.seed}), every link "
+            f"kept physically consistent; {base.n} base parameters with rotor inertia and friction"
         )
     if args.noise[0] > 0 or args.noise[1] > 0:
         lines.append(
@@ -175,10 +176,11 @@ def cmd_ik(args: argparse.Namespace) -> int:
             f"{robot.name}: {r.status} (pose error {r.error:.3g}, {r.iterations} iterations, "
             f"{r.attempts} attempt{'s' if r.attempts != 1 else ''})"
         )
+        width = max([16, *map(len, robot.joint_names)])
         for k in range(robot.n):
-            unit = "rad" if robot.joint_types[k] == "revolute" else "m"
+            unit = "rad" if robot.joint_types[k] == "revolute" else "m  "
             extra = f"  {np.degrees(r.q[k]):10.4f} deg" if unit == "rad" else ""
-            print(f"  {robot.joint_names[k]:<16} {r.q[k]:12.6f} {unit}{extra}")
+            print(f"  {robot.joint_names[k]:<{width}} {r.q[k]:12.6f} {unit}{extra}".rstrip())
     if not r.success:
         print(
             f"mindyn: error: no joint solution inside the limits reached the pose "
@@ -200,8 +202,9 @@ def register(sub) -> None:
         "dp_hat/dt = -Gamma Y^T s / (1 + nu |Y|^2), s = de + Lambda e, e = q - q_d. Default gains: "
         f"those of {ZCR07S_STUDY} "
         "for zcr07s (K_D = diag(400, 350, 130, 22, 9, 2), Lambda = diag(10, 10, 10, 30, 30, 25), "
-        "Gamma = 1) when their sampled loops are stable at --period, otherwise derived from the "
-        "mass matrix sampled over the workspace and the period: Lambda = 10 and K_D = 40 x the "
+        "Gamma = 1) when their sampled loops are stable at --controller-period, otherwise "
+        "derived from the mass matrix sampled over the workspace and the period: Lambda = 10 and "
+        "K_D = 40 x the "
         "smallest effective inertia of each joint, lowered until the sampled loops keep a gain "
         "margin of 3, Gamma = 1 normalised by nu = 3 Gamma T / min K_D (the sampled update's "
         "step condition T lambda_max(K_D^-1/2 Y Gamma Y^T K_D^-1/2) / (1 + nu |Y|^2) < 1 kept "
@@ -279,7 +282,7 @@ def register(sub) -> None:
         nargs=3,
         default=[0.0, 0.0, 0.0],
         metavar=("R", "P", "Y"),
-        help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention)",
+        help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention); default 0 0 0",
     )
     joint_vector(p, "--q0", help="start [rad, m] (default: the middle of the limits)")
     p.add_argument(

@@ -228,7 +228,8 @@ def add_identify(sub, func) -> None:
         "--integration",
         choices=["simpson", "trapezoid", "zoh"],
         default="simpson",
-        help="energy and integral model integration rule (zoh: torque held over each period)",
+        help="energy and integral model integration rule (zoh: torque held over each period); "
+        "default simpson",
     )
     number(
         p,

@@ -49,6 +49,23 @@ def _transmission_lines(robot) -> list[str]:
     return out
 
 
+def _motor_terms(robot) -> list[str]:
+    """The motors' rotor inertia and friction (slot k = motor k, motor units): what the dynamics
+    with rotor inertia and friction use and ``identify --rotor --friction`` estimates."""
+    slots = robot.parameters(rotor=True, friction=True).reshape(robot.n, -1)[:, 10:13]
+    w = max([5] + [len(m) for m in robot.transmission.motors]) + 1
+    out = [
+        "",
+        "rotor inertia and friction on the motors (slot k: motor k's, in motor units; what "
+        "--rotor / --friction use and identify; a joint's value divided by r^2, r^2, |r| for a "
+        "motor alone on it with ratio r, 0 for a coupled motor)",
+        f"{'#':<3} {'motor':<{w}}" + "".join(f"{c:>11}" for c in ("Ia", "Fv", "Fc")),
+    ]
+    for i, motor in enumerate(robot.transmission.motors):
+        out.append(f"{'m' + str(i + 1):<3} {motor:<{w}}" + "".join(f"{v:11.4g}" for v in slots[i]))
+    return out
+
+
 def cmd_info(args: argparse.Namespace) -> int:
     robot = load_robot(args)
     n = robot.n
@@ -123,7 +140,12 @@ def cmd_info(args: argparse.Namespace) -> int:
         )
     out.extend(_transmission_lines(robot))
     out.append("")
-    out.append("classical parameters about each link-frame origin (SI)")
+    on_motors = robot.transmission is not None and robot.single_dof
+    on_motors = on_motors and robot.drive_side == "motor"
+    out.append(
+        "classical parameters about each link-frame origin (SI)"
+        + ("; Ia, Fv, Fc: the joints', as the description gives them" if on_motors else "")
+    )
     names = ["XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "Ia", "Fv", "Fc"]
     wl = max([10] + [len(x) + 1 for x in robot.link_names[1:]])  # link-name column
     out.append(f"{'link':<{wl}}" + "".join(f"{c:>11}" for c in names))
@@ -133,6 +155,8 @@ def cmd_info(args: argparse.Namespace) -> int:
         row = list(p[k]) + list(extra[k])
         out.append(f"{robot.link_names[k + 1]:<{wl}}" + "".join(f"{v:11.4g}" for v in row))
     out.append(f"total moving mass {p[:, 9].sum():.4g} kg")
+    if on_motors:
+        out.extend(_motor_terms(robot))
     print("\n".join(out))
     return 0
 

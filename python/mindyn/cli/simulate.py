@@ -206,8 +206,8 @@ def register(sub) -> None:
         "--torque-unit",
         choices=["Nm", "permille"],
         default="Nm",
-        help="write torques in N m or in permille of rated torque (drive table; the header "
-        "then says tau1[permille]...)",
+        help="write torques in N m (the default) or in permille of rated torque (drive table; "
+        "the header then says tau1[permille]...)",
     )
     p.add_argument(
         "-o",

@@ -46,6 +46,7 @@ __all__ = [
     "ComputedTorque",
     "PD",
     "ZCR07S_STUDY_GAINS",
+    "consistent_perturbation",
     "coriolis_matrix",
     "default_controller",
     "Gains",
@@ -1003,13 +1004,42 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
 
 
 def perturbed_parameters(p, fraction: float, *, seed: int = 0) -> np.ndarray:
-    """``p * (1 + fraction * u)``, ``u`` uniform in [-1, 1] per entry (seeded)."""
+    """``p * (1 + fraction * u)``, ``u`` uniform in [-1, 1] per entry (seeded). On base
+    parameters the result need not be a physical robot's: combinations that nearly cancel (a
+    light wrist's) can give an estimate whose mass matrix is not positive definite;
+    :func:`consistent_perturbation` perturbs the classical parameters instead."""
     p = _args.array(p, "p", (None,))
     fraction = _args.number(fraction, "fraction", minimum=0.0)
     seed = _args.integer(seed, "seed", 0)
     p = np.asarray(p, dtype=float)
     u = np.random.default_rng(seed).uniform(-1.0, 1.0, p.shape)
     return p * (1.0 + fraction * u)
+
+
+def consistent_perturbation(robot: Robot, params, fraction: float, *, seed: int = 0) -> np.ndarray:
+    """Classical parameters ``params`` (the full layout, :func:`plant_parameters`) of ``robot``
+    perturbed the way a physical robot can be (seeded): each link's 4x4 pseudo-inertia ``J``
+    becomes ``D J D`` with ``D = diag(sqrt(|1 + fraction u|))``, ``u`` uniform in [-1, 1] (four
+    per link), so that its mass and its second moments along the link frame's axes are off by
+    up to ``fraction`` (its first moments by the geometric mean of the two factors) and ``J``
+    stays positive semidefinite; each rotor inertia and friction coefficient is multiplied by
+    ``|1 + fraction u|``. The mass matrix of the result is positive definite wherever that of
+    ``params`` is, which :func:`perturbed_parameters` on base parameters does not keep."""
+    from ..identification.consistent import inertial_from_pseudo, pseudo_inertia
+
+    _args.instance(robot, "robot", Robot)
+    size = robot.layout_sizes[3]
+    params = _args.array(params, "params", (size * robot.n,))
+    fraction = _args.number(fraction, "fraction", minimum=0.0)
+    seed = _args.integer(seed, "seed", 0)
+    full = np.array(params, dtype=float).reshape(robot.n, size)
+    rng = np.random.default_rng(seed)
+    u = rng.uniform(-1.0, 1.0, (robot.n, 4))
+    v = rng.uniform(-1.0, 1.0, (robot.n, size - 10))
+    for link, d in enumerate(np.sqrt(np.abs(1.0 + fraction * u))):
+        full[link, :10] = inertial_from_pseudo(d[:, None] * pseudo_inertia(full[link, :10]) * d)
+    full[:, 10:] *= np.abs(1.0 + fraction * v)
+    return full.reshape(-1)
 
 
 #: The controllers :func:`make_controller` makes, by name (``--controller`` on the command line).

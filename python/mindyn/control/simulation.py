@@ -1125,7 +1125,7 @@ def noise_from_spec(
     :data:`NOISE_LIMITS` (percentages at most 100)."""
     n = robot.n
     opt = "quantization=" if what == "quantization" else f"{what}_noise="
-    if spec is None or spec == "":
+    if spec is None:
         return np.zeros(n)
     s = spec.strip()
     if s.endswith("%"):
@@ -1141,10 +1141,16 @@ def noise_from_spec(
         if not np.isfinite(eff).all():
             raise ArgumentError("torque noise in %: the robot has no effort limits")
         return pct / 100.0 * eff
-    try:
+    try:  # an empty value or entry is no level (never read as 0)
+        if not all(v.strip() for v in s.split(",")):
+            raise ValueError
         vals = [float(v) for v in s.split(",")]
     except ValueError:
-        raise ArgumentError(f"{opt}: '{spec}' is not a number or list of numbers") from None
+        raise ArgumentError(
+            f"{opt}: expected a number, or one per joint separated by commas"
+            + (", or a percentage P%" if what == "torque" else "")
+            + f"; got '{spec}'"
+        ) from None
     if len(vals) == 1:
         vals = vals * n
     if len(vals) != n:

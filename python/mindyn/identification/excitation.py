@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 import time
 from dataclasses import dataclass, field
@@ -307,16 +308,41 @@ def _criterion(G: np.ndarray, rows: int, criterion: str) -> float:
     return float(np.sum(np.log(d)) - logdet)
 
 
+def _joint_units(base: BaseParameters) -> np.ndarray:
+    """Per base parameter, the factor on its regressor column that gives it in joint units: 1,
+    except, when the robot's rotor inertia and friction act on its motors (``drive_side``
+    "motor"), for a base parameter that is motor ``k``'s own ``Ia``, ``Fv`` (``1 / |t_k|^2``)
+    or Coulomb-type friction (``1 / |t_k|_1``), ``t_k`` its row of ``T``: in motor units their
+    columns are ``r^2`` or ``|r|`` times a joint-side one, and a gear ratio of 160 made the
+    condition number that of the ratio, not of the motion. The criteria are evaluated on
+    ``W * _joint_units(base)``: on a robot whose motors each drive one joint they equal those of
+    the same robot with the terms on the joints."""
+    robot = base.robot
+    scale = np.ones(base.n)
+    tr = robot.transmission
+    if tr is None or robot.drive_side != "motor":
+        return scale
+    T = np.asarray(tr.T, dtype=float)
+    for i, name in enumerate(base.names):
+        m = re.fullmatch(r"(Ia|Fv|Fc|Fa|Fs)R?(\d+)", name)
+        if m and int(m[2]) <= T.shape[0]:
+            row = T[int(m[2]) - 1]
+            size = np.sum(row**2) if m[1] in ("Ia", "Fv") else np.sum(np.abs(row))
+            scale[i] = 1.0 / size if size > 0 else 1.0
+    return scale
+
+
 def criterion_value(base: BaseParameters, q, dq, ddq, *, criterion: str = "cond") -> float:
     """The criterion in its reported form on samples ``q, dq, ddq`` (each (m, n)): the condition
     number for ``cond``, ``log det(W^T W / rows)`` for ``logdet`` and the log Hadamard ratio
-    ``log prod diag(G) - log det(G)`` for ``hadamard``."""
+    ``log prod diag(G) - log det(G)`` for ``hadamard``, ``W`` the stacked base regressor with
+    its columns in joint units (:func:`_joint_units`)."""
     _args.instance(base, "base", BaseParameters)
     q, dq, ddq = _args.batch(base.robot.n, q=q, dq=dq, ddq=ddq)
     _args.choice(criterion, "criterion", CRITERIA)
     if criterion not in CRITERIA:
         raise ArgumentError(f"unknown criterion '{criterion}'; choose one of {', '.join(CRITERIA)}")
-    W = base.regressor(q, dq, ddq).reshape(-1, base.n)
+    W = base.regressor(q, dq, ddq).reshape(-1, base.n) * _joint_units(base)
     with np.errstate(over="ignore", invalid="ignore"):  # checked on the next line
         gram = W.T @ W
     if not np.isfinite(gram).all():
@@ -408,6 +434,7 @@ class _Problem:
 
     def __init__(self, base, n, N, freq, limits, criterion, samples, grid, start):
         self.base, self.n, self.N, self.freq = base, n, N, freq
+        self.units = _joint_units(base)
         self.criterion = criterion
         self.start = None if start is None else np.asarray(start, dtype=float)
         T = 1.0 / freq
@@ -457,7 +484,7 @@ class _Problem:
         self.evals += 1
         C = self.full(x)
         q, dq, ddq = self.bq @ C.T, self.bd @ C.T, self.bdd @ C.T
-        W = self.base.regressor(q, dq, ddq).reshape(-1, self.base.n)
+        W = self.base.regressor(q, dq, ddq).reshape(-1, self.base.n) * self.units
         J = _criterion(W.T @ W, W.shape[0], self.criterion)
         if J < self.best and self.violation(x) <= 1e-9:
             self.best = J

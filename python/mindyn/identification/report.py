@@ -70,7 +70,7 @@ def plot_torques(path, t, tau, tau_hat, *, title: str = "", unit: str = "N m") -
 def format_table(result, *, truth=None) -> str:
     """Terminal table of an :class:`~mindyn.identification.IdentificationResult`: name,
     estimate, standard deviation, RSD and, when ``truth`` (base values, shape (nb,)) is given,
-    the true value and the relative error."""
+    the true value and the relative error (``-`` for a true value of 0)."""
     from .consistent import ConsistentResult
     from .estimation import IdentificationResult
 
@@ -97,8 +97,9 @@ def format_table(result, *, truth=None) -> str:
         )
         if truth is not None:
             tv = truth[b]
-            err = 100 * abs(result.values[i] - tv) / abs(tv) if tv != 0 else float("nan")
-            line += f" {tv:>13.6g} {err:>9.3g}"
+            # a true value of 0 has no relative error
+            err = f"{100 * abs(result.values[i] - tv) / abs(tv):>9.3g}" if tv != 0 else f"{'-':>9}"
+            line += f" {tv:>13.6g} {err}"
         lines.append(line)
     if result.removed:
         lines.append("")

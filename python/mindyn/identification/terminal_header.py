@@ -40,7 +40,13 @@ def _head(report) -> list[str]:
     )
     if len(fit.logs) == 1:
         return [head + f"{fit.samples[0]} samples at {fit.rates[0]:.4g} Hz from {fit.files[0]}"]
-    out = [head + f"{sum(fit.samples)} samples from {len(fit.logs)} logs fitted together:"]
+    # fit.logs are the pieces fitted (a file cut at breaks gives several), fit.files the files
+    pieces = (
+        f"{len(fit.files)} logs fitted together"
+        if len(fit.files) > 1
+        else f"1 log, its {len(fit.logs)} segments fitted together"
+    )
+    out = [head + f"{sum(fit.samples)} samples from {pieces}:"]
     k = 0
     for f, ds, seg in zip(fit.files, fit.parts, fit.segments):
         # a file cut at breaks: one line for its segments
