@@ -85,8 +85,8 @@ to 14 %. The ROS 2 form and the current logs with ``--drive-gain`` give the ROS 
 figures; a four-bar of ratio c = 0.75 (``--coupling 0.75``) is read as the script's T.
 
 Run: ``.venv/bin/python bench/bench_coupled_wrist.py [--seeds 0 1] [--noise 0.01 0.04]
-[--gain-error 0.03] [--coupling C] [--keep DIR]`` (about 2 minutes on 2 cores with the
-defaults).
+[--gain-error 0.03] [--coupling C] [--keep DIR]`` (with the defaults, 4 cases: 28 s on an idle
+2-core machine, up to 4 minutes when it is shared).
 """
 
 from __future__ import annotations
