@@ -278,7 +278,7 @@ def test_zcr07s_pipeline_on_zcr07s():
     kw = dict(rotor=True, friction=True, noise=noise)
     data = as_data(simulate(robot, exc.trajectory, seed=1, **kw), "excitation")
     vdata = as_data(simulate(robot, random_trajectory(robot, seed=11), seed=2, **kw))
-    res = identify(robot, data, base=base)
+    res = identify(robot, data, base=base, rsd_threshold=30.0)  # the study's pruning
     assert res.initial["values"].shape == (52,)
     fit, val = validate(res, data), validate(res, vdata)
     print(
@@ -530,7 +530,9 @@ def test_table_error_column_of_a_true_zero_is_a_dash():
     first = result.base.names[0]
     assert rows[first][-1] == "-"
     for k, name in enumerate(result.base.names[1:], 1):
-        if name in rows:
+        if name in rows and truth[k] == 0:  # planar2's zero first moments, when kept
+            assert rows[name][-1] == "-", name
+        elif name in rows:
             i = result.names.index(name)
             want = 100 * abs(result.values[i] - truth[k]) / abs(truth[k])
             assert float(rows[name][-1]) == pytest.approx(want, rel=2e-3, abs=1e-3)

@@ -125,7 +125,8 @@ def test_identify_json_and_simulate_into_folders(tmp_path):
     path = tmp_path / "planar2_identify.json"
     assert f"wrote {path}" in out
     doc = json.loads(path.read_text())
-    assert doc["names"] == mindyn.base_parameters(robot).names
+    assert doc["base_names"] == mindyn.base_parameters(robot).names
+    assert set(doc["names"]) <= set(doc["base_names"]) and len(doc["values"]) == len(doc["names"])
     new = str(tmp_path / "sim") + "/"
     argv = ["simulate", "planar2", "--trajectory", tmp_path / "traj.json", "-o", new]
     rc, out, err = run(argv)

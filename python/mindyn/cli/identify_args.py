@@ -4,6 +4,7 @@ and how, what is written."""
 
 from __future__ import annotations
 
+from ..identification.options import DEFAULT_RSD_THRESHOLD
 from ..robot import FRICTION_KINDS
 from .args import add_command, deprecated, remember_flags
 from .number_options import joint_vector, number
@@ -158,8 +159,10 @@ def add_identify(sub, func) -> None:
         p,
         "--rsd-threshold",
         low=0,
-        default=30.0,
-        help="remove parameters with RSD above this % (0 keeps all)",
+        default=DEFAULT_RSD_THRESHOLD,
+        help="remove parameters with RSD above this %, largest first (the default keeps a "
+        "t-statistic above sqrt(2), Akaike's criterion for one parameter; the ZCR07S study "
+        "removed above 30; 0 keeps all)",
     )
     add_data_options(p)
     p.add_argument(

@@ -6,7 +6,9 @@ Estimation is ordinary least squares, or weighted least squares with per-joint w
 ZCR07S study:
 ``sigma^2 = |y - W p|^2 / (r - c)``, ``cov = sigma^2 (W^T W)^-1``,
 ``RSD = 100 sqrt(cov_bb) / |p_b|``; parameters whose RSD exceeds a threshold are removed one at a
-time (largest first) and the rest re-estimated.
+time (largest first) and the rest re-estimated. On low-passed logs the dynamic model's
+covariance is multiplied by :func:`correlation_factor` (the filtered noise is correlated between
+the samples fitted).
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from .models import (
     require_torque,
     torque_noise,
 )
+from .options import DEFAULT_RSD_THRESHOLD
 
 #: Least equations per base parameter (and degrees of freedom of the noise estimate) that
 #: :func:`identify` accepts. Dynamic model: 10 equations per parameter; fewer, and a log too
@@ -97,7 +100,7 @@ class IdentificationResult:
     weighted: bool
     joint_sigma: np.ndarray | None = None
     cond: float = float("nan")
-    rsd_threshold: float = 30.0
+    rsd_threshold: float = DEFAULT_RSD_THRESHOLD
     initial: dict = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
     seconds: float = 0.0
@@ -465,6 +468,47 @@ def _logs(data, name: str = "data") -> list[JointData]:
     return logs
 
 
+def noise_bandwidth(cutoff: float, order: int) -> float:
+    """Equivalent noise bandwidth [Hz] of the data path's zero-phase Butterworth low-pass of
+    ``order`` at ``cutoff``: ``int_0^inf |H(f)|^4 df`` with ``|H|^2 = 1 / (1 + (f/fc)^(2n))``
+    (the filter applied forwards and backwards), ``fc (1 - 1/(2n)) (pi/(2n)) / sin(pi/(2n))``
+    (0.898 fc at order 4)."""
+    a = math.pi / (2 * order)
+    return cutoff * (1.0 - 1.0 / (2 * order)) * a / math.sin(a)
+
+
+def correlation_factor(logs: Sequence[JointData], rows: Sequence[int]) -> tuple[float, str]:
+    """The factor on the variance of the estimates of the dynamic model for the correlation of
+    its samples' noise, and the rule in words. The data path low-passes a log before it is
+    decimated to at least 10 x the cut-off, so white noise on the logged torques (or velocities)
+    is correlated between the samples fitted: over ``m`` samples at rate ``fs`` it carries the
+    information of ``m 2 B / fs`` independent ones (``B``: :func:`noise_bandwidth`), and the
+    variance ``sigma^2 (W^T W)^-1`` of samples taken as independent is ``fs / (2 B)`` times too
+    small (white noise has a flat spectrum; the regressor columns, within the band of the
+    motion, change little over the noise's correlation time). Per log ``max(1, fs / (2 B))``
+    (1 for a log not low-passed), averaged over the logs by their equations ``rows``."""
+    factors, rates = [], []
+    for d in logs:
+        pre = d.processing.get("preprocess") or {}
+        filt = pre.get("filter")
+        if filt is None:
+            factors.append(1.0)
+            continue
+        band = noise_bandwidth(float(filt["cutoff_Hz"]), int(filt["order"]))
+        factors.append(max(1.0, float(pre["rate_Hz"]) / (2.0 * band)))
+        rates.append((float(pre["rate_Hz"]), band))
+    total = sum(rows)
+    f = sum(r * x for r, x in zip(rows, factors)) / total if total > 0 else 1.0
+    if not rates:
+        return 1.0, "samples taken as independent (no low-pass)"
+    fs, band = rates[0]
+    return f, (
+        f"variance x {f:.3g} for the low-passed noise's correlation between samples (rate "
+        f"{fs:.4g} Hz / (2 x its noise bandwidth {band:.4g} Hz))"
+        + (", averaged over the logs" if len(rates) > 1 or len(rates) < len(logs) else "")
+    )
+
+
 def _rsd(p: np.ndarray, std: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(p != 0, 100.0 * std / np.abs(p), np.inf)
@@ -480,7 +524,7 @@ def identify(
     friction: bool = False,
     base: BaseParameters | None = None,
     weighted: bool = True,
-    rsd_threshold: float | None = 30.0,
+    rsd_threshold: float | None = DEFAULT_RSD_THRESHOLD,
     energy_window: int = 10,
     integration: str = "simpson",
     integral_window: int = 40,
@@ -509,7 +553,8 @@ def identify(
         OLS pass; energy model: per-window weights from torque-noise estimates.
     rsd_threshold : float or None
         Remove parameters with an RSD above this many percent, largest first, re-estimating after
-        each removal (None or <= 0: keep all).
+        each removal (None or <= 0: keep all). Default: 70.7, a t-statistic of sqrt(2)
+        (:data:`~mindyn.identification.options.DEFAULT_RSD_THRESHOLD`).
     energy_window : int
         Energy model: sample intervals per window (one equation per window).
     integration : {"simpson", "trapezoid", "zoh"}
@@ -653,8 +698,17 @@ def identify(
     else:
         settings["weighting"] = "none (ordinary least squares)"
 
+    inflation = 1.0
+    if model == "dynamic":
+        inflation, rule = correlation_factor(logs, log_rows)
+        settings["std_correlation"] = {"variance_factor": inflation, "rule": rule}
+
+    def solve(cols):
+        p, std, s2 = ls.solve(cols)
+        return p, std * math.sqrt(inflation), s2
+
     keep = list(range(nb))
-    p, std, s2 = ls.solve(keep)
+    p, std, s2 = solve(keep)
     initial = {"values": p.copy(), "std": std.copy(), "rsd": _rsd(p, std)}
     removed = []
     thr = rsd_threshold if rsd_threshold is not None and rsd_threshold > 0 else None
@@ -665,7 +719,7 @@ def identify(
             break
         removed.append((names[keep[j]], float(rsd[j])))
         del keep[j]
-        p, std, s2 = ls.solve(keep)
+        p, std, s2 = solve(keep)
     full = np.zeros(nb)
     full[keep] = p
     settings["rsd_threshold"] = thr

@@ -123,6 +123,9 @@ def _settings(report) -> list[str]:
             if res.settings["min_velocity"] > 0
             else "  all joint equations kept (min_velocity=0)"
         )
+    corr = res.settings.get("std_correlation")
+    if corr and corr["variance_factor"] > 1.0:
+        out.append(f"  standard deviations: {corr['rule']}")
     out += [f"  base set: {line}" for line in base.snap_report(detail=False)]
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
