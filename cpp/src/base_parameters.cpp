@@ -334,16 +334,21 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, int 
   s.wH.resize(me, P);
   Eigen::VectorXd wK(P), wP(P);
   Eigen::MatrixXd W(n, P);
+  // Friction that is constant while a joint moves (the asymmetric model's Fa |sign v|) differs
+  // from a constant torque (a prismatic joint's weight) only at rest: every fourth state of the
+  // regressor rows is at rest then.
+  const bool rests = layout.friction && model.friction_model.kind == FrictionKind::Asymmetric;
   for (int i = 0; i < std::max(m, me); ++i) {
     dyn.randomState(rng);
-    if (i < m) {
-      dyn.regressor(W);
-      s.W.middleRows(static_cast<long>(i) * n, n) = W;
-    }
     if (i < me) {
       dyn.energyRegressors(wK, wP);
       s.wL.row(i) = (wK - wP).transpose();
       s.wH.row(i) = (wK + wP).transpose();
+    }
+    if (i < m) {
+      if (rests && i % 4 == 0) dyn.dq.setZero();
+      dyn.regressor(W);
+      s.W.middleRows(static_cast<long>(i) * n, n) = W;
     }
   }
   return s;
