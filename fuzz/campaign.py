@@ -25,6 +25,11 @@ rerun alone with ``--case``):
   data        the data path: logs with jitter, gaps, rate drift, a missing header, NaNs, another
               robot's log, odd periods, through ``identify``; oracle: the estimate of a log whose
               samples are honest (only the time stamps irregular) against the simulated truth
+  drives      random robots with random transmissions (URDF ROS 1 / ROS 2, YAML matrices), 40 %
+              malformed: a malformed one refused in one line naming the element; T against
+              ros_control's position maps on the file's numbers; the motor-side inverse dynamics
+              against Pinocchio plus T^T (Ia T ddq + f(T dq)); base counts of the three methods
+              with rotor and friction; export then load; motor currents through T
   cli, files, api
               the earlier bad-input campaign: random command lines from the parser's options,
               mutated URDF / YAML / CSV files, Python API calls with bad arrays
