@@ -29,7 +29,8 @@ rerun alone with ``--case``):
               malformed: a malformed one refused in one line naming the element; T against
               ros_control's position maps on the file's numbers; the motor-side inverse dynamics
               against Pinocchio plus T^T (Ia T ddq + f(T dq)); base counts of the three methods
-              with rotor and friction; export then load; motor currents through T
+              with rotor and friction; export then load; motor currents through T; every
+              fourth case the generated C computed-torque step against the same
   cli, files, api
               the earlier bad-input campaign: random command lines from the parser's options,
               mutated URDF / YAML / CSV files, Python API calls with bad arrays
@@ -945,7 +946,34 @@ def check_motor_side(robot, kind, pin_model, nprng) -> tuple[str, str, tuple]:
         worst = max(worst, rel_err(r.inverse_dynamics(q, dq, ddq, p), want, scale),
                     rel_err(W @ p, want, scale))  # fmt: skip
     cls = "wrong" if not worst <= ORACLE_TOL else "ok"
-    return cls, f"{kind} motor-side inverse dynamics vs rigid + T^T(...): {worst:.3g}", (r, p)
+    detail = f"{kind} motor-side inverse dynamics vs rigid + T^T(...): {worst:.3g}"
+    return cls, detail, (r, p, (Ia, Fv, Fc, F3, w))
+
+
+def check_drive_codegen(r, p, terms, pin_model, nprng) -> tuple[str, str]:
+    """The generated C computed-torque step (compiled with cc) with the base values of p, at zero
+    tracking error: its torque is the inverse dynamics at the reference acceleration, against
+    the rigid-body inverse dynamics plus T^T (Ia T ddq + f(T dq)) written out."""
+    from mindyn import codegen
+
+    Ia, Fv, Fc, F3, w = terms
+    kind = r.friction_model["kind"]
+    bp = mindyn.base_parameters(r, rotor=True, friction=True)
+    gen = codegen.generate_controller(
+        r, "computed-torque", base=bp, params=bp.values(p), period=0.004
+    )
+    ctl = codegen.CompiledController(gen, bp)
+    T = np.asarray(r.transmission.T)
+    worst = 0.0
+    for _ in range(3):
+        q, dq, ddq = (nprng.uniform(-2, 2, r.n) for _ in range(3))
+        want = rigid_torque(r, pin_model, q, dq, ddq)
+        want = want + T.T @ (Ia * (T @ ddq) + friction_terms(kind, T @ dq, w, Fv, Fc, F3))
+        W = r.regressor(q, dq, ddq, rotor=True, friction=True)
+        scale = np.abs(W) @ np.abs(p) + np.abs(T.T) @ (np.abs(Fc) + np.abs(F3))
+        worst = max(worst, rel_err(ctl(0.0, q, dq, q, dq, ddq), want, scale))
+    cls = "wrong" if not worst <= ORACLE_TOL else "ok"
+    return cls, f"generated C computed torque vs rigid + T^T(...): {worst:.3g}"
 
 
 def check_drive_bases(r, p, nprng) -> tuple[str, str]:
@@ -1163,14 +1191,21 @@ def case_drives(ctx, index: int, rng: random.Random) -> Case:
             idx = [model.joints[model.getJointId(j)].idx_v for j in robot.joint_names]
             pin_model = (model, model.createData(), idx)
         nprng = np.random.default_rng(seed)
+        try:
+            motor_side = check_motor_side(robot, kind, pin_model, nprng)
+        except mindyn.Error as e:  # a refusal with its reason
+            return api_refusal(e)
+        r, p, terms = motor_side[2]
         checks = [
-            lambda: check_motor_side(robot, kind, pin_model, nprng)[:2],
-            lambda: check_drive_bases(*check_motor_side(robot, kind, pin_model, nprng)[2], nprng),
+            lambda: motor_side[:2],
+            lambda: check_drive_bases(r, p, nprng),
             lambda: check_drive_export(
                 ctx, robot, motor_side_robot(robot, "coulomb", nprng)[1], path, index
             ),
             lambda: check_currents(ctx, robot, index, nprng),
         ]
+        if index % 4 == 0:  # compiling takes a second or two
+            checks.append(lambda: check_drive_codegen(r, p, terms, pin_model, nprng))
         details = []
         for check in checks:
             try:
