@@ -896,12 +896,14 @@ def friction_terms(kind: str, v, w, fv, fc, f3):
     return out
 
 
-def motor_side_robot(robot, kind: str, nprng):
-    """The robot with the friction model `kind` and its parameters with random motor values:
-    (robot, p, (Ia, Fv, Fc, F3, w))."""
-    T = np.asarray(robot.transmission.T)
+def motor_side_robot(robot, kind: str, nprng, side: str = "motor"):
+    """The robot with the friction model `kind`, rotor inertia and friction on `side`, and its
+    parameters with random values of those terms: (robot, p, (Ia, Fv, Fc, F3, w, T)), T the
+    transmission matrix on the motor side, the identity on the joint side."""
+    T = np.asarray(robot.transmission.T) if side == "motor" else np.eye(robot.n)
     w = nprng.uniform(0.05, 2.0, T.shape[0]) * np.abs(T).max(axis=1)
-    r = robot.with_friction_model(kind, velocity=w if kind in ("smooth", "stribeck") else None)
+    r = robot.with_drive_side(side)
+    r = r.with_friction_model(kind, velocity=w if kind in ("smooth", "stribeck") else None)
     names = r.parameter_names(rotor=True, friction=True)
     p = np.asarray(r.parameters(rotor=True, friction=True), dtype=float).copy()
     m = T.shape[0]
@@ -913,7 +915,7 @@ def motor_side_robot(robot, kind: str, nprng):
         for key, v in (("Ia", Ia), ("Fv", Fv), ("Fc", Fc), (third, F3)):
             if key is not None:
                 p[names.index(f"{key}{k + 1}")] = v[k]
-    return r, p, (Ia, Fv, Fc, F3, w)
+    return r, p, (Ia, Fv, Fc, F3, w, T)
 
 
 def rigid_torque(robot, pin_model, q, dq, ddq):
@@ -929,12 +931,12 @@ def rigid_torque(robot, pin_model, q, dq, ddq):
     return pin.rnea(model, data, qp, dqp, ddqp)[idx]
 
 
-def check_motor_side(robot, kind, pin_model, nprng) -> tuple[str, str, tuple]:
-    """Inverse dynamics and regressor of the motor-side model against the rigid-body inverse
-    dynamics plus T^T (Ia T ddq + f(T dq)) written out, at three random states, relative to the
-    largest sum of absolute terms."""
-    r, p, (Ia, Fv, Fc, F3, w) = motor_side_robot(robot, kind, nprng)
-    T = np.asarray(robot.transmission.T)
+def check_motor_side(robot, kind, pin_model, nprng, side="motor") -> tuple[str, str, tuple]:
+    """Inverse dynamics and regressor of the motor-side (or joint-side: T = I) model against the
+    rigid-body inverse dynamics plus T^T (Ia T ddq + f(T dq)) written out, at three random
+    states, relative to the largest sum of absolute terms."""
+    r, p, terms = motor_side_robot(robot, kind, nprng, side)
+    Ia, Fv, Fc, F3, w, T = terms
     worst = 0.0
     for _ in range(3):
         q, dq, ddq = (nprng.uniform(-2, 2, robot.n) for _ in range(3))
@@ -946,8 +948,8 @@ def check_motor_side(robot, kind, pin_model, nprng) -> tuple[str, str, tuple]:
         worst = max(worst, rel_err(r.inverse_dynamics(q, dq, ddq, p), want, scale),
                     rel_err(W @ p, want, scale))  # fmt: skip
     cls = "wrong" if not worst <= ORACLE_TOL else "ok"
-    detail = f"{kind} motor-side inverse dynamics vs rigid + T^T(...): {worst:.3g}"
-    return cls, detail, (r, p, (Ia, Fv, Fc, F3, w))
+    detail = f"{kind} {side}-side inverse dynamics vs rigid + T^T(...): {worst:.3g}"
+    return cls, detail, (r, p, terms)
 
 
 def check_drive_codegen(r, p, terms, pin_model, nprng) -> tuple[str, str]:
@@ -956,14 +958,13 @@ def check_drive_codegen(r, p, terms, pin_model, nprng) -> tuple[str, str]:
     the rigid-body inverse dynamics plus T^T (Ia T ddq + f(T dq)) written out."""
     from mindyn import codegen
 
-    Ia, Fv, Fc, F3, w = terms
+    Ia, Fv, Fc, F3, w, T = terms
     kind = r.friction_model["kind"]
     bp = mindyn.base_parameters(r, rotor=True, friction=True)
     gen = codegen.generate_controller(
         r, "computed-torque", base=bp, params=bp.values(p), period=0.004
     )
     ctl = codegen.CompiledController(gen, bp)
-    T = np.asarray(r.transmission.T)
     worst = 0.0
     for _ in range(3):
         q, dq, ddq = (nprng.uniform(-2, 2, r.n) for _ in range(3))
@@ -1154,6 +1155,7 @@ def _drive_description(ctx, index: int, rng: random.Random) -> tuple:
 def case_drives(ctx, index: int, rng: random.Random) -> Case:
     path, form, rows, mal = _drive_description(ctx, index, rng)
     kind = rng.choice(["coulomb", "asymmetric", "smooth", "stribeck"])
+    side = "joint" if rng.random() < 0.25 else "motor"
     seed = rng.randrange(2**32)
     argv = ["info", path]
 
@@ -1192,7 +1194,7 @@ def case_drives(ctx, index: int, rng: random.Random) -> Case:
             pin_model = (model, model.createData(), idx)
         nprng = np.random.default_rng(seed)
         try:
-            motor_side = check_motor_side(robot, kind, pin_model, nprng)
+            motor_side = check_motor_side(robot, kind, pin_model, nprng, side)
         except mindyn.Error as e:  # a refusal with its reason
             return api_refusal(e)
         r, p, terms = motor_side[2]
@@ -1217,7 +1219,7 @@ def case_drives(ctx, index: int, rng: random.Random) -> Case:
             details.append(detail)
         return "ok", "; ".join(d for d in details if d)
 
-    label = f"{form} {path.name}" + (f" malformed: {mal[0]}" if mal else "") + f" {kind}"
+    label = f"{form} {path.name}" + (f" malformed: {mal[0]}" if mal else "") + f" {kind} {side}"
     return Case("drives", index, label, fn, argv, [path])
 
 
