@@ -785,7 +785,8 @@ YAML_BAD = ["abc", ".nan", ".inf", "-.inf", "1e400", "null", "true", "[1]", "{a:
 
 def _mutate_yaml(rng: random.Random, names, T, motors, listed: bool):
     """One malformation of a YAML description's transmissions, on the values before they are
-    written: (what, the text the refusal must hold, T, motors, an edit of the written text)."""
+    written: (what, the text the refusal must hold (or a tuple of alternatives), T, motors, an
+    edit of the written text)."""
     n = len(T)
     kinds = ["number", "row-length", "zero-column", "rank", "unknown-key"]
     kinds += ["dup-motor", "unknown-joint", "dup-key"] if listed else ["dup-motor", "motors-length"]
@@ -841,6 +842,8 @@ def _mutate_yaml(rng: random.Random, names, T, motors, listed: bool):
             f"- name: {motors[i]}\n  joints: {{{names[k]}: 7.5, ",
         )
         owner = f"'{names[k]}'"
+    if kind == "zero-column" and listed:  # or a motor whose mapping that leaves empty
+        owner = (owner, *(f"('{m}')" for m, row in zip(motors, T, strict=True) if not any(row)))
     return kind, owner, T, motors, edit
 
 
@@ -1164,7 +1167,7 @@ def case_drives(ctx, index: int, rng: random.Random) -> Case:
         if mal is not None:
             what, owner, may_note = mal
             if cls == "error":
-                if owner not in detail:
+                if not any(o in detail for o in (owner if isinstance(owner, tuple) else [owner])):
                     return "wrong", f"{what}: refused without naming {owner}: {detail}"
                 return cls, detail
             if cls != "ok":
