@@ -25,6 +25,12 @@ rerun alone with ``--case``):
   data        the data path: logs with jitter, gaps, rate drift, a missing header, NaNs, another
               robot's log, odd periods, through ``identify``; oracle: the estimate of a log whose
               samples are honest (only the time stamps irregular) against the simulated truth
+  drives      random robots with random transmissions (URDF ROS 1 / ROS 2, YAML matrices), 40 %
+              malformed: a malformed one refused in one line naming the element; T against
+              ros_control's position maps on the file's numbers; the motor-side inverse dynamics
+              against Pinocchio plus T^T (Ia T ddq + f(T dq)); base counts of the three methods
+              with rotor and friction; export then load; motor currents through T; every
+              fourth case the generated C computed-torque step against the same
   cli, files, api
               the earlier bad-input campaign: random command lines from the parser's options,
               mutated URDF / YAML / CSV files, Python API calls with bad arrays
@@ -72,9 +78,20 @@ ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "examples" / "urdf" / "ur5.urdf"
 FINDINGS = ("trace", "internal", "unclear", "crash", "hang", "memory", "wrong")
 CLASSES = ("ok", "error") + FINDINGS + ("tool",)
-TARGETS = ("trees", "symbolic", "ident", "controller", "data", "cli", "files", "api", "floating")
+TARGETS = (
+    "trees",
+    "symbolic",
+    "ident",
+    "controller",
+    "data",
+    "cli",
+    "files",
+    "api",
+    "floating",
+    "drives",
+)
 #: The targets run when none is given.
-DEFAULT_TARGETS = (*TARGETS[:5], "floating")
+DEFAULT_TARGETS = (*TARGETS[:5], "floating", "drives")
 ORACLE_TOL = 1e-9
 
 
@@ -421,6 +438,792 @@ def case_floating(ctx, index: int, rng: random.Random) -> Case:
     return Case(
         "floating", index, f"base --root-joint floating {method} {path.name}", fn, argv, [path]
     )
+
+
+# ---------------------------------------------------------------------------------------------
+# drives: transmissions (URDF ROS 1 / ROS 2, YAML), motor-side dynamics, export, base counts
+# ---------------------------------------------------------------------------------------------
+TI = "transmission_interface/"
+DRIVE_TYPES = ("SimpleTransmission", "DifferentialTransmission", "FourBarLinkageTransmission")
+#: actuator reductions: gear ratios of either sign, and (one draw in ten) huge and tiny ones
+REDUCTIONS = [100.0, -80.0, 50.0, 1.0, -1.0, 0.5, 3.7, -160.0, 121.0, 2 * np.pi / 0.005]
+ODD_REDUCTIONS = [1e4, 1e-3, 1e6, 1e-6, -1e5]
+JOINT_REDUCTIONS = [None, None, 1.0, 1.5, -0.8, 2.0, 0.25, -1.0]
+DRIVE_TWISTS = [0, 90, -90, 180, 45, 30, -60, 120]
+
+
+def _reduction(rng: random.Random, values: list) -> float | None:
+    return rng.choice(ODD_REDUCTIONS if rng.random() < 0.1 else values)
+
+
+JOINT_NAMES = ["shoulder", "elbow", "wrist_1", "wrist_2", "j0", "joint-7", "a", "z9", "J", "q"]
+
+
+def _decimal(rng: random.Random, v: float) -> str:
+    """v written in one of the forms a description may hold; the oracle reads it back with
+    float(), so the value compared is the one written."""
+    form = rng.randrange(6)
+    if form == 0:
+        return f"{v:.17g}"
+    if form == 1:
+        return f"{v:e}"
+    if form == 2:
+        return f" {v!r}\n  "
+    if form == 3 and v >= 0:
+        return f"+{v!r}"
+    if form == 4 and float(v).is_integer() and abs(v) < 1e6:
+        return str(int(v))
+    return repr(v)
+
+
+def _drive_groups(rng: random.Random, joints: list[str]) -> list[dict]:
+    """Transmissions on the joints (taken in a random order): simple ones, two-joint ones on any
+    pair (not only neighbours), and now and then a joint left without one (a direct drive)."""
+    order = list(joints)
+    rng.shuffle(order)
+    groups = []
+    while order:
+        r = rng.random()
+        if r < 0.12:
+            order.pop()  # driven directly
+            continue
+        kind = rng.choice(DRIVE_TYPES[1:]) if len(order) >= 2 and r < 0.55 else DRIVE_TYPES[0]
+        k = 1 if kind == DRIVE_TYPES[0] else 2
+        js = [order.pop() for _ in range(k)]
+        i = len(groups) + 1
+        g = {
+            "name": rng.choice([f"t{i}", f"trans_{i}", f"T {i}"]),
+            "type": kind,
+            "joints": js,
+            "acts": [rng.choice([f"m{i}_{r}", f"motor{i}{r}"]) for r in range(k)],
+            "a": [_decimal(rng, _reduction(rng, REDUCTIONS)) for _ in range(k)],
+            "j": [None] * k,
+            "off": [None] * k,
+        }
+        if k == 2:
+            g["j"] = [
+                None if x is None else _decimal(rng, x)
+                for x in (_reduction(rng, JOINT_REDUCTIONS) for _ in range(2))
+            ]
+        for r in range(k):
+            if rng.random() < 0.2:
+                g["off"][r] = _decimal(rng, rng.uniform(-1, 1))
+        groups.append(g)
+    return groups
+
+
+def _group_rows(g: dict) -> dict:
+    """ros_control's joint -> actuator position maps written out for one transmission, from the
+    numbers as written: {motor: ({joint: coefficient}, motor offset)}, x_k = q_k - o_k:
+    simple q_m1 = a1 x1; differential q_m1 = a1 (j1 x1 + j2 x2), q_m2 = a2 (j1 x1 - j2 x2);
+    four-bar q_m1 = a1 j1 x1, q_m2 = a2 (x1 + j2 x2)."""
+    a = [float(x) for x in g["a"]]
+    jr = [1.0 if x is None else float(x) for x in g["j"]]
+    off = [0.0 if x is None else float(x) for x in g["off"]]
+    J, M = g["joints"], g["acts"]
+    if g["type"] == "SimpleTransmission":
+        coef = [{J[0]: a[0]}]
+    elif g["type"] == "DifferentialTransmission":
+        coef = [{J[0]: a[0] * jr[0], J[1]: a[0] * jr[1]}, {J[0]: a[1] * jr[0], J[1]: -a[1] * jr[1]}]
+    else:
+        coef = [{J[0]: a[0] * jr[0]}, {J[0]: a[1], J[1]: a[1] * jr[1]}]
+    rows = {}
+    for r, row in enumerate(coef):
+        rows[M[r]] = (row, -sum(c * off[J.index(j)] for j, c in row.items()))
+    return rows
+
+
+def _member_xml(g: dict, what: str, r: int, ros2: bool, roles: bool) -> str:
+    """The <joint> or <actuator> element of role r of transmission g in either form."""
+    name = g["joints" if what == "joint" else "acts"][r]
+    red = "mechanical_reduction" if ros2 else "mechanicalReduction"
+    simple = g["type"] == "SimpleTransmission"
+    if what == "actuator":  # ROS 2's simple transmission: the reduction is the joint's
+        value = None if (simple and ros2) else g["a"][r]
+    else:
+        value = g["a"][0] if (simple and ros2) else g["j"][r]
+    body = "" if value is None else f"<{red}>{value}</{red}>"
+    if what == "joint" and g["off"][r] is not None:
+        body = f"<offset>{g['off'][r]}</offset>" + body
+    role = f"{what}{r + 1}"
+    if ros2:
+        attr = f' role="{role}"' if roles else ""
+        return f'<{what} name="{name}"{attr}>{body}</{what}>'
+    if roles:
+        body = f"<role>{role}</role>" + body
+    if what == "joint":
+        body += "<hardwareInterface>hardware_interface/EffortJointInterface</hardwareInterface>"
+    return f'<{what} name="{name}">{body}</{what}>'
+
+
+def _transmission_xml(rng: random.Random, g: dict, ros2: bool) -> str:
+    k = len(g["joints"])
+    roles = k == 2 and (not ros2 or rng.random() < 0.7) or rng.random() < 0.3
+    g["roles"] = roles
+    parts = [_member_xml(g, w, r, ros2, roles) for w in ("joint", "actuator") for r in range(k)]
+    if roles:  # the roles decide, not the order
+        rng.shuffle(parts)
+    tag = "plugin" if ros2 else "type"
+    parts.insert(rng.randrange(len(parts) + 1), f"<{tag}>{TI}{g['type']}</{tag}>")
+    return f'<transmission name="{g["name"]}">' + "".join(parts) + "</transmission>"
+
+
+def _drive_chain(rng: random.Random, n: int) -> tuple[list[str], list[str], list[str]]:
+    """(joint names in chain order, link elements, joint elements in a shuffled order) of a chain
+    of n revolute / prismatic joints with odd names, generic geometry (the odd one is the trees
+    target's), generic links and now and then a fixed joint."""
+    names = rng.sample(JOINT_NAMES, n)
+    links = [f'<link name="l0">{_inertial_xml(rng, 1.0)}</link>']
+    joints = []
+    k = 0
+    for name in names:
+        if rng.random() < 0.15:  # a fixed joint between two moving ones
+            k += 1
+            links.append(f'<link name="l{k}">{_inertial_xml(rng, 1.0)}</link>')
+            joints.append(
+                f'<joint name="fixed{k}" type="fixed"><origin xyz="0 0.05 0.1"/>'
+                f'<parent link="l{k - 1}"/><child link="l{k}"/></joint>'
+            )
+        k += 1
+        kind = "prismatic" if rng.random() < 0.2 else "revolute"
+        xyz = [rng.uniform(-0.3, 0.3) for _ in range(3)]
+        rpy = [rng.choice([0.0, rng.uniform(-np.pi, np.pi)]) for _ in range(3)]
+        axis = [0.0, 0.0, 0.0]
+        axis[rng.randrange(3)] = rng.choice([1.0, -1.0])
+        if rng.random() < 0.3:
+            axis = [rng.gauss(0, 1) for _ in range(3)]
+        links.append(f'<link name="l{k}">{_inertial_xml(rng, 1.0)}</link>')
+        joints.append(
+            f'<joint name="{name}" type="{kind}"><origin xyz="{_fmt(xyz)}" '
+            f'rpy="{_fmt(rpy)}"/><parent link="l{k - 1}"/><child link="l{k}"/>'
+            f'<axis xyz="{_fmt(axis)}"/>'
+            f'<limit lower="-2" upper="2" effort="50" velocity="3"/></joint>'
+        )
+    rng.shuffle(joints)
+    return names, links, joints
+
+
+#: values a malformed description writes for a number
+BAD_NUMBERS = ["abc", "1O", "", "nan", "inf", "-inf", "1e400", "1,5", "0x10", "1e", "--1", "1 2"]
+
+
+def _mutate_urdf(rng: random.Random, groups: list[dict], xml: list[str], ros2: bool):
+    """One malformation of the transmissions' XML (a list of one string per transmission, edited
+    in place): returns (what, the text the refusal must hold, whether leaving the transmission
+    out with a note is a valid outcome instead, the index of the transmission); what is None when
+    the change leaves the description valid."""
+    i = rng.randrange(len(groups))
+    g, s = groups[i], xml[i]
+    name = g["name"]
+    owner = f"transmission '{name}'"
+    two = [k for k, h in enumerate(groups) if len(h["joints"]) == 2]
+    red = "mechanical_reduction" if ros2 else "mechanicalReduction"
+    kinds = ["type", "other-type", "number", "member", "no-name", "unknown-joint", "element"]
+    kinds += ["wrong-side"] * (g["type"] == DRIVE_TYPES[0])
+    kinds += ["role", "same-joint", "bad-role"] * bool(two)
+    kinds += ["twice", "dup-name", "dup-actuator", "mixed"] * (len(groups) > 1)
+    kinds += ["missing-reduction"] * (not ros2)
+    kind = rng.choice(kinds)
+    if kind in ("role", "same-joint", "bad-role"):
+        i = rng.choice(two)
+        g, s, name = groups[i], xml[i], groups[i]["name"]
+        owner = f"transmission '{name}'"
+    J, A = g["joints"], g["acts"]
+    may_note = False
+    if kind == "type":
+        typo = rng.choice(["SimpleTransmision", "DifferentialTransmisson", "FourBarLinkage",
+                           "simpletransmission", "FourBarLinkageTransmission "])  # fmt: skip
+        s = s.replace(f"{TI}{g['type']}<", f"{TI}{typo}<")
+        may_note = True  # refused as a misspelling, or another type: left out with a note
+        if typo.strip() == g["type"]:  # white space around the type: still the type
+            kind = None
+    elif kind == "other-type":
+        s = s.replace(f"{TI}{g['type']}<", rng.choice(
+            ["pr2_mechanism_model/SimpleTransmission<", "my_robot/GearTransmission<",
+             f"{TI}HalfDifferentialTransmission<"]))  # fmt: skip
+        may_note = True
+    elif kind == "number":
+        texts = [t for t in g["a"] + g["j"] + g["off"] if t is not None]
+        old = rng.choice(texts)
+        bad = rng.choice(BAD_NUMBERS + ["0"] * (old not in g["off"]))
+        s = s.replace(f">{old}<", f">{bad}<", 1)
+    elif kind == "member":
+        who = rng.choice(["joint", "actuator"])
+        nm = rng.choice(J if who == "joint" else A)
+        s = re.sub(rf'<{who} name="{re.escape(nm)}"[^>]*>.*?</{who}>', "", s, count=1)
+    elif kind == "no-name":
+        s = s.replace(f'<transmission name="{name}">', "<transmission>")
+        owner = "<transmission> has no name"
+    elif kind == "unknown-joint":
+        for j in rng.sample(J, rng.randint(1, len(J))):
+            s = s.replace(f'<joint name="{j}"', '<joint name="nosuch_' + j + '"')
+        may_note = True  # a transmission naming no joint of the file at all is left out
+    elif kind == "element":
+        s = s.replace(f"{red}>", f"{red[:-3]}tion>" if ros2 else "mechanicalReducton>", 2)
+        if f"{red}>" not in xml[i]:
+            kind = None  # nothing to misspell: the transmission as it was
+    elif kind == "wrong-side":
+        if ros2:
+            s = s.replace("</actuator>", f"<{red}>2</{red}></actuator>", 1)
+        else:
+            s = s.replace(f'<joint name="{J[0]}">', f'<joint name="{J[0]}"><{red}>2</{red}>', 1)
+    elif kind == "role":
+        r = rng.choice(["joint", "actuator"]) + rng.choice(["1", "2"])
+        s = s.replace(f' role="{r}"', "") if ros2 else s.replace(f"<role>{r}</role>", "")
+        if not g.get("roles"):
+            kind = None  # no roles written: the order decides
+    elif kind == "bad-role":
+        r = rng.choice(["joint2", "actuator1"])
+        new = rng.choice(["joint3", "actuator", "Joint1", r + " x"])
+        s = s.replace(f'role="{r}"', f'role="{new}"') if ros2 else s.replace(
+            f"<role>{r}</role>", f"<role>{new}</role>")  # fmt: skip
+        if not g.get("roles"):
+            kind = None
+    elif kind == "missing-reduction":  # ROS 1: an actuator's reduction is required
+        s = re.sub(rf'(<actuator name="{re.escape(A[0])}">.*?)<{red}>[^<]*</{red}>', r"\1", s,
+                   count=1)  # fmt: skip
+    elif kind == "same-joint":
+        s = s.replace(f'<joint name="{J[1]}"', f'<joint name="{J[0]}"')
+    else:  # two transmissions
+        o = rng.choice([k for k in range(len(groups)) if k != i])
+        h, t = groups[o], xml[o]
+        if kind == "twice":  # a joint of g named by transmission h as well
+            t = t.replace(f'<joint name="{h["joints"][0]}"', f'<joint name="{J[0]}"', 1)
+            owner = f"joint '{J[0]}'"
+        elif kind == "dup-name":
+            t = t.replace(f'<transmission name="{h["name"]}">', f'<transmission name="{name}">')
+        elif kind == "dup-actuator":
+            t = t.replace(f'<actuator name="{h["acts"][0]}"', f'<actuator name="{A[0]}"', 1)
+            owner = f"actuator '{A[0]}'"
+        else:  # one transmission written in the other form
+            g2 = dict(h)
+            t = "MIXED" + _transmission_xml(rng, g2, not ros2)
+            owner = "both the ROS 1 form"
+        xml[o] = t
+    xml[i] = s
+    return kind, owner, may_note, i
+
+
+def _drive_table(rng: random.Random, n: int) -> tuple[list[str], dict]:
+    """A DH table of n joints with odd names (revolute, now and then prismatic), right-angle
+    twists (the odd ones are the symbolic target's)."""
+    names = rng.sample(JOINT_NAMES, n)
+    joints = []
+    for name in names:
+        kind = "prismatic" if rng.random() < 0.2 else "revolute"
+        m = rng.uniform(0.5, 5)
+        mom = sorted(rng.uniform(0.2, 1.0) * m * 0.04 / 12 for _ in range(3))
+        mom[2] = min(mom[2], 0.9 * (mom[0] + mom[1]))
+        a, d = (rng.choice([0.0, rng.uniform(0.05, 0.6)]) for _ in range(2))
+        j = {"name": name, "type": kind, "a": a, "alpha": float(rng.choice(DRIVE_TWISTS)), "d": d,
+             "theta": 0.0}  # fmt: skip
+        if kind == "prismatic":
+            j["limits"] = {"lower": -0.5, "upper": 0.5}
+        j["inertial"] = {
+            "mass": m,
+            "com": [rng.uniform(-0.1, 0.1) for _ in range(3)],
+            "inertia": {"xx": mom[0], "yy": mom[1], "zz": mom[2], "xy": 0, "xz": 0, "yz": 0},
+        }
+        joints.append(j)
+    doc = {"name": "drives", "convention": "dh", "angle_unit": "deg", "gravity": [0, 0, -9.81],
+           "joints": joints}  # fmt: skip
+    return names, doc
+
+
+def _drive_matrix(rng: random.Random, names: list[str]) -> tuple[list[list[float]], str]:
+    """T of a YAML description: ros_control-like groups, a general coupled matrix, or a
+    near-singular one (one row a relative 1e-15..1e-6 off a multiple of another)."""
+    n = len(names)
+    kind = rng.choice(["groups", "general", "near-singular"])
+    T = np.zeros((n, n))
+    if kind == "groups":
+        rows = {}
+        for g in _drive_groups(rng, names):
+            rows.update({m: row for m, (row, _) in _group_rows(g).items()})
+        driven = {j for row in rows.values() for j in row}
+        rows.update({j: {j: 1.0} for j in names if j not in driven})
+        for i, row in enumerate(rows.values()):
+            for j, c in row.items():
+                T[i, names.index(j)] = c
+        T = T[rng.sample(range(n), n)]
+    else:
+        T = np.diag([_reduction(rng, REDUCTIONS) for _ in range(n)])
+        for i in range(n):
+            for k in range(n):
+                if i != k and rng.random() < 0.3:
+                    T[i, k] = rng.choice([-1, 1]) * rng.uniform(0.1, 2) * abs(T[k, k])
+        if kind == "near-singular" and n >= 2:
+            i, k = rng.sample(range(n), 2)
+            eps = rng.choice([1e-15, 1e-13, 1e-11, 1e-9, 1e-6])
+            T[k] = T[i] * rng.choice([1.0, -2.0, 0.5]) * (1 + eps)
+            T[k, rng.randrange(n)] += eps * np.abs(T[i]).max()
+    return T.tolist(), kind
+
+
+def _yaml_transmissions(rng: random.Random, names, T, motors, offsets, listed: bool) -> tuple:
+    """The `transmissions:` block as text (numbers in odd forms, read back by the oracle with
+    float()) and the matrix of texts written."""
+    text = [[v if isinstance(v, str) else _decimal(rng, v).strip() for v in row] for row in T]
+    if listed:
+        lines = ["transmissions:"]
+        for i, m in enumerate(motors):
+            cells = [f"{names[k]}: {text[i][k]}" for k in range(len(T[i])) if T[i][k] != 0]
+            lines.append(f"- name: {m}\n  joints: {{{', '.join(cells)}}}")
+            if offsets[i] is not None:
+                lines.append(f"  offset: {offsets[i]}")
+    else:
+        lines = ["transmissions:", "  matrix:"] + [f"  - [{', '.join(r)}]" for r in text]
+        if motors is not None:
+            lines.append(f"  motors: [{', '.join(motors)}]")
+        if any(o is not None for o in offsets):
+            lines.append(f"  offset: [{', '.join(o or '0' for o in offsets)}]")
+    return "\n".join(lines) + "\n", text
+
+
+YAML_BAD = ["abc", ".nan", ".inf", "-.inf", "1e400", "null", "true", "[1]", "{a: 1}", "1O", "--1"]
+
+
+def _mutate_yaml(rng: random.Random, names, T, motors, listed: bool):
+    """One malformation of a YAML description's transmissions, on the values before they are
+    written: (what, the text the refusal must hold (or a tuple of alternatives), T, motors, an
+    edit of the written text)."""
+    n = len(T)
+    kinds = ["number", "row-length", "zero-column", "rank", "unknown-key"]
+    kinds += ["dup-motor", "unknown-joint", "dup-key"] if listed else ["dup-motor", "motors-length"]
+    kind = rng.choice(kinds)
+    T = [list(r) for r in T]
+    motors = list(motors) if motors is not None else [f"motor{i + 1}" for i in range(n)]
+    edit, owner = None, "transmissions"
+    i = rng.randrange(n)
+    if kind == "number":
+        k = rng.choice([c for c in range(len(T[i])) if T[i][c] != 0])
+        bad = rng.choice(YAML_BAD)
+        T[i][k] = "BAD"
+        edit = ("BAD", bad)
+    elif kind == "row-length":
+        if listed:  # a joint missing from a motor's mapping is a zero: drop a whole column
+            kind, T = "zero-column", [[0.0 if c == i else v for c, v in enumerate(r)] for r in T]
+            owner = f"'{names[i]}'"
+        else:
+            T[i] = T[i][:-1] if rng.random() < 0.5 else T[i] + [1.0]
+    elif kind == "zero-column":
+        k = rng.randrange(len(names))
+        T = [[0.0 if c == k else v for c, v in enumerate(r)] for r in T]
+        owner = f"'{names[k]}'"
+    elif kind == "rank":
+        if n < 2:
+            return None, owner, T, motors, edit
+        o = rng.choice([r for r in range(n) if r != i])
+        T[i], T[o] = [repr(v) for v in T[i]], [repr(2.0 * v) for v in T[i]]  # written exactly
+    elif kind == "unknown-key":
+        edit = (
+            "transmissions:\n" + ("- name" if listed else "  matrix"),
+            "transmissions:\n" + ("- ratio: 3\n  name" if listed else "  rows: [1]\n  matrix"),
+        )
+        owner = "'rows'" if not listed else "'ratio'"
+    elif kind == "dup-motor":
+        if n < 2:
+            return None, owner, T, motors, edit
+        o = rng.choice([r for r in range(n) if r != i])
+        motors[o] = motors[i]
+        owner = f"'{motors[i]}'"
+    elif kind == "motors-length":
+        motors = motors[:-1]
+    elif kind == "unknown-joint":
+        owner = "'nosuch'"
+        edit = (
+            f"- name: {motors[i]}\n  joints: {{",
+            f"- name: {motors[i]}\n  joints: {{nosuch: 3, ",
+        )
+    else:  # dup-key: a motor's mapping names one joint twice
+        k = rng.choice([c for c in range(len(names)) if T[i][c] != 0])
+        edit = (
+            f"- name: {motors[i]}\n  joints: {{",
+            f"- name: {motors[i]}\n  joints: {{{names[k]}: 7.5, ",
+        )
+        owner = f"'{names[k]}'"
+    if kind == "zero-column" and listed:  # or a motor whose mapping that leaves empty
+        owner = (owner, *(f"('{m}')" for m, row in zip(motors, T, strict=True) if not any(row)))
+    return kind, owner, T, motors, edit
+
+
+def expected_drives(groups: list[dict], joints: list[str]) -> dict:
+    """{motor: (row {joint: coefficient}, offset)} of URDF transmissions, with a direct drive
+    (a motor of the joint's name, ratio 1) for each joint that none drives, when any remain."""
+    rows = {}
+    for g in groups:
+        rows.update(_group_rows(g))
+    driven = {j for g in groups for j in g["joints"]}
+    if rows:
+        rows.update({j: ({j: 1.0}, 0.0) for j in joints if j not in driven})
+    return rows
+
+
+def check_drive_T(robot, rows: dict) -> tuple[str, str]:
+    """T and the motor offsets as loaded against rows {motor: ({joint: c}, offset)}, to a few
+    units in the last place of each entry."""
+    tr = robot.transmission
+    if not rows:
+        return ("ok", "") if tr is None else ("wrong", f"a transmission where none: {tr.motors}")
+    if tr is None:
+        return "wrong", f"no transmission loaded; declared motors {sorted(rows)}"
+    if sorted(tr.motors) != sorted(rows):
+        return "wrong", f"motors {list(tr.motors)}, declared {sorted(rows)}"
+    T = np.zeros(tr.T.shape)
+    c = np.zeros(len(tr.motors))
+    for i, m in enumerate(tr.motors):
+        row, c[i] = rows[m]
+        for j, v in row.items():
+            T[i, robot.joint_names.index(j)] = v
+    tol = 4 * np.finfo(float).eps
+    bad = np.abs(np.asarray(tr.T) - T) > tol * np.abs(T)
+    if bad.any():
+        i, k = np.argwhere(bad)[0]
+        return "wrong", (f"T[{tr.motors[i]}, {robot.joint_names[k]}] = {tr.T[i, k]!r}, the "
+                         f"transmission's formula gives {T[i, k]!r}")  # fmt: skip
+    if not np.all(np.abs(np.asarray(tr.offset) - c) <= 1e-12 * np.maximum(np.abs(c), 1.0)):
+        return "wrong", f"motor offsets {list(tr.offset)}, the formula gives {list(c)}"
+    return "ok", ""
+
+
+def friction_terms(kind: str, v, w, fv, fc, f3):
+    """The friction torque of each motor at motor velocity v, by the models' definitions."""
+    s = np.sign(v)
+    if kind == "smooth":
+        return fv * v + fc * np.tanh(v / w)
+    out = fv * v + fc * s
+    if kind == "asymmetric":
+        out = out + f3 * np.abs(s)
+    elif kind == "stribeck":
+        out = out + f3 * s * np.exp(-((v / w) ** 2))
+    return out
+
+
+def motor_side_robot(robot, kind: str, nprng, side: str = "motor"):
+    """The robot with the friction model `kind`, rotor inertia and friction on `side`, and its
+    parameters with random values of those terms: (robot, p, (Ia, Fv, Fc, F3, w, T)), T the
+    transmission matrix on the motor side, the identity on the joint side."""
+    T = np.asarray(robot.transmission.T) if side == "motor" else np.eye(robot.n)
+    w = nprng.uniform(0.05, 2.0, T.shape[0]) * np.abs(T).max(axis=1)
+    r = robot.with_drive_side(side)
+    r = r.with_friction_model(kind, velocity=w if kind in ("smooth", "stribeck") else None)
+    names = r.parameter_names(rotor=True, friction=True)
+    p = np.asarray(r.parameters(rotor=True, friction=True), dtype=float).copy()
+    m = T.shape[0]
+    Ia, Fv, Fc = (nprng.uniform(1e-5, 1e-3, m), nprng.uniform(1e-4, 1e-2, m),
+                  nprng.uniform(1e-3, 0.1, m))  # fmt: skip
+    F3 = nprng.uniform(-0.05, 0.05, m) if kind in ("asymmetric", "stribeck") else np.zeros(m)
+    third = {"asymmetric": "Fa", "stribeck": "Fs"}.get(kind)
+    for k in range(m):
+        for key, v in (("Ia", Ia), ("Fv", Fv), ("Fc", Fc), (third, F3)):
+            if key is not None:
+                p[names.index(f"{key}{k + 1}")] = v[k]
+    return r, p, (Ia, Fv, Fc, F3, w, T)
+
+
+def rigid_torque(robot, pin_model, q, dq, ddq):
+    """The links' inverse dynamics: Pinocchio's rnea on the URDF, or (a YAML table) mindyn's
+    joint-side Newton-Euler with the rigid parameters only."""
+    if pin_model is None:
+        return robot.with_drive_side("joint").inverse_dynamics(q, dq, ddq, robot.params)
+    import pinocchio as pin
+
+    model, data, idx = pin_model
+    qp, dqp, ddqp = (np.zeros(model.nv) for _ in range(3))
+    qp[idx], dqp[idx], ddqp[idx] = q, dq, ddq
+    return pin.rnea(model, data, qp, dqp, ddqp)[idx]
+
+
+def check_motor_side(robot, kind, pin_model, nprng, side="motor") -> tuple[str, str, tuple]:
+    """Inverse dynamics and regressor of the motor-side (or joint-side: T = I) model against the
+    rigid-body inverse dynamics plus T^T (Ia T ddq + f(T dq)) written out, at three random
+    states, relative to the largest sum of absolute terms."""
+    r, p, terms = motor_side_robot(robot, kind, nprng, side)
+    Ia, Fv, Fc, F3, w, T = terms
+    worst = 0.0
+    for _ in range(3):
+        q, dq, ddq = (nprng.uniform(-2, 2, robot.n) for _ in range(3))
+        vm = T @ dq
+        drive = T.T @ (Ia * (T @ ddq) + friction_terms(kind, vm, w, Fv, Fc, F3))
+        want = rigid_torque(robot, pin_model, q, dq, ddq) + drive
+        W = r.regressor(q, dq, ddq, rotor=True, friction=True)
+        scale = np.abs(W) @ np.abs(p) + np.abs(T.T) @ (np.abs(Fc) + np.abs(F3))
+        worst = max(worst, rel_err(r.inverse_dynamics(q, dq, ddq, p), want, scale),
+                    rel_err(W @ p, want, scale))  # fmt: skip
+    cls = "wrong" if not worst <= ORACLE_TOL else "ok"
+    detail = f"{kind} {side}-side inverse dynamics vs rigid + T^T(...): {worst:.3g}"
+    return cls, detail, (r, p, terms)
+
+
+def check_drive_codegen(r, p, terms, pin_model, nprng) -> tuple[str, str]:
+    """The generated C computed-torque step (compiled with cc) with the base values of p, at zero
+    tracking error: its torque is the inverse dynamics at the reference acceleration, against
+    the rigid-body inverse dynamics plus T^T (Ia T ddq + f(T dq)) written out."""
+    from mindyn import codegen
+
+    Ia, Fv, Fc, F3, w, T = terms
+    kind = r.friction_model["kind"]
+    bp = mindyn.base_parameters(r, rotor=True, friction=True)
+    gen = codegen.generate_controller(
+        r, "computed-torque", base=bp, params=bp.values(p), period=0.004
+    )
+    ctl = codegen.CompiledController(gen, bp)
+    worst = 0.0
+    for _ in range(3):
+        q, dq, ddq = (nprng.uniform(-2, 2, r.n) for _ in range(3))
+        want = rigid_torque(r, pin_model, q, dq, ddq)
+        want = want + T.T @ (Ia * (T @ ddq) + friction_terms(kind, T @ dq, w, Fv, Fc, F3))
+        W = r.regressor(q, dq, ddq, rotor=True, friction=True)
+        scale = np.abs(W) @ np.abs(p) + np.abs(T.T) @ (np.abs(Fc) + np.abs(F3))
+        worst = max(worst, rel_err(ctl(0.0, q, dq, q, dq, ddq), want, scale))
+    cls = "wrong" if not worst <= ORACLE_TOL else "ok"
+    return cls, f"generated C computed torque vs rigid + T^T(...): {worst:.3g}"
+
+
+def check_drive_bases(r, p, nprng) -> tuple[str, str]:
+    """With --rotor --friction on the motor side: the exact methods' base-parameter count equals
+    the numerical method's (unless a method reports the robot near a degenerate geometry), and
+    the projection set reproduces W p at random states."""
+    counts, near, refused = {}, False, {}
+    for method in ("projection", "recursive", "numerical"):
+        try:
+            bp = mindyn.base_parameters(r, method=method, rotor=True, friction=True, snap=False)
+        except mindyn.Error as e:  # a refusal with its reason; the others are compared
+            refused[method] = str(e)
+            if "\n" in str(e):
+                return "unclear", f"{method}: {e}"[:400]
+            continue
+        counts[method] = bp.n
+        near = near or bool(bp.margin.get("near_degenerate"))
+        if method == "projection":
+            worst = 0.0
+            for _ in range(2):
+                q, dq, ddq = (nprng.uniform(-2, 2, r.n) for _ in range(3))
+                W = r.regressor(q, dq, ddq, rotor=True, friction=True)
+                got = bp.regressor(q, dq, ddq) @ bp.values(p)
+                worst = max(worst, rel_err(got, W @ p, np.abs(W) @ np.abs(p)))
+            if not worst <= ORACLE_TOL:
+                return "wrong", f"W_b (Y pi) vs W pi with --rotor --friction: {worst:.3g}"
+    detail = f"base counts {counts}" + (" (near degenerate)" if near else "")
+    if refused:
+        detail += "; refused by " + ", ".join(f"{m}: {e[:80]}" for m, e in refused.items())
+    same = len(set(counts.values())) <= 1
+    return ("ok" if same or near else "wrong"), detail
+
+
+def check_drive_export(ctx, robot, p, path: Path, index: int) -> tuple[str, str]:
+    """`mindyn export` of the robot with motor-side rotor inertia and Coulomb friction, then
+    load: the same T, offsets and motors, and the same dynamics (a URDF keeps a directly driven
+    motor's friction on its joint, <dynamics>, and every motor's terms in the sidecar; a YAML
+    table all of them)."""
+    from mindyn.export import read_joint_terms
+
+    names = robot.parameter_names(rotor=True, friction=True)
+    doc = {"robot": robot.name, "classical": dict(zip(names, map(float, p), strict=True)),
+           "rotor": True, "friction": True, "drive_side": robot.drive_side}  # fmt: skip
+    jfile = ctx.work / f"drives-{index}.id.json"
+    jfile.write_text(json.dumps(doc))
+    out = ctx.work / f"drives-{index}-export{path.suffix}"
+    flag = "--yaml" if path.suffix == ".yaml" else "--urdf"
+    cls, detail = cli_class(*run_cli(["export", path, jfile, flag, out]))
+    if cls != "ok":
+        return cls, f"export: {detail}"
+    back = mindyn.load(out)
+    tr, tb = robot.transmission, back.transmission
+    if tb is None or tb.motors != tr.motors or not np.array_equal(tb.T, tr.T):
+        return "wrong", f"export changed T: {None if tb is None else tb.T.tolist()}"
+    if not np.array_equal(tb.offset, tr.offset) or back.drive_side != robot.drive_side:
+        return "wrong", f"export changed the offsets {list(tb.offset)} or the drive side"
+    T = np.asarray(tr.T)
+    pd = p.copy()
+    if path.suffix != ".yaml":  # the URDF's joints carry the terms of motors driving one alone
+        side = read_joint_terms(out.with_suffix(".joints.yaml"))
+        for k in range(T.shape[0]):
+            for key in ("Ia", "Fv", "Fc"):
+                want = p[names.index(f"{key}{k + 1}")]
+                if side.get(f"{key}{k + 1}") != want:
+                    return (
+                        "wrong",
+                        f"sidecar {key}{k + 1} = {side.get(f'{key}{k + 1}')}, not {want}",
+                    )
+            j = np.flatnonzero(T[k])
+            alone = j.size == 1 and np.count_nonzero(T[:, j[0]]) == 1
+            for key in ("Ia", "Fv", "Fc"):  # a URDF has no rotor inertia
+                if key == "Ia" or not alone:
+                    pd[names.index(f"{key}{k + 1}")] = 0.0
+    pb = back.parameters(rotor=True, friction=True)
+    nprng = np.random.default_rng(index)
+    worst = 0.0
+    for _ in range(2):
+        q, dq, ddq = (nprng.uniform(-2, 2, robot.n) for _ in range(3))
+        W = robot.regressor(q, dq, ddq, rotor=True, friction=True)
+        worst = max(
+            worst,
+            rel_err(
+                back.inverse_dynamics(q, dq, ddq, pb),
+                robot.inverse_dynamics(q, dq, ddq, pd),
+                np.abs(W) @ np.abs(p),
+            ),
+        )
+    if not worst <= ORACLE_TOL:
+        return "wrong", f"exported then loaded: inverse dynamics differ by {worst:.3g}"
+    return "ok", ""
+
+
+def check_currents(ctx, robot, index: int, nprng) -> tuple[str, str]:
+    """Motor currents i of known joint torques (K_t i = T^-T tau) read from a log with the
+    torque constants: tau = T^T K_t i."""
+    from mindyn.identification.data import read_csv, write_csv
+
+    T = np.asarray(robot.transmission.T)
+    n = robot.n
+    t = np.arange(60) * 0.01
+    w = nprng.uniform(0.5, 2.0, n)
+    q = 0.5 * np.sin(w * t[:, None])
+    dq, ddq = 0.5 * w * np.cos(w * t[:, None]), -0.5 * w**2 * np.sin(w * t[:, None])
+    tau = nprng.uniform(-5, 5, (t.size, n))
+    kt = nprng.uniform(0.02, 0.5, n)
+    i = np.linalg.solve(T.T, tau.T).T / kt
+    log = write_csv(ctx.work / f"drives-{index}.currents.csv", t, q, i, dq=dq, ddq=ddq,
+                    torque_unit="current")  # fmt: skip
+    data = read_csv(log, robot=robot, drive_gain=kt)
+    scale = np.abs(T.T) @ np.abs(kt * i).T
+    err = rel_err(data.tau, tau, scale)
+    return ("wrong" if not err <= ORACLE_TOL else "ok"), f"currents through T: {err:.3g}"
+
+
+def _drive_description(ctx, index: int, rng: random.Random) -> tuple:
+    """Writes a random robot with random transmissions (valid, or with one malformation) and
+    returns (path, the form, the expected rows or None, malformation (what, must-name, whether
+    a note is a valid outcome) or None)."""
+    form = rng.choice(["ros1", "ros1", "ros2", "ros2", "yaml"])
+    n = rng.randint(1, 6)
+    bad = rng.random() < 0.4
+    mal = None
+    if form == "yaml":
+        names, doc = _drive_table(rng, n)
+        T, how = _drive_matrix(rng, names)
+        listed = rng.random() < 0.5
+        motors = [f"m_{k}" for k in rng.sample(range(100), n)]
+        motors = None if not listed and rng.random() < 0.3 else motors
+        offsets = [_decimal(rng, rng.uniform(-1, 1)).strip() if rng.random() < 0.2 else None
+                   for _ in range(n)]  # fmt: skip
+        edit = None
+        if bad:
+            what, owner, T, motors, edit = _mutate_yaml(rng, names, T, motors, listed)
+            mal = None if what is None else (what, owner, False)
+        block, text = _yaml_transmissions(rng, names, T, motors, offsets, listed)
+        if edit is not None:
+            block = block.replace(edit[0], edit[1], 1)
+        path = ctx.work / f"drives-{index}.yaml"
+        path.write_text(yaml.safe_dump(doc, sort_keys=False) + block)
+        if mal is not None:
+            return path, form, None, mal
+        mnames = motors or [f"motor{i + 1}" for i in range(len(T))]
+        rows = {}
+        for i, m in enumerate(mnames):
+            row = {names[k]: float(text[i][k]) for k in range(n) if float(text[i][k]) != 0}
+            rows[m] = (row, 0.0 if offsets[i] is None else float(offsets[i]))
+        return path, f"yaml {how}", rows, None
+    ros2 = form == "ros2"
+    names, links, joints = _drive_chain(rng, n)
+    groups = _drive_groups(rng, names)
+    while not groups:  # at least one transmission
+        groups = _drive_groups(rng, names)
+    xml = [_transmission_xml(rng, g, ros2) for g in groups]
+    kept = groups
+    if bad:
+        what, owner, may_note, i = _mutate_urdf(rng, groups, xml, ros2)
+        if what is not None:
+            mal = (what, owner, may_note)
+            kept = [g for k, g in enumerate(groups) if k != i]
+    mixed = [x[5:] for x in xml if x.startswith("MIXED")]
+    xml = [x for x in xml if not x.startswith("MIXED")]
+    ros2_part, ros1_part = (xml, mixed) if ros2 else (mixed, xml)
+    body = "".join(ros1_part)
+    if ros2_part:
+        body += (
+            '<ros2_control name="hw" type="system"><hardware><plugin>mock_components/'
+            "GenericSystem</plugin></hardware>" + "".join(ros2_part) + "</ros2_control>"
+        )
+    parts = links + joints + [body]
+    if rng.random() < 0.5:  # transmissions before the links and joints
+        parts = [body] + links + joints
+    path = ctx.work / f"drives-{index}.urdf"
+    path.write_text('<?xml version="1.0"?>\n<robot name="drives">\n' + "\n".join(parts)
+                    + "\n</robot>\n")  # fmt: skip
+    return path, form, expected_drives(kept, names), mal
+
+
+def case_drives(ctx, index: int, rng: random.Random) -> Case:
+    path, form, rows, mal = _drive_description(ctx, index, rng)
+    kind = rng.choice(["coulomb", "asymmetric", "smooth", "stribeck"])
+    side = "joint" if rng.random() < 0.25 else "motor"
+    seed = rng.randrange(2**32)
+    argv = ["info", path]
+
+    def fn():
+        cls, detail = cli_class(*run_cli(argv))
+        if mal is not None:
+            what, owner, may_note = mal
+            if cls == "error":
+                if not any(o in detail for o in (owner if isinstance(owner, tuple) else [owner])):
+                    return "wrong", f"{what}: refused without naming {owner}: {detail}"
+                return cls, detail
+            if cls != "ok":
+                return cls, detail
+            if not may_note:
+                return "wrong", f"malformed ({what}) accepted: {path.name}"
+            robot = mindyn.load(path)
+            name = owner.split("'")[1] if "'" in owner else owner
+            if f"'{name}'" not in robot.notes:
+                return "wrong", f"{what}: transmission '{name}' dropped without a note"
+            return check_drive_T(robot, rows)
+        if cls != "ok":
+            return cls, detail
+        robot = mindyn.load(path)
+        cls, detail = check_drive_T(robot, rows)
+        if cls != "ok" or robot.transmission is None:
+            return cls, detail
+        T = np.asarray(robot.transmission.T)
+        if T.shape[0] != T.shape[1]:
+            return "ok", "redundant drive: no motor-side model"
+        pin_model = None
+        if path.suffix == ".urdf":
+            import pinocchio as pin
+
+            model = pin.buildModelFromUrdf(str(path))
+            idx = [model.joints[model.getJointId(j)].idx_v for j in robot.joint_names]
+            pin_model = (model, model.createData(), idx)
+        nprng = np.random.default_rng(seed)
+        try:
+            motor_side = check_motor_side(robot, kind, pin_model, nprng, side)
+        except mindyn.Error as e:  # a refusal with its reason
+            return api_refusal(e)
+        r, p, terms = motor_side[2]
+        checks = [
+            lambda: motor_side[:2],
+            lambda: check_drive_bases(r, p, nprng),
+            lambda: check_drive_export(
+                ctx, robot, motor_side_robot(robot, "coulomb", nprng)[1], path, index
+            ),
+            lambda: check_currents(ctx, robot, index, nprng),
+        ]
+        if index % 4 == 0:  # compiling takes a second or two
+            checks.append(lambda: check_drive_codegen(r, p, terms, pin_model, nprng))
+        details = []
+        for check in checks:
+            try:
+                cls, detail = check()
+            except mindyn.Error as e:  # a refusal with its reason (e.g. a degenerate geometry)
+                cls, detail = api_refusal(e)
+            if cls != "ok":
+                return cls, detail
+            details.append(detail)
+        return "ok", "; ".join(d for d in details if d)
+
+    label = f"{form} {path.name}" + (f" malformed: {mal[0]}" if mal else "") + f" {kind} {side}"
+    return Case("drives", index, label, fn, argv, [path])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1102,6 +1905,7 @@ MAKERS = {
     "files": case_files,
     "api": case_api,
     "floating": case_floating,
+    "drives": case_drives,
 }
 
 

@@ -13,6 +13,7 @@ import mindyn
 import numpy as np
 import pinocchio as pin
 import pytest
+import yaml
 from conftest import cli, pinocchio_model
 from mindyn.identification import JointData, identify, select_friction_model, write_csv
 from random_arm import random_arm_yaml
@@ -135,6 +136,42 @@ def test_third_column_is_a_base_parameter_by_all_three_methods(arm, kind):
         assert b.n == coulomb + arm.n, m
         assert all(f"F{'a' if kind == 'asymmetric' else 's'}{k + 1}" in b.names
                    for k in range(arm.n))  # fmt: skip
+
+
+@pytest.mark.parametrize("side", ["joint", "motor"])
+def test_asymmetric_friction_of_a_lift_with_a_rotor_is_its_own_base_parameter(tmp_path, side):
+    """A prismatic joint along gravity with rotor inertia: tau = M (ddq + g) + Ia r^2 ddq +
+    r (Fv r dq + Fc sign(r dq) + Fa |sign(r dq)|), r its reduction (1 on the joint side). While
+    it moves, M g is a constant as Fa |sign v| is, but not at rest: five independent functions,
+    five base parameters by every method, and each base set gives M g at rest."""
+    doc = {"name": "lift", "convention": "dh", "gravity": [0, 0, -9.81], "joints": [
+        {"name": "z", "type": "prismatic", "a": 0.0, "alpha": 0.0, "d": 0.0, "theta": 0.0,
+         "limits": {"lower": -0.5, "upper": 0.5}, "inertial": {"mass": 2.0, "com": [0.1, 0, 0],
+         "inertia": {"xx": 0.01, "yy": 0.01, "zz": 0.01}}}]}  # fmt: skip
+    r = 1256.6  # a ball screw's reduction [rad/m]
+    if side == "motor":
+        doc["transmissions"] = {"matrix": [[r]]}
+    path = tmp_path / "lift.yaml"
+    path.write_text(yaml.safe_dump(doc), encoding="utf-8")
+    robot = mindyn.load(path).with_friction_model("asymmetric")
+    assert robot.drive_side == side
+    names = robot.parameter_names(rotor=True, friction=True)
+    p = np.zeros(len(names))
+    m, ia, fv, fc, fa = 2.0, 3e-5, 1e-4, 0.02, 0.01
+    for name, v in zip(("M1", "Ia1", "Fv1", "Fc1", "Fa1"), (m, ia, fv, fc, fa), strict=True):
+        p[names.index(name)] = v
+    ratio = r if side == "motor" else 1.0
+    for method in ("projection", "recursive", "numerical"):
+        b = mindyn.base_parameters(robot, method=method, rotor=True, friction=True)
+        assert b.n == 5, (method, b.names)
+        for dq in (0.0, 0.3, -0.2):
+            ddq = 0.7
+            v = ratio * dq
+            want = m * (ddq + 9.81) + ratio * (
+                ia * ratio * ddq + fv * v + fc * np.sign(v) + fa * abs(np.sign(v))
+            )
+            got = b.regressor([0.1], [dq], [ddq]) @ b.values(p)
+            assert got[0] == pytest.approx(want, rel=1e-9), (method, dq)
 
 
 def make_log(robot, kind, w, fv, fc, f3, *, seconds=8.0, rate=200.0, noise=0.0, seed=0):

@@ -120,12 +120,72 @@ _TWO_LINKS = """<robot name="arm">
 
 
 def test_tiny_seeded_run(tmp_path):
-    """Three cases; the summary counts them and reruns of a case draw the same input."""
+    """Four cases; the summary counts them and reruns of a case draw the same input."""
     out = tmp_path / "run"
-    campaign.main([str(out), "--targets", "trees,api,floating", "--count", "1", "--seed", "5"])
+    campaign.main(
+        [str(out), "--targets", "trees,api,floating,drives", "--count", "1", "--seed", "5"]
+    )
     doc = json.loads((out / "summary.json").read_text())
-    assert sum(sum(c.values()) for c in doc["counts"].values()) == 3
-    first = (out / "work" / "trees-0.urdf").read_text()
+    assert sum(sum(c.values()) for c in doc["counts"].values()) == 4
     ctx = campaign.Context(tmp_path / "again")
-    campaign.make_case(ctx, "trees", 0, 5)
-    assert (tmp_path / "again" / "work" / "trees-0.urdf").read_text() == first
+    for target in ("trees", "drives"):
+        again = Path(campaign.make_case(ctx, target, 0, 5).files[0])
+        assert again.read_text() == (out / "work" / again.name).read_text()
+
+
+def _drive_case(tmp_path, coupled: bool):
+    """The first valid URDF of the drives target (seed 3) with a two-joint transmission, or the
+    first malformed one: (path, expected rows, malformation)."""
+    import random
+
+    ctx = campaign.Context(tmp_path)
+    for index in range(200):
+        rng = random.Random(f"3:drives:{index}")
+        path, form, rows, mal = campaign._drive_description(ctx, index, rng)
+        if coupled and mal is None and path.suffix == ".urdf":
+            if any(len(row) == 2 for row, _ in rows.values()):
+                return path, rows, mal
+        if not coupled and mal is not None and not mal[2]:
+            return path, rows, mal
+    raise AssertionError("no such case drawn")
+
+
+def test_the_drive_oracles_catch_a_wrong_T_and_wrong_motor_terms(tmp_path, monkeypatch):
+    """check_drive_T compares T with ros_control's maps applied to the file's numbers: a
+    coefficient one part in 1e12 off, or a motor of another name, is a wrong answer;
+    check_motor_side compares with Pinocchio plus T^T (Ia T ddq + f(T dq)): a friction formula
+    without its Coulomb term is one too."""
+    import mindyn
+    import numpy as np
+    import pinocchio as pin
+
+    path, rows, _ = _drive_case(tmp_path, coupled=True)
+    robot = mindyn.load(path)
+    assert campaign.check_drive_T(robot, rows)[0] == "ok"
+    motor, (row, c) = next((m, r) for m, r in rows.items() if len(r[0]) == 2)
+    joint = next(iter(row))
+    off = dict(rows) | {motor: ({**row, joint: row[joint] * (1 + 1e-12)}, c)}
+    assert campaign.check_drive_T(robot, off)[0] == "wrong"
+    renamed = {("x" + m if m == motor else m): r for m, r in rows.items()}
+    assert campaign.check_drive_T(robot, renamed)[0] == "wrong"
+    model = pin.buildModelFromUrdf(str(path))
+    idx = [model.joints[model.getJointId(j)].idx_v for j in robot.joint_names]
+    pin_model = (model, model.createData(), idx)
+    rng = np.random.default_rng(0)
+    assert campaign.check_motor_side(robot, "coulomb", pin_model, rng)[0] == "ok"
+    formula = campaign.friction_terms
+    monkeypatch.setattr(
+        campaign,
+        "friction_terms",
+        lambda kind, v, w, fv, fc, f3: formula(kind, v, w, fv, 0 * fc, f3),
+    )
+    assert campaign.check_motor_side(robot, "coulomb", pin_model, rng)[0] == "wrong"
+
+
+def test_a_malformed_transmission_is_refused_naming_it(tmp_path):
+    """A malformed transmission of the drives target is an error whose one line names the
+    element the malformation is in (the case's own check)."""
+    path, _, (what, owner, _) = _drive_case(tmp_path, coupled=False)
+    kind, detail = campaign.cli_class(*campaign.run_cli(["info", path]))
+    owners = owner if isinstance(owner, tuple) else (owner,)
+    assert kind == "error" and any(o in detail for o in owners), (what, detail)

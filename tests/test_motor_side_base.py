@@ -123,3 +123,40 @@ def test_cli_base_says_where_the_terms_act_and_the_flag_moves_them(tmp_path):
         rc = main(["base", "puma560", "--rotor", "--drive-side", "motor"])
     assert rc != 0 and len(err.getvalue().splitlines()) == 1
     assert "declares no transmissions" in err.getvalue()
+
+
+@pytest.mark.parametrize("kind", ["coulomb", "smooth"])
+def test_a_motor_on_a_prismatic_joint_of_a_long_robot(tmp_path, kind):
+    """A horizontal ball-screw axis (a motor of 1256.6 rad/m on a prismatic joint travelling
+    +-3 m, so that the exact methods scale lengths by 4) under a revolute joint with a motor of
+    its own: the rotor regroups with the axis's moving mass by r^2. Every method runs, the
+    counts agree, and W_b (Y pi) reproduces the rigid bodies plus
+    T^T (Ia T ddq + Fv T dq + Fc s(T dq)) written out, s = sign or tanh(./w) (w per motor)."""
+    from test_transmissions import arm_urdf, simple
+
+    text = arm_urdf(2, simple("t1", "j1", "m1", 1256.6) + simple("t2", "j2", "m2", -50.0))
+    text = text.replace("type='revolute'", "type='prismatic'", 1)
+    text = text.replace("<axis xyz='0 0 1'/>", "<axis xyz='0 1 0'/>", 1)
+    path = tmp_path / "axis.urdf"
+    path.write_text(text, encoding="utf-8")
+    w = np.array([300.0, 5.0])  # motor speeds [rad/s]
+    robot = mindyn.load(path).with_friction_model(kind, velocity=w if kind == "smooth" else None)
+    assert list(robot.joint_types) == ["prismatic", "revolute"] and robot.drive_side == "motor"
+    c = counts(robot)
+    assert c["projection"] == c["recursive"] == c["numerical"], c
+    T = robot.transmission.T
+    rng = np.random.default_rng(1)
+    for method in METHODS:
+        base = mindyn.base_parameters(robot, rotor=True, friction=True, method=method)
+        for _ in range(3):
+            pi = rng.uniform(0.1, 1, 26) * np.tile(np.r_[np.ones(10), 1e-4, 1e-3, 0.05], 2)
+            q, dq, ddq = rng.uniform(-2, 2, (3, 2))
+            rigid = pi.copy()
+            for col in (10, 11, 12):
+                rigid[col::13] = 0.0
+            vm = T @ dq
+            shape = np.sign(vm) if kind == "coulomb" else np.tanh(vm / w)
+            drive = T.T @ (pi[10::13] * (T @ ddq) + pi[11::13] * vm + pi[12::13] * shape)
+            ref = robot.with_drive_side("joint").inverse_dynamics(q, dq, ddq, rigid) + drive
+            tb = base.regressor(q, dq, ddq) @ base.values(pi)
+            assert np.max(np.abs(tb - ref)) <= 1e-9 * np.max(np.abs(ref)), method

@@ -221,6 +221,25 @@ def test_simple_transmission_offset_and_ros2_reduction_from_the_joint(tmp_path):
     np.testing.assert_allclose(tr.offset, [-7.5 * 0.2, 0.0], atol=1e-15)  # x_a = a (x - off)
 
 
+def test_reductions_of_very_different_sizes_are_not_a_rank_deficiency(tmp_path):
+    """Motors of reductions 1e-6 and 1e9 and a four-bar wrist of 1e4 x 1e4: T is block diagonal
+    with invertible blocks (determinants 1e-6, 1e9 and a1 j1 a2 j2), so the motors determine
+    every joint; the spread of its singular values (1e-15) is one of units. Two motors whose
+    rows are multiples of each other stay refused, whatever their sizes."""
+    parts = simple("t1", "j1", "m1", 1e-6) + simple("t2", "j2", "m2", 1e9)
+    parts += pair("FourBarLinkageTransmission", "w", ("j3", "j4"), ("m3", "m4"), (1e4, 30.0),
+                  (1e4, 1.0))  # fmt: skip
+    robot = load_text(tmp_path, arm_urdf(4, parts))
+    expected = np.zeros((4, 4))
+    expected[0, 0], expected[1, 1] = 1e-6, 1e9
+    expected[2:, 2:] = four_bar_T((1e4, 30.0), (1e4, 1.0))
+    np.testing.assert_array_equal(robot.transmission.T, expected)
+    rows = [[1e-6, 2e-6, 0.0], [1e9, 2e9, 0.0], [0.0, 0.0, 50.0]]
+    with pytest.raises(mindyn.ModelError, match="rank deficient") as e:
+        arm_yaml(tmp_path / "bad.yaml", {"matrix": rows})
+    assert "\n" not in str(e.value)
+
+
 def test_urdfs_without_transmissions_have_none(tmp_path):
     robot = load_text(tmp_path, arm_urdf(3))
     assert robot.transmission is None

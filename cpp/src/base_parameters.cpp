@@ -334,16 +334,21 @@ Samples sampleRegressors(const Model& model, ParameterLayout layout, int m, int 
   s.wH.resize(me, P);
   Eigen::VectorXd wK(P), wP(P);
   Eigen::MatrixXd W(n, P);
+  // Friction that is constant while a joint moves (the asymmetric model's Fa |sign v|) differs
+  // from a constant torque (a prismatic joint's weight) only at rest: every fourth state of the
+  // regressor rows is at rest then.
+  const bool rests = layout.friction && model.friction_model.kind == FrictionKind::Asymmetric;
   for (int i = 0; i < std::max(m, me); ++i) {
     dyn.randomState(rng);
-    if (i < m) {
-      dyn.regressor(W);
-      s.W.middleRows(static_cast<long>(i) * n, n) = W;
-    }
     if (i < me) {
       dyn.energyRegressors(wK, wP);
       s.wL.row(i) = (wK - wP).transpose();
       s.wH.row(i) = (wK + wP).transpose();
+    }
+    if (i < m) {
+      if (rests && i % 4 == 0) dyn.dq.setZero();
+      dyn.regressor(W);
+      s.W.middleRows(static_cast<long>(i) * n, n) = W;
     }
   }
   return s;
@@ -679,12 +684,14 @@ Model unitLengthModel(const Model& model, double L) {
     if (j.type == JointType::Prismatic) {
       j.limits.lower /= L;
       j.limits.upper /= L;
-      if (m.friction_model.scaled()) m.friction_model.velocity[k] /= L;  // a speed, m/s
+      // a joint's speed scale, m/s (a motor's, on the motor side, keeps its motor units)
+      if (m.friction_model.scaled() && !m.motorSide()) m.friction_model.velocity[k] /= L;
     }
   }
   m.gravity /= L;
   m.tool.translation() /= L;
-  // Motor positions per joint length: a prismatic joint's column of T in motor units per L.
+  // Motor positions per joint length: a prismatic joint's column of T in motor units per L, so
+  // that the motors' positions, velocities and terms keep their units (column unit 1).
   if (!m.transmission.empty())
     for (int k = 0; k < m.nq(); ++k)
       if (m.joints[k].type == JointType::Prismatic) m.transmission.T.col(k) *= L;
@@ -701,16 +708,10 @@ Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
     const int c0 = k * layout.perLink();
     for (int i = 6; i < 9; ++i) units[c0 + i] = L;  // MX MY MZ
     units[c0 + 9] = L * L;                          // M
-    // A prismatic joint's rotor inertia and friction act on its force as a mass does; on the
-    // motor side, those of a motor that drives prismatic joints only.
-    bool prismatic = model.joints[k].type == JointType::Prismatic;
-    if (model.motorSide() && k < model.transmission.nm()) {
-      prismatic = true;
-      for (int a = 0; a < n; ++a)
-        if (model.transmission.T(k, a) != 0.0 && model.joints[a].type != JointType::Prismatic)
-          prismatic = false;
-    }
-    if (prismatic)
+    // A prismatic joint's rotor inertia and friction act on its force as a mass does. A motor's
+    // (the motor side) keep their units: the scaled model's T carries the length of the
+    // prismatic joints it drives (unitLengthModel).
+    if (model.joints[k].type == JointType::Prismatic && !model.motorSide())
       for (int c = c0 + 10; c < c0 + layout.perLink(); ++c) units[c] = L * L;
   }
   return units;

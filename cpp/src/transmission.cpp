@@ -117,8 +117,17 @@ void Transmission::validate(const std::vector<Joint>& joints, const std::string&
   if (m < ns)
     throw ModelError(who + ": " + std::to_string(m) + " motors cannot drive " + std::to_string(ns) +
                      " joints (the transmission matrix needs full column " + "rank)");
+  // The rank in the joints' and motors' own units: each column (a joint's unit) and then each
+  // non-zero row (a motor's) scaled to norm 1, so that reductions of very different sizes (a
+  // block-diagonal T of invertible blocks) are no deficiency, while rows that are multiples of
+  // each other stay one.
   Eigen::MatrixXd S(m, ns);
-  for (Eigen::Index c = 0; c < ns; ++c) S.col(c) = T.col(single[static_cast<size_t>(c)]);
+  for (Eigen::Index c = 0; c < ns; ++c) {
+    S.col(c) = T.col(single[static_cast<size_t>(c)]);
+    S.col(c) /= S.col(c).norm();
+  }
+  for (Eigen::Index r = 0; r < m; ++r)
+    if (const double size = S.row(r).norm(); size > 0.0) S.row(r) /= size;
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(S);
   const Eigen::VectorXd s = svd.singularValues();
   const double tol =
@@ -126,7 +135,8 @@ void Transmission::validate(const std::vector<Joint>& joints, const std::string&
   if (s[ns - 1] <= tol)
     throw ModelError(who + ": the transmission matrix is rank deficient (smallest singular value " +
                      formatNumber(s[ns - 1]) + " of largest " + formatNumber(s[0]) +
-                     "): the motors do not determine every joint");
+                     ", its columns and rows scaled to norm 1): the motors do not determine "
+                     "every joint");
 }
 
 Transmission assembleTransmission(const std::vector<TransmissionGroup>& groups,
