@@ -336,3 +336,21 @@ def test_the_exact_regressor_is_mindyns(tmp_path):
     # to the round-off of the largest terms (lever arms of 1e5 m: M entries of 1e10)
     assert np.max(np.abs(ours - expected)) < 1e-14 * np.max(np.abs(expected))
     assert np.max(np.abs(expected)) > 1e9
+
+
+@pytest.mark.parametrize("kind", ["smooth", "stribeck"])
+def test_friction_with_a_velocity_scale_stays_its_own_at_any_size(tmp_path, kind):
+    """Friction has a velocity scale of its own (w = 100 rad/s here): the numerical method
+    samples it at the rates as given, where tanh(v / w) and exp(-(v / w)^2) differ from v / w
+    and 1 by 1e-4, not at the rates of the unit-length model of a robot of 1e8 m (1e-4 rad/s),
+    where they would differ by 1e-12 and regroup with the viscous and Coulomb columns. Every
+    friction parameter is a base parameter of its own (a closed form: the link columns are
+    polynomials in the rates), by every method."""
+    path = tmp_path / "one.urdf"
+    for size in (1.0, 1e8):
+        path.write_text(one_joint("revolute", "0 4e-06 1", size))
+        robot = mindyn.load(path).with_friction_model(kind, velocity=[100.0])
+        columns = 3 if kind == "stribeck" else 2
+        for method in METHODS:
+            bp = mindyn.base_parameters(robot, method=method, friction=True, snap=False)
+            assert bp.n == 3 + columns, (method, size, bp.names)
