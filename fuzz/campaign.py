@@ -8,8 +8,9 @@ rerun alone with ``--case``):
 
   trees       random URDF chains and trees with odd geometry (axes within 1e-12..1e-6 of a
               coordinate axis, angles written rounded, lengths 1e-9..1e9 m): ``mindyn base`` with
-              a random method; oracle ``W_b (Y pi) = tau`` (Newton-Euler) at random states, and
-              Pinocchio's rnea on every third case
+              a random method; oracle ``W_b (Y pi) = tau`` (Newton-Euler) at random states, for
+              an exact method the other exact method's count, and Pinocchio's rnea on every
+              third case
   floating    the same robots on a free-flyer (``--root-joint floating``): oracle
               ``W_b (Y pi) = tau`` of the multibody inverse dynamics at random states (unit
               quaternions) and, for an exact method, the other exact method's count
@@ -350,6 +351,22 @@ def check_pinocchio(robot, path: Path, nprng) -> tuple[str, str]:
     return cls, f"inverse dynamics vs pinocchio rnea: {worst:.3g} relative"
 
 
+def compare_exact(robot, method: str, bp, detail: str, **terms) -> tuple[str, str]:
+    """For an exact method, the other exact method's count on the same geometry (as written),
+    near-degenerate or not: two exact methods that disagree are wrong. A refusal of the other
+    method (with its reason) is its own outcome."""
+    if method == "numerical":
+        return "ok", detail
+    other = "recursive" if method == "projection" else "projection"
+    try:
+        n_other = mindyn.base_parameters(robot, method=other, snap=False, **terms).n
+    except BaseException as e:  # noqa: BLE001 - a refusal of the other method is its own
+        return "ok", f"{detail}; the {other} method refuses: {api_refusal(e)[1]}"
+    if n_other != bp.n:
+        return "wrong", f"{detail}; the {other} method gives {n_other} base parameters"
+    return "ok", detail
+
+
 def case_trees(ctx, index: int, rng: random.Random) -> Case:
     pin_case = index % 3 == 0
     path = odd_urdf(rng, ctx.work / f"trees-{index}.urdf", pin_case)
@@ -374,6 +391,8 @@ def case_trees(ctx, index: int, rng: random.Random) -> Case:
             cls, detail = api_refusal(e)
             return ("unclear" if cls == "error" else cls), f"API refuses, CLI ran: {detail}"
         cls, detail = check_base(robot, bp, rotor, friction, nprng)
+        if cls == "ok":
+            cls, detail = compare_exact(robot, method, bp, detail, rotor=rotor, friction=friction)
         if cls == "ok" and pin_case:
             return check_pinocchio(robot, path, nprng)
         return cls, detail
@@ -424,16 +443,9 @@ def case_floating(ctx, index: int, rng: random.Random) -> Case:
             cls, detail = api_refusal(e)
             return ("unclear" if cls == "error" else cls), f"API refuses, CLI ran: {detail}"
         cls, detail = check_floating_base(robot, bp, np.random.default_rng(seed))
-        if cls != "ok" or method == "numerical" or bp.margin.get("near_degenerate"):
+        if cls != "ok":
             return cls, detail
-        other = "recursive" if method == "projection" else "projection"
-        try:
-            n_other = mindyn.base_parameters(robot, method=other, snap=False).n
-        except BaseException as e:  # noqa: BLE001 - a refusal of the other method is its own
-            return "ok", f"{detail}; the {other} method refuses: {api_refusal(e)[1]}"
-        if n_other != bp.n:
-            return "wrong", f"{detail}; the {other} method gives {n_other} base parameters"
-        return cls, detail
+        return compare_exact(robot, method, bp, detail)
 
     return Case(
         "floating", index, f"base --root-joint floating {method} {path.name}", fn, argv, [path]

@@ -238,10 +238,47 @@ BaseSet makeSet(RankDecision decision, const std::vector<std::string>& names) {
   return set;
 }
 
+double robotLength(const Model& model);
+
+// The rates of the sampled states, per velocity coordinate: those of the unit-length model
+// (unitLengthModel: lengths in L, time in sqrt(L / 1 m) s, gravity kept), so that gravity weighs
+// against the motions as on the same shape a metre long, whatever the robot's size, as in the
+// exact methods. A rotation's rate and acceleration are scaled by 1 / tau and 1 / tau^2, a
+// translation's by L / tau and L / tau^2 (tau = sqrt(L)). (At rates of 1 rad/s a robot of 1e5 m
+// weighed gravity by g / L against its motions: a first moment only gravity reveals, on an axis
+// 4e-6 rad off vertical, fell under the rank tolerance.)
+struct StateScale {
+  Eigen::VectorXd velocity, acceleration;
+  explicit StateScale(const Model& model) {
+    const double L = robotLength(model), tau = std::sqrt(L);
+    // per velocity coordinate, 't' for a translation, 'r' for a rotation (model.hpp, JointType)
+    std::string kinds;
+    for (const Joint& j : model.joints)
+      kinds += j.type == JointType::Prismatic     ? "t"
+               : j.type == JointType::Cylindrical ? "tr"
+               : j.type == JointType::Planar      ? "ttr"
+               : j.type == JointType::FreeFlyer
+                   ? "tttrrr"
+                   : std::string(static_cast<std::size_t>(j.nv()), 'r');
+    const long nv = static_cast<long>(kinds.size());
+    velocity.resize(nv);
+    acceleration.resize(nv);
+    for (long i = 0; i < nv; ++i) {
+      const double length = kinds[static_cast<std::size_t>(i)] == 't' ? L : 1.0;
+      velocity[i] = length / tau;
+      acceleration[i] = length / (tau * tau);
+    }
+  }
+  void apply(Eigen::VectorXd& dq, Eigen::VectorXd& ddq) const {
+    dq.array() *= velocity.array();
+    ddq.array() *= acceleration.array();
+  }
+};
+
 // A random state: q within the joint limits (+-pi, or +-1 for a prismatic joint, where none are
-// given), dq and ddq uniform in [-2, 2].
+// given), dq and ddq uniform in [-2, 2] in the time unit of the unit-length model (StateScale).
 void randomState(const Model& model, std::mt19937& rng, Eigen::VectorXd& q, Eigen::VectorXd& dq,
-                 Eigen::VectorXd& ddq) {
+                 Eigen::VectorXd& ddq, const StateScale& scale) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int k = 0; k < model.nq(); ++k) {
     const JointLimits& l = model.joints[k].limits;
@@ -253,6 +290,29 @@ void randomState(const Model& model, std::mt19937& rng, Eigen::VectorXd& q, Eige
     dq[k] = 2.0 * u(rng);
     ddq[k] = 2.0 * u(rng);
   }
+  scale.apply(dq, ddq);
+}
+
+// The regressor at a state of randomState (the rates of the unit-length model), its friction
+// columns at the rates as given (those rates divided by the scale), `Wf` a work matrix of W's
+// size. Friction has velocity scales of its own (a smooth or Stribeck width, in rad/s or m/s):
+// at the rates of a robot of 1e5 m (1e-3 rad/s) tanh(v / w) is v / w to 1e-8, and its column
+// would regroup with the viscous one. The friction columns are functions of the rates alone and
+// independent of the link and rotor columns (which are polynomials of degree two in the rates),
+// so that evaluating them at other rates of the same states keeps every dependency.
+void sampledRegressor(const Model& model, Data& data, ParameterLayout layout,
+                      const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
+                      const Eigen::VectorXd& ddq, const StateScale& scale, MatOut W,
+                      Eigen::MatrixXd& Wf) {
+  regressor(model, data, q, dq, ddq, layout, W);
+  if (!layout.friction) return;
+  Wf.resize(W.rows(), W.cols());
+  const Eigen::VectorXd dq0 = dq.cwiseQuotient(scale.velocity);
+  const Eigen::VectorXd ddq0 = ddq.cwiseQuotient(scale.acceleration);
+  regressor(model, data, q, dq0, ddq0, layout, Wf);
+  for (int k = 0; k < model.nq(); ++k)
+    for (int i = 0; i < layout.friction_columns; ++i)
+      W.col(layout.frictionIndex(k, i)) = Wf.col(layout.frictionIndex(k, i));
 }
 
 // The dynamics the numerical method samples and the regrouping check evaluates, at a random
@@ -260,7 +320,7 @@ void randomState(const Model& model, std::mt19937& rng, Eigen::VectorXd& q, Eige
 // (multibody.hpp, inertial parameters only) on a model with multi-DOF joints.
 struct Dynamics {
   Dynamics(const Model& m, ParameterLayout l)
-      : model(m), layout(l), multi(!m.singleDof()), nv(m.velocitySize()) {
+      : model(m), layout(l), multi(!m.singleDof()), nv(m.velocitySize()), scale(m) {
     if (multi) {
       mb.emplace(model);
       q.resize(model.configSize());
@@ -272,19 +332,20 @@ struct Dynamics {
     ddq.resize(nv);
   }
   void randomState(std::mt19937& rng) {
-    if (!multi) return mindyn::randomState(model, rng, q, dq, ddq);
+    if (!multi) return mindyn::randomState(model, rng, q, dq, ddq, scale);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     randomConfiguration(model, rng, q);
     for (int i = 0; i < nv; ++i) {
       dq[i] = 2.0 * u(rng);
       ddq[i] = 2.0 * u(rng);
     }
+    scale.apply(dq, ddq);
   }
   void regressor(MatOut W) {
     if (multi)
       mindyn::regressor(model, *mb, q, dq, ddq, W);
     else
-      mindyn::regressor(model, *data, q, dq, ddq, layout, W);
+      sampledRegressor(model, *data, layout, q, dq, ddq, scale, W, Wf);
   }
   void energyRegressors(VecOut wK, VecOut wP) {
     if (multi)
@@ -311,6 +372,8 @@ struct Dynamics {
   ParameterLayout layout;
   bool multi;
   int nv;
+  StateScale scale;
+  Eigen::MatrixXd Wf;  // the regressor at the rates as given, for the friction columns
   std::optional<Data> data;
   std::optional<MultibodyData> mb;
   Eigen::VectorXd q, dq, ddq;
@@ -670,11 +733,17 @@ double robotLength(const Model& model) {
   return reach > 0 && std::isfinite(reach) ? std::exp2(std::round(std::log2(reach))) : 1.0;
 }
 
-// The model with every length divided by L (a power of two: exact) and gravity with it, so that
+// The model with every length divided by L (a power of two: exact) and gravity kept, so that
 // the exact methods form their coordinates at lengths of order one: their pruning of rounding
 // noise compares entries of a term that mix lengths to the first and second power, which at
-// kilometres or micrometres drops genuine entries. Coordinates of the scaled model times the
-// column units (columnUnits) are those of the model, row for row up to a power of L per row.
+// kilometres or micrometres drops genuine entries. Gravity kept is the model in the time unit
+// sqrt(L / 1 m) s: the potential rows weigh against the kinetic ones as on the same shape a metre
+// long, whatever its size. (Gravity divided by L weighed them by g / L: on a robot of 1e5 m a
+// column set apart by gravity alone, a prismatic rotor inertia beside its link's mass on an axis
+// 1e-5 rad off horizontal, fell under the rank tolerance in the projection method and not in the
+// recursive one, which measures directions.) Coordinates of the scaled model times the column
+// units (columnUnits) are those of the model, row for row up to a factor per row (a power of L,
+// and of the time unit for the kinetic rows): the same ranks and the same Y.
 Model unitLengthModel(const Model& model, double L) {
   Model m = model;
   for (int k = 0; k < m.nq(); ++k) {
@@ -688,7 +757,6 @@ Model unitLengthModel(const Model& model, double L) {
       if (m.friction_model.scaled() && !m.motorSide()) m.friction_model.velocity[k] /= L;
     }
   }
-  m.gravity /= L;
   m.tool.translation() /= L;
   // Motor positions per joint length: a prismatic joint's column of T in motor units per L, so
   // that the motors' positions, velocities and terms keep their units (column unit 1).
@@ -713,6 +781,11 @@ Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
     // prismatic joints it drives (unitLengthModel).
     if (model.joints[k].type == JointType::Prismatic && !model.motorSide())
       for (int c = c0 + 10; c < c0 + layout.perLink(); ++c) units[c] = L * L;
+    // Friction is sampled at the rates as given and the link columns at those of the
+    // unit-length model (StateScale): a revolute joint's friction measures against its
+    // accelerations, smaller by 1 / L, as a prismatic joint's does against its mass.
+    for (int i = 0; layout.friction && !prismatic && i < layout.friction_columns; ++i)
+      units[layout.frictionIndex(k, i)] = L;
   }
   return units;
 }
@@ -1026,6 +1099,8 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
       ZE = recursiveCoordinates(std::move(space.rows), units);
     }
     space.constant = space.constant * units.asDiagonal();
+    // normalised as the rows are (its size, gravity times a length, is no measure of them)
+    if (const double norm = space.constant.norm(); norm > 0) space.constant /= norm;
     // The constant first: it involves no joint, like the rows of the inner links, and leaves
     // the columns' last non-zero rows where they are. Then the rows with an entry off the
     // friction columns, without their friction entries.
@@ -1162,15 +1237,16 @@ void joinJointBlock(const Model& model, ParameterLayout layout, const BaseOption
   {
     Data data(model);
     std::mt19937 rng(options.seed);
+    const StateScale scale(model);
     Eigen::VectorXd q(n), dq(n), ddq(n);
-    Eigen::MatrixXd W(n, links.size(n));
+    Eigen::MatrixXd W(n, links.size(n)), Wf;
     A.leftCols(n).setZero();
     for (long s = 0; s < m; ++s) {
-      randomState(model, rng, q, dq, ddq);
+      randomState(model, rng, q, dq, ddq, scale);
       // at rest every fourth state: friction that is constant while a joint moves (Fa |sign v|)
       // is not constant then
       if (s % 4 == 0) dq.setZero();
-      regressor(model, data, q, dq, ddq, links, W);
+      sampledRegressor(model, data, links, q, dq, ddq, scale, W, Wf);
       for (int k = 0; k < n; ++k) A(s * n + k, k) = 1.0;
       for (int b = 0; b < nb; ++b) A.block(s * n, n + b, n, 1) = W.col(d.pivots[b]);
     }

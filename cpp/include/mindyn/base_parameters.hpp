@@ -80,10 +80,11 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
 
 /// Size of each column's coordinates in units of the robot's length L (its longest root path,
 /// joint offsets and prismatic travel added up from the base, rounded to a power of two): L^2 for
-/// the mass, L for the first moments, 1 for the inertia, rotor inertia and friction (L^2 for
-/// those of a prismatic joint, or of a motor driving only prismatic joints, which act on a
-/// force as a mass does); powers of two, so that
-/// scaling by them is exact.
+/// the mass, L for the first moments, 1 for the inertia and rotor inertia, L for friction (the
+/// numerical method samples it at the rates as given, the other columns at those of the
+/// unit-length model, time in sqrt(L / 1 m) s); L^2 for the rotor inertia and friction of a
+/// prismatic joint, or of a motor driving only prismatic joints, which act on a force as a mass
+/// does. Powers of two, so that scaling by them is exact.
 Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout);
 
 /// The conventional (Khalil) priority order: link by link from the base; in each link
