@@ -779,7 +779,8 @@ Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
     // A prismatic joint's rotor inertia and friction act on its force as a mass does. A motor's
     // (the motor side) keep their units: the scaled model's T carries the length of the
     // prismatic joints it drives (unitLengthModel).
-    if (model.joints[k].type == JointType::Prismatic && !model.motorSide())
+    const bool prismatic = model.joints[k].type == JointType::Prismatic && !model.motorSide();
+    if (prismatic)
       for (int c = c0 + 10; c < c0 + layout.perLink(); ++c) units[c] = L * L;
     // Friction is sampled at the rates as given and the link columns at those of the
     // unit-length model (StateScale): a revolute joint's friction measures against its
