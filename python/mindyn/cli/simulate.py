@@ -12,7 +12,15 @@ from .outputs import output_file
 from .robot_options import add_drive_side, add_robot, drive_side_words, load_robot, with_drive_side
 
 #: The options of the closed loop, which --mode inverse (no controller) does not take
-TRACKING_ONLY = ("controller", "gains", "param_error", "substeps", "integrator", "torque_limit")
+TRACKING_ONLY = (
+    "controller",
+    "gains",
+    "param_error",
+    "substeps",
+    "integrator",
+    "torque_limit",
+    "tracking_tolerance",
+)
 
 
 def _check_mode(args: argparse.Namespace) -> None:

@@ -834,8 +834,10 @@ def coulomb_friction(robot: Robot, params) -> np.ndarray:
     """The largest Coulomb friction torque (force) on each joint, (n,), of the robot of
     classical ``params`` (full layout, :func:`plant_parameters`): its ``Fc`` per joint, or,
     friction on the motors, ``sum_k |t_ki| Fc_k`` through the drive matrix."""
-    names = robot.parameter_names(rotor=True, friction=True)
+    _args.instance(robot, "robot", Robot)
     size = robot.layout_sizes[3]
+    params = _args.array(params, "params", (size * robot.n,))
+    names = robot.parameter_names(rotor=True, friction=True)
     cols = [k for k in range(size) if names[k].startswith("Fc")]
     p = np.asarray(params, dtype=float).reshape(robot.n, size)
     fc = np.abs(p[:, cols]).sum(axis=1) if cols else np.zeros(robot.n)
@@ -949,7 +951,7 @@ def default_gains(
         g.conflicts[kind] += (
             f" at a period of {T:g} s"
             + (f"; a period of {shorter:.3g} s allows both" if shorter else "; no period does")
-            + " (or give gains, or a larger --tolerance)"
+            + " (or give gains, or a larger tracking tolerance)"
         )
         g.note += f"; {kind} REFUSED with these gains: {g.conflicts[kind]}"
     return g
@@ -1120,11 +1122,13 @@ def _yaml_number(v):
     return None
 
 
-def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=None) -> Gains:
+def load_gains(
+    path: str | Path, robot: Robot, *, period: float = 0.004, rotor=None, tolerance=None
+) -> Gains:
     """Gains from a YAML file with keys ``kd``, ``lambda``, ``gamma``, ``nu`` (adaptation-step
     normalisation, a scalar), ``kp`` (numbers or lists of numbers; a key given twice, a boolean
     or a string is refused; missing keys take :func:`default_gains` at ``period`` for
-    ``rotor``)."""
+    ``rotor`` and ``tolerance``)."""
     _args.path(path, "path")
     _args.instance(robot, "robot", Robot)
     _args.optional(_args.flag, rotor, "rotor")
@@ -1153,7 +1157,7 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
             f"{path}: unknown key(s) {', '.join(sorted(unknown))}; "
             "expected kd, lambda, gamma, nu, kp"
         )
-    gains = default_gains(robot, period=period, rotor=rotor)
+    gains = default_gains(robot, period=period, rotor=rotor, tolerance=tolerance)
     given = []
     for key, value in data.items():
         items = value if isinstance(value, list) else [value]
