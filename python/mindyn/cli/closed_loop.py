@@ -42,6 +42,7 @@ def add_tolerance_arg(p) -> None:
     number(
         p,
         "--tracking-tolerance",
+        metavar="DEG",
         low=0,
         high=360,
         low_open=True,
