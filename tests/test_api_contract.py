@@ -224,6 +224,11 @@ def _api(tmp: Path) -> dict:
                 (ROBOT, P13),
                 {},
             ),
+            "control.controllers.friction_shortfall": (
+                controllers.friction_shortfall,
+                (ROBOT,),
+                {"rotor": True},
+            ),
             "control.controllers.friction_bound": (
                 controllers.friction_bound,
                 (ROBOT,),

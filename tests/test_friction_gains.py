@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from conftest import ROBOTS_DIR
 from mindyn import control
+from mindyn.cli import main
 
 XARM7 = ROBOTS_DIR / "xarm_description/urdf/xarm7.urdf"
 TOL_DEG = 2.0  # the stated default tolerance
@@ -127,3 +128,19 @@ def test_xarm7_at_4ms_holds_its_wrist_or_is_refused():
     ct = control.make_controller("computed-torque", robot, at, period=shorter)
     r = control.simulate(robot, ref, ct, rate=1.0 / shorter, duration=1.0, **run)
     assert np.all(r.max_error_deg() <= TOL_DEG)
+
+
+def test_simulate_states_where_its_default_controller_leaves_friction_unheld(tmp_path, capsys):
+    """``simulate --friction`` with the simulator's own computed torque (K_P = 20^2 M): on the
+    heavy/light robot the light joint's 2 Fc / K_P (0.2 N m over 400 x 5e-3 kg m^2: 11.5 deg)
+    exceeds half the tolerance and the output says so, naming joint 2 alone; with a tolerance
+    of 30 deg it is silent."""
+    urdf = two_joint_urdf(tmp_path / "hl.urdf")
+    argv = ["simulate", urdf, "--friction", "--duration", "1", "-o", str(tmp_path / "s.csv")]
+    assert main(argv) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "2 Fc / K_P" in x)
+    expected = math.degrees(2 * 0.2 / (400 * 5e-3))
+    found = re.search(r"joint\(s\) (.*?): the joints", line)
+    assert found and found.group(1) == f"2 (up to {expected:.3g} deg)"
+    assert main([*argv, "--tracking-tolerance", "30"]) == 0
+    assert "2 Fc / K_P" not in capsys.readouterr().out

@@ -58,6 +58,7 @@ __all__ = [
     "default_gains",
     "estimate_box",
     "friction_bound",
+    "friction_shortfall",
     "load_gains",
     "make_controller",
     "perturbed_parameters",
@@ -1297,6 +1298,36 @@ def make_controller(
             ctl.box_note = "estimate box: none"
     ctl.true_model = true
     return ctl
+
+
+def friction_shortfall(
+    robot: Robot, *, rotor: bool = True, omega: float = 20.0, tolerance=None
+) -> str:
+    """For :func:`default_controller` (``K_P = omega^2`` on the mass matrix) on the robot with
+    (``rotor``) or without its rotor inertia: one line naming the joints where its position gain
+    ``omega^2 min_q M_ii`` (the mass matrix sampled over the workspace) leaves Coulomb friction an
+    error ``2 Fc / K_P`` above the friction's share of ``tolerance`` (:func:`friction_bound`),
+    with that error; empty when none does."""
+    _args.instance(robot, "robot", Robot)
+    rotor = _args.flag(rotor, "rotor")
+    omega = _args.number(omega, "omega", positive=True)
+    from .stability import workspace_samples
+
+    kp_min, tol = friction_bound(robot, tolerance=tolerance)
+    qs = workspace_samples(robot)
+    m = np.diagonal(robot.mass_matrix(qs, plant_parameters(robot, rotor)), axis1=1, axis2=2)
+    kp = omega**2 * m.min(axis=0)
+    short = np.flatnonzero(kp < kp_min)
+    if not short.size:
+        return ""
+    error = kp_min * FRICTION_SHARE * tol / kp  # 2 Fc / K_P
+    return (
+        f"the default computed torque (K_P = {omega:g}^2 M) leaves Coulomb friction an error "
+        "2 Fc / K_P above half the tracking tolerance on joint(s) "
+        + ", ".join(f"{i + 1} (up to {_unit(robot, i, error[i], 'angle')})" for i in short)
+        + ": the joints may wander at velocity reversals; --param-error 0 takes the default "
+        "gains, which hold it or are refused"
+    )
 
 
 def default_controller(
