@@ -219,6 +219,21 @@ def _api(tmp: Path) -> dict:
         **_multidof_api(),
         **{
             "control.controllers.check_period": (controllers.check_period, (0.004,), {}),
+            "control.controllers.coulomb_friction": (
+                controllers.coulomb_friction,
+                (ROBOT, P13),
+                {},
+            ),
+            "control.controllers.friction_shortfall": (
+                controllers.friction_shortfall,
+                (ROBOT,),
+                {"rotor": True},
+            ),
+            "control.controllers.friction_bound": (
+                controllers.friction_bound,
+                (ROBOT,),
+                {"tolerance": 0.01},
+            ),
             "control.controllers.controller_check": (
                 controllers.controller_check,
                 (ROBOT, pd, P13, 0.004),

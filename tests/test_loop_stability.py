@@ -300,7 +300,9 @@ def test_the_default_estimate_error_keeps_a_physical_robot():
 
 def test_zcr07s_study_gains_kept_where_stable_and_said_where_not():
     """The study's gains at 4 ms on the robot with its rotor inertia (stable: kept); at 30 ms the
-    check finds them unstable, the note says so, and a run with them diverges (simulated)."""
+    check finds them unstable, the note says so, and a run with them diverges (simulated); the
+    derived PD gains at 30 ms cannot hold the wrist's Coulomb friction within the default
+    tolerance (refused), and run with a wider one."""
     robot = mindyn.load("zcr07s")
     study = control.controllers.ZCR07S_STUDY_GAINS
     kept = control.default_gains(robot, period=0.004, rotor=True)
@@ -313,7 +315,12 @@ def test_zcr07s_study_gains_kept_where_stable_and_said_where_not():
     pd = control.make_controller("pd", robot, study, period=0.03)
     with pytest.raises(control.UnstableLoopError, match="diverged"):
         simulate(robot, ref, lambda *a: pd(*a), rate=1 / 0.03, duration=3.0, rotor=True)
-    ok = control.make_controller("pd", robot, other, period=0.03)
+    # at 30 ms no PD gains both hold 2 degrees against the wrist's Coulomb friction and keep
+    # the sampled loop's margin: refused; with a wider tolerance the derived gains run
+    with pytest.raises(control.ControllerSettingError, match="joint 6.*a period of"):
+        control.make_controller("pd", robot, other, period=0.03)
+    wide = control.default_gains(robot, period=0.03, rotor=True, tolerance=math.radians(20.0))
+    ok = control.make_controller("pd", robot, wide, period=0.03)
     simulate(robot, ref, lambda *a: ok(*a), rate=1 / 0.03, duration=3.0, rotor=True)
 
 

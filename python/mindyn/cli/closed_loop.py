@@ -25,6 +25,35 @@ def check_controller_options(args: argparse.Namespace) -> None:
         )
 
 
+def joint_tolerance(robot, degrees):
+    """``--tracking-tolerance`` (degrees on revolute joints, millimetres on prismatic ones) as the
+    per-joint tolerance of :func:`mindyn.control.default_gains` [rad | m]; None for None."""
+    if degrees is None:
+        return None
+    import math
+
+    return [
+        degrees * 1e-3 if t == "prismatic" else math.radians(degrees) for t in robot.joint_types
+    ]
+
+
+def add_tolerance_arg(p) -> None:
+    """``--tracking-tolerance``: what the default gains hold against Coulomb friction."""
+    number(
+        p,
+        "--tracking-tolerance",
+        metavar="DEG",
+        low=0,
+        high=360,
+        low_open=True,
+        help="tracking tolerance the default gains hold against each joint's Coulomb friction "
+        "[deg; mm on prismatic joints] (default 2): K_P >= 2 Fc / (tolerance / 2), the "
+        "friction's steady error taking half of it; where the sampled loop at the controller "
+        "period cannot also keep its gain margin, the controller is refused in one line naming "
+        "the joint and a period that allows both",
+    )
+
+
 def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     """The reference, its text, the simulated time, the per-cycle span and the controller of
     ``mindyn track`` and ``mindyn simulate`` (``--trajectory``, ``--cycle``, ``--controller``,
@@ -73,10 +102,13 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         return reference, ref_text, duration, cycle, None, None  # the simulator's default
     # the simulated robot: track's has rotor inertia and friction, simulate's as its flags say
     rotor, friction = getattr(args, "rotor", True), getattr(args, "friction", True)
+    tolerance = joint_tolerance(robot, getattr(args, "tracking_tolerance", None))
     if args.gains:
-        gains = control.load_gains(args.gains, robot, period=period, rotor=rotor)
+        gains = control.load_gains(
+            args.gains, robot, period=period, rotor=rotor, tolerance=tolerance
+        )
     else:
-        gains = control.default_gains(robot, period=period, rotor=rotor)
+        gains = control.default_gains(robot, period=period, rotor=rotor, tolerance=tolerance)
     base = p_hat = None
     if args.controller != "pd":
         from ..control.controllers import base_values, plant_parameters
@@ -124,6 +156,7 @@ def add_closed_loop_args(p, default: str) -> None:
         help="YAML with kd, lambda, gamma, nu (adaptive PD) and optionally kp (PD: default "
         "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
     )
+    add_tolerance_arg(p)
     p.add_argument(
         "--estimate-box",
         choices=["derived", "none"],

@@ -10,6 +10,7 @@ from .._core import ModelError
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, FUNCTIONS, generate
 from .args import add_command
+from .closed_loop import add_tolerance_arg
 from .codegen_output import (
     DEFAULT_FOLDER,
     OBSERVER,
@@ -149,6 +150,7 @@ def register(subparsers) -> None:
     controller_period(
         c, help=f"controller period [s] of the controller and observer steps (default {PERIOD:g})"
     )
+    add_tolerance_arg(c)
     joint_vector(
         c,
         "--observer-gain",
@@ -250,7 +252,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         return _controller(args, robot, base, out, given, note)
     if args.observer_gain is not None:
         raise ModelError(f"--observer-gain applies to --what {OBSERVER} only")
-    for opt in ("gains", "torque_limit", "box"):
+    for opt in ("gains", "torque_limit", "box", "tracking_tolerance"):
         if getattr(args, opt) is not None:
             raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
     if args.period is not None:  # the functions of q have no period

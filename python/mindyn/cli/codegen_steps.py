@@ -72,10 +72,15 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
         raise ModelError(
             f"--controller-period must be a positive number of seconds, got {args.period:g}"
         )
+    from .closed_loop import joint_tolerance
+
+    tolerance = joint_tolerance(robot, args.tracking_tolerance)
     if args.gains:
-        gains = control.load_gains(args.gains, robot, period=args.period, rotor=True)
+        gains = control.load_gains(
+            args.gains, robot, period=args.period, rotor=True, tolerance=tolerance
+        )
     else:
-        gains = control.default_gains(robot, period=args.period, rotor=True)
+        gains = control.default_gains(robot, period=args.period, rotor=True, tolerance=tolerance)
     limit = args.torque_limit
     if limit is not None and limit != "effort":
         try:

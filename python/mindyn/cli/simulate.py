@@ -12,7 +12,15 @@ from .outputs import output_file
 from .robot_options import add_drive_side, add_robot, drive_side_words, load_robot, with_drive_side
 
 #: The options of the closed loop, which --mode inverse (no controller) does not take
-TRACKING_ONLY = ("controller", "gains", "param_error", "substeps", "integrator", "torque_limit")
+TRACKING_ONLY = (
+    "controller",
+    "gains",
+    "param_error",
+    "substeps",
+    "integrator",
+    "torque_limit",
+    "tracking_tolerance",
+)
 
 
 def _check_mode(args: argparse.Namespace) -> None:
@@ -93,9 +101,17 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             f"  controller {info['controller']}; max tracking error per joint [deg]: "
             + " ".join(f"{e:.3g}" for e in err)
         )
+        shortfall = ""
+        if controller is None and args.friction:  # the simulator's default computed torque
+            from ..control.controllers import friction_shortfall
+            from .closed_loop import joint_tolerance
+
+            tolerance = joint_tolerance(robot, args.tracking_tolerance)
+            shortfall = friction_shortfall(robot, rotor=args.rotor, tolerance=tolerance)
         for note in (
             getattr(getattr(controller, "gains", None), "note", ""),
             info.get("stability"),
+            shortfall,
         ):
             if note:
                 print(f"  {note}")

@@ -135,9 +135,11 @@ def generate_controller(
         ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
         gives them (the default: for ``period``, the robot with its rotor inertia). Gains that
         no sampled loop at ``period`` tolerates are refused
-        (:func:`mindyn.control.check_sampled_gains`). ``kp`` defaults to ``lambda**2`` for
-        computed torque (with ``kd = 2 lambda``, as :func:`mindyn.control.make_controller`) and
-        ``lambda kd`` for gravity compensation.
+        (:func:`mindyn.control.check_sampled_gains`), and so are default gains whose
+        ``conflicts`` name the controller (they cannot hold its Coulomb friction at
+        ``period``). ``kp`` defaults to ``lambda**2`` for computed torque (with ``kd = 2
+        lambda``, as :func:`mindyn.control.make_controller`) and ``lambda kd`` for gravity
+        compensation.
     params : path or array, optional
         The initial estimate ``p0`` (a file as :func:`read_parameter_file` reads it, e.g. the JSON
         of ``mindyn identify --json``); default the robot's own values.
@@ -161,6 +163,7 @@ def generate_controller(
     if base is not None and base is not False:
         _args.instance(base, "base", BaseParameters, "a BaseParameters, False or None")
     period = _args.number(period, "period", positive=True)
+    conflicts = getattr(gains, "conflicts", {})
     gains = None if gains is None else _gains(gains)
     if isinstance(tau_max, str) and tau_max != "effort":
         raise _args.fail("tau_max", f"is '{tau_max}'; expected None, 'effort' or {robot.n} values")
@@ -173,7 +176,13 @@ def generate_controller(
     else:
         names = list(bp.names)
     n = robot.n
-    g = dict(control.default_gains(robot, period=period, rotor=True) if gains is None else gains)
+    check = "pd" if kind == "gravity-compensation" else kind
+    if gains is None:
+        gains = control.default_gains(robot, period=period, rotor=True)
+        conflicts = gains.conflicts
+    if conflicts.get(check):  # default gains that cannot hold the friction: as make_controller
+        raise control.ControllerSettingError(f"default gains for {check}: {conflicts[check]}")
+    g = dict(gains)
     lam = _setting(g.get("lambda"), n, "lambda", 10.0)
     s: dict[str, Any] = {"lambda": lam, "period": float(period), "nu": float(g.get("nu", 0.0))}
     if kind == "computed-torque":
@@ -185,7 +194,6 @@ def generate_controller(
         with np.errstate(over="ignore"):  # an infinite product is refused just below
             s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam * s["kd"]
     s["gamma"] = _setting(g.get("gamma"), len(names), "gamma", 1.0)
-    check = "pd" if kind == "gravity-compensation" else kind
     control.check_sampled_gains(check, s["kp"], s["kd"], lam, period)
     big = control.controllers.MAX_GAIN
     if not (np.all(s["gamma"] >= 0) and np.all(s["gamma"] <= big) and 0 <= s["nu"] <= big):

@@ -54,8 +54,11 @@ __all__ = [
     "check_period",
     "check_sampled_gains",
     "controller_check",
+    "coulomb_friction",
     "default_gains",
     "estimate_box",
+    "friction_bound",
+    "friction_shortfall",
     "load_gains",
     "make_controller",
     "perturbed_parameters",
@@ -479,9 +482,12 @@ class AdaptivePD:
 class Gains(dict):
     """Gains as :func:`default_gains` and :func:`load_gains` give them (``kd``, ``lambda``,
     ``gamma`` and optionally ``nu``, ``kp``), with ``note``: how they were chosen and the check
-    of their sampled loops at the period (text, empty when nothing is to be said)."""
+    of their sampled loops at the period (text, empty when nothing is to be said), and
+    ``conflicts``: for each controller whose sampled loop cannot hold the friction bound at the
+    period (:func:`default_gains`), the one-line reason; :func:`make_controller` refuses it."""
 
     note: str = ""
+    conflicts: dict = {}  # replaced, never mutated, per instance
 
 
 def plant_parameters(robot: Robot, rotor: bool, *, friction: bool = True) -> np.ndarray:
@@ -817,11 +823,75 @@ def estimate_box(
 #: Bandwidth of the derived default gains where the period allows it [rad/s]: ``Lambda``
 #: (position error) and ``K_D`` per unit of effective inertia.
 DEFAULT_LAMBDA, DEFAULT_KD_PER_INERTIA = 10.0, 40.0
+#: The tracking tolerance the default gains hold against Coulomb friction (revolute [rad],
+#: prismatic [m]): 2 degrees, 2 mm.
+DEFAULT_TOLERANCE = (math.radians(2.0), 0.002)
+#: The share of the tolerance left to Coulomb friction's steady error ``2 Fc / K_P``; the rest
+#: is for what the feedback leaves of the dynamics (the lag of the sampled loop, model error).
+FRICTION_SHARE = 0.5
 
 
-def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = None) -> Gains:
+def coulomb_friction(robot: Robot, params) -> np.ndarray:
+    """The largest Coulomb friction torque (force) on each joint, (n,), of the robot of
+    classical ``params`` (full layout, :func:`plant_parameters`): its ``Fc`` per joint, or,
+    friction on the motors, ``sum_k |t_ki| Fc_k`` through the drive matrix."""
+    _args.instance(robot, "robot", Robot)
+    size = robot.layout_sizes[3]
+    params = _args.array(params, "params", (size * robot.n,))
+    names = robot.parameter_names(rotor=True, friction=True)
+    cols = [k for k in range(size) if names[k].startswith("Fc")]
+    p = np.asarray(params, dtype=float).reshape(robot.n, size)
+    fc = np.abs(p[:, cols]).sum(axis=1) if cols else np.zeros(robot.n)
+    return np.abs(robot.drive_matrix).T @ fc if robot.drive_side == "motor" else fc
+
+
+def friction_bound(robot: Robot, *, tolerance=None) -> tuple[np.ndarray, np.ndarray]:
+    """``(kp_min, tolerance)`` (n,) each: the smallest position gain ``K_P`` [N m/rad | N/m]
+    that holds each joint within ``tolerance`` (a number or n, in the joint's unit; default
+    :data:`DEFAULT_TOLERANCE`) against its Coulomb friction (:func:`coulomb_friction` of the
+    description): ``K_P >= 2 Fc / (s tolerance)``, the friction's share ``s``
+    (:data:`FRICTION_SHARE`) of the tolerance.
+
+    At a velocity reversal the model's Coulomb term (on the reference velocity, or left out)
+    and the robot's (on its own velocity) differ by up to ``2 Fc``, a torque the feedback
+    alone must hold: a PD loop ``-K_P e - K_D de`` settles where ``K_P |e| = 2 Fc`` (and the
+    velocity loop keeps ``|de|`` within ``Fc / K_D``), so ``|e| <= 2 Fc / K_P``; below the bound
+    the error that friction leaves is larger than the tolerance, and a joint whose friction
+    exceeds its gains by far wanders (the loop never corrects an error of less than
+    ``Fc / K_P``)."""
+    _args.instance(robot, "robot", Robot)
+    rev = np.array([t != "prismatic" for t in robot.joint_types])
+    if tolerance is None:
+        tol = np.where(rev, *DEFAULT_TOLERANCE)
+    else:
+        tol = (
+            np.full(robot.n, _args.number(tolerance, "tolerance", positive=True))
+            if np.ndim(tolerance) == 0
+            else _args.array(tolerance, "tolerance", (robot.n,))
+        )
+        if not np.all(np.isfinite(tol) & (tol > 0)):
+            raise _args.fail(
+                "tolerance", f"must be positive and finite, got {np.asarray(tolerance).tolist()}"
+            )
+    fc = coulomb_friction(robot, plant_parameters(robot, True))
+    return 2.0 * fc / (FRICTION_SHARE * tol), np.array(tol, dtype=float)
+
+
+def _unit(robot: Robot, i: int, value: float, what: str) -> str:
+    """``value`` of joint ``i`` in degrees / mm (``what`` "angle") or N m/rad / N/m ("gain")."""
+    prismatic = robot.joint_types[i] == "prismatic"
+    if what == "angle":
+        return f"{value * 1e3:.3g} mm" if prismatic else f"{math.degrees(value):.3g} deg"
+    return f"{value:.3g} N/m" if prismatic else f"{value:.3g} N m/rad"
+
+
+def default_gains(
+    robot: Robot, *, period: float = 0.004, rotor: bool | None = None, tolerance=None
+) -> Gains:
     """Default gains, stable at the controller ``period`` [s] for the simulated robot with
-    rotor inertia (``rotor=True``), without (``False``) or either (``None``).
+    rotor inertia (``rotor=True``), without (``False``) or either (``None``), and holding each
+    joint within ``tolerance`` (a number or n; default :data:`DEFAULT_TOLERANCE`) against its
+    Coulomb friction.
 
     ``zcr07s``: the ZCR07S study's gains when their sampled loops are stable at ``period``
     (otherwise the note says so and the derived gains follow). Derived gains, from the mass
@@ -831,20 +901,68 @@ def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = N
     and ``Lambda = 10``, lowered where the period requires (``K_D,i`` to ``2 m_i / (3 T)``,
     ``Lambda`` to ``1 / (3 T)``, then all gains by one factor) until the sampled loops of PD,
     computed torque and adaptive PD with the true model (:func:`check_gains`) keep a gain
-    margin of
-    :data:`~mindyn.control.stability.GAIN_MARGIN`; adaptation gains 1 with the step normalised
-    by ``nu = 3 Gamma T / min K_D`` (the sampled update is an integral action on ``s`` of gain
-    ``K_I = T Y Gamma Y^T / (1 + nu |Y|^2)`` per period, stable for
-    ``lambda_max(K_D^-1/2 K_I K_D^-1/2) < 1``,
+    margin of :data:`~mindyn.control.stability.GAIN_MARGIN`.
+
+    The lower bound: each joint's position gain must reach ``kp_min = 2 Fc / tolerance``
+    (:func:`friction_bound`): ``Lambda_i`` is raised (up to ``1 / (3 T)``) until the computed
+    torque's ``min_q M_ii Lambda_i^2`` reaches it, then ``K_D,i`` until ``Lambda_i K_D,i``
+    (PD, adaptive PD) does; the lowering for the period stops at these floors. Where a
+    controller's loop cannot have both at ``period`` (its gain margin below
+    :data:`~mindyn.control.stability.GAIN_MARGIN` at the floors, or, computed torque,
+    ``Lambda_i`` above ``1 / (3 T)``), ``conflicts[kind]`` holds a one-line message naming
+    the joint and a period that allows both (found by halving the period), and
+    :func:`make_controller` refuses that controller with these gains. With ``rotor=None``
+    and a conflict on either plant, the gains are derived without the lower bound and the note
+    says so (the friction of a geared robot's description belongs to its drives: without their
+    rotor inertia a wrist is far lighter than the robot's).
+
+    Adaptation gains 1 with the step normalised by ``nu = 3 Gamma T / min K_D`` (the sampled
+    update is an integral action on ``s`` of gain ``K_I = T Y Gamma Y^T / (1 + nu |Y|^2)`` per
+    period, stable for ``lambda_max(K_D^-1/2 K_I K_D^-1/2) < 1``,
     :func:`~mindyn.control.stability.adaptation_step_ratio`; this ``nu`` keeps it below a third
-    for any ``Y``). ``kp`` for PD is
-    ``Lambda K_D``; computed torque uses ``K_P = Lambda^2``, ``K_D = 2 Lambda``. The result's
-    ``note`` states the choice and the margin."""
+    for any ``Y``). ``kp`` for PD is ``Lambda K_D``; computed torque uses ``K_P = Lambda^2``,
+    ``K_D = 2 Lambda``. The result's ``note`` states the choice, the friction bound and the
+    margin."""
     _args.instance(robot, "robot", Robot)
     _args.optional(_args.flag, rotor, "rotor")
+    T = check_period(period)
+    kp_min, tol = friction_bound(robot, tolerance=tolerance)
+    g = _default_gains(robot, T, rotor, kp_min, tol)
+    if rotor is None and g.conflicts:  # no gains hold the friction on both plants: unbound
+        which = ", ".join(g.conflicts)
+        g = _default_gains(robot, T, rotor, np.zeros(robot.n), tol)
+        g.note += (
+            f"; NOT held against Coulomb friction ({which} cannot hold K_P >= 2 Fc / "
+            f"({FRICTION_SHARE:g} tolerance) on the robot both with and without rotor inertia "
+            f"at {T:g} s): the error friction leaves is up to 2 Fc / K_P; derive the gains for "
+            "one of them (rotor True or False)"
+        )
+        return g
+    for kind in list(g.conflicts):
+        shorter = T
+        for _ in range(12):  # down to T / 4096
+            shorter /= 2.0
+            if shorter < MIN_PERIOD:
+                shorter = 0.0
+                break
+            if kind not in _default_gains(robot, shorter, rotor, kp_min, tol).conflicts:
+                break
+        else:
+            shorter = 0.0
+        g.conflicts[kind] += (
+            f" at a period of {T:g} s"
+            + (f"; a period of {shorter:.3g} s allows both" if shorter else "; no period does")
+            + " (or give gains, or a larger tracking tolerance)"
+        )
+        g.note += f"; {kind} REFUSED with these gains: {g.conflicts[kind]}"
+    return g
+
+
+def _default_gains(robot: Robot, T: float, rotor, kp_min, tol) -> Gains:
+    """:func:`default_gains` at ``T`` with the friction floors ``kp_min`` (of ``tol``), the
+    conflicts without the period that resolves them."""
     from .stability import GAIN_MARGIN, workspace_samples
 
-    T = check_period(period)
     qs = workspace_samples(robot)
 
     def checks(g):
@@ -861,6 +979,7 @@ def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = N
         g = Gains(
             {k: (list(v) if isinstance(v, list) else v) for k, v in ZCR07S_STUDY_GAINS.items()}
         )
+        g.conflicts = {}
         lam_ok = np.all(np.asarray(g["lambda"]) * T < 2.0)
         cs = checks(g) if lam_ok else []
         if lam_ok and all(c.stable for c in cs):
@@ -871,33 +990,93 @@ def default_gains(robot: Robot, *, period: float = 0.004, rotor: bool | None = N
             return g
         why = next((c.text() for c in cs if not c.stable), f"Lambda T >= 2 at {T:g} s")
         prefix = f"the ZCR07S study's gains are NOT stable at this period ({why}); instead "
-    inv = [
-        np.linalg.inv(robot.mass_matrix(qs, plant_parameters(robot, r)))
-        for r in _rotor_cases(rotor)
-    ]
+    masses = [robot.mass_matrix(qs, plant_parameters(robot, r)) for r in _rotor_cases(rotor)]
+    inv = [np.linalg.inv(m) for m in masses]
     m_eff = 1.0 / np.max([np.diagonal(m, axis1=1, axis2=2).max(0) for m in inv], axis=0)
-    lam = np.full(robot.n, min(DEFAULT_LAMBDA, 1.0 / (GAIN_MARGIN * T)))
+    m_diag = np.min([np.diagonal(m, axis1=1, axis2=2).min(0) for m in masses], axis=0)
+    lam_max = 1.0 / (GAIN_MARGIN * T)
+    lam = np.full(robot.n, min(DEFAULT_LAMBDA, lam_max))
     kd = np.minimum(DEFAULT_KD_PER_INERTIA, 2.0 / (GAIN_MARGIN * T)) * m_eff
+    # the friction floors: computed torque's M_ii Lambda^2, then PD's Lambda K_D
+    lam_ct = np.sqrt(kp_min / m_diag)
+    lam_floor = np.minimum(lam_ct, lam_max)
+    lam = np.maximum(lam, lam_floor)
+    # where computed torque cannot reach the floor anyway (refused below), Lambda up to
+    # 2 / (3 T) (Lambda T < 2 with the margin) before K_D: a joint whose viscous friction is
+    # fast beside the period tolerates K_P, not K_D
+    up = (lam_ct > lam_max) & (kp_min > lam * kd)
+    lam_floor = np.where(up, 2.0 * lam_max, lam_floor)
+    lam = np.maximum(lam, lam_floor)
+    kd = np.maximum(kd, kp_min / lam)
+    conflicts = {}
+    short = np.flatnonzero(lam_ct > lam_max * (1 + 1e-12))
+    if short.size:
+        i = int(short[np.argmax(lam_ct[short] / lam_max)])
+        conflicts["computed-torque"] = (
+            f"joint {i + 1}: its Coulomb friction needs K_P >= {_unit(robot, i, kp_min[i], 'gain')}"
+            f" (2 Fc / {FRICTION_SHARE:g} of a tolerance of {_unit(robot, i, tol[i], 'angle')}),"
+            " computed torque "
+            f"Lambda >= {lam_ct[i]:.4g} on its inertia {m_diag[i]:.3g}, and a sampled loop "
+            f"with a gain margin of {GAIN_MARGIN:g} needs Lambda <= 1 / ({GAIN_MARGIN:g} T)"
+        )
     scale = 1.0
     for _ in range(40):
-        g = Gains(kd=(scale * kd).tolist(), **{"lambda": (scale * lam).tolist()}, gamma=1.0)
+        lam_s = np.maximum(scale * lam, lam_floor)
+        kd_s = np.maximum(scale * kd, kp_min / lam_s)
+        g = Gains(kd=kd_s.tolist(), **{"lambda": lam_s.tolist()}, gamma=1.0)
         g["nu"] = GAIN_MARGIN * g["gamma"] * T / min(g["kd"])
         cs = checks(g)
-        worst = min(c.gain_margin for c in cs)
-        if worst >= GAIN_MARGIN:
+        low = [c for c in cs if c.gain_margin < GAIN_MARGIN and c.kind not in conflicts]
+        if not low:
             break
+        floored = np.all(kd_s <= kp_min / lam_s * (1 + 1e-9))
+        if floored and scale * lam.max() <= lam_floor.min():
+            break
+        worst = min(c.gain_margin for c in low)
         scale *= max(0.1, min(0.9, worst / GAIN_MARGIN))
-    else:
+    if low and np.all(kp_min == 0):
         raise ControllerSettingError(
             f"no default gains keep a gain margin of {GAIN_MARGIN:g} at a period of {T:g} s "
             f"for '{robot.name}' (margins {margin_text(cs)}): give gains"
         )
+    held = kp_min > 0
+    for c in low:
+        at_floor = np.flatnonzero(held & (kd_s <= kp_min / lam_s * (1 + 1e-9)))
+        # the joint whose floor is hardest on the sampled loop: largest K_P T^2 / m
+        stiff = kp_min * T * T / m_eff
+        i = int(at_floor[np.argmax(stiff[at_floor])]) if at_floor.size else int(np.argmax(stiff))
+        conflicts[c.kind] = (
+            f"joint {i + 1}: its Coulomb friction needs K_P >= {_unit(robot, i, kp_min[i], 'gain')}"
+            f" (2 Fc / {FRICTION_SHARE:g} of a tolerance of {_unit(robot, i, tol[i], 'angle')}),"
+            " and the sampled "
+            f"{c.kind} loop with it keeps a gain margin of {c.gain_margin:.3g}, below "
+            f"{GAIN_MARGIN:g}"
+        )
+    g.conflicts = conflicts
     lowered = scale < 1.0 or np.any(lam < DEFAULT_LAMBDA)
+    raised = np.flatnonzero(
+        held & (kd_s * lam_s > (DEFAULT_LAMBDA * DEFAULT_KD_PER_INERTIA * m_eff) * (1 + 1e-9))
+    )
+    bound = (
+        f"; held against Coulomb friction: K_P >= 2 Fc / ({FRICTION_SHARE:g} tolerance) (joint "
+        + ", ".join(f"{i + 1} {_unit(robot, i, kp_min[i], 'gain')}" for i in np.flatnonzero(held))
+        + "; tolerance "
+        + ", ".join(sorted({_unit(robot, i, t, "angle") for i, t in enumerate(tol)}))
+        + (
+            f"; Lambda and K_D raised to it on joint(s) {', '.join(str(i + 1) for i in raised)}"
+            if raised.size
+            else ""
+        )
+        + ")"
+        if held.any()
+        else "; no Coulomb friction to hold"
+    )
     g.note = (
         prefix
         + f"gains: K_D = {DEFAULT_KD_PER_INERTIA:g} x the smallest effective inertia of each "
         f"joint, Lambda = {DEFAULT_LAMBDA:g}"
         + (f", lowered for the period {T:g} s" if lowered else "")
+        + bound
         + f" (mass matrix sampled at {len(qs)} configurations, robot {where}); adaptation "
         f"gains 1 normalised by nu = {g['nu']:.3g} (= {GAIN_MARGIN:g} Gamma T / min K_D: the "
         "sampled update's step condition, T lambda_max(K_D^-1/2 Y Gamma Y^T K_D^-1/2) / "
@@ -944,11 +1123,13 @@ def _yaml_number(v):
     return None
 
 
-def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=None) -> Gains:
+def load_gains(
+    path: str | Path, robot: Robot, *, period: float = 0.004, rotor=None, tolerance=None
+) -> Gains:
     """Gains from a YAML file with keys ``kd``, ``lambda``, ``gamma``, ``nu`` (adaptation-step
     normalisation, a scalar), ``kp`` (numbers or lists of numbers; a key given twice, a boolean
     or a string is refused; missing keys take :func:`default_gains` at ``period`` for
-    ``rotor``)."""
+    ``rotor`` and ``tolerance``)."""
     _args.path(path, "path")
     _args.instance(robot, "robot", Robot)
     _args.optional(_args.flag, rotor, "rotor")
@@ -977,7 +1158,7 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
             f"{path}: unknown key(s) {', '.join(sorted(unknown))}; "
             "expected kd, lambda, gamma, nu, kp"
         )
-    gains = default_gains(robot, period=period, rotor=rotor)
+    gains = default_gains(robot, period=period, rotor=rotor, tolerance=tolerance)
     given = []
     for key, value in data.items():
         items = value if isinstance(value, list) else [value]
@@ -996,6 +1177,7 @@ def load_gains(path: str | Path, robot: Robot, *, period: float = 0.004, rotor=N
         gains[key] = arr.tolist()
         given.append(key)
     if given:
+        gains.conflicts = {}  # the file's gains are the caller's choice
         rest = gains.note.removeprefix("gains: ")
         gains.note = f"gains: {', '.join(given)} from {path}" + (
             f"; the rest by default: {rest}" if len(given) < 3 and rest else ""
@@ -1078,6 +1260,9 @@ def make_controller(
         raise ControllerSettingError(f"unknown controller '{kind}'; use {', '.join(CONTROLLERS)}")
     n = robot.n
     period = check_period(period)
+    conflict = getattr(gains, "conflicts", {}).get(kind)
+    if conflict:
+        raise ControllerSettingError(f"default gains for {kind}: {conflict}")
     kp, kd, lam = _gain_arrays(kind, gains, n)
     check_sampled_gains(kind, kp, kd, lam, period)
     if kind == "pd":
@@ -1113,6 +1298,36 @@ def make_controller(
             ctl.box_note = "estimate box: none"
     ctl.true_model = true
     return ctl
+
+
+def friction_shortfall(
+    robot: Robot, *, rotor: bool = True, omega: float = 20.0, tolerance=None
+) -> str:
+    """For :func:`default_controller` (``K_P = omega^2`` on the mass matrix) on the robot with
+    (``rotor``) or without its rotor inertia: one line naming the joints where its position gain
+    ``omega^2 min_q M_ii`` (the mass matrix sampled over the workspace) leaves Coulomb friction an
+    error ``2 Fc / K_P`` above the friction's share of ``tolerance`` (:func:`friction_bound`),
+    with that error; empty when none does."""
+    _args.instance(robot, "robot", Robot)
+    rotor = _args.flag(rotor, "rotor")
+    omega = _args.number(omega, "omega", positive=True)
+    from .stability import workspace_samples
+
+    kp_min, tol = friction_bound(robot, tolerance=tolerance)
+    qs = workspace_samples(robot)
+    m = np.diagonal(robot.mass_matrix(qs, plant_parameters(robot, rotor)), axis1=1, axis2=2)
+    kp = omega**2 * m.min(axis=0)
+    short = np.flatnonzero(kp < kp_min)
+    if not short.size:
+        return ""
+    error = kp_min * FRICTION_SHARE * tol / kp  # 2 Fc / K_P
+    return (
+        f"the default computed torque (K_P = {omega:g}^2 M) leaves Coulomb friction an error "
+        "2 Fc / K_P above half the tracking tolerance on joint(s) "
+        + ", ".join(f"{i + 1} (up to {_unit(robot, i, error[i], 'angle')})" for i in short)
+        + ": the joints may wander at velocity reversals; --param-error 0 takes the default "
+        "gains, which hold it or are refused"
+    )
 
 
 def default_controller(
