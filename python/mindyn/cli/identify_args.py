@@ -161,8 +161,8 @@ def add_identify(sub, func) -> None:
         low=0,
         default=DEFAULT_RSD_THRESHOLD,
         help="remove parameters with RSD above this %, largest first (the default keeps a "
-        "t-statistic above sqrt(2), Akaike's criterion for one parameter; the ZCR07S study "
-        "removed above 30; 0 keeps all)",
+        "t-statistic above sqrt(2), Akaike's criterion for one parameter; 30 keeps one above "
+        "3.3; 0 keeps all)",
     )
     add_data_options(p)
     p.add_argument(
