@@ -1059,7 +1059,9 @@ def _default_gains(robot: Robot, T: float, rotor, kp_min, tol) -> Gains:
     )
     bound = (
         f"; held against Coulomb friction: K_P >= 2 Fc / ({FRICTION_SHARE:g} tolerance) (joint "
-        + ", ".join(f"{i + 1} {_unit(robot, i, kp_min[i], 'gain')}" for i in np.flatnonzero(held))
+        + ", ".join(
+            f"{i + 1} {_unit(robot, i, kp_min[i], 'gain')}" for i in np.flatnonzero(held).tolist()
+        )
         + "; tolerance "
         + ", ".join(sorted({_unit(robot, i, t, "angle") for i, t in enumerate(tol)}))
         + (
@@ -1324,7 +1326,7 @@ def friction_shortfall(
     return (
         f"the default computed torque (K_P = {omega:g}^2 M) leaves Coulomb friction an error "
         "2 Fc / K_P above half the tracking tolerance on joint(s) "
-        + ", ".join(f"{i + 1} (up to {_unit(robot, i, error[i], 'angle')})" for i in short)
+        + ", ".join(f"{i + 1} (up to {_unit(robot, i, error[i], 'angle')})" for i in short.tolist())
         + ": the joints may wander at velocity reversals; --param-error 0 takes the default "
         "gains, which hold it or are refused"
     )

@@ -1141,11 +1141,12 @@ def noise_from_spec(
         if not np.isfinite(eff).all():
             raise ArgumentError("torque noise in %: the robot has no effort limits")
         return pct / 100.0 * eff
+    parts = s.split(",")
     try:  # an empty value or entry is no level (never read as 0)
-        if not all(v.strip() for v in s.split(",")):
-            raise ValueError
-        vals = [float(v) for v in s.split(",")]
+        vals = [float(v) for v in parts] if all(v.strip() for v in parts) else None
     except ValueError:
+        vals = None
+    if vals is None:
         raise ArgumentError(
             f"{opt}: expected a number, or one per joint separated by commas"
             + (", or a percentage P%" if what == "torque" else "")
