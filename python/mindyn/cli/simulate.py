@@ -108,6 +108,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
             tolerance = joint_tolerance(robot, args.tracking_tolerance)
             shortfall = friction_shortfall(robot, rotor=args.rotor, tolerance=tolerance)
+            if shortfall:  # the command's way to the default gains
+                shortfall = shortfall.replace(
+                    "(the gains of default_gains hold it or are refused)",
+                    "(--param-error 0 takes the default gains, which hold it or are refused)",
+                )
         for note in (
             getattr(getattr(controller, "gains", None), "note", ""),
             info.get("stability"),

@@ -1327,8 +1327,8 @@ def friction_shortfall(
         f"the default computed torque (K_P = {omega:g}^2 M) leaves Coulomb friction an error "
         "2 Fc / K_P above half the tracking tolerance on joint(s) "
         + ", ".join(f"{i + 1} (up to {_unit(robot, i, error[i], 'angle')})" for i in short.tolist())
-        + ": the joints may wander at velocity reversals; --param-error 0 takes the default "
-        "gains, which hold it or are refused"
+        + ": the joints may wander at velocity reversals (the gains of default_gains hold it "
+        "or are refused)"
     )
 
 
