@@ -307,11 +307,12 @@ def test_docs_examples_made_what_they_say(workdirs, env):
     big = np.argsort(-np.abs(true))[:5]
     assert np.all(np.abs(est[big] - true[big]) <= 0.02 * np.abs(true[big])), (est, true)
     assert len(doc["removed"]) < len(true) / 2
-    # the count the manual states for this run is the one it gives
+    # the count this run gives lies in the range the manual states
     page = (DOCS / "identification.md").read_text()
-    stated = re.search(r"Here\s+(\d+)\s+of\s+the\s+(\d+)\s+are\s+kept", page)
+    stated = re.search(r"Here\s+(\d+)\s+to\s+(\d+)\s+of\s+the\s+(\d+)\s+are\s+kept", page)
     assert stated, "the UR5 example's kept count is no longer stated"
-    assert (int(stated[1]), int(stated[2])) == (len(doc["names"]), len(true)), stated[0]
+    low, high, total = (int(stated[k]) for k in (1, 2, 3))
+    assert low <= len(doc["names"]) <= high and total == len(true), (stated[0], len(doc["names"]))
     # every file the examples write is in out/, which git ignores ("Running the examples")
     assert sorted(p.name for p in wd.iterdir()) == ["examples", "out"], list(wd.iterdir())
 
