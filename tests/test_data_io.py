@@ -227,6 +227,29 @@ def test_a_log_without_header_says_the_header_is_missing(tmp_path, first, capsys
     assert "the header is missing" in err and err.count("\n") == 1, err
 
 
+@pytest.mark.parametrize("sep, word", [(";", "semicolons"), ("\t", "tabs")])
+def test_a_log_separated_otherwise_is_named_as_such(tmp_path, sep, word, capsys):
+    """A semicolon- or tab-separated log (a spreadsheet's export) was reported as missing every
+    column; the message says how it is separated and what a log is."""
+    p = tmp_path / "s.csv"
+    rows = ["t,q1,q2,tau1,tau2", "0,0,0,1,2", "0.004,1,2,3,4"]
+    p.write_text("\n".join(r.replace(",", sep) for r in rows) + "\n")
+    with pytest.raises(DataError) as e:
+        read_csv(p, n=2)
+    msg = str(e.value)
+    assert f"s.csv: the header is separated by {word}, not commas" in msg, msg
+    assert "missing" not in msg and "t, q1..q2," in msg, msg
+    assert cli.main(["identify", "planar2", str(p)]) == 2
+    err = capsys.readouterr().err
+    assert f"separated by {word}" in err and err.count("\n") == 1, err
+    # a one-column log with a semicolon in its name is not taken for one
+    q = tmp_path / "one.csv"
+    q.write_text("t;x\n0\n1\n")
+    with pytest.raises(DataError) as e:
+        read_csv(q, n=1)
+    assert "separated by" not in str(e.value)
+
+
 def test_column_names_with_line_breaks_stay_on_one_line(tmp_path):
     p = tmp_path / "n.csv"
     p.write_text('t,q1,"x\ny"\n0,0,0\n1,1,1\n')

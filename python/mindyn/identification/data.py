@@ -84,6 +84,14 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
     returned as ``torque_unit`` (None when the header names none)."""
     names = [h.strip() for h in header]
+    if len(names) == 1:
+        for sep, word in ((";", "semicolons"), ("\t", "tabs")):
+            if names[0].count(sep) >= 2:
+                raise DataError(
+                    f"{path}: the header is separated by {word}, not commas; a log is "
+                    "comma-separated with '.' as the decimal point: "
+                    + _expected_columns("N" if n is None else n, require_torque)
+                )
     if any(names) and all(_NUMBER.fullmatch(h) or _NONFINITE.fullmatch(h) for h in names if h):
         shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
         raise DataError(
