@@ -50,20 +50,15 @@ weight, the consistent / unconstrained validation ratio (target at most 1.1), wh
 mass is within a factor 3 of the description's or reported as determined by the data
 (``masses``: the links that miss it; ``raw``: the ratio against the torques as logged), and per
 link the mass over the description's with the mass's verdict (``d`` data, ``d+p`` data+prior,
-``p`` prior). Below it, the weight that each
-rule of choosing it would take from the default run's cross-validation record (its held-out
-residual per fold and candidate, so no rule looks at the validation log): ``one-SE`` (the
-default: the largest weight whose summed held-out residual is within one standard error of the
-smallest, the error from the folds' spread at the best weight), ``paired one-SE`` (the same
-with the standard error of the fold-by-fold difference from the best weight, which leaves out
-what the folds share at every weight), ``minimum`` (the smallest summed held-out residual), and
-``L-curve corner``: over the grid, the weight of largest curvature of the log of the prior's
-divergence against the log of the fit's residual (``fit_increase_noise_variances`` plus the
-unconstrained fit's own, ``rows - nb`` noise variances), derivatives by finite differences in
-the log of the weight (the grid's positive weights), and ``GCV``: the grid's weight of smallest
-generalised cross-validation score ``n |r|^2 / (n - df)^2`` (``n`` equations, ``|r|^2`` the
-fit's residual, ``df = tr(H^-1 Q)`` the effective number of parameters, ``Q`` the Hessian of
-the fit term and ``H`` that of the whole objective at the estimate), computed in this process on
+``p`` prior). Below it, the weight that each rule of choosing it takes: ``marginal likelihood``
+(the default run's choice); ``L-curve corner``: over the grid, the weight of largest curvature
+of the log of the prior's divergence against the log of the fit's residual
+(``fit_increase_noise_variances`` plus the unconstrained fit's own, ``rows - nb`` residual
+variances over ``noise_variance_factor``), derivatives by finite differences in the log of the
+weight (the grid's positive weights), and ``GCV``: the grid's weight of smallest generalised
+cross-validation score ``n |r|^2 / (n - df)^2`` (``n`` equations, ``|r|^2`` the fit's residual,
+``df = tr(H^-1 Q)`` the effective number of parameters, ``Q`` the Hessian of the fit term and
+``H`` that of the whole objective at the estimate), computed in this process on
 the same least-squares problem as the command (its options parsed by the command's parser).
 
 Run: ``.venv/bin/python bench/bench_real_identification.py DIR [--no-offset] [--consistent
@@ -307,6 +302,7 @@ def gcv_weight(cmd, weights) -> float | None:
         _prior_matrices,
         consistent_estimate,
         description_vector,
+        noise_scale,
     )
     from mindyn.identification.prior import BARRIER_END, PriorProblem
     from mindyn.identification.workflow import run
@@ -323,16 +319,17 @@ def gcv_weight(cmd, weights) -> float | None:
     layout = _Layout(base)
     pi0 = description_vector(base)
     # the consistent estimate's fit term |M pi - z|^2 / s2 (its noise variance unfloored)
+    data = logs.fit.logs
     problem = PriorProblem(
         (ls.R * ls.norms) @ base.Y,
         ls.z,
-        ls.rho / (ls.r - base.n),
+        ls.rho / (ls.r - base.n) * noise_scale(res, data)["factor"],
         layout,
         _prior_matrices(base, layout, pi0, None),
     )
     scores = []
     for w in weights:
-        pi = consistent_estimate(res, prior_weight=w).classical
+        pi = consistent_estimate(res, prior_weight=w, data=data).classical
         _, H = problem.derivatives(pi, w, BARRIER_END)
         d = np.sqrt(np.maximum(np.diag(H), 1e-300))
         Hinv = np.linalg.pinv(H / np.outer(d, d), hermitian=True, rcond=1e-14) / np.outer(d, d)
@@ -399,7 +396,7 @@ def weight_table(name, doc, table, gcv=None) -> str:
         "  (per link: mass / description's mass and its verdict: d data, d+p data+prior, p prior)"
     )
     ch = ce.get("prior_weight_choice")
-    rules = selection_rules(ch) if ch else {}
+    rules = {"marginal likelihood": ch["chosen"]} if ch else {}
     corner = l_curve_corner(doc, table)
     if corner is not None:
         rules["L-curve corner"] = corner
@@ -417,7 +414,9 @@ def l_curve_corner(doc, table) -> float | None:
     pts = [(w, d["consistent_estimate"]) for w, d in table if w > 0 and not isinstance(d, str)]
     if len(pts) < 3:
         return None
-    own = doc["rows"] - len(doc["base_names"])  # the unconstrained fit's residual [s^2]
+    # the unconstrained fit's residual [noise variances: residual variances over the factor
+    # for correlated samples]
+    own = (doc["rows"] - len(doc["base_names"])) / pts[0][1]["noise_variance_factor"]["factor"]
     t = np.log([w for w, _ in pts])
     x = np.log([own + c["fit_increase_noise_variances"] for _, c in pts])
     y = np.log([c["prior_divergence"] for _, c in pts])
@@ -425,25 +424,6 @@ def l_curve_corner(doc, table) -> float | None:
     ddx, ddy = np.gradient(dx, t), np.gradient(dy, t)
     kappa = (dx * ddy - dy * ddx) / np.maximum(dx**2 + dy**2, 1e-300) ** 1.5
     return float(pts[int(np.argmax(kappa))][0])
-
-
-def selection_rules(choice) -> dict:
-    """The weight each rule takes from a cross-validation record (``prior_weight_choice``)."""
-    import numpy as np
-
-    cands = np.array(choice["candidates"])
-    err = np.array(choice["held_out_per_fold"])  # folds x candidates, weakest prior first
-    total = err.sum(axis=0)
-    best = int(np.argmin(total))
-    k = err.shape[0]
-    se = float(np.std(err[:, best], ddof=1) * np.sqrt(k))
-    diff = err - err[:, [best]]
-    se_paired = np.std(diff, axis=0, ddof=1) * np.sqrt(k)
-    return {
-        "one-SE": float(cands[np.flatnonzero(total <= total[best] + se)[-1]]),
-        "paired one-SE": float(cands[np.flatnonzero(diff.sum(axis=0) <= se_paired)[-1]]),
-        "minimum": float(cands[best]),
-    }
 
 
 def link_masses(ce) -> str:
@@ -457,9 +437,9 @@ def link_masses(ce) -> str:
         + (
             " (chosen: "
             + ", ".join(
-                f"{w:g}: {e:.4g}" for w, e in zip(choice["candidates"], choice["held_out_residual"])
+                f"{w:g}: {e:.1f}" for w, e in zip(choice["candidates"], choice["log_evidence"])
             )
-            + " noise variances per equation held out)"
+            + " log marginal likelihood relative to the largest)"
             if choice
             else " (given)"
         )

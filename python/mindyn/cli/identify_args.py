@@ -106,7 +106,7 @@ def add_data_options(p) -> None:
 def add_identify(sub, func) -> None:
     """``mindyn identify``, run by ``func``."""
     from ..identification.consistent import MAX_PRIOR_WEIGHT
-    from ..identification.prior import CANDIDATES, FOLDS
+    from ..identification.prior import CANDIDATES
 
     p = add_command(
         sub,
@@ -196,9 +196,9 @@ def add_identify(sub, func) -> None:
         help="with --consistent: add W x the log-det divergence of each link's pseudo-inertia "
         "from the description's; the fit term is in units of the noise variance, so W = 1 makes "
         "a divergence of 1 cost as much as one standard deviation of the fit; 0: no prior; "
-        f"default: chosen from the data by {FOLDS}-fold cross-validation over contiguous time "
-        f"blocks among {', '.join(f'{w:g}' for w in CANDIDATES)}, the largest whose held-out "
-        "residual is within one standard error of the smallest (reported)",
+        f"default: the weight among {', '.join(f'{w:g}' for w in CANDIDATES)} under which the "
+        "data are most probable (the marginal likelihood, the prior being a Wishart density of "
+        "each pseudo-inertia about the description's; reported)",
     )
     add_description_outputs(p, "identify")
     # floating-base robots only (refused on others by cmd_identify)

@@ -16,9 +16,11 @@ The residual is taken from the ``c x c`` triangle the estimation reduced the (we
 the log. Without a prior it is solved with cvxpy (Clarabel; SCS if Clarabel fails, reported);
 with the description's log-det prior, whose weight is chosen from the data by default
 (:mod:`~mindyn.identification.prior`), by a damped Newton descent (the cone solver as
-fallback). The fit term is measured in units of the residual variance ``s^2`` of the
-unconstrained fit with all base parameters, ``|R p_b - z|^2 / s^2``: it grows by about 1 per
-standard deviation that the base parameters move along any one direction of the estimate's
+fallback). The fit term is measured in units of the noise variance ``s^2``: the residual
+variance of the unconstrained fit with all base parameters times the factor that accounts for
+the correlation of filtered samples (the estimate's standard deviations carry the same,
+``settings.std_correlation``), ``|R p_b - z|^2 / s^2``: it grows by about 1 per standard
+deviation that the base parameters move along any one direction of the estimate's
 uncertainty.
 
 Payload (:func:`identify_payload`): the 10 inertial parameters of a body fixed to the last link,
@@ -57,8 +59,10 @@ from .estimation import (
     _logs,
     _Reduced,
     identify,
+    noise_variance_factor,
     predicted_torques,
     regressor_rows,
+    residual_correlation,
 )
 from .joint_data import JointData
 from .models import moving_equations, require_torque
@@ -240,6 +244,8 @@ class ConsistentResult:
     #: Per link (with a prior): mass, its standard deviation, and whether the data or the prior
     #: determine it (:func:`~mindyn.identification.prior.link_report`).
     links: list | None = None
+    #: The fit term's noise variance as a factor on the residual variance (:func:`noise_scale`).
+    noise: dict = field(default_factory=dict)
     notes: list = field(default_factory=list)
     seconds: float = 0.0
 
@@ -299,6 +305,7 @@ class ConsistentResult:
                 "prior_divergence": self.prior_divergence,
                 "links": self.links,
                 "fit_increase_noise_variances": self.fit_increase,
+                "noise_variance_factor": self.noise,
                 "eig_tolerance": EIG_TOL,
                 "base_names": list(self.base.names),
                 "base_values": [float(v) for v in self.full],
@@ -326,12 +333,32 @@ def nearest_realisation(base: BaseParameters, values) -> np.ndarray:
     return pi0 + np.linalg.lstsq(Y, np.asarray(values, float) - Y @ pi0, rcond=None)[0]
 
 
+def noise_scale(res: IdentificationResult, data=None) -> dict:
+    """The noise variance of the consistent estimate's fit term as a factor on the residual
+    variance of ``res`` (which counts its rows as independent): the larger of the data path's
+    (``settings.std_correlation``, :func:`~mindyn.identification.estimation.correlation_factor`:
+    filtered noise; the estimate's standard deviations carry it) and, given ``data`` (the logs
+    ``res`` was fitted on), the one its residuals show
+    (:func:`~mindyn.identification.estimation.residual_correlation`: model error). Returns
+    ``factor``, ``data_path``, ``residuals`` (None without data) and ``residuals_rule``."""
+    path = noise_variance_factor(res)
+    measured, rule = (None, "not measured (no data given)")
+    if data is not None:
+        measured, rule = residual_correlation(res, data)
+    return {
+        "factor": max(path, measured or 0.0, 1.0),
+        "data_path": path,
+        "residuals": measured,
+        "residuals_rule": rule,
+    }
+
+
 def identify_consistent(
     robot, data, *, prior_weight: float | str = "auto", **kwargs
 ) -> ConsistentResult:
     """:func:`~mindyn.identification.identify` (same arguments in ``kwargs``), then
-    :func:`consistent_estimate` on its least-squares problem (the prior's weight chosen on
-    ``data`` by default)."""
+    :func:`consistent_estimate` on its least-squares problem (the prior's weight chosen from
+    the data by default)."""
     _weight(prior_weight)
     return consistent_estimate(
         identify(robot, data, **kwargs), prior_weight=prior_weight, data=data
@@ -370,8 +397,8 @@ def consistent_estimate(
     divergence ``d(J, J0) = -log det(J0^-1 J) + tr(J0^-1 J) - 4`` of each link's pseudo-inertia
     from the description's, to the fit term (which is in units of the noise variance, see the
     module): at ``W = 1`` a divergence of 1 costs as much as moving the base parameters one
-    standard deviation along one direction. ``"auto"`` (default): ``W`` chosen by
-    cross-validation over contiguous blocks of ``data`` (the logs ``res`` was fitted on; see
+    standard deviation along one direction. ``"auto"`` (default): ``W`` the candidate under
+    which the data are most probable (the marginal likelihood; see
     :mod:`~mindyn.identification.prior`), recorded in ``weight_choice``. With a prior, the
     estimate is the minimiser found by a damped Newton descent (:func:`~mindyn.identification
     .prior.newton_prior`; the conic solver and a smooth refinement if it does not converge), and
@@ -389,17 +416,17 @@ def consistent_estimate(
     positive semidefinite matrices (negative eigenvalues set to zero) and ``Ia, Fv, Fc`` clipped
     at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
 
+    The fit term's noise variance is the residual variance of ``res`` times
+    :func:`noise_scale`'s factor: with ``data``, the logs ``res`` was fitted on, it also
+    accounts for the correlation of the residuals that model error leaves (recorded in
+    ``noise``).
+
     ``progress``, a callable taking a line of text, is told each solve and refinement as it
     starts and ends (they can take seconds each)."""
     t0 = time.perf_counter()
     _args.instance(res, "res", IdentificationResult)
     W = _weight(prior_weight)
     _args.optional(_args.function, progress, "progress")
-    if W is None and data is None:
-        raise _args.ArgumentError(
-            "prior_weight 'auto' chooses the weight on the data the estimate was fitted on: "
-            "pass them as data=, or give a weight"
-        )
     base = res.base
     ls = res.reduced
     if ls is None:
@@ -412,7 +439,8 @@ def consistent_estimate(
     beta_ls, _, _ = ls.solve(list(range(nb)))
     s2 = ls.rho / (ls.r - nb) if ls.r > nb else 0.0
     floor = 1e-10 * (float(z @ z) + ls.rho)  # noise-free data: |z| / s at most 1e5
-    s2 = max(s2, floor, 1e-300)
+    noise = noise_scale(res, data)
+    s2 = max(s2 * noise["factor"], floor, 1e-300)
     fit_ls = float(np.sum((ls.R @ (beta_ls * ls.norms) - z) ** 2))
     notes: list[str] = []
 
@@ -427,20 +455,14 @@ def consistent_estimate(
     pi_un = nearest_realisation(base, res.full)
     choice, links, start = None, None, None
     if W != 0:
-        from .prior import (
-            CANDIDATES,
-            PriorProblem,
-            choose_prior_weight,
-            feasible_start,
-            newton_prior,
-        )
+        from .prior import PATH, PriorProblem, choose_prior_weight, feasible_start, newton_prior
 
         J0s = _prior_matrices(base, layout, pi0, notes)
         problem = PriorProblem(M, z, s2, layout, J0s)
         if W is None:
-            with _stage(progress, "prior weight by cross-validation"):
+            with _stage(progress, "prior weight by the marginal likelihood"):
                 W, choice, start = choose_prior_weight(
-                    res, data, layout, J0s, pi0, s2, progress=progress
+                    problem, feasible_start(problem, J0s, layout, pi0), progress=progress
                 )
     if W == 0 and ok_n:
         pi, solver, status = pi_n, "none", "optimal"
@@ -451,7 +473,7 @@ def consistent_estimate(
                 # from the description down a decade at a time to W (a weak prior's minimiser
                 # lies near the cone's boundary, far from the description)
                 start = feasible_start(problem, J0s, layout, pi0)
-                for w in sorted((c for c in CANDIDATES if c > W), reverse=True):
+                for w in sorted((c for c in PATH if c > W), reverse=True):
                     start = newton_prior(problem, w, start)[0]
             pi, converged, iters = newton_prior(problem, W, start)
         solver, status = "Newton", f"converged in {iters} steps"
@@ -518,6 +540,7 @@ def consistent_estimate(
         status=status,
         fit_increase=fit_increase(pi),
         prior_divergence=prior,
+        noise=noise,
         notes=notes,
         seconds=time.perf_counter() - t0,
     )

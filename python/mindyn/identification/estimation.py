@@ -477,6 +477,82 @@ def noise_bandwidth(cutoff: float, order: int) -> float:
     return cutoff * (1.0 - 1.0 / (2 * order)) * a / math.sin(a)
 
 
+def noise_variance_factor(res: IdentificationResult) -> float:
+    """How many times the residual variance of ``res`` (rows counted as independent) its
+    noise's variance per independent equation is: ``settings.std_correlation``'s
+    ``variance_factor`` (:func:`correlation_factor`), 1 where no correction applies."""
+    corr = res.settings.get("std_correlation") or {}
+    return float(corr.get("variance_factor", 1.0))
+
+
+@single_threaded_blas
+def residual_correlation(res: IdentificationResult, data) -> tuple[float, str]:
+    """The factor on the variance of the estimates that the correlation of the fit's own
+    residuals calls for, measured (not derived from the data path as :func:`correlation_factor`
+    is), and the rule in words: model error (friction or drive effects the model leaves out)
+    leaves residuals correlated over many samples, which the residual variance, counting the
+    samples as independent, does not see.
+
+    Dynamic model, with ``data`` the logs ``res`` was fitted on: the Newey-West estimate of the
+    covariance of the scores ``g_t = sum_j a_tj r_tj`` (per sample ``t``, ``a_tj`` the weighted
+    regressor row of joint ``j``, ``r_tj`` its weighted residual with all base parameters),
+    Bartlett weights up to lag ``L = floor(4 (m / 100)^(2/9))`` per log of ``m`` samples (Newey &
+    West, *Automatic lag selection in covariance matrix estimation*, Review of Economic Studies
+    61, 1994), against the covariance that independent residuals would give, ``s^2 A^T A``: the
+    mean of its eigenvalues relative to that, ``tr(S (s^2 A^T A)^-1) / nb``, the mean inflation of
+    a parameter direction's variance. About 1 for white residuals, the data path's factor for
+    filtered noise, more for model error. Other models: 1 (their rows are windows; not
+    measured)."""
+    if res.model != "dynamic" or res.reduced is None:
+        return 1.0, "not measured (the dynamic model only)"
+    base, ls = res.base, res.reduced
+    nb = base.n
+    beta, _, _ = ls.solve(list(range(nb)))
+    s2 = ls.rho / (ls.r - nb) if ls.r > nb else 0.0
+    js = res.joint_sigma
+    w = np.ones(base.robot.n)
+    if res.weighted and js is not None:
+        w = 1.0 / np.maximum(js, max(js.max() * 1e-9, 1e-300))
+    A = np.zeros((nb, nb))
+    S = np.zeros((nb, nb))
+    lags = []
+    for d in _logs(data):
+        tau = require_torque(d)
+        keep = moving_equations(base, d.dq, res.settings.get("min_velocity", 0.0))
+        G = np.zeros((d.m, nb))
+        for c0 in range(0, d.m, 8192):
+            c1 = min(d.m, c0 + 8192)
+            Wr = regressor_rows(base, d, c0, c1)
+            r = (tau[c0:c1] - Wr @ beta) * w[None, :]
+            Wr = Wr * w[None, :, None]
+            if keep is not None:
+                Wr = Wr * keep[c0:c1, :, None]
+                r = r * keep[c0:c1]
+            G[c0:c1] = np.einsum("tjb,tj->tb", Wr, r)
+            A += np.einsum("tjb,tjc->bc", Wr, Wr)
+        L = min(int(4.0 * (d.m / 100.0) ** (2.0 / 9.0)), d.m - 1)
+        S += G.T @ G
+        for k in range(1, L + 1):
+            C = G[:-k].T @ G[k:]
+            S += (1.0 - k / (L + 1.0)) * (C + C.T)
+        lags.append(L)
+    if not s2 > 0 or not np.any(A):
+        return 1.0, "not measured (no residual)"
+    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
+    Ad = A / np.outer(d, d)
+    try:
+        X = sla.cho_solve(sla.cho_factor(Ad), S / np.outer(d, d))
+    except (np.linalg.LinAlgError, ValueError):
+        X = np.linalg.lstsq(Ad, S / np.outer(d, d), rcond=1e-13)[0]
+    factor = float(np.trace(X)) / (nb * s2)
+    rule = (
+        "Newey-West covariance of the fit's scores (Bartlett weights up to lag "
+        + ", ".join(map(str, lags))
+        + " samples) over that of independent residuals, mean over the parameter directions"
+    )
+    return factor, rule
+
+
 def correlation_factor(logs: Sequence[JointData], rows: Sequence[int]) -> tuple[float, str]:
     """The factor on the variance of the estimates of the dynamic model for the correlation of
     its samples' noise, and the rule in words. The data path low-passes a log before it is

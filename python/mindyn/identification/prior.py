@@ -2,19 +2,21 @@
 what the estimate owes to the data and to the prior, link by link.
 
 The consistent estimate with a prior (:func:`~mindyn.identification.consistent
-.consistent_estimate`) minimises ``f(pi) = |M pi - z|^2 / s^2 + W sum_links d(J, J0)``. Its
-weight ``W`` is chosen by K-fold cross-validation over contiguous time blocks
-(:func:`choose_prior_weight`): each log is cut into :data:`FOLDS` blocks of consecutive
-samples (or windows); for each candidate weight of :data:`CANDIDATES` and each fold, the
-estimate fitted on the other blocks predicts the held-out block, and the held-out residuals
-(the fit's own weighted residual) are summed over the folds. The weight chosen is the largest
-whose sum is within one standard error of the smallest (the "one-standard-error rule" of
-cross-validation, Hastie, Tibshirani & Friedman, *The Elements of Statistical Learning*, 7.10;
-the error from the spread of the folds' residuals): a stronger prior that predicts held-out
-motion as well as the weakest, within what the data can tell apart, is preferred, as it keeps
-the directions the data hardly see at physically plausible values. A contiguous block
-is held out rather than scattered samples because neighbouring samples share their errors
-(filtered noise, model error): a block tests the estimate on motion it has not seen.
+.consistent_estimate`) minimises ``f(pi) = |M pi - z|^2 / s^2 + W sum_links d(J, J0)``, with
+``s^2`` the noise variance of the fit (corrected for the correlation of filtered samples) and
+``d`` the log-det divergence of a link's pseudo-inertia ``J`` from the description's ``J0``.
+``f / 2`` is the negative log posterior of the parameters when the noise is Gaussian and each
+link's pseudo-inertia has the prior density ``exp(-W d(J, J0) / 2)`` normalised: a Wishart
+density of ``W + 5`` degrees of freedom and scale ``J0 / W`` (mean ``(1 + 5 / W) J0``, each
+entry's relative spread about ``sqrt(2 / W)``). So ``W`` says how far the true links may lie
+from the description, and the data tell how far they do: its default is the candidate of
+:data:`CANDIDATES` under which the data are most probable, the marginal likelihood ``p(z | W)``
+(type-II maximum likelihood, or empirical Bayes; MacKay, *Bayesian interpolation*, Neural
+Computation 4, 1992), by Laplace's approximation at the estimate (:func:`log_evidence`,
+:func:`choose_prior_weight`): a weight too small spreads the prior over masses the data exclude
+(Occam's factor), one too large cannot reach the values the data demand. Unlike a
+cross-validation over parts of the same log, the choice does not depend on how the log is
+cut, and it costs one Newton descent per candidate.
 
 The objective is smooth and strictly convex inside the cone of positive definite
 pseudo-inertias (the log-det terms are barriers), so each of these solves is a damped Newton
@@ -51,12 +53,18 @@ import scipy.linalg as sla
 from .._threads import single_threaded_blas
 from .errors import IdentificationError
 
-#: Candidate prior weights (units: one divergence costs W noise variances of the fit): a
-#: log-scale grid from a prior the data outweigh in every direction they see to one that holds
-#: all but the best-determined directions.
-CANDIDATES = (1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3, 1e4)
+#: Candidate prior weights (units: one divergence costs W noise variances of the fit): half
+#: decades from a prior the data outweigh in every direction they see (relative spread of each
+#: pseudo-inertia entry about 14) to one that holds all but the best-determined directions
+#: (about 1.4 %).
+CANDIDATES = tuple(float(f"{10.0 ** (k / 2):.3g}") for k in range(-4, 9))
 
-#: Contiguous blocks each log is cut into for the cross-validation.
+#: The weights of the descent from the description to a weaker prior's minimiser (a weak
+#: prior's minimiser lies near the cone's boundary, far from the description): a decade at a
+#: time.
+PATH = tuple(w for w in CANDIDATES if math.log10(w).is_integer())
+
+#: Contiguous blocks each log is cut into for a cross-validation (that of ``auto`` friction).
 FOLDS = 5
 
 #: Barrier weight of the non-negative joint parameters at the end of the Newton descent, in
@@ -92,7 +100,8 @@ class PriorProblem:
         self.c = 2.0 * (M.T @ z) / s2
         self.links = layout.links
         self.nonneg = layout.extra[layout.nonneg]
-        self.J0inv = [0.5 * (A + A.T) for A in (np.linalg.inv(J0) for J0 in J0s)]
+        self.J0s = [0.5 * (J0 + J0.T) for J0 in J0s]
+        self.J0inv = [0.5 * (A + A.T) for A in (np.linalg.inv(J0) for J0 in self.J0s)]
         self.E = _basis()
         self._E16 = self.E.reshape(10, 16)
         self.tr0 = [np.einsum("ij,aji->a", Ji, self.E) for Ji in self.J0inv]
@@ -330,74 +339,67 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
 # ---------------------------------------------------------------------------------------------
 # Choice of the weight
 # ---------------------------------------------------------------------------------------------
-def choose_prior_weight(
-    res, data, layout, J0s, pi0, s2, *, candidates=CANDIDATES, folds=FOLDS, progress=None
-) -> tuple[float, dict, np.ndarray]:
-    """The candidate weight chosen by cross-validation with the one-standard-error rule (see
-    the module documentation). Returns ``(W, record, start)``: the record of the choice for
-    the output (the rule, the candidates, their held-out residuals per equation in noise
-    variances and its standard error) and the last fold's estimate at ``W`` (a feasible warm
-    start for the full fit)."""
-    base = res.base
-    Y = base.Y
-    nb = base.n
-    S = block_triangles(res, data, folds=folds)
-    rows = [S_k for S_k in S if np.any(S_k)]
-    if len(rows) < 2:
-        raise IdentificationError(
-            "consistent estimate: the data give fewer than 2 blocks of equations; the prior's "
-            "weight cannot be chosen by cross-validation (give prior_weight=)"
-        )
-    from .estimation import _triangle
+def log_evidence(problem: PriorProblem, pi, W: float) -> float:
+    """``log p(z | W)`` up to a constant the same for every ``W``, by Laplace's approximation
+    at ``pi``, the minimiser of ``problem`` at weight ``W > 0``: ``-fit / 2 + sum_links log
+    p(J_l | W) - log det H / 2`` with ``p(J | W)`` the Wishart density of ``W + 5`` degrees of
+    freedom and scale ``J0 / W`` (``exp(-W d(J, J0) / 2)`` normalised, see the module) and
+    ``H`` the objective's Hessian at ``pi`` (twice the negative log posterior's; the joint
+    parameters' flat priors and the factor 2 add the same constant at every weight)."""
+    from scipy.stats import wishart
 
-    cands = sorted(float(c) for c in candidates)[::-1]  # from the strongest prior down
-    err = np.zeros((folds, len(cands)))
-    failed = 0
-    equations = res.rows
-    starts = {}
-    for k in range(folds):
-        if not np.any(S[k]):
-            continue
-        T = _triangle(np.vstack([S[i] for i in range(folds) if i != k]))
-        problem = PriorProblem(T[:nb, :nb] @ Y, T[:nb, nb], s2, layout, J0s)
-        pi = feasible_start(problem, J0s, layout, pi0)
-        held = S[k]
-        for i, W in enumerate(cands):
-            # warm from the stronger weight's answer: the barrier already at its final weight
-            pi, ok, _ = newton_prior(problem, W, pi, barrier=1e-2 if i == 0 else BARRIER_END)
-            failed += not ok
-            r = held @ np.append(Y @ pi, -1.0)
-            err[k, i] = float(r @ r) / s2
-            starts[W] = pi
+    value = -0.5 * problem.fit(pi)
+    for ix, J0 in zip(problem.links, problem.J0s):
+        J = problem.J(pi[ix])
+        value += float(wishart.logpdf(0.5 * (J + J.T), df=W + 5.0, scale=J0 / W))
+    _, H = problem.derivatives(pi, W, 0.0)
+    d = np.sqrt(np.maximum(np.diag(H), 1e-300))
+    lam = np.linalg.eigvalsh(H / np.outer(d, d))
+    # a direction neither the data nor any prior constrain (a joint parameter no equation
+    # involves) has the same zero curvature at every weight: left out alike
+    lam = lam[lam > 1e-13 * lam[-1]]
+    return value - 0.5 * (float(np.sum(np.log(lam))) + 2.0 * float(np.sum(np.log(d))))
+
+
+def choose_prior_weight(
+    problem: PriorProblem, start, *, candidates=CANDIDATES, progress=None
+) -> tuple[float, dict, np.ndarray]:
+    """The candidate weight of largest :func:`log_evidence`, the minimisers found by Newton
+    descents from ``start`` (strictly feasible; the description's pseudo-inertias,
+    :func:`feasible_start`) through the candidates from the strongest prior down, each warm from
+    the last. Returns ``(W, record, pi)``: the record of the choice for the output (the rule,
+    the candidates, their log marginal likelihoods relative to the largest, whether the choice
+    is at the end of the candidates, how many descents stopped before converging) and the
+    minimiser at ``W``."""
+    cands = sorted({float(c) for c in candidates})[::-1]  # from the strongest prior down
+    if not cands or cands[-1] <= 0:
+        raise IdentificationError("consistent estimate: prior weight candidates must be > 0")
+    pi = np.array(start, dtype=float)
+    evidence, found, failed = [], [], 0
+    for i, W in enumerate(cands):
+        pi, ok, _ = newton_prior(problem, W, pi, barrier=1e-2 if i == 0 else BARRIER_END)
+        failed += not ok
+        evidence.append(log_evidence(problem, pi, W))
+        found.append(pi)
         if progress is not None:
-            progress(f"consistent estimate: prior weight, fold {k + 1} of {folds} done")
-    used = [k for k in range(folds) if np.any(S[k])]
-    err = err[used]
-    total = err.sum(axis=0)
-    best = int(np.argmin(total))
-    # one standard error of the summed held-out residual at the best weight, from the spread
-    # of the folds' residuals
-    se = float(np.std(err[:, best], ddof=1) * math.sqrt(len(used)))
-    chosen = int(np.flatnonzero(total <= total[best] + se)[0])  # the strongest prior within
-    W = cands[chosen]
+            progress(f"consistent estimate: prior weight {W:g}, {i + 1} of {len(cands)} done")
+    best = int(np.argmax(evidence))
+    top = evidence[best]
+    W = cands[best]
     record = {
         "rule": (
-            f"{folds}-fold cross-validation over contiguous time blocks (each block's weighted "
-            "residual predicted by the estimate fitted on the other blocks, summed): the "
-            "largest candidate within one standard error of the smallest sum"
+            "largest marginal likelihood of the data (empirical Bayes: each link's "
+            "pseudo-inertia Wishart-distributed about the description's, integrated by "
+            "Laplace's approximation)"
         ),
-        "folds": folds,
         "candidates": cands[::-1],
-        "held_out_residual": [float(e) / equations for e in total[::-1]],
-        "held_out_standard_error": se / equations,
-        "held_out_per_fold": [[float(e) / equations for e in row[::-1]] for row in err],
-        "held_out_unit": "noise variances per equation",
-        "smallest_at": cands[best],
+        "log_evidence": [float(e - top) for e in evidence[::-1]],
+        "log_evidence_unit": "natural log, relative to the largest",
         "chosen": W,
-        "at_grid_end": chosen in (0, len(cands) - 1),
+        "at_grid_end": best in (0, len(cands) - 1),
         "newton_not_converged": failed,
     }
-    return W, record, starts[W]
+    return W, record, found[best]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -408,7 +410,7 @@ def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
     objective at weight ``W`` with that one parameter fixed, and how much worse it fits the
     data than ``pi`` [noise variances]. Reached as the estimate itself is: from ``start`` (the
     description's pseudo-inertias, which have that mass, see :func:`feasible_start`) by Newton
-    descents at the weights of :data:`CANDIDATES` above ``W``, strongest first, then at ``W``;
+    descents at the weights of :data:`PATH` above ``W``, strongest first, then at ``W``;
     ``objective_increase``: how much higher the whole objective (fit and priors) is there;
     ``converged`` false when the last descent stopped at its iteration limit (the increase is
     then that of the point reached). The description's mass is that of the prior's
@@ -417,7 +419,7 @@ def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
     out = []
     for ix in problem.links:
         x, mu = np.array(start, dtype=float), 1e-2
-        for w in sorted((c for c in CANDIDATES if c > W), reverse=True):
+        for w in sorted((c for c in PATH if c > W), reverse=True):
             x = newton_prior(problem, w, x, fixed=[ix[9]], barrier=mu)[0]
             mu = BARRIER_END  # warm: the barrier already at its final weight
         x, ok, _ = newton_prior(problem, W, x, fixed=[ix[9]], barrier=mu)

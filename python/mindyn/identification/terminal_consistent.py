@@ -29,21 +29,20 @@ def _weight_lines(ce: dict) -> list[str]:
     lines = []
     if ch is not None:
         lines.append(
-            f"  prior weight {ch['chosen']:g} chosen by {ch['rule']}; held-out residual per "
-            f"equation [{ch['held_out_unit']}] at each candidate weight (smallest at "
-            f"{ch['smallest_at']:g}, standard error {ch['held_out_standard_error']:.3g}):"
+            f"  prior weight {ch['chosen']:g} chosen by the {ch['rule']}; log marginal "
+            f"likelihood at each candidate weight ({ch['log_evidence_unit']}):"
         )
         lines.append(
             "    "
             + "  ".join(
-                f"{w:g}: {e:.5g}" + (" (chosen)" if w == ch["chosen"] else "")
-                for w, e in zip(ch["candidates"], ch["held_out_residual"])
+                f"{w:g}: {e:.1f}" + (" (chosen)" if w == ch["chosen"] else "")
+                for w, e in zip(ch["candidates"], ch["log_evidence"])
             )
         )
         if ch["newton_not_converged"]:
             lines.append(
-                f"    {ch['newton_not_converged']} of the held-out fits stopped before the Newton "
-                "descent converged (their residuals are approximate)"
+                f"    {ch['newton_not_converged']} of the candidates' Newton descents stopped "
+                "before converging (their likelihoods are approximate)"
             )
         if ch["at_grid_end"]:
             lines.append(
@@ -87,6 +86,23 @@ def _weight_lines(ce: dict) -> list[str]:
     return lines
 
 
+def _noise_lines(noise: dict) -> list[str]:
+    """What one noise variance of the fit term is (``noise``: ``noise_variance_factor`` of the
+    JSON)."""
+    if not noise:
+        return []
+    measured = noise["residuals"]
+    return [
+        f"  one noise variance: the residual variance x {noise['factor']:.3g}, the larger of the "
+        f"data path's factor ({noise['data_path']:.3g}) and the residuals' own "
+        + (
+            f"({measured:.3g}: {noise['residuals_rule']})"
+            if measured is not None
+            else "(not measured)"
+        )
+    ]
+
+
 def _consistent_lines(doc, fit, val, cfit, cval, low) -> list[str]:
     """The lines of ``mindyn identify --consistent``: pseudo-inertias, errors side by side
     (``doc``: the consistent estimate's JSON fields, ``low``: its mass matrix's smallest
@@ -100,6 +116,7 @@ def _consistent_lines(doc, fit, val, cfit, cval, low) -> list[str]:
         + f"): total mass {doc['total_mass']:.4g} kg; fit "
         f"{ce['fit_increase_noise_variances']:.4g} noise variances worse than the unconstrained "
         "fit with all base parameters",
+        *_noise_lines(ce.get("noise_variance_factor") or {}),
         *_weight_lines(ce),
         "  smallest pseudo-inertia eigenvalue per link [kg] (unconstrained: its realisation "
         "nearest the description):",
