@@ -238,8 +238,9 @@ def integral_chunks(
     Windows do not overlap (overlapping ones would repeat the same torque samples in several
     equations, correlating their errors without adding information); consecutive ones share
     their boundary sample, so noise at that sample enters both (with the momentum's sign
-    opposite): a mild correlation between neighbouring windows that the statistics ignore, as
-    the energy model's do.
+    opposite). On low-passed logs neighbouring windows also share the filtered torque noise
+    near their common end: :func:`~mindyn.identification.estimation.correlation_factor` scales
+    the variance of the estimates for it, as for the energy model's windows.
 
     Window length: the momentum at the two ends carries the velocity noise once per window
     (``A(q) delta dq``), while the torque integral's noise grows only as the square root of the
