@@ -388,6 +388,33 @@ def test_block_parallel_filter_equals_scipys_zero_phase_filter_of_the_whole_regr
     np.testing.assert_array_equal(got, want)
 
 
+def test_filtered_signals_of_one_log_and_of_joined_logs_equal_scipys_zero_phase_filter():
+    """``regressor_filter.signals(fn)``: the columns ``fn`` of the full-rate filtered motion
+    (here the Coulomb signs, a step at each reversal) through scipy's sosfiltfilt, edge-dropped
+    like the torques; of concatenated logs, each log's filtered on its own and stacked."""
+    from scipy import signal
+
+    robot = mindyn.load("puma560_3")
+
+    def signs(q, dq, ddq):
+        return np.sign(dq)
+
+    logs = []
+    for seed in (1, 2):
+        log, _, _, _ = _friction_log(robot, np.arange(0, 6.0, 1 / 250.0), seed=seed)
+        d = preprocess(log, cutoff=4.0, decimate=False)
+        f = d.regressor_filter
+        want = signal.sosfiltfilt(f.sos, np.sign(f.dq), axis=0, padlen=f.padlen)[f.keep]
+        got = f.signals(signs)
+        assert got.shape == (d.m, robot.n)
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12)
+        logs.append((d, want))
+    joined = concatenate([d for d, _ in logs]).regressor_filter.signals(signs)
+    np.testing.assert_array_equal(
+        joined, np.vstack([d.regressor_filter.signals(signs) for d, _ in logs])
+    )
+
+
 def test_block_filter_of_columns_zero_somewhere_or_everywhere_equals_scipys(monkeypatch):
     from mindyn.identification import preprocess as P
     from scipy import signal
