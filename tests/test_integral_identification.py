@@ -188,6 +188,7 @@ def test_cli_identify_integral_model_with_offsets(tmp_path, capsys):
     `mindyn base --offset` lists the offsets."""
     from mindyn import cli
     from mindyn.identification.data import write_csv
+    from mindyn.identification.estimation import window_variance_factor
 
     robot, base, offsets, sd = _setup()
     files = {}
@@ -207,6 +208,18 @@ def test_cli_identify_integral_model_with_offsets(tmp_path, capsys):
     assert "integral windows of 40 sample interval(s), simpson integration" in out
     doc = json.loads((tmp_path / "id.json").read_text())
     assert doc["model"] == "integral" and doc["offset"] is True
+    # the low-passed noise's correlation within and between windows, stated as the dynamic
+    # model's is: each log's factor for its 40-interval windows, weighted by its equations
+    corr, st = doc["settings"]["std_correlation"], doc["settings"]
+    pre = st["preprocessing"] if isinstance(st["preprocessing"], list) else [st["preprocessing"]]
+    rows = [lg["equations"] for lg in st["logs"]]
+    factors = [
+        window_variance_factor(p["filter"]["cutoff_Hz"], p["filter"]["order"], 40 / p["rate_Hz"])
+        for p in pre
+    ]
+    assert corr["variance_factor"] == pytest.approx(np.dot(rows, factors) / sum(rows), rel=1e-9)
+    assert corr["variance_factor"] > 1.0
+    assert f"  standard deviations: {corr['rule']}\n" in out
     assert doc["base_names"][-6:] == [f"Off{k}" for k in range(1, 7)]
     # the offsets come back within 3 std of the truth file's values
     est = np.array(doc["base_values"][-6:])

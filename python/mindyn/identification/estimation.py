@@ -6,10 +6,9 @@ Estimation is ordinary least squares, or weighted least squares with per-joint w
 ZCR07S study:
 ``sigma^2 = |y - W p|^2 / (r - c)``, ``cov = sigma^2 (W^T W)^-1``,
 ``RSD = 100 sqrt(cov_bb) / |p_b|``; parameters whose RSD exceeds a threshold are removed one at a
-time (largest first) and the rest re-estimated. On low-passed logs the dynamic model's
-covariance is multiplied by :func:`correlation_factor` (the filtered noise is correlated between
-the samples fitted).
-"""
+time (largest first) and the rest re-estimated. On low-passed logs the covariance is
+multiplied by :func:`correlation_factor` (the filtered noise is correlated between the samples
+fitted, and within and between the windows of the integral and energy models)."""
 
 from __future__ import annotations
 
@@ -22,6 +21,7 @@ from typing import cast
 
 import numpy as np
 import scipy.linalg as sla
+from scipy import integrate
 
 from .. import _args, _core
 from .._core import OFFSET_PREFIX as OFF
@@ -553,16 +553,48 @@ def residual_correlation(res: IdentificationResult, data) -> tuple[float, str]:
     return factor, rule
 
 
-def correlation_factor(logs: Sequence[JointData], rows: Sequence[int]) -> tuple[float, str]:
-    """The factor on the variance of the estimates of the dynamic model for the correlation of
-    its samples' noise, and the rule in words. The data path low-passes a log before it is
-    decimated to at least 10 x the cut-off, so white noise on the logged torques (or velocities)
-    is correlated between the samples fitted: over ``m`` samples at rate ``fs`` it carries the
+def window_variance_factor(cutoff: float, order: int, duration: float) -> float:
+    """The factor on the variance of estimates from equations that each integrate low-passed
+    white noise over one of consecutive windows of ``duration`` seconds, the filter that of
+    :func:`noise_bandwidth`. Such a window's noise has the variance ``S0 V(T)``,
+    ``V(T) = int_-T^T (T - |tau|) rho(tau) dtau`` (``S0`` the white noise's spectral density,
+    ``rho`` the inverse Fourier transform of ``|H|^4``, of unit integral), while the estimates,
+    from regressor columns that change little over the filter's correlation time, see the
+    noise's spectral density at zero frequency, ``S0 T`` per window: the variance of windows
+    taken as independent is ``T / V(T)`` times too small. That is ``1 / (2 B T)`` for a window
+    much shorter than the noise's correlation time ``1 / (2 B)`` (``B``:
+    :func:`noise_bandwidth`; the windows then share their noise like samples do), tending to 1
+    for long windows (a window shares only the noise near its ends with its neighbours).
+    ``rho`` is evaluated from ``|H|^4`` by the trapezoid rule (cut-off 1: frequencies up to 40,
+    correlation lags up to 20, where it has decayed below 1e-8 for orders 1 to 10)."""
+    x = cutoff * duration  # the window in periods of the cut-off
+    f = np.linspace(0.0, 40.0, 5121)
+    h4 = (1.0 + f ** (2 * order)) ** -2
+    u = np.linspace(0.0, min(x, 20.0), 257)
+    w = np.full(f.size, f[1])
+    w[[0, -1]] *= 0.5
+    rho = 2.0 * np.cos(2.0 * np.pi * np.outer(u, f)) @ (w * h4)  # rho at cut-off 1
+    var = 2.0 * float(integrate.trapezoid((x - u) * rho, u))  # V(T) fc
+    return max(1.0, x / var)
+
+
+def correlation_factor(
+    logs: Sequence[JointData], rows: Sequence[int], window: int | None = None
+) -> tuple[float, str]:
+    """The factor on the variance of the estimates for the correlation of the equations'
+    noise, and the rule in words. The data path low-passes a log before it is decimated to at
+    least 10 x the cut-off, so white noise on the logged torques (or velocities) is correlated
+    between the samples fitted.
+
+    Dynamic model (``window`` None): over ``m`` samples at rate ``fs`` the noise carries the
     information of ``m 2 B / fs`` independent ones (``B``: :func:`noise_bandwidth`), and the
     variance ``sigma^2 (W^T W)^-1`` of samples taken as independent is ``fs / (2 B)`` times too
     small (white noise has a flat spectrum; the regressor columns, within the band of the
-    motion, change little over the noise's correlation time). Per log ``max(1, fs / (2 B))``
-    (1 for a log not low-passed), averaged over the logs by their equations ``rows``."""
+    motion, change little over the noise's correlation time); per log ``max(1, fs / (2 B))``.
+    Integral and energy models (equations integrating over consecutive windows of ``window``
+    sample intervals): per log :func:`window_variance_factor` of the windows' duration
+    ``window / fs``. A log not low-passed: 1. Averaged over the logs by their equations
+    ``rows``."""
     factors, rates = [], []
     for d in logs:
         pre = d.processing.get("preprocess") or {}
@@ -570,18 +602,32 @@ def correlation_factor(logs: Sequence[JointData], rows: Sequence[int]) -> tuple[
         if filt is None:
             factors.append(1.0)
             continue
-        band = noise_bandwidth(float(filt["cutoff_Hz"]), int(filt["order"]))
-        factors.append(max(1.0, float(pre["rate_Hz"]) / (2.0 * band)))
-        rates.append((float(pre["rate_Hz"]), band))
+        fs, cutoff, order = float(pre["rate_Hz"]), float(filt["cutoff_Hz"]), int(filt["order"])
+        band = noise_bandwidth(cutoff, order)
+        if window is None:
+            factors.append(max(1.0, fs / (2.0 * band)))
+        else:
+            factors.append(window_variance_factor(cutoff, order, window / fs))
+        rates.append((fs, band))
     total = sum(rows)
     f = sum(r * x for r, x in zip(rows, factors)) / total if total > 0 else 1.0
     if not rates:
-        return 1.0, "samples taken as independent (no low-pass)"
+        what = "samples" if window is None else "windows"
+        return 1.0, f"{what} taken as independent (no low-pass)"
     fs, band = rates[0]
-    return f, (
-        f"variance x {f:.3g} for the low-passed noise's correlation between samples (rate "
-        f"{fs:.4g} Hz / (2 x its noise bandwidth {band:.4g} Hz))"
-        + (", averaged over the logs" if len(rates) > 1 or len(rates) < len(logs) else "")
+    if window is None:
+        rule = (
+            f"variance x {f:.3g} for the low-passed noise's correlation between samples (rate "
+            f"{fs:.4g} Hz / (2 x its noise bandwidth {band:.4g} Hz))"
+        )
+    else:
+        rule = (
+            f"variance x {f:.3g} for the low-passed noise's correlation within and between "
+            f"windows (windows of {window / fs:.4g} s against its correlation time "
+            f"1 / (2 x its noise bandwidth {band:.4g} Hz) = {1 / (2 * band):.3g} s)"
+        )
+    return f, rule + (
+        ", averaged over the logs" if len(rates) > 1 or len(rates) < len(logs) else ""
     )
 
 
@@ -774,10 +820,9 @@ def identify(
     else:
         settings["weighting"] = "none (ordinary least squares)"
 
-    inflation = 1.0
-    if model == "dynamic":
-        inflation, rule = correlation_factor(logs, log_rows)
-        settings["std_correlation"] = {"variance_factor": inflation, "rule": rule}
+    window = {"dynamic": None, "integral": integral_window, "energy": energy_window}[model]
+    inflation, rule = correlation_factor(logs, log_rows, window)
+    settings["std_correlation"] = {"variance_factor": inflation, "rule": rule}
 
     def solve(cols):
         p, std, s2 = ls.solve(cols)

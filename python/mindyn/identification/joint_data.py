@@ -14,9 +14,12 @@ __all__ = ["JointData", "RegressorFilter"]
 
 class RegressorFilter(Protocol):
     """What :attr:`JointData.regressor_filter` provides: the regressor columns of a base-parameter
-    set filtered like the torques, shape (m, n, nb)."""
+    set filtered like the torques, shape (m, n, nb); any columns ``fn(q, dq, ddq)`` of the
+    motion ((k, w) for k samples) filtered alike, shape (m, w)."""
 
     def regressor(self, base: Any) -> np.ndarray: ...
+
+    def signals(self, fn: Any) -> np.ndarray: ...
 
 
 @dataclass

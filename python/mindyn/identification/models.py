@@ -111,6 +111,28 @@ def friction_columns(base: BaseParameters, dq: np.ndarray) -> dict[int, tuple[in
     return out
 
 
+def data_friction_columns(
+    base: BaseParameters, data: JointData
+) -> dict[int, tuple[int, np.ndarray]]:
+    """:func:`friction_columns` at the velocities of ``data``; on preprocessed data whose
+    regressor columns are filtered like the torques (``data.regressor_filter``), each column is
+    evaluated on the filtered full-rate motion and low-passed like the torques: the torques
+    carry the Coulomb step filtered, not a step at the filtered velocity's sign change, and the
+    windows of the energy and integral models that cut through a reversal would otherwise see
+    the difference as noise (a bias on the Coulomb and viscous estimates)."""
+    cols = friction_columns(base, data.dq)
+    if not cols or data.regressor_filter is None:
+        return cols
+    order = list(cols)
+
+    def shapes(q, dq, ddq):
+        at = friction_columns(base, dq)
+        return np.column_stack([at[c][1] for c in order])
+
+    filtered = data.regressor_filter.signals(shapes)
+    return {c: (cols[c][0], filtered[:, i]) for i, c in enumerate(order)}
+
+
 def _cumulative(f: np.ndarray, t: np.ndarray, rule: str) -> np.ndarray:
     """Cumulative integral of the samples ``f`` (m, ...) over ``t`` (m,), starting at 0."""
     if rule == "trapezoid":
@@ -153,7 +175,7 @@ def energy_system(
         power_int = None
         integration_f = integration
     v = base.robot.slot_velocities(dq)  # friction power of slot k: its friction torque times v_k
-    cols = {c: v[:, k] * f for c, (k, f) in friction_columns(base, dq).items()}
+    cols = {c: v[:, k] * f for c, (k, f) in data_friction_columns(base, data).items()}
     F = np.column_stack([power] + list(cols.values())) if cols else power[:, None]
     cum = _cumulative(F, t, integration_f)
     if power_int is not None:
@@ -233,13 +255,15 @@ def integral_chunks(
     number of intervals) or the trapezoid rule; ``zoh`` takes the logged torque as held over each
     sample interval (``int tau dt = sum tau_k (t_k+1 - t_k)``, exact for a command held by the
     drive) and integrates the rest by Simpson. The viscous term integrates exactly to the
-    position difference, not through the (noisier) velocities.
+    position difference, not through the (noisier) velocities. On preprocessed data the other
+    friction columns are filtered like the torques (:func:`data_friction_columns`).
 
     Windows do not overlap (overlapping ones would repeat the same torque samples in several
     equations, correlating their errors without adding information); consecutive ones share
     their boundary sample, so noise at that sample enters both (with the momentum's sign
-    opposite): a mild correlation between neighbouring windows that the statistics ignore, as
-    the energy model's do.
+    opposite). On low-passed logs neighbouring windows also share the filtered torque noise
+    near their common end: :func:`~mindyn.identification.estimation.correlation_factor` scales
+    the variance of the estimates for it, as for the energy model's windows.
 
     Window length: the momentum at the two ends carries the velocity noise once per window
     (``A(q) delta dq``), while the torque integral's noise grows only as the square root of the
@@ -262,7 +286,7 @@ def integral_chunks(
     n, nb = data.n, base.n
     names = list(base.names)
     fv = {k: names.index(f"Fv{k + 1}") for k in range(n) if f"Fv{k + 1}" in names}
-    shapes = {c: kf for c, kf in friction_columns(base, data.dq).items() if c not in fv.values()}
+    shapes = {c: kf for c, kf in data_friction_columns(base, data).items() if c not in fv.values()}
     T = base.robot.drive_matrix
     per = max(1, CHUNK_SAMPLES // (window + 1))
     for c0 in range(0, a.size, per):

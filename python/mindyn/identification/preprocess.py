@@ -110,13 +110,27 @@ class ParallelFilter:
     averaged period), the zero-phase filter runs block by block over time on all columns at
     once, with the arithmetic of ``scipy.signal.sosfiltfilt``: the regressor is evaluated once
     or twice per block (:data:`KEEP_BUDGET`), on two threads, never held whole. Otherwise
-    ``lowpass`` filters whole columns, in blocks of at most :data:`PARALLEL_BUDGET` bytes."""
+    ``lowpass`` filters whole columns, in blocks of at most :data:`PARALLEL_BUDGET` bytes.
+    ``signals(fn)`` filters any columns ``fn(q, dq, ddq)`` of the full-rate motion alike."""
 
     def __init__(self, q, dq, ddq, lowpass, keep: slice, *, sos=None, padlen=None):
         self.q, self.dq, self.ddq = q, dq, ddq
         self.lowpass, self.keep = lowpass, keep
         self.sos, self.padlen = sos, padlen
         self._cache: dict = {}
+
+    def signals(self, fn) -> np.ndarray:
+        """The columns ``fn(q, dq, ddq)`` ((k, w) for k samples of the filtered full-rate
+        motion) low-passed like the torques, edge-dropped and decimated: shape (m, w)."""
+        m = self.q.shape[0]
+        idx = np.arange(m)[self.keep]
+        if self.sos is not None:
+
+            def rows(a, b):
+                return fn(self.q[a:b], self.dq[a:b], self.ddq[a:b])
+
+            return _filtfilt_blocks(self.sos, self.padlen, rows, m, idx)
+        return self.lowpass(fn(self.q, self.dq, self.ddq))[idx]
 
     def regressor(self, base) -> np.ndarray:
         key = id(base)
@@ -128,11 +142,10 @@ class ParallelFilter:
         idx = np.arange(m)[self.keep]
         if self.sos is not None:
 
-            def rows(a, b):
-                W = base.regressor(self.q[a:b], self.dq[a:b], self.ddq[a:b])
-                return W.reshape(b - a, n * nb)
+            def rows(q, dq, ddq):
+                return base.regressor(q, dq, ddq).reshape(q.shape[0], n * nb)
 
-            out = _filtfilt_blocks(self.sos, self.padlen, rows, m, idx).reshape(idx.size, n, nb)
+            out = self.signals(rows).reshape(idx.size, n, nb)
             self._cache[key] = (base, out)
             return out
         out = np.empty((idx.size, n, nb))
@@ -415,7 +428,8 @@ def preprocess(
         (:func:`split_at_gaps`); ``numpy.inf`` bridges every break.
     parallel : bool
         Filter the regressor columns like the torques (:class:`ParallelFilter`, attached as
-        ``regressor_filter``; used by the dynamic model and by predictions on this data).
+        ``regressor_filter``; used by the dynamic model, by the energy and integral models'
+        friction columns and by predictions on this data).
 
     Raises
     ------
@@ -680,6 +694,17 @@ class _Joined:
 
     def __init__(self, logs):
         self.logs = logs
+
+    def signals(self, fn) -> np.ndarray:
+        return np.concatenate(
+            [
+                fn(d.q, d.dq, d.ddq)
+                if d.regressor_filter is None
+                else d.regressor_filter.signals(fn)
+                for d in self.logs
+            ],
+            axis=0,
+        )
 
     def regressor(self, base) -> np.ndarray:
         parts = []
