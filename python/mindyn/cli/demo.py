@@ -305,9 +305,10 @@ def register(sub) -> None:
         low=0,
         high=100,
         default=1.0,
-        help="torque noise sd in % of each joint's effort limit (of its peak torque along the "
-        "excitation where the description gives none or a placeholder, as simulate's "
-        "--torque-noise P%)",
+        suffix="%",
+        help="torque noise sd in % (P or P%) of each joint's effort limit (of its peak torque "
+        "along the excitation where the description gives none or a placeholder, as "
+        "simulate's --torque-noise P%)",
     )
     deprecated(p, "--noise", noise)
     seed(p, "--seed")

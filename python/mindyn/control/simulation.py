@@ -1156,6 +1156,12 @@ def torque_noise_scale(robot: Robot, reference_torque) -> tuple[np.ndarray, np.n
     return np.where(limited, eff, peak), limited, words
 
 
+def _at_least_zero(what: str) -> str:
+    if what == "quantization":
+        return "an encoder step is a size, at least 0"
+    return "a noise level is a standard deviation, at least 0"
+
+
 def noise_from_spec(
     spec: str | None, robot: Robot, what: str, *, reference_torque=None
 ) -> np.ndarray:
@@ -1177,6 +1183,8 @@ def noise_from_spec(
             pct = float(s[:-1])
         except ValueError:
             pct = math.nan
+        if pct < 0:
+            raise ArgumentError(f"{opt}: {s} is negative; {_at_least_zero(what)}")
         if not (math.isfinite(pct) and 0 <= pct <= 100):
             raise ArgumentError(f"{opt}: expected a percentage in [0, 100], got '{spec}'")
         if reference_torque is None:
@@ -1207,6 +1215,11 @@ def noise_from_spec(
             + (", or a percentage P%" if what == "torque" else "")
             + f"; got '{spec}'"
         ) from None
+    negative = [k for k, v in enumerate(vals) if v < 0]
+    if negative:
+        k = negative[0]
+        where = f" (joint {k + 1})" if len(vals) > 1 else ""
+        raise ArgumentError(f"{opt}: {parts[k].strip()}{where} is negative; {_at_least_zero(what)}")
     if len(vals) == 1:
         vals = vals * n
     if len(vals) != n:
