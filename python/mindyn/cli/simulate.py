@@ -114,7 +114,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                     "(--param-error 0 takes the default gains, which hold it or are refused)",
                 )
         for note in (
-            getattr(getattr(controller, "gains", None), "note", ""),
+            gains.note_for(args.controller)
+            if (gains := getattr(controller, "gains", None))
+            else "",
             info.get("stability"),
             shortfall,
         ):
