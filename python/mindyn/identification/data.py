@@ -192,7 +192,7 @@ def _remedy(path: str, width: int, extra: dict, beyond: list, n: int, missing: l
     else:
         skip = set(extra.values())
         keep = [i + 1 for i in range(width) if i not in skip]
-        runs = []  # the columns kept as cut's ranges, 1-3,5
+        runs: list[list[int]] = []  # the columns kept as cut's ranges, 1-3,5
         for k in keep:
             if runs and runs[-1][1] == k - 1:
                 runs[-1][1] = k
