@@ -26,7 +26,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from mindyn import cli
+from mindyn.cli.args import UsageError
 
 ROOT = Path(__file__).resolve().parents[1]
 HEAVY = ("scipy.signal", "scipy.stats", "matplotlib", "cvxpy")
@@ -259,6 +261,67 @@ def test_joint_vectors_take_spaces_commas_or_both():
         assert len(err.splitlines()) == 1
     rc, _, err = run(["ik", "planar2", "--xyz", "1", "0", "0", "--q0", "1", "2", "3"])
     assert rc == 2 and "--q0 needs 2 values" in err, err
+
+
+@pytest.mark.parametrize("value", ["-1%", "-1", "-.5", "-1,2", "-inf", "-2deg"])
+def test_a_value_starting_with_a_minus_and_a_digit_is_every_options_value(value):
+    """A word such as -1% or -inf given to any option of any command is that option's value,
+    refused (or taken) by the option's own check: argparse alone read '-1%' as an option and
+    said '--torque-noise: expected one argument', which names no value."""
+    confused = []
+    for name, p in subparsers().items():
+        for a in p._actions:
+            if not a.option_strings or a.nargs == 0 or a.help == argparse.SUPPRESS:
+                continue
+            flag = max(a.option_strings, key=len)
+            words = [value] * (a.nargs if isinstance(a.nargs, int) else 1)
+            try:
+                cli.build_parser(name).parse_args([name, flag, *words])
+            except UsageError as e:
+                if re.search(r"expected (one|at least one|\d+) argument", str(e)):
+                    confused.append(f"{name} {flag}: {e}")
+                elif flag in str(e):
+                    assert value in str(e) or "required" in str(e), (name, flag, str(e))
+    assert not confused, confused
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["simulate", "--torque-noise", "-1%"], "--torque-noise: -1% is negative; a noise level"),
+        (["simulate", "--torque-noise", "-1"], "--torque-noise: -1 is negative; a noise level"),
+        (["simulate", "--torque-noise", "1,-0.5"], "--torque-noise: -0.5 (joint 2) is negative"),
+        (["simulate", "--velocity-noise", "-1,2"], "--velocity-noise: -1 (joint 1) is negative"),
+        (["simulate", "--quantization", "-1e-3"], "--quantization: -1e-3 is negative; an encoder"),
+        (
+            ["simulate", "--rate", "-250"],
+            "--rate: expected a finite number in (0, 1e+06], got a negative value, '-250'",
+        ),
+        (
+            ["demo", "--torque-noise", "-1%"],
+            "--torque-noise: expected a finite number in [0, 100], got a negative value, '-1%'",
+        ),
+    ],
+)
+def test_a_negative_value_is_refused_as_negative_in_every_command(argv, said, tmp_path):
+    """A negative noise level, encoder step or rate is refused in one line that says the value
+    is negative, whichever command and spelling (P%, one value, one per joint)."""
+    name, *options = argv
+    out = ["--mode", "inverse", "-o", tmp_path / "log.csv"]
+    rc, _, err = run([name, "planar2", *options, *(out if name == "simulate" else [])])
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert said in err, err
+    assert not any(tmp_path.iterdir())  # refused before anything is written
+
+
+def test_demo_torque_noise_takes_a_percentage_as_simulate_does():
+    """demo --torque-noise is in percent: '2%' (simulate's spelling) is '2'."""
+    parse = cli.build_parser("demo").parse_args
+    assert (
+        parse(["demo", "--torque-noise", "2%"]).noise
+        == parse(["demo", "--torque-noise", "2"]).noise
+        == 2.0
+    )
 
 
 def test_json_to_stdout_or_to_a_file_alike(tmp_path):

@@ -85,6 +85,86 @@ def test_torque_noise_in_percent_states_what_it_is_taken_of(tmp_path):
     assert "peak torque along the reference for joint(s) 2" in line, line
 
 
+def _resting_arm(tmp_path, q, shoulder_effort, elbow_effort=None):
+    """TWO_LINK with the effort limits given, and a reference CSV resting at ``q``."""
+    text = TWO_LINK.replace("effort: 50}", f"effort: {shoulder_effort:g}}}")
+    if elbow_effort is not None:
+        text = text.replace("velocity: 3}", f"velocity: 3, effort: {elbow_effort:g}}}")
+    (tmp_path / "arm.yaml").write_text(text)
+    rows = "\n".join(f"{t:g},{float(q[0])!r},{float(q[1])!r}" for t in np.linspace(0.0, 1.0, 11))
+    (tmp_path / "rest.csv").write_text("t,q1,q2\n" + rows + "\n")
+    argv = ["simulate", tmp_path / "arm.yaml", "--trajectory", tmp_path / "rest.csv"]
+    return argv + ["--mode", "inverse", "--torque-noise", "1%", "-o", tmp_path / "log.csv"]
+
+
+@pytest.mark.parametrize(
+    ("efforts", "placeholder"),
+    [((1e6, 5.0), 0), ((50.0, 0.01), 1), ((1e6, 0.01), None)],
+    ids=["far-above-every-peak", "far-below-its-peak", "both"],
+)
+def test_torque_noise_in_percent_of_a_placeholder_effort_limit_takes_the_peak(
+    efforts, placeholder, tmp_path
+):
+    """An effort limit that the torques along the reference make no sense of (over 100 x the
+    largest peak torque of any joint, or under 1/10 of the joint's own: the placeholders of
+    Solo12 or Baxter's head) is not what `--torque-noise 1%` takes 1 % of: that joint takes its
+    peak torque along the reference, here the gravity torque of a resting arm (Pinocchio), and
+    the output names it as a placeholder."""
+    q = np.array([0.3, -0.5])
+    rc, out, err = run(_resting_arm(tmp_path, q, *efforts))
+    assert rc == 0, err
+    model = pinocchio_model(mindyn.load(tmp_path / "arm.yaml"))
+    g = np.abs(pin.computeGeneralizedGravity(model, model.createData(), q))
+    eff = np.array(efforts)
+    wrong = (eff > 100 * g.max()) | (eff < 0.1 * g)  # the rule, on Pinocchio's torques
+    expected = np.where(wrong, g, eff)
+    assert wrong.tolist() == [placeholder in (0, None), placeholder in (1, None)]
+    sd = np.array(
+        json.loads((tmp_path / "log.truth.json").read_text())["simulation"]["noise"]["torque"]
+    )
+    np.testing.assert_allclose(sd, 0.01 * expected, rtol=1e-9)
+    (line,) = [s for s in out.splitlines() if "torque noise sd" in s]
+    assert "a placeholder" in line, line
+    for j in [placeholder] if placeholder is not None else [0, 1]:
+        assert f"joint(s) {j + 1} (" in line, line
+    assert ("1 % of the effort limit" in line) == (placeholder is not None), line
+
+
+def test_torque_noise_in_percent_on_baxter_keeps_the_arms_limits_and_not_the_heads():
+    """Baxter's head pan has effort="50000" (a placeholder: its peak torque along the
+    reference is far under 1 N m); its arm joints' limits (read from the URDF here) are real
+    and kept along the default reference."""
+    import xml.etree.ElementTree as ET
+
+    urdf = ROBOTS_DIR / "baxter_description/urdf/baxter.urdf"
+    robot = mindyn.load(urdf)
+    joints = {j.get("name"): j for j in ET.parse(urdf).getroot().findall("joint")}
+    eff = np.array([float(joints[n].find("limit").get("effort")) for n in robot.joint_names])
+    assert eff[0] == 50000.0 and robot.joint_names[0] == "head_pan"
+    from mindyn.control.simulation import SumOfSines, noise_from_spec
+
+    ref = SumOfSines(robot, period=10.0, seed=0)  # the torques are the input here, not a result
+    tau = robot.inverse_dynamics(*ref.evaluate(np.linspace(0.0, 10.0, 200)))
+    sd = noise_from_spec("1%", robot, "torque", reference_torque=tau)
+    np.testing.assert_allclose(sd[1:], 0.01 * eff[1:], rtol=1e-12)
+    np.testing.assert_allclose(sd[0], 0.01 * np.abs(tau[:, 0]).max(), rtol=1e-12)
+    assert sd[0] < 0.01  # not 500 N m
+
+
+def test_torque_noise_in_percent_of_nothing_is_refused_naming_the_joint(tmp_path):
+    """A joint with no effort limit and no torque along the reference (the elbow held upright)
+    has nothing to take a percentage of: refused, saying to give the noise in N m."""
+    q = np.array([0.3, np.pi / 2 - 0.3])
+    argv = _resting_arm(tmp_path, q, 50.0)
+    model = pinocchio_model(mindyn.load(tmp_path / "arm.yaml"))
+    g = pin.computeGeneralizedGravity(model, model.createData(), q)
+    assert abs(g[1]) < 1e-12 * abs(g[0])
+    rc, out, err = run(argv)
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert "--torque-noise: 1% of nothing for joint(s) 2," in err, err
+    assert "give the noise in N m" in err, err
+
+
 def test_torque_noise_in_newton_metres_states_its_unit(tmp_path):
     rc, out, err = run(
         ["simulate", "planar2", "--mode", "inverse", "--torque-noise", "0.1", "-o", tmp_path]

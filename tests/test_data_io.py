@@ -125,6 +125,47 @@ def test_missing_and_extra_columns_are_named(tmp_path):
         read_csv(p, n=2)
 
 
+def _cut(text: str, fields: str) -> str:
+    """``cut -d, -f FIELDS`` of a text, in Python: the 1-based columns of ``1-3,5``."""
+    keep = []
+    for part in fields.split(","):
+        a, _, b = part.partition("-")
+        keep += range(int(a), int(b or a) + 1)
+    return "".join(
+        ",".join(line.split(",")[k - 1] for k in keep) + "\n" for line in text.splitlines()
+    )
+
+
+@pytest.mark.parametrize("extra", [["temp1"], ["temp1", "mode"]])
+def test_an_unknown_column_is_named_with_the_remedy_that_reads_the_log(extra, tmp_path, capsys):
+    """A log with columns the reader does not know (a temperature, a mode) is refused naming
+    each with its position and saying what to do: the reader has no option to skip a column,
+    so the message gives the cut command that deletes them; that command's columns, applied
+    here, give a log that reads as the data written."""
+    t, q, dq, tau = _log(n=2, m=50)
+    header = ["t", "q1", "temp1", "q2", "tau1", "tau2", "mode"]
+    header = [h for h in header if h in extra or h not in ("temp1", "mode")]
+    cells = {"t": t, "q1": q[:, 0], "q2": q[:, 1], "tau1": tau[:, 0], "tau2": tau[:, 1]}
+    cells |= {"temp1": 20.0 + t, "mode": np.ones_like(t)}
+    rows = [[repr(float(cells[h][i])) for h in header] for i in range(len(t))]
+    path = _write(tmp_path / "log.csv", header, rows)
+    with pytest.raises(DataError) as e:
+        read_csv(path, n=2)
+    msg = str(e.value)
+    for name in extra:
+        assert f"{name} (column {header.index(name) + 1})" in msg, msg
+    assert "no option skips others" in msg, msg
+    fields = msg.split("cut -d, -f")[1].split()[0]
+    (tmp_path / "cut.csv").write_text(_cut(path.read_text(), fields))
+    data = read_csv(tmp_path / "cut.csv", n=2, filter="none")
+    np.testing.assert_array_equal(data.q, q)
+    np.testing.assert_array_equal(data.tau, tau)
+    rc = cli.main(["identify", "planar2", str(path)])
+    err = capsys.readouterr().err
+    assert rc == 2 and len(err.splitlines()) == 1, err
+    assert f"cut -d, -f{fields} " in err, err
+
+
 def test_wrong_joint_count_for_the_robot(tmp_path):
     t, q, _, tau = _log(n=3)
     p = write_csv(tmp_path / "a.csv", t, q, tau)

@@ -7,6 +7,7 @@ warning of ``codegen`` on unstable gains; absurd settings and gains files refuse
 from __future__ import annotations
 
 import math
+import re
 
 import mindyn
 import numpy as np
@@ -247,7 +248,8 @@ def test_track_urdf_arms_with_default_settings(robot, kind, capsys):
         args += ["--param-error", error] if error else []
         assert main(args) == 0
         out = capsys.readouterr().out
-        assert "gain margins of the sampled loops" in out and "stable (spectral radius" in out
+        assert f"gain margin of the sampled {kind} loop" in out, out
+        assert "stable (spectral radius" in out
         row = next(line for line in out.splitlines() if line.startswith("max |q - q_d|"))
         errors = [float(v) for v in row.split()[5:]]
         assert max(errors) < (10.0 if kind == "adaptive-pd" else 90.0), row
@@ -363,7 +365,7 @@ def test_simulate_command_exits_non_zero_and_writes_no_log(tmp_path, capsys):
     text = capsys.readouterr().out
     row = next(line for line in text.splitlines() if "max tracking error" in line)
     assert max(float(v) for v in row.split(":")[1].split()) < 90.0
-    assert "gain margins" in text
+    assert "gain margin of the sampled pd loop" in text
 
 
 def test_track_command_refuses_an_unstable_period(tmp_path, capsys):
@@ -409,7 +411,8 @@ def test_codegen_warns_when_the_gains_are_not_stable(tmp_path, capsys):
     assert "warning: the gains baked in are not stable" in err and "UNSTABLE" in err
     assert main([*base, "-o", str(tmp_path / "b")]) == 0
     captured = capsys.readouterr()
-    assert "warning" not in captured.err and "gain margins" in captured.out
+    assert "warning" not in captured.err
+    assert "gain margin of the sampled adaptive-pd loop" in captured.out
 
 
 @pytest.mark.parametrize(
@@ -573,3 +576,59 @@ def test_a_diverged_loop_s_advice_follows_the_check_made_before_the_run(tmp_path
             assert "lower the gains" not in text
         else:
             assert text.endswith(check.advice()) and "lower the gains" in check.advice()
+
+
+# --------------------------------------------------------------------------------------------
+# notes that concern the controller run
+# --------------------------------------------------------------------------------------------
+# what each controller uses of the default gains: plain PD K_P = Lambda K_D and no adaptation,
+# computed torque K_P = Lambda^2 and K_D = 2 Lambda (not the K_D per inertia), adaptive PD the
+# adaptation gains and the estimate box
+USES = {
+    "pd": ("K_P = Lambda K_D",),
+    "computed-torque": ("K_P = Lambda^2, K_D = 2 Lambda",),
+    "adaptive-pd": ("adaptation gains 1 normalised by nu", "estimate box"),
+}
+UNUSED = {
+    "pd": ("adaptation", "nu =", "Gamma", "estimate box", "initial estimate"),
+    "computed-torque": ("adaptation", "nu =", "Gamma", "estimate box", "x the smallest"),
+    "adaptive-pd": ("K_P = Lambda",),
+}
+
+
+@pytest.mark.parametrize("command", ["track", "simulate"])
+@pytest.mark.parametrize("kind", ["pd", "computed-torque", "adaptive-pd"])
+def test_the_gains_note_speaks_of_the_controller_run_only(kind, command, tmp_path, capsys):
+    """`track --controller pd` spoke of the adaptation gains and the margins of the other
+    loops: each controller's output states what it uses of the gains and its own loop's gain
+    margin, and nothing of what only the others use."""
+    argv = [command, "planar2", "--controller", kind, "--duration", "0.2"]
+    if command == "simulate":  # computed torque with an estimate: the library's, with gains
+        argv += ["-o", str(tmp_path / "log.csv")]
+        argv += ["--param-error", "0.3"] if kind == "computed-torque" else []
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    (line,) = [s for s in out.splitlines() if s.strip().startswith("gains:")]
+    for words in USES[kind]:
+        assert words in line, (words, line)
+    for words in UNUSED[kind]:
+        assert words not in out, (words, out)
+    assert f"gain margin of the sampled {kind} loop at 0.004 s:" in line, line
+    others = [k for k in control.CONTROLLERS if k != kind]
+    assert not any(re.search(rf"(?<![\w-]){k}(?![\w-])", line) for k in others), line
+
+
+@pytest.mark.parametrize(
+    ("what", "view"), [("gravity-compensation", "pd"), ("computed-torque",) * 2]
+)
+def test_codegen_states_the_gains_its_step_uses(what, view, tmp_path, capsys):
+    """The generated PD with gravity compensation (checked as the PD loop) and computed torque
+    state no adaptation gain; the library's note for every controller still has them all."""
+    argv = ["codegen", "planar2", "--lang", "c", "--what", what, "-o", str(tmp_path / "s")]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "adaptation" not in out and "nu =" not in out, out
+    assert f"gain margin of the sampled {view} loop" in out, out
+    gains = control.default_gains(mindyn.load("planar2"), rotor=True)
+    assert "adaptation gains" in gains.note and "gain margins of the sampled loops" in gains.note
+    assert gains.note_for(view) in out

@@ -176,8 +176,9 @@ def test_mjcf_round_trip_keeps_every_parameter(case, tmp_path):
     )
     np.testing.assert_allclose(again.gravity, robot.gravity, rtol=0, atol=1e-15)
     np.testing.assert_allclose(again.axes, robot.axes, rtol=0, atol=ROUND_TRIP)
-    # the effort limits too (the joints' actuatorfrcrange); MJCF has no velocity limit
-    for key in ("lower", "upper", "effort"):
+    # the effort limits too (the joints' actuatorfrcrange), and the velocity limits (custom
+    # numerics, MJCF having no element for them)
+    for key in ("lower", "upper", "effort", "velocity"):
         np.testing.assert_allclose(again.limits[key], robot.limits[key], atol=1e-12)
 
 
@@ -733,6 +734,67 @@ def test_cli_export_mjcf_and_urdf_refused_for_an_mjcf_robot(tmp_path):
         assert main(["export", str(out), str(ident), option, str(tmp_path / "x")]) == 2
     argv = ["export", str(REPO_UR5), str(ident), "--mjcf", str(back), "--sidecar", "s.yaml"]
     assert main(argv) == 2 and not (tmp_path / "s.yaml").exists()
+
+
+def test_velocity_limits_survive_mjcf_export_and_load(tmp_path):
+    """MJCF has no joint velocity limit: `export --mjcf` wrote none and the file read back had
+    none. A URDF with a different velocity limit per joint (read from it here), exported and
+    loaded again, gives the same limits, also once written back from the MJCF; MuJoCo still
+    compiles the file, holding each limit as a custom numeric."""
+    import json
+    import xml.etree.ElementTree as ET
+
+    speeds = iter([1.25, 2.5, 3.75, 0.625, 5.0, 7.125])
+    text = re.sub(
+        r'velocity="[^"]*"', lambda _: f'velocity="{next(speeds)!r}"', REPO_UR5.read_text()
+    )
+    urdf = tmp_path / "ur5_speeds.urdf"
+    urdf.write_text(text)
+    joints = {j.get("name"): j for j in ET.parse(urdf).getroot().findall("joint")}
+    robot = mindyn.load(urdf)
+    written = [float(joints[n].find("limit").get("velocity")) for n in robot.joint_names]
+    assert sorted(written) == [0.625, 1.25, 2.5, 3.75, 5.0, 7.125]
+    p = physical_params(robot, np.random.default_rng(5))
+    ident = tmp_path / "id.json"
+    names = robot.parameter_names(rotor=True, friction=True)
+    ident.write_text(json.dumps({"robot": robot.name, "classical": dict(zip(names, p.tolist()))}))
+    out = tmp_path / "ur5.xml"
+    cli("export", urdf, ident, "--mjcf", out)
+    np.testing.assert_array_equal(mindyn.load(out).limits["velocity"], written)
+    m = mujoco.MjModel.from_xml_path(str(out))
+    held = {
+        mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_NUMERIC, i): float(
+            m.numeric_data[m.numeric_adr[i]]
+        )
+        for i in range(m.nnumeric)
+    }
+    assert held == {f"velocity_limit:{n}": v for n, v in zip(robot.joint_names, written)}
+    back = tmp_path / "back.xml"  # written back from the MJCF: the file's numerics kept
+    cli("export", out, ident, "--mjcf", back)
+    np.testing.assert_array_equal(mindyn.load(back).limits["velocity"], written)
+
+
+@pytest.mark.parametrize(
+    ("numeric", "said"),
+    [
+        ('name="velocity_limit:elbow" data="2"', "no joint 'elbow'"),
+        ('name="velocity_limit:j1" data="-2"', "expected one positive velocity limit, got data -2"),
+        (
+            'name="velocity_limit:j1" data="1 2"',
+            "expected one positive velocity limit, got data 1 2",
+        ),
+    ],
+)
+def test_a_velocity_limit_numeric_that_fits_no_joint_is_refused_by_name(numeric, said, tmp_path):
+    path = tmp_path / "one.xml"
+    path.write_text(
+        '<mujoco><worldbody><body name="b"><joint name="j1" type="hinge"/>'
+        '<inertial pos="0.1 0 0" mass="1" diaginertia="0.1 0.1 0.1"/></body></worldbody>'
+        f"<custom><numeric {numeric}/></custom></mujoco>"
+    )
+    mujoco.MjModel.from_xml_path(str(path))  # MuJoCo takes it
+    with pytest.raises(mindyn.ModelError, match=re.escape(said)):
+        mindyn.load(path)
 
 
 def test_mjcf_with_a_tip_loads_the_chain_and_is_written_back_whole_only(tmp_path):

@@ -16,6 +16,10 @@ row of ``T``): a tendon over several joints, or a spatial one, carrying armature
 frictionloss (``T^T Ia T`` couples the joints) is refused by name, as is tendon stiffness.
 Tendons without such terms, and actuators, do not enter the dynamics and are not read.
 
+Limits: a joint's ``range`` and its ``actuatorfrcrange`` (the effort limit); its velocity limit,
+which MJCF lacks, from a custom numeric ``velocity_limit:JOINT`` (:data:`VELOCITY_LIMIT`), as
+:func:`mindyn.mjcf.write_mjcf` writes it.
+
 A link frame of the model is the MuJoCo body frame moved to the anchor (``pos``) of the body's
 last joint, with the body's axes; a body with several joints gets one massless link per joint
 before its last one (``BODY__JOINT``). Jointless bodies are merged into the link they hang from.
@@ -33,6 +37,10 @@ from . import _core
 
 #: How to install the optional dependency, for error messages.
 INSTALL = 'pip install "mindyn[mujoco]"'
+#: The name of a custom numeric (``<custom><numeric name="velocity_limit:JOINT" data="V"/>``)
+#: holding a joint's velocity limit [rad/s, m/s], which MJCF has no element for: written by
+#: :func:`mindyn.mjcf.write_mjcf`, read back here (MuJoCo keeps it as data, unused).
+VELOCITY_LIMIT = "velocity_limit:"
 
 
 def require(what: str):
@@ -202,7 +210,7 @@ def read(path, tip: str | None) -> _core.Model:
         damping[:] = 0.0
     if disabled & frictionloss:
         friction[:] = 0.0
-    urdf = _urdf(m, _model_name(m, path), damping, friction)
+    urdf = _urdf(m, _model_name(m, path), damping, friction, velocity_limits(m, path))
     core = _core.parse_urdf(urdf, tip or "", str(path))
     gravity = np.zeros(3) if disabled & int(flags.mjDSBL_GRAVITY) else np.array(m.opt.gravity)
     core = core.with_gravity(gravity)
@@ -277,9 +285,37 @@ def _model_name(m, path) -> str:
     return name if name and name != "MuJoCo Model" else Path(str(path)).stem
 
 
-def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray) -> str:
+def velocity_limits(m, path) -> np.ndarray:
+    """Each joint's velocity limit (by joint id; 0: none) from the custom numerics
+    ``velocity_limit:JOINT`` (:data:`VELOCITY_LIMIT`); one naming no joint, or whose data is
+    not one positive finite number, is refused by name."""
+    mujoco = require("reading an MJCF")
+    out = np.zeros(m.njnt)
+    joints = {joint_name(m, j): j for j in range(m.njnt)}
+    for i in range(m.nnumeric):
+        name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_NUMERIC, i) or ""
+        if not name.startswith(VELOCITY_LIMIT):
+            continue
+        joint = name[len(VELOCITY_LIMIT) :]
+        adr, size = int(m.numeric_adr[i]), int(m.numeric_size[i])
+        data = [float(v) for v in m.numeric_data[adr : adr + size]]
+        if joint not in joints:
+            raise _core.ModelError(
+                f"{path}: <numeric name=\"{name}\">: no joint '{joint}' (a velocity limit is "
+                f"named {VELOCITY_LIMIT}<joint>)"
+            )
+        if len(data) != 1 or not (math.isfinite(data[0]) and data[0] > 0):
+            raise _core.ModelError(
+                f'{path}: <numeric name="{name}">: expected one positive velocity limit, got '
+                f"data {' '.join(f'{v:g}' for v in data) or '(none)'}"
+            )
+        out[joints[joint]] = data[0]
+    return out
+
+
+def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray, speed: np.ndarray) -> str:
     """The compiled model ``m`` as URDF text (see the module's docstring), with the viscous and
-    Coulomb friction of each joint (by joint id)."""
+    Coulomb friction and the velocity limit (0: none) of each joint (by joint id)."""
     mujoco = require("reading an MJCF")
     hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
     parts = [f'<robot name="{_attr(name)}">', f'<link name="{_attr(body_name(m, 0))}"/>']
@@ -317,7 +353,7 @@ def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray) -> str:
                 effort = max(abs(float(v)) for v in m.jnt_actfrcrange[j])
             extra = (
                 f'<axis xyz="{_vec(m.jnt_axis[j])}"/>'
-                f'<limit {limit}effort="{effort!r}" velocity="0"/>'
+                f'<limit {limit}effort="{effort!r}" velocity="{float(speed[j])!r}"/>'
                 f'<dynamics damping="{float(damping[j])!r}" friction="{float(friction[j])!r}"/>'
             )
             parts.append(_joint(joint_name(m, j), kind, parent, link, origin, extra))

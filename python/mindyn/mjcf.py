@@ -15,7 +15,10 @@ How MuJoCo's terms relate to the model's (``tau = W(q, dq, ddq) p + Ia ddq + Fv 
   ``efc_state`` linear) that is exactly ``Fc sign(dq)``; with the frictionloss constraint
   disabled (``mjDSBL_FRICTIONLOSS``) ``mj_inverse`` leaves it out and ``Fc sign(dq)`` is added by
   hand;
-- torque offsets ``Off`` have no place in MJCF (a comment lists them).
+- torque offsets ``Off`` have no place in MJCF (a comment lists them);
+- the joints' effort limits are their ``actuatorfrcrange``; their velocity limits, which MJCF has
+  no element for, custom numerics ``<numeric name="velocity_limit:JOINT" data="V"/>`` (data that
+  MuJoCo keeps and ignores, read back by :func:`mindyn.load`).
 
 With transmissions (``q_m = T q + c``, ``tau = T^T tau_m``), motor by motor (row ``i`` of ``T``):
 
@@ -75,8 +78,10 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
         the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, the effort
-        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), gravity, a
-        ``tool`` site for a chain, and a ``<motor>``
+        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), the
+        velocity limits as custom numerics ``velocity_limit:<joint>`` (MJCF has none; MuJoCo
+        keeps them as data, :func:`mindyn.load` reads them back), gravity, a ``tool`` site for
+        a chain, and a ``<motor>``
         per joint, or with transmissions per motor: on its joint with ``gear`` = its ratio, or
         on a fixed tendon for a motor coupling joints (see the module's docstring).
     drive_side : {"joint", "motor"}, optional
@@ -129,6 +134,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     parents = robot.parents
     bodies: list[ET.Element] = []
     lim = robot.limits
+    speeds: list[tuple[str, float]] = []
     for k in range(robot.n):
         parent = world if parents[k] < 0 else bodies[parents[k]]
         place = robot.joint_pre(k)
@@ -159,6 +165,9 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             joint.update(actuatorfrclimited="true", actuatorfrcrange=_vec((-effort, effort)))
         joint.update(_attrs(drive[k]))
         ET.SubElement(body, "joint", joint)
+        speed = lim["velocity"][k]
+        if np.isfinite(speed) and speed > 0:  # MJCF has none: a custom numeric, read back
+            speeds.append((robot.joint_names[k], speed))
     if robot.is_serial:
         tool = robot.joint_post(robot.n - 1) @ robot.tool
         ET.SubElement(bodies[-1], "site", {"name": "tool", **_pose(tool)})
@@ -171,6 +180,15 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
                 fixed.attrib.update(_attrs(_slot(terms, i, f"motor '{motor}'")))
             for k, c in row:
                 ET.SubElement(fixed, "joint", {"joint": robot.joint_names[k], "coef": _num(c)})
+    if speeds:
+        custom = ET.SubElement(root, "custom")
+        for name, speed in speeds:
+            numeric = {"name": _mujoco.VELOCITY_LIMIT + name, "data": repr(float(speed))}
+            ET.SubElement(custom, "numeric", numeric)
+        notes.append(
+            "the velocity limits, which MJCF lacks, are custom numerics "
+            f"'{_mujoco.VELOCITY_LIMIT}<joint>' (MuJoCo ignores them; mindyn reads them back)"
+        )
     actuators = ET.SubElement(root, "actuator")
     for motor, row in motors:
         if len(row) == 1:

@@ -12,6 +12,8 @@ The conventions of every command (docs/cli.md states them too):
 - a joint vector (one value per joint, or one value for every joint where a command says so)
   is given as separate words, comma-separated, or both: ``--q0 0 0.5 1`` = ``--q0 0,0.5,1``
   (:func:`~mindyn.cli.number_options.joint_vector`);
+- a word that starts with a minus and a digit (``-1%``, ``-inf``, ``-0.2,3``) is a value
+  (:class:`Parser`); an option that needs a non-negative one refuses it saying it is negative;
 - one name per meaning: ``--controller-period`` (the sample period of a controller),
   ``--excitation-period`` (the period of a periodic excitation in a log), ``--torque-noise``,
   ``--position-noise``, ``--velocity-noise`` (noise standard deviations),
@@ -102,12 +104,14 @@ class UsageError(Error):
 class Parser(argparse.ArgumentParser):
     """An argument parser whose errors are one line, ``mindyn: error: ...``, raised as
     :class:`UsageError` for :func:`mindyn.cli.main` to print (instead of usage text and an
-    exit). A word that starts with a minus and a digit is a value, not an option: negative
-    numbers in any notation (``-1e-3``) and joint vectors (``-0.2,3``)."""
+    exit). A word that starts with a minus and a digit (or ``.5``, ``inf``, ``nan``) is a value,
+    not an option, whatever follows: negative numbers in any notation (``-1e-3``, ``-inf``),
+    joint vectors (``-0.2,3``) and values with a unit (``-1%``); the option's own check then
+    refuses or takes it, saying why (no option of the command line is spelled so)."""
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        self._negative_number_matcher = re.compile(r"^-\.?\d[\d.eE+,-]*$")
+        self._negative_number_matcher = re.compile(r"^-(?:\.?\d|inf|nan)", re.IGNORECASE)
 
     def error(self, message: str):  # noqa: D102 - argparse API
         sub = self.prog.split(" ", 1)[1] if " " in self.prog else ""

@@ -134,7 +134,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
         box=box,
     )
     if getattr(controller, "box_note", ""):
-        gains.note = f"{gains.note}; {controller.box_note}" if gains.note else controller.box_note
+        gains.add_note(controller.box_note, [args.controller])
     controller.gains = gains
     return reference, ref_text, duration, cycle, controller, base
 

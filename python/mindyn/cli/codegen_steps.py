@@ -116,8 +116,9 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
     _say_step(robot, f"{kind} step", code, args)
     if note:
         print(note)
-    if gains.note:
-        print(gains.note)
+    note = gains.note_for("pd" if kind == "gravity-compensation" else kind)  # PD + gravity
+    if note:
+        print(note)
     if kind == "adaptive-pd":
         box = code.settings["box"]
         print(box if box.startswith("estimate box") else f"estimate box: {box}")

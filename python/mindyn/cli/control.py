@@ -84,8 +84,8 @@ def cmd_track(args: argparse.Namespace) -> int:
         )
     if limit is not None:
         lines.append(f"  torque limits: effort, saturated {100 * s['saturated_fraction']:.2f} %")
-    if getattr(gains, "note", ""):
-        lines.append(f"  {gains.note}")
+    if gains is not None and gains.note_for(args.controller):
+        lines.append(f"  {gains.note_for(args.controller)}")
     if "stability" in result.info:
         lines.append(f"  {result.info['stability']}")
     lines.append(f"  integration: {result.info['integrator']}")

@@ -36,7 +36,7 @@ def _joints(values, fmt: str = "{:8.3g}") -> str:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from ..control.simulation import SensorNoise, noise_from_spec, simulate
+    from ..control.simulation import SensorNoise, noise_from_spec, simulate, torque_noise_scale
     from ..identification import load_logs, run, true_base_values
     from ..identification.data import convert_torque, write_csv
     from ..identification.excitation import (
@@ -121,7 +121,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
             write_csv(p, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
         files[name] = p
     print(
-        f"    torque noise sd per joint ({args.noise:g} % of the effort limit) [N m]: "
+        f"    torque noise sd per joint ({args.noise:g} % of "
+        f"{torque_noise_scale(robot, ref_tau)[2]}) [N m]: "
         f"{_joints(sd)}; 20-bit encoder"
     )
     print(
@@ -304,7 +305,10 @@ def register(sub) -> None:
         low=0,
         high=100,
         default=1.0,
-        help="torque noise sd in % of each joint's effort limit",
+        suffix="%",
+        help="torque noise sd in % (P or P%) of each joint's effort limit (of its peak torque "
+        "along the excitation where the description gives none or a placeholder, as "
+        "simulate's --torque-noise P%)",
     )
     deprecated(p, "--noise", noise)
     seed(p, "--seed")

@@ -29,11 +29,13 @@ class Number:
         high_open: bool = False,
         integer: bool = False,
         unit: str = "",
+        suffix: str = "",
     ):
         self.low, self.high = low, high
         self.low_open, self.high_open = low_open, high_open
         self.integer = integer
         self.unit = unit
+        self.suffix = suffix  # may follow the number (``1%`` = ``1`` for a percentage)
         self.__name__ = "integer" if integer else "number"  # argparse names the type by this
 
     def describe(self) -> str:
@@ -66,6 +68,8 @@ class Number:
     def __call__(self, text: str):
         bad = argparse.ArgumentTypeError(f"expected {self.describe()}, got '{text}'")
         s = text.strip()
+        if self.suffix and s.endswith(self.suffix):
+            s = s[: -len(self.suffix)].strip()
         try:
             if self.integer:
                 if len(s) > 30:  # int() of a huge digit string is slow, and no bound allows it
@@ -78,6 +82,10 @@ class Number:
         if not self.integer and not math.isfinite(value):
             raise bad
         lo, hi = self.low, self.high
+        if lo is not None and lo >= 0 and value < 0:
+            raise argparse.ArgumentTypeError(
+                f"expected {self.describe()}, got a negative value, '{text}'"
+            )
         if lo is not None and (value < lo or (self.low_open and value == lo)):
             raise bad
         if hi is not None and (value > hi or (self.high_open and value == hi)):
@@ -94,12 +102,15 @@ def number(
     high_open: bool = False,
     integer: bool = False,
     unit: str = "",
+    suffix: str = "",
     help: str = "",
     **kwargs,
 ):
     """``p.add_argument(*flags, type=Number(...), help=...)`` with the accepted range appended
-    to the help text."""
-    kind = Number(low, high, low_open=low_open, high_open=high_open, integer=integer, unit=unit)
+    to the help text; ``suffix`` may follow the number (``%``)."""
+    kind = Number(
+        low, high, low_open=low_open, high_open=high_open, integer=integer, unit=unit, suffix=suffix
+    )
     text = f"{help}; " if help else ""
     text += f"{'integer' if integer else 'number'} {kind.range_text()}"
     if "default" in kwargs and kwargs["default"] is not None and "nargs" not in kwargs:

@@ -185,8 +185,9 @@ def add_description_outputs(p, what: str) -> None:
         metavar="FILE",
         type=output_file,
         help="MuJoCo MJCF to write" + suffix + ": inertials, joint armature (Ia), damping (Fv) "
-        "and frictionloss (Fc), transmissions as tendons; a robot read from an MJCF has that "
-        "file written back",
+        "and frictionloss (Fc), the effort limits (actuatorfrcrange) and velocity limits "
+        "(custom numerics velocity_limit:JOINT, read back on loading), transmissions as "
+        "tendons; a robot read from an MJCF has that file written back",
     )
     p.add_argument(
         "--sidecar",

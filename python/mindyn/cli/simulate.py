@@ -114,7 +114,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
                     "(--param-error 0 takes the default gains, which hold it or are refused)",
                 )
         for note in (
-            getattr(getattr(controller, "gains", None), "note", ""),
+            gains.note_for(args.controller)
+            if (gains := getattr(controller, "gains", None))
+            else "",
             info.get("stability"),
             shortfall,
         ):
@@ -125,7 +127,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     print(
         "  torque noise sd per joint: "
         + " ".join(f"{v:.3g}" for v in nz["torque"])
-        + _noise_basis(args.torque_noise, robot)
+        + _noise_basis(args.torque_noise, robot, ref_tau)
     )
     if any(nz["quantization"]) or any(nz["position"]) or any(nz["velocity"]):
         print(
@@ -141,7 +143,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _noise_basis(spec: str | None, robot) -> str:
+def _noise_basis(spec: str | None, robot, reference_torque) -> str:
     """The unit of the torque noise and, given in percent, what it was taken of per joint."""
     from ..control.simulation import torque_noise_scale
 
@@ -150,21 +152,13 @@ def _noise_basis(spec: str | None, robot) -> str:
     if not spec.strip().endswith("%"):
         return " [N m | N]"
     pct = spec.strip()[:-1].strip()
-    _, limited = torque_noise_scale(robot)
-    if limited.all():
-        return f" [N m | N], {pct} % of each joint's effort limit"
-    if not limited.any():
-        peak = "peak torque along the reference (no effort limits)"
-        return f" [N m | N], {pct} % of each joint's {peak}"
-    none = ", ".join(str(j + 1) for j in np.flatnonzero(~limited))
-    return (
-        f" [N m | N], {pct} % of the effort limit; of the peak torque along the reference for "
-        f"joint(s) {none}, which have none"
-    )
+    return f" [N m | N], {pct} % of {torque_noise_scale(robot, reference_torque)[2]}"
 
 
 def register(sub) -> None:
     """Adds ``simulate`` to the ``mindyn`` subcommands."""
+    from ..control.simulation import EFFORT_PLACEHOLDER_ABOVE as ABOVE
+    from ..control.simulation import EFFORT_PLACEHOLDER_BELOW as BELOW
     from ..control.simulation import MAX_SAMPLES, MAX_STEPS
     from .closed_loop import add_closed_loop_args
 
@@ -213,7 +207,9 @@ def register(sub) -> None:
         metavar="SD",
         help="torque noise sd: one value, one per joint (comma-separated), or P%% of each "
         "joint's effort limit (of its peak torque along the reference where the description "
-        "gives none); in [0, 1e6] N m or [0, 100] %%",
+        f"gives none or a placeholder: over {ABOVE:g} x the largest peak torque of any joint, "
+        f"or under {BELOW:g} x the joint's own; the output says which); in [0, 1e6] N m or "
+        "[0, 100] %%",
     )
     p.add_argument(
         "--position-noise", metavar="SD", help="position noise sd (rad, m), each in [0, 1]"

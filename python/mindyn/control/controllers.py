@@ -482,12 +482,39 @@ class AdaptivePD:
 class Gains(dict):
     """Gains as :func:`default_gains` and :func:`load_gains` give them (``kd``, ``lambda``,
     ``gamma`` and optionally ``nu``, ``kp``), with ``note``: how they were chosen and the check
-    of their sampled loops at the period (text, empty when nothing is to be said), and
-    ``conflicts``: for each controller whose sampled loop cannot hold the friction bound at the
-    period (:func:`default_gains`), the one-line reason; :func:`make_controller` refuses it."""
+    of their sampled loops at the period, for every controller (text, empty when nothing is to
+    be said); :meth:`note_for`: the part of it that concerns one controller (plain PD uses no
+    adaptation gain, computed torque no K_D); and ``conflicts``: for each controller whose
+    sampled loop cannot hold the friction bound at the period (:func:`default_gains`), the
+    one-line reason; :func:`make_controller` refuses it."""
 
-    note: str = ""
     conflicts: dict = {}  # replaced, never mutated, per instance
+    # the note's clauses: (the views that show it, text); a view is a controller or None (the
+    # note of every controller)
+    _clauses: tuple = ()
+
+    @property
+    def note(self) -> str:
+        return self.note_for(None)
+
+    @note.setter
+    def note(self, text: str) -> None:
+        self._clauses = ()
+        if text:
+            self.add_note(text)
+
+    def note_for(self, controller: str | None) -> str:
+        """The note's clauses that concern ``controller`` (one of :data:`CONTROLLERS`; None:
+        every controller's, :attr:`note`), joined by '; '."""
+        if controller is not None:
+            _args.choice(controller, "controller", CONTROLLERS)
+        return "; ".join(text for views, text in self._clauses if controller in views)
+
+    def add_note(self, text: str, controllers=None, *, general: bool = True) -> None:
+        """Appends a clause to the note, shown for ``controllers`` (a sequence of names; None:
+        every one) and, when ``general``, in :attr:`note` (every controller's)."""
+        views = set(CONTROLLERS if controllers is None else controllers)
+        self._clauses = (*self._clauses, (frozenset(views | ({None} if general else set())), text))
 
 
 def plant_parameters(robot: Robot, rotor: bool, *, friction: bool = True) -> np.ndarray:
@@ -922,7 +949,8 @@ def default_gains(
     :func:`~mindyn.control.stability.adaptation_step_ratio`; this ``nu`` keeps it below a third
     for any ``Y``). ``kp`` for PD is ``Lambda K_D``; computed torque uses ``K_P = Lambda^2``,
     ``K_D = 2 Lambda``. The result's ``note`` states the choice, the friction bound and the
-    margin."""
+    margins; ``note_for(controller)`` what of it concerns one controller (its own margin, the
+    adaptation gains for adaptive PD only)."""
     _args.instance(robot, "robot", Robot)
     _args.optional(_args.flag, rotor, "rotor")
     T = check_period(period)
@@ -931,8 +959,8 @@ def default_gains(
     if rotor is None and g.conflicts:  # no gains hold the friction on both plants: unbound
         which = ", ".join(g.conflicts)
         g = _default_gains(robot, T, rotor, np.zeros(robot.n), tol)
-        g.note += (
-            f"; NOT held against Coulomb friction ({which} cannot hold K_P >= 2 Fc / "
+        g.add_note(
+            f"NOT held against Coulomb friction ({which} cannot hold K_P >= 2 Fc / "
             f"({FRICTION_SHARE:g} tolerance) on the robot both with and without rotor inertia "
             f"at {T:g} s): the error friction leaves is up to 2 Fc / K_P; derive the gains for "
             "one of them (rotor True or False)"
@@ -954,7 +982,7 @@ def default_gains(
             + (f"; a period of {shorter:.3g} s allows both" if shorter else "; no period does")
             + " (or give gains, or a larger tracking tolerance)"
         )
-        g.note += f"; {kind} REFUSED with these gains: {g.conflicts[kind]}"
+        g.add_note(f"{kind} REFUSED with these gains: {g.conflicts[kind]}", [kind])
     return g
 
 
@@ -971,6 +999,12 @@ def _default_gains(robot: Robot, T: float, rotor, kp_min, tol) -> Gains:
     def margin_text(cs):
         return ", ".join(f"{c.kind} {c.gain_margin:.3g}" for c in cs)
 
+    def add_margins(g, cs):  # every loop's in the note, each controller's own in its view
+        g.add_note(f"gain margins of the sampled loops at {T:g} s: {margin_text(cs)}", [])
+        for c in cs:
+            text = f"gain margin of the sampled {c.kind} loop at {T:g} s: {c.gain_margin:.3g}"
+            g.add_note(text, [c.kind], general=False)
+
     where = {None: "with or without rotor inertia", True: "with rotor inertia"}.get(
         rotor, "without rotor inertia"
     )
@@ -985,8 +1019,9 @@ def _default_gains(robot: Robot, T: float, rotor, kp_min, tol) -> Gains:
         if lam_ok and all(c.stable for c in cs):
             g.note = (
                 f"gains: the ZCR07S study's (K_D {g['kd']}, Lambda {g['lambda']}), stable at "
-                f"{T:g} s for the robot {where} (gain margins {margin_text(cs)})"
+                f"{T:g} s for the robot {where}"
             )
+            add_margins(g, cs)
             return g
         why = next((c.text() for c in cs if not c.stable), f"Lambda T >= 2 at {T:g} s")
         prefix = f"the ZCR07S study's gains are NOT stable at this period ({why}); instead "
@@ -1073,18 +1108,26 @@ def _default_gains(robot: Robot, T: float, rotor, kp_min, tol) -> Gains:
         if held.any()
         else "; no Coulomb friction to hold"
     )
-    g.note = (
-        prefix
-        + f"gains: K_D = {DEFAULT_KD_PER_INERTIA:g} x the smallest effective inertia of each "
-        f"joint, Lambda = {DEFAULT_LAMBDA:g}"
-        + (f", lowered for the period {T:g} s" if lowered else "")
-        + bound
-        + f" (mass matrix sampled at {len(qs)} configurations, robot {where}); adaptation "
-        f"gains 1 normalised by nu = {g['nu']:.3g} (= {GAIN_MARGIN:g} Gamma T / min K_D: the "
-        "sampled update's step condition, T lambda_max(K_D^-1/2 Y Gamma Y^T K_D^-1/2) / "
-        "(1 + nu |Y|^2) < 1, kept below a third for any Y); "
-        f"gain margins of the sampled loops at {T:g} s: {margin_text(cs)}"
+    lowered_text = f", lowered for the period {T:g} s" if lowered else ""
+    kd_text = f"K_D = {DEFAULT_KD_PER_INERTIA:g} x the smallest effective inertia of each joint"
+    lam_text = f"Lambda = {DEFAULT_LAMBDA:g}"
+    g.note = ""
+    g.add_note(f"{prefix}gains: {kd_text}, {lam_text}{lowered_text}", ["adaptive-pd"])
+    pd_head = f"{prefix}gains: {kd_text}, {lam_text} (K_P = Lambda K_D){lowered_text}"
+    g.add_note(pd_head, ["pd"], general=False)
+    ct_head = f"{prefix}gains: {lam_text} (K_P = Lambda^2, K_D = 2 Lambda){lowered_text}"
+    g.add_note(ct_head, ["computed-torque"], general=False)
+    g.add_note(
+        bound.removeprefix("; ") + f" (mass matrix sampled at {len(qs)} configurations, "
+        f"robot {where})"
     )
+    g.add_note(
+        f"adaptation gains 1 normalised by nu = {g['nu']:.3g} (= {GAIN_MARGIN:g} Gamma T / min "
+        "K_D: the sampled update's step condition, T lambda_max(K_D^-1/2 Y Gamma Y^T "
+        "K_D^-1/2) / (1 + nu |Y|^2) < 1, kept below a third for any Y)",
+        ["adaptive-pd"],
+    )
+    add_margins(g, cs)
     return g
 
 
@@ -1180,10 +1223,12 @@ def load_gains(
         given.append(key)
     if given:
         gains.conflicts = {}  # the file's gains are the caller's choice
-        rest = gains.note.removeprefix("gains: ")
-        gains.note = f"gains: {', '.join(given)} from {path}" + (
-            f"; the rest by default: {rest}" if len(given) < 3 and rest else ""
-        )
+        default = gains._clauses if len(given) < 3 else ()
+        gains.note = f"gains: {', '.join(given)} from {path}"
+        for views, text in default:  # "the rest by default: ..." in each view
+            if text.startswith("gains: ") or text.startswith("the ZCR07S study's gains are NOT"):
+                text = "the rest by default: " + text.removeprefix("gains: ")
+            gains._clauses = (*gains._clauses, (views, text))
     return gains
 
 

@@ -1103,26 +1103,74 @@ def simulate_inverse(
 NOISE_LIMITS = {"torque": 1e6, "position": 1.0, "velocity": 100.0, "quantization": 1.0}
 
 
-def torque_noise_scale(robot: Robot, reference_torque=None) -> tuple[np.ndarray, np.ndarray]:
-    """Per joint, the torque a percentage of torque noise is taken of: the effort limit, or,
-    where the description gives none, the peak of ``|reference_torque|`` (shape (m, n), the
-    torques along the reference; without it such a joint's entry is NaN). Returns the
-    torques and, per joint, whether it is the effort limit."""
+#: An effort limit more than this many times the largest peak torque of any joint along the
+#: reference is a placeholder (no joint of the robot comes near it: 1000 N m on a 2 kg leg)
+EFFORT_PLACEHOLDER_ABOVE = 100.0
+#: An effort limit below this fraction of its joint's own peak torque along the reference is a
+#: placeholder too (the reference needs ten times the limit)
+EFFORT_PLACEHOLDER_BELOW = 0.1
+
+
+def torque_noise_scale(robot: Robot, reference_torque) -> tuple[np.ndarray, np.ndarray, str]:
+    """Per joint, the torque a percentage of torque noise is taken of: the effort limit, or the
+    peak of ``|reference_torque|`` (shape (m, n), the torques along the reference) where the
+    description gives none (missing, zero, infinite) or a placeholder, one that no torque along
+    the reference makes sense of: above :data:`EFFORT_PLACEHOLDER_ABOVE` x the largest peak
+    torque of any joint, or below :data:`EFFORT_PLACEHOLDER_BELOW` x the joint's own. Returns the
+    torques, per joint whether it is the effort limit, and what they are in words (``"P % of "``
+    + words: ``"each joint's effort limit"``, or which joints take the peak torque and why)."""
     eff = np.array(robot.limits["effort"], dtype=float)
-    limited = np.isfinite(eff) & (eff > 0)
-    peak = np.full(robot.n, np.nan)
-    if reference_torque is not None:
-        peak = np.abs(np.asarray(reference_torque, dtype=float)).max(0)
-    return np.where(limited, eff, peak), limited
+    tau = np.asarray(reference_torque, dtype=float)
+    if tau.ndim != 2 or tau.shape[1] != robot.n or tau.shape[0] == 0:
+        raise ArgumentError(f"reference_torque: expected shape (m, {robot.n}), got {tau.shape}")
+    peak = np.abs(tau).max(0)
+    top = float(peak.max())
+    given = np.isfinite(eff) & (eff > 0)
+    above = given & (eff > EFFORT_PLACEHOLDER_ABOVE * top)
+    below = given & ~above & (eff < EFFORT_PLACEHOLDER_BELOW * peak)
+    limited = given & ~above & ~below
+    if limited.all():
+        return eff, limited, "each joint's effort limit"
+    reasons = []
+    for mask, why in (
+        (~given, "no effort limit"),
+        (
+            above,
+            f"an effort limit over {EFFORT_PLACEHOLDER_ABOVE:g} x the largest peak torque, "
+            f"{top:.3g} N m | N: a placeholder",
+        ),
+        (
+            below,
+            f"an effort limit under {EFFORT_PLACEHOLDER_BELOW:g} x its peak torque: a placeholder",
+        ),
+    ):
+        if mask.all():
+            reasons.append(f"every joint ({why})")
+        elif mask.any():
+            reasons.append(
+                f"joint(s) {', '.join(str(j + 1) for j in np.flatnonzero(mask))} ({why})"
+            )
+    words = "the peak torque along the reference for " + ", ".join(reasons)
+    if limited.any():
+        words = f"the effort limit, and of {words}"
+    return np.where(limited, eff, peak), limited, words
+
+
+def _at_least_zero(what: str) -> str:
+    if what == "quantization":
+        return "an encoder step is a size, at least 0"
+    return "a noise level is a standard deviation, at least 0"
 
 
 def noise_from_spec(
     spec: str | None, robot: Robot, what: str, *, reference_torque=None
 ) -> np.ndarray:
     """Parses a noise level: ``"0.5"`` (all joints), ``"0.5,0.5,0.2"`` (per joint) or ``"1%"``
-    (torque only: percent of each joint's effort limit, or of the peak reference torque where
-    the description gives no effort limit). Values must be finite, non-negative and at most
-    :data:`NOISE_LIMITS` (percentages at most 100)."""
+    (torque only: percent of each joint's effort limit, or of its peak torque along the
+    reference where the description gives none or a placeholder, :func:`torque_noise_scale`;
+    ``reference_torque`` (m, n), the torques along the reference, is then needed). Values must
+    be finite, non-negative and at most :data:`NOISE_LIMITS` (percentages at most 100); a
+    joint left with nothing to take a percentage of (no usable limit, no torque) is refused."""
     n = robot.n
     opt = "quantization=" if what == "quantization" else f"{what}_noise="
     if spec is None:
@@ -1135,12 +1183,27 @@ def noise_from_spec(
             pct = float(s[:-1])
         except ValueError:
             pct = math.nan
+        if pct < 0:
+            raise ArgumentError(f"{opt}: {s} is negative; {_at_least_zero(what)}")
         if not (math.isfinite(pct) and 0 <= pct <= 100):
             raise ArgumentError(f"{opt}: expected a percentage in [0, 100], got '{spec}'")
-        eff, _ = torque_noise_scale(robot, reference_torque)
-        if not np.isfinite(eff).all():
-            raise ArgumentError("torque noise in %: the robot has no effort limits")
-        return pct / 100.0 * eff
+        if reference_torque is None:
+            raise ArgumentError(
+                "reference_torque: needed with torque noise in % (the effort limits are checked "
+                "against the torques along the reference, which stand in for missing ones)",
+            )
+        scale, _, words = torque_noise_scale(robot, reference_torque)
+        # a peak torque at the round-off of the largest one is no torque
+        top = float(np.abs(np.asarray(reference_torque, dtype=float)).max())
+        empty = ~(np.isfinite(scale) & (scale > 1e-12 * top))
+        if empty.any():
+            none = ", ".join(str(j + 1) for j in np.flatnonzero(empty))
+            raise ArgumentError(
+                f"{opt}: {s} of nothing for joint(s) {none}, which have no usable effort limit "
+                f"and no torque along the reference ({s} of {words}); give the noise in N m "
+                "instead, one value or one per joint"
+            )
+        return pct / 100.0 * scale
     parts = s.split(",")
     try:  # an empty value or entry is no level (never read as 0)
         vals = [float(v) for v in parts] if all(v.strip() for v in parts) else None
@@ -1152,6 +1215,11 @@ def noise_from_spec(
             + (", or a percentage P%" if what == "torque" else "")
             + f"; got '{spec}'"
         ) from None
+    negative = [k for k, v in enumerate(vals) if v < 0]
+    if negative:
+        k = negative[0]
+        where = f" (joint {k + 1})" if len(vals) > 1 else ""
+        raise ArgumentError(f"{opt}: {parts[k].strip()}{where} is negative; {_at_least_zero(what)}")
     if len(vals) == 1:
         vals = vals * n
     if len(vals) != n:

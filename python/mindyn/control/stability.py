@@ -247,11 +247,16 @@ class LoopCheck:
                 else f", viscous-friction margin of the controller's model above {_MARGIN_CAP:g}"
             )
         verdict = "stable" if self.stable else "UNSTABLE"
+        covered = COVERED  # the adaptation only where there is one
+        if self.kind != "adaptive-pd":
+            covered = covered.replace(
+                "not gravity, Coulomb friction or adaptation", "not gravity or Coulomb friction"
+            )
         return (
             f"sampled {self.kind} loop at a period of {self.period:g} s: {verdict} "
             f"(spectral radius {self.spectral_radius:.6g}, {margin}; largest eigenvalue of "
             f"T M^-1 K_D,eff {self.ratio:.3g}, a sampled loop needs it below 2; "
-            f"{len(self.q) and 'checked on ' + ', '.join(self.cases) + '; '}{COVERED})"
+            f"{len(self.q) and 'checked on ' + ', '.join(self.cases) + '; '}{covered})"
             + (f"; {self.adaptation}" if self.adaptation else "")
         )
 

@@ -4,19 +4,20 @@ Format: one header line, then one row per sample, comma-separated::
 
     t, q1..qN, [dq1..dqN], [ddq1..ddqN], tau1..tauN
 
-Cells are decimal numbers in ASCII (``-1.25``, ``3e-4``, blanks around them allowed); the file
-is UTF-8 text (a leading byte-order mark is skipped). ``t`` in seconds, strictly increasing;
-positions in rad (m for prismatic joints), velocities and accelerations per second; torques in N
-m (N), or as relative values in per mille of the drive's rated torque, as the ZCR07S controller
-logs them (``torque_unit="permille"``: ``tau = value * rated_torque * gear_ratio / 1000``, with
-the drive table of the robot description). The torque columns may say their unit in the header,
-``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with ``torque_unit``); the
-reader then needs no ``torque_unit``. Motor currents in A may stand in for the torques, as
-columns ``i1..iN`` (or ``torque_unit="current"``): ``tau = i * K`` with the joint-side drive
-gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K`` given as ``drive_gain``;
-when the description declares transmissions, ``tau = T^T (K_t i)`` with the motor torque
-constants ``K_t`` (``drive_gain``, else the transmission's) and the transmission matrix ``T``
-(see :func:`current_gains`).
+No other column is read: one is refused, named with its position and the ``cut`` command that
+deletes it. Cells are decimal numbers in ASCII (``-1.25``, ``3e-4``, blanks around them
+allowed); the file is UTF-8 text (a leading byte-order mark is skipped). ``t`` in seconds,
+strictly increasing; positions in rad (m for prismatic joints), velocities and accelerations per
+second; torques in N m (N), or as relative values in per mille of the drive's rated torque, as
+the ZCR07S controller logs them (``torque_unit="permille"``: ``tau = value * rated_torque *
+gear_ratio / 1000``, with the drive table of the robot description). The torque columns may say
+their unit in the header, ``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with
+``torque_unit``); the reader then needs no ``torque_unit``. Motor currents in A may stand in for
+the torques, as columns ``i1..iN`` (or ``torque_unit="current"``): ``tau = i * K`` with the
+joint-side drive gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K`` given as
+``drive_gain``; when the description declares transmissions, ``tau = T^T (K_t i)`` with the
+motor torque constants ``K_t`` (``drive_gain``, else the transmission's) and the transmission
+matrix ``T`` (see :func:`current_gains`).
 Velocities and accelerations that are not logged are obtained from the positions (velocities) by
 zero-phase low-pass filtering and central differences; the settings are reported in
 :attr:`JointData.processing`.
@@ -28,6 +29,7 @@ import csv
 import json
 import math
 import re
+import shlex
 import sys
 from pathlib import Path
 
@@ -123,7 +125,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
             )
     groups: dict[str, dict[int, int]] = {"q": {}, "dq": {}, "ddq": {}, "tau": {}}
     t_col = None
-    extra = []
+    extra: dict[str, int] = {}  # unexpected name -> its column index
     seen = set()
     for i, name in enumerate(names):
         if name in seen:
@@ -131,7 +133,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         seen.add(name)
         m = _COLUMN.fullmatch(name)
         if not m or (m.group(1) == "t") != (m.group(2) is None):
-            extra.append(name)
+            extra[name] = i
             continue
         if m.group(1) == "t":
             t_col = i
@@ -149,11 +151,13 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
             )
     want = {"q": True, "dq": False, "ddq": False, "tau": require_torque}
     missing = [] if t_col is not None else ["t"]
+    beyond = []  # columns of joints the robot does not have
     for kind, required in want.items():
         present = groups[kind]
         for j in present:
             if not 1 <= j <= n:
-                extra.append(f"{kind}{j}")
+                extra[f"{kind}{j}"] = present[j]
+                beyond.append(f"{kind}{j}")
         if present or required:
             missing += [f"{kind}{j}" for j in range(1, n + 1) if j not in present]
     if not require_torque and groups["tau"] and len(groups["tau"]) < n:
@@ -167,9 +171,43 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         raise DataError(
             f"{path}: wrong columns for a {n}-joint robot ({'; '.join(parts)}); expected "
             + _expected_columns(n, require_torque)
+            + (_remedy(path, len(names), extra, beyond, n, missing) if extra else "")
         )
     unit = next(iter(units.values())) if units else None
     return {"t": t_col, "n": n, "torque_unit": unit, **groups}
+
+
+def _remedy(path: str, width: int, extra: dict, beyond: list, n: int, missing: list) -> str:
+    """What to do about the unexpected columns ``extra`` (name -> index) of a log of ``width``
+    columns: the reader takes no other column and has no option to skip one, so they are
+    deleted from the file (a ``cut`` command that does it, when nothing else is wrong), or
+    renamed when they hold what the missing ones should."""
+    cols = ", ".join(f"{name} (column {i + 1})" for name, i in extra.items())
+    text = "; a log holds these columns only (no option skips others): "
+    if missing:
+        text += (
+            f"rename each of {cols} that holds a missing column to its name "
+            f"({', '.join(missing)}), and delete the others from the file"
+        )
+    else:
+        skip = set(extra.values())
+        keep = [i + 1 for i in range(width) if i not in skip]
+        runs: list[list[int]] = []  # the columns kept as cut's ranges, 1-3,5
+        for k in keep:
+            if runs and runs[-1][1] == k - 1:
+                runs[-1][1] = k
+            else:
+                runs.append([k, k])
+        fields = ",".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
+        stem = path[:-4] if path.lower().endswith(".csv") else path
+        text += (
+            f"delete {cols} from the file, e.g. cut -d, -f{fields} {shlex.quote(path)} > "
+            f"{shlex.quote(stem + '.cut.csv')}"
+        )
+    if beyond:
+        text += f" ({', '.join(beyond)} are of joints the {n}-joint robot does not have: a log of "
+        text += "another robot?)"
+    return text
 
 
 def read_csv(
