@@ -616,6 +616,9 @@ def test_the_gains_note_speaks_of_the_controller_run_only(kind, command, tmp_pat
     assert f"gain margin of the sampled {kind} loop at 0.004 s:" in line, line
     others = [k for k in control.CONTROLLERS if k != kind]
     assert not any(re.search(rf"(?<![\w-]){k}(?![\w-])", line) for k in others), line
+    # every figure printed is a number (computed torque printed a row of nan for the torque
+    # prediction error of an estimate it does not adapt)
+    assert "nan" not in out.lower(), out
 
 
 @pytest.mark.parametrize(
@@ -632,3 +635,31 @@ def test_codegen_states_the_gains_its_step_uses(what, view, tmp_path, capsys):
     gains = control.default_gains(mindyn.load("planar2"), rotor=True)
     assert "adaptation gains" in gains.note and "gain margins of the sampled loops" in gains.note
     assert gains.note_for(view) in out
+
+
+def test_computed_torque_from_a_gains_file_states_and_uses_its_own_gains(tmp_path):
+    """A gains file's kd is a torque gain of PD and adaptive PD: computed torque (gains in 1/s
+    and 1/s^2) does not take it as its K_D; with the file's kp alone it is critically damped,
+    K_D = 2 sqrt(K_P); with lambda alone K_P = Lambda^2, K_D = 2 Lambda of the file's Lambda.
+    The note says which, and gives no default value for a key the file sets."""
+    robot = mindyn.load("planar2")
+    path = tmp_path / "g.yaml"
+    cases = {
+        "kd: [5, 7]\n": ([100.0, 100.0], [20.0, 20.0], "the file's kd, a torque gain"),
+        "kp: [25, 64]\n": ([25.0, 64.0], [10.0, 16.0], "K_D = 2 sqrt(K_P)"),
+        "lambda: [3, 4]\n": ([9.0, 16.0], [6.0, 8.0], "with the file's Lambda"),
+        "kp: [25, 64]\nkd: [3, 4]\n": ([25.0, 64.0], [3.0, 4.0], "the file's kd [1/s]"),
+    }
+    for text, (kp, kd, words) in cases.items():
+        path.write_text(text)
+        g = control.load_gains(path, robot)
+        ct = control.make_controller("computed-torque", robot, g)
+        np.testing.assert_allclose(ct.kp, kp, rtol=1e-12)
+        np.testing.assert_allclose(ct.kd, kd, rtol=1e-12)
+        note = g.note_for("computed-torque")
+        assert words in note, note
+        rest = [c for c in g.note.split("; ") if c.startswith("the rest by default: ")]
+        for key in (line.split(":")[0] for line in text.splitlines()):
+            assert not any(f" {key} " in c for c in rest), (key, rest)
+    path.write_text("lambda: [3, 4]\n")
+    assert "Lambda = 10" not in control.load_gains(path, robot).note

@@ -154,7 +154,9 @@ def add_closed_loop_args(p, default: str) -> None:
         "--gains",
         metavar="FILE",
         help="YAML with kd, lambda, gamma, nu (adaptive PD) and optionally kp (PD: default "
-        "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda)",
+        "Lambda K_D; computed torque: default Lambda^2 with K_D = 2 Lambda; with kp, the file's "
+        "kd, else 2 sqrt(kp): a kd without kp is a torque gain, not computed torque's); keys "
+        "left out take the defaults, stated in the output",
     )
     add_tolerance_arg(p)
     p.add_argument(

@@ -489,6 +489,8 @@ class Gains(dict):
     one-line reason; :func:`make_controller` refuses it."""
 
     conflicts: dict = {}  # replaced, never mutated, per instance
+    #: the keys a gains file left to the defaults (:func:`load_gains`; empty otherwise)
+    defaulted: frozenset = frozenset()
     # the note's clauses: (the views that show it, text); a view is a controller or None (the
     # note of every controller)
     _clauses: tuple = ()
@@ -555,7 +557,12 @@ def _gain_arrays(kind: str, gains: dict, n: int):
         return _diag(gains.get("kp", lam * kd), n, "kp"), kd, lam
     if kind == "computed-torque":
         if "kp" in gains:
-            return _diag(gains["kp"], n, "kp"), kd, lam
+            kp = _diag(gains["kp"], n, "kp")
+            # without its own K_D (a gains file's default kd is a torque gain of the other
+            # controllers): critically damped
+            if "kd" in getattr(gains, "defaulted", ()):
+                kd = 2.0 * np.sqrt(np.maximum(kp, 0.0))
+            return kp, kd, lam
         return lam**2, 2 * lam, lam
     return lam * kd, kd, lam
 
@@ -1168,6 +1175,13 @@ def _yaml_number(v):
     return None
 
 
+def _gain_text(value) -> str:
+    """A gain (a number or a list of numbers) in a note, 4 significant digits."""
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(f"{float(v):.4g}" for v in value) + "]"
+    return f"{float(value):.4g}"
+
+
 def load_gains(
     path: str | Path, robot: Robot, *, period: float = 0.004, rotor=None, tolerance=None
 ) -> Gains:
@@ -1223,12 +1237,31 @@ def load_gains(
         given.append(key)
     if given:
         gains.conflicts = {}  # the file's gains are the caller's choice
-        default = gains._clauses if len(given) < 3 else ()
+        gains.defaulted = frozenset(k for k in ("kd", "lambda", "gamma", "nu") if k not in given)
         gains.note = f"gains: {', '.join(given)} from {path}"
-        for views, text in default:  # "the rest by default: ..." in each view
-            if text.startswith("gains: ") or text.startswith("the ZCR07S study's gains are NOT"):
-                text = "the rest by default: " + text.removeprefix("gains: ")
-            gains._clauses = (*gains._clauses, (views, text))
+        rest = [k for k in ("kd", "lambda", "gamma", "nu") if k in gains.defaulted]
+        if rest:  # the defaults' values; their margins were checked for the defaults only
+            gains.add_note(
+                "the rest by default: " + ", ".join(f"{k} {_gain_text(gains[k])}" for k in rest)
+            )
+        lam = "the file's Lambda" if "lambda" in given else "the default Lambda"
+        gains.add_note(
+            "PD: K_P = " + ("the file's kp" if "kp" in given else f"{lam} x K_D"),
+            ["pd"],
+            general=False,
+        )
+        if "kp" in given:
+            ct = "computed torque: the file's kp as K_P, K_D = " + (
+                "the file's kd [1/s]" if "kd" in given else "2 sqrt(K_P) [1/s] (critical damping)"
+            )
+        else:
+            ct = f"computed torque: K_P = Lambda^2, K_D = 2 Lambda [1/s] with {lam}" + (
+                f" (the file's kd, a torque gain of PD and adaptive PD, is not used; give kp "
+                f"and kd together in {path} to set computed torque's own)"
+                if "kd" in given
+                else ""
+            )
+        gains.add_note(ct, ["computed-torque"], general=False)
     return gains
 
 

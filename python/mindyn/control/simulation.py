@@ -807,7 +807,9 @@ def simulate(
         p_true,
         names,
         tau_model=out["taud"],
-        tau_true_model=taut if adaptive else None,
+        # a controller with a fixed model and no regressor of its own (computed torque) has
+        # no true-model torque to compare with
+        tau_true_model=taut if adaptive and np.all(np.isfinite(taut)) else None,
         p_hat=ph,
         p_true=pb_true,
         base_names=list(base.names) if base is not None else [],
