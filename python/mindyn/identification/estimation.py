@@ -27,7 +27,7 @@ from .. import _args, _core
 from .._core import OFFSET_PREFIX as OFF
 from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
-from ..robot import Robot, as_robot
+from ..robot import Robot, as_robot, drive_train_record
 from .data import DataError
 from .errors import IdentificationError, RankDeficientError
 from .joint_data import JointData
@@ -144,6 +144,7 @@ class IdentificationResult:
             },
             "settings": self.settings,
             "seconds": self.seconds,
+            **drive_train_record(self.base.robot),
         }
 
 
