@@ -424,7 +424,8 @@ class NumberCheck {
 // <mechanicalReduction>) and ROS 2 <ros2_control><transmission name> (<plugin>, <actuator name
 // role><mechanical_reduction>, <joint name role><offset><mechanical_reduction>); either spelling
 // of the reduction is read in either form. Transmissions of other types (PR2's type attribute,
-// other plugins) are left out and named in the notes; one naming no joint of the file too. Each
+// other plugins) are left out and kept in Model::unread_transmissions; one naming no joint of
+// the file is left out and named in the notes. Each
 // problem of the three types read is refused in one line naming the file, line, transmission
 // and element.
 // ---------------------------------------------------------------------------------------------
@@ -465,8 +466,9 @@ class TransmissionReader {
   }
 
   /// Transmissions of other types (PR2's <transmission type="pr2_mechanism_model/...">, other
-  /// plugins such as HalfDifferentialTransmission), left out: 'name' (type).
-  std::vector<std::string> skipped;
+  /// plugins such as HalfDifferentialTransmission), left out: name, type as written, the
+  /// joints it names and its line.
+  std::vector<TransmissionGroup> skipped;
 
  private:
   /// True (and noted in `skipped`) for a transmission of a type that is none of the three
@@ -482,8 +484,15 @@ class TransmissionReader {
     if (full.empty() || std::find(known.begin(), known.end(), full) != known.end() ||
         !misspelt(full, known).empty())
       return false;  // read (or refused as a misspelling)
+    TransmissionGroup g;
     const char* name = t->Attribute("name");
-    skipped.push_back("'" + std::string(name ? name : "") + "' (" + full + ")");
+    g.name = name ? name : "";
+    g.type = full;
+    g.line = t->Row();
+    for (const TiXmlElement* j = t->FirstChildElement("joint"); j;
+         j = j->NextSiblingElement("joint"))
+      if (const char* jn = j->Attribute("name")) g.joints.emplace_back(jn);
+    skipped.push_back(g);
     return true;
   }
 
@@ -677,11 +686,13 @@ class TransmissionReader {
 /// The URDF text urdfdom is to read: `xml` once its links and joints passed NumberCheck, with
 /// numbers written with extra white space rewritten. Text TinyXML cannot parse is returned as
 /// it is, for urdfdom to report.
-/// The transmissions are read into `groups` and `format`; those of other types are named in
-/// `skipped`, and elements every URDF parser ignores in `ignored`.
+/// The transmissions are read into `groups` and `format`; those of other types go to
+/// `skipped` (not read: name, type, joints), and elements every URDF parser ignores to
+/// `ignored`.
 std::string checkNumbers(const std::string& xml, const std::string& source,
                          std::vector<TransmissionGroup>* groups, std::string* format,
-                         std::vector<std::string>* skipped, std::vector<std::string>* ignored) {
+                         std::vector<TransmissionGroup>* skipped,
+                         std::vector<std::string>* ignored) {
   TiXmlDocument doc;
   doc.Parse(xml.c_str());
   TiXmlElement* robot = doc.Error() ? nullptr : doc.FirstChildElement("robot");
@@ -1138,23 +1149,14 @@ Model parseUrdf(const std::string& xml, const std::string& tip, const std::strin
   try {
     requireUtf8(xml, source);
     std::string reason, format;
-    std::vector<TransmissionGroup> groups;
-    std::vector<std::string> skipped, ignored;
+    std::vector<TransmissionGroup> groups, skipped;
+    std::vector<std::string> ignored;
     const urdf::ModelInterfaceSharedPtr urdf =
         parseQuietly(checkNumbers(xml, source, &groups, &format, &skipped, &ignored), &reason);
     if (!urdf) throw ModelError(source + ": not a valid URDF: " + reason);
     Model model = Builder(*urdf, source, root_joint).build(tip);
     if (!groups.empty()) addTransmissions(*urdf, groups, format, &model);
-    if (!skipped.empty()) {
-      std::string text;
-      for (const std::string& k : skipped) text += (text.empty() ? "" : ", ") + k;
-      model.notes += (model.notes.empty() ? "" : "; ") +
-                     std::string(
-                         "transmissions of other types than SimpleTransmission, "
-                         "DifferentialTransmission and FourBarLinkageTransmission, not "
-                         "read: ") +
-                     text;
-    }
+    model.unread_transmissions = skipped;  // the Python loader warns of them, once
     if (!ignored.empty()) {
       std::string text;
       for (const std::string& k : ignored) text += (text.empty() ? "" : ", ") + k;

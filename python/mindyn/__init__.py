@@ -24,11 +24,12 @@ from ._core import to_pinocchio_order as _to_pin
 from .base import BaseParameters, base_parameters
 from .control import coriolis_matrix, slotine_li_regressor
 from .inverse_kinematics import ik
-from .robot import Robot, bundled_robots, load
+from .robot import DriveTrainWarning, Robot, bundled_robots, load
 
 __all__ = [
     "ArgumentError",
     "BaseParameters",
+    "DriveTrainWarning",
     "Error",
     "base_parameters",
     "ModelError",

@@ -155,6 +155,9 @@ class Model:
     def transmission(self) -> dict:
         ...
     @property
+    def unread_transmissions(self) -> list:
+        ...
+    @property
     def viscous(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
         ...
     @viscous.setter

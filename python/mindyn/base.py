@@ -16,7 +16,7 @@ import numpy as np
 
 from . import _args, _core
 from . import formulas as _formulas
-from .robot import Robot, as_robot
+from .robot import Robot, as_robot, drive_train_record
 
 __all__ = [
     "BaseParameters",
@@ -402,6 +402,7 @@ class BaseParameters:
             "snapped": self.snapped,
             "snappable": self.snappable,
             "snap": _plain(self.snap_decision),
+            **drive_train_record(self.robot),
         }
         if symbolic:
             out.update(self.symbolic().to_dict())

@@ -212,6 +212,19 @@ def _joint_side_terms(
     return out, notes
 
 
+def unread_transmission_notes(robot: Robot, written: str) -> list[str]:
+    """A note per transmission of a type the loader does not read that drives joints of the
+    model (:attr:`~mindyn.Robot.unread_transmissions`): ``written`` says what the output does
+    with it; its joints' terms are written as those of directly driven joints."""
+    return [
+        f"transmission '{t['name']}' ({t['type']}) was not read: {written}; joint(s) "
+        + ", ".join(f"'{j}'" for j in t["modelled_directly"])
+        + " written as directly driven (ratio 1)"
+        for t in robot.unread_transmissions
+        if t["modelled_directly"]
+    ]
+
+
 def _few(names: list[str], most: int = 6) -> str:
     shown = ", ".join(f"'{k}'" for k in names[:most])
     return shown + (f" and {len(names) - most} more" if len(names) > most else "")
@@ -272,7 +285,9 @@ def write_urdf(
     (:attr:`~mindyn.Robot.drive_side`), a directly driven joint's ``<dynamics>`` is its motor's
     friction as it acts on the joint (``r^2 Fv``, ``|r| Fc``), a joint of a motor that turns
     with several joints gets 0 (a note says so), and the sidecar has the motor values
-    (``drive_side: motor``, each row naming its motor).
+    (``drive_side: motor``, each row naming its motor). A transmission of a type the loader does
+    not read (:attr:`~mindyn.Robot.unread_transmissions`) stays in the file as written; a note
+    says that its joints were written as directly driven.
 
     Raises
     ------
@@ -294,6 +309,7 @@ def write_urdf(
     doc = _UrdfDocument(src)
     joint_side, reflected = _joint_side_terms(robot, terms)
     notes = doc.set_chain(robot, joint_side) + reflected
+    notes += unread_transmission_notes(robot, "kept in the file as the source writes it")
     out = Path(path)
     side = _sidecar_path(sidecar, out) if terms.joint_terms() or sidecar is not None else None
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -54,7 +54,14 @@ import numpy as np
 from . import _args, _mujoco
 from ._core import OFFSET_PREFIX as _OFF
 from ._core import ModelError
-from .export import Export, JointTerms, XmlDocument, centroidal, classical_terms
+from .export import (
+    Export,
+    JointTerms,
+    XmlDocument,
+    centroidal,
+    classical_terms,
+    unread_transmission_notes,
+)
 from .robot import Robot, load
 
 __all__ = ["write_mjcf"]
@@ -118,7 +125,7 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
 
 # -- a new MJCF -------------------------------------------------------------------------------
 def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
-    notes: list[str] = []
+    notes = unread_transmission_notes(robot, "not written (MJCF has no place for it)")
     tr = robot.transmission
     on_motors = side == "motor" and tr is not None
     motors = _motor_rows(robot, tr)

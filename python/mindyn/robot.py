@@ -24,7 +24,7 @@ from . import _args, _core, _mujoco
 #: The friction models of :meth:`Robot.with_friction_model`.
 FRICTION_KINDS = ("coulomb", "asymmetric", "smooth", "stribeck")
 
-__all__ = ["Robot", "Transmission", "as_robot", "load", "bundled_robots"]
+__all__ = ["DriveTrainWarning", "Robot", "Transmission", "as_robot", "load", "bundled_robots"]
 
 _PLANAR = re.compile(r"planar([0-9]+)(h?)")
 # Most joints of a model, as the core's kMaxModelJoints (a test keeps the two equal); checked here
@@ -103,6 +103,12 @@ def load(
         number that cannot be read, or a missing or misspelt URDF attribute (file, line, link or
         joint and attribute named). A URDF link without ``<inertial>`` is massless and named in
         ``notes``.
+
+    Warns
+    -----
+    DriveTrainWarning
+        A URDF transmission of a type not read drives joints of the model: they are modelled
+        as driven directly (:attr:`Robot.unread_transmissions`).
     """
     _args.instance(robot, "robot", (Robot, str, Path), "a Robot, a bundled robot name or a path")
     _args.optional(_args.text, tip, "tip")
@@ -114,7 +120,60 @@ def load(
             f"(load its file with {given})"
         )
     out = _load(robot, tip, root_joint)
+    if out is not robot:
+        note = drive_train_note(out)
+        if note:
+            import warnings
+
+            warnings.warn(note, DriveTrainWarning, stacklevel=2)
     return out if gravity is None else out.with_gravity(gravity)
+
+
+class DriveTrainWarning(UserWarning):
+    """A robot's drive train is modelled otherwise than its description writes it: a URDF
+    ``<transmission>`` of a type not read (:attr:`Robot.unread_transmissions`), whose joints are
+    modelled as driven directly. :func:`load` warns once per file; silence it with
+    ``warnings.filterwarnings("ignore", category=mindyn.DriveTrainWarning)`` (the command line:
+    ``--drive-side joint``, where a command has it, which the note names as
+    ``drive_side='joint'``)."""
+
+
+#: The transmission types read from a URDF (ros_control's transmission_interface).
+READ_TRANSMISSIONS = (
+    "SimpleTransmission",
+    "DifferentialTransmission",
+    "FourBarLinkageTransmission",
+)
+
+
+def drive_train_note(robot: Robot) -> str:
+    """The note on the URDF transmissions of ``robot`` that are not read and drive joints of
+    the model (:attr:`Robot.unread_transmissions`), one line; "" when there are none. What
+    :func:`load` warns (:class:`DriveTrainWarning`) and the commands print."""
+    unread = [t for t in robot.unread_transmissions if t["modelled_directly"]]
+    if not unread:
+        return ""
+    each = "; ".join(
+        f"'{t['name']}' of type '{t['type']}' (line {t['line']}) driving joint(s) "
+        + ", ".join(f"'{j}'" for j in t["modelled_directly"])
+        for t in unread
+    )
+    return (
+        f"{robot.source}: transmission(s) of a type not read ({', '.join(READ_TRANSMISSIONS)} "
+        f"are): {each}. Assumed: those joints are driven directly (a motor of their own, ratio "
+        "1; rotor inertia and friction on the joint). Declare the transmission as one of the "
+        "types read to model it; drive_side='joint' (where a command takes it: every joint's "
+        "rotor inertia and friction on the joint) makes the direct drive explicit and "
+        "silences this note"
+    )
+
+
+def drive_train_record(robot: Robot) -> dict:
+    """``{"unread_transmissions": [...]}`` for a JSON output of a robot whose URDF has
+    transmissions of a type not read that drive joints of the model (each: ``name``,
+    ``type``, ``joints``, ``line``, ``modelled_directly``, ``assumed``), else ``{}``."""
+    unread = [t for t in robot.unread_transmissions if t["modelled_directly"]]
+    return {"unread_transmissions": unread} if unread else {}
 
 
 def as_robot(robot, *, name: str = "robot") -> Robot:
@@ -349,6 +408,24 @@ class Robot:
         for a URDF the joints locked and merged and the links without ``<inertial>`` taken as
         massless."""
         return self._m.notes
+
+    @property
+    def unread_transmissions(self) -> list[dict]:
+        """The URDF ``<transmission>`` elements of types not read (none of ros_control's
+        :data:`READ_TRANSMISSIONS`, e.g. ``my_pkg/HalfDifferentialTransmission`` or PR2's),
+        left out of :attr:`transmission`: each ``name``, ``type`` as written, the ``joints`` it
+        names, its ``line``, ``modelled_directly`` (those of the model's joints, each modelled
+        as driven by a motor of its own, ratio 1) and ``assumed`` (``"direct drive"``).
+        :func:`load` warns of those driving joints of the model (:class:`DriveTrainWarning`)."""
+        names = set(self._m.joint_names)
+        return [
+            {
+                **t,
+                "modelled_directly": [j for j in t["joints"] if j in names],
+                "assumed": "direct drive",
+            }
+            for t in self._m.unread_transmissions
+        ]
 
     @property
     def synthetic_inertia(self) -> bool:

@@ -122,6 +122,19 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("source", [](const PyModel& s) { return s.model.source; })
       .def_property_readonly("convention", [](const PyModel& s) { return s.model.convention; })
       .def_property_readonly("notes", [](const PyModel& s) { return s.model.notes; })
+      .def_property_readonly("unread_transmissions",
+                             [](const PyModel& s) {
+                               py::list out;
+                               for (const TransmissionGroup& g : s.model.unread_transmissions) {
+                                 py::dict d;
+                                 d["name"] = g.name;
+                                 d["type"] = g.type;
+                                 d["joints"] = g.joints;
+                                 d["line"] = g.line;
+                                 out.append(d);
+                               }
+                               return out;
+                             })
       .def_property_readonly("synthetic_inertia",
                              [](const PyModel& s) { return s.model.synthetic_inertia; })
       .def_property_readonly("link_names", [](const PyModel& s) { return s.model.link_names; })

@@ -252,6 +252,10 @@ struct Model {
   /// Motors and their coupling to the joints (transmission.hpp); empty when the description
   /// declares none (each joint driven directly).
   Transmission transmission;
+  /// URDF transmissions of types not read (none of the three of ros_control's
+  /// transmission_interface): name, type as written, the joints they name, line. Their joints
+  /// are modelled as driven directly.
+  std::vector<TransmissionGroup> unread_transmissions;
   /// Where the layout's rotor inertia and friction act when the model has transmissions: on
   /// the motors (true, the default; slot k of Ia/Fv/Fc belongs to motor k, in motor units:
   /// tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))) or on the joints (false; as without

@@ -9,6 +9,7 @@ import json
 import sys
 from pathlib import Path
 
+from ..robot import drive_train_record
 from .args import UsageError
 from .export import write_description
 from .flags import library_options_as_flags
@@ -231,5 +232,6 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
     note = f", chain to --tip {tip} as identified" if tip and not args.tip else ""
     print(format_payload(res, robot, files, args.identification, note))
     if args.json:
-        write_json(args.json, plain({"robot": robot.name, "files": files, **res.to_dict()}))
+        doc = {"robot": robot.name, "files": files, **res.to_dict(), **drive_train_record(robot)}
+        write_json(args.json, plain(doc))
     return 0

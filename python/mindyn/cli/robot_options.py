@@ -6,8 +6,9 @@ from __future__ import annotations
 
 import argparse
 import re
+import warnings
 
-from ..robot import bundled_robots, load
+from ..robot import DriveTrainWarning, bundled_robots, load
 from .args import UsageError
 from .number_options import Number
 
@@ -63,16 +64,21 @@ def add_robot(p: argparse.ArgumentParser) -> None:
 
 def load_robot(args: argparse.Namespace, *, tip: str | None = None, command: str = ""):
     """The robot of ``args``: ROBOT with ``--tip`` (else ``tip``) and ``--root-joint``
-    (``mindyn.load``). With ``command``, a command that takes revolute and prismatic joints
+    (``mindyn.load``; its note on transmissions of a type not read, a
+    :class:`~mindyn.DriveTrainWarning` printed once on stderr by the command, is silenced by
+    ``--drive-side joint``). With ``command``, a command that takes revolute and prismatic joints
     only: a robot with joints of several degrees of freedom (a root joint, or spherical,
     universal, cylindrical, planar, floating joints of a YAML table) is refused in one line
     (:func:`require_single_dof`)."""
     given_tip = getattr(args, "tip", None)
-    robot = load(
-        args.robot,
-        tip=given_tip if given_tip is not None else tip,
-        root_joint=getattr(args, "root_joint", None),
-    )
+    with warnings.catch_warnings():
+        if getattr(args, "drive_side", None) == "joint":  # direct drive asked for: no note
+            warnings.simplefilter("ignore", DriveTrainWarning)
+        robot = load(
+            args.robot,
+            tip=given_tip if given_tip is not None else tip,
+            root_joint=getattr(args, "root_joint", None),
+        )
     if command:
         require_single_dof(robot, command)
     return robot

@@ -37,7 +37,7 @@ import numpy as np
 from .. import _args, _core
 from .._args import ArgumentError
 from ..base import BaseParameters
-from ..robot import Robot, as_robot, load
+from ..robot import Robot, as_robot, drive_train_record, load
 
 __all__ = [
     "Controller",
@@ -780,6 +780,7 @@ def simulate(
         "rotor": rotor,
         "friction": friction,
         "drive_side": robot.drive_side,
+        **drive_train_record(robot),
         "coulomb_smoothing": eps,
         "noise": {k: v.tolist() for k, v in arr.items()},
         "seed": seed,
@@ -1087,6 +1088,7 @@ def simulate_inverse(
         "rotor": rotor,
         "friction": friction,
         "drive_side": robot.drive_side,
+        **drive_train_record(robot),
         "noise": {k: v.tolist() for k, v in arr.items()},
         "seed": seed,
         "max_tracking_error": [0.0] * n,
@@ -1261,6 +1263,8 @@ def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
         ],
         "saturated_fraction": float(result.saturated.mean()) if result.saturated is not None else 0,
     }
+    if "unread_transmissions" in result.info:  # the simulated robot's drive train as assumed
+        out["unread_transmissions"] = result.info["unread_transmissions"]
     if result.tau_true_model is not None:
         d = result.tau_model - result.tau_true_model
         out["torque_prediction_rms_per_cycle"] = [

@@ -27,7 +27,7 @@ from .. import _args, _core
 from .._core import OFFSET_PREFIX as OFF
 from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
-from ..robot import Robot, as_robot
+from ..robot import Robot, as_robot, drive_train_record
 from .data import DataError
 from .errors import IdentificationError, RankDeficientError
 from .joint_data import JointData
@@ -144,6 +144,7 @@ class IdentificationResult:
             },
             "settings": self.settings,
             "seconds": self.seconds,
+            **drive_train_record(self.base.robot),
         }
 
 
@@ -636,6 +637,26 @@ def _rsd(p: np.ndarray, std: np.ndarray) -> np.ndarray:
         return np.where(p != 0, 100.0 * std / np.abs(p), np.inf)
 
 
+def pruned(solve, keep: list[int], threshold: float | None):
+    """Backward elimination by relative standard deviation, the pruning of :func:`identify`:
+    from the columns ``keep``, the parameter of largest RSD [%] (:func:`_rsd`) removed while it
+    is above ``threshold`` (None: none removed), re-estimated after each removal by ``solve``
+    (columns -> ``(p, std, sigma2)``). Returns ``(keep, p, std, sigma2, removed)``, ``removed``
+    the columns left out with their RSD at that moment, in order."""
+    keep = list(keep)
+    p, std, s2 = solve(keep)
+    removed = []
+    while threshold is not None and len(keep) > 1:
+        rsd = _rsd(p, std)
+        j = int(np.argmax(np.where(np.isnan(rsd), np.inf, rsd)))
+        if not rsd[j] > threshold:
+            break
+        removed.append((keep[j], float(rsd[j])))
+        del keep[j]
+        p, std, s2 = solve(keep)
+    return keep, p, std, s2, removed
+
+
 @single_threaded_blas
 def identify(
     robot: Robot | str,
@@ -828,19 +849,11 @@ def identify(
         p, std, s2 = ls.solve(cols)
         return p, std * math.sqrt(inflation), s2
 
-    keep = list(range(nb))
-    p, std, s2 = solve(keep)
+    p, std, s2 = solve(list(range(nb)))
     initial = {"values": p.copy(), "std": std.copy(), "rsd": _rsd(p, std)}
-    removed = []
     thr = rsd_threshold if rsd_threshold is not None and rsd_threshold > 0 else None
-    while thr is not None and len(keep) > 1:
-        rsd = _rsd(p, std)
-        j = int(np.argmax(np.where(np.isnan(rsd), np.inf, rsd)))
-        if not rsd[j] > thr:
-            break
-        removed.append((names[keep[j]], float(rsd[j])))
-        del keep[j]
-        p, std, s2 = solve(keep)
+    keep, p, std, s2, dropped = pruned(solve, list(range(nb)), thr)
+    removed = [(names[j], r) for j, r in dropped]
     full = np.zeros(nb)
     full[keep] = p
     settings["rsd_threshold"] = thr

@@ -39,7 +39,7 @@ from .. import _args
 from .._args import ArgumentError
 from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
-from ..robot import Robot, as_robot, load
+from ..robot import Robot, as_robot, drive_train_record, load
 from .errors import IdentificationError
 
 __all__ = [
@@ -384,6 +384,8 @@ class ExcitationResult:
     max_violation: float = 0.0
     initial_trajectory: FourierTrajectory | None = None
     warnings: list = field(default_factory=list)
+    #: The robot's transmissions of a type not read (:func:`mindyn.robot.drive_train_record`).
+    drive_train: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {
@@ -402,6 +404,7 @@ class ExcitationResult:
             "warnings": self.warnings,
             "starts": self.starts,
             "trajectory": self.trajectory.to_dict(),
+            **self.drive_train,
         }
 
     def save(self, csv_path, *, rate: float = 250.0, periods: float = 1.0) -> dict:
@@ -828,6 +831,7 @@ def optimize_excitation(
         base_names=list(base.names),
         rotor=base.rotor,
         friction=base.friction,
+        drive_train=drive_train_record(robot),
         seed=seed,
         max_violation=_relative_violation(q, dq, ddq, lim),
         initial_trajectory=guess,

@@ -47,7 +47,9 @@ state and refuse an identification with it.
   time blocks of the fit logs (:func:`~mindyn.identification.prior.block_triangles`: each
   block's residual predicted by the estimate fitted on the other blocks, summed, every model
   weighted with the same per-joint weights, those of the Coulomb fit; every sample of a block
-  scored, also those the dynamic model leaves out of the fit as slower than ``min_velocity``);
+  scored, also those the dynamic model leaves out of the fit as slower than ``min_velocity``;
+  each fold's fit decides its parameters as the fit does, by rank and RSD pruning, see
+  :func:`held_out_residual`);
   the simplest model (in the order coulomb, smooth, asymmetric, stribeck, dahl: the stateful
   model last) whose summed held-out
   residual is within one standard error of the smallest (the one-standard-error rule, as for
@@ -393,7 +395,9 @@ def select_friction_model(
             continue
         if common is None:  # the Coulomb fit's weights for every model
             common = res.joint_sigma
-        scores[k], per_fold[k] = held_out_residual(res, logs, folds=folds, joint_sigma=common)
+        scores[k], per_fold[k] = held_out_residual(
+            res, logs, folds=folds, joint_sigma=common, rank_tolerance=fit.get("rank_tolerance")
+        )
         choices[k] = c
         active = active_friction(res, logs)
         if active:
@@ -487,19 +491,31 @@ def active_friction(res, logs) -> str | None:
     )
 
 
-def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float, np.ndarray]:
+def held_out_residual(
+    res, logs, *, folds: int, joint_sigma=None, rank_tolerance: float | None = None
+) -> tuple[float, np.ndarray]:
     """The summed held-out residual per equation of the fit ``res`` over ``folds`` contiguous
     blocks of ``logs`` (:func:`~mindyn.identification.prior.block_triangles`), each block
-    predicted by the least-squares estimate of all base parameters on the other blocks (fitted
-    on the fit's equations, scored on every sample, those the dynamic model leaves out as slower
+    predicted by the estimate fitted on the other blocks the way ``res`` was fitted (fitted on
+    the fit's equations, scored on every sample, those the dynamic model leaves out as slower
     than ``min_velocity`` included), and each block's share: ``(total, per block)``; rows
-    weighted with ``joint_sigma`` when given (else the fit's own weights)."""
-    from .estimation import _triangle
+    weighted with ``joint_sigma`` when given (else the fit's own weights).
+
+    Each fold's fit decides as the fit itself: the base parameters its blocks determine
+    (pivoted QR of the column-scaled regressor, pivots below ``rank_tolerance`` (default:
+    :func:`~mindyn.identification.identify`'s) of the largest left out), then pruned by
+    relative standard deviation at the fit's threshold (:func:`~mindyn.identification.
+    estimation.pruned`, with the fit's variance factor for correlated samples). A parameter
+    that the other blocks do not determine (e.g. a Stribeck term whose column is non-zero on
+    a few samples of the held-out block only) is thus left out instead of being fitted to
+    noise and extrapolated: the score measures a model's prediction, not its conditioning."""
+    from .estimation import _Reduced, _triangle, pruned
     from .prior import block_triangles
 
     if joint_sigma is not None and res.model != "energy":
         res = dataclasses.replace(res, joint_sigma=np.asarray(joint_sigma), weighted=True)
-    S = block_triangles(res, logs, folds=folds)
+    tol = _default("rank_tolerance") if rank_tolerance is None else rank_tolerance
+    S, rows = block_triangles(res, logs, folds=folds, counts=True)
     # a block is predicted at every sample, also where the fit leaves the equations of slow
     # joints out (min_velocity): a model's switching at rest counts against it
     held = S
@@ -510,11 +526,27 @@ def held_out_residual(res, logs, *, folds: int, joint_sigma=None) -> tuple[float
     used = [k for k in range(folds) if np.any(S[k])]
     if len(used) < 2:
         raise IdentificationError("friction model auto: the data give fewer than 2 blocks")
+    threshold = res.settings.get("rsd_threshold")
+    inflation = res.settings.get("std_correlation", {}).get("variance_factor", 1.0)
+
+    def solve_with(ls):
+        def solve(cols):
+            p, std, s2 = ls.solve(cols)
+            return p, std * math.sqrt(inflation), s2
+
+        return solve
+
     err = []
     for k in used:
-        T = _triangle(np.vstack([S[i] for i in used if i != k]))
-        p = np.linalg.lstsq(T[:nb, :nb], T[:nb, nb], rcond=None)[0]
-        r = held[k] @ np.append(p, -1.0)
+        others = [i for i in used if i != k]
+        ls = _Reduced.from_triangle(
+            _triangle(np.vstack([S[i] for i in others])), rows[others].sum()
+        )
+        rank, piv, _ = ls.rank(tol)
+        keep, p, _, _, _ = pruned(solve_with(ls), sorted(int(c) for c in piv[:rank]), threshold)
+        full = np.zeros(nb)
+        full[keep] = p
+        r = held[k] @ np.append(full, -1.0)
         err.append(float(r @ r) / max(res.rows, 1))
     err = np.array(err)
     return float(err.sum()), err

@@ -257,11 +257,12 @@ def _cut(count: int, folds: int) -> np.ndarray:
 
 
 @single_threaded_blas
-def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
+def block_triangles(res, data, *, folds: int = FOLDS, counts: bool = False):
     """The fit's weighted least-squares problem split into ``folds`` blocks of contiguous time
     (block ``k``: the ``k``-th of ``folds`` consecutive parts of every log): triangles ``S_k``,
     shape (folds, nb+1, nb+1), ``S_k^T S_k = [A_k b_k]^T [A_k b_k]`` over the block's rows with
-    the fit's own row weights."""
+    the fit's own row weights; with ``counts``, ``(S, rows)``, ``rows`` (folds,) each block's
+    number of rows."""
     from .estimation import _logs, _triangle, regressor_rows
     from .models import (
         energy_row_noise,
@@ -275,9 +276,11 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
     nb = base.n
     logs = _logs(data)
     S = np.zeros((folds, nb + 1, nb + 1))
+    rows = np.zeros(folds, dtype=int)
 
     def add(k, A):
         S[k] = _triangle(np.vstack([S[k], A]))
+        rows[k] += A.shape[0]
 
     js = res.joint_sigma
     if res.model in ("dynamic", "integral"):
@@ -333,7 +336,7 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
                 add(k, A[block == k])
     else:  # pragma: no cover - identify refuses other models
         raise IdentificationError(f"unknown model '{res.model}'")
-    return S
+    return (S, rows) if counts else S
 
 
 # ---------------------------------------------------------------------------------------------
