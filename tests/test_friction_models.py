@@ -454,3 +454,32 @@ def test_descriptions_refuse_other_friction_models(arm, tmp_path, capsys):
     rc = main(["identify", str(robot_path), "x.csv", "--friction-model", "stribeck",
                "--consistent", "--yaml", str(tmp_path / "o.yaml")])  # fmt: skip
     assert rc != 0 and "not the stribeck friction model" in capsys.readouterr().err
+
+
+def test_auto_compares_models_on_the_same_blocks_paired():
+    """Five blocks of very different difficulty; dahl is better than coulomb on every block by
+    0.03 +- 0.005, smooth worse than coulomb on some: the one-standard-error rule on the
+    block-by-block differences (written out here: sqrt(5) x their standard deviation) picks
+    dahl, whose lead (0.15 in all) is far beyond the error of the difference (0.02), though it
+    is within the spread of the blocks' own residuals (0.26), which an unpaired rule would take
+    as the error and so keep coulomb."""
+    from mindyn.identification.friction import simplest_within_one_error
+
+    hard = np.array([0.30, 0.16, 0.34, 0.20, 0.23])
+    lead = np.array([0.025, 0.035, 0.03, 0.03, 0.03])
+    per_fold = {
+        "coulomb": hard,
+        "smooth": hard + [0.01, -0.01, 0.02, 0.0, 0.0],
+        "dahl": hard - lead,
+    }
+    scores = {k: float(np.sum(v)) for k, v in per_fold.items()}
+    chosen, best, se = simplest_within_one_error(scores, per_fold)
+    assert best == "dahl" and chosen == "dahl"
+    assert se["coulomb"] == pytest.approx(np.std(lead, ddof=1) * np.sqrt(5))
+    assert np.std(per_fold["dahl"], ddof=1) * np.sqrt(5) > scores["coulomb"] - scores["dahl"]
+    # a lead within its own error: the simpler model is kept
+    noisy = {"coulomb": hard, "dahl": hard - [0.05, -0.04, 0.06, -0.05, 0.0]}
+    chosen, best, _ = simplest_within_one_error(
+        {k: float(np.sum(v)) for k, v in noisy.items()}, noisy
+    )
+    assert best == "dahl" and chosen == "coulomb"

@@ -51,9 +51,10 @@ state and refuse an identification with it.
   each fold's fit decides its parameters as the fit does, by rank and RSD pruning, see
   :func:`held_out_residual`);
   the simplest model (in the order coulomb, smooth, asymmetric, stribeck, dahl: the stateful
-  model last) whose summed held-out
-  residual is within one standard error of the smallest (the one-standard-error rule, as for
-  the prior's weight, the error from the spread of the blocks) wins. A model the data cannot
+  model last) whose summed held-out residual exceeds the smallest by at most one standard error
+  of that excess wins (the one-standard-error rule on paired differences: the error from the
+  spread of the model's block-by-block differences from the best model, since all models are
+  scored on the same blocks and how hard a block is cancels). A model the data cannot
   identify (e.g. ``asymmetric`` with torque offsets, whose ``Fa`` is a constant torque whenever
   the joint moves) is reported and left out, and so is one whose fitted friction is not
   friction: a friction torque is dissipative, ``f(v) v >= 0`` at every speed, and a fit whose
@@ -415,11 +416,7 @@ def select_friction_model(
             + "; ".join(f"{k}: {m}" for k, m in refused.items())
             + ")"
         )
-    best = min(scores, key=lambda k: (scores[k], KINDS.index(k)))
-    # one standard error of the best model's summed held-out residual, from its folds' spread
-    err = per_fold[best]
-    se = float(np.std(err, ddof=1) * math.sqrt(err.size)) if err.size > 1 else 0.0
-    chosen = next(k for k in KINDS if k in scores and scores[k] <= scores[best] + se)
+    chosen, best, se = simplest_within_one_error(scores, per_fold)
     out = choices[chosen]
     out.record.update(
         chosen_by="held-out data",
@@ -427,11 +424,12 @@ def select_friction_model(
             f"{folds}-fold cross-validation over contiguous time blocks of the fit logs (each "
             "block's residual predicted by the estimate fitted on the other blocks, summed, "
             "with the Coulomb fit's per-joint weights): the simplest model (coulomb, smooth, "
-            "asymmetric, stribeck, dahl) within one standard error of the smallest, among those "
-            "whose fitted friction is dissipative"
+            "asymmetric, stribeck, dahl) whose excess over the smallest is within one standard "
+            "error of that excess (from its fold-by-fold differences), among those whose fitted "
+            "friction is dissipative"
         ),
         smallest=best,
-        standard_error=se,
+        standard_error={k: se[k] for k in scores},
         candidates={k: float(v) for k, v in scores.items()},
         candidates_per_fold={k: [float(x) for x in v] for k, v in per_fold.items()},
         candidates_unit="weighted residual per equation",
@@ -439,6 +437,22 @@ def select_friction_model(
         not_dissipative=active_fits,
     )
     return out
+
+
+def simplest_within_one_error(scores: dict, per_fold: dict) -> tuple[str, str, dict]:
+    """The one-standard-error rule on paired differences: ``scores`` (model -> summed held-out
+    residual) and ``per_fold`` (model -> its residual per block, the same blocks for every
+    model). Returns ``(chosen, best, se)``: the simplest model (order of :data:`KINDS`) whose
+    excess over the smallest, ``best``, is at most one standard error of that excess, ``se``
+    per model: ``sqrt(K)`` times the standard deviation of its ``K`` block-by-block differences
+    from ``best`` (how hard a block is to predict is common to every model and cancels)."""
+    best = min(scores, key=lambda k: (scores[k], KINDS.index(k)))
+    se = {}
+    for k in scores:
+        diff = np.asarray(per_fold[k], float) - np.asarray(per_fold[best], float)
+        se[k] = float(np.std(diff, ddof=1) * math.sqrt(diff.size)) if diff.size > 1 else 0.0
+    chosen = next(k for k in KINDS if k in scores and scores[k] <= scores[best] + se[k])
+    return chosen, best, se
 
 
 #: A fitted friction torque counts as pushing a slot along its motion when ``f(v) sign(v)`` is
