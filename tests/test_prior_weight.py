@@ -477,3 +477,14 @@ def test_cli_report_plots_the_consistent_estimate(tmp_path, monkeypatch):
     cons = doc["consistent_estimate"]["fit"]["overall_relative"]
     assert abs(rel - cons) <= 1e-9 * cons
     assert abs(rel - doc["fit"]["overall_relative"]) > 1e-3 * cons  # not the unconstrained one
+
+
+def test_window_models_state_that_the_residual_factor_is_not_measured():
+    """The integral model's rows are windows: the factor of its residuals is not measured, said
+    so (None, not 1), and one noise variance is the data path's factor."""
+    robot = mindyn.load("puma560_3")
+    data = _log(robot, robot.params, noise=0.02)
+    res = identify(robot, data, model="integral", rsd_threshold=None, integral_window=10)
+    noise = consistent_estimate(res, prior_weight=1.0, data=data).noise
+    assert noise["residuals"] is None and "not measured" in noise["residuals_rule"]
+    assert noise["factor"] == max(noise["data_path"], 1.0)

@@ -98,7 +98,7 @@ def _noise_lines(noise: dict) -> list[str]:
         + (
             f"({measured:.3g}: {noise['residuals_rule']})"
             if measured is not None
-            else "(not measured)"
+            else f"({noise['residuals_rule']})"
         )
     ]
 
