@@ -36,10 +36,10 @@ from .models import (
     energy_row_noise,
     energy_system,
     integral_chunks,
-    integral_windows,
     moving_equations,
     require_torque,
     torque_noise,
+    windows,
 )
 from .options import DEFAULT_RSD_THRESHOLD
 
@@ -757,7 +757,7 @@ def identify(
         settings["equations_left_out"] = equations - rows
         _enough(model, rows, nb, logs, settings)
     elif model == "integral":
-        log_rows = [integral_windows(d.t, integral_window)[0].size * d.n for d in logs]
+        log_rows = [windows(d, integral_window)[0].size * d.n for d in logs]
         rows = sum(log_rows)
         _enough(model, rows, nb, logs, settings, integral_window)
         S = np.zeros((robot.n, nb + 1, nb + 1))
@@ -768,7 +768,7 @@ def identify(
         joint_rows = np.full(robot.n, rows // robot.n)
         settings.update({"integral_window": integral_window, "integration": integration})
     else:
-        log_rows = [max(0, (d.m - 1) // energy_window) for d in logs]
+        log_rows = [windows(d, energy_window, gaps=False)[0].size for d in logs]
         rows = sum(log_rows)
         _enough(model, rows, nb, logs, settings, energy_window)
         used = [d for d, r in zip(logs, log_rows) if r > 0]  # logs with a whole window
@@ -791,7 +791,7 @@ def identify(
 
     joint_sigma = None
     if weighted and model == "energy":
-        joint_sigma = torque_noise([d.tau for d in logs])
+        joint_sigma = torque_noise([d.tau[p] for d in logs for p in d.log_slices()])
         var = np.vstack([energy_row_noise(d, energy_window) for d in used]) @ joint_sigma**2
         # Floor: windows near rest would otherwise get unbounded weight, and their error is
         # then dominated by what the noise model leaves out (velocity noise, model error).

@@ -267,8 +267,8 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
         energy_row_noise,
         energy_system,
         integral_chunks,
-        integral_windows,
         moving_equations,
+        windows,
     )
 
     base = res.base
@@ -303,7 +303,7 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
                             add(k, A)
             else:
                 window = res.settings["integral_window"]
-                total = integral_windows(d.t, window)[0].size
+                total = windows(d, window)[0].size
                 block = _cut(total, folds)
                 i0 = 0
                 for Wi, yi in integral_chunks(
@@ -318,7 +318,7 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
     elif res.model == "energy":
         window = res.settings["energy_window"]
         rule = res.settings["integration"]
-        used = [d for d in logs if (d.m - 1) // window > 0]
+        used = [d for d in logs if windows(d, window, gaps=False)[0].size > 0]
         var = None
         if res.weighted and js is not None:
             var = [energy_row_noise(d, window) @ js**2 for d in used]
