@@ -36,6 +36,7 @@ from .models import (
     energy_row_noise,
     energy_system,
     integral_chunks,
+    logged_torques,
     moving_equations,
     require_torque,
     torque_noise,
@@ -672,7 +673,9 @@ def identify(
         Reuse a computed base-parameter set.
     weighted : bool
         Dynamic and integral models: weighted least squares with per-joint weights from a first
-        OLS pass; energy model: per-window weights from torque-noise estimates.
+        OLS pass; energy model: per-window weights from per-joint torque-noise estimates on
+        the torques as logged, before the data path's low-pass
+        (:func:`~mindyn.identification.models.energy_row_noise`).
     rsd_threshold : float or None
         Remove parameters with an RSD above this many percent, largest first, re-estimating after
         each removal (None or <= 0: keep all). Default: 70.7, a t-statistic of sqrt(2)
@@ -791,7 +794,7 @@ def identify(
 
     joint_sigma = None
     if weighted and model == "energy":
-        joint_sigma = torque_noise([d.tau[p] for d in logs for p in d.log_slices()])
+        joint_sigma = torque_noise([x for d in logs for x in logged_torques(d)])
         var = np.vstack([energy_row_noise(d, energy_window) for d in used]) @ joint_sigma**2
         # Floor: windows near rest would otherwise get unbounded weight, and their error is
         # then dominated by what the noise model leaves out (velocity noise, model error).
@@ -801,7 +804,7 @@ def identify(
             ls = _Reduced(W * w[:, None], y * w)
             settings["weighting"] = (
                 "per-window 1/sd of the power integral from per-joint torque-noise estimates "
-                "(second differences of the logged torques)"
+                "(second differences of the torques as logged, before any low-pass)"
             )
         else:
             weighted = False

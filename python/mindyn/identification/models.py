@@ -330,18 +330,60 @@ def torque_noise(tau) -> np.ndarray:
     return 1.4826 * mad / math.sqrt(6.0)
 
 
+def logged_torques(data: JointData) -> list[np.ndarray]:
+    """The torques whose white noise :func:`torque_noise` measures for the energy model's
+    weights, one array per log joined (:meth:`JointData.log_slices`): on preprocessed data the
+    torques as logged (``data.logged``), else ``data.tau``. The data path's low-pass leaves a
+    fraction of the noise in ``data.tau``, and of that fraction's second differences little
+    (at 250 Hz and a 5 Hz cut-off, 1e-3 of the logged noise, the torques' own curvature as
+    much): per joint the level would be wrong by a factor that differs between joints."""
+    src = data.logged if data.logged is not None and data.logged.tau is not None else data
+    assert src.tau is not None
+    return [src.tau[p] for p in src.log_slices()]
+
+
+def _density_scale(data: JointData) -> list[float]:
+    """Per log joined, the spectral density of the noise the windows integrate per unit
+    variance of the noise :func:`torque_noise` measures on :func:`logged_torques`, over that of
+    white noise on the samples of ``data``: ``fs / (P fs_logged)`` on preprocessed data (rate
+    ``fs`` after decimation, ``fs_logged`` as logged, ``P`` periods averaged; the low-pass
+    keeps the density at the frequencies of the motion), else 1."""
+    pieces = data.log_slices()
+    count = len(pieces)
+    if data.logged is None:
+        return [1.0] * count
+    procs = data.processing.get("logs") or [data.processing]
+    logged = data.logged.log_slices()
+    whole = not len(procs) == len(logged) == count
+    if whole:  # one scale for every log
+        pieces, logged, procs = [slice(0, data.m)], [slice(0, data.logged.m)], procs[:1]
+    out = []
+    for p, lp, proc in zip(pieces, logged, procs):
+        periods = ((proc.get("preprocess") or {}).get("averaging") or {}).get("periods", 1)
+        t, lt = data.t[p], data.logged.t[lp]
+        fs, fs_logged = (t.size - 1) / float(t[-1] - t[0]), (lt.size - 1) / float(lt[-1] - lt[0])
+        out.append(fs / (periods * fs_logged))
+    return out * count if whole else out
+
+
 def energy_row_noise(data: JointData, window: int) -> np.ndarray:
-    """Per window and joint, ``sum_k (c_k dq_jk)^2`` with trapezoid weights ``c_k``: the
-    variance of the window's power integral per unit torque-noise variance of joint ``j``, over
-    the energy model's windows (:func:`windows`); shape (rows, n). A row's noise variance is
-    ``A @ sigma^2``."""
+    """Per window and joint, ``s sum_k (c_k dq_jk)^2`` with trapezoid weights ``c_k``: the
+    variance of the window's power integral per unit variance of joint ``j``'s torque noise as
+    logged (:func:`logged_torques`), over the energy model's windows (:func:`windows`); shape
+    (rows, n). ``s`` is 1 on torques not low-passed; on preprocessed data the windows integrate
+    the logged noise low-passed, whose spectral density at the frequencies of the motion is the
+    logged one: ``s = fs / (P fs_logged)`` (decimated rate ``fs`` over the logged one, ``P``
+    periods averaged). A row's noise variance is ``A @ sigma^2``."""
     dt = np.diff(data.t)
+    scale = np.zeros(data.m)
+    for p, s in zip(data.log_slices(), _density_scale(data)):
+        scale[p] = s
     rows = []
     for a, b in zip(*windows(data, window, gaps=False)):
         c = np.zeros(b - a + 1)
         c[:-1] += 0.5 * dt[a:b]
         c[1:] += 0.5 * dt[a:b]
-        rows.append(np.sum((c[:, None] * data.dq[a : b + 1]) ** 2, axis=0))
+        rows.append(scale[a] * np.sum((c[:, None] * data.dq[a : b + 1]) ** 2, axis=0))
     return np.array(rows)
 
 

@@ -721,7 +721,8 @@ def concatenate(logs) -> JointData:
     stacked, the time of each log shifted to follow the one before (the samples are equations;
     no derivative is taken across the joins), regressor filters kept per log, the first sample
     of each log in ``starts`` (the integral and energy models' windows do not span a join,
-    :attr:`JointData.starts`). The processing
+    :attr:`JointData.starts`), the logged samples joined alike (``logged``) when every log has
+    them. The processing
     of each log is listed under ``processing["logs"]``; ``processing["preprocess"]`` is the first
     log's, with ``"logs"`` listing every log's."""
     from .estimation import _logs
@@ -762,4 +763,6 @@ def concatenate(logs) -> JointData:
         out.processing["preprocess"] = {**pres[0], "logs": pres}
     if any(d.regressor_filter is not None for d in logs):
         out.regressor_filter = _Joined(logs)
+    if all(d.logged is not None for d in logs):
+        out.logged = concatenate([d.logged for d in logs])
     return out
