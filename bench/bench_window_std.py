@@ -72,13 +72,20 @@ def shown(x) -> str:
     return " ".join(f"{v:.3g}" for v in x)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def log_arguments(description: str) -> argparse.ArgumentParser:
+    """The options of the simulated log and its data path shared by the window-model studies:
+    ``--robot``, ``--duration``, ``--rate``, ``--cutoff``, ``--noise``."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--robot", default="puma560_3")
     ap.add_argument("--duration", type=float, default=40.0)
     ap.add_argument("--rate", type=float, default=250.0)
     ap.add_argument("--cutoff", type=float, default=5.0)
     ap.add_argument("--noise", type=float, default=0.02)
+    return ap
+
+
+def main() -> None:
+    ap = log_arguments(__doc__.split("\n\n")[0])
     ap.add_argument("--realisations", type=int, default=20)
     ap.add_argument("--batches", type=int, default=5)
     ap.add_argument("--no-friction", action="store_true")

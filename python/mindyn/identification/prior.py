@@ -268,6 +268,7 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
         energy_system,
         integral_chunks,
         moving_equations,
+        moving_windows,
         windows,
     )
 
@@ -304,16 +305,18 @@ def block_triangles(res, data, *, folds: int = FOLDS) -> np.ndarray:
             else:
                 window = res.settings["integral_window"]
                 total = windows(d, window)[0].size
+                moving = moving_windows(base, d, window, res.settings.get("min_velocity", 0.0))
                 block = _cut(total, folds)
                 i0 = 0
                 for Wi, yi in integral_chunks(
                     base, d, window=window, integration=res.settings["integration"]
                 ):
                     kk = block[i0 : i0 + Wi.shape[0]]
+                    mv = None if moving is None else moving[i0 : i0 + Wi.shape[0]]
                     i0 += Wi.shape[0]
                     for k in np.unique(kk):
-                        sel = kk == k
                         for j in range(d.n):
+                            sel = kk == k if mv is None else (kk == k) & mv[:, j]
                             add(k, w[j] * np.column_stack([Wi[sel, j], yi[sel, j]]))
     elif res.model == "energy":
         window = res.settings["energy_window"]
