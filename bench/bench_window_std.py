@@ -15,7 +15,9 @@ the ratio of the scatter of the estimates to their reported standard deviations 
 out). Printed per model and decimation: the variance factor the fit reports
 (``settings.std_correlation``), the ratio with it, and the ratio the standard deviations give
 without it (times the square root of the factor); mean and standard deviation over BATCHES
-batches of draws (the spread of the ratio a test of REALISATIONS draws sees).
+batches of draws (the spread of the ratio a test of REALISATIONS draws sees). Energy model:
+the torque-noise level of its window weights (``joint_sigma``) over the simulated one, per
+joint.
 """
 
 from __future__ import annotations
@@ -45,10 +47,12 @@ def simulated_log(robot, duration: float, rate: float, friction: bool):
 
 
 def scatter_ratio(robot, base, log, *, model, decimate, cutoff, noise, seeds):
-    """``(ratio, variance factor)`` over the noise draws ``seeds``."""
+    """``(ratio, variance factor, noise level)`` over the noise draws ``seeds``, the noise level
+    that of the energy model's weights (``joint_sigma``) over the simulated one per joint (the
+    last draw's; None for the other models)."""
     t, q, dq, ddq, tau = log
     sd = noise * np.abs(tau).max(axis=0)
-    est, std, factor = [], [], 1.0
+    est, std, factor, level = [], [], 1.0, None
     for s in seeds:
         noisy = tau + sd * np.random.default_rng(s).standard_normal(tau.shape)
         d = preprocess(
@@ -58,17 +62,30 @@ def scatter_ratio(robot, base, log, *, model, decimate, cutoff, noise, seeds):
         est.append(res.full)
         std.append(res.std)
         factor = res.settings["std_correlation"]["variance_factor"]
+        if model == "energy" and res.joint_sigma is not None:
+            level = res.joint_sigma / sd
     z = (np.array(est) - np.mean(est, axis=0)) / np.array(std)
-    return math.sqrt(np.sum(z**2) / (z.size - z.shape[1])), factor
+    return math.sqrt(np.sum(z**2) / (z.size - z.shape[1])), factor, level
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def shown(x) -> str:
+    return " ".join(f"{v:.3g}" for v in x)
+
+
+def log_arguments(description: str) -> argparse.ArgumentParser:
+    """The options of the simulated log and its data path shared by the window-model studies:
+    ``--robot``, ``--duration``, ``--rate``, ``--cutoff``, ``--noise``."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--robot", default="puma560_3")
     ap.add_argument("--duration", type=float, default=40.0)
     ap.add_argument("--rate", type=float, default=250.0)
     ap.add_argument("--cutoff", type=float, default=5.0)
     ap.add_argument("--noise", type=float, default=0.02)
+    return ap
+
+
+def main() -> None:
+    ap = log_arguments(__doc__.split("\n\n")[0])
     ap.add_argument("--realisations", type=int, default=20)
     ap.add_argument("--batches", type=int, default=5)
     ap.add_argument("--no-friction", action="store_true")
@@ -89,7 +106,7 @@ def main() -> None:
             got, bare = [], []
             for b in range(a.batches):
                 seeds = range(b * a.realisations, (b + 1) * a.realisations)
-                r, f = scatter_ratio(
+                r, f, level = scatter_ratio(
                     robot,
                     base,
                     log,
@@ -105,7 +122,9 @@ def main() -> None:
             print(
                 f"  {model:8s} decimate={decimate!s:5s}: variance factor {f:.4g}; scatter / std "
                 f"{np.mean(got):.3f} (sd {spread:.3f}, range {min(got):.3f}-{max(got):.3f}); "
-                f"without the factor {np.mean(bare):.3f}  [{time.perf_counter() - t0:.1f} s]",
+                f"without the factor {np.mean(bare):.3f}"
+                + ("" if level is None else "; weights' torque noise / simulated " + shown(level))
+                + f"  [{time.perf_counter() - t0:.1f} s]",
                 flush=True,
             )
 

@@ -457,7 +457,8 @@ def test_the_library_refuses_the_same_combinations(planar_log):
         (dict(model="integral", energy_window=3), "energy_window"),
         (dict(model="energy", integral_window=3), "integral_window"),
         (dict(min_velocity=0.0), "min_velocity"),
-        (dict(model="integral", friction=True, min_velocity=0.0), "min_velocity"),
+        (dict(model="energy", friction=True, min_velocity=0.0), "min_velocity"),
+        (dict(model="integral", min_velocity=0.0), "min_velocity"),
     ]:
         with pytest.raises(mindyn.ArgumentError, match=f"^{name} applies only"):
             IdentifyOptions(**kw)
@@ -471,4 +472,5 @@ def test_the_library_refuses_the_same_combinations(planar_log):
     # the defaults, and the options where they apply, are taken
     IdentifyOptions(model="energy", energy_window=3, integration="zoh")
     IdentifyOptions(friction_model="stribeck", min_velocity=0.0)
+    IdentifyOptions(model="integral", friction=True, min_velocity=0.0)
     ReadingOptions(filter="butter", cutoff=5.0)

@@ -176,6 +176,7 @@ def test_integral_model_stacks_the_windows_of_each_log(two_logs):
         weighted=False,
         rsd_threshold=None,
         integral_window=8,
+        min_velocity=0,  # every window (integral_system's)
     )
     systems = [integral_system(base, d, window=8) for d in (d1, d2)]
     W = np.vstack([s[0].reshape(-1, base.n) for s in systems])

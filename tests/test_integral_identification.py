@@ -28,7 +28,7 @@ from mindyn.identification import (
 )
 from mindyn.identification.data import JointData, fill_derivatives
 from mindyn.identification.excitation import random_trajectory
-from mindyn.identification.models import integral_windows
+from mindyn.identification.models import windows
 
 ROBOT = "zcr07s"
 PERIOD = 10.0  # s, one period of random_trajectory (0.1 Hz fundamental)
@@ -85,13 +85,18 @@ def relative_error(p, truth):
 # ---------------------------------------------------------------------------------------------
 def test_windows_cover_segments_and_skip_gaps():
     t = np.concatenate([np.arange(11) * 0.01, 0.5 + np.arange(25) * 0.01])
-    a, b = integral_windows(t, 4)
+    log = JointData(t, *(np.zeros((t.size, 1)),) * 3)
+    a, b = windows(log, 4)
     # first segment: samples 0..10 -> windows [0,4], [4,8]; second: 11..35 -> 6 windows
     np.testing.assert_array_equal(a, [0, 4, 11, 15, 19, 23, 27, 31])
     np.testing.assert_array_equal(b - a, 4)
     assert not np.any((a <= 10) & (b > 10)), "a window spans the gap"
     with pytest.raises(ValueError, match="at least 1"):
-        integral_windows(t, 0)
+        windows(log, 0)
+    # two logs joined without a gap in time: no window spans the join at sample 11 either
+    even = JointData(np.arange(36) * 0.01, *(np.zeros((36, 1)),) * 3, starts=(0, 11))
+    for gaps in (True, False):
+        np.testing.assert_array_equal(windows(even, 4, gaps=gaps)[0], a)
 
 
 def test_integral_equations_hold_for_the_true_parameters():

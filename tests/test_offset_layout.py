@@ -102,7 +102,7 @@ def test_energy_and_integral_models_carry_the_offset_columns(rng):
     W, _ = models.energy_system(base, data, window=window)
     ends = np.arange(0, data.m, window)
     np.testing.assert_allclose(W[:, cols], np.diff(data.q[ends], axis=0), rtol=0, atol=1e-12)
-    a, b = models.integral_windows(data.t, window)
+    a, b = models.windows(data, window)
     Wi, _ = models.integral_system(base, data, window=window)
     expected = np.zeros((a.size, n, n))
     expected[:, range(n), range(n)] = (data.t[b] - data.t[a])[:, None]

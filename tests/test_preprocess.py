@@ -280,6 +280,32 @@ def test_concatenate_keeps_each_logs_regressor_filter():
     assert np.max(np.abs(res.full - true)[big] / np.abs(true)[big]) < 1e-3
 
 
+def test_window_models_on_joined_logs_equal_the_logs_fitted_together():
+    """The integral and energy models' windows do not span the join of two logs (it would
+    integrate two unrelated motions): identify on concatenate([a, b]) gives the estimates and
+    standard deviations of identify on [a, b], windows, weights and noise estimates alike
+    (with the windows across the join, the estimates differed by up to 100 times themselves
+    and the energy model's standard deviations were 80 times larger)."""
+    robot = mindyn.load("puma560_3")
+    base = mindyn.base_parameters(robot, friction=True)
+    parts = []
+    for seed in (3, 4):
+        log, _, tau, _ = _friction_log(robot, np.arange(0, 20.0, 1 / 250.0), seed=seed)
+        log.tau = tau + 0.02 * np.abs(tau).max(axis=0) * np.random.default_rng(
+            seed
+        ).standard_normal(tau.shape)
+        parts.append(preprocess(log, cutoff=5.0, decimate=False))
+    joined = concatenate(parts)
+    for model, integration in (("integral", "simpson"), ("energy", "simpson"), ("energy", "zoh")):
+        kw = dict(base=base, model=model, integration=integration, rsd_threshold=None)
+        apart, together = identify(robot, parts, **kw), identify(robot, joined, **kw)
+        assert together.rows == apart.rows
+        np.testing.assert_allclose(together.full, apart.full, rtol=1e-9, atol=0)
+        np.testing.assert_allclose(together.std, apart.std, rtol=1e-9, atol=0)
+    assert joined.starts == (0, parts[0].m)
+    assert concatenate([joined, parts[0]]).starts == (0, parts[0].m, joined.m)
+
+
 def test_bad_settings_are_named():
     t = np.arange(0, 4.0, 1 / RATE)
     log = sine_log(t, [0.5], [1.0])
@@ -490,6 +516,99 @@ def test_window_models_standard_deviations_on_the_data_path_match_the_scatter(mo
         ratio = np.sqrt(np.sum(z**2) / (z.size - z.shape[1]))  # the mean's dof taken out
         print(f"\n{model} decimate={decimate}: scatter / reported standard deviation {ratio:.3f}")
         assert 0.75 <= ratio <= 1.33, (model, decimate, ratio)
+
+
+def test_energy_weights_take_the_logged_torque_noise_and_its_density_after_the_low_pass():
+    """The energy model's window weights on preprocessed data: the per-joint noise level is the
+    logged torques' (measured: 0.96 to 1.02 of the simulated one; the second differences of the
+    low-passed torques gave 0.014 to 0.033 of it decimated, 6e-4 to 1.3e-3 not, in proportions
+    that differ between joints by a factor 2.4), and the rows' noise variances
+    (energy_row_noise times its square) are those of the low-passed noise the windows
+    integrate: over 2 s groups of windows (long against the filter's correlation time) the
+    measured variance of the noise in the power integrals over the predicted one, 10 noise draws
+    of a 40 s puma560_3 log: within [0.7, 1.4] (measured 0.90 here, 0.99 over 30 draws, 0.1 the
+    spread of 10), decimated to 50 Hz and not (the trapezoid rule on the decimated samples
+    alone, 5 times the density, gave 0.18)."""
+    from mindyn.identification.models import energy_row_noise, energy_system
+
+    robot = mindyn.load("puma560_3")
+    base = mindyn.base_parameters(robot, friction=True)
+    log, _, tau, _ = _friction_log(robot, np.arange(0, 40.0, 1 / 250.0), seed=3)
+    sd = 0.02 * np.abs(tau).max(axis=0)
+    for decimate in (True, False):
+        exact = preprocess(
+            JointData(log.t, log.q, log.dq, log.ddq, tau), cutoff=5.0, decimate=decimate
+        )
+        y0 = energy_system(base, exact, window=10)[1]
+        got = want = 0.0
+        for s in range(10):
+            noisy = tau + sd * np.random.default_rng(s).standard_normal(tau.shape)
+            d = preprocess(
+                JointData(log.t, log.q, log.dq, log.ddq, noisy), cutoff=5.0, decimate=decimate
+            )
+            if s == 0:
+                res = identify(robot, d, base=base, model="energy", rsd_threshold=None)
+                np.testing.assert_allclose(res.joint_sigma, sd, rtol=0.1)
+            per = int(round(2.0 * d.rate / 10))  # windows in 2 s
+            noise = (
+                energy_system(base, d, window=10)[1] - y0
+            )  # the power integrals are linear in tau
+            rows = energy_row_noise(d, 10) @ sd**2
+            k = noise.size // per * per
+            got += np.sum(noise[:k].reshape(-1, per).sum(axis=1) ** 2)
+            want += np.sum(rows[:k])
+        print(f"\ndecimate={decimate}: measured / predicted noise variance {got / want:.3f}")
+        assert 0.7 <= got / want <= 1.4, (decimate, got / want)
+
+
+def test_integral_model_leaves_out_the_windows_of_a_joint_at_rest():
+    """A joint that rests half of every 4 s (its path followed at the speed
+    ``max(0, sin(2 pi t / 4))^3``, creeping into and out of each rest; no friction at rest,
+    where the drive holds it) with 0.005 rad/s velocity noise: a window through a rest
+    integrates a Coulomb sign the data do not determine. The integral model leaves out the
+    joint's equations of the windows where it is slower than min_velocity at any sample, and
+    every estimate lies within 4 standard deviations of the truth (measured: at most 1.5 on
+    this draw, bias at most 0.65 over 30 draws, bench/bench_window_rests.py); keeping them
+    (min_velocity=0, as before) the resting joint's Coulomb estimate was 13 standard deviations
+    off (measured here 11.3)."""
+    robot = mindyn.load("puma560_3")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    t = np.arange(0, 40.0, 1 / 250.0)
+    log, truth, _, traj = _friction_log(robot, t, seed=3)
+    theta = np.mod(2 * np.pi * t / 4.0, 2 * np.pi)
+    half = theta < np.pi  # moving
+    rise = np.where(half, 2 / 3 - np.cos(theta) + np.cos(theta) ** 3 / 3, 4 / 3)
+    u = 4.0 / (2 * np.pi) * (4 / 3 * np.floor(t / 4.0) + rise)  # the integral of the speed
+    w = np.where(half, np.sin(theta), 0.0) ** 3
+    dw = 3 * np.where(half, np.sin(theta), 0.0) ** 2 * np.cos(theta) * 2 * np.pi / 4.0
+    q, dq, ddq = traj.evaluate(t)
+    qu, dqu, ddqu = traj.evaluate(u)
+    q[:, 1], dq[:, 1], ddq[:, 1] = qu[:, 1], dqu[:, 1] * w, ddqu[:, 1] * w**2 + dqu[:, 1] * dw
+    p = np.asarray(truth["values"]).reshape(robot.n, 13)
+    rigid = p.copy()
+    rigid[:, 11:] = 0.0
+    tau = robot.inverse_dynamics(q, dq, ddq, rigid.reshape(-1))
+    tau += p[:, 11] * dq + p[:, 12] * np.sign(dq)
+    rng = np.random.default_rng(7)
+    tau += 0.02 * np.abs(tau).max(axis=0) * rng.standard_normal(tau.shape)
+    d = preprocess(
+        JointData(t, q, dq + 0.005 * rng.standard_normal(dq.shape), ddq, tau),
+        cutoff=5.0,
+        decimate=False,
+    )
+    true = true_base_values(base, truth)
+    fc2 = list(base.names).index("Fc2")
+    kw = dict(base=base, model="integral", rsd_threshold=None)
+    res = identify(robot, d, **kw)
+    z = (res.full - true) / res.std
+    kept = identify(robot, d, min_velocity=0.0, **kw)
+    off = (kept.full[fc2] - true[fc2]) / kept.std[fc2]
+    print(f"\nlargest |z| {np.max(np.abs(z)):.2f}; Fc2 with every window {off:.1f}")
+    assert np.max(np.abs(z)) < 4.0, z
+    assert abs(off) > 6.0
+    left = res.settings["equations_left_out"]
+    assert res.settings["min_velocity"] == 0.01 and left > 0
+    assert res.rows + left == kept.rows
 
 
 def test_window_variance_factor_against_the_spectrum_and_filtered_noise():

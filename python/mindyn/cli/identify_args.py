@@ -248,7 +248,10 @@ def add_identify(sub, func) -> None:
         "--min-velocity",
         low=0,
         default=0.01,
-        help="dynamic model with friction: leave out joint equations slower than this [rad/s, m/s]",
+        help=(
+            "dynamic and integral models with friction: leave out joint equations slower than "
+            "this [rad/s, m/s] (integral: at a sample of the window)"
+        ),
     )
     p.add_argument(
         "--friction-model",

@@ -36,10 +36,12 @@ from .models import (
     energy_row_noise,
     energy_system,
     integral_chunks,
-    integral_windows,
+    logged_torques,
     moving_equations,
+    moving_windows,
     require_torque,
     torque_noise,
+    windows,
 )
 from .options import DEFAULT_RSD_THRESHOLD
 
@@ -435,6 +437,8 @@ def _enough(
         more = f"at least {math.ceil(need * m / max(rows, 1))} samples"
     elif model == "integral":
         got = f"{m} samples give {rows} integral equations ({n} per window of {window} intervals)"
+        if settings.get("equations_left_out"):
+            got += f" ({settings['equations_left_out']} left out as slower than min_velocity)"
         more = f"at least {math.ceil(need / n) * window + 1} samples, or a shorter window"
     else:
         got = f"{m} samples give {rows} energy windows of {window} intervals"
@@ -693,7 +697,9 @@ def identify(
         Reuse a computed base-parameter set.
     weighted : bool
         Dynamic and integral models: weighted least squares with per-joint weights from a first
-        OLS pass; energy model: per-window weights from torque-noise estimates.
+        OLS pass; energy model: per-window weights from per-joint torque-noise estimates on
+        the torques as logged, before the data path's low-pass
+        (:func:`~mindyn.identification.models.energy_row_noise`).
     rsd_threshold : float or None
         Remove parameters with an RSD above this many percent, largest first, re-estimating after
         each removal (None or <= 0: keep all). Default: 70.7, a t-statistic of sqrt(2)
@@ -709,8 +715,10 @@ def identify(
         Integral model: sample intervals per window (one equation per joint and window; see
         :func:`~mindyn.identification.models.integral_system`).
     min_velocity : float
-        Dynamic model with friction: equations of joints slower than this [rad/s | m/s] are left
-        out (see :func:`dynamic_system`).
+        Dynamic and integral models with friction: equations of joints slower than this
+        [rad/s | m/s] are left out (see :func:`dynamic_system`; integral model: a joint's
+        equation of a window where it is slower at any sample,
+        :func:`~mindyn.identification.models.moving_windows`).
     rank_tolerance : float
         Relative size of the pivots of the column-scaled regressor below which it counts as rank
         deficient.
@@ -778,18 +786,31 @@ def identify(
         settings["equations_left_out"] = equations - rows
         _enough(model, rows, nb, logs, settings)
     elif model == "integral":
-        log_rows = [integral_windows(d.t, integral_window)[0].size * d.n for d in logs]
+        keeps = [moving_windows(base, d, integral_window, min_velocity) for d in logs]
+        counts = [
+            np.full(robot.n, windows(d, integral_window)[0].size) if k is None else k.sum(axis=0)
+            for d, k in zip(logs, keeps)
+        ]
+        log_rows = [int(c.sum()) for c in counts]
         rows = sum(log_rows)
+        joint_rows = np.sum(counts, axis=0)
+        settings["min_velocity"] = min_velocity if base.friction else 0.0
+        settings["equations_left_out"] = (
+            sum(windows(d, integral_window)[0].size * d.n for d in logs) - rows
+        )
         _enough(model, rows, nb, logs, settings, integral_window)
         S = np.zeros((robot.n, nb + 1, nb + 1))
-        for d in logs:  # windows within each log; per joint, merged by QR
+        for d, keep in zip(logs, keeps):  # windows within each log; per joint, merged by QR
+            i0 = 0
             for Wi, yi in integral_chunks(base, d, window=integral_window, integration=integration):
+                sel = None if keep is None else keep[i0 : i0 + Wi.shape[0]]
+                i0 += Wi.shape[0]
                 for j in range(robot.n):
-                    S[j] = _triangle(np.vstack([S[j], np.column_stack([Wi[:, j], yi[:, j]])]))
-        joint_rows = np.full(robot.n, rows // robot.n)
+                    A = np.column_stack([Wi[:, j], yi[:, j]])
+                    S[j] = _triangle(np.vstack([S[j], A if sel is None else A[sel[:, j]]]))
         settings.update({"integral_window": integral_window, "integration": integration})
     else:
-        log_rows = [max(0, (d.m - 1) // energy_window) for d in logs]
+        log_rows = [windows(d, energy_window, gaps=False)[0].size for d in logs]
         rows = sum(log_rows)
         _enough(model, rows, nb, logs, settings, energy_window)
         used = [d for d, r in zip(logs, log_rows) if r > 0]  # logs with a whole window
@@ -807,12 +828,12 @@ def identify(
         ls = _Reduced.from_triangle(_triangle(np.vstack(list(S))), rows)
     else:
         ls = _Reduced(W, y)
-    speed = min_velocity if base.friction and model == "dynamic" else 0.0
+    speed = min_velocity if base.friction and model in ("dynamic", "integral") else 0.0
     cond = _check_rank(ls, names, what, rank_tolerance, logs, speed, base.robot)
 
     joint_sigma = None
     if weighted and model == "energy":
-        joint_sigma = torque_noise([d.tau for d in logs])
+        joint_sigma = torque_noise([x for d in logs for x in logged_torques(d)])
         var = np.vstack([energy_row_noise(d, energy_window) for d in used]) @ joint_sigma**2
         # Floor: windows near rest would otherwise get unbounded weight, and their error is
         # then dominated by what the noise model leaves out (velocity noise, model error).
@@ -822,7 +843,7 @@ def identify(
             ls = _Reduced(W * w[:, None], y * w)
             settings["weighting"] = (
                 "per-window 1/sd of the power integral from per-joint torque-noise estimates "
-                "(second differences of the logged torques)"
+                "(second differences of the torques as logged, before any low-pass)"
             )
         else:
             weighted = False

@@ -29,8 +29,8 @@ state and refuse an identification with it.
 - ``stribeck``: the Stribeck velocity ``w_j`` of each joint is found by a one-dimensional search
   on the fit's residual (:func:`stribeck_search`): a log-spaced grid of :data:`GRID_POINTS`
   velocities from the joint's velocity noise level (the smooth width above: a smaller Stribeck
-  velocity is not resolved by the data; the dynamic model: at least its ``min_velocity``, below
-  which it has no equation) to its largest speed, then a
+  velocity is not resolved by the data; the dynamic and integral models: at least their
+  ``min_velocity``, below which they have no equation) to its largest speed, then a
   golden-section search on ``log w`` between the grid neighbours of the best point, all joints
   at once (one fit per step: each joint's velocity changes only its own equations' friction
   column), the objective of joint ``j`` its residual in the first (ordinary least-squares) fit.
@@ -47,9 +47,9 @@ state and refuse an identification with it.
   time blocks of the fit logs (:func:`~mindyn.identification.prior.block_triangles`: each
   block's residual predicted by the estimate fitted on the other blocks, summed, every model
   weighted with the same per-joint weights, those of the Coulomb fit; every sample of a block
-  scored, also those the dynamic model leaves out of the fit as slower than ``min_velocity``;
-  each fold's fit decides its parameters as the fit does, by rank and RSD pruning, see
-  :func:`held_out_residual`);
+  scored, also those the dynamic and integral models leave out of the fit as slower than
+  ``min_velocity``; each fold's fit decides its parameters as the fit does, by rank and RSD
+  pruning, see :func:`held_out_residual`);
   the simplest model (in the order coulomb, smooth, asymmetric, stribeck, dahl: the stateful
   model last) whose summed held-out residual exceeds the smallest by at most one standard error
   of that excess wins (the one-standard-error rule on paired differences: the error from the
@@ -171,16 +171,17 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
             "Stribeck velocity cannot be searched (leave out friction=True, or move them)"
         )
     # Below the velocity's noise level (the smooth width) the data do not resolve the velocity,
-    # and the dynamic model has no equation below its min_velocity.
+    # and the dynamic and integral models have no equation below their min_velocity.
     floor = _noise_width(logs)[0]
-    if fit.get("model", "dynamic") == "dynamic":
+    if fit.get("model", "dynamic") in ("dynamic", "integral"):
         floor = np.maximum(floor, fit.get("min_velocity", _default("min_velocity")))
     lo = np.log(np.minimum(floor, 0.5 * top))
     hi = np.log(top)
     x, record = _log_search(lambda w: base.with_friction_velocity(w), lo, hi, logs, fit)
     record["search"] = (
         f"log-spaced grid of {GRID_POINTS} velocities from the joint's velocity noise level "
-        "(the smooth width rule; the dynamic model: at least its min_velocity) to its "
+        "(the smooth width rule; the dynamic and integral models: at least their min_velocity) "
+        "to its "
         f"largest speed, then {GOLDEN_STEPS} golden-section steps on log velocity, "
         + record["search"]
     )
@@ -511,9 +512,10 @@ def held_out_residual(
     """The summed held-out residual per equation of the fit ``res`` over ``folds`` contiguous
     blocks of ``logs`` (:func:`~mindyn.identification.prior.block_triangles`), each block
     predicted by the estimate fitted on the other blocks the way ``res`` was fitted (fitted on
-    the fit's equations, scored on every sample, those the dynamic model leaves out as slower
-    than ``min_velocity`` included), and each block's share: ``(total, per block)``; rows
-    weighted with ``joint_sigma`` when given (else the fit's own weights).
+    the fit's equations, scored on every sample or window, those the dynamic and integral
+    models leave out as slower than ``min_velocity`` included), and each block's share:
+    ``(total, per block)``; rows weighted with ``joint_sigma`` when given (else the fit's own
+    weights).
 
     Each fold's fit decides as the fit itself: the base parameters its blocks determine
     (pivoted QR of the column-scaled regressor, pivots below ``rank_tolerance`` (default:

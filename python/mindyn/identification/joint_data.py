@@ -47,6 +47,11 @@ class JointData:
         at those stamps, on which the model's torques are compared with the logged ones
         (:func:`~mindyn.identification.validate`, ``raw`` and ``moving``), and its
         ``processing["velocity_noise"]`` (see :func:`~mindyn.identification.preprocess.preprocess`).
+    starts : tuple of int
+        Set by :func:`~mindyn.identification.preprocess.concatenate`: the first sample of each
+        log joined (0 first); empty for a log not joined. The windows of the integral and
+        energy models and the noise estimates from second differences do not span the junction
+        between two logs (:meth:`log_slices`).
     """
 
     t: np.ndarray
@@ -58,6 +63,7 @@ class JointData:
     processing: dict = field(default_factory=dict)
     regressor_filter: RegressorFilter | None = None
     logged: JointData | None = None
+    starts: tuple[int, ...] = ()
 
     @property
     def m(self) -> int:
@@ -86,6 +92,12 @@ class JointData:
         t = np.atleast_1d(np.asarray(t, dtype=float)) + self.t[0]
         t = np.clip(t, self.t[0], self.t[-1])
         return tuple(s(t) for s in self._splines)
+
+    def log_slices(self) -> list[slice]:
+        """The samples of each log joined into this one (:attr:`starts`), in order; one slice
+        of every sample for a log not joined."""
+        bounds = [s for s in self.starts if 0 < s < self.m]
+        return [slice(a, b) for a, b in zip([0] + bounds, bounds + [self.m])]
 
     @property
     def duration(self) -> float:

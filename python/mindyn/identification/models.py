@@ -63,6 +63,31 @@ def moving_equations(base: BaseParameters, dq, min_velocity: float) -> np.ndarra
     return ~(slow.astype(float) @ (T != 0).astype(float) > 0)
 
 
+def moving_windows(
+    base: BaseParameters, data: JointData, window: int, min_velocity: float
+) -> np.ndarray | None:
+    """Which equations of the integral model to keep with ``min_velocity``: ``(w, n)`` booleans
+    for the windows of :func:`windows`, or None to keep all (no friction, or ``min_velocity``
+    0). Joint ``j``'s equation of a window is left out when :func:`moving_equations` leaves out
+    joint ``j``'s equation at any sample of the window (joint ``j``, or on the motor side a
+    motor acting on it, slower than ``min_velocity``): the Coulomb term integrated over the
+    window takes the sign of the velocity there, which the data do not determine (velocity
+    noise; a rest, where the drive holds the joint without friction). Keeping windows slow at
+    up to a quarter or half of their samples changed the estimates' bias little on simulated
+    logs (bench/bench_window_rests.py); with any slow sample, as in the dynamic model, no kept
+    equation carries an undetermined sign.
+
+    The energy model needs no such rule: a slow joint's friction power, its torque times its
+    velocity, is small whatever the sign (on the same logs its estimates stayed within 0.7
+    standard deviations of the truth without it)."""
+    keep = moving_equations(base, data.dq, min_velocity)
+    if keep is None:
+        return None
+    a, b = windows(data, window)
+    slow = np.vstack([np.zeros((1, data.n)), np.cumsum(~keep, axis=0)])  # slow samples before
+    return slow[b + 1] - slow[a] == 0
+
+
 def dynamic_system(base: BaseParameters, data: JointData, *, min_velocity: float = 0.0):
     """Stacked dynamic model: ``W`` (r, nb), ``y`` (r,) and the joint of each row (r,).
 
@@ -147,8 +172,9 @@ def _cumulative(f: np.ndarray, t: np.ndarray, rule: str) -> np.ndarray:
 def energy_system(
     base: BaseParameters, data: JointData, *, window: int = 1, integration: str = "simpson"
 ):
-    """Energy model over non-overlapping windows of ``window`` sample intervals:
-    ``W`` (r, nb) and ``y`` (r,), ``r = (m - 1) // window``."""
+    """Energy model over non-overlapping windows of ``window`` sample intervals
+    (:func:`windows`; none spans the join of two logs): ``W`` (r, nb) and ``y`` (r,),
+    ``r = (m - 1) // window`` for a log not joined."""
     _args.instance(base, "base", BaseParameters)
     _args.instance(data, "data", JointData)
     window = _args.integer(window, "window", 1)
@@ -158,29 +184,28 @@ def energy_system(
     if window < 1:
         raise ArgumentError(f"energy window must be at least 1 sample interval, got {window}")
     t, dq = data.t, data.dq
-    ends = np.arange(0, data.m, window)
-    if ends.size < 2:
+    a, b = windows(data, window, gaps=False)
+    if a.size == 0:
         raise IdentificationError(
             f"{data.m} samples give no complete energy window of {window} intervals"
         )
-    W = np.diff(base.energy_regressor(data.q[ends], dq[ends]), axis=0)  # only at window ends
+    at = np.unique(np.concatenate([a, b]))  # the energy regressor only at window ends
+    H = base.energy_regressor(data.q[at], dq[at])
+    W = H[np.searchsorted(at, b)] - H[np.searchsorted(at, a)]
     power = np.einsum("ij,ij->i", dq, data.tau)
-    if integration == "zoh":
-        # Torque held over each sample interval: int dq^T tau dt = sum tau_k^T (q_k+1 - q_k).
-        power_int = np.concatenate(
-            [[0.0], np.cumsum(np.einsum("ij,ij->i", np.diff(data.q, axis=0), data.tau[:-1]))]
-        )
-        integration_f = "simpson"
-    else:
-        power_int = None
-        integration_f = integration
     v = base.robot.slot_velocities(dq)  # friction power of slot k: its friction torque times v_k
     cols = {c: v[:, k] * f for c, (k, f) in data_friction_columns(base, data).items()}
     F = np.column_stack([power] + list(cols.values())) if cols else power[:, None]
-    cum = _cumulative(F, t, integration_f)
-    if power_int is not None:
-        cum[:, 0] = power_int
-    dI = np.diff(cum[ends], axis=0)
+    cum = np.zeros_like(F)
+    for p in data.log_slices():  # each joined log's integrals on its own samples
+        if p.stop - p.start < 2:
+            continue
+        cum[p] = _cumulative(F[p], t[p], "simpson" if integration == "zoh" else integration)
+        if integration == "zoh":
+            # Torque held over each sample interval: int dq^T tau dt = sum tau_k^T (q_k+1 - q_k).
+            held = np.einsum("ij,ij->i", np.diff(data.q[p], axis=0), data.tau[p][:-1])
+            cum[p, 0] = np.concatenate([[0.0], np.cumsum(held)])
+    dI = cum[b] - cum[a]
     y = dI[:, 0]
     # an offset's work Off_k (q_k(t_b) - q_k(t_a)) is exact in W: its energy column is q_k
     for j, c in enumerate(cols):
@@ -188,23 +213,28 @@ def energy_system(
     return W, y
 
 
-def integral_windows(t: np.ndarray, window: int) -> tuple[np.ndarray, np.ndarray]:
-    """Sample indices ``(a, b)`` of the integral model's windows, ``b = a + window``.
+def windows(data: JointData, window: int, *, gaps: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Sample indices ``(a, b)`` of the windows of the integral and energy models, ``b = a +
+    window``.
 
-    The log is split into continuous segments at gaps (a sample interval longer than
-    :data:`GAP_FACTOR` times the median one); each segment is covered by consecutive
+    The log is split into continuous pieces at each join of logs (:attr:`JointData.starts`,
+    :func:`~mindyn.identification.preprocess.concatenate`: a window across it would integrate
+    two unrelated motions) and, with ``gaps`` (the integral model), at gaps (a sample interval
+    longer than :data:`GAP_FACTOR` times the median one); each piece is covered by consecutive
     non-overlapping windows from its first sample (a window's last sample is the next one's
-    first), the incomplete rest of a segment left out. No window spans a gap."""
+    first), the incomplete rest of a piece left out. No window spans a join or a gap."""
     if window < 1:
-        raise ArgumentError(f"integral window must be at least 1 sample interval, got {window}")
-    dt = np.diff(t)
-    if dt.size == 0:
-        return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
-    gaps = np.flatnonzero(dt > GAP_FACTOR * np.median(dt))
-    first = np.concatenate([[0], gaps + 1])
-    last = np.concatenate([gaps, [t.size - 1]])
+        raise ArgumentError(f"window must be at least 1 sample interval, got {window}")
+    t = data.t
+    first, last = [], []
+    for piece in data.log_slices():
+        f, e = piece.start, piece.stop - 1
+        dt = np.diff(t[f : e + 1])
+        cut = np.flatnonzero(dt > GAP_FACTOR * np.median(dt)) + f if gaps and dt.size else []
+        first += [f, *(np.asarray(cut, dtype=int) + 1)]
+        last += [*np.asarray(cut, dtype=int), e]
     starts = [np.arange(f, e - window + 1, window) for f, e in zip(first, last)]
-    a = np.concatenate(starts).astype(int)
+    a = np.concatenate(starts).astype(int) if starts else np.zeros(0, dtype=int)
     return a, a + window
 
 
@@ -225,7 +255,7 @@ def _quadrature(t: np.ndarray, rule: str) -> np.ndarray:
 def integral_system(
     base: BaseParameters, data: JointData, *, window: int = 40, integration: str = "simpson"
 ):
-    """Integral model: ``W`` (w, n, nb), ``y`` (w, n) for ``w`` windows (:func:`integral_windows`)
+    """Integral model: ``W`` (w, n, nb), ``y`` (w, n) for ``w`` windows (:func:`windows`)
     (see :func:`integral_chunks`)."""
     _args.instance(base, "base", BaseParameters)
     _args.instance(data, "data", JointData)
@@ -277,7 +307,7 @@ def integral_chunks(
     is still integrated exactly up to the quadrature error."""
     require_torque(data)
     assert data.tau is not None
-    a, b = integral_windows(data.t, window)
+    a, b = windows(data, window)
     if a.size == 0:
         raise IdentificationError(
             f"{data.m} samples give no complete integral window of {window} intervals"
@@ -325,19 +355,60 @@ def torque_noise(tau) -> np.ndarray:
     return 1.4826 * mad / math.sqrt(6.0)
 
 
+def logged_torques(data: JointData) -> list[np.ndarray]:
+    """The torques whose white noise :func:`torque_noise` measures for the energy model's
+    weights, one array per log joined (:meth:`JointData.log_slices`): on preprocessed data the
+    torques as logged (``data.logged``), else ``data.tau``. The data path's low-pass leaves a
+    fraction of the noise in ``data.tau``, and of that fraction's second differences little
+    (at 250 Hz and a 5 Hz cut-off, 1e-3 of the logged noise, the torques' own curvature as
+    much): per joint the level would be wrong by a factor that differs between joints."""
+    src = data.logged if data.logged is not None and data.logged.tau is not None else data
+    assert src.tau is not None
+    return [src.tau[p] for p in src.log_slices()]
+
+
+def _density_scale(data: JointData) -> list[float]:
+    """Per log joined, the spectral density of the noise the windows integrate per unit
+    variance of the noise :func:`torque_noise` measures on :func:`logged_torques`, over that of
+    white noise on the samples of ``data``: ``fs / (P fs_logged)`` on preprocessed data (rate
+    ``fs`` after decimation, ``fs_logged`` as logged, ``P`` periods averaged; the low-pass
+    keeps the density at the frequencies of the motion), else 1."""
+    pieces = data.log_slices()
+    count = len(pieces)
+    if data.logged is None:
+        return [1.0] * count
+    procs = data.processing.get("logs") or [data.processing]
+    logged = data.logged.log_slices()
+    whole = not len(procs) == len(logged) == count
+    if whole:  # one scale for every log
+        pieces, logged, procs = [slice(0, data.m)], [slice(0, data.logged.m)], procs[:1]
+    out = []
+    for p, lp, proc in zip(pieces, logged, procs):
+        periods = ((proc.get("preprocess") or {}).get("averaging") or {}).get("periods", 1)
+        t, lt = data.t[p], data.logged.t[lp]
+        fs, fs_logged = (t.size - 1) / float(t[-1] - t[0]), (lt.size - 1) / float(lt[-1] - lt[0])
+        out.append(fs / (periods * fs_logged))
+    return out * count if whole else out
+
+
 def energy_row_noise(data: JointData, window: int) -> np.ndarray:
-    """Per window and joint, ``sum_k (c_k dq_jk)^2`` with trapezoid weights ``c_k``: the
-    variance of the window's power integral per unit torque-noise variance of joint ``j``;
-    shape (rows, n). A row's noise variance is ``A @ sigma^2``."""
+    """Per window and joint, ``s sum_k (c_k dq_jk)^2`` with trapezoid weights ``c_k``: the
+    variance of the window's power integral per unit variance of joint ``j``'s torque noise as
+    logged (:func:`logged_torques`), over the energy model's windows (:func:`windows`); shape
+    (rows, n). ``s`` is 1 on torques not low-passed; on preprocessed data the windows integrate
+    the logged noise low-passed, whose spectral density at the frequencies of the motion is the
+    logged one: ``s = fs / (P fs_logged)`` (decimated rate ``fs`` over the logged one, ``P``
+    periods averaged). A row's noise variance is ``A @ sigma^2``."""
     dt = np.diff(data.t)
-    c = np.zeros(data.m)
-    ends = np.arange(0, data.m, window)
+    scale = np.zeros(data.m)
+    for p, s in zip(data.log_slices(), _density_scale(data)):
+        scale[p] = s
     rows = []
-    for a, b in zip(ends[:-1], ends[1:]):
+    for a, b in zip(*windows(data, window, gaps=False)):
         c = np.zeros(b - a + 1)
         c[:-1] += 0.5 * dt[a:b]
         c[1:] += 0.5 * dt[a:b]
-        rows.append(np.sum((c[:, None] * data.dq[a : b + 1]) ** 2, axis=0))
+        rows.append(scale[a] * np.sum((c[:, None] * data.dq[a : b + 1]) ** 2, axis=0))
     return np.array(rows)
 
 

@@ -47,9 +47,10 @@ class IdentifyOptions:
     identified; ``weighted``: weighted (else ordinary) least squares; ``rsd_threshold`` [%]:
     parameters above it removed (0 keeps all); ``energy_window``, ``integral_window``: sample
     intervals per window; ``integration``: simpson, trapezoid or zoh; ``min_velocity``: joint
-    equations slower than this left out (dynamic model with friction); ``friction_model``: a
-    friction kind, ``dahl`` or ``auto`` (implies ``friction``), ``friction_width``: the tanh
-    width, one positive number for every joint or one per joint (smooth or auto only);
+    equations slower than this left out (dynamic and integral models with friction);
+    ``friction_model``: a friction kind, ``dahl`` or ``auto`` (implies ``friction``),
+    ``friction_width``: the tanh width, one positive number for every joint or one per joint
+    (smooth or auto only);
     ``consistent``: also the physically consistent estimate, with ``prior_weight`` (None:
     chosen from the data); ``snap``: the rotations near right angles rounded before the base
     set is computed, as ``snap=`` of :func:`mindyn.base_parameters` (``"auto"``: the right
@@ -118,7 +119,7 @@ class IdentifyOptions:
     def _refuse_what_does_not_apply(self) -> None:
         """An option set to other than its default where it has no effect is refused, naming
         it: the window of one model with another, the integration rule with the dynamic model,
-        ``min_velocity`` without friction or with a window model."""
+        ``min_velocity`` without friction or with the energy model."""
         dynamic = self.model == "dynamic"
         got = f"got model='{self.model}'"
         for name, applies, where, why in (
@@ -127,9 +128,9 @@ class IdentifyOptions:
             ("integration", not dynamic, "model='energy' or 'integral'", got),
             (
                 "min_velocity",
-                dynamic and self.friction,
-                "model='dynamic' with friction (friction=True or friction_model=)",
-                got if not dynamic else "the model has no friction",
+                self.model in ("dynamic", "integral") and self.friction,
+                "model='dynamic' or 'integral' with friction (friction=True or friction_model=)",
+                got if self.model == "energy" else "the model has no friction",
             ),
         ):
             if not applies and getattr(self, name) != _DEFAULTS[name]:

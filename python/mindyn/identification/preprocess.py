@@ -719,7 +719,10 @@ class _Joined:
 def concatenate(logs) -> JointData:
     """Several logs (preprocessed or not) of one robot as one identification data set: samples
     stacked, the time of each log shifted to follow the one before (the samples are equations;
-    no derivative is taken across the joins), regressor filters kept per log. The processing
+    no derivative is taken across the joins), regressor filters kept per log, the first sample
+    of each log in ``starts`` (the integral and energy models' windows do not span a join,
+    :attr:`JointData.starts`), the logged samples joined alike (``logged``) when every log has
+    them. The processing
     of each log is listed under ``processing["logs"]``; ``processing["preprocess"]`` is the first
     log's, with ``"logs"`` listing every log's."""
     from .estimation import _logs
@@ -734,8 +737,10 @@ def concatenate(logs) -> JointData:
             raise DataError(f"{d.source or 'data'} has {d.n} joints; {logs[0].source} has {n}")
     if any(d.tau is None for d in logs):
         raise DataError("every log to concatenate needs torques")
-    ts, end = [], None
+    ts, end, starts, first = [], None, [], 0
     for d in logs:
+        starts += [first + s for s in (d.starts or (0,))]  # a joined log's own joins kept
+        first += d.m
         step = float(np.median(np.diff(d.t))) if d.m > 1 else 1.0
         t = d.t - d.t[0] + (0.0 if end is None else end + step)
         ts.append(t)
@@ -751,10 +756,13 @@ def concatenate(logs) -> JointData:
         tau,
         source=" + ".join(d.source or "data" for d in logs),
         processing={"logs": [d.processing for d in logs]},
+        starts=tuple(starts),
     )
     pres = [d.processing.get("preprocess") for d in logs]
     if pres[0] is not None:
         out.processing["preprocess"] = {**pres[0], "logs": pres}
     if any(d.regressor_filter is not None for d in logs):
         out.regressor_filter = _Joined(logs)
+    if all(d.logged is not None for d in logs):
+        out.logged = concatenate([d.logged for d in logs])
     return out

@@ -268,8 +268,9 @@ def block_triangles(res, data, *, folds: int = FOLDS, counts: bool = False):
         energy_row_noise,
         energy_system,
         integral_chunks,
-        integral_windows,
         moving_equations,
+        moving_windows,
+        windows,
     )
 
     base = res.base
@@ -306,22 +307,24 @@ def block_triangles(res, data, *, folds: int = FOLDS, counts: bool = False):
                             add(k, A)
             else:
                 window = res.settings["integral_window"]
-                total = integral_windows(d.t, window)[0].size
+                total = windows(d, window)[0].size
+                moving = moving_windows(base, d, window, res.settings.get("min_velocity", 0.0))
                 block = _cut(total, folds)
                 i0 = 0
                 for Wi, yi in integral_chunks(
                     base, d, window=window, integration=res.settings["integration"]
                 ):
                     kk = block[i0 : i0 + Wi.shape[0]]
+                    mv = None if moving is None else moving[i0 : i0 + Wi.shape[0]]
                     i0 += Wi.shape[0]
                     for k in np.unique(kk):
-                        sel = kk == k
                         for j in range(d.n):
+                            sel = kk == k if mv is None else (kk == k) & mv[:, j]
                             add(k, w[j] * np.column_stack([Wi[sel, j], yi[sel, j]]))
     elif res.model == "energy":
         window = res.settings["energy_window"]
         rule = res.settings["integration"]
-        used = [d for d in logs if (d.m - 1) // window > 0]
+        used = [d for d in logs if windows(d, window, gaps=False)[0].size > 0]
         var = None
         if res.weighted and js is not None:
             var = [energy_row_noise(d, window) @ js**2 for d in used]

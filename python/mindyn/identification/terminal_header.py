@@ -112,10 +112,13 @@ def _settings(report) -> list[str]:
             f"  integral windows of {res.settings['integral_window']} sample interval(s), "
             f"{res.settings['integration']} integration"
         )
+    if res.model == "energy":  # no equation left out by min_velocity
+        pass
     elif res.settings.get("equations_left_out"):
         out.append(
-            f"  {res.settings['equations_left_out']} joint equations below "
-            f"{res.settings['min_velocity']:g} rad/s left out (Coulomb sign undetermined)"
+            f"  {res.settings['equations_left_out']} joint equations "
+            + ("of windows slower at a sample than " if res.model == "integral" else "below ")
+            + f"{res.settings['min_velocity']:g} rad/s left out (Coulomb sign undetermined)"
         )
     elif base.friction:
         out.append(

@@ -109,7 +109,11 @@ def moving_threshold(data: JointData) -> tuple[np.ndarray, str]:
         sd = np.asarray(noise["filtered"], dtype=float)
         what = f"the noise level of the filtered velocity ({noise['source']} through the low-pass)"
     else:
-        sd = torque_noise(data.dq) if data.m > 2 else np.zeros(data.n)
+        sd = (
+            torque_noise([data.dq[p] for p in data.log_slices()])
+            if data.m > 2
+            else np.zeros(data.n)
+        )
         what = "the noise level of the velocity (second differences)"
     peak = np.max(np.abs(data.dq), axis=0) if data.m else np.zeros(data.n)
     thr = np.maximum(MOVING_NOISE_FACTOR * sd, MOVING_PEAK_FRACTION * peak)
