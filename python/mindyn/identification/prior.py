@@ -7,8 +7,8 @@ The consistent estimate with a prior (:func:`~mindyn.identification.consistent
 ``d`` the log-det divergence of a link's pseudo-inertia ``J`` from the description's ``J0``.
 ``f / 2`` is the negative log posterior of the parameters when the noise is Gaussian and each
 link's pseudo-inertia has the prior density ``exp(-W d(J, J0) / 2)`` normalised: a Wishart
-density of ``W + 5`` degrees of freedom and scale ``J0 / W`` (mean ``(1 + 5 / W) J0``, each
-entry's relative spread about ``sqrt(2 / W)``). So ``W`` says how far the true links may lie
+density of ``W + 5`` degrees of freedom and scale ``J0 / W`` (its mode ``J0``, its mean
+``(1 + 5 / W) J0``, a diagonal entry's relative spread ``sqrt(2 / (W + 5))`` about the mean). So ``W`` says how far the true links may lie
 from the description, and the data tell how far they do: its default is the candidate of
 :data:`CANDIDATES` under which the data are most probable, the marginal likelihood ``p(z | W)``
 (type-II maximum likelihood, or empirical Bayes; MacKay, *Bayesian interpolation*, Neural
@@ -54,9 +54,9 @@ from .._threads import single_threaded_blas
 from .errors import IdentificationError
 
 #: Candidate prior weights (units: one divergence costs W noise variances of the fit): half
-#: decades from a prior the data outweigh in every direction they see (relative spread of each
-#: pseudo-inertia entry about 14) to one that holds all but the best-determined directions
-#: (about 1.4 %).
+#: decades from a prior the data outweigh in every direction they see (its mean 500 times the
+#: description's pseudo-inertia) to one that holds all but the best-determined directions (a
+#: diagonal entry's relative spread 1.4 %).
 CANDIDATES = tuple(float(f"{10.0 ** (k / 2):.3g}") for k in range(-4, 9))
 
 #: The weights of the descent from the description to a weaker prior's minimiser (a weak
