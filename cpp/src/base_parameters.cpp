@@ -1154,7 +1154,12 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     for (long r = 0; r < Zs.rows(); ++r)
       if (r != red.constant_row) Z.row(row++) = Zs.row(r);
     for (int k = 0; k < n; ++k)
-      for (int i = 0; i < fc; ++i) Z(keep + fc * k + i, layout.frictionIndex(k, i)) = 1.0;
+      for (int i = 0; i < fc; ++i) {
+        // a friction parameter of unit size in the robot's scale (its column's unit), as the
+        // other rows' coordinates are: the rows are measured against the largest (echelon)
+        const int c = layout.frictionIndex(k, i);
+        Z(keep + fc * k + i, c) = units[c];
+      }
     ZE = sparse(Z);
   } else if (options.method == BaseMethod::Recursive) {
     // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has
