@@ -54,7 +54,7 @@ def test_zcr07s_with_rotor_friction_and_offsets():
     assert rec.n == 52 + 6
 
 
-@pytest.mark.parametrize("rel", sorted(set(ARMS) - NEAR_EXACT))
+@pytest.mark.parametrize("rel", sorted(ARMS))
 def test_arm_urdfs(rel):
     robot = mindyn.load(ROBOTS_DIR / rel, tip=ARMS[rel])
     assert_same(robot, rel)

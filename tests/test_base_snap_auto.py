@@ -230,11 +230,13 @@ def test_cli_snap_option(tmp_path):
     assert "expected auto, off or a finite number" in bad.stderr
 
 
-def test_identification_snap_option(rng):
+def test_identification_snap_option(tmp_path, rng):
     """``snap=False`` identifies the base set of the angles as written (larger than the
-    default's on the Kinova), said so in the JSON, and a snap that is not "auto", a flag or a
-    tolerance is refused naming it."""
-    robot = mindyn.load(KINOVA)
+    default's on the Kinova with its right angles written 1.5708: 3.7e-6 rad off, which the
+    rank tolerance resolves, where the 2e-13 rad of its own 11 decimals are below it), said so
+    in the JSON, and a snap that is not "auto", a flag or a tolerance is refused naming it."""
+    four = rewrite_right_angles(KINOVA.read_text(), lambda k: repr(round(k * math.pi / 2, 4)))
+    robot = mindyn.load(written(tmp_path, "kinova4.urdf", four))
     report = run(robot, simulated_log(robot, rng), snap=False)
     assert report.base.snap_decision["mode"] == "off"
     assert report.base.n == mindyn.base_parameters(robot, snap=False).n

@@ -96,10 +96,17 @@ double sizeInRows(const Eigen::Ref<const Eigen::VectorXd>& x, long end,
   return end > 0 ? x.head(end).cwiseAbs().cwiseProduct(inv_row.head(end)).maxCoeff() / unit : 0.0;
 }
 
+// `inv_scale` is 1 / the largest row (in the same units): a residual is kept only when it is also
+// above the tolerance against it, the scale of the whole robot. A row is measured against itself
+// to tell rounding noise from genuine small entries, but a row that is all small (the potential
+// energy's coefficients on an axis tilted 1e-12 off vertical, gravity times the tilt) is no
+// measure of what is numerically zero: the regressor's torques mix it with the large rows, and no
+// rank decision on them resolves it. `kept` (optional) receives the pivots.
 int eliminate(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& order, double tol,
               const Eigen::VectorXd& colmax, const std::vector<long>& colend,
-              const Eigen::VectorXd& inv_row, const Eigen::VectorXd& units,
-              const Eigen::VectorXd& colsize, double zero_level, RankDecision* out) {
+              const Eigen::VectorXd& inv_row, double inv_scale, const Eigen::VectorXd& units,
+              const Eigen::VectorXd& colsize, double zero_level, RankDecision* out,
+              std::vector<int>* kept = nullptr) {
   // Rows are kept in their order; every vector remembers where its non-zero part ends, since
   // the row reduction leaves the rows of the inner links first.
   const long m = Z.rows();
@@ -153,7 +160,15 @@ int eliminate(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& orde
     // is rounding noise, so the column is dependent.
     // A residual small against its rows is dependent too, however large against its own column
     // (a column that is itself tiny: its coordinates carry the rounding of their rows).
-    if (rel > tol && nb < most && sizeInRows(x, end, inv_row, units[c]) > tol) {
+    // (the size against the robot's largest row and against the column's rows are evaluated
+    // only for a column that passes the first test)
+    double size = 0;
+    if (rel > tol && nb < most) {
+      size = std::min(rel, sizeInRows(x, end, inv_row, units[c]));
+      if (inv_scale > 0) size = std::min(size, rel * colmax[c] * inv_scale / units[c]);
+    }
+    if (size > tol) {
+      if (kept) kept->push_back(c);
       U.push(x, end);
       upivot.push_back(x[r]);
       uend.push_back(end);
@@ -162,7 +177,7 @@ int eliminate(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& orde
         F[c].push_back({nb, 1.0});
         out->pivots.push_back(c);
         out->pivot_size.push_back(rel);
-        out->smallest_kept = std::min(out->smallest_kept, rel);
+        out->smallest_kept = std::min(out->smallest_kept, size);
       }
     } else if (out) {
       out->dependent.push_back(c);
@@ -556,14 +571,24 @@ Reduced reduceRows(const InfluenceCoordinates& ic) {
 }  // namespace
 
 RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order, double tolerance,
-                     const std::vector<int>& kinds, const Eigen::VectorXd& units) {
+                     const std::vector<int>& kinds, const Eigen::VectorXd& units, double scale) {
   return echelon(Eigen::SparseMatrix<double>(Z.sparseView(0.0, 0.0)), order, tolerance, kinds,
-                 units);
+                 units, scale);
+}
+
+double largestRow(const Eigen::SparseMatrix<double>& Z, const Eigen::VectorXd& units) {
+  double largest = 0;
+  for (int c = 0; c < Z.cols(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it)
+      largest = std::max(largest, std::abs(it.value()) / (units.size() ? units[c] : 1.0));
+  return largest;
 }
 
 RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& order,
                      double tolerance, const std::vector<int>& kinds,
-                     const Eigen::VectorXd& units_in) {
+                     const Eigen::VectorXd& units_in, double scale) {
+  if (std::isnan(scale) || !std::isfinite(scale))
+    throw std::invalid_argument("echelon: the scale must be a finite number");
   if (static_cast<long>(order.size()) != Z.cols())
     throw std::invalid_argument("echelon: the order must name every column once");
   if (units_in.size() != 0 && (units_in.size() != Z.cols() || !(units_in.array() > 0).all()))
@@ -602,7 +627,13 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
       inv_row[it.index()] = std::max(inv_row[it.index()], std::abs(it.value()) / units[c]);
   // Rows at the rounding level of the largest (a basis function that is zero for the exact
   // geometry) count at that level.
-  const double row_floor = 1e-13 * (Z.rows() ? inv_row.maxCoeff() : 0.0);
+  const double largest_row = Z.rows() ? inv_row.maxCoeff() : 0.0;
+  // (a negative scale: none, the residuals measured against their columns and rows only)
+  const double inv_scale = scale > 0         ? 1.0 / scale
+                           : scale < 0       ? 0.0
+                           : largest_row > 0 ? 1.0 / largest_row
+                                             : 0.0;
+  const double row_floor = 1e-13 * largest_row;
   for (long r = 0; r < Z.rows(); ++r)
     inv_row[r] = row_floor > 0 ? 1.0 / std::max(inv_row[r], row_floor) : 0.0;
   Eigen::VectorXd colsize(Z.cols());
@@ -613,7 +644,8 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
     colsize[c] = size / units[c];
   }
   constexpr double kZeroLevel = 1e-13;
-  eliminate(Z, order, tolerance, colmax, colend, inv_row, units, colsize, kZeroLevel, &d);
+  eliminate(Z, order, tolerance, colmax, colend, inv_row, inv_scale, units, colsize, kZeroLevel,
+            &d);
   d.zero_threshold = kZeroLevel;
   for (int c : d.zero) d.largest_zeroed = std::max(d.largest_zeroed, colsize[c]);
 
@@ -679,6 +711,7 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
   // Near-degenerate geometry: say what the neighbouring tolerances would decide.
   const double looser = tolerance * 1e4, tighter = tolerance * 1e-3;
   int weak = 0;
+  std::vector<char> weak_column(Z.cols(), 0);
   if (kinds.size() == static_cast<size_t>(Z.cols())) {
     std::vector<double> kindmax(*std::max_element(kinds.begin(), kinds.end()) + 1, 0.0);
     for (int c = 0; c < Z.cols(); ++c) kindmax[kinds[c]] = std::max(kindmax[kinds[c]], colmax[c]);
@@ -686,7 +719,10 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
       const int c = d.pivots[b];
       const double s = d.pivot_size[b] * colmax[c] / kindmax[kinds[c]];
       d.weakest_kept = std::min(d.weakest_kept, s);
-      if (s < looser) ++weak;
+      if (s < looser) {
+        ++weak;
+        weak_column[c] = 1;
+      }
     }
   }
   if (d.smallest_kept < looser * 10 || d.largest_dropped > tighter / 10 || weak > 0 ||
@@ -694,15 +730,33 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
     // Each decision depends only on those before it: with every kept pivot above the looser
     // tolerance, or every dropped residual below the tighter one and no column zeroed that is
     // not exactly zero, the elimination would decide every column as it did.
-    d.rank_looser = d.smallest_kept > looser ? d.rank()
-                                             : eliminate(Z, order, looser, colmax, colend, inv_row,
-                                                         units, colsize, kZeroLevel, nullptr);
-    d.rank_tighter =
-        d.largest_dropped <= tighter && d.largest_zeroed == 0
-            ? d.rank()
-            : eliminate(Z, order, tighter, colmax, colend, inv_row, units, colsize, 0.0, nullptr);
+    std::vector<int> at_looser, at_tighter;
+    d.rank_looser = d.smallest_kept > looser
+                        ? d.rank()
+                        : eliminate(Z, order, looser, colmax, colend, inv_row, inv_scale, units,
+                                    colsize, kZeroLevel, nullptr, &at_looser);
+    // At the tighter tolerance, near the rounding of the coordinates, the columns are measured
+    // against their own rows only: the count says what the coordinates resolve at all, as the
+    // other methods' counts there do (the robot's scale would hide a column of 1e-12 behind
+    // the largest row, where the sampled regressor resolves it).
+    d.rank_tighter = d.largest_dropped <= tighter && d.largest_zeroed == 0 && inv_scale == 0
+                         ? d.rank()
+                         : eliminate(Z, order, tighter, colmax, colend, inv_row, 0.0, units,
+                                     colsize, 0.0, nullptr, &at_tighter);
+    if (d.smallest_kept > looser) at_looser = d.pivots;
+    if (d.rank_tighter == d.rank() && at_tighter.empty()) at_tighter = d.pivots;
     // Weak columns would go at the looser tolerance measured against their kind.
     d.rank_looser = std::min(d.rank_looser, d.rank() - weak);
+    // The parameters the decision affects: base at one neighbouring tolerance and not at the
+    // other, or weak.
+    std::vector<char> here(Z.cols(), 0), loose(Z.cols(), 0), tight(Z.cols(), 0);
+    for (int c : d.pivots) here[c] = 1;
+    for (int c : at_looser) loose[c] = 1;
+    for (int c : at_tighter) tight[c] = 1;
+    for (int c = 0; c < Z.cols(); ++c)
+      if (weak_column[c]) loose[c] = 0;
+    for (int c : order)
+      if (here[c] != loose[c] || here[c] != tight[c]) d.undecided.push_back(c);
   } else {
     d.rank_looser = d.rank_tighter = d.rank();
   }
@@ -888,16 +942,25 @@ Eigen::SparseMatrix<double> recursiveCoordinates(Eigen::SparseMatrix<double> Z,
   return Z;
 }
 
-// `count(t)`: the number of base parameters with the recursion at tolerance t, `rows` at tol.
+// `count(t)`: the number of base parameters with the recursion at tolerance t, `rows` at tol, and
+// the equations-of-motion pivots at t (those whose decision changes join `undecided`).
 template <class Count>
 void foldRecursiveMargins(double tol, const IdentifiableSpace& space, long rows, Count count,
-                          BaseParameters& bp) {
+                          const std::vector<int>& order, BaseParameters& bp) {
   const double looser = tol * 1e4, tighter = tol * 1e-3;
   const bool close = space.smallest_kept < looser * 10 || space.largest_dropped > tighter / 10;
   int dl = 0, dt = 0;
+  std::vector<char> changed(bp.classical_names.size(), 0);
   if (close) {
-    dl = static_cast<int>(count(looser) - rows);
-    dt = static_cast<int>(count(tighter) - rows);
+    std::vector<char> here(changed.size(), 0);
+    for (int c : bp.eom.decision.pivots) here[c] = 1;
+    for (double t : {looser, tighter}) {
+      const auto [count_t, pivots_t] = count(t);
+      (t == looser ? dl : dt) = static_cast<int>(count_t - rows);
+      std::vector<char> there(changed.size(), 0);
+      for (int c : pivots_t) there[c] = 1;
+      for (std::size_t c = 0; c < changed.size(); ++c) changed[c] |= here[c] != there[c];
+    }
   }
   for (BaseSet* set : {&bp.lagrangian, &bp.energy, &bp.eom}) {
     RankDecision& d = set->decision;
@@ -907,6 +970,10 @@ void foldRecursiveMargins(double tol, const IdentifiableSpace& space, long rows,
     d.rank_looser = std::min(d.rank_looser, d.rank() + dl);
     d.rank_tighter = std::max(d.rank_tighter, d.rank() + dt);
     d.near_degenerate = d.rank_looser != d.rank() || d.rank_tighter != d.rank();
+    for (int c : d.undecided) changed[c] = 1;
+    d.undecided.clear();
+    for (int c : order)
+      if (changed[c]) d.undecided.push_back(c);
   }
 }
 
@@ -1087,7 +1154,12 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     for (long r = 0; r < Zs.rows(); ++r)
       if (r != red.constant_row) Z.row(row++) = Zs.row(r);
     for (int k = 0; k < n; ++k)
-      for (int i = 0; i < fc; ++i) Z(keep + fc * k + i, layout.frictionIndex(k, i)) = 1.0;
+      for (int i = 0; i < fc; ++i) {
+        // a friction parameter of unit size in the robot's scale (its column's unit), as the
+        // other rows' coordinates are: the rows are measured against the largest (echelon)
+        const int c = layout.frictionIndex(k, i);
+        Z(keep + fc * k + i, c) = units[c];
+      }
     ZE = sparse(Z);
   } else if (options.method == BaseMethod::Recursive) {
     // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has
@@ -1165,16 +1237,27 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     const int p = c % layout.perLink();
     kinds[c] = p < 6 ? 0 : (p < 9 ? 1 : (p == 9 ? 2 : 3 + (p - 10)));
   }
-  bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds, units), bp.classical_names);
+  // The projection method's Lagrangian is measured against the rows that reach the torques: its
+  // constant potential (gravity times the heights) is no scale of what the torques resolve.
+  // The scale of the whole robot is for the projection method's equations of motion, whose
+  // rows, one per basis function, the torques mix (a potential row that is all small is no
+  // measure of its entries). The recursive method's rows are directions, each normalised, and
+  // each of the numerical method's is a whole torque at a state, which its entries are measured
+  // against already. The Lagrangian and total energy are checked against the energies, whose
+  // constant potential (gravity times the heights) is of another size than the torques: their
+  // rows are measured as they are.
+  bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds, units, -1.0), bp.classical_names);
   if (options.method != BaseMethod::Numerical) {
     // The total-energy coordinates are the Lagrangian's with the potential rows negated: a
     // diagonal +-1 row scaling, which leaves every pivot, residual and Y exactly as they are
     // (recursive: the same row space, as the constant's sign does not change it).
     bp.energy = bp.lagrangian;
   } else {
-    bp.energy = makeSet(echelon(ZH, order, tol, kinds, units), bp.classical_names);
+    bp.energy = makeSet(echelon(ZH, order, tol, kinds, units, -1.0), bp.classical_names);
   }
-  bp.eom = makeSet(echelon(ZE, order, tol, kinds, units), bp.classical_names);
+  bp.eom = makeSet(
+      echelon(ZE, order, tol, kinds, units, options.method == BaseMethod::Projection ? 0.0 : -1.0),
+      bp.classical_names);
   if (options.method == BaseMethod::Recursive) {
     if (expand) {
       // The expansion's rows are independent, the real links' columns of them need not be: the
@@ -1183,16 +1266,20 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
       const auto rank = [&](double t) {
         const Eigen::SparseMatrix<double> Z =
             recursiveCoordinates(recursiveIdentifiable(kernel, layout, t).rows * real, units);
-        return static_cast<long>(echelon(Z, order, tol, kinds, units).rank());
+        std::vector<int> pivots = echelon(Z, order, tol, kinds, units, -1.0).pivots;
+        return std::make_pair(static_cast<long>(pivots.size()), std::move(pivots));
       };
-      foldRecursiveMargins(tol, space, bp.eom.size(), rank, bp);
+      foldRecursiveMargins(tol, space, bp.eom.size(), rank, order, bp);
     } else {
       foldRecursiveMargins(
           tol, space, ZE.rows(),
           [&](double t) {
-            return static_cast<long>(recursiveIdentifiable(exact_model, layout, t).rows.rows());
+            const IdentifiableSpace at = recursiveIdentifiable(exact_model, layout, t);
+            const auto rows = static_cast<long>(at.rows.rows());
+            const Eigen::SparseMatrix<double> Z = recursiveCoordinates(at.rows, units);
+            return std::make_pair(rows, echelon(Z, order, tol, kinds, units, -1.0).pivots);
           },
-          bp);
+          order, bp);
     }
   }
   {

@@ -91,9 +91,15 @@ Vec6 motionToChild(const Eigen::Isometry3d& T, const Vec6& v) {
 }
 
 // An orthonormal basis grown one vector at a time: a vector joins when what is left of it after
-// removing its components along the basis (twice, for accuracy) exceeds tolerance x scale, the
-// scale being the size of what produced it. The components are taken all at once (classical
-// Gram-Schmidt, done twice), so that they do not wait on one another.
+// removing its components along the basis (twice, for accuracy), times its weight, exceeds
+// tolerance x scale, the scale being the size of what produced it. The components are taken all
+// at once (classical Gram-Schmidt, done twice), so that they do not wait on one another.
+//
+// The weight is the size of the torques a motion direction stands for, relative to the robot's
+// largest (gravityWeight): 1 for a joint's motion, more for gravity and what the joints make of
+// it when gravity loads no joint at full size. A motion set apart from the others by gravity
+// alone (a joint axis tilted off vertical) is then as far from zero as its torques are in the
+// regressor against the robot's largest, the measure of the echelon form in the other methods.
 struct Margin {
   double kept = 1.0, dropped = 0.0;
 };
@@ -101,11 +107,12 @@ struct Margin {
 template <int D>
 struct Span {
   Eigen::Matrix<double, D, D> Q = Eigen::Matrix<double, D, D>::Zero();
+  Eigen::Matrix<double, D, 1> weight = Eigen::Matrix<double, D, 1>::Zero();  // of each column
   int dim = 0;
   double tol;
   Margin* margin;
   Span(double tolerance, Margin& m) : tol(tolerance), margin(&m) {}
-  bool add(const Eigen::Matrix<double, D, 1>& v, double scale) {
+  bool add(const Eigen::Matrix<double, D, 1>& v, double scale, double w = 1.0) {
     if (dim == D) return false;
     Eigen::Matrix<double, D, 1> r = v;
     if (dim > 0)
@@ -114,17 +121,45 @@ struct Span {
         for (int i = 0; i < dim; ++i) c[i] = Q.col(i).dot(r);
         for (int i = 0; i < dim; ++i) r -= c[i] * Q.col(i);
       }
-    const double nr = r.norm(), rel = scale > 0 ? nr / scale : 0.0;
+    const double nr = r.norm(), rel = scale > 0 ? nr * w / scale : 0.0;
     if (!(rel > tol)) {
       margin->dropped = std::max(margin->dropped, rel);
       return false;
     }
     margin->kept = std::min(margin->kept, rel);
+    weight[dim] = w;
     Q.col(dim++) = r / nr;
     return true;
   }
   auto basis() const { return Q.leftCols(dim); }
 };
+
+// The weight of gravity's motion directions: in the unit-length model (time in sqrt(L / 1 m) s,
+// joint accelerations of order one) gravity weighs |g| against a joint's unit acceleration, and
+// the torques it exerts are |g| s_k on joint k, s_k the sine of the angle between a revolute
+// axis and the vertical (the cosine for a prismatic one) at q = 0: the weight is |g| relative to
+// the largest torques, max(1, |g| max_k s_k). On a robot whose joints are all vertical but one
+// tilted 1e-9 rad, gravity's torques on that joint are |g| 1e-9 of the inertial ones (weight
+// |g|, as in the regressor); on an arm that gravity loads, its rows are the largest and a
+// gravity direction counts at its own size (weight about 1).
+double gravityWeight(const Model& model) {
+  const double g = model.gravity.norm();
+  if (!(g > 0)) return 1.0;
+  const Eigen::Vector3d down = model.gravity / g;
+  const int n = model.nq();
+  std::vector<Eigen::Matrix3d> R(n);  // link k in the base at q = 0
+  double largest = 0;
+  for (int k = 0; k < n; ++k) {
+    const Joint& joint = model.joints[k];
+    const int p = model.parent(k);
+    const Eigen::Matrix3d Rp = p < 0 ? Eigen::Matrix3d::Identity() : R[p];
+    const Eigen::Vector3d u = Rp * joint.pre.linear() * joint.axis;
+    largest = std::max(
+        largest, joint.type == JointType::Revolute ? u.cross(down).norm() : std::abs(u.dot(down)));
+    R[k] = Rp * joint.pre.linear() * joint.post.linear();
+  }
+  return g / std::max(1.0, g * largest);
+}
 
 // Motion subspace of joint k in link k's frame: rotation about the axis through the joint
 // frame's origin, or translation along it.
@@ -160,7 +195,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   if (model.gravity.norm() > 0) {
     Vec6 g;
     g << Eigen::Vector3d::Zero(), -model.gravity;
-    Vbase.add(g, g.norm());
+    Vbase.add(g, g.norm(), gravityWeight(model));
   }
   const Span<10> Cbase(tolerance, margin);
   std::vector<Span<6>> Vs(n, Span<6>(tolerance, margin));
@@ -192,7 +227,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
       const Eigen::Vector3d u = joint.pre.linear() * joint.axis;  // in the parent link
       bool decoupled = true, still = true;
       for (int i = 0; i < Vp.dim; ++i) {
-        const Vec6 v = Vp.Q.col(i);
+        const Vec6 v = Vp.Q.col(i) * Vp.weight[i];  // (weighted as the spans' decisions)
         const Eigen::Vector3d w = v.head<3>();
         if (joint.type == JointType::Revolute) {
           decoupled = decoupled && std::abs(u.dot(w)) <= tolerance;
@@ -224,9 +259,9 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     V.add(S, sn);
     for (int i = 0; i < Vp.dim; ++i) {
       const Vec6 v = motionToChild(X, Vp.Q.col(i));
-      V.add(v, v.norm());
+      V.add(v, v.norm(), Vp.weight[i]);
     }
-    for (int i = 0; i < V.dim; ++i) V.add(crossMotion(S, V.Q.col(i)), sn);
+    for (int i = 0; i < V.dim; ++i) V.add(crossMotion(S, V.Q.col(i)), sn, V.weight[i]);
 
     // O_k: what the parent link identifies of link k's inertia, at every q_k (closed under the
     // rate), and its rates.
@@ -248,7 +283,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
 
     // N_k: s^T I v for v in V_k, and the rates of O_k.
     Span<10> N(tolerance, margin);
-    for (int i = 0; i < V.dim; ++i) N.add(outputRow(S, V.Q.col(i)).transpose(), sn);
+    for (int i = 0; i < V.dim; ++i) N.add(outputRow(S, V.Q.col(i)).transpose(), sn, V.weight[i]);
     for (int i = 0; i < O.dim; ++i) N.add(rates.row(i).transpose(), an);
     M[k] = N.basis().transpose();
     out.link_rank[k] = N.dim;

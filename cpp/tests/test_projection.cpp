@@ -297,6 +297,28 @@ TEST(Echelon, NearDegenerateIsFlagged) {
   EXPECT_EQ(echelon(Z, {0, 1, 2}, 1e-12).rank(), 3);
 }
 
+TEST(Echelon, ARowAllOfATiltsSizeIsMeasuredAgainstTheLargestRow) {
+  // Row 1 holds only column 1, at 1e-11: full-size against itself, 1e-11 of the largest row.
+  Eigen::MatrixXd Z(2, 2);
+  Z << 1, 0, 0, 1e-11;
+  const RankDecision d = echelon(Z, {0, 1});
+  EXPECT_EQ(d.rank(), 1);
+  EXPECT_TRUE(d.near_degenerate);
+  EXPECT_EQ(d.rank_tighter, 2);  // at 1e-12, the rows as they are
+  EXPECT_EQ(d.undecided, (std::vector<int>{1}));
+  // At 1e-12 against the largest row it is kept; without a scale (rows that are directions,
+  // each normalised) it is full-size; against a given scale of 1e-10, a tenth of it.
+  EXPECT_EQ(echelon(Z, {0, 1}, 1e-12).rank(), 2);
+  EXPECT_EQ(echelon(Z, {0, 1}, 1e-9, {}, {}, -1.0).rank(), 2);
+  EXPECT_EQ(echelon(Z, {0, 1}, 1e-9, {}, {}, 1e-10).rank(), 2);
+  EXPECT_EQ(echelon(Z, {0, 1}, 1e-9, {}, {}, 1e-1).rank(), 1);
+  EXPECT_EQ(largestRow(Eigen::SparseMatrix<double>(Z.sparseView()), Eigen::Vector2d(1.0, 2.0)),
+            1.0);
+  EXPECT_THROW(echelon(Z, {0, 1}, 1e-9, {}, {}, std::nan("")), std::invalid_argument);
+  // The other decision, far from both neighbouring tolerances, affects nothing.
+  EXPECT_TRUE(echelon(Eigen::MatrixXd::Identity(2, 2), {0, 1}).undecided.empty());
+}
+
 TEST(Echelon, KhalilOrder) {
   const std::vector<int> o = khalilOrder(2, {true, true});
   // link 1: XX XY XZ YZ ZZ MX MY, YY MZ M, Ia, Fv, Fc; then link 2 (13 columns per link)

@@ -109,8 +109,9 @@ class BaseParameters:
         ``formulas_full``, ``Y``,
         ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
         and ``margin`` (tolerance, smallest kept / largest dropped relative pivot, the counts at
-        the neighbouring tolerances, ``near_degenerate``, and ``consistency``: how far ``W_b Y``
-        is from the classical regressor, relative to the size of its terms; a set over the
+        the neighbouring tolerances, ``near_degenerate``, ``decided_by_tolerance``: the
+        parameters whose decision a neighbouring tolerance changes, and ``consistency``: how far
+        ``W_b Y`` is from the classical regressor, relative to the size of its terms; a set over the
         tolerance is refused with a ModelError when computed). Each set is a read-only mapping
         whose ``Y`` and formulas are computed on first access.
     method_reason : str

@@ -63,6 +63,9 @@ py::dict setDict(const BaseSet& set, const std::vector<std::string>& names) {
   margin["zero_threshold"] = d.zero_threshold;
   margin["largest_zeroed"] = d.largest_zeroed;
   margin["near_degenerate"] = d.near_degenerate;
+  std::vector<std::string> undecided;
+  for (int c : d.undecided) undecided.push_back(names[c]);
+  margin["decided_by_tolerance"] = undecided;
   margin["fit_residual"] = d.fit_residual;
   margin["consistency"] = d.consistency;
   out["margin"] = margin;

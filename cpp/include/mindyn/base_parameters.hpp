@@ -45,6 +45,10 @@ struct RankDecision {
   double zero_threshold = 0;  // columns up to this (entries relative to their rows) count as zero
   double largest_zeroed = 0;  // largest such non-zero column size, relative; 0 if all exact
   bool near_degenerate = false;
+  // The columns (classical indices, in priority order) whose decision the neighbouring
+  // tolerances change: a base parameter at this tolerance and not at one of them, or the other
+  // way round, or weak; empty when neither changes any.
+  std::vector<int> undecided;
   Eigen::SparseMatrix<double> Y;  // rank x columns, Y.col(pivots[b]) = e_b; mostly zero
   double fit_residual = 0;        // max |Z - Z~ Y| relative to max |Z|
   // W_b Y = W checked against the classical model (computeBaseParameters): the largest
@@ -68,15 +72,25 @@ inline constexpr double kDefaultRankTolerance = 1e-9;
 /// size of its coordinates for parameters of unit size in the robot's own length scale: a
 /// coordinate is compared with the others of its row in those units. A residual is kept as a
 /// pivot only when it is above the tolerance both relative to its own column and relative to its
-/// rows in those units; a column whose entries are all below 1e-13 of their rows counts as zero.
-/// Without `units`, every column counts as of unit size.
+/// rows in those units, and relative to the largest row (the scale of the whole robot: a row that
+/// is all small, gravity times an axis tilted 1e-12 rad, no rank decision on the regressor
+/// resolves); a column whose entries are all below 1e-13 of their rows counts as zero.
+/// Without `units`, every column counts as of unit size. `scale` (optional, > 0) is that largest
+/// row when it is another matrix's (the Lagrangian's coordinates measured against the rows that
+/// reach the torques, without the constant potential); 0: the largest row of Z; negative: none,
+/// for rows that are directions each normalised on its own (the recursive method's), which no
+/// row measures another's size.
 RankDecision echelon(const Eigen::MatrixXd& Z, const std::vector<int>& order,
                      double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {},
-                     const Eigen::VectorXd& units = {});
+                     const Eigen::VectorXd& units = {}, double scale = 0);
 /// The same on a sparse Z (only its non-zero entries are stored and visited).
 RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& order,
                      double tolerance = kDefaultRankTolerance, const std::vector<int>& kinds = {},
-                     const Eigen::VectorXd& units = {});
+                     const Eigen::VectorXd& units = {}, double scale = 0);
+
+/// The largest row of Z in the units of the parameters (max over rows and columns of
+/// |Z(r, c)| / units[c]): the scale echelon measures residuals against.
+double largestRow(const Eigen::SparseMatrix<double>& Z, const Eigen::VectorXd& units);
 
 /// Size of each column's coordinates in units of the robot's length L (its longest root path,
 /// joint offsets and prismatic travel added up from the base, rounded to a power of two): L^2 for

@@ -88,8 +88,14 @@ def cmd_base(args: argparse.Namespace) -> int:
             f"tolerance {m['tolerance']:.3g}, decided by pivots within the band (smallest kept "
             f"{m['smallest_kept']:.3g}, largest regrouped {m['largest_dropped']:.3g}); "
             f"{m['rank_at_looser_tolerance']} at {m['looser_tolerance']:.3g}, "
-            f"{m['rank_at_tighter_tolerance']} at {m['tighter_tolerance']:.3g}; the regrouping "
-            f"is checked: W_b Y reproduces the dynamics to {m['consistency']:.2g}"
+            f"{m['rank_at_tighter_tolerance']} at {m['tighter_tolerance']:.3g}"
+            + (
+                f"; the tolerance decides {' '.join(m['decided_by_tolerance'])}"
+                if m["decided_by_tolerance"]
+                else ""
+            )
+            + f"; the regrouping is checked: W_b Y reproduces the dynamics to "
+            f"{m['consistency']:.2g}"
             + (
                 f" (--snap would round {len(bp.snappable)} rotation(s) or axes that are within "
                 "1e-3 of right angles)"
