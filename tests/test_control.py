@@ -306,6 +306,19 @@ def test_gains_file(tmp_path):
         control.load_gains(f, robot)
 
 
+def test_gains_file_over_defaults_without_nu(tmp_path):
+    """The ZCR07S study's default gains (with rotor inertia, stable at 4 ms) have no adaptation
+    normalisation: a gains file leaving nu out takes none, and the note says so (it raised a
+    KeyError)."""
+    robot = mindyn.load("zcr07s")
+    assert "nu" not in control.default_gains(robot, rotor=True)
+    f = tmp_path / "g.yaml"
+    f.write_text("kd: [400, 350, 130, 22, 9, 2]\ngamma: 1\n")
+    g = control.load_gains(f, robot, rotor=True)
+    assert "nu 0 (no normalisation)" in g.note
+    assert control.make_controller("adaptive-pd", robot, g).nu == 0
+
+
 # --------------------------------------------------------------------------------------------
 # Command line
 # --------------------------------------------------------------------------------------------

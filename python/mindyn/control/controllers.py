@@ -1242,7 +1242,11 @@ def load_gains(
         rest = [k for k in ("kd", "lambda", "gamma", "nu") if k in gains.defaulted]
         if rest:  # the defaults' values; their margins were checked for the defaults only
             gains.add_note(
-                "the rest by default: " + ", ".join(f"{k} {_gain_text(gains[k])}" for k in rest)
+                "the rest by default: "
+                + ", ".join(
+                    f"{k} {_gain_text(gains[k])}" if k in gains else f"{k} 0 (no normalisation)"
+                    for k in rest
+                )
             )
         lam = "the file's Lambda" if "lambda" in given else "the default Lambda"
         gains.add_note(
