@@ -487,7 +487,7 @@ def noise_variance_factor(res: IdentificationResult) -> float:
 
 
 @single_threaded_blas
-def residual_correlation(res: IdentificationResult, data) -> tuple[float, str]:
+def residual_correlation(res: IdentificationResult, data) -> tuple[float | None, str]:
     """The factor on the variance of the estimates that the correlation of the fit's own
     residuals calls for, measured (not derived from the data path as :func:`correlation_factor`
     is), and the rule in words: model error (friction or drive effects the model leaves out)
@@ -502,10 +502,10 @@ def residual_correlation(res: IdentificationResult, data) -> tuple[float, str]:
     61, 1994), against the covariance that independent residuals would give, ``s^2 A^T A``: the
     mean of its eigenvalues relative to that, ``tr(S (s^2 A^T A)^-1) / nb``, the mean inflation of
     a parameter direction's variance. About 1 for white residuals, the data path's factor for
-    filtered noise, more for model error. Other models: 1 (their rows are windows; not
+    filtered noise, more for model error. Other models: None (their rows are windows; not
     measured)."""
     if res.model != "dynamic" or res.reduced is None:
-        return 1.0, "not measured (the dynamic model only)"
+        return None, "not measured (the dynamic model only)"
     base, ls = res.base, res.reduced
     nb = base.n
     beta, _, _ = ls.solve(list(range(nb)))
