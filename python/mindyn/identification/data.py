@@ -129,7 +129,8 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     seen = set()
     for i, name in enumerate(names):
         if name in seen:
-            raise DataError(f"{path}: column '{name}' appears twice in the header")
+            twice = f"column '{name}'" if name else "an unnamed column (an empty name)"
+            raise DataError(f"{path}: {twice} appears twice in the header")
         seen.add(name)
         m = _COLUMN.fullmatch(name)
         if not m or (m.group(1) == "t") != (m.group(2) is None):
@@ -167,7 +168,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         if missing:
             parts.append("missing " + ", ".join(missing))
         if extra:
-            parts.append("unexpected " + ", ".join(extra))
+            parts.append("unexpected " + ", ".join(e or "an unnamed column" for e in extra))
         raise DataError(
             f"{path}: wrong columns for a {n}-joint robot ({'; '.join(parts)}); expected "
             + _expected_columns(n, require_torque)
@@ -182,7 +183,10 @@ def _remedy(path: str, width: int, extra: dict, beyond: list, n: int, missing: l
     columns: the reader takes no other column and has no option to skip one, so they are
     deleted from the file (a ``cut`` command that does it, when nothing else is wrong), or
     renamed when they hold what the missing ones should."""
-    cols = ", ".join(f"{name} (column {i + 1})" for name, i in extra.items())
+    cols = ", ".join(
+        f"{name} (column {i + 1})" if name else f"the unnamed column {i + 1}"
+        for name, i in extra.items()
+    )
     text = "; a log holds these columns only (no option skips others): "
     if missing:
         text += (
