@@ -306,6 +306,22 @@ def test_gains_file(tmp_path):
         control.load_gains(f, robot)
 
 
+def test_gains_file_kp_unused_by_adaptive_pd_is_said(tmp_path):
+    """Slotine-Li adaptive PD's position gain is Lambda K_D: a file's kp changed nothing there
+    and its note did not say so. Now its note does; PD's takes the kp (note and controller)."""
+    robot = mindyn.load("planar2")
+    f = tmp_path / "g.yaml"
+    f.write_text("kp: 100\n")
+    g = control.load_gains(f, robot)
+    note = g.note_for("adaptive-pd")
+    assert "adaptive PD: the file's kp is not used (its position gain is Lambda K_D)" in note
+    np.testing.assert_allclose(
+        control.controllers._gain_arrays("adaptive-pd", g, 2)[0], np.multiply(g["lambda"], g["kd"])
+    )
+    assert "kp is not used" not in g.note_for("pd") and "K_P = the file's kp" in g.note_for("pd")
+    np.testing.assert_allclose(control.make_controller("pd", robot, g).kp, [100, 100])
+
+
 def test_gains_file_over_defaults_without_nu(tmp_path):
     """The ZCR07S study's default gains (with rotor inertia, stable at 4 ms) have no adaptation
     normalisation: a gains file leaving nu out takes none, and the note says so (it raised a

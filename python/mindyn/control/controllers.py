@@ -1266,6 +1266,12 @@ def load_gains(
                 else ""
             )
         gains.add_note(ct, ["computed-torque"], general=False)
+        if "kp" in given:  # Slotine-Li's position gain is Lambda K_D
+            gains.add_note(
+                "adaptive PD: the file's kp is not used (its position gain is Lambda K_D)",
+                ["adaptive-pd"],
+                general=False,
+            )
     return gains
 
 
