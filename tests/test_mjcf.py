@@ -889,3 +889,15 @@ def test_mjcf_export_names_the_limits_and_drive_table_it_cannot_write(tmp_path):
     ur5 = mindyn.load(REPO_UR5)
     plain = write_mjcf(ur5, ur5.params, tmp_path / "ur5.xml")
     assert not [n for n in plain.notes if "no place for, are not written" in n]
+
+
+def test_info_says_an_mjcf_is_an_mjcf(tmp_path):
+    """`mindyn info` printed '(6 joints, urdf)' for a MuJoCo file: the frame convention it is
+    read in (robot.convention), which reads as the file's format. It names the MJCF and the
+    frames; a URDF keeps its line."""
+    robot = mindyn.load(REPO_UR5)
+    out = write_mjcf(robot, robot.params, tmp_path / "ur5.xml")
+    assert mindyn.load(out.path).convention == "urdf"
+    head = cli("info", out.path).splitlines()[0]
+    assert "(6 joints, MJCF, link frames as a URDF's)" in head, head
+    assert "(6 joints, urdf)" in cli("info", REPO_UR5).splitlines()[0]
