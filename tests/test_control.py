@@ -306,6 +306,26 @@ def test_gains_file(tmp_path):
         control.load_gains(f, robot)
 
 
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("lambda: [1, 2, 3]\n", "gain 'lambda' must be a scalar or 2 values, got shape (3,)"),
+        ("kp: [1, -2]\n", "gain 'kp' must be a number in [0, 1e+16], got [1.0, -2.0]"),
+    ],
+)
+def test_gains_file_wrong_joint_gains_are_refused_naming_the_file(tmp_path, text, said):
+    """A per-joint gain of the wrong length or sign was taken by load_gains and refused later,
+    without the file's name (codegen: 'lambda has shape (3,); expected (2,)'). load_gains
+    refuses it naming the file; codegen says the same."""
+    f = tmp_path / "g.yaml"
+    f.write_text(text)
+    with pytest.raises(ValueError) as e:
+        control.load_gains(f, mindyn.load("planar2"))
+    assert str(e.value) == f"{f}: {said}"
+    rc = main(["codegen", "planar2", "--what", "adaptive-pd", "--gains", str(f), "--lang", "c"])
+    assert rc == 2
+
+
 def test_gains_file_kp_unused_by_adaptive_pd_is_said(tmp_path):
     """Slotine-Li adaptive PD's position gain is Lambda K_D: a file's kp changed nothing there
     and its note did not say so. Now its note does; PD's takes the kp (note and controller)."""

@@ -1233,6 +1233,11 @@ def load_gains(
         arr = np.asarray(numbers if isinstance(value, list) else numbers[0], dtype=float)
         if key == "nu" and (arr.ndim != 0 or not arr >= 0):
             raise ControllerSettingError(f"{path}: 'nu' must be one number >= 0")
+        if key in ("kd", "lambda", "kp"):  # per joint (gamma: per base parameter, checked there)
+            try:
+                _diag(arr, robot.n, key)
+            except ControllerSettingError as e:
+                raise ControllerSettingError(f"{path}: {e}") from None
         gains[key] = arr.tolist()
         given.append(key)
     if given:
