@@ -505,3 +505,6 @@ def test_auto_output_states_each_excess_and_its_standard_error():
         f"excess over the smallest (dahl) and its standard error: coulomb {excess} (se {error})"
         in text
     )
+    alone = {"candidates": {"dahl": 1.0}, "smallest": "dahl", "standard_error": {"dahl": 0.0}}
+    text = "\n".join(friction_lines(mindyn.load("planar2"), record={**alone, "rule": "r"}))
+    assert "excess over the smallest" not in text  # no other candidate to compare

@@ -617,7 +617,7 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
             + rec["rule"]
         )
         se, best = rec.get("standard_error"), rec.get("smallest")
-        if se and best in rec["candidates"]:
+        if se and best in rec["candidates"] and len(rec["candidates"]) > 1:
             top = rec["candidates"][best]
             lines.append(
                 f"    excess over the smallest ({best}) and its standard error: "
