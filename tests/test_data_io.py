@@ -369,6 +369,26 @@ def test_truth_sidecar(tmp_path):
         read_truth(p)
 
 
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ('{"names": ["M1", "M2"], "values": [2.0]}', "'values' holds 1 values for 2 names"),
+        ('{"names": ["M1"], "values": ["x"]}', "the value of M1 is 'x'; expected a finite"),
+        ('{"names": ["M1"], "values": [true]}', "the value of M1 is True; expected a finite"),
+        ('{"names": "M1", "values": [1.0]}', "'names' must be a list of parameter names"),
+    ],
+)
+def test_a_truth_sidecar_that_does_not_pair_names_and_values_is_refused(tmp_path, text, said):
+    """A truth sidecar with fewer values than names was paired by zip, the missing names
+    taken as zero: a wrong 'true' column without a word; a value that is not a number ended
+    in 'could not convert string to float: 'x'' without the file. Both named with the file."""
+    p = tmp_path / "log.csv"
+    truth_path(p).write_text(text)
+    with pytest.raises(DataError) as e:
+        read_truth(p)
+    assert str(e.value).startswith(f"{truth_path(p)}: ") and said in str(e.value)
+
+
 def test_cli_reports_bad_data_in_one_line(tmp_path, capsys):
     rows = [["0", "0", "0"], ["0.004", "0", "0"], ["0.002", "0", "0"]]
     p = _write(tmp_path / "bad.csv", ["t", "q1", "tau1"], rows)

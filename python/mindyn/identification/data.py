@@ -802,6 +802,19 @@ def read_truth(csv_path, robot=None) -> dict | None:
         raise DataError(f"{p}: a truth file is a JSON object")
     if "names" not in d or "values" not in d:
         raise DataError(f"{p}: a truth file needs 'names' and 'values'")
+    names, values = d["names"], d["values"]
+    if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):
+        raise DataError(f"{p}: 'names' must be a list of parameter names")
+    if not isinstance(values, list) or len(values) != len(names):
+        count = len(values) if isinstance(values, list) else "not a list of"
+        raise DataError(f"{p}: 'values' holds {count} values for {len(names)} names")
+    bad = [
+        (n, v)
+        for n, v in zip(names, values)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)
+    ]
+    if bad:
+        raise DataError(f"{p}: the value of {bad[0][0]} is {bad[0][1]!r}; expected a finite number")
     if robot is not None:
         check_log_robot(d, robot, f"{csv_path} (simulated, as {p} says)")
     return d
