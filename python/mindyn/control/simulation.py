@@ -1344,14 +1344,16 @@ def write_tracking_report(
     per_joint(error, "position error q - q_d", "tracking_error.png")
     per_joint(torque, "joint torques", "torque.png", legend=True)
 
-    if result.p_hat is not None and result.p_true is not None:
+    # adaptive runs only: a fixed model (computed torque) has estimates and no true-model torque
+    adaptive = result.tau_true_model is not None
+    if result.p_hat is not None and result.p_true is not None and adaptive:
         fig, ax = plt.subplots(3, 1, figsize=(10, 10))
         scale = np.maximum(np.abs(result.p_true), 1e-2 * np.abs(result.p_true).max())
         ax[0].plot(result.t, (result.p_hat - result.p_true) / scale, lw=0.6)
         ax[0].set_ylabel("(p_hat - p) / max(|p|, 1% max|p|)")
         ax[0].set_title("base-parameter estimates: error, one line per parameter")
         ax[0].grid(alpha=0.3)
-        assert result.tau_true_model is not None  # with the estimates of an adaptive controller
+        assert result.tau_true_model is not None  # for mypy: adaptive
         d = result.tau_model - result.tau_true_model
         for k in range(n):
             ax[1].plot(result.t, d[:, k], lw=0.6, label=f"joint {k + 1}")
