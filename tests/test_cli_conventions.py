@@ -138,6 +138,22 @@ def test_same_output_twice_is_refused_in_every_command(tmp_path):
         assert not (tmp_path / "new").exists()  # nothing created
 
 
+def test_a_file_output_that_is_a_report_folder_is_refused_first(tmp_path):
+    """--json FILE and --report FILE: the report folder was made at FILE, the fit ran, then
+    writing the JSON failed ('Is a directory'), a folder left behind. Refused before anything
+    is read or made, as two outputs naming one file are."""
+    same = tmp_path / "new" / "out.json"
+    cases = [
+        ["identify", "planar2", tmp_path / "none.csv", "--json", same, "--report", same],
+        ["track", "planar2", "-o", same, "--report", same],
+    ]
+    for argv in cases:
+        rc, out, err = run(argv)
+        assert rc == 2, (argv, err)
+        assert "is also the folder --report writes into" in err, err
+        assert len(err.splitlines()) == 1 and not (tmp_path / "new").exists()
+
+
 def subparsers() -> dict[str, argparse.ArgumentParser]:
     parser = cli.build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))

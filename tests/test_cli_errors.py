@@ -94,6 +94,29 @@ def test_bad_numbers_are_named_with_the_expected_range(argv, needles, tmp_path, 
     assert f"(see 'mindyn {argv[0]} --help')" in line
 
 
+@pytest.mark.parametrize(
+    ("argv", "hint"),
+    [
+        (["excite", "planar2", "-o", "x.csv", "--frequency", "0.1"], "--freq for --frequency?"),
+        (["base", "planar2", "--rotor-inertia"], "did you mean --rotor for --rotor-inertia?"),
+        (["simulate", "planar2", "-o", "x", "--torque-nosie=1"], "--torque-noise for"),
+        (["info", "planar2", "extra"], None),
+    ],
+)
+def test_an_unknown_option_points_to_its_command_and_a_near_spelling(
+    argv, hint, tmp_path, monkeypatch
+):
+    """Words a command does not take were refused with the top-level help ('mindyn --help',
+    which does not list the command's options) and no hint of the option meant; nothing is
+    written."""
+    monkeypatch.chdir(tmp_path)
+    rc, _, err = run(argv)
+    line = assert_one_line_error(rc, err, "unrecognized arguments")
+    assert f"(see 'mindyn {argv[0]} --help')" in line and "(see 'mindyn --help')" not in line
+    assert (hint in line) if hint else "did you mean" not in line
+    assert not list(tmp_path.iterdir())
+
+
 def test_help_shows_the_accepted_ranges(capsys):
     assert cli.main(["track", "--help"]) == 0
     out = " ".join(capsys.readouterr().out.split())

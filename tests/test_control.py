@@ -306,6 +306,55 @@ def test_gains_file(tmp_path):
         control.load_gains(f, robot)
 
 
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("lambda: [1, 2, 3]\n", "gain 'lambda' must be a scalar or 2 values, got shape (3,)"),
+        ("kp: [1, -2]\n", "gain 'kp' must be a number in [0, 1e+16], got [1.0, -2.0]"),
+    ],
+)
+def test_gains_file_wrong_joint_gains_are_refused_naming_the_file(tmp_path, text, said):
+    """A per-joint gain of the wrong length or sign was taken by load_gains and refused later,
+    without the file's name (codegen: 'lambda has shape (3,); expected (2,)'). load_gains
+    refuses it naming the file; codegen says the same."""
+    f = tmp_path / "g.yaml"
+    f.write_text(text)
+    with pytest.raises(ValueError) as e:
+        control.load_gains(f, mindyn.load("planar2"))
+    assert str(e.value) == f"{f}: {said}"
+    rc = main(["codegen", "planar2", "--what", "adaptive-pd", "--gains", str(f), "--lang", "c"])
+    assert rc == 2
+
+
+def test_gains_file_kp_unused_by_adaptive_pd_is_said(tmp_path):
+    """Slotine-Li adaptive PD's position gain is Lambda K_D: a file's kp changed nothing there
+    and its note did not say so. Now its note does; PD's takes the kp (note and controller)."""
+    robot = mindyn.load("planar2")
+    f = tmp_path / "g.yaml"
+    f.write_text("kp: 100\n")
+    g = control.load_gains(f, robot)
+    note = g.note_for("adaptive-pd")
+    assert "adaptive PD: the file's kp is not used (its position gain is Lambda K_D)" in note
+    np.testing.assert_allclose(
+        control.controllers._gain_arrays("adaptive-pd", g, 2)[0], np.multiply(g["lambda"], g["kd"])
+    )
+    assert "kp is not used" not in g.note_for("pd") and "K_P = the file's kp" in g.note_for("pd")
+    np.testing.assert_allclose(control.make_controller("pd", robot, g).kp, [100, 100])
+
+
+def test_gains_file_over_defaults_without_nu(tmp_path):
+    """The ZCR07S study's default gains (with rotor inertia, stable at 4 ms) have no adaptation
+    normalisation: a gains file leaving nu out takes none, and the note says so (it raised a
+    KeyError)."""
+    robot = mindyn.load("zcr07s")
+    assert "nu" not in control.default_gains(robot, rotor=True)
+    f = tmp_path / "g.yaml"
+    f.write_text("kd: [400, 350, 130, 22, 9, 2]\ngamma: 1\n")
+    g = control.load_gains(f, robot, rotor=True)
+    assert "nu 0 (no normalisation)" in g.note
+    assert control.make_controller("adaptive-pd", robot, g).nu == 0
+
+
 # --------------------------------------------------------------------------------------------
 # Command line
 # --------------------------------------------------------------------------------------------
@@ -334,6 +383,21 @@ def test_track_command(tmp_path, capsys):
         assert (out / name).stat().st_size > 0
     log = np.loadtxt(out / "log.csv", delimiter=",", skiprows=1)
     assert log.shape == (250, 1 + 3 * 2)
+
+
+def test_track_report_of_computed_torque(tmp_path, capsys):
+    """Computed torque keeps a fixed estimate (p_hat) and has no true-model torque: its report
+    ended in 'unexpected AssertionError' from the parameter plot, which is for adaptive runs.
+    The report is written without that plot; the summary gives the fixed estimate's error."""
+    out = tmp_path / "rep"
+    argv = ["track", "planar2", "--controller", "computed-torque", "--duration", "1"]
+    assert main([*argv, "--cycle", "0.5", "--report", str(out)]) == 0, capsys.readouterr().err
+    for name in ("tracking_error.png", "torque.png", "log.csv"):
+        assert (out / name).stat().st_size > 0
+    assert not (out / "parameters.png").exists()
+    s = json.loads((out / "summary.json").read_text())
+    assert s["controller"] == "computed-torque" and len(s["parameter_error_norm"]) == 3
+    assert "torque_prediction_rms_per_cycle" not in s
 
 
 def test_track_command_errors(tmp_path, capsys):

@@ -166,6 +166,30 @@ def test_an_unknown_column_is_named_with_the_remedy_that_reads_the_log(extra, tm
     assert f"cut -d, -f{fields} " in err, err
 
 
+def test_a_trailing_comma_is_named_as_an_unnamed_column(tmp_path):
+    """A spreadsheet's trailing comma gives the header a column with an empty name: the message
+    read 'unexpected )' and 'delete  (column 6)'. It names the unnamed column and its position;
+    the cut command given reads the log; two such columns are named as unnamed too."""
+    t, q, dq, tau = _log(n=2, m=50)
+    header = ["t", "q1", "q2", "tau1", "tau2"]
+    cols = [t, q[:, 0], q[:, 1], tau[:, 0], tau[:, 1]]
+    text = ",".join(header) + ",\n"
+    text += "".join(",".join(repr(float(c[i])) for c in cols) + ",\n" for i in range(len(t)))
+    path = tmp_path / "log.csv"
+    path.write_text(text)
+    with pytest.raises(DataError) as e:
+        read_csv(path, n=2)
+    msg = str(e.value)
+    assert "unexpected an unnamed column)" in msg and "delete the unnamed column 6 " in msg, msg
+    assert "unexpected )" not in msg and "delete  (" not in msg
+    fields = msg.split("cut -d, -f")[1].split()[0]
+    (tmp_path / "cut.csv").write_text(_cut(text, fields))
+    np.testing.assert_array_equal(read_csv(tmp_path / "cut.csv", n=2, filter="none").q, q)
+    path.write_text(text.replace(",\n", ",,\n"))
+    with pytest.raises(DataError, match="an unnamed column .* appears twice in the header"):
+        read_csv(path, n=2)
+
+
 def test_wrong_joint_count_for_the_robot(tmp_path):
     t, q, _, tau = _log(n=3)
     p = write_csv(tmp_path / "a.csv", t, q, tau)
@@ -343,6 +367,26 @@ def test_truth_sidecar(tmp_path):
     truth_path(p).write_text("{nope")
     with pytest.raises(DataError, match="not valid JSON"):
         read_truth(p)
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ('{"names": ["M1", "M2"], "values": [2.0]}', "'values' holds 1 values for 2 names"),
+        ('{"names": ["M1"], "values": ["x"]}', "the value of M1 is 'x'; expected a finite"),
+        ('{"names": ["M1"], "values": [true]}', "the value of M1 is True; expected a finite"),
+        ('{"names": "M1", "values": [1.0]}', "'names' must be a list of parameter names"),
+    ],
+)
+def test_a_truth_sidecar_that_does_not_pair_names_and_values_is_refused(tmp_path, text, said):
+    """A truth sidecar with fewer values than names was paired by zip, the missing names
+    taken as zero: a wrong 'true' column without a word; a value that is not a number ended
+    in 'could not convert string to float: 'x'' without the file. Both named with the file."""
+    p = tmp_path / "log.csv"
+    truth_path(p).write_text(text)
+    with pytest.raises(DataError) as e:
+        read_truth(p)
+    assert str(e.value).startswith(f"{truth_path(p)}: ") and said in str(e.value)
 
 
 def test_cli_reports_bad_data_in_one_line(tmp_path, capsys):

@@ -693,3 +693,30 @@ def test_a_classical_map_read_from_a_file_is_a_data_error(tmp_path):
         )
     assert not isinstance(e.value, mindyn.ArgumentError)
     assert not (tmp_path / "o.yaml").exists()
+
+
+def test_yaml_export_refuses_a_negative_mass_and_notes_an_unphysical_inertia(tmp_path):
+    """A URDF or MJCF export refuses a negative mass; the YAML table's wrote it (and the table
+    read back held a link of -5 kg). Now refused the same way, nothing written; an inertia
+    about the centre of mass that breaks the triangle inequality (Izz > Ixx + Iyy, a body no
+    mass distribution gives) is written with a note, as for a URDF."""
+    robot = mindyn.load("zcr07s")
+    p = robot.params.copy()
+    p[9] = -5.0  # M1
+    out = tmp_path / "neg.yaml"
+    with pytest.raises(mindyn.ModelError, match=r"M1 = -5.0 \(link 'link1'\) is negative"):
+        write_yaml(robot, p, out)
+    assert not out.exists()
+    p = robot.params.copy()
+    k = 2  # link3: a point mass at its centre of mass, then Izz = 3 (Ixx + Iyy) added about it
+    m, h = p[10 * k + 9], p[10 * k + 6 : 10 * k + 9]
+    Io = (h @ h * np.eye(3) - np.outer(h, h)) / m + np.diag([0.01, 0.01, 0.06])
+    p[10 * k : 10 * k + 6] = Io[[0, 0, 0, 1, 1, 2], [0, 1, 2, 1, 2, 2]]
+    written = write_yaml(robot, p, tmp_path / "odd.yaml")
+    assert [
+        n
+        for n in written.notes
+        if n.startswith("link 'link3'") and "not that of a physical body" in n
+    ]
+    assert not [n for n in written.notes if "link 'link1'" in n or "link 'link2'" in n]
+    np.testing.assert_allclose(mindyn.load(written.path).params, p, rtol=1e-12, atol=1e-15)

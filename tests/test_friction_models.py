@@ -483,3 +483,28 @@ def test_auto_compares_models_on_the_same_blocks_paired():
         {k: float(np.sum(v)) for k, v in noisy.items()}, noisy
     )
     assert best == "dahl" and chosen == "coulomb"
+
+
+def test_auto_output_states_each_excess_and_its_standard_error():
+    """The output line of the choice gives, per candidate, its excess over the smallest and the
+    standard error the rule compares it with (they were in the JSON only): figures written out
+    here, dahl best on every block, coulomb's lead lost by 0.15 with a standard error of
+    sqrt(5) x std(lead)."""
+    from mindyn.identification.friction import friction_lines, simplest_within_one_error
+
+    hard = np.array([0.30, 0.16, 0.34, 0.20, 0.23])
+    lead = np.array([0.025, 0.035, 0.03, 0.03, 0.03])
+    per_fold = {"coulomb": hard, "dahl": hard - lead}
+    scores = {k: float(np.sum(v)) for k, v in per_fold.items()}
+    chosen, best, se = simplest_within_one_error(scores, per_fold)
+    record = {"candidates": scores, "smallest": best, "standard_error": se, "rule": "r"}
+    text = "\n".join(friction_lines(mindyn.load("planar2"), record=record))
+    excess = f"{lead.sum():.3g}"
+    error = f"{np.std(lead, ddof=1) * np.sqrt(5):.3g}"
+    assert (
+        f"excess over the smallest (dahl) and its standard error: coulomb {excess} (se {error})"
+        in text
+    )
+    alone = {"candidates": {"dahl": 1.0}, "smallest": "dahl", "standard_error": {"dahl": 0.0}}
+    text = "\n".join(friction_lines(mindyn.load("planar2"), record={**alone, "rule": "r"}))
+    assert "excess over the smallest" not in text  # no other candidate to compare

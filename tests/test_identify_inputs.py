@@ -474,3 +474,25 @@ def test_the_library_refuses_the_same_combinations(planar_log):
     IdentifyOptions(friction_model="stribeck", min_velocity=0.0)
     IdentifyOptions(model="integral", friction=True, min_velocity=0.0)
     ReadingOptions(filter="butter", cutoff=5.0)
+
+
+@pytest.mark.parametrize("model", ["dynamic", "energy"])
+def test_a_log_whose_torques_are_all_zero_is_named_so(model, tmp_path, capsys):
+    """A log whose torque columns hold zeros only (not logged) was refused as 'the
+    least-squares problem of the base regressor of this data is singular ... use a longer or
+    richer log': the regressor is well conditioned (the same motion with torques fits); the
+    weights of the first pass were 1 / 0. The message now says what is wrong."""
+    robot = mindyn.load("planar2")
+    traj = random_trajectory(robot, seed=2)
+    t = np.arange(0.0, traj.duration, 0.004)
+    q, dq, ddq = traj.evaluate(t)
+    tau = robot.inverse_dynamics(q, dq, ddq)
+    good, zero = tmp_path / "good.csv", tmp_path / "zero.csv"
+    write_csv(good, t, q, tau, dq=dq)
+    write_csv(zero, t, q, np.zeros_like(tau), dq=dq)
+    assert cli.main(["identify", "planar2", str(good), "--model", model]) == 0
+    capsys.readouterr()
+    assert cli.main(["identify", "planar2", str(zero), "--model", model]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "every torque is zero at every sample" in err, err
+    assert "singular" not in err

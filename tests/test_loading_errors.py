@@ -194,6 +194,21 @@ def test_yaml_bad_values(tmp_path, change, match):
         mindyn.load(path)
 
 
+def test_yaml_classical_inertial_with_a_negative_mass_is_refused(tmp_path):
+    """A table's inertial in the loader's classical form (XX..M, as export writes it) took a
+    negative M without a word (a -2 kg link, total moving mass -2 kg), where the mass/com form
+    and a URDF refuse it."""
+    text = (
+        "name: neg\nconvention: dh\njoints:\n"
+        "  - {type: revolute, a: 0.5, alpha: 0, d: 0, theta: 0,\n"
+        "     inertial: {XX: 0.1, YY: 0.1, ZZ: 0.1, MX: 0.2, M: -2}}\n"
+    )
+    with pytest.raises(mindyn.ModelError, match=r"neg\.yaml:5: joint 1 .*mass M is negative"):
+        mindyn.load(write(tmp_path, "neg.yaml", text))
+    robot = mindyn.load(write(tmp_path, "pos.yaml", text.replace("M: -2", "M: 2")))
+    assert robot.params[9] == 2.0
+
+
 def test_good_yaml_loads(tmp_path):
     robot = mindyn.load(write(tmp_path, "r.yaml", GOOD_YAML))
     assert robot.n == 2

@@ -869,3 +869,35 @@ def test_exported_mjcf_of_a_tree_is_pinocchio_plus_the_joint_terms(tmp_path):
     ref = baxter_rnea(robot, inertial, q, dq, ddq) + ia * ddq + fv * dq + fc * np.sign(dq)
     got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(out)), robot.joint_names, q, dq, ddq)
     assert_close(got + fc * np.sign(dq), ref, TOL, "MJCF of a tree vs Pinocchio + terms")
+
+
+def test_mjcf_export_names_the_limits_and_drive_table_it_cannot_write(tmp_path):
+    """A new MJCF has no place for acceleration limits or the drive table (rated torque, gear
+    ratio) that a YAML table gives: export said nothing of them and the file read back had
+    none. The note names them; a URDF without them gets no such note."""
+    robot = mindyn.load("zcr07s")
+    assert np.all(np.isfinite(robot.limits["acceleration"]))
+    assert np.all(np.isfinite(robot.drives["rated_torque"]))
+    out = write_mjcf(robot, robot.params, tmp_path / "zcr07s.xml")
+    back = mindyn.load(out.path)
+    assert np.all(np.isnan(back.limits["acceleration"]))
+    assert np.all(np.isnan(back.drives["rated_torque"]))
+    said = [n for n in out.notes if "which MJCF has no place for, are not written" in n]
+    assert len(said) == 1
+    assert "acceleration limits" in said[0] and "rated torques, gear ratios)" in said[0]
+    assert "torque constants" not in said[0]  # the table gives none
+    ur5 = mindyn.load(REPO_UR5)
+    plain = write_mjcf(ur5, ur5.params, tmp_path / "ur5.xml")
+    assert not [n for n in plain.notes if "no place for, are not written" in n]
+
+
+def test_info_says_an_mjcf_is_an_mjcf(tmp_path):
+    """`mindyn info` printed '(6 joints, urdf)' for a MuJoCo file: the frame convention it is
+    read in (robot.convention), which reads as the file's format. It names the MJCF and the
+    frames; a URDF keeps its line."""
+    robot = mindyn.load(REPO_UR5)
+    out = write_mjcf(robot, robot.params, tmp_path / "ur5.xml")
+    assert mindyn.load(out.path).convention == "urdf"
+    head = cli("info", out.path).splitlines()[0]
+    assert "(6 joints, MJCF, link frames as a URDF's)" in head, head
+    assert "(6 joints, urdf)" in cli("info", REPO_UR5).splitlines()[0]

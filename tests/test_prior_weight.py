@@ -479,12 +479,22 @@ def test_cli_report_plots_the_consistent_estimate(tmp_path, monkeypatch):
     assert abs(rel - doc["fit"]["overall_relative"]) > 1e-3 * cons  # not the unconstrained one
 
 
-def test_window_models_state_that_the_residual_factor_is_not_measured():
-    """The integral model's rows are windows: the factor of its residuals is not measured, said
-    so (None, not 1), and one noise variance is the data path's factor."""
-    robot = mindyn.load("puma560_3")
-    data = _log(robot, robot.params, noise=0.02)
-    res = identify(robot, data, model="integral", rsd_threshold=None, integral_window=10)
-    noise = consistent_estimate(res, prior_weight=1.0, data=data).noise
-    assert noise["residuals"] is None and "not measured" in noise["residuals_rule"]
+def test_window_model_noise_factor_not_measured_is_not_reported_as_one(tmp_path, capsys):
+    """The integral model's rows are windows: the residuals' own correlation factor is not
+    measured. The JSON recorded it as 1.0 and the output as '(1: not measured ...)', a
+    measurement it never made; now null, the output saying it is not measured, and the factor
+    used is the data path's."""
+    robot = mindyn.load(ROBOT)
+    data = _log(robot, robot.params, noise=0.01)
+    fit = tmp_path / "fit.csv"
+    write_csv(fit, data.t, data.q, data.tau, dq=data.dq)
+    out = tmp_path / "id.json"
+    argv = ["identify", ROBOT, str(fit), "--model", "integral", "--integral-window", "10"]
+    argv += ["--consistent", "--prior-weight"]
+    assert cli.main([*argv, "1", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    noise = json.loads(out.read_text())["consistent_estimate"]["noise_variance_factor"]
+    assert noise["residuals"] is None and noise["residuals_rule"].startswith("not measured")
     assert noise["factor"] == max(noise["data_path"], 1.0)
+    line = next(t for t in text.splitlines() if "one noise variance" in t)
+    assert "(1: not measured" not in line and "factor: not measured" in line

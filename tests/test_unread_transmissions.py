@@ -187,3 +187,25 @@ def test_excite_records_the_note_in_its_json(tmp_path):
     noted_once(err)
     (rec,) = json.loads(csv.with_suffix(".json").read_text())["unread_transmissions"]
     assert rec["name"] == "half" and rec["modelled_directly"] == ["j2", "j3"]
+
+
+def test_pr2_form_named_like_a_read_type_is_told_apart_from_the_types_read(tmp_path):
+    """PR2's form (<transmission type="SimpleTransmission"> with no <type> element) is not
+    read; the note listed the types read by their short names, 'SimpleTransmission' among
+    them, and then this transmission 'of type SimpleTransmission' as not read. It names the
+    types read in full, with where they are written."""
+    pr2 = (
+        "<transmission name='half' type='SimpleTransmission'><actuator name='ma'/>"
+        "<joint name='j2'/><mechanicalReduction>30</mechanicalReduction></transmission>"
+    )
+    path = tmp_path / "arm.urdf"
+    path.write_text(arm_urdf(3, simple("t1", "j1", "m1", 50.0) + pr2, False))
+    with pytest.warns(mindyn.DriveTrainWarning) as caught:
+        mindyn.load(path)
+    text = str(caught[0].message)
+    assert "'half' of type 'SimpleTransmission'" in text, text
+    read = text.split("of a type not read (")[1].split(", are)")[0]
+    for kind in ("Simple", "Differential", "FourBarLinkage"):
+        assert f"transmission_interface/{kind}Transmission" in read, read
+    assert "<type> element" in read, read
+    assert "(SimpleTransmission," not in text

@@ -214,6 +214,7 @@ Eigen::Matrix<double, 10, 1> readInertial(const Ctx& c, const YAML::Node& node) 
   checkKeys(c, node, names, "inertial (give either mass/com/inertia or XX..M)");
   Eigen::Matrix<double, 10, 1> p;
   for (int i = 0; i < 10; ++i) p[i] = optional(c, node, kInertialNames[i], 0.0);
+  if (p[9] < 0) c.fail("mass M is negative", node[kInertialNames[9]]);
   return p;
 }
 

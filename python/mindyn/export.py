@@ -774,6 +774,8 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
         if not isinstance(jn, dict):
             raise ModelError(f"{src}: joint {k + 1} is not a mapping")
         p = terms.inertial[10 * k : 10 * k + 10]
+        if p[9] != 0:  # a negative mass refused, an inertia no body has noted, as for a URDF
+            reflected += centroidal(p, k + 1, robot.link_names[k + 1], kind="a YAML table")[3]
         jn["inertial"] = {key: float(v) for key, v in zip(names, p)}
         jn.pop("rotor_inertia", None)
         if terms.rotor is not None:

@@ -123,6 +123,32 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     return _generate(robot, terms, out, side)
 
 
+def _unwritten_limits_and_drives(robot: Robot) -> list[str]:
+    """A note naming what the description gives and a new MJCF has no place for: acceleration
+    limits, the drive table (rated torques, gear ratios, torque constants)."""
+    accel = robot.limits["acceleration"]
+    lost = ["the acceleration limits"] if np.any(np.isfinite(accel) & (accel > 0)) else []
+    drives = robot.drives
+    table = [
+        label
+        for key, label in (
+            ("rated_torque", "rated torques"),
+            ("gear_ratio", "gear ratios"),
+            ("torque_constant", "torque constants"),
+        )
+        if np.any(np.isfinite(drives[key]))
+    ]
+    if table:
+        lost.append(f"the drive table ({', '.join(table)})")
+    if not lost:
+        return []
+    return [
+        f"{' and '.join(lost)} of the description, which MJCF has no place for, are not written:"
+        " the file read back has none (torques logged in permille of the rated torque or as"
+        " currents need the description, or --drive-gain for currents)"
+    ]
+
+
 # -- a new MJCF -------------------------------------------------------------------------------
 def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     notes = unread_transmission_notes(robot, "not written (MJCF has no place for it)")
@@ -196,6 +222,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             "the velocity limits, which MJCF lacks, are custom numerics "
             f"'{_mujoco.VELOCITY_LIMIT}<joint>' (MuJoCo ignores them; mindyn reads them back)"
         )
+    notes += _unwritten_limits_and_drives(robot)
     actuators = ET.SubElement(root, "actuator")
     for motor, row in motors:
         if len(row) == 1:

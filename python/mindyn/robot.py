@@ -140,9 +140,9 @@ class DriveTrainWarning(UserWarning):
 
 #: The transmission types read from a URDF (ros_control's transmission_interface).
 READ_TRANSMISSIONS = (
-    "SimpleTransmission",
-    "DifferentialTransmission",
-    "FourBarLinkageTransmission",
+    "transmission_interface/SimpleTransmission",
+    "transmission_interface/DifferentialTransmission",
+    "transmission_interface/FourBarLinkageTransmission",
 )
 
 
@@ -159,10 +159,11 @@ def drive_train_note(robot: Robot) -> str:
         for t in unread
     )
     return (
-        f"{robot.source}: transmission(s) of a type not read ({', '.join(READ_TRANSMISSIONS)} "
-        f"are): {each}. Assumed: those joints are driven directly (a motor of their own, ratio "
-        "1; rotor inertia and friction on the joint). Declare the transmission as one of the "
-        "types read to model it; drive_side='joint' (where a command takes it: every joint's "
+        f"{robot.source}: transmission(s) of a type not read ({', '.join(READ_TRANSMISSIONS)}, "
+        f"named so in a <type> element or a ROS 2 <plugin>, are): {each}. Assumed: those "
+        "joints are driven directly (a motor of their own, ratio 1; rotor inertia and "
+        "friction on the joint). Declare the transmission as one of the types read to model it;"
+        " drive_side='joint' (where a command takes it: every joint's "
         "rotor inertia and friction on the joint) makes the direct drive explicit and "
         "silences this note"
     )

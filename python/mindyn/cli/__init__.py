@@ -5,6 +5,7 @@ the libraries that only identification, plots or convex fits need."""
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib
 import os
 import sys
@@ -59,6 +60,25 @@ def _command(argv: list[str]) -> str:
     return next((a for a in argv if not a.startswith("-")), "")
 
 
+def _unrecognized(parser: argparse.ArgumentParser, command: str, extra: list[str]) -> str:
+    """The error for words that ``command`` does not take: named, with the options of that
+    command they may be misspellings of, and the command's help (not the top-level one)."""
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    actions = sub.choices[command]._option_string_actions  # hidden former spellings left out
+    flags = [f for f, a in actions.items() if a.help != argparse.SUPPRESS]
+    hints = []
+    for word in (w.split("=", 1)[0] for w in extra if w.startswith("--")):
+        # an option the word extends (--frequency: --freq), else one close in spelling
+        near = [f for f in flags if f.startswith("--") and word.startswith(f)]
+        near = near or difflib.get_close_matches(word, flags, n=1, cutoff=0.8)
+        if near:
+            hints.append(f"{max(near, key=len)} for {word}")
+    said = f"unrecognized arguments: {' '.join(extra)}"
+    if hints:
+        said += f" (did you mean {', '.join(hints)}?)"
+    return f"{said} (see 'mindyn {command} --help')"
+
+
 def _one_line(text: object) -> str:
     return "; ".join(line.strip() for line in str(text).splitlines() if line.strip())
 
@@ -75,7 +95,10 @@ def main(argv: list[str] | None = None) -> int:
     ``mindyn: error: ...``, and a non-zero status."""
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
-        args = build_parser(_command(argv)).parse_args(argv)
+        parser = build_parser(_command(argv))
+        args, extra = parser.parse_known_args(argv)
+        if extra:
+            raise UsageError(_unrecognized(parser, args.command, extra))
     except UsageError as e:
         _error(e)
         return 2

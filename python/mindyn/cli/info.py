@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .._mujoco import is_mjcf
 from .args import add_command
 from .robot_options import add_robot, load_robot
 
@@ -72,7 +73,10 @@ def cmd_info(args: argparse.Namespace) -> int:
     out = []
     tree = not robot.is_serial
     shape = f", a tree of {robot.branches} branches" if tree else ""
-    out.append(f"robot      {robot.name}  ({n} joints, {robot.convention}{shape})")
+    kind = robot.convention
+    if is_mjcf(robot.source):  # read as a URDF's link frames (robot.convention "urdf")
+        kind = "MJCF, link frames as a URDF's"
+    out.append(f"robot      {robot.name}  ({n} joints, {kind}{shape})")
     out.append(f"source     {robot.source}")
     g = robot.gravity
     out.append(f"gravity    [{g[0]:g}, {g[1]:g}, {g[2]:g}] m/s^2")

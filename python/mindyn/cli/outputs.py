@@ -157,10 +157,17 @@ def prepare_outputs(args: argparse.Namespace) -> None:
         _into_folders(args)
         outputs = declared_outputs(args)
     seen: dict[Path, tuple[str, Path]] = {}
+    folders = {path.resolve(): (option, path) for option, path, folder in outputs if folder}
     for option, path, folder in outputs:
         if folder:  # files inside it are named by the command (output_path)
             continue
         key = path.resolve()
+        if key in folders:
+            other, first = folders[key]
+            raise UsageError(
+                f"{option} '{path}' is also the folder {other} writes into ('{first}'): give "
+                "each output its own path"
+            )
         if key in seen:
             other, first = seen[key]
             raise UsageError(

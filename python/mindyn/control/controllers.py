@@ -1233,6 +1233,11 @@ def load_gains(
         arr = np.asarray(numbers if isinstance(value, list) else numbers[0], dtype=float)
         if key == "nu" and (arr.ndim != 0 or not arr >= 0):
             raise ControllerSettingError(f"{path}: 'nu' must be one number >= 0")
+        if key in ("kd", "lambda", "kp"):  # per joint (gamma: per base parameter, checked there)
+            try:
+                _diag(arr, robot.n, key)
+            except ControllerSettingError as e:
+                raise ControllerSettingError(f"{path}: {e}") from None
         gains[key] = arr.tolist()
         given.append(key)
     if given:
@@ -1242,7 +1247,11 @@ def load_gains(
         rest = [k for k in ("kd", "lambda", "gamma", "nu") if k in gains.defaulted]
         if rest:  # the defaults' values; their margins were checked for the defaults only
             gains.add_note(
-                "the rest by default: " + ", ".join(f"{k} {_gain_text(gains[k])}" for k in rest)
+                "the rest by default: "
+                + ", ".join(
+                    f"{k} {_gain_text(gains[k])}" if k in gains else f"{k} 0 (no normalisation)"
+                    for k in rest
+                )
             )
         lam = "the file's Lambda" if "lambda" in given else "the default Lambda"
         gains.add_note(
@@ -1262,6 +1271,12 @@ def load_gains(
                 else ""
             )
         gains.add_note(ct, ["computed-torque"], general=False)
+        if "kp" in given:  # Slotine-Li's position gain is Lambda K_D
+            gains.add_note(
+                "adaptive PD: the file's kp is not used (its position gain is Lambda K_D)",
+                ["adaptive-pd"],
+                general=False,
+            )
     return gains
 
 

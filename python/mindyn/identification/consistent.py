@@ -340,7 +340,8 @@ def noise_scale(res: IdentificationResult, data=None) -> dict:
     filtered noise; the estimate's standard deviations carry it) and, given ``data`` (the logs
     ``res`` was fitted on), the one its residuals show
     (:func:`~mindyn.identification.estimation.residual_correlation`: model error). Returns
-    ``factor``, ``data_path``, ``residuals`` (None without data) and ``residuals_rule``."""
+    ``factor``, ``data_path``, ``residuals`` (None without data, or not measured: a window
+    model) and ``residuals_rule``."""
     path = noise_variance_factor(res)
     measured, rule = (None, "not measured (no data given)")
     if data is not None:

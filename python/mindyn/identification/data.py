@@ -129,7 +129,8 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     seen = set()
     for i, name in enumerate(names):
         if name in seen:
-            raise DataError(f"{path}: column '{name}' appears twice in the header")
+            twice = f"column '{name}'" if name else "an unnamed column (an empty name)"
+            raise DataError(f"{path}: {twice} appears twice in the header")
         seen.add(name)
         m = _COLUMN.fullmatch(name)
         if not m or (m.group(1) == "t") != (m.group(2) is None):
@@ -167,7 +168,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         if missing:
             parts.append("missing " + ", ".join(missing))
         if extra:
-            parts.append("unexpected " + ", ".join(extra))
+            parts.append("unexpected " + ", ".join(e or "an unnamed column" for e in extra))
         raise DataError(
             f"{path}: wrong columns for a {n}-joint robot ({'; '.join(parts)}); expected "
             + _expected_columns(n, require_torque)
@@ -182,7 +183,10 @@ def _remedy(path: str, width: int, extra: dict, beyond: list, n: int, missing: l
     columns: the reader takes no other column and has no option to skip one, so they are
     deleted from the file (a ``cut`` command that does it, when nothing else is wrong), or
     renamed when they hold what the missing ones should."""
-    cols = ", ".join(f"{name} (column {i + 1})" for name, i in extra.items())
+    cols = ", ".join(
+        f"{name} (column {i + 1})" if name else f"the unnamed column {i + 1}"
+        for name, i in extra.items()
+    )
     text = "; a log holds these columns only (no option skips others): "
     if missing:
         text += (
@@ -798,6 +802,19 @@ def read_truth(csv_path, robot=None) -> dict | None:
         raise DataError(f"{p}: a truth file is a JSON object")
     if "names" not in d or "values" not in d:
         raise DataError(f"{p}: a truth file needs 'names' and 'values'")
+    names, values = d["names"], d["values"]
+    if not (isinstance(names, list) and all(isinstance(n, str) for n in names)):
+        raise DataError(f"{p}: 'names' must be a list of parameter names")
+    if not isinstance(values, list) or len(values) != len(names):
+        count = len(values) if isinstance(values, list) else "not a list of"
+        raise DataError(f"{p}: 'values' holds {count} values for {len(names)} names")
+    bad = [
+        (n, v)
+        for n, v in zip(names, values)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v)
+    ]
+    if bad:
+        raise DataError(f"{p}: the value of {bad[0][0]} is {bad[0][1]!r}; expected a finite number")
     if robot is not None:
         check_log_robot(d, robot, f"{csv_path} (simulated, as {p} says)")
     return d

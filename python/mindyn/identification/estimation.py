@@ -831,6 +831,11 @@ def identify(
     speed = min_velocity if base.friction and model in ("dynamic", "integral") else 0.0
     cond = _check_rank(ls, names, what, rank_tolerance, logs, speed, base.robot)
 
+    if not any(np.any(np.asarray(d.tau)) for d in logs):  # not a singular regressor
+        raise IdentificationError(
+            f"{what}: every torque is zero at every sample: nothing to fit (were the torques, "
+            "or currents, logged?)"
+        )
     joint_sigma = None
     if weighted and model == "energy":
         joint_sigma = torque_noise([x for d in logs for x in logged_torques(d)])

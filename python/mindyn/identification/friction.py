@@ -618,6 +618,17 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
             + "; "
             + rec["rule"]
         )
+        se, best = rec.get("standard_error"), rec.get("smallest")
+        if se and best in rec["candidates"] and len(rec["candidates"]) > 1:
+            top = rec["candidates"][best]
+            lines.append(
+                f"    excess over the smallest ({best}) and its standard error: "
+                + ", ".join(
+                    f"{k} {v - top:.3g} (se {se[k]:.3g})"
+                    for k, v in rec["candidates"].items()
+                    if k != best and k in se
+                )
+            )
     for k, why in (rec.get("not_identifiable") or {}).items():
         lines.append(f"    {k}: not identifiable here ({why})")
     for k, why in (rec.get("not_dissipative") or {}).items():

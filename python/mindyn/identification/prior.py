@@ -4,19 +4,19 @@ what the estimate owes to the data and to the prior, link by link.
 The consistent estimate with a prior (:func:`~mindyn.identification.consistent
 .consistent_estimate`) minimises ``f(pi) = |M pi - z|^2 / s^2 + W sum_links d(J, J0)``, with
 ``s^2`` the noise variance of the fit (corrected for the correlation of filtered samples) and
-``d`` the log-det divergence of a link's pseudo-inertia ``J`` from the description's ``J0``.
-``f / 2`` is the negative log posterior of the parameters when the noise is Gaussian and each
-link's pseudo-inertia has the prior density ``exp(-W d(J, J0) / 2)`` normalised: a Wishart
-density of ``W + 5`` degrees of freedom and scale ``J0 / W`` (its mode ``J0``, its mean
-``(1 + 5 / W) J0``, a diagonal entry's relative spread ``sqrt(2 / (W + 5))`` about the mean). So ``W`` says how far the true links may lie
-from the description, and the data tell how far they do: its default is the candidate of
-:data:`CANDIDATES` under which the data are most probable, the marginal likelihood ``p(z | W)``
-(type-II maximum likelihood, or empirical Bayes; MacKay, *Bayesian interpolation*, Neural
-Computation 4, 1992), by Laplace's approximation at the estimate (:func:`log_evidence`,
-:func:`choose_prior_weight`): a weight too small spreads the prior over masses the data exclude
-(Occam's factor), one too large cannot reach the values the data demand. Unlike a
-cross-validation over parts of the same log, the choice does not depend on how the log is
-cut, and it costs one Newton descent per candidate.
+``d`` the log-det divergence of a link's pseudo-inertia ``J`` from the description's ``J0``. Half
+of ``f`` is the negative log posterior of the parameters when the noise is Gaussian and each link's
+pseudo-inertia has the prior density ``exp(-W d(J, J0) / 2)`` normalised: a Wishart density of
+``W + 5`` degrees of freedom and scale ``J0 / W`` (its mode ``J0``, its mean ``(1 + 5 / W) J0``,
+a diagonal entry's relative spread ``sqrt(2 / (W + 5))`` about the mean). So ``W`` says how far
+the true links may lie from the description, and the data tell how far they do: its default is
+the candidate of :data:`CANDIDATES` under which the data are most probable, the marginal
+likelihood ``p(z | W)`` (type-II maximum likelihood, or empirical Bayes; MacKay, *Bayesian
+interpolation*, Neural Computation 4, 1992), by Laplace's approximation at the estimate
+(:func:`log_evidence`, :func:`choose_prior_weight`): a weight too small spreads the prior over
+masses the data exclude (Occam's factor), one too large cannot reach the values the data demand.
+Unlike a cross-validation over parts of the same log, the choice does not depend on how the log
+is cut, and it costs one Newton descent per candidate.
 
 The objective is smooth and strictly convex inside the cone of positive definite
 pseudo-inertias (the log-det terms are barriers), so each of these solves is a damped Newton

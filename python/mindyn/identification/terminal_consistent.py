@@ -92,14 +92,15 @@ def _noise_lines(noise: dict) -> list[str]:
     if not noise:
         return []
     measured = noise["residuals"]
+    head = f"  one noise variance: the residual variance x {noise['factor']:.3g}, "
+    if measured is None:  # the rule says why: "not measured (...)"
+        return [
+            head + f"the data path's factor ({noise['data_path']:.3g}); the "
+            f"residuals' own factor: {noise['residuals_rule']}"
+        ]
     return [
-        f"  one noise variance: the residual variance x {noise['factor']:.3g}, the larger of the "
-        f"data path's factor ({noise['data_path']:.3g}) and the residuals' own "
-        + (
-            f"({measured:.3g}: {noise['residuals_rule']})"
-            if measured is not None
-            else f"({noise['residuals_rule']})"
-        )
+        head + f"the larger of the data path's factor ({noise['data_path']:.3g}) and the "
+        f"residuals' own ({measured:.3g}: {noise['residuals_rule']})"
     ]
 
 
