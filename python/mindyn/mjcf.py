@@ -145,7 +145,7 @@ def _unwritten_limits_and_drives(robot: Robot) -> list[str]:
     return [
         f"{' and '.join(lost)} of the description, which MJCF has no place for, are not written:"
         " the file read back has none (torques logged in permille of the rated torque or as"
-        " currents need the description, or --drive-gain for currents)"
+        " currents need the description, or drive_gain= for currents)"
     ]
 
 
