@@ -496,3 +496,22 @@ def test_a_log_whose_torques_are_all_zero_is_named_so(model, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "every torque is zero at every sample" in err, err
     assert "singular" not in err
+
+
+def test_friction_model_auto_states_a_reason_common_to_every_candidate_once(tmp_path, capsys):
+    """``--friction-model auto`` on a log whose torques are all zero printed the same reason
+    once per candidate model (five times). The reason each candidate gives alone (the
+    Coulomb fit's own refusal) is printed once, naming every candidate."""
+    robot = mindyn.load("planar2")
+    traj = random_trajectory(robot, seed=2)
+    t = np.arange(0.0, traj.duration, 0.004)
+    q, dq, _ = traj.evaluate(t)
+    zero = tmp_path / "zero.csv"
+    write_csv(zero, t, q, np.zeros_like(q), dq=dq)
+    assert cli.main(["identify", "planar2", str(zero)]) == 2
+    alone = capsys.readouterr().err.removeprefix("mindyn: error: ").strip()
+    assert "every torque is zero" in alone, alone
+    assert cli.main(["identify", "planar2", str(zero), "--friction-model", "auto"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.count(alone) == 1, err
+    assert "every candidate, coulomb, smooth, asymmetric, stribeck, dahl: " in err, err
