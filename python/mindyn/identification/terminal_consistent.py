@@ -83,6 +83,19 @@ def _weight_lines(ce: dict) -> list[str]:
             "below 0.5; data: their mean share "
             "below 0.5; partly: above, but some of them below; prior: none)"
         )
+        better = [lk for lk in ce["links"] if lk["mass_fit_increase"] < 0]
+        if better:  # not a defect: that fit is not the minimiser of the fit alone
+            lines.append(
+                "  (a negative fit increase, "
+                + ", ".join(
+                    f"{lk['link']} {lk['mass_fit_increase']:.3g} (whole objective "
+                    f"{lk['mass_objective_increase']:+.3g})"
+                    for lk in better
+                )
+                + ": with the mass held the estimate minimises the whole objective, fit plus "
+                "priors, not the fit alone, so its fit can be slightly better than the "
+                "estimate's while the whole objective is not)"
+            )
     return lines
 
 
