@@ -511,8 +511,9 @@ def _unit_key(unit: str) -> str:
 def drive_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, str]:
     """Joint-side drive gains ``K`` [N m/A per joint] that turn motor currents into joint
     torques, and where they come from: ``drive_gain`` (n,) when given, else the robot's drive
-    table, ``torque_constant * gear_ratio``. Raises DataError when a gain is missing, not
-    finite or zero."""
+    table, ``torque_constant * gear_ratio``. A negative gain is a sign convention, kept: the
+    motor's positive current drives its joint backwards (a motor wired or mounted reversed).
+    Raises DataError when a gain is missing, not finite or zero."""
     if drive_gain is not None:
         K = np.asarray(drive_gain, dtype=float).reshape(-1)
         if robot is not None and K.size != robot.n:
@@ -547,7 +548,9 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
     When the robot's description declares transmissions (:attr:`~mindyn.Robot.transmission`),
     current i drives motor i and ``tau = T^T (K_t * i)``, i.e. ``G = diag(K_t) T``, with the
     motor-side torque constants ``K_t`` [N m/A per motor] given as ``drive_gain`` or else the
-    transmission's ``torque_constant``. Raises DataError when a constant is missing, not finite
+    transmission's ``torque_constant``. A negative gain or constant is kept (a reversed motor,
+    as in :func:`drive_gains`), the joints or motors named in ``reversed`` of the information.
+    Raises DataError when a constant is missing, not finite
     or zero, or when there are not as many motors as joints."""
     tr = getattr(robot, "transmission", None) if robot is not None else None
     if tr is None:
@@ -555,6 +558,7 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
         return np.diag(K), {
             "scale_Nm_per_unit": K.tolist(),
             "formula": f"current x gain ({source})",
+            "reversed": [f"joint {k + 1}" for k in np.flatnonzero(K < 0)],
         }
     if tr.n_motors != robot.n:
         raise DataError(
@@ -582,6 +586,7 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
         "scale_Nm_per_unit": Kt.tolist(),
         "formula": f"T^T (torque constant x current) ({source}; T of the transmissions)",
         "transmission_T": tr.T.tolist(),
+        "reversed": [f"motor {tr.motors[k]}" for k in np.flatnonzero(Kt < 0)],
     }
 
 
