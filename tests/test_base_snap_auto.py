@@ -371,3 +371,30 @@ def test_a_snap_word_other_than_auto_is_refused_naming_what_snap_takes(value):
         message = str(info.value)
         assert message.startswith(f"snap is '{value}'; expected 'auto'")
         assert "rotation tolerance in rad" in message and "False" in message
+
+
+def test_snapped_zero_angles_print_as_0_not_minus_0(tmp_path):
+    """A rotation's angles of zero read back from the matrix as -0 (a roll-only rotation's
+    pitch), and a small negative angle snapped to zero was -0: ``base`` printed '(0, -0, 1.57..)
+    rad -> (0, -0, ...)'. Every zero is printed as 0 in the snap lines and is +0 in the
+    structured list; the other numbers are the description's (read back as written)."""
+    from mindyn.base import snap_changes
+
+    text = SNAP_URDF.replace('rpy="0 0.0004 0"', 'rpy="0 -0.0004 0"')
+    path = written(tmp_path, "snapneg.urdf", text)
+    robot = mindyn.load(path)
+    minus_zero = re.compile(r"(?<![\w.])-0(?![\w.])")
+    lines = mindyn.base_parameters(robot, snap=False).snappable
+    assert lines and not any(minus_zero.search(x) for x in lines), lines
+    pitch = [c for c in snap_changes(robot) if c["component"] == "pitch"]
+    assert len(pitch) == 1 and math.isclose(pitch[0]["value"], -0.0004, rel_tol=1e-12)
+    assert pitch[0]["snapped"] == 0.0 and math.copysign(1.0, pitch[0]["snapped"]) == 1.0
+    out = subprocess.run(
+        [sys.executable, "-m", "mindyn", "base", str(path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert out.returncode == 0, out.stderr
+    snapped = [x for x in out.stdout.splitlines() if "rotation (yaw, pitch, roll)" in x]
+    assert snapped and not any(minus_zero.search(x) for x in snapped), out.stdout

@@ -178,6 +178,18 @@ def test_prior_optimum_matches_independent_scipy_solve():
     assert dist <= 2.0 * np.sqrt(max(gap, 0.0)) + 0.05, (dist, gap)
 
 
+def boundary_fit():
+    """A log of the robot with a negative viscous friction on joint 2 (1 % noise) and its
+    unconstrained fit with friction: the consistent optimum without a prior sits on the
+    boundary Fv2 = 0."""
+    robot = mindyn.load(ROBOT)
+    p = robot.parameters(rotor=False, friction=True).reshape(robot.n, 12)
+    p[:, 10] = [0.5, -0.4, 0.3, 0.2, 0.1, 0.1]  # Fv, one negative
+    p[:, 11] = [0.8, 0.6, 0.5, 0.3, 0.2, 0.2]  # Fc
+    data = make_log(robot, p.reshape(-1), noise=0.01)
+    return data, identify(robot, data, friction=True, rsd_threshold=None, min_velocity=0.0)
+
+
 def test_boundary_optimum_without_prior_matches_bounded_least_squares():
     """(b, c) prior weight 0, data of a robot with a negative viscous friction on joint 2: the
     optimum sits on the boundary Fv2 = 0. Independent route: scipy's bounded linear least
@@ -185,12 +197,7 @@ def test_boundary_optimum_without_prior_matches_bounded_least_squares():
     part of the optimum is inside the consistent set, so only the bounds are active)."""
     from scipy.optimize import lsq_linear
 
-    robot = mindyn.load(ROBOT)
-    p = robot.parameters(rotor=False, friction=True).reshape(robot.n, 12)
-    p[:, 10] = [0.5, -0.4, 0.3, 0.2, 0.1, 0.1]  # Fv, one negative
-    p[:, 11] = [0.8, 0.6, 0.5, 0.3, 0.2, 0.2]  # Fc
-    data = make_log(robot, p.reshape(-1), noise=0.01)
-    res = identify(robot, data, friction=True, rsd_threshold=None, min_velocity=0.0)
+    data, res = boundary_fit()
     cons = consistent_estimate(res, prior_weight=0.0)
     assert np.all(cons.min_eig >= -EIG_TOL)
     names = res.base.names
@@ -433,3 +440,44 @@ def test_a_min_velocity_for_an_arm_without_friction_is_refused():
     data = make_log(robot, robot.params, rate=20.0)
     with pytest.raises(mindyn.ArgumentError, match="^min_velocity applies only to an arm"):
         identify_payload(robot, _arm_doc(robot), data, min_velocity=0.0, consistent=False)
+
+
+def test_the_tie_break_slack_is_stated_with_the_fit_increase(tmp_path, capsys):
+    """Without a prior on an optimum at the boundary (a negative viscous friction), the
+    estimate is the one nearest the description within TIE_BREAK_SLACK noise variances of the
+    optimum's fit: the fit increase printed read 1 noise variance more than the optimum's with
+    no word of it. The result records the slack and the optimum's own increase (against scipy's
+    bounded least squares of the same problem); the terminal line states both; with a prior
+    (no tie-break) nothing of it is said."""
+    from mindyn.identification.consistent import TIE_BREAK_SLACK
+    from mindyn.identification.data import write_csv
+    from scipy.optimize import lsq_linear
+
+    data, res = boundary_fit()
+    cons = consistent_estimate(res, prior_weight=0.0)
+    names, ls = res.base.names, res.reduced
+    lo = np.array([0.0 if nm[:2] in ("Fv", "Fc") else -np.inf for nm in names])
+    ref = lsq_linear(ls.R, ls.z, bounds=(lo / ls.norms, np.inf), tol=1e-14, method="bvls")
+    free = np.linalg.lstsq(ls.R, ls.z, rcond=None)[0]
+    _, _, s2 = _residual_problem(res)
+    optimum = (np.sum((ls.R @ ref.x - ls.z) ** 2) - np.sum((ls.R @ free - ls.z) ** 2)) / s2
+    tie = cons.tie_break
+    assert tie is not None and tie["slack"] == TIE_BREAK_SLACK
+    assert abs(tie["optimum_fit_increase"] - optimum) <= 1e-3 * optimum + 1e-3, (tie, optimum)
+    assert optimum - 1e-3 <= cons.fit_increase <= optimum + TIE_BREAK_SLACK * 1.01
+    assert cons.to_dict()["consistent_estimate"]["tie_break"] == tie
+    # the command line
+    log, out = tmp_path / "log.csv", tmp_path / "id.json"
+    write_csv(log, data.t, data.q, data.tau, dq=data.dq)
+    argv = ["identify", ROBOT, str(log), "--friction", "--consistent", "--min-velocity", "0"]
+    assert cli.main([*argv, "--prior-weight", "0", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    ce = json.loads(out.read_text())["consistent_estimate"]
+    (line,) = [x for x in text.splitlines() if x.startswith("Physically consistent estimate")]
+    assert f"fit {ce['fit_increase_noise_variances']:.4g} noise variances worse" in line
+    opt = ce["tie_break"]["optimum_fit_increase"]
+    assert f"(the optimum's {opt:.4g} plus at most 1 noise variance of designed slack" in line
+    assert cli.main([*argv, "--prior-weight", "1e-3", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert json.loads(out.read_text())["consistent_estimate"]["tie_break"] is None
+    assert "designed slack" not in text

@@ -6,6 +6,7 @@ integrator, reference trajectories, gains files and the ``track`` command."""
 from __future__ import annotations
 
 import json
+import re
 
 import mindyn
 import numpy as np
@@ -381,6 +382,10 @@ def test_track_command(tmp_path, capsys):
     assert s["controller"] == "adaptive-pd" and len(s["rms_error_deg_per_cycle"]) == 2
     for name in ("tracking_error.png", "torque.png", "parameters.png", "log.csv"):
         assert (out / name).stat().st_size > 0
+    # the files the report's docstring names are the files an adaptive run writes (it named a
+    # torque_prediction.png that was never written)
+    named = set(re.findall(r"``(\w+\.\w+)``", control.write_tracking_report.__doc__))
+    assert named == {f.name for f in out.iterdir()}
     log = np.loadtxt(out / "log.csv", delimiter=",", skiprows=1)
     assert log.shape == (250, 1 + 3 * 2)
 

@@ -185,9 +185,30 @@ def test_a_trailing_comma_is_named_as_an_unnamed_column(tmp_path):
     fields = msg.split("cut -d, -f")[1].split()[0]
     (tmp_path / "cut.csv").write_text(_cut(text, fields))
     np.testing.assert_array_equal(read_csv(tmp_path / "cut.csv", n=2, filter="none").q, q)
-    path.write_text(text.replace(",\n", ",,\n"))
-    with pytest.raises(DataError, match="an unnamed column .* appears twice in the header"):
+
+
+def test_a_double_trailing_comma_gets_the_cut_remedy_too(tmp_path):
+    """Two trailing commas give the header two columns with an empty name: the message said an
+    unnamed column appears twice, with no remedy. Both are named as unnamed columns with their
+    positions, and the cut command given reads the log (the positions it gives back are the
+    test's own)."""
+    t, q, dq, tau = _log(n=2, m=50)
+    cols = [t, q[:, 0], q[:, 1], tau[:, 0], tau[:, 1]]
+    text = "t,q1,q2,tau1,tau2,,\n"
+    text += "".join(",".join(repr(float(c[i])) for c in cols) + ",,\n" for i in range(len(t)))
+    path = tmp_path / "log.csv"
+    path.write_text(text)
+    with pytest.raises(DataError) as e:
         read_csv(path, n=2)
+    msg = str(e.value)
+    assert "appears twice" not in msg, msg
+    assert "the unnamed column 6, the unnamed column 7" in msg, msg
+    fields = msg.split("cut -d, -f")[1].split()[0]
+    assert fields == "1-5", msg
+    (tmp_path / "cut.csv").write_text(_cut(text, fields))
+    data = read_csv(tmp_path / "cut.csv", n=2, filter="none")
+    np.testing.assert_array_equal(data.q, q)
+    np.testing.assert_array_equal(data.tau, tau)
 
 
 def test_wrong_joint_count_for_the_robot(tmp_path):

@@ -496,3 +496,94 @@ def test_a_log_whose_torques_are_all_zero_is_named_so(model, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "every torque is zero at every sample" in err, err
     assert "singular" not in err
+
+
+def test_friction_model_auto_states_a_reason_common_to_every_candidate_once(tmp_path, capsys):
+    """``--friction-model auto`` on a log whose torques are all zero printed the same reason
+    once per candidate model (five times). The reason each candidate gives alone (the
+    Coulomb fit's own refusal) is printed once, naming every candidate."""
+    robot = mindyn.load("planar2")
+    traj = random_trajectory(robot, seed=2)
+    t = np.arange(0.0, traj.duration, 0.004)
+    q, dq, _ = traj.evaluate(t)
+    zero = tmp_path / "zero.csv"
+    write_csv(zero, t, q, np.zeros_like(q), dq=dq)
+    assert cli.main(["identify", "planar2", str(zero)]) == 2
+    alone = capsys.readouterr().err.removeprefix("mindyn: error: ").strip()
+    assert "every torque is zero" in alone, alone
+    assert cli.main(["identify", "planar2", str(zero), "--friction-model", "auto"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.count(alone) == 1, err
+    assert "every candidate, coulomb, smooth, asymmetric, stribeck, dahl: " in err, err
+
+
+def _exact_log(robot):
+    """Positions, velocities, accelerations of a random trajectory and their torques (no
+    noise, no data path): the base parameters are the known answer."""
+    traj = random_trajectory(robot, seed=2)
+    t = np.arange(0.0, traj.duration, 0.004)
+    q, dq, ddq = traj.evaluate(t)
+    return t, q, dq, ddq, robot.inverse_dynamics(q, dq, ddq)
+
+
+def test_torques_beyond_the_fits_arithmetic_are_named_with_the_rule():
+    """Torques x 1e300 were reported as a singular regressor. Every torque enters the fit's
+    sums of squares over all E equations (samples x joints): the bound is sqrt(DBL_MAX / E),
+    computed here from the log. A tenth of it identifies the parameters scaled alike (the
+    known answer); ten times it is refused naming the column, its magnitude and the bound."""
+    import math
+
+    from mindyn.identification import identify
+    from mindyn.identification.joint_data import JointData
+
+    robot = mindyn.load("planar2")
+    t, q, dq, ddq, tau = _exact_log(robot)
+    bound = math.sqrt(np.finfo(float).max / q.size)
+    truth = base_parameters(robot).values(robot.params)
+    j = int(np.argmax(np.abs(tau).max(axis=0)))
+    s = 0.1 * bound / np.abs(tau).max()
+    res = identify(robot, JointData(t, q, dq, ddq, tau * s), rsd_threshold=None)
+    np.testing.assert_allclose(res.full[: truth.size] / s, truth, rtol=1e-9, atol=1e-9)
+    s = 10 * bound / np.abs(tau).max()
+    with pytest.raises(DataError) as e:
+        identify(robot, JointData(t, q, dq, ddq, tau * s), rsd_threshold=None)
+    msg = str(e.value)
+    assert f"tau{j + 1} reaches {10 * bound:.3g} N m" in msg, msg
+    assert f"below {bound:.3g} ((1.8e308 / {q.size})^1/2)" in msg, msg
+    assert "singular" not in msg
+
+
+def test_revolute_positions_whose_rounding_loses_half_the_digits_are_refused(tmp_path, capsys):
+    """Positions + 1e10 rad identified silently with a large error: at that magnitude a double
+    is rounded to 1.9e-6 rad. A revolute position whose rounding loses more than half of the
+    digits of an angle within one turn (|q| > pi 2^26) is refused, naming the column, its
+    magnitude and the digits lost (computed here from numpy's spacing); 1e7 whole turns
+    (2^26 > 6.3e7 / pi) still identify the known answer."""
+    import math
+
+    from mindyn.identification import identify
+    from mindyn.identification.joint_data import JointData
+
+    robot = mindyn.load("planar2")
+    t, q, dq, ddq, tau = _exact_log(robot)
+    truth = base_parameters(robot).values(robot.params)
+    turns = 2 * math.pi * 1e7
+    assert turns < math.pi * 2**26
+    res = identify(robot, JointData(t, q + turns, dq, ddq, tau), rsd_threshold=None)
+    np.testing.assert_allclose(res.full[: truth.size], truth, rtol=1e-4, atol=1e-6)
+    far = q + 1e10
+    with pytest.raises(DataError) as e:
+        identify(robot, JointData(t, far, dq, ddq, tau), rsd_threshold=None)
+    msg = str(e.value)
+    j = int(np.argmax(np.abs(far).max(axis=0)))
+    peak = np.abs(far[:, j]).max()
+    lost = math.log10(peak / math.pi)
+    assert f"q{j + 1} reaches {peak:.3g} rad" in msg, msg
+    assert f"rounding unit of a double of that magnitude is {np.spacing(peak):.2g} rad" in msg
+    assert f"loses {lost:.1f} of the" in msg, msg
+    # the command line: one line, positions logged alone
+    log = tmp_path / "far.csv"
+    write_csv(log, t, far, tau)
+    assert cli.main(["identify", "planar2", str(log)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and f"q{j + 1} reaches" in err, err

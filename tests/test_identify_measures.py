@@ -406,3 +406,35 @@ def test_bag_efforts_in_amperes(tmp_path, capsys):
     a, b = np.array(out["amps"]["base_values"]), np.array(out["ref"]["base_values"])
     np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-12 * np.abs(b).max())  # round-off
     assert out["amps"]["data"]["processing"]["torque"]["scale_Nm_per_unit"] == [50, 40, 30]
+
+
+def test_a_negative_drive_gain_is_a_reversed_motor(drive_arm, tmp_path, capsys):
+    """A negative --drive-gain was taken silently, its meaning nowhere said. It is a sign
+    convention, as the drive table's negative gear ratio is: a motor whose positive current
+    drives its joint backwards. A log of currents whose joint-2 motor is wired reversed, read
+    with joint 2's gain negated, identifies as the torque log does; the output names the
+    reversed joints; --help says so."""
+    robot, arm, K = drive_arm  # the drive table's joint 3 has a negative gear ratio
+    log = simulate_inverse(robot, random_trajectory(robot, seed=3), rate=100.0, friction=True)
+    flip = np.array([1.0, -1.0, 1.0])
+    cur = log.tau / K * flip  # the current as the reversed motor's amplifier logs it
+    p, ref = tmp_path / "i.csv", tmp_path / "tau.csv"
+    write_csv(p, log.t, log.q, cur, dq=log.dq)
+    write_csv(ref, log.t, log.q, log.tau, dq=log.dq)
+    gains = ",".join(f"{k:.17g}" for k in K * flip)
+    np.testing.assert_allclose(
+        read_csv(p, robot, drive_gain=K * flip, torque_unit="current").tau, log.tau, rtol=1e-9
+    )
+    docs = []
+    for extra in ([str(p), "--torque-unit", "current", "--drive-gain", gains], [str(ref)]):
+        out = tmp_path / "o.json"
+        argv = ["identify", arm, *extra, "--friction", "--rsd-threshold", "0", "--json", str(out)]
+        assert cli.main(argv) == 0, capsys.readouterr().err
+        docs.append(json.loads(out.read_text()))
+        if len(docs) == 1:
+            text = capsys.readouterr().out
+    np.testing.assert_allclose(docs[0]["base_values"], docs[1]["base_values"], rtol=1e-8)
+    assert "negative gain of joint 2, joint 3 (a positive current drives it backwards" in text
+    assert cli.main(["identify", "--help"]) == 0
+    helptext = " ".join(capsys.readouterr().out.split())
+    assert "A negative gain is kept as a sign convention" in helptext, helptext

@@ -308,3 +308,37 @@ def test_ik_command_aligns_long_joint_names(tmp_path, capsys):
     ends = {ln.index(" rad") if " rad" in ln else ln.index(" m") for ln in lines}
     assert len(ends) == 1, lines
     assert [float(ln.split()[1]) for ln in lines] == pytest.approx(q, abs=1e-6)
+
+
+def test_ik_reports_position_and_orientation_errors_in_their_units(capsys):
+    """The command printed 'best pose error 2.24' for an unreachable target: the norm of a
+    twist of metres and radians, no unit. The result, the text and the JSON give the position
+    error [m] (the distance of the tool frame's origin from the target's) and the orientation
+    error [rad] (the angle of R_target^T R, SciPy's rotation vector), and say what the pose
+    error combines."""
+    from scipy.spatial.transform import Rotation
+
+    robot = mindyn.load("puma560")
+    target = np.eye(4)
+    target[:3, 3] = [3.0, 0.0, 0.0]  # beyond the arm's reach
+    r = ik_solve(robot, target, max_time=0.02)
+    T = robot.fk(r.q)
+    dist = np.linalg.norm(T[:3, 3] - target[:3, 3])
+    angle = Rotation.from_matrix(target[:3, :3].T @ T[:3, :3]).magnitude()
+    assert not r.success and dist > 1.0
+    assert r.position_error == pytest.approx(dist, rel=1e-12)
+    assert r.orientation_error == pytest.approx(angle, rel=1e-9, abs=1e-12)
+    argv = ["ik", "puma560", "--xyz", "3", "0", "0", "--timeout", "0.02"]
+    assert main([*argv, "--format", "json"]) == 1
+    captured = capsys.readouterr()
+    doc = json.loads(captured.out)
+    T = robot.fk(doc["q"])
+    dist = np.linalg.norm(T[:3, 3] - target[:3, 3])
+    angle = Rotation.from_matrix(T[:3, :3]).magnitude()
+    assert doc["position_error_m"] == pytest.approx(dist, rel=1e-12)
+    assert doc["orientation_error_rad"] == pytest.approx(angle, rel=1e-9, abs=1e-12)
+    assert "metres and radians" in doc["pose_error_definition"]
+    err = captured.err
+    assert f"position error {doc['position_error_m']:.3g} m, " in err, err
+    assert f"orientation error {doc['orientation_error_rad']:.3g} rad (" in err, err
+    assert "best pose error" not in err

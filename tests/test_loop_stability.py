@@ -663,3 +663,33 @@ def test_computed_torque_from_a_gains_file_states_and_uses_its_own_gains(tmp_pat
             assert not any(f" {key} " in c for c in rest), (key, rest)
     path.write_text("lambda: [3, 4]\n")
     assert "Lambda = 10" not in control.load_gains(path, robot).note
+
+
+def test_each_controller_lists_only_the_defaults_it_uses(tmp_path):
+    """A gains file that leaves keys to the defaults: the note of computed torque listed the
+    default gamma, nu and kd, which it does not use. Each controller's note lists the defaulted
+    keys its law reads (computed torque: Lambda, none when kp is given; PD: K_D and Lambda, K_D
+    alone when kp replaces Lambda K_D; adaptive PD: all four); the note of every controller
+    still lists them all."""
+    robot = mindyn.load("planar2")
+    path = tmp_path / "g.yaml"
+    reads = {  # (kp given?) -> the keys each law reads besides kp
+        False: {"pd": {"kd", "lambda"}, "computed-torque": {"lambda"}},
+        True: {"pd": {"kd"}, "computed-torque": set()},
+    }
+    for text in ("kd: [5, 7]\n", "gamma: 2\n", "kp: [25, 64]\n", "kp: [25, 64]\nkd: [3, 4]\n"):
+        path.write_text(text)
+        g = control.load_gains(path, robot)
+        given = {line.split(":")[0] for line in text.splitlines()}
+        defaulted = {"kd", "lambda", "gamma", "nu"} - given
+
+        def listed(note: str) -> set:
+            clauses = [c for c in note.split("; ") if c.startswith("the rest by default: ")]
+            assert len(clauses) <= 1, note
+            tail = clauses[0].removeprefix("the rest by default: ") if clauses else ""
+            return set(re.findall(r"(?:^|, )(kd|lambda|gamma|nu) ", tail))
+
+        assert listed(g.note) == defaulted, (text, g.note)
+        laws = {**reads["kp" in given], "adaptive-pd": {"kd", "lambda", "gamma", "nu"}}
+        for kind, keys in laws.items():
+            assert listed(g.note_for(kind)) == keys & defaulted, (text, kind, g.note_for(kind))

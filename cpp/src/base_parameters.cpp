@@ -224,6 +224,7 @@ int eliminate(const Eigen::SparseMatrix<double>& Z, const std::vector<int>& orde
 }
 
 std::string shortest(double v) {
+  if (v == 0.0) v = 0.0;  // a negative zero prints as 0, not -0
   char buf[64];
   auto res = std::to_chars(buf, buf + sizeof(buf), v);
   return std::string(buf, res.ptr);
@@ -1461,7 +1462,7 @@ std::vector<std::string> snapRightAngles(Model& model, double tolerance,
   };
   auto snapAngle = [tolerance](double a, bool& changed) {
     const double k = std::round(a / (kPi / 2));
-    const double s = k * (kPi / 2);
+    const double s = k * (kPi / 2) + 0.0;  // + 0.0: a snap to zero is 0, never -0
     if (std::abs(a - s) <= tolerance && a != s) {
       changed = true;
       return s;

@@ -17,6 +17,7 @@ a frame onto another in unit time: ``(p_d - p, rotation vector of R_d R^T)``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable
 
@@ -309,8 +310,11 @@ class IkResult:
     status: ``"converged"`` (pose error within tolerance, inside the limits), ``"not converged"``
     (all attempts used: unreachable or too hard), ``"timeout"`` (budget used up).
     ``q`` is the solution, or the best point found; ``error`` its pose error
-    ``|log6(T_target^-1 T(q))|`` (metres and radians, as Pinocchio's
-    ``pin.log6(oMdes.actInv(oMq)).vector`` norm)."""
+    ``|log6(T_target^-1 T(q))|``, the norm of a twist whose translation is in metres and rotation
+    in radians, unweighted (as Pinocchio's ``pin.log6(oMdes.actInv(oMq)).vector`` norm; the
+    solver's tolerance applies to it); ``position_error`` [m] the distance of the tool frame's
+    origin from the target's and ``orientation_error`` [rad] the angle of the rotation between
+    their orientations, each in its own unit."""
 
     q: np.ndarray
     success: bool
@@ -318,6 +322,17 @@ class IkResult:
     error: float
     iterations: int
     attempts: int
+    position_error: float = math.nan
+    orientation_error: float = math.nan
+
+    def error_text(self) -> str:
+        """The errors in words, each with its unit: position [m], orientation [rad, deg], and
+        the pose error the tolerance applies to."""
+        return (
+            f"position error {self.position_error:.3g} m, orientation error "
+            f"{self.orientation_error:.3g} rad ({math.degrees(self.orientation_error):.3g} deg); "
+            f"pose error |log6| {self.error:.3g} (m and rad together, unweighted)"
+        )
 
 
 def ik_solve(
@@ -366,13 +381,17 @@ def ik_solve(
     if q0 is None:
         q0 = 0.5 * (solver.lower + solver.upper)
     r = solver.solve(T, q0)
+    q = np.asarray(r["q"])
+    e = pose_error(robot.fk(q), T)  # (p_target - p, rotation vector of R_target R^T)
     return IkResult(
-        q=np.asarray(r["q"]),
+        q=q,
         success=bool(r["success"]),
         status=r["status"],
         error=float(r["error"]),
         iterations=int(r["iterations"]),
         attempts=int(r["attempts"]),
+        position_error=float(np.linalg.norm(e[:3])),
+        orientation_error=float(np.linalg.norm(e[3:])),
     )
 
 

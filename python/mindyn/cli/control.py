@@ -162,6 +162,10 @@ def cmd_ik(args: argparse.Namespace) -> int:
         "status": r.status,
         "q": r.q.tolist(),
         "pose_error": r.error,
+        "pose_error_definition": "|log6(T_target^-1 T(q))|: metres and radians together, "
+        "unweighted (the tolerance applies to it)",
+        "position_error_m": r.position_error,
+        "orientation_error_rad": r.orientation_error,
         "iterations": r.iterations,
         "attempts": r.attempts,
     }
@@ -173,7 +177,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
         print(json.dumps(doc, indent=2))
     else:
         print(
-            f"{robot.name}: {r.status} (pose error {r.error:.3g}, {r.iterations} iterations, "
+            f"{robot.name}: {r.status} ({r.error_text()}; {r.iterations} iterations, "
             f"{r.attempts} attempt{'s' if r.attempts != 1 else ''})"
         )
         width = max([16, *map(len, robot.joint_names)])
@@ -184,7 +188,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
     if not r.success:
         print(
             f"mindyn: error: no joint solution inside the limits reached the pose "
-            f"({r.status}; best pose error {r.error:.3g})",
+            f"({r.status}; best point: {r.error_text()})",
             file=sys.stderr,
         )
         return 1

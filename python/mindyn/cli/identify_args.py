@@ -34,7 +34,9 @@ def add_data_options(p) -> None:
         help="joint-side drive gains [N m/A] that turn motor currents into joint torques (or "
         "one value for all joints); default: the robot's drive table. When the description "
         "declares transmissions: motor torque constants K_t [N m/A, motor side], torques = "
-        "T^T (K_t x current) (default: the transmissions' torque constants)",
+        "T^T (K_t x current) (default: the transmissions' torque constants). A negative gain "
+        "is kept as a sign convention: that motor's positive current drives its joint "
+        "backwards (a motor wired or mounted reversed); zero is refused",
     )
     p.add_argument(
         "--currents",

@@ -1245,14 +1245,26 @@ def load_gains(
         gains.defaulted = frozenset(k for k in ("kd", "lambda", "gamma", "nu") if k not in given)
         gains.note = f"gains: {', '.join(given)} from {path}"
         rest = [k for k in ("kd", "lambda", "gamma", "nu") if k in gains.defaulted]
-        if rest:  # the defaults' values; their margins were checked for the defaults only
-            gains.add_note(
-                "the rest by default: "
-                + ", ".join(
-                    f"{k} {_gain_text(gains[k])}" if k in gains else f"{k} 0 (no normalisation)"
-                    for k in rest
-                )
+
+        def defaults(keys) -> str:  # the defaults' values; their margins were checked for them
+            return ", ".join(
+                f"{k} {_gain_text(gains[k])}" if k in gains else f"{k} 0 (no normalisation)"
+                for k in keys
             )
+
+        if rest:  # every controller's note lists them all; each controller's, those it uses
+            gains.add_note("the rest by default: " + defaults(rest), ())
+            uses = {
+                "pd": ("kd",) if "kp" in given else ("kd", "lambda"),
+                "computed-torque": () if "kp" in given else ("lambda",),
+                "adaptive-pd": ("kd", "lambda", "gamma", "nu"),
+            }
+            for controller, keys in uses.items():
+                used = [k for k in rest if k in keys]
+                if used:
+                    gains.add_note(
+                        "the rest by default: " + defaults(used), [controller], general=False
+                    )
         lam = "the file's Lambda" if "lambda" in given else "the default Lambda"
         gains.add_note(
             "PD: K_P = " + ("the file's kp" if "kp" in given else f"{lam} x K_D"),

@@ -1291,8 +1291,8 @@ def write_tracking_report(
     header: dict | None = None,
 ) -> dict:
     """Writes ``summary.json``, ``log.csv`` and plots (``tracking_error.png``, ``torque.png``,
-    and for adaptive runs ``parameters.png``, ``torque_prediction.png``) into ``folder``.
-    Returns the summary."""
+    and for adaptive runs ``parameters.png``: the estimates' errors, the adapted model's torque
+    prediction error and both per cycle) into ``folder``. Returns the summary."""
     _args.instance(result, "result", SimulationResult)
     _args.path(folder, "folder")
     cycle = _args.optional(_args.number, cycle, "cycle", positive=True)

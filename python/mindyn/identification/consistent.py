@@ -246,6 +246,11 @@ class ConsistentResult:
     links: list | None = None
     #: The fit term's noise variance as a factor on the residual variance (:func:`noise_scale`).
     noise: dict = field(default_factory=dict)
+    #: Without a prior, when the estimate was taken nearest the description among those within
+    #: :data:`TIE_BREAK_SLACK` noise variances of the optimum's fit: ``slack`` and the optimum's
+    #: own ``optimum_fit_increase`` (its ``fit_increase`` then lies between the two sums);
+    #: None when that path was not taken.
+    tie_break: dict | None = None
     notes: list = field(default_factory=list)
     seconds: float = 0.0
 
@@ -305,6 +310,7 @@ class ConsistentResult:
                 "prior_divergence": self.prior_divergence,
                 "links": self.links,
                 "fit_increase_noise_variances": self.fit_increase,
+                "tie_break": self.tie_break,
                 "noise_variance_factor": self.noise,
                 "eig_tolerance": EIG_TOL,
                 "base_names": list(self.base.names),
@@ -455,6 +461,7 @@ def consistent_estimate(
     )
     pi_un = nearest_realisation(base, res.full)
     choice, links, start = None, None, None
+    tie_break: dict = {}  # filled when the no-prior estimate is taken by the tie-break
     if W != 0:
         from .prior import PATH, PriorProblem, choose_prior_weight, feasible_start, newton_prior
 
@@ -501,7 +508,11 @@ def consistent_estimate(
                     start=feasible_start(problem, J0s, layout, pi0),
                 )
     else:
-        pi, solver, status = _solve(base, layout, M, z, s2, pi0, W, notes, beta_ls, progress)
+        pi, solver, status = _solve(
+            base, layout, M, z, s2, pi0, W, notes, beta_ls, progress, tie_break
+        )
+        if tie_break:  # the optimum's fit term, from the residual variable: in noise variances
+            tie_break["optimum_fit_increase"] = tie_break.pop("optimum_fit") - fit_ls / s2
     realised = W == 0 and (ok_n or any(n.startswith("the unconstrained optimum") for n in notes))
     # Enforce the constraints exactly (solver tolerance): PSD projection, clipping.
     for ix in layout.links:
@@ -540,6 +551,7 @@ def consistent_estimate(
         solver=solver,
         status=status,
         fit_increase=fit_increase(pi),
+        tie_break=tie_break or None,
         prior_divergence=prior,
         noise=noise,
         notes=notes,
@@ -672,7 +684,9 @@ def _divergence(J, J0) -> float:
     return float(-logdet + np.trace(A) - 4) if sign > 0 else math.inf
 
 
-def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None, progress=None):
+def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None, progress=None, tie_break=None):
+    """The conic solve; when the tie-break is taken (no prior), ``tie_break`` (a dict) gets
+    ``slack`` and ``optimum_fit``, the optimum's fit term [noise variances]."""
     import cvxpy as cp
 
     n = base.robot.n
@@ -739,6 +753,8 @@ def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None, progress=None):
             cp.Minimize(tie), cons + [cp.norm(r) <= math.sqrt(best + TIE_BREAK_SLACK)]
         )
         solver2, status2 = _run(prob, notes, "tie-break ", False, progress)
+        if tie_break is not None:
+            tie_break.update(slack=TIE_BREAK_SLACK, optimum_fit=best)
         solver = solver if solver2 == solver else f"{solver}+{solver2}"
         status = status if status2 == status else f"{status}+{status2}"
     return np.asarray(G @ u.value, float), solver, status

@@ -125,16 +125,16 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
             )
     groups: dict[str, dict[int, int]] = {"q": {}, "dq": {}, "ddq": {}, "tau": {}}
     t_col = None
-    extra: dict[str, int] = {}  # unexpected name -> its column index
+    # unexpected (name, column index) pairs; unnamed columns (trailing commas) may be several
+    extra: list[tuple[str, int]] = []
     seen = set()
     for i, name in enumerate(names):
-        if name in seen:
-            twice = f"column '{name}'" if name else "an unnamed column (an empty name)"
-            raise DataError(f"{path}: {twice} appears twice in the header")
+        if name and name in seen:
+            raise DataError(f"{path}: column '{name}' appears twice in the header")
         seen.add(name)
         m = _COLUMN.fullmatch(name)
         if not m or (m.group(1) == "t") != (m.group(2) is None):
-            extra[name] = i
+            extra.append((name, i))
             continue
         if m.group(1) == "t":
             t_col = i
@@ -143,7 +143,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     if n is None:
         n = max(groups["q"]) if groups["q"] else 0
         if n == 0:
-            other = f" (it has {', '.join(repr(e) for e in extra)})" if extra else ""
+            other = f" (it has {', '.join(repr(e) for e, _ in extra)})" if extra else ""
             raise DataError(f"{path}: no position columns q1, q2, ... in the header{other}")
         if n > len(names):
             raise DataError(
@@ -157,7 +157,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         present = groups[kind]
         for j in present:
             if not 1 <= j <= n:
-                extra[f"{kind}{j}"] = present[j]
+                extra.append((f"{kind}{j}", present[j]))
                 beyond.append(f"{kind}{j}")
         if present or required:
             missing += [f"{kind}{j}" for j in range(1, n + 1) if j not in present]
@@ -168,7 +168,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         if missing:
             parts.append("missing " + ", ".join(missing))
         if extra:
-            parts.append("unexpected " + ", ".join(e or "an unnamed column" for e in extra))
+            parts.append("unexpected " + ", ".join(e or "an unnamed column" for e, _ in extra))
         raise DataError(
             f"{path}: wrong columns for a {n}-joint robot ({'; '.join(parts)}); expected "
             + _expected_columns(n, require_torque)
@@ -178,14 +178,13 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     return {"t": t_col, "n": n, "torque_unit": unit, **groups}
 
 
-def _remedy(path: str, width: int, extra: dict, beyond: list, n: int, missing: list) -> str:
-    """What to do about the unexpected columns ``extra`` (name -> index) of a log of ``width``
+def _remedy(path: str, width: int, extra: list, beyond: list, n: int, missing: list) -> str:
+    """What to do about the unexpected columns ``extra`` ((name, index) pairs) of a log of ``width``
     columns: the reader takes no other column and has no option to skip one, so they are
     deleted from the file (a ``cut`` command that does it, when nothing else is wrong), or
     renamed when they hold what the missing ones should."""
     cols = ", ".join(
-        f"{name} (column {i + 1})" if name else f"the unnamed column {i + 1}"
-        for name, i in extra.items()
+        f"{name} (column {i + 1})" if name else f"the unnamed column {i + 1}" for name, i in extra
     )
     text = "; a log holds these columns only (no option skips others): "
     if missing:
@@ -194,7 +193,7 @@ def _remedy(path: str, width: int, extra: dict, beyond: list, n: int, missing: l
             f"({', '.join(missing)}), and delete the others from the file"
         )
     else:
-        skip = set(extra.values())
+        skip = {i for _, i in extra}
         keep = [i + 1 for i in range(width) if i not in skip]
         runs: list[list[int]] = []  # the columns kept as cut's ranges, 1-3,5
         for k in keep:
@@ -512,8 +511,9 @@ def _unit_key(unit: str) -> str:
 def drive_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, str]:
     """Joint-side drive gains ``K`` [N m/A per joint] that turn motor currents into joint
     torques, and where they come from: ``drive_gain`` (n,) when given, else the robot's drive
-    table, ``torque_constant * gear_ratio``. Raises DataError when a gain is missing, not
-    finite or zero."""
+    table, ``torque_constant * gear_ratio``. A negative gain is a sign convention, kept: the
+    motor's positive current drives its joint backwards (a motor wired or mounted reversed).
+    Raises DataError when a gain is missing, not finite or zero."""
     if drive_gain is not None:
         K = np.asarray(drive_gain, dtype=float).reshape(-1)
         if robot is not None and K.size != robot.n:
@@ -548,7 +548,9 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
     When the robot's description declares transmissions (:attr:`~mindyn.Robot.transmission`),
     current i drives motor i and ``tau = T^T (K_t * i)``, i.e. ``G = diag(K_t) T``, with the
     motor-side torque constants ``K_t`` [N m/A per motor] given as ``drive_gain`` or else the
-    transmission's ``torque_constant``. Raises DataError when a constant is missing, not finite
+    transmission's ``torque_constant``. A negative gain or constant is kept (a reversed motor,
+    as in :func:`drive_gains`), the joints or motors named in ``reversed`` of the information.
+    Raises DataError when a constant is missing, not finite
     or zero, or when there are not as many motors as joints."""
     tr = getattr(robot, "transmission", None) if robot is not None else None
     if tr is None:
@@ -556,6 +558,7 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
         return np.diag(K), {
             "scale_Nm_per_unit": K.tolist(),
             "formula": f"current x gain ({source})",
+            "reversed": [f"joint {k + 1}" for k in np.flatnonzero(K < 0)],
         }
     if tr.n_motors != robot.n:
         raise DataError(
@@ -583,6 +586,7 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
         "scale_Nm_per_unit": Kt.tolist(),
         "formula": f"T^T (torque constant x current) ({source}; T of the transmissions)",
         "transmission_T": tr.T.tolist(),
+        "reversed": [f"motor {tr.motors[k]}" for k in np.flatnonzero(Kt < 0)],
     }
 
 

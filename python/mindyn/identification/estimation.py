@@ -418,6 +418,69 @@ def _remedies(
     return out
 
 
+#: A revolute position is refused when the rounding of a double at its magnitude loses more
+#: than half of the digits of an angle within one turn (the regressor sees it only through
+#: sin and cos; its velocities and accelerations are differences of it): |q| > pi 2^26.
+ANGLE_DIGITS_KEPT = 0.5
+
+
+def check_magnitudes(robot: Robot, logs: list) -> None:
+    """Raises DataError naming the log, column and magnitude of a value beyond what the double
+    arithmetic of the least-squares problem can carry, with the rule: each equation's terms are
+    summed as squares over all ``E`` equations of the logs (``E`` = samples x joints), so a
+    torque must stay below ``sqrt(DBL_MAX / E)``; velocities (their products, the centripetal
+    and Coriolis terms), accelerations and prismatic positions (products with each other in
+    the regressor) below ``(DBL_MAX / E)^(1/4)``; a revolute position within ``pi 2^26`` (see
+    :data:`ANGLE_DIGITS_KEPT`: beyond, its rounding, ``|q| 2^-52``, leaves fewer than half of
+    the 16 digits of an angle)."""
+    big = np.finfo(float).max
+    equations = max(sum(d.m for d in logs) * robot.n, 1)
+    linear, product = math.sqrt(big / equations), (big / equations) ** 0.25
+    digits = -math.log10(np.finfo(float).eps)  # of an angle within one turn, about 15.7
+    for d in logs:
+        src = d.source or "data"
+        for kind, a, limit, units in (
+            ("tau", d.tau, linear, ("N m", "N")),
+            ("ddq", d.ddq, product, ("rad/s^2", "m/s^2")),
+            ("dq", d.dq, product, ("rad/s", "m/s")),
+        ):
+            if a is None or not a.size:
+                continue
+            peak = np.abs(a).max(axis=0)
+            j = int(np.argmax(peak))
+            if peak[j] > limit:
+                unit = units[robot.joint_types[j] != "revolute"]
+                raise DataError(
+                    f"{src}: {kind}{j + 1} reaches {peak[j]:.3g} {unit}, beyond what the "
+                    f"double arithmetic of the fit can carry: its terms are summed as "
+                    f"{'squares' if kind == 'tau' else 'squares of products'} over the "
+                    f"{equations} equations, so the values must stay below {limit:.3g} "
+                    f"((1.8e308 / {equations})^{'1/2' if kind == 'tau' else '1/4'}); "
+                    "are the values in the right unit?"
+                )
+        peak = np.abs(d.q).max(axis=0)
+        for j in range(robot.n):
+            if robot.joint_types[j] != "revolute":
+                if peak[j] > product:
+                    raise DataError(
+                        f"{src}: q{j + 1} (prismatic) reaches {peak[j]:.3g} m, beyond what the "
+                        f"double arithmetic of the fit can carry: its products with the "
+                        f"accelerations are summed as squares over the {equations} equations, "
+                        f"so it must stay below {product:.3g} ((1.8e308 / {equations})^1/4)"
+                    )
+                continue
+            lost = math.log10(peak[j] / math.pi) if peak[j] > math.pi else 0.0
+            if lost > (1.0 - ANGLE_DIGITS_KEPT) * digits:
+                raise DataError(
+                    f"{src}: q{j + 1} reaches {peak[j]:.3g} rad: the rounding unit of a double "
+                    f"of that magnitude is {float(np.spacing(peak[j])):.2g} rad, which loses "
+                    f"{lost:.1f} of the {digits:.1f} digits of an angle within one turn (the "
+                    "regressor takes its sine and cosine; velocities and accelerations are its "
+                    "differences), more than half; reduce the positions to within a turn "
+                    "(subtract a multiple of 2 pi)"
+                )
+
+
 def _enough(
     model: str, rows: int, nb: int, logs: list[JointData], settings: dict, window: int = 1
 ) -> None:
@@ -762,6 +825,7 @@ def identify(
             raise DataError(
                 f"{d.source or 'data'} has {d.n} joints; robot '{robot.name}' has {robot.n}"
             )
+    check_magnitudes(robot, logs)
     if base is None:
         base = base_parameters(robot, rotor=rotor, friction=friction)
     names = list(base.names)

@@ -412,10 +412,15 @@ def select_friction_model(
     else:
         active_fits = {}
     if not scores:
+        by_reason: dict[str, list[str]] = {}  # one reason once, with the models it refused
+        for k, m in refused.items():
+            by_reason.setdefault(m, []).append(k)
+        if len(by_reason) == 1 and len(refused) > 1:
+            why = f"every candidate, {', '.join(refused)}: {next(iter(by_reason))}"
+        else:
+            why = "; ".join(f"{', '.join(ks)}: {m}" for m, ks in by_reason.items())
         raise IdentificationError(
-            "friction model auto: no friction model can be identified from this data ("
-            + "; ".join(f"{k}: {m}" for k, m in refused.items())
-            + ")"
+            f"friction model auto: no friction model can be identified from this data ({why})"
         )
     chosen, best, se = simplest_within_one_error(scores, per_fold)
     out = choices[chosen]

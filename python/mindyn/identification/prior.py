@@ -419,8 +419,10 @@ def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
     descents at the weights of :data:`PATH` above ``W``, strongest first, then at ``W``;
     ``objective_increase``: how much higher the whole objective (fit and priors) is there;
     ``converged`` false when the last descent stopped at its iteration limit (the increase is
-    then that of the point reached). The description's mass is that of the prior's
-    pseudo-inertia (regularised when the description's is singular)."""
+    then that of the point reached). ``fit_increase`` can be slightly negative: the descent
+    minimises the whole objective, not the fit alone, so with the mass held the fit may come
+    out better than the estimate's while the whole objective does not. The description's mass
+    is that of the prior's pseudo-inertia (regularised when the description's is singular)."""
     f0, v0 = problem.fit(pi), problem.value(pi, W, 0.0)
     out = []
     for ix in problem.links:

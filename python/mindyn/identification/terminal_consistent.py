@@ -83,6 +83,19 @@ def _weight_lines(ce: dict) -> list[str]:
             "below 0.5; data: their mean share "
             "below 0.5; partly: above, but some of them below; prior: none)"
         )
+        better = [lk for lk in ce["links"] if lk["mass_fit_increase"] < 0]
+        if better:  # not a defect: that fit is not the minimiser of the fit alone
+            lines.append(
+                "  (a negative fit increase, "
+                + ", ".join(
+                    f"{lk['link']} {lk['mass_fit_increase']:.3g} (whole objective "
+                    f"{lk['mass_objective_increase']:+.3g})"
+                    for lk in better
+                )
+                + ": with the mass held the estimate minimises the whole objective, fit plus "
+                "priors, not the fit alone, so its fit can be slightly better than the "
+                "estimate's while the whole objective is not)"
+            )
     return lines
 
 
@@ -104,6 +117,18 @@ def _noise_lines(noise: dict) -> list[str]:
     ]
 
 
+def _tie_break_text(tie: dict | None) -> str:
+    """What of the fit increase the no-prior tie-break took (``tie``: the JSON's
+    ``consistent_estimate.tie_break``; nothing when it was not taken)."""
+    if not tie:
+        return ""
+    return (
+        f" (the optimum's {tie['optimum_fit_increase']:.4g} plus at most {tie['slack']:g} noise "
+        "variance of designed slack: with no prior, the estimate is the one nearest the "
+        "description among those within that slack of the optimum's fit)"
+    )
+
+
 def _consistent_lines(doc, fit, val, cfit, cval, low) -> list[str]:
     """The lines of ``mindyn identify --consistent``: pseudo-inertias, errors side by side
     (``doc``: the consistent estimate's JSON fields, ``low``: its mass matrix's smallest
@@ -116,7 +141,7 @@ def _consistent_lines(doc, fit, val, cfit, cval, low) -> list[str]:
         + (f", prior weight {weight:g}" if weight else ", no prior")
         + f"): total mass {doc['total_mass']:.4g} kg; fit "
         f"{ce['fit_increase_noise_variances']:.4g} noise variances worse than the unconstrained "
-        "fit with all base parameters",
+        "fit with all base parameters" + _tie_break_text(ce.get("tie_break")),
         *_noise_lines(ce.get("noise_variance_factor") or {}),
         *_weight_lines(ce),
         "  smallest pseudo-inertia eigenvalue per link [kg] (unconstrained: its realisation "

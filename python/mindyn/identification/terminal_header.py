@@ -143,6 +143,12 @@ def _settings(report) -> list[str]:
                 if what != "permille"
                 else ""
             )
+            + (
+                f"; negative gain of {', '.join(proc['torque']['reversed'])} (a "
+                "positive current drives it backwards: a reversed motor)"
+                if proc["torque"].get("reversed")
+                else ""
+            )
         )
     return out
 
