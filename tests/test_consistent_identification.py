@@ -481,3 +481,28 @@ def test_the_tie_break_slack_is_stated_with_the_fit_increase(tmp_path, capsys):
     text = capsys.readouterr().out
     assert json.loads(out.read_text())["consistent_estimate"]["tie_break"] is None
     assert "designed slack" not in text
+
+
+def test_shares_of_a_link_at_a_vanishing_prior_weight(tmp_path):
+    """At a prior weight of 1e-9 the covariance's prior-held directions are 1e9 times the
+    data's: its block over a link's identifiable directions lost positive definiteness to
+    round-off and the generalised eigenvalue solve failed with scipy's raw message. The
+    relative eigenvalues equal scipy's where the matrix is positive definite, are finite where
+    round-off made it indefinite, and the command runs."""
+    from mindyn.identification.prior import _relative_eigenvalues
+    from scipy.linalg import eigh
+
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((6, 6))
+    A, B = X @ X.T, X.T @ X + np.eye(6)
+    np.testing.assert_allclose(
+        np.sort(_relative_eigenvalues(A, B)), eigh(A, B, eigvals_only=True), rtol=1e-10
+    )
+    V = np.linalg.qr(rng.standard_normal((6, 6)))[0]
+    B = V @ np.diag([1e9, 1e3, 1.0, 1e-2, 1e-3, -1e-9]) @ V.T
+    assert np.all(np.isfinite(_relative_eigenvalues(A, B)))
+    data, _ = boundary_fit()
+    fit = tmp_path / "fit.csv"
+    _write_log(fit, data)
+    argv = ["identify", ROBOT, str(fit), "--friction", "--consistent", "--min-velocity", "0"]
+    assert cli.main([*argv, "--prior-weight", "1e-9"]) == 0

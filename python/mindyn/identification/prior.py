@@ -442,6 +442,19 @@ def mass_profile(problem: PriorProblem, pi, W: float, start) -> list[dict]:
     return out
 
 
+def _relative_eigenvalues(A, B) -> np.ndarray:
+    """The eigenvalues of ``A`` relative to the symmetric positive semidefinite ``B``
+    (``A v = lambda B v``), over the directions where ``B`` is positive beyond round-off: ``B``
+    of a covariance whose prior-held directions are ``1 / W`` times larger than the data's is
+    positive definite in exact arithmetic but need not be in floating point, where a Cholesky
+    factorisation of it fails."""
+    A, B = 0.5 * (A + A.T), 0.5 * (B + B.T)
+    lam, V = np.linalg.eigh(B)
+    keep = lam > 1e-12 * max(float(lam[-1]), 1e-300)
+    T = V[:, keep] / np.sqrt(lam[keep])
+    return np.linalg.eigvalsh(T.T @ A @ T)
+
+
 def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y, *, start) -> list[dict]:
     """Per link, what the consistent estimate owes to the data and to the priors.
 
@@ -489,7 +502,7 @@ def link_report(problem: PriorProblem, pi, W: float, names, pi0, Y, *, start) ->
         share = np.zeros(0)
         if Nl.size:
             A, B = Nl.T @ Pl @ Nl, Nl.T @ Cl @ Nl
-            share = np.clip(sla.eigh(0.5 * (A + A.T), 0.5 * (B + B.T), eigvals_only=True), 0, 1)
+            share = np.clip(_relative_eigenvalues(A, B), 0, 1)
         mass_share = float(np.clip(Pl[9, 9] / Cl[9, 9], 0.0, 1.0)) if Cl[9, 9] > 0 else 1.0
         held = profile[len(out)]
         rise, whole = held["fit_increase"], held["objective_increase"]
