@@ -785,6 +785,7 @@ def identify(
     integral_window: int = 40,
     min_velocity: float = 0.01,
     rank_tolerance: float = 1e-9,
+    check_residual: bool = True,
 ) -> IdentificationResult:
     """Estimate the base parameters of ``robot`` from ``data``.
 
@@ -830,6 +831,9 @@ def identify(
     rank_tolerance : float
         Relative size of the pivots of the column-scaled regressor below which it counts as rank
         deficient.
+    check_residual : bool
+        Compare the torque residual with the torque noise (:func:`residual_check`); False
+        for fits that are steps of another choice (the friction model's candidates and folds).
 
     The dynamic model is reduced chunk by chunk (:func:`dynamic_triangles`): memory does not
     grow with the length of the log; nor does the integral model's (reduced per joint from
@@ -866,6 +870,7 @@ def identify(
     integral_window = _args.integer(integral_window, "integral_window", 1)
     min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
     rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)
+    check_residual = _args.flag(check_residual, "check_residual")
     for d in logs:
         if d.n != robot.n:
             raise DataError(
@@ -1001,11 +1006,12 @@ def identify(
             "what the removed ones contribute, and their RSDs assume those are zero. Use a "
             "longer or richer excitation"
         ]
-    check = residual_check(base, full, logs, min_velocity=min_velocity)
-    settings["residual_check"] = check
-    warning = residual_warning(model, check)
-    if warning is not None:
-        settings.setdefault("warnings", []).append(warning)
+    if check_residual:
+        check = residual_check(base, full, logs, min_velocity=min_velocity)
+        settings["residual_check"] = check
+        warning = residual_warning(model, check)
+        if warning is not None:
+            settings.setdefault("warnings", []).append(warning)
     return IdentificationResult(
         model=model,
         base=base,
