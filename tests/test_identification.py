@@ -566,7 +566,7 @@ def test_the_model_that_made_the_log_passes_the_residual_check(noisy_zcr, model)
 def test_a_low_passed_log_is_judged_by_the_noise_left_after_the_filter(noisy_zcr, tmp_path):
     """Through the default data path (low-pass at about 10 x the motion's band) the torques
     keep 2 B / fs of the logged noise's variance: the ratio stays near 1 (without that factor it
-    would be fs / (2 B), over 20) and the dynamic fit passes."""
+    would be 2 B / fs, under 0.05, and no model error would show) and the dynamic fit passes."""
     robot, base, data, _, _ = noisy_zcr
     path = write_csv(tmp_path / "log.csv", data.t, data.q, data.tau, dq=data.dq)
     res = identify(robot, list(load_logs([path], robot)), base=base)
