@@ -297,14 +297,11 @@ def test_docs_examples_made_what_they_say(workdirs, env):
     assert len(said) == 4, said
     assert all(f"; {len(removed)} pruned in identification" in o for o in said), said
     # the UR5 example follows an optimised excitation: no warning that most base parameters
-    # were removed, and the five largest (by the simulation's true values) within 2 % of them;
-    # its one warning is the residual check's (the simulated controller holds each torque)
+    # were removed, and the five largest (by the simulation's true values) within 2 % of them
     ur5 = [
         o for c, o in OUTPUT.items() if ": mindyn identify examples/urdf/ur5.urdf out/ur5.csv" in c
     ]
-    assert len(ur5) == 1, ur5
-    warned = [line for line in ur5[0].splitlines() if "WARNING" in line]
-    assert all("torque residual of the fit" in line for line in warned), warned
+    assert len(ur5) == 1 and "WARNING" not in ur5[0], ur5
     doc = json.loads((wd / "out/ur5_id.json").read_text())
     est, true = np.array(doc["base_values"]), np.array(doc["true_values"])
     big = np.argsort(-np.abs(true))[:5]

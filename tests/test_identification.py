@@ -23,12 +23,10 @@ from mindyn.identification import (
     dynamic_system,
     energy_system,
     identify,
-    load_logs,
     true_base_values,
     validate,
 )
-from mindyn.identification.data import JointData, fill_derivatives, read_csv, write_csv
-from mindyn.identification.estimation import RESIDUAL_Z
+from mindyn.identification.data import JointData, fill_derivatives, read_csv
 from mindyn.identification.excitation import (
     FourierTrajectory,
     optimize_excitation,
@@ -538,76 +536,3 @@ def test_table_error_column_of_a_true_zero_is_a_dash():
             i = result.names.index(name)
             want = 100 * abs(result.values[i] - truth[k]) / abs(truth[k])
             assert float(rows[name][-1]) == pytest.approx(want, rel=2e-3, abs=1e-3)
-
-
-# ---------------------------------------------------------------------------------------------
-# The residual check: the fit's torque residual against the torque noise as logged
-# ---------------------------------------------------------------------------------------------
-def _residual_check(res):
-    check = res.settings["residual_check"]
-    spread = check["threshold"] - 1.0
-    assert spread == pytest.approx(RESIDUAL_Z * np.sqrt(2.0 / check["dof"]))
-    return check
-
-
-@pytest.mark.parametrize("model", ["dynamic", "integral"])
-def test_the_model_that_made_the_log_passes_the_residual_check(noisy_zcr, model):
-    """Fitted with its own model, the log's torque residual is its white noise (1 % of the
-    effort limits, known): the noise measured from second differences is the one simulated
-    (within 10 %), the variance ratio within the chi-square spread of 1 and no warning."""
-    robot, base, data, sd, _ = noisy_zcr
-    res = identify(robot, data, model=model, base=base)
-    check = _residual_check(res)
-    assert np.allclose(check["torque_noise"], sd, rtol=0.1), (check["torque_noise"], sd)
-    assert 0.8 < check["variance_ratio"] < check["threshold"], check
-    assert not check["exceeded"] and "warnings" not in res.settings
-
-
-def test_a_low_passed_log_is_judged_by_the_noise_left_after_the_filter(noisy_zcr, tmp_path):
-    """Through the default data path (low-pass at about 10 x the motion's band) the torques
-    keep 2 B / fs of the logged noise's variance: the ratio stays near 1 (without that factor it
-    would be 2 B / fs, under 0.05, and no model error would show) and the dynamic fit passes."""
-    robot, base, data, _, _ = noisy_zcr
-    path = write_csv(tmp_path / "log.csv", data.t, data.q, data.tau, dq=data.dq)
-    res = identify(robot, list(load_logs([path], robot)), base=base)
-    check = _residual_check(res)
-    assert 0.5 < check["variance_ratio"] < check["threshold"], check
-    assert not check["exceeded"] and "warnings" not in res.settings
-
-
-@pytest.mark.parametrize("model", ["dynamic", "integral", "energy"])
-def test_a_model_that_leaves_the_friction_out_is_warned_of(noisy_zcr, model):
-    """The log carries the truth's viscous and Coulomb friction, whose torque has several
-    times the noise's variance; fitted without friction, the residual holds what the
-    rigid-body parameters cannot take up of it: the check exceeds its threshold and the warning
-    names model error, in the settings the JSON writes."""
-    robot, base, data, sd, truth = noisy_zcr
-    names = list(base.names)
-    fv = np.array([truth[names.index(f"Fv{j + 1}")] for j in range(robot.n)])
-    fc = np.array([truth[names.index(f"Fc{j + 1}")] for j in range(robot.n)])
-    assert np.mean((fv * data.dq + fc * np.sign(data.dq)) ** 2) > 4 * np.mean(sd**2)
-    res = identify(robot, data, model=model, rotor=True, rsd_threshold=None)
-    check = _residual_check(res)
-    assert check["exceeded"] and check["variance_ratio"] > 2 * check["threshold"], check
-    (warning,) = [w for w in res.settings["warnings"] if "torque residual" in w]
-    assert "model error" in warning and f"{check['variance_ratio']:.3g} times" in warning
-    assert res.to_dict()["settings"]["residual_check"]["exceeded"] is True
-
-
-def test_an_energy_fit_whose_torques_the_data_do_not_determine_is_warned_of(noisy_zcr):
-    """The energy model fitted with the model that made the log: its equations see the power
-    ``dq . tau`` only, and along this excitation with rotor inertia and friction they leave
-    parameter combinations whose torques are orthogonal to the velocity undetermined. Its own
-    weighted residual is at the noise level, but its torques, against the noise-free ones of
-    the simulation's truth, are off by far more than the noise: the check exceeds its threshold
-    by as much and the warning names both causes."""
-    robot, base, data, sd, truth = noisy_zcr
-    res = identify(robot, data, model="energy", base=base)
-    assert res.sigma < 2.0  # the energy equations are fitted to their noise
-    exact = base.regressor(data.q, data.dq, data.ddq) @ truth
-    error = np.mean((res.predict(data) - exact) ** 2) / np.mean(sd**2)
-    assert error > 100.0  # the torques are not determined (independent of the check)
-    check = _residual_check(res)
-    assert check["exceeded"] and check["variance_ratio"] > 0.5 * error, (check, error)
-    (warning,) = [w for w in res.settings["warnings"] if "torque residual" in w]
-    assert "model error" in warning and "power dq . tau" in warning

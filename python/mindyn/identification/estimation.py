@@ -39,7 +39,6 @@ from .models import (
     logged_torques,
     moving_equations,
     moving_windows,
-    noise_density_scale,
     require_torque,
     torque_noise,
     windows,
@@ -55,11 +54,6 @@ from .options import DEFAULT_RSD_THRESHOLD
 #: freedom, so that the noise variance behind the RSDs is known within about 25 %.
 MIN_EQUATIONS_PER_PARAMETER = {"dynamic": 10, "energy": 4, "integral": 4}
 MIN_NOISE_DOF = 30
-
-#: :func:`residual_check` warns when the fit's torque residual variance exceeds the torque
-#: noise's prediction by more than this many standard deviations of its chi-square spread
-#: (``1 + z sqrt(2 / nu)`` for ``nu`` independent residuals).
-RESIDUAL_Z = 5.0
 
 #: Samples whose regressor is evaluated at once by the dynamic model (memory: samples x joints x
 #: base parameters x 8 bytes, 15 MB for 6 joints and 40 parameters).
@@ -705,108 +699,6 @@ def correlation_factor(
     )
 
 
-def _filter_rates(d: JointData) -> tuple[float, float] | None:
-    """``(fs, B)``: the rate of the preprocessed log ``d`` and the noise bandwidth of its
-    low-pass (:func:`noise_bandwidth`), or None for a log not low-passed."""
-    pre = d.processing.get("preprocess") or {}
-    filt = pre.get("filter")
-    if filt is None or d.logged is None:
-        return None
-    fs = float(pre["rate_Hz"])
-    return fs, noise_bandwidth(float(filt["cutoff_Hz"]), int(filt["order"]))
-
-
-def residual_check(
-    base: BaseParameters, full: np.ndarray, data, *, min_velocity: float = 0.0
-) -> dict:
-    """The fit's torque residual on the logs ``data`` it was fitted on against the torque
-    noise, measured independently of the fit, for every model.
-
-    Per joint ``j``, the noise ``sigma_j`` of the torques as logged
-    (:func:`~mindyn.identification.models.torque_noise` of
-    :func:`~mindyn.identification.models.logged_torques`, second differences) predicts the
-    variance of the torques the fit saw: ``sigma_j^2`` on a log not low-passed, ``sigma_j^2 2 B
-    / (P fs_logged)`` on a low-passed one (``B`` :func:`noise_bandwidth`, ``P`` periods
-    averaged). The variance ratio ``R = sum r^2 / sum predicted`` of the residuals ``r = tau -
-    W_b p_b`` (:func:`predicted_torques`; samples where a joint is slower than
-    ``min_velocity``, whose Coulomb sign the data do not determine, and joints whose noise
-    measures zero left out) is about 1 when the model describes the data, the noise is white
-    and the estimate determines the torques (less when the torques' own curvature adds to the
-    second differences); it is a chi-square over ``nu`` independent residuals divided by
-    ``nu`` (``nu``: the samples, ``m 2 B / fs`` of ``m`` low-passed ones at rate ``fs``, over
-    the joints, minus the base parameters), of spread ``sqrt(2 / nu)``. Beyond ``1 + z sqrt(2 /
-    nu)`` (``z`` :data:`RESIDUAL_Z`) the residual holds what the noise does not explain: model
-    error, or (energy model, whose equations see the power ``dq . tau`` only) torques the data
-    do not determine. The dynamic and integral models' weights and every model's standard
-    deviations come from the fit's own residual, which therefore cannot show this.
-
-    Returns ``{"variance_ratio", "per_joint", "threshold", "dof", "torque_noise",
-    "exceeded", "rule"}``, or ``{"variance_ratio": None, "rule"}`` when the noise measures
-    zero on every joint."""
-    logs = _logs(data)
-    sigma = torque_noise([x for d in logs for x in logged_torques(d)])
-    use = sigma > 0
-    n = sigma.size
-    num, den, dof = np.zeros(n), np.zeros(n), 0.0
-    for d in logs:
-        r = require_torque(d) - predicted_torques(base, full, d)
-        keep = moving_equations(base, d.dq, min_velocity)
-        mask = np.ones_like(r, dtype=bool) if keep is None else keep
-        mask = mask & use[None, :]
-        rates = _filter_rates(d)
-        g, e = np.ones(d.m), 1.0
-        if rates is not None:
-            fs, band = rates
-            e = min(1.0, 2.0 * band / fs)
-            for p, s in zip(d.log_slices(), noise_density_scale(d)):
-                g[p] = s * 2.0 * band / fs
-        num += np.sum(np.where(mask, r, 0.0) ** 2, axis=0)
-        den += (g @ mask) * sigma**2
-        dof += e * float(mask.sum())
-    dof -= base.n
-    rule = (
-        "torque residual on the fit samples over the variance the torque noise as logged "
-        "(second differences) predicts after the data path"
-    )
-    if not np.any(use) or not np.sum(den) > 0 or dof < 1:
-        return {"variance_ratio": None, "rule": rule + ": not checked (no torque noise measured)"}
-    ratio = float(np.sum(num) / np.sum(den))
-    threshold = 1.0 + RESIDUAL_Z * math.sqrt(2.0 / dof)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        per_joint = np.where(den > 0, num / den, np.nan)
-    return {
-        "variance_ratio": ratio,
-        "per_joint": [_json_float(v) for v in per_joint],
-        "threshold": threshold,
-        "dof": dof,
-        "torque_noise": sigma.tolist(),
-        "exceeded": ratio > threshold,
-        "rule": rule + f"; expected 1, at most 1 + {RESIDUAL_Z:g} sqrt(2 / dof)",
-    }
-
-
-def residual_warning(model: str, check: dict) -> str | None:
-    """The warning of a :func:`residual_check` whose ratio exceeds its threshold, else None."""
-    if not check.get("exceeded"):
-        return None
-    why = (
-        "model error (friction, rotor inertia or a torque offset the model leaves out, "
-        "another robot's description, torques in another unit or delayed against the motion)"
-    )
-    if model == "energy":
-        why += (
-            ", or torques the data do not determine (the energy model's equations see only "
-            "the power dq . tau: use a richer excitation or the dynamic or integral model)"
-        )
-    return (
-        f"the torque residual of the fit is {check['variance_ratio']:.3g} times the variance "
-        f"the torque noise predicts (at most {check['threshold']:.3g} expected from its "
-        f"chi-square spread over {check['dof']:.0f} independent residuals): the model does not "
-        f"describe the data; likely cause: {why}; the estimates' standard deviations do not "
-        "cover this error"
-    )
-
-
 def _rsd(p: np.ndarray, std: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(p != 0, 100.0 * std / np.abs(p), np.inf)
@@ -848,7 +740,6 @@ def identify(
     integral_window: int = 40,
     min_velocity: float = 0.01,
     rank_tolerance: float = 1e-9,
-    check_residual: bool = True,
 ) -> IdentificationResult:
     """Estimate the base parameters of ``robot`` from ``data``.
 
@@ -894,16 +785,12 @@ def identify(
     rank_tolerance : float
         Relative size of the pivots of the column-scaled regressor below which it counts as rank
         deficient.
-    check_residual : bool
-        Compare the torque residual with the torque noise (:func:`residual_check`); False
-        for fits that are steps of another choice (the friction model's candidates and folds).
 
     The dynamic model is reduced chunk by chunk (:func:`dynamic_triangles`): memory does not
     grow with the length of the log; nor does the integral model's (reduced per joint from
     :func:`~mindyn.identification.models.integral_chunks`, then weighted like the dynamic
     model's). More than half of the parameters removed by pruning is reported in
-    ``settings["warnings"]``, and so is a torque residual far above the torque noise
-    (:func:`residual_check`, recorded in ``settings["residual_check"]``).
+    ``settings["warnings"]``.
 
     Raises
     ------
@@ -933,7 +820,6 @@ def identify(
     integral_window = _args.integer(integral_window, "integral_window", 1)
     min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
     rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)
-    check_residual = _args.flag(check_residual, "check_residual")
     for d in logs:
         if d.n != robot.n:
             raise DataError(
@@ -1070,12 +956,6 @@ def identify(
             "what the removed ones contribute, and their RSDs assume those are zero. Use a "
             "longer or richer excitation"
         ]
-    if check_residual:
-        check = residual_check(base, full, logs, min_velocity=min_velocity)
-        settings["residual_check"] = check
-        warning = residual_warning(model, check)
-        if warning is not None:
-            settings.setdefault("warnings", []).append(warning)
     return IdentificationResult(
         model=model,
         base=base,

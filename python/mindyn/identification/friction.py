@@ -142,7 +142,7 @@ def _default(option: str):
 def _fit(base: BaseParameters, logs, fit: dict):
     from .estimation import identify
 
-    return identify(base.robot, logs, base=base, check_residual=False, **fit)
+    return identify(base.robot, logs, base=base, **fit)
 
 
 def _objective(base: BaseParameters, logs, fit: dict, per_joint: bool) -> np.ndarray:

@@ -367,7 +367,7 @@ def logged_torques(data: JointData) -> list[np.ndarray]:
     return [src.tau[p] for p in src.log_slices()]
 
 
-def noise_density_scale(data: JointData) -> list[float]:
+def _density_scale(data: JointData) -> list[float]:
     """Per log joined, the spectral density of the noise the windows integrate per unit
     variance of the noise :func:`torque_noise` measures on :func:`logged_torques`, over that of
     white noise on the samples of ``data``: ``fs / (P fs_logged)`` on preprocessed data (rate
@@ -401,7 +401,7 @@ def energy_row_noise(data: JointData, window: int) -> np.ndarray:
     periods averaged). A row's noise variance is ``A @ sigma^2``."""
     dt = np.diff(data.t)
     scale = np.zeros(data.m)
-    for p, s in zip(data.log_slices(), noise_density_scale(data)):
+    for p, s in zip(data.log_slices(), _density_scale(data)):
         scale[p] = s
     rows = []
     for a, b in zip(*windows(data, window, gaps=False)):

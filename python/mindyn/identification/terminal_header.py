@@ -129,15 +129,6 @@ def _settings(report) -> list[str]:
     corr = res.settings.get("std_correlation")
     if corr and corr["variance_factor"] > 1.0:
         out.append(f"  standard deviations: {corr['rule']}")
-    check = res.settings.get("residual_check") or {}
-    if check.get("variance_ratio") is not None:
-        out.append(
-            f"  residual check: torque residual variance {check['variance_ratio']:.3g} x the "
-            "torque noise's prediction (noise from second differences of the torques as logged; "
-            f"at most {check['threshold']:.3g} for {check['dof']:.0f} independent residuals)"
-        )
-    elif check:
-        out.append(f"  residual check: {check['rule']}")
     out += [f"  base set: {line}" for line in base.snap_report(detail=False)]
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
