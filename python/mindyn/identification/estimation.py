@@ -545,6 +545,20 @@ def noise_bandwidth(cutoff: float, order: int) -> float:
     return cutoff * (1.0 - 1.0 / (2 * order)) * a / math.sin(a)
 
 
+def row_weights(res: IdentificationResult) -> np.ndarray:
+    """Each joint's equations' weight in the fit of ``res``, shape (n,): ``1 / sigma_j`` of the
+    weighted fit (:func:`joint_weights`), ones for ordinary least squares."""
+    js = res.joint_sigma
+    if res.weighted and js is not None:
+        return joint_weights(js)
+    return np.ones(res.base.robot.n)
+
+
+def joint_weights(joint_sigma: np.ndarray) -> np.ndarray:
+    """``1 / sigma_j`` per joint, a joint without residual floored at 1e-9 of the largest."""
+    return 1.0 / np.maximum(joint_sigma, max(float(joint_sigma.max()) * 1e-9, 1e-300))
+
+
 def noise_variance_factor(res: IdentificationResult) -> float:
     """How many times the residual variance of ``res`` (rows counted as independent) its
     noise's variance per independent equation is: ``settings.std_correlation``'s
@@ -577,10 +591,7 @@ def residual_correlation(res: IdentificationResult, data) -> tuple[float | None,
     nb = base.n
     beta, _, _ = ls.solve(list(range(nb)))
     s2 = ls.rho / (ls.r - nb) if ls.r > nb else 0.0
-    js = res.joint_sigma
-    w = np.ones(base.robot.n)
-    if res.weighted and js is not None:
-        w = 1.0 / np.maximum(js, max(js.max() * 1e-9, 1e-300))
+    w = row_weights(res)
     A = np.zeros((nb, nb))
     S = np.zeros((nb, nb))
     lags = []
@@ -924,8 +935,7 @@ def identify(
         dof = (rows - nb) / rows
         mean = rss / np.maximum(joint_rows, 1)
         joint_sigma = np.sqrt(np.where(joint_rows > 0, mean, 0.0) / max(dof, 1e-12))
-        floor = max(joint_sigma.max() * 1e-9, 1e-300)
-        w = 1.0 / np.maximum(joint_sigma, floor)
+        w = joint_weights(joint_sigma)
         ls = _Reduced.from_triangle(_triangle(np.vstack([wj * Sj for wj, Sj in zip(w, S)])), rows)
         settings["weighting"] = "per-joint 1/sigma_j from a first OLS pass"
     else:

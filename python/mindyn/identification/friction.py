@@ -530,7 +530,7 @@ def held_out_residual(
     that the other blocks do not determine (e.g. a Stribeck term whose column is non-zero on
     a few samples of the held-out block only) is thus left out instead of being fitted to
     noise and extrapolated: the score measures a model's prediction, not its conditioning."""
-    from .estimation import _Reduced, _triangle, pruned
+    from .estimation import _Reduced, _triangle, noise_variance_factor, pruned
     from .prior import block_triangles
 
     if joint_sigma is not None and res.model != "energy":
@@ -548,7 +548,7 @@ def held_out_residual(
     if len(used) < 2:
         raise IdentificationError("friction model auto: the data give fewer than 2 blocks")
     threshold = res.settings.get("rsd_threshold")
-    inflation = res.settings.get("std_correlation", {}).get("variance_factor", 1.0)
+    inflation = noise_variance_factor(res)
 
     def solve_with(ls):
         def solve(cols):

@@ -263,7 +263,7 @@ def block_triangles(res, data, *, folds: int = FOLDS, counts: bool = False):
     shape (folds, nb+1, nb+1), ``S_k^T S_k = [A_k b_k]^T [A_k b_k]`` over the block's rows with
     the fit's own row weights; with ``counts``, ``(S, rows)``, ``rows`` (folds,) each block's
     number of rows."""
-    from .estimation import _logs, _triangle, regressor_rows
+    from .estimation import _logs, _triangle, regressor_rows, row_weights
     from .models import (
         energy_row_noise,
         energy_system,
@@ -285,9 +285,7 @@ def block_triangles(res, data, *, folds: int = FOLDS, counts: bool = False):
 
     js = res.joint_sigma
     if res.model in ("dynamic", "integral"):
-        w = np.ones(base.robot.n)
-        if res.weighted and js is not None:
-            w = 1.0 / np.maximum(js, max(js.max() * 1e-9, 1e-300))
+        w = row_weights(res)
         for d in logs:
             if res.model == "dynamic":
                 assert d.tau is not None  # the fit's logs have torques
