@@ -166,17 +166,24 @@ def test_an_unknown_column_is_named_with_the_remedy_that_reads_the_log(extra, tm
     assert f"cut -d, -f{fields} " in err, err
 
 
+def _trailing_commas(tmp_path, commas: int):
+    """A two-joint log (t, q1, q2, tau1, tau2) whose header and rows end with ``commas`` commas,
+    as a spreadsheet writes it: its text, its path and the positions and torques written."""
+    t, q, dq, tau = _log(n=2, m=50)
+    cols = [t, q[:, 0], q[:, 1], tau[:, 0], tau[:, 1]]
+    end = "," * commas + "\n"
+    text = "t,q1,q2,tau1,tau2" + end
+    text += "".join(",".join(repr(float(c[i])) for c in cols) + end for i in range(len(t)))
+    path = tmp_path / "log.csv"
+    path.write_text(text)
+    return text, path, q, tau
+
+
 def test_a_trailing_comma_is_named_as_an_unnamed_column(tmp_path):
     """A spreadsheet's trailing comma gives the header a column with an empty name: the message
     read 'unexpected )' and 'delete  (column 6)'. It names the unnamed column and its position;
     the cut command given reads the log; two such columns are named as unnamed too."""
-    t, q, dq, tau = _log(n=2, m=50)
-    header = ["t", "q1", "q2", "tau1", "tau2"]
-    cols = [t, q[:, 0], q[:, 1], tau[:, 0], tau[:, 1]]
-    text = ",".join(header) + ",\n"
-    text += "".join(",".join(repr(float(c[i])) for c in cols) + ",\n" for i in range(len(t)))
-    path = tmp_path / "log.csv"
-    path.write_text(text)
+    text, path, q, _ = _trailing_commas(tmp_path, 1)
     with pytest.raises(DataError) as e:
         read_csv(path, n=2)
     msg = str(e.value)
@@ -192,12 +199,7 @@ def test_a_double_trailing_comma_gets_the_cut_remedy_too(tmp_path):
     unnamed column appears twice, with no remedy. Both are named as unnamed columns with their
     positions, and the cut command given reads the log (the positions it gives back are the
     test's own)."""
-    t, q, dq, tau = _log(n=2, m=50)
-    cols = [t, q[:, 0], q[:, 1], tau[:, 0], tau[:, 1]]
-    text = "t,q1,q2,tau1,tau2,,\n"
-    text += "".join(",".join(repr(float(c[i])) for c in cols) + ",,\n" for i in range(len(t)))
-    path = tmp_path / "log.csv"
-    path.write_text(text)
+    text, path, q, tau = _trailing_commas(tmp_path, 2)
     with pytest.raises(DataError) as e:
         read_csv(path, n=2)
     msg = str(e.value)
