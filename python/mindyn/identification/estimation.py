@@ -198,8 +198,9 @@ class _Reduced:
         cond = float(sv[0] / sv[-1]) if sv.size and sv[-1] > 0 else float("inf")
         return rank, piv, cond
 
-    def solve(self, keep: list[int]):
-        """Estimate of the columns ``keep``: ``(p, std, sigma2)``."""
+    def solve(self, keep: list[int], *, inflation: float = 1.0):
+        """Estimate of the columns ``keep``: ``(p, std, sigma2)``, the variances multiplied by
+        ``inflation`` (the factor for correlated equations, :func:`correlation_factor`)."""
         k = len(keep)
         T = _r_factor(np.column_stack([self.R[:, keep], self.z]))
         rss = self.rho + (float(T[k, k] ** 2) if T.shape[0] > k else 0.0)
@@ -208,7 +209,7 @@ class _Reduced:
         scale = self.norms[keep]
         sigma2 = rss / (self.r - k) if self.r > k else float("nan")
         Rinv = sla.solve_triangular(Rk, np.eye(k))
-        var = sigma2 * np.einsum("ij,ij->i", Rinv, Rinv) / scale**2
+        var = inflation * sigma2 * np.einsum("ij,ij->i", Rinv, Rinv) / scale**2
         return ps / scale, np.sqrt(var), sigma2
 
 
@@ -946,8 +947,7 @@ def identify(
     settings["std_correlation"] = {"variance_factor": inflation, "rule": rule}
 
     def solve(cols):
-        p, std, s2 = ls.solve(cols)
-        return p, std * math.sqrt(inflation), s2
+        return ls.solve(cols, inflation=inflation)
 
     p, std, s2 = solve(list(range(nb)))
     initial = {"values": p.copy(), "std": std.copy(), "rsd": _rsd(p, std)}

@@ -66,6 +66,7 @@ state and refuse an identification with it.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -550,13 +551,6 @@ def held_out_residual(
     threshold = res.settings.get("rsd_threshold")
     inflation = noise_variance_factor(res)
 
-    def solve_with(ls):
-        def solve(cols):
-            p, std, s2 = ls.solve(cols)
-            return p, std * math.sqrt(inflation), s2
-
-        return solve
-
     err = []
     for k in used:
         others = [i for i in used if i != k]
@@ -564,7 +558,11 @@ def held_out_residual(
             _triangle(np.vstack([S[i] for i in others])), rows[others].sum()
         )
         rank, piv, _ = ls.rank(tol)
-        keep, p, _, _, _ = pruned(solve_with(ls), sorted(int(c) for c in piv[:rank]), threshold)
+        keep, p, _, _, _ = pruned(
+            functools.partial(ls.solve, inflation=inflation),
+            sorted(int(c) for c in piv[:rank]),
+            threshold,
+        )
         full = np.zeros(nb)
         full[keep] = p
         r = held[k] @ np.append(full, -1.0)
