@@ -101,6 +101,10 @@ def test_bad_numbers_are_named_with_the_expected_range(argv, needles, tmp_path, 
         (["base", "planar2", "--rotor-inertia"], "did you mean --rotor for --rotor-inertia?"),
         (["simulate", "planar2", "-o", "x", "--torque-nosie=1"], "--torque-noise for"),
         (["info", "planar2", "extra"], None),
+        # an abbreviation is not taken for the option it abbreviates: the options it could be
+        (["codegen", "planar2", "--controller", "0.004"], "--controller-period for --controller?"),
+        (["base", "planar2", "--rot"], "--rotor for --rot?"),
+        (["identify", "planar2", "x.csv", "--fric"], "--friction or --friction-model or"),
     ],
 )
 def test_an_unknown_option_points_to_its_command_and_a_near_spelling(

@@ -68,11 +68,17 @@ def _unrecognized(parser: argparse.ArgumentParser, command: str, extra: list[str
     flags = [f for f, a in actions.items() if a.help != argparse.SUPPRESS]
     hints = []
     for word in (w.split("=", 1)[0] for w in extra if w.startswith("--")):
-        # an option the word extends (--frequency: --freq), else one close in spelling
+        # an option the word extends (--frequency: --freq), else the options it abbreviates
+        # (abbreviations are not taken: --controller could be any --controller-...), else
+        # one close in spelling
         near = [f for f in flags if f.startswith("--") and word.startswith(f)]
-        near = near or difflib.get_close_matches(word, flags, n=1, cutoff=0.8)
         if near:
             hints.append(f"{max(near, key=len)} for {word}")
+            continue
+        near = sorted(f for f in flags if f.startswith(word))
+        near = near or difflib.get_close_matches(word, flags, n=1, cutoff=0.8)
+        if near:
+            hints.append(f"{' or '.join(near)} for {word}")
     said = f"unrecognized arguments: {' '.join(extra)}"
     if hints:
         said += f" (did you mean {', '.join(hints)}?)"

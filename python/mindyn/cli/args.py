@@ -14,6 +14,8 @@ The conventions of every command (docs/cli.md states them too):
   (:func:`~mindyn.cli.number_options.joint_vector`);
 - a word that starts with a minus and a digit (``-1%``, ``-inf``, ``-0.2,3``) is a value
   (:class:`Parser`); an option that needs a non-negative one refuses it saying it is negative;
+- options are spelled in full: an abbreviation is refused (naming the options it could stand
+  for), never taken for one of them (:class:`Parser`);
 - one name per meaning: ``--controller-period`` (the sample period of a controller),
   ``--excitation-period`` (the period of a periodic excitation in a log), ``--torque-noise``,
   ``--position-noise``, ``--velocity-noise`` (noise standard deviations),
@@ -110,6 +112,7 @@ class Parser(argparse.ArgumentParser):
     refuses or takes it, saying why (no option of the command line is spelled so)."""
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)  # an abbreviation is never taken for an option
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(r"^-(?:\.?\d|inf|nan)", re.IGNORECASE)
 
