@@ -265,7 +265,8 @@ def test_log_evidence_equals_a_laplace_approximation_written_out():
 
 
 def test_residual_correlation_matches_the_scatter_of_the_estimates():
-    """Torque noise correlated from sample to sample (first-order autoregressive, coefficient
+    """The estimates' standard deviations count the correlation their residuals show. Torque
+    noise correlated from sample to sample (first-order autoregressive, coefficient
     0.3, so the variance of a slowly varying regressor's estimate is about (1 + 0.3) / (1 - 0.3)
     = 1.86 times that of independent noise), and white noise: over 30 realisations, the mean
     variance inflation measured from each fit's residuals equals the one of the estimates'
@@ -282,7 +283,7 @@ def test_residual_correlation_matches_the_scatter_of_the_estimates():
     A = base.regressor(clean.q, clean.dq, clean.ddq_true).reshape(-1, base.n)
     rng = np.random.default_rng(5)
     for rho in (0.3, 0.0):
-        est, measured, naive = [], [], []
+        est, measured, naive, var_reported = [], [], [], []
         for _ in range(30):
             e = np.zeros_like(clean.tau)
             white = rng.standard_normal(clean.tau.shape) * sd * np.sqrt(1 - rho**2)
@@ -292,6 +293,7 @@ def test_residual_correlation_matches_the_scatter_of_the_estimates():
             d = JointData(clean.t, clean.q, clean.dq, clean.ddq_true, clean.tau + e, "sim")
             res = identify(robot, d, weighted=False, rsd_threshold=None)
             measured.append(residual_correlation(res, d)[0])
+            var_reported.append(res.std**2)
             beta, rss = np.linalg.lstsq(A, d.tau.reshape(-1), rcond=None)[:2]
             est.append(beta)
             naive.append(rss[0] / (A.shape[0] - base.n))
@@ -299,6 +301,11 @@ def test_residual_correlation_matches_the_scatter_of_the_estimates():
         # the covariance against s^2 (A^T A)^-1, the formula for independent residuals
         scatter = np.trace(A.T @ A @ C) / np.mean(naive) / base.n
         assert 0.7 < np.mean(measured) / scatter < 1.3, (rho, np.mean(measured), scatter)
+        # the estimates' reported variances carry the measured factor (the log is not
+        # low-passed, so the data path's factor is 1): on the mean over the parameters, they
+        # are the scatter's
+        spread = np.mean(np.mean(var_reported, axis=0) / np.diag(C))
+        assert 0.7 < spread < 1.3, (rho, spread)
         if rho:
             assert scatter > 1.5  # the correlation matters here
 

@@ -347,11 +347,19 @@ def noise_scale(res: IdentificationResult, data=None) -> dict:
     ``res`` was fitted on), the one its residuals show
     (:func:`~mindyn.identification.estimation.residual_correlation`: model error). Returns
     ``factor``, ``data_path``, ``residuals`` (None without data, or not measured: a window
-    model) and ``residuals_rule``."""
-    path = noise_variance_factor(res)
-    measured, rule = (None, "not measured (no data given)")
-    if data is not None:
-        measured, rule = residual_correlation(res, data)
+    model) and ``residuals_rule``. :func:`~mindyn.identification.identify` measures both and
+    takes the larger for the estimates' standard deviations too (its
+    ``settings.std_correlation``); that record is read when present, ``data`` is then not
+    needed."""
+    record = res.settings.get("std_correlation") or {}
+    if "residuals" in record:
+        path, measured = float(record["data_path"]), record["residuals"]
+        rule = str(record["residuals_rule"])
+    else:
+        path = noise_variance_factor(res)
+        measured, rule = (None, "not measured (no data given)")
+        if data is not None:
+            measured, rule = residual_correlation(res, data)
     return {
         "factor": max(path, measured or 0.0, 1.0),
         "data_path": path,

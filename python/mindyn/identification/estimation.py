@@ -588,17 +588,25 @@ def residual_correlation(res: IdentificationResult, data) -> tuple[float | None,
     measured), as without residuals."""
     if res.model != "dynamic" or res.reduced is None:
         return None, "not measured (the dynamic model only)"
-    base, ls = res.base, res.reduced
+    return _score_correlation(
+        res.base, res.reduced, row_weights(res), _logs(data), res.settings.get("min_velocity", 0.0)
+    )
+
+
+def _score_correlation(
+    base: BaseParameters, ls: _Reduced, w: np.ndarray, logs: list[JointData], min_velocity: float
+) -> tuple[float | None, str]:
+    """:func:`residual_correlation` of the dynamic model's reduced problem ``ls`` (rows weighted
+    by ``w`` per joint) fitted on ``logs``."""
     nb = base.n
     beta, _, _ = ls.solve(list(range(nb)))
     s2 = ls.rho / (ls.r - nb) if ls.r > nb else 0.0
-    w = row_weights(res)
     A = np.zeros((nb, nb))
     S = np.zeros((nb, nb))
     lags = []
-    for d in _logs(data):
+    for d in logs:
         tau = require_torque(d)
-        keep = moving_equations(base, d.dq, res.settings.get("min_velocity", 0.0))
+        keep = moving_equations(base, d.dq, min_velocity)
         G = np.zeros((d.m, nb))
         for c0 in range(0, d.m, 8192):
             c1 = min(d.m, c0 + 8192)
@@ -656,6 +664,35 @@ def window_variance_factor(cutoff: float, order: int, duration: float) -> float:
     rho = 2.0 * np.cos(2.0 * np.pi * np.outer(u, f)) @ (w * h4)  # rho at cut-off 1
     var = 2.0 * float(integrate.trapezoid((x - u) * rho, u))  # V(T) fc
     return max(1.0, x / var)
+
+
+def _variance_factor_record(
+    path: float, path_rule: str, measured: float | None, measured_rule: str
+) -> dict:
+    """``settings.std_correlation``: the factor on the variance of the estimates, the larger of
+    the data path's (:func:`correlation_factor`) and the one the fit's residuals show
+    (:func:`residual_correlation`, None: not measured), with both and the rule in words."""
+    factor = max(path, measured or 0.0)
+    if measured is not None and measured > path:
+        rule = (
+            f"variance x {factor:.3g} for the correlation the fit's residuals show ({measured_rule}"
+            f"; model error leaves residuals correlated), above the data path's {path:.3g} ("
+            + path_rule
+            + ")"
+        )
+    else:
+        rule = path_rule + (
+            f"; the fit's residuals show {measured:.3g} ({measured_rule}), not more"
+            if measured is not None
+            else ""
+        )
+    return {
+        "variance_factor": factor,
+        "rule": rule,
+        "data_path": path,
+        "residuals": measured,
+        "residuals_rule": measured_rule,
+    }
 
 
 def correlation_factor(
@@ -944,7 +981,14 @@ def identify(
 
     window = {"dynamic": None, "integral": integral_window, "energy": energy_window}[model]
     inflation, rule = correlation_factor(logs, log_rows, window)
-    settings["std_correlation"] = {"variance_factor": inflation, "rule": rule}
+    measured, measured_rule = None, "not measured (the dynamic model only)"
+    if model == "dynamic":
+        w = joint_weights(joint_sigma) if weighted and joint_sigma is not None else np.ones(robot.n)
+        measured, measured_rule = _score_correlation(
+            base, ls, w, logs, settings.get("min_velocity", 0.0)
+        )
+    settings["std_correlation"] = _variance_factor_record(inflation, rule, measured, measured_rule)
+    inflation = settings["std_correlation"]["variance_factor"]
 
     def solve(cols):
         return ls.solve(cols, inflation=inflation)
