@@ -688,4 +688,40 @@ def test_noise_bandwidth_of_the_zero_phase_filter_and_the_reported_factor():
     assert corr["variance_factor"] > 5  # decimated to 50 Hz, at least 10 x the cut-off
     exact = JointData(t, *traj.evaluate(t), tau, source="exact")
     raw = identify(robot, exact, friction=True)  # not low-passed: samples independent
-    assert raw.settings["std_correlation"]["variance_factor"] == 1.0
+    assert raw.settings["std_correlation"]["data_path"] == 1.0
+
+
+def test_joined_logs_of_different_rates_keep_each_logs_correlation_factor():
+    """Two logs low-passed alike, one decimated and one not (so their samples carry different
+    numbers of independent noise values, fs / (2 B) each), joined by concatenate give the standard
+    deviations of the same logs fitted as a list: the factor is each part's, by its samples
+    (it was the first log's for the whole), and the residuals' Newey-West lags stay within a
+    part. The factor is checked against the formula written out here."""
+    robot = mindyn.load("puma560_3")
+    base = mindyn.base_parameters(robot, friction=True)
+    parts = []
+    for seed, decimate in ((3, True), (4, False)):
+        log, _, _, _ = _friction_log(robot, np.arange(0, 20.0, 1 / 250.0), seed=seed)
+        log.tau = log.tau + 0.02 * np.abs(log.tau).max(axis=0) * np.random.default_rng(
+            seed
+        ).standard_normal(log.tau.shape)
+        parts.append(preprocess(log, cutoff=4.0, decimate=decimate))
+    joined = concatenate(parts)
+    # every equation kept (min_velocity 0): a list is averaged by equations, a joined log's
+    # parts by samples, the same then
+    kw = dict(base=base, rsd_threshold=None, min_velocity=0.0)
+    listed = identify(robot, parts, **kw)
+    one = identify(robot, joined, **kw)
+
+    def written_out(d):  # fs / (2 B), B the order-n Butterworth's noise bandwidth
+        pre = d.processing["preprocess"]
+        fc, n = pre["filter"]["cutoff_Hz"], pre["filter"]["order"]
+        a = np.pi / (2 * n)
+        return pre["rate_Hz"] / (2 * fc * (1 - 1 / (2 * n)) * a / np.sin(a))
+
+    f = [written_out(d) for d in parts]
+    assert f[0] > 1.5 * f[1] or f[1] > 1.5 * f[0]  # the parts differ
+    expect = (parts[0].m * f[0] + parts[1].m * f[1]) / (parts[0].m + parts[1].m)
+    assert one.settings["std_correlation"]["data_path"] == pytest.approx(expect, rel=1e-9)
+    np.testing.assert_allclose(one.values, listed.values, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(one.std, listed.std, rtol=1e-9, atol=0)

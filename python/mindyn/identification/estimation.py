@@ -581,7 +581,9 @@ def residual_correlation(res: IdentificationResult, data) -> tuple[float | None,
     regressor row of joint ``j``, ``r_tj`` its weighted residual with all base parameters),
     Bartlett weights up to lag ``L = floor(4 (m / 100)^(2/9))`` per log of ``m`` samples (Newey &
     West, *Automatic lag selection in covariance matrix estimation*, Review of Economic Studies
-    61, 1994), against the covariance that independent residuals would give, ``s^2 A^T A``: the
+    61, 1994; the parts of a log joined by
+    :func:`~mindyn.identification.preprocess.concatenate` each a log), against the covariance
+    that independent residuals would give, ``s^2 A^T A``: the
     mean of its eigenvalues relative to that, ``tr(S (s^2 A^T A)^-1) / nb``, the mean inflation of
     a parameter direction's variance. About 1 for white residuals, the data path's factor for
     filtered noise, more for model error. Other models: None (their rows are windows; not
@@ -618,12 +620,14 @@ def _score_correlation(
                 r = r * keep[c0:c1]
             G[c0:c1] = np.einsum("tjb,tj->tb", Wr, r)
             A += np.einsum("tjb,tjc->bc", Wr, Wr)
-        L = min(int(4.0 * (d.m / 100.0) ** (2.0 / 9.0)), d.m - 1)
-        S += G.T @ G
-        for k in range(1, L + 1):
-            C = G[:-k].T @ G[k:]
-            S += (1.0 - k / (L + 1.0)) * (C + C.T)
-        lags.append(L)
+        edges = [*(d.starts or (0,)), d.m]  # no lag spans the join of two logs
+        for g in (G[a:b] for a, b in zip(edges[:-1], edges[1:]) if b > a):
+            L = min(int(4.0 * (len(g) / 100.0) ** (2.0 / 9.0)), len(g) - 1)
+            S += g.T @ g
+            for k in range(1, L + 1):
+                C = g[:-k].T @ g[k:]
+                S += (1.0 - k / (L + 1.0)) * (C + C.T)
+            lags.append(L)
     if not s2 > 0 or not np.any(A):
         return None, "not measured (no residual)"
     d = np.sqrt(np.maximum(np.diag(A), 1e-300))
@@ -711,21 +715,31 @@ def correlation_factor(
     Integral and energy models (equations integrating over consecutive windows of ``window``
     sample intervals): per log :func:`window_variance_factor` of the windows' duration
     ``window / fs``. A log not low-passed: 1. Averaged over the logs by their equations
-    ``rows``."""
+    ``rows``, and over the parts of a log joined by
+    :func:`~mindyn.identification.preprocess.concatenate` by their samples."""
     factors, rates = [], []
-    for d in logs:
-        pre = d.processing.get("preprocess") or {}
-        filt = pre.get("filter")
+
+    def factor(pre: dict | None) -> float:
+        filt = (pre or {}).get("filter")
         if filt is None:
-            factors.append(1.0)
-            continue
+            return 1.0
         fs, cutoff, order = float(pre["rate_Hz"]), float(filt["cutoff_Hz"]), int(filt["order"])
         band = noise_bandwidth(cutoff, order)
-        if window is None:
-            factors.append(max(1.0, fs / (2.0 * band)))
-        else:
-            factors.append(window_variance_factor(cutoff, order, window / fs))
         rates.append((fs, band))
+        if window is None:
+            return max(1.0, fs / (2.0 * band))
+        return window_variance_factor(cutoff, order, window / fs)
+
+    for d in logs:
+        pre = d.processing.get("preprocess")
+        parts = (pre or {}).get("logs")
+        if parts and len(parts) == len(d.starts or (0,)) > 1:
+            # logs joined by concatenate: each part's own data path, by its samples
+            edges = [*d.starts, d.m]
+            sizes = np.diff(edges)
+            factors.append(float(sizes @ [factor(p) for p in parts]) / max(d.m, 1))
+        else:
+            factors.append(factor(pre))
     total = sum(rows)
     f = sum(r * x for r, x in zip(rows, factors)) / total if total > 0 else 1.0
     if not rates:
