@@ -41,7 +41,9 @@ def as_data(log, source="sim") -> JointData:
 
 
 def stacked(*logs: JointData) -> JointData:
-    """One log holding the samples of several (time made increasing; no derivatives taken)."""
+    """One log holding the samples of several (time made increasing; no derivatives taken),
+    where each starts recorded (``starts``: the residuals' correlation is measured within
+    each)."""
     ts, t0 = [], 0.0
     for d in logs:
         ts.append(d.t - d.t[0] + t0)
@@ -50,6 +52,7 @@ def stacked(*logs: JointData) -> JointData:
         np.concatenate(ts),
         *(np.vstack([getattr(d, k) for d in logs]) for k in ("q", "dq", "ddq", "tau")),
         source="stacked",
+        starts=tuple(np.cumsum([0] + [d.m for d in logs[:-1]]).tolist()),
     )
 
 
