@@ -135,8 +135,10 @@ def prediction_check(result: IdentificationResult, fit: dict, data) -> dict:
     torque can still be undetermined: the check also warns when a joint's RMS uncertainty is at
     least its RMS torque (:data:`UNCERTAINTY_RELATIVE`: the predicted torque is then within one
     standard deviation of zero; a fit of the torques reaches it only on a joint whose residual
-    is several times its torque). The joints named are those whose own share exceeds 1/2 or
-    whose uncertainty reaches their torque. No torque noise is estimated (on logs whose torques
+    is several times its torque). The joints named are those whose uncertainty reaches their
+    torque and, when the mean share is the reason, those whose own share exceeds 1/2. A share
+    above 1 is possible: the error of one fit along an undetermined direction is one draw, and
+    can fall below its standard deviation. No torque noise is estimated (on logs whose torques
     a controller smoothed it means nothing): the fit is compared with itself and its torques.
 
     Returns ``{"share" (n,), "mean_share", "reference", "excess", "threshold",
@@ -156,7 +158,8 @@ def prediction_check(result: IdentificationResult, fit: dict, data) -> dict:
     mean = float(np.mean(share[np.isfinite(share)])) if np.any(np.isfinite(share)) else 0.0
     rel = np.asarray(unc["relative"], dtype=float)
     large = rel >= UNCERTAINTY_RELATIVE
-    joints = [int(j) + 1 for j in np.flatnonzero((share > UNCERTAINTY_SHARE) | large)]
+    named = large | ((share > UNCERTAINTY_SHARE) & (mean > UNCERTAINTY_SHARE))
+    joints = [int(j) + 1 for j in np.flatnonzero(named)]
     reasons = []
     if mean > UNCERTAINTY_SHARE:
         reasons.append(
