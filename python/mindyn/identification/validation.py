@@ -289,7 +289,12 @@ def validate(result: Predictor, data: JointData | Sequence[JointData]) -> dict:
       with ``threshold`` (n,) (the largest over the logs; each log's in its own ``moving``),
       ``rule``, and ``fraction``: the share of each joint's samples counted.
 
-    Each entry of ``logs`` has its own ``raw`` and ``moving``."""
+    Each entry of ``logs`` has its own ``raw`` and ``moving``. For an
+    :class:`~mindyn.identification.estimation.IdentificationResult` (not a consistent one), the
+    stacked measures and each log's also have ``prediction_uncertainty``
+    (:func:`uncertainty_measures` of its
+    :meth:`~mindyn.identification.estimation.IdentificationResult.prediction_std`); on the logs
+    it was fitted on, :func:`prediction_check` judges it."""
     from .consistent import ConsistentResult
 
     _args.instance(result, "result", (IdentificationResult, ConsistentResult))
