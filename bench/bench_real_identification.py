@@ -42,7 +42,12 @@ With ``--friction-model KIND`` (coulomb, asymmetric, smooth, stribeck, dahl or a
 command gets that option, and each case prints the friction model used (for ``auto`` the candidates'
 held-out residuals). Every case prints each joint's validation error relative to that joint's
 torque (``validation.relative`` and its ``raw`` and ``moving`` counterparts of the JSON), e.g.
-the UR10e's joint 6 (target with ``auto``: at most 30 %).
+the UR10e's joint 6 (target with ``auto``: at most 30 %). Every case also prints the prediction
+uncertainty (``fit.prediction_uncertainty`` and ``validation.prediction_uncertainty``: the RMS
+standard deviation of the predicted torques over the RMS torque), its share of the fit's
+squared residual (per joint and mean) and whether the fit warns that the estimate does not
+determine the torques (target with the default, dynamic model: no warning). ``--model MODEL``
+gives every command that model (energy, integral).
 
 With ``--weight-grid W1,W2,...`` (implies ``--consistent``) each case is also run with
 ``--prior-weight`` at each of those weights (0: no prior), and a table per case gives, per
@@ -62,7 +67,7 @@ cross-validation score ``n |r|^2 / (n - df)^2`` (``n`` equations, ``|r|^2`` the 
 the same least-squares problem as the command (its options parsed by the command's parser).
 
 Run: ``.venv/bin/python bench/bench_real_identification.py DIR [--no-offset] [--consistent
-[--prior-weight W]] [--friction-model KIND] [--weight-grid W1,W2,...]``.
+[--prior-weight W]] [--friction-model KIND] [--model MODEL] [--weight-grid W1,W2,...]``.
 """
 
 from __future__ import annotations
@@ -156,6 +161,11 @@ def main() -> int:
         help="give every command this --friction-model (default: none, viscous + Coulomb)",
     )
     ap.add_argument(
+        "--model",
+        choices=["dynamic", "energy", "integral"],
+        help="give every command this --model (default: none, the dynamic model)",
+    )
+    ap.add_argument(
         "--weight-grid",
         type=lambda text: [float(w) for w in text.split(",")],
         help="comma-separated prior weights: the consistent estimate at each (0: no prior)",
@@ -177,6 +187,7 @@ def main() -> int:
                 + [str(args.dir / f) for f in fits]
                 + ["--friction"]
                 + (["--friction-model", args.friction_model] if args.friction_model else [])
+                + (["--model", args.model] if args.model else [])
                 + [x.format(dir=args.dir) for x in extra]
                 + ([] if args.no_offset else ["--offset"])
                 + ["--validate", str(args.dir / val), "--json", str(out)]
@@ -224,6 +235,7 @@ def main() -> int:
                         else "-"
                     )
                 )
+            print(uncertainty_line(doc))
             fm = doc.get("friction_model") or {}
             print(
                 f"  friction model {fm.get('kind')} ({fm.get('chosen_by')})"
@@ -287,6 +299,26 @@ def main() -> int:
         print()
         print(weight_table(name, doc, table, gcv))
     return 0
+
+
+def uncertainty_line(doc) -> str:
+    """The prediction uncertainty of the JSON ``doc`` on the fit and validation logs (overall,
+    relative to the torques), the largest share of the fit's squared residual and the joints
+    warned of (``fit.prediction_uncertainty``)."""
+    fit, val = doc["fit"]["prediction_uncertainty"], doc["validation"]["prediction_uncertainty"]
+    return (
+        f"  prediction uncertainty: fit +-{fmt(100 * fit['overall_relative'])}, validation "
+        f"+-{fmt(100 * val['overall_relative'])}; per joint (fit) "
+        + " ".join(fmt(100 * x if x is not None else None) for x in fit["relative"])
+        + f"; share of the fit's residual: mean {fit['mean_share']:.3g}, per joint "
+        + " ".join("-" if x is None else f"{x:.2g}" for x in fit["share"])
+        + f" (p / N_eff {fit['reference']:.3g}, warned above {fit['threshold']:g}): "
+        + (
+            f"WARNING joint(s) {', '.join(map(str, fit['joints']))}"
+            if fit["joints"]
+            else "no warning"
+        )
+    )
 
 
 def gcv_weight(cmd, weights) -> float | None:

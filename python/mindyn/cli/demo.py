@@ -176,6 +176,14 @@ def cmd_demo(args: argparse.Namespace) -> int:
             f"{100 * fit['overall_relative']:.2f} %, "
             f"validation {100 * val['overall_relative']:.2f} %"
         )
+        unc = fit["prediction_uncertainty"]
+        print(
+            f"      predicted torques determined to +-{100 * unc['overall_relative']:.2f} % "
+            f"(identification), +-"
+            f"{100 * val['prediction_uncertainty']['overall_relative']:.2f} % (validation)"
+        )
+        if unc["warning"]:
+            print(f"      WARNING: {unc['warning']}")
         big = np.argsort(-np.abs(truth))[:3]
         print(
             "      largest base parameters, estimate / true: "

@@ -10,7 +10,8 @@
 - :mod:`~mindyn.identification.friction`: the friction model of an identification (given,
   derived from the data, or chosen on held-out data);
 - :mod:`~mindyn.identification.validation`: torque prediction and error measures (against the
-  filtered torques, the torques as logged, and on moving samples);
+  filtered torques, the torques as logged, and on moving samples), the uncertainty of the
+  predicted torques and whether an estimate determines them;
 - :mod:`~mindyn.identification.prediction`: an identification's torques on any log;
 - :mod:`~mindyn.identification.consistent`: physically consistent classical parameters and
   payload identification (convex, cvxpy);

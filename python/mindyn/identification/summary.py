@@ -39,7 +39,13 @@ def nan_list(a) -> list:
 
 def measures_doc(v: dict, files: list) -> dict:
     """The error measures of :func:`~mindyn.identification.validate` for the JSON: fractions
-    (relative, NRMS) and N m (RMS), over all logs stacked and per log."""
+    (relative, NRMS) and N m (RMS), over all logs stacked and per log; beside them, for the
+    unconstrained estimate, ``prediction_uncertainty``
+    (:func:`~mindyn.identification.validation.uncertainty_measures`: ``overall_relative``,
+    ``rms``, ``relative``), on the fit with the check of
+    :func:`~mindyn.identification.validation.prediction_check` (``share``, ``mean_share``,
+    ``reference``, ``excess``, ``threshold``, ``relative_threshold``, ``joints``, ``warning``,
+    ``rule``)."""
 
     def base(m):
         return {
@@ -50,8 +56,37 @@ def measures_doc(v: dict, files: list) -> dict:
             "nrms_missing_limit": m["nrms_missing"],
         }
 
+    def uncertainty(u):
+        out = {
+            "overall_relative": nan_list([u["overall_relative"]])[0],
+            "rms": nan_list(u["rms"]),
+            "relative": nan_list(u["relative"]),
+        }
+        if "share" in u:  # the fit's check (prediction_check)
+            out.update(
+                share=nan_list(u["share"]),
+                **plain(
+                    {
+                        k: u[k]
+                        for k in (
+                            "mean_share",
+                            "reference",
+                            "excess",
+                            "threshold",
+                            "relative_threshold",
+                            "joints",
+                            "warning",
+                            "rule",
+                        )
+                    }
+                ),
+            )
+        return out
+
     def one(m):
         out = base(m)
+        if "prediction_uncertainty" in m:
+            out["prediction_uncertainty"] = uncertainty(m["prediction_uncertainty"])
         raw, mov = m.get("raw"), m.get("moving")
         out["raw"] = None if raw is None else {**base(raw), "samples": raw["samples"]}
         if raw is not None:

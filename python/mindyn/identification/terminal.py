@@ -175,6 +175,7 @@ def _rms_lines(label: str, v: dict) -> str:
         f"  overall relative error |tau - tau_hat| / |tau|, all joints stacked: "
         f"{_pct(v['overall_relative']).strip()}",
     ]
+    lines += _uncertainty_lines(v.get("prediction_uncertainty"))
     lines += _three_measures(v)
     if len(v["logs"]) > 1:
         groups: dict = {}  # the segments of a file cut at its breaks: one line
@@ -194,6 +195,34 @@ def _rms_lines(label: str, v: dict) -> str:
                     f"{_pct(max(e)).strip()} (each in the JSON)"
                 )
     return "\n".join(lines)
+
+
+def _uncertainty_lines(u: dict | None) -> list[str]:
+    """The prediction uncertainty of :func:`~mindyn.identification.validation.
+    uncertainty_measures` beside the error table, with the fit's check and its warning
+    (:func:`~mindyn.identification.validation.prediction_check`)."""
+    if u is None:
+        return []
+    lines = [
+        "  +- pred.  "
+        + " ".join(_pct(x) for x in u["relative"])
+        + "  (prediction uncertainty: RMS of sqrt(diag(Y Sigma Y^T)) / RMS torque)",
+        "  the predicted torques are determined to +-"
+        + _pct(u["overall_relative"]).strip()
+        + " of |tau|, all joints stacked (covariance of all base parameters, before pruning)",
+    ]
+    if "share" in u:
+        lines.append(
+            "  share     "
+            + " ".join(f"{x:9.3g}" for x in u["share"])
+            + f"  (mean u^2 / residual variance; mean {u['mean_share']:.3g}, "
+            f"{u['excess']:.3g} x the p / N_eff = {u['reference']:.2g} a fit of the torques "
+            f"leaves; warned above {u['threshold']:g}, or where +- pred. reaches "
+            f"{100 * u['relative_threshold']:g} %)"
+        )
+        if u["warning"]:
+            lines.append(f"  WARNING: {u['warning']}")
+    return lines
 
 
 def _three_measures(v: dict) -> list[str]:

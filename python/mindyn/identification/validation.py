@@ -11,7 +11,7 @@ import numpy as np
 from .. import _args
 from ..base import BaseParameters
 from .data import DataError
-from .estimation import IdentificationResult, _logs
+from .estimation import IdentificationResult, _logs, correlation_factor
 from .joint_data import JointData
 from .models import require_torque, torque_noise
 
@@ -70,6 +70,140 @@ def error_measures(tau: np.ndarray, tau_hat: np.ndarray, *, effort=None, mask=No
     if mask is not None:
         out["counted"] = count
     return out
+
+
+def uncertainty_measures(tau: np.ndarray, std: np.ndarray) -> dict:
+    """How well an estimate determines the torques it predicts, from the standard deviation
+    ``std`` (m, n) of each predicted torque
+    (:meth:`~mindyn.identification.estimation.IdentificationResult.prediction_std`) beside the
+    torques ``tau`` (m, n), as :func:`error_measures` measures the error: ``rms``, the per-joint
+    RMS of ``std`` [N m | N] (n,); ``relative``, that over the joint's RMS torque (n,; NaN for
+    zero torques); ``overall_relative``, ``|std| / |tau|`` over all joints and samples stacked
+    (Frobenius norms): the torques the estimate predicts are determined to +- that fraction.
+    ``std`` itself is kept under that key."""
+    tau = _args.array(tau, "tau", (None, None))
+    std = _args.array(std, "std", tau.shape)
+    m = max(tau.shape[0], 1)
+    norms = norm(tau, axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = np.where(norms > 0, norm(std, axis=0) / norms, np.nan)
+    total = float(norm(tau))
+    return {
+        "rms": norm(std, axis=0) / np.sqrt(m),
+        "relative": rel,
+        "overall_relative": float(norm(std)) / total if total > 0 else float("nan"),
+        "std": std,
+    }
+
+
+#: :func:`prediction_check` warns when the squared prediction uncertainty averaged over the
+#: fit's samples, each joint's over its mean squared torque residual, exceeds this share on
+#: average over the joints ...
+UNCERTAINTY_SHARE = 0.5
+#: ... or when on a joint the RMS prediction uncertainty is at least this fraction of its RMS
+#: torque (the torque is then not determined even in size).
+UNCERTAINTY_RELATIVE = 1.0
+
+
+def prediction_check(result: IdentificationResult, fit: dict, data) -> dict:
+    """Whether ``result`` determines the torques it predicts, from the measures ``fit`` of
+    :func:`validate` on the logs ``data`` it was fitted on (with ``prediction_uncertainty``).
+
+    Per joint ``j``, ``share_j = mean u_j^2 / r_j^2``: the squared prediction uncertainty
+    ``u`` (:func:`uncertainty_measures`) averaged over the fit's samples over the fit's mean
+    squared torque residual ``r_j^2``; ``mean_share`` is their mean over the joints, the mean
+    of ``(u / r_j)^2`` over all the fit's torque equations. For an honest covariance of a
+    model that fits the torques themselves (dynamic), the sum of ``u^2`` over the equations,
+    each weighted by its inverse residual variance, is ``p`` residual variances times the
+    factor for correlated equations: ``mean_share`` is ``p / N_eff`` (``reference``; ``p`` base
+    parameters, ``N_eff`` independent torque equations: samples times joints over the data
+    path's factor for the low-passed noise's correlation between samples,
+    :func:`~mindyn.identification.estimation.correlation_factor`); a single joint's share
+    differs from it as its equations carry more or less of the parameters' leverage. A model
+    fitted on other equations (energy: the power ``dq . tau`` only; integral: torques
+    integrated over windows) can leave torque directions its equations hardly see, and ``u``
+    far larger: ``excess = mean_share / reference`` is that ratio, about 1 for a fit of the
+    torques. As such a model's prediction error is not fitted away, its residual is about
+    ``r^2 = s^2 + u^2`` (``s^2``: noise and model error), so ``excess`` is bounded by about
+    ``N_eff / p`` however badly the torques are determined; the warning therefore compares
+    ``u`` with the residual directly: ``mean_share > 1/2`` (:data:`UNCERTAINTY_SHARE`) means
+    ``u > s`` on average over the joints: the estimate's own uncertainty is most of the torque
+    residual, and the fit's error figures describe the estimate's indeterminacy rather than the
+    robot. A fit of the torques reaches it only with fewer than ``3 p`` independent equations
+    (``mean_share = (p / N_eff) / (1 - p / N_eff)``). On data where model error dominates the
+    residual (real logs fitted with the energy model) the share stays small while a joint's
+    torque can still be undetermined: the check also warns when a joint's RMS uncertainty is at
+    least its RMS torque (:data:`UNCERTAINTY_RELATIVE`: the predicted torque is then within one
+    standard deviation of zero; a fit of the torques reaches it only on a joint whose residual
+    is several times its torque). The joints named are those whose uncertainty reaches their
+    torque and, when the mean share is the reason, those whose own share exceeds 1/2. A share
+    above 1 is possible: the error of one fit along an undetermined direction is one draw, and
+    can fall below its standard deviation. No torque noise is estimated (on logs whose torques
+    a controller smoothed it means nothing): the fit is compared with itself and its torques.
+
+    Returns ``{"share" (n,), "mean_share", "reference", "excess", "threshold",
+    "relative_threshold", "joints" (1-based), "warning" (one line, or None), "rule"}``."""
+    _args.instance(result, "result", IdentificationResult)
+    unc = fit.get("prediction_uncertainty") if isinstance(fit, dict) else None
+    if unc is None:
+        raise _args.fail("fit", "has no prediction_uncertainty (validate an IdentificationResult)")
+    logs = _logs(data)
+    rows = sum(d.m * d.n for d in logs)
+    factor, _ = correlation_factor(logs, [d.m * d.n for d in logs], None)
+    p = result.base.n
+    reference = p * factor / max(rows, 1)
+    rms = np.asarray(fit["rms"], dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(rms > 0, (np.asarray(unc["rms"]) / rms) ** 2, np.nan)
+    mean = float(np.mean(share[np.isfinite(share)])) if np.any(np.isfinite(share)) else 0.0
+    rel = np.asarray(unc["relative"], dtype=float)
+    large = rel >= UNCERTAINTY_RELATIVE
+    named = large | ((share > UNCERTAINTY_SHARE) & (mean > UNCERTAINTY_SHARE))
+    joints = [int(j) + 1 for j in np.flatnonzero(named)]
+    reasons = []
+    if mean > UNCERTAINTY_SHARE:
+        reasons.append(
+            f"it is most of the fit's torque residual (mean share {mean:.2g} > "
+            f"{UNCERTAINTY_SHARE:g}; a fit of the torques leaves p / N_eff = {reference:.2g})"
+        )
+    if np.any(large):
+        reasons.append(
+            "on joint(s) "
+            + ", ".join(str(j + 1) for j in np.flatnonzero(large))
+            + " it reaches the RMS torque"
+        )
+    warning = None
+    if reasons:
+        remedy = {
+            "energy": "its equations see only the power dq . tau: use the dynamic model or a "
+            "richer excitation",
+            "integral": "use the dynamic model or a richer excitation",
+        }.get(result.model, "use a longer or richer excitation")
+        warning = (
+            f"the {result.model} model's estimate does not determine the torques it predicts, "
+            f"+-{100 * unc['overall_relative']:.3g} % of |tau| (joint(s) "
+            + ", ".join(f"{j} +-{100 * rel[j - 1]:.3g} %" for j in joints)
+            + "): "
+            + "; ".join(reasons)
+            + "; "
+            + remedy
+        )
+    return {
+        "share": share,
+        "mean_share": mean,
+        "reference": reference,
+        "excess": mean / reference,
+        "threshold": UNCERTAINTY_SHARE,
+        "relative_threshold": UNCERTAINTY_RELATIVE,
+        "joints": joints if warning else [],
+        "warning": warning,
+        "rule": (
+            f"warned when the mean over the joints of mean u_j^2 / r_j^2 on the fit exceeds "
+            f"{UNCERTAINTY_SHARE:g} (u: prediction uncertainty, r: torque residual; a fit of "
+            f"the torques leaves p / N_eff = {p} / {rows / factor:.4g} = {reference:.2g}), or "
+            f"a joint's RMS u reaches {UNCERTAINTY_RELATIVE:g} x its RMS torque"
+        ),
+    }
 
 
 def norm(x: np.ndarray, axis: int | None = None) -> np.ndarray | float:
@@ -155,7 +289,12 @@ def validate(result: Predictor, data: JointData | Sequence[JointData]) -> dict:
       with ``threshold`` (n,) (the largest over the logs; each log's in its own ``moving``),
       ``rule``, and ``fraction``: the share of each joint's samples counted.
 
-    Each entry of ``logs`` has its own ``raw`` and ``moving``."""
+    Each entry of ``logs`` has its own ``raw`` and ``moving``. For an
+    :class:`~mindyn.identification.estimation.IdentificationResult` (not a consistent one), the
+    stacked measures and each log's also have ``prediction_uncertainty``
+    (:func:`uncertainty_measures` of its
+    :meth:`~mindyn.identification.estimation.IdentificationResult.prediction_std`); on the logs
+    it was fitted on, :func:`prediction_check` judges it."""
     from .consistent import ConsistentResult
 
     _args.instance(result, "result", (IdentificationResult, ConsistentResult))
@@ -177,11 +316,18 @@ def validate(result: Predictor, data: JointData | Sequence[JointData]) -> dict:
                 **_raw_and_moving(result, [d], effort),
             }
         )
+        if isinstance(result, IdentificationResult) and result.reduced is not None:
+            per[-1]["prediction_uncertainty"] = uncertainty_measures(tau, result.prediction_std(d))
     out = error_measures(
         np.vstack([require_torque(d) for d in logs]),
         np.vstack([p["tau_hat"] for p in per]),
         effort=effort,
     )
+    if all("prediction_uncertainty" in p for p in per):
+        out["prediction_uncertainty"] = uncertainty_measures(
+            np.vstack([require_torque(d) for d in logs]),
+            np.vstack([p["prediction_uncertainty"]["std"] for p in per]),
+        )
     out["tau_hat"] = (
         per[0]["tau_hat"] if isinstance(data, JointData) else [p["tau_hat"] for p in per]
     )

@@ -211,9 +211,10 @@ def run(
     choice, robot, base, record, lines = _friction(robot, data, opts, progress)
     res, res_doc = _fit(robot, base, data, logs.fit.files, opts)
     cons, cons_doc, low = _consistent(res, data, opts, progress)
-    from .validation import validate
+    from .validation import prediction_check, validate
 
     fit = validate(res, data)
+    fit["prediction_uncertainty"].update(prediction_check(res, fit, data))
     val = validate(res, vdata) if vdata else None
     cfit = validate(cons, data) if cons is not None else None
     cval = validate(cons, vdata) if cons is not None and vdata else None
