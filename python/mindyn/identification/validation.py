@@ -11,7 +11,7 @@ import numpy as np
 from .. import _args
 from ..base import BaseParameters
 from .data import DataError
-from .estimation import IdentificationResult, _logs, correlation_factor
+from .estimation import IdentificationResult, _logs, correlation_factor, noise_variance_factor
 from .joint_data import JointData
 from .models import require_torque, torque_noise
 
@@ -116,9 +116,10 @@ def prediction_check(result: IdentificationResult, fit: dict, data) -> dict:
     model that fits the torques themselves (dynamic), the sum of ``u^2`` over the equations,
     each weighted by its inverse residual variance, is ``p`` residual variances times the
     factor for correlated equations: ``mean_share`` is ``p / N_eff`` (``reference``; ``p`` base
-    parameters, ``N_eff`` independent torque equations: samples times joints over the data
-    path's factor for the low-passed noise's correlation between samples,
-    :func:`~mindyn.identification.estimation.correlation_factor`); a single joint's share
+    parameters, ``N_eff`` independent torque equations: samples times joints over the factor
+    for correlated equations, the dynamic model's own
+    (:func:`~mindyn.identification.estimation.noise_variance_factor`), else the data path's for
+    samples, :func:`~mindyn.identification.estimation.correlation_factor`); a single joint's share
     differs from it as its equations carry more or less of the parameters' leverage. A model
     fitted on other equations (energy: the power ``dq . tau`` only; integral: torques
     integrated over windows) can leave torque directions its equations hardly see, and ``u``
@@ -149,7 +150,13 @@ def prediction_check(result: IdentificationResult, fit: dict, data) -> dict:
         raise _args.fail("fit", "has no prediction_uncertainty (validate an IdentificationResult)")
     logs = _logs(data)
     rows = sum(d.m * d.n for d in logs)
-    factor, _ = correlation_factor(logs, [d.m * d.n for d in logs], None)
+    # the factor of the covariance a fit of the torques has: the dynamic model's own (the data
+    # path's or its residuals', the larger); else the data path's for samples
+    factor = (
+        noise_variance_factor(result)
+        if result.model == "dynamic"
+        else correlation_factor(logs, [d.m * d.n for d in logs], None)[0]
+    )
     p = result.base.n
     reference = p * factor / max(rows, 1)
     rms = np.asarray(fit["rms"], dtype=float)
