@@ -343,3 +343,35 @@ def test_malformed_pr2_transmissions_are_refused_in_one_line(tmp_path, text, mes
     text = str(e.value)
     assert message in text and f"{path}:" in text and "transmission '" in text, text
     assert "\n" not in text
+
+
+def test_example_robot_data_pr2_right_arm_reads_the_file_s_reductions(robots_dir):
+    """example-robot-data's pr2.urdf (bare PR2 type names in the attribute): the right arm's
+    chain (torso and 7 joints) has T from the file's reductions, parsed here on their own, the
+    wrist by pr2_mechanism_model's map, and no transmission is left unread on it."""
+    import xml.etree.ElementTree as ET
+
+    path = robots_dir / "pr2_description/urdf/pr2.urdf"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mindyn.DriveTrainWarning)
+        robot = mindyn.load(path, tip="r_wrist_roll_link")
+    names = robot.joint_names
+    expected = np.zeros((robot.n, robot.n))
+    motors = []
+    for t in ET.parse(path).getroot().iter("transmission"):
+        if t.get("type") == "SimpleTransmission" and t.find("joint").get("name") in names:
+            motors.append(t.find("actuator").get("name"))
+            k = names.index(t.find("joint").get("name"))
+            expected[len(motors) - 1, k] = float(t.find("mechanicalReduction").text)
+        elif t.get("type") == "WristTransmission" and t.find("flexJoint").get("name") in names:
+            red = {e.tag: float(e.get("mechanicalReduction")) for e in t}
+            a = red["rightActuator"], red["leftActuator"]
+            j = red["flexJoint"], red["rollJoint"]
+            cols = [names.index(t.find(e).get("name")) for e in ("flexJoint", "rollJoint")]
+            rows = [len(motors), len(motors) + 1]
+            motors += [t.find(e).get("name") for e in ("rightActuator", "leftActuator")]
+            expected[np.ix_(rows, cols)] = wrist_T(a, j)
+    assert len(motors) == robot.n == 8
+    assert robot.transmission.motors == tuple(motors)
+    np.testing.assert_array_equal(robot.transmission.T, expected)
+    assert robot.transmission.T[6, 6] == -60.1714285714  # the file's wrist: a_r 60.17, j_f -1
