@@ -272,7 +272,7 @@ def test_transmission_of_a_locked_joint_is_dropped_or_held_constant(tmp_path):
 
 def test_other_transmission_types_are_left_out_and_noted(tmp_path):
     other = (
-        "<transmission name='pr2' type='pr2_mechanism_model/SimpleTransmission'>"
+        "<transmission name='pr2' type='pr2_mechanism_model/PR2BeltCompensatorTransmission'>"
         "<actuator name='x'/><joint name='j1'/><mechanicalReduction>1</mechanicalReduction>"
         "</transmission>"
     )

@@ -90,8 +90,9 @@ def test_no_note_when_the_unread_transmission_drives_no_joint_of_the_model(tmp_p
 
 
 def test_pr2_type_attribute_is_noted_too(tmp_path):
+    """PR2's belt compensator (a compliant belt, no linear map) in its type attribute."""
     other = (
-        "<transmission name='pr2' type='pr2_mechanism_model/SimpleTransmission'>"
+        "<transmission name='pr2' type='pr2_mechanism_model/PR2BeltCompensatorTransmission'>"
         "<actuator name='x'/><joint name='j1'/><mechanicalReduction>1</mechanicalReduction>"
         "</transmission>"
     )
@@ -190,12 +191,13 @@ def test_excite_records_the_note_in_its_json(tmp_path):
 
 
 def test_pr2_form_named_like_a_read_type_is_told_apart_from_the_types_read(tmp_path):
-    """PR2's form (<transmission type="SimpleTransmission"> with no <type> element) is not
-    read; the note listed the types read by their short names, 'SimpleTransmission' among
-    them, and then this transmission 'of type SimpleTransmission' as not read. It names the
-    types read in full, with where they are written."""
+    """A type attribute naming a read type short (<transmission type="DifferentialTransmission">,
+    which neither ros_control nor PR2's loader reads) is not read; the note listed the types read
+    by their short names, 'DifferentialTransmission' among them, and then this transmission 'of
+    type DifferentialTransmission' as not read. It names the types read in full, with where they
+    are written."""
     pr2 = (
-        "<transmission name='half' type='SimpleTransmission'><actuator name='ma'/>"
+        "<transmission name='half' type='DifferentialTransmission'><actuator name='ma'/>"
         "<joint name='j2'/><mechanicalReduction>30</mechanicalReduction></transmission>"
     )
     path = tmp_path / "arm.urdf"
@@ -203,9 +205,11 @@ def test_pr2_form_named_like_a_read_type_is_told_apart_from_the_types_read(tmp_p
     with pytest.warns(mindyn.DriveTrainWarning) as caught:
         mindyn.load(path)
     text = str(caught[0].message)
-    assert "'half' of type 'SimpleTransmission'" in text, text
+    assert "'half' of type 'DifferentialTransmission'" in text, text
     read = text.split("of a type not read (")[1].split(", are)")[0]
     for kind in ("Simple", "Differential", "FourBarLinkage"):
         assert f"transmission_interface/{kind}Transmission" in read, read
-    assert "<type> element" in read, read
-    assert "(SimpleTransmission," not in text
+    for kind in ("Simple", "Wrist"):
+        assert f"pr2_mechanism_model/{kind}Transmission" in read, read
+    assert "<type> element" in read and "type attribute" in read, read
+    assert "(DifferentialTransmission," not in text

@@ -32,12 +32,15 @@ Eigen::MatrixXd TransmissionGroup::matrix() const {
   const auto a = [&](size_t i) { return actuator_reduction.at(i); };
   const auto j = [&](size_t i) { return i < joint_reduction.size() ? joint_reduction[i] : 1.0; };
   Eigen::MatrixXd M;
-  if (type == "SimpleTransmission") {
+  if (type == "SimpleTransmission" || type == kPr2Simple) {
     M.resize(1, 1);
     M << a(0) * j(0);
   } else if (type == "DifferentialTransmission") {
     M.resize(2, 2);
     M << a(0) * j(0), a(0) * j(1), a(1) * j(0), -a(1) * j(1);
+  } else if (type == kPr2Wrist) {  // rows right, left; columns flex, roll
+    M.resize(2, 2);
+    M << a(0) * j(0), -a(0) * j(1), -a(1) * j(0), -a(1) * j(1);
   } else {  // FourBarLinkageTransmission
     M.resize(2, 2);
     M << a(0) * j(0), 0.0, a(1), a(1) * j(1);

@@ -423,11 +423,17 @@ class NumberCheck {
 // of <robot> (<type>, <joint name><role><offset><mechanicalReduction>, <actuator name><role>
 // <mechanicalReduction>) and ROS 2 <ros2_control><transmission name> (<plugin>, <actuator name
 // role><mechanical_reduction>, <joint name role><offset><mechanical_reduction>); either spelling
-// of the reduction is read in either form. Transmissions of other types (PR2's type attribute,
-// other plugins) are left out and kept in Model::unread_transmissions; one naming no joint of
-// the file is left out and named in the notes. Each
-// problem of the three types read is refused in one line naming the file, line, transmission
-// and element.
+// of the reduction is read in either form. PR2's older form, <transmission name type> in
+// <robot> (its type in the type attribute, or in <type> as pr2_mechanism_model reads it too),
+// of pr2_mechanism_model's SimpleTransmission (<actuator name>, <joint name>,
+// <mechanicalReduction>) and WristTransmission (<rightActuator>, <leftActuator>, <flexJoint>,
+// <rollJoint>, each with name and mechanicalReduction attributes), goes with either form
+// (alone it counts as the ROS 1 form); the names without "pr2_mechanism_model/", which it once
+// resolved, are read from the type attribute. Transmissions of other types (PR2's belt compensator
+// and gripper, a SimpleTransmission with PR2's <simulated_actuated_joint>, other plugins) are left
+// out and kept in Model::unread_transmissions; one naming no joint of the file is left out and
+// named in the notes. Each problem of the types read is refused in one line naming the file, line,
+// transmission and element.
 // ---------------------------------------------------------------------------------------------
 
 class TransmissionReader {
@@ -435,11 +441,16 @@ class TransmissionReader {
   explicit TransmissionReader(std::string source) : source_(std::move(source)) {}
 
   /// The transmissions declared under `robot`; `format` is set to "ros1" or "ros2" (a file
-  /// mixing both forms is refused).
+  /// mixing both forms is refused; PR2's form goes with either, and alone is "ros1").
   std::vector<TransmissionGroup> run(const TiXmlElement* robot, std::string* format) {
     std::vector<TransmissionGroup> groups;
     for (const TiXmlElement* e = robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
       if (e->ValueStr() == "transmission") {
+        const std::string pr2 = pr2Type(e);
+        if (!pr2.empty()) {  // beside either form (files ported to ROS 2 may keep PR2's)
+          groups.push_back(readPr2(e, pr2));
+          continue;
+        }
         if (other(e, false)) continue;
         setFormat(e, "ros1", format);
         groups.push_back(read(e, false));
@@ -452,6 +463,7 @@ class TransmissionReader {
         }
       }
     }
+    if (format->empty() && !groups.empty()) *format = "ros1";  // PR2's form alone
     std::set<std::string> names, actuators;
     for (const TransmissionGroup& g : groups) {
       if (!names.insert(g.name).second)
@@ -465,19 +477,53 @@ class TransmissionReader {
     return groups;
   }
 
-  /// Transmissions of other types (PR2's <transmission type="pr2_mechanism_model/...">, other
-  /// plugins such as HalfDifferentialTransmission), left out: name, type as written, the
-  /// joints it names and its line.
+  /// Transmissions of other types (PR2's belt compensator and gripper, other plugins such as
+  /// HalfDifferentialTransmission), left out: name, type as written, the joints it names (each
+  /// child element whose tag ends in "joint" or "Joint": <joint>, PR2's <gap_joint>,
+  /// <passive_joint>, <simulated_actuated_joint>) and its line.
   std::vector<TransmissionGroup> skipped;
 
  private:
-  /// True (and noted in `skipped`) for a transmission of a type that is none of the three
-  /// read here nor looks like a misspelling of one (also PR2's type attribute instead of the
-  /// element). Such transmissions are not read.
-  bool other(const TiXmlElement* t, bool ros2) {
+  /// The type of transmission `t` as written: its <type> (ROS 2: <plugin>) element, else (ROS 1)
+  /// its type attribute (PR2's form); `attribute` tells which.
+  static std::string typeOf(const TiXmlElement* t, bool ros2, bool* attribute = nullptr) {
     const TiXmlElement* type = t->FirstChildElement(ros2 ? "plugin" : "type");
-    std::string full = type ? trimmed(type->GetText()) : "";
-    if (!type && !ros2 && t->Attribute("type")) full = t->Attribute("type");
+    const bool from_attribute = !type && !ros2 && t->Attribute("type");
+    if (attribute) *attribute = from_attribute;
+    if (from_attribute) return t->Attribute("type");
+    return type ? trimmed(type->GetText()) : "";
+  }
+
+  /// PR2's names of the types read from its form, and the same without the package, which
+  /// pr2_mechanism_model once resolved and reads from the type attribute only.
+  static const std::vector<std::string>& pr2Names(bool attribute) {
+    static const std::vector<std::string> full{kPr2Simple, kPr2Wrist};
+    static const std::vector<std::string> both{kPr2Simple, kPr2Wrist, "SimpleTransmission",
+                                               "WristTransmission"};
+    return attribute ? both : full;
+  }
+
+  /// The type as written when ROS 1 transmission `t` is one of PR2's types read here (or looks
+  /// like a misspelling of one, which readPr2 refuses), else "". A SimpleTransmission with a
+  /// <simulated_actuated_joint> (whose effort goes to that joint in PR2's simulator) is no
+  /// linear map of its joints: "", left to other().
+  static std::string pr2Type(const TiXmlElement* t) {
+    bool attribute = false;
+    const std::string full = typeOf(t, false, &attribute);
+    const std::vector<std::string>& names = pr2Names(attribute);
+    const bool known = std::find(names.begin(), names.end(), full) != names.end();
+    if (full.empty() || (!known && misspelt(full, names).empty())) return "";
+    if (known && full.find("SimpleTransmission") != std::string::npos &&
+        t->FirstChildElement("simulated_actuated_joint"))
+      return "";
+    return full;
+  }
+
+  /// True (and noted in `skipped`) for a transmission of a type that is none of those read
+  /// here nor looks like a misspelling of one of ros_control's. Such transmissions are not
+  /// read.
+  bool other(const TiXmlElement* t, bool ros2) {
+    const std::string full = typeOf(t, ros2);
     const std::vector<std::string> known{"transmission_interface/SimpleTransmission",
                                          "transmission_interface/DifferentialTransmission",
                                          "transmission_interface/FourBarLinkageTransmission"};
@@ -489,9 +535,12 @@ class TransmissionReader {
     g.name = name ? name : "";
     g.type = full;
     g.line = t->Row();
-    for (const TiXmlElement* j = t->FirstChildElement("joint"); j;
-         j = j->NextSiblingElement("joint"))
-      if (const char* jn = j->Attribute("name")) g.joints.emplace_back(jn);
+    for (const TiXmlElement* j = t->FirstChildElement(); j; j = j->NextSiblingElement()) {
+      const std::string& tag = j->ValueStr();
+      const bool joint = tag.size() >= 5 && (tag.compare(tag.size() - 5, 5, "joint") == 0 ||
+                                             tag.compare(tag.size() - 5, 5, "Joint") == 0);
+      if (const char* jn = j->Attribute("name"); joint && jn) g.joints.emplace_back(jn);
+    }
     skipped.push_back(g);
     return true;
   }
@@ -525,8 +574,8 @@ class TransmissionReader {
       if (std::find(known.begin(), known.end(), t) != known.end()) continue;
       const std::string like = misspelt(t, known);
       if (!like.empty())
-        fail(c, "<" + e->ValueStr() + "> holds an element <" + t + ">, which ros_control does " +
-                    "not define in this form; is it <" + like + ">?");
+        fail(c, "<" + e->ValueStr() + "> holds an element <" + t + ">, which " + definer_ +
+                    " does not define in this form; is it <" + like + ">?");
     }
     const TiXmlElement* found = e->FirstChildElement(tag);
     if (found && found->NextSiblingElement(tag))
@@ -537,15 +586,21 @@ class TransmissionReader {
   /// The number written in element `c` (child of <where>); a non-zero one if `nonzero`.
   double number(const TiXmlElement* c, const std::string& where, bool nonzero) const {
     const std::string text = trimmed(c->GetText());
-    const std::string shown =
-        "<" + where + "><" + c->ValueStr() + ">" + text + "</" + c->ValueStr() + ">";
-    if (text.empty()) fail(c, shown + ": expected a number, got none");
+    return parsed(c, text,
+                  "<" + where + "><" + c->ValueStr() + ">" + text + "</" + c->ValueStr() + ">",
+                  nonzero);
+  }
+
+  /// The number `text` (shown as `shown` in a refusal of element `at`); non-zero if `nonzero`.
+  double parsed(const TiXmlElement* at, const std::string& text, const std::string& shown,
+                bool nonzero) const {
+    if (text.empty()) fail(at, shown + ": expected a number, got none");
     double v = 0.0;
     const std::string why = readDecimal(text, &v);
     if (why == "too large for a double" || (why.empty() && std::abs(v) > kMaxDescriptionValue))
-      fail(c, shown + ": exceeds the bound on the magnitude of a description value");
-    if (!why.empty()) fail(c, shown + ": " + why);
-    if (nonzero && v == 0.0) fail(c, shown + ": a reduction cannot be zero");
+      fail(at, shown + ": exceeds the bound on the magnitude of a description value");
+    if (!why.empty()) fail(at, shown + ": " + why);
+    if (nonzero && v == 0.0) fail(at, shown + ": a reduction cannot be zero");
     return v;
   }
 
@@ -559,9 +614,12 @@ class TransmissionReader {
     bool has_offset;
   };
 
-  TransmissionGroup read(const TiXmlElement* t, bool ros2) {
+  /// A group of `t` with its name and line (refused without a name); sets owner_ and
+  /// definer_.
+  TransmissionGroup named(const TiXmlElement* t, const std::string& definer) {
     TransmissionGroup g;
     g.line = t->Row();
+    definer_ = definer;
     const char* name = t->Attribute("name");
     if (!name || !*name) {
       owner_ = "a transmission";
@@ -569,6 +627,74 @@ class TransmissionReader {
     }
     g.name = name;
     owner_ = "transmission '" + g.name + "'";
+    return g;
+  }
+
+  /// PR2's form (pr2_mechanism_model), type `written` as pr2Type found it.
+  TransmissionGroup readPr2(const TiXmlElement* t, const std::string& written) {
+    TransmissionGroup g = named(t, "pr2_mechanism_model");
+    const bool wrist = written.find("WristTransmission") != std::string::npos;
+    g.type = wrist ? kPr2Wrist : kPr2Simple;
+    bool attribute = false;
+    typeOf(t, false, &attribute);
+    const std::vector<std::string>& names = pr2Names(attribute);
+    if (std::find(names.begin(), names.end(), written) == names.end())
+      fail(t, "type '" + written + "': is it " + misspelt(written, names) + "?");
+    const std::string kind =
+        "PR2's " + std::string(wrist ? "WristTransmission" : "SimpleTransmission");
+    if (!wrist) {
+      const std::vector<std::string> known{"type", "joint", "actuator", "mechanicalReduction"};
+      const TiXmlElement* joint = only(t, "joint", known);
+      const TiXmlElement* actuator = only(t, "actuator", known);
+      const TiXmlElement* reduction = only(t, "mechanicalReduction", known);
+      for (const TiXmlElement* m : {joint, actuator})
+        for (const char* tag : {"mechanicalReduction", "mechanical_reduction"})
+          if (const TiXmlElement* inner = m ? m->FirstChildElement(tag) : nullptr)
+            fail(inner, "<" + m->ValueStr() + "> holds a <" + tag + ">; " + kind +
+                            " reads the reduction from <mechanicalReduction> in <transmission>");
+      if (!joint) fail(t, kind + " needs a <joint name=...>");
+      if (!actuator) fail(t, kind + " needs an <actuator name=...>");
+      if (!reduction) fail(t, kind + " needs a <mechanicalReduction> in <transmission>");
+      g.joints.push_back(nameOf(joint));
+      g.actuators.push_back(nameOf(actuator));
+      g.actuator_reduction.push_back(number(reduction, "transmission", true));
+      g.joint_reduction.push_back(1.0);
+      g.joint_offset.push_back(0.0);
+      return g;
+    }
+    const std::vector<std::string> known{"type", "rightActuator", "leftActuator", "flexJoint",
+                                         "rollJoint"};
+    for (const char* tag : {"rightActuator", "leftActuator", "flexJoint", "rollJoint"}) {
+      const TiXmlElement* e = only(t, tag, known);
+      if (!e)
+        fail(t, kind + " needs a <" + std::string(tag) + " name=... mechanicalReduction=...>");
+      const std::string name = nameOf(e);
+      const char* value = e->Attribute("mechanicalReduction");
+      const std::string shown = "<" + e->ValueStr() + " name=\"" + name + "\">";
+      if (!value) fail(e, shown + " has no mechanicalReduction attribute");
+      const double r = parsed(e, trimmed(value),
+                              shown + " mechanicalReduction=\"" + std::string(value) + "\"", true);
+      const bool actuator = e->ValueStr().find("Actuator") != std::string::npos;
+      (actuator ? g.actuators : g.joints).push_back(name);
+      (actuator ? g.actuator_reduction : g.joint_reduction).push_back(r);
+    }
+    g.joint_offset = {0.0, 0.0};
+    if (g.actuators[0] == g.actuators[1])
+      fail(t, "<rightActuator> and <leftActuator> both name '" + g.actuators[0] + "'");
+    if (g.joints[0] == g.joints[1])
+      fail(t, "<flexJoint> and <rollJoint> both name '" + g.joints[0] + "'");
+    return g;
+  }
+
+  /// The name attribute of element `e`, refused when missing or empty.
+  std::string nameOf(const TiXmlElement* e) const {
+    const char* name = e->Attribute("name");
+    if (!name || !*name) fail(e, "<" + e->ValueStr() + "> has no name attribute");
+    return name;
+  }
+
+  TransmissionGroup read(const TiXmlElement* t, bool ros2) {
+    TransmissionGroup g = named(t, "ros_control");
     const std::string type_tag = ros2 ? "plugin" : "type";
     const std::string reduction_tag = ros2 ? "mechanical_reduction" : "mechanicalReduction";
     const std::vector<std::string> known{type_tag, "joint", "actuator"};
@@ -681,6 +807,7 @@ class TransmissionReader {
 
   const std::string source_;
   std::string owner_;
+  std::string definer_ = "ros_control";  // whose form is being read, for refusals
 };
 
 /// The URDF text urdfdom is to read: `xml` once its links and joints passed NumberCheck, with

@@ -635,3 +635,16 @@ TEST(Transmission, FourBarAndDifferentialMatricesFollowRosControlPositionMaps) {
   const Eigen::Vector2d diff(50.0 * (1.5 * d[0] + 0.5 * d[1]), 40.0 * (1.5 * d[0] - 0.5 * d[1]));
   EXPECT_LT((g.matrix() * x + g.offsets() - diff).norm(), 1e-12);
 }
+
+TEST(Transmission, Pr2WristMatrixInvertsPr2MechanismModelsActuatorToJointMap) {
+  // pr2_mechanism_model's WristTransmission, actuators (right, left), joints (flex, roll):
+  // flex = (right / a_r - left / a_l) / (2 j_f), roll = (-right / a_r - left / a_l) / (2 j_r).
+  const TransmissionGroup g{"w",          kPr2Wrist,   {"flex", "roll"}, {"r", "l"},
+                            {60.0, 45.0}, {-1.0, 1.5}, {0.0, 0.0}};
+  const Eigen::Vector2d x(0.3, -0.7);
+  const Eigen::Vector2d m = g.matrix() * x;
+  const double r = m[0] / 60.0, l = m[1] / 45.0;
+  EXPECT_NEAR((r - l) / (2.0 * -1.0), x[0], 1e-12);
+  EXPECT_NEAR((-r - l) / (2.0 * 1.5), x[1], 1e-12);
+  EXPECT_EQ(g.offsets().norm(), 0.0);
+}

@@ -138,11 +138,15 @@ class DriveTrainWarning(UserWarning):
     ``drive_side='joint'``)."""
 
 
-#: The transmission types read from a URDF (ros_control's transmission_interface).
+#: The transmission types read from a URDF: ros_control's (transmission_interface, named in a
+#: ``<type>`` element or a ROS 2 ``<plugin>``) and PR2's older ones (pr2_mechanism_model, named
+#: in the type attribute or a ``<type>`` element).
 READ_TRANSMISSIONS = (
     "transmission_interface/SimpleTransmission",
     "transmission_interface/DifferentialTransmission",
     "transmission_interface/FourBarLinkageTransmission",
+    "pr2_mechanism_model/SimpleTransmission",
+    "pr2_mechanism_model/WristTransmission",
 )
 
 
@@ -158,9 +162,12 @@ def drive_train_note(robot: Robot) -> str:
         + ", ".join(f"'{j}'" for j in t["modelled_directly"])
         for t in unread
     )
+    ros = [t for t in READ_TRANSMISSIONS if t.startswith("transmission_interface/")]
+    pr2 = [t for t in READ_TRANSMISSIONS if t.startswith("pr2_mechanism_model/")]
     return (
-        f"{robot.source}: transmission(s) of a type not read ({', '.join(READ_TRANSMISSIONS)}, "
-        f"named so in a <type> element or a ROS 2 <plugin>, are): {each}. Assumed: those "
+        f"{robot.source}: transmission(s) of a type not read ({', '.join(ros)}, named so in a "
+        f"<type> element or a ROS 2 <plugin>, and PR2's {', '.join(pr2)}, named so in the type "
+        f"attribute or a <type> element, are): {each}. Assumed: those "
         "joints are driven directly (a motor of their own, ratio 1; rotor inertia and "
         "friction on the joint). Declare the transmission as one of the types read to model it;"
         " drive_side='joint' (where a command takes it: every joint's "
@@ -264,20 +271,21 @@ class Transmission:
     T : ndarray, shape (n_m, n), read-only
         Motor positions ``q_m = T q + offset``; joint torques ``tau = T^T tau_m``. Row i is
         motor i, column k joint k; the gear ratios and coupling terms of ros_control's
-        SimpleTransmission, DifferentialTransmission and FourBarLinkageTransmission. The column
+        SimpleTransmission, DifferentialTransmission and FourBarLinkageTransmission and of PR2's
+        SimpleTransmission and WristTransmission (pr2_mechanism_model). The column
         of a joint of several degrees of freedom (a floating or planar base) is zero: no motor.
     offset : ndarray, shape (n_m,), read-only
         Motor positions at ``q = 0``.
     motors : tuple of str
         Motor (actuator) names.
     types : tuple of str
-        Each motor's transmission type (``SimpleTransmission``, ..., ``direct`` for a revolute
-        or prismatic joint a URDF gives no transmission while others have one, ``matrix`` for a
-        YAML row).
+        Each motor's transmission type (``SimpleTransmission``, ...,
+        ``pr2_mechanism_model/WristTransmission``, ``direct`` for a revolute or prismatic joint
+        a URDF gives no transmission while others have one, ``matrix`` for a YAML row).
     torque_constant : ndarray, shape (n_m,), read-only
         Motor torque constants [N m/A] the description gives (NaN where none).
     format : str
-        ``ros1`` or ``ros2`` (the URDF form read) or ``yaml``.
+        ``ros1`` or ``ros2`` (the URDF form read; PR2's form alone is ``ros1``) or ``yaml``.
     groups : tuple of dict
         The transmissions as declared in a URDF: name, type, joints, actuators,
         actuator_reduction, joint_reduction, joint_offset.
@@ -412,8 +420,9 @@ class Robot:
 
     @property
     def unread_transmissions(self) -> list[dict]:
-        """The URDF ``<transmission>`` elements of types not read (none of ros_control's
-        :data:`READ_TRANSMISSIONS`, e.g. ``my_pkg/HalfDifferentialTransmission`` or PR2's),
+        """The URDF ``<transmission>`` elements of types not read (none of
+        :data:`READ_TRANSMISSIONS`, e.g. ``my_pkg/HalfDifferentialTransmission`` or PR2's belt
+        compensator and gripper),
         left out of :attr:`transmission`: each ``name``, ``type`` as written, the ``joints`` it
         names, its ``line``, ``modelled_directly`` (those of the model's joints, each modelled
         as driven by a motor of its own, ratio 1) and ``assumed`` (``"direct drive"``).

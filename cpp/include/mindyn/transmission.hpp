@@ -25,6 +25,16 @@
 // own effort map; for the four-bar linkage ros_control's effort map is not the transpose of its
 // position map, and T^T (consistent with the positions) is used here.
 //
+// PR2's older types (pr2_mechanism_model), x_k = q_k (its joints' reference positions are set
+// by the calibration at run time, not by the description: no motor offsets):
+//   pr2_mechanism_model/SimpleTransmission    q_m1 = a_1 x_1     (a_1: <mechanicalReduction>
+//                                                                 of <transmission>)
+//   pr2_mechanism_model/WristTransmission     q_right = a_r ( j_f x_flex - j_r x_roll)
+//                                             q_left  = a_l (-j_f x_flex - j_r x_roll)
+// (actuators: right, left; joints: flex, roll; each reduction the mechanicalReduction attribute
+// of its element). pr2_mechanism_model's effort maps are T^T of these. The wrist is ros_control's
+// DifferentialTransmission with actuator reductions a_r, -a_l and joint reductions j_f, -j_r.
+//
 // Notation (frames, vector orders, units, parameter layouts): docs/notation.md.
 #pragma once
 
@@ -36,14 +46,18 @@ namespace mindyn {
 
 struct Joint;  // model.hpp
 
+/// PR2's transmission types read (pr2_mechanism_model), as TransmissionGroup::type.
+inline constexpr const char* kPr2Simple = "pr2_mechanism_model/SimpleTransmission";
+inline constexpr const char* kPr2Wrist = "pr2_mechanism_model/WristTransmission";
+
 /// One transmission as the description declares it, kept to show and to write it back.
 struct TransmissionGroup {
   std::string name;
   /// SimpleTransmission | DifferentialTransmission | FourBarLinkageTransmission (ros_control's
-  /// transmission_interface types).
+  /// transmission_interface types) | kPr2Simple | kPr2Wrist (PR2's).
   std::string type;
-  std::vector<std::string> joints;     // by role: joint1, joint2
-  std::vector<std::string> actuators;  // by role: actuator1, actuator2
+  std::vector<std::string> joints;     // by role: joint1, joint2 (PR2's wrist: flex, roll)
+  std::vector<std::string> actuators;  // by role: actuator1, actuator2 (PR2's wrist: right, left)
   std::vector<double> actuator_reduction;
   std::vector<double> joint_reduction;
   std::vector<double> joint_offset;

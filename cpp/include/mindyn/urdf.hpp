@@ -40,7 +40,8 @@
 // notes name those merged into the model.
 //
 // ros_control <transmission> elements (ROS 1 form in <robot>, ROS 2 form in <ros2_control>) of
-// types SimpleTransmission, DifferentialTransmission and FourBarLinkageTransmission become
+// types SimpleTransmission, DifferentialTransmission and FourBarLinkageTransmission, and PR2's
+// older ones (pr2_mechanism_model's SimpleTransmission and WristTransmission, in <robot>), become
 // `Model::transmission` (transmission.hpp); a joint of the model that none drives is driven
 // directly, a joint locked in the model adds a constant to its motors, other types are left
 // out; the notes say which.
