@@ -1157,3 +1157,35 @@ def test_an_assignment_to_an_entry_of_params_is_refused_not_lost():
     q[3] = 1.0
     robot.params = q
     assert robot.params[3] == 1.0
+
+
+def test_base_parameter_lists_and_reports_do_not_change_under_their_users():
+    """What a base set gives as a list or a mapping (names, formulas, the rank report, each
+    set's entries) is its reader's own: editing it leaves the set as a second computation of
+    the same robot gives it, and the code generated from it (its header lists the formulas)."""
+    robot = mindyn.load("puma560")
+    bp = mindyn.base_parameters(robot)
+    fresh = mindyn.base_parameters(robot)  # an independent computation to compare with
+    bp.formulas.append("junk")
+    bp.formulas[0] = "junk"
+    bp.formulas_full.clear()
+    bp.names.reverse()
+    bp.no_effect.append("junk")
+    bp.margin["tolerance"] = 5.0
+    bp.margin["decided_by_tolerance"] = ["junk"]
+    for kind in ("lagrangian", "energy", "eom"):
+        bp.sets[kind]["names"].append("junk")
+        bp.sets[kind]["formulas"].append("junk")
+        bp.sets[kind]["margin"]["tolerance"] = 5.0
+        with pytest.raises(ValueError, match="read-only"):
+            bp.sets[kind]["Y"][0, 0] = 1.0
+    assert bp.formulas == fresh.formulas and len(bp.formulas) == 36
+    assert bp.formulas_full == fresh.formulas_full
+    assert bp.names == fresh.names and bp.no_effect == fresh.no_effect
+    assert bp.margin == fresh.margin and bp.margin["tolerance"] == 1e-9
+    for kind in ("lagrangian", "energy", "eom"):
+        for key in ("names", "formulas", "margin"):
+            assert bp.sets[kind][key] == fresh.sets[kind][key], (kind, key)
+        np.testing.assert_array_equal(bp.sets[kind]["Y"], fresh.sets[kind]["Y"])
+    header = codegen.generate(robot, base=bp, name="p560").header
+    assert "junk" not in header and fresh.formulas[0] in header
