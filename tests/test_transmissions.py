@@ -526,6 +526,12 @@ def test_currents_need_the_motor_torque_constants(tmp_path):
         read_csv(log, robot=robot)
     with pytest.raises(mindyn.Error, match="3 values for 6 motors"):
         read_csv(log, robot=robot, drive_gain=[1.0, 2.0, 3.0])
+    # a zero given is named as given, not as a constant missing from the description
+    with pytest.raises(mindyn.Error) as err:
+        read_csv(log, robot=robot, drive_gain=[1.0, 0.0, 1.0, 1.0, 1.0, 0.0])
+    message = str(err.value)
+    assert "constants given are zero or not finite for m2 = 0, m6 = 0" in message, message
+    assert "not given" not in message and "m1" not in message
 
 
 def test_drive_side_is_the_motors_with_transmissions_and_switches_without_changing_the_robot(

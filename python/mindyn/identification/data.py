@@ -574,6 +574,12 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
         Kt = np.array(tr.torque_constant, dtype=float)
         source = "torque constants of the transmissions"
     bad = np.flatnonzero(~np.isfinite(Kt) | (Kt == 0))
+    if bad.size and drive_gain is not None:
+        given = ", ".join(f"{tr.motors[b]} = {Kt[b]:g}" for b in bad)
+        raise DataError(
+            f"drive gains: the motor torque constants given are zero or not finite for {given} "
+            "(N m/A per motor, non-zero; a negative one is a reversed motor)"
+        )
     if bad.size:
         names = ", ".join(tr.motors[b] for b in bad)
         raise DataError(
