@@ -561,6 +561,14 @@ class Robot:
         stribeck); this robot is unchanged."""
         _args.choice(kind, "kind", FRICTION_KINDS)
         v = np.zeros(0) if velocity is None else _args.array(velocity, "velocity", (self.n,))
+        bad = np.flatnonzero(~(v > 0))
+        if bad.size:
+            k = int(bad[0])
+            raise _args.fail(
+                "velocity",
+                f"has {v[k]:g} at entry {k + 1} (joint '{self.joint_names[k]}'); expected "
+                "positive velocity scales, one per joint",
+            )
         return Robot(self._m.with_friction_model(kind, v))
 
     @property
