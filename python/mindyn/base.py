@@ -214,10 +214,10 @@ class BaseParameters:
         """The regrouping formulas of the equations-of-motion set, one per base parameter,
         readable: round-off removed and equal coefficients gathered (written on first use; each
         access gives a list of its own)."""
-        return list(self._formulas)
+        return list(self._formula_texts)
 
     @cached_property
-    def _formulas(self) -> tuple[str, ...]:
+    def _formula_texts(self) -> tuple[str, ...]:
         return tuple(str(f) for f in self.formula_terms())
 
     @property
