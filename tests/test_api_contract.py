@@ -739,6 +739,9 @@ def _codegen_api(tmp: Path) -> dict:
     p = BASE.values(ROBOT.params)
     names_file = tmp / "params.json"
     names_file.write_text(json.dumps(dict(zip(BASE.names, p.tolist()))))
+    ident_file = tmp / "id.json"
+    ident = {"robot": ROBOT.name, "names": BASE.names, "values": p.tolist(), "removed": []}
+    ident_file.write_text(json.dumps(ident | {"rotor": False, "friction": False}))
     st = codegen.generate(ROBOT, lang="st", base=BASE)
     names = {"name": "two", "header_name": "two.h"}
     code = codegen.generate(ROBOT, base=BASE, **names)
@@ -771,6 +774,11 @@ def _codegen_api(tmp: Path) -> dict:
             | names,
         ),
         "codegen.read_parameter_file": (codegen.read_parameter_file, (names_file, BASE.names), {}),
+        "codegen.read_identified_parameters": (
+            codegen.read_identified_parameters,
+            (ident_file, BASE.names),
+            {"robot": ROBOT, "rotor": False, "friction": False, "offset": False},
+        ),
         "codegen.plcopen_project": (codegen.plcopen_project, ([st], "two"), {"comment": "c"}),
         "codegen.generation.identifier": (codegen.generation.identifier, ("two arms",), {}),
         "codegen.GeneratedCode.write": (code.write, (tmp / "two.c",), {}),
