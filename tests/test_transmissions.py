@@ -4,6 +4,8 @@ trips, refusals of malformed transmissions, and motor currents converted through
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import mindyn
 import numpy as np
 import pytest
@@ -476,6 +478,28 @@ def test_cli_info_lists_the_motors(tmp_path, capsys):
     assert "transmissions (URDF, ROS 1 form)" in out
     line = next(x for x in out.splitlines() if x.startswith("m6 "))
     assert "FourBarLinkageTransmission" in line and "+40 j5 +40 j6" in line
+
+
+def test_cli_info_of_more_motors_than_joints_says_where_the_drive_terms_go(tmp_path, capsys):
+    """A YAML matrix of 4 motors for 3 joints (a redundant drive): info lists the 4 motors and
+    says that rotor inertia and friction need --drive-side joint (on the motors they need a
+    motor per joint, as the dynamics say); it failed on an index past the 3 slots."""
+    from mindyn.cli import main
+
+    table = yaml.safe_load(
+        (Path(mindyn.__file__).parent / "robots" / "puma560_3.yaml").read_text(encoding="utf-8")
+    )
+    table["transmissions"] = {"matrix": [[1, 0, 0], [0, 2, 0], [0, 0, 3], [1, 1, 1]]}
+    path = tmp_path / "redundant.yaml"
+    path.write_text(yaml.safe_dump(table), encoding="utf-8")
+    robot = mindyn.load(path)
+    assert robot.transmission.n_motors == 4 and robot.n == 3
+    with pytest.raises(mindyn.ModelError, match="4 motors for 3 joints"):
+        robot.regressor(np.zeros(3), np.zeros(3), np.zeros(3), rotor=True)
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "m4 " in out and "+1 j1 +1 j2 +1 j3" in out.replace("  ", " ")
+    assert "4 motors for 3 joints; --rotor and --friction need --drive-side joint" in out
 
 
 # ---- motor currents through T --------------------------------------------------------------
