@@ -594,6 +594,33 @@ class Robot:
         """4x4 transform from the last link frame to the tool frame (the identity for a tree)."""
         return _readonly(self._m.tool)
 
+    def _fixed_link_hint(self, name: object) -> str:
+        """For a name that is no moving link: where a URDF fixes that link (``"; 'FL_foot' is
+        fixed to the moving link 'FL_calf', merged into it"``), following its fixed joints up
+        to a moving link; empty for any other name or description."""
+        import xml.etree.ElementTree as ET
+
+        if not isinstance(name, str) or self.convention != "urdf":
+            return ""
+        try:
+            root = ET.parse(self.source).getroot()
+        except (OSError, ET.ParseError):
+            return ""
+        if root.tag != "robot":  # an MJCF read as a URDF's link frames
+            return ""
+        parent = {}
+        for joint in root.iter("joint"):
+            child, up = joint.find("child"), joint.find("parent")
+            if child is not None and up is not None and joint.get("type") == "fixed":
+                parent[child.get("link")] = up.get("link")
+        moving, link, seen = set(self.link_names[1:]), name, set()
+        while link in parent and link not in moving and link not in seen:
+            seen.add(link)
+            link = parent[link]
+        if link == name or link not in moving:
+            return ""
+        return f"; {name!r} is fixed to the moving link {link!r}, merged into it"
+
     def _require_serial(self, what: str) -> None:
         """Raises ModelError unless the robot is a serial chain; ``what`` names the operation."""
         if not self.is_serial:

@@ -186,7 +186,8 @@ def _contact_links(robot: Robot, contacts) -> list[int]:
         if not isinstance(c, str) or c not in names:
             raise _args.fail(
                 "contacts",
-                f"names {c!r}, no moving link of robot '{robot.name}' ({', '.join(names)})",
+                f"names {c!r}, no moving link of robot '{robot.name}' ({', '.join(names)})"
+                + robot._fixed_link_hint(c),
             )
         if names.index(c) in links:
             raise _args.fail("contacts", f"names the link {c!r} twice")
