@@ -608,11 +608,11 @@ class Robot:
             return ""
         if root.tag != "robot":  # an MJCF read as a URDF's link frames
             return ""
-        parent = {}
+        parent: dict[str, str] = {}
         for joint in root.iter("joint"):
             child, up = joint.find("child"), joint.find("parent")
             if child is not None and up is not None and joint.get("type") == "fixed":
-                parent[child.get("link")] = up.get("link")
+                parent[child.get("link", "")] = up.get("link", "")
         moving, link, seen = set(self.link_names[1:]), name, set()
         while link in parent and link not in moving and link not in seen:
             seen.add(link)
