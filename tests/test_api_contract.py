@@ -739,6 +739,9 @@ def _codegen_api(tmp: Path) -> dict:
     p = BASE.values(ROBOT.params)
     names_file = tmp / "params.json"
     names_file.write_text(json.dumps(dict(zip(BASE.names, p.tolist()))))
+    ident_file = tmp / "id.json"
+    ident = {"robot": ROBOT.name, "names": BASE.names, "values": p.tolist(), "removed": []}
+    ident_file.write_text(json.dumps(ident | {"rotor": False, "friction": False}))
     st = codegen.generate(ROBOT, lang="st", base=BASE)
     names = {"name": "two", "header_name": "two.h"}
     code = codegen.generate(ROBOT, base=BASE, **names)
@@ -771,6 +774,11 @@ def _codegen_api(tmp: Path) -> dict:
             | names,
         ),
         "codegen.read_parameter_file": (codegen.read_parameter_file, (names_file, BASE.names), {}),
+        "codegen.read_identified_parameters": (
+            codegen.read_identified_parameters,
+            (ident_file, BASE.names),
+            {"robot": ROBOT, "rotor": False, "friction": False, "offset": False},
+        ),
         "codegen.plcopen_project": (codegen.plcopen_project, ([st], "two"), {"comment": "c"}),
         "codegen.generation.identifier": (codegen.generation.identifier, ("two arms",), {}),
         "codegen.GeneratedCode.write": (code.write, (tmp / "two.c",), {}),
@@ -1157,3 +1165,35 @@ def test_an_assignment_to_an_entry_of_params_is_refused_not_lost():
     q[3] = 1.0
     robot.params = q
     assert robot.params[3] == 1.0
+
+
+def test_base_parameter_lists_and_reports_do_not_change_under_their_users():
+    """What a base set gives as a list or a mapping (names, formulas, the rank report, each
+    set's entries) is its reader's own: editing it leaves the set as a second computation of
+    the same robot gives it, and the code generated from it (its header lists the formulas)."""
+    robot = mindyn.load("puma560")
+    bp = mindyn.base_parameters(robot)
+    fresh = mindyn.base_parameters(robot)  # an independent computation to compare with
+    bp.formulas.append("junk")
+    bp.formulas[0] = "junk"
+    bp.formulas_full.clear()
+    bp.names.reverse()
+    bp.no_effect.append("junk")
+    bp.margin["tolerance"] = 5.0
+    bp.margin["decided_by_tolerance"] = ["junk"]
+    for kind in ("lagrangian", "energy", "eom"):
+        bp.sets[kind]["names"].append("junk")
+        bp.sets[kind]["formulas"].append("junk")
+        bp.sets[kind]["margin"]["tolerance"] = 5.0
+        with pytest.raises(ValueError, match="read-only"):
+            bp.sets[kind]["Y"][0, 0] = 1.0
+    assert bp.formulas == fresh.formulas and len(bp.formulas) == 36
+    assert bp.formulas_full == fresh.formulas_full
+    assert bp.names == fresh.names and bp.no_effect == fresh.no_effect
+    assert bp.margin == fresh.margin and bp.margin["tolerance"] == 1e-9
+    for kind in ("lagrangian", "energy", "eom"):
+        for key in ("names", "formulas", "margin"):
+            assert bp.sets[kind][key] == fresh.sets[kind][key], (kind, key)
+        np.testing.assert_array_equal(bp.sets[kind]["Y"], fresh.sets[kind]["Y"])
+    header = codegen.generate(robot, base=bp, name="p560").header
+    assert "junk" not in header and fresh.formulas[0] in header

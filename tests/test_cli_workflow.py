@@ -117,7 +117,7 @@ def test_codegen_params_errors_name_the_file(tmp_path, capsys):
     assert main(argv) == 0
     assert "1 pruned in identification" in capsys.readouterr().out
     assert main([*argv[:4], "--rotor", *argv[4:]]) == 2
-    assert "give codegen the same --rotor and --friction" in capsys.readouterr().err
+    assert "generate with the same --rotor, --friction" in capsys.readouterr().err
     assert main(["codegen", "planar3", *argv[2:]]) == 2
     assert "identified for robot 'planar2', not 'planar3'" in capsys.readouterr().err
 

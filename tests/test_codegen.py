@@ -599,6 +599,58 @@ def test_parameter_files(tmp_path):
         read_parameter_file(tmp_path / "none.txt", names)
 
 
+def test_the_library_takes_an_identification_json_as_the_command_does(tmp_path):
+    """generate, generate_controller and generate_observer take the JSON of ``mindyn identify
+    --json`` as the command's --params does: the pruned parameters (``removed``) as zero, the
+    others the values it holds; a JSON of other joint terms or of another friction model than
+    the robot's is refused (its friction columns are another model's), and the robot with that
+    model takes it."""
+    import json
+
+    from mindyn.codegen import generate_controller, generate_observer
+
+    robot = mindyn.load("planar3")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    names = list(base.names)
+    rng = np.random.default_rng(7)
+    values = rng.uniform(0.5, 2.0, len(names))
+    pruned = names[1::4]  # every fourth, as the identification's pruning leaves them
+    kept = [k for k in names if k not in pruned]
+    doc = {
+        "robot": robot.name,
+        "rotor": True,
+        "friction": True,
+        "names": kept,
+        "values": [float(values[names.index(k)]) for k in kept],
+        "removed": [{"name": k, "rsd": 90.0} for k in pruned],
+        "rsd_threshold": 70.7,
+        "friction_model": {"kind": "coulomb", "velocity": None},
+    }
+    path = tmp_path / "id.json"
+    path.write_text(json.dumps(doc))
+    expected = np.where(np.isin(names, pruned), 0.0, values)
+    code = generate(robot, rotor=True, friction=True, params=path, name="p3")
+    np.testing.assert_array_equal(code.values, expected)
+    observer = generate_observer(robot, base=base, params=path, period=0.004)
+    np.testing.assert_array_equal(observer.values, expected)
+    gains = {"kd": [50.0, 30.0, 10.0], "lambda": [10.0, 10.0, 10.0]}
+    controller = generate_controller(robot, "computed-torque", base=base, params=path, gains=gains)
+    assert controller.settings["p0"].tolist() == expected.tolist()
+    with pytest.raises(mindyn.ModelError, match="identified with rotor=True friction=True"):
+        generate(robot, params=path)
+    doc["friction_model"] = {"kind": "smooth", "velocity": [0.01, 0.02, 0.03]}
+    path.write_text(json.dumps(doc))
+    with pytest.raises(mindyn.ModelError) as err:
+        generate(robot, rotor=True, friction=True, params=path)
+    assert "identified with the smooth friction model; robot 'planar3' has the coulomb" in str(
+        err.value
+    ) and "with_friction_model('smooth', velocity=[0.01, 0.02, 0.03])" in str(err.value)
+    smooth = robot.with_friction_model("smooth", velocity=[0.01, 0.02, 0.03])
+    code = generate(smooth, rotor=True, friction=True, params=path, name="p3")
+    np.testing.assert_array_equal(code.values, expected)
+    assert "tanh" in code.source
+
+
 def test_cli_codegen_chooses_the_method_as_base_does(tmp_path, capsys):
     """A chain beyond the projection method (20 joints) is generated from the recursive
     method's base set, which the output says; --method projection keeps the refusal."""

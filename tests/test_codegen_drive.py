@@ -506,7 +506,7 @@ def test_cli_drive_side_errors(robot, extra, message, tmp_path, capsys):
         ("smooth", "'friction_model' must be {kind, velocity}"),
         ({"kind": "lugre"}, "'lugre'; expected one of 'coulomb', 'asymmetric', 'smooth'"),
         ({"kind": "smooth", "velocity": ["fast", 1]}, "velocity must be a list of numbers"),
-        ({"kind": "smooth", "velocity": [0.1, -1.0]}, "velocity 2 must be positive"),
+        ({"kind": "smooth", "velocity": [0.1, -1.0]}, "friction_model: velocity has -1 at entry 2"),
     ],
 )
 def test_cli_friction_model_of_a_json_is_checked(recorded, message, tmp_path, capsys):

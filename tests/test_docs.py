@@ -433,6 +433,75 @@ def test_errors_page_names_every_error_class():
         assert any(f"`{b}`" in row for b in bases), (cls.__name__, bases, row)
 
 
+_FLOATING_YAML = """\
+name: hop
+convention: mdh
+joints:
+  - {name: base, type: floating, alpha: 0, d: 0, theta: 0, r: 0,
+     inertial: {mass: 5.0, com: [0, 0, 0.1], inertia: {xx: 0.1, yy: 0.1, zz: 0.05}}}
+  - {name: knee, type: revolute, alpha: 1.5708, d: 0, theta: 0, r: 0,
+     inertial: {mass: 0.5, com: [0.2, 0, 0], inertia: {xx: 0.001, yy: 0.01, zz: 0.01}}}
+"""
+
+
+def test_the_commands_the_manual_says_take_or_refuse_a_floating_robot_do(tmp_path):
+    """The identification page lists the commands that take a robot with a floating root and
+    those that refuse it: each one does what the page says, on a YAML table whose root is a
+    free-flyer (a revolute joint below it), and the page's two lists together are every command
+    that the refusal's own message does not name as taking such a robot."""
+    import contextlib
+    import io
+
+    from mindyn.cli import main
+
+    text = " ".join((DOCS / "identification.md").read_text().split())
+    start = text.index("The other commands take a robot with `--root-joint` where they can:")
+    sentence = text[start : text.index("in one line.", start)]
+    take_part, refuse_part = sentence.split(";")[0], sentence.split(";")[-1]
+    assert "refuse a robot with joints of several degrees of freedom" in refuse_part
+    taking = set(re.findall(r"`(?:mindyn )?([a-z-]+)`", take_part)) - {"--root-joint"}
+    refusing = set(re.findall(r"`([a-z-]+)`", refuse_part))
+    robot_yaml = tmp_path / "hop.yaml"
+    robot_yaml.write_text(_FLOATING_YAML)
+    robot = mindyn.load(robot_yaml)
+    ident = tmp_path / "id.json"
+    ident.write_text(json.dumps({"classical": dict(zip(robot.param_names, robot.params.tolist()))}))
+    log = tmp_path / "log.csv"
+    log.write_text("t,q1\n")
+    extra = {
+        "excite": ["-o", tmp_path / "e.csv"],
+        "simulate": ["-o", tmp_path / "s.csv"],
+        "track": [],
+        "ik": ["--xyz", "0", "0", "1"],
+        "detect": [ident, log],
+        "predict": [ident, log, "-o", tmp_path / "p.csv"],
+        "identify-payload": [ident, log],
+        "demo": ["--out", tmp_path / "demo"],
+        "info": [],
+        "base": [],
+        "codegen": ["--lang", "c", "-o", tmp_path / "hop"],
+        "export": [ident, "--yaml", tmp_path / "out.yaml"],
+    }
+
+    def run(cmd):
+        out, err = io.StringIO(), io.StringIO()
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            rc = main([cmd, str(robot_yaml), *map(str, extra[cmd])])
+        return rc, err.getvalue()
+
+    assert refusing and taking >= {"info", "base"}, (taking, refusing)
+    for cmd in sorted(refusing):
+        rc, err = run(cmd)
+        assert rc == 2 and "takes revolute and prismatic joints only" in err, (cmd, err)
+        # the refusal names what takes such a robot: the page's other list, and identify
+        named = err.split("for such a robot:")[1]
+        for other in taking | {"identify"}:
+            assert re.search(rf"\b{other}\b", named), (other, err)
+    for cmd in sorted(taking):
+        rc, err = run(cmd)
+        assert rc == 0, (cmd, err)
+
+
 def test_every_public_header_points_to_the_notation_page():
     headers = sorted((REPO / "cpp/include/mindyn").rglob("*.hpp"))
     assert len(headers) > 20

@@ -13,6 +13,7 @@ import contextlib
 import functools
 import io
 import json
+from pathlib import Path
 
 import mindyn
 import numpy as np
@@ -291,6 +292,34 @@ def test_bad_floating_input_is_refused_in_one_line(tmp_path):
     # a YAML robot with multi-DOF joints and no floating root
     yaml = random_multidof_tree_yaml(tmp_path / "md.yaml", n=5, seed=1)
     refused("identify", yaml, good, match="and no floating or planar root joint")
+
+
+def test_a_contact_on_a_link_fixed_to_a_moving_one_says_which(tmp_path):
+    """Solo12's FL_FOOT hangs from FL_LOWER_LEG by a fixed joint (the loader merges it): a
+    contact named by the foot is refused, naming the link it is fixed to, by the contact
+    Jacobian, the generated code and identify (--contact and a log's wrench columns)."""
+    from mindyn import codegen
+    from mindyn.identification.floating import contact_jacobian
+
+    robot, model = pair(SOLO)
+    hint = "'FL_FOOT' is fixed to the moving link 'FL_LOWER_LEG', merged into it"
+    q, _, _ = random_state(robot, np.random.default_rng(1))
+    with pytest.raises(mindyn.ArgumentError) as err:
+        contact_jacobian(robot, q, "FL_FOOT")
+    assert str(err.value).endswith(hint)
+    with pytest.raises(mindyn.ArgumentError) as err:
+        codegen.generate(robot, what="id", contacts=["FL_FOOT"])
+    assert str(err.value).endswith(hint)
+    with pytest.raises(mindyn.ArgumentError) as err:  # a link of no joint: no hint
+        contact_jacobian(robot, q, "NO_SUCH_LINK")
+    assert "fixed to" not in str(err.value)
+    table, header, _ = simulate(robot, model, ["FL_LOWER_LEG"], np.random.default_rng(2), 30)
+    log = write(tmp_path / "log.csv", table, header)
+    ff = ["--root-joint", "floating"]
+    refused("identify", SOLO, log, *ff, "--contact", "FL_FOOT", match=hint)
+    foot = tmp_path / "foot.csv"
+    foot.write_text(Path(log).read_text().replace("FL_LOWER_LEG.", "FL_FOOT.", 6))
+    refused("identify", SOLO, foot, *ff, match=hint)
 
 
 def test_base_and_info_take_a_root_joint_and_other_commands_refuse_it_in_one_line(tmp_path):

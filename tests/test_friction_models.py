@@ -126,6 +126,19 @@ def test_friction_model_errors_are_one_line(arm, velocity, message):
         arm.with_friction_model("viscous")
 
 
+@pytest.mark.parametrize("kind", ["smooth", "stribeck"])
+@pytest.mark.parametrize("bad", [-1e-7, 0.0, -3.0])
+def test_a_velocity_scale_that_is_not_positive_is_a_bad_argument_naming_its_value(arm, kind, bad):
+    """The velocity is an argument: a scale at or below zero is an ArgumentError naming it, the
+    entry, its joint and the value as given (a small one printed as -0.000000 read as a zero)."""
+    v = [0.1, bad, 0.3]
+    with pytest.raises(mindyn.ArgumentError) as err:
+        arm.with_friction_model(kind, velocity=v)
+    expected = f"velocity has {bad:g} at entry 2 (joint '{arm.joint_names[1]}')"
+    assert str(err.value).startswith(expected), str(err.value)
+    assert arm.friction_model["kind"] == "coulomb"  # the robot is unchanged
+
+
 @pytest.mark.parametrize("kind", ["asymmetric", "stribeck"])
 def test_third_column_is_a_base_parameter_by_all_three_methods(arm, kind):
     r = with_kind(arm, kind, np.full(arm.n, 0.2))

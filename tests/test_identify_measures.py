@@ -323,6 +323,20 @@ def test_currents_times_gains_are_the_torques(drive_arm, tmp_path, capsys):
     assert docs[0]["fit"]["nrms"][1] is None and docs[0]["fit"]["nrms_missing_limit"] == [2]
 
 
+def test_currents_of_a_urdf_without_gains_ask_for_the_gains_not_a_yaml_table(tmp_path, capsys):
+    """A URDF has no drive table: the refusal of a current log without --drive-gain asks for
+    the gains, not for a drive table in a YAML file the robot does not have."""
+    urdf = Path(__file__).resolve().parents[1] / "examples" / "urdf" / "ur5.urdf"
+    log = simulate_inverse(mindyn.load(urdf), random_trajectory(str(urdf), seed=1), rate=50.0)
+    path = write_csv(tmp_path / "i.csv", log.t, log.q, log.tau, torque_unit="current")
+    assert cli.main(["identify", str(urdf), str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "a URDF or MJCF has no drive table: give the joint-side gains (--drive-gain" in err
+    assert "YAML" not in err and "\n" not in err, err
+    yaml_table = cli.main(["identify", "zcr07s", str(path), "--torque-unit", "current"])
+    assert yaml_table == 2 and "to its YAML" in capsys.readouterr().err
+
+
 def test_current_errors_are_one_line(drive_arm, tmp_path, capsys):
     robot, arm, K = drive_arm
     log = simulate_inverse(robot, random_trajectory(robot, seed=3), rate=100.0)

@@ -13,6 +13,7 @@ dynamics of the model).
 
 from __future__ import annotations
 
+import math
 import re
 import sys
 
@@ -673,6 +674,25 @@ def test_mjcf_joints_the_model_cannot_hold_are_refused_by_name(case, tmp_path):
     with pytest.raises(mindyn.ModelError) as e:
         mindyn.load(path)
     assert message in str(e.value) and "\n" not in str(e.value) and str(path) in str(e.value)
+
+
+def test_a_joint_reference_is_refused_in_the_unit_it_is_shown_in(tmp_path):
+    """MuJoCo compiles a hinge's ref from the file's unit (degrees by default) to radians: the
+    refusal gives the compiled value with its unit, so that ref="0.2" (degrees) read as
+    0.00349 rad does not look like another number than the file's."""
+    path = tmp_path / "ref.xml"
+    for compiler, joint, shown in (
+        ("", 'axis="0 0 1" ref="0.2"', f"has ref={math.radians(0.2)!r} rad (an angle of"),
+        ('<compiler angle="radian"/>', 'axis="0 0 1" ref="0.2"', "has ref=0.2 rad"),
+        ("", 'type="slide" axis="0 0 1" ref="0.2"', "has ref=0.2 m;"),
+    ):
+        path.write_text(
+            f'<mujoco>{compiler}<worldbody><body name="a"><joint name="r1" {joint}/>'
+            '<geom size="0.1"/></body></worldbody></mujoco>'
+        )
+        with pytest.raises(mindyn.ModelError) as e:
+            mindyn.load(path)
+        assert shown in str(e.value) and "\n" not in str(e.value), str(e.value)
 
 
 def test_mjcf_equality_and_mocap_are_refused(tmp_path):

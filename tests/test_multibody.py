@@ -392,3 +392,90 @@ def test_a_floating_chain_to_a_tip_agrees_with_pinocchio_locking_the_other_joint
         i = full.joints[jid].idx_q
         q0[i] = min(max(0.0, full.lowerPositionLimit[i]), full.upperPositionLimit[i])
     compare(robot, pin.buildReducedModel(full, lock, q0), np.random.default_rng(1))
+
+
+def _planar_urdf(path: Path, planar_rpy, axis, below_xyz, below_rpy, com, com_rpy) -> Path:
+    """base -j1 (revolute)- l1 -j2 (planar, `axis`)- l2 -j3 (revolute)- l3."""
+    inertia = '<inertia ixx="0.01" ixy="0.001" ixz="0" iyy="0.02" iyz="0.002" izz="0.03"/>'
+
+    def link(name, xyz="0.1 0.02 -0.03", rpy="0.1 0.2 0.3"):
+        return (
+            f'<link name="{name}"><inertial><origin xyz="{xyz}" rpy="{rpy}"/>'
+            f'<mass value="0.8"/>{inertia}</inertial></link>'
+        )
+
+    def joint(name, kind, parent, child, xyz, rpy, ax):
+        limit = '<limit lower="-2" upper="2" effort="10" velocity="3"/>' if kind != "planar" else ""
+        return (
+            f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{xyz}" rpy="{rpy}"/><axis xyz="{ax}"/>{limit}</joint>'
+        )
+
+    def v(x):
+        return " ".join(repr(float(c)) for c in x)
+
+    path.write_text(
+        '<robot name="planar_axis">'
+        + link("base")
+        + link("l1")
+        + link("l2", v(com), v(com_rpy))
+        + link("l3")
+        + joint("j1", "revolute", "base", "l1", "0 0 0.1", "0 0 0", "0 1 0")
+        + joint("j2", "planar", "l1", "l2", "0.05 0 0.2", v(planar_rpy), v(axis))
+        + joint("j3", "revolute", "l2", "l3", v(below_xyz), v(below_rpy), "1 0 0")
+        + "</robot>"
+    )
+    return path
+
+
+def test_a_urdf_planar_joint_moves_in_the_plane_normal_to_its_axis(tmp_path):
+    """URDF's planar joint moves in the plane normal to its <axis> (Pinocchio's URDF parser takes
+    the joint frame's xy plane whatever the axis). With the axis a = (0.6, 0, 0.8): the joint's
+    translations move the link normal to a and its rotation turns it about a (the Jacobian's
+    columns, world axes), and the robot is Pinocchio's of the same URDF rewritten with the axis z
+    and the joint frame turned by the shortest rotation A taking z onto a (the joint origin's
+    rotation times A, what hangs below it by A^T): x and y of q along A's x and y axes (inverse
+    and forward dynamics, mass matrix)."""
+    a = np.array([0.6, 0.0, 0.8])
+    z = np.array([0.0, 0.0, 1.0])
+    k = np.cross(z, a) / np.linalg.norm(np.cross(z, a))  # Rodrigues: about k by acos(z . a)
+    A = pin.AngleAxis(np.arccos(z @ a), k).matrix()
+    R0 = pin.rpy.rpyToMatrix(0.3, 0.0, 0.2)
+    below_xyz, below_R = np.array([0.2, 0.05, -0.1]), pin.rpy.rpyToMatrix(0.1, -0.4, 0.5)
+    com, com_R = np.array([0.1, 0.02, -0.03]), pin.rpy.rpyToMatrix(0.1, 0.2, 0.3)
+    rpy = pin.rpy.matrixToRpy
+    robot = mindyn.load(
+        _planar_urdf(tmp_path / "a.urdf", rpy(R0), a, below_xyz, rpy(below_R), com, rpy(com_R))
+    )
+    assert robot.joint_types == ["revolute", "planar", "revolute"]
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        q, _, _ = random_state(robot, rng)
+        J = robot.jacobian(q, link=1)  # link l2, about its origin, world axes
+        a_world = robot.fk(q, link=0)[:3, :3] @ R0 @ a
+        assert_close(J[:3, 1:3].T @ a_world, np.zeros(2), 1e-12, "translations normal to a")
+        assert_close(J[3:, 1:3], np.zeros((3, 2)), 1e-12, "translations do not turn")
+        assert_close(J[3:, 3], a_world, 1e-12, "the rotation is about a")
+    turned = _planar_urdf(
+        tmp_path / "z.urdf",
+        rpy(R0 @ A),
+        z,
+        A.T @ below_xyz,
+        rpy(A.T @ below_R),
+        A.T @ com,
+        rpy(A.T @ com_R),
+    )
+    model = pin.buildModelFromUrdf(str(turned))
+    data = model.createData()
+    assert list(model.names[1:]) == robot.joint_names
+    for _ in range(3):  # (the regressors differ: link l2's frame is turned by A in one of them)
+        q, v, acc = random_state(robot, rng)
+        tau = rng.uniform(-5, 5, robot.nv)
+        assert_close(
+            robot.inverse_dynamics(q, v, acc), pin.rnea(model, data, q, v, acc), TOL, "rnea"
+        )
+        M = pin.crba(model, data, q)
+        assert_close(robot.mass_matrix(q), np.triu(M) + np.triu(M, 1).T, TOL, "crba")
+        assert_close(
+            robot.forward_dynamics(q, v, tau), pin.aba(model, data, q, v, tau), 1e-10, "aba"
+        )

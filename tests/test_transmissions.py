@@ -4,6 +4,8 @@ trips, refusals of malformed transmissions, and motor currents converted through
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import mindyn
 import numpy as np
 import pytest
@@ -478,6 +480,57 @@ def test_cli_info_lists_the_motors(tmp_path, capsys):
     assert "FourBarLinkageTransmission" in line and "+40 j5 +40 j6" in line
 
 
+def redundant_drive(tmp_path) -> Path:
+    """The PUMA's links 1-3 driven by 4 motors through a YAML matrix (a redundant drive)."""
+    table = yaml.safe_load(
+        (Path(mindyn.__file__).parent / "robots" / "puma560_3.yaml").read_text(encoding="utf-8")
+    )
+    table["transmissions"] = {"matrix": [[1, 0, 0], [0, 2, 0], [0, 0, 3], [1, 1, 1]]}
+    for joint, coulomb in zip(table["joints"], (2.0, 1.5, 1.0)):
+        joint["friction"] = {"viscous": 0.5, "coulomb": coulomb}
+    path = tmp_path / "redundant.yaml"
+    path.write_text(yaml.safe_dump(table), encoding="utf-8")
+    return path
+
+
+def test_cli_info_of_more_motors_than_joints_says_where_the_drive_terms_go(tmp_path, capsys):
+    """A YAML matrix of 4 motors for 3 joints (a redundant drive): info lists the 4 motors and
+    says that rotor inertia and friction need --drive-side joint (on the motors they need a
+    motor per joint, as the dynamics say); it failed on an index past the 3 slots."""
+    from mindyn.cli import main
+
+    path = redundant_drive(tmp_path)
+    robot = mindyn.load(path)
+    assert robot.transmission.n_motors == 4 and robot.n == 3
+    with pytest.raises(mindyn.ModelError, match="4 motors for 3 joints"):
+        robot.regressor(np.zeros(3), np.zeros(3), np.zeros(3), rotor=True)
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "m4 " in out and "+1 j1 +1 j2 +1 j3" in out.replace("  ", " ")
+    assert "4 motors for 3 joints; --rotor and --friction need --drive-side joint" in out
+
+
+def test_default_gains_of_more_motors_than_joints_are_refused_in_one_line(tmp_path, capsys):
+    """The friction bound of the default gains takes the joints' Coulomb friction when the
+    slots are the joints' (4 motors for 3 joints: K_P >= 2 Fc / (0.5 x 2 deg) per joint, from
+    the description's values), and the gains with the rotors on the motors are refused as the
+    dynamics refuse them; a numpy shape error (T is 4 x 3) came out of both, and of `track`."""
+    from mindyn import control
+    from mindyn.cli import main
+
+    path = redundant_drive(tmp_path)
+    robot = mindyn.load(path)
+    fc = robot.coulomb  # the description's joint values
+    assert fc.tolist() == [2.0, 1.5, 1.0]
+    kp, tol = control.controllers.friction_bound(robot)
+    np.testing.assert_allclose(kp, 2 * fc / (0.5 * np.radians(2.0)), rtol=1e-12)
+    with pytest.raises(mindyn.ModelError, match="4 motors for 3 joints"):
+        control.default_gains(robot, period=0.004, rotor=True)
+    assert main(["track", str(path), "--duration", "0.2"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("mindyn: error: ") and "4 motors for 3 joints" in err, err
+
+
 # ---- motor currents through T --------------------------------------------------------------
 
 
@@ -526,6 +579,12 @@ def test_currents_need_the_motor_torque_constants(tmp_path):
         read_csv(log, robot=robot)
     with pytest.raises(mindyn.Error, match="3 values for 6 motors"):
         read_csv(log, robot=robot, drive_gain=[1.0, 2.0, 3.0])
+    # a zero given is named as given, not as a constant missing from the description
+    with pytest.raises(mindyn.Error) as err:
+        read_csv(log, robot=robot, drive_gain=[1.0, 0.0, 1.0, 1.0, 1.0, 0.0])
+    message = str(err.value)
+    assert "constants given are zero or not finite for m2 = 0, m6 = 0" in message, message
+    assert "not given" not in message and "m1" not in message
 
 
 def test_drive_side_is_the_motors_with_transmissions_and_switches_without_changing_the_robot(
@@ -553,7 +612,7 @@ def test_friction_model_is_chosen_on_a_new_robot_and_checked(tmp_path):
     assert robot.with_friction_model("asymmetric").friction_model["kind"] == "asymmetric"
     with pytest.raises(mindyn.ArgumentError, match="'coulomb', 'asymmetric', 'smooth', 'stribeck'"):
         robot.with_friction_model("lugre")
-    with pytest.raises(mindyn.ModelError, match="velocity 2 must be positive"):
+    with pytest.raises(mindyn.ArgumentError, match="^velocity has 0 at entry 2"):
         robot.with_friction_model("stribeck", velocity=[0.1, 0.0, 0.1])
     with pytest.raises(mindyn.ModelError, match="needs a velocity per joint"):
         robot.with_friction_model("smooth")

@@ -14,6 +14,14 @@ const char* const kJointNames[] = {"revolute",    "prismatic", "spherical", "uni
                                    "cylindrical", "planar",    "floating"};
 constexpr int kJointNq[] = {1, 1, 4, 2, 2, 4, 7};
 constexpr int kJointNv[] = {1, 1, 3, 2, 2, 3, 6};
+
+/// `v` in 6 significant digits: a small or large value keeps its size (std::to_string writes
+/// -1e-07 as -0.000000).
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
 }  // namespace
 
 const char* toString(JointType type) { return kJointNames[static_cast<int>(type)]; }
@@ -248,8 +256,7 @@ void FrictionModel::validate(int n) const {
   for (int k = 0; k < n; ++k)
     if (!std::isfinite(velocity[k]) || !(velocity[k] > 0.0) || velocity[k] > kMaxDescriptionValue)
       throw ModelError("the " + kind_name + " friction model's velocity " + std::to_string(k + 1) +
-                       " must be positive, finite and at most 1e16, not " +
-                       std::to_string(velocity[k]));
+                       " must be positive, finite and at most 1e16, not " + number(velocity[k]));
 }
 
 std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
@@ -318,11 +325,6 @@ Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
 }
 
 namespace {
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
 
 /// Throws unless |value| <= bound; `what` names the value and `where()` the place. `where` is
 /// only called on an error, so that checking a valid model builds no message.

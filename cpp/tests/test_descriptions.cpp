@@ -648,3 +648,17 @@ TEST(Transmission, Pr2WristMatrixInvertsPr2MechanismModelsActuatorToJointMap) {
   EXPECT_NEAR((-r - l) / (2.0 * 1.5), x[1], 1e-12);
   EXPECT_EQ(g.offsets().norm(), 0.0);
 }
+
+TEST(Descriptions, FrictionVelocityErrorKeepsTheValueItRefuses) {
+  // a small scale (-1e-7) was printed as -0.000000, which reads as a zero
+  FrictionModel f;
+  f.kind = FrictionKind::Smooth;
+  f.velocity = Eigen::VectorXd::Constant(2, 1.0);
+  f.velocity[1] = -1e-7;
+  const std::string what = errorOf<ModelError>([&] { f.validate(2); });
+  EXPECT_NE(what.find("velocity 2 must be positive"), std::string::npos) << what;
+  EXPECT_NE(what.find("not -1e-07"), std::string::npos) << what;
+  f.kind = FrictionKind::Stribeck;
+  f.velocity[1] = 3e20;
+  EXPECT_NE(errorOf<ModelError>([&] { f.validate(2); }).find("not 3e+20"), std::string::npos);
+}

@@ -140,9 +140,11 @@ def check(m, path) -> None:
                 "springs are not in the model"
             )
         if m.qpos0[m.jnt_qposadr[j]] != 0:
+            hinge = int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
+            unit = "rad (an angle of the file in degrees, the default unit, is compiled to it)"
             raise _core.ModelError(
-                f"{where} has ref={float(m.qpos0[m.jnt_qposadr[j]])!r}; the model's q is MuJoCo's "
-                "qpos only with ref=0"
+                f"{where} has ref={float(m.qpos0[m.jnt_qposadr[j]])!r} {unit if hinge else 'm'}; "
+                "the model's q is MuJoCo's qpos only with ref=0"
             )
         b = int(m.jnt_bodyid[j])
         while b != 0:

@@ -209,13 +209,18 @@ class BaseParameters:
     n = property(lambda self: self._b.n)
     names = property(lambda self: list(self._b.names))
 
-    @cached_property
+    @property
     def formulas(self) -> list[str]:
         """The regrouping formulas of the equations-of-motion set, one per base parameter,
-        readable: round-off removed and equal coefficients gathered (written on first use)."""
-        return [str(f) for f in self.formula_terms()]
+        readable: round-off removed and equal coefficients gathered (written on first use; each
+        access gives a list of its own)."""
+        return list(self._formula_texts)
 
     @cached_property
+    def _formula_texts(self) -> tuple[str, ...]:
+        return tuple(str(f) for f in self.formula_terms())
+
+    @property
     def formulas_full(self) -> list[str]:
         """The regrouping formulas at full precision, one term per classical parameter."""
         return list(self._b.formulas)
@@ -428,7 +433,7 @@ class _Set(Mapping):
     def __getitem__(self, key):
         if key not in self._data and key in self._later:
             self._data[key] = self._later.pop(key)()
-        return self._data[key]
+        return _own_copy(self._data[key])
 
     def __iter__(self):
         return iter([*self._data, *self._later])
@@ -438,6 +443,20 @@ class _Set(Mapping):
 
     def __repr__(self) -> str:
         return f"{{{', '.join(repr(k) for k in self)}}}"
+
+
+def _own_copy(value):
+    """``value`` as its reader's own: lists and dicts copied (nested ones too), arrays read-only,
+    so that what one user does with an entry never changes the set under another."""
+    if isinstance(value, dict):
+        return {k: _own_copy(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return type(value)(_own_copy(v) for v in value)
+    if isinstance(value, np.ndarray):
+        view = value.view()
+        view.flags.writeable = False
+        return view
+    return value
 
 
 def _plain(d: dict) -> dict:

@@ -570,6 +570,14 @@ class Robot:
         stribeck); this robot is unchanged."""
         _args.choice(kind, "kind", FRICTION_KINDS)
         v = np.zeros(0) if velocity is None else _args.array(velocity, "velocity", (self.n,))
+        bad = np.flatnonzero(~(v > 0))
+        if bad.size:
+            k = int(bad[0])
+            raise _args.fail(
+                "velocity",
+                f"has {v[k]:g} at entry {k + 1} (joint '{self.joint_names[k]}'); expected "
+                "positive velocity scales, one per joint",
+            )
         return Robot(self._m.with_friction_model(kind, v))
 
     @property
@@ -594,6 +602,33 @@ class Robot:
     def tool(self) -> np.ndarray:
         """4x4 transform from the last link frame to the tool frame (the identity for a tree)."""
         return _readonly(self._m.tool)
+
+    def _fixed_link_hint(self, name: object) -> str:
+        """For a name that is no moving link: where a URDF fixes that link (``"; 'FL_foot' is
+        fixed to the moving link 'FL_calf', merged into it"``), following its fixed joints up
+        to a moving link; empty for any other name or description."""
+        import xml.etree.ElementTree as ET
+
+        if not isinstance(name, str) or self.convention != "urdf":
+            return ""
+        try:
+            root = ET.parse(self.source).getroot()
+        except (OSError, ET.ParseError):
+            return ""
+        if root.tag != "robot":  # an MJCF read as a URDF's link frames
+            return ""
+        parent: dict[str, str] = {}
+        for joint in root.iter("joint"):
+            child, up = joint.find("child"), joint.find("parent")
+            if child is not None and up is not None and joint.get("type") == "fixed":
+                parent[child.get("link", "")] = up.get("link", "")
+        moving, link, seen = set(self.link_names[1:]), name, set()
+        while link in parent and link not in moving and link not in seen:
+            seen.add(link)
+            link = parent[link]
+        if link == name or link not in moving:
+            return ""
+        return f"; {name!r} is fixed to the moving link {link!r}, merged into it"
 
     def _require_serial(self, what: str) -> None:
         """Raises ModelError unless the robot is a serial chain; ``what`` names the operation."""

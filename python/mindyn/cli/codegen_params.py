@@ -4,11 +4,7 @@
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-
-from .._core import ModelError
+from .._core import ArgumentError, ModelError
 
 
 def _params_note(n: int, path: str, pruned: list[str], threshold: str) -> str:
@@ -48,7 +44,10 @@ def _with_friction_model(robot, args):
                 raise ModelError(
                     f"{args.params}: friction_model velocity must be a list of numbers"
                 )
-            robot = robot.with_friction_model(recorded["kind"], velocity=velocity or None)
+            try:
+                robot = robot.with_friction_model(recorded["kind"], velocity=velocity or None)
+            except ArgumentError as e:  # the JSON's values, not the command's arguments
+                raise ModelError(f"{args.params}: friction_model: {e}") from None
     if not args.friction:
         return robot, ""
     model = robot.friction_model
@@ -63,56 +62,10 @@ def _identified_params(path: str, robot, base, args):
     """The values of a ``mindyn identify --json`` file in the order of ``base.names``, with the
     parameters it pruned (``removed``) as zero, and the pruned names; ``(None, [], "")`` for any
     other parameter file (read by :func:`mindyn.codegen.read_parameter_file`); and the pruning
-    threshold as text."""
-    from ..identification.data import DataError, read_json
+    threshold as text (:func:`mindyn.codegen.read_identified_parameters`)."""
+    from ..codegen import read_identified_parameters
 
-    try:
-        doc = read_json(path)
-    except (DataError, FileNotFoundError):
-        return None, [], ""
-    if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
-        return None, [], ""
-    if doc.get("robot") not in (None, robot.name):
-        raise ModelError(
-            f"{path}: parameters identified for robot '{doc['robot']}', not '{robot.name}'"
-        )
-    flags = {"rotor": args.rotor, "friction": args.friction, "offset": args.offset}
-    differ = [k for k, on in flags.items() if k in doc and bool(doc[k]) != on]
-    if differ:
-        said = " ".join(f"--{k}" for k in flags if doc.get(k))
-        raise ModelError(
-            f"{path}: identified "
-            f"{'with ' + said if said else 'without --rotor, --friction and --offset'}; "
-            "give codegen the same --rotor and --friction (and --offset) as identify"
-        )
-    names, values = doc["names"], doc["values"]
-    try:
-        pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]
-    except (KeyError, TypeError):
-        raise ModelError(f"{path}: 'removed' must list the pruned parameters by name") from None
-    if not (isinstance(names, list) and isinstance(values, list) and len(names) == len(values)):
-        raise ModelError(f"{path}: 'names' and 'values' must be lists of the same length")
-    known = set(base.names)
-    unknown = [k for k in names + pruned if k not in known]
-    if unknown:
-        raise ModelError(
-            f"{path}: unknown parameter(s) {', '.join(unknown[:5])}; expected "
-            f"{', '.join(base.names)}"
-        )
-    given = dict(zip(names, values))
-    both = [k for k in pruned if k in given]
-    if both:
-        raise ModelError(f"{path}: {', '.join(both[:5])} both identified and pruned")
-    missing = [k for k in base.names if k not in given and k not in pruned]
-    if missing:
-        raise ModelError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
-    out = np.zeros(len(base.names))
-    for i, k in enumerate(base.names):
-        if k in given:
-            v = given[k]
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise ModelError(f"{path}: value of '{k}' is not a finite number")
-            out[i] = v
-    threshold = doc.get("rsd_threshold")
-    said = f"{threshold:g} %" if isinstance(threshold, (int, float)) else "the threshold"
-    return out, [k for k in base.names if k in pruned], said
+    identified = read_identified_parameters(
+        path, base.names, robot=robot, rotor=args.rotor, friction=args.friction, offset=args.offset
+    )
+    return identified if identified is not None else (None, [], "")

@@ -22,7 +22,8 @@ offset`` from one momentum pass customised to the robot, to run beside a control
 :class:`CompiledObserver` calls the C step.
 
 The modules, one concern each: :mod:`~mindyn.codegen.generation` (:func:`generate`,
-:class:`GeneratedCode`), :mod:`~mindyn.codegen.parameters` (:func:`read_parameter_file`),
+:class:`GeneratedCode`), :mod:`~mindyn.codegen.parameters` (:func:`read_parameter_file`,
+:func:`read_identified_parameters`),
 :mod:`~mindyn.codegen.dynamics` (:class:`BaseDynamics`), :mod:`~mindyn.codegen.controllers`
 (:func:`generate_controller`, :func:`generate_observer`), :mod:`~mindyn.codegen.compiled`
 (:class:`CompiledController`, :class:`CompiledObserver`) and :mod:`~mindyn.codegen.plcopen`
@@ -41,7 +42,7 @@ from .controllers import (
 )
 from .dynamics import BaseDynamics
 from .generation import FUNCTIONS, GeneratedCode, generate
-from .parameters import read_parameter_file
+from .parameters import read_identified_parameters, read_parameter_file
 from .plcopen import PLCOPEN_NS, plcopen_project
 
 __all__ = [
@@ -58,5 +59,6 @@ __all__ = [
     "generate_controller",
     "generate_observer",
     "plcopen_project",
+    "read_identified_parameters",
     "read_parameter_file",
 ]

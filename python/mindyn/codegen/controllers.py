@@ -141,8 +141,9 @@ def generate_controller(
         lambda``, as :func:`mindyn.control.make_controller`) and ``lambda kd`` for gravity
         compensation.
     params : path or array, optional
-        The initial estimate ``p0`` (a file as :func:`read_parameter_file` reads it, e.g. the JSON
-        of ``mindyn identify --json``); default the robot's own values.
+        The initial estimate ``p0`` (the JSON of ``mindyn identify --json``, read by
+        :func:`read_identified_parameters`, or another file :func:`read_parameter_file` reads);
+        default the robot's own values.
     period : float
         Controller period [s] (adaptive PD: the adaptation step).
     p_min, p_max : scalar or array (np,), optional
@@ -207,7 +208,14 @@ def generate_controller(
         if bp.offset:
             s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
     else:
-        s["p0"] = _parameter_values(params, names)
+        s["p0"] = _parameter_values(
+            params,
+            names,
+            robot,
+            rotor=True if classical else bp.rotor,
+            friction=True if classical else bp.friction,
+            offset=False if classical else bp.offset,
+        )
     s["box"] = "given" if p_min is not None or p_max is not None else "none"
     if kind == "adaptive-pd" and p_min is None and p_max is None and not classical:
         # the library's default box (make_controller): about the description's values
@@ -308,8 +316,9 @@ def generate_observer(
         and friction act and the friction model, as in :func:`generate`: the momentum gets
         ``t_k Ia_k (t_k . dq)``, beta the friction ``t_k f(t_k . dq)``.
     params : path or array, optional
-        The parameter values (a file as :func:`read_parameter_file` reads it, e.g. the JSON of
-        ``mindyn identify --json``); default the robot's own values.
+        The parameter values (the JSON of ``mindyn identify --json``, read by
+        :func:`read_identified_parameters`, or another file :func:`read_parameter_file` reads);
+        default the robot's own values.
     period : float
         The controller period [s].
     gains : scalar or array (n,), optional
@@ -339,7 +348,9 @@ def generate_observer(
     if base is None:
         base = base_parameters(robot, rotor=True, friction=True)
     names = list(base.names)
-    p = _parameter_values(params, names)
+    p = _parameter_values(
+        params, names, robot, rotor=base.rotor, friction=base.friction, offset=base.offset
+    )
     if p is None:
         p = base.values(robot.parameters(rotor=base.rotor, friction=base.friction))
         if base.offset:

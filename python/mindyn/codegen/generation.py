@@ -13,7 +13,7 @@ import numpy as np
 from .. import _args, _core
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
-from .parameters import read_parameter_file
+from .parameters import read_identified_parameters, read_parameter_file
 
 __all__ = ["FUNCTIONS", "GeneratedCode", "generate", "identifier"]
 
@@ -158,13 +158,20 @@ def _check_options(name, header_name, params) -> None:
         )
 
 
-def _parameter_values(params, names: Sequence[str]):
-    """``params`` (None, a file for :func:`read_parameter_file`, or an array) as values of
-    ``names``; None stays None."""
+def _parameter_values(
+    params, names: Sequence[str], robot: Robot, *, rotor: bool, friction: bool, offset: bool
+):
+    """``params`` (None, the JSON of ``mindyn identify --json`` for
+    :func:`read_identified_parameters`, another file for :func:`read_parameter_file`, or an
+    array) as values of ``names``, base parameters of ``robot`` with those joint terms; None
+    stays None."""
     if params is None:
         return None
     if isinstance(params, (str, Path)):
-        return read_parameter_file(params, names)
+        identified = read_identified_parameters(
+            params, names, robot=robot, rotor=rotor, friction=friction, offset=offset
+        )
+        return identified[0] if identified is not None else read_parameter_file(params, names)
     return _args.array(params, "params", (len(names),))
 
 
@@ -179,7 +186,8 @@ def _contact_links(robot: Robot, contacts) -> list[int]:
         if not isinstance(c, str) or c not in names:
             raise _args.fail(
                 "contacts",
-                f"names {c!r}, no moving link of robot '{robot.name}' ({', '.join(names)})",
+                f"names {c!r}, no moving link of robot '{robot.name}' ({', '.join(names)})"
+                + robot._fixed_link_hint(c),
             )
         if names.index(c) in links:
             raise _args.fail("contacts", f"names the link {c!r} twice")
@@ -254,8 +262,9 @@ def generate(
         with ``exp``; its velocities baked in; a third column ``Fa``/``Fs`` per slot where the
         model has one); the header says which and where.
     params : path or array, optional
-        Parameter values, shape (np,): an array, or a file read by
-        :func:`read_parameter_file`. Default: the robot's own values (``p_b = Y pi``).
+        Parameter values, shape (np,): an array, the JSON of ``mindyn identify --json`` (read
+        by :func:`read_identified_parameters`: its pruned parameters as zero) or another file
+        read by :func:`read_parameter_file`. Default: the robot's own values (``p_b = Y pi``).
     numeric : bool
         Bake the values into inverse_dynamics and gravity (they then take no ``p``).
     name : str, optional
@@ -324,7 +333,9 @@ def generate(
         names = list(
             _core.classical_parameter_names(robot._m, rotor=rotor, friction=friction, offset=offset)
         )
-    values = _parameter_values(params, names)
+    values = _parameter_values(
+        params, names, robot, rotor=rotor, friction=friction, offset=bool(offset)
+    )
     out = _core.generate_code(
         robot._m,
         bp_core,  # type: ignore[arg-type]  # None: the classical parameters (the binding takes it)

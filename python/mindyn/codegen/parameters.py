@@ -12,9 +12,22 @@ import numpy as np
 
 from .. import _args, _core
 
-__all__ = ["read_parameter_file"]
+__all__ = ["read_identified_parameters", "read_parameter_file"]
 
 _NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+
+
+def _names(names) -> list[str]:
+    """``names`` checked: a list of distinct non-empty parameter names."""
+    if isinstance(names, (str, bytes)) or not isinstance(names, Sequence):
+        raise _args.fail("names", "must be a list of parameter names")
+    names = list(names)
+    if not names or not all(isinstance(k, str) and k for k in names):
+        raise _args.fail("names", "must be a non-empty list of non-empty strings")
+    twice = sorted({k for k in names if names.count(k) > 1})
+    if twice:
+        raise _args.fail("names", f"gives {', '.join(twice[:5])} more than once")
+    return names
 
 
 def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
@@ -27,14 +40,7 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
     from ..identification.data import DataError
 
     path = Path(_args.path(path, "path"))
-    if isinstance(names, (str, bytes)) or not isinstance(names, Sequence):
-        raise _args.fail("names", "must be a list of parameter names")
-    names = list(names)
-    if not names or not all(isinstance(k, str) and k for k in names):
-        raise _args.fail("names", "must be a non-empty list of non-empty strings")
-    twice = sorted({k for k in names if names.count(k) > 1})
-    if twice:
-        raise _args.fail("names", f"gives {', '.join(twice[:5])} more than once")
+    names = _names(names)
     if not path.is_file():
         raise _core.RobotFileNotFoundError(f"parameter file '{path}' does not exist")
     text = path.read_text()
@@ -84,3 +90,121 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
         if not math.isfinite(values[i]):
             raise DataError(f"{path}: value of '{k}' is not finite")
     return values
+
+
+def read_identified_parameters(
+    path: str | Path,
+    names: Sequence[str],
+    *,
+    robot,
+    rotor: bool = False,
+    friction: bool = False,
+    offset: bool = False,
+) -> tuple[np.ndarray, list[str], str] | None:
+    """The values of the JSON that ``mindyn identify --json`` writes
+    (:func:`mindyn.identification.run`'s report) in the order of the base parameters ``names``,
+    with the parameters the identification pruned (its ``removed``) as zero.
+
+    Returns ``(values, pruned, threshold)``: the pruned names in the order of ``names`` and the
+    pruning threshold as text; None when ``path`` is not such a JSON (it has no ``names``,
+    ``values`` and ``removed``: :func:`read_parameter_file` reads it). Refused with a
+    :class:`mindyn.ModelError` naming the file: a JSON identified for another robot than
+    ``robot``, with other joint terms than ``rotor``, ``friction`` and ``offset``, or, with
+    ``friction``, with another friction model than the robot's (then
+    ``robot.with_friction_model(kind, velocity=...)`` with the JSON's ``friction_model`` is the
+    robot it was identified for) or the Dahl model, which generated code has no state for; names
+    unknown, missing, or both identified and pruned; values that are not finite numbers."""
+    from ..identification.data import DataError, read_json
+    from ..robot import Robot
+
+    path = Path(_args.path(path, "path"))
+    names = _names(names)
+    _args.instance(robot, "robot", Robot)
+    flags = {
+        "rotor": _args.flag(rotor, "rotor"),
+        "friction": _args.flag(friction, "friction"),
+        "offset": _args.flag(offset, "offset"),
+    }
+    try:
+        doc = read_json(path)
+    except (DataError, FileNotFoundError):
+        return None
+    if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
+        return None
+    if doc.get("robot") not in (None, robot.name):
+        raise _core.ModelError(
+            f"{path}: parameters identified for robot '{doc['robot']}', not '{robot.name}'"
+        )
+    differ = [k for k, on in flags.items() if k in doc and bool(doc[k]) != on]
+    if differ:
+        said = " ".join(f"{k}=True" for k in flags if doc.get(k))
+        raise _core.ModelError(
+            f"{path}: identified "
+            f"{'with ' + said if said else 'without rotor=True, friction=True and offset=True'}; "
+            "generate with the same rotor=, friction= (and offset=) as the identification"
+        )
+    if flags["friction"]:
+        _same_friction_model(doc, path, robot)
+    idents, values = doc["names"], doc["values"]
+    try:
+        pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]
+    except (KeyError, TypeError):
+        raise _core.ModelError(
+            f"{path}: 'removed' must list the pruned parameters by name"
+        ) from None
+    if not (isinstance(idents, list) and isinstance(values, list) and len(idents) == len(values)):
+        raise _core.ModelError(f"{path}: 'names' and 'values' must be lists of the same length")
+    known = set(names)
+    unknown = [k for k in idents + pruned if k not in known]
+    if unknown:
+        raise _core.ModelError(
+            f"{path}: unknown parameter(s) {', '.join(unknown[:5])}; expected {', '.join(names)}"
+        )
+    given = dict(zip(idents, values))
+    both = [k for k in pruned if k in given]
+    if both:
+        raise _core.ModelError(f"{path}: {', '.join(both[:5])} both identified and pruned")
+    missing = [k for k in names if k not in given and k not in pruned]
+    if missing:
+        raise _core.ModelError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
+    out = np.zeros(len(names))
+    for i, k in enumerate(names):
+        if k in given:
+            v = given[k]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise _core.ModelError(f"{path}: value of '{k}' is not a finite number")
+            out[i] = v
+    threshold = doc.get("rsd_threshold")
+    said = f"{threshold:g} %" if isinstance(threshold, (int, float)) else "the threshold"
+    return out, [k for k in names if k in pruned], said
+
+
+def _same_friction_model(doc: dict, path, robot) -> None:
+    """Refuses an identification JSON whose friction model (``friction_model: {kind,
+    velocity}``) is not ``robot``'s: its friction parameters are another model's."""
+    from ..identification.document import refuse_state
+
+    refuse_state(doc, "generated code", str(path))
+    recorded = doc.get("friction_model")
+    if recorded is None:
+        return
+    if not (isinstance(recorded, dict) and isinstance(recorded.get("kind"), str)):
+        raise _core.ModelError(
+            f"{path}: 'friction_model' must be {{kind, velocity}}, got {recorded!r}"
+        )
+    kind, velocity = recorded["kind"], recorded.get("velocity") or []
+    own = robot.friction_model
+    same = kind == own["kind"] and len(velocity) == len(own["velocity"])
+    if same and velocity:
+        try:
+            same = bool(np.array_equal(np.asarray(velocity, dtype=float), own["velocity"]))
+        except (TypeError, ValueError):
+            raise _core.ModelError(
+                f"{path}: friction_model velocity must be a list of numbers"
+            ) from None
+    if not same:
+        scales = f", velocity={list(velocity)!r}" if velocity else ""
+        raise _core.ModelError(
+            f"{path}: identified with the {kind} friction model; robot '{robot.name}' has the "
+            f"{own['kind']} one: generate for robot.with_friction_model('{kind}'{scales})"
+        )

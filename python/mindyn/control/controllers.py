@@ -876,7 +876,9 @@ def coulomb_friction(robot: Robot, params) -> np.ndarray:
     cols = [k for k in range(size) if names[k].startswith("Fc")]
     p = np.asarray(params, dtype=float).reshape(robot.n, size)
     fc = np.abs(p[:, cols]).sum(axis=1) if cols else np.zeros(robot.n)
-    return np.abs(robot.drive_matrix).T @ fc if robot.drive_side == "motor" else fc
+    T = robot.drive_matrix
+    # the slots are the motors' only with one motor per joint (Robot.parameters), else the joints'
+    return np.abs(T).T @ fc if robot.drive_side == "motor" and T.shape[0] == robot.n else fc
 
 
 def friction_bound(robot: Robot, *, tolerance=None) -> tuple[np.ndarray, np.ndarray]:

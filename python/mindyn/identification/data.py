@@ -531,11 +531,15 @@ def drive_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, str]:
     K = drives.get("torque_constant", np.full(robot.n, np.nan)) * drives["gear_ratio"]
     bad = np.flatnonzero(~np.isfinite(K) | (K == 0))
     if bad.size:
+        table = (
+            "add drive: {torque_constant, gear_ratio} to its YAML or give"
+            if robot.convention in ("dh", "mdh")
+            else "a URDF or MJCF has no drive table: give"
+        )
         raise DataError(
             f"torque unit 'current': the description of '{robot.name}' gives no torque constant "
-            f"/ gear ratio for joint(s) {', '.join(str(k + 1) for k in bad)}; add "
-            "drive: {torque_constant, gear_ratio} to its YAML or give the joint-side gains "
-            "(drive_gain=, K1,...,Kn in N m/A)"
+            f"/ gear ratio for joint(s) {', '.join(str(k + 1) for k in bad)}; {table} the "
+            "joint-side gains (drive_gain=, K1,...,Kn in N m/A)"
         )
     return K, "drive table: torque_constant x gear_ratio"
 
@@ -574,6 +578,12 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
         Kt = np.array(tr.torque_constant, dtype=float)
         source = "torque constants of the transmissions"
     bad = np.flatnonzero(~np.isfinite(Kt) | (Kt == 0))
+    if bad.size and drive_gain is not None:
+        given = ", ".join(f"{tr.motors[b]} = {Kt[b]:g}" for b in bad)
+        raise DataError(
+            f"drive gains: the motor torque constants given are zero or not finite for {given} "
+            "(N m/A per motor, non-zero; a negative one is a reversed motor)"
+        )
     if bad.size:
         names = ", ".join(tr.motors[b] for b in bad)
         raise DataError(

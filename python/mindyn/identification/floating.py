@@ -91,7 +91,9 @@ def _link_index(robot: Robot, link: str | int) -> int:
     if link in names:
         return names.index(link)
     raise _args.fail(
-        "link", f"is {link!r}, no moving link of robot '{robot.name}' ({', '.join(names)})"
+        "link",
+        f"is {link!r}, no moving link of robot '{robot.name}' ({', '.join(names)})"
+        + robot._fixed_link_hint(link),
     )
 
 
@@ -157,7 +159,7 @@ def _check_log(robot: Robot, log: FloatingLog) -> tuple[int, list[int]]:
         if name not in names:
             raise IdentificationError(
                 f"{log.source}: a wrench on {name!r}, no moving link of robot '{robot.name}' "
-                f"({', '.join(names)})"
+                f"({', '.join(names)})" + robot._fixed_link_hint(name)
             )
         links.append(names.index(name))
         if np.shape(w) != (m, 6):
@@ -644,5 +646,5 @@ def _link_as_data_error(robot: Robot, link: str, path: Path) -> None:
     if link not in names:
         raise DataError(
             f"{path}:1: no moving link {link!r} in robot '{robot.name}' for the wrench columns "
-            f"{link}.fx..{link}.tz (links: {', '.join(names)})"
+            f"{link}.fx..{link}.tz (links: {', '.join(names)})" + robot._fixed_link_hint(link)
         )

@@ -160,7 +160,8 @@ def load_floating_logs(
             if c not in names:
                 raise _args.fail(
                     "contacts=:",
-                    f"{c!r} is no moving link of robot '{robot.name}' ({', '.join(names)})",
+                    f"{c!r} is no moving link of robot '{robot.name}' ({', '.join(names)})"
+                    + robot._fixed_link_hint(c),
                 )
         declared = tuple(dict.fromkeys(contacts))
     return FloatingLogs(
