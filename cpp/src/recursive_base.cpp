@@ -4,6 +4,7 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "mindyn/spatial.hpp"
 
@@ -95,14 +96,23 @@ Vec6 motionToChild(const Eigen::Isometry3d& T, const Vec6& v) {
 // tolerance x scale, the scale being the size of what produced it. The components are taken all
 // at once (classical Gram-Schmidt, done twice), so that they do not wait on one another.
 //
-// The weight is the size of the torques a motion direction stands for, relative to the robot's
-// largest (gravityWeight): 1 for a joint's motion, more for gravity and what the joints make of
-// it when gravity loads no joint at full size. A motion set apart from the others by gravity
-// alone (a joint axis tilted off vertical) is then as far from zero as its torques are in the
-// regressor against the robot's largest, the measure of the echelon form in the other methods.
+// The weight is the size of the torques a vector stands for, relative to the robot's largest in
+// the unit-length model: 1 for a joint's motion, gravity's (gravityWeight) for gravity, and for
+// each direction of the basis the largest of what the vectors offered to it put along it (its
+// weight when it joined: the part of its vector left over, weighted). A direction that joined as
+// the 3.7e-6 by which two nearly parallel axes differ keeps that size: what the links' inertia
+// shows of it, and what it moves in turn, is measured at that size and not at full size, as the
+// regressor's columns are in the other methods (the rows of a link's inertia that only the
+// square of the difference reveals, 1.3e-11 of the torques, are below the tolerance there too).
+// The decisions are thus the echelon form's "numerically zero": below the tolerance against the
+// size of the robot's torques.
 struct Margin {
   double kept = 1.0, dropped = 0.0;
 };
+
+// The rounding level of a vector's entries relative to its norm, after the transforms that made
+// it (a few roundings each).
+constexpr double kNoise = 16 * std::numeric_limits<double>::epsilon();
 
 template <int D>
 struct Span {
@@ -115,19 +125,30 @@ struct Span {
   bool add(const Eigen::Matrix<double, D, 1>& v, double scale, double w = 1.0) {
     if (dim == D) return false;
     Eigen::Matrix<double, D, 1> r = v;
+    double along[D] = {};  // the components of v along the basis
     if (dim > 0)
       for (int pass = 0; pass < 2; ++pass) {
         double c[D] = {};
         for (int i = 0; i < dim; ++i) c[i] = Q.col(i).dot(r);
-        for (int i = 0; i < dim; ++i) r -= c[i] * Q.col(i);
+        for (int i = 0; i < dim; ++i) {
+          r -= c[i] * Q.col(i);
+          along[i] += c[i];
+        }
       }
+    if (scale > 0)
+      for (int i = 0; i < dim; ++i) weight[i] = std::max(weight[i], std::abs(along[i]) * w / scale);
+    // What is left at the rounding level of v is rounding: normalised, a residual of 1e-6 of v
+    // would carry it as a component of 1e-10 (an axis turned 1e-10 rad that no joint turns).
+    const double noise = kNoise * v.norm();
+    for (int i = 0; i < D; ++i)
+      if (std::abs(r[i]) <= noise) r[i] = 0.0;
     const double nr = r.norm(), rel = scale > 0 ? nr * w / scale : 0.0;
     if (!(rel > tol)) {
       margin->dropped = std::max(margin->dropped, rel);
       return false;
     }
     margin->kept = std::min(margin->kept, rel);
-    weight[dim] = w;
+    weight[dim] = rel;
     Q.col(dim++) = r / nr;
     return true;
   }
@@ -270,7 +291,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     Span<10> O(tolerance, margin);
     for (int i = 0; i < Cp.dim; ++i) {
       const Vec10 r = T0[k].transpose().lazyProduct(Cp.Q.col(i));
-      O.add(r, r.norm());
+      O.add(r, r.norm(), Cp.weight[i]);
     }
     // C_k starts from the same rows: what the parent link identifies of link k at q_k = 0.
     Span<10>& C = Cs[k];
@@ -278,18 +299,18 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     Rows10 rates(10, 10);
     for (int i = 0; i < O.dim; ++i) {
       rates.row(i) = At.lazyProduct(O.Q.col(i)).transpose();
-      O.add(rates.row(i).transpose(), an);
+      O.add(rates.row(i).transpose(), an, O.weight[i]);
     }
 
     // N_k: s^T I v for v in V_k, and the rates of O_k.
     Span<10> N(tolerance, margin);
     for (int i = 0; i < V.dim; ++i) N.add(outputRow(S, V.Q.col(i)).transpose(), sn, V.weight[i]);
-    for (int i = 0; i < O.dim; ++i) N.add(rates.row(i).transpose(), an);
+    for (int i = 0; i < O.dim; ++i) N.add(rates.row(i).transpose(), an, O.weight[i]);
     M[k] = N.basis().transpose();
     out.link_rank[k] = N.dim;
 
     // C_k: and N_k.
-    for (int i = 0; i < N.dim; ++i) C.add(N.Q.col(i), 1.0);
+    for (int i = 0; i < N.dim; ++i) C.add(N.Q.col(i), 1.0, N.weight[i]);
   }
 
   out.smallest_kept = margin.kept;

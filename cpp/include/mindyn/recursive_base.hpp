@@ -50,9 +50,10 @@ struct IdentifiableSpace {
   std::vector<int> link_rank;        // rank of N_k per link: its number of base parameters
   std::vector<int> rotor_regrouped;  // joints whose rotor inertia regroups with link inertia
   /// Margins of the recursion's own rank decisions: residual of a vector relative to the size
-  /// of what produced it (a motion that gravity produces weighted as its torques are against
-  /// the robot's largest, see gravityWeight in recursive_base.cpp), smallest of those kept and
-  /// largest of those dropped.
+  /// of what produced it, weighted by the size of the torques that stands for against the
+  /// robot's largest (gravity's, gravityWeight, and what is derived from a kept direction, the
+  /// size it was kept at: see Span in recursive_base.cpp), smallest of those kept and largest
+  /// of those dropped.
   double smallest_kept = 1.0;
   double largest_dropped = 0.0;
 };
