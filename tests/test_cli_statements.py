@@ -483,3 +483,10 @@ def test_info_gives_the_motor_terms_the_dynamics_use():
         assert ia == 0.0
         assert fv == pytest.approx(float(dyn.get("damping")) / r**2, rel=1e-3)
         assert fc == pytest.approx(float(dyn.get("friction")) / abs(r), rel=1e-3)
+
+
+@pytest.mark.parametrize(("robot", "said"), [("planar1", "(1 joint,"), ("planar2", "(2 joints,")])
+def test_info_counts_the_joints_in_words(robot, said):
+    rc, out, err = run(["info", robot])
+    assert rc == 0, err
+    assert said in out.splitlines()[0]

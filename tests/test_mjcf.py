@@ -921,3 +921,17 @@ def test_info_says_an_mjcf_is_an_mjcf(tmp_path):
     head = cli("info", out.path).splitlines()[0]
     assert "(6 joints, MJCF, link frames as a URDF's)" in head, head
     assert "(6 joints, urdf)" in cli("info", REPO_UR5).splitlines()[0]
+
+
+def test_write_mjcf_refuses_none_without_offering_it(tmp_path):
+    """write_mjcf needs parameters: None is refused saying what it takes, and a wrong length
+    does not offer None among the shapes it expects."""
+    from mindyn.mjcf import write_mjcf
+
+    robot = mindyn.load("planar2")
+    with pytest.raises(mindyn.ArgumentError, match=r"is None; expected a vector of shape \(20,\)"):
+        write_mjcf(robot, None, tmp_path / "a.xml")
+    with pytest.raises(mindyn.ArgumentError, match=r"7 entries") as e:
+        write_mjcf(robot, np.zeros(7), tmp_path / "a.xml")
+    assert "None" not in str(e.value)
+    assert not list(tmp_path.iterdir())

@@ -114,7 +114,9 @@ void Transmission::validate(const std::vector<Joint>& joints, const std::string&
   }
   if (!idle.empty())
     throw ModelError(who + ": no motor drives joint" + (idle.size() > 1 ? "s " : " ") +
-                     quoted(idle) + " (its column of the transmission matrix is zero)");
+                     quoted(idle) +
+                     (idle.size() > 1 ? " (their columns of the transmission matrix are zero)"
+                                      : " (its column of the transmission matrix is zero)"));
   const auto ns = static_cast<Eigen::Index>(single.size());
   if (ns == 0) return;
   if (m < ns)

@@ -229,21 +229,36 @@ def number(
     return v
 
 
-def params(x, name: str, n: int, sizes_per_joint: Sequence[int] = (10, 11, 12, 13)):
-    """A classical parameter vector (or None: the model's own values): shape (k n,) for one of
-    ``sizes_per_joint``."""
-    if x is None:
-        return None
+def params(
+    x,
+    name: str,
+    n: int,
+    sizes_per_joint: Sequence[int] = (10, 11, 12, 13),
+    *,
+    allow_none: bool = True,
+):
+    """A classical parameter vector (or None, with ``allow_none``: the model's own values):
+    shape (k n,) for one of ``sizes_per_joint``."""
     sizes = [k * n for k in sizes_per_joint]
-    expected = " or ".join(f"({s},)" for s in sizes)
+    if x is None:
+        if allow_none:
+            return None
+        raise ArgumentError(
+            f"{name} is None; expected a vector of shape "
+            + " or ".join(f"({s},)" for s in sizes)
+            + " or a mapping of parameter names to values"
+        )
+    shapes = " or ".join(f"({s},)" for s in sizes)
+    none = " or None" if allow_none else ""
+    expected = shapes + none
     what = ", ".join(f"{k} n" for k in sizes_per_joint)
     a = _convert(x, name, expected)
     if a.ndim != 1:
-        raise ArgumentError(f"{name} must be 1-D, got shape {a.shape}; expected {expected} or None")
+        raise ArgumentError(f"{name} must be 1-D, got shape {a.shape}; expected {expected}")
     if a.shape[0] not in sizes:
         raise ArgumentError(
             f"{name} has shape {a.shape}: {a.shape[0]} entries fits no layout for {n} joints; "
-            f"expected {expected} ({what}) or None"
+            f"expected {shapes} ({what}){none}"
         )
     _finite(a, name, "entry")
     return a

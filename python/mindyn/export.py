@@ -93,7 +93,7 @@ def classical_terms(robot: Robot, classical, *, what: str = "classical parameter
     n = robot.n
     if isinstance(classical, Mapping):
         return _from_mapping(robot, classical, what)
-    p = _args.params(classical, what, n)
+    p = _args.params(classical, what, n, allow_none=False)
     per = p.size // n
     rotor = per in (11, 13)
     friction = per in (12, 13)

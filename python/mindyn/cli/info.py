@@ -76,7 +76,8 @@ def cmd_info(args: argparse.Namespace) -> int:
     kind = robot.convention
     if is_mjcf(robot.source):  # read as a URDF's link frames (robot.convention "urdf")
         kind = "MJCF, link frames as a URDF's"
-    out.append(f"robot      {robot.name}  ({n} joints, {kind}{shape})")
+    joints = "1 joint" if n == 1 else f"{n} joints"
+    out.append(f"robot      {robot.name}  ({joints}, {kind}{shape})")
     out.append(f"source     {robot.source}")
     g = robot.gravity
     out.append(f"gravity    [{g[0]:g}, {g[1]:g}, {g[2]:g}] m/s^2")
