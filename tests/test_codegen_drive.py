@@ -329,12 +329,21 @@ def one_motor_per_joint_refusal(tmp_path):
 
 
 def test_motor_side_needs_one_motor_per_joint(tmp_path):
+    """A URDF chain cut (--tip) inside a differential: 4 motors for its 3 joints. The rotor
+    inertia and friction act on the joints (no motor slot per joint), so the generated code
+    has the joint-side terms: rotor columns the accelerations (checked on the runtime
+    regressor, whose rotor columns are then diag(ddq)); the motor side is refused."""
     robot = one_motor_per_joint_refusal(tmp_path)
     assert robot.n == 3 and robot.transmission.T.shape == (4, 3)
-    with pytest.raises(mindyn.ModelError, match="one motor per joint; fourmotors has 4 motors"):
-        codegen.generate(robot, rotor=True, base=False)
-    # on the joints, or without rotor inertia and friction, nothing needs the motors
-    codegen.generate(robot.with_drive_side("joint"), rotor=True, base=False, what="gravity")
+    assert robot.drive_side == "joint"
+    with pytest.raises(mindyn.ModelError, match="4 motors for 3 joints"):
+        robot.with_drive_side("motor")
+    code = codegen.generate(robot, rotor=True, base=False)
+    assert code.counts["inverse_dynamics"]["mul"] > 0
+    rng = np.random.default_rng(1)
+    q, dq, ddq = (rng.standard_normal(3) for _ in range(3))
+    W = robot.regressor(q, dq, ddq, rotor=True).reshape(3, 3, 11)
+    np.testing.assert_array_equal(W[:, :, 10], np.diag(ddq))
     codegen.generate(robot, base=False, what="gravity")
 
 

@@ -493,28 +493,44 @@ def redundant_drive(tmp_path) -> Path:
     return path
 
 
-def test_cli_info_of_more_motors_than_joints_says_where_the_drive_terms_go(tmp_path, capsys):
-    """A YAML matrix of 4 motors for 3 joints (a redundant drive): info lists the 4 motors and
-    says that rotor inertia and friction need --drive-side joint (on the motors they need a
-    motor per joint, as the dynamics say); it failed on an index past the 3 slots."""
+def test_more_motors_than_joints_put_the_drive_terms_on_the_joints_by_default(tmp_path, capsys):
+    """A YAML matrix of 4 motors for 3 joints (a redundant drive): a motor's rotor inertia and
+    friction have no joint slot, so they act on the joints by default (a motor side refused
+    --rotor and --friction until --drive-side joint was given); the rotor columns are then the
+    joints' accelerations and the friction columns their velocities and signs (the closed
+    form), info lists the 4 motors and says where the terms act, and asking for the motor side
+    is refused in one line (library and description alike)."""
     from mindyn.cli import main
 
     path = redundant_drive(tmp_path)
     robot = mindyn.load(path)
     assert robot.transmission.n_motors == 4 and robot.n == 3
-    with pytest.raises(mindyn.ModelError, match="4 motors for 3 joints"):
-        robot.regressor(np.zeros(3), np.zeros(3), np.zeros(3), rotor=True)
+    assert robot.drive_side == "joint"
+    rng = np.random.default_rng(3)
+    q, dq, ddq = (rng.standard_normal(3) for _ in range(3))
+    W = robot.regressor(q, dq, ddq, rotor=True, friction=True).reshape(3, 3, 13)
+    np.testing.assert_array_equal(W[:, :, 10], np.diag(ddq))
+    np.testing.assert_array_equal(W[:, :, 11], np.diag(dq))
+    np.testing.assert_array_equal(W[:, :, 12], np.diag(np.sign(dq)))
+    with pytest.raises(mindyn.ModelError, match="4 motors for 3 joints") as e:
+        robot.with_drive_side("motor")
+    assert "\n" not in str(e.value)
+    table = yaml.safe_load(path.read_text(encoding="utf-8"))
+    table["drive_side"] = "motor"
+    (tmp_path / "motor.yaml").write_text(yaml.safe_dump(table), encoding="utf-8")
+    with pytest.raises(mindyn.ModelError, match="needs one motor per joint.*4 motors for 3"):
+        mindyn.load(tmp_path / "motor.yaml")
     assert main(["info", str(path)]) == 0
     out = capsys.readouterr().out
     assert "m4 " in out and "+1 j1 +1 j2 +1 j3" in out.replace("  ", " ")
-    assert "4 motors for 3 joints; --rotor and --friction need --drive-side joint" in out
+    assert "rotor inertia and friction: on the joints (the values above): 4 motors for 3" in out
 
 
-def test_default_gains_of_more_motors_than_joints_are_refused_in_one_line(tmp_path, capsys):
-    """The friction bound of the default gains takes the joints' Coulomb friction when the
-    slots are the joints' (4 motors for 3 joints: K_P >= 2 Fc / (0.5 x 2 deg) per joint, from
-    the description's values), and the gains with the rotors on the motors are refused as the
-    dynamics refuse them; a numpy shape error (T is 4 x 3) came out of both, and of `track`."""
+def test_default_gains_of_more_motors_than_joints_take_the_joints_friction(tmp_path, capsys):
+    """The friction bound of the default gains takes the joints' Coulomb friction (4 motors for
+    3 joints: K_P >= 2 Fc / (0.5 x 2 deg) per joint, from the description's values), with the
+    rotors too, and `track` runs with them; a numpy shape error (T is 4 x 3) came out of
+    both, and of `track`."""
     from mindyn import control
     from mindyn.cli import main
 
@@ -524,11 +540,9 @@ def test_default_gains_of_more_motors_than_joints_are_refused_in_one_line(tmp_pa
     assert fc.tolist() == [2.0, 1.5, 1.0]
     kp, tol = control.controllers.friction_bound(robot)
     np.testing.assert_allclose(kp, 2 * fc / (0.5 * np.radians(2.0)), rtol=1e-12)
-    with pytest.raises(mindyn.ModelError, match="4 motors for 3 joints"):
-        control.default_gains(robot, period=0.004, rotor=True)
-    assert main(["track", str(path), "--duration", "0.2"]) == 2
-    err = capsys.readouterr().err.strip()
-    assert err.startswith("mindyn: error: ") and "4 motors for 3 joints" in err, err
+    gains = control.default_gains(robot, period=0.004, rotor=True)
+    assert np.asarray(gains["kd"]).shape == (3,) and np.all(np.asarray(gains["kd"]) > 0)
+    assert main(["track", str(path), "--duration", "0.2"]) == 0, capsys.readouterr().err
 
 
 # ---- motor currents through T --------------------------------------------------------------

@@ -573,7 +573,9 @@ Model build(const Ctx& start, const YAML::Node& root) {
   }
   if (root["transmissions"].IsDefined()) model.transmission = readTransmissions(c, root, model);
   // Where each joint's rotor_inertia and friction act (Model::drive_terms_on_motors): with
-  // transmissions, on motor k of the joint's slot k ("motor", the default) or on the joint.
+  // transmissions, on motor k of the joint's slot k ("motor", the default) or on the joint
+  // (for more motors than joints the only side: a motor's terms then have no joint slot).
+  const bool square = model.transmission.nm() == model.nq();
   const std::string side = text(c, root, "drive_side", "");
   if (!side.empty()) {
     if (side != "motor" && side != "joint")
@@ -581,6 +583,11 @@ Model build(const Ctx& start, const YAML::Node& root) {
              root["drive_side"]);
     if (side == "motor" && model.transmission.empty())
       c.fail("'drive_side: motor' needs 'transmissions'", root["drive_side"]);
+    if (side == "motor" && !square)
+      c.fail("'drive_side: motor' needs one motor per joint; the transmissions have " +
+                 std::to_string(model.transmission.nm()) + " motors for " +
+                 std::to_string(model.nq()) + " joints (use 'drive_side: joint')",
+             root["drive_side"]);
     model.drive_terms_on_motors = side == "motor";
   }
   model.validate();

@@ -231,6 +231,11 @@ PYBIND11_MODULE(_core, m) {
               throw ModelError(s.model.name +
                                " declares no transmissions: its rotor inertia and friction can "
                                "only act on the joints");
+            if (side == "motor" && s.model.transmission.nm() != s.model.nq())
+              throw ModelError(s.model.name + " has " + std::to_string(s.model.transmission.nm()) +
+                               " motors for " + std::to_string(s.model.nq()) +
+                               " joints: rotor inertia and friction on the motors need one "
+                               "motor per joint; they can only act on the joints");
             Model copy = s.model;
             copy.drive_terms_on_motors = side == "motor";
             return std::make_shared<PyModel>(std::move(copy));

@@ -259,13 +259,17 @@ struct Model {
   /// Where the layout's rotor inertia and friction act when the model has transmissions: on
   /// the motors (true, the default; slot k of Ia/Fv/Fc belongs to motor k, in motor units:
   /// tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq))) or on the joints (false; as without
-  /// transmissions).
+  /// transmissions). A transmission of more motors than joints has no slot per motor: its
+  /// terms act on the joints whatever this says (motorSide()).
   bool drive_terms_on_motors = true;
   /// The shape of the friction terms (Coulomb unless a friction model is chosen).
   FrictionModel friction_model;
 
-  /// True when rotor inertia and friction act through the transmission (see above).
-  bool motorSide() const { return !transmission.empty() && drive_terms_on_motors; }
+  /// True when rotor inertia and friction act through the transmission (see above): declared
+  /// transmissions of one motor per joint, and drive_terms_on_motors.
+  bool motorSide() const {
+    return !transmission.empty() && drive_terms_on_motors && transmission.nm() == nq();
+  }
 
   /// Number of joints (and of moving links). The name is historical: it is the size of q only
   /// when every joint is revolute or prismatic (singleDof()); configSize() and velocitySize()

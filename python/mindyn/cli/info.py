@@ -160,12 +160,12 @@ def cmd_info(args: argparse.Namespace) -> int:
         row = list(p[k]) + list(extra[k])
         out.append(f"{robot.link_names[k + 1]:<{wl}}" + "".join(f"{v:11.4g}" for v in row))
     out.append(f"total moving mass {p[:, 9].sum():.4g} kg")
-    if on_motors and robot.transmission.n_motors != n:
+    if robot.transmission is not None and robot.transmission.n_motors != n:
         out += [
             "",
-            f"rotor inertia and friction: {robot.transmission.n_motors} motors for {n} joints; "
-            "--rotor and --friction need --drive-side joint (the joints' values above; on the "
-            "motors they need one motor per joint)",
+            f"rotor inertia and friction: on the joints (the values above): "
+            f"{robot.transmission.n_motors} motors for {n} joints, and on the motors they "
+            "need one motor per joint",
         ]
     elif on_motors:
         out.extend(_motor_terms(robot))
