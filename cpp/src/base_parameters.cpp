@@ -715,10 +715,11 @@ RankDecision echelon(const Eigen::SparseMatrix<double>& Z, const std::vector<int
   std::vector<char> weak_column(Z.cols(), 0);
   if (kinds.size() == static_cast<size_t>(Z.cols())) {
     std::vector<double> kindmax(*std::max_element(kinds.begin(), kinds.end()) + 1, 0.0);
-    for (int c = 0; c < Z.cols(); ++c) kindmax[kinds[c]] = std::max(kindmax[kinds[c]], colmax[c]);
+    for (int c = 0; c < Z.cols(); ++c)
+      kindmax[kinds[c]] = std::max(kindmax[kinds[c]], colmax[c] / units[c]);
     for (int b = 0; b < d.rank(); ++b) {
       const int c = d.pivots[b];
-      const double s = d.pivot_size[b] * colmax[c] / kindmax[kinds[c]];
+      const double s = d.pivot_size[b] * colmax[c] / units[c] / kindmax[kinds[c]];
       d.weakest_kept = std::min(d.weakest_kept, s);
       if (s < looser) {
         ++weak;
@@ -846,6 +847,38 @@ Eigen::VectorXd columnUnits(const Model& model, ParameterLayout layout) {
   return units;
 }
 
+namespace {
+
+// The size of each column's coordinates for a parameter of the size it takes in the torques of
+// the unit-length model: columnUnits, and on the motor side a drive-train parameter's torques
+// through its motor's reduction r (the largest entry of its row of T in that model, as a power
+// of two), T^T Ia T ddq and T^T Fv T dq by r^2, the bounded friction shapes by r. The decisions
+// measure the columns in these sizes; the coordinates are formed with columnUnits (so that Y
+// is the model's). A rotor on a reduction of 52143 rad/m measured in columnUnits was 2.7e9 times
+// the joint-side columns of its rows, which then fell under the tolerance against them.
+Eigen::VectorXd parameterSizes(const Model& model, ParameterLayout layout) {
+  Eigen::VectorXd sizes = columnUnits(model, layout);
+  if (!model.motorSide() || (!layout.rotor && !layout.friction)) return sizes;
+  const int n = model.nq();
+  const Eigen::MatrixXd& T = model.transmission.T;
+  const double L = robotLength(model);
+  for (int k = 0; k < n && k < T.rows(); ++k) {
+    // motor k's largest reduction in the unit-length model (a prismatic joint's column of T in
+    // motor units per L, unitLengthModel), as a power of two
+    double r = 0;
+    for (int a = 0; a < n; ++a)
+      r = std::max(r, std::abs(T(k, a)) * (model.joints[a].type == JointType::Prismatic ? L : 1));
+    if (!(r > 0) || !std::isfinite(r)) continue;
+    const double s = std::exp2(std::round(std::log2(r)));
+    if (layout.rotor) sizes[layout.rotorIndex(k)] *= s * s;
+    for (int i = 0; layout.friction && i < layout.friction_columns; ++i)
+      sizes[layout.frictionIndex(k, i)] *= i == 0 ? s * s : s;
+  }
+  return sizes;
+}
+
+}  // namespace
+
 std::vector<int> khalilOrder(int n, ParameterLayout layout) {
   std::vector<int> order;
   for (int k = 0; k < n; ++k) {
@@ -928,14 +961,16 @@ namespace {
 // (its rows are independent by construction, so their number is the rank; the Lagrangian's count
 // moves with it).
 // The recursion's rows with the columns in their units, then each row normalised (its norm
-// summed in column order).
+// summed in column order) with its entries measured in `sizes` (parameterSizes), as the
+// decisions measure them: a row holding a rotor on a large reduction is of that size.
 Eigen::SparseMatrix<double> recursiveCoordinates(Eigen::SparseMatrix<double> Z,
-                                                 const Eigen::VectorXd& units) {
+                                                 const Eigen::VectorXd& units,
+                                                 const Eigen::VectorXd& sizes) {
   Eigen::VectorXd norm2 = Eigen::VectorXd::Zero(Z.rows());
   for (int c = 0; c < Z.cols(); ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it) {
       it.valueRef() *= units[c];
-      norm2[it.row()] += it.value() * it.value();
+      norm2[it.row()] += (it.value() / sizes[c]) * (it.value() / sizes[c]);
     }
   for (int c = 0; c < Z.cols(); ++c)
     for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it)
@@ -1102,6 +1137,9 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     return Eigen::SparseMatrix<double>(Z.sparseView(0.0, 0.0));
   };
   const Eigen::VectorXd units = columnUnits(model, layout);
+  // the sizes the decisions measure the columns in (the motors' reductions on the drive-train
+  // columns); `units` forms the coordinates, so that Y is the model's
+  const Eigen::VectorXd sizes = parameterSizes(model, layout);
   const double length = robotLength(model);
   const Model unit_model = length != 1.0 ? unitLengthModel(model, length) : Model{};
   const Model& exact_model = length != 1.0 ? unit_model : model;
@@ -1156,10 +1194,11 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
       if (r != red.constant_row) Z.row(row++) = Zs.row(r);
     for (int k = 0; k < n; ++k)
       for (int i = 0; i < fc; ++i) {
-        // a friction parameter of unit size in the robot's scale (its column's unit), as the
-        // other rows' coordinates are: the rows are measured against the largest (echelon)
+        // a friction parameter of unit size in the robot's scale (its column's size, with its
+        // motor's reduction), as the other rows' coordinates are: the rows are measured
+        // against the largest (echelon)
         const int c = layout.frictionIndex(k, i);
-        Z(keep + fc * k + i, c) = units[c];
+        Z(keep + fc * k + i, c) = sizes[c];
       }
     ZE = sparse(Z);
   } else if (options.method == BaseMethod::Recursive) {
@@ -1167,14 +1206,16 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     // no friction columns), the total energy's is the same space.
     space = recursiveIdentifiable(kernel, layout, tol);
     if (expand) {
-      ZE = recursiveCoordinates(space.rows * real, units);
+      ZE = recursiveCoordinates(space.rows * real, units, sizes);
       space.constant = space.constant * real;
     } else {
-      ZE = recursiveCoordinates(std::move(space.rows), units);
+      ZE = recursiveCoordinates(std::move(space.rows), units, sizes);
     }
     space.constant = space.constant * units.asDiagonal();
-    // normalised as the rows are (its size, gravity times a length, is no measure of them)
-    if (const double norm = space.constant.norm(); norm > 0) space.constant /= norm;
+    // normalised as the rows are, in the sizes (its size, gravity times a length, is no
+    // measure of them)
+    if (const double norm = space.constant.cwiseQuotient(sizes.transpose()).norm(); norm > 0)
+      space.constant /= norm;
     // The constant first: it involves no joint, like the rows of the inner links, and leaves
     // the columns' last non-zero rows where they are. Then the rows with an entry off the
     // friction columns, without their friction entries.
@@ -1247,17 +1288,17 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
   // against already. The Lagrangian and total energy are checked against the energies, whose
   // constant potential (gravity times the heights) is of another size than the torques: their
   // rows are measured as they are.
-  bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds, units, -1.0), bp.classical_names);
+  bp.lagrangian = makeSet(echelon(ZL, order, tol, kinds, sizes, -1.0), bp.classical_names);
   if (options.method != BaseMethod::Numerical) {
     // The total-energy coordinates are the Lagrangian's with the potential rows negated: a
     // diagonal +-1 row scaling, which leaves every pivot, residual and Y exactly as they are
     // (recursive: the same row space, as the constant's sign does not change it).
     bp.energy = bp.lagrangian;
   } else {
-    bp.energy = makeSet(echelon(ZH, order, tol, kinds, units, -1.0), bp.classical_names);
+    bp.energy = makeSet(echelon(ZH, order, tol, kinds, sizes, -1.0), bp.classical_names);
   }
   bp.eom = makeSet(
-      echelon(ZE, order, tol, kinds, units, options.method == BaseMethod::Projection ? 0.0 : -1.0),
+      echelon(ZE, order, tol, kinds, sizes, options.method == BaseMethod::Projection ? 0.0 : -1.0),
       bp.classical_names);
   if (options.method == BaseMethod::Recursive) {
     if (expand) {
@@ -1265,9 +1306,9 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
       // counts at the neighbouring tolerances are the echelon form's ranks of those columns of
       // the recursion's rows at those tolerances.
       const auto rank = [&](double t) {
-        const Eigen::SparseMatrix<double> Z =
-            recursiveCoordinates(recursiveIdentifiable(kernel, layout, t).rows * real, units);
-        std::vector<int> pivots = echelon(Z, order, tol, kinds, units, -1.0).pivots;
+        const Eigen::SparseMatrix<double> Z = recursiveCoordinates(
+            recursiveIdentifiable(kernel, layout, t).rows * real, units, sizes);
+        std::vector<int> pivots = echelon(Z, order, tol, kinds, sizes, -1.0).pivots;
         return std::make_pair(static_cast<long>(pivots.size()), std::move(pivots));
       };
       foldRecursiveMargins(tol, space, bp.eom.size(), rank, order, bp);
@@ -1277,8 +1318,8 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
           [&](double t) {
             const IdentifiableSpace at = recursiveIdentifiable(exact_model, layout, t);
             const auto rows = static_cast<long>(at.rows.rows());
-            const Eigen::SparseMatrix<double> Z = recursiveCoordinates(at.rows, units);
-            return std::make_pair(rows, echelon(Z, order, tol, kinds, units, -1.0).pivots);
+            const Eigen::SparseMatrix<double> Z = recursiveCoordinates(at.rows, units, sizes);
+            return std::make_pair(rows, echelon(Z, order, tol, kinds, sizes, -1.0).pivots);
           },
           order, bp);
     }
@@ -1287,7 +1328,7 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     Model copy = model;
     bp.snappable = snapRightAngles(copy, 1e-3);
   }
-  checkRegrouping(model, layout, units, bp);
+  checkRegrouping(model, layout, sizes, bp);
   refuseInconsistent(bp, tol);
   bp.lagrangian_equals_energy = bp.lagrangian.decision.pivots == bp.energy.decision.pivots;
   bp.lagrangian_equals_eom = bp.lagrangian.decision.pivots == bp.eom.decision.pivots;
