@@ -58,6 +58,7 @@ import argparse
 import contextlib
 import io
 import json
+import math
 import os
 import random
 import re
@@ -481,7 +482,7 @@ def _decimal(rng: random.Random, v: float) -> str:
         return f"{v:e}"
     if form == 2:
         return f" {v!r}\n  "
-    if form == 3 and v >= 0:
+    if form == 3 and math.copysign(1.0, v) > 0:  # not -0.0, which would read '+-0.0'
         return f"+{v!r}"
     if form == 4 and float(v).is_integer() and abs(v) < 1e6:
         return str(int(v))

@@ -220,3 +220,15 @@ def test_a_transmission_of_a_type_not_read_is_found_in_the_robots_record(tmp_pat
         monkeypatch.setattr(mindyn.Robot, "unread_transmissions", property(lambda self: []))
         kind, detail = case.fn()
     assert kind == "wrong" and "dropped without a note" in detail, detail
+
+
+@pytest.mark.parametrize("v", [-0.0, 0.0, -1.5, 2.0, 1e-300])
+def test_a_number_written_in_an_odd_form_reads_back(v):
+    """Every form _decimal writes a description's number in reads back as that number with
+    float() (a negative zero was written '+-0.0', and drawing the case failed)."""
+    import random
+
+    rng = random.Random(0)
+    for _ in range(60):
+        text = campaign._decimal(rng, v)
+        assert float(text) == v, text
