@@ -310,6 +310,16 @@ def test_cli_controller(tmp_path, capsys):
         (["--what", "computed-torque", "--box", "0.1"], "adaptive-pd only"),
         (["--what", "adaptive-pd", "--box", "-1"], "--box must be"),
         (["--what", "adaptive-pd", "--controller-period", "0"], "--controller-period"),
+        # below the library's least period: said with this command's flag, not identify's
+        # --excitation-period (the library's keyword period)
+        (
+            ["--what", "gravity-compensation", "--controller-period", "1e-9"],
+            "--controller-period: expected a finite number in [1e-06, 10]",
+        ),
+        (
+            ["--what", "momentum-observer", "--controller-period", "1e-300"],
+            "--controller-period: expected a finite number in [1e-06",
+        ),
         (["--what", "adaptive-pd", "--torque-limit", "x"], "--torque-limit"),
         (["--what", "adaptive-pd", "--torque-limit", "effort"], "effort limits"),
         (["--what", "adaptive-pd", "--numeric"], "--numeric"),
