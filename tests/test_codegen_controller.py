@@ -310,6 +310,16 @@ def test_cli_controller(tmp_path, capsys):
         (["--what", "computed-torque", "--box", "0.1"], "adaptive-pd only"),
         (["--what", "adaptive-pd", "--box", "-1"], "--box must be"),
         (["--what", "adaptive-pd", "--controller-period", "0"], "--controller-period"),
+        # below the library's least period: said with this command's flag, not identify's
+        # --excitation-period (the library's keyword period)
+        (
+            ["--what", "gravity-compensation", "--controller-period", "1e-9"],
+            "--controller-period: expected a finite number in [1e-06, 10]",
+        ),
+        (
+            ["--what", "momentum-observer", "--controller-period", "1e-300"],
+            "--controller-period: expected a finite number in [1e-06",
+        ),
         (["--what", "adaptive-pd", "--torque-limit", "x"], "--torque-limit"),
         (["--what", "adaptive-pd", "--torque-limit", "effort"], "effort limits"),
         (["--what", "adaptive-pd", "--numeric"], "--numeric"),
@@ -329,3 +339,30 @@ def test_bad_settings_are_refused():
         codegen.generate_controller("planar2", gains={"kd": -1.0})
     with pytest.raises(mindyn.ArgumentError, match="kind is a str 'pid'; expected one of"):
         codegen.generate_controller("planar2", "pid")
+
+
+def test_computed_torque_with_a_files_kp_alone_is_critically_damped(tmp_path):
+    """A gains file giving computed torque's kp and no kd: the generated step's K_D is the
+    critically damped 2 sqrt(K_P) its note states (it took the default kd, a torque gain of the
+    other controllers). Measured from the C step alone: tau = M(q) v + h(q, dq) with
+    v = ddq_d - K_D (dq - dq_d) - K_P (q - q_d), so a step of dq_d moves tau by M K_D (the
+    step) and one of ddq_d by M (the step): their ratio is K_D, as one of q_d gives K_P."""
+    robot = mindyn.load("planar3")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    path = tmp_path / "gains.yaml"
+    path.write_text("kp: 100.0\n")
+    period = 0.004
+    g = control.load_gains(path, robot, period=period, rotor=True)
+    gen = codegen.generate_controller(robot, "computed-torque", base=base, gains=g, period=period)
+    ctl = codegen.CompiledController(gen, base)
+    rng = np.random.default_rng(3)
+    q, dq, qd, dqd, ddqd = (rng.uniform(-1, 1, robot.n) for _ in range(5))
+    tau = ctl(0.0, q, dq, qd, dqd, ddqd)
+    for j in range(robot.n):
+        e = np.eye(robot.n)[j]
+        by_acc = ctl(0.0, q, dq, qd, dqd, ddqd + e) - tau  # M e_j
+        by_vel = ctl(0.0, q, dq, qd, dqd + e, ddqd) - tau  # K_D,j M e_j
+        by_pos = ctl(0.0, q, dq, qd + e, dqd, ddqd) - tau  # K_P,j M e_j
+        k = int(np.argmax(np.abs(by_acc)))
+        assert by_pos[k] / by_acc[k] == pytest.approx(100.0, rel=1e-9)
+        assert by_vel[k] / by_acc[k] == pytest.approx(2 * np.sqrt(100.0), rel=1e-9)

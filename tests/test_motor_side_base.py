@@ -160,3 +160,55 @@ def test_a_motor_on_a_prismatic_joint_of_a_long_robot(tmp_path, kind):
             ref = robot.with_drive_side("joint").inverse_dynamics(q, dq, ddq, rigid) + drive
             tb = base.regressor(q, dq, ddq) @ base.values(pi)
             assert np.max(np.abs(tb - ref)) <= 1e-9 * np.max(np.abs(ref)), method
+
+
+NEAR_PARALLEL_TABLE = """name: nearpar
+convention: dh
+angle_unit: deg
+joints:
+- {name: j1, type: revolute, a: 0.1, alpha: -60.0, d: 0.0, theta: 0.0,
+   inertial: {mass: 4.4, com: [-0.08, -0.05, 0.08], inertia: {xx: 0.008, yy: 0.009, zz: 0.013}}}
+- {name: j2, type: prismatic, a: 0.0, alpha: 120.0, d: 0.0, theta: 0.0,
+   limits: {lower: -0.5, upper: 0.5},
+   inertial: {mass: 3.8, com: [0.09, 0.03, 0.03], inertia: {xx: 0.0096, yy: 0.0107, zz: 0.0109}}}
+- {name: j3, type: revolute, a: 0.0, alpha: 30.0, d: 0.58, theta: 0.0,
+   inertial: {mass: 4.1, com: [0.03, -0.08, 0.04], inertia: {xx: 0.0035, yy: 0.0036, zz: 0.0065}}}
+transmissions:
+  matrix:
+  - [T11, -65.67746716376892, T13]
+  - [189.5, 121.0, 0]
+  - [0.0, -65.677467163762358, 1.0]
+"""
+
+
+def sampled_rank(robot, tolerance=1e-9, states=300, seed=1):
+    """The rank of the stacked regressor (rotor inertia and friction on the motors) at random
+    states: singular values above tolerance times the largest."""
+    rng = np.random.default_rng(seed)
+    n = robot.n
+    W = np.vstack(
+        [
+            robot.regressor(*rng.uniform(-2, 2, (3, n)), rotor=True, friction=True)
+            for _ in range(states)
+        ]
+    )
+    s = np.linalg.svd(W, compute_uv=False)
+    return int(np.sum(s > tolerance * s[0])), s / s[0]
+
+
+@pytest.mark.parametrize("t11, t13", [("6.567747e-12", "1.0000000000001"), ("3.0", "1.0")])
+def test_friction_of_motors_turning_alike_regroups(tmp_path, t11, t13):
+    """Motors 1 and 3 whose rows of T are parallel to 1e-13: their viscous and Coulomb columns
+    are those of one motor at any state the regressor is sampled at, so the base set has two
+    parameters fewer than with the rows apart (the second case). The projection method took each
+    friction column as independent (two more than the regressor's rank, unflagged); every
+    method now gives the rank of the sampled regressor (a gap of 1e6 around the tolerance)."""
+    path = tmp_path / "nearpar.yaml"
+    path.write_text(NEAR_PARALLEL_TABLE.replace("T11", t11).replace("T13", t13))
+    robot = mindyn.load(path)
+    rank, s = sampled_rank(robot)
+    assert s[rank - 1] > 1e-8 and (rank == len(s) or s[rank] < 1e-12), s  # a clear gap
+    for method in ("projection", "numerical"):
+        bp = mindyn.base_parameters(robot, rotor=True, friction=True, method=method)
+        assert bp.n == rank, (method, bp.n, rank)
+    check_regrouping(robot)

@@ -331,6 +331,13 @@ void sampledRegressor(const Model& model, Data& data, ParameterLayout layout,
       W.col(layout.frictionIndex(k, i)) = Wf.col(layout.frictionIndex(k, i));
 }
 
+// Some motor drives two or more joints (a row of T with two non-zero entries).
+bool coupledMotors(const Eigen::MatrixXd& T) {
+  for (Eigen::Index k = 0; k < T.rows(); ++k)
+    if ((T.row(k).array() != 0.0).count() > 1) return true;
+  return false;
+}
+
 // The dynamics the numerical method samples and the regrouping check evaluates, at a random
 // state it holds: the single-DOF algorithms (dynamics.hpp) in the layout, or the multibody ones
 // (multibody.hpp, inertial parameters only) on a model with multi-DOF joints.
@@ -1192,14 +1199,44 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     long row = 0;
     for (long r = 0; r < Zs.rows(); ++r)
       if (r != red.constant_row) Z.row(row++) = Zs.row(r);
-    for (int k = 0; k < n; ++k)
-      for (int i = 0; i < fc; ++i) {
-        // a friction parameter of unit size in the robot's scale (its column's size, with its
-        // motor's reduction), as the other rows' coordinates are: the rows are measured
-        // against the largest (echelon)
-        const int c = layout.frictionIndex(k, i);
-        Z(keep + fc * k + i, c) = sizes[c];
+    if (fc > 0 && kernel.motorSide() && coupledMotors(kernel.transmission.T)) {
+      // Friction of motors that couple joints: motor k's columns are functions of its velocity
+      // T_k dq, so motors whose rows of T are nearly parallel have nearly dependent friction
+      // columns (a unit row each counted them independent). The rows are the triangular factor
+      // of the friction columns sampled at random states, each column scaled to its unit: the
+      // same dependencies, decided by the elimination as the other rows are (each column
+      // scaled to its size, with its motor's reduction).
+      Dynamics dyn(kernel, layout);
+      std::mt19937 rng(options.seed);
+      const int states = std::max(40, 2 * fr);
+      const int nv = kernel.velocitySize();
+      Eigen::MatrixXd F(static_cast<long>(states) * nv, fr), W(nv, P);
+      for (int s = 0; s < states; ++s) {
+        dyn.randomState(rng);
+        dyn.regressor(W);
+        for (int k = 0; k < n; ++k)
+          for (int i = 0; i < fc; ++i)
+            F.block(static_cast<long>(s) * nv, fc * k + i, nv, 1) =
+                W.col(layout.frictionIndex(k, i));
       }
+      for (int k = 0; k < n; ++k)
+        for (int i = 0; i < fc; ++i) {
+          const double norm = F.col(fc * k + i).norm();
+          if (norm > 0) F.col(fc * k + i) *= sizes[layout.frictionIndex(k, i)] / norm;
+        }
+      const Eigen::MatrixXd R = Eigen::HouseholderQR<Eigen::MatrixXd>(F).matrixQR().topRows(fr);
+      for (int a = 0; a < fr; ++a)
+        for (int b = a; b < fr; ++b) Z(keep + a, layout.frictionIndex(b / fc, b % fc)) = R(a, b);
+    } else {
+      for (int k = 0; k < n; ++k)
+        for (int i = 0; i < fc; ++i) {
+          // a friction parameter of unit size in the robot's scale (its column's size, with its
+          // motor's reduction), as the other rows' coordinates are: the rows are measured
+          // against the largest (echelon)
+          const int c = layout.frictionIndex(k, i);
+          Z(keep + fc * k + i, c) = sizes[c];
+        }
+    }
     ZE = sparse(Z);
   } else if (options.method == BaseMethod::Recursive) {
     // The rows span the identifiable space exactly; the Lagrangian's adds its constant (and has

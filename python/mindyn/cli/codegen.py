@@ -148,7 +148,9 @@ def register(subparsers) -> None:
         "estimate",
     )
     controller_period(
-        c, help=f"controller period [s] of the controller and observer steps (default {PERIOD:g})"
+        c,
+        low=1e-6,  # the library's least period (mindyn.control.MIN_PERIOD), checked again below
+        help=f"controller period [s] of the controller and observer steps (default {PERIOD:g})",
     )
     add_tolerance_arg(c)
     joint_vector(
@@ -242,7 +244,13 @@ def cmd_codegen(args: argparse.Namespace) -> int:
                 "--classical-counts applies to the inverse dynamics, gravity and regressor, "
                 "not to a controller or observer step"
             )
-        args.period = PERIOD if args.period is None else args.period
+        from ..control.controllers import check_period
+
+        # the library's range, said with this command's flag (the library's keyword period is
+        # identify's --excitation-period)
+        args.period = check_period(
+            PERIOD if args.period is None else args.period, what="--controller-period"
+        )
         note = _params_note(base.n, args.params, pruned, threshold) if params is not None else None
         given = params if params is not None else args.params
         if args.what.strip() == OBSERVER:

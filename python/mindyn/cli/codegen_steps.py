@@ -68,10 +68,6 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
     kind = args.what.strip()
     if args.numeric:
         raise ModelError("--numeric does not apply to controller steps (p is their state)")
-    if not (math.isfinite(args.period) and args.period > 0):
-        raise ModelError(
-            f"--controller-period must be a positive number of seconds, got {args.period:g}"
-        )
     from .closed_loop import joint_tolerance
 
     tolerance = joint_tolerance(robot, args.tracking_tolerance)

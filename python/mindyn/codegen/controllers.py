@@ -138,8 +138,9 @@ def generate_controller(
         (:func:`mindyn.control.check_sampled_gains`), and so are default gains whose
         ``conflicts`` name the controller (they cannot hold its Coulomb friction at
         ``period``). ``kp`` defaults to ``lambda**2`` for computed torque (with ``kd = 2
-        lambda``, as :func:`mindyn.control.make_controller`) and ``lambda kd`` for gravity
-        compensation.
+        lambda``, as :func:`mindyn.control.make_controller`; with a gains file's ``kp`` and no
+        ``kd`` of its own, critically damped ``kd = 2 sqrt(kp)``, as that too) and ``lambda
+        kd`` for gravity compensation.
     params : path or array, optional
         The initial estimate ``p0`` (the JSON of ``mindyn identify --json``, read by
         :func:`read_identified_parameters`, or another file :func:`read_parameter_file` reads);
@@ -165,6 +166,7 @@ def generate_controller(
         _args.instance(base, "base", BaseParameters, "a BaseParameters, False or None")
     period = _args.number(period, "period", positive=True)
     conflicts = getattr(gains, "conflicts", {})
+    defaulted = getattr(gains, "defaulted", ())  # the keys a gains file left to the defaults
     gains = None if gains is None else _gains(gains)
     if isinstance(tau_max, str) and tau_max != "effort":
         raise _args.fail("tau_max", f"is '{tau_max}'; expected None, 'effort' or {robot.n} values")
@@ -189,7 +191,13 @@ def generate_controller(
     if kind == "computed-torque":
         with np.errstate(over="ignore"):  # an infinite square is refused just below
             s["kp"] = _setting(g.get("kp"), n, "kp", 0.0) if "kp" in g else lam**2
-        s["kd"] = _setting(g["kd"], n, "kd", 0.0) if "kp" in g else 2 * lam
+        s["kd"] = (
+            control.controllers.computed_torque_kd(
+                s["kp"], _setting(g["kd"], n, "kd", 0.0), defaulted
+            )
+            if "kp" in g
+            else 2 * lam
+        )
     else:
         s["kd"] = _setting(g.get("kd"), n, "kd", 0.0)
         with np.errstate(over="ignore"):  # an infinite product is refused just below

@@ -558,13 +558,18 @@ def _gain_arrays(kind: str, gains: dict, n: int):
     if kind == "computed-torque":
         if "kp" in gains:
             kp = _diag(gains["kp"], n, "kp")
-            # without its own K_D (a gains file's default kd is a torque gain of the other
-            # controllers): critically damped
-            if "kd" in getattr(gains, "defaulted", ()):
-                kd = 2.0 * np.sqrt(np.maximum(kp, 0.0))
-            return kp, kd, lam
+            return kp, computed_torque_kd(kp, kd, getattr(gains, "defaulted", ())), lam
         return lam**2, 2 * lam, lam
     return lam * kd, kd, lam
+
+
+def computed_torque_kd(kp, kd, defaulted) -> np.ndarray:
+    """Computed torque's ``K_D`` beside the gains' own ``kp``: ``kd`` when the gains give it,
+    else (``"kd"`` in ``defaulted``, the keys a gains file left to the defaults: the default kd
+    is a torque gain of the other controllers) critically damped, ``2 sqrt(K_P)`` [1/s]."""
+    if "kd" in defaulted:
+        return 2.0 * np.sqrt(np.maximum(kp, 0.0))
+    return kd
 
 
 def check_gains(
