@@ -95,21 +95,21 @@ def test_drive_side_key_is_checked(tmp_path):
 
 def test_motor_side_terms_need_one_motor_per_joint(tmp_path):
     """Seven motors on six joints (a redundant drive): the motor side has no slot per motor, so
-    rotor inertia and friction there are refused in one line; on the joints they work."""
+    rotor inertia and friction act on the joints, by default (the base parameters are those of
+    the robot without transmissions), and the motor side is refused in one line."""
     rows = np.vstack([np.diag([60.0, -100.0, 50.0, 40.0, 40.0, 30.0]), np.ones((1, 6))])
     doc = yaml.safe_load(open(mindyn.load("puma560").source).read())
     doc["transmissions"] = {"matrix": rows.tolist()}
     path = tmp_path / "seven.yaml"
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
     robot = mindyn.load(path)
-    q = np.zeros(6)
+    assert robot.drive_side == "joint"
     with pytest.raises(mindyn.ModelError, match="7 motors for 6 joints") as e:
-        robot.regressor(q, q, q, rotor=True)
+        robot.with_drive_side("motor")
     assert "\n" not in str(e.value)
-    with pytest.raises(mindyn.ModelError, match="one motor per joint"):
-        mindyn.base_parameters(robot, friction=True)
-    robot.regressor(q, q, q)  # without rotor and friction: nothing to place
-    robot.with_drive_side("joint").regressor(q, q, q, rotor=True, friction=True)
+    plain = mindyn.base_parameters(mindyn.load("puma560"), rotor=True, friction=True)
+    ours = mindyn.base_parameters(robot, rotor=True, friction=True)
+    assert ours.names == plain.names
 
 
 def test_per_motor_values_in_the_list_form_and_their_check(tmp_path):
