@@ -264,10 +264,14 @@ def exact_regressor(joints: list[dict], q, dq, ddq, g: Decimal) -> list[list[Dec
     return W
 
 
-def exact_rank(path: Path, rotor: bool, states: int = 14, seed: int = 3) -> tuple[int, list]:
+def exact_rank(
+    path: Path, rotor: bool, states: int = 14, seed: int = 3, friction: bool = False
+) -> tuple[int, list]:
     """The rank of the regressor stacked over random states, by Gaussian elimination with
     complete pivoting on the columns scaled to unit norm (exactly zero columns left out), and
-    the pivots: those of the rank stand out from the 60-digit round-off (below 1e-45)."""
+    the pivots: those of the rank stand out from the 60-digit round-off (below 1e-45).
+    `friction`: with viscous and Coulomb friction columns per joint (dq_k and sign(dq_k) on
+    joint k's torque)."""
     rng = random.Random(seed)
     with localcontext() as ctx:
         ctx.prec = DIGITS
@@ -276,8 +280,14 @@ def exact_rank(path: Path, rotor: bool, states: int = 14, seed: int = 3) -> tupl
         rows = []
         for _ in range(states):
             q, dq, ddq = ([Decimal(rng.uniform(-2, 2)) for _ in range(n)] for _ in range(3))
-            rows += exact_regressor(joints, q, dq, ddq, Decimal("9.81"))
+            W = exact_regressor(joints, q, dq, ddq, Decimal("9.81"))
+            for k, row in enumerate(W):
+                for i in range(n if friction else 0):
+                    on = Decimal(int(i == k))  # joint i's friction acts on joint i's torque
+                    row += [on * dq[i], on * (1 if dq[i] > 0 else -1)]
+            rows += W
         cols = [c for c in range(11 * n) if rotor or c % 11 != 10]
+        cols += list(range(11 * n, len(rows[0])))
         A = []
         for c in cols:
             norm = sum(r[c] * r[c] for r in rows).sqrt()

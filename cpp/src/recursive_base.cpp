@@ -1,10 +1,10 @@
 #include "mindyn/recursive_base.hpp"
 
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "mindyn/spatial.hpp"
 
@@ -91,68 +91,73 @@ Vec6 motionToChild(const Eigen::Isometry3d& T, const Vec6& v) {
   return out;
 }
 
-// An orthonormal basis grown one vector at a time: a vector joins when what is left of it after
-// removing its components along the basis (twice, for accuracy), times its weight, exceeds
-// tolerance x scale, the scale being the size of what produced it. The components are taken all
-// at once (classical Gram-Schmidt, done twice), so that they do not wait on one another.
-//
-// The weight is the size of the torques a vector stands for, relative to the robot's largest in
-// the unit-length model: 1 for a joint's motion, gravity's (gravityWeight) for gravity, and for
-// each direction of the basis the largest of what the vectors offered to it put along it (its
-// weight when it joined: the part of its vector left over, weighted). A direction that joined as
-// the 3.7e-6 by which two nearly parallel axes differ keeps that size: what the links' inertia
+// A span given by weighted vectors, each the vector divided by the size of what produced it and
+// multiplied by the size of the torques it stands for, relative to the robot's largest in the
+// unit-length model: 1 for a joint's motion, gravity's (gravityWeight) for gravity, and for what
+// is derived from a direction of a span, that direction's size. The span's directions and their
+// sizes are the left singular vectors and singular values of the matrix of its weighted vectors
+// (kept compressed as Q diag(weight), D columns: the same singular values and vectors as all the
+// vectors offered), a size at most that of the largest vector offered (a direction that several
+// vectors share stands for torques no larger than the largest of them); a direction counts when
+// its size exceeds the tolerance. A span closed under a map (a joint's motion) is offered the
+// powers of the map on its vectors until one adds no direction: it is then closed. The decisions
+// are thus the echelon form's "numerically zero" of the other methods: below the tolerance against
+// the size of the robot's torques. They do not depend on the order in which the vectors come,
+// and a direction is measured by everything that points along it: one that only the 3.7e-6 by
+// which two nearly parallel axes differ sets apart keeps that size, and what the links' inertia
 // shows of it, and what it moves in turn, is measured at that size and not at full size, as the
 // regressor's columns are in the other methods (the rows of a link's inertia that only the
 // square of the difference reveals, 1.3e-11 of the torques, are below the tolerance there too).
-// The decisions are thus the echelon form's "numerically zero": below the tolerance against the
-// size of the robot's torques.
+// A direction's rounding (the 6e-17 of a written right angle beside a motion of 1e-8) stays at
+// its size: the singular vectors of the small singular values carry it relative to the gap
+// between them, and times their size it is again at the rounding level of the whole.
 struct Margin {
   double kept = 1.0, dropped = 0.0;
 };
 
-// The rounding level of a vector's entries relative to its norm, after the transforms that made
-// it (a few roundings each).
-constexpr double kNoise = 16 * std::numeric_limits<double>::epsilon();
-
 template <int D>
 struct Span {
-  Eigen::Matrix<double, D, D> Q = Eigen::Matrix<double, D, D>::Zero();
+  using Block = Eigen::Matrix<double, D, Eigen::Dynamic, Eigen::ColMajor, D, 3 * D>;
+  Eigen::Matrix<double, D, D> Q = Eigen::Matrix<double, D, D>::Zero();  // by size, largest first
   Eigen::Matrix<double, D, 1> weight = Eigen::Matrix<double, D, 1>::Zero();  // of each column
-  int dim = 0;
+  int dim = 0;         // the columns over the tolerance
+  double largest = 0;  // the size of the largest vector offered
   double tol;
   Margin* margin;
   Span(double tolerance, Margin& m) : tol(tolerance), margin(&m) {}
-  bool add(const Eigen::Matrix<double, D, 1>& v, double scale, double w = 1.0) {
-    if (dim == D) return false;
-    Eigen::Matrix<double, D, 1> r = v;
-    double along[D] = {};  // the components of v along the basis
-    if (dim > 0)
-      for (int pass = 0; pass < 2; ++pass) {
-        double c[D] = {};
-        for (int i = 0; i < dim; ++i) c[i] = Q.col(i).dot(r);
-        for (int i = 0; i < dim; ++i) {
-          r -= c[i] * Q.col(i);
-          along[i] += c[i];
-        }
-      }
-    if (scale > 0)
-      for (int i = 0; i < dim; ++i) weight[i] = std::max(weight[i], std::abs(along[i]) * w / scale);
-    // What is left at the rounding level of v is rounding: normalised, a residual of 1e-6 of v
-    // would carry it as a component of 1e-10 (an axis turned 1e-10 rad that no joint turns).
-    const double noise = kNoise * v.norm();
-    for (int i = 0; i < D; ++i)
-      if (std::abs(r[i]) <= noise) r[i] = 0.0;
-    const double nr = r.norm(), rel = scale > 0 ? nr * w / scale : 0.0;
-    if (!(rel > tol)) {
-      margin->dropped = std::max(margin->dropped, rel);
-      return false;
+  // Offers weighted vectors (at most 2D at once).
+  void add(const Block& W) {
+    if (W.cols() == 0) return;
+    Block G(D, D + W.cols());
+    G << Q * weight.asDiagonal(), W;
+    const Eigen::JacobiSVD<Block> svd(G, Eigen::ComputeFullU);
+    Q = svd.matrixU();
+    // (what several vectors put along a direction counts at most at the size of the largest:
+    // sizes do not grow from link to link)
+    largest = std::max(largest, W.colwise().norm().maxCoeff());
+    weight = svd.singularValues().head(D).cwiseMin(largest);
+    dim = 0;
+    while (dim < D && weight[dim] > tol) ++dim;
+  }
+  // Offers the weighted vectors W and f(W), f(f(W)) .. (f of a weighted vector: the weighted
+  // vector of what it produces) until a power adds no direction: the span closed under f.
+  template <class F>
+  void close(Block W, F f) {
+    add(W);
+    for (int power = 1, before = -1; power < D && dim > before; ++power) {
+      before = dim;
+      for (int c = 0; c < W.cols(); ++c) W.col(c) = f(W.col(c));
+      add(W);
     }
-    margin->kept = std::min(margin->kept, rel);
-    weight[dim] = rel;
-    Q.col(dim++) = r / nr;
-    return true;
+  }
+  // The decision is taken: its margins join the recursion's.
+  void decide() const {
+    if (dim > 0) margin->kept = std::min(margin->kept, weight[dim - 1]);
+    if (dim < D) margin->dropped = std::max(margin->dropped, weight[dim]);
   }
   auto basis() const { return Q.leftCols(dim); }
+  // The kept directions, each at its size.
+  Block kept() const { return Q.leftCols(dim) * weight.head(dim).asDiagonal(); }
 };
 
 // The weight of gravity's motion directions: in the unit-length model (time in sqrt(L / 1 m) s,
@@ -216,8 +221,9 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   if (model.gravity.norm() > 0) {
     Vec6 g;
     g << Eigen::Vector3d::Zero(), -model.gravity;
-    Vbase.add(g, g.norm(), gravityWeight(model));
+    Vbase.add(g / g.norm() * gravityWeight(model));
   }
+  Vbase.decide();
   const Span<10> Cbase(tolerance, margin);
   std::vector<Span<6>> Vs(n, Span<6>(tolerance, margin));
   std::vector<Span<10>> Cs(n, Span<10>(tolerance, margin));
@@ -274,43 +280,49 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
       }
     }
 
-    // V_k: the motions of the parent link seen from link k, closed under joint k's motion, and
-    // S_k.
+    // V_k: the motions of the parent link seen from link k, and S_k, closed under joint k's
+    // motion.
     Span<6>& V = Vs[k];
-    V.add(S, sn);
+    Span<6>::Block W(6, 1 + Vp.dim);
+    W.col(0) = S / sn;
+    int cols = 1;
     for (int i = 0; i < Vp.dim; ++i) {
       const Vec6 v = motionToChild(X, Vp.Q.col(i));
-      V.add(v, v.norm(), Vp.weight[i]);
+      if (v.norm() > 0) W.col(cols++) = v / v.norm() * Vp.weight[i];
     }
-    for (int i = 0; i < V.dim; ++i) V.add(crossMotion(S, V.Q.col(i)), sn, V.weight[i]);
+    V.close(W.leftCols(cols), [&](const Vec6& v) -> Vec6 { return crossMotion(S, v) / sn; });
+    V.decide();
 
     // O_k: what the parent link identifies of link k's inertia, at every q_k (closed under the
-    // rate), and its rates.
+    // rate).
     const Mat10 At = parameterRate(S).transpose();
     const double an = At.norm();
-    Span<10> O(tolerance, margin);
+    Span<10>::Block R(10, Cp.dim);
+    cols = 0;
     for (int i = 0; i < Cp.dim; ++i) {
       const Vec10 r = T0[k].transpose().lazyProduct(Cp.Q.col(i));
-      O.add(r, r.norm(), Cp.weight[i]);
+      if (r.norm() > 0) R.col(cols++) = r / r.norm() * Cp.weight[i];
     }
-    // C_k starts from the same rows: what the parent link identifies of link k at q_k = 0.
-    Span<10>& C = Cs[k];
-    C = O;
-    Rows10 rates(10, 10);
-    for (int i = 0; i < O.dim; ++i) {
-      rates.row(i) = At.lazyProduct(O.Q.col(i)).transpose();
-      O.add(rates.row(i).transpose(), an, O.weight[i]);
-    }
+    Span<10> O(tolerance, margin);
+    O.close(R.leftCols(cols), [&](const Vec10& r) -> Vec10 { return At * r / an; });
+    O.decide();
 
     // N_k: s^T I v for v in V_k, and the rates of O_k.
     Span<10> N(tolerance, margin);
-    for (int i = 0; i < V.dim; ++i) N.add(outputRow(S, V.Q.col(i)).transpose(), sn, V.weight[i]);
-    for (int i = 0; i < O.dim; ++i) N.add(rates.row(i).transpose(), an, O.weight[i]);
+    Span<10>::Block outputs(10, V.dim);
+    for (int i = 0; i < V.dim; ++i)
+      outputs.col(i) = outputRow(S, V.Q.col(i)).transpose() / sn * V.weight[i];
+    N.add(outputs);
+    N.add(At * O.kept() / an);
+    N.decide();
     M[k] = N.basis().transpose();
     out.link_rank[k] = N.dim;
 
-    // C_k: and N_k.
-    for (int i = 0; i < N.dim; ++i) C.add(N.Q.col(i), 1.0, N.weight[i]);
+    // C_k: what the parent link identifies of link k at q_k = 0, and N_k.
+    Span<10>& C = Cs[k];
+    C.add(R.leftCols(cols));
+    C.add(N.kept());
+    C.decide();
   }
 
   out.smallest_kept = margin.kept;

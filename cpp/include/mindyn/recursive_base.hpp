@@ -49,11 +49,11 @@ struct IdentifiableSpace {
   Eigen::RowVectorXd constant;
   std::vector<int> link_rank;        // rank of N_k per link: its number of base parameters
   std::vector<int> rotor_regrouped;  // joints whose rotor inertia regroups with link inertia
-  /// Margins of the recursion's own rank decisions: residual of a vector relative to the size
-  /// of what produced it, weighted by the size of the torques that stands for against the
-  /// robot's largest (gravity's, gravityWeight, and what is derived from a kept direction, the
-  /// size it was kept at: see Span in recursive_base.cpp), smallest of those kept and largest
-  /// of those dropped.
+  /// Margins of the recursion's own rank decisions: the singular values of each span's vectors,
+  /// each relative to the size of what produced it and weighted by the size of the torques it
+  /// stands for against the robot's largest (gravity's, gravityWeight, and what is derived from
+  /// a kept direction, that direction's singular value: see Span in recursive_base.cpp),
+  /// smallest of those kept and largest of those dropped.
   double smallest_kept = 1.0;
   double largest_dropped = 0.0;
 };
