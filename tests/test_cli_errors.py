@@ -519,3 +519,95 @@ def test_valid_values_at_their_bounds_run(argv, files, tmp_path):
     argv = [named.get(a, a).replace("OUT", str(tmp_path)) for a in argv]
     rc, _, err = run(argv)
     assert rc == 0, err
+
+
+@pytest.mark.parametrize(
+    "exc",
+    [
+        IndexError("index 3 is out of bounds for axis 0 with size 3"),
+        ValueError("matmul: Input operand 1 has a mismatch in its core dimension 0"),
+        KeyError("tau"),
+        np.linalg.LinAlgError("Singular matrix"),
+    ],
+    ids=lambda e: type(e).__name__,
+)
+def test_a_bare_standard_error_is_a_defect_not_the_users(monkeypatch, exc):
+    """Only mindyn's own errors (and a missing file) are the input's: a bare ValueError,
+    IndexError, KeyError or LinAlgError escaping a command is a defect in mindyn, reported with
+    its type and exit status 70, never as if the command line were wrong."""
+
+    def broken(args):
+        raise exc
+
+    import mindyn.cli.info
+
+    monkeypatch.setattr(mindyn.cli.info, "cmd_info", broken)
+    rc, _, err = run(["info", "planar2"])
+    assert rc == 70 and err.count("\n") == 1, err
+    assert err.startswith(f"mindyn: error: unexpected {type(exc).__name__}: "), err
+    assert "a defect in mindyn; please report it" in err
+
+
+@pytest.mark.parametrize(
+    "argv, needles",
+    [
+        (
+            ["simulate", "planar2", "--mode", "inverse", "--controller", "pd", "-o", "x.csv"],
+            ["--controller:", "--mode tracking"],
+        ),
+        (["identify", "planar2", "LOG", "--urdf", "out.urdf"], ["--urdf:", "--consistent"]),
+        (
+            [
+                "identify",
+                "planar2",
+                "LOG",
+                "--consistent",
+                "--urdf",
+                "o.urdf",
+                "--friction",
+                "--friction-model",
+                "smooth",
+            ],
+            ["--urdf:", "smooth friction model"],
+        ),
+        (
+            ["identify", "planar2", "LOG", "--consistent", "--sidecar", "s.yaml"],
+            ["--sidecar:", "--urdf or --yaml"],
+        ),
+        (
+            ["identify", "planar2", "LOG", "--validate-currents", "c.csv"],
+            ["--validate-currents:", "--validate"],
+        ),
+        (
+            ["excite", "planar2", "--start", "100", "0", "-o", "e.csv"],
+            ["--start 100 (value 1)", "[-2pi, 2pi]", "--deg"],
+        ),
+        (["excite", "planar2", "-o", "e.json"], ["-o e.json", ".json"]),
+        (["excite", "planar2", "--samples", "3", "-o", "e.csv"], ["--samples 3", "--harmonics"]),
+        (
+            ["track", "planar2", "--controller", "pd", "--param-error", "10"],
+            ["--param-error:", "--controller pd"],
+        ),
+        (["track", "planar2", "--cycle", "0.01"], ["--cycle 0.01 s", "--controller-period"]),
+        (["track", "planar2", "--duration", "1e-9"], ["--duration 1e-09 s", "--controller-period"]),
+    ],
+)
+def test_option_conflicts_are_usage_errors(argv, needles, files, monkeypatch):
+    """Options that do not go together, or a value the other options rule out, are refused as
+    the command line's error (exit status 2, naming the option), not as a defect."""
+    monkeypatch.chdir(files)
+    argv = [str(files / "log.csv") if a == "LOG" else a for a in argv]
+    rc, _, err = run(argv)
+    assert rc == 2
+    assert_one_line_error(rc, err, *needles)
+
+
+@pytest.mark.parametrize("cmd", ["predict", "detect"])
+def test_an_identification_json_that_is_not_an_object_names_the_file(cmd, files, tmp_path):
+    (tmp_path / "list.json").write_text("[1, 2]")
+    argv = [cmd, "planar2", str(tmp_path / "list.json"), str(files / "log.csv")]
+    if cmd == "predict":
+        argv += ["-o", str(tmp_path / "p.csv")]
+    rc, _, err = run(argv)
+    assert rc == 2
+    assert_one_line_error(rc, err, "list.json: not the JSON of 'mindyn identify'", "got list")

@@ -4,27 +4,30 @@ from __future__ import annotations
 
 import argparse
 
-from .args import add_command
+from .args import UsageError, add_command
 from .number_options import add_recorded_torque_reading, number
 from .outputs import output_file
 from .robot_options import add_robot, load_robot
 
 
 def cmd_predict(args: argparse.Namespace) -> int:
-    from ..identification.data import read_json
+    from ..identification.data import DataError, read_json
     from ..identification.options import ReadingOptions
     from ..identification.prediction import identified_model, predict
     from ..identification.reading import read_log
 
     doc = read_json(args.identification)
     if not isinstance(doc, dict):
-        raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
+        raise DataError(
+            f"{args.identification}: not the JSON of 'mindyn identify' (expected an object, got "
+            f"{type(doc).__name__})"
+        )
     robot = load_robot(args, tip=doc.get("tip"), command="predict")
     estimate = "consistent" if args.consistent else "unconstrained"
     identified_model(args.identification, robot, estimate=estimate)  # errors before reading
     recorded = doc.get("reading")
     if recorded is None and args.filter is None:
-        raise ValueError(
+        raise UsageError(
             f"{args.identification}: does not record how identify read its logs; give --filter "
             "(and --cutoff) as identify had them"
         )
