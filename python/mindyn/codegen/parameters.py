@@ -148,12 +148,16 @@ def read_identified_parameters(
     idents, values = doc["names"], doc["values"]
     try:
         pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]
+        pruned = [k if isinstance(k, str) else str(k) for k in pruned]
     except (KeyError, TypeError):
         raise _core.ModelError(
             f"{path}: 'removed' must list the pruned parameters by name"
         ) from None
     if not (isinstance(idents, list) and isinstance(values, list) and len(idents) == len(values)):
         raise _core.ModelError(f"{path}: 'names' and 'values' must be lists of the same length")
+    odd = next((k for k in idents if not isinstance(k, str)), None)
+    if odd is not None:
+        raise _core.ModelError(f"{path}: 'names' must list parameter names (strings), got {odd!r}")
     known = set(names)
     unknown = [k for k in idents + pruned if k not in known]
     if unknown:
@@ -193,6 +197,10 @@ def _same_friction_model(doc: dict, path, robot) -> None:
             f"{path}: 'friction_model' must be {{kind, velocity}}, got {recorded!r}"
         )
     kind, velocity = recorded["kind"], recorded.get("velocity") or []
+    if not isinstance(velocity, list):
+        raise _core.ModelError(
+            f"{path}: friction_model velocity must be a list of numbers, got {velocity!r}"
+        )
     own = robot.friction_model
     same = kind == own["kind"] and len(velocity) == len(own["velocity"])
     if same and velocity:
