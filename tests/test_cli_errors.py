@@ -610,4 +610,66 @@ def test_an_identification_json_that_is_not_an_object_names_the_file(cmd, files,
         argv += ["-o", str(tmp_path / "p.csv")]
     rc, _, err = run(argv)
     assert rc == 2
-    assert_one_line_error(rc, err, "list.json: not the JSON of 'mindyn identify'", "got list")
+    assert_one_line_error(
+        rc, err, "list.json: expected a JSON object (the JSON of mindyn identify)"
+    )
+
+
+def _identification(path, **fields):
+    """A hand-written identification JSON of planar2 (its own base-parameter values)."""
+    base = mindyn.base_parameters(mindyn.load("planar2"))
+    doc = {"robot": "planar2", "rotor": False, "friction": False, "offset": False}
+    doc.update(
+        base_names=list(base.names), base_values=[float(v) for v in base.values(base.robot.params)]
+    )
+    doc.update(fields)
+    path.write_text(json.dumps(doc))
+    return path
+
+
+@pytest.mark.parametrize(
+    "fields, needle",
+    [
+        ({"reading": [[1]]}, "'reading' is"),
+        ({"reading": {"filter": 3}}, "'reading' filter is 3; expected one of lowpass"),
+        ({"reading": {"cutoff_Hz": "x"}}, "'reading' cutoff_Hz"),
+        ({"reading": {"drive_gain": "x"}}, "'reading' drive_gain is 'x'"),
+        ({"base_names": {"a": 1}}, "'base_names' is"),
+    ],
+)
+def test_an_identification_json_with_odd_fields_names_the_field(fields, needle, files, tmp_path):
+    """Fields of the wrong JSON type were bare TypeError, AttributeError or ValueError (a list
+    where 'reading' is an object, a mapping as base_names): now the file's error."""
+    path = _identification(tmp_path / "id.json", **fields)
+    for argv in (
+        ["predict", "planar2", str(path), str(files / "log.csv"), "-o", str(tmp_path / "p.csv")],
+        ["detect", "planar2", str(path), str(files / "log.csv")],
+    ):
+        rc, _, err = run(argv)
+        assert rc == 2
+        assert_one_line_error(rc, err, f"{path}:", needle)
+
+
+def test_predict_with_another_filter_than_recorded_states_the_derived_cutoff(files, tmp_path):
+    """--filter lowpass on an identification recorded with butter and no cut-off: the low-pass
+    takes the log's own cut-off, and the output states it (it failed formatting None)."""
+    from mindyn.identification.data import read_csv
+    from mindyn.identification.preprocess import preprocess
+
+    path = _identification(tmp_path / "id.json", reading={"filter": "butter", "cutoff_Hz": None})
+    log = files / "log.csv"
+    rc, out, err = run(
+        [
+            "predict",
+            "planar2",
+            str(path),
+            str(log),
+            "-o",
+            str(tmp_path / "p.csv"),
+            "--filter",
+            "lowpass",
+        ]
+    )
+    assert rc == 0, err
+    fc = preprocess(read_csv(log)).processing["preprocess"]["filter"]["cutoff_Hz"]
+    assert f"low-pass at {fc:.4g} Hz, derived from the log" in out, out

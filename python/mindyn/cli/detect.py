@@ -42,15 +42,10 @@ def cmd_detect(args: argparse.Namespace) -> int:
         load_thresholds,
         residual_uncertainty,
     )
-    from ..identification.data import DataError, read_json
+    from ..identification.document import read_identification
     from ..identification.prediction import identified_model
 
-    doc = read_json(args.identification)
-    if not isinstance(doc, dict):
-        raise DataError(
-            f"{args.identification}: not the JSON of 'mindyn identify' (expected an object, got "
-            f"{type(doc).__name__})"
-        )
+    doc = read_identification(args.identification)
     from ..identification.document import refuse_state
 
     refuse_state(doc, "the momentum observer", str(args.identification))
