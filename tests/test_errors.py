@@ -162,3 +162,25 @@ def test_an_identification_json_with_odd_types_names_the_file(tmp_path, change, 
     with pytest.raises(mindyn.ModelError) as e:
         read_identified_parameters(path, names, robot=robot, friction="friction_model" in change)
     assert str(e.value).startswith(str(path)) and needle in str(e.value), e.value
+
+
+@pytest.mark.parametrize(
+    "data, needle",
+    [
+        (b"[" * 5000 + b"]" * 5000, "nested deeper than the JSON reader follows"),
+        (b'{"ZZR1": 1,\n "MXR1": \xff}', "line 2: not UTF-8 text (byte 0xff"),
+        (b'{"names": 3, "values": [1]}', "'names' and 'values' must be lists"),
+        (b'{"names": [[1]], "values": [1]}', "'names' must list parameter names"),
+        (b'{"ZZR1": 1,\n "MXR1" 2}', ":2:"),  # the line of a syntax error
+    ],
+)
+def test_a_parameter_file_that_cannot_be_read_names_the_file(tmp_path, data, needle):
+    """Files nested too deep, not UTF-8 or with names of the wrong type escaped as bare
+    RecursionError, UnicodeDecodeError or TypeError."""
+    from mindyn.codegen.parameters import read_parameter_file
+
+    path = tmp_path / "params.json"
+    path.write_bytes(data)
+    with pytest.raises(DataError) as e:
+        read_parameter_file(path, mindyn.base_parameters(mindyn.load("planar2")).names)
+    assert str(e.value).startswith(str(path)) and needle in str(e.value), e.value

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from collections.abc import Sequence
@@ -37,25 +36,27 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
     or a plain list in order; or text with one ``NAME value`` (or ``NAME = value``) per line,
     ``#`` comments allowed. Every name must be given exactly once; unknown names are an error.
     """
-    from ..identification.data import DataError
+    from ..identification.data import DataError, decode_text, read_json
 
     path = Path(_args.path(path, "path"))
     names = _names(names)
     if not path.is_file():
         raise _core.RobotFileNotFoundError(f"parameter file '{path}' does not exist")
-    text = path.read_text()
+    text = decode_text(path)
     mapping: dict[str, float] = {}
     if path.suffix.lower() == ".json" or text.lstrip().startswith(("{", "[")):
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise DataError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+        data = read_json(path, what="parameter file")
         if isinstance(data, list):
             if len(data) != len(names):
                 raise DataError(f"{path}: {len(data)} values; expected {len(names)}")
             mapping = dict(zip(names, data))
         elif isinstance(data, dict) and "names" in data and "values" in data:
-            if len(data["names"]) != len(data["values"]):
+            idents, values = data["names"], data["values"]
+            if not (isinstance(idents, list) and isinstance(values, list)):
+                raise DataError(f"{path}: 'names' and 'values' must be lists")
+            if not all(isinstance(k, str) for k in idents):
+                raise DataError(f"{path}: 'names' must list parameter names (strings)")
+            if len(idents) != len(values):
                 raise DataError(f"{path}: 'names' and 'values' differ in length")
             mapping = dict(zip(data["names"], data["values"]))
         elif isinstance(data, dict):
