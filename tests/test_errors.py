@@ -184,3 +184,21 @@ def test_a_parameter_file_that_cannot_be_read_names_the_file(tmp_path, data, nee
     with pytest.raises(DataError) as e:
         read_parameter_file(path, mindyn.base_parameters(mindyn.load("planar2")).names)
     assert str(e.value).startswith(str(path)) and needle in str(e.value), e.value
+
+
+def test_a_csv_field_past_the_csv_modules_limit_names_the_file_and_line(tmp_path):
+    """csv.Error (not a ValueError) escaped from the trajectory and floating-base log readers
+    for a field longer than the csv module takes."""
+    from mindyn.control.simulation import CsvTrajectory
+    from mindyn.identification.floating import read_floating_csv
+
+    path = tmp_path / "big.csv"
+    path.write_text("t,q1,q2\n0,0,0\n0.1," + "1" * 200_000 + ",0\n")
+    with pytest.raises(DataError) as e:
+        CsvTrajectory(path, 2)
+    assert str(e.value).startswith(f"{path}, line 3: not readable as CSV"), e.value
+    ur5 = Path(__file__).resolve().parents[1] / "examples" / "urdf" / "ur5.urdf"
+    robot = mindyn.load(str(ur5), root_joint="floating")
+    with pytest.raises(DataError) as e:
+        read_floating_csv(path, robot)
+    assert str(e.value).startswith(f"{path}, line 3: not readable as CSV"), e.value
