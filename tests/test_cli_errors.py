@@ -673,3 +673,27 @@ def test_predict_with_another_filter_than_recorded_states_the_derived_cutoff(fil
     assert rc == 0, err
     fc = preprocess(read_csv(log)).processing["preprocess"]["filter"]["cutoff_Hz"]
     assert f"low-pass at {fc:.4g} Hz, derived from the log" in out, out
+
+
+def test_predict_on_a_log_without_torques(files, tmp_path):
+    """A log without torque columns is what predict takes (it predicts them): it failed with a
+    bare KeyError looking up the unit of the torques it does not have. The prediction is the
+    inverse dynamics at the motion it writes."""
+    path = _identification(tmp_path / "id.json")
+    lines = (files / "log.csv").read_text().splitlines()
+    head = [c.strip() for c in lines[0].split(",")]
+    keep = [k for k, c in enumerate(head) if not c.startswith("tau")]
+    log = tmp_path / "motion.csv"
+    log.write_text(
+        "\n".join(",".join(line.split(",")[k] for k in keep) for line in lines if line) + "\n"
+    )
+    out_csv = tmp_path / "p.csv"
+    argv = ["predict", "planar2", str(path), str(log), "-o", str(out_csv), "--filter", "lowpass"]
+    rc, out, err = run(argv)
+    assert rc == 0, err
+    rows = np.loadtxt(out_csv, delimiter=",", skiprows=1)
+    assert open(out_csv).readline().strip() == "t,q1,q2,dq1,dq2,ddq1,ddq2,tau_hat1,tau_hat2"
+    robot = mindyn.load("planar2")
+    tau = robot.inverse_dynamics(rows[:, 1:3], rows[:, 3:5], rows[:, 5:7])
+    scale = np.abs(tau).max()
+    assert np.abs(rows[:, 7:9] - tau).max() <= 1e-9 * scale
