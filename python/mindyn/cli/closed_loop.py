@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 
+from .._core import ArgumentError
 from ..base import base_parameters
 from .args import UsageError
 from .number_options import number
@@ -90,7 +91,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
             1.0 / period,
             substeps=(args.substeps or MIN_SUBSTEPS) if args.integrator == "rk4" else 1,
         )
-    except ValueError as e:
+    except ArgumentError as e:  # the library's check; a bare ValueError stays a defect
         raise UsageError(
             f"--duration {duration:g} with --controller-period {period:g}: {e}"
             + (" (the duration is two cycles unless given)" if args.duration is None else "")

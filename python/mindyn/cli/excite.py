@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._core import ArgumentError
 from .args import ZCR07S_STUDY, UsageError, add_command, deprecated
 from .number_options import check_radians, joint_values, joint_vector, number, seed
 from .outputs import output_file
@@ -33,7 +34,7 @@ def cmd_excite(args: argparse.Namespace) -> int:
         )
     try:  # before the optimisation, not after it
         check_sampling(args.harmonics, args.freq, args.rate)
-    except ValueError as e:
+    except ArgumentError as e:  # the library's check; a bare ValueError stays a defect
         raise UsageError(f"--rate {args.rate:g}: {e}") from None
     if not args.samples > 2 * args.harmonics:
         raise UsageError(
