@@ -519,3 +519,181 @@ def test_valid_values_at_their_bounds_run(argv, files, tmp_path):
     argv = [named.get(a, a).replace("OUT", str(tmp_path)) for a in argv]
     rc, _, err = run(argv)
     assert rc == 0, err
+
+
+@pytest.mark.parametrize(
+    "exc",
+    [
+        IndexError("index 3 is out of bounds for axis 0 with size 3"),
+        ValueError("matmul: Input operand 1 has a mismatch in its core dimension 0"),
+        KeyError("tau"),
+        np.linalg.LinAlgError("Singular matrix"),
+    ],
+    ids=lambda e: type(e).__name__,
+)
+def test_a_bare_standard_error_is_a_defect_not_the_users(monkeypatch, exc):
+    """Only mindyn's own errors (and a missing file) are the input's: a bare ValueError,
+    IndexError, KeyError or LinAlgError escaping a command is a defect in mindyn, reported with
+    its type and exit status 70, never as if the command line were wrong."""
+
+    def broken(args):
+        raise exc
+
+    import mindyn.cli.info
+
+    monkeypatch.setattr(mindyn.cli.info, "cmd_info", broken)
+    rc, _, err = run(["info", "planar2"])
+    assert rc == 70 and err.count("\n") == 1, err
+    assert err.startswith(f"mindyn: error: unexpected {type(exc).__name__}: "), err
+    assert "a defect in mindyn; please report it" in err
+
+
+@pytest.mark.parametrize(
+    "argv, needles",
+    [
+        (
+            ["simulate", "planar2", "--mode", "inverse", "--controller", "pd", "-o", "x.csv"],
+            ["--controller:", "--mode tracking"],
+        ),
+        (["identify", "planar2", "LOG", "--urdf", "out.urdf"], ["--urdf:", "--consistent"]),
+        (
+            [
+                "identify",
+                "planar2",
+                "LOG",
+                "--consistent",
+                "--urdf",
+                "o.urdf",
+                "--friction",
+                "--friction-model",
+                "smooth",
+            ],
+            ["--urdf:", "smooth friction model"],
+        ),
+        (
+            ["identify", "planar2", "LOG", "--consistent", "--sidecar", "s.yaml"],
+            ["--sidecar:", "--urdf or --yaml"],
+        ),
+        (
+            ["identify", "planar2", "LOG", "--validate-currents", "c.csv"],
+            ["--validate-currents:", "--validate"],
+        ),
+        (
+            ["excite", "planar2", "--start", "100", "0", "-o", "e.csv"],
+            ["--start 100 (value 1)", "[-2pi, 2pi]", "--deg"],
+        ),
+        (["excite", "planar2", "-o", "e.json"], ["-o e.json", ".json"]),
+        (["excite", "planar2", "--samples", "3", "-o", "e.csv"], ["--samples 3", "--harmonics"]),
+        (
+            ["track", "planar2", "--controller", "pd", "--param-error", "10"],
+            ["--param-error:", "--controller pd"],
+        ),
+        (["track", "planar2", "--cycle", "0.01"], ["--cycle 0.01 s", "--controller-period"]),
+        (["track", "planar2", "--duration", "1e-9"], ["--duration 1e-09 s", "--controller-period"]),
+    ],
+)
+def test_option_conflicts_are_usage_errors(argv, needles, files, monkeypatch):
+    """Options that do not go together, or a value the other options rule out, are refused as
+    the command line's error (exit status 2, naming the option), not as a defect."""
+    monkeypatch.chdir(files)
+    argv = [str(files / "log.csv") if a == "LOG" else a for a in argv]
+    rc, _, err = run(argv)
+    assert rc == 2
+    assert_one_line_error(rc, err, *needles)
+
+
+@pytest.mark.parametrize("cmd", ["predict", "detect"])
+def test_an_identification_json_that_is_not_an_object_names_the_file(cmd, files, tmp_path):
+    (tmp_path / "list.json").write_text("[1, 2]")
+    argv = [cmd, "planar2", str(tmp_path / "list.json"), str(files / "log.csv")]
+    if cmd == "predict":
+        argv += ["-o", str(tmp_path / "p.csv")]
+    rc, _, err = run(argv)
+    assert rc == 2
+    assert_one_line_error(
+        rc, err, "list.json: expected a JSON object (the JSON of mindyn identify)"
+    )
+
+
+def _identification(path, **fields):
+    """A hand-written identification JSON of planar2 (its own base-parameter values)."""
+    base = mindyn.base_parameters(mindyn.load("planar2"))
+    doc = {"robot": "planar2", "rotor": False, "friction": False, "offset": False}
+    doc.update(
+        base_names=list(base.names), base_values=[float(v) for v in base.values(base.robot.params)]
+    )
+    doc.update(fields)
+    path.write_text(json.dumps(doc))
+    return path
+
+
+@pytest.mark.parametrize(
+    "fields, needle",
+    [
+        ({"reading": [[1]]}, "'reading' is"),
+        ({"reading": {"filter": 3}}, "'reading' filter is 3; expected one of lowpass"),
+        ({"reading": {"cutoff_Hz": "x"}}, "'reading' cutoff_Hz"),
+        ({"reading": {"drive_gain": "x"}}, "'reading' drive_gain is 'x'"),
+        ({"base_names": {"a": 1}}, "'base_names' is"),
+    ],
+)
+def test_an_identification_json_with_odd_fields_names_the_field(fields, needle, files, tmp_path):
+    """Fields of the wrong JSON type were bare TypeError, AttributeError or ValueError (a list
+    where 'reading' is an object, a mapping as base_names): now the file's error."""
+    path = _identification(tmp_path / "id.json", **fields)
+    for argv in (
+        ["predict", "planar2", str(path), str(files / "log.csv"), "-o", str(tmp_path / "p.csv")],
+        ["detect", "planar2", str(path), str(files / "log.csv")],
+    ):
+        rc, _, err = run(argv)
+        assert rc == 2
+        assert_one_line_error(rc, err, f"{path}:", needle)
+
+
+def test_predict_with_another_filter_than_recorded_states_the_derived_cutoff(files, tmp_path):
+    """--filter lowpass on an identification recorded with butter and no cut-off: the low-pass
+    takes the log's own cut-off, and the output states it (it failed formatting None)."""
+    from mindyn.identification.data import read_csv
+    from mindyn.identification.preprocess import preprocess
+
+    path = _identification(tmp_path / "id.json", reading={"filter": "butter", "cutoff_Hz": None})
+    log = files / "log.csv"
+    rc, out, err = run(
+        [
+            "predict",
+            "planar2",
+            str(path),
+            str(log),
+            "-o",
+            str(tmp_path / "p.csv"),
+            "--filter",
+            "lowpass",
+        ]
+    )
+    assert rc == 0, err
+    fc = preprocess(read_csv(log)).processing["preprocess"]["filter"]["cutoff_Hz"]
+    assert f"low-pass at {fc:.4g} Hz, derived from the log" in out, out
+
+
+def test_predict_on_a_log_without_torques(files, tmp_path):
+    """A log without torque columns is what predict takes (it predicts them): it failed with a
+    bare KeyError looking up the unit of the torques it does not have. The prediction is the
+    inverse dynamics at the motion it writes."""
+    path = _identification(tmp_path / "id.json")
+    lines = (files / "log.csv").read_text().splitlines()
+    head = [c.strip() for c in lines[0].split(",")]
+    keep = [k for k, c in enumerate(head) if not c.startswith("tau")]
+    log = tmp_path / "motion.csv"
+    log.write_text(
+        "\n".join(",".join(line.split(",")[k] for k in keep) for line in lines if line) + "\n"
+    )
+    out_csv = tmp_path / "p.csv"
+    argv = ["predict", "planar2", str(path), str(log), "-o", str(out_csv), "--filter", "lowpass"]
+    rc, out, err = run(argv)
+    assert rc == 0, err
+    rows = np.loadtxt(out_csv, delimiter=",", skiprows=1)
+    assert open(out_csv).readline().strip() == "t,q1,q2,dq1,dq2,ddq1,ddq2,tau_hat1,tau_hat2"
+    robot = mindyn.load("planar2")
+    tau = robot.inverse_dynamics(rows[:, 1:3], rows[:, 3:5], rows[:, 5:7])
+    scale = np.abs(tau).max()
+    assert np.abs(rows[:, 7:9] - tau).max() <= 1e-9 * scale

@@ -109,6 +109,7 @@ def test_calibrate_then_detect_the_injected_torque(files):
     "content, needle",
     [
         ("{not json", "not a thresholds JSON file"),
+        ("[" * 5000 + "]" * 5000, "nested deeper than the JSON reader follows"),
         ('{"robot": "puma560"}', "lacks period_s, gains, thresholds"),
         ('{"robot": "zcr07s", "period_s": 0.001, "gains": [1], "thresholds": [1]}', "zcr07s"),
         (

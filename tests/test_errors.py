@@ -93,3 +93,112 @@ def test_raised_errors_are_caught_by_either_handler(tmp_path):
     bad.write_text("t,q1\n0,notanumber\n", encoding="utf-8")
     e = raises_both(ValueError, lambda: read_csv(bad))
     assert isinstance(e, DataError)
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("joints:\n  - {Ia: 2001-13-45}\n", "month must be in 1..12"),  # a date YAML cannot build
+        (f"joints:\n  - {{Ia: {'9' * 400}}}\n", "'Ia' is an integer beyond 1e16"),
+        ("joints:\n  - {Fv: .inf}\n", "'Fv' is inf"),
+        ("joints:\n  - {Fc: .nan}\n", "'Fc' is nan"),
+    ],
+)
+def test_a_joint_terms_file_yaml_cannot_build_names_the_file(tmp_path, text, needle):
+    """Values PyYAML refuses with a bare ValueError, or that are not finite numbers, are the
+    file's error (a ModelError naming it), never a bare ValueError or OverflowError."""
+    from mindyn.export import read_joint_terms
+
+    path = tmp_path / "terms.yaml"
+    path.write_text(text)
+    with pytest.raises(mindyn.ModelError) as e:
+        read_joint_terms(path)
+    assert str(path) in str(e.value) and needle in str(e.value), e.value
+    assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize(
+    "text, needle",
+    [
+        ("kd: 2001-13-45\n", "month must be in 1..12"),
+        (f"kd: {'9' * 5000}\n", "digits"),  # past Python's integer-string limit
+        ("? [kd]\n: 1\n", "expected a mapping with keys kd"),  # a key that is a list
+        ("kd: [1,\n  2\n", "not valid YAML"),
+    ],
+)
+def test_a_gains_file_yaml_cannot_build_names_the_file(tmp_path, text, needle):
+    from mindyn.control import ControllerSettingError, load_gains
+
+    path = tmp_path / "gains.yaml"
+    path.write_text(text)
+    with pytest.raises(ControllerSettingError) as e:
+        load_gains(path, mindyn.load("planar2"))
+    assert str(e.value).startswith(str(path)) and needle in str(e.value), e.value
+    assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize(
+    "change, needle",
+    [
+        ({"names": [["a"]], "values": [1.0]}, "'names' must list parameter names"),
+        ({"friction_model": {"kind": "coulomb", "velocity": 3}}, "velocity must be a list"),
+    ],
+)
+def test_an_identification_json_with_odd_types_names_the_file(tmp_path, change, needle):
+    """A JSON whose names are not strings (unhashable in a set) or whose friction velocities
+    are not a list is refused naming the file, not with a bare TypeError."""
+    import json
+
+    from mindyn.codegen.parameters import read_identified_parameters
+
+    robot = mindyn.load("planar2")
+    names = mindyn.base_parameters(robot).names
+    doc = {"robot": "planar2", "names": list(names), "values": [1.0] * len(names), "removed": []}
+    doc.update(change)
+    if "friction_model" in change:
+        doc["friction"] = True
+    path = tmp_path / "ident.json"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(mindyn.ModelError) as e:
+        read_identified_parameters(path, names, robot=robot, friction="friction_model" in change)
+    assert str(e.value).startswith(str(path)) and needle in str(e.value), e.value
+
+
+@pytest.mark.parametrize(
+    "data, needle",
+    [
+        (b"[" * 5000 + b"]" * 5000, "nested deeper than the JSON reader follows"),
+        (b'{"ZZR1": 1,\n "MXR1": \xff}', "line 2: not UTF-8 text (byte 0xff"),
+        (b'{"names": 3, "values": [1]}', "'names' and 'values' must be lists"),
+        (b'{"names": [[1]], "values": [1]}', "'names' must list parameter names"),
+        (b'{"ZZR1": 1,\n "MXR1" 2}', ":2:"),  # the line of a syntax error
+    ],
+)
+def test_a_parameter_file_that_cannot_be_read_names_the_file(tmp_path, data, needle):
+    """Files nested too deep, not UTF-8 or with names of the wrong type escaped as bare
+    RecursionError, UnicodeDecodeError or TypeError."""
+    from mindyn.codegen.parameters import read_parameter_file
+
+    path = tmp_path / "params.json"
+    path.write_bytes(data)
+    with pytest.raises(DataError) as e:
+        read_parameter_file(path, mindyn.base_parameters(mindyn.load("planar2")).names)
+    assert str(e.value).startswith(str(path)) and needle in str(e.value), e.value
+
+
+def test_a_csv_field_past_the_csv_modules_limit_names_the_file_and_line(tmp_path):
+    """csv.Error (not a ValueError) escaped from the trajectory and floating-base log readers
+    for a field longer than the csv module takes."""
+    from mindyn.control.simulation import CsvTrajectory
+    from mindyn.identification.floating import read_floating_csv
+
+    path = tmp_path / "big.csv"
+    path.write_text("t,q1,q2\n0,0,0\n0.1," + "1" * 200_000 + ",0\n")
+    with pytest.raises(DataError) as e:
+        CsvTrajectory(path, 2)
+    assert str(e.value).startswith(f"{path}, line 3: not readable as CSV"), e.value
+    ur5 = Path(__file__).resolve().parents[1] / "examples" / "urdf" / "ur5.urdf"
+    robot = mindyn.load(str(ur5), root_joint="floating")
+    with pytest.raises(DataError) as e:
+        read_floating_csv(path, robot)
+    assert str(e.value).startswith(f"{path}, line 3: not readable as CSV"), e.value

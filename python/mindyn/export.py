@@ -673,6 +673,11 @@ def read_joint_terms(path) -> dict[str, float]:
                 v = row[key]
                 if isinstance(v, bool) or not isinstance(v, (int, float)):
                     raise ModelError(f"{p}: joint {i}: '{key}' is {v!r}; expected a number")
+                if not abs(v) <= 1e16:  # as a description's numbers; not inf, nan or 400 digits
+                    said = "an integer beyond 1e16" if isinstance(v, int) else repr(v)
+                    raise ModelError(
+                        f"{p}: joint {i}: '{key}' is {said}; expected a finite number within 1e16"
+                    )
                 out[f"{key}{i}"] = float(v)
     return out
 
@@ -699,6 +704,12 @@ def _read_yaml(path: Path, what: str):
         return yaml.safe_load(path.read_text(encoding="utf-8"))
     except (yaml.YAMLError, UnicodeDecodeError) as e:
         raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
+    except ValueError as e:  # a value YAML cannot build: a date out of range, a huge integer
+        raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
+    except RecursionError:
+        raise ModelError(
+            f"{path}: not a YAML file: nested deeper than the reader follows"
+        ) from None
 
 
 # -- YAML DH / MDH tables -----------------------------------------------------------------------

@@ -10,7 +10,7 @@ import importlib
 import os
 import sys
 
-from .._core import ArgumentError, ModelError, RobotFileNotFoundError
+from .._core import ArgumentError, Error
 from .._threads import reuse_freed_memory
 from .args import COMMANDS, Parser, UsageError, print_deprecation_notes
 from .flags import argument_as_flag, library_options_as_flags
@@ -98,7 +98,9 @@ def _error(text: object) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Runs the command line; returns the exit status. Every failure ends in one line on stderr,
-    ``mindyn: error: ...``, and a non-zero status."""
+    ``mindyn: error: ...``, and a non-zero status: 2 for the input (a :class:`mindyn.Error`, a
+    missing file), 1 for an output that cannot be written, 70 for anything else (a bare
+    ValueError or IndexError too), which is a defect in mindyn, not in the input."""
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         parser = build_parser(_command(argv))
@@ -118,13 +120,7 @@ def main(argv: list[str] | None = None) -> int:
         if status == 0:  # an error stays one line
             print_deprecation_notes(args)
         return status
-    except UsageError as e:
-        _error(e)
-        return 2
-    except (RobotFileNotFoundError, FileNotFoundError) as e:
-        _error(e)
-        return 2
-    except (ModelError, ValueError, IndexError) as e:
+    except (Error, FileNotFoundError) as e:  # the input: mindyn's errors and a missing file
         _error(e)
         return 2
     except KeyboardInterrupt:
@@ -143,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     except MemoryError:
         _error("out of memory: the input asks for more memory than this machine has")
         return 1
-    except Exception as e:  # last resort: a defect in mindyn, not in the input
+    except Exception as e:  # anything else, a bare ValueError too: a defect in mindyn
         _error(
             f"unexpected {type(e).__name__}: {e} (a defect in mindyn; please report it with "
             "the command line)"

@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import argparse
 
+from .._core import ArgumentError
 from ..base import base_parameters
+from .args import UsageError
 from .number_options import number
 from .outputs import output_dir
 
@@ -14,12 +16,12 @@ from .outputs import output_dir
 def check_controller_options(args: argparse.Namespace) -> None:
     """--param-error sets a model's estimate: PD has none (it was ignored)."""
     if getattr(args, "estimate_box", None) is not None and args.controller != "adaptive-pd":
-        raise ValueError(
+        raise UsageError(
             f"--estimate-box: a box on the estimate of adaptive-pd (--controller is "
             f"{args.controller})"
         )
     if args.controller == "pd" and args.param_error is not None:
-        raise ValueError(
+        raise UsageError(
             "--param-error: --controller pd has no model (the error is that of the estimate of "
             "adaptive-pd and computed-torque)"
         )
@@ -66,7 +68,7 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     n = robot.n
     period = args.period
     if args.cycle is not None and args.cycle < 20 * period:
-        raise ValueError(
+        raise UsageError(
             f"--cycle {args.cycle:g} s: expected at least 20 controller periods "
             f"(--controller-period {period:g} s), so that the reference's third harmonic is "
             "sampled about 7 times per oscillation"
@@ -89,13 +91,13 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
             1.0 / period,
             substeps=(args.substeps or MIN_SUBSTEPS) if args.integrator == "rk4" else 1,
         )
-    except ValueError as e:
-        raise ValueError(
+    except ArgumentError as e:  # the library's check; a bare ValueError stays a defect
+        raise UsageError(
             f"--duration {duration:g} with --controller-period {period:g}: {e}"
             + (" (the duration is two cycles unless given)" if args.duration is None else "")
         ) from None
     if duration < period:
-        raise ValueError(
+        raise UsageError(
             f"--duration {duration:g} s is shorter than one --controller-period {period:g} s"
         )
     if args.controller == "computed-torque" and args.gains is None and args.param_error is None:

@@ -82,11 +82,11 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
         try:
             limit = float(limit)
         except ValueError:
-            raise ModelError(
+            raise UsageError(
                 f"--torque-limit: expected 'effort' or a number, got '{limit}'"
             ) from None
         if not (math.isfinite(limit) and limit > 0):
-            raise ModelError(f"--torque-limit must be positive, got {limit:g}")
+            raise UsageError(f"--torque-limit must be positive, got {limit:g}")
     same = dict(base=base, gains=gains, params=params, period=args.period, name=args.name)
     same.update(tau_max=limit)
     if args.box is not None:

@@ -8,7 +8,7 @@ import argparse
 
 import numpy as np
 
-from .args import add_command, given_options, remember_flags
+from .args import UsageError, add_command, given_options, remember_flags
 from .number_options import add_recorded_torque_reading, joint_values, joint_vector, number
 from .outputs import output_file
 from .robot_options import add_robot, load_robot
@@ -18,7 +18,7 @@ CALIBRATE_ONLY = ("quantile", "margin", "model_sigma")
 
 
 def _read_log(path, robot, doc, args):
-    from ..identification.data import read_csv
+    from ..identification.data import DataError, read_csv
 
     reading = doc.get("reading") or {}
     unit = args.torque_unit or reading.get("torque_unit")
@@ -26,7 +26,7 @@ def _read_log(path, robot, doc, args):
     gain = np.array(joint_values(gain, robot.n, "--drive-gain", broadcast=True)) if gain else None
     data = read_csv(path, robot=robot, torque_unit=unit, filter="none", drive_gain=gain)
     if data.tau is None:
-        raise ValueError(
+        raise DataError(
             f"{path}: has no torque columns tau1..tau{robot.n}; the observer needs them"
         )
     return data
@@ -42,12 +42,10 @@ def cmd_detect(args: argparse.Namespace) -> int:
         load_thresholds,
         residual_uncertainty,
     )
-    from ..identification.data import read_json
+    from ..identification.document import read_identification
     from ..identification.prediction import identified_model
 
-    doc = read_json(args.identification)
-    if not isinstance(doc, dict):
-        raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
+    doc = read_identification(args.identification)
     from ..identification.document import refuse_state
 
     refuse_state(doc, "the momentum observer", str(args.identification))
@@ -56,14 +54,14 @@ def cmd_detect(args: argparse.Namespace) -> int:
     base, values, _ = identified_model(args.identification, robot, estimate=estimate)
     given = given_options(args, *CALIBRATE_ONLY) if not args.calibrate else []
     if given:  # (they were ignored)
-        raise ValueError(f"{given[0]} applies to --calibrate")
+        raise UsageError(f"{given[0]} applies to --calibrate")
     if args.thresholds and args.calibrate:
-        raise ValueError(
+        raise UsageError(
             "--thresholds and --calibrate exclude each other (calibrate on a "
             "collision-free log, then detect with the file it wrote)"
         )
     if args.thresholds and args.gain:
-        raise ValueError("--gain: the thresholds file gives the gains it was calibrated with")
+        raise UsageError("--gain: the thresholds file gives the gains it was calibrated with")
     thresholds = load_thresholds(args.thresholds, robot) if args.thresholds else None
     data = _read_log(args.log, robot, doc, args)
     t = data.t
@@ -162,16 +160,23 @@ def cmd_detect(args: argparse.Namespace) -> int:
 
 def _base_std(doc, base, where, estimate):
     """The identification's standard deviation of each base parameter (0 for a pruned one)."""
+    from ..identification.data import DataError
+
     if estimate != "unconstrained":
-        raise ValueError("--model-sigma: the standard deviations are the unconstrained estimate's")
+        raise UsageError("--model-sigma: the standard deviations are the unconstrained estimate's")
     names, std = doc.get("names"), doc.get("std")
     if not (isinstance(names, list) and isinstance(std, list) and len(names) == len(std)):
-        raise ValueError(f"--model-sigma: {where} gives no standard deviations (names, std)")
+        raise DataError(f"--model-sigma: {where} gives no standard deviations (names, std)")
     out = np.zeros(base.n)
     index = {k: i for i, k in enumerate(base.names)}
     for name, s in zip(names, std, strict=True):
-        if name not in index or not isinstance(s, (int, float)) or not s >= 0:
-            raise ValueError(f"--model-sigma: {where}: '{name}' has no usable standard deviation")
+        if (
+            not isinstance(name, str)
+            or name not in index
+            or not isinstance(s, (int, float))
+            or not s >= 0
+        ):
+            raise DataError(f"--model-sigma: {where}: '{name}' has no usable standard deviation")
         out[index[name]] = float(s)
     return out
 

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .args import ZCR07S_STUDY, add_command, deprecated
+from .._core import ArgumentError
+from .args import ZCR07S_STUDY, UsageError, add_command, deprecated
 from .number_options import check_radians, joint_values, joint_vector, number, seed
 from .outputs import output_file
 from .robot_options import (
@@ -26,17 +27,17 @@ def cmd_excite(args: argparse.Namespace) -> int:
     from ..identification.excitation import check_sampling, optimize_excitation
 
     if Path(args.output).suffix.lower() in (".json", ".png"):
-        raise ValueError(
+        raise UsageError(
             f"-o {args.output}: the trajectory CSV needs another suffix than "
             f"{Path(args.output).suffix} (the coefficients and the plot are written beside it as "
             ".json and .png)"
         )
     try:  # before the optimisation, not after it
         check_sampling(args.harmonics, args.freq, args.rate)
-    except ValueError as e:
-        raise ValueError(f"--rate {args.rate:g}: {e}") from None
+    except ArgumentError as e:  # the library's check; a bare ValueError stays a defect
+        raise UsageError(f"--rate {args.rate:g}: {e}") from None
     if not args.samples > 2 * args.harmonics:
-        raise ValueError(
+        raise UsageError(
             f"--samples {args.samples}: expected more than 2 x --harmonics = "
             f"{2 * args.harmonics}, so that the highest harmonic is sampled"
         )

@@ -78,19 +78,19 @@ def _check_outputs(args: argparse.Namespace, robot) -> None:
     described = args.urdf or args.yaml or args.mjcf
     if (described or args.sidecar) and not args.consistent:
         given = "urdf" if args.urdf else "yaml" if args.yaml else "mjcf" if args.mjcf else "sidecar"
-        raise ValueError(
+        raise UsageError(
             f"--{given}: expected "
             "--consistent as well (only a physically consistent estimate can be written as a robot "
             "description)"
         )
     if described and args.friction_model not in (None, "coulomb", "auto"):
         given = "urdf" if args.urdf else "yaml" if args.yaml else "mjcf"
-        raise ValueError(
+        raise UsageError(
             f"--{given}: a robot description holds viscous and Coulomb friction only, not the "
             f"{args.friction_model} friction model"
         )
     if args.sidecar and not (args.urdf or args.yaml):
-        raise ValueError("--sidecar: expected --urdf or --yaml (the description it goes with)")
+        raise UsageError("--sidecar: expected --urdf or --yaml (the description it goes with)")
     if described:
         check_description_kind(robot, args.robot, args.urdf is not None, args.mjcf)
 
@@ -166,7 +166,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..identification.workflow import run
 
     if args.validate_currents and not args.validate:
-        raise ValueError("--validate-currents: expected --validate with the logs they belong to")
+        raise UsageError("--validate-currents: expected --validate with the logs they belong to")
     robot = load_robot(args)
     if not robot.single_dof:  # a floating-base robot: its own workflow
         return cmd_identify_floating(args, robot)
@@ -208,7 +208,7 @@ def cmd_identify_payload(args: argparse.Namespace) -> int:
 
     tip = arm_tip(args.identification, args.robot)
     if args.tip is not None and tip is not None and args.tip != tip:
-        raise ValueError(
+        raise UsageError(
             f"--tip {args.tip}: {args.identification} was identified on the chain ending at "
             f"--tip {tip}; the payload sits on that chain's last link"
         )

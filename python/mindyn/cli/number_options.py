@@ -134,7 +134,7 @@ def check_radians(values, option: str, flag: str, robot=None) -> None:
             where = f" (value {k + 1})" if len(values) > 1 else ""
             r = reach[k]
             within = "[-2pi, 2pi]" if r == 2 * math.pi else f"[-{r:.4g}, {r:.4g}] (its limits)"
-            raise ValueError(
+            raise UsageError(
                 f"{option} {_fmt(v)}{where}: outside {within}, so not an angle in radians; "
                 f"give {flag} if the angles are in degrees"
             )

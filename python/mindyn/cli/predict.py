@@ -4,27 +4,25 @@ from __future__ import annotations
 
 import argparse
 
-from .args import add_command
+from .args import UsageError, add_command
 from .number_options import add_recorded_torque_reading, number
 from .outputs import output_file
 from .robot_options import add_robot, load_robot
 
 
 def cmd_predict(args: argparse.Namespace) -> int:
-    from ..identification.data import read_json
+    from ..identification.document import read_identification
     from ..identification.options import ReadingOptions
     from ..identification.prediction import identified_model, predict
     from ..identification.reading import read_log
 
-    doc = read_json(args.identification)
-    if not isinstance(doc, dict):
-        raise ValueError(f"{args.identification}: not the JSON of 'mindyn identify'")
+    doc = read_identification(args.identification)
     robot = load_robot(args, tip=doc.get("tip"), command="predict")
     estimate = "consistent" if args.consistent else "unconstrained"
     identified_model(args.identification, robot, estimate=estimate)  # errors before reading
     recorded = doc.get("reading")
     if recorded is None and args.filter is None:
-        raise ValueError(
+        raise UsageError(
             f"{args.identification}: does not record how identify read its logs; give --filter "
             "(and --cutoff) as identify had them"
         )
@@ -49,8 +47,13 @@ def cmd_predict(args: argparse.Namespace) -> int:
     logs = read_log(args.log, robot, options=opts, decimate=False, require_torque=False)
     pred = predict(args.identification, logs, robot=robot, estimate=estimate)
     path = pred.write_csv(args.output)
+    cutoff = opts.cutoff
+    derived = ""
+    if cutoff is None and opts.filter == "lowpass":  # not recorded for this filter: the data's
+        info = logs[0].processing.get("preprocess", {}).get("filter", {})
+        cutoff, derived = info.get("cutoff_Hz"), ", derived from the log"
     how = (
-        f"low-pass at {opts.cutoff:.4g} Hz (zero-phase Butterworth order 4), the model on the "
+        f"low-pass at {cutoff:.4g} Hz{derived} (zero-phase Butterworth order 4), the model on the "
         "filtered motion at the logged time stamps between the filter edges"
         if opts.filter == "lowpass"
         else f"--filter {opts.filter}"

@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from .args import add_command, given_options, remember_flags
+from .args import UsageError, add_command, given_options, remember_flags
 from .number_options import controller_period, number, seed
 from .outputs import output_file
 from .robot_options import add_drive_side, add_robot, drive_side_words, load_robot, with_drive_side
@@ -27,7 +27,7 @@ def _check_mode(args: argparse.Namespace) -> None:
     """--mode inverse refuses the closed loop's options instead of ignoring them."""
     given = given_options(args, *TRACKING_ONLY) if args.mode == "inverse" else []
     if given:
-        raise ValueError(
+        raise UsageError(
             f"{given[0]}: an option of the closed loop (--mode tracking); --mode inverse has no "
             "controller (the torques of the inverse dynamics along the reference)"
         )

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 import math
 import re
 from collections.abc import Sequence
@@ -37,25 +36,27 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
     or a plain list in order; or text with one ``NAME value`` (or ``NAME = value``) per line,
     ``#`` comments allowed. Every name must be given exactly once; unknown names are an error.
     """
-    from ..identification.data import DataError
+    from ..identification.data import DataError, decode_text, read_json
 
     path = Path(_args.path(path, "path"))
     names = _names(names)
     if not path.is_file():
         raise _core.RobotFileNotFoundError(f"parameter file '{path}' does not exist")
-    text = path.read_text()
+    text = decode_text(path)
     mapping: dict[str, float] = {}
     if path.suffix.lower() == ".json" or text.lstrip().startswith(("{", "[")):
-        try:
-            data = json.loads(text)
-        except json.JSONDecodeError as e:
-            raise DataError(f"{path}:{e.lineno}: not valid JSON: {e.msg}") from None
+        data = read_json(path, what="parameter file")
         if isinstance(data, list):
             if len(data) != len(names):
                 raise DataError(f"{path}: {len(data)} values; expected {len(names)}")
             mapping = dict(zip(names, data))
         elif isinstance(data, dict) and "names" in data and "values" in data:
-            if len(data["names"]) != len(data["values"]):
+            idents, values = data["names"], data["values"]
+            if not (isinstance(idents, list) and isinstance(values, list)):
+                raise DataError(f"{path}: 'names' and 'values' must be lists")
+            if not all(isinstance(k, str) for k in idents):
+                raise DataError(f"{path}: 'names' must list parameter names (strings)")
+            if len(idents) != len(values):
                 raise DataError(f"{path}: 'names' and 'values' differ in length")
             mapping = dict(zip(data["names"], data["values"]))
         elif isinstance(data, dict):
@@ -148,12 +149,16 @@ def read_identified_parameters(
     idents, values = doc["names"], doc["values"]
     try:
         pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]
+        pruned = [k if isinstance(k, str) else str(k) for k in pruned]
     except (KeyError, TypeError):
         raise _core.ModelError(
             f"{path}: 'removed' must list the pruned parameters by name"
         ) from None
     if not (isinstance(idents, list) and isinstance(values, list) and len(idents) == len(values)):
         raise _core.ModelError(f"{path}: 'names' and 'values' must be lists of the same length")
+    odd = next((k for k in idents if not isinstance(k, str)), None)
+    if odd is not None:
+        raise _core.ModelError(f"{path}: 'names' must list parameter names (strings), got {odd!r}")
     known = set(names)
     unknown = [k for k in idents + pruned if k not in known]
     if unknown:
@@ -193,6 +198,10 @@ def _same_friction_model(doc: dict, path, robot) -> None:
             f"{path}: 'friction_model' must be {{kind, velocity}}, got {recorded!r}"
         )
     kind, velocity = recorded["kind"], recorded.get("velocity") or []
+    if not isinstance(velocity, list):
+        raise _core.ModelError(
+            f"{path}: friction_model velocity must be a list of numbers, got {velocity!r}"
+        )
     own = robot.friction_model
     same = kind == own["kind"] and len(velocity) == len(own["velocity"])
     if same and velocity:

@@ -1210,8 +1210,18 @@ def load_gains(
 
     try:
         data = yaml.load(decode_text(path), Loader=_reject_duplicate_keys(path))
-    except yaml.YAMLError as e:
-        raise ControllerSettingError(f"{path}: not valid YAML ({e})") from None
+    except (yaml.YAMLError, ValueError) as e:  # ValueError: a date out of range, a huge integer
+        raise ControllerSettingError(
+            f"{path}: not valid YAML ({' '.join(str(e).split())})"
+        ) from None
+    except TypeError:  # a mapping key that is itself a list or a mapping
+        raise ControllerSettingError(
+            f"{path}: expected a mapping with keys kd, lambda, gamma, nu, kp"
+        ) from None
+    except RecursionError:
+        raise ControllerSettingError(
+            f"{path}: nested deeper than the YAML reader follows"
+        ) from None
     if data is None:
         data = {}
     if not isinstance(data, dict):

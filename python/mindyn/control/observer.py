@@ -265,13 +265,15 @@ def load_thresholds(path, robot) -> ObserverThresholds:
     is not JSON, lacks a field, holds a non-number or was made for another robot."""
     _args.path(path, "path")
     _args.instance(robot, "robot", Robot)
+    from ..identification.data import DataError, read_json
+
     where = str(path)
-    try:
-        doc = json.loads(Path(path).read_text())
-    except FileNotFoundError:
-        raise ThresholdsError(f"{where}: no such thresholds file") from None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise ThresholdsError(f"{where}: not a thresholds JSON file ({e})") from None
+    if not Path(path).is_file():
+        raise ThresholdsError(f"{where}: no such thresholds file")
+    try:  # names the line and column; a file nested too deep or not UTF-8 too
+        doc = read_json(path, what="thresholds file")
+    except (OSError, DataError) as e:
+        raise ThresholdsError(f"not a thresholds JSON file: {e}") from None
     if not isinstance(doc, dict):
         raise ThresholdsError(f"{where}: not a thresholds JSON file (not an object)")
     missing = [k for k in ("robot", "period_s", "gains", "thresholds") if k not in doc]

@@ -156,25 +156,29 @@ class CsvTrajectory:
         header: list[str] = []
         # cells as a log's (identification.data.parse_cell): ASCII decimals, so that '1_000',
         # hex or non-ASCII digits are refused, not read as Python's float() reads them
-        for lineno, row in enumerate(csv.reader(decode_text(path).splitlines()), 1):
-            if not row or all(not c.strip() for c in row):
-                continue
-            if lineno == 1:
-                try:
-                    parse_cell(row[0], "")
-                except DataError:
-                    header = [c.strip() for c in row]  # a first line whose t is not a number
+        reader = csv.reader(decode_text(path).splitlines())
+        try:
+            for lineno, row in enumerate(reader, 1):
+                if not row or all(not c.strip() for c in row):
                     continue
-            rows.append(
-                [
-                    parse_cell(
-                        c,
-                        f"{path}, line {lineno}, column "
-                        + (header[j] if j < len(header) else str(j + 1)),
-                    )
-                    for j, c in enumerate(row)
-                ]
-            )
+                if lineno == 1:
+                    try:
+                        parse_cell(row[0], "")
+                    except DataError:
+                        header = [c.strip() for c in row]  # a first line whose t is not a number
+                        continue
+                rows.append(
+                    [
+                        parse_cell(
+                            c,
+                            f"{path}, line {lineno}, column "
+                            + (header[j] if j < len(header) else str(j + 1)),
+                        )
+                        for j, c in enumerate(row)
+                    ]
+                )
+        except csv.Error as e:  # a field past the csv module's size limit
+            raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
         if len({len(r) for r in rows}) > 1:
             raise DataError(f"{path}: rows have different numbers of columns")
         if len(rows) < 4:

@@ -1,5 +1,6 @@
 """The JSON document of ``mindyn identify --json`` read back: one check of the fields that
-``identify-payload``, ``export`` and ``codegen --params`` take from it.
+``identify-payload``, ``export``, ``predict``, ``detect`` and ``codegen --params`` take
+from it.
 
 A field is checked for its JSON type (``rotor: "no"`` is not a boolean, ``base_names: 7`` not a
 list), numbers for being finite and within a double (a 400-digit integer is not), and the lists
@@ -92,6 +93,8 @@ def read_identification(
     fm = doc.get("friction_model")
     if fm is not None:
         out["friction_model"] = _friction_model(fm, where)
+    if doc.get("reading") is not None:
+        out["reading"] = _reading(doc["reading"], where)
     classical = doc.get("classical")
     if classical is not None:
         if not isinstance(classical, dict) or not classical:
@@ -152,6 +155,40 @@ def _friction_model(fm, where: str) -> dict:
             raise DataError(f"{where}: 'friction_model' velocity is {_kind(v)}; expected a list")
         out["velocity"] = [
             _number(x, f"{where}: 'friction_model' velocity item {i + 1}") for i, x in enumerate(v)
+        ]
+    return out
+
+
+def _reading(rec, where: str) -> dict:
+    """The checked ``reading`` field, how identify read its logs: ``filter`` one of the filters,
+    ``cutoff_Hz`` and ``edge_s`` numbers, ``torque_unit`` and ``topic`` text, ``drive_gain`` a
+    list of numbers; each may be null or absent."""
+    from .options import FILTERS
+
+    if not isinstance(rec, dict):
+        raise DataError(
+            f"{where}: 'reading' is {_kind(rec)}; expected an object (how identify read its logs)"
+        )
+    out = dict(rec)
+    filt = rec.get("filter")
+    if filt is not None and filt not in FILTERS:
+        raise DataError(
+            f"{where}: 'reading' filter is {_kind(filt)}; expected one of {', '.join(FILTERS)}"
+        )
+    for key in ("cutoff_Hz", "edge_s"):
+        if rec.get(key) is not None:
+            out[key] = _number(rec[key], f"{where}: 'reading' {key}")
+    for key in ("torque_unit", "topic"):
+        if rec.get(key) is not None and not isinstance(rec[key], str):
+            raise DataError(f"{where}: 'reading' {key} is {_kind(rec[key])}; expected text")
+    gain = rec.get("drive_gain")
+    if gain is not None:
+        if not isinstance(gain, list):
+            raise DataError(
+                f"{where}: 'reading' drive_gain is {_kind(gain)}; expected a list of numbers"
+            )
+        out["drive_gain"] = [
+            _number(g, f"{where}: 'reading' drive_gain item {i + 1}") for i, g in enumerate(gain)
         ]
     return out
 

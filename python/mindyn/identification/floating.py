@@ -517,9 +517,11 @@ def read_floating_csv(
     cutoff = _args.optional(_args.number, cutoff, "cutoff", positive=True)
     if not path.is_file():
         raise DataFileNotFoundError(f"{path}: no such file")
-    rows = [
-        row for row in csv.reader(io.StringIO(decode_text(path))) if any(c.strip() for c in row)
-    ]
+    reader = csv.reader(io.StringIO(decode_text(path)))
+    try:
+        rows = [row for row in reader if any(c.strip() for c in row)]
+    except csv.Error as e:  # a field past the csv module's size limit
+        raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
     if not rows:
         raise DataError(f"{path}: empty file (expected a header line)")
     header = [c.strip() for c in rows[0]]

@@ -14,8 +14,13 @@ from .. import _args
 from .._args import ArgumentError
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
-from .data import DataError, read_json
-from .document import robot_on_drive_side, with_identified_friction, with_identified_state
+from .data import DataError
+from .document import (
+    read_identification,
+    robot_on_drive_side,
+    with_identified_friction,
+    with_identified_state,
+)
 from .estimation import CHUNK_SAMPLES
 from .joint_data import JointData
 from .models import require_torque
@@ -99,9 +104,7 @@ def identified_model(
             raise ArgumentError("estimate 'consistent' needs a consistent result")
         return identification.base, np.asarray(identification.full, dtype=float), {}
     where = str(identification) if not isinstance(identification, dict) else "identification"
-    doc = read_json(identification) if not isinstance(identification, dict) else identification
-    if not (isinstance(doc, dict) and {"base_names", "base_values"} <= doc.keys()):
-        raise DataError(f"{where}: not the JSON of 'mindyn identify' (no base_names/base_values)")
+    doc = read_identification(identification, need=("base_names", "base_values"), what=where)
     if robot is None:
         raise _args.fail("robot", "is None; the robot is needed with an identification JSON")
     if isinstance(robot, Robot):
@@ -130,7 +133,11 @@ def identified_model(
         src = consistent
     names = src["base_names"] if "base_names" in src else doc["base_names"]
     values = src["base_values"]
-    if list(names) != list(base.names):
+    if not (isinstance(names, list) and isinstance(values, list)):
+        raise DataError(
+            f"{where}: the consistent estimate's base_names and base_values must be lists"
+        )
+    if names != list(base.names):
         raise DataError(
             f"{where}: its base parameters ({', '.join(map(str, names[:6]))}, ...) are not "
             f"those of '{robot.name}' with its rotor/friction/offset settings "

@@ -114,6 +114,8 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
             for d, c in zip(out, currents)
         ]
     for p, d in zip(paths, out):
+        if "torque" not in d.processing:  # a log without torques (require_torque=False)
+            continue
         unit = d.processing["torque"]["unit"]
         if gain is not None and not unit.startswith("motor current"):
             raise DataError(
