@@ -756,7 +756,8 @@ def correlation_factor(
     factors, rates = [], []
 
     def factor(pre: dict | None) -> float:
-        filt = (pre or {}).get("filter")
+        pre = pre or {}
+        filt = pre.get("filter")
         if filt is None:
             return 1.0
         fs, cutoff, order = float(pre["rate_Hz"]), float(filt["cutoff_Hz"]), int(filt["order"])
