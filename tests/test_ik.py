@@ -261,7 +261,7 @@ def test_ik_command_refuses_degrees_given_as_radians(tmp_path, capsys, monkeypat
 
     wide = mindyn.load(write_wide_urdf(tmp_path))
     check_radians([7.0, 100.0], "--q0", "--deg", wide)  # 100 m on the prismatic joint
-    with pytest.raises(ValueError, match=r"--q0 13 \(value 1\): outside \[-12.57, 12.57\]"):
+    with pytest.raises(mindyn.Error, match=r"--q0 13 \(value 1\): outside \[-12.57, 12.57\]"):
         check_radians([13.0, 0.0], "--q0", "--deg", wide)
     # excite's --start: the same check, naming its own option
     assert (
