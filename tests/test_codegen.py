@@ -660,10 +660,16 @@ def test_cli_codegen_chooses_the_method_as_base_does(tmp_path, capsys):
     assert "base parameters by the recursive method: the projection method handles at most" in text
     rec = mindyn.base_parameters("planar20", method="recursive")
     assert f"planar20: {rec.n} base parameters;" in text
+    assert "; base set by the recursive method\n" in text
     argv = ["codegen", "planar20", "--lang", "c", "--method", "projection", "-o", out]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert err.startswith("mindyn: error: ") and "18 joints" in err and err.count("\n") == 1
+    # the default method is named as such; a chosen one by its name
+    assert main(["codegen", "planar3", "--lang", "c", "-o", out]) == 0
+    assert "; base set by the projection method (the default)\n" in capsys.readouterr().out
+    assert main(["codegen", "planar3", "--lang", "c", "--method", "numerical", "-o", out]) == 0
+    assert "; base set by the numerical method\n" in capsys.readouterr().out
 
 
 def test_cli_codegen(tmp_path, capsys):

@@ -296,6 +296,8 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         + (f" ({', '.join(extras)})" if extras else "")
         + (", values baked in" if args.numeric else "")
         + f"; {len(robot.parameter_names(**layout))} classical"
+        + f"; base set by the {method} method"
+        + (" (the default)" if args.method is None and method == "projection" else "")
     )
     if params is not None:
         print(_params_note(len(code.names), args.params, pruned, threshold))
