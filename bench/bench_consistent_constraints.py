@@ -64,7 +64,7 @@ def main() -> int:
         for nm, v, s in zip(full.names, full.values, full.std):
             if nm.startswith("Ia"):
                 print(f"  {nm} = {v:.4g} +- {s:.2g} kg m^2 ({v / s:+.1f} standard deviations)")
-    cons0 = C.consistent_estimate(res, prior_weight=0, data=logs)
+    cons0 = C.consistent_estimate(res, prior_weight=0)
     ls, b = res.reduced, res.base
     Y = b.Y
     M, z = (ls.R * ls.norms) @ Y, ls.z

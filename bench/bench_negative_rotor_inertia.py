@@ -186,7 +186,7 @@ def main() -> int:
         vu = validate(res, vlogs)["overall_relative"]
         ratios = []
         for weight in ("auto", 0):
-            c = C.consistent_estimate(res, prior_weight=weight, data=logs)
+            c = C.consistent_estimate(res, prior_weight=weight)
             ratios.append(
                 f"{validate(c, vlogs)['overall_relative'] / vu:.3f} (weight {c.prior_weight:g})"
             )

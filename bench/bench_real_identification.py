@@ -351,17 +351,16 @@ def gcv_weight(cmd, weights) -> float | None:
     layout = _Layout(base)
     pi0 = description_vector(base)
     # the consistent estimate's fit term |M pi - z|^2 / s2 (its noise variance unfloored)
-    data = logs.fit.logs
     problem = PriorProblem(
         (ls.R * ls.norms) @ base.Y,
         ls.z,
-        ls.rho / (ls.r - base.n) * noise_scale(res, data)["factor"],
+        ls.rho / (ls.r - base.n) * noise_scale(res)["factor"],
         layout,
         _prior_matrices(base, layout, pi0, None),
     )
     scores = []
     for w in weights:
-        pi = consistent_estimate(res, prior_weight=w, data=data).classical
+        pi = consistent_estimate(res, prior_weight=w).classical
         _, H = problem.derivatives(pi, w, BARRIER_END)
         d = np.sqrt(np.maximum(np.diag(H), 1e-300))
         Hinv = np.linalg.pinv(H / np.outer(d, d), hermitian=True, rcond=1e-14) / np.outer(d, d)

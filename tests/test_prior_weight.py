@@ -87,7 +87,7 @@ def test_default_weight_gives_plausible_masses_where_links_are_poorly_excited():
     bare = consistent_estimate(res, prior_weight=0.0)
     ratio = _masses(bare) / m_true
     assert np.any((ratio > 3) | (ratio < 1 / 3)), ratio
-    auto = consistent_estimate(res, data=data)
+    auto = consistent_estimate(res)
     assert auto.weight_choice is not None and auto.prior_weight == auto.weight_choice["chosen"]
     ratio = _masses(auto) / m_true
     assert np.all((ratio < 1.6) & (ratio > 1 / 1.6)), ratio
@@ -107,7 +107,7 @@ def test_well_excited_log_lets_the_data_dominate():
     truth = truth.reshape(-1)
     data = _log(robot, truth, noise=0.01)
     res = identify(robot, data, rsd_threshold=None)
-    c = consistent_estimate(res, data=data)
+    c = consistent_estimate(res)
     beta = res.base.values(truth)
     assert np.all(np.abs(c.full - beta) <= 4 * res.std), (c.full - beta) / res.std
     layout = _Layout(res.base)
@@ -361,7 +361,7 @@ def test_mass_verdict_from_the_fit_with_the_mass_held_at_the_description():
     Phi = robot.regressor(data.q, data.dq, data.ddq)
     assert np.all(Phi[..., 9] == 0.0)  # the first link's mass: no torque depends on it
     res = identify(robot, data, rsd_threshold=None)
-    c = consistent_estimate(res, data=data)
+    c = consistent_estimate(res)
     first, third = c.links[0], c.links[2]
     assert third["mass_verdict"] == "data", third
     assert third["mass_fit_increase"] >= MASS_EVIDENCE
@@ -385,7 +385,7 @@ def test_a_mass_the_prior_moves_with_the_moments_the_data_fix_is_not_held_by_the
     truth = robot.params.copy().reshape(robot.n, 10)
     truth[2] *= 0.2
     data = _log(robot, truth.reshape(-1), noise=0.01)
-    c = consistent_estimate(identify(robot, data, rsd_threshold=None), data=data)
+    c = consistent_estimate(identify(robot, data, rsd_threshold=None))
     third = c.links[2]
     m0, mt = third["description_mass"], truth[2, 9]
     assert third["mass_fit_increase"] < MASS_EVIDENCE, third

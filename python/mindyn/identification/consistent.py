@@ -62,7 +62,6 @@ from .estimation import (
     noise_variance_factor,
     predicted_torques,
     regressor_rows,
-    residual_correlation,
 )
 from .joint_data import JointData
 from .models import moving_equations, require_torque
@@ -339,32 +338,23 @@ def nearest_realisation(base: BaseParameters, values) -> np.ndarray:
     return pi0 + np.linalg.lstsq(Y, np.asarray(values, float) - Y @ pi0, rcond=None)[0]
 
 
-def noise_scale(res: IdentificationResult, data=None) -> dict:
+def noise_scale(res: IdentificationResult) -> dict:
     """The noise variance of the consistent estimate's fit term as a factor on the residual
-    variance of ``res`` (which counts its rows as independent): the larger of the data path's
-    (``settings.std_correlation``, :func:`~mindyn.identification.estimation.correlation_factor`:
-    filtered noise; the estimate's standard deviations carry it) and, given ``data`` (the logs
-    ``res`` was fitted on), the one its residuals show
-    (:func:`~mindyn.identification.estimation.residual_correlation`: model error). Returns
-    ``factor``, ``data_path``, ``residuals`` (None without data, or not measured: a window
-    model) and ``residuals_rule``. :func:`~mindyn.identification.identify` measures both and
-    takes the larger for the estimates' standard deviations too (its
-    ``settings.std_correlation``); that record is read when present, ``data`` is then not
-    needed."""
+    variance of ``res`` (which counts its rows as independent): the factor of its standard
+    deviations, ``settings.std_correlation`` (:func:`~mindyn.identification.identify`), the
+    larger of the data path's (:func:`~mindyn.identification.estimation.correlation_factor`:
+    filtered noise) and the one its residuals show
+    (:func:`~mindyn.identification.estimation.residual_correlation`: model error; dynamic
+    model). Returns ``factor``, ``data_path``, ``residuals`` (None: not measured, a window
+    model) and ``residuals_rule``."""
     record = res.settings.get("std_correlation") or {}
-    if "residuals" in record:
-        path, measured = float(record["data_path"]), record["residuals"]
-        rule = str(record["residuals_rule"])
-    else:
-        path = noise_variance_factor(res)
-        measured, rule = (None, "not measured (no data given)")
-        if data is not None:
-            measured, rule = residual_correlation(res, data)
+    path = float(record.get("data_path", noise_variance_factor(res)))
+    measured = record.get("residuals")
     return {
         "factor": max(path, measured or 0.0, 1.0),
         "data_path": path,
         "residuals": measured,
-        "residuals_rule": rule,
+        "residuals_rule": str(record.get("residuals_rule", "not measured")),
     }
 
 
@@ -375,9 +365,7 @@ def identify_consistent(
     :func:`consistent_estimate` on its least-squares problem (the prior's weight chosen from
     the data by default)."""
     _weight(prior_weight)
-    return consistent_estimate(
-        identify(robot, data, **kwargs), prior_weight=prior_weight, data=data
-    )
+    return consistent_estimate(identify(robot, data, **kwargs), prior_weight=prior_weight)
 
 
 def _weight(prior_weight) -> float | None:
@@ -402,7 +390,6 @@ def consistent_estimate(
     res: IdentificationResult,
     *,
     prior_weight: float | str = "auto",
-    data=None,
     progress=None,
 ) -> ConsistentResult:
     """The physically consistent classical parameters for the least-squares problem of ``res``
@@ -432,9 +419,8 @@ def consistent_estimate(
     at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
 
     The fit term's noise variance is the residual variance of ``res`` times
-    :func:`noise_scale`'s factor: with ``data``, the logs ``res`` was fitted on, it also
-    accounts for the correlation of the residuals that model error leaves (recorded in
-    ``noise``).
+    :func:`noise_scale`'s factor, that of its standard deviations: it also accounts for the
+    correlation of the residuals that model error leaves (recorded in ``noise``).
 
     ``progress``, a callable taking a line of text, is told each solve and refinement as it
     starts and ends (they can take seconds each)."""
@@ -454,7 +440,7 @@ def consistent_estimate(
     beta_ls, _, _ = ls.solve(list(range(nb)))
     s2 = ls.rho / (ls.r - nb) if ls.r > nb else 0.0
     floor = 1e-10 * (float(z @ z) + ls.rho)  # noise-free data: |z| / s at most 1e5
-    noise = noise_scale(res, data)
+    noise = noise_scale(res)
     s2 = max(s2 * noise["factor"], floor, 1e-300)
     fit_ls = float(np.sum((ls.R @ (beta_ls * ls.norms) - z) ** 2))
     notes: list[str] = []

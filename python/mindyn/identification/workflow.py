@@ -162,7 +162,7 @@ def _consistent(res, data: list, options: IdentifyOptions, progress):
     from .consistent import consistent_estimate
 
     weight = "auto" if options.prior_weight is None else options.prior_weight
-    cons = consistent_estimate(res, prior_weight=weight, data=data, progress=progress)
+    cons = consistent_estimate(res, prior_weight=weight, progress=progress)
     return cons, cons.to_dict(), cons.mass_matrix_min_eig(data)
 
 
