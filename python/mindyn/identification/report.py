@@ -72,7 +72,7 @@ def format_table(result, *, truth=None) -> str:
     estimate, standard deviation, RSD and, when ``truth`` (base values, shape (nb,)) is given,
     the true value and the relative error (``-`` for a true value of 0)."""
     from .consistent import ConsistentResult
-    from .estimation import IdentificationResult
+    from .estimation import PRUNING_STD_LISTED, IdentificationResult
 
     _args.instance(result, "result", (IdentificationResult, ConsistentResult))
     truth = _args.optional(_args.array, truth, "truth", (result.base.n,))
@@ -109,6 +109,19 @@ def format_table(result, *, truth=None) -> str:
                 f"{n} ({r:.0f} %)" if math.isfinite(r) else f"{n} (inf)" for n, r in result.removed
             )
         )
+        wide = getattr(result, "settings", {}).get("pruning_std", {})
+        if wide.get("listed"):
+            lines.append(
+                f"std with the removed parameters free (the fit with all base parameters): "
+                f"{wide['listed']} kept estimate(s) above {PRUNING_STD_LISTED:g} x their std, "
+                + ", ".join(
+                    f"{n} ({r:.3g} x)" if r is not None else f"{n} (inf)"
+                    for n, r in wide["largest"]
+                )
+                + (", ..." if wide["listed"] > len(wide["largest"]) else "")
+                + "; as estimates of the base parameters they carry what the removed ones "
+                "contribute"
+            )
     return "\n".join(lines)
 
 
