@@ -194,7 +194,8 @@ def add_description_outputs(p, what: str) -> None:
         help="MuJoCo MJCF to write" + suffix + ": inertials, joint armature (Ia), damping (Fv) "
         "and frictionloss (Fc), the effort limits (actuatorfrcrange) and velocity limits "
         "(custom numerics velocity_limit:JOINT, read back on loading), transmissions as "
-        "tendons; a robot read from an MJCF has that file written back",
+        "tendons" + (", a floating root as a free joint" if what == "export" else "") + "; a "
+        "robot read from an MJCF has that file written back",
     )
     p.add_argument(
         "--sidecar",
