@@ -1,4 +1,4 @@
-"""MuJoCo MJCF in and out for a floating base: a free joint on the root body.
+"""MuJoCo MJCF in and out for a floating base (a free joint on the root body) and ball joints.
 
 MuJoCo's free joint and mindyn's floating joint (Pinocchio's free-flyer) have other
 coordinates. The map is written here from MuJoCo's definitions, not taken from the library, and
@@ -10,7 +10,9 @@ checked on its own against finite differences of ``mj_integratePos``:
   origin's in the world axes, mindyn's in the body's; the angular velocity is in the body's
   axes in both;
 - so ``qacc = (R (a + w x v), dw)`` (the derivative of ``R v``) and the generalised forces,
-  dual to the velocities, ``qfrc = (R f, t)``.
+  dual to the velocities, ``qfrc = (R f, t)``;
+- a ball joint: ``qpos = (w, x, y, z)``, mindyn's ``q = (x, y, z, w)``; the velocity is the
+  angular velocity in the body's axes in both (Pinocchio's spherical joint's).
 
 The references: MuJoCo's ``mj_inverse`` (no contacts, no limits, gravity on), Pinocchio's
 ``rnea`` on a free-flyer (whose coordinates are mindyn's) and the base regressor ``W_b`` times
@@ -63,6 +65,12 @@ def to_mujoco(m, robot, q, v, a):
                 *a[iv + 3 : iv + 6],
             ]
             iq, iv = iq + 7, iv + 6
+        elif kind == "spherical":
+            assert int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_BALL)
+            x, y, z, w = q[iq : iq + 4]
+            qpos[adr : adr + 4] = [w, x, y, z]
+            qvel[dof : dof + 3], qacc[dof : dof + 3] = v[iv : iv + 3], a[iv : iv + 3]
+            iq, iv = iq + 4, iv + 3
         else:
             assert robot.joint_types.count("floating") <= 1 and kind in ("revolute", "prismatic")
             qpos[adr], qvel[dof], qacc[dof] = q[iq], v[iv], a[iv]
@@ -80,6 +88,9 @@ def from_mujoco_force(m, robot, q, qfrc) -> np.ndarray:
             R = rotation([w, x, y, z])
             out += [*(R.T @ qfrc[dof : dof + 3]), *qfrc[dof + 3 : dof + 6]]
             iq += 7
+        elif kind == "spherical":
+            out += list(qfrc[dof : dof + 3])
+            iq += 4
         else:
             out.append(qfrc[dof])
             iq += 1
@@ -301,19 +312,24 @@ def test_hand_written_free_joint_loads_as_a_floating_base(tmp_path):
     np.testing.assert_array_equal(robot.gravity, [0.2, -0.1, -9.7])
     m = mujoco.MjModel.from_xml_path(str(path))
     assert [m.joint(j).name for j in range(m.njnt)] != robot.joint_names
-    model = pin_free_flyer(robot)
+    assert_mujoco_agrees(robot, m, np.random.default_rng(4), "free joint in")
+
+
+def assert_mujoco_agrees(robot, m, rng, what: str) -> None:
+    """At random states mj_inverse of ``m`` is ``robot``'s inverse dynamics and Pinocchio's
+    rnea of its geometry."""
+    model = pinocchio_of(robot)
     data = model.createData()
-    rng = np.random.default_rng(4)
     for _ in range(4):
         q, v, a = random_state(robot, rng)
         ref = mj_inverse(m, robot, q, v, a)
-        assert_close(robot.inverse_dynamics(q, v, a), ref, TOL, "MJCF in vs mj_inverse")
-        assert_close(pin.rnea(model, data, q, v, a), ref, TOL, "Pinocchio vs mj_inverse")
+        assert_close(robot.inverse_dynamics(q, v, a), ref, TOL, f"{what}: mindyn vs MuJoCo")
+        assert_close(pin.rnea(model, data, q, v, a), ref, TOL, f"{what}: Pinocchio vs MuJoCo")
 
 
-def pin_free_flyer(robot) -> pin.Model:
-    """Pinocchio's model of ``robot``'s geometry (joint placements, axes, link inertias) with a
-    free-flyer for its floating joint."""
+def pinocchio_of(robot) -> pin.Model:
+    """Pinocchio's model of ``robot``'s geometry (joint placements, axes, link inertias; link
+    frames the joint frames) with a free-flyer and spherical joints for its own."""
     model = pin.Model()
     model.gravity.linear = robot.gravity
     ids = []
@@ -321,6 +337,8 @@ def pin_free_flyer(robot) -> pin.Model:
         parent = 0 if robot.parents[k] < 0 else ids[robot.parents[k]]
         if kind == "floating":
             joint = pin.JointModelFreeFlyer()
+        elif kind == "spherical":
+            joint = pin.JointModelSpherical()
         elif kind == "revolute":
             joint = pin.JointModelRevoluteUnaligned(*robot.axes[k])
         else:
@@ -362,10 +380,14 @@ REFUSED_IN = {
         f'<body name="a"><joint name="f1" type="free" stiffness="3"/>{BODY}</body>',
         "joint 'f1' (body 'a') has a spring (stiffness 3.0)",
     ),
-    "ball": (
+    "ball_damping": (
         f'<body name="a"><freejoint name="f1"/>{BODY}'
-        f'<body name="b"><joint name="s" type="ball"/>{BODY}</body></body>',
-        "joint 's' (body 'b') is a ball joint, which is not read",
+        f'<body name="b"><joint name="s" type="ball" damping="0.1"/>{BODY}</body></body>',
+        "ball joint 's' (body 'b') has damping 0.1",
+    ),
+    "ball_velocity_limit": (
+        f'<body name="a"><joint name="f1" type="ball"/>{BODY}</body>',
+        "<numeric name=\"velocity_limit:f1\">: 'f1' is a ball joint",
     ),
     "velocity_limit": (
         f'<body name="a"><freejoint name="f1"/>{BODY}</body>',
@@ -380,7 +402,7 @@ def test_free_joints_the_model_cannot_hold_are_refused_by_name(case, tmp_path):
     custom = '<custom><numeric name="velocity_limit:f1" data="2"/></custom>'
     path = tmp_path / "bad.xml"
     path.write_text(
-        f"<mujoco><worldbody>{bodies}</worldbody>{custom if case == 'velocity_limit' else ''}"
+        f"<mujoco><worldbody>{bodies}</worldbody>{custom if 'velocity_limit' in case else ''}"
         "</mujoco>"
     )
     with pytest.raises(mindyn.ModelError) as e:
@@ -390,9 +412,9 @@ def test_free_joints_the_model_cannot_hold_are_refused_by_name(case, tmp_path):
 
 REFUSED_OUT = {
     "planar_root": ("planar", "has the planar joint 'root_joint', which MJCF out does not"),
-    "spherical": (
-        "  - {name: j2, type: spherical, alpha: 0, d: 0, theta: 0, r: 0.1, parent: 1,",
-        "has the spherical joint 'j2', which MJCF out does not write",
+    "cylindrical": (
+        "  - {name: j2, type: cylindrical, alpha: 0, d: 0, theta: 0, r: 0.1, parent: 1,",
+        "has the cylindrical joint 'j2', which MJCF out does not write",
     ),
     "floating_below": (
         "  - {name: j2, type: floating, alpha: 0, d: 0, theta: 0, r: 0.1, parent: 1,",
@@ -407,9 +429,10 @@ REFUSED_OUT = {
 
 @pytest.mark.parametrize("case", sorted(REFUSED_OUT))
 def test_joints_mjcf_out_cannot_write_are_refused_by_name(case, tmp_path):
-    """write_mjcf and `export --mjcf` refuse, naming the joint, what a free joint cannot be:
-    a planar root, a joint of several degrees of freedom other than the floating root, a
-    floating joint below a link, a joint on the base beside the floating one."""
+    """write_mjcf and `export --mjcf` refuse, naming the joint, what a free or ball joint cannot
+    be: a planar root, a joint of several degrees of freedom other than a spherical joint and
+    the floating root, a floating joint below a link, a joint on the base beside the floating
+    one."""
     second, message = REFUSED_OUT[case]
     if case == "planar_root":
         robot = mindyn.load(SOLO, root_joint="planar")
@@ -435,3 +458,83 @@ def test_joints_mjcf_out_cannot_write_are_refused_by_name(case, tmp_path):
 
     refused("export", *args, ident, "--mjcf", tmp_path / "o.xml", match=message)
     assert not (tmp_path / "out.xml").exists() and not (tmp_path / "o.xml").exists()
+
+
+# -- ball joints --------------------------------------------------------------------------------
+BALLS = """<mujoco model="shoulder">
+  <compiler angle="radian"/>
+  <option gravity="0.3 0 -9.81"/>
+  <worldbody>
+    <body name="upper" pos="0 0 1" euler="0.2 0.1 0">
+      <joint name="a_ball" type="ball" pos="0 0 0.05"/>
+      <inertial pos="0.01 0 -0.15" mass="2" fullinertia="0.03 0.02 0.015 0.001 0.002 0.003"/>
+      <body name="fore" pos="0 0 -0.3" quat="0.9 0 0.3 0.1">
+        <joint name="b_elbow" axis="0 1 0"/>
+        <inertial pos="0 0.01 -0.12" mass="1" diaginertia="0.01 0.012 0.004"/>
+        <body name="hand" pos="0 0 -0.25">
+          <joint name="c_wrist" axis="1 0 0" pos="0 0 0.02"/>
+          <joint name="d_ball" type="ball" pos="0 0.01 0"/>
+          <inertial pos="0.02 0 -0.05" mass="0.5" diaginertia="0.002 0.003 0.004"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_hand_written_ball_joints_load_as_spherical_joints(tmp_path):
+    """Ball joints (one off its body's origin, one after a hinge in the same body) load as
+    spherical joints at their anchors, with the inverse dynamics MuJoCo computes (quaternions
+    reordered) and Pinocchio's rnea with JointModelSpherical on the same geometry."""
+    path = tmp_path / "balls.xml"
+    path.write_text(BALLS)
+    robot = mindyn.load(path)
+    assert robot.joint_names == ["a_ball", "b_elbow", "c_wrist", "d_ball"]
+    assert robot.joint_types == ["spherical", "revolute", "revolute", "spherical"]
+    assert (robot.nq, robot.nv) == (10, 8) and robot.link_names[3] == "hand__c_wrist"
+    with pytest.raises(mindyn.ArgumentError, match="'b_elbow' is no floating joint of shoulder"):
+        robot._m.with_spherical(["b_elbow"])  # what the reader uses on its floating joints
+    m = mujoco.MjModel.from_xml_path(str(path))
+    assert_mujoco_agrees(robot, m, np.random.default_rng(6), "ball joints in")
+
+
+YAML_BALLS = """
+name: critter
+convention: mdh
+joints:
+  - {name: a_base, type: floating, alpha: 0, d: 0, theta: 0, r: 0,
+     inertial: {mass: 4.0, com: [0.05, 0, 0.1], inertia: {xx: 0.1, yy: 0.08, zz: 0.05}}}
+  - {name: b_hip, type: spherical, alpha: 0.3, d: 0.2, theta: 0.1, r: -0.05, parent: 1,
+     inertial: {mass: 1.0, com: [0, 0.02, -0.2], inertia: {xx: 0.02, yy: 0.02, zz: 0.004}}}
+  - {name: c_knee, type: revolute, alpha: 1.5708, d: 0, theta: 0, r: 0, parent: 2,
+     inertial: {mass: 0.5, com: [0.2, 0, 0], inertia: {xx: 0.001, yy: 0.01, zz: 0.01}}}
+  - {name: d_neck, type: spherical, alpha: -0.4, d: -0.1, theta: 0, r: 0.2, parent: 1,
+     inertial: {mass: 0.8, com: [0, 0, 0.1], inertia: {xx: 0.01, yy: 0.01, zz: 0.003}}}
+"""
+
+
+def test_spherical_joints_are_written_as_ball_joints_and_read_back(tmp_path):
+    """A YAML tree on a floating base with spherical joints, random physically consistent
+    parameters: written with a ball joint per spherical joint (no motor, a note on the
+    quaternion order), read back with the same joints and parameters, and MuJoCo's mj_inverse
+    on the file is mindyn's inverse dynamics and Pinocchio's rnea of the robot read back."""
+    path = tmp_path / "critter.yaml"
+    path.write_text(YAML_BALLS)
+    robot = mindyn.load(path)
+    p = physical_params(robot, np.random.default_rng(12), drive=False)
+    res = write_mjcf(robot, p, tmp_path / "critter.xml")
+    text = res.path.read_text()
+    assert len(re.findall(r'<joint name="(b_hip|d_neck)" type="ball"\s*/>', text)) == 2
+    assert '<motor name="b_hip"' not in text
+    assert any("('b_hip', 'd_neck') are ball joints" in n for n in res.notes)
+    again = mindyn.load(res.path)
+    assert again.joint_names == robot.joint_names and again.parents == robot.parents
+    assert again.joint_types == robot.joint_types
+    m = mujoco.MjModel.from_xml_path(str(res.path))
+    assert_mujoco_agrees(again, m, np.random.default_rng(13), "ball joints read back")
+    rng = np.random.default_rng(14)
+    for _ in range(3):
+        q, v, a = random_state(robot, rng)
+        ref = mj_inverse(m, robot, q, v, a)
+        assert_close(robot.inverse_dynamics(q, v, a, params=p), ref, TOL, "YAML balls vs MuJoCo")

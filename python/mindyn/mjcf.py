@@ -24,7 +24,10 @@ How MuJoCo's terms relate to the model's (``tau = W(q, dq, ddq) p + Ia ddq + Fv 
   ``(v, w)``: the linear velocity of the body origin in the world axes against the body's
   (``R`` the body's rotation), the angular velocity in the body's axes in both; so MuJoCo's
   ``qacc`` = ``(R (a + w x v), dw)`` and its generalised force ``(R f, t)`` for mindyn's ``(f,
-  t)``. Other joints of several degrees of freedom (ball, planar ...) are refused by name;
+  t)``. A spherical joint is a ball joint (``qpos`` its quaternion ``(w, x, y, z)``, mindyn's q
+  ``(x, y, z, w)``; the angular velocity in the body's axes in both), without motor, limits or
+  drive terms. Other joints of several degrees of freedom (planar, universal, cylindrical) are
+  refused by name;
 - torque offsets ``Off`` have no place in MJCF (a comment lists them);
 - the joints' effort limits are their ``actuatorfrcrange``; their velocity limits, which MJCF has
   no element for, custom numerics ``<numeric name="velocity_limit:JOINT" data="V"/>`` (data that
@@ -135,20 +138,20 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
 
 def check_joints(robot: Robot) -> None:
     """Refuses, in one line naming the joint, a robot whose joints an MJCF cannot hold as the
-    model has them: any joint of several degrees of freedom but a floating root (a free-flyer
-    on the base carrying every other joint, written as MuJoCo's free joint, which moves a body
-    hanging from the world only)."""
+    model has them: any joint of several degrees of freedom but a spherical joint (a ball
+    joint) and a floating root (a free-flyer on the base carrying every other joint, written as
+    MuJoCo's free joint, which moves a body hanging from the world only)."""
     _args.instance(robot, "robot", Robot)
     roots = [k for k in range(robot.n) if robot.parents[k] < 0]
     for k, kind in enumerate(robot.joint_types):
-        if kind in _SINGLE_DOF:
+        if kind in _SINGLE_DOF or kind == "spherical":
             continue
         name = robot.joint_names[k]
         if kind != "floating":
             raise ModelError(
-                f"write_mjcf writes revolute and prismatic joints and a floating root (a free "
-                f"joint); robot '{robot.name}' has the {kind} joint '{name}', which MJCF out "
-                "does not write"
+                f"write_mjcf writes revolute, prismatic and spherical joints and a floating root "
+                f"(a free joint); robot '{robot.name}' has the {kind} joint '{name}', which MJCF "
+                "out does not write"
             )
         if robot.parents[k] >= 0:
             raise ModelError(
@@ -229,9 +232,13 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
         inertia = post[:3, :3] @ inertia @ post[:3, :3].T
         ET.SubElement(body, "inertial", _inertial(mass, com, inertia))
         if robot.joint_types[k] == "floating":  # the root (check_joints)
-            _no_free_terms(robot, k, drive[k])
+            _no_drive_terms(robot, k, drive[k])
             ET.SubElement(body, "freejoint", {"name": robot.joint_names[k]})
             notes += _free_notes(robot, k, place)
+            continue
+        if robot.joint_types[k] == "spherical":
+            _no_drive_terms(robot, k, drive[k])
+            ET.SubElement(body, "joint", {"name": robot.joint_names[k], "type": "ball"})
             continue
         joint = {
             "name": robot.joint_names[k],
@@ -251,6 +258,13 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
         speed = lim["velocity"][k]
         if np.isfinite(speed) and speed > 0:  # MJCF has none: a custom numeric, read back
             speeds.append((robot.joint_names[k], speed))
+    balls = [name for name, t in zip(robot.joint_names, robot.joint_types) if t == "spherical"]
+    if balls:
+        notes.append(
+            f"the spherical joints ({', '.join(repr(b) for b in balls)}) are ball joints: "
+            "MuJoCo's qpos holds their quaternions as (w, x, y, z), mindyn's q as (x, y, z, w) "
+            "(the velocity, the angular velocity in the body's axes, is the same)"
+        )
     if robot.is_serial:
         tool = robot.joint_post(robot.n - 1) @ robot.tool
         ET.SubElement(bodies[-1], "site", {"name": "tool", **_pose(tool)})
@@ -275,8 +289,8 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     notes += _unwritten_limits_and_drives(robot)
     actuators = ET.SubElement(root, "actuator")
     for motor, row in motors:
-        if tr is None and robot.joint_types[row[0][0]] == "floating":
-            continue  # no motor: the floating base is moved by contacts
+        if tr is None and robot.joint_types[row[0][0]] not in _SINGLE_DOF:
+            continue  # no motor: a free or ball joint has no drive
         if len(row) == 1:
             ((k, r),) = row
             on = {"joint": robot.joint_names[k], "gear": _num(r)}
@@ -303,14 +317,15 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     return Export(out, notes=notes)
 
 
-def _no_free_terms(robot: Robot, k: int, drive) -> None:
-    """Refuses armature, damping or frictionloss on the floating joint ``k``: MuJoCo would
-    apply them to its six velocities, the model's floating base has none."""
+def _no_drive_terms(robot: Robot, k: int, drive) -> None:
+    """Refuses armature, damping or frictionloss on the floating or spherical joint ``k``:
+    MuJoCo would apply them to each of its velocities, the model has none on such a joint."""
     for key, x in zip(_DRIVE, drive):
         if x != 0:
             raise ModelError(
-                f"{key} of the floating joint '{robot.joint_names[k]}' would be {float(x)!r}: the "
-                "model's floating base has no rotor inertia or friction (give 0)"
+                f"{key} of the {robot.joint_types[k]} joint '{robot.joint_names[k]}' would be "
+                f"{float(x)!r}: the model's joints of several degrees of freedom have no rotor "
+                "inertia or friction (give 0)"
             )
 
 
@@ -446,6 +461,11 @@ def _mapping_comment(robot: Robot, on_motors: bool, transmissions: bool) -> str:
             "world axes and its angular velocity in its own axes (mindyn's v: both in its own "
             "axes). "
         )
+    if "spherical" in robot.joint_types:
+        text += (
+            "Ball joints: qpos = the quaternion (w, x, y, z) (mindyn's q: (x, y, z, w)), qvel = "
+            "the angular velocity in the body's axes (as mindyn's v). "
+        )
     if transmissions:
         text += (
             "Motors (q_m = T q, tau = T^T tau_m): one driving one joint with ratio r is an "
@@ -533,8 +553,8 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
         for j in jnts:
             name = _mujoco.joint_name(m, j)
             drive = _slot(terms, joint_index[name], f"joint '{name}'")
-            if robot.joint_types[joint_index[name]] == "floating":  # a free joint: none
-                _no_free_terms(robot, joint_index[name], drive)
+            if robot.joint_types[joint_index[name]] not in _SINGLE_DOF:  # free or ball: none
+                _no_drive_terms(robot, joint_index[name], drive)
                 continue
             _named(joints, name, "joint", src).attrib.update(_attrs(drive))
     tendons = {e.get("name"): e for e in doc.root.iter("fixed") if e.get("name")}
