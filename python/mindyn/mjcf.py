@@ -86,7 +86,8 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     Parameters
     ----------
     robot : Robot
-        Any robot; one loaded from an MJCF has that file rewritten.
+        A robot of revolute, prismatic and spherical joints on a fixed or floating base
+        (:func:`check_joints`); one loaded from an MJCF has that file rewritten.
     classical : mapping or array_like
         Classical parameters, see :func:`mindyn.export.classical_terms`.
     path : str or Path
@@ -98,8 +99,9 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
         the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, the effort
-        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``) or, for a
-        floating root, a ``<freejoint>`` (see the module's docstring), the
+        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), a ball
+        joint for a spherical joint or, for a floating root, a ``<freejoint>`` (see the
+        module's docstring), the
         velocity limits as custom numerics ``velocity_limit:<joint>`` (MJCF has none; MuJoCo
         keeps them as data, :func:`mindyn.load` reads them back), gravity, a ``tool`` site for
         a chain, and a ``<motor>``
