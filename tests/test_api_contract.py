@@ -671,6 +671,7 @@ def _api(tmp: Path) -> dict:
             "export.read_joint_terms": (export.read_joint_terms, (f["sidecar"],), {}),
             "export.write_urdf": (export.write_urdf, (two, two_classical, tmp / "w.urdf"), {}),
             "mjcf.write_mjcf": (mjcf.write_mjcf, (two, two_classical, tmp / "w.xml"), {}),
+            "mjcf.check_joints": (mjcf.check_joints, (two,), {}),
             # export
             "export.classical_terms": (export.classical_terms, (ROBOT, classical), {}),
             "export.write_yaml": (

@@ -347,13 +347,17 @@ def test_base_and_info_take_a_root_joint_and_other_commands_refuse_it_in_one_lin
         ["track"],
         ["ik", "--xyz", "0", "0", "1"],
         ["codegen", "-o", tmp_path / "x.c", "--lang", "c", "--what", "adaptive-pd"],
-        ["export", ident, "--mjcf", tmp_path / "o.xml"],
         ["detect", ident, log],
         ["predict", ident, log, "-o", tmp_path / "p.csv"],
     ):
         for robot_args in ([urdf, "--root-joint", "floating"], [yaml]):
             refused(argv[0], *robot_args, *argv[1:], match="takes revolute and prismatic joints")
     refused("demo", yaml, match="demo takes revolute and prismatic joints only")
+    # export --mjcf writes a floating root as a free joint (test_mjcf_floating), not this tree's
+    # other multi-DOF joints; a floating identification has base parameters only
+    refused("export", yaml, ident, "--mjcf", tmp_path / "o.xml", match="which MJCF out does not")
+    mjcf = ["--mjcf", tmp_path / "o.xml"]
+    refused("export", urdf, "--root-joint", "floating", ident, *mjcf, match="'classical'")
     # export --urdf takes the robot (its root joint is not written: see test_export); this
     # identification has base parameters only
     out = tmp_path / "o.urdf"

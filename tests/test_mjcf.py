@@ -653,8 +653,6 @@ def test_mjcf_tendon_terms_the_model_cannot_hold_are_refused_by_name(tmp_path):
 
 
 BAD = {
-    "ball": ('<joint name="b1" type="ball"/>', "joint 'b1' (body 'a') is a ball joint"),
-    "free": ('<freejoint name="f1"/>', "joint 'f1' (body 'a') is a free joint"),
     "spring": (
         '<joint name="s1" axis="0 0 1" stiffness="3"/>',
         "joint 's1' (body 'a') has a spring",

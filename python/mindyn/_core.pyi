@@ -64,6 +64,10 @@ class Model:
         """
         A new model, the same but for its gravity vector (base frame, m/s^2); this one is unchanged.
         """
+    def with_spherical(self, names: collections.abc.Sequence[str]) -> Model:
+        """
+        A new model, the same but with the named floating (free-flyer) joints made spherical: the rotation about the same joint frame's origin, without translation (a ball joint, which URDF text cannot carry); this one is unchanged.
+        """
     @property
     def axes(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
         ...

@@ -23,6 +23,24 @@ which MJCF lacks, from a custom numeric ``velocity_limit:JOINT`` (:data:`VELOCIT
 A link frame of the model is the MuJoCo body frame moved to the anchor (``pos``) of the body's
 last joint, with the body's axes; a body with several joints gets one massless link per joint
 before its last one (``BODY__JOINT``). Jointless bodies are merged into the link they hang from.
+
+A free joint (:func:`free_joint`: one, on a body hanging from the world, with every other joint
+below that body) is the model's floating joint (Pinocchio's free-flyer) from the world to the
+body frame, with no placement: MuJoCo's ``qpos`` of it is the body's pose in the world (the
+body's ``pos`` and ``quat`` give only the initial ``qpos0``). The coordinates, checked in the
+tests by finite differences of ``mj_integratePos``: MuJoCo's ``qpos`` = ``(p, w, x, y, z)``
+and the model's q = ``(p, x, y, z, w)`` (the same position and quaternion); MuJoCo's ``qvel`` =
+``(R v, w)`` where the model's v = ``(v, w)``, ``R`` the body's rotation: MuJoCo's linear
+velocity is the body origin's in the world axes, the model's in the body's, the angular
+velocity in the body's axes in both. The generalised forces are dual: MuJoCo's force is ``R f``
+for the model's ``f``, the torque (about the body origin, body axes) the same.
+
+A ball joint is the model's spherical joint at its anchor (written into the URDF text as a
+floating joint, which :meth:`Model.with_spherical` then makes spherical: URDF has no ball
+joint): MuJoCo's ``qpos`` of it is the quaternion ``(w, x, y, z)``, the model's q ``(x, y, z,
+w)``, and the velocity is the angular velocity in the body's axes in both. Free and ball joints
+carry no armature, damping, frictionloss or velocity limit (refused by name: the model's joints
+of several degrees of freedom have none); a ball joint's cone ``range`` is not read.
 """
 
 from __future__ import annotations
@@ -125,20 +143,19 @@ def last_anchor(m, b: int) -> np.ndarray:
 def check(m, path) -> None:
     """Refuses, in one line naming the element, what the model cannot represent."""
     mujoco = require("reading an MJCF")
-    kinds = {int(mujoco.mjtJoint.mjJNT_FREE): "free", int(mujoco.mjtJoint.mjJNT_BALL): "ball"}
+    free_joint(m, path)
     for j in range(m.njnt):
         name, body = joint_name(m, j), body_name(m, int(m.jnt_bodyid[j]))
         where = f"{path}: joint '{name}' (body '{body}')"
-        if int(m.jnt_type[j]) in kinds:
-            raise _core.ModelError(
-                f"{where} is a {kinds[int(m.jnt_type[j])]} joint; multi-DOF joints are not in "
-                "the model (hinge and slide joints are)"
-            )
         if m.jnt_stiffness[j] != 0:
             raise _core.ModelError(
                 f"{where} has a spring (stiffness {float(m.jnt_stiffness[j])!r}); joint "
                 "springs are not in the model"
             )
+        kind = _multi_dof_kinds().get(int(m.jnt_type[j]))
+        if kind:
+            _no_drive_terms(m, j, path, kind)
+            continue  # its qpos0 is the body's initial pose or the identity, not a reference
         if m.qpos0[m.jnt_qposadr[j]] != 0:
             hinge = int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
             unit = "rad (an angle of the file in degrees, the default unit, is compiled to it)"
@@ -195,7 +212,64 @@ def check(m, path) -> None:
             f"viscosity={float(m.opt.viscosity)!r}>: fluid forces are not in the model"
         )
     if m.nv == 0:
-        raise _core.ModelError(f"{path}: no hinge or slide joint")
+        raise _core.ModelError(f"{path}: no hinge, slide or free joint")
+
+
+def free_joint(m, path) -> int | None:
+    """The id of the model's free joint (None if none), checked to be what the model's floating
+    base is: one free joint, on a body hanging from the world, every other joint below that
+    body, with no armature, damping or frictionloss (refused by name otherwise)."""
+    mujoco = require("reading an MJCF")
+    free = [j for j in range(m.njnt) if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE)]
+    if not free:
+        return None
+
+    def where(j: int) -> str:
+        return f"joint '{joint_name(m, j)}' (body '{body_name(m, int(m.jnt_bodyid[j]))}')"
+
+    if len(free) > 1:
+        raise _core.ModelError(
+            f"{path}: {where(free[0])} and {where(free[1])} are both free joints: one floating "
+            "base is read, not several free bodies"
+        )
+    j = free[0]
+    b = int(m.jnt_bodyid[j])
+    if int(m.body_parentid[b]) != 0:
+        raise _core.ModelError(
+            f"{path}: free {where(j)} is below body '{body_name(m, int(m.body_parentid[b]))}': "
+            "a floating base is a free joint on a body hanging from the world"
+        )
+    for other in range(m.njnt):
+        a = int(m.jnt_bodyid[other])
+        while a not in (0, b):
+            a = int(m.body_parentid[a])
+        if a != b:
+            raise _core.ModelError(
+                f"{path}: {where(other)} is not below the free body '{body_name(m, b)}': a "
+                "floating base carries every joint (none may hang from the world beside it)"
+            )
+    return j
+
+
+def _no_drive_terms(m, j: int, path, kind: str) -> None:
+    """Refuses armature, damping or frictionloss on the free or ball joint ``j``: the model's
+    joints of several degrees of freedom have no rotor inertia or friction."""
+    start = int(m.jnt_dofadr[j])
+    dofs = slice(start, start + (6 if kind == "free" else 3))
+    for key in ("armature", "damping", "frictionloss"):
+        values = np.asarray(getattr(m, f"dof_{key}")[dofs], dtype=float)
+        if np.any(values != 0):
+            raise _core.ModelError(
+                f"{path}: {kind} joint '{joint_name(m, j)}' (body "
+                f"'{body_name(m, int(m.jnt_bodyid[j]))}') has {key} "
+                f"{float(values[values != 0][0])!r}: the model's {kind} joints have no rotor "
+                "inertia or friction"
+            )
+
+
+def _multi_dof_kinds() -> dict[int, str]:
+    mujoco = require("reading an MJCF")
+    return {int(mujoco.mjtJoint.mjJNT_FREE): "free", int(mujoco.mjtJoint.mjJNT_BALL): "ball"}
 
 
 def read(path, tip: str | None) -> _core.Model:
@@ -214,6 +288,10 @@ def read(path, tip: str | None) -> _core.Model:
         friction[:] = 0.0
     urdf = _urdf(m, _model_name(m, path), damping, friction, velocity_limits(m, path))
     core = _core.parse_urdf(urdf, tip or "", str(path))
+    ball = int(mujoco.mjtJoint.mjJNT_BALL)
+    balls = {joint_name(m, j) for j in range(m.njnt) if int(m.jnt_type[j]) == ball}
+    if balls & set(core.joint_names):  # written as floating joints: URDF has no ball joint
+        core = core.with_spherical(sorted(balls & set(core.joint_names)))
     gravity = np.zeros(3) if disabled & int(flags.mjDSBL_GRAVITY) else np.array(m.opt.gravity)
     core = core.with_gravity(gravity)
     by_name = {joint_name(m, j): float(armature[j]) for j in range(m.njnt)}
@@ -306,6 +384,12 @@ def velocity_limits(m, path) -> np.ndarray:
                 f"{path}: <numeric name=\"{name}\">: no joint '{joint}' (a velocity limit is "
                 f"named {VELOCITY_LIMIT}<joint>)"
             )
+        kind = _multi_dof_kinds().get(int(m.jnt_type[joints[joint]]))
+        if kind:
+            raise _core.ModelError(
+                f"{path}: <numeric name=\"{name}\">: '{joint}' is a {kind} joint, which has no "
+                "velocity limit in the model (hinge and slide joints have)"
+            )
         if len(data) != 1 or not (math.isfinite(data[0]) and data[0] > 0):
             raise _core.ModelError(
                 f'{path}: <numeric name="{name}">: expected one positive velocity limit, got '
@@ -340,10 +424,20 @@ def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray, speed: np.nda
         previous = np.zeros(3)
         for j in joints:
             link = link_name(m, b, j)
+            if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_FREE):  # the body's only joint
+                # qpos is the body's pose in the world: no placement (pos, quat: qpos0 only)
+                parts.append(_link(link, m, b, np.zeros(3)))
+                parts.append(_joint(joint_name(m, j), "floating", parent, link, np.eye(4)))
+                parent = link
+                continue
             origin = (pre if j == joints[0] else np.eye(4)) @ _translation(m.jnt_pos[j] - previous)
             previous = np.array(m.jnt_pos[j], dtype=float)
             last = j == joints[-1]
             parts.append(_link(link, m, b if last else None, previous))
+            if int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_BALL):  # made spherical by read()
+                parts.append(_joint(joint_name(m, j), "floating", parent, link, origin))
+                parent = link
+                continue
             lo, hi = (float(v) for v in m.jnt_range[j])
             limited = bool(m.jnt_limited[j])
             kind = "prismatic" if int(m.jnt_type[j]) != hinge else "revolute"

@@ -15,6 +15,19 @@ How MuJoCo's terms relate to the model's (``tau = W(q, dq, ddq) p + Ia ddq + Fv 
   ``efc_state`` linear) that is exactly ``Fc sign(dq)``; with the frictionloss constraint
   disabled (``mjDSBL_FRICTIONLOSS``) ``mj_inverse`` leaves it out and ``Fc sign(dq)`` is added by
   hand;
+- a floating root (a free-flyer, ``root_joint="floating"``) is a ``<freejoint>`` on its body,
+  which hangs from the world (MuJoCo's free joint moves such a body only, and the model's
+  floating base carries every other joint: :func:`check_joints`), without armature, damping or
+  frictionloss (the model's floating base has none). The coordinates differ: MuJoCo's ``qpos``
+  = the body's position and quaternion ``(w, x, y, z)`` in the world, mindyn's q = the same
+  position and quaternion ``(x, y, z, w)``; MuJoCo's ``qvel`` = ``(R v, w)`` for mindyn's v =
+  ``(v, w)``: the linear velocity of the body origin in the world axes against the body's
+  (``R`` the body's rotation), the angular velocity in the body's axes in both; so MuJoCo's
+  ``qacc`` = ``(R (a + w x v), dw)`` and its generalised force ``(R f, t)`` for mindyn's ``(f,
+  t)``. A spherical joint is a ball joint (``qpos`` its quaternion ``(w, x, y, z)``, mindyn's q
+  ``(x, y, z, w)``; the angular velocity in the body's axes in both), without motor, limits or
+  drive terms. Other joints of several degrees of freedom (planar, universal, cylindrical) are
+  refused by name;
 - torque offsets ``Off`` have no place in MJCF (a comment lists them);
 - the joints' effort limits are their ``actuatorfrcrange``; their velocity limits, which MJCF has
   no element for, custom numerics ``<numeric name="velocity_limit:JOINT" data="V"/>`` (data that
@@ -64,7 +77,7 @@ from .export import (
 )
 from .robot import Robot, load
 
-__all__ = ["write_mjcf"]
+__all__ = ["check_joints", "write_mjcf"]
 
 
 def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -> Export:
@@ -73,7 +86,8 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     Parameters
     ----------
     robot : Robot
-        Any robot; one loaded from an MJCF has that file rewritten.
+        A robot of revolute, prismatic and spherical joints on a fixed or floating base
+        (:func:`check_joints`); one loaded from an MJCF has that file rewritten.
     classical : mapping or array_like
         Classical parameters, see :func:`mindyn.export.classical_terms`.
     path : str or Path
@@ -85,7 +99,9 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
         the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, the effort
-        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), the
+        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), a ball
+        joint for a spherical joint or, for a floating root, a ``<freejoint>`` (see the
+        module's docstring), the
         velocity limits as custom numerics ``velocity_limit:<joint>`` (MJCF has none; MuJoCo
         keeps them as data, :func:`mindyn.load` reads them back), gravity, a ``tool`` site for
         a chain, and a ``<motor>``
@@ -106,11 +122,10 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         ``classical`` does not fit the robot, a mass is negative (or zero with a first
         moment), the MJCF to rewrite does not hold the robot's bodies and joints by name,
         ``mujoco`` is missing where it is needed, MuJoCo compiles the written file to other
-        parameters, or the robot has joints of several degrees of freedom (written here as
-        hinge and slide joints only).
+        parameters, or the robot has joints MJCF out cannot write (:func:`check_joints`).
     """
     _args.instance(robot, "robot", Robot)
-    robot._require_single_dof("write_mjcf")
+    check_joints(robot)
     _args.path(path, "path")
     _args.optional(_args.path, source, "source")
     terms = classical_terms(robot, classical)
@@ -121,6 +136,41 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     if _mujoco.is_mjcf(src):
         return _rewrite(robot, terms, src, out)
     return _generate(robot, terms, out, side)
+
+
+def check_joints(robot: Robot) -> None:
+    """Refuses, in one line naming the joint, a robot whose joints an MJCF cannot hold as the
+    model has them: any joint of several degrees of freedom but a spherical joint (a ball
+    joint) and a floating root (a free-flyer on the base carrying every other joint, written as
+    MuJoCo's free joint, which moves a body hanging from the world only)."""
+    _args.instance(robot, "robot", Robot)
+    roots = [k for k in range(robot.n) if robot.parents[k] < 0]
+    for k, kind in enumerate(robot.joint_types):
+        if kind in _SINGLE_DOF or kind == "spherical":
+            continue
+        name = robot.joint_names[k]
+        if kind != "floating":
+            raise ModelError(
+                f"write_mjcf writes revolute, prismatic and spherical joints and a floating root "
+                f"(a free joint); robot '{robot.name}' has the {kind} joint '{name}', which MJCF "
+                "out does not write"
+            )
+        if robot.parents[k] >= 0:
+            raise ModelError(
+                f"robot '{robot.name}' has the floating joint '{name}' below link "
+                f"'{robot.link_names[robot.parents[k] + 1]}': MuJoCo's free joint moves a body "
+                "hanging from the world only"
+            )
+        if len(roots) > 1:
+            other = robot.joint_names[next(i for i in roots if i != k)]
+            raise ModelError(
+                f"robot '{robot.name}' has the joint '{other}' on its base beside the floating "
+                f"joint '{name}': a floating base written as MuJoCo's free joint carries every "
+                "joint"
+            )
+
+
+_SINGLE_DOF = ("revolute", "prismatic")
 
 
 def _unwritten_limits_and_drives(robot: Robot) -> list[str]:
@@ -183,6 +233,15 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
         com = post[:3, :3] @ com + post[:3, 3]
         inertia = post[:3, :3] @ inertia @ post[:3, :3].T
         ET.SubElement(body, "inertial", _inertial(mass, com, inertia))
+        if robot.joint_types[k] == "floating":  # the root (check_joints)
+            _no_drive_terms(robot, k, drive[k])
+            ET.SubElement(body, "freejoint", {"name": robot.joint_names[k]})
+            notes += _free_notes(robot, k, place)
+            continue
+        if robot.joint_types[k] == "spherical":
+            _no_drive_terms(robot, k, drive[k])
+            ET.SubElement(body, "joint", {"name": robot.joint_names[k], "type": "ball"})
+            continue
         joint = {
             "name": robot.joint_names[k],
             "type": "hinge" if robot.joint_types[k] == "revolute" else "slide",
@@ -201,6 +260,13 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
         speed = lim["velocity"][k]
         if np.isfinite(speed) and speed > 0:  # MJCF has none: a custom numeric, read back
             speeds.append((robot.joint_names[k], speed))
+    balls = [name for name, t in zip(robot.joint_names, robot.joint_types) if t == "spherical"]
+    if balls:
+        notes.append(
+            f"the spherical joints ({', '.join(repr(b) for b in balls)}) are ball joints: "
+            "MuJoCo's qpos holds their quaternions as (w, x, y, z), mindyn's q as (x, y, z, w) "
+            "(the velocity, the angular velocity in the body's axes, is the same)"
+        )
     if robot.is_serial:
         tool = robot.joint_post(robot.n - 1) @ robot.tool
         ET.SubElement(bodies[-1], "site", {"name": "tool", **_pose(tool)})
@@ -225,6 +291,8 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     notes += _unwritten_limits_and_drives(robot)
     actuators = ET.SubElement(root, "actuator")
     for motor, row in motors:
+        if tr is None and robot.joint_types[row[0][0]] not in _SINGLE_DOF:
+            continue  # no motor: a free or ball joint has no drive
         if len(row) == 1:
             ((k, r),) = row
             on = {"joint": robot.joint_names[k], "gear": _num(r)}
@@ -249,6 +317,38 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text, encoding="utf-8")
     return Export(out, notes=notes)
+
+
+def _no_drive_terms(robot: Robot, k: int, drive) -> None:
+    """Refuses armature, damping or frictionloss on the floating or spherical joint ``k``:
+    MuJoCo would apply them to each of its velocities, the model has none on such a joint."""
+    for key, x in zip(_DRIVE, drive):
+        if x != 0:
+            raise ModelError(
+                f"{key} of the {robot.joint_types[k]} joint '{robot.joint_names[k]}' would be "
+                f"{float(x)!r}: the model's joints of several degrees of freedom have no rotor "
+                "inertia or friction (give 0)"
+            )
+
+
+def _free_notes(robot: Robot, k: int, place) -> list[str]:
+    """What a reader of the MJCF needs to know of the free joint written for the floating joint
+    ``k``, whose placement from the world is ``place``."""
+    name, body = robot.joint_names[k], robot.link_names[k + 1]
+    notes = [
+        f"the floating joint '{name}' is the free joint of body '{body}': MuJoCo's qpos holds "
+        "its quaternion as (w, x, y, z), mindyn's q as (x, y, z, w), and MuJoCo's qvel its "
+        "linear velocity in the world axes, mindyn's v in the body's (the angular velocity is "
+        "in the body's axes in both)"
+    ]
+    if not np.array_equal(np.asarray(place, dtype=float), np.eye(4)):
+        notes.append(
+            f"the floating joint '{name}' has a placement from the world, written as the "
+            f"initial pose of body '{body}' (pos, quat: MuJoCo's qpos0): MuJoCo's qpos is the "
+            "body's pose in the world, the placement times mindyn's q (v is the same); read "
+            "back, the free joint has no placement"
+        )
+    return notes
 
 
 def _motor_rows(robot: Robot, tr) -> list[tuple[str, list[tuple[int, float]]]]:
@@ -355,6 +455,19 @@ def _mapping_comment(robot: Robot, on_motors: bool, transmissions: bool) -> str:
         "friction constraint (at most Fc, opposing the motion, soft near zero velocity), not "
         "as Fc sign(dq). "
     )
+    if robot.joint_types[0] == "floating":
+        text += (
+            f"The floating base is the free joint '{robot.joint_names[0]}' of body "
+            f"'{robot.link_names[1]}': qpos = its position and quaternion (w, x, y, z) in the "
+            "world (mindyn's q: (x, y, z, w)), qvel = the linear velocity of its origin in the "
+            "world axes and its angular velocity in its own axes (mindyn's v: both in its own "
+            "axes). "
+        )
+    if "spherical" in robot.joint_types:
+        text += (
+            "Ball joints: qpos = the quaternion (w, x, y, z) (mindyn's q: (x, y, z, w)), qvel = "
+            "the angular velocity in the body's axes (as mindyn's v). "
+        )
     if transmissions:
         text += (
             "Motors (q_m = T q, tau = T^T tau_m): one driving one joint with ratio r is an "
@@ -406,10 +519,10 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
     doc = XmlDocument(src, "MJCF")
     if doc.root.tag != "mujoco":
         raise ModelError(f"{src}: the root element is <{doc.root.tag}>, not <mujoco>")
-    if robot.n != m.nv:
+    if robot.n != m.njnt:
         raise ModelError(
-            f"{src}: robot '{robot.name}' has {robot.n} of the file's {m.nv} joints (loaded with "
-            "a tip): an MJCF is written back for the whole model only"
+            f"{src}: robot '{robot.name}' has {robot.n} of the file's {m.njnt} joints (loaded "
+            "with a tip): an MJCF is written back for the whole model only"
         )
     bodies = {e.get("name"): e for e in doc.root.iter("body") if e.get("name")}
     joints = {e.get("name"): e for e in doc.root.iter("joint") if e.get("name")}
@@ -441,8 +554,11 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
         _set_inertial(_named(bodies, bname, "body", src), mass, com, inertia)
         for j in jnts:
             name = _mujoco.joint_name(m, j)
-            element = _named(joints, name, "joint", src)
-            element.attrib.update(_attrs(_slot(terms, joint_index[name], f"joint '{name}'")))
+            drive = _slot(terms, joint_index[name], f"joint '{name}'")
+            if robot.joint_types[joint_index[name]] not in _SINGLE_DOF:  # free or ball: none
+                _no_drive_terms(robot, joint_index[name], drive)
+                continue
+            _named(joints, name, "joint", src).attrib.update(_attrs(drive))
     tendons = {e.get("name"): e for e in doc.root.iter("fixed") if e.get("name")}
     for t in _mujoco.folded_tendons(m):  # read as their joint's terms, now written there
         name = _mujoco.tendon_name(m, t)

@@ -65,8 +65,10 @@ def load(
         A bundled name (``puma560``, ``puma560_3``, ``zcr07s``, ``stanford``, ``planar<N>`` for a
         vertical-plane N-link arm, ``planar<N>h`` for a horizontal one, 1 <= N <= 1000), a URDF
         file (``.urdf``, ``.xml``), a MuJoCo MJCF (``.xml`` whose root is ``<mujoco>``, compiled
-        by the optional ``mujoco`` package: hinge and slide joints, ``armature``, ``damping``
-        and ``frictionloss`` as ``Ia``, ``Fv``, ``Fc``, MuJoCo's gravity) or a YAML DH / MDH
+        by the optional ``mujoco`` package: hinge and slide joints, ball joints as spherical
+        joints and a free joint on the root body as the floating base, ``armature``,
+        ``damping`` and ``frictionloss`` as ``Ia``, ``Fv``, ``Fc``, MuJoCo's gravity) or a
+        YAML DH / MDH
         table (``.yaml``, ``.yml``).
     tip : str, optional
         URDF and MJCF only: the link that ends the serial chain root -> tip; moving joints off

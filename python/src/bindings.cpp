@@ -286,6 +286,25 @@ PYBIND11_MODULE(_core, m) {
           py::arg("gravity"),
           "A new model, the same but for its gravity vector (base frame, m/s^2); this one is "
           "unchanged.")
+      .def(
+          "with_spherical",
+          [](const PyModel& s, const std::vector<std::string>& names) {
+            Model copy = s.model;
+            for (const std::string& name : names) {
+              auto j = std::find_if(copy.joints.begin(), copy.joints.end(),
+                                    [&](const Joint& x) { return x.name == name; });
+              if (j == copy.joints.end() || j->type != JointType::FreeFlyer)
+                throw ArgumentError("with_spherical: '" + name + "' is no floating joint of " +
+                                    copy.name);
+              j->type = JointType::Spherical;  // its rotation about the same frame's origin
+            }
+            copy.validate();
+            return std::make_shared<PyModel>(std::move(copy));
+          },
+          py::arg("names"),
+          "A new model, the same but with the named floating (free-flyer) joints made "
+          "spherical: the rotation about the same joint frame's origin, without translation (a "
+          "ball joint, which URDF text cannot carry); this one is unchanged.")
       .def_property_readonly("tool", [](const PyModel& s) { return toMatrix(s.model.tool); })
       .def_property(
           "inertial", [](const PyModel& s) { return Eigen::VectorXd(s.model.inertial); },

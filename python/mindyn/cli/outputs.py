@@ -187,6 +187,7 @@ def add_description_outputs(p, what: str) -> None:
     out.add_argument(
         "--yaml", metavar="FILE", type=output_file, help="YAML DH/MDH table to write" + suffix
     )
+    multi_dof = ", a floating root and spherical joints as free and ball joints"
     out.add_argument(
         "--mjcf",
         metavar="FILE",
@@ -194,7 +195,8 @@ def add_description_outputs(p, what: str) -> None:
         help="MuJoCo MJCF to write" + suffix + ": inertials, joint armature (Ia), damping (Fv) "
         "and frictionloss (Fc), the effort limits (actuatorfrcrange) and velocity limits "
         "(custom numerics velocity_limit:JOINT, read back on loading), transmissions as "
-        "tendons; a robot read from an MJCF has that file written back",
+        f"tendons{multi_dof if what == 'export' else ''}; a robot read from an MJCF has that "
+        "file written back",
     )
     p.add_argument(
         "--sidecar",

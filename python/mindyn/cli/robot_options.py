@@ -94,7 +94,8 @@ def require_single_dof(robot, command: str) -> None:
     raise UsageError(
         f"{command} takes revolute and prismatic joints only; robot '{robot.name}' has the "
         f"{robot.joint_types[k]} joint '{robot.joint_names[k]}' (nq {robot.nq}, nv "
-        f"{robot.nv}); for such a robot: info, base, export (--urdf, --yaml), codegen (C "
+        f"{robot.nv}); for such a robot: info, base, export (--urdf, --yaml; --mjcf with a "
+        "floating root and spherical joints), codegen (C "
         "inverse dynamics, gravity and regressor, with a floating or planar root) and, with such "
         "a root, identify"
     )
