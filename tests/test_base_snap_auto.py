@@ -22,6 +22,7 @@ from mindyn.identification.joint_data import JointData
 
 KINOVA = ROBOTS_DIR / "kinova_description/robots/kinova.urdf"  # 1.57079632679, 3.14159265359
 XARM = ROBOTS_DIR / "xarm_description/urdf/xarm7.urdf"  # pi/2 written 1.5708
+SO100 = ROBOTS_DIR / "so_arm_description/urdf/so100.urdf"  # 1.57079, 3.14158: cut, not rounded
 
 
 def rewrite_right_angles(text: str, write) -> str:
@@ -97,8 +98,9 @@ def written(tmp_path, name: str, text: str):
         (KINOVA, None, False),  # as shipped: 1.57079632679, 3.14159265359, 1.570796327
         (XARM, None, True),  # as shipped: 1.5708, 3.7e-6 rad off
         (KINOVA, lambda k: repr(k * math.pi / 2 + k * 1e-12), False),  # 1e-12 rad per right angle
+        (SO100, None, False),  # as shipped: 6.3e-6 and 1.3e-5 rad off
     ],
-    ids=["kinova", "xarm7", "kinova-1e-12"],
+    ids=["kinova", "xarm7", "kinova-1e-12", "so100"],
 )
 def test_rounded_right_angles_give_the_count_of_the_exact_geometry(
     tmp_path, rng, source, rounding, rotor

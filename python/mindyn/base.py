@@ -485,14 +485,14 @@ _ROUNDING_MATCH = 16 * np.finfo(float).eps * 2 * np.pi
 
 
 def _decimal_roundings() -> np.ndarray:
-    """``|round(m pi/2, d) - m pi/2|`` for m = 1..4 and d = 0..17 decimals, sorted. (Not their
-    sums: the sum of two roundings of one angle is a round decimal, 1.571 - 1.57 = 1e-3, which
-    is how a deliberate offset is written.)"""
-    return np.array(
-        sorted(
-            {abs(round(m * np.pi / 2, d) - m * np.pi / 2) for m in range(1, 5) for d in range(18)}
-        )
-    )
+    """``|round(m pi/2, d) - m pi/2|`` and the same cut instead of rounded (3.14158) for
+    m = 1..4 and d = 0..17 decimals, sorted. (Not their sums: the sum of two roundings of one
+    angle is a round decimal, 1.571 - 1.57 = 1e-3, which is how a deliberate offset is
+    written.)"""
+    right = [m * np.pi / 2 for m in range(1, 5)]
+    written = {round(a, d) for a in right for d in range(18)}
+    written |= {np.floor(a * 10.0**d) / 10.0**d for a in right for d in range(18)}
+    return np.array(sorted({min(abs(w - a) for a in right) for w in written}))
 
 
 _ROUNDINGS = _decimal_roundings()
@@ -508,7 +508,8 @@ def _is_rounding(deviation: float, floor: float = 0.0) -> bool:
 
 def _is_decimal_rounding(deviation: float) -> bool:
     """Whether ``deviation`` is, to round-off, what writing a right angle with fewer decimals
-    than a double holds leaves (1.5708: 3.67e-6; 1.571: 2.04e-4)."""
+    than a double holds leaves, rounded or cut (1.5708: 3.67e-6; 1.571: 2.04e-4; 3.14158:
+    1.27e-5)."""
     k = int(np.searchsorted(_ROUNDINGS, deviation))
     near = _ROUNDINGS[max(k - 1, 0) : k + 1]
     return bool(np.min(np.abs(near - deviation)) <= _ROUNDING_MATCH)
@@ -540,20 +541,21 @@ def rounded_right_angles(
 
     The description's precision is the coarsest right angle it writes with few decimals: the
     largest deviation of an angle from its multiple of pi/2 that is exactly (to round-off) what
-    writing the multiple with ``d`` decimals leaves, for some ``d`` (``1.5708``: 3.67e-6;
-    ``1.571``: 2.04e-4; 0 when there is none). An angle or axis component is a rounded right
-    angle when its deviation from the nearest multiple of pi/2 (from 0, for an axis component)
-    is at most the effective bound: ``bound`` (default :data:`SNAP_AUTO_BOUND`, 1e-5 rad: what
-    descriptions exported from CAD leave, 6 to 8 significant digits, ``1.5707963``, an axis
-    ``(-1, 8.5e-11, 7e-8)``), three times the precision (a rotation read back from three such
-    angles) or the rank ``tolerance``, whichever is largest; an angle also when it is such a
-    decimal rounding itself. A deliberate angle (a calibrated offset of 1e-3 rad beside right
-    angles written 1.5708, a tilt of 5e-5 rad written with its own digits) is above the bound
-    and no decimal rounding: real geometry, kept. Returns ``rounded`` and ``real`` (what,
-    deviation in rad), ``largest_rounding``, ``smallest_real`` (None when there is none; every
-    rounding is at most the bound, every real deviation above it), ``precision``, ``bound`` (the
-    effective one) and ``tolerance``: the snap tolerance, twice the largest rounding (at most
-    the geometric mean of it and the smallest real deviation), 0 when nothing is rounded.
+    writing the multiple with ``d`` decimals, rounded or cut, leaves, for some ``d``
+    (``1.5708``: 3.67e-6; ``1.571``: 2.04e-4; ``3.14158``: 1.27e-5; 0 when there is none). An
+    angle or axis component is a rounded right angle when its deviation from the nearest
+    multiple of pi/2 (from 0, for an axis component) is at most the effective bound: ``bound``
+    (default :data:`SNAP_AUTO_BOUND`, 1e-5 rad: what descriptions exported from CAD leave, 6 to
+    8 significant digits, ``1.5707963``, an axis ``(-1, 8.5e-11, 7e-8)``), three times the
+    precision (a rotation read back from three such angles) or the rank ``tolerance``, whichever
+    is largest; an angle also when it is such a decimal rounding itself. A deliberate angle (a
+    calibrated offset of 1e-3 rad beside right angles written 1.5708, a tilt of 5e-5 rad written
+    with its own digits) is above the bound and no decimal rounding: real geometry, kept.
+    Returns ``rounded`` and ``real`` (what, deviation in rad), ``largest_rounding``,
+    ``smallest_real`` (None when there is none; every rounding is at most the bound, every real
+    deviation above it), ``precision``, ``bound`` (the effective one) and ``tolerance``: the
+    snap tolerance, twice the largest rounding (at most the geometric mean of it and the
+    smallest real deviation), 0 when nothing is rounded.
     """
     _args.instance(changes, "changes", (list, tuple), "a list of the dicts of snap_changes")
     tolerance = _args.number(tolerance, "tolerance", minimum=0.0)
@@ -572,12 +574,11 @@ def rounded_right_angles(
         default=0.0,
     )
     # (1 + 1e-9): three roundings read back from one rotation sum to 3 p up to round-off
-    bound = max(bound, 3 * precision * (1 + 1e-9))
-    floor = max(tolerance, bound)
+    bound = max(bound, 3 * precision * (1 + 1e-9), tolerance)
     rounded: list[tuple[str, float]] = []
     real: list[tuple[str, float]] = []
     for what, dev, axis in near:
-        small = dev <= max(_ROUNDING_MATCH, floor) if axis else _is_rounding(dev, floor)
+        small = dev <= max(_ROUNDING_MATCH, bound) if axis else _is_rounding(dev, bound)
         (rounded if small else real).append((what, dev))
     largest = max((d for _, d in rounded), default=0.0)
     smallest = min((d for _, d in real), default=None)
