@@ -245,16 +245,18 @@ def test_a_rounded_floating_base_robot_gives_the_exact_twins_count(tmp_path, kin
         assert d["check"] is not None and d["check"] <= d["check_bound"]
 
 
-def test_a_genuinely_tilted_axis_is_never_snapped(tmp_path, rng):
-    """The CAD-rounded arm with its first axis tilted by 1e-2 rad off the vertical, and right
-    angles written 1.57 (8e-4 rad off: a description that coarse rounds everything within
-    2.4e-3 rad): the tilt is kept, so the count is that of the exact arm with the same tilt,
-    above the untilted one, and the snap lists nothing of that joint's axis."""
+@pytest.mark.parametrize("tilt", [1e-2, 1.5e-3])
+def test_a_genuinely_tilted_axis_is_never_snapped(tmp_path, rng, tilt):
+    """The CAD-rounded arm with its first axis tilted by ``tilt`` rad off the vertical, and
+    right angles written 1.57 (8e-4 rad off: a description that coarse rounds everything within
+    2.4e-3 rad of a right angle, up to 1e-3 rad): the tilt is kept, so the count is that of the
+    exact arm with the same tilt, above the untilted one, and the snap lists nothing of that
+    joint's axis (a snap tolerance of twice the 1.57's rounding, 1.6e-3, would have rounded a
+    tilt of 1.5e-3 away)."""
 
     def coarse(text: str) -> str:
         return "1.57" if text == "1.5707963" else text
 
-    tilt = 1e-2
     tilted = written(tmp_path, "tilted.urdf", arm_urdf(cad=False, tilt=tilt))
     plain = written(tmp_path, "plain.urdf", arm_urdf(cad=False))
     cad = written(tmp_path, "cad.urdf", arm_urdf(cad=True, write=coarse, tilt=tilt))
@@ -264,6 +266,7 @@ def test_a_genuinely_tilted_axis_is_never_snapped(tmp_path, rng):
     bp = mindyn.base_parameters(cad)
     d = bp.snap_decision
     assert d["applied"] and d["bound"] == pytest.approx(3 * (HALF_PI - 1.57), rel=1e-6)
+    assert d["tolerance"] < tilt
     assert bp.n == count
     assert not any("j1' axis" in what for what, _ in d["rounded"] + d["real"])
     assert not any("joint 'j1' axis" in line for line in bp.snapped)

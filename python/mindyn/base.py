@@ -555,7 +555,8 @@ def rounded_right_angles(
     ``smallest_real`` (None when there is none; every rounding is at most the bound, every real
     deviation above it), ``precision``, ``bound`` (the effective one) and ``tolerance``: the
     snap tolerance, twice the largest rounding (at most the geometric mean of it and the
-    smallest real deviation), 0 when nothing is rounded.
+    smallest real deviation, and at most 1e-3: a deviation beyond is not listed), 0 when
+    nothing is rounded.
     """
     _args.instance(changes, "changes", (list, tuple), "a list of the dicts of snap_changes")
     tolerance = _args.number(tolerance, "tolerance", minimum=0.0)
@@ -583,10 +584,10 @@ def rounded_right_angles(
     largest = max((d for _, d in rounded), default=0.0)
     smallest = min((d for _, d in real), default=None)
     tolerance = 0.0
-    if rounded:
-        tolerance = (
-            2 * largest if smallest is None else min(2 * largest, np.sqrt(largest * smallest))
-        )
+    if rounded:  # (at most the window: a deviation beyond it is not listed, but would be snapped)
+        tolerance = min(2 * largest, SNAP_WINDOW)
+        if smallest is not None:
+            tolerance = min(tolerance, np.sqrt(largest * smallest))
     return {
         "rounded": rounded,
         "real": real,
