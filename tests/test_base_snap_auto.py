@@ -22,6 +22,7 @@ from mindyn.identification.joint_data import JointData
 
 KINOVA = ROBOTS_DIR / "kinova_description/robots/kinova.urdf"  # 1.57079632679, 3.14159265359
 XARM = ROBOTS_DIR / "xarm_description/urdf/xarm7.urdf"  # pi/2 written 1.5708
+SO100 = ROBOTS_DIR / "so_arm_description/urdf/so100.urdf"  # 1.57079, 3.14158: cut, not rounded
 
 
 def rewrite_right_angles(text: str, write) -> str:
@@ -97,8 +98,9 @@ def written(tmp_path, name: str, text: str):
         (KINOVA, None, False),  # as shipped: 1.57079632679, 3.14159265359, 1.570796327
         (XARM, None, True),  # as shipped: 1.5708, 3.7e-6 rad off
         (KINOVA, lambda k: repr(k * math.pi / 2 + k * 1e-12), False),  # 1e-12 rad per right angle
+        (SO100, None, False),  # as shipped: 6.3e-6 and 1.3e-5 rad off
     ],
-    ids=["kinova", "xarm7", "kinova-1e-12"],
+    ids=["kinova", "xarm7", "kinova-1e-12", "so100"],
 )
 def test_rounded_right_angles_give_the_count_of_the_exact_geometry(
     tmp_path, rng, source, rounding, rotor
@@ -128,14 +130,16 @@ def test_rounded_right_angles_give_the_count_of_the_exact_geometry(
     assert off.n > count or off.margin["near_degenerate"]
 
 
-def test_a_deliberate_offset_near_a_right_angle_is_kept(tmp_path, rng):
-    """One right angle of the xArm7 tilted by 1e-3 rad (a calibration), the others written
-    with 4 decimals (as shipped), rotor inertia on the joints: the default snaps the rounded
-    ones only and keeps the parameters the tilt makes identifiable; forcing a snap of 1e-2
-    rounds the tilt away too."""
+@pytest.mark.parametrize("tilt", [1e-3, 5e-5])
+def test_a_deliberate_offset_near_a_right_angle_is_kept(tmp_path, rng, tilt):
+    """One right angle of the xArm7 tilted by ``tilt`` rad (a calibration; 5e-5 is above the
+    default's bound, 1e-5 rad and three times the 3.7e-6 rad of the 1.5708 the description
+    writes), the others written with 4 decimals (as shipped), rotor inertia on the joints: the
+    default snaps the rounded ones only and keeps the parameters the tilt makes identifiable;
+    forcing a snap of 1e-2 rounds the tilt away too."""
     text = XARM.read_text()
-    tilted = first_tilted(1e-3, rounded)
-    reference = first_tilted(1e-3, exact)  # the same tilt, the other right angles exact
+    tilted = first_tilted(tilt, rounded)
+    reference = first_tilted(tilt, exact)  # the same tilt, the other right angles exact
     path = written(tmp_path, "tilted.urdf", rewrite_right_angles(text, tilted))
     ref = written(tmp_path, "reference.urdf", rewrite_right_angles(text, reference))
     plain = written(tmp_path, "exact.urdf", rewrite_right_angles(text, exact))
@@ -149,23 +153,11 @@ def test_a_deliberate_offset_near_a_right_angle_is_kept(tmp_path, rng):
     assert bp.n == count
     d = bp.snap_decision
     assert d["applied"] and d["rounded"]
-    assert len(d["real"]) == 1 and d["real"][0][1] == pytest.approx(1e-3, rel=1e-6)
-    assert d["tolerance"] < 1e-3
+    assert len(d["real"]) == 1 and d["real"][0][1] == pytest.approx(tilt, rel=1e-6)
+    assert d["tolerance"] < tilt
     assert any(line.startswith("kept as written: 1 deliberate") for line in bp.snap_report())
     forced = mindyn.base_parameters(robot, rotor=True, snap=1e-2)
     assert forced.n == pinocchio_rank(plain, rng, rotor=True)
-
-
-def test_rounded_and_deliberate_angles_that_overlap_are_not_snapped(tmp_path, rng):
-    """A deliberate tilt of 1e-6 rad beside right angles written 1.5708 (3.7e-6 rad off): no
-    tolerance separates them, so nothing is snapped, and the output says why."""
-    text = XARM.read_text()
-    mixed = first_tilted(1e-6, rounded)
-    path = written(tmp_path, "mixed.urdf", rewrite_right_angles(text, mixed))
-    bp = mindyn.base_parameters(load(path, True), rotor=True)
-    d = bp.snap_decision
-    assert not d["applied"] and not d["separable"] and bp.snapped == []
-    assert "a deliberate angle" in bp.snap_report()[0]
 
 
 def simulated_log(robot: mindyn.Robot, rng, noise: float = 0.01) -> JointData:

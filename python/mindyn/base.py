@@ -278,23 +278,26 @@ class BaseParameters:
         if d["applied"]:
             check = d.get("check")
             checked = (
-                f"the snapped model reproduces the description's torques to {check:.2g}"
+                f"the snapped model reproduces the description's torques to {check:.2g} "
+                f"relative (bound {d['check_bound']:.2g})"
                 if check is not None
-                else "not checked against the description (multi-DOF joints or over 200 joints)"
+                else "not checked against the description (over 200 joints)"
+            )
+            coarse = d.get("precision", 0.0)
+            bound = f"{d.get('bound', SNAP_AUTO_BOUND):.2g} rad" + (
+                f", three times the coarsest right angle written with few decimals, "
+                f"{coarse:.2g} rad"
+                if 3 * coarse > SNAP_AUTO_BOUND
+                else ""
             )
             out = [
-                f"{len(rounded)} right angle(s) written rounded (each off by a decimal "
-                f"rounding of a multiple of pi/2 or by at most the rank tolerance; largest "
+                f"{len(rounded)} right angle(s) written rounded (each off by at most {bound}, "
+                f"or by a decimal rounding of a multiple of pi/2; largest "
                 f"{d['largest_rounding']:.2g} rad) rounded to them (snap auto, tolerance "
                 f"{d['tolerance']:.2g}; snap off keeps them); {checked}"
             ]
         else:
-            why = d.get("refused") or (
-                f"a deliberate angle ({d['smallest_real']:.2g} rad) is closer to a right angle "
-                f"than a rounded one ({d['largest_rounding']:.2g} rad)"
-                if rounded
-                else "none is a rounded right angle"
-            )
+            why = d.get("refused") or "none is a rounded right angle"
             out = [f"nothing snapped (snap auto): {why}"]
         if real:
             out.append(
@@ -468,30 +471,45 @@ def _plain(d: dict) -> dict:
 # --------------------------------------------------------------------------------------------
 #: Largest deviation from a right angle that ``snappable`` lists (the C++ core's window)
 SNAP_WINDOW = 1e-3
+#: Largest deviation from a right angle [rad] that ``snap="auto"`` takes for a rounding whatever
+#: its digits: descriptions exported from CAD write rotations and axes with 6 to 8 significant
+#: digits, computed in single or double precision from a pose (``1.5707963``, an axis
+#: ``(-1, 8.5e-11, 7e-8)``), so each number is off by up to a few 1e-6 rad and a rotation
+#: composed of three such numbers by about 1e-5. A tilt this small changes the torques by about
+#: as much, relatively (checked), far below what a torque measurement resolves, while the rank
+#: decision (tolerance 1e-9) would take it for geometry: parameters of the size of the tilt.
+SNAP_AUTO_BOUND = 1e-5
 #: Deviations this close to a decimal rounding of a right angle are that rounding: 16 units of
 #: round-off of an angle of size 2 pi (the angles are read back from the composed rotation)
 _ROUNDING_MATCH = 16 * np.finfo(float).eps * 2 * np.pi
 
 
 def _decimal_roundings() -> np.ndarray:
-    """``|round(m pi/2, d) - m pi/2|`` for m = 1..4 and d = 0..17 decimals, sorted. (Not their
-    sums: the sum of two roundings of one angle is a round decimal, 1.571 - 1.57 = 1e-3, which
-    is how a deliberate offset is written.)"""
-    return np.array(
-        sorted(
-            {abs(round(m * np.pi / 2, d) - m * np.pi / 2) for m in range(1, 5) for d in range(18)}
-        )
-    )
+    """``|round(m pi/2, d) - m pi/2|`` and the same cut instead of rounded (3.14158) for
+    m = 1..4 and d = 0..17 decimals, sorted. (Not their sums: the sum of two roundings of one
+    angle is a round decimal, 1.571 - 1.57 = 1e-3, which is how a deliberate offset is
+    written.)"""
+    right = [m * np.pi / 2 for m in range(1, 5)]
+    written = {round(a, d) for a in right for d in range(18)}
+    written |= {np.floor(a * 10.0**d) / 10.0**d for a in right for d in range(18)}
+    return np.array(sorted({min(abs(w - a) for a in right) for w in written}))
 
 
 _ROUNDINGS = _decimal_roundings()
 
 
 def _is_rounding(deviation: float, floor: float = 0.0) -> bool:
-    """Whether ``deviation`` from a right angle is a right angle written with fewer decimals
-    than a double holds (1.5708, 1.57079632679), or round-off, or at most ``floor``."""
+    """Whether ``deviation`` from a right angle is at most ``floor``, or a right angle written
+    with fewer decimals than a double holds (1.5708, 1.571), or round-off."""
     if deviation <= max(_ROUNDING_MATCH, floor):
         return True
+    return _is_decimal_rounding(deviation)
+
+
+def _is_decimal_rounding(deviation: float) -> bool:
+    """Whether ``deviation`` is, to round-off, what writing a right angle with fewer decimals
+    than a double holds leaves, rounded or cut (1.5708: 3.67e-6; 1.571: 2.04e-4; 3.14158:
+    1.27e-5)."""
     k = int(np.searchsorted(_ROUNDINGS, deviation))
     near = _ROUNDINGS[max(k - 1, 0) : k + 1]
     return bool(np.min(np.abs(near - deviation)) <= _ROUNDING_MATCH)
@@ -512,52 +530,71 @@ def snap_changes(robot: Robot | str, *, tolerance: float = SNAP_WINDOW) -> list[
 
 
 def rounded_right_angles(
-    changes: Sequence[Mapping], *, tolerance: float = DEFAULT_TOLERANCE
+    changes: Sequence[Mapping],
+    *,
+    tolerance: float = DEFAULT_TOLERANCE,
+    bound: float = SNAP_AUTO_BOUND,
 ) -> dict:
     """Which of the near right angles ``changes`` lists (:func:`snap_changes` of a robot: angles
     and axis components within 1e-3 of a right angle) are right angles written rounded, and the
     snap tolerance that rounds those and nothing else.
 
-    An angle is a rounded right angle when its deviation from the nearest multiple of pi/2 is
-    exactly (to round-off) what writing that multiple with ``d`` decimals leaves, for some
-    ``d`` (``1.5708``: 3.67e-6; ``1.57079632679``: 4.9e-12), or is at most the rank
-    ``tolerance`` (a column that small is below what the rank decision resolves: no geometry
-    the base set could use). A deliberate angle (a calibrated offset of 1e-3 rad, a
-    tilt of 2e-5 rad written with its own digits) matches none of these and is real geometry;
-    so is an axis component above round-off. Returns ``rounded`` and ``real`` (what, deviation
-    in rad), ``largest_rounding``, ``smallest_real`` (None when there is none), ``separable``
-    (every rounding below every real deviation) and ``tolerance``: the snap tolerance, twice the
-    largest rounding (at most the geometric mean of it and the smallest real deviation), 0 when
-    nothing is rounded or the two cannot be separated.
+    The description's precision is the coarsest right angle it writes with few decimals: the
+    largest deviation of an angle from its multiple of pi/2 that is exactly (to round-off) what
+    writing the multiple with ``d`` decimals, rounded or cut, leaves, for some ``d``
+    (``1.5708``: 3.67e-6; ``1.571``: 2.04e-4; ``3.14158``: 1.27e-5; 0 when there is none). An
+    angle or axis component is a rounded right angle when its deviation from the nearest
+    multiple of pi/2 (from 0, for an axis component) is at most the effective bound: ``bound``
+    (default :data:`SNAP_AUTO_BOUND`, 1e-5 rad: what descriptions exported from CAD leave, 6 to
+    8 significant digits, ``1.5707963``, an axis ``(-1, 8.5e-11, 7e-8)``), three times the
+    precision (a rotation read back from three such angles) or the rank ``tolerance``, whichever
+    is largest; an angle also when it is such a decimal rounding itself. A deliberate angle (a
+    calibrated offset of 1e-3 rad beside right angles written 1.5708, a tilt of 5e-5 rad written
+    with its own digits) is above the bound and no decimal rounding: real geometry, kept.
+    Returns ``rounded`` and ``real`` (what, deviation in rad), ``largest_rounding``,
+    ``smallest_real`` (None when there is none; every rounding is at most the bound, every real
+    deviation above it), ``precision``, ``bound`` (the effective one) and ``tolerance``: the
+    snap tolerance, twice the largest rounding (at most the geometric mean of it and the
+    smallest real deviation, and at most 1e-3: a deviation beyond is not listed), 0 when
+    nothing is rounded.
     """
     _args.instance(changes, "changes", (list, tuple), "a list of the dicts of snap_changes")
     tolerance = _args.number(tolerance, "tolerance", minimum=0.0)
-    rounded: list[tuple[str, float]] = []
-    real: list[tuple[str, float]] = []
+    bound = _args.number(bound, "bound", minimum=0.0)
+    near: list[tuple[str, float, bool]] = []
     for change in changes:
         try:
             what = f"joint '{change['joint_name']}' {change['frame']} {change['component']}"
             dev, axis = float(change["deviation"]), change["frame"] == "axis"
         except (TypeError, KeyError, ValueError):
             raise _args.fail("changes", f"holds {change!r}, not an entry of snap_changes") from None
-        if not 0 < dev <= SNAP_WINDOW:
-            continue
-        small = dev <= max(_ROUNDING_MATCH, tolerance) if axis else _is_rounding(dev, tolerance)
+        if 0 < dev <= SNAP_WINDOW:
+            near.append((what, dev, axis))
+    precision = max(
+        (d for _, d, axis in near if not axis and d > _ROUNDING_MATCH and _is_decimal_rounding(d)),
+        default=0.0,
+    )
+    # (1 + 1e-9): three roundings read back from one rotation sum to 3 p up to round-off
+    bound = max(bound, 3 * precision * (1 + 1e-9), tolerance)
+    rounded: list[tuple[str, float]] = []
+    real: list[tuple[str, float]] = []
+    for what, dev, axis in near:
+        small = dev <= max(_ROUNDING_MATCH, bound) if axis else _is_rounding(dev, bound)
         (rounded if small else real).append((what, dev))
     largest = max((d for _, d in rounded), default=0.0)
     smallest = min((d for _, d in real), default=None)
-    separable = smallest is None or largest < smallest
     tolerance = 0.0
-    if rounded and separable:
-        tolerance = (
-            2 * largest if smallest is None else min(2 * largest, np.sqrt(largest * smallest))
-        )
+    if rounded:  # (at most the window: a deviation beyond it is not listed, but would be snapped)
+        tolerance = min(2 * largest, SNAP_WINDOW)
+        if smallest is not None:
+            tolerance = min(tolerance, np.sqrt(largest * smallest))
     return {
         "rounded": rounded,
         "real": real,
         "largest_rounding": largest,
         "smallest_real": smallest,
-        "separable": separable,
+        "precision": precision,
+        "bound": bound,
         "tolerance": tolerance,
     }
 
@@ -613,12 +650,14 @@ def base_parameters(
         ModelError that says by how much and what to try.
     snap : "auto", float or bool, optional
         Which joint-origin rotations near multiples of pi/2 are rounded to them before
-        computing. ``"auto"`` (the default): the right angles the description writes rounded
-        (:func:`rounded_right_angles`: a deviation that is a decimal rounding of the right angle,
-        1.5708 or 1.57079632679, or at most ``tolerance``), never a deliberate angle, and only
-        when a snap tolerance separates the two; the snapped set is checked against the
-        description's own inverse dynamics (within 100 times the largest rounding; else nothing
-        is snapped). A number: every rotation within this many radians (``True``: 1e-3).
+        computing. ``"auto"`` (the default): the right angles and axes the description writes
+        rounded (:func:`rounded_right_angles`: within 1e-5 rad, :data:`SNAP_AUTO_BOUND`, as CAD
+        exports write them, ``1.5707963``, an axis ``(-1, 8.5e-11, 7e-8)``; within three times
+        the coarsest decimal rounding of a right angle the description writes, ``1.571``; or a
+        decimal rounding itself), never a deliberate angle above that bound; the snapped set is
+        checked against the description's own inverse dynamics (within 100 times the largest
+        rounding, relative to the largest torque; else nothing is snapped). A number: every
+        rotation and axis component within this many radians (``True``: 1e-3).
         ``False``, ``None`` or 0: none. What was done and why is in ``snap_decision`` and
         :meth:`~BaseParameters.snap_report`, what was changed in ``snapped`` (what a snap of
         1e-3 would change, when nothing was snapped, in ``snappable``).
@@ -724,15 +763,21 @@ def _auto_snap(robot: Robot, compute, tolerance: float) -> tuple[_core.BaseParam
 
 def _snap_check(robot: Robot, core: _core.BaseParameters) -> float | None:
     """Largest difference, relative to the largest torque, between the snapped base model
-    (``W_b Y p``) and the description's inverse dynamics at a few random states, with the
-    description's link parameters; None where not checked (multi-DOF joints, over 200 joints:
-    the classical regressors would take too much memory)."""
-    if not robot.single_dof or robot.n > 200:
+    (``W_b Y p``) and the description's inverse dynamics at a few random states (unit
+    quaternions and (cos, sin) pairs where multi-DOF joints take them), with the description's
+    link parameters; None where not checked (over 200 joints: the classical regressors would
+    take too much memory)."""
+    if robot.n > 200:
         return None
     rng = np.random.default_rng(0)
-    q, dq, ddq = (rng.uniform(-1.0, 1.0, (4, robot.n)) for _ in range(3))
+    q = rng.uniform(-1.0, 1.0, (4, robot.nq))
+    for start, size, _ in robot._unit_blocks():
+        block = q[:, start : start + size]
+        block /= np.linalg.norm(block, axis=1, keepdims=True)
+    dq, ddq = (rng.uniform(-1.0, 1.0, (4, robot.nv)) for _ in range(2))
     p = dict(zip(robot.param_names, robot.params))
-    classical = np.array([p.get(name, 0.0) for name in core.classical_names])
-    tau = robot.inverse_dynamics(q, dq, ddq)
-    model = core.regressor(q, dq, ddq) @ core.values(classical)
+    base = BaseParameters(core, robot, bool(core.offset))
+    values = base.values(np.array([p.get(name, 0.0) for name in core.classical_names]))
+    tau = np.array([robot.inverse_dynamics(*x) for x in zip(q, dq, ddq)])
+    model = np.array([base.regressor(*x) @ values for x in zip(q, dq, ddq)])
     return float(np.max(np.abs(model - tau)) / max(np.max(np.abs(tau)), np.finfo(float).tiny))

@@ -217,10 +217,10 @@ def add_snap(p: argparse.ArgumentParser) -> None:
         default="auto",
         metavar="auto|off|RAD",
         help="round joint rotations to multiples of pi/2 before computing the base parameters: "
-        "auto (the default) rounds the right angles the description writes with fewer digits "
-        "than a double holds (1.5708, 1.57079632679), never a deliberate small angle; off "
-        "keeps the description as written; RAD (1e-3 when given alone) rounds every rotation "
-        "within RAD",
+        "auto (the default) rounds the right angles and axes the description writes rounded "
+        "(within 1e-5 rad, as CAD exports write them, 1.5707963; or with fewer decimals, "
+        "1.5708), never a deliberate angle above that; off keeps the description as written; "
+        "RAD (1e-3 when given alone) rounds every rotation and axis within RAD",
     )
 
 
