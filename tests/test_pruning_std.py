@@ -12,6 +12,7 @@ from pathlib import Path
 import mindyn
 import numpy as np
 import pytest
+from mindyn.cli.flags import library_options_as_flags
 from mindyn.control import SensorNoise, simulate_inverse
 from mindyn.identification import identify
 from mindyn.identification.excitation import random_trajectory
@@ -56,6 +57,9 @@ def test_a_short_log_warns_that_pruning_understates_the_standard_deviations(seed
         "smaller (median) than the fit with all base parameters" in w
         for w in res.settings["warnings"]
     )
+    # the command line names its flag
+    warning = next(w for w in res.settings["warnings"] if "smaller (median)" in w)
+    assert "--rsd-threshold 0" in library_options_as_flags(warning)
     listed = {n for n, _ in rec["largest"]}
     worst = res.names[int(np.argmax(std_all / res.std))]
     assert worst in listed

@@ -39,6 +39,7 @@ LIBRARY_OPTIONS = (
     "quantization",
     "root_joint",
     "rotor",
+    "rsd_threshold",
     "snap",
     "tip",
     "topic",

@@ -1116,7 +1116,7 @@ def identify(
             f"the {len(removed)} removed parameters are zero, and as estimates of the base "
             "parameters they may be off by many of their standard deviations (the removed "
             "parameters' contributions taken up). Use a longer or richer excitation, or "
-            "--rsd-threshold 0 to keep every parameter with its own standard deviation"
+            "rsd_threshold=0 to keep every parameter with its own standard deviation"
         )
     if warnings:
         settings["warnings"] = warnings
