@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import _args
 from ..robot import Robot
-from .data import DataError, differentiate
+from .data import DataError, differentiate, filter_edge
 
 __all__ = ["configuration_derivatives"]
 
@@ -74,14 +74,9 @@ def _body_rate(Q: np.ndarray, dQ: np.ndarray) -> np.ndarray:
 def edge_samples(info: dict) -> int:
     """The samples at each end of a log whose derivatives by the settings ``info`` of
     :func:`~mindyn.identification.data.differentiate` are not the motion's: the filter's edge
-    (``savgol``: half its window; ``butter``: ``2 / cutoff`` seconds) and the two one-sided
-    differences of velocity and acceleration."""
-    edge = 0
-    if "window_samples" in info:
-        edge = int(info["window_samples"]) // 2
-    elif "cutoff_Hz" in info:
-        edge = int(np.ceil(2.0 / float(info["cutoff_Hz"]) * float(info["rate_Hz"])))
-    return edge + 2
+    (:func:`~mindyn.identification.data.filter_edge`: ``savgol``, half its window; ``butter``,
+    ``2 / cutoff`` seconds) and the two one-sided differences of velocity and acceleration."""
+    return filter_edge(info) + 2
 
 
 def configuration_derivatives(robot: Robot, t, q, *, filter: str = "butter", cutoff=None):

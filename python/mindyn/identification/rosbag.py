@@ -23,6 +23,7 @@ from .data import (
     convert_torque,
     fill_derivatives,
     first_not_increasing,
+    without_derivative_edges,
 )
 
 __all__ = ["is_rosbag", "read_rosbag"]
@@ -175,7 +176,8 @@ def read_rosbag(
         tau, processing["torque"] = convert_torque(tau, torque_unit, robot)
     dq, ddq, deriv = fill_derivatives(t - t[0], q, dq, None, **derivative_settings)
     processing.update(deriv)
-    return JointData(t - t[0], q, dq, ddq, tau, source=str(path), processing=processing)
+    data = JointData(t - t[0], q, dq, ddq, tau, source=str(path), processing=processing)
+    return without_derivative_edges(data)
 
 
 def _field(values, cols, path, topic, index, what, required=False):
