@@ -19,8 +19,9 @@ joint-side drive gain ``K = torque_constant * gear_ratio`` of the drive table, o
 motor torque constants ``K_t`` (``drive_gain``, else the transmission's) and the transmission
 matrix ``T`` (see :func:`current_gains`).
 Velocities and accelerations that are not logged are obtained from the positions (velocities) by
-zero-phase low-pass filtering and central differences; the settings are reported in
-:attr:`JointData.processing`.
+zero-phase low-pass filtering and central differences; the samples at each end where the
+filter starts up are then dropped (:func:`without_derivative_edges`); the settings are reported
+in :attr:`JointData.processing`.
 """
 
 from __future__ import annotations
@@ -245,7 +246,9 @@ def read_csv(
     require_torque : bool
         False for a trajectory file (``t, q, [dq], [ddq]``).
     filter, cutoff, order, window, polyorder
-        How missing velocities / accelerations are obtained, see :func:`differentiate`.
+        How missing velocities / accelerations are obtained, see :func:`differentiate`; the
+        samples at each end where the filter starts up are dropped
+        (:func:`without_derivative_edges`, ``processing["derivative_edges"]``).
     drive_gain : array (n,), optional
         Currents: joint-side gain per joint [N m/A], instead of the drive table's.
 
@@ -257,7 +260,8 @@ def read_csv(
         Wrong or missing columns, a cell that is not a decimal number in ASCII (``1_000``,
         ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
         named), a file that is not UTF-8 text (line and byte offset named), time not strictly
-        increasing (line named), fewer than 2 samples, derivatives that overflow.
+        increasing (line named), fewer than 2 samples (or too few beyond the derivatives'
+        filter edges), derivatives that overflow.
     """
     from ..robot import Robot
 
