@@ -104,3 +104,16 @@ def test_a_log_shorter_than_its_filter_edges_is_refused(tmp_path):
     with pytest.raises(DataError, match=r"the 200 samples at each end .* leave 0 of 300"):
         read_csv(p)
     assert read_csv(p, cutoff=40.0).m == 300 - 2 * 2 * 25  # two derivations, 25 samples each
+
+
+def test_the_command_line_states_the_dropped_edges(tmp_path, capsys):
+    from mindyn import cli
+
+    _, log = _log(2.0, 1)
+    p = write_csv(tmp_path / "log.csv", log.t, log.q, log.tau, dq=log.dq)
+    out = tmp_path / "o.json"
+    argv = ["identify", "zcr07s", str(p), "--friction", "--filter", "butter", "--json", str(out)]
+    assert cli.main(argv) == 0
+    text = capsys.readouterr().out
+    assert "100 samples (0.2 s) dropped at each end, where the derivatives' filter starts" in text
+    assert f"{log.t.size - 200} samples at 500 Hz" in text
