@@ -26,7 +26,12 @@ from mindyn.identification import (
     true_base_values,
     validate,
 )
-from mindyn.identification.data import JointData, fill_derivatives, read_csv
+from mindyn.identification.data import (
+    JointData,
+    fill_derivatives,
+    read_csv,
+    without_derivative_edges,
+)
 from mindyn.identification.excitation import (
     FourierTrajectory,
     optimize_excitation,
@@ -39,9 +44,10 @@ from random_arm import random_arm_yaml  # noqa: E402
 
 
 def as_data(log, source="sim", logged_ddq=False) -> JointData:
-    """What a reader of the log gets: logged t, q, dq, tau; ddq from filtered velocities."""
-    dq, ddq, info = fill_derivatives(log.t, log.q, log.dq, None)
-    return JointData(log.t, log.q, dq, log.ddq_true if logged_ddq else ddq, log.tau, source, info)
+    """What a reader of the log gets: logged t, q, dq, tau; ddq from filtered velocities, the
+    filter's start-up at each end dropped (or the true ddq, as if logged)."""
+    dq, ddq, info = fill_derivatives(log.t, log.q, log.dq, log.ddq_true if logged_ddq else None)
+    return without_derivative_edges(JointData(log.t, log.q, dq, ddq, log.tau, source, info))
 
 
 def truth_of(base, log):

@@ -55,7 +55,8 @@ def add_data_options(p) -> None:
         "time stamps, one zero-phase Butterworth low-pass of positions, logged velocities, "
         "torques and regressor columns, derivatives of the filtered signals, filter edges "
         "dropped, decimation; butter, savgol, none: only derive missing velocities and "
-        "accelerations (torques unfiltered; butter and savgol refuse unevenly spaced time "
+        "accelerations, dropping the samples at each end where their filter starts up "
+        "(torques unfiltered; butter and savgol refuse unevenly spaced time "
         "stamps, none differences them as they are). A floating-base log: the dq and ddq it "
         "lacks are derived by butter (lowpass too), savgol or none, torques and wrenches as "
         "logged",

@@ -19,8 +19,9 @@ joint-side drive gain ``K = torque_constant * gear_ratio`` of the drive table, o
 motor torque constants ``K_t`` (``drive_gain``, else the transmission's) and the transmission
 matrix ``T`` (see :func:`current_gains`).
 Velocities and accelerations that are not logged are obtained from the positions (velocities) by
-zero-phase low-pass filtering and central differences; the settings are reported in
-:attr:`JointData.processing`.
+zero-phase low-pass filtering and central differences; the samples at each end where the
+filter starts up are then dropped (:func:`without_derivative_edges`); the settings are reported
+in :attr:`JointData.processing`.
 """
 
 from __future__ import annotations
@@ -245,7 +246,9 @@ def read_csv(
     require_torque : bool
         False for a trajectory file (``t, q, [dq], [ddq]``).
     filter, cutoff, order, window, polyorder
-        How missing velocities / accelerations are obtained, see :func:`differentiate`.
+        How missing velocities / accelerations are obtained, see :func:`differentiate`; the
+        samples at each end where the filter starts up are dropped
+        (:func:`without_derivative_edges`, ``processing["derivative_edges"]``).
     drive_gain : array (n,), optional
         Currents: joint-side gain per joint [N m/A], instead of the drive table's.
 
@@ -257,7 +260,8 @@ def read_csv(
         Wrong or missing columns, a cell that is not a decimal number in ASCII (``1_000``,
         ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
         named), a file that is not UTF-8 text (line and byte offset named), time not strictly
-        increasing (line named), fewer than 2 samples, derivatives that overflow.
+        increasing (line named), fewer than 2 samples (or too few beyond the derivatives'
+        filter edges), derivatives that overflow.
     """
     from ..robot import Robot
 
@@ -395,7 +399,8 @@ def _read_csv(
                 f"{path}: the {what} overflow (the largest logged magnitude is "
                 f"{np.max(np.abs(values)):.3g}); the log's values are too large to process"
             )
-    return JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
+    data = JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
+    return without_derivative_edges(data)
 
 
 def _strict_values(rows: list, header: list[str], path: Path) -> np.ndarray:
@@ -631,6 +636,12 @@ def convert_torque(tau: np.ndarray, unit: str, robot=None, *, drive_gain=None):
     raise DataError(f"unknown torque unit '{unit}'; use Nm, permille or current")
 
 
+#: Filter edges dropped at each end, in periods of the cut-off of a zero-phase Butterworth
+#: low-pass (:func:`filter_edge`; the data path's edges,
+#: :func:`~mindyn.identification.preprocess.preprocess`).
+EDGE_PERIODS = 2.0
+
+
 def check_cutoff(fc: float, rate: float, span: float, *, source: str = "the log") -> None:
     """Refuses a low-pass cut-off ``fc`` [Hz] outside (1 / span, rate / 2): at or above half the
     sample ``rate`` there is no filter to design, and below one cycle over the log's ``span`` [s]
@@ -737,21 +748,82 @@ def differentiate(
     raise DataError(f"unknown filter '{filter}'; use butter, savgol or none")
 
 
+def filter_edge(info: dict) -> int:
+    """The samples at each end of a log where the filter of one :func:`differentiate` (its
+    settings ``info``) starts up, so that the filtered signal and its derivative there are not
+    the motion's: ``butter``, :data:`EDGE_PERIODS` periods of the cut-off (the zero-phase
+    filter's odd extension beyond the ends continues the signal and its slope but reverses its
+    curvature, and the filter spreads that over its impulse response); ``savgol``, half its
+    window (fitted off-centre); ``none``, 0 (central differences, one-sided at the end samples
+    alone)."""
+    _args.mapping(info, "info")
+    if "window_samples" in info:
+        return int(info["window_samples"]) // 2
+    if "cutoff_Hz" in info:
+        span = EDGE_PERIODS * float(info["rate_Hz"]) / float(info["cutoff_Hz"])
+        return int(math.ceil(span - 1e-9))
+    return 0
+
+
 def fill_derivatives(t, q, dq=None, ddq=None, **settings):
     """Velocities and accelerations: logged ones are kept, missing ones derived (velocities from
-    filtered positions, accelerations from filtered velocities). Returns ``(dq, ddq, info)``."""
+    filtered positions, accelerations from filtered velocities). Returns ``(dq, ddq, info)``,
+    the derivatives for every sample of ``t``; ``info["derivative_edges"]["samples"]`` counts
+    the samples at each end where a derived one is not the motion's: the :func:`filter_edge`
+    of each derivation taken (an acceleration from derived velocities filters the velocities'
+    edge error again), 0 when both are logged. :func:`without_derivative_edges` drops them."""
     info: dict = {}
+    edge = 0
     if dq is None:
         _, dq, s = differentiate(t, q, **settings)
         info["velocity"] = {"source": "differentiated positions", **s}
+        edge += filter_edge(s)
     else:
         info["velocity"] = {"source": "logged"}
     if ddq is None:
         _, ddq, s = differentiate(t, dq, **settings)
         info["acceleration"] = {"source": "differentiated velocities", **s}
+        edge += filter_edge(s)
     else:
         info["acceleration"] = {"source": "logged"}
+    info["derivative_edges"] = {
+        "samples": edge,
+        "rule": "per derivation, the filter's start-up: butterworth "
+        f"{EDGE_PERIODS:g} / cutoff seconds, savitzky-golay half its window, none 0",
+    }
     return dq, ddq, info
+
+
+def without_derivative_edges(data: JointData) -> JointData:
+    """``data`` (as :func:`fill_derivatives` made its derivatives, its ``processing`` holding
+    that function's ``info``) without the samples at each end where a derived derivative is
+    not the motion's: ``processing["derivative_edges"]["samples"]`` dropped at each end (a
+    derivative there is off the motion by the filter's start-up, and equations fitted on it
+    bias the estimates by many of their standard deviations on a short log). Records
+    ``seconds``, the time dropped at each end, there. DataError (naming ``data.source``) when
+    fewer than 8 samples would remain."""
+    _args.instance(data, "data", JointData)
+    edges = data.processing.get("derivative_edges") or {"samples": 0}
+    k, m = int(edges["samples"]), data.m
+    if k and m - 2 * k < 8:
+        raise DataError(
+            f"{data.source or 'the log'}: the {k} samples at each end whose derived velocities "
+            f"or accelerations are the filter's start-up leave {max(m - 2 * k, 0)} of {m} "
+            "samples; give a longer log, a higher cutoff or logged derivatives"
+        )
+    if not k:
+        return data
+    edges["seconds"] = float(data.t[k] - data.t[0])
+    keep = slice(k, m - k)
+    return JointData(
+        data.t[keep],
+        data.q[keep],
+        data.dq[keep],
+        data.ddq[keep],
+        None if data.tau is None else data.tau[keep],
+        source=data.source,
+        processing=data.processing,
+    )
 
 
 def _header(n: int, kinds) -> list[str]:

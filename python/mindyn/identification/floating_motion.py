@@ -16,7 +16,8 @@ The accelerations are the time derivatives of these velocity coordinates (Pinocc
 a free-flyer: the derivative of its body-axis twist). The samples at each end where the
 derivatives are not those of the motion (one-sided differences; a filter's start-up) are
 counted in ``edge_samples`` of the settings: 2 for ``none``, the half window for ``savgol`` and
-``2 / cutoff`` seconds for ``butter`` (the fixed-base data path's filter edge), each plus 2;
+``2 / cutoff`` seconds for ``butter`` (the fixed-base data path's filter edge) per derivation
+(two when the velocities are derived too), each plus 2;
 :func:`~mindyn.identification.floating.read_floating_csv` drops them."""
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import numpy as np
 
 from .. import _args
 from ..robot import Robot
-from .data import DataError, differentiate
+from .data import DataError, differentiate, filter_edge
 
 __all__ = ["configuration_derivatives"]
 
@@ -71,17 +72,17 @@ def _body_rate(Q: np.ndarray, dQ: np.ndarray) -> np.ndarray:
     return 2.0 * (w * du - dw * u - np.cross(u, du))
 
 
-def edge_samples(info: dict) -> int:
+def edge_samples(info: dict, *, derivations: int = 1) -> int:
     """The samples at each end of a log whose derivatives by the settings ``info`` of
     :func:`~mindyn.identification.data.differentiate` are not the motion's: the filter's edge
-    (``savgol``: half its window; ``butter``: ``2 / cutoff`` seconds) and the two one-sided
+    (:func:`~mindyn.identification.data.filter_edge`: ``savgol``, half its window; ``butter``,
+    ``2 / cutoff`` seconds) of each of the ``derivations`` taken (accelerations from derived
+    velocities filter the velocities' edge error again, as
+    :func:`~mindyn.identification.data.fill_derivatives` counts) and the two one-sided
     differences of velocity and acceleration."""
-    edge = 0
-    if "window_samples" in info:
-        edge = int(info["window_samples"]) // 2
-    elif "cutoff_Hz" in info:
-        edge = int(np.ceil(2.0 / float(info["cutoff_Hz"]) * float(info["rate_Hz"])))
-    return edge + 2
+    _args.mapping(info, "info")
+    derivations = _args.integer(derivations, "derivations", 1, maximum=2)
+    return derivations * filter_edge(info) + 2
 
 
 def configuration_derivatives(robot: Robot, t, q, *, filter: str = "butter", cutoff=None):
@@ -148,7 +149,7 @@ def configuration_derivatives(robot: Robot, t, q, *, filter: str = "butter", cut
     _, ddq, _ = differentiate(t, dq_all, filter=filter, cutoff=cutoff)
     info = {
         **info,
-        "edge_samples": edge_samples(info),
+        "edge_samples": edge_samples(info, derivations=2),
         "velocity": "differentiated configurations (body-axis velocities of the free-flyer, "
         "spherical and planar joints)",
         "acceleration": "differentiated velocities",

@@ -53,7 +53,7 @@ from scipy.interpolate import CubicSpline
 from .. import _args
 from .._core import sosfilt_rows
 from .._threads import evaluated_ahead
-from .data import DataError, check_cutoff
+from .data import EDGE_PERIODS, DataError, check_cutoff
 from .joint_data import JointData
 
 __all__ = [
@@ -75,8 +75,6 @@ DECIMATION_MARGIN = 10.0
 BAND_ENERGY = 0.999
 #: Relative jitter of the sample intervals above which the log is resampled.
 JITTER_TOLERANCE = 1e-3
-#: Filter edges dropped at each end, in periods of the cut-off.
-EDGE_PERIODS = 2.0
 #: Bytes of full-rate regressor columns filtered at once by :class:`ParallelFilter`.
 PARALLEL_BUDGET = 256 * 2**20
 #: Bytes of full-rate regressor blocks the block-wise parallel filter keeps from its forward pass

@@ -23,6 +23,7 @@ from .data import (
     convert_torque,
     fill_derivatives,
     first_not_increasing,
+    without_derivative_edges,
 )
 
 __all__ = ["is_rosbag", "read_rosbag"]
@@ -84,7 +85,9 @@ def read_rosbag(
     Returns
     -------
     JointData
-        ``t`` in seconds from the first sample, ``q``, ``dq``, ``ddq``, ``tau`` of shape (m, n).
+        ``t`` in seconds from the first message, ``q``, ``dq``, ``ddq``, ``tau`` of shape
+        (m, n): the messages but those at each end where a derived velocity or acceleration
+        is the filter's start-up (:func:`~mindyn.identification.data.without_derivative_edges`).
 
     Raises
     ------
@@ -94,7 +97,8 @@ def read_rosbag(
         Not a readable bag, no or several JointState topics (the topics are listed), a joint of
         the robot missing from a message (named, with the message's index), positions,
         velocities or efforts missing or not finite, time stamps not increasing, fewer than 2
-        samples, or ``rosbags`` not installed.
+        samples (or too few beyond the derivatives' filter edges), or ``rosbags`` not
+        installed.
     """
     from ..robot import Robot
 
@@ -175,7 +179,8 @@ def read_rosbag(
         tau, processing["torque"] = convert_torque(tau, torque_unit, robot)
     dq, ddq, deriv = fill_derivatives(t - t[0], q, dq, None, **derivative_settings)
     processing.update(deriv)
-    return JointData(t - t[0], q, dq, ddq, tau, source=str(path), processing=processing)
+    data = JointData(t - t[0], q, dq, ddq, tau, source=str(path), processing=processing)
+    return without_derivative_edges(data)
 
 
 def _field(values, cols, path, topic, index, what, required=False):

@@ -85,12 +85,19 @@ def _processing(report) -> list[str]:
             out += [indent + line for line in _describe_preprocess(p, res.model)]
     else:
         proc = logs[0].processing
+        edges = proc.get("derivative_edges") or {}
         out.append(
             f"  velocities: {_describe(proc.get('velocity', {}))}; accelerations: "
             f"{_describe(proc.get('acceleration', {}))}"
             + ("" if res.model == "dynamic" else f" (not used by the {res.model} model)")
             + (" (each log on its own)" if len(logs) > 1 else "")
         )
+        if edges.get("samples"):
+            out.append(
+                f"  {edges['samples']} samples ({edges['seconds']:.3g} s) dropped at each end"
+                + (" of the first log" if len(logs) > 1 else "")
+                + ", where the derivatives' filter starts up"
+            )
     return out
 
 
