@@ -628,7 +628,7 @@ def test_read_joint_terms_errors(tmp_path):
     with pytest.raises(mindyn.ModelError, match="joint 1: 'Ia' is 'x'; expected a number"):
         read_joint_terms(bad)
     bad.write_text("joints: [\n")
-    with pytest.raises(mindyn.ModelError, match="bad.yaml: not a YAML file"):
+    with pytest.raises(mindyn.ModelError, match=r"bad.yaml:2:1: not valid YAML: while parsing"):
         read_joint_terms(bad)
 
 

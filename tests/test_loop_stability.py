@@ -457,7 +457,7 @@ def test_codegen_refusal_of_huge_gains_is_one_line(tmp_path, capfd):
 @pytest.mark.parametrize(
     "content, message",
     [
-        ("kd: 10\nlambda: 5\nkd: 20\n", r"g.yaml:3: key 'kd' appears twice"),
+        ("kd: 10\nlambda: 5\nkd: 20\n", r"g.yaml:3:1: key 'kd' appears twice"),
         ("kd: true\n", "'kd' must be a number or a list of numbers, got the boolean true"),
         ("kd: [1, 2, yes]\n", "got the boolean true"),
         ("gamma: abc\n", "'gamma' must be a number or a list of numbers, got 'abc'"),
