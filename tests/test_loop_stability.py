@@ -399,6 +399,19 @@ def test_scipy_integrator_is_bounded(monkeypatch):
         simulate(robot, ref, duration=0.1, max_seconds=-1)
 
 
+def test_a_simulation_past_its_wall_time_bound_exits_1(tmp_path, monkeypatch, capsys):
+    """A simulation past its wall-time bound is a limit of the machine, as memory is (exit
+    status 1, as docs/errors.md says), not an error in the input (2); it writes no log."""
+    monkeypatch.setattr(simulation_module, "MAX_SECONDS", 1e-9)  # the command line's bound
+    log = tmp_path / "log.csv"
+    argv = ["simulate", "planar2", "--mode", "tracking", "--duration", "0.1", "-o", str(log)]
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mindyn: error: "), err
+    assert "exceeded its wall-time bound of 1e-09 s" in err[0], err
+    assert not log.exists()
+
+
 # --------------------------------------------------------------------------------------------
 # codegen, absurd settings, gains files
 # --------------------------------------------------------------------------------------------
