@@ -1380,8 +1380,8 @@ def check_estimate(doc: dict, out: str, robot_name: str = IDENT_ROBOT) -> tuple[
         robot, rotor=bool(doc.get("rotor")), friction=bool(doc.get("friction"))
     )
     p = robot.parameters(rotor=bp.rotor, friction=bp.friction)
-    joint_terms = [k for k, name in enumerate(robot.parameter_names(rotor=bp.rotor, friction=bp.friction))
-                   if name.startswith(("Ia", "Fv", "Fc"))]  # fmt: skip
+    names = robot.parameter_names(rotor=bp.rotor, friction=bp.friction)
+    joint_terms = [k for k, name in enumerate(names) if name.startswith(("Ia", "Fv", "Fc"))]
     p[joint_terms] = 0.0  # the logs are simulated without rotor inertia and friction
     truth = dict(zip(bp.names, bp.values(p), strict=True))
     scale = max(abs(v) for v in truth.values())
