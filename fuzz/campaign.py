@@ -1380,8 +1380,8 @@ def check_estimate(doc: dict, out: str, robot_name: str = IDENT_ROBOT) -> tuple[
         robot, rotor=bool(doc.get("rotor")), friction=bool(doc.get("friction"))
     )
     p = robot.parameters(rotor=bp.rotor, friction=bp.friction)
-    joint_terms = [k for k, name in enumerate(robot.parameter_names(rotor=bp.rotor, friction=bp.friction))
-                   if name.startswith(("Ia", "Fv", "Fc"))]  # fmt: skip
+    names = robot.parameter_names(rotor=bp.rotor, friction=bp.friction)
+    joint_terms = [k for k, name in enumerate(names) if name.startswith(("Ia", "Fv", "Fc"))]
     p[joint_terms] = 0.0  # the logs are simulated without rotor inertia and friction
     truth = dict(zip(bp.names, bp.values(p), strict=True))
     scale = max(abs(v) for v in truth.values())
@@ -1719,7 +1719,15 @@ NUM_BAD = [
     "0", "-1", "-0", "1e308", "-1e308", "inf", "-inf", "nan", "1e-300", "1e9", "1_000", "",
     "abc", "0x10", "99999999999999999999999", "-99999999999999999999", "1.5", "3",
 ]  # fmt: skip
+# values PyYAML's safe loader cannot build (a gains file) and tags the robot reader refuses
+YAML_BAD = [
+    "!!bool maybe", "!!int abc", "!!float ''", "!!timestamp 2001-13-45", "!!timestamp abc",
+    "!!binary '%'", "!!binary abc", "2001-02-30", "!!python/object:os.system x", "!!set 3",
+    "!!str [1]", "!!omap [1]",
+]  # fmt: skip
 ROBOTS = ["planar2", "puma560", "zcr07s", "stanford"]
+#: a gains file for planar2's controller steps
+GAINS = "kd: [6, 2]\nlambda: [10, 10]\ngamma: 1\nnu: 0.01\nkp: [0, 0]\n"
 
 
 def parser_options():
@@ -1799,7 +1807,8 @@ def mutate_text(s, kind, rng):
         lines.insert(i, lines[rng.randrange(len(lines))])
     elif op < 7:
         number = r"-?\d+(\.\d+)?(e-?\d+)?"
-        lines[i] = re.sub(number, lambda m: rng.choice(NUM_BAD), lines[i], count=1)
+        bad = NUM_BAD + YAML_BAD if kind in ("yaml", "gains") else NUM_BAD
+        lines[i] = re.sub(number, lambda m: rng.choice(bad), lines[i], count=1)
     elif op < 8:
         lines[i] = lines[i] + rng.choice([": [1, 2]", " !!python/object:os.system", "{", "]", "\t"])
     else:
@@ -1809,25 +1818,19 @@ def mutate_text(s, kind, rng):
 
 def case_files(ctx, index: int, rng: random.Random) -> Case:
     files = ctx.cli_files()
-    kind = rng.choice(["urdf", "yaml", "csv"])
-    src = {"urdf": files["urdf"], "yaml": files["yaml"], "csv": files["csv"]}[kind]
-    f = ctx.work / f"files-{index}.{kind}"
-    text = mutate_text(Path(src).read_text(), kind, rng)
+    kind = rng.choice(["urdf", "yaml", "csv", "gains"])
+    f = ctx.work / f"files-{index}.{'yaml' if kind == 'gains' else kind}"
+    text = mutate_text(Path(files[kind]).read_text(), kind, rng)
     f.write_bytes(text.encode("utf-8", "surrogateescape") + (b"\xff\xfe" * (rng.random() < 0.1)))
-    argv = (
-        ["identify", "planar2", f]
-        if kind == "csv"
-        else [
-            rng.choice(["info", "base", "codegen"]),
-            f,
-            "--lang",
-            "c",
-            "-o",
-            ctx.work / f"files-{index}-o",
-        ]
-    )
-    if argv[0] == "info" or argv[0] == "base":
-        argv = argv[:2]
+    out = ["--lang", "c", "-o", ctx.work / f"files-{index}-o"]
+    if kind == "csv":
+        argv = ["identify", "planar2", f]
+    elif kind == "gains":  # a controller step with a gains file (read by PyYAML)
+        step = rng.choice(["adaptive-pd", "computed-torque"])
+        argv = ["codegen", "planar2", "--what", step, "--gains", f, *out]
+    else:
+        command = rng.choice(["info", "base", "codegen"])
+        argv = [command, f, *out] if command == "codegen" else [command, f]
     return Case("files", index, f"{argv[0]} {f.name}", cli_fn(argv), argv, [f])
 
 
@@ -1898,7 +1901,9 @@ def _ctx_cli_files(self):
         "yaml": str(Path(mindyn.__file__).parent / "robots" / "puma560.yaml"),
         "csv": str(tmp / "log.csv"),
         "traj": str(traj.with_suffix(".json")),
+        "gains": str(tmp / "gains.yaml"),
     }
+    Path(self._files["gains"]).write_text(GAINS)
     return self._files
 
 

@@ -355,7 +355,7 @@ def test_codegen_refuses_a_controller_period_for_functions_without_one(tmp_path)
     functions of the state), while --gains, --box and --torque-limit were refused there."""
     argv = ["codegen", "planar2", "--lang", "c", "-o", tmp_path / "a"]
     rc, _, err = run([*argv, "--controller-period", "0.01"])
-    assert rc == 2 and "--controller-period applies to controller and" in err, err
+    assert rc == 2 and "--controller-period: applies to controller and" in err, err
     assert not (tmp_path / "a.c").exists()
     step = ["--what", "momentum-observer", "--controller-period", "0.01"]
     rc, out, err = run([*argv, *step])
@@ -416,7 +416,7 @@ def test_codegen_numeric_needs_a_function_that_takes_the_values(tmp_path):
     """--numeric with the regressor alone was ignored, and the output said 'values baked in'."""
     argv = ["codegen", "planar2", "--lang", "c", "--numeric", "-o", tmp_path / "a"]
     rc, _, err = run([*argv, "--what", "regressor"])
-    assert rc == 2 and "--numeric applies to the inverse dynamics and gravity" in err, err
+    assert rc == 2 and "--numeric: applies to the inverse dynamics and gravity" in err, err
     rc, out, err = run([*argv, "--what", "gravity,regressor"])
     assert rc == 0 and "values baked in" in out, err
     assert "const double p[" not in (tmp_path / "a.h").read_text()  # gravity takes no p

@@ -308,7 +308,7 @@ def test_cli_controller(tmp_path, capsys):
     [
         (["--what", "adaptive-pd,id"], "generated alone"),
         (["--what", "computed-torque", "--box", "0.1"], "adaptive-pd only"),
-        (["--what", "adaptive-pd", "--box", "-1"], "--box must be"),
+        (["--what", "adaptive-pd", "--box", "-1"], "--box: expected a finite number >= 0"),
         (["--what", "adaptive-pd", "--controller-period", "0"], "--controller-period"),
         # below the library's least period: said with this command's flag, not identify's
         # --excitation-period (the library's keyword period)
@@ -330,6 +330,46 @@ def test_cli_controller_errors(extra, message, tmp_path, capsys):
     assert main(["codegen", "puma560", "--lang", "c", "-o", str(tmp_path / "x")] + extra) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("mindyn: error: ") and message in err[0], err
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--wrench-frame", "local"], "--wrench-frame: applies with --contact"),
+        (["--contact", "l1"], "--contact: applies to a floating-base robot"),
+        (["--what", "adaptive-pd", "--classical-counts"], "--classical-counts: applies to"),
+        (["--what", "adaptive-pd", "--observer-gain", "5"], "--observer-gain: applies to"),
+        (["--observer-gain", "5"], "--observer-gain: applies to --what momentum-observer"),
+        (["--gains", "g.yaml"], "--gains: applies to controller steps only"),
+        (["--torque-limit", "5"], "--torque-limit: applies to controller steps only"),
+        (["--box", "0.1"], "--box: applies to controller steps only"),
+        (["--tracking-tolerance", "0.1"], "--tracking-tolerance: applies to controller steps"),
+        (["--controller-period", "0.01"], "--controller-period: applies to controller and"),
+        (["--what", "regressor", "--numeric"], "--numeric: applies to the inverse dynamics"),
+        (["--what", "adaptive-pd,id"], "--what: a controller step is generated alone"),
+        (["--what", "momentum-observer", "--gains", "g.yaml"], "--gains: applies to controller"),
+        (["--what", "momentum-observer", "--numeric"], "--numeric: does not apply to the"),
+        # the observer's step takes no tracking tolerance (it was ignored)
+        (["--what", "momentum-observer", "--tracking-tolerance", "0.1"], "--tracking-tolerance"),
+        (["--what", "adaptive-pd", "--numeric"], "--numeric: does not apply to controller"),
+        (["--what", "computed-torque", "--box", "0.1"], "--box: applies to --what adaptive-pd"),
+        (["--what", "adaptive-pd", "--box", "nan"], "--box: expected a finite number >= 0"),
+    ],
+)
+def test_codegen_option_clashes_are_usage_errors(extra, message, tmp_path, monkeypatch):
+    """Options that do not go together, or do not apply to the robot or step asked for, are the
+    command line's errors (a UsageError, as the other commands' option clashes), not the robot
+    description's (ModelError): one line, exit status 2, the option named first."""
+    from mindyn import cli
+    from mindyn.cli.args import UsageError
+
+    seen = []
+    monkeypatch.setattr(cli, "_error", seen.append)
+    argv = ["codegen", "planar2", "--lang", "c", "-o", str(tmp_path / "x")]
+    assert main(argv + extra) == 2
+    assert len(seen) == 1 and type(seen[0]) is UsageError, repr(seen)
+    assert str(seen[0]).startswith(message) and "\n" not in str(seen[0]), seen[0]
+    assert not list(tmp_path.iterdir())  # nothing written
 
 
 def test_bad_settings_are_refused():

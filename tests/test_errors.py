@@ -122,7 +122,7 @@ def test_a_joint_terms_file_yaml_cannot_build_names_the_file(tmp_path, text, nee
     [
         ("kd: 2001-13-45\n", "month must be in 1..12"),
         (f"kd: {'9' * 5000}\n", "digits"),  # past Python's integer-string limit
-        ("? [kd]\n: 1\n", "expected a mapping with keys kd"),  # a key that is a list
+        ("? [kd]\n: 1\n", ":1:3: not valid YAML: while constructing a mapping: found unhashable"),
         ("kd: [1,\n  2\n", "not valid YAML"),
     ],
 )
@@ -135,6 +135,70 @@ def test_a_gains_file_yaml_cannot_build_names_the_file(tmp_path, text, needle):
         load_gains(path, mindyn.load("planar2"))
     assert str(e.value).startswith(str(path)) and needle in str(e.value), e.value
     assert "\n" not in str(e.value)
+
+
+# values PyYAML's safe loader cannot build, with a word of the reason each message gives
+UNBUILDABLE = [
+    ("!!python/object:os.system x", "could not determine a constructor"),
+    ("!!python/name:os.system ''", "could not determine a constructor"),
+    ("!!binary 'abc'", "failed to decode base64 data"),
+    ("!!int abc", "cannot build 'abc' as !!int"),
+    ("!!float abc", "cannot build 'abc' as !!float"),
+    ("!!bool maybe", "cannot build 'maybe' as !!bool"),  # was a bare KeyError
+    ("!!timestamp 2001-13-45", "month must be in 1..12"),
+    ("!!timestamp abc", "cannot build 'abc' as !!timestamp"),  # was a bare AttributeError
+    ("2001-02-30", "day is out of range for month"),  # a date by YAML 1.1's implicit rule
+    ("!!str [1]", "expected a scalar node, but found sequence"),
+    (f"{'9' * 5000}", "(5000 characters) as !!int"),
+]
+
+
+def _yaml_readers(tmp_path):
+    """(name, text before the value on its line, lines before that line, reader of a path) of
+    each PyYAML reader of the package: joint terms, gains and the table export rewrites."""
+    from mindyn.control import load_gains
+    from mindyn.export import read_joint_terms, write_yaml
+
+    robot = mindyn.load("puma560")
+    out = tmp_path / "out.yaml"
+    return [
+        ("terms.yaml", "  - Fv: ", "joints:\n  - {Ia: 1}\n", read_joint_terms),
+        ("gains.yaml", "lambda: ", "kd: 1\ngamma: 1\n", lambda p: load_gains(p, robot)),
+        (
+            "table.yaml",
+            "  - a: ",
+            "name: x\njoints:\n",
+            lambda p: write_yaml(robot, robot.params, out, source=p),
+        ),
+    ]
+
+
+@pytest.mark.parametrize("value, needle", UNBUILDABLE)
+def test_a_yaml_value_the_loader_cannot_build_is_named_by_file_line_and_column(
+    tmp_path, value, needle
+):
+    """A value PyYAML's safe loader refuses (an unsafe or unknown tag, a tagged value its
+    constructor cannot build, a date out of range) in any YAML file the package reads with
+    PyYAML is a mindyn.Error of one line naming the file, the value's line and column."""
+    for name, before, lines, read in _yaml_readers(tmp_path):
+        path = tmp_path / name
+        path.write_text(f"{lines}{before}{value}\n")
+        line, column = lines.count("\n") + 1, len(before) + 1  # where the value starts
+        with pytest.raises(mindyn.Error) as e:
+            read(path)
+        said = str(e.value)
+        assert said.startswith(f"{path}:{line}:{column}: not valid YAML: "), said
+        assert needle in said and "\n" not in said and len(said) < 400, said
+
+
+def test_a_gains_file_the_loader_cannot_build_exits_2_naming_the_place(tmp_path, capsys):
+    """``!!bool maybe`` in a gains file was a bare KeyError (exit 70, "a defect in mindyn")."""
+    gains = tmp_path / "g.yaml"
+    gains.write_text("kd: 10\nlambda: !!bool maybe\n")
+    argv = ["codegen", "planar2", "--what", "adaptive-pd", "--gains", str(gains)]
+    assert mindyn.cli.main([*argv, "--lang", "c", "-o", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"mindyn: error: {gains}:2:9: not valid YAML: cannot build 'maybe' as !!bool"]
 
 
 @pytest.mark.parametrize(

@@ -599,6 +599,31 @@ def test_cli_export_errors(tmp_path, robot, content, output, message):
     assert not (tmp_path / output).exists()
 
 
+@pytest.mark.parametrize(
+    ("robot", "outputs", "message"),
+    [
+        ("puma560", ["--urdf", "o.urdf"], "--urdf needs a robot from a URDF: 'puma560' is a DH"),
+        (str(UR5), ["--yaml", "o.yaml"], "--yaml needs a YAML DH/MDH table: "),
+        (str(UR5), ["--mjcf", "o.xml", "--sidecar", "s.yaml"], "--sidecar: goes with --urdf or"),
+    ],
+)
+def test_cli_export_option_clashes_are_usage_errors(tmp_path, monkeypatch, robot, outputs, message):
+    """An output option that does not fit the robot's description (--urdf for a table, --yaml
+    for a URDF) or the other outputs (--sidecar with --mjcf) is the command line's error (a
+    UsageError, as the other commands' option clashes), not the description's (ModelError)."""
+    from mindyn.cli.args import UsageError
+
+    ident = tmp_path / "id.json"
+    ident.write_text(json.dumps({"classical": _params_of(robot)}))
+    seen = []
+    monkeypatch.setattr(cli, "_error", seen.append)
+    argv = ["export", robot, str(ident), *(str(tmp_path / w) if "." in w else w for w in outputs)]
+    assert cli.main(argv) == 2
+    assert len(seen) == 1 and type(seen[0]) is UsageError, repr(seen)
+    assert str(seen[0]).startswith(message), seen[0]
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["id.json"]  # nothing written
+
+
 def test_cli_export_needs_one_output(tmp_path):
     rc, _, err = run(["export", "puma560", tmp_path / "id.json"])
     assert rc == 2 and "one of the arguments --urdf --yaml --mjcf is required" in err
@@ -629,7 +654,7 @@ def test_read_joint_terms_errors(tmp_path):
     with pytest.raises(mindyn.ModelError, match="joint 1: 'Ia' is 'x'; expected a number"):
         read_joint_terms(bad)
     bad.write_text("joints: [\n")
-    with pytest.raises(mindyn.ModelError, match="bad.yaml: not a YAML file"):
+    with pytest.raises(mindyn.ModelError, match=r"bad.yaml:2:1: not valid YAML: while parsing"):
         read_joint_terms(bad)
 
 

@@ -342,3 +342,27 @@ def test_ik_reports_position_and_orientation_errors_in_their_units(capsys):
     assert f"position error {doc['position_error_m']:.3g} m, " in err, err
     assert f"orientation error {doc['orientation_error_rad']:.3g} rad (" in err, err
     assert "best pose error" not in err
+
+
+@pytest.mark.parametrize("x", [1e308, 1e200, -1e160])
+def test_a_target_so_far_that_the_errors_overflow_is_refused(x, capsys):
+    """A target position whose distance from any tool position overflows the double range
+    (|p| above about 1.3e154, squared in the norms): the errors were inf, with numpy's overflow
+    warning on a second line and exit status 1. It is an ArgumentError naming the position, as
+    every function whose result overflows for finite inputs; a far target whose errors stay
+    finite is still answered (not converged)."""
+    import warnings
+
+    robot = mindyn.load("puma560")
+    T = pose_from_xyz_rpy([x, 1e9, -1e20], [0.0, 0.0, 0.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no numpy warning before the error
+        with pytest.raises(mindyn.ArgumentError, match=r"ik_solve: the result overflows") as e:
+            ik_solve(robot, T)
+    assert f"T_target's position {x:.3g} (entry 1)" in str(e.value), e.value
+    assert "q0" not in str(e.value)  # not given: the default start is not the user's input
+    assert main(["ik", "puma560", "--xyz", f"{x:g}", "1e9", "-1e20"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mindyn: error: ik_solve: the result"), err
+    far = ik_solve(robot, pose_from_xyz_rpy([1e100, 0.0, 0.0], [0.0, 0.0, 0.0]))
+    assert far.status == "not converged" and far.position_error == pytest.approx(1e100, rel=1e-9)

@@ -399,6 +399,19 @@ def test_scipy_integrator_is_bounded(monkeypatch):
         simulate(robot, ref, duration=0.1, max_seconds=-1)
 
 
+def test_a_simulation_past_its_wall_time_bound_exits_1(tmp_path, monkeypatch, capsys):
+    """A simulation past its wall-time bound is a limit of the machine, as memory is (exit
+    status 1, as docs/errors.md says), not an error in the input (2); it writes no log."""
+    monkeypatch.setattr(simulation_module, "MAX_SECONDS", 1e-9)  # the command line's bound
+    log = tmp_path / "log.csv"
+    argv = ["simulate", "planar2", "--mode", "tracking", "--duration", "0.1", "-o", str(log)]
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mindyn: error: "), err
+    assert "exceeded its wall-time bound of 1e-09 s" in err[0], err
+    assert not log.exists()
+
+
 # --------------------------------------------------------------------------------------------
 # codegen, absurd settings, gains files
 # --------------------------------------------------------------------------------------------
@@ -457,7 +470,7 @@ def test_codegen_refusal_of_huge_gains_is_one_line(tmp_path, capfd):
 @pytest.mark.parametrize(
     "content, message",
     [
-        ("kd: 10\nlambda: 5\nkd: 20\n", r"g.yaml:3: key 'kd' appears twice"),
+        ("kd: 10\nlambda: 5\nkd: 20\n", r"g.yaml:3:1: key 'kd' appears twice"),
         ("kd: true\n", "'kd' must be a number or a list of numbers, got the boolean true"),
         ("kd: [1, 2, yes]\n", "got the boolean true"),
         ("gamma: abc\n", "'gamma' must be a number or a list of numbers, got 'abc'"),

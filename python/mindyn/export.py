@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from . import _args
+from . import _args, _yaml
 from ._args import ArgumentError
 from ._core import OFFSET_PREFIX as _OFF
 from ._core import ModelError, RobotFileNotFoundError
@@ -701,15 +701,10 @@ def _read_yaml(path: Path, what: str):
     if not path.is_file():
         raise RobotFileNotFoundError(f"{what} '{path}' does not exist")
     try:
-        return yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as e:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as e:
         raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
-    except ValueError as e:  # a value YAML cannot build: a date out of range, a huge integer
-        raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
-    except RecursionError:
-        raise ModelError(
-            f"{path}: not a YAML file: nested deeper than the reader follows"
-        ) from None
+    return _yaml.load(text, path, ModelError)
 
 
 # -- YAML DH / MDH tables -----------------------------------------------------------------------

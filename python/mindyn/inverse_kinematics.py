@@ -378,20 +378,30 @@ def ik_solve(
         orientation_weight=_args.number(orientation_weight, "orientation_weight", minimum=0.0),
         seed=_args.integer(seed, "seed", minimum=0),
     )
+    given = q0
     if q0 is None:
         q0 = 0.5 * (solver.lower + solver.upper)
     r = solver.solve(T, q0)
     q = np.asarray(r["q"])
-    e = pose_error(robot.fk(q), T)  # (p_target - p, rotation vector of R_target R^T)
+    # (p_target - p, rotation vector of R_target R^T); a target so far that the errors
+    # overflow (|p| near 1e308) is refused below, not warned about by numpy
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = pose_error(robot.fk(q), T)
+        errors = [float(r["error"]), float(np.linalg.norm(e[:3])), float(np.linalg.norm(e[3:]))]
+    if not np.isfinite(errors).all():
+        inputs = {"T_target's position": T[:3, 3]}  # its rotation's entries are at most 1
+        if given is not None:
+            inputs["q0"] = given
+        raise _args.overflow("ik_solve", **inputs)
     return IkResult(
         q=q,
         success=bool(r["success"]),
         status=r["status"],
-        error=float(r["error"]),
+        error=errors[0],
         iterations=int(r["iterations"]),
         attempts=int(r["attempts"]),
-        position_error=float(np.linalg.norm(e[:3])),
-        orientation_error=float(np.linalg.norm(e[3:])),
+        position_error=errors[1],
+        orientation_error=errors[2],
     )
 
 

@@ -99,8 +99,10 @@ def _error(text: object) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Runs the command line; returns the exit status. Every failure ends in one line on stderr,
     ``mindyn: error: ...``, and a non-zero status: 2 for the input (a :class:`mindyn.Error`, a
-    missing file), 1 for an output that cannot be written, 70 for anything else (a bare
-    ValueError or IndexError too), which is a defect in mindyn, not in the input."""
+    missing file), 1 for a limit of the machine (an output that cannot be written, memory, a
+    simulation past its wall-time bound, which is the Error that is a TimeoutError), 70 for
+    anything else (a bare ValueError or IndexError too), which is a defect in mindyn, not in
+    the input."""
     try:
         argv = list(sys.argv[1:] if argv is None else argv)
         parser = build_parser(_command(argv))
@@ -122,7 +124,9 @@ def main(argv: list[str] | None = None) -> int:
         return status
     except (Error, FileNotFoundError) as e:  # the input: mindyn's errors and a missing file
         _error(e)
-        return 2
+        # a simulation past its wall-time bound (SimulationTimeoutError): the machine's limit,
+        # as memory is, not an error in the input
+        return 1 if isinstance(e, TimeoutError) else 2
     except KeyboardInterrupt:
         print("mindyn: interrupted", file=sys.stderr)
         return 130

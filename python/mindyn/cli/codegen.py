@@ -6,10 +6,9 @@ from __future__ import annotations
 
 import argparse
 
-from .._core import ModelError
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, FUNCTIONS, generate
-from .args import add_command
+from .args import UsageError, add_command
 from .closed_loop import add_tolerance_arg
 from .codegen_output import (
     DEFAULT_FOLDER,
@@ -21,7 +20,7 @@ from .codegen_output import (
     _write_plcopen,
 )
 from .codegen_params import _identified_params, _params_note, _with_friction_model
-from .codegen_steps import _controller, _observer
+from .codegen_steps import _controller, _observer, refuse_controller_options
 from .method import base_method
 from .number_options import controller_period, joint_vector
 from .outputs import output_file
@@ -200,9 +199,9 @@ def register(subparsers) -> None:
 def cmd_codegen(args: argparse.Namespace) -> int:
     robot = load_robot(args)  # a floating base: C inverse dynamics, gravity, regressor only
     if args.wrench_frame is not None and not args.contact:
-        raise ModelError("--wrench-frame: applies with --contact (the contact wrenches' axes)")
+        raise UsageError("--wrench-frame: applies with --contact (the contact wrenches' axes)")
     if args.contact and robot.single_dof:
-        raise ModelError(
+        raise UsageError(
             "--contact: applies to a floating-base robot (--root-joint floating|planar, or a "
             "floating or planar joint at the root of the description)"
         )
@@ -240,8 +239,8 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     if args.what.strip() in CONTROLLERS + (OBSERVER,):
         require_single_dof(robot, f"codegen --what {args.what.strip()}")
         if args.classical_counts:  # given (None: the default)
-            raise ModelError(
-                "--classical-counts applies to the inverse dynamics, gravity and regressor, "
+            raise UsageError(
+                "--classical-counts: applies to the inverse dynamics, gravity and regressor, "
                 "not to a controller or observer step"
             )
         from ..control.controllers import check_period
@@ -256,22 +255,20 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         if args.what.strip() == OBSERVER:
             return _observer(args, robot, base, out, given, note)
         if args.observer_gain is not None:
-            raise ModelError(f"--observer-gain applies to --what {OBSERVER} only")
+            raise UsageError(f"--observer-gain: applies to --what {OBSERVER} only")
         return _controller(args, robot, base, out, given, note)
     if args.observer_gain is not None:
-        raise ModelError(f"--observer-gain applies to --what {OBSERVER} only")
-    for opt in ("gains", "torque_limit", "box", "tracking_tolerance"):
-        if getattr(args, opt) is not None:
-            raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
+        raise UsageError(f"--observer-gain: applies to --what {OBSERVER} only")
+    refuse_controller_options(args)
     if args.period is not None:  # the functions of q have no period
-        raise ModelError(f"--controller-period applies to controller and {OBSERVER} steps only")
+        raise UsageError(f"--controller-period: applies to controller and {OBSERVER} steps only")
     if args.numeric and not {w.strip() for w in args.what.split(",")} & {"id", *FUNCTIONS[:2]}:
-        raise ModelError(
-            "--numeric applies to the inverse dynamics and gravity (the regressor takes no "
+        raise UsageError(
+            "--numeric: applies to the inverse dynamics and gravity (the regressor takes no "
             "parameter values)"
         )
     if any(w.strip() in CONTROLLERS + (OBSERVER,) for w in args.what.split(",")):
-        raise ModelError("--what: a controller step is generated alone, not with other functions")
+        raise UsageError("--what: a controller step is generated alone, not with other functions")
     contacts: dict = {"contacts": args.contact or [], "wrench_frame": args.wrench_frame or "world"}
     code = generate(
         robot,

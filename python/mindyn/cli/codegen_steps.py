@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._core import ArgumentError, ModelError
+from .._core import ArgumentError
 from ..codegen import generate, generate_controller, generate_observer
 from .args import UsageError
 from .codegen_output import OBSERVER, _stem, _write, _write_plcopen
@@ -18,15 +18,21 @@ from .number_options import joint_values
 from .robot_options import joint_terms
 
 
+def refuse_controller_options(args) -> None:
+    """Refuses (UsageError) the options of the controller steps alone, given for another step or
+    function (which would not use them)."""
+    for opt in ("gains", "torque_limit", "box", "tracking_tolerance"):
+        if getattr(args, opt) is not None:
+            raise UsageError(f"--{opt.replace('_', '-')}: applies to controller steps only")
+
+
 def _observer(args, robot, base, out: Path | None, params, note: str | None = None) -> int:
     """``--what momentum-observer``; ``note`` says where the values came from."""
     from ..control import default_observer_gain
 
-    for opt in ("gains", "torque_limit", "box"):
-        if getattr(args, opt) is not None:
-            raise ModelError(f"--{opt.replace('_', '-')} applies to controller steps only")
+    refuse_controller_options(args)
     if args.numeric:
-        raise ModelError(f"--numeric does not apply to the {OBSERVER} step")
+        raise UsageError(f"--numeric: does not apply to the {OBSERVER} step")
     gains = (
         joint_values(args.observer_gain, robot.n, "--observer-gain", broadcast=True)
         if args.observer_gain
@@ -67,7 +73,7 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
 
     kind = args.what.strip()
     if args.numeric:
-        raise ModelError("--numeric does not apply to controller steps (p is their state)")
+        raise UsageError("--numeric: does not apply to controller steps (p is their state)")
     from .closed_loop import joint_tolerance
 
     tolerance = joint_tolerance(robot, args.tracking_tolerance)
@@ -91,9 +97,9 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
     same.update(tau_max=limit)
     if args.box is not None:
         if kind != "adaptive-pd":
-            raise ModelError("--box (a box on the estimate) applies to --what adaptive-pd only")
+            raise UsageError("--box: applies to --what adaptive-pd only (a box on the estimate)")
         if not (math.isfinite(args.box) and args.box >= 0):
-            raise ModelError(f"--box must be a number >= 0, got {args.box:g}")
+            raise UsageError(f"--box: expected a finite number >= 0, got {args.box:g}")
         p0 = generate_controller(robot, kind, lang="st", **same).settings["p0"]
         same.update(p_min=p0 - args.box * np.abs(p0), p_max=p0 + args.box * np.abs(p0))
     header = (out.name if out is not None else _stem(args, robot)) + ".h"

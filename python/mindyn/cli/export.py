@@ -7,7 +7,7 @@ import math
 
 from .._core import ArgumentError, ModelError
 from ..export import classical_terms, write_urdf, write_yaml
-from .args import add_command
+from .args import UsageError, add_command
 from .flags import library_options_as_flags
 from .outputs import add_description_outputs, check_description_kind
 from .robot_options import add_robot, load_robot
@@ -92,7 +92,7 @@ def write_description(
         raise DataError(str(e)) from None
     if mjcf is not None:
         if sidecar is not None:
-            raise ModelError("--sidecar goes with --urdf or --yaml, not --mjcf")
+            raise UsageError("--sidecar: goes with --urdf or --yaml, not --mjcf")
         from ..mjcf import write_mjcf  # here: not needed by the other outputs
 
         res = write_mjcf(robot, classical, mjcf)

@@ -10,7 +10,6 @@ import argparse
 import os
 from pathlib import Path
 
-from .._core import ModelError
 from .._mujoco import is_mjcf
 from .args import UsageError
 
@@ -209,14 +208,14 @@ def add_description_outputs(p, what: str) -> None:
 
 
 def check_description_kind(robot, source: str, urdf: bool, mjcf=None) -> None:
-    """Refuse ``--urdf`` for a robot from a YAML table or an MJCF, ``--yaml`` for one from a
-    URDF or an MJCF; ``--mjcf`` takes any robot."""
+    """Refuse (UsageError) ``--urdf`` for a robot from a YAML table or an MJCF, ``--yaml`` for
+    one from a URDF or an MJCF; ``--mjcf`` takes any robot."""
     if mjcf is not None:
         return
     if is_mjcf(robot.source):
         want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
-        raise ModelError(f"{want}: '{source}' is an MJCF; use --mjcf")
+        raise UsageError(f"{want}: '{source}' is an MJCF; use --mjcf")
     if urdf != (robot.convention == "urdf"):
         want = "--urdf needs a robot from a URDF" if urdf else "--yaml needs a YAML DH/MDH table"
         kind = "a URDF" if robot.convention == "urdf" else f"a {robot.convention.upper()} table"
-        raise ModelError(f"{want}: '{source}' is {kind}; use {'--yaml' if urdf else '--urdf'}")
+        raise UsageError(f"{want}: '{source}' is {kind}; use {'--yaml' if urdf else '--urdf'}")

@@ -31,6 +31,7 @@ ddq_d)`` once per period on the measured state, the torque held until the next c
 from __future__ import annotations
 
 import math
+from collections.abc import Hashable
 from pathlib import Path
 
 import numpy as np
@@ -1149,16 +1150,21 @@ def _reject_duplicate_keys(path: Path):
     """A YAML safe loader that refuses a mapping with a key twice (PyYAML keeps the last)."""
     import yaml
 
-    class Loader(yaml.SafeLoader):
+    from .._yaml import SafeLoader
+
+    class Loader(SafeLoader):
         pass
 
     def mapping(loader, node, deep=False):
         seen = set()
         for key_node, _ in node.value:
             key = loader.construct_object(key_node, deep=deep)
+            if not isinstance(key, Hashable):
+                break  # a list or a mapping as a key: construct_mapping refuses it, with where
             if key in seen:
+                mark = key_node.start_mark
                 raise ControllerSettingError(
-                    f"{path}:{key_node.start_mark.line + 1}: key '{key}' appears twice"
+                    f"{path}:{mark.line + 1}:{mark.column + 1}: key '{key}' appears twice"
                 )
             seen.add(key)
         return loader.construct_mapping(node, deep=deep)
@@ -1199,29 +1205,17 @@ def load_gains(
     _args.path(path, "path")
     _args.instance(robot, "robot", Robot)
     _args.optional(_args.flag, rotor, "rotor")
-    import yaml
-
     path = Path(path)
     if not path.is_file():
         from .._core import RobotFileNotFoundError
 
         raise RobotFileNotFoundError(f"gains file '{path}' does not exist")
+    from .. import _yaml
     from ..identification.data import decode_text
 
-    try:
-        data = yaml.load(decode_text(path), Loader=_reject_duplicate_keys(path))
-    except (yaml.YAMLError, ValueError) as e:  # ValueError: a date out of range, a huge integer
-        raise ControllerSettingError(
-            f"{path}: not valid YAML ({' '.join(str(e).split())})"
-        ) from None
-    except TypeError:  # a mapping key that is itself a list or a mapping
-        raise ControllerSettingError(
-            f"{path}: expected a mapping with keys kd, lambda, gamma, nu, kp"
-        ) from None
-    except RecursionError:
-        raise ControllerSettingError(
-            f"{path}: nested deeper than the YAML reader follows"
-        ) from None
+    data = _yaml.load(
+        decode_text(path), path, ControllerSettingError, loader=_reject_duplicate_keys(path)
+    )
     if data is None:
         data = {}
     if not isinstance(data, dict):
