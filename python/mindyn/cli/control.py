@@ -108,9 +108,9 @@ def cmd_track(args: argparse.Namespace) -> int:
         pe = s["parameter_error_norm"]
         lines.append(f"parameter error |p_hat - p|: {pe[0]:.4g} at t = 0, {pe[-1]:.4g} at the end")
     if args.output:
-        from ..identification.data import truth_path
+        from ..identification.data import link_frames, truth_path
 
-        path = result.save(args.output, robot_name=robot.name)
+        path = result.save(args.output, robot_name=robot.name, link_frames=link_frames(robot))
         lines.append(
             f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"
         )

@@ -83,7 +83,14 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         )
     else:
         log = simulate_inverse(robot, ref, **kwargs)
-    path = log.save(args.output, robot_name=robot.name, joint_names=robot.joint_names)
+    from ..identification.data import link_frames
+
+    path = log.save(
+        args.output,
+        robot_name=robot.name,
+        joint_names=robot.joint_names,
+        link_frames=link_frames(robot),
+    )
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
         write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")

@@ -177,6 +177,11 @@ def _kept(report) -> list[str]:
             f"{report.truth_side}s, this fit has them on the {report.robot.drive_side}s: its "
             "true values are not compared"
         )
+    if report.truth_frames:
+        out.append(
+            f"  note: {report.truth_frames}: the log's true values are about other link frames "
+            "(another description of the robot), not compared"
+        )
     if base.friction:
         out += report.friction_lines
     for w in res.settings.get("warnings", []):
