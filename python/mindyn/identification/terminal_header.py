@@ -6,6 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from .terminal import (
     _cutoff_range,
     _describe,
@@ -153,6 +155,25 @@ def _settings(report) -> list[str]:
     return out
 
 
+def _drive_terms_left_out(report) -> str:
+    """The rotor inertia and friction that the robot's description gives (non-zero) and the
+    fit leaves out, in words with the options that fit them ("" when none)."""
+    robot, base = report.robot, report.base
+    if not robot.single_dof:
+        return ""
+    names = robot.parameter_names(rotor=True, friction=True)
+    values = np.asarray(robot.parameters(rotor=True, friction=True))
+    inertial = set(robot.parameter_names())
+    given = {nm.rstrip("0123456789") for nm, v in zip(names, values) if v and nm not in inertial}
+    words = []
+    if not base.rotor and "Ia" in given:
+        words.append("rotor inertia Ia (--rotor)")
+    friction = [k for k in ("Fv", "Fc", "Fa", "Fs") if k in given]
+    if not base.friction and friction:
+        words.append(f"friction {', '.join(friction)} (--friction)")
+    return " and ".join(words)
+
+
 def _kept(report) -> list[str]:
     """Parameters kept, the truth compared, the friction model, the fit's warnings."""
     res, base = report.result, report.base
@@ -176,6 +197,13 @@ def _kept(report) -> list[str]:
             f"  note: the log was simulated with rotor inertia and friction on the "
             f"{report.truth_side}s, this fit has them on the {report.robot.drive_side}s: its "
             "true values are not compared"
+        )
+    left = _drive_terms_left_out(report)
+    if left:
+        out.append(
+            f"  note: the description gives {left} that this fit leaves out: the kept "
+            "parameters take up their torques (a large torque error and many parameters "
+            "removed can come from that)"
         )
     if report.truth_frames:
         out.append(
