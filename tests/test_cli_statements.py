@@ -15,6 +15,7 @@ import mindyn
 import numpy as np
 import pinocchio as pin
 import pytest
+import yaml
 from conftest import ROBOTS_DIR, pinocchio_model
 from mindyn import cli
 
@@ -537,3 +538,27 @@ def test_ik_names_the_frame_it_places(tmp_path):
         pin.framesForwardKinematics(model, data, np.array(doc["q"]))
         placed = data.oMf[model.getFrameId(frame)].translation
         assert np.max(np.abs(placed - target)) < 1e-9, (frame, placed)
+
+
+def test_simulate_says_when_rotor_and_friction_have_nothing_to_add(tmp_path):
+    """--rotor --friction on a description that gives no rotor inertia or friction (a URDF
+    without <dynamics>, which has no place for rotor inertia) change nothing: the output says
+    so, and the log is the one without them. On a description that gives them it says nothing
+    of the kind, and the torques differ."""
+    urdf, table = tmp_path / "flanged.urdf", tmp_path / "arm.yaml"
+    urdf.write_text(FLANGED)
+    doc = yaml.safe_load(TWO_LINK)
+    for joint in doc["joints"]:
+        joint.update(rotor_inertia=0.05, friction={"viscous": 0.2, "coulomb": 0.5})
+    table.write_text(yaml.safe_dump(doc))
+    taus = {}
+    for robot, rotor_said in ((urdf, True), (table, False)):
+        for flags in ([], ["--rotor", "--friction"]):
+            csv = tmp_path / f"{robot.stem}{len(flags)}.csv"
+            rc, out, err = run(["simulate", robot, "--mode", "inverse", *flags, "-o", csv])
+            assert rc == 0, err
+            said = "rotor inertia on (zero in the description: no effect), friction on (zero"
+            assert (said in out.splitlines()[0]) is (rotor_said and bool(flags)), out
+            taus[robot.stem, len(flags)] = np.loadtxt(csv, delimiter=",", skiprows=1)[:, -2:]
+    assert np.array_equal(taus["flanged", 0], taus["flanged", 2])
+    assert not np.allclose(taus["arm", 0], taus["arm", 2])

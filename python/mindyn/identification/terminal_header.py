@@ -6,8 +6,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
-
 from .terminal import (
     _cutoff_range,
     _describe,
@@ -158,17 +156,12 @@ def _settings(report) -> list[str]:
 def _drive_terms_left_out(report) -> str:
     """The rotor inertia and friction that the robot's description gives (non-zero) and the
     fit leaves out, in words with the options that fit them ("" when none)."""
-    robot, base = report.robot, report.base
-    if not robot.single_dof:
-        return ""
-    names = robot.parameter_names(rotor=True, friction=True)
-    values = np.asarray(robot.parameters(rotor=True, friction=True))
-    inertial = set(robot.parameter_names())
-    given = {nm.rstrip("0123456789") for nm, v in zip(names, values) if v and nm not in inertial}
+    base = report.base
+    given = report.robot.drive_terms_given()
     words = []
     if not base.rotor and "Ia" in given:
         words.append("rotor inertia Ia (--rotor)")
-    friction = [k for k in ("Fv", "Fc", "Fa", "Fs") if k in given]
+    friction = [k for k in given if k != "Ia"]
     if not base.friction and friction:
         words.append(f"friction {', '.join(friction)} (--friction)")
     return " and ".join(words)
