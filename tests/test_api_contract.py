@@ -450,6 +450,7 @@ def _api(tmp: Path) -> dict:
                 {"velocity": [0.1, 0.1]},
             ),
             "Robot.slot_velocities": (ROBOT.slot_velocities, (Z,), {}),
+            "Robot.drive_terms_given": (ROBOT.drive_terms_given, (), {}),
             # BaseParameters
             "BaseParameters.values": (BASE.values, (ROBOT.params,), {}),
             "BaseParameters.embed": (BASE.embed, (np.ones(BASE.n),), {}),

@@ -15,6 +15,7 @@ import mindyn
 import numpy as np
 import pinocchio as pin
 import pytest
+import yaml
 from conftest import ROBOTS_DIR, pinocchio_model
 from mindyn import cli
 
@@ -490,3 +491,74 @@ def test_info_counts_the_joints_in_words(robot, said):
     rc, out, err = run(["info", robot])
     assert rc == 0, err
     assert said in out.splitlines()[0]
+
+
+FLANGED = """<robot name="flanged">
+  <link name="base"/>
+  <link name="l1"><inertial><mass value="2"/><inertia ixx="0.1" iyy="0.1" izz="0.1"
+    ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="l2"><inertial><mass value="1"/><inertia ixx="0.05" iyy="0.05" izz="0.05"
+    ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="flange"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="1"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.4 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="1"/></joint>
+  <joint name="f" type="fixed"><parent link="l2"/><child link="flange"/>
+    <origin xyz="0.3 0 0"/></joint>
+</robot>
+"""
+
+
+def test_ik_names_the_frame_it_places(tmp_path):
+    """A whole URDF ending in a fixed flange: ik places the last moving link's frame (not the
+    flange 0.3 m further), and says so in the table and the JSON; with --tip flange it places
+    the flange. Reference: Pinocchio's placement of the joint frame j2 (and of the flange frame)
+    at the answer, against the target."""
+    path = tmp_path / "flanged.urdf"
+    path.write_text(FLANGED)
+    model = pin.buildModelFromUrdf(str(path))
+    data = model.createData()
+    q = np.array([0.3, 0.4])  # a pose each frame reaches: its placement at q
+    for tip, frame, words in [
+        ([], "j2", "the frame of link 'l2', the last moving link (a fixed link after it: --tip"),
+        (["--tip", "flange"], "flange", "link 'l2' moved by the tool offset (xyz 0.3 0 0 m)"),
+    ]:
+        pin.framesForwardKinematics(model, data, q)
+        target = data.oMf[model.getFrameId(frame)].translation.copy()
+        pose = ["--xyz", *(repr(float(v)) for v in target), "--rpy", "0", "0", "0.7"]
+        rc, out, err = run(["ik", path, *tip, *pose])
+        assert rc == 0, err
+        assert "  frame: " in out and words in out, out
+        rc, js, err = run(["ik", path, *tip, *pose, "--format", "json"])
+        doc = json.loads(js)
+        assert words in doc["frame"], doc["frame"]
+        pin.framesForwardKinematics(model, data, np.array(doc["q"]))
+        placed = data.oMf[model.getFrameId(frame)].translation
+        assert np.max(np.abs(placed - target)) < 1e-9, (frame, placed)
+
+
+def test_simulate_says_when_rotor_and_friction_have_nothing_to_add(tmp_path):
+    """--rotor --friction on a description that gives no rotor inertia or friction (a URDF
+    without <dynamics>, which has no place for rotor inertia) change nothing: the output says
+    so, and the log is the one without them. On a description that gives them it says nothing
+    of the kind, and the torques differ."""
+    urdf, table = tmp_path / "flanged.urdf", tmp_path / "arm.yaml"
+    urdf.write_text(FLANGED)
+    doc = yaml.safe_load(TWO_LINK)
+    for joint in doc["joints"]:
+        joint.update(rotor_inertia=0.05, friction={"viscous": 0.2, "coulomb": 0.5})
+    table.write_text(yaml.safe_dump(doc))
+    taus = {}
+    for robot, rotor_said in ((urdf, True), (table, False)):
+        for flags in ([], ["--rotor", "--friction"]):
+            csv = tmp_path / f"{robot.stem}{len(flags)}.csv"
+            rc, out, err = run(["simulate", robot, "--mode", "inverse", *flags, "-o", csv])
+            assert rc == 0, err
+            said = "rotor inertia on (zero in the description: no effect), friction on (zero"
+            assert (said in out.splitlines()[0]) is (rotor_said and bool(flags)), out
+            taus[robot.stem, len(flags)] = np.loadtxt(csv, delimiter=",", skiprows=1)[:, -2:]
+    assert np.array_equal(taus["flanged", 0], taus["flanged", 2])
+    assert not np.allclose(taus["arm", 0], taus["arm", 2])

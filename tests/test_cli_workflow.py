@@ -182,3 +182,52 @@ def test_demo_prints_the_operation_counts_once(tmp_path, capsys):
     assert (tmp_path / "inverse_dynamics.st").is_file()
     assert out.count("inverse_dynamics ") == 1, out
     assert "C and Structured Text alike" in out
+
+
+@pytest.mark.skipif(GCC is None, reason="gcc is needed to compile the generated C")
+def test_codegen_takes_the_consistent_estimate_of_identify_json(tmp_path):
+    """codegen --params ID.json --consistent: the compiled C gives the torques of the
+    consistent estimate, which identify --urdf writes as a description: Pinocchio's rnea on
+    that URDF plus the motors' rotor inertia and friction of its sidecar, by hand through the
+    transmissions (a gear and a differential). Without --consistent the C is the unconstrained
+    estimate's, and the output says the file holds a consistent one."""
+    import pinocchio as pin
+    import yaml
+    from test_formulas import GEARED_URDF
+
+    urdf, log, ident = tmp_path / "geared.urdf", tmp_path / "log.csv", tmp_path / "id.json"
+    urdf.write_text(GEARED_URDF)
+    flags = ["--rotor", "--friction"]
+    cli("simulate", urdf, "--mode", "inverse", "--duration", "8", "--torque-noise", "2%", "-o", log)
+    out_urdf = tmp_path / "identified.urdf"
+    cli("identify", urdf, log, *flags, "--consistent", "--json", ident, "--urdf", out_urdf)
+    model = pin.buildModelFromUrdf(str(out_urdf))
+    data = model.createData()
+    rows = yaml.safe_load(out_urdf.with_name("identified.joints.yaml").read_text())["joints"]
+    Ia, Fv, Fc = (np.array([r.get(k, 0.0) for r in rows]) for k in ("Ia", "Fv", "Fc"))
+    T = mindyn.load(urdf).transmission.T
+    libs = {}
+    for extra in ([], ["--consistent"]):
+        name = f"dyn{len(extra)}"
+        said = cli("codegen", urdf, "--lang", "c", *flags, "--params", ident, *extra, "--numeric",
+                   "--name", name, "-o", tmp_path / name)  # fmt: skip
+        words = "consistent estimate of" if extra else "the file's consistent estimate: --consist"
+        assert words in said, said
+        so = tmp_path / f"lib{name}.so"
+        cmd = [GCC, "-std=c99", "-O1", "-shared", "-fPIC", "-o", so, tmp_path / f"{name}.c"]
+        res = subprocess.run([str(c) for c in [*cmd, "-lm"]], capture_output=True, text=True)
+        assert res.returncode == 0, res.stderr
+        libs[len(extra)] = getattr(ctypes.CDLL(str(so)), f"{name}_inverse_dynamics")
+    dbl = ctypes.POINTER(ctypes.c_double)
+    ptr = lambda a: a.ctypes.data_as(dbl)  # noqa: E731
+    rng = np.random.default_rng(5)
+    gap = {0: 0.0, 1: 0.0}
+    for _ in range(10):
+        q, dq, ddq = rng.uniform(-2, 2, (3, 3))
+        v = T @ dq
+        ref = pin.rnea(model, data, q, dq, ddq) + T.T @ (Ia * (T @ ddq) + Fv * v + Fc * np.sign(v))
+        for k, f in libs.items():
+            tau = np.zeros(3)
+            f(ptr(q), ptr(dq), ptr(ddq), ptr(tau))
+            gap[k] = max(gap[k], float(np.max(np.abs(tau - ref)) / np.max(np.abs(ref))))
+    assert gap[1] < 1e-9 < 1e-4 < gap[0], gap

@@ -151,7 +151,7 @@ def urdf_at(source: Path, robot: mindyn.Robot, values: dict[str, float], path: P
     """The URDF ``source`` with joint ``j``'s origin component ``x_j``/``y_j``/``z_j`` replaced
     (joints numbered along the moving chain)."""
     tree = ET.parse(source)
-    joints = {j.get("name"): j for j in tree.getroot().iter("joint")}
+    joints = {j.get("name"): j for j in tree.getroot().findall("joint")}  # not a transmission's
     for sym, v in values.items():
         axis, j = "xyz".index(sym[0]), int(sym[1:])
         origin = joints[robot.joint_names[j - 1]].find("origin")
@@ -512,3 +512,88 @@ def test_symbolic_names_rounded_right_angles_and_works_once_snapped():
     with pytest.raises(mindyn.ModelError) as plain:
         mindyn.base_parameters("planar2", order=order).symbolic()
     assert "snap" not in str(plain.value)
+
+
+GEARED_URDF = """<robot name="geared3">
+  <link name="base"/>
+  <link name="l1"><inertial><origin xyz="0.02 0.01 0.1"/><mass value="8"/>
+    <inertia ixx="0.2" iyy="0.25" izz="0.15" ixy="0.01" ixz="0" iyz="0"/></inertial></link>
+  <link name="l2"><inertial><origin xyz="0.2 0.01 0.03"/><mass value="5"/>
+    <inertia ixx="0.02" iyy="0.1" izz="0.11" ixy="0" ixz="0.005" iyz="0"/></inertial></link>
+  <link name="l3"><inertial><origin xyz="0.15 0 -0.02"/><mass value="2"/>
+    <inertia ixx="0.01" iyy="0.04" izz="0.045" ixy="0" ixz="0" iyz="0.002"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0.3"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="100" velocity="2"/></joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.1 0 0.25" rpy="1.5707963267948966 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="100" velocity="2"/></joint>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+    <origin xyz="0.4 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="100" velocity="2"/></joint>
+  <transmission name="t1"><type>transmission_interface/SimpleTransmission</type>
+    <joint name="j1"/><actuator name="m1"><mechanicalReduction>100</mechanicalReduction></actuator>
+  </transmission>
+  <transmission name="t23"><type>transmission_interface/DifferentialTransmission</type>
+    <actuator name="m2"><role>actuator1</role>
+      <mechanicalReduction>50</mechanicalReduction></actuator>
+    <actuator name="m3"><role>actuator2</role>
+      <mechanicalReduction>50</mechanicalReduction></actuator>
+    <joint name="j2"><role>joint1</role><mechanicalReduction>1</mechanicalReduction></joint>
+    <joint name="j3"><role>joint2</role><mechanicalReduction>1</mechanicalReduction></joint>
+  </transmission>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("convention", ["urdf", "mdh"])
+def test_symbolic_with_transmissions_on_the_motors(convention, tmp_path, rng):
+    """Rotor inertia and friction of motors behind transmissions (a gear of 100 on joint 1, a
+    differential of 50 on joints 2 and 3): the regrouping coefficients hold the rows of T, so
+    the formulas at other lengths must be those of the robot with its transmissions. Reference:
+    the numeric Y of descriptions this test writes at random lengths (transmissions kept), and
+    joint 1's motor by hand: its rotor turns 100 times as fast, Ia1 counts 100^2 in ZZR1."""
+    if convention == "urdf":
+        source = tmp_path / "geared.urdf"
+        source.write_text(GEARED_URDF)
+        robot = mindyn.load(source)
+
+        def build(v):
+            return urdf_at(source, robot, v, tmp_path / "r.urdf")
+
+    else:
+        # the URDF's geometry and links as an MDH table (link frames at the joint frames)
+        links = [  # alpha, d, r, mass, com, (xx, yy, zz)
+            (0, 0, 0.3, 8, [0.02, 0.01, 0.1], (0.2, 0.25, 0.15)),
+            (90, 0.1, 0, 5, [0.2, 0.01, 0.03], (0.02, 0.1, 0.11)),
+            (0, 0.4, 0, 2, [0.15, 0, -0.02], (0.01, 0.04, 0.045)),
+        ]
+        joints = [
+            {"name": f"j{k + 1}", "type": "revolute", "alpha": a, "d": d, "theta": 0, "r": r,
+             "inertial": {"mass": m, "com": c, "inertia": dict(zip(("xx", "yy", "zz"), i))}}
+            for k, (a, d, r, m, c, i) in enumerate(links)
+        ]  # fmt: skip
+        transmissions = [
+            {"name": "m1", "joints": {"j1": 100}},
+            {"name": "m2", "joints": {"j2": 50, "j3": 50}},
+            {"name": "m3", "joints": {"j2": 50, "j3": -50}},
+        ]
+        doc = {"name": "geared3", "convention": "mdh", "angle_unit": "deg", "joints": joints}
+        doc["transmissions"] = transmissions
+        source = tmp_path / "geared.yaml"
+        source.write_text(yaml.safe_dump(doc))
+        robot = mindyn.load(source)
+
+        def build(v):
+            other = json.loads(json.dumps(doc))
+            for sym, x in v.items():
+                other["joints"][int(sym[1:]) - 1][sym[0]] = float(x)
+            path = tmp_path / "r.yaml"
+            path.write_text(yaml.safe_dump(other))
+            return path
+
+    assert robot.drive_side == "motor"
+    bp = mindyn.base_parameters(robot, rotor=True, friction=True)
+    sym = check_symbolic(bp, build, rng)
+    zz1 = next(t for t in sym.text if t.startswith("ZZR1 ="))
+    assert re.search(r"(?<![\d.])10000\*Ia1\b", zz1), zz1

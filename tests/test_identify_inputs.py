@@ -15,6 +15,7 @@ from pathlib import Path
 import mindyn
 import numpy as np
 import pytest
+import yaml
 from mindyn import cli
 from mindyn.base import base_parameters
 from mindyn.export import classical_terms
@@ -587,3 +588,110 @@ def test_revolute_positions_whose_rounding_loses_half_the_digits_are_refused(tmp
     assert cli.main(["identify", "planar2", str(log)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"q{j + 1} reaches" in err, err
+
+
+# -- a truth about other link frames ------------------------------------------------------------
+TWO_FRAMES_YAML = """\
+name: twoframes
+convention: mdh
+angle_unit: deg
+joints:
+  - {name: j1, type: revolute, alpha: 0, d: 0, theta: 0, r: 0,
+     limits: {lower: -170, upper: 170, velocity: 120, effort: 80},
+     inertial: {mass: 3, com: [0.05, 0.02, 0.1], inertia: {xx: 0.03, yy: 0.04, zz: 0.02}}}
+  - {name: j2, type: revolute, alpha: 90, d: 0.1, theta: 0, r: 0,
+     limits: {lower: -170, upper: 170, velocity: 120, effort: 40},
+     inertial: {mass: 2, com: [0.25, 0.03, 0.01],
+                inertia: {xx: 0.005, yy: 0.03, zz: 0.03, xy: 0.002}}}
+"""
+
+
+def _two_frames_urdf() -> str:
+    """The arm of TWO_FRAMES_YAML with link 2's frame turned 60 degrees about its joint axis
+    (the same body: its inertial values written in the turned frame)."""
+    from scipy.spatial.transform import Rotation
+
+    Rz = Rotation.from_euler("z", 60, degrees=True).as_matrix()
+    R = Rotation.from_euler("x", 90, degrees=True).as_matrix() @ Rz
+    rpy = " ".join(repr(float(a)) for a in Rotation.from_matrix(R).as_euler("xyz"))
+    com = Rz.T @ np.array([0.25, 0.03, 0.01])
+    inertia = Rz.T @ np.array([[0.005, 0.002, 0], [0.002, 0.03, 0], [0, 0, 0.03]]) @ Rz
+    i = {k: repr(float(inertia["xyz".index(k[0]), "xyz".index(k[1])])) for k in
+         ("xx", "xy", "xz", "yy", "yz", "zz")}  # fmt: skip
+    limit = '<limit lower="-2.967" upper="2.967" velocity="2.094" effort="{}"/>'
+    return f"""<robot name="twoframes">
+  <link name="base"/>
+  <link name="l1"><inertial><origin xyz="0.05 0.02 0.1"/><mass value="3"/>
+    <inertia ixx="0.03" iyy="0.04" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="l2"><inertial><origin xyz="{" ".join(repr(float(c)) for c in com)}"/>
+    <mass value="2"/><inertia ixx="{i["xx"]}" iyy="{i["yy"]}" izz="{i["zz"]}" ixy="{i["xy"]}"
+    ixz="{i["xz"]}" iyz="{i["yz"]}"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+    <origin xyz="0 0 0"/><axis xyz="0 0 1"/>{limit.format(80)}</joint>
+  <joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+    <origin xyz="0.1 0 0" rpy="{rpy}"/><axis xyz="0 0 1"/>{limit.format(40)}</joint>
+</robot>
+"""
+
+
+def test_a_truth_about_other_link_frames_is_not_compared(tmp_path):
+    """A log simulated with a DH table, identified with a URDF of the same arm (same name,
+    joints and motion; Pinocchio's torques on the URDF equal the table's) whose link 2 frame is
+    turned about its axis: the table's classical values are about other frames, and its base
+    values are not the URDF's, so the truth is not compared (a note says why); with the table
+    itself it is."""
+    import pinocchio as pin
+
+    table, urdf = tmp_path / "arm.yaml", tmp_path / "arm.urdf"
+    table.write_text(TWO_FRAMES_YAML)
+    urdf.write_text(_two_frames_urdf())
+    a, b = mindyn.load(table), mindyn.load(urdf)
+    model = pin.buildModelFromUrdf(str(urdf))
+    rng = np.random.default_rng(3)
+    for q, dq, ddq in rng.uniform(-2, 2, (5, 3, 2)):
+        ref = pin.rnea(model, model.createData(), q, dq, ddq)
+        assert np.max(np.abs(a.inverse_dynamics(q, dq, ddq) - ref)) < 1e-12
+    va = base_parameters(a).values(a.params)
+    vb = base_parameters(b).values(b.params)
+    assert np.max(np.abs(va - vb)) > 0.01  # the same robot, other base values
+    log = simulate(tmp_path / "arm.csv", table)
+    for robot, compared in ((urdf, False), (table, True)):
+        js = tmp_path / "id.json"
+        rc, out, err = run(["identify", robot, log, "--json", js])
+        assert rc == 0, err
+        assert ("true_values" in json.loads(js.read_text())) is compared
+        assert ("(true values from" in out) is compared, out
+        said = "frame of link 'l2' at q = 0 is off this description's by 0.866 (m"  # sin 60 deg
+        assert (said in out) is not compared, out
+
+
+def test_identify_notes_the_rotor_inertia_and_friction_it_leaves_out(tmp_path):
+    """A description that gives a geared motor's rotor inertia and friction, a log simulated
+    with them, the default fit (neither): a note names what the fit leaves out and the options
+    that fit it. It is that: with --rotor --friction the torque error drops to the noise-free
+    log's round-off level from the per cent the default fit leaves (reference: the same log)."""
+    doc = yaml.safe_load(TWO_FRAMES_YAML)
+    doc["transmissions"] = [
+        {"name": "m1", "joints": {"j1": 100}, "rotor_inertia": 2e-4, "viscous": 1e-4},
+        {"name": "m2", "joints": {"j2": 80}, "rotor_inertia": 1e-4, "coulomb": 0.05},
+    ]
+    table = tmp_path / "geared.yaml"
+    table.write_text(yaml.safe_dump(doc))
+    log = simulate(tmp_path / "geared.csv", table, "--rotor", "--friction")
+    errors = {}
+    for flags, said in (
+        ([], "rotor inertia Ia (--rotor) and friction Fv, Fc (--friction)"),
+        (["--rotor"], "gives friction Fv, Fc (--friction) that this fit leaves out"),
+        (["--rotor", "--friction"], None),
+    ):
+        js = tmp_path / "id.json"
+        rc, out, err = run(["identify", table, log, *flags, "--json", js])
+        assert rc == 0, err
+        notes = [line for line in out.splitlines() if "that this fit leaves out" in line]
+        assert (said is None and not notes) or (len(notes) == 1 and said in notes[0]), notes
+        errors[len(flags)] = json.loads(js.read_text())["fit"]["overall_relative"]
+    assert errors[2] < 1e-3 < 0.01 < errors[0], errors
+    # a description without them: no note
+    table.write_text(TWO_FRAMES_YAML)
+    rc, out, err = run(["identify", table, log])
+    assert rc == 0 and "that this fit leaves out" not in out, err

@@ -303,7 +303,8 @@ def test_ik_command_aligns_long_joint_names(tmp_path, capsys):
     assert main([*args, "--format", "json"]) in (0, 1)
     q = json.loads(capsys.readouterr().out)["q"]
     main(args)
-    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("  ")]
+    out = capsys.readouterr().out.splitlines()
+    lines = [ln for ln in out if ln.startswith("  ") and not ln.startswith("  frame: ")]
     assert [ln.split()[0] for ln in lines] == ["a_rather_long_joint_name", "j2"]
     ends = {ln.index(" rad") if " rad" in ln else ln.index(" m") for ln in lines}
     assert len(ends) == 1, lines

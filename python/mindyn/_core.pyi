@@ -52,6 +52,10 @@ class Model:
         ...
     def regressor(self, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], dq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], ddq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], rotor: bool = False, friction: bool = False, offset: bool = False) -> numpy.typing.NDArray[numpy.float64]:
         ...
+    def with_drive_of(self, other: Model) -> Model:
+        """
+        A new model with the joints of this one and the transmissions, drive side and friction model of `other` (a model of as many joints); this one is unchanged.
+        """
     def with_drive_side(self, side: str) -> Model:
         """
         A new model whose rotor inertia and friction act on the motors ('motor') or on the joints ('joint'); this one is unchanged.

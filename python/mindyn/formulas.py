@@ -425,7 +425,7 @@ class _Geometry:
         (rad) for the joints in ``self.twists``."""
         robot = self.robot
         if self.convention == "urdf":
-            return self._build_urdf(values)
+            return self._with_drive(self._build_urdf(values))
         rows = self.rows.copy()
         for (k, s), v in zip(self.where, values):
             rows[k, s] = v
@@ -444,7 +444,17 @@ class _Geometry:
             geo = ", ".join(f"{key}: {float(v)!r}" for key, v in zip(keys, vals))
             theta = "" if self.convention == "dh" else f", theta: {float(rows[k, 3])!r}"
             lines.append(f"  - {{type: {robot.joint_types[k]}, {geo}{theta}}}")
-        return Robot(_core.parse_yaml("\n".join(lines) + "\n", "<symbolic geometry>"))
+        return self._with_drive(
+            Robot(_core.parse_yaml("\n".join(lines) + "\n", "<symbolic geometry>"))
+        )
+
+    def _with_drive(self, other: Robot) -> Robot:
+        """``other`` (the geometry at other lengths) with the description's transmissions, drive
+        side and friction model: with transmissions the rotor inertia and friction of a motor
+        reach the joints through its row of ``T``, which the regrouping coefficients hold."""
+        if self.robot.transmission is None:
+            return other
+        return Robot(other._m.with_drive_of(self.robot._m))
 
     def _build_urdf(self, values: np.ndarray) -> Robot:
         robot = self.robot
@@ -544,10 +554,12 @@ def _denominators(ns: int, nt: int) -> list[Poly]:
     return out
 
 
-def _rationalise(c: float) -> Number | None:
-    """A fitted monomial coefficient as a fraction, a rounded float, or None for zero."""
+def _rationalise(c: float, scale: float = 1.0) -> Number | None:
+    """A fitted monomial coefficient as a fraction, a rounded float, or None for zero: round-off
+    of the fit, at most :data:`FRACTION_TOLERANCE` of ``scale`` (the largest coefficient of its
+    entry, at least 1: a motor's ``r^2`` of 2e4 leaves fitted zeros of 1e-11 beside it)."""
     tol = FRACTION_TOLERANCE * max(1.0, abs(c))
-    if abs(c) <= tol:
+    if abs(c) <= FRACTION_TOLERANCE * max(1.0, scale):
         return None
     f = Fraction(c).limit_denominator(MAX_DENOMINATOR)
     if abs(float(f) - c) <= tol:
@@ -743,8 +755,9 @@ def symbolic_formulas(bp, *, seed: int = 20240607) -> SymbolicFormulas:
     for flat in np.flatnonzero(np.max(np.abs(C), axis=0) > FRACTION_TOLERANCE):
         b, c = divmod(int(flat), P)
         poly = []
+        scale = float(np.max(np.abs(C[:, flat])))
         for m, e in enumerate(exps):
-            v = _rationalise(float(C[m, flat]))
+            v = _rationalise(float(C[m, flat]), scale)
             if v is not None:
                 poly.append((e, v))
         for j in range(nt):

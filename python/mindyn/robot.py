@@ -712,6 +712,21 @@ class Robot:
     def third_friction(self, v) -> None:
         self._m.third_friction = _vector(v, self.n, "third_friction")
 
+    def drive_terms_given(self) -> list[str]:
+        """The kinds of rotor inertia and friction terms that the description gives a non-zero
+        value on some slot, in layout order (of ``Ia``, ``Fv``, ``Fc`` and the friction
+        model's third, ``Fa`` or ``Fs``); empty for a robot with joints of several degrees of
+        freedom, which has none."""
+        if not self._m.single_dof:
+            return []
+        names = self.parameter_names(rotor=True, friction=True)
+        values = self.parameters(rotor=True, friction=True)
+        inertial = set(self.parameter_names())
+        kinds = [
+            nm.rstrip("0123456789") for nm, v in zip(names, values) if v and nm not in inertial
+        ]
+        return list(dict.fromkeys(kinds))
+
     def parameter_names(
         self, *, rotor: bool = False, friction: bool = False, offset: bool = False
     ) -> list[str]:

@@ -243,6 +243,24 @@ PYBIND11_MODULE(_core, m) {
           py::arg("side"),
           "A new model whose rotor inertia and friction act on the motors ('motor') or on the "
           "joints ('joint'); this one is unchanged.")
+      .def(
+          "with_drive_of",
+          [](const PyModel& s, const PyModel& other) {
+            if (other.model.joints.size() != s.model.joints.size())
+              throw ModelError(s.model.name + " has " + std::to_string(s.model.joints.size()) +
+                               " joints, " + other.model.name + " " +
+                               std::to_string(other.model.joints.size()) +
+                               ": the transmissions of one do not fit the other");
+            Model copy = s.model;
+            copy.transmission = other.model.transmission;
+            copy.transmission.validate(copy.joints, copy.name);
+            copy.drive_terms_on_motors = other.model.drive_terms_on_motors;
+            copy.friction_model = other.model.friction_model;
+            return std::make_shared<PyModel>(std::move(copy));
+          },
+          py::arg("other"),
+          "A new model with the joints of this one and the transmissions, drive side and "
+          "friction model of `other` (a model of as many joints); this one is unchanged.")
       .def_property_readonly("friction_model",
                              [](const PyModel& s) {
                                const FrictionModel& f = s.model.friction_model;

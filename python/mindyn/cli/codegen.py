@@ -109,6 +109,12 @@ def register(subparsers) -> None:
         "velocity}, is the generated code's, else Coulomb), a JSON mapping, or 'NAME value' "
         "lines; default: the robot's own values",
     )
+    p.add_argument(
+        "--consistent",
+        action="store_true",
+        help="with --params an identification JSON: its consistent estimate (identify "
+        "--consistent; every base parameter, none pruned) instead of the unconstrained one",
+    )
     method_help = (
         "how the base parameters are found, as 'mindyn base --method': the exact projection "
         "method, the exact recursive method, or the numerical method (sampled regressor + QR); "
@@ -233,6 +239,8 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     for note in (drive_note, friction_note):
         if note:
             print(note)
+    if args.consistent and not args.params:
+        raise UsageError("--consistent: takes the consistent estimate of --params FILE: give it")
     params, pruned, threshold = (
         _identified_params(args.params, robot, base, args) if args.params else (None, [], "")
     )

@@ -4,16 +4,33 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 from .._core import ArgumentError, ModelError
 
 
-def _params_note(n: int, path: str, pruned: list[str], threshold: str) -> str:
-    """The line saying which identified values the generated code takes."""
+def _params_note(n: int, path: str, pruned: list[str], threshold: str | None) -> str:
+    """The line saying which identified values the generated code takes (``threshold`` None:
+    the consistent estimate, which prunes nothing)."""
+    if threshold is None:
+        return f"parameters: the consistent estimate of {path}, all {n} base values"
     return (
         f"parameters: {n - len(pruned)} identified values from {path}; "
         f"{len(pruned)} pruned in identification (relative standard deviation above "
         f"{threshold}) taken as zero" + (f": {', '.join(pruned)}" if pruned else "")
+    ) + (
+        " (the unconstrained estimate; the file's consistent estimate: --consistent)"
+        if _has_consistent(path)
+        else ""
     )
+
+
+def _has_consistent(path: str) -> bool:
+    """Whether the identification JSON ``path`` holds a consistent estimate."""
+    from ..identification.data import read_json
+
+    doc = read_json(path)
+    return isinstance(doc, dict) and isinstance(doc.get("consistent_estimate"), dict)
 
 
 def _with_friction_model(robot, args):
@@ -68,4 +85,18 @@ def _identified_params(path: str, robot, base, args):
     identified = read_identified_parameters(
         path, base.names, robot=robot, rotor=args.rotor, friction=args.friction, offset=args.offset
     )
-    return identified if identified is not None else (None, [], "")
+    if not args.consistent:
+        return identified if identified is not None else (None, [], "")
+    if identified is None:
+        raise ArgumentError(f"--consistent: {path} is not the JSON of 'mindyn identify --json'")
+    from ..identification.prediction import identified_model
+
+    own, values, _ = identified_model(path, robot, estimate="consistent")
+    by_name = dict(zip(own.names, values))
+    missing = [k for k in base.names if k not in by_name]
+    if missing:
+        raise ModelError(
+            f"--consistent: the base set of this command ({', '.join(missing[:5])}) is not the "
+            f"one {path} was identified in; generate with the identification's --method"
+        )
+    return np.array([by_name[k] for k in base.names]), [], None

@@ -108,9 +108,9 @@ def cmd_track(args: argparse.Namespace) -> int:
         pe = s["parameter_error_norm"]
         lines.append(f"parameter error |p_hat - p|: {pe[0]:.4g} at t = 0, {pe[-1]:.4g} at the end")
     if args.output:
-        from ..identification.data import truth_path
+        from ..identification.data import link_frames, truth_path
 
-        path = result.save(args.output, robot_name=robot.name)
+        path = result.save(args.output, robot_name=robot.name, link_frames=link_frames(robot))
         lines.append(
             f"log: {path} ({result.t.size} samples: t, q, dq, tau in N m) and {truth_path(path)}"
         )
@@ -156,8 +156,10 @@ def cmd_ik(args: argparse.Namespace) -> int:
         max_time=args.timeout,
         seed=args.seed,
     )
+    frame = _tool_frame_words(robot)
     doc = {
         "robot": robot.name,
+        "frame": frame,
         "success": r.success,
         "status": r.status,
         "q": r.q.tolist(),
@@ -180,6 +182,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
             f"{robot.name}: {r.status} ({r.error_text()}; {r.iterations} iterations, "
             f"{r.attempts} attempt{'s' if r.attempts != 1 else ''})"
         )
+        print(f"  frame: {frame}")
         width = max([16, *map(len, robot.joint_names)])
         for k in range(robot.n):
             unit = "rad" if robot.joint_types[k] == "revolute" else "m  "
@@ -193,6 +196,22 @@ def cmd_ik(args: argparse.Namespace) -> int:
         )
         return 1
     return 0
+
+
+def _tool_frame_words(robot) -> str:
+    """The frame whose pose ``ik`` solves for, in words: the last link's frame moved by the
+    description's tool offset (a URDF's fixed links after the last moving one are not part of
+    it unless the chain is loaded to one of them with ``--tip``)."""
+    last = robot.link_names[-1]
+    xyz = np.asarray(robot.tool)[:3, 3]
+    if np.allclose(robot.tool, np.eye(4), rtol=0.0, atol=0.0):
+        where = f"the frame of link '{last}', the last moving link"
+    else:
+        offset = " ".join(f"{v:.6g}" for v in xyz)
+        where = f"the tool frame: link '{last}' moved by the tool offset (xyz {offset} m)"
+    if robot.convention == "urdf" and where.startswith("the frame"):
+        where += " (a fixed link after it: --tip LINK)"
+    return where
 
 
 def register(sub) -> None:

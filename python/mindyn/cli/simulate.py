@@ -83,15 +83,25 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         )
     else:
         log = simulate_inverse(robot, ref, **kwargs)
-    path = log.save(args.output, robot_name=robot.name, joint_names=robot.joint_names)
+    from ..identification.data import link_frames
+
+    path = log.save(
+        args.output,
+        robot_name=robot.name,
+        joint_names=robot.joint_names,
+        link_frames=link_frames(robot),
+    )
     if args.torque_unit == "permille":
         scale, _ = convert_torque(np.ones((1, robot.n)), "permille", robot)
         write_csv(path, log.t, log.q, log.tau / scale, dq=log.dq, torque_unit="permille")
     info = log.info
+    given = robot.drive_terms_given()
+    none = " (zero in the description: no effect)"
+    rotor = f"on{'' if 'Ia' in given else none}" if args.rotor else "off"
+    friction = f"on{'' if set(given) - {'Ia'} else none}" if args.friction else "off"
     print(
         f"{robot.name}: {info['mode']} simulation, {log.t.shape[0]} samples at {rate:g} Hz "
-        f"({info['duration_s']:g} s), rotor inertia {'on' if args.rotor else 'off'}, "
-        f"friction {'on' if args.friction else 'off'}"
+        f"({info['duration_s']:g} s), rotor inertia {rotor}, friction {friction}"
         + (f", {side}" if (side := drive_side_words(robot, args)) else "")
     )
     print(f"  reference: {ref_text}")

@@ -463,11 +463,13 @@ class SimulationResult:
         """``q - q_d`` at the last sample, degrees."""
         return np.degrees(self.error[-1])
 
-    def save(self, path, *, robot_name: str = "", joint_names=None) -> Path:
+    def save(self, path, *, robot_name: str = "", joint_names=None, link_frames=None) -> Path:
         """Writes ``t, q, dq, tau`` (the logged values, torques in N m) to ``path`` as
         ``mindyn identify`` reads it and the true parameters and settings to the sidecar
         ``<stem>.truth.json``, with the robot's name and ``joint_names`` (when given), by which
-        ``mindyn identify`` refuses the log for another robot."""
+        ``mindyn identify`` refuses the log for another robot, and ``link_frames``
+        (:func:`mindyn.identification.data.link_frames`, when given), the frames the classical
+        values are about, by which it compares them only with a description of those frames."""
         # imported here: the identification package (and scipy.signal) is not needed to simulate
         from ..identification.data import truth_path, write_csv
 
@@ -476,6 +478,7 @@ class SimulationResult:
         truth = {
             "robot": robot_name,
             **({} if joint_names is None else {"joints": list(joint_names)}),
+            **({} if link_frames is None else {"link_frames": link_frames}),
             "names": self.param_names,
             "values": [float(v) for v in self.params],
             "simulation": self.info,

@@ -58,7 +58,9 @@ from .estimation import (
     IdentificationResult,
     _logs,
     _Reduced,
+    correlation_factor,
     identify,
+    joint_weights,
     noise_variance_factor,
     predicted_torques,
     regressor_rows,
@@ -808,8 +810,11 @@ class PayloadResult:
     """Inertial parameters of a payload fixed to the last link, about the last link frame's
     origin and in its frame (``XX XY XZ YY YZ ZZ MX MY MZ M``).
 
-    ``values``, ``std``: the unconstrained least-squares estimate and its standard deviations
-    (``s^2 (A^T A)^-1``, ``s^2`` the residual variance); ``covariance`` (10, 10). ``consistent``:
+    ``values``, ``std``: the unconstrained (weighted) least-squares estimate and its standard
+    deviations (``f s^2 (A^T A)^-1`` of the weighted rows, ``s^2`` their residual variance, ``f``
+    the correlation factor of low-passed logs; ``std_rule`` says which); ``covariance``
+    (10, 10); ``sigma`` the first OLS pass's residual standard deviation, ``joint_sigma`` per
+    joint. ``consistent``:
     the estimate with the payload's pseudo-inertia positive semidefinite (or None). ``derived`` /
     ``consistent_derived``: mass, centre of mass, inertia about the centre of mass, with standard
     deviations by first-order propagation for the unconstrained one."""
@@ -829,6 +834,10 @@ class PayloadResult:
     solver: str | None = None
     status: str | None = None
     seconds: float = 0.0
+    #: The per-joint residual standard deviations of the first OLS pass (n,), whose inverses
+    #: weight the joints' equations, and how the standard deviations were formed.
+    joint_sigma: np.ndarray | None = None
+    std_rule: str = ""
 
     def derived(self, *, consistent: bool = False) -> dict:
         if consistent:
@@ -858,7 +867,9 @@ class PayloadResult:
             "names": list(self.names),
             "values": self.values.tolist(),
             "std": self.std.tolist(),
+            "std_rule": self.std_rule,
             "sigma": self.sigma,
+            "joint_sigma": None if self.joint_sigma is None else self.joint_sigma.tolist(),
             "rows": self.rows,
             "rank": self.rank,
             "condition_number_scaled": self.cond,
@@ -973,8 +984,11 @@ def identify_payload(
     """Inertial parameters of a payload rigidly fixed to the last link, from logs ``data`` with
     the payload and the identified ``arm`` (JSON of ``mindyn identify`` as a dict or path: its
     base values, or its ``classical`` map when present; friction, rotor inertia and offsets as
-    identified; a ``robot`` given by name is loaded with the JSON's ``tip``). Ordinary least
-    squares on ``tau - tau_arm = W_last phi`` (all joints' equations;
+    identified; a ``robot`` given by name is loaded with the JSON's ``tip``). Least squares on
+    ``tau - tau_arm = W_last phi``, weighted as identify's dynamic fit (per-joint ``1 / sigma_j``
+    from a first OLS pass; the standard deviations inflated by
+    :func:`~mindyn.identification.estimation.correlation_factor` for low-passed logs) (all
+    joints' equations;
     with arm friction, equations of joints slower than ``min_velocity`` left out as in
     :func:`~mindyn.identification.identify`), and with ``consistent`` the estimate under a
     positive semidefinite payload pseudo-inertia (cvxpy, Clarabel).
@@ -1000,7 +1014,7 @@ def identify_payload(
     logs = _logs(data)
     last = _LastLink(robot)
     names = [f"{k}{robot.n}" for k in INERTIAL]
-    rows_A, rows_y = [], []
+    rows_A, rows_y, rows_j, log_rows = [], [], [], []
     for d in logs:
         require_torque(d)
         if d.n != robot.n:
@@ -1016,18 +1030,31 @@ def identify_payload(
         )
         r = (d.tau - tau_arm).reshape(-1)
         A = Wl.reshape(-1, 10)
+        joint = np.tile(np.arange(robot.n), d.m)
         keep = moving_equations(base, d.dq, min_velocity)
         if keep is not None:
             keep = keep.reshape(-1)
-            A, r = A[keep], r[keep]
+            A, r, joint = A[keep], r[keep], joint[keep]
         rows_A.append(A)
         rows_y.append(r)
-    A, y = np.vstack(rows_A), np.concatenate(rows_y)
+        rows_j.append(joint)
+        log_rows.append(len(r))
+    A, y, joint = np.vstack(rows_A), np.concatenate(rows_y), np.concatenate(rows_j)
     if A.shape[0] < 10 + 30:
         raise IdentificationError(
             f"{len(y)} equations for the 10 payload parameters; at least 40 are needed"
         )
-    ls = _Reduced(A, y)
+    # weighted least squares as identify's dynamic fit: per-joint 1 / sigma_j from the
+    # residuals of a first OLS pass (the joints' torque noise differs by orders of magnitude),
+    # the variances inflated for the low-passed noise's correlation between samples
+    p0, *_ = np.linalg.lstsq(A, y, rcond=None)
+    e2 = (y - A @ p0) ** 2
+    counts = np.bincount(joint, minlength=robot.n)
+    dof = max((len(y) - 10) / len(y), 1e-12)
+    joint_sigma = np.sqrt(np.bincount(joint, e2, robot.n) / np.maximum(counts, 1) / dof)
+    w = joint_weights(joint_sigma)[joint]
+    ls = _Reduced(A * w[:, None], y * w)
+    inflation, inflation_rule = correlation_factor(logs, log_rows)
     rank, piv, cond = ls.rank(rank_tolerance)
     if rank < 10:
         N = sla.null_space(ls.R, rcond=rank_tolerance)  # scaled coordinates
@@ -1045,9 +1072,9 @@ def identify_payload(
             + "; ".join(combos)
             + "); the joint axes' symmetry or the motion leaves them unobservable"
         )
-    p, std, s2 = ls.solve(list(range(10)))
+    p, std, s2 = ls.solve(list(range(10)), inflation=inflation)
     Rinv = sla.solve_triangular(ls.R, np.eye(10))
-    cov = s2 * (Rinv @ Rinv.T) / np.outer(ls.norms, ls.norms)
+    cov = s2 * inflation * (Rinv @ Rinv.T) / np.outer(ls.norms, ls.norms)
     min_eig = float(np.linalg.eigvalsh(pseudo_inertia(p))[0])
     phi_c, solver, status, cmin = None, None, None, None
     if consistent:
@@ -1064,7 +1091,10 @@ def identify_payload(
         values=p,
         std=std,
         covariance=cov,
-        sigma=math.sqrt(s2),
+        sigma=math.sqrt(float(e2.sum()) / max(len(y) - 10, 1)),
+        joint_sigma=joint_sigma,
+        std_rule="weighted least squares, per-joint 1/sigma_j from a first OLS pass; "
+        + inflation_rule,
         rows=ls.r,
         rank=rank,
         cond=cond,

@@ -906,6 +906,46 @@ def read_truth(csv_path, robot=None) -> dict | None:
     return d
 
 
+#: How far (m, and rad through the rotation's entries) a link frame at q = 0 of a truth sidecar
+#: may sit from the identified description's before its classical values are taken as another
+#: frame's: above the rounding of right angles a CAD export writes (3e-8).
+LINK_FRAME_TOLERANCE = 1e-6
+
+
+def link_frames(robot) -> list[list[float]] | None:
+    """Each link's frame at q = 0 in the base frame, the top three rows of its pose row by row
+    (12 numbers): the frames a truth sidecar's classical values are about. None for a robot
+    with joints of several degrees of freedom (no zero configuration of the same meaning)."""
+    if not robot.single_dof:
+        return None
+    q = np.zeros(robot.nq)
+    return [[float(v) for v in np.asarray(robot.fk(q, link=k))[:3].ravel()] for k in range(robot.n)]
+
+
+def other_link_frames(doc: dict, robot) -> str | None:
+    """Why the classical values of a truth sidecar ``doc`` are about other link frames than
+    ``robot``'s (a description of the same robot and joints written with other frames, such as
+    a URDF and a DH table of one arm), or None when they are its own or ``doc`` does not say."""
+    frames = doc.get("link_frames")
+    ours = link_frames(robot)
+    if frames is None or ours is None:
+        return None
+    try:
+        theirs = np.asarray(frames, dtype=float)
+    except (TypeError, ValueError):
+        theirs = None
+    if theirs is None or theirs.shape != (robot.n, 12) or not np.all(np.isfinite(theirs)):
+        return f"its link_frames are not {robot.n} frames of 12 finite numbers"
+    gap = np.max(np.abs(theirs - np.asarray(ours)), axis=1)
+    if not np.any(gap > LINK_FRAME_TOLERANCE):
+        return None
+    k = int(np.argmax(gap > LINK_FRAME_TOLERANCE))
+    return (
+        f"the simulated description's frame of link '{robot.link_names[k + 1]}' at q = 0 is "
+        f"off this description's by {gap[k]:.3g} (m, or rotation entries)"
+    )
+
+
 def check_log_robot(doc: dict, robot, where: str) -> None:
     """Refuses a document (a truth sidecar, an identification JSON) whose ``robot`` name or
     ``joints`` names differ from ``robot``'s; either field may be absent (or an empty name)."""

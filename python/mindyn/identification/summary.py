@@ -128,7 +128,8 @@ class IdentificationReport:
     ``consistent_fit``, ``consistent_validation`` those of the consistent estimate;
     ``mass_matrix_min_eig``: the smallest eigenvalue of the consistent model's mass matrix over
     the fit logs; ``truth``: the true base values when the logs are simulated; ``truth_side``:
-    the drive side of a simulation whose true values cannot be compared; ``tip``: the chain
+    the drive side of a simulation whose true values cannot be compared; ``truth_frames``: why
+    a simulation's true values, about other link frames, are not compared; ``tip``: the chain
     identified."""
 
     robot: Robot
@@ -150,6 +151,7 @@ class IdentificationReport:
     truth: np.ndarray | None
     truth_side: str | None
     tip: str | None = None
+    truth_frames: str | None = None
 
     def format(self) -> str:
         """The terminal text of ``mindyn identify``."""

@@ -50,6 +50,8 @@ def format_payload(res, robot, files: list, identification: str, tip_note: str =
         f"number {res.cond:.3g}; arm torques from the {res.arm_values} of {identification}",
         "  parameters about the last link frame's origin, in its frame (least squares):",
     ]
+    if res.std_rule:
+        out.insert(1, f"  fit and standard deviations: {res.std_rule}")
     for nm, v, sd in zip(res.names, res.values, res.std):
         out.append(f"    {nm:<6} {v:12.5g} +- {sd:.3g}")
     out.append(

@@ -160,6 +160,20 @@ def _settings(report) -> list[str]:
     return out
 
 
+def _drive_terms_left_out(report) -> str:
+    """The rotor inertia and friction that the robot's description gives (non-zero) and the
+    fit leaves out, in words with the options that fit them ("" when none)."""
+    base = report.base
+    given = report.robot.drive_terms_given()
+    words = []
+    if not base.rotor and "Ia" in given:
+        words.append("rotor inertia Ia (--rotor)")
+    friction = [k for k in given if k != "Ia"]
+    if not base.friction and friction:
+        words.append(f"friction {', '.join(friction)} (--friction)")
+    return " and ".join(words)
+
+
 def _kept(report) -> list[str]:
     """Parameters kept, the truth compared, the friction model, the fit's warnings."""
     res, base = report.result, report.base
@@ -183,6 +197,18 @@ def _kept(report) -> list[str]:
             f"  note: the log was simulated with rotor inertia and friction on the "
             f"{report.truth_side}s, this fit has them on the {report.robot.drive_side}s: its "
             "true values are not compared"
+        )
+    left = _drive_terms_left_out(report)
+    if left:
+        out.append(
+            f"  note: the description gives {left} that this fit leaves out: the kept "
+            "parameters take up their torques (a large torque error and many parameters "
+            "removed can come from that)"
+        )
+    if report.truth_frames:
+        out.append(
+            f"  note: {report.truth_frames}: the log's true values are about other link frames "
+            "(another description of the robot), not compared"
         )
     if base.friction:
         out += report.friction_lines

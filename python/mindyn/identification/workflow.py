@@ -80,19 +80,24 @@ def _as_logs(logs, model: str, robot) -> Logs:
 
 
 def _truth(robot, base, logs: Logs, options: IdentifyOptions):
-    """The true base values when every fit log is simulated with the same truth, and the drive
-    side of a truth that cannot be compared (its rotor and friction values another side's)."""
+    """The true base values when every fit log is simulated with the same truth, the drive
+    side of a truth that cannot be compared (its rotor and friction values another side's),
+    and why a truth about other link frames is not compared (None when it is)."""
+    from .data import other_link_frames
     from .validation import true_base_values
 
     docs = logs.truth
     doc = docs[0] if docs and all(d == docs[0] for d in docs) else None
     side = None
+    frames = other_link_frames(doc, robot) if doc else None
+    if frames:
+        return None, None, frames
     if doc and (options.rotor or options.friction):
         sim = doc.get("simulation")
         logged = sim.get("drive_side", "joint") if isinstance(sim, dict) else "joint"
         if logged != robot.drive_side:  # its Ia/Fv/Fc are another side's: nothing to compare
             doc, side = None, logged
-    return (true_base_values(base, doc) if doc else None), side
+    return (true_base_values(base, doc) if doc else None), side, None
 
 
 def _friction(robot, data: list, options: IdentifyOptions, progress):
@@ -218,7 +223,7 @@ def run(
     val = validate(res, vdata) if vdata else None
     cfit = validate(cons, data) if cons is not None else None
     cval = validate(cons, vdata) if cons is not None and vdata else None
-    truth, side = _truth(robot, base, logs, opts)
+    truth, side, frames = _truth(robot, base, logs, opts)
     return IdentificationReport(
         robot=robot,
         options=opts,
@@ -238,5 +243,6 @@ def run(
         mass_matrix_min_eig=low,
         truth=truth,
         truth_side=side,
+        truth_frames=frames,
         tip=tip,
     )
