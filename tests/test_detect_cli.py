@@ -70,6 +70,8 @@ def test_calibrate_then_detect_the_injected_torque(files):
     )
     assert rc == 0, err
     assert "wrote" in out and json.loads(thr.read_text())["robot"] == "puma560"
+    # the default quantile, 1, is the largest |r|, and the line says so
+    assert "1.5 x the largest |r|" in out and "quantile" not in out, out
     rc, out, err = run(
         [
             "detect",

@@ -127,7 +127,13 @@ def cmd_detect(args: argparse.Namespace) -> int:
         )
         path = out.write(args.calibrate)
         print(
-            f"  thresholds = {args.margin:g} x the {args.quantile:g} quantile of |r| "
+            f"  thresholds = {args.margin:g} x "
+            + (
+                "the largest |r|"
+                if args.quantile == 1
+                else f"the {args.quantile:g} quantile of |r|"
+            )
+            + " "
             "(this log taken as collision-free)"
             + (f", at least {args.model_sigma:g} sigma" if args.model_sigma else "")
             + ": "
