@@ -167,10 +167,10 @@ def _drive_terms_left_out(report) -> str:
     given = report.robot.drive_terms_given()
     words = []
     if not base.rotor and "Ia" in given:
-        words.append("rotor inertia Ia (--rotor)")
+        words.append("rotor inertia Ia (rotor=True)")
     friction = [k for k in given if k != "Ia"]
     if not base.friction and friction:
-        words.append(f"friction {', '.join(friction)} (--friction)")
+        words.append(f"friction {', '.join(friction)} (friction=True)")
     return " and ".join(words)
 
 
