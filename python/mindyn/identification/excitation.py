@@ -424,6 +424,12 @@ def excitation_limits(
         prism, FALLBACK["acceleration"][1], FALLBACK["acceleration"][0]
     )
     record: dict = {"share": effort_share, "configurations": 0}
+    if given.any():
+        notes.append(
+            f"acceleration limits of joints {_joint_list(given)} from the "
+            f"{'overrides' if source[0] == 'override' else 'description'} less the "
+            f"{100 * margin:g} % margin: {_values(acc[given])}"
+        )
     if not given.all() and robot.single_dof:
         # Bernstein's inequality: a Fourier series of N harmonics of f whose velocity stays
         # within V has accelerations within 2 pi f N V.
