@@ -253,8 +253,34 @@ EFFORT_CONFIGURATIONS = 64
 def _drive_torques(robot: Robot, q, dq, ddq, *, rotor: bool, friction: bool) -> np.ndarray:
     """Inverse-dynamics torques, shape (m, n), with the robot's rotor inertia and friction when
     asked (on its :attr:`~mindyn.robot.Robot.drive_side`)."""
-    W = robot.regressor(q, dq, ddq, rotor=rotor, friction=friction)
-    return W @ robot.parameters(rotor=rotor, friction=friction)
+    p = robot.parameters(rotor=rotor, friction=friction)
+    q, dq, ddq = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, dq, ddq))
+    step = max(1, 2_000_000 // (robot.n * p.size))  # rows per block: at most ~16 MB of W
+    blocks = [
+        robot.regressor(
+            q[i : i + step], dq[i : i + step], ddq[i : i + step], rotor=rotor, friction=friction
+        )
+        @ p
+        for i in range(0, q.shape[0], step)
+    ]
+    return np.concatenate(blocks)
+
+
+def _mass_matrices(robot: Robot, q: np.ndarray, *, rotor: bool) -> np.ndarray:
+    """``M(q)``, shape (m, n, n), with the rotor inertia ``sum_k Ia_k t_k^T t_k`` when asked
+    (``t_k`` the rows of :attr:`~mindyn.robot.Robot.drive_matrix`)."""
+    M = robot.mass_matrix(q)
+    if rotor:
+        names = robot.parameter_names(rotor=True)
+        p = robot.parameters(rotor=True)
+        D = np.asarray(robot.drive_matrix, dtype=float)
+        ia = np.zeros(D.shape[0])
+        for i, name in enumerate(names):
+            m = re.fullmatch(r"Ia(\d+)", name)
+            if m and int(m[1]) <= D.shape[0]:
+                ia[int(m[1]) - 1] = p[i]
+        M = M + (D.T * ia) @ D
+    return M
 
 
 def effort_acceleration_limits(
@@ -311,17 +337,8 @@ def effort_acceleration_limits(
     S = configurations
     q = lower + (upper - lower) * rng.uniform(size=(S, n))
     dq = velocity * rng.choice([-1.0, 1.0], size=(S, n))
-    # h(q, v), and the columns of M(q) as the torques of unit accelerations less gravity.
-    Q = np.repeat(q, n + 1, axis=0)
-    DQ = np.zeros_like(Q)
-    DQ[:: n + 1] = dq
-    DDQ = np.zeros_like(Q)
-    for j in range(n):
-        DDQ[j + 1 :: n + 1, j] = 1.0
-    tau = _drive_torques(robot, Q, DQ, DDQ, rotor=rotor, friction=friction).reshape(S, n + 1, n)
-    h = tau[:, 0, :]
-    g = _drive_torques(robot, q, np.zeros_like(q), np.zeros_like(q), rotor=rotor, friction=False)
-    M = np.transpose(tau[:, 1:, :] - g[:, None, :], (0, 2, 1))  # M[s, k, j]
+    h = _drive_torques(robot, q, dq, np.zeros_like(q), rotor=rotor, friction=friction)
+    M = _mass_matrices(robot, q, rotor=rotor)  # M[s, k, j]
     diag = np.einsum("skk->sk", M)
     budget = share * effort - np.abs(h)  # (S, n)
     ok = np.isfinite(effort) & (effort > 0) & ~np.isfinite(fixed)
