@@ -10,7 +10,7 @@ import mindyn
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import ROBOTS_DIR
+from conftest import ROBOTS_DIR, pinocchio_model
 from mindyn import cli
 from mindyn.identification.data import read_csv
 from mindyn.identification.excitation import effort_acceleration_limits, excitation_limits
@@ -52,16 +52,19 @@ def heavy_arm(tmp_path, e1=15.0):
     return path
 
 
-def pinocchio_rule(urdf, q, dq, share, effort, bound):
-    """The rule of effort_acceleration_limits written out with Pinocchio's crba and rnea."""
-    model = pin.buildModelFromUrdf(str(urdf))
+def pinocchio_rule(model, q, dq, share, effort, bound, rotor=0.0, friction=None):
+    """The rule of effort_acceleration_limits written out with Pinocchio's crba and rnea (a
+    model or a URDF path); ``rotor`` joint-side rotor inertias, ``friction(v)`` torques."""
+    if not isinstance(model, pin.Model):
+        model = pin.buildModelFromUrdf(str(model))
     data = model.createData()
     n = model.nv
     A = np.full(n, np.inf)
     for qs, vs in zip(q, dq):
         M = pin.crba(model, data, qs).copy()
-        M = np.triu(M) + np.triu(M, 1).T
+        M = np.triu(M) + np.triu(M, 1).T + np.diag(np.broadcast_to(rotor, (n,)))
         h = pin.rnea(model, data, qs, vs, np.zeros(n)).copy()
+        h += 0.0 if friction is None else friction(vs)
         for k in range(n):
             others = sum(abs(M[k, j]) * bound[j] for j in range(n) if j != k)
             A[k] = min(A[k], (share * effort[k] - abs(h[k]) - others) / M[k, k])
@@ -106,6 +109,31 @@ def test_derived_acceleration_limits_match_pinocchio(name, tmp_path):
             a = np.minimum(rule["acceleration"], bound) * rng.choice([-1.0, 1.0], size=n)
             tau = pin.rnea(model, data, qs, vs, a)
             assert (np.abs(tau) <= 0.8 * lim["effort"] * (1 + 1e-9)).all()
+
+
+def test_rotor_inertia_and_friction_count_when_asked():
+    """ZCR07S (rotor inertia, viscous and Coulomb friction on the joints), its given
+    acceleration limits set aside: the rule with both terms, against Pinocchio plus them."""
+    robot = mindyn.load("zcr07s")
+    lim, n = robot.limits, robot.n
+    kw = dict(lower=lim["lower"], upper=lim["upper"], velocity=lim["velocity"], share=0.8)
+    kw.update(fixed=np.full(n, np.nan), fallback=np.full(n, 6.0), reach=np.full(n, 20.0))
+    plain = effort_acceleration_limits(robot, **kw)
+    rule = effort_acceleration_limits(robot, rotor=True, friction=True, **kw)
+    model = pinocchio_model(robot)
+    terms = dict(
+        rotor=robot.rotor_inertia,
+        friction=lambda v: robot.viscous * v + robot.coulomb * np.sign(v),
+    )
+    isolated = pinocchio_rule(
+        model, rule["q"], rule["dq"], 0.8, lim["effort"], 0 * lim["effort"], **terms
+    )
+    np.testing.assert_allclose(rule["isolated"], isolated, rtol=1e-8)
+    expected = pinocchio_rule(
+        model, rule["q"], rule["dq"], 0.8, lim["effort"], np.minimum(isolated, 20.0), **terms
+    )
+    np.testing.assert_allclose(rule["acceleration"], expected, rtol=1e-8)
+    assert (rule["acceleration"] < plain["acceleration"]).all()  # the terms cost torque
 
 
 def test_heavy_arm_trajectory_stays_within_its_effort_limits(tmp_path, capsys):
