@@ -35,7 +35,7 @@ HEAVY_ARM = """<?xml version="1.0"?>
     <limit lower="-2.5" upper="2.5" velocity="0.5" effort="{e1}"/></joint>
   <joint name="j2" type="revolute"><parent link="turret"/><child link="upper"/>
     <origin xyz="0 0 0.4"/><axis xyz="0 1 0"/>
-    <limit lower="-1.5" upper="1.5" velocity="0.5" effort="300"/></joint>
+    <limit lower="-1.5" upper="1.5" velocity="0.5" effort="{e2}"/></joint>
   <joint name="j3" type="revolute"><parent link="upper"/><child link="fore"/>
     <origin xyz="0.8 0 0"/><axis xyz="0 1 0"/>
     <limit lower="-2" upper="2" velocity="0.5" effort="80"/></joint>
@@ -43,12 +43,12 @@ HEAVY_ARM = """<?xml version="1.0"?>
 """
 
 
-def heavy_arm(tmp_path, e1=15.0):
+def heavy_arm(tmp_path, e1=15.0, e2=300.0):
     """A 35-kg arm whose base joint has a small effort limit for its inertia (8-9 kg m^2
     outstretched): 15 N m give it about 1.4 rad/s^2; the optimiser asked it for 20 N m within
     the fixed 6 rad/s^2."""
     path = tmp_path / "heavy_arm.urdf"
-    path.write_text(HEAVY_ARM.format(e1=e1))
+    path.write_text(HEAVY_ARM.format(e1=e1, e2=e2))
     return path
 
 
@@ -174,3 +174,35 @@ def test_fallback_is_stated_without_effort_limits(tmp_path, capsys):
     assert "joints 1-3: the fixed fallback" in printed and "per joint: -, -, -" in printed
     assert doc["acceleration_rule"]["source"] == ["fallback"] * 3
     assert doc["peak_torque"]["share"] == [None] * 3
+
+
+def test_a_joint_its_gravity_saturates_falls_back_and_says_why(tmp_path):
+    """With 100 N m at the shoulder, which holds up to 98 N m of gravity, no acceleration limit
+    fits within 80 % of it: the fallback is used and the note gives the shares."""
+    urdf = heavy_arm(tmp_path, e2=100.0)
+    robot = mindyn.load(urdf)
+    lim, notes = excitation_limits(robot, margin=0.05)
+    assert list(lim["acceleration_source"]) == ["effort", "fallback", "effort"]
+    assert lim["acceleration"][1] == pytest.approx(5.7)
+    (line,) = [x for x in notes if x.startswith("joint 2:")]
+    assert "gravity and velocity terms alone reach" in line
+    src = robot.limits
+    rule = effort_acceleration_limits(
+        robot,
+        lower=lim["lower"],
+        upper=lim["upper"],
+        velocity=lim["velocity"],
+        fixed=np.full(3, np.nan),
+        fallback=np.full(3, 5.7),
+        share=0.8,
+    )
+    model = pin.buildModelFromUrdf(str(urdf))
+    data = model.createData()
+    h = np.array(
+        [pin.rnea(model, data, q, v, np.zeros(3)).copy() for q, v in zip(rule["q"], rule["dq"])]
+    )
+    g = np.array([pin.computeGeneralizedGravity(model, data, q).copy() for q in rule["q"]])
+    np.testing.assert_allclose(rule["held"], np.abs(h).max(0) / src["effort"], rtol=1e-9)
+    np.testing.assert_allclose(rule["gravity"], np.abs(g).max(0) / src["effort"], rtol=1e-9)
+    assert f"(gravity alone {100 * rule['gravity'][1]:.0f} %)" in line
+    assert rule["saturated"] == [1]

@@ -319,7 +319,8 @@ def effort_acceleration_limits(
     ``acceleration`` (n,) (NaN where none can be derived: a ``fixed`` joint, no positive effort
     limit, or ``|h_k|`` plus the coupling reaching ``share E_k``), ``isolated`` (n,), ``bound``
     (the ``U``), ``share``, ``effort``, ``q`` and ``dq`` (the samples, (S, n)) and
-    ``saturated`` (joints whose ``|h_k|`` alone reaches ``share E_k``)."""
+    ``saturated`` (joints whose ``|h_k|`` alone reaches ``share E_k``) with ``held``, the
+    largest ``|h_k| / E_k`` and ``gravity``, the largest ``|g_k(q_s)| / E_k`` per joint."""
     _args.instance(robot, "robot", Robot)
     n = robot.n
     lower = _args.array(lower, "lower", (n,))
@@ -361,6 +362,8 @@ def effort_acceleration_limits(
         "q": q,
         "dq": dq,
         "saturated": saturated,
+        "held": np.max(np.abs(h), axis=0) / effort,
+        "gravity": np.max(np.abs(robot.gravity_torque(q)), axis=0) / effort,
     }
 
 
@@ -480,11 +483,22 @@ def excitation_limits(
                 f"{EFFORT_CONFIGURATIONS} configurations within the position limits, "
                 "velocities at their limits)"
             )
-        for k in rule["saturated"]:
+        for k in np.flatnonzero(~derived & ~given & (rule["effort"] > 0)):
+            if k in rule["saturated"]:
+                why = (
+                    f"gravity and velocity terms alone reach {100 * rule['held'][k]:.0f} % of "
+                    f"its effort limit {rule['effort'][k]:g} (gravity alone "
+                    f"{100 * rule['gravity'][k]:.0f} %)"
+                )
+            else:
+                why = (
+                    "gravity, velocity terms and the other joints' accelerations leave no "
+                    f"torque within {100 * effort_share:g} % of its effort limit "
+                    f"{rule['effort'][k]:g}"
+                )
             notes.append(
-                f"joint {k + 1}: gravity and velocity terms alone exceed "
-                f"{100 * effort_share:g} % of its effort limit {rule['effort'][k]:g} at a "
-                "sampled configuration; no acceleration limit can be derived from it"
+                f"joint {k + 1}: {why} at a sampled configuration; no acceleration limit can "
+                "be derived from it"
             )
     missing = ~np.isfinite(acc)
     if missing.any():
