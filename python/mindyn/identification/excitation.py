@@ -329,6 +329,21 @@ def effort_acceleration_limits(
     fixed = _args.array(fixed, "fixed", (n,), finite=False)
     fallback = _args.array(fallback, "fallback", (n,))
     reach = np.full(n, np.inf) if reach is None else _args.array(reach, "reach", (n,))
+    for name, v in (
+        ("velocity", velocity),
+        ("fixed", fixed),
+        ("fallback", fallback),
+        ("reach", reach),
+    ):
+        bad = np.flatnonzero(v <= 0)
+        if bad.size:
+            raise ArgumentError(
+                f"{name} of joint {bad[0] + 1} is {v[bad[0]]:g}; expected a positive limit"
+            )
+    bad = np.flatnonzero(lower >= upper)
+    if bad.size:
+        k = int(bad[0])
+        raise ArgumentError(f"lower {lower[k]:g} of joint {k + 1} is not below upper {upper[k]:g}")
     share = _args.number(share, "share", positive=True, maximum=1.0)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     configurations = _args.integer(configurations, "configurations", 1)
@@ -1122,6 +1137,9 @@ def peak_torques(robot: Robot, q, dq, ddq, *, rotor: bool = False, friction: boo
     (each (m, n)), with the robot's rotor inertia and friction when asked, and its share of the
     joint's effort limit: a dict of lists ``torque``, ``effort`` and ``share`` (None where the
     description gives no effort limit) and ``line``, the statement printed."""
+    _args.instance(robot, "robot", Robot)
+    q, dq, ddq = _args.batch(robot.n, q=q, dq=dq, ddq=ddq)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     tau = _drive_torques(robot, q, dq, ddq, rotor=rotor, friction=friction)
     top = np.abs(tau).max(0)
     effort = np.array(robot.limits["effort"], dtype=float)
