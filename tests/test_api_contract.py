@@ -342,6 +342,28 @@ def _api(tmp: Path) -> dict:
                 (ROBOT,),
                 {"margin": 0.05},
             ),
+            "identification.excitation.effort_acceleration_limits": (
+                excitation.effort_acceleration_limits,
+                (ROBOT,),
+                {
+                    "lower": -np.ones(ROBOT.n),
+                    "upper": np.ones(ROBOT.n),
+                    "velocity": np.ones(ROBOT.n),
+                    "fixed": np.full(ROBOT.n, np.nan),
+                    "fallback": np.full(ROBOT.n, 6.0),
+                    "reach": np.full(ROBOT.n, 10.0),
+                    "share": 0.8,
+                    "rotor": True,
+                    "friction": True,
+                    "configurations": 8,
+                    "seed": 1,
+                },
+            ),
+            "identification.excitation.peak_torques": (
+                excitation.peak_torques,
+                (ROBOT, LOG.q, LOG.dq, LOG.ddq),
+                {"rotor": True, "friction": True},
+            ),
             "identification.excitation.random_trajectory": (
                 excitation.random_trajectory,
                 (ROBOT,),
@@ -813,6 +835,7 @@ NOT_WALKED = {
 WRONG_VALUE: dict[tuple[str, str], object] = {
     ("mindyn.load", "robot"): SKIP,  # an unknown name is a ModelError (not an argument's type)
     ("Robot.joint_transform", "k"): 5,
+    ("identification.excitation.effort_acceleration_limits", "fixed"): -np.ones(2),
     ("Robot.joint_pre", "k"): 5,
     ("Robot.joint_post", "k"): -1,
     ("Robot.fk", "link"): 7,

@@ -64,6 +64,7 @@ def cmd_excite(args: argparse.Namespace) -> int:
         samples=args.samples,
         maxiter=args.maxiter,
         margin=args.margin,
+        effort_share=args.effort_share,
         start=start,
         progress=not args.quiet,
     )
@@ -78,6 +79,10 @@ def cmd_excite(args: argparse.Namespace) -> int:
     print(f"  {shown}: {res.value:.6g} (initial guess {res.initial_value:.6g})")
     for line in snap_lines(base, "  base set: ", detail=False):
         print(line)
+    for note in res.notes:
+        if note.startswith("acceleration limits"):
+            print(f"  {note}")
+    print(f"  {res.peak_torque['line']}")
     for warning in res.warnings:
         print(f"  WARNING: {warning}")
     print(f"  limits respected on a fine grid (largest relative excess {res.max_violation:.2g})")
@@ -144,6 +149,20 @@ def register(sub) -> None:
         high_open=True,
         default=0.05,
         help="fraction the limits are tightened by",
+    )
+    number(
+        p,
+        "--effort-share",
+        low=0,
+        high=1,
+        low_open=True,
+        default=0.8,
+        help="where the description gives no acceleration limit (URDF never does), each joint's "
+        "is derived so that the inverse-dynamics torque (gravity, velocity terms at the velocity "
+        "limits, the mass matrix with the other joints' accelerations at their limits, over 64 "
+        "sampled configurations) stays within this share of its effort limit; without an effort "
+        "limit the fixed 6 rad/s^2 (2 m/s^2) is used. Both are stated, and the trajectory's peak "
+        "torques are reported against the effort limits",
     )
     p.add_argument("--rotor", action="store_true", help="base parameters with rotor inertia")
     p.add_argument("--friction", action="store_true", help="base parameters with friction")

@@ -49,8 +49,10 @@ __all__ = [
     "ExcitationResult",
     "FourierTrajectory",
     "criterion_value",
+    "effort_acceleration_limits",
     "excitation_limits",
     "optimize_excitation",
+    "peak_torques",
     "plot_trajectory",
     "random_trajectory",
 ]
@@ -240,36 +242,200 @@ def _reduction(N: int, freq: float, start: float | None):
     return R, r
 
 
-def excitation_limits(robot: Robot, *, margin: float = 0.05, overrides: dict | None = None):
+#: Share of each joint's effort limit that the acceleration limits derived from it leave to the
+#: inverse-dynamics torque (:func:`effort_acceleration_limits`).
+EFFORT_SHARE = 0.8
+
+#: Configurations sampled within the position limits by :func:`effort_acceleration_limits`.
+EFFORT_CONFIGURATIONS = 64
+
+
+def _drive_torques(robot: Robot, q, dq, ddq, *, rotor: bool, friction: bool) -> np.ndarray:
+    """Inverse-dynamics torques, shape (m, n), with the robot's rotor inertia and friction when
+    asked (on its :attr:`~mindyn.robot.Robot.drive_side`)."""
+    p = robot.parameters(rotor=rotor, friction=friction)
+    q, dq, ddq = (np.atleast_2d(np.asarray(x, dtype=float)) for x in (q, dq, ddq))
+    step = max(1, 2_000_000 // (robot.n * p.size))  # rows per block: at most ~16 MB of W
+    blocks = [
+        robot.regressor(
+            q[i : i + step], dq[i : i + step], ddq[i : i + step], rotor=rotor, friction=friction
+        )
+        @ p
+        for i in range(0, q.shape[0], step)
+    ]
+    return np.concatenate(blocks)
+
+
+def _mass_matrices(robot: Robot, q: np.ndarray, *, rotor: bool) -> np.ndarray:
+    """``M(q)``, shape (m, n, n), with the rotor inertia ``sum_k Ia_k t_k^T t_k`` when asked
+    (``t_k`` the rows of :attr:`~mindyn.robot.Robot.drive_matrix`)."""
+    M = robot.mass_matrix(q)
+    if rotor:
+        names = robot.parameter_names(rotor=True)
+        p = robot.parameters(rotor=True)
+        D = np.asarray(robot.drive_matrix, dtype=float)
+        ia = np.zeros(D.shape[0])
+        for i, name in enumerate(names):
+            m = re.fullmatch(r"Ia(\d+)", name)
+            if m and int(m[1]) <= D.shape[0]:
+                ia[int(m[1]) - 1] = p[i]
+        M = M + (D.T * ia) @ D
+    return M
+
+
+def effort_acceleration_limits(
+    robot: Robot,
+    *,
+    lower,
+    upper,
+    velocity,
+    fixed,
+    fallback,
+    reach=None,
+    share: float = EFFORT_SHARE,
+    rotor: bool = False,
+    friction: bool = False,
+    configurations: int = EFFORT_CONFIGURATIONS,
+    seed: int = 0,
+) -> dict:
+    """Acceleration limits derived from the robot's effort limits ``E`` and its dynamics.
+
+    At ``configurations`` positions ``q_s`` drawn uniformly within ``[lower, upper]`` (seeded
+    by ``seed``), each with velocities ``v_s`` at ``+-velocity`` (random signs), joint ``k``'s
+    limit is the largest ``A_k`` with
+
+        ``|h_k(q_s, v_s)| + M_kk(q_s) A_k + sum_{j != k} |M_kj(q_s)| U_j <= share E_k``
+
+    at every sample (``h``: gravity, velocity terms and, when asked, friction; ``M``: the mass
+    matrix, with the rotor inertia when asked). ``U_j`` bounds the other joints' accelerations:
+    ``fixed[j]`` where given (limits of the description or the fallback), else joint ``j``'s
+    own limit with no coupling, ``min_s (share E_j - |h_j|) / M_jj`` where positive, else
+    ``fallback[j]`` (the limit the joint will get) — all capped at
+    ``reach[j]`` when given (the largest acceleration the trajectory can reach). Each ``U_j`` is
+    at least the acceleration joint ``j`` will have, so every joint's torque stays within
+    ``share E_k`` at the samples with all joints accelerating at once, worst signs included.
+
+    ``fixed``: (n,) limits already known (NaN where one is to be derived). Returns a dict:
+    ``acceleration`` (n,) (NaN where none can be derived: a ``fixed`` joint, no positive effort
+    limit, or ``|h_k|`` plus the coupling reaching ``share E_k``), ``isolated`` (n,), ``bound``
+    (the ``U``), ``share``, ``effort``, ``q`` and ``dq`` (the samples, (S, n)) and
+    ``saturated`` (joints whose ``|h_k|`` alone reaches ``share E_k``) with ``held``, the
+    largest ``|h_k| / E_k`` and ``gravity``, the largest ``|g_k(q_s)| / E_k`` per joint."""
+    _args.instance(robot, "robot", Robot)
+    n = robot.n
+    lower = _args.array(lower, "lower", (n,))
+    upper = _args.array(upper, "upper", (n,))
+    velocity = _args.array(velocity, "velocity", (n,))
+    fixed = _args.array(fixed, "fixed", (n,), finite=False)
+    fallback = _args.array(fallback, "fallback", (n,))
+    reach = np.full(n, np.inf) if reach is None else _args.array(reach, "reach", (n,))
+    for name, v in (
+        ("velocity", velocity),
+        ("fixed", fixed),
+        ("fallback", fallback),
+        ("reach", reach),
+    ):
+        bad = np.flatnonzero(v <= 0)
+        if bad.size:
+            raise ArgumentError(
+                f"{name} of joint {bad[0] + 1} is {v[bad[0]]:g}; expected a positive limit"
+            )
+    bad = np.flatnonzero(lower >= upper)
+    if bad.size:
+        k = int(bad[0])
+        raise ArgumentError(f"lower {lower[k]:g} of joint {k + 1} is not below upper {upper[k]:g}")
+    share = _args.number(share, "share", positive=True, maximum=1.0)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    configurations = _args.integer(configurations, "configurations", 1)
+    seed = _args.integer(seed, "seed", 0)
+    effort = np.array(robot.limits["effort"], dtype=float)
+    rng = np.random.default_rng(seed)
+    S = configurations
+    q = lower + (upper - lower) * rng.uniform(size=(S, n))
+    dq = velocity * rng.choice([-1.0, 1.0], size=(S, n))
+    h = _drive_torques(robot, q, dq, np.zeros_like(q), rotor=rotor, friction=friction)
+    M = _mass_matrices(robot, q, rotor=rotor)  # M[s, k, j]
+    diag = np.einsum("skk->sk", M)
+    budget = share * effort - np.abs(h)  # (S, n)
+    ok = np.isfinite(effort) & (effort > 0) & ~np.isfinite(fixed)
+    saturated = [k for k in range(n) if ok[k] and budget[:, k].min() <= 0]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        isolated = np.where(ok, np.min(budget / diag, axis=0), np.nan)
+    ok &= np.isfinite(isolated) & (isolated > 0)  # (a joint moving no mass has no bound)
+    bound = np.where(ok, isolated, fallback)
+    bound = np.minimum(np.where(np.isfinite(fixed), fixed, bound), reach)
+    coupling = (np.abs(M) * ~np.eye(n, dtype=bool)) @ bound  # sum_{j != k} |M_kj| U_j, (S, n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        acc = np.min((budget - coupling) / diag, axis=0)
+    ok &= np.isfinite(acc) & (acc > 0)
+    return {
+        "acceleration": np.where(ok, acc, np.nan),
+        "isolated": isolated,
+        "bound": bound,
+        "share": share,
+        "effort": effort,
+        "q": q,
+        "dq": dq,
+        "saturated": saturated,
+        "held": np.max(np.abs(h), axis=0) / effort,
+        "gravity": np.max(np.abs(robot.gravity_torque(q)), axis=0) / effort,
+    }
+
+
+def excitation_limits(
+    robot: Robot,
+    *,
+    margin: float = 0.05,
+    overrides: dict | None = None,
+    effort_share: float = EFFORT_SHARE,
+    rotor: bool = False,
+    friction: bool = False,
+    harmonics: int = 5,
+    freq: float = 0.1,
+):
     """Limits used for the excitation: arrays ``lower``, ``upper``, ``velocity``,
-    ``acceleration`` of shape (n,), and a list of notes for every fallback taken.
+    ``acceleration`` of shape (n,), ``acceleration_source`` (per joint ``"description"``,
+    ``"override"``, ``"effort"`` or ``"fallback"``) and ``acceleration_rule`` (a dict: the
+    rule's numbers, :func:`effort_acceleration_limits`), and a list of notes for every
+    fallback taken and rule applied.
 
     The robot's limits are shrunk by ``margin`` (a fraction: positions towards the middle of
     their range, velocities and accelerations in magnitude). Where the description gives no
-    limit (NaN) a fallback is used (``FALLBACK``) and noted. ``overrides`` may give any of the
-    four arrays (or scalars) to replace the robot's values."""
+    position or velocity limit (NaN) a fallback is used (``FALLBACK``) and noted. Where it gives
+    no acceleration limit (URDF never does), the limit is derived from the joint's effort limit
+    and the robot's dynamics (with its rotor inertia and friction when asked) so that the
+    inverse-dynamics torque stays within ``effort_share`` of the effort limits
+    (:func:`effort_acceleration_limits`, on the limits after the margin, the other joints'
+    accelerations bounded by what a trajectory of ``harmonics`` harmonics of ``freq`` [Hz] can
+    reach); only without a usable effort limit is the fixed fallback used. ``overrides`` may
+    give any of the four arrays (or scalars) to replace the robot's values."""
     _args.instance(robot, "robot", Robot)
     margin = _args.number(margin, "margin", minimum=0.0, below=0.5)
     _args.optional(_args.mapping, overrides, "overrides")
+    effort_share = _args.number(effort_share, "effort_share", positive=True, maximum=1.0)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    harmonics = _args.integer(harmonics, "harmonics", 1)
+    freq = _args.number(freq, "freq", positive=True)
     lim = robot.limits
     n = robot.n
     overrides = overrides or {}
     prism = np.array([t == "prismatic" for t in robot.joint_types])
-    out: dict[str, np.ndarray] = {}
+    out: dict = {}
     notes: list[str] = []
+    source = np.array(["description"] * n, dtype=object)
     for key in ("lower", "upper", "velocity", "acceleration"):
         v = np.array(lim[key], dtype=float)
         if key in overrides and overrides[key] is not None:
             v = np.broadcast_to(np.asarray(overrides[key], dtype=float), (n,)).copy()
+            if key == "acceleration":
+                source[:] = "override"
         out[key] = v
     for k in range(n):
         unit = "m" if prism[k] else "rad"
-        for key in ("velocity", "acceleration"):
-            if not np.isfinite(out[key][k]) or out[key][k] <= 0:
-                fb = FALLBACK[key][1 if prism[k] else 0]
-                out[key][k] = fb
-                suffix = "/s" if key == "velocity" else "/s^2"
-                notes.append(f"joint {k + 1}: no {key} limit given; using {fb:g} {unit}{suffix}")
+        if not np.isfinite(out["velocity"][k]) or out["velocity"][k] <= 0:
+            fb = FALLBACK["velocity"][1 if prism[k] else 0]
+            out["velocity"][k] = fb
+            notes.append(f"joint {k + 1}: no velocity limit given; using {fb:g} {unit}/s")
         for key, sign in (("lower", -1.0), ("upper", 1.0)):
             if not np.isfinite(out[key][k]):
                 fb = FALLBACK["position"][1 if prism[k] else 0]
@@ -282,14 +448,105 @@ def excitation_limits(robot: Robot, *, margin: float = 0.05, overrides: dict | N
                 f"joint {k + 1}: lower position limit {out['lower'][k]:g} is not below the "
                 f"upper limit {out['upper'][k]:g}"
             )
-    if not 0 <= margin < 0.5:
-        raise ArgumentError(f"margin must be in [0, 0.5), got {margin}")
     mid = 0.5 * (out["lower"] + out["upper"])
     half = 0.5 * (out["upper"] - out["lower"]) * (1 - margin)
     out["lower"], out["upper"] = mid - half, mid + half
     out["velocity"] = out["velocity"] * (1 - margin)
-    out["acceleration"] = out["acceleration"] * (1 - margin)
+    acc = out["acceleration"]
+    given = np.isfinite(acc) & (acc > 0)
+    acc = np.where(given, acc * (1 - margin), np.nan)
+    fallback = (1 - margin) * np.where(
+        prism, FALLBACK["acceleration"][1], FALLBACK["acceleration"][0]
+    )
+    record: dict = {"share": effort_share, "configurations": 0}
+    if given.any():
+        notes.append(
+            f"acceleration limits of joints {_joint_list(given)} from the "
+            f"{'overrides' if source[0] == 'override' else 'description'} less the "
+            f"{100 * margin:g} % margin: {_values(acc[given])}"
+        )
+    if not given.all() and robot.single_dof:
+        # Bernstein's inequality: a Fourier series of N harmonics of f whose velocity stays
+        # within V has accelerations within 2 pi f N V.
+        reach = 2.0 * math.pi * freq * harmonics * out["velocity"]
+        rule = effort_acceleration_limits(
+            robot,
+            lower=out["lower"],
+            upper=out["upper"],
+            velocity=out["velocity"],
+            fixed=np.where(given, acc, np.where(robot.limits["effort"] > 0, np.nan, fallback)),
+            fallback=fallback,
+            reach=reach,
+            share=effort_share,
+            rotor=rotor,
+            friction=friction,
+        )
+        derived = np.isfinite(rule["acceleration"])
+        acc = np.where(derived, rule["acceleration"], acc)
+        source[derived] = "effort"
+        record.update(
+            configurations=EFFORT_CONFIGURATIONS,
+            isolated=[float(v) if np.isfinite(v) else None for v in rule["isolated"]],
+            coupling_bound=rule["bound"].tolist(),
+        )
+        if derived.any():
+            notes.append(
+                f"acceleration limits of joints {_joint_list(derived)} from their effort limits: "
+                f"{_values(acc[derived])} (the largest for which |gravity + velocity terms| + "
+                f"M_kk a_k + sum |M_kj| a_j of the other joints at their limits or their reach "
+                f"2 pi f N v_max stays within {100 * effort_share:g} % of the effort limit at "
+                f"{EFFORT_CONFIGURATIONS} configurations within the position limits, "
+                "velocities at their limits)"
+            )
+        for k in np.flatnonzero(~derived & ~given & (rule["effort"] > 0)):
+            if k in rule["saturated"]:
+                why = (
+                    f"gravity and velocity terms alone reach {100 * rule['held'][k]:.0f} % of "
+                    f"its effort limit {rule['effort'][k]:g} (gravity alone "
+                    f"{100 * rule['gravity'][k]:.0f} %)"
+                )
+            else:
+                why = (
+                    "gravity, velocity terms and the other joints' accelerations leave no "
+                    f"torque within {100 * effort_share:g} % of its effort limit "
+                    f"{rule['effort'][k]:g}"
+                )
+            notes.append(
+                f"joint {k + 1}: {why} at a sampled configuration; no acceleration limit can "
+                "be derived from it"
+            )
+    missing = ~np.isfinite(acc)
+    if missing.any():
+        acc = np.where(missing, fallback, acc)
+        source[missing] = "fallback"
+        notes.append(
+            f"acceleration limits of joints {_joint_list(missing)}: the fixed fallback "
+            f"{FALLBACK['acceleration'][0]:g} rad/s^2 ({FALLBACK['acceleration'][1]:g} m/s^2) "
+            f"less the {100 * margin:g} % margin, {_values(acc[missing])} (no effort limit "
+            "to derive them from, or one the rule above cannot use)"
+        )
+    out["acceleration"] = acc
+    out["acceleration_source"] = source.astype(str)
+    record["source"] = out["acceleration_source"].tolist()
+    out["acceleration_rule"] = record
     return out, notes
+
+
+def _joint_list(mask: np.ndarray) -> str:
+    """``1-3, 5`` for the joints where ``mask`` holds."""
+    ks = [int(k) + 1 for k in np.flatnonzero(mask)]
+    parts, i = [], 0
+    while i < len(ks):
+        j = i
+        while j + 1 < len(ks) and ks[j + 1] == ks[j] + 1:
+            j += 1
+        parts.append(f"{ks[i]}" if i == j else f"{ks[i]}-{ks[j]}")
+        i = j + 1
+    return ", ".join(parts)
+
+
+def _values(v: np.ndarray) -> str:
+    return ", ".join(f"{x:.3g}" for x in v)
 
 
 def _criterion(G: np.ndarray, rows: int, criterion: str) -> float:
@@ -386,6 +643,8 @@ class ExcitationResult:
     warnings: list = field(default_factory=list)
     #: The robot's transmissions of a type not read (:func:`mindyn.robot.drive_train_record`).
     drive_train: dict = field(default_factory=dict)
+    #: The trajectory's peak torque per joint against its effort limit (:func:`peak_torques`).
+    peak_torque: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
         return {
@@ -399,7 +658,13 @@ class ExcitationResult:
             "seed": self.seed,
             "seconds": self.seconds,
             "max_limit_violation": self.max_violation,
-            "limits": {k: np.asarray(v).tolist() for k, v in self.limits.items()},
+            "limits": {
+                k: np.asarray(v).tolist()
+                for k, v in self.limits.items()
+                if k != "acceleration_rule"
+            },
+            "acceleration_rule": self.limits.get("acceleration_rule", {}),
+            "peak_torque": {k: v for k, v in self.peak_torque.items() if k != "line"},
             "notes": self.notes,
             "warnings": self.warnings,
             "starts": self.starts,
@@ -553,7 +818,9 @@ def random_trajectory(
     robot = load(robot)
     keys = ("lower", "upper", "velocity", "acceleration")
     if limits is None or not all(k in limits for k in keys):
-        limits, _ = excitation_limits(robot, margin=margin, overrides=limits)
+        limits, _ = excitation_limits(
+            robot, margin=margin, overrides=limits, harmonics=harmonics, freq=freq
+        )
     rng = np.random.default_rng(seed)
     n, N = robot.n, harmonics
     rows = []
@@ -597,6 +864,7 @@ def optimize_excitation(
     grid: int | None = None,
     maxiter: int = 100,
     margin: float = 0.05,
+    effort_share: float = EFFORT_SHARE,
     limits: dict | None = None,
     start=None,
     progress: bool = True,
@@ -623,6 +891,11 @@ def optimize_excitation(
         SLSQP iterations per start.
     margin : float
         Fraction by which the robot's limits are tightened (see :func:`excitation_limits`).
+    effort_share : float
+        Share of each effort limit that the acceleration limits derived from it leave to the
+        inverse-dynamics torque, where the description gives no acceleration limit (see
+        :func:`excitation_limits`). The trajectory's peak torques are reported against the
+        effort limits either way (``peak_torque``; a warning beyond them).
     limits : dict, optional
         Overrides for ``lower``, ``upper``, ``velocity``, ``acceleration`` (arrays (n,) or
         scalars).
@@ -644,6 +917,7 @@ def optimize_excitation(
     grid = _args.optional(_args.integer, grid, "grid", 1)
     maxiter = _args.integer(maxiter, "maxiter", 1)
     margin = _args.number(margin, "margin", minimum=0.0, below=0.5)
+    effort_share = _args.number(effort_share, "effort_share", positive=True, maximum=1.0)
     _args.optional(_args.mapping, limits, "limits")
     start = _args.optional(_args.array, start, "start", (robot.n,))
     progress = _args.flag(progress, "progress")
@@ -668,7 +942,16 @@ def optimize_excitation(
     t_begin = time.perf_counter()
     if base is None:
         base = base_parameters(robot, rotor=rotor, friction=friction)
-    lim, notes = excitation_limits(robot, margin=margin, overrides=limits)
+    lim, notes = excitation_limits(
+        robot,
+        margin=margin,
+        overrides=limits,
+        effort_share=effort_share,
+        rotor=base.rotor,
+        friction=base.friction,
+        harmonics=harmonics,
+        freq=freq,
+    )
     if start is not None:
         start = np.asarray(start, dtype=float).reshape(-1)
         if start.shape != (robot.n,):
@@ -813,6 +1096,15 @@ def optimize_excitation(
             say(f"excite: limits exceeded by {100 * rel:.3g} % between grid points; motion shrunk")
         traj = _scale_into_limits(traj, _tighten(lim, 1e-3), fine, start is not None)
         q, dq, ddq = traj.evaluate(t)
+    peak = peak_torques(robot, q, dq, ddq, rotor=base.rotor, friction=base.friction)
+    say(f"excite: {peak['line']}")
+    for k in np.flatnonzero(np.nan_to_num(np.array(peak["share"], dtype=float)) > 1.0):
+        warnings.append(
+            f"joint {k + 1}: the trajectory's peak inverse-dynamics torque "
+            f"{peak['torque'][k]:.4g} is {100 * peak['share'][k]:.0f} % of its effort limit "
+            f"{peak['effort'][k]:g}; lower the effort share or give acceleration limits"
+        )
+        say(f"excite: WARNING: {warnings[-1]}")
     tm = np.arange(samples) * (traj.period / samples)
     qm, dqm, ddqm = traj.evaluate(tm)
     value = criterion_value(base, qm, dqm, ddqm, criterion=criterion)
@@ -836,7 +1128,32 @@ def optimize_excitation(
         max_violation=_relative_violation(q, dq, ddq, lim),
         initial_trajectory=guess,
         warnings=warnings,
+        peak_torque=peak,
     )
+
+
+def peak_torques(robot: Robot, q, dq, ddq, *, rotor: bool = False, friction: bool = False):
+    """The largest inverse-dynamics torque magnitude per joint along samples ``q, dq, ddq``
+    (each (m, n)), with the robot's rotor inertia and friction when asked, and its share of the
+    joint's effort limit: a dict of lists ``torque``, ``effort`` and ``share`` (None where the
+    description gives no effort limit) and ``line``, the statement printed."""
+    _args.instance(robot, "robot", Robot)
+    q, dq, ddq = _args.batch(robot.n, q=q, dq=dq, ddq=ddq)
+    rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
+    tau = _drive_torques(robot, q, dq, ddq, rotor=rotor, friction=friction)
+    top = np.abs(tau).max(0)
+    effort = np.array(robot.limits["effort"], dtype=float)
+    has = np.isfinite(effort) & (effort > 0)
+    share = np.where(has, top / np.where(has, effort, 1.0), np.nan)
+    shown = ", ".join(f"{100 * v:.0f} %" if np.isfinite(v) else "-" for v in share)
+    extra = " with rotor inertia" if rotor else ""
+    extra += (" and friction" if rotor else " with friction") if friction else ""
+    return {
+        "torque": top.tolist(),
+        "effort": [float(e) if h else None for e, h in zip(effort, has)],
+        "share": [float(v) if np.isfinite(v) else None for v in share],
+        "line": f"peak inverse-dynamics torque{extra} / effort limit per joint: {shown}",
+    }
 
 
 def _tighten(lim: dict, frac: float) -> dict:
