@@ -260,3 +260,23 @@ def test_every_command_says_what_it_takes_from_the_file(identified):
     said = cli("export", out_urdf, ident, "--joint-terms", sidecar, "--urdf",
                sidecar.with_name("again.urdf"))  # fmt: skip
     assert f"joint terms of {sidecar}: not used (the parameter values" in said, said
+
+
+def test_the_offsets_of_a_robot_reach_the_base_dynamics_and_its_code():
+    """A robot with torque offsets (with_joint_terms): the base dynamics with offsets add them
+    to its inverse dynamics and not to the gravity torque, by default values (before, the
+    default values had zero offsets); the robot it came from is unchanged."""
+    from mindyn.codegen import BaseDynamics
+
+    plain = mindyn.load("puma560")
+    off = np.array([0.5, -0.25, 0.125, 1.0, -2.0, 0.0625])
+    robot = plain.with_joint_terms(offset=off)
+    assert (plain.torque_offset == 0).all() and (robot.torque_offset == off).all()
+    dyn = BaseDynamics(mindyn.base_parameters(robot, offset=True))
+    rng = np.random.default_rng(3)
+    q, dq, ddq = rng.uniform(-1, 1, (3, 6))
+    ref = plain.inverse_dynamics(q, dq, ddq)
+    np.testing.assert_allclose(dyn.inverse_dynamics(q, dq, ddq), ref + off, atol=1e-10)
+    np.testing.assert_allclose(dyn.gravity(q), plain.gravity_torque(q), atol=1e-10)
+    with pytest.raises(mindyn.ArgumentError, match="coulomb.*entry 2; rotor inertia and fric"):
+        plain.with_joint_terms(coulomb=[0, -1, 0, 0, 0, 0])
