@@ -631,6 +631,17 @@ def _api(tmp: Path) -> dict:
                 {},
             ),
             "Robot.with_drive_side": (ROBOT.with_drive_side, ("joint",), {}),
+            "Robot.with_joint_terms": (
+                ROBOT.with_joint_terms,
+                (),
+                {
+                    "rotor": np.full(ROBOT.n, 0.1),
+                    "viscous": np.full(ROBOT.n, 0.2),
+                    "coulomb": np.full(ROBOT.n, 0.3),
+                    "offset": np.full(ROBOT.n, -0.4),
+                    "drive_side": "joint",
+                },
+            ),
             "BaseParameters.with_friction_velocity": (
                 smooth.with_friction_velocity,
                 ([0.2, 0.2],),

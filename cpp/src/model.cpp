@@ -280,7 +280,9 @@ std::vector<std::string> Model::parameterNames(ParameterLayout layout) const {
 
 Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
   const int n = nq();
-  Eigen::VectorXd p = Eigen::VectorXd::Zero(layout.size(n));  // offsets: 0
+  Eigen::VectorXd p = Eigen::VectorXd::Zero(layout.size(n));  // offsets: 0 unless given
+  if (layout.offset && torque_offset.size() == n)
+    for (int k = 0; k < n; ++k) p[layout.offsetIndex(n, k)] = torque_offset[k];
   for (int k = 0; k < n; ++k) {
     p.segment<10>(k * layout.perLink()) = inertial.segment<10>(10 * k);
     if (layout.rotor) p[layout.rotorIndex(k)] = rotor_inertia[k];
@@ -365,6 +367,10 @@ void Model::validate() const {
   if (!rotor_inertia.allFinite() || !viscous.allFinite() || !coulomb.allFinite() ||
       !third_friction.allFinite())
     throw ModelError(who() + ": rotor inertia or friction is not finite");
+  if (torque_offset.size() != 0 && torque_offset.size() != n)
+    throw ModelError(who() + ": " + std::to_string(torque_offset.size()) + " torque offsets for " +
+                     std::to_string(n) + " joints");
+  if (!torque_offset.allFinite()) throw ModelError(who() + ": a torque offset is not finite");
   try {
     friction_model.validate(n);
   } catch (const ModelError& e) {
@@ -402,6 +408,7 @@ void Model::validate() const {
     checkBound(joint, "Coulomb friction", coulomb[k], V);
     if (third_friction.size() == n)
       checkBound(joint, "third friction parameter", third_friction[k], V);
+    if (torque_offset.size() == n) checkBound(joint, "torque offset", torque_offset[k], V);
   }
   for (const Joint& j : joints) {
     const auto joint = [&] { return who() + ", joint '" + j.name + "'"; };

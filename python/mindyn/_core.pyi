@@ -68,6 +68,10 @@ class Model:
         """
         A new model, the same but for its gravity vector (base frame, m/s^2); this one is unchanged.
         """
+    def with_joint_terms(self, *, rotor: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, viscous: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, coulomb: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_rotor: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_viscous: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_coulomb: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, offset: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None) -> Model:
+        """
+        A new model with the given joint-side rotor inertia, viscous and Coulomb friction (n each), the motors' own (n_m each, as a YAML table's transmissions give them) and torque offsets (n); a term not given is kept. This one is unchanged.
+        """
     def with_spherical(self, names: collections.abc.Sequence[str]) -> Model:
         """
         A new model, the same but with the named floating (free-flyer) joints made spherical: the rotation about the same joint frame's origin, without translation (a ball joint, which URDF text cannot carry); this one is unchanged.
@@ -158,6 +162,9 @@ class Model:
         ...
     @property
     def tool(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[4, 4]"]:
+        ...
+    @property
+    def torque_offset(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, 1]"]:
         ...
     @property
     def transmission(self) -> dict:

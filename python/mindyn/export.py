@@ -24,11 +24,11 @@ from typing import Any
 import numpy as np
 import yaml
 
-from . import _args, _yaml
+from . import _args, _sidecar
 from ._args import ArgumentError
 from ._core import OFFSET_PREFIX as _OFF
 from ._core import ModelError, RobotFileNotFoundError
-from .robot import Robot
+from .robot import Robot, _direct_drives
 
 __all__ = [
     "Export",
@@ -39,17 +39,7 @@ __all__ = [
     "write_yaml",
 ]
 
-#: What each joint term of a sidecar file is, and its unit for a revolute / prismatic joint.
-_TERMS = {
-    "Ia": (
-        "rotor (armature) inertia reflected to the joint side: tau += Ia * ddq",
-        "kg m^2",
-        "kg",
-    ),
-    "Fv": ("viscous friction: tau += Fv * dq", "N m s/rad", "N s/m"),
-    "Fc": ("Coulomb friction: tau += Fc * sign(dq)", "N m", "N"),
-    _OFF: (f"constant torque offset: tau += {_OFF}", "N m", "N"),
-}
+_TERMS = _sidecar.TERMS
 
 
 @dataclass
@@ -184,13 +174,11 @@ def _joint_side_terms(
         terms.offset,
     )
     coupled = []
-    for j in range(robot.n):
-        ks = np.flatnonzero(T[:, j])
-        k = int(ks[0]) if ks.size == 1 else -1
-        if k < 0 or np.count_nonzero(T[k]) != 1:
+    for j, direct in enumerate(_direct_drives(T)):
+        if direct is None:
             coupled.append(j)
             continue
-        r = float(T[k, j])
+        k, r = direct
         if terms.rotor is not None and out.rotor is not None:
             out.rotor[j] = r * r * terms.rotor[k]
         if terms.viscous is not None and out.viscous is not None:
@@ -659,27 +647,15 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
 
 def read_joint_terms(path) -> dict[str, float]:
     """The joint terms of a sidecar YAML written by :func:`write_urdf` or :func:`write_yaml`, as
-    ``{"Ia1": ..., "Fv1": ..., "Fc1": ..., "Off1": ..., ...}`` (the terms it holds)."""
-    _args.path(path, "path")
-    p = Path(path)
-    doc = _read_yaml(p, "joint-terms file")
-    rows = doc.get("joints") if isinstance(doc, dict) else None
-    if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
-        raise ModelError(f"{p}: expected a 'joints' list of mappings (a mindyn joint-terms file)")
-    out = {}
-    for i, row in enumerate(rows, 1):
-        for key in _TERMS:
-            if key in row:
-                v = row[key]
-                if isinstance(v, bool) or not isinstance(v, (int, float)):
-                    raise ModelError(f"{p}: joint {i}: '{key}' is {v!r}; expected a number")
-                if not abs(v) <= 1e16:  # as a description's numbers; not inf, nan or 400 digits
-                    said = "an integer beyond 1e16" if isinstance(v, int) else repr(v)
-                    raise ModelError(
-                        f"{p}: joint {i}: '{key}' is {said}; expected a finite number within 1e16"
-                    )
-                out[f"{key}{i}"] = float(v)
-    return out
+    ``{"Ia1": ..., "Fv1": ..., "Fc1": ..., "Off1": ..., ...}`` (the terms it holds, numbered by
+    row). To load a robot with them: ``mindyn.load(path, joint_terms=...)``."""
+    side = _sidecar.read(path)
+    return {
+        f"{key}{i}": float(row[key])
+        for i, row in enumerate(side.rows, 1)
+        for key in _TERMS
+        if key in row
+    }
 
 
 class _TableDumper(yaml.SafeDumper):
@@ -694,17 +670,6 @@ class _TableDumper(yaml.SafeDumper):
         items = mapping.values() if isinstance(mapping, dict) else []
         flat = len(mapping) <= 6 and all(isinstance(v, (int, float)) for v in items)
         return super().represent_mapping(tag, mapping, flow_style=flat or flow_style)
-
-
-def _read_yaml(path: Path, what: str):
-    """The document of the YAML file `path`, or an error naming it as `what`."""
-    if not path.is_file():
-        raise RobotFileNotFoundError(f"{what} '{path}' does not exist")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError as e:
-        raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
-    return _yaml.load(text, path, ModelError)
 
 
 # -- YAML DH / MDH tables -----------------------------------------------------------------------
@@ -764,7 +729,7 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
             f"'{robot.source}'): there is no table to rewrite"
         )
     src = Path(robot.source if source is None else source)
-    doc = _read_yaml(src, "robot description")
+    doc = _sidecar.read_yaml(src, "robot description")
     joints = doc.get("joints") if isinstance(doc, dict) else None
     if not isinstance(joints, list) or len(joints) != robot.n:
         raise ModelError(

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _args, _core, _mujoco
+from . import _args, _core, _mujoco, _sidecar
 
 #: The friction models of :meth:`Robot.with_friction_model`.
 FRICTION_KINDS = ("coulomb", "asymmetric", "smooth", "stribeck")
@@ -56,6 +56,7 @@ def load(
     tip: str | None = None,
     gravity=None,
     root_joint: str | None = None,
+    joint_terms=None,
 ) -> Robot:
     """Load a robot.
 
@@ -95,6 +96,16 @@ def load(
         Gravity in the base frame [m/s^2], instead of the description's (default
         ``(0, 0, -9.81)``). A robot's gravity is fixed once loaded; :meth:`Robot.with_gravity`
         gives a new robot with another.
+    joint_terms : str or Path, optional
+        A joint-terms file (``OUT.joints.yaml``, which ``mindyn identify --urdf OUT.urdf`` and
+        :func:`mindyn.export.write_urdf` write beside the description): its rotor inertia,
+        friction and torque offsets replace the description's (:meth:`Robot.with_joint_terms`;
+        a term the file does not have stays the description's). Rows name the robot's joints
+        (each once); with ``drive_side: motor`` each row's ``Ia``, ``Fv``, ``Fc`` are those of
+        the motor it names, in motor units, and the robot's terms act on the motors, otherwise
+        on the joints (:attr:`Robot.drive_side`). A file that does not fit the robot (a joint or
+        motor it does not have, a count that differs, a negative rotor inertia or friction, a
+        term some rows lack) is a ModelError naming the file and the entry.
 
     Raises
     ------
@@ -121,6 +132,7 @@ def load(
             f"{given} applies to a description file, not to the loaded Robot '{robot.name}' "
             f"(load its file with {given})"
         )
+    _args.optional(_args.path, joint_terms, "joint_terms")
     out = _load(robot, tip, root_joint)
     if out is not robot:
         note = drive_train_note(out)
@@ -128,6 +140,8 @@ def load(
             import warnings
 
             warnings.warn(note, DriveTrainWarning, stacklevel=2)
+    if joint_terms is not None:
+        out = out.with_joint_terms(**_sidecar.slots(_sidecar.read(joint_terms), out))
     return out if gravity is None else out.with_gravity(gravity)
 
 
@@ -539,6 +553,67 @@ class Robot:
             )
         return Robot(self._m.with_drive_side(side))
 
+    def with_joint_terms(
+        self, *, rotor=None, viscous=None, coulomb=None, offset=None, drive_side=None
+    ) -> Robot:
+        """A new robot, the same as this one but for its rotor inertia, friction and torque
+        offsets; this robot is unchanged. A term not given (``None``) stays as it is.
+
+        Parameters
+        ----------
+        rotor, viscous, coulomb : array_like, shape (n,), optional
+            ``Ia``, ``Fv``, ``Fc`` of each slot, each >= 0: joint k's on the joint side,
+            motor k's (row k of ``transmission.T``, motor units) on the motor side. On the
+            motor side the joint-side values (:attr:`rotor_inertia`, ...) become each directly
+            driven joint's motor's as they act on it (``r^2 Ia``, ``r^2 Fv``, ``|r| Fc``), 0 for
+            a joint of a motor that turns with several joints.
+        offset : array_like, shape (n,), optional
+            A constant torque offset per joint (``Off1 .. OffN``, :attr:`torque_offset`), the
+            values of the offset entries of :meth:`parameters`.
+        drive_side : {"motor", "joint"}, optional
+            Where ``rotor``, ``viscous`` and ``coulomb`` act (default: :attr:`drive_side`);
+            the new robot has this drive side (:meth:`with_drive_side`).
+        """
+        self._require_single_dof("joint terms (rotor inertia, friction, torque offsets)")
+        if drive_side is not None:
+            _args.choice(drive_side, "drive_side", ("motor", "joint"))
+        side = self.drive_side if drive_side is None else drive_side
+        robot = self.with_drive_side(side) if side != self.drive_side else self
+        given = {}
+        for name, v in (("rotor", rotor), ("viscous", viscous), ("coulomb", coulomb)):
+            if v is None:
+                continue
+            v = _vector(v, self.n, name)
+            bad = np.flatnonzero(v < 0)
+            if bad.size:
+                k = int(bad[0])
+                raise _args.fail(
+                    name, f"has {v[k]!r} at entry {k + 1}; rotor inertia and friction are >= 0"
+                )
+            given[name] = v
+        kw = {}
+        if side == "motor":
+            direct = _direct_drives(robot.drive_matrix)
+            for name, v in given.items():
+                kw["motor_" + name] = v
+                reflected = np.zeros(self.n)
+                for j, d in enumerate(direct):
+                    if d is not None:
+                        k, r = d
+                        reflected[j] = (abs(r) if name == "coulomb" else r * r) * v[k]
+                kw[name] = reflected
+        else:
+            kw.update(given)
+        if offset is not None:
+            kw["offset"] = _vector(offset, self.n, "offset")
+        return Robot(robot._m.with_joint_terms(**kw))
+
+    @property
+    def torque_offset(self) -> np.ndarray:
+        """Constant torque offset per joint, shape (n,) (``Off1 .. OffN``): 0 unless given by
+        :meth:`with_joint_terms` (a joint-terms file, ``mindyn.load(..., joint_terms=)``)."""
+        return _readonly(self._m.torque_offset)
+
     @property
     def drive_matrix(self) -> np.ndarray:
         """The rows ``t_k`` through which slot ``k``'s rotor inertia and friction act, shape
@@ -743,8 +818,10 @@ class Robot:
         """Classical parameter values of the model in that layout. :attr:`rotor_inertia`,
         :attr:`viscous` and :attr:`coulomb` are the joints' (as descriptions give them); on the
         motor side slot k holds motor k's: its joint's divided by ``r^2``, ``r^2``, ``|r|`` for a
-        motor that alone drives one joint, with ratio ``r``, 0 for a coupled motor. Torque
-        offsets (``offset``) are 0: a description gives none."""
+        motor that alone drives one joint, with ratio ``r``, 0 for a coupled motor, unless
+        given (a YAML table's ``transmissions``, :meth:`with_joint_terms`). Torque offsets
+        (``offset``) are :attr:`torque_offset`: 0 unless a joint-terms file gives them (a
+        description gives none)."""
         return self._m.parameters(*self._layout(rotor, friction, offset))
 
     # -- dynamics ------------------------------------------------------------------------------
@@ -991,6 +1068,18 @@ class Robot:
 
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, convention={self.convention!r})"
+
+
+def _direct_drives(T: np.ndarray) -> list:
+    """Per joint j, ``(k, r)`` when motor k alone drives it and drives it alone (row k of the
+    transmission ``T`` is ``r e_j``), else None: the joints whose motor's rotor inertia and
+    friction act on them as ``r^2 Ia``, ``r^2 Fv``, ``|r| Fc``."""
+    out: list = []
+    for j in range(T.shape[1]):
+        ks = np.flatnonzero(T[:, j])
+        k = int(ks[0]) if ks.size == 1 else -1
+        out.append(None if k < 0 or np.count_nonzero(T[k]) != 1 else (k, float(T[k, j])))
+    return out
 
 
 def _vector(x, n: int, name: str, unit: str = "joint") -> np.ndarray:

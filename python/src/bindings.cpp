@@ -261,6 +261,48 @@ PYBIND11_MODULE(_core, m) {
           py::arg("other"),
           "A new model with the joints of this one and the transmissions, drive side and "
           "friction model of `other` (a model of as many joints); this one is unchanged.")
+      .def(
+          "with_joint_terms",
+          [](const PyModel& s, const std::optional<Eigen::VectorXd>& rotor,
+             const std::optional<Eigen::VectorXd>& viscous,
+             const std::optional<Eigen::VectorXd>& coulomb,
+             const std::optional<Eigen::VectorXd>& motor_rotor,
+             const std::optional<Eigen::VectorXd>& motor_viscous,
+             const std::optional<Eigen::VectorXd>& motor_coulomb,
+             const std::optional<Eigen::VectorXd>& offset) {
+            Model copy = s.model;
+            const auto set = [](const std::optional<Eigen::VectorXd>& v, Eigen::VectorXd& to,
+                                long size, const char* what) {
+              if (!v) return;
+              if (v->size() != size)
+                throw ArgumentError(std::string(what) + " has " + std::to_string(v->size()) +
+                                    " entries; expected " + std::to_string(size));
+              to = *v;
+            };
+            const long n = copy.nq(), m = copy.transmission.nm();
+            set(rotor, copy.rotor_inertia, n, "rotor");
+            set(viscous, copy.viscous, n, "viscous");
+            set(coulomb, copy.coulomb, n, "coulomb");
+            set(motor_rotor, copy.transmission.rotor_inertia, m, "motor_rotor");
+            set(motor_viscous, copy.transmission.viscous, m, "motor_viscous");
+            set(motor_coulomb, copy.transmission.coulomb, m, "motor_coulomb");
+            set(offset, copy.torque_offset, n, "offset");
+            copy.validate();
+            return std::make_shared<PyModel>(std::move(copy));
+          },
+          py::kw_only(), py::arg("rotor") = py::none(), py::arg("viscous") = py::none(),
+          py::arg("coulomb") = py::none(), py::arg("motor_rotor") = py::none(),
+          py::arg("motor_viscous") = py::none(), py::arg("motor_coulomb") = py::none(),
+          py::arg("offset") = py::none(),
+          "A new model with the given joint-side rotor inertia, viscous and Coulomb friction (n "
+          "each), the motors' own (n_m each, as a YAML table's transmissions give them) and "
+          "torque offsets (n); a term not given is kept. This one is unchanged.")
+      .def_property_readonly("torque_offset",
+                             [](const PyModel& s) {
+                               return s.model.torque_offset.size() == s.model.nq()
+                                          ? Eigen::VectorXd(s.model.torque_offset)
+                                          : Eigen::VectorXd(Eigen::VectorXd::Zero(s.model.nq()));
+                             })
       .def_property_readonly("friction_model",
                              [](const PyModel& s) {
                                const FrictionModel& f = s.model.friction_model;

@@ -249,6 +249,9 @@ struct Model {
   /// n, the third friction parameter of the friction model (Fa of Asymmetric, Fs of
   /// Stribeck), joint side; empty reads as zero.
   Eigen::VectorXd third_friction;
+  /// n constant torque offsets (Off1 .. Offn, a joint-terms file gives them; a description
+  /// gives none), or empty: zero. parameters() puts them in a layout's offset entries.
+  Eigen::VectorXd torque_offset;
   /// Motors and their coupling to the joints (transmission.hpp); empty when the description
   /// declares none (each joint driven directly).
   Transmission transmission;
@@ -307,8 +310,8 @@ struct Model {
   /// slot k holds motor k's values: its own (transmission.rotor_inertia, viscous, coulomb) where
   /// the description gives them, otherwise derived from the joint-side rotor_inertia, viscous
   /// and coulomb: those of its joint divided by r^2, r^2 and |r| for a motor that alone drives
-  /// one joint alone with ratio r, 0 for a motor that turns with several joints. Offsets are 0
-  /// (a description gives none).
+  /// one joint alone with ratio r, 0 for a motor that turns with several joints. Offsets are
+  /// torque_offset's (0 when empty: a description gives none).
   Eigen::VectorXd parameters(ParameterLayout layout = {}) const;
 
   /// Checks sizes, finiteness, magnitudes, unit axes and rigid transforms; throws ModelError

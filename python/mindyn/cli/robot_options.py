@@ -6,8 +6,10 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 import warnings
 
+from .. import _sidecar
 from ..robot import DriveTrainWarning, bundled_robots, load
 from .args import UsageError
 from .number_options import Number
@@ -60,6 +62,14 @@ def add_robot(p: argparse.ArgumentParser) -> None:
         "then angular in the base's axes) or planar (x, y, cos, sin of the yaw; 3 velocities), "
         "as Pinocchio's root joints (default: the root link fixed to the world)",
     )
+    p.add_argument(
+        "--joint-terms",
+        metavar="FILE",
+        help="a joint-terms file (OUT.joints.yaml, which identify and export write beside "
+        "--urdf OUT.urdf): the robot's rotor inertia and friction are the file's (on the motors "
+        "when it says drive_side: motor), and its torque offsets where the command takes "
+        "--offset; the output says so (default: the description's terms)",
+    )
 
 
 def load_robot(args: argparse.Namespace, *, tip: str | None = None, command: str = ""):
@@ -71,6 +81,7 @@ def load_robot(args: argparse.Namespace, *, tip: str | None = None, command: str
     universal, cylindrical, planar, floating joints of a YAML table) is refused in one line
     (:func:`require_single_dof`)."""
     given_tip = getattr(args, "tip", None)
+    terms = getattr(args, "joint_terms", None)
     with warnings.catch_warnings():
         if getattr(args, "drive_side", None) == "joint":  # direct drive asked for: no note
             warnings.simplefilter("ignore", DriveTrainWarning)
@@ -78,10 +89,53 @@ def load_robot(args: argparse.Namespace, *, tip: str | None = None, command: str
             args.robot,
             tip=given_tip if given_tip is not None else tip,
             root_joint=getattr(args, "root_joint", None),
+            joint_terms=terms,
         )
     if command:
         require_single_dof(robot, command)
+    if terms is not None:
+        line = joint_terms_line(args, robot, _sidecar.read(terms))
+        # beside a JSON document on standard output: on stderr
+        print(line, file=sys.stderr if getattr(args, "format", None) == "json" else sys.stdout)
     return robot
+
+
+def joint_terms_line(args: argparse.Namespace, robot, sidecar) -> str:
+    """The output line of ``--joint-terms FILE``: which terms the robot took from the file and
+    where they act, whether the command uses its torque offsets, or that the command takes
+    every value from an identification file instead. Refuses (UsageError) a ``--drive-side``
+    that contradicts the file's."""
+    path, terms = sidecar.path, _sidecar.terms_of(sidecar)
+    values = getattr(args, "identification", None) or getattr(args, "params", None)
+    if values is not None:
+        return (
+            f"joint terms of {path}: not used (the parameter values, rotor inertia, friction "
+            f"and offsets included, are those of {values})"
+        )
+    side = getattr(args, "drive_side", None)
+    drives = [k for k in terms if k in ("Ia", "Fv", "Fc")]
+    if drives and side is not None and side != robot.drive_side:
+        raise UsageError(
+            f"--drive-side {side}: the rotor inertia and friction of {path} act on the "
+            f"{robot.drive_side}s (its drive_side); drop --drive-side"
+        )
+    words = []
+    if drives:
+        where = (
+            f"of the {robot.n} motors (its drive_side: motor)"
+            if robot.drive_side == "motor"
+            else "on the joints"
+        )
+        words.append(f"{', '.join(drives)} {where}, replacing the description's")
+    off = _sidecar.OFF
+    if off in terms:
+        if not hasattr(args, "offset"):
+            words.append(f"torque offsets {off} not used (this command has none)")
+        elif args.offset:
+            words.append(f"torque offsets {off} used (--offset)")
+        else:
+            words.append(f"torque offsets {off} not used (without --offset)")
+    return f"joint terms from {path}: " + ("; ".join(words) if words else "none in the file")
 
 
 def require_single_dof(robot, command: str) -> None:

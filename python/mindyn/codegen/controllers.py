@@ -212,9 +212,10 @@ def generate_controller(
     if params is None and classical:
         s["p0"] = None  # the robot's classical values, as the generator reads them
     elif params is None:
-        s["p0"] = bp.values(robot.parameters(rotor=bp.rotor, friction=bp.friction))
-        if bp.offset:
-            s["p0"] = np.concatenate([s["p0"], np.zeros(n)])[: len(names)]
+        # the robot's torque offsets (0 unless a joint-terms file gave them)
+        s["p0"] = bp.values(
+            robot.parameters(rotor=bp.rotor, friction=bp.friction, offset=bool(bp.offset))
+        )
     else:
         s["p0"] = _parameter_values(
             params,
@@ -360,9 +361,9 @@ def generate_observer(
         params, names, robot, rotor=base.rotor, friction=base.friction, offset=base.offset
     )
     if p is None:
-        p = base.values(robot.parameters(rotor=base.rotor, friction=base.friction))
-        if base.offset:
-            p = np.concatenate([p, np.zeros(n)])[: len(names)]
+        p = base.values(
+            robot.parameters(rotor=base.rotor, friction=base.friction, offset=bool(base.offset))
+        )
     name = name if name is not None else identifier(robot.name)
     header_name = header_name or f"{name}_momentum_observer.h"
     out = _core.generate_observer(

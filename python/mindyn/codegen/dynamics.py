@@ -64,7 +64,9 @@ class BaseDynamics:
         if p is None:
             rob = self.base.robot
             return self.base.values(
-                rob.parameters(rotor=self.base.rotor, friction=self.base.friction)
+                rob.parameters(
+                    rotor=self.base.rotor, friction=self.base.friction, offset=self.base.offset
+                )
             )
         return _args.array(p, "p", (self.np,))
 

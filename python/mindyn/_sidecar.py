@@ -1,0 +1,196 @@
+"""The joint-terms file (``OUT.joints.yaml``) that :mod:`mindyn.export` writes beside a
+description for what it has no place for (rotor inertia, friction, torque offsets): what each
+term is, reading the file (:func:`read`) and mapping its rows onto a robot's joints and motors
+(:func:`slots`), which :func:`mindyn.load` (``joint_terms=``) uses."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from . import _args, _yaml
+from ._core import OFFSET_PREFIX as OFF
+from ._core import ModelError, RobotFileNotFoundError
+
+#: What each joint term of a sidecar file is, and its unit for a revolute / prismatic joint.
+TERMS = {
+    "Ia": (
+        "rotor (armature) inertia reflected to the joint side: tau += Ia * ddq",
+        "kg m^2",
+        "kg",
+    ),
+    "Fv": ("viscous friction: tau += Fv * dq", "N m s/rad", "N s/m"),
+    "Fc": ("Coulomb friction: tau += Fc * sign(dq)", "N m", "N"),
+    OFF: (f"constant torque offset: tau += {OFF}", "N m", "N"),
+}
+#: The entries of a row besides the terms.
+_ROW_KEYS = ("name", "index", "type", "motor", "units")
+#: The terms that are never negative, in words.
+_NONNEGATIVE = {"Ia": "rotor inertia", "Fv": "viscous friction", "Fc": "Coulomb friction"}
+
+
+@dataclass(frozen=True)
+class Sidecar:
+    """A joint-terms file as read: its rows (mappings, the terms checked as numbers) and
+    ``drive_side`` (``"motor"``: each row's Ia, Fv, Fc are the motor's it names; else
+    ``"joint"``)."""
+
+    path: Path
+    rows: list
+    drive_side: str
+
+
+def read_yaml(path: Path, what: str):
+    """The document of the YAML file ``path`` (a joint-terms file, a description to rewrite),
+    or an error naming it as ``what``."""
+    if not path.is_file():
+        raise RobotFileNotFoundError(f"{what} '{path}' does not exist")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as e:
+        raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
+    return _yaml.load(text, path, ModelError)
+
+
+def terms_of(sidecar: Sidecar) -> list[str]:
+    """The terms the file's rows have (those of its first row), in the order of :data:`TERMS`."""
+    return [k for k in TERMS if sidecar.rows and k in sidecar.rows[0]]
+
+
+def read(path) -> Sidecar:
+    """The joint-terms file ``path``: a YAML mapping with a ``joints`` list of mappings whose
+    terms (``Ia``, ``Fv``, ``Fc``, ``Off``) are finite numbers within 1e16; ModelError (one line
+    naming the file) otherwise, RobotFileNotFoundError when it does not exist."""
+    _args.path(path, "path")
+    p = Path(path)
+    doc = read_yaml(p, "joint-terms file")
+    rows = doc.get("joints") if isinstance(doc, dict) else None
+    if not isinstance(rows, list) or not all(isinstance(r, dict) for r in rows):
+        raise ModelError(f"{p}: expected a 'joints' list of mappings (a mindyn joint-terms file)")
+    for i, row in enumerate(rows, 1):
+        for key in TERMS:
+            if key in row:
+                v = row[key]
+                if isinstance(v, bool) or not isinstance(v, (int, float)):
+                    raise ModelError(f"{p}: joint {i}: '{key}' is {v!r}; expected a number")
+                if not abs(v) <= 1e16:  # as a description's numbers; not inf, nan or 400 digits
+                    said = "an integer beyond 1e16" if isinstance(v, int) else repr(v)
+                    raise ModelError(
+                        f"{p}: joint {i}: '{key}' is {said}; expected a finite number within 1e16"
+                    )
+    side = doc.get("drive_side", "joint")
+    if side not in ("motor", "joint"):
+        raise ModelError(f"{p}: 'drive_side' is {side!r}; expected 'motor' or 'joint'")
+    return Sidecar(p, rows, side)
+
+
+def slots(sidecar: Sidecar, robot) -> dict:
+    """The terms of ``sidecar`` as the keywords of :meth:`mindyn.Robot.with_joint_terms` for
+    ``robot``: ``rotor``, ``viscous``, ``coulomb`` by slot (motor k's on the motor side, the
+    motor named in the row), ``offset`` by joint (``None`` for a term the file does not
+    have) and ``drive_side``. Every row names a joint of the robot (``name``; ``index`` and
+    ``type``, when given, as the robot has them), each joint once; every row has the same
+    terms, ``Fv`` with ``Fc``, none of ``Ia``, ``Fv``, ``Fc`` negative. ModelError (one line
+    naming the file and the entry) otherwise."""
+    p, rows = sidecar.path, sidecar.rows
+    if not robot.single_dof:
+        raise ModelError(
+            f"{p}: joint terms apply to revolute and prismatic joints; robot '{robot.name}' has "
+            "joints of several degrees of freedom"
+        )
+    n, names = robot.n, list(robot.joint_names)
+    joint_of: list[int] = []
+    for i, row in enumerate(rows, 1):
+        unknown = [k for k in row if k not in TERMS and k not in _ROW_KEYS]
+        if unknown:
+            raise ModelError(
+                f"{p}: joint {i}: unknown entry {str(unknown[0])!r} (a row has "
+                f"{', '.join(_ROW_KEYS)} and the terms {', '.join(TERMS)})"
+            )
+        name = row.get("name")
+        if not isinstance(name, str) or name not in names:
+            raise ModelError(
+                f"{p}: joint {i}: 'name' is {name!r}, not a joint of robot '{robot.name}' "
+                f"({', '.join(names[:8])}{', ...' if n > 8 else ''})"
+            )
+        j = names.index(name)
+        if j in joint_of:
+            raise ModelError(f"{p}: joint {i}: '{name}' is also joint {joint_of.index(j) + 1}")
+        joint_of.append(j)
+        if "index" in row and (isinstance(row["index"], bool) or row["index"] != j + 1):
+            raise ModelError(
+                f"{p}: joint {i} ('{name}'): 'index' is {row['index']!r}; robot "
+                f"'{robot.name}' numbers it {j + 1}"
+            )
+        if "type" in row and row["type"] != robot.joint_types[j]:
+            raise ModelError(
+                f"{p}: joint {i} ('{name}'): 'type' is {row['type']!r}; robot "
+                f"'{robot.name}' has it {robot.joint_types[j]}"
+            )
+    if len(rows) != n:
+        missing = [k for k in names if names.index(k) not in joint_of]
+        raise ModelError(
+            f"{p}: {len(rows)} joints; robot '{robot.name}' has {n} (missing: "
+            f"{', '.join(repr(k) for k in missing[:6])})"
+        )
+    present = terms_of(sidecar)
+    for i, row in enumerate(rows, 1):
+        for key in TERMS:
+            if (key in row) != (key in present):
+                which = "has" if key in row else "has no"
+                raise ModelError(
+                    f"{p}: joint {i} ('{row['name']}') {which} '{key}', unlike joint 1: every "
+                    "joint has the same terms"
+                )
+        for key, words in _NONNEGATIVE.items():
+            if key in row and row[key] < 0:
+                raise ModelError(
+                    f"{p}: joint {i} ('{row['name']}'): '{key}' is {row[key]!r}; {words} is >= 0"
+                )
+    if ("Fv" in present) != ("Fc" in present):
+        have = "Fv" if "Fv" in present else "Fc"
+        raise ModelError(f"{p}: the joints have '{have}' alone; friction is Fv with Fc")
+    drives = any(k in present for k in _NONNEGATIVE)
+    slot_of = _motor_slots(sidecar, robot) if drives and sidecar.drive_side == "motor" else joint_of
+    # offsets alone: the robot's drive side stays (a file records where Ia, Fv, Fc act)
+    out: dict = {"drive_side": sidecar.drive_side if drives else None}
+    for key, word in (("Ia", "rotor"), ("Fv", "viscous"), ("Fc", "coulomb"), (OFF, "offset")):
+        if key not in present:
+            out[word] = None
+            continue
+        v = np.zeros(n)
+        where = joint_of if key == OFF else slot_of
+        for row, k in zip(rows, where):
+            v[k] = float(row[key])
+        assert all(math.isfinite(x) for x in v)  # read() checked them
+        out[word] = v
+    return out
+
+
+def _motor_slots(sidecar: Sidecar, robot) -> list[int]:
+    """The slot (motor index) of each row of a motor-side file: the motor its ``motor`` entry
+    names, each once."""
+    p = sidecar.path
+    tr = robot.transmission
+    if tr is None or tr.n_motors != robot.n:
+        has = "declares no transmissions" if tr is None else f"has {tr.n_motors} motors"
+        raise ModelError(
+            f"{p}: 'drive_side' is 'motor' (the rows' Ia, Fv, Fc are their motors'), but robot "
+            f"'{robot.name}' {has} for its {robot.n} joints"
+        )
+    motors = list(tr.motors)
+    out: list[int] = []
+    for i, row in enumerate(sidecar.rows, 1):
+        m = row.get("motor")
+        if not isinstance(m, str) or m not in motors:
+            raise ModelError(
+                f"{p}: joint {i} ('{row['name']}'): 'motor' is {m!r}, not a motor of robot "
+                f"'{robot.name}' ({', '.join(motors[:8])}{', ...' if len(motors) > 8 else ''})"
+            )
+        if motors.index(m) in out:
+            raise ModelError(f"{p}: joint {i} ('{row['name']}'): motor '{m}' is named twice")
+        out.append(motors.index(m))
+    return out
