@@ -1108,15 +1108,22 @@ def identify(
     settings["pruning_std"] = pruning_std_record(
         [names[k] for k in keep], std, initial["std"][keep], removed=len(removed)
     )
-    if settings["pruning_std"]["warn"] and not warnings:
+    if settings["pruning_std"]["warn"]:
+        # The pruned standard deviations assume the removed parameters are zero, which data that
+        # leave them this uncertain cannot confirm: each kept estimate is given the larger of
+        # its two standard deviations (on a simulated geared arm, energy model: 79 % of the kept
+        # estimates beyond 3 pruned ones from the truth, up to 22; none beyond 3 of these).
+        std = np.maximum(std, initial["std"][keep])
+        settings["pruning_std"]["widened"] = True
         r = settings["pruning_std"]
         warnings.append(
             f"the pruning leaves the kept estimates' standard deviations {r['median']:.3g} x "
             "smaller (median) than the fit with all base parameters gives them: they assume "
             f"the {len(removed)} removed parameters are zero, and as estimates of the base "
-            "parameters they may be off by many of their standard deviations (the removed "
-            "parameters' contributions taken up). Use a longer or richer excitation, or "
-            "rsd_threshold=0 to keep every parameter with its own standard deviation"
+            "parameters they may be off by many of them (the removed parameters' contributions "
+            "taken up); the standard deviations given are the larger ones, with the removed "
+            "parameters free. Use a longer or richer excitation, or rsd_threshold=0 to keep "
+            "every parameter with its own standard deviation"
         )
     if warnings:
         settings["warnings"] = warnings
