@@ -165,7 +165,8 @@ def test_energy_model_stacks_the_windows_of_each_log(two_logs):
         rsd_threshold=None,
         energy_window=5,
     )
-    systems = [energy_system(base, d, window=5) for d in (d1, d2)]  # none across the junction
+    rule = res.settings["integration"]  # the rule identify chose, on both logs together
+    systems = [energy_system(base, d, window=5, integration=rule) for d in (d1, d2)]  # per log
     W = np.vstack([s[0] for s in systems])
     y = np.concatenate([s[1] for s in systems])
     p, *_ = np.linalg.lstsq(W, y, rcond=None)
@@ -188,7 +189,8 @@ def test_integral_model_stacks_the_windows_of_each_log(two_logs):
         integral_window=8,
         min_velocity=0,  # every window (integral_system's)
     )
-    systems = [integral_system(base, d, window=8) for d in (d1, d2)]
+    rule = res.settings["integration"]  # the rule identify chose, on both logs together
+    systems = [integral_system(base, d, window=8, integration=rule) for d in (d1, d2)]
     W = np.vstack([s[0].reshape(-1, base.n) for s in systems])
     y = np.concatenate([s[1].reshape(-1) for s in systems])
     p, *_ = np.linalg.lstsq(W, y, rcond=None)

@@ -232,10 +232,10 @@ def add_identify(sub, func) -> None:
     )
     p.add_argument(
         "--integration",
-        choices=["simpson", "trapezoid", "zoh"],
-        default="simpson",
+        choices=["auto", "simpson", "trapezoid", "zoh"],
+        default="auto",
         help="energy and integral model integration rule (zoh: torque held over each period); "
-        "default simpson",
+        "default auto: simpson or zoh, whichever fit leaves the smaller residual (stated)",
     )
     number(
         p,

@@ -25,7 +25,7 @@ FILTERS = ("lowpass", "butter", "savgol", "none")
 #: (a t-statistic above 3.3) is ``rsd_threshold=30``.
 DEFAULT_RSD_THRESHOLD = 70.7
 MODELS = ("dynamic", "integral", "energy")
-INTEGRATIONS = ("simpson", "trapezoid", "zoh")
+INTEGRATIONS = ("auto", "simpson", "trapezoid", "zoh")
 FRICTION_MODELS = (*FRICTION_KINDS, "dahl", "auto")
 
 
@@ -46,7 +46,7 @@ class IdentifyOptions:
     ``model``: dynamic, integral or energy; ``rotor``, ``friction``, ``offset``: the joint terms
     identified; ``weighted``: weighted (else ordinary) least squares; ``rsd_threshold`` [%]:
     parameters above it removed (0 keeps all); ``energy_window``, ``integral_window``: sample
-    intervals per window; ``integration``: simpson, trapezoid or zoh; ``min_velocity``: joint
+    intervals per window; ``integration``: auto, simpson, trapezoid or zoh; ``min_velocity``: joint
     equations slower than this left out (dynamic and integral models with friction);
     ``friction_model``: a friction kind, ``dahl`` or ``auto`` (implies ``friction``),
     ``friction_width``: the tanh width, one positive number for every joint or one per joint
@@ -63,7 +63,7 @@ class IdentifyOptions:
     weighted: bool = True
     rsd_threshold: float = DEFAULT_RSD_THRESHOLD
     energy_window: int = 10
-    integration: str = "simpson"
+    integration: str = "auto"
     integral_window: int = 40
     min_velocity: float = 0.01
     friction_model: str | None = None

@@ -14,6 +14,15 @@ from .terminal import (
 )
 
 
+def _integration_choice(res) -> str:
+    """How ``integration="auto"`` chose the rule: the residual of each rule's fit."""
+    c = res.settings.get("integration_choice")
+    if not c:
+        return ""
+    other = ", ".join(f"{r} {v:.4g}" for r, v in c["rss"].items())
+    return f" (auto: the smaller residual of the fits with every base parameter; {other})"
+
+
 def joint_term_words(robot, *, rotor: bool, friction: bool, offset: bool) -> list[str]:
     """The joint terms identified, in words, for the first line (with where the rotor inertia
     and friction act when the robot has transmissions)."""
@@ -112,12 +121,12 @@ def _settings(report) -> list[str]:
     if res.model == "energy":
         out.append(
             f"  energy windows of {res.settings['energy_window']} sample interval(s), "
-            f"{res.settings['integration']} integration"
+            f"{res.settings['integration']} integration{_integration_choice(res)}"
         )
     elif res.model == "integral":
         out.append(
             f"  integral windows of {res.settings['integral_window']} sample interval(s), "
-            f"{res.settings['integration']} integration"
+            f"{res.settings['integration']} integration{_integration_choice(res)}"
         )
     if res.model == "energy":  # no equation left out by min_velocity
         pass
