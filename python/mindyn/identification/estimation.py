@@ -1024,8 +1024,10 @@ def identify(
         q_k)`` (energy), ``int tau dt = sum tau_k (t_k+1 - t_k)`` (integral), exact for a command
         held by the drive; the other integrals by Simpson). ``auto`` (the default): of
         ``simpson`` and ``zoh``, the one whose fit with every base parameter leaves the smaller
-        residual (a torque held between the samples, or smooth; :func:`_energy_equations`,
-        :func:`_integral_equations`); ``settings["integration_choice"]`` records both.
+        residual (a torque held between the samples, or smooth; energy model: the weighted
+        residual sum of squares, integral model: each joint's relative to Simpson's, summed;
+        both systems are formed, twice the work of one rule); ``settings["integration_choice"]``
+        records both.
     integral_window : int
         Integral model: sample intervals per window (one equation per joint and window; see
         :func:`~mindyn.identification.models.integral_system`).

@@ -13,7 +13,8 @@
     needed. The
     dissipated-energy columns of the friction parameters (and the work of the torque offsets)
     replace their (zero) energy columns; the integrals use the trapezoid or Simpson rule on the
-    samples.
+    samples, or for the power the zero-order hold (``sum tau_k^T (q_k+1 - q_k)``, exact for a
+    torque held over each sample period).
 ``integral``
     Each joint's equation of motion in momentum form, ``tau = d/dt p - dL/dq + friction``
     (``p = A(q) dq``, ``L = K - P``), integrated over windows ``[t_a, t_b]`` of ``window``
