@@ -84,6 +84,8 @@ def one_seed(robot, base, args, seed: int, kind: str, folder: Path) -> dict:
         z = (res.values - truth) / res.std
         out[model] = {
             "z": z,
+            "error": res.values - truth,
+            "std": res.std,
             "factor": corr["variance_factor"],
             "path": corr["data_path"],
             "measured": corr["residuals"],
