@@ -4,11 +4,14 @@ against the truth, by Monte Carlo.
     .venv/bin/python bench/bench_std_calibration.py [--robot zcr07s] [--seeds 20]
         [--model dynamic integral energy] [--noise white ar1] [--duration 20] [--rate 250]
         [--harmonics 5] [--level 0.01] [--correlation-time 0.05] [--no-friction]
+        [--closed-loop] [--quantization 0]
 
 Per seed, a random Fourier motion of ROBOT (HARMONICS harmonics, seed-dependent) is simulated
-open loop (:func:`mindyn.control.simulate_inverse`, rotor inertia and viscous and Coulomb
-friction unless ``--no-friction``) for DURATION seconds at RATE Hz; torque noise of LEVEL x
-each joint's effort limit is added, ``white`` (independent samples) or ``ar1`` (a first-order
+open loop (:func:`mindyn.control.simulate_inverse`; ``--closed-loop``: tracked under the
+default controller, :func:`mindyn.control.simulate`, torques held over each sample period;
+rotor inertia and viscous and Coulomb friction unless ``--no-friction``) for DURATION seconds
+at RATE Hz, positions quantised to QUANTIZATION if given; torque noise of LEVEL x each joint's
+effort limit is added, ``white`` (independent samples) or ``ar1`` (a first-order
 autoregression of correlation time CORRELATION_TIME seconds, of the same variance: noise
 correlated like model error). The log is written as a CSV and read as ``mindyn identify`` reads
 it (:func:`~mindyn.identification.reading.load_logs` with the default reading options: the
@@ -37,7 +40,7 @@ from pathlib import Path
 import mindyn
 import numpy as np
 from mindyn.base import base_parameters
-from mindyn.control import simulate_inverse
+from mindyn.control import SensorNoise, simulate, simulate_inverse
 from mindyn.identification import identify
 from mindyn.identification.data import write_csv
 from mindyn.identification.errors import RankDeficientError
@@ -65,8 +68,16 @@ def one_seed(robot, base, args, seed: int, kind: str, folder: Path) -> dict:
     """Per model: ``z``, the variance factors and the seconds of one simulated log."""
     traj = random_trajectory(robot, harmonics=args.harmonics, freq=0.1, seed=seed)
     friction = not args.no_friction
-    log = simulate_inverse(
-        robot, traj, rate=args.rate, duration=args.duration, rotor=True, friction=friction
+    sim = simulate if args.closed_loop else simulate_inverse
+    log = sim(
+        robot,
+        traj,
+        rate=args.rate,
+        duration=args.duration,
+        rotor=True,
+        friction=friction,
+        noise=SensorNoise(quantization=args.quantization),
+        seed=seed,
     )
     truth = true_base_values(base, {"names": log.param_names, "values": log.params})
     sd = args.level * np.asarray(robot.limits["effort"], dtype=float)
@@ -133,6 +144,13 @@ def main() -> None:
     ap.add_argument("--level", type=float, default=0.01, help="torque noise / effort limit")
     ap.add_argument("--correlation-time", type=float, default=0.05, help="AR(1) noise [s]")
     ap.add_argument("--no-friction", action="store_true")
+    ap.add_argument("--quantization", type=float, default=0.0, help="encoder step [rad]")
+    ap.add_argument(
+        "--closed-loop",
+        action="store_true",
+        help="simulate the robot tracking the motion under the default controller (torques held "
+        "over each sample period) instead of the motion's inverse dynamics",
+    )
     ap.add_argument("--json", help="write the figures to this file")
     args = ap.parse_args()
     robot = mindyn.load(args.robot)
