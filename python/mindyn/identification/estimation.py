@@ -43,7 +43,7 @@ from .models import (
     torque_noise,
     windows,
 )
-from .options import DEFAULT_RSD_THRESHOLD
+from .options import DEFAULT_RSD_THRESHOLD, INTEGRATIONS
 
 #: Least equations per base parameter (and degrees of freedom of the noise estimate) that
 #: :func:`identify` accepts. Dynamic model: 10 equations per parameter; fewer, and a log too
@@ -901,11 +901,19 @@ def _energy_row_sd(
     each window's standard deviation of the power integral from them (None: the noise is not
     measurable)."""
     joint_sigma = torque_noise([x for d in logs for x in logged_torques(d)])
-    var = np.vstack([energy_row_noise(d, window) for d in used]) @ joint_sigma**2
-    # Floor: windows near rest would otherwise get unbounded weight, and their error is then
-    # dominated by what the noise model leaves out (velocity noise, model error).
-    var = var + 0.1 * np.median(var)
-    return joint_sigma, (np.sqrt(var) if np.all(var > 0) else None)
+    sd = np.concatenate(_energy_window_sd(used, window, joint_sigma))
+    return joint_sigma, (sd if np.all(sd > 0) else None)
+
+
+def _energy_window_sd(used: list[JointData], window: int, joint_sigma: np.ndarray) -> list:
+    """Per log of ``used``, each energy window's standard deviation of the power integral from
+    the per-joint torque-noise levels ``joint_sigma`` (n,), with a floor of a tenth of the
+    median variance over all the windows: windows near rest would otherwise get unbounded
+    weight, and their error is then dominated by what the noise model leaves out (velocity
+    noise, model error). The energy model's row weights are their inverses."""
+    var = [energy_row_noise(d, window) @ joint_sigma**2 for d in used]
+    floor = 0.1 * np.median(np.concatenate(var))
+    return [np.sqrt(v + floor) for v in var]
 
 
 #: The integration rules ``integration="auto"`` chooses between (see :func:`_energy_equations`).
@@ -1097,7 +1105,7 @@ def identify(
     weighted = _args.flag(weighted, "weighted")
     rsd_threshold = _args.optional(_args.number, rsd_threshold, "rsd_threshold")
     energy_window = _args.integer(energy_window, "energy_window", 1)
-    _args.choice(integration, "integration", ("auto", "simpson", "trapezoid", "zoh"))
+    _args.choice(integration, "integration", INTEGRATIONS)
     integral_window = _args.integer(integral_window, "integral_window", 1)
     min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
     rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)

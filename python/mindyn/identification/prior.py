@@ -263,9 +263,8 @@ def block_triangles(res, data, *, folds: int = FOLDS, counts: bool = False):
     shape (folds, nb+1, nb+1), ``S_k^T S_k = [A_k b_k]^T [A_k b_k]`` over the block's rows with
     the fit's own row weights; with ``counts``, ``(S, rows)``, ``rows`` (folds,) each block's
     number of rows."""
-    from .estimation import _logs, _triangle, regressor_rows, row_weights
+    from .estimation import _energy_window_sd, _logs, _triangle, regressor_rows, row_weights
     from .models import (
-        energy_row_noise,
         energy_system,
         integral_chunks,
         moving_equations,
@@ -323,15 +322,12 @@ def block_triangles(res, data, *, folds: int = FOLDS, counts: bool = False):
         window = res.settings["energy_window"]
         rule = res.settings["integration"]
         used = [d for d in logs if windows(d, window, gaps=False)[0].size > 0]
-        var = None
-        if res.weighted and js is not None:
-            var = [energy_row_noise(d, window) @ js**2 for d in used]
-            floor = 0.1 * np.median(np.concatenate(var))
+        sd = _energy_window_sd(used, window, js) if res.weighted and js is not None else None
         for i, d in enumerate(used):
             Wd, yd = energy_system(base, d, window=window, integration=rule)
             A = np.column_stack([Wd, yd])
-            if var is not None:
-                A = A / np.sqrt(var[i] + floor)[:, None]
+            if sd is not None:
+                A = A / sd[i][:, None]
             block = _cut(A.shape[0], folds)
             for k in range(folds):
                 add(k, A[block == k])
