@@ -347,8 +347,8 @@ def noise_scale(res: IdentificationResult) -> dict:
     larger of the data path's (:func:`~mindyn.identification.estimation.correlation_factor`:
     filtered noise) and the one its residuals show
     (:func:`~mindyn.identification.estimation.residual_correlation`: model error; dynamic
-    model). Returns ``factor``, ``data_path``, ``residuals`` (None: not measured, a window
-    model) and ``residuals_rule``."""
+    and integral models). Returns ``factor``, ``data_path``, ``residuals`` (None: not
+    measured, the energy model) and ``residuals_rule``."""
     record = res.settings.get("std_correlation") or {}
     path = float(record.get("data_path", noise_variance_factor(res)))
     measured = record.get("residuals")

@@ -613,30 +613,73 @@ def residual_correlation(res: IdentificationResult, data) -> tuple[float | None,
     leaves residuals correlated over many samples, which the residual variance, counting the
     samples as independent, does not see.
 
-    Dynamic model, with ``data`` the logs ``res`` was fitted on: the Newey-West estimate of the
-    covariance of the scores ``g_t = sum_j a_tj r_tj`` (per sample ``t``, ``a_tj`` the weighted
-    regressor row of joint ``j``, ``r_tj`` its weighted residual with all base parameters),
-    Bartlett weights up to the lag :func:`newey_west_lag` chooses per log from its scores'
-    own correlation (Newey & West, *Automatic lag selection in covariance matrix estimation*,
-    Review of Economic Studies 61, 1994; the parts of a log joined by
+    Dynamic and integral models, with ``data`` the logs ``res`` was fitted on: the Newey-West
+    estimate of the covariance of the scores ``g_t = sum_j a_tj r_tj`` (per sample ``t`` of the
+    dynamic model, per window of the integral model; ``a_tj`` the weighted regressor row of
+    joint ``j``, ``r_tj`` its weighted residual with all base parameters), Bartlett weights up
+    to the lag :func:`newey_west_lag` chooses per log from its scores' own correlation (Newey &
+    West, *Automatic lag selection in covariance matrix estimation*, Review of Economic Studies
+    61, 1994; the parts of a log joined by
     :func:`~mindyn.identification.preprocess.concatenate` each a log), against the covariance
-    that independent residuals would give, ``s^2 A^T A``: the
-    mean of its eigenvalues relative to that, ``tr(S (s^2 A^T A)^-1) / nb``, the mean inflation of
-    a parameter direction's variance. About 1 for white residuals, the data path's factor for
-    filtered noise, more for model error. Other models: None (their rows are windows; not
-    measured), as without residuals."""
-    if res.model != "dynamic" or res.reduced is None:
-        return None, "not measured (the dynamic model only)"
+    that independent residuals would give, ``s^2 A^T A``: the mean of its eigenvalues relative
+    to that, ``tr(S (s^2 A^T A)^-1) / nb``, the mean inflation of a parameter direction's
+    variance. About 1 for white residuals, the data path's factor for filtered noise, more for
+    model error. Energy model: None (its windows are weighted by noise estimates of their own;
+    not measured), as without residuals."""
+    if res.model == "energy" or res.reduced is None:
+        return None, "not measured (the dynamic and integral models only)"
+    window = res.settings.get("integral_window") if res.model == "integral" else None
     return _score_correlation(
-        res.base, res.reduced, row_weights(res), _logs(data), res.settings.get("min_velocity", 0.0)
+        res.base,
+        res.reduced,
+        row_weights(res),
+        _logs(data),
+        res.settings.get("min_velocity", 0.0),
+        window=window,
+        integration=res.settings.get("integration", "simpson"),
     )
 
 
+def _equation_rows(
+    base: BaseParameters,
+    d: JointData,
+    min_velocity: float,
+    window: int | None,
+    integration: str,
+):
+    """The equations of log ``d`` as :func:`_score_correlation` takes them: ``(count, edges,
+    keep, chunks)``, ``count`` the samples (dynamic model, ``window`` None) or windows
+    (integral model), ``edges`` the indices where the logs joined in ``d`` start (and
+    ``count``), ``keep`` the equations fitted (``(count, n)`` booleans, None: all) and
+    ``chunks`` an iterator of consecutive ``(W (k, n, nb), y (k, n))``."""
+    if window is None:
+        tau = require_torque(d)
+        keep = moving_equations(base, d.dq, min_velocity)
+        chunks = (
+            (regressor_rows(base, d, c0, min(d.m, c0 + 8192)), tau[c0 : c0 + 8192])
+            for c0 in range(0, d.m, 8192)
+        )
+        return d.m, [*(d.starts or (0,)), d.m], keep, chunks
+    a, _ = windows(d, window)
+    keep = moving_windows(base, d, window, min_velocity)
+    chunks = integral_chunks(base, d, window=window, integration=integration)
+    starts = np.searchsorted(a, np.asarray(d.starts or (0,)))
+    return a.size, [*(int(x) for x in starts), a.size], keep, chunks
+
+
 def _score_correlation(
-    base: BaseParameters, ls: _Reduced, w: np.ndarray, logs: list[JointData], min_velocity: float
+    base: BaseParameters,
+    ls: _Reduced,
+    w: np.ndarray,
+    logs: list[JointData],
+    min_velocity: float,
+    *,
+    window: int | None = None,
+    integration: str = "simpson",
 ) -> tuple[float | None, str]:
-    """:func:`residual_correlation` of the dynamic model's reduced problem ``ls`` (rows weighted
-    by ``w`` per joint) fitted on ``logs``."""
+    """:func:`residual_correlation` of the reduced problem ``ls`` (rows weighted by ``w`` per
+    joint) fitted on ``logs``: the dynamic model's (``window`` None) or the integral model's
+    (windows of ``window`` sample intervals, integrated by ``integration``)."""
     nb = base.n
     beta, _, _ = ls.solve(list(range(nb)))
     s2 = ls.rho / (ls.r - nb) if ls.r > nb else 0.0
@@ -644,20 +687,20 @@ def _score_correlation(
     S = np.zeros((nb, nb))
     lags = []
     for d in logs:
-        tau = require_torque(d)
-        keep = moving_equations(base, d.dq, min_velocity)
-        G = np.zeros((d.m, nb))
-        for c0 in range(0, d.m, 8192):
-            c1 = min(d.m, c0 + 8192)
-            Wr = regressor_rows(base, d, c0, c1)
-            r = (tau[c0:c1] - Wr @ beta) * w[None, :]
+        count, edges, keep, chunks = _equation_rows(base, d, min_velocity, window, integration)
+        G = np.zeros((count, nb))
+        i0 = 0
+        for Wr, y in chunks:
+            i1 = i0 + Wr.shape[0]
+            r = (y - Wr @ beta) * w[None, :]
             Wr = Wr * w[None, :, None]
             if keep is not None:
-                Wr = Wr * keep[c0:c1, :, None]
-                r = r * keep[c0:c1]
-            G[c0:c1] = np.einsum("tjb,tj->tb", Wr, r)
+                Wr = Wr * keep[i0:i1, :, None]
+                r = r * keep[i0:i1]
+            G[i0:i1] = np.einsum("tjb,tj->tb", Wr, r)
             A += np.einsum("tjb,tjc->bc", Wr, Wr)
-        edges = [*(d.starts or (0,)), d.m]  # no lag spans the join of two logs
+            i0 = i1
+        # no lag spans the join of two logs
         for g in (G[a:b] for a, b in zip(edges[:-1], edges[1:]) if b > a):
             L = newey_west_lag(g)
             S += g.T @ g
@@ -677,7 +720,8 @@ def _score_correlation(
     rule = (
         "Newey-West covariance of the fit's scores (Bartlett weights up to lag "
         + ", ".join(map(str, lags))
-        + " samples, chosen from the scores' correlation by Newey and West's automatic rule) "
+        + (" samples" if window is None else " windows")
+        + ", chosen from the scores' correlation by Newey and West's automatic rule) "
         "over that of independent residuals, mean over the parameter directions"
     )
     return factor, rule
@@ -1216,11 +1260,17 @@ def identify(
 
     window = {"dynamic": None, "integral": integral_window, "energy": energy_window}[model]
     inflation, rule = correlation_factor(logs, log_rows, window)
-    measured, measured_rule = None, "not measured (the dynamic model only)"
-    if model == "dynamic":
+    measured, measured_rule = None, "not measured (the dynamic and integral models only)"
+    if model != "energy":
         w = joint_weights(joint_sigma) if weighted and joint_sigma is not None else np.ones(robot.n)
         measured, measured_rule = _score_correlation(
-            base, ls, w, logs, settings.get("min_velocity", 0.0)
+            base,
+            ls,
+            w,
+            logs,
+            settings.get("min_velocity", 0.0),
+            window=window,
+            integration=settings.get("integration", "simpson"),
         )
     settings["std_correlation"] = _variance_factor_record(inflation, rule, measured, measured_rule)
     inflation = settings["std_correlation"]["variance_factor"]
