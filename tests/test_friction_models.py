@@ -441,9 +441,12 @@ def test_codegen_takes_the_friction_model_identified(arm, tmp_path, capsys):
     assert "Fv v + Fc tanh(v / w)" in header and "viscous and smooth Coulomb friction" in header
 
 
-def test_descriptions_refuse_other_friction_models(arm, tmp_path, capsys):
-    """A robot description holds viscous and Coulomb friction only: export and identify
-    --yaml refuse another model (the smooth one has the same parameter names)."""
+def test_descriptions_keep_other_friction_models_in_their_joint_terms_file(arm, tmp_path, capsys):
+    """A description holds viscous and Coulomb friction; export --yaml of the smooth model
+    writes the model and its widths to the joint-terms file beside the table, and the table
+    loaded with it has them (the smooth model has the Coulomb model's parameter names: without
+    the file it would be read back as Coulomb friction). MJCF, which has no place for them,
+    refuses, as does identify --mjcf with such a model and identify --urdf with Dahl's."""
     from mindyn.cli import main
 
     robot_path = random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4)
@@ -451,22 +454,33 @@ def test_descriptions_refuse_other_friction_models(arm, tmp_path, capsys):
     doc = {
         "robot": arm.name,
         "classical": dict(zip(names, map(float, arm.parameters(rotor=False, friction=True)))),
-        "friction_model": {"kind": "smooth", "velocity": [0.1, 0.1, 0.1], "chosen_by": "given"},
+        "friction_model": {"kind": "smooth", "velocity": [0.1, 0.2, 0.3], "chosen_by": "given"},
     }
     (tmp_path / "id.json").write_text(json.dumps(doc))
     capsys.readouterr()
-    rc = main(["export", str(robot_path), str(tmp_path / "id.json"), "--yaml",
-               str(tmp_path / "out.yaml")])  # fmt: skip
-    assert rc != 0 and "smooth friction model" in capsys.readouterr().err
-    assert not (tmp_path / "out.yaml").exists()
-    doc["friction_model"]["kind"] = "coulomb"
-    del doc["friction_model"]["velocity"]
-    (tmp_path / "id.json").write_text(json.dumps(doc))
     assert main(["export", str(robot_path), str(tmp_path / "id.json"), "--yaml",
                  str(tmp_path / "out.yaml")]) == 0  # fmt: skip
+    out = capsys.readouterr().out
+    side = tmp_path / "out.joints.yaml"
+    assert "friction model smooth: the table's 'friction' holds Fv and Fc only" in out, out
+    back = mindyn.load(tmp_path / "out.yaml", joint_terms=side)
+    assert back.friction_model["kind"] == "smooth"
+    np.testing.assert_array_equal(back.friction_model["velocity"], [0.1, 0.2, 0.3])
+    np.testing.assert_array_equal(
+        back.parameters(rotor=False, friction=True), arm.parameters(rotor=False, friction=True)
+    )
+    assert mindyn.load(tmp_path / "out.yaml").friction_model["kind"] == "coulomb"
+    rc = main(["export", str(robot_path), str(tmp_path / "id.json"), "--mjcf",
+               str(tmp_path / "out.xml")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert rc != 0 and "smooth friction model; MJCF holds viscous and dry friction only" in err
+    assert not (tmp_path / "out.xml").exists()
     rc = main(["identify", str(robot_path), "x.csv", "--friction-model", "stribeck",
-               "--consistent", "--yaml", str(tmp_path / "o.yaml")])  # fmt: skip
+               "--consistent", "--mjcf", str(tmp_path / "o.xml")])  # fmt: skip
     assert rc != 0 and "not the stribeck friction model" in capsys.readouterr().err
+    rc = main(["identify", str(robot_path), "x.csv", "--friction-model", "dahl",
+               "--consistent", "--urdf", str(tmp_path / "o.urdf")])  # fmt: skip
+    assert rc != 0 and "no robot description holds it" in capsys.readouterr().err
 
 
 def test_auto_compares_models_on_the_same_blocks_paired():

@@ -202,6 +202,11 @@ MALFORMED = [
     (("set", 2, "motor", "m2"), "joint 3 ('j3'): motor 'm2' is named twice"),
     (("set", 0, "index", 2), "joint 1 ('j1'): 'index' is 2; robot 'geared3' numbers it 1"),
     (("top", "drive_side", "motors"), "'drive_side' is 'motors'; expected 'motor' or 'joint'"),
+    (("top", "friction_model", "dahl"), "'friction_model' is 'dahl'; expected one of coulomb"),
+    (("top", "friction_model", "stribeck"), "has a third term, 'Fs', which the joints lack"),
+    (("top", "friction_model", "smooth"), "joint 1 ('j1') has no 'velocity', which the friction"),
+    (("set", 0, "velocity", 0.1), "joint 1 ('j1') has a 'velocity', which the friction model"),
+    (("set", 0, "velocity", -1), "joint 1: 'velocity' is -1; expected a positive number"),
 ]
 
 
@@ -280,3 +285,69 @@ def test_the_offsets_of_a_robot_reach_the_base_dynamics_and_its_code():
     np.testing.assert_allclose(dyn.gravity(q), plain.gravity_torque(q), atol=1e-10)
     with pytest.raises(mindyn.ArgumentError, match="coulomb.*entry 2; rotor inertia and fric"):
         plain.with_joint_terms(coulomb=[0, -1, 0, 0, 0, 0])
+
+
+def _friction_by_hand(kind, v, Fv, Fc, third, w):
+    """The friction models' torques written out (the manual's formulas), per slot velocity v."""
+    s = np.sign(v)
+    f = Fv * v + (Fc * np.tanh(v / w) if kind == "smooth" else Fc * s)
+    if kind == "asymmetric":
+        f += third * np.abs(s)
+    if kind == "stribeck":
+        f += third * s * np.exp(-((v / w) ** 2))
+    return f
+
+
+@pytest.mark.parametrize("side", ["motor", "joint"])
+@pytest.mark.parametrize("kind", ["smooth", "asymmetric", "stribeck"])
+def test_a_friction_model_goes_into_the_sidecar_and_comes_back(tmp_path, kind, side):
+    """write_urdf of a robot with the smooth, asymmetric or Stribeck friction model: the URDF's
+    <dynamics> holds Fv and Fc, the sidecar the model, its third term and velocities (a note
+    says so); loaded with the sidecar, the robot has the model and the values written, and its
+    inverse dynamics equal Pinocchio's rnea plus T^T (Ia T ddq + f(T dq)) with the model's
+    formula written out (T the identity on the joint side). A motor that turns with several
+    joints cannot hold a third term: a non-zero one is refused."""
+    import pinocchio as pin
+
+    path, T = coupled_wrist_urdf(tmp_path / "w.urdf")
+    robot = mindyn.load(path).with_drive_side(side)
+    n = robot.n
+    rng = np.random.default_rng(5)
+    w = rng.uniform(0.05, 0.5, n) if kind in ("smooth", "stribeck") else None
+    robot = robot.with_friction_model(kind, velocity=w)
+    c = 2 if kind == "smooth" else 3
+    Ia, Fv, Fc = motor_values(n, seed=4)
+    # motors that drive one joint alone (the only ones the model holds a third term for)
+    alone = [k for k in range(n) if np.count_nonzero(T[k]) == 1
+             and np.count_nonzero(T[:, np.flatnonzero(T[k])[0]]) == 1]  # fmt: skip
+    third = rng.uniform(0.2, 0.6, n) * Fc
+    if side == "motor":
+        third[[k for k in range(n) if k not in alone]] = 0.0
+    else:
+        Ia, Fv, Fc = Ia * 900, Fv * 900, Fc * 30  # about the size they have on the joints
+        third = third * 30
+    p = robot.parameters(rotor=True, friction=True).reshape(n, 11 + c).copy()
+    p[:, 10], p[:, 11], p[:, 12] = Ia, Fv, Fc
+    if c == 3:
+        p[:, 13] = third
+    res = write_urdf(robot, p.reshape(-1), tmp_path / "out.urdf")
+    assert any(f"friction model {kind}" in note and str(res.sidecar) in note for note in res.notes)
+    back = mindyn.load(res.path, joint_terms=res.sidecar)
+    assert back.friction_model["kind"] == kind and back.drive_side == side
+    if w is not None:
+        np.testing.assert_array_equal(back.friction_model["velocity"], w)
+    np.testing.assert_allclose(
+        back.parameters(rotor=True, friction=True).reshape(n, 11 + c)[:, 10:], p[:, 10:],
+        rtol=1e-14, atol=0,
+    )  # fmt: skip
+    Tm = T if side == "motor" else np.eye(n)
+    model = pin.buildModelFromUrdf(str(res.path))
+    for q, dq, ddq in rng.uniform(-1.5, 1.5, (4, 3, n)):
+        ref = pin.rnea(model, model.createData(), q, dq, ddq)
+        ref += Tm.T @ (Ia * (Tm @ ddq) + _friction_by_hand(kind, Tm @ dq, Fv, Fc, third, w))
+        tau = back.inverse_dynamics(q, dq, ddq, back.parameters(rotor=True, friction=True))
+        np.testing.assert_allclose(tau, ref, rtol=1e-9, atol=1e-12)
+    if side == "motor" and c == 3:
+        p[5, 13] = 0.01  # motor 6 turns with joints 5 and 6
+        with pytest.raises(mindyn.ModelError, match="motors 'm6'.*drive one joint alone"):
+            write_urdf(robot, p.reshape(-1), tmp_path / "bad.urdf")

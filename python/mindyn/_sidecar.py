@@ -24,23 +24,45 @@ TERMS = {
     ),
     "Fv": ("viscous friction: tau += Fv * dq", "N m s/rad", "N s/m"),
     "Fc": ("Coulomb friction: tau += Fc * sign(dq)", "N m", "N"),
+    "Fa": (
+        "direction-dependent Coulomb friction (friction_model asymmetric): tau += Fa * "
+        "|sign(dq)|, the Coulomb torque Fc + Fa moving forward and Fc - Fa backward",
+        "N m",
+        "N",
+    ),
+    "Fs": (
+        "Stribeck friction (friction_model stribeck): tau += Fs * sign(dq) * exp(-(dq / "
+        "velocity)^2), velocity the row's Stribeck velocity",
+        "N m",
+        "N",
+    ),
     OFF: (f"constant torque offset: tau += {OFF}", "N m", "N"),
 }
 #: The entries of a row besides the terms.
-_ROW_KEYS = ("name", "index", "type", "motor", "units")
+_ROW_KEYS = ("name", "index", "type", "motor", "units", "velocity")
 #: The terms that are never negative, in words.
 _NONNEGATIVE = {"Ia": "rotor inertia", "Fv": "viscous friction", "Fc": "Coulomb friction"}
+#: The friction models a file may name (``friction_model``), with the third term each has and
+#: whether its rows give a ``velocity`` (the tanh width of ``smooth``: ``tau += Fc *
+#: tanh(dq / velocity)`` in place of ``Fc * sign(dq)``; the Stribeck velocity).
+FRICTION_MODELS = {
+    "coulomb": (None, False),
+    "asymmetric": ("Fa", False),
+    "smooth": (None, True),
+    "stribeck": ("Fs", True),
+}
 
 
 @dataclass(frozen=True)
 class Sidecar:
-    """A joint-terms file as read: its rows (mappings, the terms checked as numbers) and
+    """A joint-terms file as read: its rows (mappings, the terms checked as numbers),
     ``drive_side`` (``"motor"``: each row's Ia, Fv, Fc are the motor's it names; else
-    ``"joint"``)."""
+    ``"joint"``) and ``friction_model`` (a key of :data:`FRICTION_MODELS`)."""
 
     path: Path
     rows: list
     drive_side: str
+    friction_model: str = "coulomb"
 
 
 def read_yaml(path: Path, what: str):
@@ -81,17 +103,36 @@ def read(path) -> Sidecar:
                     raise ModelError(
                         f"{p}: joint {i}: '{key}' is {said}; expected a finite number within 1e16"
                     )
+        if "velocity" in row:
+            v = row["velocity"]
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v <= 1e16:
+                raise ModelError(
+                    f"{p}: joint {i}: 'velocity' is {v!r}; expected a positive number [rad/s | m/s]"
+                )
     side = doc.get("drive_side", "joint")
     if side not in ("motor", "joint"):
         raise ModelError(f"{p}: 'drive_side' is {side!r}; expected 'motor' or 'joint'")
-    return Sidecar(p, rows, side)
+    model = doc.get("friction_model", "coulomb")
+    if model not in FRICTION_MODELS:
+        hint = (
+            " (the Dahl model's state follows the motion: no joint term holds it)"
+            if model == "dahl"
+            else ""
+        )
+        raise ModelError(
+            f"{p}: 'friction_model' is {model!r}; expected one of "
+            f"{', '.join(FRICTION_MODELS)}{hint}"
+        )
+    return Sidecar(p, rows, side, model)
 
 
 def slots(sidecar: Sidecar, robot) -> dict:
     """The terms of ``sidecar`` as the keywords of :meth:`mindyn.Robot.with_joint_terms` for
-    ``robot``: ``rotor``, ``viscous``, ``coulomb`` by slot (motor k's on the motor side, the
-    motor named in the row), ``offset`` by joint (``None`` for a term the file does not
-    have) and ``drive_side``. Every row names a joint of the robot (``name``; ``index`` and
+    ``robot``: ``rotor``, ``viscous``, ``coulomb`` and ``third`` (the friction model's ``Fa``
+    or ``Fs``) by slot (motor k's on the motor side, the motor named in the row), ``offset``
+    by joint (``None`` for a term the file does not have), ``drive_side`` and
+    ``friction_model`` (``{"kind", "velocity"}``, velocity by slot or None; None without
+    friction). Every row names a joint of the robot (``name``; ``index`` and
     ``type``, when given, as the robot has them), each joint once; every row has the same
     terms, ``Fv`` with ``Fc``, none of ``Ia``, ``Fv``, ``Fc`` negative. ModelError (one line
     naming the file and the entry) otherwise."""
@@ -153,12 +194,41 @@ def slots(sidecar: Sidecar, robot) -> dict:
     if ("Fv" in present) != ("Fc" in present):
         have = "Fv" if "Fv" in present else "Fc"
         raise ModelError(f"{p}: the joints have '{have}' alone; friction is Fv with Fc")
+    third, velocity = FRICTION_MODELS[sidecar.friction_model]
+    for key in ("Fa", "Fs"):
+        if key in present and key != third:
+            raise ModelError(
+                f"{p}: the joints have '{key}', which the friction model "
+                f"'{sidecar.friction_model}' has not (Fa: asymmetric, Fs: stribeck)"
+            )
+    if sidecar.friction_model != "coulomb" and "Fc" not in present:
+        raise ModelError(
+            f"{p}: 'friction_model' is '{sidecar.friction_model}' but the joints have no "
+            "friction (Fv, Fc)"
+        )
+    if third is not None and third not in present:
+        raise ModelError(
+            f"{p}: the friction model '{sidecar.friction_model}' has a third term, '{third}', "
+            "which the joints lack"
+        )
+    for i, row in enumerate(rows, 1):
+        if ("velocity" in row) != (velocity and "Fc" in present):
+            raise ModelError(
+                f"{p}: joint {i} ('{row['name']}') "
+                + (
+                    f"has no 'velocity', which the friction model '{sidecar.friction_model}' needs"
+                    if velocity
+                    else f"has a 'velocity', which the friction model "
+                    f"'{sidecar.friction_model}' has not (smooth and stribeck have one)"
+                )
+            )
     drives = any(k in present for k in _NONNEGATIVE)
     slot_of = _motor_slots(sidecar, robot) if drives and sidecar.drive_side == "motor" else joint_of
     # offsets alone: the robot's drive side stays (a file records where Ia, Fv, Fc act)
     out: dict = {"drive_side": sidecar.drive_side if drives else None}
-    for key, word in (("Ia", "rotor"), ("Fv", "viscous"), ("Fc", "coulomb"), (OFF, "offset")):
-        if key not in present:
+    words = (("Ia", "rotor"), ("Fv", "viscous"), ("Fc", "coulomb"), (OFF, "offset"))
+    for key, word in (*words, (third or "", "third"), ("velocity", "velocity")):
+        if not (key in present or (key == "velocity" and velocity and "Fc" in present)):
             out[word] = None
             continue
         v = np.zeros(n)
@@ -167,6 +237,12 @@ def slots(sidecar: Sidecar, robot) -> dict:
             v[k] = float(row[key])
         assert all(math.isfinite(x) for x in v)  # read() checked them
         out[word] = v
+    # the friction model's shape, by slot: with friction only (a file of offsets keeps the
+    # robot's)
+    by_slot = out.pop("velocity")
+    out["friction_model"] = (
+        {"kind": sidecar.friction_model, "velocity": by_slot} if "Fc" in present else None
+    )
     return out
 
 

@@ -45,17 +45,24 @@ _TERMS = _sidecar.TERMS
 @dataclass
 class JointTerms:
     """Validated classical parameters: ``inertial`` (10 n) and, per joint, the optional terms
-    (``None`` when absent)."""
+    (``None`` when absent); ``third`` the friction model's third term, named ``third_name``
+    (``Fa`` or ``Fs``)."""
 
     inertial: np.ndarray
     rotor: np.ndarray | None = None
     viscous: np.ndarray | None = None
     coulomb: np.ndarray | None = None
     offset: np.ndarray | None = None
+    third: np.ndarray | None = None
+    third_name: str = ""
 
     def joint_terms(self) -> dict[str, np.ndarray]:
-        """The per-joint terms present, by their name prefix (``Ia``, ``Fv``, ``Fc``, ``Off``)."""
-        out = {"Ia": self.rotor, "Fv": self.viscous, "Fc": self.coulomb, _OFF: self.offset}
+        """The per-joint terms present, by their name prefix (``Ia``, ``Fv``, ``Fc``, ``Fa`` or
+        ``Fs``, ``Off``)."""
+        out = {"Ia": self.rotor, "Fv": self.viscous, "Fc": self.coulomb}
+        if self.third is not None:
+            out[self.third_name] = self.third
+        out[_OFF] = self.offset
         return {k: v for k, v in out.items() if v is not None}
 
 
@@ -74,27 +81,43 @@ def classical_terms(robot: Robot, classical, *, what: str = "classical parameter
     """Checks ``classical`` against ``robot`` and splits it.
 
     ``classical`` is a mapping ``{name: value}`` holding exactly the names of one classical
-    layout of the robot (``robot.parameter_names(rotor, friction)``), optionally with ``Off1 ..
-    OffN``, or a vector in a classical layout (length 10 n, 11 n, 12 n or 13 n); anything else
-    (names missing or unknown, a value that is not a finite number) is an
+    layout of the robot (``robot.parameter_names(rotor, friction)``, the friction columns those
+    of its friction model), optionally with ``Off1 .. OffN``, or a vector in a classical layout
+    (per joint 10, 11 with rotor inertia, 10 + c with friction of ``c`` columns, 11 + c with
+    both); anything else (names missing or unknown, a value that is not a finite number) is an
     :class:`~mindyn.ArgumentError`. ``what`` names the input in error messages."""
     _args.instance(robot, "robot", Robot)
     _args.text(what, "what")
     n = robot.n
     if isinstance(classical, Mapping):
         return _from_mapping(robot, classical, what)
-    p = _args.params(classical, what, n, allow_none=False)
+    c = _friction_columns(robot)
+    p = _args.params(classical, what, n, (10, 11, 10 + c, 11 + c), allow_none=False)
     per = p.size // n
-    rotor = per in (11, 13)
-    friction = per in (12, 13)
+    rotor = per in (11, 11 + c)
+    friction = per in (10 + c, 11 + c)
     rows = p.reshape(n, per)
     out = JointTerms(inertial=rows[:, :10].reshape(-1).copy())
     if rotor:
         out.rotor = rows[:, 10].copy()
     if friction:
-        out.viscous = rows[:, per - 2].copy()
-        out.coulomb = rows[:, per - 1].copy()
+        f = 11 if rotor else 10
+        out.viscous = rows[:, f].copy()
+        out.coulomb = rows[:, f + 1].copy()
+        if c == 3:
+            out.third, out.third_name = rows[:, f + 2].copy(), _third_name(robot)
     return out
+
+
+def _friction_columns(robot: Robot) -> int:
+    """The number of friction terms of the robot's friction model (2 or 3)."""
+    return 3 if _third_name(robot) else 2
+
+
+def _third_name(robot: Robot) -> str:
+    """The name prefix of the third friction term of the robot's friction model, or ''."""
+    third = _sidecar.FRICTION_MODELS[robot.friction_model["kind"]][0]
+    return third or ""
 
 
 def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
@@ -104,7 +127,7 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
     if bad:
         raise ArgumentError(f"{what}: the names must be text, got {bad[0]!r}")
     has = {p: any(k.startswith(p) and k[len(p) :].isdigit() for k in keys) for p in _TERMS}
-    rotor, friction = has["Ia"], has["Fv"] or has["Fc"]
+    rotor, friction = has["Ia"], has["Fv"] or has["Fc"] or has["Fa"] or has["Fs"]
     expected = robot.parameter_names(rotor=rotor, friction=friction, offset=has[_OFF])
     missing = [k for k in expected if k not in classical]
     unknown = [k for k in keys if k not in set(expected)]
@@ -114,7 +137,9 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
             parts.append(f"unknown {_few(unknown)}")
         if missing:
             parts.append(f"missing {_few(missing)}")
-        extras = [t for t, on in (("Ia", rotor), ("Fv, Fc", friction), (_OFF, has[_OFF])) if on]
+        third = _third_name(robot)
+        words = "Fv, Fc" + (f", {third}" if third else "")
+        extras = [t for t, on in (("Ia", rotor), (words, friction), (_OFF, has[_OFF])) if on]
         layout = "XX..M" + "".join(f", {t}" for t in extras)
         raise ArgumentError(
             f"{what}: {'; '.join(parts)} (robot '{robot.name}' has {n} joints: expected "
@@ -144,6 +169,9 @@ def _from_mapping(robot: Robot, classical: Mapping, what: str) -> JointTerms:
         out.rotor = column("Ia")
     if friction:
         out.viscous, out.coulomb = column("Fv"), column("Fc")
+        if _third_name(robot):
+            out.third_name = _third_name(robot)
+            out.third = column(out.third_name)
     if has[_OFF]:
         out.offset = column(_OFF)
     return out
@@ -172,6 +200,8 @@ def _joint_side_terms(
         None if terms.viscous is None else zeros.copy(),
         None if terms.coulomb is None else zeros.copy(),
         terms.offset,
+        None if terms.third is None else zeros.copy(),
+        terms.third_name,
     )
     coupled = []
     for j, direct in enumerate(_direct_drives(T)):
@@ -185,6 +215,8 @@ def _joint_side_terms(
             assert terms.coulomb is not None and out.coulomb is not None  # given with viscous
             out.viscous[j] = r * r * terms.viscous[k]
             out.coulomb[j] = abs(r) * terms.coulomb[k]
+            if terms.third is not None and out.third is not None:  # as the loader divides
+                out.third[j] = (r if terms.third_name == "Fa" else abs(r)) * terms.third[k]
     notes = [
         "rotor inertia and friction on the motors: each directly driven joint carries its "
         "motor's as they act on the joint (r^2 Ia, r^2 Fv, |r| Fc, r the reduction)"
@@ -293,6 +325,7 @@ def write_urdf(
             + (": export it with write_yaml" if robot.convention in ("dh", "mdh") else "")
         )
     terms = classical_terms(robot, classical)
+    _check_third(robot, terms)
     src = Path(robot.source if source is None else source)
     doc = _UrdfDocument(src)
     joint_side, reflected = _joint_side_terms(robot, terms)
@@ -306,6 +339,7 @@ def write_urdf(
     if side is not None:
         _write_sidecar(side, robot, terms, out, urdf=True)
         written.sidecar = side
+        written.notes += _shape_note(robot, terms, side, "the joints' <dynamics> hold")
     return written
 
 
@@ -602,6 +636,40 @@ def _sidecar_path(sidecar, out: Path) -> Path:
     return side
 
 
+def _shape_note(robot: Robot, terms: JointTerms, side: Path, holds: str) -> list[str]:
+    """The note that the description holds only viscous and Coulomb friction of a robot whose
+    friction model has a shape (smooth, asymmetric, Stribeck), which the sidecar ``side``
+    keeps; ``holds`` says where the description has them."""
+    kind = robot.friction_model["kind"]
+    if kind == "coulomb" or terms.coulomb is None:
+        return []
+    extra = [t for t in (terms.third_name,) if t]
+    if _sidecar.FRICTION_MODELS[kind][1]:
+        extra.append("velocity")
+    return [
+        f"friction model {kind}: {holds} Fv and Fc only; the model and its "
+        f"{' and '.join(extra)} are in {side} (mindyn.load(..., joint_terms=) or "
+        "--joint-terms reads them back)"
+    ]
+
+
+def _check_third(robot: Robot, terms: JointTerms) -> None:
+    """ModelError when the friction model's third term is non-zero on a motor that turns with
+    several joints: a robot holds it on the motors that drive one joint alone."""
+    if terms.third is None or robot.drive_side != "motor":
+        return
+    assert robot.transmission is not None  # the motor side has one
+    alone = {d[0] for d in _direct_drives(robot.transmission.T) if d is not None}
+    bad = [k for k in range(robot.n) if k not in alone and terms.third[k] != 0]
+    if bad:
+        motors = ", ".join(f"'{robot.transmission.motors[k]}'" for k in bad)
+        raise ModelError(
+            f"{terms.third_name} (the {robot.friction_model['kind']} friction model's third "
+            f"term) of motors {motors}, which turn with several joints, is not zero: a robot "
+            "description holds it for motors that drive one joint alone"
+        )
+
+
 def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Path, urdf: bool):
     present = terms.joint_terms()
     meaning = {}
@@ -612,20 +680,32 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
         if urdf and key == "Fc":
             text += "; also the URDF joint's <dynamics friction>"
         meaning[key] = f"{text} [{rev} for a revolute joint, {pri} for a prismatic one]"
+    model = robot.friction_model
+    shaped = model["kind"] != "coulomb" and "Fc" in present
+    widths = shaped and _sidecar.FRICTION_MODELS[model["kind"]][1]
+    if widths:
+        meaning["velocity"] = (
+            "the friction model's velocity scale: "
+            + ("the tanh width of Fc" if model["kind"] == "smooth" else "the Stribeck velocity")
+            + " [rad/s for a revolute joint, m/s for a prismatic one; the motor's on the motor "
+            "side]"
+        )
     joints = []
     for k in range(robot.n):
         kind = robot.joint_types[k]
         unit = 1 if kind == "revolute" else 2
-        row = {"name": robot.joint_names[k], "index": k + 1, "type": kind}
+        row: dict[str, Any] = {"name": robot.joint_names[k], "index": k + 1, "type": kind}
         row.update({key: float(v[k]) for key, v in present.items()})
-        row["units"] = {key: _TERMS[key][unit] for key in present}
+        units = {key: _TERMS[key][unit] for key in present}
+        if widths:
+            row["velocity"] = float(model["velocity"][k])
+            units["velocity"] = ("rad/s", "m/s")[unit - 1]
+        row["units"] = units
         joints.append(row)
-    doc: dict[str, Any] = {
-        "robot": robot.name,
-        "description": description.name,
-        "terms": meaning,
-        "joints": joints,
-    }
+    doc: dict[str, Any] = {"robot": robot.name, "description": description.name}
+    if shaped:
+        doc["friction_model"] = model["kind"]
+    doc.update({"terms": meaning, "joints": joints})
     if robot.drive_side == "motor" and any(k in present for k in ("Ia", "Fv", "Fc")):
         # row k's Ia, Fv, Fc are motor k's, in motor units, acting through row k of T
         doc["drive_side"] = "motor"
@@ -633,9 +713,10 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
         for k, row in enumerate(joints):
             row["motor"] = robot.transmission.motors[k]
         doc["terms"]["drive_side"] = (
-            "motor: each row's Ia, Fv, Fc belong to the motor named in it (row k of the "
-            "transmission T, q_m = T q): tau += T^T (Ia T ddq + Fv T dq + Fc sign(T dq)), in "
-            f"motor units (kg m^2, N m s/rad, N m); {_OFF} stays the joint's"
+            "motor: each row's Ia, Fv, Fc (and the friction model's terms) belong to the motor "
+            "named in it (row k of the transmission T, q_m = T q): tau += T^T (Ia T ddq + "
+            "f(T dq)), f the friction model's torque (Fv T dq + Fc sign(T dq) for Coulomb "
+            f"friction), in motor units (kg m^2, N m s/rad, N m); {_OFF} stays the joint's"
         )
     head = (
         f"# Joint terms identified for robot '{robot.name}', written by mindyn export beside "
@@ -723,6 +804,7 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
             + ("export it with write_urdf" if robot.convention == "urdf" else "nothing to rewrite")
         )
     terms = classical_terms(robot, classical)
+    _check_third(robot, terms)
     if source is None and not Path(robot.source).is_file():
         raise ModelError(
             f"robot '{robot.name}' was not read from a description file (source "
@@ -776,7 +858,8 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
     old_notes = doc.get("notes")
     doc["notes"] = f"{old_notes.rstrip()} {note}" if isinstance(old_notes, str) else note
     out = Path(path)
-    keep = terms.offset is not None or sidecar is not None
+    shaped = robot.friction_model["kind"] != "coulomb" and terms.coulomb is not None
+    keep = terms.offset is not None or sidecar is not None or shaped
     side = _sidecar_path(sidecar, out) if keep else None
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(yaml.dump(doc, Dumper=_TableDumper, sort_keys=False, width=100), "utf-8")
@@ -786,4 +869,5 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
         written.sidecar = side
         if terms.offset is not None:
             written.notes.append(f"torque offsets have no place in a DH/MDH table: see {side}")
+        written.notes += _shape_note(robot, motor_terms, side, "the table's 'friction' holds")
     return written

@@ -120,7 +120,8 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     ------
     ModelError
         ``classical`` does not fit the robot, a mass is negative (or zero with a first
-        moment), the MJCF to rewrite does not hold the robot's bodies and joints by name,
+        moment), friction of a friction model other than Coulomb's (MJCF has no place for
+        its shape), the MJCF to rewrite does not hold the robot's bodies and joints by name,
         ``mujoco`` is missing where it is needed, MuJoCo compiles the written file to other
         parameters, or the robot has joints MJCF out cannot write (:func:`check_joints`).
     """
@@ -129,6 +130,13 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     _args.path(path, "path")
     _args.optional(_args.path, source, "source")
     terms = classical_terms(robot, classical)
+    kind = robot.friction_model["kind"] if robot.single_dof else "coulomb"
+    if kind != "coulomb" and terms.coulomb is not None:
+        raise ModelError(
+            f"robot '{robot.name}' has the {kind} friction model; MJCF holds viscous friction "
+            "(damping) and dry friction (frictionloss) only: write a URDF or YAML table, whose "
+            "joint-terms file keeps the model, or identify with friction_model='coulomb'"
+        )
     side = drive_side if drive_side is not None else getattr(robot, "drive_side", "joint")
     _args.choice(side, "drive_side", ("joint", "motor"))
     src = Path(robot.source if source is None else source)

@@ -103,9 +103,12 @@ def load(
         a term the file does not have stays the description's). Rows name the robot's joints
         (each once); with ``drive_side: motor`` each row's ``Ia``, ``Fv``, ``Fc`` are those of
         the motor it names, in motor units, and the robot's terms act on the motors, otherwise
-        on the joints (:attr:`Robot.drive_side`). A file that does not fit the robot (a joint or
-        motor it does not have, a count that differs, a negative rotor inertia or friction, a
-        term some rows lack) is a ModelError naming the file and the entry.
+        on the joints (:attr:`Robot.drive_side`). A file with friction gives the friction model
+        too (``friction_model``, default coulomb; its third term ``Fa`` or ``Fs`` and the
+        rows' ``velocity``, :attr:`Robot.friction_model`). A file that does not fit the robot
+        (a joint or motor it does not have, a count that differs, a negative rotor inertia or
+        friction, a term some rows lack, a friction model's term or velocity missing) is a
+        ModelError naming the file and the entry.
 
     Raises
     ------
@@ -141,7 +144,11 @@ def load(
 
             warnings.warn(note, DriveTrainWarning, stacklevel=2)
     if joint_terms is not None:
-        out = out.with_joint_terms(**_sidecar.slots(_sidecar.read(joint_terms), out))
+        terms = _sidecar.slots(_sidecar.read(joint_terms), out)
+        model = terms.pop("friction_model")
+        if model is not None:  # the file's friction: its model too
+            out = out.with_friction_model(model["kind"], velocity=model["velocity"])
+        out = out.with_joint_terms(**terms)
     return out if gravity is None else out.with_gravity(gravity)
 
 
@@ -554,7 +561,14 @@ class Robot:
         return Robot(self._m.with_drive_side(side))
 
     def with_joint_terms(
-        self, *, rotor=None, viscous=None, coulomb=None, offset=None, drive_side=None
+        self,
+        *,
+        rotor=None,
+        viscous=None,
+        coulomb=None,
+        third=None,
+        offset=None,
+        drive_side=None,
     ) -> Robot:
         """A new robot, the same as this one but for its rotor inertia, friction and torque
         offsets; this robot is unchanged. A term not given (``None``) stays as it is.
@@ -567,6 +581,12 @@ class Robot:
             motor side the joint-side values (:attr:`rotor_inertia`, ...) become each directly
             driven joint's motor's as they act on it (``r^2 Ia``, ``r^2 Fv``, ``|r| Fc``), 0 for
             a joint of a motor that turns with several joints.
+        third : array_like, shape (n,), optional
+            The third parameter of the robot's friction model (:attr:`friction_model`: ``Fa``
+            of the asymmetric, ``Fs`` of the Stribeck model) of each slot, as ``coulomb``
+            (:attr:`third_friction`; on the motor side it acts on each directly driven joint as
+            ``r Fa`` or ``|r| Fs``). A motor that turns with several joints cannot carry one:
+            a non-zero value there is an ArgumentError.
         offset : array_like, shape (n,), optional
             A constant torque offset per joint (``Off1 .. OffN``, :attr:`torque_offset`), the
             values of the offset entries of :meth:`parameters`.
@@ -591,9 +611,35 @@ class Robot:
                     name, f"has {v[k]!r} at entry {k + 1}; rotor inertia and friction are >= 0"
                 )
             given[name] = v
+        if third is not None:
+            third = _vector(third, self.n, "third")
+            kind = self.friction_model["kind"]
+            if kind not in ("asymmetric", "stribeck"):
+                raise _args.fail(
+                    "third",
+                    f"is given, but the friction model of robot '{self.name}' is {kind}, which "
+                    "has two terms (a third for 'asymmetric' and 'stribeck': "
+                    "robot.with_friction_model)",
+                )
         kw = {}
+        joint_third = third
         if side == "motor":
             direct = _direct_drives(robot.drive_matrix)
+            if third is not None:
+                joint_third = np.zeros(self.n)
+                driven = {d[0]: (j, d[1]) for j, d in enumerate(direct) if d is not None}
+                for k in range(self.n):
+                    if k in driven:
+                        j, r = driven[k]
+                        joint_third[j] = (r if kind == "asymmetric" else abs(r)) * third[k]
+                    elif third[k] != 0:
+                        motor = robot.transmission.motors[k] if robot.transmission else k + 1
+                        raise _args.fail(
+                            "third",
+                            f"has {third[k]!r} for motor '{motor}', which turns with several "
+                            "joints: the model holds the friction model's third term of a "
+                            "motor that drives one joint alone",
+                        )
             for name, v in given.items():
                 kw["motor_" + name] = v
                 reflected = np.zeros(self.n)
@@ -606,7 +652,10 @@ class Robot:
             kw.update(given)
         if offset is not None:
             kw["offset"] = _vector(offset, self.n, "offset")
-        return Robot(robot._m.with_joint_terms(**kw))
+        core = robot._m.with_joint_terms(**kw)
+        if joint_third is not None:
+            core.third_friction = joint_third  # a new model: nobody uses it yet
+        return Robot(core)
 
     @property
     def torque_offset(self) -> np.ndarray:

@@ -79,10 +79,12 @@ def write_description(
     the robot argument."""
     check_description_kind(robot, source, urdf is not None, mjcf)
     kind = robot.friction_model["kind"]
-    if kind != "coulomb" and any(k.startswith(("Fv", "Fc")) for k in classical):
+    has_friction = any(k.startswith(("Fv", "Fc")) for k in classical)
+    if mjcf is not None and kind != "coulomb" and has_friction:
         raise ModelError(
-            f"{what}: identified with the {kind} friction model; a robot description holds "
-            "viscous and Coulomb friction only (identify with --friction-model coulomb)"
+            f"{what}: identified with the {kind} friction model; MJCF holds viscous and dry "
+            "friction only (write --urdf or --yaml, whose joint-terms file keeps the model, or "
+            "identify with --friction-model coulomb)"
         )
     try:  # values read from a file: their errors are the data's
         terms = classical_terms(robot, classical, what=what)

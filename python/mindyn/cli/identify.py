@@ -74,7 +74,7 @@ def identify_options(args: argparse.Namespace, robot):
 
 def _check_outputs(args: argparse.Namespace, robot) -> None:
     """The robot-description outputs need the consistent estimate, a description of the same
-    kind and the Coulomb friction model."""
+    kind and a friction model it can hold (MJCF: Coulomb's; no description: Dahl's)."""
     described = args.urdf or args.yaml or args.mjcf
     if (described or args.sidecar) and not args.consistent:
         given = "urdf" if args.urdf else "yaml" if args.yaml else "mjcf" if args.mjcf else "sidecar"
@@ -83,11 +83,17 @@ def _check_outputs(args: argparse.Namespace, robot) -> None:
             "--consistent as well (only a physically consistent estimate can be written as a robot "
             "description)"
         )
-    if described and args.friction_model not in (None, "coulomb", "auto"):
-        given = "urdf" if args.urdf else "yaml" if args.yaml else "mjcf"
+    if args.mjcf and args.friction_model not in (None, "coulomb", "auto"):
         raise UsageError(
-            f"--{given}: a robot description holds viscous and Coulomb friction only, not the "
-            f"{args.friction_model} friction model"
+            "--mjcf: MJCF holds viscous and dry friction only, not the "
+            f"{args.friction_model} friction model (--urdf and --yaml keep it in their "
+            "joint-terms file)"
+        )
+    if described and args.friction_model == "dahl":
+        given = "urdf" if args.urdf else "yaml"
+        raise UsageError(
+            f"--{given}: the Dahl friction model's state follows the motion; no robot "
+            "description holds it"
         )
     if args.sidecar and not (args.urdf or args.yaml):
         raise UsageError("--sidecar: expected --urdf or --yaml (the description it goes with)")

@@ -113,7 +113,7 @@ def joint_terms_line(args: argparse.Namespace, robot, sidecar) -> str:
             f"and offsets included, are those of {values})"
         )
     side = getattr(args, "drive_side", None)
-    drives = [k for k in terms if k in ("Ia", "Fv", "Fc")]
+    drives = [k for k in terms if k in ("Ia", "Fv", "Fc", "Fa", "Fs")]
     if drives and side is not None and side != robot.drive_side:
         raise UsageError(
             f"--drive-side {side}: the rotor inertia and friction of {path} act on the "
@@ -127,6 +127,8 @@ def joint_terms_line(args: argparse.Namespace, robot, sidecar) -> str:
             else "on the joints"
         )
         words.append(f"{', '.join(drives)} {where}, replacing the description's")
+        if "Fc" in drives and sidecar.friction_model != "coulomb":
+            words.append(f"friction model {sidecar.friction_model}")
     off = _sidecar.OFF
     if off in terms:
         if not hasattr(args, "offset"):
