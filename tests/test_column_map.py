@@ -258,8 +258,9 @@ def test_motor_currents_through_the_map_in_the_log_and_in_a_currents_file(zcr, t
         ({"t": "t", "q": "q{j}", "tau": "T{j}", "i": "I{j}"}, "gives both tau and i"),
         ({"q": "q{j}", "tau": "T{j}"}, "columns has no t; a map names the time and position"),
         ({"t": "t", "q": "q{j}"}, "columns has no tau or i; the torques"),
-        ({"t": "t", "q": "q{j}", "tau": 3}, "gives tau as the scalar 3; expected a column name"),
+        ({"t": "t", "q": "q{j}", "tau": 3}, "columns tau is the scalar 3; expected a column name"),
         ({"t": "t", "q": "q{j}", "tau": ""}, "gives an empty column name for tau"),
+        ({"t": "t", "q": ["a", 1, "c", "d", "e", "f"]}, "columns q is the scalar 1; expected text"),
         ("t=t", "columns is a str 't=t'; expected a mapping"),
     ],
 )

@@ -190,10 +190,10 @@ def _value(quantity: str, value):
         expected = (
             "a column name" if quantity == "t" else "a column name pattern or a list of names"
         )
-        raise _fail(f"gives {quantity} as {_args._describe(value)}; expected {expected}")
+        _args.instance(value, f"columns {quantity}", str, expected)  # raises: it is not text
+        names = []
     for name in names:
-        if not isinstance(name, str):
-            raise _fail(f"gives a name of {quantity} as {_args._describe(name)}; expected text")
+        _args.instance(name, f"columns {quantity}", str, "text (a column name)")
         if not name.strip():
             raise _fail(f"gives an empty column name for {quantity}")
     if not isinstance(value, str):
