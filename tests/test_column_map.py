@@ -141,6 +141,21 @@ def test_the_cli_identifies_an_rtde_log_with_columns_and_records_the_map(zcr, tm
     assert cli.main(["predict", "zcr07s", str(jb), str(rtde), "-o", str(pb)]) == 0
     assert "columns mapped: t[ms]=timestamp" in capsys.readouterr().out
     assert pa.read_text() == pb.read_text()
+    # and detect: the thresholds calibrated on the log through the recorded map, or through
+    # the map given, are those of the log under mindyn's names
+    thr = {}
+    for key, doc, log, extra in (
+        ("a", ja, own, []),
+        ("b", jb, rtde, []),
+        ("c", ja, rtde, ["--columns", str(spec)]),
+    ):
+        thr[key] = tmp_path / f"thr_{key}.json"
+        argv = ["detect", "zcr07s", str(doc), str(log), "--calibrate", str(thr[key]), *extra]
+        assert cli.main(argv) == 0
+        out = capsys.readouterr().out
+        assert ("3 other column(s) ignored" in out) == (key != "a"), out
+    ta, tb, tc = (json.loads(thr[k].read_text()) for k in "abc")
+    assert ta["thresholds"] == tb["thresholds"] == tc["thresholds"], (ta, tb)
 
 
 def test_name_patterns_and_lists_of_names(tmp_path):
@@ -324,3 +339,21 @@ def test_cli_yaml_column_map_that_is_not_a_mapping(zcr, tmp_path, capsys):
     rc = cli.main(["identify", "zcr07s", str(rtde), "--columns", str(spec)])
     err = capsys.readouterr().err
     assert rc == 2 and "expected a mapping of quantities to column names" in err, err
+
+
+def test_the_cells_of_ignored_columns_do_not_change_what_is_read(zcr, tmp_path):
+    """The rows cut down to the mapped columns (text in the others) read as the CSV reader reads
+    them cell by cell: the same log with a quoted cell holding a comma in an ignored column
+    (which only the CSV reader splits right) and with a blank line gives the same arrays."""
+    robot, own, rtde = zcr
+    lines = rtde.read_text().splitlines()
+    quoted = [lines[0]] + [line.replace("RUNNING", '"RUNNING, remote"') for line in lines[1:]]
+    quoted.insert(7, "")
+    other = tmp_path / "quoted.csv"
+    other.write_text("\r\n".join(quoted) + "\r\n")
+    a = read_csv(rtde, robot, columns=RTDE)
+    b = read_csv(other, robot, columns=RTDE)
+    for x, y in ((a.t, b.t), (a.q, b.q), (a.dq, b.dq), (a.ddq, b.ddq), (a.tau, b.tau)):
+        np.testing.assert_array_equal(x, y)
+    c = read_csv(own, robot)  # and as under mindyn's names
+    np.testing.assert_array_equal(a.q, c.q)

@@ -381,7 +381,10 @@ def _read_csv(
         # the data rows' bytes: after a byte-order mark and the header's text
         start = len(_BOM) if raw.startswith(_BOM) else 0
         start += lines.end if text.isascii() else len(text[: lines.end].encode())
+        used = [cols["t"]] + [c for k in ("q", "dq", "ddq", "tau") for c in cols[k].values()]
         values = _fast_values(raw[start:], len(header), cols["t"])
+        if values is None and cmap is not None:  # the columns read, without the others' cells
+            values = _projected_values(raw[start:], len(header), used, cols["t"])
         for row in reader if values is None else ():
             if not row or (len(row) == 1 and not row[0].strip()):
                 continue
@@ -392,7 +395,6 @@ def _read_csv(
             rows.append((reader.line_num, row))
     except csv.Error as e:
         raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
-    used = [cols["t"]] + [c for k in ("q", "dq", "ddq", "tau") for c in cols[k].values()]
     if values is None:
         values = _strict_values(rows, header, path, used)
     t = values[:, cols["t"]]
@@ -486,6 +488,31 @@ def _fast_values(data: bytes, columns: int, t_col: int) -> np.ndarray | None:
         return None
     if first_not_increasing(values[:, t_col]) is not None:
         return None
+    return values
+
+
+def _projected_values(data: bytes, columns: int, used: list[int], t_col: int) -> np.ndarray | None:
+    """The columns ``used`` of the data rows ``data`` (of ``columns`` columns each), as
+    :func:`_fast_values` parses them (the other columns NaN) from the rows cut down to those
+    columns, whatever the other columns hold (text, such as a robot mode); None, for the strict
+    reading, when the cut could differ from the CSV reader's: quotes, a line break other than
+    LF, a row of another length (a blank line), or when :func:`_fast_values` refuses the cut."""
+    if b'"' in data or b"\r" in data:
+        return None
+    lines = data.split(b"\n")
+    if lines and not lines[-1]:
+        lines.pop()
+    cut = []
+    for line in lines:
+        cells = line.split(b",")
+        if len(cells) != columns:
+            return None
+        cut.append(b",".join([cells[c] for c in used]))
+    got = _fast_values(b"\n".join(cut) + b"\n", len(used), used.index(t_col))
+    if got is None:
+        return None
+    values = np.full((got.shape[0], columns), np.nan)
+    values[:, used] = got
     return values
 
 
