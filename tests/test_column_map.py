@@ -141,6 +141,18 @@ def test_the_cli_identifies_an_rtde_log_with_columns_and_records_the_map(zcr, tm
     assert cli.main(["predict", "zcr07s", str(jb), str(rtde), "-o", str(pb)]) == 0
     assert "columns mapped: t[ms]=timestamp" in capsys.readouterr().out
     assert pa.read_text() == pb.read_text()
+    # a log without torques: the recorded map's torque columns are optional for predict
+    header, rows = _cells(rtde)
+    keep = [k for k, h in enumerate(header) if not h.startswith("target_moment")]
+    notau = tmp_path / "notau.csv"
+    notau.write_text("\n".join(",".join(r[k] for k in keep) for r in [header, *rows]) + "\n")
+    pc = tmp_path / "pc.csv"
+    assert cli.main(["predict", "zcr07s", str(jb), str(notau), "-o", str(pc)]) == 0
+    capsys.readouterr()
+    a, c = (np.genfromtxt(p, delimiter=",", names=True) for p in (pa, pc))
+    assert "tau_hat1" in c.dtype.names and "tau1" not in c.dtype.names, c.dtype.names
+    for name in c.dtype.names:
+        np.testing.assert_array_equal(c[name], a[name])
     # and detect: the thresholds calibrated on the log through the recorded map, or through
     # the map given, are those of the log under mindyn's names
     thr = {}
@@ -357,3 +369,16 @@ def test_the_cells_of_ignored_columns_do_not_change_what_is_read(zcr, tmp_path):
         np.testing.assert_array_equal(x, y)
     c = read_csv(own, robot)  # and as under mindyn's names
     np.testing.assert_array_equal(a.q, c.q)
+
+
+def test_a_map_with_a_ros_bag_is_refused(zcr, tmp_path, capsys):
+    """A bag's joints are matched by name: a column map does not apply to it, and is refused
+    (naming the option) before any log is read."""
+    robot, own, rtde = zcr
+    bag = tmp_path / "run.mcap"
+    bag.write_bytes(b"")
+    rc = cli.main(["identify", "zcr07s", str(rtde), str(bag), "--columns", RTDE_INLINE])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.startswith("mindyn: error: --columns applies to CSV logs; a ROS bag"), (
+        err
+    )

@@ -212,14 +212,21 @@ def _value(quantity: str, value):
     return value
 
 
-def mapped_columns(header: list[str], cmap: ColumnMap, robot, n: int, path: str) -> dict:
+def mapped_columns(
+    header: list[str], cmap: ColumnMap, robot, n: int, path: str, *, require_torque: bool = True
+) -> dict:
     """The columns of a log's ``header`` that ``cmap`` names, as the reader's column table
     (``t`` its index; ``q``, ``dq``, ``ddq``, ``tau`` joint -> index; ``torque_unit``), with
-    ``ignored`` the names of the file's other columns. DataError naming a mapped name the file
-    lacks (with its quantity and the closest names the file has) or has twice."""
+    ``ignored`` the names of the file's other columns. Without ``require_torque`` (a log whose
+    torques are optional) the map's torque or current columns are read when the file has any of
+    them. DataError naming a mapped name the file lacks (with its quantity and the closest names
+    the file has) or has twice."""
     names = [h.strip() for h in header]
     joint_names = list(robot.joint_names) if robot is not None else None
     wanted = cmap.names(n, joint_names)
+    for q in ("tau", "i"):
+        if not require_torque and q in wanted and not set(wanted[q]) & set(names):
+            del wanted[q]
     index: dict[str, int] = {}
     for k, h in enumerate(names):
         index.setdefault(h, k)
@@ -241,7 +248,7 @@ def mapped_columns(header: list[str], cmap: ColumnMap, robot, n: int, path: str)
                 t_col = index[name]
             else:
                 groups["tau" if q == "i" else q][j + 1] = index[name]
-    unit = "current" if "i" in wanted else cmap.unit("tau")
+    unit = "current" if "i" in wanted else cmap.unit("tau") if "tau" in wanted else None
     ignored = [h for k, h in enumerate(names) if k not in used]
     return {"t": t_col, "n": n, "torque_unit": unit, **groups, "ignored": ignored}
 

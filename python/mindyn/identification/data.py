@@ -374,7 +374,7 @@ def _read_csv(
         else:
             from .columns import mapped_columns
 
-            cols = mapped_columns(header, cmap, robot, n, str(path))
+            cols = mapped_columns(header, cmap, robot, n, str(path), require_torque=require_torque)
         n = cols["n"]
         rows = []
         first_line = reader.line_num + 1
