@@ -382,3 +382,34 @@ def test_a_map_with_a_ros_bag_is_refused(zcr, tmp_path, capsys):
     assert rc == 2 and err.startswith("mindyn: error: --columns applies to CSV logs; a ROS bag"), (
         err
     )
+
+
+def test_a_header_the_map_cannot_be_matched_to_is_named_as_such(zcr, tmp_path):
+    """The header checks of the reader hold with a map: a log separated by semicolons, or one
+    without a header, is refused saying so (not as a mapped column missing)."""
+    robot, own, rtde = zcr
+    lines = rtde.read_text().splitlines()
+    semi = tmp_path / "semi.csv"
+    semi.write_text("\n".join(line.replace(",", ";") for line in lines) + "\n")
+    with pytest.raises(DataError, match="the header is separated by semicolons, not commas"):
+        read_csv(semi, robot, columns=RTDE)
+    bare = tmp_path / "bare.csv"
+    bare.write_text("\n".join(own.read_text().splitlines()[1:]) + "\n")
+    with pytest.raises(DataError, match="holds numbers .* the header is missing"):
+        read_csv(bare, robot, columns=RTDE)
+
+
+def test_an_identification_json_with_a_malformed_recorded_map_is_named(zcr, tmp_path, capsys):
+    robot, own, rtde = zcr
+    doc = tmp_path / "id.json"
+    assert (
+        cli.main(["identify", "zcr07s", str(rtde), "--columns", RTDE_INLINE, "--json", str(doc)])
+        == 0
+    )
+    d = json.loads(doc.read_text())
+    d["reading"]["columns"]["x"] = "y"
+    doc.write_text(json.dumps(d))
+    capsys.readouterr()
+    rc = cli.main(["predict", "zcr07s", str(doc), str(rtde), "-o", str(tmp_path / "p.csv")])
+    err = capsys.readouterr().err
+    assert rc == 2 and f"{doc}: 'reading' columns names the quantity 'x'" in err, err

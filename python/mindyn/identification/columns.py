@@ -221,7 +221,9 @@ def mapped_columns(
     torques are optional) the map's torque or current columns are read when the file has any of
     them. DataError naming a mapped name the file lacks (with its quantity and the closest names
     the file has) or has twice."""
-    names = [h.strip() for h in header]
+    from .data import check_header
+
+    names = check_header(header, path, "the columns of the column map")
     joint_names = list(robot.joint_names) if robot is not None else None
     wanted = cmap.names(n, joint_names)
     for q in ("tau", "i"):

@@ -85,26 +85,32 @@ def _expected_columns(n, require_torque: bool) -> str:
     )
 
 
-def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
-    """Maps header names to kinds; raises DataError naming missing and extra columns. A torque
-    column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
-    returned as ``torque_unit`` (None when the header names none)."""
+def check_header(header: list[str], path: str, expected: str) -> list[str]:
+    """The names of a log's ``header``, stripped; DataError when the header is separated by
+    semicolons or tabs, or is a row of numbers (no header), saying the columns ``expected``."""
     names = [h.strip() for h in header]
     if len(names) == 1:
         for sep, word in ((";", "semicolons"), ("\t", "tabs")):
             if names[0].count(sep) >= 2:
                 raise DataError(
                     f"{path}: the header is separated by {word}, not commas; a log is "
-                    "comma-separated with '.' as the decimal point: "
-                    + _expected_columns("N" if n is None else n, require_torque)
+                    "comma-separated with '.' as the decimal point: " + expected
                 )
     if any(names) and all(_NUMBER.fullmatch(h) or _NONFINITE.fullmatch(h) for h in names if h):
         shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
         raise DataError(
             f"{path}: the first line (after any # comments) holds numbers ({shown}), not column "
             "names: the header is missing; a log starts with a header line naming its columns: "
-            + _expected_columns("N" if n is None else n, require_torque)
+            + expected
         )
+    return names
+
+
+def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
+    """Maps header names to kinds; raises DataError naming missing and extra columns. A torque
+    column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
+    returned as ``torque_unit`` (None when the header names none)."""
+    names = check_header(header, path, _expected_columns("N" if n is None else n, require_torque))
     currents = [i for i, h in enumerate(names) if re.fullmatch(r"i\d+", h)]
     if currents:
         if any(re.fullmatch(r"tau\d+(\s*\[.*\])?", h) for h in names):
