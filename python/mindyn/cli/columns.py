@@ -18,8 +18,7 @@ _HELP = (
     "currents); a joint quantity's NAME holds {j} (joint number from 1), {j0} (from 0) or "
     "{name} (joint name); a unit after the quantity: t[ms] (s, ms, us, ns), q[deg], "
     "dq[deg/s], ddq[deg/s^2] (revolute joints x pi/180), tau[permille]. The log's other "
-    "columns are ignored (counted in the output); a --currents file is read through the map's "
-    "t and i"
+    "columns are ignored (counted in the output)"
 )
 
 
@@ -78,6 +77,6 @@ def add_columns(p, *, recorded: bool = False) -> None:
         + (
             " (default: the map the JSON records, if any)"
             if recorded
-            else " (JSON: reading.columns)"
+            else "; a --currents file is read through the map's t and i"
         ),
     )
