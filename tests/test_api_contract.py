@@ -34,6 +34,7 @@ from mindyn import ArgumentError, BaseParameters, Robot
 from mindyn.cli import main as cli_main
 from mindyn.control import controllers, stability
 from mindyn.identification import (
+    columns,
     consistent,
     currents,
     document,
@@ -283,6 +284,11 @@ def _api(tmp: Path) -> dict:
             "identification.consistent.inertial_from_pseudo": (
                 consistent.inertial_from_pseudo,
                 (consistent.pseudo_inertia(p10),),
+                {},
+            ),
+            "identification.columns.column_map": (
+                columns.column_map,
+                ({"t[ms]": "time", "q": "q{j}", "tau": ["T1", "T2"]},),
                 {},
             ),
             "identification.currents.read_currents": (

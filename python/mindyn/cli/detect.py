@@ -9,6 +9,7 @@ import argparse
 import numpy as np
 
 from .args import UsageError, add_command, given_options, remember_flags
+from .columns import add_columns
 from .number_options import add_recorded_torque_reading, joint_values, joint_vector, number
 from .outputs import output_file
 from .robot_options import add_robot, load_robot
@@ -24,7 +25,10 @@ def _read_log(path, robot, doc, args):
     unit = args.torque_unit or reading.get("torque_unit")
     gain = args.drive_gain or reading.get("drive_gain")
     gain = np.array(joint_values(gain, robot.n, "--drive-gain", broadcast=True)) if gain else None
-    data = read_csv(path, robot=robot, torque_unit=unit, filter="none", drive_gain=gain)
+    columns = args.columns or reading.get("columns")
+    data = read_csv(
+        path, robot=robot, torque_unit=unit, filter="none", drive_gain=gain, columns=columns
+    )
     if data.tau is None:
         raise DataError(
             f"{path}: has no torque columns tau1..tau{robot.n}; the observer needs them"
@@ -90,6 +94,10 @@ def cmd_detect(args: argparse.Namespace) -> int:
         f"(median step {period * 1e3:.4g} ms, {steps.min() * 1e3:.4g} to "
         f"{steps.max() * 1e3:.4g} ms)"
     )
+    if "columns" in data.processing:
+        from ..identification.columns import describe
+
+        print(f"  {describe(data.processing['columns'])}")
     print(
         f"  gains K_O [1/s] ({how}): "
         + ", ".join(f"{k:.4g}" for k in gains)
@@ -268,4 +276,5 @@ def register(sub) -> None:
     p.add_argument("--plot", metavar="PNG", type=output_file, help="plot of r and thresholds")
     p.add_argument("--consistent", action="store_true", help="the consistent estimate of the JSON")
     add_recorded_torque_reading(p)
+    add_columns(p, recorded=True)
     p.set_defaults(func=cmd_detect)

@@ -9,6 +9,7 @@ import re
 #: ``prior_weight=``) whose command-line flag is the keyword with dashes (``--prior-weight``),
 #: those of identification and of the generated code (``what``, ``trig``, ``name``) alike.
 LIBRARY_OPTIONS = (
+    "columns",
     "consistent",
     "contacts",
     "currents",

@@ -43,6 +43,7 @@ def reading_options(args: argparse.Namespace):
         torque_unit=args.torque_unit,
         drive_gain=args.drive_gain,
         topic=args.topic,
+        columns=args.columns,
     )
 
 

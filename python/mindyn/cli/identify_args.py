@@ -7,6 +7,7 @@ from __future__ import annotations
 from ..identification.options import DEFAULT_RSD_THRESHOLD
 from ..robot import FRICTION_KINDS
 from .args import add_command, deprecated, remember_flags
+from .columns import add_columns
 from .number_options import joint_vector, number
 from .outputs import add_description_outputs, output_dir, output_file
 from .robot_options import add_joint_terms, add_offset, add_robot, add_snap
@@ -98,6 +99,7 @@ def add_data_options(p) -> None:
         help="lowpass: seconds dropped at each end after filtering (default 2 / cut-off; none "
         "for an averaged period)",
     )
+    add_columns(p)
     p.add_argument(
         "--no-decimate",
         action="store_true",

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from .args import UsageError, add_command
+from .columns import add_columns
 from .number_options import add_recorded_torque_reading, number
 from .outputs import output_file
 from .robot_options import add_robot, load_robot
@@ -43,6 +44,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
         torque_unit=args.torque_unit or reading.get("torque_unit"),
         drive_gain=args.drive_gain or reading.get("drive_gain"),
         topic=args.topic or reading.get("topic"),
+        columns=args.columns or reading.get("columns"),
     )
     logs = read_log(args.log, robot, options=opts, decimate=False, require_torque=False)
     pred = predict(args.identification, logs, robot=robot, estimate=estimate)
@@ -74,6 +76,10 @@ def cmd_predict(args: argparse.Namespace) -> int:
     cols = "t, q, dq, ddq (the motion evaluated), tau_hat" + (
         ", tau (as logged, N m)" if pred.tau is not None else ""
     )
+    if "columns" in logs[0].processing:
+        from ..identification.columns import describe
+
+        print(f"  {describe(logs[0].processing['columns'])}")
     print(f"  wrote {path} ({cols})")
     return 0
 
@@ -111,4 +117,5 @@ def register(sub) -> None:
     number(p, "--cutoff", low=0, low_open=True, help="cut-off [Hz] instead of the recorded one")
     p.add_argument("--topic", help="ROS bag: the JointState topic (when there are several)")
     add_recorded_torque_reading(p)
+    add_columns(p, recorded=True)
     p.set_defaults(func=cmd_predict)

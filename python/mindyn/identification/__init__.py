@@ -2,6 +2,8 @@
 
 - :mod:`~mindyn.identification.data`: joint logs (``JointData``), CSV reading and writing, torque
   units, derivatives by zero-phase filtering;
+- :mod:`~mindyn.identification.columns`: column maps, a log read under a controller's own
+  column names (``read_csv(columns=...)``);
 - :mod:`~mindyn.identification.rosbag`: ``sensor_msgs/JointState`` from ROS bags;
 - :mod:`~mindyn.identification.excitation`: optimised Fourier excitation trajectories;
 - :mod:`~mindyn.identification.models`: the regression systems (dynamic, energy and integral

@@ -35,13 +35,20 @@ from .data import (
 __all__ = ["attach_currents", "read_currents"]
 
 
-def read_currents(path, n: int) -> tuple[np.ndarray, np.ndarray]:
+def read_currents(path, n: int, *, columns=None, robot=None) -> tuple[np.ndarray, np.ndarray]:
     """The time stamps (m,) and motor currents ``i1..in`` (m, n) [A] of a CSV with the header
-    ``t, i1..in`` and any further columns (ignored). Raises DataError naming the file, line and
-    column of a missing column, a value that is not a finite number, or a time that does not
-    increase."""
+    ``t, i1..in`` and any further columns (ignored), or the columns that the ``t`` and ``i`` of
+    the column map ``columns`` name (:func:`~mindyn.identification.columns.column_map`; its
+    time unit applied; ``robot`` gives the joint names of ``{name}``). Raises DataError naming
+    the file, line and column of a missing column, a value that is not a finite number, or a
+    time that does not increase."""
+    from .columns import TIME_UNITS, column_map, missing_column
+
     _args.path(path, "path")
     n = _args.integer(n, "n", 1)
+    cmap = None if columns is None else column_map(columns)
+    if cmap is not None and "i" not in cmap.entries:
+        raise _args.fail("columns", "has no i: the currents file is read through its t and i")
     path = Path(path)
     if not path.is_file():
         raise DataFileNotFoundError(f"currents file '{path}' does not exist")
@@ -54,6 +61,14 @@ def read_currents(path, n: int) -> tuple[np.ndarray, np.ndarray]:
             raise DataError(f"{path}: the file is empty")
         names = [h.strip() for h in header]
         want = ["t"] + [f"i{j}" for j in range(1, n + 1)]
+        if cmap is not None:
+            joints = None if robot is None else list(robot.joint_names)
+            mapped = cmap.names(n, joints)
+            want = mapped["t"] + mapped["i"]
+            for k, w in enumerate(want):
+                if w not in names:
+                    what = "t" if k == 0 else f"i{k}"
+                    raise DataError(f"{path}: {missing_column(w, what, names)}")
         missing = [w for w in want if w not in names]
         if missing:
             extra = [h for h in names if re.fullmatch(r"i\d+", h) and h not in want]
@@ -86,6 +101,9 @@ def read_currents(path, n: int) -> tuple[np.ndarray, np.ndarray]:
         raise DataError(
             f"{path}, line {lines[r]}: time is not increasing (t = {t[r]:.9g} after {t[r - 1]:.9g})"
         )
+    unit = None if cmap is None else cmap.unit("t")
+    if unit not in (None, "s"):
+        t = t / TIME_UNITS[unit]
     return t, np.array(cur)
 
 
@@ -96,6 +114,7 @@ def attach_currents(
     *,
     drive_gain=None,
     tolerance: float | None = None,
+    columns=None,
 ) -> JointData:
     """``data`` with its torques replaced by the currents of the file ``path`` converted with
     the drive gains (see :func:`~mindyn.identification.data.current_gains`).
@@ -103,7 +122,8 @@ def attach_currents(
     The files are joined on their time stamps: each sample of ``data`` takes the current sample
     with the nearest time stamp, which must lie within ``tolerance`` seconds (default a
     thousandth of the median sample period of ``data``); current samples before, after or
-    between those of ``data`` are left out. Raises DataError naming the first time stamp
+    between those of ``data`` are left out. ``columns``: a column map, the file read through
+    its ``t`` and ``i`` (:func:`read_currents`). Raises DataError naming the first time stamp
     without a match."""
     from ..robot import Robot
 
@@ -112,7 +132,7 @@ def attach_currents(
     _args.optional(_args.instance, robot, "robot", Robot)
     drive_gain = _args.optional(_args.array, drive_gain, "drive_gain", (data.n,))
     tolerance = _args.optional(_args.number, tolerance, "tolerance", positive=True)
-    t_i, cur = read_currents(path, data.n)
+    t_i, cur = read_currents(path, data.n, columns=columns, robot=robot)
     G, info = current_gains(robot, drive_gain=drive_gain)
     if G.shape[0] != data.n:
         raise DataError(f"drive gains: {G.shape[0]} values for {data.n} joints")

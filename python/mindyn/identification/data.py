@@ -5,19 +5,22 @@ Format: one header line, then one row per sample, comma-separated::
     t, q1..qN, [dq1..dqN], [ddq1..ddqN], tau1..tauN
 
 No other column is read: one is refused, named with its position and the ``cut`` command that
-deletes it. Cells are decimal numbers in ASCII (``-1.25``, ``3e-4``, blanks around them
-allowed); the file is UTF-8 text (a leading byte-order mark is skipped). ``t`` in seconds,
-strictly increasing; positions in rad (m for prismatic joints), velocities and accelerations per
-second; torques in N m (N), or as relative values in per mille of the drive's rated torque, as
-the ZCR07S controller logs them (``torque_unit="permille"``: ``tau = value * rated_torque *
-gear_ratio / 1000``, with the drive table of the robot description). The torque columns may say
-their unit in the header, ``tau1[permille]`` or ``tau1[Nm]`` (as :func:`write_csv` writes with
-``torque_unit``); the reader then needs no ``torque_unit``. Motor currents in A may stand in for
-the torques, as columns ``i1..iN`` (or ``torque_unit="current"``): ``tau = i * K`` with the
-joint-side drive gain ``K = torque_constant * gear_ratio`` of the drive table, or ``K`` given as
-``drive_gain``; when the description declares transmissions, ``tau = T^T (K_t i)`` with the
-motor torque constants ``K_t`` (``drive_gain``, else the transmission's) and the transmission
-matrix ``T`` (see :func:`current_gains`).
+deletes it, unless a column map (``columns=``, :mod:`~mindyn.identification.columns`) names the
+file's columns of each quantity (a controller's own names, such as ``actual_q_0``): the file's
+other columns are then ignored. Cells are decimal numbers in ASCII (``-1.25``, ``3e-4``, blanks
+around them allowed); the file is UTF-8 text (a leading byte-order mark is skipped). ``t`` in
+seconds, strictly increasing; positions in rad (m for prismatic joints), velocities and
+accelerations per second; torques in N m (N), or as relative values in per mille of the drive's
+rated torque, as the ZCR07S controller logs them (``torque_unit="permille"``: ``tau = value *
+rated_torque * gear_ratio / 1000``, with the drive table of the robot description). The torque
+columns may say their unit in the header, ``tau1[permille]`` or ``tau1[Nm]`` (as
+:func:`write_csv` writes with ``torque_unit``); the reader then needs no ``torque_unit``. Motor
+currents in A may stand in for the torques, as columns ``i1..iN`` (or
+``torque_unit="current"``): ``tau = i * K`` with the joint-side drive gain ``K = torque_constant
+* gear_ratio`` of the drive table, or ``K`` given as ``drive_gain``; when the description
+declares transmissions, ``tau = T^T (K_t i)`` with the motor torque constants ``K_t``
+(``drive_gain``, else the transmission's) and the transmission matrix ``T`` (see
+:func:`current_gains`).
 Velocities and accelerations that are not logged are obtained from the positions (velocities) by
 zero-phase low-pass filtering and central differences; the samples at each end where the
 filter starts up are then dropped (:func:`without_derivative_edges`); the settings are reported
@@ -82,26 +85,32 @@ def _expected_columns(n, require_torque: bool) -> str:
     )
 
 
-def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
-    """Maps header names to kinds; raises DataError naming missing and extra columns. A torque
-    column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
-    returned as ``torque_unit`` (None when the header names none)."""
+def check_header(header: list[str], path: str, expected: str) -> list[str]:
+    """The names of a log's ``header``, stripped; DataError when the header is separated by
+    semicolons or tabs, or is a row of numbers (no header), saying the columns ``expected``."""
     names = [h.strip() for h in header]
     if len(names) == 1:
         for sep, word in ((";", "semicolons"), ("\t", "tabs")):
             if names[0].count(sep) >= 2:
                 raise DataError(
                     f"{path}: the header is separated by {word}, not commas; a log is "
-                    "comma-separated with '.' as the decimal point: "
-                    + _expected_columns("N" if n is None else n, require_torque)
+                    "comma-separated with '.' as the decimal point: " + expected
                 )
     if any(names) and all(_NUMBER.fullmatch(h) or _NONFINITE.fullmatch(h) for h in names if h):
         shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
         raise DataError(
             f"{path}: the first line (after any # comments) holds numbers ({shown}), not column "
             "names: the header is missing; a log starts with a header line naming its columns: "
-            + _expected_columns("N" if n is None else n, require_torque)
+            + expected
         )
+    return names
+
+
+def _columns(header: list[str], n: int | None, require_torque: bool, path: str) -> dict:
+    """Maps header names to kinds; raises DataError naming missing and extra columns. A torque
+    column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
+    returned as ``torque_unit`` (None when the header names none)."""
+    names = check_header(header, path, _expected_columns("N" if n is None else n, require_torque))
     currents = [i for i, h in enumerate(names) if re.fullmatch(r"i\d+", h)]
     if currents:
         if any(re.fullmatch(r"tau\d+(\s*\[.*\])?", h) for h in names):
@@ -187,7 +196,10 @@ def _remedy(path: str, width: int, extra: list, beyond: list, n: int, missing: l
     cols = ", ".join(
         f"{name} (column {i + 1})" if name else f"the unnamed column {i + 1}" for name, i in extra
     )
-    text = "; a log holds these columns only (no option skips others): "
+    text = (
+        "; a log holds these columns only, unless a column map names the ones to read "
+        "(columns=, the others then ignored): "
+    )
     if missing:
         text += (
             f"rename each of {cols} that holds a missing column to its name "
@@ -227,6 +239,7 @@ def read_csv(
     window: float | None = None,
     polyorder: int = 3,
     drive_gain=None,
+    columns=None,
 ) -> JointData:
     """Read a joint log.
 
@@ -251,6 +264,13 @@ def read_csv(
         (:func:`without_derivative_edges`, ``processing["derivative_edges"]``).
     drive_gain : array (n,), optional
         Currents: joint-side gain per joint [N m/A], instead of the drive table's.
+    columns : mapping, optional
+        A column map (:mod:`~mindyn.identification.columns`): the file's names of mindyn's
+        quantities, e.g. ``{"t[ms]": "timestamp", "q": "actual_q_{j0}", "i":
+        "actual_current_{j0}"}`` (``{j}`` the joint number from 1, ``{j0}`` from 0, ``{name}``
+        the joint name, or a list of names; units ``t[ms]``, ``q[deg]``, ...). The file's other
+        columns are then ignored (counted and the first few named in
+        ``processing["columns"]``).
 
     Raises
     ------
@@ -261,7 +281,11 @@ def read_csv(
         ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
         named), a file that is not UTF-8 text (line and byte offset named), time not strictly
         increasing (line named), fewer than 2 samples (or too few beyond the derivatives'
-        filter edges), derivatives that overflow.
+        filter edges), derivatives that overflow; a column of the map the file lacks (named,
+        with the closest names the file has).
+    ArgumentError
+        A column map with an unknown quantity or unit, a quantity given twice, a pattern
+        without placeholder for several joints, a column mapped twice.
     """
     from ..robot import Robot
 
@@ -276,6 +300,22 @@ def read_csv(
     window = _args.optional(_args.number, window, "window", positive=True)
     polyorder = _args.integer(polyorder, "polyorder", 0)
     drive_gain = _args.optional(_args.array, drive_gain, "drive_gain", (None,))
+    if columns is not None:
+        from .columns import column_map
+
+        columns = column_map(columns)
+        if robot is None and n is None:
+            n = next((len(v) for _, v in columns.entries.values() if not isinstance(v, str)), None)
+            if n is None:
+                raise _args.fail(
+                    "columns",
+                    "needs the robot or n= (the number of joints) to fill in its patterns",
+                )
+        columns.names(robot.n if robot is not None else n, _joint_names(robot))
+        if require_torque and "tau" not in columns.entries and "i" not in columns.entries:
+            raise _args.fail(
+                "columns", "has no tau or i; the torques (or currents) of the log are needed"
+            )
     path = Path(path)
     if not path.is_file():
         raise DataFileNotFoundError(f"data file '{path}' does not exist")
@@ -283,10 +323,16 @@ def read_csv(
         derivatives = dict(
             filter=filter, cutoff=cutoff, order=order, window=window, polyorder=polyorder
         )
-        return _read_csv(path, robot, n, torque_unit, require_torque, drive_gain, derivatives)
+        return _read_csv(
+            path, robot, n, torque_unit, require_torque, drive_gain, derivatives, columns
+        )
     except DataError as e:
         # column names from the file may hold line breaks; the message stays one line
         raise DataError(_CONTROL.sub(lambda m: repr(m.group())[1:-1], str(e))) from None
+
+
+def _joint_names(robot) -> list[str] | None:
+    return None if robot is None else list(robot.joint_names)
 
 
 _CONTROL = re.compile(r"[\x00-\x1f\x7f]")
@@ -314,7 +360,7 @@ class _Lines:
 
 
 def _read_csv(
-    path: Path, robot, n, torque_unit, require_torque, drive_gain, derivatives: dict
+    path: Path, robot, n, torque_unit, require_torque, drive_gain, derivatives: dict, cmap=None
 ) -> JointData:
     if robot is not None:
         n = robot.n
@@ -329,14 +375,22 @@ def _read_csv(
             raise DataError(f"{path}: the file is empty") from None
         while header and header[0].lstrip().startswith("#"):
             header = next(reader, [])
-        cols = _columns(header, n, require_torque, str(path))
+        if cmap is None:
+            cols = _columns(header, n, require_torque, str(path))
+        else:
+            from .columns import mapped_columns
+
+            cols = mapped_columns(header, cmap, robot, n, str(path), require_torque=require_torque)
         n = cols["n"]
         rows = []
         first_line = reader.line_num + 1
         # the data rows' bytes: after a byte-order mark and the header's text
         start = len(_BOM) if raw.startswith(_BOM) else 0
         start += lines.end if text.isascii() else len(text[: lines.end].encode())
+        used = [cols["t"]] + [c for k in ("q", "dq", "ddq", "tau") for c in cols[k].values()]
         values = _fast_values(raw[start:], len(header), cols["t"])
+        if values is None and cmap is not None:  # the columns read, without the others' cells
+            values = _projected_values(raw[start:], len(header), used, cols["t"])
         for row in reader if values is None else ():
             if not row or (len(row) == 1 and not row[0].strip()):
                 continue
@@ -348,7 +402,7 @@ def _read_csv(
     except csv.Error as e:
         raise DataError(f"{path}, line {reader.line_num}: not readable as CSV ({e})") from None
     if values is None:
-        values = _strict_values(rows, header, path)
+        values = _strict_values(rows, header, path, used)
     t = values[:, cols["t"]]
     r = first_not_increasing(t)
     if r is not None:
@@ -368,16 +422,23 @@ def _read_csv(
     ddq = block("ddq")
     tau = block("tau")
     processing: dict = {"samples": values.shape[0], "first_data_line": first_line}
+    if cmap is not None:  # the map's units: seconds and radians
+        from .columns import converted, record
+
+        got, units = converted({"t": t, "q": q, "dq": dq, "ddq": ddq}, cmap, robot)
+        t, q, dq, ddq = got["t"], got["q"], got["dq"], got["ddq"]
+        processing["columns"] = record(cmap, cols["ignored"], units)
     header_unit = cols["torque_unit"]
+    said = "the header" if cmap is None else "the column map"
     if tau is not None and header_unit is not None:
         if _unit_key(header_unit) not in ("Nm", "permille", "current"):
             raise DataError(
-                f"{path}: unknown torque unit '{header_unit}' in the header; use Nm, permille "
+                f"{path}: unknown torque unit '{header_unit}' in {said}; use Nm, permille "
                 "or current"
             )
         if torque_unit is not None and _unit_key(torque_unit) != _unit_key(header_unit):
             raise DataError(
-                f"{path}: the header gives the torques in '{header_unit}', but the torque unit "
+                f"{path}: {said} gives the torques in '{header_unit}', but the torque unit "
                 f"'{torque_unit}' was asked for"
             )
         torque_unit = header_unit
@@ -397,23 +458,25 @@ def _read_csv(
         if a is not None and not np.isfinite(a).all():
             raise DataError(
                 f"{path}: the {what} overflow (the largest logged magnitude is "
-                f"{np.max(np.abs(values)):.3g}); the log's values are too large to process"
+                f"{np.max(np.abs(values[:, used])):.3g}); the log's values are too large to process"
             )
     data = JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
     return without_derivative_edges(data)
 
 
-def _strict_values(rows: list, header: list[str], path: Path) -> np.ndarray:
-    """The cells of ``rows`` (``(line, cells)`` pairs) parsed one by one by :func:`parse_cell`:
-    the first that is not a finite decimal number raises DataError naming its line and column.
+def _strict_values(rows: list, header: list[str], path: Path, used: list[int]) -> np.ndarray:
+    """The cells of the columns ``used`` of ``rows`` (``(line, cells)`` pairs) parsed one by one
+    by :func:`parse_cell`: the first that is not a finite decimal number raises DataError naming
+    its line and column (the other columns, which a column map leaves out, are not read: NaN).
     At least 2 rows are required."""
     if len(rows) < 2:
         raise DataError(f"{path}: {len(rows)} data row(s); at least 2 samples are needed")
     names = [h.strip() for h in header]
-    values = np.empty((len(rows), len(header)))
+    values = np.full((len(rows), len(header)), np.nan)
+    cols = sorted(used)
     for r, (line, row) in enumerate(rows):
-        for c, v in enumerate(row):
-            values[r, c] = parse_cell(v, f"{path}, line {line}, column {names[c]}")
+        for c in cols:
+            values[r, c] = parse_cell(row[c], f"{path}, line {line}, column {names[c]}")
     return values
 
 
@@ -431,6 +494,31 @@ def _fast_values(data: bytes, columns: int, t_col: int) -> np.ndarray | None:
         return None
     if first_not_increasing(values[:, t_col]) is not None:
         return None
+    return values
+
+
+def _projected_values(data: bytes, columns: int, used: list[int], t_col: int) -> np.ndarray | None:
+    """The columns ``used`` of the data rows ``data`` (of ``columns`` columns each), as
+    :func:`_fast_values` parses them (the other columns NaN) from the rows cut down to those
+    columns, whatever the other columns hold (text, such as a robot mode); None, for the strict
+    reading, when the cut could differ from the CSV reader's: quotes, a line break other than
+    LF, a row of another length (a blank line), or when :func:`_fast_values` refuses the cut."""
+    if b'"' in data or b"\r" in data:
+        return None
+    lines = data.split(b"\n")
+    if lines and not lines[-1]:
+        lines.pop()
+    cut = []
+    for line in lines:
+        cells = line.split(b",")
+        if len(cells) != columns:
+            return None
+        cut.append(b",".join([cells[c] for c in used]))
+    got = _fast_values(b"\n".join(cut) + b"\n", len(used), used.index(t_col))
+    if got is None:
+        return None
+    values = np.full((got.shape[0], columns), np.nan)
+    values[:, used] = got
     return values
 
 

@@ -162,7 +162,7 @@ def _friction_model(fm, where: str) -> dict:
 def _reading(rec, where: str) -> dict:
     """The checked ``reading`` field, how identify read its logs: ``filter`` one of the filters,
     ``cutoff_Hz`` and ``edge_s`` numbers, ``torque_unit`` and ``topic`` text, ``drive_gain`` a
-    list of numbers; each may be null or absent."""
+    list of numbers, ``columns`` a column map; each may be null or absent."""
     from .options import FILTERS
 
     if not isinstance(rec, dict):
@@ -181,6 +181,14 @@ def _reading(rec, where: str) -> dict:
     for key in ("torque_unit", "topic"):
         if rec.get(key) is not None and not isinstance(rec[key], str):
             raise DataError(f"{where}: 'reading' {key} is {_kind(rec[key])}; expected text")
+    if rec.get("columns") is not None:
+        from .._core import ArgumentError
+        from .columns import column_map
+
+        try:
+            column_map(rec["columns"])
+        except ArgumentError as e:
+            raise DataError(f"{where}: 'reading' {e}") from None
     gain = rec.get("drive_gain")
     if gain is not None:
         if not isinstance(gain, list):

@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import _args
 from ..robot import FRICTION_KINDS
+from .columns import ColumnMap, column_map
 from .data import DataError
 from .errors import IdentificationError
 
@@ -167,7 +168,9 @@ class ReadingOptions:
     [s]: a periodic excitation averaged (lowpass, fit logs only); ``edge`` [s] dropped at each
     end (lowpass); ``decimate`` (lowpass, dynamic model only); ``torque_unit`` (None: as the
     file says; not with a currents file for every log), ``drive_gain`` (per
-    joint, or one for all), ``topic`` (ROS bag)."""
+    joint, or one for all), ``topic`` (ROS bag), ``columns``: a column map of the CSV logs
+    (:func:`~mindyn.identification.columns.column_map`; the currents files read through its
+    ``t`` and ``i``)."""
 
     filter: str = "lowpass"
     cutoff: float | None = None
@@ -178,8 +181,11 @@ class ReadingOptions:
     torque_unit: str | None = None
     drive_gain: tuple[float, ...] | None = None
     topic: str | None = None
+    columns: ColumnMap | None = None
 
     def __post_init__(self):
+        if self.columns is not None:
+            object.__setattr__(self, "columns", column_map(self.columns))
         if self.filter not in FILTERS:
             raise DataError(f"filter '{self.filter}': expected one of {', '.join(FILTERS)}")
         if self.drive_gain is not None:

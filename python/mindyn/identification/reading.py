@@ -78,6 +78,15 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
 
     gain = _gains(opts, robot.n)
     bags = [is_rosbag(p) for p in paths]
+    cmap = opts.columns
+    if cmap is not None and any(bags):
+        raise _args.fail("columns=", "applies to CSV logs; a ROS bag's joints are matched by name")
+    if cmap is not None and any(currents) and "i" not in cmap.entries:
+        raise _args.fail(
+            "columns=",
+            "has no i: a currents file is read through the map's t and i (the log through the "
+            "others)",
+        )
     if opts.topic is not None and not any(bags):
         raise _args.fail("topic=", "applies to ROS bags; none of the logs is one")
     if opts.torque_unit is not None and all(c is not None for c in currents):
@@ -104,13 +113,14 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
                     filter="none" if opts.filter == "lowpass" else opts.filter,
                     cutoff=opts.cutoff,
                     drive_gain=gain,
+                    columns=cmap if cmap is None or not cur else cmap.without("i"),
                 )
             )
     if any(currents):
         from .currents import attach_currents
 
         out = [
-            d if c is None else attach_currents(d, c, robot, drive_gain=gain)
+            d if c is None else attach_currents(d, c, robot, drive_gain=gain, columns=cmap)
             for d, c in zip(out, currents)
         ]
     for p, d in zip(paths, out):
@@ -274,6 +284,7 @@ class Logs(Sequence):
                 "torque_unit": r.torque_unit,
                 "drive_gain": None if r.drive_gain is None else list(r.drive_gain),
                 "topic": r.topic,
+                "columns": None if r.columns is None else r.columns.record(),
             }
         )
         object.__setattr__(self, "record", record)

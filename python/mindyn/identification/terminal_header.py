@@ -76,6 +76,13 @@ def _processing(report) -> list[str]:
     logs = fit.logs
     pres = [d.processing.get("preprocess") for d in logs]
     out = []
+    if "columns" in logs[0].processing:
+        from .columns import describe
+
+        out.append(
+            f"  {describe(logs[0].processing['columns'])}"
+            + (" (in the first log)" if len(logs) > 1 else "")
+        )
     if all(pres):
         k = 0
         for f, ds in zip(fit.files, fit.parts):
