@@ -6,6 +6,7 @@ term is, reading the file (:func:`read`) and mapping its rows onto a robot's joi
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,13 +35,15 @@ _NONNEGATIVE = {"Ia": "rotor inertia", "Fv": "viscous friction", "Fc": "Coulomb 
 
 @dataclass(frozen=True)
 class Sidecar:
-    """A joint-terms file as read: its rows (mappings, the terms checked as numbers) and
+    """A joint-terms file as read: its rows (mappings, the terms checked as numbers),
     ``drive_side`` (``"motor"``: each row's Ia, Fv, Fc are the motor's it names; else
-    ``"joint"``)."""
+    ``"joint"``) and the file name of the ``description`` it was written beside (None if not
+    recorded)."""
 
     path: Path
     rows: list
     drive_side: str
+    description: str | None = None
 
 
 def read_yaml(path: Path, what: str):
@@ -53,6 +56,26 @@ def read_yaml(path: Path, what: str):
     except UnicodeDecodeError as e:
         raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
     return _yaml.load(text, path, ModelError)
+
+
+def description_name(robot) -> str | None:
+    """The file name of the description ``robot`` was loaded from (what a joint-terms file and
+    the JSON of ``mindyn identify`` record as ``description``), None for a generated robot."""
+    source = Path(robot.source)
+    return source.name if source.is_file() else None
+
+
+def warn_other_description(recorded, robot, where: str) -> None:
+    """A warning when the ``description`` file name a document records (for ``robot``, whose
+    joints it matches) is not the one ``robot`` was loaded from: files get renamed and moved,
+    so it is not refused."""
+    own = description_name(robot)
+    if isinstance(recorded, str) and own is not None and recorded != own:
+        warnings.warn(
+            f"{where}: made for the description '{recorded}'; robot '{robot.name}' was loaded "
+            f"from '{own}' (same joint names: taken as the same robot)",
+            stacklevel=3,
+        )
 
 
 def terms_of(sidecar: Sidecar) -> list[str]:
@@ -84,7 +107,8 @@ def read(path) -> Sidecar:
     side = doc.get("drive_side", "joint")
     if side not in ("motor", "joint"):
         raise ModelError(f"{p}: 'drive_side' is {side!r}; expected 'motor' or 'joint'")
-    return Sidecar(p, rows, side)
+    description = doc.get("description")
+    return Sidecar(p, rows, side, description if isinstance(description, str) else None)
 
 
 def slots(sidecar: Sidecar, robot) -> dict:
@@ -136,6 +160,7 @@ def slots(sidecar: Sidecar, robot) -> dict:
             f"{p}: {len(rows)} joints; robot '{robot.name}' has {n} (missing: "
             f"{', '.join(repr(k) for k in missing[:6])})"
         )
+    warn_other_description(sidecar.description, robot, str(p))
     present = terms_of(sidecar)
     for i, row in enumerate(rows, 1):
         for key in TERMS:

@@ -147,10 +147,9 @@ def read_identified_parameters(
         return None  # NAME value lines
     if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
         return None
-    if doc.get("robot") not in (None, robot.name):
-        raise _core.ModelError(
-            f"{path}: parameters identified for robot '{doc['robot']}', not '{robot.name}'"
-        )
+    from ..identification.document import check_identified_robot
+
+    check_identified_robot(doc, robot, f"{path}: parameters", error=_core.ModelError)
     differ = [k for k, on in flags.items() if k in doc and bool(doc[k]) != on]
     if differ:
         said = " ".join(f"{k}=True" for k in flags if doc.get(k))
