@@ -160,7 +160,6 @@ def slots(sidecar: Sidecar, robot) -> dict:
             f"{p}: {len(rows)} joints; robot '{robot.name}' has {n} (missing: "
             f"{', '.join(repr(k) for k in missing[:6])})"
         )
-    warn_other_description(sidecar.description, robot, str(p))
     present = terms_of(sidecar)
     for i, row in enumerate(rows, 1):
         for key in TERMS:
@@ -192,6 +191,7 @@ def slots(sidecar: Sidecar, robot) -> dict:
             v[k] = float(row[key])
         assert all(math.isfinite(x) for x in v)  # read() checked them
         out[word] = v
+    warn_other_description(sidecar.description, robot, str(p))  # the file fits the robot
     return out
 
 
