@@ -245,12 +245,15 @@ def test_a_motor_side_file_on_a_robot_without_transmissions_and_a_contradicting_
 
 def test_every_command_says_what_it_takes_from_the_file(identified):
     """The line of --joint-terms: the terms and their side; the offsets used with --offset, not
-    used without it or by a command without offsets; nothing used where the values are an
-    identification JSON's."""
+    used without it, shown by info (with the file's values); nothing used where the values are
+    an identification JSON's."""
     _, out_urdf, sidecar, ident = identified["motor"]
     said = cli("info", out_urdf, "--joint-terms", sidecar)
     assert f"joint terms from {sidecar}: Ia, Fv, Fc of the 3 motors (its drive_side: " in said
-    assert "torque offsets Off not used (this command has none)" in said, said
+    assert "torque offsets Off shown" in said, said
+    rows = said.split("torque offsets per joint")[1].splitlines()[2:5]
+    offsets = [row["Off"] for row in yaml.safe_load(sidecar.read_text())["joints"]]
+    assert [float(r.split()[2]) for r in rows] == pytest.approx(offsets, rel=1e-3, abs=1e-12)
     said = cli("base", out_urdf, "--joint-terms", sidecar, "--rotor", "--friction")
     assert "torque offsets Off not used (without --offset)" in said, said
     said = cli("base", out_urdf, "--joint-terms", sidecar, *FLAGS)
