@@ -320,7 +320,14 @@ def test_a_negative_limit_in_a_yaml_table_is_refused_by_name(key, tmp_path):
         return TWO_LINK.replace("{lower: -170, upper: 170, velocity: 3, effort: 50}", given)
 
     (tmp_path / "arm.yaml").write_text(table(-1))
-    expected = rf"arm.yaml:\d+: joint 1 \('shoulder'\): limits: '{key}' is -\d+: a limit on the "
+    where = next(
+        f"{i + 1}:{line.index(f'{key}: -') + len(key) + 3}"  # the line and column of the value
+        for i, line in enumerate(table(-1).splitlines())
+        if f"{key}: -" in line
+    )
+    expected = (
+        rf"arm.yaml:{where}: joint 1 \('shoulder'\): limits: '{key}' is -\d+: a limit on the "
+    )
     with pytest.raises(mindyn.ModelError, match=expected + "magnitude cannot be negative"):
         mindyn.load(tmp_path / "arm.yaml")
     (tmp_path / "arm.yaml").write_text(table(1))
