@@ -283,3 +283,19 @@ def test_the_offsets_of_a_robot_reach_the_base_dynamics_and_its_code():
     np.testing.assert_allclose(dyn.gravity(q), plain.gravity_torque(q), atol=1e-10)
     with pytest.raises(mindyn.ArgumentError, match="coulomb.*entry 2; rotor inertia and fric"):
         plain.with_joint_terms(coulomb=[0, -1, 0, 0, 0, 0])
+
+
+def test_a_bare_off_key_is_named_as_the_boolean_yaml_reads(tmp_path):
+    """YAML 1.1 reads a bare ``Off:`` as the boolean false: a hand-written file with it said
+    "unknown entry 'False'"; now the error says why and how to write the key."""
+    path = tmp_path / "planar2.joints.yaml"
+    path.write_text("joints:\n  - {name: joint1, Off: 0.25}\n  - {name: joint2, Off: -1.5}\n")
+    assert yaml.safe_load(path.read_text())["joints"][0] == {"name": "joint1", False: 0.25}
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load("planar2", joint_terms=path)
+    assert str(e.value) == (
+        f"{path}: joint 1: a key YAML reads as false: a bare Off, On, No or Yes is a boolean in "
+        "YAML; write the torque offset's key quoted, 'Off':"
+    )
+    path.write_text(path.read_text().replace("Off:", "'Off':"))
+    assert mindyn.load("planar2", joint_terms=path).torque_offset.tolist() == [0.25, -1.5]

@@ -129,6 +129,11 @@ def slots(sidecar: Sidecar, robot) -> dict:
     joint_of: list[int] = []
     for i, row in enumerate(rows, 1):
         unknown = [k for k in row if k not in TERMS and k not in _ROW_KEYS]
+        if unknown and isinstance(unknown[0], bool):  # YAML 1.1: a bare Off (On, No, ...)
+            raise ModelError(
+                f"{p}: joint {i}: a key YAML reads as {str(unknown[0]).lower()}: a bare Off, On, "
+                f"No or Yes is a boolean in YAML; write the torque offset's key quoted, '{OFF}':"
+            )
         if unknown:
             raise ModelError(
                 f"{p}: joint {i}: unknown entry {str(unknown[0])!r} (a row has "
