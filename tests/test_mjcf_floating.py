@@ -571,8 +571,8 @@ def test_hinge_armature_under_a_free_joint_is_named_as_not_in_the_dynamics(tmp_p
     keeps them as read (they are written back to an MJCF)."""
     path = tmp_path / "floatarm.xml"
     path.write_text(ARMATURE)
-    said = r"the armature \(j1 0.3, j2 0.05\); damping \(j1 0.5\); frictionloss \(j1 0.2\) of"
-    with pytest.warns(UserWarning, match=said + r" its hinge and slide joints are not in the dyn"):
+    said = r"rotor inertia \(j1 0.3, j2 0.05\); viscous friction \(j1 0.5\); Coulomb friction \("
+    with pytest.warns(UserWarning, match=said + r"j1 0.2\) of its revolute and prismatic joints"):
         robot = mindyn.load(path)
     assert robot.joint_types == ["floating", "revolute", "revolute"]
     assert robot.rotor_inertia.tolist() == [0.0, 0.3, 0.05]

@@ -44,7 +44,7 @@ of several degrees of freedom have none); a ball joint's cone ``range`` is not r
 names it). A model with a free or ball joint has no rotor inertia or friction in its dynamics:
 its hinges' and slides' armature, damping and frictionloss are read as their ``Ia``, ``Fv``,
 ``Fc`` (and written back), but its mass matrix and inverse dynamics are MuJoCo's without them,
-which a warning naming them says.
+which :func:`mindyn.load` warns, naming them.
 """
 
 from __future__ import annotations
@@ -302,37 +302,8 @@ def read(path, tip: str | None) -> _core.Model:
     by_name = {joint_name(m, j): float(armature[j]) for j in range(m.njnt)}
     core.rotor_inertia = np.array([by_name[name] for name in core.joint_names])
     if not core.single_dof:
-        _warn_drive_terms(core, path)
         _ball_ranges(m, core, path)
     return core
-
-
-def _warn_drive_terms(core: _core.Model, path) -> None:
-    """A warning naming the hinge and slide joints' rotor inertia and friction (their armature,
-    damping and frictionloss) of a model with free or ball joints: they are read (and written
-    back by :func:`mindyn.mjcf.write_mjcf`), but such a model's dynamics have no rotor inertia
-    or friction, so that its mass matrix and inverse dynamics leave them out, as MuJoCo's do
-    not."""
-    names = list(core.joint_names)
-    given = []
-    for key, values in (
-        ("armature", core.rotor_inertia),
-        ("damping", core.viscous),
-        ("frictionloss", core.coulomb),
-    ):
-        at = [f"{names[k]} {values[k]:g}" for k in range(len(names)) if values[k] != 0]
-        if at:
-            more = f" and {len(at) - 4} more" if len(at) > 4 else ""
-            given.append(f"{key} ({', '.join(at[:4])}{more})")
-    if given:
-        warnings.warn(
-            f"{path}: the {'; '.join(given)} of its hinge and slide joints are not in the "
-            "dynamics: with a free or ball joint the model has no rotor inertia or friction, so "
-            "that its mass matrix and inverse dynamics are MuJoCo's without them (MuJoCo adds "
-            "armature to the mass matrix's diagonal, damping and frictionloss as joint forces); "
-            "they are kept as the joints' Ia, Fv, Fc and written back to an MJCF",
-            stacklevel=2,
-        )
 
 
 def _ball_ranges(m, core: _core.Model, path) -> None:
