@@ -101,8 +101,10 @@ def test_another_count_of_joints_is_refused_naming_both(tmp_path):
         identified_model(doc, arm)
     assert str(e.value) == (
         "identification: made for 3 joints (shoulder, elbow, wrist); robot 'arm' has 2 "
-        "(shoulder, elbow)"
+        "(shoulder, elbow) (identified with another tip=?)"
     )
+    with pytest.raises(DataError, match=r"elbow\) \(identified on the chain ending at tip="):
+        identified_model({**doc, "tip": "l3"}, arm)
 
 
 def test_another_description_file_of_the_same_joints_is_a_warning(tmp_path):

@@ -963,10 +963,13 @@ def check_log_robot(doc: dict, robot, where: str) -> None:
     check_joint_names(doc.get("joints"), robot, where)
 
 
-def check_joint_names(joints, robot, where: str, *, error: type[Exception] = DataError) -> None:
+def check_joint_names(
+    joints, robot, where: str, *, error: type[Exception] = DataError, hint: str = ""
+) -> None:
     """Refuses (``error``, naming ``where``) the joint names a document records (``joints``;
     None: not recorded) when they are not ``robot``'s: another count (the names on both
-    sides), or the joints whose names differ (each as the document and the robot name it)."""
+    sides, then ``hint``), or the joints whose names differ (each as the document and the robot
+    name it)."""
     if joints is None:
         return
     own = list(robot.joint_names)
@@ -975,7 +978,7 @@ def check_joint_names(joints, robot, where: str, *, error: type[Exception] = Dat
     if len(joints) != len(own):
         raise error(
             f"{where}: made for {len(joints)} joints {_shown(joints)}; robot '{robot.name}' has "
-            f"{len(own)} {_shown(own)}"
+            f"{len(own)} {_shown(own)}{hint}"
         )
     differ = [k for k in range(len(own)) if joints[k] != own[k]]
     if differ:

@@ -124,7 +124,13 @@ def check_identified_robot(
     name = doc.get("robot")
     if name is not None and name != robot.name:
         raise error(f"{where}: identified for robot '{name}', not '{robot.name}'")
-    check_joint_names(doc.get("joints"), robot, where, error=error)
+    tip = doc.get("tip")
+    hint = (
+        f" (identified on the chain ending at tip='{tip}': load the robot with that tip)"
+        if isinstance(tip, str)
+        else " (identified with another tip=?)"
+    )
+    check_joint_names(doc.get("joints"), robot, where, error=error, hint=hint)
     _sidecar.warn_other_description(doc.get("description"), robot, where)
 
 
