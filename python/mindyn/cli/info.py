@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .._core import OFFSET_PREFIX as OFF
 from .._mujoco import is_mjcf
 from .args import add_command
 from .robot_options import add_robot, load_robot
@@ -74,9 +75,9 @@ def _offset_lines(robot, w: int) -> list[str]:
         return []
     out = [
         "",
-        "torque offsets per joint, tau += Off (N m, or N for a prismatic joint; what --offset "
-        "uses and identifies)",
-        f"{'#':>2} {'joint':<{w}}{'Off':>11}",
+        f"torque offsets per joint, tau += {OFF} (N m, or N for a prismatic joint; what "
+        "--offset uses and identifies)",
+        f"{'#':>2} {'joint':<{w}}{OFF:>11}",
     ]
     for k, v in enumerate(robot.torque_offset):
         out.append(f"{k + 1:>2} {robot.joint_names[k]:<{w}}{v:11.4g}")
