@@ -320,7 +320,14 @@ def test_a_negative_limit_in_a_yaml_table_is_refused_by_name(key, tmp_path):
         return TWO_LINK.replace("{lower: -170, upper: 170, velocity: 3, effort: 50}", given)
 
     (tmp_path / "arm.yaml").write_text(table(-1))
-    expected = rf"arm.yaml:\d+: joint 1 \('shoulder'\): limits: '{key}' is -\d+: a limit on the "
+    where = next(
+        f"{i + 1}:{line.index(f'{key}: -') + len(key) + 3}"  # the line and column of the value
+        for i, line in enumerate(table(-1).splitlines())
+        if f"{key}: -" in line
+    )
+    expected = (
+        rf"arm.yaml:{where}: joint 1 \('shoulder'\): limits: '{key}' is -\d+: a limit on the "
+    )
     with pytest.raises(mindyn.ModelError, match=expected + "magnitude cannot be negative"):
         mindyn.load(tmp_path / "arm.yaml")
     (tmp_path / "arm.yaml").write_text(table(1))
@@ -562,3 +569,23 @@ def test_simulate_says_when_rotor_and_friction_have_nothing_to_add(tmp_path):
             taus[robot.stem, len(flags)] = np.loadtxt(csv, delimiter=",", skiprows=1)[:, -2:]
     assert np.array_equal(taus["flanged", 0], taus["flanged", 2])
     assert not np.allclose(taus["arm", 0], taus["arm", 2])
+
+
+def test_info_lists_the_torque_offsets_of_a_joint_terms_file(tmp_path):
+    """``info --joint-terms FILE`` with torque offsets: it listed the rotor inertia and friction
+    but not the offsets, and said they were not used; now a row per joint with the file's
+    value, and the line says they are shown."""
+    terms = tmp_path / "planar2.joints.yaml"
+    offsets = {"joint1": 0.25, "joint2": -1.5}
+    rows = [{"name": j, "Ia": 0.125, "Off": v} for j, v in offsets.items()]
+    terms.write_text(json.dumps({"joints": rows}))  # JSON is YAML; "Off" quoted
+    rc, out, err = run(["info", "planar2", "--joint-terms", terms])
+    assert rc == 0, err
+    lines = out.splitlines()
+    said = "Ia on the joints, replacing the description's; torque offsets Off shown"
+    assert lines[0] == f"joint terms from {terms}: {said}"
+    at = next(i for i, x in enumerate(lines) if x.startswith("torque offsets per joint"))
+    assert lines[at + 1].split() == ["#", "joint", "Off"]
+    got = {r.split()[1]: float(r.split()[2]) for r in lines[at + 2 : at + 4]}
+    assert got == offsets
+    assert "torque offsets per joint" not in run(["info", "planar2"])[1]

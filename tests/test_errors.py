@@ -210,7 +210,8 @@ def test_a_gains_file_the_loader_cannot_build_exits_2_naming_the_place(tmp_path,
 )
 def test_an_identification_json_with_odd_types_names_the_file(tmp_path, change, needle):
     """A JSON whose names are not strings (unhashable in a set) or whose friction velocities
-    are not a list is refused naming the file, not with a bare TypeError."""
+    are not a list is refused naming the file, not with a bare TypeError, and as the data error
+    it is (as every reader of a file says it), not as a ModelError of the robot."""
     import json
 
     from mindyn.codegen.parameters import read_identified_parameters
@@ -223,9 +224,46 @@ def test_an_identification_json_with_odd_types_names_the_file(tmp_path, change, 
         doc["friction"] = True
     path = tmp_path / "ident.json"
     path.write_text(json.dumps(doc))
-    with pytest.raises(mindyn.ModelError) as e:
+    with pytest.raises(DataError) as e:
         read_identified_parameters(path, names, robot=robot, friction="friction_model" in change)
     assert str(e.value).startswith(str(path)) and needle in str(e.value), e.value
+
+
+@pytest.mark.parametrize("consistent", [False, True])
+def test_codegen_params_not_json_names_the_line_and_column(tmp_path, capsys, consistent):
+    """``codegen --params`` with a file that is not JSON: the reader's error (file, line,
+    column), also with --consistent, which said the file was not the JSON of identify."""
+    from mindyn.codegen.parameters import read_identified_parameters
+
+    path = tmp_path / "id.json"
+    path.write_text('{"names": ["ZZR1"],\n "values": }')  # line 2, column 12: no value
+    names = mindyn.base_parameters(mindyn.load("planar2")).names
+    with pytest.raises(DataError, match=r":2:12: not valid JSON: Expecting value$"):
+        read_identified_parameters(path, names, robot=mindyn.load("planar2"))
+    argv = ["codegen", "planar2", "--lang", "c", "--params", str(path), "-o", str(tmp_path / "x")]
+    assert mindyn.cli.main(argv + ["--consistent"] * consistent) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"mindyn: error: {path}:2:12: not valid JSON: Expecting value"], err
+
+
+def test_codegen_params_of_the_wrong_shape_is_a_data_error(tmp_path, capsys):
+    """An identification JSON whose 'removed' is not a list of names: a DataError naming the
+    file and the field (it was a ModelError, the class of a robot that cannot be built)."""
+    import json
+
+    from mindyn.codegen.parameters import read_identified_parameters
+
+    robot = mindyn.load("planar2")
+    names = mindyn.base_parameters(robot).names
+    path = tmp_path / "id.json"
+    path.write_text(json.dumps({"names": names, "values": [1.0] * len(names), "removed": [3]}))
+    with pytest.raises(DataError) as e:
+        read_identified_parameters(path, names, robot=robot)
+    assert not isinstance(e.value, mindyn.ModelError)
+    assert str(e.value) == f"{path}: unknown parameter(s) 3; expected {', '.join(names)}"
+    path.write_text(json.dumps({"names": names, "values": [1.0] * len(names), "removed": 3}))
+    with pytest.raises(DataError, match="'removed' must list the pruned parameters by name"):
+        read_identified_parameters(path, names, robot=robot)
 
 
 @pytest.mark.parametrize(

@@ -341,6 +341,9 @@ def test_base_and_info_take_a_root_joint_and_other_commands_refuse_it_in_one_lin
     log = write(tmp_path / "log.csv", table, header)
     cli("identify", urdf, log, "--root-joint", "floating", "--json", tmp_path / "id.json")
     ident = tmp_path / "id.json"
+    recorded = json.loads(ident.read_text())  # the robot it was identified for: Pinocchio's
+    assert recorded["joints"] == list(model.names[1:]), recorded["joints"]
+    assert recorded["description"] == Path(urdf).name
     for argv in (
         ["excite", "-o", tmp_path / "e.csv"],
         ["simulate", "-o", tmp_path / "s.csv"],

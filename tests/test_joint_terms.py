@@ -250,12 +250,15 @@ def test_a_motor_side_file_on_a_robot_without_transmissions_and_a_contradicting_
 
 def test_every_command_says_what_it_takes_from_the_file(identified):
     """The line of --joint-terms: the terms and their side; the offsets used with --offset, not
-    used without it or by a command without offsets; nothing used where the values are an
-    identification JSON's."""
+    used without it, shown by info (with the file's values); nothing used where the values are
+    an identification JSON's."""
     _, out_urdf, sidecar, ident = identified["motor"]
     said = cli("info", out_urdf, "--joint-terms", sidecar)
     assert f"joint terms from {sidecar}: Ia, Fv, Fc of the 3 motors (its drive_side: " in said
-    assert "torque offsets Off not used (this command has none)" in said, said
+    assert "torque offsets Off shown" in said, said
+    rows = said.split("torque offsets per joint")[1].splitlines()[2:5]
+    offsets = [row["Off"] for row in yaml.safe_load(sidecar.read_text())["joints"]]
+    assert [float(r.split()[2]) for r in rows] == pytest.approx(offsets, rel=1e-3, abs=1e-12)
     said = cli("base", out_urdf, "--joint-terms", sidecar, "--rotor", "--friction")
     assert "torque offsets Off not used (without --offset)" in said, said
     said = cli("base", out_urdf, "--joint-terms", sidecar, *FLAGS)
@@ -351,3 +354,19 @@ def test_a_friction_model_goes_into_the_sidecar_and_comes_back(tmp_path, kind, s
         p[5, 13] = 0.01  # motor 6 turns with joints 5 and 6
         with pytest.raises(mindyn.ModelError, match="motors 'm6'.*drive one joint alone"):
             write_urdf(robot, p.reshape(-1), tmp_path / "bad.urdf")
+
+
+def test_a_bare_off_key_is_named_as_the_boolean_yaml_reads(tmp_path):
+    """YAML 1.1 reads a bare ``Off:`` as the boolean false: a hand-written file with it said
+    "unknown entry 'False'"; now the error says why and how to write the key."""
+    path = tmp_path / "planar2.joints.yaml"
+    path.write_text("joints:\n  - {name: joint1, Off: 0.25}\n  - {name: joint2, Off: -1.5}\n")
+    assert yaml.safe_load(path.read_text())["joints"][0] == {"name": "joint1", False: 0.25}
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load("planar2", joint_terms=path)
+    assert str(e.value) == (
+        f"{path}: joint 1: a key YAML reads as false: a bare Off, On, No or Yes is a boolean in "
+        "YAML; write the torque offset's key quoted, 'Off':"
+    )
+    path.write_text(path.read_text().replace("Off:", "'Off':"))
+    assert mindyn.load("planar2", joint_terms=path).torque_offset.tolist() == [0.25, -1.5]

@@ -161,7 +161,7 @@ def test_mimic_joint_in_chain():
 
 def test_malformed_yaml(tmp_path):
     path = write(tmp_path, "bad.yaml", "name: x\nconvention: dh\njoints:\n  - {a: 1, alpha: 0\n")
-    with pytest.raises(ValueError, match=r"bad\.yaml:\d+: not valid YAML") as info:
+    with pytest.raises(ValueError, match=r"bad\.yaml:5:1: not valid YAML") as info:
         mindyn.load(path)
     assert isinstance(info.value, mindyn.ModelError)
 
@@ -169,8 +169,9 @@ def test_malformed_yaml(tmp_path):
 def test_yaml_unknown_key_typo(tmp_path):
     text = GOOD_YAML.replace("a: 0.3, alpha: 0", "a: 0.3, alpah: 0")
     path = write(tmp_path, "typo.yaml", text)
+    column = text.splitlines()[4].index("alpah") + 1  # the key at fault
     with pytest.raises(
-        ValueError, match=r"typo\.yaml:5: joint 2 \('b'\): unknown key 'alpah'.*alpha"
+        ValueError, match=rf"typo\.yaml:5:{column}: joint 2 \('b'\): unknown key 'alpah'.*alpha"
     ):
         mindyn.load(path)
     path = write(tmp_path, "top.yaml", GOOD_YAML.replace("convention", "conventoin"))
@@ -203,7 +204,8 @@ def test_yaml_classical_inertial_with_a_negative_mass_is_refused(tmp_path):
         "  - {type: revolute, a: 0.5, alpha: 0, d: 0, theta: 0,\n"
         "     inertial: {XX: 0.1, YY: 0.1, ZZ: 0.1, MX: 0.2, M: -2}}\n"
     )
-    with pytest.raises(mindyn.ModelError, match=r"neg\.yaml:5: joint 1 .*mass M is negative"):
+    column = text.splitlines()[4].index("-2") + 1  # the value at fault
+    with pytest.raises(mindyn.ModelError, match=rf"neg\.yaml:5:{column}: joint 1 .*mass M is neg"):
         mindyn.load(write(tmp_path, "neg.yaml", text))
     robot = mindyn.load(write(tmp_path, "pos.yaml", text.replace("M: -2", "M: 2")))
     assert robot.params[9] == 2.0
@@ -467,36 +469,66 @@ def test_urdf_loops_and_self_parented_joints_are_named(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "change, match",
+    "change, at, match",
     [
-        (("name: two", "name: [1, 2]"), r"r\.yaml:1: 'name' must be text, got a list"),
-        (("convention: dh", "convention: {x: 1}"), r"r\.yaml:2: 'convention' must be text"),
-        (("name: a,", "name: [a],"), r"r\.yaml:4: joint 1: 'name' must be text, got a list"),
-        (("a: 0.4", "a: [0.4]"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got a list"),
-        (("com: [-0.2, 0, 0]", "com: {x: 1}"), r"r\.yaml:4: .*'com' must be a list of 3 numbers"),
-        (("name: two", "name: !!python/object:os.system two"), r"r\.yaml:1: YAML tag '.*python"),
-        (("name: two", "name: !!binary AAAA"), r"r\.yaml:1: YAML tag '.*binary"),
-        (("name: two", "name: two\nname: three"), r"r\.yaml:2: key 'name' appears twice"),
-        (("a: 0.4,", "a: 0.4, a: 0.5,"), r"r\.yaml:4: key 'a' appears twice"),
-        (("name: two", "name: two\nsynthetic_inertia: [1]"), r"r\.yaml:2: 'synthetic_inertia'"),
-        (("name: two", "name: two\n[1, 2]: 3"), r"r\.yaml:2: a key must be plain text"),
+        (("name: two", "name: [1, 2]"), "[1, 2]", r"r\.yaml:1:\d+: 'name' must be text, got a l"),
+        (("convention: dh", "convention: {x: 1}"), "{x", r"r\.yaml:2:\d+: 'convention' must be"),
+        (("name: a,", "name: [a],"), "[a]", r"r\.yaml:4:\d+: joint 1: 'name' must be text, got a"),
+        (("a: 0.4", "a: [0.4]"), "[0.4]", r"r\.yaml:4:\d+: joint 1 \('a'\): 'a' must be a number"),
+        (("com: [-0.2, 0, 0]", "com: {x: 1}"), "{x", r"r\.yaml:4:\d+: .*'com' must be a list of 3"),
+        (("name: two", "name: !!python/object:os.system two"), "!!py", r"r\.yaml:1:\d+: YAML tag"),
+        (("name: two", "name: !!binary AAAA"), "!!binary", r"r\.yaml:1:\d+: YAML tag '.*binary"),
+        (("name: two", "name: two\nname: three"), "name: three", r"r\.yaml:2:\d+: key 'name' appe"),
+        (("a: 0.4,", "a: 0.4, a: 0.5,"), "a: 0.5", r"r\.yaml:4:\d+: key 'a' appears twice"),
+        (("name: two", "name: two\nsynthetic_inertia: [1]"), "[1]", r"r\.yaml:2:\d+: 'synthetic_"),
+        (("name: two", "name: two\n[1, 2]: 3"), "[1, 2]: 3", r"r\.yaml:2:\d+: a key must be plain"),
         # numbers that cannot be read, or keys left without a value (were taken as 0)
-        (("a: 0.4", "a: 3.7.0"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '3.7.0'"),
-        (("a: 0.4", "a: '3,7'"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '3,7'"),
-        (("a: 0.4", "a: 1e400"), r"r\.yaml:4: joint 1 \('a'\): 'a' must be a number, got '1e400'"),
-        (("a: 0.4", "a: ~"), r"r\.yaml:4: joint 1 \('a'\): 'a' has no value; give a number"),
-        (("mass: 1.0", "mass: 1.0, inertia: {xx: }"), r"r\.yaml:4: .*'xx' has no value"),
+        (("a: 0.4", "a: 3.7.0"), "3.7.0", r"r\.yaml:4:\d+: .*'a' must be a number, got '3.7.0'"),
+        (("a: 0.4", "a: '3,7'"), "'3,7'", r"r\.yaml:4:\d+: .*'a' must be a number, got '3,7'"),
+        (("a: 0.4", "a: 1e400"), "1e400", r"r\.yaml:4:\d+: .*'a' must be a number, got '1e400'"),
+        (("a: 0.4", "a: ~"), "~", r"r\.yaml:4:\d+: joint 1 \('a'\): 'a' has no value; give a num"),
+        (("mass: 1.0", "mass: 1.0, inertia: {xx: }"), "}, com", r"r\.yaml:4:\d+: .*'xx' has no"),
     ],
 )
-def test_yaml_type_errors_name_file_line_and_key(tmp_path, change, match):
+def test_yaml_type_errors_name_file_line_column_and_key(tmp_path, change, at, match):
+    """The column is that of the entry at fault (where the value would be, for a key left
+    without one), found here in the file's own text."""
     path = write(tmp_path, "r.yaml", GOOD_YAML.replace(*change))
-    with pytest.raises(mindyn.ModelError, match=match):
+    with pytest.raises(mindyn.ModelError, match=match) as e:
         mindyn.load(path)
+    line, column = map(int, re.search(r"r\.yaml:(\d+):(\d+): ", str(e.value)).groups())
+    assert path.read_text().splitlines()[line - 1][column - 1 :].startswith(at), e.value
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "name: x\nconvention: dh\njoints:\n  - {a: 1, alpha: 0\n",  # a flow mapping not closed
+        "name: x\n  bad: 1\n",  # a mapping value where none may be
+        "joints: [\n",  # a flow sequence not closed
+        "a: 1\n\tb: 2\n",  # a tab as indentation
+        "name: x\nconvention: dh\njoints:\n  - {a: 1, alpha: 0]}\n",  # a stray flow end
+        "name: x\nconvention: dh\njoints:\n  - a: 1\n   b: 2\n",  # indentation off by one
+    ],
+)
+def test_yaml_syntax_errors_give_the_line_and_column_pyyaml_gives(tmp_path, text):
+    """The description reader (yaml-cpp) named the line of a syntax error only; now the line
+    and column, as the Python readers give them: the place PyYAML's parser reports."""
+    import yaml
+
+    path = write(tmp_path, "s.yaml", text)
+    with pytest.raises(yaml.YAMLError) as e:
+        yaml.safe_load(text)
+    mark = e.value.problem_mark
+    with pytest.raises(mindyn.ModelError) as info:
+        mindyn.load(path)
+    want = f"{path}:{mark.line + 1}:{mark.column + 1}: not valid YAML: "
+    assert str(info.value).startswith(want), (str(info.value), want)
 
 
 def test_yaml_several_documents_refused(tmp_path):
     path = write(tmp_path, "r.yaml", GOOD_YAML + "---\n" + GOOD_YAML)
-    with pytest.raises(mindyn.ModelError, match=r"r\.yaml:6: a second YAML document starts here"):
+    with pytest.raises(mindyn.ModelError, match=r"r\.yaml:6:1: a second YAML document starts here"):
         mindyn.load(path)
     # a stray flow end: yaml-cpp's own multi-document loader loops forever, allocating, on it
     path = write(tmp_path, "s.yaml", ", 0.1]}}\n")
@@ -517,7 +549,7 @@ def test_yaml_several_documents_refused(tmp_path):
 def test_yaml_extreme_values_refused_with_the_bound(tmp_path, change, key):
     path = write(tmp_path, "r.yaml", GOOD_YAML.replace(*change))
     with pytest.raises(
-        mindyn.ModelError, match=rf"r\.yaml:\d+: .*'{key}' = .* exceeds the bound 1e\+16"
+        mindyn.ModelError, match=rf"r\.yaml:\d+:\d+: .*'{key}' = .* exceeds the bound 1e\+16"
     ):
         mindyn.load(path)
 
@@ -576,7 +608,8 @@ def test_names_with_line_breaks_stay_on_one_line(tmp_path):
         mindyn.load(path)
     assert "\n" not in str(info.value)
     path = write(tmp_path, "n.yaml", GOOD_YAML.replace("a: 0.4", 'type: "x\\ny", a: 0.4'))
-    with pytest.raises(mindyn.ModelError, match=r"n\.yaml:4: .*joint type 'x\\ny'") as info:
+    column = path.read_text().splitlines()[3].index('"x') + 1
+    with pytest.raises(mindyn.ModelError, match=rf"n\.yaml:4:{column}: .*type 'x\\ny'") as info:
         mindyn.load(path)
     assert "\n" not in str(info.value)
 
@@ -586,7 +619,7 @@ def test_yaml_parser_messages_reach_python_as_one_line(tmp_path):
     # Python used to fail with UnicodeDecodeError
     text = b"n" + b"\0" * 8 + b"ame: three\njoints:\n  - {alpha:, d: 0.1}\n  - {alpha: 0, d: }\n"
     (tmp_path / "z.yaml").write_bytes(text)
-    with pytest.raises(mindyn.ModelError, match=r"z\.yaml:\d+: not valid YAML") as info:
+    with pytest.raises(mindyn.ModelError, match=r"z\.yaml:\d+:\d+: not valid YAML") as info:
         mindyn.load(tmp_path / "z.yaml")
     assert "\n" not in str(info.value)
 

@@ -490,6 +490,19 @@ TREE = """<mujoco model="tree">
 """
 
 
+def full_mass_matrix(m, qpos) -> np.ndarray:
+    """MuJoCo's joint-space inertia (armature included) at ``qpos``."""
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    mujoco.mj_forward(m, d)
+    full = np.zeros((m.nv, m.nv))
+    if hasattr(d, "qM"):  # MuJoCo 3
+        mujoco.mj_fullM(m, full, d.qM)
+    else:  # MuJoCo 4: mj_fullM(m, d, dst)
+        mujoco.mj_fullM(m, d, full)
+    return full
+
+
 @pytest.mark.parametrize("xml", [ARM7, TREE], ids=["arm7_defaults", "tree"])
 def test_hand_written_mjcf_loads_with_the_dynamics_mujoco_computes(xml, tmp_path):
     path = tmp_path / "robot.xml"
@@ -516,16 +529,11 @@ def test_hand_written_mjcf_loads_with_the_dynamics_mujoco_computes(xml, tmp_path
     ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
     assert_close(got, ref + robot.coulomb * np.sign(dq), TOL, "MJCF in vs mj_inverse")
     # the mass matrix with the armature, against MuJoCo's
-    d = mujoco.MjData(m)
     adr = [int(m.jnt_qposadr[m.joint(n).id]) for n in robot.joint_names]
     dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in robot.joint_names]
-    d.qpos[adr] = q[0]
-    mujoco.mj_forward(m, d)
-    full = np.zeros((m.nv, m.nv))
-    if hasattr(d, "qM"):  # MuJoCo 3
-        mujoco.mj_fullM(m, full, d.qM)
-    else:  # MuJoCo 4: mj_fullM(m, d, dst)
-        mujoco.mj_fullM(m, d, full)
+    qpos = np.array(m.qpos0)
+    qpos[adr] = q[0]
+    full = full_mass_matrix(m, qpos)
     mass = robot.mass_matrix(q[0]) + np.diag(robot.rotor_inertia)
     assert_close(mass, full[np.ix_(dof, dof)], TOL, "MJCF in mass matrix vs mj_fullM")
 

@@ -22,6 +22,7 @@ the base parameters.
 from __future__ import annotations
 
 import re
+import warnings
 
 import mindyn
 import numpy as np
@@ -29,7 +30,7 @@ import pinocchio as pin
 import pytest
 from conftest import ROBOTS_DIR, assert_close, cli, set_pinocchio_params
 from mindyn.mjcf import write_mjcf
-from test_mjcf import REPO_UR5, ROUND_TRIP, TOL, physical_params
+from test_mjcf import REPO_UR5, ROUND_TRIP, TOL, full_mass_matrix, physical_params
 from test_multibody import pin_q, random_state
 
 mujoco = pytest.importorskip("mujoco", reason="the 'mujoco' wheel is not installed")
@@ -538,3 +539,75 @@ def test_spherical_joints_are_written_as_ball_joints_and_read_back(tmp_path):
         q, v, a = random_state(robot, rng)
         ref = mj_inverse(m, robot, q, v, a)
         assert_close(robot.inverse_dynamics(q, v, a, params=p), ref, TOL, "YAML balls vs MuJoCo")
+
+
+# -- hinge terms and ball ranges the model of a floating base has no place for -----------------
+ARMATURE = """<mujoco model="floatarm">
+  <worldbody>
+    <body name="base" pos="0 0 1">
+      <freejoint name="root"/>
+      <inertial pos="0.01 0.02 0" mass="3" diaginertia="0.1 0.2 0.15"/>
+      <body name="l1" pos="0.1 0 0">
+        <joint name="j1" axis="0 0 1" armature="0.3" damping="0.5" frictionloss="0.2"/>
+        <inertial pos="0.2 0 0" mass="1.5" diaginertia="0.01 0.03 0.03"/>
+        <body name="l2" pos="0.4 0 0">
+          <joint name="j2" axis="0 1 0" armature="0.05"/>
+          <inertial pos="0.1 0.01 0" mass="0.7" diaginertia="0.005 0.01 0.01"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_hinge_armature_under_a_free_joint_is_named_as_not_in_the_dynamics(tmp_path):
+    """Armature, damping and frictionloss of hinges below a free joint: the model of a floating
+    base has no rotor inertia or friction, and its dynamics left them out while the robot
+    carried them, silently. Now a warning names them and says that the mass matrix and inverse
+    dynamics are MuJoCo's without them, which they are: MuJoCo's mass matrix (in mindyn's
+    velocities, ``S^T M S`` with ``S = diag(R, I)``) minus the armature on the hinges'
+    diagonal, and ``mj_inverse`` of the model with the three terms set to zero. The robot
+    keeps them as read (they are written back to an MJCF)."""
+    path = tmp_path / "floatarm.xml"
+    path.write_text(ARMATURE)
+    said = r"rotor inertia \(j1 0.3, j2 0.05\); viscous friction \(j1 0.5\); Coulomb friction \("
+    with pytest.warns(UserWarning, match=said + r"j1 0.2\) of its revolute and prismatic joints"):
+        robot = mindyn.load(path)
+    assert robot.joint_types == ["floating", "revolute", "revolute"]
+    assert robot.rotor_inertia.tolist() == [0.0, 0.3, 0.05]
+    assert (robot.viscous.tolist(), robot.coulomb.tolist()) == ([0, 0.5, 0], [0, 0.2, 0])
+    m = mujoco.MjModel.from_xml_path(str(path))
+    bare = mujoco.MjModel.from_xml_path(str(path))
+    bare.dof_armature[:], bare.dof_damping[:], bare.dof_frictionloss[:] = 0.0, 0.0, 0.0
+    armature = np.array(m.dof_armature)
+    assert armature[6:].tolist() == [0.3, 0.05]
+    rng = np.random.default_rng(8)
+    for _ in range(3):
+        q, v, a = random_state(robot, rng)
+        qpos, _, _ = to_mujoco(m, robot, q, v, a)
+        x, y, z, w = q[3:7]
+        S = np.eye(m.nv)
+        S[:3, :3] = rotation([w, x, y, z])
+        full = S.T @ full_mass_matrix(m, qpos) @ S
+        assert_close(robot.mass_matrix(q) + np.diag(armature), full, TOL, "A + armature vs MuJoCo")
+        ref = mj_inverse(bare, robot, q, v, a)
+        assert_close(robot.inverse_dynamics(q, v, a), ref, TOL, "mindyn vs MuJoCo without terms")
+
+
+def test_a_ball_joint_range_is_named_as_not_read(tmp_path):
+    """A ball joint's range (MuJoCo's cone limit on its rotation angle; 60 degrees here, in the
+    file's degrees) has no place in the model's spherical joint: a warning names it."""
+    path = tmp_path / "cone.xml"
+    path.write_text(
+        BALLS.replace('<compiler angle="radian"/>', "").replace(
+            'name="a_ball" type="ball"', 'name="a_ball" type="ball" range="0 60"'
+        )
+    )
+    with pytest.warns(UserWarning, match=r"range of ball joint\(s\) 'a_ball' \(60 deg\), a cone"):
+        robot = mindyn.load(path)
+    assert robot.joint_types[0] == "spherical"
+    path.write_text(BALLS)  # no range: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mindyn.load(path)

@@ -479,3 +479,26 @@ def test_a_urdf_planar_joint_moves_in_the_plane_normal_to_its_axis(tmp_path):
         assert_close(
             robot.forward_dynamics(q, v, tau), pin.aba(model, data, q, v, tau), 1e-10, "aba"
         )
+
+
+def test_joint_friction_of_a_floating_urdf_is_named_as_not_in_the_dynamics():
+    """TIAGo on a planar root: its URDF gives joint damping (the torso lift 1000 N s/m), which
+    the model of a robot with joints of several degrees of freedom leaves out of its dynamics,
+    as Pinocchio's rnea does: it was kept in the robot silently. A warning names the joints
+    with the URDF's values, and the inverse dynamics are Pinocchio's (without them)."""
+    import xml.etree.ElementTree as ET
+
+    path = PLANAR["tiago"]
+    with pytest.warns(UserWarning, match="of its revolute and prismatic joints") as caught:
+        robot = mindyn.load(path, root_joint="planar")
+    said = next(str(w.message) for w in caught if "not in the dynamics" in str(w.message))
+    damping = {
+        j.get("name"): float(j.find("dynamics").get("damping", 0))
+        for j in ET.parse(path).getroot().iter("joint")
+        if j.find("dynamics") is not None
+    }
+    damped = [k for k in robot.joint_names[1:] if damping.get(k, 0) != 0]
+    listed = ", ".join(f"{k} {damping[k]:g}" for k in damped[:4])
+    assert f"viscous friction ({listed} and {len(damped) - 4} more)" in said, said
+    model = pin.buildModelFromUrdf(str(path), pin.JointModelPlanar())
+    compare(robot, model, np.random.default_rng(2), states=1)

@@ -25,13 +25,18 @@ std::string formatNumber(double v) {
   return buf;
 }
 
+/// `SOURCE:LINE:COLUMN` (both from 1) of a place in a YAML text, as the Python readers give
+/// it; `SOURCE` alone without a place.
+std::string at(const std::string& source, const YAML::Mark& mark) {
+  if (mark.is_null() || mark.line < 0) return source;
+  return source + ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+}
+
 struct Ctx {
   std::string source;
   std::string where;  // e.g. "joint 2 ('shoulder')"
   [[noreturn]] void fail(const std::string& msg, const YAML::Node& node = YAML::Node()) const {
-    std::string loc = source;
-    if (node.IsDefined() && node.Mark().line >= 0)
-      loc += ":" + std::to_string(node.Mark().line + 1);
+    const std::string loc = node.IsDefined() ? at(source, node.Mark()) : source;
     throw ModelError(loc + ": " + (where.empty() ? "" : where + ": ") + msg);
   }
 };
@@ -275,12 +280,11 @@ Model parseDocument(const std::string& yaml, const std::string& source) {
     root = YAML::Load(yaml);
     second = secondDocument(yaml);
   } catch (const YAML::Exception& e) {
-    throw ModelError(source + (e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1)) +
-                     ": not valid YAML: " + e.msg);
+    throw ModelError(at(source, e.mark) + ": not valid YAML: " + e.msg);
   }
   if (!root.IsMap()) c.fail("a robot description must be a YAML mapping with a 'joints' list");
   if (!second.is_null())
-    throw ModelError(source + ":" + std::to_string(second.line + 1) +
+    throw ModelError(at(source, second) +
                      ": a second YAML document starts here; a robot description is one document");
   long budget = 4 * static_cast<long>(yaml.size()) + 16;
   checkTree(c, root, &budget, 0);
@@ -288,8 +292,7 @@ Model parseDocument(const std::string& yaml, const std::string& source) {
     return build(c, root);
   } catch (const YAML::Exception& e) {
     // Every entry is type-checked before conversion; this is the backstop for anything missed.
-    throw ModelError(source + (e.mark.is_null() ? "" : ":" + std::to_string(e.mark.line + 1)) +
-                     ": " + e.msg);
+    throw ModelError(at(source, e.mark) + ": " + e.msg);
   }
 }
 
@@ -402,7 +405,7 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
       *fields[t] = Eigen::Map<const Eigen::VectorXd>(motor_terms[t].data(), m);
     }
   c.where.clear();
-  const std::string who = c.source + ":" + std::to_string(node.Mark().line + 1) + ": transmissions";
+  const std::string who = at(c.source, node.Mark()) + ": transmissions";
   tr.validate(model.joints, who);
   return tr;
 }

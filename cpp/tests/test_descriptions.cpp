@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <utility>
 
 #include "mindyn/urdf.hpp"
 #include "test_util.hpp"
@@ -431,21 +433,24 @@ TEST(Yaml, TypeErrorsNameFileLineAndKey) {
     std::string yaml, expect;
   };
   const Case cases[] = {
-      {"name: [1, 2]\nconvention: dh\njoints:\n  - {a: 1}\n", "y.yaml:1: 'name' must be text"},
-      {"name: r\nconvention: {x: 1}\njoints:\n  - {a: 1}\n", "y.yaml:2: 'convention' must be text"},
-      {"name: r\nconvention: dh\njoints: {a: 1}\n", "y.yaml:3: 'joints' must be a non-empty list"},
+      {"name: [1, 2]\nconvention: dh\njoints:\n  - {a: 1}\n", "y.yaml:1:7: 'name' must be text"},
+      {"name: r\nconvention: {x: 1}\njoints:\n  - {a: 1}\n",
+       "y.yaml:2:13: 'convention' must be text"},
+      {"name: r\nconvention: dh\njoints: {a: 1}\n",
+       "y.yaml:3:9: 'joints' must be a non-empty list"},
       {"name: r\nconvention: dh\njoints:\n  - {a: [1]}\n",
-       "y.yaml:4: joint 1 ('joint1'): 'a' must be a number, got a list"},
+       "y.yaml:4:9: joint 1 ('joint1'): 'a' must be a number, got a list"},
       {"name: r\nconvention: dh\njoints:\n  - {type: {x: 1}}\n",
-       "y.yaml:4: joint 1 ('joint1'): 'type' must be text, got a mapping"},
+       "y.yaml:4:12: joint 1 ('joint1'): 'type' must be text, got a mapping"},
       {"name: !!python/object:os.system r\nconvention: dh\njoints:\n  - {a: 1}\n",
-       "y.yaml:1: YAML tag 'tag:yaml.org,2002:python/object:os.system' is not supported"},
+       "y.yaml:1:7: YAML tag 'tag:yaml.org,2002:python/object:os.system' is not supported"},
       {"name: r\nconvention: dh\nname: s\njoints:\n  - {a: 1}\n",
-       "y.yaml:3: key 'name' appears twice"},
-      {"name: r\nconvention: dh\njoints:\n  - {a: 1, a: 2}\n", "y.yaml:4: key 'a' appears twice"},
+       "y.yaml:3:1: key 'name' appears twice"},
+      {"name: r\nconvention: dh\njoints:\n  - {a: 1, a: 2}\n",
+       "y.yaml:4:12: key 'a' appears twice"},
       {"name: r\nconvention: dh\nsynthetic_inertia: maybe\njoints:\n  - {a: 1}\n",
-       "y.yaml:3: 'synthetic_inertia' must be true or false"},
-      {base + "---\n" + base, "y.yaml:5: a second YAML document starts here"},
+       "y.yaml:3:20: 'synthetic_inertia' must be true or false"},
+      {base + "---\n" + base, "y.yaml:5:1: a second YAML document starts here"},
       // yaml-cpp's LoadAll loops forever, allocating, on this (a stray flow end)
       {", 0.1]}}\n", "y.yaml"},
   };
@@ -457,21 +462,28 @@ TEST(Yaml, TypeErrorsNameFileLineAndKey) {
 }
 
 TEST(Yaml, ExtremeValuesAreRefusedWithTheBound) {
-  // 1e16 is the bound: accepted; 2e16 is refused with the value, the bound, file and line
+  // 1e16 is the bound: accepted; 2e16 is refused with the value, the bound, file, line and
+  // column (of the value: the entry starts at column 6 of "  - {ENTRY}")
   EXPECT_EQ(parseYaml("convention: dh\njoints:\n  - {a: 1e16}\n", "y.yaml").nq(), 1);
-  for (const char* entry : {"a: 2e16", "d: -1e308", "inertial: {mass: 1e300}",
-                            "inertial: {mass: 1, inertia: {xx: 1e200}}",
-                            "limits: {lower: -1e300, upper: 1}", "rotor_inertia: 1e17"}) {
+  const std::pair<std::string, std::string> entries[] = {
+      {"a: 2e16", "2e16"},
+      {"d: -1e308", "-1e308"},
+      {"inertial: {mass: 1e300}", "1e300"},
+      {"inertial: {mass: 1, inertia: {xx: 1e200}}", "1e200"},
+      {"limits: {lower: -1e300, upper: 1}", "-1e300"},
+      {"rotor_inertia: 1e17", "1e17"}};
+  for (const auto& [entry, value] : entries) {
     const std::string e = errorOf<ModelError>([&] {
       parseYaml(std::string("convention: dh\njoints:\n  - {") + entry + "}\n", "y.yaml");
     });
-    EXPECT_TRUE(contains(e, "y.yaml:3: joint 1 ('joint1'): '")) << e;
+    const std::string at = "y.yaml:3:" + std::to_string(6 + entry.find(value)) + ": ";
+    EXPECT_TRUE(contains(e, at + "joint 1 ('joint1'): '")) << e << "\nexpected: " << at;
     EXPECT_TRUE(contains(e, "exceeds the bound 1e+16")) << e;
   }
   const std::string g = errorOf<ModelError>([] {
     parseYaml("convention: dh\ngravity: [0, 0, -1e200]\njoints:\n  - {a: 1}\n", "y.yaml");
   });
-  EXPECT_TRUE(contains(g, "y.yaml:2: 'gravity' = -1e200 exceeds the bound")) << g;
+  EXPECT_TRUE(contains(g, "y.yaml:2:17: 'gravity' = -1e200 exceeds the bound")) << g;
 }
 
 TEST(Yaml, NumbersThatCannotBeReadOrAreLeftEmptyAreRefused) {
@@ -479,14 +491,18 @@ TEST(Yaml, NumbersThatCannotBeReadOrAreLeftEmptyAreRefused) {
     const std::string e = errorOf<ModelError>([&] {
       parseYaml(std::string("convention: dh\njoints:\n  - {") + entry + "}\n", "y.yaml");
     });
-    EXPECT_TRUE(contains(e, "y.yaml:3: joint 1 ('joint1'): 'a' must be a number, got '")) << e;
+    EXPECT_TRUE(contains(e, "y.yaml:3:9: joint 1 ('joint1'): 'a' must be a number, got '")) << e;
   }
-  // a key written without a value is a number left out, not its default
-  for (const char* entry : {"a: ", "a: ~", "inertial: {mass: 1, inertia: {xx: }}"}) {
+  // a key written without a value is a number left out, not its default (the column where
+  // the value would be: after "KEY: ", the entry starting at column 6 of "  - {ENTRY}")
+  const std::pair<std::string, std::string> empty[] = {
+      {"a: ", "a: "}, {"a: ~", "a: "}, {"inertial: {mass: 1, inertia: {xx: }}", "xx: "}};
+  for (const auto& [entry, key] : empty) {
     const std::string e = errorOf<ModelError>([&] {
       parseYaml(std::string("convention: dh\njoints:\n  - {") + entry + "}\n", "y.yaml");
     });
-    EXPECT_TRUE(contains(e, "y.yaml:3: joint 1 ('joint1'): '")) << e;
+    const std::string at = "y.yaml:3:" + std::to_string(6 + entry.find(key) + key.size());
+    EXPECT_TRUE(contains(e, at + ": joint 1 ('joint1'): '")) << e << "\nexpected: " << at;
     EXPECT_TRUE(contains(e, "' has no value; give a number, or leave the key out")) << e;
   }
 }

@@ -40,12 +40,17 @@ floating joint, which :meth:`Model.with_spherical` then makes spherical: URDF ha
 joint): MuJoCo's ``qpos`` of it is the quaternion ``(w, x, y, z)``, the model's q ``(x, y, z,
 w)``, and the velocity is the angular velocity in the body's axes in both. Free and ball joints
 carry no armature, damping, frictionloss or velocity limit (refused by name: the model's joints
-of several degrees of freedom have none); a ball joint's cone ``range`` is not read.
+of several degrees of freedom have none); a ball joint's cone ``range`` is not read (a warning
+names it). A model with a free or ball joint has no rotor inertia or friction in its dynamics:
+its hinges' and slides' armature, damping and frictionloss are read as their ``Ia``, ``Fv``,
+``Fc`` (and written back), but its mass matrix and inverse dynamics are MuJoCo's without them,
+which :func:`mindyn.load` warns, naming them.
 """
 
 from __future__ import annotations
 
 import math
+import warnings
 import xml.parsers.expat
 from pathlib import Path
 
@@ -296,7 +301,28 @@ def read(path, tip: str | None) -> _core.Model:
     core = core.with_gravity(gravity)
     by_name = {joint_name(m, j): float(armature[j]) for j in range(m.njnt)}
     core.rotor_inertia = np.array([by_name[name] for name in core.joint_names])
+    if not core.single_dof:
+        _ball_ranges(m, core, path)
     return core
+
+
+def _ball_ranges(m, core: _core.Model, path) -> None:
+    """A warning naming the ball joints of the model with a ``range`` (MuJoCo's cone limit on
+    the joint's rotation angle), which the model's spherical joints have no place for."""
+    mujoco = require("reading an MJCF")
+    ball = int(mujoco.mjtJoint.mjJNT_BALL)
+    names = set(core.joint_names)
+    limited = [
+        f"'{joint_name(m, j)}' ({math.degrees(float(m.jnt_range[j][1])):.6g} deg)"
+        for j in range(m.njnt)
+        if int(m.jnt_type[j]) == ball and bool(m.jnt_limited[j]) and joint_name(m, j) in names
+    ]
+    if limited:
+        warnings.warn(
+            f"{path}: the range of ball joint(s) {', '.join(limited)}, a cone limit on the "
+            "rotation angle, is not read: the model's spherical joints have no limits",
+            stacklevel=2,
+        )
 
 
 def tendon_name(m, t: int) -> str:

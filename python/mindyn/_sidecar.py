@@ -6,6 +6,7 @@ term is, reading the file (:func:`read`) and mapping its rows onto a robot's joi
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -57,12 +58,14 @@ FRICTION_MODELS = {
 class Sidecar:
     """A joint-terms file as read: its rows (mappings, the terms checked as numbers),
     ``drive_side`` (``"motor"``: each row's Ia, Fv, Fc are the motor's it names; else
-    ``"joint"``) and ``friction_model`` (a key of :data:`FRICTION_MODELS`)."""
+    ``"joint"``), ``friction_model`` (a key of :data:`FRICTION_MODELS`) and the file name of
+    the ``description`` it was written beside (None if not recorded)."""
 
     path: Path
     rows: list
     drive_side: str
     friction_model: str = "coulomb"
+    description: str | None = None
 
 
 def read_yaml(path: Path, what: str):
@@ -75,6 +78,26 @@ def read_yaml(path: Path, what: str):
     except UnicodeDecodeError as e:
         raise ModelError(f"{path}: not a YAML file: {' '.join(str(e).split())}") from None
     return _yaml.load(text, path, ModelError)
+
+
+def description_name(robot) -> str | None:
+    """The file name of the description ``robot`` was loaded from (what a joint-terms file and
+    the JSON of ``mindyn identify`` record as ``description``), None for a generated robot."""
+    source = Path(robot.source)
+    return source.name if source.is_file() else None
+
+
+def warn_other_description(recorded, robot, where: str) -> None:
+    """A warning when the ``description`` file name a document records (for ``robot``, whose
+    joints it matches) is not the one ``robot`` was loaded from: files get renamed and moved,
+    so it is not refused."""
+    own = description_name(robot)
+    if isinstance(recorded, str) and own is not None and recorded != own:
+        warnings.warn(
+            f"{where}: made for the description '{recorded}'; robot '{robot.name}' was loaded "
+            f"from '{own}' (same joint names: taken as the same robot)",
+            stacklevel=3,
+        )
 
 
 def terms_of(sidecar: Sidecar) -> list[str]:
@@ -123,7 +146,8 @@ def read(path) -> Sidecar:
             f"{p}: 'friction_model' is {model!r}; expected one of "
             f"{', '.join(FRICTION_MODELS)}{hint}"
         )
-    return Sidecar(p, rows, side, model)
+    description = doc.get("description")
+    return Sidecar(p, rows, side, model, description if isinstance(description, str) else None)
 
 
 def slots(sidecar: Sidecar, robot) -> dict:
@@ -146,6 +170,11 @@ def slots(sidecar: Sidecar, robot) -> dict:
     joint_of: list[int] = []
     for i, row in enumerate(rows, 1):
         unknown = [k for k in row if k not in TERMS and k not in _ROW_KEYS]
+        if unknown and isinstance(unknown[0], bool):  # YAML 1.1: a bare Off (On, No, ...)
+            raise ModelError(
+                f"{p}: joint {i}: a key YAML reads as {str(unknown[0]).lower()}: a bare Off, On, "
+                f"No or Yes is a boolean in YAML; write the torque offset's key quoted, '{OFF}':"
+            )
         if unknown:
             raise ModelError(
                 f"{p}: joint {i}: unknown entry {str(unknown[0])!r} (a row has "
@@ -243,6 +272,7 @@ def slots(sidecar: Sidecar, robot) -> dict:
     out["friction_model"] = (
         {"kind": sidecar.friction_model, "velocity": by_slot} if "Fc" in present else None
     )
+    warn_other_description(sidecar.description, robot, str(p))  # the file fits the robot
     return out
 
 

@@ -138,11 +138,14 @@ def load(
     _args.optional(_args.path, joint_terms, "joint_terms")
     out = _load(robot, tip, root_joint)
     if out is not robot:
+        import warnings
+
         note = drive_train_note(out)
         if note:
-            import warnings
-
             warnings.warn(note, DriveTrainWarning, stacklevel=2)
+        note = unused_terms_note(out)
+        if note:
+            warnings.warn(note, UserWarning, stacklevel=2)
     if joint_terms is not None:
         terms = _sidecar.slots(_sidecar.read(joint_terms), out)
         model = terms.pop("friction_model")
@@ -171,6 +174,35 @@ READ_TRANSMISSIONS = (
     "pr2_mechanism_model/SimpleTransmission",
     "pr2_mechanism_model/WristTransmission",
 )
+
+
+def unused_terms_note(robot: Robot) -> str:
+    """The note on the rotor inertia and friction that the revolute and prismatic joints of a
+    robot with joints of several degrees of freedom carry (as its description gives them), which
+    its dynamics leave out (such a model has no rotor inertia or friction), one line; "" when
+    there are none. What :func:`load` warns."""
+    if robot.single_dof:
+        return ""
+    names = robot.joint_names
+    given = []
+    for words, values in (
+        ("rotor inertia", robot.rotor_inertia),
+        ("viscous friction", robot.viscous),
+        ("Coulomb friction", robot.coulomb),
+    ):
+        at = [f"{names[k]} {values[k]:g}" for k in range(len(names)) if values[k] != 0]
+        if at:
+            more = f" and {len(at) - 4} more" if len(at) > 4 else ""
+            given.append(f"{words} ({', '.join(at[:4])}{more})")
+    if not given:
+        return ""
+    return (
+        f"{robot.source}: the {'; '.join(given)} of its revolute and prismatic joints (a URDF's "
+        "<dynamics damping, friction>, an MJCF's armature, damping, frictionloss) are not in the "
+        "dynamics: with joints of several degrees of freedom the model has no rotor inertia or "
+        "friction, so that its mass matrix and inverse dynamics leave them out (they stay the "
+        "joints' Ia, Fv, Fc)"
+    )
 
 
 def drive_train_note(robot: Robot) -> str:

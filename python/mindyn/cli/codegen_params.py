@@ -50,7 +50,7 @@ def _with_friction_model(robot, args):
             refuse_state(doc, "generated code", str(args.params))
             recorded = doc["friction_model"]
             if not (isinstance(recorded, dict) and isinstance(recorded.get("kind"), str)):
-                raise ModelError(
+                raise DataError(
                     f"{args.params}: 'friction_model' must be {{kind, velocity}}, got {recorded!r}"
                 )
             velocity = recorded.get("velocity")
@@ -58,9 +58,7 @@ def _with_friction_model(robot, args):
                 isinstance(velocity, list)
                 and all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in velocity)
             ):
-                raise ModelError(
-                    f"{args.params}: friction_model velocity must be a list of numbers"
-                )
+                raise DataError(f"{args.params}: friction_model velocity must be a list of numbers")
             try:
                 robot = robot.with_friction_model(recorded["kind"], velocity=velocity or None)
             except ArgumentError as e:  # the JSON's values, not the command's arguments

@@ -40,6 +40,7 @@ def read_classical(path: str) -> tuple[dict, str | None, dict]:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from ..identification.document import (
+        check_identified_robot,
         refuse_state,
         robot_on_drive_side,
         with_identified_friction,
@@ -50,12 +51,9 @@ def cmd_export(args: argparse.Namespace) -> int:
         from ..mjcf import check_joints  # here: not needed by the other outputs
 
         check_joints(robot)
-    classical, identified_for, doc = read_classical(args.params)
+    classical, _, doc = read_classical(args.params)
     refuse_state(doc, "a robot description", str(args.params))
-    if identified_for not in (None, robot.name):
-        raise ModelError(
-            f"{args.params}: parameters identified for robot '{identified_for}', not '{robot.name}'"
-        )
+    check_identified_robot(doc, robot, f"{args.params}: parameters", error=ModelError)
     robot = robot_on_drive_side(robot, doc, where=str(args.params))
     robot = with_identified_friction(robot, doc, where=str(args.params))
     write_description(

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .._core import OFFSET_PREFIX as OFF
 from .._mujoco import is_mjcf
 from .args import add_command
 from .robot_options import add_robot, load_robot
@@ -64,6 +65,22 @@ def _motor_terms(robot) -> list[str]:
     ]
     for i, motor in enumerate(robot.transmission.motors):
         out.append(f"{'m' + str(i + 1):<3} {motor:<{w}}" + "".join(f"{v:11.4g}" for v in slots[i]))
+    return out
+
+
+def _offset_lines(robot, w: int) -> list[str]:
+    """The torque offsets per joint (``robot.torque_offset``, a joint-terms file's), when the
+    robot has any (a description gives none); ``w`` the joint-name column's width."""
+    if not robot.single_dof or not np.any(robot.torque_offset != 0.0):
+        return []
+    out = [
+        "",
+        f"torque offsets per joint, tau += {OFF} (N m, or N for a prismatic joint; what "
+        "--offset uses and identifies)",
+        f"{'#':>2} {'joint':<{w}}{OFF:>11}",
+    ]
+    for k, v in enumerate(robot.torque_offset):
+        out.append(f"{k + 1:>2} {robot.joint_names[k]:<{w}}{v:11.4g}")
     return out
 
 
@@ -160,6 +177,7 @@ def cmd_info(args: argparse.Namespace) -> int:
         row = list(p[k]) + list(extra[k])
         out.append(f"{robot.link_names[k + 1]:<{wl}}" + "".join(f"{v:11.4g}" for v in row))
     out.append(f"total moving mass {p[:, 9].sum():.4g} kg")
+    out.extend(_offset_lines(robot, w))
     if robot.transmission is not None and robot.transmission.n_motors != n:
         out += [
             "",
@@ -177,4 +195,4 @@ def register(sub) -> None:
     """Adds ``info`` to the ``mindyn`` subcommands."""
     p = add_command(sub, "info")
     add_robot(p)
-    p.set_defaults(func=cmd_info)
+    p.set_defaults(func=cmd_info, shows_offsets=True)

@@ -68,7 +68,7 @@ def add_robot(p: argparse.ArgumentParser) -> None:
         help="a joint-terms file (OUT.joints.yaml, which identify and export write beside "
         "--urdf OUT.urdf): the robot's rotor inertia and friction are the file's (on the motors "
         "when it says drive_side: motor), and its torque offsets where the command takes "
-        "--offset; the output says so (default: the description's terms)",
+        "--offset (info lists them); the output says so (default: the description's terms)",
     )
 
 
@@ -131,7 +131,9 @@ def joint_terms_line(args: argparse.Namespace, robot, sidecar) -> str:
             words.append(f"friction model {sidecar.friction_model}")
     off = _sidecar.OFF
     if off in terms:
-        if not hasattr(args, "offset"):
+        if getattr(args, "shows_offsets", False):
+            words.append(f"torque offsets {off} shown")
+        elif not hasattr(args, "offset"):
             words.append(f"torque offsets {off} not used (this command has none)")
         elif args.offset:
             words.append(f"torque offsets {off} used (--offset)")

@@ -29,6 +29,12 @@ def _names(names) -> list[str]:
     return names
 
 
+def _is_json(path: Path, text: str) -> bool:
+    """Whether a parameter file is meant as JSON (its suffix, or its first character), not as
+    ``NAME value`` lines."""
+    return path.suffix.lower() == ".json" or text.lstrip().startswith(("{", "["))
+
+
 def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
     """Parameter values from a file, in the order of ``names``.
 
@@ -44,7 +50,7 @@ def read_parameter_file(path: str | Path, names: Sequence[str]) -> np.ndarray:
         raise _core.RobotFileNotFoundError(f"parameter file '{path}' does not exist")
     text = decode_text(path)
     mapping: dict[str, float] = {}
-    if path.suffix.lower() == ".json" or text.lstrip().startswith(("{", "[")):
+    if _is_json(path, text):
         data = read_json(path, what="parameter file")
         if isinstance(data, list):
             if len(data) != len(names):
@@ -113,8 +119,11 @@ def read_identified_parameters(
     ``robot``, with other joint terms than ``rotor``, ``friction`` and ``offset``, or, with
     ``friction``, with another friction model than the robot's (then
     ``robot.with_friction_model(kind, velocity=...)`` with the JSON's ``friction_model`` is the
-    robot it was identified for) or the Dahl model, which generated code has no state for; names
-    unknown, missing, or both identified and pruned; values that are not finite numbers."""
+    robot it was identified for). Refused with a :class:`~mindyn.identification.data.DataError`
+    naming the file (and, for a syntax error, its line and column): a file meant as JSON (its
+    suffix or first character) that is not JSON; fields of the wrong type; the Dahl model,
+    which generated code has no state for; names unknown, missing, or both identified and
+    pruned; values that are not finite numbers."""
     from ..identification.data import DataError, read_json
     from ..robot import Robot
 
@@ -128,14 +137,19 @@ def read_identified_parameters(
     }
     try:
         doc = read_json(path)
-    except (DataError, FileNotFoundError):
-        return None
+    except FileNotFoundError:
+        return None  # read_parameter_file says so
+    except DataError:
+        from ..identification.data import decode_text
+
+        if _is_json(path, decode_text(path)):
+            raise  # where the JSON breaks, not "not the JSON of identify" further on
+        return None  # NAME value lines
     if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
         return None
-    if doc.get("robot") not in (None, robot.name):
-        raise _core.ModelError(
-            f"{path}: parameters identified for robot '{doc['robot']}', not '{robot.name}'"
-        )
+    from ..identification.document import check_identified_robot
+
+    check_identified_robot(doc, robot, f"{path}: parameters", error=_core.ModelError)
     differ = [k for k, on in flags.items() if k in doc and bool(doc[k]) != on]
     if differ:
         said = " ".join(f"{k}=True" for k in flags if doc.get(k))
@@ -151,33 +165,31 @@ def read_identified_parameters(
         pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]
         pruned = [k if isinstance(k, str) else str(k) for k in pruned]
     except (KeyError, TypeError):
-        raise _core.ModelError(
-            f"{path}: 'removed' must list the pruned parameters by name"
-        ) from None
+        raise DataError(f"{path}: 'removed' must list the pruned parameters by name") from None
     if not (isinstance(idents, list) and isinstance(values, list) and len(idents) == len(values)):
-        raise _core.ModelError(f"{path}: 'names' and 'values' must be lists of the same length")
+        raise DataError(f"{path}: 'names' and 'values' must be lists of the same length")
     odd = next((k for k in idents if not isinstance(k, str)), None)
     if odd is not None:
-        raise _core.ModelError(f"{path}: 'names' must list parameter names (strings), got {odd!r}")
+        raise DataError(f"{path}: 'names' must list parameter names (strings), got {odd!r}")
     known = set(names)
     unknown = [k for k in idents + pruned if k not in known]
     if unknown:
-        raise _core.ModelError(
+        raise DataError(
             f"{path}: unknown parameter(s) {', '.join(unknown[:5])}; expected {', '.join(names)}"
         )
     given = dict(zip(idents, values))
     both = [k for k in pruned if k in given]
     if both:
-        raise _core.ModelError(f"{path}: {', '.join(both[:5])} both identified and pruned")
+        raise DataError(f"{path}: {', '.join(both[:5])} both identified and pruned")
     missing = [k for k in names if k not in given and k not in pruned]
     if missing:
-        raise _core.ModelError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
+        raise DataError(f"{path}: missing parameter(s) {', '.join(missing[:8])}")
     out = np.zeros(len(names))
     for i, k in enumerate(names):
         if k in given:
             v = given[k]
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                raise _core.ModelError(f"{path}: value of '{k}' is not a finite number")
+                raise DataError(f"{path}: value of '{k}' is not a finite number")
             out[i] = v
     threshold = doc.get("rsd_threshold")
     said = f"{threshold:g} %" if isinstance(threshold, (int, float)) else "the threshold"
@@ -187,6 +199,7 @@ def read_identified_parameters(
 def _same_friction_model(doc: dict, path, robot) -> None:
     """Refuses an identification JSON whose friction model (``friction_model: {kind,
     velocity}``) is not ``robot``'s: its friction parameters are another model's."""
+    from ..identification.data import DataError
     from ..identification.document import refuse_state
 
     refuse_state(doc, "generated code", str(path))
@@ -194,12 +207,10 @@ def _same_friction_model(doc: dict, path, robot) -> None:
     if recorded is None:
         return
     if not (isinstance(recorded, dict) and isinstance(recorded.get("kind"), str)):
-        raise _core.ModelError(
-            f"{path}: 'friction_model' must be {{kind, velocity}}, got {recorded!r}"
-        )
+        raise DataError(f"{path}: 'friction_model' must be {{kind, velocity}}, got {recorded!r}")
     kind, velocity = recorded["kind"], recorded.get("velocity") or []
     if not isinstance(velocity, list):
-        raise _core.ModelError(
+        raise DataError(
             f"{path}: friction_model velocity must be a list of numbers, got {velocity!r}"
         )
     own = robot.friction_model
@@ -208,9 +219,7 @@ def _same_friction_model(doc: dict, path, robot) -> None:
         try:
             same = bool(np.array_equal(np.asarray(velocity, dtype=float), own["velocity"]))
         except (TypeError, ValueError):
-            raise _core.ModelError(
-                f"{path}: friction_model velocity must be a list of numbers"
-            ) from None
+            raise DataError(f"{path}: friction_model velocity must be a list of numbers") from None
     if not same:
         scales = f", velocity={list(velocity)!r}" if velocity else ""
         raise _core.ModelError(

@@ -48,6 +48,7 @@ from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError, read_json
 from .document import (
+    check_identified_robot,
     read_identification,
     robot_on_drive_side,
     with_identified_friction,
@@ -918,8 +919,7 @@ def read_arm(robot: Robot, arm, *, where: str = "arm") -> tuple[BaseParameters, 
             raise ModelError(f"{where}: not a JSON file of mindyn identify ({ex})") from None
     need = ("robot", "base_names", "base_values", "rotor", "friction", "offset")
     arm = read_identification(arm, need=need, what=where)
-    if arm["robot"] != robot.name:
-        raise ModelError(f"{where}: identified for robot '{arm['robot']}', not '{robot.name}'")
+    check_identified_robot(arm, robot, where, error=ModelError)
     robot = robot_on_drive_side(robot, arm, where=where)
     robot = with_identified_friction(robot, arm, where=where)
     base = base_parameters(

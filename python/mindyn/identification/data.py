@@ -1048,12 +1048,31 @@ def check_log_robot(doc: dict, robot, where: str) -> None:
             f"{where}: belongs to robot {_shown(name)}, not '{robot.name}' (a log of another "
             "robot, even with as many joints, identifies nothing of this one)"
         )
-    joints = doc.get("joints")
-    if joints is not None and joints != list(robot.joint_names):
-        raise DataError(
-            f"{where}: its joints {_shown(joints)} are not those of robot '{robot.name}' "
-            f"({', '.join(robot.joint_names)})"
+    check_joint_names(doc.get("joints"), robot, where)
+
+
+def check_joint_names(
+    joints, robot, where: str, *, error: type[Exception] = DataError, hint: str = ""
+) -> None:
+    """Refuses (``error``, naming ``where``) the joint names a document records (``joints``;
+    None: not recorded) when they are not ``robot``'s: another count (the names on both
+    sides, then ``hint``), or the joints whose names differ (each as the document and the robot
+    name it)."""
+    if joints is None:
+        return
+    own = list(robot.joint_names)
+    if not (isinstance(joints, list) and all(isinstance(j, str) for j in joints)):
+        raise error(f"{where}: 'joints' is {_shown(joints)}; expected a list of joint names")
+    if len(joints) != len(own):
+        raise error(
+            f"{where}: made for {len(joints)} joints {_shown(joints)}; robot '{robot.name}' has "
+            f"{len(own)} {_shown(own)}{hint}"
         )
+    differ = [k for k in range(len(own)) if joints[k] != own[k]]
+    if differ:
+        pairs = "; ".join(f"joint {k + 1} '{joints[k]}' there, '{own[k]}' here" for k in differ[:4])
+        more = f" and {len(differ) - 4} more" if len(differ) > 4 else ""
+        raise error(f"{where}: its joints are not those of robot '{robot.name}': {pairs}{more}")
 
 
 def _shown(value) -> str:

@@ -14,8 +14,8 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from .. import _args
-from .data import DataError, read_json
+from .. import _args, _sidecar
+from .data import DataError, check_joint_names, read_json
 
 if TYPE_CHECKING:
     from ..robot import Robot
@@ -64,13 +64,18 @@ def read_identification(
             "identify has them)"
         )
     out = dict(doc)
-    for key in ("robot", "tip"):
+    for key in ("robot", "tip", "description"):
         v = doc.get(key)
-        if key in doc and not isinstance(v, str) and not (key == "tip" and v is None):
+        if key in doc and not isinstance(v, str) and not (key != "robot" and v is None):
             raise DataError(f"{where}: '{key}' is {_kind(v)}; expected text")
     for key in FLAGS:
         if key in doc and not isinstance(doc[key], bool):
             raise DataError(f"{where}: '{key}' is {_kind(doc[key])}; expected true or false")
+    joints = doc.get("joints")
+    if joints is not None and not (
+        isinstance(joints, list) and all(isinstance(x, str) for x in joints)
+    ):
+        raise DataError(f"{where}: 'joints' is {_kind(joints)}; expected a list of joint names")
     if "base_names" in doc:
         names = doc["base_names"]
         if not isinstance(names, list) or not all(isinstance(x, str) for x in names):
@@ -106,6 +111,38 @@ def read_identification(
             k: _number(v, f"{where}: 'classical' {k!r}") for k, v in classical.items()
         }
     return out
+
+
+def check_identified_robot(
+    doc: dict, robot: Robot, where: str, *, error: type[Exception] = DataError
+) -> None:
+    """Refuses (``error``, naming ``where``) an identification JSON ``doc`` made for another
+    robot than ``robot``: another ``robot`` name, or other ``joints`` (their count, or the
+    joints whose names differ); a warning when the ``description`` file name it records is not
+    the one ``robot`` was loaded from. A field the document does not record is not checked
+    (JSON of earlier versions has no ``joints`` and ``description``)."""
+    name = doc.get("robot")
+    if name is not None and name != robot.name:
+        raise error(f"{where}: identified for robot '{name}', not '{robot.name}'")
+    tip = doc.get("tip")
+    hint = (
+        f" (identified on the chain ending at tip='{tip}': load the robot with that tip)"
+        if isinstance(tip, str)
+        else " (identified with another tip=?)"
+    )
+    check_joint_names(doc.get("joints"), robot, where, error=error, hint=hint)
+    _sidecar.warn_other_description(doc.get("description"), robot, where)
+
+
+def identified_robot_record(robot: Robot) -> dict:
+    """What the JSON of an identification records of its robot, for
+    :func:`check_identified_robot`: ``robot`` (its name), ``joints`` (the joint names) and
+    ``description`` (the file name it was loaded from; None for a generated robot)."""
+    return {
+        "robot": robot.name,
+        "joints": list(robot.joint_names),
+        "description": _sidecar.description_name(robot),
+    }
 
 
 def robot_on_drive_side(robot: Robot, doc: dict, *, where: str = "identification JSON") -> Robot:

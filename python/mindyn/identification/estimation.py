@@ -29,6 +29,7 @@ from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, as_robot, drive_train_record
 from .data import DataError
+from .document import identified_robot_record
 from .errors import IdentificationError, RankDeficientError
 from .joint_data import JointData
 from .models import (
@@ -145,7 +146,7 @@ class IdentificationResult:
     def to_dict(self) -> dict:
         return {
             "model": self.model,
-            "robot": self.base.robot.name,
+            **identified_robot_record(self.base.robot),  # robot, joints, description
             "rotor": self.base.rotor,
             "friction": self.base.friction,
             "offset": self.base.offset,

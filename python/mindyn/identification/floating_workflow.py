@@ -31,6 +31,7 @@ from .. import _args
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot
 from .data import DataError
+from .document import identified_robot_record
 from .errors import IdentificationError
 from .floating import (
     _FRAMES,
@@ -240,7 +241,7 @@ class FloatingReport:
         robot, res, logs = self.robot, self.result, self.logs
         contacts = sorted({c for log in logs.fit + logs.validation for c in log.wrenches})
         doc = {
-            "robot": robot.name,
+            **identified_robot_record(robot),  # robot, joints, description
             "floating_base": True,
             "root_joint": {
                 "name": robot.joint_names[0],

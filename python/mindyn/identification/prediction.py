@@ -16,6 +16,7 @@ from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError
 from .document import (
+    check_identified_robot,
     read_identification,
     robot_on_drive_side,
     with_identified_friction,
@@ -107,13 +108,9 @@ def identified_model(
     doc = read_identification(identification, need=("base_names", "base_values"), what=where)
     if robot is None:
         raise _args.fail("robot", "is None; the robot is needed with an identification JSON")
-    if isinstance(robot, Robot):
-        if doc.get("robot") not in (None, robot.name):
-            raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
-    else:
+    if not isinstance(robot, Robot):
         robot = load(robot, tip=doc.get("tip"))
-        if doc.get("robot") not in (None, robot.name):
-            raise DataError(f"{where}: identified for robot '{doc['robot']}', not '{robot.name}'")
+    check_identified_robot(doc, robot, where)
     robot = robot_on_drive_side(robot, doc, where=where)
     robot = with_identified_friction(robot, doc, where=where)
     base = base_parameters(
