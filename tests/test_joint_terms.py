@@ -350,6 +350,14 @@ def test_a_friction_model_goes_into_the_sidecar_and_comes_back(tmp_path, kind, s
         ref += Tm.T @ (Ia * (Tm @ ddq) + _friction_by_hand(kind, Tm @ dq, Fv, Fc, third, w))
         tau = back.inverse_dynamics(q, dq, ddq, back.parameters(rotor=True, friction=True))
         np.testing.assert_allclose(tau, ref, rtol=1e-9, atol=1e-12)
+    if side == "joint":  # info shows the model and its third term
+        said = cli("info", res.path, "--joint-terms", res.sidecar)
+        assert f"friction model {kind}: " in said, said
+        if w is not None:
+            assert " ".join(f"{v:.4g}" for v in w) in said, said
+        if c == 3:
+            head = next(x for x in said.splitlines() if x.startswith("link "))
+            assert head.split()[-1] == ("Fa" if kind == "asymmetric" else "Fs"), head
     if side == "motor" and c == 3:
         p[5, 13] = 0.01  # motor 6 turns with joints 5 and 6
         with pytest.raises(mindyn.ModelError, match="motors 'm6'.*drive one joint alone"):
