@@ -648,8 +648,7 @@ def _shape_note(robot: Robot, terms: JointTerms, side: Path, holds: str) -> list
         extra.append("velocity")
     return [
         f"friction model {kind}: {holds} Fv and Fc only; the model and its "
-        f"{' and '.join(extra)} are in {side} (mindyn.load(..., joint_terms=) or "
-        "--joint-terms reads them back)"
+        f"{' and '.join(extra)} are in {side} (read back with joint_terms=)"
     ]
 
 

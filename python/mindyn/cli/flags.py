@@ -25,6 +25,7 @@ LIBRARY_OPTIONS = (
     "friction_width",
     "integral_window",
     "integration",
+    "joint_terms",
     "lang",
     "method",
     "min_velocity",
