@@ -422,10 +422,15 @@ def per_joint(tau, hat):
 # ---- the cases -------------------------------------------------------------------------------
 
 
+#: Flags of every mindyn run before its own (``--rsd-threshold``: the last given counts).
+DEFAULT_FLAGS: list[str] = []
+
+
 def run_mindyn(urdf, fit, val, tmp, tag, extra=()):
     out = tmp / f"{tag}.json"
     cmd = [sys.executable, "-m", "mindyn", "identify", str(urdf), str(fit), "--validate"]
-    cmd += [*map(str, val), "--rotor", "--friction", "--offset", "--json", str(out), *extra]
+    cmd += [*map(str, val), "--rotor", "--friction", "--offset", "--json", str(out)]
+    cmd += [*DEFAULT_FLAGS, *extra]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise SystemExit(f"{tag}: mindyn failed: {proc.stderr.strip() or proc.stdout[-400:]}")
@@ -434,6 +439,28 @@ def run_mindyn(urdf, fit, val, tmp, tag, extra=()):
 
 
 VALIDATIONS = ("fourier", "ptp")
+
+
+def _threshold_words(threshold) -> str:
+    return "all kept" if threshold is None else f"RSD > {threshold:g} %"
+
+
+def pruning_said(doc):
+    """The fit's pruning (``settings.pruning_choice`` with ``--rsd-threshold auto``: the
+    candidates' held-out residuals) in one line."""
+    c = doc["settings"].get("pruning_choice")
+    if not c:
+        thr = doc["settings"].get("rsd_threshold")
+        return f"  pruning: {_threshold_words(thr)} (given), {len(doc['removed'])} removed"
+    held = ", ".join(
+        f"{_threshold_words(d['rsd_threshold'])} {d['held_out']:.5g} (se {d['standard_error']:.2g})"
+        for d in c.get("candidates", [])
+    )
+    return (
+        f"  pruning: {_threshold_words(c.get('rsd_threshold'))} "
+        f"({c.get('chosen_by')}{'; held-out ' + held if held else ''}), "
+        f"{len(doc['removed'])} removed"
+    )
 
 
 def figures(doc):
@@ -467,6 +494,7 @@ def case(seed, noise, gain_error, tmp, ros2_check):
     t0 = time.perf_counter()
     doc = run_mindyn(urdfs["ros1"], fit, val, tmp, "coupled")
     out["mindyn coupled"] = figures(doc)
+    print(pruning_said(doc))
     cutoff = doc["settings"]["preprocessing"]["filter"]["cutoff_Hz"]
     kt = ",".join(f"{k:.9g}" for k in KT * gain)
     val_i = [str(tmp / f"{kind}_i.csv") for kind in VALIDATIONS]
@@ -557,7 +585,12 @@ def main(argv=None):
     ap.add_argument("--coupling", type=float, default=1.0,
                     help="c of q_m6 = r6 (q6 + c q5) (default 1), nonzero")  # fmt: skip
     ap.add_argument("--keep", type=Path, help="keep the files in this folder")
+    ap.add_argument(
+        "--rsd-threshold", help="mindyn's default runs with this --rsd-threshold (percent or auto)"
+    )
     args = ap.parse_args(argv)
+    if args.rsd_threshold is not None:
+        DEFAULT_FLAGS[:] = ["--rsd-threshold", args.rsd_threshold]
     if not (np.isfinite(args.coupling) and args.coupling != 0):
         ap.error("--coupling must be a finite nonzero number")
     COUPLING = args.coupling
