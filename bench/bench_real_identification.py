@@ -47,7 +47,9 @@ uncertainty (``fit.prediction_uncertainty`` and ``validation.prediction_uncertai
 standard deviation of the predicted torques over the RMS torque), its share of the fit's
 squared residual (per joint and mean) and whether the fit warns that the estimate does not
 determine the torques (target with the default, dynamic model: no warning). ``--model MODEL``
-gives every command that model (energy, integral).
+gives every command that model (energy, integral). ``--rsd-threshold T`` gives every command
+that threshold (``auto``: decided on held-out data); every case prints the fit's pruning (with
+``auto`` the candidates' held-out residuals and standard errors).
 
 With ``--weight-grid W1,W2,...`` (implies ``--consistent``) each case is also run with
 ``--prior-weight`` at each of those weights (0: no prior), and a table per case gives, per

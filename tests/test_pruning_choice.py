@@ -154,3 +154,17 @@ def test_options_refuse_a_threshold_word_other_than_auto():
     with pytest.raises(mindyn.Error, match="rsd_threshold .*'auto'"):
         IdentifyOptions(rsd_threshold="sometimes")
     assert IdentifyOptions(rsd_threshold="auto").rsd_threshold == "auto"
+
+
+def test_the_consistent_estimate_does_not_depend_on_the_pruning(zcr):
+    # it starts from the least-squares problem of every base parameter, whatever was pruned
+    from mindyn.identification.consistent import consistent_estimate
+
+    robot, base = zcr
+    data, _ = _case(robot, base, 2.5)
+    pruned = identify(robot, data, base=base)
+    kept = identify(robot, data, base=base, rsd_threshold=None)
+    assert pruned.removed and not kept.removed
+    a = consistent_estimate(pruned, prior_weight=0.0)
+    b = consistent_estimate(kept, prior_weight=0.0)
+    np.testing.assert_allclose(a.classical, b.classical, rtol=1e-12, atol=1e-12)

@@ -11,9 +11,11 @@ import math
 
 import numpy as np
 
+from .._threads import single_threaded_blas
 from .errors import IdentificationError
 
 
+@single_threaded_blas  # thousands of small triangles: one BLAS thread is faster
 def held_out_residuals(
     res,
     logs,
