@@ -4,9 +4,10 @@ Reference: logs the test makes from known base parameters (torques ``W_b(q, dq, 
 plus white noise of unit variance, exact velocities and accelerations): half of the base
 parameters are well determined (30 of their standard deviations), the other half either zero
 (pruning them is right) or 2.5 of their standard deviations (pruning them leaves out torque that
-is there). Which candidate predicts better is checked on the noise-free torques of another
-motion, not against mindyn's own output; the held-out residual of the fit with every base
-parameter is checked against numpy's least squares on the blocks."""
+is there), fitted by the dynamic and the integral model. Which candidate predicts better is
+checked on the noise-free torques of another motion, not against mindyn's own output; the
+held-out residual of the fit with every base parameter is checked against numpy's least squares
+on the blocks."""
 
 from __future__ import annotations
 
@@ -59,13 +60,19 @@ def _error(full, other) -> float:
     return float(np.linalg.norm(Wv @ full - tau) / np.linalg.norm(tau))
 
 
+#: The models' options for a 10 s log at 100 Hz (integral: windows of 8 intervals).
+MODELS = {"dynamic": {}, "integral": {"model": "integral", "integral_window": 8}}
+
+
+@pytest.mark.parametrize("model", MODELS)
 @pytest.mark.parametrize(
     "small, pruned", [(0.0, True), (2.5, False)], ids=["zero: prune", "2.5 sd: keep all"]
 )
-def test_auto_pruning_follows_the_held_out_data_both_ways(zcr, small, pruned):
+def test_auto_pruning_follows_the_held_out_data_both_ways(zcr, small, pruned, model):
     robot, base = zcr
     data, other = _case(robot, base, small)
-    rep = run(robot, [data], rotor=True, friction=True, rsd_threshold="auto")
+    fit = MODELS[model]
+    rep = run(robot, [data], rotor=True, friction=True, rsd_threshold="auto", **fit)
     assert rep.base.names == base.names
     res = rep.result
     choice = res.settings["pruning_choice"]
@@ -85,7 +92,7 @@ def test_auto_pruning_follows_the_held_out_data_both_ways(zcr, small, pruned):
     assert (excess > se) != pruned  # keep all only when better by more than one error
     # against the truth: the candidate chosen predicts another motion better than the other
     other_threshold = None if pruned else 70.7
-    rest = identify(robot, data, base=base, rsd_threshold=other_threshold)
+    rest = identify(robot, data, base=base, rsd_threshold=other_threshold, **fit)
     assert _error(res.full, other) < _error(rest.full, other)
     # the output states the decision in one line, naming the option
     text = rep.format()
