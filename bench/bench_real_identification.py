@@ -47,7 +47,9 @@ uncertainty (``fit.prediction_uncertainty`` and ``validation.prediction_uncertai
 standard deviation of the predicted torques over the RMS torque), its share of the fit's
 squared residual (per joint and mean) and whether the fit warns that the estimate does not
 determine the torques (target with the default, dynamic model: no warning). ``--model MODEL``
-gives every command that model (energy, integral).
+gives every command that model (energy, integral). ``--rsd-threshold T`` gives every command
+that threshold (``auto``: decided on held-out data); every case prints the fit's pruning (with
+``auto`` the candidates' held-out residuals and standard errors).
 
 With ``--weight-grid W1,W2,...`` (implies ``--consistent``) each case is also run with
 ``--prior-weight`` at each of those weights (0: no prior), and a table per case gives, per
@@ -166,6 +168,10 @@ def main() -> int:
         help="give every command this --model (default: none, the dynamic model)",
     )
     ap.add_argument(
+        "--rsd-threshold",
+        help="give every command this --rsd-threshold (a percentage or auto; default: none)",
+    )
+    ap.add_argument(
         "--weight-grid",
         type=lambda text: [float(w) for w in text.split(",")],
         help="comma-separated prior weights: the consistent estimate at each (0: no prior)",
@@ -188,6 +194,7 @@ def main() -> int:
                 + ["--friction"]
                 + (["--friction-model", args.friction_model] if args.friction_model else [])
                 + (["--model", args.model] if args.model else [])
+                + (["--rsd-threshold", args.rsd_threshold] if args.rsd_threshold else [])
                 + [x.format(dir=args.dir) for x in extra]
                 + ([] if args.no_offset else ["--offset"])
                 + ["--validate", str(args.dir / val), "--json", str(out)]
@@ -236,6 +243,7 @@ def main() -> int:
                     )
                 )
             print(uncertainty_line(doc))
+            print(pruning_line(doc))
             fm = doc.get("friction_model") or {}
             print(
                 f"  friction model {fm.get('kind')} ({fm.get('chosen_by')})"
@@ -299,6 +307,29 @@ def main() -> int:
         print()
         print(weight_table(name, doc, table, gcv))
     return 0
+
+
+def _threshold_words(threshold) -> str:
+    return "none" if threshold is None else f"RSD > {threshold:g} %"
+
+
+def pruning_line(doc) -> str:
+    """The fit's pruning and, with ``--rsd-threshold auto``, how it was decided
+    (``settings.pruning_choice``: the candidates' held-out residuals)."""
+    c = doc["settings"].get("pruning_choice") or {
+        "rsd_threshold": doc["settings"].get("rsd_threshold"),
+        "chosen_by": "given",
+    }
+    held = "; held-out: " + ", ".join(
+        f"{_threshold_words(d['rsd_threshold'])} {d['held_out']:.5g} "
+        f"(se {d['standard_error']:.2g}, removes {d['removed']})"
+        for d in c.get("candidates", [])
+    )
+    return (
+        f"  pruning {_threshold_words(c.get('rsd_threshold'))} ({c.get('chosen_by')})"
+        f", {len(doc['removed'])} of {len(doc['base_names'])} removed"
+        + (held if c.get("candidates") else "")
+    )
 
 
 def uncertainty_line(doc) -> str:

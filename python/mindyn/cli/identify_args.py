@@ -4,11 +4,13 @@ and how, what is written."""
 
 from __future__ import annotations
 
+import argparse
+
 from ..identification.options import DEFAULT_RSD_THRESHOLD
 from ..robot import FRICTION_KINDS
 from .args import add_command, deprecated, remember_flags
 from .columns import add_columns
-from .number_options import joint_vector, number
+from .number_options import Number, joint_vector, number
 from .outputs import add_description_outputs, output_dir, output_file
 from .robot_options import add_joint_terms, add_offset, add_robot, add_snap
 
@@ -108,6 +110,21 @@ def add_data_options(p) -> None:
     )
 
 
+def _rsd_threshold(text: str):
+    """``--rsd-threshold``'s value: ``auto`` or a percentage >= 0."""
+    if text.strip().lower() == "auto":
+        return "auto"
+    try:
+        return Number(0)(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(
+            f"expected a finite number >= 0 or auto, got '{text}'"
+        ) from None
+
+
+_rsd_threshold.__name__ = "rsd threshold"  # argparse names the type by this
+
+
 def add_identify(sub, func) -> None:
     """``mindyn identify``, run by ``func``."""
     from ..identification.consistent import MAX_PRIOR_WEIGHT
@@ -160,14 +177,16 @@ def add_identify(sub, func) -> None:
     )
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
     p.add_argument("--report", metavar="DIR", type=output_dir, help="write plots and tables to DIR")
-    number(
-        p,
+    p.add_argument(
         "--rsd-threshold",
-        low=0,
+        type=_rsd_threshold,
         default=DEFAULT_RSD_THRESHOLD,
-        help="remove parameters with RSD above this %, largest first (the default keeps a "
+        metavar="PERCENT|auto",
+        help="remove parameters with RSD above this %%, largest first (the default keeps a "
         "t-statistic above sqrt(2), Akaike's criterion for one parameter; 30 keeps one above "
-        "3.3; 0 keeps all)",
+        "3.3; 0 keeps all; auto: the default or every base parameter, as cross-validation over "
+        "blocks of the fit logs decides, printed); a finite number >= 0 or auto; default "
+        f"{DEFAULT_RSD_THRESHOLD:g}",
     )
     add_data_options(p)
     p.add_argument(

@@ -65,8 +65,6 @@ state and refuse an identification with it.
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import math
 from dataclasses import dataclass, field
 
@@ -447,19 +445,14 @@ def select_friction_model(
 
 
 def simplest_within_one_error(scores: dict, per_fold: dict) -> tuple[str, str, dict]:
-    """The one-standard-error rule on paired differences: ``scores`` (model -> summed held-out
-    residual) and ``per_fold`` (model -> its residual per block, the same blocks for every
-    model). Returns ``(chosen, best, se)``: the simplest model (order of :data:`KINDS`) whose
-    excess over the smallest, ``best``, is at most one standard error of that excess, ``se``
-    per model: ``sqrt(K)`` times the standard deviation of its ``K`` block-by-block differences
-    from ``best`` (how hard a block is to predict is common to every model and cancels)."""
-    best = min(scores, key=lambda k: (scores[k], KINDS.index(k)))
-    se = {}
-    for k in scores:
-        diff = np.asarray(per_fold[k], float) - np.asarray(per_fold[best], float)
-        se[k] = float(np.std(diff, ddof=1) * math.sqrt(diff.size)) if diff.size > 1 else 0.0
-    chosen = next(k for k in KINDS if k in scores and scores[k] <= scores[best] + se[k])
-    return chosen, best, se
+    """The one-standard-error rule on paired differences
+    (:func:`~mindyn.identification.held_out.within_one_error`) over the friction models, the
+    simplest first (order of :data:`KINDS`): ``scores`` (model -> summed held-out residual)
+    and ``per_fold`` (model -> its residual per block, the same blocks for every model).
+    Returns ``(chosen, best, se)``."""
+    from .held_out import within_one_error
+
+    return within_one_error(scores, per_fold, order=KINDS)
 
 
 #: A fitted friction torque counts as pushing a slot along its motion when ``f(v) sign(v)`` is
@@ -516,59 +509,20 @@ def held_out_residual(
     res, logs, *, folds: int, joint_sigma=None, rank_tolerance: float | None = None
 ) -> tuple[float, np.ndarray]:
     """The summed held-out residual per equation of the fit ``res`` over ``folds`` contiguous
-    blocks of ``logs`` (:func:`~mindyn.identification.prior.block_triangles`), each block
-    predicted by the estimate fitted on the other blocks the way ``res`` was fitted (fitted on
-    the fit's equations, scored on every sample or window, those the dynamic and integral
-    models leave out as slower than ``min_velocity`` included), and each block's share:
-    ``(total, per block)``; rows weighted with ``joint_sigma`` when given (else the fit's own
-    weights).
+    blocks of ``logs`` and each block's share, ``(total, per block)``, each fold's fit pruned
+    at the fit's own threshold: :func:`~mindyn.identification.held_out.held_out_residuals`
+    (which see) with that one threshold."""
+    from .held_out import held_out_residuals
 
-    Each fold's fit decides as the fit itself: the base parameters its blocks determine
-    (pivoted QR of the column-scaled regressor, pivots below ``rank_tolerance`` (default:
-    :func:`~mindyn.identification.identify`'s) of the largest left out), then pruned by
-    relative standard deviation at the fit's threshold (:func:`~mindyn.identification.
-    estimation.pruned`, with the fit's variance factor for correlated samples). A parameter
-    that the other blocks do not determine (e.g. a Stribeck term whose column is non-zero on
-    a few samples of the held-out block only) is thus left out instead of being fitted to
-    noise and extrapolated: the score measures a model's prediction, not its conditioning."""
-    from .estimation import _Reduced, _triangle, noise_variance_factor, pruned
-    from .prior import block_triangles
-
-    if joint_sigma is not None and res.model != "energy":
-        res = dataclasses.replace(res, joint_sigma=np.asarray(joint_sigma), weighted=True)
-    tol = _default("rank_tolerance") if rank_tolerance is None else rank_tolerance
-    S, rows = block_triangles(res, logs, folds=folds, counts=True)
-    # a block is predicted at every sample, also where the fit leaves the equations of slow
-    # joints out (min_velocity): a model's switching at rest counts against it
-    held = S
-    if res.settings.get("min_velocity", 0.0) > 0:
-        every = dataclasses.replace(res, settings={**res.settings, "min_velocity": 0.0})
-        held = block_triangles(every, logs, folds=folds)
-    nb = res.base.n
-    used = [k for k in range(folds) if np.any(S[k])]
-    if len(used) < 2:
-        raise IdentificationError("friction model auto: the data give fewer than 2 blocks")
-    threshold = res.settings.get("rsd_threshold")
-    inflation = noise_variance_factor(res)
-
-    err = []
-    for k in used:
-        others = [i for i in used if i != k]
-        ls = _Reduced.from_triangle(
-            _triangle(np.vstack([S[i] for i in others])), rows[others].sum()
-        )
-        rank, piv, _ = ls.rank(tol)
-        keep, p, _, _, _ = pruned(
-            functools.partial(ls.solve, inflation=inflation),
-            sorted(int(c) for c in piv[:rank]),
-            threshold,
-        )
-        full = np.zeros(nb)
-        full[keep] = p
-        r = held[k] @ np.append(full, -1.0)
-        err.append(float(r @ r) / max(res.rows, 1))
-    err = np.array(err)
-    return float(err.sum()), err
+    return held_out_residuals(
+        res,
+        logs,
+        folds=folds,
+        thresholds=[res.settings.get("rsd_threshold")],
+        joint_sigma=joint_sigma,
+        rank_tolerance=rank_tolerance,
+        what="friction model auto",
+    )[0]
 
 
 def friction_record(robot: Robot, *, record: dict | None = None) -> dict:

@@ -46,7 +46,9 @@ class IdentifyOptions:
 
     ``model``: dynamic, integral or energy; ``rotor``, ``friction``, ``offset``: the joint terms
     identified; ``weighted``: weighted (else ordinary) least squares; ``rsd_threshold`` [%]:
-    parameters above it removed (0 keeps all); ``energy_window``, ``integral_window``: sample
+    parameters above it removed (0 keeps all; ``"auto"``: :data:`DEFAULT_RSD_THRESHOLD` or every
+    base parameter, as held-out data decide, :mod:`~mindyn.identification.pruning`);
+    ``energy_window``, ``integral_window``: sample
     intervals per window; ``integration``: auto, simpson, trapezoid or zoh; ``min_velocity``: joint
     equations slower than this left out (dynamic and integral models with friction);
     ``friction_model``: a friction kind, ``dahl`` or ``auto`` (implies ``friction``),
@@ -62,7 +64,7 @@ class IdentifyOptions:
     friction: bool = False
     offset: bool = False
     weighted: bool = True
-    rsd_threshold: float = DEFAULT_RSD_THRESHOLD
+    rsd_threshold: float | str = DEFAULT_RSD_THRESHOLD
     energy_window: int = 10
     integration: str = "auto"
     integral_window: int = 40
@@ -77,9 +79,16 @@ class IdentifyOptions:
         _args.choice(self.model, "model", MODELS)
         for name in ("rotor", "friction", "offset", "weighted", "consistent"):
             object.__setattr__(self, name, _args.flag(getattr(self, name), name))
-        object.__setattr__(
-            self, "rsd_threshold", _args.number(self.rsd_threshold, "rsd_threshold", minimum=0.0)
-        )
+        if self.rsd_threshold != "auto":
+            if isinstance(self.rsd_threshold, str):
+                raise _args.fail(
+                    "rsd_threshold", f"is {self.rsd_threshold!r}; expected a number >= 0 or 'auto'"
+                )
+            object.__setattr__(
+                self,
+                "rsd_threshold",
+                _args.number(self.rsd_threshold, "rsd_threshold", minimum=0.0),
+            )
         for name in ("energy_window", "integral_window"):
             object.__setattr__(self, name, _args.integer(getattr(self, name), name, 1))
         _args.choice(self.integration, "integration", INTEGRATIONS)

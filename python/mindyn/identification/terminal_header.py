@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .pruning import pruning_line
 from .terminal import (
     _cutoff_range,
     _describe,
@@ -196,7 +197,7 @@ def _kept(report) -> list[str]:
     out = [
         f"  {len(res.names)} of {base.n} parameters kept"
         + (
-            f" after removing {len(res.removed)} with RSD > {report.options.rsd_threshold:g} %"
+            f" after removing {len(res.removed)} with RSD > {res.rsd_threshold:g} %"
             if res.removed
             else ""
         )
@@ -208,6 +209,9 @@ def _kept(report) -> list[str]:
             else ""
         )
     ]
+    said = pruning_line(res.settings.get("pruning_choice"))
+    if said:
+        out.append(said)
     if report.truth_side:
         out.append(
             f"  note: the log was simulated with rotor inertia and friction on the "

@@ -22,7 +22,7 @@ from .. import _args
 from ..robot import as_robot
 from .errors import IdentificationError
 from .joint_data import JointData
-from .options import OPTION_NAMES, IdentifyOptions, ReadingOptions
+from .options import DEFAULT_RSD_THRESHOLD, OPTION_NAMES, IdentifyOptions, ReadingOptions
 from .reading import Logs, LogSet, load_logs
 from .summary import IdentificationReport
 
@@ -30,11 +30,14 @@ __all__ = ["IdentificationReport", "IdentifyOptions", "ReadingOptions", "load_lo
 
 
 def _fit_keywords(options: IdentifyOptions) -> dict:
-    """The keywords of :func:`~mindyn.identification.identify` the options give."""
+    """The keywords of :func:`~mindyn.identification.identify` the options give (threshold
+    ``auto``: the default one, which the friction model's choice prunes at; the final fit's
+    pruning is then decided on held-out data, :func:`_fit`)."""
+    threshold = options.rsd_threshold
     return dict(
         model=options.model,
         weighted=options.weighted,
-        rsd_threshold=options.rsd_threshold,
+        rsd_threshold=DEFAULT_RSD_THRESHOLD if threshold == "auto" else threshold,
         energy_window=options.energy_window,
         integration=options.integration,
         integral_window=options.integral_window,
@@ -144,12 +147,17 @@ def _friction(robot, data: list, options: IdentifyOptions, progress):
     )
 
 
-def _fit(robot, base, data: list, files: list, options: IdentifyOptions):
-    """The least-squares fit and its JSON fields."""
+def _fit(robot, base, data: list, files: list, options: IdentifyOptions, progress):
+    """The least-squares fit and its JSON fields; its pruning at the threshold given, or with
+    ``auto`` decided on held-out data (:func:`~mindyn.identification.pruning.choose_pruning`)."""
     from .estimation import identify
+    from .pruning import choose_pruning
 
     try:
-        res = identify(robot, data, base=base, **_fit_keywords(options))
+        if options.rsd_threshold == "auto":
+            res = choose_pruning(robot, base, data, fit=_fit_keywords(options), progress=progress)
+        else:
+            res = identify(robot, data, base=base, **_fit_keywords(options))
     except np.linalg.LinAlgError as e:
         raise IdentificationError(
             f"{options.model} model on {' + '.join(files)}: the least-squares problem of the "
@@ -189,7 +197,8 @@ def run(
     when the logs are simulated. ``tip``: the chain identified (as ``load(robot, tip=...)``),
     recorded in the JSON; ``progress``: a callable taking one line per step of the long
     solves. Each stage runs once, in order: friction model, fit, consistent estimate, error
-    measures."""
+    measures. With ``rsd_threshold="auto"`` the fit's pruning is decided on held-out data
+    (:mod:`~mindyn.identification.pruning`; ``settings["pruning_choice"]`` of the JSON)."""
     robot = as_robot(robot)
     _args.optional(_args.instance, options, "options", IdentifyOptions)
     _args.optional(_args.text, tip, "tip")
@@ -214,7 +223,7 @@ def run(
             )
     data, vdata = logs.fit.logs, logs.validation.logs
     choice, robot, base, record, lines = _friction(robot, data, opts, progress)
-    res, res_doc = _fit(robot, base, data, logs.fit.files, opts)
+    res, res_doc = _fit(robot, base, data, logs.fit.files, opts, progress)
     cons, cons_doc, low = _consistent(res, data, opts, progress)
     from .validation import prediction_check, validate
 
