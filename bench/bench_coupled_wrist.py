@@ -73,8 +73,9 @@ per-joint validation errors (filtered) of mindyn coupled, the script and mindyn 
 joint 5 especially. The point-to-point log's error is dominated, for every model, by the
 Coulomb step where a move starts or stops (the low-pass smears it over about 1 / cut-off).
 
-Measured (seeds 0 1 2, current noise 1 % and 4 %), with the default pruning (RSD > 70.7 %, on
-standard deviations that count the low-passed noise's correlation): mindyn with the
+Measured (seeds 0 1 2, current noise 1 % and 4 %), pruning at RSD > 70.7 % (``--rsd-threshold
+70.7``, the default before ``auto``; on standard deviations that count the low-passed noise's
+correlation): mindyn with the
 transmissions against the script on the Fourier validation log 0.96 to 1.06 (filtered; raw
 0.98 to 1.05), above 1.05 on seed 1 only (1.059 and 1.052 filtered), on the point-to-point log
 1.00 to 1.02; every base parameter kept (``--rsd-threshold 0``), 1.00 to 1.03 on both; with the
@@ -84,12 +85,12 @@ the Panda's real log, see docs/benchmarks.md). The joint-side model: 4.6 to 8.0 
 to 14 %. The ROS 2 form and the current logs with ``--drive-gain`` give the ROS 1 form's
 figures; a four-bar of ratio c = 0.75 (``--coupling 0.75``) is read as the script's T.
 
-With ``--rsd-threshold auto`` given to mindyn's default runs (the pruning decided on held-out
-blocks of the fit log; each case prints the decision): every base parameter kept on seeds 0 and
-1, the pruning on seed 2; 0.96 to 1.03 on the Fourier log, 1.00 on the point-to-point log.
+With the default ``--rsd-threshold auto`` (the pruning decided on held-out blocks of the fit
+log; each case prints the decision): every base parameter kept on seeds 0 and 1, the pruning on
+seed 2; 0.96 to 1.03 on the Fourier log, 1.00 on the point-to-point log.
 
 Run: ``.venv/bin/python bench/bench_coupled_wrist.py [--seeds 0 1] [--noise 0.01 0.04]
-[--gain-error 0.03] [--coupling C] [--keep DIR] [--rsd-threshold auto]`` (with the defaults,
+[--gain-error 0.03] [--coupling C] [--keep DIR] [--rsd-threshold PERCENT]`` (with the defaults,
 4 cases: 28 s on an idle 2-core machine, up to 4 minutes when it is shared).
 """
 

@@ -61,8 +61,9 @@ def test_run_gives_the_json_of_identify_friction(logs, tmp_path):
     out = tmp_path / "id.json"
     text = cli("identify", "planar2", fit, "--friction", "--json", out)
     assert _round_trip(report.to_dict()) == _timeless(json.loads(out.read_text()))
-    # the terminal text is the command's, less the line naming the file it wrote
-    assert report.format() + "\n" + f"wrote {out}\n" == text
+    # the terminal text is the command's, less the line naming the file it wrote, with the
+    # library's keywords (the pruning choice's rsd_threshold=) as the command's flags
+    assert library_options_as_flags(report.format()) + "\n" + f"wrote {out}\n" == text
     # and the estimate is the simulation's: the known answer of the generated data
     doc = report.to_dict()
     kept = [doc["base_names"].index(name) for name in doc["names"]]

@@ -111,7 +111,7 @@ def test_a_given_threshold_is_honoured_and_nothing_is_scored(zcr, monkeypatch):
         raise AssertionError("a given threshold is not decided on held-out data")
 
     monkeypatch.setattr(held_out, "held_out_residuals", refuse)
-    rep = run(robot, [data], rotor=True, friction=True)  # the default, 70.7 %
+    rep = run(robot, [data], rotor=True, friction=True, rsd_threshold=70.7)
     direct = identify(robot, data, base=base)
     assert rep.result.removed and [n for n, _ in rep.result.removed] == [
         n for n, _ in direct.removed

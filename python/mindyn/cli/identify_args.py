@@ -180,13 +180,13 @@ def add_identify(sub, func) -> None:
     p.add_argument(
         "--rsd-threshold",
         type=_rsd_threshold,
-        default=DEFAULT_RSD_THRESHOLD,
+        default="auto",
         metavar="PERCENT|auto",
-        help="remove parameters with RSD above this %%, largest first (the default keeps a "
-        "t-statistic above sqrt(2), Akaike's criterion for one parameter; 30 keeps one above "
-        "3.3; 0 keeps all; auto: the default or every base parameter, as cross-validation over "
-        "blocks of the fit logs decides, printed); a finite number >= 0 or auto; default "
-        f"{DEFAULT_RSD_THRESHOLD:g}",
+        help="remove parameters with RSD above this %%, largest first, re-estimating after "
+        f"each removal ({DEFAULT_RSD_THRESHOLD:g} keeps a t-statistic above sqrt(2), Akaike's "
+        "criterion for one parameter; 30 keeps one above 3.3; 0 keeps all); auto (the "
+        f"default): {DEFAULT_RSD_THRESHOLD:g} or every base parameter, as cross-validation "
+        "over blocks of the fit logs decides (printed); a finite number >= 0 or auto",
     )
     add_data_options(p)
     p.add_argument(

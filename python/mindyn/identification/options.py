@@ -46,8 +46,9 @@ class IdentifyOptions:
 
     ``model``: dynamic, integral or energy; ``rotor``, ``friction``, ``offset``: the joint terms
     identified; ``weighted``: weighted (else ordinary) least squares; ``rsd_threshold`` [%]:
-    parameters above it removed (0 keeps all; ``"auto"``: :data:`DEFAULT_RSD_THRESHOLD` or every
-    base parameter, as held-out data decide, :mod:`~mindyn.identification.pruning`);
+    parameters above it removed (0 keeps all; ``"auto"``, the default:
+    :data:`DEFAULT_RSD_THRESHOLD` or every base parameter, as held-out blocks of the fit logs
+    decide, :mod:`~mindyn.identification.pruning`);
     ``energy_window``, ``integral_window``: sample
     intervals per window; ``integration``: auto, simpson, trapezoid or zoh; ``min_velocity``: joint
     equations slower than this left out (dynamic and integral models with friction);
@@ -64,7 +65,7 @@ class IdentifyOptions:
     friction: bool = False
     offset: bool = False
     weighted: bool = True
-    rsd_threshold: float | str = DEFAULT_RSD_THRESHOLD
+    rsd_threshold: float | str = "auto"
     energy_window: int = 10
     integration: str = "auto"
     integral_window: int = 40
