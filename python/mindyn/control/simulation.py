@@ -202,6 +202,7 @@ class CsvTrajectory:
         self._dq = CubicSpline(t, data[:, 1 + n : 1 + 2 * n]) if cols >= 1 + 2 * n else None
         self._ddq = CubicSpline(t, data[:, 1 + 2 * n :]) if cols == 1 + 3 * n else None
         self._qend = data[-1, 1 : 1 + n]
+        self._samples = data[:, 1 : 1 + n]  # the positions as the file gives them
 
     def evaluate(self, t):
         t = self.t0 + np.atleast_1d(np.asarray(t, dtype=float))
@@ -218,7 +219,8 @@ def load_reference(path, n: int, *, robot: Robot | None = None):
     """A reference from the JSON of ``mindyn excite`` (its exact Fourier series) or from a CSV
     (:class:`CsvTrajectory`, e.g. the CSV ``mindyn excite`` writes) for a robot of ``n`` joints;
     raises ValueError when the file gives another number of joints, and, given ``robot``, when
-    the JSON names another robot (whose limits the excitation kept)."""
+    the JSON names another robot (whose limits the excitation kept) or the CSV's positions are
+    in degrees or millimetres (:func:`~mindyn.identification.data.check_position_units`)."""
     _args.path(path, "path")
     n = _args.integer(n, "n", 1)
     _args.optional(_args.instance, robot, "robot", Robot)
@@ -237,7 +239,12 @@ def load_reference(path, n: int, *, robot: Robot | None = None):
                 "limits of the robot it was made for)"
             )
         return ref
-    return CsvTrajectory(p, n)
+    ref = CsvTrajectory(p, n)
+    if robot is not None:
+        from ..identification.data import check_position_units
+
+        check_position_units(ref._samples, robot, str(p))
+    return ref
 
 
 @dataclass

@@ -261,7 +261,8 @@ def read_csv(
         ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
         named), a file that is not UTF-8 text (line and byte offset named), time not strictly
         increasing (line named), fewer than 2 samples (or too few beyond the derivatives'
-        filter edges), derivatives that overflow.
+        filter edges), derivatives that overflow; with ``robot``, positions in degrees or
+        millimetres (:func:`check_position_units`).
     """
     from ..robot import Robot
 
@@ -364,6 +365,8 @@ def _read_csv(
         return values[:, [g[j] for j in range(1, n + 1)]]
 
     q = block("q")
+    if robot is not None:
+        check_position_units(q, robot, str(path))
     dq = block("dq")
     ddq = block("ddq")
     tau = block("tau")
@@ -965,6 +968,56 @@ def check_log_robot(doc: dict, robot, where: str) -> None:
         raise DataError(
             f"{where}: its joints {_shown(joints)} are not those of robot '{robot.name}' "
             f"({', '.join(robot.joint_names)})"
+        )
+
+
+#: Per joint type: the unit of a log's positions, the unit a log is most often written in by
+#: mistake, and that unit's size in the right one.
+_MISTAKEN_UNITS = {
+    "revolute": ("rad", "degrees", math.pi / 180.0),
+    "prismatic": ("m", "millimetres", 1e-3),
+}
+
+
+def check_position_units(q, robot, source: str) -> None:
+    """Refuses joint positions ``q`` (samples x joints) that are in degrees (millimetres for
+    prismatic joints) instead of radians (metres): some joint of that type leaves its limits by
+    more than half their range, and read in that unit every joint of the type with limits lies
+    within them to the same margin. A log that only slightly oversteps a description's limits
+    (a calibration offset, a limit set tighter than the hardware's) is not refused. Robots with
+    joints of several degrees of freedom are not checked (their positions hold quaternions)."""
+    from ..robot import Robot
+
+    _args.instance(robot, "robot", Robot)
+    q = np.asarray(q, dtype=float)
+    if not robot.single_dof or q.ndim != 2 or q.shape[1] != robot.n or q.shape[0] == 0:
+        return
+    lower, upper = robot.limits["lower"], robot.limits["upper"]
+    lo, hi = q.min(axis=0), q.max(axis=0)
+    for kind, (unit, other, size) in _MISTAKEN_UNITS.items():
+        joints = [
+            k
+            for k, t in enumerate(robot.joint_types)
+            if t == kind and np.isfinite(lower[k]) and np.isfinite(upper[k]) and upper[k] > lower[k]
+        ]
+        if not joints:
+            continue
+        margin = {k: 0.5 * (upper[k] - lower[k]) for k in joints}
+        out = [k for k in joints if lo[k] < lower[k] - margin[k] or hi[k] > upper[k] + margin[k]]
+        inside = all(
+            lo[k] * size >= lower[k] - margin[k] and hi[k] * size <= upper[k] + margin[k]
+            for k in joints
+        )
+        if not out or not inside:
+            continue
+        k = out[0]
+        v = lo[k] if lower[k] - lo[k] > hi[k] - upper[k] else hi[k]
+        raise DataError(
+            f"{source}: the positions of joint {k + 1} ('{robot.joint_names[k]}') reach {v:.4g}, "
+            f"beyond its limits [{lower[k]:.4g}, {upper[k]:.4g}] {unit} by more than half their "
+            f"range, and read as {other} every {kind} joint's positions lie within its limits: "
+            f"its positions seem to be in {other}; convert its {kind} joints' positions, "
+            f"velocities and accelerations to {unit}"
         )
 
 
