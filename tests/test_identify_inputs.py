@@ -769,3 +769,19 @@ def test_a_prismatic_joint_in_millimetres_is_refused(tmp_path):
     rc, _, err = run(["identify", "stanford", mm])
     line = one_line_error(rc, err, "mm.csv", "in millimetres", "prismatic")
     assert any(name in line for name in _beyond_half_range(robot, q)), line
+
+
+def test_predict_and_detect_refuse_a_log_of_another_robot_with_as_many_joints(logs, tmp_path):
+    """identify refused a simulated log whose truth sidecar names another robot; predict and
+    detect took it and printed torques and residuals of the wrong robot's motion."""
+    assert mindyn.load(UR5).n == mindyn.load("zcr07s").n  # the case: the columns fit
+    ident = tmp_path / "id.json"
+    assert run_ok(["identify", "zcr07s", logs["zcr07s"], "--json", ident])
+    for argv in (
+        ["predict", "zcr07s", ident, logs["ur5"], "-o", tmp_path / "p.csv"],
+        ["detect", "zcr07s", ident, logs["ur5"]],
+    ):
+        rc, _, err = run(argv)
+        one_line_error(rc, err, "ur5.csv", "'ur5_example'", "not 'zcr07s'")
+    assert run_ok(["predict", "zcr07s", ident, logs["zcr07s"], "-o", tmp_path / "p.csv"])
+    assert run_ok(["detect", "zcr07s", ident, logs["zcr07s"]])

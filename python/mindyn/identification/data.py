@@ -961,7 +961,7 @@ def check_log_robot(doc: dict, robot, where: str) -> None:
     if name not in (None, "") and name != robot.name:
         raise DataError(
             f"{where}: belongs to robot {_shown(name)}, not '{robot.name}' (a log of another "
-            "robot, even with as many joints, identifies nothing of this one)"
+            "robot, even with as many joints, tells nothing of this one)"
         )
     joints = doc.get("joints")
     if joints is not None and joints != list(robot.joint_names):

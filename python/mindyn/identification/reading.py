@@ -177,9 +177,11 @@ def read_log(
     (:func:`~mindyn.identification.preprocess.split_at_gaps`) and each segment through
     :func:`~mindyn.identification.preprocess.preprocess` (``cutoff`` overrides the options';
     periods averaged only when ``periodic``; decimated when ``decimate`` and the options allow);
-    otherwise one log. A filter that cannot be designed at the cut-off is named as such."""
+    otherwise one log. A filter that cannot be designed at the cut-off is named as such, and a
+    simulated log whose truth sidecar names another robot is refused."""
     opts = options or ReadingOptions()
-    raws = _raw([path], robot, opts, [currents], require_torque)
+    # truth=[]: a simulated log whose truth sidecar names another robot is refused
+    raws = _raw([path], robot, opts, [currents], require_torque, truth=[])
     return _processed([path], raws, opts, cutoff, periodic, decimate and opts.decimate)[0]
 
 
