@@ -238,3 +238,26 @@ def test_track_reads_the_excite_json(tmp_path, capsys):
     assert np.allclose(log[:, 3:5], qd, rtol=0, atol=1e-12)  # the reference logged is the JSON's
     assert main(["track", "planar2", "--trajectory", str(tmp_path / "none.json")]) == 2
     assert "none.json" in capsys.readouterr().err
+
+
+def test_tracking_errors_of_a_prismatic_joint_are_in_millimetres(tmp_path):
+    """The tracking figures were degrees for every joint: a prismatic joint's error in metres
+    went through np.degrees (the Stanford arm's d3 shown 57.3 times its metres, labelled deg).
+    Each figure is checked against the report's own log (q, qd): degrees on revolute joints,
+    millimetres on the prismatic one, and the heading says both."""
+    robot = mindyn.load("stanford")
+    assert robot.joint_types[2] == "prismatic"
+    report = tmp_path / "rep"
+    out = cli("track", "stanford", "--controller", "pd", "--duration", 0.4, "--report", report)
+    log = np.loadtxt(report / "log.csv", delimiter=",", skiprows=1)
+    n = robot.n
+    err = np.abs(log[:, 1 : 1 + n] - log[:, 1 + n : 1 + 2 * n]).max(axis=0)
+    expected = np.where(np.array(robot.joint_types) == "prismatic", 1e3, 180 / np.pi) * err
+    s = json.loads((report / "summary.json").read_text())
+    np.testing.assert_allclose(s["max_error_deg"], expected, rtol=1e-12)
+    assert s["error_unit"] == "deg | mm"
+    row = next(line for line in out.splitlines() if line.startswith("max |q - q_d|"))
+    assert row.startswith("max |q - q_d| [deg | mm]"), row
+    np.testing.assert_allclose([float(v) for v in row.split("]")[1].split()], expected, atol=1e-4)
+    out = cli("simulate", "stanford", "--duration", 0.4, "-o", tmp_path / "s.csv")
+    assert "max tracking error per joint [deg | mm]" in out

@@ -91,10 +91,10 @@ def cmd_track(args: argparse.Namespace) -> int:
     lines.append(f"  integration: {result.info['integrator']}")
     lines.append("")
     lines.append(_row("joint", range(1, n + 1), "{:>9d}"))
-    lines.append(_row("max |q - q_d| [deg]", s["max_error_deg"]))
+    lines.append(_row(f"max |q - q_d| [{s['error_unit']}]", s["max_error_deg"]))
     if robot.name == "zcr07s" and args.controller == "adaptive-pd" and n == 6:
         lines.append(_row("  the ZCR07S study (real robot)", ZCR07S_STUDY_MAX_ERROR_DEG, "{:9.2f}"))
-    lines.append(_row("final q - q_d [deg]", s["final_error_deg"]))
+    lines.append(_row(f"final q - q_d [{s['error_unit']}]", s["final_error_deg"]))
     rms = s["rms_error_deg_per_cycle"]
     lines.append(_row("RMS error, first cycle", rms[0]))
     if len(rms) > 1:

@@ -36,7 +36,13 @@ def _joints(values, fmt: str = "{:8.3g}") -> str:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from ..control.simulation import SensorNoise, noise_from_spec, simulate, torque_noise_scale
+    from ..control.simulation import (
+        SensorNoise,
+        error_unit,
+        noise_from_spec,
+        simulate,
+        torque_noise_scale,
+    )
     from ..identification import load_logs, run, true_base_values
     from ..identification.data import convert_torque, write_csv
     from ..identification.excitation import (
@@ -126,8 +132,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
         f"{_joints(sd)}; 20-bit encoder"
     )
     print(
-        "    max tracking error per joint [deg]: "
-        + _joints(np.degrees(log_e.info["max_tracking_error"]))
+        f"    max tracking error per joint [{error_unit(robot.joint_types)}]: "
+        + _joints(log_e.max_error_deg())
     )
     print(
         f"    wrote {files['measurement'].name}, {files['validation'].name} ({log_e.t.size} "

@@ -454,21 +454,29 @@ class SimulationResult:
         """True position error ``q_true - q_d``, shape (m, n), rad."""
         return _args.readonly(self.q_true - self.qd)
 
+    @property
+    def display_scale(self) -> np.ndarray:
+        """Per joint, the factor from rad (m) to the unit of the ``*_deg`` figures: degrees for
+        a revolute joint, millimetres for a prismatic one (:func:`display_scale`)."""
+        return display_scale(self.info.get("joint_types") or ["revolute"] * self.q_true.shape[1])
+
     def max_error_deg(self, *, t_from: float = 0.0) -> np.ndarray:
-        """Largest ``|q - q_d|`` per joint in degrees, from ``t_from`` on."""
+        """Largest ``|q - q_d|`` per joint in degrees (mm on prismatic joints), from ``t_from``
+        on."""
         sel = self.t >= t_from
-        return np.degrees(np.abs(self.error[sel]).max(axis=0))
+        return self.display_scale * np.abs(self.error[sel]).max(axis=0)
 
     def rms_error_deg(self, t0: float, t1: float) -> np.ndarray:
-        """RMS position error per joint in degrees over ``t0 <= t < t1``."""
+        """RMS position error per joint in degrees (mm on prismatic joints) over
+        ``t0 <= t < t1``."""
         sel = (self.t >= t0) & (self.t < t1)
         if not np.any(sel):
             raise ArgumentError(f"no samples in [{t0}, {t1})")
-        return np.degrees(np.sqrt(np.mean(self.error[sel] ** 2, axis=0)))
+        return self.display_scale * np.sqrt(np.mean(self.error[sel] ** 2, axis=0))
 
     def final_error_deg(self) -> np.ndarray:
-        """``q - q_d`` at the last sample, degrees."""
-        return np.degrees(self.error[-1])
+        """``q - q_d`` at the last sample, degrees (mm on prismatic joints)."""
+        return self.display_scale * self.error[-1]
 
     def save(self, path, *, robot_name: str = "", joint_names=None, link_frames=None) -> Path:
         """Writes ``t, q, dq, tau`` (the logged values, torques in N m) to ``path`` as
@@ -799,6 +807,7 @@ def simulate(
         "noise": {k: v.tolist() for k, v in arr.items()},
         "seed": seed,
         "max_tracking_error": np.abs(err).max(0).tolist(),
+        "joint_types": list(robot.joint_types),
         "seconds": time.perf_counter() - t0,
     }
     if check is not None:
@@ -1106,6 +1115,7 @@ def simulate_inverse(
         "noise": {k: v.tolist() for k, v in arr.items()},
         "seed": seed,
         "max_tracking_error": [0.0] * n,
+        "joint_types": list(robot.joint_types),
         "seconds": time.perf_counter() - t0,
     }
     if dahl is not None:
@@ -1251,8 +1261,22 @@ def noise_from_spec(
 # ---------------------------------------------------------------------------------------------
 # Report
 # ---------------------------------------------------------------------------------------------
+def display_scale(joint_types) -> np.ndarray:
+    """Per joint, the factor from rad (m) to the unit position errors are shown in: degrees on
+    revolute joints, millimetres on prismatic ones (as ``--tracking-tolerance`` takes them)."""
+    return np.array([1e3 if t == "prismatic" else 180.0 / np.pi for t in joint_types])
+
+
+def error_unit(joint_types) -> str:
+    """The unit of :func:`display_scale`'s figures in a heading: ``deg``, ``deg | mm`` or
+    ``mm``."""
+    kinds = {"mm" if t == "prismatic" else "deg" for t in joint_types}
+    return " | ".join(u for u in ("deg", "mm") if u in kinds)
+
+
 def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
-    """Figures of a run: max / final / RMS-per-cycle position errors (deg), and for adaptive runs
+    """Figures of a run: max / final / RMS-per-cycle position errors (deg; mm on prismatic
+    joints, ``error_unit``), and for adaptive runs
     the torque prediction error ``Y (p_hat - p)`` and the parameter error per cycle."""
     _args.instance(result, "result", SimulationResult)
     cycle = _args.optional(_args.number, cycle, "cycle", positive=True)
@@ -1268,11 +1292,15 @@ def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
         "max_error_deg": result.max_error_deg().tolist(),
         "final_error_deg": result.final_error_deg().tolist(),
         "cycle_s": cycle,
+        "error_unit": error_unit(result.info.get("joint_types") or ["revolute"]),
         "rms_error_deg_per_cycle": [
             result.rms_error_deg(a, b).tolist() for a, b in zip(edges[:-1], edges[1:])
         ],
         "max_error_deg_per_cycle": [
-            np.degrees(np.abs(result.error[(result.t >= a) & (result.t < b)]).max(axis=0)).tolist()
+            (
+                result.display_scale
+                * np.abs(result.error[(result.t >= a) & (result.t < b)]).max(axis=0)
+            ).tolist()
             for a, b in zip(edges[:-1], edges[1:])
         ],
         "saturated_fraction": float(result.saturated.mean()) if result.saturated is not None else 0,
@@ -1343,9 +1371,11 @@ def write_tracking_report(
         fig.savefig(folder / name, dpi=110)
         plt.close(fig)
 
+    scale = result.display_scale
+
     def error(ax, k):
-        ax.plot(result.t, np.degrees(result.error[:, k]), lw=0.8)
-        ax.set_ylabel(f"e{k + 1} [deg]")
+        ax.plot(result.t, scale[k] * result.error[:, k], lw=0.8)
+        ax.set_ylabel(f"e{k + 1} [{'mm' if scale[k] == 1e3 else 'deg'}]")
 
     def torque(ax, k):
         ax.plot(result.t, result.tau_true[:, k], lw=0.8, label="applied")
@@ -1377,8 +1407,8 @@ def write_tracking_report(
         k = np.arange(1, len(s["rms_error_deg_per_cycle"]) + 1)
         rms_e = [np.sqrt(np.mean(np.square(x))) for x in s["rms_error_deg_per_cycle"]]
         rms_t = [np.sqrt(np.mean(np.square(x))) for x in s["torque_prediction_rms_per_cycle"]]
-        ax[2].plot(k, rms_e, "o-", label="tracking error [deg]")
-        ax[2].set_ylabel("RMS tracking error [deg]")
+        ax[2].plot(k, rms_e, "o-", label=f"tracking error [{s['error_unit']}]")
+        ax[2].set_ylabel(f"RMS tracking error [{s['error_unit']}]")
         ax[2].set_xlabel(f"cycle ({s['cycle_s']:g} s each)")
         tw = ax[2].twinx()
         tw.plot(k, rms_t, "s--", color="C3", label="torque prediction error [N m]")
