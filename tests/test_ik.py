@@ -367,3 +367,27 @@ def test_a_target_so_far_that_the_errors_overflow_is_refused(x, capsys):
     assert len(err) == 1 and err[0].startswith("mindyn: error: ik_solve: the result"), err
     far = ik_solve(robot, pose_from_xyz_rpy([1e100, 0.0, 0.0], [0.0, 0.0, 0.0]))
     assert far.status == "not converged" and far.position_error == pytest.approx(1e100, rel=1e-9)
+
+
+def test_ik_states_the_tool_offsets_rotation(capsys):
+    """The Panda to panda_hand: the tool offset from panda_link7 turns by -45 deg about z, which
+    the frame line left out (it gave the translation alone). The xyz and rpy it prints, taken as
+    --xyz / --rpy take them, give Pinocchio's placement of panda_hand in panda_link7."""
+    import re
+
+    from conftest import URDFS
+
+    args = ["ik", str(URDFS["panda"]), "--tip", "panda_hand", "--xyz", "0.4", "0", "0.4"]
+    main([*args, "--rpy", "3.14159", "0", "0", "--format", "json"])
+    frame = json.loads(capsys.readouterr().out)["frame"]
+    m = re.search(r"xyz (\S+) (\S+) (\S+) m, rpy (\S+) (\S+) (\S+) rad", frame)
+    assert m, frame
+    values = [float(v) for v in m.groups()]
+    model = pin.buildModelFromUrdf(str(URDFS["panda"]))
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    link7 = data.oMf[model.getFrameId("panda_link7")]
+    hand = data.oMf[model.getFrameId("panda_hand")]
+    offset = (link7.inverse() * hand).homogeneous
+    np.testing.assert_allclose(pose_from_xyz_rpy(values[:3], values[3:]), offset, atol=1e-5)
+    assert abs(values[5] + np.pi / 4) < 1e-5

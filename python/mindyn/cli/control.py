@@ -202,13 +202,18 @@ def _tool_frame_words(robot) -> str:
     """The frame whose pose ``ik`` solves for, in words: the last link's frame moved by the
     description's tool offset (a URDF's fixed links after the last moving one are not part of
     it unless the chain is loaded to one of them with ``--tip``)."""
+    from scipy.spatial.transform import Rotation
+
     last = robot.link_names[-1]
-    xyz = np.asarray(robot.tool)[:3, 3]
-    if np.allclose(robot.tool, np.eye(4), rtol=0.0, atol=0.0):
+    tool = np.asarray(robot.tool)
+    if np.allclose(tool, np.eye(4), rtol=0.0, atol=0.0):
         where = f"the frame of link '{last}', the last moving link"
     else:
-        offset = " ".join(f"{v:.6g}" for v in xyz)
-        where = f"the tool frame: link '{last}' moved by the tool offset (xyz {offset} m)"
+        offset = "xyz " + " ".join(f"{v:.6g}" for v in tool[:3, 3]) + " m"
+        if not np.array_equal(tool[:3, :3], np.eye(3)):  # as --rpy takes it (fixed axes x, y, z)
+            rpy = Rotation.from_matrix(tool[:3, :3]).as_euler("xyz")
+            offset += ", rpy " + " ".join(f"{v:.6g}" for v in rpy) + " rad"
+        where = f"the tool frame: link '{last}' moved by the tool offset ({offset})"
     if robot.convention == "urdf" and where.startswith("the frame"):
         where += " (a fixed link after it: --tip LINK)"
     return where
