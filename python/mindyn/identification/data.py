@@ -261,7 +261,9 @@ def read_csv(
         ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
         named), a file that is not UTF-8 text (line and byte offset named), time not strictly
         increasing (line named), fewer than 2 samples (or too few beyond the derivatives'
-        filter edges), derivatives that overflow; with ``robot``, positions in degrees or
+        filter edges), derivatives that overflow, logged velocities that are not the
+        positions' derivative over the time stamps (:func:`check_velocity_units`: time in ms,
+        velocities in deg/s, of the opposite sign); with ``robot``, positions in degrees or
         millimetres (:func:`check_position_units`).
     """
     from ..robot import Robot
@@ -368,6 +370,8 @@ def _read_csv(
     if robot is not None:
         check_position_units(q, robot, str(path))
     dq = block("dq")
+    if dq is not None:
+        check_velocity_units(t, q, dq, str(path))
     ddq = block("ddq")
     tau = block("tau")
     processing: dict = {"samples": values.shape[0], "first_data_line": first_line}
@@ -1019,6 +1023,49 @@ def check_position_units(q, robot, source: str) -> None:
             f"its positions seem to be in {other}; convert its {kind} joints' positions, "
             f"velocities and accelerations to {unit}"
         )
+
+
+#: A joint whose logged velocity and the derivative of its logged position correlate at least
+#: this much is in the velocity check; the ratio of the two must lie within these bounds.
+VELOCITY_CHECK_CORRELATION = 0.9
+VELOCITY_RATIO_BOUNDS = (0.2, 5.0)
+#: Fewest samples for that correlation to judge (two unrelated signals of 20 samples correlate
+#: that much with a probability of about 1e-7)
+VELOCITY_CHECK_SAMPLES = 20
+
+
+def check_velocity_units(t, q, dq, source: str) -> None:
+    """Refuses logged velocities ``dq`` that are not the derivative of the logged positions
+    ``q`` over the time stamps ``t`` (samples x joints): per joint whose two signals correlate
+    (:data:`VELOCITY_CHECK_CORRELATION`, in magnitude: a joint held still is not judged; a log
+    of fewer than :data:`VELOCITY_CHECK_SAMPLES` samples neither), the
+    least-squares ratio ``d/dt q ~ k dq`` must lie within :data:`VELOCITY_RATIO_BOUNDS`. Time
+    stamps in milliseconds give k = 1e-3, velocities in deg/s beside positions in rad 1/57.3, a
+    velocity of the opposite sign -1; real logs give k within 1 % of 1."""
+    t, q, dq = (np.asarray(a, dtype=float) for a in (t, q, dq))
+    if t.size < VELOCITY_CHECK_SAMPLES or q.shape != dq.shape:
+        return
+    with np.errstate(all="ignore"):
+        fd = np.gradient(q, t, axis=0)
+        fd0, dq0 = fd - fd.mean(axis=0), dq - dq.mean(axis=0)
+        corr = (fd0 * dq0).sum(axis=0) / np.sqrt((fd0**2).sum(axis=0) * (dq0**2).sum(axis=0))
+        k = (fd * dq).sum(axis=0) / (dq**2).sum(axis=0)
+    low, high = VELOCITY_RATIO_BOUNDS
+    for j in range(q.shape[1]):
+        if not (np.isfinite(corr[j]) and np.isfinite(k[j])):
+            continue
+        if abs(corr[j]) >= VELOCITY_CHECK_CORRELATION and not low <= k[j] <= high:
+            causes = (
+                "a velocity column of the opposite sign"
+                if k[j] < 0
+                else "time stamps in milliseconds (1000), velocities in degrees per second "
+                "beside positions in radians (57.3), or other units"
+            )
+            raise DataError(
+                f"{source}: the logged velocity dq{j + 1} is {1 / k[j]:.4g} times the derivative "
+                f"of q{j + 1} over the time stamps (correlation {corr[j]:.3f}; expected 1): "
+                f"{causes}; t in s, positions in rad (m), velocities in rad/s (m/s)"
+            )
 
 
 def _shown(value) -> str:
