@@ -713,10 +713,13 @@ def _rescaled(log: Path, out: Path, robot, kind: str, factor: float) -> np.ndarr
 
 
 def _beyond_half_range(robot, q: np.ndarray) -> list[str]:
-    """The joints whose positions leave their limits by more than half the range."""
+    """The joints whose positions leave their limits by more than half the range and reach
+    beyond a full turn (revolute) or a metre (prismatic)."""
     lo, hi = robot.limits["lower"], robot.limits["upper"]
     m = 0.5 * (hi - lo)
+    far = np.where(np.array(robot.joint_types) == "prismatic", 1.0, 2 * np.pi)
     out = (q.min(axis=0) < lo - m) | (q.max(axis=0) > hi + m)
+    out &= np.abs(q).max(axis=0) > far
     return [f"'{robot.joint_names[k]}'" for k in np.flatnonzero(out)]
 
 

@@ -976,20 +976,22 @@ def check_log_robot(doc: dict, robot, where: str) -> None:
 
 
 #: Per joint type: the unit of a log's positions, the unit a log is most often written in by
-#: mistake, and that unit's size in the right one.
+#: mistake, that unit's size in the right one, and a magnitude that a position in the right
+#: unit outside the joint's limits rarely reaches (a full turn, a metre).
 _MISTAKEN_UNITS = {
-    "revolute": ("rad", "degrees", math.pi / 180.0),
-    "prismatic": ("m", "millimetres", 1e-3),
+    "revolute": ("rad", "degrees", math.pi / 180.0, 2.0 * math.pi),
+    "prismatic": ("m", "millimetres", 1e-3, 1.0),
 }
 
 
 def check_position_units(q, robot, source: str) -> None:
     """Refuses joint positions ``q`` (samples x joints) that are in degrees (millimetres for
     prismatic joints) instead of radians (metres): some joint of that type leaves its limits by
-    more than half their range, and read in that unit every joint of the type with limits lies
-    within them to the same margin. A log that only slightly oversteps a description's limits
-    (a calibration offset, a limit set tighter than the hardware's) is not refused. Robots with
-    joints of several degrees of freedom are not checked (their positions hold quaternions)."""
+    more than half their range and reaches beyond a full turn (1 m), and read in that unit
+    every joint of the type with limits lies within them to the same margin. A log that only
+    oversteps a description's limits (a calibration offset, a limit set tighter than the
+    hardware's) is not refused. Robots with joints of several degrees of freedom are not
+    checked (their positions hold quaternions)."""
     from ..robot import Robot
 
     _args.instance(robot, "robot", Robot)
@@ -998,7 +1000,7 @@ def check_position_units(q, robot, source: str) -> None:
         return
     lower, upper = robot.limits["lower"], robot.limits["upper"]
     lo, hi = q.min(axis=0), q.max(axis=0)
-    for kind, (unit, other, size) in _MISTAKEN_UNITS.items():
+    for kind, (unit, other, size, far) in _MISTAKEN_UNITS.items():
         joints = [
             k
             for k, t in enumerate(robot.joint_types)
@@ -1007,7 +1009,12 @@ def check_position_units(q, robot, source: str) -> None:
         if not joints:
             continue
         margin = {k: 0.5 * (upper[k] - lower[k]) for k in joints}
-        out = [k for k in joints if lo[k] < lower[k] - margin[k] or hi[k] > upper[k] + margin[k]]
+        out = [
+            k
+            for k in joints
+            if (lo[k] < lower[k] - margin[k] or hi[k] > upper[k] + margin[k])
+            and max(-lo[k], hi[k]) > far
+        ]
         inside = all(
             lo[k] * size >= lower[k] - margin[k] and hi[k] * size <= upper[k] + margin[k]
             for k in joints
@@ -1019,7 +1026,8 @@ def check_position_units(q, robot, source: str) -> None:
         raise DataError(
             f"{source}: the positions of joint {k + 1} ('{robot.joint_names[k]}') reach {v:.4g}, "
             f"beyond its limits [{lower[k]:.4g}, {upper[k]:.4g}] {unit} by more than half their "
-            f"range, and read as {other} every {kind} joint's positions lie within its limits: "
+            f"range and beyond {far:.4g} {unit}, and read as {other} every {kind} joint's "
+            "positions lie within its limits: "
             f"its positions seem to be in {other}; convert its {kind} joints' positions, "
             f"velocities and accelerations to {unit}"
         )
