@@ -261,3 +261,45 @@ def test_tracking_errors_of_a_prismatic_joint_are_in_millimetres(tmp_path):
     np.testing.assert_allclose([float(v) for v in row.split("]")[1].split()], expected, atol=1e-4)
     out = cli("simulate", "stanford", "--duration", 0.4, "-o", tmp_path / "s.csv")
     assert "max tracking error per joint [deg | mm]" in out
+
+
+def test_torque_limit_effort_names_the_joints_without_one(tmp_path, capsys):
+    """--torque-limit effort on a robot whose description lacks some effort limits said 'does
+    not give effort limits for all joints' (which?) in the library's keywords. The joints
+    the URDF leaves without one (here the first and third, written as effort="0", read as
+    none) are named, in the command's flag, for simulate and codegen alike."""
+    import itertools
+    import re
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "examples/urdf/ur5.urdf"
+    names = mindyn.load(example).joint_names
+    count = itertools.count(1)
+    text = re.sub(
+        r'effort="[^"]+"',
+        lambda m: 'effort="0"' if next(count) in (1, 3) else m.group(0),
+        example.read_text(),
+    )
+    urdf = tmp_path / "ur5.urdf"
+    urdf.write_text(text)
+    limits = mindyn.load(urdf).limits["effort"]
+    assert np.isnan(limits[[0, 2]]).all() and np.isfinite(limits[[1, 3, 4, 5]]).all()
+    for argv in (
+        ["simulate", urdf, "--torque-limit", "effort", "--duration", 0.1, "-o", tmp_path / "s.csv"],
+        [
+            "codegen",
+            urdf,
+            "--what",
+            "gravity-compensation",
+            "--lang",
+            "c",
+            "--torque-limit",
+            "effort",
+            "-o",
+            tmp_path / "g",
+        ],  # fmt: skip
+    ):
+        assert main([str(a) for a in argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith("mindyn: error: --torque-limit"), err
+        assert f"joint(s) 1 ('{names[0]}'), 3 ('{names[2]}');" in err, err

@@ -505,6 +505,20 @@ class SimulationResult:
 # ---------------------------------------------------------------------------------------------
 # Closed loop
 # ---------------------------------------------------------------------------------------------
+def effort_limits(robot: Robot, what: str) -> np.ndarray:
+    """The robot's effort limits, one per joint, for ``what`` (the option asking for them); a
+    joint without one (missing, zero or infinite in the description) is refused, named."""
+    limit = np.asarray(robot.limits["effort"], dtype=float)
+    missing = [k for k in range(robot.n) if not np.isfinite(limit[k]) or limit[k] <= 0]
+    if missing:
+        names = ", ".join(f"{k + 1} ('{robot.joint_names[k]}')" for k in missing)
+        raise ArgumentError(
+            f"{what}: robot '{robot.name}' has no effort limits for joint(s) {names}; add them "
+            "to its description or give other limits"
+        )
+    return limit
+
+
 def _torque_limit(robot: Robot, torque_limit):
     if torque_limit is None:
         return None
@@ -512,10 +526,7 @@ def _torque_limit(robot: Robot, torque_limit):
     if isinstance(torque_limit, str):
         if torque_limit != "effort":
             raise ArgumentError(f"torque_limit must be None, 'effort' or {n} values")
-        limit = np.asarray(robot.limits["effort"], dtype=float)
-        if not np.all(np.isfinite(limit)):
-            raise ArgumentError(f"robot '{robot.name}' does not give effort limits for all joints")
-        return limit
+        return effort_limits(robot, "torque_limit='effort'")
     if np.ndim(torque_limit) == 0:
         return np.full(n, _args.number(torque_limit, "torque_limit", minimum=0.0))
     limit = _args.array(torque_limit, "torque_limit", (n,))
