@@ -21,6 +21,7 @@ from .codegen_output import (
 )
 from .codegen_params import (
     _identified_params,
+    _identified_snap,
     _on_identified_drive_side,
     _params_note,
     _with_friction_model,
@@ -238,7 +239,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         friction=args.friction,
         offset=args.offset,
         method=method,
-        snap=snap_keyword(args),
+        snap=_identified_snap(args) if args.snap == "auto" else snap_keyword(args),
     )
     if method != "projection" and args.method is None:  # said once the method ran
         print(f"base parameters by the {method} method: {why}")

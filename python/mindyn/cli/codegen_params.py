@@ -104,6 +104,23 @@ def _on_identified_drive_side(robot, args):
     return robot_on_drive_side(robot, doc, where=str(args.params)), str(args.params)
 
 
+def _identified_snap(args):
+    """The ``snap=`` the ``--params`` JSON of ``mindyn identify`` was identified with (its base
+    set's names follow it), "auto" without such a JSON."""
+    from ..identification.data import DataError, read_json
+    from ..identification.document import identified_snap
+
+    if not args.params:
+        return "auto"
+    try:
+        doc = read_json(args.params)
+    except (DataError, FileNotFoundError):
+        return "auto"
+    if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
+        return "auto"
+    return identified_snap(doc, where=str(args.params))
+
+
 def _identified_params(path: str, robot, base, args):
     """The values of a ``mindyn identify --json`` file in the order of ``base.names``, with the
     parameters it pruned (``removed``) as zero, and the pruned names; ``(None, [], "")`` for any

@@ -16,6 +16,7 @@ from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
 from .data import DataError
 from .document import (
+    identified_snap,
     read_identification,
     robot_on_drive_side,
     with_identified_friction,
@@ -121,6 +122,7 @@ def identified_model(
         rotor=bool(doc.get("rotor")),
         friction=bool(doc.get("friction")),
         offset=bool(doc.get("offset")),
+        snap=identified_snap(doc, where=where),
     )
     base = with_identified_state(base, doc, where)
     src: dict = doc
