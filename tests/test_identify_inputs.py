@@ -830,3 +830,19 @@ def test_logged_velocities_that_are_not_the_positions_derivative_are_refused(log
         d[:, dq] += 0.05 * d[:, dq].std(axis=0) * rng.standard_normal((d.shape[0], 6))
 
     assert run_ok(["identify", "zcr07s", changed("noisy.csv", noisy)])
+
+
+def test_a_trajectory_csv_with_velocities_in_degrees_is_refused(tmp_path):
+    """simulate --trajectory took a CSV whose velocities were in deg/s beside positions in rad
+    and followed that velocity reference; it is refused naming the column and the ratio."""
+    from mindyn.control.simulation import SumOfSines
+
+    robot = mindyn.load("planar2")
+    t = np.arange(0.0, 2.0, 0.004)
+    q, dq, _ = SumOfSines(robot, period=2.0).evaluate(t)
+    traj = tmp_path / "traj.csv"
+    np.savetxt(traj, np.column_stack([t, q, dq * 180 / np.pi]), delimiter=",", fmt="%.17g")
+    rc, _, err = run(["simulate", "planar2", "--trajectory", traj, "-o", tmp_path / "s.csv"])
+    one_line_error(rc, err, "traj.csv", "velocity dq1 is 57.3 times the derivative of q1")
+    np.savetxt(traj, np.column_stack([t, q, dq]), delimiter=",", fmt="%.17g")
+    assert run_ok(["simulate", "planar2", "--trajectory", traj, "-o", tmp_path / "s.csv"])

@@ -203,6 +203,8 @@ class CsvTrajectory:
         self._ddq = CubicSpline(t, data[:, 1 + 2 * n :]) if cols == 1 + 3 * n else None
         self._qend = data[-1, 1 : 1 + n]
         self._samples = data[:, 1 : 1 + n]  # the positions as the file gives them
+        self._t = t
+        self._dq_samples = data[:, 1 + n : 1 + 2 * n] if cols >= 1 + 2 * n else None
 
     def evaluate(self, t):
         t = self.t0 + np.atleast_1d(np.asarray(t, dtype=float))
@@ -220,7 +222,9 @@ def load_reference(path, n: int, *, robot: Robot | None = None):
     (:class:`CsvTrajectory`, e.g. the CSV ``mindyn excite`` writes) for a robot of ``n`` joints;
     raises ValueError when the file gives another number of joints, and, given ``robot``, when
     the JSON names another robot (whose limits the excitation kept) or the CSV's positions are
-    in degrees or millimetres (:func:`~mindyn.identification.data.check_position_units`)."""
+    in degrees or millimetres (:func:`~mindyn.identification.data.check_position_units`); a
+    CSV whose velocities are not its positions' derivative is refused too
+    (:func:`~mindyn.identification.data.check_velocity_units`)."""
     _args.path(path, "path")
     n = _args.integer(n, "n", 1)
     _args.optional(_args.instance, robot, "robot", Robot)
@@ -240,9 +244,11 @@ def load_reference(path, n: int, *, robot: Robot | None = None):
             )
         return ref
     ref = CsvTrajectory(p, n)
-    if robot is not None:
-        from ..identification.data import check_position_units
+    from ..identification.data import check_position_units, check_velocity_units
 
+    if ref._dq_samples is not None:
+        check_velocity_units(ref._t, ref._samples, ref._dq_samples, str(p))
+    if robot is not None:
         check_position_units(ref._samples, robot, str(p))
     return ref
 

@@ -1070,7 +1070,7 @@ def check_velocity_units(t, q, dq, source: str) -> None:
                 "beside positions in radians (57.3), or other units"
             )
             raise DataError(
-                f"{source}: the logged velocity dq{j + 1} is {1 / k[j]:.4g} times the derivative "
+                f"{source}: the velocity dq{j + 1} is {1 / k[j]:.4g} times the derivative "
                 f"of q{j + 1} over the time stamps (correlation {corr[j]:.3f}; expected 1): "
                 f"{causes}; t in s, positions in rad (m), velocities in rad/s (m/s)"
             )
