@@ -152,24 +152,24 @@ def test_an_output_that_is_an_input_is_refused_and_the_input_kept(tmp_path):
     ident = tmp_path / "id.json"
     ur5 = mindyn.load(urdf)
     ident.write_text(json.dumps({"classical": consistent_params(ur5, np.random.default_rng(1))}))
+    (tmp_path / "x.joints.yaml").write_text("robot: ur5_example\n")
+    export = ["export", "ur5.urdf", "id.json", "--urdf"]
     cases = [
         (["identify", "planar2", "log.csv", "--json", "log.csv"], "--json", "LOG"),
         (
             ["simulate", "planar2", "--trajectory", "traj.json", "-o", "traj.json"],
             "--output",
             "--trajectory",
-        ),  # fmt: skip
-        (["export", "ur5.urdf", "id.json", "--urdf", "ur5.urdf"], "--urdf", "ROBOT"),
-        (
-            ["export", "ur5.urdf", "id.json", "--urdf", "x.urdf", "--sidecar", "id.json"],
-            "--sidecar",
-            "the identification JSON",
-        ),  # fmt: skip
+        ),
+        ([*export, "ur5.urdf"], "--urdf", "ROBOT"),
+        ([*export, "x.urdf", "--sidecar", "id.json"], "--sidecar", "the identification JSON"),
+        # the joint-terms file that --urdf writes beside it by default
+        ([*export, "x.urdf", "--joint-terms", "x.joints.yaml"], "--urdf", "--joint-terms"),
     ]
     for argv, option, name in cases:
         files = {p: p.read_bytes() for p in tmp_path.iterdir() if p.is_file()}
-        rc, _, err = run([tmp_path / a if a.endswith((".csv", ".json", ".urdf")) else a
-                          for a in argv])  # fmt: skip
+        paths = (".csv", ".json", ".urdf", ".yaml")
+        rc, _, err = run([tmp_path / a if a.endswith(paths) else a for a in argv])
         assert rc == 2 and err.count("\n") == 1, err
         assert f"mindyn: error: {option} '" in err and f"reads as {name} (" in err, err
         assert {p: p.read_bytes() for p in tmp_path.iterdir() if p.is_file()} == files

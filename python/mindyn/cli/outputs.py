@@ -190,6 +190,19 @@ def prepare_outputs(args: argparse.Namespace) -> None:
     seen: dict[Path, tuple[str, Path]] = {}
     folders = {path.resolve(): (option, path) for option, path, folder in outputs if folder}
     inputs = _inputs(args)
+    if getattr(args, "sidecar", None) is None:  # the joint-terms file beside --urdf / --yaml
+        from ..export import default_sidecar
+
+        for dest in ("urdf", "yaml"):
+            value = getattr(args, dest, None)
+            side = default_sidecar(value) if isinstance(value, OutputPath) else None
+            if side is not None and side.resolve() in inputs:
+                name, given = inputs[side.resolve()]
+                raise UsageError(
+                    f"--{dest} '{value}': its joint-terms file '{side}' is also the file the "
+                    f"command reads as {name} ('{given}'): writing it would overwrite that "
+                    "input; give --sidecar another file"
+                )
     for option, path, folder in outputs:
         if folder:  # files inside it are named by the command (output_path)
             continue
