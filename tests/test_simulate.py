@@ -303,3 +303,15 @@ def test_torque_limit_effort_names_the_joints_without_one(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and err.startswith("mindyn: error: --torque-limit"), err
         assert f"joint(s) 1 ('{names[0]}'), 3 ('{names[2]}');" in err, err
+
+
+def test_torque_headings_say_newtons_for_a_prismatic_joint():
+    """The adaptive run's torque-prediction row was headed [Nm] whatever the joints: the
+    Stanford arm's prismatic joint 3 carries a force. The heading gives both units there, and
+    N m alone on an arm of revolute joints."""
+    out = cli("track", "stanford", "--controller", "adaptive-pd", "--duration", 0.4)
+    row = next(line for line in out.splitlines() if line.startswith("|Y (p_hat - p)|"))
+    assert row.startswith("|Y (p_hat - p)| RMS, first [N m | N]"), row
+    out = cli("track", "planar2", "--controller", "adaptive-pd", "--duration", 0.4)
+    row = next(line for line in out.splitlines() if line.startswith("|Y (p_hat - p)|"))
+    assert row.startswith("|Y (p_hat - p)| RMS, first [N m] "), row

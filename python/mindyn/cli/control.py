@@ -34,7 +34,13 @@ def _row(label: str, values, fmt: str = "{:9.4f}") -> str:
 
 
 def cmd_track(args: argparse.Namespace) -> int:
-    from ..control.simulation import SensorNoise, simulate, summary, write_tracking_report
+    from ..control.simulation import (
+        SensorNoise,
+        simulate,
+        summary,
+        torque_unit,
+        write_tracking_report,
+    )
 
     check_controller_options(args)
     robot = with_drive_side(load_robot(args, command="track"), args)
@@ -101,7 +107,8 @@ def cmd_track(args: argparse.Namespace) -> int:
         lines.append(_row(f"RMS error, cycle {len(rms)}", rms[-1]))
     if "torque_prediction_rms_per_cycle" in s:
         tp = s["torque_prediction_rms_per_cycle"]
-        lines.append(_row("|Y (p_hat - p)| RMS, first [Nm]", tp[0]))
+        unit = torque_unit(robot.joint_types)
+        lines.append(_row(f"|Y (p_hat - p)| RMS, first [{unit}]", tp[0]))
         if len(tp) > 1:
             lines.append(_row(f"|Y (p_hat - p)| RMS, cycle {len(tp)}", tp[-1]))
     if "parameter_error_norm" in s:

@@ -42,6 +42,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         noise_from_spec,
         simulate,
         torque_noise_scale,
+        torque_unit,
     )
     from ..identification import load_logs, run, true_base_values
     from ..identification.data import convert_torque, write_csv
@@ -128,7 +129,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         files[name] = p
     print(
         f"    torque noise sd per joint ({args.noise:g} % of "
-        f"{torque_noise_scale(robot, ref_tau)[2]}) [N m]: "
+        f"{torque_noise_scale(robot, ref_tau)[2]}) [{torque_unit(robot.joint_types)}]: "
         f"{_joints(sd)}; 20-bit encoder"
     )
     print(
@@ -175,8 +176,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
             f"({len(res.removed)} removed), scaled condition number {res.cond:.3g}, "
             f"{res.seconds:.2f} s"
         )
-        print(f"      RMS error [N m], identification data: {_joints(fit['rms'])}")
-        print(f"      RMS error [N m], validation data:     {_joints(val['rms'])}")
+        unit = torque_unit(robot.joint_types)
+        print(f"      {f'RMS error [{unit}], identification data:':<40}{_joints(fit['rms'])}")
+        print(f"      {f'RMS error [{unit}], validation data:':<40}{_joints(val['rms'])}")
         print(
             "      overall relative error |tau - tau_hat| / |tau|: identification "
             f"{100 * fit['overall_relative']:.2f} %, "
@@ -220,7 +222,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
             val["tau_hat"][0],
             title=f"{robot.name}, {model} model: validation trajectory",
         )
-    print(f"    noise sd (reference) [N m]:               {_joints(sd)}")
+    unit = torque_unit(robot.joint_types)
+    print(f"    {f'noise sd (reference) [{unit}]:':<42}{_joints(sd)}")
     if robot.name == "zcr07s":
         print(f"    RMS torque errors on the real robot in {ZCR07S_STUDY}, Table 6:")
         print(

@@ -1291,6 +1291,13 @@ def error_unit(joint_types) -> str:
     return " | ".join(u for u in ("deg", "mm") if u in kinds)
 
 
+def torque_unit(joint_types) -> str:
+    """The unit of joint torques (forces on prismatic joints) in a heading: ``N m``,
+    ``N m | N`` or ``N``."""
+    kinds = {"N" if t == "prismatic" else "N m" for t in joint_types}
+    return " | ".join(u for u in ("N m", "N") if u in kinds)
+
+
 def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
     """Figures of a run: max / final / RMS-per-cycle position errors (deg; mm on prismatic
     joints, ``error_unit``), and for adaptive runs
