@@ -526,3 +526,71 @@ def test_cli_friction_model_of_a_json_is_checked(recorded, message, tmp_path, ca
     assert main([*argv, "-o", str(tmp_path / "x")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("mindyn: error: ") and message in err[0], err
+
+
+GEARED_2R = (
+    """<robot name="geared2r"><link name="base"/>
+<link name="l1"><inertial><origin xyz="0.1 0.02 0"/><mass value="2"/>
+<inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.025"/></inertial></link>
+<link name="l2"><inertial><origin xyz="0.15 0 0.01"/><mass value="1.2"/>
+<inertia ixx="0.004" ixy="0.001" ixz="0" iyy="0.012" iyz="0" izz="0.013"/></inertial></link>
+<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+<origin rpy="1.5707963267948966 0 0"/><axis xyz="0 0 1"/>
+<limit lower="-2.5" upper="2.5" effort="80" velocity="2"/><dynamics damping="0.5" friction="1.0"/>
+</joint>
+<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+<origin xyz="0.3 0 0"/><axis xyz="0 0 1"/>
+<limit lower="-2.5" upper="2.5" effort="40" velocity="2"/><dynamics damping="0.2" friction="0.4"/>
+</joint>
+"""
+    + simple("t1", "j1", "m1", 50)
+    + "</robot>"
+)
+
+
+def test_codegen_takes_the_drive_side_the_identification_json_records(tmp_path, rng):
+    """A robot with a 50:1 transmission identified with --drive-side joint: codegen --params
+    without --drive-side generated motor-side code with the joint-side values (joint 1's
+    friction 2500 times too large). The code now takes the JSON's side and equals Pinocchio's
+    rnea plus the URDF's damping and friction on the joints, which the noise-free log's
+    identification recovers; the other side asked for is refused, and so is a robot on the
+    other side in the library."""
+    import subprocess
+
+    urdf = tmp_path / "geared2r.urdf"
+    urdf.write_text(GEARED_2R)
+    log, ident, out = tmp_path / "log.csv", tmp_path / "id.json", tmp_path / "g"
+    assert main(["simulate", str(urdf), "--mode", "inverse", "--friction", "-o", str(log)]) == 0
+    argv = ["identify", str(urdf), str(log), "--friction", "--drive-side", "joint"]
+    assert main([*argv, "--rsd-threshold", "0", "--json", str(ident)]) == 0
+    assert json.loads(ident.read_text())["drive_side"] == "joint"
+    argv = ["codegen", str(urdf), "--lang", "c", "--what", "id", "--friction", "--params"]
+    assert main([*argv, str(ident), "-o", str(out)]) == 0
+    model = pin.buildModelFromUrdf(str(urdf))
+    data = model.createData()
+    states = rng.uniform(-1.5, 1.5, (5, 3, 2))
+    states[:, 1] = np.sign(states[:, 1]) * (0.2 + np.abs(states[:, 1]))  # away from rest
+    rows = ",".join("{" + ",".join(f"{v:.17g}" for v in s.ravel()) + "}" for s in states)
+    (tmp_path / "main.c").write_text(
+        '#include <stdio.h>\n#include "g.h"\n'
+        f"static const double S[5][6] = {{{rows}}};\n"
+        "int main(void) { double tau[2];\n"
+        "  for (int k = 0; k < 5; ++k) {\n"
+        "    geared2r_inverse_dynamics(S[k], S[k] + 2, S[k] + 4, geared2r_parameter_values, tau);\n"
+        '    printf("%.17g %.17g\\n", tau[0], tau[1]); }\n  return 0; }\n'
+    )
+    exe = tmp_path / "main"
+    build = [GCC, "-std=c99", "-Wall", "-Wextra", "-Werror", "-o", str(exe)]
+    subprocess.run([*build, str(tmp_path / "main.c"), f"{out}.c", "-lm"], check=True)
+    text = subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout
+    tau_c = np.array(text.split(), dtype=float).reshape(5, 2)
+    damping, friction = np.array([0.5, 0.2]), np.array([1.0, 0.4])
+    for (q, dq, ddq), tau in zip(states, tau_c):
+        ref = pin.rnea(model, data, q, dq, ddq) + damping * dq + friction * np.sign(dq)
+        np.testing.assert_allclose(tau, ref, rtol=1e-4, atol=1e-4 * np.abs(ref).max())
+    assert main([*argv, str(ident), "--drive-side", "motor", "-o", str(out)]) == 2
+    robot = mindyn.load(urdf)
+    assert robot.drive_side == "motor"
+    with pytest.raises(mindyn.ModelError, match=r"robot.with_drive_side\('joint'\)"):
+        codegen.generate(robot, what="id", friction=True, params=str(ident))
+    codegen.generate(robot.with_drive_side("joint"), what="id", friction=True, params=str(ident))

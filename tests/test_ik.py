@@ -367,3 +367,56 @@ def test_a_target_so_far_that_the_errors_overflow_is_refused(x, capsys):
     assert len(err) == 1 and err[0].startswith("mindyn: error: ik_solve: the result"), err
     far = ik_solve(robot, pose_from_xyz_rpy([1e100, 0.0, 0.0], [0.0, 0.0, 0.0]))
     assert far.status == "not converged" and far.position_error == pytest.approx(1e100, rel=1e-9)
+
+
+def test_ik_states_the_tool_offsets_rotation(capsys):
+    """The Panda to panda_hand: the tool offset from panda_link7 turns by -45 deg about z, which
+    the frame line left out (it gave the translation alone). The xyz and rpy it prints, taken as
+    --xyz / --rpy take them, give Pinocchio's placement of panda_hand in panda_link7."""
+    import re
+
+    from conftest import URDFS
+
+    args = ["ik", str(URDFS["panda"]), "--tip", "panda_hand", "--xyz", "0.4", "0", "0.4"]
+    main([*args, "--rpy", "3.14159", "0", "0", "--format", "json"])
+    frame = json.loads(capsys.readouterr().out)["frame"]
+    m = re.search(r"xyz (\S+) (\S+) (\S+) m, rpy (\S+) (\S+) (\S+) rad", frame)
+    assert m, frame
+    values = [float(v) for v in m.groups()]
+    model = pin.buildModelFromUrdf(str(URDFS["panda"]))
+    data = model.createData()
+    pin.framesForwardKinematics(model, data, pin.neutral(model))
+    link7 = data.oMf[model.getFrameId("panda_link7")]
+    hand = data.oMf[model.getFrameId("panda_hand")]
+    offset = (link7.inverse() * hand).homogeneous
+    np.testing.assert_allclose(pose_from_xyz_rpy(values[:3], values[3:]), offset, atol=1e-5)
+    assert abs(values[5] + np.pi / 4) < 1e-5
+
+
+def test_position_only_ik_of_a_three_joint_arm_checked_with_pinocchio(rng, capsys):
+    """orientation_weight=0 was accepted but still judged the answer by the whole pose: a
+    three-joint arm never converged on a position reached in another orientation (and the
+    command had no way to ask for the position alone). Position only, the tool origin lands
+    on the target (Pinocchio's forward kinematics) while the orientation stays free."""
+    robot = mindyn.load("puma560_3")
+    model = pinocchio_model(robot)
+    data = model.createData()
+    fid = model.getFrameId("tool")
+    for _ in range(5):
+        qt = rng.uniform(-1.5, 1.5, robot.n)
+        target = robot.fk(qt)
+        target[:3, :3] = np.eye(3)  # an orientation the arm does not reach there
+        assert not ik_solve(robot, target, max_time=0.05).success
+        r = ik_solve(robot, target, orientation_weight=0.0)
+        assert r.success and r.position_only and r.error == r.position_error
+        pin.framesForwardKinematics(model, data, r.q)
+        assert np.linalg.norm(data.oMf[fid].translation - target[:3, 3]) <= 1e-9
+        assert r.orientation_error > 1e-3
+    xyz = [str(v) for v in target[:3, 3]]
+    assert main(["ik", "puma560_3", "--xyz", *xyz, "--position-only", "--format", "json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["success"] and doc["position_only"] and doc["position_error_m"] <= 1e-9
+    assert main(["ik", "puma560_3", "--xyz", *xyz, "--timeout", "0.05"]) == 1
+    assert "--position-only leaves the orientation free" in capsys.readouterr().err
+    assert main(["ik", "puma560_3", "--xyz", *xyz, "--position-only", "--rpy", "0", "0", "0"]) == 2
+    assert capsys.readouterr().err.count("\n") == 1

@@ -133,3 +133,46 @@ def test_identify_json_and_simulate_into_folders(tmp_path):
     assert rc == 0, err
     assert (tmp_path / "sim" / "planar2_simulate.csv").is_file()
     assert str(tmp_path / "sim" / "planar2_simulate.csv") in out
+
+
+def test_an_output_that_is_an_input_is_refused_and_the_input_kept(tmp_path):
+    """identify --json LOG wrote the JSON over the log, simulate -o over its --trajectory,
+    export --urdf over the robot's own URDF: each input was lost without a word. Each is
+    refused in one line naming the input, and the file is unchanged byte for byte."""
+    from mindyn.control.simulation import simulate_inverse
+    from mindyn.identification.excitation import random_trajectory
+
+    robot = mindyn.load("planar2")
+    lim = {"lower": -np.ones(2), "upper": np.ones(2)}
+    traj = random_trajectory(robot, seed=1, limits=lim)
+    (tmp_path / "traj.json").write_text(json.dumps(traj.to_dict()))
+    simulate_inverse(robot, traj, seed=3).save(tmp_path / "log.csv", robot_name="planar2")
+    urdf = tmp_path / "ur5.urdf"
+    urdf.write_text((Path(__file__).resolve().parents[1] / "examples/urdf/ur5.urdf").read_text())
+    ident = tmp_path / "id.json"
+    ur5 = mindyn.load(urdf)
+    ident.write_text(json.dumps({"classical": consistent_params(ur5, np.random.default_rng(1))}))
+    (tmp_path / "x.joints.yaml").write_text("robot: ur5_example\n")
+    export = ["export", "ur5.urdf", "id.json", "--urdf"]
+    cases = [
+        (["identify", "planar2", "log.csv", "--json", "log.csv"], "--json", "LOG"),
+        (
+            ["simulate", "planar2", "--trajectory", "traj.json", "-o", "traj.json"],
+            "--output",
+            "--trajectory",
+        ),
+        ([*export, "ur5.urdf"], "--urdf", "ROBOT"),
+        ([*export, "x.urdf", "--sidecar", "id.json"], "--sidecar", "the identification JSON"),
+        # the joint-terms file that --urdf writes beside it by default
+        ([*export, "x.urdf", "--joint-terms", "x.joints.yaml"], "--urdf", "--joint-terms"),
+    ]
+    for argv, option, name in cases:
+        files = {p: p.read_bytes() for p in tmp_path.iterdir() if p.is_file()}
+        paths = (".csv", ".json", ".urdf", ".yaml")
+        rc, _, err = run([tmp_path / a if a.endswith(paths) else a for a in argv])
+        assert rc == 2 and err.count("\n") == 1, err
+        assert f"mindyn: error: {option} '" in err and f"reads as {name} (" in err, err
+        assert {p: p.read_bytes() for p in tmp_path.iterdir() if p.is_file()} == files
+    # another file beside them is written as before
+    rc, _, err = run(["identify", "planar2", tmp_path / "log.csv", "--json", tmp_path / "o.json"])
+    assert rc == 0 and (tmp_path / "o.json").is_file(), err

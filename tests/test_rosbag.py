@@ -225,3 +225,19 @@ def test_bag_errors_are_precise(planar, tmp_path, capsys):
     err = capsys.readouterr().err
     assert rc == 2 and err.startswith("mindyn: error: ") and err.count("\n") == 1
     assert "--topic" in err
+
+
+def test_a_bag_in_degrees_or_with_velocities_in_degrees_is_refused(planar, tmp_path, capsys):
+    """A bag's JointState in degrees (or its velocities alone in deg/s) was identified without
+    a word, as a CSV was; both are refused in one line naming the bag and the unit."""
+    robot, log = planar
+    t, q, dq, tau = log
+    deg = 180 / np.pi
+    for name, log_, said in (
+        ("deg", (t, q * deg, dq * deg, tau), "seem to be in degrees"),
+        ("degps", (t, q, dq * deg, tau), "velocity dq1 is 57.3 times"),
+    ):
+        bag = write_bag(tmp_path / name, messages(robot, log_))
+        assert cli.main(["identify", "planar3", str(bag)]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and str(bag) in err and said in err, err

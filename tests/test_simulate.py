@@ -238,3 +238,80 @@ def test_track_reads_the_excite_json(tmp_path, capsys):
     assert np.allclose(log[:, 3:5], qd, rtol=0, atol=1e-12)  # the reference logged is the JSON's
     assert main(["track", "planar2", "--trajectory", str(tmp_path / "none.json")]) == 2
     assert "none.json" in capsys.readouterr().err
+
+
+def test_tracking_errors_of_a_prismatic_joint_are_in_millimetres(tmp_path):
+    """The tracking figures were degrees for every joint: a prismatic joint's error in metres
+    went through np.degrees (the Stanford arm's d3 shown 57.3 times its metres, labelled deg).
+    Each figure is checked against the report's own log (q, qd): degrees on revolute joints,
+    millimetres on the prismatic one, and the heading says both."""
+    robot = mindyn.load("stanford")
+    assert robot.joint_types[2] == "prismatic"
+    report = tmp_path / "rep"
+    out = cli("track", "stanford", "--controller", "pd", "--duration", 0.4, "--report", report)
+    log = np.loadtxt(report / "log.csv", delimiter=",", skiprows=1)
+    n = robot.n
+    err = np.abs(log[:, 1 : 1 + n] - log[:, 1 + n : 1 + 2 * n]).max(axis=0)
+    expected = np.where(np.array(robot.joint_types) == "prismatic", 1e3, 180 / np.pi) * err
+    s = json.loads((report / "summary.json").read_text())
+    np.testing.assert_allclose(s["max_error_deg"], expected, rtol=1e-12)
+    assert s["error_unit"] == "deg | mm"
+    row = next(line for line in out.splitlines() if line.startswith("max |q - q_d|"))
+    assert row.startswith("max |q - q_d| [deg | mm]"), row
+    np.testing.assert_allclose([float(v) for v in row.split("]")[1].split()], expected, atol=1e-4)
+    out = cli("simulate", "stanford", "--duration", 0.4, "-o", tmp_path / "s.csv")
+    assert "max tracking error per joint [deg | mm]" in out
+
+
+def test_torque_limit_effort_names_the_joints_without_one(tmp_path, capsys):
+    """--torque-limit effort on a robot whose description lacks some effort limits said 'does
+    not give effort limits for all joints' (which?) in the library's keywords. The joints
+    the URDF leaves without one (here the first and third, written as effort="0", read as
+    none) are named, in the command's flag, for simulate and codegen alike."""
+    import itertools
+    import re
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "examples/urdf/ur5.urdf"
+    names = mindyn.load(example).joint_names
+    count = itertools.count(1)
+    text = re.sub(
+        r'effort="[^"]+"',
+        lambda m: 'effort="0"' if next(count) in (1, 3) else m.group(0),
+        example.read_text(),
+    )
+    urdf = tmp_path / "ur5.urdf"
+    urdf.write_text(text)
+    limits = mindyn.load(urdf).limits["effort"]
+    assert np.isnan(limits[[0, 2]]).all() and np.isfinite(limits[[1, 3, 4, 5]]).all()
+    for argv in (
+        ["simulate", urdf, "--torque-limit", "effort", "--duration", 0.1, "-o", tmp_path / "s.csv"],
+        [
+            "codegen",
+            urdf,
+            "--what",
+            "gravity-compensation",
+            "--lang",
+            "c",
+            "--torque-limit",
+            "effort",
+            "-o",
+            tmp_path / "g",
+        ],  # fmt: skip
+    ):
+        assert main([str(a) for a in argv]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and err.startswith("mindyn: error: --torque-limit"), err
+        assert f"joint(s) 1 ('{names[0]}'), 3 ('{names[2]}');" in err, err
+
+
+def test_torque_headings_say_newtons_for_a_prismatic_joint():
+    """The adaptive run's torque-prediction row was headed [Nm] whatever the joints: the
+    Stanford arm's prismatic joint 3 carries a force. The heading gives both units there, and
+    N m alone on an arm of revolute joints."""
+    out = cli("track", "stanford", "--controller", "adaptive-pd", "--duration", 0.4)
+    row = next(line for line in out.splitlines() if line.startswith("|Y (p_hat - p)|"))
+    assert row.startswith("|Y (p_hat - p)| RMS, first [N m | N]"), row
+    out = cli("track", "planar2", "--controller", "adaptive-pd", "--duration", 0.4)
+    row = next(line for line in out.splitlines() if line.startswith("|Y (p_hat - p)|"))
+    assert row.startswith("|Y (p_hat - p)| RMS, first [N m] "), row

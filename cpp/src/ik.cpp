@@ -137,6 +137,11 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
   rng_.seed(options_.seed);
   const double tol = options_.tolerance;
   const double wr = options_.orientation_weight;
+  // the error the tolerance applies to: the pose's, or with no weight on the orientation the
+  // position's alone (the rotation is then free)
+  const auto errorOf = [&target, wr](const Eigen::Isometry3d& X) noexcept {
+    return wr > 0 ? logError(X, target) : (target.translation() - X.translation()).norm();
+  };
   Eigen::Matrix<double, 6, 1> W;
   W << 1, 1, 1, wr, wr, wr;
   Eigen::Isometry3d T, Tc;
@@ -157,7 +162,7 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
     bringInside(x_);
     kin_.poseAndJacobian(x_, T, J_);
     poseError(T, target, e);
-    double err = logError(T, target);
+    double err = errorOf(T);
     double cost = 0.5 * (W.asDiagonal() * e).squaredNorm();
     double mu = 0.3;
     double err_checkpoint = err;
@@ -201,7 +206,7 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
             if (!held) break;
           }
           kin_.poseAndJacobian(xc_, Tc, Jc_);
-          const double errc = logError(Tc, target);
+          const double errc = errorOf(Tc);
           if (!(errc <= 1e3 * best)) break;
           poseError(Tc, target, e);
           x_.swap(xc_);
@@ -238,7 +243,7 @@ IkResult IkSolver::solve(const Eigen::Isometry3d& target,
       bringInside(xc_);
       kin_.poseAndJacobian(xc_, Tc, Jc_);
       poseError(Tc, target, ec);
-      const double errc = logError(Tc, target);
+      const double errc = errorOf(Tc);
       const double costc = 0.5 * (W.asDiagonal() * ec).squaredNorm();
       if (costc < cost) {
         x_.swap(xc_);

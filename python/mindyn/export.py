@@ -629,8 +629,15 @@ def _child_ws(parent, indent: str) -> str:
 
 
 # -- sidecar ----------------------------------------------------------------------------------
+def default_sidecar(description) -> Path:
+    """The joint-terms file written beside a description file when no other is named:
+    ``OUT.joints.yaml`` beside ``OUT.urdf`` (or ``OUT.yaml``)."""
+    out = Path(description)
+    return out.with_name(out.stem + ".joints.yaml")
+
+
 def _sidecar_path(sidecar, out: Path) -> Path:
-    side = Path(sidecar) if sidecar is not None else out.with_name(out.stem + ".joints.yaml")
+    side = Path(sidecar) if sidecar is not None else default_sidecar(out)
     if side.absolute() == out.absolute():
         raise ModelError(f"the sidecar file '{side}' is the description file itself")
     return side

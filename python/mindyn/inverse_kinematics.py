@@ -42,6 +42,8 @@ __all__ = [
 ]
 
 TASKS = {"pose": [0, 1, 2, 3, 4, 5], "position": [0, 1, 2], "orientation": [3, 4, 5]}
+#: The default weight [m/rad] of :func:`ik_solve`'s orientation error against its position error
+IK_ORIENTATION_WEIGHT = 0.3
 
 
 # ---------------------------------------------------------------------------------------------
@@ -314,7 +316,8 @@ class IkResult:
     in radians, unweighted (as Pinocchio's ``pin.log6(oMdes.actInv(oMq)).vector`` norm; the
     solver's tolerance applies to it); ``position_error`` [m] the distance of the tool frame's
     origin from the target's and ``orientation_error`` [rad] the angle of the rotation between
-    their orientations, each in its own unit."""
+    their orientations, each in its own unit. ``position_only`` (``orientation_weight=0``): the
+    orientation was free, and ``error`` is ``position_error``."""
 
     q: np.ndarray
     success: bool
@@ -324,13 +327,23 @@ class IkResult:
     attempts: int
     position_error: float = math.nan
     orientation_error: float = math.nan
+    position_only: bool = False
 
     def error_text(self) -> str:
         """The errors in words, each with its unit: position [m], orientation [rad, deg], and
-        the pose error the tolerance applies to."""
+        the pose error the tolerance applies to (position only: that the orientation was
+        free)."""
+        orientation = (
+            f"orientation error {self.orientation_error:.3g} rad "
+            f"({math.degrees(self.orientation_error):.3g} deg)"
+        )
+        if self.position_only:
+            return (
+                f"position error {self.position_error:.3g} m (position only: the tolerance "
+                f"applies to it; the orientation free, {orientation} from the target's)"
+            )
         return (
-            f"position error {self.position_error:.3g} m, orientation error "
-            f"{self.orientation_error:.3g} rad ({math.degrees(self.orientation_error):.3g} deg); "
+            f"position error {self.position_error:.3g} m, {orientation}; "
             f"pose error |log6| {self.error:.3g} (m and rad together, unweighted)"
         )
 
@@ -344,7 +357,7 @@ def ik_solve(
     max_time: float = 0.1,
     max_attempts: int = 100,
     max_iterations: int = 100,
-    orientation_weight: float = 0.3,
+    orientation_weight: float = IK_ORIENTATION_WEIGHT,
     seed: int = 42,
 ) -> IkResult:
     """Joint positions inside the limits that put the tool frame at ``T_target`` (4x4, base
@@ -358,9 +371,14 @@ def ik_solve(
     q0 : array (n,), optional
         Start (default: the middle of the limits); values outside the limits are brought inside.
     tolerance : float
-        Largest accepted pose error ``|log6(T_target^-1 T(q))|`` (m, rad).
+        Largest accepted pose error ``|log6(T_target^-1 T(q))|`` (m, rad); position only: the
+        largest position error [m].
     max_time : float
         CPU-time budget in seconds (0: none); ``max_attempts`` bounds the restarts.
+    orientation_weight : float
+        Weight [m/rad] of the orientation error against the position error in the steps; 0:
+        position only (the orientation free; for arms of fewer than six joints, which reach
+        most positions in one orientation only).
     seed : int
         Seed of the restart points (same seed, same answer).
     """
@@ -369,8 +387,7 @@ def ik_solve(
     T = _pose(T_target, "T_target")
     if q0 is not None:
         q0 = _args.array(q0, "q0", (robot.n,), unit="joint")
-    solver = _core.IkSolver(
-        robot._m,
+    solver_options = dict(
         tolerance=_args.number(tolerance, "tolerance", positive=True),
         max_iterations=_args.integer(max_iterations, "max_iterations", minimum=1),
         max_attempts=_args.integer(max_attempts, "max_attempts", minimum=1),
@@ -378,6 +395,7 @@ def ik_solve(
         orientation_weight=_args.number(orientation_weight, "orientation_weight", minimum=0.0),
         seed=_args.integer(seed, "seed", minimum=0),
     )
+    solver = _core.IkSolver(robot._m, **solver_options)
     given = q0
     if q0 is None:
         q0 = 0.5 * (solver.lower + solver.upper)
@@ -402,6 +420,7 @@ def ik_solve(
         attempts=int(r["attempts"]),
         position_error=errors[1],
         orientation_error=errors[2],
+        position_only=solver_options["orientation_weight"] == 0,
     )
 
 

@@ -4,11 +4,11 @@
 //
 // Steps: damped least squares on the twist that moves the current tool frame onto the target in
 // the base frame, e = poseError(T, target) (spatial.hpp). Convergence test: logError(T, target),
-// the norm of the SE(3) logarithm of T_target^-1 T, within the tolerance, the joints inside their
-// limits. A converged point is then refined by Newton steps (joints a step would take past a limit
-// held there), at most kIkRefineSteps, until the norm is at rounding level; the best point is
-// returned. The answer is as precise as the arithmetic allows (about 1e-15 m or rad) unless a limit
-// prevents it.
+// the norm of the SE(3) logarithm of T_target^-1 T (with orientation_weight 0, of the position
+// error alone), within the tolerance, the joints inside their limits. A converged point is then
+// refined by Newton steps (joints a step would take past a limit held there), at most
+// kIkRefineSteps, until the norm is at rounding level; the best point is returned. The answer is as
+// precise as the arithmetic allows (about 1e-15 m or rad) unless a limit prevents it.
 //
 // After construction nothing allocates or throws: IkSolver::solve() and ChainKinematics::pose()
 // and poseAndJacobian() are real-time safe. An object holds its workspace: one per thread.
@@ -66,15 +66,18 @@ struct IkOptions {
   // CPU seconds of the calling thread for one solve (0: no limit). In a real-time thread this is
   // wall time; on a loaded machine preemption does not count against the budget.
   double max_time = 0.005;
-  double orientation_weight = 0.3;  // [m/rad]: weight of rotation errors against positions
-  unsigned seed = 42;               // of the restart points (reset at every solve: reproducible)
+  // [m/rad]: weight of rotation errors against positions; 0: the position alone (the rotation
+  // free, the tolerance and IkResult::error then the position error's norm [m])
+  double orientation_weight = 0.3;
+  unsigned seed = 42;  // of the restart points (reset at every solve: reproducible)
   // Range used for joints without limits: revolute [-pi, pi], prismatic [-range, range].
   double unlimited_prismatic_range = 1.0;
 };
 
 struct IkResult {
   IkStatus status = IkStatus::NotConverged;
-  double error = 0;    // norm of the SE(3) logarithm of T_target^-1 T at the answer
+  double error = 0;    // norm of the SE(3) logarithm of T_target^-1 T at the answer (position
+                       // only: of the position error)
   int iterations = 0;  // over all attempts
   int attempts = 0;
   bool success() const { return status == IkStatus::Converged; }

@@ -19,7 +19,13 @@ from .codegen_output import (
     _write,
     _write_plcopen,
 )
-from .codegen_params import _identified_params, _params_note, _with_friction_model
+from .codegen_params import (
+    _identified_params,
+    _identified_snap,
+    _on_identified_drive_side,
+    _params_note,
+    _with_friction_model,
+)
 from .codegen_steps import _controller, _observer, refuse_controller_options
 from .method import base_method
 from .number_options import controller_period, joint_vector
@@ -212,7 +218,8 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             "floating or planar joint at the root of the description)"
         )
     robot, friction_note = _with_friction_model(robot, args)
-    robot, drive_note = drive_side(robot, args)
+    robot, source = _on_identified_drive_side(robot, args)
+    robot, drive_note = drive_side(robot, args, source=source)
     args.lang = args.lang or "st"  # --plcopen alone
     out = _output_base(args, robot)
     header = (out.name if out is not None else _stem(args, robot)) + ".h"
@@ -232,7 +239,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
         friction=args.friction,
         offset=args.offset,
         method=method,
-        snap=snap_keyword(args),
+        snap=_identified_snap(args) if args.snap == "auto" else snap_keyword(args),
     )
     if method != "projection" and args.method is None:  # said once the method ran
         print(f"base parameters by the {method} method: {why}")

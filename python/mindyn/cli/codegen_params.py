@@ -1,5 +1,5 @@
 """The parameter values ``mindyn codegen --params`` takes: the JSON of ``mindyn identify
---json`` (pruned parameters as zero, its friction model) or any file that
+--json`` (pruned parameters as zero, its friction model and drive side) or any file that
 :func:`mindyn.codegen.read_parameter_file` reads."""
 
 from __future__ import annotations
@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._core import ArgumentError, ModelError
+from .args import UsageError
 
 
 def _params_note(n: int, path: str, pruned: list[str], threshold: str | None) -> str:
@@ -71,6 +72,51 @@ def _with_friction_model(robot, args):
     if scale:
         words += f" ({scale} " + ", ".join(f"{v:g}" for v in model["velocity"]) + ")"
     return robot, words + (f", from {args.params}" if recorded else " (the default)")
+
+
+def _on_identified_drive_side(robot, args):
+    """``robot`` with the rotor inertia and friction on the side (``drive_side``) where the
+    ``--params`` JSON of ``mindyn identify`` has them, when ``--rotor`` or ``--friction`` asks
+    for them and ``--drive-side`` is not given (a ``--drive-side`` that differs is refused);
+    and that JSON's path when it decided, else None."""
+    from ..identification.data import DataError, read_json
+    from ..identification.document import robot_on_drive_side
+
+    if not args.params or not (args.rotor or args.friction):
+        return robot, None
+    try:
+        doc = read_json(args.params)
+    except (DataError, FileNotFoundError):
+        return robot, None  # not an identification JSON: read_parameter_file reads it
+    if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
+        return robot, None
+    side = doc.get("drive_side", "joint")
+    given = getattr(args, "drive_side", None)
+    if given is not None and side in ("motor", "joint") and given != side:
+        raise UsageError(
+            f"--drive-side {given}: {args.params} was identified with the rotor inertia and "
+            f"friction on the {side}s; give --drive-side {side} or leave it out"
+        )
+    if given is not None or side == robot.drive_side:
+        return robot, None
+    return robot_on_drive_side(robot, doc, where=str(args.params)), str(args.params)
+
+
+def _identified_snap(args):
+    """The ``snap=`` the ``--params`` JSON of ``mindyn identify`` was identified with (its base
+    set's names follow it), "auto" without such a JSON."""
+    from ..identification.data import DataError, read_json
+    from ..identification.document import identified_snap
+
+    if not args.params:
+        return "auto"
+    try:
+        doc = read_json(args.params)
+    except (DataError, FileNotFoundError):
+        return "auto"
+    if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
+        return "auto"
+    return identified_snap(doc, where=str(args.params))
 
 
 def _identified_params(path: str, robot, base, args):

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .args import ZCR07S_STUDY, add_command, deprecated
+from .args import ZCR07S_STUDY, UsageError, add_command, deprecated
 from .closed_loop import add_closed_loop_args, check_controller_options, reference_and_controller
 from .number_options import (
     Number,
@@ -34,7 +34,13 @@ def _row(label: str, values, fmt: str = "{:9.4f}") -> str:
 
 
 def cmd_track(args: argparse.Namespace) -> int:
-    from ..control.simulation import SensorNoise, simulate, summary, write_tracking_report
+    from ..control.simulation import (
+        SensorNoise,
+        simulate,
+        summary,
+        torque_unit,
+        write_tracking_report,
+    )
 
     check_controller_options(args)
     robot = with_drive_side(load_robot(args, command="track"), args)
@@ -91,17 +97,18 @@ def cmd_track(args: argparse.Namespace) -> int:
     lines.append(f"  integration: {result.info['integrator']}")
     lines.append("")
     lines.append(_row("joint", range(1, n + 1), "{:>9d}"))
-    lines.append(_row("max |q - q_d| [deg]", s["max_error_deg"]))
+    lines.append(_row(f"max |q - q_d| [{s['error_unit']}]", s["max_error_deg"]))
     if robot.name == "zcr07s" and args.controller == "adaptive-pd" and n == 6:
         lines.append(_row("  the ZCR07S study (real robot)", ZCR07S_STUDY_MAX_ERROR_DEG, "{:9.2f}"))
-    lines.append(_row("final q - q_d [deg]", s["final_error_deg"]))
+    lines.append(_row(f"final q - q_d [{s['error_unit']}]", s["final_error_deg"]))
     rms = s["rms_error_deg_per_cycle"]
     lines.append(_row("RMS error, first cycle", rms[0]))
     if len(rms) > 1:
         lines.append(_row(f"RMS error, cycle {len(rms)}", rms[-1]))
     if "torque_prediction_rms_per_cycle" in s:
         tp = s["torque_prediction_rms_per_cycle"]
-        lines.append(_row("|Y (p_hat - p)| RMS, first [Nm]", tp[0]))
+        unit = torque_unit(robot.joint_types)
+        lines.append(_row(f"|Y (p_hat - p)| RMS, first [{unit}]", tp[0]))
         if len(tp) > 1:
             lines.append(_row(f"|Y (p_hat - p)| RMS, cycle {len(tp)}", tp[-1]))
     if "parameter_error_norm" in s:
@@ -134,13 +141,16 @@ def cmd_track(args: argparse.Namespace) -> int:
 
 
 def cmd_ik(args: argparse.Namespace) -> int:
-    from ..inverse_kinematics import ik_solve, pose_from_xyz_rpy
+    from ..inverse_kinematics import IK_ORIENTATION_WEIGHT, ik_solve, pose_from_xyz_rpy
 
     robot = load_robot(args, command="ik")
+    if args.position_only and args.rpy is not None:
+        raise UsageError("--rpy: --position-only leaves the orientation free; give one of them")
+    rpy = [0.0, 0.0, 0.0] if args.rpy is None else args.rpy
     scale = np.pi / 180.0 if args.deg else 1.0
     if not args.deg:
-        check_radians(args.rpy, "--rpy", "--deg")
-    T = pose_from_xyz_rpy(args.xyz, np.asarray(args.rpy, dtype=float) * scale)
+        check_radians(rpy, "--rpy", "--deg")
+    T = pose_from_xyz_rpy(args.xyz, np.asarray(rpy, dtype=float) * scale)
     q0 = None
     if args.q0 is not None:
         revolute = np.array([t == "revolute" for t in robot.joint_types])
@@ -155,6 +165,7 @@ def cmd_ik(args: argparse.Namespace) -> int:
         tolerance=args.tolerance,
         max_time=args.timeout,
         seed=args.seed,
+        orientation_weight=0.0 if args.position_only else IK_ORIENTATION_WEIGHT,
     )
     frame = _tool_frame_words(robot)
     doc = {
@@ -164,8 +175,12 @@ def cmd_ik(args: argparse.Namespace) -> int:
         "status": r.status,
         "q": r.q.tolist(),
         "pose_error": r.error,
-        "pose_error_definition": "|log6(T_target^-1 T(q))|: metres and radians together, "
-        "unweighted (the tolerance applies to it)",
+        "position_only": r.position_only,
+        "pose_error_definition": "|p_target - p(q)| [m]: the position alone, the orientation "
+        "free (the tolerance applies to it)"
+        if r.position_only
+        else "|log6(T_target^-1 T(q))|: metres and radians together, unweighted (the tolerance "
+        "applies to it)",
         "position_error_m": r.position_error,
         "orientation_error_rad": r.orientation_error,
         "iterations": r.iterations,
@@ -189,9 +204,16 @@ def cmd_ik(args: argparse.Namespace) -> int:
             extra = f"  {np.degrees(r.q[k]):10.4f} deg" if unit == "rad" else ""
             print(f"  {robot.joint_names[k]:<{width}} {r.q[k]:12.6f} {unit}{extra}".rstrip())
     if not r.success:
+        hint = ""
+        if not r.position_only and robot.n < 6:
+            hint = (
+                f"; an arm of {robot.n} joints reaches most positions in one orientation only: "
+                "--position-only leaves the orientation free"
+            )
         print(
-            f"mindyn: error: no joint solution inside the limits reached the pose "
-            f"({r.status}; best point: {r.error_text()})",
+            f"mindyn: error: no joint solution inside the limits reached the "
+            f"{'position' if r.position_only else 'pose'} ({r.status}; best point: "
+            f"{r.error_text()}){hint}",
             file=sys.stderr,
         )
         return 1
@@ -202,13 +224,18 @@ def _tool_frame_words(robot) -> str:
     """The frame whose pose ``ik`` solves for, in words: the last link's frame moved by the
     description's tool offset (a URDF's fixed links after the last moving one are not part of
     it unless the chain is loaded to one of them with ``--tip``)."""
+    from scipy.spatial.transform import Rotation
+
     last = robot.link_names[-1]
-    xyz = np.asarray(robot.tool)[:3, 3]
-    if np.allclose(robot.tool, np.eye(4), rtol=0.0, atol=0.0):
+    tool = np.asarray(robot.tool)
+    if np.allclose(tool, np.eye(4), rtol=0.0, atol=0.0):
         where = f"the frame of link '{last}', the last moving link"
     else:
-        offset = " ".join(f"{v:.6g}" for v in xyz)
-        where = f"the tool frame: link '{last}' moved by the tool offset (xyz {offset} m)"
+        offset = "xyz " + " ".join(f"{v:.6g}" for v in tool[:3, 3]) + " m"
+        if not np.array_equal(tool[:3, :3], np.eye(3)):  # as --rpy takes it (fixed axes x, y, z)
+            rpy = Rotation.from_matrix(tool[:3, :3]).as_euler("xyz")
+            offset += ", rpy " + " ".join(f"{v:.6g}" for v in rpy) + " rad"
+        where = f"the tool frame: link '{last}' moved by the tool offset ({offset})"
     if robot.convention == "urdf" and where.startswith("the frame"):
         where += " (a fixed link after it: --tip LINK)"
     return where
@@ -306,9 +333,15 @@ def register(sub) -> None:
         p,
         "--rpy",
         nargs=3,
-        default=[0.0, 0.0, 0.0],
         metavar=("R", "P", "Y"),
         help="roll, pitch, yaw about the fixed base axes x, y, z (URDF convention); default 0 0 0",
+    )
+    p.add_argument(
+        "--position-only",
+        action="store_true",
+        help="solve for the position alone, the orientation free (an arm of fewer than six "
+        "joints reaches most positions in one orientation only); the tolerance is then the "
+        "position error's [m]",
     )
     joint_vector(p, "--q0", help="start [rad, m] (default: the middle of the limits)")
     p.add_argument(
@@ -325,7 +358,8 @@ def register(sub) -> None:
         high=1,
         low_open=True,
         default=1e-5,
-        help="largest pose error |log6(T_target^-1 T)| of a solution [m, rad]",
+        help="largest pose error |log6(T_target^-1 T)| of a solution [m, rad] (--position-only: "
+        "largest position error [m])",
     )
     deprecated(p, "--tolerance", tolerance)
     number(p, "--timeout", low=0, high=3600, low_open=True, default=0.5, help="CPU-time budget [s]")

@@ -36,7 +36,14 @@ def _joints(values, fmt: str = "{:8.3g}") -> str:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    from ..control.simulation import SensorNoise, noise_from_spec, simulate, torque_noise_scale
+    from ..control.simulation import (
+        SensorNoise,
+        error_unit,
+        noise_from_spec,
+        simulate,
+        torque_noise_scale,
+        torque_unit,
+    )
     from ..identification import load_logs, run, true_base_values
     from ..identification.data import convert_torque, write_csv
     from ..identification.excitation import (
@@ -122,12 +129,12 @@ def cmd_demo(args: argparse.Namespace) -> int:
         files[name] = p
     print(
         f"    torque noise sd per joint ({args.noise:g} % of "
-        f"{torque_noise_scale(robot, ref_tau)[2]}) [N m]: "
+        f"{torque_noise_scale(robot, ref_tau)[2]}) [{torque_unit(robot.joint_types)}]: "
         f"{_joints(sd)}; 20-bit encoder"
     )
     print(
-        "    max tracking error per joint [deg]: "
-        + _joints(np.degrees(log_e.info["max_tracking_error"]))
+        f"    max tracking error per joint [{error_unit(robot.joint_types)}]: "
+        + _joints(log_e.max_error_deg())
     )
     print(
         f"    wrote {files['measurement'].name}, {files['validation'].name} ({log_e.t.size} "
@@ -169,8 +176,9 @@ def cmd_demo(args: argparse.Namespace) -> int:
             f"({len(res.removed)} removed), scaled condition number {res.cond:.3g}, "
             f"{res.seconds:.2f} s"
         )
-        print(f"      RMS error [N m], identification data: {_joints(fit['rms'])}")
-        print(f"      RMS error [N m], validation data:     {_joints(val['rms'])}")
+        unit = torque_unit(robot.joint_types)
+        print(f"      {f'RMS error [{unit}], identification data:':<40}{_joints(fit['rms'])}")
+        print(f"      {f'RMS error [{unit}], validation data:':<40}{_joints(val['rms'])}")
         print(
             "      overall relative error |tau - tau_hat| / |tau|: identification "
             f"{100 * fit['overall_relative']:.2f} %, "
@@ -214,7 +222,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
             val["tau_hat"][0],
             title=f"{robot.name}, {model} model: validation trajectory",
         )
-    print(f"    noise sd (reference) [N m]:               {_joints(sd)}")
+    unit = torque_unit(robot.joint_types)
+    print(f"    {f'noise sd (reference) [{unit}]:':<42}{_joints(sd)}")
     if robot.name == "zcr07s":
         print(f"    RMS torque errors on the real robot in {ZCR07S_STUDY}, Table 6:")
         print(

@@ -19,8 +19,9 @@ CALIBRATE_ONLY = ("quantile", "margin", "model_sigma")
 
 
 def _read_log(path, robot, doc, args):
-    from ..identification.data import DataError, read_csv
+    from ..identification.data import DataError, read_csv, read_truth
 
+    read_truth(path, robot)  # a simulated log of another robot is refused
     reading = doc.get("reading") or {}
     unit = args.torque_unit or reading.get("torque_unit")
     gain = args.drive_gain or reading.get("drive_gain")

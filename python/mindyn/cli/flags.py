@@ -43,8 +43,10 @@ LIBRARY_OPTIONS = (
     "rotor",
     "rsd_threshold",
     "snap",
+    "tau_max",
     "tip",
     "topic",
+    "torque_limit",
     "torque_noise",
     "torque_unit",
     "trig",
@@ -60,6 +62,7 @@ _FLAG_OF = {
     ("period", None): "--excitation-period",
     ("decimate", "False"): "--no-decimate",
     ("contacts", None): "--contact",
+    ("tau_max", None): "--torque-limit",
 }
 _NUMBER = r"-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?"
 _LIBRARY_OPTION = re.compile(

@@ -141,11 +141,43 @@ def declared_outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
     return found
 
 
+#: The arguments that name files a command reads, by destination, with their name in a message
+#: (positional ones by their metavar): no output may be one of them.
+INPUTS = {
+    "robot": "ROBOT",
+    "data": "LOG",
+    "log": "LOG",
+    "identification": "ID.json",
+    "params": "the identification JSON",
+    "validate": "--validate",
+    "currents": "--currents",
+    "validate_currents": "--validate-currents",
+    "trajectory": "--trajectory",
+    "gains": "--gains",
+    "thresholds": "--thresholds",
+    "joint_terms": "--joint-terms",
+}
+
+
+def _inputs(args: argparse.Namespace) -> dict[Path, tuple[str, str]]:
+    """The existing files the command line names as inputs (:data:`INPUTS`), by resolved path:
+    the argument's name and the path as given."""
+    found: dict[Path, tuple[str, str]] = {}
+    for dest, name in INPUTS.items():
+        value = getattr(args, dest, None)
+        for v in value if isinstance(value, list) else [value]:
+            if isinstance(v, (str, os.PathLike)) and not isinstance(v, OutputPath):
+                if Path(v).is_file():
+                    found.setdefault(Path(v).resolve(), (name, str(v)))
+    return found
+
+
 def prepare_outputs(args: argparse.Namespace) -> None:
     """The one rule for the outputs of every command, applied before the command writes
     anything: a file option given a folder names its default file inside it
     (:func:`output_path`, :func:`default_file_name`), no two outputs may be the same file
-    (compared as resolved paths), and the missing folders of each are created. The outputs are
+    (compared as resolved paths), none may be a file the command reads (:data:`INPUTS`: the
+    robot's description, a log, ...), and the missing folders of each are created. The outputs are
     :func:`declared_outputs`, or those that the command's ``outputs(args)`` (a parser default)
     lists when it writes files the options only imply (``codegen -o NAME``: NAME.c and
     NAME.h); the commands state the paths they wrote (on standard output, unless it carries
@@ -157,10 +189,30 @@ def prepare_outputs(args: argparse.Namespace) -> None:
         outputs = declared_outputs(args)
     seen: dict[Path, tuple[str, Path]] = {}
     folders = {path.resolve(): (option, path) for option, path, folder in outputs if folder}
+    inputs = _inputs(args)
+    if getattr(args, "sidecar", None) is None:  # the joint-terms file beside --urdf / --yaml
+        from ..export import default_sidecar
+
+        for dest in ("urdf", "yaml"):
+            value = getattr(args, dest, None)
+            side = default_sidecar(value) if isinstance(value, OutputPath) else None
+            if side is not None and side.resolve() in inputs:
+                name, given = inputs[side.resolve()]
+                raise UsageError(
+                    f"--{dest} '{value}': its joint-terms file '{side}' is also the file the "
+                    f"command reads as {name} ('{given}'): writing it would overwrite that "
+                    "input; give --sidecar another file"
+                )
     for option, path, folder in outputs:
         if folder:  # files inside it are named by the command (output_path)
             continue
         key = path.resolve()
+        if key in inputs:
+            name, given = inputs[key]
+            raise UsageError(
+                f"{option} '{path}' is also the file the command reads as {name} ('{given}'): "
+                "writing it would overwrite that input; give the output its own file"
+            )
         if key in folders:
             other, first = folders[key]
             raise UsageError(

@@ -202,10 +202,11 @@ def drive_side_words(robot, args) -> str:
     return "on the joints (--drive-side joint)"
 
 
-def drive_side(robot, args):
+def drive_side(robot, args, *, source: str | None = None):
     """``robot`` with ``--drive-side`` applied (:func:`with_drive_side`), and the words saying
     where rotor inertia and friction act, for a command's output ("" when neither is asked
-    for)."""
+    for); ``source``: the file that put them there (an identification JSON), instead of an
+    option or the default."""
     side = getattr(args, "drive_side", None)
     robot = with_drive_side(robot, args)
     if not (getattr(args, "rotor", False) or getattr(args, "friction", False)):
@@ -213,12 +214,14 @@ def drive_side(robot, args):
     if robot.drive_side == "motor":
         n = len(robot.transmission.motors)
         how = "--drive-side motor" if side else "the default with transmissions"
+        how = f"as {source} has them" if source else how
         return robot, (
             f"rotor inertia and friction on the {n} motors (q_m = T q, tau = T^T tau_m; {how}"
-            + ("" if side else "; --drive-side joint puts them on the joints")
+            + ("" if side or source else "; --drive-side joint puts them on the joints")
             + ")"
         )
     why = "--drive-side joint" if side else "no transmissions declared"
+    why = f"as {source} has them" if source else why
     return robot, f"rotor inertia and friction on the joints ({why})"
 
 

@@ -36,6 +36,7 @@ def _check_mode(args: argparse.Namespace) -> None:
 def cmd_simulate(args: argparse.Namespace) -> int:
     from ..control.simulation import (
         SensorNoise,
+        error_unit,
         noise_from_spec,
         simulate,
         simulate_inverse,
@@ -106,10 +107,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     )
     print(f"  reference: {ref_text}")
     if info["mode"] == "tracking":
-        err = np.degrees(info["max_tracking_error"])
+        err = log.max_error_deg()
         print(
-            f"  controller {info['controller']}; max tracking error per joint [deg]: "
-            + " ".join(f"{e:.3g}" for e in err)
+            f"  controller {info['controller']}; max tracking error per joint "
+            f"[{error_unit(robot.joint_types)}]: " + " ".join(f"{e:.3g}" for e in err)
         )
         shortfall = ""
         if controller is None and args.friction:  # the simulator's default computed torque

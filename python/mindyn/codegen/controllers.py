@@ -246,12 +246,9 @@ def generate_controller(
             s["p0"] = np.clip(s["p0"], s["p_min"], s["p_max"])
             s["box"] += f"; the initial estimate moved into it on {int(out_of.sum())}"
     if isinstance(tau_max, str):
-        tau_max = robot.limits["effort"]
-        if not np.all(np.isfinite(tau_max)):
-            raise _args.fail(
-                "tau_max",
-                f"is 'effort' but robot '{robot.name}' does not give effort limits for all joints",
-            )
+        from ..control.simulation import effort_limits
+
+        tau_max = effort_limits(robot, "tau_max='effort'")
     s["tau_max"] = _setting(tau_max, n, "tau_max", math.inf, infinite=True)
     if not np.all(s["tau_max"] > 0):
         raise _args.fail("tau_max", "must be positive")

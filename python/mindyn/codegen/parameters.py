@@ -119,11 +119,13 @@ def read_identified_parameters(
     ``robot``, with other joint terms than ``rotor``, ``friction`` and ``offset``, or, with
     ``friction``, with another friction model than the robot's (then
     ``robot.with_friction_model(kind, velocity=...)`` with the JSON's ``friction_model`` is the
-    robot it was identified for). Refused with a :class:`~mindyn.identification.data.DataError`
-    naming the file (and, for a syntax error, its line and column): a file meant as JSON (its
-    suffix or first character) that is not JSON; fields of the wrong type; the Dahl model,
-    which generated code has no state for; names unknown, missing, or both identified and
-    pruned; values that are not finite numbers."""
+    robot it was identified for) or, with ``rotor`` or ``friction``, with them on the other side
+    (``drive_side``) than the robot's (then ``robot.with_drive_side(side)`` is the robot it was
+    identified for). Refused with a :class:`~mindyn.identification.data.DataError` naming the
+    file (and, for a syntax error, its line and column): a file meant as JSON (its suffix or
+    first character) that is not JSON; fields of the wrong type; the Dahl model, which generated
+    code has no state for; names unknown, missing, or both identified and pruned; values that
+    are not finite numbers."""
     from ..identification.data import DataError, read_json
     from ..robot import Robot
 
@@ -160,6 +162,8 @@ def read_identified_parameters(
         )
     if flags["friction"]:
         _same_friction_model(doc, path, robot)
+    if flags["rotor"] or flags["friction"]:
+        _same_drive_side(doc, path, robot)
     idents, values = doc["names"], doc["values"]
     try:
         pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]
@@ -194,6 +198,21 @@ def read_identified_parameters(
     threshold = doc.get("rsd_threshold")
     said = f"{threshold:g} %" if isinstance(threshold, (int, float)) else "the threshold"
     return out, [k for k in names if k in pruned], said
+
+
+def _same_drive_side(doc: dict, path, robot) -> None:
+    """Refuses an identification JSON whose rotor inertia and friction act on the other side
+    (``drive_side``; absent: the joints) than ``robot``'s: a motor's values are in motor units,
+    a joint's are those through the gear ratio squared (rotor inertia, viscous friction)."""
+    side = doc.get("drive_side", "joint")
+    if side not in ("motor", "joint"):
+        raise _core.ModelError(f"{path}: 'drive_side' is {side!r}; expected 'motor' or 'joint'")
+    if side != robot.drive_side:
+        raise _core.ModelError(
+            f"{path}: identified with the rotor inertia and friction on the {side}s; robot "
+            f"'{robot.name}' has them on the {robot.drive_side}s: generate for "
+            f"robot.with_drive_side('{side}')"
+        )
 
 
 def _same_friction_model(doc: dict, path, robot) -> None:

@@ -202,6 +202,9 @@ class CsvTrajectory:
         self._dq = CubicSpline(t, data[:, 1 + n : 1 + 2 * n]) if cols >= 1 + 2 * n else None
         self._ddq = CubicSpline(t, data[:, 1 + 2 * n :]) if cols == 1 + 3 * n else None
         self._qend = data[-1, 1 : 1 + n]
+        self._samples = data[:, 1 : 1 + n]  # the positions as the file gives them
+        self._t = t
+        self._dq_samples = data[:, 1 + n : 1 + 2 * n] if cols >= 1 + 2 * n else None
 
     def evaluate(self, t):
         t = self.t0 + np.atleast_1d(np.asarray(t, dtype=float))
@@ -218,7 +221,10 @@ def load_reference(path, n: int, *, robot: Robot | None = None):
     """A reference from the JSON of ``mindyn excite`` (its exact Fourier series) or from a CSV
     (:class:`CsvTrajectory`, e.g. the CSV ``mindyn excite`` writes) for a robot of ``n`` joints;
     raises ValueError when the file gives another number of joints, and, given ``robot``, when
-    the JSON names another robot (whose limits the excitation kept)."""
+    the JSON names another robot (whose limits the excitation kept) or the CSV's positions are
+    in degrees or millimetres (:func:`~mindyn.identification.data.check_position_units`); a
+    CSV whose velocities are not its positions' derivative is refused too
+    (:func:`~mindyn.identification.data.check_velocity_units`)."""
     _args.path(path, "path")
     n = _args.integer(n, "n", 1)
     _args.optional(_args.instance, robot, "robot", Robot)
@@ -237,7 +243,14 @@ def load_reference(path, n: int, *, robot: Robot | None = None):
                 "limits of the robot it was made for)"
             )
         return ref
-    return CsvTrajectory(p, n)
+    ref = CsvTrajectory(p, n)
+    from ..identification.data import check_position_units, check_velocity_units
+
+    if ref._dq_samples is not None:
+        check_velocity_units(ref._t, ref._samples, ref._dq_samples, str(p))
+    if robot is not None:
+        check_position_units(ref._samples, robot, str(p))
+    return ref
 
 
 @dataclass
@@ -447,21 +460,29 @@ class SimulationResult:
         """True position error ``q_true - q_d``, shape (m, n), rad."""
         return _args.readonly(self.q_true - self.qd)
 
+    @property
+    def display_scale(self) -> np.ndarray:
+        """Per joint, the factor from rad (m) to the unit of the ``*_deg`` figures: degrees for
+        a revolute joint, millimetres for a prismatic one (:func:`display_scale`)."""
+        return display_scale(self.info.get("joint_types") or ["revolute"] * self.q_true.shape[1])
+
     def max_error_deg(self, *, t_from: float = 0.0) -> np.ndarray:
-        """Largest ``|q - q_d|`` per joint in degrees, from ``t_from`` on."""
+        """Largest ``|q - q_d|`` per joint in degrees (mm on prismatic joints), from ``t_from``
+        on."""
         sel = self.t >= t_from
-        return np.degrees(np.abs(self.error[sel]).max(axis=0))
+        return self.display_scale * np.abs(self.error[sel]).max(axis=0)
 
     def rms_error_deg(self, t0: float, t1: float) -> np.ndarray:
-        """RMS position error per joint in degrees over ``t0 <= t < t1``."""
+        """RMS position error per joint in degrees (mm on prismatic joints) over
+        ``t0 <= t < t1``."""
         sel = (self.t >= t0) & (self.t < t1)
         if not np.any(sel):
             raise ArgumentError(f"no samples in [{t0}, {t1})")
-        return np.degrees(np.sqrt(np.mean(self.error[sel] ** 2, axis=0)))
+        return self.display_scale * np.sqrt(np.mean(self.error[sel] ** 2, axis=0))
 
     def final_error_deg(self) -> np.ndarray:
-        """``q - q_d`` at the last sample, degrees."""
-        return np.degrees(self.error[-1])
+        """``q - q_d`` at the last sample, degrees (mm on prismatic joints)."""
+        return self.display_scale * self.error[-1]
 
     def save(self, path, *, robot_name: str = "", joint_names=None, link_frames=None) -> Path:
         """Writes ``t, q, dq, tau`` (the logged values, torques in N m) to ``path`` as
@@ -490,6 +511,20 @@ class SimulationResult:
 # ---------------------------------------------------------------------------------------------
 # Closed loop
 # ---------------------------------------------------------------------------------------------
+def effort_limits(robot: Robot, what: str) -> np.ndarray:
+    """The robot's effort limits, one per joint, for ``what`` (the option asking for them); a
+    joint without one (missing, zero or infinite in the description) is refused, named."""
+    limit = np.asarray(robot.limits["effort"], dtype=float)
+    missing = [k for k in range(robot.n) if not np.isfinite(limit[k]) or limit[k] <= 0]
+    if missing:
+        names = ", ".join(f"{k + 1} ('{robot.joint_names[k]}')" for k in missing)
+        raise ArgumentError(
+            f"{what}: robot '{robot.name}' has no effort limits for joint(s) {names}; add them "
+            "to its description or give other limits"
+        )
+    return limit
+
+
 def _torque_limit(robot: Robot, torque_limit):
     if torque_limit is None:
         return None
@@ -497,10 +532,7 @@ def _torque_limit(robot: Robot, torque_limit):
     if isinstance(torque_limit, str):
         if torque_limit != "effort":
             raise ArgumentError(f"torque_limit must be None, 'effort' or {n} values")
-        limit = np.asarray(robot.limits["effort"], dtype=float)
-        if not np.all(np.isfinite(limit)):
-            raise ArgumentError(f"robot '{robot.name}' does not give effort limits for all joints")
-        return limit
+        return effort_limits(robot, "torque_limit='effort'")
     if np.ndim(torque_limit) == 0:
         return np.full(n, _args.number(torque_limit, "torque_limit", minimum=0.0))
     limit = _args.array(torque_limit, "torque_limit", (n,))
@@ -792,6 +824,7 @@ def simulate(
         "noise": {k: v.tolist() for k, v in arr.items()},
         "seed": seed,
         "max_tracking_error": np.abs(err).max(0).tolist(),
+        "joint_types": list(robot.joint_types),
         "seconds": time.perf_counter() - t0,
     }
     if check is not None:
@@ -1099,6 +1132,7 @@ def simulate_inverse(
         "noise": {k: v.tolist() for k, v in arr.items()},
         "seed": seed,
         "max_tracking_error": [0.0] * n,
+        "joint_types": list(robot.joint_types),
         "seconds": time.perf_counter() - t0,
     }
     if dahl is not None:
@@ -1244,8 +1278,29 @@ def noise_from_spec(
 # ---------------------------------------------------------------------------------------------
 # Report
 # ---------------------------------------------------------------------------------------------
+def display_scale(joint_types) -> np.ndarray:
+    """Per joint, the factor from rad (m) to the unit position errors are shown in: degrees on
+    revolute joints, millimetres on prismatic ones (as ``--tracking-tolerance`` takes them)."""
+    return np.array([1e3 if t == "prismatic" else 180.0 / np.pi for t in joint_types])
+
+
+def error_unit(joint_types) -> str:
+    """The unit of :func:`display_scale`'s figures in a heading: ``deg``, ``deg | mm`` or
+    ``mm``."""
+    kinds = {"mm" if t == "prismatic" else "deg" for t in joint_types}
+    return " | ".join(u for u in ("deg", "mm") if u in kinds)
+
+
+def torque_unit(joint_types) -> str:
+    """The unit of joint torques (forces on prismatic joints) in a heading: ``N m``,
+    ``N m | N`` or ``N``."""
+    kinds = {"N" if t == "prismatic" else "N m" for t in joint_types}
+    return " | ".join(u for u in ("N m", "N") if u in kinds)
+
+
 def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
-    """Figures of a run: max / final / RMS-per-cycle position errors (deg), and for adaptive runs
+    """Figures of a run: max / final / RMS-per-cycle position errors (deg; mm on prismatic
+    joints, ``error_unit``), and for adaptive runs
     the torque prediction error ``Y (p_hat - p)`` and the parameter error per cycle."""
     _args.instance(result, "result", SimulationResult)
     cycle = _args.optional(_args.number, cycle, "cycle", positive=True)
@@ -1261,11 +1316,15 @@ def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
         "max_error_deg": result.max_error_deg().tolist(),
         "final_error_deg": result.final_error_deg().tolist(),
         "cycle_s": cycle,
+        "error_unit": error_unit(result.info.get("joint_types") or ["revolute"]),
         "rms_error_deg_per_cycle": [
             result.rms_error_deg(a, b).tolist() for a, b in zip(edges[:-1], edges[1:])
         ],
         "max_error_deg_per_cycle": [
-            np.degrees(np.abs(result.error[(result.t >= a) & (result.t < b)]).max(axis=0)).tolist()
+            (
+                result.display_scale
+                * np.abs(result.error[(result.t >= a) & (result.t < b)]).max(axis=0)
+            ).tolist()
             for a, b in zip(edges[:-1], edges[1:])
         ],
         "saturated_fraction": float(result.saturated.mean()) if result.saturated is not None else 0,
@@ -1336,9 +1395,11 @@ def write_tracking_report(
         fig.savefig(folder / name, dpi=110)
         plt.close(fig)
 
+    scale = result.display_scale
+
     def error(ax, k):
-        ax.plot(result.t, np.degrees(result.error[:, k]), lw=0.8)
-        ax.set_ylabel(f"e{k + 1} [deg]")
+        ax.plot(result.t, scale[k] * result.error[:, k], lw=0.8)
+        ax.set_ylabel(f"e{k + 1} [{'mm' if scale[k] == 1e3 else 'deg'}]")
 
     def torque(ax, k):
         ax.plot(result.t, result.tau_true[:, k], lw=0.8, label="applied")
@@ -1370,8 +1431,8 @@ def write_tracking_report(
         k = np.arange(1, len(s["rms_error_deg_per_cycle"]) + 1)
         rms_e = [np.sqrt(np.mean(np.square(x))) for x in s["rms_error_deg_per_cycle"]]
         rms_t = [np.sqrt(np.mean(np.square(x))) for x in s["torque_prediction_rms_per_cycle"]]
-        ax[2].plot(k, rms_e, "o-", label="tracking error [deg]")
-        ax[2].set_ylabel("RMS tracking error [deg]")
+        ax[2].plot(k, rms_e, "o-", label=f"tracking error [{s['error_unit']}]")
+        ax[2].set_ylabel(f"RMS tracking error [{s['error_unit']}]")
         ax[2].set_xlabel(f"cycle ({s['cycle_s']:g} s each)")
         tw = ax[2].twinx()
         tw.plot(k, rms_t, "s--", color="C3", label="torque prediction error [N m]")

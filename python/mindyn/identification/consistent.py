@@ -49,6 +49,7 @@ from ..robot import Robot, load
 from .data import DataError, read_json
 from .document import (
     check_identified_robot,
+    identified_snap,
     read_identification,
     robot_on_drive_side,
     with_identified_friction,
@@ -923,7 +924,11 @@ def read_arm(robot: Robot, arm, *, where: str = "arm") -> tuple[BaseParameters, 
     robot = robot_on_drive_side(robot, arm, where=where)
     robot = with_identified_friction(robot, arm, where=where)
     base = base_parameters(
-        robot, rotor=arm["rotor"], friction=arm["friction"], offset=arm["offset"]
+        robot,
+        rotor=arm["rotor"],
+        friction=arm["friction"],
+        offset=arm["offset"],
+        snap=identified_snap(arm, where=where),
     )
     base = with_identified_state(base, arm, where)
     if arm["base_names"] != list(base.names):

@@ -281,7 +281,10 @@ def read_csv(
         ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
         named), a file that is not UTF-8 text (line and byte offset named), time not strictly
         increasing (line named), fewer than 2 samples (or too few beyond the derivatives'
-        filter edges), derivatives that overflow; a column of the map the file lacks (named,
+        filter edges), derivatives that overflow, logged velocities that are not the
+        positions' derivative over the time stamps (:func:`check_velocity_units`: time in ms,
+        velocities in deg/s, of the opposite sign); with ``robot``, positions in degrees or
+        millimetres (:func:`check_position_units`); a column of the map the file lacks (named,
         with the closest names the file has).
     ArgumentError
         A column map with an unknown quantity or unit, a quantity given twice, a pattern
@@ -418,7 +421,11 @@ def _read_csv(
         return values[:, [g[j] for j in range(1, n + 1)]]
 
     q = block("q")
+    if robot is not None:
+        check_position_units(q, robot, str(path))
     dq = block("dq")
+    if dq is not None:
+        check_velocity_units(t, q, dq, str(path))
     ddq = block("ddq")
     tau = block("tau")
     processing: dict = {"samples": values.shape[0], "first_data_line": first_line}
@@ -1046,7 +1053,7 @@ def check_log_robot(doc: dict, robot, where: str) -> None:
     if name not in (None, "") and name != robot.name:
         raise DataError(
             f"{where}: belongs to robot {_shown(name)}, not '{robot.name}' (a log of another "
-            "robot, even with as many joints, identifies nothing of this one)"
+            "robot, even with as many joints, tells nothing of this one)"
         )
     check_joint_names(doc.get("joints"), robot, where)
 
@@ -1073,6 +1080,107 @@ def check_joint_names(
         pairs = "; ".join(f"joint {k + 1} '{joints[k]}' there, '{own[k]}' here" for k in differ[:4])
         more = f" and {len(differ) - 4} more" if len(differ) > 4 else ""
         raise error(f"{where}: its joints are not those of robot '{robot.name}': {pairs}{more}")
+
+
+#: Per joint type: the unit of a log's positions, the unit a log is most often written in by
+#: mistake, that unit's size in the right one, and a magnitude that a position in the right
+#: unit outside the joint's limits rarely reaches (a full turn, a metre).
+_MISTAKEN_UNITS = {
+    "revolute": ("rad", "degrees", math.pi / 180.0, 2.0 * math.pi),
+    "prismatic": ("m", "millimetres", 1e-3, 1.0),
+}
+
+
+def check_position_units(q, robot, source: str) -> None:
+    """Refuses joint positions ``q`` (samples x joints) that are in degrees (millimetres for
+    prismatic joints) instead of radians (metres): some joint of that type leaves its limits by
+    more than half their range and reaches beyond a full turn (1 m), and read in that unit
+    every joint of the type with limits lies within them to the same margin. A log that only
+    oversteps a description's limits (a calibration offset, a limit set tighter than the
+    hardware's) is not refused. Robots with joints of several degrees of freedom are not
+    checked (their positions hold quaternions)."""
+    from ..robot import Robot
+
+    _args.instance(robot, "robot", Robot)
+    q = np.asarray(q, dtype=float)
+    if not robot.single_dof or q.ndim != 2 or q.shape[1] != robot.n or q.shape[0] == 0:
+        return
+    lower, upper = robot.limits["lower"], robot.limits["upper"]
+    lo, hi = q.min(axis=0), q.max(axis=0)
+    for kind, (unit, other, size, far) in _MISTAKEN_UNITS.items():
+        joints = [
+            k
+            for k, t in enumerate(robot.joint_types)
+            if t == kind and np.isfinite(lower[k]) and np.isfinite(upper[k]) and upper[k] > lower[k]
+        ]
+        if not joints:
+            continue
+        margin = {k: 0.5 * (upper[k] - lower[k]) for k in joints}
+        out = [
+            k
+            for k in joints
+            if (lo[k] < lower[k] - margin[k] or hi[k] > upper[k] + margin[k])
+            and max(-lo[k], hi[k]) > far
+        ]
+        inside = all(
+            lo[k] * size >= lower[k] - margin[k] and hi[k] * size <= upper[k] + margin[k]
+            for k in joints
+        )
+        if not out or not inside:
+            continue
+        k = out[0]
+        v = lo[k] if lower[k] - lo[k] > hi[k] - upper[k] else hi[k]
+        raise DataError(
+            f"{source}: the positions of joint {k + 1} ('{robot.joint_names[k]}') reach {v:.4g}, "
+            f"beyond its limits [{lower[k]:.4g}, {upper[k]:.4g}] {unit} by more than half their "
+            f"range and beyond {far:.4g} {unit}, and read as {other} every {kind} joint's "
+            "positions lie within its limits: "
+            f"its positions seem to be in {other}; convert its {kind} joints' positions, "
+            f"velocities and accelerations to {unit}"
+        )
+
+
+#: A joint whose logged velocity and the derivative of its logged position correlate at least
+#: this much is in the velocity check; the ratio of the two must lie within these bounds.
+VELOCITY_CHECK_CORRELATION = 0.9
+VELOCITY_RATIO_BOUNDS = (0.2, 5.0)
+#: Fewest samples for that correlation to judge (two unrelated signals of 20 samples correlate
+#: that much with a probability of about 1e-7)
+VELOCITY_CHECK_SAMPLES = 20
+
+
+def check_velocity_units(t, q, dq, source: str) -> None:
+    """Refuses logged velocities ``dq`` that are not the derivative of the logged positions
+    ``q`` over the time stamps ``t`` (samples x joints): per joint whose two signals correlate
+    (:data:`VELOCITY_CHECK_CORRELATION`, in magnitude: a joint held still is not judged; a log
+    of fewer than :data:`VELOCITY_CHECK_SAMPLES` samples neither), the
+    least-squares ratio ``d/dt q ~ k dq`` must lie within :data:`VELOCITY_RATIO_BOUNDS`. Time
+    stamps in milliseconds give k = 1e-3, velocities in deg/s beside positions in rad 1/57.3, a
+    velocity of the opposite sign -1; real logs give k within 1 % of 1."""
+    t, q, dq = (np.asarray(a, dtype=float) for a in (t, q, dq))
+    if t.size < VELOCITY_CHECK_SAMPLES or q.shape != dq.shape:
+        return
+    with np.errstate(all="ignore"):
+        fd = np.gradient(q, t, axis=0)
+        fd0, dq0 = fd - fd.mean(axis=0), dq - dq.mean(axis=0)
+        corr = (fd0 * dq0).sum(axis=0) / np.sqrt((fd0**2).sum(axis=0) * (dq0**2).sum(axis=0))
+        k = (fd * dq).sum(axis=0) / (dq**2).sum(axis=0)
+    low, high = VELOCITY_RATIO_BOUNDS
+    for j in range(q.shape[1]):
+        if not (np.isfinite(corr[j]) and np.isfinite(k[j])):
+            continue
+        if abs(corr[j]) >= VELOCITY_CHECK_CORRELATION and not low <= k[j] <= high:
+            causes = (
+                "a velocity column of the opposite sign"
+                if k[j] < 0
+                else "time stamps in milliseconds (1000), velocities in degrees per second "
+                "beside positions in radians (57.3), or other units"
+            )
+            raise DataError(
+                f"{source}: the velocity dq{j + 1} is {1 / k[j]:.4g} times the derivative "
+                f"of q{j + 1} over the time stamps (correlation {corr[j]:.3f}; expected 1): "
+                f"{causes}; t in s, positions in rad (m), velocities in rad/s (m/s)"
+            )
 
 
 def _shown(value) -> str:

@@ -145,6 +145,27 @@ def identified_robot_record(robot: Robot) -> dict:
     }
 
 
+def identified_snap(doc: dict, *, where: str = "identification JSON"):
+    """The ``snap=`` of :func:`mindyn.base_parameters` that the identification ``doc`` had
+    (``base_snap``: ``mode`` auto, off or given with its ``tolerance``): "auto", False or the
+    tolerance; "auto" for a document that does not record it."""
+    _args.mapping(doc, "doc")
+    record = doc.get("base_snap")
+    if record is None:
+        return "auto"
+    mode = record.get("mode") if isinstance(record, dict) else None
+    if mode not in ("auto", "off", "given"):
+        raise DataError(
+            f"{where}: 'base_snap' is {_kind(record)}; expected {{mode: auto, off or given, ...}}"
+        )
+    if mode == "given":
+        tol = record.get("tolerance")
+        if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 0 < tol < 1:
+            raise DataError(f"{where}: 'base_snap' tolerance is {_kind(tol)}; expected (0, 1)")
+        return float(tol)
+    return "auto" if mode == "auto" else False
+
+
 def robot_on_drive_side(robot: Robot, doc: dict, *, where: str = "identification JSON") -> Robot:
     """``robot`` with rotor inertia and friction where the identification ``doc`` had them
     (``drive_side``; a document without it was identified with them on the joints)."""

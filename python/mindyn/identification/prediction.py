@@ -17,6 +17,7 @@ from ..robot import Robot, load
 from .data import DataError
 from .document import (
     check_identified_robot,
+    identified_snap,
     read_identification,
     robot_on_drive_side,
     with_identified_friction,
@@ -118,6 +119,7 @@ def identified_model(
         rotor=bool(doc.get("rotor")),
         friction=bool(doc.get("friction")),
         offset=bool(doc.get("offset")),
+        snap=identified_snap(doc, where=where),
     )
     base = with_identified_state(base, doc, where)
     src: dict = doc

@@ -50,7 +50,7 @@ def _gains(opts: ReadingOptions, n: int) -> np.ndarray | None:
 
 
 def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
-    from .data import convert_torque
+    from .data import check_position_units, check_velocity_units, convert_torque
     from .rosbag import read_rosbag
 
     current = unit == "current"
@@ -62,6 +62,9 @@ def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
         filter="none" if opts.filter == "lowpass" else opts.filter,
         cutoff=opts.cutoff,
     )
+    check_position_units(data.q, robot, str(path))
+    if data.dq is not None:
+        check_velocity_units(data.t, data.q, data.dq, str(path))
     if current:  # effort in A: the gains (given or of the drive table) turn it into N m
         assert data.tau is not None  # read with its effort column
         tau, info = convert_torque(data.tau, "current", robot, drive_gain=gain)
@@ -186,9 +189,11 @@ def read_log(
     (:func:`~mindyn.identification.preprocess.split_at_gaps`) and each segment through
     :func:`~mindyn.identification.preprocess.preprocess` (``cutoff`` overrides the options';
     periods averaged only when ``periodic``; decimated when ``decimate`` and the options allow);
-    otherwise one log. A filter that cannot be designed at the cut-off is named as such."""
+    otherwise one log. A filter that cannot be designed at the cut-off is named as such, and a
+    simulated log whose truth sidecar names another robot is refused."""
     opts = options or ReadingOptions()
-    raws = _raw([path], robot, opts, [currents], require_torque)
+    # truth=[]: a simulated log whose truth sidecar names another robot is refused
+    raws = _raw([path], robot, opts, [currents], require_torque, truth=[])
     return _processed([path], raws, opts, cutoff, periodic, decimate and opts.decimate)[0]
 
 
