@@ -420,14 +420,7 @@ def _read_csv(
             return None
         return values[:, [g[j] for j in range(1, n + 1)]]
 
-    q = block("q")
-    if robot is not None:
-        check_position_units(q, robot, str(path))
-    dq = block("dq")
-    if dq is not None:
-        check_velocity_units(t, q, dq, str(path))
-    ddq = block("ddq")
-    tau = block("tau")
+    q, dq, ddq, tau = block("q"), block("dq"), block("ddq"), block("tau")
     processing: dict = {"samples": values.shape[0], "first_data_line": first_line}
     if cmap is not None:  # the map's units: seconds and radians
         from .columns import converted, record
@@ -435,6 +428,11 @@ def _read_csv(
         got, units = converted({"t": t, "q": q, "dq": dq, "ddq": ddq}, cmap, robot)
         t, q, dq, ddq = got["t"], got["q"], got["dq"], got["ddq"]
         processing["columns"] = record(cmap, cols["ignored"], units)
+    # in seconds and radians (metres), a map's units converted
+    if robot is not None:
+        check_position_units(q, robot, str(path))
+    if dq is not None:
+        check_velocity_units(t, q, dq, str(path))
     header_unit = cols["torque_unit"]
     said = "the header" if cmap is None else "the column map"
     if tau is not None and header_unit is not None:
