@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .. import _sidecar
 from .._core import OFFSET_PREFIX as OFF
 from .._mujoco import is_mjcf
 from .args import add_command
@@ -170,7 +171,7 @@ def cmd_info(args: argparse.Namespace) -> int:
     )
     names = ["XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M", "Ia", "Fv", "Fc"]
     model = robot.friction_model if robot.single_dof else {"kind": "coulomb"}
-    third = {"asymmetric": "Fa", "stribeck": "Fs"}.get(model["kind"])
+    third = _sidecar.FRICTION_MODELS[model["kind"]][0]
     wl = max([10] + [len(x) + 1 for x in robot.link_names[1:]])  # link-name column
     out.append(f"{'link':<{wl}}" + "".join(f"{c:>11}" for c in names + ([third] if third else [])))
     p = robot.params.reshape(n, 10)
@@ -182,17 +183,11 @@ def cmd_info(args: argparse.Namespace) -> int:
         row = list(p[k]) + list(extra[k])
         out.append(f"{robot.link_names[k + 1]:<{wl}}" + "".join(f"{v:11.4g}" for v in row))
     out.append(f"total moving mass {p[:, 9].sum():.4g} kg")
-    if model["kind"] != "coulomb":
-        formula = {
-            "asymmetric": "Fv v + Fc sign(v) + Fa |sign(v)|",
-            "smooth": "Fv v + Fc tanh(v / w)",
-            "stribeck": "Fv v + Fc sign(v) + Fs sign(v) exp(-(v / w)^2)",
-        }[model["kind"]]
-        line = f"friction model {model['kind']}: {formula}"
-        if len(model["velocity"]):
-            what = "tanh width" if model["kind"] == "smooth" else "Stribeck velocity"
-            line += f"; {what} w [rad/s | m/s]: " + " ".join(f"{v:.4g}" for v in model["velocity"])
-        out.append(line)
+    if model["kind"] != "coulomb":  # as identify states it
+        from ..identification.friction import friction_lines
+
+        lines = friction_lines(robot, record={"chosen_by": "as loaded"})
+        out.extend(line[2:] for line in lines)
     out.extend(_offset_lines(robot, w))
     if robot.transmission is not None and robot.transmission.n_motors != n:
         out += [

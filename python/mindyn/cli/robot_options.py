@@ -113,7 +113,7 @@ def joint_terms_line(args: argparse.Namespace, robot, sidecar) -> str:
             f"and offsets included, are those of {values})"
         )
     side = getattr(args, "drive_side", None)
-    drives = [k for k in terms if k in ("Ia", "Fv", "Fc", "Fa", "Fs")]
+    drives = [k for k in terms if k != _sidecar.OFF]  # rotor inertia and friction
     if drives and side is not None and side != robot.drive_side:
         raise UsageError(
             f"--drive-side {side}: the rotor inertia and friction of {path} act on the "
