@@ -1276,6 +1276,30 @@ def identify(
     settings["std_correlation"] = _variance_factor_record(inflation, rule, measured, measured_rule)
     inflation = settings["std_correlation"]["variance_factor"]
 
+    return _pruned_result(
+        model, base, ls, settings, inflation, rsd_threshold,
+        weighted=weighted, joint_sigma=joint_sigma, cond=cond, t0=t0,
+    )  # fmt: skip
+
+
+def _pruned_result(
+    model: str,
+    base: BaseParameters,
+    ls: _Reduced,
+    settings: dict,
+    inflation: float,
+    rsd_threshold: float | None,
+    *,
+    weighted: bool,
+    joint_sigma,
+    cond: float,
+    t0: float,
+) -> IdentificationResult:
+    """The estimate of the reduced problem ``ls`` (its variance times ``inflation``) pruned at
+    ``rsd_threshold`` (None or <= 0: every base parameter kept), as :func:`identify` returns
+    it; ``settings`` (the fit's, without the pruning's entries) gets the pruning's."""
+    names, nb = list(base.names), base.n
+
     def solve(cols):
         return ls.solve(cols, inflation=inflation)
 
@@ -1339,3 +1363,19 @@ def identify(
         seconds=time.perf_counter() - t0,
         reduced=ls,
     )
+
+
+@single_threaded_blas
+def repruned(res: IdentificationResult, rsd_threshold: float | None) -> IdentificationResult:
+    """``res`` pruned at ``rsd_threshold`` instead (None or <= 0: every base parameter kept):
+    what :func:`identify` returns for the same data and options with that threshold, from the
+    least-squares problem ``res`` carries, without forming it again."""
+    if res.reduced is None:
+        raise IdentificationError("the identification result carries no least-squares problem")
+    own = ("warnings", "pruning_std", "rsd_threshold")  # the pruning's entries
+    settings = {k: v for k, v in res.settings.items() if k not in own}
+    return _pruned_result(
+        res.model, res.base, res.reduced, settings, noise_variance_factor(res), rsd_threshold,
+        weighted=res.weighted, joint_sigma=res.joint_sigma, cond=res.cond,
+        t0=time.perf_counter() - res.seconds,
+    )  # fmt: skip

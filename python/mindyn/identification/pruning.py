@@ -59,7 +59,7 @@ def choose_pruning(robot, base, logs, *, fit: dict, folds: int | None = None, pr
     parameters the whole fit removes, the summed held-out residual, per fold, and the standard
     error of its excess over the smallest) and ``smallest``. When the default threshold
     removes nothing there is nothing to decide (``chosen_by``: ``nothing to prune``)."""
-    from .estimation import identify
+    from .estimation import identify, repruned
     from .held_out import held_out_residuals, within_one_error
     from .prior import FOLDS
 
@@ -100,8 +100,8 @@ def choose_pruning(robot, base, logs, *, fit: dict, folds: int | None = None, pr
             + ", ".join(f"{_label(t)} {s:.4g}" for t, s in scores.items())
         )
     removed = {threshold: len(res.removed), None: 0}
-    if chosen is None:
-        res = identify(robot, logs, base=base, rsd_threshold=None, **fit)
+    if chosen is None:  # the same least-squares problem, every parameter kept
+        res = repruned(res, None)
     res.settings["pruning_choice"] = {
         "chosen_by": "held-out data",
         "rsd_threshold": chosen,
