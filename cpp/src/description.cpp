@@ -227,15 +227,17 @@ Eigen::Matrix<double, 10, 1> readInertial(const Ctx& c, const YAML::Node& node) 
 
 namespace {
 
-/// Records where documents start and nothing else.
+/// Records where documents start and where quoted scalars start, nothing else.
 class DocumentStarts : public YAML::EventHandler {
  public:
   void OnDocumentStart(const YAML::Mark& mark) override { starts.push_back(mark); }
   void OnDocumentEnd() override {}
   void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
   void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
-                const std::string&) override {}
+  void OnScalar(const YAML::Mark& mark, const std::string& tag, YAML::anchor_t,
+                const std::string&) override {
+    if (tag == "!") quoted.push_back(mark);  // the non-specific tag of a quoted scalar
+  }
   void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
                        YAML::EmitterStyle::value) override {}
   void OnSequenceEnd() override {}
@@ -243,16 +245,42 @@ class DocumentStarts : public YAML::EventHandler {
                   YAML::EmitterStyle::value) override {}
   void OnMapEnd() override {}
   std::vector<YAML::Mark> starts;
+  std::vector<YAML::Mark> quoted;
 };
 
-/// The start of a second document in `yaml`, or a null mark. Parses at most two documents:
+/// Whether the quoted scalar opening at `pos` of `yaml` is closed: yaml-cpp takes a quote left
+/// open as a scalar running to the end of the text, where YAML (and PyYAML) refuse it. In double
+/// quotes a backslash escapes the next character; in single quotes a doubled quote is one.
+bool quoteClosed(const std::string& yaml, std::size_t pos) {
+  if (pos >= yaml.size() || (yaml[pos] != '"' && yaml[pos] != '\'')) return true;  // not a quote
+  const char q = yaml[pos];
+  for (std::size_t k = pos + 1; k < yaml.size(); ++k) {
+    if (q == '"' && yaml[k] == '\\') {
+      ++k;
+    } else if (yaml[k] == q) {
+      if (q == '\'' && k + 1 < yaml.size() && yaml[k + 1] == '\'') {
+        ++k;
+      } else {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+/// Where a second document starts in `yaml` (`second`, or a null mark), after checking that
+/// every quoted scalar of the first two documents is closed. Parses at most two documents:
 /// YAML::LoadAll of this yaml-cpp can loop forever, allocating, on a stray ',' or ']'.
-YAML::Mark secondDocument(const std::string& yaml) {
+YAML::Mark secondDocument(const std::string& yaml, const std::string& source) {
   std::istringstream in(yaml);
   YAML::Parser parser(in);
   DocumentStarts starts;
   for (int k = 0; k < 2 && parser.HandleNextDocument(starts); ++k) {
   }
+  for (const YAML::Mark& m : starts.quoted)
+    if (m.pos >= 0 && !quoteClosed(yaml, static_cast<std::size_t>(m.pos)))
+      throw ModelError(at(source, m) +
+                       ": not valid YAML: the quoted text starting here is never closed");
   return starts.starts.size() > 1 ? starts.starts[1] : YAML::Mark::null_mark();
 }
 
@@ -278,7 +306,7 @@ Model parseDocument(const std::string& yaml, const std::string& source) {
   YAML::Mark second;  // where a second document starts, if there is one
   try {
     root = YAML::Load(yaml);
-    second = secondDocument(yaml);
+    second = secondDocument(yaml, source);
   } catch (const YAML::Exception& e) {
     throw ModelError(at(source, e.mark) + ": not valid YAML: " + e.msg);
   }

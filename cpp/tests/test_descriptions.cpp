@@ -451,6 +451,11 @@ TEST(Yaml, TypeErrorsNameFileLineAndKey) {
       {"name: r\nconvention: dh\nsynthetic_inertia: maybe\njoints:\n  - {a: 1}\n",
        "y.yaml:3:20: 'synthetic_inertia' must be true or false"},
       {base + "---\n" + base, "y.yaml:5:1: a second YAML document starts here"},
+      // yaml-cpp reads a quote left open as text running to the end of the file
+      {"name: \"r\nconvention: dh\njoints:\n  - {a: 1}\n",
+       "y.yaml:1:7: not valid YAML: the quoted text starting here is never closed"},
+      {"convention: dh\njoints:\n  - name: 'j\n    a: 1\n",
+       "y.yaml:3:11: not valid YAML: the quoted text starting here is never closed"},
       // yaml-cpp's LoadAll loops forever, allocating, on this (a stray flow end)
       {", 0.1]}}\n", "y.yaml"},
   };
