@@ -28,7 +28,7 @@ from . import _args, _sidecar
 from ._args import ArgumentError
 from ._core import OFFSET_PREFIX as _OFF
 from ._core import ModelError, RobotFileNotFoundError
-from .robot import Robot, _direct_drives
+from .robot import Robot, _direct_drives, _reflected
 
 __all__ = [
     "Export",
@@ -210,13 +210,13 @@ def _joint_side_terms(
             continue
         k, r = direct
         if terms.rotor is not None and out.rotor is not None:
-            out.rotor[j] = r * r * terms.rotor[k]
+            out.rotor[j] = _reflected("rotor", r) * terms.rotor[k]
         if terms.viscous is not None and out.viscous is not None:
             assert terms.coulomb is not None and out.coulomb is not None  # given with viscous
-            out.viscous[j] = r * r * terms.viscous[k]
-            out.coulomb[j] = abs(r) * terms.coulomb[k]
+            out.viscous[j] = _reflected("viscous", r) * terms.viscous[k]
+            out.coulomb[j] = _reflected("coulomb", r) * terms.coulomb[k]
             if terms.third is not None and out.third is not None:  # as the loader divides
-                out.third[j] = (r if terms.third_name == "Fa" else abs(r)) * terms.third[k]
+                out.third[j] = _reflected(terms.third_name, r) * terms.third[k]
     notes = [
         "rotor inertia and friction on the motors: each directly driven joint carries its "
         "motor's as they act on the joint (r^2 Ia, r^2 Fv, |r| Fc, r the reduction)"

@@ -663,7 +663,8 @@ class Robot:
                 for k in range(self.n):
                     if k in driven:
                         j, r = driven[k]
-                        joint_third[j] = (r if kind == "asymmetric" else abs(r)) * third[k]
+                        third_name = "Fa" if kind == "asymmetric" else "Fs"
+                        joint_third[j] = _reflected(third_name, r) * third[k]
                     elif third[k] != 0:
                         motor = robot.transmission.motors[k] if robot.transmission else k + 1
                         raise _args.fail(
@@ -678,7 +679,7 @@ class Robot:
                 for j, d in enumerate(direct):
                     if d is not None:
                         k, r = d
-                        reflected[j] = (abs(r) if name == "coulomb" else r * r) * v[k]
+                        reflected[j] = _reflected(name, r) * v[k]
                 kw[name] = reflected
         else:
             kw.update(given)
@@ -1149,6 +1150,20 @@ class Robot:
 
     def __repr__(self) -> str:
         return f"Robot(name={self.name!r}, n={self.n}, convention={self.convention!r})"
+
+
+def _reflected(term: str, r: float) -> float:
+    """The factor that carries a motor's drive term ``term`` (``rotor``, ``viscous``,
+    ``coulomb``, or a third friction term ``Fa`` / ``Fs``) to the one joint it drives alone
+    through the reduction ``r`` (``q_m = r q``, ``tau = r tau_m``): ``r^2`` for the rotor inertia
+    and viscous friction, ``|r|`` for Coulomb and Stribeck levels, ``r`` for the asymmetric
+    term, whose sign follows the direction of turning."""
+    if term in ("rotor", "viscous"):
+        return r * r
+    if term == "Fa":
+        return r
+    assert term in ("coulomb", "Fs"), term
+    return abs(r)
 
 
 def _direct_drives(T: np.ndarray) -> list:
