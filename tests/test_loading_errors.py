@@ -756,3 +756,102 @@ def test_mutated_files_load_or_fail_with_our_error(tmp_path, name, good, load):
         _outcome_is_ours(path, load)
 
     check()
+
+
+# --------------------------------------------------------------------------------------------
+# rotor inertia and friction are >= 0 wherever a robot gets them
+# --------------------------------------------------------------------------------------------
+NEGATIVE_TERMS = [
+    ("r.yaml", ("{name: a,", "{name: a, rotor_inertia: -0.5,"), r"'rotor_inertia' is -0.5"),
+    ("r.yaml", ("{name: b,", "{name: b, friction: {viscous: -1},"), r"'viscous' is -1"),
+    ("r.yaml", ("{name: b,", "{name: b, friction: {coulomb: -0.2},"), r"'coulomb' is -0.2"),
+    ("r.urdf", '<dynamics damping="-0.5"/>', r'damping="-0.5".*: friction cannot be negative'),
+    ("r.urdf", '<dynamics friction="-0.1"/>', r'friction="-0.1".*: friction cannot be negative'),
+    ("r.xml", 'damping="-1"', r"joint 'j1' \(body 'l1'\) has damping=-1.0"),
+    ("r.xml", 'armature="-0.001"', r"joint 'j1' \(body 'l1'\) has armature=-0.001"),
+    ("r.xml", 'frictionloss="-0.2"', r"joint 'j1' \(body 'l1'\) has frictionloss=-0.2"),
+]
+
+
+def _description(name: str, item: str) -> str:
+    """A two-joint URDF or MJCF whose first joint carries ``item``."""
+    if name.endswith(".urdf"):
+        return urdf(
+            joint("j1", "base", "l1", extra=item) + joint("j2", "l1", "l2"),
+            link("l1") + link("l2"),
+        )
+    return (
+        '<mujoco><worldbody><body name="l1"><joint name="j1" type="hinge" axis="0 0 1" '
+        f'{item}/><geom type="sphere" size="0.1" mass="1"/><body name="l2" pos="0.3 0 0">'
+        '<joint name="j2" type="hinge" axis="0 0 1"/><geom type="sphere" size="0.1" mass="1"/>'
+        "</body></body></worldbody></mujoco>"
+    )
+
+
+@pytest.mark.parametrize("name, change, match", NEGATIVE_TERMS)
+def test_negative_rotor_inertia_or_friction_in_a_description_is_refused(
+    tmp_path, name, change, match
+):
+    """A negative damping, friction, armature or rotor inertia loaded silently from a URDF,
+    YAML table or MJCF (MuJoCo compiles them too); joint-terms files and with_joint_terms
+    refused them. Now every description refuses them in one line naming the file (and the
+    entry); zero loads."""
+    if name.endswith(".yaml"):
+        text = GOOD_YAML.replace(*change)
+        zero = GOOD_YAML.replace(change[0], re.sub(r"-[0-9.]+", "0", change[1]))
+    else:
+        negative = re.search(r"-[0-9.]+", change).group(0)
+        text, zero = _description(name, change), _description(name, change.replace(negative, "0"))
+    path = write(tmp_path, name, text)
+    with pytest.raises(mindyn.ModelError, match=match) as e:
+        mindyn.load(path)
+    assert str(e.value).startswith(str(path)) and "\n" not in str(e.value)
+    assert np.all(mindyn.load(write(tmp_path, "zero" + path.suffix, zero)).viscous == 0)
+
+
+def test_yaml_negative_term_error_names_its_line_and_column(tmp_path):
+    path = write(tmp_path, "r.yaml", GOOD_YAML.replace("{name: b,", "{name: b, rotor_inertia: -2,"))
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load(path)
+    line, column = map(int, re.search(r"r\.yaml:(\d+):(\d+): ", str(e.value)).groups())
+    assert path.read_text().splitlines()[line - 1][column - 1 :].startswith("-2,")
+    assert "joint 2 ('b'): 'rotor_inertia' is -2; rotor inertia and friction are >= 0" in str(
+        e.value
+    )
+
+
+@pytest.mark.parametrize("name", ["rotor_inertia", "viscous", "coulomb"])
+def test_robot_drive_terms_refuse_negative_values(name):
+    robot = mindyn.load("planar3")
+    with pytest.raises(mindyn.ArgumentError, match=rf"{name} has -0.5 at entry 2; .* >= 0"):
+        setattr(robot, name, [0.1, -0.5, 0.2])
+    setattr(robot, name, [0.1, 0.0, 0.2])
+    assert list(getattr(robot, name)) == [0.1, 0.0, 0.2]
+
+
+def test_export_refuses_a_negative_friction_estimate(tmp_path):
+    """An unconstrained estimate may hold a negative viscous friction; a URDF written with it
+    would not load (a description's friction is >= 0): export refuses it, naming it."""
+    from mindyn.export import write_urdf
+
+    robot = mindyn.load(write(tmp_path, "r.urdf", GOOD_URDF))
+    names = robot.parameter_names(friction=True)
+    p = robot.parameters(friction=True).copy()
+    p[names.index("Fv2")] = -0.05
+    with pytest.raises(mindyn.ModelError, match=r"Fv2 = -0.05 is negative; .* consistent=True"):
+        write_urdf(robot, p, tmp_path / "out.urdf")
+    assert not (tmp_path / "out.urdf").exists()
+    p[names.index("Fv2")] = 0.05
+    write_urdf(robot, p, tmp_path / "out.urdf")
+    assert mindyn.load(tmp_path / "out.urdf").viscous[1] == pytest.approx(0.05, rel=1e-15)
+
+
+def test_yaml_joint_names_must_be_unique(tmp_path):
+    """Two YAML joints of one name loaded (a URDF's are refused), and a transmission naming it
+    then failed with a message that hid the cause."""
+    path = write(tmp_path, "r.yaml", GOOD_YAML.replace("{name: b,", "{name: a,"))
+    with pytest.raises(
+        mindyn.ModelError,
+        match=r"r\.yaml:5:12: joint 2: the name 'a' is joint 1's too; joint names must be unique",
+    ):
+        mindyn.load(path)

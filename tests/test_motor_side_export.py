@@ -128,6 +128,10 @@ def test_per_motor_values_in_the_list_form_and_their_check(tmp_path):
     assert p[10] == pytest.approx(joint1["rotor_inertia"] / 50.0**2, rel=1e-15)
     motors[5]["viscous"] = -1.0
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
-    with pytest.raises(mindyn.ModelError, match="motor 'm6': its viscous is -1") as e:
+    with pytest.raises(
+        mindyn.ModelError,
+        match=r"list\.yaml:\d+:\d+: transmissions, motor 6 \('m6'\): 'viscous' is -1; rotor "
+        "inertia and friction are >= 0",
+    ) as e:
         mindyn.load(path)
     assert "\n" not in str(e.value)

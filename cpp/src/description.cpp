@@ -156,6 +156,15 @@ double optional(const Ctx& c, const YAML::Node& map, const std::string& key, dou
   return number(c, n, key);
 }
 
+/// An optional rotor inertia or friction entry (default 0), refused where negative.
+double driveTerm(const Ctx& c, const YAML::Node& map, const std::string& key) {
+  const double v = optional(c, map, key, 0.0);
+  if (v < 0.0)
+    c.fail("'" + key + "' is " + formatNumber(v) + "; rotor inertia and friction are >= 0",
+           map[key]);
+  return v;
+}
+
 Eigen::Vector3d vec3(const Ctx& c, const YAML::Node& node, const std::string& key) {
   if (!node.IsSequence() || node.size() != 3)
     c.fail("'" + key + "' must be a list of 3 numbers", node);
@@ -377,7 +386,14 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
          {std::pair<const char*, std::vector<double>*>{"rotor_inertia", &motor_terms[0]},
           {"viscous", &motor_terms[1]},
           {"coulomb", &motor_terms[2]}})
-      if (node[key].IsDefined()) *v = numbers(c, node[key], key, m);
+      if (node[key].IsDefined()) {
+        *v = numbers(c, node[key], key, m);
+        for (size_t i = 0; i < m; ++i)
+          if ((*v)[i] < 0.0)
+            c.fail("'" + std::string(key) + "' of motor " + std::to_string(i + 1) + " is " +
+                       formatNumber((*v)[i]) + "; rotor inertia and friction are >= 0",
+                   node[key][i]);
+      }
   } else if (node.IsSequence() && node.size() > 0) {
     std::map<std::string, size_t> index;
     for (size_t k = 0; k < n; ++k) index[model.joints[k].name] = k;
@@ -408,7 +424,7 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
       const char* keys[3] = {"rotor_inertia", "viscous", "coulomb"};
       for (int t = 0; t < 3; ++t) {
         motor_terms[t].resize(i - 1, kNaN);  // the motors before, without
-        motor_terms[t].push_back(optional(c, e, keys[t], kNaN));
+        motor_terms[t].push_back(e[keys[t]].IsDefined() ? driveTerm(c, e, keys[t]) : kNaN);
       }
     }
   } else {
@@ -488,6 +504,11 @@ Model build(const Ctx& start, const YAML::Node& root) {
     c.where = "joint " + std::to_string(k + 1);
     if (!jn.IsMap()) c.fail("a joint must be a mapping, got " + std::string(kindName(jn)), jn);
     j.name = text(c, jn, "name", "joint" + std::to_string(k + 1));
+    for (int e = 0; e < k; ++e)
+      if (model.joints[static_cast<size_t>(e)].name == j.name)
+        c.fail("the name '" + j.name + "' is joint " + std::to_string(e + 1) +
+                   "'s too; joint names must be unique",
+               jn["name"].IsDefined() ? jn["name"] : jn);
     c.where = "joint " + std::to_string(k + 1) + " ('" + j.name + "')";
     std::set<std::string> allowed = geo;
     allowed.insert({"name", "type", "limits", "drive", "inertial", "rotor_inertia", "friction",
@@ -576,11 +597,11 @@ Model build(const Ctx& start, const YAML::Node& root) {
     }
     if (jn["inertial"].IsDefined())
       model.inertial.segment<10>(10 * k) = readInertial(c, jn["inertial"]);
-    model.rotor_inertia[k] = optional(c, jn, "rotor_inertia", 0.0);
+    model.rotor_inertia[k] = driveTerm(c, jn, "rotor_inertia");
     if (jn["friction"].IsDefined()) {
       checkKeys(c, jn["friction"], {"viscous", "coulomb"}, "friction");
-      model.viscous[k] = optional(c, jn["friction"], "viscous", 0.0);
-      model.coulomb[k] = optional(c, jn["friction"], "coulomb", 0.0);
+      model.viscous[k] = driveTerm(c, jn["friction"], "viscous");
+      model.coulomb[k] = driveTerm(c, jn["friction"], "coulomb");
     }
     model.link_names.push_back(text(c, jn, "link", "link" + std::to_string(k + 1)));
     model.joints.push_back(j);

@@ -310,6 +310,12 @@ class NumberCheck {
       checkElement(e, spec);
       if (element == "dynamics" && !e->Attribute("damping") && !e->Attribute("friction"))
         fail(e, "<dynamics> has neither damping nor friction");
+      if (element == "dynamics")
+        for (const char* a : {"damping", "friction"}) {
+          double v = 0.0;
+          if (e->Attribute(a) && readDecimal(e->Attribute(a), &v).empty() && v < 0.0)
+            fail(e, show(e, a, e->Attribute(a)) + ": friction cannot be negative");
+        }
       if (element == "limit")
         for (const char* a : {"effort", "velocity"}) {
           double v = 0.0;

@@ -157,6 +157,13 @@ def check(m, path) -> None:
                 f"{where} has a spring (stiffness {float(m.jnt_stiffness[j])!r}); joint "
                 "springs are not in the model"
             )
+        dof = int(m.jnt_dofadr[j])
+        for key in ("armature", "damping", "frictionloss"):
+            value = float(getattr(m, "dof_" + key)[dof])
+            if value < 0:
+                raise _core.ModelError(
+                    f"{where} has {key}={value!r}; rotor inertia and friction are >= 0"
+                )
         kind = _multi_dof_kinds().get(int(m.jnt_type[j]))
         if kind:
             _no_drive_terms(m, j, path, kind)
@@ -184,6 +191,12 @@ def check(m, path) -> None:
         )
     for t in range(m.ntendon):
         terms = tendon_terms(m, t)
+        for key, value in terms.items():
+            if key in ("armature", "damping", "frictionloss") and value < 0:
+                raise _core.ModelError(
+                    f"{path}: tendon '{tendon_name(m, t)}' has {key}={float(value)!r}; rotor "
+                    "inertia and friction are >= 0"
+                )
         given = [f"{k} {float(v)!r}" for k, v in terms.items() if v != 0]
         if not given:
             continue

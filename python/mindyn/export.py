@@ -85,12 +85,28 @@ def classical_terms(robot: Robot, classical, *, what: str = "classical parameter
     of its friction model), optionally with ``Off1 .. OffN``, or a vector in a classical layout
     (per joint 10, 11 with rotor inertia, 10 + c with friction of ``c`` columns, 11 + c with
     both); anything else (names missing or unknown, a value that is not a finite number) is an
-    :class:`~mindyn.ArgumentError`. ``what`` names the input in error messages."""
+    :class:`~mindyn.ArgumentError`; a negative rotor inertia or friction value (``Ia``, ``Fv``,
+    ``Fc``) a :class:`~mindyn.ModelError`. ``what`` names the input in error messages."""
     _args.instance(robot, "robot", Robot)
     _args.text(what, "what")
-    n = robot.n
     if isinstance(classical, Mapping):
-        return _from_mapping(robot, classical, what)
+        terms = _from_mapping(robot, classical, what)
+    else:
+        terms = _from_vector(robot, classical, what)
+    for key, values in (("Ia", terms.rotor), ("Fv", terms.viscous), ("Fc", terms.coulomb)):
+        if values is None or not np.any(values < 0):
+            continue
+        k = int(np.flatnonzero(values < 0)[0])
+        raise ModelError(
+            f"{what}: {key}{k + 1} = {values[k]:.6g} is negative; a robot description's rotor "
+            "inertia and friction are >= 0 (the physically consistent estimate, "
+            "consistent=True, keeps them so)"
+        )
+    return terms
+
+
+def _from_vector(robot: Robot, classical, what: str) -> JointTerms:
+    n = robot.n
     c = _friction_columns(robot)
     p = _args.params(classical, what, n, (10, 11, 10 + c, 11 + c), allow_none=False)
     per = p.size // n

@@ -635,14 +635,7 @@ class Robot:
         for name, v in (("rotor", rotor), ("viscous", viscous), ("coulomb", coulomb)):
             if v is None:
                 continue
-            v = _vector(v, self.n, name)
-            bad = np.flatnonzero(v < 0)
-            if bad.size:
-                k = int(bad[0])
-                raise _args.fail(
-                    name, f"has {v[k]!r} at entry {k + 1}; rotor inertia and friction are >= 0"
-                )
-            given[name] = v
+            given[name] = _drive_vector(v, self.n, name)
         if third is not None:
             third = _vector(third, self.n, "third")
             kind = self.friction_model["kind"]
@@ -841,7 +834,7 @@ class Robot:
 
     @rotor_inertia.setter
     def rotor_inertia(self, v) -> None:
-        self._m.rotor_inertia = _vector(v, self.n, "rotor_inertia")
+        self._m.rotor_inertia = _drive_vector(v, self.n, "rotor_inertia")
 
     @property
     def viscous(self) -> np.ndarray:
@@ -849,7 +842,7 @@ class Robot:
 
     @viscous.setter
     def viscous(self, v) -> None:
-        self._m.viscous = _vector(v, self.n, "viscous")
+        self._m.viscous = _drive_vector(v, self.n, "viscous")
 
     @property
     def coulomb(self) -> np.ndarray:
@@ -857,7 +850,7 @@ class Robot:
 
     @coulomb.setter
     def coulomb(self, v) -> None:
-        self._m.coulomb = _vector(v, self.n, "coulomb")
+        self._m.coulomb = _drive_vector(v, self.n, "coulomb")
 
     @property
     def third_friction(self) -> np.ndarray:
@@ -1176,6 +1169,19 @@ def _direct_drives(T: np.ndarray) -> list:
         k = int(ks[0]) if ks.size == 1 else -1
         out.append(None if k < 0 or np.count_nonzero(T[k]) != 1 else (k, float(T[k, j])))
     return out
+
+
+def _drive_vector(x, n: int, name: str) -> np.ndarray:
+    """A rotor inertia or friction argument ``x`` as :func:`_vector` gives it, refused (naming
+    ``name`` and the entry) where negative."""
+    v = _vector(x, n, name)
+    bad = np.flatnonzero(v < 0)
+    if bad.size:
+        k = int(bad[0])
+        raise _args.fail(
+            name, f"has {float(v[k])!r} at entry {k + 1}; rotor inertia and friction are >= 0"
+        )
+    return v
 
 
 def _vector(x, n: int, name: str, unit: str = "joint") -> np.ndarray:
