@@ -174,7 +174,8 @@ def add_closed_loop_args(p, default: str) -> None:
         "--trajectory",
         metavar="FILE",
         help="reference: the JSON of 'mindyn excite' (its Fourier series) or a CSV with columns "
-        "t, q1..qN [, dq1..dqN, ddq1..ddqN] (default: a sum of sines within the joint limits)",
+        "t, q1..qN [, dq1..dqN, ddq1..ddqN], t in s (or as its header says: t[ms], t[s] for "
+        "samples 0.5 s or more apart) (default: a sum of sines within the joint limits)",
     )
     number(
         p,
