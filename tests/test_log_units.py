@@ -238,7 +238,13 @@ def test_joint_data_built_in_python_is_checked_by_identify(planar, kind):
 
 
 def test_the_other_entry_points_check_too(planar):
-    from mindyn.identification import select_friction_model, validate
+    from mindyn.identification import (
+        dynamic_system,
+        energy_system,
+        integral_system,
+        select_friction_model,
+        validate,
+    )
     from mindyn.identification.prediction import predict
 
     robot, (t, q, dq, ddq, tau) = planar
@@ -249,6 +255,9 @@ def test_the_other_entry_points_check_too(planar):
         (lambda bad: validate(res, [bad]), "data[0]"),
         (lambda bad: predict(report.to_dict(), bad, robot=robot), "data"),
         (lambda bad: select_friction_model(robot, [good, bad]), "logs[1]"),
+        (lambda bad: dynamic_system(res.base, bad), "data"),
+        (lambda bad: energy_system(res.base, bad), "data"),
+        (lambda bad: integral_system(res.base, bad), "data"),
     ):
         for kind in ("ms", "deg", "degps"):
             bad, said = _wrong(planar, kind)
