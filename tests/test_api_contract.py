@@ -616,6 +616,7 @@ def _api(tmp: Path) -> dict:
             # inverse kinematics
             "inverse_kinematics.ik_solve": (inverse_kinematics.ik_solve, (ROBOT, T0), {}),
             "inverse_kinematics.pose_error": (inverse_kinematics.pose_error, (T0, T0), {}),
+            "inverse_kinematics.pose_rank": (inverse_kinematics.pose_rank, (ROBOT,), {}),
             "inverse_kinematics.pose_from_xyz_rpy": (
                 inverse_kinematics.pose_from_xyz_rpy,
                 (np.zeros(3), np.zeros(3)),

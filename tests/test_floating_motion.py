@@ -137,3 +137,27 @@ def test_a_log_without_dq_needs_its_time_column(tmp_path):
         read_floating_csv(path, robot, cutoff=100.0)
     log = read_floating_csv(path, robot, filter="none")
     assert log.dq.shape == (len(t) - 4, robot.nv) and log.tau is None  # 2 edge samples each end
+
+
+def test_a_log_of_configurations_stamped_in_milliseconds_is_refused(tmp_path):
+    """Its velocities and accelerations derived over t in ms would be 1e3 and 1e6 too small:
+    the median interval (10 here) is named with the unit and rate it suggests; with dq and
+    ddq logged t is not used, and the same stamps are taken."""
+    from mindyn.identification.floating import read_floating_csv
+
+    robot, model = pair(SOLO)
+    t = np.arange(0.0, 2.0, 0.01)
+    header = [f"q{i + 1}" for i in range(robot.nq)]
+    path = tmp_path / "ms.csv"
+    Q = motion("floating")(t)
+    write(path, np.hstack([1e3 * t[:, None], Q]), ["t", *header])
+    step = np.median(np.diff(1e3 * t))
+    with pytest.raises(DataError) as e:
+        read_floating_csv(path, robot)
+    msg = str(e.value)
+    assert msg.startswith(f"{path}: the median interval between its time stamps is {step:.4g} s")
+    assert "milliseconds (a log of 100 Hz)" in msg and "\n" not in msg, msg
+    V, A = reference(model, motion("floating"), t)
+    dv = [f"{k}{i + 1}" for k in ("dq", "ddq") for i in range(robot.nv)]
+    write(path, np.hstack([1e3 * t[:, None], Q, V, A]), ["t", *header, *dv])
+    assert read_floating_csv(path, robot).dq.shape == (len(t), robot.nv)

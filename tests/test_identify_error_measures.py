@@ -185,8 +185,9 @@ def test_rank_deficiency_names_the_offset_when_a_joint_never_reverses():
     robot = mindyn.load("planar2")
     t = np.arange(0, 20, 1 / 250)
     q, dq, ddq = sines(t)
-    q[:, 1] = 0.3 * t + 0.2 * np.sin(1.3 * t)  # joint 2 turns one way only
-    dq[:, 1] = 0.3 + 0.26 * np.cos(1.3 * t)
+    # joint 2 turns one way only, within its limits (+-pi) over the 60 s
+    q[:, 1] = -3.0 + 0.1 * t + 0.03 * np.sin(1.3 * t)
+    dq[:, 1] = 0.1 + 0.039 * np.cos(1.3 * t)
     ddq[:, 1] = -0.338 * np.sin(1.3 * t)
     base = mindyn.base_parameters(robot, friction=True, offset=True)
     tau = base.regressor(q, dq, ddq) @ np.ones(base.n)
@@ -237,8 +238,9 @@ def test_a_rank_deficiency_on_a_log_with_breaks_counts_its_segments():
     robot = mindyn.load("planar2")
     t = gappy_times()
     q, dq, ddq = sines(t)
-    q[:, 1] = 0.3 * t + 0.2 * np.sin(1.3 * t)  # joint 2 turns one way only
-    dq[:, 1] = 0.3 + 0.26 * np.cos(1.3 * t)
+    # joint 2 turns one way only, within its limits (+-pi) over the 60 s
+    q[:, 1] = -3.0 + 0.1 * t + 0.03 * np.sin(1.3 * t)
+    dq[:, 1] = 0.1 + 0.039 * np.cos(1.3 * t)
     base = mindyn.base_parameters(robot, friction=True, offset=True)
     log = JointData(t, q, dq, ddq, base.regressor(q, dq, ddq) @ np.ones(base.n), "oneway.csv")
     segments = [preprocess(s) for s in split_at_gaps(log)]

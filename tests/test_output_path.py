@@ -176,3 +176,79 @@ def test_an_output_that_is_an_input_is_refused_and_the_input_kept(tmp_path):
     # another file beside them is written as before
     rc, _, err = run(["identify", "planar2", tmp_path / "log.csv", "--json", tmp_path / "o.json"])
     assert rc == 0 and (tmp_path / "o.json").is_file(), err
+
+
+def test_a_file_written_beside_an_output_that_is_an_input_is_refused(tmp_path):
+    """excite -o X.csv writes X.json and X.png beside it, simulate -o X.csv X.truth.json, and
+    track and simulate --report DIR the report's files into DIR: one of them that is a file
+    the command reads was overwritten without a word. Each is refused in one line naming the
+    option, the file written beside it and the input, and every file is unchanged byte for
+    byte."""
+    from mindyn.control.simulation import simulate_inverse
+    from mindyn.identification.excitation import random_trajectory
+
+    robot = mindyn.load("planar2")
+    lim = {"lower": -np.ones(2), "upper": np.ones(2)}
+    traj = random_trajectory(robot, seed=1, limits=lim)
+    doc = json.dumps(traj.to_dict())
+    (tmp_path / "traj.truth.json").write_text(doc)
+    (tmp_path / "rep").mkdir()
+    simulate_inverse(robot, traj, seed=3).save(tmp_path / "rep" / "log.csv", robot_name="planar2")
+    # joint terms are YAML, of which JSON is a part
+    (tmp_path / "terms.json").write_text('{"robot": "planar2"}\n')
+    (tmp_path / "terms.png").write_text('{"robot": "planar2"}\n')
+    excite = ["excite", "planar2", "--quiet", "--starts", "1", "--maxiter", "1"]
+    rep_log = ["--trajectory", tmp_path / "rep" / "log.csv", "--report", tmp_path / "rep"]
+    cases = [
+        (
+            [*excite, "--joint-terms", tmp_path / "terms.json", "-o", tmp_path / "terms.csv"],
+            f"--output '{tmp_path / 'terms.csv'}': its coefficients file "
+            f"'{tmp_path / 'terms.json'}' is also the file the command reads as --joint-terms",
+        ),
+        (
+            [*excite, "--joint-terms", tmp_path / "terms.png", "-o", tmp_path / "terms.csv"],
+            f"its plot '{tmp_path / 'terms.png'}' is also the file the command reads as "
+            "--joint-terms",
+        ),
+        (
+            ["simulate", "planar2", "--trajectory", tmp_path / "traj.truth.json"]
+            + ["-o", tmp_path / "traj.csv"],
+            f"its truth file '{tmp_path / 'traj.truth.json'}' is also the file the command "
+            "reads as --trajectory",
+        ),
+        (
+            ["simulate", "planar2", *rep_log, "-o", tmp_path / "s.csv"],
+            f"--report '{tmp_path / 'rep'}': its report file '{tmp_path / 'rep' / 'log.csv'}' "
+            "is also the file the command reads as --trajectory",
+        ),
+        (
+            ["track", "planar2", *rep_log],
+            f"its report file '{tmp_path / 'rep' / 'log.csv'}' is also the file the command "
+            "reads as --trajectory",
+        ),
+    ]
+
+    def files():
+        return {p: p.read_bytes() for p in tmp_path.rglob("*") if p.is_file()}
+
+    before = files()
+    for argv, said in cases:
+        rc, _, err = run(argv)
+        assert rc == 2 and err.count("\n") == 1, err
+        assert err.startswith("mindyn: error: ") and said in err, (said, err)
+        assert "writing it would overwrite that input" in err, err
+        assert files() == before
+    # with their own names the files beside the outputs are written, as the rule lists them
+    from mindyn.cli.closed_loop import REPORT_FILES
+
+    out = tmp_path / "out"
+    rc, _, err = run([*excite, "-o", out / "e.csv"])
+    assert rc == 0, err
+    assert {p.name for p in out.iterdir()} == {"e.csv", "e.json", "e.png"}
+    rc, _, err = run(
+        ["simulate", "planar2", "--controller", "adaptive-pd", "--duration", "0.2"]
+        + ["--report", out / "r", "-o", out / "s.csv"]
+    )
+    assert rc == 0, err
+    assert (out / "s.truth.json").is_file()
+    assert {p.name for p in (out / "r").iterdir()} == set(REPORT_FILES)

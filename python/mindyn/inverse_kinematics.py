@@ -37,6 +37,7 @@ __all__ = [
     "line_path",
     "pose_error",
     "pose_from_xyz_rpy",
+    "pose_rank",
     "resolved_rate",
     "velocity_ik",
 ]
@@ -377,8 +378,9 @@ def ik_solve(
         CPU-time budget in seconds (0: none); ``max_attempts`` bounds the restarts.
     orientation_weight : float
         Weight [m/rad] of the orientation error against the position error in the steps; 0:
-        position only (the orientation free; for arms of fewer than six joints, which reach
-        most positions in one orientation only).
+        position only (the orientation free; for a tool whose pose moves in fewer than six
+        independent directions, :func:`pose_rank`, which reaches most positions in few
+        orientations only).
     seed : int
         Seed of the restart points (same seed, same answer).
     """
@@ -422,6 +424,44 @@ def ik_solve(
         orientation_error=errors[2],
         position_only=solver_options["orientation_weight"] == 0,
     )
+
+
+#: Configurations :func:`pose_rank` samples, and the span it samples a joint without limits in
+#: (rad for a revolute joint, m for a prismatic one)
+POSE_RANK_SAMPLES = 8
+POSE_RANK_UNLIMITED = math.pi
+
+
+def pose_rank(robot: Robot, *, samples: int = POSE_RANK_SAMPLES, seed: int = 0):
+    """How many independent directions the tool frame's pose moves in: the rank of the tool
+    frame's Jacobian (:meth:`~mindyn.Robot.jacobian`) over the joints that move it, the
+    largest at ``samples`` random configurations within the limits (a joint without limits:
+    within +-:data:`POSE_RANK_UNLIMITED`; a singular configuration has a lower rank, random
+    ones the robot's). Returns ``(rank, joints)``, ``joints`` the 0-based joints whose columns
+    are not zero anywhere. Below 6, most poses are out of reach whatever the joint count: a
+    five-joint arm, a planar one, a wrist joint coaxial with the one before it, a joint on
+    another branch of a tree than the tool's."""
+    _args.instance(robot, "robot", Robot)
+    samples = _args.integer(samples, "samples", minimum=1)
+    seed = _args.integer(seed, "seed", minimum=0)
+    if not robot.single_dof:
+        raise _core.ModelError(
+            f"pose_rank takes revolute and prismatic joints only; robot '{robot.name}' has "
+            "joints of several degrees of freedom"
+        )
+    lower = np.asarray(robot.limits["lower"], dtype=float)
+    upper = np.asarray(robot.limits["upper"], dtype=float)
+    bounded = np.isfinite(lower) & np.isfinite(upper)
+    lower = np.where(bounded, lower, -POSE_RANK_UNLIMITED)
+    upper = np.where(bounded, upper, POSE_RANK_UNLIMITED)
+    rng = np.random.default_rng(seed)
+    rank, moving = 0, np.zeros(robot.n, dtype=bool)
+    for _ in range(samples):
+        J = robot.jacobian(rng.uniform(lower, upper))
+        scale = np.abs(J).max()
+        moving |= np.abs(J).max(axis=0) > 1e-12 * max(scale, 1e-300)
+        rank = max(rank, int(np.linalg.matrix_rank(J[:, moving])) if moving.any() else 0)
+    return rank, [int(j) for j in np.flatnonzero(moving)]
 
 
 def ik(robot: Robot, T_target, q0=None, **options) -> tuple[np.ndarray, bool]:

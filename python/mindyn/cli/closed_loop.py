@@ -5,6 +5,7 @@ they give."""
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from .._core import ArgumentError
 from ..base import base_parameters
@@ -141,6 +142,24 @@ def reference_and_controller(args: argparse.Namespace, robot, default_duration):
     return reference, ref_text, duration, cycle, controller, base
 
 
+#: The files the tracking report writes into ``--report``
+#: (:func:`~mindyn.control.simulation.write_tracking_report`)
+REPORT_FILES = ("summary.json", "log.csv", "tracking_error.png", "torque.png", "parameters.png")
+
+
+def report_outputs(args: argparse.Namespace) -> list[tuple[str, str, str, Path, str]]:
+    """The files of the tracking report in ``--report`` (none without it), for the command
+    line's rule on outputs (:func:`~mindyn.cli.outputs.implied_outputs`)."""
+    folder = getattr(args, "report", None)
+    if folder is None:
+        return []
+    remedy = "give --report another folder"
+    return [
+        ("--report", str(folder), "report file", Path(folder) / name, remedy)
+        for name in REPORT_FILES
+    ]
+
+
 def add_closed_loop_args(p, default: str) -> None:
     """The reference, controller and integration options shared by ``track`` and ``simulate``
     (``default``: the default controller)."""
@@ -174,7 +193,8 @@ def add_closed_loop_args(p, default: str) -> None:
         "--trajectory",
         metavar="FILE",
         help="reference: the JSON of 'mindyn excite' (its Fourier series) or a CSV with columns "
-        "t, q1..qN [, dq1..dqN, ddq1..ddqN] (default: a sum of sines within the joint limits)",
+        "t, q1..qN [, dq1..dqN, ddq1..ddqN], t in s (or as its header says: t[ms], t[s] for "
+        "samples 0.5 s or more apart) (default: a sum of sines within the joint limits)",
     )
     number(
         p,
@@ -224,3 +244,4 @@ def add_closed_loop_args(p, default: str) -> None:
         type=output_dir,
         help="write the tracking report here: summary.json, log.csv and plots",
     )
+    p.set_defaults(implied=report_outputs)

@@ -205,11 +205,18 @@ def cmd_ik(args: argparse.Namespace) -> int:
             print(f"  {robot.joint_names[k]:<{width}} {r.q[k]:12.6f} {unit}{extra}".rstrip())
     if not r.success:
         hint = ""
-        if not r.position_only and robot.n < 6:
-            hint = (
-                f"; an arm of {robot.n} joints reaches most positions in one orientation only: "
-                "--position-only leaves the orientation free"
-            )
+        if not r.position_only:
+            from ..inverse_kinematics import POSE_RANK_SAMPLES, pose_rank
+
+            rank, moving = pose_rank(robot)
+            if rank < 6:
+                hint = (
+                    f"; the tool frame's Jacobian has rank {rank} over the {len(moving)} "
+                    f"joint(s) that move it (at most, at {POSE_RANK_SAMPLES} configurations "
+                    "within the limits): its pose moves in fewer than 6 directions, so most "
+                    "positions are reached in few orientations only: --position-only leaves "
+                    "the orientation free"
+                )
         print(
             f"mindyn: error: no joint solution inside the limits reached the "
             f"{'position' if r.position_only else 'pose'} ({r.status}; best point: "
@@ -339,9 +346,9 @@ def register(sub) -> None:
     p.add_argument(
         "--position-only",
         action="store_true",
-        help="solve for the position alone, the orientation free (an arm of fewer than six "
-        "joints reaches most positions in one orientation only); the tolerance is then the "
-        "position error's [m]",
+        help="solve for the position alone, the orientation free (a tool whose Jacobian has "
+        "rank below 6, such as a five-joint arm's, reaches most positions in few orientations "
+        "only; a failed pose says so); the tolerance is then the position error's [m]",
     )
     joint_vector(p, "--q0", help="start [rad, m] (default: the middle of the limits)")
     p.add_argument(

@@ -197,4 +197,14 @@ def register(sub) -> None:
         type=output_file,
         help="trajectory CSV to write (and its .json and .png beside it)",
     )
-    p.set_defaults(func=cmd_excite)
+    p.set_defaults(func=cmd_excite, implied=_implied)
+
+
+def _implied(args: argparse.Namespace) -> list[tuple[str, str, str, Path, str]]:
+    """The files excite writes beside the trajectory CSV: its coefficients (.json) and plot
+    (.png)."""
+    out, remedy = Path(args.output), "give --output another file name"
+    return [
+        ("--output", str(out), what, out.with_suffix(suffix), remedy)
+        for what, suffix in (("coefficients file", ".json"), ("plot", ".png"))
+    ]

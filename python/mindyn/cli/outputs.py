@@ -172,6 +172,27 @@ def _inputs(args: argparse.Namespace) -> dict[Path, tuple[str, str]]:
     return found
 
 
+def implied_outputs(args: argparse.Namespace) -> list[tuple[str, str, str, Path, str]]:
+    """The files a command writes beside the outputs its options name: ``(option, value,
+    what, path, remedy)`` for each: the option and its value, what the file is, its path, and
+    how to write it elsewhere. The joint-terms file beside ``--urdf`` / ``--yaml`` (without
+    ``--sidecar``), and those the command's ``implied(args)`` (a parser default) lists, such as
+    the coefficients and plot ``excite -o X.csv`` writes as X.json and X.png."""
+    found = []
+    if getattr(args, "sidecar", None) is None:  # the joint-terms file beside --urdf / --yaml
+        from ..export import default_sidecar
+
+        for dest in ("urdf", "yaml"):
+            value = getattr(args, dest, None)
+            side = default_sidecar(value) if isinstance(value, OutputPath) else None
+            if side is not None:
+                remedy = "give --sidecar another file"
+                found.append((f"--{dest}", str(value), "joint-terms file", side, remedy))
+    if callable(getattr(args, "implied", None)):
+        found += args.implied(args)
+    return found
+
+
 def prepare_outputs(args: argparse.Namespace) -> None:
     """The one rule for the outputs of every command, applied before the command writes
     anything: a file option given a folder names its default file inside it
@@ -180,8 +201,11 @@ def prepare_outputs(args: argparse.Namespace) -> None:
     robot's description, a log, ...), and the missing folders of each are created. The outputs are
     :func:`declared_outputs`, or those that the command's ``outputs(args)`` (a parser default)
     lists when it writes files the options only imply (``codegen -o NAME``: NAME.c and
-    NAME.h); the commands state the paths they wrote (on standard output, unless it carries
-    the JSON document of ``--format json``)."""
+    NAME.h). The files written beside an output (:func:`implied_outputs`: ``excite -o X.csv``
+    writes X.json and X.png, ``simulate -o X.csv`` X.truth.json, ``--urdf`` its joint-terms
+    file) may not be a file the command reads either, nor another output. The commands state the
+    paths they wrote (on standard output, unless it carries the JSON document of ``--format
+    json``)."""
     if callable(getattr(args, "outputs", None)):
         outputs = args.outputs(args)  # the command names the files in a folder given
     else:
@@ -190,19 +214,21 @@ def prepare_outputs(args: argparse.Namespace) -> None:
     seen: dict[Path, tuple[str, Path]] = {}
     folders = {path.resolve(): (option, path) for option, path, folder in outputs if folder}
     inputs = _inputs(args)
-    if getattr(args, "sidecar", None) is None:  # the joint-terms file beside --urdf / --yaml
-        from ..export import default_sidecar
-
-        for dest in ("urdf", "yaml"):
-            value = getattr(args, dest, None)
-            side = default_sidecar(value) if isinstance(value, OutputPath) else None
-            if side is not None and side.resolve() in inputs:
-                name, given = inputs[side.resolve()]
-                raise UsageError(
-                    f"--{dest} '{value}': its joint-terms file '{side}' is also the file the "
-                    f"command reads as {name} ('{given}'): writing it would overwrite that "
-                    "input; give --sidecar another file"
-                )
+    declared = {path.resolve(): (option, path) for option, path, folder in outputs if not folder}
+    for option, value, what, path, remedy in implied_outputs(args):
+        key = path.resolve()
+        if key in inputs:
+            name, given = inputs[key]
+            raise UsageError(
+                f"{option} '{value}': its {what} '{path}' is also the file the command reads as "
+                f"{name} ('{given}'): writing it would overwrite that input; {remedy}"
+            )
+        if key in declared and declared[key][0] != option:
+            other, first = declared[key]
+            raise UsageError(
+                f"{option} '{value}': its {what} '{path}' is also the file {other} writes "
+                f"('{first}'): {remedy}"
+            )
     for option, path, folder in outputs:
         if folder:  # files inside it are named by the command (output_path)
             continue

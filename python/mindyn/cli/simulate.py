@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -245,4 +246,15 @@ def register(sub) -> None:
         type=output_file,
         help="log to write (and its .truth.json beside it)",
     )
-    p.set_defaults(func=cmd_simulate)
+    p.set_defaults(func=cmd_simulate, implied=_implied)
+
+
+def _implied(args: argparse.Namespace) -> list[tuple[str, str, str, Path, str]]:
+    """The files simulate writes beside its outputs: the truth file beside the log, the
+    tracking report's files."""
+    from ..identification.data import truth_path
+    from .closed_loop import report_outputs
+
+    truth = truth_path(args.output)
+    remedy = "give --output another file name"
+    return [("--output", str(args.output), "truth file", truth, remedy), *report_outputs(args)]

@@ -27,6 +27,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import re
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -135,9 +136,28 @@ class SumOfSines:
         return self.center + a * s, a * ds, a * dds
 
 
+def _time_unit(name: str | None, path: Path) -> str | None:
+    """The unit the header's first name ``name`` gives the time in (``t[ms]``), None for none;
+    DataError for a unit of time it does not know."""
+    from ..identification.columns import TIME_UNITS
+    from ..identification.data import DataError
+
+    m = re.fullmatch(r"t\s*\[([^\]]*)\]", name or "")
+    if m is None:
+        return None
+    unit = m.group(1).strip()
+    if unit not in TIME_UNITS:
+        raise DataError(
+            f"{path}: the header gives t in '{unit}'; the units of t are " + ", ".join(TIME_UNITS)
+        )
+    return unit
+
+
 class CsvTrajectory:
     """A reference from a CSV file with columns ``t, q1..qN`` and optionally ``dq1..dqN`` and
-    ``ddq1..ddqN`` (a header line is allowed; ``mindyn excite`` writes such a file). Positions
+    ``ddq1..ddqN`` (a header line is allowed; ``mindyn excite`` writes such a file). Time in
+    s, or in the unit the header's first name gives, ``t[ms]`` (``s``, ``ms``, ``us``, ``ns``,
+    as a column map's ``t``; :attr:`time_unit` that unit, None when not given). Positions
     are interpolated by cubic splines; missing velocities and accelerations are the spline's
     derivatives. Times count from the first sample; after the last sample the reference holds
     the last position at rest."""
@@ -192,6 +212,11 @@ class CsvTrajectory:
             )
         if not np.all(np.isfinite(data)):
             raise DataError(f"{path}: contains NaN or infinite values")
+        self.time_unit = _time_unit(header[0] if header else None, path)
+        if self.time_unit is not None:
+            from ..identification.columns import TIME_UNITS
+
+            data[:, 0] /= TIME_UNITS[self.time_unit]
         t = data[:, 0]
         if np.any(np.diff(t) <= 0):
             raise DataError(f"{path}: time column must be strictly increasing")
@@ -224,7 +249,10 @@ def load_reference(path, n: int, *, robot: Robot | None = None):
     the JSON names another robot (whose limits the excitation kept) or the CSV's positions are
     in degrees or millimetres (:func:`~mindyn.identification.data.check_position_units`); a
     CSV whose velocities are not its positions' derivative is refused too
-    (:func:`~mindyn.identification.data.check_velocity_units`)."""
+    (:func:`~mindyn.identification.data.check_velocity_units`), and so is one whose median
+    interval between time stamps is 0.5 s or more unless its header states the time's unit
+    (:func:`~mindyn.identification.data.check_time_units`: ``t[s]`` for a trajectory that
+    slow)."""
     _args.path(path, "path")
     n = _args.integer(n, "n", 1)
     _args.optional(_args.instance, robot, "robot", Robot)
@@ -244,8 +272,19 @@ def load_reference(path, n: int, *, robot: Robot | None = None):
             )
         return ref
     ref = CsvTrajectory(p, n)
-    from ..identification.data import check_position_units, check_velocity_units
+    from ..identification.data import (
+        check_position_units,
+        check_time_units,
+        check_velocity_units,
+    )
 
+    if ref.time_unit is None:
+        check_time_units(
+            ref._t,
+            str(p),
+            "give t in s, or state its unit as the header's first name: t[ms], t[us] or t[ns] "
+            "(t[s] for a trajectory this slow)",
+        )
     if ref._dq_samples is not None:
         check_velocity_units(ref._t, ref._samples, ref._dq_samples, str(p))
     if robot is not None:

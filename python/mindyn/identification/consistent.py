@@ -1016,7 +1016,7 @@ def identify_payload(
             "applies only to an arm identified with friction (it leaves out the equations of "
             "joints too slow for the sign of their Coulomb friction); this arm has none",
         )
-    logs = _logs(data)
+    logs = _logs(data, robot=robot)
     last = _LastLink(robot)
     names = [f"{k}{robot.n}" for k in INERTIAL]
     rows_A, rows_y, rows_j, log_rows = [], [], [], []

@@ -283,9 +283,12 @@ def read_csv(
         increasing (line named), fewer than 2 samples (or too few beyond the derivatives'
         filter edges), derivatives that overflow, logged velocities that are not the
         positions' derivative over the time stamps (:func:`check_velocity_units`: time in ms,
-        velocities in deg/s, of the opposite sign); with ``robot``, positions in degrees or
-        millimetres (:func:`check_position_units`); a column of the map the file lacks (named,
-        with the closest names the file has).
+        velocities in deg/s, of the opposite sign), time stamps whose median interval is 0.5 s
+        or more (:func:`check_time_units`: in ms or us; not checked when a column map states
+        the unit of ``t``, ``t[s]`` for a log that slow); with ``robot``, positions in degrees
+        or millimetres (:func:`check_position_units`); a column of the map the file lacks
+        (named, with the closest names the file has). The log read with ``robot`` has
+        ``units_checked`` set.
     ArgumentError
         A column map with an unknown quantity or unit, a quantity given twice, a pattern
         without placeholder for several joints, a column mapped twice.
@@ -429,6 +432,8 @@ def _read_csv(
         t, q, dq, ddq = got["t"], got["q"], got["dq"], got["ddq"]
         processing["columns"] = record(cmap, cols["ignored"], units)
     # in seconds and radians (metres), a map's units converted
+    if cmap is None or cmap.unit("t") is None:  # a unit the map states is taken as given
+        check_time_units(t, str(path), CSV_TIME_REMEDY)
     if robot is not None:
         check_position_units(q, robot, str(path))
     if dq is not None:
@@ -465,7 +470,9 @@ def _read_csv(
                 f"{path}: the {what} overflow (the largest logged magnitude is "
                 f"{np.max(np.abs(values[:, used])):.3g}); the log's values are too large to process"
             )
-    data = JointData(t, q, dq, ddq, tau, source=str(path), processing=processing)
+    data = JointData(
+        t, q, dq, ddq, tau, source=str(path), processing=processing, units_checked=robot is not None
+    )
     return without_derivative_edges(data)
 
 
@@ -916,6 +923,7 @@ def without_derivative_edges(data: JointData) -> JointData:
         None if data.tau is None else data.tau[keep],
         source=data.source,
         processing=data.processing,
+        units_checked=data.units_checked,
     )
 
 
@@ -1179,6 +1187,66 @@ def check_velocity_units(t, q, dq, source: str) -> None:
                 f"of q{j + 1} over the time stamps (correlation {corr[j]:.3f}; expected 1): "
                 f"{causes}; t in s, positions in rad (m), velocities in rad/s (m/s)"
             )
+
+
+#: A log whose median sample interval is at least this [s] is refused (slower than 2 Hz: too
+#: slow to carry accelerations; time stamps in ms of a log of up to 2 kHz have intervals of at
+#: least 0.5)
+SLOWEST_SAMPLE_INTERVAL = 0.5
+#: The units time stamps are logged in by mistake, and their size in s
+_MISTAKEN_TIME_UNITS = (("milliseconds", 1e-3), ("microseconds", 1e-6), ("nanoseconds", 1e-9))
+
+
+def check_time_units(t, source: str, remedy: str) -> None:
+    """Refuses time stamps ``t`` (read as s) whose median sample interval is at least
+    :data:`SLOWEST_SAMPLE_INTERVAL`: a log slower than 2 Hz cannot carry accelerations, and a
+    log of up to 2 kHz whose stamps are in milliseconds (microseconds, nanoseconds) has such
+    intervals. The message names the median interval, the unit that makes the log's rate at
+    least 2 Hz and that rate, and ends with ``remedy`` (how to give the stamps' unit)."""
+    t = np.asarray(t, dtype=float).ravel()
+    if t.size < 2:
+        return
+    with np.errstate(all="ignore"):
+        dt = float(np.median(np.diff(t)))
+    if not (np.isfinite(dt) and dt >= SLOWEST_SAMPLE_INTERVAL):
+        return
+    unit, size = next(
+        ((u, s) for u, s in _MISTAKEN_TIME_UNITS if dt * s < SLOWEST_SAMPLE_INTERVAL),
+        _MISTAKEN_TIME_UNITS[-1],
+    )
+    raise DataError(
+        f"{source}: the median interval between its time stamps is {dt:.4g} s, a log slower "
+        f"than {1 / SLOWEST_SAMPLE_INTERVAL:g} Hz, which cannot carry accelerations: its time "
+        f"stamps seem to be in {unit} (a log of {1 / (dt * size):.4g} Hz); {remedy}"
+    )
+
+
+#: How a CSV log states the unit of its time stamps
+CSV_TIME_REMEDY = (
+    "give t in s, or state its unit in a column map, columns= with t[ms], t[us] or t[ns] "
+    "(t[s] for a log this slow)"
+)
+
+
+def check_units(data: JointData, robot, label: str) -> None:
+    """The unit checks of a log read from a file, on a :class:`JointData` built otherwise
+    (``label``: its name in the message, such as ``data[0]``): time stamps in s
+    (:func:`check_time_units`), positions in rad or m (:func:`check_position_units`),
+    velocities the positions' derivative (:func:`check_velocity_units`). Once they pass,
+    ``data.units_checked`` is set; a log with it set is not checked again."""
+    if data.units_checked:
+        return
+    name = f"{label} ('{data.source}')" if data.source else label
+    check_time_units(
+        data.t,
+        name,
+        "JointData.t is in s: convert it, or give JointData(..., units_checked=True) for a "
+        "log this slow",
+    )
+    check_position_units(data.q, robot, name)
+    if data.dq is not None:
+        check_velocity_units(data.t, data.q, data.dq, name)
+    data.units_checked = True
 
 
 def _shown(value) -> str:

@@ -565,13 +565,24 @@ def _sources(logs: list[JointData]) -> str:
     return " + ".join(n if k == 0 else f"{n} ({k} segments)" for n, k in out)
 
 
-def _logs(data, name: str = "data") -> list[JointData]:
-    """One log or a sequence of logs as a non-empty list of :class:`JointData`."""
+def _logs(data, name: str = "data", robot: Robot | None = None) -> list[JointData]:
+    """One log or a sequence of logs as a non-empty list of :class:`JointData`; given the
+    ``robot`` they are for, each whose units are not checked yet (a log built in Python) is
+    checked, named ``name[k]`` (``name`` for one log given alone): the one place the logs of
+    the library's identification entry points are checked
+    (:func:`~mindyn.identification.data.check_units`)."""
     if isinstance(data, JointData):
-        return [data]
-    logs = list(data) if isinstance(data, (list, tuple)) else []
-    if not logs or not all(isinstance(d, JointData) for d in logs):
-        raise _args.fail(name, "must be a JointData or a non-empty list of JointData")
+        logs = [data]
+    else:
+        logs = list(data) if isinstance(data, (list, tuple)) else []
+        if not logs or not all(isinstance(d, JointData) for d in logs):
+            raise _args.fail(name, "must be a JointData or a non-empty list of JointData")
+    if robot is not None:
+        from .data import check_units
+
+        for k, d in enumerate(logs):
+            if not d.units_checked and d.n == robot.n:  # other joint counts: refused by each
+                check_units(d, robot, name if isinstance(data, JointData) else f"{name}[{k}]")
     return logs
 
 
@@ -1143,7 +1154,7 @@ def identify(
             "mindyn.identification.identify_floating (joint torques and contact wrenches, or "
             "free flight)"
         )
-    logs = _logs(data)
+    logs = _logs(data, robot=robot)
     _args.choice(model, "model", MODELS)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     _args.optional(_args.instance, base, "base", BaseParameters)

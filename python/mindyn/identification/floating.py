@@ -48,7 +48,14 @@ from .. import _args
 from .._threads import single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot
-from .data import DataError, DataFileNotFoundError, decode_text, differentiate, parse_cell
+from .data import (
+    DataError,
+    DataFileNotFoundError,
+    check_time_units,
+    decode_text,
+    differentiate,
+    parse_cell,
+)
 from .errors import IdentificationError
 from .estimation import _triangle
 
@@ -593,6 +600,12 @@ def read_floating_csv(
         from .floating_motion import configuration_derivatives, edge_samples
 
         t = values[:, index["t"]]
+        check_time_units(
+            t,
+            str(path),
+            "give t in s (it serves only to derive the missing dq or ddq, which a log this "
+            "slow cannot give: log them)",
+        )
         try:
             if dq is None:
                 _, dq, derived, processing = configuration_derivatives(

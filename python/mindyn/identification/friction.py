@@ -319,7 +319,7 @@ def select_friction_model(
     from .prior import FOLDS
 
     _args.instance(robot, "robot", Robot)
-    logs = _logs(logs, "logs")
+    logs = _logs(logs, "logs", robot)
     _args.choice(kind, "kind", CHOICES)
     rotor, offset = _args.flag(rotor, "rotor"), _args.flag(offset, "offset")
     _args.optional(_args.mapping, fit, "fit")

@@ -52,6 +52,15 @@ class JointData:
         log joined (0 first); empty for a log not joined. The windows of the integral and
         energy models and the noise estimates from second differences do not span the junction
         between two logs (:meth:`log_slices`).
+    units_checked : bool
+        Whether its units have been checked (:func:`~mindyn.identification.data.check_units`:
+        time stamps in s, positions in rad (m), velocities the positions' derivative). The
+        readers (:func:`~mindyn.identification.data.read_csv` given the robot, ROS bags,
+        :func:`~mindyn.identification.load_logs`) check and set it; a log built in Python is
+        checked once, when it first reaches identification (:func:`~mindyn.identification.identify`,
+        :func:`~mindyn.identification.run`, ...), which then sets it. Give ``True`` for a log
+        whose units are right but which a check refuses (a log slower than 2 Hz, its stamps
+        in s).
     """
 
     t: np.ndarray
@@ -64,6 +73,7 @@ class JointData:
     regressor_filter: RegressorFilter | None = None
     logged: JointData | None = None
     starts: tuple[int, ...] = ()
+    units_checked: bool = False
 
     @property
     def m(self) -> int:

@@ -32,7 +32,7 @@ from scipy import integrate
 from .. import _args
 from .._args import ArgumentError
 from ..base import BaseParameters
-from .data import DataError
+from .data import DataError, check_units
 from .errors import IdentificationError
 from .joint_data import JointData
 
@@ -98,6 +98,7 @@ def dynamic_system(base: BaseParameters, data: JointData, *, min_velocity: float
     velocity noise). ``r = m n`` minus those equations."""
     _args.instance(base, "base", BaseParameters)
     _args.instance(data, "data", JointData)
+    check_units(data, base.robot, "data")  # a log built in Python: once
     min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
     require_torque(data)
     assert data.tau is not None
@@ -178,6 +179,7 @@ def energy_system(
     ``r = (m - 1) // window`` for a log not joined."""
     _args.instance(base, "base", BaseParameters)
     _args.instance(data, "data", JointData)
+    check_units(data, base.robot, "data")  # a log built in Python: once
     window = _args.integer(window, "window", 1)
     _args.choice(integration, "integration", ("simpson", "trapezoid", "zoh"))
     require_torque(data)
@@ -260,6 +262,7 @@ def integral_system(
     (see :func:`integral_chunks`)."""
     _args.instance(base, "base", BaseParameters)
     _args.instance(data, "data", JointData)
+    check_units(data, base.robot, "data")  # a log built in Python: once
     window = _args.integer(window, "window", 1)
     _args.choice(integration, "integration", ("simpson", "trapezoid", "zoh"))
     parts = list(integral_chunks(base, data, window=window, integration=integration))

@@ -166,8 +166,8 @@ def predict(
     are stacked in order."""
     from .estimation import _logs
 
-    logs = _logs(data)
     base, values, doc = identified_model(identification, robot, estimate=estimate)
+    logs = _logs(data, robot=base.robot)
     if not logs:
         raise DataError("predict: no data")
     parts = []

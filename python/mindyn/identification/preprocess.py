@@ -385,6 +385,7 @@ def split_at_gaps(data: JointData, *, gap: float = SEGMENT_GAP) -> list[JointDat
                     **data.processing,
                     "segment": {"index": k, "of": len(bounds) - 1, "t_s": list(span)},
                 },
+                units_checked=data.units_checked,
             )
         )
     return out
@@ -623,6 +624,7 @@ def preprocess(
         None if tauf is None else tauf[keep],
         source=data.source,
         processing={**data.processing, "preprocess": info},
+        units_checked=data.units_checked,
     )
     info["samples"] = out.m
     if info["parallel_filtering"]:
@@ -684,6 +686,7 @@ def _logged_samples(data, tu, qf, dqf, ddqf, drop, cycle, fc, rate, logged_dq) -
         None if data.tau is None else data.tau[sel],
         source=data.source,
         processing={"velocity_noise": noise},
+        units_checked=data.units_checked,
     )
 
 
@@ -755,6 +758,7 @@ def concatenate(logs) -> JointData:
         source=" + ".join(d.source or "data" for d in logs),
         processing={"logs": [d.processing for d in logs]},
         starts=tuple(starts),
+        units_checked=all(d.units_checked for d in logs),
     )
     pres = [d.processing.get("preprocess") for d in logs]
     if pres[0] is not None:

@@ -50,7 +50,7 @@ def _gains(opts: ReadingOptions, n: int) -> np.ndarray | None:
 
 
 def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
-    from .data import check_position_units, check_velocity_units, convert_torque
+    from .data import convert_torque
     from .rosbag import read_rosbag
 
     current = unit == "current"
@@ -62,9 +62,6 @@ def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
         filter="none" if opts.filter == "lowpass" else opts.filter,
         cutoff=opts.cutoff,
     )
-    check_position_units(data.q, robot, str(path))
-    if data.dq is not None:
-        check_velocity_units(data.t, data.q, data.dq, str(path))
     if current:  # effort in A: the gains (given or of the drive table) turn it into N m
         assert data.tau is not None  # read with its effort column
         tau, info = convert_torque(data.tau, "current", robot, drive_gain=gain)

@@ -20,6 +20,9 @@ from .data import (
     DataError,
     DataFileNotFoundError,
     JointData,
+    check_position_units,
+    check_time_units,
+    check_velocity_units,
     convert_torque,
     fill_derivatives,
     first_not_increasing,
@@ -98,7 +101,10 @@ def read_rosbag(
         the robot missing from a message (named, with the message's index), positions,
         velocities or efforts missing or not finite, time stamps not increasing, fewer than 2
         samples (or too few beyond the derivatives' filter edges), or ``rosbags`` not
-        installed.
+        installed; the units of a CSV log
+        (:func:`~mindyn.identification.data.check_time_units`: a median interval between the
+        stamps of 0.5 s or more; positions in degrees or millimetres, velocities that are not
+        the positions' derivative). The log has ``units_checked`` set.
     """
     from ..robot import Robot
 
@@ -174,12 +180,22 @@ def read_rosbag(
     tau = _complete(tau, path, topic, "effort")
     if tau is None and require_torque:
         raise DataError(f"{path}, {topic}: the messages carry no efforts (joint torques)")
+    check_time_units(
+        t,
+        f"{path}, {topic}",
+        "a JointState stamp is sec + 1e-9 nanosec s: record the stamps in s",
+    )
+    check_position_units(q, robot, str(path))
+    if dq is not None:
+        check_velocity_units(t, q, dq, str(path))
     processing: dict = {"samples": len(t), "topic": topic, "joints": names}
     if tau is not None:
         tau, processing["torque"] = convert_torque(tau, torque_unit, robot)
     dq, ddq, deriv = fill_derivatives(t - t[0], q, dq, None, **derivative_settings)
     processing.update(deriv)
-    data = JointData(t - t[0], q, dq, ddq, tau, source=str(path), processing=processing)
+    data = JointData(
+        t - t[0], q, dq, ddq, tau, source=str(path), processing=processing, units_checked=True
+    )
     return without_derivative_edges(data)
 
 

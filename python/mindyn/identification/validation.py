@@ -148,7 +148,7 @@ def prediction_check(result: IdentificationResult, fit: dict, data) -> dict:
     unc = fit.get("prediction_uncertainty") if isinstance(fit, dict) else None
     if unc is None:
         raise _args.fail("fit", "has no prediction_uncertainty (validate an IdentificationResult)")
-    logs = _logs(data)
+    logs = _logs(data, robot=result.base.robot)
     rows = sum(d.m * d.n for d in logs)
     # the factor of the covariance a fit of the torques has: the dynamic model's own (the data
     # path's or its residuals', the larger); else the data path's for samples
@@ -305,8 +305,8 @@ def validate(result: Predictor, data: JointData | Sequence[JointData]) -> dict:
     from .consistent import ConsistentResult
 
     _args.instance(result, "result", (IdentificationResult, ConsistentResult))
-    logs = _logs(data)
     robot = result.base.robot
+    logs = _logs(data, robot=robot)
     effort = robot.limits["effort"]
     per = []
     for d in logs:

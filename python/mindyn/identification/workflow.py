@@ -68,7 +68,8 @@ def _as_logs(logs, model: str, robot) -> Logs:
                 "them with load_logs(paths, robot) for this robot",
             )
         return logs
-    if isinstance(logs, JointData):
+    alone = isinstance(logs, JointData)
+    if alone:
         logs = [logs]
     if isinstance(logs, (str, bytes)) or not hasattr(logs, "__iter__"):
         raise _args.ArgumentError(
@@ -78,6 +79,10 @@ def _as_logs(logs, model: str, robot) -> Logs:
     logs = list(logs)
     for d in logs:
         _args.instance(d, "logs", JointData, "the Logs of load_logs, a JointData or a list of them")
+    if robot.single_dof and logs:  # their units, checked once (identify refuses other robots)
+        from .estimation import _logs
+
+        _logs(logs[0] if alone else logs, "logs", robot)
     names = [d.source or f"log {k + 1}" for k, d in enumerate(logs)]
     return Logs(LogSet(names, [[d] for d in logs]), model=model, truth=[None] * len(logs))
 
