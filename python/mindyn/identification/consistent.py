@@ -840,6 +840,11 @@ class PayloadResult:
     #: weight the joints' equations, and how the standard deviations were formed.
     joint_sigma: np.ndarray | None = None
     std_rule: str = ""
+    #: ``H`` (10, nb): the estimate moves by ``-H e`` for an error ``e`` of the arm's base
+    #: values; ``arm_covariance`` ``H Sigma_arm H^T`` (10, 10), the part of ``covariance`` the
+    #: arm estimate's uncertainty brings (None when its JSON has no covariance).
+    arm_sensitivity: np.ndarray | None = None
+    arm_covariance: np.ndarray | None = None
 
     def derived(self, *, consistent: bool = False) -> dict:
         if consistent:
@@ -908,10 +913,14 @@ class _LastLink:
         return self.robot.regressor(q, dq, ddq)[..., self.cols]
 
 
-def read_arm(robot: Robot, arm, *, where: str = "arm") -> tuple[BaseParameters, np.ndarray, str]:
+def read_arm(
+    robot: Robot, arm, *, where: str = "arm"
+) -> tuple[BaseParameters, np.ndarray, str, np.ndarray | None]:
     """The base set and base values of an identified arm: the JSON of ``mindyn identify``
     (a dict or a path), checked by :func:`~mindyn.identification.document.read_identification`.
-    Uses ``classical`` when present (the consistent estimate), else ``base_values``."""
+    Uses ``classical`` when present (the consistent estimate), else ``base_values``; with them
+    which it used and the covariance of the least-squares estimate's base parameters
+    (``initial.covariance``; None in a JSON without it)."""
     if isinstance(arm, (str, Path)):
         where = str(arm)
         try:
@@ -954,7 +963,18 @@ def read_arm(robot: Robot, arm, *, where: str = "arm") -> tuple[BaseParameters, 
         values, used = np.array(arm["base_values"]), "base values"
     if values.shape != (base.n,) or not np.all(np.isfinite(values)):
         raise ModelError(f"{where}: expected {base.n} finite base values")
-    return base, values, used
+    cov = (arm.get("initial") or {}).get("covariance")
+    if cov is not None:
+        try:
+            cov = np.array(cov, dtype=float)
+        except (TypeError, ValueError):
+            cov = None
+        if cov is None or cov.shape != (base.n, base.n) or not np.all(np.isfinite(cov)):
+            raise ModelError(
+                f"{where}: 'initial.covariance' is not a {base.n} x {base.n} matrix of finite "
+                "numbers"
+            )
+    return base, values, used, cov
 
 
 def arm_tip(arm, robot) -> str | None:
@@ -1009,7 +1029,7 @@ def identify_payload(
     rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)
     robot = load(robot, tip=arm_tip(arm, robot) if isinstance(robot, (str, Path)) else None)
     robot._require_serial("payload identification (a payload on the last link)")
-    base, beta, used = read_arm(robot, arm)
+    base, beta, used, arm_cov = read_arm(robot, arm)
     if not base.friction and min_velocity != PAYLOAD_MIN_VELOCITY:
         raise _args.fail(
             "min_velocity",
@@ -1019,9 +1039,9 @@ def identify_payload(
     logs = _logs(data, robot=robot)
     last = _LastLink(robot)
     names = [f"{k}{robot.n}" for k in INERTIAL]
-    rows_A, rows_y, rows_j, log_rows = [], [], [], []
+    rows_A, rows_y, rows_j, rows_B, log_rows = [], [], [], [], []
     for d in logs:
-        require_torque(d)
+        tau = require_torque(d)
         if d.n != robot.n:
             raise ModelError(
                 f"{d.source or 'data'} has {d.n} joints; robot '{robot.name}' has {robot.n}"
@@ -1030,16 +1050,20 @@ def identify_payload(
             Wl = d.regressor_filter.regressor(last)
         else:
             Wl = last.regressor(d.q, d.dq, d.ddq)
-        tau_arm = np.concatenate(
-            [regressor_rows(base, d, a, min(d.m, a + 8192)) @ beta for a in range(0, d.m, 8192)]
+        # the arm's base regressor rows: its torques, and (with its covariance) how its
+        # estimate's error reaches the payload's
+        B = np.concatenate(
+            [regressor_rows(base, d, a, min(d.m, a + 8192)) for a in range(0, d.m, 8192)]
         )
-        r = (d.tau - tau_arm).reshape(-1)
+        B = B.reshape(-1, base.n)
+        r = tau.reshape(-1) - B @ beta
         A = Wl.reshape(-1, 10)
         joint = np.tile(np.arange(robot.n), d.m)
         keep = moving_equations(base, d.dq, min_velocity)
         if keep is not None:
             keep = keep.reshape(-1)
-            A, r, joint = A[keep], r[keep], joint[keep]
+            A, r, joint, B = A[keep], r[keep], joint[keep], B[keep]
+        rows_B.append(B)
         rows_A.append(A)
         rows_y.append(r)
         rows_j.append(joint)
@@ -1080,6 +1104,28 @@ def identify_payload(
     p, std, s2 = ls.solve(list(range(10)), inflation=inflation)
     Rinv = sla.solve_triangular(ls.R, np.eye(10))
     cov = s2 * inflation * (Rinv @ Rinv.T) / np.outer(ls.norms, ls.norms)
+    # the estimate is linear in the arm's base values: p = G (tau - B beta), G the weighted
+    # least-squares solution, so an error e of beta moves it by -H e, H = G B
+    Bw = np.vstack(rows_B) * w[:, None]
+    H = (Rinv @ Rinv.T) @ ((A * w[:, None] / ls.norms).T @ Bw) / ls.norms[:, None]
+    arm_part = None
+    if arm_cov is not None:
+        arm_part = H @ arm_cov @ H.T
+        cov = cov + arm_part
+        std = np.sqrt(np.diag(cov))
+        inflation_rule += (
+            "; plus the arm estimate's covariance (its base parameters before pruning, "
+            "initial.covariance of its JSON) carried through the arm's torques"
+            + (
+                ", that of its least-squares estimate for the consistent one used"
+                if used.startswith("classical")
+                else ""
+            )
+        )
+    else:
+        inflation_rule += (
+            "; the arm estimate's own uncertainty is not counted (its JSON has no covariance)"
+        )
     min_eig = float(np.linalg.eigvalsh(pseudo_inertia(p))[0])
     phi_c, solver, status, cmin = None, None, None, None
     if consistent:
@@ -1107,6 +1153,8 @@ def identify_payload(
         min_eig=min_eig,
         consistent_min_eig=cmin,
         arm_values=used,
+        arm_sensitivity=H,
+        arm_covariance=arm_part,
         solver=solver,
         status=status,
         seconds=time.perf_counter() - t0,

@@ -143,6 +143,22 @@ class IdentificationResult:
             out[a:b] = np.linalg.norm(regressor_rows(self.base, data, a, b) @ root, axis=2)
         return out
 
+    def initial_covariance(self) -> list | None:
+        """The covariance of all base parameters before pruning (the ``initial`` estimate), its
+        variance multiplied by the factor for correlated equations
+        (:func:`noise_variance_factor`), as :meth:`prediction_std` takes it: a list of
+        ``base.n`` rows, or None without a least-squares system. The identification JSON keeps
+        it (``initial.covariance``) for what carries the estimate's uncertainty on
+        (:func:`~mindyn.identification.consistent.identify_payload`)."""
+        if self.reduced is None:
+            return None
+        nb = self.base.n
+        root = self.reduced.covariance_root(list(range(nb)), inflation=noise_variance_factor(self))
+        C = root @ root.T
+        if not np.all(np.isfinite(C)):
+            return None
+        return [[float(v) for v in row] for row in 0.5 * (C + C.T)]
+
     def to_dict(self) -> dict:
         return {
             "model": self.model,
@@ -172,6 +188,7 @@ class IdentificationResult:
                 "values": [float(v) for v in self.initial.get("values", [])],
                 "std": [_json_float(v) for v in self.initial.get("std", [])],
                 "rsd": [_json_float(v) for v in self.initial.get("rsd", [])],
+                "covariance": self.initial_covariance(),
             },
             "settings": self.settings,
             "seconds": self.seconds,
