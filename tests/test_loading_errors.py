@@ -855,3 +855,40 @@ def test_yaml_joint_names_must_be_unique(tmp_path):
         match=r"r\.yaml:5:12: joint 2: the name 'a' is joint 1's too; joint names must be unique",
     ):
         mindyn.load(path)
+
+
+def _rigid(p) -> bool:
+    """Whether 10 inertial parameters are a rigid body's, by its mass and principal moments
+    about the centre of mass (each >= 0, each at most the sum of the other two)."""
+    m, h = p[9], np.asarray(p[6:9])
+    io = np.array([[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]])
+    if m < 0 or (m == 0 and np.any(h)):
+        return False
+    c = h / m if m > 0 else np.zeros(3)
+    lam = np.linalg.eigvalsh(io - m * (c @ c * np.eye(3) - np.outer(c, c)))
+    tol = 1e-9 * max(1.0, abs(lam).max())
+    return bool(lam[0] >= -tol and 2 * lam.max() <= lam.sum() + tol)
+
+
+@pytest.mark.parametrize("robot", ["puma560", "zcr07s", "stanford", "planar3", "r.urdf"])
+def test_info_names_links_no_rigid_body_has(tmp_path, robot):
+    """A link whose inertia breaks the triangle inequality loaded without a word; info now
+    names every such link, the links a test of mass and principal moments finds."""
+    if robot == "r.urdf":  # l2: izz beyond ixx + iyy
+        good = link("l2", 0.5)
+        text = GOOD_URDF.replace(good, good.replace('izz="0.01"', 'izz="0.5"'))
+        robot = str(write(tmp_path, "r.urdf", text))
+    r = mindyn.load(robot)
+    expected = [
+        r.link_names[k + 1] for k, p in enumerate(r.params.reshape(r.n, 10)) if not _rigid(p)
+    ]
+    out = run_cli("info", robot)
+    assert out.returncode == 0, out.stderr
+    lines = [ln for ln in out.stdout.splitlines() if "not a rigid body's" in ln]
+    if robot.endswith("r.urdf"):
+        assert expected == ["l2"]
+    if expected:
+        assert lines, out.stdout
+        assert re.findall(r"'([^']+)'", lines[0].split(": ", 1)[1]) == expected
+    else:
+        assert not lines

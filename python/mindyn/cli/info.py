@@ -117,6 +117,13 @@ def cmd_info(args: argparse.Namespace) -> int:
         out.append("inertia    SYNTHETIC: the inertial values are invented, not measured")
     if robot.notes:
         out.append(f"notes      {robot.notes.strip()}")
+    impossible = _inconsistent_links(robot)
+    if impossible:
+        out.append(
+            f"inertia    not a rigid body's: {', '.join(repr(k) for k in impossible)} (a "
+            "pseudo-inertia is not positive semidefinite: a negative mass or principal moment, "
+            "or principal moments that break the triangle inequality)"
+        )
     out.append("")
     lim = robot.limits
     drv = robot.drives
@@ -207,3 +214,19 @@ def register(sub) -> None:
     p = add_command(sub, "info")
     add_robot(p)
     p.set_defaults(func=cmd_info, shows_offsets=True)
+
+
+def _inconsistent_links(robot) -> list[str]:
+    """The links whose 10 inertial parameters no rigid body has: a pseudo-inertia with an
+    eigenvalue below -1e-9 of its largest magnitude (none for a robot with joints of several
+    degrees of freedom, whose parameters are read as given)."""
+    from ..identification.consistent import pseudo_inertia
+
+    if not robot.single_dof:
+        return []
+    out = []
+    for k, p in enumerate(np.asarray(robot.params).reshape(robot.n, 10)):
+        ev = np.linalg.eigvalsh(pseudo_inertia(p))
+        if ev[0] < -1e-9 * max(abs(ev[0]), abs(ev[-1])):
+            out.append(robot.link_names[k + 1])
+    return out
