@@ -156,6 +156,86 @@ def test_cli_records_dahl_and_predict_follows_the_state_on_another_log(arm, tmp_
     np.testing.assert_allclose(tau_hat, other.tau, atol=0.01 * np.abs(other.tau).max())
 
 
+SNAPPED = """<robot name="snapped4"><link name="base"/>
+<link name="l1"><inertial><origin xyz="0 0 0.1"/><mass value="4"/>
+<inertia ixx="0.03" iyy="0.03" izz="0.01" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<link name="l2"><inertial><origin xyz="0.15 0 0"/><mass value="3"/>
+<inertia ixx="0.005" iyy="0.02" izz="0.02" ixy="0.001" ixz="0" iyz="0"/></inertial></link>
+<link name="l3"><inertial><origin xyz="0.12 0 0.01"/><mass value="2"/>
+<inertia ixx="0.003" iyy="0.012" izz="0.012" ixy="0" ixz="0.0005" iyz="0"/></inertial></link>
+<link name="l4"><inertial><origin xyz="0 0.01 0.05"/><mass value="1"/>
+<inertia ixx="0.002" iyy="0.002" izz="0.001" ixy="0" ixz="0" iyz="0"/></inertial></link>
+<joint name="j1" type="revolute"><parent link="base"/><child link="l1"/>
+<origin xyz="0 0 0.3"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="150" velocity="2"/>
+</joint><joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>
+<origin xyz="0 0 0.2" rpy="1.5708 0 0"/><axis xyz="0 0 1"/>
+<limit lower="-2" upper="2" effort="150" velocity="2"/></joint>
+<joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>
+<origin xyz="0.35 0 0"/><axis xyz="0 0 1"/>
+<limit lower="-2.5" upper="2.5" effort="80" velocity="2"/></joint>
+<joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/>
+<origin xyz="0.3 0 0" rpy="0 1.5708 0"/><axis xyz="0 0 1"/>
+<limit lower="-3" upper="3" effort="30" velocity="3"/></joint></robot>"""
+
+
+def test_dahl_identification_of_a_snapped_robot_predicts_with_its_base_set(tmp_path):
+    """The Dahl base set keeps the snap of the base set it is made from (the origins' angles
+    of 1.5708 rad snapped to pi/2): the JSON records it and predict forms the same set again
+    (it formed it unsnapped, whose names differ, and refused the JSON)."""
+    from mindyn.identification.friction import dahl_base
+
+    path = tmp_path / "snapped4.urdf"
+    path.write_text(SNAPPED)
+    robot = mindyn.load(path)
+    base = mindyn.base_parameters(robot, friction=True)
+    assert base.snap_decision["applied"]
+    sigma = np.r_[SIGMA, 40.0]
+    assert dahl_base(base, 50.0).with_sigma(sigma).snap_decision == base.snap_decision
+    unsnapped = mindyn.base_parameters(robot, friction=True, snap=False)
+    assert list(unsnapped.names) != list(base.names)  # what made the JSON unreadable
+    t = np.arange(0.0, 3.0, 1 / 500.0)
+
+    def four(s):  # the three joints of motion() and a fourth from another of its seeds
+        a, b = motion(s, 1), motion(s, 6)
+        return tuple(np.hstack([x, y[:, :1]]) for x, y in zip(a, b))
+
+    q, dq, ddq = four(t)
+    z = dahl_integrated(t, lambda s: four(s)[1], sigma)
+    tau = robot.inverse_dynamics(q, dq, ddq) + np.r_[FV, 0.4] * dq + np.r_[FC, 0.5] * z
+    log = JointData(t, q, dq, ddq, tau, "dahl log")
+    write_csv(tmp_path / "log.csv", log.t, log.q, log.tau, log.dq, log.ddq)
+    cli("identify", path, tmp_path / "log.csv", "--friction-model", "dahl", "--filter", "none",
+        "--min-velocity", "0", "--json", tmp_path / "id.json")  # fmt: skip
+    doc = json.loads((tmp_path / "id.json").read_text())
+    assert doc["base_snap"]["mode"] == "auto" and doc["base_names"] == list(base.names)
+    cli("predict", path, tmp_path / "id.json", tmp_path / "log.csv", "--filter", "none",
+        "-o", tmp_path / "pred.csv")  # fmt: skip
+    pred = np.genfromtxt(tmp_path / "pred.csv", delimiter=",", names=True)
+    tau_hat = np.column_stack([pred[f"tau_hat{k + 1}"] for k in range(4)])
+    np.testing.assert_allclose(tau_hat, log.tau, atol=0.01 * np.abs(log.tau).max())
+
+
+def test_base_names_that_differ_are_named(arm, tmp_path):
+    """predict names the parameters that differ, never two equal truncated lists."""
+    from mindyn.identification import DataError
+    from mindyn.identification.document import names_difference
+    from mindyn.identification.prediction import identified_model
+
+    base = mindyn.base_parameters(arm, friction=True)
+    names = list(base.names)
+    doc = {"robot": arm.name, "friction": True, "rotor": False, "offset": False,
+           "base_names": names[:-1] + ["Fx9"], "base_values": [1.0] * base.n}  # fmt: skip
+    with pytest.raises(DataError) as e:
+        identified_model(doc, arm)
+    assert f"only in the file: Fx9; only here: {names[-1]}" in str(e.value), str(e.value)
+    swapped = [names[1], names[0], *names[2:]]
+    said = names_difference(swapped, names)
+    assert said == (
+        f"the same names in another order, first at position 1: {names[1]} in the file, "
+        f"{names[0]} here"
+    )
+
+
 def test_generated_code_and_descriptions_refuse_the_dahl_state(arm, tmp_path, capsys):
     from mindyn.cli import main
 

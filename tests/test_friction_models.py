@@ -187,12 +187,9 @@ def test_asymmetric_friction_of_a_lift_with_a_rotor_is_its_own_base_parameter(tm
             assert got[0] == pytest.approx(want, rel=1e-9), (method, dq)
 
 
-def make_log(robot, kind, w, fv, fc, f3, *, seconds=8.0, rate=200.0, noise=0.0, seed=0):
-    """A log of a multi-sine motion (analytic q, dq, ddq) whose torques are the rigid-body ones
-    plus the friction written out here, with white noise of ``noise`` times each joint's RMS."""
-    rng = np.random.default_rng(seed)
-    n = robot.n
-    t = np.arange(0, seconds, 1 / rate)
+def multisine(n: int, t, rng):
+    """Analytic q, dq, ddq (m, n) of a multi-sine motion at the times ``t``: three harmonics of
+    0.25 Hz (scaled by 1 + 0.1 k for joint k) per joint, random amplitudes and phases."""
     q, dq, ddq = (np.zeros((t.size, n)) for _ in range(3))
     for k in range(n):
         for h in range(1, 4):
@@ -202,6 +199,15 @@ def make_log(robot, kind, w, fv, fc, f3, *, seconds=8.0, rate=200.0, noise=0.0, 
             q[:, k] += a * np.sin(om * t + ph)
             dq[:, k] += a * om * np.cos(om * t + ph)
             ddq[:, k] -= a * om**2 * np.sin(om * t + ph)
+    return q, dq, ddq
+
+
+def make_log(robot, kind, w, fv, fc, f3, *, seconds=8.0, rate=200.0, noise=0.0, seed=0):
+    """A log of a multi-sine motion (analytic q, dq, ddq) whose torques are the rigid-body ones
+    plus the friction written out here, with white noise of ``noise`` times each joint's RMS."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0, seconds, 1 / rate)
+    q, dq, ddq = multisine(robot.n, t, rng)
     tau = robot.inverse_dynamics(q, dq, ddq) + friction_formula(kind, dq, w, fv, fc, f3)
     if noise:
         tau = tau + noise * tau.std(axis=0) * rng.standard_normal(tau.shape)

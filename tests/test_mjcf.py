@@ -386,13 +386,24 @@ def test_tendon_mjcf_is_the_motor_side_formula(T, tmp_path):
     mujoco.mj_forward(m, d)
     dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in robot.joint_names]
     np.testing.assert_allclose(d.qfrc_actuator[dof], T.T @ tau_m, rtol=1e-12, atol=1e-12)
-    # a tendon's terms over several joints cannot be read back (the model read has its terms
-    # on the joints): refused, naming the tendon and its joints
-    joints = ", ".join(f"'j{k + 1}'" for k in np.flatnonzero(T[coupled[0]]))
-    with pytest.raises(
-        mindyn.ModelError, match=f"tendon 'm{coupled[0] + 1}' couples joints {joints}"
-    ):
-        mindyn.load(out)
+    # read back: each tendon a motor whose row of T is its coefficients and whose Ia, Fv, Fc
+    # are its armature, damping, frictionloss; every other joint (and one with terms of its own,
+    # as the four-bar linkage's first) a direct motor of ratio 1 with its joint's terms
+    again = mindyn.load(out)
+    tr = again.transmission
+    assert again.drive_side == "motor" and tr.format == "mjcf"
+    slots = again.parameters(rotor=True, friction=True).reshape(6, 13)[:, 10:]
+    for k in coupled:
+        i = tr.motors.index(f"m{k + 1}")
+        np.testing.assert_array_equal(tr.T[i], T[k])
+        np.testing.assert_allclose(slots[i], [ia[k], fv[k], fc[k]], rtol=1e-15)
+    assert sorted(tr.types) == sorted(["tendon"] * len(coupled) + ["direct"] * (6 - len(coupled)))
+    got = again.inverse_dynamics(q, dq, ddq, again.parameters(rotor=True, friction=True))
+    assert_close(got, ref, ROUND_TRIP, "tendon MJCF read back vs motor-side formula")
+    # written back from the robot read: the same file's dynamics
+    back = write_mjcf(again, again.parameters(rotor=True, friction=True), tmp_path / "back.xml")
+    got, _ = mj_inverse(mujoco.MjModel.from_xml_path(str(back.path)), robot.joint_names, q, dq, ddq)
+    assert_close(got + friction, ref, TOL, "tendon MJCF written back vs motor-side formula")
     # joint-side terms with the same transmissions: on the joints; read back exactly (tendons
     # without terms, and actuators, are not dynamics: the robot read has no transmissions)
     joint = write_mjcf(robot, p, tmp_path / "joint.xml", drive_side="joint").path
@@ -638,10 +649,13 @@ def test_mjcf_tendon_terms_the_model_cannot_hold_are_refused_by_name(tmp_path):
         '<joint name="h2" axis="0 0 1"/><geom size="0.1"/></body></body></worldbody>'
     )
     cases = {
-        "coupled": (
-            '<fixed name="d" damping="0.2"><joint joint="h1" coef="1"/>'
-            '<joint joint="h2" coef="-1"/></fixed>',
-            "tendon 'd' couples joints 'h1', 'h2' and has damping 0.2",
+        "redundant": (
+            '<fixed name="d1" damping="0.2"><joint joint="h1" coef="1"/>'
+            '<joint joint="h2" coef="1"/></fixed><fixed name="d2" armature="0.1">'
+            '<joint joint="h1" coef="1"/><joint joint="h2" coef="-1"/></fixed>'
+            '<fixed name="own" frictionloss="0.1"><joint joint="h1" coef="2"/></fixed>',
+            "tendons 'd1', 'd2' carry motor terms: with the joints' own terms (on 'h1') that is "
+            "3 motors for 2 joints",
         ),
         "spatial": (
             '<spatial name="cable" frictionloss="0.3"><site site="s0"/><site site="s1"/></spatial>',
@@ -658,6 +672,82 @@ def test_mjcf_tendon_terms_the_model_cannot_hold_are_refused_by_name(tmp_path):
         with pytest.raises(mindyn.ModelError) as e:
             mindyn.load(path)
         assert message in str(e.value) and "\n" not in str(e.value), str(e.value)
+
+
+DIFFERENTIAL_MJCF = """
+<mujoco model="wrist">
+  <option gravity="0 0 -9.81"/>
+  <worldbody>
+    <body name="a" pos="0 0 0.3">
+      <joint name="h0" axis="0 0 1" armature="0.02" damping="0.1" frictionloss="0.2"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+      <body name="b" pos="0.3 0 0">
+        <joint name="h1" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0.25 0 0.05" size="0.03"/>
+        <body name="c" pos="0.25 0 0.05">
+          <joint name="h2" axis="1 0 0"/>
+          <geom type="box" size="0.05 0.03 0.02" pos="0.05 0.01 0"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <fixed name="ma" armature="0.004" damping="0.03" frictionloss="0.05">
+      <joint joint="h1" coef="20"/><joint joint="h2" coef="20"/>
+    </fixed>
+    <fixed name="mb" armature="0.006" damping="0.02" frictionloss="0.04">
+      <joint joint="h1" coef="15"/><joint joint="h2" coef="-15"/>
+    </fixed>
+  </tendon>
+</mujoco>
+"""
+
+
+def test_mjcf_tendons_over_several_joints_are_motors_with_mujocos_dynamics(tmp_path):
+    """MuJoCo applies a fixed tendon's armature as armature J^T J in the mass matrix, its damping
+    as -damping J^T (J dq) and its frictionloss as a dry friction on J dq: the motor-side
+    model's terms with J the motor's row of T. Read back as such, checked against mj_fullM and
+    mj_inverse (frictionloss disabled, then enabled and saturated at moving states)."""
+    path = tmp_path / "wrist.xml"
+    path.write_text(DIFFERENTIAL_MJCF, encoding="utf-8")
+    robot = mindyn.load(path)
+    tr = robot.transmission
+    assert robot.drive_side == "motor" and tr.motors == ("ma", "mb", "h0")
+    assert tr.types == ("tendon", "tendon", "direct")
+    T = np.array([[0, 20, 20], [0, 15, -15], [1, 0, 0]], dtype=float)
+    np.testing.assert_array_equal(tr.T, T)
+    ia, fv, fc = (
+        np.array([0.004, 0.006, 0.02]),
+        np.array([0.03, 0.02, 0.1]),
+        np.array([0.05, 0.04, 0.2]),
+    )
+    p = robot.parameters(rotor=True, friction=True)
+    np.testing.assert_array_equal(p.reshape(3, 13)[:, 10:], np.column_stack([ia, fv, fc]))
+    m = mujoco.MjModel.from_xml_path(str(path))
+    rng = np.random.default_rng(11)
+    q, dq, ddq = states(robot, rng, m=5, speed=(0.3, 1.0))
+    adr = [int(m.jnt_qposadr[m.joint(n).id]) for n in robot.joint_names]
+    dof = [int(m.jnt_dofadr[m.joint(n).id]) for n in robot.joint_names]
+    for qi in q:  # armature: T^T diag(Ia) T added to the mass matrix
+        qpos = np.array(m.qpos0)
+        qpos[adr] = qi
+        full = full_mass_matrix(m, qpos)[np.ix_(dof, dof)]
+        mass = robot.mass_matrix(qi) + T.T @ np.diag(ia) @ T
+        assert_close(mass, full, TOL, "tendon armature vs mj_fullM")
+    sign = np.sign(dq @ T.T)
+    got = robot.inverse_dynamics(q, dq, ddq, p)
+    ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)  # damping in, frictionloss out
+    assert_close(got, ref + (fc * sign) @ T, TOL, "tendon motors vs mj_inverse")
+    # frictionloss on: MuJoCo's dry friction on each tendon velocity, saturated while it moves
+    on = mujoco.mjtDisableBit.mjDSBL_LIMIT | mujoco.mjtDisableBit.mjDSBL_CONTACT
+    linear = (mujoco.mjtConstraintState.mjCNSTRSTATE_LINEARNEG,
+              mujoco.mjtConstraintState.mjCNSTRSTATE_LINEARPOS)  # fmt: skip
+    for i in range(q.shape[0]):
+        full, d = mj_inverse(m, robot.joint_names, q[i], dq[i], ddq[i], disable=on)
+        kinds = d.efc_type[: d.nefc]
+        assert (kinds == mujoco.mjtConstraint.mjCNSTR_FRICTION_TENDON).sum() == 2
+        assert np.isin(d.efc_state[: d.nefc], linear).all()
+        assert_close(got[i], full[0], TOL, "tendon motors vs mj_inverse with frictionloss")
 
 
 BAD = {

@@ -1199,43 +1199,59 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
     long row = 0;
     for (long r = 0; r < Zs.rows(); ++r)
       if (r != red.constant_row) Z.row(row++) = Zs.row(r);
+    // A friction parameter of unit size in the robot's scale (its column's size, with its
+    // motor's reduction), as the other rows' coordinates are: the rows are measured against
+    // the largest (echelon). A motor that turns with several joints has no third term
+    // (Model::holdsThirdFriction): no row, a parameter without effect.
+    auto unitRow = [&](int k, int i) {
+      const int c = layout.frictionIndex(k, i);
+      if (i < 2 || kernel.holdsThirdFriction(k)) Z(keep + fc * k + i, c) = sizes[c];
+    };
     if (fc > 0 && kernel.motorSide() && coupledMotors(kernel.transmission.T)) {
       // Friction of motors that couple joints: motor k's columns are functions of its velocity
       // T_k dq, so motors whose rows of T are nearly parallel have nearly dependent friction
       // columns (a unit row each counted them independent). The rows are the triangular factor
-      // of the friction columns sampled at random states, each column scaled to its unit: the
-      // same dependencies, decided by the elimination as the other rows are (each column
-      // scaled to its size, with its motor's reduction).
+      // of those motors' friction columns sampled at random states, each column scaled to its
+      // unit: the same dependencies, decided by the elimination as the other rows are (each
+      // column scaled to its size, with its motor's reduction). A motor that alone drives one
+      // joint alone (Transmission::soleJoint) shares that joint's torque with no other motor:
+      // its columns are independent of every other's, a unit row each (sampled, a Stribeck
+      // column at a velocity scale far below the sampled motor speeds vanished).
+      std::vector<int> shared;
+      for (int k = 0; k < n; ++k) {
+        if (kernel.transmission.soleJoint(k) >= 0)
+          for (int i = 0; i < fc; ++i) unitRow(k, i);
+        else
+          shared.push_back(k);
+      }
+      const int fs = fc * static_cast<int>(shared.size());
       Dynamics dyn(kernel, layout);
       std::mt19937 rng(options.seed);
-      const int states = std::max(40, 2 * fr);
+      const int states = std::max(40, 2 * fs);
       const int nv = kernel.velocitySize();
-      Eigen::MatrixXd F(static_cast<long>(states) * nv, fr), W(nv, P);
+      Eigen::MatrixXd F(static_cast<long>(states) * nv, fs), W(nv, P);
       for (int s = 0; s < states; ++s) {
         dyn.randomState(rng);
         dyn.regressor(W);
-        for (int k = 0; k < n; ++k)
+        for (std::size_t a = 0; a < shared.size(); ++a)
           for (int i = 0; i < fc; ++i)
-            F.block(static_cast<long>(s) * nv, fc * k + i, nv, 1) =
-                W.col(layout.frictionIndex(k, i));
+            F.block(static_cast<long>(s) * nv, fc * static_cast<long>(a) + i, nv, 1) =
+                W.col(layout.frictionIndex(shared[a], i));
       }
-      for (int k = 0; k < n; ++k)
+      for (std::size_t a = 0; a < shared.size(); ++a)
         for (int i = 0; i < fc; ++i) {
-          const double norm = F.col(fc * k + i).norm();
-          if (norm > 0) F.col(fc * k + i) *= sizes[layout.frictionIndex(k, i)] / norm;
+          const long col = fc * static_cast<long>(a) + i;
+          const double norm = F.col(col).norm();
+          if (norm > 0) F.col(col) *= sizes[layout.frictionIndex(shared[a], i)] / norm;
         }
-      const Eigen::MatrixXd R = Eigen::HouseholderQR<Eigen::MatrixXd>(F).matrixQR().topRows(fr);
-      for (int a = 0; a < fr; ++a)
-        for (int b = a; b < fr; ++b) Z(keep + a, layout.frictionIndex(b / fc, b % fc)) = R(a, b);
+      const Eigen::MatrixXd R = Eigen::HouseholderQR<Eigen::MatrixXd>(F).matrixQR().topRows(fs);
+      for (int a = 0; a < fs; ++a)
+        for (int b = a; b < fs; ++b)
+          Z(keep + fc * shared[a / fc] + a % fc, layout.frictionIndex(shared[b / fc], b % fc)) =
+              R(a, b);
     } else {
       for (int k = 0; k < n; ++k)
-        for (int i = 0; i < fc; ++i) {
-          // a friction parameter of unit size in the robot's scale (its column's size, with its
-          // motor's reduction), as the other rows' coordinates are: the rows are measured
-          // against the largest (echelon)
-          const int c = layout.frictionIndex(k, i);
-          Z(keep + fc * k + i, c) = sizes[c];
-        }
+        for (int i = 0; i < fc; ++i) unitRow(k, i);
     }
     ZE = sparse(Z);
   } else if (options.method == BaseMethod::Recursive) {

@@ -22,11 +22,12 @@ inline double motorVelocity(const Model& model, int k, const VecRef& dq) noexcep
 }
 
 /// The friction features of slot k at slot velocity v, one per friction column of the layout:
-/// the slot's friction torque is sum_j params[viscousIndex(k) + j] * out[j].
+/// the slot's friction torque is sum_j params[viscousIndex(k) + j] * out[j]. The third is zero
+/// for a motor that turns with several joints (Model::holdsThirdFriction): it has no third term.
 inline void frictionFeatures(const Model& model, ParameterLayout /*layout*/, int k, double v,
                              double* out) noexcept {
   out[2] = 0.0;  // the friction models without a third column leave it
-  frictionShapes(model.friction_model, k, v, out);
+  slotFrictionShapes(model, k, v, out);
 }
 
 /// Adds to `tau` the joint torques of every slot's rotor inertia (at `ddq`) and friction (at

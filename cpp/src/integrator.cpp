@@ -41,7 +41,7 @@ bool Integrator::acceleration(Data& data, const VecRef& q, const VecRef& dq, con
   for (int k = 0; k < n_; ++k) {
     const double v = drive::motorVelocity(model_, k, dq);
     double phi[3] = {0.0, 0.0, 0.0};
-    frictionShapes(model_.friction_model, k, v, phi, eps_);
+    slotFrictionShapes(model_, k, v, phi, eps_);
     double f = 0.0;
     for (int i = 1; i < layout_.friction_columns; ++i) f += friction_(k, i) * phi[i];
     if (f == 0.0) continue;

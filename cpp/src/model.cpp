@@ -296,14 +296,13 @@ Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
   if (!motorSide() || transmission.nm() != n) return p;
   // On the motor side slot k is motor k: its own values when the description gives them
   // (Transmission), otherwise from the joints'. A motor that alone drives one joint alone (row
-  // k of T = r e_j, column j = r e_k) acts on it as r^2 Ia, r^2 Fv, |r| Fc: its values are the
-  // joint's divided so. A motor that turns with several joints (or shares its joint): 0.
+  // k of T = r e_j, column j = r e_k: Transmission::soleJoint) acts on it as r^2 Ia, r^2 Fv,
+  // |r| Fc: its values are the joint's divided so. A motor that turns with several joints (or
+  // shares its joint): 0, and it has no third friction term (holdsThirdFriction).
   const Eigen::MatrixXd& T = transmission.T;
   for (int k = 0; k < n; ++k) {
-    int j = -1;
-    for (int a = 0; a < n; ++a)
-      if (T(k, a) != 0.0) j = j < 0 ? a : n;  // n: several
-    const bool alone = j >= 0 && j < n && (T.col(j).array() != 0.0).count() == 1;
+    const int j = transmission.soleJoint(k);
+    const bool alone = j >= 0;
     const double r = alone ? T(k, j) : 0.0;
     // the motor's own value when the description gives it
     auto own = [k](const Eigen::VectorXd& v, double derived) {

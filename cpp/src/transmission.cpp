@@ -56,6 +56,22 @@ Eigen::VectorXd TransmissionGroup::offsets() const {
   return -M * o;
 }
 
+int soleJoint(const Eigen::MatrixXd& T, int k) noexcept {
+  if (k < 0 || k >= T.rows()) return -1;
+  int j = -1;
+  for (Eigen::Index a = 0; a < T.cols(); ++a) {
+    if (T(k, a) == 0.0) continue;
+    if (j >= 0) return -1;  // turns with several joints
+    j = static_cast<int>(a);
+  }
+  if (j < 0) return -1;
+  for (Eigen::Index m = 0; m < T.rows(); ++m)
+    if (m != k && T(m, j) != 0.0) return -1;  // another motor turns joint j too
+  return j;
+}
+
+int Transmission::soleJoint(int k) const noexcept { return mindyn::soleJoint(T, k); }
+
 void Transmission::validate(const std::vector<Joint>& joints, const std::string& who) const {
   if (empty()) return;
   const auto n = static_cast<Eigen::Index>(joints.size());

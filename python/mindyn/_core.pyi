@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ArgumentError', 'BaseDynamics', 'BaseParameters', 'Error', 'IkSolver', 'Integrator', 'Kinematics', 'Model', 'ModelError', 'MomentumObserver', 'OFFSET_PREFIX', 'RobotFileNotFoundError', 'STFunctionBlock', 'STProgram', 'STVariable', 'base_parameters', 'classical_parameter_names', 'coriolis_matrix', 'from_pinocchio_order', 'generate_code', 'generate_controller', 'generate_observer', 'inertial_from_com', 'inertial_from_urdf', 'influence_coordinates', 'khalil_order', 'link_poses', 'load_urdf', 'load_yaml', 'multibody_coriolis_matrix', 'multibody_energies', 'multibody_forward_dynamics', 'multibody_frame_jacobian', 'multibody_inverse_dynamics', 'multibody_link_poses', 'multibody_mass_matrix', 'multibody_momentum', 'multibody_regressor', 'multibody_slotine_li_regressor', 'parse_csv_numbers', 'parse_urdf', 'parse_yaml', 'planar_arm', 'pose_error', 'projection_cost', 'projection_limits', 'projection_refusal', 'recursive_refusal', 'slotine_li_regressor', 'slotine_li_regressor_classical', 'snap_changes', 'sosfilt_rows', 'to_pinocchio_order', 'tool_jacobian']
+__all__: list[str] = ['ArgumentError', 'BaseDynamics', 'BaseParameters', 'Error', 'IkSolver', 'Integrator', 'Kinematics', 'Model', 'ModelError', 'MomentumObserver', 'OFFSET_PREFIX', 'RobotFileNotFoundError', 'STFunctionBlock', 'STProgram', 'STVariable', 'base_parameters', 'classical_parameter_names', 'coriolis_matrix', 'from_pinocchio_order', 'generate_code', 'generate_controller', 'generate_observer', 'inertial_from_com', 'inertial_from_urdf', 'influence_coordinates', 'khalil_order', 'link_poses', 'load_urdf', 'load_yaml', 'multibody_coriolis_matrix', 'multibody_energies', 'multibody_forward_dynamics', 'multibody_frame_jacobian', 'multibody_inverse_dynamics', 'multibody_link_poses', 'multibody_mass_matrix', 'multibody_momentum', 'multibody_regressor', 'multibody_slotine_li_regressor', 'parse_csv_numbers', 'parse_urdf', 'parse_yaml', 'planar_arm', 'pose_error', 'projection_cost', 'projection_limits', 'projection_refusal', 'recursive_refusal', 'slotine_li_regressor', 'slotine_li_regressor_classical', 'snap_changes', 'sole_joints', 'sosfilt_rows', 'to_pinocchio_order', 'tool_jacobian']
 class Error(Exception):
     """
     Base class of the errors mindyn raises.
@@ -26,7 +26,7 @@ class Model:
         ...
     def friction_shapes(self, dq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
         """
-        The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c).
+        The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c); the third zero for a motor that turns with several joints (it has no third term).
         """
     def gravity_torque(self, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], params: typing.Any = None) -> numpy.typing.NDArray[numpy.float64]:
         ...
@@ -75,6 +75,10 @@ class Model:
     def with_spherical(self, names: collections.abc.Sequence[str]) -> Model:
         """
         A new model, the same but with the named floating (free-flyer) joints made spherical: the rotation about the same joint frame's origin, without translation (a ball joint, which URDF text cannot carry); this one is unchanged.
+        """
+    def with_transmission(self, *, T: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"], motors: collections.abc.Sequence[str], types: collections.abc.Sequence[str], format: str) -> Model:
+        """
+        A new model with the transmission q_m = T q (no offsets, no torque constants) of the named motors, each of its `types`, and the rotor inertia and friction on them; this one is unchanged.
         """
     @property
     def axes(self) -> typing.Annotated[numpy.typing.NDArray[numpy.float64], "[m, n]"]:
@@ -524,6 +528,10 @@ def slotine_li_regressor_classical(model: Model, q: typing.Annotated[numpy.typin
 def snap_changes(model: Model, tolerance: typing.SupportsFloat | typing.SupportsIndex = 0.001) -> tuple[list, list[str]]:
     """
     What a snap of `tolerance` [rad] would round in the model (which is unchanged): each angle and axis component rounded (dicts: joint, joint_name, frame 'origin' | 'link frame' | 'axis', component 'yaw' | 'pitch' | 'roll' | 'x' | 'y' | 'z', value, snapped, deviation) and the lines of text that describe the changes.
+    """
+def sole_joints(T: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> list[int]:
+    """
+    Per motor (row of the transmission T), the joint it alone drives and drives alone, or -1 (it turns with several joints, or another motor turns that joint too): the motors whose rotor inertia and friction a joint can carry, and the only ones with a third friction term.
     """
 def sosfilt_rows(sos: numpy.ndarray, x: numpy.ndarray, z: numpy.ndarray, cols: typing.Any = None, out: typing.Any = None) -> None:
     """

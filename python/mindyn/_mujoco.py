@@ -10,11 +10,17 @@ joint's ``armature`` as its rotor inertia ``Ia``, ``damping`` as ``Fv`` and ``fr
 Tendons: a fixed tendon over one joint with coefficient ``c`` (length ``c q``) is folded onto
 that joint, exactly as MuJoCo applies it: its ``armature`` adds ``c^2 armature`` to the joint's
 ``Ia``, its ``damping`` ``c^2 damping`` to ``Fv`` and its ``frictionloss`` ``|c| frictionloss``
-to ``Fc``. The model read has its terms on the joints and no transmissions (a URDF in memory can
-carry only ros_control's Simple, Differential and FourBarLinkage forms, not a tendon's general
-row of ``T``): a tendon over several joints, or a spatial one, carrying armature, damping or
-frictionloss (``T^T Ia T`` couples the joints) is refused by name, as is tendon stiffness.
-Tendons without such terms, and actuators, do not enter the dynamics and are not read.
+to ``Fc``. Fixed tendons over several joints carrying armature, damping or frictionloss are
+motors (:func:`motor_tendons`, :func:`_with_tendon_motors`): MuJoCo applies a tendon's armature
+as ``armature J^T J`` in the mass matrix, its damping as the force ``-damping J^T (J dq)`` and
+its frictionloss as a dry friction of at most ``frictionloss`` on the tendon velocity ``J dq``,
+``J`` the tendon's coefficients: the motor-side model's ``T_k^T (Ia_k T_k ddq + Fv_k T_k dq +
+Fc_k sign(T_k dq))`` with ``T_k = J``. The model read then has a transmission (format
+``mjcf``): a motor per such tendon and a direct motor (ratio 1, the joint's terms) per other
+joint, the drive terms on the motors. A spatial tendon carrying such terms is refused by name,
+as is tendon stiffness, and tendons that are not one motor per joint they turn. Tendons
+without such terms (outside a differential's), and actuators, do not enter the dynamics and are
+not read.
 
 Limits: a joint's ``range`` and its ``actuatorfrcrange`` (the effort limit); its velocity limit,
 which MJCF lacks, from a custom numeric ``velocity_limit:JOINT`` (:data:`VELOCITY_LIMIT`), as
@@ -206,17 +212,10 @@ def check(m, path) -> None:
                 f"{where} has a spring (stiffness {float(m.tendon_stiffness[t])!r}); tendon "
                 "springs are not in the model"
             )
-        wraps = tendon_joints(m, t)
-        if wraps is None or len(wraps) != 1:
-            over = (
-                "is a spatial tendon"
-                if wraps is None
-                else "couples joints " + ", ".join(f"'{joint_name(m, j)}'" for j, _ in wraps)
-            )
+        if tendon_joints(m, t) is None:
             raise _core.ModelError(
-                f"{where} {over} and has {', '.join(given)}: only the terms of a fixed tendon "
-                "over one joint are read (folded onto it); a tendon's over several joints "
-                "couple them, which joint terms cannot hold (put the terms on the joints)"
+                f"{where} is a spatial tendon and has {', '.join(given)}: only the terms of "
+                "fixed tendons are read (over one joint folded onto it, over several a motor)"
             )
     for b in range(1, m.nbody):
         if m.body_gravcomp[b] != 0:
@@ -316,7 +315,8 @@ def read(path, tip: str | None) -> _core.Model:
     core.rotor_inertia = np.array([by_name[name] for name in core.joint_names])
     if not core.single_dof:
         _ball_ranges(m, core, path)
-    return core
+    scale = (1.0, 0.0 if disabled & int(damper) else 1.0, 0.0 if disabled & frictionloss else 1.0)
+    return _with_tendon_motors(m, core, path, (armature, damping, friction), scale)
 
 
 def _ball_ranges(m, core: _core.Model, path) -> None:
@@ -365,6 +365,111 @@ def tendon_terms(m, t: int) -> dict[str, float]:
         "damping": float(m.tendon_damping[t]),
         "frictionloss": float(m.tendon_frictionloss[t]),
     }
+
+
+def motor_tendons(m) -> list[int]:
+    """The fixed tendons over several joints read as motors: those carrying armature, damping
+    or frictionloss, and the fixed tendons over several joints that share a joint with them (a
+    differential's other motor, whose terms may be zero)."""
+    multi = {t: tendon_joints(m, t) for t in range(m.ntendon)}
+    over = {t: {j for j, _ in w} for t, w in multi.items() if w is not None and len(w) > 1}
+    chosen = {t for t in over if any(v != 0 for v in tendon_terms(m, t).values())}
+    joints = set().union(*(over[t] for t in chosen)) if chosen else set()
+    grew = bool(chosen)
+    while grew:
+        grew = False
+        for t, js in over.items():
+            if t not in chosen and js & joints:
+                chosen.add(t)
+                joints |= js
+                grew = True
+    return sorted(chosen)
+
+
+def _with_tendon_motors(m, core, path, terms: tuple[np.ndarray, np.ndarray, np.ndarray], scale):
+    """``core`` with the transmission of the motor tendons (:func:`motor_tendons`): a motor per
+    such tendon, its row of ``T`` the tendon's coefficients and its ``Ia``, ``Fv``, ``Fc`` the
+    tendon's ``armature``, ``damping`` and ``frictionloss`` (times ``scale``: 0 for a term
+    ``<option>`` disables), which MuJoCo applies as ``T_k^T armature T_k`` in the mass matrix,
+    ``-damping T_k^T (T_k dq)`` and a dry friction of at most ``frictionloss`` on the tendon
+    velocity: the motor-side model's terms exactly. A joint that no such tendon turns, or that
+    has terms of its own (``terms``: armature, damping, frictionloss by joint id; a four-bar
+    linkage's first motor), is driven directly by a motor named after it (ratio 1) with those
+    terms; a tendon joint the rows leave undetermined gets such a motor without terms. Refused
+    by name: a model with free or ball joints, a tendon joint outside the model, and motors
+    that are not one per joint (or whose rows do not determine the joints)."""
+    tendons = motor_tendons(m)
+    if not tendons:
+        return core
+    names = list(core.joint_names)
+    index = {name: k for k, name in enumerate(names)}
+    n = len(names)
+    first = f"{path}: tendon '{tendon_name(m, tendons[0])}'"
+    if not core.single_dof:
+        raise _core.ModelError(
+            f"{first} couples joints and carries motor terms, but the model has free or ball "
+            "joints, which no motor drives (their drive terms act on the joints): put the "
+            "terms on the joints"
+        )
+    rows, motors, types, values = [], [], [], []
+    covered: dict[str, str] = {}  # joint -> a tendon turning it
+    for t in tendons:
+        row = np.zeros(n)
+        tname = tendon_name(m, t)
+        for j, c in tendon_joints(m, t) or []:
+            jname = joint_name(m, j)
+            if jname not in index:
+                raise _core.ModelError(
+                    f"{path}: tendon '{tname}' turns joint '{jname}', which is not in the model "
+                    "(loaded with a tip): its motor cannot be read"
+                )
+            row[index[jname]] = c
+            covered.setdefault(jname, tname)
+        tt = tendon_terms(m, t)
+        rows.append(row)
+        motors.append(tname)
+        types.append("tendon")
+        values.append([tt[k] * f for k, f in zip(("armature", "damping", "frictionloss"), scale)])
+    ids = {joint_name(m, j): j for j in range(m.njnt)}
+
+    def direct(k: int) -> None:
+        row = np.zeros(n)
+        row[k] = 1.0
+        rows.append(row)
+        motors.append(names[k])
+        types.append("direct")
+        values.append([float(v[ids[names[k]]]) for v in terms])
+
+    # a joint with terms of its own, or turned by no motor tendon, is driven directly (ratio 1)
+    for k, jname in enumerate(names):
+        if jname not in covered or any(v[ids[jname]] != 0 for v in terms):
+            direct(k)
+    # a tendon joint the rows leave undetermined: a direct motor without terms (a four-bar
+    # linkage's first motor whose terms are all zero), which changes no dynamics
+    for k, jname in enumerate(names):
+        if len(rows) < n and jname in covered and motors.count(jname) == 0:
+            if np.linalg.matrix_rank(np.array(rows + [np.eye(n)[k]])) > np.linalg.matrix_rank(
+                np.array(rows)
+            ):
+                direct(k)
+                values[-1] = [0.0, 0.0, 0.0]
+    if len(rows) != n:
+        extra = [x for x in motors[len(tendons) :] if x in covered]
+        raise _core.ModelError(
+            f"{path}: tendons {', '.join(repr(x) for x in motors[: len(tendons)])} carry motor "
+            f"terms: with the joints' own terms"
+            + (f" (on {', '.join(repr(x) for x in extra)})" if extra else "")
+            + f" that is {len(rows)} motors for {n} joints, and the model reads motors only "
+            "one per joint (put the terms either on the tendons or on the joints)"
+        )
+    try:
+        core = core.with_transmission(T=np.array(rows), motors=motors, types=types, format="mjcf")
+    except _core.ModelError as e:
+        raise _core.ModelError(f"{path}: the tendons as motors: {e}") from None
+    values_ = np.array(values)
+    return core.with_joint_terms(
+        motor_rotor=values_[:, 0], motor_viscous=values_[:, 1], motor_coulomb=values_[:, 2]
+    )
 
 
 def folded_tendons(m) -> list[int]:

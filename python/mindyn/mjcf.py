@@ -50,10 +50,14 @@ With transmissions (``q_m = T q + c``, ``tau = T^T tau_m``), motor by motor (row
   ``frictionloss`` as without transmissions; the motor offsets ``c`` are not written (they do
   not change the dynamics).
 
-Read back (:mod:`mindyn._mujoco`), such a file gives a robot with its terms on the joints and
-no transmissions: a motor-side robot's simple motors come back as the joint terms above
-(``r^2 Ia`` ..., the same parameters when ``r`` = 1) with the same dynamics; a file with
-tendons carrying terms over several joints is refused.
+Read back (:mod:`mindyn._mujoco`), such a file gives a robot with the same dynamics: a
+motor-side robot's simple motors come back as the joint terms above (``r^2 Ia`` ..., the same
+parameters when ``r`` = 1); fixed tendons over several joints carrying terms come back as a
+transmission (``robot.transmission.format`` ``mjcf``) of one motor per tendon, its row of ``T``
+the tendon's coefficients and its ``Ia``, ``Fv``, ``Fc`` the tendon's terms, every other joint
+driven directly (ratio 1) with its joint's terms, the drive terms on the motors. A robot read so
+is written back with each coupling motor's terms on its tendon and each direct motor's on its
+joint.
 """
 
 from __future__ import annotations
@@ -537,6 +541,17 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
     link_index = {name: k for k, name in enumerate(robot.link_names[1:])}
     joint_index = {name: k for k, name in enumerate(robot.joint_names)}
     notes: list[str] = []
+    tendons = {e.get("name"): e for e in doc.root.iter("fixed") if e.get("name")}
+    on_motors = robot.drive_side == "motor"
+    if on_motors:  # the file's motor tendons (its transmission) and directly driven joints
+        tr = robot.transmission
+        assert tr is not None  # the motor side has one
+        motors = _motor_rows(robot, tr)
+        per_joint = _joint_drive(robot, terms, motors, True)
+        for i, (motor, row) in enumerate(motors):
+            if len(row) > 1:
+                element = _named(tendons, motor, "fixed", src)
+                element.attrib.update(_attrs(_slot(terms, i, f"motor '{motor}'")))
     for b in range(1, m.nbody):
         jnts = _mujoco.body_joints(m, b)
         bname = _mujoco.body_name(m, b)
@@ -562,12 +577,15 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
         _set_inertial(_named(bodies, bname, "body", src), mass, com, inertia)
         for j in jnts:
             name = _mujoco.joint_name(m, j)
-            drive = _slot(terms, joint_index[name], f"joint '{name}'")
+            drive = (
+                tuple(per_joint[joint_index[name]])
+                if on_motors
+                else _slot(terms, joint_index[name], f"joint '{name}'")
+            )
             if robot.joint_types[joint_index[name]] not in _SINGLE_DOF:  # free or ball: none
                 _no_drive_terms(robot, joint_index[name], drive)
                 continue
             _named(joints, name, "joint", src).attrib.update(_attrs(drive))
-    tendons = {e.get("name"): e for e in doc.root.iter("fixed") if e.get("name")}
     for t in _mujoco.folded_tendons(m):  # read as their joint's terms, now written there
         name = _mujoco.tendon_name(m, t)
         element = _named(tendons, name, "fixed", src)

@@ -983,7 +983,9 @@ class Robot:
         """The friction columns of every slot at the slot velocities ``dq`` (:attr:`friction_model`:
         ``v, sign v`` (coulomb), ``v, sign v, |sign v|`` (asymmetric), ``v, tanh(v / w)``
         (smooth), ``v, sign v, sign v exp(-(v / w)^2)`` (stribeck)), shape (n, c) or (m, n, c):
-        a slot's friction torque is its friction parameters dotted with its row."""
+        a slot's friction torque is its friction parameters dotted with its row. The third is 0
+        for a motor that turns with several joints (or shares its joint): it has no third term
+        (:meth:`with_joint_terms`)."""
         (dq,) = _args.batch(self.n, dq=dq)
         return self._m.friction_shapes(dq)
 
@@ -1161,13 +1163,14 @@ def _reflected(term: str, r: float) -> float:
 
 def _direct_drives(T: np.ndarray) -> list:
     """Per joint j, ``(k, r)`` when motor k alone drives it and drives it alone (row k of the
-    transmission ``T`` is ``r e_j``), else None: the joints whose motor's rotor inertia and
-    friction act on them as ``r^2 Ia``, ``r^2 Fv``, ``|r| Fc``."""
-    out: list = []
-    for j in range(T.shape[1]):
-        ks = np.flatnonzero(T[:, j])
-        k = int(ks[0]) if ks.size == 1 else -1
-        out.append(None if k < 0 or np.count_nonzero(T[k]) != 1 else (k, float(T[k, j])))
+    transmission ``T`` is ``r e_j``; the core's ``sole_joints``, the one place this is
+    decided), else None: the joints whose motor's rotor inertia and friction act on them as
+    ``r^2 Ia``, ``r^2 Fv``, ``|r| Fc``, and the only motors with a third friction term."""
+    T = np.asarray(T, dtype=float)
+    out: list = [None] * T.shape[1]
+    for k, j in enumerate(_core.sole_joints(T)):
+        if j >= 0:
+            out[j] = (k, float(T[k, j]))
     return out
 
 

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 
 #include "mindyn/base_parameters.hpp"
@@ -261,6 +262,34 @@ PYBIND11_MODULE(_core, m) {
           py::arg("other"),
           "A new model with the joints of this one and the transmissions, drive side and "
           "friction model of `other` (a model of as many joints); this one is unchanged.")
+      .def(
+          "with_transmission",
+          [](const PyModel& s, const Eigen::MatrixXd& T, const std::vector<std::string>& motors,
+             const std::vector<std::string>& types, const std::string& format) {
+            if (static_cast<Eigen::Index>(motors.size()) != T.rows() ||
+                types.size() != motors.size())
+              throw ArgumentError("with_transmission: " + std::to_string(motors.size()) +
+                                  " motors and " + std::to_string(types.size()) +
+                                  " types for a matrix of " + std::to_string(T.rows()) + " rows");
+            Model copy = s.model;
+            Transmission t;
+            t.format = format;
+            t.T = T;
+            t.offset = Eigen::VectorXd::Zero(T.rows());
+            t.motors = motors;
+            t.types = types;
+            t.torque_constant =
+                Eigen::VectorXd::Constant(T.rows(), std::numeric_limits<double>::quiet_NaN());
+            t.validate(copy.joints, copy.name);
+            copy.transmission = std::move(t);
+            copy.drive_terms_on_motors = true;
+            copy.validate();
+            return std::make_shared<PyModel>(std::move(copy));
+          },
+          py::kw_only(), py::arg("T"), py::arg("motors"), py::arg("types"), py::arg("format"),
+          "A new model with the transmission q_m = T q (no offsets, no torque constants) of the "
+          "named motors, each of its `types`, and the rotor inertia and friction on them; this "
+          "one is unchanged.")
       .def(
           "with_joint_terms",
           [](const PyModel& s, const std::optional<Eigen::VectorXd>& rotor,
@@ -520,13 +549,14 @@ PYBIND11_MODULE(_core, m) {
             return perSample<1>(batch, {{{n, c}}}, [&](const auto& x, auto out) {
               for (int k = 0; k < n; ++k) {
                 double phi[3] = {0.0, 0.0, 0.0};
-                frictionShapes(s.model.friction_model, k, x[0][k], phi);
+                slotFrictionShapes(s.model, k, x[0][k], phi);
                 for (int i = 0; i < c; ++i) out[0][k * c + i] = phi[i];
               }
             })[0];
           },
           py::arg("dq"),
-          "The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c).")
+          "The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c); "
+          "the third zero for a motor that turns with several joints (it has no third term).")
       .def(
           "energies",
           [](PyModel& s, const Array& q, const Array& dq, const py::object& params) {
@@ -873,6 +903,18 @@ PYBIND11_MODULE(_core, m) {
       "Why the recursive method cannot take the model with these joint terms (rotor inertia of "
       "a motor coupling joints whose coupled energy it cannot prove independent of the links'), "
       "or None when it can.");
+  m.def(
+      "sole_joints",
+      [](const Eigen::MatrixXd& T) {
+        std::vector<int> out(static_cast<size_t>(T.rows()));
+        for (Eigen::Index k = 0; k < T.rows(); ++k) out[k] = soleJoint(T, static_cast<int>(k));
+        return out;
+      },
+      py::arg("T"),
+      "Per motor (row of the transmission T), the joint it alone drives and drives alone, or -1 "
+      "(it turns with several joints, or another motor turns that joint too): the motors whose "
+      "rotor inertia and friction a joint can carry, and the only ones with a third friction "
+      "term.");
   m.def("khalil_order", [](int n, bool rotor, bool friction) {
     return khalilOrder(n, {rotor, friction});
   });

@@ -53,13 +53,23 @@ inline void frictionShapes(const FrictionModel& f, int k, double v, double* phi,
   }
 }
 
-/// Slot k's friction torque sum_i params[layout.frictionIndex(k, i)] phi_i(v) (frictionShapes);
-/// zero without friction in the layout.
+/// The friction columns of slot k of `model` at the slot's velocity v: frictionShapes of its
+/// friction model, the third zero for a slot without a third term (a motor that turns with
+/// several joints, Model::holdsThirdFriction). What every regressor, simulation and the
+/// bindings take.
+inline void slotFrictionShapes(const Model& model, int k, double v, double* phi,
+                               double sign_smoothing = 0.0) noexcept {
+  frictionShapes(model.friction_model, k, v, phi, sign_smoothing);
+  if (model.friction_model.columns() == 3 && !model.holdsThirdFriction(k)) phi[2] = 0.0;
+}
+
+/// Slot k's friction torque sum_i params[layout.frictionIndex(k, i)] phi_i(v)
+/// (slotFrictionShapes); zero without friction in the layout.
 inline double frictionTorque(const Model& model, ParameterLayout layout, const VecRef& params,
                              int k, double v) noexcept {
   if (!layout.friction) return 0.0;
   double phi[3] = {0.0, 0.0, 0.0};
-  frictionShapes(model.friction_model, k, v, phi);
+  slotFrictionShapes(model, k, v, phi);
   double t = 0.0;
   for (int i = 0; i < layout.friction_columns; ++i)
     t += params[layout.frictionIndex(k, i)] * phi[i];

@@ -274,6 +274,16 @@ struct Model {
     return !transmission.empty() && drive_terms_on_motors && transmission.nm() == nq();
   }
 
+  /// Whether slot k has the friction model's third term (Fa, Fs; FrictionModel::columns() 3):
+  /// every joint on the joint side; on the motor side (motorSide()) a motor that alone drives
+  /// one joint alone (Transmission::soleJoint), whose third term that joint carries as r Fa or
+  /// |r| Fs. A motor that turns with several joints has none: its third friction column is zero
+  /// in every regressor and generated code (a parameter without effect), as its value is in
+  /// parameters(). The one place this is decided.
+  bool holdsThirdFriction(int k) const noexcept {
+    return !motorSide() || transmission.soleJoint(k) >= 0;
+  }
+
   /// Number of joints (and of moving links). The name is historical: it is the size of q only
   /// when every joint is revolute or prismatic (singleDof()); configSize() and velocitySize()
   /// are the sizes of q and v in general (Pinocchio's nq and nv).

@@ -85,6 +85,8 @@ struct Transmission {
 
   bool empty() const { return motors.empty(); }
   int nm() const { return static_cast<int>(motors.size()); }
+  /// The joint that motor k alone drives and drives alone (soleJoint of T), or -1.
+  int soleJoint(int k) const noexcept;
 
   /// Checks sizes against the model's `joints`, finiteness and magnitude of every entry,
   /// unique motor names, that every single-DOF joint is driven (a non-zero column) and no
@@ -93,6 +95,14 @@ struct Transmission {
   /// throws ModelError naming the motor, joint or the rank found.
   void validate(const std::vector<Joint>& joints, const std::string& who) const;
 };
+
+/// The joint j that motor k of the transmission T (n_m x n) alone drives and drives alone (row k
+/// of T is r e_j and column j is r e_k), or -1 (motor k turns with several joints, or another
+/// motor turns joint j too). Such a motor's rotor inertia and friction act on joint j as
+/// r^2 Ia, r^2 Fv, |r| Fc, |r| Fs and r Fa: the only motors whose terms a joint can carry, and
+/// the only ones with the friction model's third term (Model::holdsThirdFriction). The one place
+/// this is decided.
+int soleJoint(const Eigen::MatrixXd& T, int k) noexcept;
 
 /// The transmission of a model from the declared groups. `joints` are the model's joints;
 /// a group's joint that is not one of them but is a joint of the description locked at a

@@ -25,7 +25,11 @@ def _transmission_lines(robot) -> list[str]:
     tr = robot.transmission
     if tr is None:
         return []
-    form = {"ros1": "URDF, ROS 1 form", "ros2": "URDF, ROS 2 form"}.get(tr.format, tr.format)
+    form = {
+        "ros1": "URDF, ROS 1 form",
+        "ros2": "URDF, ROS 2 form",
+        "mjcf": "MJCF, fixed tendons over several joints as motors",
+    }.get(tr.format, tr.format)
     if not robot.single_dof:
         acts = (
             "rotor inertia and friction are not modelled with joints of several degrees of freedom"

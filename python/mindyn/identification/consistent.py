@@ -50,6 +50,7 @@ from .data import DataError, read_json
 from .document import (
     check_identified_robot,
     identified_snap,
+    names_difference,
     read_identification,
     robot_on_drive_side,
     with_identified_friction,
@@ -944,7 +945,8 @@ def read_arm(
         tip = arm.get("tip")
         raise ModelError(
             f"{where}: its base parameters ({len(arm['base_names'])}) are not those of robot "
-            f"'{robot.name}' ({base.n}, {robot.n} joints); "
+            f"'{robot.name}' ({base.n}, {robot.n} joints: "
+            f"{names_difference(arm['base_names'], base.names)}); "
             + (
                 f"it was identified on the chain ending at tip='{tip}': load the robot with "
                 "that tip"

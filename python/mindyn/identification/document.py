@@ -298,6 +298,36 @@ def with_identified_state(base, doc: dict, where: str = "identification JSON"):
     return dahl_base(base, sigma)
 
 
+def names_difference(
+    given, expected, *, given_as: str = "the file", expected_as: str = "here"
+) -> str:
+    """Which names of the list ``given`` differ from ``expected``, in words: those only in one
+    of them (up to 6 each, with the count), or, for the same names in another order, the first
+    position where they differ; empty when the lists are equal."""
+    given, expected = [str(k) for k in given], [str(k) for k in expected]
+    if given == expected:
+        return ""
+
+    def listed(names: list[str]) -> str:
+        more = f" and {len(names) - 6} more" if len(names) > 6 else ""
+        return ", ".join(names[:6]) + more
+
+    only_given = [k for k in given if k not in set(expected)]
+    only_expected = [k for k in expected if k not in set(given)]
+    parts = []
+    if only_given:
+        parts.append(f"only in {given_as}: {listed(only_given)}")
+    if only_expected:
+        parts.append(f"only {expected_as}: {listed(only_expected)}")
+    if not parts:
+        i = next(i for i, (a, b) in enumerate(zip(given, expected)) if a != b)
+        parts.append(
+            f"the same names in another order, first at position {i + 1}: {given[i]} in "
+            f"{given_as}, {expected[i]} {expected_as}"
+        )
+    return "; ".join(parts)
+
+
 def refuse_state(doc, what: str, where: str = "identification JSON") -> None:
     """DataError when the identification JSON ``doc`` records the Dahl friction model: ``what``
     (generated code, a description, ...) has no friction state per joint."""

@@ -18,6 +18,7 @@ from .data import DataError
 from .document import (
     check_identified_robot,
     identified_snap,
+    names_difference,
     read_identification,
     robot_on_drive_side,
     with_identified_friction,
@@ -138,9 +139,8 @@ def identified_model(
         )
     if names != list(base.names):
         raise DataError(
-            f"{where}: its base parameters ({', '.join(map(str, names[:6]))}, ...) are not "
-            f"those of '{robot.name}' with its rotor/friction/offset settings "
-            f"({', '.join(base.names[:6])}, ...)"
+            f"{where}: its base parameters are not those of '{robot.name}' with its "
+            f"rotor/friction/offset settings ({names_difference(names, base.names)})"
         )
     try:
         values = np.array([float(v) for v in values])
