@@ -24,6 +24,11 @@ TORQUE_CHECK_MIN_SAMPLES = 20
 #: The low-pass [Hz] applied alike to the logged torques and the motion the description's
 #: torques are computed on (at least 4 edge periods over the log's span)
 TORQUE_CHECK_CUTOFF = 2.0
+#: A ratio above the bounds is refused only where it is beyond doubt: the joint's torques peak
+#: beyond this many times its effort limit, or, for a joint without one, the ratio exceeds this
+#: (a description's placeholder friction or inertials can be far too small; mN m give 1000)
+EFFORT_EXCEEDED = 2.0
+UNLIMITED_RATIO = 100.0
 #: Without a judged joint: torques whose peak exceeds this many times the effort limit on most
 #: joints that have one are refused
 EFFORT_FACTOR = 20.0
@@ -92,9 +97,11 @@ def check_torque_units(t, q, dq, tau, robot, source: str, remedy: str) -> None:
     :data:`TORQUE_CHECK_CUTOFF` Hz, accelerations from the low-passed velocities ``dq``)
     correlate at least :data:`TORQUE_CHECK_CORRELATION` in magnitude, the slope ``k`` of the
     least-squares line ``tau ~ k tau_desc + offset`` must lie within
-    :data:`TORQUE_RATIO_BOUNDS` (mN m: 1000, a negated column: -1; real logs: 0.7 to 1.5); a
-    ratio above them is refused only where the joint has no effort limit or its torques
-    exceed it (a description's placeholder inertials are not a wrong unit). Joints dominated by
+    :data:`TORQUE_RATIO_BOUNDS` (mN m: 1000, a negated column: -1; real logs: 0.7 to 1.4); a
+    ratio above them is refused only where the joint's torques peak beyond
+    :data:`EFFORT_EXCEEDED` times its effort limit or, without a limit, the ratio exceeds
+    :data:`UNLIMITED_RATIO` (a description's placeholder friction or inertials can be far too
+    small; that is not a wrong unit). Joints dominated by
     friction or with little gravity do not correlate and are not judged. When no joint is
     judged (no masses, none correlating): torques whose peak exceeds :data:`EFFORT_FACTOR`
     times the effort limit on most joints that have one are refused. Robots with joints of
@@ -119,8 +126,10 @@ def check_torque_units(t, q, dq, tau, robot, source: str, remedy: str) -> None:
         corr, k = got
         judged = np.isfinite(corr) & np.isfinite(k) & (np.abs(corr) >= TORQUE_CHECK_CORRELATION)
         low, high = TORQUE_RATIO_BOUNDS
-        over = ~limited | (peak > np.where(limited, effort, 0.0))
-        bad = [j for j in np.flatnonzero(judged) if k[j] < low or (k[j] > high and over[j])]
+        beyond = np.where(
+            limited, peak > EFFORT_EXCEEDED * np.where(limited, effort, 0.0), k > UNLIMITED_RATIO
+        )
+        bad = [j for j in np.flatnonzero(judged) if k[j] < low or (k[j] > high and beyond[j])]
         if bad:
             j = bad[0]
             others = [b + 1 for b in bad[1:]]
