@@ -9,7 +9,9 @@ import numpy as np
 
 from .data import EDGE_PERIODS, DataError, differentiate, filter_edge
 
-__all__ = ["check_torque_units"]
+# no public names: the readers and the checks of a JointData run it (as the other unit checks
+# of the data module)
+__all__: list[str] = []
 
 #: A joint whose logged torque and the description's correlate at least this much (in
 #: magnitude) is judged; the least-squares ratio of the two must lie within these bounds (a
@@ -48,14 +50,16 @@ def _description_ratios(t, q, dq, tau, robot):
     fc = max(TORQUE_CHECK_CUTOFF, 4.0 * EDGE_PERIODS / span)
     x = np.hstack([q, dq, tau])
     n = q.shape[1]
+    got = None
     with np.errstate(all="ignore"):
-        try:
-            if fc >= rate / 4:
-                raise DataError("too slow a log to low-pass")
-            xf, dx, info = differentiate(t, x, filter="butter", cutoff=fc)
-            edge = filter_edge(info)
-        except (DataError, ValueError, np.linalg.LinAlgError):
-            xf, dx, edge = x, np.gradient(x, t, axis=0), 0
+        if fc < rate / 4:
+            try:
+                xf, dx, info = differentiate(t, x, filter="butter", cutoff=fc)
+                got = (xf, dx, filter_edge(info))
+            except (DataError, ValueError, np.linalg.LinAlgError):
+                got = None
+        # a log too slow or too short to low-pass: its signals as they are
+        xf, dx, edge = got if got is not None else (x, np.gradient(x, t, axis=0), 0)
     if m - 2 * edge < TORQUE_CHECK_MIN_SAMPLES:
         return None
     idx = np.unique(np.linspace(edge, m - edge - 1, min(TORQUE_CHECK_SAMPLES, m - 2 * edge)))
