@@ -124,7 +124,9 @@ def attach_currents(
     thousandth of the median sample period of ``data``); current samples before, after or
     between those of ``data`` are left out. ``columns``: a column map, the file read through
     its ``t`` and ``i`` (:func:`read_currents`). Raises DataError naming the first time stamp
-    without a match."""
+    without a match, or (with ``robot``) torques of another unit or sign than the description's
+    (:func:`~mindyn.identification.torque_units.check_torque_units`: gains of the wrong sign or
+    size)."""
     from ..robot import Robot
 
     _args.instance(data, "data", JointData)
@@ -156,4 +158,17 @@ def attach_currents(
         "time_tolerance_s": tol,
         "max_time_offset_s": float(gap.max()),
     }
-    return replace(data, tau=cur[k] @ G, processing=processing)
+    tau = cur[k] @ G
+    if robot is not None:
+        from .torque_units import CURRENTS_TORQUE_REMEDY, check_torque_units
+
+        check_torque_units(
+            data.t,
+            data.q,
+            data.dq,
+            tau,
+            robot,
+            f"{path} (currents x drive gains)",
+            CURRENTS_TORQUE_REMEDY,
+        )
+    return replace(data, tau=tau, processing=processing)

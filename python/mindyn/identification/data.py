@@ -286,7 +286,10 @@ def read_csv(
         velocities in deg/s, of the opposite sign), time stamps whose median interval is 0.5 s
         or more (:func:`check_time_units`: in ms or us; not checked when a column map states
         the unit of ``t``, ``t[s]`` for a log that slow); with ``robot``, positions in degrees
-        or millimetres (:func:`check_position_units`); a column of the map the file lacks
+        or millimetres (:func:`check_position_units`) and, for a log read for its torques,
+        torques of another unit or sign than the description's inverse dynamics on the logged
+        motion (:func:`~mindyn.identification.torque_units.check_torque_units`: mN m, a negated
+        column); a column of the map the file lacks
         (named, with the closest names the file has). The log read with ``robot`` has
         ``units_checked`` set.
     ArgumentError
@@ -470,6 +473,10 @@ def _read_csv(
                 f"{path}: the {what} overflow (the largest logged magnitude is "
                 f"{np.max(np.abs(values[:, used])):.3g}); the log's values are too large to process"
             )
+    if robot is not None and tau is not None and require_torque:
+        from .torque_units import CSV_TORQUE_REMEDY, check_torque_units
+
+        check_torque_units(t, q, dq, tau, robot, str(path), CSV_TORQUE_REMEDY)
     data = JointData(
         t, q, dq, ddq, tau, source=str(path), processing=processing, units_checked=robot is not None
     )
@@ -1232,7 +1239,9 @@ def check_units(data: JointData, robot, label: str) -> None:
     """The unit checks of a log read from a file, on a :class:`JointData` built otherwise
     (``label``: its name in the message, such as ``data[0]``): time stamps in s
     (:func:`check_time_units`), positions in rad or m (:func:`check_position_units`),
-    velocities the positions' derivative (:func:`check_velocity_units`). Once they pass,
+    velocities the positions' derivative (:func:`check_velocity_units`), torques in N m of
+    the description's sign (:func:`~mindyn.identification.torque_units.check_torque_units`).
+    Once they pass,
     ``data.units_checked`` is set; a log with it set is not checked again."""
     if data.units_checked:
         return
@@ -1246,6 +1255,10 @@ def check_units(data: JointData, robot, label: str) -> None:
     check_position_units(data.q, robot, name)
     if data.dq is not None:
         check_velocity_units(data.t, data.q, data.dq, name)
+    if data.tau is not None and data.dq is not None:
+        from .torque_units import JOINT_DATA_TORQUE_REMEDY, check_torque_units
+
+        check_torque_units(data.t, data.q, data.dq, data.tau, robot, name, JOINT_DATA_TORQUE_REMEDY)
     data.units_checked = True
 
 

@@ -54,7 +54,8 @@ class JointData:
         between two logs (:meth:`log_slices`).
     units_checked : bool
         Whether its units have been checked (:func:`~mindyn.identification.data.check_units`:
-        time stamps in s, positions in rad (m), velocities the positions' derivative). The
+        time stamps in s, positions in rad (m), velocities the positions' derivative, torques
+        in N m of the description's sign). The
         readers (:func:`~mindyn.identification.data.read_csv` given the robot, ROS bags,
         :func:`~mindyn.identification.load_logs`) check and set it; a log built in Python is
         checked once, when it first reaches identification (:func:`~mindyn.identification.identify`,

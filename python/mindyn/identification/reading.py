@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 
@@ -50,23 +50,18 @@ def _gains(opts: ReadingOptions, n: int) -> np.ndarray | None:
 
 
 def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
-    from .data import convert_torque
     from .rosbag import read_rosbag
 
-    current = unit == "current"
-    data = read_rosbag(
+    # effort in A (unit current): the gains (given or of the drive table) turn it into N m
+    return read_rosbag(
         path,
         robot,
         topic=opts.topic,
-        torque_unit="Nm" if current or not unit else unit,
+        torque_unit=unit or "Nm",
+        drive_gain=gain if unit == "current" else None,
         filter="none" if opts.filter == "lowpass" else opts.filter,
         cutoff=opts.cutoff,
     )
-    if current:  # effort in A: the gains (given or of the drive table) turn it into N m
-        assert data.tau is not None  # read with its effort column
-        tau, info = convert_torque(data.tau, "current", robot, drive_gain=gain)
-        data = replace(data, tau=tau, processing={**data.processing, "torque": info})
-    return data
 
 
 def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=None) -> list:

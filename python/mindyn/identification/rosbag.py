@@ -28,6 +28,7 @@ from .data import (
     first_not_increasing,
     without_derivative_edges,
 )
+from .torque_units import BAG_TORQUE_REMEDY, check_torque_units
 
 __all__ = ["is_rosbag", "read_rosbag"]
 
@@ -64,6 +65,7 @@ def read_rosbag(
     topic: str | None = None,
     torque_unit: str = "Nm",
     require_torque: bool = True,
+    drive_gain=None,
     **derivative_settings,
 ) -> JointData:
     """Read a joint log from a ROS bag.
@@ -76,10 +78,14 @@ def read_rosbag(
         Its joint names select and order the columns; its drive table converts ``permille``.
     topic : str, optional
         The ``sensor_msgs/JointState`` topic; needed only when the bag has several.
-    torque_unit : {"Nm", "permille"}
+    torque_unit : {"Nm", "permille", "current"}
         Unit of the ``effort`` fields, as in :func:`mindyn.identification.data.read_csv`.
     require_torque : bool
         False accepts messages without efforts (a trajectory); ``tau`` is then None.
+    drive_gain : array (n,), optional
+        ``current``: the joint-side gains [N m/A] (or the transmissions' motor torque
+        constants), instead of the description's, see
+        :func:`mindyn.identification.data.convert_torque`.
     **derivative_settings
         ``filter``, ``cutoff``, ``order``, ``window``, ``polyorder`` of
         :func:`mindyn.identification.data.differentiate`, for velocities / accelerations not in
@@ -104,7 +110,9 @@ def read_rosbag(
         installed; the units of a CSV log
         (:func:`~mindyn.identification.data.check_time_units`: a median interval between the
         stamps of 0.5 s or more; positions in degrees or millimetres, velocities that are not
-        the positions' derivative). The log has ``units_checked`` set.
+        the positions' derivative; efforts of another unit or sign than the description's
+        torques, :func:`~mindyn.identification.torque_units.check_torque_units`). The log has
+        ``units_checked`` set.
     """
     from ..robot import Robot
 
@@ -112,6 +120,7 @@ def read_rosbag(
     _args.instance(robot, "robot", Robot)
     _args.optional(_args.text, topic, "topic")
     _args.text(torque_unit, "torque_unit")
+    drive_gain = _args.optional(_args.array, drive_gain, "drive_gain", (None,))
     require_torque = _args.flag(require_torque, "require_torque")
     path = Path(path)
     if not path.exists():
@@ -190,9 +199,11 @@ def read_rosbag(
         check_velocity_units(t, q, dq, str(path))
     processing: dict = {"samples": len(t), "topic": topic, "joints": names}
     if tau is not None:
-        tau, processing["torque"] = convert_torque(tau, torque_unit, robot)
+        tau, processing["torque"] = convert_torque(tau, torque_unit, robot, drive_gain=drive_gain)
     dq, ddq, deriv = fill_derivatives(t - t[0], q, dq, None, **derivative_settings)
     processing.update(deriv)
+    if tau is not None:
+        check_torque_units(t - t[0], q, dq, tau, robot, str(path), BAG_TORQUE_REMEDY)
     data = JointData(
         t - t[0], q, dq, ddq, tau, source=str(path), processing=processing, units_checked=True
     )
