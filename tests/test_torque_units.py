@@ -121,6 +121,24 @@ def test_torques_in_mNm_or_negated_are_refused_by_identify(zcr, tmp_path):
         read_csv(tmp_path / "neg.csv", robot=robot)
 
 
+def test_torques_stated_in_newton_metres_are_taken_as_they_are(zcr, tmp_path):
+    """The check judges the torques against the description, which can be far from the robot
+    (a description ten times too heavy gives the ratio of mN m's inverse): torques whose unit
+    the command line, the header or the column map states as N m are taken as they are, with
+    the estimates of the robot that made them."""
+    robot, t, q, dq, _ = zcr
+    light = 0.05 * torques(zcr, noise=0.0)  # a robot 20 times lighter than the description
+    path = write_csv(tmp_path / "light.csv", t, q, light, dq=dq)
+    with pytest.raises(DataError, match="stated as N m"):
+        read_csv(path, robot=robot)
+    said = write_csv(tmp_path / "said.csv", t, q, light, dq=dq, torque_unit="Nm")
+    for d in (read_csv(path, robot=robot, torque_unit="Nm"), read_csv(said, robot=robot)):
+        rows = np.searchsorted(t, d.t - 1e-9)  # the samples kept (derivative edges dropped)
+        np.testing.assert_allclose(d.tau, light[rows], rtol=1e-9, atol=1e-9)  # as written
+    rc, out, err = cli_run(["identify", "zcr07s", path, "--torque-unit", "Nm"])
+    assert rc == 0, err
+
+
 @pytest.mark.parametrize("joint", [2, 4])
 def test_a_single_negated_joint_is_refused_naming_it(zcr, tmp_path, joint):
     robot, t, q, dq, _ = zcr

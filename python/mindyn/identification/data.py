@@ -289,7 +289,8 @@ def read_csv(
         or millimetres (:func:`check_position_units`) and, for a log read for its torques,
         torques of another unit or sign than the description's inverse dynamics on the logged
         motion (:func:`~mindyn.identification.torque_units.check_torque_units`: mN m, a negated
-        column); a column of the map the file lacks
+        column; not checked when ``torque_unit``, the header or the map states N m); a column of
+        the map the file lacks
         (named, with the closest names the file has). The log read with ``robot`` has
         ``units_checked`` set.
     ArgumentError
@@ -473,7 +474,10 @@ def _read_csv(
                 f"{path}: the {what} overflow (the largest logged magnitude is "
                 f"{np.max(np.abs(values[:, used])):.3g}); the log's values are too large to process"
             )
-    if robot is not None and tau is not None and require_torque:
+    # torques stated to be in N m (torque_unit=, the header or the column map) are taken as
+    # they are: the check judges them against the description, which can be far off
+    stated_nm = torque_unit is not None and _unit_key(torque_unit) == "Nm"
+    if robot is not None and tau is not None and require_torque and not stated_nm:
         from .torque_units import CSV_TORQUE_REMEDY, check_torque_units
 
         check_torque_units(t, q, dq, tau, robot, str(path), CSV_TORQUE_REMEDY)

@@ -162,7 +162,9 @@ def check_torque_units(t, q, dq, tau, robot, source: str, remedy: str) -> None:
 CSV_TORQUE_REMEDY = (
     "give the torques in N m (N), positive along each joint's axis: convert the columns, or state "
     "their unit (torque_unit='permille' or 'current' with drive_gain=, a negative gain for a "
-    "reversed drive; tau1[permille] or i1 in the header, tau[permille] or i in a column map)"
+    "reversed drive; tau1[permille] or i1 in the header, tau[permille] or i in a column map); "
+    "torques right as they are (a description far from the robot) are taken when their unit is "
+    "stated as N m (torque_unit='Nm', tau1[Nm] in the header)"
 )
 #: How a ROS bag's efforts are given
 BAG_TORQUE_REMEDY = (
