@@ -44,16 +44,14 @@ import scipy.linalg as sla
 
 from .. import _args
 from .._core import ModelError
-from ..base import BaseParameters, base_parameters
+from ..base import BaseParameters
 from ..robot import Robot, load
 from .data import DataError, read_json
 from .document import (
+    check_identified_model,
     check_identified_robot,
-    identified_snap,
+    identified_base,
     read_identification,
-    robot_on_drive_side,
-    with_identified_friction,
-    with_identified_state,
 )
 from .errors import IdentificationError
 from .estimation import (
@@ -921,16 +919,8 @@ def read_arm(robot: Robot, arm, *, where: str = "arm") -> tuple[BaseParameters, 
     need = ("robot", "base_names", "base_values", "rotor", "friction", "offset")
     arm = read_identification(arm, need=need, what=where)
     check_identified_robot(arm, robot, where, error=ModelError)
-    robot = robot_on_drive_side(robot, arm, where=where)
-    robot = with_identified_friction(robot, arm, where=where)
-    base = base_parameters(
-        robot,
-        rotor=arm["rotor"],
-        friction=arm["friction"],
-        offset=arm["offset"],
-        snap=identified_snap(arm, where=where),
-    )
-    base = with_identified_state(base, arm, where)
+    base = identified_base(arm, robot, where)
+    robot = base.robot
     if arm["base_names"] != list(base.names):
         tip = arm.get("tip")
         raise ModelError(
@@ -943,6 +933,7 @@ def read_arm(robot: Robot, arm, *, where: str = "arm") -> tuple[BaseParameters, 
                 else "identified with another description or another tip=?"
             )
         )
+    check_identified_model(arm, base, where, error=ModelError)
     classical = arm.get("classical")
     if classical is not None:
         missing = [nm for nm in base.classical_names if nm not in classical]

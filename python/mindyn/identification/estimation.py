@@ -29,7 +29,7 @@ from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, as_robot, drive_train_record
 from .data import DataError
-from .document import identified_robot_record
+from .document import identified_robot_record, model_record
 from .errors import IdentificationError, RankDeficientError
 from .joint_data import JointData
 from .models import (
@@ -161,6 +161,8 @@ class IdentificationResult:
             "rsd_threshold": self.rsd_threshold,
             "base_names": list(self.base.names),
             "base_values": [float(v) for v in self.full],
+            # the regrouping and regressor columns of the base set: what the readers compare
+            "model_check": model_record(self.base),
             "sigma": self.sigma,
             "rows": self.rows,
             "weighted": self.weighted,
