@@ -374,6 +374,52 @@ def test_excite_reports_progress_within_a_start_to_a_log(monkeypatch):
     assert "\r" not in stream.getvalue()
 
 
+# -- a log given twice -----------------------------------------------------------------------
+def test_a_log_given_twice_or_fitted_and_validated_is_refused(planar_log, tmp_path):
+    """A fit log twice (the same path, another spelling of it, or a copy of the same bytes)
+    would fit its rows twice; a validation log that is a fit log would score the fit on its
+    own data: refused in one line naming both, by the command and by the library."""
+    from mindyn.identification import load_logs
+    from mindyn.identification.floating_workflow import load_floating_logs
+
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(Path(planar_log).read_bytes())
+    spelled = Path(planar_log).parent / ".." / Path(planar_log).parent.name / "planar2.csv"
+    twice = f"{planar_log}: given twice as a fit log: its samples would be fitted twice"
+    for argv, said in [
+        ([planar_log, planar_log], twice),
+        ([planar_log, spelled], f"{spelled}: given twice as a fit log: its samples would be"),
+        (
+            [planar_log, copy],
+            f"{copy}: given twice as a fit log (has the same content as '{planar_log}'): its",
+        ),
+        (
+            [planar_log, "--validate", planar_log],
+            f"{planar_log}: the validation log is the fit log '{planar_log}': validation on "
+            "the fitted data says nothing of other data (give a log not fitted)",
+        ),
+        ([planar_log, "--validate", copy], f"{copy}: the validation log has the same content"),
+    ]:
+        rc, _, err = run(["identify", "planar2", *argv])
+        one_line_error(rc, err, said)
+    robot = mindyn.load("planar2")
+    with pytest.raises(DataError) as e:
+        load_logs([planar_log, planar_log], robot)
+    assert str(e.value) == twice
+    with pytest.raises(DataError, match="the validation log has the same content as the fit"):
+        load_logs(planar_log, robot, validate=copy)
+    with pytest.raises(DataError, match="the validation log is the fit log"):
+        load_floating_logs(
+            [planar_log], mindyn.load(UR5, root_joint="floating"), validate=[planar_log]
+        )
+    other = tmp_path / "other.csv"  # another log of as many bytes is another log
+    text = Path(planar_log).read_text()
+    last = max(i for i, c in enumerate(text) if c in "0123456789")  # a torque's last digit
+    other.write_text(text[:last] + ("1" if text[last] != "1" else "2") + text[last + 1 :])
+    assert other.stat().st_size == copy.stat().st_size
+    assert len(load_logs(planar_log, robot, validate=other).validation.files) == 1
+
+
 # -- options that do not apply ----------------------------------------------------------------
 @pytest.fixture(scope="module")
 def planar_log(tmp_path_factory):

@@ -155,7 +155,7 @@ def add_identify(sub, func) -> None:
         metavar="LOG",
         help="CSV log (t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun or currents i1..in) or "
         "ROS bag (a ROS 2 bag folder, .mcap, .db3, or a ROS 1 .bag); several logs are fitted "
-        "together (derivatives taken on each log alone, regression systems stacked)",
+        "together (derivatives taken on each log alone, regression systems stacked; each once)",
     )
     p.add_argument(
         "--model",
@@ -173,7 +173,10 @@ def add_identify(sub, func) -> None:
     add_offset(p, "identify")
     add_snap(p)
     p.add_argument(
-        "--validate", nargs="+", metavar="LOG", help="log(s) (CSV or bag) for validation"
+        "--validate",
+        nargs="+",
+        metavar="LOG",
+        help="log(s) (CSV or bag) for validation, none of them a fit log",
     )
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
     p.add_argument("--report", metavar="DIR", type=output_dir, help="write plots and tables to DIR")
