@@ -198,13 +198,17 @@ def _api(tmp: Path) -> dict:
     pd = control.make_controller("pd", ROBOT, GAINS, period=0.004)
     p10 = ROBOT.params[:10]
     six = mindyn.load("zcr07s")  # a payload on the last of six joints
-    six_base = mindyn.base_parameters(six)
+    # identified with friction (zero), which min_velocity= applies to
+    six_base = mindyn.base_parameters(six, friction=True)
+    six_classical = dict(zip(six.param_names, six.params, strict=True))
     six_arm = {
         "robot": six.name,
         "base_names": six_base.names,
-        "base_values": six_base.values(six.params).tolist(),
+        "base_values": six_base.values(
+            [six_classical.get(k, 0.0) for k in six_base.classical_names]
+        ).tolist(),
         "rotor": False,
-        "friction": False,
+        "friction": True,
         "offset": False,
     }
     with_payload = six.params.copy()
@@ -519,7 +523,7 @@ def _api(tmp: Path) -> dict:
             "identification.run": (
                 identification.run,
                 (ROBOT, LOG),
-                {"friction": False, "rsd_threshold": 30.0, "min_velocity": 0.01},
+                {"friction": True, "rsd_threshold": 30.0, "min_velocity": 0.01},
             ),
             "identification.error_measures": (
                 identification.error_measures,

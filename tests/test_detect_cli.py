@@ -305,9 +305,12 @@ def test_any_mix_of_arguments_gives_status_0_1_or_one_error_line(files, tmp_path
     check()
 
 
-@pytest.mark.parametrize("option", [["--margin", "3"], ["--quantile", "0.5"]])
+@pytest.mark.parametrize(
+    "option", [["--margin", "3"], ["--quantile", "0.5"], ["--margin", "1.5"], ["--quantile", "1"]]
+)
 def test_the_calibration_options_need_calibrate(option, files):
-    """--margin and --quantile without --calibrate were ignored (--model-sigma was refused)."""
+    """--margin and --quantile without --calibrate were ignored (--model-sigma was refused), at
+    their defaults (1.5 and 1) too."""
     argv = ["detect", "puma560", str(files / "id.json"), str(files / "free.csv"), *option]
     rc, _, err = run(argv)
     assert_one_line_error(rc, err, f"{option[0]} applies to --calibrate")

@@ -441,6 +441,12 @@ def planar_log(tmp_path_factory):
         (["--model", "integral", "--no-decimate"], "--no-decimate applies only to the dynamic"),
         (["--topic", "/joint_states"], "--topic applies to ROS bags"),
         (["--friction-model", "coulomb", "--friction-width", "0.1"], "--friction-width applies"),
+        # given at their defaults: refused as well (they were ignored)
+        (["--min-velocity", "0.01"], "--min-velocity applies only with --model dynamic or"),
+        (["--model", "energy", "--min-velocity", "0.01"], "--min-velocity applies only"),
+        (["--energy-window", "10"], "--energy-window applies only with --model energy"),
+        (["--integration", "auto"], "--integration applies only with --model energy or"),
+        (["--model", "energy", "--integral-window", "40"], "--integral-window applies only"),
     ],
 )
 def test_an_option_that_does_not_apply_is_refused(planar_log, argv, said):
@@ -506,6 +512,12 @@ def test_the_library_refuses_the_same_combinations(planar_log):
         (dict(min_velocity=0.0), "min_velocity"),
         (dict(model="energy", friction=True, min_velocity=0.0), "min_velocity"),
         (dict(model="integral", min_velocity=0.0), "min_velocity"),
+        # at their defaults too: given is refused where it does not apply
+        (dict(min_velocity=0.01), "min_velocity"),
+        (dict(model="energy", friction=True, min_velocity=0.01), "min_velocity"),
+        (dict(energy_window=10), "energy_window"),
+        (dict(integration="auto"), "integration"),
+        (dict(model="energy", integral_window=40), "integral_window"),
     ]:
         with pytest.raises(mindyn.ArgumentError, match=f"^{name} applies only"):
             IdentifyOptions(**kw)
@@ -514,12 +526,27 @@ def test_the_library_refuses_the_same_combinations(planar_log):
             ReadingOptions(filter=f, cutoff=5.0)
     with pytest.raises(mindyn.ArgumentError, match="^decimate=False applies only"):
         load_logs([planar_log], robot, model="energy", decimate=False)
+    with pytest.raises(mindyn.ArgumentError, match="^decimate=True applies only"):
+        load_logs([planar_log], robot, model="energy", decimate=True)
+    with pytest.raises(DataError, match="^decimate=True needs filter='lowpass'"):
+        ReadingOptions(filter="none", decimate=True)
+    with pytest.raises(mindyn.ArgumentError, match="^min_velocity applies only with"):
+        mindyn.identification.run(robot, load_logs([planar_log], robot), min_velocity=0.01)
     with pytest.raises(mindyn.ArgumentError, match="^topic= applies to ROS bags"):
         load_logs([planar_log], robot, topic="/joint_states")
     # the defaults, and the options where they apply, are taken
     IdentifyOptions(model="energy", energy_window=3, integration="zoh")
     IdentifyOptions(friction_model="stribeck", min_velocity=0.0)
     IdentifyOptions(model="integral", friction=True, min_velocity=0.0)
+    # not given: the defaults, which the options hold
+    opts = IdentifyOptions(model="energy")
+    assert (opts.energy_window, opts.integration, opts.integral_window, opts.min_velocity) == (
+        10,
+        "auto",
+        40,
+        0.01,
+    )
+    assert ReadingOptions().decimate is True
     ReadingOptions(filter="butter", cutoff=5.0)
 
 

@@ -251,13 +251,12 @@ def add_identify(sub, func) -> None:
         low=1,
         high=1000000,
         integer=True,
-        default=10,
+        default_when_unset=10,
         help="energy model: sample intervals per energy equation",
     )
     p.add_argument(
         "--integration",
         choices=["auto", "simpson", "trapezoid", "zoh"],
-        default="auto",
         help="energy and integral model integration rule (zoh: torque held over each period); "
         "default auto: simpson or zoh, whichever fit leaves the smaller residual (stated)",
     )
@@ -267,14 +266,14 @@ def add_identify(sub, func) -> None:
         low=1,
         high=1000000,
         integer=True,
-        default=40,
+        default_when_unset=40,
         help="integral model: sample intervals per window (one equation per joint and window)",
     )
     number(
         p,
         "--min-velocity",
         low=0,
-        default=0.01,
+        default_when_unset=0.01,
         help=(
             "dynamic and integral models with friction: leave out joint equations slower than "
             "this [rad/s, m/s] (integral: at a sample of the window)"
@@ -323,7 +322,7 @@ def add_identify_payload(sub, func) -> None:
         p,
         "--min-velocity",
         low=0,
-        default=0.01,
+        default_when_unset=0.01,
         help="arm with friction: leave out joint equations slower than this [rad/s, m/s]",
     )
     p.add_argument(

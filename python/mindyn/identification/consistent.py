@@ -974,7 +974,7 @@ def identify_payload(
     data: JointData | list[JointData],
     *,
     consistent: bool = True,
-    min_velocity: float = PAYLOAD_MIN_VELOCITY,
+    min_velocity: float | None = None,
     rank_tolerance: float = 1e-9,
 ) -> PayloadResult:
     """Inertial parameters of a payload rigidly fixed to the last link, from logs ``data`` with
@@ -986,7 +986,8 @@ def identify_payload(
     :func:`~mindyn.identification.estimation.correlation_factor` for low-passed logs) (all
     joints' equations;
     with arm friction, equations of joints slower than ``min_velocity`` left out as in
-    :func:`~mindyn.identification.identify`), and with ``consistent`` the estimate under a
+    :func:`~mindyn.identification.identify`: :data:`PAYLOAD_MIN_VELOCITY` when not given;
+    given to an arm without friction, refused), and with ``consistent`` the estimate under a
     positive semidefinite payload pseudo-inertia (cvxpy, Clarabel).
 
     Raises IdentificationError when the data (or the geometry: a last joint whose axis symmetry
@@ -996,12 +997,15 @@ def identify_payload(
     _args.instance(robot, "robot", (Robot, str, Path), "a Robot, a bundled robot name or a path")
     _args.instance(arm, "arm", (dict, str, Path), "an identification (its JSON as a dict or path)")
     consistent = _args.flag(consistent, "consistent")
-    min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
+    given_velocity = min_velocity is not None
+    min_velocity = _args.number(
+        PAYLOAD_MIN_VELOCITY if min_velocity is None else min_velocity, "min_velocity", minimum=0.0
+    )
     rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)
     robot = load(robot, tip=arm_tip(arm, robot) if isinstance(robot, (str, Path)) else None)
     robot._require_serial("payload identification (a payload on the last link)")
     base, beta, used = read_arm(robot, arm)
-    if not base.friction and min_velocity != PAYLOAD_MIN_VELOCITY:
+    if not base.friction and given_velocity:
         raise _args.fail(
             "min_velocity",
             "applies only to an arm identified with friction (it leaves out the equations of "

@@ -342,9 +342,9 @@ def load_logs(
     opts = options or ReadingOptions(**reading)
     if model not in MODELS:
         raise DataError(f"load_logs: model '{model}': expected one of {', '.join(MODELS)}")
-    if not opts.decimate and model != "dynamic":
+    if opts._decimate_given and model != "dynamic":
         raise _args.fail(
-            "decimate=False",
+            f"decimate={opts.decimate}",
             f"applies only to the dynamic model (the integral and energy models keep every "
             f"sample); got model='{model}'",
         )
