@@ -8,7 +8,7 @@ import argparse
 
 import numpy as np
 
-from .args import UsageError, add_command, given_options, remember_flags
+from .args import UsageError, add_command, deprecated, given_options, remember_flags
 from .columns import add_columns
 from .number_options import add_recorded_torque_reading, joint_values, joint_vector, number
 from .outputs import output_file
@@ -65,8 +65,10 @@ def cmd_detect(args: argparse.Namespace) -> int:
             "--thresholds and --calibrate exclude each other (calibrate on a "
             "collision-free log, then detect with the file it wrote)"
         )
-    if args.thresholds and args.gain:
-        raise UsageError("--gain: the thresholds file gives the gains it was calibrated with")
+    if args.thresholds and args.observer_gain:
+        raise UsageError(
+            "--observer-gain: the thresholds file gives the gains it was calibrated with"
+        )
     thresholds = load_thresholds(args.thresholds, robot) if args.thresholds else None
     data = _read_log(args.log, robot, doc, args)
     t = data.t
@@ -74,8 +76,10 @@ def cmd_detect(args: argparse.Namespace) -> int:
     period = float(np.median(steps))
     if thresholds is not None:
         gains, how = thresholds.gains, f"those of {args.thresholds}"
-    elif args.gain:
-        gains = np.array(joint_values(args.gain, robot.n, "--gain", broadcast=True))
+    elif args.observer_gain:
+        gains = np.array(
+            joint_values(args.observer_gain, robot.n, "--observer-gain", broadcast=True)
+        )
         how = "given"
     else:
         k = default_observer_gain(period)
@@ -260,13 +264,14 @@ def register(sub) -> None:
         "deviations, correlations left out; 0: off)",
     )
     remember_flags(p)
-    joint_vector(
+    gain = joint_vector(
         p,
-        "--gain",
+        "--observer-gain",
         metavar="K_O",
-        help="observer gains [1/s], one or one per joint (default 1 / (10 T), T the log's "
+        help="observer gains K_O [1/s], one or one per joint (default 1 / (10 T), T the log's "
         "median step, or 1 / its longest step when that is lower)",
     )
+    deprecated(p, "--gain", gain)
     p.add_argument(
         "--torque",
         choices=["sampled", "held"],
