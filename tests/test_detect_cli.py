@@ -6,6 +6,7 @@ residual is the observer's alone."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import mindyn
 import numpy as np
@@ -184,6 +185,49 @@ def test_the_observer_gain_has_the_name_of_codegen(files, tmp_path):
         help_text[command] = " ".join(out.split())
         assert "--observer-gain K_O" in help_text[command]
     assert "--gain" not in help_text["detect"].replace("--observer-gain", "")
+
+
+def test_thresholds_of_another_model_are_refused_or_noted(files, tmp_path):
+    """The thresholds file records the base values it was calibrated with: another
+    identification (one value 10 % off) is refused naming the value; the same values under
+    another file name are taken; a file written before the record (no values) naming another
+    identification gets a one-line warning."""
+    thr = str(tmp_path / "thr.json")
+    ident, free = str(files / "id.json"), str(files / "free.csv")
+    rc, _, err = run(["detect", "puma560", ident, free, "--calibrate", thr])
+    assert rc == 0, err
+    doc = json.loads(Path(ident).read_text())
+    assert json.loads(Path(thr).read_text())["base_values"] == doc["base_values"]
+    off = dict(doc, base_values=list(doc["base_values"]))
+    off["base_values"][2] *= 1.1
+    changed, copy = str(tmp_path / "changed.json"), str(tmp_path / "copy.json")
+    Path(changed).write_text(json.dumps(off))
+    Path(copy).write_text(Path(ident).read_text())
+    rc, _, err = run(["detect", "puma560", changed, free, "--thresholds", thr])
+    name, value = doc["base_names"][2], doc["base_values"][2]
+    assert_one_line_error(
+        rc,
+        err,
+        f"{thr}: calibrated with the unconstrained estimate of '{ident}': 1 of its "
+        f"{len(doc['base_names'])} base parameter values differ from the unconstrained estimate "
+        f"of '{changed}' ({name} {value:.6g} there, {value * 1.1:.6g} here)",
+    )
+    rc, _, err = run(["detect", "puma560", copy, free, "--thresholds", thr])
+    assert rc == 0 and not err, err
+    old = str(tmp_path / "old.json")
+    recorded = json.loads(Path(thr).read_text())
+    for key in ("estimate", "base_names", "base_values"):
+        del recorded[key]
+    Path(old).write_text(json.dumps(recorded))
+    rc, _, err = run(["detect", "puma560", changed, free, "--thresholds", old])
+    # (run, with alarms: the other model's residual on the collision-free log)
+    assert rc in (0, 1) and err.strip().splitlines() == [
+        f"mindyn: warning: {old}: calibrated with the identification '{ident}', not "
+        f"'{changed}' (the file records no parameter values to compare: thresholds of another "
+        "model's residual do not fit this one) (note)"
+    ], err
+    rc, _, err = run(["detect", "puma560", ident, free, "--thresholds", old])
+    assert rc == 0 and not err, err
 
 
 def test_bad_log_and_identification(files):
