@@ -137,12 +137,14 @@ def check_identified_robot(
     _sidecar.warn_other_description(doc.get("description"), robot, where)
 
 
-#: The states of :func:`model_record`: how many, and the tolerance of its comparison (relative
-#: to each number, plus a floor relative to the largest of its list): far above the round-off
-#: of another machine's arithmetic, far below what a length changed by a tenth of a millimetre
-#: does to a regressor column.
+#: The states of :func:`model_record`: how many, and the tolerance of its comparison: relative
+#: to each number, plus a floor relative to the largest of its list (a number that round-off
+#: leaves near zero: a gear ratio's 1e4 beside a length's 0.1 in one list). Far above the
+#: round-off of another machine's arithmetic and the record's 12 digits, far below what a
+#: length changed by a tenth of a millimetre does to a regrouping or a regressor column.
 MODEL_STATES = 2
 MODEL_TOLERANCE = 1e-7
+MODEL_FLOOR = 1e-11
 
 
 def model_record(base: BaseParameters) -> dict:
@@ -257,8 +259,8 @@ def identified_base(doc: dict, robot: Robot, where: str) -> BaseParameters:
 
 def _differ(recorded: np.ndarray, own: np.ndarray) -> np.ndarray:
     """Where the numbers ``own`` differ from the ``recorded`` ones beyond
-    :data:`MODEL_TOLERANCE`."""
-    floor = MODEL_TOLERANCE * max(float(np.max(np.abs(own), initial=0.0)), 1e-300)
+    :data:`MODEL_TOLERANCE` (and :data:`MODEL_FLOOR`)."""
+    floor = MODEL_FLOOR * max(float(np.max(np.abs(own), initial=0.0)), 1e-300)
     return np.abs(recorded - own) > MODEL_TOLERANCE * np.abs(own) + floor
 
 
