@@ -155,9 +155,11 @@ def _files(tmp: Path) -> dict:
     header += [f"ddq{i + 1}" for i in range(8)] + ["tau1", "tau2"]
     header += [f"b.{a}" for a in ("fx", "fy", "fz", "tx", "ty", "tz")]
     table = np.hstack([L.q, L.dq, L.ddq, L.tau, L.wrenches["b"]])
-    floating_csv.write_text(
-        ",".join(header) + "\n" + "".join(",".join(map(repr, r.tolist())) + "\n" for r in table)
-    )
+    for path, rows in ((floating_csv, table), (tmp / "floating_val.csv", table[::-1])):
+        # (the validation log another file: the fit log as validation is refused)
+        path.write_text(
+            ",".join(header) + "\n" + "".join(",".join(map(repr, r.tolist())) + "\n" for r in rows)
+        )
     arm_json = tmp / "arm.json"
     assert cli_main(["identify", "planar2", str(log_csv), "--json", str(arm_json)]) == 0
     return {
@@ -172,6 +174,7 @@ def _files(tmp: Path) -> dict:
         "reference": reference,
         "sidecar": sidecar,
         "floating_csv": floating_csv,
+        "floating_val_csv": tmp / "floating_val.csv",
     }
 
 
@@ -570,7 +573,7 @@ def _api(tmp: Path) -> dict:
                 floating_workflow.load_floating_logs,
                 ([f["floating_csv"]], FLOATING),
                 {
-                    "validate": [f["floating_csv"]],
+                    "validate": [f["floating_val_csv"]],
                     "wrench_frame": "world",
                     "contacts": ["b"],
                     "filter": "butter",

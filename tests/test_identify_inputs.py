@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import re
 import tracemalloc
 from pathlib import Path
 
@@ -412,6 +413,13 @@ def test_a_log_given_twice_or_fitted_and_validated_is_refused(planar_log, tmp_pa
         load_floating_logs(
             [planar_log], mindyn.load(UR5, root_joint="floating"), validate=[planar_log]
         )
+    # logs already read: the same JointData twice, to identify or to run
+    d = load_logs(planar_log, robot).fit.logs[0]
+    said = f"gives log 1 ({d.source}) again as log 2: its samples would be fitted twice"
+    with pytest.raises(mindyn.ArgumentError, match=rf"^data {re.escape(said)}$"):
+        mindyn.identification.identify(robot, [d, d])
+    with pytest.raises(mindyn.ArgumentError, match=rf"^logs {re.escape(said)}$"):
+        mindyn.identification.run(robot, [d, d])
     other = tmp_path / "other.csv"  # another log of as many bytes is another log
     text = Path(planar_log).read_text()
     last = max(i for i, c in enumerate(text) if c in "0123456789")  # a torque's last digit

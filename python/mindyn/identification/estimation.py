@@ -577,6 +577,24 @@ def _logs(data, name: str = "data") -> list[JointData]:
     return logs
 
 
+def distinct_logs(logs: list[JointData], name: str = "data") -> list[JointData]:
+    """``logs`` when no log is given twice (the same object): a log fitted twice counts its
+    samples twice (other estimates, smaller standard deviations); ArgumentError naming both
+    places otherwise. (Logs read from files: :func:`~mindyn.identification.data.
+    check_distinct_logs` compares the files.)"""
+    seen: dict[int, int] = {}
+    for k, d in enumerate(logs):
+        first = seen.setdefault(id(d), k)
+        if first != k:
+            said = f" ({d.source})" if d.source else ""
+            raise _args.fail(
+                name,
+                f"gives log {first + 1}{said} again as log {k + 1}: its samples would be "
+                "fitted twice",
+            )
+    return logs
+
+
 def noise_bandwidth(cutoff: float, order: int) -> float:
     """Equivalent noise bandwidth [Hz] of the data path's zero-phase Butterworth low-pass of
     ``order`` at ``cutoff``: ``int_0^inf |H(f)|^4 df`` with ``|H|^2 = 1 / (1 + (f/fc)^(2n))``
@@ -1145,7 +1163,7 @@ def identify(
             "mindyn.identification.identify_floating (joint torques and contact wrenches, or "
             "free flight)"
         )
-    logs = _logs(data)
+    logs = distinct_logs(_logs(data))
     _args.choice(model, "model", MODELS)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     _args.optional(_args.instance, base, "base", BaseParameters)
