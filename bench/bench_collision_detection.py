@@ -18,8 +18,8 @@ false alarms, with an identified (not the true) model and torque noise.
    residual sees it at the next sample: one period at least).
 
 The observer: ``mindyn.control.MomentumObserver`` of the identified values at the controller
-period with the default gain 1 / (10 T) (or ``--gain``), the logged (noisy) torque held over each
-period.
+period with the default gain 1 / (10 T) (or ``--observer-gain``), the logged (noisy) torque
+held over each period.
 """
 
 from __future__ import annotations
@@ -58,7 +58,9 @@ def main() -> int:
     ap.add_argument("--runs", type=int, default=5, help="collision-free runs checked")
     ap.add_argument("--duration", type=float, default=2.0, help="each run [s]")
     ap.add_argument("--excitation", type=float, default=10.0, help="identification run [s]")
-    ap.add_argument("--gain", type=float, help="observer gain K_O [1/s] (default: the library's)")
+    ap.add_argument(
+        "--observer-gain", type=float, help="observer gain K_O [1/s] (default: the library's)"
+    )
     ap.add_argument("--margin", type=float, default=1.5, help="threshold margin on max |r|")
     args = ap.parse_args()
     robot = mindyn.load(args.robot)
@@ -85,7 +87,7 @@ def main() -> int:
         obs = control.MomentumObserver(base, values, period=T, gains=gain)
         return obs.run(res.q, res.dq, res.tau)
 
-    gain = args.gain or control.default_observer_gain(T)
+    gain = args.observer_gain or control.default_observer_gain(T)
     cal = residual(run(robot, 0, args, sd=sd))
     thr = control.calibrate_thresholds(cal, margin=args.margin)
     print(f"gain K_O = {gain:.4g} 1/s on every joint; thresholds {args.margin:g} x max |r|")

@@ -155,9 +155,11 @@ def _files(tmp: Path) -> dict:
     header += [f"ddq{i + 1}" for i in range(8)] + ["tau1", "tau2"]
     header += [f"b.{a}" for a in ("fx", "fy", "fz", "tx", "ty", "tz")]
     table = np.hstack([L.q, L.dq, L.ddq, L.tau, L.wrenches["b"]])
-    floating_csv.write_text(
-        ",".join(header) + "\n" + "".join(",".join(map(repr, r.tolist())) + "\n" for r in table)
-    )
+    for path, rows in ((floating_csv, table), (tmp / "floating_val.csv", table[::-1])):
+        # (the validation log another file: the fit log as validation is refused)
+        path.write_text(
+            ",".join(header) + "\n" + "".join(",".join(map(repr, r.tolist())) + "\n" for r in rows)
+        )
     arm_json = tmp / "arm.json"
     assert cli_main(["identify", "planar2", str(log_csv), "--json", str(arm_json)]) == 0
     return {
@@ -172,6 +174,7 @@ def _files(tmp: Path) -> dict:
         "reference": reference,
         "sidecar": sidecar,
         "floating_csv": floating_csv,
+        "floating_val_csv": tmp / "floating_val.csv",
     }
 
 
@@ -198,13 +201,17 @@ def _api(tmp: Path) -> dict:
     pd = control.make_controller("pd", ROBOT, GAINS, period=0.004)
     p10 = ROBOT.params[:10]
     six = mindyn.load("zcr07s")  # a payload on the last of six joints
-    six_base = mindyn.base_parameters(six)
+    # identified with friction (zero), which min_velocity= applies to
+    six_base = mindyn.base_parameters(six, friction=True)
+    six_classical = dict(zip(six.param_names, six.params, strict=True))
     six_arm = {
         "robot": six.name,
         "base_names": six_base.names,
-        "base_values": six_base.values(six.params).tolist(),
+        "base_values": six_base.values(
+            [six_classical.get(k, 0.0) for k in six_base.classical_names]
+        ).tolist(),
         "rotor": False,
-        "friction": False,
+        "friction": True,
         "offset": False,
     }
     with_payload = six.params.copy()
@@ -519,7 +526,7 @@ def _api(tmp: Path) -> dict:
             "identification.run": (
                 identification.run,
                 (ROBOT, LOG),
-                {"friction": False, "rsd_threshold": 30.0, "min_velocity": 0.01},
+                {"friction": True, "rsd_threshold": 30.0, "min_velocity": 0.01},
             ),
             "identification.error_measures": (
                 identification.error_measures,
@@ -566,7 +573,7 @@ def _api(tmp: Path) -> dict:
                 floating_workflow.load_floating_logs,
                 ([f["floating_csv"]], FLOATING),
                 {
-                    "validate": [f["floating_csv"]],
+                    "validate": [f["floating_val_csv"]],
                     "wrench_frame": "world",
                     "contacts": ["b"],
                     "filter": "butter",

@@ -97,14 +97,32 @@ def test_bad_numbers_are_named_with_the_expected_range(argv, needles, tmp_path, 
 @pytest.mark.parametrize(
     ("argv", "hint"),
     [
-        (["excite", "planar2", "-o", "x.csv", "--frequency", "0.1"], "--freq for --frequency?"),
-        (["base", "planar2", "--rotor-inertia"], "did you mean --rotor for --rotor-inertia?"),
-        (["simulate", "planar2", "-o", "x", "--torque-nosie=1"], "--torque-noise for"),
+        (
+            ["excite", "planar2", "-o", "x.csv", "--frequency", "0.1"],
+            "unrecognized arguments: --frequency 0.1 (unknown option --frequency: did you mean "
+            "--freq?) (see 'mindyn excite --help')",
+        ),
+        (["base", "planar2", "--rotor-inertia"], "option --rotor-inertia: did you mean --rotor?"),
+        (
+            ["simulate", "planar2", "-o", "x", "--torque-nosie=1"],
+            "(unknown option --torque-nosie: did you mean --torque-noise?)",
+        ),
         (["info", "planar2", "extra"], None),
         # an abbreviation is not taken for the option it abbreviates: the options it could be
-        (["codegen", "planar2", "--controller", "0.004"], "--controller-period for --controller?"),
-        (["base", "planar2", "--rot"], "--rotor for --rot?"),
-        (["identify", "planar2", "x.csv", "--fric"], "--friction or --friction-model or"),
+        (
+            ["codegen", "planar2", "--controller", "0.004"],
+            "(unknown option --controller: did you mean --controller-period?)",
+        ),
+        (["base", "planar2", "--rot"], "(unknown option --rot: did you mean --rotor?)"),
+        (
+            ["identify", "planar2", "x.csv", "--fric"],
+            "unknown option --fric: did you mean --friction or --friction-model or",
+        ),
+        (
+            ["base", "planar2", "--rot", "--rotor-inertia"],
+            "(unknown option --rot: did you mean --rotor?; unknown option --rotor-inertia: did "
+            "you mean --rotor?)",
+        ),
     ],
 )
 def test_an_unknown_option_points_to_its_command_and_a_near_spelling(

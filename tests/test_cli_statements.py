@@ -279,6 +279,7 @@ def test_a_loaded_robot_refuses_a_tip_or_root_joint_instead_of_ignoring_it(optio
         ["--integrator", "scipy"],
         ["--torque-limit", "effort"],
         ["--param-error", "0.1"],
+        ["--controller", "computed-torque"],  # the default, given: refused as well
     ],
 )
 def test_simulate_inverse_refuses_the_closed_loops_options(option, tmp_path):

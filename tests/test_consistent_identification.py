@@ -500,6 +500,10 @@ def test_cli_consistent_and_payload(tmp_path, capsys):
             ["identify-payload", ROBOT, "{json}", "{fit}", "--min-velocity", "0"],
             "--min-velocity applies only to an arm identified with friction",
         ),
+        (
+            ["identify-payload", ROBOT, "{json}", "{fit}", "--min-velocity", "0.01"],
+            "--min-velocity applies only to an arm identified with friction",
+        ),
     ],
 )
 def test_cli_bad_input_one_line(tmp_path, capsys, argv, message):
@@ -523,6 +527,8 @@ def test_a_min_velocity_for_an_arm_without_friction_is_refused():
     data = make_log(robot, robot.params, rate=20.0)
     with pytest.raises(mindyn.ArgumentError, match="^min_velocity applies only to an arm"):
         identify_payload(robot, _arm_doc(robot), data, min_velocity=0.0, consistent=False)
+    with pytest.raises(mindyn.ArgumentError, match="^min_velocity applies only to an arm"):
+        identify_payload(robot, _arm_doc(robot), data, min_velocity=0.01, consistent=False)
 
 
 def test_the_tie_break_slack_is_stated_with_the_fit_increase(tmp_path, capsys):

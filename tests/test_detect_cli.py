@@ -6,6 +6,7 @@ residual is the observer's alone."""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import mindyn
 import numpy as np
@@ -147,7 +148,7 @@ def test_gains_come_from_the_thresholds_file(files, tmp_path):
             str(files / "free.csv"),
             "--calibrate",
             str(thr),
-            "--gain",
+            "--observer-gain",
             "50",
         ]
     )
@@ -160,11 +161,73 @@ def test_gains_come_from_the_thresholds_file(files, tmp_path):
             str(files / "free.csv"),
             "--thresholds",
             str(thr),
-            "--gain",
+            "--observer-gain",
             "60",
         ]
     )
-    assert_one_line_error(rc, err, "--gain")
+    assert_one_line_error(rc, err, "--observer-gain")
+
+
+def test_the_observer_gain_has_the_name_of_codegen(files, tmp_path):
+    """detect and codegen --what momentum-observer name K_O --observer-gain; detect's former
+    --gain still works for this release, with a note naming the new spelling."""
+    thr = tmp_path / "thr.json"
+    argv = ["detect", "puma560", str(files / "id.json"), str(files / "free.csv")]
+    rc, _, err = run([*argv, "--calibrate", str(thr), "--gain", "40"])
+    assert rc == 0 and json.loads(thr.read_text())["gains"] == [40.0] * N, err
+    assert err.strip() == (
+        "mindyn: note: --gain is deprecated and will be removed in the next release; use "
+        "--observer-gain"
+    )
+    help_text = {}
+    for command in ("detect", "codegen"):
+        rc, out, _ = run([command, "--help"])
+        help_text[command] = " ".join(out.split())
+        assert "--observer-gain K_O" in help_text[command]
+    assert "--gain" not in help_text["detect"].replace("--observer-gain", "")
+
+
+def test_thresholds_of_another_model_are_refused_or_noted(files, tmp_path):
+    """The thresholds file records the base values it was calibrated with: another
+    identification (one value 10 % off) is refused naming the value; the same values under
+    another file name are taken; a file written before the record (no values) naming another
+    identification gets a one-line warning."""
+    thr = str(tmp_path / "thr.json")
+    ident, free = str(files / "id.json"), str(files / "free.csv")
+    rc, _, err = run(["detect", "puma560", ident, free, "--calibrate", thr])
+    assert rc == 0, err
+    doc = json.loads(Path(ident).read_text())
+    assert json.loads(Path(thr).read_text())["base_values"] == doc["base_values"]
+    off = dict(doc, base_values=list(doc["base_values"]))
+    off["base_values"][2] *= 1.1
+    changed, copy = str(tmp_path / "changed.json"), str(tmp_path / "copy.json")
+    Path(changed).write_text(json.dumps(off))
+    Path(copy).write_text(Path(ident).read_text())
+    rc, _, err = run(["detect", "puma560", changed, free, "--thresholds", thr])
+    name, value = doc["base_names"][2], doc["base_values"][2]
+    assert_one_line_error(
+        rc,
+        err,
+        f"{thr}: calibrated with the unconstrained estimate of '{ident}': 1 of its "
+        f"{len(doc['base_names'])} base parameter values differ from the unconstrained estimate "
+        f"of '{changed}' ({name} {value:.6g} there, {value * 1.1:.6g} here)",
+    )
+    rc, _, err = run(["detect", "puma560", copy, free, "--thresholds", thr])
+    assert rc == 0 and not err, err
+    old = str(tmp_path / "old.json")
+    recorded = json.loads(Path(thr).read_text())
+    for key in ("estimate", "base_names", "base_values"):
+        del recorded[key]
+    Path(old).write_text(json.dumps(recorded))
+    rc, _, err = run(["detect", "puma560", changed, free, "--thresholds", old])
+    # (run, with alarms: the other model's residual on the collision-free log)
+    assert rc in (0, 1) and err.strip().splitlines() == [
+        f"mindyn: warning: {old}: calibrated with the identification '{ident}', not "
+        f"'{changed}' (the file records no parameter values to compare: thresholds of another "
+        "model's residual do not fit this one) (note)"
+    ], err
+    rc, _, err = run(["detect", "puma560", ident, free, "--thresholds", old])
+    assert rc == 0 and not err, err
 
 
 def test_bad_log_and_identification(files):
@@ -225,9 +288,9 @@ def test_cli_codegen_observer(files, tmp_path):
         ("--quantile", "1.5", "--quantile"),
         ("--margin", "0.5", "--margin"),
         ("--margin", "nan", "--margin"),
-        ("--gain", "-1", "observer gain K_O of joint 1"),
-        ("--gain", "5000", "expected 0 < K_O < 2 / T = 2000"),
-        ("--gain", "1,2", "--gain"),
+        ("--observer-gain", "-1", "observer gain K_O of joint 1"),
+        ("--observer-gain", "5000", "expected 0 < K_O < 2 / T = 2000"),
+        ("--observer-gain", "1,2", "--observer-gain"),
     ],
 )
 def test_bad_settings_are_one_line_errors(files, tmp_path, option, value, needle):
@@ -284,7 +347,7 @@ def test_any_mix_of_arguments_gives_status_0_1_or_one_error_line(files, tmp_path
         opt("--calibrate", [str(d / "out" / "t.json")], [str(d), "", str(d / "bad.json" / "x")]),
         opt("--quantile", ["0.5", "1"]),
         opt("--margin", ["1", "2"]),
-        opt("--gain", ["10", "10,20,30,40,50,60"]),
+        opt("--observer-gain", ["10", "10,20,30,40,50,60"]),
         opt("--torque", ["held", "sampled"]),
     ).map(lambda p: ["detect", "puma560", p[0], p[1], *(a for x in p[2:] if x for a in x)])
 
@@ -305,9 +368,12 @@ def test_any_mix_of_arguments_gives_status_0_1_or_one_error_line(files, tmp_path
     check()
 
 
-@pytest.mark.parametrize("option", [["--margin", "3"], ["--quantile", "0.5"]])
+@pytest.mark.parametrize(
+    "option", [["--margin", "3"], ["--quantile", "0.5"], ["--margin", "1.5"], ["--quantile", "1"]]
+)
 def test_the_calibration_options_need_calibrate(option, files):
-    """--margin and --quantile without --calibrate were ignored (--model-sigma was refused)."""
+    """--margin and --quantile without --calibrate were ignored (--model-sigma was refused), at
+    their defaults (1.5 and 1) too."""
     argv = ["detect", "puma560", str(files / "id.json"), str(files / "free.csv"), *option]
     rc, _, err = run(argv)
     assert_one_line_error(rc, err, f"{option[0]} applies to --calibrate")

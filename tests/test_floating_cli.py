@@ -280,6 +280,8 @@ def test_bad_floating_input_is_refused_in_one_line(tmp_path):
     refused("identify", SOLO, good, *ff, "--rotor", match="--rotor: does not apply")
     refused("identify", SOLO, good, *ff, "--consistent", match="--consistent: does not apply")
     refused("identify", SOLO, good, *ff, "--edge", "0.5", match="--edge: does not apply")
+    # at its default too: --integration auto would be ignored
+    refused("identify", SOLO, good, *ff, "--integration", "auto", match="--integration: does not")
     for f in ("savgol", "none"):  # their derivatives have no cut-off
         refused("identify", SOLO, no_dq, *ff, "--filter", f, "--cutoff", "5",
                 match="--cutoff applies only with --filter lowpass or butter")  # fmt: skip

@@ -131,3 +131,93 @@ def test_a_joint_terms_file_beside_another_description_warns(tmp_path):
     with pytest.warns(UserWarning, match=r"made for the description 'old.urdf'; robot 'arm' was"):
         robot = mindyn.load(tmp_path / "arm.urdf", joint_terms=side)
     assert np.allclose(robot.rotor_inertia, [0.1, 0.1])
+
+
+def _identified(robot, **fields) -> dict:
+    """The JSON of an identification of ``robot`` on a log simulated with its own parameters
+    (it records ``model_check``), with ``fields`` added."""
+    rng = np.random.default_rng(5)
+    q, dq, ddq = (rng.uniform(-1, 1, size=(400, 2)) for _ in range(3))
+    base = mindyn.base_parameters(robot)
+    tau = base.regressor(q, dq, ddq) @ base.values(robot.params)
+    doc = identify(robot, JointData(np.arange(400) * 4e-3, q, dq, ddq, tau)).to_dict()
+    return json.loads(json.dumps({**doc, **fields}))
+
+
+def test_another_geometry_under_the_same_names_is_refused_by_every_reader(tmp_path, capsys):
+    """The elbow 0.5 m from the shoulder instead of 0.4 m: the same robot name, joints and base
+    parameter names, even the same file name in another folder; every reader refuses it in one
+    line naming the base parameters whose regrouping or torque column differs."""
+    arm, _ = _arms(tmp_path)
+    classical = dict(zip(arm.param_names, map(float, arm.params), strict=True))
+    path = tmp_path / "id.json"
+    path.write_text(json.dumps(_identified(arm, classical=classical)))
+    (tmp_path / "b").mkdir()
+    longer = tmp_path / "b" / "arm.urdf"
+    longer.write_text(ARM.replace('<origin xyz="0.4 0 0"/>', '<origin xyz="0.5 0 0"/>'))
+    other = mindyn.load(longer)
+    names = mindyn.base_parameters(other).names
+    assert names == mindyn.base_parameters(arm).names
+    # the identified values on the other geometry: torques off its own (same inertials)
+    _, values, _ = identified_model(path, arm)
+    q = np.array([0.3, -0.7])
+    own = mindyn.base_parameters(other)
+    diff = own.regressor(q, q, q) @ (values - own.values(other.params))
+    assert np.max(np.abs(diff)) > 0.1
+    said = (
+        f"identified on another model than robot 'arm' loaded from '{longer}': the regrouping "
+        "of MXR1, YYR1 and the torque columns of MX2, MZ2 differ (its lengths, axes, gravity, "
+        "gear ratios "
+        "or friction model are not those identified)"
+    )
+    with pytest.raises(DataError) as e:
+        identified_model(path, other)
+    assert str(e.value) == f"{path}: {said}"
+    with pytest.raises(mindyn.ModelError) as e:
+        read_identified_parameters(path, names, robot=other)
+    assert str(e.value) == f"{path}: parameters: {said}"
+    with pytest.raises(mindyn.ModelError) as e:
+        read_arm(other, str(path))
+    assert str(e.value) == f"{path}: {said}"
+    for argv in (
+        ["codegen", str(longer), "--lang", "c", "--params", str(path), "-o", str(tmp_path / "x")],
+        ["export", str(longer), str(path), "--urdf", str(tmp_path / "x.urdf")],
+    ):
+        assert mindyn.cli.main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert err == [f"mindyn: error: {path}: parameters: {said}"], err
+    # gravity along x instead of -z: the torque columns alone differ
+    tilted = mindyn.load(tmp_path / "arm.urdf", gravity=[9.81, 0, 0])
+    with pytest.raises(DataError, match=r"model than robot 'arm' loaded from .*: the torque col"):
+        identified_model(path, tilted)
+
+
+def test_the_same_geometry_under_another_name_or_folder_passes(tmp_path):
+    """The model record is of the geometry, not of the file: a copy in another folder gives
+    no warning, a copy under another name the existing note; a JSON without the record (written
+    by earlier versions) is not checked."""
+    arm, _ = _arms(tmp_path)
+    doc = _identified(arm)
+    assert len(doc["model_check"]["regrouping"]) == len(doc["base_names"])
+    (tmp_path / "b").mkdir()
+    (tmp_path / "b" / "arm.urdf").write_text(ARM)
+    (tmp_path / "b" / "renamed.urdf").write_text(ARM)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _, values, _ = identified_model(doc, mindyn.load(tmp_path / "b" / "arm.urdf"))
+    assert np.allclose(values, doc["base_values"], rtol=0, atol=0)
+    with pytest.warns(UserWarning, match=r"made for the description 'arm.urdf'; robot 'arm' was "):
+        identified_model(doc, mindyn.load(tmp_path / "b" / "renamed.urdf"))
+    longer = tmp_path / "b" / "long.urdf"
+    longer.write_text(ARM.replace('<origin xyz="0.4 0 0"/>', '<origin xyz="0.5 0 0"/>'))
+    old = {k: v for k, v in doc.items() if k != "model_check"}
+    with pytest.warns(UserWarning, match=r"made for the description 'arm.urdf'"):
+        identified_model(old, mindyn.load(longer))  # today's behaviour: a note only
+    # numbers rounded to 12 digits (another machine's arithmetic) still pass; a change of 1e-5
+    # in one number does not
+    rounded = json.loads(json.dumps(doc))
+    rounded["model_check"]["regressor"][0][0] *= 1 + 1e-11
+    identified_model(rounded, arm)
+    rounded["model_check"]["regrouping"][1] *= 1 + 1e-5
+    with pytest.raises(DataError, match=r"the regrouping of \w+ differ"):
+        identified_model(rounded, arm)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import re
 import tracemalloc
 from pathlib import Path
 
@@ -374,6 +375,59 @@ def test_excite_reports_progress_within_a_start_to_a_log(monkeypatch):
     assert "\r" not in stream.getvalue()
 
 
+# -- a log given twice -----------------------------------------------------------------------
+def test_a_log_given_twice_or_fitted_and_validated_is_refused(planar_log, tmp_path):
+    """A fit log twice (the same path, another spelling of it, or a copy of the same bytes)
+    would fit its rows twice; a validation log that is a fit log would score the fit on its
+    own data: refused in one line naming both, by the command and by the library."""
+    from mindyn.identification import load_logs
+    from mindyn.identification.floating_workflow import load_floating_logs
+
+    copy = tmp_path / "copy.csv"
+    copy.write_bytes(Path(planar_log).read_bytes())
+    spelled = Path(planar_log).parent / ".." / Path(planar_log).parent.name / "planar2.csv"
+    twice = f"{planar_log}: given twice as a fit log: its samples would be fitted twice"
+    for argv, said in [
+        ([planar_log, planar_log], twice),
+        ([planar_log, spelled], f"{spelled}: given twice as a fit log: its samples would be"),
+        (
+            [planar_log, copy],
+            f"{copy}: given twice as a fit log (has the same content as '{planar_log}'): its",
+        ),
+        (
+            [planar_log, "--validate", planar_log],
+            f"{planar_log}: the validation log is the fit log '{planar_log}': validation on "
+            "the fitted data says nothing of other data (give a log not fitted)",
+        ),
+        ([planar_log, "--validate", copy], f"{copy}: the validation log has the same content"),
+    ]:
+        rc, _, err = run(["identify", "planar2", *argv])
+        one_line_error(rc, err, said)
+    robot = mindyn.load("planar2")
+    with pytest.raises(DataError) as e:
+        load_logs([planar_log, planar_log], robot)
+    assert str(e.value) == twice
+    with pytest.raises(DataError, match="the validation log has the same content as the fit"):
+        load_logs(planar_log, robot, validate=copy)
+    with pytest.raises(DataError, match="the validation log is the fit log"):
+        load_floating_logs(
+            [planar_log], mindyn.load(UR5, root_joint="floating"), validate=[planar_log]
+        )
+    # logs already read: the same JointData twice, to identify or to run
+    d = load_logs(planar_log, robot).fit.logs[0]
+    said = f"gives log 1 ({d.source}) again as log 2: its samples would be fitted twice"
+    with pytest.raises(mindyn.ArgumentError, match=rf"^data {re.escape(said)}$"):
+        mindyn.identification.identify(robot, [d, d])
+    with pytest.raises(mindyn.ArgumentError, match=rf"^logs {re.escape(said)}$"):
+        mindyn.identification.run(robot, [d, d])
+    other = tmp_path / "other.csv"  # another log of as many bytes is another log
+    text = Path(planar_log).read_text()
+    last = max(i for i, c in enumerate(text) if c in "0123456789")  # a torque's last digit
+    other.write_text(text[:last] + ("1" if text[last] != "1" else "2") + text[last + 1 :])
+    assert other.stat().st_size == copy.stat().st_size
+    assert len(load_logs(planar_log, robot, validate=other).validation.files) == 1
+
+
 # -- options that do not apply ----------------------------------------------------------------
 @pytest.fixture(scope="module")
 def planar_log(tmp_path_factory):
@@ -395,6 +449,12 @@ def planar_log(tmp_path_factory):
         (["--model", "integral", "--no-decimate"], "--no-decimate applies only to the dynamic"),
         (["--topic", "/joint_states"], "--topic applies to ROS bags"),
         (["--friction-model", "coulomb", "--friction-width", "0.1"], "--friction-width applies"),
+        # given at their defaults: refused as well (they were ignored)
+        (["--min-velocity", "0.01"], "--min-velocity applies only with --model dynamic or"),
+        (["--model", "energy", "--min-velocity", "0.01"], "--min-velocity applies only"),
+        (["--energy-window", "10"], "--energy-window applies only with --model energy"),
+        (["--integration", "auto"], "--integration applies only with --model energy or"),
+        (["--model", "energy", "--integral-window", "40"], "--integral-window applies only"),
     ],
 )
 def test_an_option_that_does_not_apply_is_refused(planar_log, argv, said):
@@ -460,6 +520,12 @@ def test_the_library_refuses_the_same_combinations(planar_log):
         (dict(min_velocity=0.0), "min_velocity"),
         (dict(model="energy", friction=True, min_velocity=0.0), "min_velocity"),
         (dict(model="integral", min_velocity=0.0), "min_velocity"),
+        # at their defaults too: given is refused where it does not apply
+        (dict(min_velocity=0.01), "min_velocity"),
+        (dict(model="energy", friction=True, min_velocity=0.01), "min_velocity"),
+        (dict(energy_window=10), "energy_window"),
+        (dict(integration="auto"), "integration"),
+        (dict(model="energy", integral_window=40), "integral_window"),
     ]:
         with pytest.raises(mindyn.ArgumentError, match=f"^{name} applies only"):
             IdentifyOptions(**kw)
@@ -468,12 +534,27 @@ def test_the_library_refuses_the_same_combinations(planar_log):
             ReadingOptions(filter=f, cutoff=5.0)
     with pytest.raises(mindyn.ArgumentError, match="^decimate=False applies only"):
         load_logs([planar_log], robot, model="energy", decimate=False)
+    with pytest.raises(mindyn.ArgumentError, match="^decimate=True applies only"):
+        load_logs([planar_log], robot, model="energy", decimate=True)
+    with pytest.raises(DataError, match="^decimate=True needs filter='lowpass'"):
+        ReadingOptions(filter="none", decimate=True)
+    with pytest.raises(mindyn.ArgumentError, match="^min_velocity applies only with"):
+        mindyn.identification.run(robot, load_logs([planar_log], robot), min_velocity=0.01)
     with pytest.raises(mindyn.ArgumentError, match="^topic= applies to ROS bags"):
         load_logs([planar_log], robot, topic="/joint_states")
     # the defaults, and the options where they apply, are taken
     IdentifyOptions(model="energy", energy_window=3, integration="zoh")
     IdentifyOptions(friction_model="stribeck", min_velocity=0.0)
     IdentifyOptions(model="integral", friction=True, min_velocity=0.0)
+    # not given: the defaults, which the options hold
+    opts = IdentifyOptions(model="energy")
+    assert (opts.energy_window, opts.integration, opts.integral_window, opts.min_velocity) == (
+        10,
+        "auto",
+        40,
+        0.01,
+    )
+    assert ReadingOptions().decimate is True
     ReadingOptions(filter="butter", cutoff=5.0)
 
 

@@ -232,7 +232,11 @@ def test_junction_between_logs_does_not_leak_into_derivatives(tmp_path, capsys):
     args = ["identify", "zcr07s", *map(str, files), "--rsd-threshold", "0", "--json", str(out)]
     args += ["--filter", "butter"]  # the reader's derivative filter, as read_csv above
     report = tmp_path / "report"
-    argv = args + ["--validate", str(files[1]), str(files[0]), "--report", str(report)]
+    checks = []  # two validation logs of their own (a fit log as validation is refused)
+    for k, seed in enumerate((23, 24)):
+        log = simulate_inverse(robot, random_trajectory(robot, seed=seed), rate=100.0)
+        checks.append(str(write_csv(tmp_path / f"val{k}.csv", log.t, log.q, log.tau)))
+    argv = args + ["--validate", *checks, "--report", str(report)]
     assert cli.main(argv) == 0
     text = capsys.readouterr().out
     assert "2 logs fitted together" in text and "overall relative error" in text
@@ -243,7 +247,10 @@ def test_junction_between_logs_does_not_leak_into_derivatives(tmp_path, capsys):
     np.testing.assert_allclose(doc["base_values"], sep.full, rtol=1e-9, atol=1e-12)
     v = validate(sep, data)
     assert doc["fit"]["overall_relative"] == pytest.approx(v["overall_relative"], rel=1e-9)
-    assert doc["validation"]["overall_relative"] == pytest.approx(v["overall_relative"], rel=1e-9)
+    checked = validate(sep, [read_csv(c, robot) for c in checks])
+    assert doc["validation"]["overall_relative"] == pytest.approx(
+        checked["overall_relative"], rel=1e-9
+    )
     assert [x["samples"] for x in doc["fit"]["logs"]] == [d.m for d in data]
     np.testing.assert_allclose(doc["fit"]["logs"][0]["rms"], v["logs"][0]["rms"], rtol=1e-9)
     np.testing.assert_allclose(doc["fit"]["nrms"], v["rms"] / robot.limits["effort"], rtol=1e-9)

@@ -52,6 +52,36 @@ def test_codegen_plcopen_alone_writes_the_default_path(tmp_path, monkeypatch):
     assert _pous(path) == names + ["planar2_regressor", "planar2_momentum_observer"]
 
 
+@pytest.mark.parametrize(
+    "given, written",
+    [
+        ("foo.bar", ("foo.bar.c", "foo.bar.h")),  # another suffix: kept in both names
+        ("arm.v2.c", ("arm.v2.c", "arm.v2.h")),
+        ("foo.c", ("foo.c", "foo.h")),
+        ("foo.h", ("foo.c", "foo.h")),
+        ("foo.st", ("foo.c", "foo.h")),
+        ("foo", ("foo.c", "foo.h")),
+    ],
+)
+@pytest.mark.parametrize("what", ["gravity", "momentum-observer"])
+def test_codegen_c_names_both_files_by_one_rule(tmp_path, monkeypatch, given, written, what):
+    """-o FILE with --lang c writes FILE.c and FILE.h, FILE the path without a .c, .h or .st
+    suffix; the source includes the header by the name written (-o foo.bar wrote foo.bar.h
+    and foo.c)."""
+    monkeypatch.chdir(tmp_path)
+    rc, out, err = run(["codegen", "planar2", "--what", what, "--lang", "c", "-o", given])
+    assert rc == 0, err
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(written)
+    assert f'#include "{written[1]}"' in (tmp_path / written[0]).read_text()
+    assert f"wrote {written[1]}, {written[0]}" in out
+
+
+def test_generated_code_write_adds_c_to_another_suffix(tmp_path):
+    code = mindyn.codegen.generate("planar2", lang="c", what="gravity", header_name="g.v2.h")
+    assert code.write(tmp_path / "g.v2") == [tmp_path / "g.v2.h", tmp_path / "g.v2.c"]
+    assert code.write(tmp_path / "h.c")[1] == tmp_path / "h.c"
+
+
 def _pous(path: Path) -> list[str]:
     import xml.etree.ElementTree as ET
 

@@ -73,15 +73,15 @@ def _unrecognized(parser: argparse.ArgumentParser, command: str, extra: list[str
         # one close in spelling
         near = [f for f in flags if f.startswith("--") and word.startswith(f)]
         if near:
-            hints.append(f"{max(near, key=len)} for {word}")
-            continue
-        near = sorted(f for f in flags if f.startswith(word))
-        near = near or difflib.get_close_matches(word, flags, n=1, cutoff=0.8)
+            near = [max(near, key=len)]
+        else:
+            near = sorted(f for f in flags if f.startswith(word))
+            near = near or difflib.get_close_matches(word, flags, n=1, cutoff=0.8)
         if near:
-            hints.append(f"{' or '.join(near)} for {word}")
+            hints.append(f"unknown option {word}: did you mean {' or '.join(near)}?")
     said = f"unrecognized arguments: {' '.join(extra)}"
     if hints:
-        said += f" (did you mean {', '.join(hints)}?)"
+        said += f" ({'; '.join(hints)})"
     return f"{said} (see 'mindyn {command} --help')"
 
 

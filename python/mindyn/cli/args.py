@@ -162,22 +162,46 @@ def deprecated(p, old: str, target: argparse.Action | None = None, *, new: str =
 
 def remember_flags(p: argparse.ArgumentParser) -> None:
     """Records the flag and the default of every option of ``p`` (``args._flags``: dest ->
-    (flag, default)), so that :func:`given_options` tells which of them a command line set.
+    (flag, default)), and makes each option note on the parsed arguments that it was given
+    (``args._given``), so that :func:`given_options` tells which of them a command line set.
     Called after the last option is added."""
-    flags = {
-        a.dest: (max(a.option_strings, key=len), a.default)
-        for a in p._actions
-        if a.option_strings and a.help != argparse.SUPPRESS and a.dest != "help"
-    }
+    flags = {}
+    for a in p._actions:
+        if a.option_strings and a.dest != "help":
+            a.__class__ = _noting(type(a))
+            if a.help != argparse.SUPPRESS:
+                flags[a.dest] = (max(a.option_strings, key=len), a.default)
     p.set_defaults(_flags=flags)
+
+
+_NOTING: dict[type, type] = {}
+
+
+def _noting(kind: type) -> type:
+    """The argparse action class ``kind`` that also adds its destination to the namespace's
+    ``_given`` set when its option appears on the command line (one class per ``kind``)."""
+    if kind in _NOTING or kind in _NOTING.values():
+        return _NOTING.get(kind, kind)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        given = getattr(namespace, "_given", None)
+        if given is None:
+            given = set()
+            namespace._given = given
+        given.add(self.dest)
+        return kind.__call__(self, parser, namespace, values, option_string)
+
+    _NOTING[kind] = type(kind.__name__, (kind,), {"__call__": __call__})
+    return _NOTING[kind]
 
 
 def given_options(args: argparse.Namespace, *dests: str) -> list[str]:
     """The flags (``--param-error``) of the options ``dests`` (recorded by
-    :func:`remember_flags`) that the command line set to other than their defaults: an option
-    that applies in one mode only is then refused in the others instead of ignored."""
-    flags = args._flags
-    return [flags[d][0] for d in dests if getattr(args, d) != flags[d][1]]
+    :func:`remember_flags`) that the command line gave, whatever their values (their defaults'
+    too): an option that applies in one mode only is then refused in the others instead of
+    ignored."""
+    flags, given = args._flags, getattr(args, "_given", None) or set()
+    return [flags[d][0] for d in dests if d in given]
 
 
 def deprecation_notes(args: argparse.Namespace) -> list[str]:

@@ -201,7 +201,8 @@ def register(subparsers) -> None:
         "--output",
         metavar="FILE",
         type=output_file,
-        help="C: FILE.c and FILE.h; ST: FILE; a folder: NAME.c and NAME.h, or NAME.st, inside "
+        help="C: FILE.c and FILE.h (FILE: the path without a .c, .h or .st suffix; any other "
+        "suffix is kept in both names); ST: FILE; a folder: NAME.c and NAME.h, or NAME.st, inside "
         "it (NAME: --name, or the robot's name, with the controller or observer step's); "
         "-o, --plcopen or both",
     )

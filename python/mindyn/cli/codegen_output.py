@@ -1,4 +1,5 @@
-"""Where ``mindyn codegen`` writes: ``-o`` (C: NAME.c and NAME.h; ST: the file) and the PLCopen
+"""Where ``mindyn codegen`` writes: ``-o`` (C: NAME.c and NAME.h, NAME the path without a
+.c, .h or .st suffix, any other kept; ST: the file) and the PLCopen
 XML of ``--plcopen``, by the command line's one output rule
 (:func:`~mindyn.cli.outputs.output_path`: a folder means the default name inside it;
 ``--plcopen`` alone: :data:`DEFAULT_FOLDER`)."""
@@ -28,14 +29,29 @@ def _stem(args: argparse.Namespace, robot) -> str:
     return f"{name}_{what.replace('-', '_')}" if what in CONTROLLERS + (OBSERVER,) else name
 
 
+#: The suffixes a C output's -o may end with: taken off before .c and .h are added (any other
+#: suffix is part of the name: -o arm.v2 writes arm.v2.c and arm.v2.h).
+C_SUFFIXES = (".c", ".h", ".st")
+
+
+def c_base(out: Path) -> Path:
+    """The C output ``out`` without a suffix of :data:`C_SUFFIXES`: FILE of FILE.c and FILE.h."""
+    return out.with_suffix("") if out.suffix in C_SUFFIXES else out
+
+
+def c_files(base: Path) -> tuple[Path, Path]:
+    """The source and header of the C output ``base`` (:func:`c_base`): ``base`` + .c, + .h."""
+    return base.parent / (base.name + ".c"), base.parent / (base.name + ".h")
+
+
 def _output_base(args: argparse.Namespace, robot) -> Path | None:
-    """``-o``'s path without the ``.c``/``.h`` a C output may be given with (a folder: the
-    default name inside it, by :func:`~mindyn.cli.outputs.output_path`), or None without -o."""
+    """``-o``'s path, for C without a suffix of :data:`C_SUFFIXES` (a folder: the default name
+    inside it, by :func:`~mindyn.cli.outputs.output_path`), or None without -o."""
     if args.output is None:
         return None
     ext = ".st" if args.lang == "st" else ""
     out = output_path(args.output, _stem(args, robot) + ext)
-    return out.with_suffix("") if args.lang == "c" and out.suffix in (".c", ".h") else out
+    return c_base(out) if args.lang == "c" else out
 
 
 def _plcopen_path(args: argparse.Namespace, name: str) -> Path:
@@ -57,16 +73,8 @@ def _outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
         files.append(("--output", Path(args.output), True))
     elif args.output is not None:
         out = Path(args.output)
-        if args.lang == "c" and out.suffix in (".c", ".h"):
-            out = out.with_suffix("")
-        files += (
-            [
-                ("--output", out.with_suffix(".c"), False),
-                ("--output", out.parent / (out.name + ".h"), False),
-            ]
-            if args.lang == "c"
-            else [("--output", out, False)]
-        )
+        names = c_files(c_base(out)) if args.lang == "c" else (out,)
+        files += [("--output", f, False) for f in names]
     if isinstance(args.plcopen, str):
         files.append(("--plcopen", Path(args.plcopen), getattr(args.plcopen, "into_folder", False)))
     return files
@@ -76,7 +84,7 @@ def _write(code, out: Path | None, lang: str) -> list[Path]:
     """Writes ``code`` to ``-o``'s path (C: .c and .h), or nothing without -o."""
     if out is None:
         return []
-    return code.write(out.with_suffix(".c") if lang == "c" else out)
+    return code.write(c_files(out)[0] if lang == "c" else out)
 
 
 def _write_plcopen(args: argparse.Namespace, codes: list, project: str, name: str) -> Path:

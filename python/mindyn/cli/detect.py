@@ -8,7 +8,7 @@ import argparse
 
 import numpy as np
 
-from .args import UsageError, add_command, given_options, remember_flags
+from .args import UsageError, add_command, deprecated, given_options, remember_flags
 from .columns import add_columns
 from .number_options import add_recorded_torque_reading, joint_values, joint_vector, number
 from .outputs import output_file
@@ -65,17 +65,23 @@ def cmd_detect(args: argparse.Namespace) -> int:
             "--thresholds and --calibrate exclude each other (calibrate on a "
             "collision-free log, then detect with the file it wrote)"
         )
-    if args.thresholds and args.gain:
-        raise UsageError("--gain: the thresholds file gives the gains it was calibrated with")
+    if args.thresholds and args.observer_gain:
+        raise UsageError(
+            "--observer-gain: the thresholds file gives the gains it was calibrated with"
+        )
     thresholds = load_thresholds(args.thresholds, robot) if args.thresholds else None
+    if thresholds is not None:
+        _same_model(thresholds, base, values, estimate, args)
     data = _read_log(args.log, robot, doc, args)
     t = data.t
     steps = np.diff(t)
     period = float(np.median(steps))
     if thresholds is not None:
         gains, how = thresholds.gains, f"those of {args.thresholds}"
-    elif args.gain:
-        gains = np.array(joint_values(args.gain, robot.n, "--gain", broadcast=True))
+    elif args.observer_gain:
+        gains = np.array(
+            joint_values(args.observer_gain, robot.n, "--observer-gain", broadcast=True)
+        )
         how = "given"
     else:
         k = default_observer_gain(period)
@@ -113,7 +119,14 @@ def cmd_detect(args: argparse.Namespace) -> int:
         )
     if args.calibrate:
         thr = calibrate_thresholds(r, quantile=args.quantile, margin=args.margin)
-        info = {"calibration_log": str(args.log), "identification": str(args.identification)}
+        info = {
+            "calibration_log": str(args.log),
+            "identification": str(args.identification),
+            # the model whose residual the thresholds bound: what --thresholds compares
+            "estimate": estimate,
+            "base_names": list(base.names),
+            "base_values": [float(v) for v in values],
+        }
         if args.model_sigma:
             std = _base_std(doc, base, args.identification, estimate)
             sig = residual_uncertainty(obs, std, data.q, data.dq, t).max(0)
@@ -171,6 +184,51 @@ def cmd_detect(args: argparse.Namespace) -> int:
         _plot(args.plot, t, r, thresholds.thresholds, alarms, robot.name)
         print(f"  wrote {args.plot}")
     return 1 if alarms else 0
+
+
+def _same_model(thresholds, base, values, estimate: str, args) -> None:
+    """Refuses thresholds calibrated with another model than ``values`` (the ``base_values``
+    their file records: another identification, or the other estimate), naming the largest
+    difference; warns, in one line, when a file that records no values (written before them)
+    names another identification JSON than the one given."""
+    import warnings
+    from pathlib import Path
+
+    from ..control.observer import ThresholdsError
+
+    info, where = thresholds.info, str(args.thresholds)
+    made = info.get("identification")
+    made_with = f"the {info.get('estimate', 'unconstrained')} estimate of '{made}'"
+    names, recorded = info.get("base_names"), info.get("base_values")
+    if isinstance(names, list) and isinstance(recorded, list):
+        try:
+            theirs = np.array(recorded, dtype=float)
+        except (TypeError, ValueError):
+            raise ThresholdsError(f"{where}: 'base_values' must be a list of numbers") from None
+        ours = f"the {estimate} estimate of '{args.identification}'"
+        if names != list(base.names) or theirs.shape != values.shape:
+            raise ThresholdsError(
+                f"{where}: calibrated with {made_with}, whose {len(names)} base parameters are "
+                f"not the {base.n} of {ours}; calibrate again with it (--calibrate)"
+            )
+        differ = ~np.isclose(theirs, values, rtol=1e-9, atol=0.0)
+        if differ.any():
+            scale = np.maximum(np.maximum(np.abs(theirs), np.abs(values)), 1e-300)
+            k = int(np.argmax(np.abs(theirs - values) / scale))
+            raise ThresholdsError(
+                f"{where}: calibrated with {made_with}: {int(differ.sum())} of its {base.n} base "
+                f"parameter values differ from {ours} ({base.names[k]} {theirs[k]:.6g} there, "
+                f"{values[k]:.6g} here); its thresholds bound another model's residual: "
+                "calibrate again with this one (--calibrate)"
+            )
+        return
+    if isinstance(made, str) and Path(made).resolve() != Path(args.identification).resolve():
+        warnings.warn(
+            f"{where}: calibrated with the identification '{made}', not "
+            f"'{args.identification}' (the file records no parameter values to compare: "
+            "thresholds of another model's residual do not fit this one)",
+            stacklevel=2,
+        )
 
 
 def _base_std(doc, base, where, estimate):
@@ -260,13 +318,14 @@ def register(sub) -> None:
         "deviations, correlations left out; 0: off)",
     )
     remember_flags(p)
-    joint_vector(
+    gain = joint_vector(
         p,
-        "--gain",
+        "--observer-gain",
         metavar="K_O",
-        help="observer gains [1/s], one or one per joint (default 1 / (10 T), T the log's "
+        help="observer gains K_O [1/s], one or one per joint (default 1 / (10 T), T the log's "
         "median step, or 1 / its longest step when that is lower)",
     )
+    deprecated(p, "--gain", gain)
     p.add_argument(
         "--torque",
         choices=["sampled", "held"],

@@ -40,6 +40,7 @@ def read_classical(path: str) -> tuple[dict, str | None, dict]:
 
 def cmd_export(args: argparse.Namespace) -> int:
     from ..identification.document import (
+        check_identified_geometry,
         check_identified_robot,
         refuse_state,
         robot_on_drive_side,
@@ -54,6 +55,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     classical, _, doc = read_classical(args.params)
     refuse_state(doc, "a robot description", str(args.params))
     check_identified_robot(doc, robot, f"{args.params}: parameters", error=ModelError)
+    check_identified_geometry(doc, robot, f"{args.params}: parameters", error=ModelError)
     robot = robot_on_drive_side(robot, doc, where=str(args.params))
     robot = with_identified_friction(robot, doc, where=str(args.params))
     write_description(

@@ -39,7 +39,7 @@ def reading_options(args: argparse.Namespace):
         periods=args.periods,
         period=args.period,
         edge=args.edge,
-        decimate=not args.no_decimate,
+        decimate=False if args.no_decimate else None,
         torque_unit=args.torque_unit,
         drive_gain=args.drive_gain,
         topic=args.topic,

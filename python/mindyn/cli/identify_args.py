@@ -155,7 +155,7 @@ def add_identify(sub, func) -> None:
         metavar="LOG",
         help="CSV log (t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun or currents i1..in) or "
         "ROS bag (a ROS 2 bag folder, .mcap, .db3, or a ROS 1 .bag); several logs are fitted "
-        "together (derivatives taken on each log alone, regression systems stacked)",
+        "together (derivatives taken on each log alone, regression systems stacked; each once)",
     )
     p.add_argument(
         "--model",
@@ -173,7 +173,10 @@ def add_identify(sub, func) -> None:
     add_offset(p, "identify")
     add_snap(p)
     p.add_argument(
-        "--validate", nargs="+", metavar="LOG", help="log(s) (CSV or bag) for validation"
+        "--validate",
+        nargs="+",
+        metavar="LOG",
+        help="log(s) (CSV or bag) for validation, none of them a fit log",
     )
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
     p.add_argument("--report", metavar="DIR", type=output_dir, help="write plots and tables to DIR")
@@ -248,13 +251,12 @@ def add_identify(sub, func) -> None:
         low=1,
         high=1000000,
         integer=True,
-        default=10,
+        default_when_unset=10,
         help="energy model: sample intervals per energy equation",
     )
     p.add_argument(
         "--integration",
         choices=["auto", "simpson", "trapezoid", "zoh"],
-        default="auto",
         help="energy and integral model integration rule (zoh: torque held over each period); "
         "default auto: simpson or zoh, whichever fit leaves the smaller residual (stated)",
     )
@@ -264,14 +266,14 @@ def add_identify(sub, func) -> None:
         low=1,
         high=1000000,
         integer=True,
-        default=40,
+        default_when_unset=40,
         help="integral model: sample intervals per window (one equation per joint and window)",
     )
     number(
         p,
         "--min-velocity",
         low=0,
-        default=0.01,
+        default_when_unset=0.01,
         help=(
             "dynamic and integral models with friction: leave out joint equations slower than "
             "this [rad/s, m/s] (integral: at a sample of the window)"
@@ -320,7 +322,7 @@ def add_identify_payload(sub, func) -> None:
         p,
         "--min-velocity",
         low=0,
-        default=0.01,
+        default_when_unset=0.01,
         help="arm with friction: leave out joint equations slower than this [rad/s, m/s]",
     )
     p.add_argument(

@@ -104,10 +104,13 @@ def number(
     unit: str = "",
     suffix: str = "",
     help: str = "",
+    default_when_unset: float | None = None,
     **kwargs,
 ):
     """``p.add_argument(*flags, type=Number(...), help=...)`` with the accepted range appended
-    to the help text; ``suffix`` may follow the number (``%``)."""
+    to the help text; ``suffix`` may follow the number (``%``). ``default_when_unset``: the
+    value the command takes when the option is not given, stated as its default while the
+    option itself stays None (an option of one mode, refused in another whenever given)."""
     kind = Number(
         low, high, low_open=low_open, high_open=high_open, integer=integer, unit=unit, suffix=suffix
     )
@@ -115,6 +118,8 @@ def number(
     text += f"{'integer' if integer else 'number'} {kind.range_text()}"
     if "default" in kwargs and kwargs["default"] is not None and "nargs" not in kwargs:
         text += f"; default {_fmt(kwargs['default'])}"
+    elif default_when_unset is not None:
+        text += f"; default {_fmt(default_when_unset)}"
     return p.add_argument(*flags, type=kind, help=text.replace("%", "%%"), **kwargs)
 
 

@@ -83,7 +83,8 @@ class GeneratedCode:
         self.wrench_frame = wrench_frame
 
     def write(self, path: str | Path) -> list[Path]:
-        """Writes the code: C to ``path`` (``.c`` added when missing) and the header beside it
+        """Writes the code: C to ``path`` (``.c`` added when it does not end so: ``arm.v2`` is
+        written as ``arm.v2.c``) and the header beside it
         under ``header_name`` (the name the source includes); ST to ``path``. Returns the paths
         written."""
         path = Path(_args.path(path, "path"))
@@ -91,7 +92,7 @@ class GeneratedCode:
             assert self.text is not None
             path.write_text(self.text)
             return [path]
-        src = path if path.suffix == ".c" else path.with_suffix(".c")
+        src = path if path.suffix == ".c" else path.parent / (path.name + ".c")
         hdr = src.parent / self.header_name
         assert self.header is not None and self.source is not None
         hdr.write_text(self.header)

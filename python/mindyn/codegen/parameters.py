@@ -109,23 +109,23 @@ def read_identified_parameters(
     offset: bool = False,
 ) -> tuple[np.ndarray, list[str], str] | None:
     """The values of the JSON that ``mindyn identify --json`` writes
-    (:func:`mindyn.identification.run`'s report) in the order of the base parameters ``names``,
-    with the parameters the identification pruned (its ``removed``) as zero.
+    (:func:`mindyn.identification.run`'s report) in the order of the base parameters ``names``, with
+    the parameters the identification pruned (its ``removed``) as zero.
 
     Returns ``(values, pruned, threshold)``: the pruned names in the order of ``names`` and the
     pruning threshold as text; None when ``path`` is not such a JSON (it has no ``names``,
     ``values`` and ``removed``: :func:`read_parameter_file` reads it). Refused with a
-    :class:`mindyn.ModelError` naming the file: a JSON identified for another robot than
-    ``robot``, with other joint terms than ``rotor``, ``friction`` and ``offset``, or, with
-    ``friction``, with another friction model than the robot's (then
-    ``robot.with_friction_model(kind, velocity=...)`` with the JSON's ``friction_model`` is the
-    robot it was identified for) or, with ``rotor`` or ``friction``, with them on the other side
-    (``drive_side``) than the robot's (then ``robot.with_drive_side(side)`` is the robot it was
-    identified for). Refused with a :class:`~mindyn.identification.data.DataError` naming the
-    file (and, for a syntax error, its line and column): a file meant as JSON (its suffix or
-    first character) that is not JSON; fields of the wrong type; the Dahl model, which generated
-    code has no state for; names unknown, missing, or both identified and pruned; values that
-    are not finite numbers."""
+    :class:`mindyn.ModelError` naming the file: a JSON identified for another robot than ``robot``
+    (its name, joints, or the model its ``model_check`` records), with other joint terms than
+    ``rotor``, ``friction`` and ``offset``, or, with ``friction``, with another friction model than
+    the robot's (then ``robot.with_friction_model(kind, velocity=...)`` with the JSON's
+    ``friction_model`` is the robot it was identified for) or, with ``rotor`` or ``friction``, with
+    them on the other side (``drive_side``) than the robot's (then ``robot.with_drive_side(side)``
+    is the robot it was identified for). Refused with a
+    :class:`~mindyn.identification.data.DataError` naming the file (and, for a syntax error, its
+    line and column): a file meant as JSON (its suffix or first character) that is not JSON; fields
+    of the wrong type; the Dahl model, which generated code has no state for; names unknown,
+    missing, or both identified and pruned; values that are not finite numbers."""
     from ..identification.data import DataError, read_json
     from ..robot import Robot
 
@@ -149,7 +149,7 @@ def read_identified_parameters(
         return None  # NAME value lines
     if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
         return None
-    from ..identification.document import check_identified_robot
+    from ..identification.document import check_identified_geometry, check_identified_robot
 
     check_identified_robot(doc, robot, f"{path}: parameters", error=_core.ModelError)
     differ = [k for k, on in flags.items() if k in doc and bool(doc[k]) != on]
@@ -164,6 +164,7 @@ def read_identified_parameters(
         _same_friction_model(doc, path, robot)
     if flags["rotor"] or flags["friction"]:
         _same_drive_side(doc, path, robot)
+    check_identified_geometry(doc, robot, f"{path}: parameters", error=_core.ModelError)
     idents, values = doc["names"], doc["values"]
     try:
         pruned = [r["name"] if isinstance(r, dict) else str(r) for r in doc["removed"]]

@@ -44,17 +44,15 @@ import scipy.linalg as sla
 
 from .. import _args
 from .._core import ModelError
-from ..base import BaseParameters, base_parameters
+from ..base import BaseParameters
 from ..robot import Robot, load
 from .data import DataError, read_json
 from .document import (
+    check_identified_model,
     check_identified_robot,
-    identified_snap,
+    identified_base,
     names_difference,
     read_identification,
-    robot_on_drive_side,
-    with_identified_friction,
-    with_identified_state,
 )
 from .errors import IdentificationError
 from .estimation import (
@@ -931,16 +929,8 @@ def read_arm(
     need = ("robot", "base_names", "base_values", "rotor", "friction", "offset")
     arm = read_identification(arm, need=need, what=where)
     check_identified_robot(arm, robot, where, error=ModelError)
-    robot = robot_on_drive_side(robot, arm, where=where)
-    robot = with_identified_friction(robot, arm, where=where)
-    base = base_parameters(
-        robot,
-        rotor=arm["rotor"],
-        friction=arm["friction"],
-        offset=arm["offset"],
-        snap=identified_snap(arm, where=where),
-    )
-    base = with_identified_state(base, arm, where)
+    base = identified_base(arm, robot, where)
+    robot = base.robot
     if arm["base_names"] != list(base.names):
         tip = arm.get("tip")
         raise ModelError(
@@ -954,6 +944,7 @@ def read_arm(
                 else "identified with another description or another tip=?"
             )
         )
+    check_identified_model(arm, base, where, error=ModelError)
     classical = arm.get("classical")
     if classical is not None:
         missing = [nm for nm in base.classical_names if nm not in classical]
@@ -1005,7 +996,7 @@ def identify_payload(
     data: JointData | list[JointData],
     *,
     consistent: bool = True,
-    min_velocity: float = PAYLOAD_MIN_VELOCITY,
+    min_velocity: float | None = None,
     rank_tolerance: float = 1e-9,
 ) -> PayloadResult:
     """Inertial parameters of a payload rigidly fixed to the last link, from logs ``data`` with
@@ -1017,7 +1008,8 @@ def identify_payload(
     :func:`~mindyn.identification.estimation.correlation_factor` for low-passed logs) (all
     joints' equations;
     with arm friction, equations of joints slower than ``min_velocity`` left out as in
-    :func:`~mindyn.identification.identify`), and with ``consistent`` the estimate under a
+    :func:`~mindyn.identification.identify`: :data:`PAYLOAD_MIN_VELOCITY` when not given;
+    given to an arm without friction, refused), and with ``consistent`` the estimate under a
     positive semidefinite payload pseudo-inertia (cvxpy, Clarabel).
 
     Raises IdentificationError when the data (or the geometry: a last joint whose axis symmetry
@@ -1027,12 +1019,15 @@ def identify_payload(
     _args.instance(robot, "robot", (Robot, str, Path), "a Robot, a bundled robot name or a path")
     _args.instance(arm, "arm", (dict, str, Path), "an identification (its JSON as a dict or path)")
     consistent = _args.flag(consistent, "consistent")
-    min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
+    given_velocity = min_velocity is not None
+    min_velocity = _args.number(
+        PAYLOAD_MIN_VELOCITY if min_velocity is None else min_velocity, "min_velocity", minimum=0.0
+    )
     rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)
     robot = load(robot, tip=arm_tip(arm, robot) if isinstance(robot, (str, Path)) else None)
     robot._require_serial("payload identification (a payload on the last link)")
     base, beta, used, arm_cov = read_arm(robot, arm)
-    if not base.friction and min_velocity != PAYLOAD_MIN_VELOCITY:
+    if not base.friction and given_velocity:
         raise _args.fail(
             "min_velocity",
             "applies only to an arm identified with friction (it leaves out the equations of "

@@ -30,11 +30,13 @@ in :attr:`JointData.processing`.
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 import re
 import shlex
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -1280,3 +1282,47 @@ def finite_or_none(x) -> float | None:
     """JSON helper: a float, or None for NaN / inf."""
     x = float(x)
     return x if math.isfinite(x) else None
+
+
+def check_distinct_logs(files: Sequence[str], validate: Sequence[str] = ()) -> None:
+    """DataError (one line naming both) when a fit log is given twice, or a validation log
+    is one of the fit logs or given twice: the same file (its resolved path) or files of the
+    same bytes. A fit log twice fits its samples twice (its rows counted as independent twice
+    over: other estimates, smaller standard deviations); validation on fitted data says nothing
+    of other data. Paths that do not exist are left to the reader's error."""
+    seen: list[tuple[str, str, Path]] = []  # (role, given path, resolved path)
+    digests: dict[Path, str] = {}
+
+    def same(a: Path, b: Path) -> str | None:
+        if a == b:
+            return "is"
+        if not (a.is_file() and b.is_file()) or a.stat().st_size != b.stat().st_size:
+            return None
+        for p in (a, b):
+            if p not in digests:
+                digests[p] = hashlib.sha256(p.read_bytes()).hexdigest()
+        return "has the same content as" if digests[a] == digests[b] else None
+
+    for role, paths in (("fit log", files), ("validation log", validate)):
+        for given in paths:
+            resolved = Path(given).resolve()
+            if resolved.exists():
+                for other_role, other, where in seen:
+                    said = same(resolved, where)
+                    if said is None:
+                        continue
+                    if role == other_role:
+                        raise DataError(
+                            f"{given}: given twice as a {role}"
+                            + ("" if said == "is" else f" ({said} '{other}')")
+                            + (
+                                ": its samples would be fitted twice"
+                                if role == "fit log"
+                                else ": it would be scored twice"
+                            )
+                        )
+                    raise DataError(
+                        f"{given}: the validation log {said} the fit log '{other}': validation "
+                        "on the fitted data says nothing of other data (give a log not fitted)"
+                    )
+                seen.append((role, str(given), resolved))

@@ -14,10 +14,13 @@ import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+import numpy as np
+
 from .. import _args, _sidecar
 from .data import DataError, check_joint_names, read_json
 
 if TYPE_CHECKING:
+    from ..base import BaseParameters
     from ..robot import Robot
 
 __all__ = ["FLAGS", "read_identification", "robot_on_drive_side", "with_identified_friction"]
@@ -132,6 +135,139 @@ def check_identified_robot(
     )
     check_joint_names(doc.get("joints"), robot, where, error=error, hint=hint)
     _sidecar.warn_other_description(doc.get("description"), robot, where)
+
+
+#: The states of :func:`model_record`: how many, and the tolerance of its comparison: relative
+#: to each number, plus a floor relative to the largest of its list (a number that round-off
+#: leaves near zero: a gear ratio's 1e4 beside a length's 0.1 in one list). Far above the
+#: round-off of another machine's arithmetic and the record's 12 digits, far below what a
+#: length changed by a tenth of a millimetre does to a regrouping or a regressor column.
+MODEL_STATES = 2
+MODEL_TOLERANCE = 1e-7
+MODEL_FLOOR = 1e-11
+
+
+def model_record(base: BaseParameters) -> dict:
+    """What identifies the model of an identification's base set ``base`` in its JSON
+    (``model_check``), for :func:`check_identified_model`: ``regrouping``, the base values of
+    a fixed classical vector (one number per base parameter: the numeric regrouping, which the
+    lengths, axes and gear ratios set), and ``regressor``, per fixed state (positions,
+    velocities and accelerations) the base regressor's rows summed with fixed weights (one
+    number per base parameter: its torque column, which the geometry, gravity, transmissions
+    and friction model set). Numbers at 12 significant digits."""
+    regrouping, regressor = _model_numbers(base)
+    return {
+        "version": 1,
+        "regrouping": [float(f"{x:.12g}") for x in regrouping],
+        "regressor": [[float(f"{x:.12g}") for x in row] for row in regressor],
+    }
+
+
+def _model_numbers(base: BaseParameters) -> tuple[np.ndarray, np.ndarray]:
+    """The numbers of :func:`model_record` at full precision."""
+    from ..base import BaseParameters
+
+    robot = base.robot
+    P = len(base.classical_names)
+    regrouping = base.values(1.0 + 0.17 * np.sin(1.1 * np.arange(1, P + 1)))
+    rows = []
+    for s in range(MODEL_STATES):
+        q = 0.4 + 0.9 * np.sin(1.7 * np.arange(1, robot.nq + 1) + 2.3 * s)
+        for start, size, _ in robot._unit_blocks():
+            q[start : start + size] /= np.linalg.norm(q[start : start + size])
+        v = np.arange(1, robot.nv + 1)
+        dq = 0.6 + 0.8 * np.cos(1.3 * v + 0.9 * s)
+        ddq = -0.5 + 1.1 * np.sin(0.7 * v + 1.9 * s)
+        # the set's own columns: a Dahl set's Coulomb column is a state along a path
+        W = BaseParameters.regressor(base, q, dq, ddq)
+        rows.append((1.0 + 0.31 * np.arange(W.shape[0])) @ W)
+    return regrouping, np.array(rows)
+
+
+def check_identified_model(
+    doc: dict, base: BaseParameters, where: str, *, error: type[Exception] = DataError
+) -> None:
+    """Refuses (``error``, one line naming ``where`` and the base parameters concerned) an
+    identification JSON ``doc`` whose ``model_check`` (:func:`model_record`) is not that of
+    ``base``, the base set formed for the robot given with the document's settings: another
+    geometry, gravity, transmission or friction model under the same robot and joint names. A
+    document without the record (written by earlier versions) is not checked."""
+    record = doc.get("model_check")
+    if record is None:
+        return
+    n = base.n
+    try:
+        regrouping = np.asarray(record["regrouping"], dtype=float)
+        regressor = np.asarray(record["regressor"], dtype=float)
+        ok = regrouping.shape == (n,) and regressor.shape == (MODEL_STATES, n)
+    except (KeyError, TypeError, ValueError):
+        ok = False
+    if not ok or record.get("version") != 1:
+        raise DataError(
+            f"{where}: 'model_check' is not a record of {n} base parameters at "
+            f"{MODEL_STATES} states (the JSON of mindyn identify writes it)"
+        )
+    own_regrouping, own_regressor = _model_numbers(base)
+    names = list(base.names)
+    regrouped = [names[i] for i in np.flatnonzero(_differ(regrouping, own_regrouping))]
+    columns = sorted(
+        set().union(*(np.flatnonzero(_differ(a, b)) for a, b in zip(regressor, own_regressor)))
+    )
+    if not regrouped and not columns:
+        return
+    parts = []
+    if regrouped:
+        parts.append(f"the regrouping of {_some(regrouped)}")
+    if columns:
+        parts.append(f"the torque columns of {_some([names[i] for i in columns])}")
+    source = base.robot.source
+    raise error(
+        f"{where}: identified on another model than robot '{base.robot.name}'"
+        + (f" loaded from '{source}'" if Path(source).is_file() else "")
+        + f": {' and '.join(parts)} differ (its lengths, axes, gravity, gear ratios or friction "
+        "model are not those identified)"
+    )
+
+
+def check_identified_geometry(
+    doc: dict, robot: Robot, where: str, *, error: type[Exception] = DataError
+) -> None:
+    """:func:`check_identified_model` for a reader that forms no base set of its own: the base
+    set of ``robot`` with the settings the document records (drive side, friction model,
+    ``rotor``, ``friction``, ``offset``, snap), formed only when it has a ``model_check``."""
+    if doc.get("model_check") is None:
+        return
+    check_identified_model(doc, identified_base(doc, robot, where), where, error=error)
+
+
+def identified_base(doc: dict, robot: Robot, where: str) -> BaseParameters:
+    """The base set an identification JSON ``doc`` was fitted with, formed for ``robot`` (checked
+    against the document by :func:`check_identified_robot`): its drive side, friction model,
+    ``rotor``, ``friction``, ``offset`` and snap (the Dahl set for the Dahl model)."""
+    from ..base import base_parameters
+
+    robot = with_identified_friction(robot_on_drive_side(robot, doc, where=where), doc, where=where)
+    base = base_parameters(
+        robot,
+        rotor=bool(doc.get("rotor")),
+        friction=bool(doc.get("friction")),
+        offset=bool(doc.get("offset")),
+        snap=identified_snap(doc, where=where),
+    )
+    return with_identified_state(base, doc, where)
+
+
+def _differ(recorded: np.ndarray, own: np.ndarray) -> np.ndarray:
+    """Where the numbers ``own`` differ from the ``recorded`` ones beyond
+    :data:`MODEL_TOLERANCE` (and :data:`MODEL_FLOOR`)."""
+    floor = MODEL_FLOOR * max(float(np.max(np.abs(own), initial=0.0)), 1e-300)
+    return np.abs(recorded - own) > MODEL_TOLERANCE * np.abs(own) + floor
+
+
+def _some(names: list[str]) -> str:
+    """Up to five names, and how many more."""
+    more = f" and {len(names) - 5} more" if len(names) > 5 else ""
+    return ", ".join(names[:5]) + more
 
 
 def identified_robot_record(robot: Robot) -> dict:

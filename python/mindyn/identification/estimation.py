@@ -29,7 +29,7 @@ from .._threads import evaluated_ahead, single_threaded_blas
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, as_robot, drive_train_record
 from .data import DataError
-from .document import identified_robot_record
+from .document import identified_robot_record, model_record
 from .errors import IdentificationError, RankDeficientError
 from .joint_data import JointData
 from .models import (
@@ -177,6 +177,8 @@ class IdentificationResult:
             "rsd_threshold": self.rsd_threshold,
             "base_names": list(self.base.names),
             "base_values": [float(v) for v in self.full],
+            # the regrouping and regressor columns of the base set: what the readers compare
+            "model_check": model_record(self.base),
             "sigma": self.sigma,
             "rows": self.rows,
             "weighted": self.weighted,
@@ -600,6 +602,24 @@ def _logs(data, name: str = "data", robot: Robot | None = None) -> list[JointDat
         for k, d in enumerate(logs):
             if not d.units_checked and d.n == robot.n:  # other joint counts: refused by each
                 check_units(d, robot, name if isinstance(data, JointData) else f"{name}[{k}]")
+    return logs
+
+
+def distinct_logs(logs: list[JointData], name: str = "data") -> list[JointData]:
+    """``logs`` when no log is given twice (the same object): a log fitted twice counts its
+    samples twice (other estimates, smaller standard deviations); ArgumentError naming both
+    places otherwise. (Logs read from files: :func:`~mindyn.identification.data.
+    check_distinct_logs` compares the files.)"""
+    seen: dict[int, int] = {}
+    for k, d in enumerate(logs):
+        first = seen.setdefault(id(d), k)
+        if first != k:
+            said = f" ({d.source})" if d.source else ""
+            raise _args.fail(
+                name,
+                f"gives log {first + 1}{said} again as log {k + 1}: its samples would be "
+                "fitted twice",
+            )
     return logs
 
 
@@ -1171,7 +1191,7 @@ def identify(
             "mindyn.identification.identify_floating (joint torques and contact wrenches, or "
             "free flight)"
         )
-    logs = _logs(data, robot=robot)
+    logs = distinct_logs(_logs(data, robot=robot))
     _args.choice(model, "model", MODELS)
     rotor, friction = _args.flag(rotor, "rotor"), _args.flag(friction, "friction")
     _args.optional(_args.instance, base, "base", BaseParameters)

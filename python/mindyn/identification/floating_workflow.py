@@ -30,7 +30,7 @@ import numpy as np
 from .. import _args
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot
-from .data import DataError
+from .data import DataError, check_distinct_logs
 from .document import identified_robot_record
 from .errors import IdentificationError
 from .floating import (
@@ -144,6 +144,7 @@ def load_floating_logs(
     _args.instance(robot, "robot", Robot)
     fit = _paths(paths, "paths")
     val = _paths(validate, "validate", empty=True)
+    check_distinct_logs(fit, val)
     frame = _args.choice(wrench_frame, "wrench_frame", _FRAMES)
     derive = dict(
         filter=_args.choice(filter, "filter", ("butter", "savgol", "none")),

@@ -5,7 +5,7 @@ what is identified and how (:class:`IdentifyOptions`), keyword-only, with the de
 from __future__ import annotations
 
 import numbers
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, field, fields
 
 import numpy as np
 
@@ -28,6 +28,14 @@ DEFAULT_RSD_THRESHOLD = 70.7
 MODELS = ("dynamic", "integral", "energy")
 INTEGRATIONS = ("auto", "simpson", "trapezoid", "zoh")
 FRICTION_MODELS = (*FRICTION_KINDS, "dahl", "auto")
+#: The defaults of the options of :class:`IdentifyOptions` that apply in one mode only (a
+#: model, friction): what they are when not given.
+MODE_DEFAULTS = {
+    "energy_window": 10,
+    "integration": "auto",
+    "integral_window": 40,
+    "min_velocity": 0.01,
+}
 
 
 def _widths(width) -> tuple[float, ...]:
@@ -50,8 +58,11 @@ class IdentifyOptions:
     :data:`DEFAULT_RSD_THRESHOLD` or every base parameter, as held-out blocks of the fit logs
     decide, :mod:`~mindyn.identification.pruning`);
     ``energy_window``, ``integral_window``: sample
-    intervals per window; ``integration``: auto, simpson, trapezoid or zoh; ``min_velocity``: joint
-    equations slower than this left out (dynamic and integral models with friction);
+    intervals per window (10, 40); ``integration``: auto (the default), simpson, trapezoid or
+    zoh; ``min_velocity``: joint equations slower than this left out (dynamic and integral
+    models with friction; 0.01 rad/s or m/s). These four apply in one mode each: given (any
+    value, the default's too) in another, they are refused; not given (None), they take their
+    defaults (:data:`MODE_DEFAULTS`), which the attributes then hold;
     ``friction_model``: a friction kind, ``dahl`` or ``auto`` (implies ``friction``),
     ``friction_width``: the tanh width, one positive number for every joint or one per joint
     (smooth or auto only);
@@ -66,17 +77,26 @@ class IdentifyOptions:
     offset: bool = False
     weighted: bool = True
     rsd_threshold: float | str = "auto"
-    energy_window: int = 10
-    integration: str = "auto"
-    integral_window: int = 40
-    min_velocity: float = 0.01
+    # None: not given, the default of :data:`MODE_DEFAULTS` (an option of one mode given in
+    # another is refused, whatever its value)
+    energy_window: int | None = None
+    integration: str | None = None
+    integral_window: int | None = None
+    min_velocity: float | None = None
     friction_model: str | None = None
     friction_width: tuple[float, ...] | None = None
     consistent: bool = False
     prior_weight: float | None = None
     snap: str | float | bool = "auto"
+    #: the options of :data:`MODE_DEFAULTS` given (not None)
+    _given: frozenset[str] = field(default=frozenset(), init=False, repr=False, compare=False)
 
     def __post_init__(self):
+        given = frozenset(k for k in MODE_DEFAULTS if getattr(self, k) is not None)
+        object.__setattr__(self, "_given", given)
+        for k, default in MODE_DEFAULTS.items():
+            if k not in given:
+                object.__setattr__(self, k, default)
         _args.choice(self.model, "model", MODELS)
         for name in ("rotor", "friction", "offset", "weighted", "consistent"):
             object.__setattr__(self, name, _args.flag(getattr(self, name), name))
@@ -128,7 +148,7 @@ class IdentifyOptions:
         self._refuse_what_does_not_apply()
 
     def _refuse_what_does_not_apply(self) -> None:
-        """An option set to other than its default where it has no effect is refused, naming
+        """An option given (whatever its value) where it has no effect is refused, naming
         it: the window of one model with another, the integration rule with the dynamic model,
         ``min_velocity`` without friction or with the energy model."""
         dynamic = self.model == "dynamic"
@@ -144,15 +164,17 @@ class IdentifyOptions:
                 got if self.model == "energy" else "the model has no friction",
             ),
         ):
-            if not applies and getattr(self, name) != _DEFAULTS[name]:
+            if not applies and name in self._given:
                 raise _args.fail(name, f"applies only with {where}; {why}")
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The options as given or defaulted (what was given aside)."""
+        out = asdict(self)
+        del out["_given"]
+        return out
 
 
-OPTION_NAMES = frozenset(f.name for f in fields(IdentifyOptions))
-_DEFAULTS = {f.name: f.default for f in fields(IdentifyOptions)}
+OPTION_NAMES = frozenset(f.name for f in fields(IdentifyOptions) if f.init)
 
 
 def check_cutoff(filter: str, cutoff: float | None) -> None:
@@ -176,7 +198,8 @@ class ReadingOptions:
     edges dropped, decimation), or ``butter``, ``savgol``, ``none`` (derivatives only);
     ``cutoff`` [Hz] (None: from the data; lowpass and butter only); ``periods`` / ``period``
     [s]: a periodic excitation averaged (lowpass, fit logs only); ``edge`` [s] dropped at each
-    end (lowpass); ``decimate`` (lowpass, dynamic model only); ``torque_unit`` (None: as the
+    end (lowpass); ``decimate`` (lowpass, dynamic model only; None: True, and given True or
+    False where it does not apply, refused); ``torque_unit`` (None: as the
     file says; not with a currents file for every log), ``drive_gain`` (per
     joint, or one for all), ``topic`` (ROS bag), ``columns``: a column map of the CSV logs
     (:func:`~mindyn.identification.columns.column_map`; the currents files read through its
@@ -187,13 +210,21 @@ class ReadingOptions:
     periods: int | None = None
     period: float | None = None
     edge: float | None = None
-    decimate: bool = True
+    # None: not given, True (decimated on the low-pass path of the dynamic model)
+    decimate: bool | None = None
     torque_unit: str | None = None
     drive_gain: tuple[float, ...] | None = None
     topic: str | None = None
     columns: ColumnMap | None = None
 
+    #: whether ``decimate`` was given (True or False): refused where it does not apply
+    _decimate_given: bool = field(default=False, init=False, repr=False, compare=False)
+
     def __post_init__(self):
+        object.__setattr__(self, "_decimate_given", self.decimate is not None)
+        if self.decimate is None:
+            object.__setattr__(self, "decimate", True)
+        object.__setattr__(self, "decimate", _args.flag(self.decimate, "decimate"))
         if self.columns is not None:
             object.__setattr__(self, "columns", column_map(self.columns))
         if self.filter not in FILTERS:
@@ -206,7 +237,7 @@ class ReadingOptions:
                 ("periods=", self.periods),
                 ("period=", self.period),
                 ("edge=", self.edge),
-                ("decimate=False", None if self.decimate else True),
+                (f"decimate={self.decimate}", True if self._decimate_given else None),
             ):
                 if value is not None:
                     raise DataError(f"{given} needs filter='lowpass' (got filter='{self.filter}')")

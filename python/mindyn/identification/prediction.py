@@ -12,17 +12,15 @@ import numpy as np
 
 from .. import _args
 from .._args import ArgumentError
-from ..base import BaseParameters, base_parameters
+from ..base import BaseParameters
 from ..robot import Robot, load
 from .data import DataError
 from .document import (
+    check_identified_model,
     check_identified_robot,
-    identified_snap,
+    identified_base,
     names_difference,
     read_identification,
-    robot_on_drive_side,
-    with_identified_friction,
-    with_identified_state,
 )
 from .estimation import CHUNK_SAMPLES
 from .joint_data import JointData
@@ -85,10 +83,10 @@ def identified_model(
 ) -> tuple[BaseParameters, np.ndarray, dict]:
     """The base parameters and their values of an identification: a result of
     :func:`~mindyn.identification.identify` or :func:`~mindyn.identification.consistent.
-    consistent_estimate` (``robot`` unused), or the JSON of ``mindyn identify --json`` (a path
-    or its dict; ``robot`` is then required, loaded with the JSON's ``tip``, the base parameters
-    formed with its ``rotor``, ``friction`` and ``offset`` and checked against its
-    ``base_names``). ``estimate``: ``unconstrained`` (``base_values``) or ``consistent``
+    consistent_estimate` (``robot`` unused), or the JSON of ``mindyn identify --json`` (a path or
+    its dict; ``robot`` is then required, loaded with the JSON's ``tip``, the base parameters formed
+    with its ``rotor``, ``friction`` and ``offset`` and checked against its ``base_names`` and
+    ``model_check``). ``estimate``: ``unconstrained`` (``base_values``) or ``consistent``
     (``consistent_estimate.base_values``). Returns ``(base, values, doc)`` (``doc`` empty for a
     result)."""
     _args.choice(estimate, "estimate", ("unconstrained", "consistent"))
@@ -113,16 +111,9 @@ def identified_model(
     if not isinstance(robot, Robot):
         robot = load(robot, tip=doc.get("tip"))
     check_identified_robot(doc, robot, where)
-    robot = robot_on_drive_side(robot, doc, where=where)
-    robot = with_identified_friction(robot, doc, where=where)
-    base = base_parameters(
-        robot,
-        rotor=bool(doc.get("rotor")),
-        friction=bool(doc.get("friction")),
-        offset=bool(doc.get("offset")),
-        snap=identified_snap(doc, where=where),
-    )
-    base = with_identified_state(base, doc, where)
+    base = identified_base(doc, robot, where)
+    robot = base.robot
+    check_identified_model(doc, base, where)
     src: dict = doc
     if estimate == "consistent":
         consistent = doc.get("consistent_estimate")

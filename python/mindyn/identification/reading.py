@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import _args
 from ..robot import as_robot
-from .data import DataError
+from .data import DataError, check_distinct_logs
 from .joint_data import JointData
 from .options import MODELS, ReadingOptions
 
@@ -312,8 +312,9 @@ def load_logs(
     models integrate over the logged samples: no decimation for them). ``what``: the logs'
     name in errors.
 
-    A log simulated for another robot (its truth sidecar says so) is refused before any is read;
-    with the low-pass the fit logs average their periods (``periods``/``period``) and the
+    A log simulated for another robot (its truth sidecar says so) is refused before any is read,
+    as a fit log given twice and a validation log that is a fit log (the same file, or the same
+    bytes); with the low-pass the fit logs average their periods (``periods``/``period``) and the
     validation logs are filtered at the fit's cut-off, the highest of the fit logs'."""
     robot = as_robot(robot)
     one = (str, PathLike)
@@ -333,9 +334,9 @@ def load_logs(
     opts = options or ReadingOptions(**reading)
     if model not in MODELS:
         raise DataError(f"load_logs: model '{model}': expected one of {', '.join(MODELS)}")
-    if not opts.decimate and model != "dynamic":
+    if opts._decimate_given and model != "dynamic":
         raise _args.fail(
-            "decimate=False",
+            f"decimate={opts.decimate}",
             f"applies only to the dynamic model (the integral and energy models keep every "
             f"sample); got model='{model}'",
         )
@@ -345,6 +346,7 @@ def load_logs(
     files, vfiles = [str(p) for p in paths], [str(p) for p in validate]
     if not files:
         raise DataError("load_logs: expected at least one log")
+    check_distinct_logs(files, vfiles)
     if validate_currents and not vfiles:
         raise DataError("validate_currents=: expected validate= with the logs they belong to")
     cur = paired(files, currents, "currents=", what)

@@ -21,6 +21,7 @@ import numpy as np
 from .. import _args
 from ..robot import as_robot
 from .errors import IdentificationError
+from .estimation import distinct_logs
 from .joint_data import JointData
 from .options import DEFAULT_RSD_THRESHOLD, OPTION_NAMES, IdentifyOptions, ReadingOptions
 from .reading import Logs, LogSet, load_logs
@@ -79,6 +80,7 @@ def _as_logs(logs, model: str, robot) -> Logs:
     logs = list(logs)
     for d in logs:
         _args.instance(d, "logs", JointData, "the Logs of load_logs, a JointData or a list of them")
+    distinct_logs(logs, "logs")
     if robot.single_dof and logs:  # their units, checked once (identify refuses other robots)
         from .estimation import _logs
 
