@@ -301,5 +301,6 @@ def test_the_checks_run_once_per_log(planar, tmp_path, monkeypatch):
     assert calls == ["logs[0]", "time", "logs[1]", "time"], calls
     calls.clear()
     path = write_csv(tmp_path / "p.csv", t, q, tau, dq=dq)
-    run(robot, load_logs([path], robot, validate=[path]), friction_model="auto")
+    other = write_csv(tmp_path / "v.csv", t, q, tau * 1.001, dq=dq)  # not the fit log
+    run(robot, load_logs([path], robot, validate=[other]), friction_model="auto")
     assert calls == ["time", "time"], calls  # the fit and the validation file, read once each
