@@ -1191,3 +1191,16 @@ def _vector(x, n: int, name: str, unit: str = "joint") -> np.ndarray:
     """``x`` as a finite float array of shape (n,), or ModelError naming ``name``, the expected
     shape and what was given (the offending ``unit``, 1-based, for a non-finite value)."""
     return _args.array(x, name, (n,), unit=unit)
+
+
+def pseudo_inertia(p) -> np.ndarray:
+    """The 4x4 pseudo-inertia ``[[tr(I)/2 1 - I, h], [h^T, m]]`` of the 10 inertial parameters
+    ``XX XY XZ YY YZ ZZ MX MY MZ M`` (about the link-frame origin, in its frame)."""
+    p = _args.array(p, "p", (10,))
+    xx, xy, xz, yy, yz, zz, mx, my, mz, m = np.asarray(p, dtype=float)
+    inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
+    J = np.empty((4, 4))
+    J[:3, :3] = 0.5 * np.trace(inertia) * np.eye(3) - inertia
+    J[:3, 3] = J[3, :3] = (mx, my, mz)
+    J[3, 3] = m
+    return J

@@ -224,7 +224,7 @@ def _inconsistent_links(robot) -> list[str]:
     """The links whose 10 inertial parameters no rigid body has: a pseudo-inertia with an
     eigenvalue below -1e-9 of its largest magnitude (none for a robot with joints of several
     degrees of freedom, whose parameters are read as given)."""
-    from ..identification.consistent import pseudo_inertia
+    from ..robot import pseudo_inertia
 
     if not robot.single_dof:
         return []

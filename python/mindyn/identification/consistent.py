@@ -45,7 +45,7 @@ import scipy.linalg as sla
 from .. import _args
 from .._core import ModelError
 from ..base import BaseParameters
-from ..robot import Robot, load
+from ..robot import Robot, load, pseudo_inertia
 from .data import DataError, read_json
 from .document import (
     check_identified_model,
@@ -120,19 +120,6 @@ def _name_kind(name: str) -> str:
 # ---------------------------------------------------------------------------------------------
 # Pseudo-inertia
 # ---------------------------------------------------------------------------------------------
-def pseudo_inertia(p) -> np.ndarray:
-    """The 4x4 pseudo-inertia ``[[tr(I)/2 1 - I, h], [h^T, m]]`` of the 10 inertial parameters
-    ``XX XY XZ YY YZ ZZ MX MY MZ M`` (about the link-frame origin, in its frame)."""
-    p = _args.array(p, "p", (10,))
-    xx, xy, xz, yy, yz, zz, mx, my, mz, m = np.asarray(p, dtype=float)
-    inertia = np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])
-    J = np.empty((4, 4))
-    J[:3, :3] = 0.5 * np.trace(inertia) * np.eye(3) - inertia
-    J[:3, 3] = J[3, :3] = (mx, my, mz)
-    J[3, 3] = m
-    return J
-
-
 def inertial_from_pseudo(J) -> np.ndarray:
     """The 10 inertial parameters of a pseudo-inertia (inverse of :func:`pseudo_inertia`):
     ``I = tr(S) 1 - S`` for its upper-left block ``S``."""
