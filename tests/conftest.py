@@ -199,3 +199,24 @@ def random_state(robot: mindyn.Robot, rng: np.random.Generator, m: int | None = 
     dq = rng.uniform(-2.0, 2.0, shape)
     ddq = rng.uniform(-2.0, 2.0, shape)
     return q, dq, ddq
+
+
+# --------------------------------------------------------------------------------------------
+# The command line in-process: its exit code and output, and the one-line error it must give
+# --------------------------------------------------------------------------------------------
+def cli_run(argv) -> tuple[int, str, str]:
+    from mindyn import cli
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = cli.main([str(a) for a in argv])
+    return rc, out.getvalue(), err.getvalue()
+
+
+def one_line_error(rc: int, err: str, *needles: str) -> str:
+    assert rc == 2, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mindyn: error: "), err
+    for s in needles:
+        assert s in lines[0], (s, err)
+    return lines[0]

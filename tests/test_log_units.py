@@ -10,36 +10,18 @@ by its argument. Every expectation is computed here from the log the test makes.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 
 import mindyn
 import numpy as np
 import pytest
-from mindyn import cli
+from conftest import cli_run, one_line_error
 from mindyn.base import base_parameters
 from mindyn.identification import data as data_module
 from mindyn.identification import identify, load_logs, read_csv, run
 from mindyn.identification.data import DataError, write_csv
 from mindyn.identification.excitation import random_trajectory
 from mindyn.identification.joint_data import JointData
-
-
-def cli_run(argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = cli.main([str(a) for a in argv])
-    return rc, out.getvalue(), err.getvalue()
-
-
-def one_line_error(rc: int, err: str, *needles: str) -> str:
-    assert rc == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("mindyn: error: "), err
-    for s in needles:
-        assert s in lines[0], (s, err)
-    return lines[0]
 
 
 def exact_log(robot, rate: float = 250.0):

@@ -12,14 +12,12 @@ Every expectation is computed here from the log the test makes.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import re
 
 import mindyn
 import numpy as np
 import pytest
-from mindyn import cli
+from conftest import cli_run, one_line_error
 from mindyn.identification import identify, read_csv, run
 from mindyn.identification.currents import attach_currents
 from mindyn.identification.data import DataError, check_units, write_csv
@@ -27,22 +25,6 @@ from mindyn.identification.excitation import random_trajectory
 from mindyn.identification.joint_data import JointData
 
 RATE = 250.0
-
-
-def cli_run(argv) -> tuple[int, str, str]:
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        rc = cli.main([str(a) for a in argv])
-    return rc, out.getvalue(), err.getvalue()
-
-
-def one_line_error(rc: int, err: str, *needles: str) -> str:
-    assert rc == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("mindyn: error: "), err
-    for s in needles:
-        assert s in lines[0], (s, err)
-    return lines[0]
 
 
 def ratio(message: str) -> float:
