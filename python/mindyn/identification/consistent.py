@@ -233,6 +233,10 @@ class ConsistentResult:
     #: Per link (with a prior): mass, its standard deviation, and whether the data or the prior
     #: determine it (:func:`~mindyn.identification.prior.link_report`).
     links: list | None = None
+    #: Where consistency costs the fit: the least increase of any consistent estimate and the
+    #: part each link's constraint accounts for
+    #: (:func:`~mindyn.identification.constraint_cost.constraint_costs`).
+    constraint_cost: dict | None = None
     #: The fit term's noise variance as a factor on the residual variance (:func:`noise_scale`).
     noise: dict = field(default_factory=dict)
     #: Without a prior, when the estimate was taken nearest the description among those within
@@ -299,6 +303,7 @@ class ConsistentResult:
                 "prior_divergence": self.prior_divergence,
                 "links": self.links,
                 "fit_increase_noise_variances": self.fit_increase,
+                "constraint_cost": self.constraint_cost,
                 "tie_break": self.tie_break,
                 "noise_variance_factor": self.noise,
                 "eig_tolerance": EIG_TOL,
@@ -412,6 +417,10 @@ def consistent_estimate(
     :func:`noise_scale`'s factor, that of its standard deviations: it also accounts for the
     correlation of the residuals that model error leaves (recorded in ``noise``).
 
+    ``constraint_cost`` says where consistency costs the fit (without a prior, one solve with
+    every constraint and, when that costs at least one noise variance, one per link with its
+    constraint lifted: :func:`~mindyn.identification.constraint_cost.constraint_costs`).
+
     ``progress``, a callable taking a line of text, is told each solve and refinement as it
     starts and ends (they can take seconds each)."""
     t0 = time.perf_counter()
@@ -511,6 +520,14 @@ def consistent_estimate(
         raise IdentificationError(
             f"consistent estimate: smallest pseudo-inertia eigenvalue {eig.min():.3g} kg"
         )
+    if ok_n:  # the unconstrained optimum is consistent: consistency costs nothing
+        from .constraint_cost import RULE
+
+        cost: dict = {"total": 0.0, "links": None, "joint_terms": None, "major": [], "rule": RULE}
+    else:
+        from .constraint_cost import constraint_costs
+
+        cost = constraint_costs(base, M, z, s2, notes=notes, progress=progress)
     prior = None
     if W > 0:
         prior = float(
@@ -535,6 +552,7 @@ def consistent_estimate(
         solver=solver,
         status=status,
         fit_increase=fit_increase(pi),
+        constraint_cost=cost,
         tie_break=tie_break or None,
         prior_divergence=prior,
         noise=noise,

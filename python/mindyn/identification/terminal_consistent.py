@@ -99,6 +99,40 @@ def _weight_lines(ce: dict) -> list[str]:
     return lines
 
 
+def _cost_lines(cost: dict | None) -> list[str]:
+    """Where consistency costs the fit (``cost``: ``consistent_estimate.constraint_cost`` of
+    the JSON; nothing for older JSONs)."""
+    if not cost:
+        return []
+    total = cost["total"]
+    if total is None:
+        return ["  cost of consistency: not measured (its solve failed; see the notes)"]
+    head = (
+        f"  cost of consistency: the best consistent estimate (no prior) fits {total:.4g} noise "
+        "variances worse than the unconstrained fit"
+    )
+    if cost["links"] is None:
+        return [head + " (negligible: the data ask for nothing non-physical)"]
+    parts = [
+        f"{nm} {v:.4g}" if v is not None else f"{nm} not solved" for nm, v in cost["links"].items()
+    ]
+    if cost["joint_terms"] is not None:
+        parts.append(f"joint terms (Ia, Fv, Fc >= 0) {cost['joint_terms']:.4g}")
+    lines = [head + "; of it, lifting one constraint alone recovers:", "    " + "  ".join(parts)]
+    shares = {**cost["links"], "joint terms": cost["joint_terms"]}
+    if cost["major"]:
+        lines.append(
+            "  most at "
+            + " and ".join(f"{nm} ({100 * shares[nm] / total:.0f} %)" for nm in cost["major"])
+            + ": the torques ask there for values no rigid body (or no positive friction or rotor "
+            "inertia) has: the description's geometry of those links, or effects the model "
+            "lacks (friction, elasticity, torque-sensor gains), disagree with the log"
+        )
+    else:
+        lines.append("  spread over the links: no one constraint accounts for half of it")
+    return lines
+
+
 def _noise_lines(noise: dict) -> list[str]:
     """What one noise variance of the fit term is (``noise``: ``noise_variance_factor`` of the
     JSON)."""
@@ -143,6 +177,7 @@ def _consistent_lines(doc, fit, val, cfit, cval, low) -> list[str]:
         f"{ce['fit_increase_noise_variances']:.4g} noise variances worse than the unconstrained "
         "fit with all base parameters" + _tie_break_text(ce.get("tie_break")),
         *_noise_lines(ce.get("noise_variance_factor") or {}),
+        *_cost_lines(ce.get("constraint_cost")),
         *_weight_lines(ce),
         "  smallest pseudo-inertia eigenvalue per link [kg] (unconstrained: its realisation "
         "nearest the description):",
