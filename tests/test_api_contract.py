@@ -500,7 +500,8 @@ def _api(tmp: Path) -> dict:
             "identification.identify": (
                 identification.identify,
                 (ROBOT, LOG),
-                {"model": "dynamic", "rsd_threshold": 30.0, "min_velocity": 0.01},
+                # with friction (zero in LOG), which min_velocity= applies to
+                {"model": "dynamic", "friction": True, "rsd_threshold": 30.0, "min_velocity": 0.01},
             ),
             "identification.dynamic_system": (
                 identification.dynamic_system,

@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from conftest import assert_close, cli
+from mindyn import codegen
 from mindyn.cli import main
 from random_tree import random_multidof_tree_yaml, random_tree_urdf
 from test_multibody import FLOATING, random_state
@@ -368,6 +369,57 @@ def test_base_and_info_take_a_root_joint_and_other_commands_refuse_it_in_one_lin
     out = tmp_path / "o.urdf"
     refused("export", urdf, "--root-joint", "floating", ident, "--urdf", out, match="'classical'")
     refused("base", "puma560", "--root-joint", "floating", match="--root-joint applies to URDF")
+
+
+def test_the_json_records_its_model_and_codegen_params_refuses_another(tmp_path):
+    """The JSON of a floating-base identification records its base set's regrouping and
+    regressor columns (``model_check``), as a fixed-base one does: the record is that of the
+    numerical method's base set of the robot, recomputed. ``codegen --params``, which takes its
+    names and values, takes it for that robot and refuses (one line, naming the file) the same
+    joint and link names with the last joint's origin moved 1 mm or with another gravity; a
+    document without the record (earlier versions) has only its robot checked."""
+    import re
+
+    from mindyn.identification.document import model_record
+
+    urdf = random_tree_urdf(tmp_path / "tree.urdf", n=5, seed=7, moving=("revolute",))
+    robot, model = pair(str(urdf))
+    table, header, _ = simulate(robot, model, [], np.random.default_rng(2), 40)
+    log = write(tmp_path / "log.csv", table, header)
+    ident = tmp_path / "id.json"
+    cli("identify", urdf, log, "--root-joint", "floating", "--json", ident)
+    doc = json.loads(ident.read_text())
+    base = mindyn.base_parameters(robot, method="numerical")
+    assert doc["base_method"] == "numerical"
+    assert doc["model_check"] == json.loads(json.dumps(model_record(base)))
+    assert len(doc["model_check"]["regrouping"]) == base.n == len(doc["names"])
+    code = ["--root-joint", "floating", "--params", ident, "--lang", "c"]
+    cli("codegen", urdf, *code, "-o", tmp_path / "same.c")
+    header_text = (tmp_path / "same.h").read_text()
+    assert f"parameter_values[{base.n}]" in header_text
+    # the same names, another model: the last joint's origin 1 mm further along x
+    text = urdf.read_text()
+    last = [m for m in re.finditer(r'<joint name="[^"]+" type="revolute">\s*<origin xyz="', text)]
+    at = last[-1].end()
+    x, rest = text[at:].split(" ", 1)
+    moved = tmp_path / "moved" / "tree.urdf"
+    moved.parent.mkdir()
+    moved.write_text(text[:at] + repr(float(x) + 1e-3) + " " + rest)
+    err = refused("codegen", moved, *code, "-o", tmp_path / "m.c", match="another model")
+    assert f"{ident}: parameters: identified on another model than robot 'tree5_7'" in err
+    assert not (tmp_path / "m.c").exists()
+    # the library's reader: another gravity
+    with pytest.raises(mindyn.ModelError, match="identified on another model") as e:
+        codegen.generate(robot.with_gravity([0.0, 0.0, -9.7]), params=ident, what="id")
+    assert str(e.value).startswith(f"{ident}: parameters: ") and "\n" not in str(e.value)
+    codegen.generate(robot, params=ident, what="id")
+    # a document of earlier versions: the robot is checked, the model is not
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps({k: v for k, v in doc.items() if k != "model_check"}))
+    cli("codegen", moved, "--root-joint", "floating", "--params", old, "--lang", "c",
+        "-o", tmp_path / "old.c")  # fmt: skip
+    refused("codegen", SOLO, "--root-joint", "floating", "--params", old, "--lang", "c",
+            "-o", tmp_path / "solo.c", match="identified for robot 'tree5_7'")  # fmt: skip
 
 
 def test_the_default_method_s_reason_names_the_command_s_flags():

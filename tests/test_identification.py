@@ -164,6 +164,43 @@ def test_dynamic_model_is_exact_on_noise_free_data_with_rotor_and_friction():
         assert rel.max() < (1e-9 if model == "dynamic" else 1e-3)
 
 
+def test_identify_refuses_min_velocity_given_for_a_base_without_friction():
+    """min_velocity leaves out the equations of joints too slow for the sign of their Coulomb
+    friction: given (any value, the default 0.01 too) for a base without friction it was ignored;
+    now refused in one line naming it. Not given, the fit keeps every equation and is exact on
+    noise-free data; with friction the default is 0.01, given or not, and leaves out exactly the
+    equations of joints slower than it."""
+    from mindyn.identification.options import DEFAULT_MIN_VELOCITY
+
+    robot = mindyn.load("planar2")
+    log = simulate_inverse(robot, random_trajectory(robot, seed=4), rotor=True, friction=True)
+    data = as_data(log, logged_ddq=True)
+    plain, fric = mindyn.base_parameters(robot), mindyn.base_parameters(robot, friction=True)
+    for given in (0.0, 0.01, 0.05, float(DEFAULT_MIN_VELOCITY)):
+        # no friction asked, or a base without it (friction= is then ignored)
+        for kw in ({}, {"base": plain}, {"base": plain, "friction": True}):
+            with pytest.raises(mindyn.ArgumentError) as e:
+                identify(robot, data, min_velocity=given, **kw)
+            msg = str(e.value)
+            assert "\n" not in msg
+            assert msg.startswith("min_velocity applies only to a base with friction"), msg
+    # not given: every equation kept; rigid-body fit of a log without rotor or friction exact
+    rigid = as_data(simulate_inverse(robot, random_trajectory(robot, seed=4)), logged_ddq=True)
+    res = identify(robot, rigid, rsd_threshold=None)
+    truth = true_base_values(plain, {"names": robot.param_names, "values": robot.params})
+    np.testing.assert_allclose(res.full, truth, rtol=1e-9, atol=1e-9 * np.abs(truth).max())
+    assert res.settings["min_velocity"] == 0.0 and res.settings["equations_left_out"] == 0
+    # with friction: not given is 0.01, the same fit as 0.01 given
+    a = identify(robot, data, base=fric, rsd_threshold=None)
+    b = identify(robot, data, base=fric, rsd_threshold=None, min_velocity=0.01)
+    assert a.settings["min_velocity"] == b.settings["min_velocity"] == 0.01
+    np.testing.assert_array_equal(a.full, b.full)
+    slow = int(np.sum(np.abs(data.dq) < 0.01))  # each joint has its own friction
+    assert slow > 0 and a.settings["equations_left_out"] == slow
+    c = identify(robot, data, base=fric, rsd_threshold=None, min_velocity=0.05)
+    assert c.settings["equations_left_out"] == int(np.sum(np.abs(data.dq) < 0.05))
+
+
 def test_energy_equation_with_friction_on_a_held_torque_log():
     """Closed loop with the torque held over each 4 ms period: the 'zoh' rule integrates the
     power exactly, so the energy equation with the true parameters leaves a residual only from

@@ -114,6 +114,47 @@ def test_the_rule_is_the_one_written_here(case):
     assert have == ([0] if name == "differential" else [0, 1, 2])
 
 
+@pytest.mark.parametrize("factor", [1e-3, 1e2])
+@pytest.mark.parametrize("kind", ["stribeck", "smooth"])
+def test_the_numerical_method_follows_the_rule_at_any_velocity_scale(case, kind, factor):
+    """The numerical method samples the regressor: a Stribeck velocity far below the sampled
+    speeds made the Stribeck column vanish (Fs dropped), one far above it made it Coulomb's (Fs
+    regrouped with Fc), and a smooth width far above them made tanh(v / w) v / w. Its base set
+    has the names of the default method's, Fs where the rule says, at widths 1e-3 and 1e2 times
+    the slots' largest speed, and its regressor reproduces Pinocchio's rnea plus the motor terms
+    written out here with those widths."""
+    name, _, robot, model = case
+    if kind == "smooth" and factor > 1 and name == "differential":
+        pytest.skip(
+            "the smooth columns of motors that share joints are decided on samples at their "
+            "widths by every method (not this rule); at widths far above the speeds the "
+            "numerical method regroups Fv of one of them, the projection method does not"
+        )
+    n = robot.n
+    t, q, dq, ddq = motion(n)
+    w = factor * np.abs(dq @ rows(robot).T).max(axis=0)
+    r = robot.with_friction_model(kind, velocity=w)
+    default = mindyn.base_parameters(r, rotor=True, friction=True)
+    numerical = mindyn.base_parameters(r, rotor=True, friction=True, method="numerical")
+    assert list(numerical.names) == list(default.names)
+    third = [x for x in numerical.names if x.startswith("Fs")]
+    expect = [f"Fs{k + 1}" for k in range(n) if holds_third(robot, k)] if kind == "stribeck" else []
+    assert third == expect
+    for k in range(n):  # every slot's viscous and scaled column is its own base parameter
+        assert {f"Fv{k + 1}", f"Fc{k + 1}"} <= set(numerical.names)
+    drive = drive_values(robot)
+    pi = np.concatenate(
+        [
+            np.concatenate([robot.params[10 * k : 10 * k + 10], drive[k, : 3 + (kind != "smooth")]])
+            for k in range(n)
+        ]  # fmt: skip
+    )
+    i = np.random.default_rng(6).choice(t.size, 40, replace=False)
+    got = numerical.regressor(q[i], dq[i], ddq[i]) @ numerical.values(pi)
+    ref = rnea(model, q[i], dq[i], ddq[i]) + drive_torque(robot, kind, w, drive, dq[i], ddq[i])
+    assert_close(got, ref, 1e-9, f"numerical base regressor vs rnea + motor terms ({name})")
+
+
 @pytest.mark.parametrize("kind", KINDS)
 def test_identify_base_parameters_predict_and_codegen_agree(case, kind, tmp_path):
     name, path, robot, model = case

@@ -316,6 +316,14 @@ void randomState(const Model& model, std::mt19937& rng, Eigen::VectorXd& q, Eige
 // would regroup with the viscous one. The friction columns are functions of the rates alone and
 // independent of the link and rotor columns (which are polynomials of degree two in the rates),
 // so that evaluating them at other rates of the same states keeps every dependency.
+//
+// The scaled column (tanh(v / w), s exp(-(v / w)^2)) of a slot that alone moves its joint (a
+// joint, or a motor that alone drives one joint alone: Model::holdsThirdFriction) is a function
+// of that joint's rate alone, independent of every other column whatever w: it is taken at
+// v / u instead, u the slot's rate per unit joint rate (1 on a joint, |r| for a motor of T's
+// row r e_j), so that its sampled arguments spread over [-2, 2] whatever w. At w far below the
+// sampled speeds exp(-(v / w)^2) vanished (Fs dropped), far above it s exp(-(v / w)^2) was
+// s to round-off (Fs regrouped with Fc); the exact methods keep both, and so does this.
 void sampledRegressor(const Model& model, Data& data, ParameterLayout layout,
                       const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
                       const Eigen::VectorXd& ddq, const StateScale& scale, MatOut W,
@@ -329,6 +337,23 @@ void sampledRegressor(const Model& model, Data& data, ParameterLayout layout,
   for (int k = 0; k < model.nq(); ++k)
     for (int i = 0; i < layout.friction_columns; ++i)
       W.col(layout.frictionIndex(k, i)) = Wf.col(layout.frictionIndex(k, i));
+  const FrictionKind kind = model.friction_model.kind;
+  if (!model.friction_model.scaled()) return;
+  const int scaled = kind == FrictionKind::Smooth ? 1 : 2;  // tanh(v / w); s exp(-(v / w)^2)
+  for (int k = 0; k < model.nq(); ++k) {
+    if (!model.holdsThirdFriction(k)) continue;
+    const double u = model.motorSide() ? model.transmission.T.row(k).cwiseAbs().maxCoeff() : 1.0;
+    const double v = model.motorSide() ? model.transmission.T.row(k).dot(dq0) : dq0[k];
+    const double r = v / u;
+    const double phi = kind == FrictionKind::Smooth ? std::tanh(r) : sgn(v) * std::exp(-r * r);
+    auto column = W.col(layout.frictionIndex(k, scaled));
+    if (model.motorSide())
+      column = phi * model.transmission.T.row(k).transpose();
+    else {
+      column.setZero();
+      column[k] = phi;
+    }
+  }
 }
 
 // Some motor drives two or more joints (a row of T with two non-zero entries).

@@ -26,6 +26,7 @@ from ._core import ArgumentError
 
 __all__ = [
     "ArgumentError",
+    "Default",
     "array",
     "batch",
     "choice",
@@ -51,6 +52,13 @@ __all__ = [
 #: How far from 1 the norm of a configuration's unit quaternion or (cos, sin) pair may be (the
 #: core's check of a configuration): none is normalised.
 UNIT_NORM_TOLERANCE = 1e-6
+
+
+class Default(float):
+    """A number keyword's default value, told apart from the same number given by identity
+    (``x is DEFAULT``: not given); otherwise a float, shown as its value."""
+
+    __slots__ = ()
 
 
 def _describe(x) -> str:

@@ -114,7 +114,10 @@ def read_identified_parameters(
 
     Returns ``(values, pruned, threshold)``: the pruned names in the order of ``names`` and the
     pruning threshold as text; None when ``path`` is not such a JSON (it has no ``names``,
-    ``values`` and ``removed``: :func:`read_parameter_file` reads it). Refused with a
+    ``values`` and ``removed``: :func:`read_parameter_file` reads it), and for the JSON of a
+    floating-base identification (``floating_base``: its ``names`` and ``values``, nothing
+    pruned, are read_parameter_file's), once its robot and model are checked
+    (:func:`~mindyn.identification.document.check_floating_identification`). Refused with a
     :class:`mindyn.ModelError` naming the file: a JSON identified for another robot than ``robot``
     (its name, joints, or the model its ``model_check`` records), with other joint terms than
     ``rotor``, ``friction`` and ``offset``, or, with ``friction``, with another friction model than
@@ -147,6 +150,12 @@ def read_identified_parameters(
         if _is_json(path, decode_text(path)):
             raise  # where the JSON breaks, not "not the JSON of identify" further on
         return None  # NAME value lines
+    if isinstance(doc, dict) and doc.get("floating_base") is True:
+        from ..identification.document import check_floating_identification
+
+        # its names and values (nothing pruned) are read_parameter_file's, once checked
+        check_floating_identification(doc, robot, f"{path}: parameters", error=_core.ModelError)
+        return None
     if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
         return None
     from ..identification.document import check_identified_geometry, check_identified_robot

@@ -240,6 +240,26 @@ def check_identified_geometry(
     check_identified_model(doc, identified_base(doc, robot, where), where, error=error)
 
 
+def check_floating_identification(
+    doc: dict, robot: Robot, where: str, *, error: type[Exception] = DataError
+) -> None:
+    """For the JSON of a floating-base identification (``floating_base``), what
+    :func:`check_identified_robot` and :func:`check_identified_geometry` are for a fixed-base
+    one: refuses (``error``, one line naming ``where``) a document made for another robot
+    (name, joints) or another model (its ``model_check`` against the base set it was fitted
+    with, the ``base_method``'s of ``robot``: another geometry or gravity under the same names).
+    A document without ``model_check`` (earlier versions) has its robot checked only."""
+    from ..base import base_parameters
+
+    check_identified_robot(doc, robot, where, error=error)
+    if doc.get("model_check") is None:
+        return
+    method = doc.get("base_method", "numerical")
+    if method not in ("projection", "recursive", "numerical"):
+        raise DataError(f"{where}: 'base_method' is {_kind(method)}; expected the method's name")
+    check_identified_model(doc, base_parameters(robot, method=method), where, error=error)
+
+
 def identified_base(doc: dict, robot: Robot, where: str) -> BaseParameters:
     """The base set an identification JSON ``doc`` was fitted with, formed for ``robot`` (checked
     against the document by :func:`check_identified_robot`): its drive side, friction model,

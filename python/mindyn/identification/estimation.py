@@ -44,7 +44,7 @@ from .models import (
     torque_noise,
     windows,
 )
-from .options import DEFAULT_RSD_THRESHOLD, INTEGRATIONS
+from .options import DEFAULT_MIN_VELOCITY, DEFAULT_RSD_THRESHOLD, INTEGRATIONS
 
 #: Least equations per base parameter (and degrees of freedom of the noise estimate) that
 #: :func:`identify` accepts. Dynamic model: 10 equations per parameter; fewer, and a log too
@@ -1115,7 +1115,7 @@ def identify(
     energy_window: int = 10,
     integration: str = "auto",
     integral_window: int = 40,
-    min_velocity: float = 0.01,
+    min_velocity: float = DEFAULT_MIN_VELOCITY,
     rank_tolerance: float = 1e-9,
 ) -> IdentificationResult:
     """Estimate the base parameters of ``robot`` from ``data``.
@@ -1163,7 +1163,9 @@ def identify(
         Dynamic and integral models with friction: equations of joints slower than this
         [rad/s | m/s] are left out (see :func:`dynamic_system`; integral model: a joint's
         equation of a window where it is slower at any sample,
-        :func:`~mindyn.identification.models.moving_windows`).
+        :func:`~mindyn.identification.models.moving_windows`). Given (any value, 0.01 too) for
+        a base without friction, refused; not given, 0.01
+        (:data:`~mindyn.identification.options.DEFAULT_MIN_VELOCITY`).
     rank_tolerance : float
         Relative size of the pivots of the column-scaled regressor below which it counts as rank
         deficient.
@@ -1181,6 +1183,9 @@ def identify(
         :data:`MIN_NOISE_DOF` beyond them, unknown model.
     RankDeficientError
         The data do not excite every base parameter (they are named).
+    ArgumentError
+        An argument of the wrong type or range, ``min_velocity`` given for a base without
+        friction.
     """
     t0 = time.perf_counter()
     robot = as_robot(robot)
@@ -1200,6 +1205,7 @@ def identify(
     energy_window = _args.integer(energy_window, "energy_window", 1)
     _args.choice(integration, "integration", INTEGRATIONS)
     integral_window = _args.integer(integral_window, "integral_window", 1)
+    given_velocity = min_velocity is not DEFAULT_MIN_VELOCITY
     min_velocity = _args.number(min_velocity, "min_velocity", minimum=0.0)
     rank_tolerance = _args.number(rank_tolerance, "rank_tolerance", positive=True)
     for d in logs:
@@ -1210,6 +1216,13 @@ def identify(
     check_magnitudes(robot, logs)
     if base is None:
         base = base_parameters(robot, rotor=rotor, friction=friction)
+    if given_velocity and not base.friction:
+        raise _args.fail(
+            "min_velocity",
+            "applies only to a base with friction (it leaves out the equations of joints too "
+            "slow for the sign of their Coulomb friction); this base has none (friction=True, "
+            "or leave out min_velocity)",
+        )
     names = list(base.names)
     nb = base.n
     settings: dict = {"model": model}

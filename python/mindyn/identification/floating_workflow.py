@@ -31,7 +31,7 @@ from .. import _args
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot
 from .data import DataError, check_distinct_logs
-from .document import identified_robot_record
+from .document import identified_robot_record, model_record
 from .errors import IdentificationError
 from .floating import (
     _FRAMES,
@@ -263,6 +263,9 @@ class FloatingReport:
             "base_method": self.base.method,
             "names": list(self.base.names),
             "values": [float(v) for v in res.values],
+            # the regrouping and regressor columns of the base set: what a reader compares
+            # (check_floating_identification)
+            "model_check": model_record(self.base),
             "std": nan_list(res.std),
             "rank": res.rank,
             "n_base": self.base.n,

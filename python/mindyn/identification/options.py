@@ -28,13 +28,16 @@ DEFAULT_RSD_THRESHOLD = 70.7
 MODELS = ("dynamic", "integral", "energy")
 INTEGRATIONS = ("auto", "simpson", "trapezoid", "zoh")
 FRICTION_MODELS = (*FRICTION_KINDS, "dahl", "auto")
+#: The default ``min_velocity`` of :func:`~mindyn.identification.identify` [rad/s, m/s]: told
+#: apart from 0.01 given (given to a base without friction, refused).
+DEFAULT_MIN_VELOCITY = _args.Default(0.01)
 #: The defaults of the options of :class:`IdentifyOptions` that apply in one mode only (a
 #: model, friction): what they are when not given.
 MODE_DEFAULTS = {
     "energy_window": 10,
     "integration": "auto",
     "integral_window": 40,
-    "min_velocity": 0.01,
+    "min_velocity": float(DEFAULT_MIN_VELOCITY),
 }
 
 

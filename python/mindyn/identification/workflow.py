@@ -33,17 +33,20 @@ __all__ = ["IdentificationReport", "IdentifyOptions", "ReadingOptions", "load_lo
 def _fit_keywords(options: IdentifyOptions) -> dict:
     """The keywords of :func:`~mindyn.identification.identify` the options give (threshold
     ``auto``: the default one, which the friction model's choice prunes at; the final fit's
-    pruning is then decided on held-out data, :func:`_fit`)."""
+    pruning is then decided on held-out data, :func:`_fit`; ``min_velocity`` only when given,
+    which the options refuse without friction as identify does)."""
     threshold = options.rsd_threshold
-    return dict(
+    keywords = dict(
         model=options.model,
         weighted=options.weighted,
         rsd_threshold=DEFAULT_RSD_THRESHOLD if threshold == "auto" else threshold,
         energy_window=options.energy_window,
         integration=options.integration,
         integral_window=options.integral_window,
-        min_velocity=options.min_velocity,
     )
+    if "min_velocity" in options._given:
+        keywords["min_velocity"] = options.min_velocity
+    return keywords
 
 
 def _check_width(width, n: int) -> list[float]:
