@@ -199,6 +199,16 @@ def test_identify_refuses_min_velocity_given_for_a_base_without_friction():
     assert slow > 0 and a.settings["equations_left_out"] == slow
     c = identify(robot, data, base=fric, rsd_threshold=None, min_velocity=0.05)
     assert c.settings["equations_left_out"] == int(np.sum(np.abs(data.dq) < 0.05))
+    # the energy model takes every sample: given there, refused as well (with or without
+    # friction); not given, its fit runs and leaves nothing out
+    for kw in ({"base": fric}, {}):
+        with pytest.raises(mindyn.ArgumentError) as e:
+            identify(robot, data, model="energy", min_velocity=0.01, **kw)
+        assert str(e.value).startswith(
+            "min_velocity applies only to the dynamic and integral models"
+        ), str(e.value)
+    energy = identify(robot, data, base=fric, model="energy", rsd_threshold=None)
+    assert energy.settings.get("equations_left_out", 0) == 0
 
 
 def test_energy_equation_with_friction_on_a_held_torque_log():

@@ -1164,7 +1164,7 @@ def identify(
         [rad/s | m/s] are left out (see :func:`dynamic_system`; integral model: a joint's
         equation of a window where it is slower at any sample,
         :func:`~mindyn.identification.models.moving_windows`). Given (any value, 0.01 too) for
-        a base without friction, refused; not given, 0.01
+        a base without friction or with the energy model, refused; not given, 0.01
         (:data:`~mindyn.identification.options.DEFAULT_MIN_VELOCITY`).
     rank_tolerance : float
         Relative size of the pivots of the column-scaled regressor below which it counts as rank
@@ -1185,7 +1185,7 @@ def identify(
         The data do not excite every base parameter (they are named).
     ArgumentError
         An argument of the wrong type or range, ``min_velocity`` given for a base without
-        friction.
+        friction or with the energy model.
     """
     t0 = time.perf_counter()
     robot = as_robot(robot)
@@ -1216,6 +1216,14 @@ def identify(
     check_magnitudes(robot, logs)
     if base is None:
         base = base_parameters(robot, rotor=rotor, friction=friction)
+    if given_velocity and model == "energy":
+        raise _args.fail(
+            "min_velocity",
+            "applies only to the dynamic and integral models (it leaves out the equations of "
+            "joints too slow for the sign of their Coulomb friction); the energy model's "
+            "windows take every sample (model='dynamic' or 'integral', or leave out "
+            "min_velocity)",
+        )
     if given_velocity and not base.friction:
         raise _args.fail(
             "min_velocity",
