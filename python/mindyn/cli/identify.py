@@ -44,6 +44,7 @@ def reading_options(args: argparse.Namespace):
         drive_gain=args.drive_gain,
         topic=args.topic,
         columns=args.columns,
+        torque=args.torque,
     )
 
 

@@ -103,6 +103,15 @@ def add_data_options(p) -> None:
     )
     add_columns(p)
     p.add_argument(
+        "--torque",
+        choices=["sampled", "held"],
+        default=None,
+        help="dynamic model: the logged torque is a measurement (default) or the command held "
+        "over each sample period, as a digital controller (and simulate's tracking mode) logs "
+        "it: then taken at the middle of its period (the window models take a held torque by "
+        "--integration zoh)",
+    )
+    p.add_argument(
         "--no-decimate",
         action="store_true",
         help="lowpass, dynamic model: keep every sample (default: decimate to at least 10 x the "
