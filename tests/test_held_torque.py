@@ -78,3 +78,33 @@ def test_torque_held_is_refused_with_a_window_model(tracking_log):
         ["identify", "planar3", tracking_log, "--model", "energy", "--torque", "held"]
     )
     one_line_error(rc, err, "--torque held applies only to the dynamic model", "--integration zoh")
+
+
+def _max_residual(text: str) -> float:
+    lines = text.split("residual |r| per joint")[1].splitlines()[1:4]
+    return max(float(line.split(":")[1].split("/")[0]) for line in lines)
+
+
+def test_detect_takes_the_torque_as_the_identification_read_it(tracking_log, tmp_path):
+    """On the noise-free tracking log, with the model fitted to it as held, the observer's
+    residual is near zero when it integrates the held command and not when it takes the torque
+    as sampled (a half period's lag of the whole torque): by default detect takes the reading
+    the JSON records."""
+    ident = tmp_path / "held.json"
+    rc, _, err = cli_run(
+        ["identify", "planar3", tracking_log, "--torque", "held", "--rsd-threshold", "0"]
+        + ["--json", ident]
+    )
+    assert rc == 0, err
+    runs = {}
+    for name, extra in (
+        ("default", []),
+        ("held", ["--torque", "held"]),
+        ("sampled", ["--torque", "sampled"]),
+    ):
+        rc, out, err = cli_run(["detect", "planar3", ident, tracking_log, *extra])
+        assert rc == 0, err
+        runs[name] = out
+    assert "torque held over each step, as" in runs["default"]
+    assert _max_residual(runs["default"]) == _max_residual(runs["held"])
+    assert _max_residual(runs["held"]) < 0.01 * _max_residual(runs["sampled"])
