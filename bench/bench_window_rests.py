@@ -99,9 +99,8 @@ def main() -> None:
                 source="rests",
             )
             d = preprocess(log, cutoff=a.cutoff, decimate=model == "dynamic")
-            res = identify(
-                robot, d, base=base, model=model, rsd_threshold=None, min_velocity=a.min_velocity
-            )
+            rule = {} if model == "energy" else {"min_velocity": a.min_velocity}
+            res = identify(robot, d, base=base, model=model, rsd_threshold=None, **rule)
             est.append(res.full)
             std.append(res.std)
         est, std = np.array(est), np.array(std)

@@ -121,9 +121,7 @@ def test_noise_free_logs_give_the_true_base_parameters(arms, name):
         print(f"\n{name} {model} model, noise-free, {base.n} parameters: largest error {err:.2g}")
         assert err <= 1e-6, f"{model}: {err}"
     logs = [make_log(robot, base, params, [s], 0.0, exact=True)[0] for s in (4, 5, 6)]
-    res = identify(
-        robot, logs, model="energy", base=base, rsd_threshold=None, min_velocity=0, energy_window=4
-    )
+    res = identify(robot, logs, model="energy", base=base, rsd_threshold=None, energy_window=4)
     err = relative_error(res.full, truth).max()
     print(f"{name} energy model, noise-free, 3 runs: largest error {err:.2g}")
     assert err <= 1e-5

@@ -90,9 +90,12 @@ def cmd_detect(args: argparse.Namespace) -> int:
             k = 1.0 / steps.max()
             how = f"1 / the log's longest step of {steps.max() * 1e3:.4g} ms (below 1 / (10 T))"
         gains = np.full(robot.n, k)
-    obs = MomentumObserver(
-        base, values, period=period, gains=gains, held_torque=args.torque == "held"
-    )
+    torque, torque_how = args.torque, ""
+    if torque is None:
+        torque = (doc.get("reading") or {}).get("torque") or "sampled"
+        if torque == "held":
+            torque_how = f", as {args.identification} read its logs (--torque sets it)"
+    obs = MomentumObserver(base, values, period=period, gains=gains, held_torque=torque == "held")
     r = obs.run(data.q, data.dq, data.tau, t)
     n = robot.n
     print(
@@ -108,7 +111,8 @@ def cmd_detect(args: argparse.Namespace) -> int:
     print(
         f"  gains K_O [1/s] ({how}): "
         + ", ".join(f"{k:.4g}" for k in gains)
-        + f"; torque {'held over each step' if args.torque == 'held' else 'sampled (trapezoid)'}"
+        + f"; torque {'held over each step' if torque == 'held' else 'sampled (trapezoid)'}"
+        + torque_how
     )
     absr = np.abs(r)
     print("  residual |r| per joint (max / 99.9 % / RMS):")
@@ -329,9 +333,10 @@ def register(sub) -> None:
     p.add_argument(
         "--torque",
         choices=["sampled", "held"],
-        default="sampled",
-        help="the logged torque is a measurement (trapezoid; default) or the command held "
-        "over each step",
+        default=None,
+        help="the logged torque is a measurement (trapezoid) or the command held over each "
+        "step (default: as the identification read its logs, its JSON's reading.torque; "
+        "sampled when it records none)",
     )
     p.add_argument("--plot", metavar="PNG", type=output_file, help="plot of r and thresholds")
     p.add_argument("--consistent", action="store_true", help="the consistent estimate of the JSON")

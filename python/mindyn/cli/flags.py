@@ -46,6 +46,7 @@ LIBRARY_OPTIONS = (
     "tau_max",
     "tip",
     "topic",
+    "torque",
     "torque_limit",
     "torque_noise",
     "torque_unit",

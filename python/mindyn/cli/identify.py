@@ -44,6 +44,7 @@ def reading_options(args: argparse.Namespace):
         drive_gain=args.drive_gain,
         topic=args.topic,
         columns=args.columns,
+        torque=args.torque,
     )
 
 
@@ -121,8 +122,9 @@ def _write_report(folder: str, report, doc: dict, text: str) -> None:
             validation=report.consistent_validation, fit=report.consistent_fit,
             trajectory_limits=lim, estimate="consistent",
         )  # fmt: skip
-    (Path(folder) / "identification.json").write_text(json.dumps(doc, indent=2) + "\n")
-    (Path(folder) / "table.txt").write_text(text + "\n")
+    for name, content in (("identification.json", json.dumps(doc, indent=2)), ("table.txt", text)):
+        (Path(folder) / name).write_text(content + "\n")
+        paths.append(Path(folder) / name)
     print(f"wrote report to {Path(folder)}/: " + ", ".join(p.name for p in paths))
 
 

@@ -5,6 +5,7 @@ and how, what is written."""
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from ..identification.options import DEFAULT_RSD_THRESHOLD
 from ..robot import FRICTION_KINDS
@@ -103,6 +104,15 @@ def add_data_options(p) -> None:
     )
     add_columns(p)
     p.add_argument(
+        "--torque",
+        choices=["sampled", "held"],
+        default=None,
+        help="dynamic model: the logged torque is a measurement (default) or the command held "
+        "over each sample period, as a digital controller (and simulate's tracking mode) logs "
+        "it: then taken at the middle of its period (the window models take a held torque by "
+        "--integration zoh)",
+    )
+    p.add_argument(
         "--no-decimate",
         action="store_true",
         help="lowpass, dynamic model: keep every sample (default: decimate to at least 10 x the "
@@ -123,6 +133,22 @@ def _rsd_threshold(text: str):
 
 
 _rsd_threshold.__name__ = "rsd threshold"  # argparse names the type by this
+
+
+def report_files(args: argparse.Namespace) -> list[tuple[str, str, str, Path, str]]:
+    """The files ``--report DIR`` writes that the command line determines (none without it),
+    for the rule on outputs (:func:`~mindyn.cli.outputs.implied_outputs`): the JSON and the
+    table, and per log given its torque plot and trajectory plot (a log cut at breaks adds
+    plots of its further segments)."""
+    folder = getattr(args, "report", None)
+    if folder is None:
+        return []
+    names = ["identification.json", "table.txt"]
+    for kind, logs in (("identification", args.data), ("validation", args.validate or [])):
+        names += [f"torque_{kind}{'' if k == 0 else f'_{k + 1}'}.png" for k in range(len(logs))]
+    names += [f"trajectory{'' if k == 0 else f'_{k + 1}'}.png" for k in range(len(args.data))]
+    remedy = "give --report another folder"
+    return [("--report", str(folder), "report file", Path(folder) / n, remedy) for n in names]
 
 
 def add_identify(sub, func) -> None:
@@ -179,7 +205,13 @@ def add_identify(sub, func) -> None:
         help="log(s) (CSV or bag) for validation, none of them a fit log",
     )
     p.add_argument("--json", metavar="FILE", type=output_file, help="write the results as JSON")
-    p.add_argument("--report", metavar="DIR", type=output_dir, help="write plots and tables to DIR")
+    p.add_argument(
+        "--report",
+        metavar="DIR",
+        type=output_dir,
+        help="write plots and tables to DIR: identification.json, table.txt (the "
+        "JSON and the text printed), torque and trajectory plots",
+    )
     p.add_argument(
         "--rsd-threshold",
         type=_rsd_threshold,
@@ -296,7 +328,7 @@ def add_identify(sub, func) -> None:
         help="--friction-model smooth or auto: the tanh width w [rad/s, m/s], positive (or "
         "one value for all joints)",
     )
-    p.set_defaults(func=func)
+    p.set_defaults(func=func, implied=report_files)
     remember_flags(p)  # the floating-base command refuses the options it does not take
 
 

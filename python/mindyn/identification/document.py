@@ -376,8 +376,9 @@ def _friction_model(fm, where: str) -> dict:
 def _reading(rec, where: str) -> dict:
     """The checked ``reading`` field, how identify read its logs: ``filter`` one of the filters,
     ``cutoff_Hz`` and ``edge_s`` numbers, ``torque_unit`` and ``topic`` text, ``drive_gain`` a
-    list of numbers, ``columns`` a column map; each may be null or absent."""
-    from .options import FILTERS
+    list of numbers, ``columns`` a column map, ``torque`` sampled or held; each may be null or
+    absent."""
+    from .options import FILTERS, TORQUE_READINGS
 
     if not isinstance(rec, dict):
         raise DataError(
@@ -395,6 +396,11 @@ def _reading(rec, where: str) -> dict:
     for key in ("torque_unit", "topic"):
         if rec.get(key) is not None and not isinstance(rec[key], str):
             raise DataError(f"{where}: 'reading' {key} is {_kind(rec[key])}; expected text")
+    if rec.get("torque") is not None and rec["torque"] not in TORQUE_READINGS:
+        raise DataError(
+            f"{where}: 'reading' torque is {_kind(rec['torque'])}; expected one of "
+            f"{', '.join(TORQUE_READINGS)}"
+        )
     if rec.get("columns") is not None:
         from .._core import ArgumentError
         from .columns import column_map

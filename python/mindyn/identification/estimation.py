@@ -555,20 +555,40 @@ def _enough(
         got = f"{m} samples x {n} joints = {rows} equations"
         if settings.get("equations_left_out"):
             got += f" ({settings['equations_left_out']} left out as slower than min_velocity)"
-        more = f"at least {math.ceil(need * m / max(rows, 1))} samples"
+        more = _as_logged(logs, math.ceil(need * m / max(rows, 1)))
     elif model == "integral":
         got = f"{m} samples give {rows} integral equations ({n} per window of {window} intervals)"
         if settings.get("equations_left_out"):
             got += f" ({settings['equations_left_out']} left out as slower than min_velocity)"
-        more = f"at least {math.ceil(need / n) * window + 1} samples, or a shorter window"
+        more = _as_logged(logs, math.ceil(need / n) * window + 1) + ", or a shorter window"
     else:
         got = f"{m} samples give {rows} energy windows of {window} intervals"
-        more = f"at least {need * window + 1} samples, or a shorter window"
+        more = _as_logged(logs, need * window + 1) + ", or a shorter window"
     raise IdentificationError(
         f"{src}: {got} for {nb} base parameters; at least {need} are needed ({k} per "
         f"parameter and {MIN_NOISE_DOF} degrees of freedom for the noise estimate): fewer give "
         f"estimates whose RSD does not show their error. Use a longer log ({more})"
     )
+
+
+def _as_logged(logs: list[JointData], needed: int) -> str:
+    """``needed`` samples after the data path as the rows a log must have: the data path drops
+    the filter edges of each log (or segment) and keeps every ``decimation``-th sample, so the
+    samples it leaves are fewer than the log's rows."""
+    edges, step, cutoffs = 0, 1, set()
+    for d in logs:
+        pre = d.processing.get("preprocess") or {}
+        edges += int(pre.get("edge_samples_dropped", 0))
+        edges += 2 * int((d.processing.get("derivative_edges") or {}).get("samples", 0))
+        step = max(step, int(pre.get("decimation", 1)))
+        if "filter" in pre:
+            cutoffs.add(float(pre["filter"]["cutoff_Hz"]))
+    if not edges and step == 1:
+        return f"at least {needed} samples"
+    rows = edges + (needed - 1) * step + 1
+    at = f" of its {cutoffs.pop():.4g} Hz cut-off" if len(cutoffs) == 1 else ""
+    kept = f"{edges} at the filter edges{at}" + (f", then every {step}th kept" if step > 1 else "")
+    return f"at least {rows} samples as logged, {needed} after the data path ({kept})"
 
 
 def _sources(logs: list[JointData]) -> str:

@@ -464,7 +464,9 @@ def active_friction(res, logs) -> str | None:
     """Why the friction fitted in ``res`` is not friction, or None: a friction torque is
     dissipative, ``f(v) v >= 0`` at every speed; the slots whose fitted ``f(v) sign(v)`` is
     below zero by more than :data:`ACTIVE_SIGMAS` standard deviations (the parameters' standard
-    deviations of the fit, taken as independent) at some speed from just above zero to the
+    deviations of the fit, taken as independent; of a pruned fit each the larger of the pruned
+    one and that of the fit with every base parameter, ``res.initial["std"]``, since the pruned
+    one assumes the removed parameters zero) at some speed from just above zero to the
     largest of ``logs``, either way (the steady friction of the Dahl model: ``sign(v)`` for
     its state)."""
     base = res.base
@@ -473,6 +475,8 @@ def active_friction(res, logs) -> str | None:
     robot = base.robot
     names = list(base.names)
     std = dict(zip(res.names, np.asarray(res.std, float)))
+    free = dict(zip(names, np.asarray(res.initial.get("std", []), float)))
+    std = {nm: max(s, free.get(nm, 0.0)) for nm, s in std.items()}
     classical = robot.parameter_names(rotor=False, friction=True)[10 : robot.layout_sizes[2]]
     kinds = [nm.rstrip("0123456789") for nm in classical]
     top = np.max(np.vstack([np.abs(robot.slot_velocities(d.dq)) for d in logs]), axis=0)

@@ -16,6 +16,8 @@ from .data import DataError
 from .errors import IdentificationError
 
 FILTERS = ("lowpass", "butter", "savgol", "none")
+#: How a logged torque is read: a measurement at its sample, or a command held over its period
+TORQUE_READINGS = ("sampled", "held")
 
 #: The default RSD threshold [%]: a parameter is kept when its estimate is more than sqrt(2)
 #: standard deviations from zero (100 / sqrt(2) = 70.7 %): Akaike's criterion for one
@@ -206,7 +208,12 @@ class ReadingOptions:
     file says; not with a currents file for every log), ``drive_gain`` (per
     joint, or one for all), ``topic`` (ROS bag), ``columns``: a column map of the CSV logs
     (:func:`~mindyn.identification.columns.column_map`; the currents files read through its
-    ``t`` and ``i``)."""
+    ``t`` and ``i``); ``torque``: ``sampled`` (a measurement, taken at its sample) or ``held``
+    (the command a digital controller holds over each sample period, as ``mindyn simulate``'s
+    tracking mode logs it: taken at the middle of its period,
+    :func:`~mindyn.identification.data.held_torque_at_samples`; dynamic model only, the window
+    models take a held torque by ``integration='zoh'``; None: sampled, and given where it does
+    not apply, refused)."""
 
     filter: str = "lowpass"
     cutoff: float | None = None
@@ -219,11 +226,19 @@ class ReadingOptions:
     drive_gain: tuple[float, ...] | None = None
     topic: str | None = None
     columns: ColumnMap | None = None
+    # None: not given, sampled
+    torque: str | None = None
 
     #: whether ``decimate`` was given (True or False): refused where it does not apply
     _decimate_given: bool = field(default=False, init=False, repr=False, compare=False)
+    #: whether ``torque`` was given: refused where it does not apply
+    _torque_given: bool = field(default=False, init=False, repr=False, compare=False)
 
     def __post_init__(self):
+        object.__setattr__(self, "_torque_given", self.torque is not None)
+        if self.torque is None:
+            object.__setattr__(self, "torque", "sampled")
+        _args.choice(self.torque, "torque", TORQUE_READINGS)
         object.__setattr__(self, "_decimate_given", self.decimate is not None)
         if self.decimate is None:
             object.__setattr__(self, "decimate", True)

@@ -127,7 +127,25 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
                 f"drive_gain=: {p} holds torques in {unit}, not motor currents; expected "
                 "torque_unit='current', columns i1..in or currents="
             )
+    if opts.torque == "held":
+        out = [_held(d) for d in out]
     return out
+
+
+def _held(d):
+    """Log ``d`` with its torques, held over each sample period, taken at the samples
+    (:func:`~mindyn.identification.data.held_torque_at_samples`), as ``processing`` says."""
+    from .data import held_torque_at_samples
+
+    if d.tau is None:
+        return d
+    d.tau = held_torque_at_samples(d.t, d.tau)
+    d.processing["torque"] = {
+        **d.processing.get("torque", {}),
+        "held": "the command held over each sample period, taken at the samples: the "
+        "interpolation between the middles of the periods",
+    }
+    return d
 
 
 def _processed(paths, raws, opts: ReadingOptions, cutoff, periodic, decimate) -> list[list]:
@@ -282,6 +300,7 @@ class Logs(Sequence):
                 "drive_gain": None if r.drive_gain is None else list(r.drive_gain),
                 "topic": r.topic,
                 "columns": None if r.columns is None else r.columns.record(),
+                "torque": r.torque,
             }
         )
         object.__setattr__(self, "record", record)
@@ -339,6 +358,12 @@ def load_logs(
             f"decimate={opts.decimate}",
             f"applies only to the dynamic model (the integral and energy models keep every "
             f"sample); got model='{model}'",
+        )
+    if opts._torque_given and model != "dynamic":
+        raise _args.fail(
+            f"torque='{opts.torque}'",
+            "applies only to the dynamic model (the integral and energy models take a torque "
+            f"held over each sample period by integration='zoh'); got model='{model}'",
         )
     one = (str, PathLike)  # one path given alone: a list of it
     paths = [paths] if isinstance(paths, one) else paths

@@ -154,6 +154,8 @@ def _settings(report) -> list[str]:
     if corr and corr["variance_factor"] > 1.0:
         out.append(f"  standard deviations: {corr['rule']}")
     out += [f"  base set: {line}" for line in base.snap_report(detail=False)]
+    if "held" in proc.get("torque", {}):
+        out.append(f"  torques: {proc['torque']['held']} (torque='held')")
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
         out.append(
