@@ -106,7 +106,15 @@ def constraint_costs(
             objective = objective + 1e-6 * cp.sum_squares(N.T @ ((G @ u - pi0) / s))
         try:
             _run(cp.Problem(cp.Minimize(objective), cons), said, "cost of consistency: ")
-        except IdentificationError:
+        except IdentificationError as ex:
+            lifted = (
+                "every constraint kept"
+                if free_link is None and not free_terms
+                else f"{names[free_link]}'s constraint lifted"
+                if free_link is not None
+                else "the joint terms' bounds lifted"
+            )
+            said.append(f"cost of consistency, {lifted}: not measured ({ex})")
             return math.nan
         pi = np.asarray(G @ u.value, float)
         return max((float(np.sum((M @ pi - z) ** 2)) - fit_ls) / s2, 0.0)
