@@ -124,12 +124,6 @@ def test_the_numerical_method_follows_the_rule_at_any_velocity_scale(case, kind,
     the slots' largest speed, and its regressor reproduces Pinocchio's rnea plus the motor terms
     written out here with those widths."""
     name, _, robot, model = case
-    if kind == "smooth" and factor > 1 and name == "differential":
-        pytest.skip(
-            "the smooth columns of motors that share joints are decided on samples at their "
-            "widths by every method (not this rule); at widths far above the speeds the "
-            "numerical method regroups Fv of one of them, the projection method does not"
-        )
     n = robot.n
     t, q, dq, ddq = motion(n)
     w = factor * np.abs(dq @ rows(robot).T).max(axis=0)

@@ -317,13 +317,15 @@ void randomState(const Model& model, std::mt19937& rng, Eigen::VectorXd& q, Eige
 // independent of the link and rotor columns (which are polynomials of degree two in the rates),
 // so that evaluating them at other rates of the same states keeps every dependency.
 //
-// The scaled column (tanh(v / w), s exp(-(v / w)^2)) of a slot that alone moves its joint (a
-// joint, or a motor that alone drives one joint alone: Model::holdsThirdFriction) is a function
-// of that joint's rate alone, independent of every other column whatever w: it is taken at
-// v / u instead, u the slot's rate per unit joint rate (1 on a joint, |r| for a motor of T's
-// row r e_j), so that its sampled arguments spread over [-2, 2] whatever w. At w far below the
-// sampled speeds exp(-(v / w)^2) vanished (Fs dropped), far above it s exp(-(v / w)^2) was
-// s to round-off (Fs regrouped with Fc); the exact methods keep both, and so does this.
+// A slot's scaled column (tanh(v / w), s exp(-(v / w)^2)) is t^T phi(v), t its row of T (e_k
+// on the joint side) and v = t . dq its own rate: with T invertible the columns of distinct
+// slots never combine, and the friction columns do not combine with the others, so the scaled
+// column is independent of every other column whatever w. It is taken at v / u instead, u the
+// largest entry of |t|, so that its sampled arguments spread over [-2, 2] whatever w: every
+// slot's smooth column, and the Stribeck column of a slot that has one
+// (Model::holdsThirdFriction). At w far below the sampled speeds exp(-(v / w)^2) vanished (Fs
+// dropped), far above them s exp(-(v / w)^2) was s to round-off (Fs regrouped with Fc) and
+// tanh(v / w) was v / w (Fc regrouped with Fv); the exact methods keep them, and so does this.
 void sampledRegressor(const Model& model, Data& data, ParameterLayout layout,
                       const Eigen::VectorXd& q, const Eigen::VectorXd& dq,
                       const Eigen::VectorXd& ddq, const StateScale& scale, MatOut W,
@@ -341,7 +343,7 @@ void sampledRegressor(const Model& model, Data& data, ParameterLayout layout,
   if (!model.friction_model.scaled()) return;
   const int scaled = kind == FrictionKind::Smooth ? 1 : 2;  // tanh(v / w); s exp(-(v / w)^2)
   for (int k = 0; k < model.nq(); ++k) {
-    if (!model.holdsThirdFriction(k)) continue;
+    if (kind != FrictionKind::Smooth && !model.holdsThirdFriction(k)) continue;
     const double u = model.motorSide() ? model.transmission.T.row(k).cwiseAbs().maxCoeff() : 1.0;
     const double v = model.motorSide() ? model.transmission.T.row(k).dot(dq0) : dq0[k];
     const double r = v / u;

@@ -92,9 +92,18 @@ def cmd_detect(args: argparse.Namespace) -> int:
         gains = np.full(robot.n, k)
     torque, torque_how = args.torque, ""
     if torque is None:
-        torque = (doc.get("reading") or {}).get("torque") or "sampled"
-        if torque == "held":
-            torque_how = f", as {args.identification} read its logs (--torque sets it)"
+        from ..identification.data import truth_path
+        from ..identification.reading import simulated_torque
+
+        simulated = simulated_torque(args.log)
+        if simulated is not None:  # the log's own simulation says how it logged its torque
+            torque = simulated
+            if torque == "held":
+                torque_how = f", as {truth_path(args.log)} says (--torque sets it)"
+        else:
+            torque = (doc.get("reading") or {}).get("torque") or "sampled"
+            if torque == "held":
+                torque_how = f", as {args.identification} read its logs (--torque sets it)"
     obs = MomentumObserver(base, values, period=period, gains=gains, held_torque=torque == "held")
     r = obs.run(data.q, data.dq, data.tau, t)
     n = robot.n
@@ -335,8 +344,9 @@ def register(sub) -> None:
         choices=["sampled", "held"],
         default=None,
         help="the logged torque is a measurement (trapezoid) or the command held over each "
-        "step (default: as the identification read its logs, its JSON's reading.torque; "
-        "sampled when it records none)",
+        "step (default: as the log's .truth.json says its simulation logged it; for any other "
+        "log as the identification read its logs, its JSON's reading.torque; sampled when it "
+        "records none)",
     )
     p.add_argument("--plot", metavar="PNG", type=output_file, help="plot of r and thresholds")
     p.add_argument("--consistent", action="store_true", help="the consistent estimate of the JSON")

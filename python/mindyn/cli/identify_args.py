@@ -107,9 +107,10 @@ def add_data_options(p) -> None:
         "--torque",
         choices=["sampled", "held"],
         default=None,
-        help="dynamic model: the logged torque is a measurement (default) or the command held "
-        "over each sample period, as a digital controller (and simulate's tracking mode) logs "
-        "it: then taken at the middle of its period (the window models take a held torque by "
+        help="dynamic model: the logged torque is a measurement or the command held over each "
+        "sample period, as a digital controller (and simulate's tracking mode) logs it: then "
+        "taken at the middle of its period (default: held for a log whose .truth.json says its "
+        "simulation held it, sampled for any other; the window models take a held torque by "
         "--integration zoh)",
     )
     p.add_argument(

@@ -847,6 +847,7 @@ def simulate(
     err = out["q"] - qd
     info = {
         "mode": "tracking",
+        "torque": "held",  # the command, held over each period (identify reads it so)
         "controller": getattr(controller, "name", type(controller).__name__),
         "rate_Hz": rate,
         "substeps": substeps,
@@ -1162,6 +1163,7 @@ def simulate_inverse(
     taum = tau + arr["torque"] * rng.standard_normal(tau.shape)
     info = {
         "mode": "inverse",
+        "torque": "sampled",  # inverse dynamics at the samples
         "rate_Hz": rate,
         "duration_s": T,
         "rotor": rotor,

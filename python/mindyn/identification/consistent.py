@@ -527,7 +527,7 @@ def consistent_estimate(
     else:
         from .constraint_cost import constraint_costs
 
-        cost = constraint_costs(base, M, z, s2, notes=notes, progress=progress)
+        cost = constraint_costs(base, M, z, s2, fit_ls=fit_ls, notes=notes, progress=progress)
     prior = None
     if W > 0:
         prior = float(
@@ -686,27 +686,49 @@ def _divergence(J, J0) -> float:
     return float(-logdet + np.trace(A) - 4) if sign > 0 else math.inf
 
 
+def _conic_map(base, layout, pi0) -> tuple[np.ndarray, np.ndarray, float]:
+    """The conic problems' variables: ``pi = G u``, ``u = [vec(J'_1) .. vec(J'_n), extras]``
+    with each link's pseudo-inertia ``J = mbar J'`` (variables of order 1; ``mbar`` the mean
+    link mass); ``s`` (P,): each parameter's scale (``mbar`` on a link's, 1 on the joint
+    terms'). Returns ``(G, s, mbar)``."""
+    mbar = _mean_mass(base, layout, pi0)
+    G10 = _pseudo_map()
+    n, P, k = len(layout.links), len(layout.names), layout.extra.size
+    G = np.zeros((P, 16 * n + k))
+    s = np.ones(P)
+    for j, ix in enumerate(layout.links):
+        G[ix, 16 * j : 16 * (j + 1)] = mbar * G10
+        s[ix] = mbar
+    G[layout.extra, 16 * n + np.arange(k)] = 1.0
+    return G, s, mbar
+
+
+def _conic_variables(layout, free_link: int | None = None):
+    """The variables of :func:`_conic_map`: ``(Js, e, u)``, the links' scaled pseudo-inertias
+    (positive semidefinite; link ``free_link``'s only symmetric), the joint terms (None without
+    them) and their stack ``u``."""
+    import cvxpy as cp
+
+    Js = [
+        cp.Variable((4, 4), symmetric=True) if j == free_link else cp.Variable((4, 4), PSD=True)
+        for j in range(len(layout.links))
+    ]
+    parts = [cp.vec(J, order="C") for J in Js]
+    k = layout.extra.size
+    e = cp.Variable(k) if k else None
+    if e is not None:
+        parts.append(e)
+    return Js, e, cp.hstack(parts)
+
+
 def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None, progress=None, tie_break=None):
     """The conic solve; when the tie-break is taken (no prior), ``tie_break`` (a dict) gets
     ``slack`` and ``optimum_fit``, the optimum's fit term [noise variances]."""
     import cvxpy as cp
 
-    n = base.robot.n
     P = len(layout.names)
-    mbar = _mean_mass(base, layout, pi0)
-    G10 = _pseudo_map()
-    # pi = G u, u = [vec(J'_1) .. vec(J'_n), extras]; J = mbar J' (the variables of order 1).
-    k = layout.extra.size
-    G = np.zeros((P, 16 * n + k))
-    for j, ix in enumerate(layout.links):
-        G[ix, 16 * j : 16 * (j + 1)] = mbar * G10
-    G[layout.extra, 16 * n + np.arange(k)] = 1.0
-    Js = [cp.Variable((4, 4), PSD=True) for _ in range(n)]
-    parts = [cp.vec(J, order="C") for J in Js]
-    e = cp.Variable(k) if k else None
-    if e is not None:
-        parts.append(e)
-    u = cp.hstack(parts)
+    G, s, mbar = _conic_map(base, layout, pi0)
+    Js, e, u = _conic_variables(layout)
     pi = G @ u
     scale = 1.0 / math.sqrt(s2)
     # The residual as its own variable: the objective's quadratic form is then the identity
@@ -725,9 +747,6 @@ def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None, progress=None, tie_
             inv = 0.5 * (inv + inv.T)
             objective = objective + W * (-cp.log_det(J) + cp.trace(inv @ J))
     else:
-        s = np.ones(P)
-        for ix in layout.links:
-            s[ix] = mbar
         N = sla.null_space(base.Y * s)
         if N.size:
             w = cp.Variable(N.shape[1])

@@ -46,12 +46,15 @@ def constraint_costs(
     z: np.ndarray,
     s2: float,
     *,
+    fit_ls: float | None = None,
     notes: list | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> dict:
     """The cost of physical consistency for the least-squares problem ``|M pi - z|^2`` in the
     classical parameters ``pi`` of ``base`` (``M``: (c, P), ``z``: (c,), ``s2``: the noise
-    variance, as :func:`~mindyn.identification.consistent.consistent_estimate` sets them up).
+    variance, as :func:`~mindyn.identification.consistent.consistent_estimate` sets them up;
+    ``fit_ls``: the unconstrained least-squares fit term ``min |M pi - z|^2``, computed when
+    not given).
 
     Returns ``total``: the least fit increase of a consistent ``pi`` over the unconstrained
     least-squares fit [noise variances] (None: the solve failed, noted in ``notes``);
@@ -61,26 +64,24 @@ def constraint_costs(
     without such terms or when not computed); ``major``: the links (and ``"joint terms"``)
     recovering at least :data:`MAJOR_SHARE` of ``total``, the largest first (recoveries do not
     add up: a link's parameters can stand in for another's they regroup with); ``rule``."""
-    from .consistent import _Layout, _mean_mass, _pseudo_map, _run, _stage, description_vector
+    from .consistent import (
+        _conic_map,
+        _conic_variables,
+        _Layout,
+        _run,
+        _stage,
+        description_vector,
+    )
 
     layout = _Layout(base)
     names = list(base.robot.link_names[1:])
-    Yb = base.Y
-    # the unconstrained optimum over the base parameters: |M pi - z|^2 depends on Y pi only
-    A = M @ np.linalg.pinv(Yb)
-    fit_ls = float(np.sum((A @ np.linalg.lstsq(A, z, rcond=None)[0] - z) ** 2))
+    n = len(layout.links)
+    if fit_ls is None:  # the unconstrained optimum: |M pi - z|^2 depends on Y pi only
+        A = M @ np.linalg.pinv(base.Y)
+        fit_ls = float(np.sum((A @ np.linalg.lstsq(A, z, rcond=None)[0] - z) ** 2))
     pi0 = description_vector(base)
-    mbar = _mean_mass(base, layout, pi0)
-    G10 = _pseudo_map()
-    n, P, k = len(layout.links), len(layout.names), layout.extra.size
-    G = np.zeros((P, 16 * n + k))
-    for j, ix in enumerate(layout.links):
-        G[ix, 16 * j : 16 * (j + 1)] = mbar * G10
-    G[layout.extra, 16 * n + np.arange(k)] = 1.0
-    s = np.ones(P)
-    for ix in layout.links:
-        s[ix] = mbar
-    N = sla.null_space(Yb * s)
+    G, s, _ = _conic_map(base, layout, pi0)
+    N = sla.null_space(base.Y * s)
     scale = 1.0 / math.sqrt(s2)
     bounded = np.flatnonzero(layout.nonneg)
     said = notes if notes is not None else []
@@ -88,15 +89,7 @@ def constraint_costs(
     def least(free_link: int | None = None, free_terms: bool = False) -> float:
         import cvxpy as cp
 
-        Js = [
-            cp.Variable((4, 4), symmetric=True) if j == free_link else cp.Variable((4, 4), PSD=True)
-            for j in range(n)
-        ]
-        parts = [cp.vec(J, order="C") for J in Js]
-        e = cp.Variable(k) if k else None
-        if e is not None:
-            parts.append(e)
-        u = cp.hstack(parts)
+        _, e, u = _conic_variables(layout, free_link)
         r = cp.Variable(z.size)
         cons = [r == (M @ G) @ u * scale - z * scale]
         if e is not None and bounded.size and not free_terms:

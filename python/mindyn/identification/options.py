@@ -212,8 +212,9 @@ class ReadingOptions:
     (the command a digital controller holds over each sample period, as ``mindyn simulate``'s
     tracking mode logs it: taken at the middle of its period,
     :func:`~mindyn.identification.data.held_torque_at_samples`; dynamic model only, the window
-    models take a held torque by ``integration='zoh'``; None: sampled, and given where it does
-    not apply, refused)."""
+    models take a held torque by ``integration='zoh'``; None: per log, held when its truth
+    sidecar says its simulation held it, :func:`~mindyn.identification.reading.simulated_held`,
+    else sampled; given where it does not apply, refused)."""
 
     filter: str = "lowpass"
     cutoff: float | None = None

@@ -5,6 +5,7 @@ are filtered at the fit's cut-off."""
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -64,7 +65,9 @@ def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
     )
 
 
-def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=None) -> list:
+def _raw(
+    paths, robot, opts: ReadingOptions, currents, require_torque, truth=None, because=None
+) -> list:
     """The logs at ``paths`` as read (CSV or ROS bag; torques from the ``currents`` file of
     each when given), by stages: which are bags, then (after the truth sidecars, when a list
     ``truth`` is given to fill) the reads, then the currents joined."""
@@ -127,14 +130,20 @@ def _raw(paths, robot, opts: ReadingOptions, currents, require_torque, truth=Non
                 f"drive_gain=: {p} holds torques in {unit}, not motor currents; expected "
                 "torque_unit='current', columns i1..in or currents="
             )
-    if opts.torque == "held":
-        out = [_held(d) for d in out]
+    # ``because`` (torque not given): per log, why it is read as held (None: sampled)
+    reasons = because if because is not None else [None] * len(out)
+    if opts.torque == "held" or because is not None:
+        out = [
+            _held(d, b) if opts.torque == "held" or b is not None else d
+            for d, b in zip(out, reasons)
+        ]
     return out
 
 
-def _held(d):
+def _held(d, because: str | None = None):
     """Log ``d`` with its torques, held over each sample period, taken at the samples
-    (:func:`~mindyn.identification.data.held_torque_at_samples`), as ``processing`` says."""
+    (:func:`~mindyn.identification.data.held_torque_at_samples`), as ``processing`` says (with
+    ``because``: why they were read so, when not asked for)."""
     from .data import held_torque_at_samples
 
     if d.tau is None:
@@ -144,8 +153,47 @@ def _held(d):
         **d.processing.get("torque", {}),
         "held": "the command held over each sample period, taken at the samples: the "
         "interpolation between the middles of the periods",
+        **({} if because is None else {"held_because": because}),
     }
     return d
+
+
+def simulated_torque(path) -> str | None:
+    """How the simulation that wrote the log at ``path`` logged its torque, as the log's truth
+    sidecar says: ``"held"`` (``mindyn simulate``'s tracking mode: the controller's command,
+    held over each period), ``"sampled"`` (inverse dynamics at the samples), or None (no
+    sidecar, or one that does not say)."""
+    from .data import read_json, truth_path
+
+    p = truth_path(path)
+    if not p.is_file():
+        return None
+    try:
+        sim = read_json(p, what="truth file").get("simulation")
+    except (DataError, AttributeError):  # read_truth names a broken sidecar where it matters
+        return None
+    if not isinstance(sim, dict):
+        return None
+    said = sim.get("torque")
+    if said in ("held", "sampled"):
+        return said
+    # sidecars written before the key: the tracking mode held its command
+    return {"tracking": "held", "inverse": "sampled"}.get(str(sim.get("mode")))
+
+
+def simulated_held(paths) -> list[str | None]:
+    """Per log at ``paths``, why the dynamic model reads its torque as held when ``torque`` is
+    not given: its truth sidecar says its simulation held the command over each period
+    (:func:`simulated_torque`); None: read as sampled (no sidecar, as a measured log, or one
+    that says sampled)."""
+    from .data import truth_path
+
+    return [
+        f"as {truth_path(p)} says: simulated with the command held over each period"
+        if simulated_torque(p) == "held"
+        else None
+        for p in paths
+    ]
 
 
 def _processed(paths, raws, opts: ReadingOptions, cutoff, periodic, decimate) -> list[list]:
@@ -376,8 +424,14 @@ def load_logs(
         raise DataError("validate_currents=: expected validate= with the logs they belong to")
     cur = paired(files, currents, "currents=", what)
     vcur = paired(vfiles, validate_currents, "validate_currents=", "validate=")
+    because = None
+    if model == "dynamic" and not opts._torque_given:
+        because = simulated_held(files + vfiles)
+        if all(b is not None for b in because):  # recorded as held (predict, detect follow)
+            opts = copy.copy(opts)  # (replace() would take its defaults as given)
+            object.__setattr__(opts, "torque", "held")
     truth: list = []
-    raws = _raw(files + vfiles, robot, opts, cur + vcur, True, truth)
+    raws = _raw(files + vfiles, robot, opts, cur + vcur, True, truth, because)
     decimate = model == "dynamic" and opts.decimate
     parts = _processed(files, raws[: len(files)], opts, None, True, decimate)
     pres = [d.processing.get("preprocess") for ds in parts for d in ds]

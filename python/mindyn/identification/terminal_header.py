@@ -155,7 +155,11 @@ def _settings(report) -> list[str]:
         out.append(f"  standard deviations: {corr['rule']}")
     out += [f"  base set: {line}" for line in base.snap_report(detail=False)]
     if "held" in proc.get("torque", {}):
-        out.append(f"  torques: {proc['torque']['held']} (torque='held')")
+        why = proc["torque"].get("held_because")
+        out.append(
+            f"  torques: {proc['torque']['held']} (torque='held'"
+            + (f", {why}; torque='sampled' reads them at their samples)" if why else ")")
+        )
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
         out.append(
