@@ -151,7 +151,7 @@ def _diag(x, n: int, name: str) -> np.ndarray:
         isinstance(x, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in x)
     ):
         raise ControllerSettingError(f"gain '{name}' must be numbers, got a boolean ({x!r})")
-    a = np.asarray(x, dtype=float)
+    a = np.array(x, dtype=float)  # a copy: the caller's array may change after
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.shape != (n,):
@@ -174,7 +174,7 @@ def check_period(period, *, what: str = "period") -> float:
     """``period`` as a float; raises ControllerSettingError (an ArgumentError) unless it is a
     number of seconds in [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
     _args.text(what, "what")
-    if isinstance(period, (bool, np.bool_)):
+    if isinstance(period, (bool, np.bool_, str, bytes)):
         raise ControllerSettingError(f"{what} must be a number of seconds, got {period!r}")
     try:
         T = float(period)
@@ -262,6 +262,7 @@ class PD:
     name = "pd"
 
     def __init__(self, n: int, kp, kd):
+        n = _args.integer(n, "n", 1)
         self.kp = _diag(kp, n, "kp")
         self.kd = _diag(kd, n, "kd")
 

@@ -921,19 +921,21 @@ class TorqueProfile:
     stop: float | None = None
 
     def __post_init__(self):
-        self.torque = np.asarray(self.torque, dtype=float)
-        if self.torque.ndim != 1 or not np.all(np.isfinite(self.torque)):
-            raise ArgumentError("torque must be a vector of finite joint torques")
-        if not math.isfinite(self.start) or (
-            self.stop is not None and not (math.isfinite(self.stop) and self.stop > self.start)
-        ):
-            raise ArgumentError(f"the interval [{self.start}, {self.stop}] is not a finite span")
+        # a read-only copy: neither the caller's array nor a returned torque can change it
+        self.torque = _args.readonly(_args.array(self.torque, "torque", (None,)))
+        self.start = _args.number(self.start, "start")
+        if self.stop is not None:
+            self.stop = _args.number(self.stop, "stop")
+            if not self.stop > self.start:
+                raise _args.fail(
+                    "stop", f"is {self.stop:g}; expected a time after start ({self.start:g} s)"
+                )
 
     def active(self, t: float) -> bool:
         return t >= self.start and (self.stop is None or t < self.stop)
 
     def __call__(self, t: float, q=None, dq=None) -> np.ndarray:
-        return self.torque if self.active(t) else np.zeros_like(self.torque)
+        return self.torque.copy() if self.active(t) else np.zeros_like(self.torque)
 
 
 @dataclass
