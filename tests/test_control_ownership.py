@@ -119,3 +119,11 @@ def test_alarm_intervals_refuse_thresholds_that_are_not_positive_and_unordered_t
     with pytest.raises(ArgumentError, match=r"^t is not strictly increasing at sample 3$"):
         control.alarm_intervals(np.array([0.0, 1.0, 1.0, 2.0]), r, [1.0, 1.0])
 
+
+def test_default_gains_state_their_values():
+    gains = control.default_gains(ROBOT, period=T)
+    for kind in ("adaptive-pd", "pd"):
+        note = gains.note_for(kind)
+        assert "K_D [" + ", ".join(f"{v:.4g}" for v in gains["kd"]) + "]" in note
+        assert "Lambda [" + ", ".join(f"{v:.4g}" for v in gains["lambda"]) + "]" in note
+
