@@ -127,3 +127,20 @@ def test_default_gains_state_their_values():
         assert "K_D [" + ", ".join(f"{v:.4g}" for v in gains["kd"]) + "]" in note
         assert "Lambda [" + ", ".join(f"{v:.4g}" for v in gains["lambda"]) + "]" in note
 
+
+def test_the_summary_gives_no_relative_error_for_a_parameter_whose_truth_is_zero():
+    """The simulated robot has no friction while the controller's model has it: the friction
+    parameters' true values are zero, their relative error undefined (was the error over 1e-9)."""
+    robot = mindyn.load("planar2")
+    gains = control.default_gains(robot, period=T)
+    ctl = control.make_controller("adaptive-pd", robot, gains, period=T, rotor=False, box=False)
+    res = control.simulate(robot, control.SumOfSines(robot, period=1.0), ctl, duration=0.5)
+    out = control.summary(res)["final_parameter_relative_error"]
+    names = list(ctl.base.names)
+    truth = res.p_true[-1] if res.p_true.ndim == 2 else res.p_true
+    for name, v, p in zip(names, res.p_hat[-1], truth, strict=True):
+        if p == 0:
+            assert out[name] is None, name
+        else:
+            assert out[name] == pytest.approx((v - p) / abs(p), rel=1e-12), name
+    assert any(out[name] is None for name in names if name.startswith("F"))
