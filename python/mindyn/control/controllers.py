@@ -151,7 +151,7 @@ def _diag(x, n: int, name: str) -> np.ndarray:
         isinstance(x, (list, tuple)) and any(isinstance(v, (bool, np.bool_)) for v in x)
     ):
         raise ControllerSettingError(f"gain '{name}' must be numbers, got a boolean ({x!r})")
-    a = np.asarray(x, dtype=float)
+    a = np.array(x, dtype=float)  # a copy: the caller's array may change after
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.shape != (n,):
@@ -174,7 +174,7 @@ def check_period(period, *, what: str = "period") -> float:
     """``period`` as a float; raises ControllerSettingError (an ArgumentError) unless it is a
     number of seconds in [:data:`MIN_PERIOD`, :data:`MAX_PERIOD`]."""
     _args.text(what, "what")
-    if isinstance(period, (bool, np.bool_)):
+    if isinstance(period, (bool, np.bool_, str, bytes)):
         raise ControllerSettingError(f"{what} must be a number of seconds, got {period!r}")
     try:
         T = float(period)
@@ -262,6 +262,7 @@ class PD:
     name = "pd"
 
     def __init__(self, n: int, kp, kd):
+        n = _args.integer(n, "n", 1)
         self.kp = _diag(kp, n, "kp")
         self.kd = _diag(kd, n, "kd")
 
@@ -1126,11 +1127,22 @@ def _default_gains(robot: Robot, T: float, rotor, kp_min, tol) -> Gains:
     lowered_text = f", lowered for the period {T:g} s" if lowered else ""
     kd_text = f"K_D = {DEFAULT_KD_PER_INERTIA:g} x the smallest effective inertia of each joint"
     lam_text = f"Lambda = {DEFAULT_LAMBDA:g}"
+    # the values themselves, which a controller elsewhere takes (what --gains reads)
+    kd_values = f"K_D {_gain_text(g['kd'])}"
+    lam_values = f"Lambda {_gain_text(g['lambda'])}"
     g.note = ""
-    g.add_note(f"{prefix}gains: {kd_text}, {lam_text}{lowered_text}", ["adaptive-pd"])
-    pd_head = f"{prefix}gains: {kd_text}, {lam_text} (K_P = Lambda K_D){lowered_text}"
+    g.add_note(
+        f"{prefix}gains: {kd_text}, {lam_text}{lowered_text}: {kd_values}, {lam_values}",
+        ["adaptive-pd"],
+    )
+    pd_head = (
+        f"{prefix}gains: {kd_text}, {lam_text} (K_P = Lambda K_D){lowered_text}: {kd_values}, "
+        f"{lam_values}"
+    )
     g.add_note(pd_head, ["pd"], general=False)
-    ct_head = f"{prefix}gains: {lam_text} (K_P = Lambda^2, K_D = 2 Lambda){lowered_text}"
+    ct_head = (
+        f"{prefix}gains: {lam_text} (K_P = Lambda^2, K_D = 2 Lambda){lowered_text}: {lam_values}"
+    )
     g.add_note(ct_head, ["computed-torque"], general=False)
     g.add_note(
         bound.removeprefix("; ") + f" (mass matrix sampled at {len(qs)} configurations, "

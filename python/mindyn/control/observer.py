@@ -72,6 +72,9 @@ class MomentumObserver:
     held_torque : bool
         The torque is the command held over each period (True) or a sampled measurement
         integrated by the trapezoid (False).
+
+    The attributes ``values`` and ``gains`` are read-only copies of what the observer runs
+    with: a later change of the arrays it was given does not change it.
     """
 
     def __init__(
@@ -107,9 +110,12 @@ class MomentumObserver:
                 f"observer gain K_O of joint {j + 1} is {k[j]:g} 1/s; expected 0 < K_O < 2 / T "
                 f"= {2 / self.period:g} 1/s (K_O T >= 2 makes the discrete residual alternate)"
             )
-        self.gains = k
+        # the core keeps its own copies: the attributes are the observer's own, read-only
+        # copies too, so that neither the caller's arrays nor an edit of them can part them
+        # from the residual the core computes
+        self.gains = _args.readonly(k)
         self.held_torque = bool(held_torque)
-        self.values = values
+        self.values = _args.readonly(values)
         # the offsets are base parameters of the core's layout: in values, not a separate vector
         self._o = _core.MomentumObserver(
             base._b, values, k, self.period, np.zeros(n), held_torque=self.held_torque
@@ -312,10 +318,20 @@ def load_thresholds(path, robot) -> ObserverThresholds:
 def alarm_intervals(t, residual, thresholds) -> list[dict]:
     """The intervals where ``|r_j| > threshold_j``: one dict per interval and joint, in time
     order, with ``joint`` (1-based), ``start``, ``end`` (time of its last sample above) and
-    ``peak`` (the largest |r_j| in it, signed)."""
+    ``peak`` (the largest |r_j| in it, signed). ``t`` increases strictly and the thresholds
+    are positive."""
     t = _args.array(t, "t", (None,))
+    bad = np.flatnonzero(~(np.diff(t) > 0))
+    if bad.size:
+        raise _args.fail("t", f"is not strictly increasing at sample {int(bad[0]) + 2}")
     r = _args.array(residual, "residual", (t.shape[0], None))
     thr = _args.array(thresholds, "thresholds", (r.shape[1],))
+    bad = np.flatnonzero(~(thr > 0))
+    if bad.size:
+        j = int(bad[0])
+        raise _args.fail(
+            "thresholds", f"has {thr[j]:g} for joint {j + 1}; expected positive values"
+        )
     over = np.abs(r) > thr
     out = []
     for j in range(r.shape[1]):

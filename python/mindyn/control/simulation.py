@@ -922,19 +922,21 @@ class TorqueProfile:
     stop: float | None = None
 
     def __post_init__(self):
-        self.torque = np.asarray(self.torque, dtype=float)
-        if self.torque.ndim != 1 or not np.all(np.isfinite(self.torque)):
-            raise ArgumentError("torque must be a vector of finite joint torques")
-        if not math.isfinite(self.start) or (
-            self.stop is not None and not (math.isfinite(self.stop) and self.stop > self.start)
-        ):
-            raise ArgumentError(f"the interval [{self.start}, {self.stop}] is not a finite span")
+        # a read-only copy: neither the caller's array nor a returned torque can change it
+        self.torque = _args.readonly(_args.array(self.torque, "torque", (None,)))
+        self.start = _args.number(self.start, "start")
+        if self.stop is not None:
+            self.stop = _args.number(self.stop, "stop")
+            if not self.stop > self.start:
+                raise _args.fail(
+                    "stop", f"is {self.stop:g}; expected a time after start ({self.start:g} s)"
+                )
 
     def active(self, t: float) -> bool:
         return t >= self.start and (self.stop is None or t < self.stop)
 
     def __call__(self, t: float, q=None, dq=None) -> np.ndarray:
-        return self.torque if self.active(t) else np.zeros_like(self.torque)
+        return self.torque.copy() if self.active(t) else np.zeros_like(self.torque)
 
 
 @dataclass
@@ -1342,7 +1344,8 @@ def torque_unit(joint_types) -> str:
 def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
     """Figures of a run: max / final / RMS-per-cycle position errors (deg; mm on prismatic
     joints, ``error_unit``), and for adaptive runs
-    the torque prediction error ``Y (p_hat - p)`` and the parameter error per cycle."""
+    the torque prediction error ``Y (p_hat - p)`` and the parameter error per cycle, and each
+    base parameter's final relative error ``(p_hat - p) / |p|`` (None where ``p`` is zero)."""
     _args.instance(result, "result", SimulationResult)
     cycle = _args.optional(_args.number, cycle, "cycle", positive=True)
     T = result.t[-1] + result.period
@@ -1380,12 +1383,14 @@ def summary(result: SimulationResult, *, cycle: float | None = None) -> dict:
         ]
     if result.p_hat is not None and result.p_true is not None:
         err = result.p_hat - result.p_true
-        scale = np.maximum(np.abs(result.p_true), 1e-9)
+        # a true value of zero (friction of a robot without it) has no relative error: None
+        zero = np.abs(result.p_true) <= 1e-12 * max(float(np.abs(result.p_true).max()), 1e-300)
+        relative = np.where(zero, np.nan, err[-1] / np.where(zero, 1.0, np.abs(result.p_true)))
         idx = [min(int(round(b / result.period)), len(result.t) - 1) for b in edges]
         out["parameter_error_norm"] = [float(np.linalg.norm(err[i])) for i in idx]
         out["parameter_error_at_s"] = [float(result.t[i]) for i in idx]
         out["final_parameter_relative_error"] = dict(
-            zip(result.base_names, (err[-1] / scale).tolist())
+            zip(result.base_names, [None if zero[i] else float(v) for i, v in enumerate(relative)])
         )
     return out
 
