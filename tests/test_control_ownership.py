@@ -144,3 +144,34 @@ def test_the_summary_gives_no_relative_error_for_a_parameter_whose_truth_is_zero
         else:
             assert out[name] == pytest.approx((v - p) / abs(p), rel=1e-12), name
     assert any(out[name] is None for name in names if name.startswith("F"))
+
+
+def test_the_truth_sidecar_says_where_the_external_torque_acted(tmp_path):
+    """Two steps of a known torque on planar2 at 100 Hz (one from 0.3 to 0.5 s on joint 2, one
+    from 0.8 s to the end on both joints): the sidecar's spans are those runs, each stopping
+    where the hold ends, with the step's value as its peak."""
+    import json
+
+    from mindyn.control.simulation import SumOfSines, simulate
+
+    robot = mindyn.load("planar2")
+    first = control.TorqueProfile([0.0, -1.5], start=0.3, stop=0.5)
+    second = control.TorqueProfile([2.0, 0.25], start=0.8)
+    res = simulate(
+        robot,
+        SumOfSines(robot, period=2.0, fraction=0.2, seed=1),
+        rate=100.0,
+        duration=1.0,
+        external=lambda t, q, dq: first(t) + second(t),
+    )
+    doc = json.loads(res.save(tmp_path / "log.csv").with_name("log.truth.json").read_text())
+    ext = doc["external"]
+    assert ext["count"] == 2
+    (a, b) = ext["spans"]
+    assert a["start_s"] == pytest.approx(0.3) and a["stop_s"] == pytest.approx(0.5)
+    assert a["peak"] == [0.0, -1.5]
+    assert b["start_s"] == pytest.approx(0.8) and b["stop_s"] == pytest.approx(1.01)
+    assert b["peak"] == [2.0, 0.25]
+    quiet = simulate(robot, SumOfSines(robot, period=2.0, fraction=0.2, seed=1), duration=0.1)
+    doc = json.loads(quiet.save(tmp_path / "q.csv").with_name("q.truth.json").read_text())
+    assert "external" not in doc

@@ -543,6 +543,8 @@ class SimulationResult:
             "values": [float(v) for v in self.params],
             "simulation": self.info,
         }
+        if self.tau_ext is not None:
+            truth["external"] = external_spans(self.t, self.tau_ext)
         truth_path(path).write_text(json.dumps(truth, indent=2) + "\n")
         return path
 
@@ -657,7 +659,8 @@ def simulate(
         An external joint torque acting on the robot (a contact, a collision): ``external(t, q,
         dq)`` gives the torque (n,) [N m | N] at the sample ``t`` and the true state there, held
         over the period like the controller's torque (:class:`TorqueProfile`, or
-        :class:`ContactWrench` for a wrench at the tool); logged as ``tau_ext``. The logged
+        :class:`ContactWrench` for a wrench at the tool); logged as ``tau_ext`` (and where it
+        acted in the truth sidecar :meth:`SimulationResult.save` writes). The logged
         torque ``tau`` stays the controller's (a robot without joint torque sensors does not
         see it).
 
@@ -898,6 +901,40 @@ def simulate(
         tau_ext=ext,
         friction_state=states if dahl is not None else None,
     )
+
+
+#: At most this many spans of an external torque are written to a truth sidecar
+MAX_EXTERNAL_SPANS = 1000
+
+
+def external_spans(t: np.ndarray, tau_ext: np.ndarray) -> dict:
+    """Where an external torque ``tau_ext`` (m, n), held over each period from the samples
+    ``t`` (m,), acted: ``spans``, per run of samples with a non-zero torque, ``start_s`` (its
+    first sample), ``stop_s`` (the sample after its last: the hold's end; the log's last
+    sample plus one period for a run to the end) and ``peak`` (n,): each joint's torque of the
+    largest magnitude in the run [N m | N] (at most :data:`MAX_EXTERNAL_SPANS` runs, the count
+    of all in ``count``), for the truth sidecar of a simulated log (``external``)."""
+    t = np.asarray(t, dtype=float)
+    on = np.any(tau_ext != 0, axis=1).astype(np.int8)
+    edges = np.diff(np.concatenate([[0], on, [0]]))
+    starts, stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    period = float(t[-1] - t[-2]) if t.size > 1 else 0.0
+    spans = []
+    for a, b in zip(starts[:MAX_EXTERNAL_SPANS], stops[:MAX_EXTERNAL_SPANS]):
+        block = tau_ext[a:b]
+        k = np.argmax(np.abs(block), axis=0)
+        spans.append(
+            {
+                "start_s": float(t[a]),
+                "stop_s": float(t[b]) if b < t.size else float(t[-1] + period),
+                "peak": [float(block[i, j]) for j, i in enumerate(k)],
+            }
+        )
+    return {
+        "what": "the external torque the simulation applied (held over each period): its runs",
+        "count": int(starts.size),
+        "spans": spans,
+    }
 
 
 def _external_torque(external, t: float, q, dq) -> np.ndarray:
