@@ -667,6 +667,14 @@ def _api(tmp: Path) -> dict:
                 (LOG.t, LOG.tau, np.ones(N)),
                 {},
             ),
+            "control.score_alarms": (
+                control.score_alarms,
+                (
+                    [{"joint": 1, "start": 0.1, "end": 0.2, "peak": 1.0}],
+                    [{"start_s": 0.05, "stop_s": 0.15}],
+                ),
+                {"settle": 0.01},
+            ),
             "control.check_gains": (control.check_gains, (ROBOT, GAINS), {"kind": "pd"}),
             "control.check_sampled_gains": (
                 control.check_sampled_gains,
@@ -861,6 +869,8 @@ NOT_WALKED = {
 WRONG_VALUE: dict[tuple[str, str], object] = {
     ("mindyn.load", "robot"): SKIP,  # an unknown name is a ModelError (not an argument's type)
     ("Robot.joint_transform", "k"): 5,
+    ("control.score_alarms", "alarms"): [{"joint": 1}],  # no start
+    ("control.score_alarms", "spans"): [{"start_s": float("nan"), "stop_s": 1.0}],
     ("identification.excitation.effort_acceleration_limits", "fixed"): -np.ones(2),
     ("Robot.joint_pre", "k"): 5,
     ("Robot.joint_post", "k"): -1,

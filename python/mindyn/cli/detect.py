@@ -37,6 +37,24 @@ def _read_log(path, robot, doc, args):
     return data
 
 
+def _external_spans(path) -> list:
+    """The runs of external torque a simulated log's truth sidecar records (empty without)."""
+    from ..identification.data import read_json, truth_path
+
+    p = truth_path(path)
+    if not p.is_file():
+        return []
+    ext = read_json(p, what="truth file").get("external")
+    spans = ext.get("spans") if isinstance(ext, dict) else None
+    ok = isinstance(spans, list) and all(
+        isinstance(s, dict)
+        and all(isinstance(s.get(k), (int, float)) for k in ("start_s", "stop_s"))
+        and isinstance(s.get("peak"), list)
+        for s in spans
+    )
+    return list(spans) if ok and spans is not None else []
+
+
 def cmd_detect(args: argparse.Namespace) -> int:
     from ..control.observer import (
         MomentumObserver,
@@ -46,7 +64,9 @@ def cmd_detect(args: argparse.Namespace) -> int:
         default_observer_gain,
         load_thresholds,
         residual_uncertainty,
+        score_alarms,
     )
+    from ..identification.data import truth_path
     from ..identification.document import read_identification
     from ..identification.prediction import identified_model
 
@@ -92,7 +112,6 @@ def cmd_detect(args: argparse.Namespace) -> int:
         gains = np.full(robot.n, k)
     torque, torque_how = args.torque, ""
     if torque is None:
-        from ..identification.data import truth_path
         from ..identification.reading import simulated_torque
 
         simulated = simulated_torque(args.log)
@@ -123,6 +142,13 @@ def cmd_detect(args: argparse.Namespace) -> int:
         + f"; torque {'held over each step' if torque == 'held' else 'sampled (trapezoid)'}"
         + torque_how
     )
+    external = _external_spans(args.log)
+    if args.calibrate and external:
+        print(
+            f"  WARNING: {truth_path(args.log)} says an external torque acted on this log "
+            f"({len(external)} run(s), the first from {external[0]['start_s']:.4g} s): it is "
+            "not collision-free, and thresholds calibrated on it take the hits in"
+        )
     absr = np.abs(r)
     print("  residual |r| per joint (max / 99.9 % / RMS):")
     for j in range(n):
@@ -193,6 +219,25 @@ def cmd_detect(args: argparse.Namespace) -> int:
         print(
             f"    joint {a['joint']}: {a['start']:.4f} s to {a['end']:.4f} s, peak {a['peak']:.4g}"
         )
+    if external:
+        settle = 5.0 / float(np.min(gains))
+        score = score_alarms(alarms, external, settle=settle)
+        print(
+            f"  the external torque of the simulation ({truth_path(args.log)}), an alarm "
+            f"counted for a run when it starts in it or within 5 / K_O = {settle:.4g} s after:"
+        )
+        for s, sc in zip(external, score["spans"]):
+            peak = ", ".join(f"{x:.4g}" for x in s["peak"])
+            print(
+                f"    {s['start_s']:.4f} s to {s['stop_s']:.4f} s (peak per joint {peak}): "
+                + (
+                    f"detected after {sc['delay_s'] * 1e3:.4g} ms, joint(s) "
+                    + ", ".join(map(str, sc["joints"]))
+                    if sc["detected"]
+                    else "not detected"
+                )
+            )
+        print(f"    alarms outside them (false): {len(score['false'])}")
     if args.plot:
         _plot(args.plot, t, r, thresholds.thresholds, alarms, robot.name)
         print(f"  wrote {args.plot}")

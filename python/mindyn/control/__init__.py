@@ -38,6 +38,7 @@ from .observer import (
     default_observer_gain,
     load_thresholds,
     residual_uncertainty,
+    score_alarms,
 )
 from .simulation import (
     ContactWrench,
@@ -76,6 +77,7 @@ __all__ = [
     "default_observer_gain",
     "load_thresholds",
     "residual_uncertainty",
+    "score_alarms",
     "CsvTrajectory",
     "Reference",
     "SensorNoise",

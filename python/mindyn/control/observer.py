@@ -47,6 +47,7 @@ __all__ = [
     "default_observer_gain",
     "load_thresholds",
     "residual_uncertainty",
+    "score_alarms",
 ]
 
 
@@ -313,6 +314,60 @@ def load_thresholds(path, robot) -> ObserverThresholds:
         float(doc.get("margin", DEFAULT_MARGIN)),
         {k: v for k, v in info.items() if k not in ("quantile", "margin")},
     )
+
+
+def _records(value, name: str, keys: tuple[str, ...]) -> None:
+    """``value`` is a list of dicts, each with the finite numbers ``keys``."""
+    import numbers
+
+    _args.instance(value, name, (list, tuple), f"a list of dicts with {', '.join(keys)}")
+    for i, d in enumerate(value):
+        bad = (
+            keys
+            if not isinstance(d, dict)
+            else [
+                k
+                for k in keys
+                if isinstance(d.get(k), bool)
+                or not isinstance(d.get(k), numbers.Real)
+                or not np.isfinite(d[k])
+            ]
+        )
+        if bad:
+            raise _args.fail(
+                name,
+                f"item {i} has no finite number '{bad[0]}'; expected dicts with " + ", ".join(keys),
+            )
+
+
+def score_alarms(alarms: list[dict], spans: list[dict], *, settle: float) -> dict:
+    """The alarms of :func:`alarm_intervals` against the spans where an external torque is
+    known to act (``start_s``, ``stop_s``, as a simulated log's truth sidecar gives them,
+    :func:`~mindyn.control.simulation.external_spans`). An alarm starting within a span or up
+    to ``settle`` [s] after its stop (the residual's decay, say 5 / K_O) belongs to it.
+    Returns ``spans``: per span ``detected`` (bool), ``delay_s`` (its first alarm's start
+    minus the span's start, None when not detected) and ``joints`` (1-based, in the order of
+    their first alarm); ``false``: the alarms that belong to no span."""
+    _records(alarms, "alarms", ("joint", "start"))
+    _records(spans, "spans", ("start_s", "stop_s"))
+    _args.number(settle, "settle", minimum=0.0)
+    out, used = [], set()
+    for s in spans:
+        a, b = float(s["start_s"]), float(s["stop_s"]) + settle
+        mine = [k for k, al in enumerate(alarms) if a <= al["start"] <= b]
+        used.update(mine)
+        joints: list[int] = []
+        for k in mine:
+            if alarms[k]["joint"] not in joints:
+                joints.append(alarms[k]["joint"])
+        out.append(
+            {
+                "detected": bool(mine),
+                "delay_s": alarms[mine[0]]["start"] - a if mine else None,
+                "joints": joints,
+            }
+        )
+    return {"spans": out, "false": [al for k, al in enumerate(alarms) if k not in used]}
 
 
 def alarm_intervals(t, residual, thresholds) -> list[dict]:
