@@ -382,7 +382,10 @@ def load_logs(
     A log simulated for another robot (its truth sidecar says so) is refused before any is read,
     as a fit log given twice and a validation log that is a fit log (the same file, or the same
     bytes); with the low-pass the fit logs average their periods (``periods``/``period``) and the
-    validation logs are filtered at the fit's cut-off, the highest of the fit logs'."""
+    validation logs are filtered at the fit's cut-off, the highest of the fit logs'. With the
+    dynamic model and ``torque`` not given, each log is read as held when its truth sidecar
+    says its simulation held the torque (:func:`simulated_held`; the processing record says
+    why), as sampled otherwise; ``record`` says held when every log was."""
     robot = as_robot(robot)
     one = (str, PathLike)
     for name, value in (("paths", paths), ("validate", validate)):
