@@ -1031,3 +1031,121 @@ def test_write_mjcf_refuses_none_without_offering_it(tmp_path):
         write_mjcf(robot, np.zeros(7), tmp_path / "a.xml")
     assert "None" not in str(e.value)
     assert not list(tmp_path.iterdir())
+
+
+BRANCHES_MJCF = """
+<mujoco model="branches">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="torso" pos="0 0 0.5">
+      <joint name="waist" axis="0 0 1"/>
+      <geom type="box" size="0.1 0.2 0.3"/>
+      <body name="left" pos="0 0.25 0.2">
+        <joint name="left" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+      </body>
+      <body name="right" pos="0 -0.25 0.2" euler="0.3 0 0">
+        <joint name="right" axis="1 0 0"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0.1" size="0.04"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <fixed name="both" {terms}>
+      <joint joint="left" coef="20"/><joint joint="right" coef="-15"/>
+    </fixed>
+  </tendon>
+</mujoco>
+"""
+
+
+def test_tendon_armature_across_branches_is_refused_by_name(tmp_path):
+    """MuJoCo adds a tendon's armature to its joint-space inertia only where that sparse matrix
+    has entries, between joints of one branch: a tendon over two sibling joints gets a * c^2
+    on each diagonal but not the a * c1 * c2 between them that J^T a J has. Read as a motor,
+    mindyn's model would have the whole J^T a J, not MuJoCo's dynamics (it was read so, 5 %
+    off mj_inverse): refused naming the tendon and the joints. Its damping and frictionloss,
+    forces through J, are MuJoCo's exactly and still read."""
+    path = tmp_path / "branches.xml"
+    path.write_text(BRANCHES_MJCF.format(terms='armature="0.01"'), encoding="utf-8")
+    m = mujoco.MjModel.from_xml_path(str(path))
+    bare = mujoco.MjModel.from_xml_path(str(path))
+    bare.tendon_armature[:] = 0.0
+    left, right = (int(m.jnt_dofadr[m.joint(n).id]) for n in ("left", "right"))
+    added = full_mass_matrix(m, m.qpos0) - full_mass_matrix(bare, bare.qpos0)
+    # MuJoCo's behaviour, pinned: the diagonal terms, nothing between the branches
+    np.testing.assert_allclose(added[left, left], 0.01 * 400, rtol=1e-12)
+    np.testing.assert_allclose(added[right, right], 0.01 * 225, rtol=1e-12)
+    assert added[left, right] == 0.0
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load(path)
+    said = str(e.value)
+    assert str(path) in said and "\n" not in said
+    assert "tendon 'both' has armature 0.01" in said and "'left' and 'right'" in said, said
+    # without armature: the tendon's damping and frictionloss are read, MuJoCo's dynamics
+    path.write_text(BRANCHES_MJCF.format(terms='damping="0.3" frictionloss="0.2"'))
+    robot = mindyn.load(path)
+    assert robot.transmission.motors[0] == "both"
+    m = mujoco.MjModel.from_xml_path(str(path))
+    q, dq, ddq = states(robot, np.random.default_rng(4), speed=(0.3, 1.0))
+    coefs = {"waist": 0.0, "left": 20.0, "right": -15.0}
+    J = np.array([coefs[name] for name in robot.joint_names])
+    ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)  # damping in, frictionloss out
+    ref += np.outer(0.2 * np.sign(dq @ J), J)
+    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(rotor=True, friction=True))
+    assert_close(got, ref, TOL, "tendon across branches (damping, frictionloss) vs mj_inverse")
+
+
+BRANCHES_URDF = """<robot name="branches">
+  <link name="base"/>
+  <link name="a"><inertial><mass value="1"/><origin xyz="0.1 0 0"/>
+    <inertia ixx="0.01" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="b"><inertial><mass value="2"/><origin xyz="0 0.1 0"/>
+    <inertia ixx="0.02" iyy="0.01" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="ja" type="revolute"><parent link="base"/><child link="a"/>
+    <origin xyz="0 0.2 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="jb" type="revolute"><parent link="base"/><child link="b"/>
+    <origin xyz="0 -0.2 0"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <transmission name="diff"><type>transmission_interface/DifferentialTransmission</type>
+    <actuator name="m1"><role>actuator1</role><mechanicalReduction>50</mechanicalReduction>
+    </actuator>
+    <actuator name="m2"><role>actuator2</role><mechanicalReduction>50</mechanicalReduction>
+    </actuator>
+    <joint name="ja"><role>joint1</role></joint>
+    <joint name="jb"><role>joint2</role></joint>
+  </transmission>
+</robot>
+"""
+
+
+def test_mjcf_export_refuses_motor_inertia_coupling_two_branches(tmp_path):
+    """The writer's side of the same: motors of a differential over two joints hanging from
+    the base (two branches) with rotor inertia would be tendons whose armature MuJoCo applies
+    without the terms between the branches; refused naming the motor and joints. Without rotor
+    inertia, or with the terms on the joints, the file is written and MuJoCo's inverse
+    dynamics is the motor-side formula."""
+    path = tmp_path / "branches.urdf"
+    path.write_text(BRANCHES_URDF)
+    robot = mindyn.load(path)
+    assert robot.drive_side == "motor" and not robot.is_serial
+    p = physical_params(robot, np.random.default_rng(9))
+    with pytest.raises(mindyn.ModelError) as e:
+        write_mjcf(robot, p, tmp_path / "x.xml")
+    said = str(e.value)
+    assert "motor 'm1' has rotor inertia" in said and "'ja' and 'jb'" in said, said
+    assert not (tmp_path / "x.xml").exists()
+    inertial, ia, fv, fc = split(robot, p)
+    p[10::13] = 0.0
+    out = write_mjcf(robot, p, tmp_path / "ok.xml").path
+    T = robot.transmission.T
+    m = mujoco.MjModel.from_xml_path(str(out))
+    q, dq, ddq = states(robot, np.random.default_rng(3))
+    model = pin.buildModelFromUrdf(str(path))  # a tree: Pinocchio's own URDF parser
+    set_pinocchio_params(model, robot, inertial)
+    rnea = pin_rnea(model, q, dq, ddq)
+    ref = rnea + (fv * (dq @ T.T)) @ T + (fc * np.sign(dq @ T.T)) @ T
+    got, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(got + (fc * np.sign(dq @ T.T)) @ T, ref, TOL, "differential across branches")
+    write_mjcf(robot, p, tmp_path / "joint.xml", drive_side="joint")

@@ -18,7 +18,9 @@ its frictionloss as a dry friction of at most ``frictionloss`` on the tendon vel
 Fc_k sign(T_k dq))`` with ``T_k = J``. The model read then has a transmission (format
 ``mjcf``): a motor per such tendon and a direct motor (ratio 1, the joint's terms) per other
 joint, the drive terms on the motors. A spatial tendon carrying such terms is refused by name,
-as is tendon stiffness, and tendons that are not one motor per joint they turn. Tendons
+as is tendon stiffness, tendons that are not one motor per joint they turn, and armature on a
+tendon turning joints on different branches of the tree (MuJoCo adds it to its mass matrix
+only between joints of one branch: :func:`_one_branch`). Tendons
 without such terms (outside a differential's), and actuators, do not enter the dynamics and are
 not read.
 
@@ -426,6 +428,8 @@ def _with_tendon_motors(m, core, path, terms: tuple[np.ndarray, np.ndarray, np.n
             row[index[jname]] = c
             covered.setdefault(jname, tname)
         tt = tendon_terms(m, t)
+        if tt["armature"] != 0:
+            _one_branch(m, t, path)
         rows.append(row)
         motors.append(tname)
         types.append("tendon")
@@ -470,6 +474,35 @@ def _with_tendon_motors(m, core, path, terms: tuple[np.ndarray, np.ndarray, np.n
     return core.with_joint_terms(
         motor_rotor=values_[:, 0], motor_viscous=values_[:, 1], motor_coulomb=values_[:, 2]
     )
+
+
+def _one_branch(m, t: int, path) -> None:
+    """Refuses the motor tendon ``t`` carrying armature when two of its joints are on different
+    branches of the tree (neither moves the other): MuJoCo adds a tendon's armature to its
+    joint-space inertia only where that matrix has entries, between joints of one branch, so
+    its dynamics then have no ``J^T armature J``, the motor's inertia (they drop its terms
+    between the branches)."""
+    joints = [j for j, _ in tendon_joints(m, t) or []]
+
+    def chain(j: int) -> set[int]:  # the dof of joint j and those of the joints moving it
+        out, dof = set(), int(m.jnt_dofadr[j])
+        while dof >= 0:
+            out.add(dof)
+            dof = int(m.dof_parentid[dof])
+        return out
+
+    for a in joints:
+        for b in joints:
+            if a < b and int(m.jnt_dofadr[a]) not in chain(b):
+                if int(m.jnt_dofadr[b]) not in chain(a):
+                    raise _core.ModelError(
+                        f"{path}: tendon '{tendon_name(m, t)}' has armature "
+                        f"{float(m.tendon_armature[t])!r} and turns joints '{joint_name(m, a)}' "
+                        f"and '{joint_name(m, b)}', on different branches of the tree: MuJoCo "
+                        "adds a tendon's armature to its mass matrix only between joints of "
+                        "one branch, not as the motor inertia J^T armature J (put the armature "
+                        "on the joints, or couple joints of one branch)"
+                    )
 
 
 def folded_tendons(m) -> list[int]:

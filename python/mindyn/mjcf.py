@@ -45,7 +45,9 @@ With transmissions (``q_m = T q + c``, ``tau = T^T tau_m``), motor by motor (row
 - a motor coupling several joints is a fixed tendon whose coefficients are its row of ``T``
   (which ``gear`` on a joint actuator cannot express), driven by a ``<motor>`` on the tendon with
   ``gear`` 1; with the drive terms on the motors they go on the tendon (its ``armature``,
-  ``damping``, ``frictionloss``: ``T_i^T Ia T_i ddq`` and so on; MuJoCo 3.4 and later);
+  ``damping``, ``frictionloss``: ``T_i^T Ia T_i ddq`` and so on; MuJoCo 3.4 and later), but for
+  the rotor inertia of a motor coupling joints on different branches of the tree, refused:
+  MuJoCo adds a tendon's armature to its mass matrix only between joints of one branch;
 - with the drive terms on the joints they are the joints' ``armature``, ``damping``,
   ``frictionloss`` as without transmissions; the motor offsets ``c`` are not written (they do
   not change the dynamics).
@@ -220,6 +222,8 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     coupled = [i for i, (_, row) in enumerate(motors) if len(row) > 1]
     if on_motors:
         _check_motor_side(robot, tr, bool(coupled))
+        for i in coupled:
+            _one_branch(robot, motors[i], _slot(terms, i, f"motor '{motors[i][0]}'")[0])
     drive = _joint_drive(robot, terms, motors, on_motors)
     root = ET.Element("mujoco", {"model": robot.name})
     root.append(_comment(_mapping_comment(robot, on_motors, tr is not None)))
@@ -427,6 +431,35 @@ def _check_motor_side(robot: Robot, tr, coupled: bool) -> None:
             f"drive terms on motors coupling several joints go on tendons, whose armature "
             f"MuJoCo {mujoco.__version__} does not take as the motors' inertia (3.4 and later do)"
         )
+
+
+def _one_branch(robot: Robot, motor: tuple[str, list[tuple[int, float]]], ia: float) -> None:
+    """Refuses the rotor inertia ``ia`` of a motor coupling joints on different branches of the
+    tree (neither moves the other): MuJoCo adds a tendon's armature to its mass matrix only
+    between joints of one branch, so the MJCF would not have the motor's inertia
+    ``T_i^T Ia T_i`` (its terms between the branches dropped)."""
+    if ia == 0:
+        return
+    parents = robot.parents
+
+    def chain(k: int) -> set[int]:  # joint k and the joints moving it
+        out = set()
+        while k >= 0:
+            out.add(k)
+            k = parents[k]
+        return out
+
+    joints = [k for k, _ in motor[1]]
+    for a in joints:
+        for b in joints:
+            if a < b and a not in chain(b) and b not in chain(a):
+                raise ModelError(
+                    f"motor '{motor[0]}' has rotor inertia {ia!r} and couples joints "
+                    f"'{robot.joint_names[a]}' and '{robot.joint_names[b]}', on different "
+                    "branches of the tree: MuJoCo adds a tendon's armature to its mass matrix "
+                    "only between joints of one branch, not as the motor inertia T^T Ia T "
+                    "(write the drive terms on the joints: drive_side='joint')"
+                )
 
 
 _DRIVE = ("armature", "damping", "frictionloss")
