@@ -1149,3 +1149,63 @@ def test_mjcf_export_refuses_motor_inertia_coupling_two_branches(tmp_path):
     got, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
     assert_close(got + (fc * np.sign(dq @ T.T)) @ T, ref, TOL, "differential across branches")
     write_mjcf(robot, p, tmp_path / "joint.xml", drive_side="joint")
+
+
+WRIST_URDF = """<robot name="wrist">
+  <link name="base"/>
+  <link name="arm"/>
+  <link name="cross"/>
+  <link name="hand"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="arm"/>
+    <origin xyz="0 0 0.3" rpy="0.2 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="pitch" type="revolute"><parent link="arm"/><child link="cross"/>
+    <origin xyz="0.4 0 0" rpy="0 0 0.4"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="yaw" type="revolute"><parent link="cross"/><child link="hand"/>
+    <origin xyz="0.02 0 0.05" rpy="{rpy}"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="slide" type="prismatic"><parent link="hand"/><child link="tip"/>
+    <origin xyz="0.1 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="-0.1" upper="0.1" effort="10" velocity="2"/></joint>
+  <link name="tip"/>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("rpy", ["0 0 0", "0 0.3 0"])
+def test_mjcf_export_of_a_massless_link_between_two_joints(rpy, tmp_path):
+    """A universal wrist: a massless link ('cross') between two revolute joints. MuJoCo refuses
+    a moving body without mass, so export --mjcf failed for such a robot (and for a robot read
+    from an MJCF body with two joints, written as a new file). Where the link's frame turns
+    with its joint only (no rotation to the next joint), both joints go into one body, the
+    second with its anchor: mj_inverse of the file is Pinocchio's rnea plus the joint terms,
+    and the file reads back with the same dynamics; with a rotation between them MuJoCo's
+    refusal is said in one line."""
+    path = tmp_path / "wrist.urdf"
+    path.write_text(WRIST_URDF.replace("{rpy}", rpy))
+    robot = mindyn.load(path)
+    assert robot.joint_names == ["shoulder", "pitch", "yaw", "slide"]
+    rng = np.random.default_rng(13)
+    p = physical_params(robot, rng)
+    p[13:23] = 0.0  # the cross link: no mass
+    out = tmp_path / "wrist.xml"
+    if rpy != "0 0 0":
+        with pytest.raises(mindyn.ModelError) as e:
+            write_mjcf(robot, p, out)
+        assert "mass and inertia of moving bodies" in str(e.value) and "\n" not in str(e.value)
+        return
+    write_mjcf(robot, p, out)
+    m = mujoco.MjModel.from_xml_path(str(out))
+    assert m.nbody == 4 and m.body("hand").jntnum == 2  # world, arm, hand (pitch, yaw), tip
+    inertial, ia, fv, fc = split(robot, p)
+    model = pin.buildModelFromUrdf(str(path))
+    set_pinocchio_params(model, robot, inertial)
+    q, dq, ddq = states(robot, rng)
+    ref = pin_rnea(model, q, dq, ddq) + ia * ddq + fv * dq + fc * np.sign(dq)
+    got, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(got + fc * np.sign(dq), ref, TOL, "massless link in one body vs Pinocchio")
+    again = mindyn.load(out)
+    assert again.joint_names == robot.joint_names
+    got = again.inverse_dynamics(q, dq, ddq, again.parameters(rotor=True, friction=True))
+    assert_close(got, ref, TOL, "massless link in one body read back vs Pinocchio")

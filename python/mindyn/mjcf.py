@@ -104,7 +104,9 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         ``frictionloss`` changed (comments and everything else kept; bodies merged into a
         moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
-        the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, the effort
+        the joint frame (a link without inertia and with one child hinge or slide joint, not
+        turned from it, shares that joint's body: MuJoCo has no massless moving body), with
+        ``<inertial>``, a hinge or slide joint (axis, range, the effort
         limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), a ball
         joint for a spherical joint or, for a floating root, a ``<freejoint>`` (see the
         module's docstring), the
@@ -232,20 +234,33 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     world = ET.SubElement(root, "worldbody")
     parents = robot.parents
     bodies: list[ET.Element] = []
+    # where each joint frame sits in its body's frame: the identity, or for a joint sharing the
+    # body of a massless link before it, a translation
+    offsets: list[np.ndarray] = []
     lim = robot.limits
     speeds: list[tuple[str, float]] = []
     for k in range(robot.n):
-        parent = world if parents[k] < 0 else bodies[parents[k]]
         place = robot.joint_pre(k)
         if parents[k] >= 0:
             place = robot.joint_post(parents[k]) @ place
-        body = ET.SubElement(parent, "body", {"name": robot.link_names[k + 1], **_pose(place)})
+        if _shares_body(robot, terms, k):  # MuJoCo has no massless moving body
+            body = bodies[parents[k]]
+            offset = offsets[parents[k]] @ place
+            body.set("name", robot.link_names[k + 1])
+            body.remove(next(e for e in body if e.tag == "inertial"))  # the massless link's
+        else:
+            parent = world if parents[k] < 0 else bodies[parents[k]]
+            if parents[k] >= 0:
+                place = offsets[parents[k]] @ place
+            body = ET.SubElement(parent, "body", {"name": robot.link_names[k + 1], **_pose(place)})
+            offset = np.eye(4)
         bodies.append(body)
+        offsets.append(offset)
         mass, com, inertia, more = centroidal(
             terms.inertial[10 * k : 10 * k + 10], k + 1, robot.link_names[k + 1], kind="an MJCF"
         )
         notes += more
-        post = robot.joint_post(k)
+        post = offset @ robot.joint_post(k)
         com = post[:3, :3] @ com + post[:3, 3]
         inertia = post[:3, :3] @ inertia @ post[:3, :3].T
         ET.SubElement(body, "inertial", _inertial(mass, com, inertia))
@@ -263,6 +278,8 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             "type": "hinge" if robot.joint_types[k] == "revolute" else "slide",
             "axis": _vec(robot.axes[k]),
         }
+        if np.any(offset[:3, 3] != 0):  # a joint after others in its body: its anchor
+            joint["pos"] = _vec(offset[:3, 3])
         lo, hi = lim["lower"][k], lim["upper"][k]
         if np.isfinite(lo) and np.isfinite(hi):
             joint.update(limited="true", range=_vec((lo, hi)))
@@ -284,7 +301,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             "(the velocity, the angular velocity in the body's axes, is the same)"
         )
     if robot.is_serial:
-        tool = robot.joint_post(robot.n - 1) @ robot.tool
+        tool = offsets[-1] @ robot.joint_post(robot.n - 1) @ robot.tool
         ET.SubElement(bodies[-1], "site", {"name": "tool", **_pose(tool)})
     if coupled:
         tendons = ET.SubElement(root, "tendon")
@@ -333,6 +350,23 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text, encoding="utf-8")
     return Export(out, notes=notes)
+
+
+def _shares_body(robot: Robot, terms: JointTerms, k: int) -> bool:
+    """Whether hinge or slide joint ``k`` goes into the body of its parent link, a link without
+    inertia (MuJoCo refuses a moving body without mass) of a hinge or slide joint with no other
+    child, whose frame is joint ``k``'s moved without rotation: MuJoCo's joints of one body
+    act one after the other, each about its axis through its anchor (``pos``) in the body's
+    axes, as the chain of the massless link does (mindyn reads such a body back as that)."""
+    parent = robot.parents[k]
+    if parent < 0 or robot.joint_types[k] not in _SINGLE_DOF:
+        return False
+    if robot.joint_types[parent] not in _SINGLE_DOF or robot.parents.count(parent) != 1:
+        return False
+    if np.any(terms.inertial[10 * parent : 10 * parent + 10] != 0):
+        return False
+    turn = (robot.joint_post(parent) @ robot.joint_pre(k))[:3, :3]
+    return bool(np.array_equal(turn, np.eye(3)))
 
 
 def _no_drive_terms(robot: Robot, k: int, drive) -> None:
