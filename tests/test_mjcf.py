@@ -1209,3 +1209,30 @@ def test_mjcf_export_of_a_massless_link_between_two_joints(rpy, tmp_path):
     assert again.joint_names == robot.joint_names
     got = again.inverse_dynamics(q, dq, ddq, again.parameters(rotor=True, friction=True))
     assert_close(got, ref, TOL, "massless link in one body read back vs Pinocchio")
+
+
+def test_mjcf_tendon_motors_that_do_not_determine_the_joints_are_refused_by_name(tmp_path):
+    """Two motor tendons and two joints with terms of their own, four motors for four joints,
+    but the tendon over the two joints with terms is their sum: the rows do not determine the
+    other tendon's joints. The refusal said 'the tendons as motors: mjcf: ... rank deficient'
+    without naming a tendon; it names them and the joints with terms, in one line."""
+    chain = "".join(
+        f'<body name="b{k}" pos="0.2 0 0"><joint name="h{k}" axis="0 {k % 2} {1 - k % 2}"'
+        + (' damping="0.3"' if k < 2 else "")
+        + '/><inertial pos="0.1 0 0" mass="1" diaginertia="0.01 0.01 0.01"/>'
+        for k in range(4)
+    )
+    path = tmp_path / "motors.xml"
+    path.write_text(
+        f"<mujoco><worldbody>{chain}{'</body>' * 4}</worldbody><tendon>"
+        '<fixed name="m0" armature="0.1"><joint joint="h2" coef="2"/><joint joint="h3" coef="1"/>'
+        '</fixed><fixed name="over_t" damping="0.1"><joint joint="h0" coef="1"/>'
+        '<joint joint="h1" coef="1"/></fixed></tendon></mujoco>'
+    )
+    mujoco.MjModel.from_xml_path(str(path))  # MuJoCo takes it
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load(path)
+    said = str(e.value)
+    assert "\n" not in said and str(path) in said
+    assert "tendons 'm0', 'over_t' carry motor terms" in said and "(on 'h0', 'h1')" in said
+    assert "rank deficient" in said, said

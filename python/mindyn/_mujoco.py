@@ -457,19 +457,23 @@ def _with_tendon_motors(m, core, path, terms: tuple[np.ndarray, np.ndarray, np.n
             ):
                 direct(k)
                 values[-1] = [0.0, 0.0, 0.0]
+    extra = [x for x in motors[len(tendons) :] if x in covered]
+    said = (
+        f"{path}: tendons {', '.join(repr(x) for x in motors[: len(tendons)])} carry motor "
+        f"terms: with the joints' own terms"
+        + (f" (on {', '.join(repr(x) for x in extra)})" if extra else "")
+    )
     if len(rows) != n:
-        extra = [x for x in motors[len(tendons) :] if x in covered]
         raise _core.ModelError(
-            f"{path}: tendons {', '.join(repr(x) for x in motors[: len(tendons)])} carry motor "
-            f"terms: with the joints' own terms"
-            + (f" (on {', '.join(repr(x) for x in extra)})" if extra else "")
-            + f" that is {len(rows)} motors for {n} joints, and the model reads motors only "
-            "one per joint (put the terms either on the tendons or on the joints)"
+            f"{said} that is {len(rows)} motors for {n} joints, and the model reads motors "
+            "only one per joint (put the terms either on the tendons or on the joints)"
         )
     try:
         core = core.with_transmission(T=np.array(rows), motors=motors, types=types, format="mjcf")
-    except _core.ModelError as e:
-        raise _core.ModelError(f"{path}: the tendons as motors: {e}") from None
+    except _core.ModelError as e:  # rows that do not determine the joints
+        raise _core.ModelError(
+            f"{said} as motors, {e} (put the terms either on the tendons or on the joints)"
+        ) from None
     values_ = np.array(values)
     return core.with_joint_terms(
         motor_rotor=values_[:, 0], motor_viscous=values_[:, 1], motor_coulomb=values_[:, 2]
