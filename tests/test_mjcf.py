@@ -1236,3 +1236,45 @@ def test_mjcf_tendon_motors_that_do_not_determine_the_joints_are_refused_by_name
     assert "\n" not in said and str(path) in said
     assert "tendons 'm0', 'over_t' carry motor terms" in said and "(on 'h0', 'h1')" in said
     assert "rank deficient" in said, said
+
+
+def _named_chain(names) -> str:
+    """A chain of bodies from ``names`` [(body name or None, joint names)], each with mass."""
+    text = ""
+    for body, joints in names:
+        text += f'<body{"" if body is None else f" name={chr(34)}{body}{chr(34)}"} pos="0.2 0 0">'
+        for k, joint in enumerate(joints):
+            name = "" if joint is None else f' name="{joint}"'
+            text += f'<joint{name} axis="{k % 2} 0 {1 - k % 2}" pos="0.0{k} 0 0"/>'
+        text += '<inertial pos="0.1 0.02 0" mass="1" diaginertia="0.01 0.02 0.03"/>'
+    return f"<mujoco><worldbody>{text}{'</body>' * len(names)}</worldbody></mujoco>"
+
+
+def test_mjcf_names_that_clash_in_the_model_are_refused_by_name_or_kept_apart(tmp_path):
+    """mindyn names the link of each joint but the last of a body BODY__JOINT, an unnamed body
+    or joint by its number, and the fixed joint of a jointless body BODY__fixed. A body named
+    as such a link was refused as 'not a valid URDF: link ... is not unique' (of an MJCF); it
+    is refused naming both, as an unnamed joint whose number another's name is. A joint named
+    BODY__fixed is kept apart from the merged body's joint: the file loads, with MuJoCo's
+    dynamics."""
+    path = tmp_path / "names.xml"
+    for chain, said in (
+        ([("b0", ["j1", "j2"]), ("b0__j1", ["j3"])],
+         "the link of joint 'j1' of body 'b0' and body 'b0__j1' are both 'b0__j1'"),
+        ([("b0", [None]), ("b1", ["joint0"])],
+         "joint 'joint0' and unnamed joint 0 are both 'joint0'"),
+        ([("b0", ["j0"]), (None, ["j1"]), ("body2", ["j2"])],
+         "unnamed body 2 and body 'body2' are both 'body2'"),
+    ):  # fmt: skip
+        path.write_text(_named_chain(chain))
+        mujoco.MjModel.from_xml_path(str(path))  # MuJoCo takes it
+        with pytest.raises(mindyn.ModelError) as e:
+            mindyn.load(path)
+        assert said in str(e.value) and "\n" not in str(e.value), str(e.value)
+    path.write_text(_named_chain([("b0", ["j0"]), ("b1", []), ("b2", ["b1__fixed"])]))
+    robot = mindyn.load(path)
+    assert robot.joint_names == ["j0", "b1__fixed"]
+    m = mujoco.MjModel.from_xml_path(str(path))
+    q, dq, ddq = states(robot, np.random.default_rng(2))
+    ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(robot.inverse_dynamics(q, dq, ddq), ref, TOL, "joint named BODY__fixed")

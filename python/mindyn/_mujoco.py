@@ -30,7 +30,9 @@ which MJCF lacks, from a custom numeric ``velocity_limit:JOINT`` (:data:`VELOCIT
 
 A link frame of the model is the MuJoCo body frame moved to the anchor (``pos``) of the body's
 last joint, with the body's axes; a body with several joints gets one massless link per joint
-before its last one (``BODY__JOINT``). Jointless bodies are merged into the link they hang from.
+before its last one (``BODY__JOINT``; a body of that name is refused by name, as are unnamed
+bodies and joints, named by number, whose name another has). Jointless bodies are merged into
+the link they hang from.
 
 A free joint (:func:`free_joint`: one, on a body hanging from the world, with every other joint
 below that body) is the model's floating joint (Pinocchio's free-flyer) from the world to the
@@ -157,6 +159,7 @@ def check(m, path) -> None:
     """Refuses, in one line naming the element, what the model cannot represent."""
     mujoco = require("reading an MJCF")
     free_joint(m, path)
+    _distinct_names(m, path)
     for j in range(m.njnt):
         name, body = joint_name(m, j), body_name(m, int(m.jnt_bodyid[j]))
         where = f"{path}: joint '{name}' (body '{body}')"
@@ -232,6 +235,44 @@ def check(m, path) -> None:
         )
     if m.nv == 0:
         raise _core.ModelError(f"{path}: no hinge, slide or free joint")
+
+
+def _distinct_names(m, path) -> None:
+    """Refuses, naming them, two links of the model with one name: a body named as the link of
+    one of another body's several joints (``BODY__JOINT``), or an unnamed body or joint whose
+    name by number (``body3``, ``joint2``) another has."""
+    mujoco = require("reading an MJCF")
+    seen: dict[str, str] = {}
+    for b in range(1, m.nbody):
+        for j in body_joints(m, b)[:-1] + [None]:
+            name = body_name(m, b) if j is None else link_name(m, b, j)
+            if j is not None:
+                what = f"the link of joint '{joint_name(m, j)}' of body '{body_name(m, b)}'"
+            else:
+                what = f"body '{name}'" if _named_body(m, b) else f"unnamed body {b}"
+            if name in seen:
+                raise _core.ModelError(
+                    f"{path}: {seen[name]} and {what} are both '{name}' in the model (a body of "
+                    "several joints has a link per joint before its last, named BODY__JOINT; "
+                    "an unnamed body or joint is named by its number): rename one"
+                )
+            seen[name] = what
+    joints: dict[str, int] = {}
+    for j in range(m.njnt):
+        name = joint_name(m, j)
+        if name in joints:
+            unnamed = joints[name] if mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) else j
+            raise _core.ModelError(
+                f"{path}: joint '{name}' and unnamed joint {unnamed} "
+                f"are both '{name}' in the model (an unnamed joint is named by its number): "
+                "name it"
+            )
+        joints[name] = j
+
+
+def _named_body(m, b: int) -> bool:
+    mujoco = require("reading an MJCF")
+    return bool(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b))
 
 
 def free_joint(m, path) -> int | None:
@@ -587,6 +628,7 @@ def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray, speed: np.nda
     hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
     parts = [f'<robot name="{_attr(name)}">', f'<link name="{_attr(body_name(m, 0))}"/>']
     link_of = {0: body_name(m, 0)}
+    taken = {joint_name(m, j) for j in range(m.njnt)}  # a merged body's joint: a name of its own
     for b in range(1, m.nbody):
         p = int(m.body_parentid[b])
         if m.body_mocapid[b] >= 0 or p not in link_of:
@@ -599,7 +641,11 @@ def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray, speed: np.nda
         if not joints:
             link = body_name(m, b)
             parts.append(_link(link, m, b, np.zeros(3)))
-            parts.append(_joint(f"{link}__fixed", "fixed", parent, link, pre))
+            fixed = f"{link}__fixed"
+            while fixed in taken:
+                fixed += "_"
+            taken.add(fixed)
+            parts.append(_joint(fixed, "fixed", parent, link, pre))
             link_of[b] = link
             continue
         previous = np.zeros(3)
