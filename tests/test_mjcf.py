@@ -1278,3 +1278,58 @@ def test_mjcf_names_that_clash_in_the_model_are_refused_by_name_or_kept_apart(tm
     q, dq, ddq = states(robot, np.random.default_rng(2))
     ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
     assert_close(robot.inverse_dynamics(q, dq, ddq), ref, TOL, "joint named BODY__fixed")
+
+
+TWO_JOINT_BODY = """<mujoco model="two">
+  <worldbody>
+    <body name="a" pos="0 0 0.3" euler="10 0 20">
+      <joint name="h" axis="0 0 1"/>
+      <inertial pos="0.1 0 0" mass="1.5" fullinertia="0.02 0.03 0.025 0.001 0 0.002"/>
+      <body name="b" pos="0.4 0 0" xyaxes="0 1 0 -1 0 0">
+        <joint name="first" axis="0 1 0" damping="0.2"/>
+        <joint name="second" type="{kind}" pos="0.03 0.01 0" {axis}/>
+        <inertial pos="0.1 0.02 0" mass="1" diaginertia="0.01 0.02 0.03" euler="5 10 15"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("kind", ["hinge", "slide", "ball"])
+def test_a_body_with_two_joints_written_as_a_new_mjcf_has_mujocos_dynamics(kind, tmp_path):
+    """A body with two joints is read with a massless link before its second joint; written as
+    a new MJCF (from a description that is not the file) that link was a body without mass,
+    which MuJoCo refuses. Its joints share a body again: MuJoCo's inverse dynamics of the new
+    file is that of the original at the same qpos, qvel, qacc (joints by name)."""
+    path = tmp_path / "two.xml"
+    axis = "" if kind == "ball" else 'axis="1 0 0"'
+    path.write_text(TWO_JOINT_BODY.replace("{kind}", kind).replace("{axis}", axis))
+    if kind == "ball":  # the hinge's damping, outside the dynamics of a ball joint's robot
+        with pytest.warns(UserWarning, match="are not in the dynamics"):
+            robot = mindyn.load(path)
+    else:
+        robot = mindyn.load(path)
+    assert robot.link_names[2:] == ["b__first", "b"]
+    p = robot.parameters(rotor=True, friction=True)
+    out = write_mjcf(robot, p, tmp_path / "new.xml", source=tmp_path / "none.urdf").path
+    old, new = (mujoco.MjModel.from_xml_path(str(f)) for f in (path, out))
+    assert new.nbody == old.nbody and new.body("b").jntnum == 2
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        state = rng.normal(size=old.nq), rng.normal(size=old.nv), rng.normal(size=old.nv)
+        got = []
+        for m in (old, new):
+            m.opt.disableflags = int(OFF)
+            d = mujoco.MjData(m)
+            for name in ("h", "first", "second"):
+                j = m.joint(name).id
+                adr, dof = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+                width = 4 if kind == "ball" and name == "second" else 1
+                d.qpos[adr : adr + width] = state[0][adr : adr + width]
+                d.qvel[dof : dof + width - (width > 1)] = state[1][dof : dof + width - (width > 1)]
+                d.qacc[dof : dof + width - (width > 1)] = state[2][dof : dof + width - (width > 1)]
+            mujoco.mj_normalizeQuat(m, d.qpos)
+            mujoco.mj_inverse(m, d)
+            got.append(d.qfrc_inverse.copy())
+        assert_close(got[1], got[0], TOL, "two joints in a body, new MJCF vs the original")

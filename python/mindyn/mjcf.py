@@ -104,8 +104,9 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         ``frictionloss`` changed (comments and everything else kept; bodies merged into a
         moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
-        the joint frame (a link without inertia and with one child hinge or slide joint, not
-        turned from it, shares that joint's body: MuJoCo has no massless moving body), with
+        the joint frame (a hinge's or slide's link without inertia and with one child hinge,
+        slide or ball joint, not turned from it, shares that joint's body: MuJoCo has no
+        massless moving body), with
         ``<inertial>``, a hinge or slide joint (axis, range, the effort
         limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), a ball
         joint for a spherical joint or, for a floating root, a ``<freejoint>`` (see the
@@ -271,7 +272,10 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             continue
         if robot.joint_types[k] == "spherical":
             _no_drive_terms(robot, k, drive[k])
-            ET.SubElement(body, "joint", {"name": robot.joint_names[k], "type": "ball"})
+            ball = {"name": robot.joint_names[k], "type": "ball"}
+            if np.any(offset[:3, 3] != 0):  # a joint after others in its body: its anchor
+                ball["pos"] = _vec(offset[:3, 3])
+            ET.SubElement(body, "joint", ball)
             continue
         joint = {
             "name": robot.joint_names[k],
@@ -353,15 +357,18 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
 
 
 def _shares_body(robot: Robot, terms: JointTerms, k: int) -> bool:
-    """Whether hinge or slide joint ``k`` goes into the body of its parent link, a link without
-    inertia (MuJoCo refuses a moving body without mass) of a hinge or slide joint with no other
-    child, whose frame is joint ``k``'s moved without rotation: MuJoCo's joints of one body
+    """Whether hinge, slide or ball joint ``k`` goes into the body of its parent link, a link
+    without inertia (MuJoCo refuses a moving body without mass) of a hinge or slide joint with
+    no other child, whose frame is joint ``k``'s moved without rotation: MuJoCo's joints of one body
     act one after the other, each about its axis through its anchor (``pos``) in the body's
     axes, as the chain of the massless link does (mindyn reads such a body back as that)."""
     parent = robot.parents[k]
-    if parent < 0 or robot.joint_types[k] not in _SINGLE_DOF:
+    kinds = (*_SINGLE_DOF, "spherical")  # MuJoCo refuses a ball joint followed by another
+    if parent < 0 or robot.joint_types[k] not in kinds or robot.joint_types[parent] not in kinds:
         return False
-    if robot.joint_types[parent] not in _SINGLE_DOF or robot.parents.count(parent) != 1:
+    if robot.joint_types[parent] == "spherical":
+        return False
+    if robot.parents.count(parent) != 1:
         return False
     if np.any(terms.inertial[10 * parent : 10 * parent + 10] != 0):
         return False
