@@ -1264,7 +1264,7 @@ MJ_FLAGS = ["gravity", "damper", "frictionloss", "constraint", "contact", "limit
 MJ_BAD = ["stiffness", "ref", "equality", "gravcomp", "two-free", "ball-terms", "free-terms",
           "velocity-limit", "broken-xml", "missing-include", "tendon-spring", "spatial-terms",
           "fluid", "mocap", "beside-free", "free-below", "bad-number", "too-many-motors",
-          "tendon-with-ball", "massless", "negative-term"]  # fmt: skip
+          "tendon-with-ball", "massless", "negative-term", "name-clash"]  # fmt: skip
 
 
 def _el(tag: str, attrs: dict | None = None, children=None) -> list:
@@ -1393,6 +1393,9 @@ def _mj_terms(rng: random.Random) -> dict:
 
 
 ZERO_TERMS = {"armature": "0", "damping": "0", "frictionloss": "0"}
+#: Joint names of other forms (one is the name mindyn gives the fixed joint of the jointless
+#: body 'fixed1', which is kept apart).
+ODD_JOINT_NAMES = ["elbow joint", "ä1", "j.2", "J-3", "fixed1__fixed", "q", "x__y", "0"]
 #: A body's mass whatever the compiler's inertiafromgeom.
 MASS = ["inertial", {"pos": "0 0 0", "mass": "1", "diaginertia": "0.01 0.01 0.01"}, []]
 
@@ -1409,6 +1412,8 @@ def _mj_joint(rng: random.Random, name: str, kind: str, L: float, degree: bool, 
     attrs["axis"] = _mj_fmt(rng, axis)
     if rng.random() < 0.4:
         attrs["pos"] = _mj_fmt(rng, [rng.uniform(-0.1, 0.1) * L for _ in range(3)])
+    if rng.random() < 0.1:
+        attrs["limited"] = "false"
     if rng.random() < 0.5:
         lo, hi = -rng.uniform(0.3, 3.0), rng.uniform(0.3, 3.0)
         if kind == "hinge":
@@ -1495,6 +1500,10 @@ class MjcfCase:
         self.moving: list[list] = []  # the bodies carrying joints
         self.joints: dict[str, tuple[str, list]] = {}  # name -> (kind, element)
         names = [f"j{k}" for k in rng.sample(range(100), n)]
+        for k in range(n):  # now and then a name of another form
+            if rng.random() < 0.15:
+                odd = rng.choice(ODD_JOINT_NAMES)
+                names[k] = odd if odd not in names else names[k]
         self.free_body = None
         if self.free:
             free_body = self._body("base", self.world, round_trip)
@@ -1517,19 +1526,15 @@ class MjcfCase:
             if parent is not self.world and rng.random() < 0.25:  # a jointless body between
                 parent = self._body(f"fixed{k}", parent, round_trip, moving=False)
             body = self._body(f"b{k}", parent, round_trip)
-            for _ in range(
-                2
-                if k + 1 < n
-                and kinds[k] != "ball"
-                and kinds[k + 1] != "ball"
-                and rng.random() < 0.15
-                else 1
-            ):
+            # two joints in one body (MuJoCo refuses a ball joint followed by another)
+            for _ in range(2 if k + 1 < n and kinds[k] != "ball" and rng.random() < 0.15 else 1):
                 kind, name = kinds[k], names[k]
                 if kind == "ball":
                     attrs = {"name": name, "type": "ball", **ZERO_TERMS}
                     if rng.random() < 0.4:
                         attrs["pos"] = _mj_fmt(rng, [rng.uniform(-0.1, 0.1) * L for _ in range(3)])
+                    if rng.random() < 0.2:  # a cone limit, not read (a warning)
+                        attrs["range"] = _mj_fmt(rng, [0, _mj_angle(rng, deg, 1.0)])
                     if self.classes and rng.random() < 0.4:
                         attrs["class"] = rng.choice(self.classes)
                     joint = _el("joint", attrs)
@@ -1623,6 +1628,8 @@ class MjcfCase:
         attrs.update(_mj_orientation(rng, deg))
         if self.classes and rng.random() < 0.3:
             attrs["childclass"] = rng.choice(self.classes)
+        if not moving and not round_trip and rng.random() < 0.3:
+            del attrs["name"]  # an unnamed jointless body
         body = _el("body", attrs)
         ifg = self.compiler.get("inertiafromgeom", "auto")
         inertial = ifg == "false" or (ifg == "auto" and rng.random() < 0.6)
@@ -1808,6 +1815,13 @@ class MjcfCase:
             a, b = rng.sample(single, 2)
             self.tendons[2].append(_fixed({"name": "ball_t", "armature": "0.1"}, [(a, 1), (b, -2)]))
             self.mal = (what, ("'ball_t'",))
+            return
+        two = [b for b in self.moving if len([c for c in b[2] if c[0] == "joint"]) > 1]
+        if what == "name-clash" and two:
+            body = rng.choice(two)
+            clash = f"{body[1]['name']}__{next(c for c in body[2] if c[0] == 'joint')[1]['name']}"
+            self._body("leaf", rng.choice(self.moving), False, moving=False)[1]["name"] = clash
+            self.mal = (what, (f"'{clash}'",))
             return
         if what == "massless":
             body = self.moving[-1]
@@ -2130,13 +2144,13 @@ def check_mjcf_round_trip(ctx, robot, path: Path, index: int, nprng) -> tuple[st
     from mindyn.mjcf import write_mjcf
 
     single = robot.single_dof
-    names = robot.parameter_names(rotor=single, friction=single)
-    p = robot.parameters(rotor=single, friction=single)
+    names = robot.parameter_names(rotor=True, friction=True)
+    p = robot.parameters(rotor=True, friction=True)  # a free or ball joint's: 0
     doc = {
         "robot": robot.name,
         "classical": dict(zip(names, map(float, p), strict=True)),
-        "rotor": single,
-        "friction": single,
+        "rotor": True,
+        "friction": True,
         "drive_side": robot.drive_side,
     }
     jfile = ctx.work / f"mjcf-{index}.id.json"
@@ -2157,9 +2171,17 @@ def check_mjcf_round_trip(ctx, robot, path: Path, index: int, nprng) -> tuple[st
         order = [again.joint_names.index(name) for name in robot.joint_names]
         if order != list(range(robot.n)):
             return "ok", f"{what}: joints in another order, not compared"
-        pa = again.parameters(rotor=single, friction=single)
+        pa = again.parameters(rotor=True, friction=True)
+        if not single:  # the hinges' terms kept, outside the dynamics (docs/mujoco.md)
+            for key in ("rotor_inertia", "viscous", "coulomb"):
+                got, want = getattr(again, key), getattr(robot, key)
+                if rel_err(got, want, np.maximum(np.abs(want), 1e-300)) > 1e-12:
+                    return "wrong", f"{what} MJCF read back: {key} {list(got)}, not {list(want)}"
+            pa, p10 = again.params, robot.params
+        else:
+            p10 = p
         states = [mj_state(robot, nprng) for _ in range(2)]
-        worst = id_difference(robot, (p, p), again, pa, states, rotor=single, friction=single)
+        worst = id_difference(robot, (p10, p10), again, pa, states, rotor=single, friction=single)
         if not worst <= ORACLE_TOL:
             return "wrong", f"{what} MJCF read back: inverse dynamics differ by {worst:.3g}"
         cls, detail = check_mjcf_dynamics(again, out, nprng)
