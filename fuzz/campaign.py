@@ -1847,7 +1847,7 @@ class MjcfCase:
             return
         if what == "massless":
             body = self.moving[-1]
-            body[2] = [c for c in body[2] if c[0] not in ("inertial", "geom", "body")]
+            body[2] = [c for c in body[2] if c[0] not in ("inertial", "geom", "body", "frame")]
             self.compiler["inertiafromgeom"] = "auto"
             self.mal = (what, (file,))
             return
