@@ -32,6 +32,12 @@ rerun alone with ``--case``):
               against Pinocchio plus T^T (Ia T ddq + f(T dq)); base counts of the three methods
               with rotor and friction; export then load; motor currents through T; every
               fourth case the generated C computed-torque step against the same
+  mjcf        random MuJoCo MJCF chains and trees (ball joints, a free root, every form of
+              orientation, default classes, jointless bodies, inertia from <inertial> or geoms,
+              joint and tendon terms, <option> flags), 40 % malformed: a malformed one refused
+              in one line naming the element or file; inverse dynamics, W_b (Y pi) and the mass
+              matrix against MuJoCo's mj_inverse and mj_fullM; every third case export --mjcf
+              and a new MJCF, read back, with the same dynamics
   cli, files, api
               the earlier bad-input campaign: random command lines from the parser's options,
               mutated URDF / YAML / CSV files, Python API calls with bad arrays
@@ -91,9 +97,10 @@ TARGETS = (
     "api",
     "floating",
     "drives",
+    "mjcf",
 )
 #: The targets run when none is given.
-DEFAULT_TARGETS = (*TARGETS[:5], "floating", "drives")
+DEFAULT_TARGETS = (*TARGETS[:5], "floating", "drives", "mjcf")
 ORACLE_TOL = 1e-9
 
 
@@ -1066,21 +1073,45 @@ def check_drive_export(ctx, robot, p, path: Path, index: int) -> tuple[str, str]
                     pd[names.index(f"{key}{k + 1}")] = 0.0
     pb = back.parameters(rotor=True, friction=True)
     nprng = np.random.default_rng(index)
-    worst = 0.0
-    for _ in range(2):
-        q, dq, ddq = (nprng.uniform(-2, 2, robot.n) for _ in range(3))
-        W = robot.regressor(q, dq, ddq, rotor=True, friction=True)
-        worst = max(
-            worst,
-            rel_err(
-                back.inverse_dynamics(q, dq, ddq, pb),
-                robot.inverse_dynamics(q, dq, ddq, pd),
-                np.abs(W) @ np.abs(p),
-            ),
-        )
+    states = [[nprng.uniform(-2, 2, robot.n) for _ in range(3)] for _ in range(2)]
+    worst = id_difference(robot, (pd, p), back, pb, states, rotor=True, friction=True)
     if not worst <= ORACLE_TOL:
         return "wrong", f"exported then loaded: inverse dynamics differ by {worst:.3g}"
     return "ok", ""
+
+
+def id_difference(robot, p, again, pa, states, order=None, **terms) -> float:
+    """The largest difference of the inverse dynamics of ``robot`` with ``p[0]`` and of
+    ``again`` with ``pa`` over ``states`` [(q, v, a)], relative to the largest sum of absolute
+    terms of ``W p[1]`` (``W`` the regressor of ``robot`` with ``terms``); ``order`` (q, v):
+    the entries of ``robot``'s q and v in ``again``'s order of the joints, if another."""
+    qi, vi = order if order is not None else (slice(None), slice(None))
+    worst = 0.0
+    for q, v, a in states:
+        scale = np.abs(robot.regressor(q, v, a, **terms)) @ np.abs(p[1])
+        got = np.empty(len(v))
+        got[vi] = again.inverse_dynamics(q[qi], v[vi], a[vi], pa)
+        worst = max(worst, rel_err(got, robot.inverse_dynamics(q, v, a, p[0]), scale))
+    return worst
+
+
+def _reorder(robot, again) -> tuple[np.ndarray, np.ndarray]:
+    """For each entry of ``again``'s q and v, the index of the same joint's entry in
+    ``robot``'s (joints by name)."""
+
+    def slices(r):
+        out, iq, iv = {}, 0, 0
+        for name, kind in zip(r.joint_names, r.joint_types, strict=True):
+            nq, nv = {"floating": (7, 6), "spherical": (4, 3)}.get(kind, (1, 1))
+            out[name] = (np.arange(iq, iq + nq), np.arange(iv, iv + nv))
+            iq, iv = iq + nq, iv + nv
+        return out
+
+    mine, theirs = slices(robot), slices(again)
+    q = np.concatenate([mine[name][0] for name in again.joint_names])
+    v = np.concatenate([mine[name][1] for name in again.joint_names])
+    assert all(len(theirs[n][0]) == len(mine[n][0]) for n in mine)  # the same kinds
+    return q, v
 
 
 def check_currents(ctx, robot, index: int, nprng) -> tuple[str, str]:
@@ -1240,6 +1271,1015 @@ def case_drives(ctx, index: int, rng: random.Random) -> Case:
 
     label = f"{form} {path.name}" + (f" malformed: {mal[0]}" if mal else "") + f" {kind} {side}"
     return Case("drives", index, label, fn, argv, [path])
+
+
+# ---------------------------------------------------------------------------------------------
+# mjcf: MuJoCo MJCF robots read through MuJoCo's compiler, against MuJoCo's own dynamics
+# ---------------------------------------------------------------------------------------------
+EULERSEQS = ["xyz", "XYZ", "zyx", "ZYX", "zxz", "XZX", "xYz", "Zyx", "yzx", "YXY"]
+#: <option><flag .../> attributes a valid case may disable (none changes what mindyn reads
+#: beyond gravity, damping and frictionloss).
+MJ_FLAGS = ["gravity", "damper", "frictionloss", "constraint", "contact", "limit", "spring",
+            "actuation", "warmstart", "equality"]  # fmt: skip
+#: The malformations of the mjcf target: each a refused feature of docs/mujoco.md or a file
+#: MuJoCo cannot compile.
+MJ_BAD = ["stiffness", "ref", "equality", "gravcomp", "two-free", "ball-terms", "free-terms",
+          "velocity-limit", "broken-xml", "missing-include", "tendon-spring", "spatial-terms",
+          "fluid", "mocap", "beside-free", "free-below", "bad-number", "too-many-motors",
+          "tendon-with-ball", "massless", "negative-term", "name-clash"]  # fmt: skip
+
+
+def _el(tag: str, attrs: dict | None = None, children=None) -> list:
+    """An XML element under construction: [tag, attributes, children]."""
+    return [tag, dict(attrs or {}), list(children or [])]
+
+
+def _xml(e, depth: int = 0) -> str:
+    pad = "  " * depth
+    if isinstance(e, str):  # raw text (a comment, a malformation)
+        return pad + e
+    tag, attrs, children = e
+    head = " ".join([tag] + [f'{k}="{v}"' for k, v in attrs.items()])
+    if not children:
+        return f"{pad}<{head}/>"
+    inner = "\n".join(_xml(c, depth + 1) for c in children)
+    return f"{pad}<{head}>\n{inner}\n{pad}</{tag}>"
+
+
+def _fixed(attrs: dict, coefs: list) -> list:
+    """A fixed tendon over the joints of ``coefs`` [(joint, coefficient)]."""
+    return _el(
+        "fixed", attrs, [_el("joint", {"joint": j, "coef": repr(float(c))}) for j, c in coefs]
+    )
+
+
+def _mj_fmt(rng: random.Random, v) -> str:
+    """Numbers as MJCF takes them: repr, 17 significant digits or an exponent."""
+    form = rng.random()
+    out = []
+    for x in np.atleast_1d(np.asarray(v, dtype=float)):
+        if form < 0.7:
+            out.append(repr(float(x)))
+        elif form < 0.85:
+            out.append(f"{x:.17g}")
+        else:
+            out.append(f"{x:.17e}")
+    return " ".join(out)
+
+
+def _mj_vec(rng: random.Random, n: int, lo: float = -1.0, hi: float = 1.0) -> list[float]:
+    while True:
+        v = [rng.uniform(lo, hi) for _ in range(n)]
+        if np.linalg.norm(v) > 0.1 * max(abs(lo), abs(hi)):
+            return v
+
+
+def _mj_angle(rng: random.Random, degree: bool, x: float | None = None) -> float:
+    a = rng.uniform(-np.pi, np.pi) if x is None else x
+    if rng.random() < 0.2:
+        a = rng.choice([np.pi / 2, -np.pi / 2, np.pi, np.pi / 4, 0.0])
+    return math.degrees(a) if degree else a
+
+
+def _mj_orientation(rng: random.Random, degree: bool) -> dict:
+    """A random orientation written in one of MJCF's forms (or none)."""
+    kind = rng.choice(["none", "quat", "axisangle", "euler", "euler", "xyaxes", "zaxis"])
+    if kind == "quat":
+        return {"quat": _mj_fmt(rng, _mj_vec(rng, 4))}
+    if kind == "axisangle":
+        return {"axisangle": _mj_fmt(rng, [*_mj_vec(rng, 3), _mj_angle(rng, degree)])}
+    if kind == "euler":
+        return {"euler": _mj_fmt(rng, [_mj_angle(rng, degree) for _ in range(3)])}
+    if kind == "xyaxes":
+        while True:
+            x, y = np.array(_mj_vec(rng, 3)), np.array(_mj_vec(rng, 3))
+            if np.linalg.norm(np.cross(x, y)) > 0.2 * np.linalg.norm(x) * np.linalg.norm(y):
+                return {"xyaxes": _mj_fmt(rng, [*x, *y])}
+    if kind == "zaxis":
+        return {"zaxis": _mj_fmt(rng, _mj_vec(rng, 3))}
+    return {}
+
+
+def _mj_inertia(rng: random.Random, m: float, L: float) -> np.ndarray:
+    """A body's inertia about its centre of mass (random axes, moments of a body)."""
+    a = np.array([rng.uniform(0.05, 1.0) for _ in range(3)]) * m * (0.3 * L) ** 2
+    Q, _ = np.linalg.qr(np.random.default_rng(rng.randrange(2**32)).normal(size=(3, 3)))
+    return Q @ np.diag([a[0] + a[1], a[1] + a[2], a[0] + a[2]]) @ Q.T
+
+
+def _mj_inertial(rng: random.Random, L: float, degree: bool) -> list:
+    m = rng.uniform(0.2, 5.0)
+    attrs = {"pos": _mj_fmt(rng, [rng.uniform(-0.3, 0.3) * L for _ in range(3)]),
+             "mass": _mj_fmt(rng, m)}  # fmt: skip
+    inertia = _mj_inertia(rng, m, L)
+    if rng.random() < 0.5:
+        full = [inertia[0, 0], inertia[1, 1], inertia[2, 2], inertia[0, 1], inertia[0, 2],
+                inertia[1, 2]]  # fmt: skip
+        attrs["fullinertia"] = _mj_fmt(rng, full)
+    else:
+        attrs["diaginertia"] = _mj_fmt(rng, np.linalg.eigvalsh(inertia))
+        attrs.update(_mj_orientation(rng, degree))
+    return _el("inertial", attrs)
+
+
+def _mj_geom(rng: random.Random, L: float, degree: bool) -> list:
+    kind = rng.choice(["sphere", "box", "capsule", "cylinder", "ellipsoid", "capsule-fromto"])
+    s = [rng.uniform(0.03, 0.15) * L for _ in range(3)]
+    attrs = {"type": kind.split("-")[0]}
+    if kind == "capsule-fromto":
+        attrs["fromto"] = _mj_fmt(rng, [*(_mj_vec(rng, 3, -0.2 * L, 0.2 * L)),
+                                        *(_mj_vec(rng, 3, -0.2 * L, 0.2 * L))])  # fmt: skip
+        attrs["size"] = _mj_fmt(rng, s[0])
+    else:
+        n = {"sphere": 1, "capsule": 2, "cylinder": 2}.get(kind, 3)
+        attrs["size"] = _mj_fmt(rng, s[:n])
+        attrs["pos"] = _mj_fmt(rng, [rng.uniform(-0.2, 0.2) * L for _ in range(3)])
+        attrs.update(_mj_orientation(rng, degree))
+    if rng.random() < 0.3:
+        attrs["mass"] = _mj_fmt(rng, rng.uniform(0.1, 3.0))
+    elif rng.random() < 0.3:
+        attrs["density"] = _mj_fmt(rng, rng.uniform(200, 3000))
+    return _el("geom", attrs)
+
+
+def _mj_terms(rng: random.Random) -> dict:
+    """Some of a joint's or tendon's armature, damping, frictionloss (random, or 0)."""
+    out = {}
+    for key, hi in (("armature", 0.5), ("damping", 2.0), ("frictionloss", 1.0)):
+        r = rng.random()
+        if r < 0.35:
+            out[key] = repr(round(rng.uniform(0.0, hi), 6))
+        elif r < 0.45:
+            out[key] = "0"
+    return out
+
+
+ZERO_TERMS = {"armature": "0", "damping": "0", "frictionloss": "0"}
+#: Joint names of other forms (one is the name mindyn gives the fixed joint of the jointless
+#: body 'fixed1', which is kept apart).
+ODD_JOINT_NAMES = ["elbow joint", "ä1", "j.2", "J-3", "fixed1__fixed", "q", "x__y", "0"]
+#: A body's mass whatever the compiler's inertiafromgeom.
+MASS = ["inertial", {"pos": "0 0 0", "mass": "1", "diaginertia": "0.01 0.01 0.01"}, []]
+
+
+def _mj_joint(rng: random.Random, name: str, kind: str, L: float, degree: bool, classes) -> list:
+    attrs: dict = {"name": name}
+    if kind != "hinge" or rng.random() < 0.5:
+        attrs["type"] = kind
+    if rng.random() < 0.6:
+        axis = [0.0, 0.0, 0.0]
+        axis[rng.randrange(3)] = rng.choice([1.0, -1.0, 2.5])
+    else:
+        axis = _mj_vec(rng, 3)
+    attrs["axis"] = _mj_fmt(rng, axis)
+    if rng.random() < 0.4:
+        attrs["pos"] = _mj_fmt(rng, [rng.uniform(-0.1, 0.1) * L for _ in range(3)])
+    if rng.random() < 0.1:
+        attrs["limited"] = "false"
+    if rng.random() < 0.5:
+        lo, hi = -rng.uniform(0.3, 3.0), rng.uniform(0.3, 3.0)
+        if kind == "hinge":
+            lo, hi = _mj_angle(rng, degree, lo), _mj_angle(rng, degree, hi)
+            lo, hi = min(lo, hi) - 1e-3, max(lo, hi) + 1e-3
+        attrs["range"] = _mj_fmt(
+            rng, [lo * (L if kind == "slide" else 1), hi * (L if kind == "slide" else 1)]
+        )
+    if rng.random() < 0.3:
+        effort = rng.uniform(1.0, 100.0)
+        attrs["actuatorfrcrange"] = _mj_fmt(rng, [-effort, effort])
+    if classes and rng.random() < 0.4:
+        attrs["class"] = rng.choice(classes)
+    attrs.update(_mj_terms(rng))
+    return _el("joint", attrs)
+
+
+class MjcfCase:
+    """A random MJCF robot (valid, or with one malformation): the element tree, its extra
+    files and what the oracle needs to know of it (the velocity limits written, the
+    malformation and the names the refusal must give)."""
+
+    def __init__(self, rng: random.Random, path: Path, round_trip: bool):
+        self.rng, self.path = rng, path
+        self.files: dict[Path, str] = {}
+        self.speeds: dict[str, float] = {}
+        self.mal: tuple[str, tuple[str, ...]] | None = None
+        self.degree = rng.random() < 0.5
+        self.L = rng.choice([1.0, 1.0, 1.0, 0.5, 0.05, 10.0])
+        self._draw(round_trip)
+
+    # -- drawing ------------------------------------------------------------------------
+    def _draw(self, round_trip: bool) -> None:
+        rng, L, deg = self.rng, self.L, self.degree
+        compiler: dict = {}
+        if not self.degree or rng.random() < 0.5:
+            compiler["angle"] = "degree" if deg else "radian"
+        if rng.random() < 0.5:
+            compiler["eulerseq"] = rng.choice(EULERSEQS)
+        ifg = rng.choice(["", "auto", "true", "false"])
+        if round_trip and ifg == "true":  # MuJoCo would override the inertials written back
+            ifg = "auto"
+        if ifg:
+            compiler["inertiafromgeom"] = ifg
+        if not round_trip:  # options that change the inertias written back
+            for key, value in (
+                ("balanceinertia", "true"),
+                ("fusestatic", "true"),
+                ("boundmass", "0.5"),
+                ("boundinertia", "0.01"),
+                ("settotalmass", "12.5"),
+            ):
+                if rng.random() < 0.1:
+                    compiler[key] = value
+        self.compiler = compiler
+        # defaults, with classes
+        self.classes = []
+        top = _el("default", {}, [_el("joint", _mj_terms(rng))])
+        if rng.random() < 0.5:
+            top[2].append(_el("geom", {"density": repr(round(rng.uniform(300, 3000), 3))}))
+        if rng.random() < 0.7:
+            c1 = _el("default", {"class": "c1"}, [_el("joint", _mj_terms(rng))])
+            self.classes.append("c1")
+            if rng.random() < 0.5:
+                c1[2].append(
+                    _el(
+                        "default",
+                        {"class": "c2"},
+                        [_el("joint", {**_mj_terms(rng), "axis": "0 1 0"})],
+                    )
+                )
+                self.classes.append("c2")
+            top[2].append(c1)
+        self.defaults = top
+        # the moving joints and their bodies
+        n = rng.randint(1, 7)
+        self.free = rng.random() < 0.25
+        self.ball = rng.random() < 0.25
+        tree = rng.random() < 0.5
+        kinds = [rng.choice(["hinge", "hinge", "slide"]) for _ in range(n)]
+        if self.ball:
+            kinds[rng.randrange(n)] = "ball"
+        self.world = _el("worldbody")
+        self.moving: list[list] = []  # the bodies carrying joints
+        self.joints: dict[str, tuple[str, list]] = {}  # name -> (kind, element)
+        names = [f"j{k}" for k in rng.sample(range(100), n)]
+        for k in range(n):  # now and then a name of another form
+            if rng.random() < 0.15:
+                odd = rng.choice(ODD_JOINT_NAMES)
+                names[k] = odd if odd not in names else names[k]
+        self.free_body = None
+        if self.free:
+            free_body = self._body("base", self.world, round_trip)
+            if rng.random() < 0.5:
+                joint = _el("freejoint", {"name": "root"})
+            else:
+                joint = _el("joint", {"name": "root", "type": "free", **ZERO_TERMS})
+            free_body[2].insert(0, joint)
+            self.joints["root"] = ("free", joint)
+            self.moving.append(free_body)
+            self.free_body = free_body
+        k = 0
+        while k < n:
+            if self.moving and (tree or self.free):
+                parent = rng.choice(self.moving) if tree else self.moving[-1]
+            elif self.moving:
+                parent = self.moving[-1]
+            else:
+                parent = self.world
+            if parent is not self.world and rng.random() < 0.25:  # a jointless body between
+                parent = self._body(f"fixed{k}", parent, round_trip, moving=False)
+            body = self._body(f"b{k}", parent, round_trip)
+            # two joints in one body (MuJoCo refuses a ball joint followed by another)
+            for _ in range(2 if k + 1 < n and kinds[k] != "ball" and rng.random() < 0.15 else 1):
+                kind, name = kinds[k], names[k]
+                if kind == "ball":
+                    attrs = {"name": name, "type": "ball", **ZERO_TERMS}
+                    if rng.random() < 0.4:
+                        attrs["pos"] = _mj_fmt(rng, [rng.uniform(-0.1, 0.1) * L for _ in range(3)])
+                    if rng.random() < 0.2:  # a cone limit, not read (a warning)
+                        attrs["range"] = _mj_fmt(rng, [0, _mj_angle(rng, deg, 1.0)])
+                    if self.classes and rng.random() < 0.4:
+                        attrs["class"] = rng.choice(self.classes)
+                    joint = _el("joint", attrs)
+                else:
+                    joint = _mj_joint(rng, name, kind, L, deg, self.classes)
+                body[2].insert(len([c for c in body[2] if c[0] == "joint"]), joint)
+                self.joints[name] = (kind, joint)
+                k += 1
+            self.moving.append(body)
+        for _ in range(rng.randint(0, 2)):  # jointless leaves
+            self._body(f"leaf{_}", rng.choice(self.moving), round_trip, moving=False)
+        if rng.random() < 0.3:  # a static body on the world
+            self._body("stand", self.world, round_trip, moving=False)
+        # tendons: over one joint (folded onto it), over several (motors, fixed base only)
+        self.tendons = _el("tendon")
+        single = [j for j, (kind, _) in self.joints.items() if kind in ("hinge", "slide")]
+        for t in range(rng.randint(0, 2) if single else 0):
+            j = rng.choice(single)
+            coef = rng.choice([1.0, -1.0, 40.0, -80.0, 0.5, 3.7])
+            self.tendons[2].append(_fixed({"name": f"t{t}", **_mj_terms(rng)}, [(j, coef)]))
+        if not (self.free or self.ball) and len(single) >= 2 and rng.random() < 0.3:
+            over = rng.sample(single, rng.choice([2, 2, 3]) if len(single) >= 3 else 2)
+            for j in over:  # the motors' joints have no terms of their own
+                self.joints[j][1][1].update(ZERO_TERMS)
+            self.tendons[2] = [e for e in self.tendons[2] if e[2][0][1]["joint"] not in over]
+            self._motor_tendon("m0", over, terms=True)
+            if len(over) == 2 and rng.random() < 0.5:  # a differential
+                self._motor_tendon("m1", over, terms=rng.random() < 0.7)
+            if not self._one_branch(over):  # MuJoCo drops the armature between the branches
+                self.mal = ("tendon armature across branches", ("'m0'", "'m1'"))
+        # velocity limits, option, an include
+        self.custom = _el("custom")
+        for j in single:
+            if rng.random() < 0.3:
+                self.speeds[j] = round(rng.uniform(0.5, 10.0), 4)
+                self.custom[2].append(
+                    _el("numeric", {"name": f"velocity_limit:{j}", "data": repr(self.speeds[j])})
+                )
+        self.option = _el("option")
+        if rng.random() < 0.5:
+            self.option[1]["gravity"] = _mj_fmt(
+                rng, [rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(-12, 0)]
+            )
+        if rng.random() < 0.4:
+            flags = rng.sample(MJ_FLAGS, rng.randint(1, 3))
+            self.option[2].append(_el("flag", {f: "disable" for f in flags}))
+        self.include = rng.random() < 0.2
+        self.actuators = _el("actuator")
+        for j in single:
+            if rng.random() < 0.3:
+                self.actuators[2].append(_el("motor", {"joint": j, "gear": "50"}))
+
+    def _motor_tendon(self, name: str, over: list[str], terms: bool) -> None:
+        rng = self.rng
+        coefs = [rng.choice([1.0, -1.0, 20.0, -15.0, 0.5, 2.0]) * rng.uniform(0.5, 2) for _ in over]
+        attrs = {"name": name}
+        if terms:
+            attrs.update({k: repr(round(self.rng.uniform(0.001, 0.5), 5)) for k in ZERO_TERMS})
+        self.tendons[2].append(_fixed(attrs, list(zip(over, coefs))))
+
+    def _one_branch(self, joints: list[str]) -> bool:
+        """Whether ``joints`` are on one branch of the tree (each pair: one moves the other)."""
+        paths = {}
+
+        def walk(e, path):
+            if e[0] == "joint" and e[1].get("name") in joints:
+                paths[e[1]["name"]] = path
+            for c in e[2]:
+                if not isinstance(c, str):
+                    walk(c, path + [id(e)] if e[0] == "body" else path)
+
+        walk(self.world, [])
+        for a in joints:
+            for b in joints:
+                pa, pb = paths[a], paths[b]
+                if pa[: len(pb)] != pb and pb[: len(pa)] != pa:
+                    return False
+        return True
+
+    def _drop(self, joints: set) -> None:
+        """Leaves out the actuators, tendons and numerics of ``joints`` (gone)."""
+        self.actuators[2] = [e for e in self.actuators[2] if e[1]["joint"] not in joints]
+        self.tendons[2] = [e for e in self.tendons[2] if not {c[1]["joint"] for c in e[2]} & joints]
+        self.custom[2] = [e for e in self.custom[2] if e[1]["name"].split(":")[1] not in joints]
+        for j in joints:
+            self.speeds.pop(j, None)
+
+    def _body(self, name: str, parent: list, round_trip: bool, moving: bool = True) -> list:
+        rng, L, deg = self.rng, self.L, self.degree
+        attrs = {"name": name, "pos": _mj_fmt(rng, [rng.uniform(-0.5, 0.5) * L for _ in range(3)])}
+        attrs.update(_mj_orientation(rng, deg))
+        if self.classes and rng.random() < 0.3:
+            attrs["childclass"] = rng.choice(self.classes)
+        if not moving and not round_trip and rng.random() < 0.3:
+            del attrs["name"]  # an unnamed jointless body
+        body = _el("body", attrs)
+        ifg = self.compiler.get("inertiafromgeom", "auto")
+        inertial = ifg == "false" or (ifg == "auto" and rng.random() < 0.6)
+        geoms = ifg == "true" or not inertial or rng.random() < 0.3
+        if not moving and rng.random() < 0.4:  # a massless jointless body
+            inertial = geoms = False
+        if inertial:
+            body[2].append(_mj_inertial(rng, L, deg))
+        if geoms:
+            body[2] += [_mj_geom(rng, L, deg) for _ in range(rng.randint(1, 2))]
+        if rng.random() < 0.15:  # in a <frame>, which moves the body
+            frame = {"pos": _mj_fmt(rng, [rng.uniform(-0.2, 0.2) * L for _ in range(3)])}
+            parent[2].append(_el("frame", {**frame, **_mj_orientation(rng, deg)}, [body]))
+        else:
+            parent[2].append(body)
+        return body
+
+    # -- malformations ------------------------------------------------------------------
+    def malform(self) -> None:
+        """One malformation (a feature docs/mujoco.md refuses, or a file MuJoCo cannot compile):
+        sets ``self.mal`` = (what, the names a refusal must give, any one of them)."""
+        rng = self.rng
+        what = rng.choice(MJ_BAD)
+        single = [j for j, (kind, _) in self.joints.items() if kind in ("hinge", "slide")]
+        file = self.path.name
+        if what in ("stiffness", "ref", "bad-number", "negative-term") and single:
+            j = rng.choice(single)
+            key, value = {
+                "stiffness": ("stiffness", "3.5"),
+                "ref": ("ref", "0.25"),
+                "bad-number": (
+                    rng.choice(["damping", "armature", "pos", "range"]),
+                    rng.choice(BAD_NUMBERS[:2] + ["1 x", "0x", "1e"]),
+                ),
+                "negative-term": (rng.choice(list(ZERO_TERMS)), "-0.5"),
+            }[what]
+            self.joints[j][1][1][key] = value
+            self.mal = (what, (f"'{j}'",) if what not in ("bad-number",) else (file,))
+            if what == "negative-term":  # MuJoCo may refuse it first, naming the file
+                self.mal = (what, (f"'{j}'", file))
+            return
+        if what == "equality" and len(self.joints) >= 2:
+            a, b = rng.sample(sorted(self.joints), 2)
+            bodies = [e[1]["name"] for e in self.moving]
+            eq = rng.choice(
+                [
+                    _el("joint", {"name": "eq_couple", "joint1": a, "joint2": b}),
+                    _el("weld", {"name": "eq_couple", "body1": rng.choice(bodies)}),
+                    _el(
+                        "connect",
+                        {"name": "eq_couple", "body1": rng.choice(bodies), "anchor": "0 0 0"},
+                    ),
+                ]
+            )
+            if eq[0] == "joint" and "ball" in (self.joints[a][0], self.joints[b][0]):
+                eq = _el("weld", {"name": "eq_couple", "body1": bodies[-1]})
+            if eq[0] == "joint" and "free" in (self.joints[a][0], self.joints[b][0]):
+                eq = _el("weld", {"name": "eq_couple", "body1": bodies[-1]})
+            self.equality = _el("equality", {}, [eq])
+            self.mal = (what, ("'eq_couple'",))
+            return
+        if what == "gravcomp":
+            body = rng.choice(self.moving)
+            body[1]["gravcomp"] = "1"
+            self.mal = (what, (f"'{body[1]['name']}'",))
+            return
+        if what == "two-free":
+            body = _el(
+                "body",
+                {"name": "other", "pos": "1 0 0"},
+                [
+                    _el("freejoint", {"name": "other_free"}),
+                    MASS,
+                    _el("geom", {"type": "sphere", "size": "0.1"}),
+                ],
+            )
+            self.world[2].append(body)
+            self.mal = (what, ("'other_free'", "'other'"))
+            return
+        if what == "ball-terms" and self.ball:
+            j = next(j for j, (kind, _) in self.joints.items() if kind == "ball")
+            key = rng.choice(list(ZERO_TERMS))
+            self.joints[j][1][1][key] = "0.1"
+            self.mal = (what, (f"'{j}'",))
+            return
+        if what == "free-terms" and self.free:
+            kind, joint = self.joints["root"]
+            joint[0], joint[1] = "joint", {"name": "root", "type": "free", **ZERO_TERMS}
+            joint[1][rng.choice(list(ZERO_TERMS))] = "0.2"
+            self.mal = (what, ("'root'",))
+            return
+        if what == "velocity-limit":
+            j = rng.choice(sorted(self.joints))
+            name, data = rng.choice(
+                [
+                    ("velocity_limit:nojoint", "2"),
+                    (f"velocity_limit:{j}", "-1"),
+                    (f"velocity_limit:{j}", "1 2"),
+                    (f"velocity_limit:{j}", "0"),
+                    (f"velocity_limit:{j}", "inf"),
+                    (f"velocity_limit:{j}", "nan"),
+                ]
+            )
+            if self.joints[j][0] in ("ball", "free"):
+                data = "2"  # a velocity limit on a joint of several degrees of freedom
+            self.custom[2] = [e for e in self.custom[2] if e[1]["name"] != name]
+            self.custom[2].append(_el("numeric", {"name": name, "data": data}))
+            self.mal = (what, (name, file))  # MuJoCo refuses inf / nan itself
+            return
+        if what == "missing-include":
+            self.extra = _el("include", {"file": "missing-part.xml"})
+            self.mal = (what, ("missing-part.xml",))
+            return
+        if what in ("tendon-spring", "spatial-terms") and single:
+            j = rng.choice(single)
+            if what == "tendon-spring":
+                t = _fixed({"name": "spring_t", "stiffness": "5", "damping": "0.1"}, [(j, 2)])
+            else:
+                body = self.joints[j][1]
+                host = next(b for b in self.moving if body in b[2])
+                host[2].append(_el("site", {"name": "s_end", "pos": "0.1 0 0"}))
+                self.world[2].insert(0, _el("site", {"name": "s_start", "pos": "0 0 0.1"}))
+                t = _el(
+                    "spatial",
+                    {"name": "spring_t", "frictionloss": "0.3"},
+                    [_el("site", {"site": "s_start"}), _el("site", {"site": "s_end"})],
+                )
+            self.tendons[2].append(t)
+            self.mal = (what, ("'spring_t'",))
+            return
+        if what == "fluid":
+            self.option[1][rng.choice(["density", "viscosity"])] = "1.2"
+            self.mal = (what, ("density",))
+            return
+        if what == "mocap":
+            body = _el(
+                "body",
+                {"name": "target", "mocap": "true", "pos": "0 1 0"},
+                [
+                    _el(
+                        "body",
+                        {"name": "finger"},
+                        [
+                            _el("joint", {"name": "fj", "axis": "0 0 1"}),
+                            MASS,
+                            _el("geom", {"type": "sphere", "size": "0.05"}),
+                        ],
+                    )
+                ],
+            )
+            self.world[2].append(body)
+            self.mal = (what, ("'fj'", "'target'", "'base'"))  # or: not below the free body
+            return
+        if what == "beside-free" and self.free:
+            body = _el(
+                "body",
+                {"name": "beside", "pos": "0 1 0"},
+                [
+                    _el("joint", {"name": "bj", "axis": "0 0 1"}),
+                    MASS,
+                    _el("geom", {"type": "sphere", "size": "0.05"}),
+                ],
+            )
+            self.world[2].append(body)
+            self.mal = (what, ("'bj'",))
+            return
+        if what == "free-below" and len(self.moving) > 1 + self.free:
+            body = self.moving[-1]
+            gone = {c[1]["name"] for c in body[2] if c[0] == "joint"}
+            body[2] = [c for c in body[2] if c[0] != "joint"]
+            self._drop(gone)
+            body[2].insert(0, _el("freejoint", {"name": "inner_free"}))
+            self.mal = (what, (file,))
+            return
+        if what == "too-many-motors" and len(single) >= 2 and not (self.free or self.ball):
+            a, b = rng.sample(single, 2)
+            self.joints[a][1][1]["damping"] = "0.3"
+            self.joints[b][1][1]["armature"] = "0.2"
+            self.tendons[2].append(_fixed({"name": "over_t", "damping": "0.1"}, [(a, 1), (b, 1)]))
+            self.mal = (what, ("'over_t'",))
+            return
+        if what == "tendon-with-ball" and self.ball and len(single) >= 2:
+            a, b = rng.sample(single, 2)
+            self.tendons[2].append(_fixed({"name": "ball_t", "armature": "0.1"}, [(a, 1), (b, -2)]))
+            self.mal = (what, ("'ball_t'",))
+            return
+        two = [b for b in self.moving if len([c for c in b[2] if c[0] == "joint"]) > 1]
+        if what == "name-clash" and two:
+            body = rng.choice(two)
+            clash = f"{body[1]['name']}__{next(c for c in body[2] if c[0] == 'joint')[1]['name']}"
+            self._body("leaf", rng.choice(self.moving), False, moving=False)[1]["name"] = clash
+            self.mal = (what, (f"'{clash}'",))
+            return
+        if what == "massless":
+            body = self.moving[-1]
+            body[2] = [c for c in body[2] if c[0] not in ("inertial", "geom", "body", "frame")]
+            self.compiler["inertiafromgeom"] = "auto"
+            self.mal = (what, (file,))
+            return
+        # broken XML (also the fallback of a malformation the robot has no place for)
+        self.broken = rng.choice(["truncate", "unclosed", "garbage", "attribute", "root"])
+        self.mal = ("broken-xml " + self.broken, (file,))
+
+    # -- writing ------------------------------------------------------------------------
+    def write(self) -> Path:
+        parts: list = [
+            f"<!-- a random robot, {'degrees' if self.degree else 'radians'} -->",
+            _el("compiler", self.compiler),
+            self.option,
+        ]
+        if self.include:
+            part = self.path.with_name(self.path.stem + "-defaults.xml")
+            self.files[part] = "<mujoco>\n" + _xml(self.defaults, 1) + "\n</mujoco>\n"
+            parts.append(_el("include", {"file": part.name}))
+        else:
+            parts.append(self.defaults)
+        if getattr(self, "extra", None) is not None:
+            parts.append(self.extra)
+        parts.append(self.world)
+        for e in (self.tendons, getattr(self, "equality", None), self.custom, self.actuators):
+            if e is not None and e[2]:
+                parts.append(e)
+        text = '<mujoco model="mjcf">\n' + "\n".join(_xml(p, 1) for p in parts) + "\n</mujoco>\n"
+        broken = getattr(self, "broken", None)
+        if broken == "truncate":
+            text = text[: self.rng.randrange(len(text) // 3, len(text) - 12)]
+        elif broken == "unclosed":
+            text = text.replace("</worldbody>", "", 1)
+        elif broken == "garbage":
+            text = text.replace("<worldbody>", "<worldbody>\n  <body <<>", 1)
+        elif broken == "attribute":
+            text = text.replace(
+                "<worldbody>",
+                '<worldbody>\n  <body name="x" pos="1 2 3"><geom size="0.1" fantasy="1"/></body>',
+                1,
+            )
+        elif broken == "root":
+            text = text.replace('<mujoco model="mjcf">', '<mujoco model="mjcf"><mujoco>', 1)
+        for f, t in self.files.items():
+            f.write_text(t)
+        self.path.write_text(text)
+        return self.path
+
+
+def mj_to_mindyn(m, robot, q) -> np.ndarray:
+    """S with MuJoCo's qvel = S v for mindyn's v at mindyn's q (joints by name): the free
+    joint's linear velocity is R v (R the body's rotation), every other velocity the same.
+    Generalised forces map back as S^T."""
+    S = np.zeros((m.nv, robot.nv))
+    iq = iv = 0
+    for kind, name in zip(robot.joint_types, robot.joint_names, strict=True):
+        dof = int(m.jnt_dofadr[m.joint(name).id])
+        if kind == "floating":
+            x, y, z, w = q[iq + 3 : iq + 7]
+            S[dof : dof + 3, iv : iv + 3] = _wxyz_matrix([w, x, y, z])
+            S[dof + 3 : dof + 6, iv + 3 : iv + 6] = np.eye(3)
+            iq, iv = iq + 7, iv + 6
+        elif kind == "spherical":
+            S[dof : dof + 3, iv : iv + 3] = np.eye(3)
+            iq, iv = iq + 4, iv + 3
+        else:
+            S[dof, iv] = 1.0
+            iq, iv = iq + 1, iv + 1
+    return S
+
+
+def _wxyz_matrix(quat) -> np.ndarray:
+    import mujoco
+
+    out = np.zeros(9)
+    mujoco.mju_quat2Mat(out, np.asarray(quat, dtype=float))
+    return out.reshape(3, 3)
+
+
+def mj_qpos(m, robot, q, v, a):
+    """MuJoCo's qpos, qvel, qacc of mindyn's q, v, a: quaternions (w, x, y, z) for mindyn's
+    (x, y, z, w); qvel = S v; the free joint's qacc = R (a + w x v) (the derivative of R v)."""
+    qpos = np.array(m.qpos0)
+    S = mj_to_mindyn(m, robot, q)
+    qvel, qacc = S @ v, S @ a
+    iq = iv = 0
+    for kind, name in zip(robot.joint_types, robot.joint_names, strict=True):
+        j = m.joint(name).id
+        adr, dof = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+        if kind == "floating":
+            x, y, z, w = q[iq + 3 : iq + 7]
+            qpos[adr : adr + 7] = [*q[iq : iq + 3], w, x, y, z]
+            R = _wxyz_matrix([w, x, y, z])
+            qacc[dof : dof + 3] += R @ np.cross(v[iv + 3 : iv + 6], v[iv : iv + 3])
+            iq, iv = iq + 7, iv + 6
+        elif kind == "spherical":
+            x, y, z, w = q[iq : iq + 4]
+            qpos[adr : adr + 4] = [w, x, y, z]
+            iq, iv = iq + 4, iv + 3
+        else:
+            qpos[adr] = q[iq]
+            iq, iv = iq + 1, iv + 1
+    return qpos, qvel, qacc, S
+
+
+def mj_state(robot, nprng, moving: bool = False):
+    """Random q (unit quaternions), v, a of ``robot``; ``moving``: every velocity 0.5..2 in
+    magnitude."""
+    q, v = [], nprng.uniform(-2, 2, robot.nv)
+    for kind in robot.joint_types:
+        if kind == "floating":
+            quat = nprng.normal(size=4)
+            q += [*nprng.uniform(-1, 1, 3), *(quat / np.linalg.norm(quat))]
+        elif kind == "spherical":
+            quat = nprng.normal(size=4)
+            q += list(quat / np.linalg.norm(quat))
+        else:
+            q.append(nprng.uniform(-2, 2))
+    if moving:
+        v = nprng.uniform(0.5, 2, robot.nv) * nprng.choice([-1, 1], robot.nv)
+    return np.array(q), v, nprng.uniform(-2, 2, robot.nv)
+
+
+def _mj_fixed_tendons(m) -> list[tuple[int, np.ndarray]]:
+    """Each fixed tendon's id and its Jacobian (coefficients on the dofs)."""
+    import mujoco
+
+    out = []
+    for t in range(m.ntendon):
+        adr, num = int(m.tendon_adr[t]), int(m.tendon_num[t])
+        if any(
+            int(m.wrap_type[w]) != int(mujoco.mjtWrap.mjWRAP_JOINT) for w in range(adr, adr + num)
+        ):
+            continue
+        J = np.zeros(m.nv)
+        for w in range(adr, adr + num):
+            J[int(m.jnt_dofadr[int(m.wrap_objid[w])])] += float(m.wrap_prm[w])
+        out.append((t, J))
+    return out
+
+
+def mj_reference(m, robot, q, v, a, *, friction_on: bool = False):
+    """MuJoCo's inverse dynamics and mass matrix at mindyn's (q, v, a), in mindyn's
+    coordinates (tau = S^T qfrc, M = S^T M_mj S), with limits and contacts off. The file's own
+    <option> flags stay; the frictionloss constraint is off and its saturated force
+    (frictionloss sign of each dof's and fixed tendon's velocity) is added by hand where the
+    file leaves it on; ``friction_on`` keeps the constraint instead, and also returns whether
+    every friction row is saturated (MuJoCo's efc_state linear), where its force is exactly
+    that."""
+    import mujoco
+
+    bits = mujoco.mjtDisableBit
+    flags = int(m.opt.disableflags)
+    active = not flags & (int(bits.mjDSBL_FRICTIONLOSS) | int(bits.mjDSBL_CONSTRAINT))
+    off = int(bits.mjDSBL_LIMIT) | int(bits.mjDSBL_CONTACT)
+    if not friction_on:
+        off |= int(bits.mjDSBL_FRICTIONLOSS)
+    m.opt.disableflags = flags | off
+    try:
+        d = mujoco.MjData(m)
+        qpos, qvel, qacc, S = mj_qpos(m, robot, q, v, a)
+        d.qpos[:], d.qvel[:], d.qacc[:] = qpos, qvel, qacc
+        mujoco.mj_inverse(m, d)
+        qfrc = d.qfrc_inverse.copy()
+        if active and not friction_on:
+            qfrc += np.asarray(m.dof_frictionloss) * np.sign(qvel)
+            for t, J in _mj_fixed_tendons(m):
+                qfrc += J * float(m.tendon_frictionloss[t]) * np.sign(J @ qvel)
+        full = np.zeros((m.nv, m.nv))
+        if hasattr(d, "qM"):  # MuJoCo 3
+            mujoco.mj_fullM(m, full, d.qM)
+        else:  # MuJoCo 4
+            mujoco.mj_fullM(m, d, full)
+        saturated = True
+        if friction_on:
+            kinds = d.efc_type[: d.nefc]
+            rows = np.isin(
+                kinds,
+                [
+                    mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF,
+                    mujoco.mjtConstraint.mjCNSTR_FRICTION_TENDON,
+                ],
+            )
+            linear = [
+                mujoco.mjtConstraintState.mjCNSTRSTATE_LINEARNEG,
+                mujoco.mjtConstraintState.mjCNSTRSTATE_LINEARPOS,
+            ]
+            saturated = bool(rows.any()) and bool(
+                np.isin(d.efc_state[: d.nefc][rows], linear).all()
+            )
+    finally:
+        m.opt.disableflags = flags
+    return S.T @ qfrc, S.T @ full @ S, saturated
+
+
+def _mj_without_drive_terms(m) -> None:
+    """MuJoCo's model without armature, damping and frictionloss (mindyn's dynamics of a robot
+    with a free or ball joint leave them out, docs/mujoco.md)."""
+    for key in (
+        "dof_armature",
+        "dof_damping",
+        "dof_frictionloss",
+        "tendon_armature",
+        "tendon_damping",
+        "tendon_frictionloss",
+    ):
+        getattr(m, key)[:] = 0.0
+
+
+def check_mjcf_dynamics(robot, path: Path, nprng) -> tuple[str, str]:
+    """mindyn's inverse dynamics, mass matrix and W_b (Y pi) of ``robot`` (read from the MJCF
+    ``path``) against MuJoCo's mj_inverse and mj_fullM at three random states, to 1e-9
+    relative; with frictionloss, also at moving states where MuJoCo's dry friction is
+    saturated."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_path(str(path))
+    single = robot.single_dof
+    if not single:
+        _mj_without_drive_terms(m)
+    p = robot.parameters(rotor=single, friction=single)
+    bp = mindyn.base_parameters(robot, rotor=single, friction=single)
+    pb = bp.values(p)
+    worst = [0.0, 0.0, 0.0]
+    for _ in range(3):
+        q, v, a = mj_state(robot, nprng)
+        tau, M, _ = mj_reference(m, robot, q, v, a)
+        W = robot.regressor(q, v, a, rotor=single, friction=single)
+        scale = np.abs(W) @ np.abs(p)
+        worst[0] = max(worst[0], rel_err(robot.inverse_dynamics(q, v, a, p), tau, scale))
+        worst[1] = max(worst[1], rel_err(bp.regressor(q, v, a) @ pb, tau, scale))
+        worst[2] = max(worst[2], rel_err(robot.mass_matrix(q, p), M, M))
+    detail = (
+        f"vs mj_inverse {worst[0]:.3g}, W_b (Y pi) {worst[1]:.3g}, mass matrix vs "
+        f"mj_fullM {worst[2]:.3g} (n_b={bp.n})"
+    )
+    if not max(worst) <= ORACLE_TOL:
+        return "wrong", detail
+    if single and np.any(p[12::13]):
+        seen = 0
+        for _ in range(3):
+            q, v, a = mj_state(robot, nprng, moving=True)
+            tau, _, saturated = mj_reference(m, robot, q, v, a, friction_on=True)
+            if not saturated:
+                continue
+            seen += 1
+            scale = np.abs(robot.regressor(q, v, a, rotor=True, friction=True)) @ np.abs(p)
+            err = rel_err(robot.inverse_dynamics(q, v, a, p), tau, scale)
+            if not err <= ORACLE_TOL:
+                return "wrong", f"{detail}; with MuJoCo's frictionloss, moving: {err:.3g}"
+        detail += f"; frictionloss on at {seen} saturated states"
+    return "ok", detail
+
+
+def check_mjcf_read(robot, path: Path, speeds: dict) -> tuple[str, str]:
+    """The joints read (names, kinds), the velocity limits written and, for a robot with a free
+    or ball joint (whose dynamics leave them out), the hinges' armature, damping and
+    frictionloss (with those of fixed tendons over one joint: c^2, c^2, |c|) against MuJoCo's
+    compiled model."""
+    import mujoco
+
+    m = mujoco.MjModel.from_xml_path(str(path))
+    kinds = {
+        int(mujoco.mjtJoint.mjJNT_HINGE): ("revolute", "continuous"),
+        int(mujoco.mjtJoint.mjJNT_SLIDE): ("prismatic",),
+        int(mujoco.mjtJoint.mjJNT_BALL): ("spherical",),
+        int(mujoco.mjtJoint.mjJNT_FREE): ("floating",),
+    }
+    want = {m.joint(j).name: kinds[int(m.jnt_type[j])] for j in range(m.njnt)}
+    if sorted(want) != sorted(robot.joint_names):
+        return "wrong", f"joints {robot.joint_names}, MuJoCo's {sorted(want)}"
+    for name, kind in zip(robot.joint_names, robot.joint_types, strict=True):
+        if kind not in want[name]:
+            return "wrong", f"joint '{name}' read as {kind}, MuJoCo's {want[name]}"
+    for k, name in enumerate(robot.joint_names):
+        got = robot.limits["velocity"][k]
+        if name in speeds and got != speeds[name] or name not in speeds and not np.isnan(got):
+            return "wrong", f"velocity limit of '{name}' {got}, written {speeds.get(name)}"
+    if robot.single_dof:
+        return "ok", ""
+    bits = mujoco.mjtDisableBit
+    flags = int(m.opt.disableflags)
+    terms = {}
+    for j in range(m.njnt):
+        dof = int(m.jnt_dofadr[j])
+        terms[m.joint(j).name] = np.array(
+            [m.dof_armature[dof], m.dof_damping[dof], m.dof_frictionloss[dof]]
+        )
+    for t, J in _mj_fixed_tendons(m):
+        (dofs,) = np.nonzero(J)
+        if len(dofs) == 1:
+            c = J[dofs[0]]
+            j = int(m.dof_jntid[dofs[0]])
+            terms[m.joint(j).name] += [
+                c * c * m.tendon_armature[t],
+                c * c * m.tendon_damping[t],
+                abs(c) * m.tendon_frictionloss[t],
+            ]
+    for k, name in enumerate(robot.joint_names):
+        if robot.joint_types[k] in ("floating", "spherical"):
+            continue
+        want3 = terms[name].copy()
+        if flags & int(bits.mjDSBL_DAMPER):
+            want3[1] = 0.0
+        if flags & (int(bits.mjDSBL_FRICTIONLOSS) | int(bits.mjDSBL_CONSTRAINT)):
+            want3[2] = 0.0
+        got = [robot.rotor_inertia[k], robot.viscous[k], robot.coulomb[k]]
+        if rel_err(got, want3, np.maximum(np.abs(want3), 1e-300)) > 1e-12:
+            return "wrong", f"joint '{name}': Ia, Fv, Fc {got}, MuJoCo's {list(want3)}"
+    return "ok", ""
+
+
+def check_mjcf_round_trip(ctx, robot, path: Path, index: int, nprng) -> tuple[str, str]:
+    """The robot's own parameters written with `mindyn export --mjcf` (the file written back)
+    and, through the library, as a new MJCF: each read back has the same inverse dynamics and
+    agrees with MuJoCo on the file written."""
+    from mindyn.mjcf import write_mjcf
+
+    single = robot.single_dof
+    names = robot.parameter_names(rotor=True, friction=True)
+    p = robot.parameters(rotor=True, friction=True)  # a free or ball joint's: 0
+    doc = {
+        "robot": robot.name,
+        "classical": dict(zip(names, map(float, p), strict=True)),
+        "rotor": True,
+        "friction": True,
+        "drive_side": robot.drive_side,
+    }
+    jfile = ctx.work / f"mjcf-{index}.id.json"
+    jfile.write_text(json.dumps(doc))
+    back = ctx.work / f"mjcf-{index}-back.xml"
+    cls, detail = cli_class(*run_cli(["export", path, jfile, "--mjcf", back]))
+    if cls != "ok":
+        return cls, f"export --mjcf: {detail}"
+    new = ctx.work / f"mjcf-{index}-new.xml"
+    # a description that is not an MJCF to start from: a new file, one body per link
+    write_mjcf(robot, p, new, source=ctx.work / f"mjcf-{index}-none.urdf")
+    details = []
+    for what, out in (("written back", back), ("new", new)):
+        with warnings_off():
+            again = mindyn.load(out)
+        if sorted(again.joint_names) != sorted(robot.joint_names):
+            return "wrong", f"{what}: joints {again.joint_names}, not {robot.joint_names}"
+        order = [again.joint_names.index(name) for name in robot.joint_names]
+        pa = again.parameters(rotor=True, friction=True)
+        if not single:  # the hinges' terms kept, outside the dynamics (docs/mujoco.md)
+            for key in ("rotor_inertia", "viscous", "coulomb"):
+                got, want = np.asarray(getattr(again, key))[order], getattr(robot, key)
+                if rel_err(got, want, np.maximum(np.abs(want), 1e-300)) > 1e-12:
+                    return "wrong", f"{what} MJCF read back: {key} {list(got)}, not {list(want)}"
+            pa, p10 = again.params, robot.params
+        else:
+            p10 = p
+        states = [mj_state(robot, nprng) for _ in range(2)]
+        worst = id_difference(
+            robot,
+            (p10, p10),
+            again,
+            pa,
+            states,
+            rotor=single,
+            friction=single,
+            order=_reorder(robot, again),
+        )
+        if not worst <= ORACLE_TOL:
+            return "wrong", f"{what} MJCF read back: inverse dynamics differ by {worst:.3g}"
+        cls, detail = check_mjcf_dynamics(again, out, nprng)
+        if cls != "ok":
+            return cls, f"{what} MJCF: {detail}"
+        details.append(f"{what} {worst:.2g}")
+    return "ok", "round trip: " + ", ".join(details)
+
+
+@contextlib.contextmanager
+def warnings_off():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        yield
+
+
+def case_mjcf(ctx, index: int, rng: random.Random) -> Case:
+    path = ctx.work / f"mjcf-{index}.xml"
+    round_trip = index % 3 == 0
+    case = MjcfCase(rng, path, round_trip)
+    if rng.random() < 0.4 and case.mal is None:
+        case.malform()
+    case.write()
+    seed = rng.randrange(2**32)
+    argv = ["info", path]
+
+    def fn():
+        cls, detail = cli_class(*run_cli(argv))
+        if case.mal is not None:
+            what, names = case.mal
+            if cls == "ok":
+                return "wrong", f"malformed ({what}) loaded: {path.name}"
+            if cls == "error" and not any(x in detail for x in names):
+                return "wrong", f"{what}: refused without naming {' or '.join(names)}: {detail}"
+            return cls, detail
+        if cls != "ok":
+            return cls, detail
+        with warnings_off():
+            robot = mindyn.load(path)
+        nprng = np.random.default_rng(seed)
+        checks = [
+            lambda: check_mjcf_read(robot, path, case.speeds),
+            lambda: check_mjcf_dynamics(robot, path, nprng),
+        ]
+        if round_trip:
+            checks.append(lambda: check_mjcf_round_trip(ctx, robot, path, index, nprng))
+        details = []
+        for check in checks:
+            try:
+                cls, detail = check()
+            except mindyn.Error as e:  # a refusal with its reason
+                cls, detail = api_refusal(e)
+            if cls != "ok":
+                return cls, detail
+            details.append(detail)
+        return "ok", "; ".join(d for d in details if d)
+
+    label = (
+        f"{path.name} n={len(case.joints)}"
+        + " free" * case.free
+        + " ball" * case.ball
+        + (f" malformed: {case.mal[0]}" if case.mal else "")
+        + " round-trip" * round_trip
+    )
+    out = Case("mjcf", index, label, fn, argv, [path, *case.files])
+    out.drawn = case  # what was drawn (the tests change its malformation's names)
+    return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1927,6 +2967,7 @@ MAKERS = {
     "api": case_api,
     "floating": case_floating,
     "drives": case_drives,
+    "mjcf": case_mjcf,
 }
 
 

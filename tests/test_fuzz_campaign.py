@@ -120,14 +120,21 @@ _TWO_LINKS = """<robot name="arm">
 
 
 def test_tiny_seeded_run(tmp_path):
-    """Four cases; the summary counts them and reruns of a case draw the same input."""
+    """Six cases (two of the mjcf target); the summary counts them and reruns of a case draw
+    the same input."""
+    pytest.importorskip("mujoco", reason="the mjcf target needs the 'mujoco' wheel")
     out = tmp_path / "run"
     campaign.main(
         [str(out), "--targets", "trees,api,floating,drives", "--count", "1", "--seed", "5"]
     )
+    campaign.main([str(out / "mjcf"), "--targets", "mjcf", "--count", "2", "--seed", "5"])
     doc = json.loads((out / "summary.json").read_text())
     assert sum(sum(c.values()) for c in doc["counts"].values()) == 4
+    doc = json.loads((out / "mjcf" / "summary.json").read_text())
+    assert doc["counts"]["mjcf"].get("ok", 0) + doc["counts"]["mjcf"].get("error", 0) == 2
     ctx = campaign.Context(tmp_path / "again")
+    again = Path(campaign.make_case(ctx, "mjcf", 1, 5).files[0])
+    assert again.read_text() == (out / "mjcf" / "work" / again.name).read_text()
     for target in ("trees", "drives"):
         again = Path(campaign.make_case(ctx, target, 0, 5).files[0])
         assert again.read_text() == (out / "work" / again.name).read_text()
@@ -232,3 +239,66 @@ def test_a_number_written_in_an_odd_form_reads_back(v):
     for _ in range(60):
         text = campaign._decimal(rng, v)
         assert float(text) == v, text
+
+
+_FLOATING_MJCF = """<mujoco model="f">
+  <compiler angle="degree" eulerseq="zyx"/>
+  <option gravity="0.5 -1 -9.5"/>
+  <worldbody>
+    <body name="base" pos="0 0 1" euler="10 20 30"><freejoint name="root"/>
+      <inertial pos="0.01 0 0" mass="3" diaginertia="0.05 0.06 0.07" axisangle="1 1 0 40"/>
+      <body name="a" pos="0.2 0 0" xyaxes="0 1 0 -1 0 0">
+        <joint name="h" axis="0 1 0" armature="0.1" damping="0.4"/>
+        <inertial pos="0.1 0 0" mass="1" fullinertia="0.01 0.02 0.02 0.001 0 0"/>
+        <body name="b" pos="0.3 0 0" zaxis="0 1 1">
+          <joint name="s" type="ball" pos="{anchor}"/>
+          <geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.03"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_the_mjcf_oracle_catches_other_dynamics(tmp_path):
+    """check_mjcf_dynamics compares mindyn's inverse dynamics, W_b (Y pi) and mass matrix with
+    MuJoCo's on a free root, a hinge and a ball joint (coordinates converted): the file's own
+    robot passes, the same robot against a file whose ball joint sits 1 mm away is wrong."""
+    pytest.importorskip("mujoco", reason="the mjcf target needs the 'mujoco' wheel")
+    import warnings
+
+    import mindyn
+    import numpy as np
+
+    path, moved = tmp_path / "f.xml", tmp_path / "moved.xml"
+    path.write_text(_FLOATING_MJCF.replace("{anchor}", "0 0 0"))
+    moved.write_text(_FLOATING_MJCF.replace("{anchor}", "0.001 0 0"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the hinge's terms, left out below a floating base
+        robot = mindyn.load(path)
+    assert robot.joint_types == ["floating", "revolute", "spherical"]
+    rng = np.random.default_rng(0)
+    assert campaign.check_mjcf_dynamics(robot, path, rng)[0] == "ok"
+    assert campaign.check_mjcf_dynamics(robot, moved, rng)[0] == "wrong"
+    assert campaign.check_mjcf_read(robot, path, {})[0] == "ok"
+    assert campaign.check_mjcf_read(robot, path, {"h": 2.0})[0] == "wrong"
+
+
+def test_a_malformed_mjcf_case_is_refused_naming_it(tmp_path):
+    """The first malformed case of the mjcf target (seed 3) is an error whose one line names
+    what the malformation is in; the same file with the names the refusal must give changed
+    is called refused without naming them."""
+    pytest.importorskip("mujoco", reason="the mjcf target needs the 'mujoco' wheel")
+    ctx = campaign.Context(tmp_path)
+    for index in range(60):
+        case = campaign.make_case(ctx, "mjcf", index, 3)
+        if "malformed" in case.label:
+            break
+    else:
+        raise AssertionError("no malformed case drawn")
+    kind, detail = case.fn()
+    assert kind == "error", (case.label, detail)
+    case.drawn.mal = (case.drawn.mal[0], ("'no such name'",))
+    kind, detail = case.fn()
+    assert kind == "wrong" and "refused without naming 'no such name'" in detail, detail

@@ -1031,3 +1031,305 @@ def test_write_mjcf_refuses_none_without_offering_it(tmp_path):
         write_mjcf(robot, np.zeros(7), tmp_path / "a.xml")
     assert "None" not in str(e.value)
     assert not list(tmp_path.iterdir())
+
+
+BRANCHES_MJCF = """
+<mujoco model="branches">
+  <compiler angle="radian"/>
+  <worldbody>
+    <body name="torso" pos="0 0 0.5">
+      <joint name="waist" axis="0 0 1"/>
+      <geom type="box" size="0.1 0.2 0.3"/>
+      <body name="left" pos="0 0.25 0.2">
+        <joint name="left" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.04"/>
+      </body>
+      <body name="right" pos="0 -0.25 0.2" euler="0.3 0 0">
+        <joint name="right" axis="1 0 0"/>
+        <geom type="capsule" fromto="0 0 0 0.3 0 0.1" size="0.04"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <fixed name="both" {terms}>
+      <joint joint="left" coef="20"/><joint joint="right" coef="-15"/>
+    </fixed>
+  </tendon>
+</mujoco>
+"""
+
+
+def test_tendon_armature_across_branches_is_refused_by_name(tmp_path):
+    """MuJoCo adds a tendon's armature to its joint-space inertia only where that sparse matrix
+    has entries, between joints of one branch: a tendon over two sibling joints gets a * c^2
+    on each diagonal but not the a * c1 * c2 between them that J^T a J has. Read as a motor,
+    mindyn's model would have the whole J^T a J, not MuJoCo's dynamics (it was read so, 5 %
+    off mj_inverse): refused naming the tendon and the joints. Its damping and frictionloss,
+    forces through J, are MuJoCo's exactly and still read."""
+    path = tmp_path / "branches.xml"
+    path.write_text(BRANCHES_MJCF.format(terms='armature="0.01"'), encoding="utf-8")
+    m = mujoco.MjModel.from_xml_path(str(path))
+    bare = mujoco.MjModel.from_xml_path(str(path))
+    bare.tendon_armature[:] = 0.0
+    left, right = (int(m.jnt_dofadr[m.joint(n).id]) for n in ("left", "right"))
+    added = full_mass_matrix(m, m.qpos0) - full_mass_matrix(bare, bare.qpos0)
+    # MuJoCo's behaviour, pinned: the diagonal terms, nothing between the branches
+    np.testing.assert_allclose(added[left, left], 0.01 * 400, rtol=1e-12)
+    np.testing.assert_allclose(added[right, right], 0.01 * 225, rtol=1e-12)
+    assert added[left, right] == 0.0
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load(path)
+    said = str(e.value)
+    assert str(path) in said and "\n" not in said
+    assert "tendon 'both' has armature 0.01" in said and "'left' and 'right'" in said, said
+    # without armature: the tendon's damping and frictionloss are read, MuJoCo's dynamics
+    path.write_text(BRANCHES_MJCF.format(terms='damping="0.3" frictionloss="0.2"'))
+    robot = mindyn.load(path)
+    assert robot.transmission.motors[0] == "both"
+    m = mujoco.MjModel.from_xml_path(str(path))
+    q, dq, ddq = states(robot, np.random.default_rng(4), speed=(0.3, 1.0))
+    coefs = {"waist": 0.0, "left": 20.0, "right": -15.0}
+    J = np.array([coefs[name] for name in robot.joint_names])
+    ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)  # damping in, frictionloss out
+    ref += np.outer(0.2 * np.sign(dq @ J), J)
+    got = robot.inverse_dynamics(q, dq, ddq, robot.parameters(rotor=True, friction=True))
+    assert_close(got, ref, TOL, "tendon across branches (damping, frictionloss) vs mj_inverse")
+
+
+BRANCHES_URDF = """<robot name="branches">
+  <link name="base"/>
+  <link name="a"><inertial><mass value="1"/><origin xyz="0.1 0 0"/>
+    <inertia ixx="0.01" iyy="0.02" izz="0.02" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="b"><inertial><mass value="2"/><origin xyz="0 0.1 0"/>
+    <inertia ixx="0.02" iyy="0.01" izz="0.03" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="ja" type="revolute"><parent link="base"/><child link="a"/>
+    <origin xyz="0 0.2 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="jb" type="revolute"><parent link="base"/><child link="b"/>
+    <origin xyz="0 -0.2 0"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <transmission name="diff"><type>transmission_interface/DifferentialTransmission</type>
+    <actuator name="m1"><role>actuator1</role><mechanicalReduction>50</mechanicalReduction>
+    </actuator>
+    <actuator name="m2"><role>actuator2</role><mechanicalReduction>50</mechanicalReduction>
+    </actuator>
+    <joint name="ja"><role>joint1</role></joint>
+    <joint name="jb"><role>joint2</role></joint>
+  </transmission>
+</robot>
+"""
+
+
+def test_mjcf_export_refuses_motor_inertia_coupling_two_branches(tmp_path):
+    """The writer's side of the same: motors of a differential over two joints hanging from
+    the base (two branches) with rotor inertia would be tendons whose armature MuJoCo applies
+    without the terms between the branches; refused naming the motor and joints. Without rotor
+    inertia, or with the terms on the joints, the file is written and MuJoCo's inverse
+    dynamics is the motor-side formula."""
+    path = tmp_path / "branches.urdf"
+    path.write_text(BRANCHES_URDF)
+    robot = mindyn.load(path)
+    assert robot.drive_side == "motor" and not robot.is_serial
+    p = physical_params(robot, np.random.default_rng(9))
+    with pytest.raises(mindyn.ModelError) as e:
+        write_mjcf(robot, p, tmp_path / "x.xml")
+    said = str(e.value)
+    assert "motor 'm1' has rotor inertia" in said and "'ja' and 'jb'" in said, said
+    assert not (tmp_path / "x.xml").exists()
+    inertial, ia, fv, fc = split(robot, p)
+    p[10::13] = 0.0
+    out = write_mjcf(robot, p, tmp_path / "ok.xml").path
+    T = robot.transmission.T
+    m = mujoco.MjModel.from_xml_path(str(out))
+    q, dq, ddq = states(robot, np.random.default_rng(3))
+    model = pin.buildModelFromUrdf(str(path))  # a tree: Pinocchio's own URDF parser
+    set_pinocchio_params(model, robot, inertial)
+    rnea = pin_rnea(model, q, dq, ddq)
+    ref = rnea + (fv * (dq @ T.T)) @ T + (fc * np.sign(dq @ T.T)) @ T
+    got, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(got + (fc * np.sign(dq @ T.T)) @ T, ref, TOL, "differential across branches")
+    write_mjcf(robot, p, tmp_path / "joint.xml", drive_side="joint")
+
+
+WRIST_URDF = """<robot name="wrist">
+  <link name="base"/>
+  <link name="arm"/>
+  <link name="cross"/>
+  <link name="hand"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="arm"/>
+    <origin xyz="0 0 0.3" rpy="0.2 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="pitch" type="revolute"><parent link="arm"/><child link="cross"/>
+    <origin xyz="0.4 0 0" rpy="0 0 0.4"/><axis xyz="0 1 0"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="yaw" type="revolute"><parent link="cross"/><child link="hand"/>
+    <origin xyz="0.02 0 0.05" rpy="{rpy}"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="2"/></joint>
+  <joint name="slide" type="prismatic"><parent link="hand"/><child link="tip"/>
+    <origin xyz="0.1 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="-0.1" upper="0.1" effort="10" velocity="2"/></joint>
+  <link name="tip"/>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("rpy", ["0 0 0", "0 0.3 0"])
+def test_mjcf_export_of_a_massless_link_between_two_joints(rpy, tmp_path):
+    """A universal wrist: a massless link ('cross') between two revolute joints. MuJoCo refuses
+    a moving body without mass, so export --mjcf failed for such a robot (and for a robot read
+    from an MJCF body with two joints, written as a new file). Where the link's frame turns
+    with its joint only (no rotation to the next joint), both joints go into one body, the
+    second with its anchor: mj_inverse of the file is Pinocchio's rnea plus the joint terms,
+    and the file reads back with the same dynamics; with a rotation between them MuJoCo's
+    refusal is said in one line."""
+    path = tmp_path / "wrist.urdf"
+    path.write_text(WRIST_URDF.replace("{rpy}", rpy))
+    robot = mindyn.load(path)
+    assert robot.joint_names == ["shoulder", "pitch", "yaw", "slide"]
+    rng = np.random.default_rng(13)
+    p = physical_params(robot, rng)
+    p[13:23] = 0.0  # the cross link: no mass
+    out = tmp_path / "wrist.xml"
+    if rpy != "0 0 0":
+        with pytest.raises(mindyn.ModelError) as e:
+            write_mjcf(robot, p, out)
+        assert "mass and inertia of moving bodies" in str(e.value) and "\n" not in str(e.value)
+        return
+    write_mjcf(robot, p, out)
+    m = mujoco.MjModel.from_xml_path(str(out))
+    assert m.nbody == 4 and m.body("hand").jntnum == 2  # world, arm, hand (pitch, yaw), tip
+    inertial, ia, fv, fc = split(robot, p)
+    model = pin.buildModelFromUrdf(str(path))
+    set_pinocchio_params(model, robot, inertial)
+    q, dq, ddq = states(robot, rng)
+    ref = pin_rnea(model, q, dq, ddq) + ia * ddq + fv * dq + fc * np.sign(dq)
+    got, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(got + fc * np.sign(dq), ref, TOL, "massless link in one body vs Pinocchio")
+    again = mindyn.load(out)
+    assert again.joint_names == robot.joint_names
+    got = again.inverse_dynamics(q, dq, ddq, again.parameters(rotor=True, friction=True))
+    assert_close(got, ref, TOL, "massless link in one body read back vs Pinocchio")
+
+
+def test_mjcf_tendon_motors_that_do_not_determine_the_joints_are_refused_by_name(tmp_path):
+    """Two motor tendons and two joints with terms of their own, four motors for four joints,
+    but the tendon over the two joints with terms is their sum: the rows do not determine the
+    other tendon's joints. The refusal said 'the tendons as motors: mjcf: ... rank deficient'
+    without naming a tendon; it names them and the joints with terms, in one line."""
+    chain = "".join(
+        f'<body name="b{k}" pos="0.2 0 0"><joint name="h{k}" axis="0 {k % 2} {1 - k % 2}"'
+        + (' damping="0.3"' if k < 2 else "")
+        + '/><inertial pos="0.1 0 0" mass="1" diaginertia="0.01 0.01 0.01"/>'
+        for k in range(4)
+    )
+    path = tmp_path / "motors.xml"
+    path.write_text(
+        f"<mujoco><worldbody>{chain}{'</body>' * 4}</worldbody><tendon>"
+        '<fixed name="m0" armature="0.1"><joint joint="h2" coef="2"/><joint joint="h3" coef="1"/>'
+        '</fixed><fixed name="over_t" damping="0.1"><joint joint="h0" coef="1"/>'
+        '<joint joint="h1" coef="1"/></fixed></tendon></mujoco>'
+    )
+    mujoco.MjModel.from_xml_path(str(path))  # MuJoCo takes it
+    with pytest.raises(mindyn.ModelError) as e:
+        mindyn.load(path)
+    said = str(e.value)
+    assert "\n" not in said and str(path) in said
+    assert "tendons 'm0', 'over_t' carry motor terms" in said and "(on 'h0', 'h1')" in said
+    assert "rank deficient" in said, said
+
+
+def _named_chain(names) -> str:
+    """A chain of bodies from ``names`` [(body name or None, joint names)], each with mass."""
+    text = ""
+    for body, joints in names:
+        text += f'<body{"" if body is None else f" name={chr(34)}{body}{chr(34)}"} pos="0.2 0 0">'
+        for k, joint in enumerate(joints):
+            name = "" if joint is None else f' name="{joint}"'
+            text += f'<joint{name} axis="{k % 2} 0 {1 - k % 2}" pos="0.0{k} 0 0"/>'
+        text += '<inertial pos="0.1 0.02 0" mass="1" diaginertia="0.01 0.02 0.03"/>'
+    return f"<mujoco><worldbody>{text}{'</body>' * len(names)}</worldbody></mujoco>"
+
+
+def test_mjcf_names_that_clash_in_the_model_are_refused_by_name_or_kept_apart(tmp_path):
+    """mindyn names the link of each joint but the last of a body BODY__JOINT, an unnamed body
+    or joint by its number, and the fixed joint of a jointless body BODY__fixed. A body named
+    as such a link was refused as 'not a valid URDF: link ... is not unique' (of an MJCF); it
+    is refused naming both, as an unnamed joint whose number another's name is. A joint named
+    BODY__fixed is kept apart from the merged body's joint: the file loads, with MuJoCo's
+    dynamics."""
+    path = tmp_path / "names.xml"
+    for chain, said in (
+        ([("b0", ["j1", "j2"]), ("b0__j1", ["j3"])],
+         "the link of joint 'j1' of body 'b0' and body 'b0__j1' are both 'b0__j1'"),
+        ([("b0", [None]), ("b1", ["joint0"])],
+         "joint 'joint0' and unnamed joint 0 are both 'joint0'"),
+        ([("b0", ["j0"]), (None, ["j1"]), ("body2", ["j2"])],
+         "unnamed body 2 and body 'body2' are both 'body2'"),
+    ):  # fmt: skip
+        path.write_text(_named_chain(chain))
+        mujoco.MjModel.from_xml_path(str(path))  # MuJoCo takes it
+        with pytest.raises(mindyn.ModelError) as e:
+            mindyn.load(path)
+        assert said in str(e.value) and "\n" not in str(e.value), str(e.value)
+    path.write_text(_named_chain([("b0", ["j0"]), ("b1", []), ("b2", ["b1__fixed"])]))
+    robot = mindyn.load(path)
+    assert robot.joint_names == ["j0", "b1__fixed"]
+    m = mujoco.MjModel.from_xml_path(str(path))
+    q, dq, ddq = states(robot, np.random.default_rng(2))
+    ref, _ = mj_inverse(m, robot.joint_names, q, dq, ddq)
+    assert_close(robot.inverse_dynamics(q, dq, ddq), ref, TOL, "joint named BODY__fixed")
+
+
+TWO_JOINT_BODY = """<mujoco model="two">
+  <worldbody>
+    <body name="a" pos="0 0 0.3" euler="10 0 20">
+      <joint name="h" axis="0 0 1"/>
+      <inertial pos="0.1 0 0" mass="1.5" fullinertia="0.02 0.03 0.025 0.001 0 0.002"/>
+      <body name="b" pos="0.4 0 0" xyaxes="0 1 0 -1 0 0">
+        <joint name="first" axis="0 1 0" damping="0.2"/>
+        <joint name="second" type="{kind}" pos="0.03 0.01 0" {axis}/>
+        <inertial pos="0.1 0.02 0" mass="1" diaginertia="0.01 0.02 0.03" euler="5 10 15"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("kind", ["hinge", "slide", "ball"])
+def test_a_body_with_two_joints_written_as_a_new_mjcf_has_mujocos_dynamics(kind, tmp_path):
+    """A body with two joints is read with a massless link before its second joint; written as
+    a new MJCF (from a description that is not the file) that link was a body without mass,
+    which MuJoCo refuses. Its joints share a body again: MuJoCo's inverse dynamics of the new
+    file is that of the original at the same qpos, qvel, qacc (joints by name)."""
+    path = tmp_path / "two.xml"
+    axis = "" if kind == "ball" else 'axis="1 0 0"'
+    path.write_text(TWO_JOINT_BODY.replace("{kind}", kind).replace("{axis}", axis))
+    if kind == "ball":  # the hinge's damping, outside the dynamics of a ball joint's robot
+        with pytest.warns(UserWarning, match="are not in the dynamics"):
+            robot = mindyn.load(path)
+    else:
+        robot = mindyn.load(path)
+    assert robot.link_names[2:] == ["b__first", "b"]
+    p = robot.parameters(rotor=True, friction=True)
+    out = write_mjcf(robot, p, tmp_path / "new.xml", source=tmp_path / "none.urdf").path
+    old, new = (mujoco.MjModel.from_xml_path(str(f)) for f in (path, out))
+    assert new.nbody == old.nbody and new.body("b").jntnum == 2
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        state = rng.normal(size=old.nq), rng.normal(size=old.nv), rng.normal(size=old.nv)
+        got = []
+        for m in (old, new):
+            m.opt.disableflags = int(OFF)
+            d = mujoco.MjData(m)
+            for name in ("h", "first", "second"):
+                j = m.joint(name).id
+                adr, dof = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
+                width = 4 if kind == "ball" and name == "second" else 1
+                d.qpos[adr : adr + width] = state[0][adr : adr + width]
+                d.qvel[dof : dof + width - (width > 1)] = state[1][dof : dof + width - (width > 1)]
+                d.qacc[dof : dof + width - (width > 1)] = state[2][dof : dof + width - (width > 1)]
+            mujoco.mj_normalizeQuat(m, d.qpos)
+            mujoco.mj_inverse(m, d)
+            got.append(d.qfrc_inverse.copy())
+        assert_close(got[1], got[0], TOL, "two joints in a body, new MJCF vs the original")

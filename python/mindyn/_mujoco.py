@@ -18,7 +18,9 @@ its frictionloss as a dry friction of at most ``frictionloss`` on the tendon vel
 Fc_k sign(T_k dq))`` with ``T_k = J``. The model read then has a transmission (format
 ``mjcf``): a motor per such tendon and a direct motor (ratio 1, the joint's terms) per other
 joint, the drive terms on the motors. A spatial tendon carrying such terms is refused by name,
-as is tendon stiffness, and tendons that are not one motor per joint they turn. Tendons
+as is tendon stiffness, tendons that are not one motor per joint they turn, and armature on a
+tendon turning joints on different branches of the tree (MuJoCo adds it to its mass matrix
+only between joints of one branch: :func:`_one_branch`). Tendons
 without such terms (outside a differential's), and actuators, do not enter the dynamics and are
 not read.
 
@@ -28,7 +30,9 @@ which MJCF lacks, from a custom numeric ``velocity_limit:JOINT`` (:data:`VELOCIT
 
 A link frame of the model is the MuJoCo body frame moved to the anchor (``pos``) of the body's
 last joint, with the body's axes; a body with several joints gets one massless link per joint
-before its last one (``BODY__JOINT``). Jointless bodies are merged into the link they hang from.
+before its last one (``BODY__JOINT``; a body of that name is refused by name, as are unnamed
+bodies and joints, named by number, whose name another has). Jointless bodies are merged into
+the link they hang from.
 
 A free joint (:func:`free_joint`: one, on a body hanging from the world, with every other joint
 below that body) is the model's floating joint (Pinocchio's free-flyer) from the world to the
@@ -155,6 +159,7 @@ def check(m, path) -> None:
     """Refuses, in one line naming the element, what the model cannot represent."""
     mujoco = require("reading an MJCF")
     free_joint(m, path)
+    _distinct_names(m, path)
     for j in range(m.njnt):
         name, body = joint_name(m, j), body_name(m, int(m.jnt_bodyid[j]))
         where = f"{path}: joint '{name}' (body '{body}')"
@@ -230,6 +235,44 @@ def check(m, path) -> None:
         )
     if m.nv == 0:
         raise _core.ModelError(f"{path}: no hinge, slide or free joint")
+
+
+def _distinct_names(m, path) -> None:
+    """Refuses, naming them, two links of the model with one name: a body named as the link of
+    one of another body's several joints (``BODY__JOINT``), or an unnamed body or joint whose
+    name by number (``body3``, ``joint2``) another has."""
+    mujoco = require("reading an MJCF")
+    seen: dict[str, str] = {}
+    for b in range(1, m.nbody):
+        for j in body_joints(m, b)[:-1] + [None]:
+            name = body_name(m, b) if j is None else link_name(m, b, j)
+            if j is not None:
+                what = f"the link of joint '{joint_name(m, j)}' of body '{body_name(m, b)}'"
+            else:
+                what = f"body '{name}'" if _named_body(m, b) else f"unnamed body {b}"
+            if name in seen:
+                raise _core.ModelError(
+                    f"{path}: {seen[name]} and {what} are both '{name}' in the model (a body of "
+                    "several joints has a link per joint before its last, named BODY__JOINT; "
+                    "an unnamed body or joint is named by its number): rename one"
+                )
+            seen[name] = what
+    joints: dict[str, int] = {}
+    for j in range(m.njnt):
+        name = joint_name(m, j)
+        if name in joints:
+            unnamed = joints[name] if mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) else j
+            raise _core.ModelError(
+                f"{path}: joint '{name}' and unnamed joint {unnamed} "
+                f"are both '{name}' in the model (an unnamed joint is named by its number): "
+                "name it"
+            )
+        joints[name] = j
+
+
+def _named_body(m, b: int) -> bool:
+    mujoco = require("reading an MJCF")
+    return bool(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b))
 
 
 def free_joint(m, path) -> int | None:
@@ -426,6 +469,8 @@ def _with_tendon_motors(m, core, path, terms: tuple[np.ndarray, np.ndarray, np.n
             row[index[jname]] = c
             covered.setdefault(jname, tname)
         tt = tendon_terms(m, t)
+        if tt["armature"] != 0:
+            _one_branch(m, t, path)
         rows.append(row)
         motors.append(tname)
         types.append("tendon")
@@ -453,23 +498,56 @@ def _with_tendon_motors(m, core, path, terms: tuple[np.ndarray, np.ndarray, np.n
             ):
                 direct(k)
                 values[-1] = [0.0, 0.0, 0.0]
+    extra = [x for x in motors[len(tendons) :] if x in covered]
+    said = (
+        f"{path}: tendons {', '.join(repr(x) for x in motors[: len(tendons)])} carry motor "
+        f"terms: with the joints' own terms"
+        + (f" (on {', '.join(repr(x) for x in extra)})" if extra else "")
+    )
     if len(rows) != n:
-        extra = [x for x in motors[len(tendons) :] if x in covered]
         raise _core.ModelError(
-            f"{path}: tendons {', '.join(repr(x) for x in motors[: len(tendons)])} carry motor "
-            f"terms: with the joints' own terms"
-            + (f" (on {', '.join(repr(x) for x in extra)})" if extra else "")
-            + f" that is {len(rows)} motors for {n} joints, and the model reads motors only "
-            "one per joint (put the terms either on the tendons or on the joints)"
+            f"{said} that is {len(rows)} motors for {n} joints, and the model reads motors "
+            "only one per joint (put the terms either on the tendons or on the joints)"
         )
     try:
         core = core.with_transmission(T=np.array(rows), motors=motors, types=types, format="mjcf")
-    except _core.ModelError as e:
-        raise _core.ModelError(f"{path}: the tendons as motors: {e}") from None
+    except _core.ModelError as e:  # rows that do not determine the joints
+        raise _core.ModelError(
+            f"{said} as motors, {e} (put the terms either on the tendons or on the joints)"
+        ) from None
     values_ = np.array(values)
     return core.with_joint_terms(
         motor_rotor=values_[:, 0], motor_viscous=values_[:, 1], motor_coulomb=values_[:, 2]
     )
+
+
+def _one_branch(m, t: int, path) -> None:
+    """Refuses the motor tendon ``t`` carrying armature when two of its joints are on different
+    branches of the tree (neither moves the other): MuJoCo adds a tendon's armature to its
+    joint-space inertia only where that matrix has entries, between joints of one branch, so
+    its dynamics then have no ``J^T armature J``, the motor's inertia (they drop its terms
+    between the branches)."""
+    joints = [j for j, _ in tendon_joints(m, t) or []]
+
+    def chain(j: int) -> set[int]:  # the dof of joint j and those of the joints moving it
+        out, dof = set(), int(m.jnt_dofadr[j])
+        while dof >= 0:
+            out.add(dof)
+            dof = int(m.dof_parentid[dof])
+        return out
+
+    for a in joints:
+        for b in joints:
+            if a < b and int(m.jnt_dofadr[a]) not in chain(b):
+                if int(m.jnt_dofadr[b]) not in chain(a):
+                    raise _core.ModelError(
+                        f"{path}: tendon '{tendon_name(m, t)}' has armature "
+                        f"{float(m.tendon_armature[t])!r} and turns joints '{joint_name(m, a)}' "
+                        f"and '{joint_name(m, b)}', on different branches of the tree: MuJoCo "
+                        "adds a tendon's armature to its mass matrix only between joints of "
+                        "one branch, not as the motor inertia J^T armature J (put the armature "
+                        "on the joints, or couple joints of one branch)"
+                    )
 
 
 def folded_tendons(m) -> list[int]:
@@ -550,6 +628,7 @@ def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray, speed: np.nda
     hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
     parts = [f'<robot name="{_attr(name)}">', f'<link name="{_attr(body_name(m, 0))}"/>']
     link_of = {0: body_name(m, 0)}
+    taken = {joint_name(m, j) for j in range(m.njnt)}  # a merged body's joint: a name of its own
     for b in range(1, m.nbody):
         p = int(m.body_parentid[b])
         if m.body_mocapid[b] >= 0 or p not in link_of:
@@ -562,7 +641,11 @@ def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray, speed: np.nda
         if not joints:
             link = body_name(m, b)
             parts.append(_link(link, m, b, np.zeros(3)))
-            parts.append(_joint(f"{link}__fixed", "fixed", parent, link, pre))
+            fixed = f"{link}__fixed"
+            while fixed in taken:
+                fixed += "_"
+            taken.add(fixed)
+            parts.append(_joint(fixed, "fixed", parent, link, pre))
             link_of[b] = link
             continue
         previous = np.zeros(3)

@@ -45,7 +45,9 @@ With transmissions (``q_m = T q + c``, ``tau = T^T tau_m``), motor by motor (row
 - a motor coupling several joints is a fixed tendon whose coefficients are its row of ``T``
   (which ``gear`` on a joint actuator cannot express), driven by a ``<motor>`` on the tendon with
   ``gear`` 1; with the drive terms on the motors they go on the tendon (its ``armature``,
-  ``damping``, ``frictionloss``: ``T_i^T Ia T_i ddq`` and so on; MuJoCo 3.4 and later);
+  ``damping``, ``frictionloss``: ``T_i^T Ia T_i ddq`` and so on; MuJoCo 3.4 and later), but for
+  the rotor inertia of a motor coupling joints on different branches of the tree, refused:
+  MuJoCo adds a tendon's armature to its mass matrix only between joints of one branch;
 - with the drive terms on the joints they are the joints' ``armature``, ``damping``,
   ``frictionloss`` as without transmissions; the motor offsets ``c`` are not written (they do
   not change the dynamics).
@@ -102,7 +104,10 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         ``frictionloss`` changed (comments and everything else kept; bodies merged into a
         moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
-        the joint frame, with ``<inertial>``, a hinge or slide joint (axis, range, the effort
+        the joint frame (a hinge's or slide's link without inertia and with one child hinge,
+        slide or ball joint, not turned from it, shares that joint's body: MuJoCo has no
+        massless moving body), with
+        ``<inertial>``, a hinge or slide joint (axis, range, the effort
         limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), a ball
         joint for a spherical joint or, for a floating root, a ``<freejoint>`` (see the
         module's docstring), the
@@ -220,6 +225,8 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     coupled = [i for i, (_, row) in enumerate(motors) if len(row) > 1]
     if on_motors:
         _check_motor_side(robot, tr, bool(coupled))
+        for i in coupled:
+            _one_branch(robot, motors[i], _slot(terms, i, f"motor '{motors[i][0]}'")[0])
     drive = _joint_drive(robot, terms, motors, on_motors)
     root = ET.Element("mujoco", {"model": robot.name})
     root.append(_comment(_mapping_comment(robot, on_motors, tr is not None)))
@@ -228,20 +235,33 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     world = ET.SubElement(root, "worldbody")
     parents = robot.parents
     bodies: list[ET.Element] = []
+    # where each joint frame sits in its body's frame: the identity, or for a joint sharing the
+    # body of a massless link before it, a translation
+    offsets: list[np.ndarray] = []
     lim = robot.limits
     speeds: list[tuple[str, float]] = []
     for k in range(robot.n):
-        parent = world if parents[k] < 0 else bodies[parents[k]]
         place = robot.joint_pre(k)
         if parents[k] >= 0:
             place = robot.joint_post(parents[k]) @ place
-        body = ET.SubElement(parent, "body", {"name": robot.link_names[k + 1], **_pose(place)})
+        if _shares_body(robot, terms, k):  # MuJoCo has no massless moving body
+            body = bodies[parents[k]]
+            offset = offsets[parents[k]] @ place
+            body.set("name", robot.link_names[k + 1])
+            body.remove(next(e for e in body if e.tag == "inertial"))  # the massless link's
+        else:
+            parent = world if parents[k] < 0 else bodies[parents[k]]
+            if parents[k] >= 0:
+                place = offsets[parents[k]] @ place
+            body = ET.SubElement(parent, "body", {"name": robot.link_names[k + 1], **_pose(place)})
+            offset = np.eye(4)
         bodies.append(body)
+        offsets.append(offset)
         mass, com, inertia, more = centroidal(
             terms.inertial[10 * k : 10 * k + 10], k + 1, robot.link_names[k + 1], kind="an MJCF"
         )
         notes += more
-        post = robot.joint_post(k)
+        post = offset @ robot.joint_post(k)
         com = post[:3, :3] @ com + post[:3, 3]
         inertia = post[:3, :3] @ inertia @ post[:3, :3].T
         ET.SubElement(body, "inertial", _inertial(mass, com, inertia))
@@ -252,13 +272,18 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             continue
         if robot.joint_types[k] == "spherical":
             _no_drive_terms(robot, k, drive[k])
-            ET.SubElement(body, "joint", {"name": robot.joint_names[k], "type": "ball"})
+            ball = {"name": robot.joint_names[k], "type": "ball"}
+            if np.any(offset[:3, 3] != 0):  # a joint after others in its body: its anchor
+                ball["pos"] = _vec(offset[:3, 3])
+            ET.SubElement(body, "joint", ball)
             continue
         joint = {
             "name": robot.joint_names[k],
             "type": "hinge" if robot.joint_types[k] == "revolute" else "slide",
             "axis": _vec(robot.axes[k]),
         }
+        if np.any(offset[:3, 3] != 0):  # a joint after others in its body: its anchor
+            joint["pos"] = _vec(offset[:3, 3])
         lo, hi = lim["lower"][k], lim["upper"][k]
         if np.isfinite(lo) and np.isfinite(hi):
             joint.update(limited="true", range=_vec((lo, hi)))
@@ -280,7 +305,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
             "(the velocity, the angular velocity in the body's axes, is the same)"
         )
     if robot.is_serial:
-        tool = robot.joint_post(robot.n - 1) @ robot.tool
+        tool = offsets[-1] @ robot.joint_post(robot.n - 1) @ robot.tool
         ET.SubElement(bodies[-1], "site", {"name": "tool", **_pose(tool)})
     if coupled:
         tendons = ET.SubElement(root, "tendon")
@@ -329,6 +354,26 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text, encoding="utf-8")
     return Export(out, notes=notes)
+
+
+def _shares_body(robot: Robot, terms: JointTerms, k: int) -> bool:
+    """Whether hinge, slide or ball joint ``k`` goes into the body of its parent link, a link
+    without inertia (MuJoCo refuses a moving body without mass) of a hinge or slide joint with
+    no other child, whose frame is joint ``k``'s moved without rotation: MuJoCo's joints of one body
+    act one after the other, each about its axis through its anchor (``pos``) in the body's
+    axes, as the chain of the massless link does (mindyn reads such a body back as that)."""
+    parent = robot.parents[k]
+    kinds = (*_SINGLE_DOF, "spherical")  # MuJoCo refuses a ball joint followed by another
+    if parent < 0 or robot.joint_types[k] not in kinds or robot.joint_types[parent] not in kinds:
+        return False
+    if robot.joint_types[parent] == "spherical":
+        return False
+    if robot.parents.count(parent) != 1:
+        return False
+    if np.any(terms.inertial[10 * parent : 10 * parent + 10] != 0):
+        return False
+    turn = (robot.joint_post(parent) @ robot.joint_pre(k))[:3, :3]
+    return bool(np.array_equal(turn, np.eye(3)))
 
 
 def _no_drive_terms(robot: Robot, k: int, drive) -> None:
@@ -427,6 +472,35 @@ def _check_motor_side(robot: Robot, tr, coupled: bool) -> None:
             f"drive terms on motors coupling several joints go on tendons, whose armature "
             f"MuJoCo {mujoco.__version__} does not take as the motors' inertia (3.4 and later do)"
         )
+
+
+def _one_branch(robot: Robot, motor: tuple[str, list[tuple[int, float]]], ia: float) -> None:
+    """Refuses the rotor inertia ``ia`` of a motor coupling joints on different branches of the
+    tree (neither moves the other): MuJoCo adds a tendon's armature to its mass matrix only
+    between joints of one branch, so the MJCF would not have the motor's inertia
+    ``T_i^T Ia T_i`` (its terms between the branches dropped)."""
+    if ia == 0:
+        return
+    parents = robot.parents
+
+    def chain(k: int) -> set[int]:  # joint k and the joints moving it
+        out = set()
+        while k >= 0:
+            out.add(k)
+            k = parents[k]
+        return out
+
+    joints = [k for k, _ in motor[1]]
+    for a in joints:
+        for b in joints:
+            if a < b and a not in chain(b) and b not in chain(a):
+                raise ModelError(
+                    f"motor '{motor[0]}' has rotor inertia {ia!r} and couples joints "
+                    f"'{robot.joint_names[a]}' and '{robot.joint_names[b]}', on different "
+                    "branches of the tree: MuJoCo adds a tendon's armature to its mass matrix "
+                    "only between joints of one branch, not as the motor inertia T^T Ia T "
+                    "(write the drive terms on the joints: drive_side='joint')"
+                )
 
 
 _DRIVE = ("armature", "damping", "frictionloss")
