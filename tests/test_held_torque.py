@@ -200,3 +200,17 @@ def test_detect_takes_the_torque_as_the_logs_sidecar_says(tracking_log, tmp_path
     rc, out, err = cli_run(["detect", "planar3", ident, tracking_log])
     assert rc == 0, err
     assert f"torque held over each step, as {tracking_log.with_name('track.truth.json')}" in out
+
+
+def test_run_refuses_a_window_model_on_logs_read_as_held(tracking_log):
+    """Logs read for the dynamic model with their torque as held (interpolated to the samples)
+    are not what the window models integrate by integration='zoh': run says how to read them."""
+    from mindyn.identification import load_logs, run
+    from mindyn.identification.errors import IdentificationError
+
+    logs = load_logs([tracking_log], "planar3", filter="butter")
+    with pytest.raises(IdentificationError, match=r"read the logs with load_logs\(\.\.\., model"):
+        run("planar3", logs, model="integral", integration="zoh")
+    windows = load_logs([tracking_log], "planar3", filter="butter", model="integral")
+    assert "held" not in windows.fit.logs[0].processing["torque"]
+    assert run("planar3", windows, model="integral", integration="zoh").result is not None

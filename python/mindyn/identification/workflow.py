@@ -231,6 +231,14 @@ def run(
                 f"(decimated for the dynamic model only); read them with "
                 f"load_logs(..., model='{opts.model}')"
             )
+    held = [d for d in [*logs.fit.logs, *logs.validation.logs] if "held" in d.processing["torque"]]
+    if opts.model != "dynamic" and held:
+        raise IdentificationError(
+            f"run(model='{opts.model}'): the torques of {held[0].source} were read as held for "
+            "the dynamic model (taken at the middle of each period), which the window models "
+            "integrate by integration='zoh' instead; read the logs with "
+            f"load_logs(..., model='{opts.model}')"
+        )
     data, vdata = logs.fit.logs, logs.validation.logs
     choice, robot, base, record, lines = _friction(robot, data, opts, progress)
     res, res_doc = _fit(robot, base, data, logs.fit.files, opts, progress)
