@@ -83,6 +83,7 @@ def test_a_simulated_tracking_log_is_read_as_held_by_default(tracking_log):
     sidecar = tracking_log.with_name("track.truth.json")
     assert json.loads(sidecar.read_text())["simulation"]["torque"] == "held"
     assert f"(--torque held, as {sidecar} says: simulated with the command held" in text
+    assert "(read as held:" in doc["fit"]["raw"]["against"]  # the measure says what it scores
 
 
 def _inverse_log(tmp_path, name="inverse.csv"):
@@ -105,6 +106,7 @@ def test_logs_whose_sidecar_says_sampled_or_have_none_are_read_as_sampled(tmp_pa
     default, doc, text = _errors(inv)
     assert doc["reading"]["torque"] == "sampled"
     assert "torques: the command held" not in text
+    assert "read as held" not in doc["fit"]["raw"]["against"]
     assert default.max() < 5e-4
     held, _, _ = _errors(inv, "--torque", "held")
     assert held.max() > 5e-3

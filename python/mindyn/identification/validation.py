@@ -356,7 +356,13 @@ def _raw_and_moving(result, logs: list, effort, known=None) -> dict:
     tau = np.vstack([require_torque(r) for r in raws])
     hat = np.vstack(hats)
     raw = error_measures(tau, hat, effort=effort)
-    raw.update({"samples": int(tau.shape[0]), "against": RAW_AGAINST, "tau_hat": hats[0]})
+    against = RAW_AGAINST
+    if any("held" in d.processing.get("torque", {}) for d in logs):
+        against += (
+            " (read as held: the command held over each period taken at the samples, the "
+            "interpolation between the middles of the periods)"
+        )
+    raw.update({"samples": int(tau.shape[0]), "against": against, "tau_hat": hats[0]})
     if len(logs) > 1:
         raw["tau_hat"] = hats
     thr = [moving_threshold(r) for r in raws]
@@ -368,7 +374,7 @@ def _raw_and_moving(result, logs: list, effort, known=None) -> dict:
             "threshold": np.max([t for t, _ in thr], axis=0),
             "rule": thr[0][1],
             "fraction": moving["counted"] / max(tau.shape[0], 1),
-            "against": RAW_AGAINST,
+            "against": against,
         }
     )
     return {"raw": raw, "moving": moving}
