@@ -46,10 +46,15 @@ def _external_spans(path) -> list:
         return []
     ext = read_json(p, what="truth file").get("external")
     spans = ext.get("spans") if isinstance(ext, dict) else None
+
+    def number(x) -> bool:
+        return isinstance(x, (int, float)) and not isinstance(x, bool)
+
     ok = isinstance(spans, list) and all(
         isinstance(s, dict)
-        and all(isinstance(s.get(k), (int, float)) for k in ("start_s", "stop_s"))
+        and all(number(s.get(k)) for k in ("start_s", "stop_s"))
         and isinstance(s.get("peak"), list)
+        and all(number(x) for x in s["peak"])
         for s in spans
     )
     return list(spans) if ok and spans is not None else []

@@ -231,7 +231,11 @@ def run(
                 f"(decimated for the dynamic model only); read them with "
                 f"load_logs(..., model='{opts.model}')"
             )
-    held = [d for d in [*logs.fit.logs, *logs.validation.logs] if "held" in d.processing["torque"]]
+    held = [
+        d
+        for d in [*logs.fit.logs, *logs.validation.logs]
+        if "held" in d.processing.get("torque", {})
+    ]
     if opts.model != "dynamic" and held:
         raise IdentificationError(
             f"run(model='{opts.model}'): the torques of {held[0].source} were read as held for "
