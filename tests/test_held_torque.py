@@ -72,6 +72,8 @@ def test_the_dynamic_model_fits_a_held_command_when_told_so(tracking_log):
     assert doc["reading"]["torque"] == "held"
     assert sdoc["reading"]["torque"] == "sampled"
     assert "(--torque held)" in text
+    _, _, stext = _errors(tracking_log, "--torque", "sampled")
+    assert "torques: taken at their samples (--torque sampled given; " in stext  # overrides
 
 
 def test_a_simulated_tracking_log_is_read_as_held_by_default(tracking_log):
@@ -106,6 +108,7 @@ def test_logs_whose_sidecar_says_sampled_or_have_none_are_read_as_sampled(tmp_pa
     default, doc, text = _errors(inv)
     assert doc["reading"]["torque"] == "sampled"
     assert "torques: the command held" not in text
+    assert f"torques: taken at their samples (as {inv.with_name('inverse.truth.json')} says" in text
     assert "read as held" not in doc["fit"]["raw"]["against"]
     assert default.max() < 5e-4
     held, _, _ = _errors(inv, "--torque", "held")

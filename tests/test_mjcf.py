@@ -1180,8 +1180,9 @@ def test_mjcf_export_of_a_massless_link_between_two_joints(rpy, tmp_path):
     from an MJCF body with two joints, written as a new file). Where the link's frame turns
     with its joint only (no rotation to the next joint), both joints go into one body, the
     second with its anchor: mj_inverse of the file is Pinocchio's rnea plus the joint terms,
-    and the file reads back with the same dynamics; with a rotation between them MuJoCo's
-    refusal is said in one line."""
+    and the file reads back with the same dynamics; with a rotation between them the robot is
+    refused before MuJoCo's compiler, in one line naming the link, its child joint and the
+    turn."""
     path = tmp_path / "wrist.urdf"
     path.write_text(WRIST_URDF.replace("{rpy}", rpy))
     robot = mindyn.load(path)
@@ -1193,9 +1194,16 @@ def test_mjcf_export_of_a_massless_link_between_two_joints(rpy, tmp_path):
     if rpy != "0 0 0":
         with pytest.raises(mindyn.ModelError) as e:
             write_mjcf(robot, p, out)
-        assert "mass and inertia of moving bodies" in str(e.value) and "\n" not in str(e.value)
+        msg = str(e.value)
+        assert "\n" not in msg, msg
+        # names the link, the joint and the turn between them (0.3 rad)
+        assert msg.startswith("link 'cross' has no mass"), msg
+        assert "child joint 'yaw'" in msg and f"turned by {np.degrees(0.3):.4g} deg" in msg, msg
         return
-    write_mjcf(robot, p, out)
+    written = write_mjcf(robot, p, out)
+    # the massless link is said to share the body, not to have a zero inertial written
+    assert not any(n.startswith("link 'cross': M") for n in written.notes), written.notes
+    assert any("link 'cross' (no mass) shares the body of link 'hand'" in n for n in written.notes)
     m = mujoco.MjModel.from_xml_path(str(out))
     assert m.nbody == 4 and m.body("hand").jntnum == 2  # world, arm, hand (pitch, yaw), tip
     inertial, ia, fv, fc = split(robot, p)

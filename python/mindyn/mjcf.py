@@ -247,8 +247,23 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
         if _shares_body(robot, terms, k):  # MuJoCo has no massless moving body
             body = bodies[parents[k]]
             offset = offsets[parents[k]] @ place
+            massless = robot.link_names[parents[k] + 1]
             body.set("name", robot.link_names[k + 1])
             body.remove(next(e for e in body if e.tag == "inertial"))  # the massless link's
+            notes = [x for x in notes if not x.startswith(f"link '{massless}': M")]
+            notes.append(
+                f"link '{massless}' (no mass) shares the body of link "
+                f"'{robot.link_names[k + 1]}': its joint '{robot.joint_names[parents[k]]}' "
+                f"then '{robot.joint_names[k]}' (MuJoCo has no moving body without mass)"
+            )
+        elif parents[k] >= 0 and _turned_massless(robot, terms, k):
+            raise ModelError(
+                f"link '{robot.link_names[parents[k] + 1]}' has no mass, and MuJoCo refuses a "
+                f"moving body without one: it can share the body of its one child joint "
+                f"'{robot.joint_names[k]}' only when that joint's frame is not turned from it "
+                f"(here turned by {_turn_degrees(robot, k):.4g} deg); give the link a mass, or "
+                "write a URDF"
+            )
         else:
             parent = world if parents[k] < 0 else bodies[parents[k]]
             if parents[k] >= 0:
@@ -374,6 +389,29 @@ def _shares_body(robot: Robot, terms: JointTerms, k: int) -> bool:
         return False
     turn = (robot.joint_post(parent) @ robot.joint_pre(k))[:3, :3]
     return bool(np.array_equal(turn, np.eye(3)))
+
+
+def _turned_massless(robot: Robot, terms: JointTerms, k: int) -> bool:
+    """Whether joint ``k`` would share the body of its parent link (:func:`_shares_body`) but
+    for its frame being turned from that link's."""
+    parent = robot.parents[k]
+    kinds = (*_SINGLE_DOF, "spherical")
+    return (
+        robot.joint_types[k] in kinds
+        and robot.joint_types[parent] in _SINGLE_DOF
+        and robot.parents.count(parent) == 1
+        and not np.any(terms.inertial[10 * parent : 10 * parent + 10] != 0)
+        and _turn_degrees(robot, k) != 0
+    )
+
+
+def _turn_degrees(robot: Robot, k: int) -> float:
+    """The angle [deg] by which joint ``k``'s frame is turned from its parent link's."""
+    R = (robot.joint_post(robot.parents[k]) @ robot.joint_pre(k))[:3, :3]
+    if np.array_equal(R, np.eye(3)):
+        return 0.0
+    c = np.clip((np.trace(R) - 1.0) / 2.0, -1.0, 1.0)
+    return float(np.degrees(np.arccos(c))) or float(np.finfo(float).eps)
 
 
 def _no_drive_terms(robot: Robot, k: int, drive) -> None:

@@ -66,7 +66,14 @@ def _read_bag(path, robot, opts: ReadingOptions, unit, gain) -> JointData:
 
 
 def _raw(
-    paths, robot, opts: ReadingOptions, currents, require_torque, truth=None, because=None
+    paths,
+    robot,
+    opts: ReadingOptions,
+    currents,
+    require_torque,
+    truth=None,
+    because=None,
+    sampled=None,
 ) -> list:
     """The logs at ``paths`` as read (CSV or ROS bag; torques from the ``currents`` file of
     each when given), by stages: which are bags, then (after the truth sidecars, when a list
@@ -137,6 +144,10 @@ def _raw(
             _held(d, b) if opts.torque == "held" or b is not None else d
             for d, b in zip(out, reasons)
         ]
+    # ``sampled``: per log read as sampled, why, where its truth sidecar has a say (or None)
+    for d, s in zip(out, sampled or []):
+        if s is not None and d.tau is not None and "held" not in d.processing.get("torque", {}):
+            d.processing["torque"] = {**d.processing.get("torque", {}), "sampled_because": s}
     return out
 
 
@@ -427,14 +438,31 @@ def load_logs(
         raise DataError("validate_currents=: expected validate= with the logs they belong to")
     cur = paired(files, currents, "currents=", what)
     vcur = paired(vfiles, validate_currents, "validate_currents=", "validate=")
-    because = None
-    if model == "dynamic" and not opts._torque_given:
-        because = simulated_held(files + vfiles)
-        if all(b is not None for b in because):  # recorded as held (predict, detect follow)
-            opts = copy.copy(opts)  # (replace() would take its defaults as given)
-            object.__setattr__(opts, "torque", "held")
+    because, sampled = None, None
+    if model == "dynamic":
+        from .data import truth_path
+
+        said = [simulated_torque(p) for p in files + vfiles]
+        if not opts._torque_given:
+            because = simulated_held(files + vfiles)
+            if all(b is not None for b in because):  # recorded as held (predict, detect follow)
+                opts = copy.copy(opts)  # (replace() would take its defaults as given)
+                object.__setattr__(opts, "torque", "held")
+            sampled = [
+                f"as {truth_path(p)} says: inverse dynamics at the samples"
+                if s == "sampled"
+                else None
+                for p, s in zip(files + vfiles, said)
+            ]
+        elif opts.torque == "sampled":
+            sampled = [
+                f"torque='sampled' given; {truth_path(p)} says its simulation held the command"
+                if s == "held"
+                else None
+                for p, s in zip(files + vfiles, said)
+            ]
     truth: list = []
-    raws = _raw(files + vfiles, robot, opts, cur + vcur, True, truth, because)
+    raws = _raw(files + vfiles, robot, opts, cur + vcur, True, truth, because, sampled)
     decimate = model == "dynamic" and opts.decimate
     parts = _processed(files, raws[: len(files)], opts, None, True, decimate)
     pres = [d.processing.get("preprocess") for ds in parts for d in ds]

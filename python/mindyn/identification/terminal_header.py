@@ -160,6 +160,8 @@ def _settings(report) -> list[str]:
             f"  torques: {proc['torque']['held']} (torque='held'"
             + (f", {why}; torque='sampled' reads them at their samples)" if why else ")")
         )
+    if "sampled_because" in proc.get("torque", {}):
+        out.append(f"  torques: taken at their samples ({proc['torque']['sampled_because']})")
     if "torque" in proc and proc["torque"]["unit"] != "N m":
         what = "permille" if proc["torque"]["unit"].startswith("permille") else "motor currents"
         out.append(
