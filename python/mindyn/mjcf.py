@@ -256,7 +256,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
                 f"'{robot.link_names[k + 1]}': its joint '{robot.joint_names[parents[k]]}' "
                 f"then '{robot.joint_names[k]}' (MuJoCo has no moving body without mass)"
             )
-        elif parents[k] >= 0 and _turned_massless(robot, terms, k):
+        elif _turned_massless(robot, terms, k):
             raise ModelError(
                 f"link '{robot.link_names[parents[k] + 1]}' has no mass, and MuJoCo refuses a "
                 f"moving body without one: it can share the body of its one child joint "
@@ -371,38 +371,35 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
     return Export(out, notes=notes)
 
 
-def _shares_body(robot: Robot, terms: JointTerms, k: int) -> bool:
-    """Whether hinge, slide or ball joint ``k`` goes into the body of its parent link, a link
-    without inertia (MuJoCo refuses a moving body without mass) of a hinge or slide joint with
-    no other child, whose frame is joint ``k``'s moved without rotation: MuJoCo's joints of one body
-    act one after the other, each about its axis through its anchor (``pos``) in the body's
-    axes, as the chain of the massless link does (mindyn reads such a body back as that)."""
+def _after_massless(robot: Robot, terms: JointTerms, k: int) -> bool:
+    """Whether hinge, slide or ball joint ``k`` is the one child of a link without inertia
+    (MuJoCo refuses a moving body without mass) of a hinge or slide joint: such a joint shares
+    that link's body when its frame is not turned from the link's (:func:`_shares_body`), and
+    is refused by name when it is (:func:`_turned_massless`)."""
     parent = robot.parents[k]
     kinds = (*_SINGLE_DOF, "spherical")  # MuJoCo refuses a ball joint followed by another
-    if parent < 0 or robot.joint_types[k] not in kinds or robot.joint_types[parent] not in kinds:
-        return False
-    if robot.joint_types[parent] == "spherical":
-        return False
-    if robot.parents.count(parent) != 1:
-        return False
-    if np.any(terms.inertial[10 * parent : 10 * parent + 10] != 0):
-        return False
-    turn = (robot.joint_post(parent) @ robot.joint_pre(k))[:3, :3]
-    return bool(np.array_equal(turn, np.eye(3)))
-
-
-def _turned_massless(robot: Robot, terms: JointTerms, k: int) -> bool:
-    """Whether joint ``k`` would share the body of its parent link (:func:`_shares_body`) but
-    for its frame being turned from that link's."""
-    parent = robot.parents[k]
-    kinds = (*_SINGLE_DOF, "spherical")
     return (
-        robot.joint_types[k] in kinds
+        parent >= 0
+        and robot.joint_types[k] in kinds
         and robot.joint_types[parent] in _SINGLE_DOF
         and robot.parents.count(parent) == 1
         and not np.any(terms.inertial[10 * parent : 10 * parent + 10] != 0)
-        and _turn_degrees(robot, k) != 0
     )
+
+
+def _shares_body(robot: Robot, terms: JointTerms, k: int) -> bool:
+    """Whether joint ``k`` goes into the body of its massless parent link
+    (:func:`_after_massless`), its frame that link's moved without rotation: MuJoCo's joints of
+    one body act one after the other, each about its axis through its anchor (``pos``) in the
+    body's axes, as the chain of the massless link does (mindyn reads such a body back as
+    that)."""
+    return _after_massless(robot, terms, k) and _turn_degrees(robot, k) == 0
+
+
+def _turned_massless(robot: Robot, terms: JointTerms, k: int) -> bool:
+    """Whether joint ``k`` would share the body of its massless parent link
+    (:func:`_shares_body`) but for its frame being turned from that link's."""
+    return _after_massless(robot, terms, k) and _turn_degrees(robot, k) != 0
 
 
 def _turn_degrees(robot: Robot, k: int) -> float:

@@ -197,14 +197,13 @@ def simulated_held(paths) -> list[str | None]:
     not given: its truth sidecar says its simulation held the command over each period
     (:func:`simulated_torque`); None: read as sampled (no sidecar, as a measured log, or one
     that says sampled)."""
+    return [_held_reason(p) if simulated_torque(p) == "held" else None for p in paths]
+
+
+def _held_reason(path) -> str:
     from .data import truth_path
 
-    return [
-        f"as {truth_path(p)} says: simulated with the command held over each period"
-        if simulated_torque(p) == "held"
-        else None
-        for p in paths
-    ]
+    return f"as {truth_path(path)} says: simulated with the command held over each period"
 
 
 def _processed(paths, raws, opts: ReadingOptions, cutoff, periodic, decimate) -> list[list]:
@@ -444,7 +443,10 @@ def load_logs(
 
         said = [simulated_torque(p) for p in files + vfiles]
         if not opts._torque_given:
-            because = simulated_held(files + vfiles)
+            # (:func:`simulated_held`, from the sidecars read once)
+            because = [
+                _held_reason(p) if s == "held" else None for p, s in zip(files + vfiles, said)
+            ]
             if all(b is not None for b in because):  # recorded as held (predict, detect follow)
                 opts = copy.copy(opts)  # (replace() would take its defaults as given)
                 object.__setattr__(opts, "torque", "held")
