@@ -393,8 +393,6 @@ GOOD_DIFF = pair("DifferentialTransmission", "d", ("j1", "j2"), ("m1", "m2"), (2
         (GOOD_SIMPLE.replace(" name='t1'", ""), "has no name attribute"),
         (GOOD_SIMPLE.replace("<joint name='j1'/>", ""), "needs 1 <joint> element, found 0"),
         (GOOD_SIMPLE.replace("<joint name='j1'/>", "<joint/>"), "<joint> has no name"),
-        (GOOD_SIMPLE.replace("<mechanicalReduction>10</mechanicalReduction>", ""),
-         "has no <mechanicalReduction>"),
         (GOOD_SIMPLE.replace(">10<", ">1O<"), "<mechanicalReduction>1O</mechanicalReduction>: "
          "not a number"),
         (GOOD_SIMPLE.replace(">10<", "><"), "expected a number, got none"),
@@ -441,7 +439,7 @@ def test_malformed_ros1_transmissions_are_refused_in_one_line(tmp_path, text, me
         (simple("t1", "j1", "m1", 4, ros2=True).replace(
             "role='actuator1'/>", "role='actuator1'><mechanical_reduction>3"
             "</mechanical_reduction></actuator>"),
-         "ros2_control's SimpleTransmission reads it from <joint>"),
+         "ros2_control's SimpleTransmission reads it from <joint>"),  # in both: which one?
         (pair("FourBarLinkageTransmission", "w", ("j1", "j2"), ("m1", "m2"), (1, 2), (1, 1),
               ros2=True).replace("role='joint2'", "role='joint1'"),
          "two <joint> elements have the role joint1"),

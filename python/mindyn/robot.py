@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import _args, _core, _mujoco, _sidecar
+from . import _args, _core, _mujoco, _sidecar, _urdf_forms
 
 #: The friction models of :meth:`Robot.with_friction_model`.
 FRICTION_KINDS = ("coulomb", "asymmetric", "smooth", "stribeck")
@@ -262,6 +262,13 @@ def _load(robot: Robot | str | Path, tip: str | None, root_joint: str | None = N
             if root_joint:
                 raise _core.ModelError("root_joint= applies to URDF files only, not to MJCF")
             return Robot(_mujoco.read(text, tip))
+        if not root_joint:  # forms of transmissions read as ros_control's, on the same lines
+            xml, note = _urdf_forms.normalise(path.read_bytes(), text)
+            if note:
+                import warnings
+
+                warnings.warn(note, UserWarning, stacklevel=3)
+                return Robot(_core.parse_urdf(xml, tip or "", text))
         return Robot(_core.load_urdf(text, tip or "", root_joint or ""))
     if root_joint:
         raise _core.ModelError(
@@ -479,10 +486,12 @@ class Robot:
         :data:`READ_TRANSMISSIONS`, e.g. ``my_pkg/HalfDifferentialTransmission`` or PR2's belt
         compensator and gripper),
         left out of :attr:`transmission`: each ``name``, ``type`` as written, the ``joints`` it
-        names, its ``line``, ``modelled_directly`` (those of the model's joints, each modelled
-        as driven by a motor of its own, ratio 1) and ``assumed`` (``"direct drive"``).
+        names, its ``line``, ``modelled_directly`` (those of the model's joints that no
+        transmission read drives, each modelled as driven by a motor of its own, ratio 1) and
+        ``assumed`` (``"direct drive"``).
         :func:`load` warns of those driving joints of the model (:class:`DriveTrainWarning`)."""
-        names = set(self._m.joint_names)
+        read = {j for g in self._m.transmission["groups"] for j in g["joints"]}
+        names = set(self._m.joint_names) - read  # not those a transmission read drives
         return [
             {
                 **t,
