@@ -67,6 +67,12 @@ def test_codegen_takes_identify_json_with_pruned_parameters_as_zero(tmp_path):
     )  # fmt: skip
     assert f"{len(pruned)} pruned in identification" in out
     assert "taken as zero: " + ", ".join(sorted(pruned, key=doc["base_names"].index)) in out
+    # without --rotor --friction: the terms the JSON was identified with, the same code
+    out = cli("codegen", robot_name, "--lang", "c", "--params", ident, "--numeric", "-o",
+              tmp_path / "dyn2")  # fmt: skip
+    assert f"--rotor, --friction: as identified in {ident}" in out
+    same = (tmp_path / "dyn2.c").read_text().replace("dyn2.h", "dyn.h")
+    assert same == (tmp_path / "dyn.c").read_text()
 
     # the base-parameter values as the JSON gives them, the pruned ones zero
     robot = mindyn.load(robot_name)

@@ -20,6 +20,7 @@ from .codegen_output import (
     _write_plcopen,
 )
 from .codegen_params import (
+    _identified_layout,
     _identified_params,
     _identified_snap,
     _on_identified_drive_side,
@@ -112,8 +113,9 @@ def register(subparsers) -> None:
         help="base-parameter values: the JSON that 'mindyn identify --json' writes (the "
         "parameters it pruned for a high relative standard deviation are taken as zero, and "
         "the output says how many; the friction model it records, friction_model: {kind, "
-        "velocity}, is the generated code's, else Coulomb), a JSON mapping, or 'NAME value' "
-        "lines; default: the robot's own values",
+        "velocity}, is the generated code's, else Coulomb; its rotor inertia, friction and "
+        "offset too when none of --rotor, --friction, --offset is given), a JSON mapping, or "
+        "'NAME value' lines; default: the robot's own values",
     )
     p.add_argument(
         "--consistent",
@@ -218,6 +220,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             "--contact: applies to a floating-base robot (--root-joint floating|planar, or a "
             "floating or planar joint at the root of the description)"
         )
+    layout_note = _identified_layout(args)
     robot, friction_note = _with_friction_model(robot, args)
     robot, source = _on_identified_drive_side(robot, args)
     robot, drive_note = drive_side(robot, args, source=source)
@@ -244,7 +247,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     )
     if method != "projection" and args.method is None:  # said once the method ran
         print(f"base parameters by the {method} method: {why}")
-    for note in (drive_note, friction_note):
+    for note in (layout_note, drive_note, friction_note):
         if note:
             print(note)
     if args.consistent and not args.params:

@@ -34,6 +34,29 @@ def _has_consistent(path: str) -> bool:
     return isinstance(doc, dict) and isinstance(doc.get("consistent_estimate"), dict)
 
 
+def _identified_layout(args) -> str:
+    """Sets ``--rotor``, ``--friction`` and ``--offset`` from the ``--params`` JSON of ``mindyn
+    identify`` (its ``rotor``, ``friction`` and ``offset``) when none of the three is given, as
+    ``predict`` and ``detect`` take them from it; the line saying so, or "" (no such JSON, a flag
+    given: a layout other than the JSON's is then refused, naming it)."""
+    from ..identification.data import DataError, read_json
+
+    if not args.params or args.rotor or args.friction or args.offset:
+        return ""
+    try:
+        doc = read_json(args.params)
+    except (DataError, FileNotFoundError):
+        return ""  # not an identification JSON: read_parameter_file reads it, or says why
+    if not (isinstance(doc, dict) and {"names", "values", "removed"} <= doc.keys()):
+        return ""
+    taken = [k for k in ("rotor", "friction", "offset") if doc.get(k) is True]
+    for k in taken:
+        setattr(args, k, True)
+    if not taken:
+        return ""
+    return f"{', '.join('--' + k for k in taken)}: as identified in {args.params}"
+
+
 def _with_friction_model(robot, args):
     """``robot`` with the friction model a ``--params`` JSON records (``friction_model: {kind,
     velocity}``), else as it is (Coulomb); and the line saying which, when ``--friction``."""
