@@ -155,18 +155,33 @@ def last_anchor(m, b: int) -> np.ndarray:
     return np.array(m.jnt_pos[joints[-1]], dtype=float) if joints else np.zeros(3)
 
 
-def check(m, path) -> None:
-    """Refuses, in one line naming the element, what the model cannot represent."""
-    mujoco = require("reading an MJCF")
-    free_joint(m, path)
+def check(m, path, joints: set[int] | None = None) -> None:
+    """Refuses, in one line naming the element, what the model cannot represent. ``joints``:
+    the ids of the joints the model has (a chain to a tip link), default all; what acts only
+    on the others, which the chain holds locked at q = 0 clamped into their range (springs,
+    equality constraints and tendons over them, gravity compensation of bodies they alone
+    move, the terms of ball joints), is not refused; a reference (``ref``) is, on any joint:
+    the position it is locked at is in the model's q."""
+    require("reading an MJCF")
+    chain = set(range(m.njnt)) if joints is None else set(joints)
+    if joints is None:
+        free_joint(m, path)  # a chain holds at most one free joint, at its root
     _distinct_names(m, path)
     for j in range(m.njnt):
         name, body = joint_name(m, j), body_name(m, int(m.jnt_bodyid[j]))
         where = f"{path}: joint '{name}' (body '{body}')"
+        if j not in chain:
+            _no_reference(m, j, where)
+            continue
         if m.jnt_stiffness[j] != 0:
             raise _core.ModelError(
                 f"{where} has a spring (stiffness {float(m.jnt_stiffness[j])!r}); joint "
                 "springs are not in the model"
+                + (
+                    ""
+                    if joints is not None
+                    else "; a chain to a tip link (tip=) without it locks it"
+                )
             )
         dof = int(m.jnt_dofadr[j])
         for key in ("armature", "damping", "frictionloss"):
@@ -179,13 +194,7 @@ def check(m, path) -> None:
         if kind:
             _no_drive_terms(m, j, path, kind)
             continue  # its qpos0 is the body's initial pose or the identity, not a reference
-        if m.qpos0[m.jnt_qposadr[j]] != 0:
-            hinge = int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
-            unit = "rad (an angle of the file in degrees, the default unit, is compiled to it)"
-            raise _core.ModelError(
-                f"{where} has ref={float(m.qpos0[m.jnt_qposadr[j]])!r} {unit if hinge else 'm'}; "
-                "the model's q is MuJoCo's qpos only with ref=0"
-            )
+        _no_reference(m, j, where)
         b = int(m.jnt_bodyid[j])
         while b != 0:
             if m.body_mocapid[b] >= 0:
@@ -194,13 +203,21 @@ def check(m, path) -> None:
                     "the joints must be on a tree rooted at the fixed world"
                 )
             b = int(m.body_parentid[b])
-    if m.neq:
-        raise _core.ModelError(
-            f"{path}: {m.neq} equality constraint(s), the first "
-            f"'{_name(m, mujoco.mjtObj.mjOBJ_EQUALITY, 0, 'equality0')}'; closed chains and "
-            "coupled joints are not in the model"
-        )
+    for e in range(m.neq):
+        moved = _equality_joints(m, e)
+        if moved is None or moved & chain:
+            hint = (
+                "; a chain to a tip link (tip=) leaves out the joints off it"
+                if joints is None and len(chain - (moved or chain)) > 0
+                else ""
+            )
+            raise _core.ModelError(
+                f"{path}: {_equality_label(m, e)}: closed chains and coupled joints are not in "
+                f"the model{hint}"
+            )
     for t in range(m.ntendon):
+        if not _tendon_moved_by(m, t) & chain:
+            continue  # over joints the chain holds locked
         terms = tendon_terms(m, t)
         for key, value in terms.items():
             if key in ("armature", "damping", "frictionloss") and value < 0:
@@ -223,7 +240,7 @@ def check(m, path) -> None:
                 "fixed tendons are read (over one joint folded onto it, over several a motor)"
             )
     for b in range(1, m.nbody):
-        if m.body_gravcomp[b] != 0:
+        if m.body_gravcomp[b] != 0 and _ancestor_joints(m, b) & chain:
             raise _core.ModelError(
                 f"{path}: body '{body_name(m, b)}' has gravcomp={float(m.body_gravcomp[b])!r}; "
                 "gravity compensation is not in the model"
@@ -235,6 +252,100 @@ def check(m, path) -> None:
         )
     if m.nv == 0:
         raise _core.ModelError(f"{path}: no hinge, slide or free joint")
+
+
+def _no_reference(m, j: int, where: str) -> None:
+    """Refuses a hinge or slide joint ``j`` with a reference position (``ref``, MuJoCo's
+    ``qpos0``): the model's q is MuJoCo's qpos only without one."""
+    mujoco = require("reading an MJCF")
+    if _multi_dof_kinds().get(int(m.jnt_type[j])):
+        return  # its qpos0 is the body's initial pose or the identity, not a reference
+    if m.qpos0[m.jnt_qposadr[j]] != 0:
+        hinge = int(m.jnt_type[j]) == int(mujoco.mjtJoint.mjJNT_HINGE)
+        unit = "rad (an angle of the file in degrees, the default unit, is compiled to it)"
+        raise _core.ModelError(
+            f"{where} has ref={float(m.qpos0[m.jnt_qposadr[j]])!r} {unit if hinge else 'm'}; "
+            "the model's q is MuJoCo's qpos only with ref=0"
+        )
+
+
+def _ancestor_joints(m, b: int) -> set[int]:
+    """The joints moving body ``b``: its own and those of the bodies it hangs from."""
+    out: set[int] = set()
+    while b > 0:
+        out.update(body_joints(m, b))
+        b = int(m.body_parentid[b])
+    return out
+
+
+def _joints_between(m, bodies: list[int]) -> set[int]:
+    """The joints that move the ``bodies`` relative to each other (on the tree's paths
+    between them; the world is body 0)."""
+    if not bodies:
+        return set()
+    first = _ancestor_joints(m, bodies[0])
+    out: set[int] = set()
+    for b in bodies[1:]:
+        out |= first ^ _ancestor_joints(m, b)
+    return out
+
+
+def _tendon_moved_by(m, t: int) -> set[int]:
+    """The joints that change the length of tendon ``t``: a fixed tendon's joints, or those
+    moving the bodies of a spatial tendon's sites and wrapping geoms relative to each other."""
+    mujoco = require("reading an MJCF")
+    adr, num = int(m.tendon_adr[t]), int(m.tendon_num[t])
+    joints, bodies = set(), []
+    for w in range(adr, adr + num):
+        kind, obj = int(m.wrap_type[w]), int(m.wrap_objid[w])
+        if kind == int(mujoco.mjtWrap.mjWRAP_JOINT):
+            joints.add(obj)
+        elif kind == int(mujoco.mjtWrap.mjWRAP_SITE):
+            bodies.append(int(m.site_bodyid[obj]))
+        elif obj >= 0:  # a wrapping sphere or cylinder
+            bodies.append(int(m.geom_bodyid[obj]))
+    return joints | _joints_between(m, bodies)
+
+
+def _equality_joints(m, e: int) -> set[int] | None:
+    """The joints equality constraint ``e`` acts on (its joints, its tendons' joints, or those
+    moving its two bodies or sites relative to each other); ``None`` for other kinds."""
+    mujoco = require("reading an MJCF")
+    kind, a, b = int(m.eq_type[e]), int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
+    eq = mujoco.mjtEq
+    if kind == int(eq.mjEQ_JOINT):
+        return {j for j in (a, b) if j >= 0}
+    if kind == int(eq.mjEQ_TENDON):
+        return set().union(*(_tendon_moved_by(m, t) for t in (a, b) if t >= 0))
+    if kind in (int(eq.mjEQ_CONNECT), int(eq.mjEQ_WELD)):
+        sites = int(getattr(m, "eq_objtype", [0] * m.neq)[e]) == int(mujoco.mjtObj.mjOBJ_SITE)
+        bodies = [int(m.site_bodyid[x]) if sites else x for x in (a, b) if x >= 0]
+        return _joints_between(m, bodies + [0] * (len(bodies) < 2))
+    return None
+
+
+def _equality_label(m, e: int) -> str:
+    """Equality constraint ``e`` as the file writes it: its name or number, its kind and the
+    elements it ties (``equality 0 <joint joint1="a" joint2="b">``)."""
+    mujoco = require("reading an MJCF")
+    kind = int(m.eq_type[e])
+    tag = mujoco.mjtEq(kind).name[len("mjEQ_") :].lower()
+    objects = {
+        int(mujoco.mjtEq.mjEQ_JOINT): (mujoco.mjtObj.mjOBJ_JOINT, "joint"),
+        int(mujoco.mjtEq.mjEQ_TENDON): (mujoco.mjtObj.mjOBJ_TENDON, "tendon"),
+    }
+    if kind in objects:
+        obj, key = objects[kind]
+    elif int(getattr(m, "eq_objtype", [0] * m.neq)[e]) == int(mujoco.mjtObj.mjOBJ_SITE):
+        obj, key = mujoco.mjtObj.mjOBJ_SITE, "site"
+    else:
+        obj, key = mujoco.mjtObj.mjOBJ_BODY, "body"
+    attrs = []
+    for i, x in enumerate((int(m.eq_obj1id[e]), int(m.eq_obj2id[e])), start=1):
+        if x >= 0:
+            attrs.append(f'{key}{i}="{mujoco.mj_id2name(m, obj, x) or f"{key}{x}"}"')
+    name = mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_EQUALITY, e)
+    return f"equality {repr(name) if name else e} <{tag} {' '.join(attrs)}>"
 
 
 def _distinct_names(m, path) -> None:
@@ -336,7 +447,10 @@ def read(path, tip: str | None) -> _core.Model:
     """The core model of the MJCF ``path`` (``tip`` as for a URDF)."""
     mujoco = require(f"reading the MJCF '{path}'")
     m = compile_model(path)
-    check(m, path)
+    if tip:
+        _distinct_names(m, path)  # the links of the URDF text below, checked before it
+    else:
+        check(m, path)
     disabled = int(m.opt.disableflags)
     flags = mujoco.mjtDisableBit
     damper = getattr(flags, "mjDSBL_DAMPER", None) or flags.mjDSBL_PASSIVE
@@ -348,6 +462,9 @@ def read(path, tip: str | None) -> _core.Model:
         friction[:] = 0.0
     urdf = _urdf(m, _model_name(m, path), damping, friction, velocity_limits(m, path))
     core = _core.parse_urdf(urdf, tip or "", str(path))
+    if tip:  # the chain's joints; those off it are held at the file's pose
+        ids = {joint_name(m, j): j for j in range(m.njnt)}
+        check(m, path, {ids[name] for name in core.joint_names})
     ball = int(mujoco.mjtJoint.mjJNT_BALL)
     balls = {joint_name(m, j) for j in range(m.njnt) if int(m.jnt_type[j]) == ball}
     if balls & set(core.joint_names):  # written as floating joints: URDF has no ball joint
@@ -441,10 +558,15 @@ def _with_tendon_motors(m, core, path, terms: tuple[np.ndarray, np.ndarray, np.n
     terms; a tendon joint the rows leave undetermined gets such a motor without terms. Refused
     by name: a model with free or ball joints, a tendon joint outside the model, and motors
     that are not one per joint (or whose rows do not determine the joints)."""
-    tendons = motor_tendons(m)
+    names = list(core.joint_names)
+    # a tendon over joints off a chain (loaded with a tip), which it holds locked, moves nothing
+    tendons = [
+        t
+        for t in motor_tendons(m)
+        if any(joint_name(m, j) in names for j, _ in tendon_joints(m, t) or [])
+    ]
     if not tendons:
         return core
-    names = list(core.joint_names)
     index = {name: k for k, name in enumerate(names)}
     n = len(names)
     first = f"{path}: tendon '{tendon_name(m, tendons[0])}'"

@@ -64,6 +64,7 @@ joint.
 
 from __future__ import annotations
 
+import os
 import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -709,10 +710,62 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
         comment.tail = "\n"
         doc.root.insert(0, comment)
         notes.append("torque offsets have no place in MJCF: listed in a comment of the file")
+    notes += _relocate(doc.root, src, out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(doc.text(), encoding="utf-8")
     _verify(robot, terms, out)
     return Export(out, notes=notes)
+
+
+# the file attributes MuJoCo reads relative to meshdir (or assetdir), to texturedir (or
+# assetdir), and relative to the model file's folder
+_MESH_FILES = {"mesh": ("file",), "hfield": ("file",), "skin": ("file",)}
+_TEXTURE_FILES = {
+    "texture": ("file", "fileright", "fileleft", "fileup", "filedown", "filefront", "fileback")
+}
+
+
+def _relocate(root, src: Path, out: Path) -> list[str]:
+    """Makes the relative paths of the MJCF ``root`` (read from ``src``) hold for a file written
+    at ``out`` in another folder: MuJoCo reads ``<compiler>``'s ``meshdir``, ``texturedir`` and
+    ``assetdir`` and an ``<include>``'s ``file`` relative to the model file's folder, and an
+    asset's ``file`` relative to the folder those name (the model file's when unset). Each such
+    relative path is rewritten to the same place seen from ``out``'s folder; a note says how
+    many."""
+    old, new = src.resolve().parent, out.resolve().parent
+    if old == new:
+        return []
+    changed = 0
+
+    def move(element, key: str) -> None:
+        nonlocal changed
+        value = element.get(key)
+        if value is None or value == "" or Path(value).is_absolute():
+            return
+        element.set(key, os.path.relpath(old / value, new).replace(os.sep, "/"))
+        changed += 1
+
+    compilers = [e for e in root.iter("compiler")]
+    given = {key for e in compilers for key in ("meshdir", "texturedir", "assetdir") if e.get(key)}
+    for e in compilers:
+        for key in ("meshdir", "texturedir", "assetdir"):
+            move(e, key)
+    for e in root.iter("include"):
+        move(e, "file")
+    # an asset whose folder is the model file's (no folder given) is itself moved
+    for kinds, folder in ((_MESH_FILES, "meshdir"), (_TEXTURE_FILES, "texturedir")):
+        if given & {folder, "assetdir"}:
+            continue
+        for tag, keys in kinds.items():
+            for e in root.iter(tag):
+                for key in keys:
+                    move(e, key)
+    if not changed:
+        return []
+    return [
+        f"{changed} relative path(s) of the file (asset folders, asset files, includes) "
+        f"rewritten to hold from {out.parent}, the folder written to"
+    ]
 
 
 def _moving_ancestor(m, b: int) -> bool:
