@@ -699,9 +699,11 @@ def _mutate_urdf(rng: random.Random, groups: list[dict], xml: list[str], ros2: b
             f"<role>{r}</role>", f"<role>{new}</role>")  # fmt: skip
         if not g.get("roles"):
             kind = None
-    elif kind == "missing-reduction":  # ROS 1: an actuator's reduction is required
+    elif kind == "missing-reduction":  # ROS 1: an actuator without one has reduction 1
         s = re.sub(rf'(<actuator name="{re.escape(A[0])}">.*?)<{red}>[^<]*</{red}>', r"\1", s,
                    count=1)  # fmt: skip
+        g["a"][0] = "1"  # read so, with a warning (as Gazebo runs it): valid
+        kind = None
     elif kind == "same-joint":
         s = s.replace(f'<joint name="{J[1]}"', f'<joint name="{J[0]}"')
     else:  # two transmissions
@@ -800,7 +802,19 @@ def _yaml_transmissions(rng: random.Random, names, T, motors, offsets, listed: b
     return "\n".join(lines) + "\n", text
 
 
-YAML_BAD = ["abc", ".nan", ".inf", "-.inf", "1e400", "null", "true", "[1]", "{a: 1}", "1O", "--1"]
+DRIVE_YAML_BAD = [
+    "abc",
+    ".nan",
+    ".inf",
+    "-.inf",
+    "1e400",
+    "null",
+    "true",
+    "[1]",
+    "{a: 1}",
+    "1O",
+    "--1",
+]
 
 
 def _mutate_yaml(rng: random.Random, names, T, motors, listed: bool):
@@ -817,7 +831,7 @@ def _mutate_yaml(rng: random.Random, names, T, motors, listed: bool):
     i = rng.randrange(n)
     if kind == "number":
         k = rng.choice([c for c in range(len(T[i])) if T[i][c] != 0])
-        bad = rng.choice(YAML_BAD)
+        bad = rng.choice(DRIVE_YAML_BAD)
         T[i][k] = "BAD"
         edit = ("BAD", bad)
     elif kind == "row-length":
@@ -933,6 +947,9 @@ def motor_side_robot(robot, kind: str, nprng, side: str = "motor"):
     Ia, Fv, Fc = (nprng.uniform(1e-5, 1e-3, m), nprng.uniform(1e-4, 1e-2, m),
                   nprng.uniform(1e-3, 0.1, m))  # fmt: skip
     F3 = nprng.uniform(-0.05, 0.05, m) if kind in ("asymmetric", "stribeck") else np.zeros(m)
+    # a motor that turns with several joints, or shares its joint, has no third term
+    nz = np.abs(T) > 0
+    F3 = np.where([nz[k].sum() == 1 and nz[:, nz[k]].sum() == 1 for k in range(m)], F3, 0.0)
     third = {"asymmetric": "Fa", "stribeck": "Fs"}.get(kind)
     for k in range(m):
         for key, v in (("Ia", Ia), ("Fv", Fv), ("Fc", Fc), (third, F3)):
