@@ -22,11 +22,12 @@ as is tendon stiffness, tendons that are not one motor per joint they turn, and 
 tendon turning joints on different branches of the tree (MuJoCo adds it to its mass matrix
 only between joints of one branch: :func:`_one_branch`). Tendons
 without such terms (outside a differential's), and actuators, do not enter the dynamics and are
-not read.
+not read (but for the effort limits).
 
-Limits: a joint's ``range`` and its ``actuatorfrcrange`` (the effort limit); its velocity limit,
-which MJCF lacks, from a custom numeric ``velocity_limit:JOINT`` (:data:`VELOCITY_LIMIT`), as
-:func:`mindyn.mjcf.write_mjcf` writes it.
+Limits: a joint's ``range``; its effort limit from its ``actuatorfrcrange`` and the actuators
+driving it through a joint transmission, ``|gear|`` times each one's force bound
+(:func:`effort_limits`); its velocity limit, which MJCF lacks, from a custom numeric
+``velocity_limit:JOINT`` (:data:`VELOCITY_LIMIT`), as :func:`mindyn.mjcf.write_mjcf` writes it.
 
 A link frame of the model is the MuJoCo body frame moved to the anchor (``pos``) of the body's
 last joint, with the body's axes; a body with several joints gets one massless link per joint
@@ -743,10 +744,75 @@ def velocity_limits(m, path) -> np.ndarray:
     return out
 
 
+def _symmetric(lo: float, hi: float) -> float:
+    """The bound ``E`` of a force range ``[lo, hi]`` as an effort limit, ``|tau| <= E``: the
+    force reached in both directions, ``min(|lo|, |hi|)``; 0 (none) for a range that does not
+    hold 0 strictly inside."""
+    return min(-lo, hi) if lo < 0 < hi else 0.0
+
+
+def _actuator_bound(m, a: int) -> float | None:
+    """The largest force actuator ``a`` applies in both directions (:func:`_symmetric`), or
+    ``None`` when it has no bound: its ``forcerange`` when force-limited and, for an actuator
+    whose force is its control times a fixed gain (a ``<motor>``, a ``<general>`` without bias
+    or activation dynamics), the gain times its ``ctrlrange`` when control-limited; the
+    tighter of the two."""
+    mujoco = require("reading an MJCF")
+    bounds = []
+    if m.actuator_forcelimited[a]:
+        bounds.append(_symmetric(*(float(v) for v in m.actuator_forcerange[a])))
+    plain = (
+        int(m.actuator_gaintype[a]) == int(mujoco.mjtGain.mjGAIN_FIXED)
+        and int(m.actuator_biastype[a]) == int(mujoco.mjtBias.mjBIAS_NONE)
+        and int(m.actuator_dyntype[a]) == int(mujoco.mjtDyn.mjDYN_NONE)
+    )
+    if plain and m.actuator_ctrllimited[a]:
+        gain = float(m.actuator_gainprm[a][0])
+        lo, hi = sorted(gain * float(v) for v in m.actuator_ctrlrange[a])
+        bounds.append(_symmetric(lo, hi))
+    return min(bounds) if bounds else None
+
+
+def effort_limits(m) -> np.ndarray:
+    """Each joint's effort limit (by joint id; 0: none), ``|tau| <= E`` as a URDF's ``<limit
+    effort>``: the tighter of its ``actuatorfrcrange`` (to which MuJoCo clamps the sum of the
+    actuator forces on the joint) and the sum over the actuators driving it through a joint
+    transmission (``joint=``) of ``|gear|`` times each one's bound (:func:`_actuator_bound`),
+    each range taken as the force reached in both directions, ``min(|lo|, |hi|)``. The
+    actuators give no limit to a joint one of them leaves unbounded, or that an actuator
+    through a tendon over it also drives (its share of the tendon force is no joint limit);
+    actuators through sites, bodies or a slider-crank are not read."""
+    mujoco = require("reading an MJCF")
+    direct = (int(mujoco.mjtTrn.mjTRN_JOINT), int(mujoco.mjtTrn.mjTRN_JOINTINPARENT))
+    total = np.zeros(m.njnt)
+    unbounded = np.zeros(m.njnt, dtype=bool)
+    driven = np.zeros(m.njnt, dtype=bool)
+    for a in range(m.nu):
+        kind, target = int(m.actuator_trntype[a]), int(m.actuator_trnid[a][0])
+        if kind in direct:
+            bound = _actuator_bound(m, a)
+            driven[target] = True
+            if bound is None:
+                unbounded[target] = True
+            else:
+                total[target] += abs(float(m.actuator_gear[a][0])) * bound
+        elif kind == int(mujoco.mjtTrn.mjTRN_TENDON):
+            for j, _ in tendon_joints(m, target) or []:
+                unbounded[j] = True  # no per-joint bound
+    out = np.where(driven & ~unbounded, total, 0.0)
+    for j in range(m.njnt):
+        if m.jnt_actfrclimited[j]:
+            own = _symmetric(*(float(v) for v in m.jnt_actfrcrange[j]))
+            if own > 0:
+                out[j] = min(own, out[j]) if out[j] > 0 else own
+    return out
+
+
 def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray, speed: np.ndarray) -> str:
     """The compiled model ``m`` as URDF text (see the module's docstring), with the viscous and
     Coulomb friction and the velocity limit (0: none) of each joint (by joint id)."""
     mujoco = require("reading an MJCF")
+    efforts = effort_limits(m)
     hinge = int(mujoco.mjtJoint.mjJNT_HINGE)
     parts = [f'<robot name="{_attr(name)}">', f'<link name="{_attr(body_name(m, 0))}"/>']
     link_of = {0: body_name(m, 0)}
@@ -793,9 +859,7 @@ def _urdf(m, name: str, damping: np.ndarray, friction: np.ndarray, speed: np.nda
             if kind == "revolute" and not limited:
                 kind = "continuous"
             limit = f'lower="{lo!r}" upper="{hi!r}" ' if limited else ""
-            effort = 0.0
-            if m.jnt_actfrclimited[j]:
-                effort = max(abs(float(v)) for v in m.jnt_actfrcrange[j])
+            effort = float(efforts[j])
             extra = (
                 f'<axis xyz="{_vec(m.jnt_axis[j])}"/>'
                 f'<limit {limit}effort="{effort!r}" velocity="{float(speed[j])!r}"/>'

@@ -102,14 +102,16 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     source : str or Path, optional
         The description to start from; default ``robot.source``. An MJCF is written back with
         only its moving bodies' ``<inertial>`` and its joints' ``armature``, ``damping`` and
-        ``frictionloss`` changed (comments and everything else kept; bodies merged into a
+        ``frictionloss`` changed (of these, those ``classical`` holds: the file keeps its own
+        of the others, as a note says; comments and everything else kept; bodies merged into a
         moving link get a zero ``<inertial>``), then compiled by MuJoCo and checked to give
         the parameters written. Any other robot gets a new MJCF: one body per link, its frame
         the joint frame (a hinge's or slide's link without inertia and with one child hinge,
         slide or ball joint, not turned from it, shares that joint's body: MuJoCo has no
         massless moving body), with
         ``<inertial>``, a hinge or slide joint (axis, range, the effort
-        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``), a ball
+        limit as ``actuatorfrcrange``, ``armature``, ``damping``, ``frictionloss``: 0 for a
+        term ``classical`` lacks, as a note says when the description has some), a ball
         joint for a spherical joint or, for a floating root, a ``<freejoint>`` (see the
         module's docstring), the
         velocity limits as custom numerics ``velocity_limit:<joint>`` (MJCF has none; MuJoCo
@@ -229,6 +231,7 @@ def _generate(robot: Robot, terms: JointTerms, out: Path, side: str) -> Export:
         for i in coupled:
             _one_branch(robot, motors[i], _slot(terms, i, f"motor '{motors[i][0]}'")[0])
     drive = _joint_drive(robot, terms, motors, on_motors)
+    notes += _zero_terms(robot, terms)
     root = ET.Element("mujoco", {"model": robot.name})
     root.append(_comment(_mapping_comment(robot, on_motors, tr is not None)))
     ET.SubElement(root, "compiler", {"angle": "radian", "inertiafromgeom": "false"})
@@ -557,8 +560,68 @@ def _slot(terms: JointTerms, k: int, what: str) -> tuple[float, float, float]:
     return out[0], out[1], out[2]
 
 
-def _attrs(values) -> dict[str, str]:
-    return {key: _num(x) for key, x in zip(_DRIVE, values)}
+def _attrs(values, given=_DRIVE) -> dict[str, str]:
+    """``armature``, ``damping``, ``frictionloss`` of ``values``, those named in ``given``."""
+    return {key: _num(x) for key, x in zip(_DRIVE, values) if key in given}
+
+
+def _given(terms: JointTerms) -> tuple[str, ...]:
+    """The MJCF terms of which ``terms`` holds values: ``armature`` with ``Ia``, ``damping``
+    and ``frictionloss`` with ``Fv`` and ``Fc``."""
+    values = (terms.rotor, terms.viscous, terms.coulomb)
+    return tuple(key for key, v in zip(_DRIVE, values) if v is not None)
+
+
+#: what each MJCF term holds, and its name among the model's parameters
+_TERM_NAMES = {
+    "armature": ("rotor inertia", "Ia"),
+    "damping": ("viscous friction", "Fv"),
+    "frictionloss": ("Coulomb friction", "Fc"),
+}
+
+
+def _zero_terms(robot: Robot, terms: JointTerms) -> list[str]:
+    """A note per MJCF term that ``terms`` has no values of and that the robot's description
+    gives some joint: a new MJCF has 0 there."""
+    notes = []
+    for key, given in zip(_DRIVE, (robot.rotor_inertia, robot.viscous, robot.coulomb)):
+        if key not in _given(terms) and np.any(np.asarray(given) != 0):
+            notes.append(
+                f"the parameters written have no {_TERM_NAMES[key][0]} "
+                f"({_TERM_NAMES[key][1]}): {key} 0 is written on every joint (the "
+                f"description's {_TERM_NAMES[key][0]} is not)"
+            )
+    return notes
+
+
+def _kept_terms(m, terms: JointTerms) -> list[str]:
+    """A note per MJCF term that ``terms`` has no values of (an identification without rotor
+    inertia or friction, as every one of a floating base is) and that the file written back
+    (compiled as ``m``) gives some joint or tendon: the file's own values are kept."""
+    dofs = [
+        int(m.jnt_dofadr[j])
+        for j in range(m.njnt)
+        if not _mujoco._multi_dof_kinds().get(int(m.jnt_type[j]))
+    ]
+    notes = []
+    for key in _DRIVE:
+        if key in _given(terms):
+            continue
+        joints = sum(1 for d in dofs if getattr(m, f"dof_{key}")[d] != 0)
+        tendons = sum(1 for t in range(m.ntendon) if _mujoco.tendon_terms(m, t)[key] != 0)
+        if not joints and not tendons:
+            continue
+        where = [
+            f"{n} {w}{'s' if n > 1 else ''}"
+            for n, w in ((joints, "joint"), (tendons, "tendon"))
+            if n
+        ]
+        notes.append(
+            f"the parameters written have no {_TERM_NAMES[key][0]} ({_TERM_NAMES[key][1]}): "
+            f"the file's own {key} is kept "
+            f"({' and '.join(where)} carry it)"
+        )
+    return notes
 
 
 def _comment(text: str):
@@ -650,7 +713,8 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
     joints = {e.get("name"): e for e in doc.root.iter("joint") if e.get("name")}
     link_index = {name: k for k, name in enumerate(robot.link_names[1:])}
     joint_index = {name: k for k, name in enumerate(robot.joint_names)}
-    notes: list[str] = []
+    notes: list[str] = _kept_terms(m, terms)
+    given = _given(terms)  # the terms identified; the file keeps its own of the others
     tendons = {e.get("name"): e for e in doc.root.iter("fixed") if e.get("name")}
     on_motors = robot.drive_side == "motor"
     if on_motors:  # the file's motor tendons (its transmission) and directly driven joints
@@ -661,7 +725,7 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
         for i, (motor, row) in enumerate(motors):
             if len(row) > 1:
                 element = _named(tendons, motor, "fixed", src)
-                element.attrib.update(_attrs(_slot(terms, i, f"motor '{motor}'")))
+                element.attrib.update(_attrs(_slot(terms, i, f"motor '{motor}'"), given))
     for b in range(1, m.nbody):
         jnts = _mujoco.body_joints(m, b)
         bname = _mujoco.body_name(m, b)
@@ -695,15 +759,18 @@ def _rewrite(robot: Robot, terms: JointTerms, src: Path, out: Path) -> Export:
             if robot.joint_types[joint_index[name]] not in _SINGLE_DOF:  # free or ball: none
                 _no_drive_terms(robot, joint_index[name], drive)
                 continue
-            _named(joints, name, "joint", src).attrib.update(_attrs(drive))
+            _named(joints, name, "joint", src).attrib.update(_attrs(drive, given))
     for t in _mujoco.folded_tendons(m):  # read as their joint's terms, now written there
         name = _mujoco.tendon_name(m, t)
         element = _named(tendons, name, "fixed", src)
         terms_t = _mujoco.tendon_terms(m, t)
-        element.attrib.update({k: "0.0" for k in _DRIVE if terms_t[k] != 0})
+        moved = [k for k in _DRIVE if terms_t[k] != 0 and k in given]
+        if not moved:
+            continue  # kept on the tendon, as the joint keeps its own
+        element.attrib.update({k: "0.0" for k in moved})
         notes.append(
-            f"the armature, damping and frictionloss of tendon '{name}' (over one joint) are "
-            "written on its joint: zero on the tendon"
+            f"the {', '.join(moved)} of tendon '{name}' (over one joint) "
+            f"{'are' if len(moved) > 1 else 'is'} written on its joint: zero on the tendon"
         )
     if terms.offset is not None:
         comment = _comment(_offsets_comment(robot, terms))
@@ -729,12 +796,14 @@ def _relocate(root, src: Path, out: Path) -> list[str]:
     """Makes the relative paths of the MJCF ``root`` (read from ``src``) hold for a file written
     at ``out`` in another folder: MuJoCo reads ``<compiler>``'s ``meshdir``, ``texturedir`` and
     ``assetdir`` and an ``<include>``'s ``file`` relative to the model file's folder, and an
-    asset's ``file`` relative to the folder those name (the model file's when unset). Each such
-    relative path is rewritten to the same place seen from ``out``'s folder; a note says how
-    many."""
+    asset's ``file`` relative to the folder those name (the model file's when unset), in an
+    included file as in the model file (:func:`_inline_includes` writes such files into
+    ``root``). Each such relative path is rewritten to the same place seen from ``out``'s
+    folder; a note says how many."""
     old, new = src.resolve().parent, out.resolve().parent
     if old == new:
         return []
+    notes = _inline_includes(root, old)
     changed = 0
 
     def move(element, key: str) -> None:
@@ -761,11 +830,100 @@ def _relocate(root, src: Path, out: Path) -> list[str]:
                 for key in keys:
                     move(e, key)
     if not changed:
-        return []
-    return [
+        return notes
+    return notes + [
         f"{changed} relative path(s) of the file (asset folders, asset files, includes) "
         f"rewritten to hold from {out.parent}, the folder written to"
     ]
+
+
+def _path_keys(element) -> tuple[str, ...]:
+    """The attributes of ``element`` that MuJoCo reads as file or folder paths."""
+    if element.tag == "compiler":
+        return ("meshdir", "texturedir", "assetdir")
+    if element.tag == "include":
+        return ("file",)
+    return {**_MESH_FILES, **_TEXTURE_FILES}.get(element.tag, ())
+
+
+def _relative_paths(root) -> list[tuple[ET.Element, str]]:
+    """The elements of ``root`` with a relative path, and the attribute holding it."""
+    return [
+        (e, key)
+        for e in root.iter()
+        for key in _path_keys(e)
+        if e.get(key) and not Path(e.get(key, "")).is_absolute()
+    ]
+
+
+def _inline_includes(root, old: Path) -> list[str]:
+    """Writes into ``root`` (an MJCF whose file was in the folder ``old``, to be written to
+    another folder) the ``<include>``d files holding relative paths (asset folders, asset
+    files, further includes), each in place of its ``<include>``, after a comment naming it:
+    MuJoCo reads the paths of an included file relative to the main file's folder (or its
+    ``meshdir`` ...), not the included file's, so from the new folder they would name other
+    files; written into the file, :func:`_relocate` rewrites them as the file's own. MuJoCo 4
+    falls back to the included file's own folder for a path not found from the main file's:
+    such a path is first made relative to the main file's folder. An include holding no
+    relative path stays an include (its ``file`` rewritten). A note names the files."""
+    written: list[str] = []
+    kept: set[int] = set()  # includes left as they are
+    origin: dict[int, Path] = {}  # an include from an included file: that file's folder
+    while True:
+        found = next((e for e in root.iter("include") if id(e) not in kept), None)
+        if found is None:
+            break
+        value = found.get("file") or ""
+        here = origin.get(id(found), old)
+        path = Path(value) if Path(value).is_absolute() else old / value
+        if not path.is_file() and (here / value).is_file():
+            path = here / value
+        doc = XmlDocument(path, "MJCF")
+        if not _relative_paths(doc.root):
+            kept.add(id(found))
+            continue
+        if len(written) >= 1000:
+            raise ModelError(f"{path}: more than 1000 <include>s (an include cycle?)")
+        parent = next(p for p in root.iter() if found in list(p))
+        at = list(parent).index(found)
+        parent.remove(found)
+        mark = _comment(f' from <include file="{value}"> ')
+        mark.tail = found.tail
+        parent.insert(at, mark)
+        folder = path.resolve().parent
+        for offset, kid in enumerate(list(doc.root), start=1):
+            parent.insert(at + offset, kid)
+            if folder != old:
+                _main_relative(kid, old, folder, root)
+                origin.update({id(e): folder for e in kid.iter("include")})
+        if len(doc.root):
+            doc.root[-1].tail = found.tail
+        written.append(os.path.relpath(path, old).replace(os.sep, "/"))
+    if not written:
+        return []
+    return [
+        f"the included file(s) {', '.join(repr(x) for x in written)} are written into the "
+        "file, in place of their <include>: MuJoCo reads the relative paths in an included "
+        "file from the main file's folder"
+    ]
+
+
+def _main_relative(element, old: Path, folder: Path, root) -> None:
+    """Rewrites each relative include or asset file of ``element`` (from an included file in
+    ``folder``) that MuJoCo finds only in ``folder`` (its fallback) to the same file seen
+    from the main file's folder ``old`` (the folder of the assets, when ``root``'s compiler
+    names one)."""
+    dirs = {
+        key: e.get(key, "") for e in root.iter("compiler") for key in _path_keys(e) if e.get(key)
+    }
+    for e, key in _relative_paths(element):
+        if e.tag == "compiler":
+            continue
+        value = e.get(key, "")
+        kind = "texturedir" if e.tag in _TEXTURE_FILES else "meshdir"
+        base = old if e.tag == "include" else old / dirs.get(kind, dirs.get("assetdir", ""))
+        if not (base / value).exists() and (folder / value).exists():
+            e.set(key, os.path.relpath(folder / value, base).replace(os.sep, "/"))
 
 
 def _moving_ancestor(m, b: int) -> bool:
