@@ -670,7 +670,8 @@ def _mutate_urdf(rng: random.Random, groups: list[dict], xml: list[str], ros2: b
     elif kind == "member":
         who = rng.choice(["joint", "actuator"])
         nm = rng.choice(J if who == "joint" else A)
-        s = re.sub(rf'<{who} name="{re.escape(nm)}"[^>]*>.*?</{who}>', "", s, count=1)
+        s = re.sub(rf'<{who} name="{re.escape(nm)}"[^>]*>.*?</{who}>', "", s, count=1,
+                   flags=re.DOTALL)  # fmt: skip
     elif kind == "no-name":
         s = s.replace(f'<transmission name="{name}">', "<transmission>")
         owner = "<transmission> has no name"
