@@ -224,7 +224,15 @@ def test_tree_own_parameters_keep_the_source_dynamics(tree, tmp_path):
     robot = mindyn.load(tree, tip="tool")
     assert robot.link_names == ["world", "l1", "l2", "l3"]
     out = tmp_path / "own.urdf"
-    write_urdf(robot, robot.params, out)
+    res = write_urdf(robot, robot.params, out)
+    # no friction in the parameters: the source's damping and friction (j1, j3) written as 0
+    joints = {e.get("name"): e for e in _parse(out).iter("joint")}
+    for name in ("j1", "j3"):
+        dyn = joints[name].find("dynamics")
+        assert float(dyn.get("damping")) == 0.0 and float(dyn.get("friction")) == 0.0, name
+    assert joints["j2"].find("dynamics") is None  # none in the source, none written
+    said = [n for n in res.notes if "the parameters have no friction" in n]
+    assert said and "'j1', 'j3'" in said[0] and "'j2'" not in said[0], res.notes
     rng = np.random.default_rng(1)
     q, dq, ddq = states(robot, rng)
     want = pin_rnea(pin_chain(tree, robot, TREE_LOCKED), q, dq, ddq)
@@ -370,7 +378,8 @@ def test_inertia_that_is_not_physical_is_written_and_noted(tree, tmp_path):
     classical["XX2"] += 1.0  # principal moment about x far above the other two
     res = write_urdf(robot, classical, tmp_path / "x.urdf")
     assert any(n.startswith("link 'l2': the inertia about its centre") for n in res.notes)
-    assert len(res.notes) == 4  # that one and the three links' merged inertials
+    # that one, the three links' merged inertials and the source's friction written as 0
+    assert len(res.notes) == 5, res.notes
     back = mindyn.load(tmp_path / "x.urdf", tip="tool")
     assert_inertial_roundtrip(robot, back.params, inertial_vector(robot, classical))
 

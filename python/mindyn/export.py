@@ -315,7 +315,8 @@ def write_urdf(
     zero first moment gets mass 0 and its rotational inertia at the link origin (a zero
     inertial if it has none); the notes say so. ``Fv`` and ``Fc`` go into the joint's
     ``<dynamics damping= friction=>``; when the parameters have no friction, the model joints'
-    damping and friction are set to 0, so that the file describes the identified model. ``Ia``,
+    damping and friction are set to 0, so that the file describes the identified model (a note
+    names the joints whose non-zero values that replaces). ``Ia``,
     ``Fv``, ``Fc`` and ``Off`` are also written to the sidecar YAML, with their meaning and unit
     (:func:`read_joint_terms` reads it back). With rotor inertia and friction on the motors
     (:attr:`~mindyn.Robot.drive_side`), a directly driven joint's ``<dynamics>`` is its motor's
@@ -509,13 +510,36 @@ class _UrdfDocument(XmlDocument):
                     f"link '{name}' holds the identified inertia of the links merged into it, "
                     f"whose <inertial> was removed: {', '.join(merged)}"
                 )
+        zeroed = []
         for k, name in enumerate(bodies):
             if added and k == 0:
                 continue
+            joint = self.entering[name]
+            if terms.viscous is None and self._has_friction(joint):
+                zeroed.append(joint.get("name", "?"))
             fv = 0.0 if terms.viscous is None else terms.viscous[k]
             fc = 0.0 if terms.coulomb is None else terms.coulomb[k]
-            self._set_dynamics(self.entering[name], fv, fc)
+            self._set_dynamics(joint, fv, fc)
+        if zeroed:
+            notes.append(
+                "the parameters have no friction: the <dynamics> damping and friction of joints "
+                f"{', '.join(repr(j) for j in zeroed)}, non-zero in the description, written as 0"
+            )
         return notes
+
+    @staticmethod
+    def _has_friction(joint) -> bool:
+        """Whether `joint`'s <dynamics> gives a non-zero damping or friction."""
+        dyn = joint.find("dynamics")
+        if dyn is None:
+            return False
+        for key in ("damping", "friction"):
+            try:
+                if float(dyn.get(key, "0")) != 0.0:
+                    return True
+            except ValueError:
+                return True  # not a number: replaced all the same
+        return False
 
     def _merged_below(self, body: str, bodies: set) -> list[str]:
         """The links merged into `body` by the loader: all below it, up to the next body."""
