@@ -163,3 +163,36 @@ def test_auto_warns_when_every_candidate_drives_the_motion(setup):
     text = report.format().splitlines()
     assert f"  WARNING: {rec['warning']}" in text
     assert not any(": left out, not friction here" in line for line in text)
+
+
+def test_the_warning_needs_a_material_value_beyond_the_multiple_test_threshold(setup):
+    """The warning's rule: the slot's value below zero by more than the Bonferroni threshold of
+    2 n one-sided tests at the level of one ACTIVE_SIGMAS test (3 joints: 2.64 standard
+    deviations, from the normal distribution written out here), and at least MATERIAL_SHARE of
+    some joint's RMS torque. Joint 3 of the stiction log passes both; a threshold just above its
+    z many times over, or a share many times its |value| / RMS torque, silences it."""
+    from math import erfc, sqrt
+
+    from mindyn.identification.friction import ACTIVE_SIGMAS, active_friction
+
+    _, _, arm, _ = setup
+    log = _log(arm, stiction=True)
+    report = run(arm, [log], friction=True)
+    res = report.result
+    why = active_friction(res, [log])
+    m = re.search(r"joint 3 at v = (\S+): f\(v\) sign\(v\) = (\S+) \+- ([^;\s]+)", why or "")
+    assert m, why
+    _, value, std = (float(x) for x in m.groups())
+    z = -value / std
+    # the threshold dissipation_check uses for n = 3 solves erfc(s / sqrt 2) / 2 = p / 6
+    level = 0.5 * erfc(ACTIVE_SIGMAS / sqrt(2)) / (2 * arm.n)
+    said = re.search(r"beyond (\S+) standard deviations", report.friction_record["warning"])
+    threshold = float(said.group(1))
+    assert 0.5 * erfc(threshold / sqrt(2)) == pytest.approx(level, rel=2e-3)
+    assert threshold < z  # warned: beyond the threshold at the speed reported
+    assert active_friction(res, [log], sigmas=10 * z) is None  # nowhere 10 z below zero
+    # the value reported (the first speed found) over joint 3's RMS torque: at most the most
+    # negative value's share, which the friction at the largest speed does not exceed tenfold
+    share = abs(value) / np.sqrt(np.mean(log.tau[:, 2] ** 2))
+    assert active_friction(res, [log], material=0.5 * share) is not None
+    assert active_friction(res, [log], material=10.0 * share) is None
