@@ -39,10 +39,11 @@ over a sample period of the log and the Coulomb feedforward on the reference vel
 errors of this size with any model), ``WORSE`` when finite but beyond that.
 
 With ``--friction-model KIND`` (coulomb, asymmetric, smooth, stribeck, dahl or auto) every
-command gets that option, and each case prints the friction model used (for ``auto`` the candidates'
-held-out residuals). Every case prints each joint's validation error relative to that joint's
-torque (``validation.relative`` and its ``raw`` and ``moving`` counterparts of the JSON), e.g.
-the UR10e's joint 6 (target with ``auto``: at most 30 %). Every case also prints the prediction
+command gets that option. Each case prints the friction model used (for ``auto`` the
+candidates' held-out residuals) and the warning when its fitted friction is not dissipative.
+Every case prints each joint's validation error relative to that joint's torque
+(``validation.relative`` and its ``raw`` and ``moving`` counterparts of the JSON), e.g. the
+UR10e's joint 6 (target with ``auto``: at most 30 %). Every case also prints the prediction
 uncertainty (``fit.prediction_uncertainty`` and ``validation.prediction_uncertainty``: the RMS
 standard deviation of the predicted torques over the RMS torque), its share of the fit's
 squared residual (per joint and mean) and whether the fit warns that the estimate does not
@@ -257,6 +258,7 @@ def main() -> int:
                     if fm.get("candidates")
                     else ""
                 )
+                + (f"; WARNING: {fm['warning']}" if fm.get("warning") else "")
             )
             m = doc["validation"]
             for kind, sub in (("filtered", m), ("raw", m.get("raw")), ("moving", m.get("moving"))):

@@ -318,7 +318,7 @@ def test_auto_leaves_out_a_fit_whose_friction_drives_the_motion(arm):
     rec = select_friction_model(arm, [log], kind="auto").record
     assert "stribeck" not in rec["candidates"] and rec["kind"] != "stribeck"
     why = rec["not_dissipative"]["stribeck"]
-    assert all(f"slot {k}" in why for k in (1, 2, 3)), why
+    assert all(f"joint {k}" in why for k in (1, 2, 3)), why
     # the same fit given explicitly is the user's choice: kept
     assert select_friction_model(arm, [log], kind="stribeck").record["kind"] == "stribeck"
 

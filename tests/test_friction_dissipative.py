@@ -60,7 +60,7 @@ def test_a_viscous_term_negative_beyond_both_spreads_is_not_friction(fit):
     res, data = fit
     why = active_friction(_with_viscous(res, -3.0, 1.0), [data])
     assert why is not None and why.startswith("the fitted friction drives the motion")
-    assert "slot 1 at" in why
+    assert "joint 1 at" in why
 
 
 def test_a_viscous_term_negative_only_against_the_pruned_spread_is_friction(fit):

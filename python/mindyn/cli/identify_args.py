@@ -321,7 +321,8 @@ def add_identify(sub, func) -> None:
         "exp(-(v / w)^2) (w searched per joint on the fit's residual), dahl Fv v + Fc z with "
         "the presliding state dz/dq = sigma (1 - z sign v) following the filtered positions "
         "(sigma searched per joint on the fit's residual; dynamic model), or auto (the one with "
-        "the smallest residual on held-out blocks of the fit logs); the choice is reported",
+        "the smallest residual on held-out blocks of the fit logs); the choice is reported, and "
+        "a fitted friction that drives the motion (f(v) v < 0 at a logged speed) warned of",
     )
     joint_vector(
         p,

@@ -60,7 +60,12 @@ state and refuse an identification with it.
   friction: a friction torque is dissipative, ``f(v) v >= 0`` at every speed, and a fit whose
   ``f(v) sign(v)`` is significantly negative at some speed (:func:`active_friction`, e.g. a
   Stribeck term ``Fs`` below ``-Fc``: friction pushing the joint along as it starts) fits
-  something other than friction there (when every model's fit is such, none is left out).
+  something other than friction there (when every model's fit is such, none is left out: each
+  is reported so, and the choice warned of).
+
+The fit of a model given or the default is checked by the same rule
+(:func:`dissipation_check`): the identification workflow records and warns of a fitted
+friction that is not dissipative.
 """
 
 from __future__ import annotations
@@ -408,8 +413,6 @@ def select_friction_model(
     if len(active_fits) < len(scores):  # a fit that is not friction competes only with such
         for k in active_fits:
             del scores[k]
-    else:
-        active_fits = {}
     if not scores:
         by_reason: dict[str, list[str]] = {}  # one reason once, with the models it refused
         for k, m in refused.items():
@@ -423,6 +426,12 @@ def select_friction_model(
         )
     chosen, best, se = simplest_within_one_error(scores, per_fold)
     out = choices[chosen]
+    warning = None
+    if chosen in active_fits:  # every candidate's fit is such: none was left out
+        warning = (
+            f"friction model auto, {chosen}: {active_fits[chosen]} (so does every other "
+            "candidate's fit: none was left out)"
+        )
     out.record.update(
         chosen_by="held-out data",
         rule=(
@@ -440,6 +449,7 @@ def select_friction_model(
         candidates_unit="weighted residual per equation",
         not_identifiable=refused,
         not_dissipative=active_fits,
+        warning=warning,
     )
     return out
 
@@ -460,7 +470,17 @@ def simplest_within_one_error(scores: dict, per_fold: dict) -> tuple[str, str, d
 ACTIVE_SIGMAS = 2.0
 
 
-def active_friction(res, logs) -> str | None:
+#: The default and given friction models' fits are warned of (:func:`dissipation_check`) only
+#: where the friction that drives the motion is material: on some joint at least this share of
+#: that joint's RMS torque in the fit logs (a slot whose fitted friction is close to zero, e.g.
+#: a motor's behind a joint torque sensor, crosses zero by a few standard deviations, which
+#: changes no torque the model predicts).
+MATERIAL_SHARE = 0.01
+
+
+def active_friction(
+    res, logs, *, material: float | None = None, sigmas: float = ACTIVE_SIGMAS
+) -> str | None:
     """Why the friction fitted in ``res`` is not friction, or None: a friction torque is
     dissipative, ``f(v) v >= 0`` at every speed; the slots whose fitted ``f(v) sign(v)`` is
     below zero by more than :data:`ACTIVE_SIGMAS` standard deviations (the parameters' standard
@@ -468,7 +488,11 @@ def active_friction(res, logs) -> str | None:
     one and that of the fit with every base parameter, ``res.initial["std"]``, since the pruned
     one assumes the removed parameters zero) at some speed from just above zero to the
     largest of ``logs``, either way (the steady friction of the Dahl model: ``sign(v)`` for
-    its state)."""
+    its state). The slots are named as the joints or, on the motor side, the motors they are,
+    each with the first speed found and its value. ``sigmas``: that many standard deviations
+    instead of :data:`ACTIVE_SIGMAS`. ``material``: a slot counts only where its
+    most negative such value, as it acts on the joints (``T^T`` on the motor side), is at least
+    this share of some joint's RMS torque in ``logs``."""
     base = res.base
     if not base.friction:
         return None
@@ -482,6 +506,14 @@ def active_friction(res, logs) -> str | None:
     top = np.max(np.vstack([np.abs(robot.slot_velocities(d.dq)) for d in logs]), axis=0)
     speeds = np.geomspace(1e-9, 1.0, 40)[:, None] * np.maximum(top, 1e-300)  # (S, n)
     phis = {sgn: robot.friction_shapes(sgn * speeds) for sgn in (1.0, -1.0)}  # (S, n, c)
+    slot = "motor" if robot.drive_side == "motor" else "joint"
+    if material is not None:
+        acts = (
+            np.abs(np.asarray(robot.transmission.T, float))
+            if robot.drive_side == "motor" and robot.transmission is not None
+            else np.eye(robot.n)
+        )
+        rms = np.sqrt(np.mean(np.vstack([d.tau for d in logs]) ** 2, axis=0))
     bad = []
     for k in range(robot.n):
         for sgn, phi in phis.items():
@@ -493,11 +525,15 @@ def active_friction(res, logs) -> str | None:
                     col = sgn * phi[:, k, i]
                     value += col * res.full[names.index(nm)]
                     var += (col * std.get(nm, 0.0)) ** 2
-            low = value < -ACTIVE_SIGMAS * np.sqrt(var)
+            low = value < -sigmas * np.sqrt(var)
+            if np.any(low) and material is not None:
+                worst = -float(value[low].min())  # the most negative value found
+                if not np.any(worst * acts[k] >= material * rms):
+                    continue  # immaterial: changes no torque the model predicts
             if np.any(low):
                 at = int(np.argmax(low))
                 bad.append(
-                    f"slot {k + 1} at v = {sgn * speeds[at, k]:.3g}: f(v) sign(v) = "
+                    f"{slot} {k + 1} at v = {sgn * speeds[at, k]:.3g}: f(v) sign(v) = "
                     f"{value[at]:.3g} +- {math.sqrt(var[at]):.2g}"
                 )
                 break
@@ -505,8 +541,41 @@ def active_friction(res, logs) -> str | None:
         return None
     return (
         "the fitted friction drives the motion (f(v) v < 0 beyond "
-        f"{ACTIVE_SIGMAS:g} standard deviations): " + "; ".join(bad)
+        f"{sigmas:.3g} standard deviations): " + "; ".join(bad)
     )
+
+
+def _remedy(kind: str) -> str:
+    """What to try when the fitted friction of the model ``kind`` is not dissipative."""
+    if kind == "stribeck":
+        return "friction_model='auto' leaves out a model whose fitted friction is not friction"
+    return (
+        "for a Stribeck-shaped friction (breakaway above the Coulomb level) try "
+        "friction_model='stribeck' or 'auto'"
+    )
+
+
+def dissipation_check(res, logs, *, kind: str) -> dict:
+    """The fit ``res`` of a friction model given or the default (``kind``; ``auto`` checks each
+    of its candidates itself) checked by :func:`active_friction` on its fit logs ``logs``, where
+    material (:data:`MATERIAL_SHARE` of a joint's RMS torque) and beyond the standard
+    deviations that hold the chance of a false warning over all ``2 n`` slots and directions
+    to that of one :data:`ACTIVE_SIGMAS` test (Bonferroni: 2.94 for 7 slots):
+    ``{"not_dissipative": {kind: why} (empty when dissipative), "warning": one line or
+    None}``, the warning naming the joints or motors, the speed and value found, and what to
+    try."""
+    from scipy.stats import norm
+
+    # one test per slot and direction: each at the level of one ACTIVE_SIGMAS test over all
+    n = res.base.robot.n
+    sigmas = float(norm.isf(norm.sf(ACTIVE_SIGMAS) / (2 * n)))
+    why = active_friction(res, logs, material=MATERIAL_SHARE, sigmas=sigmas)
+    if why is None:
+        return {"not_dissipative": {}, "warning": None}
+    return {
+        "not_dissipative": {kind: why},
+        "warning": f"friction model {kind}: {why}; {_remedy(kind)}",
+    }
 
 
 def held_out_residual(
@@ -592,8 +661,13 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
             )
     for k, why in (rec.get("not_identifiable") or {}).items():
         lines.append(f"    {k}: not identifiable here ({why})")
-    for k, why in (rec.get("not_dissipative") or {}).items():
-        lines.append(f"    {k}: left out, not friction here ({why})")
+    if rec["chosen_by"] == "held-out data":
+        for k, why in (rec.get("not_dissipative") or {}).items():
+            kept = k in rec["candidates"]
+            how = "not left out (every candidate's fit is such)" if kept else "left out"
+            lines.append(f"    {k}: {how}, not friction here ({why})")
+    if rec.get("warning"):
+        lines.append(f"  WARNING: {rec['warning']}")
     return lines
 
 

@@ -119,18 +119,18 @@ class IdentificationReport:
     :class:`~mindyn.identification.options.IdentifyOptions`; ``logs``: the
     :class:`~mindyn.identification.reading.Logs`; ``base``: the base set; ``result``: the
     unconstrained least-squares fit (``result_doc`` its JSON fields); ``friction``: the friction
-    choice (None: the robot's own model), ``friction_record`` and ``friction_lines`` the
-    friction model and how it was chosen, for the JSON and the text (None and empty without
-    friction); ``consistent``: the physically consistent estimate (None unless asked for;
-    ``consistent_doc`` its JSON fields); ``fit``, ``validation``: the error measures of the
-    unconstrained estimate on the fit and validation logs
-    (:func:`~mindyn.identification.validate`; validation None without validation logs),
-    ``consistent_fit``, ``consistent_validation`` those of the consistent estimate;
-    ``mass_matrix_min_eig``: the smallest eigenvalue of the consistent model's mass matrix over
-    the fit logs; ``truth``: the true base values when the logs are simulated; ``truth_side``:
-    the drive side of a simulation whose true values cannot be compared; ``truth_frames``: why
-    a simulation's true values, about other link frames, are not compared; ``tip``: the chain
-    identified."""
+    choice (None: the robot's own model), ``friction_record`` and ``friction_lines`` the friction
+    model and how it was chosen, for the JSON and the text (None and empty without friction), with
+    whether the fitted friction is dissipative (``not_dissipative``: model -> why, and ``warning``,
+    one line or None; :func:`~mindyn.identification.friction.dissipation_check`); ``consistent``:
+    the physically consistent estimate (None unless asked for; ``consistent_doc`` its JSON fields);
+    ``fit``, ``validation``: the error measures of the unconstrained estimate on the fit and
+    validation logs (:func:`~mindyn.identification.validate`; validation None without validation
+    logs), ``consistent_fit``, ``consistent_validation`` those of the consistent estimate;
+    ``mass_matrix_min_eig``: the smallest eigenvalue of the consistent model's mass matrix over the
+    fit logs; ``truth``: the true base values when the logs are simulated; ``truth_side``: the drive
+    side of a simulation whose true values cannot be compared; ``truth_frames``: why a simulation's
+    true values, about other link frames, are not compared; ``tip``: the chain identified."""
 
     robot: Robot
     options: IdentifyOptions

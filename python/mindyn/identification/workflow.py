@@ -157,6 +157,18 @@ def _friction(robot, data: list, options: IdentifyOptions, progress):
     )
 
 
+def _dissipation(robot, res, data: list, record: dict | None, lines: list[str]):
+    """The friction record and lines with the check of the fitted friction
+    (:func:`~mindyn.identification.friction.dissipation_check`) of a model given or the
+    default: ``not_dissipative`` and ``warning`` (``auto`` checked its candidates)."""
+    if record is None or record["chosen_by"] == "held-out data":
+        return record, lines
+    from .friction import dissipation_check, friction_lines
+
+    record = {**record, **dissipation_check(res, data, kind=record["kind"])}
+    return record, friction_lines(robot, record=record)
+
+
 def _fit(robot, base, data: list, files: list, options: IdentifyOptions, progress):
     """The least-squares fit and its JSON fields; its pruning at the threshold given, or with
     ``auto`` decided on held-out data (:func:`~mindyn.identification.pruning.choose_pruning`)."""
@@ -206,9 +218,11 @@ def run(
     estimate when asked for, the error measures on the fit and validation logs, the true values
     when the logs are simulated. ``tip``: the chain identified (as ``load(robot, tip=...)``),
     recorded in the JSON; ``progress``: a callable taking one line per step of the long
-    solves. Each stage runs once, in order: friction model, fit, consistent estimate, error
-    measures. With ``rsd_threshold="auto"`` the fit's pruning is decided on held-out data
-    (:mod:`~mindyn.identification.pruning`; ``settings["pruning_choice"]`` of the JSON)."""
+    solves. Each stage runs once, in order: friction model, fit (its friction checked to be
+    dissipative unless ``friction_model='auto'`` chose it, ``friction_record["warning"]``),
+    consistent estimate, error measures. With ``rsd_threshold="auto"`` the fit's pruning is
+    decided on held-out data (:mod:`~mindyn.identification.pruning`;
+    ``settings["pruning_choice"]`` of the JSON)."""
     robot = as_robot(robot)
     _args.optional(_args.instance, options, "options", IdentifyOptions)
     _args.optional(_args.text, tip, "tip")
@@ -246,6 +260,7 @@ def run(
     data, vdata = logs.fit.logs, logs.validation.logs
     choice, robot, base, record, lines = _friction(robot, data, opts, progress)
     res, res_doc = _fit(robot, base, data, logs.fit.files, opts, progress)
+    record, lines = _dissipation(robot, res, data, record, lines)
     cons, cons_doc, low = _consistent(res, data, opts, progress)
     from .validation import prediction_check, validate
 
