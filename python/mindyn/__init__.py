@@ -15,6 +15,8 @@
   ``mindyn`` command.
 """
 
+import numpy as np
+
 from . import _args
 from ._core import ArgumentError, Error, ModelError, RobotFileNotFoundError
 from ._core import from_pinocchio_order as _from_pin
@@ -68,26 +70,52 @@ def from_pinocchio_order(params):
     return _from_pin(_args.array(params, "params", (None,)))
 
 
+def _symmetric(x, name: str):
+    """A (3, 3) tensor, symmetric to round-off (a tensor's two triangles would give two
+    different products of inertia)."""
+    a = _args.array(x, name, (3, 3))
+    if abs(a - a.T).max() > 1e-9 * abs(a).max():
+        i, j = divmod(int(abs(a - a.T).argmax()), 3)
+        raise _args.fail(
+            name,
+            f"is not symmetric: entry ({i}, {j}) is {a[i, j]:g}, entry ({j}, {i}) is "
+            f"{a[j, i]:g}; expected an inertia tensor",
+        )
+    return a
+
+
+def _rotation(x, name: str):
+    """A (3, 3) rotation matrix, orthonormal to 1e-6 with determinant +1."""
+    R = _args.array(x, name, (3, 3))
+    if abs(R).max() > 1.0 + 1e-6 or abs(R.T @ R - np.eye(3)).max() > 1e-6:
+        raise _args.fail(name, "is not a rotation matrix (R^T R differs from the identity)")
+    if np.linalg.det(R) < 0:
+        raise _args.fail(name, "is not a rotation matrix (a reflection: determinant -1)")
+    return R
+
+
 @_args.finite_results("mass", "com", "inertia")
 def inertial_from_com(mass, com, inertia):
     """The ten inertial parameters about the link origin ``[XX XY XZ YY YZ ZZ MX MY MZ M]`` of a
-    body of ``mass`` with centre of mass ``com`` (3,) and inertia tensor ``inertia`` (3, 3) about
-    the centre of mass, all in link axes."""
+    body of ``mass`` with centre of mass ``com`` (3,) and inertia tensor ``inertia`` (3, 3),
+    symmetric, about the centre of mass, all in link axes. Any values are accepted as a
+    parameter vector is (a negative mass too); a tensor that is not symmetric is an
+    ArgumentError naming ``inertia``."""
     return _from_com(
         _args.number(mass, "mass"),
         _args.array(com, "com", (3,)),
-        _args.array(inertia, "inertia", (3, 3)),
+        _symmetric(inertia, "inertia"),
     )
 
 
 @_args.finite_results("mass", "com", "rotation", "inertia")
 def inertial_from_urdf(mass, com, rotation, inertia):
-    """As :func:`inertial_from_com` for a URDF ``<inertial>``: ``inertia`` (3, 3) about the
-    centre of mass in the axes of its origin, which is rotated by ``rotation`` (3, 3) from the
-    link axes."""
+    """As :func:`inertial_from_com` for a URDF ``<inertial>``: ``inertia`` (3, 3, symmetric)
+    about the centre of mass in the axes of its origin, which is rotated by ``rotation`` (3, 3,
+    a rotation matrix: orthonormal, determinant +1) from the link axes."""
     return _from_urdf(
         _args.number(mass, "mass"),
         _args.array(com, "com", (3,)),
-        _args.array(rotation, "rotation", (3, 3)),
-        _args.array(inertia, "inertia", (3, 3)),
+        _rotation(rotation, "rotation"),
+        _symmetric(inertia, "inertia"),
     )

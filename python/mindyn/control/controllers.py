@@ -239,6 +239,23 @@ def check_lambda(lam, period: float, *, what: str = "lambda") -> None:
         )
 
 
+def _estimate(x, base: BaseParameters, name: str) -> np.ndarray:
+    """A vector of base-parameter values (an estimate), a copy: ``base.n`` finite numbers."""
+    try:
+        a = np.array(x, dtype=float)  # a copy: the caller's array may change after
+    except (TypeError, ValueError):
+        raise ControllerSettingError(f"{name} must be {base.n} numbers, got {x!r}") from None
+    if a.shape != (base.n,):
+        raise ControllerSettingError(f"{name} has shape {a.shape}; expected ({base.n},)")
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        k = int(bad[0])
+        raise ControllerSettingError(
+            f"{name} has {a[k]} at '{base.names[k]}' (entry {k + 1}); expected finite values"
+        )
+    return a
+
+
 def _bound(x, size: int, name: str, fill: float) -> np.ndarray:
     """A side of the box on the estimate: None (``fill``, open), a number or ``size`` numbers
     (infinities allowed, NaN not)."""
@@ -293,13 +310,10 @@ class ComputedTorque:
         coulomb: str = "measured",
         coulomb_smoothing: float = 0.0,
     ):
+        _args.instance(base, "base", BaseParameters)
         n = base.robot.n
         self.base = base
-        self.p_hat = np.asarray(p_hat, dtype=float).copy()
-        if self.p_hat.shape != (base.n,):
-            raise ControllerSettingError(
-                f"p_hat has shape {self.p_hat.shape}; expected ({base.n},)"
-            )
+        self.p_hat = _estimate(p_hat, base, "p_hat")
         self.kp = _diag(kp, n, "kp")
         self.kd = _diag(kd, n, "kd")
         if coulomb not in ("measured", "reference"):
@@ -307,7 +321,7 @@ class ComputedTorque:
                 f"coulomb must be 'measured' or 'reference', got '{coulomb}'"
             )
         self._coulomb = coulomb
-        self.eps = float(coulomb_smoothing)
+        self.eps = _args.number(coulomb_smoothing, "coulomb_smoothing", minimum=0.0)
         if not (math.isfinite(self.eps) and self.eps >= 0):
             raise ControllerSettingError(
                 f"coulomb_smoothing must be a finite number >= 0, got {self.eps}"
@@ -393,6 +407,7 @@ class AdaptivePD:
         p_min=None,
         p_max=None,
     ):
+        _args.instance(base, "base", BaseParameters)
         n = base.robot.n
         self.base = base
         self.kd = _diag(kd, n, "kd")
@@ -407,10 +422,8 @@ class AdaptivePD:
                 f"p_min exceeds p_max at '{base.names[k]}' ({self.p_min[k]:g} > {self.p_max[k]:g})"
             )
         self.gamma = _diag(gamma, base.n, "gamma")
-        self.p0 = np.asarray(p0, dtype=float).copy()
-        if self.p0.shape != (base.n,):
-            raise ControllerSettingError(f"p0 has shape {self.p0.shape}; expected ({base.n},)")
-        self.adapt = adapt
+        self.p0 = _estimate(p0, base, "p0")
+        self.adapt = _args.flag(adapt, "adapt")
         self.nu = float(nu)
         if not (0 <= self.nu <= MAX_GAIN):
             raise ControllerSettingError(f"nu must be a number in [0, {MAX_GAIN:g}], got {nu}")
@@ -448,10 +461,7 @@ class AdaptivePD:
 
     def use_parameters(self, p0) -> None:
         """Takes ``p0`` (base parameters) as the initial estimate, and resets."""
-        p0 = np.asarray(p0, dtype=float)
-        if p0.shape != self.p0.shape:
-            raise ControllerSettingError(f"p0 has shape {p0.shape}; expected {self.p0.shape}")
-        self.p0 = p0.copy()
+        self.p0 = _estimate(p0, self.base, "p0")
         self.reset()
 
     def terms(self, q, dq, ref):

@@ -114,6 +114,7 @@ class IdentificationResult:
     def predict(self, data: JointData) -> np.ndarray:
         """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n)
         (:func:`predicted_torques`)."""
+        _args.instance(data, "data", JointData)
         return predicted_torques(self.base, self.full, data)
 
     def prediction_std(self, data: JointData) -> np.ndarray:

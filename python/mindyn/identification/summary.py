@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -160,7 +161,8 @@ class IdentificationReport:
         return format_identification(self)
 
     def to_dict(self) -> dict:
-        """The JSON document of ``mindyn identify --json``."""
+        """The JSON document of ``mindyn identify --json``: a new document at each call, which
+        the caller may change without changing the report or a later ``to_dict()``."""
         cons, logs = self.consistent_doc, self.logs
         fit, val = logs.fit, logs.validation
         doc = dict(self.result_doc)
@@ -215,4 +217,6 @@ class IdentificationReport:
                     doc[key] = {"estimate": "unconstrained least squares", **doc[key]}
         if self.truth is not None:
             doc["true_values"] = [float(v) for v in self.truth]
-        return doc
+        # the fit's, friction's and reading's records are the report's own: a copy, so that an
+        # edit of the document never reaches them (nor the next document)
+        return copy.deepcopy(doc)

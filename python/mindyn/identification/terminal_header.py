@@ -31,7 +31,8 @@ def joint_term_words(robot, *, rotor: bool, friction: bool, offset: bool) -> lis
     words = [w for w, on in named if on]
     if robot.transmission is not None and (rotor or friction):
         words[int(rotor and friction)] += (
-            " on the motors through the transmissions (drive_side='joint': on the joints)"
+            " on the motors through the transmissions (robot.with_drive_side('joint') puts them on "
+            "the joints)"
             if robot.drive_side == "motor"
             else " on the joints (drive_side='joint')"
         )

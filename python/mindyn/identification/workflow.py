@@ -19,7 +19,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .. import _args
-from ..robot import as_robot
+from ..robot import Robot, as_robot, load
 from .errors import IdentificationError
 from .estimation import distinct_logs
 from .joint_data import JointData
@@ -47,6 +47,30 @@ def _fit_keywords(options: IdentifyOptions) -> dict:
     if "min_velocity" in options._given:
         keywords["min_velocity"] = options.min_velocity
     return keywords
+
+
+def _chain(robot, tip: str | None) -> Robot:
+    """The robot identified: ``robot`` loaded with ``tip`` (a description file), or the loaded
+    ``robot`` once it is the chain ``tip`` names, so that the JSON's ``tip`` is the chain whose
+    parameters it holds (the readers load a description with it)."""
+    if tip is None or not isinstance(robot, Robot):
+        return as_robot(robot) if tip is None else load(robot, tip=tip)
+    import warnings
+
+    try:
+        with warnings.catch_warnings():  # the robot's own load said them
+            warnings.simplefilter("ignore")
+            joints = load(robot.source, tip=tip).joint_names
+    except (ValueError, FileNotFoundError) as e:
+        raise _args.fail("tip", f"does not apply to robot '{robot.name}': {e}") from None
+    if joints != robot.joint_names:
+        raise _args.fail(
+            "tip",
+            f"is '{tip}', whose chain in {robot.source} has the joints {', '.join(joints)}; "
+            f"robot '{robot.name}' has {', '.join(robot.joint_names)} (load it with tip='{tip}', "
+            "or give the tip it was loaded with)",
+        )
+    return robot
 
 
 def _check_width(width, n: int) -> list[float]:
@@ -217,15 +241,17 @@ def run(
     Returns an :class:`IdentificationReport`: the fit, the friction choice and the consistent
     estimate when asked for, the error measures on the fit and validation logs, the true values
     when the logs are simulated. ``tip``: the chain identified (as ``load(robot, tip=...)``),
-    recorded in the JSON; ``progress``: a callable taking one line per step of the long
+    recorded in the JSON: a description file is loaded with it, and a loaded ``robot`` must be
+    that chain (its joints those of ``load(robot.source, tip=tip)``; ArgumentError naming
+    ``tip`` otherwise); ``progress``: a callable taking one line per step of the long
     solves. Each stage runs once, in order: friction model, fit (its friction checked to be
     dissipative unless ``friction_model='auto'`` chose it, ``friction_record["warning"]``),
     consistent estimate, error measures. With ``rsd_threshold="auto"`` the fit's pruning is
     decided on held-out data (:mod:`~mindyn.identification.pruning`;
     ``settings["pruning_choice"]`` of the JSON)."""
-    robot = as_robot(robot)
-    _args.optional(_args.instance, options, "options", IdentifyOptions)
     _args.optional(_args.text, tip, "tip")
+    robot = _chain(robot, tip)
+    _args.optional(_args.instance, options, "options", IdentifyOptions)
     _args.optional(_args.function, progress, "progress")
     if options is not None and keywords:
         raise IdentificationError(f"run: give options or {', '.join(keywords)}, not both")
