@@ -426,12 +426,6 @@ def select_friction_model(
         )
     chosen, best, se = simplest_within_one_error(scores, per_fold)
     out = choices[chosen]
-    warning = None
-    if chosen in active_fits:  # every candidate's fit is such: none was left out
-        warning = (
-            f"friction model auto, {chosen}: {active_fits[chosen]} (so does every other "
-            "candidate's fit: none was left out)"
-        )
     out.record.update(
         chosen_by="held-out data",
         rule=(
@@ -449,7 +443,7 @@ def select_friction_model(
         candidates_unit="weighted residual per equation",
         not_identifiable=refused,
         not_dissipative=active_fits,
-        warning=warning,
+        warning=None,  # the chosen fit is checked as a given model's (dissipation_check)
     )
     return out
 
@@ -555,7 +549,7 @@ def _remedy(kind: str) -> str:
     )
 
 
-def dissipation_check(res, logs, *, kind: str) -> dict:
+def dissipation_check(res, logs, *, kind: str, auto: bool = False) -> dict:
     """The fit ``res`` of a friction model given or the default (``kind``; ``auto`` checks each
     of its candidates itself) checked by :func:`active_friction` on its fit logs ``logs``, where
     material (:data:`MATERIAL_SHARE` of a joint's RMS torque) and beyond the standard
@@ -563,13 +557,21 @@ def dissipation_check(res, logs, *, kind: str) -> dict:
     to that of one :data:`ACTIVE_SIGMAS` test (Bonferroni: 2.94 for 7 slots):
     ``{"not_dissipative": {kind: why} (empty when dissipative), "warning": one line or
     None}``, the warning naming the joints or motors, the speed and value found, and what to
-    try."""
+    try. ``auto``: ``kind`` is the model ``friction_model='auto'`` chose (which it left in as
+    every candidate's fit drives the motion): ``{"warning": ...}`` alone."""
     from scipy.stats import norm
 
     # one test per slot and direction: each at the level of one ACTIVE_SIGMAS test over all
     n = res.base.robot.n
     sigmas = float(norm.isf(norm.sf(ACTIVE_SIGMAS) / (2 * n)))
     why = active_friction(res, logs, material=MATERIAL_SHARE, sigmas=sigmas)
+    if auto:  # the candidates were checked at ACTIVE_SIGMAS: their record stays
+        return {
+            "warning": None
+            if why is None
+            else f"friction model auto, {kind}: {why} (every candidate's fit drives the motion "
+            f"beyond {ACTIVE_SIGMAS:g} standard deviations: none was left out)"
+        }
     if why is None:
         return {"not_dissipative": {}, "warning": None}
     return {

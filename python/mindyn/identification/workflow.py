@@ -184,12 +184,16 @@ def _friction(robot, data: list, options: IdentifyOptions, progress):
 def _dissipation(robot, res, data: list, record: dict | None, lines: list[str]):
     """The friction record and lines with the check of the fitted friction
     (:func:`~mindyn.identification.friction.dissipation_check`) of a model given or the
-    default: ``not_dissipative`` and ``warning`` (``auto`` checked its candidates)."""
-    if record is None or record["chosen_by"] == "held-out data":
+    default: ``not_dissipative`` and ``warning``; of the model ``auto`` chose, which it checked
+    with its candidates, ``warning`` when it left it in as every candidate's fit is such."""
+    if record is None:
         return record, lines
     from .friction import dissipation_check, friction_lines
 
-    record = {**record, **dissipation_check(res, data, kind=record["kind"])}
+    auto = record["chosen_by"] == "held-out data"
+    if auto and record["kind"] not in (record.get("not_dissipative") or {}):
+        return record, lines
+    record = {**record, **dissipation_check(res, data, kind=record["kind"], auto=auto)}
     return record, friction_lines(robot, record=record)
 
 
