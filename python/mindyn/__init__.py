@@ -15,6 +15,9 @@
   ``mindyn`` command.
 """
 
+import importlib
+import importlib.util
+
 import numpy as np
 
 from . import _args
@@ -56,6 +59,10 @@ def __getattr__(name: str):
         from ._version import __version__
 
         return __version__
+    # A submodule not imported above (identification, codegen, export, ...: their imports cost
+    # every command's start) is imported when first named: ``mindyn.identification.run``.
+    if not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        return importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module 'mindyn' has no attribute '{name}'")
 
 

@@ -47,6 +47,7 @@ __all__ = [
     "samples",
     "text",
     "unit_norms",
+    "unknown_keywords",
 ]
 
 #: How far from 1 the norm of a configuration's unit quaternion or (cos, sin) pair may be (the
@@ -356,6 +357,18 @@ def mapping(x, name: str):
     if not isinstance(x, Mapping):
         raise ArgumentError(f"{name} is {_describe(x)}; expected a mapping (a dict)")
     return x
+
+
+def unknown_keywords(function: str, given, accepted) -> None:
+    """Refuses the keywords of ``given`` (names) that are not ``accepted``: an error naming
+    ``function``, the one the user called (not the one it passes the keywords on to), the
+    unknown keywords and every accepted one."""
+    unknown = sorted(set(given) - set(accepted))
+    if unknown:
+        raise ArgumentError(
+            f"{function}: unknown option(s) {', '.join(unknown)}; expected some of "
+            + ", ".join(sorted(accepted))
+        )
 
 
 def protocol(x, name: str, method: str, what: str):

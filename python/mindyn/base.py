@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from functools import cached_property
+from types import MappingProxyType
 
 import numpy as np
 
@@ -132,18 +133,28 @@ class BaseParameters:
         core: _core.BaseParameters,
         robot: Robot,
         offset: bool = False,
-        options: dict | None = None,
+        options: Mapping | None = None,
     ):
         self._b = core
         self.robot = robot
         self.offset = bool(core.offset)
         if self.offset != bool(offset):
             raise _core.ModelError("offset does not match the core's parameter layout")
-        # the settings it was computed with (tolerance, snap, samples, seed), for symbolic()
-        self.options = dict(options or {})
+        self._options = _frozen(options or {})
         self.method_reason = ""  # set by base_parameters
-        #: what the snap did and why (see :func:`base_parameters`)
-        self.snap_decision: dict = {"mode": "off", "applied": False}
+        self._snap_decision = _frozen({"mode": "off", "applied": False})
+
+    @property
+    def options(self) -> Mapping:
+        """The settings it was computed with (``tolerance``, ``snap``, ``samples``, ``seed``),
+        read-only."""
+        return self._options
+
+    @property
+    def snap_decision(self) -> Mapping:
+        """What the snap did and why (see :func:`base_parameters`), read-only (its lists as
+        tuples; ``to_dict()["snap"]`` is a plain copy)."""
+        return self._snap_decision
 
     def for_robot(
         self, robot: Robot, *, order: Sequence[int] | Sequence[str] | None = None, offset=None
@@ -175,7 +186,7 @@ class BaseParameters:
         robot = self.robot.with_friction_model(kind, velocity=v)
         out = BaseParameters(self._b.with_friction_velocity(v), robot, self.offset, self.options)
         out.method_reason = self.method_reason
-        out.snap_decision = self.snap_decision  # the same geometry, snapped the same way
+        out._snap_decision = self._snap_decision  # the same geometry, snapped the same way
         return out
 
     @cached_property
@@ -462,8 +473,23 @@ def _own_copy(value):
     return value
 
 
-def _plain(d: dict) -> dict:
-    return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in d.items()}
+def _frozen(x):
+    """``x`` read-only, all the way down: mappings as read-only views of copies, lists and
+    tuples as tuples (what a getter returns: the object never changes under its users)."""
+    if isinstance(x, Mapping):
+        return MappingProxyType({k: _frozen(v) for k, v in x.items()})
+    if isinstance(x, (list, tuple)):
+        return tuple(_frozen(v) for v in x)
+    return x
+
+
+def _plain(x):
+    """``x`` (of :func:`_frozen`) as JSON takes it: dicts, lists and Python floats."""
+    if isinstance(x, Mapping):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    return float(x) if isinstance(x, (float, np.floating)) else x
 
 
 # --------------------------------------------------------------------------------------------
@@ -732,7 +758,7 @@ def base_parameters(
     options.update(samples=int(samples), seed=int(seed))
     out = BaseParameters(core, robot, offset, options)
     out.method_reason = reason
-    out.snap_decision = decision
+    out._snap_decision = _frozen(decision)
     return out
 
 

@@ -273,17 +273,36 @@ def _bound(x, size: int, name: str, fill: float) -> np.ndarray:
     return a
 
 
+def _joint_vectors(n: int, **arrays) -> list[np.ndarray]:
+    """A controller step's per-joint inputs, each of shape (n,) and finite, or an ArgumentError
+    naming it (:func:`mindyn._args.array`). A float64 array of that shape passes as it is, not
+    copied (the step runs every controller period); anything else is converted."""
+    out = []
+    for name, x in arrays.items():
+        if not (
+            type(x) is np.ndarray
+            and x.shape == (n,)
+            and x.dtype == np.float64
+            and np.isfinite(x).all()
+        ):
+            x = _args.array(x, name, (n,), unit="joint")
+        out.append(x)
+    return out
+
+
 class PD:
-    """Plain PD: ``tau = -K_P e - K_D de`` (no model)."""
+    """Plain PD: ``tau = -K_P e - K_D de`` (no model). ``q``, ``dq`` and the reference are
+    arrays of shape (n,), finite (else an ArgumentError names the argument)."""
 
     name = "pd"
 
     def __init__(self, n: int, kp, kd):
-        n = _args.integer(n, "n", 1)
+        self.n = n = _args.integer(n, "n", 1)
         self.kp = _diag(kp, n, "kp")
         self.kd = _diag(kd, n, "kd")
 
     def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
+        q, dq, q_d, dq_d, _ = _joint_vectors(self.n, q=q, dq=dq, q_d=q_d, dq_d=dq_d, ddq_d=ddq_d)
         return -self.kp * (q - q_d) - self.kd * (dq - dq_d)
 
 
@@ -348,6 +367,9 @@ class ComputedTorque:
         )
 
     def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
+        q, dq, q_d, dq_d, ddq_d = _joint_vectors(
+            self.base.robot.n, q=q, dq=dq, q_d=q_d, dq_d=dq_d, ddq_d=ddq_d
+        )
         v = ddq_d - self.kd * (dq - dq_d) - self.kp * (q - q_d)
         self.model_torque = self.base.regressor(q, dq, v) @ self._p
         if self._fc.any():  # slot k's Coulomb torque at its reference velocity, through t_k
@@ -465,8 +487,15 @@ class AdaptivePD:
         self.reset()
 
     def terms(self, q, dq, ref):
-        """``(e, s, dq_r, ddq_r)`` of the sign convention."""
-        qd, dqd, ddqd = ref
+        """``(e, s, dq_r, ddq_r)`` of the sign convention; ``ref`` is ``(q_d, dq_d, ddq_d)``.
+        Every array is of shape (n,) and finite, else an ArgumentError names it."""
+        if not (isinstance(ref, (tuple, list)) and len(ref) == 3):
+            raise _args.fail("ref", "must be the three arrays (q_d, dq_d, ddq_d)")
+        return self._terms(
+            *_joint_vectors(self.base.robot.n, q=q, dq=dq, q_d=ref[0], dq_d=ref[1], ddq_d=ref[2])
+        )
+
+    def _terms(self, q, dq, qd, dqd, ddqd):
         e = q - qd
         de = dq - dqd
         dqr = dqd - self.lam * e
@@ -475,7 +504,10 @@ class AdaptivePD:
         return e, s, dqr, ddqr
 
     def __call__(self, t, q, dq, q_d, dq_d, ddq_d):
-        _, s, dqr, ddqr = self.terms(q, dq, (q_d, dq_d, ddq_d))
+        q, dq, q_d, dq_d, ddq_d = _joint_vectors(
+            self.base.robot.n, q=q, dq=dq, q_d=q_d, dq_d=dq_d, ddq_d=ddq_d
+        )
+        _, s, dqr, ddqr = self._terms(q, dq, q_d, dq_d, ddq_d)
         Y = slotine_li_regressor(self.base, q, dq, dqr, ddqr)
         self.Y = Y
         self.model_torque = Y @ self.p_hat

@@ -29,8 +29,13 @@
   (:mod:`~mindyn.identification.summary`: its JSON by ``to_dict()``;
   :mod:`~mindyn.identification.terminal`: its text by ``format()``).
 
-The names below are the ones a workflow needs; the modules hold the rest.
+The names below are the ones a workflow needs; the modules hold the rest. A module not imported
+here (``excitation``, ``floating``, ``rosbag``, ...) is imported when first named as an
+attribute: ``mindyn.identification.excitation``.
 """
+
+import importlib
+import importlib.util
 
 from .consistent import ConsistentResult, identify_consistent, identify_payload
 from .data import DataError, read_csv, write_csv
@@ -73,3 +78,10 @@ __all__ = [
     "validate",
     "write_csv",
 ]
+
+
+def __getattr__(name: str):
+    # the modules that the names above do not need are imported when first named
+    if not name.startswith("_") and importlib.util.find_spec(f"{__name__}.{name}") is not None:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

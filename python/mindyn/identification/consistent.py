@@ -31,6 +31,7 @@ from ``tau - tau_arm(q, dq, ddq) = W_last(q, dq, ddq) phi`` with the identified 
 from __future__ import annotations
 
 import contextlib
+import inspect
 import math
 import numbers
 import re
@@ -359,6 +360,12 @@ def identify_consistent(
     """:func:`~mindyn.identification.identify` (same arguments in ``kwargs``), then
     :func:`consistent_estimate` on its least-squares problem (the prior's weight chosen from
     the data by default)."""
+    accepted = [
+        name
+        for name, p in inspect.signature(identify).parameters.items()
+        if p.kind is p.KEYWORD_ONLY
+    ]
+    _args.unknown_keywords("identify_consistent", kwargs, ["prior_weight", *accepted])
     _weight(prior_weight)
     return consistent_estimate(identify(robot, data, **kwargs), prior_weight=prior_weight)
 

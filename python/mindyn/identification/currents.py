@@ -29,6 +29,7 @@ from .data import (
     current_gains,
     decode_text,
     first_not_increasing,
+    given_drive_gain,
     parse_cell,
 )
 
@@ -132,7 +133,7 @@ def attach_currents(
     _args.instance(data, "data", JointData)
     _args.path(path, "path")
     _args.optional(_args.instance, robot, "robot", Robot)
-    drive_gain = _args.optional(_args.array, drive_gain, "drive_gain", (data.n,))
+    drive_gain = given_drive_gain(drive_gain, robot, size=data.n)
     tolerance = _args.optional(_args.number, tolerance, "tolerance", positive=True)
     t_i, cur = read_currents(path, data.n, columns=columns, robot=robot)
     G, info = current_gains(robot, drive_gain=drive_gain)

@@ -265,7 +265,9 @@ def read_csv(
         samples at each end where the filter starts up are dropped
         (:func:`without_derivative_edges`, ``processing["derivative_edges"]``).
     drive_gain : array (n,), optional
-        Currents: joint-side gain per joint [N m/A], instead of the drive table's.
+        Currents: joint-side gain per joint [N m/A], instead of the drive table's (the motor
+        torque constants when the description declares transmissions); a gain that is zero or
+        not finite is an ArgumentError naming its joint (or motor), whatever the log holds.
     columns : mapping, optional
         A column map (:mod:`~mindyn.identification.columns`): the file's names of mindyn's
         quantities, e.g. ``{"t[ms]": "timestamp", "q": "actual_q_{j0}", "i":
@@ -311,7 +313,7 @@ def read_csv(
     order = _args.integer(order, "order", 1)
     window = _args.optional(_args.number, window, "window", positive=True)
     polyorder = _args.integer(polyorder, "polyorder", 0)
-    drive_gain = _args.optional(_args.array, drive_gain, "drive_gain", (None,))
+    drive_gain = given_drive_gain(drive_gain, robot)
     if columns is not None:
         from .columns import column_map
 
@@ -626,22 +628,51 @@ def _unit_key(unit: str) -> str:
     return u
 
 
+def _refuse_unusable_gains(K: np.ndarray, motors=None) -> None:
+    """An ArgumentError naming every gain of ``K`` given as ``drive_gain=`` that is zero or not
+    finite: by joint, or by motor name when ``motors`` (the transmissions' motors, whose torque
+    constants the gains then are) is given."""
+    bad = np.flatnonzero(~np.isfinite(K) | (K == 0))
+    if not bad.size:
+        return
+    if motors is not None and len(motors) == K.size:
+        given = ", ".join(f"{motors[b]} = {K[b]:g}" for b in bad)
+        what, unit = "the motor torque constants", "N m/A per motor"
+    else:
+        given = ", ".join(f"joint {b + 1} = {K[b]:g}" for b in bad)
+        what, unit = "the gains", "N m/A per joint"
+    raise _args.ArgumentError(
+        f"drive_gain=: {what} given are zero or not finite for {given} ({unit}, non-zero; a "
+        "negative one is a reversed motor)"
+    )
+
+
+def given_drive_gain(drive_gain, robot=None, *, size: int | None = None) -> np.ndarray | None:
+    """The gains given as ``drive_gain`` (None: not given) as a float array of ``size`` entries
+    (None: any), checked where they are given whether or not the log turns out to hold
+    currents: a gain that is zero or not finite is an ArgumentError naming its joint, or its motor
+    when ``robot`` declares transmissions (the gains are then the motors' torque constants); a
+    negative gain is kept (a reversed motor)."""
+    if drive_gain is None:
+        return None
+    K = _args.array(drive_gain, "drive_gain", (size,), unit="joint", finite=False)
+    tr = getattr(robot, "transmission", None) if robot is not None else None
+    _refuse_unusable_gains(K, tr.motors if tr is not None else None)
+    return K
+
+
 def drive_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, str]:
     """Joint-side drive gains ``K`` [N m/A per joint] that turn motor currents into joint
     torques, and where they come from: ``drive_gain`` (n,) when given, else the robot's drive
     table, ``torque_constant * gear_ratio``. A negative gain is a sign convention, kept: the
     motor's positive current drives its joint backwards (a motor wired or mounted reversed).
-    Raises DataError when a gain is missing, not finite or zero."""
+    Raises DataError when a gain of the drive table is missing, not finite or zero, and
+    ArgumentError when a gain given is not finite or zero."""
     if drive_gain is not None:
         K = np.asarray(drive_gain, dtype=float).reshape(-1)
         if robot is not None and K.size != robot.n:
             raise DataError(f"drive gains: {K.size} values for {robot.n} joints")
-        bad = np.flatnonzero(~np.isfinite(K) | (K == 0))
-        if bad.size:
-            raise DataError(
-                f"drive gains: joint(s) {', '.join(str(k + 1) for k in bad)} have a gain that "
-                "is zero or not a finite number"
-            )
+        _refuse_unusable_gains(K)
         return K, "given drive gains"
     if robot is None:
         raise DataError("torque unit 'current' needs drive gains or the robot's drive table")
@@ -672,8 +703,9 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
     motor-side torque constants ``K_t`` [N m/A per motor] given as ``drive_gain`` or else the
     transmission's ``torque_constant``. A negative gain or constant is kept (a reversed motor,
     as in :func:`drive_gains`), the joints or motors named in ``reversed`` of the information.
-    Raises DataError when a constant is missing, not finite
-    or zero, or when there are not as many motors as joints."""
+    Raises DataError when a constant of the description is missing, not finite or zero, or when
+    there are not as many motors as joints, and ArgumentError when a gain given is not finite
+    or zero."""
     tr = getattr(robot, "transmission", None) if robot is not None else None
     if tr is None:
         K, source = drive_gains(robot, drive_gain=drive_gain)
@@ -695,13 +727,9 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
     else:
         Kt = np.array(tr.torque_constant, dtype=float)
         source = "torque constants of the transmissions"
+    if drive_gain is not None:
+        _refuse_unusable_gains(Kt, tr.motors)
     bad = np.flatnonzero(~np.isfinite(Kt) | (Kt == 0))
-    if bad.size and drive_gain is not None:
-        given = ", ".join(f"{tr.motors[b]} = {Kt[b]:g}" for b in bad)
-        raise DataError(
-            f"drive gains: the motor torque constants given are zero or not finite for {given} "
-            "(N m/A per motor, non-zero; a negative one is a reversed motor)"
-        )
     if bad.size:
         names = ", ".join(tr.motors[b] for b in bad)
         raise DataError(
@@ -970,11 +998,43 @@ def _header(n: int, kinds) -> list[str]:
     return ["t"] + [f"{k}{j}" for k in kinds for j in range(1, n + 1)]
 
 
+#: Significant digits of the numbers :func:`write_csv` writes.
+_WRITTEN_DIGITS = 12
+
+
+def _written_times(t: np.ndarray) -> np.ndarray:
+    """``t`` when its time stamps are strictly increasing as :func:`write_csv` writes them (as
+    :func:`read_csv` needs them), else an ArgumentError naming the first sample that is not
+    later than the one before it (also where the two differ only beyond the digits written)."""
+    k = first_not_increasing(t)
+    if k is not None:
+        raise _args.fail(
+            "t",
+            f"is not strictly increasing: t[{k}] = {float(t[k])!r} is not later than t[{k - 1}] = "
+            f"{float(t[k - 1])!r}; expected strictly increasing time stamps",
+        )
+    # two stamps written alike differ by less than one unit of the last digit written
+    unit = 10.0 ** (1 - _WRITTEN_DIGITS) * np.maximum(np.abs(t[1:]), np.abs(t[:-1]))
+    for k in np.flatnonzero(np.diff(t) <= unit) + 1:
+        a, b = (f"{x:.{_WRITTEN_DIGITS}g}" for x in (t[k - 1], t[k]))
+        if a == b:
+            raise _args.fail(
+                "t",
+                f"is not strictly increasing as written ({_WRITTEN_DIGITS} significant digits): "
+                f"t[{k}] = {float(t[k])!r} and t[{k - 1}] = {float(t[k - 1])!r} are both "
+                f"written {a}; expected time stamps that differ in the digits written",
+            )
+    return t
+
+
 def write_csv(path, t, q, tau, dq=None, ddq=None, *, torque_unit: str | None = None) -> Path:
     """Write ``t, q1..qn, [dq1..dqn], [ddq1..ddqn], tau1..taun``; shapes (m,) and (m, n). With
-    ``torque_unit`` (e.g. ``"permille"``) the torque columns say it: ``tau1[permille]``."""
+    ``torque_unit`` (e.g. ``"permille"``) the torque columns say it: ``tau1[permille]``. Numbers
+    are written with 12 significant digits; time stamps that are not strictly increasing as
+    written (which :func:`read_csv` refuses) are an ArgumentError naming the first such
+    sample."""
     _args.path(path, "path")
-    t = _args.array(t, "t", (None,))
+    t = _written_times(_args.array(t, "t", (None,)))
     arrays = [t[:, None], _args.array(q, "q", (t.shape[0], None))]
     kinds = ["q"]
     n = arrays[1].shape[1]
@@ -994,7 +1054,7 @@ def write_csv(path, t, q, tau, dq=None, ddq=None, *, torque_unit: str | None = N
         delimiter=",",
         header=",".join(header),
         comments="",
-        fmt="%.12g",
+        fmt=f"%.{_WRITTEN_DIGITS}g",
     )
     return path
 

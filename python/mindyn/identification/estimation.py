@@ -88,6 +88,9 @@ class IdentificationResult:
         ``min_velocity`` excluded) with its columns scaled to unit norm.
     initial : dict
         Estimates, std and RSD of all base parameters before pruning.
+
+    The arrays (``values``, ``std``, ``rsd``, ``full``, ``joint_sigma`` and those of
+    ``initial``) are read-only copies: assigning to an entry raises ``ValueError``.
     """
 
     model: str
@@ -110,6 +113,17 @@ class IdentificationResult:
     #: The final (weighted) least-squares problem reduced to its triangle, for estimates under
     #: constraints on the same residual (:mod:`~mindyn.identification.consistent`).
     reduced: _Reduced | None = field(default=None, repr=False, compare=False)
+
+    def __post_init__(self):
+        # the arrays read-only copies (as a Robot's): an entry assigned raises, instead of
+        # making values disagree with full, which predict() uses
+        for name in ("values", "std", "rsd", "full", "joint_sigma"):
+            if getattr(self, name) is not None:
+                setattr(self, name, _args.readonly(getattr(self, name)))
+        self.initial = {
+            k: _args.readonly(v) if isinstance(v, np.ndarray) else v
+            for k, v in self.initial.items()
+        }
 
     def predict(self, data: JointData) -> np.ndarray:
         """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n)

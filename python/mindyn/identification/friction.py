@@ -744,7 +744,7 @@ class DahlBase(BaseParameters):
         super().__init__(base._b, base.robot, base.offset, base.options)
         self.method_reason = base.method_reason
         # the same base set, snapped the same way: the JSON records it, predict forms it again
-        self.snap_decision = base.snap_decision
+        self._snap_decision = base._snap_decision
         n = base.robot.n
         self.sigma = np.broadcast_to(np.asarray(sigma, dtype=float), (n,)).copy()
         if not np.all(np.isfinite(self.sigma) & (self.sigma > 0)):

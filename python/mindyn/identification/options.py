@@ -12,7 +12,7 @@ import numpy as np
 from .. import _args
 from ..robot import FRICTION_KINDS
 from .columns import ColumnMap, column_map
-from .data import DataError
+from .data import DataError, given_drive_gain
 from .errors import IdentificationError
 
 FILTERS = ("lowpass", "butter", "savgol", "none")
@@ -249,7 +249,9 @@ class ReadingOptions:
         if self.filter not in FILTERS:
             raise DataError(f"filter '{self.filter}': expected one of {', '.join(FILTERS)}")
         if self.drive_gain is not None:
-            object.__setattr__(self, "drive_gain", tuple(float(g) for g in self.drive_gain))
+            gains = given_drive_gain(self.drive_gain)
+            assert gains is not None  # given
+            object.__setattr__(self, "drive_gain", tuple(float(g) for g in gains))
         check_cutoff(self.filter, self.cutoff)
         if self.filter != "lowpass":  # the options of the low-pass path, refused with another
             for given, value in (

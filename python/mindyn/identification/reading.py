@@ -8,7 +8,7 @@ from __future__ import annotations
 import copy
 from collections.abc import Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from os import PathLike
 from pathlib import Path
 
@@ -370,6 +370,17 @@ class Logs(Sequence):
         return len(self.fit.logs)
 
 
+#: The keywords :func:`load_logs` takes: its own and those of :class:`ReadingOptions`.
+_LOAD_LOGS_KEYWORDS = frozenset(f.name for f in fields(ReadingOptions) if f.init) | {
+    "validate",
+    "currents",
+    "validate_currents",
+    "model",
+    "options",
+    "what",
+}
+
+
 def load_logs(
     paths: Sequence,
     robot,
@@ -396,6 +407,7 @@ def load_logs(
     dynamic model and ``torque`` not given, each log is read as held when its truth sidecar
     says its simulation held the torque (:func:`simulated_held`; the processing record says
     why), as sampled otherwise; ``record`` says held when every log was."""
+    _args.unknown_keywords("load_logs", reading, _LOAD_LOGS_KEYWORDS)
     robot = as_robot(robot)
     one = (str, PathLike)
     for name, value in (("paths", paths), ("validate", validate)):

@@ -26,6 +26,7 @@ from .data import (
     convert_torque,
     fill_derivatives,
     first_not_increasing,
+    given_drive_gain,
     without_derivative_edges,
 )
 from .torque_units import BAG_TORQUE_REMEDY, check_torque_units
@@ -120,7 +121,7 @@ def read_rosbag(
     _args.instance(robot, "robot", Robot)
     _args.optional(_args.text, topic, "topic")
     _args.text(torque_unit, "torque_unit")
-    drive_gain = _args.optional(_args.array, drive_gain, "drive_gain", (None,))
+    drive_gain = given_drive_gain(drive_gain, robot)
     require_torque = _args.flag(require_torque, "require_torque")
     path = Path(path)
     if not path.exists():

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -22,8 +23,9 @@ if TYPE_CHECKING:
 
 
 def plain(d):
-    """``d`` with numpy scalars as Python numbers and non-finite floats as None (for JSON)."""
-    if isinstance(d, dict):
+    """``d`` with numpy scalars as Python numbers, non-finite floats as None, mappings (a
+    read-only view too) as dicts and tuples as lists (for JSON)."""
+    if isinstance(d, Mapping):
         return {k: plain(v) for k, v in d.items()}
     if isinstance(d, (list, tuple)):
         return [plain(v) for v in d]
@@ -169,7 +171,7 @@ class IdentificationReport:
         if self.friction_record is not None:
             doc["friction_model"] = self.friction_record
         doc["tip"] = self.tip  # the chain identified (None: the whole description)
-        doc["base_snap"] = {**self.base.snap_decision, "snapped": list(self.base.snapped)}
+        doc["base_snap"] = {**plain(self.base.snap_decision), "snapped": list(self.base.snapped)}
         doc["consistent"] = cons is not None
         if cons is not None:
             assert self.consistent_fit is not None  # computed with the consistent estimate
