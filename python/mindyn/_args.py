@@ -359,13 +359,13 @@ def mapping(x, name: str):
     return x
 
 
-def unknown_keywords(function: str, given, accepted) -> None:
+def unknown_keywords(function: str, given, accepted, *, error=None) -> None:
     """Refuses the keywords of ``given`` (names) that are not ``accepted``: an error naming
     ``function``, the one the user called (not the one it passes the keywords on to), the
-    unknown keywords and every accepted one."""
+    unknown keywords and every accepted one; ``error`` its class (default ArgumentError)."""
     unknown = sorted(set(given) - set(accepted))
     if unknown:
-        raise ArgumentError(
+        raise (error or ArgumentError)(
             f"{function}: unknown option(s) {', '.join(unknown)}; expected some of "
             + ", ".join(sorted(accepted))
         )

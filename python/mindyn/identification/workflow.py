@@ -259,12 +259,7 @@ def run(
     _args.optional(_args.function, progress, "progress")
     if options is not None and keywords:
         raise IdentificationError(f"run: give options or {', '.join(keywords)}, not both")
-    unknown = sorted(set(keywords) - OPTION_NAMES)
-    if unknown:
-        raise IdentificationError(
-            f"run: unknown option(s) {', '.join(unknown)}; expected some of "
-            + ", ".join(sorted(OPTION_NAMES))
-        )
+    _args.unknown_keywords("run", keywords, OPTION_NAMES, error=IdentificationError)
     opts = options or IdentifyOptions(**keywords)
     logs = _as_logs(logs, opts.model, robot)
     r = logs.reading
