@@ -541,3 +541,76 @@ def test_auto_output_states_each_excess_and_its_standard_error():
     alone = {"candidates": {"dahl": 1.0}, "smallest": "dahl", "standard_error": {"dahl": 0.0}}
     text = "\n".join(friction_lines(mindyn.load("planar2"), record={**alone, "rule": "r"}))
     assert "excess over the smallest" not in text  # no other candidate to compare
+
+
+def geared(arm, tmp_path, ratios):
+    """The arm of the ``arm`` fixture with a YAML transmission of one motor per joint, gear
+    ratios ``ratios``: friction on the motor side by default, velocity scales in motor units."""
+    doc = yaml.safe_load(random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4).read_text())
+    doc["transmissions"] = {"matrix": np.diag(ratios).tolist(), "motors": ["m1", "m2", "m3"]}
+    path = tmp_path / "geared.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    robot = mindyn.load(path)
+    assert robot.drive_side == "motor"
+    return robot
+
+
+RATIOS = np.array([50.0, -40.0, 30.0])
+
+
+def test_motor_side_stribeck_velocity_is_found_in_the_motors_units(arm, tmp_path):
+    """A motor of ratio r acting on its joint has the joint's friction at the velocity scale
+    |r| w (r Fs sign(r dq) exp(-(r dq / (|r| w))^2) = |r| Fs sign(dq) exp(-(dq / w)^2)): on a
+    log with Stribeck friction of velocity w on the joints (written out here), the motor side's
+    search finds |r| w and the estimate is the joint side's truth divided as the loader divides
+    (|r| Fc, r^2 Fv, |r| Fs). The search used to run over the joints' speeds, below every
+    motor's (it ended at the top of its range, 1.6 to 2.0 rad/s instead of 3 to 10)."""
+    w, f3 = np.array([0.15, 0.25, 0.1]), np.array([1.0, 0.7, 0.5])
+    log = make_log(arm, "stribeck", w, FV, FC, f3)
+    robot = geared(arm, tmp_path, RATIOS)
+    choice = select_friction_model(robot, [log], kind="stribeck", fit={"min_velocity": 0.0})
+    found = np.asarray(choice.record["velocity"])
+    np.testing.assert_allclose(found, np.abs(RATIOS) * w, rtol=1e-3)
+    res = identify(choice.robot, log, base=choice.base, rsd_threshold=None, min_velocity=0.0)
+    names = list(res.base.names)
+    for k, r in enumerate(RATIOS):
+        for nm, want in (("Fv", FV[k] / r**2), ("Fc", FC[k] / abs(r)), ("Fs", f3[k] / abs(r))):
+            got = res.full[names.index(f"{nm}{k + 1}")]
+            assert got == pytest.approx(want, rel=1e-5), (nm, k, got, want)
+    line = "\n".join(mindyn.identification.friction.friction_lines(choice.robot))
+    assert "per motor" in line and "of the motor" in line, line
+
+
+def test_motor_side_smooth_width_is_the_joint_sides_in_motor_units(arm, tmp_path):
+    """tanh(r dq / (|r| w)) = sign(r) tanh(dq / w): the smooth model on the motor side is the
+    joint side's with each width times |r|, so with widths derived from the same noisy log the
+    two fits predict the same torques (to round-off) and the motor's width is |r| times the
+    joint's. Before, the motor side took the joint's width for its motor: |r| times sharper."""
+    w = np.array([0.05, 0.08, 0.03])
+    log = make_log(arm, "smooth", w, FV, FC, 0.0, noise=0.01, seed=5)
+    motor = geared(arm, tmp_path, RATIOS)
+    joint = motor.with_drive_side("joint")
+    on_m = select_friction_model(motor, [log], kind="smooth")
+    on_j = select_friction_model(joint, [log], kind="smooth")
+    wm, wj = (np.asarray(c.record["velocity"]) for c in (on_m, on_j))
+    np.testing.assert_allclose(wm, np.abs(RATIOS) * wj, rtol=1e-12)
+    fits = [identify(c.robot, log, base=c.base, rsd_threshold=None) for c in (on_m, on_j)]
+    pm, pj = (
+        c.base.regressor(log.q, log.dq, log.ddq) @ f.values for c, f in zip((on_m, on_j), fits)
+    )
+    np.testing.assert_allclose(pm, pj, rtol=0, atol=1e-9 * np.abs(pj).max())
+
+
+def test_a_motor_that_never_moves_is_named(arm, tmp_path):
+    """A motor whose velocity is zero throughout (here joint 3 held) is named as the motor in
+    the one-line refusal of the smooth width and the Stribeck search."""
+    log = make_log(arm, "coulomb", None, FV, FC, 0.0)
+    held = JointData(
+        log.t, log.q * [1, 1, 0], log.dq * [1, 1, 0], log.ddq * [1, 1, 0], log.tau, "held"
+    )
+    robot = geared(arm, tmp_path, RATIOS)
+    for kind in ("smooth", "stribeck"):
+        with pytest.raises(
+            mindyn.identification.IdentificationError, match="motor\\(s\\) 'm3' never move"
+        ):
+            select_friction_model(robot, [held], kind=kind)

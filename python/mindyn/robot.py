@@ -721,7 +721,8 @@ class Robot:
     def friction_model(self) -> dict:
         """The shape of the friction terms: ``{"kind": "coulomb" | "asymmetric" | "smooth" |
         "stribeck", "velocity": array (n,) of tanh widths / Stribeck velocities [rad/s | m/s],
-        empty for the kinds without one}``."""
+        one per slot (the motors' in their units on the motor side, :attr:`drive_side`), empty
+        for the kinds without one}``."""
         d = self._m.friction_model
         return {"kind": d["kind"], "velocity": _readonly(d["velocity"])}
 

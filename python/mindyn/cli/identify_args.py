@@ -327,8 +327,8 @@ def add_identify(sub, func) -> None:
     joint_vector(
         p,
         "--friction-width",
-        help="--friction-model smooth or auto: the tanh width w [rad/s, m/s], positive (or "
-        "one value for all joints)",
+        help="--friction-model smooth or auto: the tanh width w [rad/s, m/s], positive, per "
+        "joint (per motor, in the motor's units, on the motor side; or one value for all)",
     )
     p.set_defaults(func=func, implied=report_files)
     remember_flags(p)  # the floating-base command refuses the options it does not take

@@ -41,7 +41,13 @@ state and refuse an identification with it.
   displacement never saturates: a spring over the whole motion), to ``1 / (w_j dt)``, ``w_j``
   the smooth width above (the speed below which the data do not tell the direction) and ``dt``
   the logged sample interval (a shorter one is covered within one sample at that speed: ``z``
-  is ``sign(v)`` on the samples, the Coulomb model); on the motor side in the motor's units.
+  is ``sign(v)`` on the samples, the Coulomb model).
+
+On the motor side (:attr:`~mindyn.Robot.drive_side`) each motor is a slot and its velocity
+scale, ``sigma`` and the speeds above are in the motor's units (``v = t_k . dq``): its largest
+speed is its own, a joint's noise level and ``min_velocity`` become the motor's through the
+largest ``|T_kj|`` of its row (:func:`_in_slot_units`; ``|r|`` times the joint's for a motor that
+drives one joint), and a width given is the motor's.
 - ``auto``: the five models are fitted (the smooth width and the Stribeck velocities derived
   and searched on all fit logs as above) and each scored by cross-validation over contiguous
   time blocks of the fit logs (:func:`~mindyn.identification.prior.block_triangles`: each
@@ -104,31 +110,64 @@ class FrictionChoice:
     record: dict = field(default_factory=dict)
 
 
-def _speeds(logs) -> np.ndarray:
-    return np.max(np.vstack([np.abs(d.dq) for d in logs]), axis=0)
+def _slots(robot: Robot) -> tuple[np.ndarray, str]:
+    """The rows ``t_k`` of the friction slots (the transmission's ``T`` on the motor side, the
+    identity otherwise; :attr:`~mindyn.Robot.drive_matrix`) and what a slot is ("joint",
+    "motor")."""
+    return np.asarray(robot.drive_matrix, float), (
+        "motor" if robot.drive_side == "motor" else "joint"
+    )
 
 
-def _noise_width(logs) -> tuple[np.ndarray, str]:
-    """Per joint, the speed below which the sign of the velocity is not determined by the data:
+def _speeds(robot: Robot, logs) -> np.ndarray:
+    """Each slot's largest speed in ``logs``: ``|t_k . dq|`` (the motor's on the motor side)."""
+    return np.max(np.vstack([np.abs(robot.slot_velocities(d.dq)) for d in logs]), axis=0)
+
+
+def _in_slot_units(robot: Robot, speed: np.ndarray) -> np.ndarray:
+    """A per-joint speed (n,) as each slot's: ``max_j |T_kj| speed_j`` on the motor side (exact
+    for a motor that drives one joint, ``|r| speed_j``; for a motor turning with several joints
+    the largest of its joints' shares), ``speed`` itself otherwise. The friction models'
+    velocity scales are in the slot's units: the motor's on the motor side."""
+    T, _ = _slots(robot)
+    return np.max(np.abs(T) * np.asarray(speed, float), axis=1)
+
+
+def _never_moving(robot: Robot, speed: np.ndarray) -> str:
+    """The slots (named "joint(s) 1, 3" or "motor(s) 'm2'") whose ``speed`` is not positive."""
+    _, slot = _slots(robot)
+    still = np.flatnonzero(~(speed > 0))
+    if slot == "motor" and robot.transmission is not None:
+        return "motor(s) " + ", ".join(f"'{robot.transmission.motors[k]}'" for k in still)
+    return "joint(s) " + ", ".join(str(k + 1) for k in still)
+
+
+def _noise_width(robot: Robot, logs) -> tuple[np.ndarray, str]:
+    """Per slot, the speed below which the sign of its velocity is not determined by the data:
     the moving threshold of the error measures
     (:func:`~mindyn.identification.validation.moving_threshold`: 3 x the noise level of the
-    velocity as the fit uses it, at least 0.001 x the joint's largest speed), the largest over
-    ``logs``; and the rule in words."""
+    joint's velocity as the fit uses it, at least 0.001 x the joint's largest speed), the
+    largest over ``logs``, in the slot's units (:func:`_in_slot_units`); and the rule in
+    words."""
     from .validation import logged_samples, moving_threshold
 
     # the logged samples carry the data path's noise level of the filtered velocity
     rules = [moving_threshold(logged_samples(d) or d) for d in logs]
-    return np.max([w for w, _ in rules], axis=0), rules[0][1]
+    w = _in_slot_units(robot, np.max([w for w, _ in rules], axis=0))
+    rule = rules[0][1]
+    if _slots(robot)[1] == "motor":
+        rule += "; a motor's: the largest |T_kj| times its joints' (the motor's units)"
+    return w, rule
 
 
-def smooth_width(logs) -> tuple[np.ndarray, str]:
-    """The smooth model's tanh width per joint from the velocities of ``logs`` (see the module
+def smooth_width(robot: Robot, logs) -> tuple[np.ndarray, str]:
+    """The smooth model's tanh width per slot of ``robot`` (the joints, or the motors on the
+    motor side, in their units) from the velocities of ``logs`` (see the module
     documentation), and the rule in words."""
-    w, rule = _noise_width(logs)
+    w, rule = _noise_width(robot, logs)
     if not np.all(w > 0):
-        still = [str(j + 1) for j in np.flatnonzero(~(w > 0))]
         raise IdentificationError(
-            f"smooth friction: joint(s) {', '.join(still)} never move in the fit data; their tanh "
+            f"smooth friction: {_never_moving(robot, w)} never move in the fit data; their tanh "
             "width cannot be derived (give friction_width=, or leave out friction=True)"
         )
     return w, rule.replace("|dq_j| >= ", "w_j = ")
@@ -167,18 +206,20 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
     """The Stribeck velocity per joint minimising the fit's residual (see the module
     documentation): ``(velocity, record)``; ``base`` is a Stribeck base set (its velocities are
     replaced)."""
-    top = _speeds(logs)
+    robot = base.robot
+    top = _speeds(robot, logs)
     if not np.all(top > 0):
-        still = [str(j + 1) for j in np.flatnonzero(~(top > 0))]
         raise IdentificationError(
-            f"Stribeck friction: joint(s) {', '.join(still)} never move in the fit data; their "
+            f"Stribeck friction: {_never_moving(robot, top)} never move in the fit data; their "
             "Stribeck velocity cannot be searched (leave out friction=True, or move them)"
         )
     # Below the velocity's noise level (the smooth width) the data do not resolve the velocity,
-    # and the dynamic and integral models have no equation below their min_velocity.
-    floor = _noise_width(logs)[0]
+    # and the dynamic and integral models have no equation below their min_velocity (a joint
+    # speed: in the slot's units as the noise level).
+    floor = _noise_width(robot, logs)[0]
     if fit.get("model", "dynamic") in ("dynamic", "integral"):
-        floor = np.maximum(floor, fit.get("min_velocity", _default("min_velocity")))
+        least = fit.get("min_velocity", _default("min_velocity"))
+        floor = np.maximum(floor, _in_slot_units(robot, np.full(robot.n, least)))
     lo = np.log(np.minimum(floor, 0.5 * top))
     hi = np.log(top)
     x, record = _log_search(lambda w: base.with_friction_velocity(w), lo, hi, logs, fit)
@@ -244,19 +285,18 @@ def dahl_search(base: DahlBase, logs, *, fit: dict) -> tuple[np.ndarray, dict]:
     from .validation import logged_samples
 
     robot = base.robot
-    T = robot.drive_matrix if robot.drive_side == "motor" else np.eye(robot.n)
+    T, _ = _slots(robot)
     span = np.max([np.ptp(d.q @ T.T, axis=0) for d in logs], axis=0)  # slot positions
     if not np.all(span > 0):
-        still = [str(j + 1) for j in np.flatnonzero(~(span > 0))]
         raise IdentificationError(
-            f"Dahl friction: joint(s) {', '.join(still)} never move in the fit data; their "
+            f"Dahl friction: {_never_moving(robot, span)} never move in the fit data; their "
             "presliding displacement cannot be searched (leave out friction=True, or move them)"
         )
     # The presliding displacement 1/sigma lies between the distance a joint travels in one
     # sample at the speed below which the data do not tell its direction (shorter: the state
     # is sign(dq) on the samples, the Coulomb model) and half its range of motion (longer: the
     # state never saturates, a spring over the whole motion).
-    width = np.max(np.abs(T) * _noise_width(logs)[0], axis=1)  # in slot units
+    width = _noise_width(robot, logs)[0]  # in slot units
     dt = np.median(np.concatenate([np.diff((logged_samples(d) or d).t) for d in logs]))
     hi = np.log(1.0 / np.maximum(width * dt, 1e-300))
     lo = np.log(2.0 / span)
@@ -355,11 +395,11 @@ def select_friction_model(
             if given_width is not None:
                 w, rule = given_width, "given"
             else:
-                w, rule = smooth_width(logs)
+                w, rule = smooth_width(robot, logs)
             rec.update(velocity=[float(v) for v in w], velocity_rule=rule)
             r, b = make(k, w)
         elif k == "stribeck":
-            r, b = make(k, _speeds(logs).clip(min=1e-300))
+            r, b = make(k, _speeds(robot, logs).clip(min=1e-300))
             if progress is not None:
                 progress("friction: searching the Stribeck velocities")
             w, search = stribeck_search(b, logs, fit=fit)
@@ -628,11 +668,13 @@ def friction_lines(robot: Robot, *, record: dict | None = None) -> list[str]:
         "dahl": "Fv v + Fc z, dz/dq = sigma (1 - z sign(v)), z = 0 at a log's start",
     }[rec["kind"]]
     how = {"default": "the default", "given": "given"}.get(rec["chosen_by"], rec["chosen_by"])
-    lines = [f"  friction model {rec['kind']}: {formula} per joint ({how})"]
+    slot = _slots(robot)[1]
+    lines = [f"  friction model {rec['kind']}: {formula} per {slot} ({how})"]
     if rec["velocity"] is not None:
         what = "tanh width" if rec["kind"] == "smooth" else "Stribeck velocity"
+        unit = "[rad/s | m/s of the motor]" if slot == "motor" else "[rad/s | m/s]"
         lines.append(
-            f"    {what} w [rad/s | m/s]: "
+            f"    {what} w {unit}: "
             + " ".join(f"{v:.4g}" for v in rec["velocity"])
             + (f" ({rec['velocity_rule']})" if rec.get("velocity_rule") else "")
         )

@@ -70,7 +70,7 @@ class IdentifyOptions:
     defaults (:data:`MODE_DEFAULTS`), which the attributes then hold;
     ``friction_model``: a friction kind, ``dahl`` or ``auto`` (implies ``friction``),
     ``friction_width``: the tanh width, one positive number for every joint or one per joint
-    (smooth or auto only);
+    (per motor, in the motor's units, on the motor side; smooth or auto only);
     ``consistent``: also the physically consistent estimate, with ``prior_weight`` (None:
     chosen from the data); ``snap``: the rotations near right angles rounded before the base
     set is computed, as ``snap=`` of :func:`mindyn.base_parameters` (``"auto"``: the right
