@@ -948,9 +948,6 @@ def motor_side_robot(robot, kind: str, nprng, side: str = "motor"):
     Ia, Fv, Fc = (nprng.uniform(1e-5, 1e-3, m), nprng.uniform(1e-4, 1e-2, m),
                   nprng.uniform(1e-3, 0.1, m))  # fmt: skip
     F3 = nprng.uniform(-0.05, 0.05, m) if kind in ("asymmetric", "stribeck") else np.zeros(m)
-    # a motor that turns with several joints, or shares its joint, has no third term
-    nz = np.abs(T) > 0
-    F3 = np.where([nz[k].sum() == 1 and nz[:, nz[k]].sum() == 1 for k in range(m)], F3, 0.0)
     third = {"asymmetric": "Fa", "stribeck": "Fs"}.get(kind)
     for k in range(m):
         for key, v in (("Ia", Ia), ("Fv", Fv), ("Fc", Fc), (third, F3)):

@@ -107,27 +107,16 @@ def rows(robot) -> np.ndarray:
     return robot.transmission.T if robot.drive_side == "motor" else np.eye(robot.n)
 
 
-def holds_third(robot, k: int) -> bool:
-    """Whether slot k has the friction model's third term: on the joints every joint; on the
-    motors a motor whose row of T has one non-zero entry, in a column with no other (a motor
-    that turns with several joints, or shares its joint, has none)."""
-    if robot.drive_side != "motor":
-        return True
-    T = robot.transmission.T
-    cols = np.flatnonzero(T[k])
-    return cols.size == 1 and np.count_nonzero(T[:, cols[0]]) == 1
-
-
-def friction_shapes(kind: str, v: float, w: float | None, third: bool = True) -> list[float]:
+def friction_shapes(kind: str, v: float, w: float | None) -> list[float]:
     """The friction model's columns (Fv, Fc[, Fa | Fs]) at a slot velocity v."""
     s = float(np.sign(v))
     if kind == "coulomb":
         return [v, s]
     if kind == "asymmetric":
-        return [v, s, abs(s) if third else 0.0]
+        return [v, s, abs(s)]
     if kind == "smooth":
         return [v, float(np.tanh(v / w))]
-    return [v, s, s * float(np.exp(-((v / w) ** 2))) if third else 0.0]
+    return [v, s, s * float(np.exp(-((v / w) ** 2)))]
 
 
 def drive_torque(robot, pi, dq, acc) -> np.ndarray:
@@ -139,7 +128,7 @@ def drive_torque(robot, pi, dq, acc) -> np.ndarray:
     tau = np.zeros(n)
     for k, t in enumerate(rows(robot)):
         v = t @ dq
-        f = friction_shapes(kind, v, w[k] if len(w) else None, holds_third(robot, k))
+        f = friction_shapes(kind, v, w[k] if len(w) else None)
         torque = pi[k * per + 10] * (t @ acc) + sum(c * x for c, x in zip(pi[k * per + 11 :], f))
         tau += t * torque
     return tau
@@ -154,7 +143,7 @@ def classical_regressor(robot, model, data, q, dq, ddq, per: int) -> np.ndarray:
     W = np.zeros((n, per * n))
     for k, t in enumerate(rows(robot)):
         W[:, k * per : k * per + 10] = Wpin[:, 10 * k : 10 * k + 10] @ TO_PIN
-        shapes = friction_shapes(kind, t @ dq, w[k] if len(w) else None, holds_third(robot, k))
+        shapes = friction_shapes(kind, t @ dq, w[k] if len(w) else None)
         W[:, k * per + 10 : (k + 1) * per] = np.outer(t, [t @ ddq] + shapes)
     return W
 

@@ -308,8 +308,8 @@ def test_a_friction_model_goes_into_the_sidecar_and_comes_back(tmp_path, kind, s
     <dynamics> holds Fv and Fc, the sidecar the model, its third term and velocities (a note
     says so); loaded with the sidecar, the robot has the model and the values written, and its
     inverse dynamics equal Pinocchio's rnea plus T^T (Ia T ddq + f(T dq)) with the model's
-    formula written out (T the identity on the joint side). A motor that turns with several
-    joints cannot hold a third term: a non-zero one is refused."""
+    formula written out (T the identity on the joint side), the third term of motor 6, which
+    turns with joints 5 and 6, too."""
     import pinocchio as pin
 
     path, T = coupled_wrist_urdf(tmp_path / "w.urdf")
@@ -320,12 +320,9 @@ def test_a_friction_model_goes_into_the_sidecar_and_comes_back(tmp_path, kind, s
     robot = robot.with_friction_model(kind, velocity=w)
     c = 2 if kind == "smooth" else 3
     Ia, Fv, Fc = motor_values(n, seed=4)
-    # motors that drive one joint alone (the only ones the model holds a third term for)
-    alone = [k for k in range(n) if np.count_nonzero(T[k]) == 1
-             and np.count_nonzero(T[:, np.flatnonzero(T[k])[0]]) == 1]  # fmt: skip
     third = rng.uniform(0.2, 0.6, n) * Fc
     if side == "motor":
-        third[[k for k in range(n) if k not in alone]] = 0.0
+        assert np.count_nonzero(T[5]) == 2  # motor 6 turns with joints 5 and 6: its own third
     else:
         Ia, Fv, Fc = Ia * 900, Fv * 900, Fc * 30  # about the size they have on the joints
         third = third * 30
@@ -358,10 +355,6 @@ def test_a_friction_model_goes_into_the_sidecar_and_comes_back(tmp_path, kind, s
         if c == 3:
             head = next(x for x in said.splitlines() if x.startswith("link "))
             assert head.split()[-1] == ("Fa" if kind == "asymmetric" else "Fs"), head
-    if side == "motor" and c == 3:
-        p[5, 13] = 0.01  # motor 6 turns with joints 5 and 6
-        with pytest.raises(mindyn.ModelError, match="motors 'm6'.*drive one joint alone"):
-            write_urdf(robot, p.reshape(-1), tmp_path / "bad.urdf")
 
 
 def test_a_bare_off_key_is_named_as_the_boolean_yaml_reads(tmp_path):

@@ -1,12 +1,11 @@
-"""Which slots have the friction model's third term (``Fa`` of the asymmetric, ``Fs`` of the
-Stribeck model): every joint on the joint side; on the motor side only a motor whose row of T has
-one non-zero entry, in a column with no other entry (a motor that turns with several joints, or
-shares its joint, has none). Identification, ``base_parameters``, ``predict`` and generated code
-follow that one rule: on an arm with a differential, one with simple transmissions of large
-reductions and one without transmissions, for the asymmetric, smooth and Stribeck models, the
-names of identify's JSON, of the base set, of predict's model and of the parameters codegen
-takes are the same, and predict's torques and the generated code's equal Pinocchio's rnea plus
-the motor terms written out here.
+"""The friction model's third term (``Fa`` of the asymmetric, ``Fs`` of the Stribeck model) of
+every slot: every joint on the joint side, every motor on the motor side, a motor that turns with
+several joints (a differential's) too, at its own velocity ``t_k . dq`` through its row of T.
+Identification, ``base_parameters``, ``predict`` and generated code agree: on an arm with a
+differential, one with simple transmissions of large reductions and one without transmissions,
+for the asymmetric, smooth and Stribeck models, the names of identify's JSON, of the base set, of
+predict's model and of the parameters codegen takes are the same, and predict's torques and the
+generated code's equal Pinocchio's rnea plus the motor terms written out here.
 """
 
 from __future__ import annotations
@@ -50,16 +49,6 @@ def rows(robot) -> np.ndarray:
     return robot.transmission.T if robot.drive_side == "motor" else np.eye(robot.n)
 
 
-def holds_third(robot, k: int) -> bool:
-    """The rule, written out: slot k has a third friction term unless it is a motor whose row
-    of T has several non-zero entries or whose joint another motor turns too."""
-    if robot.drive_side != "motor":
-        return True
-    T = robot.transmission.T
-    cols = np.flatnonzero(T[k])
-    return cols.size == 1 and np.count_nonzero(T[:, cols[0]]) == 1
-
-
 def drive_torque(robot, kind, w, drive, dq, ddq) -> np.ndarray:
     """sum_k t_k (Ia_k a_k + Fv_k v_k + f(v_k)), a_k = t_k . ddq, v_k = t_k . dq, f the friction
     model written out; ``drive`` (n, 4): Ia, Fv, Fc, third per slot. (m, n) for (m, n) rates."""
@@ -72,8 +61,7 @@ def drive_torque(robot, kind, w, drive, dq, ddq) -> np.ndarray:
             f = fv * v + fc * np.tanh(v / w[k])
         else:
             f = fv * v + fc * s
-            if holds_third(robot, k):
-                f = f + f3 * (np.abs(s) if kind == "asymmetric" else s * np.exp(-((v / w[k]) ** 2)))
+            f = f + f3 * (np.abs(s) if kind == "asymmetric" else s * np.exp(-((v / w[k]) ** 2)))
         tau += np.outer(ia * a + f, t)
     return tau
 
@@ -104,14 +92,19 @@ def case(request, tmp_path_factory):
     return request.param, path, mindyn.load(path), pin.buildModelFromUrdf(str(path))
 
 
-def test_the_rule_is_the_one_written_here(case):
-    name, _, robot, _ = case
+@pytest.mark.parametrize("method", ["projection", "numerical", "recursive"])
+def test_every_slot_has_its_third_term_by_every_method(case, method):
+    """Fs of each slot, the differential's two motors too, is a base parameter of its own
+    (without rotor inertia: the recursive method cannot decide how a differential's rotors
+    regroup, and says so)."""
+    _, _, robot, _ = case
     base = mindyn.base_parameters(
-        robot.with_friction_model("stribeck", velocity=np.full(3, 0.05)), rotor=True, friction=True
+        robot.with_friction_model("stribeck", velocity=np.full(3, 0.05)),
+        rotor=False,
+        friction=True,
+        method=method,
     )
-    have = [k for k in range(3) if f"Fs{k + 1}" in base.names]
-    assert have == [k for k in range(3) if holds_third(robot, k)]
-    assert have == ([0] if name == "differential" else [0, 1, 2])
+    assert [x for x in base.names if x.startswith("Fs")] == ["Fs1", "Fs2", "Fs3"]
 
 
 @pytest.mark.parametrize("factor", [1e-3, 1e2])
@@ -132,7 +125,7 @@ def test_the_numerical_method_follows_the_rule_at_any_velocity_scale(case, kind,
     numerical = mindyn.base_parameters(r, rotor=True, friction=True, method="numerical")
     assert list(numerical.names) == list(default.names)
     third = [x for x in numerical.names if x.startswith("Fs")]
-    expect = [f"Fs{k + 1}" for k in range(n) if holds_third(robot, k)] if kind == "stribeck" else []
+    expect = [f"Fs{k + 1}" for k in range(n)] if kind == "stribeck" else []
     assert third == expect
     for k in range(n):  # every slot's viscous and scaled column is its own base parameter
         assert {f"Fv{k + 1}", f"Fc{k + 1}"} <= set(numerical.names)
@@ -171,7 +164,7 @@ def test_identify_base_parameters_predict_and_codegen_agree(case, kind, tmp_path
     base = mindyn.base_parameters(identified, rotor=True, friction=True)
     assert list(base.names) == names
     third = "Fa" if kind == "asymmetric" else "Fs"
-    expect = [f"{third}{k + 1}" for k in range(n) if holds_third(robot, k)]
+    expect = [f"{third}{k + 1}" for k in range(n)]
     assert [x for x in names if x[:2] == third] == (expect if kind != "smooth" else [])
     # predict's model
     from mindyn.identification.prediction import identified_model
@@ -220,18 +213,35 @@ def test_identify_base_parameters_predict_and_codegen_agree(case, kind, tmp_path
         assert_close(got, ref[i], 1e-9, f"generated C vs rnea + motor terms ({name}, {kind})")
 
 
-def test_a_third_term_given_for_a_motor_that_turns_with_several_joints_acts_nowhere(case):
-    """The dynamics and the friction columns follow the rule: a third term given for such a
-    motor in a classical vector changes no torque."""
-    name, _, robot, _ = case
-    if name != "differential":
-        pytest.skip("the other arms have no such motor")
-    r = robot.with_friction_model("stribeck", velocity=np.full(3, 0.5))
-    p = r.parameters(rotor=True, friction=True)
+@pytest.mark.parametrize("kind", ["asymmetric", "stribeck"])
+def test_a_coupled_motors_third_term_acts_through_its_row(tmp_path, kind):
+    """A third term of a differential's motor, given as the motor's own (with_joint_terms, as a
+    joint-terms file gives it), is in parameters() and acts as t_k^T Fa_k |sign(v_k)| or
+    t_k^T Fs_k sign(v_k) exp(-(v_k / w_k)^2), v_k = t_k . dq, written out here; a directly
+    driven motor's value reaches its joint as r Fa or |r| Fs (robot.third_friction)."""
+    path = tmp_path / "differential.urdf"
+    path.write_text(differential())
+    robot = mindyn.load(path)
+    w = np.array([0.3, 0.5, 0.4])
+    r = robot.with_friction_model(kind, velocity=w if kind == "stribeck" else None)
+    third = np.array([0.2, -0.15, 0.1])
+    got = r.with_joint_terms(third=third)
+    p = got.parameters(rotor=True, friction=True)
     per = len(p) // 3
-    dq = np.array([[0.1, 0.2, -0.15]])
-    q, ddq = np.zeros((1, 3)), np.zeros((1, 3))
-    before = r.inverse_dynamics(q, dq, ddq, p)
-    p[per + 13] = p[2 * per + 13] = 5.0  # Fs2, Fs3: motors of the differential
-    assert_close(r.inverse_dynamics(q, dq, ddq, p), before, 1e-15, "Fs of coupled motors")
-    assert r.friction_shapes(dq @ r.drive_matrix.T)[0, 1:, 2].tolist() == [0.0, 0.0]
+    np.testing.assert_array_equal(p[13::per], third)
+    T = robot.transmission.T
+    np.testing.assert_allclose(
+        got.third_friction[0], third[0] * (T[0, 0] if kind == "asymmetric" else abs(T[0, 0]))
+    )
+    rng = np.random.default_rng(7)
+    q, dq, ddq = rng.uniform(-1, 1, (3, 6, 3))
+    dq[0] = [0.125, 0.25, 0.25]  # motor 3 of the differential at rest: v_3 = 0 exactly
+    zero = p.copy()
+    zero[13::per] = 0.0
+    diff = got.inverse_dynamics(q, dq, ddq, p) - got.inverse_dynamics(q, dq, ddq, zero)
+    v = dq @ T.T
+    s = np.sign(v)
+    shape = np.abs(s) if kind == "asymmetric" else s * np.exp(-((v / w) ** 2))
+    want = (shape * third) @ T
+    assert np.count_nonzero(v[0] == 0.0) == 1  # the state at rest is one
+    assert_close(diff, want, 1e-12, f"third terms through T ({kind})")

@@ -322,8 +322,7 @@ void randomState(const Model& model, std::mt19937& rng, Eigen::VectorXd& q, Eige
 // slots never combine, and the friction columns do not combine with the others, so the scaled
 // column is independent of every other column whatever w. It is taken at v / u instead, u the
 // largest entry of |t|, so that its sampled arguments spread over [-2, 2] whatever w: every
-// slot's smooth column, and the Stribeck column of a slot that has one
-// (Model::holdsThirdFriction). At w far below the sampled speeds exp(-(v / w)^2) vanished (Fs
+// slot's smooth or Stribeck column. At w far below the sampled speeds exp(-(v / w)^2) vanished (Fs
 // dropped), far above them s exp(-(v / w)^2) was s to round-off (Fs regrouped with Fc) and
 // tanh(v / w) was v / w (Fc regrouped with Fv); the exact methods keep them, and so does this.
 void sampledRegressor(const Model& model, Data& data, ParameterLayout layout,
@@ -343,7 +342,6 @@ void sampledRegressor(const Model& model, Data& data, ParameterLayout layout,
   if (!model.friction_model.scaled()) return;
   const int scaled = kind == FrictionKind::Smooth ? 1 : 2;  // tanh(v / w); s exp(-(v / w)^2)
   for (int k = 0; k < model.nq(); ++k) {
-    if (kind != FrictionKind::Smooth && !model.holdsThirdFriction(k)) continue;
     const double u = model.motorSide() ? model.transmission.T.row(k).cwiseAbs().maxCoeff() : 1.0;
     const double v = model.motorSide() ? model.transmission.T.row(k).dot(dq0) : dq0[k];
     const double r = v / u;
@@ -1228,11 +1226,10 @@ BaseParameters linkBaseParameters(const Model& model, const BaseOptions& options
       if (r != red.constant_row) Z.row(row++) = Zs.row(r);
     // A friction parameter of unit size in the robot's scale (its column's size, with its
     // motor's reduction), as the other rows' coordinates are: the rows are measured against
-    // the largest (echelon). A motor that turns with several joints has no third term
-    // (Model::holdsThirdFriction): no row, a parameter without effect.
+    // the largest (echelon).
     auto unitRow = [&](int k, int i) {
       const int c = layout.frictionIndex(k, i);
-      if (i < 2 || kernel.holdsThirdFriction(k)) Z(keep + fc * k + i, c) = sizes[c];
+      Z(keep + fc * k + i, c) = sizes[c];
     };
     if (fc > 0 && kernel.motorSide() && coupledMotors(kernel.transmission.T)) {
       // Friction of motors that couple joints: motor k's columns are functions of its velocity

@@ -22,8 +22,7 @@ inline double motorVelocity(const Model& model, int k, const VecRef& dq) noexcep
 }
 
 /// The friction features of slot k at slot velocity v, one per friction column of the layout:
-/// the slot's friction torque is sum_j params[viscousIndex(k) + j] * out[j]. The third is zero
-/// for a motor that turns with several joints (Model::holdsThirdFriction): it has no third term.
+/// the slot's friction torque is sum_j params[viscousIndex(k) + j] * out[j].
 inline void frictionFeatures(const Model& model, ParameterLayout /*layout*/, int k, double v,
                              double* out) noexcept {
   out[2] = 0.0;  // the friction models without a third column leave it

@@ -298,7 +298,7 @@ Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
   // (Transmission), otherwise from the joints'. A motor that alone drives one joint alone (row
   // k of T = r e_j, column j = r e_k: Transmission::soleJoint) acts on it as r^2 Ia, r^2 Fv,
   // |r| Fc: its values are the joint's divided so. A motor that turns with several joints (or
-  // shares its joint): 0, and it has no third friction term (holdsThirdFriction).
+  // shares its joint): its own values, 0 where none is given.
   const Eigen::MatrixXd& T = transmission.T;
   for (int k = 0; k < n; ++k) {
     const int j = transmission.soleJoint(k);
@@ -317,8 +317,9 @@ Eigen::VectorXd Model::parameters(ParameterLayout layout) const {
       // r Fa |sign(r dq)| = (r Fa) |sign(dq)|; r Fs sign(r dq) ... = |r| Fs sign(dq) ...
       if (layout.friction_columns == 3) {
         const double t = third_friction.size() == n && alone ? third_friction[j] : 0.0;
-        p[layout.thirdFrictionIndex(k)] =
-            alone ? t / (friction_model.kind == FrictionKind::Asymmetric ? r : std::abs(r)) : 0.0;
+        p[layout.thirdFrictionIndex(k)] = own(
+            transmission.third_friction,
+            alone ? t / (friction_model.kind == FrictionKind::Asymmetric ? r : std::abs(r)) : 0.0);
       }
     }
   }

@@ -368,10 +368,7 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
   for (int k = 0; k < n; ++k) {
     rows += out.link_rank[k];
     if (layout.rotor && rotor[k].rows() == 0) ++rows;
-    if (layout.friction)  // a motor that turns with several joints has no third term
-      rows += layout.friction_columns == 3 && !model.holdsThirdFriction(k)
-                  ? 2
-                  : layout.friction_columns;
+    if (layout.friction) rows += layout.friction_columns;
   }
   // The rows are sparse: those of link j are zero outside the columns of its subtree, whose
   // total size grows as n log n on a random tree (as n^2 only on a long chain).
@@ -405,10 +402,8 @@ IdentifiableSpace recursiveIdentifiable(const Model& model, ParameterLayout layo
     r0 += nj;
     if (layout.rotor && rotor[j].rows() == 0)
       rotorEntries(r0++, j, Eigen::VectorXd::Ones(1), entries);
-    // a motor that turns with several joints has no third friction term: no row
     for (int i = 0; layout.friction && i < layout.friction_columns; ++i)
-      if (i < 2 || model.holdsThirdFriction(j))
-        entries.emplace_back(r0++, layout.frictionIndex(j, i), 1.0);
+      entries.emplace_back(r0++, layout.frictionIndex(j, i), 1.0);
   }
   for (const auto& [a, b] : pairs) {  // E_ab, its own row
     for (int m = 0; m < n; ++m)

@@ -109,6 +109,14 @@ void Transmission::validate(const std::vector<Joint>& joints, const std::string&
         throw ModelError(motor + ": its " + what + " is " + formatNumber((*v)[i]) +
                          ", not a finite number >= 0 within the bound on a description value");
     }
+    if (third_friction.size() != 0 && third_friction.size() != m)
+      throw ModelError(who + ": third_friction has " + std::to_string(third_friction.size()) +
+                       " entries for " + std::to_string(m) + " motors");
+    if (third_friction.size() != 0 && !std::isnan(third_friction[i]) &&
+        !(std::abs(third_friction[i]) <= kMaxDescriptionValue))
+      throw ModelError(motor + ": its third friction parameter is " +
+                       formatNumber(third_friction[i]) +
+                       ", not a finite number within the bound on a description value");
     const double kt = torque_constant[i];
     if (!std::isnan(kt) && (!std::isfinite(kt) || kt == 0.0 || std::abs(kt) > kMaxDescriptionValue))
       throw ModelError(motor + ": its torque constant must be a non-zero finite number");

@@ -26,7 +26,7 @@ class Model:
         ...
     def friction_shapes(self, dq: typing.Annotated[numpy.typing.ArrayLike, numpy.float64]) -> numpy.typing.NDArray[numpy.float64]:
         """
-        The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c); the third zero for a motor that turns with several joints (it has no third term).
+        The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c).
         """
     def gravity_torque(self, q: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], params: typing.Any = None) -> numpy.typing.NDArray[numpy.float64]:
         ...
@@ -68,9 +68,9 @@ class Model:
         """
         A new model, the same but for its gravity vector (base frame, m/s^2); this one is unchanged.
         """
-    def with_joint_terms(self, *, rotor: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, viscous: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, coulomb: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_rotor: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_viscous: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_coulomb: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, offset: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None) -> Model:
+    def with_joint_terms(self, *, rotor: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, viscous: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, coulomb: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_rotor: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_viscous: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_coulomb: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, motor_third: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None, offset: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, 1]"] | None = None) -> Model:
         """
-        A new model with the given joint-side rotor inertia, viscous and Coulomb friction (n each), the motors' own (n_m each, as a YAML table's transmissions give them) and torque offsets (n); a term not given is kept. This one is unchanged.
+        A new model with the given joint-side rotor inertia, viscous and Coulomb friction (n each), the motors' own (n_m each, as a YAML table's transmissions give them; NaN: none, derived from the joint's), the motors' own third friction parameters (n_m, NaN: none) and torque offsets (n); a term not given is kept. This one is unchanged.
         """
     def with_spherical(self, names: collections.abc.Sequence[str]) -> Model:
         """
@@ -531,7 +531,7 @@ def snap_changes(model: Model, tolerance: typing.SupportsFloat | typing.Supports
     """
 def sole_joints(T: typing.Annotated[numpy.typing.ArrayLike, numpy.float64, "[m, n]"]) -> list[int]:
     """
-    Per motor (row of the transmission T), the joint it alone drives and drives alone, or -1 (it turns with several joints, or another motor turns that joint too): the motors whose rotor inertia and friction a joint can carry, and the only ones with a third friction term.
+    Per motor (row of the transmission T), the joint it alone drives and drives alone, or -1 (it turns with several joints, or another motor turns that joint too): the motors whose rotor inertia and friction a joint can carry.
     """
 def sosfilt_rows(sos: numpy.ndarray, x: numpy.ndarray, z: numpy.ndarray, cols: typing.Any = None, out: typing.Any = None) -> None:
     """

@@ -342,7 +342,6 @@ def write_urdf(
             + (": export it with write_yaml" if robot.convention in ("dh", "mdh") else "")
         )
     terms = classical_terms(robot, classical)
-    _check_third(robot, terms)
     src = Path(robot.source if source is None else source)
     doc = _UrdfDocument(src)
     joint_side, reflected = _joint_side_terms(robot, terms)
@@ -699,23 +698,6 @@ def _shape_note(robot: Robot, terms: JointTerms, side: Path, holds: str) -> list
     ]
 
 
-def _check_third(robot: Robot, terms: JointTerms) -> None:
-    """ModelError when the friction model's third term is non-zero on a motor that turns with
-    several joints: a robot holds it on the motors that drive one joint alone."""
-    if terms.third is None or robot.drive_side != "motor":
-        return
-    assert robot.transmission is not None  # the motor side has one
-    alone = {d[0] for d in _direct_drives(robot.transmission.T) if d is not None}
-    bad = [k for k in range(robot.n) if k not in alone and terms.third[k] != 0]
-    if bad:
-        motors = ", ".join(f"'{robot.transmission.motors[k]}'" for k in bad)
-        raise ModelError(
-            f"{terms.third_name} (the {robot.friction_model['kind']} friction model's third "
-            f"term) of motors {motors}, which turn with several joints, is not zero: a robot "
-            "description holds it for motors that drive one joint alone"
-        )
-
-
 def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Path, urdf: bool):
     present = terms.joint_terms()
     meaning = {}
@@ -850,7 +832,6 @@ def write_yaml(robot: Robot, classical, path, *, source=None, sidecar=None) -> E
             + ("export it with write_urdf" if robot.convention == "urdf" else "nothing to rewrite")
         )
     terms = classical_terms(robot, classical)
-    _check_third(robot, terms)
     if source is None and not Path(robot.source).is_file():
         raise ModelError(
             f"robot '{robot.name}' was not read from a description file (source "

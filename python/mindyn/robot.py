@@ -325,8 +325,9 @@ def _readonly(a) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Transmission:
-    """Transmissions between the motors and the joints of a robot (as data: the dynamics do
-    not use them yet).
+    """Transmissions between the motors and the joints of a robot: motor positions, torque
+    constants, and (on the motor side, :attr:`Robot.drive_side`) the rows through which the
+    motors' rotor inertia and friction act.
 
     Attributes
     ----------
@@ -626,8 +627,7 @@ class Robot:
             The third parameter of the robot's friction model (:attr:`friction_model`: ``Fa``
             of the asymmetric, ``Fs`` of the Stribeck model) of each slot, as ``coulomb``
             (:attr:`third_friction`; on the motor side it acts on each directly driven joint as
-            ``r Fa`` or ``|r| Fs``). A motor that turns with several joints cannot carry one:
-            a non-zero value there is an ArgumentError.
+            ``r Fa`` or ``|r| Fs``, and a motor that turns with several joints keeps its own).
         offset : array_like, shape (n,), optional
             A constant torque offset per joint (``Off1 .. OffN``, :attr:`torque_offset`), the
             values of the offset entries of :meth:`parameters`.
@@ -659,22 +659,14 @@ class Robot:
         joint_third = third
         if side == "motor":
             direct = _direct_drives(robot.drive_matrix)
-            if third is not None:
+            if third is not None:  # the motors' own, and as they act on their joints
+                kw["motor_third"] = third
                 joint_third = np.zeros(self.n)
-                driven = {d[0]: (j, d[1]) for j, d in enumerate(direct) if d is not None}
-                for k in range(self.n):
-                    if k in driven:
-                        j, r = driven[k]
-                        third_name = "Fa" if kind == "asymmetric" else "Fs"
+                third_name = "Fa" if kind == "asymmetric" else "Fs"
+                for j, d in enumerate(direct):
+                    if d is not None:
+                        k, r = d
                         joint_third[j] = _reflected(third_name, r) * third[k]
-                    elif third[k] != 0:
-                        motor = robot.transmission.motors[k] if robot.transmission else k + 1
-                        raise _args.fail(
-                            "third",
-                            f"has {third[k]!r} for motor '{motor}', which turns with several "
-                            "joints: the model holds the friction model's third term of a "
-                            "motor that drives one joint alone",
-                        )
             for name, v in given.items():
                 kw["motor_" + name] = v
                 reflected = np.zeros(self.n)
@@ -993,9 +985,7 @@ class Robot:
         """The friction columns of every slot at the slot velocities ``dq`` (:attr:`friction_model`:
         ``v, sign v`` (coulomb), ``v, sign v, |sign v|`` (asymmetric), ``v, tanh(v / w)``
         (smooth), ``v, sign v, sign v exp(-(v / w)^2)`` (stribeck)), shape (n, c) or (m, n, c):
-        a slot's friction torque is its friction parameters dotted with its row. The third is 0
-        for a motor that turns with several joints (or shares its joint): it has no third term
-        (:meth:`with_joint_terms`)."""
+        a slot's friction torque is its friction parameters dotted with its row."""
         (dq,) = _args.batch(self.n, dq=dq)
         return self._m.friction_shapes(dq)
 
@@ -1175,7 +1165,7 @@ def _direct_drives(T: np.ndarray) -> list:
     """Per joint j, ``(k, r)`` when motor k alone drives it and drives it alone (row k of the
     transmission ``T`` is ``r e_j``; the core's ``sole_joints``, the one place this is
     decided), else None: the joints whose motor's rotor inertia and friction act on them as
-    ``r^2 Ia``, ``r^2 Fv``, ``|r| Fc``, and the only motors with a third friction term."""
+    ``r^2 Ia``, ``r^2 Fv``, ``|r| Fc``, ``|r| Fs`` and ``r Fa``."""
     T = np.asarray(T, dtype=float)
     out: list = [None] * T.shape[1]
     for k, j in enumerate(_core.sole_joints(T)):

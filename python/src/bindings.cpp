@@ -298,6 +298,7 @@ PYBIND11_MODULE(_core, m) {
              const std::optional<Eigen::VectorXd>& motor_rotor,
              const std::optional<Eigen::VectorXd>& motor_viscous,
              const std::optional<Eigen::VectorXd>& motor_coulomb,
+             const std::optional<Eigen::VectorXd>& motor_third,
              const std::optional<Eigen::VectorXd>& offset) {
             Model copy = s.model;
             const auto set = [](const std::optional<Eigen::VectorXd>& v, Eigen::VectorXd& to,
@@ -315,6 +316,7 @@ PYBIND11_MODULE(_core, m) {
             set(motor_rotor, copy.transmission.rotor_inertia, m, "motor_rotor");
             set(motor_viscous, copy.transmission.viscous, m, "motor_viscous");
             set(motor_coulomb, copy.transmission.coulomb, m, "motor_coulomb");
+            set(motor_third, copy.transmission.third_friction, m, "motor_third");
             set(offset, copy.torque_offset, n, "offset");
             copy.validate();
             return std::make_shared<PyModel>(std::move(copy));
@@ -322,10 +324,11 @@ PYBIND11_MODULE(_core, m) {
           py::kw_only(), py::arg("rotor") = py::none(), py::arg("viscous") = py::none(),
           py::arg("coulomb") = py::none(), py::arg("motor_rotor") = py::none(),
           py::arg("motor_viscous") = py::none(), py::arg("motor_coulomb") = py::none(),
-          py::arg("offset") = py::none(),
+          py::arg("motor_third") = py::none(), py::arg("offset") = py::none(),
           "A new model with the given joint-side rotor inertia, viscous and Coulomb friction (n "
-          "each), the motors' own (n_m each, as a YAML table's transmissions give them) and "
-          "torque offsets (n); a term not given is kept. This one is unchanged.")
+          "each), the motors' own (n_m each, as a YAML table's transmissions give them; NaN: "
+          "none, derived from the joint's), the motors' own third friction parameters (n_m, NaN: "
+          "none) and torque offsets (n); a term not given is kept. This one is unchanged.")
       .def_property_readonly("torque_offset",
                              [](const PyModel& s) {
                                return s.model.torque_offset.size() == s.model.nq()
@@ -555,8 +558,7 @@ PYBIND11_MODULE(_core, m) {
             })[0];
           },
           py::arg("dq"),
-          "The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c); "
-          "the third zero for a motor that turns with several joints (it has no third term).")
+          "The friction columns of each slot at the slot velocities `dq`, (n, c) or (m, n, c).")
       .def(
           "energies",
           [](PyModel& s, const Array& q, const Array& dq, const py::object& params) {
@@ -913,8 +915,7 @@ PYBIND11_MODULE(_core, m) {
       py::arg("T"),
       "Per motor (row of the transmission T), the joint it alone drives and drives alone, or -1 "
       "(it turns with several joints, or another motor turns that joint too): the motors whose "
-      "rotor inertia and friction a joint can carry, and the only ones with a third friction "
-      "term.");
+      "rotor inertia and friction a joint can carry.");
   m.def("khalil_order", [](int n, bool rotor, bool friction) {
     return khalilOrder(n, {rotor, friction});
   });

@@ -54,13 +54,11 @@ inline void frictionShapes(const FrictionModel& f, int k, double v, double* phi,
 }
 
 /// The friction columns of slot k of `model` at the slot's velocity v: frictionShapes of its
-/// friction model, the third zero for a slot without a third term (a motor that turns with
-/// several joints, Model::holdsThirdFriction). What every regressor, simulation and the
-/// bindings take.
+/// friction model (every slot, joint or motor, has each of the model's terms). What every
+/// regressor, simulation and the bindings take.
 inline void slotFrictionShapes(const Model& model, int k, double v, double* phi,
                                double sign_smoothing = 0.0) noexcept {
   frictionShapes(model.friction_model, k, v, phi, sign_smoothing);
-  if (model.friction_model.columns() == 3 && !model.holdsThirdFriction(k)) phi[2] = 0.0;
 }
 
 /// Slot k's friction torque sum_i params[layout.frictionIndex(k, i)] phi_i(v)

@@ -274,16 +274,6 @@ struct Model {
     return !transmission.empty() && drive_terms_on_motors && transmission.nm() == nq();
   }
 
-  /// Whether slot k has the friction model's third term (Fa, Fs; FrictionModel::columns() 3):
-  /// every joint on the joint side; on the motor side (motorSide()) a motor that alone drives
-  /// one joint alone (Transmission::soleJoint), whose third term that joint carries as r Fa or
-  /// |r| Fs. A motor that turns with several joints has none: its third friction column is zero
-  /// in every regressor and generated code (a parameter without effect), as its value is in
-  /// parameters(). The one place this is decided.
-  bool holdsThirdFriction(int k) const noexcept {
-    return !motorSide() || transmission.soleJoint(k) >= 0;
-  }
-
   /// Number of joints (and of moving links). The name is historical: it is the size of q only
   /// when every joint is revolute or prismatic (singleDof()); configSize() and velocitySize()
   /// are the sizes of q and v in general (Pinocchio's nq and nv).
@@ -317,10 +307,11 @@ struct Model {
   /// (the third friction column Fa_k for Asymmetric, Fs_k for Stribeck), then Off1, ..., Offn
   std::vector<std::string> parameterNames(ParameterLayout layout = {}) const;
   /// Classical parameter values of this model in a layout. On the motor side (motorSide()),
-  /// slot k holds motor k's values: its own (transmission.rotor_inertia, viscous, coulomb) where
-  /// the description gives them, otherwise derived from the joint-side rotor_inertia, viscous
-  /// and coulomb: those of its joint divided by r^2, r^2 and |r| for a motor that alone drives
-  /// one joint alone with ratio r, 0 for a motor that turns with several joints. Offsets are
+  /// slot k holds motor k's values: its own (transmission.rotor_inertia, viscous, coulomb,
+  /// third_friction) where given, otherwise derived from the joint-side rotor_inertia, viscous,
+  /// coulomb and third_friction: those of its joint divided by r^2, r^2, |r| and r (Fa) or |r|
+  /// (Fs) for a motor that alone drives one joint alone with ratio r, 0 for a motor that turns
+  /// with several joints. Offsets are
   /// torque_offset's (0 when empty: a description gives none).
   Eigen::VectorXd parameters(ParameterLayout layout = {}) const;
 

@@ -82,6 +82,10 @@ struct Transmission {
   /// each motor as a YAML description gives them: n_m entries (NaN for a motor without), or
   /// empty when it gives none. Model::parameters puts them in the motor slots.
   Eigen::VectorXd rotor_inertia, viscous, coulomb;
+  /// The friction model's third parameter of each motor (Fa [N m] of the asymmetric model, of
+  /// either sign; Fs [N m] of the Stribeck model), as a joint-terms file gives it for a motor
+  /// that turns with several joints: n_m entries (NaN for a motor without), or empty.
+  Eigen::VectorXd third_friction;
 
   bool empty() const { return motors.empty(); }
   int nm() const { return static_cast<int>(motors.size()); }
@@ -99,8 +103,8 @@ struct Transmission {
 /// The joint j that motor k of the transmission T (n_m x n) alone drives and drives alone (row k
 /// of T is r e_j and column j is r e_k), or -1 (motor k turns with several joints, or another
 /// motor turns joint j too). Such a motor's rotor inertia and friction act on joint j as
-/// r^2 Ia, r^2 Fv, |r| Fc, |r| Fs and r Fa: the only motors whose terms a joint can carry, and
-/// the only ones with the friction model's third term (Model::holdsThirdFriction). The one place
+/// r^2 Ia, r^2 Fv, |r| Fc, |r| Fs and r Fa: the only motors whose terms a joint can carry (the
+/// others' are the motor's own, Transmission's rotor_inertia ... third_friction). The one place
 /// this is decided.
 int soleJoint(const Eigen::MatrixXd& T, int k) noexcept;
 

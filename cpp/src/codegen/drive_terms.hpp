@@ -94,9 +94,7 @@ inline void addDriveTerms(Graph& g, const Model& model, const std::vector<Ref>& 
     if (layout.friction) {
       f[0] = pi[layout.viscousIndex(k)];
       f[1] = pi[layout.coulombIndex(k)];
-      // a motor that turns with several joints has no third term (Model::holdsThirdFriction)
-      if (layout.friction_columns == 3 && model.holdsThirdFriction(k))
-        f[2] = pi[layout.thirdFrictionIndex(k)];
+      if (layout.friction_columns == 3) f[2] = pi[layout.thirdFrictionIndex(k)];
     }
     Ref rotor = Graph::zero(), friction = Graph::zero();
     if (ia != Graph::zero()) rotor = g.mul(ia, slotSum(k, acc));
