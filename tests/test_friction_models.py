@@ -614,3 +614,55 @@ def test_a_motor_that_never_moves_is_named(arm, tmp_path):
             mindyn.identification.IdentificationError, match="motor\\(s\\) 'm3' never move"
         ):
             select_friction_model(robot, [held], kind=kind)
+
+
+def with_transmission(tmp_path, matrix, motors):
+    """The arm of the ``arm`` fixture with the YAML transmission ``matrix`` (rows: motors)."""
+    doc = yaml.safe_load(random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4).read_text())
+    doc["transmissions"] = {"matrix": np.asarray(matrix, float).tolist(), "motors": motors}
+    path = tmp_path / "t.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return mindyn.load(path)
+
+
+def motor_stribeck_log(robot, w, fv, fc, fs):
+    """A multi-sine log whose torques are the rigid-body ones (the robot's inverse dynamics,
+    inertial parameters only) plus each motor's Stribeck friction written out here,
+    T^T f(T dq), f with motor velocity scales ``w``."""
+    T = robot.drive_matrix
+    t = np.arange(0, 8.0, 1 / 200.0)
+    q, dq, ddq = multisine(robot.n, t, np.random.default_rng(0))
+    v = dq @ T.T
+    f = fv * v + fc * sign(v) + fs * sign(v) * np.exp(-((v / w) ** 2))
+    return JointData(t, q, dq, ddq, robot.inverse_dynamics(q, dq, ddq) + f @ T, "motors")
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["motors declared in another order", "a motor turning with two joints"],
+)
+def test_the_stribeck_search_pairs_each_motor_with_its_joints(tmp_path, case):
+    """The search scores each motor's velocity on the residuals of the joints it acts on. With
+    the motors declared in another order than the joints, it scored motor k on joint k's
+    residual (another motor's); a motor turning with joints 2 and 3 shares joint 2 with motor 2,
+    so the two are searched one after the other on the residuals of both joints. Noise-free,
+    the Stribeck velocity of each motor (the coupled one's Fs too) is found to 1e-3 and the
+    friction parameters to 1e-5."""
+    if case.startswith("motors declared"):
+        T = [[0, 0, 30.0], [50.0, 0, 0], [0, -40.0, 0]]
+    else:
+        T = [[50.0, 0, 0], [0, 40.0, 0], [0, 30.0, 30.0]]
+    robot = with_transmission(tmp_path, T, ["ma", "mb", "mc"])
+    assert robot.drive_side == "motor"
+    top = np.abs(np.asarray(T)).max(axis=1)
+    w = np.array([0.15, 0.25, 0.1]) * top
+    fv, fc, fs = FV / top**2, FC / top, np.array([1.0, 0.7, 0.5]) / top
+    log = motor_stribeck_log(robot, w, fv, fc, fs)
+    choice = select_friction_model(robot, [log], kind="stribeck", fit={"min_velocity": 0.0})
+    np.testing.assert_allclose(choice.record["velocity"], w, rtol=1e-3)
+    res = identify(choice.robot, log, base=choice.base, rsd_threshold=None, min_velocity=0.0)
+    names = list(res.base.names)
+    for k in range(3):
+        for nm, want in (("Fv", fv), ("Fc", fc), ("Fs", fs)):
+            got = res.full[names.index(f"{nm}{k + 1}")]
+            assert got == pytest.approx(want[k], rel=1e-5), (nm, k, got, want[k])

@@ -222,7 +222,7 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
         floor = np.maximum(floor, _in_slot_units(robot, np.full(robot.n, least)))
     lo = np.log(np.minimum(floor, 0.5 * top))
     hi = np.log(top)
-    x, record = _log_search(lambda w: base.with_friction_velocity(w), lo, hi, logs, fit)
+    x, record = _log_search(robot, lambda w: base.with_friction_velocity(w), lo, hi, logs, fit)
     record["search"] = (
         f"log-spaced grid of {GRID_POINTS} velocities from the joint's velocity noise level "
         "(the smooth width rule; the dynamic and integral models: at least their min_velocity) "
@@ -233,26 +233,78 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
     return x, record
 
 
-def _log_search(make, lo, hi, logs, fit: dict) -> tuple[np.ndarray, dict]:
-    """The scale per joint between ``exp(lo)`` and ``exp(hi)`` (n,) minimising the fit's
-    residual of the base set ``make(scale)``: a log-spaced grid of :data:`GRID_POINTS`, then
-    :data:`GOLDEN_STEPS` golden-section steps between the grid neighbours of the best point, all
-    joints at once on their own residuals, or (the energy model) one joint at a time on the
-    overall residual. ``(scale, record)``."""
+#: Most passes over the slots of a group acting on a joint in common (coordinate search).
+SEARCH_PASSES = 3
+
+
+def _groups(acts: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """The search's rounds and each slot's joints: ``acts`` (slots, joints) is True where slot
+    k acts on joint j; slots acting on a joint in common, directly or through others, form a
+    group. Round r holds the r-th slot of each group (so that the slots of a round act on
+    disjoint joints), and row k of the second result marks the joints of slot k's group."""
+    n = acts.shape[0]
+    group = list(range(n))  # union-find over slots sharing a joint
+
+    def root(k: int) -> int:
+        while group[k] != k:
+            k = group[k]
+        return k
+
+    for k in range(n):
+        for m in range(k):
+            if np.any(acts[k] & acts[m]):
+                group[root(k)] = root(m)
+    members: dict[int, list[int]] = {}
+    for k in range(n):
+        members.setdefault(root(k), []).append(k)
+    depth = max(len(v) for v in members.values())
+    rounds = [np.array([v[r] for v in members.values() if len(v) > r]) for r in range(depth)]
+    joints = np.array([np.any(acts[members[root(k)]], axis=0) for k in range(n)])
+    return rounds, joints
+
+
+def _log_search(robot: Robot, make, lo, hi, logs, fit: dict) -> tuple[np.ndarray, dict]:
+    """The scale per slot of ``robot`` (joint, or motor on the motor side) between ``exp(lo)``
+    and ``exp(hi)`` (n,) minimising the fit's residual of the base set ``make(scale)``: a
+    log-spaced grid of :data:`GRID_POINTS`, then :data:`GOLDEN_STEPS` golden-section steps
+    between the grid neighbours of the best point; every slot at once, each on the residuals
+    of the joints it acts on (the sum of their logarithms: a slot's scale changes only those
+    joints' equations), except that slots acting on a joint in common (motors of a coupled
+    wrist or a differential) are searched one after the other on their joints' residuals, the
+    others held, in up to :data:`SEARCH_PASSES` passes (until a pass moves none by 1e-4 in log
+    scale); or (the energy model) one slot at a time on the overall residual.
+    ``(scale, record)``."""
     n = lo.shape[0]
     grid = np.linspace(lo, hi, GRID_POINTS)  # (G, n), log scales
     per_joint = fit.get("model", "dynamic") != "energy"
     evaluations = 0
+    rounds, joints = _groups(np.abs(_slots(robot)[0]) > 0)
+    passes = 0
 
     def f(logw: np.ndarray) -> np.ndarray:
         nonlocal evaluations
         evaluations += 1
-        return _objective(make(np.exp(logw)), logs, fit, per_joint)
+        residual = _objective(make(np.exp(logw)), logs, fit, per_joint)
+        if not per_joint:
+            return residual
+        return joints @ np.log(np.maximum(residual, 1e-300))  # per slot, its group's joints'
 
     if per_joint:
-        values = np.array([f(g) for g in grid])  # (G, n)
-        best = np.argmin(values, axis=0)
-        x = _golden(f, grid, best, np.arange(n))
+        x = grid[GRID_POINTS // 2].copy()
+        while passes < (1 if len(rounds) == 1 else SEARCH_PASSES):
+            passes += 1
+            before = x.copy()
+            for slots in rounds:
+                values = []
+                for g in grid:
+                    y = x.copy()
+                    y[slots] = g[slots]
+                    values.append(f(y))
+                best = np.zeros(n, dtype=int)
+                best[slots] = np.argmin(np.array(values)[:, slots], axis=0)
+                x[slots] = _golden(f, grid, best, slots, start=x)[slots]
+            if np.max(np.abs(x - before)) < 1e-4:
+                break
     else:  # one joint at a time on the overall residual
         x = grid[GRID_POINTS // 2].copy()
         for j in range(n):
@@ -266,9 +318,15 @@ def _log_search(make, lo, hi, logs, fit: dict) -> tuple[np.ndarray, dict]:
             x[j] = _golden(f, grid, best, np.array([j]), start=x)[j]
     record = {
         "search": (
-            "all joints at once, each on its own residual (first OLS fit)"
+            "all slots at once, each on the residuals of the joints it acts on (first OLS fit)"
+            + (
+                ", slots acting on a joint in common one after the other on their joints' "
+                f"residuals ({passes} passes)"
+                if len(rounds) > 1
+                else ""
+            )
             if per_joint
-            else "one joint at a time on the overall residual"
+            else "one slot at a time on the overall residual"
         ),
         "fits": evaluations,
         "range": [[float(a), float(b)] for a, b in zip(np.exp(lo), np.exp(hi))],
@@ -301,7 +359,7 @@ def dahl_search(base: DahlBase, logs, *, fit: dict) -> tuple[np.ndarray, dict]:
     hi = np.log(1.0 / np.maximum(width * dt, 1e-300))
     lo = np.log(2.0 / span)
     hi = np.maximum(hi, lo + math.log(10.0))
-    sigma, record = _log_search(base.with_sigma, lo, hi, logs, fit)
+    sigma, record = _log_search(robot, base.with_sigma, lo, hi, logs, fit)
     record["search"] = (
         f"log-spaced grid of {GRID_POINTS} values of sigma from 2 / the joint's range of motion "
         "to 1 / (its velocity noise level (the smooth width rule) x the logged sample interval), "
