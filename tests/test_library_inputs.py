@@ -1,7 +1,7 @@
 """Inputs a library user gets wrong, refused with one line naming the argument, and objects that
 do not change under their users: controller steps given wrongly shaped or non-finite states, a
 drive gain of zero, time stamps that are not increasing, unknown keywords, modules the manual
-names, the base parameters' records and an identification's arrays."""
+names, the base parameters' records and an identification's arrays and names."""
 
 from __future__ import annotations
 
@@ -253,3 +253,38 @@ def test_an_identification_result_keeps_its_arrays():
             with pytest.raises(ValueError, match="read-only"):
                 a[0] = 1.0
     np.testing.assert_array_equal(res.predict(data), predicted)
+
+
+def test_an_identification_result_keeps_its_kept_and_removed_names():
+    """names and removed were lists: an edit (append, sort, an entry assigned) changed the
+    result, and the JSON it writes, under its other users."""
+    t, q, dq, ddq = _motion(2000)
+    tau = ROBOT.inverse_dynamics(q, dq, ddq)
+    rng = np.random.default_rng(3)
+    data = JointData(t=t, q=q, dq=dq, ddq=ddq, tau=tau + 0.05 * rng.standard_normal(tau.shape))
+    res = identify(ROBOT, data)
+    # the description's first moments MY1, MY2 are zero: those estimates are noise, pruned
+    truth = dict(zip(BASE.names, BASE.values(ROBOT.parameters())))
+    zero = {name for name, v in truth.items() if abs(v) < 1e-12}
+    assert zero == {"MY1", "MY2"}
+    assert {name for name, _ in res.removed} == zero
+    assert set(res.names) == set(BASE.names) - zero
+    before = json.dumps(res.to_dict(), sort_keys=True, default=str)
+    assert isinstance(res.names, tuple) and isinstance(res.removed, tuple)
+    with pytest.raises(AttributeError):
+        res.names.append("XX9")  # type: ignore[attr-defined]
+    with pytest.raises(TypeError):
+        res.names[0] = "XX9"  # type: ignore[index]
+    with pytest.raises(AttributeError):
+        res.removed.sort()  # type: ignore[attr-defined]
+    with pytest.raises(TypeError):
+        res.removed[0][1] = 0.0  # type: ignore[index]
+    # the JSON as before: lists of the names, and of {name, rsd} in order of removal
+    doc = json.loads(before)
+    assert doc["names"] == list(res.names) and all(isinstance(n, str) for n in doc["names"])
+    assert doc["removed"] == [{"name": n, "rsd": r} for n, r in res.removed]
+    assert json.dumps(res.to_dict(), sort_keys=True, default=str) == before
+    # the pruned estimate's full vector is zero exactly at the removed parameters
+    assert [name for name, v in zip(BASE.names, res.full) if v == 0] == [
+        name for name in BASE.names if name in zero
+    ]
