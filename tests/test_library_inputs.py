@@ -288,3 +288,31 @@ def test_an_identification_result_keeps_its_kept_and_removed_names():
     assert [name for name, v in zip(BASE.names, res.full) if v == 0] == [
         name for name in BASE.names if name in zero
     ]
+
+
+def test_a_consistent_estimate_keeps_its_arrays_links_and_notes():
+    """classical, full and the eigenvalues were writable arrays, links and notes lists: an edit
+    changed the estimate (its predictions, its JSON) under its other users."""
+    t, q, dq, ddq = _motion(2000)
+    tau = ROBOT.inverse_dynamics(q, dq, ddq)
+    rng = np.random.default_rng(3)
+    data = JointData(t=t, q=q, dq=dq, ddq=ddq, tau=tau + 1e-3 * rng.standard_normal(tau.shape))
+    c = identify_consistent(ROBOT, data, prior_weight=1.0)  # a prior: the per-link records
+    predicted = c.predict(data)
+    np.testing.assert_allclose(predicted, tau, atol=5e-3)  # the data's own torques
+    before = json.dumps(c.to_dict(), sort_keys=True, default=str)
+    for name in ("classical", "full", "min_eig", "unconstrained_min_eig"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(c, name)[0] = 1.0
+    assert c.links is not None and c.notes  # the description's pseudo-inertias regularised
+    assert isinstance(c.links, tuple) and isinstance(c.notes, tuple)
+    with pytest.raises(TypeError):
+        c.links[0]["mass"] = 100.0  # type: ignore[index]
+    with pytest.raises(AttributeError):
+        c.notes.append("edited")  # type: ignore[attr-defined]
+    np.testing.assert_array_equal(c.predict(data), predicted)
+    assert json.dumps(c.to_dict(), sort_keys=True, default=str) == before
+    # the JSON as before: lists of plain dicts and of lines
+    doc = json.loads(before)["consistent_estimate"]
+    assert [lk["link"] for lk in doc["links"]] == list(ROBOT.link_names[1:])
+    assert doc["notes"] == list(c.notes)
