@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from mindyn import control
 from mindyn.identification import (
+    DataError,
     JointData,
     ReadingOptions,
     identify,
@@ -117,6 +118,41 @@ def test_a_zero_or_non_finite_drive_gain_is_refused_whatever_the_log_holds(tmp_p
     np.testing.assert_allclose(d.tau, tau, rtol=1e-9, atol=1e-9)
     with pytest.raises(mindyn.ArgumentError, match=r"for joint 2 = 0 \("):
         read_csv(amps, ROBOT, drive_gain=[2.0, 0.0], filter="none")
+
+
+def test_a_drive_gain_for_a_log_of_torques_is_refused_not_ignored(tmp_path):
+    """read_csv took drive_gain=[2, 3] for a log of torques in N m and ignored it: the torques
+    came out as logged, the gain given unused without a word. The command line says the same."""
+    t, q, dq, ddq = _motion()
+    tau = ROBOT.inverse_dynamics(q, dq, ddq)
+    path = write_csv(tmp_path / "log.csv", t, q, tau, dq=dq)
+    message = (
+        f"drive_gain=: {path} holds torques in N m, not motor currents, which the gains convert "
+        "into torques; expected torque_unit='current' or columns i1..in, or no drive_gain="
+    )
+    with pytest.raises(DataError) as e:
+        read_csv(path, ROBOT, drive_gain=[2.0, 3.0], filter="none")
+    assert str(e.value) == message
+    # without the gain the log is read as written: the description's torques
+    np.testing.assert_allclose(read_csv(path, ROBOT, filter="none").tau, tau, atol=1e-9)
+    # the same log of currents (tau / K) with the gain: the gain is used, tau = K i
+    gain = np.array([2.0, 3.0])
+    amps = write_csv(tmp_path / "i.csv", t, q, tau / gain, dq=dq, torque_unit="current")
+    np.testing.assert_allclose(
+        read_csv(amps, ROBOT, drive_gain=gain, filter="none").tau, tau, rtol=1e-9, atol=1e-9
+    )
+    cli = subprocess.run(
+        [sys.executable, "-m", "mindyn", "identify", "planar2", str(path), "--drive-gain", "2,3"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert cli.returncode == 2 and cli.stdout == "", cli.stdout
+    assert cli.stderr == (
+        f"mindyn: error: --drive-gain: {path} holds torques in N m, not motor currents, which "
+        "the gains convert into torques; expected --torque-unit current or columns i1..in, or "
+        "no --drive-gain\n"
+    )
 
 
 # ---------------------------------------------------------------------------------------------
