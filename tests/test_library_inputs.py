@@ -1,7 +1,7 @@
 """Inputs a library user gets wrong, refused with one line naming the argument, and objects that
 do not change under their users: controller steps given wrongly shaped or non-finite states, a
 drive gain of zero, time stamps that are not increasing, unknown keywords, modules the manual
-names, the base parameters' records and an identification's arrays."""
+names, the base parameters' records and an identification's arrays and names."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from mindyn import control
 from mindyn.identification import (
+    DataError,
     JointData,
     ReadingOptions,
     identify,
@@ -117,6 +118,41 @@ def test_a_zero_or_non_finite_drive_gain_is_refused_whatever_the_log_holds(tmp_p
     np.testing.assert_allclose(d.tau, tau, rtol=1e-9, atol=1e-9)
     with pytest.raises(mindyn.ArgumentError, match=r"for joint 2 = 0 \("):
         read_csv(amps, ROBOT, drive_gain=[2.0, 0.0], filter="none")
+
+
+def test_a_drive_gain_for_a_log_of_torques_is_refused_not_ignored(tmp_path):
+    """read_csv took drive_gain=[2, 3] for a log of torques in N m and ignored it: the torques
+    came out as logged, the gain given unused without a word. The command line says the same."""
+    t, q, dq, ddq = _motion()
+    tau = ROBOT.inverse_dynamics(q, dq, ddq)
+    path = write_csv(tmp_path / "log.csv", t, q, tau, dq=dq)
+    message = (
+        f"drive_gain=: {path} holds torques in N m, not motor currents, which the gains convert "
+        "into torques; expected torque_unit='current' or columns i1..in, or no drive_gain="
+    )
+    with pytest.raises(DataError) as e:
+        read_csv(path, ROBOT, drive_gain=[2.0, 3.0], filter="none")
+    assert str(e.value) == message
+    # without the gain the log is read as written: the description's torques
+    np.testing.assert_allclose(read_csv(path, ROBOT, filter="none").tau, tau, atol=1e-9)
+    # the same log of currents (tau / K) with the gain: the gain is used, tau = K i
+    gain = np.array([2.0, 3.0])
+    amps = write_csv(tmp_path / "i.csv", t, q, tau / gain, dq=dq, torque_unit="current")
+    np.testing.assert_allclose(
+        read_csv(amps, ROBOT, drive_gain=gain, filter="none").tau, tau, rtol=1e-9, atol=1e-9
+    )
+    cli = subprocess.run(
+        [sys.executable, "-m", "mindyn", "identify", "planar2", str(path), "--drive-gain", "2,3"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+    )
+    assert cli.returncode == 2 and cli.stdout == "", cli.stdout
+    assert cli.stderr == (
+        f"mindyn: error: --drive-gain: {path} holds torques in N m, not motor currents, which "
+        "the gains convert into torques; expected --torque-unit current or columns i1..in, or "
+        "no --drive-gain\n"
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -253,3 +289,66 @@ def test_an_identification_result_keeps_its_arrays():
             with pytest.raises(ValueError, match="read-only"):
                 a[0] = 1.0
     np.testing.assert_array_equal(res.predict(data), predicted)
+
+
+def test_an_identification_result_keeps_its_kept_and_removed_names():
+    """names and removed were lists: an edit (append, sort, an entry assigned) changed the
+    result, and the JSON it writes, under its other users."""
+    t, q, dq, ddq = _motion(2000)
+    tau = ROBOT.inverse_dynamics(q, dq, ddq)
+    rng = np.random.default_rng(3)
+    data = JointData(t=t, q=q, dq=dq, ddq=ddq, tau=tau + 0.05 * rng.standard_normal(tau.shape))
+    res = identify(ROBOT, data)
+    # the description's first moments MY1, MY2 are zero: those estimates are noise, pruned
+    truth = dict(zip(BASE.names, BASE.values(ROBOT.parameters())))
+    zero = {name for name, v in truth.items() if abs(v) < 1e-12}
+    assert zero == {"MY1", "MY2"}
+    assert {name for name, _ in res.removed} == zero
+    assert set(res.names) == set(BASE.names) - zero
+    before = json.dumps(res.to_dict(), sort_keys=True, default=str)
+    assert isinstance(res.names, tuple) and isinstance(res.removed, tuple)
+    with pytest.raises(AttributeError):
+        res.names.append("XX9")  # type: ignore[attr-defined]
+    with pytest.raises(TypeError):
+        res.names[0] = "XX9"  # type: ignore[index]
+    with pytest.raises(AttributeError):
+        res.removed.sort()  # type: ignore[attr-defined]
+    with pytest.raises(TypeError):
+        res.removed[0][1] = 0.0  # type: ignore[index]
+    # the JSON as before: lists of the names, and of {name, rsd} in order of removal
+    doc = json.loads(before)
+    assert doc["names"] == list(res.names) and all(isinstance(n, str) for n in doc["names"])
+    assert doc["removed"] == [{"name": n, "rsd": r} for n, r in res.removed]
+    assert json.dumps(res.to_dict(), sort_keys=True, default=str) == before
+    # the pruned estimate's full vector is zero exactly at the removed parameters
+    assert [name for name, v in zip(BASE.names, res.full) if v == 0] == [
+        name for name in BASE.names if name in zero
+    ]
+
+
+def test_a_consistent_estimate_keeps_its_arrays_links_and_notes():
+    """classical, full and the eigenvalues were writable arrays, links and notes lists: an edit
+    changed the estimate (its predictions, its JSON) under its other users."""
+    t, q, dq, ddq = _motion(2000)
+    tau = ROBOT.inverse_dynamics(q, dq, ddq)
+    rng = np.random.default_rng(3)
+    data = JointData(t=t, q=q, dq=dq, ddq=ddq, tau=tau + 1e-3 * rng.standard_normal(tau.shape))
+    c = identify_consistent(ROBOT, data, prior_weight=1.0)  # a prior: the per-link records
+    predicted = c.predict(data)
+    np.testing.assert_allclose(predicted, tau, atol=5e-3)  # the data's own torques
+    before = json.dumps(c.to_dict(), sort_keys=True, default=str)
+    for name in ("classical", "full", "min_eig", "unconstrained_min_eig"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(c, name)[0] = 1.0
+    assert c.links is not None and c.notes  # the description's pseudo-inertias regularised
+    assert isinstance(c.links, tuple) and isinstance(c.notes, tuple)
+    with pytest.raises(TypeError):
+        c.links[0]["mass"] = 100.0  # type: ignore[index]
+    with pytest.raises(AttributeError):
+        c.notes.append("edited")  # type: ignore[attr-defined]
+    np.testing.assert_array_equal(c.predict(data), predicted)
+    assert json.dumps(c.to_dict(), sort_keys=True, default=str) == before
+    # the JSON as before: lists of plain dicts and of lines
+    doc = json.loads(before)["consistent_estimate"]
+    assert [lk["link"] for lk in doc["links"]] == list(ROBOT.link_names[1:])
+    assert doc["notes"] == list(c.notes)

@@ -67,7 +67,7 @@ def test_report_document_is_a_new_one_each_time(fitted):
     first["fit"]["rms"][0] = -1.0
     again = report.to_dict()
     assert json.dumps(again, sort_keys=True, default=str) == expected
-    assert report.result.names == again["names"]
+    assert list(report.result.names) == again["names"]
 
 
 def test_run_loads_a_description_with_its_tip_and_records_it(chain, fitted):

@@ -1341,3 +1341,52 @@ def test_a_body_with_two_joints_written_as_a_new_mjcf_has_mujocos_dynamics(kind,
             mujoco.mj_inverse(m, d)
             got.append(d.qfrc_inverse.copy())
         assert_close(got[1], got[0], TOL, "two joints in a body, new MJCF vs the original")
+
+
+def test_mujoco_warnings_on_a_file_read_are_python_warnings_and_write_no_log(tmp_path, monkeypatch):
+    """MuJoCo's default warning handler printed the warning and appended it to MUJOCO_LOG.TXT in
+    the current folder, a file the reader left beside the user's. The warning is now a Python
+    warning naming the file, with MuJoCo's own text; the handler set before is restored."""
+    (tmp_path / "arm.xml").write_text(
+        """<mujoco model="arm">
+  <statistic meaninertia="1"/>
+  <worldbody>
+    <body name="link1">
+      <joint name="j1" type="hinge" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.5 0 0" size="0.05"/>
+      <body name="link2" pos="0.5 0 0">
+        <joint name="j2" type="hinge" axis="0 0 1"/>
+        <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.04"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+    )
+    monkeypatch.chdir(tmp_path)
+    own: list[str] = []
+
+    def handler(text):  # the test's own handler: what MuJoCo says of the file
+        own.append(text)
+
+    before = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(handler)
+    try:
+        mujoco.MjModel.from_xml_path("arm.xml")
+        said = list(own)
+        own.clear()
+        with pytest.warns(UserWarning) as caught:
+            robot = mindyn.load("arm.xml")
+        after = mujoco.get_mju_user_warning()
+    finally:
+        mujoco.set_mju_user_warning(before)
+    assert len(said) == 1 and "'meaninertia' is deprecated" in said[0], said  # MuJoCo warns
+    assert own == [] and after is handler  # the reader's own, its handler then restored
+    ours = [str(w.message) for w in caught if "MuJoCo" in str(w.message)]
+    assert ours == [f"arm.xml: MuJoCo warns: {' '.join(said[0].split())}"]
+    assert robot.n == 2 and list(robot.joint_names) == ["j1", "j2"]
+    # with MuJoCo's default handler in place: no log file, the default restored
+    with pytest.warns(UserWarning, match="MuJoCo warns: statistic attribute 'meaninertia'"):
+        mindyn.load("arm.xml")
+    assert mujoco.get_mju_user_warning() is before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.xml"]  # no MUJOCO_LOG.TXT

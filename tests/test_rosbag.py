@@ -127,6 +127,20 @@ def test_velocities_missing_from_the_messages_are_derived(planar, tmp_path):
     np.testing.assert_allclose(d.dq, log[2][k : log[0].size - k], atol=2e-3)
 
 
+def test_a_drive_gain_for_efforts_in_newton_metres_is_refused_not_ignored(planar, tmp_path):
+    """read_rosbag took drive_gain= for efforts in N m and ignored it; in A the gain is used."""
+    robot, log = planar
+    t, q, dq, tau = log
+    bag = write_bag(tmp_path / "run", messages(robot, log))
+    with pytest.raises(DataError, match=r"^drive_gain=: .* holds torques in N m, not motor curr"):
+        read_rosbag(bag, robot, drive_gain=[2.0] * robot.n)
+    gain = np.array([2.0, -0.5, 4.0])  # tau = K i, the currents the bag holds
+    amps = write_bag(tmp_path / "amps", messages(robot, (t, q, dq, tau / gain)))
+    d = read_rosbag(amps, robot, torque_unit="current", drive_gain=gain)
+    k = d.processing["derivative_edges"]["samples"]
+    np.testing.assert_allclose(d.tau, tau[k : t.size - k], rtol=1e-9, atol=1e-9)
+
+
 def test_ros1_bag(planar, tmp_path):
     robot, log = planar
     ts1 = get_typestore(Stores.ROS1_NOETIC)

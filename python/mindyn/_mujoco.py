@@ -60,6 +60,7 @@ which :func:`mindyn.load` warns, naming them.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import warnings
 import xml.parsers.expat
@@ -112,15 +113,34 @@ def is_mjcf(path) -> bool:
     return Path(str(path)).is_file() and root_tag(path) == "mujoco"
 
 
+@contextlib.contextmanager
+def warnings_caught(mujoco):
+    """MuJoCo's warnings within the block, collected in the list it yields, one text each,
+    instead of MuJoCo's own handling (printed, and appended to a file MUJOCO_LOG.TXT in the
+    current folder); the handler set before is restored after."""
+    said: list[str] = []
+    before = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda text: said.append(" ".join(str(text).split())))
+    try:
+        yield said
+    finally:
+        mujoco.set_mju_user_warning(before)
+
+
 def compile_model(path):
     """MuJoCo's compiled model of the MJCF ``path``, or a one-line ModelError with MuJoCo's
-    reason."""
+    reason. MuJoCo's warnings on the file (a deprecated attribute ...) are Python warnings
+    naming it."""
     mujoco = require(f"reading the MJCF '{path}'")
-    try:
-        return mujoco.MjModel.from_xml_path(str(path))
-    except ValueError as e:
-        why = "; ".join(s.strip() for s in str(e).splitlines() if s.strip())
-        raise _core.ModelError(f"{path}: MuJoCo cannot compile it: {why}") from None
+    with warnings_caught(mujoco) as said:
+        try:
+            model = mujoco.MjModel.from_xml_path(str(path))
+        except ValueError as e:
+            why = "; ".join(s.strip() for s in str(e).splitlines() if s.strip())
+            raise _core.ModelError(f"{path}: MuJoCo cannot compile it: {why}") from None
+    for text in said:
+        warnings.warn(f"{path}: MuJoCo warns: {text}", stacklevel=2)
+    return model
 
 
 def _name(m, kind, i: int, fallback: str) -> str:

@@ -476,20 +476,22 @@ def _joint_drive(robot: Robot, terms: JointTerms, motors, on_motors: bool) -> np
 
 def _compiles(text: str, robot: Robot, notes: list[str]) -> None:
     """Has MuJoCo compile the MJCF ``text`` (when installed): its refusal (an inertia that is
-    not physical, a body without mass ...) becomes a one-line ModelError."""
+    not physical, a body without mass ...) becomes a one-line ModelError, its warnings notes."""
     try:
         import mujoco
     except ImportError:
         notes.append(f"not compiled by MuJoCo (the 'mujoco' package is missing: {_mujoco.INSTALL})")
         return
-    try:
-        mujoco.MjModel.from_xml_string(text)
-    except ValueError as e:
-        why = "; ".join(s.strip() for s in str(e).splitlines() if s.strip())
-        raise ModelError(
-            f"MuJoCo refuses the MJCF of robot '{robot.name}' with these parameters: {why} "
-            "(export physically consistent parameters, with positive masses)"
-        ) from None
+    with _mujoco.warnings_caught(mujoco) as said:
+        try:
+            mujoco.MjModel.from_xml_string(text)
+        except ValueError as e:
+            why = "; ".join(s.strip() for s in str(e).splitlines() if s.strip())
+            raise ModelError(
+                f"MuJoCo refuses the MJCF of robot '{robot.name}' with these parameters: {why} "
+                "(export physically consistent parameters, with positive masses)"
+            ) from None
+    notes += [f"MuJoCo warns on the file written: {w}" for w in said]
 
 
 def _check_motor_side(robot: Robot, tr, coupled: bool) -> None:

@@ -40,7 +40,8 @@ def add_data_options(p) -> None:
         "declares transmissions: motor torque constants K_t [N m/A, motor side], torques = "
         "T^T (K_t x current) (default: the transmissions' torque constants). A negative gain "
         "is kept as a sign convention: that motor's positive current drives its joint "
-        "backwards (a motor wired or mounted reversed); zero is refused",
+        "backwards (a motor wired or mounted reversed); zero is refused, and so is a gain for "
+        "a log of torques (N m or permille)",
     )
     p.add_argument(
         "--currents",

@@ -37,8 +37,10 @@ import numbers
 import re
 import time
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 import scipy.linalg as sla
@@ -214,6 +216,16 @@ class ConsistentResult:
     fit_increase : float
         ``(|R p_b - z|^2 - |R p_b_ls - z|^2) / s^2``: how much worse the consistent estimate fits
         than the unconstrained one with all base parameters, in units of the noise variance.
+    links : tuple of mappings, optional
+        With a prior, per link: its mass, the mass's standard deviation, and whether the data or
+        the prior determine it (:func:`~mindyn.identification.prior.link_report`); else None.
+    notes : tuple of str
+        What the estimate's computation took or met, one line each.
+
+    The arrays (``classical``, ``full``, ``min_eig``, ``unconstrained_min_eig``) are read-only
+    copies, as an :class:`IdentificationResult`'s: assigning to an entry raises ``ValueError``;
+    ``links`` (each link's record a read-only view) and ``notes`` are tuples (``to_dict()``
+    writes them as lists and dicts).
     """
 
     model: str
@@ -233,7 +245,7 @@ class ConsistentResult:
     weight_choice: dict | None = None
     #: Per link (with a prior): mass, its standard deviation, and whether the data or the prior
     #: determine it (:func:`~mindyn.identification.prior.link_report`).
-    links: list | None = None
+    links: tuple[Mapping, ...] | None = None
     #: Where consistency costs the fit: the least increase of any consistent estimate and the
     #: part each link's constraint accounts for
     #: (:func:`~mindyn.identification.constraint_cost.constraint_costs`).
@@ -245,8 +257,17 @@ class ConsistentResult:
     #: own ``optimum_fit_increase`` (its ``fit_increase`` then lies between the two sums);
     #: None when that path was not taken.
     tie_break: dict | None = None
-    notes: list = field(default_factory=list)
+    notes: tuple[str, ...] = ()
     seconds: float = 0.0
+
+    def __post_init__(self):
+        # as an IdentificationResult's: the arrays read-only copies and the lists tuples (an
+        # entry assigned, or a note added, would change the estimate under its other users)
+        for name in ("classical", "full", "min_eig", "unconstrained_min_eig"):
+            setattr(self, name, _args.readonly(getattr(self, name)))
+        if self.links is not None:
+            self.links = tuple(MappingProxyType(dict(lk)) for lk in self.links)
+        self.notes = tuple(self.notes)
 
     @property
     def classical_names(self) -> list[str]:
@@ -302,7 +323,7 @@ class ConsistentResult:
                 "prior_weight": self.prior_weight,
                 "prior_weight_choice": self.weight_choice,
                 "prior_divergence": self.prior_divergence,
-                "links": self.links,
+                "links": None if self.links is None else [dict(lk) for lk in self.links],
                 "fit_increase_noise_variances": self.fit_increase,
                 "constraint_cost": self.constraint_cost,
                 "tie_break": self.tie_break,
@@ -555,7 +576,7 @@ def consistent_estimate(
         ),
         prior_weight=W,
         weight_choice=choice,
-        links=links,
+        links=None if links is None else tuple(links),
         solver=solver,
         status=status,
         fit_increase=fit_increase(pi),
@@ -563,7 +584,7 @@ def consistent_estimate(
         tie_break=tie_break or None,
         prior_divergence=prior,
         noise=noise,
-        notes=notes,
+        notes=tuple(notes),
         seconds=time.perf_counter() - t0,
     )
 

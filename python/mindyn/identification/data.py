@@ -268,6 +268,8 @@ def read_csv(
         Currents: joint-side gain per joint [N m/A], instead of the drive table's (the motor
         torque constants when the description declares transmissions); a gain that is zero or
         not finite is an ArgumentError naming its joint (or motor), whatever the log holds.
+        Given for a log of torques (N m or permille), which has no currents for it to convert,
+        it is a DataError.
     columns : mapping, optional
         A column map (:mod:`~mindyn.identification.columns`): the file's names of mindyn's
         quantities, e.g. ``{"t[ms]": "timestamp", "q": "actual_q_{j0}", "i":
@@ -283,7 +285,8 @@ def read_csv(
     DataError
         Wrong or missing columns, a cell that is not a decimal number in ASCII (``1_000``,
         ``0x10``, non-ASCII digits), is NaN or infinite, or overflows a double (line and column
-        named), a file that is not UTF-8 text (line and byte offset named), time not strictly
+        named), a file that is not UTF-8 text (line and byte offset named), ``drive_gain`` given
+        for a log of torques, not currents, time not strictly
         increasing (line named), fewer than 2 samples (or too few beyond the derivatives'
         filter edges), derivatives that overflow, logged velocities that are not the
         positions' derivative over the time stamps (:func:`check_velocity_units`: time in ms,
@@ -471,6 +474,9 @@ def _read_csv(
             dq, ddq, deriv = fill_derivatives(t, q, dq, ddq, **derivatives)
     except DataError as e:
         raise DataError(f"{path}: {e}") from None
+    refuse_unused_gain(
+        drive_gain, path, processing.get("torque"), "torque_unit='current' or columns i1..in"
+    )
     processing.update(deriv)
     for what, a in (("velocities", dq), ("accelerations", ddq), ("torques", tau)):
         if a is not None and not np.isfinite(a).all():
@@ -659,6 +665,19 @@ def given_drive_gain(drive_gain, robot=None, *, size: int | None = None) -> np.n
     tr = getattr(robot, "transmission", None) if robot is not None else None
     _refuse_unusable_gains(K, tr.motors if tr is not None else None)
     return K
+
+
+def refuse_unused_gain(drive_gain, where, torque: dict | None, remedy: str) -> None:
+    """A DataError when ``drive_gain`` is given for the log ``where`` whose torques, as read
+    (``torque``: its ``processing["torque"]``, None without torques), are not motor currents:
+    the gains convert currents into torques, and would go unused. ``remedy``: how the log's
+    currents are read instead."""
+    if drive_gain is None or torque is None or torque["unit"].startswith("motor current"):
+        return
+    raise DataError(
+        f"drive_gain=: {where} holds torques in {torque['unit']}, not motor currents, which the "
+        f"gains convert into torques; expected {remedy}, or no drive_gain="
+    )
 
 
 def drive_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, str]:

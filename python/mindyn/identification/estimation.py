@@ -69,10 +69,10 @@ class IdentificationResult:
     ----------
     model : str
         ``dynamic``, ``energy`` or ``integral``.
-    names, values, std, rsd : list, ndarray (k,), ndarray (k,), ndarray (k,)
+    names, values, std, rsd : tuple of str, ndarray (k,), ndarray (k,), ndarray (k,)
         The parameters kept after pruning, their estimates, standard deviations and relative
         standard deviations in percent.
-    removed : list of (name, rsd)
+    removed : tuple of (name, rsd) tuples
         Parameters removed for an RSD above the threshold, in order of removal (their RSD at
         that moment).
     full : ndarray, shape (nb,)
@@ -90,16 +90,17 @@ class IdentificationResult:
         Estimates, std and RSD of all base parameters before pruning.
 
     The arrays (``values``, ``std``, ``rsd``, ``full``, ``joint_sigma`` and those of
-    ``initial``) are read-only copies: assigning to an entry raises ``ValueError``.
+    ``initial``) are read-only copies: assigning to an entry raises ``ValueError``; ``names``
+    and ``removed`` are tuples (``to_dict()`` writes them as lists).
     """
 
     model: str
     base: BaseParameters
-    names: list
+    names: tuple[str, ...]
     values: np.ndarray
     std: np.ndarray
     rsd: np.ndarray
-    removed: list
+    removed: tuple[tuple[str, float], ...]
     full: np.ndarray
     sigma: float
     rows: int
@@ -124,6 +125,9 @@ class IdentificationResult:
             k: _args.readonly(v) if isinstance(v, np.ndarray) else v
             for k, v in self.initial.items()
         }
+        # and the kept and removed parameters tuples: a list edited would change them too
+        self.names = tuple(self.names)
+        self.removed = tuple((n, r) for n, r in self.removed)
 
     def predict(self, data: JointData) -> np.ndarray:
         """Joint torques ``W_b(q, dq, ddq) @ full`` on ``data``, shape (m, n)
@@ -1411,7 +1415,7 @@ def _pruned_result(
     initial = {"values": p.copy(), "std": std.copy(), "rsd": _rsd(p, std)}
     thr = rsd_threshold if rsd_threshold is not None and rsd_threshold > 0 else None
     keep, p, std, s2, dropped = pruned(solve, list(range(nb)), thr)
-    removed = [(names[j], r) for j, r in dropped]
+    removed = tuple((names[j], r) for j, r in dropped)
     full = np.zeros(nb)
     full[keep] = p
     settings["rsd_threshold"] = thr
@@ -1450,7 +1454,7 @@ def _pruned_result(
     return IdentificationResult(
         model=model,
         base=base,
-        names=[names[k] for k in keep],
+        names=tuple(names[k] for k in keep),
         values=p,
         std=std,
         rsd=_rsd(p, std),

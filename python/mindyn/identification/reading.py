@@ -78,7 +78,7 @@ def _raw(
     """The logs at ``paths`` as read (CSV or ROS bag; torques from the ``currents`` file of
     each when given), by stages: which are bags, then (after the truth sidecars, when a list
     ``truth`` is given to fill) the reads, then the currents joined."""
-    from .data import read_csv, read_truth
+    from .data import read_csv, read_truth, refuse_unused_gain
     from .rosbag import is_rosbag
 
     gain = _gains(opts, robot.n)
@@ -117,7 +117,7 @@ def _raw(
                     require_torque=not cur and require_torque,
                     filter="none" if opts.filter == "lowpass" else opts.filter,
                     cutoff=opts.cutoff,
-                    drive_gain=gain,
+                    drive_gain=None if cur else gain,  # a currents file's, not the log's
                     columns=cmap if cmap is None or not cur else cmap.without("i"),
                 )
             )
@@ -128,15 +128,9 @@ def _raw(
             d if c is None else attach_currents(d, c, robot, drive_gain=gain, columns=cmap)
             for d, c in zip(out, currents)
         ]
-    for p, d in zip(paths, out):
-        if "torque" not in d.processing:  # a log without torques (require_torque=False)
-            continue
-        unit = d.processing["torque"]["unit"]
-        if gain is not None and not unit.startswith("motor current"):
-            raise DataError(
-                f"drive_gain=: {p} holds torques in {unit}, not motor currents; expected "
-                "torque_unit='current', columns i1..in or currents="
-            )
+    for p, d in zip(paths, out):  # a log without torques (require_torque=False) passes
+        remedy = "torque_unit='current', columns i1..in or currents="
+        refuse_unused_gain(gain, p, d.processing.get("torque"), remedy)
     # ``because`` (torque not given): per log, why it is read as held (None: sampled)
     reasons = because if because is not None else [None] * len(out)
     if opts.torque == "held" or because is not None:

@@ -27,6 +27,7 @@ from .data import (
     fill_derivatives,
     first_not_increasing,
     given_drive_gain,
+    refuse_unused_gain,
     without_derivative_edges,
 )
 from .torque_units import BAG_TORQUE_REMEDY, check_torque_units
@@ -86,7 +87,8 @@ def read_rosbag(
     drive_gain : array (n,), optional
         ``current``: the joint-side gains [N m/A] (or the transmissions' motor torque
         constants), instead of the description's, see
-        :func:`mindyn.identification.data.convert_torque`.
+        :func:`mindyn.identification.data.convert_torque`; given with efforts in another unit
+        (which it would not convert), a DataError.
     **derivative_settings
         ``filter``, ``cutoff``, ``order``, ``window``, ``polyorder`` of
         :func:`mindyn.identification.data.differentiate`, for velocities / accelerations not in
@@ -201,6 +203,9 @@ def read_rosbag(
     processing: dict = {"samples": len(t), "topic": topic, "joints": names}
     if tau is not None:
         tau, processing["torque"] = convert_torque(tau, torque_unit, robot, drive_gain=drive_gain)
+    refuse_unused_gain(
+        drive_gain, f"{path}, {topic}", processing.get("torque"), "torque_unit='current'"
+    )
     dq, ddq, deriv = fill_derivatives(t - t[0], q, dq, None, **derivative_settings)
     processing.update(deriv)
     if tau is not None:
