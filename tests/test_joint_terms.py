@@ -355,6 +355,13 @@ def test_a_friction_model_goes_into_the_sidecar_and_comes_back(tmp_path, kind, s
         if c == 3:
             head = next(x for x in said.splitlines() if x.startswith("link "))
             assert head.split()[-1] == ("Fa" if kind == "asymmetric" else "Fs"), head
+    if side == "motor" and c == 3:  # info's motor table shows each motor's, m6's own too
+        said = cli("info", res.path, "--joint-terms", res.sidecar).splitlines()
+        head = next(x for x in said if x.startswith("#") and x.split()[-4:-1] == ["Ia", "Fv", "Fc"])
+        assert head.split()[-1] == ("Fa" if kind == "asymmetric" else "Fs"), head
+        for k in range(n):
+            row = next(x for x in said[said.index(head) :] if x.startswith(f"m{k + 1} "))
+            assert float(row.split()[-1]) == pytest.approx(third[k], rel=1e-3), row
 
 
 def test_a_bare_off_key_is_named_as_the_boolean_yaml_reads(tmp_path):

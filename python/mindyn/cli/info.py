@@ -59,14 +59,17 @@ def _transmission_lines(robot) -> list[str]:
 def _motor_terms(robot) -> list[str]:
     """The motors' rotor inertia and friction (slot k = motor k, motor units): what the dynamics
     with rotor inertia and friction use and ``identify --rotor --friction`` estimates."""
-    slots = robot.parameters(rotor=True, friction=True).reshape(robot.n, -1)[:, 10:13]
+    third = _sidecar.FRICTION_MODELS[robot.friction_model["kind"]][0]
+    columns = ["Ia", "Fv", "Fc"] + ([third] if third else [])
+    slots = robot.parameters(rotor=True, friction=True).reshape(robot.n, -1)[:, 10:]
     w = max([5] + [len(m) for m in robot.transmission.motors]) + 1
     out = [
         "",
         "rotor inertia and friction on the motors (slot k: motor k's, in motor units; what "
-        "--rotor / --friction use and identify; a joint's value divided by r^2, r^2, |r| for a "
+        "--rotor / --friction use and identify; the motor's own where the description or "
+        "joint-terms file gives them, else a joint's value divided by r^2, r^2, |r| for a "
         "motor alone on it with ratio r, 0 for a coupled motor)",
-        f"{'#':<3} {'motor':<{w}}" + "".join(f"{c:>11}" for c in ("Ia", "Fv", "Fc")),
+        f"{'#':<3} {'motor':<{w}}" + "".join(f"{c:>11}" for c in columns),
     ]
     for i, motor in enumerate(robot.transmission.motors):
         out.append(f"{'m' + str(i + 1):<3} {motor:<{w}}" + "".join(f"{v:11.4g}" for v in slots[i]))
