@@ -9,7 +9,10 @@ same row weights -- through the base parameters ``p_b = Y pi``, subject to
 - every link's pseudo-inertia ``J = [[tr(I)/2 1 - I, h], [h^T, m]]`` positive semidefinite (mass
   ``m >= 0``, inertia about the centre of mass positive semidefinite and the triangle
   inequalities of its principal moments);
-- ``Ia >= 0``, ``Fv >= 0``, ``Fc >= 0`` (offsets are free).
+- ``Ia >= 0``, ``Fv >= 0``, ``Fc >= 0`` (offsets are free), and the friction dissipative under
+  the robot's friction model (``f(v) v >= 0`` at every speed): ``Fc + Fs >= 0`` (Stribeck:
+  the breakaway torque), ``Fc - Fa >= 0`` and ``Fc + Fa >= 0`` (asymmetric: the Coulomb torque
+  each way). These joint-term constraints are the rows of ``B e >= 0`` (:class:`_Layout`).
 
 The residual is taken from the ``c x c`` triangle the estimation reduced the (weighted) system to,
 ``|A p_b - b|^2 = |R p_b - z|^2 + rho``, so the convex problem is small whatever the length of
@@ -175,7 +178,9 @@ def min_eigenvalues(pi: np.ndarray, layout: _Layout) -> np.ndarray:
 
 class _Layout:
     """Indices of a base set's classical vector: the 10 inertial parameters of each link, and
-    the rotor, friction and offset parameters."""
+    the rotor, friction and offset parameters (``extra``, the joint terms ``e = pi[extra]``),
+    with their constraints ``B e >= 0`` (``B`` (c, len(extra))): ``Ia, Fv, Fc >= 0`` (the rows
+    of ``nonneg``), ``Fc + Fs >= 0`` and ``Fc -+ Fa >= 0`` (the friction dissipative)."""
 
     def __init__(self, base: BaseParameters):
         names = base.classical_names
@@ -187,7 +192,33 @@ class _Layout:
         self.extra = np.array([i for i in range(len(names)) if i not in inertial], dtype=int)
         kinds = [_name_kind(names[i]) for i in self.extra]
         self.nonneg = np.array([k in ("Ia", "Fv", "Fc") for k in kinds], dtype=bool)
+        rows = [np.eye(len(kinds))[i] for i in np.flatnonzero(self.nonneg)]
+        at = {names[i]: a for a, i in enumerate(self.extra)}
+        for name, a in at.items():  # a third friction term and the slot's Fc
+            kind = _name_kind(name)
+            if kind in ("Fs", "Fa") and "Fc" + name[2:] in at:
+                for sign in (1.0,) if kind == "Fs" else (1.0, -1.0):
+                    row = np.zeros(len(kinds))
+                    row[at["Fc" + name[2:]]], row[a] = 1.0, sign
+                    rows.append(row)
+        self.B = np.array(rows, dtype=float).reshape(len(rows), len(kinds))
         self.robot_params = len(names) - (n if base.offset else 0)
+
+    def satisfied(self, pi: np.ndarray, tol: float = 0.0) -> bool:
+        """Whether the joint terms of ``pi`` meet ``B e >= -tol``."""
+        return bool(np.all(self.B @ pi[self.extra] >= -tol))
+
+    def project(self, pi: np.ndarray) -> None:
+        """Moves the joint terms of ``pi`` (in place) onto their constraints: ``Ia, Fv, Fc``
+        clipped at zero, then ``Fs`` raised to ``-Fc`` and ``Fa`` clipped to ``[-Fc, Fc]``
+        (solver tolerance)."""
+        nonneg = self.extra[self.nonneg]
+        pi[nonneg] = np.maximum(pi[nonneg], 0.0)
+        for name, i in ((self.names[i], i) for i in self.extra):
+            kind = _name_kind(name)
+            if kind in ("Fs", "Fa") and "Fc" + name[2:] in self.names:
+                fc = pi[self.names.index("Fc" + name[2:])]
+                pi[i] = max(pi[i], -fc) if kind == "Fs" else min(max(pi[i], -fc), fc)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -438,8 +469,9 @@ def consistent_estimate(
     Newton descent does not converge, the conic solver's answer is refined by a smooth descent
     of the same objective (:func:`_refine_with_prior`; noted with the gain). After a solve,
     pseudo-inertias with eigenvalues below zero by solver tolerance are projected onto the
-    positive semidefinite matrices (negative eigenvalues set to zero) and ``Ia, Fv, Fc`` clipped
-    at zero, so every smallest eigenvalue is at least ``-EIG_TOL``.
+    positive semidefinite matrices (negative eigenvalues set to zero) and the joint terms moved
+    onto their constraints (``Ia, Fv, Fc`` clipped at zero, ``Fs >= -Fc``, ``|Fa| <= Fc``), so
+    every smallest eigenvalue is at least ``-EIG_TOL``.
 
     The fit term's noise variance is the residual variance of ``res`` times
     :func:`noise_scale`'s factor, that of its standard deviations: it also accounts for the
@@ -477,9 +509,7 @@ def consistent_estimate(
 
     pi0 = description_vector(base)
     pi_n = nearest_realisation(base, beta_ls)
-    ok_n = np.all(min_eigenvalues(pi_n, layout) >= 0) and np.all(
-        pi_n[layout.extra[layout.nonneg]] >= 0
-    )
+    ok_n = np.all(min_eigenvalues(pi_n, layout) >= 0) and layout.satisfied(pi_n)
     pi_un = nearest_realisation(base, res.full)
     choice, links, start = None, None, None
     tie_break: dict = {}  # filled when the no-prior estimate is taken by the tie-break
@@ -541,8 +571,7 @@ def consistent_estimate(
         lam, V = np.linalg.eigh(J)
         if lam[0] < 0:
             pi[ix] = inertial_from_pseudo((V * np.maximum(lam, 0.0)) @ V.T)
-    nonneg = layout.extra[layout.nonneg]
-    pi[nonneg] = np.maximum(pi[nonneg], 0.0)
+    layout.project(pi)
     eig = min_eigenvalues(pi, layout)
     if eig.min() < -EIG_TOL:  # pragma: no cover - guarded by the projection above
         raise IdentificationError(
@@ -677,9 +706,13 @@ def _refine_with_prior(M, z, s2, pi, layout: _Layout, J0s, W: float) -> tuple[np
         bounds=bounds,
         options={"maxiter": 5000, "ftol": 1e-15, "gtol": 1e-10},
     )
-    if not (math.isfinite(out.fun) and out.fun < f0):
+    refined = unpack(out.x)[0]
+    # its bounds are the non-negative terms' alone: a refinement that leaves the friction's
+    # other constraints (Fs >= -Fc, |Fa| <= Fc) beyond round-off is not taken
+    scale = max(float(np.max(np.abs(refined[extra]), initial=0.0)), 1e-300)
+    if not (math.isfinite(out.fun) and out.fun < f0 and layout.satisfied(refined, 1e-9 * scale)):
         return pi, 0.0
-    return unpack(out.x)[0], float(f0 - out.fun)
+    return refined, float(f0 - out.fun)
 
 
 def _mean_mass(base: BaseParameters, layout: _Layout, pi0: np.ndarray) -> float:
@@ -766,8 +799,8 @@ def _solve(base, layout, M, z, s2, pi0, W, notes, beta=None, progress=None, tie_
     objective = fit
     N = np.zeros((P, 0))
     cons = [r == (M @ G) @ u * scale - z * scale]
-    if e is not None and layout.nonneg.any():
-        cons.append(e[np.flatnonzero(layout.nonneg)] >= 0)
+    if e is not None and layout.B.shape[0]:
+        cons.append(layout.B @ e >= 0)
     if W > 0:
         J0s = _prior_matrices(base, layout, pi0, notes)
         for J, J0 in zip(Js, J0s):

@@ -60,7 +60,8 @@ def constraint_costs(
     least-squares fit [noise variances] (None: the solve failed, noted in ``notes``);
     ``links``: link name -> the part of ``total`` that lifting that link's constraint alone
     recovers (None when ``total`` is below :data:`NEGLIGIBLE`: not computed; a link's None: its
-    solve failed, noted); ``joint_terms``: the same for the bounds ``Ia, Fv, Fc >= 0`` (None
+    solve failed, noted); ``joint_terms``: the same for the joint terms' constraints
+    (``Ia, Fv, Fc >= 0``, the friction dissipative: ``Fc + Fs >= 0``, ``|Fa| <= Fc``; None
     without such terms or when not computed); ``major``: the links (and ``"joint terms"``)
     recovering at least :data:`MAJOR_SHARE` of ``total``, the largest first (recoveries do not
     add up: a link's parameters can stand in for another's they regroup with); ``rule``."""
@@ -83,7 +84,6 @@ def constraint_costs(
     G, s, _ = _conic_map(base, layout, pi0)
     N = sla.null_space(base.Y * s)
     scale = 1.0 / math.sqrt(s2)
-    bounded = np.flatnonzero(layout.nonneg)
     said = notes if notes is not None else []
 
     def least(free_link: int | None = None, free_terms: bool = False) -> float:
@@ -92,8 +92,8 @@ def constraint_costs(
         _, e, u = _conic_variables(layout, free_link)
         r = cp.Variable(z.size)
         cons = [r == (M @ G) @ u * scale - z * scale]
-        if e is not None and bounded.size and not free_terms:
-            cons.append(e[bounded] >= 0)
+        if e is not None and layout.B.shape[0] and not free_terms:
+            cons.append(layout.B @ e >= 0)
         objective = cp.sum_squares(r)
         if N.size:  # keeps the undetermined parameters bounded; the fit is recomputed below
             objective = objective + 1e-6 * cp.sum_squares(N.T @ ((G @ u - pi0) / s))
@@ -131,7 +131,7 @@ def constraint_costs(
 
     with _stage(progress, f"cost of consistency: {n} links' constraints lifted one at a time"):
         out["links"] = {nm: recovered(free_link=j) for j, nm in enumerate(names)}
-        if bounded.size:
+        if layout.B.shape[0]:
             out["joint_terms"] = recovered(free_terms=True)
     shares = dict(out["links"])
     if out["joint_terms"] is not None:

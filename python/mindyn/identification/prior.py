@@ -91,8 +91,9 @@ def _basis() -> np.ndarray:
 
 class PriorProblem:
     """``|M pi - z|^2 / s2 + W sum_l (-log det J_l + tr(J0_l^-1 J_l))`` over the classical
-    vector ``pi`` (layout of :class:`~mindyn.identification.consistent._Layout`), its
-    non-negative joint parameters kept positive by a log barrier."""
+    vector ``pi`` (layout of :class:`~mindyn.identification.consistent._Layout`), its joint
+    terms' constraints ``B pi >= 0`` (``Ia, Fv, Fc >= 0``, ``Fc + Fs >= 0``, ``Fc -+ Fa >= 0``)
+    kept strict by a log barrier."""
 
     def __init__(self, M, z, s2, layout, J0s):
         self.M, self.z, self.s2 = M, z, s2
@@ -100,6 +101,8 @@ class PriorProblem:
         self.c = 2.0 * (M.T @ z) / s2
         self.links = layout.links
         self.nonneg = layout.extra[layout.nonneg]
+        self.B = np.zeros((layout.B.shape[0], M.shape[1]))  # over the whole classical vector
+        self.B[:, layout.extra] = layout.B
         self.J0s = [0.5 * (J0 + J0.T) for J0 in J0s]
         self.J0inv = [0.5 * (A + A.T) for A in (np.linalg.inv(J0) for J0 in self.J0s)]
         self.E = _basis()
@@ -111,7 +114,7 @@ class PriorProblem:
         return (p @ self._E16).reshape(4, 4)
 
     def feasible(self, pi) -> bool:
-        if np.any(pi[self.nonneg] <= 0):
+        if np.any(self.B @ pi <= 0):
             return False
         for ix in self.links:
             try:
@@ -140,8 +143,8 @@ class PriorProblem:
             if sign <= 0:
                 return math.inf
             f += W * (-logdet + float(t0 @ pi[ix]))
-        if mu > 0 and self.nonneg.size:
-            v = pi[self.nonneg]
+        if mu > 0 and self.B.shape[0]:
+            v = self.B @ pi
             if np.any(v <= 0):
                 return math.inf
             f -= mu * float(np.sum(np.log(v)))
@@ -156,10 +159,10 @@ class PriorProblem:
             A = Jinv @ self.E  # (10, 4, 4)
             g[ix] += W * (t0 - np.einsum("aii->a", A))
             H[np.ix_(ix, ix)] += W * np.einsum("aij,bji->ab", A, A)
-        if barrier and mu > 0 and self.nonneg.size:
-            v = pi[self.nonneg]
-            g[self.nonneg] -= mu / v
-            H[self.nonneg, self.nonneg] += mu / v**2
+        if barrier and mu > 0 and self.B.shape[0]:
+            v = self.B @ pi
+            g -= self.B.T @ (mu / v)
+            H += (self.B.T * (mu / v**2)) @ self.B
         return g, H
 
 
@@ -189,7 +192,7 @@ def newton_prior(
     if not problem.feasible(pi):
         raise IdentificationError("consistent estimate: infeasible start of the Newton descent")
     free = np.setdiff1d(np.arange(pi.size), [] if fixed is None else fixed)
-    mu = max(barrier, BARRIER_END) if problem.nonneg.size else 0.0
+    mu = max(barrier, BARRIER_END) if problem.B.shape[0] else 0.0
     it = 0
     converged = False
     while True:
@@ -245,6 +248,10 @@ def feasible_start(problem: PriorProblem, J0s, layout, pi0) -> np.ndarray:
         if nn.size:
             floor = 1e-3 * max(float(np.max(np.abs(pi[nn]))), 1e-6)
             pi[nn] = np.maximum(pi[nn], floor)
+        # a third friction term strictly within its Coulomb term's bounds (Fs > -Fc, |Fa| < Fc)
+        inside = np.array(pi)
+        layout.project(inside)
+        pi = np.where(inside != pi, 0.999 * inside, pi) if nn.size else pi
     return pi
 
 
