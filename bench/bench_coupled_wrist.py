@@ -500,6 +500,11 @@ def case(seed, noise, gain_error, tmp, ros2_check):
     doc = run_mindyn(urdfs["ros1"], fit, val, tmp, "coupled")
     out["mindyn coupled"] = figures(doc)
     print(pruning_said(doc))
+    fm = doc["friction_model"]
+    if fm["kind"] != "coulomb" or fm.get("chosen_by") != "default":
+        scales = " ".join(f"{v:.3g}" for v in fm["velocity"] or [])
+        print(f"  friction model {fm['kind']} ({fm['chosen_by']})"
+              + (f", velocity scales per motor {scales} rad/s" if scales else ""))  # fmt: skip
     cutoff = doc["settings"]["preprocessing"]["filter"]["cutoff_Hz"]
     kt = ",".join(f"{k:.9g}" for k in KT * gain)
     val_i = [str(tmp / f"{kind}_i.csv") for kind in VALIDATIONS]
@@ -544,7 +549,8 @@ NAMES = [
 def table(rows):
     """Prints the tables; returns the worst ratio mindyn coupled / script on validation."""
     print("\noverall relative error [%], filtered (raw): fit; validation on the Fourier log; on "
-          "the point-to-point log")  # fmt: skip
+          "the point-to-point log" + (f" (mindyn: {' '.join(DEFAULT_FLAGS)})" if DEFAULT_FLAGS
+                                      else ""))  # fmt: skip
     worst = 0.0
     for seed, noise, res in rows:
         print(f"seed {seed}, current noise {noise:.0%}:")
@@ -593,9 +599,16 @@ def main(argv=None):
     ap.add_argument(
         "--rsd-threshold", help="mindyn's default runs with this --rsd-threshold (percent or auto)"
     )
+    ap.add_argument(
+        "--friction-model",
+        help="mindyn's runs with this --friction-model (e.g. stribeck, auto; the plant's motor "
+        "friction has a Stribeck hump); the script keeps viscous + Coulomb",
+    )
     args = ap.parse_args(argv)
     if args.rsd_threshold is not None:
         DEFAULT_FLAGS[:] = ["--rsd-threshold", args.rsd_threshold]
+    if args.friction_model is not None:
+        DEFAULT_FLAGS.extend(["--friction-model", args.friction_model])
     if not (np.isfinite(args.coupling) and args.coupling != 0):
         ap.error("--coupling must be a finite nonzero number")
     COUPLING = args.coupling
