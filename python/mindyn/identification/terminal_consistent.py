@@ -117,7 +117,9 @@ def _cost_lines(cost: dict | None) -> list[str]:
         f"{nm} {v:.4g}" if v is not None else f"{nm} not solved" for nm, v in cost["links"].items()
     ]
     if cost["joint_terms"] is not None:
-        parts.append(f"joint terms (Ia, Fv, Fc >= 0) {cost['joint_terms']:.4g}")
+        parts.append(
+            f"joint terms (Ia, Fv, Fc >= 0, friction dissipative) {cost['joint_terms']:.4g}"
+        )
     lines = [head + "; of it, lifting one constraint alone recovers:", "    " + "  ".join(parts)]
     shares = {**cost["links"], "joint terms": cost["joint_terms"]}
     if cost["major"]:
