@@ -115,7 +115,7 @@ def test_codegen_outputs_follow_the_rule(tmp_path):
     "argv, message",
     [
         (["codegen", "planar2"], "nothing to write"),
-        (["codegen", "planar2", "-o", "x.st"], "--lang is required with -o"),
+        (["codegen", "planar2", "-o", "x.txt"], "--lang is required with -o"),
     ],
 )
 def test_codegen_needs_an_output(tmp_path, monkeypatch, argv, message):
@@ -123,6 +123,20 @@ def test_codegen_needs_an_output(tmp_path, monkeypatch, argv, message):
     rc, out, err = run(argv)
     assert rc == 2 and len(err.splitlines()) == 1 and message in err, err
     assert not any(tmp_path.iterdir())
+
+
+def test_codegen_takes_the_language_a_file_name_says(tmp_path):
+    """-o FILE.c (or .h) without --lang writes C (FILE.c and FILE.h), -o FILE.st Structured
+    Text: the same files as with --lang."""
+    for lang, name, made in (("c", "dyn.c", ("dyn.c", "dyn.h")), ("st", "dyn.st", ("dyn.st",))):
+        given, implied = tmp_path / f"given_{lang}", tmp_path / f"implied_{lang}"
+        rc, _, err = run(["codegen", "planar2", "--lang", lang, "-o", given / name])
+        assert rc == 0, err
+        rc, _, err = run(["codegen", "planar2", "-o", implied / name])
+        assert rc == 0, err
+        assert sorted(p.name for p in implied.iterdir()) == sorted(made)
+        for f in made:
+            assert (implied / f).read_text() == (given / f).read_text()
 
 
 def test_export_into_a_folder(tmp_path):

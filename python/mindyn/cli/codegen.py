@@ -67,7 +67,8 @@ def register(subparsers) -> None:
     p.add_argument(
         "--lang",
         choices=["c", "st"],
-        help="C99 or Structured Text (needed with -o; --plcopen alone generates Structured Text)",
+        help="C99 or Structured Text (needed with -o unless its FILE ends in .c, .h or .st; "
+        "--plcopen alone generates Structured Text)",
     )
     p.add_argument(
         "--what",

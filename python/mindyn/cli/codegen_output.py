@@ -64,8 +64,11 @@ def _plcopen_path(args: argparse.Namespace, name: str) -> Path:
 def _outputs(args: argparse.Namespace) -> list[tuple[str, Path, bool]]:
     """The files codegen writes (C: NAME.c and NAME.h; ST: the file; the PLCopen XML), for the
     command line's one rule on outputs (a folder given: the files inside it are named later)."""
+    if args.output is not None and args.lang is None and not args.output.into_folder:
+        # the language of a file name that says it
+        args.lang = {".c": "c", ".h": "c", ".st": "st"}.get(Path(args.output).suffix.lower())
     if args.output is not None and args.lang is None:
-        raise UsageError("--lang is required with -o (c or st)")
+        raise UsageError("--lang is required with -o (c or st) unless FILE ends in .c, .h or .st")
     if args.output is None and args.plcopen is None:
         raise UsageError("nothing to write: give -o FILE (with --lang), --plcopen [XML] or both")
     files = []
