@@ -616,6 +616,9 @@ def test_a_motor_that_never_moves_is_named(arm, tmp_path):
             select_friction_model(robot, [held], kind=kind)
 
 
+MOTORS = ["ma", "mb", "mc"]
+
+
 def with_transmission(tmp_path, matrix, motors):
     """The arm of the ``arm`` fixture with the YAML transmission ``matrix`` (rows: motors)."""
     doc = yaml.safe_load(random_arm_yaml(tmp_path / "arm.yaml", n=3, seed=4).read_text())
@@ -652,7 +655,7 @@ def test_the_stribeck_search_pairs_each_motor_with_its_joints(tmp_path, case):
         T = [[0, 0, 30.0], [50.0, 0, 0], [0, -40.0, 0]]
     else:
         T = [[50.0, 0, 0], [0, 40.0, 0], [0, 30.0, 30.0]]
-    robot = with_transmission(tmp_path, T, ["ma", "mb", "mc"])
+    robot = with_transmission(tmp_path, T, MOTORS)
     assert robot.drive_side == "motor"
     top = np.abs(np.asarray(T)).max(axis=1)
     w = np.array([0.15, 0.25, 0.1]) * top
@@ -692,3 +695,24 @@ def test_the_stribeck_search_scores_each_joint_on_its_own_residual_in_the_weight
     at_found, at_truth = (f.joint_residual for f in fits)
     assert np.all(at_found[1:] <= at_truth[1:] * (1 + 1e-9)), (at_found, at_truth)
     assert "(weighted fit)" in choice.record["velocity_rule"]
+
+
+def test_a_given_width_below_the_resolved_speed_is_said(arm, tmp_path):
+    """A width given per joint to a geared robot is |r| times too small for its motors: below
+    the speed at which the data resolve each motor's sign (the width the data give, scaled
+    here by hand from the joint side's), which the rule names; a width above it says nothing."""
+    log = make_log(arm, "smooth", np.array([0.05, 0.08, 0.03]), FV, FC, 0.0, noise=0.01, seed=5)
+    motor = geared(arm, tmp_path, RATIOS)
+    joint_w = np.asarray(
+        select_friction_model(motor.with_drive_side("joint"), [log], kind="smooth").record[
+            "velocity"
+        ]
+    )
+    small = select_friction_model(motor, [log], kind="smooth", width=joint_w).record
+    rule = small["velocity_rule"]
+    assert rule.startswith("given; below the speed at which the data resolve the sign"), rule
+    assert "motor(s) m1, m2, m3" in rule and "|r| times a joint's" in rule, rule
+    for v in np.abs(RATIOS) * joint_w:
+        assert f"{v:.3g}" in rule, (v, rule)
+    ok = select_friction_model(motor, [log], kind="smooth", width=2 * np.abs(RATIOS) * joint_w)
+    assert ok.record["velocity_rule"] == "given"

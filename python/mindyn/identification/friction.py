@@ -163,6 +163,27 @@ def _noise_width(robot: Robot, logs) -> tuple[np.ndarray, str]:
     return w, rule
 
 
+def _unresolved(robot: Robot, logs, width: np.ndarray) -> str:
+    """Words on the slots whose given tanh ``width`` lies below the speed at which the data
+    resolve the sign of their velocity (:func:`_noise_width`, the derived width), or ''."""
+    floor = _noise_width(robot, logs)[0]
+    low = np.flatnonzero(width < floor)
+    if not low.size:
+        return ""
+    _, slot = _slots(robot)
+    names = (
+        [robot.transmission.motors[k] for k in low]
+        if slot == "motor" and robot.transmission is not None
+        else [str(k + 1) for k in low]
+    )
+    return (
+        f"; below the speed at which the data resolve the sign for {slot}(s) "
+        f"{', '.join(names)} ({' '.join(f'{floor[k]:.3g}' for k in low)}): tanh(v / w) is "
+        "sign(v) there, the Coulomb model"
+        + (" (a motor's width is in its units: |r| times a joint's)" if slot == "motor" else "")
+    )
+
+
 def smooth_width(robot: Robot, logs) -> tuple[np.ndarray, str]:
     """The smooth model's tanh width per slot of ``robot`` (the joints, or the motors on the
     motor side, in their units) from the velocities of ``logs`` (see the module
@@ -455,7 +476,7 @@ def select_friction_model(
         rec: dict = {"kind": k, "velocity": None}
         if k == "smooth":
             if given_width is not None:
-                w, rule = given_width, "given"
+                w, rule = given_width, "given" + _unresolved(robot, logs, given_width)
             else:
                 w, rule = smooth_width(robot, logs)
             rec.update(velocity=[float(v) for v in w], velocity_rule=rule)
