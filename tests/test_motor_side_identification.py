@@ -217,7 +217,8 @@ def test_cli_identifies_a_coupled_urdf_log_on_the_motors(arms, tmp_path):
 def test_a_motor_that_never_moves_is_named_though_its_joints_move(arms):
     """Joints 5 and 6 of the four-bar wrist move with q5 + q6 constant: motor 6 stands still,
     so its friction and rotor inertia have no effect; the rank message names the motor (its
-    joints do move) and the options that would lift it."""
+    joints do move) and the options that would lift it, and says why motor 5's terms, though
+    it moves, have none: every equation of joint 5 is left out at motor 6's rest."""
     robot, base, _, _, params = arms["wrist6"]
     t = np.arange(0, 20, 1 / 250)
     rng = np.random.default_rng(1)
@@ -235,6 +236,11 @@ def test_a_motor_that_never_moves_is_named_though_its_joints_move(arms):
     msg = str(e.value)
     assert "Motor(s) 'm6' never move" in msg, msg
     assert "leave out friction=True and rotor=True" in msg and "Joint(s)" not in msg
+    # motor 5 moves, but joint 5's equations are all left out (motor 6 acts on joint 5 too)
+    assert (
+        "Motor(s) 'm5' move, but every equation of the joints they act on is left out: "
+        "motor(s) 'm6' acting on those joints never reach min_velocity" in msg
+    ), msg
 
 
 def test_a_direction_dependent_coulomb_term_on_a_motor_is_named_beside_the_offsets(arms):

@@ -440,9 +440,38 @@ def _rank_remedies(concerned: list[str], logs, speed: float, robot=None) -> list
     names = [f"'{m}'" for m in motors]
     # the joints' offsets span every constant joint torque, so a motor's direction-dependent
     # Coulomb term (a constant T^T column whenever the motor moves) is inseparable from them
-    return _remedies(drive, vm, speed, "Motor(s) {}", names, offsets=bool(offsets)) + _remedies(
-        offsets, dq, speed, "Joint(s) {}"
+    return (
+        _remedies(drive, vm, speed, "Motor(s) {}", names, offsets=bool(offsets))
+        + _left_out(drive, vm, T, speed, names)
+        + _remedies(offsets, dq, speed, "Joint(s) {}")
     )
+
+
+def _left_out(kinds: dict, vm: np.ndarray, T: np.ndarray, speed: float, names) -> list[str]:
+    """The remedy for motors of ``kinds`` (1-based) that move but whose joints have no equation
+    left: a joint's equation is left out where a motor acting on it is slower than ``speed``
+    (:func:`~mindyn.identification.models.moving_equations`; ``vm`` the motors' speeds in joint
+    units), so a motor turning with a joint whose other motor never moves has no effect."""
+    if not speed > 0 or not vm.size:
+        return []
+    slow = np.abs(vm) < speed
+    empty = np.all((slow.astype(float) @ (T != 0).astype(float)) > 0, axis=0)  # per joint
+    moving = ~np.all(slow, axis=0)
+    hidden = [k for k in sorted(kinds) if moving[k - 1] and np.all(empty[T[k - 1] != 0])]
+    if not hidden:
+        return []
+    culprits = [k for k in range(T.shape[0]) if not moving[k] and np.any(T[k, empty] != 0)]
+    return [
+        f"Motor(s) {', '.join(names[k - 1] for k in hidden)} move, but every equation of the "
+        "joints they act on is left out: "
+        + (
+            f"motor(s) {', '.join(names[k] for k in culprits)} acting on those joints never reach"
+            if culprits
+            else "at every sample a motor acting on those joints is below"
+        )
+        + f" min_velocity ({speed:g} rad/s | m/s), below which an equation is left out; "
+        "lower min_velocity, or move them."
+    ]
 
 
 def _remedies(
