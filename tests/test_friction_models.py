@@ -671,32 +671,6 @@ def test_the_stribeck_search_pairs_each_motor_with_its_joints(tmp_path, case):
             assert got == pytest.approx(want[k], rel=1e-5), (nm, k, got, want[k])
 
 
-def test_the_stribeck_search_scores_each_joint_on_its_own_residual_in_the_weighted_fit(arm):
-    """Joint 1 noisy (noise of its RMS torque), joints 2 and 3 quiet (0.2 %): in the first
-    ordinary fit the quiet joints' residuals carry joint 1's noise through the parameters they
-    share, and the search on them put their Stribeck velocities 5 % and 17 % off the truth
-    written into the log. Scored on each joint's residual in the weighted fit, the quiet joints'
-    velocities are found to 1 %, and each joint's residual there is no larger than at the
-    true velocities (the search's minimum)."""
-    w, f3 = np.array([0.15, 0.25, 0.1]), np.array([1.0, 0.7, 0.5])
-    rng = np.random.default_rng(0)
-    t = np.arange(0, 8.0, 1 / 200.0)
-    q, dq, ddq = multisine(arm.n, t, rng)
-    tau = arm.inverse_dynamics(q, dq, ddq) + friction_formula("stribeck", dq, w, FV, FC, f3)
-    tau = tau + np.array([1.0, 0.002, 0.002]) * tau.std(axis=0) * rng.standard_normal(tau.shape)
-    log = JointData(t, q, dq, ddq, tau, "noisy joint 1")
-    choice = select_friction_model(arm, [log], kind="stribeck", fit={"min_velocity": 0.0})
-    found = np.asarray(choice.record["velocity"])
-    np.testing.assert_allclose(found[1:], w[1:], rtol=0.01)
-    fits = [
-        identify(choice.robot, log, base=b, rsd_threshold=None, min_velocity=0.0)
-        for b in (choice.base, choice.base.with_friction_velocity(w))
-    ]
-    at_found, at_truth = (f.joint_residual for f in fits)
-    assert np.all(at_found[1:] <= at_truth[1:] * (1 + 1e-9)), (at_found, at_truth)
-    assert "(weighted fit)" in choice.record["velocity_rule"]
-
-
 def test_a_given_width_below_the_resolved_speed_is_said(arm, tmp_path):
     """A width given per joint to a geared robot is |r| times too small for its motors: below
     the speed at which the data resolve each motor's sign (the width the data give, scaled

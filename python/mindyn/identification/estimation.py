@@ -83,9 +83,6 @@ class IdentificationResult:
     joint_sigma : ndarray (n,), optional
         Dynamic and integral models: per-joint residual standard deviations of the first OLS
         pass, the weights' inverse (WLS).
-    joint_residual : ndarray (n,), optional
-        Dynamic and integral models, weighted: each joint's RMS residual (its equations, not
-        weighted) in the weighted fit with every base parameter, before pruning.
     cond : float
         Condition number of the stacked regressor (unweighted, equations left out by
         ``min_velocity`` excluded) with its columns scaled to unit norm.
@@ -117,12 +114,11 @@ class IdentificationResult:
     #: The final (weighted) least-squares problem reduced to its triangle, for estimates under
     #: constraints on the same residual (:mod:`~mindyn.identification.consistent`).
     reduced: _Reduced | None = field(default=None, repr=False, compare=False)
-    joint_residual: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         # the arrays read-only copies (as a Robot's): an entry assigned raises, instead of
         # making values disagree with full, which predict() uses
-        for name in ("values", "std", "rsd", "full", "joint_sigma", "joint_residual"):
+        for name in ("values", "std", "rsd", "full", "joint_sigma"):
             if getattr(self, name) is not None:
                 setattr(self, name, _args.readonly(getattr(self, name)))
         self.initial = {
@@ -1376,7 +1372,6 @@ def identify(
         )
     if model != "energy":
         joint_sigma = None
-    joint_residual = None
     if weighted and model == "energy":
         if row_sd is not None:
             w = 1.0 / row_sd
@@ -1398,12 +1393,6 @@ def identify(
         w = joint_weights(joint_sigma)
         ls = _Reduced.from_triangle(_triangle(np.vstack([wj * Sj for wj, Sj in zip(w, S)])), rows)
         settings["weighting"] = "per-joint 1/sigma_j from a first OLS pass"
-        # each joint's own residual in the weighted fit, which the friction models' velocity
-        # searches minimise: in the OLS pass a quiet joint's residual carries the noisy
-        # joints' errors through the parameters they share
-        p, _, _ = ls.solve(list(range(nb)))
-        rss = np.array([float(np.sum((Sj @ np.append(p, -1.0)) ** 2)) for Sj in S])
-        joint_residual = np.sqrt(np.where(joint_rows > 0, rss / np.maximum(joint_rows, 1), 0.0))
     else:
         settings["weighting"] = "none (ordinary least squares)"
 
@@ -1427,7 +1416,6 @@ def identify(
     return _pruned_result(
         model, base, ls, settings, inflation, rsd_threshold,
         weighted=weighted, joint_sigma=joint_sigma, cond=cond, t0=t0,
-        joint_residual=joint_residual,
     )  # fmt: skip
 
 
@@ -1443,7 +1431,6 @@ def _pruned_result(
     joint_sigma,
     cond: float,
     t0: float,
-    joint_residual: np.ndarray | None = None,
 ) -> IdentificationResult:
     """The estimate of the reduced problem ``ls`` (its variance times ``inflation``) pruned at
     ``rsd_threshold`` (None or <= 0: every base parameter kept), as :func:`identify` returns
@@ -1512,7 +1499,6 @@ def _pruned_result(
         settings=settings,
         seconds=time.perf_counter() - t0,
         reduced=ls,
-        joint_residual=joint_residual,
     )
 
 
@@ -1528,5 +1514,5 @@ def repruned(res: IdentificationResult, rsd_threshold: float | None) -> Identifi
     return _pruned_result(
         res.model, res.base, res.reduced, settings, noise_variance_factor(res), rsd_threshold,
         weighted=res.weighted, joint_sigma=res.joint_sigma, cond=res.cond,
-        t0=time.perf_counter() - res.seconds, joint_residual=res.joint_residual,
+        t0=time.perf_counter() - res.seconds,
     )  # fmt: skip

@@ -33,10 +33,7 @@ state and refuse an identification with it.
   ``min_velocity``, below which they have no equation) to its largest speed, then a
   golden-section search on ``log w`` between the grid neighbours of the best point, all joints
   at once (one fit per step: each joint's velocity changes only its own equations' friction
-  column), the objective of joint ``j`` its own residual in the weighted fit (each joint's
-  equations weighted by the first ordinary pass's 1 / sigma_j, as the fit weighs them): in the
-  ordinary pass a quiet joint's residual carries the noisy joints' errors through the
-  parameters they share, which moved a wrist motor's Stribeck velocity 11 % off its truth.
+  column), the objective of joint ``j`` its residual in the first (ordinary least-squares) fit.
   The energy model has one equation for all joints: there the joints are searched one after
   the other on the overall residual.
 - ``dahl``: ``sigma_j`` is found by the same search (:func:`dahl_search`) on a log-spaced grid
@@ -213,8 +210,7 @@ def _fit(base: BaseParameters, logs, fit: dict):
 
 
 def _objective(base: BaseParameters, logs, fit: dict, per_joint: bool) -> np.ndarray:
-    """The fit's residual per joint (each joint's own in the weighted fit) or overall; inf
-    where the fit fails."""
+    """The fit's residual per joint (first OLS pass) or overall; inf where the fit fails."""
     from .errors import RankDeficientError
 
     n = base.robot.n
@@ -222,8 +218,8 @@ def _objective(base: BaseParameters, logs, fit: dict, per_joint: bool) -> np.nda
         res = _fit(base, logs, {**fit, "rsd_threshold": None, "weighted": True})
     except (RankDeficientError, np.linalg.LinAlgError):
         return np.full(n, np.inf)
-    if per_joint and res.joint_residual is not None:
-        return np.asarray(res.joint_residual, float)
+    if per_joint and res.joint_sigma is not None:
+        return np.asarray(res.joint_sigma, float)
     return np.full(n, res.sigma)
 
 
@@ -343,7 +339,7 @@ def _log_search(robot: Robot, make, lo, hi, logs, fit: dict) -> tuple[np.ndarray
             x[j] = _golden(f, grid, best, np.array([j]), start=x)[j]
     record = {
         "search": (
-            "all slots at once, each on the residuals of the joints it acts on (weighted fit)"
+            "all slots at once, each on the residuals of the joints it acts on (first OLS fit)"
             + (
                 ", slots acting on a joint in common one after the other on their joints' "
                 f"residuals ({passes} passes)"
