@@ -245,7 +245,8 @@ def stribeck_search(base: BaseParameters, logs, *, fit: dict) -> tuple[np.ndarra
     hi = np.log(top)
     x, record = _log_search(robot, lambda w: base.with_friction_velocity(w), lo, hi, logs, fit)
     record["search"] = (
-        f"log-spaced grid of {GRID_POINTS} velocities from the joint's velocity noise level "
+        f"log-spaced grid of {GRID_POINTS} velocities from each joint's (on the motor side each "
+        "motor's) velocity noise level "
         "(the smooth width rule; the dynamic and integral models: at least their min_velocity) "
         "to its "
         f"largest speed, then {GOLDEN_STEPS} golden-section steps on log velocity, "
@@ -382,7 +383,8 @@ def dahl_search(base: DahlBase, logs, *, fit: dict) -> tuple[np.ndarray, dict]:
     hi = np.maximum(hi, lo + math.log(10.0))
     sigma, record = _log_search(robot, base.with_sigma, lo, hi, logs, fit)
     record["search"] = (
-        f"log-spaced grid of {GRID_POINTS} values of sigma from 2 / the joint's range of motion "
+        f"log-spaced grid of {GRID_POINTS} values of sigma from 2 / each joint's (on the motor "
+        "side each motor's) range of motion "
         "to 1 / (its velocity noise level (the smooth width rule) x the logged sample interval), "
         f"then {GOLDEN_STEPS} golden-section steps on log sigma, " + record["search"]
     )
