@@ -187,7 +187,7 @@ def test_identification_of_a_rounded_pi_robot_matches_the_truth(rng):
     report = run(robot, log, rsd_threshold=0.0)
     base, res = report.base, report.result
     truth = base.values(robot.params)
-    assert res.names == base.names  # rsd_threshold=0: every base parameter kept
+    assert list(res.names) == list(base.names)  # rsd_threshold=0: every base parameter kept
     est, std = np.asarray(res.values), np.asarray(res.std)
     assert np.all(np.abs(est - truth) <= 5 * std + 1e-9 * np.abs(truth).max()), (
         np.abs(est - truth) / std
