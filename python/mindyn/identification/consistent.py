@@ -194,13 +194,18 @@ class _Layout:
         self.nonneg = np.array([k in ("Ia", "Fv", "Fc") for k in kinds], dtype=bool)
         rows = [np.eye(len(kinds))[i] for i in np.flatnonzero(self.nonneg)]
         at = {names[i]: a for a, i in enumerate(self.extra)}
-        for name, a in at.items():  # a third friction term and the slot's Fc
-            kind = _name_kind(name)
-            if kind in ("Fs", "Fa") and "Fc" + name[2:] in at:
-                for sign in (1.0,) if kind == "Fs" else (1.0, -1.0):
-                    row = np.zeros(len(kinds))
-                    row[at["Fc" + name[2:]]], row[a] = 1.0, sign
-                    rows.append(row)
+        #: (kind, index of Fc, index of the third term) in pi: each third friction term
+        self.pairs = [
+            (_name_kind(name), int(self.extra[at["Fc" + name[2:]]]), int(self.extra[a]))
+            for name, a in at.items()
+            if _name_kind(name) in ("Fs", "Fa") and "Fc" + name[2:] in at
+        ]
+        inside = {int(i): a for a, i in enumerate(self.extra)}
+        for kind, fc, third in self.pairs:
+            for sign in (1.0,) if kind == "Fs" else (1.0, -1.0):
+                row = np.zeros(len(kinds))
+                row[inside[fc]], row[inside[third]] = 1.0, sign
+                rows.append(row)
         self.B = np.array(rows, dtype=float).reshape(len(rows), len(kinds))
         self.robot_params = len(names) - (n if base.offset else 0)
 
@@ -214,11 +219,9 @@ class _Layout:
         (solver tolerance)."""
         nonneg = self.extra[self.nonneg]
         pi[nonneg] = np.maximum(pi[nonneg], 0.0)
-        for name, i in ((self.names[i], i) for i in self.extra):
-            kind = _name_kind(name)
-            if kind in ("Fs", "Fa") and "Fc" + name[2:] in self.names:
-                fc = pi[self.names.index("Fc" + name[2:])]
-                pi[i] = max(pi[i], -fc) if kind == "Fs" else min(max(pi[i], -fc), fc)
+        for kind, fc, third in self.pairs:
+            lo, hi = -pi[fc], (np.inf if kind == "Fs" else pi[fc])
+            pi[third] = min(max(pi[third], lo), hi)
 
 
 # ---------------------------------------------------------------------------------------------
