@@ -340,6 +340,69 @@ def test_currents_times_gains_are_the_torques(drive_arm, tmp_path, capsys):
     assert docs[0]["fit"]["nrms"][1] is None and docs[0]["fit"]["nrms_missing_limit"] == [2]
 
 
+def test_recorded_drive_gains_are_not_applied_to_a_log_of_torques(drive_arm, tmp_path, capsys):
+    """An identification of currents through --drive-gain records the gains. ``predict`` and
+    ``detect`` on a log of torques refused it, naming --drive-gain, which the user had not
+    given. The recorded gains now apply to logs of currents only; gains given still refuse."""
+    robot, arm, K = drive_arm
+    K = -0.5 * K  # not the drive table's: the recorded gains are the ones applied
+    log = simulate_inverse(robot, random_trajectory(robot, seed=4), rate=100.0, friction=True)
+    cur = tmp_path / "i.csv"
+    np.savetxt(
+        cur,
+        np.column_stack([log.t, log.q, log.dq, log.tau / K]),
+        delimiter=",",
+        header="t,q1,q2,q3,dq1,dq2,dq3,i1,i2,i3",
+        comments="",
+        fmt="%.17g",
+    )
+    tau = write_csv(tmp_path / "tau.csv", log.t, log.q, log.tau, dq=log.dq)
+    gains = ",".join(f"{k:.17g}" for k in K)
+    doc = tmp_path / "id.json"
+    argv = ["identify", arm, str(cur), "--drive-gain", gains, "--friction", "--json", str(doc)]
+    assert cli.main(argv) == 0, capsys.readouterr().err
+    capsys.readouterr()
+    out = {}
+    for name, p in (("currents", cur), ("torques", tau)):
+        csv = tmp_path / f"pred_{name}.csv"
+        assert cli.main(["predict", arm, str(doc), str(p), "-o", str(csv)]) == 0
+        out[name] = np.genfromtxt(csv, delimiter=",", names=True)
+        text = capsys.readouterr().out
+        assert ("recorded for the identification's currents are not applied" in text) is (
+            name == "torques"
+        )
+    for j in range(1, 4):  # the same motion, the same torques: K i of the one, tau of the other
+        np.testing.assert_allclose(
+            out["torques"][f"tau{j}"], out["currents"][f"tau{j}"], rtol=1e-9, atol=1e-12
+        )
+        np.testing.assert_allclose(
+            out["torques"][f"tau_hat{j}"], out["currents"][f"tau_hat{j}"], rtol=1e-8, atol=1e-10
+        )
+    residuals = []
+    for p in (cur, tau):
+        assert cli.main(["detect", arm, str(doc), str(p)]) == 0
+        text = capsys.readouterr().out
+        residuals.append(text[text.index("residual |r|") :].splitlines()[1:4])
+    assert residuals[0] == residuals[1]
+    # gains given for a log of torques are still refused
+    assert (
+        cli.main(
+            [
+                "predict",
+                arm,
+                str(doc),
+                str(tau),
+                "-o",
+                str(tmp_path / "x.csv"),
+                "--drive-gain",
+                gains,
+            ]
+        )
+        == 2
+    )
+    assert "holds torques in N m, not motor currents" in capsys.readouterr().err
+
+
 def test_currents_of_a_urdf_without_gains_ask_for_the_gains_not_a_yaml_table(tmp_path, capsys):
     """A URDF has no drive table: the refusal of a current log without --drive-gain asks for
     the gains, not for a drive table in a YAML file the robot does not have."""

@@ -18,8 +18,10 @@ from .robot_options import add_robot, load_robot
 CALIBRATE_ONLY = ("quantile", "margin", "model_sigma")
 
 
-def _read_log(path, robot, doc, args):
-    from ..identification.data import DataError, read_csv, read_truth
+def _read_log(path, robot, doc, args) -> tuple:
+    """The log at ``path`` read as the identification ``doc`` records (options given win), and a
+    note when the recorded drive gains were not applied (None otherwise)."""
+    from ..identification.data import DataError, UnusedGainError, read_csv, read_truth
 
     read_truth(path, robot)  # a simulated log of another robot is refused
     reading = doc.get("reading") or {}
@@ -27,14 +29,26 @@ def _read_log(path, robot, doc, args):
     gain = args.drive_gain or reading.get("drive_gain")
     gain = np.array(joint_values(gain, robot.n, "--drive-gain", broadcast=True)) if gain else None
     columns = args.columns or reading.get("columns")
-    data = read_csv(
-        path, robot=robot, torque_unit=unit, filter="none", drive_gain=gain, columns=columns
-    )
+    try:
+        data = read_csv(
+            path, robot=robot, torque_unit=unit, filter="none", drive_gain=gain, columns=columns
+        )
+    except UnusedGainError:
+        if args.drive_gain:
+            raise
+        # the recorded gains converted the identification's currents; this log holds torques
+        data = read_csv(path, robot=robot, torque_unit=unit, filter="none", columns=columns)
+        note = (
+            "  the log holds torques, not motor currents: the drive gains recorded for the "
+            "identification's currents are not applied"
+        )
+    else:
+        note = None
     if data.tau is None:
         raise DataError(
             f"{path}: has no torque columns tau1..tau{robot.n}; the observer needs them"
         )
-    return data
+    return data, note
 
 
 def _external_spans(path) -> list:
@@ -97,7 +111,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
     thresholds = load_thresholds(args.thresholds, robot) if args.thresholds else None
     if thresholds is not None:
         _same_model(thresholds, base, values, estimate, args)
-    data = _read_log(args.log, robot, doc, args)
+    data, gain_note = _read_log(args.log, robot, doc, args)
     t = data.t
     steps = np.diff(t)
     period = float(np.median(steps))
@@ -137,6 +151,8 @@ def cmd_detect(args: argparse.Namespace) -> int:
         f"(median step {period * 1e3:.4g} ms, {steps.min() * 1e3:.4g} to "
         f"{steps.max() * 1e3:.4g} ms)"
     )
+    if gain_note:
+        print(gain_note)
     if "columns" in data.processing:
         from ..identification.columns import describe
 

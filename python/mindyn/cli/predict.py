@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from dataclasses import replace
 
 from .args import UsageError, add_command
 from .columns import add_columns
@@ -12,6 +13,7 @@ from .robot_options import add_robot, load_robot
 
 
 def cmd_predict(args: argparse.Namespace) -> int:
+    from ..identification.data import UnusedGainError
     from ..identification.document import read_identification
     from ..identification.options import ReadingOptions
     from ..identification.prediction import identified_model, predict
@@ -46,7 +48,16 @@ def cmd_predict(args: argparse.Namespace) -> int:
         topic=args.topic or reading.get("topic"),
         columns=args.columns or reading.get("columns"),
     )
-    logs = read_log(args.log, robot, options=opts, decimate=False, require_torque=False)
+    unapplied = False  # the recorded drive gains, for a log of torques
+    try:
+        logs = read_log(args.log, robot, options=opts, decimate=False, require_torque=False)
+    except UnusedGainError:
+        if args.drive_gain is not None:
+            raise
+        # the recorded gains converted the identification's currents; this log holds torques
+        opts = replace(opts, drive_gain=None)
+        logs = read_log(args.log, robot, options=opts, decimate=False, require_torque=False)
+        unapplied = True
     pred = predict(args.identification, logs, robot=robot, estimate=estimate)
     path = pred.write_csv(args.output)
     cutoff = opts.cutoff
@@ -73,6 +84,11 @@ def cmd_predict(args: argparse.Namespace) -> int:
         + (("given: " + ", ".join(stated)) if stated else "")
         + f"): {how}"
     )
+    if unapplied:
+        print(
+            "  the log holds torques, not motor currents: the drive gains recorded for the "
+            "identification's currents are not applied"
+        )
     cols = "t, q, dq, ddq (the motion evaluated), tau_hat" + (
         ", tau (as logged, N m)" if pred.tau is not None else ""
     )

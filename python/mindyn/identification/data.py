@@ -64,6 +64,10 @@ class DataError(Error, ValueError):
     """Malformed or unusable joint data (names the file, line and column)."""
 
 
+class UnusedGainError(DataError):
+    """Drive gains given for a log whose torques are not motor currents (refuse_unused_gain)."""
+
+
 class DataFileNotFoundError(Error, FileNotFoundError):
     """A data file that does not exist."""
 
@@ -345,7 +349,7 @@ def read_csv(
         )
     except DataError as e:
         # column names from the file may hold line breaks; the message stays one line
-        raise DataError(_CONTROL.sub(lambda m: repr(m.group())[1:-1], str(e))) from None
+        raise type(e)(_CONTROL.sub(lambda m: repr(m.group())[1:-1], str(e))) from None
 
 
 def _joint_names(robot) -> list[str] | None:
@@ -674,7 +678,7 @@ def refuse_unused_gain(drive_gain, where, torque: dict | None, remedy: str) -> N
     currents are read instead."""
     if drive_gain is None or torque is None or torque["unit"].startswith("motor current"):
         return
-    raise DataError(
+    raise UnusedGainError(
         f"drive_gain=: {where} holds torques in {torque['unit']}, not motor currents, which the "
         f"gains convert into torques; expected {remedy}, or no drive_gain="
     )
