@@ -208,7 +208,6 @@ def _joint_side_terms(
         return terms, []
     assert robot.transmission is not None  # the motor side has one
     T = robot.transmission.T
-    motors = robot.transmission.motors
     zeros = np.zeros(robot.n)
     out = JointTerms(
         terms.inertial,
@@ -238,14 +237,35 @@ def _joint_side_terms(
         "motor's as they act on the joint (r^2 Ia, r^2 Fv, |r| Fc, r the reduction)"
     ]
     if coupled:
-        names = ", ".join(f"'{robot.joint_names[j]}'" for j in coupled)
-        via = sorted({motors[k] for j in coupled for k in np.flatnonzero(T[:, j])})
-        notes.append(
-            f"joints {names}: the rotor inertia and friction of motors "
-            f"{', '.join(repr(m) for m in via)}, which turn with several joints, cannot be "
-            f"written per joint: 0 there; the motor values are {kept}"
-        )
+        notes.append(_coupled_note(robot, coupled, kept))
     return out, notes
+
+
+def _coupled_note(robot: Robot, coupled: list[int], kept: str) -> str:
+    """The note on the joints whose terms cannot be written per joint, saying why of each of
+    their motors: it turns with several joints, or it drives one joint that other motors drive
+    too (a coupled wrist's first motor)."""
+    assert robot.transmission is not None  # the motor side has one
+    T, motors = robot.transmission.T, robot.transmission.motors
+    via = sorted({int(k) for j in coupled for k in np.flatnonzero(T[:, j])})
+    several = [k for k in via if np.count_nonzero(T[k]) > 1]
+    shared = [k for k in via if k not in several]
+    reasons = []
+    if several:
+        verb = "turns" if len(several) == 1 else "turn"
+        reasons.append(f"{', '.join(repr(motors[k]) for k in several)} {verb} with several joints")
+    if shared:
+        alone = ", ".join(
+            f"{motors[k]!r} drives {robot.joint_names[int(np.flatnonzero(T[k])[0])]!r}"
+            for k in shared
+        )
+        reasons.append(f"{alone}, which other motors drive too")
+    names = ", ".join(f"'{robot.joint_names[j]}'" for j in coupled)
+    return (
+        f"joints {names}: the rotor inertia and friction of motors "
+        f"{', '.join(repr(motors[k]) for k in via)} cannot be written per joint "
+        f"({'; '.join(reasons)}): 0 there; the motor values are {kept}"
+    )
 
 
 def unread_transmission_notes(robot: Robot, written: str) -> list[str]:

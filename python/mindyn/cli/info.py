@@ -45,14 +45,19 @@ def _transmission_lines(robot) -> list[str]:
     ]
     w = max([5] + [len(m) for m in tr.motors]) + 1
     wt = max([4] + [len(t) for t in tr.types]) + 1
-    out.append(f"{'#':<3} {'motor':<{w}}{'type':<{wt}}q_m")
+    # the torque constants currents are converted with (identify --torque-unit current)
+    kt = np.asarray(tr.torque_constant, dtype=float)
+    given = bool(np.isfinite(kt).any())
+    head = f"{'K_t [N m/A]':>12}  " if given else ""
+    out.append(f"{'#':<3} {'motor':<{w}}{'type':<{wt}}{head}q_m")
     for i, motor in enumerate(tr.motors):
         terms = [
             f"{tr.T[i, k]:+.6g} {robot.joint_names[k]}" for k in range(robot.n) if tr.T[i, k] != 0.0
         ]
         if tr.offset[i] != 0.0:
             terms.append(f"{tr.offset[i]:+.6g}")
-        out.append(f"{'m' + str(i + 1):<3} {motor:<{w}}{tr.types[i]:<{wt}}{' '.join(terms)}")
+        cell = (f"{kt[i]:>12.6g}  " if np.isfinite(kt[i]) else f"{'-':>12}  ") if given else ""
+        out.append(f"{'m' + str(i + 1):<3} {motor:<{w}}{tr.types[i]:<{wt}}{cell}{' '.join(terms)}")
     return out
 
 
