@@ -10,6 +10,7 @@ import mindyn
 import numpy as np
 import pytest
 import yaml
+from mindyn import cli
 from mindyn.export import write_urdf, write_yaml
 from mindyn.identification.currents import attach_currents
 from mindyn.identification.data import read_csv, write_csv
@@ -835,3 +836,33 @@ def test_a_transmission_naming_a_floating_or_planar_joint_is_refused_in_one_line
     assert main(argv) != 0
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and f"joint '{joint}' is a {kind} joint" in err
+
+
+def test_currents_of_joints_without_a_transmission_beside_geared_ones_are_said(tmp_path, capsys):
+    """A URDF that declares the transmission of joint 2 only: joints 1 and 3 are driven
+    directly, so their currents become their torques at ratio 1. A wrist left out of the
+    description by mistake gave torques 50 to 80 times too small that the unit check, blind to
+    friction-dominated joints, took silently; the conversion now says which joints it took as
+    driven directly."""
+    robot = load_text(tmp_path, arm_urdf(3, simple("t2", "j2", "m2", 9.0)))
+    t = np.arange(300) * 0.01
+    w = np.arange(1, 4)
+    q = 0.5 * np.sin(0.7 * w * t[:, None])
+    dq = 0.35 * w * np.cos(0.7 * w * t[:, None])
+    i = np.column_stack([np.sin(t), np.cos(2 * t), np.sin(3 * t + 1)])  # motors m2, j1, j3
+    Kt = np.array([0.2, 3.0, 4.0])
+    log = write_csv(tmp_path / "log.csv", t, q, i, dq=dq, torque_unit="current")
+    data = read_csv(log, robot=robot, drive_gain=Kt)
+    expected = np.column_stack([3.0 * i[:, 1], 9.0 * 0.2 * i[:, 0], 4.0 * i[:, 2]])  # by hand
+    rows = np.searchsorted(t, data.t)
+    np.testing.assert_allclose(data.tau, expected[rows], rtol=1e-9, atol=1e-9)  # 12 digits
+    assert data.processing["torque"]["direct"] == ["j1", "j3"]
+    argv = ["identify", str(tmp_path / "arm.urdf"), str(log), "--drive-gain", "0.2,3,4"]
+    assert cli.main(argv + ["--rsd-threshold", "0"]) == 0, capsys.readouterr().err
+    out = capsys.readouterr().out
+    assert "joint(s) j1, j3 without a transmission in the description: driven directly" in out
+    # every motor declared: nothing to say
+    both = simple("t1", "j1", "m1", 5.0) + simple("t2", "j2", "m2", 9.0)
+    both += simple("t3", "j3", "m3", 7.0)
+    robot = load_text(tmp_path, arm_urdf(3, both), name="all.urdf")
+    assert read_csv(log, robot=robot, drive_gain=Kt).processing["torque"]["direct"] == []

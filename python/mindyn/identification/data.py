@@ -761,11 +761,15 @@ def current_gains(robot=None, *, drive_gain=None) -> tuple[np.ndarray, dict]:
             "(drive_gain=, Kt1,...,Ktn in N m/A, motor side: the description's transmissions "
             "apply the gear ratios and couplings)"
         )
+    # motors the description does not declare (a joint without a transmission beside geared
+    # ones): their currents become the joint's torque at ratio 1, which is said
+    direct = [m for m, ty in zip(tr.motors, tr.types) if ty == "direct"]
     return Kt[:, None] * tr.T, {
         "scale_Nm_per_unit": Kt.tolist(),
         "formula": f"T^T (torque constant x current) ({source}; T of the transmissions)",
         "transmission_T": tr.T.tolist(),
         "reversed": [f"motor {tr.motors[k]}" for k in np.flatnonzero(Kt < 0)],
+        "direct": direct if len(direct) < len(tr.motors) else [],
     }
 
 

@@ -182,6 +182,12 @@ def _settings(report) -> list[str]:
                 if proc["torque"].get("reversed")
                 else ""
             )
+            + (
+                f"; joint(s) {', '.join(proc['torque']['direct'])} without a transmission in "
+                "the description: driven directly (ratio 1), their torque the gain x current"
+                if proc["torque"].get("direct")
+                else ""
+            )
         )
     return out
 
