@@ -382,3 +382,23 @@ def test_code_is_not_generated_from_the_base_parameters_of_another_robot():
         rtol=1e-12,
         atol=1e-12,
     )
+
+
+def test_simulate_names_bad_noise_a_bad_controller_torque_and_parameters_of_no_body():
+    """Three inputs of ``simulate`` that reached numpy or the plant as a bare ValueError (not a
+    mindyn.Error): a noise level given as text or None, a controller returning text, and true
+    parameters whose mass matrix is not positive definite (the PUMA's negated: -M(q))."""
+    ref = control.SumOfSines(ROBOT, period=1.0)
+    for value, given in (("a", "a str 'a'"), (None, "None")):
+        with pytest.raises(mindyn.ArgumentError, match=f"torque noise is {given}; expected"):
+            control.simulate(ROBOT, ref, duration=0.1, noise=control.SensorNoise(torque=value))
+    with pytest.raises(mindyn.ArgumentError, match=r"controller returned a str 'x' at t = 0 s"):
+        control.simulate(ROBOT, ref, lambda *a: "x", duration=0.1)
+    puma = mindyn.load("puma560")
+    q0 = np.zeros(6)
+    assert np.linalg.eigvalsh(puma.mass_matrix(q0, -puma.params)).max() < 0  # -M(q)
+    with pytest.raises(mindyn.ArgumentError, match="params: the simulated robot's mass matrix"):
+        control.simulate(puma, control.SumOfSines(puma), duration=0.1, params=-puma.params)
+    # good values still run: a noise-free log equals its truth
+    res = control.simulate(ROBOT, ref, duration=0.1, noise=control.SensorNoise(torque=[0, 0]))
+    np.testing.assert_array_equal(res.tau, res.tau_true)
