@@ -1258,3 +1258,24 @@ def test_base_parameter_lists_and_reports_do_not_change_under_their_users():
         np.testing.assert_array_equal(bp.sets[kind]["Y"], fresh.sets[kind]["Y"])
     header = codegen.generate(robot, base=bp, name="p560").header
     assert "junk" not in header and fresh.formulas[0] in header
+
+
+def test_the_mapping_of_sets_and_the_symbolic_formulas_do_not_change_under_their_users():
+    """``sets`` itself (not only each set) is read-only: replacing or deleting a set was kept
+    and broke ``margin`` and ``no_effect`` for every later user. ``symbolic()`` gives each
+    caller its own lists and dicts: an edit of one was the next caller's formulas."""
+    bp = mindyn.base_parameters("puma560")
+    fresh = mindyn.base_parameters("puma560")
+    with pytest.raises(TypeError):
+        bp.sets["eom"] = {}
+    with pytest.raises(TypeError):
+        del bp.sets["eom"]
+    assert sorted(bp.sets) == ["energy", "eom", "lagrangian"]
+    assert bp.no_effect == fresh.no_effect and bp.margin == fresh.margin
+    sym = bp.symbolic()
+    sym.formulas.append(sym.formulas[0])
+    sym.symbols.clear()
+    sym.names[0] = "junk"
+    again, other = bp.symbolic(), fresh.symbolic()
+    assert again.text == other.text and len(again.formulas) == bp.n == 36
+    assert again.symbols == other.symbols and again.names == other.names

@@ -175,3 +175,50 @@ def test_the_truth_sidecar_says_where_the_external_torque_acted(tmp_path):
     quiet = simulate(robot, SumOfSines(robot, period=2.0, fraction=0.2, seed=1), duration=0.1)
     doc = json.loads(quiet.save(tmp_path / "q.csv").with_name("q.truth.json").read_text())
     assert "external" not in doc
+
+
+def test_the_observer_refuses_a_residual_that_overflows():
+    """A finite state so large that the residual overflows (a velocity of 1e200, squared in
+    the momentum's Coriolis terms) was returned as inf and NaN; it is an ArgumentError naming
+    the step and the largest input, as for the other functions of the joint state. On good
+    inputs after a reset the residual keeps its closed form: at rest under the gravity torque
+    the momentum stays zero and beta equals the torque, so r = 0."""
+    robot = mindyn.load("puma560")
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    values = base.values(robot.parameters(rotor=True, friction=True))
+    observer = control.MomentumObserver(base, values, period=1e-3)
+    q, zero = np.linspace(-0.5, 0.5, 6), np.zeros(6)
+    observer.reset(q, zero, zero)
+    with pytest.raises(ArgumentError, match=r"MomentumObserver.step: .*dq 1e\+200"):
+        observer.step(q, np.full(6, 1e200), zero)
+    with pytest.raises(ArgumentError, match=r"MomentumObserver.run: .*dq 1e\+200"):
+        observer.run(np.tile(q, (3, 1)), np.full((3, 6), 1e200), np.zeros((3, 6)))
+    g = robot.gravity_torque(q)
+    observer.reset(q, zero, g)
+    for _ in range(5):
+        np.testing.assert_allclose(observer.step(q, zero, g), 0.0, atol=1e-12)
+
+
+def test_generated_steps_keep_the_values_and_gains_they_were_written_with():
+    """The values, gains and settings a generated step reports describe the code written:
+    read-only, so that an edit cannot make them disagree with it."""
+    from mindyn import codegen
+
+    robot = mindyn.load("puma560")
+    code = codegen.generate_observer(robot, period=1e-3, gains=np.linspace(10.0, 60.0, 6))
+    values = code.values.copy()
+    np.testing.assert_allclose(
+        values, code_base_values(robot), rtol=1e-12, err_msg="the robot's own values"
+    )
+    for array in (code.values, code.gains):
+        with pytest.raises(ValueError, match="read-only"):
+            array[0] = 1.0
+    np.testing.assert_array_equal(code.gains, np.linspace(10.0, 60.0, 6))
+    ctl = codegen.generate_controller(robot, "computed-torque", period=T)
+    with pytest.raises(ValueError, match="read-only"):
+        ctl.settings["kd"][0] = 0.0
+
+
+def code_base_values(robot):
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    return base.values(robot.parameters(rotor=True, friction=True))

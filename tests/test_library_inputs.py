@@ -352,3 +352,53 @@ def test_a_consistent_estimate_keeps_its_arrays_links_and_notes():
     doc = json.loads(before)["consistent_estimate"]
     assert [lk["link"] for lk in doc["links"]] == list(ROBOT.link_names[1:])
     assert doc["notes"] == list(c.notes)
+
+
+def test_code_is_not_generated_from_the_base_parameters_of_another_robot():
+    """``base=`` of another robot with as many joints (the Stanford arm's for the PUMA 560)
+    gave code of the PUMA's name and geometry with the Stanford arm's base set and values
+    projected through its regrouping: silently wrong torques. It is refused naming ``base``,
+    both robots and what differs; the same description loaded again, or with another friction
+    model, is the same robot and is taken (its code equals the PUMA's own inverse dynamics)."""
+    from mindyn import codegen
+
+    puma = mindyn.load("puma560")
+    stanford = mindyn.base_parameters("stanford", rotor=True, friction=True)
+    expected = r"base is of robot 'stanford', whose joint 1 .* expected base parameters of robot"
+    for generate in (codegen.generate, codegen.generate_controller, codegen.generate_observer):
+        with pytest.raises(mindyn.ArgumentError, match=expected + " 'puma560'"):
+            generate(puma, base=stanford)
+    flat = mindyn.base_parameters(puma.with_gravity([0.0, 0.0, 0.0]))
+    with pytest.raises(mindyn.ArgumentError, match="gravity"):
+        codegen.generate(puma, base=flat)
+    again = mindyn.base_parameters(mindyn.load("puma560"))
+    code = codegen.generate(puma, base=again, what="id")
+    assert code.names == again.names
+    rng = np.random.default_rng(0)
+    q, dq, ddq = rng.uniform(-1, 1, (3, 6))
+    np.testing.assert_allclose(
+        again.regressor(q, dq, ddq) @ code.values,
+        puma.inverse_dynamics(q, dq, ddq),
+        rtol=1e-12,
+        atol=1e-12,
+    )
+
+
+def test_simulate_names_bad_noise_a_bad_controller_torque_and_parameters_of_no_body():
+    """Three inputs of ``simulate`` that reached numpy or the plant as a bare ValueError (not a
+    mindyn.Error): a noise level given as text or None, a controller returning text, and true
+    parameters whose mass matrix is not positive definite (the PUMA's negated: -M(q))."""
+    ref = control.SumOfSines(ROBOT, period=1.0)
+    for value, given in (("a", "a str 'a'"), (None, "None")):
+        with pytest.raises(mindyn.ArgumentError, match=f"torque noise is {given}; expected"):
+            control.simulate(ROBOT, ref, duration=0.1, noise=control.SensorNoise(torque=value))
+    with pytest.raises(mindyn.ArgumentError, match=r"controller returned a str 'x' at t = 0 s"):
+        control.simulate(ROBOT, ref, lambda *a: "x", duration=0.1)
+    puma = mindyn.load("puma560")
+    q0 = np.zeros(6)
+    assert np.linalg.eigvalsh(puma.mass_matrix(q0, -puma.params)).max() < 0  # -M(q)
+    with pytest.raises(mindyn.ArgumentError, match="params: the simulated robot's mass matrix"):
+        control.simulate(puma, control.SumOfSines(puma), duration=0.1, params=-puma.params)
+    # good values still run: a noise-free log equals its truth
+    res = control.simulate(ROBOT, ref, duration=0.1, noise=control.SensorNoise(torque=[0, 0]))
+    np.testing.assert_array_equal(res.tau, res.tau_true)

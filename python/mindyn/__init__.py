@@ -66,15 +66,27 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'mindyn' has no attribute '{name}'")
 
 
+def _inertial_vector(params) -> np.ndarray:
+    """``params`` as a vector of ten inertial parameters per link, shape (10 n,)."""
+    p = _args.array(params, "params", (None,))
+    if p.size % 10:
+        raise _args.fail(
+            "params",
+            f"has {p.size} entries, not a multiple of 10; expected ten per link, shape (10 n,)",
+        )
+    return p
+
+
 def to_pinocchio_order(params):
     """Inertial parameters ``[XX XY XZ YY YZ ZZ MX MY MZ M]`` per link, shape (10 n,), to
-    Pinocchio's dynamic-parameter order ``[m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]``."""
-    return _to_pin(_args.array(params, "params", (None,)))
+    Pinocchio's dynamic-parameter order ``[m, mcx, mcy, mcz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]``;
+    a length that is not a multiple of ten is an ArgumentError."""
+    return _to_pin(_inertial_vector(params))
 
 
 def from_pinocchio_order(params):
     """Inverse of :func:`to_pinocchio_order`."""
-    return _from_pin(_args.array(params, "params", (None,)))
+    return _from_pin(_inertial_vector(params))
 
 
 def _symmetric(x, name: str):

@@ -30,6 +30,7 @@ __all__ = [
     "array",
     "batch",
     "choice",
+    "describe",
     "fail",
     "finite_results",
     "flag",
@@ -74,6 +75,12 @@ def _describe(x) -> str:
     if isinstance(x, (list, tuple)):
         return f"a {type(x).__name__} of length {len(x)}"
     return f"a {type(x).__name__}"
+
+
+def describe(x) -> str:
+    """``x`` as a message names what was given: ``a str 'abc'``, ``the scalar 3``, ``None``,
+    ``an array of shape (2,) and dtype float64`` ..."""
+    return _describe(x)
 
 
 def _shape_text(shape: Sequence) -> str:

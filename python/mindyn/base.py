@@ -9,6 +9,7 @@ uses the same set (a constant in the energy cancels in differences).
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 from types import MappingProxyType
@@ -105,7 +106,7 @@ class BaseParameters:
     formulas_full : list of str
         The same at full precision, one term per classical parameter
         (``... + 0.18645124000000002*M2 + ...``).
-    sets : dict
+    sets : mapping
         ``lagrangian``, ``energy`` and ``eom``: each with ``n``, ``names``, ``formulas`` (readable),
         ``formulas_full``, ``Y``,
         ``pivots``, ``no_effect`` (classical parameters with no effect at all), ``regrouped``
@@ -189,10 +190,15 @@ class BaseParameters:
         out._snap_decision = self._snap_decision  # the same geometry, snapped the same way
         return out
 
+    @property
+    def sets(self) -> Mapping:
+        """The three sets as a read-only mapping of read-only mappings (see the class
+        attributes), built on first use; each set's ``Y`` and formulas on first access (large
+        for long chains and trees)."""
+        return MappingProxyType(self._sets)
+
     @cached_property
-    def sets(self) -> dict:
-        """The three sets as mappings (see the class attributes), built on first use; each
-        set's ``Y`` and formulas on first access (large for long chains and trees)."""
+    def _sets(self) -> dict:
         core = self._b
         out = {}
         for kind in ("lagrangian", "energy", "eom"):
@@ -250,8 +256,9 @@ class BaseParameters:
         r_j`` of an MDH table, ``a_j, d_j`` of a DH table, joint origins ``x_j, y_j, z_j`` of a
         URDF), recovered exactly and checked against the numeric ``Y`` at several geometries;
         see :func:`mindyn.formulas.symbolic_formulas`. Offsets, when enabled, are
-        ``Off_j = Off_j``. Computed on first use."""
-        return self._symbolic
+        ``Off_j = Off_j``. Computed on first use; each call gives a copy of its own (its lists
+        and dicts), so that what one caller does with it never changes another's."""
+        return copy.deepcopy(self._symbolic)
 
     def latex(self, *, symbolic: bool = False) -> str:
         """The formulas (numeric, or symbolic) as a LaTeX ``align*`` environment."""

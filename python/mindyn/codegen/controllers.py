@@ -15,7 +15,14 @@ import numpy as np
 from .. import _args, _core
 from ..base import BaseParameters, base_parameters
 from ..robot import Robot, load
-from .generation import GeneratedCode, _check_lang, _check_options, _parameter_values, identifier
+from .generation import (
+    GeneratedCode,
+    _check_lang,
+    _check_options,
+    _parameter_values,
+    check_base_robot,
+    identifier,
+)
 
 __all__ = [
     "CONTROLLERS",
@@ -46,7 +53,8 @@ class GeneratedController(GeneratedCode):
         used, the fewest multiplications plus additions).
     settings : dict
         The settings the step starts with (``kd``, ``lambda``, ``gamma``, ``kp``, ``p_min``,
-        ``p_max``, ``tau_max``, ``nu``, ``period``; arrays).
+        ``p_max``, ``tau_max``, ``nu``, ``period``; arrays, read-only: they describe the code
+        written).
     """
 
     def __init__(self, kind, lang, name, out, header_name, settings):
@@ -55,7 +63,9 @@ class GeneratedController(GeneratedCode):
         self.function = f"{name}_{kind.replace('-', '_')}"
         self.variants = {k: dict(v) for k, v in out["variants"].items()}
         self.form = out["form"]
-        self.settings = settings
+        self.settings: dict[str, Any] = {
+            k: _args.readonly(v) if isinstance(v, np.ndarray) else v for k, v in settings.items()
+        }
 
     def __repr__(self) -> str:
         s = self.counts["step"]
@@ -130,7 +140,8 @@ def generate_controller(
         all classical parameters with rotor inertia and friction); a base set's offset setting
         adds a torque offset per joint. Its robot decides where rotor inertia and friction act
         and the friction model, as in :func:`generate` (rotor inertia through the reference
-        acceleration ``t_k . ddq_r``, friction at the motor velocity ``t_k . dq``).
+        acceleration ``t_k . ddq_r``, friction at the motor velocity ``t_k . dq``). It must
+        be of ``robot``'s geometry: another robot's is an ArgumentError.
     gains : dict, optional
         ``kd``, ``lambda``, ``gamma``, ``nu``, ``kp`` as :func:`mindyn.control.default_gains`
         gives them (the default: for ``period``, the robot with its rotor inertia). Gains that
@@ -164,6 +175,7 @@ def generate_controller(
     _check_options(name, header_name, params)
     if base is not None and base is not False:
         _args.instance(base, "base", BaseParameters, "a BaseParameters, False or None")
+        check_base_robot(cast(BaseParameters, base), robot)
     period = _args.number(period, "period", positive=True)
     conflicts = getattr(gains, "conflicts", {})
     defaulted = getattr(gains, "defaulted", ())  # the keys a gains file left to the defaults
@@ -281,13 +293,14 @@ class GeneratedObserver(GeneratedCode):
     counts : dict
         ``{"momentum": the momentum pass, "step": the whole step}``.
     gains : ndarray (n,)
-        ``K_O`` [1/s]; ``period`` [s]; ``held_torque``.
+        ``K_O`` [1/s] (read-only: they describe the code written); ``period`` [s];
+        ``held_torque``.
     """
 
     def __init__(self, lang, name, out, header_name, period, held_torque):
         super().__init__(lang, name, out, False, header_name)
         self.function = f"{name}_momentum_observer"
-        self.gains = np.asarray(out["gains"], dtype=float)
+        self.gains = _args.readonly(np.asarray(out["gains"], dtype=float))
         self.period = float(period)
         self.held_torque = bool(held_torque)
 
@@ -320,7 +333,8 @@ def generate_observer(
         The parameter set (default: base parameters with rotor inertia and friction); its
         offset setting adds a torque offset per joint. Its robot decides where rotor inertia
         and friction act and the friction model, as in :func:`generate`: the momentum gets
-        ``t_k Ia_k (t_k . dq)``, beta the friction ``t_k f(t_k . dq)``.
+        ``t_k Ia_k (t_k . dq)``, beta the friction ``t_k f(t_k . dq)``. It must be of
+        ``robot``'s geometry: another robot's is an ArgumentError.
     params : path or array, optional
         The parameter values (the JSON of ``mindyn identify --json``, read by
         :func:`read_identified_parameters`, or another file :func:`read_parameter_file` reads);
@@ -339,6 +353,8 @@ def generate_observer(
     _check_lang(lang, trig)
     _check_options(name, header_name, params)
     _args.optional(_args.instance, base, "base", BaseParameters)
+    if base is not None:
+        check_base_robot(base, robot)
     held_torque = _args.flag(held_torque, "held_torque")
     period = control.controllers.check_period(period)
     n = robot.n

@@ -43,7 +43,8 @@ class GeneratedCode:
     names : list of str
         The parameters ``p`` in order.
     values : ndarray, shape (np,)
-        Their values (the robot's own, or those given; baked in when ``numeric``).
+        Their values (the robot's own, or those given; baked in when ``numeric``), read-only:
+        they describe the code written.
     geometry_snap : dict
         Constants of the geometry (joint transforms and axes, gravity) within ``tolerance``
         (1e-9) of 0 are taken as 0, and rotation or axis entries then alone in their row and
@@ -77,7 +78,7 @@ class GeneratedCode:
         self.program = out.get("program")
         self.counts = {k: dict(v) for k, v in out["counts"].items()}
         self.names = list(out["names"])
-        self.values = np.asarray(out["values"], dtype=float)
+        self.values = _args.readonly(np.asarray(out["values"], dtype=float))
         self.geometry_snap = dict(out["geometry_snap"])
         self.contacts = list(contacts)
         self.wrench_frame = wrench_frame
@@ -157,6 +158,36 @@ def _check_options(name, header_name, params) -> None:
         raise _args.fail(
             "header_name", f"is '{header_name}'; expected a file name ending in '.h' (no folder)"
         )
+
+
+def check_base_robot(base: BaseParameters, robot: Robot) -> None:
+    """Refuses (an ArgumentError naming ``base``) base parameters of a robot other than
+    ``robot``: the code is generated from ``robot``'s geometry and ``base``'s set, which must
+    be computed for that geometry (its joints, axes, placements and gravity; the parameter
+    values, friction model and drive side may differ)."""
+    other = base.robot
+    if other is robot:
+        return
+    expected = f"expected base parameters of robot '{robot.name}' (base_parameters(robot, ...))"
+
+    def refuse(what: str):
+        return _args.fail("base", f"is of robot '{other.name}', whose {what}; {expected}")
+
+    if other.n != robot.n:
+        raise refuse(f"{other.n} joints differ from the {robot.n} of robot '{robot.name}'")
+    for k in range(robot.n):
+        joint = f"joint {k + 1} ('{other.joint_names[k]}')"
+        if other.joint_types[k] != robot.joint_types[k] or other.parents[k] != robot.parents[k]:
+            raise refuse(f"{joint} differs in its type or parent")
+        for what, a, b in (
+            ("axis", other.axes[k], robot.axes[k]),
+            ("placement", other.joint_pre(k), robot.joint_pre(k)),
+            ("placement", other.joint_post(k), robot.joint_post(k)),
+        ):
+            if not np.allclose(a, b, rtol=1e-12, atol=1e-12):
+                raise refuse(f"{joint} differs in its {what}")
+    if not np.allclose(other.gravity, robot.gravity, rtol=1e-12, atol=1e-12):
+        raise refuse(f"gravity {other.gravity.tolist()} differs from {robot.gravity.tolist()}")
 
 
 def _parameter_values(
@@ -274,7 +305,8 @@ def generate(
         Base parameters (default: by the method :func:`mindyn.base_parameters` chooses), a
         given :class:`BaseParameters`, or ``False`` for all classical parameters (the classical
         recursion, for comparison). The header lists the base parameters with their formulas as
-        ``BaseParameters.formulas`` writes them.
+        ``BaseParameters.formulas`` writes them. A given set must be of ``robot``'s geometry
+        (joints, axes, placements, gravity): another robot's is an ArgumentError.
     header_name : str, optional
         C: the header file name the source includes (default ``NAME.h``).
     minimise : {"operations", "additions"}
@@ -317,6 +349,7 @@ def generate(
     links = _contact_links(robot, contacts)
     name = name if name is not None else identifier(robot.name)
     if isinstance(base, BaseParameters):
+        check_base_robot(base, robot)
         if base.rotor != rotor or base.friction != friction:
             rotor, friction = base.rotor, base.friction
         offset = base.offset

@@ -128,15 +128,20 @@ class MomentumObserver:
         q, dq, tau = (_args.array(x, k, (n,)) for x, k in ((q, "q"), (dq, "dq"), (tau, "tau")))
         self._o.reset(q, dq, tau)
 
+    @_args.finite_results("q", "dq", "tau")
     def step(self, q, dq, tau) -> np.ndarray:
-        """The residual ``r_k`` (n,) of the next sample."""
+        """The residual ``r_k`` (n,) of the next sample. Inputs so large that the residual
+        overflows the double range are an ArgumentError (the observer then holds no finite
+        state: :meth:`reset` it)."""
         n = self.base.robot.n
         q, dq, tau = (_args.array(x, k, (n,)) for x, k in ((q, "q"), (dq, "dq"), (tau, "tau")))
         return self._o.step(q, dq, tau)
 
+    @_args.finite_results("q", "dq", "tau")
     def run(self, q, dq, tau, t=None) -> np.ndarray:
         """The residual (m, n) of a log: 0 at sample 0. Sampled at the period, or at the time
-        stamps ``t`` (m,) when given (uneven steps; each must keep ``K_O dt < 2``)."""
+        stamps ``t`` (m,) when given (uneven steps; each must keep ``K_O dt < 2``). A log so
+        large that the residual overflows the double range is an ArgumentError."""
         n = self.base.robot.n
         q = _args.array(q, "q", (None, n), unit="joint")
         if q.shape[0] < 1:

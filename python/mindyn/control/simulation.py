@@ -308,7 +308,16 @@ class SensorNoise:
     def arrays(self, n: int) -> dict[str, np.ndarray]:
         out = {}
         for k in ("torque", "position", "velocity", "quantization"):
-            v = np.asarray(getattr(self, k), dtype=float)
+            given = getattr(self, k)
+            try:
+                if given is None or isinstance(given, (str, bytes)):
+                    raise TypeError
+                v = np.asarray(given, dtype=float)
+            except (TypeError, ValueError):
+                raise ArgumentError(
+                    f"{k} noise is {_args.describe(given)}; expected a scalar or ({n},) of "
+                    "finite non-negative numbers"
+                ) from None
             try:
                 v = np.broadcast_to(v, (n,)).copy()
             except ValueError:
@@ -788,7 +797,7 @@ def simulate(
         for i in range(m):
             qm = noise.measure_q(q, rng, arr)
             dqm = dq + arr["velocity"] * rng.standard_normal(n)
-            tau = np.asarray(controller(t[i], qm, dqm, qd[i], dqd[i], ddqd[i]), dtype=float)
+            tau = _controller_torque(controller(t[i], qm, dqm, qd[i], dqd[i], ddqd[i]), t[i], n)
             if tau.shape != (n,):
                 raise ArgumentError(
                     f"the controller returned shape {tau.shape} at t = {t[i]:g} s; expected "
@@ -804,11 +813,14 @@ def simulate(
             out["q"][i], out["dq"][i], out["tau"][i] = q, dq, tau
             if ext is not None:
                 ext[i] = _external_torque(external, t[i], q, dq)
-            if dahl is None:
-                out["ddq"][i] = plant.acceleration(q, dq, tau)
-            else:
-                states[i] = z
-                out["ddq"][i] = plant.acceleration(q, dq, tau - dahl[1] * z)
+            try:
+                if dahl is None:
+                    out["ddq"][i] = plant.acceleration(q, dq, tau)
+                else:
+                    states[i] = z
+                    out["ddq"][i] = plant.acceleration(q, dq, tau - dahl[1] * z)
+            except ValueError as e:  # the plant's own error, whatever its class
+                raise _plant_error(e, t[i], q) from None
             out["qm"][i], out["dqm"][i] = qm, dqm
             out["taum"][i] = tau + arr["torque"] * rng.standard_normal(n)
             model_torque = getattr(controller, "model_torque", None)
@@ -833,7 +845,7 @@ def simulate(
                         q, dq, z = _advance_dahl(plant, q, dq, z, acting, period, substeps, *dahl)
                 except ValueError as e:  # the plant's own error, whatever its class
                     if "the integration diverged" not in str(e):
-                        raise
+                        raise _plant_error(e, t[i], q) from None
                     raise _diverged(
                         f"the state became non-finite after t = {t[i]:.4f} s", check
                     ) from None
@@ -1150,6 +1162,28 @@ def _diverged(what: str, check):
             f"the closed loop diverged: {what}; lower the gains or the controller period"
         )
     return UnstableLoopError(f"the closed loop diverged: {what} ({check.text()}); {check.advice()}")
+
+
+def _controller_torque(value, t: float, n: int) -> np.ndarray:
+    """What a controller returned, as a float array (its shape checked by the caller)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ArgumentError(
+            f"the controller returned {_args.describe(value)} at t = {t:g} s; expected {n} torques"
+        ) from None
+
+
+def _plant_error(error: ValueError, t: float, q) -> Exception:
+    """The simulated robot's error at ``t``: a mass matrix that is not positive definite is the
+    true parameters' (an ArgumentError naming ``params``); any other is returned as it is."""
+    if "not positive definite" not in str(error):
+        return error
+    return ArgumentError(
+        f"params: the simulated robot's mass matrix is not positive definite at t = {t:g} s "
+        f"(q = {np.round(q, 6).tolist()}); expected physically consistent parameters (positive "
+        "masses, rotor inertias and link inertias)"
+    )
 
 
 def simulate_inverse(
