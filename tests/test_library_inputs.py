@@ -402,3 +402,20 @@ def test_simulate_names_bad_noise_a_bad_controller_torque_and_parameters_of_no_b
     # good values still run: a noise-free log equals its truth
     res = control.simulate(ROBOT, ref, duration=0.1, noise=control.SensorNoise(torque=[0, 0]))
     np.testing.assert_array_equal(res.tau, res.tau_true)
+
+
+def test_the_plant_refuses_a_mass_matrix_not_positive_definite_as_a_model_error():
+    """The simulation plant's forward dynamics raised numpy's bare ValueError for parameters
+    whose mass matrix is not positive definite, where the other forward dynamics raise
+    ModelError (a mindyn.Error)."""
+    from mindyn import _core
+
+    puma = mindyn.load("puma560")
+    q0 = np.zeros(6)
+    plant = _core.Integrator(puma._m, -np.asarray(puma.params), 0.0)
+    with pytest.raises(mindyn.ModelError, match="mass matrix is not positive definite"):
+        plant.acceleration(q0, q0, q0)
+    ddq = _core.Integrator(puma._m, np.asarray(puma.params), 0.0).acceleration(q0, q0, q0)
+    np.testing.assert_allclose(  # gravity alone: M ddq = -g
+        puma.mass_matrix(q0) @ ddq, -puma.inverse_dynamics(q0, q0, q0), atol=1e-9
+    )

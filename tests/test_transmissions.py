@@ -366,6 +366,9 @@ def test_yaml_matrix_and_per_motor_forms_give_the_same_T_and_round_trip(tmp_path
         ([{"name": "m", "joints": {"j1": 1.0}}], "joints 'j2' and 'j3' .their columns of"),
         ({"matrix": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "torque_constant": [1, 0, 1]}, "torque"),
         ({"rows": [[1]]}, "unknown key 'rows'"),
+        # the forms named with every key they take
+        ("m1", r"offset, torque_constant, rotor_inertia, viscous, coulomb\} or a list"),
+        ([], r"coefficient\}, offset, torque_constant, rotor_inertia, viscous, coulomb\}"),
     ],
 )
 def test_yaml_transmissions_malformed_are_refused_in_one_line(tmp_path, transmissions, message):

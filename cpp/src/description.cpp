@@ -430,8 +430,9 @@ Transmission readTransmissions(Ctx c, const YAML::Node& root, const Model& model
   } else {
     c.where.clear();
     c.fail(
-        "'transmissions' must be a mapping {matrix, motors, offset, torque_constant} or a "
-        "list of motors {name, joints: {joint: coefficient}, offset, torque_constant}",
+        "'transmissions' must be a mapping {matrix, motors, offset, torque_constant, "
+        "rotor_inertia, viscous, coulomb} or a list of motors {name, joints: {joint: "
+        "coefficient}, offset, torque_constant, rotor_inertia, viscous, coulomb}",
         node);
   }
   const auto m = static_cast<Eigen::Index>(rows.size());

@@ -137,8 +137,7 @@ void bindControl(py::module_& m) {
             Data data(g.model);
             if (!g.integrator.acceleration(data, vectorArg(q, g.n, "q"), vectorArg(dq, g.n, "dq"),
                                            vectorArg(tau, g.n, "tau"), ddq))
-              throw py::value_error(
-                  "the mass matrix is not positive definite for these parameters");
+              throw ModelError("the mass matrix is not positive definite for these parameters");
             return ddq;
           },
           py::arg("q"), py::arg("dq"), py::arg("tau"),
