@@ -2020,6 +2020,10 @@ def mj_reference(m, robot, q, v, a, *, friction_on: bool = False):
     if not friction_on:
         off |= int(bits.mjDSBL_FRICTIONLOSS)
     m.opt.disableflags = flags | off
+    warn = mujoco.get_mju_user_warning()
+    # a random model's warnings (a nearly singular inertia) go nowhere: MuJoCo's default
+    # handler appends them to MUJOCO_LOG.TXT in the folder the campaign runs from
+    mujoco.set_mju_user_warning(lambda text: None)
     try:
         d = mujoco.MjData(m)
         qpos, qvel, qacc, S = mj_qpos(m, robot, q, v, a)
@@ -2054,6 +2058,7 @@ def mj_reference(m, robot, q, v, a, *, friction_on: bool = False):
             )
     finally:
         m.opt.disableflags = flags
+        mujoco.set_mju_user_warning(warn)
     return S.T @ qfrc, S.T @ full @ S, saturated
 
 
