@@ -40,6 +40,14 @@ def test_urdf_export_reflects_direct_drives_and_notes_the_coupled_motors(tmp_pat
     side = yaml.safe_load(res.sidecar.read_text())
     assert side["drive_side"] == "motor"
     assert [row["motor"] for row in side["joints"]] == list(robot.transmission.motors)
+    # each term said to be the row's motor's, not the joint's (nor the URDF joint's <dynamics>)
+    for key in ("Ia", "Fv", "Fc"):
+        assert "of the row's motor" in side["terms"][key], side["terms"][key]
+        assert "joint side" not in side["terms"][key] and "<dynamics" not in side["terms"][key]
+    # on the joint side the terms are the joint's
+    joint = write_urdf(robot.with_drive_side("joint"), p, tmp_path / "joint.urdf")
+    meaning = yaml.safe_load(joint.sidecar.read_text())["terms"]
+    assert meaning["Ia"].startswith("rotor (armature) inertia reflected to the joint side")
     terms = read_joint_terms(res.sidecar)
     np.testing.assert_array_equal([terms[f"Ia{k + 1}"] for k in range(6)], Ia)
     np.testing.assert_array_equal([terms[f"Fc{k + 1}"] for k in range(6)], Fc)

@@ -39,6 +39,21 @@ TERMS = {
     ),
     OFF: (f"constant torque offset: tau += {OFF}", "N m", "N"),
 }
+#: What a term of a row is on the motor side (``drive_side: motor``): the motor's it names, in
+#: the motor's velocity ``dq_m`` (row k of ``T dq``) and torque ``tau_m`` (``tau += T^T tau_m``).
+MOTOR_TERMS = {
+    "Ia": "rotor inertia of the row's motor: tau_m += Ia * ddq_m",
+    "Fv": "viscous friction of the row's motor: tau_m += Fv * dq_m",
+    "Fc": "Coulomb friction of the row's motor: tau_m += Fc * sign(dq_m)",
+    "Fa": (
+        "direction-dependent Coulomb friction of the row's motor (friction_model asymmetric): "
+        "tau_m += Fa * |sign(dq_m)|"
+    ),
+    "Fs": (
+        "Stribeck friction of the row's motor (friction_model stribeck): tau_m += Fs * "
+        "sign(dq_m) * exp(-(dq_m / velocity)^2)"
+    ),
+}
 #: The entries of a row besides the terms.
 _ROW_KEYS = ("name", "index", "type", "motor", "units", "velocity")
 #: The terms that are never negative, in words.

@@ -720,9 +720,13 @@ def _shape_note(robot: Robot, terms: JointTerms, side: Path, holds: str) -> list
 
 def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Path, urdf: bool):
     present = terms.joint_terms()
+    motor_side = robot.drive_side == "motor" and any(k in present for k in ("Ia", "Fv", "Fc"))
     meaning = {}
     for key in present:
         text, rev, pri = _TERMS[key]
+        if motor_side and key in _sidecar.MOTOR_TERMS:
+            meaning[key] = f"{_sidecar.MOTOR_TERMS[key]} [{rev} for a rotary motor, {pri} linear]"
+            continue
         if urdf and key == "Fv":
             text += "; also the URDF joint's <dynamics damping>"
         if urdf and key == "Fc":
@@ -754,7 +758,7 @@ def _write_sidecar(path: Path, robot: Robot, terms: JointTerms, description: Pat
     if shaped:
         doc["friction_model"] = model["kind"]
     doc.update({"terms": meaning, "joints": joints})
-    if robot.drive_side == "motor" and any(k in present for k in ("Ia", "Fv", "Fc")):
+    if motor_side:
         # row k's Ia, Fv, Fc are motor k's, in motor units, acting through row k of T
         doc["drive_side"] = "motor"
         assert robot.transmission is not None  # the motor side has one
