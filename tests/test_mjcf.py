@@ -1321,7 +1321,7 @@ def test_a_body_with_two_joints_written_as_a_new_mjcf_has_mujocos_dynamics(kind,
         robot = mindyn.load(path)
     assert robot.link_names[2:] == ["b__first", "b"]
     p = robot.parameters(rotor=True, friction=True)
-    out = write_mjcf(robot, p, tmp_path / "new.xml", source=tmp_path / "none.urdf").path
+    out = write_mjcf(robot, p, tmp_path / "new.xml", new=True).path
     old, new = (mujoco.MjModel.from_xml_path(str(f)) for f in (path, out))
     assert new.nbody == old.nbody and new.body("b").jntnum == 2
     rng = np.random.default_rng(1)
@@ -1397,3 +1397,34 @@ def test_mujoco_warnings_on_a_file_read_are_python_warnings_and_write_no_log(tmp
     assert [str(w.message) for w in caught if "MuJoCo" in str(w.message)] == ours
     assert mujoco.get_mju_user_warning() is before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.xml"]  # no MUJOCO_LOG.TXT
+
+
+def test_a_source_that_does_not_exist_is_refused_and_new_writes_a_new_mjcf(tmp_path):
+    """A ``source`` that does not exist gave a new MJCF without a word (the URDF and YAML
+    writers refuse it); it is now refused, and ``new=True`` asks for a new MJCF of a robot
+    loaded from one: a file of MuJoCo's own form whose inverse dynamics is the original's."""
+    path = tmp_path / "arm7.xml"
+    path.write_text(ARM7)
+    robot = mindyn.load(path)
+    p = robot.parameters(rotor=True, friction=True)
+    with pytest.raises(mindyn.RobotFileNotFoundError, match="source: description file .*typo"):
+        write_mjcf(robot, p, tmp_path / "out.xml", source=tmp_path / "typo.xml")
+    with pytest.raises(mindyn.ArgumentError, match="new is a str"):
+        write_mjcf(robot, p, tmp_path / "out.xml", new="yes")
+    rewritten = write_mjcf(robot, p, tmp_path / "same.xml").path.read_text()
+    written = write_mjcf(robot, p, tmp_path / "new.xml", new=True).path.read_text()
+    assert 'class="wrist"' in rewritten  # the file rewritten keeps its default classes
+    assert 'class="wrist"' not in written and "<inertial pos=" in written  # one per body
+    old, new = (mujoco.MjModel.from_xml_path(str(f)) for f in (path, tmp_path / "new.xml"))
+    rng = np.random.default_rng(2)
+    for _ in range(3):
+        qpos = rng.normal(size=old.nq)
+        qvel, qacc = rng.normal(size=old.nv), rng.normal(size=old.nv)
+        tau = []
+        for m in (old, new):
+            m.opt.disableflags = int(OFF)
+            d = mujoco.MjData(m)
+            d.qpos[:], d.qvel[:], d.qacc[:] = qpos, qvel, qacc
+            mujoco.mj_inverse(m, d)
+            tau.append(d.qfrc_inverse.copy())
+        assert_close(tau[1], tau[0], TOL, "new=True, new MJCF vs the original")

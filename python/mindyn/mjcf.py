@@ -73,7 +73,7 @@ import numpy as np
 
 from . import _args, _mujoco
 from ._core import OFFSET_PREFIX as _OFF
-from ._core import ModelError
+from ._core import ModelError, RobotFileNotFoundError
 from .export import (
     Export,
     JointTerms,
@@ -87,7 +87,9 @@ from .robot import Robot, load
 __all__ = ["check_joints", "write_mjcf"]
 
 
-def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -> Export:
+def write_mjcf(
+    robot: Robot, classical, path, *, source=None, drive_side=None, new: bool = False
+) -> Export:
     """Writes ``classical`` as the dynamics of ``robot`` in a MuJoCo MJCF.
 
     Parameters
@@ -122,6 +124,8 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
     drive_side : {"joint", "motor"}, optional
         Where ``Ia``, ``Fv``, ``Fc`` act with transmissions; default the robot's
         ``drive_side`` (``"joint"`` when it has none).
+    new : bool
+        Write a new MJCF even for a robot loaded from one (``source`` is then not read).
 
     Returns
     -------
@@ -130,6 +134,8 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
 
     Raises
     ------
+    RobotFileNotFoundError
+        ``source`` is given and does not exist.
     ModelError
         ``classical`` does not fit the robot, a mass is negative (or zero with a first
         moment), friction of a friction model other than Coulomb's (MJCF has no place for
@@ -151,9 +157,12 @@ def write_mjcf(robot: Robot, classical, path, *, source=None, drive_side=None) -
         )
     side = drive_side if drive_side is not None else getattr(robot, "drive_side", "joint")
     _args.choice(side, "drive_side", ("joint", "motor"))
+    new = _args.flag(new, "new")
+    if source is not None and not new and not Path(source).is_file():
+        raise RobotFileNotFoundError(f"source: description file '{source}' does not exist")
     src = Path(robot.source if source is None else source)
     out = Path(path)
-    if _mujoco.is_mjcf(src):
+    if not new and _mujoco.is_mjcf(src):
         return _rewrite(robot, terms, src, out)
     return _generate(robot, terms, out, side)
 
