@@ -144,6 +144,14 @@ class BaseParameters:
         self._options = _frozen(options or {})
         self.method_reason = ""  # set by base_parameters
         self._snap_decision = _frozen({"mode": "off", "applied": False})
+        # A base set that differs from others only in some regressor columns (the friction
+        # columns that with_friction_velocity changes): (the first set of that family, what
+        # varies), else None. Filtered regressors of one family share the other columns
+        # (preprocess.ParallelFilter filters the varied ones only).
+        self._family: tuple | None = None
+        if core.friction and robot.single_dof:
+            if robot.friction_model["kind"] in ("smooth", "stribeck"):
+                self._family = (self, "velocity")
 
     @property
     def options(self) -> Mapping:
@@ -188,6 +196,36 @@ class BaseParameters:
         out = BaseParameters(self._b.with_friction_velocity(v), robot, self.offset, self.options)
         out.method_reason = self.method_reason
         out._snap_decision = self._snap_decision  # the same geometry, snapped the same way
+        if kind in ("smooth", "stribeck"):
+            root = self._family[0] if self._family and self._family[1] == "velocity" else self
+            out._family = (root, "velocity")
+        return out
+
+    def _varied(self) -> list[tuple[int, int, int]]:
+        """The regressor columns that differ within the base set's family (``_family``): per
+        column ``(base column, slot, column of the friction model's shapes)``; slot ``k``'s
+        column is its friction shape at its velocity times row ``k`` of the drive matrix (the
+        friction parameters are base parameters of their own)."""
+        if self._family is None or self._family[1] != "velocity":
+            return []
+        i = 1 if self.robot.friction_model["kind"] == "smooth" else 2  # tanh(v/w), or s exp
+        term = ("Fc", "Fc", "Fs")[i]
+        names = list(self.names)
+        return [
+            (names.index(f"{term}{k + 1}"), k, i)
+            for k in range(self.robot.n)
+            if f"{term}{k + 1}" in names
+        ]
+
+    def _varied_regressor(self, q, dq, ddq) -> np.ndarray:
+        """The columns of :meth:`_varied` of the regressor at ``(q, dq, ddq)`` (m, n_joints,
+        len(_varied())): those columns of :meth:`regressor`, without forming the others."""
+        cols = self._varied()
+        phi = self.robot.friction_shapes(self.robot.slot_velocities(dq))  # (m, n, c)
+        T = self.robot.drive_matrix
+        out = np.empty((phi.shape[0], self.robot.n, len(cols)))
+        for c, (_, k, i) in enumerate(cols):
+            out[:, :, c] = phi[:, k, i, None] * T[k]
         return out
 
     @property

@@ -875,6 +875,24 @@ class DahlBase(BaseParameters):
         names = list(base.names)
         self._fc = [(j, names.index(f"Fc{j + 1}")) for j in range(n) if f"Fc{j + 1}" in names]
         self._paths: dict = {}
+        # the Dahl sets of one base set differ in their Coulomb columns only
+        root = base._family[0] if base._family and base._family[1] == "dahl" else base
+        self._family = (root, "dahl")
+
+    def _varied(self) -> list[tuple[int, int, int]]:
+        """The Coulomb columns, the Dahl states: ``(base column, slot, 1)`` each."""
+        return [(c, k, 1) for k, c in self._fc]
+
+    def _varied_regressor(self, q, dq, ddq) -> np.ndarray:
+        """The Coulomb columns of :meth:`regressor` alone (the Dahl state of each slot times
+        its row of the drive matrix)."""
+        q = np.asarray(q, dtype=float)
+        z = self.state(q)
+        T = self.robot.drive_matrix
+        out = np.empty((q.shape[0], self.robot.n, len(self._fc)))
+        for c, (k, _) in enumerate(self._fc):
+            out[:, :, c] = z[:, k, None] * T[k]
+        return out
 
     def with_sigma(self, sigma) -> DahlBase:
         """The same base set at another ``sigma`` (n,)."""

@@ -98,6 +98,10 @@ PERIODICITY_TOLERANCE = 0.05
 SEGMENT_GAP = 20.0
 
 
+#: The filtered regressors a ParallelFilter keeps (the last base sets asked for).
+KEPT_BASES = 4
+
+
 class ParallelFilter:
     """The regressor columns filtered like the torques: ``regressor(base)`` evaluates
     ``base.regressor`` on the filtered full-rate motion, applies the same zero-phase low-pass,
@@ -116,6 +120,7 @@ class ParallelFilter:
         self.lowpass, self.keep = lowpass, keep
         self.sos, self.padlen = sos, padlen
         self._cache: dict = {}
+        self._families: dict = {}
 
     def signals(self, fn) -> np.ndarray:
         """The columns ``fn(q, dq, ddq)`` ((k, w) for k samples of the filtered full-rate
@@ -131,10 +136,42 @@ class ParallelFilter:
         return self.lowpass(fn(self.q, self.dq, self.ddq))[idx]
 
     def regressor(self, base) -> np.ndarray:
+        """The filtered base regressor (m, n, nb) of ``base``, kept for the last
+        :data:`KEPT_BASES` base sets. A base set of a family (``base._family``: sets that
+        differ in a few friction columns, as the friction models' searches try) starts from the
+        first member's filtered regressor and filters its varied columns only."""
         key = id(base)
         hit = self._cache.get(key)
         if hit is not None and hit[0] is base:
             return hit[1]
+        family: tuple | None = getattr(base, "_family", None)
+        first = self._families.get(id(family[0])) if family is not None else None
+        if family is not None and first is not None and first[0] is family[0]:
+            out = self._varied(base, first[1])
+        else:
+            out = self._full(base)
+            if family is not None:  # one family kept: the search running
+                self._families = {id(family[0]): (family[0], out)}
+        if len(self._cache) >= KEPT_BASES:
+            self._cache.pop(next(iter(self._cache)))
+        self._cache[key] = (base, out)
+        return out
+
+    def _varied(self, base, first: np.ndarray) -> np.ndarray:
+        """``first`` (a family member's filtered regressor) with the columns of ``base`` that
+        vary in the family (``base._varied()``) filtered in."""
+        cols = [c for c, _, _ in base._varied()]
+        out = first.copy()
+        if cols:
+            n, w = self.q.shape[1], len(cols)
+
+            def rows(q, dq, ddq):
+                return base._varied_regressor(q, dq, ddq).reshape(q.shape[0], n * w)
+
+            out[:, :, cols] = self.signals(rows).reshape(out.shape[0], n, w)
+        return out
+
+    def _full(self, base) -> np.ndarray:
         m, n = self.q.shape
         nb = base.n
         idx = np.arange(m)[self.keep]
@@ -143,9 +180,7 @@ class ParallelFilter:
             def rows(q, dq, ddq):
                 return base.regressor(q, dq, ddq).reshape(q.shape[0], n * nb)
 
-            out = self.signals(rows).reshape(idx.size, n, nb)
-            self._cache[key] = (base, out)
-            return out
+            return self.signals(rows).reshape(idx.size, n, nb)
         out = np.empty((idx.size, n, nb))
         block = max(1, min(nb, PARALLEL_BUDGET // (8 * m * n)))
         for c0 in range(0, nb, block):
@@ -155,7 +190,6 @@ class ParallelFilter:
                 b = min(m, a + _CHUNK)
                 W[a:b] = base.regressor(self.q[a:b], self.dq[a:b], self.ddq[a:b])[:, :, c0:c1]
             out[:, :, c0:c1] = self.lowpass(W)[idx]
-        self._cache[key] = (base, out)
         return out
 
 
