@@ -92,3 +92,30 @@ def test_codegen_checks_the_model_it_generates(tmp_path, capsys):
     assert main([*argv, "--rotor", "--friction", "-o", str(tmp_path / "whole")]) == 0
     out, err = capsys.readouterr()
     assert "warning" not in err and "generated step (" not in out, (out, err)
+
+
+def test_simulate_checks_a_compiled_step_given_no_base():
+    """simulate checked the sampled loop of a compiled generated step only when it was given
+    its base: without, a step whose gains no sampled loop of the robot keeps stable ran until
+    it diverged. It is now refused before the run, as with its base, and the result of a stable
+    one states the check."""
+    import pytest
+    from mindyn import codegen, control
+
+    robot = mindyn.load("planar3")
+    ref = control.SumOfSines(robot, period=2.0)
+    gains = {"kd": 4000.0, "lambda": 10.0, "gamma": 1.0}
+    code = codegen.generate_controller(robot, "adaptive-pd", gains=gains, p_min=-np.inf)
+    # independent: a sampled loop without friction needs max eig(T M^-1 K_D) < 2 at rest
+    m = robot.mass_matrix(np.zeros(robot.n), robot.parameters(rotor=True, friction=True))
+    assert np.max(np.linalg.eigvals(0.004 * np.linalg.solve(m, 4000.0 * np.eye(3))).real) > 2
+    base = mindyn.base_parameters(robot, rotor=True, friction=True)
+    messages = []
+    for given in (base, None):
+        with pytest.raises(control.UnstableLoopError) as e:
+            control.simulate(robot, ref, codegen.CompiledController(code, base=given), duration=1)
+        messages.append(str(e.value))
+    assert messages[0] == messages[1]
+    stable = codegen.generate_controller(robot, "adaptive-pd", p_min=-np.inf)
+    res = control.simulate(robot, ref, codegen.CompiledController(stable), duration=0.2)
+    assert "stable" in res.info["stability"]

@@ -31,6 +31,7 @@ ddq_d)`` once per period on the measured state, the torque held until the next c
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Hashable
 from pathlib import Path
 
@@ -682,12 +683,24 @@ def plant_damping(robot: Robot, params, qs) -> np.ndarray:
     return viscous_damping(regressor, names, params, qs)
 
 
+def _generated_base(robot: Robot, code) -> BaseParameters | None:
+    """The base parameters of ``robot`` whose names are those of a generated step ``code``
+    (with or without rotor inertia and friction, as :func:`mindyn.base_parameters` gives
+    them), or None when none is: the model of a compiled step given no ``base``."""
+    names = list(getattr(code, "names", ()))
+    for rotor, friction in ((True, True), (False, False), (True, False), (False, True)):
+        base = base_parameters(robot, rotor=rotor, friction=friction)
+        if list(base.names) == names:
+            return base
+    return None
+
+
 def controller_check(robot: Robot, controller, params, period: float):
     """The linearised check of a controller of this module or of a compiled generated step
-    (:class:`mindyn.codegen.CompiledController` given its ``base``; ``None`` for other
-    controllers) against the simulated robot of classical parameters ``params`` (13 per joint)
-    at ``period`` [s]: the controller's own model (``base`` and ``p0`` / ``p_hat``) at the
-    sampled configurations."""
+    (:class:`mindyn.codegen.CompiledController`; given no ``base``, the robot's base set whose
+    names are the step's; ``None`` for other controllers) against the
+    simulated robot of classical parameters ``params`` (13 per joint) at ``period`` [s]: the
+    controller's own model (``base`` and ``p0`` / ``p_hat``) at the sampled configurations."""
     _args.instance(robot, "robot", Robot)
     _args.function(controller, "controller")
     params = _args.array(params, "params", (None,))
@@ -711,6 +724,8 @@ def controller_check(robot: Robot, controller, params, period: float):
     else:
         return None
     base = getattr(controller, "base", None)
+    if base is None and isinstance(settings, dict):  # a compiled step given no base
+        base = _generated_base(robot, controller.code)
     if kind not in CONTROLLERS or (kind != "pd" and (base is None or p_hat is None)):
         return None
     qs = workspace_samples(robot)
@@ -1530,13 +1545,19 @@ def model_friction_shortfall(
         raise _args.fail("base", f"has {base.robot.n} joints; the robot has {robot.n}")
     n = robot.n
     p_hat = _estimate(p_hat, base, "p_hat")
-    kp = _diag(kp, n, "kp")
+    if isinstance(kp, numbers.Real) and not isinstance(kp, (bool, np.bool_)):
+        kp = np.full(n, _args.number(kp, "kp", minimum=0.0))
+    else:
+        kp = _args.array(kp, "kp", (n,))
+        if np.any(kp < 0):
+            raise _args.fail("kp", f"must be >= 0, got {kp.tolist()}")
     share = _args.number(share, "share", positive=True)
     if share > 1:
         raise _args.fail("share", f"must be in (0, 1], got {share:g}")
     kp_min, tol = friction_bound(robot, tolerance=tolerance)
     kp_min = kp_min * FRICTION_SHARE / share
-    qs = workspace_samples(robot) if qs is None else np.atleast_2d(np.asarray(qs, dtype=float))
+    qs = _args.optional(_args.array, qs, "qs", (None, n))
+    qs = workspace_samples(robot) if qs is None else qs
     k = len(qs)
     eye = np.broadcast_to(np.eye(n), (k, n, n)).reshape(k * n, n)
     qq = np.repeat(qs, n, axis=0)
