@@ -237,6 +237,11 @@ def _api(tmp: Path) -> dict:
                 (ROBOT,),
                 {"rotor": True},
             ),
+            "control.controllers.model_friction_shortfall": (
+                controllers.model_friction_shortfall,
+                (ROBOT, BASE, BASE.values(ROBOT.params), np.full(N, 100.0)),
+                {"tolerance": 0.01, "share": 1.0, "qs": qs[:2]},
+            ),
             "control.controllers.friction_bound": (
                 controllers.friction_bound,
                 (ROBOT,),

@@ -315,3 +315,30 @@ def test_torque_headings_say_newtons_for_a_prismatic_joint():
     out = cli("track", "planar2", "--controller", "adaptive-pd", "--duration", 0.4)
     row = next(line for line in out.splitlines() if line.startswith("|Y (p_hat - p)|"))
     assert row.startswith("|Y (p_hat - p)| RMS, first [N m] "), row
+
+
+def test_torque_limit_takes_the_same_words_in_simulate_track_and_codegen(tmp_path, capsys):
+    """codegen --torque-limit took effort or a number and refused none; simulate and track took
+    effort or none and refused a number. All three take effort, none and NM now: the
+    simulated log's torques stay within +-NM and reach it, the generated step saturates at it,
+    and none is no limit."""
+    log = tmp_path / "s.csv"
+    argv = ["simulate", "planar2", "--torque-limit", "2", "--duration", "0.5", "-o", str(log)]
+    assert main(argv) == 0
+    capsys.readouterr()
+    data = np.genfromtxt(log, delimiter=",", names=True)
+    tau = np.column_stack([data["tau1"], data["tau2"]])
+    assert np.abs(tau).max() == pytest.approx(2.0, abs=1e-12)  # saturated, never beyond
+    track = ["track", "planar2", "--cycle", "0.2", "--duration", "0.2", "--torque-limit", "2"]
+    assert main(track) == 0
+    assert "torque limits: +-2 N m on every joint, saturated" in capsys.readouterr().out
+    code = ["codegen", "planar2", "--what", "computed-torque", "--lang", "c"]
+    assert main([*code, "--torque-limit", "2.5", "-o", str(tmp_path / "a")]) == 0
+    assert "c->tau_max[1] = 2.5;" in (tmp_path / "a.c").read_text()
+    assert main([*code, "--torque-limit", "none", "-o", str(tmp_path / "b")]) == 0
+    assert "c->tau_max[1] = 1.0e+300;" in (tmp_path / "b.c").read_text()
+    capsys.readouterr()
+    for command in (argv[:2] + ["-o", str(log)], track[:2], code + ["-o", str(tmp_path / "c")]):
+        assert main([*command, "--torque-limit", "-1"]) == 2
+        err = capsys.readouterr().err
+        assert "--torque-limit: must be positive and finite, got -1" in err, err

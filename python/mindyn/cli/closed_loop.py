@@ -28,6 +28,40 @@ def check_controller_options(args: argparse.Namespace) -> None:
         )
 
 
+def torque_limit(text: str):
+    """``--torque-limit`` (track, simulate and codegen alike): ``effort`` (each joint's effort
+    limit), ``none`` or a positive number [N m | N] on every joint."""
+    import math
+
+    word = text.strip()
+    if word in ("effort", "none"):
+        return word
+    try:
+        value = float(word)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected effort, none or a positive number [N m], got '{text}'"
+        ) from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be positive and finite, got {text}")
+    return value
+
+
+def applied_limit(limit, n: int):
+    """The ``torque_limit`` of :func:`mindyn.control.simulate` for ``--torque-limit``: None,
+    ``"effort"`` or the number on each of the ``n`` joints."""
+    import numpy as np
+
+    if limit is None or limit == "none":
+        return None
+    return limit if limit == "effort" else np.full(n, float(limit))
+
+
+def limit_words(limit) -> str:
+    """``--torque-limit`` in words: effort, or +-N on every joint."""
+    return "effort" if limit == "effort" else f"+-{float(limit):g} N m on every joint"
+
+
 def joint_tolerance(robot, degrees):
     """``--tracking-tolerance`` (degrees on revolute joints, millimetres on prismatic ones) as the
     per-joint tolerance of :func:`mindyn.control.default_gains` [rad | m]; None for None."""
@@ -233,10 +267,11 @@ def add_closed_loop_args(p, default: str) -> None:
     )
     p.add_argument(
         "--torque-limit",
-        choices=["effort", "none"],
+        type=torque_limit,
         default="none",
-        help="effort: saturate each joint's torque at the robot's effort limit; none: no limit "
-        "(default)",
+        metavar="effort|none|NM",
+        help="effort: saturate each joint's torque at the robot's effort limit; NM: at +-NM "
+        "[N m, N] on every joint; none: no limit (default)",
     )
     p.add_argument(
         "--report",

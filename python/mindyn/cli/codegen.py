@@ -9,7 +9,7 @@ import argparse
 from ..base import base_parameters
 from ..codegen import CONTROLLERS, FUNCTIONS, generate
 from .args import UsageError, add_command
-from .closed_loop import add_tolerance_arg
+from .closed_loop import add_tolerance_arg, torque_limit
 from .codegen_output import (
     DEFAULT_FOLDER,
     OBSERVER,
@@ -176,8 +176,10 @@ def register(subparsers) -> None:
     )
     c.add_argument(
         "--torque-limit",
-        metavar="effort|NM",
-        help="saturate the torque at the robot's effort limits or at +-NM on every joint",
+        type=torque_limit,
+        metavar="effort|none|NM",
+        help="saturate the torque at the robot's effort limits or at +-NM [N m, N] on every "
+        "joint; none: no limit (the default), as track and simulate take it",
     )
     c.add_argument(
         "--box",

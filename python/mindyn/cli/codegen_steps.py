@@ -83,16 +83,7 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
         )
     else:
         gains = control.default_gains(robot, period=args.period, rotor=True, tolerance=tolerance)
-    limit = args.torque_limit
-    if limit is not None and limit != "effort":
-        try:
-            limit = float(limit)
-        except ValueError:
-            raise UsageError(
-                f"--torque-limit: expected 'effort' or a number, got '{limit}'"
-            ) from None
-        if not (math.isfinite(limit) and limit > 0):
-            raise UsageError(f"--torque-limit must be positive, got {limit:g}")
+    limit = None if args.torque_limit == "none" else args.torque_limit
     same = dict(base=base, gains=gains, params=params, period=args.period, name=args.name)
     same.update(tau_max=limit)
     if args.box is not None:
@@ -124,7 +115,7 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
     if kind == "adaptive-pd":
         box = code.settings["box"]
         print(box if box.startswith("estimate box") else f"estimate box: {box}")
-    _warn_unstable(robot, gains, kind, args.period)
+    _check_model(robot, code, base, args, tolerance)
     print("wrote " + ", ".join(str(w) for w in written))
     print()
     print(f"{'':<34}{'mul':>8}{'add':>7}{'trig':>7}{'sign':>7}{'div':>7}")
@@ -142,23 +133,54 @@ def _controller(args, robot, base, out: Path | None, params, note: str | None = 
     return 0
 
 
-def _warn_unstable(robot, gains, kind: str, period: float) -> None:
-    """Warns on stderr when the sampled loop of the gains baked in is unstable at ``period``
-    (the robot with its rotor inertia; :func:`mindyn.control.check_gains`)."""
-    from .. import control
+def _check_model(robot, code, base, args, tolerance) -> None:
+    """The sampled loop of the step as generated, its own model (``base``, the initial estimate)
+    and gains, against the robot with its rotor inertia and friction, which the default gains
+    assume (:func:`mindyn.control.controllers.controller_check`): printed when the model is not
+    the description's whole one (no rotor inertia or friction in it, or ``--params``), a warning
+    on stderr when unstable; computed torque, whose gains act through its model's inertia: a
+    warning naming the joints where that inertia leaves the error that Coulomb friction causes
+    beyond the whole tracking tolerance
+    (:func:`mindyn.control.controllers.model_friction_shortfall`; the default gains hold it
+    within half, an identified model's inertia a little smaller still within the whole)."""
+    from ..control import controllers
 
-    check = control.check_gains(
-        robot,
-        gains,
-        kind="pd" if kind == "gravity-compensation" else kind,
-        period=period,
-        rotor=True,
-    )
-    if not check.stable:
+    class Step:  # what controller_check reads of a compiled generated step
+        def __init__(self):
+            self.name, self.code, self.base = code.kind, code, base
+
+        def __call__(self, *args):  # pragma: no cover - never run, the check reads settings
+            raise NotImplementedError
+
+    kind, s = code.kind, code.settings
+    plant = robot.parameters(rotor=True, friction=True)
+    check = controllers.controller_check(robot, Step(), plant, args.period)
+    left = [t for t, on in (("rotor inertia", base.rotor), ("friction", base.friction)) if not on]
+    names = robot.parameter_names(rotor=True, friction=False)
+    values = robot.parameters(rotor=True, friction=False)
+    rotors = any(v != 0 for k, v in zip(names, values) if k.startswith("Ia"))
+    model = "its model without " + " and ".join(left) if left else "its model from --params"
+    if check is not None and (left or args.params):
+        print(
+            f"generated step ({model}) against the robot with rotor inertia and friction: "
+            + check.text()
+        )
+    if check is not None and not check.stable:
         print(
             f"mindyn: warning: the gains baked in are not stable: the {check.text()}",
             file=sys.stderr,
         )
+    if kind == "computed-torque":
+        short = controllers.model_friction_shortfall(  # beyond the whole tolerance
+            robot, base, s["p0"], s["kp"], tolerance=tolerance, share=1.0
+        )
+        if short:
+            hint = (
+                "; --rotor puts the robot's rotor inertia into the model"
+                if not base.rotor and rotors
+                else ""
+            )
+            print(f"mindyn: warning: the generated {short}{hint}", file=sys.stderr)
 
 
 def _say_step(robot, what: str, code, args) -> None:

@@ -11,7 +11,13 @@ from pathlib import Path
 import numpy as np
 
 from .args import ZCR07S_STUDY, UsageError, add_command, deprecated
-from .closed_loop import add_closed_loop_args, check_controller_options, reference_and_controller
+from .closed_loop import (
+    add_closed_loop_args,
+    applied_limit,
+    check_controller_options,
+    limit_words,
+    reference_and_controller,
+)
 from .number_options import (
     Number,
     check_radians,
@@ -51,7 +57,7 @@ def cmd_track(args: argparse.Namespace) -> int:
         args, robot, lambda ref: 2 * ref.period
     )
     gains = controller.gains
-    limit = None if args.torque_limit == "none" else args.torque_limit
+    limit = applied_limit(args.torque_limit, n)
     result = simulate(
         robot,
         reference,
@@ -89,7 +95,10 @@ def cmd_track(args: argparse.Namespace) -> int:
             f"  sensor noise: sigma_q {args.noise[0]:g} rad, sigma_dq {args.noise[1]:g} rad/s"
         )
     if limit is not None:
-        lines.append(f"  torque limits: effort, saturated {100 * s['saturated_fraction']:.2f} %")
+        lines.append(
+            f"  torque limits: {limit_words(args.torque_limit)}, saturated "
+            f"{100 * s['saturated_fraction']:.2f} %"
+        )
     if gains is not None and gains.note_for(args.controller):
         lines.append(f"  {gains.note_for(args.controller)}")
     if "stability" in result.info:

@@ -24,7 +24,7 @@ from .robot_options import (
 
 def cmd_excite(args: argparse.Namespace) -> int:
     from ..base import base_parameters
-    from ..identification.excitation import check_sampling, optimize_excitation
+    from ..identification.excitation import EFFORT_SHARE, check_sampling, optimize_excitation
 
     if Path(args.output).suffix.lower() in (".json", ".png"):
         raise UsageError(
@@ -50,6 +50,12 @@ def cmd_excite(args: argparse.Namespace) -> int:
             start = np.where(rev, np.radians(start), start)
         else:
             check_radians(start, "--start", "--deg", robot)
+    acc = np.asarray(robot.limits["acceleration"], dtype=float)
+    if args.effort_share is not None and np.all(np.isfinite(acc) & (acc > 0)):
+        raise UsageError(
+            f"--effort-share: applies where the description gives no acceleration limit; "
+            f"{robot.name} gives one for every joint (lower those to lower the torques)"
+        )
     base = base_parameters(robot, rotor=args.rotor, friction=args.friction, snap=snap_keyword(args))
     res = optimize_excitation(
         robot,
@@ -64,7 +70,7 @@ def cmd_excite(args: argparse.Namespace) -> int:
         samples=args.samples,
         maxiter=args.maxiter,
         margin=args.margin,
-        effort_share=args.effort_share,
+        effort_share=EFFORT_SHARE if args.effort_share is None else args.effort_share,
         start=start,
         progress=not args.quiet,
     )
@@ -156,7 +162,7 @@ def register(sub) -> None:
         low=0,
         high=1,
         low_open=True,
-        default=0.8,
+        default_when_unset=0.8,  # identification.excitation.EFFORT_SHARE
         help="where the description gives no acceleration limit (URDF never does), each joint's "
         "is derived so that the inverse-dynamics torque (gravity, velocity terms at the velocity "
         "limits, the mass matrix with the other joints' accelerations at their limits, over 64 "

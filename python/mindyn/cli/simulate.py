@@ -44,7 +44,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         write_tracking_report,
     )
     from ..identification.data import convert_torque, write_csv
-    from .closed_loop import check_controller_options, reference_and_controller
+    from .closed_loop import applied_limit, check_controller_options, reference_and_controller
 
     _check_mode(args)
     check_controller_options(args)
@@ -73,7 +73,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         seed=args.seed,
     )
     if args.mode == "tracking":
-        limit = None if args.torque_limit == "none" else args.torque_limit
+        limit = applied_limit(args.torque_limit, robot.n)
         log = simulate(
             robot,
             ref,

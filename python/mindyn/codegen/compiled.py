@@ -53,6 +53,8 @@ class CompiledController:
         C code from :func:`generate_controller`.
     base : BaseParameters, optional
         Reported to :func:`~mindyn.control.simulate` (the true base parameters in its result).
+        Its check of the sampled loop before the run takes the step's model in it; without it,
+        in the simulated robot's base set whose names are the step's.
 
     Attributes
     ----------

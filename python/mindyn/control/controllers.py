@@ -31,6 +31,7 @@ ddq_d)`` once per period on the measured state, the torque held until the next c
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Hashable
 from pathlib import Path
 
@@ -62,6 +63,7 @@ __all__ = [
     "friction_shortfall",
     "load_gains",
     "make_controller",
+    "model_friction_shortfall",
     "perturbed_parameters",
     "slotine_li_regressor",
 ]
@@ -681,12 +683,24 @@ def plant_damping(robot: Robot, params, qs) -> np.ndarray:
     return viscous_damping(regressor, names, params, qs)
 
 
+def _generated_base(robot: Robot, code) -> BaseParameters | None:
+    """The base parameters of ``robot`` whose names are those of a generated step ``code``
+    (with or without rotor inertia and friction, as :func:`mindyn.base_parameters` gives
+    them), or None when none is: the model of a compiled step given no ``base``."""
+    names = list(getattr(code, "names", ()))
+    for rotor, friction in ((True, True), (False, False), (True, False), (False, True)):
+        base = base_parameters(robot, rotor=rotor, friction=friction)
+        if list(base.names) == names:
+            return base
+    return None
+
+
 def controller_check(robot: Robot, controller, params, period: float):
     """The linearised check of a controller of this module or of a compiled generated step
-    (:class:`mindyn.codegen.CompiledController` given its ``base``; ``None`` for other
-    controllers) against the simulated robot of classical parameters ``params`` (13 per joint)
-    at ``period`` [s]: the controller's own model (``base`` and ``p0`` / ``p_hat``) at the
-    sampled configurations."""
+    (:class:`mindyn.codegen.CompiledController`; given no ``base``, the robot's base set whose
+    names are the step's; ``None`` for other controllers) against the
+    simulated robot of classical parameters ``params`` (13 per joint) at ``period`` [s]: the
+    controller's own model (``base`` and ``p0`` / ``p_hat``) at the sampled configurations."""
     _args.instance(robot, "robot", Robot)
     _args.function(controller, "controller")
     params = _args.array(params, "params", (None,))
@@ -710,6 +724,8 @@ def controller_check(robot: Robot, controller, params, period: float):
     else:
         return None
     base = getattr(controller, "base", None)
+    if base is None and isinstance(settings, dict):  # a compiled step given no base
+        base = _generated_base(robot, controller.code)
     if kind not in CONTROLLERS or (kind != "pd" and (base is None or p_hat is None)):
         return None
     qs = workspace_samples(robot)
@@ -1499,6 +1515,71 @@ def friction_shortfall(
         + ", ".join(f"{i + 1} (up to {_unit(robot, i, error[i], 'angle')})" for i in short.tolist())
         + ": the joints may wander at velocity reversals (the gains of default_gains hold it "
         "or are refused)"
+    )
+
+
+def model_friction_shortfall(
+    robot: Robot,
+    base: BaseParameters,
+    p_hat,
+    kp,
+    *,
+    tolerance=None,
+    share: float = FRICTION_SHARE,
+    qs=None,
+) -> str:
+    """For computed torque of model ``(base, p_hat)`` and acceleration gain ``kp`` [1/s²]:
+    one line naming the joints where its position gain as a torque, ``K_P min_q M̂_ii`` (the
+    model's mass matrix, sampled over the workspace or at ``qs``), is below the bound that
+    holds the robot's Coulomb friction within ``share`` of ``tolerance`` (by default the share
+    the default gains give it, :func:`friction_bound`; 1: the whole tolerance), with that
+    torque gain and the error ``2 Fc / (K_P M̂_ii)``; empty when none is. The default gains
+    raise ``Lambda`` for the robot's own inertia: a model with less inertia (no rotor inertia,
+    where a geared joint's reflected rotor inertia dominates its link's) scales the torque
+    gains down by the ratio."""
+    from .stability import workspace_samples
+
+    _args.instance(robot, "robot", Robot)
+    _args.instance(base, "base", BaseParameters)
+    if base.robot.n != robot.n:
+        raise _args.fail("base", f"has {base.robot.n} joints; the robot has {robot.n}")
+    n = robot.n
+    p_hat = _estimate(p_hat, base, "p_hat")
+    if isinstance(kp, numbers.Real) and not isinstance(kp, (bool, np.bool_)):
+        kp = np.full(n, _args.number(kp, "kp", minimum=0.0))
+    else:
+        kp = _args.array(kp, "kp", (n,))
+        if np.any(kp < 0):
+            raise _args.fail("kp", f"must be >= 0, got {kp.tolist()}")
+    share = _args.number(share, "share", positive=True)
+    if share > 1:
+        raise _args.fail("share", f"must be in (0, 1], got {share:g}")
+    kp_min, tol = friction_bound(robot, tolerance=tolerance)
+    kp_min = kp_min * FRICTION_SHARE / share
+    qs = _args.optional(_args.array, qs, "qs", (None, n))
+    qs = workspace_samples(robot) if qs is None else qs
+    k = len(qs)
+    eye = np.broadcast_to(np.eye(n), (k, n, n)).reshape(k * n, n)
+    qq = np.repeat(qs, n, axis=0)
+    grav = base.regressor(qs, np.zeros_like(qs), np.zeros_like(qs)) @ p_hat
+    cols = (base.regressor(qq, np.zeros_like(qq), eye) @ p_hat).reshape(k, n, n)
+    m_diag = np.min(np.diagonal(cols, axis1=1, axis2=2) - grav, axis=0)  # min_q M̂_ii
+    gain = kp * m_diag
+    short = np.flatnonzero(gain < kp_min * (1.0 - 1e-9))
+    if not short.size:
+        return ""
+    error = kp_min * share * tol / np.maximum(gain, 1e-300)  # 2 Fc / (K_P M̂_ii)
+    within = {1.0: "the whole", 0.5: "half the"}.get(share, f"{share:g} of the")
+    return (
+        "computed torque's model gives its position gain K_P M_ii (M_ii: the model's inertia, "
+        "the smallest over the workspace) below the bound that holds Coulomb friction within "
+        f"{within} tracking tolerance on joint(s) "
+        + ", ".join(
+            f"{i + 1} ({_unit(robot, i, gain[i], 'gain')} against "
+            f"{_unit(robot, i, kp_min[i], 'gain')}: errors up to "
+            f"{_unit(robot, i, error[i], 'angle')})"
+            for i in short.tolist()
+        )
     )
 
 

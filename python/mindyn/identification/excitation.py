@@ -1098,12 +1098,40 @@ def optimize_excitation(
         q, dq, ddq = traj.evaluate(t)
     peak = peak_torques(robot, q, dq, ddq, rotor=base.rotor, friction=base.friction)
     say(f"excite: {peak['line']}")
-    for k in np.flatnonzero(np.nan_to_num(np.array(peak["share"], dtype=float)) > 1.0):
-        warnings.append(
+    over = np.flatnonzero(np.nan_to_num(np.array(peak["share"], dtype=float)) > 1.0)
+    if over.size:  # what is left of the effort limit with the joints at rest along the path
+        still = np.abs(_drive_torques(robot, q, 0 * dq, 0 * ddq, rotor=False, friction=False))
+    for k in over:
+        what = (
             f"joint {k + 1}: the trajectory's peak inverse-dynamics torque "
             f"{peak['torque'][k]:.4g} is {100 * peak['share'][k]:.0f} % of its effort limit "
-            f"{peak['effort'][k]:g}; lower the effort share or give acceleration limits"
+            f"{peak['effort'][k]:g}"
         )
+        gravity = still[:, k].max() / peak["effort"][k]
+        derived = lim["acceleration_source"] == "effort"
+        if gravity > 1.0:
+            why = (
+                f"gravity alone along it reaches {100 * gravity:.0f} %: no acceleration limit "
+                "keeps it within; narrow the joints' position limits (or check the effort limit "
+                "and the masses)"
+            )
+        elif derived.any():
+            why = (
+                f"the acceleration limits of joints {_joint_list(derived)} come "
+                "from the effort limits: lower the effort share (or give acceleration limits)"
+            )
+        else:
+            why = (
+                "the acceleration limits are the "
+                + (
+                    "given ones"
+                    if (lim["acceleration_source"] == "override").any()
+                    else "description's"
+                )
+                + f" (gravity alone reaches {100 * gravity:.0f} %): lower them (the effort share "
+                "applies only where no acceleration limit is given)"
+            )
+        warnings.append(f"{what}; {why}")
         say(f"excite: WARNING: {warnings[-1]}")
     tm = np.arange(samples) * (traj.period / samples)
     qm, dqm, ddqm = traj.evaluate(tm)
