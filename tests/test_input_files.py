@@ -225,3 +225,19 @@ def test_order_names_its_flag_and_the_parameters_named_twice_or_missing():
     assert line.startswith(f"mindyn: error: --order must name each of the {len(names)} ")
     assert f"named twice: {names[0]}" in line
     assert f"{len(names) - 5} missing: {', '.join(names[5:13])}, ..." in line
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc")
+@pytest.mark.parametrize(
+    "argv", [["base", "planar2", "--json"], ["simulate", "planar2", "--duration", "0.1", "-o"]]
+)
+def test_an_output_that_cannot_be_created_exits_with_status_1(argv):
+    """errors.md: an output that cannot be written is a limit of the machine, status 1 (a file
+    in /proc cannot be created: it was taken for a missing input, status 2, '[Errno 2] ...')."""
+    path = "/proc/mindyn-output/x.csv"
+    rc, _, err = run([*argv, path])
+    lines = err.strip().splitlines()
+    assert rc == 1 and len(lines) == 1, (rc, err)
+    assert lines[0].startswith("mindyn: error: '/proc/mindyn-output") and "Errno" not in lines[0]
+    rc, _, err = run(["base", "/proc/mindyn-no-robot.yaml"])  # a missing input stays status 2
+    assert rc == 2 and "does not exist" in err
