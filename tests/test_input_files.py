@@ -241,3 +241,12 @@ def test_an_output_that_cannot_be_created_exits_with_status_1(argv):
     assert lines[0].startswith("mindyn: error: '/proc/mindyn-output") and "Errno" not in lines[0]
     rc, _, err = run(["base", "/proc/mindyn-no-robot.yaml"])  # a missing input stays status 2
     assert rc == 2 and "does not exist" in err
+
+
+@pytest.mark.parametrize(
+    "given, taken", [("30", 30.0), ("30%", 30.0), (" 5.5 %", 5.5), ("auto", "auto")]
+)
+def test_rsd_threshold_takes_a_percentage_with_or_without_its_sign(given, taken):
+    """--rsd-threshold is a percentage, as simulate's --torque-noise P% is: '30%' was refused."""
+    argv = ["identify", "planar2", "log.csv", "--rsd-threshold", given]
+    assert cli.build_parser("identify").parse_args(argv).rsd_threshold == taken
