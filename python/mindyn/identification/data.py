@@ -507,6 +507,9 @@ def _read_csv(
         check_time_units(t, str(path), CSV_TIME_REMEDY)
     if robot is not None:
         check_position_units(q, robot, str(path))
+        beyond = positions_beyond_limits(q, robot)
+        if beyond:
+            processing["beyond_limits"] = beyond
     if dq is not None:
         check_velocity_units(t, q, dq, str(path))
     header_unit = cols["torque_unit"]
@@ -1326,6 +1329,57 @@ def check_position_units(q, robot, source: str) -> None:
             f"its positions seem to be in {other}; convert its {kind} joints' positions, "
             f"velocities and accelerations to {unit}"
         )
+
+
+def positions_beyond_limits(q, robot) -> list[dict]:
+    """The joints whose positions ``q`` (samples x joints, rad or m) leave the description's
+    finite limits by more than their range: a log of another robot, another zero position or
+    limits other than the robot's, which the fit takes as they are (a log that only oversteps
+    the limits a little, a limit set tighter than the hardware's, is not named). Per joint:
+    ``joint`` (from 1), ``name``, ``reached`` (the position farthest out), ``lower``,
+    ``upper``, ``unit``. Robots with joints of several degrees of freedom give none."""
+    from ..robot import Robot
+
+    _args.instance(robot, "robot", Robot)
+    q = np.asarray(q, dtype=float)
+    if not robot.single_dof or q.ndim != 2 or q.shape[1] != robot.n or q.shape[0] == 0:
+        return []
+    lower = np.asarray(robot.limits["lower"], dtype=float)
+    upper = np.asarray(robot.limits["upper"], dtype=float)
+    found = []
+    with np.errstate(invalid="ignore"):
+        lo, hi = np.nanmin(q, axis=0), np.nanmax(q, axis=0)
+    for k in range(robot.n):
+        span = upper[k] - lower[k]
+        if not (np.isfinite(span) and span > 0):
+            continue
+        below, above = lower[k] - lo[k], hi[k] - upper[k]
+        if max(below, above) > span:
+            found.append(
+                {
+                    "joint": k + 1,
+                    "name": robot.joint_names[k],
+                    "reached": float(lo[k] if below > above else hi[k]),
+                    "lower": float(lower[k]),
+                    "upper": float(upper[k]),
+                    "unit": "m" if robot.joint_types[k] == "prismatic" else "rad",
+                }
+            )
+    return found
+
+
+def describe_beyond_limits(source: str, found: list[dict]) -> str:
+    """The warning of :func:`positions_beyond_limits`' joints ``found`` in log ``source``."""
+    first = found[0]
+    others = [str(f["joint"]) for f in found[1:]]
+    return (
+        f"{source}: the positions of joint {first['joint']} ('{first['name']}') reach "
+        f"{first['reached']:.4g} {first['unit']}, beyond its limits [{first['lower']:.4g}, "
+        f"{first['upper']:.4g}] by more than their range"
+        + (f" (joint(s) {', '.join(others)} alike)" if others else "")
+        + ": a log of another robot, another zero position or limits other than the robot's? "
+        "The fit takes the positions as they are"
+    )
 
 
 #: A joint whose logged velocity and the derivative of its logged position correlate at least
