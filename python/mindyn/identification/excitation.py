@@ -200,12 +200,12 @@ class FourierTrajectory:
         got = {}
         for key, ndim in shapes.items():
             value = d[key]
-            try:
-                if isinstance(value, (bool, str)) or value is None:
-                    raise TypeError
-                x = np.asarray(value, dtype=float)
-            except (TypeError, ValueError):
-                x = None
+            x = None
+            if not (isinstance(value, (bool, str)) or value is None):
+                try:
+                    x = np.asarray(value, dtype=float)
+                except (TypeError, ValueError):
+                    pass
             if x is None or x.ndim != ndim or (ndim and x.size == 0):
                 what = ("a number", "a list of numbers", "a list of lists of numbers")[ndim]
                 raise DataError(f"{source}: entry '{key}' is not {what}")
