@@ -288,3 +288,5 @@ def test_a_log_far_beyond_the_limits_is_warned_of(tmp_path):
     assert rc == 0, err
     said = [line for line in out.splitlines() if "WARNING" in line and "limits" in line]
     assert len(said) == 1 and f"{path}: the positions of joint 2 ('j2') reach" in said[0], out
+    rc, out, _ = run(["identify", "--help"])  # its help, which states the form, prints
+    assert rc == 0 and "(P or P%)" in " ".join(out.split())

@@ -225,7 +225,7 @@ def add_identify(sub, func) -> None:
         f"each removal ({DEFAULT_RSD_THRESHOLD:g} keeps a t-statistic above sqrt(2), Akaike's "
         "criterion for one parameter; 30 keeps one above 3.3; 0 keeps all); auto (the "
         f"default): {DEFAULT_RSD_THRESHOLD:g} or every base parameter, as cross-validation "
-        "over blocks of the fit logs decides (printed); a finite number >= 0 (P or P%) or "
+        "over blocks of the fit logs decides (printed); a finite number >= 0 (P or P%%) or "
         "auto",
     )
     add_data_options(p)
