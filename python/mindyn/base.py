@@ -10,6 +10,7 @@ uses the same set (a constant in the energy cancels in differences).
 from __future__ import annotations
 
 import copy
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from functools import cached_property
 from types import MappingProxyType
@@ -769,11 +770,19 @@ def base_parameters(
             else:
                 idx.append(_args.integer(item, "order entry"))
         if sorted(idx) != list(range(len(names))):
+            twice = sorted(i for i, c in Counter(idx).items() if c > 1)
             missing = [names[i] for i in sorted(set(range(len(names))) - set(idx))]
+            said = []
+            if twice:
+                named = (names[i] if 0 <= i < len(names) else str(i) for i in twice)
+                said.append(f"named twice: {', '.join(named)}")
+            if missing:
+                more = ", ..." if len(missing) > 8 else ""
+                said.append(f"{len(missing)} missing: {', '.join(missing[:8])}{more}")
             raise _args.fail(
                 "order",
                 f"must name each of the {len(names)} parameters exactly once"
-                + (f"; missing: {', '.join(missing[:8])}" if missing else ""),
+                + "".join(f"; {s}" for s in said),
             )
     if snap is True:
         snap = SNAP_WINDOW

@@ -14,7 +14,7 @@ from .._core import ArgumentError, Error
 from .._threads import reuse_freed_memory
 from .args import COMMANDS, Parser, UsageError, print_deprecation_notes
 from .flags import argument_as_flag, library_options_as_flags
-from .outputs import prepare_outputs
+from .outputs import is_output, prepare_outputs
 from .quiet import warnings_after_success
 
 
@@ -122,7 +122,13 @@ def main(argv: list[str] | None = None) -> int:
         if status == 0:  # an error stays one line
             print_deprecation_notes(args)
         return status
-    except (Error, FileNotFoundError) as e:  # the input: mindyn's errors and a missing file
+    except FileNotFoundError as e:  # an output's path that cannot be created: as OSError below
+        if isinstance(e, Error) or not is_output(args, e.filename):
+            _error(e)  # the input: a missing file
+            return 2
+        _error(f"'{e.filename}': {e.strerror or e} (the output cannot be written there)")
+        return 1
+    except Error as e:  # the input: mindyn's errors
         _error(e)
         # a simulation past its wall-time bound (SimulationTimeoutError): the machine's limit,
         # as memory is, not an error in the input

@@ -34,6 +34,7 @@ LIBRARY_OPTIONS = (
     "name",
     "numeric",
     "offset",
+    "order",
     "period",
     "periods",
     "position_noise",

@@ -123,14 +123,16 @@ def add_data_options(p) -> None:
 
 
 def _rsd_threshold(text: str):
-    """``--rsd-threshold``'s value: ``auto`` or a percentage >= 0."""
+    """``--rsd-threshold``'s value: ``auto`` or a percentage >= 0, its ``%`` sign optional
+    (``30`` or ``30%``, as ``simulate --torque-noise`` takes a percentage)."""
     if text.strip().lower() == "auto":
         return "auto"
+    number = text.strip()[:-1] if text.strip().endswith("%") else text
     try:
-        return Number(0)(text)
+        return Number(0)(number)
     except argparse.ArgumentTypeError:
         raise argparse.ArgumentTypeError(
-            f"expected a finite number >= 0 or auto, got '{text}'"
+            f"expected a finite number >= 0 (a percentage, P or P%) or auto, got '{text}'"
         ) from None
 
 
@@ -223,7 +225,8 @@ def add_identify(sub, func) -> None:
         f"each removal ({DEFAULT_RSD_THRESHOLD:g} keeps a t-statistic above sqrt(2), Akaike's "
         "criterion for one parameter; 30 keeps one above 3.3; 0 keeps all); auto (the "
         f"default): {DEFAULT_RSD_THRESHOLD:g} or every base parameter, as cross-validation "
-        "over blocks of the fit logs decides (printed); a finite number >= 0 or auto",
+        "over blocks of the fit logs decides (printed); a finite number >= 0 (P or P%%) or "
+        "auto",
     )
     add_data_options(p)
     p.add_argument(

@@ -193,6 +193,26 @@ def implied_outputs(args: argparse.Namespace) -> list[tuple[str, str, str, Path,
     return found
 
 
+def is_output(args: argparse.Namespace, filename: object) -> bool:
+    """Whether ``filename`` (an OSError's) is a file the command line's outputs name or imply,
+    a folder on the way to one, or lies in a folder an output names: an error on it is the
+    output's, not the input's."""
+    if not isinstance(filename, (str, os.PathLike)):
+        return False
+    try:
+        key = Path(filename).resolve()
+        named = [(path, folder) for _, path, folder in declared_outputs(args)]
+        named += [(path, False) for *_, path, _ in implied_outputs(args)]
+        return any(
+            key == path.resolve()
+            or key in path.resolve().parents
+            or (folder and path.resolve() in key.parents)
+            for path, folder in named
+        )
+    except (OSError, ValueError, RuntimeError):
+        return False
+
+
 def prepare_outputs(args: argparse.Namespace) -> None:
     """The one rule for the outputs of every command, applied before the command writes
     anything: a file option given a folder names its default file inside it

@@ -91,10 +91,34 @@ def _expected_columns(n, require_torque: bool) -> str:
     )
 
 
+#: What a first line starting so is, when a file of another kind is given for a CSV table
+_NOT_A_TABLE = (
+    ("<", "XML (a URDF or MJCF robot description?)"),
+    ("{", "JSON (an identification, excitation or truth file?)"),
+    ("[", "JSON"),
+)
+#: A first line that is a YAML mapping's key (``name: r3``, ``joints:``)
+_YAML_KEY = re.compile(r"[A-Za-z_][A-Za-z0-9_ -]*:(\s.*)?")
+
+
+def _shorten(text: str, size: int = 40) -> str:
+    return repr(text if len(text) <= size else text[: size - 3] + "...")
+
+
 def check_header(header: list[str], path: str, expected: str) -> list[str]:
     """The names of a log's ``header``, stripped; DataError when the header is separated by
     semicolons or tabs, or is a row of numbers (no header), saying the columns ``expected``."""
     names = [h.strip() for h in header]
+    # another kind of file given for a log: a robot description, a JSON the commands write
+    first = names[0] if names else ""
+    kind = next((k for c, k in _NOT_A_TABLE if first.startswith(c)), None)
+    if kind is None and len(names) == 1 and _YAML_KEY.fullmatch(first):
+        kind = "YAML (a robot description or a joint-terms file?)"
+    if kind is not None:
+        raise DataError(
+            f"{path}: not a CSV table: its first line ({_shorten(','.join(header))}) is {kind}; "
+            "a log is comma-separated, its first line naming the columns: " + expected
+        )
     if len(names) == 1:
         for sep, word in ((";", "semicolons"), ("\t", "tabs")):
             if names[0].count(sep) >= 2:
@@ -117,6 +141,7 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
     column may carry its unit, ``tau1[permille]``: all torque columns then say the same one,
     returned as ``torque_unit`` (None when the header names none)."""
     names = check_header(header, path, _expected_columns("N" if n is None else n, require_torque))
+    _refuse_motion_units(names, path)
     currents = [i for i, h in enumerate(names) if re.fullmatch(r"i\d+", h)]
     if currents:
         if any(re.fullmatch(r"tau\d+(\s*\[.*\])?", h) for h in names):
@@ -175,10 +200,8 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
             if not 1 <= j <= n:
                 extra.append((f"{kind}{j}", present[j]))
                 beyond.append(f"{kind}{j}")
-        if present or required:
+        if present or required:  # optional torques: all or none
             missing += [f"{kind}{j}" for j in range(1, n + 1) if j not in present]
-    if not require_torque and groups["tau"] and len(groups["tau"]) < n:
-        missing += [f"tau{j}" for j in range(1, n + 1) if j not in groups["tau"]]
     if missing or extra:
         parts = []
         if missing:
@@ -192,6 +215,39 @@ def _columns(header: list[str], n: int | None, require_torque: bool, path: str) 
         )
     unit = next(iter(units.values())) if units else None
     return {"t": t_col, "n": n, "torque_unit": unit, **groups}
+
+
+_MOTION_UNIT = re.compile(r"(t|q|dq|ddq)([1-9][0-9]*)?\s*\[([^\]]*)\]")
+
+
+def _refuse_motion_units(names: list[str], path: str) -> None:
+    """Refuses a header that gives the unit of the time or of a joint's motion (``q1[deg]``),
+    which only a column map reads (a header's unit is read on the torque columns alone), with
+    the column map that reads this header."""
+    said = [(i, m) for i, name in enumerate(names) if (m := _MOTION_UNIT.fullmatch(name))]
+    if not said:
+        return
+    i, first = said[0]
+    pairs: dict[str, str] = {}
+    for name in names:
+        m = _MOTION_UNIT.fullmatch(name) or _UNIT.fullmatch(name) or _COLUMN.fullmatch(name)
+        if m is None:
+            continue
+        quantity = re.match(r"[a-z]+", m.group(1)).group(0)  # type: ignore[union-attr]
+        if quantity in pairs:
+            continue
+        unit = m.group(m.lastindex).strip() if m.re is not _COLUMN and m.lastindex else None
+        if unit in ("deg", "rad") and quantity in ("dq", "ddq"):  # a rate's unit, per second
+            unit += "/s" if quantity == "dq" else "/s^2"
+        key = quantity + (f"[{unit}]" if unit else "")
+        pattern = name if quantity == "t" else re.sub(r"[0-9]+", "{j}", name, count=1)
+        pairs[quantity] = f"{key}={pattern}"
+    raise DataError(
+        f"{path}: column '{names[i]}' (column {i + 1}) gives the unit of {first.group(1)} in the "
+        "header, where a log states the torques' unit only (tau1[permille], tau1[Nm]): give t "
+        "in s and the motion in rad (m), or read the file through a column map that states the "
+        f"units (columns=), its QUANTITY=NAME pairs '{','.join(pairs.values())}'"
+    )
 
 
 def _remedy(path: str, width: int, extra: list, beyond: list, n: int, missing: list) -> str:
@@ -451,6 +507,9 @@ def _read_csv(
         check_time_units(t, str(path), CSV_TIME_REMEDY)
     if robot is not None:
         check_position_units(q, robot, str(path))
+        beyond = positions_beyond_limits(q, robot)
+        if beyond:
+            processing["beyond_limits"] = beyond
     if dq is not None:
         check_velocity_units(t, q, dq, str(path))
     header_unit = cols["torque_unit"]
@@ -1270,6 +1329,57 @@ def check_position_units(q, robot, source: str) -> None:
             f"its positions seem to be in {other}; convert its {kind} joints' positions, "
             f"velocities and accelerations to {unit}"
         )
+
+
+def positions_beyond_limits(q, robot) -> list[dict]:
+    """The joints whose positions ``q`` (samples x joints, rad or m) leave the description's
+    finite limits by more than their range: a log of another robot, another zero position or
+    limits other than the robot's, which the fit takes as they are (a log that only oversteps
+    the limits a little, a limit set tighter than the hardware's, is not named). Per joint:
+    ``joint`` (from 1), ``name``, ``reached`` (the position farthest out), ``lower``,
+    ``upper``, ``unit``. Robots with joints of several degrees of freedom give none."""
+    from ..robot import Robot
+
+    _args.instance(robot, "robot", Robot)
+    q = np.asarray(q, dtype=float)
+    if not robot.single_dof or q.ndim != 2 or q.shape[1] != robot.n or q.shape[0] == 0:
+        return []
+    lower = np.asarray(robot.limits["lower"], dtype=float)
+    upper = np.asarray(robot.limits["upper"], dtype=float)
+    found = []
+    with np.errstate(invalid="ignore"):
+        lo, hi = np.nanmin(q, axis=0), np.nanmax(q, axis=0)
+    for k in range(robot.n):
+        span = upper[k] - lower[k]
+        if not (np.isfinite(span) and span > 0):
+            continue
+        below, above = lower[k] - lo[k], hi[k] - upper[k]
+        if max(below, above) > span:
+            found.append(
+                {
+                    "joint": k + 1,
+                    "name": robot.joint_names[k],
+                    "reached": float(lo[k] if below > above else hi[k]),
+                    "lower": float(lower[k]),
+                    "upper": float(upper[k]),
+                    "unit": "m" if robot.joint_types[k] == "prismatic" else "rad",
+                }
+            )
+    return found
+
+
+def describe_beyond_limits(source: str, found: list[dict]) -> str:
+    """The warning of :func:`positions_beyond_limits`' joints ``found`` in log ``source``."""
+    first = found[0]
+    others = [str(f["joint"]) for f in found[1:]]
+    return (
+        f"{source}: the positions of joint {first['joint']} ('{first['name']}') reach "
+        f"{first['reached']:.4g} {first['unit']}, beyond its limits [{first['lower']:.4g}, "
+        f"{first['upper']:.4g}] by more than their range"
+        + (f" (joint(s) {', '.join(others)} alike)" if others else "")
+        + ": a log of another robot, another zero position or limits other than the robot's? "
+        "The fit takes the positions as they are"
+    )
 
 
 #: A joint whose logged velocity and the derivative of its logged position correlate at least

@@ -182,24 +182,67 @@ class FourierTrajectory:
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> FourierTrajectory:
+    def from_dict(cls, d: dict, *, source: str = "Fourier trajectory") -> FourierTrajectory:
+        """The trajectory of :meth:`to_dict`'s mapping ``d``; DataError naming ``source`` (and the
+        entry) when an entry is missing or is not a finite number or array of the right shape."""
         from .data import DataError
 
+        if not isinstance(d, dict):
+            raise DataError(f"{source}: expected a mapping of the Fourier coefficients")
+        missing = [k for k in ("a", "b", "q0", "freq") if k not in d]
+        if missing:
+            raise DataError(
+                f"{source}: missing entr{'y' if len(missing) == 1 else 'ies'} "
+                + ", ".join(repr(k) for k in missing)
+                + " (an excitation's coefficients: a, b, q0 and freq, as mindyn excite writes)"
+            )
+        shapes = {"a": 2, "b": 2, "q0": 1, "freq": 0}
+        got = {}
+        for key, ndim in shapes.items():
+            value = d[key]
+            x = None
+            if not (isinstance(value, (bool, str)) or value is None):
+                try:
+                    x = np.asarray(value, dtype=float)
+                except (TypeError, ValueError):
+                    pass
+            if x is None or x.ndim != ndim or (ndim and x.size == 0):
+                what = ("a number", "a list of numbers", "a list of lists of numbers")[ndim]
+                raise DataError(f"{source}: entry '{key}' is not {what}")
+            if not np.isfinite(x).all():
+                raise DataError(f"{source}: entry '{key}' holds NaN or infinite values")
+            got[key] = x
         try:
-            return cls(np.array(d["a"]), np.array(d["b"]), np.array(d["q0"]), float(d["freq"]))
-        except KeyError as e:
-            raise DataError(f"Fourier trajectory: missing entry {e}") from None
+            return cls(got["a"], got["b"], got["q0"], float(got["freq"]))
+        except ArgumentError as e:
+            raise DataError(f"{source}: {e}") from None
 
     @classmethod
     def load(cls, path) -> FourierTrajectory:
-        """Reads the JSON written by :meth:`ExcitationResult.save` (or :meth:`to_dict`)."""
+        """Reads the JSON written by :meth:`ExcitationResult.save` (or :meth:`to_dict`);
+        DataError naming the file when it holds no such trajectory."""
         from .data import DataError, read_json
 
         path = Path(path)
         d = read_json(path, what="trajectory file")
         if not isinstance(d, dict):
             raise DataError(f"{path}: expected a JSON object (the excitation's coefficients)")
-        return cls.from_dict(d.get("trajectory", d))
+        if "trajectory" not in d and not {"a", "b", "q0", "freq"} & set(d):
+            kind = next((k for key, k in _OTHER_JSON if key in d), "a JSON document")
+            raise DataError(
+                f"{path}: {kind}, not an excitation's coefficients (the JSON that mindyn excite "
+                "writes beside its CSV)"
+            )
+        return cls.from_dict(d.get("trajectory", d), source=str(path))
+
+
+#: Entries by which the other JSON files of the commands are recognised, and what they are
+_OTHER_JSON = (
+    ("thresholds", "a collision-detection thresholds file"),
+    ("simulation", "the truth file of a simulated log"),
+    ("base_names", "the JSON of an identification"),
+    ("n_base", "the JSON of mindyn base"),
+)
 
 
 def _basis(t: np.ndarray, N: int, freq: float):

@@ -27,6 +27,7 @@ from .data import (
     fill_derivatives,
     first_not_increasing,
     given_drive_gain,
+    positions_beyond_limits,
     refuse_unused_gain,
     without_derivative_edges,
 )
@@ -201,6 +202,9 @@ def read_rosbag(
     if dq is not None:
         check_velocity_units(t, q, dq, str(path))
     processing: dict = {"samples": len(t), "topic": topic, "joints": names}
+    beyond = positions_beyond_limits(q, robot)
+    if beyond:
+        processing["beyond_limits"] = beyond
     if tau is not None:
         tau, processing["torque"] = convert_torque(tau, torque_unit, robot, drive_gain=drive_gain)
     refuse_unused_gain(

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .data import describe_beyond_limits
 from .pruning import pruning_line
 from .terminal import (
     _cutoff_range,
@@ -85,6 +86,13 @@ def _processing(report) -> list[str]:
             f"  {describe(logs[0].processing['columns'])}"
             + (" (in the first log)" if len(logs) > 1 else "")
         )
+    for logset in (fit, report.logs.validation):  # a log of another robot, or zero?
+        for f, ds in zip(logset.files, logset.parts):
+            beyond = next(
+                (d.processing["beyond_limits"] for d in ds if "beyond_limits" in d.processing), None
+            )
+            if beyond:
+                out.append(f"  WARNING: {describe_beyond_limits(f, beyond)}")
     if all(pres):
         k = 0
         for f, ds in zip(fit.files, fit.parts):

@@ -19,6 +19,9 @@ __all__: list[str] = []
 #: column -1).
 TORQUE_CHECK_CORRELATION = 0.9
 TORQUE_RATIO_BOUNDS = (0.1, 10.0)
+#: A joint whose description torque or logged torque varies (RMS about its mean) by at most
+#: this fraction of the RMS of all joints' torques is not judged: its variation is round-off
+VARIATION_FLOOR = 1e-9
 #: At most this many evenly spaced samples are compared
 TORQUE_CHECK_SAMPLES = 2000
 #: Fewest samples for the comparison to judge (as the velocity check's)
@@ -75,6 +78,13 @@ def _description_ratios(t, q, dq, tau, robot):
         d0, m0 = desc - desc.mean(axis=0), tf - tf.mean(axis=0)
         corr = (d0 * m0).sum(axis=0) / np.sqrt((d0**2).sum(axis=0) * (m0**2).sum(axis=0))
         k = (d0 * m0).sum(axis=0) / (d0**2).sum(axis=0)
+        # a signal that does not vary beyond the round-off of the torques' scale (a joint whose
+        # gravity torque is zero held still, a constant logged torque) has no shape to compare:
+        # its correlation and ratio are those of the round-off
+        flat = (np.sqrt((d0**2).mean(axis=0)) <= VARIATION_FLOOR * np.sqrt((desc**2).mean())) | (
+            np.sqrt((m0**2).mean(axis=0)) <= VARIATION_FLOOR * np.sqrt((tf**2).mean())
+        )
+    corr, k = np.where(flat, np.nan, corr), np.where(flat, np.nan, k)
     return corr, k
 
 
