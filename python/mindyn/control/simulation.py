@@ -309,15 +309,17 @@ class SensorNoise:
         out = {}
         for k in ("torque", "position", "velocity", "quantization"):
             given = getattr(self, k)
-            try:
-                if given is None or isinstance(given, (str, bytes)):
-                    raise TypeError
-                v = np.asarray(given, dtype=float)
-            except (TypeError, ValueError):
+            v = None
+            if given is not None and not isinstance(given, (str, bytes)):
+                try:
+                    v = np.asarray(given, dtype=float)
+                except (TypeError, ValueError):
+                    v = None
+            if v is None:
                 raise ArgumentError(
                     f"{k} noise is {_args.describe(given)}; expected a scalar or ({n},) of "
                     "finite non-negative numbers"
-                ) from None
+                )
             try:
                 v = np.broadcast_to(v, (n,)).copy()
             except ValueError:
