@@ -287,6 +287,42 @@ def test_csv_trajectory(tmp_path):
         CsvTrajectory(tmp_path / "none.csv", 2)
 
 
+def test_csv_trajectory_columns_are_taken_by_their_header_names(tmp_path):
+    """A log given as a trajectory (t, q, dq, tau) had its torques read as the reference's
+    accelerations, by count. With a header the columns are taken by name, in any order, the
+    others left out; a motion column with a unit or a group given in part is refused."""
+    t = np.linspace(0, 2, 201)
+    q = np.column_stack([np.sin(2 * t), 0.5 * np.cos(t)])
+    dq = np.column_stack([2 * np.cos(2 * t), -0.5 * np.sin(t)])
+    tau = np.column_stack([40 + t, -30 - t])  # far from any acceleration of this motion
+    log = tmp_path / "log.csv"
+    np.savetxt(log, np.column_stack([t, q, dq, tau]), delimiter=",", comments="",
+               header="t,q1,q2,dq1,dq2,tau1,tau2")  # fmt: skip
+    shuffled = tmp_path / "shuffled.csv"
+    np.savetxt(shuffled, np.column_stack([t, tau[:, 0], dq[:, 1], q[:, 1], dq[:, 0], q[:, 0]]),
+               delimiter=",", comments="", header="t,tau1,dq2,q2,dq1,q1")  # fmt: skip
+    for path in (log, shuffled):
+        ref = CsvTrajectory(path, 2)
+        for s in (0.3047, 1.1731):
+            qd, dqd, ddqd = _at(ref, s)
+            assert_close(qd, [np.sin(2 * s), 0.5 * np.cos(s)], 1e-7, "q by name")
+            assert_close(ddqd, [-4 * np.sin(2 * s), -0.5 * np.cos(s)], 1e-2, "ddq, not tau")
+    cases = {
+        "t,q1[deg],q2": "column 'q1\\[deg\\]' gives a unit",
+        "t,q1,tau2": "has no column q2",
+        "t,q1,q2,dq1": "has no column dq2",
+        "t,q1,q2,q2": "column 'q2' is given twice",
+        "t,q1,q2,q3": "column.s. q3 beyond the robot's 2 joints",
+    }
+    for header, message in cases.items():
+        bad = tmp_path / "bad.csv"
+        k = header.count(",")
+        np.savetxt(bad, np.column_stack([t] + [q[:, 0]] * k), delimiter=",", header=header,
+                   comments="")  # fmt: skip
+        with pytest.raises(mindyn.Error, match=message):
+            CsvTrajectory(bad, 2)
+
+
 def test_gains_file(tmp_path):
     robot = mindyn.load("zcr07s")
     f = tmp_path / "g.yaml"

@@ -153,14 +153,57 @@ def _time_unit(name: str | None, path: Path) -> str | None:
     return unit
 
 
+def _trajectory_columns(header: list[str], n: int, path: Path) -> list[int]:
+    """The indices of a trajectory CSV's columns ``t, q1..qN[, dq1..dqN[, ddq1..ddqN]]`` by
+    their names in ``header`` (any order after ``t``; other columns, such as a log's
+    ``tau1..tauN``, left out); DataError for a missing or repeated one, a group given in part,
+    or a motion column with a unit (the reference is in rad and m)."""
+    from ..identification.data import DataError
+
+    where: dict[str, int] = {}
+    for j, name in enumerate(header[1:], 1):
+        m = re.fullmatch(r"(q|dq|ddq)([1-9][0-9]*)\s*(\[.*\])?", name)
+        if m is None:
+            continue  # not a motion column: a log's torques or currents, a comment column
+        if m.group(3):
+            raise DataError(
+                f"{path}: column '{name}' gives a unit; a trajectory's positions, velocities "
+                "and accelerations are in rad (m), rad/s and rad/s^2: convert the column and "
+                f"name it {m.group(1)}{m.group(2)}"
+            )
+        if name in where:
+            raise DataError(f"{path}: column '{name}' is given twice")
+        where[name] = j
+    order = [0]
+    for group in ("q", "dq", "ddq"):
+        names = [f"{group}{k}" for k in range(1, n + 1)]
+        have = [c for c in names if c in where]
+        if group == "q" or have:
+            missing = [c for c in names if c not in where]
+            if missing:
+                raise DataError(
+                    f"{path}: the header has no column {', '.join(missing)}; a trajectory "
+                    f"gives t, q1..q{n} and optionally dq1..dq{n} and ddq1..ddq{n}"
+                )
+            order += [where[c] for c in names]
+        extra = [c for c in where if re.fullmatch(rf"{group}[0-9]+", c) and c not in names]
+        if extra:
+            raise DataError(f"{path}: column(s) {', '.join(extra)} beyond the robot's {n} joints")
+    if "ddq1" in where and "dq1" not in where:
+        raise DataError(f"{path}: ddq1..ddq{n} without dq1..dq{n}; give both or neither")
+    return order
+
+
 class CsvTrajectory:
     """A reference from a CSV file with columns ``t, q1..qN`` and optionally ``dq1..dqN`` and
-    ``ddq1..ddqN`` (a header line is allowed; ``mindyn excite`` writes such a file). Time in
-    s, or in the unit the header's first name gives, ``t[ms]`` (``s``, ``ms``, ``us``, ``ns``,
-    as a column map's ``t``; :attr:`time_unit` that unit, None when not given). Positions
-    are interpolated by cubic splines; missing velocities and accelerations are the spline's
-    derivatives. Times count from the first sample; after the last sample the reference holds
-    the last position at rest."""
+    ``ddq1..ddqN`` (``mindyn excite`` writes such a file). With a header line the columns are
+    taken by their names, in any order after ``t``, and others are left out (a log's
+    ``tau1..tauN``: the motion of a log replays); without one, by their count in that order.
+    Time in s, or in the unit the header's first name gives, ``t[ms]`` (``s``, ``ms``, ``us``,
+    ``ns``, as a column map's ``t``; :attr:`time_unit` that unit, None when not given).
+    Positions are interpolated by cubic splines; missing velocities and accelerations are the
+    spline's derivatives. Times count from the first sample; after the last sample the
+    reference holds the last position at rest."""
 
     def __init__(self, path: str | Path, n: int):
         from scipy.interpolate import CubicSpline
@@ -204,6 +247,8 @@ class CsvTrajectory:
         if len(rows) < 4:
             raise DataError(f"{path}: need at least 4 samples, found {len(rows)}")
         data = np.array(rows, dtype=float)
+        if header:  # the columns by their names, in the order t, q, dq, ddq
+            data = data[:, _trajectory_columns(header, n, path)]
         cols = data.shape[1]
         if cols not in (1 + n, 1 + 2 * n, 1 + 3 * n):
             raise DataError(
